@@ -1,0 +1,340 @@
+/*
+ * padapt.h -- the only public header of padapt, a library for parallel mesh
+ * adaptation of simplex meshes (2D triangles, 3D tetrahedra) to a metric field.
+ *
+ * Conventions used throughout:
+ *  - Every function that can fail returns a pa_status; results come back through
+ *    out-pointers. On failure, pa_last_error() gives a one-line message naming
+ *    the file and line (or the entity) at fault.
+ *  - Indices are 0-based. Local indices are pa_idx (32-bit), global ids pa_gid
+ *    (64-bit).
+ *  - "Collective" means every rank of the communicator must call the function.
+ *    Functions not marked collective are local.
+ *  - Metric storage per vertex: ncomp = 1 is an isotropic size h (the metric is
+ *    I/h^2); ncomp = 3 (2D) or 6 (3D) is a symmetric positive definite tensor
+ *    stored as m11 m12 m22 [m13 m23 m33] (Medit's order).
+ *  - The library never calls exit(), abort() or MPI_Abort().
+ */
+#ifndef PADAPT_H
+#define PADAPT_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define PADAPT_VERSION_MAJOR 0
+#define PADAPT_VERSION_MINOR 1
+#define PADAPT_VERSION_PATCH 0
+
+/** Local index (vertex, element, ...) on one process. */
+typedef int32_t pa_idx;
+/** Global id of an entity across all processes. */
+typedef int64_t pa_gid;
+
+/* ------------------------------------------------------------------------ */
+/* Status, errors, memory                                                   */
+/* ------------------------------------------------------------------------ */
+
+typedef enum pa_status {
+  PA_SUCCESS = 0,
+  PA_ERR_ARG,         /**< the caller passed an invalid argument */
+  PA_ERR_MEMORY,      /**< an allocation failed */
+  PA_ERR_IO,          /**< a file could not be opened, read or written */
+  PA_ERR_FORMAT,      /**< a file is malformed (message names file:line) */
+  PA_ERR_MESH,        /**< the mesh is invalid (inverted, non-conforming...) */
+  PA_ERR_METRIC,      /**< a metric is not finite or not positive definite */
+  PA_ERR_MPI,         /**< an MPI call failed or ranks disagree */
+  PA_ERR_PARTITION,   /**< the graph partitioner failed */
+  PA_ERR_UNSUPPORTED, /**< a feature or file variant that is not supported */
+  PA_ERR_INTERNAL     /**< an internal invariant was violated (a bug) */
+} pa_status;
+
+/** Short constant name of a status ("success", "format error", ...). */
+const char *pa_status_string(pa_status status);
+
+/** Message of the last error raised in the calling thread ("" if none). */
+const char *pa_last_error(void);
+
+/** Clear the calling thread's last error message. */
+void pa_clear_error(void);
+
+/** Bytes currently allocated by padapt in this process. */
+size_t pa_memory_current(void);
+/** Peak of pa_memory_current() since start (or last reset). */
+size_t pa_memory_peak(void);
+/** Reset the peak to the current value. */
+void pa_memory_reset_peak(void);
+/** Peak resident set size of the process in bytes (from the OS), 0 if unknown. */
+size_t pa_peak_rss(void);
+/** Test hook: make the n-th next allocation fail (n >= 1); n = 0 disables. */
+void pa_memory_fail_after(long n);
+
+/** Verbosity of messages printed by the library on stderr (default 0). */
+void pa_set_verbosity(int level);
+int pa_verbosity(void);
+
+/** Wall-clock time in seconds (monotonic). */
+double pa_wtime(void);
+
+/* ------------------------------------------------------------------------ */
+/* Sequential simplex mesh                                                  */
+/* ------------------------------------------------------------------------ */
+
+/**
+ * A simplex mesh of runtime dimension dim (2 or 3):
+ *  - vertices (dim coordinates, a reference, flags),
+ *  - elements: triangles in 2D, tetrahedra in 3D (dim+1 vertices),
+ *  - boundary entities: edges in 2D, triangles in 3D (dim vertices),
+ *  - in 3D only, feature edges (2 vertices): Medit "Edges" (ridges, required
+ *    edges, interior curves). In 2D, Medit Edges are the boundary entities.
+ * Every entity has an integer reference and a flag byte (PA_FLAG_*).
+ * A mesh may carry a metric and user vertex fields.
+ */
+typedef struct pa_mesh pa_mesh;
+
+/** Entity flags (bit mask). */
+enum {
+  PA_FLAG_CORNER = 1,   /**< vertex: corner, never removed nor moved */
+  PA_FLAG_RIDGE = 2,    /**< edge (or vertex on a ridge): sharp feature */
+  PA_FLAG_REQUIRED = 4, /**< entity frozen: never modified by the remesher */
+  PA_FLAG_USER = 8      /**< free for callers (e.g. "tagged for remeshing") */
+};
+
+/** Create an empty mesh of dimension dim (2 or 3). Not collective. */
+pa_status pa_mesh_create(int dim, pa_mesh **mesh);
+/** Destroy a mesh (NULL allowed). */
+void pa_mesh_destroy(pa_mesh *mesh);
+/** Deep copy of a mesh, including metric and fields. */
+pa_status pa_mesh_copy(const pa_mesh *src, pa_mesh **dst);
+
+int pa_mesh_dim(const pa_mesh *mesh);
+pa_idx pa_mesh_nvert(const pa_mesh *mesh);
+pa_idx pa_mesh_nelem(const pa_mesh *mesh);
+/** Number of boundary entities (edges in 2D, triangles in 3D). */
+pa_idx pa_mesh_nbdry(const pa_mesh *mesh);
+/** Number of feature edges (3D only; always 0 in 2D). */
+pa_idx pa_mesh_nedge(const pa_mesh *mesh);
+
+/** Reserve room so that adding up to these counts does not reallocate. */
+pa_status pa_mesh_reserve(pa_mesh *mesh, pa_idx nvert, pa_idx nelem,
+                          pa_idx nbdry, pa_idx nedge);
+/** Append a vertex (dim coordinates); its index is returned in *index (may be NULL). */
+pa_status pa_mesh_add_vertex(pa_mesh *mesh, const double *x, int32_t ref,
+                             pa_idx *index);
+/** Append an element (dim+1 vertex indices). */
+pa_status pa_mesh_add_elem(pa_mesh *mesh, const pa_idx *v, int32_t ref,
+                           pa_idx *index);
+/** Append a boundary entity (dim vertex indices). */
+pa_status pa_mesh_add_bdry(pa_mesh *mesh, const pa_idx *v, int32_t ref,
+                           pa_idx *index);
+/** Append a feature edge (3D only; in 2D use pa_mesh_add_bdry). */
+pa_status pa_mesh_add_edge(pa_mesh *mesh, const pa_idx *v, int32_t ref,
+                           pa_idx *index);
+
+/*
+ * Raw array access (structure of arrays). Pointers are valid until the next
+ * call that adds entities. Layouts: coords[dim*i + k], elems[(dim+1)*e + k],
+ * bdry[dim*b + k], edges[2*e + k]; refs and flags one per entity.
+ */
+double *pa_mesh_coords(pa_mesh *mesh);
+pa_idx *pa_mesh_elems(pa_mesh *mesh);
+pa_idx *pa_mesh_bdrys(pa_mesh *mesh);
+pa_idx *pa_mesh_edges(pa_mesh *mesh);
+int32_t *pa_mesh_vert_refs(pa_mesh *mesh);
+int32_t *pa_mesh_elem_refs(pa_mesh *mesh);
+int32_t *pa_mesh_bdry_refs(pa_mesh *mesh);
+int32_t *pa_mesh_edge_refs(pa_mesh *mesh);
+uint8_t *pa_mesh_vert_flags(pa_mesh *mesh);
+uint8_t *pa_mesh_elem_flags(pa_mesh *mesh);
+uint8_t *pa_mesh_bdry_flags(pa_mesh *mesh);
+uint8_t *pa_mesh_edge_flags(pa_mesh *mesh);
+
+/**
+ * Attach a metric: ncomp = 1 (size h > 0) or 3 (2D) / 6 (3D) SPD tensors, one
+ * per vertex, copied. Fails with PA_ERR_METRIC naming the first vertex whose
+ * value is not finite or not positive definite. ncomp = 0 removes the metric.
+ */
+pa_status pa_mesh_set_metric(pa_mesh *mesh, int ncomp, const double *values);
+/** Number of metric components per vertex (0 when there is no metric). */
+int pa_mesh_metric_ncomp(const pa_mesh *mesh);
+/** The metric array (nvert * ncomp), NULL when there is none. */
+double *pa_mesh_metric(pa_mesh *mesh);
+
+/** Attach a named user vertex field of ncomp components (copied). */
+pa_status pa_mesh_add_field(pa_mesh *mesh, const char *name, int ncomp,
+                            const double *values);
+int pa_mesh_nfield(const pa_mesh *mesh);
+/** Field k: its name, number of components and values (nvert * ncomp). */
+pa_status pa_mesh_field(pa_mesh *mesh, int k, const char **name, int *ncomp,
+                        double **values);
+
+/**
+ * Build element-to-element adjacency: adja[(dim+1)*e + i] = (dim+1)*f + j when
+ * face i of e (the face opposite its vertex i) is face j of element f, -1 on
+ * the boundary. Fails with PA_ERR_MESH if a face is shared by more than two
+ * elements. O(n log n) or better.
+ */
+pa_status pa_mesh_build_adjacency(pa_mesh *mesh, const pa_idx **adja);
+/** Vertex balls as CSR: elements of vertex v are ball[start[v] .. start[v+1]-1]. */
+pa_status pa_mesh_build_balls(pa_mesh *mesh, const pa_idx **start,
+                              const pa_idx **ball);
+/** Find the boundary entity with the given dim vertices (any order); -1 if none. */
+pa_status pa_mesh_find_bdry(pa_mesh *mesh, const pa_idx *v, pa_idx *index);
+
+/** Signed volume (3D) or area (2D) of element e. */
+double pa_mesh_elem_volume(const pa_mesh *mesh, pa_idx e);
+/** Sum of the signed element volumes (areas in 2D). */
+double pa_mesh_volume(const pa_mesh *mesh);
+
+/**
+ * Check the mesh and return PA_ERR_MESH with a message naming the first violated
+ * invariant and the entity: indices in range, positive orientation, no face
+ * shared by more than two elements, symmetric adjacency, every topological
+ * boundary face listed as a boundary entity, no unused vertex, finite
+ * coordinates, valid metric.
+ */
+pa_status pa_mesh_check(pa_mesh *mesh);
+
+/** Bytes used by the mesh and its derived structures. */
+size_t pa_mesh_memory_used(const pa_mesh *mesh);
+
+/**
+ * Structured generators: unit square [0,1]^2 split in n x n squares of two
+ * triangles; unit cube [0,1]^3 split in n^3 hexahedra of six tetrahedra.
+ * Boundary references: 2D x=0:1 x=1:2 y=0:3 y=1:4; 3D x=0:1 x=1:2 y=0:3 y=1:4
+ * z=0:5 z=1:6. Element reference 1, vertex reference 0.
+ */
+pa_status pa_mesh_generate_box(int dim, int n, pa_mesh **mesh);
+
+/* ------------------------------------------------------------------------ */
+/* Metrics, quality, statistics                                             */
+/* ------------------------------------------------------------------------ */
+
+/**
+ * Attach a built-in analytic metric field to the mesh vertices. spec is
+ * "NAME" or "NAME:h" where h scales the field's reference size:
+ *  - "uniform[:h]"   isotropic size h (default 0.1);
+ *  - "layer[:h]"     anisotropic boundary layer along the plane x = 0.5, size
+ *                    h tangentially and h/100 normally at the plane, growing to
+ *                    h at distance 0.25 (1:100 stretching);
+ *  - "shell[:h]"     anisotropic spherical (circular in 2D) shell of radius
+ *                    0.3 centred at the box centre, size h/50 normally at the
+ *                    shell, h tangentially;
+ *  - "iso-shell[:h]" the isotropic version of "shell" (size h/10 at the shell).
+ */
+pa_status pa_metric_analytic(pa_mesh *mesh, const char *spec);
+
+/** List of the built-in metric field names, NULL-terminated. */
+const char *const *pa_metric_analytic_names(void);
+
+/**
+ * Clamp the metric: eigenvalues into [1/hmax^2, 1/hmin^2] (sizes into
+ * [hmin, hmax]). A bound <= 0 is ignored.
+ */
+pa_status pa_mesh_metric_clamp(pa_mesh *mesh, double hmin, double hmax);
+
+/** Edge length in the metric (geometric formula), the metric of each end given. */
+double pa_metric_edge_length(int dim, int ncomp, const double *a,
+                             const double *b, const double *ma,
+                             const double *mb);
+
+/** Quality of element e in Mmg's normalisation (1 regular, 0 flat, < 0 inverted).
+ *  Uses the identity metric when the mesh has none. */
+double pa_mesh_elem_quality(pa_mesh *mesh, pa_idx e);
+
+/** Mesh statistics, as printed by `padapt stats`. Sums/min/max so that they can
+ *  be combined across processes. */
+#define PA_STATS_EDGE_NBIN 10
+#define PA_STATS_QUAL_NBIN 5
+typedef struct pa_stats {
+  int dim;
+  int has_metric;
+  pa_gid nvert, nelem, nbdry;
+  double volume;
+  pa_gid ninverted;   /**< elements with volume <= 0 */
+  int valid;          /**< pa_mesh_check succeeded */
+  pa_gid nedge;       /**< unique edges */
+  double edge_min, edge_max, edge_sum;
+  /** Edge length bins: [0,0.3) [0.3,0.6) [0.6,0.7071) [0.7071,0.9) [0.9,1.3)
+   *  [1.3,1.4142) [1.4142,2) [2,5) [5,inf) and (last) [0.7071,1.4142). */
+  pa_gid edge_hist[PA_STATS_EDGE_NBIN];
+  double qual_min, qual_max, qual_sum;
+  /** Quality bins [0,0.2) ... [0.8,1]. */
+  pa_gid qual_hist[PA_STATS_QUAL_NBIN];
+  pa_gid qual_above_05, qual_above_012;
+} pa_stats;
+
+/** Compute the statistics of a mesh (metric: the attached one, or identity). */
+pa_status pa_mesh_stats(pa_mesh *mesh, pa_stats *stats);
+/** Print the statistics in human-readable form. */
+void pa_stats_print(const pa_stats *stats, FILE *out);
+/** Write the statistics as a JSON object (keys: dim vertices elements boundary
+ *  volume inverted valid edge_min edge_max edge_mean edge_in_range
+ *  quality_worst quality_mean quality_above_0.5 ...). extra, if not NULL, is
+ *  inserted verbatim as further members (e.g. "\"time_s\": 1.0"). */
+pa_status pa_stats_write_json(const pa_stats *stats, const char *extra,
+                              const char *path);
+
+/* ------------------------------------------------------------------------ */
+/* Solutions (.sol / .solb) and mesh files                                  */
+/* ------------------------------------------------------------------------ */
+
+/** Kinds of vertex fields in a solution file (Medit's codes). */
+typedef enum pa_sol_kind {
+  PA_SOL_SCALAR = 1,
+  PA_SOL_VECTOR = 2,
+  PA_SOL_TENSOR = 3 /**< symmetric: m11 m12 m22 [m13 m23 m33] */
+} pa_sol_kind;
+
+/** A set of fields at the vertices of a mesh (SolAtVertices). */
+typedef struct pa_sol pa_sol;
+
+pa_status pa_sol_create(int dim, pa_idx nvert, pa_sol **sol);
+void pa_sol_destroy(pa_sol *sol);
+int pa_sol_dim(const pa_sol *sol);
+pa_idx pa_sol_nvert(const pa_sol *sol);
+int pa_sol_nfield(const pa_sol *sol);
+/** Append a field; values (nvert * ncomp, ncomp from kind and dim) copied. */
+pa_status pa_sol_add_field(pa_sol *sol, pa_sol_kind kind, const double *values);
+/** Field k: kind, components per vertex and values. */
+pa_status pa_sol_field(pa_sol *sol, int k, pa_sol_kind *kind, int *ncomp,
+                       double **values);
+
+/** Read .sol (ASCII) or .solb (binary, versions 1-4), chosen by extension. */
+pa_status pa_sol_read(const char *path, pa_sol **sol);
+/** Write .sol or .solb (by extension), atomically (temporary file + rename). */
+pa_status pa_sol_write(const pa_sol *sol, const char *path);
+
+/** Attach field k of sol as the mesh's metric (scalar: size, tensor: SPD). */
+pa_status pa_mesh_metric_from_sol(pa_mesh *mesh, const pa_sol *sol, int k);
+/** A solution holding the mesh's metric (and, if with_fields, its user fields). */
+pa_status pa_mesh_metric_to_sol(pa_mesh *mesh, int with_fields, pa_sol **sol);
+
+/** Options for writing mesh files. */
+typedef struct pa_write_opts {
+  int binary;  /**< Gmsh .msh: 1 binary, 0 ASCII (default) */
+  int version; /**< .meshb: file version 1-4 (0: default 2) */
+} pa_write_opts;
+
+/**
+ * Read a mesh, format chosen by extension: .mesh/.meshb (Medit), .msh (Gmsh
+ * 4.1 ASCII or binary, or 2.2 ASCII). Errors name the file and the line.
+ */
+pa_status pa_mesh_read(const char *path, pa_mesh **mesh);
+/**
+ * Write a mesh, format chosen by extension: .mesh/.meshb, .msh (Gmsh 4.1),
+ * .vtu (VTK XML, appended raw binary; point data: metric and fields; cell
+ * data: reference and quality). Written to a temporary file then renamed, so a
+ * failure never leaves a partial file. opts may be NULL.
+ */
+pa_status pa_mesh_write(pa_mesh *mesh, const char *path,
+                        const pa_write_opts *opts);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* PADAPT_H */

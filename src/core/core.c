@@ -1,0 +1,168 @@
+/*
+ * core.c -- error messages, the counting allocator, verbosity, timing.
+ *
+ * The last error message is thread-local, so threads (MPI_THREAD_MULTIPLE)
+ * never see each other's errors. The allocator prefixes every block with a
+ * 16-byte header holding its size; counters are C11 atomics.
+ */
+#include "core/core.h"
+
+#include <stdatomic.h>
+#include <stdio.h>
+#include <sys/resource.h>
+#include <time.h>
+
+#define PA_MSG_LEN 1024
+
+static _Thread_local char pa_msg[PA_MSG_LEN];
+static atomic_size_t pa_mem_cur;
+static atomic_size_t pa_mem_peak;
+static atomic_long pa_fail_countdown;
+static int pa_verbose;
+
+const char *pa_status_string(pa_status status) {
+  switch (status) {
+  case PA_SUCCESS: return "success";
+  case PA_ERR_ARG: return "invalid argument";
+  case PA_ERR_MEMORY: return "out of memory";
+  case PA_ERR_IO: return "i/o error";
+  case PA_ERR_FORMAT: return "format error";
+  case PA_ERR_MESH: return "invalid mesh";
+  case PA_ERR_METRIC: return "invalid metric";
+  case PA_ERR_MPI: return "MPI error";
+  case PA_ERR_PARTITION: return "partitioner error";
+  case PA_ERR_UNSUPPORTED: return "unsupported";
+  case PA_ERR_INTERNAL: return "internal error";
+  }
+  return "unknown status";
+}
+
+const char *pa_last_error(void) { return pa_msg; }
+
+void pa_clear_error(void) { pa_msg[0] = '\0'; }
+
+pa_status pa__error(pa_status code, const char *file, int line,
+                    const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(pa_msg, sizeof pa_msg, fmt, ap);
+  va_end(ap);
+  if (pa_verbose >= 3)
+    fprintf(stderr, "padapt: error raised at %s:%d: %s\n", file, line, pa_msg);
+  return code;
+}
+
+pa_status pa__error_trace(pa_status code, const char *file, int line) {
+  if (pa_verbose >= 3)
+    fprintf(stderr, "padapt:   propagated from %s:%d\n", file, line);
+  return code;
+}
+
+void pa__assert_fail(const char *expr, const char *file, int line) {
+  /* An internal invariant is broken: this is a bug in padapt, and continuing
+   * would corrupt data. Debug builds only. */
+  fprintf(stderr, "padapt: assertion failed at %s:%d: %s\n", file, line, expr);
+  fflush(stderr);
+  __builtin_trap();
+}
+
+/* ---- counting allocator ---- */
+
+#define PA_HDR 16
+
+static int pa_should_fail(void) {
+  long c = atomic_load(&pa_fail_countdown);
+  while (c > 0) {
+    if (atomic_compare_exchange_weak(&pa_fail_countdown, &c, c - 1))
+      return c == 1;
+  }
+  return 0;
+}
+
+static void pa_count_add(size_t n) {
+  size_t cur = atomic_fetch_add(&pa_mem_cur, n) + n;
+  size_t peak = atomic_load(&pa_mem_peak);
+  while (cur > peak && !atomic_compare_exchange_weak(&pa_mem_peak, &peak, cur))
+    ;
+}
+
+void *pa__malloc(size_t size) {
+  if (pa_should_fail()) return NULL;
+  char *p = malloc(size + PA_HDR);
+  if (!p) return NULL;
+  memcpy(p, &size, sizeof size);
+  pa_count_add(size);
+  return p + PA_HDR;
+}
+
+void *pa__calloc(size_t nmemb, size_t size) {
+  if (size && nmemb > SIZE_MAX / size - PA_HDR) return NULL;
+  size_t n = nmemb * size;
+  void *p = pa__malloc(n);
+  if (p) memset(p, 0, n);
+  return p;
+}
+
+void *pa__realloc(void *ptr, size_t size) {
+  if (!ptr) return pa__malloc(size);
+  if (pa_should_fail()) return NULL;
+  char *base = (char *)ptr - PA_HDR;
+  size_t old;
+  memcpy(&old, base, sizeof old);
+  char *p = realloc(base, size + PA_HDR);
+  if (!p) return NULL;
+  memcpy(p, &size, sizeof size);
+  atomic_fetch_sub(&pa_mem_cur, old);
+  pa_count_add(size);
+  return p + PA_HDR;
+}
+
+void pa__free(void *ptr) {
+  if (!ptr) return;
+  char *base = (char *)ptr - PA_HDR;
+  size_t old;
+  memcpy(&old, base, sizeof old);
+  atomic_fetch_sub(&pa_mem_cur, old);
+  free(base);
+}
+
+size_t pa__alloc_size(const void *ptr) {
+  if (!ptr) return 0;
+  size_t n;
+  memcpy(&n, (const char *)ptr - PA_HDR, sizeof n);
+  return n;
+}
+
+size_t pa_memory_current(void) { return atomic_load(&pa_mem_cur); }
+size_t pa_memory_peak(void) { return atomic_load(&pa_mem_peak); }
+void pa_memory_reset_peak(void) {
+  atomic_store(&pa_mem_peak, atomic_load(&pa_mem_cur));
+}
+void pa_memory_fail_after(long n) {
+  atomic_store(&pa_fail_countdown, n > 0 ? n : 0);
+}
+
+size_t pa_peak_rss(void) {
+  struct rusage ru;
+  if (getrusage(RUSAGE_SELF, &ru) != 0) return 0;
+  return (size_t)ru.ru_maxrss * 1024; /* Linux reports KiB */
+}
+
+/* ---- verbosity and time ---- */
+
+void pa_set_verbosity(int level) { pa_verbose = level; }
+int pa_verbosity(void) { return pa_verbose; }
+
+void pa__info(int level, const char *fmt, ...) {
+  if (pa_verbose < level) return;
+  va_list ap;
+  va_start(ap, fmt);
+  vfprintf(stderr, fmt, ap);
+  va_end(ap);
+}
+
+double pa_wtime(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}

@@ -1,0 +1,140 @@
+/*
+ * core.h -- internal services shared by every component: error reporting,
+ * the counting allocator, small utilities.
+ *
+ * Error handling pattern (one cleanup label per function):
+ *
+ *   pa_status st = PA_SUCCESS;
+ *   PA_CHECK(n > 0, PA_ERR_ARG, "n must be positive, got %d", n);
+ *   PA_CALL(pa_mesh_build_adjacency(mesh, &adja));
+ *   PA_ALLOC(buf, n);
+ * cleanup:
+ *   pa__free(buf);
+ *   return st;
+ *
+ * PA_CHECK and PA_CALL are always on; PA_ASSERT checks internal invariants and
+ * compiles to nothing in release builds (NDEBUG).
+ */
+#ifndef PA_CORE_H
+#define PA_CORE_H
+
+#include "padapt.h"
+
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Record an error message "msg" for the calling thread and return code. */
+pa_status pa__error(pa_status code, const char *file, int line,
+                    const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+/* Append a propagation frame ("  from file:line") to the error message in
+ * debug builds; returns code unchanged. */
+pa_status pa__error_trace(pa_status code, const char *file, int line);
+
+/* Raise an error and jump to cleanup (needs a local `pa_status st`). */
+#define PA_FAIL(code, ...)                                                   \
+  do {                                                                       \
+    st = pa__error((code), __FILE__, __LINE__, __VA_ARGS__);                 \
+    goto cleanup;                                                            \
+  } while (0)
+
+/* Check a condition on caller input or data read; always on. */
+#define PA_CHECK(cond, code, ...)                                            \
+  do {                                                                       \
+    if (!(cond)) PA_FAIL((code), __VA_ARGS__);                               \
+  } while (0)
+
+/* Call a function returning pa_status and propagate its failure. */
+#define PA_CALL(expr)                                                        \
+  do {                                                                       \
+    st = (expr);                                                             \
+    if (st != PA_SUCCESS) {                                                  \
+      st = pa__error_trace(st, __FILE__, __LINE__);                          \
+      goto cleanup;                                                          \
+    }                                                                        \
+  } while (0)
+
+/* Internal invariant, debug builds only. */
+#ifdef NDEBUG
+#define PA_ASSERT(cond) ((void)0)
+#else
+#define PA_ASSERT(cond)                                                      \
+  do {                                                                       \
+    if (!(cond)) pa__assert_fail(#cond, __FILE__, __LINE__);                 \
+  } while (0)
+#endif
+void pa__assert_fail(const char *expr, const char *file, int line);
+
+/* Counting allocator. Every allocation of the library goes through these, so
+ * that pa_memory_current()/pa_memory_peak() are exact and the test hook
+ * pa_memory_fail_after() can make any allocation fail. pa__free(NULL) is a
+ * no-op; pa__realloc(NULL, n) allocates. Sizes in bytes. */
+void *pa__malloc(size_t size);
+void *pa__calloc(size_t nmemb, size_t size);
+void *pa__realloc(void *ptr, size_t size);
+void pa__free(void *ptr);
+/* Size in bytes of a block returned by the allocator (0 for NULL). */
+size_t pa__alloc_size(const void *ptr);
+
+/* Allocate n elements of *ptr's type or fail with PA_ERR_MEMORY. */
+#define PA_ALLOC(ptr, n)                                                     \
+  do {                                                                       \
+    size_t pa_n_ = (size_t)(n);                                              \
+    (ptr) = pa__malloc((pa_n_ ? pa_n_ : 1) * sizeof(*(ptr)));                \
+    if (!(ptr))                                                              \
+      PA_FAIL(PA_ERR_MEMORY, "out of memory allocating %zu bytes",           \
+              pa_n_ * sizeof(*(ptr)));                                       \
+  } while (0)
+#define PA_CALLOC(ptr, n)                                                    \
+  do {                                                                       \
+    size_t pa_n_ = (size_t)(n);                                              \
+    (ptr) = pa__calloc(pa_n_ ? pa_n_ : 1, sizeof(*(ptr)));                   \
+    if (!(ptr))                                                              \
+      PA_FAIL(PA_ERR_MEMORY, "out of memory allocating %zu bytes",           \
+              pa_n_ * sizeof(*(ptr)));                                       \
+  } while (0)
+/* Grow an array to hold at least `need` elements (factor 1.5 growth). */
+#define PA_GROW(ptr, cap, need)                                              \
+  do {                                                                       \
+    if ((size_t)(need) > (size_t)(cap)) {                                    \
+      size_t pa_nc_ = (size_t)(cap) + (size_t)(cap) / 2 + 16;                \
+      if (pa_nc_ < (size_t)(need)) pa_nc_ = (size_t)(need);                  \
+      void *pa_np_ = pa__realloc((ptr), pa_nc_ * sizeof(*(ptr)));            \
+      if (!pa_np_)                                                           \
+        PA_FAIL(PA_ERR_MEMORY, "out of memory growing an array to %zu",      \
+                pa_nc_);                                                     \
+      (ptr) = pa_np_;                                                        \
+      (cap) = pa_nc_;                                                        \
+    }                                                                        \
+  } while (0)
+
+/* Verbose message on stderr when pa_verbosity() >= level. */
+void pa__info(int level, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+
+/* Sort n pa_idx keys ascending (insertion sort, for tiny arrays). */
+static inline void pa__sort_small(pa_idx *a, int n) {
+  for (int i = 1; i < n; i++) {
+    pa_idx x = a[i];
+    int j = i - 1;
+    while (j >= 0 && a[j] > x) {
+      a[j + 1] = a[j];
+      j--;
+    }
+    a[j + 1] = x;
+  }
+}
+
+/* Hash of a small sorted key of pa_idx. */
+static inline uint64_t pa__hash_idx(const pa_idx *k, int n) {
+  uint64_t h = 0x9E3779B97F4A7C15ull;
+  for (int i = 0; i < n; i++) {
+    h ^= (uint64_t)(uint32_t)k[i] + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
+    h *= 0xBF58476D1CE4E5B9ull;
+  }
+  return h ^ (h >> 31);
+}
+
+#endif /* PA_CORE_H */

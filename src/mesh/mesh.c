@@ -1,0 +1,320 @@
+/*
+ * mesh.c -- creation, growth, copy and raw access of struct pa_mesh, its
+ * metric and user fields, and memory accounting.
+ *
+ * Vertex-attached arrays (coord, vref, vflag, met, field values) always share
+ * the capacity capv; every growth goes through pa__mesh_grow_vertices().
+ */
+#include "mesh/mesh.h"
+
+#include <math.h>
+
+pa_status pa_mesh_create(int dim, pa_mesh **mesh) {
+  pa_status st = PA_SUCCESS;
+  pa_mesh *m = NULL;
+  PA_CHECK(mesh, PA_ERR_ARG, "pa_mesh_create: NULL output pointer");
+  *mesh = NULL;
+  PA_CHECK(dim == 2 || dim == 3, PA_ERR_ARG,
+           "pa_mesh_create: dimension must be 2 or 3, got %d", dim);
+  PA_CALLOC(m, 1);
+  m->dim = dim;
+  *mesh = m;
+cleanup:
+  return st;
+}
+
+void pa__mesh_invalidate(pa_mesh *mesh) {
+  pa__free(mesh->adja);
+  pa__free(mesh->ball_start);
+  pa__free(mesh->ball);
+  pa__free(mesh->bhash);
+  mesh->adja = mesh->ball_start = mesh->ball = mesh->bhash = NULL;
+  mesh->bhash_cap = 0;
+}
+
+void pa_mesh_destroy(pa_mesh *mesh) {
+  if (!mesh) return;
+  pa__mesh_invalidate(mesh);
+  pa__free(mesh->coord);
+  pa__free(mesh->vref);
+  pa__free(mesh->vflag);
+  pa__free(mesh->elem);
+  pa__free(mesh->eref);
+  pa__free(mesh->eflag);
+  pa__free(mesh->bdry);
+  pa__free(mesh->bref);
+  pa__free(mesh->bflag);
+  pa__free(mesh->edge);
+  pa__free(mesh->edref);
+  pa__free(mesh->edflag);
+  pa__free(mesh->met);
+  for (int k = 0; k < mesh->nfield; k++) pa__free(mesh->field[k].val);
+  pa__free(mesh);
+}
+
+/* Reallocate p to n items of size sz; on failure p is left untouched. */
+static pa_status grow_array(void **p, size_t n, size_t sz) {
+  void *q = pa__realloc(*p, (n ? n : 1) * sz);
+  if (!q)
+    return pa__error(PA_ERR_MEMORY, __FILE__, __LINE__,
+                     "out of memory growing a mesh array to %zu entries", n);
+  *p = q;
+  return PA_SUCCESS;
+}
+
+pa_status pa__mesh_grow_vertices(pa_mesh *m, size_t n) {
+  pa_status st = PA_SUCCESS;
+  if (n <= m->capv) return PA_SUCCESS;
+  size_t cap = m->capv + m->capv / 2 + 16;
+  if (cap < n) cap = n;
+  PA_CHECK(cap <= INT32_MAX, PA_ERR_ARG, "too many vertices (%zu)", cap);
+  PA_CALL(grow_array((void **)&m->coord, cap * m->dim, sizeof(double)));
+  PA_CALL(grow_array((void **)&m->vref, cap, sizeof(int32_t)));
+  PA_CALL(grow_array((void **)&m->vflag, cap, sizeof(uint8_t)));
+  if (m->met_ncomp)
+    PA_CALL(grow_array((void **)&m->met, cap * m->met_ncomp, sizeof(double)));
+  for (int k = 0; k < m->nfield; k++)
+    PA_CALL(grow_array((void **)&m->field[k].val, cap * m->field[k].ncomp,
+                       sizeof(double)));
+  m->capv = cap;
+cleanup:
+  return st;
+}
+
+static pa_status grow_cells(pa_idx **v, int32_t **ref, uint8_t **flag,
+                            size_t *capp, size_t n, int nv) {
+  pa_status st = PA_SUCCESS;
+  if (n <= *capp) return PA_SUCCESS;
+  size_t cap = *capp + *capp / 2 + 16;
+  if (cap < n) cap = n;
+  PA_CHECK(cap <= INT32_MAX, PA_ERR_ARG, "too many entities (%zu)", cap);
+  PA_CALL(grow_array((void **)v, cap * nv, sizeof(pa_idx)));
+  PA_CALL(grow_array((void **)ref, cap, sizeof(int32_t)));
+  PA_CALL(grow_array((void **)flag, cap, sizeof(uint8_t)));
+  *capp = cap;
+cleanup:
+  return st;
+}
+
+pa_status pa_mesh_reserve(pa_mesh *m, pa_idx nvert, pa_idx nelem, pa_idx nbdry,
+                          pa_idx nedge) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(m && nvert >= 0 && nelem >= 0 && nbdry >= 0 && nedge >= 0,
+           PA_ERR_ARG, "pa_mesh_reserve: invalid arguments");
+  PA_CALL(pa__mesh_grow_vertices(m, (size_t)nvert));
+  PA_CALL(grow_cells(&m->elem, &m->eref, &m->eflag, &m->cape, (size_t)nelem,
+                     m->dim + 1));
+  PA_CALL(grow_cells(&m->bdry, &m->bref, &m->bflag, &m->capb, (size_t)nbdry,
+                     m->dim));
+  PA_CALL(grow_cells(&m->edge, &m->edref, &m->edflag, &m->caped,
+                     (size_t)nedge, 2));
+cleanup:
+  return st;
+}
+
+pa_status pa_mesh_add_vertex(pa_mesh *m, const double *x, int32_t ref,
+                             pa_idx *index) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(m && x, PA_ERR_ARG, "pa_mesh_add_vertex: NULL argument");
+  PA_CHECK(m->nv < INT32_MAX, PA_ERR_ARG, "too many vertices");
+  PA_CALL(pa__mesh_grow_vertices(m, (size_t)m->nv + 1));
+  pa_idx i = m->nv++;
+  memcpy(m->coord + (size_t)m->dim * i, x, m->dim * sizeof(double));
+  m->vref[i] = ref;
+  m->vflag[i] = 0;
+  if (m->met_ncomp)
+    memset(m->met + (size_t)m->met_ncomp * i, 0, m->met_ncomp * sizeof(double));
+  for (int k = 0; k < m->nfield; k++)
+    memset(m->field[k].val + (size_t)m->field[k].ncomp * i, 0,
+           m->field[k].ncomp * sizeof(double));
+  pa__mesh_invalidate(m);
+  if (index) *index = i;
+cleanup:
+  return st;
+}
+
+static pa_status add_cell(pa_mesh *m, pa_idx **v, int32_t **ref,
+                          uint8_t **flag, size_t *cap, pa_idx *count, int nv,
+                          const pa_idx *verts, int32_t r, pa_idx *index) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(verts, PA_ERR_ARG, "NULL vertex list");
+  PA_CHECK(*count < INT32_MAX, PA_ERR_ARG, "too many entities");
+  PA_CALL(grow_cells(v, ref, flag, cap, (size_t)*count + 1, nv));
+  pa_idx i = (*count)++;
+  memcpy(*v + (size_t)nv * i, verts, nv * sizeof(pa_idx));
+  (*ref)[i] = r;
+  (*flag)[i] = 0;
+  pa__mesh_invalidate(m);
+  if (index) *index = i;
+cleanup:
+  return st;
+}
+
+pa_status pa_mesh_add_elem(pa_mesh *m, const pa_idx *v, int32_t ref,
+                           pa_idx *index) {
+  if (!m) return pa__error(PA_ERR_ARG, __FILE__, __LINE__, "NULL mesh");
+  return add_cell(m, &m->elem, &m->eref, &m->eflag, &m->cape, &m->ne,
+                  m->dim + 1, v, ref, index);
+}
+
+pa_status pa_mesh_add_bdry(pa_mesh *m, const pa_idx *v, int32_t ref,
+                           pa_idx *index) {
+  if (!m) return pa__error(PA_ERR_ARG, __FILE__, __LINE__, "NULL mesh");
+  return add_cell(m, &m->bdry, &m->bref, &m->bflag, &m->capb, &m->nb, m->dim,
+                  v, ref, index);
+}
+
+pa_status pa_mesh_add_edge(pa_mesh *m, const pa_idx *v, int32_t ref,
+                           pa_idx *index) {
+  if (!m) return pa__error(PA_ERR_ARG, __FILE__, __LINE__, "NULL mesh");
+  if (m->dim == 2)
+    return pa__error(PA_ERR_ARG, __FILE__, __LINE__,
+                     "feature edges exist in 3D only; use pa_mesh_add_bdry");
+  return add_cell(m, &m->edge, &m->edref, &m->edflag, &m->caped, &m->ned, 2,
+                  v, ref, index);
+}
+
+int pa_mesh_dim(const pa_mesh *m) { return m->dim; }
+pa_idx pa_mesh_nvert(const pa_mesh *m) { return m->nv; }
+pa_idx pa_mesh_nelem(const pa_mesh *m) { return m->ne; }
+pa_idx pa_mesh_nbdry(const pa_mesh *m) { return m->nb; }
+pa_idx pa_mesh_nedge(const pa_mesh *m) { return m->ned; }
+double *pa_mesh_coords(pa_mesh *m) { return m->coord; }
+pa_idx *pa_mesh_elems(pa_mesh *m) { return m->elem; }
+pa_idx *pa_mesh_bdrys(pa_mesh *m) { return m->bdry; }
+pa_idx *pa_mesh_edges(pa_mesh *m) { return m->edge; }
+int32_t *pa_mesh_vert_refs(pa_mesh *m) { return m->vref; }
+int32_t *pa_mesh_elem_refs(pa_mesh *m) { return m->eref; }
+int32_t *pa_mesh_bdry_refs(pa_mesh *m) { return m->bref; }
+int32_t *pa_mesh_edge_refs(pa_mesh *m) { return m->edref; }
+uint8_t *pa_mesh_vert_flags(pa_mesh *m) { return m->vflag; }
+uint8_t *pa_mesh_elem_flags(pa_mesh *m) { return m->eflag; }
+uint8_t *pa_mesh_bdry_flags(pa_mesh *m) { return m->bflag; }
+uint8_t *pa_mesh_edge_flags(pa_mesh *m) { return m->edflag; }
+int pa_mesh_metric_ncomp(const pa_mesh *m) { return m->met_ncomp; }
+double *pa_mesh_metric(pa_mesh *m) { return m->met_ncomp ? m->met : NULL; }
+int pa_mesh_nfield(const pa_mesh *m) { return m->nfield; }
+
+pa_status pa_mesh_field(pa_mesh *m, int k, const char **name, int *ncomp,
+                        double **values) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(m && k >= 0 && k < m->nfield, PA_ERR_ARG,
+           "pa_mesh_field: no field %d", k);
+  if (name) *name = m->field[k].name;
+  if (ncomp) *ncomp = m->field[k].ncomp;
+  if (values) *values = m->field[k].val;
+cleanup:
+  return st;
+}
+
+/* Declared in metric/metric.h; kept here to avoid a dependency cycle. */
+int pa__metric_valid(int dim, int ncomp, const double *m);
+
+pa_status pa_mesh_set_metric(pa_mesh *m, int ncomp, const double *values) {
+  pa_status st = PA_SUCCESS;
+  double *met = NULL;
+  PA_CHECK(m, PA_ERR_ARG, "pa_mesh_set_metric: NULL mesh");
+  PA_CHECK(ncomp == 0 || ncomp == 1 || ncomp == pa__tensor_ncomp(m->dim),
+           PA_ERR_ARG, "a %dD metric has 1 or %d components, not %d", m->dim,
+           pa__tensor_ncomp(m->dim), ncomp);
+  if (ncomp == 0) {
+    pa__free(m->met);
+    m->met = NULL;
+    m->met_ncomp = 0;
+    return PA_SUCCESS;
+  }
+  PA_CHECK(values || m->nv == 0, PA_ERR_ARG, "pa_mesh_set_metric: NULL values");
+  for (pa_idx i = 0; i < m->nv; i++)
+    PA_CHECK(pa__metric_valid(m->dim, ncomp, values + (size_t)ncomp * i),
+             PA_ERR_METRIC,
+             "metric at vertex %d is not %s", (int)i + 1,
+             ncomp == 1 ? "a finite positive size"
+                        : "a finite symmetric positive definite tensor");
+  PA_ALLOC(met, (m->capv ? m->capv : 1) * ncomp);
+  if (m->nv) memcpy(met, values, (size_t)m->nv * ncomp * sizeof(double));
+  pa__free(m->met);
+  m->met = met;
+  met = NULL;
+  m->met_ncomp = ncomp;
+cleanup:
+  pa__free(met);
+  return st;
+}
+
+pa_status pa_mesh_add_field(pa_mesh *m, const char *name, int ncomp,
+                            const double *values) {
+  pa_status st = PA_SUCCESS;
+  double *val = NULL;
+  PA_CHECK(m && name && ncomp > 0, PA_ERR_ARG, "pa_mesh_add_field: bad arguments");
+  PA_CHECK(m->nfield < PA_MAX_FIELDS, PA_ERR_ARG,
+           "a mesh holds at most %d fields", PA_MAX_FIELDS);
+  PA_CHECK(values || m->nv == 0, PA_ERR_ARG, "pa_mesh_add_field: NULL values");
+  for (size_t i = 0; i < (size_t)m->nv * ncomp; i++)
+    PA_CHECK(isfinite(values[i]), PA_ERR_ARG,
+             "field '%s': value at vertex %zu is not finite", name,
+             i / ncomp + 1);
+  PA_ALLOC(val, (m->capv ? m->capv : 1) * ncomp);
+  if (m->nv) memcpy(val, values, (size_t)m->nv * ncomp * sizeof(double));
+  pa_field *f = &m->field[m->nfield++];
+  snprintf(f->name, sizeof f->name, "%s", name);
+  f->ncomp = ncomp;
+  f->val = val;
+  val = NULL;
+cleanup:
+  pa__free(val);
+  return st;
+}
+
+pa_status pa_mesh_copy(const pa_mesh *src, pa_mesh **dst) {
+  pa_status st = PA_SUCCESS;
+  pa_mesh *m = NULL;
+  PA_CHECK(src && dst, PA_ERR_ARG, "pa_mesh_copy: NULL argument");
+  PA_CALL(pa_mesh_create(src->dim, &m));
+  m->met_ncomp = src->met_ncomp;
+  m->nfield = src->nfield;
+  for (int k = 0; k < src->nfield; k++) {
+    snprintf(m->field[k].name, sizeof m->field[k].name, "%s", src->field[k].name);
+    m->field[k].ncomp = src->field[k].ncomp;
+  }
+  PA_CALL(pa_mesh_reserve(m, src->nv, src->ne, src->nb, src->ned));
+  int d = src->dim;
+  m->nv = src->nv;
+  m->ne = src->ne;
+  m->nb = src->nb;
+  m->ned = src->ned;
+  memcpy(m->coord, src->coord, sizeof(double) * d * src->nv);
+  memcpy(m->vref, src->vref, sizeof(int32_t) * src->nv);
+  memcpy(m->vflag, src->vflag, src->nv);
+  memcpy(m->elem, src->elem, sizeof(pa_idx) * (d + 1) * src->ne);
+  memcpy(m->eref, src->eref, sizeof(int32_t) * src->ne);
+  memcpy(m->eflag, src->eflag, src->ne);
+  memcpy(m->bdry, src->bdry, sizeof(pa_idx) * d * src->nb);
+  memcpy(m->bref, src->bref, sizeof(int32_t) * src->nb);
+  memcpy(m->bflag, src->bflag, src->nb);
+  memcpy(m->edge, src->edge, sizeof(pa_idx) * 2 * src->ned);
+  memcpy(m->edref, src->edref, sizeof(int32_t) * src->ned);
+  memcpy(m->edflag, src->edflag, src->ned);
+  if (src->met_ncomp)
+    memcpy(m->met, src->met, sizeof(double) * src->met_ncomp * src->nv);
+  for (int k = 0; k < src->nfield; k++)
+    memcpy(m->field[k].val, src->field[k].val,
+           sizeof(double) * src->field[k].ncomp * src->nv);
+  *dst = m;
+  m = NULL;
+cleanup:
+  pa_mesh_destroy(m);
+  return st;
+}
+
+size_t pa_mesh_memory_used(const pa_mesh *m) {
+  if (!m) return 0;
+  size_t n = sizeof *m;
+  const void *blocks[] = {m->coord, m->vref,  m->vflag, m->elem,  m->eref,
+                          m->eflag, m->bdry,  m->bref,  m->bflag, m->edge,
+                          m->edref, m->edflag, m->met,  m->adja,  m->ball_start,
+                          m->ball,  m->bhash};
+  for (size_t i = 0; i < sizeof blocks / sizeof *blocks; i++)
+    n += pa__alloc_size(blocks[i]);
+  for (int k = 0; k < m->nfield; k++) n += pa__alloc_size(m->field[k].val);
+  return n;
+}

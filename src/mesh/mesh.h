@@ -1,0 +1,91 @@
+/*
+ * mesh.h -- the sequential simplex mesh (struct pa_mesh) shared by every
+ * component. Structure of arrays, 0-based, 32-bit local indices.
+ *
+ * Invariants kept by the functions of src/mesh/:
+ *  - nX <= capX for every entity kind; arrays of one kind grow together;
+ *  - derived structures (adja, ball_start/ball) are either NULL or valid for
+ *    the current elements: anything that changes elements or vertices must call
+ *    pa__mesh_invalidate();
+ *  - the metric and fields have one value block per vertex (grown with the
+ *    vertices, contents of new vertices set by whoever adds them).
+ */
+#ifndef PA_MESH_H
+#define PA_MESH_H
+
+#include "core/core.h"
+
+#define PA_MAX_FIELDS 16
+#define PA_FIELD_NAME_LEN 64
+
+typedef struct pa_field {
+  char name[PA_FIELD_NAME_LEN];
+  int ncomp;
+  double *val; /* capv * ncomp */
+} pa_field;
+
+struct pa_mesh {
+  int dim; /* 2 or 3 */
+
+  /* vertices */
+  pa_idx nv;
+  size_t capv;
+  double *coord;   /* dim * capv */
+  int32_t *vref;   /* capv */
+  uint8_t *vflag;  /* capv */
+
+  /* elements: triangles (2D) or tetrahedra (3D) */
+  pa_idx ne;
+  size_t cape;
+  pa_idx *elem;    /* (dim+1) * cape */
+  int32_t *eref;
+  uint8_t *eflag;
+
+  /* boundary entities: edges (2D) or triangles (3D) */
+  pa_idx nb;
+  size_t capb;
+  pa_idx *bdry;    /* dim * capb */
+  int32_t *bref;
+  uint8_t *bflag;
+
+  /* feature edges (3D only) */
+  pa_idx ned;
+  size_t caped;
+  pa_idx *edge;    /* 2 * caped */
+  int32_t *edref;
+  uint8_t *edflag;
+
+  /* metric: 0 (none), 1 (size), 3 (2D tensor) or 6 (3D tensor) per vertex */
+  int met_ncomp;
+  double *met;     /* met_ncomp * capv */
+
+  /* user vertex fields */
+  int nfield;
+  pa_field field[PA_MAX_FIELDS];
+
+  /* derived structures, NULL when not built */
+  pa_idx *adja;       /* (dim+1) * ne: (dim+1)*f + j, or -1 */
+  pa_idx *ball_start; /* nv + 1 */
+  pa_idx *ball;       /* ball_start[nv] */
+  /* boundary lookup: open-addressing hash of sorted bdry vertex tuples */
+  pa_idx *bhash;      /* bhash_cap slots, -1 empty */
+  size_t bhash_cap;
+};
+
+/* Free derived structures after a topological change. */
+void pa__mesh_invalidate(pa_mesh *mesh);
+
+/* Number of metric components of a full tensor in dimension dim (3 or 6). */
+static inline int pa__tensor_ncomp(int dim) { return dim == 2 ? 3 : 6; }
+
+/* Vertices of face i of element e (the face opposite local vertex i), in an
+ * order that makes the face's normal point out of e. Writes dim indices. */
+void pa__elem_face(const pa_mesh *mesh, pa_idx e, int i, pa_idx *face);
+
+/* Signed volume/area of the simplex with the given dim+1 vertex coordinates. */
+double pa__simplex_volume(int dim, const double *const *x);
+
+/* Grow vertex arrays (and metric/fields) to hold at least n vertices. */
+pa_status pa__mesh_grow_vertices(pa_mesh *mesh, size_t n);
+
+#endif /* PA_MESH_H */

@@ -1,0 +1,75 @@
+/*
+ * metric.h -- Riemannian metric algebra, edge lengths and element quality.
+ *
+ * A metric value has ncomp components: 1 = isotropic size h (tensor I/h^2),
+ * 3 (2D) or 6 (3D) = symmetric tensor m11 m12 m22 [m13 m23 m33].
+ * Functions taking (dim, ncomp, m) accept both forms. These are the kernels of
+ * the remeshers' inner loops: no allocation, no error reporting; validity of
+ * inputs is checked once, when a metric enters the mesh.
+ *
+ * Conventions (shared with Mmg so our figures are comparable):
+ *  - edge length L = (la - lb) / ln(la/lb) with la = sqrt(e^T Ma e), the mean
+ *    (la + lb)/2 when |la - lb| < 1e-3 * max(la, lb);
+ *  - quality with the arithmetic mean M of the vertex tensors:
+ *    3D Q = 72 sqrt(3) V_M / (sum l_M^2)^(3/2), 2D Q = 4 sqrt(3) A_M / sum l_M^2,
+ *    V_M = V sqrt(det M), l_M^2 = e^T M e. 1 = regular, 0 = flat, < 0 inverted.
+ */
+#ifndef PA_METRIC_H
+#define PA_METRIC_H
+
+#include "mesh/mesh.h"
+
+/* Index of entry (i,j) of a symmetric tensor stored m11 m12 m22 m13 m23 m33. */
+static inline int pa__sym_index(int i, int j) {
+  if (i > j) { int t = i; i = j; j = t; }
+  return j * (j + 1) / 2 + i;
+}
+
+/* 1 if the value is a finite positive size (ncomp 1) or a finite SPD tensor. */
+int pa__metric_valid(int dim, int ncomp, const double *m);
+
+/* Expand a metric value to a full tensor (3 or 6 components). */
+void pa__metric_tensor(int dim, int ncomp, const double *m, double *t);
+
+/* Symmetric eigen-decomposition: m = V diag(lambda) V^T; vec column-major
+ * (eigenvector k is vec[dim*k .. dim*k+dim-1]). Robust for repeated and tiny
+ * eigenvalues (Jacobi rotations in 3D, closed form in 2D). */
+void pa__sym_eigen(int dim, const double *m, double *lambda, double *vec);
+/* Rebuild a symmetric tensor from eigenpairs. */
+void pa__sym_from_eigen(int dim, const double *lambda, const double *vec,
+                        double *m);
+double pa__sym_det(int dim, const double *m);
+/* Inverse of an SPD tensor; returns 0 if singular. */
+int pa__sym_inverse(int dim, const double *m, double *inv);
+
+/* Matrix log/exp of SPD tensors (full tensors). */
+void pa__metric_log(int dim, const double *m, double *logm);
+void pa__metric_exp(int dim, const double *logm, double *m);
+
+/* Log-Euclidean interpolation of n metrics with weights w (sum to 1):
+ * exp(sum w_i log M_i). Sizes interpolate as h = prod h_i^w_i. Output in the
+ * same ncomp as the inputs. */
+void pa__metric_interp(int dim, int ncomp, int n, const double *const *m,
+                       const double *w, double *out);
+
+/* Intersection by simultaneous reduction: the largest metric contained in
+ * both (full tensors in, full tensor out; sizes: out = min). */
+void pa__metric_intersect(int dim, int ncomp, const double *m1,
+                          const double *m2, double *out);
+
+/* Clamp eigenvalues into [1/hmax^2, 1/hmin^2]; a bound <= 0 is ignored. */
+void pa__metric_clamp(int dim, int ncomp, double *m, double hmin, double hmax);
+
+/* Squared length of vector e in metric m (value of ncomp components). */
+double pa__metric_sqlen(int dim, int ncomp, const double *m, const double *e);
+
+/* Edge length between points a and b with end metrics ma, mb. */
+double pa__edge_length(int dim, int ncomp, const double *a, const double *b,
+                       const double *ma, const double *mb);
+
+/* Quality of the simplex with vertex coordinates x[0..dim] and metrics
+ * m[0..dim] (ncomp 0: identity metric, m may be NULL). */
+double pa__quality(int dim, int ncomp, const double *const *x,
+                   const double *const *m);
+
+#endif /* PA_METRIC_H */

@@ -1,0 +1,3 @@
+/* padapt command-line tool (being written). */
+#include "padapt.h"
+int main(void) { return 0; }
