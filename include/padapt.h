@@ -334,6 +334,81 @@ pa_status pa_mesh_read(const char *path, pa_mesh **mesh);
 pa_status pa_mesh_write(pa_mesh *mesh, const char *path,
                         const pa_write_opts *opts);
 
+/* ------------------------------------------------------------------------ */
+/* Sequential remeshers (plug-in interface)                                 */
+/* ------------------------------------------------------------------------ */
+
+/** Outcome of a remesh, in Mmg's three levels. */
+typedef enum pa_remesh_outcome {
+  PA_REMESH_SUCCESS = 0,       /**< target reached, mesh valid */
+  PA_REMESH_TARGET_MISSED = 1, /**< mesh valid, but some edges/qualities off target */
+  PA_REMESH_FAILED = 2         /**< failed; the mesh was left as it was given */
+} pa_remesh_outcome;
+
+/** Options common to every remesher (the CLI's -hmin, -hmax, ... flags). */
+typedef struct pa_remesh_opts {
+  double hmin;      /**< minimal size (<= 0: none) */
+  double hmax;      /**< maximal size (<= 0: none) */
+  double hsiz;      /**< > 0: constant isotropic size, replaces the metric */
+  double hgrad;     /**< gradation (size ratio bound along an edge); <= 1: off */
+  double hausd;     /**< max distance of the new boundary to the reconstructed one */
+  double angle;     /**< ridge/corner detection angle in degrees (-ar) */
+  int no_angle;     /**< -nr: no corner/ridge detection by angle */
+  int no_insert;    /**< -noinsert: no split nor collapse */
+  int no_swap;      /**< -noswap */
+  int no_move;      /**< -nomove */
+  int no_surf;      /**< -nosurf: boundary left unchanged (3D) */
+  int verbosity;
+} pa_remesh_opts;
+
+/** Default options: no hmin/hmax/hsiz, hgrad 1.3, hausd 0.01, angle 45. */
+void pa_remesh_opts_default(pa_remesh_opts *opts);
+
+/** What a remesh did. */
+typedef struct pa_remesh_report {
+  pa_remesh_outcome outcome;
+  long nsplit, ncollapse, nswap, nmove;
+  int npass;
+  double time_s;
+} pa_remesh_report;
+
+/**
+ * A sequential remesher. remesh() adapts `mesh` in place to its metric (the
+ * mesh always carries one: the caller sets it, from -hsiz if needed). Entities
+ * flagged PA_FLAG_REQUIRED are frozen and must come back bit for bit: a frozen
+ * element keeps its vertices (coordinates, references, metric, fields), a
+ * frozen vertex is never moved or removed, no edge of a frozen element is
+ * split, collapsed or swapped. User fields are interpolated onto new vertices.
+ * Returns PA_SUCCESS with report->outcome set (on PA_REMESH_FAILED the mesh is
+ * as given), or an error status for a hard error (also leaving the mesh as
+ * given). Not collective: the parallel driver calls it on one piece.
+ */
+typedef struct pa_remesher {
+  const char *name;
+  /** Bit mask of supported dimensions: 1 << 2 for 2D, 1 << 3 for 3D. */
+  unsigned dims;
+  pa_status (*remesh)(void *ctx, pa_mesh *mesh, const pa_remesh_opts *opts,
+                      pa_remesh_report *report);
+  void *ctx;
+} pa_remesher;
+
+/** The built-in remesher (2D triangles; 3D when available). */
+const pa_remesher *pa_remesher_builtin(void);
+
+/**
+ * Remesh through a remesher: checks the input (valid mesh, metric present or
+ * opts->hsiz > 0), applies hsiz/hmin/hmax/hgrad to the metric, calls
+ * r->remesh and times it. Not collective.
+ */
+pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
+                    const pa_remesh_opts *opts, pa_remesh_report *report);
+
+/* ------------------------------------------------------------------------ */
+/* Distributed mesh (MPI)                                                   */
+/* ------------------------------------------------------------------------ */
+
+/* @@DMESH@@ (section owned by the distributed-mesh work, issue #5) */
+
 #ifdef __cplusplus
 }
 #endif

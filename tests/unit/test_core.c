@@ -1,0 +1,70 @@
+/* test_core.c -- counting allocator, failure hook, error messages, mesh storage. */
+#include "testutil.h"
+#include "core/core.h"
+
+static void test_allocator(void) {
+  size_t before = pa_memory_current();
+  void *p = pa__malloc(1000);
+  CHECK(p != NULL);
+  CHECK(pa_memory_current() == before + 1000);
+  CHECK(pa_memory_peak() >= before + 1000);
+  p = pa__realloc(p, 4000);
+  CHECK(pa_memory_current() == before + 4000);
+  pa__free(p);
+  CHECK(pa_memory_current() == before);
+}
+
+static void test_fail_hook(void) {
+  pa_memory_fail_after(2);
+  void *a = pa__malloc(8), *b = pa__malloc(8), *c = pa__malloc(8);
+  CHECK(a != NULL);
+  CHECK(b == NULL);
+  CHECK(c != NULL);
+  pa__free(a);
+  pa__free(c);
+  /* A failing allocation inside a library call gives PA_ERR_MEMORY and no leak. */
+  pa_mesh *m = NULL;
+  pa_memory_fail_after(1);
+  CHECK(pa_mesh_create(2, &m) == PA_ERR_MEMORY);
+  CHECK(m == NULL);
+  CHECK(strstr(pa_last_error(), "out of memory") != NULL);
+  pa_memory_fail_after(0);
+}
+
+static void test_mesh_storage(void) {
+  pa_mesh *m = NULL;
+  CHECK(pa_mesh_create(4, &m) == PA_ERR_ARG);
+  CHECK_OK(pa_mesh_create(2, &m));
+  for (int i = 0; i < 100; i++) {
+    double x[2] = {i, 2.0 * i};
+    pa_idx k;
+    CHECK_OK(pa_mesh_add_vertex(m, x, i % 3, &k));
+    CHECK(k == i);
+  }
+  pa_idx t[3] = {0, 1, 2};
+  CHECK_OK(pa_mesh_add_elem(m, t, 7, NULL));
+  CHECK(pa_mesh_nvert(m) == 100);
+  CHECK(pa_mesh_nelem(m) == 1);
+  CHECK(pa_mesh_coords(m)[2 * 50 + 1] == 100.0);
+  CHECK(pa_mesh_elem_refs(m)[0] == 7);
+  CHECK(pa_mesh_add_edge(m, t, 0, NULL) == PA_ERR_ARG); /* 3D only */
+  double *h = malloc(100 * sizeof *h);
+  for (int i = 0; i < 100; i++) h[i] = 0.1;
+  CHECK_OK(pa_mesh_set_metric(m, 1, h));
+  CHECK(pa_mesh_set_metric(m, 2, h) == PA_ERR_ARG);
+  double f[100];
+  for (int i = 0; i < 100; i++) f[i] = i;
+  CHECK_OK(pa_mesh_add_field(m, "u", 1, f));
+  pa_mesh *c = NULL;
+  CHECK_OK(pa_mesh_copy(m, &c));
+  CHECK(pa_mesh_nvert(c) == 100 && pa_mesh_metric_ncomp(c) == 1);
+  double *cv;
+  CHECK_OK(pa_mesh_field(c, 0, NULL, NULL, &cv));
+  CHECK(cv[42] == 42.0);
+  CHECK(pa_mesh_memory_used(c) > 100 * (2 * sizeof(double)));
+  pa_mesh_destroy(c);
+  pa_mesh_destroy(m);
+  free(h);
+}
+
+TEST_MAIN(test_allocator, test_fail_hook, test_mesh_storage)
