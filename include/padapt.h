@@ -185,6 +185,14 @@ pa_status pa_mesh_build_balls(pa_mesh *mesh, const pa_idx **start,
 /** Find the boundary entity with the given dim vertices (any order); -1 if none. */
 pa_status pa_mesh_find_bdry(pa_mesh *mesh, const pa_idx *v, pa_idx *index);
 
+/**
+ * Add the missing boundary entities: every element face that has no
+ * neighbour and is not yet listed becomes a boundary entity of reference ref.
+ * *nadded (may be NULL) receives their number. Meshes read from files that
+ * list no boundary get one this way.
+ */
+pa_status pa_mesh_build_boundary(pa_mesh *mesh, int32_t ref, pa_idx *nadded);
+
 /** Signed volume (3D) or area (2D) of element e. */
 double pa_mesh_elem_volume(const pa_mesh *mesh, pa_idx e);
 /** Sum of the signed element volumes (areas in 2D). */

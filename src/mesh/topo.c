@@ -9,3 +9,4 @@ double pa_mesh_volume(const pa_mesh *m) { (void)m; return 0; }
 pa_status pa_mesh_check(pa_mesh *m) { (void)m; STUB; }
 void pa__elem_face(const pa_mesh *m, pa_idx e, int i, pa_idx *f) { (void)m; (void)e; (void)i; (void)f; }
 double pa__simplex_volume(int dim, const double *const *x) { (void)dim; (void)x; return 0; }
+pa_status pa_mesh_build_boundary(pa_mesh *m, int32_t r, pa_idx *n) { (void)m; (void)r; (void)n; STUB; }

@@ -1,0 +1,36 @@
+/*
+ * cli.h -- shared declarations of the padapt command-line tool. Each command
+ * lives in its own file (tools/cmd_*.c) and returns the process exit status.
+ * The CLI is the only code of padapt allowed to exit().
+ */
+#ifndef PA_CLI_H
+#define PA_CLI_H
+
+#include "padapt.h"
+
+#include <mpi.h>
+
+typedef struct pa_cli {
+  MPI_Comm comm;
+  int rank, size;
+  int verbosity;
+} pa_cli;
+
+/* Commands: argv[0] is the command name; argv[1..argc-1] its arguments. */
+int pa_cli_generate(const pa_cli *cli, int argc, char **argv);
+int pa_cli_metric(const pa_cli *cli, int argc, char **argv);
+int pa_cli_stats(const pa_cli *cli, int argc, char **argv);
+int pa_cli_convert(const pa_cli *cli, int argc, char **argv);
+int pa_cli_adapt(const pa_cli *cli, int argc, char **argv);
+int pa_cli_partition(const pa_cli *cli, int argc, char **argv);
+
+/* Print "padapt: <message>" on stderr (every rank that calls it); returns 1. */
+int pa_cli_error(const pa_cli *cli, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+/* Print the library's last error for status st; returns 1 (0 on success). */
+int pa_cli_fail(const pa_cli *cli, pa_status st);
+
+/* Read a mesh given on the command line (and its metric file if met != NULL). */
+pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path, pa_mesh **mesh);
+
+#endif
