@@ -1,11 +1,279 @@
-/* padapt.c -- command-line entry point (being written). */
+/*
+ * padapt.c -- entry point of the padapt command-line tool: MPI start-up,
+ * global options, command dispatch, and the basic sequential commands
+ * (generate, metric, stats, convert). Heavier commands live in cmd_*.c.
+ *
+ * Every command returns an exit status; main() makes the ranks agree on it
+ * (the maximum) so that `mpiexec` reports a failure on any rank. Commands that
+ * work on one sequential mesh run on rank 0 while the other ranks wait.
+ */
 #include "cli.h"
+
 #include <stdarg.h>
-int pa_cli_generate(const pa_cli *c, int a, char **v) { (void)a; (void)v; return pa_cli_error(c, "not yet"); }
-int pa_cli_metric(const pa_cli *c, int a, char **v) { (void)a; (void)v; return pa_cli_error(c, "not yet"); }
-int pa_cli_stats(const pa_cli *c, int a, char **v) { (void)a; (void)v; return pa_cli_error(c, "not yet"); }
-int pa_cli_convert(const pa_cli *c, int a, char **v) { (void)a; (void)v; return pa_cli_error(c, "not yet"); }
-int pa_cli_error(const pa_cli *cli, const char *fmt, ...) { (void)cli; va_list ap; va_start(ap, fmt); fprintf(stderr, "padapt: "); vfprintf(stderr, fmt, ap); fprintf(stderr, "\n"); va_end(ap); return 1; }
-int pa_cli_fail(const pa_cli *cli, pa_status st) { return st ? pa_cli_error(cli, "%s", pa_last_error()) : 0; }
-pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path, pa_mesh **mesh) { (void)cli; return pa_mesh_read(path, mesh); }
-int main(void) { return 0; }
+#include <stdlib.h>
+#include <string.h>
+
+static const char *usage_text =
+    "usage: padapt [-v N] COMMAND [ARGS]\n"
+    "\n"
+    "Commands:\n"
+    "  generate box2d|box3d N OUT     unit square (n x n x 2 triangles) or cube\n"
+    "                                 (n^3 x 6 tetrahedra) with boundary refs\n"
+    "  metric NAME[:h] IN OUT.sol     a built-in analytic metric on IN's vertices\n"
+    "                                 (names: uniform layer shell iso-shell)\n"
+    "  stats IN [-met SOL] [-json OUT.json]\n"
+    "                                 counts, volume, edge lengths in the metric,\n"
+    "                                 quality, validity (exit 1 if invalid)\n"
+    "  convert IN OUT [-met SOL] [-binary] [-meshb-version V]\n"
+    "                                 formats by extension: .mesh .meshb .msh .vtu\n"
+    "  adapt IN [-met SOL|-sol SOL|-hsiz H] -out OUT [options]\n"
+    "                                 adapt the mesh to the metric (see adapt -h)\n"
+    "  partition IN -out OUT [-overlap K]\n"
+    "                                 write a distributed set OUT.<rank>.meshb\n"
+    "\n"
+    "Global options: -v N (verbosity), -h/--help.\n"
+    "Meshes: Medit .mesh/.meshb, Gmsh .msh (4.1, 2.2); metrics: .sol/.solb.\n"
+    "A mesh that lists no boundary entity gets them all (reference 0) on\n"
+    "reading; one that lists some must list them all.\n";
+
+int pa_cli_error(const pa_cli *cli, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  fprintf(stderr, "padapt: ");
+  if (cli && cli->size > 1) fprintf(stderr, "[rank %d] ", cli->rank);
+  vfprintf(stderr, fmt, ap);
+  fputc('\n', stderr);
+  va_end(ap);
+  return 1;
+}
+
+int pa_cli_fail(const pa_cli *cli, pa_status st) {
+  if (st == PA_SUCCESS) return 0;
+  const char *msg = pa_last_error();
+  return pa_cli_error(cli, "%s", msg[0] ? msg : pa_status_string(st));
+}
+
+pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path,
+                           pa_mesh **mesh) {
+  pa_idx nadded = 0;
+  pa_status st = pa_mesh_read(path, mesh);
+  /* A file that lists no boundary at all gets one; a file that lists some
+   * must list all (a missing one reveals a non-conforming mesh). */
+  if (st == PA_SUCCESS && pa_mesh_nbdry(*mesh) == 0)
+    st = pa_mesh_build_boundary(*mesh, 0, &nadded);
+  if (st == PA_SUCCESS && nadded > 0 && cli->verbosity >= 1)
+    fprintf(stderr, "padapt: %s: added %d missing boundary entities (ref 0)\n",
+            path, (int)nadded);
+  if (st == PA_SUCCESS) {
+    st = pa_mesh_check(*mesh);
+    if (st != PA_SUCCESS) {
+      /* Prefix the file name: the check names the entity, not the file. */
+      char msg[1100];
+      snprintf(msg, sizeof msg, "%s: %s", path, pa_last_error());
+      pa_mesh_destroy(*mesh);
+      *mesh = NULL;
+      fprintf(stderr, "padapt: %s\n", msg);
+      pa_clear_error();
+      return st;
+    }
+  }
+  if (st != PA_SUCCESS) {
+    pa_mesh_destroy(*mesh);
+    *mesh = NULL;
+  }
+  return st;
+}
+
+/* Report a failed read: pa_cli_read_mesh already printed check failures. */
+static int read_failed(const pa_cli *cli, pa_status st) {
+  if (pa_last_error()[0]) return pa_cli_fail(cli, st);
+  return 1;
+}
+
+/* Attach the metric stored in field 0 of a .sol/.solb file. */
+static pa_status attach_metric(pa_mesh *mesh, const char *path) {
+  pa_sol *sol = NULL;
+  pa_status st = pa_sol_read(path, &sol);
+  if (st == PA_SUCCESS) st = pa_mesh_metric_from_sol(mesh, sol, 0);
+  pa_sol_destroy(sol);
+  return st;
+}
+
+int pa_cli_generate(const pa_cli *cli, int argc, char **argv) {
+  if (argc != 4)
+    return pa_cli_error(cli, "usage: padapt generate box2d|box3d N OUT");
+  int dim = !strcmp(argv[1], "box2d") ? 2 : !strcmp(argv[1], "box3d") ? 3 : 0;
+  if (!dim)
+    return pa_cli_error(cli, "generate: unknown shape '%s' (box2d or box3d)",
+                        argv[1]);
+  char *end;
+  long n = strtol(argv[2], &end, 10);
+  if (*end || n < 1 || n > 2000)
+    return pa_cli_error(cli, "generate: N must be an integer in [1, 2000], "
+                             "got '%s'", argv[2]);
+  if (cli->rank != 0) return 0;
+  pa_mesh *mesh = NULL;
+  pa_status st = pa_mesh_generate_box(dim, (int)n, &mesh);
+  if (st == PA_SUCCESS) st = pa_mesh_write(mesh, argv[3], NULL);
+  if (st == PA_SUCCESS && cli->verbosity >= 1)
+    printf("%s: %d vertices, %d elements, %d boundary entities\n", argv[3],
+           (int)pa_mesh_nvert(mesh), (int)pa_mesh_nelem(mesh),
+           (int)pa_mesh_nbdry(mesh));
+  pa_mesh_destroy(mesh);
+  return pa_cli_fail(cli, st);
+}
+
+int pa_cli_metric(const pa_cli *cli, int argc, char **argv) {
+  if (argc != 4)
+    return pa_cli_error(cli, "usage: padapt metric NAME[:h] IN OUT.sol");
+  if (cli->rank != 0) return 0;
+  pa_mesh *mesh = NULL;
+  pa_sol *sol = NULL;
+  pa_status st = pa_cli_read_mesh(cli, argv[2], &mesh);
+  if (st != PA_SUCCESS) return read_failed(cli, st);
+  st = pa_metric_analytic(mesh, argv[1]);
+  if (st == PA_SUCCESS) st = pa_mesh_metric_to_sol(mesh, 0, &sol);
+  if (st == PA_SUCCESS) st = pa_sol_write(sol, argv[3]);
+  pa_sol_destroy(sol);
+  pa_mesh_destroy(mesh);
+  return pa_cli_fail(cli, st);
+}
+
+int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
+  const char *in = NULL, *met = NULL, *json = NULL;
+  for (int i = 1; i < argc; i++) {
+    if (!strcmp(argv[i], "-met") || !strcmp(argv[i], "-sol")) {
+      if (++i >= argc) return pa_cli_error(cli, "stats: -met needs a file");
+      met = argv[i];
+    } else if (!strcmp(argv[i], "-json")) {
+      if (++i >= argc) return pa_cli_error(cli, "stats: -json needs a file");
+      json = argv[i];
+    } else if (argv[i][0] == '-' && argv[i][1]) {
+      return pa_cli_error(cli, "stats: unknown option '%s'", argv[i]);
+    } else if (!in) {
+      in = argv[i];
+    } else {
+      return pa_cli_error(cli, "stats: more than one input ('%s')", argv[i]);
+    }
+  }
+  if (!in)
+    return pa_cli_error(cli,
+                        "usage: padapt stats IN [-met SOL] [-json OUT.json]");
+  if (cli->rank != 0) return 0;
+
+  pa_mesh *mesh = NULL;
+  pa_stats stats;
+  int valid = 1;
+  /* Read without the validity check so that an invalid mesh is still
+   * reported; the check result is part of the statistics. */
+  pa_status st = pa_mesh_read(in, &mesh);
+  if (st == PA_SUCCESS && pa_mesh_nbdry(mesh) == 0) {
+    pa_idx nadded = 0;
+    if (pa_mesh_build_boundary(mesh, 0, &nadded) != PA_SUCCESS) pa_clear_error();
+  }
+  if (st == PA_SUCCESS && met) st = attach_metric(mesh, met);
+  if (st == PA_SUCCESS) st = pa_mesh_stats(mesh, &stats);
+  if (st == PA_SUCCESS) {
+    pa_stats_print(&stats, stdout);
+    fflush(stdout);
+    if (json) st = pa_stats_write_json(&stats, NULL, json);
+  }
+  if (st == PA_SUCCESS && !stats.valid) {
+    valid = 0;
+    pa_mesh_check(mesh); /* recover the message naming the entity */
+    pa_cli_error(cli, "%s: %s", in, pa_last_error());
+  }
+  pa_mesh_destroy(mesh);
+  if (st != PA_SUCCESS) return pa_cli_fail(cli, st);
+  return valid ? 0 : 1;
+}
+
+int pa_cli_convert(const pa_cli *cli, int argc, char **argv) {
+  const char *in = NULL, *out = NULL, *met = NULL;
+  pa_write_opts opts = {0, 0};
+  for (int i = 1; i < argc; i++) {
+    if (!strcmp(argv[i], "-met") || !strcmp(argv[i], "-sol")) {
+      if (++i >= argc) return pa_cli_error(cli, "convert: -met needs a file");
+      met = argv[i];
+    } else if (!strcmp(argv[i], "-binary")) {
+      opts.binary = 1;
+    } else if (!strcmp(argv[i], "-meshb-version")) {
+      if (++i >= argc || atoi(argv[i]) < 1 || atoi(argv[i]) > 4)
+        return pa_cli_error(cli, "convert: -meshb-version needs 1, 2, 3 or 4");
+      opts.version = atoi(argv[i]);
+    } else if (argv[i][0] == '-' && argv[i][1]) {
+      return pa_cli_error(cli, "convert: unknown option '%s'", argv[i]);
+    } else if (!in) {
+      in = argv[i];
+    } else if (!out) {
+      out = argv[i];
+    } else {
+      return pa_cli_error(cli, "convert: too many arguments ('%s')", argv[i]);
+    }
+  }
+  if (!in || !out)
+    return pa_cli_error(cli, "usage: padapt convert IN OUT [-met SOL] "
+                             "[-binary] [-meshb-version V]");
+  if (cli->rank != 0) return 0;
+  pa_mesh *mesh = NULL;
+  pa_status st = pa_cli_read_mesh(cli, in, &mesh);
+  if (st != PA_SUCCESS) return read_failed(cli, st);
+  if (met) st = attach_metric(mesh, met);
+  if (st == PA_SUCCESS) st = pa_mesh_write(mesh, out, &opts);
+  pa_mesh_destroy(mesh);
+  return pa_cli_fail(cli, st);
+}
+
+typedef int (*pa_cli_cmd)(const pa_cli *, int, char **);
+
+static const struct {
+  const char *name;
+  pa_cli_cmd run;
+} commands[] = {{"generate", pa_cli_generate}, {"metric", pa_cli_metric},
+                {"stats", pa_cli_stats},       {"convert", pa_cli_convert},
+                {"adapt", pa_cli_adapt},       {"partition", pa_cli_partition}};
+
+static int dispatch(pa_cli *cli, int argc, char **argv) {
+  int i = 1;
+  while (i < argc && argv[i][0] == '-') {
+    if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) {
+      if (cli->rank == 0) fputs(usage_text, stdout);
+      return 0;
+    } else if (!strcmp(argv[i], "-v") && i + 1 < argc) {
+      cli->verbosity = atoi(argv[i + 1]);
+      i += 2;
+    } else {
+      break;
+    }
+  }
+  pa_set_verbosity(cli->verbosity);
+  if (i >= argc) {
+    if (cli->rank == 0) fputs(usage_text, stderr);
+    return 1;
+  }
+  /* Mmg-style invocation: `padapt -in IN ...` means `padapt adapt -in IN`. */
+  if (!strcmp(argv[i], "-in")) return pa_cli_adapt(cli, argc - i + 1, argv + i - 1);
+  for (size_t k = 0; k < sizeof commands / sizeof *commands; k++)
+    if (!strcmp(argv[i], commands[k].name))
+      return commands[k].run(cli, argc - i, argv + i);
+  if (cli->rank == 0)
+    pa_cli_error(cli, "unknown command '%s' (try padapt --help)", argv[i]);
+  return 1;
+}
+
+int main(int argc, char **argv) {
+  int provided = 0;
+  if (MPI_Init_thread(&argc, &argv, MPI_THREAD_MULTIPLE, &provided) !=
+      MPI_SUCCESS) {
+    fprintf(stderr, "padapt: MPI initialisation failed\n");
+    return 1;
+  }
+  pa_cli cli = {MPI_COMM_WORLD, 0, 1, 0};
+  MPI_Comm_rank(cli.comm, &cli.rank);
+  MPI_Comm_size(cli.comm, &cli.size);
+  int rc = dispatch(&cli, argc, argv);
+  int all = rc;
+  MPI_Allreduce(&rc, &all, 1, MPI_INT, MPI_MAX, cli.comm);
+  MPI_Finalize();
+  return all;
+}

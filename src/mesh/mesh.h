@@ -79,11 +79,29 @@ void pa__mesh_invalidate(pa_mesh *mesh);
 static inline int pa__tensor_ncomp(int dim) { return dim == 2 ? 3 : 6; }
 
 /* Vertices of face i of element e (the face opposite local vertex i), in an
- * order that makes the face's normal point out of e. Writes dim indices. */
+ * order that makes the face's normal point out of e. Writes dim indices.
+ * Orientation convention: a triangle (v0,v1,v2) is positive when
+ * counter-clockwise, a tetrahedron when det(v1-v0, v2-v0, v3-v0) > 0. Faces:
+ *   triangle     0:(v1,v2)  1:(v2,v0)  2:(v0,v1)
+ *   tetrahedron  0:(v1,v2,v3)  1:(v0,v3,v2)  2:(v0,v1,v3)  3:(v0,v2,v1)
+ * For a positive element the face's outward normal is, in 2D, the edge
+ * direction (b - a) turned clockwise, in 3D (b - a) x (c - a): boundary
+ * entities oriented "outward" follow the same rule. */
 void pa__elem_face(const pa_mesh *mesh, pa_idx e, int i, pa_idx *face);
 
-/* Signed volume/area of the simplex with the given dim+1 vertex coordinates. */
+/* Signed volume/area of the simplex with the given dim+1 vertex coordinates
+ * (2D: cross(x1-x0, x2-x0)/2, 3D: det(x1-x0, x2-x0, x3-x0)/6), in plain
+ * floating point. */
 double pa__simplex_volume(int dim, const double *const *x);
+
+/* Exact orientation predicates (predicates.c): a value with the exact sign of
+ * det(b-a, c-a) (2D) or det(b-a, c-a, d-a) (3D), 0 exactly when degenerate;
+ * its magnitude is only approximate. Inputs finite. pa__orient dispatches on
+ * dim with x[0..dim]. */
+double pa__orient2d(const double *a, const double *b, const double *c);
+double pa__orient3d(const double *a, const double *b, const double *c,
+                    const double *d);
+double pa__orient(int dim, const double *const *x);
 
 /* Grow vertex arrays (and metric/fields) to hold at least n vertices. */
 pa_status pa__mesh_grow_vertices(pa_mesh *mesh, size_t n);
