@@ -22,6 +22,8 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include <mpi.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -192,6 +194,10 @@ pa_status pa_mesh_find_bdry(pa_mesh *mesh, const pa_idx *v, pa_idx *index);
  * list no boundary get one this way.
  */
 pa_status pa_mesh_build_boundary(pa_mesh *mesh, int32_t ref, pa_idx *nadded);
+
+/** Drop the cached adjacency, balls and boundary lookup: call it after
+ *  changing entity arrays directly through the raw accessors. */
+void pa_mesh_invalidate(pa_mesh *mesh);
 
 /** Signed volume (3D) or area (2D) of element e. */
 double pa_mesh_elem_volume(const pa_mesh *mesh, pa_idx e);
@@ -415,7 +421,286 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
 /* Distributed mesh (MPI)                                                   */
 /* ------------------------------------------------------------------------ */
 
-/* @@DMESH@@ (section owned by the distributed-mesh work, issue #5) */
+/*
+ * A mesh distributed over the ranks of an MPI communicator (2D or 3D), in the
+ * spirit of PaMPA. Ownership rule (see docs/DMESH.md):
+ *  - every element is owned by exactly one rank (its part);
+ *  - a vertex is owned by the lowest rank owning an element that contains it;
+ *  - a boundary entity or a feature edge is owned by the lowest rank owning an
+ *    element that contains all its vertices.
+ * Ghosts: with overlap K in {0, 1, 2, ...}, ghost layer k holds the elements
+ * that share a vertex with the owned elements or layers < k; every vertex of
+ * a local element is local (owned or ghost), and so is every boundary entity
+ * or edge contained in a local element. Overlap 0 still has ghost vertices:
+ * the interface vertices owned by another rank.
+ * Local numbering of each entity kind: the nowned owned entities first,
+ * [0, nowned), then the ghosts, [nowned, nlocal). Every entity has a 64-bit
+ * global id, unique per kind and kept by redistribution and file round trips.
+ * The local mesh (owned + ghost entities, same numbering) is a pa_mesh with
+ * the metric and user vertex fields of the distributed mesh.
+ * All point-to-point traffic goes through one exchange layer (a star forest
+ * per entity kind, roots = owned entities, leaves = ghost copies).
+ */
+typedef struct pa_dmesh pa_dmesh;
+
+/** Entity kinds of a distributed mesh. */
+typedef enum pa_entity {
+  PA_VERTEX = 0,
+  PA_ELEMENT = 1,
+  PA_BOUNDARY = 2, /**< boundary entities: edges (2D), triangles (3D) */
+  PA_EDGE = 3      /**< feature edges (3D only) */
+} pa_entity;
+
+/**
+ * Distribute a mesh held by rank root. Collective. The root sends contiguous
+ * blocks of the mesh to the ranks one at a time (it never holds more than the
+ * input plus one block in flight), then the ranks partition the dual graph
+ * (elements sharing a face) with PT-Scotch and migrate to the final parts.
+ * Global ids are the 0-based indices of the input. mesh: the mesh on root
+ * (not modified), ignored elsewhere (may be NULL). overlap: ghost layers.
+ * Returns PA_ERR_MESH on an inconsistent mesh (vertex out of range, entity in
+ * no element), the same status on every rank.
+ */
+pa_status pa_dmesh_distribute(MPI_Comm comm, int root, pa_mesh *mesh,
+                              int overlap, pa_dmesh **dm);
+
+/**
+ * Read a distributed mesh. Collective. path is either a sequential mesh file
+ * (any format of pa_mesh_read; read on rank 0, then pa_dmesh_distribute) or
+ * a distributed set written by pa_dmesh_write (see pa_dmesh_is_set) by any
+ * number of ranks: with as many ranks as writers each rank reads its own
+ * file; otherwise the files are shared out and the mesh is repartitioned.
+ * A missing or inconsistent file gives the same error on every rank.
+ */
+pa_status pa_dmesh_read(MPI_Comm comm, const char *path, int overlap,
+                        pa_dmesh **dm);
+
+/**
+ * Write a distributed set. Collective. For path "OUT.meshb" (or "OUT.mesh"),
+ * rank r writes OUT.<r>.meshb: its owned elements with their vertices and
+ * boundary entities as a standard Medit file (readable by any Medit reader),
+ * plus ParMmg's vertex communicators and padapt keywords (global ids, owners,
+ * number of ranks); rank 0 also writes OUT.pvtu referencing OUT.<r>.vtu (owned
+ * elements, cell fields "rank" and "ref"), which ParaView opens. Each file is
+ * written atomically (temporary name, then rename).
+ */
+pa_status pa_dmesh_write(pa_dmesh *dm, const char *path);
+
+/**
+ * 1 if path ("OUT.meshb" or "OUT.mesh") names a distributed set: the file
+ * itself does not exist but OUT.0.meshb (or OUT.0.mesh) does. Not collective.
+ */
+int pa_dmesh_is_set(const char *path);
+
+/**
+ * Read any mesh on rank root: a sequential file is read by root alone; a
+ * distributed set is read by all ranks and gathered on root. Collective.
+ * *mesh is set on root (NULL elsewhere).
+ */
+pa_status pa_dmesh_read_gathered(MPI_Comm comm, int root, const char *path,
+                                 pa_mesh **mesh);
+
+/**
+ * Gather the owned entities of every rank into one mesh on rank root,
+ * numbered by global id (so that gathering a freshly distributed mesh gives
+ * back the input). Metric and vertex fields are gathered; user values that are
+ * vertex values of MPI_DOUBLE on all vertices become vertex fields. Collective;
+ * *mesh is set on root, NULL elsewhere.
+ */
+pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **mesh);
+
+/** Destroy a distributed mesh (NULL allowed). Collective (frees a communicator). */
+void pa_dmesh_destroy(pa_dmesh *dm);
+
+/** The distributed mesh's communicator (a private duplicate). Not collective. */
+MPI_Comm pa_dmesh_comm(const pa_dmesh *dm);
+int pa_dmesh_dim(const pa_dmesh *dm);
+/** Number of ghost element layers. */
+int pa_dmesh_overlap(const pa_dmesh *dm);
+/** Owned entities of a kind on this rank (they are local indices [0, n)). */
+pa_idx pa_dmesh_nowned(const pa_dmesh *dm, pa_entity kind);
+/** Local (owned + ghost) entities of a kind on this rank. */
+pa_idx pa_dmesh_nlocal(const pa_dmesh *dm, pa_entity kind);
+/** Global number of entities of a kind (sum of the owned counts). */
+pa_gid pa_dmesh_nglobal(const pa_dmesh *dm, pa_entity kind);
+/** Global ids of the local entities of a kind (nlocal). */
+const pa_gid *pa_dmesh_gids(const pa_dmesh *dm, pa_entity kind);
+/** Owner rank of each local entity of a kind (nlocal). */
+const int *pa_dmesh_owners(const pa_dmesh *dm, pa_entity kind);
+/** Layer of each local element: 0 owned, k for a ghost of layer k. */
+const uint8_t *pa_dmesh_elem_layers(const pa_dmesh *dm);
+/** The ranks this rank exchanges with; returns their number. */
+int pa_dmesh_neighbours(const pa_dmesh *dm, const int **ranks);
+/**
+ * The local mesh: owned and ghost entities in local numbering. Callers may
+ * read it and change coordinates, references, flags, metric and fields (then
+ * call pa_dmesh_sync_mesh to make ghosts equal owners again); adding or
+ * removing entities breaks the distribution.
+ */
+pa_mesh *pa_dmesh_mesh(pa_dmesh *dm);
+/** Collective: copy coordinates, references, flags, metric and fields of
+ *  owned entities to their ghosts. */
+pa_status pa_dmesh_sync_mesh(pa_dmesh *dm);
+/** Bytes used by this rank's part (mesh, ids, exchange patterns, values). */
+size_t pa_dmesh_memory_used(const pa_dmesh *dm);
+
+/* ---- values attached to entities ---- */
+
+/** A user value: ncomp items of an MPI datatype per entity of one kind. */
+typedef struct pa_dmesh_value pa_dmesh_value;
+
+/**
+ * Attach a value (initialised to zero) to the entities of a kind, or only to
+ * the entities of reference ref (a sub-class, e.g. boundary faces of
+ * reference 3); ref = -1 for all. type: any MPI datatype whose extent equals
+ * its size (MPI_DOUBLE, MPI_INT, a contiguous type, MPI_BYTE with ncomp =
+ * bytes...); reductions need a predefined type. Values follow the entities
+ * through redistribution and reordering. Collective (same calls in the same
+ * order on every rank). The value belongs to dm (freed by
+ * pa_dmesh_value_remove or pa_dmesh_destroy).
+ */
+pa_status pa_dmesh_value_add(pa_dmesh *dm, pa_entity kind, const char *name,
+                             MPI_Datatype type, int ncomp, int32_t ref,
+                             pa_dmesh_value **value);
+/** Find a value by name (NULL if none). Not collective. */
+pa_dmesh_value *pa_dmesh_value_find(pa_dmesh *dm, const char *name);
+/** Detach and free a value. Collective. */
+pa_status pa_dmesh_value_remove(pa_dmesh *dm, pa_dmesh_value *value);
+/**
+ * Data of a value: *n (may be NULL) receives the number of local entities
+ * holding it (all local entities of the kind when ref = -1), *nowned the
+ * number of those that are owned (the first ones); the data holds n blocks of
+ * ncomp items. Pointer valid until the distribution changes
+ * (pa_dmesh_redistribute, pa_dmesh_reorder).
+ */
+void *pa_dmesh_value_data(pa_dmesh_value *value, pa_idx *n, pa_idx *nowned);
+/** Local entity of each block of a sub-class value (NULL when ref = -1: block
+ *  i is entity i). */
+const pa_idx *pa_dmesh_value_entities(const pa_dmesh_value *value);
+/** Kind, name, type, number of components and sub-class of a value. */
+void pa_dmesh_value_info(const pa_dmesh_value *value, pa_entity *kind,
+                         const char **name, MPI_Datatype *type, int *ncomp,
+                         int32_t *ref);
+
+/* ---- exchange ---- */
+
+/**
+ * Owner -> ghost update of a value: every ghost block receives its owner's.
+ * pa_dmesh_halo = begin + end; between begin and end the caller may work on
+ * owned data (not on ghosts); only one exchange per value at a time.
+ * Collective over the neighbour ranks (every rank must call it); begin and end
+ * never allocate, so they fail only on invalid arguments.
+ */
+pa_status pa_dmesh_halo(pa_dmesh *dm, pa_dmesh_value *value);
+pa_status pa_dmesh_halo_begin(pa_dmesh *dm, pa_dmesh_value *value);
+pa_status pa_dmesh_halo_end(pa_dmesh *dm, pa_dmesh_value *value);
+/**
+ * Ghost -> owner reduction: owner = op(owner, each ghost copy), op MPI_SUM,
+ * MPI_MIN or MPI_MAX (any predefined MPI_Op on a predefined type). Ghost
+ * blocks are left as they are (follow with pa_dmesh_halo to update them).
+ * Contributions are combined in rank order, so results do not depend on
+ * timing. Same collective rules as pa_dmesh_halo.
+ */
+pa_status pa_dmesh_reduce(pa_dmesh *dm, pa_dmesh_value *value, MPI_Op op);
+pa_status pa_dmesh_reduce_begin(pa_dmesh *dm, pa_dmesh_value *value);
+pa_status pa_dmesh_reduce_end(pa_dmesh *dm, pa_dmesh_value *value, MPI_Op op);
+
+/* ---- iterators and adjacency ---- */
+
+/** Entity sets to iterate over. */
+typedef enum pa_dmesh_set {
+  PA_OWNED,    /**< owned entities */
+  PA_GHOST,    /**< ghost entities */
+  PA_LOCAL,    /**< owned and ghost */
+  PA_INTERIOR, /**< owned, none of whose vertices has a copy on another rank:
+                    computable without any halo data */
+  PA_FRONTIER  /**< owned, not interior */
+} pa_dmesh_set;
+
+/** Iterator state (plain struct, no allocation). */
+typedef struct pa_dmesh_iter {
+  const pa_idx *list; /**< explicit list, or NULL for the range [first, end) */
+  pa_idx first, end, pos;
+} pa_dmesh_iter;
+
+/** Start iterating over a set of entities of a kind (builds the interior and
+ *  frontier lists on first use). Not collective. */
+pa_status pa_dmesh_iter_init(pa_dmesh *dm, pa_entity kind, pa_dmesh_set set,
+                             pa_dmesh_iter *it);
+/** Next local entity index in *i; returns 0 when the set is exhausted. */
+static inline int pa_dmesh_iter_next(pa_dmesh_iter *it, pa_idx *i) {
+  if (it->pos >= it->end) return 0;
+  *i = it->list ? it->list[it->pos] : it->pos;
+  it->pos++;
+  return 1;
+}
+/** Number of entities of the set (without moving the iterator). */
+static inline pa_idx pa_dmesh_iter_count(const pa_dmesh_iter *it) {
+  return it->end - it->first;
+}
+
+/** Local vertices of local element e (dim+1). Not collective. */
+const pa_idx *pa_dmesh_elem_verts(pa_dmesh *dm, pa_idx e);
+/** Local elements containing local vertex v: *n of them in (*elems)[0..n).
+ *  Complete for owned vertices when overlap >= 1. Not collective. */
+pa_status pa_dmesh_vert_elems(pa_dmesh *dm, pa_idx v, pa_idx *n,
+                              const pa_idx **elems);
+/**
+ * Face neighbours of local element e: nb[i] is the local element across the
+ * face opposite vertex i, or -1 if there is none in the local mesh (a domain
+ * boundary face, or -- for owned elements with overlap 0 and ghosts of the
+ * last layer -- a face whose neighbour is not local). Not collective.
+ */
+pa_status pa_dmesh_elem_neighbours(pa_dmesh *dm, pa_idx e, const pa_idx **nb);
+/** The (one or two) local elements having boundary entity b as a face;
+ *  e[1] = -1 if only one. Not collective. */
+pa_status pa_dmesh_bdry_elems(pa_dmesh *dm, pa_idx b, pa_idx e[2]);
+
+/**
+ * Renumber owned and ghost entities separately for locality: elements by
+ * the Hilbert curve index of their centroid, vertices by first use in the
+ * new element order, boundary entities and edges by their first vertex.
+ * Owned entities stay first; values, ids and owners follow. Collective
+ * (rebuilds the exchange patterns).
+ */
+pa_status pa_dmesh_reorder(pa_dmesh *dm);
+
+/**
+ * Move elements to new owners and migrate their vertices, boundary entities,
+ * edges and every value; ghosts are rebuilt, global ids kept. newpart: new
+ * owner rank of each owned element, or NULL to repartition with PT-Scotch on
+ * the distributed dual graph (weights: one per owned element, or NULL for
+ * unit weights), parts being remapped to the ranks that already hold most of
+ * them. Collective.
+ */
+pa_status pa_dmesh_redistribute(pa_dmesh *dm, const int *newpart,
+                                const double *weights);
+
+/**
+ * Check the distributed mesh; collective, returns the same status on every
+ * rank (PA_ERR_MESH with a message naming the entity): global ids unique and
+ * counts consistent, every ghost equal to its owner (coordinates, reference,
+ * vertices by global id), owners following the ownership rule, conformity
+ * across ranks (no face shared by more than two elements), positive
+ * orientation of owned elements, owned-first numbering.
+ */
+pa_status pa_dmesh_check(pa_dmesh *dm);
+
+/**
+ * A checksum of the mesh and its values that depends neither on the number
+ * of ranks nor on the numbering: the sum over owned entities of hashes of
+ * their coordinates, references, sorted vertex coordinates and orientation,
+ * and value bytes. Collective; the same on every rank.
+ */
+pa_status pa_dmesh_checksum(pa_dmesh *dm, uint64_t *checksum);
+
+/**
+ * Partition quality: owned elements per rank (nelem array of the
+ * communicator's size, may be NULL), imbalance max/mean and edge cut (faces
+ * between elements of different owners). Collective, results on every rank.
+ */
+pa_status pa_dmesh_partition_stats(pa_dmesh *dm, pa_gid *nelem,
+                                   double *imbalance, pa_gid *edgecut);
 
 #ifdef __cplusplus
 }

@@ -23,6 +23,10 @@ cleanup:
   return st;
 }
 
+void pa_mesh_invalidate(pa_mesh *mesh) {
+  if (mesh) pa__mesh_invalidate(mesh);
+}
+
 void pa__mesh_invalidate(pa_mesh *mesh) {
   pa__free(mesh->adja);
   pa__free(mesh->ball_start);
@@ -207,9 +211,6 @@ cleanup:
   return st;
 }
 
-/* Declared in metric/metric.h; kept here to avoid a dependency cycle. */
-int pa__metric_valid(int dim, int ncomp, const double *m);
-
 pa_status pa_mesh_set_metric(pa_mesh *m, int ncomp, const double *values) {
   pa_status st = PA_SUCCESS;
   double *met = NULL;
@@ -282,23 +283,30 @@ pa_status pa_mesh_copy(const pa_mesh *src, pa_mesh **dst) {
   m->ne = src->ne;
   m->nb = src->nb;
   m->ned = src->ned;
-  memcpy(m->coord, src->coord, sizeof(double) * d * src->nv);
-  memcpy(m->vref, src->vref, sizeof(int32_t) * src->nv);
-  memcpy(m->vflag, src->vflag, src->nv);
-  memcpy(m->elem, src->elem, sizeof(pa_idx) * (d + 1) * src->ne);
-  memcpy(m->eref, src->eref, sizeof(int32_t) * src->ne);
-  memcpy(m->eflag, src->eflag, src->ne);
-  memcpy(m->bdry, src->bdry, sizeof(pa_idx) * d * src->nb);
-  memcpy(m->bref, src->bref, sizeof(int32_t) * src->nb);
-  memcpy(m->bflag, src->bflag, src->nb);
-  memcpy(m->edge, src->edge, sizeof(pa_idx) * 2 * src->ned);
-  memcpy(m->edref, src->edref, sizeof(int32_t) * src->ned);
-  memcpy(m->edflag, src->edflag, src->ned);
+  /* Empty arrays may be NULL: copy only what exists (memcpy(NULL,..,0) is
+   * undefined behaviour). */
+#define PA_COPY(dst, srcp, n)                                                \
+  do {                                                                       \
+    if ((n) > 0) memcpy((dst), (srcp), (n) * sizeof(*(srcp)));               \
+  } while (0)
+  PA_COPY(m->coord, src->coord, (size_t)d * src->nv);
+  PA_COPY(m->vref, src->vref, (size_t)src->nv);
+  PA_COPY(m->vflag, src->vflag, (size_t)src->nv);
+  PA_COPY(m->elem, src->elem, (size_t)(d + 1) * src->ne);
+  PA_COPY(m->eref, src->eref, (size_t)src->ne);
+  PA_COPY(m->eflag, src->eflag, (size_t)src->ne);
+  PA_COPY(m->bdry, src->bdry, (size_t)d * src->nb);
+  PA_COPY(m->bref, src->bref, (size_t)src->nb);
+  PA_COPY(m->bflag, src->bflag, (size_t)src->nb);
+  PA_COPY(m->edge, src->edge, (size_t)2 * src->ned);
+  PA_COPY(m->edref, src->edref, (size_t)src->ned);
+  PA_COPY(m->edflag, src->edflag, (size_t)src->ned);
   if (src->met_ncomp)
-    memcpy(m->met, src->met, sizeof(double) * src->met_ncomp * src->nv);
+    PA_COPY(m->met, src->met, (size_t)src->met_ncomp * src->nv);
   for (int k = 0; k < src->nfield; k++)
-    memcpy(m->field[k].val, src->field[k].val,
-           sizeof(double) * src->field[k].ncomp * src->nv);
+    PA_COPY(m->field[k].val, src->field[k].val,
+            (size_t)src->field[k].ncomp * src->nv);
+#undef PA_COPY
   *dst = m;
   m = NULL;
 cleanup:

@@ -72,6 +72,11 @@ struct pa_mesh {
   size_t bhash_cap;
 };
 
+/* 1 if a metric value is a finite positive size (ncomp 1) or a finite SPD
+ * tensor. Implemented in src/metric/metric.c; declared here because the mesh
+ * check uses it and mesh/ sits below metric/. */
+int pa__metric_valid(int dim, int ncomp, const double *m);
+
 /* Free derived structures after a topological change. */
 void pa__mesh_invalidate(pa_mesh *mesh);
 
