@@ -25,8 +25,8 @@ static inline int pa__sym_index(int i, int j) {
   return j * (j + 1) / 2 + i;
 }
 
-/* 1 if the value is a finite positive size (ncomp 1) or a finite SPD tensor. */
-int pa__metric_valid(int dim, int ncomp, const double *m);
+/* pa__metric_valid (finite positive size or SPD tensor) is declared in
+ * mesh/mesh.h, which the mesh check needs. */
 
 /* Expand a metric value to a full tensor (3 or 6 components). */
 void pa__metric_tensor(int dim, int ncomp, const double *m, double *t);

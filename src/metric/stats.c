@@ -1,7 +1,300 @@
-/* stats.c -- STUB, being written: quality and mesh statistics. */
+/*
+ * stats.c -- element quality and mesh statistics (pa_mesh_stats), their
+ * human-readable report and their JSON form.
+ *
+ * pa_mesh_stats makes three streaming passes and never builds the mesh's
+ * derived structures itself:
+ *  1. over elements: index check, signed volume, quality, and the number of
+ *     edge instances (v, w) filed under their smaller vertex v;
+ *  2. over elements again: the larger vertex of each instance written into a
+ *     CSR array keyed by the smaller one (6 pa_idx per tetrahedron);
+ *  3. over vertices v: the instances filed under v, deduplicated with a
+ *     marker array (mark[w] == v means (v, w) was seen), each unique edge
+ *     measured once with pa__edge_length.
+ * Time O(nelem + nvert), memory 4 bytes per edge instance plus 12 bytes per
+ * vertex, all freed before returning. The validity check (pa_mesh_check)
+ * runs last, after that memory is released.
+ *
+ * Conventions: edge lengths use the vertex metrics (identity when the mesh
+ * has none) and the geometric formula of metric.c; an element whose two
+ * vertices coincide contributes no edge. Quality bins take floor(Q / 0.2)
+ * clamped to [0, 4], so inverted elements (Q < 0) count in the first bin and
+ * every element in exactly one bin. When there are no edges (elements),
+ * their min/max/sum are 0.
+ */
+#include "io/io.h"
 #include "metric/metric.h"
-#define STUB return pa__error(PA_ERR_UNSUPPORTED, __FILE__, __LINE__, "not yet implemented")
-double pa_mesh_elem_quality(pa_mesh *m, pa_idx e) { (void)m; (void)e; return 0; }
-pa_status pa_mesh_stats(pa_mesh *m, pa_stats *s) { (void)m; (void)s; STUB; }
-void pa_stats_print(const pa_stats *s, FILE *out) { (void)s; (void)out; }
-pa_status pa_stats_write_json(const pa_stats *s, const char *extra, const char *path) { (void)s; (void)extra; (void)path; STUB; }
+
+#include <math.h>
+
+/* Upper bounds of the edge-length bins 0..7 (bin 8 is [5, inf)); literal
+ * values as printed by Mmg, so 0.7071 is not 1/sqrt(2). */
+static const double edge_bounds[PA_STATS_EDGE_NBIN - 2] = {
+    0.3, 0.6, 0.7071, 0.9, 1.3, 1.4142, 2.0, 5.0};
+#define IN_RANGE_LO 0.7071
+#define IN_RANGE_HI 1.4142
+
+double pa_mesh_elem_quality(pa_mesh *mesh, pa_idx e) {
+  if (!mesh || e < 0 || e >= mesh->ne) return NAN;
+  int dim = mesh->dim, nc = mesh->met_ncomp;
+  const pa_idx *v = mesh->elem + (size_t)(dim + 1) * e;
+  const double *x[4], *m[4];
+  for (int k = 0; k <= dim; k++) {
+    if (v[k] < 0 || v[k] >= mesh->nv) return NAN;
+    x[k] = mesh->coord + (size_t)dim * v[k];
+    m[k] = nc ? mesh->met + (size_t)nc * v[k] : NULL;
+  }
+  return pa__quality(dim, nc, x, m);
+}
+
+/* Neumaier's compensated sum: totals do not drift with the count (the volume
+ * equals pa_mesh_volume's, which sums in the same order). */
+typedef struct ksum {
+  double s, c;
+} ksum;
+
+static inline void ksum_add(ksum *k, double x) {
+  double t = k->s + x;
+  k->c += fabs(k->s) >= fabs(x) ? (k->s - t) + x : (x - t) + k->s;
+  k->s = t;
+}
+
+static void add_edge_length(pa_stats *s, ksum *sum, double len) {
+  int b = 0;
+  while (b < PA_STATS_EDGE_NBIN - 2 && len >= edge_bounds[b])
+    b++;
+  s->edge_hist[b]++;
+  if (len >= IN_RANGE_LO && len < IN_RANGE_HI)
+    s->edge_hist[PA_STATS_EDGE_NBIN - 1]++;
+  if (s->nedge == 0 || len < s->edge_min) s->edge_min = len;
+  if (s->nedge == 0 || len > s->edge_max) s->edge_max = len;
+  ksum_add(sum, len);
+  s->nedge++;
+}
+
+static void add_quality(pa_stats *s, ksum *sum, double q, pa_gid count_before) {
+  int b = (int)floor(q / 0.2);
+  if (!(b >= 0)) b = 0; /* also NaN */
+  if (b >= PA_STATS_QUAL_NBIN) b = PA_STATS_QUAL_NBIN - 1;
+  s->qual_hist[b]++;
+  if (q > 0.5) s->qual_above_05++;
+  if (q > 0.12) s->qual_above_012++;
+  if (count_before == 0 || q < s->qual_min) s->qual_min = q;
+  if (count_before == 0 || q > s->qual_max) s->qual_max = q;
+  ksum_add(sum, q);
+}
+
+pa_status pa_mesh_stats(pa_mesh *mesh, pa_stats *stats) {
+  pa_status st = PA_SUCCESS;
+  size_t *pos = NULL;
+  pa_idx *other = NULL, *mark = NULL;
+  PA_CHECK(mesh && stats, PA_ERR_ARG, "pa_mesh_stats: NULL argument");
+  pa_stats s;
+  memset(&s, 0, sizeof s);
+  int dim = mesh->dim, nve = dim + 1, nc = mesh->met_ncomp;
+  pa_idx nv = mesh->nv, ne = mesh->ne;
+  s.dim = dim;
+  s.has_metric = nc > 0;
+  s.nvert = nv;
+  s.nelem = ne;
+  s.nbdry = mesh->nb;
+  ksum vol_sum = {0, 0}, edge_sum = {0, 0}, qual_sum = {0, 0};
+
+  /* Pass 1: volumes, qualities, edge instances per smaller vertex. */
+  PA_CALLOC(pos, (size_t)nv + 1);
+  for (pa_idx e = 0; e < ne; e++) {
+    const pa_idx *v = mesh->elem + (size_t)nve * e;
+    const double *x[4], *m[4];
+    for (int k = 0; k < nve; k++) {
+      PA_CHECK(v[k] >= 0 && v[k] < nv, PA_ERR_MESH,
+               "element %ld: vertex index %ld out of range (the mesh has %ld "
+               "vertices)",
+               (long)e + 1, (long)v[k] + 1, (long)nv);
+      x[k] = mesh->coord + (size_t)dim * v[k];
+      m[k] = nc ? mesh->met + (size_t)nc * v[k] : NULL;
+    }
+    double vol = pa__simplex_volume(dim, x);
+    ksum_add(&vol_sum, vol);
+    if (vol <= 0.0) s.ninverted++;
+    add_quality(&s, &qual_sum, pa__quality(dim, nc, x, m), e);
+    for (int i = 0; i < nve; i++)
+      for (int j = i + 1; j < nve; j++)
+        if (v[i] != v[j]) pos[(v[i] < v[j] ? v[i] : v[j]) + 1]++;
+  }
+  for (pa_idx i = 0; i < nv; i++)
+    pos[i + 1] += pos[i];
+
+  /* Pass 2: fill; pos[v] moves from the start to the end of v's range, so
+   * afterwards v's instances are other[v ? pos[v-1] : 0 .. pos[v]-1]. */
+  PA_ALLOC(other, pos[nv]);
+  for (pa_idx e = 0; e < ne; e++) {
+    const pa_idx *v = mesh->elem + (size_t)nve * e;
+    for (int i = 0; i < nve; i++)
+      for (int j = i + 1; j < nve; j++) {
+        pa_idx a = v[i], b = v[j];
+        if (a == b) continue;
+        if (a > b) {
+          pa_idx t = a;
+          a = b;
+          b = t;
+        }
+        other[pos[a]++] = b;
+      }
+  }
+
+  /* Pass 3: unique edges and their lengths. */
+  PA_ALLOC(mark, nv);
+  for (pa_idx i = 0; i < nv; i++)
+    mark[i] = -1;
+  for (pa_idx v = 0; v < nv; v++) {
+    size_t begin = v ? pos[v - 1] : 0, end = pos[v];
+    const double *xv = mesh->coord + (size_t)dim * v;
+    const double *mv = nc ? mesh->met + (size_t)nc * v : NULL;
+    for (size_t k = begin; k < end; k++) {
+      pa_idx w = other[k];
+      if (mark[w] == v) continue;
+      mark[w] = v;
+      const double *xw = mesh->coord + (size_t)dim * w;
+      const double *mw = nc ? mesh->met + (size_t)nc * w : NULL;
+      add_edge_length(&s, &edge_sum, pa__edge_length(dim, nc, xv, xw, mv, mw));
+    }
+  }
+  s.volume = vol_sum.s + vol_sum.c;
+  s.edge_sum = edge_sum.s + edge_sum.c;
+  s.qual_sum = qual_sum.s + qual_sum.c;
+  pa__free(pos);
+  pa__free(other);
+  pa__free(mark);
+  pos = NULL;
+  other = mark = NULL;
+
+  /* Validity last: it may build adjacency, so our arrays are gone by now. */
+  pa_status chk = pa_mesh_check(mesh);
+  if (chk == PA_ERR_MEMORY) PA_CALL(chk);
+  s.valid = chk == PA_SUCCESS;
+  if (!s.valid) {
+    pa__info(1, "pa_mesh_stats: mesh check failed: %s", pa_last_error());
+    pa_clear_error();
+  }
+  *stats = s;
+cleanup:
+  pa__free(pos);
+  pa__free(other);
+  pa__free(mark);
+  return st;
+}
+
+static double pct(pa_gid n, pa_gid total) {
+  return total > 0 ? 100.0 * (double)n / (double)total : 0.0;
+}
+
+void pa_stats_print(const pa_stats *s, FILE *out) {
+  if (!s || !out) return;
+  static const char *edge_labels[PA_STATS_EDGE_NBIN - 1] = {
+      "0      <= L < 0.3   ", "0.3    <= L < 0.6   ", "0.6    <= L < 0.7071",
+      "0.7071 <= L < 0.9   ", "0.9    <= L < 1.3   ", "1.3    <= L < 1.4142",
+      "1.4142 <= L < 2     ", "2      <= L < 5     ", "5      <= L         "};
+  static const char *qual_labels[PA_STATS_QUAL_NBIN] = {
+      "       Q < 0.2", "0.2 <= Q < 0.4", "0.4 <= Q < 0.6", "0.6 <= Q < 0.8",
+      "0.8 <= Q      "};
+  int d2 = s->dim == 2;
+  fprintf(out, " -- MESH STATISTICS (%dD)\n", s->dim);
+  fprintf(out, "    %-22s%lld\n", "vertices", (long long)s->nvert);
+  fprintf(out, "    %-22s%lld\n", d2 ? "triangles" : "tetrahedra",
+          (long long)s->nelem);
+  fprintf(out, "    %-22s%lld\n", d2 ? "boundary edges" : "boundary triangles",
+          (long long)s->nbdry);
+  fprintf(out, "    %-22s%.10g\n", d2 ? "area" : "volume", s->volume);
+  fprintf(out, "    %-22s%lld\n", "inverted elements", (long long)s->ninverted);
+  fprintf(out, "    %-22s%s\n", "mesh check", s->valid ? "valid" : "INVALID");
+
+  fprintf(out, " -- EDGE LENGTHS (%s)   %lld edges\n",
+          s->has_metric ? "in the metric" : "no metric: Euclidean",
+          (long long)s->nedge);
+  if (s->nedge > 0) {
+    fprintf(out, "    average length        %.6f\n",
+            s->edge_sum / (double)s->nedge);
+    fprintf(out, "    smallest length       %.6f\n", s->edge_min);
+    fprintf(out, "    largest length        %.6f\n", s->edge_max);
+    pa_gid inr = s->edge_hist[PA_STATS_EDGE_NBIN - 1];
+    fprintf(out, "    0.7071 <= L < 1.4142  %12lld   %6.2f %%\n",
+            (long long)inr, pct(inr, s->nedge));
+    for (int b = 0; b < PA_STATS_EDGE_NBIN - 1; b++)
+      if (s->edge_hist[b] > 0)
+        fprintf(out, "      %s  %12lld   %6.2f %%\n", edge_labels[b],
+                (long long)s->edge_hist[b], pct(s->edge_hist[b], s->nedge));
+  }
+
+  fprintf(out, " -- ELEMENT QUALITY   %lld elements\n", (long long)s->nelem);
+  if (s->nelem > 0) {
+    fprintf(out, "    best                  %.6f\n", s->qual_max);
+    fprintf(out, "    average               %.6f\n",
+            s->qual_sum / (double)s->nelem);
+    fprintf(out, "    worst                 %.6g\n", s->qual_min);
+    for (int b = PA_STATS_QUAL_NBIN - 1; b >= 0; b--)
+      if (s->qual_hist[b] > 0)
+        fprintf(out, "      %s        %12lld   %6.2f %%\n", qual_labels[b],
+                (long long)s->qual_hist[b], pct(s->qual_hist[b], s->nelem));
+    fprintf(out, "    Q > 0.5               %12lld   %6.2f %%\n",
+            (long long)s->qual_above_05, pct(s->qual_above_05, s->nelem));
+    fprintf(out, "    Q > 0.12              %12lld   %6.2f %%\n",
+            (long long)s->qual_above_012, pct(s->qual_above_012, s->nelem));
+  }
+}
+
+/* A JSON number (%.17g round-trips), or null when not finite. */
+static void json_double(FILE *fp, const char *key, double x) {
+  if (isfinite(x))
+    fprintf(fp, "  \"%s\": %.17g,\n", key, x);
+  else
+    fprintf(fp, "  \"%s\": null,\n", key);
+}
+
+static double ratio(pa_gid n, pa_gid total) {
+  return total > 0 ? (double)n / (double)total : 0.0;
+}
+
+pa_status pa_stats_write_json(const pa_stats *s, const char *extra,
+                              const char *path) {
+  pa_status st = PA_SUCCESS;
+  pa_outfile out = {0};
+  PA_CHECK(s && path, PA_ERR_ARG, "pa_stats_write_json: NULL argument");
+  PA_CALL(pa__out_open(&out, path));
+  FILE *fp = out.fp;
+  fprintf(fp, "{\n");
+  fprintf(fp, "  \"dim\": %d,\n", s->dim);
+  fprintf(fp, "  \"vertices\": %lld,\n", (long long)s->nvert);
+  fprintf(fp, "  \"elements\": %lld,\n", (long long)s->nelem);
+  fprintf(fp, "  \"boundary\": %lld,\n", (long long)s->nbdry);
+  json_double(fp, "volume", s->volume);
+  fprintf(fp, "  \"inverted\": %lld,\n", (long long)s->ninverted);
+  fprintf(fp, "  \"valid\": %s,\n", s->valid ? "true" : "false");
+  fprintf(fp, "  \"has_metric\": %s,\n", s->has_metric ? "true" : "false");
+  fprintf(fp, "  \"edges\": %lld,\n", (long long)s->nedge);
+  json_double(fp, "edge_min", s->edge_min);
+  json_double(fp, "edge_max", s->edge_max);
+  json_double(fp, "edge_mean",
+              s->nedge > 0 ? s->edge_sum / (double)s->nedge : 0.0);
+  json_double(fp, "edge_in_range",
+              ratio(s->edge_hist[PA_STATS_EDGE_NBIN - 1], s->nedge));
+  fprintf(fp, "  \"edge_hist\": [");
+  for (int b = 0; b < PA_STATS_EDGE_NBIN; b++)
+    fprintf(fp, "%s%lld", b ? ", " : "", (long long)s->edge_hist[b]);
+  fprintf(fp, "],\n");
+  json_double(fp, "quality_worst", s->qual_min);
+  json_double(fp, "quality_mean",
+              s->nelem > 0 ? s->qual_sum / (double)s->nelem : 0.0);
+  json_double(fp, "quality_best", s->qual_max);
+  json_double(fp, "quality_above_0.5", ratio(s->qual_above_05, s->nelem));
+  json_double(fp, "quality_above_0.12", ratio(s->qual_above_012, s->nelem));
+  fprintf(fp, "  \"quality_hist\": [");
+  for (int b = 0; b < PA_STATS_QUAL_NBIN; b++)
+    fprintf(fp, "%s%lld", b ? ", " : "", (long long)s->qual_hist[b]);
+  fprintf(fp, "]");
+  if (extra && extra[0]) fprintf(fp, ",\n  %s", extra);
+  fprintf(fp, "\n}\n");
+  PA_CALL(pa__out_commit(&out));
+cleanup:
+  pa__out_abort(&out);
+  return st;
+}
