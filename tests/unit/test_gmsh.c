@@ -1,0 +1,622 @@
+/*
+ * test_gmsh.c -- Gmsh .msh reader and writer: 2D and 3D round trips in ASCII
+ * and binary (coordinates bit for bit, connectivity, references, boundary,
+ * feature edges, corners), hand-written MSH 4.1 and 2.2 files, error messages,
+ * every truncation and random corruptions of a file, allocation failures, and
+ * the malformed files of tests/data/bad (gmsh.expected).
+ */
+#include "testutil.h"
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+/* ---- test meshes, built by hand ---- */
+
+/* Unit square, n x n squares of two triangles, coordinates jittered so that
+ * they have no short decimal form. Element references by column half (sorted
+ * in element order), boundary references 1..4, corners flagged with ref 7. */
+static pa_mesh *make_square(int n) {
+  pa_mesh *m = NULL;
+  if (pa_mesh_create(2, &m)) return NULL;
+  pa_test_seed(42);
+  for (int j = 0; j <= n; j++)
+    for (int i = 0; i <= n; i++) {
+      double x[2] = {(double)i / n, (double)j / n};
+      if (i > 0 && i < n) x[0] += pa_test_rand_range(-0.1, 0.1) / n;
+      if (j > 0 && j < n) x[1] += pa_test_rand_range(-0.1, 0.1) / n;
+      pa_mesh_add_vertex(m, x, 0, NULL);
+    }
+  for (int half = 0; half < 2; half++)
+    for (int j = 0; j < n; j++)
+      for (int i = half * n / 2; i < (half + 1) * n / 2; i++) {
+        pa_idx a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+        pa_idx t1[3] = {a, b, c}, t2[3] = {a, c, d};
+        pa_mesh_add_elem(m, t1, half + 1, NULL);
+        pa_mesh_add_elem(m, t2, half + 1, NULL);
+      }
+  for (int k = 0; k < n; k++) {
+    pa_idx e1[2] = {k * (n + 1), (k + 1) * (n + 1)};         /* x=0 */
+    pa_idx e2[2] = {k * (n + 1) + n, (k + 1) * (n + 1) + n}; /* x=1 */
+    pa_idx e3[2] = {k, k + 1};                               /* y=0 */
+    pa_idx e4[2] = {n * (n + 1) + k, n * (n + 1) + k + 1};   /* y=1 */
+    pa_mesh_add_bdry(m, e1, 1, NULL);
+    pa_mesh_add_bdry(m, e2, 2, NULL);
+    pa_mesh_add_bdry(m, e3, 3, NULL);
+    pa_mesh_add_bdry(m, e4, 4, NULL);
+  }
+  pa_idx corners[4] = {0, n, n * (n + 1), n * (n + 1) + n};
+  for (int k = 0; k < 4; k++) {
+    pa_mesh_vert_flags(m)[corners[k]] |= PA_FLAG_CORNER;
+    pa_mesh_vert_refs(m)[corners[k]] = 7;
+  }
+  return m;
+}
+
+/* Unit cube, n^3 hexahedra of six tetrahedra, jittered coordinates; element
+ * references 1 then 2 (sorted); boundary triangles on z = 0 (ref 5) and
+ * z = 1 (ref 6); feature edges along the x axis (ref 9); corner 0 flagged. */
+static pa_mesh *make_cube(int n) {
+  pa_mesh *m = NULL;
+  if (pa_mesh_create(3, &m)) return NULL;
+  pa_test_seed(7);
+  int p = n + 1;
+  for (int k = 0; k <= n; k++)
+    for (int j = 0; j <= n; j++)
+      for (int i = 0; i <= n; i++) {
+        double x[3] = {(double)i / n, (double)j / n, (double)k / n};
+        for (int d = 0; d < 3; d++)
+          x[d] += pa_test_rand_range(-1e-3, 1e-3);
+        pa_mesh_add_vertex(m, x, 0, NULL);
+      }
+  static const int tet[6][4] = {{0, 1, 2, 6}, {0, 2, 3, 6}, {0, 3, 7, 6},
+                                {0, 7, 4, 6}, {0, 4, 5, 6}, {0, 5, 1, 6}};
+  int ncell = n * n * n, c = 0;
+  for (int k = 0; k < n; k++)
+    for (int j = 0; j < n; j++)
+      for (int i = 0; i < n; i++, c++) {
+        pa_idx v0 = i + p * (j + p * k);
+        pa_idx h[8] = {
+            v0,         v0 + 1,         v0 + 1 + p,         v0 + p,
+            v0 + p * p, v0 + 1 + p * p, v0 + 1 + p + p * p, v0 + p + p * p};
+        for (int t = 0; t < 6; t++) {
+          pa_idx v[4] = {h[tet[t][0]], h[tet[t][1]], h[tet[t][2]],
+                         h[tet[t][3]]};
+          pa_mesh_add_elem(m, v, c < ncell / 2 ? 1 : 2, NULL);
+        }
+      }
+  for (int z = 0; z <= n; z += n)
+    for (int j = 0; j < n; j++)
+      for (int i = 0; i < n; i++) {
+        pa_idx a = i + p * (j + p * z), b = a + 1, cc = a + 1 + p, d = a + p;
+        pa_idx t1[3] = {a, cc, b}, t2[3] = {a, d, cc};
+        pa_mesh_add_bdry(m, t1, z ? 6 : 5, NULL);
+        pa_mesh_add_bdry(m, t2, z ? 6 : 5, NULL);
+      }
+  for (int i = 0; i < n; i++) {
+    pa_idx e[2] = {i, i + 1};
+    pa_mesh_add_edge(m, e, 9, NULL);
+  }
+  pa_mesh_vert_flags(m)[0] |= PA_FLAG_CORNER;
+  pa_mesh_vert_refs(m)[0] = 3;
+  return m;
+}
+
+/* Stable order of n references (what the writer does with cells). */
+static pa_idx *stable_order(const int32_t *ref, pa_idx n) {
+  pa_idx *o = malloc((n ? n : 1) * sizeof *o);
+  for (pa_idx i = 0; i < n; i++)
+    o[i] = i;
+  for (pa_idx i = 1; i < n; i++) { /* insertion sort: stable */
+    pa_idx x = o[i], j = i - 1;
+    while (j >= 0 && ref[o[j]] > ref[x]) {
+      o[j + 1] = o[j];
+      j--;
+    }
+    o[j + 1] = x;
+  }
+  return o;
+}
+
+/* Cells of b equal to the cells of a taken in the writer's order. */
+static int same_cells(const pa_idx *va, const int32_t *ra, pa_idx na,
+                      const pa_idx *vb, const int32_t *rb, pa_idx nb, int nn) {
+  if (na != nb) return 0;
+  pa_idx *o = stable_order(ra, na);
+  int ok = 1;
+  for (pa_idx k = 0; k < na && ok; k++) {
+    ok = ra[o[k]] == rb[k] &&
+         !memcmp(va + (size_t)nn * o[k], vb + (size_t)nn * k, nn * sizeof *va);
+  }
+  free(o);
+  return ok;
+}
+
+/* Everything the .msh format stores is equal. */
+static void check_same(pa_mesh *a, pa_mesh *b) {
+  int d = pa_mesh_dim(a);
+  CHECK(pa_mesh_dim(b) == d);
+  CHECK(pa_mesh_nvert(b) == pa_mesh_nvert(a));
+  if (pa_mesh_dim(b) != d || pa_mesh_nvert(b) != pa_mesh_nvert(a)) return;
+  pa_idx nv = pa_mesh_nvert(a);
+  CHECK(!memcmp(pa_mesh_coords(a), pa_mesh_coords(b),
+                (size_t)nv * d * sizeof(double)));
+  int flags_ok = 1;
+  for (pa_idx i = 0; i < nv; i++) {
+    int ca = pa_mesh_vert_flags(a)[i] & PA_FLAG_CORNER;
+    int cb = pa_mesh_vert_flags(b)[i] & PA_FLAG_CORNER;
+    if (ca != cb || (ca && pa_mesh_vert_refs(a)[i] != pa_mesh_vert_refs(b)[i]))
+      flags_ok = 0;
+  }
+  CHECK(flags_ok);
+  CHECK(same_cells(pa_mesh_elems(a), pa_mesh_elem_refs(a), pa_mesh_nelem(a),
+                   pa_mesh_elems(b), pa_mesh_elem_refs(b), pa_mesh_nelem(b),
+                   d + 1));
+  CHECK(same_cells(pa_mesh_bdrys(a), pa_mesh_bdry_refs(a), pa_mesh_nbdry(a),
+                   pa_mesh_bdrys(b), pa_mesh_bdry_refs(b), pa_mesh_nbdry(b),
+                   d));
+  CHECK(same_cells(pa_mesh_edges(a), pa_mesh_edge_refs(a), pa_mesh_nedge(a),
+                   pa_mesh_edges(b), pa_mesh_edge_refs(b), pa_mesh_nedge(b),
+                   2));
+}
+
+static void roundtrip(pa_mesh *m, const char *path, int binary) {
+  pa_write_opts opts = {binary, 0};
+  pa_mesh *r = NULL;
+  CHECK_OK(pa_mesh_write(m, path, &opts));
+  CHECK_OK(pa_mesh_read(path, &r));
+  if (r) check_same(m, r);
+  pa_mesh_destroy(r);
+  /* The header says what was asked for. */
+  FILE *fp = fopen(path, "rb");
+  char head[32] = {0};
+  CHECK(fp && fread(head, 1, 20, fp) == 20);
+  if (fp) fclose(fp);
+  CHECK(strstr(head, binary ? "4.1 1 8" : "4.1 0 8") != NULL);
+}
+
+static void test_roundtrip_2d(void) {
+  pa_mesh *m = make_square(6);
+  CHECK(m && pa_mesh_nelem(m) == 72 && pa_mesh_nbdry(m) == 24);
+  roundtrip(m, "sq_ascii.msh", 0);
+  roundtrip(m, "sq_binary.msh", 1);
+  pa_mesh_destroy(m);
+}
+
+static void test_roundtrip_3d(void) {
+  pa_mesh *m = make_cube(4);
+  CHECK(m && pa_mesh_nelem(m) == 384 && pa_mesh_nedge(m) == 4);
+  roundtrip(m, "cube_ascii.msh", 0);
+  roundtrip(m, "cube_binary.msh", 1);
+  pa_mesh_destroy(m);
+}
+
+/* References in any order, zero and negative: cells come back grouped by
+ * reference, stably, with the same references. */
+static void test_roundtrip_refs(void) {
+  pa_mesh *m = make_square(4);
+  int32_t *er = pa_mesh_elem_refs(m), *br = pa_mesh_bdry_refs(m);
+  for (pa_idx e = 0; e < pa_mesh_nelem(m); e++)
+    er[e] = (int32_t[]){3, -2, 0, 3, 1000}[e % 5];
+  for (pa_idx b = 0; b < pa_mesh_nbdry(m); b++)
+    br[b] = b % 3 - 1;
+  roundtrip(m, "refs_ascii.msh", 0);
+  roundtrip(m, "refs_binary.msh", 1);
+  /* An empty mesh and a mesh without elements survive too. */
+  pa_mesh *e = NULL, *r = NULL;
+  CHECK_OK(pa_mesh_create(3, &e));
+  CHECK_OK(pa_mesh_write(e, "empty.msh", NULL));
+  CHECK_OK(pa_mesh_read("empty.msh", &r));
+  CHECK(r && pa_mesh_nvert(r) == 0 && pa_mesh_nelem(r) == 0);
+  pa_mesh_destroy(r);
+  r = NULL;
+  double x[3] = {0.5, 0.25, 1.0 / 3};
+  CHECK_OK(pa_mesh_add_vertex(e, x, 0, NULL));
+  roundtrip(e, "lonely.msh", 1);
+  pa_mesh_destroy(e);
+  pa_mesh_destroy(m);
+}
+
+static void write_text(const char *path, const char *text) {
+  FILE *fp = fopen(path, "wb");
+  CHECK(fp != NULL);
+  if (!fp) return;
+  fputs(text, fp);
+  fclose(fp);
+}
+
+/* MSH 4.1 ASCII as Gmsh writes it, with sparse node tags, two surfaces of
+ * different physical tags, a curve without physical tag, a point, names and
+ * an unknown section. */
+static void test_read_handwritten41(void) {
+  write_text("hand41.msh",
+             "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
+             "$PhysicalNames\n3\n1 7 \"wall\"\n2 100 \"left part\"\n"
+             "2 200 \"right\"\n$EndPhysicalNames\n"
+             "$Comments\nanything $Nodes 1 2 3\n$EndComments\n"
+             "$Entities\n1 2 2 0\n"
+             "4 0 0 0 1 11\n"
+             "5 0 0 0 1 0 0 1 7 2 4 -4\n"
+             "6 0 1 0 1 1 0 0 0\n"
+             "1 0 0 0 0.5 1 0 1 100 0\n"
+             "2 0.5 0 0 1 1 0 2 200 300 0\n"
+             "$EndEntities\n"
+             "$Nodes\n2 5 10 99\n"
+             "2 1 0 3\n10\n20\n99\n0 0 0\n1 0 0\n0.5 0.5 0\n"
+             "2 2 0 2\n40\n30\n0 1 0\n1 1 0\n"
+             "$EndNodes\n"
+             "$Elements\n5 7 1 7\n"
+             "0 4 15 1\n1 10\n"
+             "1 5 1 1\n2 10 20\n"
+             "1 6 1 1\n3 30 40\n"
+             "2 1 2 2\n4 10 20 99\n5 10 99 40\n"
+             "2 2 2 2\n6 20 30 99\n7 99 30 40\n"
+             "$EndElements\n"
+             "$NodeData\n1\n\"u\"\n1\n0.0\n3\n0\n1\n1\n10 1.5\n$EndNodeData\n");
+  pa_mesh *m = NULL;
+  CHECK_OK(pa_mesh_read("hand41.msh", &m));
+  if (!m) return;
+  CHECK(pa_mesh_dim(m) == 2);
+  CHECK(pa_mesh_nvert(m) == 5 && pa_mesh_nelem(m) == 4);
+  CHECK(pa_mesh_nbdry(m) == 2 && pa_mesh_nedge(m) == 0);
+  /* vertices in tag order: 10 20 30 40 99 */
+  const double *x = pa_mesh_coords(m);
+  static const double want_x[10] = {0, 0, 1, 0, 1, 1, 0, 1, 0.5, 0.5};
+  CHECK(!memcmp(x, want_x, sizeof want_x));
+  const pa_idx *t = pa_mesh_elems(m);
+  static const pa_idx want[12] = {0, 1, 4, 0, 4, 3, 1, 2, 4, 4, 2, 3};
+  CHECK(!memcmp(t, want, sizeof want));
+  const int32_t *r = pa_mesh_elem_refs(m);
+  CHECK(r[0] == 100 && r[1] == 100 && r[2] == 200 && r[3] == 200);
+  const pa_idx *b = pa_mesh_bdrys(m);
+  CHECK(b[0] == 0 && b[1] == 1 && b[2] == 2 && b[3] == 3);
+  CHECK(pa_mesh_bdry_refs(m)[0] == 7); /* physical tag of curve 5 */
+  CHECK(pa_mesh_bdry_refs(m)[1] == 6); /* curve 6 has none: entity tag */
+  CHECK(pa_mesh_vert_flags(m)[0] & PA_FLAG_CORNER);
+  CHECK(pa_mesh_vert_refs(m)[0] == 11);
+  CHECK(!(pa_mesh_vert_flags(m)[1] & PA_FLAG_CORNER));
+  pa_mesh_destroy(m);
+}
+
+/* MSH 2.2 ASCII: a tetrahedron, one face and one edge. */
+/* Very sparse tags (sorted map) listed out of order. */
+static void test_read_sparse_tags(void) {
+  write_text("sparse.msh", "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
+                           "$Nodes\n2 3 5 9000000000\n"
+                           "2 1 0 2\n9000000000\n5\n0 1 0\n0 0 0\n"
+                           "2 1 0 1\n70000\n1 0 0\n$EndNodes\n"
+                           "$Elements\n1 1 1 1\n2 1 2 1\n1 5 70000 9000000000\n"
+                           "$EndElements\n");
+  pa_mesh *m = NULL;
+  CHECK_OK(pa_mesh_read("sparse.msh", &m));
+  if (!m) return;
+  static const double want_x[6] = {0, 0, 1, 0, 0, 1};
+  static const pa_idx want_t[3] = {0, 1, 2};
+  CHECK(pa_mesh_nvert(m) == 3 && pa_mesh_nelem(m) == 1);
+  CHECK(!memcmp(pa_mesh_coords(m), want_x, sizeof want_x));
+  CHECK(!memcmp(pa_mesh_elems(m), want_t, sizeof want_t));
+  CHECK(pa_mesh_elem_refs(m)[0] == 1); /* no $Entities: the entity tag */
+  pa_mesh_destroy(m);
+}
+
+static void test_read_handwritten22(void) {
+  write_text("hand22.msh",
+             "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n"
+             "$PhysicalNames\n1\n3 5 \"volume\"\n$EndPhysicalNames\n"
+             "$Nodes\n4\n3 0 0 0\n5 1 0 0\n8 0 1 0\n13 0 0 1\n$EndNodes\n"
+             "$Elements\n4\n"
+             "1 4 2 5 1 3 5 8 13\n"
+             "2 2 2 0 4 3 8 5\n"
+             "3 1 3 6 2 0 3 5\n"
+             "4 15 2 0 1 13\n"
+             "$EndElements\n");
+  pa_mesh *m = NULL;
+  CHECK_OK(pa_mesh_read("hand22.msh", &m));
+  if (!m) return;
+  CHECK(pa_mesh_dim(m) == 3 && pa_mesh_nvert(m) == 4);
+  CHECK(pa_mesh_nelem(m) == 1 && pa_mesh_nbdry(m) == 1 &&
+        pa_mesh_nedge(m) == 1);
+  CHECK(pa_mesh_coords(m)[3 * 3 + 2] == 1.0);
+  static const pa_idx tet[4] = {0, 1, 2, 3}, tri[3] = {0, 2, 1};
+  static const pa_idx edge[2] = {0, 1};
+  CHECK(!memcmp(pa_mesh_elems(m), tet, sizeof tet));
+  CHECK(!memcmp(pa_mesh_bdrys(m), tri, sizeof tri));
+  CHECK(!memcmp(pa_mesh_edges(m), edge, sizeof edge));
+  CHECK(pa_mesh_elem_refs(m)[0] == 5); /* physical */
+  CHECK(pa_mesh_bdry_refs(m)[0] == 4); /* physical 0: elementary */
+  CHECK(pa_mesh_edge_refs(m)[0] == 6);
+  CHECK(pa_mesh_vert_flags(m)[3] & PA_FLAG_CORNER);
+  pa_mesh_destroy(m);
+}
+
+/* Read text as a .msh file: must fail with status code and a message that
+ * contains the file name and each fragment. */
+static void expect_error(const char *text, pa_status code, const char *frag1,
+                         const char *frag2) {
+  pa_mesh *m = NULL;
+  write_text("bad.msh", text);
+  pa_status st = pa_mesh_read("bad.msh", &m);
+  CHECK(st == code);
+  CHECK(m == NULL);
+  const char *msg = pa_last_error();
+  int ok = strstr(msg, "bad.msh") && strstr(msg, frag1) &&
+           (!frag2 || strstr(msg, frag2));
+  CHECK(ok);
+  if (!ok || st != code)
+    fprintf(stderr, "  message was: %s (%s)\n", msg, pa_status_string(st));
+  pa_mesh_destroy(m);
+}
+
+#define HEAD "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
+#define NODES3                                                                 \
+  "$Nodes\n1 3 1 3\n2 1 0 3\n1\n2\n3\n0 0 0\n1 0 0\n0 1 0\n$EndNodes\n"
+
+static void test_errors(void) {
+  expect_error(
+      HEAD NODES3 "$Elements\n1 1 1 1\n2 1 2 1\n1 1 2", PA_ERR_FORMAT,
+      ":16: truncated file or bad count: the element block announces 1", NULL);
+  expect_error(HEAD NODES3 "$Elements\n1 1 1 1\n2 1 2 1\n1 1 2 3\n",
+               PA_ERR_FORMAT,
+               ":18: unexpected end of file, expected "
+               "$EndElements",
+               NULL);
+  expect_error(HEAD NODES3 "$Elements\n1 1 1 1\n2 1 3 1\n1 1 2 3 3\n"
+                           "$EndElements\n",
+               PA_ERR_UNSUPPORTED,
+               ":16:", "element type 3 (4-node quadrangle)");
+  expect_error(HEAD NODES3 "$Elements\n1 1 1 1\n2 1 2 1\n1 1 2 77\n"
+                           "$EndElements\n",
+               PA_ERR_FORMAT, ":17: element 1 refers to unknown node tag 77",
+               NULL);
+  expect_error(HEAD "$Nodes\n1 3 1 3\n2 1 0 3\n1\n2\n3\n0 0 0\nnan 0 0\n"
+                    "0 1 0\n$EndNodes\n",
+               PA_ERR_FORMAT, ":11: node coordinate is not finite", NULL);
+  expect_error(HEAD "$Nodes\n1 3 1 3\n2 1 0 2\n1\n2\n0 0 0\n1 0 0\n"
+                    "$EndNodes\n",
+               PA_ERR_FORMAT, "declares 3 nodes but its blocks hold 2", NULL);
+  expect_error(HEAD "$Nodes\n1 3 1 3\n2 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n"
+                    "0 1 0\n0 1 1\n$EndNodes\n",
+               PA_ERR_FORMAT, ":6: node blocks hold more nodes", NULL);
+  expect_error(
+      HEAD "$Nodes\n1 3000000 1 3\n", PA_ERR_FORMAT,
+      ":5: truncated file or bad count: the $Nodes header announces 3000000",
+      NULL);
+  expect_error(HEAD "$Nodes\n1 3 1 3\n2 1 0 3\n1\n2\n1\n0 0 0\n1 0 0\n"
+                    "0 1 0\n$EndNodes\n",
+               PA_ERR_FORMAT, "duplicate node tag 1", NULL);
+  expect_error(NODES3, PA_ERR_FORMAT, ":1: missing $MeshFormat", NULL);
+  expect_error("$MeshFormat\n3.0 0 8\n$EndMeshFormat\n", PA_ERR_UNSUPPORTED,
+               ":2: MSH version 3 is not supported", NULL);
+  expect_error("$MeshFormat\n2.2 1 8\n$EndMeshFormat\n", PA_ERR_UNSUPPORTED,
+               "binary MSH 2.2", NULL);
+  expect_error(HEAD NODES3 "$Comments\nno end\n", PA_ERR_FORMAT,
+               "no $EndComments line", NULL);
+  expect_error(HEAD NODES3, PA_ERR_FORMAT, "no $Elements section", NULL);
+  expect_error(HEAD "$Nodes\n1 3 1 3\n2 1 0 3\n1\n2\n3\n0 0 0\n1 0 0\n"
+                    "0 1 0.5\n$EndNodes\n$Elements\n1 1 1 1\n2 1 2 1\n"
+                    "1 1 2 3\n$EndElements\n",
+               PA_ERR_FORMAT, "node 3 has z = 0.5", "plane z = 0");
+  expect_error(HEAD NODES3 "$Elements\n1 1 1 1\n2 1 2 1\n1 1 2 3x\n"
+                           "$EndElements\n",
+               PA_ERR_FORMAT,
+               ":17: expected a node tag of an element, found "
+               "'3x'",
+               NULL);
+  expect_error(HEAD NODES3 "$Elements\n1 2 1 2\n2 1 2 1\n1 1 2 3\n"
+                           "$EndElements\n",
+               PA_ERR_FORMAT, "declares 2 elements but its blocks hold 1",
+               NULL);
+  expect_error("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n3\n1 0 0 0\n"
+               "2 1 0 0\n3 0 1 0\n$EndNodes\n$Elements\n1\n1 5 2 1 1 1 2 3 4 5"
+               " 6 7 8\n$EndElements\n",
+               PA_ERR_UNSUPPORTED, ":12:", "8-node hexahedron");
+  /* A missing file and a directory are i/o errors. */
+  pa_mesh *m = NULL;
+  CHECK(pa_mesh_read("no_such_file.msh", &m) == PA_ERR_IO);
+  CHECK(strstr(pa_last_error(), "no_such_file.msh") != NULL);
+  mkdir("adir.msh", 0755);
+  CHECK(pa_mesh_read("adir.msh", &m) == PA_ERR_IO);
+  CHECK(m == NULL);
+}
+
+static unsigned char *slurp(const char *path, size_t *len) {
+  FILE *fp = fopen(path, "rb");
+  if (!fp) return NULL;
+  fseek(fp, 0, SEEK_END);
+  *len = (size_t)ftell(fp);
+  rewind(fp);
+  unsigned char *buf = malloc(*len + 1);
+  if (fread(buf, 1, *len, fp) != *len) *len = 0;
+  fclose(fp);
+  return buf;
+}
+
+static void spill(const char *path, const unsigned char *buf, size_t len) {
+  FILE *fp = fopen(path, "wb");
+  if (!fp) return;
+  fwrite(buf, 1, len, fp);
+  fclose(fp);
+}
+
+/* Every proper prefix of a file (that cuts into "$EndElements") is refused
+ * as a format error, without crash or leak (ASan build). */
+static void truncations(const char *src, const char *dst) {
+  size_t len = 0;
+  unsigned char *buf = slurp(src, &len);
+  CHECK(buf && len > 100);
+  if (!buf) return;
+  int bad = 0;
+  for (size_t cut = 0; cut + 1 < len; cut++) {
+    spill(dst, buf, cut);
+    pa_mesh *m = NULL;
+    pa_status st = pa_mesh_read(dst, &m);
+    if (st != PA_ERR_FORMAT || m) {
+      if (!bad++)
+        fprintf(stderr, "  %s cut at %zu: %s: %s\n", src, cut,
+                pa_status_string(st), pa_last_error());
+    }
+    pa_mesh_destroy(m);
+  }
+  CHECK(bad == 0);
+  free(buf);
+}
+
+static void test_truncated(void) {
+  pa_mesh *m = make_cube(1);
+  pa_write_opts bin = {1, 0};
+  CHECK_OK(pa_mesh_write(m, "trunc_a.msh", NULL));
+  CHECK_OK(pa_mesh_write(m, "trunc_b.msh", &bin));
+  truncations("trunc_a.msh", "cut.msh");
+  truncations("trunc_b.msh", "cut.msh");
+  pa_mesh_destroy(m);
+}
+
+/* Random byte corruptions of binary and ASCII files: whatever the outcome,
+ * no crash, no read past the buffer, no leak; a success gives a mesh whose
+ * indices are in range. */
+static void test_corrupted(void) {
+  pa_mesh *m = make_square(2);
+  pa_write_opts bin = {1, 0};
+  CHECK_OK(pa_mesh_write(m, "fuzz_b.msh", &bin));
+  CHECK_OK(pa_mesh_write(m, "fuzz_a.msh", NULL));
+  pa_mesh_destroy(m);
+  const char *src[2] = {"fuzz_b.msh", "fuzz_a.msh"};
+  pa_test_seed(1234);
+  int bad = 0, nfail = 0;
+  for (int f = 0; f < 2; f++) {
+    size_t len = 0;
+    unsigned char *orig = slurp(src[f], &len), *buf = malloc(len);
+    for (int it = 0; it < 1500 && orig; it++) {
+      memcpy(buf, orig, len);
+      int nflip = 1 + (int)(pa_test_rand() * 3);
+      for (int k = 0; k < nflip; k++) {
+        size_t at = (size_t)(pa_test_rand() * len);
+        double u = pa_test_rand();
+        buf[at] =
+            u < 0.3 ? (unsigned char)(pa_test_rand() * 256)
+            : u < 0.6
+                ? (unsigned char)"0123456789 -\n$"[(int)(pa_test_rand() * 15)]
+                : (unsigned char)(buf[at] ^ (1u << (int)(pa_test_rand() * 8)));
+      }
+      spill("fuzz.msh", buf, len);
+      pa_mesh *r = NULL;
+      pa_status st = pa_mesh_read("fuzz.msh", &r);
+      if (st) {
+        nfail++;
+        if (!strstr(pa_last_error(), "fuzz.msh")) bad++;
+      } else {
+        int d = pa_mesh_dim(r);
+        pa_idx nv = pa_mesh_nvert(r);
+        for (pa_idx e = 0; e < pa_mesh_nelem(r) * (d + 1); e++)
+          if (pa_mesh_elems(r)[e] < 0 || pa_mesh_elems(r)[e] >= nv) bad++;
+        for (pa_idx e = 0; e < pa_mesh_nbdry(r) * d; e++)
+          if (pa_mesh_bdrys(r)[e] < 0 || pa_mesh_bdrys(r)[e] >= nv) bad++;
+      }
+      pa_mesh_destroy(r);
+    }
+    free(orig);
+    free(buf);
+  }
+  CHECK(bad == 0);
+  CHECK(nfail > 1000); /* most corruptions are caught */
+}
+
+/* Every allocation of a read or a write may fail: PA_ERR_MEMORY, no leak,
+ * and no file left behind by a failed write. */
+static void test_alloc_failures(void) {
+  pa_mesh *m = make_cube(1), *r = NULL;
+  pa_write_opts bin = {1, 0};
+  CHECK_OK(pa_mesh_write(m, "alloc.msh", &bin));
+  int nok = 0, nbad = 0;
+  for (long k = 1; k < 200; k++) {
+    pa_memory_fail_after(k);
+    pa_status st = pa_mesh_read("alloc.msh", &r);
+    pa_memory_fail_after(0);
+    if (st == PA_SUCCESS) {
+      nok++;
+      check_same(m, r);
+      pa_mesh_destroy(r);
+      r = NULL;
+    } else if (st != PA_ERR_MEMORY || r) {
+      nbad++;
+    }
+  }
+  CHECK(nok > 0 && nbad == 0);
+  nok = nbad = 0;
+  for (long k = 1; k < 100; k++) {
+    remove("alloc_w.msh");
+    pa_memory_fail_after(k);
+    pa_status st = pa_mesh_write(m, "alloc_w.msh", &bin);
+    pa_memory_fail_after(0);
+    int exists = access("alloc_w.msh", F_OK) == 0;
+    if (st == PA_SUCCESS)
+      nok += exists;
+    else if (st != PA_ERR_MEMORY || exists)
+      nbad++;
+  }
+  CHECK(nok > 0 && nbad == 0);
+  /* A write that cannot open its file leaves nothing either. */
+  CHECK(pa_mesh_write(m, "no_such_dir/x.msh", NULL) == PA_ERR_IO);
+  CHECK(strstr(pa_last_error(), "no_such_dir/x.msh") != NULL);
+  pa_mesh_destroy(m);
+}
+
+/* The malformed files of tests/data/bad listed in gmsh.expected. */
+static void test_bad_corpus(void) {
+  const char *dir = getenv("PADAPT_TESTDATA");
+  CHECK(dir != NULL);
+  if (!dir) return;
+  char path[1024], line[512];
+  snprintf(path, sizeof path, "%s/bad/gmsh.expected", dir);
+  FILE *fp = fopen(path, "r");
+  CHECK(fp != NULL);
+  if (!fp) return;
+  int n = 0;
+  while (fgets(line, sizeof line, fp)) {
+    line[strcspn(line, "\r\n")] = '\0';
+    char *tab = strchr(line, '\t');
+    if (!line[0] || line[0] == '#') continue;
+    CHECK(tab != NULL);
+    if (!tab) continue;
+    *tab = '\0';
+    const char *frag = tab + 1;
+    snprintf(path, sizeof path, "%s/bad/%s", dir, line);
+    pa_mesh *m = NULL;
+    pa_status st = pa_mesh_read(path, &m);
+    int ok = st != PA_SUCCESS && !m && strstr(pa_last_error(), line) &&
+             strstr(pa_last_error(), frag);
+    CHECK(ok);
+    if (!ok)
+      fprintf(stderr, "  %s: expected '%s', got %s: %s\n", line, frag,
+              pa_status_string(st), pa_last_error());
+    pa_mesh_destroy(m);
+    n++;
+  }
+  fclose(fp);
+  CHECK(n >= 8);
+}
+
+/* A larger mesh: both encodings round trip, binary is the faster. */
+static void test_larger(void) {
+  pa_mesh *m = make_cube(16), *r = NULL;
+  pa_write_opts bin = {1, 0};
+  double t0 = pa_wtime();
+  CHECK_OK(pa_mesh_write(m, "big.msh", &bin));
+  CHECK_OK(pa_mesh_read("big.msh", &r));
+  double t1 = pa_wtime();
+  if (r) check_same(m, r);
+  pa_mesh_destroy(r);
+  r = NULL;
+  CHECK_OK(pa_mesh_write(m, "big_a.msh", NULL));
+  CHECK_OK(pa_mesh_read("big_a.msh", &r));
+  double t2 = pa_wtime();
+  if (r) check_same(m, r);
+  printf("24576 tets: binary write+read %.3f s, ASCII %.3f s\n", t1 - t0,
+         t2 - t1);
+  pa_mesh_destroy(r);
+  pa_mesh_destroy(m);
+}
+
+TEST_MAIN(test_roundtrip_2d, test_roundtrip_3d, test_roundtrip_refs,
+          test_read_handwritten41, test_read_sparse_tags,
+          test_read_handwritten22, test_errors, test_truncated, test_corrupted,
+          test_alloc_failures, test_bad_corpus, test_larger)
