@@ -1,3 +1,337 @@
-/* cmd_adapt.c -- `padapt adapt` (being written). */
+/*
+ * cmd_adapt.c -- `padapt adapt`: sequential adaptation of a mesh to a metric
+ * with the built-in remesher (Mmg-compatible options).
+ *
+ *   padapt adapt IN [-met SOL | -sol SOL | -hsiz H] -out OUT [options]
+ *
+ * Outputs: the mesh OUT (format by extension), its metric in OUT's name with
+ * the extension replaced by .sol (or -outsol PATH; -nosol for none), the
+ * interpolated user fields (-field F.sol) in <OUT stem>.fields.sol (or
+ * -outfield PATH). Prints `padapt stats` before and after, the operation
+ * counts and the time. Exit status: 0 on success and on "target missed" (a
+ * valid mesh that misses some edge lengths: a warning says so, and the JSON
+ * report's "outcome" field), 1 on any error (no output written).
+ *
+ * With several MPI ranks, rank 0 does the work (the parallel driver is
+ * `padapt adapt` with distributed input, issue #6).
+ */
 #include "cli.h"
-int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) { (void)argc; (void)argv; return pa_cli_error(cli, "adapt: not yet implemented"); }
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *adapt_usage =
+    "usage: padapt adapt IN [-met SOL | -sol SOL | -hsiz H] -out OUT [options]\n"
+    "  -in IN          input mesh (same as the positional IN)\n"
+    "  -met/-sol SOL   metric: sizes (scalar) or tensors, .sol/.solb\n"
+    "  -hsiz H         constant size H (replaces the metric)\n"
+    "  -out OUT        output mesh (.mesh .meshb .msh .vtu)\n"
+    "  -outsol PATH    output metric (default: OUT with extension .sol)\n"
+    "  -nosol          do not write the output metric\n"
+    "  -hmin H -hmax H clamp the sizes\n"
+    "  -hgrad G        gradation (default 1.3; <= 1 disables)\n"
+    "  -hausd D        max boundary deviation from the curve (default 0.01)\n"
+    "  -ar A           corner detection angle in degrees (default 45)\n"
+    "  -nr             no corner detection by angle\n"
+    "  -noinsert -noswap -nomove   disable operators\n"
+    "  -field F.sol    vertex fields to interpolate; written to\n"
+    "                  <OUT stem>.fields.sol (or -outfield PATH)\n"
+    "  -json R.json    write the after-statistics, time and counts as JSON\n"
+    "  -v N            verbosity\n";
+
+/* Strict number parsing: the whole argument, finite. */
+static int parse_num(const char *s, double *v) {
+  char *end;
+  if (!s || !*s) return 0;
+  *v = strtod(s, &end);
+  return *end == '\0' && isfinite(*v);
+}
+
+/* path with its extension replaced by ext (ext includes the dot). */
+static char *replace_ext(const char *path, const char *ext) {
+  const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
+  size_t n = (dot && (!slash || dot > slash)) ? (size_t)(dot - path) : strlen(path);
+  char *s = malloc(n + strlen(ext) + 1);
+  if (!s) return NULL;
+  memcpy(s, path, n);
+  strcpy(s + n, ext);
+  return s;
+}
+
+static const char *outcome_name(pa_remesh_outcome o) {
+  return o == PA_REMESH_SUCCESS         ? "success"
+         : o == PA_REMESH_TARGET_MISSED ? "target missed"
+                                        : "failed";
+}
+
+/* Attach every field of a .sol file as a user field of the mesh. */
+static pa_status attach_fields(pa_mesh *mesh, const char *path) {
+  pa_sol *sol = NULL;
+  pa_status st = pa_sol_read(path, &sol);
+  if (st) return st;
+  if (pa_sol_nvert(sol) != pa_mesh_nvert(mesh)) {
+    pa_sol_destroy(sol);
+    return PA_ERR_FORMAT;
+  }
+  for (int k = 0; k < pa_sol_nfield(sol) && st == PA_SUCCESS; k++) {
+    pa_sol_kind kind;
+    int nc;
+    double *val;
+    char name[32];
+    st = pa_sol_field(sol, k, &kind, &nc, &val);
+    snprintf(name, sizeof name, "field%d", k + 1);
+    if (st == PA_SUCCESS) st = pa_mesh_add_field(mesh, name, nc, val);
+  }
+  pa_sol_destroy(sol);
+  return st;
+}
+
+/* Write the user fields of the mesh as one .sol file. */
+static pa_status write_fields(pa_mesh *mesh, const char *path) {
+  pa_sol *sol = NULL;
+  int d = pa_mesh_dim(mesh);
+  pa_status st = pa_sol_create(d, pa_mesh_nvert(mesh), &sol);
+  for (int k = 0; k < pa_mesh_nfield(mesh) && st == PA_SUCCESS; k++) {
+    int nc;
+    double *val;
+    st = pa_mesh_field(mesh, k, NULL, &nc, &val);
+    pa_sol_kind kind = nc == 1 ? PA_SOL_SCALAR : nc == d ? PA_SOL_VECTOR : PA_SOL_TENSOR;
+    if (st == PA_SUCCESS) st = pa_sol_add_field(sol, kind, val);
+  }
+  if (st == PA_SUCCESS) st = pa_sol_write(sol, path);
+  pa_sol_destroy(sol);
+  return st;
+}
+
+int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
+  const char *in = NULL, *out = NULL, *met = NULL, *outsol = NULL;
+  const char *field = NULL, *outfield = NULL, *json = NULL;
+  int nosol = 0, rc = 1;
+  pa_remesh_opts opts;
+  pa_remesh_opts_default(&opts);
+  opts.verbosity = cli->verbosity;
+
+  for (int i = 1; i < argc; i++) {
+    const char *a = argv[i];
+    const char *val = i + 1 < argc ? argv[i + 1] : NULL;
+    double x;
+#define NEEDS_FILE(what)                                                     \
+  do {                                                                       \
+    if (!val) return pa_cli_error(cli, "adapt: %s needs %s", a, what);       \
+    i++;                                                                     \
+  } while (0)
+#define NEEDS_NUM(lo_ok)                                                     \
+  do {                                                                       \
+    if (!parse_num(val, &x) || !(lo_ok))                                     \
+      return pa_cli_error(cli, "adapt: %s needs a %s number, got '%s'", a,   \
+                          #lo_ok, val ? val : "nothing");                    \
+    i++;                                                                     \
+  } while (0)
+    if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+      if (cli->rank == 0) fputs(adapt_usage, stdout);
+      return 0;
+    } else if (!strcmp(a, "-in")) {
+      NEEDS_FILE("a mesh file");
+      if (in) return pa_cli_error(cli, "adapt: more than one input mesh");
+      in = val;
+    } else if (!strcmp(a, "-met") || !strcmp(a, "-sol")) {
+      NEEDS_FILE("a .sol file");
+      met = val;
+    } else if (!strcmp(a, "-out")) {
+      NEEDS_FILE("a mesh file");
+      out = val;
+    } else if (!strcmp(a, "-outsol")) {
+      NEEDS_FILE("a .sol file");
+      outsol = val;
+    } else if (!strcmp(a, "-nosol")) {
+      nosol = 1;
+    } else if (!strcmp(a, "-field")) {
+      NEEDS_FILE("a .sol file");
+      field = val;
+    } else if (!strcmp(a, "-outfield")) {
+      NEEDS_FILE("a .sol file");
+      outfield = val;
+    } else if (!strcmp(a, "-json")) {
+      NEEDS_FILE("a file");
+      json = val;
+    } else if (!strcmp(a, "-hsiz")) {
+      NEEDS_NUM(x > 0);
+      opts.hsiz = x;
+    } else if (!strcmp(a, "-hmin")) {
+      NEEDS_NUM(x > 0);
+      opts.hmin = x;
+    } else if (!strcmp(a, "-hmax")) {
+      NEEDS_NUM(x > 0);
+      opts.hmax = x;
+    } else if (!strcmp(a, "-hgrad")) {
+      NEEDS_NUM(x >= 0);
+      opts.hgrad = x;
+    } else if (!strcmp(a, "-hausd")) {
+      NEEDS_NUM(x > 0);
+      opts.hausd = x;
+    } else if (!strcmp(a, "-ar")) {
+      NEEDS_NUM(x >= 0 && x <= 180);
+      opts.angle = x;
+    } else if (!strcmp(a, "-v")) {
+      NEEDS_NUM(x >= 0 && x <= 10);
+      opts.verbosity = (int)x;
+      pa_set_verbosity((int)x);
+    } else if (!strcmp(a, "-nr")) {
+      opts.no_angle = 1;
+    } else if (!strcmp(a, "-noinsert")) {
+      opts.no_insert = 1;
+    } else if (!strcmp(a, "-noswap")) {
+      opts.no_swap = 1;
+    } else if (!strcmp(a, "-nomove")) {
+      opts.no_move = 1;
+    } else if (!strcmp(a, "-nosurf")) {
+      opts.no_surf = 1;
+    } else if (a[0] == '-' && a[1]) {
+      return pa_cli_error(cli, "adapt: unknown option '%s' (see padapt adapt -h)", a);
+    } else if (!in) {
+      in = a;
+    } else {
+      return pa_cli_error(cli, "adapt: more than one input mesh ('%s')", a);
+    }
+#undef NEEDS_FILE
+#undef NEEDS_NUM
+  }
+  if (!in) return pa_cli_error(cli, "adapt: no input mesh\n%s", adapt_usage);
+  if (!out) return pa_cli_error(cli, "adapt: no output mesh (-out OUT)");
+  if (met && opts.hsiz > 0)
+    return pa_cli_error(cli, "adapt: give either -met/-sol or -hsiz, not both");
+  if (opts.hmin > 0 && opts.hmax > 0 && opts.hmin > opts.hmax)
+    return pa_cli_error(cli, "adapt: -hmin (%g) is larger than -hmax (%g)",
+                        opts.hmin, opts.hmax);
+  if (cli->rank != 0) return 0;
+
+  pa_mesh *mesh = NULL;
+  pa_sol *sol = NULL;
+  char *solpath = NULL, *fieldpath = NULL, *extra = NULL;
+  pa_stats before, after;
+  pa_remesh_report rep;
+  pa_status st = pa_cli_read_mesh(cli, in, &mesh);
+  if (st != PA_SUCCESS) {
+    if (pa_last_error()[0]) pa_cli_fail(cli, st);
+    goto done;
+  }
+  if (met) {
+    st = pa_sol_read(met, &sol);
+    if (st == PA_SUCCESS) st = pa_mesh_metric_from_sol(mesh, sol, 0);
+    pa_sol_destroy(sol);
+    sol = NULL;
+    if (st) {
+      pa_cli_fail(cli, st);
+      goto done;
+    }
+  } else if (opts.hsiz <= 0 && pa_mesh_metric_ncomp(mesh) == 0) {
+    pa_cli_error(cli, "adapt: no metric: give -met SOL, -sol SOL or -hsiz H");
+    goto done;
+  }
+  if (field) {
+    st = attach_fields(mesh, field);
+    if (st) {
+      if (st == PA_ERR_FORMAT && !pa_last_error()[0])
+        pa_cli_error(cli, "%s: the number of values does not match the mesh's "
+                          "%d vertices", field, (int)pa_mesh_nvert(mesh));
+      else
+        pa_cli_fail(cli, st);
+      goto done;
+    }
+  }
+
+  /* statistics before, in the target metric */
+  if (opts.hsiz > 0 && pa_mesh_metric_ncomp(mesh) == 0) {
+    pa_idx nv = pa_mesh_nvert(mesh);
+    double *h = malloc(sizeof(double) * (nv ? nv : 1));
+    if (!h) {
+      pa_cli_error(cli, "adapt: out of memory");
+      goto done;
+    }
+    for (pa_idx v = 0; v < nv; v++) h[v] = opts.hsiz;
+    st = pa_mesh_set_metric(mesh, 1, h);
+    free(h);
+    if (st) {
+      pa_cli_fail(cli, st);
+      goto done;
+    }
+  }
+  st = pa_mesh_stats(mesh, &before);
+  if (st) {
+    pa_cli_fail(cli, st);
+    goto done;
+  }
+  printf(" -- INPUT %s\n", in);
+  pa_stats_print(&before, stdout);
+  fflush(stdout);
+
+  st = pa_remesh(pa_remesher_builtin(), mesh, &opts, &rep);
+  if (st != PA_SUCCESS) {
+    pa_cli_fail(cli, st);
+    goto done;
+  }
+  if (rep.outcome == PA_REMESH_FAILED) {
+    pa_cli_error(cli, "adapt: the remesher failed (%s); nothing written",
+                 pa_last_error()[0] ? pa_last_error() : "no detail");
+    goto done;
+  }
+  st = pa_mesh_stats(mesh, &after);
+  if (st) {
+    pa_cli_fail(cli, st);
+    goto done;
+  }
+  printf(" -- OUTPUT %s\n", out);
+  pa_stats_print(&after, stdout);
+  printf(" -- ADAPTATION\n"
+         "    splits %ld, collapses %ld, swaps %ld, moves %ld, passes %d\n"
+         "    time %.3f s (%.0f output elements/s), peak padapt memory %.1f MB\n"
+         "    outcome %s\n",
+         rep.nsplit, rep.ncollapse, rep.nswap, rep.nmove, rep.npass, rep.time_s,
+         rep.time_s > 0 ? pa_mesh_nelem(mesh) / rep.time_s : 0.0,
+         pa_memory_peak() / 1e6, outcome_name(rep.outcome));
+  fflush(stdout);
+  if (rep.outcome == PA_REMESH_TARGET_MISSED)
+    fprintf(stderr, "padapt: warning: adapt: target missed (valid mesh, but "
+                    "some edge lengths or qualities are off target)\n");
+
+  st = pa_mesh_write(mesh, out, NULL);
+  if (st == PA_SUCCESS && !nosol) {
+    solpath = outsol ? NULL : replace_ext(out, ".sol");
+    st = pa_mesh_metric_to_sol(mesh, 0, &sol);
+    if (st == PA_SUCCESS) st = pa_sol_write(sol, outsol ? outsol : solpath);
+    pa_sol_destroy(sol);
+    sol = NULL;
+  }
+  if (st == PA_SUCCESS && pa_mesh_nfield(mesh) > 0) {
+    fieldpath = outfield ? NULL : replace_ext(out, ".fields.sol");
+    st = write_fields(mesh, outfield ? outfield : fieldpath);
+  }
+  if (st == PA_SUCCESS && json) {
+    size_t n = 512;
+    extra = malloc(n);
+    if (extra)
+      snprintf(extra, n,
+               "\"time_s\": %.6f, \"peak_rss_bytes\": %zu, "
+               "\"peak_memory_bytes\": %zu, \"outcome\": \"%s\", "
+               "\"nsplit\": %ld, \"ncollapse\": %ld, \"nswap\": %ld, "
+               "\"nmove\": %ld, \"npass\": %d, \"elements_before\": %lld, "
+               "\"vertices_before\": %lld",
+               rep.time_s, pa_peak_rss(), pa_memory_peak(),
+               outcome_name(rep.outcome), rep.nsplit, rep.ncollapse, rep.nswap,
+               rep.nmove, rep.npass, (long long)before.nelem,
+               (long long)before.nvert);
+    st = pa_stats_write_json(&after, extra, json);
+  }
+  if (st != PA_SUCCESS) {
+    pa_cli_fail(cli, st);
+    goto done;
+  }
+  rc = 0;
+done:
+  free(solpath);
+  free(fieldpath);
+  free(extra);
+  pa_mesh_destroy(mesh);
+  return rc;
+}

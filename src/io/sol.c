@@ -106,7 +106,7 @@ cleanup:
 pa_status pa_sol_add_field(pa_sol *sol, pa_sol_kind kind,
                            const double *values) {
   pa_status st = PA_SUCCESS;
-  int k;
+  int k = 0;
   PA_CHECK(sol, PA_ERR_ARG, "pa_sol_add_field: NULL solution");
   PA_CHECK(values || sol->nvert == 0, PA_ERR_ARG,
            "pa_sol_add_field: NULL values");

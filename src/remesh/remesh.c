@@ -1,5 +1,154 @@
-/* remesh.c -- STUB, being written: remesher interface and driver. */
-#include "mesh/mesh.h"
-void pa_remesh_opts_default(pa_remesh_opts *o) { memset(o, 0, sizeof *o); o->hgrad = 1.3; o->hausd = 0.01; o->angle = 45; }
-const pa_remesher *pa_remesher_builtin(void) { return NULL; }
-pa_status pa_remesh(const pa_remesher *r, pa_mesh *m, const pa_remesh_opts *o, pa_remesh_report *rep) { (void)r; (void)m; (void)o; (void)rep; return pa__error(PA_ERR_UNSUPPORTED, __FILE__, __LINE__, "not yet implemented"); }
+/*
+ * remesh.c -- the remesher plug-in interface: default options, the built-in
+ * remesher, and the driver pa_remesh() that validates the input, prepares
+ * the metric (hsiz, hmin/hmax, gradation) and calls a remesher.
+ *
+ * Invariants:
+ *  - pa_remesh never leaves a half-changed mesh: the prepared metric is built
+ *    in a new array and installed only for the call; on an error or the
+ *    FAILED outcome the original metric (and everything else) is restored;
+ *  - frozen vertices (PA_FLAG_REQUIRED, or vertices of a frozen element or
+ *    boundary entity) keep their metric value bit for bit: hsiz, clamping and
+ *    gradation skip them (gradation still lets them constrain neighbours);
+ *    with -hsiz on a mesh without a metric every vertex gets hsiz.
+ */
+#include "remesh/remesh.h"
+
+void pa_remesh_opts_default(pa_remesh_opts *o) {
+  memset(o, 0, sizeof *o);
+  o->hgrad = 1.3;
+  o->hausd = 0.01;
+  o->angle = 45;
+}
+
+/* The built-in remesher's callback. */
+static pa_status builtin_remesh(void *ctx, pa_mesh *mesh,
+                                const pa_remesh_opts *opts,
+                                pa_remesh_report *report) {
+  pa_status st = PA_SUCCESS;
+  pa__rmesh *rm = NULL;
+  (void)ctx;
+  PA_CHECK(mesh->dim == 2, PA_ERR_UNSUPPORTED,
+           "the built-in remesher handles 2D meshes only for now (3D "
+           "tetrahedra: issue #4)");
+  PA_CALL(pa__rm_create(mesh, opts, &rm));
+  PA_CALL(pa__rm_adapt(rm, &pa__rm_ops_2d, report));
+  if (report->outcome != PA_REMESH_FAILED) PA_CALL(pa__rm_writeback(rm, mesh));
+cleanup:
+  pa__rm_destroy(rm);
+  return st;
+}
+
+const pa_remesher *pa_remesher_builtin(void) {
+  static const pa_remesher builtin = {"padapt", 1u << 2, builtin_remesh, NULL};
+  return &builtin;
+}
+
+/* Frozen-vertex mask: required vertices and vertices of required elements or
+ * boundary entities. */
+static pa_status frozen_mask(const pa_mesh *m, uint8_t **mask) {
+  pa_status st = PA_SUCCESS;
+  uint8_t *f = NULL;
+  int d = m->dim;
+  PA_CALLOC(f, m->nv);
+  for (pa_idx v = 0; v < m->nv; v++) f[v] = (m->vflag[v] & PA_FLAG_REQUIRED) != 0;
+  for (pa_idx k = 0; k < m->ne; k++)
+    if (m->eflag[k] & PA_FLAG_REQUIRED)
+      for (int i = 0; i <= d; i++) f[m->elem[(size_t)(d + 1) * k + i]] = 1;
+  for (pa_idx b = 0; b < m->nb; b++)
+    if (m->bflag[b] & PA_FLAG_REQUIRED)
+      for (int i = 0; i < d; i++) f[m->bdry[(size_t)d * b + i]] = 1;
+  *mask = f;
+cleanup:
+  return st;
+}
+
+pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
+                    const pa_remesh_opts *opts, pa_remesh_report *report) {
+  pa_status st = PA_SUCCESS;
+  pa_remesh_opts def;
+  pa_remesh_report dummy;
+  uint8_t *frozen = NULL;
+  double *newmet = NULL, *oldmet = NULL;
+  int oldnc = 0, installed = 0;
+  double t0 = pa_wtime();
+  PA_CHECK(r && r->remesh && mesh, PA_ERR_ARG, "pa_remesh: NULL argument");
+  if (!opts) {
+    pa_remesh_opts_default(&def);
+    opts = &def;
+  }
+  if (!report) report = &dummy;
+  memset(report, 0, sizeof *report);
+  report->outcome = PA_REMESH_FAILED;
+  PA_CHECK(r->dims & (1u << mesh->dim), PA_ERR_UNSUPPORTED,
+           "remesher '%s' does not handle %dD meshes", r->name ? r->name : "?",
+           mesh->dim);
+  PA_CHECK(mesh->met_ncomp || opts->hsiz > 0, PA_ERR_ARG,
+           "pa_remesh: the mesh has no metric and no constant size (hsiz) was "
+           "given");
+  PA_CHECK(isfinite(opts->hsiz) && isfinite(opts->hmin) && isfinite(opts->hmax) &&
+               isfinite(opts->hgrad) && isfinite(opts->hausd) &&
+               isfinite(opts->angle),
+           PA_ERR_ARG, "pa_remesh: options must be finite numbers");
+  PA_CHECK(!(opts->hmin > 0 && opts->hmax > 0 && opts->hmin > opts->hmax),
+           PA_ERR_ARG, "pa_remesh: hmin (%g) is larger than hmax (%g)",
+           opts->hmin, opts->hmax);
+  PA_CHECK(opts->hausd >= 0, PA_ERR_ARG, "pa_remesh: hausd must be >= 0");
+  PA_CHECK(opts->angle >= 0 && opts->angle <= 180, PA_ERR_ARG,
+           "pa_remesh: the angle must lie in [0, 180] degrees, got %g",
+           opts->angle);
+  PA_CALL(pa_mesh_check(mesh));
+
+  /* prepare the metric in a new array */
+  int d = mesh->dim, nc = mesh->met_ncomp ? mesh->met_ncomp : 1;
+  size_t cap = mesh->capv > (size_t)mesh->nv ? mesh->capv : (size_t)mesh->nv;
+  PA_CALL(frozen_mask(mesh, &frozen));
+  PA_ALLOC(newmet, (cap ? cap : 1) * nc);
+  if (mesh->met_ncomp)
+    memcpy(newmet, mesh->met, sizeof(double) * nc * mesh->nv);
+  if (opts->hsiz > 0) {
+    for (pa_idx v = 0; v < mesh->nv; v++) {
+      if (mesh->met_ncomp && frozen[v]) continue;
+      double *m = newmet + (size_t)nc * v;
+      if (nc == 1) {
+        m[0] = opts->hsiz;
+      } else {
+        double t = 1.0 / (opts->hsiz * opts->hsiz);
+        for (int i = 0; i < nc; i++) m[i] = 0;
+        for (int i = 0; i < d; i++) m[pa__sym_index(i, i)] = t;
+      }
+    }
+  }
+  if (opts->hmin > 0 || opts->hmax > 0)
+    for (pa_idx v = 0; v < mesh->nv; v++)
+      if (!frozen[v])
+        pa__metric_clamp(d, nc, newmet + (size_t)nc * v, opts->hmin, opts->hmax);
+  PA_CALL(pa__metric_gradation(d, nc, mesh->nv, mesh->coord, newmet, mesh->ne,
+                               mesh->elem, frozen, opts->hgrad, NULL));
+  pa__free(frozen);
+  frozen = NULL;
+
+  oldmet = mesh->met;
+  oldnc = mesh->met_ncomp;
+  mesh->met = newmet;
+  mesh->met_ncomp = nc;
+  newmet = NULL;
+  installed = 1;
+
+  PA_CALL(r->remesh(r->ctx, mesh, opts, report));
+  if (report->outcome == PA_REMESH_FAILED) goto cleanup;
+  pa__free(oldmet);
+  oldmet = NULL;
+  installed = 0;
+cleanup:
+  if (installed) { /* error or FAILED: give the mesh back as it was */
+    pa__free(mesh->met);
+    mesh->met = oldmet;
+    mesh->met_ncomp = oldnc;
+  }
+  pa__free(frozen);
+  pa__free(newmet);
+  if (st != PA_SUCCESS) report->outcome = PA_REMESH_FAILED;
+  report->time_s = pa_wtime() - t0;
+  return st;
+}

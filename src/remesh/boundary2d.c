@@ -1,0 +1,275 @@
+/*
+ * boundary2d.c -- feature lines of the 2D remesher: boundary edges and
+ * interior curves, their corners, and the smooth curve reconstructed through
+ * them.
+ *
+ * A feature record is a boundary edge (one element side) or an interior-curve
+ * edge (two sides: listed in the boundary list although interior, or between
+ * elements of different references). Operators never swap a feature edge, a
+ * split puts the new vertex on the reconstructed curve, and a collapse along a
+ * feature must keep the new chord within hausd of that curve.
+ *
+ * Curve: on each record, the cubic Hermite arc between its end vertices with
+ * the unit tangents stored at its ends (btan), scaled by the chord length.
+ * Tangent at a regular feature vertex: t ~ l1 e0 + l0 e1 (e0, e1 unit vectors
+ * of the incoming and outgoing edges, l0, l1 their lengths; exact for a circle
+ * through the three points to second order). At a corner each record uses its
+ * own chord direction. Straight runs give tangents equal to the chord, and then
+ * the curve is the chord exactly (see pa__rm_curve_point_2d), so straight
+ * boundaries stay straight.
+ *
+ * Corners: input PA_FLAG_CORNER, a vertex with other than two feature edges,
+ * two feature edges of different references, or (unless -nr) a turning angle
+ * larger than -ar degrees.
+ */
+#include "remesh/remesh.h"
+
+/* Element face code holding edge (a, c) found in the ball of a, or -1. */
+static pa_idx find_face(const pa__rmesh *rm, const pa_idx *bstart,
+                        const pa_idx *ball, pa_idx a, pa_idx c) {
+  for (pa_idx s = bstart[a]; s < bstart[a + 1]; s++) {
+    pa_idx k = ball[s];
+    const pa_idx *v = rm->ev + 3 * (size_t)k;
+    for (int i = 0; i < 3; i++) {
+      pa_idx e0 = v[(i + 1) % 3], e1 = v[(i + 2) % 3];
+      if ((e0 == a && e1 == c) || (e0 == c && e1 == a)) return 3 * k + i;
+    }
+  }
+  return -1;
+}
+
+static pa_status add_record(pa__rmesh *rm, pa_idx a, pa_idx c, int32_t ref,
+                            uint8_t tag, pa_idx code) {
+  pa_status st = PA_SUCCESS;
+  pa_idx b, o = rm->adj[code];
+  PA_CHECK(o >= 0 || o == RM_NOADJ, PA_ERR_MESH,
+           "remesher: boundary edge (%d %d) is listed twice", (int)a + 1,
+           (int)c + 1);
+  PA_CALL(pa__rm_new_feat(rm, &b));
+  rm->bv[2 * b] = a;
+  rm->bv[2 * b + 1] = c;
+  rm->bref[b] = ref;
+  rm->btag[b] = tag;
+  rm->bside[2 * b] = code;
+  rm->bside[2 * b + 1] = o >= 0 ? o : -1;
+  rm->adj[code] = -b - 1;
+  if (o >= 0) rm->adj[o] = -b - 1;
+  rm->vtag[a] |= RMV_FEAT;
+  rm->vtag[c] |= RMV_FEAT;
+  if (tag & RMB_FROZEN) {
+    rm->vtag[a] |= RMV_FROZEN;
+    rm->vtag[c] |= RMV_FROZEN;
+  }
+cleanup:
+  return st;
+}
+
+/* Raise the eigenvalues of a 2D tensor to at least lam (intersection with
+ * the isotropic metric lam I). */
+static void tensor_floor(double *m, double lam) {
+  double a = m[0], b = m[1], c = m[2];
+  double hm = 0.5 * (a + c), hd = 0.5 * (a - c);
+  double r = sqrt(hd * hd + b * b);
+  double l1 = hm + r, l2 = hm - r;
+  if (l2 >= lam) return;
+  if (l1 <= lam) {
+    m[0] = m[2] = lam;
+    m[1] = 0;
+    return;
+  }
+  /* m = l2 I + (l1 - l2) P1, P1 = (m - l2 I)/(l1 - l2): replace l2 by lam */
+  m[0] = lam + (a - l2);
+  m[1] = b;
+  m[2] = lam + (c - l2);
+}
+
+pa_status pa__rm_features_2d_init(pa__rmesh *rm, pa_mesh *mesh,
+                                  const pa_idx *bstart, const pa_idx *ball) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *r0 = NULL, *r1 = NULL;
+  uint8_t *cnt = NULL, *frz = NULL;
+  const pa_remesh_opts *o = rm->opts;
+  pa_idx nv = rm->nv;
+
+  /* records of the boundary list */
+  for (pa_idx b = 0; b < mesh->nb; b++) {
+    pa_idx a = mesh->bdry[2 * (size_t)b], c = mesh->bdry[2 * (size_t)b + 1];
+    PA_CHECK(a >= 0 && a < nv && c >= 0 && c < nv && a != c, PA_ERR_MESH,
+             "remesher: boundary edge %d has invalid vertices", (int)b + 1);
+    pa_idx code = find_face(rm, bstart, ball, a, c);
+    PA_CHECK(code >= 0, PA_ERR_MESH,
+             "remesher: boundary edge %d (%d %d) is not an element edge",
+             (int)b + 1, (int)a + 1, (int)c + 1);
+    PA_CALL(add_record(rm, a, c, mesh->bref[b],
+                       (mesh->bflag[b] & 0x0F) | RMB_LISTED, code));
+  }
+  /* unlisted boundary edges (listed on output) and reference interfaces */
+  pa_idx ne = rm->ne;
+  for (pa_idx k = 0; k < ne; k++)
+    for (int i = 0; i < 3; i++) {
+      pa_idx code = 3 * k + i, ob = rm->adj[code];
+      pa_idx a = rm->ev[3 * k + (i + 1) % 3], c = rm->ev[3 * k + (i + 2) % 3];
+      if (ob == RM_NOADJ)
+        PA_CALL(add_record(rm, a, c, 0, RMB_LISTED, code));
+      else if (ob > code && rm->eref[ob / 3] != rm->eref[k])
+        PA_CALL(add_record(rm, a, c, 0, 0, code));
+    }
+
+  /* feature edges per vertex */
+  PA_CALLOC(cnt, nv);
+  PA_ALLOC(r0, nv);
+  PA_ALLOC(r1, nv);
+  for (pa_idx b = 0; b < rm->nb; b++)
+    for (int e = 0; e < 2; e++) {
+      pa_idx v = rm->bv[2 * b + e];
+      if (cnt[v] == 0) r0[v] = b;
+      else if (cnt[v] == 1) r1[v] = b;
+      if (cnt[v] < 255) cnt[v]++;
+    }
+  double cosar = cos((o->angle > 0 ? o->angle : 45.0) * M_PI / 180.0);
+  for (pa_idx v = 0; v < nv; v++) {
+    if (!cnt[v]) continue;
+    if (cnt[v] != 2) {
+      rm->vtag[v] |= RMV_CORNER;
+      continue;
+    }
+    if (rm->bref[r0[v]] != rm->bref[r1[v]]) rm->vtag[v] |= RMV_CORNER;
+    if (o->no_angle) continue;
+    pa_idx u = rm->bv[2 * r0[v]] == v ? rm->bv[2 * r0[v] + 1] : rm->bv[2 * r0[v]];
+    pa_idx w = rm->bv[2 * r1[v]] == v ? rm->bv[2 * r1[v] + 1] : rm->bv[2 * r1[v]];
+    const double *xu = rm->x + 2 * (size_t)u, *xv = rm->x + 2 * (size_t)v,
+                 *xw = rm->x + 2 * (size_t)w;
+    double e0x = xv[0] - xu[0], e0y = xv[1] - xu[1];
+    double e1x = xw[0] - xv[0], e1y = xw[1] - xv[1];
+    double c = (e0x * e1x + e0y * e1y) /
+               (sqrt(e0x * e0x + e0y * e0y) * sqrt(e1x * e1x + e1y * e1y));
+    if (c < cosar) rm->vtag[v] |= RMV_CORNER;
+  }
+
+  /* tangents */
+  int limited = 0;
+  for (pa_idx b = 0; b < rm->nb; b++)
+    for (int e = 0; e < 2; e++) {
+      pa_idx v = rm->bv[2 * b + e];
+      const double *xv = rm->x + 2 * (size_t)v;
+      double dx = rm->x[2 * (size_t)rm->bv[2 * b + 1]] - rm->x[2 * (size_t)rm->bv[2 * b]];
+      double dy = rm->x[2 * (size_t)rm->bv[2 * b + 1] + 1] -
+                  rm->x[2 * (size_t)rm->bv[2 * b] + 1];
+      double dl = sqrt(dx * dx + dy * dy);
+      double tx = dx / dl, ty = dy / dl;
+      if (!(rm->vtag[v] & RMV_CORNER)) {
+        pa_idx ra = r0[v], rb = r1[v];
+        pa_idx u = rm->bv[2 * ra] == v ? rm->bv[2 * ra + 1] : rm->bv[2 * ra];
+        pa_idx w = rm->bv[2 * rb] == v ? rm->bv[2 * rb + 1] : rm->bv[2 * rb];
+        const double *xu = rm->x + 2 * (size_t)u, *xw = rm->x + 2 * (size_t)w;
+        double e0x = xv[0] - xu[0], e0y = xv[1] - xu[1];
+        double e1x = xw[0] - xv[0], e1y = xw[1] - xv[1];
+        double l0 = sqrt(e0x * e0x + e0y * e0y), l1 = sqrt(e1x * e1x + e1y * e1y);
+        double cx = l1 * e0x / l0 + l0 * e1x / l1, cy = l1 * e0y / l0 + l0 * e1y / l1;
+        double cl = sqrt(cx * cx + cy * cy);
+        if (cl > 1e-12 * (l0 + l1)) {
+          cx /= cl;
+          cy /= cl;
+          if (cx * tx + cy * ty < 0) {
+            cx = -cx;
+            cy = -cy;
+          }
+          tx = cx;
+          ty = cy;
+        }
+      }
+      rm->btan[4 * b + 2 * e] = tx;
+      rm->btan[4 * b + 2 * e + 1] = ty;
+    }
+  /* Hausdorff bound: at a regular vertex of curvature kappa (turning angle
+   * over the mean edge length), a chord of length h deviates from the curve
+   * by about h^2 kappa / 8, so the size is limited to sqrt(8 hausd / kappa). */
+  for (pa_idx v = 0; v < nv; v++) {
+    if (cnt[v] != 2 || (rm->vtag[v] & (RMV_CORNER | RMV_FROZEN))) continue;
+    pa_idx u = rm->bv[2 * r0[v]] == v ? rm->bv[2 * r0[v] + 1] : rm->bv[2 * r0[v]];
+    pa_idx w = rm->bv[2 * r1[v]] == v ? rm->bv[2 * r1[v] + 1]
+                                                         : rm->bv[2 * r1[v]];
+    const double *xu = rm->x + 2 * (size_t)u, *xv = rm->x + 2 * (size_t)v,
+                 *xw = rm->x + 2 * (size_t)w;
+    double e0x = xv[0] - xu[0], e0y = xv[1] - xu[1];
+    double e1x = xw[0] - xv[0], e1y = xw[1] - xv[1];
+    double l0 = sqrt(e0x * e0x + e0y * e0y), l1 = sqrt(e1x * e1x + e1y * e1y);
+    double ang = fabs(atan2(e0x * e1y - e0y * e1x, e0x * e1x + e0y * e1y));
+    double kappa = ang / (0.5 * (l0 + l1));
+    if (kappa <= 1e-12) continue;
+    double hb = sqrt(8.0 * rm->hausd / kappa);
+    if (o->hmin > 0 && hb < o->hmin) hb = o->hmin;
+    double *m = rm->met + (size_t)rm->mcomp * v;
+    if (rm->mcomp == 1) {
+      if (m[0] > hb) {
+        m[0] = hb;
+        limited = 1;
+      }
+    } else {
+      double old[3] = {m[0], m[1], m[2]};
+      tensor_floor(m, 1.0 / (hb * hb));
+      if (old[0] != m[0] || old[2] != m[2]) limited = 1;
+    }
+  }
+  if (limited && o->hgrad > 1) {
+    PA_ALLOC(frz, nv);
+    for (pa_idx v = 0; v < nv; v++) frz[v] = (rm->vtag[v] & RMV_FROZEN) != 0;
+    PA_CALL(pa__metric_gradation(2, rm->mcomp, nv, rm->x, rm->met, rm->ne,
+                                 rm->ev, frz, o->hgrad, NULL));
+  }
+
+  /* element qualities */
+  int mc = rm->mcomp;
+  for (pa_idx k = 0; k < rm->ne; k++) {
+    const pa_idx *v = rm->ev + 3 * (size_t)k;
+    rm->q[k] = (float)rm_qual2(mc, rm->x + 2 * (size_t)v[0], rm->x + 2 * (size_t)v[1],
+                               rm->x + 2 * (size_t)v[2], rm->met + (size_t)mc * v[0],
+                               rm->met + (size_t)mc * v[1], rm->met + (size_t)mc * v[2]);
+  }
+cleanup:
+  pa__free(r0);
+  pa__free(r1);
+  pa__free(cnt);
+  pa__free(frz);
+  return st;
+}
+
+void pa__rm_curve_point_2d(const pa__rmesh *rm, pa_idx b, double s, double *p,
+                           double *t) {
+  const double *a = rm->x + 2 * (size_t)rm->bv[2 * b];
+  const double *c = rm->x + 2 * (size_t)rm->bv[2 * b + 1];
+  const double *ta = rm->btan + 4 * (size_t)b, *tc = ta + 2;
+  double dx = c[0] - a[0], dy = c[1] - a[1];
+  double l = sqrt(dx * dx + dy * dy);
+  double ux = dx / l, uy = dy / l;
+  /* straight: both tangents along the chord */
+  double ca = fabs(ta[0] * uy - ta[1] * ux), cc = fabs(tc[0] * uy - tc[1] * ux);
+  if (ca < 1e-10 && cc < 1e-10) {
+    p[0] = a[0] + s * dx;
+    p[1] = a[1] + s * dy;
+    if (s == 0.5) {
+      p[0] = 0.5 * (a[0] + c[0]);
+      p[1] = 0.5 * (a[1] + c[1]);
+    }
+    t[0] = ux;
+    t[1] = uy;
+    return;
+  }
+  double s2 = s * s, s3 = s2 * s;
+  double h00 = 2 * s3 - 3 * s2 + 1, h10 = s3 - 2 * s2 + s;
+  double h01 = -2 * s3 + 3 * s2, h11 = s3 - s2;
+  double d00 = 6 * s2 - 6 * s, d10 = 3 * s2 - 4 * s + 1;
+  double d01 = -6 * s2 + 6 * s, d11 = 3 * s2 - 2 * s;
+  for (int k = 0; k < 2; k++) {
+    p[k] = h00 * a[k] + h10 * l * ta[k] + h01 * c[k] + h11 * l * tc[k];
+    t[k] = d00 * a[k] + d10 * l * ta[k] + d01 * c[k] + d11 * l * tc[k];
+  }
+  double tl = sqrt(t[0] * t[0] + t[1] * t[1]);
+  if (tl > 0) {
+    t[0] /= tl;
+    t[1] /= tl;
+  } else {
+    t[0] = ux;
+    t[1] = uy;
+  }
+}

@@ -1,0 +1,172 @@
+/*
+ * loop.c -- the remesher's pass loop, shared by every dimension: alternate
+ * split / collapse / swap passes until the edge lengths settle, then swap and
+ * relocation passes, a pass on the worst elements, and the verdict.
+ *
+ * Schedule (see docs/REMESHER.md):
+ *  1. refinement rounds (at most 80) while splits + collapses change more
+ *     than 0.02 % of the elements, or until three stalled rounds: split
+ *     edges longer than 1.4142 (longest-edge propagation), collapse edges
+ *     shorter than 0.7071 (no new edge longer than 1.4142), swap around
+ *     elements of quality < 0.6, and relocate once the splits are few;
+ *  2. up to eight optimisation rounds: swap (quality < 0.9), relocate, split,
+ *     collapse with a relaxed guard (new edges up to 1.7 + 0.05 round, cut
+ *     by the next split), then splits until none is left and a strict
+ *     collapse pass;
+ *  3. worst-element pass (quality < 0.45), then (if it changed anything) two
+ *     more relocation rounds.
+ * The working mesh is checked after each pass in debug builds and once at the
+ * end always; a failed check gives the FAILED outcome (the caller then keeps
+ * the mesh as given).
+ *
+ * Verdict: TARGET_MISSED when, over the modifiable edges (not of a frozen
+ * element), fewer than 90 % lie in [1/sqrt(2), sqrt(2)), or one is longer than
+ * 2, or the worst modifiable element has quality < 0.05.
+ */
+#include "remesh/remesh.h"
+
+#ifdef NDEBUG
+#define DEBUG_CHECK(rm) ((void)0)
+#else
+#define DEBUG_CHECK(rm) PA_CALL(pa__rm_check(rm))
+#endif
+
+static void report_pass(pa__rmesh *rm, const char *what, int pass, long n) {
+  if (pa_verbosity() < 2) return;
+  double now = pa_wtime();
+  pa__info(2, "remesh: pass %d %-9s %8ld ops, %d elements, %d vertices, %.3f s\n",
+           pass, what, n, (int)rm->nelive, (int)rm->nvlive,
+           rm->tlast > 0 ? now - rm->tlast : 0.0);
+  rm->tlast = now;
+}
+
+static void report_figures(const pa__rmesh *rm, const pa__rm_ops *ops,
+                           const char *when) {
+  if (pa_verbosity() < 2) return;
+
+  pa__rm_figures f;
+  ops->figures(rm, &f);
+  pa__info(2,
+           "remesh: %s: %ld/%ld edges in range (%ld long, %ld short), length "
+           "[%.3g, %.3g], quality min %.3g mean %.3g\n",
+           when, f.nin, f.nedge, f.nlong, f.nshort, f.lmin, f.lmax, f.qmin,
+           f.qmean);
+}
+
+pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
+                       pa_remesh_report *report) {
+  pa_status st = PA_SUCCESS;
+  const pa_remesh_opts *o = rm->opts;
+  int pass = 0;
+  rm->lguard = RM_LLONG;
+
+  if (!o->no_insert) {
+    long prev = -1;
+    int stall = 0;
+    for (int it = 0; it < 80; it++) {
+      long ns = 0, nc = 0, nw = 0, nm = 0;
+      PA_CALL(ops->split_pass(rm, RM_LLONG, &ns));
+      DEBUG_CHECK(rm);
+      report_pass(rm, "split", pass, ns);
+      PA_CALL(ops->collapse_pass(rm, RM_LSHORT, &nc));
+      DEBUG_CHECK(rm);
+      report_pass(rm, "collapse", pass, nc);
+      if (!o->no_swap) {
+        nw = ops->swap_pass(rm, 0.6);
+        DEBUG_CHECK(rm);
+        report_pass(rm, "swap", pass, nw);
+      }
+      /* once the sizes are nearly reached, relocation helps collapses */
+      if (!o->no_move && ns < 0.01 * rm->nelive) {
+        nm = ops->smooth_pass(rm);
+        DEBUG_CHECK(rm);
+        report_pass(rm, "move", pass, nm);
+      }
+      pass++;
+      if (ns + nc <= 2e-4 * rm->nelive) break;
+      /* a few operations undoing each other: stop after three such rounds */
+      stall = (prev >= 0 && ns + nc >= prev && ns + nc <= 5e-3 * rm->nelive)
+                  ? stall + 1 : 0;
+      if (stall >= 3) break;
+      prev = ns + nc;
+    }
+    report_figures(rm, ops, "after refinement");
+  }
+  /* Optimisation rounds. The collapse guard is relaxed (a collapse may
+   * create an edge up to lguard, which the split that follows cuts in
+   * two edges in range): edges in a tight configuration can then go. */
+  for (int it = 0; it < 8; it++) {
+    long nw = 0, nm = 0, ns = 0, nc = 0;
+    if (!o->no_swap) {
+      nw = ops->swap_pass(rm, 0.9);
+      DEBUG_CHECK(rm);
+    }
+    if (!o->no_move) {
+      nm = ops->smooth_pass(rm);
+      DEBUG_CHECK(rm);
+    }
+    if (!o->no_insert) {
+      PA_CALL(ops->split_pass(rm, RM_LLONG, &ns));
+      DEBUG_CHECK(rm);
+      rm->lguard = 1.7 + 0.05 * it;
+      PA_CALL(ops->collapse_pass(rm, RM_LSHORT, &nc));
+      DEBUG_CHECK(rm);
+      rm->lguard = RM_LLONG;
+    }
+    report_pass(rm, "optimise", pass, nw + nm + ns + nc);
+    pass++;
+    if (ns + nc == 0 && nw + nm <= 1e-3 * rm->nelive) break;
+  }
+  if (!o->no_insert) { /* cut what the relaxed collapses left long */
+    long ns = 0, nc = 0, n1 = 0;
+    for (int it = 0; it < 6; it++) {
+      PA_CALL(ops->split_pass(rm, RM_LLONG, &n1));
+      DEBUG_CHECK(rm);
+      ns += n1;
+      if (!n1) break;
+    }
+    PA_CALL(ops->collapse_pass(rm, RM_LSHORT, &nc));
+    DEBUG_CHECK(rm);
+    report_pass(rm, "final", pass, ns + nc);
+    pass++;
+  }
+  report_figures(rm, ops, "after optimisation");
+  {
+    long nb = ops->sliver_pass(rm, 0.45);
+    DEBUG_CHECK(rm);
+    report_pass(rm, "worst", pass, nb);
+    pass++;
+    if (!o->no_move && nb > 0) { /* only if the pass changed something */
+      for (int it = 0; it < 2; it++) {
+        long nm = ops->smooth_pass(rm);
+        DEBUG_CHECK(rm);
+        report_pass(rm, "move", pass, nm);
+        pass++;
+        if (!nm) break;
+      }
+    }
+  }
+
+  report->nsplit = rm->nsplit;
+  report->ncollapse = rm->ncollapse;
+  report->nswap = rm->nswap;
+  report->nmove = rm->nmove;
+  report->npass = pass;
+  if (pa__rm_check(rm) != PA_SUCCESS) {
+    pa__info(1, "remesh: %s\n", pa_last_error());
+    report->outcome = PA_REMESH_FAILED;
+    goto cleanup;
+  }
+  pa__rm_figures f;
+  ops->figures(rm, &f);
+  int missed = f.nedge > 0 && ((double)f.nin < 0.9 * (double)f.nedge ||
+                               f.lmax > 2.0 || f.qmin < 0.05);
+  report->outcome = missed ? PA_REMESH_TARGET_MISSED : PA_REMESH_SUCCESS;
+  pa__info(1,
+           "remesh: %ld/%ld edges in range, length [%.3g, %.3g], quality min "
+           "%.3g mean %.3g -> %s\n",
+           f.nin, f.nedge, f.lmin, f.lmax, f.qmin, f.qmean,
+           missed ? "target missed" : "success");
+cleanup:
+  return st;
+}

@@ -1,0 +1,633 @@
+/*
+ * rmesh.c -- the remesher's compact working mesh (struct pa__rmesh, see
+ * remesh.h): construction from a pa_mesh, slot management with free lists,
+ * vertex interpolation, invariant check and the compact write-back.
+ *
+ * Dimension-independent except where marked (feature records are the 2D
+ * boundary edges; 3D will add its own feature tables).
+ *
+ * Invariants: see remesh.h. In addition, write-back renumbers live entities in
+ * slot order, so the output depends only on the sequence of operations (the
+ * remesher is deterministic), and it never touches the pa_mesh until every new
+ * array has been built: a failure leaves the mesh as it was given.
+ */
+#include "remesh/remesh.h"
+
+#include <float.h>
+
+/* ---- growth ---- */
+
+static pa_status grow(void **p, size_t n, size_t sz) {
+  void *q = pa__realloc(*p, (n ? n : 1) * sz);
+  if (!q)
+    return pa__error(PA_ERR_MEMORY, __FILE__, __LINE__,
+                     "remesher: out of memory growing an array to %zu entries",
+                     n);
+  *p = q;
+  return PA_SUCCESS;
+}
+
+static pa_status grow_vertices(pa__rmesh *rm, size_t need) {
+  pa_status st = PA_SUCCESS;
+  if (need <= rm->capv) return PA_SUCCESS;
+  size_t cap = rm->capv + rm->capv / 2 + 64;
+  if (cap < need) cap = need;
+  PA_CHECK(cap <= INT32_MAX, PA_ERR_ARG, "remesher: too many vertices (%zu)",
+           cap);
+  PA_CALL(grow((void **)&rm->x, cap * rm->dim, sizeof(double)));
+  PA_CALL(grow((void **)&rm->met, cap * rm->mcomp, sizeof(double)));
+  if (rm->fcomp)
+    PA_CALL(grow((void **)&rm->fld, cap * rm->fcomp, sizeof(double)));
+  PA_CALL(grow((void **)&rm->vref, cap, sizeof(int32_t)));
+  PA_CALL(grow((void **)&rm->vflag, cap, 1));
+  PA_CALL(grow((void **)&rm->vtag, cap, 1));
+  rm->capv = cap;
+cleanup:
+  return st;
+}
+
+static pa_status grow_elems(pa__rmesh *rm, size_t need) {
+  pa_status st = PA_SUCCESS;
+  if (need <= rm->cape) return PA_SUCCESS;
+  size_t cap = rm->cape + rm->cape / 2 + 64;
+  if (cap < need) cap = need;
+  PA_CHECK(cap * rm->nvpe <= INT32_MAX, PA_ERR_ARG,
+           "remesher: too many elements (%zu)", cap);
+  PA_CALL(grow((void **)&rm->ev, cap * rm->nvpe, sizeof(pa_idx)));
+  PA_CALL(grow((void **)&rm->adj, cap * rm->nvpe, sizeof(pa_idx)));
+  PA_CALL(grow((void **)&rm->q, cap, sizeof(float)));
+  PA_CALL(grow((void **)&rm->eref, cap, sizeof(int32_t)));
+  PA_CALL(grow((void **)&rm->etag, cap, 1));
+  rm->cape = cap;
+cleanup:
+  return st;
+}
+
+static pa_status grow_feats(pa__rmesh *rm, size_t need) {
+  pa_status st = PA_SUCCESS;
+  if (need <= rm->capb) return PA_SUCCESS;
+  size_t cap = rm->capb + rm->capb / 2 + 64;
+  if (cap < need) cap = need;
+  PA_CHECK(cap <= INT32_MAX / 4, PA_ERR_ARG,
+           "remesher: too many boundary edges (%zu)", cap);
+  PA_CALL(grow((void **)&rm->bv, cap * 2, sizeof(pa_idx)));
+  PA_CALL(grow((void **)&rm->bside, cap * 2, sizeof(pa_idx)));
+  PA_CALL(grow((void **)&rm->btan, cap * 4, sizeof(double)));
+  PA_CALL(grow((void **)&rm->bref, cap, sizeof(int32_t)));
+  PA_CALL(grow((void **)&rm->btag, cap, 1));
+  rm->capb = cap;
+cleanup:
+  return st;
+}
+
+pa_status pa__rm_reserve(pa__rmesh *rm, pa_idx nvmore, pa_idx nemore,
+                         pa_idx nbmore) {
+  pa_status st = PA_SUCCESS;
+  PA_CALL(grow_vertices(rm, (size_t)rm->nv + nvmore));
+  PA_CALL(grow_elems(rm, (size_t)rm->ne + nemore));
+  PA_CALL(grow_feats(rm, (size_t)rm->nb + nbmore));
+cleanup:
+  return st;
+}
+
+/* ---- slots ---- */
+
+pa_status pa__rm_new_vertex(pa__rmesh *rm, pa_idx *v) {
+  pa_status st = PA_SUCCESS;
+  pa_idx i;
+  if (rm->vfree >= 0) {
+    i = rm->vfree;
+    rm->vfree = rm->vref[i];
+  } else {
+    PA_CALL(grow_vertices(rm, (size_t)rm->nv + 1));
+    i = rm->nv++;
+  }
+  rm->vref[i] = 0;
+  rm->vflag[i] = 0;
+  rm->vtag[i] = 0;
+  rm->nvlive++;
+  *v = i;
+cleanup:
+  return st;
+}
+
+pa_status pa__rm_new_elem(pa__rmesh *rm, pa_idx *k) {
+  pa_status st = PA_SUCCESS;
+  pa_idx i;
+  if (rm->efree >= 0) {
+    i = rm->efree;
+    rm->efree = rm->ev[(size_t)rm->nvpe * i];
+  } else {
+    PA_CALL(grow_elems(rm, (size_t)rm->ne + 1));
+    i = rm->ne++;
+  }
+  rm->etag[i] = 0;
+  rm->eref[i] = 0;
+  rm->nelive++;
+  *k = i;
+cleanup:
+  return st;
+}
+
+pa_status pa__rm_new_feat(pa__rmesh *rm, pa_idx *b) {
+  pa_status st = PA_SUCCESS;
+  pa_idx i;
+  if (rm->bfree >= 0) {
+    i = rm->bfree;
+    rm->bfree = rm->bv[2 * (size_t)i];
+  } else {
+    PA_CALL(grow_feats(rm, (size_t)rm->nb + 1));
+    i = rm->nb++;
+  }
+  rm->btag[i] = 0;
+  rm->bref[i] = 0;
+  rm->bside[2 * (size_t)i] = rm->bside[2 * (size_t)i + 1] = -1;
+  rm->nblive++;
+  *b = i;
+cleanup:
+  return st;
+}
+
+void pa__rm_kill_vertex(pa__rmesh *rm, pa_idx v) {
+  rm->vtag[v] = RMV_DEAD;
+  rm->vref[v] = rm->vfree;
+  rm->vfree = v;
+  rm->nvlive--;
+}
+
+void pa__rm_kill_elem(pa__rmesh *rm, pa_idx k) {
+  rm->etag[k] = RME_DEAD;
+  rm->ev[(size_t)rm->nvpe * k] = rm->efree;
+  rm->efree = k;
+  rm->nelive--;
+}
+
+void pa__rm_kill_feat(pa__rmesh *rm, pa_idx b) {
+  rm->btag[b] = RMB_DEAD;
+  rm->bv[2 * (size_t)b] = rm->bfree;
+  rm->bfree = b;
+  rm->nblive--;
+}
+
+/* ---- interpolation ---- */
+
+void pa__rm_interp(pa__rmesh *rm, pa_idx v, int n, const pa_idx *src,
+                   const double *w) {
+  int mc = rm->mcomp;
+  double *mv = rm->met + (size_t)mc * v;
+  if (mc == 1) {
+    double s = 0;
+    for (int i = 0; i < n; i++) s += w[i] * log(rm->met[src[i]]);
+    mv[0] = exp(s);
+  } else if (rm->dim == 2) {
+    double acc[3] = {0, 0, 0}, l[3];
+    for (int i = 0; i < n; i++) {
+      rm_sym2_fun(rm->met + 3 * (size_t)src[i], l, 1);
+      for (int c = 0; c < 3; c++) acc[c] += w[i] * l[c];
+    }
+    rm_sym2_fun(acc, mv, 0);
+  } else {
+    const double *ms[8];
+    for (int i = 0; i < n && i < 8; i++) ms[i] = rm->met + (size_t)mc * src[i];
+    pa__metric_interp(rm->dim, mc, n < 8 ? n : 8, ms, w, mv);
+  }
+  int fc = rm->fcomp;
+  if (fc) {
+    double *fv = rm->fld + (size_t)fc * v;
+    for (int c = 0; c < fc; c++) {
+      double s = 0;
+      for (int i = 0; i < n; i++) s += w[i] * rm->fld[(size_t)fc * src[i] + c];
+      fv[c] = s;
+    }
+  }
+}
+
+/* ---- construction ---- */
+
+/* Expected number of elements of the adapted mesh (unit elements in the
+ * metric), from the input mesh. */
+static double expected_elems(pa_mesh *mesh) {
+  double sum = 0;
+  int d = mesh->dim, nvpe = d + 1, mc = mesh->met_ncomp;
+  if (d != 2 || !mc) return mesh->ne;
+  for (pa_idx k = 0; k < mesh->ne; k++) {
+    const pa_idx *v = mesh->elem + (size_t)nvpe * k;
+    const double *a = mesh->coord + 2 * (size_t)v[0];
+    const double *b = mesh->coord + 2 * (size_t)v[1];
+    const double *c = mesh->coord + 2 * (size_t)v[2];
+    double area = 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) -
+                         (b[1] - a[1]) * (c[0] - a[0]));
+    double t[3] = {0, 0, 0}, ti[3];
+    for (int i = 0; i < 3; i++) {
+      rm_tensor2(mc, mesh->met + (size_t)mc * v[i], ti);
+      for (int j = 0; j < 3; j++) t[j] += ti[j] / 3;
+    }
+    double det = t[0] * t[2] - t[1] * t[1];
+    if (det > 0 && area > 0) sum += area * sqrt(det);
+  }
+  return sum / 0.4330127018922193; /* area of the unit equilateral triangle */
+}
+
+pa_status pa__rm_create(pa_mesh *mesh, const pa_remesh_opts *opts,
+                        pa__rmesh **out) {
+  pa_status st = PA_SUCCESS;
+  pa__rmesh *rm = NULL;
+  pa_idx *bstart = NULL, *ball = NULL;
+  int d = mesh->dim, nvpe = d + 1;
+  *out = NULL;
+  PA_CHECK(mesh->met_ncomp == 1 || mesh->met_ncomp == pa__tensor_ncomp(d),
+           PA_ERR_ARG, "remesher: the mesh has no metric");
+  PA_CALLOC(rm, 1);
+  rm->dim = d;
+  rm->nvpe = nvpe;
+  rm->mcomp = mesh->met_ncomp;
+  rm->opts = opts;
+  rm->hausd = opts->hausd > 0 ? opts->hausd : 0.01;
+  rm->vfree = rm->efree = rm->bfree = -1;
+  rm->nfield = mesh->nfield;
+  for (int k = 0; k < mesh->nfield; k++) {
+    rm->fncomp[k] = mesh->field[k].ncomp;
+    rm->fcomp += mesh->field[k].ncomp;
+  }
+
+  /* Reserve for the expected output, so that refinement rarely reallocates. */
+  double nexp = expected_elems(mesh) * 1.15 + 64;
+  if (nexp > 1.5e9 / nvpe) nexp = 1.5e9 / nvpe;
+  size_t cape = (size_t)nexp > (size_t)mesh->ne ? (size_t)nexp : (size_t)mesh->ne;
+  size_t capv = cape / (d == 2 ? 2 : 5) + 4 * (size_t)mesh->nb + 64;
+  if (capv < (size_t)mesh->nv) capv = (size_t)mesh->nv;
+  PA_CALL(grow_vertices(rm, capv));
+  PA_CALL(grow_elems(rm, cape));
+  PA_CALL(grow_feats(rm, (size_t)mesh->nb * 2 + 64));
+
+  /* vertices */
+  pa_idx nv = mesh->nv, ne = mesh->ne;
+  memcpy(rm->x, mesh->coord, sizeof(double) * d * nv);
+  memcpy(rm->met, mesh->met, sizeof(double) * rm->mcomp * nv);
+  memcpy(rm->vref, mesh->vref, sizeof(int32_t) * nv);
+  memcpy(rm->vflag, mesh->vflag, nv);
+  for (pa_idx v = 0; v < nv; v++) {
+    uint8_t f = mesh->vflag[v];
+    rm->vtag[v] = (f & PA_FLAG_REQUIRED ? RMV_FROZEN : 0) |
+                  (f & PA_FLAG_CORNER ? RMV_CORNER : 0);
+  }
+  if (rm->fcomp) {
+    int off = 0;
+    for (int k = 0; k < mesh->nfield; k++) {
+      int nc = mesh->field[k].ncomp;
+      for (pa_idx v = 0; v < nv; v++)
+        for (int c = 0; c < nc; c++)
+          rm->fld[(size_t)rm->fcomp * v + off + c] =
+              mesh->field[k].val[(size_t)nc * v + c];
+      off += nc;
+    }
+  }
+  rm->nv = rm->nvlive = nv;
+
+  /* elements; vertices of frozen elements are frozen */
+  memcpy(rm->ev, mesh->elem, sizeof(pa_idx) * nvpe * ne);
+  memcpy(rm->eref, mesh->eref, sizeof(int32_t) * ne);
+  for (pa_idx k = 0; k < ne; k++) {
+    rm->etag[k] = mesh->eflag[k] & 0x0F;
+    if (mesh->eflag[k] & PA_FLAG_REQUIRED)
+      for (int i = 0; i < nvpe; i++)
+        rm->vtag[rm->ev[(size_t)nvpe * k + i]] |= RMV_FROZEN;
+  }
+  rm->ne = rm->nelive = ne;
+
+  /* Vertex balls (CSR), then face adjacency by scanning the ball of the
+   * face's first vertex. */
+  PA_CALLOC(bstart, (size_t)nv + 1);
+  for (size_t i = 0; i < (size_t)nvpe * ne; i++) bstart[rm->ev[i] + 1]++;
+  for (pa_idx v = 0; v < nv; v++) bstart[v + 1] += bstart[v];
+  PA_ALLOC(ball, bstart[nv]);
+  for (pa_idx k = 0; k < ne; k++)
+    for (int i = 0; i < nvpe; i++) ball[bstart[rm->ev[(size_t)nvpe * k + i]]++] = k;
+  for (pa_idx v = nv; v > 0; v--) bstart[v] = bstart[v - 1];
+  bstart[0] = 0;
+  for (pa_idx k = 0; k < ne; k++) {
+    const pa_idx *vk = rm->ev + (size_t)nvpe * k;
+    for (int i = 0; i < nvpe; i++) {
+      pa_idx face[3];
+      int nf = 0;
+      for (int j = 0; j < nvpe; j++)
+        if (j != i) face[nf++] = vk[j];
+      pa_idx nb = RM_NOADJ;
+      int cnt = 0;
+      for (pa_idx s = bstart[face[0]]; s < bstart[face[0] + 1]; s++) {
+        pa_idx f = ball[s];
+        if (f == k) continue;
+        const pa_idx *vf = rm->ev + (size_t)nvpe * f;
+        int found = 0, jo = -1;
+        for (int j = 0; j < nvpe; j++) {
+          int in = 0;
+          for (int l = 0; l < nf; l++) in |= vf[j] == face[l];
+          if (in) found++;
+          else jo = j;
+        }
+        if (found == nf) {
+          nb = (pa_idx)nvpe * f + jo;
+          cnt++;
+        }
+      }
+      PA_CHECK(cnt <= 1, PA_ERR_MESH,
+               "remesher: a face of element %d is shared by more than two "
+               "elements", (int)k + 1);
+      rm->adj[(size_t)nvpe * k + i] = nb;
+    }
+  }
+
+  if (d == 2) {
+    PA_CALL(pa__rm_features_2d_init(rm, mesh, bstart, ball));
+  } else {
+    PA_FAIL(PA_ERR_UNSUPPORTED, "remesher: 3D is not available yet");
+  }
+  *out = rm;
+  rm = NULL;
+cleanup:
+  pa__free(bstart);
+  pa__free(ball);
+  pa__rm_destroy(rm);
+  return st;
+}
+
+void pa__rm_destroy(pa__rmesh *rm) {
+  if (!rm) return;
+  pa__free(rm->x);
+  pa__free(rm->met);
+  pa__free(rm->fld);
+  pa__free(rm->vref);
+  pa__free(rm->vflag);
+  pa__free(rm->vtag);
+  pa__free(rm->ev);
+  pa__free(rm->adj);
+  pa__free(rm->q);
+  pa__free(rm->eref);
+  pa__free(rm->etag);
+  pa__free(rm->bv);
+  pa__free(rm->bside);
+  pa__free(rm->btan);
+  pa__free(rm->bref);
+  pa__free(rm->btag);
+  pa__free(rm);
+}
+
+/* ---- write-back ---- */
+
+#define FREE_NULL(p)                                                         \
+  do {                                                                       \
+    pa__free(p);                                                             \
+    (p) = NULL;                                                              \
+  } while (0)
+
+pa_status pa__rm_writeback(pa__rmesh *rm, pa_mesh *mesh) {
+  pa_status st = PA_SUCCESS;
+  int d = rm->dim, nvpe = rm->nvpe, mc = rm->mcomp;
+  pa_idx *map = NULL;
+  double *coord = NULL, *met = NULL, *fval[PA_MAX_FIELDS] = {0};
+  int32_t *vref = NULL, *eref = NULL, *bref = NULL;
+  uint8_t *vflag = NULL, *eflag = NULL, *bflag = NULL;
+  pa_idx *elem = NULL, *bdry = NULL;
+  pa_idx nvl = 0, nel = 0, nbl = 0;
+
+  PA_ALLOC(map, rm->nv);
+  for (pa_idx v = 0; v < rm->nv; v++)
+    map[v] = (rm->vtag[v] & RMV_DEAD) ? -1 : nvl++;
+
+  /* vertex arrays, freeing the working ones as they are copied */
+  PA_ALLOC(coord, (size_t)d * nvl);
+  for (pa_idx v = 0; v < rm->nv; v++)
+    if (map[v] >= 0)
+      memcpy(coord + (size_t)d * map[v], rm->x + (size_t)d * v, d * sizeof(double));
+  FREE_NULL(rm->x);
+  PA_ALLOC(met, (size_t)mc * nvl);
+  for (pa_idx v = 0; v < rm->nv; v++)
+    if (map[v] >= 0)
+      memcpy(met + (size_t)mc * map[v], rm->met + (size_t)mc * v,
+             mc * sizeof(double));
+  FREE_NULL(rm->met);
+  int off = 0;
+  for (int k = 0; k < rm->nfield; k++) {
+    int nc = rm->fncomp[k];
+    PA_ALLOC(fval[k], (size_t)nc * nvl);
+    for (pa_idx v = 0; v < rm->nv; v++)
+      if (map[v] >= 0)
+        for (int c = 0; c < nc; c++)
+          fval[k][(size_t)nc * map[v] + c] = rm->fld[(size_t)rm->fcomp * v + off + c];
+    off += nc;
+  }
+  FREE_NULL(rm->fld);
+  PA_ALLOC(vref, nvl);
+  PA_ALLOC(vflag, nvl);
+  for (pa_idx v = 0; v < rm->nv; v++)
+    if (map[v] >= 0) {
+      vref[map[v]] = rm->vref[v];
+      vflag[map[v]] = rm->vflag[v];
+    }
+  FREE_NULL(rm->vref);
+  FREE_NULL(rm->vflag);
+  FREE_NULL(rm->vtag);
+
+  /* elements */
+  FREE_NULL(rm->adj);
+  FREE_NULL(rm->q);
+  PA_ALLOC(elem, (size_t)nvpe * rm->nelive);
+  PA_ALLOC(eref, rm->nelive);
+  PA_ALLOC(eflag, rm->nelive);
+  for (pa_idx k = 0; k < rm->ne; k++) {
+    if (rm->etag[k] & RME_DEAD) continue;
+    for (int i = 0; i < nvpe; i++)
+      elem[(size_t)nvpe * nel + i] = map[rm->ev[(size_t)nvpe * k + i]];
+    eref[nel] = rm->eref[k];
+    eflag[nel] = rm->etag[k] & 0x0F;
+    nel++;
+  }
+  FREE_NULL(rm->ev);
+  FREE_NULL(rm->eref);
+  FREE_NULL(rm->etag);
+
+  /* boundary entities (2D: listed feature edges) */
+  PA_ALLOC(bdry, (size_t)d * rm->nblive);
+  PA_ALLOC(bref, rm->nblive);
+  PA_ALLOC(bflag, rm->nblive);
+  for (pa_idx b = 0; b < rm->nb; b++) {
+    if ((rm->btag[b] & RMB_DEAD) || !(rm->btag[b] & RMB_LISTED)) continue;
+    bdry[2 * (size_t)nbl] = map[rm->bv[2 * (size_t)b]];
+    bdry[2 * (size_t)nbl + 1] = map[rm->bv[2 * (size_t)b + 1]];
+    bref[nbl] = rm->bref[b];
+    bflag[nbl] = rm->btag[b] & 0x0F;
+    nbl++;
+  }
+
+  /* Everything is built: install into the mesh. */
+  pa__mesh_invalidate(mesh);
+  pa__free(mesh->coord);
+  pa__free(mesh->vref);
+  pa__free(mesh->vflag);
+  pa__free(mesh->met);
+  pa__free(mesh->elem);
+  pa__free(mesh->eref);
+  pa__free(mesh->eflag);
+  pa__free(mesh->bdry);
+  pa__free(mesh->bref);
+  pa__free(mesh->bflag);
+  mesh->coord = coord;
+  mesh->vref = vref;
+  mesh->vflag = vflag;
+  mesh->met = met;
+  mesh->met_ncomp = mc;
+  for (int k = 0; k < rm->nfield; k++) {
+    pa__free(mesh->field[k].val);
+    mesh->field[k].val = fval[k];
+    fval[k] = NULL;
+  }
+  mesh->nv = nvl;
+  mesh->capv = (size_t)nvl;
+  mesh->elem = elem;
+  mesh->eref = eref;
+  mesh->eflag = eflag;
+  mesh->ne = nel;
+  mesh->cape = (size_t)rm->nelive;
+  mesh->bdry = bdry;
+  mesh->bref = bref;
+  mesh->bflag = bflag;
+  mesh->nb = nbl;
+  mesh->capb = (size_t)rm->nblive;
+  coord = met = NULL;
+  vref = eref = bref = NULL;
+  vflag = eflag = bflag = NULL;
+  elem = bdry = NULL;
+cleanup:
+  pa__free(map);
+  pa__free(coord);
+  pa__free(met);
+  for (int k = 0; k < PA_MAX_FIELDS; k++) pa__free(fval[k]);
+  pa__free(vref);
+  pa__free(vflag);
+  pa__free(elem);
+  pa__free(eref);
+  pa__free(eflag);
+  pa__free(bdry);
+  pa__free(bref);
+  pa__free(bflag);
+  return st;
+}
+
+/* ---- check ---- */
+
+pa_status pa__rm_check(const pa__rmesh *rm) {
+  pa_status st = PA_SUCCESS;
+  int nvpe = rm->nvpe;
+  pa_idx nlive = 0;
+  PA_CHECK(rm->dim == 2, PA_ERR_INTERNAL, "remesher check: 2D only");
+  for (pa_idx k = 0; k < rm->ne; k++) {
+    if (rm->etag[k] & RME_DEAD) continue;
+    nlive++;
+    const pa_idx *v = rm->ev + (size_t)nvpe * k;
+    for (int i = 0; i < nvpe; i++)
+      PA_CHECK(v[i] >= 0 && v[i] < rm->nv && !(rm->vtag[v[i]] & RMV_DEAD),
+               PA_ERR_INTERNAL, "remesher: element %d has a dead vertex",
+               (int)k);
+    const double *a = rm->x + 2 * (size_t)v[0], *b = rm->x + 2 * (size_t)v[1],
+                 *c = rm->x + 2 * (size_t)v[2];
+    double area = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    PA_CHECK(area > 0, PA_ERR_INTERNAL,
+             "remesher: element %d is not positively oriented", (int)k);
+    for (int i = 0; i < 3; i++) {
+      pa_idx code = 3 * k + i, o = rm->adj[code];
+      pa_idx e0 = v[(i + 1) % 3], e1 = v[(i + 2) % 3];
+      if (o >= 0) {
+        pa_idx f = o / 3;
+        int j = o % 3;
+        PA_CHECK(!(rm->etag[f] & RME_DEAD) && rm->adj[o] == code,
+                 PA_ERR_INTERNAL, "remesher: adjacency of element %d face %d "
+                 "is not symmetric", (int)k, i);
+        PA_CHECK(rm->ev[3 * f + (j + 1) % 3] == e1 &&
+                     rm->ev[3 * f + (j + 2) % 3] == e0,
+                 PA_ERR_INTERNAL, "remesher: element %d face %d does not match "
+                 "its neighbour", (int)k, i);
+      } else {
+        pa_idx bi = -o - 1;
+        PA_CHECK(bi < rm->nb && !(rm->btag[bi] & RMB_DEAD), PA_ERR_INTERNAL,
+                 "remesher: element %d face %d points to a dead feature",
+                 (int)k, i);
+        PA_CHECK(rm->bside[2 * bi] == code || rm->bside[2 * bi + 1] == code,
+                 PA_ERR_INTERNAL, "remesher: feature %d does not know element "
+                 "%d", (int)bi, (int)k);
+        pa_idx b0 = rm->bv[2 * bi], b1 = rm->bv[2 * bi + 1];
+        PA_CHECK((b0 == e0 && b1 == e1) || (b0 == e1 && b1 == e0),
+                 PA_ERR_INTERNAL, "remesher: feature %d vertices do not match "
+                 "element %d", (int)bi, (int)k);
+      }
+    }
+  }
+  PA_CHECK(nlive == rm->nelive, PA_ERR_INTERNAL,
+           "remesher: live element count is off");
+  for (pa_idx b = 0; b < rm->nb; b++) {
+    if (rm->btag[b] & RMB_DEAD) continue;
+    PA_CHECK(rm->bside[2 * b] >= 0, PA_ERR_INTERNAL,
+             "remesher: feature %d has no element", (int)b);
+    for (int s = 0; s < 2; s++) {
+      pa_idx code = rm->bside[2 * b + s];
+      if (code < 0) continue;
+      PA_CHECK(!(rm->etag[code / 3] & RME_DEAD) && rm->adj[code] == -b - 1,
+               PA_ERR_INTERNAL, "remesher: feature %d side %d is stale",
+               (int)b, s);
+    }
+  }
+cleanup:
+  return st;
+}
+
+/* ---- figures ---- */
+
+void pa__rm_figures_2d(const pa__rmesh *rm, pa__rm_figures *f) {
+  memset(f, 0, sizeof *f);
+  f->lmin = DBL_MAX;
+  f->qmin = DBL_MAX;
+  int mc = rm->mcomp;
+  long nq = 0;
+  double qs = 0;
+  for (pa_idx k = 0; k < rm->ne; k++) {
+    uint8_t t = rm->etag[k];
+    if (t & RME_DEAD) continue;
+    if (!(t & RME_FROZEN)) {
+      double q = rm->q[k];
+      if (q < f->qmin) f->qmin = q;
+      qs += q;
+      nq++;
+    }
+    for (int i = 0; i < 3; i++) {
+      pa_idx code = 3 * k + i, o = rm->adj[code];
+      int frozen = t & RME_FROZEN;
+      if (o >= 0) {
+        if (o < code) continue; /* count each edge once */
+        frozen |= rm->etag[o / 3] & RME_FROZEN;
+      } else {
+        pa_idx b = -o - 1;
+        if (rm->bside[2 * b] != code) continue;
+        frozen |= rm->btag[b] & RMB_FROZEN;
+        pa_idx s = rm->bside[2 * b + 1];
+        if (s >= 0) frozen |= rm->etag[s / 3] & RME_FROZEN;
+      }
+      if (frozen) continue;
+      pa_idx a = rm->ev[3 * k + (i + 1) % 3], c = rm->ev[3 * k + (i + 2) % 3];
+      double l = rm_len2(mc, rm->x + 2 * (size_t)a, rm->x + 2 * (size_t)c,
+                         rm->met + (size_t)mc * a, rm->met + (size_t)mc * c);
+      f->nedge++;
+      if (l < f->lmin) f->lmin = l;
+      if (l > f->lmax) f->lmax = l;
+      if (l >= RM_LSHORT && l < RM_LLONG) f->nin++;
+      else if (l >= RM_LLONG) f->nlong++;
+      else {
+        f->nshort++;
+        if (pa_verbosity() >= 4)
+          pa__info(4, "short edge %d-%d L=%.3f tags %d %d q=%.3f\n", (int)a, (int)c, l,
+                   rm->vtag[a], rm->vtag[c], rm->q[k]);
+      }
+    }
+  }
+  if (!f->nedge) f->lmin = 0;
+  if (!nq) f->qmin = 1;
+  f->qmean = nq ? qs / nq : 1;
+}
