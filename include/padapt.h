@@ -702,6 +702,122 @@ pa_status pa_dmesh_checksum(pa_dmesh *dm, uint64_t *checksum);
 pa_status pa_dmesh_partition_stats(pa_dmesh *dm, pa_gid *nelem,
                                    double *imbalance, pa_gid *edgecut);
 
+/* ------------------------------------------------------------------------ */
+/* Parallel adaptation                                                      */
+/* ------------------------------------------------------------------------ */
+
+/*
+ * pa_dmesh_adapt adapts a distributed mesh to its metric with any sequential
+ * remesher, by the iterative piece algorithm of PaMPA (Lachat, Dobrzynski,
+ * Pellegrini): tag the elements to remesh, partition the tagged ones into
+ * pieces with PT-Scotch, give each piece a frozen skin, gather each piece on
+ * one process, remesh the pieces concurrently, put them back, and repeat
+ * until no element is tagged; then repartition for balance. See
+ * docs/ADAPT.md.
+ */
+
+/** Figures of one iteration (the same on every rank). Times are wall-clock
+ *  seconds of each step, the maximum over the ranks. */
+typedef struct pa_adapt_iter {
+  int iter;            /**< 1-based */
+  pa_gid ntagged;      /**< tagged elements at the start of the iteration */
+  pa_gid nelem;        /**< elements after the iteration */
+  int npieces;
+  int nfailed;         /**< pieces rolled back */
+  double imbalance;    /**< estimated work of the most loaded rank / mean */
+  double t_tag, t_pieces, t_gather, t_remesh, t_reintegrate;
+  double remesh_busy;  /**< seconds spent remeshing, summed over the ranks */
+  double bytes_moved;  /**< bytes of records sent between ranks */
+} pa_adapt_iter;
+
+/** Options of pa_dmesh_adapt. */
+typedef struct pa_adapt_opts {
+  /** Options given to the remesher for every piece. hsiz, hmin and hmax are
+   *  applied to the whole metric before the loop; hgrad per piece. */
+  pa_remesh_opts remesh;
+  /** The sequential remesher (NULL: pa_remesher_builtin()). */
+  const pa_remesher *remesher;
+  /** Memory bound per process for one piece, in MB (<= 0: none): the number
+   *  of pieces grows so that each piece's estimated remesher memory fits. */
+  double mem_mb;
+  /** Tag elements whose quality is below this (default 0.3; <= 0: off). */
+  double qual_threshold;
+  /** 1: tag only the elements flagged PA_FLAG_USER (default 0: also the
+   *  elements with an edge outside [0.7071, 1.4142) or a poor quality). */
+  int user_tags_only;
+  /** Maximum number of iterations (default 30). */
+  int max_iter;
+  /** Pieces per process (default 1). */
+  int pieces_per_rank;
+  /** Vertex layers of untagged elements added around the tagged ones
+   *  (default 2, at least 1). */
+  int skin_layers;
+  /** Smallest estimated work (about output elements) worth a piece of its
+   *  own: fewer pieces are made when the tagged work is small (default
+   *  2000; tests lower it to get many pieces on small meshes). */
+  double min_piece_work;
+  /** Repartition and redistribute for balance after the loop (default 1). */
+  int rebalance;
+  /** Check every remeshed piece (pa_mesh_check) before using it (default 1);
+   *  a piece that fails the check is rolled back. */
+  int check_pieces;
+  /** Called on every rank after each iteration with the same figures (may be
+   *  NULL), e.g. to print a progress line on rank 0. */
+  void (*progress)(const pa_adapt_iter *iter, void *ctx);
+  void *progress_ctx;
+} pa_adapt_opts;
+
+#define PA_ADAPT_MAX_ITERS 64
+
+/** What pa_dmesh_adapt did (the same on every rank). */
+typedef struct pa_adapt_report {
+  int nranks;
+  int niter;
+  int converged;       /**< 1: no element is left tagged */
+  int stalled;         /**< 1: stopped because the tagged count stopped
+                            decreasing (or max_iter was reached) */
+  pa_gid nelem_initial, nelem_final, nvert_initial, nvert_final;
+  pa_gid ntagged_left; /**< elements still tagged at the end */
+  long npieces;        /**< pieces remeshed, all iterations */
+  long nfailed;        /**< pieces rolled back, all iterations */
+  double time_total;   /**< wall-clock seconds of the whole call */
+  double t_tag, t_pieces, t_gather, t_remesh, t_reintegrate, t_rebalance;
+  double remesh_busy;  /**< seconds spent in the remesher, summed over ranks */
+  double bytes_moved;  /**< bytes of records sent between ranks, all steps */
+  size_t peak_memory;  /**< max over ranks of pa_memory_peak() at the end */
+  size_t peak_rss;     /**< max over ranks of pa_peak_rss() at the end */
+  int niter_recorded;  /**< entries of iters (at most PA_ADAPT_MAX_ITERS) */
+  pa_adapt_iter iters[PA_ADAPT_MAX_ITERS];
+} pa_adapt_report;
+
+/** Default options: built-in remesher, pa_remesh_opts_default, no memory
+ *  bound, quality threshold 0.3, 30 iterations, 1 piece per rank, 2 skin
+ *  layers, min_piece_work 2000, rebalance and piece checks on. */
+void pa_adapt_opts_default(pa_adapt_opts *opts);
+
+/**
+ * Adapt a distributed mesh to its metric (or to opts->remesh.hsiz) in place.
+ * Collective; the same status and report on every rank. Entities never
+ * touched keep their global ids and values; new entities get fresh global ids
+ * (ids stay unique, not contiguous) and zero user values. Metric and user
+ * vertex fields of the local mesh are interpolated by the remesher.
+ * Elements and boundary entities flagged PA_FLAG_REQUIRED are kept as they
+ * are. A piece whose remesh fails is rolled back: its elements stay, still
+ * tagged, and the mesh stays valid; if the tagged count stops decreasing the
+ * loop stops with report->stalled = 1 and PA_SUCCESS (the mesh is valid).
+ * opts may be NULL (defaults), report may be NULL.
+ */
+pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
+                         pa_adapt_report *report);
+
+/**
+ * Statistics of a distributed mesh, equal to pa_mesh_stats of the gathered
+ * mesh (each edge counted once over the ranks; sums may differ in the last
+ * bits). valid is the outcome of pa_dmesh_check. Collective; the same result
+ * on every rank.
+ */
+pa_status pa_dmesh_stats(pa_dmesh *dm, pa_stats *stats);
+
 #ifdef __cplusplus
 }
 #endif

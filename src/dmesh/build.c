@@ -1,0 +1,1037 @@
+/*
+ * build.c -- the build pipeline shared by every way of making a distributed
+ * mesh (scatter from a root, per-rank files, redistribution): from records of
+ * owned elements with a destination rank and of vertices, boundary entities
+ * and edges held anywhere, it migrates the elements, builds the ghost layers,
+ * fetches vertices and boundary entities, resolves the owners and builds the
+ * star forests (see dmesh.h for the ownership rule and the local numbering).
+ *
+ * Rendezvous ("directory") ranks: vertex records, and the boundary entities
+ * and edges whose smallest vertex gid is theirs, are kept during the build by
+ * the rank dir(gid) = gid / ceil((max gid + 1) / P). The directory learns
+ * which ranks own elements touching each vertex ("touch lists", sorted by
+ * rank), which gives the vertex owner (lowest touching rank) and routes the
+ * ghost requests of each layer to the ranks owning the elements around a
+ * vertex. Every step is a sparse all-to-all (exchange.h), so the memory per
+ * rank is O(local entities), never O(global).
+ */
+#include "dmesh/dmesh.h"
+
+#include <limits.h>
+
+typedef struct dirmap {
+  pa_gid block;
+  int size;
+} dirmap;
+
+static void dir_init(dirmap *d, pa_gid maxgid, int size) {
+  d->size = size;
+  d->block = (maxgid + size) / size;
+  if (d->block < 1) d->block = 1;
+}
+
+static int dir_rank(const dirmap *d, pa_gid g) {
+  pa_gid r = g / d->block;
+  return r >= d->size ? d->size - 1 : (int)r;
+}
+
+/* Collective: send fixed-size items (unit bytes) to ranks dest[i]. On return
+ * *rcnt[r] is the number of items received from rank r and *recv holds them
+ * by source rank. */
+static pa_status send_items(MPI_Comm comm, size_t n, size_t unit,
+                            const void *items, const int *dest, size_t **rcnt,
+                            void **recv) {
+  pa_status st = PA_SUCCESS;
+  int size;
+  size_t *cnt = NULL, *pos = NULL;
+  unsigned char *buf = NULL;
+  MPI_Comm_size(comm, &size);
+  *rcnt = NULL;
+  *recv = NULL;
+  PA_CALLOC(cnt, size);
+  PA_CALLOC(pos, (size_t)size + 1);
+  for (size_t i = 0; i < n; i++) cnt[dest[i]]++;
+  for (int r = 0; r < size; r++) pos[r + 1] = pos[r] + cnt[r];
+  PA_ALLOC(buf, n * unit);
+  for (size_t i = 0; i < n; i++)
+    memcpy(buf + unit * pos[dest[i]]++, (const unsigned char *)items + unit * i,
+           unit);
+  for (int r = 0; r < size; r++) cnt[r] *= unit;
+  PA_CALL(pa__xchg_sparse(comm, cnt, buf, rcnt, recv));
+  for (int r = 0; r < size; r++) (*rcnt)[r] /= unit;
+cleanup:
+  st = pa__agree_end(comm, st);
+  pa__free(cnt);
+  pa__free(pos);
+  pa__free(buf);
+  return st;
+}
+
+/* Collective: owner of each of n local entities = lowest rank with cand = 1
+ * among the ranks holding the entity (gid). owner[i] = -1 if none. */
+static pa_status resolve_owner(MPI_Comm comm, size_t n, const pa_gid *gid,
+                               const uint8_t *cand, int *owner) {
+  pa_status st = PA_SUCCESS;
+  int rank, size;
+  pa_gid maxg = -1;
+  dirmap d;
+  int *dest = NULL;
+  pa_gid *item = NULL, *rec = NULL, *back = NULL;
+  size_t *rcnt = NULL, *bcnt = NULL;
+  void *recv = NULL;
+  int *best = NULL;
+  pa__gidmap map = {0};
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  for (size_t i = 0; i < n; i++)
+    if (gid[i] > maxg) maxg = gid[i];
+  PA_CALL(pa__allreduce(comm, &maxg, 1, MPI_INT64_T, MPI_MAX));
+  dir_init(&d, maxg, size);
+  PA_ALLOC(dest, n);
+  PA_ALLOC(item, 2 * n);
+  for (size_t i = 0; i < n; i++) {
+    dest[i] = dir_rank(&d, gid[i]);
+    item[2 * i] = gid[i];
+    item[2 * i + 1] = cand[i];
+  }
+  PA_CALL(send_items(comm, n, 2 * sizeof(pa_gid), item, dest, &rcnt, &recv));
+  rec = recv;
+  size_t nrec = 0;
+  for (int r = 0; r < size; r++) nrec += rcnt[r];
+  PA_CALL(pa__gidmap_init(&map, nrec));
+  PA_ALLOC(best, nrec);
+  {
+    size_t j = 0;
+    for (int r = 0; r < size; r++)
+      for (size_t q = 0; q < rcnt[r]; q++, j++) {
+        int found;
+        pa_idx slot;
+        PA_CALL(pa__gidmap_put(&map, rec[2 * j], (pa_idx)j, &found, &slot));
+        if (!found) {
+          slot = (pa_idx)j;
+          best[j] = INT_MAX;
+        }
+        if (rec[2 * j + 1] && r < best[slot]) best[slot] = r;
+      }
+  }
+  /* Reply, in the order received, with the owner. */
+  {
+    int *rdest;
+    PA_ALLOC(back, 2 * nrec);
+    rdest = pa__malloc((nrec ? nrec : 1) * sizeof *rdest);
+    PA_CHECK(rdest, PA_ERR_MEMORY, "out of memory");
+    size_t j = 0;
+    for (int r = 0; r < size; r++)
+      for (size_t q = 0; q < rcnt[r]; q++, j++) {
+        pa_idx slot = pa__gidmap_get(&map, rec[2 * j]);
+        back[2 * j] = rec[2 * j];
+        back[2 * j + 1] = best[slot] == INT_MAX ? -1 : best[slot];
+        rdest[j] = r;
+      }
+    pa__free(recv);
+    recv = NULL;
+    st = send_items(comm, nrec, 2 * sizeof(pa_gid), back, rdest, &bcnt, &recv);
+    pa__free(rdest);
+    if (st) goto cleanup;
+  }
+  /* Answers come back grouped by directory rank, in the order sent. */
+  {
+    size_t *pos;
+    PA_CALLOC(pos, (size_t)size + 1);
+    for (int r = 0; r < size; r++) pos[r + 1] = pos[r] + bcnt[r];
+    const pa_gid *ans = recv;
+    for (size_t i = 0; i < n; i++) {
+      size_t k = pos[dest[i]]++;
+      PA_ASSERT(ans[2 * k] == gid[i]);
+      owner[i] = (int)ans[2 * k + 1];
+    }
+    pa__free(pos);
+  }
+cleanup:
+  st = pa__agree_end(comm, st);
+  pa__free(dest);
+  pa__free(item);
+  pa__free(back);
+  pa__free(rcnt);
+  pa__free(bcnt);
+  pa__free(recv);
+  pa__free(best);
+  pa__gidmap_free(&map);
+  return st;
+}
+
+pa_status pa__gids_unique(MPI_Comm comm, size_t n, const pa_gid *gid,
+                          const char *what) {
+  pa_status st = PA_SUCCESS;
+  int size;
+  pa_gid maxg = -1;
+  dirmap d;
+  int *dest = NULL;
+  size_t *rcnt = NULL, nr = 0;
+  void *recv = NULL;
+  MPI_Comm_size(comm, &size);
+  for (size_t i = 0; i < n; i++) {
+    PA_CHECK(gid[i] >= 0, PA_ERR_FORMAT, "negative %s global id %lld", what,
+             (long long)gid[i]);
+    if (gid[i] > maxg) maxg = gid[i];
+  }
+  PA_CALL(pa__allreduce(comm, &maxg, 1, MPI_INT64_T, MPI_MAX));
+  dir_init(&d, maxg, size);
+  PA_ALLOC(dest, n);
+  for (size_t i = 0; i < n; i++) dest[i] = dir_rank(&d, gid[i]);
+  PA_CALL(send_items(comm, n, sizeof(pa_gid), gid, dest, &rcnt, &recv));
+  for (int r = 0; r < size; r++) nr += rcnt[r];
+  {
+    pa_gid *g = recv;
+    size_t nu = pa__gid_sort_unique(g, nr);
+    PA_CHECK(nu == nr, PA_ERR_FORMAT, "%zu %s global ids are given twice",
+             nr - nu, what);
+  }
+cleanup:
+  st = pa__agree_end(comm, st);
+  pa__free(dest);
+  pa__free(rcnt);
+  pa__free(recv);
+  return st;
+}
+
+/* Build-time state. */
+typedef struct bstate {
+  MPI_Comm comm;
+  int rank, size, dim, nve;
+  dirmap vdir;
+  /* directory side */
+  pa__recs V, B, D;         /* vertex records, bdry/edges by smallest vertex */
+  pa__gidmap vmap;          /* vertex gid -> index in V */
+  pa_idx *bstart, *blist;   /* V index -> B records (CSR) */
+  pa_idx *dstart, *dlist;   /* V index -> D records */
+  pa_idx *tstart;           /* V index -> touching ranks (CSR) */
+  int *trank;
+  /* local side */
+  pa__recs L;               /* local elements: owned first; aux = owner */
+  uint8_t *layer;           /* per L record */
+  size_t caplayer;
+  pa__gidmap emap;          /* element gid -> L index */
+  pa__recs LV, LB, LD;      /* local vertices / bdry / edges (aux = owner) */
+} bstate;
+
+static void bstate_free(bstate *s) {
+  pa__recs_free(&s->V);
+  pa__recs_free(&s->B);
+  pa__recs_free(&s->D);
+  pa__gidmap_free(&s->vmap);
+  pa__free(s->bstart);
+  pa__free(s->blist);
+  pa__free(s->dstart);
+  pa__free(s->dlist);
+  pa__free(s->tstart);
+  pa__free(s->trank);
+  s->bstart = s->blist = s->dstart = s->dlist = s->tstart = NULL;
+  s->trank = NULL;
+  pa__recs_free(&s->L);
+  pa__free(s->layer);
+  s->layer = NULL;
+  s->caplayer = 0;
+  pa__gidmap_free(&s->emap);
+  pa__recs_free(&s->LV);
+  pa__recs_free(&s->LB);
+  pa__recs_free(&s->LD);
+}
+
+static pa_gid min_vgid(const pa__recs *r, size_t i) {
+  const pa_gid *v = r->vgid + (size_t)r->nv * i;
+  pa_gid m = v[0];
+  for (int k = 1; k < r->nv; k++)
+    if (v[k] < m) m = v[k];
+  return m;
+}
+
+/* Attach records of R (bdry or edges) to their smallest vertex in V (CSR). */
+static pa_status attach(bstate *s, const pa__recs *R, pa_idx **start,
+                        pa_idx **list) {
+  pa_status st = PA_SUCCESS;
+  size_t nV = s->V.n;
+  PA_CALLOC(*start, nV + 1);
+  PA_ALLOC(*list, R->n);
+  for (size_t i = 0; i < R->n; i++) {
+    pa_idx v = pa__gidmap_get(&s->vmap, min_vgid(R, i));
+    PA_CHECK(v >= 0, PA_ERR_MESH,
+             "%s of global id %lld references vertex %lld, which does not "
+             "exist", R->kind == PA_BOUNDARY ? "boundary entity" : "edge",
+             (long long)R->gid[i], (long long)min_vgid(R, i));
+    (*start)[v + 1]++;
+  }
+  for (size_t v = 0; v < nV; v++) (*start)[v + 1] += (*start)[v];
+  for (size_t i = 0; i < R->n; i++) {
+    pa_idx v = pa__gidmap_get(&s->vmap, min_vgid(R, i));
+    (*list)[(*start)[v]++] = (pa_idx)i;
+  }
+  for (size_t v = nV; v > 0; v--) (*start)[v] = (*start)[v - 1];
+  (*start)[0] = 0;
+cleanup:
+  return st;
+}
+
+/* Steps 1-2: directory of vertices, boundary entities and edges. */
+static pa_status build_directory(bstate *s, pa__recs *verts, pa__recs *bdry,
+                                 pa__recs *edges) {
+  pa_status st = PA_SUCCESS;
+  int *dest = NULL;
+  size_t nmax = verts->n > bdry->n ? verts->n : bdry->n;
+  if (edges->n > nmax) nmax = edges->n;
+  PA_ALLOC(dest, nmax);
+  for (size_t i = 0; i < verts->n; i++) dest[i] = dir_rank(&s->vdir, verts->gid[i]);
+  PA_CALL(pa__recs_migrate(s->comm, verts, dest, &s->V));
+  pa__recs_free(verts);
+  for (size_t i = 0; i < bdry->n; i++) dest[i] = dir_rank(&s->vdir, min_vgid(bdry, i));
+  PA_CALL(pa__recs_migrate(s->comm, bdry, dest, &s->B));
+  pa__recs_free(bdry);
+  for (size_t i = 0; i < edges->n; i++) dest[i] = dir_rank(&s->vdir, min_vgid(edges, i));
+  PA_CALL(pa__recs_migrate(s->comm, edges, dest, &s->D));
+  pa__recs_free(edges);
+  PA_CALL(pa__gidmap_init(&s->vmap, s->V.n));
+  for (size_t i = 0; i < s->V.n; i++) {
+    int found;
+    PA_CALL(pa__gidmap_put(&s->vmap, s->V.gid[i], (pa_idx)i, &found, NULL));
+    PA_CHECK(!found, PA_ERR_MESH, "vertex global id %lld is given twice",
+             (long long)s->V.gid[i]);
+  }
+  for (size_t i = 1; i < s->B.n; i++)
+    PA_CHECK(s->B.gid[i] != s->B.gid[i - 1], PA_ERR_MESH,
+             "boundary entity global id %lld is given twice",
+             (long long)s->B.gid[i]);
+  PA_CALL(attach(s, &s->B, &s->bstart, &s->blist));
+  PA_CALL(attach(s, &s->D, &s->dstart, &s->dlist));
+cleanup:
+  pa__free(dest);
+  return st;
+}
+
+/* Unique vertex gids of the L elements with layer in [l0, l1]. */
+static pa_status elem_verts(bstate *s, int l0, int l1, pa_gid **out,
+                            size_t *nout) {
+  pa_status st = PA_SUCCESS;
+  size_t n = 0;
+  pa_gid *g = NULL;
+  for (size_t e = 0; e < s->L.n; e++)
+    if (s->layer[e] >= l0 && s->layer[e] <= l1) n += (size_t)s->nve;
+  PA_ALLOC(g, n);
+  n = 0;
+  for (size_t e = 0; e < s->L.n; e++)
+    if (s->layer[e] >= l0 && s->layer[e] <= l1)
+      for (int k = 0; k < s->nve; k++) g[n++] = s->L.vgid[(size_t)s->nve * e + k];
+  *nout = pa__gid_sort_unique(g, n);
+  *out = g;
+cleanup:
+  return st;
+}
+
+/* Step 3: the directory records which ranks own elements touching each
+ * vertex. */
+static pa_status build_touch(bstate *s) {
+  pa_status st = PA_SUCCESS;
+  pa_gid *g = NULL;
+  int *dest = NULL;
+  size_t n, *rcnt = NULL;
+  void *recv = NULL;
+  PA_CALL(elem_verts(s, 0, 0, &g, &n));
+  PA_ALLOC(dest, n);
+  for (size_t i = 0; i < n; i++) dest[i] = dir_rank(&s->vdir, g[i]);
+  PA_CALL(send_items(s->comm, n, sizeof(pa_gid), g, dest, &rcnt, &recv));
+  const pa_gid *rg = recv;
+  size_t nV = s->V.n, tot = 0;
+  PA_CALLOC(s->tstart, nV + 1);
+  for (int r = 0; r < s->size; r++) tot += rcnt[r];
+  PA_ALLOC(s->trank, tot);
+  for (size_t j = 0; j < tot; j++) {
+    pa_idx v = pa__gidmap_get(&s->vmap, rg[j]);
+    PA_CHECK(v >= 0, PA_ERR_MESH,
+             "an element references vertex %lld, which does not exist",
+             (long long)rg[j]);
+    s->tstart[v + 1]++;
+  }
+  for (size_t v = 0; v < nV; v++) s->tstart[v + 1] += s->tstart[v];
+  {
+    size_t j = 0;
+    for (int r = 0; r < s->size; r++) /* by rank: lists come out sorted */
+      for (size_t q = 0; q < rcnt[r]; q++, j++) {
+        pa_idx v = pa__gidmap_get(&s->vmap, rg[j]);
+        s->trank[s->tstart[v]++] = r;
+      }
+  }
+  for (size_t v = nV; v > 0; v--) s->tstart[v] = s->tstart[v - 1];
+  s->tstart[0] = 0;
+cleanup:
+  st = pa__agree_end(s->comm, st);
+  pa__free(g);
+  pa__free(dest);
+  pa__free(rcnt);
+  pa__free(recv);
+  return st;
+}
+
+static pa_status add_local_elem(bstate *s, const pa__recs *R, size_t i,
+                                int owner, int layer) {
+  pa_status st = PA_SUCCESS;
+  int found;
+  PA_CALL(pa__gidmap_put(&s->emap, R->gid[i], (pa_idx)s->L.n, &found, NULL));
+  if (found) return PA_SUCCESS;
+  PA_CALL(pa__recs_add(&s->L, R->gid[i], R->vgid + (size_t)R->nv * i, R->ref[i],
+                       R->flag[i], owner, NULL,
+                       R->poff ? R->pay + R->poff[i] : NULL,
+                       R->poff ? R->poff[i + 1] - R->poff[i] : 0));
+  PA_GROW(s->layer, s->caplayer, s->L.n);
+  s->layer[s->L.n - 1] = (uint8_t)layer;
+cleanup:
+  return st;
+}
+
+/* Step 4: ghost layers. For layer l, the vertices of layer l-1 not queried
+ * yet go to the directory, which forwards (vertex, requester) to every other
+ * rank owning elements around the vertex; those reply with these elements. */
+static pa_status build_layers(bstate *s, int overlap, pa_idx nown) {
+  pa_status st = PA_SUCCESS;
+  pa_gid *g = NULL, *pair = NULL, *fw = NULL;
+  int *dest = NULL, *fwdest = NULL;
+  size_t *rcnt = NULL, *fcnt = NULL, *ecnt = NULL, *bcnt = NULL;
+  void *recv = NULL, *frecv = NULL, *erecv = NULL;
+  pa__gidmap queried = {0};
+  pa_idx *ustart = NULL, *uelem = NULL;
+  pa__gidmap umap = {0};
+  pa_gid *ukey = NULL;
+  pa__buf b = {0};
+  pa__recs tmp;
+  pa__recs_init(&tmp, PA_ELEMENT, s->nve, 0);
+  if (overlap <= 0) goto cleanup;
+  PA_CALL(pa__gidmap_init(&queried, 16));
+  /* owned elements around each vertex: CSR over the unique vertex gids */
+  {
+    size_t np = (size_t)nown * s->nve, nu = 0;
+    pa_idx *order;
+    PA_ALLOC(order, np);
+    for (size_t p = 0; p < np; p++) order[p] = (pa_idx)p;
+    st = pa__sort_by_gid(order, np, s->L.vgid);
+    if (st) {
+      pa__free(order);
+      goto cleanup;
+    }
+    ukey = pa__malloc((np ? np : 1) * sizeof *ukey);
+    ustart = pa__malloc((np + 1) * sizeof *ustart);
+    uelem = pa__malloc((np ? np : 1) * sizeof *uelem);
+    if (!ukey || !ustart || !uelem) {
+      pa__free(order);
+      PA_FAIL(PA_ERR_MEMORY, "out of memory");
+    }
+    for (size_t p = 0; p < np; p++) {
+      pa_gid key = s->L.vgid[order[p]];
+      if (nu == 0 || ukey[nu - 1] != key) {
+        ukey[nu] = key;
+        ustart[nu++] = (pa_idx)p;
+      }
+      uelem[p] = order[p] / s->nve;
+    }
+    ustart[nu] = (pa_idx)np;
+    pa__free(order);
+    PA_CALL(pa__gidmap_init(&umap, nu));
+    for (size_t u = 0; u < nu; u++)
+      PA_CALL(pa__gidmap_put(&umap, ukey[u], (pa_idx)u, NULL, NULL));
+  }
+  for (int l = 1; l <= overlap; l++) {
+    size_t n, nq = 0;
+    PA_CALL(elem_verts(s, l - 1, l - 1, &g, &n));
+    for (size_t i = 0; i < n; i++) {
+      int found;
+      PA_CALL(pa__gidmap_put(&queried, g[i], 0, &found, NULL));
+      if (!found) g[nq++] = g[i];
+    }
+    PA_ALLOC(dest, nq);
+    for (size_t i = 0; i < nq; i++) dest[i] = dir_rank(&s->vdir, g[i]);
+    PA_CALL(send_items(s->comm, nq, sizeof(pa_gid), g, dest, &rcnt, &recv));
+    pa__free(g);
+    g = NULL;
+    pa__free(dest);
+    dest = NULL;
+    /* directory: forward (vertex, requester) to the other touching ranks */
+    size_t nfw = 0, tot = 0;
+    const pa_gid *rg = recv;
+    for (int r = 0; r < s->size; r++) tot += rcnt[r];
+    for (size_t j = 0; j < tot; j++) {
+      pa_idx v = pa__gidmap_get(&s->vmap, rg[j]);
+      PA_CHECK(v >= 0, PA_ERR_INTERNAL, "ghost query of unknown vertex %lld",
+               (long long)rg[j]);
+      nfw += (size_t)(s->tstart[v + 1] - s->tstart[v]);
+    }
+    PA_ALLOC(fw, 2 * nfw);
+    PA_ALLOC(fwdest, nfw);
+    {
+      size_t j = 0, k = 0;
+      for (int r = 0; r < s->size; r++)
+        for (size_t q = 0; q < rcnt[r]; q++, j++) {
+          pa_idx v = pa__gidmap_get(&s->vmap, rg[j]);
+          for (pa_idx t = s->tstart[v]; t < s->tstart[v + 1]; t++)
+            if (s->trank[t] != r) {
+              fw[2 * k] = rg[j];
+              fw[2 * k + 1] = r;
+              fwdest[k++] = s->trank[t];
+            }
+        }
+      nfw = k;
+    }
+    pa__free(recv);
+    recv = NULL;
+    pa__free(rcnt);
+    rcnt = NULL;
+    PA_CALL(send_items(s->comm, nfw, 2 * sizeof(pa_gid), fw, fwdest, &fcnt,
+                       &frecv));
+    pa__free(fw);
+    fw = NULL;
+    pa__free(fwdest);
+    fwdest = NULL;
+    /* owner side: (requester, element) pairs, sorted and unique */
+    size_t nf = 0, npair = 0;
+    for (int r = 0; r < s->size; r++) nf += fcnt[r];
+    const pa_gid *fr = frecv;
+    for (size_t j = 0; j < nf; j++) {
+      pa_idx u = pa__gidmap_get(&umap, fr[2 * j]);
+      PA_CHECK(u >= 0, PA_ERR_INTERNAL, "forwarded query of vertex %lld "
+               "that no owned element has", (long long)fr[2 * j]);
+      npair += (size_t)(ustart[u + 1] - ustart[u]);
+    }
+    PA_ALLOC(pair, npair);
+    npair = 0;
+    for (size_t j = 0; j < nf; j++) {
+      pa_idx u = pa__gidmap_get(&umap, fr[2 * j]);
+      for (pa_idx p = ustart[u]; p < ustart[u + 1]; p++)
+        pair[npair++] = fr[2 * j + 1] * (pa_gid)nown + uelem[p];
+    }
+    npair = pa__gid_sort_unique(pair, npair);
+    {
+      size_t *cnt;
+      PA_CALLOC(ecnt, s->size);
+      cnt = ecnt;
+      size_t bytes = 0;
+      for (size_t p = 0; p < npair; p++)
+        bytes += pa__recs_wire(&s->L, (size_t)(pair[p] % (nown ? nown : 1)));
+      PA_CALL(pa__buf_reserve(&b, bytes));
+      for (size_t p = 0; p < npair; p++) {
+        int r = (int)(pair[p] / (nown ? nown : 1));
+        size_t e = (size_t)(pair[p] % (nown ? nown : 1));
+        size_t before = b.n;
+        pa__recs_pack(&s->L, e, &b);
+        cnt[r] += b.n - before;
+      }
+    }
+    pa__free(pair);
+    pair = NULL;
+    pa__free(frecv);
+    frecv = NULL;
+    pa__free(fcnt);
+    fcnt = NULL;
+    PA_CALL(pa__xchg_sparse(s->comm, ecnt, b.p, &bcnt, &erecv));
+    pa__buf_free(&b);
+    pa__free(ecnt);
+    ecnt = NULL;
+    /* requester side: new elements become layer l, owner = sender */
+    {
+      size_t q = 0;
+      for (int r = 0; r < s->size; r++) {
+        size_t end = q + bcnt[r];
+        while (q < end) {
+          tmp.n = 0;
+          if (tmp.poff) tmp.poff[0] = 0;
+          PA_CALL(pa__recs_unpack(&tmp, erecv, &q));
+          PA_CALL(add_local_elem(s, &tmp, 0, r, l));
+        }
+      }
+    }
+    pa__free(erecv);
+    erecv = NULL;
+    pa__free(bcnt);
+    bcnt = NULL;
+  }
+cleanup:
+  st = pa__agree_end(s->comm, st);
+  pa__free(g);
+  pa__free(pair);
+  pa__free(fw);
+  pa__free(dest);
+  pa__free(fwdest);
+  pa__free(rcnt);
+  pa__free(fcnt);
+  pa__free(ecnt);
+  pa__free(bcnt);
+  pa__free(recv);
+  pa__free(frecv);
+  pa__free(erecv);
+  pa__gidmap_free(&queried);
+  pa__gidmap_free(&umap);
+  pa__free(ukey);
+  pa__free(ustart);
+  pa__free(uelem);
+  pa__buf_free(&b);
+  pa__recs_free(&tmp);
+  return st;
+}
+
+/* Step 5: fetch the records of every local vertex (aux = owner) with the
+ * boundary entities and edges attached to it. */
+static pa_status fetch_vertices(bstate *s) {
+  pa_status st = PA_SUCCESS;
+  pa_gid *g = NULL;
+  int *dest = NULL;
+  size_t n, *rcnt = NULL, *cnt = NULL, *bcnt = NULL;
+  void *recv = NULL, *brecv = NULL;
+  pa__buf b = {0};
+  PA_CALL(elem_verts(s, 0, 255, &g, &n));
+  PA_ALLOC(dest, n);
+  for (size_t i = 0; i < n; i++) dest[i] = dir_rank(&s->vdir, g[i]);
+  PA_CALL(send_items(s->comm, n, sizeof(pa_gid), g, dest, &rcnt, &recv));
+  pa__free(g);
+  g = NULL;
+  const pa_gid *rg = recv;
+  PA_CALLOC(cnt, s->size);
+  size_t j = 0;
+  for (int r = 0; r < s->size; r++)
+    for (size_t q = 0; q < rcnt[r]; q++, j++) {
+      pa_idx v = pa__gidmap_get(&s->vmap, rg[j]);
+      PA_CHECK(v >= 0 && s->tstart[v + 1] > s->tstart[v], PA_ERR_INTERNAL,
+               "vertex %lld requested but untouched", (long long)rg[j]);
+      int32_t nb = s->bstart[v + 1] - s->bstart[v];
+      int32_t nd = s->dstart[v + 1] - s->dstart[v];
+      size_t need = pa__recs_wire(&s->V, (size_t)v) + 8;
+      for (pa_idx k = s->bstart[v]; k < s->bstart[v + 1]; k++)
+        need += pa__recs_wire(&s->B, (size_t)s->blist[k]);
+      for (pa_idx k = s->dstart[v]; k < s->dstart[v + 1]; k++)
+        need += pa__recs_wire(&s->D, (size_t)s->dlist[k]);
+      PA_CALL(pa__buf_reserve(&b, need));
+      size_t before = b.n;
+      s->V.aux[v] = s->trank[s->tstart[v]]; /* owner: lowest touching rank */
+      pa__recs_pack(&s->V, (size_t)v, &b);
+      pa__buf_put(&b, &nb, 4);
+      for (pa_idx k = s->bstart[v]; k < s->bstart[v + 1]; k++)
+        pa__recs_pack(&s->B, (size_t)s->blist[k], &b);
+      pa__buf_put(&b, &nd, 4);
+      for (pa_idx k = s->dstart[v]; k < s->dstart[v + 1]; k++)
+        pa__recs_pack(&s->D, (size_t)s->dlist[k], &b);
+      cnt[r] += b.n - before;
+    }
+  PA_CALL(pa__xchg_sparse(s->comm, cnt, b.p, &bcnt, &brecv));
+  pa__buf_free(&b);
+  {
+    size_t tot = 0, q = 0;
+    for (int r = 0; r < s->size; r++) tot += bcnt[r];
+    while (q < tot) {
+      int32_t nb, nd;
+      PA_CALL(pa__recs_unpack(&s->LV, brecv, &q));
+      pa__get(brecv, &q, &nb, 4);
+      for (int32_t k = 0; k < nb; k++) PA_CALL(pa__recs_unpack(&s->LB, brecv, &q));
+      pa__get(brecv, &q, &nd, 4);
+      for (int32_t k = 0; k < nd; k++) PA_CALL(pa__recs_unpack(&s->LD, brecv, &q));
+    }
+  }
+cleanup:
+  st = pa__agree_end(s->comm, st);
+  pa__free(g);
+  pa__free(dest);
+  pa__free(rcnt);
+  pa__free(cnt);
+  pa__free(bcnt);
+  pa__free(recv);
+  pa__free(brecv);
+  pa__buf_free(&b);
+  return st;
+}
+
+/* Order of local entities: owned (aux == rank) first, each group by gid (and
+ * elements by layer). out[k] = record index of local entity k. */
+static pa_status number_local(const pa__recs *R, const uint8_t *layer,
+                              int rank, pa_idx *out, pa_idx *nown) {
+  pa_status st = PA_SUCCESS;
+  pa_gid *key = NULL;
+  PA_ALLOC(key, R->n);
+  for (size_t i = 0; i < R->n; i++) out[i] = (pa_idx)i;
+  PA_CALL(pa__sort_by_gid(out, R->n, R->gid));
+  /* stable partition by group: owned, then ghost layers 1.. */
+  for (size_t i = 0; i < R->n; i++)
+    key[i] = layer ? layer[i] : (R->aux[i] == rank ? 0 : 1);
+  PA_CALL(pa__sort_by_gid(out, R->n, key));
+  pa_idx k = 0;
+  while ((size_t)k < R->n && key[out[k]] == 0) k++;
+  *nown = k;
+cleanup:
+  pa__free(key);
+  return st;
+}
+
+/* Copy the payload of record i of R into the values of kind at entity e. */
+static void unpack_payload(pa_dmesh *dm, int kind, const pa__recs *R, size_t i,
+                           pa_idx e) {
+  if (!R->poff) return;
+  const unsigned char *p = R->pay + R->poff[i];
+  for (int k = 0; k < dm->nvalue; k++) {
+    pa_dmesh_value *v = dm->value[k];
+    if ((int)v->kind != kind || (v->ref >= 0 && v->ref != R->ref[i])) continue;
+    pa_idx slot = v->slot ? v->slot[e] : e;
+    memcpy(v->data + v->unit * (size_t)slot, p, v->unit);
+    p += v->unit;
+  }
+}
+
+/* Steps 6-9: filter and own the boundary entities / edges, number all local
+ * entities, fill dm. */
+static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
+  pa_status st = PA_SUCCESS;
+  int d = s->dim, rank = s->rank;
+  pa_idx *ordV = NULL, *ordE = NULL, *ordB = NULL, *ordD = NULL;
+  pa__gidmap lv = {0};
+  pa_idx *vstart = NULL, *vel = NULL;
+  pa__recs *SB[2] = {&s->LB, &s->LD};
+  uint8_t *keep = NULL, *cand = NULL;
+  pa_gid *kg = NULL;
+  int *kown = NULL;
+  pa_mesh *m = NULL;
+
+  /* vertices */
+  PA_ALLOC(ordV, s->LV.n);
+  PA_CALL(number_local(&s->LV, NULL, rank, ordV, &dm->nown[PA_VERTEX]));
+  dm->nloc[PA_VERTEX] = (pa_idx)s->LV.n;
+  PA_CALL(pa__gidmap_init(&lv, s->LV.n));
+  for (size_t k = 0; k < s->LV.n; k++)
+    PA_CALL(pa__gidmap_put(&lv, s->LV.gid[ordV[k]], (pa_idx)k, NULL, NULL));
+  /* elements */
+  PA_ALLOC(ordE, s->L.n);
+  PA_CALL(number_local(&s->L, s->layer, rank, ordE, &dm->nown[PA_ELEMENT]));
+  dm->nloc[PA_ELEMENT] = (pa_idx)s->L.n;
+
+  /* the local mesh */
+  PA_CALL(pa_mesh_create(d, &m));
+  m->met_ncomp = lay->met_ncomp;
+  m->nfield = lay->nfield;
+  for (int f = 0; f < lay->nfield; f++) {
+    snprintf(m->field[f].name, sizeof m->field[f].name, "%s", lay->fieldname[f]);
+    m->field[f].ncomp = lay->fieldncomp[f];
+  }
+  PA_CALL(pa_mesh_reserve(m, (pa_idx)s->LV.n, (pa_idx)s->L.n, 0, 0));
+  for (size_t k = 0; k < s->LV.n; k++) {
+    size_t i = (size_t)ordV[k];
+    const double *x = s->LV.dbl + (size_t)s->LV.ndbl * i;
+    memcpy(m->coord + (size_t)d * k, x, d * sizeof(double));
+    x += d;
+    if (m->met_ncomp) {
+      memcpy(m->met + (size_t)m->met_ncomp * k, x, m->met_ncomp * sizeof(double));
+      x += m->met_ncomp;
+    }
+    for (int f = 0; f < m->nfield; f++) {
+      memcpy(m->field[f].val + (size_t)m->field[f].ncomp * k, x,
+             m->field[f].ncomp * sizeof(double));
+      x += m->field[f].ncomp;
+    }
+    m->vref[k] = s->LV.ref[i];
+    m->vflag[k] = s->LV.flag[i];
+  }
+  m->nv = (pa_idx)s->LV.n;
+  for (size_t k = 0; k < s->L.n; k++) {
+    size_t i = (size_t)ordE[k];
+    for (int j = 0; j <= d; j++) {
+      pa_idx v = pa__gidmap_get(&lv, s->L.vgid[(size_t)(d + 1) * i + j]);
+      PA_CHECK(v >= 0, PA_ERR_INTERNAL, "element vertex not fetched");
+      m->elem[(size_t)(d + 1) * k + j] = v;
+    }
+    m->eref[k] = s->L.ref[i];
+    m->eflag[k] = s->L.flag[i];
+  }
+  m->ne = (pa_idx)s->L.n;
+
+  /* vertex -> local elements, for the containment tests */
+  PA_CALLOC(vstart, (size_t)m->nv + 1);
+  PA_ALLOC(vel, (size_t)m->ne * (d + 1));
+  for (size_t k = 0; k < (size_t)m->ne * (d + 1); k++) vstart[m->elem[k] + 1]++;
+  for (pa_idx v = 0; v < m->nv; v++) vstart[v + 1] += vstart[v];
+  for (size_t k = 0; k < (size_t)m->ne * (d + 1); k++)
+    vel[vstart[m->elem[k]]++] = (pa_idx)(k / (d + 1));
+  for (pa_idx v = m->nv; v > 0; v--) vstart[v] = vstart[v - 1];
+  vstart[0] = 0;
+
+  /* boundary entities and edges: keep those inside a local element; the
+   * owner is the lowest rank with an owned element containing them */
+  for (int t = 0; t < 2; t++) {
+    pa__recs *R = SB[t];
+    int nv = R->nv;
+    pa__free(keep);
+    pa__free(cand);
+    keep = NULL;
+    cand = NULL;
+    PA_CALLOC(keep, R->n);
+    PA_CALLOC(cand, R->n);
+    size_t nk = 0;
+    for (size_t i = 0; i < R->n; i++) {
+      pa_idx lvx[4];
+      int ok = 1;
+      for (int j = 0; j < nv; j++) {
+        lvx[j] = pa__gidmap_get(&lv, R->vgid[(size_t)nv * i + j]);
+        if (lvx[j] < 0) ok = 0;
+      }
+      if (!ok) continue;
+      for (pa_idx q = vstart[lvx[0]]; q < vstart[lvx[0] + 1]; q++) {
+        const pa_idx *ev = m->elem + (size_t)(d + 1) * vel[q];
+        int all = 1;
+        for (int j = 1; j < nv && all; j++) {
+          int in = 0;
+          for (int c = 0; c <= d; c++) in |= ev[c] == lvx[j];
+          all = in;
+        }
+        if (all) {
+          keep[i] = 1;
+          if (vel[q] < dm->nown[PA_ELEMENT]) cand[i] = 1;
+        }
+      }
+      nk += keep[i];
+    }
+    /* compact the kept records in place */
+    {
+      size_t k = 0;
+      for (size_t i = 0; i < R->n; i++) {
+        if (!keep[i]) continue;
+        if (k != i) {
+          R->gid[k] = R->gid[i];
+          memcpy(R->vgid + (size_t)nv * k, R->vgid + (size_t)nv * i,
+                 nv * sizeof(pa_gid));
+          R->ref[k] = R->ref[i];
+          R->flag[k] = R->flag[i];
+          if (R->poff) { /* payload offsets: move the slice pointers */
+            size_t len = R->poff[i + 1] - R->poff[i];
+            memmove(R->pay + R->poff[k], R->pay + R->poff[i], len);
+            R->poff[k + 1] = R->poff[k] + len;
+          }
+        } else if (R->poff) {
+          R->poff[k + 1] = R->poff[k] + (R->poff[i + 1] - R->poff[i]);
+        }
+        cand[k] = cand[i];
+        k++;
+      }
+      R->n = k;
+      PA_ASSERT(k == nk);
+    }
+    PA_ALLOC(kown, R->n);
+    st = resolve_owner(s->comm, R->n, R->gid, cand, kown);
+    if (st) goto cleanup;
+    for (size_t i = 0; i < R->n; i++) {
+      PA_CHECK(kown[i] >= 0, PA_ERR_INTERNAL,
+               "entity %lld is in no owned element", (long long)R->gid[i]);
+      R->aux[i] = kown[i];
+    }
+    pa__free(kown);
+    kown = NULL;
+  }
+  PA_ALLOC(ordB, s->LB.n);
+  PA_CALL(number_local(&s->LB, NULL, rank, ordB, &dm->nown[PA_BOUNDARY]));
+  dm->nloc[PA_BOUNDARY] = (pa_idx)s->LB.n;
+  PA_ALLOC(ordD, s->LD.n);
+  PA_CALL(number_local(&s->LD, NULL, rank, ordD, &dm->nown[PA_EDGE]));
+  dm->nloc[PA_EDGE] = (pa_idx)s->LD.n;
+  PA_CALL(pa_mesh_reserve(m, 0, 0, (pa_idx)s->LB.n, (pa_idx)s->LD.n));
+  for (size_t k = 0; k < s->LB.n; k++) {
+    size_t i = (size_t)ordB[k];
+    for (int j = 0; j < d; j++)
+      m->bdry[(size_t)d * k + j] = pa__gidmap_get(&lv, s->LB.vgid[(size_t)d * i + j]);
+    m->bref[k] = s->LB.ref[i];
+    m->bflag[k] = s->LB.flag[i];
+  }
+  m->nb = (pa_idx)s->LB.n;
+  for (size_t k = 0; k < s->LD.n; k++) {
+    size_t i = (size_t)ordD[k];
+    for (int j = 0; j < 2; j++)
+      m->edge[2 * k + j] = pa__gidmap_get(&lv, s->LD.vgid[2 * i + j]);
+    m->edref[k] = s->LD.ref[i];
+    m->edflag[k] = s->LD.flag[i];
+  }
+  m->ned = (pa_idx)s->LD.n;
+
+  /* ids, owners, layers */
+  {
+    const pa__recs *R[PA_NKIND] = {&s->LV, &s->L, &s->LB, &s->LD};
+    const pa_idx *ord[PA_NKIND] = {ordV, ordE, ordB, ordD};
+    for (int kind = 0; kind < PA_NKIND; kind++) {
+      pa_idx n = dm->nloc[kind];
+      PA_ALLOC(dm->gid[kind], n);
+      PA_ALLOC(dm->owner[kind], n);
+      for (pa_idx k = 0; k < n; k++) {
+        dm->gid[kind][k] = R[kind]->gid[ord[kind][k]];
+        dm->owner[kind][k] = R[kind]->aux[ord[kind][k]];
+      }
+    }
+    PA_ALLOC(dm->layer, dm->nloc[PA_ELEMENT]);
+    for (pa_idx k = 0; k < dm->nloc[PA_ELEMENT]; k++)
+      dm->layer[k] = s->layer[ordE[k]];
+  }
+  dm->mesh = m;
+  m = NULL;
+
+  /* values: slots for the new distribution, then the payloads */
+  {
+    const pa__recs *R[PA_NKIND] = {&s->LV, &s->L, &s->LB, &s->LD};
+    const pa_idx *ord[PA_NKIND] = {ordV, ordE, ordB, ordD};
+    int any = 0;
+    for (int kind = 0; kind < PA_NKIND; kind++) any |= R[kind]->poff != NULL;
+    if (any || dm->nvalue) {
+      /* slots from the references (local); sfs are built later */
+      for (int k = 0; k < dm->nvalue; k++) PA_CALL(pa__value_alloc(dm, dm->value[k]));
+      for (int kind = 0; kind < PA_NKIND; kind++)
+        for (pa_idx e = 0; e < dm->nloc[kind]; e++)
+          unpack_payload(dm, kind, R[kind], (size_t)ord[kind][e], e);
+    }
+  }
+cleanup:
+  pa_mesh_destroy(m);
+  pa__free(ordV);
+  pa__free(ordE);
+  pa__free(ordB);
+  pa__free(ordD);
+  pa__gidmap_free(&lv);
+  pa__free(vstart);
+  pa__free(vel);
+  pa__free(keep);
+  pa__free(cand);
+  pa__free(kg);
+  pa__free(kown);
+  return st;
+}
+
+int pa__layout_ndbl(const pa__layout *l) {
+  int n = l->dim + l->met_ncomp;
+  for (int f = 0; f < l->nfield; f++) n += l->fieldncomp[f];
+  return n;
+}
+
+pa_status pa__dmesh_build(pa_dmesh *dm, const pa__layout *lay, int overlap,
+                          pa__recs *elems, pa__recs *verts, pa__recs *bdry,
+                          pa__recs *edges) {
+  pa_status st = PA_SUCCESS;
+  bstate s;
+  double t0 = pa_wtime();
+  memset(&s, 0, sizeof s);
+  s.comm = dm->comm;
+  s.rank = dm->rank;
+  s.size = dm->size;
+  s.dim = dm->dim;
+  s.nve = dm->dim + 1;
+  int ndbl = pa__layout_ndbl(lay);
+  pa__recs_init(&s.L, PA_ELEMENT, s.nve, 0);
+  pa__recs_init(&s.LV, PA_VERTEX, 0, ndbl);
+  pa__recs_init(&s.LB, PA_BOUNDARY, s.dim, 0);
+  pa__recs_init(&s.LD, PA_EDGE, 2, 0);
+  pa__recs_init(&s.V, PA_VERTEX, 0, ndbl);
+  pa__recs_init(&s.B, PA_BOUNDARY, s.dim, 0);
+  pa__recs_init(&s.D, PA_EDGE, 2, 0);
+  dm->overlap = overlap;
+
+  /* input totals and the directory of vertex gids */
+  pa_gid cnt_in[PA_NKIND] = {(pa_gid)verts->n, (pa_gid)elems->n,
+                             (pa_gid)bdry->n, (pa_gid)edges->n};
+  pa_gid maxg = -1;
+  PA_CHECK(verts->ndbl == ndbl && elems->nv == s.nve && bdry->nv == s.dim &&
+               edges->nv == 2,
+           PA_ERR_INTERNAL, "record layout mismatch");
+  PA_CHECK(overlap >= 0 && overlap <= 8, PA_ERR_ARG,
+           "overlap must be in [0, 8], got %d", overlap);
+  for (size_t i = 0; i < verts->n; i++)
+    if (verts->gid[i] > maxg) maxg = verts->gid[i];
+  PA_CALL(pa__allreduce(s.comm, cnt_in, PA_NKIND, MPI_INT64_T, MPI_SUM));
+  PA_CALL(pa__allreduce(s.comm, &maxg, 1, MPI_INT64_T, MPI_MAX));
+  dir_init(&s.vdir, maxg, s.size);
+
+  /* 1. elements to their owners */
+  {
+    pa__recs E;
+    PA_CALL(pa__recs_migrate(s.comm, elems, NULL, &E));
+    pa__recs_free(elems);
+    PA_CALL(pa__gidmap_init(&s.emap, E.n));
+    for (size_t i = 0; i < E.n; i++) {
+      int found;
+      if (i && E.gid[i] == E.gid[i - 1]) {
+        pa__recs_free(&E);
+        PA_FAIL(PA_ERR_MESH, "element global id %lld is given twice",
+                (long long)E.gid[i]);
+      }
+      st = add_local_elem(&s, &E, i, s.rank, 0);
+      if (st) {
+        pa__recs_free(&E);
+        goto cleanup;
+      }
+      (void)found;
+    }
+    pa__recs_free(&E);
+  }
+  pa_idx nown_e = (pa_idx)s.L.n;
+  double t1 = pa_wtime();
+  /* 2-3. directory and touch lists */
+  PA_CALL(build_directory(&s, verts, bdry, edges));
+  PA_CALL(build_touch(&s));
+  /* 4. ghost layers */
+  PA_CALL(build_layers(&s, overlap, nown_e));
+  double t2 = pa_wtime();
+  /* 5. vertices, boundary entities, edges */
+  PA_CALL(fetch_vertices(&s));
+  pa__recs_free(&s.V);
+  pa__recs_free(&s.B);
+  pa__recs_free(&s.D);
+  /* 6-9. numbering, local mesh, values */
+  PA_CALL(assemble(dm, &s, lay));
+  bstate_free(&s);
+
+  /* 10. totals: an entity in no element was dropped */
+  {
+    pa_gid own[PA_NKIND];
+    for (int k = 0; k < PA_NKIND; k++) own[k] = dm->nown[k];
+    PA_CALL(pa__allreduce(dm->comm, own, PA_NKIND, MPI_INT64_T, MPI_SUM));
+    for (int k = 0; k < PA_NKIND; k++) dm->nglob[k] = own[k];
+    PA_CHECK(own[PA_VERTEX] == cnt_in[PA_VERTEX], PA_ERR_MESH,
+             "%lld of %lld vertices belong to no element",
+             (long long)(cnt_in[PA_VERTEX] - own[PA_VERTEX]),
+             (long long)cnt_in[PA_VERTEX]);
+    PA_CHECK(own[PA_BOUNDARY] == cnt_in[PA_BOUNDARY], PA_ERR_MESH,
+             "%lld of %lld boundary entities are not faces of any element",
+             (long long)(cnt_in[PA_BOUNDARY] - own[PA_BOUNDARY]),
+             (long long)cnt_in[PA_BOUNDARY]);
+    PA_CHECK(own[PA_EDGE] == cnt_in[PA_EDGE], PA_ERR_MESH,
+             "%lld of %lld edges are in no element",
+             (long long)(cnt_in[PA_EDGE] - own[PA_EDGE]),
+             (long long)cnt_in[PA_EDGE]);
+  }
+  /* 11. star forests and neighbour ranks */
+  PA_CALL(pa__agree(dm->comm, PA_SUCCESS));
+  for (int k = 0; k < PA_NKIND; k++)
+    PA_CALL(pa__sf_build(dm->comm, dm->nloc[k], dm->gid[k], dm->owner[k],
+                         &dm->sf[k]));
+  {
+    uint8_t *mark;
+    PA_CALLOC(mark, dm->size);
+    for (int k = 0; k < PA_NKIND; k++) {
+      for (int r = 0; r < dm->sf[k].nrootrank; r++) mark[dm->sf[k].rootrank[r]] = 1;
+      for (int r = 0; r < dm->sf[k].nleafrank; r++) mark[dm->sf[k].leafrank[r]] = 1;
+    }
+    int nn = 0;
+    for (int r = 0; r < dm->size; r++) nn += mark[r];
+    dm->neigh = pa__malloc((size_t)(nn ? nn : 1) * sizeof *dm->neigh);
+    if (!dm->neigh) {
+      pa__free(mark);
+      PA_FAIL(PA_ERR_MEMORY, "out of memory");
+    }
+    dm->nneigh = 0;
+    for (int r = 0; r < dm->size; r++)
+      if (mark[r]) dm->neigh[dm->nneigh++] = r;
+    pa__free(mark);
+  }
+  for (int k = 0; k < dm->nvalue; k++)
+    PA_CALL(pa__value_setup(dm, dm->value[k]));
+  pa__info(2, "padapt: dmesh build: migrate %.3f s, directory+ghosts %.3f s, "
+              "rest %.3f s\n", t1 - t0, t2 - t1, pa_wtime() - t2);
+cleanup:
+  st = pa__agree_end(dm->comm, st);
+  bstate_free(&s);
+  pa__recs_free(elems);
+  pa__recs_free(verts);
+  pa__recs_free(bdry);
+  pa__recs_free(edges);
+  return st;
+}

@@ -1,0 +1,894 @@
+/*
+ * dio.c -- distributed I/O: a set of per-rank Medit files OUT.<r>.meshb plus
+ * OUT.pvtu / OUT.<r>.vtu for ParaView, readable by any number of ranks.
+ *
+ * File convention (docs/DMESH.md): OUT.<r>.meshb is a standard binary Medit
+ * mesh (written by pa_mesh_write) of the elements owned by rank r, all their
+ * vertices and the boundary entities / edges they contain, in the rank's
+ * local order, with its End keyword; after that End we append (as ParMmg
+ * does, so that standard readers, which stop at the first End, never see
+ * them), then a second End:
+ *  - ParMmg's vertex communicators (codes 71 ParallelVertexCommunicators and
+ *    73 ParallelCommunicatorVertices, 32-bit, 1-based local indices): for each
+ *    other rank owning elements around some of our vertices, the shared
+ *    vertices in increasing global id, so item k is the same vertex on both
+ *    sides;
+ *  - padapt keywords (codes 2101-2110, unknown to other readers, which skip
+ *    them through the next-keyword position): header, global ids and owner
+ *    ranks of vertices / boundary entities / edges, element global ids,
+ *    metric and fields, entity flags.
+ * Every keyword starts with its code (int32) and the absolute position of the
+ * next keyword (int32 in versions 1-2, int64 in 3-4), as libMeshb does.
+ * Invariants: files are complete or absent (written under a temporary name,
+ * renamed last); a reader checks each file's header (number of ranks, own
+ * rank, global counts) before trusting it.
+ */
+#include "dmesh/dmesh.h"
+#include "io/io.h"
+#include "partition/partition.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+enum {
+  KW_PARMMG_VCOMMS = 71,   /* ParallelVertexCommunicators (ParMmg) */
+  KW_PARMMG_VITEMS = 73,   /* ParallelCommunicatorVertices (ParMmg) */
+  KW_HEADER = 2101,        /* PadaptDistribution: 16 int64 */
+  KW_VGID = 2102,          /* PadaptVertexGlobalIds: int64 per vertex */
+  KW_VOWNER = 2103,        /* PadaptVertexOwners: int32 per vertex */
+  KW_EGID = 2104,          /* PadaptElementGlobalIds */
+  KW_BGID = 2105,          /* PadaptBoundaryGlobalIds */
+  KW_BOWNER = 2106,        /* PadaptBoundaryOwners */
+  KW_DGID = 2107,          /* PadaptEdgeGlobalIds */
+  KW_DOWNER = 2108,        /* PadaptEdgeOwners */
+  KW_VDBL = 2109,          /* PadaptVertexData: metric and fields */
+  KW_FLAGS = 2110,         /* PadaptFlags: uint8 per V, E, B, D entity */
+  KW_END = 54,
+  FORMAT_VERSION = 1
+};
+
+/* Header words. */
+enum { H_FORMAT, H_NRANKS, H_RANK, H_DIM, H_NGLOB, H_NFILE = H_NGLOB + 4,
+       H_MET = H_NFILE + 4, H_NFIELD, H_WORDS = 16 };
+
+/* ---- paths ---- */
+
+/* "OUT.meshb" / "OUT.mesh" / "OUT" -> base "OUT". */
+static void path_base(const char *path, char *base, size_t len) {
+  snprintf(base, len, "%s", path);
+  size_t n = strlen(base);
+  if (n > 6 && !strcmp(base + n - 6, ".meshb")) base[n - 6] = '\0';
+  else if (n > 5 && !strcmp(base + n - 5, ".mesh")) base[n - 5] = '\0';
+}
+
+static void rank_path(const char *base, int r, const char *ext, char *out,
+                      size_t len) {
+  snprintf(out, len, "%s.%d%s", base, r, ext);
+}
+
+static int file_exists(const char *p) {
+  struct stat sb;
+  return stat(p, &sb) == 0;
+}
+
+int pa_dmesh_is_set(const char *path) {
+  char base[4096], p0[4200];
+  if (!path || file_exists(path)) return 0;
+  path_base(path, base, sizeof base);
+  rank_path(base, 0, ".meshb", p0, sizeof p0);
+  return file_exists(p0);
+}
+
+/* ---- appending keywords to a binary Medit file ---- */
+
+typedef struct kwfile {
+  FILE *fp;
+  const char *path;
+  int ver;
+  int64_t pos; /* where the next keyword starts */
+} kwfile;
+
+static pa_status kw_open_append(kwfile *k, const char *path) {
+  pa_status st = PA_SUCCESS;
+  int32_t h[2];
+  memset(k, 0, sizeof *k);
+  k->path = path;
+  k->fp = fopen(path, "r+b");
+  PA_CHECK(k->fp, PA_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+  PA_CHECK(fread(h, 4, 2, k->fp) == 2 && h[0] == 1 && h[1] >= 1 && h[1] <= 4,
+           PA_ERR_FORMAT, "%s: not a native binary Medit file", path);
+  k->ver = h[1];
+  /* walk to End */
+  int64_t pos = 8;
+  for (;;) {
+    int32_t code;
+    int64_t next;
+    PA_CHECK(fseeko(k->fp, pos, SEEK_SET) == 0 && fread(&code, 4, 1, k->fp) == 1,
+             PA_ERR_FORMAT, "%s: byte %lld: no End keyword", path, (long long)pos);
+    if (code == KW_END) break;
+    if (k->ver >= 3) {
+      PA_CHECK(fread(&next, 8, 1, k->fp) == 1, PA_ERR_FORMAT, "%s: truncated", path);
+    } else {
+      int32_t n32;
+      PA_CHECK(fread(&n32, 4, 1, k->fp) == 1, PA_ERR_FORMAT, "%s: truncated", path);
+      next = n32;
+    }
+    PA_CHECK(next > pos, PA_ERR_FORMAT,
+             "%s: byte %lld: keyword %d has no next position", path,
+             (long long)pos, code);
+    pos = next;
+  }
+  /* keep the End of the standard part: our keywords follow it (ParMmg's
+   * convention), so standard readers stop before them */
+  k->pos = pos + 4 + (k->ver >= 3 ? 8 : 4);
+  PA_CHECK(fseeko(k->fp, k->pos, SEEK_SET) == 0, PA_ERR_IO, "%s: seek failed",
+           path);
+cleanup:
+  if (st && k->fp) {
+    fclose(k->fp);
+    k->fp = NULL;
+  }
+  return st;
+}
+
+/* Write one keyword made of up to 3 data blocks; its next position is the
+ * byte after it. */
+static pa_status kw_write(kwfile *k, int code, const void *a, size_t na,
+                          const void *b, size_t nb, const void *c, size_t nc) {
+  pa_status st = PA_SUCCESS;
+  int ps = k->ver >= 3 ? 8 : 4;
+  int64_t next = k->pos + 4 + ps + (int64_t)(na + nb + nc);
+  int32_t c32 = code;
+  PA_CHECK(k->ver >= 3 || next < INT32_MAX, PA_ERR_IO,
+           "%s: too large for a version %d Medit file", k->path, k->ver);
+  int ok = fwrite(&c32, 4, 1, k->fp) == 1;
+  if (ps == 8) ok &= fwrite(&next, 8, 1, k->fp) == 1;
+  else {
+    int32_t n32 = (int32_t)next;
+    ok &= fwrite(&n32, 4, 1, k->fp) == 1;
+  }
+  if (na) ok &= fwrite(a, 1, na, k->fp) == na;
+  if (nb) ok &= fwrite(b, 1, nb, k->fp) == nb;
+  if (nc) ok &= fwrite(c, 1, nc, k->fp) == nc;
+  PA_CHECK(ok, PA_ERR_IO, "%s: write error: %s", k->path, strerror(errno));
+  k->pos = next;
+cleanup:
+  return st;
+}
+
+static pa_status kw_close(kwfile *k) {
+  pa_status st = PA_SUCCESS;
+  int32_t end = KW_END;
+  int64_t zero = 0;
+  int ok = fwrite(&end, 4, 1, k->fp) == 1;
+  ok &= fwrite(&zero, k->ver >= 3 ? 8 : 4, 1, k->fp) == 1;
+  ok &= ftruncate(fileno(k->fp), k->pos + 4 + (k->ver >= 3 ? 8 : 4)) == 0;
+  ok &= fclose(k->fp) == 0;
+  k->fp = NULL;
+  PA_CHECK(ok, PA_ERR_IO, "%s: write error: %s", k->path, strerror(errno));
+cleanup:
+  return st;
+}
+
+/* ---- scanning our keywords ---- */
+
+typedef struct dfile {
+  int64_t h[H_WORDS];
+  pa_gid *gid[PA_NKIND];
+  int32_t *owner[PA_NKIND];
+  int met_ncomp, nfield;
+  char fieldname[PA_MAX_FIELDS][PA_FIELD_NAME_LEN];
+  int32_t fieldncomp[PA_MAX_FIELDS];
+  double *vdbl;
+  uint8_t *flags;
+  int have_header;
+} dfile;
+
+static void dfile_free(dfile *f) {
+  for (int k = 0; k < PA_NKIND; k++) {
+    pa__free(f->gid[k]);
+    pa__free(f->owner[k]);
+  }
+  pa__free(f->vdbl);
+  pa__free(f->flags);
+  memset(f, 0, sizeof *f);
+}
+
+static pa_status read_block(FILE *fp, const char *path, void **p, size_t n,
+                            int64_t avail) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK((int64_t)n <= avail, PA_ERR_FORMAT,
+           "%s: a padapt keyword is larger than its room in the file", path);
+  *p = pa__malloc(n ? n : 1);
+  PA_CHECK(*p, PA_ERR_MEMORY, "out of memory reading %s", path);
+  PA_CHECK(fread(*p, 1, n, fp) == n, PA_ERR_FORMAT, "%s: truncated", path);
+cleanup:
+  return st;
+}
+
+static pa_status scan_file(const char *path, dfile *f) {
+  pa_status st = PA_SUCCESS;
+  FILE *fp = NULL;
+  int32_t h[2];
+  memset(f, 0, sizeof *f);
+  fp = fopen(path, "rb");
+  PA_CHECK(fp, PA_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+  PA_CHECK(fread(h, 4, 2, fp) == 2 && h[0] == 1 && h[1] >= 1 && h[1] <= 4,
+           PA_ERR_FORMAT, "%s: not a native binary Medit file", path);
+  int ver = h[1], nend = 0;
+  int64_t pos = 8;
+  for (;;) {
+    int32_t code;
+    int64_t next;
+    PA_CHECK(fseeko(fp, pos, SEEK_SET) == 0 && fread(&code, 4, 1, fp) == 1,
+             PA_ERR_FORMAT, "%s: byte %lld: no End keyword", path, (long long)pos);
+    if (code == KW_END) { /* the first End closes the standard part */
+      if (++nend == 2) break;
+      pos += 4 + (ver >= 3 ? 8 : 4);
+      continue;
+    }
+    if (ver >= 3) {
+      PA_CHECK(fread(&next, 8, 1, fp) == 1, PA_ERR_FORMAT, "%s: truncated", path);
+    } else {
+      int32_t n32;
+      PA_CHECK(fread(&n32, 4, 1, fp) == 1, PA_ERR_FORMAT, "%s: truncated", path);
+      next = n32;
+    }
+    PA_CHECK(next == 0 || next > pos, PA_ERR_FORMAT,
+             "%s: byte %lld: bad next keyword position", path, (long long)pos);
+    int64_t room = (next ? next : INT64_MAX) - ftello(fp);
+    const int64_t *H = f->h;
+    void *p = NULL;
+    switch (code) {
+    case KW_HEADER:
+      PA_CHECK(room >= (int64_t)sizeof f->h &&
+                   fread(f->h, sizeof f->h, 1, fp) == 1,
+               PA_ERR_FORMAT, "%s: truncated header", path);
+      PA_CHECK(f->h[H_FORMAT] == FORMAT_VERSION, PA_ERR_UNSUPPORTED,
+               "%s: distributed format version %lld, expected %d", path,
+               (long long)f->h[H_FORMAT], FORMAT_VERSION);
+      for (int k = 0; k < PA_NKIND; k++)
+        PA_CHECK(H[H_NFILE + k] >= 0 && H[H_NFILE + k] < INT32_MAX &&
+                     H[H_NGLOB + k] >= 0,
+                 PA_ERR_FORMAT, "%s: bad counts in the header", path);
+      f->have_header = 1;
+      break;
+    case KW_VGID: case KW_EGID: case KW_BGID: case KW_DGID: {
+      int k = code == KW_VGID ? 0 : code == KW_EGID ? 1 : code == KW_BGID ? 2 : 3;
+      PA_CHECK(f->have_header, PA_ERR_FORMAT, "%s: ids before the header", path);
+      PA_CALL(read_block(fp, path, &p, sizeof(pa_gid) * (size_t)H[H_NFILE + k], room));
+      f->gid[k] = p;
+      break;
+    }
+    case KW_VOWNER: case KW_BOWNER: case KW_DOWNER: {
+      int k = code == KW_VOWNER ? 0 : code == KW_BOWNER ? 2 : 3;
+      PA_CHECK(f->have_header, PA_ERR_FORMAT, "%s: owners before the header", path);
+      PA_CALL(read_block(fp, path, &p, 4 * (size_t)H[H_NFILE + k], room));
+      f->owner[k] = p;
+      break;
+    }
+    case KW_VDBL: {
+      int32_t mn[2];
+      PA_CHECK(f->have_header && room >= 8 && fread(mn, 4, 2, fp) == 2 &&
+                   mn[0] >= 0 && mn[0] <= 6 && mn[1] >= 0 && mn[1] <= PA_MAX_FIELDS,
+               PA_ERR_FORMAT, "%s: bad vertex data keyword", path);
+      f->met_ncomp = mn[0];
+      f->nfield = mn[1];
+      int nd = mn[0];
+      for (int q = 0; q < f->nfield; q++) {
+        PA_CHECK(fread(f->fieldname[q], PA_FIELD_NAME_LEN, 1, fp) == 1 &&
+                     fread(&f->fieldncomp[q], 4, 1, fp) == 1 &&
+                     f->fieldncomp[q] > 0 && f->fieldncomp[q] < 1000,
+                 PA_ERR_FORMAT, "%s: bad field description", path);
+        f->fieldname[q][PA_FIELD_NAME_LEN - 1] = '\0';
+        nd += f->fieldncomp[q];
+      }
+      room = (next ? next : INT64_MAX) - ftello(fp);
+      PA_CALL(read_block(fp, path, &p, sizeof(double) * nd * (size_t)H[H_NFILE], room));
+      f->vdbl = p;
+      break;
+    }
+    case KW_FLAGS: {
+      size_t n = 0;
+      for (int k = 0; k < PA_NKIND; k++) n += (size_t)H[H_NFILE + k];
+      PA_CHECK(f->have_header, PA_ERR_FORMAT, "%s: flags before the header", path);
+      PA_CALL(read_block(fp, path, &p, n, room));
+      f->flags = p;
+      break;
+    }
+    default:
+      break;
+    }
+    if (!next) break;
+    pos = next;
+  }
+  PA_CHECK(f->have_header, PA_ERR_FORMAT,
+           "%s: no PadaptDistribution keyword (not a padapt distributed file)",
+           path);
+  PA_CHECK(f->gid[0] && f->gid[1] && f->owner[0] &&
+               (!f->h[H_NFILE + 2] || (f->gid[2] && f->owner[2])) &&
+               (!f->h[H_NFILE + 3] || (f->gid[3] && f->owner[3])),
+           PA_ERR_FORMAT, "%s: global ids or owners missing", path);
+cleanup:
+  if (fp) fclose(fp);
+  if (st) dfile_free(f);
+  return st;
+}
+
+/* ---- VTU output ---- */
+
+static pa_status write_vtu(const pa_mesh *m, int rank, const char *path) {
+  pa_status st = PA_SUCCESS;
+  pa_outfile out;
+  int d = m->dim, nv = d + 1;
+  uint64_t nb;
+  size_t np = (size_t)m->nv, nc = (size_t)m->ne, off = 0;
+  memset(&out, 0, sizeof out);
+  PA_CALL(pa__out_open(&out, path));
+  FILE *fp = out.fp;
+  size_t sz[6] = {np * 3 * 8, nc * nv * 8, nc * 8, nc, nc * 4, nc * 4};
+  size_t o[6];
+  for (int i = 0; i < 6; i++) {
+    o[i] = off;
+    off += 8 + sz[i];
+  }
+  fprintf(fp,
+          "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" "
+          "version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+          "<UnstructuredGrid>\n<Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">\n"
+          "<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" "
+          "format=\"appended\" offset=\"%zu\"/></Points>\n<Cells>\n"
+          "<DataArray type=\"Int64\" Name=\"connectivity\" format=\"appended\" offset=\"%zu\"/>\n"
+          "<DataArray type=\"Int64\" Name=\"offsets\" format=\"appended\" offset=\"%zu\"/>\n"
+          "<DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"%zu\"/>\n"
+          "</Cells>\n<CellData Scalars=\"rank\">\n"
+          "<DataArray type=\"Int32\" Name=\"rank\" format=\"appended\" offset=\"%zu\"/>\n"
+          "<DataArray type=\"Int32\" Name=\"ref\" format=\"appended\" offset=\"%zu\"/>\n"
+          "</CellData>\n</Piece>\n</UnstructuredGrid>\n<AppendedData encoding=\"raw\">\n_",
+          np, nc, o[0], o[1], o[2], o[3], o[4], o[5]);
+  nb = sz[0];
+  fwrite(&nb, 8, 1, fp);
+  for (size_t i = 0; i < np; i++) {
+    double x[3] = {0, 0, 0};
+    memcpy(x, m->coord + (size_t)d * i, sizeof(double) * d);
+    fwrite(x, 8, 3, fp);
+  }
+  nb = sz[1];
+  fwrite(&nb, 8, 1, fp);
+  for (size_t i = 0; i < nc * nv; i++) {
+    int64_t v = m->elem[i];
+    fwrite(&v, 8, 1, fp);
+  }
+  nb = sz[2];
+  fwrite(&nb, 8, 1, fp);
+  for (size_t i = 0; i < nc; i++) {
+    int64_t v = (int64_t)(i + 1) * nv;
+    fwrite(&v, 8, 1, fp);
+  }
+  nb = sz[3];
+  fwrite(&nb, 8, 1, fp);
+  uint8_t type = d == 2 ? 5 : 10; /* VTK_TRIANGLE, VTK_TETRA */
+  for (size_t i = 0; i < nc; i++) fwrite(&type, 1, 1, fp);
+  nb = sz[4];
+  fwrite(&nb, 8, 1, fp);
+  for (size_t i = 0; i < nc; i++) fwrite(&rank, 4, 1, fp);
+  nb = sz[5];
+  fwrite(&nb, 8, 1, fp);
+  fwrite(m->eref, 4, nc, fp);
+  fprintf(fp, "\n</AppendedData>\n</VTKFile>\n");
+  PA_CALL(pa__out_commit(&out));
+cleanup:
+  pa__out_abort(&out);
+  return st;
+}
+
+static pa_status write_pvtu(const char *base, int nranks) {
+  pa_status st = PA_SUCCESS;
+  pa_outfile out;
+  char path[4200];
+  const char *slash = strrchr(base, '/');
+  const char *name = slash ? slash + 1 : base;
+  memset(&out, 0, sizeof out);
+  snprintf(path, sizeof path, "%s.pvtu", base);
+  PA_CALL(pa__out_open(&out, path));
+  fprintf(out.fp,
+          "<?xml version=\"1.0\"?>\n<VTKFile type=\"PUnstructuredGrid\" "
+          "version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+          "<PUnstructuredGrid GhostLevel=\"0\">\n"
+          "<PPoints><PDataArray type=\"Float64\" NumberOfComponents=\"3\"/></PPoints>\n"
+          "<PCellData Scalars=\"rank\">\n<PDataArray type=\"Int32\" Name=\"rank\"/>\n"
+          "<PDataArray type=\"Int32\" Name=\"ref\"/>\n</PCellData>\n");
+  for (int r = 0; r < nranks; r++)
+    fprintf(out.fp, "<Piece Source=\"%s.%d.vtu\"/>\n", name, r);
+  fprintf(out.fp, "</PUnstructuredGrid>\n</VTKFile>\n");
+  PA_CALL(pa__out_commit(&out));
+cleanup:
+  pa__out_abort(&out);
+  return st;
+}
+
+/* ---- writing a set ---- */
+
+/* The file mesh of this rank: owned elements, their vertices, the boundary
+ * entities and edges they contain. map[k][i] = file index of local entity i
+ * of kind k, or -1. */
+static pa_status file_mesh(pa_dmesh *dm, pa_mesh **fmp, pa_idx *map[PA_NKIND],
+                           pa_idx nfile[PA_NKIND]) {
+  pa_status st = PA_SUCCESS;
+  pa_mesh *m = dm->mesh, *fm = NULL;
+  int d = dm->dim;
+  pa_idx ne = dm->nown[PA_ELEMENT], *vstart = NULL, *vel = NULL;
+  for (int k = 0; k < PA_NKIND; k++) {
+    PA_ALLOC(map[k], dm->nloc[k]);
+    for (pa_idx i = 0; i < dm->nloc[k]; i++) map[k][i] = -1;
+  }
+  nfile[PA_ELEMENT] = ne;
+  for (pa_idx e = 0; e < ne; e++) map[PA_ELEMENT][e] = e;
+  nfile[PA_VERTEX] = 0;
+  for (size_t q = 0; q < (size_t)ne * (d + 1); q++) map[PA_VERTEX][m->elem[q]] = 0;
+  for (pa_idx v = 0; v < m->nv; v++)
+    if (map[PA_VERTEX][v] == 0) map[PA_VERTEX][v] = nfile[PA_VERTEX]++;
+  /* owned elements around each vertex */
+  PA_CALLOC(vstart, (size_t)m->nv + 1);
+  PA_ALLOC(vel, (size_t)ne * (d + 1));
+  for (size_t q = 0; q < (size_t)ne * (d + 1); q++) vstart[m->elem[q] + 1]++;
+  for (pa_idx v = 0; v < m->nv; v++) vstart[v + 1] += vstart[v];
+  for (size_t q = 0; q < (size_t)ne * (d + 1); q++) vel[vstart[m->elem[q]]++] = (pa_idx)(q / (d + 1));
+  for (pa_idx v = m->nv; v > 0; v--) vstart[v] = vstart[v - 1];
+  vstart[0] = 0;
+  for (int k = PA_BOUNDARY; k <= PA_EDGE; k++) {
+    int nv = pa__kind_nv(d, k);
+    const pa_idx *conn = k == PA_BOUNDARY ? m->bdry : m->edge;
+    nfile[k] = 0;
+    for (pa_idx b = 0; b < dm->nloc[k]; b++) {
+      const pa_idx *bv = conn + (size_t)nv * b;
+      int in = 0;
+      for (pa_idx q = vstart[bv[0]]; q < vstart[bv[0] + 1] && !in; q++) {
+        const pa_idx *ev = m->elem + (size_t)(d + 1) * vel[q];
+        int all = 1;
+        for (int j = 1; j < nv && all; j++) {
+          int c = 0;
+          for (int i = 0; i <= d; i++) c |= ev[i] == bv[j];
+          all = c;
+        }
+        in = all;
+      }
+      if (in) map[k][b] = nfile[k]++;
+    }
+  }
+  PA_CALL(pa_mesh_create(d, &fm));
+  PA_CALL(pa_mesh_reserve(fm, nfile[0], nfile[1], nfile[2], nfile[3]));
+  for (pa_idx v = 0; v < m->nv; v++) {
+    pa_idx f = map[PA_VERTEX][v];
+    if (f < 0) continue;
+    memcpy(fm->coord + (size_t)d * f, m->coord + (size_t)d * v, sizeof(double) * d);
+    fm->vref[f] = m->vref[v];
+    fm->vflag[f] = m->vflag[v];
+  }
+  fm->nv = nfile[PA_VERTEX];
+  for (pa_idx e = 0; e < ne; e++) {
+    for (int j = 0; j <= d; j++)
+      fm->elem[(size_t)(d + 1) * e + j] = map[PA_VERTEX][m->elem[(size_t)(d + 1) * e + j]];
+    fm->eref[e] = m->eref[e];
+    fm->eflag[e] = m->eflag[e];
+  }
+  fm->ne = ne;
+  for (int k = PA_BOUNDARY; k <= PA_EDGE; k++) {
+    int nv = pa__kind_nv(d, k);
+    const pa_idx *conn = k == PA_BOUNDARY ? m->bdry : m->edge;
+    pa_idx *fc = k == PA_BOUNDARY ? fm->bdry : fm->edge;
+    for (pa_idx b = 0; b < dm->nloc[k]; b++) {
+      pa_idx f = map[k][b];
+      if (f < 0) continue;
+      for (int j = 0; j < nv; j++) fc[(size_t)nv * f + j] = map[PA_VERTEX][conn[(size_t)nv * b + j]];
+      if (k == PA_BOUNDARY) {
+        fm->bref[f] = m->bref[b];
+        fm->bflag[f] = m->bflag[b];
+      } else {
+        fm->edref[f] = m->edref[b];
+        fm->edflag[f] = m->edflag[b];
+      }
+    }
+  }
+  fm->nb = nfile[PA_BOUNDARY];
+  fm->ned = nfile[PA_EDGE];
+  *fmp = fm;
+  fm = NULL;
+cleanup:
+  pa_mesh_destroy(fm);
+  pa__free(vstart);
+  pa__free(vel);
+  return st;
+}
+
+/* For each local vertex, the set of ranks owning elements around it, as a
+ * bit mask of `words` uint64 (reduced to the owner with MPI_BOR, then
+ * broadcast back). Collective. */
+static pa_status touch_masks(pa_dmesh *dm, int words, uint64_t **maskp) {
+  pa_status st = PA_SUCCESS;
+  uint64_t *mask = NULL;
+  pa__sfop op;
+  memset(&op, 0, sizeof op);
+  pa_mesh *m = dm->mesh;
+  int d = dm->dim;
+  mask = pa__calloc((size_t)m->nv * words + 1, sizeof *mask);
+  st = mask ? pa__sfop_init(&op, &dm->sf[PA_VERTEX], 8 * (size_t)words, 902)
+            : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+  PA_CALL(pa__agree(dm->comm, st));
+  for (size_t q = 0; q < (size_t)dm->nown[PA_ELEMENT] * (d + 1); q++)
+    mask[(size_t)words * m->elem[q] + dm->rank / 64] |= 1ull << (dm->rank % 64);
+  pa__sf_reduce_begin(&op, mask);
+  pa__sf_reduce_end(&op, mask, MPI_UINT64_T, words, MPI_BOR);
+  pa__sf_bcast_begin(&op, mask);
+  pa__sf_bcast_end(&op, mask);
+  *maskp = mask;
+  mask = NULL;
+cleanup:
+  pa__sfop_free(&op);
+  pa__free(mask);
+  return st;
+}
+
+pa_status pa_dmesh_write(pa_dmesh *dm, const char *path) {
+  pa_status st = PA_SUCCESS;
+  char base[4096], fpath[4200], tpath[4300];
+  pa_mesh *fm = NULL;
+  pa_idx *map[PA_NKIND] = {NULL}, nfile[PA_NKIND] = {0};
+  uint64_t *mask = NULL;
+  pa_gid *g = NULL;
+  int32_t *o = NULL, *items = NULL, *comms = NULL;
+  double *vd = NULL;
+  uint8_t *flags = NULL;
+  unsigned char *fdesc = NULL;
+  kwfile kw;
+  int tmp_written = 0;
+  memset(&kw, 0, sizeof kw);
+  PA_CHECK(dm && path, PA_ERR_ARG, "pa_dmesh_write: NULL argument");
+  pa__agree_reset();
+  path_base(path, base, sizeof base);
+  pa_mesh *m = dm->mesh;
+  int words = (dm->size + 63) / 64;
+  PA_CALL(file_mesh(dm, &fm, map, nfile));
+  PA_CALL(touch_masks(dm, words, &mask));
+  rank_path(base, dm->rank, ".meshb", fpath, sizeof fpath);
+  snprintf(tpath, sizeof tpath, "%s.%d.tmp%ld.meshb", base, dm->rank, (long)getpid());
+  tmp_written = 1;
+  PA_CALL(pa_mesh_write(fm, tpath, NULL));
+  PA_CALL(kw_open_append(&kw, tpath));
+  /* ParMmg vertex communicators */
+  {
+    int ncomm = 0;
+    size_t nitem = 0;
+    PA_ALLOC(comms, 1 + 2 * (size_t)dm->size);
+    int32_t *cnt = comms + 1;
+    for (int r = 0; r < dm->size; r++) {
+      if (r == dm->rank) continue;
+      int32_t c = 0;
+      for (pa_idx v = 0; v < m->nv; v++)
+        if (map[PA_VERTEX][v] >= 0 && (mask[(size_t)words * v + r / 64] >> (r % 64) & 1)) c++;
+      if (c) {
+        cnt[2 * ncomm] = r;
+        cnt[2 * ncomm + 1] = c;
+        ncomm++;
+        nitem += (size_t)c;
+      }
+    }
+    comms[0] = ncomm;
+    PA_ALLOC(items, 3 * nitem);
+    pa_idx *ord;
+    PA_ALLOC(ord, m->nv);
+    for (pa_idx v = 0; v < m->nv; v++) ord[v] = v;
+    st = pa__sort_by_gid(ord, (size_t)m->nv, dm->gid[PA_VERTEX]);
+    size_t k = 0;
+    for (int c = 0; c < ncomm && !st; c++) {
+      int r = cnt[2 * c], idx = 0;
+      for (pa_idx q = 0; q < m->nv; q++) {
+        pa_idx v = ord[q];
+        if (map[PA_VERTEX][v] >= 0 && (mask[(size_t)words * v + r / 64] >> (r % 64) & 1)) {
+          items[3 * k] = map[PA_VERTEX][v] + 1;
+          items[3 * k + 1] = ++idx;
+          items[3 * k + 2] = c;
+          k++;
+        }
+      }
+    }
+    pa__free(ord);
+    if (st) goto cleanup;
+    PA_CALL(kw_write(&kw, KW_PARMMG_VCOMMS, comms, 4 * (1 + 2 * (size_t)ncomm), NULL, 0, NULL, 0));
+    PA_CALL(kw_write(&kw, KW_PARMMG_VITEMS, items, 12 * nitem, NULL, 0, NULL, 0));
+  }
+  /* padapt keywords */
+  {
+    int64_t h[H_WORDS] = {0};
+    h[H_FORMAT] = FORMAT_VERSION;
+    h[H_NRANKS] = dm->size;
+    h[H_RANK] = dm->rank;
+    h[H_DIM] = dm->dim;
+    for (int k = 0; k < PA_NKIND; k++) {
+      h[H_NGLOB + k] = dm->nglob[k];
+      h[H_NFILE + k] = nfile[k];
+    }
+    h[H_MET] = m->met_ncomp;
+    h[H_NFIELD] = m->nfield;
+    PA_CALL(kw_write(&kw, KW_HEADER, h, sizeof h, NULL, 0, NULL, 0));
+    pa_idx nmax = 0;
+    for (int k = 0; k < PA_NKIND; k++) nmax = nfile[k] > nmax ? nfile[k] : nmax;
+    PA_ALLOC(g, nmax);
+    PA_ALLOC(o, nmax);
+    static const int kwg[PA_NKIND] = {KW_VGID, KW_EGID, KW_BGID, KW_DGID};
+    static const int kwo[PA_NKIND] = {KW_VOWNER, 0, KW_BOWNER, KW_DOWNER};
+    for (int k = 0; k < PA_NKIND; k++) {
+      for (pa_idx i = 0; i < dm->nloc[k]; i++)
+        if (map[k][i] >= 0) {
+          g[map[k][i]] = dm->gid[k][i];
+          o[map[k][i]] = dm->owner[k][i];
+        }
+      PA_CALL(kw_write(&kw, kwg[k], g, sizeof(pa_gid) * nfile[k], NULL, 0, NULL, 0));
+      if (kwo[k]) PA_CALL(kw_write(&kw, kwo[k], o, 4 * (size_t)nfile[k], NULL, 0, NULL, 0));
+    }
+    /* metric and fields */
+    int nd = m->met_ncomp;
+    for (int f = 0; f < m->nfield; f++) nd += m->field[f].ncomp;
+    PA_ALLOC(vd, (size_t)nd * nfile[PA_VERTEX]);
+    for (pa_idx v = 0; v < m->nv; v++) {
+      pa_idx f = map[PA_VERTEX][v];
+      if (f < 0) continue;
+      double *x = vd + (size_t)nd * f;
+      if (m->met_ncomp) memcpy(x, m->met + (size_t)m->met_ncomp * v, sizeof(double) * m->met_ncomp);
+      x += m->met_ncomp;
+      for (int q = 0; q < m->nfield; q++) {
+        memcpy(x, m->field[q].val + (size_t)m->field[q].ncomp * v, sizeof(double) * m->field[q].ncomp);
+        x += m->field[q].ncomp;
+      }
+    }
+    size_t dl = 8 + (size_t)m->nfield * (PA_FIELD_NAME_LEN + 4);
+    PA_CALLOC(fdesc, dl);
+    int32_t mn[2] = {m->met_ncomp, m->nfield};
+    memcpy(fdesc, mn, 8);
+    for (int q = 0; q < m->nfield; q++) {
+      memcpy(fdesc + 8 + (size_t)q * (PA_FIELD_NAME_LEN + 4), m->field[q].name, PA_FIELD_NAME_LEN);
+      int32_t nc = m->field[q].ncomp;
+      memcpy(fdesc + 8 + (size_t)q * (PA_FIELD_NAME_LEN + 4) + PA_FIELD_NAME_LEN, &nc, 4);
+    }
+    PA_CALL(kw_write(&kw, KW_VDBL, fdesc, dl, vd, sizeof(double) * nd * nfile[PA_VERTEX], NULL, 0));
+    /* flags */
+    size_t nf = 0;
+    for (int k = 0; k < PA_NKIND; k++) nf += (size_t)nfile[k];
+    PA_ALLOC(flags, nf);
+    const uint8_t *src[PA_NKIND] = {m->vflag, m->eflag, m->bflag, m->edflag};
+    size_t base_off = 0;
+    for (int k = 0; k < PA_NKIND; k++) {
+      for (pa_idx i = 0; i < dm->nloc[k]; i++)
+        if (map[k][i] >= 0) flags[base_off + map[k][i]] = src[k][i];
+      base_off += (size_t)nfile[k];
+    }
+    PA_CALL(kw_write(&kw, KW_FLAGS, flags, nf, NULL, 0, NULL, 0));
+  }
+  PA_CALL(kw_close(&kw));
+  PA_CHECK(rename(tpath, fpath) == 0, PA_ERR_IO, "%s: cannot rename: %s", fpath,
+           strerror(errno));
+  tmp_written = 0;
+  /* ParaView: per-rank vtu of the owned elements, and the pvtu */
+  rank_path(base, dm->rank, ".vtu", fpath, sizeof fpath);
+  PA_CALL(write_vtu(fm, dm->rank, fpath));
+  if (dm->rank == 0) PA_CALL(write_pvtu(base, dm->size));
+cleanup:
+  if (kw.fp) fclose(kw.fp);
+  if (tmp_written) remove(tpath);
+  if (dm) st = pa__agree_end(dm->comm, st);
+  pa_mesh_destroy(fm);
+  for (int k = 0; k < PA_NKIND; k++) pa__free(map[k]);
+  pa__free(mask);
+  pa__free(g);
+  pa__free(o);
+  pa__free(items);
+  pa__free(comms);
+  pa__free(vd);
+  pa__free(flags);
+  pa__free(fdesc);
+  return st;
+}
+
+/* ---- reading ---- */
+
+/* Records of the entities file f owns (elements: all). */
+static pa_status file_records(const char *path, int f, int nwriters,
+                              const dfile *df, const pa_mesh *fm,
+                              const pa__layout *lay, int me, pa__recs *R) {
+  pa_status st = PA_SUCCESS;
+  int d = fm->dim;
+  double *dbl = NULL;
+  const int64_t *h = df->h;
+  PA_CHECK(h[H_NRANKS] == nwriters && h[H_RANK] == f, PA_ERR_FORMAT,
+           "%s: this is the file of rank %lld of %lld, expected rank %d of %d",
+           path, (long long)h[H_RANK], (long long)h[H_NRANKS], f, nwriters);
+  PA_CHECK(h[H_DIM] == lay->dim && fm->dim == lay->dim, PA_ERR_FORMAT,
+           "%s: dimension %d differs from the set's (%d)", path, fm->dim, lay->dim);
+  PA_CHECK(fm->nv == h[H_NFILE] && fm->ne == h[H_NFILE + 1] &&
+               fm->nb == h[H_NFILE + 2] && fm->ned == h[H_NFILE + 3],
+           PA_ERR_FORMAT, "%s: the mesh counts differ from the padapt header",
+           path);
+  PA_CHECK(df->met_ncomp == lay->met_ncomp && df->nfield == lay->nfield,
+           PA_ERR_FORMAT, "%s: metric or fields differ from rank 0's file", path);
+  int nd = pa__layout_ndbl(lay) - d;
+  PA_ALLOC(dbl, d + nd);
+  for (pa_idx v = 0; v < fm->nv; v++) {
+    PA_CHECK(df->owner[0][v] >= 0 && df->owner[0][v] < nwriters, PA_ERR_FORMAT,
+             "%s: vertex %d has owner %d out of range", path, (int)v + 1,
+             df->owner[0][v]);
+    if (df->owner[0][v] != f) continue;
+    memcpy(dbl, fm->coord + (size_t)d * v, sizeof(double) * d);
+    if (nd) memcpy(dbl + d, df->vdbl + (size_t)nd * v, sizeof(double) * nd);
+    uint8_t flag = df->flags ? df->flags[v] : fm->vflag[v];
+    PA_CALL(pa__recs_add(&R[PA_VERTEX], df->gid[0][v], NULL, fm->vref[v], flag,
+                         me, dbl, NULL, 0));
+  }
+  size_t foff = (size_t)fm->nv;
+  for (int k = PA_ELEMENT; k < PA_NKIND; k++) {
+    int nv = pa__kind_nv(d, k);
+    pa_idx n = (pa_idx)h[H_NFILE + k];
+    const pa_idx *conn = k == PA_ELEMENT ? fm->elem : k == PA_BOUNDARY ? fm->bdry : fm->edge;
+    const int32_t *ref = k == PA_ELEMENT ? fm->eref : k == PA_BOUNDARY ? fm->bref : fm->edref;
+    const uint8_t *fl = k == PA_ELEMENT ? fm->eflag : k == PA_BOUNDARY ? fm->bflag : fm->edflag;
+    for (pa_idx i = 0; i < n; i++) {
+      if (k != PA_ELEMENT && df->owner[k][i] != f) continue;
+      pa_gid vg[4];
+      for (int j = 0; j < nv; j++) vg[j] = df->gid[0][conn[(size_t)nv * i + j]];
+      uint8_t flag = df->flags ? df->flags[foff + (size_t)i] : fl[i];
+      PA_CALL(pa__recs_add(&R[k], df->gid[k][i], vg, ref[i], flag, me, NULL,
+                           NULL, 0));
+    }
+    foff += (size_t)n;
+  }
+cleanup:
+  pa__free(dbl);
+  return st;
+}
+
+static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
+                          pa_dmesh **dmp) {
+  pa_status st = PA_SUCCESS;
+  int rank, size;
+  char base[4096], fpath[4200];
+  dfile df;
+  pa_mesh *fm = NULL;
+  pa__layout lay;
+  int64_t hdr[H_WORDS];
+  pa__recs R[PA_NKIND];
+  pa_dmesh *dm = NULL;
+  int *part = NULL;
+  memset(&df, 0, sizeof df);
+  memset(R, 0, sizeof R);
+  memset(&lay, 0, sizeof lay);
+  memset(hdr, 0, sizeof hdr);
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  path_base(path, base, sizeof base);
+  /* rank 0's file fixes the number of writers and the layout */
+  if (rank == 0) {
+    rank_path(base, 0, ".meshb", fpath, sizeof fpath);
+    PA_CALL(scan_file(fpath, &df));
+    memcpy(hdr, df.h, sizeof hdr);
+    lay.dim = (int)df.h[H_DIM];
+    lay.met_ncomp = df.met_ncomp;
+    lay.nfield = df.nfield;
+    memcpy(lay.fieldname, df.fieldname, sizeof lay.fieldname);
+    memcpy(lay.fieldncomp, df.fieldncomp, sizeof lay.fieldncomp);
+    PA_CHECK(hdr[H_NRANKS] >= 1 && hdr[H_NRANKS] < (1 << 24) &&
+                 (hdr[H_DIM] == 2 || hdr[H_DIM] == 3),
+             PA_ERR_FORMAT, "%s: bad header", fpath);
+    dfile_free(&df);
+  }
+  PA_CALL(pa__agree(comm, st));
+  MPI_Bcast(hdr, H_WORDS, MPI_INT64_T, 0, comm);
+  MPI_Bcast(&lay, (int)sizeof lay, MPI_BYTE, 0, comm);
+  int nw = (int)hdr[H_NRANKS];
+  for (int k = 0; k < PA_NKIND; k++)
+    pa__recs_init(&R[k], k, pa__kind_nv(lay.dim, k),
+                  k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
+  /* files [rank*nw/size, (rank+1)*nw/size) */
+  int f0 = (int)((int64_t)rank * nw / size), f1 = (int)((int64_t)(rank + 1) * nw / size);
+  for (int f = f0; f < f1; f++) {
+    rank_path(base, f, ".meshb", fpath, sizeof fpath);
+    PA_CHECK(file_exists(fpath), PA_ERR_IO,
+             "%s: missing file of the distributed set %s (written by %d ranks)",
+             fpath, path, nw);
+    PA_CALL(scan_file(fpath, &df));
+    PA_CALL(pa_mesh_read(fpath, &fm));
+    PA_CALL(file_records(fpath, f, nw, &df, fm, &lay, rank, R));
+    for (int k = 0; k < PA_NKIND; k++)
+      PA_CHECK(df.h[H_NGLOB + k] == hdr[H_NGLOB + k], PA_ERR_FORMAT,
+               "%s: global counts differ from rank 0's file", fpath);
+    pa_mesh_destroy(fm);
+    fm = NULL;
+    dfile_free(&df);
+  }
+  /* every entity exactly once */
+  {
+    int64_t n[PA_NKIND];
+    for (int k = 0; k < PA_NKIND; k++) n[k] = (int64_t)R[k].n;
+    PA_CALL(pa__allreduce(comm, n, PA_NKIND, MPI_INT64_T, MPI_SUM));
+    static const char *what[] = {"vertices", "elements", "boundary entities", "edges"};
+    for (int k = 0; k < PA_NKIND; k++)
+      PA_CHECK(n[k] == hdr[H_NGLOB + k], PA_ERR_FORMAT,
+               "%s: inconsistent distributed set: the files own %lld %s, the "
+               "header says %lld", path, (long long)n[k], what[k],
+               (long long)hdr[H_NGLOB + k]);
+  }
+  PA_CALL(pa__gids_unique(comm, R[PA_ELEMENT].n, R[PA_ELEMENT].gid, "element"));
+  PA_CALL(pa__gids_unique(comm, R[PA_BOUNDARY].n, R[PA_BOUNDARY].gid, "boundary entity"));
+  PA_CALL(pa__gids_unique(comm, R[PA_EDGE].n, R[PA_EDGE].gid, "edge"));
+  PA_CALL(pa__dmesh_create(comm, lay.dim, &dm));
+  if (nw != size) { /* another number of ranks: repartition */
+    part = pa__malloc((R[PA_ELEMENT].n + 1) * sizeof *part);
+    st = part ? PA_SUCCESS : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+    PA_CALL(pa__agree(dm->comm, st));
+    PA_CALL(pa__dmesh_partition(dm->comm, lay.dim, (pa_idx)R[PA_ELEMENT].n,
+                                R[PA_ELEMENT].vgid, NULL, part));
+    for (size_t i = 0; i < R[PA_ELEMENT].n; i++) R[PA_ELEMENT].aux[i] = part[i];
+  }
+  PA_CALL(pa__dmesh_build(dm, &lay, overlap, &R[PA_ELEMENT], &R[PA_VERTEX],
+                          &R[PA_BOUNDARY], &R[PA_EDGE]));
+  *dmp = dm;
+  dm = NULL;
+cleanup:
+  st = pa__agree_end(comm, st);
+  dfile_free(&df);
+  pa_mesh_destroy(fm);
+  for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&R[k]);
+  pa_dmesh_destroy(dm);
+  pa__free(part);
+  return st;
+}
+
+pa_status pa_dmesh_read(MPI_Comm comm, const char *path, int overlap,
+                        pa_dmesh **dmp) {
+  pa_status st = PA_SUCCESS;
+  int rank = 0, isset = 0;
+  pa_mesh *m = NULL;
+  pa__agree_reset();
+  PA_CHECK(path && dmp, PA_ERR_ARG, "pa_dmesh_read: NULL argument");
+  *dmp = NULL;
+  MPI_Comm_rank(comm, &rank);
+  if (rank == 0) isset = pa_dmesh_is_set(path);
+cleanup:
+  if (!path || !dmp) return st;
+  st = pa__agree(comm, st);
+  if (st) return st;
+  MPI_Bcast(&isset, 1, MPI_INT, 0, comm);
+  if (isset) return read_set(comm, path, overlap, dmp);
+  if (rank == 0) st = pa_mesh_read(path, &m);
+  st = pa__agree(comm, st);
+  if (!st) st = pa_dmesh_distribute(comm, 0, m, overlap, dmp);
+  pa_mesh_destroy(m);
+  return st;
+}
+
+pa_status pa_dmesh_read_gathered(MPI_Comm comm, int root, const char *path,
+                                 pa_mesh **mesh) {
+  pa_status st = PA_SUCCESS;
+  int rank = 0, size = 1, isset = 0;
+  pa_dmesh *dm = NULL;
+  pa__agree_reset();
+  PA_CHECK(path && mesh, PA_ERR_ARG, "pa_dmesh_read_gathered: NULL argument");
+  *mesh = NULL;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  PA_CHECK(root >= 0 && root < size, PA_ERR_ARG, "root %d out of range", root);
+  if (rank == root) isset = pa_dmesh_is_set(path);
+cleanup:
+  if (!path || !mesh) return st;
+  st = pa__agree(comm, st);
+  if (st) return st;
+  MPI_Bcast(&isset, 1, MPI_INT, root, comm);
+  if (!isset) {
+    if (rank == root) st = pa_mesh_read(path, mesh);
+    return pa__agree(comm, st);
+  }
+  st = pa_dmesh_read(comm, path, 0, &dm);
+  if (!st) st = pa_dmesh_gather(dm, root, mesh);
+  pa_dmesh_destroy(dm);
+  return st;
+}

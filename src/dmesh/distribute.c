@@ -1,0 +1,717 @@
+/*
+ * distribute.c -- making and moving distributed meshes: scatter from a root
+ * (contiguous blocks, one in flight, then PT-Scotch and migration), the
+ * distributed dual graph, repartitioning and redistribution, and the gather
+ * to one centralized mesh.
+ *
+ * Invariants: global ids of a distributed root mesh are its 0-based indices;
+ * every path ends in pa__dmesh_build (build.c), so the ownership rule and
+ * numbering are the same whichever way a pa_dmesh was made; a gathered mesh
+ * is numbered by increasing global id.
+ */
+#include "dmesh/dmesh.h"
+#include "partition/partition.h"
+
+#include <limits.h>
+#include <stdio.h>
+
+/* ---- scatter from a root ---- */
+
+typedef struct header {
+  int dim, met_ncomp, nfield, ok;
+  int fieldncomp[PA_MAX_FIELDS];
+  char fieldname[PA_MAX_FIELDS][PA_FIELD_NAME_LEN];
+  int64_t n[PA_NKIND]; /* vertices, elements, boundary, edges */
+} header;
+
+/* Check that every connectivity index of the root mesh is in range. */
+static pa_status check_indices(pa_mesh *m) {
+  pa_status st = PA_SUCCESS;
+  int d = m->dim;
+  for (size_t k = 0; k < (size_t)m->ne * (d + 1); k++)
+    PA_CHECK(m->elem[k] >= 0 && m->elem[k] < m->nv, PA_ERR_MESH,
+             "element %zu references vertex %d out of [0, %d)", k / (d + 1),
+             (int)m->elem[k], (int)m->nv);
+  for (size_t k = 0; k < (size_t)m->nb * d; k++)
+    PA_CHECK(m->bdry[k] >= 0 && m->bdry[k] < m->nv, PA_ERR_MESH,
+             "boundary entity %zu references vertex %d out of [0, %d)", k / d,
+             (int)m->bdry[k], (int)m->nv);
+  for (size_t k = 0; k < (size_t)m->ned * 2; k++)
+    PA_CHECK(m->edge[k] >= 0 && m->edge[k] < m->nv, PA_ERR_MESH,
+             "edge %zu references vertex %d out of [0, %d)", k / 2,
+             (int)m->edge[k], (int)m->nv);
+cleanup:
+  return st;
+}
+
+/* Pack block r of P of the root mesh: counts, then records of each kind. */
+static pa_status pack_block(pa_mesh *m, const pa__layout *lay, int r, int P,
+                            pa__buf *b) {
+  pa_status st = PA_SUCCESS;
+  int d = m->dim;
+  pa__recs R[PA_NKIND];
+  double *dbl = NULL;
+  int64_t n[PA_NKIND] = {m->nv, m->ne, m->nb, m->ned};
+  for (int k = 0; k < PA_NKIND; k++)
+    pa__recs_init(&R[k], k, pa__kind_nv(d, k), k == PA_VERTEX ? pa__layout_ndbl(lay) : 0);
+  PA_ALLOC(dbl, pa__layout_ndbl(lay));
+  for (int k = 0; k < PA_NKIND; k++) {
+    int64_t lo = n[k] * r / P, hi = n[k] * (r + 1) / P;
+    int nv = pa__kind_nv(d, k);
+    const pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
+    for (int64_t i = lo; i < hi; i++) {
+      pa_gid vg[4];
+      for (int j = 0; j < nv; j++) vg[j] = conn[(size_t)nv * i + j];
+      int32_t ref;
+      uint8_t flag;
+      if (k == PA_VERTEX) {
+        double *x = dbl;
+        memcpy(x, m->coord + (size_t)d * i, d * sizeof(double));
+        x += d;
+        if (m->met_ncomp) {
+          memcpy(x, m->met + (size_t)m->met_ncomp * i, m->met_ncomp * sizeof(double));
+          x += m->met_ncomp;
+        }
+        for (int f = 0; f < m->nfield; f++) {
+          memcpy(x, m->field[f].val + (size_t)m->field[f].ncomp * i,
+                 m->field[f].ncomp * sizeof(double));
+          x += m->field[f].ncomp;
+        }
+        ref = m->vref[i];
+        flag = m->vflag[i];
+      } else if (k == PA_ELEMENT) {
+        ref = m->eref[i];
+        flag = m->eflag[i];
+      } else if (k == PA_BOUNDARY) {
+        ref = m->bref[i];
+        flag = m->bflag[i];
+      } else {
+        ref = m->edref[i];
+        flag = m->edflag[i];
+      }
+      PA_CALL(pa__recs_add(&R[k], i, vg, ref, flag, r, dbl, NULL, 0));
+    }
+  }
+  size_t bytes = sizeof(int64_t) * PA_NKIND;
+  for (int k = 0; k < PA_NKIND; k++)
+    for (size_t i = 0; i < R[k].n; i++) bytes += pa__recs_wire(&R[k], i);
+  b->n = 0;
+  PA_CALL(pa__buf_reserve(b, bytes));
+  for (int k = 0; k < PA_NKIND; k++) {
+    int64_t c = (int64_t)R[k].n;
+    pa__buf_put(b, &c, sizeof c);
+  }
+  for (int k = 0; k < PA_NKIND; k++)
+    for (size_t i = 0; i < R[k].n; i++) pa__recs_pack(&R[k], i, b);
+cleanup:
+  for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&R[k]);
+  pa__free(dbl);
+  return st;
+}
+
+static pa_status unpack_block(const unsigned char *p, size_t n, pa__recs *R) {
+  pa_status st = PA_SUCCESS;
+  size_t pos = 0;
+  int64_t c[PA_NKIND];
+  PA_CHECK(n >= sizeof c, PA_ERR_INTERNAL, "short block");
+  for (int k = 0; k < PA_NKIND; k++) pa__get(p, &pos, &c[k], sizeof c[k]);
+  for (int k = 0; k < PA_NKIND; k++)
+    for (int64_t i = 0; i < c[k]; i++) PA_CALL(pa__recs_unpack(&R[k], p, &pos));
+  PA_CHECK(pos == n, PA_ERR_INTERNAL, "block of %zu bytes, %zu read", n, pos);
+cleanup:
+  return st;
+}
+
+pa_status pa_dmesh_distribute(MPI_Comm comm, int root, pa_mesh *mesh,
+                              int overlap, pa_dmesh **dmp) {
+  pa_status st = PA_SUCCESS;
+  int rank = 0, size = 1;
+  header h;
+  pa__layout lay;
+  pa_dmesh *dm = NULL;
+  pa__recs R[PA_NKIND];
+  pa__buf b = {0};
+  void *rbuf = NULL;
+  int *part = NULL;
+  double t0 = pa_wtime(), t1, t2;
+  memset(&h, 0, sizeof h);
+  memset(R, 0, sizeof R);
+  pa__agree_reset();
+  PA_CHECK(dmp, PA_ERR_ARG, "pa_dmesh_distribute: NULL output pointer");
+  *dmp = NULL;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  PA_CHECK(root >= 0 && root < size, PA_ERR_ARG, "root %d out of [0, %d)",
+           root, size);
+  PA_CHECK(overlap >= 0 && overlap <= 8, PA_ERR_ARG,
+           "overlap must be in [0, 8], got %d", overlap);
+  if (rank == root) {
+    PA_CHECK(mesh, PA_ERR_ARG, "pa_dmesh_distribute: NULL mesh on the root");
+    PA_CALL(check_indices(mesh));
+    h.dim = mesh->dim;
+    h.met_ncomp = mesh->met_ncomp;
+    h.nfield = mesh->nfield;
+    for (int f = 0; f < mesh->nfield; f++) {
+      h.fieldncomp[f] = mesh->field[f].ncomp;
+      snprintf(h.fieldname[f], PA_FIELD_NAME_LEN, "%s", mesh->field[f].name);
+    }
+    h.n[PA_VERTEX] = mesh->nv;
+    h.n[PA_ELEMENT] = mesh->ne;
+    h.n[PA_BOUNDARY] = mesh->nb;
+    h.n[PA_EDGE] = mesh->ned;
+  }
+cleanup:
+  if (!dmp) return st;
+  st = pa__agree_end(comm, st);
+  if (st) return st;
+  MPI_Bcast(&h, (int)sizeof h, MPI_BYTE, root, comm);
+  memset(&lay, 0, sizeof lay);
+  lay.dim = h.dim;
+  lay.met_ncomp = h.met_ncomp;
+  lay.nfield = h.nfield;
+  memcpy(lay.fieldncomp, h.fieldncomp, sizeof lay.fieldncomp);
+  memcpy(lay.fieldname, h.fieldname, sizeof lay.fieldname);
+  st = pa__dmesh_create(comm, h.dim, &dm);
+  if (st) return st;
+  for (int k = 0; k < PA_NKIND; k++)
+    pa__recs_init(&R[k], k, pa__kind_nv(h.dim, k),
+                  k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
+  /* blocks, one in flight */
+  for (int r = 0; r < size; r++) {
+    if (rank == root) st = pack_block(mesh, &lay, r, size, &b);
+    st = pa__agree(dm->comm, st);
+    if (st) goto fail;
+    if (r == root) {
+      if (rank == root) st = unpack_block(b.p, b.n, R);
+    } else if (rank == root) {
+      st = pa__xchg_send(dm->comm, r, b.p, b.n);
+    } else if (rank == r) {
+      size_t n;
+      st = pa__xchg_recv(dm->comm, root, &rbuf, &n);
+      if (!st) st = unpack_block(rbuf, n, R);
+      pa__free(rbuf);
+      rbuf = NULL;
+    }
+    if (rank == root) pa__buf_free(&b);
+  }
+  st = pa__agree(dm->comm, st);
+  if (st) goto fail;
+  t1 = pa_wtime();
+  /* partition the blocks, then migrate */
+  part = pa__malloc((R[PA_ELEMENT].n ? R[PA_ELEMENT].n : 1) * sizeof *part);
+  st = part ? PA_SUCCESS
+            : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+  st = pa__agree(dm->comm, st);
+  if (st) goto fail;
+  st = pa__dmesh_partition(dm->comm, h.dim, (pa_idx)R[PA_ELEMENT].n,
+                           R[PA_ELEMENT].vgid, NULL, part);
+  if (st) goto fail;
+  for (size_t i = 0; i < R[PA_ELEMENT].n; i++) R[PA_ELEMENT].aux[i] = part[i];
+  pa__free(part);
+  part = NULL;
+  t2 = pa_wtime();
+  st = pa__dmesh_build(dm, &lay, overlap, &R[PA_ELEMENT], &R[PA_VERTEX],
+                       &R[PA_BOUNDARY], &R[PA_EDGE]);
+  if (st) goto fail;
+  pa__info(1, "padapt: rank %d: scatter %.3f s, partition %.3f s, "
+              "build %.3f s\n", rank, t1 - t0, t2 - t1, pa_wtime() - t2);
+  *dmp = dm;
+  return PA_SUCCESS;
+fail:
+  pa__buf_free(&b);
+  pa__free(rbuf);
+  pa__free(part);
+  for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&R[k]);
+  pa_dmesh_destroy(dm);
+  return st;
+}
+
+/* ---- distributed dual graph ---- */
+
+typedef struct face {
+  pa_gid key[3];
+  pa_gid who; /* local face number e*(d+1)+i, or global graph vertex */
+} face;
+
+static uint64_t face_hash(const pa_gid *k, int n) {
+  uint64_t h = 0x9E3779B97F4A7C15ull;
+  for (int i = 0; i < n; i++) h = pa__mix64(h ^ (uint64_t)k[i]);
+  return h;
+}
+
+static int face_eq(const pa_gid *a, const pa_gid *b, int n) {
+  for (int i = 0; i < n; i++)
+    if (a[i] != b[i]) return 0;
+  return 1;
+}
+
+static void sort_key(pa_gid *k, int n) {
+  for (int i = 1; i < n; i++) {
+    pa_gid x = k[i];
+    int j = i - 1;
+    while (j >= 0 && k[j] > x) {
+      k[j + 1] = k[j];
+      j--;
+    }
+    k[j + 1] = x;
+  }
+}
+
+/* Match faces pairwise with a hash table: mate[i] = j for faces sharing a
+ * key, -1 for faces seen once. A key seen three times is an error. */
+static pa_status match_faces(const face *f, size_t n, int nk, pa_gid *mate) {
+  pa_status st = PA_SUCCESS;
+  size_t cap = 16;
+  int64_t *tab = NULL;
+  while (cap < 2 * n + 2) cap *= 2;
+  PA_ALLOC(tab, cap);
+  for (size_t s = 0; s < cap; s++) tab[s] = -1;
+  for (size_t i = 0; i < n; i++) {
+    mate[i] = -1;
+    size_t s = face_hash(f[i].key, nk) & (cap - 1);
+    for (;;) {
+      if (tab[s] < 0) {
+        tab[s] = (int64_t)i;
+        break;
+      }
+      if (face_eq(f[tab[s]].key, f[i].key, nk)) {
+        size_t j = (size_t)tab[s];
+        PA_CHECK(mate[j] < 0, PA_ERR_MESH,
+                 "non-conforming mesh: a face (vertices %lld %lld%s) is shared "
+                 "by more than two elements", (long long)f[i].key[0],
+                 (long long)f[i].key[1], nk > 2 ? " ..." : "");
+        mate[j] = (pa_gid)i;
+        mate[i] = (pa_gid)j;
+        break;
+      }
+      s = (s + 1) & (cap - 1);
+    }
+  }
+cleanup:
+  pa__free(tab);
+  return st;
+}
+
+pa_status pa__dual_graph(MPI_Comm comm, int dim, pa_idx n, const pa_gid *vgid,
+                         pa_idx **xadjp, pa_gid **adjp, int **adjrankp,
+                         pa_gid *offsetp) {
+  pa_status st = PA_SUCCESS;
+  int rank, size, nk = dim, nf = dim + 1;
+  size_t nface = (size_t)n * nf;
+  face *f = NULL, *sendf = NULL;
+  pa_gid *mate = NULL, *rmate = NULL;
+  int *dest = NULL, *rdest = NULL;
+  size_t *rcnt = NULL, *bcnt = NULL, *cnt = NULL, *pos = NULL;
+  void *recv = NULL, *brecv = NULL;
+  pa_idx *xadj = NULL;
+  pa_gid *adj = NULL, offset = 0, *nbr = NULL;
+  int *adjrank = NULL, *nbrrank = NULL;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  {
+    pa_gid nn = n;
+    PA_CALL(pa__agree(comm, PA_SUCCESS));
+    MPI_Exscan(&nn, &offset, 1, MPI_INT64_T, MPI_SUM, comm);
+    if (rank == 0) offset = 0;
+  }
+  PA_ALLOC(f, nface);
+  PA_ALLOC(mate, nface);
+  for (pa_idx e = 0; e < n; e++)
+    for (int i = 0; i < nf; i++) {
+      face *fc = &f[(size_t)e * nf + i];
+      int k = 0;
+      for (int j = 0; j < nf; j++)
+        if (j != i) fc->key[k++] = vgid[(size_t)e * nf + j];
+      for (; k < 3; k++) fc->key[k] = -1;
+      sort_key(fc->key, nk);
+      fc->who = (pa_gid)e * nf + i;
+    }
+  PA_CALL(match_faces(f, nface, nk, mate));
+  /* neighbour per face: global graph vertex and rank (-1: none yet) */
+  PA_ALLOC(nbr, nface);
+  PA_ALLOC(nbrrank, nface);
+  size_t nun = 0;
+  for (size_t i = 0; i < nface; i++) {
+    nbr[i] = mate[i] >= 0 ? offset + mate[i] / nf : -1;
+    nbrrank[i] = mate[i] >= 0 ? rank : -1;
+    nun += mate[i] < 0;
+  }
+  /* unmatched faces meet at the rank hash(key) % size */
+  PA_ALLOC(sendf, nun);
+  PA_ALLOC(dest, nun);
+  nun = 0;
+  for (size_t i = 0; i < nface; i++)
+    if (mate[i] < 0) {
+      sendf[nun] = f[i];
+      sendf[nun].who = offset + (pa_gid)(i / nf); /* graph vertex */
+      dest[nun++] = (int)(face_hash(f[i].key, nk) % (uint64_t)size);
+    }
+  pa__free(f);
+  f = NULL;
+  PA_CALLOC(cnt, size);
+  PA_CALLOC(pos, (size_t)size + 1);
+  for (size_t i = 0; i < nun; i++) cnt[dest[i]]++;
+  for (int r = 0; r < size; r++) pos[r + 1] = pos[r] + cnt[r];
+  {
+    face *tmp;
+    PA_ALLOC(tmp, nun);
+    /* remember where each unmatched face went: order within a rank kept */
+    for (size_t i = 0; i < nun; i++) tmp[pos[dest[i]]++] = sendf[i];
+    pa__free(sendf);
+    sendf = tmp;
+    for (int r = 0; r < size; r++) cnt[r] *= sizeof(face);
+  }
+  PA_CALL(pa__xchg_sparse(comm, cnt, sendf, &rcnt, &recv));
+  {
+    size_t nr = 0;
+    for (int r = 0; r < size; r++) nr += rcnt[r] / sizeof(face);
+    const face *rf = recv;
+    PA_ALLOC(rmate, nr);
+    PA_CALL(match_faces(rf, nr, nk, rmate));
+    /* reply to every received face, in order: neighbour vertex and rank */
+    pa_gid *ans;
+    PA_ALLOC(ans, 2 * nr);
+    rdest = pa__malloc((nr ? nr : 1) * sizeof *rdest);
+    if (!rdest) {
+      pa__free(ans);
+      PA_FAIL(PA_ERR_MEMORY, "out of memory");
+    }
+    size_t j = 0;
+    for (int r = 0; r < size; r++)
+      for (size_t q = 0; q < rcnt[r] / sizeof(face); q++, j++) rdest[j] = r;
+    for (size_t i = 0; i < nr; i++) {
+      pa_gid m = rmate[i];
+      ans[2 * i] = m >= 0 ? rf[m].who : -1;
+      ans[2 * i + 1] = m >= 0 ? rdest[m] : -1;
+    }
+    size_t *acnt;
+    acnt = pa__calloc((size_t)size, sizeof *acnt);
+    if (!acnt) {
+      pa__free(ans);
+      PA_FAIL(PA_ERR_MEMORY, "out of memory");
+    }
+    for (int r = 0; r < size; r++) acnt[r] = rcnt[r] / sizeof(face) * 2 * sizeof(pa_gid);
+    st = pa__xchg_sparse(comm, acnt, ans, &bcnt, &brecv);
+    pa__free(acnt);
+    pa__free(ans);
+    if (st) goto cleanup;
+  }
+  /* answers arrive by directory rank in the order sent */
+  {
+    const pa_gid *a = brecv;
+    for (int r = 0; r < size; r++) pos[r + 1] = pos[r] + cnt[r] / sizeof(face);
+    pos[0] = 0;
+    for (int r = 0; r < size; r++) pos[r + 1] = pos[r] + cnt[r] / sizeof(face);
+    size_t *cur;
+    cur = pa__malloc(((size_t)size + 1) * sizeof *cur);
+    PA_CHECK(cur, PA_ERR_MEMORY, "out of memory");
+    memcpy(cur, pos, ((size_t)size + 1) * sizeof *cur);
+    for (size_t i = 0; i < nface; i++)
+      if (mate[i] < 0) {
+        /* recompute the destination of face i (same order as sent) */
+        pa_gid key[3];
+        pa_idx e = (pa_idx)(i / nf);
+        int fi = (int)(i % nf), k = 0;
+        for (int jv = 0; jv < nf; jv++)
+          if (jv != fi) key[k++] = vgid[(size_t)e * nf + jv];
+        sort_key(key, nk);
+        int r = (int)(face_hash(key, nk) % (uint64_t)size);
+        size_t q = cur[r]++;
+        nbr[i] = a[2 * q];
+        nbrrank[i] = (int)a[2 * q + 1];
+      }
+    pa__free(cur);
+  }
+  PA_ALLOC(xadj, n + 1);
+  xadj[0] = 0;
+  for (pa_idx e = 0; e < n; e++) {
+    pa_idx c = 0;
+    for (int i = 0; i < nf; i++) c += nbr[(size_t)e * nf + i] >= 0;
+    xadj[e + 1] = xadj[e] + c;
+  }
+  PA_ALLOC(adj, xadj[n]);
+  PA_ALLOC(adjrank, xadj[n]);
+  for (pa_idx e = 0, k = 0; e < n; e++)
+    for (int i = 0; i < nf; i++)
+      if (nbr[(size_t)e * nf + i] >= 0) {
+        adj[k] = nbr[(size_t)e * nf + i];
+        adjrank[k++] = nbrrank[(size_t)e * nf + i];
+      }
+  *xadjp = xadj;
+  *adjp = adj;
+  if (adjrankp) *adjrankp = adjrank; else pa__free(adjrank);
+  if (offsetp) *offsetp = offset;
+  xadj = NULL;
+  adj = NULL;
+  adjrank = NULL;
+cleanup:
+  st = pa__agree_end(comm, st);
+  pa__free(f);
+  pa__free(sendf);
+  pa__free(mate);
+  pa__free(rmate);
+  pa__free(dest);
+  pa__free(rdest);
+  pa__free(rcnt);
+  pa__free(bcnt);
+  pa__free(cnt);
+  pa__free(pos);
+  pa__free(recv);
+  pa__free(brecv);
+  pa__free(xadj);
+  pa__free(adj);
+  pa__free(adjrank);
+  pa__free(nbr);
+  pa__free(nbrrank);
+  return st;
+}
+
+pa_status pa__dmesh_partition(MPI_Comm comm, int dim, pa_idx n,
+                              const pa_gid *vgid, const double *weights,
+                              int *part) {
+  pa_status st = PA_SUCCESS;
+  int size;
+  pa_idx *xadj = NULL;
+  pa_gid *adj = NULL;
+  MPI_Comm_size(comm, &size);
+  if (size == 1) {
+    for (pa_idx i = 0; i < n; i++) part[i] = 0;
+    return pa__agree(comm, PA_SUCCESS);
+  }
+  PA_CALL(pa__dual_graph(comm, dim, n, vgid, &xadj, &adj, NULL, NULL));
+  PA_CALL(pa__agree(comm, PA_SUCCESS));
+  st = pa__partition_dgraph(comm, n, xadj, adj, weights, size, part);
+  PA_CALL(pa__agree(comm, st));
+  st = pa__partition_remap(comm, n, part, weights);
+  PA_CALL(pa__agree(comm, st));
+cleanup:
+  st = pa__agree_end(comm, st);
+  pa__free(xadj);
+  pa__free(adj);
+  return st;
+}
+
+/* ---- redistribution ---- */
+
+pa_status pa_dmesh_redistribute(pa_dmesh *dm, const int *newpart,
+                                const double *weights) {
+  pa_status st = PA_SUCCESS;
+  int *part = NULL;
+  pa_gid *vg = NULL;
+  pa__recs R[PA_NKIND];
+  pa__layout lay;
+  memset(R, 0, sizeof R);
+  PA_CHECK(dm, PA_ERR_ARG, "pa_dmesh_redistribute: NULL dmesh");
+  pa__agree_reset();
+  pa_idx ne = dm->nown[PA_ELEMENT];
+  int d = dm->dim;
+  for (int k = 0; k < dm->nvalue; k++)
+    PA_CHECK(!dm->value[k]->op.active, PA_ERR_ARG,
+             "value '%s' has an exchange in flight", dm->value[k]->name);
+  PA_ALLOC(part, ne);
+  if (newpart) {
+    for (pa_idx e = 0; e < ne; e++) {
+      PA_CHECK(newpart[e] >= 0 && newpart[e] < dm->size, PA_ERR_ARG,
+               "new part %d of element %d out of [0, %d)", newpart[e], (int)e,
+               dm->size);
+      part[e] = newpart[e];
+    }
+  } else {
+    PA_ALLOC(vg, (size_t)ne * (d + 1));
+    for (size_t k = 0; k < (size_t)ne * (d + 1); k++)
+      vg[k] = dm->gid[PA_VERTEX][dm->mesh->elem[k]];
+    PA_CALL(pa__agree(dm->comm, st));
+    PA_CALL(pa__dmesh_partition(dm->comm, d, ne, vg, weights, part));
+  }
+  pa__dmesh_layout(dm, &lay);
+  PA_CALL(pa__dmesh_owned_recs(dm, part, &R[PA_ELEMENT], &R[PA_VERTEX],
+                               &R[PA_BOUNDARY], &R[PA_EDGE]));
+  PA_CALL(pa__agree(dm->comm, st));
+  pa__dmesh_clear(dm);
+  PA_CALL(pa__dmesh_build(dm, &lay, dm->overlap, &R[PA_ELEMENT], &R[PA_VERTEX],
+                          &R[PA_BOUNDARY], &R[PA_EDGE]));
+cleanup:
+  if (dm) st = pa__agree_end(dm->comm, st);
+  for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&R[k]);
+  pa__free(part);
+  pa__free(vg);
+  return st;
+}
+
+/* ---- gather ---- */
+
+/* Vertex values gathered as mesh fields: MPI_DOUBLE on every vertex. */
+static int gather_value(const pa_dmesh_value *v) {
+  return v->kind == PA_VERTEX && v->ref < 0 && v->double_type;
+}
+
+pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
+  pa_status st = PA_SUCCESS;
+  pa__recs R[PA_NKIND], A[PA_NKIND];
+  pa__buf b = {0};
+  void *rbuf = NULL;
+  pa_mesh *m = NULL;
+  pa__layout lay;
+  pa__gidmap vmap = {0};
+  pa_idx *ord = NULL;
+  int vals[PA_MAX_FIELDS], nvals = 0;
+  memset(R, 0, sizeof R);
+  memset(A, 0, sizeof A);
+  PA_CHECK(dm && meshp, PA_ERR_ARG, "pa_dmesh_gather: NULL argument");
+  pa__agree_reset();
+  *meshp = NULL;
+  PA_CHECK(root >= 0 && root < dm->size, PA_ERR_ARG, "root %d out of range",
+           root);
+  /* owned records, without payloads; double vertex values become fields */
+  pa__dmesh_layout(dm, &lay);
+  for (int k = 0; k < dm->nvalue && lay.nfield < PA_MAX_FIELDS; k++)
+    if (gather_value(dm->value[k])) {
+      snprintf(lay.fieldname[lay.nfield], PA_FIELD_NAME_LEN, "%s",
+               dm->value[k]->name);
+      lay.fieldncomp[lay.nfield++] = dm->value[k]->ncomp;
+      vals[nvals++] = k;
+    }
+  {
+    int nvalue = dm->nvalue;
+    dm->nvalue = 0; /* no payloads */
+    st = pa__dmesh_owned_recs(dm, NULL, &R[PA_ELEMENT], &R[PA_VERTEX],
+                              &R[PA_BOUNDARY], &R[PA_EDGE]);
+    dm->nvalue = nvalue;
+    if (st) goto cleanup;
+  }
+  if (nvals) { /* append the value doubles to the vertex records */
+    int nd0 = R[PA_VERTEX].ndbl, nd = pa__layout_ndbl(&lay);
+    pa__recs V2;
+    double *x;
+    pa__recs_init(&V2, PA_VERTEX, 0, nd);
+    x = pa__malloc((size_t)nd * sizeof *x);
+    PA_CHECK(x, PA_ERR_MEMORY, "out of memory");
+    for (size_t i = 0; i < R[PA_VERTEX].n && !st; i++) {
+      memcpy(x, R[PA_VERTEX].dbl + (size_t)nd0 * i, (size_t)nd0 * sizeof *x);
+      int o = nd0;
+      for (int q = 0; q < nvals; q++) {
+        const pa_dmesh_value *v = dm->value[vals[q]];
+        memcpy(x + o, v->data + v->unit * i, v->unit);
+        o += v->ncomp;
+      }
+      st = pa__recs_add(&V2, R[PA_VERTEX].gid[i], NULL, R[PA_VERTEX].ref[i],
+                        R[PA_VERTEX].flag[i], 0, x, NULL, 0);
+    }
+    pa__free(x);
+    pa__recs_free(&R[PA_VERTEX]);
+    R[PA_VERTEX] = V2;
+    if (st) goto cleanup;
+  }
+  {
+    size_t bytes = sizeof(int64_t) * PA_NKIND;
+    for (int k = 0; k < PA_NKIND; k++)
+      for (size_t i = 0; i < R[k].n; i++) bytes += pa__recs_wire(&R[k], i);
+    PA_CALL(pa__buf_reserve(&b, bytes));
+    for (int k = 0; k < PA_NKIND; k++) {
+      int64_t c = (int64_t)R[k].n;
+      pa__buf_put(&b, &c, sizeof c);
+    }
+    for (int k = 0; k < PA_NKIND; k++) {
+      for (size_t i = 0; i < R[k].n; i++) pa__recs_pack(&R[k], i, &b);
+      int kind = R[k].kind, nv = R[k].nv, nd = R[k].ndbl;
+      pa__recs_free(&R[k]);
+      pa__recs_init(&A[k], kind, nv, nd);
+    }
+  }
+  /* one rank at a time to the root */
+  for (int r = 0; r < dm->size; r++) {
+    PA_CALL(pa__agree(dm->comm, st));
+    if (r == root) {
+      if (dm->rank == root) st = unpack_block(b.p, b.n, A);
+    } else if (dm->rank == r) {
+      st = pa__xchg_send(dm->comm, root, b.p, b.n);
+    } else if (dm->rank == root) {
+      size_t n;
+      st = pa__xchg_recv(dm->comm, r, &rbuf, &n);
+      if (!st) st = unpack_block(rbuf, n, A);
+      pa__free(rbuf);
+      rbuf = NULL;
+    }
+  }
+  pa__buf_free(&b);
+  if (st || dm->rank != root) goto cleanup;
+  /* the root assembles the mesh by increasing global id */
+  {
+    int d = dm->dim;
+    PA_CALL(pa_mesh_create(d, &m));
+    m->met_ncomp = lay.met_ncomp;
+    m->nfield = lay.nfield;
+    for (int f = 0; f < lay.nfield; f++) {
+      snprintf(m->field[f].name, PA_FIELD_NAME_LEN, "%s", lay.fieldname[f]);
+      m->field[f].ncomp = lay.fieldncomp[f];
+    }
+    PA_CALL(pa_mesh_reserve(m, (pa_idx)A[0].n, (pa_idx)A[1].n, (pa_idx)A[2].n,
+                            (pa_idx)A[3].n));
+    size_t nmax = 0;
+    for (int k = 0; k < PA_NKIND; k++) nmax = A[k].n > nmax ? A[k].n : nmax;
+    PA_ALLOC(ord, nmax);
+    PA_CALL(pa__gidmap_init(&vmap, A[PA_VERTEX].n));
+    for (int k = 0; k < PA_NKIND; k++) {
+      pa__recs *Q = &A[k];
+      for (size_t i = 0; i < Q->n; i++) ord[i] = (pa_idx)i;
+      PA_CALL(pa__sort_by_gid(ord, Q->n, Q->gid));
+      for (size_t j = 0; j < Q->n; j++) {
+        size_t i = (size_t)ord[j];
+        if (k == PA_VERTEX) {
+          const double *x = Q->dbl + (size_t)Q->ndbl * i;
+          memcpy(m->coord + (size_t)d * j, x, d * sizeof(double));
+          x += d;
+          if (m->met_ncomp) {
+            memcpy(m->met + (size_t)m->met_ncomp * j, x, m->met_ncomp * sizeof(double));
+            x += m->met_ncomp;
+          }
+          for (int f = 0; f < m->nfield; f++) {
+            memcpy(m->field[f].val + (size_t)m->field[f].ncomp * j, x,
+                   m->field[f].ncomp * sizeof(double));
+            x += m->field[f].ncomp;
+          }
+          m->vref[j] = Q->ref[i];
+          m->vflag[j] = Q->flag[i];
+          int found;
+          PA_CALL(pa__gidmap_put(&vmap, Q->gid[i], (pa_idx)j, &found, NULL));
+          PA_CHECK(!found, PA_ERR_MESH, "vertex global id %lld owned twice",
+                   (long long)Q->gid[i]);
+          continue;
+        }
+        pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
+        int32_t *ref = k == PA_ELEMENT ? m->eref : k == PA_BOUNDARY ? m->bref : m->edref;
+        uint8_t *flag = k == PA_ELEMENT ? m->eflag : k == PA_BOUNDARY ? m->bflag : m->edflag;
+        for (int q = 0; q < Q->nv; q++) {
+          pa_idx v = pa__gidmap_get(&vmap, Q->vgid[(size_t)Q->nv * i + q]);
+          PA_CHECK(v >= 0, PA_ERR_MESH, "gather: vertex %lld is owned by no rank",
+                   (long long)Q->vgid[(size_t)Q->nv * i + q]);
+          conn[(size_t)Q->nv * j + q] = v;
+        }
+        ref[j] = Q->ref[i];
+        flag[j] = Q->flag[i];
+      }
+    }
+    m->nv = (pa_idx)A[PA_VERTEX].n;
+    m->ne = (pa_idx)A[PA_ELEMENT].n;
+    m->nb = (pa_idx)A[PA_BOUNDARY].n;
+    m->ned = (pa_idx)A[PA_EDGE].n;
+  }
+  *meshp = m;
+  m = NULL;
+cleanup:
+  if (dm) st = pa__agree_end(dm->comm, st);
+  if (st && meshp && *meshp) {
+    pa_mesh_destroy(*meshp);
+    *meshp = NULL;
+  }
+  for (int k = 0; k < PA_NKIND; k++) {
+    pa__recs_free(&R[k]);
+    pa__recs_free(&A[k]);
+  }
+  pa__buf_free(&b);
+  pa__free(rbuf);
+  pa_mesh_destroy(m);
+  pa__gidmap_free(&vmap);
+  pa__free(ord);
+  return st;
+}

@@ -1,0 +1,198 @@
+/*
+ * dmesh.h -- the distributed mesh (struct pa_dmesh) and the internal services
+ * the parallel adaptation builds on (record sets, the build pipeline, the
+ * distributed dual graph).
+ *
+ * Distribution (see docs/DMESH.md):
+ *  - every element is owned by exactly one rank;
+ *  - a vertex is owned by the lowest rank owning an element that contains it;
+ *  - a boundary entity (and a 3D feature edge) is owned by the lowest rank
+ *    owning an element that contains all its vertices;
+ *  - ghosts: with overlap K, layer k (1 <= k <= K) holds the elements that
+ *    share a vertex with layers < k and are not among them; every vertex of a
+ *    local element is local; boundary entities and edges contained in a
+ *    local element are local.
+ *
+ * Local numbering of each kind: owned entities first, [0, nown), sorted by
+ * global id; ghosts after, [nown, nloc), sorted by global id (elements: by
+ * layer, then global id) -- until pa_dmesh_reorder permutes owned and ghosts
+ * separately. Global ids are 64-bit, unique per kind, kept by redistribution.
+ *
+ * The local mesh `mesh` holds the nloc entities of every kind in this order,
+ * its metric and user vertex fields included.
+ */
+#ifndef PA_DMESH_H
+#define PA_DMESH_H
+
+#include "dmesh/exchange.h"
+#include "dmesh/util.h"
+#include "mesh/mesh.h"
+
+#define PA_NKIND 4
+#define PA_VALUE_NAME_LEN 64
+
+/* A user value attached to entities of one kind (see pa_dmesh_value_add). */
+struct pa_dmesh_value {
+  int id;             /* creation number: tag of its messages */
+  pa_entity kind;
+  char name[PA_VALUE_NAME_LEN];
+  MPI_Datatype type;  /* element type: a predefined one, or our dup */
+  int duped;          /* type is a dup of a user type (freed with the value) */
+  int ncomp;
+  int double_type;    /* type is MPI_DOUBLE (gathered as a mesh field) */
+  size_t unit;        /* bytes per entity: type size * ncomp */
+  int32_t ref;        /* sub-class filter: entity reference, or -1 for all */
+  pa_idx nslot;       /* entities holding the value (local) */
+  pa_idx nslotown;    /* of which owned (the first ones) */
+  pa_idx *ent;        /* ref >= 0: slot -> local entity; NULL otherwise */
+  pa_idx *slot;       /* ref >= 0: local entity -> slot or -1 */
+  unsigned char *data; /* nslot * unit */
+  pa__sf sf;          /* ref >= 0: restricted sf (kind sf otherwise) */
+  pa__sfop op;        /* buffers of the in-flight halo/reduce */
+  int ready;          /* sf/op built for the current distribution */
+};
+
+struct pa_dmesh {
+  MPI_Comm comm;      /* private duplicate of the user's communicator */
+  int rank, size;
+  int dim;
+  int overlap;
+  pa_mesh *mesh;      /* local mesh: owned + ghost entities of every kind */
+
+  pa_idx nown[PA_NKIND];
+  pa_idx nloc[PA_NKIND];
+  pa_gid nglob[PA_NKIND];
+  pa_gid *gid[PA_NKIND];   /* nloc */
+  int *owner[PA_NKIND];    /* nloc */
+  uint8_t *layer;          /* elements: 0 owned, k ghost of layer k */
+  pa__sf sf[PA_NKIND];     /* owned -> ghost copies */
+
+  int nneigh;              /* neighbour ranks (either side of any sf) */
+  int *neigh;
+
+  int nvalue, capvalue, nextid;
+  pa_dmesh_value **value;
+
+  /* Derived, built on demand (NULL when not built). */
+  pa_idx *shared[PA_NKIND]; /* 1 if the entity has copies on other ranks */
+  pa_idx *iterlist[PA_NKIND][2]; /* interior / frontier owned entities */
+  pa_idx niter[PA_NKIND][2];
+  pa_idx *adja;            /* (dim+1) * nelem local face neighbours or -1 */
+  pa_idx *vstart, *velem;  /* vertex -> local elements (CSR) */
+  pa_idx *bface;           /* boundary entity -> 2 elements (-1 if none) */
+};
+
+/* Number of vertices of one entity of a kind (vertex: 0). */
+static inline int pa__kind_nv(int dim, int kind) {
+  return kind == PA_VERTEX ? 0
+         : kind == PA_ELEMENT ? dim + 1
+         : kind == PA_BOUNDARY ? dim
+                               : 2;
+}
+
+/* ---- record sets: entities in transit between ranks ---- */
+
+/* Records of one kind: global id, vertex global ids, reference, flag, an int
+ * (destination rank or owner), doubles (vertices: coordinates, metric,
+ * fields) and an opaque payload (the bytes of the user values). */
+typedef struct pa__recs {
+  int kind, nv, ndbl;
+  size_t n, cap;
+  pa_gid *gid;
+  pa_gid *vgid;         /* nv * cap */
+  int32_t *ref;
+  uint8_t *flag;
+  int *aux;
+  double *dbl;          /* ndbl * cap */
+  size_t *poff;         /* cap + 1 payload offsets (NULL: no payloads) */
+  unsigned char *pay;
+  size_t paycap;
+} pa__recs;
+
+void pa__recs_init(pa__recs *r, int kind, int nv, int ndbl);
+void pa__recs_free(pa__recs *r);
+/* Append one record (vgid nv ids, dbl ndbl doubles, pay of paylen bytes). */
+pa_status pa__recs_add(pa__recs *r, pa_gid gid, const pa_gid *vgid,
+                       int32_t ref, uint8_t flag, int aux, const double *dbl,
+                       const void *pay, size_t paylen);
+/* Bytes of record i on the wire. */
+size_t pa__recs_wire(const pa__recs *r, size_t i);
+/* Append record i to a buffer (reserve pa__recs_wire bytes first). */
+void pa__recs_pack(const pa__recs *r, size_t i, pa__buf *b);
+/* Unpack one record at *pos of p into r and advance *pos. */
+pa_status pa__recs_unpack(pa__recs *r, const unsigned char *p, size_t *pos);
+/* Collective: send record i to rank dest[i] (the records' aux if dest NULL);
+ * *out receives (initialised by the call) the records sent to this rank,
+ * sorted by gid. */
+pa_status pa__recs_migrate(MPI_Comm comm, const pa__recs *in, const int *dest,
+                           pa__recs *out);
+
+/* Description of the values and fields carried by a build. */
+typedef struct pa__layout {
+  int dim;
+  int met_ncomp;
+  int nfield;
+  char fieldname[PA_MAX_FIELDS][PA_FIELD_NAME_LEN];
+  int fieldncomp[PA_MAX_FIELDS];
+} pa__layout;
+/* Doubles per vertex record: dim + metric + fields. */
+int pa__layout_ndbl(const pa__layout *l);
+
+/* Collective: build a distributed mesh from records. elems: the owned
+ * elements, aux = destination rank; verts, bdry, edges: every vertex,
+ * boundary entity and edge exactly once over the ranks, anywhere. Records
+ * carry value payloads laid out for the values of dm (if dm has values).
+ * Fills dm (created with comm, dim set) -- its previous distribution must
+ * have been released. Fails with PA_ERR_MESH on inconsistent input (unknown
+ * vertex, entity in no element, duplicate ids). The record sets are freed. */
+pa_status pa__dmesh_build(pa_dmesh *dm, const pa__layout *lay, int overlap,
+                          pa__recs *elems, pa__recs *verts, pa__recs *bdry,
+                          pa__recs *edges);
+
+/* Collective: fail with PA_ERR_FORMAT naming the first global id given
+ * twice over the ranks (what: "element", ...). */
+pa_status pa__gids_unique(MPI_Comm comm, size_t n, const pa_gid *gid,
+                          const char *what);
+
+/* Create an empty pa_dmesh on a duplicate of comm. Collective. */
+pa_status pa__dmesh_create(MPI_Comm comm, int dim, pa_dmesh **dm);
+/* Free the distribution (mesh, ids, sfs, derived data), keep the values'
+ * definitions (their data is freed). */
+void pa__dmesh_clear(pa_dmesh *dm);
+/* Free derived structures (adjacency, iterator lists). */
+void pa__dmesh_invalidate(pa_dmesh *dm);
+/* Layout of the local mesh's metric and fields. */
+void pa__dmesh_layout(pa_dmesh *dm, pa__layout *lay);
+/* Records of the owned entities of dm (with value payloads). */
+pa_status pa__dmesh_owned_recs(pa_dmesh *dm, const int *dest, pa__recs *elems,
+                               pa__recs *verts, pa__recs *bdry,
+                               pa__recs *edges);
+/* Bytes of the payload of entity i of kind (sum of matching values). */
+size_t pa__value_paylen(const pa_dmesh *dm, int kind, int32_t ref);
+/* Local: (re)compute the value's slots from the entity references and
+ * allocate its data (zeroed) for the current distribution. */
+pa_status pa__value_alloc(pa_dmesh *dm, pa_dmesh_value *v);
+/* Local: build the value's restricted sf and operation buffers (after the
+ * kind's sf exists). */
+pa_status pa__value_setup(pa_dmesh *dm, pa_dmesh_value *v);
+/* Reference of local entity e of a kind (vertices: vertex reference). */
+int32_t pa__dmesh_ref(const pa_dmesh *dm, int kind, pa_idx e);
+
+/* Collective: the distributed dual graph of n elements (vertex gids in
+ * vgid, dim+1 per element): for element i, its face neighbours are
+ * adj[xadj[i] .. xadj[i+1]-1], given as global graph vertex numbers
+ * (offset of the holding rank + its local index; offsets from an exclusive
+ * scan of n), with the holding rank in adjrank. Fails with PA_ERR_MESH if a
+ * face is shared by more than two elements. */
+pa_status pa__dual_graph(MPI_Comm comm, int dim, pa_idx n, const pa_gid *vgid,
+                         pa_idx **xadj, pa_gid **adj, int **adjrank,
+                         pa_gid *offset);
+
+/* Collective: new owner rank of each of the n owned elements, by PT-Scotch on
+ * the dual graph (weights per element or NULL), remapped so that ranks keep
+ * most of their elements. */
+pa_status pa__dmesh_partition(MPI_Comm comm, int dim, pa_idx n,
+                              const pa_gid *vgid, const double *weights,
+                              int *part);
+
+#endif /* PA_DMESH_H */

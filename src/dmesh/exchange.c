@@ -1,0 +1,464 @@
+/*
+ * exchange.c -- the exchange layer (see exchange.h): agreement on the status
+ * of collective routines, the star forest with split begin/end broadcast and
+ * reduction, the sparse all-to-all and blocking buffer transfers of setup.
+ *
+ * This is the only file of padapt that calls point-to-point MPI functions.
+ * Invariants: an sf lists, for each neighbour rank, root indices on the root
+ * side and leaf indices on the leaf side in the same order; messages of one
+ * operation use the tag of its pa__sfop, so operations on different values may
+ * be in flight at once; setup messages use tags below PA_TAG_OP_BASE.
+ */
+#include "dmesh/exchange.h"
+#include "dmesh/util.h"
+
+#include <limits.h>
+#include <stdio.h>
+
+enum {
+  TAG_SPARSE = 11,
+  TAG_SFBUILD = 12,
+  TAG_P2P_SIZE = 13,
+  TAG_P2P_DATA = 14,
+  CHUNK = 1 << 30 /* bytes per message at most */
+};
+
+/* ---- agreement ---- */
+
+static _Thread_local int agreed_fail;                 /* last agree failed */
+static _Thread_local char agreed_msg[256];            /* its message prefix */
+
+void pa__agree_reset(void) { agreed_fail = 0; }
+
+pa_status pa__agree(MPI_Comm comm, pa_status st) {
+  int rank, size, first;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  int mine = st != PA_SUCCESS ? rank : size;
+  MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, comm);
+  if (first == size) {
+    agreed_fail = 0;
+    return PA_SUCCESS;
+  }
+  /* Broadcast the status and message of the lowest failing rank. */
+  struct {
+    int code;
+    char msg[1000];
+  } m;
+  memset(&m, 0, sizeof m);
+  if (rank == first) {
+    m.code = (int)st;
+    snprintf(m.msg, sizeof m.msg, "%s", pa_last_error());
+  }
+  MPI_Bcast(&m, (int)sizeof m, MPI_BYTE, first, comm);
+  pa_status code = (pa_status)m.code;
+  if (rank != first)
+    pa__error(code, __FILE__, __LINE__, "rank %d: %s", first, m.msg);
+  agreed_fail = 1;
+  snprintf(agreed_msg, sizeof agreed_msg, "%s", pa_last_error());
+  return code;
+}
+
+pa_status pa__agree_end(MPI_Comm comm, pa_status st) {
+  if (st != PA_SUCCESS && agreed_fail &&
+      !strncmp(agreed_msg, pa_last_error(), sizeof agreed_msg - 1))
+    return st;
+  return pa__agree(comm, st);
+}
+
+pa_status pa__allreduce(MPI_Comm comm, void *buf, int n, MPI_Datatype t,
+                        MPI_Op op) {
+  pa_status st = pa__agree(comm, PA_SUCCESS);
+  if (st) return st;
+  if (MPI_Allreduce(MPI_IN_PLACE, buf, n, t, op, comm) != MPI_SUCCESS)
+    return pa__error(PA_ERR_MPI, __FILE__, __LINE__, "MPI_Allreduce failed");
+  return PA_SUCCESS;
+}
+
+/* ---- sparse all-to-all ---- */
+
+/* Post the receives and sends of one rank pair, chunked below CHUNK bytes. */
+static int nchunks(size_t n) { return (int)((n + CHUNK - 1) / CHUNK); }
+
+pa_status pa__xchg_sparse(MPI_Comm comm, const size_t *sendcount,
+                          const void *sendbuf, size_t **recvcountp,
+                          void **recvbufp) {
+  pa_status st = PA_SUCCESS;
+  int size;
+  uint64_t *sc = NULL, *rc = NULL;
+  size_t *recvcount = NULL;
+  unsigned char *recvbuf = NULL;
+  MPI_Request *req = NULL;
+  *recvcountp = NULL;
+  *recvbufp = NULL;
+  PA_CALL(pa__agree(comm, PA_SUCCESS));
+  MPI_Comm_size(comm, &size);
+  PA_ALLOC(sc, size);
+  PA_ALLOC(rc, size);
+  PA_ALLOC(recvcount, size);
+  for (int r = 0; r < size; r++) sc[r] = sendcount[r];
+  MPI_Alltoall(sc, 1, MPI_UINT64_T, rc, 1, MPI_UINT64_T, comm);
+  size_t total = 0;
+  int nreq = 0;
+  for (int r = 0; r < size; r++) {
+    recvcount[r] = (size_t)rc[r];
+    total += recvcount[r];
+    nreq += nchunks(recvcount[r]) + nchunks(sendcount[r]);
+  }
+  /* Allocation failures here must not leave others waiting for messages. */
+  recvbuf = pa__malloc(total ? total : 1);
+  req = pa__malloc((size_t)(nreq ? nreq : 1) * sizeof *req);
+  st = (!recvbuf || !req)
+           ? pa__error(PA_ERR_MEMORY, __FILE__, __LINE__,
+                       "out of memory receiving %zu bytes", total)
+           : PA_SUCCESS;
+  PA_CALL(pa__agree(comm, st));
+  int k = 0;
+  size_t off = 0;
+  for (int r = 0; r < size; r++) {
+    for (size_t o = 0; o < recvcount[r]; o += CHUNK) {
+      size_t n = recvcount[r] - o < CHUNK ? recvcount[r] - o : CHUNK;
+      MPI_Irecv(recvbuf + off + o, (int)n, MPI_BYTE, r, TAG_SPARSE, comm,
+                &req[k++]);
+    }
+    off += recvcount[r];
+  }
+  off = 0;
+  for (int r = 0; r < size; r++) {
+    for (size_t o = 0; o < sendcount[r]; o += CHUNK) {
+      size_t n = sendcount[r] - o < CHUNK ? sendcount[r] - o : CHUNK;
+      MPI_Isend((const unsigned char *)sendbuf + off + o, (int)n, MPI_BYTE, r,
+                TAG_SPARSE, comm, &req[k++]);
+    }
+    off += sendcount[r];
+  }
+  MPI_Waitall(k, req, MPI_STATUSES_IGNORE);
+  *recvcountp = recvcount;
+  *recvbufp = recvbuf;
+  recvcount = NULL;
+  recvbuf = NULL;
+cleanup:
+  pa__free(sc);
+  pa__free(rc);
+  pa__free(recvcount);
+  pa__free(recvbuf);
+  pa__free(req);
+  return st;
+}
+
+/* ---- point to point buffers ---- */
+
+pa_status pa__xchg_send(MPI_Comm comm, int dest, const void *buf, size_t n) {
+  uint64_t n64 = n;
+  MPI_Send(&n64, 1, MPI_UINT64_T, dest, TAG_P2P_SIZE, comm);
+  for (size_t o = 0; o < n; o += CHUNK) {
+    size_t c = n - o < CHUNK ? n - o : CHUNK;
+    MPI_Send((const unsigned char *)buf + o, (int)c, MPI_BYTE, dest,
+             TAG_P2P_DATA, comm);
+  }
+  return PA_SUCCESS;
+}
+
+pa_status pa__xchg_recv(MPI_Comm comm, int src, void **bufp, size_t *np) {
+  pa_status st = PA_SUCCESS;
+  uint64_t n64;
+  unsigned char *buf = NULL, *sink = NULL;
+  MPI_Recv(&n64, 1, MPI_UINT64_T, src, TAG_P2P_SIZE, comm, MPI_STATUS_IGNORE);
+  size_t n = (size_t)n64;
+  buf = pa__malloc(n ? n : 1);
+  if (!buf) { /* drain the message so the sender is not left blocked */
+    sink = malloc(CHUNK < n ? CHUNK : (n ? n : 1));
+    for (size_t o = 0; o < n; o += CHUNK)
+      MPI_Recv(sink, (int)(n - o < CHUNK ? n - o : CHUNK), MPI_BYTE, src,
+               TAG_P2P_DATA, comm, MPI_STATUS_IGNORE);
+    free(sink);
+    PA_FAIL(PA_ERR_MEMORY, "out of memory receiving %zu bytes", n);
+  }
+  for (size_t o = 0; o < n; o += CHUNK)
+    MPI_Recv(buf + o, (int)(n - o < CHUNK ? n - o : CHUNK), MPI_BYTE, src,
+             TAG_P2P_DATA, comm, MPI_STATUS_IGNORE);
+  *bufp = buf;
+  *np = n;
+  buf = NULL;
+cleanup:
+  pa__free(buf);
+  return st;
+}
+
+/* ---- star forest ---- */
+
+void pa__sf_free(pa__sf *sf) {
+  pa__free(sf->rootrank);
+  pa__free(sf->rootoff);
+  pa__free(sf->rootidx);
+  pa__free(sf->leafrank);
+  pa__free(sf->leafoff);
+  pa__free(sf->leafidx);
+  memset(sf, 0, sizeof *sf);
+}
+
+size_t pa__sf_memory(const pa__sf *sf) {
+  return pa__alloc_size(sf->rootrank) + pa__alloc_size(sf->rootoff) +
+         pa__alloc_size(sf->rootidx) + pa__alloc_size(sf->leafrank) +
+         pa__alloc_size(sf->leafoff) + pa__alloc_size(sf->leafidx);
+}
+
+pa_status pa__sf_build(MPI_Comm comm, pa_idx n, const pa_gid *gid,
+                       const int *owner, pa__sf *sf) {
+  pa_status st = PA_SUCCESS;
+  int rank, size;
+  size_t *cnt = NULL, *rcnt = NULL;
+  pa_idx *order = NULL;
+  pa_gid *sendg = NULL;
+  void *recv = NULL;
+  pa__gidmap map = {0};
+  memset(sf, 0, sizeof *sf);
+  sf->comm = comm;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  PA_CALLOC(cnt, size);
+  /* Leaves: ghosts grouped by owner rank, sorted by gid within a rank. */
+  pa_idx nleaf = 0;
+  for (pa_idx i = 0; i < n; i++)
+    if (owner[i] != rank) {
+      PA_CHECK(owner[i] >= 0 && owner[i] < size, PA_ERR_INTERNAL,
+               "entity %d has owner %d out of range", (int)i, owner[i]);
+      cnt[owner[i]]++;
+      nleaf++;
+    }
+  PA_ALLOC(order, nleaf);
+  {
+    pa_idx k = 0;
+    for (pa_idx i = 0; i < n; i++)
+      if (owner[i] != rank) order[k++] = i;
+    PA_CALL(pa__sort_by_gid(order, (size_t)nleaf, gid));
+    /* stable counting sort by owner keeps gid order within an owner */
+    pa_idx *tmp;
+    PA_ALLOC(tmp, nleaf);
+    size_t *pos;
+    pos = pa__calloc((size_t)size + 1, sizeof *pos);
+    if (!pos) {
+      pa__free(tmp);
+      PA_FAIL(PA_ERR_MEMORY, "out of memory");
+    }
+    for (int r = 0; r < size; r++) pos[r + 1] = pos[r] + cnt[r];
+    for (pa_idx j = 0; j < nleaf; j++) tmp[pos[owner[order[j]]]++] = order[j];
+    memcpy(order, tmp, (size_t)nleaf * sizeof *order);
+    pa__free(tmp);
+    pa__free(pos);
+  }
+  int nlr = 0;
+  for (int r = 0; r < size; r++) nlr += cnt[r] > 0;
+  PA_ALLOC(sf->leafrank, nlr);
+  PA_ALLOC(sf->leafoff, nlr + 1);
+  PA_ALLOC(sf->leafidx, nleaf);
+  sf->nleafrank = nlr;
+  sf->leafoff[0] = 0;
+  for (int r = 0, k = 0; r < size; r++)
+    if (cnt[r]) {
+      sf->leafrank[k] = r;
+      sf->leafoff[k + 1] = sf->leafoff[k] + (pa_idx)cnt[r];
+      k++;
+    }
+  memcpy(sf->leafidx, order, (size_t)nleaf * sizeof *order);
+  PA_ALLOC(sendg, nleaf);
+  for (pa_idx j = 0; j < nleaf; j++) sendg[j] = gid[order[j]];
+  for (int r = 0; r < size; r++) cnt[r] *= sizeof(pa_gid);
+  /* Owned gids -> local index, to resolve the requests. */
+  pa_idx nown = 0;
+  for (pa_idx i = 0; i < n; i++) nown += owner[i] == rank;
+  PA_CALL(pa__gidmap_init(&map, (size_t)nown));
+  for (pa_idx i = 0; i < n; i++)
+    if (owner[i] == rank) PA_CALL(pa__gidmap_put(&map, gid[i], i, NULL, NULL));
+  PA_CALL(pa__xchg_sparse(comm, cnt, sendg, &rcnt, &recv));
+  int nrr = 0;
+  size_t nroot = 0;
+  for (int r = 0; r < size; r++) {
+    nrr += rcnt[r] > 0;
+    nroot += rcnt[r] / sizeof(pa_gid);
+  }
+  PA_ALLOC(sf->rootrank, nrr);
+  PA_ALLOC(sf->rootoff, nrr + 1);
+  PA_ALLOC(sf->rootidx, nroot);
+  sf->nrootrank = nrr;
+  sf->rootoff[0] = 0;
+  {
+    const pa_gid *rg = recv;
+    size_t j = 0;
+    for (int r = 0, k = 0; r < size; r++) {
+      if (!rcnt[r]) continue;
+      size_t m = rcnt[r] / sizeof(pa_gid);
+      sf->rootrank[k] = r;
+      sf->rootoff[k + 1] = sf->rootoff[k] + (pa_idx)m;
+      for (size_t q = 0; q < m; q++, j++) {
+        pa_idx li = pa__gidmap_get(&map, rg[j]);
+        PA_CHECK(li >= 0, PA_ERR_MESH,
+                 "rank %d holds a ghost of gid %lld that its owner %d does not "
+                 "own", r, (long long)rg[j], rank);
+        sf->rootidx[j] = li;
+      }
+      k++;
+    }
+  }
+cleanup:
+  st = pa__agree_end(comm, st);
+  if (st) pa__sf_free(sf);
+  pa__free(cnt);
+  pa__free(rcnt);
+  pa__free(order);
+  pa__free(sendg);
+  pa__free(recv);
+  pa__gidmap_free(&map);
+  return st;
+}
+
+pa_status pa__sf_restrict(const pa__sf *sf, const pa_idx *slot, pa__sf *out) {
+  pa_status st = PA_SUCCESS;
+  memset(out, 0, sizeof *out);
+  out->comm = sf->comm;
+  for (int side = 0; side < 2; side++) {
+    int nr = side ? sf->nleafrank : sf->nrootrank;
+    const int *rk = side ? sf->leafrank : sf->rootrank;
+    const pa_idx *off = side ? sf->leafoff : sf->rootoff;
+    const pa_idx *idx = side ? sf->leafidx : sf->rootidx;
+    int *ork = NULL;
+    pa_idx *ooff = NULL, *oidx = NULL;
+    PA_ALLOC(ork, nr);
+    if (side) out->leafrank = ork; else out->rootrank = ork;
+    PA_ALLOC(ooff, nr + 1);
+    if (side) out->leafoff = ooff; else out->rootoff = ooff;
+    PA_ALLOC(oidx, off[nr]);
+    if (side) out->leafidx = oidx; else out->rootidx = oidx;
+    int k = 0;
+    pa_idx m = 0;
+    ooff[0] = 0;
+    for (int r = 0; r < nr; r++) {
+      pa_idx m0 = m;
+      for (pa_idx j = off[r]; j < off[r + 1]; j++)
+        if (slot[idx[j]] >= 0) oidx[m++] = slot[idx[j]];
+      if (m > m0) {
+        ork[k] = rk[r];
+        ooff[++k] = m;
+      }
+    }
+    if (side) out->nleafrank = k; else out->nrootrank = k;
+  }
+cleanup:
+  if (st) pa__sf_free(out);
+  return st;
+}
+
+pa_status pa__sfop_init(pa__sfop *op, const pa__sf *sf, size_t unit, int tag) {
+  pa_status st = PA_SUCCESS;
+  memset(op, 0, sizeof *op);
+  op->sf = sf;
+  op->unit = unit;
+  op->tag = tag;
+  PA_ALLOC(op->rootbuf, unit * (size_t)sf->rootoff[sf->nrootrank]);
+  PA_ALLOC(op->leafbuf, unit * (size_t)sf->leafoff[sf->nleafrank]);
+  PA_ALLOC(op->req, sf->nrootrank + sf->nleafrank);
+  {
+    pa_idx big = 0;
+    for (int r = 0; r < sf->nrootrank; r++)
+      if (sf->rootoff[r + 1] - sf->rootoff[r] > big)
+        big = sf->rootoff[r + 1] - sf->rootoff[r];
+    PA_ALLOC(op->scratch, unit * (size_t)big);
+  }
+cleanup:
+  if (st) pa__sfop_free(op);
+  return st;
+}
+
+void pa__sfop_free(pa__sfop *op) {
+  if (op->active)
+    MPI_Waitall(op->sf->nrootrank + op->sf->nleafrank, op->req,
+                MPI_STATUSES_IGNORE);
+  pa__free(op->rootbuf);
+  pa__free(op->leafbuf);
+  pa__free(op->scratch);
+  pa__free(op->req);
+  memset(op, 0, sizeof *op);
+}
+
+/* Every message of an sf fits in one MPI message (counts are 32-bit indices
+ * times unit); units above 2^31/n would overflow int, guarded by a derived
+ * contiguous datatype of `unit` bytes. */
+static MPI_Datatype unit_type(size_t unit) {
+  MPI_Datatype t;
+  MPI_Type_contiguous((int)unit, MPI_BYTE, &t);
+  MPI_Type_commit(&t);
+  return t;
+}
+
+void pa__sf_bcast_begin(pa__sfop *op, const void *data) {
+  const pa__sf *sf = op->sf;
+  const unsigned char *d = data;
+  size_t u = op->unit;
+  MPI_Datatype t = unit_type(u);
+  int k = 0;
+  for (int r = 0; r < sf->nleafrank; r++)
+    MPI_Irecv(op->leafbuf + u * (size_t)sf->leafoff[r],
+              (int)(sf->leafoff[r + 1] - sf->leafoff[r]), t, sf->leafrank[r],
+              op->tag, sf->comm, &op->req[k++]);
+  for (int r = 0; r < sf->nrootrank; r++) {
+    for (pa_idx j = sf->rootoff[r]; j < sf->rootoff[r + 1]; j++)
+      memcpy(op->rootbuf + u * (size_t)j, d + u * (size_t)sf->rootidx[j], u);
+    MPI_Isend(op->rootbuf + u * (size_t)sf->rootoff[r],
+              (int)(sf->rootoff[r + 1] - sf->rootoff[r]), t, sf->rootrank[r],
+              op->tag, sf->comm, &op->req[k++]);
+  }
+  MPI_Type_free(&t);
+  op->active = 1;
+}
+
+void pa__sf_bcast_end(pa__sfop *op, void *data) {
+  const pa__sf *sf = op->sf;
+  unsigned char *d = data;
+  size_t u = op->unit;
+  MPI_Waitall(sf->nrootrank + sf->nleafrank, op->req, MPI_STATUSES_IGNORE);
+  for (pa_idx j = 0; j < sf->leafoff[sf->nleafrank]; j++)
+    memcpy(d + u * (size_t)sf->leafidx[j], op->leafbuf + u * (size_t)j, u);
+  op->active = 0;
+}
+
+void pa__sf_reduce_begin(pa__sfop *op, const void *data) {
+  const pa__sf *sf = op->sf;
+  const unsigned char *d = data;
+  size_t u = op->unit;
+  MPI_Datatype t = unit_type(u);
+  int k = 0;
+  for (int r = 0; r < sf->nrootrank; r++)
+    MPI_Irecv(op->rootbuf + u * (size_t)sf->rootoff[r],
+              (int)(sf->rootoff[r + 1] - sf->rootoff[r]), t, sf->rootrank[r],
+              op->tag, sf->comm, &op->req[k++]);
+  for (int r = 0; r < sf->nleafrank; r++) {
+    for (pa_idx j = sf->leafoff[r]; j < sf->leafoff[r + 1]; j++)
+      memcpy(op->leafbuf + u * (size_t)j, d + u * (size_t)sf->leafidx[j], u);
+    MPI_Isend(op->leafbuf + u * (size_t)sf->leafoff[r],
+              (int)(sf->leafoff[r + 1] - sf->leafoff[r]), t, sf->leafrank[r],
+              op->tag, sf->comm, &op->req[k++]);
+  }
+  MPI_Type_free(&t);
+  op->active = 2;
+}
+
+void pa__sf_reduce_end(pa__sfop *op, void *data, MPI_Datatype type, int count,
+                       MPI_Op mop) {
+  const pa__sf *sf = op->sf;
+  unsigned char *d = data;
+  size_t u = op->unit;
+  MPI_Waitall(sf->nrootrank + sf->nleafrank, op->req, MPI_STATUSES_IGNORE);
+  /* Ranks in increasing order, so the result does not depend on timing. A
+   * rank's block lists each root once: gather the roots, combine the block
+   * in one call, scatter back. */
+  for (int r = 0; r < sf->nrootrank; r++) {
+    pa_idx j0 = sf->rootoff[r], n = sf->rootoff[r + 1] - j0;
+    unsigned char *in = op->rootbuf + u * (size_t)j0;
+    for (pa_idx j = 0; j < n; j++)
+      memcpy(op->scratch + u * (size_t)j, d + u * (size_t)sf->rootidx[j0 + j], u);
+    MPI_Reduce_local(in, op->scratch, count * (int)n, type, mop);
+    for (pa_idx j = 0; j < n; j++)
+      memcpy(d + u * (size_t)sf->rootidx[j0 + j], op->scratch + u * (size_t)j, u);
+  }
+  op->active = 0;
+}

@@ -1,0 +1,415 @@
+/*
+ * iter.c -- iterators over owned / ghost / interior / frontier entities,
+ * adjacency queries on the local mesh (valid across the overlap), and the
+ * locality reordering (Hilbert curve) of local entities.
+ *
+ * Invariants: "shared" marks the local entities that have copies on other
+ * ranks (roots with leaves, and leaves); an owned entity is interior when
+ * none of its vertices is shared (a vertex: when it is not shared itself).
+ * Derived structures are dropped by pa__dmesh_invalidate whenever the
+ * numbering changes. Reordering permutes owned and ghost ranges separately,
+ * so the owned-first invariant holds, then rebuilds the star forests.
+ */
+#include "dmesh/dmesh.h"
+
+/* ---- iterators ---- */
+
+static pa_status build_shared(pa_dmesh *dm, int kind) {
+  pa_status st = PA_SUCCESS;
+  if (dm->shared[kind]) return PA_SUCCESS;
+  const pa__sf *sf = &dm->sf[kind];
+  PA_CALLOC(dm->shared[kind], dm->nloc[kind]);
+  for (pa_idx j = 0; j < sf->rootoff[sf->nrootrank]; j++)
+    dm->shared[kind][sf->rootidx[j]] = 1;
+  for (pa_idx j = 0; j < sf->leafoff[sf->nleafrank]; j++)
+    dm->shared[kind][sf->leafidx[j]] = 1;
+cleanup:
+  return st;
+}
+
+static pa_status build_iter(pa_dmesh *dm, int kind) {
+  pa_status st = PA_SUCCESS;
+  if (dm->iterlist[kind][0]) return PA_SUCCESS;
+  PA_CALL(build_shared(dm, PA_VERTEX));
+  pa_mesh *m = dm->mesh;
+  int nv = pa__kind_nv(dm->dim, kind);
+  const pa_idx *conn = kind == PA_ELEMENT ? m->elem : kind == PA_BOUNDARY ? m->bdry : m->edge;
+  pa_idx n = dm->nown[kind];
+  PA_ALLOC(dm->iterlist[kind][0], n);
+  PA_ALLOC(dm->iterlist[kind][1], n);
+  pa_idx ni = 0, nf = 0;
+  for (pa_idx e = 0; e < n; e++) {
+    int sh = 0;
+    if (kind == PA_VERTEX)
+      sh = dm->shared[PA_VERTEX][e];
+    else
+      for (int j = 0; j < nv; j++) sh |= dm->shared[PA_VERTEX][conn[(size_t)nv * e + j]];
+    if (sh) dm->iterlist[kind][1][nf++] = e;
+    else dm->iterlist[kind][0][ni++] = e;
+  }
+  dm->niter[kind][0] = ni;
+  dm->niter[kind][1] = nf;
+cleanup:
+  if (st) {
+    pa__free(dm->iterlist[kind][0]);
+    pa__free(dm->iterlist[kind][1]);
+    dm->iterlist[kind][0] = dm->iterlist[kind][1] = NULL;
+  }
+  return st;
+}
+
+pa_status pa_dmesh_iter_init(pa_dmesh *dm, pa_entity kind, pa_dmesh_set set,
+                             pa_dmesh_iter *it) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(dm && it && (unsigned)kind < PA_NKIND, PA_ERR_ARG,
+           "pa_dmesh_iter_init: bad argument");
+  memset(it, 0, sizeof *it);
+  switch (set) {
+  case PA_OWNED: it->first = 0; it->end = dm->nown[kind]; break;
+  case PA_GHOST: it->first = dm->nown[kind]; it->end = dm->nloc[kind]; break;
+  case PA_LOCAL: it->first = 0; it->end = dm->nloc[kind]; break;
+  case PA_INTERIOR:
+  case PA_FRONTIER: {
+    int s = set == PA_FRONTIER;
+    PA_CALL(build_iter(dm, kind));
+    it->list = dm->iterlist[kind][s];
+    it->first = 0;
+    it->end = dm->niter[kind][s];
+    break;
+  }
+  default: PA_FAIL(PA_ERR_ARG, "unknown entity set %d", (int)set);
+  }
+  it->pos = it->first;
+cleanup:
+  return st;
+}
+
+/* ---- adjacency ---- */
+
+const pa_idx *pa_dmesh_elem_verts(pa_dmesh *dm, pa_idx e) {
+  return dm->mesh->elem + (size_t)(dm->dim + 1) * e;
+}
+
+static pa_status build_balls(pa_dmesh *dm) {
+  pa_status st = PA_SUCCESS;
+  if (dm->vstart) return PA_SUCCESS;
+  pa_mesh *m = dm->mesh;
+  int d = dm->dim;
+  PA_CALLOC(dm->vstart, (size_t)m->nv + 1);
+  PA_ALLOC(dm->velem, (size_t)m->ne * (d + 1));
+  for (size_t k = 0; k < (size_t)m->ne * (d + 1); k++) dm->vstart[m->elem[k] + 1]++;
+  for (pa_idx v = 0; v < m->nv; v++) dm->vstart[v + 1] += dm->vstart[v];
+  for (size_t k = 0; k < (size_t)m->ne * (d + 1); k++)
+    dm->velem[dm->vstart[m->elem[k]]++] = (pa_idx)(k / (d + 1));
+  for (pa_idx v = m->nv; v > 0; v--) dm->vstart[v] = dm->vstart[v - 1];
+  dm->vstart[0] = 0;
+cleanup:
+  if (st) {
+    pa__free(dm->vstart);
+    pa__free(dm->velem);
+    dm->vstart = dm->velem = NULL;
+  }
+  return st;
+}
+
+pa_status pa_dmesh_vert_elems(pa_dmesh *dm, pa_idx v, pa_idx *n,
+                              const pa_idx **elems) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(dm && n && elems && v >= 0 && v < dm->mesh->nv, PA_ERR_ARG,
+           "pa_dmesh_vert_elems: bad argument");
+  PA_CALL(build_balls(dm));
+  *n = dm->vstart[v + 1] - dm->vstart[v];
+  *elems = dm->velem + dm->vstart[v];
+cleanup:
+  return st;
+}
+
+/* Does element e contain the k vertices of f? */
+static int contains(const pa_mesh *m, pa_idx e, const pa_idx *f, int k) {
+  const pa_idx *ev = m->elem + (size_t)(m->dim + 1) * e;
+  for (int j = 0; j < k; j++) {
+    int in = 0;
+    for (int c = 0; c <= m->dim; c++) in |= ev[c] == f[j];
+    if (!in) return 0;
+  }
+  return 1;
+}
+
+static pa_status build_adja(pa_dmesh *dm) {
+  pa_status st = PA_SUCCESS;
+  if (dm->adja) return PA_SUCCESS;
+  PA_CALL(build_balls(dm));
+  pa_mesh *m = dm->mesh;
+  int d = dm->dim;
+  PA_ALLOC(dm->adja, (size_t)m->ne * (d + 1));
+  /* face i of e (opposite vertex i): the other element containing it is in
+   * the ball of any of its vertices */
+  for (pa_idx e = 0; e < m->ne; e++)
+    for (int i = 0; i <= d; i++) {
+      pa_idx f[3];
+      int k = 0;
+      for (int j = 0; j <= d; j++)
+        if (j != i) f[k++] = m->elem[(size_t)(d + 1) * e + j];
+      pa_idx nb = -1;
+      for (pa_idx q = dm->vstart[f[0]]; q < dm->vstart[f[0] + 1]; q++) {
+        pa_idx g = dm->velem[q];
+        if (g != e && contains(m, g, f, d)) {
+          nb = g;
+          break;
+        }
+      }
+      dm->adja[(size_t)(d + 1) * e + i] = nb;
+    }
+cleanup:
+  return st;
+}
+
+pa_status pa_dmesh_elem_neighbours(pa_dmesh *dm, pa_idx e, const pa_idx **nb) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(dm && nb && e >= 0 && e < dm->mesh->ne, PA_ERR_ARG,
+           "pa_dmesh_elem_neighbours: bad argument");
+  PA_CALL(build_adja(dm));
+  *nb = dm->adja + (size_t)(dm->dim + 1) * e;
+cleanup:
+  return st;
+}
+
+pa_status pa_dmesh_bdry_elems(pa_dmesh *dm, pa_idx b, pa_idx e[2]) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(dm && e && b >= 0 && b < dm->mesh->nb, PA_ERR_ARG,
+           "pa_dmesh_bdry_elems: bad argument");
+  PA_CALL(build_balls(dm));
+  const pa_idx *f = dm->mesh->bdry + (size_t)dm->dim * b;
+  int k = 0;
+  e[0] = e[1] = -1;
+  for (pa_idx q = dm->vstart[f[0]]; q < dm->vstart[f[0] + 1] && k < 2; q++)
+    if (contains(dm->mesh, dm->velem[q], f, dm->dim)) e[k++] = dm->velem[q];
+cleanup:
+  return st;
+}
+
+/* ---- reordering ---- */
+
+/* Hilbert index of a point with integer coordinates of b bits per axis
+ * (Skilling's transpose algorithm), dims 2 or 3. */
+static uint64_t hilbert(uint32_t *x, int n, int b) {
+  uint32_t M = 1u << (b - 1), P, Q, t;
+  for (Q = M; Q > 1; Q >>= 1) { /* inverse undo */
+    P = Q - 1;
+    for (int i = 0; i < n; i++) {
+      if (x[i] & Q) x[0] ^= P;
+      else {
+        t = (x[0] ^ x[i]) & P;
+        x[0] ^= t;
+        x[i] ^= t;
+      }
+    }
+  }
+  for (int i = 1; i < n; i++) x[i] ^= x[i - 1]; /* Gray encode */
+  t = 0;
+  for (Q = M; Q > 1; Q >>= 1)
+    if (x[n - 1] & Q) t ^= Q - 1;
+  for (int i = 0; i < n; i++) x[i] ^= t;
+  uint64_t h = 0; /* interleave the transposed bits */
+  for (int bit = b - 1; bit >= 0; bit--)
+    for (int i = 0; i < n; i++) h = (h << 1) | ((x[i] >> bit) & 1u);
+  return h;
+}
+
+/* Sort the index range [lo, hi) of perm by key (stable). */
+static pa_status sort_range(pa_idx *perm, pa_idx lo, pa_idx hi,
+                            const pa_gid *key) {
+  return pa__sort_by_gid(perm + lo, (size_t)(hi - lo), key);
+}
+
+pa_status pa_dmesh_reorder(pa_dmesh *dm) {
+  pa_status st = PA_SUCCESS;
+  pa_gid *key = NULL;
+  pa_idx *pe = NULL, *pv = NULL, *ivn = NULL, *pb = NULL, *pd = NULL;
+  pa_mesh *nm = NULL;
+  unsigned char *tmp = NULL;
+  PA_CHECK(dm && dm->mesh, PA_ERR_ARG, "pa_dmesh_reorder: NULL dmesh");
+  pa__agree_reset();
+  pa_mesh *m = dm->mesh;
+  int d = dm->dim, b = d == 2 ? 31 : 21;
+  for (int k = 0; k < dm->nvalue; k++)
+    PA_CHECK(!dm->value[k]->op.active, PA_ERR_ARG,
+             "value '%s' has an exchange in flight", dm->value[k]->name);
+  /* elements: Hilbert key of the centroid, owned then each ghost layer */
+  double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+  for (int c = 0; c < d; c++) {
+    lo[c] = m->nv ? m->coord[c] : 0;
+    hi[c] = lo[c];
+  }
+  for (pa_idx v = 0; v < m->nv; v++)
+    for (int c = 0; c < d; c++) {
+      double x = m->coord[(size_t)d * v + c];
+      lo[c] = x < lo[c] ? x : lo[c];
+      hi[c] = x > hi[c] ? x : hi[c];
+    }
+  size_t nmax = (size_t)m->ne;
+  if ((size_t)m->nv > nmax) nmax = (size_t)m->nv;
+  if ((size_t)m->nb > nmax) nmax = (size_t)m->nb;
+  if ((size_t)m->ned > nmax) nmax = (size_t)m->ned;
+  PA_ALLOC(key, nmax);
+  PA_ALLOC(pe, m->ne);
+  for (pa_idx e = 0; e < m->ne; e++) {
+    uint32_t x[3];
+    for (int c = 0; c < d; c++) {
+      double s = 0;
+      for (int j = 0; j <= d; j++) s += m->coord[(size_t)d * m->elem[(size_t)(d + 1) * e + j] + c];
+      s /= d + 1;
+      double t = hi[c] > lo[c] ? (s - lo[c]) / (hi[c] - lo[c]) : 0;
+      x[c] = (uint32_t)(t * (double)((1u << b) - 1));
+    }
+    key[e] = (pa_gid)(hilbert(x, d, b) >> 4) + ((pa_gid)dm->layer[e] << 59);
+    pe[e] = e;
+  }
+  PA_CALL(sort_range(pe, 0, m->ne, key)); /* layer bits keep owned first */
+  /* vertices: by first use in the new element order, owned then ghosts */
+  PA_ALLOC(ivn, m->nv);
+  for (pa_idx v = 0; v < m->nv; v++) ivn[v] = -1;
+  pa_idx nvo = dm->nown[PA_VERTEX], co = 0, cg = nvo;
+  for (pa_idx q = 0; q < m->ne; q++)
+    for (int j = 0; j <= d; j++) {
+      pa_idx v = m->elem[(size_t)(d + 1) * pe[q] + j];
+      if (ivn[v] < 0) ivn[v] = v < nvo ? co++ : cg++;
+    }
+  for (pa_idx v = 0; v < m->nv; v++)
+    if (ivn[v] < 0) ivn[v] = v < nvo ? co++ : cg++;
+  PA_ALLOC(pv, m->nv);
+  for (pa_idx v = 0; v < m->nv; v++) pv[ivn[v]] = v;
+  /* boundary entities and edges: by smallest new vertex, owned first */
+  pa_idx *pk[2];
+  pa_idx cnt[2] = {m->nb, m->ned};
+  PA_ALLOC(pb, m->nb);
+  PA_ALLOC(pd, m->ned);
+  pk[0] = pb;
+  pk[1] = pd;
+  for (int t = 0; t < 2; t++) {
+    int kind = PA_BOUNDARY + t, nv = pa__kind_nv(d, kind);
+    const pa_idx *conn = t ? m->edge : m->bdry;
+    for (pa_idx i = 0; i < cnt[t]; i++) {
+      pa_idx mn = ivn[conn[(size_t)nv * i]];
+      for (int j = 1; j < nv; j++)
+        if (ivn[conn[(size_t)nv * i + j]] < mn) mn = ivn[conn[(size_t)nv * i + j]];
+      key[i] = (pa_gid)mn + ((pa_gid)(i >= dm->nown[kind]) << 40);
+      pk[t][i] = i;
+    }
+    PA_CALL(sort_range(pk[t], 0, cnt[t], key));
+  }
+  /* apply: a new local mesh, then ids, owners, layers, values */
+  PA_CALL(pa_mesh_create(d, &nm));
+  nm->met_ncomp = m->met_ncomp;
+  nm->nfield = m->nfield;
+  for (int f = 0; f < m->nfield; f++) {
+    memcpy(nm->field[f].name, m->field[f].name, sizeof nm->field[f].name);
+    nm->field[f].ncomp = m->field[f].ncomp;
+  }
+  PA_CALL(pa_mesh_reserve(nm, m->nv, m->ne, m->nb, m->ned));
+  for (pa_idx i = 0; i < m->nv; i++) {
+    pa_idx o = pv[i];
+    memcpy(nm->coord + (size_t)d * i, m->coord + (size_t)d * o, d * sizeof(double));
+    nm->vref[i] = m->vref[o];
+    nm->vflag[i] = m->vflag[o];
+    if (m->met_ncomp)
+      memcpy(nm->met + (size_t)m->met_ncomp * i, m->met + (size_t)m->met_ncomp * o,
+             m->met_ncomp * sizeof(double));
+    for (int f = 0; f < m->nfield; f++)
+      memcpy(nm->field[f].val + (size_t)m->field[f].ncomp * i,
+             m->field[f].val + (size_t)m->field[f].ncomp * o,
+             m->field[f].ncomp * sizeof(double));
+  }
+  for (pa_idx i = 0; i < m->ne; i++) {
+    for (int j = 0; j <= d; j++)
+      nm->elem[(size_t)(d + 1) * i + j] = ivn[m->elem[(size_t)(d + 1) * pe[i] + j]];
+    nm->eref[i] = m->eref[pe[i]];
+    nm->eflag[i] = m->eflag[pe[i]];
+  }
+  for (pa_idx i = 0; i < m->nb; i++) {
+    for (int j = 0; j < d; j++)
+      nm->bdry[(size_t)d * i + j] = ivn[m->bdry[(size_t)d * pb[i] + j]];
+    nm->bref[i] = m->bref[pb[i]];
+    nm->bflag[i] = m->bflag[pb[i]];
+  }
+  for (pa_idx i = 0; i < m->ned; i++) {
+    for (int j = 0; j < 2; j++) nm->edge[2 * i + j] = ivn[m->edge[2 * pd[i] + j]];
+    nm->edref[i] = m->edref[pd[i]];
+    nm->edflag[i] = m->edflag[pd[i]];
+  }
+  nm->nv = m->nv;
+  nm->ne = m->ne;
+  nm->nb = m->nb;
+  nm->ned = m->ned;
+  {
+    const pa_idx *perm[PA_NKIND] = {pv, pe, pb, pd};
+    /* values: gather old blocks in the new entity order */
+    for (int q = 0; q < dm->nvalue; q++) {
+      pa_dmesh_value *v = dm->value[q];
+      const pa_idx *p = perm[v->kind];
+      pa__free(tmp);
+      tmp = NULL;
+      PA_ALLOC(tmp, (size_t)v->nslot * v->unit);
+      pa_idx s = 0;
+      for (pa_idx i = 0; i < dm->nloc[v->kind]; i++) {
+        pa_idx o = p[i];
+        pa_idx os = v->slot ? v->slot[o] : o;
+        if (os < 0) continue;
+        memcpy(tmp + v->unit * (size_t)s++, v->data + v->unit * (size_t)os, v->unit);
+      }
+      memcpy(v->data, tmp, (size_t)v->nslot * v->unit);
+    }
+    for (int k = 0; k < PA_NKIND; k++) {
+      pa_gid *g;
+      int *o;
+      PA_ALLOC(g, dm->nloc[k]);
+      o = pa__malloc(((size_t)dm->nloc[k] + 1) * sizeof *o);
+      if (!o) {
+        pa__free(g);
+        PA_FAIL(PA_ERR_MEMORY, "out of memory");
+      }
+      for (pa_idx i = 0; i < dm->nloc[k]; i++) {
+        g[i] = dm->gid[k][perm[k][i]];
+        o[i] = dm->owner[k][perm[k][i]];
+      }
+      pa__free(dm->gid[k]);
+      pa__free(dm->owner[k]);
+      dm->gid[k] = g;
+      dm->owner[k] = o;
+    }
+    for (pa_idx i = 0; i < m->ne; i++) key[i] = dm->layer[pe[i]];
+    for (pa_idx i = 0; i < m->ne; i++) dm->layer[i] = (uint8_t)key[i];
+  }
+  pa_mesh_destroy(dm->mesh);
+  dm->mesh = nm;
+  nm = NULL;
+  pa__dmesh_invalidate(dm);
+  /* slots of sub-class values, in the new order (data already permuted) */
+  for (int q = 0; q < dm->nvalue; q++) {
+    pa_dmesh_value *v = dm->value[q];
+    if (!v->slot) continue;
+    pa_idx s = 0;
+    for (pa_idx e = 0; e < dm->nloc[v->kind]; e++)
+      v->slot[e] = pa__dmesh_ref(dm, v->kind, e) == v->ref ? s++ : -1;
+    for (pa_idx e = 0; e < dm->nloc[v->kind]; e++)
+      if (v->slot[e] >= 0) v->ent[v->slot[e]] = e;
+  }
+  /* exchange patterns for the new numbering */
+  for (int k = 0; k < PA_NKIND; k++) {
+    pa__sf_free(&dm->sf[k]);
+    PA_CALL(pa__agree(dm->comm, st));
+    PA_CALL(pa__sf_build(dm->comm, dm->nloc[k], dm->gid[k], dm->owner[k], &dm->sf[k]));
+  }
+  for (int q = 0; q < dm->nvalue; q++) PA_CALL(pa__value_setup(dm, dm->value[q]));
+cleanup:
+  if (dm) st = pa__agree_end(dm->comm, st);
+  pa__free(key);
+  pa__free(pe);
+  pa__free(pv);
+  pa__free(ivn);
+  pa__free(pb);
+  pa__free(pd);
+  pa__free(tmp);
+  pa_mesh_destroy(nm);
+  return st;
+}

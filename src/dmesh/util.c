@@ -1,0 +1,185 @@
+/*
+ * util.c -- gid hash map, byte buffers and sorting helpers of src/dmesh/.
+ *
+ * Invariants: a gidmap is at most half full, so probing always ends on an
+ * empty slot; sorting is an LSD radix sort on (key, index) pairs, stable, with
+ * as many 8-bit passes as the largest key needs.
+ */
+#include "dmesh/util.h"
+
+pa_status pa__gidmap_init(pa__gidmap *m, size_t nexpected) {
+  pa_status st = PA_SUCCESS;
+  size_t cap = 16;
+  while (cap < 2 * nexpected + 2) cap *= 2;
+  memset(m, 0, sizeof *m);
+  PA_ALLOC(m->key, cap);
+  PA_ALLOC(m->val, cap);
+  for (size_t i = 0; i < cap; i++) m->key[i] = -1;
+  m->cap = cap;
+cleanup:
+  if (st) pa__gidmap_free(m);
+  return st;
+}
+
+void pa__gidmap_free(pa__gidmap *m) {
+  pa__free(m->key);
+  pa__free(m->val);
+  memset(m, 0, sizeof *m);
+}
+
+static size_t slot_of(const pa__gidmap *m, pa_gid key) {
+  return (size_t)pa__mix64((uint64_t)key) & (m->cap - 1);
+}
+
+static pa_status gidmap_grow(pa__gidmap *m) {
+  pa_status st = PA_SUCCESS;
+  pa__gidmap big;
+  PA_CALL(pa__gidmap_init(&big, m->cap));
+  for (size_t i = 0; i < m->cap; i++) {
+    if (m->key[i] < 0) continue;
+    size_t s = slot_of(&big, m->key[i]);
+    while (big.key[s] >= 0) s = (s + 1) & (big.cap - 1);
+    big.key[s] = m->key[i];
+    big.val[s] = m->val[i];
+  }
+  big.n = m->n;
+  pa__gidmap_free(m);
+  *m = big;
+cleanup:
+  return st;
+}
+
+pa_status pa__gidmap_put(pa__gidmap *m, pa_gid key, pa_idx val, int *found,
+                         pa_idx *old) {
+  pa_status st = PA_SUCCESS;
+  if (found) *found = 0;
+  PA_CHECK(key >= 0, PA_ERR_ARG, "negative global id %lld", (long long)key);
+  if (m->cap == 0 || 2 * (m->n + 1) > m->cap) PA_CALL(gidmap_grow(m));
+  size_t s = slot_of(m, key);
+  while (m->key[s] >= 0) {
+    if (m->key[s] == key) {
+      if (found) *found = 1;
+      if (old) *old = m->val[s];
+      return PA_SUCCESS;
+    }
+    s = (s + 1) & (m->cap - 1);
+  }
+  m->key[s] = key;
+  m->val[s] = val;
+  m->n++;
+cleanup:
+  return st;
+}
+
+pa_idx pa__gidmap_get(const pa__gidmap *m, pa_gid key) {
+  if (m->cap == 0 || key < 0) return -1;
+  size_t s = slot_of(m, key);
+  while (m->key[s] >= 0) {
+    if (m->key[s] == key) return m->val[s];
+    s = (s + 1) & (m->cap - 1);
+  }
+  return -1;
+}
+
+pa_status pa__buf_reserve(pa__buf *b, size_t extra) {
+  pa_status st = PA_SUCCESS;
+  PA_GROW(b->p, b->cap, b->n + extra);
+cleanup:
+  return st;
+}
+
+/* Stable LSD radix sort of n (key, idx) pairs on the key bytes needed. */
+typedef struct kv {
+  uint64_t k;
+  pa_idx i;
+} kv;
+
+static pa_status radix_sort(kv *a, size_t n) {
+  pa_status st = PA_SUCCESS;
+  kv *tmp = NULL;
+  uint64_t maxk = 0;
+  for (size_t i = 0; i < n; i++)
+    if (a[i].k > maxk) maxk = a[i].k;
+  if (n < 64) { /* insertion sort */
+    for (size_t i = 1; i < n; i++) {
+      kv x = a[i];
+      size_t j = i;
+      while (j > 0 && a[j - 1].k > x.k) {
+        a[j] = a[j - 1];
+        j--;
+      }
+      a[j] = x;
+    }
+    return PA_SUCCESS;
+  }
+  PA_ALLOC(tmp, n);
+  kv *src = a, *dst = tmp;
+  for (int shift = 0; shift < 64 && (maxk >> shift); shift += 8) {
+    size_t cnt[257] = {0};
+    for (size_t i = 0; i < n; i++) cnt[((src[i].k >> shift) & 255) + 1]++;
+    for (int b = 0; b < 256; b++) cnt[b + 1] += cnt[b];
+    for (size_t i = 0; i < n; i++) dst[cnt[(src[i].k >> shift) & 255]++] = src[i];
+    kv *t = src;
+    src = dst;
+    dst = t;
+  }
+  if (src != a) memcpy(a, src, n * sizeof *a);
+cleanup:
+  pa__free(tmp);
+  return st;
+}
+
+size_t pa__gid_sort_unique(pa_gid *a, size_t n) {
+  /* Fallback to qsort-free insertion for tiny inputs is inside radix_sort;
+   * here we sort the gids directly through (key, 0) pairs when possible. */
+  kv *p = pa__malloc((n ? n : 1) * sizeof *p);
+  if (!p) { /* out of memory: degrade to a heap sort, still correct */
+    for (size_t i = n / 2; i-- > 0;) {
+      size_t r = i;
+      for (;;) {
+        size_t c = 2 * r + 1;
+        if (c >= n) break;
+        if (c + 1 < n && a[c + 1] > a[c]) c++;
+        if (a[r] >= a[c]) break;
+        pa_gid t = a[r]; a[r] = a[c]; a[c] = t;
+        r = c;
+      }
+    }
+    for (size_t e = n; e-- > 1;) {
+      pa_gid t = a[0]; a[0] = a[e]; a[e] = t;
+      size_t r = 0;
+      for (;;) {
+        size_t c = 2 * r + 1;
+        if (c >= e) break;
+        if (c + 1 < e && a[c + 1] > a[c]) c++;
+        if (a[r] >= a[c]) break;
+        t = a[r]; a[r] = a[c]; a[c] = t;
+        r = c;
+      }
+    }
+  } else {
+    for (size_t i = 0; i < n; i++) p[i].k = (uint64_t)a[i], p[i].i = 0;
+    if (radix_sort(p, n) == PA_SUCCESS)
+      for (size_t i = 0; i < n; i++) a[i] = (pa_gid)p[i].k;
+    pa__free(p);
+  }
+  size_t m = 0;
+  for (size_t i = 0; i < n; i++)
+    if (m == 0 || a[i] != a[m - 1]) a[m++] = a[i];
+  return m;
+}
+
+pa_status pa__sort_by_gid(pa_idx *idx, size_t n, const pa_gid *key) {
+  pa_status st = PA_SUCCESS;
+  kv *p = NULL;
+  PA_ALLOC(p, n);
+  for (size_t i = 0; i < n; i++) {
+    p[i].k = (uint64_t)key[idx[i]];
+    p[i].i = idx[i];
+  }
+  PA_CALL(radix_sort(p, n));
+  for (size_t i = 0; i < n; i++) idx[i] = p[i].i;
+cleanup:
+  pa__free(p);
+  return st;
+}

@@ -1,0 +1,172 @@
+/*
+ * partition.c -- PT-Scotch partitioning of a distributed graph and the
+ * remapping of parts to ranks. Only this file includes PT-Scotch.
+ *
+ * Invariants: Scotch sees 0-based (baseval 0) 32-bit SCOTCH_Num arrays copied
+ * from the caller's CSR; integer vertex loads are the caller's weights scaled
+ * to [1, 10^6]; every collective step agrees on the status first (one
+ * MPI_Allreduce), so a failure on one rank never leaves another waiting.
+ */
+#include "partition/partition.h"
+
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+/* PT-Scotch needs these before its header. */
+#include <mpi.h>
+#include <stdint.h>
+#include <scotch/ptscotch.h>
+
+/* Agree on a status over comm (max of the codes); a rank that did not fail
+ * gets a message saying another one did. */
+static pa_status agree(MPI_Comm comm, pa_status st) {
+  int mine = (int)st, any;
+  MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, comm);
+  if (any && !st)
+    return pa__error((pa_status)any, __FILE__, __LINE__,
+                     "partitioning failed on another rank");
+  return any && st ? st : (pa_status)any;
+}
+
+pa_status pa__partition_dgraph(MPI_Comm comm, pa_idx n, const pa_idx *xadj,
+                               const int64_t *adj, const double *weights,
+                               int nparts, int *part) {
+  pa_status st = PA_SUCCESS;
+  SCOTCH_Num *vert = NULL, *edge = NULL, *velo = NULL, *parttab = NULL;
+  SCOTCH_Dgraph graph;
+  SCOTCH_Strat strat;
+  int graph_init = 0, strat_init = 0;
+  int64_t nglob = n, wmax_ok = 1;
+  double wmax = 0;
+
+  if (weights)
+    for (pa_idx i = 0; i < n; i++) {
+      if (!(weights[i] > 0) || !isfinite(weights[i])) wmax_ok = 0;
+      if (weights[i] > wmax) wmax = weights[i];
+    }
+  /* The only collectives before the agreement: every rank reaches them. */
+  MPI_Allreduce(MPI_IN_PLACE, &nglob, 1, MPI_INT64_T, MPI_SUM, comm);
+  MPI_Allreduce(MPI_IN_PLACE, &wmax, 1, MPI_DOUBLE, MPI_MAX, comm);
+  PA_CHECK(nglob < INT32_MAX, PA_ERR_ARG,
+           "graph of %lld vertices: PT-Scotch is built with 32-bit integers",
+           (long long)nglob);
+  PA_CHECK(nparts >= 1, PA_ERR_ARG, "nparts must be >= 1, got %d", nparts);
+  PA_CHECK(wmax_ok, PA_ERR_ARG, "element weights must be finite and > 0");
+  PA_ALLOC(vert, n + 1);
+  PA_ALLOC(edge, xadj[n]);
+  PA_ALLOC(parttab, n);
+  for (pa_idx i = 0; i <= n; i++) vert[i] = xadj[i];
+  for (pa_idx j = 0; j < xadj[n]; j++) edge[j] = (SCOTCH_Num)adj[j];
+  if (weights) {
+    PA_ALLOC(velo, n);
+    for (pa_idx i = 0; i < n; i++) {
+      double w = weights[i] / wmax * 1e6;
+      velo[i] = w < 1 ? 1 : (SCOTCH_Num)w;
+    }
+  }
+cleanup:
+  st = agree(comm, st);
+  if (st) goto done;
+  if (nparts == 1) {
+    for (pa_idx i = 0; i < n; i++) part[i] = 0;
+    goto done;
+  }
+  if (SCOTCH_dgraphInit(&graph, comm) != 0)
+    st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
+                   "SCOTCH_dgraphInit failed");
+  else
+    graph_init = 1;
+  st = agree(comm, st);
+  if (st) goto done;
+  if (SCOTCH_dgraphBuild(&graph, 0, n, n, vert, NULL, velo, NULL, xadj[n],
+                         xadj[n], edge, NULL, NULL) != 0)
+    st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
+                   "SCOTCH_dgraphBuild failed on a graph of %d local vertices",
+                   (int)n);
+  st = agree(comm, st);
+  if (st) goto done;
+#ifndef NDEBUG
+  if (SCOTCH_dgraphCheck(&graph) != 0)
+    st = pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
+                   "SCOTCH_dgraphCheck: the dual graph is inconsistent");
+  st = agree(comm, st);
+  if (st) goto done;
+#endif
+  SCOTCH_stratInit(&strat);
+  strat_init = 1;
+  if (SCOTCH_dgraphPart(&graph, nparts, &strat, parttab) != 0)
+    st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
+                   "SCOTCH_dgraphPart failed (%d parts)", nparts);
+  st = agree(comm, st);
+  if (st) goto done;
+  for (pa_idx i = 0; i < n; i++) part[i] = (int)parttab[i];
+done:
+  if (strat_init) SCOTCH_stratExit(&strat);
+  if (graph_init) SCOTCH_dgraphExit(&graph);
+  pa__free(vert);
+  pa__free(edge);
+  pa__free(velo);
+  pa__free(parttab);
+  return st;
+}
+
+typedef struct cell {
+  double w;
+  int p, r;
+} cell;
+
+static int cell_cmp(const void *a, const void *b) {
+  const cell *x = a, *y = b;
+  if (x->w != y->w) return x->w > y->w ? -1 : 1;
+  if (x->p != y->p) return x->p - y->p;
+  return x->r - y->r;
+}
+
+pa_status pa__partition_remap(MPI_Comm comm, pa_idx n, int *part,
+                              const double *weights) {
+  pa_status st = PA_SUCCESS;
+  int size;
+  double *mine = NULL, *all = NULL;
+  cell *c = NULL;
+  int *map = NULL, *used = NULL;
+  MPI_Comm_size(comm, &size);
+  PA_CALLOC(mine, size);
+  PA_ALLOC(all, (size_t)size * size);
+  PA_ALLOC(c, (size_t)size * size);
+  PA_ALLOC(map, size);
+  PA_CALLOC(used, size);
+  for (pa_idx i = 0; i < n; i++) {
+    PA_CHECK(part[i] >= 0 && part[i] < size, PA_ERR_ARG,
+             "part %d of element %d out of [0, %d)", part[i], (int)i, size);
+    mine[part[i]] += weights ? weights[i] : 1.0;
+  }
+cleanup:
+  st = agree(comm, st);
+  if (st) goto done;
+  /* all[r * size + p]: weight of part p currently on rank r. */
+  MPI_Allgather(mine, size, MPI_DOUBLE, all, size, MPI_DOUBLE, comm);
+  for (int r = 0; r < size; r++)
+    for (int p = 0; p < size; p++)
+      c[(size_t)r * size + p] = (cell){all[(size_t)r * size + p], p, r};
+  qsort(c, (size_t)size * size, sizeof *c, cell_cmp);
+  for (int p = 0; p < size; p++) map[p] = -1;
+  for (size_t k = 0; k < (size_t)size * size; k++)
+    if (c[k].w > 0 && map[c[k].p] < 0 && !used[c[k].r]) {
+      map[c[k].p] = c[k].r;
+      used[c[k].r] = 1;
+    }
+  for (int p = 0, r = 0; p < size; p++)
+    if (map[p] < 0) {
+      while (used[r]) r++;
+      map[p] = r;
+      used[r] = 1;
+    }
+  for (pa_idx i = 0; i < n; i++) part[i] = map[part[i]];
+done:
+  pa__free(mine);
+  pa__free(all);
+  pa__free(c);
+  pa__free(map);
+  pa__free(used);
+  return st;
+}

@@ -1,0 +1,31 @@
+/*
+ * partition.h -- graph partitioning: the only component that includes
+ * PT-Scotch. It partitions a distributed graph given in CSR form and remaps
+ * parts to ranks; building the graph (the mesh's dual graph) is dmesh's job.
+ */
+#ifndef PA_PARTITION_H
+#define PA_PARTITION_H
+
+#include "core/core.h"
+
+#include <mpi.h>
+
+/* Collective: partition a distributed graph into nparts parts with
+ * PT-Scotch (SCOTCH_dgraphPart, default strategy). Rank r holds n vertices
+ * numbered offset(r) + i globally (offsets: exclusive scan of n); the
+ * neighbours of local vertex i are adj[xadj[i] .. xadj[i+1]-1] (global
+ * numbers, symmetric graph, no self loop). weights: per vertex (> 0) or NULL.
+ * part[i] receives the part of local vertex i in [0, nparts). Fails with
+ * PA_ERR_PARTITION if Scotch does, PA_ERR_ARG if the graph has 2^31 vertices
+ * or more (SCOTCH_Num is 32-bit). */
+pa_status pa__partition_dgraph(MPI_Comm comm, pa_idx n, const pa_idx *xadj,
+                               const int64_t *adj, const double *weights,
+                               int nparts, int *part);
+
+/* Collective: map parts to ranks (nparts == number of ranks) so that the
+ * weight kept in place is large: greedy on the part x rank matrix of weights
+ * (heaviest pair first). On return part[i] is the destination rank. */
+pa_status pa__partition_remap(MPI_Comm comm, pa_idx n, int *part,
+                              const double *weights);
+
+#endif /* PA_PARTITION_H */

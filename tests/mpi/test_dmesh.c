@@ -1,0 +1,412 @@
+/*
+ * test_dmesh.c -- distributed mesh: distribution from a root, ghosts, halo
+ * exchange (sync and async) of global ids and multi-component fields,
+ * reductions, iterators, gather, checksum independence of the number of
+ * ranks, reordering, redistribution round trips and bad input. Runs at any
+ * number of ranks.
+ */
+#include "testutil.h"
+
+#include <mpi.h>
+
+static int rank, size;
+
+/* A 2D or 3D box on rank 0 (NULL elsewhere). */
+static pa_mesh *box_on_root(int dim, int n) {
+  pa_mesh *m = NULL;
+  if (rank == 0) CHECK_OK(pa_mesh_generate_box(dim, n, &m));
+  return m;
+}
+
+/* The checksum of a mesh distributed on MPI_COMM_SELF (one rank). */
+static uint64_t serial_checksum(int dim, int n) {
+  pa_mesh *m = NULL;
+  pa_dmesh *dm = NULL;
+  uint64_t sum = 0;
+  CHECK_OK(pa_mesh_generate_box(dim, n, &m));
+  CHECK_OK(pa_dmesh_distribute(MPI_COMM_SELF, 0, m, 0, &dm));
+  if (dm) CHECK_OK(pa_dmesh_checksum(dm, &sum));
+  pa_dmesh_destroy(dm);
+  pa_mesh_destroy(m);
+  return sum;
+}
+
+/* Every owned entity of every kind is owned once over the ranks, and the
+ * owned gids cover [0, nglobal). */
+static void check_owned_once(pa_dmesh *dm) {
+  for (int k = 0; k < 4; k++) {
+    pa_dmesh_iter it;
+    pa_idx i;
+    pa_gid ng = pa_dmesh_nglobal(dm, (pa_entity)k);
+    int *seen = calloc((size_t)ng + 1, sizeof *seen);
+    const pa_gid *g = pa_dmesh_gids(dm, (pa_entity)k);
+    CHECK_OK(pa_dmesh_iter_init(dm, (pa_entity)k, PA_OWNED, &it));
+    while (pa_dmesh_iter_next(&it, &i)) {
+      CHECK(g[i] >= 0 && g[i] < ng);
+      if (g[i] >= 0 && g[i] < ng) seen[g[i]]++;
+    }
+    MPI_Allreduce(MPI_IN_PLACE, seen, (int)ng, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+    int bad = 0;
+    for (pa_gid q = 0; q < ng; q++) bad += seen[q] != 1;
+    CHECK(bad == 0);
+    free(seen);
+    /* interior + frontier = owned, disjoint */
+    pa_dmesh_iter a, b;
+    CHECK_OK(pa_dmesh_iter_init(dm, (pa_entity)k, PA_INTERIOR, &a));
+    CHECK_OK(pa_dmesh_iter_init(dm, (pa_entity)k, PA_FRONTIER, &b));
+    CHECK(pa_dmesh_iter_count(&a) + pa_dmesh_iter_count(&b) ==
+          pa_dmesh_nowned(dm, (pa_entity)k));
+    pa_idx ng_ = 0;
+    CHECK_OK(pa_dmesh_iter_init(dm, (pa_entity)k, PA_GHOST, &it));
+    while (pa_dmesh_iter_next(&it, &i)) {
+      CHECK(pa_dmesh_owners(dm, (pa_entity)k)[i] != rank);
+      ng_++;
+    }
+    CHECK(ng_ == pa_dmesh_nlocal(dm, (pa_entity)k) - pa_dmesh_nowned(dm, (pa_entity)k));
+  }
+}
+
+/* Halo of the global ids of every kind (int64, sync) and of a 3-component
+ * double field from the coordinates (async, with work in between). */
+static void check_halo(pa_dmesh *dm) {
+  for (int k = 0; k < 4; k++) {
+    pa_dmesh_value *v = NULL;
+    char name[32];
+    snprintf(name, sizeof name, "gid%d", k);
+    CHECK_OK(pa_dmesh_value_add(dm, (pa_entity)k, name, MPI_INT64_T, 1, -1, &v));
+    if (!v) continue;
+    pa_idx n, nown;
+    int64_t *d = pa_dmesh_value_data(v, &n, &nown);
+    const pa_gid *g = pa_dmesh_gids(dm, (pa_entity)k);
+    CHECK(n == pa_dmesh_nlocal(dm, (pa_entity)k));
+    for (pa_idx i = 0; i < n; i++) d[i] = i < nown ? g[i] : -1;
+    CHECK_OK(pa_dmesh_halo(dm, v));
+    int bad = 0;
+    for (pa_idx i = 0; i < n; i++) bad += d[i] != g[i];
+    CHECK(bad == 0);
+    CHECK_OK(pa_dmesh_value_remove(dm, v));
+  }
+  int dim = pa_dmesh_dim(dm);
+  pa_dmesh_value *x = NULL;
+  CHECK_OK(pa_dmesh_value_add(dm, PA_VERTEX, "x3", MPI_DOUBLE, 3, -1, &x));
+  if (!x) return;
+  pa_idx n, nown;
+  double *d = pa_dmesh_value_data(x, &n, &nown);
+  const double *c = pa_mesh_coords(pa_dmesh_mesh(dm));
+  for (pa_idx i = 0; i < n; i++)
+    for (int j = 0; j < 3; j++)
+      d[3 * i + j] = i < nown ? c[dim * i + j % dim] * (j + 1) + 1 : -99;
+  CHECK_OK(pa_dmesh_halo_begin(dm, x));
+  /* work on interior vertices while the messages fly */
+  pa_dmesh_iter it;
+  pa_idx i;
+  double acc = 0;
+  CHECK_OK(pa_dmesh_iter_init(dm, PA_VERTEX, PA_INTERIOR, &it));
+  while (pa_dmesh_iter_next(&it, &i)) acc += d[3 * i];
+  CHECK(acc >= 0);
+  CHECK(pa_dmesh_halo_begin(dm, x) == PA_ERR_ARG); /* already in flight */
+  CHECK_OK(pa_dmesh_halo_end(dm, x));
+  int bad = 0;
+  for (pa_idx q = 0; q < n; q++)
+    for (int j = 0; j < 3; j++)
+      bad += d[3 * q + j] != c[dim * q + j % dim] * (j + 1) + 1;
+  CHECK(bad == 0);
+  CHECK_OK(pa_dmesh_value_remove(dm, x));
+}
+
+/* Reductions: SUM of ones counts the copies; MIN/MAX of the holding rank. */
+static void check_reduce(pa_dmesh *dm) {
+  pa_dmesh_value *one = NULL, *mn = NULL, *mx = NULL;
+  CHECK_OK(pa_dmesh_value_add(dm, PA_VERTEX, "one", MPI_INT, 1, -1, &one));
+  CHECK_OK(pa_dmesh_value_add(dm, PA_VERTEX, "mn", MPI_INT, 1, -1, &mn));
+  CHECK_OK(pa_dmesh_value_add(dm, PA_VERTEX, "mx", MPI_INT, 2, -1, &mx));
+  if (!one || !mn || !mx) return;
+  pa_idx n, nown;
+  int *a = pa_dmesh_value_data(one, &n, &nown);
+  int *b = pa_dmesh_value_data(mn, NULL, NULL);
+  int *c = pa_dmesh_value_data(mx, NULL, NULL);
+  for (pa_idx i = 0; i < n; i++) {
+    a[i] = 1;
+    b[i] = rank;
+    c[2 * i] = rank;
+    c[2 * i + 1] = -rank;
+  }
+  CHECK_OK(pa_dmesh_reduce(dm, one, MPI_SUM));
+  CHECK_OK(pa_dmesh_reduce_begin(dm, mn));
+  CHECK_OK(pa_dmesh_reduce_begin(dm, mx));
+  CHECK_OK(pa_dmesh_reduce_end(dm, mx, MPI_MAX));
+  CHECK_OK(pa_dmesh_reduce_end(dm, mn, MPI_MIN));
+  long copies = 0, local = n;
+  int bad = 0;
+  for (pa_idx i = 0; i < nown; i++) {
+    copies += a[i];
+    bad += b[i] > rank || c[2 * i] < rank || c[2 * i + 1] < -rank;
+  }
+  CHECK(bad == 0);
+  MPI_Allreduce(MPI_IN_PLACE, &copies, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
+  MPI_Allreduce(MPI_IN_PLACE, &local, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
+  CHECK(copies == local);
+  /* after a halo, every copy knows the number of copies */
+  CHECK_OK(pa_dmesh_halo(dm, one));
+  bad = 0;
+  for (pa_idx i = 0; i < n; i++) bad += a[i] < 1 || a[i] > size;
+  CHECK(bad == 0);
+  CHECK_OK(pa_dmesh_value_remove(dm, one));
+  CHECK_OK(pa_dmesh_value_remove(dm, mn));
+  CHECK_OK(pa_dmesh_value_remove(dm, mx));
+}
+
+/* The gathered mesh equals the input (numbered by global id = input index). */
+static void check_gather(pa_dmesh *dm, pa_mesh *in) {
+  pa_mesh *g = NULL;
+  CHECK_OK(pa_dmesh_gather(dm, 0, &g));
+  if (rank != 0) {
+    CHECK(g == NULL);
+    return;
+  }
+  CHECK(g != NULL);
+  if (!g) return;
+  int d = pa_mesh_dim(in);
+  CHECK(pa_mesh_nvert(g) == pa_mesh_nvert(in));
+  CHECK(pa_mesh_nelem(g) == pa_mesh_nelem(in));
+  CHECK(pa_mesh_nbdry(g) == pa_mesh_nbdry(in));
+  if (pa_mesh_nvert(g) == pa_mesh_nvert(in) && pa_mesh_nelem(g) == pa_mesh_nelem(in) &&
+      pa_mesh_nbdry(g) == pa_mesh_nbdry(in)) {
+    CHECK(!memcmp(pa_mesh_coords(g), pa_mesh_coords(in),
+                  sizeof(double) * d * pa_mesh_nvert(in)));
+    CHECK(!memcmp(pa_mesh_elems(g), pa_mesh_elems(in),
+                  sizeof(pa_idx) * (d + 1) * pa_mesh_nelem(in)));
+    CHECK(!memcmp(pa_mesh_elem_refs(g), pa_mesh_elem_refs(in),
+                  sizeof(int32_t) * pa_mesh_nelem(in)));
+    CHECK(!memcmp(pa_mesh_bdrys(g), pa_mesh_bdrys(in),
+                  sizeof(pa_idx) * d * pa_mesh_nbdry(in)));
+    CHECK(!memcmp(pa_mesh_bdry_refs(g), pa_mesh_bdry_refs(in),
+                  sizeof(int32_t) * pa_mesh_nbdry(in)));
+  }
+  pa_mesh_destroy(g);
+}
+
+static void test_distribute(void) {
+  for (int dim = 2; dim <= 3; dim++) {
+    int n = dim == 2 ? 12 : 5;
+    pa_mesh *in = box_on_root(dim, n);
+    uint64_t ref = serial_checksum(dim, n);
+    for (int overlap = 0; overlap <= 2; overlap++) {
+      pa_dmesh *dm = NULL;
+      CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, in, overlap, &dm));
+      if (!dm) continue;
+      CHECK(pa_dmesh_overlap(dm) == overlap);
+      CHECK_OK(pa_dmesh_check(dm));
+      uint64_t sum = 0;
+      CHECK_OK(pa_dmesh_checksum(dm, &sum));
+      CHECK(sum == ref);
+      check_owned_once(dm);
+      check_halo(dm);
+      check_reduce(dm);
+      check_gather(dm, in);
+      /* layers: every ghost of layer k has a vertex of layer k-1 */
+      const uint8_t *lay = pa_dmesh_elem_layers(dm);
+      int maxl = 0;
+      for (pa_idx e = 0; e < pa_dmesh_nlocal(dm, PA_ELEMENT); e++)
+        if (lay[e] > maxl) maxl = lay[e];
+      CHECK(maxl <= overlap);
+      if (size > 1 && overlap > 0) {
+        int any = maxl == overlap;
+        MPI_Allreduce(MPI_IN_PLACE, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+        CHECK(any);
+      }
+      pa_dmesh_destroy(dm);
+    }
+    pa_mesh_destroy(in);
+  }
+}
+
+/* Values of every kind survive redistribution and reordering; the checksum
+ * (which covers the values) is unchanged. */
+static void test_redistribute(void) {
+  for (int dim = 2; dim <= 3; dim++) {
+    pa_mesh *in = box_on_root(dim, dim == 2 ? 10 : 4);
+    pa_dmesh *dm = NULL;
+    CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, in, 1, &dm));
+    pa_mesh_destroy(in);
+    if (!dm) continue;
+    pa_dmesh_value *vx = NULL, *ve = NULL, *vb = NULL;
+    CHECK_OK(pa_dmesh_value_add(dm, PA_VERTEX, "vx", MPI_DOUBLE, 2, -1, &vx));
+    CHECK_OK(pa_dmesh_value_add(dm, PA_ELEMENT, "ve", MPI_INT64_T, 1, -1, &ve));
+    CHECK_OK(pa_dmesh_value_add(dm, PA_BOUNDARY, "b3", MPI_FLOAT, 1, 3, &vb));
+    if (!vx || !ve || !vb) {
+      pa_dmesh_destroy(dm);
+      continue;
+    }
+    for (int round = 0; round < 3; round++) {
+      pa_idx n, nown;
+      double *x = pa_dmesh_value_data(vx, &n, &nown);
+      const double *c = pa_mesh_coords(pa_dmesh_mesh(dm));
+      if (round == 0)
+        for (pa_idx i = 0; i < n; i++) {
+          x[2 * i] = c[dim * i] + 2 * c[dim * i + 1];
+          x[2 * i + 1] = -c[dim * i + 1];
+        }
+      int bad = 0;
+      for (pa_idx i = 0; i < n; i++)
+        bad += x[2 * i] != c[dim * i] + 2 * c[dim * i + 1] || x[2 * i + 1] != -c[dim * i + 1];
+      CHECK(bad == 0);
+      int64_t *e = pa_dmesh_value_data(ve, &n, &nown);
+      const pa_gid *eg = pa_dmesh_gids(dm, PA_ELEMENT);
+      if (round == 0)
+        for (pa_idx i = 0; i < n; i++) e[i] = 7 * eg[i] + 1;
+      for (pa_idx i = 0; i < n; i++) bad += e[i] != 7 * eg[i] + 1;
+      CHECK(bad == 0);
+      float *b = pa_dmesh_value_data(vb, &n, &nown);
+      const pa_idx *ent = pa_dmesh_value_entities(vb);
+      const pa_gid *bg = pa_dmesh_gids(dm, PA_BOUNDARY);
+      const int32_t *br = pa_mesh_bdry_refs(pa_dmesh_mesh(dm));
+      if (round == 0)
+        for (pa_idx i = 0; i < n; i++) b[i] = (float)bg[ent[i]] + 0.5f;
+      for (pa_idx i = 0; i < n; i++) bad += b[i] != (float)bg[ent[i]] + 0.5f || br[ent[i]] != 3;
+      CHECK(bad == 0);
+      uint64_t before = 0, after = 0;
+      CHECK_OK(pa_dmesh_checksum(dm, &before));
+      if (round == 0) { /* shift every element to the next rank */
+        pa_idx ne = pa_dmesh_nowned(dm, PA_ELEMENT);
+        int *part = malloc(sizeof(int) * (ne + 1));
+        for (pa_idx i = 0; i < ne; i++) part[i] = (rank + 1) % size;
+        CHECK_OK(pa_dmesh_redistribute(dm, part, NULL));
+        free(part);
+      } else if (round == 1) { /* back with PT-Scotch, weighted */
+        pa_idx ne = pa_dmesh_nowned(dm, PA_ELEMENT);
+        double *w = malloc(sizeof(double) * (ne + 1));
+        for (pa_idx i = 0; i < ne; i++) w[i] = 1.0 + (eg[i] % 3);
+        CHECK_OK(pa_dmesh_redistribute(dm, NULL, w));
+        free(w);
+      } else {
+        CHECK_OK(pa_dmesh_reorder(dm));
+      }
+      CHECK_OK(pa_dmesh_check(dm));
+      CHECK_OK(pa_dmesh_checksum(dm, &after));
+      CHECK(before == after);
+    }
+    pa_dmesh_destroy(dm);
+  }
+}
+
+/* Adjacency queries agree with each other across the overlap. */
+static void test_adjacency(void) {
+  pa_mesh *in = box_on_root(3, 4);
+  pa_dmesh *dm = NULL;
+  CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, in, 1, &dm));
+  pa_mesh_destroy(in);
+  if (!dm) return;
+  int d = 3, bad = 0;
+  pa_idx ne = pa_dmesh_nowned(dm, PA_ELEMENT);
+  for (pa_idx e = 0; e < ne; e++) {
+    const pa_idx *nb;
+    CHECK_OK(pa_dmesh_elem_neighbours(dm, e, &nb));
+    for (int i = 0; i <= d; i++) {
+      if (nb[i] < 0) continue;
+      const pa_idx *nn;
+      CHECK_OK(pa_dmesh_elem_neighbours(dm, nb[i], &nn));
+      int back = 0;
+      for (int j = 0; j <= d; j++) back += nn[j] == e;
+      bad += back != 1;
+    }
+    const pa_idx *ev = pa_dmesh_elem_verts(dm, e);
+    for (int i = 0; i <= d; i++) {
+      pa_idx n;
+      const pa_idx *el;
+      CHECK_OK(pa_dmesh_vert_elems(dm, ev[i], &n, &el));
+      int found = 0;
+      for (pa_idx q = 0; q < n; q++) found += el[q] == e;
+      bad += found != 1;
+    }
+  }
+  /* owned elements with overlap 1: a face without neighbour is a boundary
+   * face, listed as a boundary entity */
+  long nfree = 0, nbdry = 0;
+  for (pa_idx e = 0; e < ne; e++) {
+    const pa_idx *nb;
+    CHECK_OK(pa_dmesh_elem_neighbours(dm, e, &nb));
+    for (int i = 0; i <= d; i++) nfree += nb[i] < 0;
+  }
+  for (pa_idx b = 0; b < pa_dmesh_nlocal(dm, PA_BOUNDARY); b++) {
+    pa_idx e2[2];
+    CHECK_OK(pa_dmesh_bdry_elems(dm, b, e2));
+    bad += e2[0] < 0 || e2[1] >= 0;
+    if (e2[0] >= 0 && e2[0] < ne) nbdry++;
+  }
+  CHECK(bad == 0);
+  CHECK(nfree == nbdry);
+  pa_dmesh_destroy(dm);
+}
+
+/* Inconsistent input: the same error on every rank, never a hang. */
+static void test_bad_input(void) {
+  pa_mesh *in = box_on_root(2, 3);
+  pa_dmesh *dm = NULL;
+  if (rank == 0) pa_mesh_elems(in)[5] = 999;
+  pa_status st = pa_dmesh_distribute(MPI_COMM_WORLD, 0, in, 1, &dm);
+  CHECK(st == PA_ERR_MESH);
+  CHECK(dm == NULL);
+  CHECK(strstr(pa_last_error(), "999") != NULL);
+  pa_mesh_destroy(in);
+  /* a boundary edge that is in no element */
+  in = box_on_root(2, 3);
+  if (rank == 0) {
+    pa_idx v[2] = {0, 15};
+    CHECK_OK(pa_mesh_add_bdry(in, v, 7, NULL));
+  }
+  st = pa_dmesh_distribute(MPI_COMM_WORLD, 0, in, 0, &dm);
+  CHECK(st == PA_ERR_MESH);
+  CHECK(strstr(pa_last_error(), "boundary") != NULL);
+  pa_dmesh_destroy(dm);
+  pa_mesh_destroy(in);
+  /* a bad argument on one rank only */
+  in = box_on_root(2, 3);
+  st = pa_dmesh_distribute(MPI_COMM_WORLD, 0, in, rank == size - 1 ? -1 : 0, &dm);
+  CHECK(st == PA_ERR_ARG);
+  pa_mesh_destroy(in);
+  /* a wrong new part on one rank */
+  in = box_on_root(2, 4);
+  CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, in, 0, &dm));
+  pa_mesh_destroy(in);
+  if (dm) {
+    pa_idx ne = pa_dmesh_nowned(dm, PA_ELEMENT);
+    int *part = calloc((size_t)ne + 1, sizeof *part);
+    if (rank == size - 1 && ne > 0) part[0] = size;
+    st = pa_dmesh_redistribute(dm, part, NULL);
+    CHECK(st == PA_ERR_ARG);
+    free(part);
+    pa_dmesh_destroy(dm);
+  }
+}
+
+int main(int argc, char **argv) {
+  int provided;
+  MPI_Init_thread(&argc, &argv, MPI_THREAD_MULTIPLE, &provided);
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  size_t mem0 = pa_memory_current();
+  pa_test_fn tests[] = {test_distribute, test_redistribute, test_adjacency,
+                        test_bad_input};
+  const char *names[] = {"distribute", "redistribute", "adjacency", "bad_input"};
+  for (size_t t = 0; t < sizeof tests / sizeof *tests; t++) {
+    int before = pa_test_failures;
+    double t0 = MPI_Wtime();
+    tests[t]();
+    if (pa_test_failures != before)
+      fprintf(stderr, "rank %d: test %s failed\n", rank, names[t]);
+    if (rank == 0) printf("%s: %.2f s\n", names[t], MPI_Wtime() - t0);
+  }
+  if (pa_memory_current() != mem0) {
+    fprintf(stderr, "rank %d: %zu bytes leaked\n", rank,
+            pa_memory_current() - mem0);
+    pa_test_failures++;
+  }
+  int fails = pa_test_failures;
+  MPI_Allreduce(MPI_IN_PLACE, &fails, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+  if (rank == 0)
+    printf("test_dmesh: %d ranks, %d checks on rank 0, %d failures\n", size,
+           pa_test_checks, fails);
+  MPI_Finalize();
+  return fails ? 1 : 0;
+}

@@ -1,0 +1,229 @@
+/*
+ * test_dmesh_io.c -- distributed I/O: round trip of a distributed set (same
+ * and different numbers of ranks, through sub-communicators), gather from a
+ * set, ParaView files, and bad sets (a missing rank file, inconsistent
+ * interfaces) that must fail with the same error on every rank, never hang.
+ */
+#include "testutil.h"
+
+#include <mpi.h>
+#include <unistd.h>
+
+static int rank, size;
+
+/* 3D box with a metric and a field, on rank 0. */
+static pa_mesh *input(void) {
+  pa_mesh *m = NULL;
+  if (rank != 0) return NULL;
+  CHECK_OK(pa_mesh_generate_box(3, 5, &m));
+  if (!m) return NULL;
+  pa_idx nv = pa_mesh_nvert(m);
+  double *h = malloc(sizeof(double) * nv), *f = malloc(sizeof(double) * 2 * nv);
+  const double *x = pa_mesh_coords(m);
+  for (pa_idx i = 0; i < nv; i++) {
+    h[i] = 0.1 + x[3 * i];
+    f[2 * i] = x[3 * i + 1];
+    f[2 * i + 1] = -x[3 * i + 2];
+  }
+  CHECK_OK(pa_mesh_set_metric(m, 1, h));
+  CHECK_OK(pa_mesh_add_field(m, "f", 2, f));
+  pa_mesh_vert_flags(m)[3] |= PA_FLAG_CORNER | PA_FLAG_REQUIRED;
+  free(h);
+  free(f);
+  return m;
+}
+
+static uint64_t checksum(pa_dmesh *dm) {
+  uint64_t s = 0;
+  CHECK_OK(pa_dmesh_checksum(dm, &s));
+  return s;
+}
+
+static int file_exists(const char *p) { return access(p, F_OK) == 0; }
+
+static void copy_file(const char *from, const char *to) {
+  FILE *a = fopen(from, "rb"), *b = fopen(to, "wb");
+  char buf[65536];
+  size_t n;
+  CHECK(a && b);
+  if (a && b)
+    while ((n = fread(buf, 1, sizeof buf, a)) > 0) fwrite(buf, 1, n, b);
+  if (a) fclose(a);
+  if (b) fclose(b);
+}
+
+static void test_round_trip(void) {
+  pa_mesh *in = input();
+  pa_dmesh *dm = NULL, *back = NULL;
+  CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, in, 1, &dm));
+  if (!dm) {
+    pa_mesh_destroy(in);
+    return;
+  }
+  uint64_t ref = checksum(dm);
+  CHECK_OK(pa_dmesh_write(dm, "io_w.meshb"));
+  CHECK(pa_dmesh_is_set("io_w.meshb"));
+  CHECK(pa_dmesh_is_set("io_w.mesh"));
+  CHECK(!pa_dmesh_is_set("nothing.meshb"));
+  CHECK(file_exists("io_w.pvtu"));
+  char p[64];
+  snprintf(p, sizeof p, "io_w.%d.vtu", rank);
+  CHECK(file_exists(p));
+  snprintf(p, sizeof p, "io_w.%d.meshb", rank);
+  CHECK(file_exists(p));
+  /* every per-rank file is a valid Medit mesh on its own */
+  pa_mesh *part = NULL;
+  CHECK_OK(pa_mesh_read(p, &part));
+  if (part) CHECK(pa_mesh_nelem(part) == pa_dmesh_nowned(dm, PA_ELEMENT));
+  pa_mesh_destroy(part);
+  /* same number of ranks, two overlaps */
+  for (int ov = 0; ov <= 2; ov += 2) {
+    CHECK_OK(pa_dmesh_read(MPI_COMM_WORLD, "io_w.meshb", ov, &back));
+    if (back) {
+      CHECK_OK(pa_dmesh_check(back));
+      CHECK(checksum(back) == ref);
+      CHECK(pa_dmesh_nowned(back, PA_ELEMENT) == pa_dmesh_nowned(dm, PA_ELEMENT));
+      CHECK(pa_mesh_metric_ncomp(pa_dmesh_mesh(back)) == 1);
+      CHECK(pa_mesh_nfield(pa_dmesh_mesh(back)) == 1);
+    }
+    pa_dmesh_destroy(back);
+    back = NULL;
+  }
+  /* gathered from the set = input */
+  pa_mesh *g = NULL;
+  CHECK_OK(pa_dmesh_read_gathered(MPI_COMM_WORLD, 0, "io_w.meshb", &g));
+  if (rank == 0 && g && in) {
+    CHECK(pa_mesh_nvert(g) == pa_mesh_nvert(in) && pa_mesh_nelem(g) == pa_mesh_nelem(in));
+    if (pa_mesh_nvert(g) == pa_mesh_nvert(in) && pa_mesh_nelem(g) == pa_mesh_nelem(in)) {
+      CHECK(!memcmp(pa_mesh_coords(g), pa_mesh_coords(in), sizeof(double) * 3 * pa_mesh_nvert(in)));
+      CHECK(!memcmp(pa_mesh_elems(g), pa_mesh_elems(in), sizeof(pa_idx) * 4 * pa_mesh_nelem(in)));
+      CHECK(!memcmp(pa_mesh_metric(g), pa_mesh_metric(in), sizeof(double) * pa_mesh_nvert(in)));
+      CHECK(!memcmp(pa_mesh_vert_flags(g), pa_mesh_vert_flags(in), pa_mesh_nvert(in)));
+    }
+  }
+  CHECK((g != NULL) == (rank == 0));
+  pa_mesh_destroy(g);
+  /* a sequential file through the same entry points */
+  if (rank == 0 && in) CHECK_OK(pa_mesh_write(in, "io_seq.meshb", NULL));
+  MPI_Barrier(MPI_COMM_WORLD);
+  CHECK(!pa_dmesh_is_set("io_seq.meshb"));
+  CHECK_OK(pa_dmesh_read(MPI_COMM_WORLD, "io_seq.meshb", 1, &back));
+  if (back) {
+    CHECK_OK(pa_dmesh_check(back));
+    CHECK(checksum(back) == ref);
+  }
+  pa_dmesh_destroy(back);
+  back = NULL;
+  /* different numbers of ranks: a sub-communicator of size - 1 ranks */
+  if (size >= 2) {
+    MPI_Comm sub;
+    MPI_Comm_split(MPI_COMM_WORLD, rank < size - 1 ? 0 : MPI_UNDEFINED, rank, &sub);
+    if (sub != MPI_COMM_NULL) {
+      /* fewer readers than writers */
+      CHECK_OK(pa_dmesh_read(sub, "io_w.meshb", 1, &back));
+      if (back) {
+        CHECK_OK(pa_dmesh_check(back));
+        CHECK(checksum(back) == ref);
+        CHECK_OK(pa_dmesh_write(back, "io_sub.meshb"));
+      }
+      pa_dmesh_destroy(back);
+      back = NULL;
+      MPI_Comm_free(&sub);
+    }
+    MPI_Barrier(MPI_COMM_WORLD);
+    /* more readers than writers */
+    CHECK_OK(pa_dmesh_read(MPI_COMM_WORLD, "io_sub.meshb", 1, &back));
+    if (back) {
+      CHECK_OK(pa_dmesh_check(back));
+      CHECK(checksum(back) == ref);
+      pa_gid nel = pa_dmesh_nowned(back, PA_ELEMENT);
+      MPI_Allreduce(MPI_IN_PLACE, &nel, 1, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD);
+      CHECK(nel > 0); /* repartitioned: no rank left empty */
+    }
+    pa_dmesh_destroy(back);
+    back = NULL;
+  }
+  pa_dmesh_destroy(dm);
+  pa_mesh_destroy(in);
+}
+
+static void test_bad_sets(void) {
+  pa_mesh *in = input();
+  pa_dmesh *dm = NULL, *back = NULL;
+  char p[64];
+  CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, in, 0, &dm));
+  pa_mesh_destroy(in);
+  if (!dm) return;
+  CHECK_OK(pa_dmesh_write(dm, "bad_a.meshb"));
+  /* a missing rank file */
+  MPI_Barrier(MPI_COMM_WORLD);
+  if (rank == 0) {
+    snprintf(p, sizeof p, "bad_a.%d.meshb", size - 1);
+    CHECK(remove(p) == 0);
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+  pa_status st = pa_dmesh_read(MPI_COMM_WORLD, "bad_a.meshb", 1, &back);
+  CHECK(st == PA_ERR_IO);
+  CHECK(back == NULL);
+  if (size > 1) CHECK(strstr(pa_last_error(), "missing") != NULL);
+  /* inconsistent interfaces: rank file 1 from another distribution */
+  if (size >= 2) {
+    int *part = malloc(sizeof(int) * (pa_dmesh_nowned(dm, PA_ELEMENT) + 1));
+    for (pa_idx e = 0; e < pa_dmesh_nowned(dm, PA_ELEMENT); e++)
+      part[e] = (rank + 1) % size;
+    CHECK_OK(pa_dmesh_write(dm, "bad_b.meshb"));
+    CHECK_OK(pa_dmesh_redistribute(dm, part, NULL));
+    CHECK_OK(pa_dmesh_write(dm, "bad_c.meshb"));
+    free(part);
+    MPI_Barrier(MPI_COMM_WORLD);
+    if (rank == 0) copy_file("bad_c.1.meshb", "bad_b.1.meshb");
+    MPI_Barrier(MPI_COMM_WORLD);
+    st = pa_dmesh_read(MPI_COMM_WORLD, "bad_b.meshb", 1, &back);
+    CHECK(st == PA_ERR_FORMAT || st == PA_ERR_MESH);
+    CHECK(back == NULL);
+    /* a truncated file */
+    if (rank == 0) {
+      copy_file("bad_c.0.meshb", "bad_d.0.meshb");
+      for (int r = 1; r < size; r++) {
+        char a[64], b[64];
+        snprintf(a, sizeof a, "bad_c.%d.meshb", r);
+        snprintf(b, sizeof b, "bad_d.%d.meshb", r);
+        copy_file(a, b);
+      }
+      CHECK(truncate("bad_d.0.meshb", 300) == 0);
+    }
+    MPI_Barrier(MPI_COMM_WORLD);
+    st = pa_dmesh_read(MPI_COMM_WORLD, "bad_d.meshb", 1, &back);
+    CHECK(st == PA_ERR_FORMAT);
+    CHECK(back == NULL);
+    int same = st, mn, mx;
+    MPI_Allreduce(&same, &mn, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    MPI_Allreduce(&same, &mx, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    CHECK(mn == mx);
+  }
+  pa_dmesh_destroy(dm);
+}
+
+int main(int argc, char **argv) {
+  int provided;
+  MPI_Init_thread(&argc, &argv, MPI_THREAD_MULTIPLE, &provided);
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  size_t mem0 = pa_memory_current();
+  test_round_trip();
+  if (pa_test_failures) fprintf(stderr, "rank %d: round trip failed\n", rank);
+  int before = pa_test_failures;
+  test_bad_sets();
+  if (pa_test_failures != before) fprintf(stderr, "rank %d: bad sets failed\n", rank);
+  if (pa_memory_current() != mem0) {
+    fprintf(stderr, "rank %d: %zu bytes leaked\n", rank, pa_memory_current() - mem0);
+    pa_test_failures++;
+  }
+  int fails = pa_test_failures;
+  MPI_Allreduce(MPI_IN_PLACE, &fails, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+  if (rank == 0)
+    printf("test_dmesh_io: %d ranks, %d checks on rank 0, %d failures\n", size,
+           pa_test_checks, fails);
+  MPI_Finalize();
+  return fails ? 1 : 0;
+}
