@@ -30,7 +30,13 @@ int pa_cli_error(const pa_cli *cli, const char *fmt, ...)
 /* Print the library's last error for status st; returns 1 (0 on success). */
 int pa_cli_fail(const pa_cli *cli, pa_status st);
 
-/* Read a mesh given on the command line (and its metric file if met != NULL). */
+/* Read a mesh given on the command line: a sequential file (read by rank 0)
+ * or a distributed set OUT.<r>.meshb (read by all ranks, gathered on rank 0).
+ * Collective. A mesh listing no boundary entity gets them all (ref 0); the
+ * mesh is checked, and errors name the file. *mesh is set on rank 0 only. */
 pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path, pa_mesh **mesh);
+
+/* Set the library's last error message to msg; returns st. */
+pa_status pa_cli_set_error(pa_status st, const char *msg);
 
 #endif

@@ -204,16 +204,16 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
   if (opts.hmin > 0 && opts.hmax > 0 && opts.hmin > opts.hmax)
     return pa_cli_error(cli, "adapt: -hmin (%g) is larger than -hmax (%g)",
                         opts.hmin, opts.hmax);
-  if (cli->rank != 0) return 0;
 
   pa_mesh *mesh = NULL;
   pa_sol *sol = NULL;
   char *solpath = NULL, *fieldpath = NULL, *extra = NULL;
   pa_stats before, after;
   pa_remesh_report rep;
-  pa_status st = pa_cli_read_mesh(cli, in, &mesh);
+  pa_status st = pa_cli_read_mesh(cli, in, &mesh); /* collective */
+  if (cli->rank != 0) return st ? 1 : 0;
   if (st != PA_SUCCESS) {
-    if (pa_last_error()[0]) pa_cli_fail(cli, st);
+    pa_cli_fail(cli, st);
     goto done;
   }
   if (met) {

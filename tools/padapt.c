@@ -9,6 +9,8 @@
  */
 #include "cli.h"
 
+#include "core/core.h"
+
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -47,6 +49,10 @@ int pa_cli_error(const pa_cli *cli, const char *fmt, ...) {
   return 1;
 }
 
+pa_status pa_cli_set_error(pa_status st, const char *msg) {
+  return pa__error(st, __FILE__, __LINE__, "%s", msg);
+}
+
 int pa_cli_fail(const pa_cli *cli, pa_status st) {
   if (st == PA_SUCCESS) return 0;
   const char *msg = pa_last_error();
@@ -56,38 +62,41 @@ int pa_cli_fail(const pa_cli *cli, pa_status st) {
 pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path,
                            pa_mesh **mesh) {
   pa_idx nadded = 0;
-  pa_status st = pa_mesh_read(path, mesh);
+  pa_status st;
+  char msg[1100];
+  *mesh = NULL;
+  /* A distributed set is read by every rank and gathered on rank 0; a
+   * sequential file is read by rank 0 alone. */
+  int is_set = cli->rank == 0 ? pa_dmesh_is_set(path) : 0;
+  MPI_Bcast(&is_set, 1, MPI_INT, 0, cli->comm);
+  if (is_set) {
+    st = pa_dmesh_read_gathered(cli->comm, 0, path, mesh);
+    if (cli->rank != 0 || st != PA_SUCCESS) return st;
+  } else {
+    if (cli->rank != 0) return PA_SUCCESS;
+    st = pa_mesh_read(path, mesh);
+    if (st != PA_SUCCESS) return st;
+  }
   /* A file that lists no boundary at all gets one; a file that lists some
    * must list all (a missing one reveals a non-conforming mesh). */
-  if (st == PA_SUCCESS && pa_mesh_nbdry(*mesh) == 0)
-    st = pa_mesh_build_boundary(*mesh, 0, &nadded);
+  if (pa_mesh_nbdry(*mesh) == 0) st = pa_mesh_build_boundary(*mesh, 0, &nadded);
   if (st == PA_SUCCESS && nadded > 0 && cli->verbosity >= 1)
     fprintf(stderr, "padapt: %s: added %d missing boundary entities (ref 0)\n",
             path, (int)nadded);
-  if (st == PA_SUCCESS) {
-    st = pa_mesh_check(*mesh);
-    if (st != PA_SUCCESS) {
-      /* Prefix the file name: the check names the entity, not the file. */
-      char msg[1100];
-      snprintf(msg, sizeof msg, "%s: %s", path, pa_last_error());
-      pa_mesh_destroy(*mesh);
-      *mesh = NULL;
-      fprintf(stderr, "padapt: %s\n", msg);
-      pa_clear_error();
-      return st;
-    }
-  }
+  if (st == PA_SUCCESS) st = pa_mesh_check(*mesh);
   if (st != PA_SUCCESS) {
+    /* The topology and check messages name the entity, not the file. */
+    snprintf(msg, sizeof msg, "%s: %s", path, pa_last_error());
     pa_mesh_destroy(*mesh);
     *mesh = NULL;
+    st = pa_cli_set_error(st, msg);
   }
   return st;
 }
 
-/* Report a failed read: pa_cli_read_mesh already printed check failures. */
+/* Report a failed read on rank 0 (the other ranks return quietly). */
 static int read_failed(const pa_cli *cli, pa_status st) {
-  if (pa_last_error()[0]) return pa_cli_fail(cli, st);
-  return 1;
+  return cli->rank == 0 ? pa_cli_fail(cli, st) : 1;
 }
 
 /* Attach the metric stored in field 0 of a .sol/.solb file. */
@@ -126,11 +135,11 @@ int pa_cli_generate(const pa_cli *cli, int argc, char **argv) {
 int pa_cli_metric(const pa_cli *cli, int argc, char **argv) {
   if (argc != 4)
     return pa_cli_error(cli, "usage: padapt metric NAME[:h] IN OUT.sol");
-  if (cli->rank != 0) return 0;
   pa_mesh *mesh = NULL;
   pa_sol *sol = NULL;
   pa_status st = pa_cli_read_mesh(cli, argv[2], &mesh);
   if (st != PA_SUCCESS) return read_failed(cli, st);
+  if (cli->rank != 0) return 0;
   st = pa_metric_analytic(mesh, argv[1]);
   if (st == PA_SUCCESS) st = pa_mesh_metric_to_sol(mesh, 0, &sol);
   if (st == PA_SUCCESS) st = pa_sol_write(sol, argv[3]);
@@ -159,14 +168,19 @@ int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
   if (!in)
     return pa_cli_error(cli,
                         "usage: padapt stats IN [-met SOL] [-json OUT.json]");
-  if (cli->rank != 0) return 0;
-
   pa_mesh *mesh = NULL;
   pa_stats stats;
   int valid = 1;
   /* Read without the validity check so that an invalid mesh is still
    * reported; the check result is part of the statistics. */
-  pa_status st = pa_mesh_read(in, &mesh);
+  int is_set = cli->rank == 0 ? pa_dmesh_is_set(in) : 0;
+  MPI_Bcast(&is_set, 1, MPI_INT, 0, cli->comm);
+  pa_status st = PA_SUCCESS;
+  if (is_set)
+    st = pa_dmesh_read_gathered(cli->comm, 0, in, &mesh);
+  else if (cli->rank == 0)
+    st = pa_mesh_read(in, &mesh);
+  if (cli->rank != 0) return st ? 1 : 0;
   if (st == PA_SUCCESS && pa_mesh_nbdry(mesh) == 0) {
     pa_idx nadded = 0;
     if (pa_mesh_build_boundary(mesh, 0, &nadded) != PA_SUCCESS) pa_clear_error();
@@ -214,10 +228,10 @@ int pa_cli_convert(const pa_cli *cli, int argc, char **argv) {
   if (!in || !out)
     return pa_cli_error(cli, "usage: padapt convert IN OUT [-met SOL] "
                              "[-binary] [-meshb-version V]");
-  if (cli->rank != 0) return 0;
   pa_mesh *mesh = NULL;
   pa_status st = pa_cli_read_mesh(cli, in, &mesh);
   if (st != PA_SUCCESS) return read_failed(cli, st);
+  if (cli->rank != 0) return 0;
   if (met) st = attach_metric(mesh, met);
   if (st == PA_SUCCESS) st = pa_mesh_write(mesh, out, &opts);
   pa_mesh_destroy(mesh);

@@ -37,7 +37,7 @@ for d in 2 3; do
   # uniform:0.25 on the 4x4 square: every axis edge has length exactly 1
   if [ $d = 2 ]; then
     "$PADAPT" metric uniform:0.25 sq.mesh u.sol && "$PADAPT" stats sq.mesh -met u.sol -json u.json > /dev/null
-    [ "$(json u.json edge_min)" = "1.0" ] && ok "uniform metric lengths" || bad "uniform edge_min $(json u.json edge_min)"
+    /usr/bin/python3 -c "import json,sys; sys.exit(0 if json.load(open('u.json'))['edge_min'] == 1.0 else 1)" && ok "uniform metric lengths" || bad "uniform edge_min $(json u.json edge_min)"
   fi
   for ext in mesh meshb msh vtu; do
     "$PADAPT" convert sq.mesh c.$ext -met m.sol && [ -s c.$ext ] && ok "convert to .$ext" || bad "convert to .$ext ${d}D"

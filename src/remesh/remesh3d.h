@@ -1,0 +1,292 @@
+/*
+ * remesh3d.h -- padapt's sequential 3D tetrahedral remesher (issue #4).
+ *
+ * Entry point: pa__remesh3d(), same contract as pa_remesher.remesh (the
+ * builtin remesher calls it for dim 3). The rest of this header is the
+ * private working structure shared by the rm3d_*.c files and the inline
+ * kernels of their inner loops (metric edge length, element quality).
+ *
+ * Working structure (struct rm3d), structure of arrays, 32-bit indices:
+ *  - tetrahedra: tv[4k..4k+3] positively oriented; adj[4k+i] = 4*l+j when
+ *    face i of k (opposite its vertex i) is face j of l, -1 on the domain
+ *    boundary; q[k] the cached quality; tflag[k] internal bits (R3T_*: bits
+ *    0..3 say that face i is a boundary triangle), tpf[k] the caller's
+ *    PA_FLAG_* byte, tref[k] the reference;
+ *  - vertices: x[3i..], met[mc*i..] (mc = 1 size or 6 tensor), vref, vpf (the
+ *    caller's PA_FLAG_* byte), vtag (internal R3V_* bits), vtet[i] one live
+ *    tetrahedron holding i;
+ *  - boundary triangles and feature edges: keyed tables (rm3d_table) holding
+ *    each entity's own vertex order, reference and flags; the tetrahedron
+ *    faces that are boundary triangles carry the face bit in tflag.
+ * Dead tetrahedra/vertices keep their slots (R3T_DEAD / R3V_DEAD) until a
+ * compaction; nothing points at a dead slot.
+ */
+#ifndef PA_REMESH3D_H
+#define PA_REMESH3D_H
+
+#include "metric/metric.h"
+
+#include <math.h>
+
+/**
+ * Adapt the tetrahedral mesh in place to its metric (or to opts->hsiz when it
+ * has none). Contract of pa_remesher.remesh: entities flagged
+ * PA_FLAG_REQUIRED come back bit for bit, report->outcome is set on
+ * PA_SUCCESS, and on any error or PA_REMESH_FAILED the mesh is as given.
+ * Not collective.
+ */
+pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
+                       pa_remesh_report *report);
+
+/* ---- private working structure ----------------------------------------- */
+
+enum {
+  R3T_FACES = 0x0f,  /* face i is a boundary triangle (bit i) */
+  R3T_FROZEN = 0x10, /* caller's PA_FLAG_REQUIRED: never touched */
+  R3T_DEAD = 0x20,
+  R3T_MARK = 0x40 /* transient visit mark (always cleared after use) */
+};
+
+enum {
+  R3V_BDRY = 1,   /* on a boundary triangle */
+  R3V_LOCK = 2,   /* never moved nor removed (frozen entity, corner) */
+  R3V_FEAT = 4,   /* on a feature (ridge) edge */
+  R3V_CORNER = 8, /* corner: never moved nor removed */
+  R3V_DEAD = 16,
+  R3V_MARK = 32, /* transient */
+  R3V_CURVED = 64, /* on a curved surface patch (has a normal) */
+  R3V_TODO = 128   /* pass scratch: vertex to visit / not tried yet */
+};
+
+/* Boundary triangles (nk = 3) or feature edges (nk = 2): records in an array
+ * (kept in creation order, dead ones flagged) with an open-addressing hash
+ * on the sorted vertex tuple. */
+typedef struct rm3d_table {
+  int nk;
+  pa_idx n;     /* records used (live + dead) */
+  size_t cap;
+  pa_idx *v;    /* nk * cap, the entity's own vertex order */
+  int32_t *ref;
+  uint8_t *flag; /* PA_FLAG_* of the entity; 0x80 marks a dead record */
+  pa_idx *slot;  /* hash slots: record index, -1 empty, -2 deleted */
+  size_t nslot;  /* power of two */
+  size_t nfull;  /* slots not empty (live + deleted) */
+} rm3d_table;
+#define R3_REC_DEAD 0x80
+
+typedef struct rm3d {
+  int mc; /* metric components: 1 (size) or 6 (tensor) */
+  pa_idx nv, ne;
+  size_t capv, cape;
+  double *x;
+  double *met;
+  int32_t *vref;
+  uint8_t *vpf, *vtag;
+  pa_idx *vtet;
+  pa_idx *tv, *adj;
+  float *q;
+  uint8_t *tflag, *tpf;
+  int32_t *tref;
+  double *nrm; /* 3 * capv: unit normal of curved surface vertices */
+  int nfield;
+  int fcomp[PA_MAX_FIELDS];
+  double *fval[PA_MAX_FIELDS];
+  rm3d_table tri, edg;
+  /* options */
+  int surf;  /* remesh the boundary surface */
+  double hausd, ridge_cos;
+  int verbosity;
+  /* counters */
+  long nsplit, ncollapse, nswap, nmove;
+  pa_idx ndead_t, ndead_v;
+} rm3d;
+
+/* Local edges of a tetrahedron and, for an ordered pair (i,j) of local
+ * vertices, the other two (k,l) such that (i,j,k,l) is an even permutation:
+ * then (v_i, v_j, v_k, v_l) is positively oriented. */
+extern const int rm3d_edge[6][2];
+extern const int rm3d_compl[4][4][2];
+/* Face i as in mesh.h: local vertices in outward order. */
+extern const int rm3d_face[4][3];
+
+#define RM3D_SQRT2 1.4142135623730951
+#define RM3D_LMAX 1.4142135623730951 /* split above */
+#define RM3D_LMIN 0.7071067811865476 /* collapse below */
+#define RM3D_QFLOOR 1e-3 /* operators create no worse element... */
+#define RM3D_QABS 1e-9   /* ...unless replacing worse ones, and never this */
+
+/* May an operator create an element of quality q where the worst element it
+ * replaces had quality qref? */
+static inline int rm3d_q_ok(double q, double qref) {
+  return q >= RM3D_QABS && (q >= RM3D_QFLOOR || q >= 0.5 * qref);
+}
+#define RM3D_MAXSHELL 64
+#define RM3D_MAXBALL 512
+
+/* Local index of vertex x in tet vertices v, -1 if absent. */
+static inline int rm3d_loc(const pa_idx *v, pa_idx x) {
+  return v[0] == x ? 0 : v[1] == x ? 1 : v[2] == x ? 2 : v[3] == x ? 3 : -1;
+}
+
+/* e^T M e for a tensor m11 m12 m22 m13 m23 m33. */
+static inline double rm3d_sq(const double *m, const double *e) {
+  return m[0] * e[0] * e[0] + m[2] * e[1] * e[1] + m[5] * e[2] * e[2] +
+         2.0 * (m[1] * e[0] * e[1] + m[3] * e[0] * e[2] + m[4] * e[1] * e[2]);
+}
+
+/* Metric length from the two end lengths (metric.h's convention). */
+static inline double rm3d_len_ends(double la, double lb) {
+  double d = la - lb;
+  double mx = la > lb ? la : lb;
+  if (fabs(d) < 1e-3 * mx) return 0.5 * (la + lb);
+  return d / log(la / lb);
+}
+
+/* Metric length of the segment between points pa, pb with metrics ma, mb. */
+static inline double rm3d_len_pts(int mc, const double *pa, const double *pb,
+                                  const double *ma, const double *mb) {
+  double e[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]};
+  if (mc == 1) {
+    double d = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+    return rm3d_len_ends(d / ma[0], d / mb[0]);
+  }
+  return rm3d_len_ends(sqrt(rm3d_sq(ma, e)), sqrt(rm3d_sq(mb, e)));
+}
+
+static inline double rm3d_len(const rm3d *m, pa_idx a, pa_idx b) {
+  return rm3d_len_pts(m->mc, m->x + 3 * (size_t)a, m->x + 3 * (size_t)b,
+                      m->met + (size_t)m->mc * a, m->met + (size_t)m->mc * b);
+}
+
+/* Quality (Mmg's normalisation) of the tetrahedron p0..p3 with vertex
+ * metrics m0..m3. Isotropic sizes cancel out: the value is Euclidean. */
+static inline double rm3d_qual_pts(int mc, const double *p0, const double *p1,
+                                   const double *p2, const double *p3,
+                                   const double *m0, const double *m1,
+                                   const double *m2, const double *m3) {
+  double a[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+  double b[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+  double c[3] = {p3[0] - p0[0], p3[1] - p0[1], p3[2] - p0[2]};
+  double det = a[0] * (b[1] * c[2] - b[2] * c[1]) -
+               a[1] * (b[0] * c[2] - b[2] * c[0]) +
+               a[2] * (b[0] * c[1] - b[1] * c[0]);
+  if (det <= 0.0) return det < 0.0 ? -1.0 : 0.0;
+  double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  double e[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  double f[3] = {c[0] - b[0], c[1] - b[1], c[2] - b[2]};
+  double s;
+  if (mc == 1) {
+    s = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + b[0] * b[0] + b[1] * b[1] +
+        b[2] * b[2] + c[0] * c[0] + c[1] * c[1] + c[2] * c[2] + d[0] * d[0] +
+        d[1] * d[1] + d[2] * d[2] + e[0] * e[0] + e[1] * e[1] + e[2] * e[2] +
+        f[0] * f[0] + f[1] * f[1] + f[2] * f[2];
+    /* 72 sqrt(3) (det/6) / s^1.5 */
+    return 20.784609690826528 * det / (s * sqrt(s));
+  }
+  /* Euclidean guard: a volume at rounding level has no reliable sign. */
+  double se = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + b[0] * b[0] +
+              b[1] * b[1] + b[2] * b[2] + c[0] * c[0] + c[1] * c[1] +
+              c[2] * c[2];
+  if (det < 1e-11 * se * sqrt(se)) return 0.0;
+  double M[6];
+  for (int i = 0; i < 6; i++) M[i] = 0.25 * (m0[i] + m1[i] + m2[i] + m3[i]);
+  double dm = M[0] * (M[2] * M[5] - M[4] * M[4]) -
+              M[1] * (M[1] * M[5] - M[4] * M[3]) +
+              M[3] * (M[1] * M[4] - M[2] * M[3]);
+  if (dm <= 0.0) return 0.0;
+  s = rm3d_sq(M, a) + rm3d_sq(M, b) + rm3d_sq(M, c) + rm3d_sq(M, d) +
+      rm3d_sq(M, e) + rm3d_sq(M, f);
+  return 20.784609690826528 * det * sqrt(dm) / (s * sqrt(s));
+}
+
+/* Quality of the tetrahedron with vertices v[0..3]. */
+static inline double rm3d_qual_v(const rm3d *m, const pa_idx *v) {
+  const double *x = m->x, *mt = m->met;
+  int mc = m->mc;
+  return rm3d_qual_pts(mc, x + 3 * (size_t)v[0], x + 3 * (size_t)v[1],
+                       x + 3 * (size_t)v[2], x + 3 * (size_t)v[3],
+                       mt + (size_t)mc * v[0], mt + (size_t)mc * v[1],
+                       mt + (size_t)mc * v[2], mt + (size_t)mc * v[3]);
+}
+
+/* ---- rm3d_mesh.c: structure, tables, build, write back, check --------- */
+
+pa_status pa__rm3d_build(rm3d *m, pa_mesh *mesh, const pa_remesh_opts *opts);
+void pa__rm3d_free(rm3d *m);
+/* Make room for nv vertices and ne tetrahedra in total. */
+pa_status pa__rm3d_reserve(rm3d *m, size_t nv, size_t ne);
+/* Append a vertex (coordinates, metric given; fields zeroed). */
+pa_status pa__rm3d_new_vertex(rm3d *m, const double *x, const double *met,
+                              pa_idx *index);
+/* Renumber vertices along a Morton curve and tets by their first vertex,
+ * for memory locality (compacts first). */
+pa_status pa__rm3d_reorder(rm3d *m);
+/* Drop dead slots, renumbering tetrahedra and vertices in order; the quality
+ * cache is rebuilt when keep_q, freed otherwise. */
+pa_status pa__rm3d_compact(rm3d *m, int keep_q);
+/* Write the working mesh back into `mesh` (replacing its content only when
+ * everything succeeded). */
+pa_status pa__rm3d_write(rm3d *m, pa_mesh *mesh);
+/* Check adjacency symmetry, orientation, vtet, face tags. PA_ERR_INTERNAL
+ * naming the first violation. */
+pa_status pa__rm3d_check(rm3d *m);
+
+pa_idx pa__rm3d_table_find(const rm3d_table *t, const pa_idx *v);
+pa_status pa__rm3d_table_add(rm3d_table *t, const pa_idx *v, int32_t ref,
+                             uint8_t flag, pa_idx *index);
+void pa__rm3d_table_remove(rm3d_table *t, pa_idx i);
+
+/* ---- operators --------------------------------------------------------- */
+
+/* Shell of the edge (a,b) of tet k: tets[0..n) in rotation order and ring
+ * vertices such that tets[i] = (a, b, ring[i], ring[i+1]) is positive
+ * (ring[n] = ring[0] when closed). Returns n, or -1 when longer than max.
+ * *info: bit 0 closed, bit 1 a face containing ab is a boundary triangle,
+ * bit 2 a frozen tet, bit 3 tets of different references. */
+enum { R3SH_CLOSED = 1, R3SH_BDRY = 2, R3SH_FROZEN = 4, R3SH_REFS = 8 };
+int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
+                   pa_idx *ring, int max, int *info);
+/* Ball of vertex p (from vtet[p]): entries 4*t + local index of p. Returns
+ * the count, or -1 when larger than max. */
+int pa__rm3d_ball(rm3d *m, pa_idx p, pa_idx *ball, int max);
+
+/* Split the edge (a,b) of tet k at its midpoint if allowed and acceptable.
+ * *done = 1 when split. */
+pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
+                              int *done);
+/* Collapse the edge (p,q): p removed, q kept. *done = 1 when collapsed. */
+pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
+                            int *done);
+/* Replace tets old[0..nold) by nnew tets (vertex quadruples, positive),
+ * matching faces to rebuild adjacency; new tets take reference ref and PA
+ * flags pf. Face tags follow the cavity's outer faces. */
+pa_status pa__rm3d_replace(rm3d *m, const pa_idx *old, int nold,
+                           const pa_idx *nv4, int nnew, int32_t ref,
+                           uint8_t pf);
+/* Try to improve the worst quality around edge (a,b) of tet k by edge
+ * removal (best triangulation of the ring, closed shells of 3..7 tets).
+ * Accept if the new worst quality exceeds gain * the old one. */
+pa_status pa__rm3d_swap_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
+                             double gain, int *done);
+/* 2-3 swap of face f of tet k. */
+pa_status pa__rm3d_swap_face(rm3d *m, pa_idx k, int f, double gain,
+                             int *done);
+/* Relocate vertex p to raise the worst quality of its ball. */
+int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball);
+
+/* Feature edges, corners and normals of the boundary surface
+ * (rm3d_surface.c); use_angle = 0 for -nr. */
+pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle);
+
+/* Passes (rm3d_driver.c). */
+pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count);
+pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, long *count);
+pa_status pa__rm3d_swap_pass(rm3d *m, double qthr, double gain, long *count);
+pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, long *count);
+
+/* Interpolation of a new vertex's metric and fields as a weighted mean of
+ * vertices src[0..n) (log-Euclidean for the metric). */
+void pa__rm3d_interp(rm3d *m, pa_idx dst, int n, const pa_idx *src,
+                     const double *w);
+
+#endif /* PA_REMESH3D_H */

@@ -1,0 +1,262 @@
+/*
+ * rm3d_collapse.c -- edge collapse p -> q: vertex p disappears, the tets
+ * holding the edge (p,q) are deleted, the others of p's ball take q.
+ *
+ * Checked before applied: p is free (not locked, not a corner, not on a
+ * frozen entity -- so no edge of a frozen tet is touched); the ball has one
+ * reference; every modified tet keeps quality >= max(RM3D_QFLOOR, qratio *
+ * old worst of the ball); no new edge longer than lguard. A boundary p (only
+ * in surface mode) moves onto q along a boundary edge: a ridge vertex along
+ * its ridge only (exactly two feature edges), its triangles keep their
+ * references, no triangle is duplicated, no tet is left with two boundary
+ * faces glued, and the new surface stays within hausd of p (exactly planar
+ * on planar patches, since no point moves). For an interior p, positive
+ * volumes of the new tets imply that they tile p's old ball.
+ */
+#include "remesh/remesh3d.h"
+
+static double tri_normal(const double *a, const double *b, const double *c,
+                         double *n) {
+  double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  n[0] = u[1] * v[2] - u[2] * v[1];
+  n[1] = u[2] * v[0] - u[0] * v[2];
+  n[2] = u[0] * v[1] - u[1] * v[0];
+  double s = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (s > 0)
+    for (int i = 0; i < 3; i++) n[i] /= s;
+  return s;
+}
+
+#define R3_COL_MAXTRI 128
+
+pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
+                            int *done) {
+  pa_status st = PA_SUCCESS;
+  pa_idx ball[RM3D_MAXBALL];
+  float nq[RM3D_MAXBALL];
+  pa_idx trec[R3_COL_MAXTRI];
+  pa_idx erec[4];
+  int ntri = 0, nerec = 0;
+  *done = 0;
+  uint8_t tp = m->vtag[p];
+  if (tp & (R3V_LOCK | R3V_CORNER | R3V_DEAD)) return st;
+  int surfp = (tp & R3V_BDRY) != 0;
+  if (surfp && (!m->surf || !(m->vtag[q] & R3V_BDRY))) return st;
+  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
+  if (n < 0) return st;
+  int mc = m->mc;
+  int32_t ref0 = m->tref[ball[0] >> 2];
+  double qold = 1e30, qnew = 1e30;
+  int nd = 0;
+  const double *xq = m->x + 3 * (size_t)q;
+  const double *mq = m->met + (size_t)mc * q;
+  for (int i = 0; i < n; i++) {
+    pa_idx t = ball[i] >> 2;
+    int ip = ball[i] & 3;
+    if (m->tref[t] != ref0) return st;
+    const pa_idx *v = m->tv + 4 * (size_t)t;
+    if (m->q[t] < qold) qold = m->q[t];
+    int iq = rm3d_loc(v, q);
+    if (iq >= 0) {
+      /* Deleted: both faces (p,x,y) and (q,x,y) on a surface is a cap. */
+      if (((m->tflag[t] >> ip) & 1) && ((m->tflag[t] >> iq) & 1)) return st;
+      nd++;
+      nq[i] = -1;
+      continue;
+    }
+    const double *px[4], *pm[4];
+    for (int j = 0; j < 4; j++) {
+      px[j] = m->x + 3 * (size_t)v[j];
+      pm[j] = m->met + (size_t)mc * v[j];
+    }
+    px[ip] = xq;
+    pm[ip] = mq;
+    double qq = rm3d_qual_pts(mc, px[0], px[1], px[2], px[3], pm[0], pm[1],
+                              pm[2], pm[3]);
+    if (qq < RM3D_QABS) return st;
+    if (qq < qnew) qnew = qq;
+    nq[i] = (float)qq;
+  }
+  if (nd == 0 || nd == n) return st;
+  if (qnew < 0.3 * qold || !rm3d_q_ok(qnew, qold)) return st;
+  /* Length guard on the new edges (q, x). */
+  int ok = 1;
+  for (int i = 0; i < n && ok; i++) {
+    if (nq[i] < 0) continue;
+    const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
+    for (int j = 0; j < 4; j++) {
+      pa_idx x = v[j];
+      if (x == p || (m->vtag[x] & R3V_MARK)) continue;
+      m->vtag[x] |= R3V_MARK;
+      if (rm3d_len(m, q, x) > lguard) {
+        ok = 0;
+        break;
+      }
+    }
+  }
+  for (int i = 0; i < n; i++) {
+    const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
+    for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~R3V_MARK;
+  }
+  if (!ok) return st;
+  if (surfp) {
+    /* Boundary triangles around p; the edge (p,q) must be on the surface. */
+    int onsurf = 0;
+    const double *xp = m->x + 3 * (size_t)p;
+    for (int i = 0; i < n; i++) {
+      pa_idx t = ball[i] >> 2;
+      int ip = ball[i] & 3;
+      uint8_t fl = m->tflag[t];
+      if (!(fl & R3T_FACES & ~(1u << ip))) continue;
+      const pa_idx *v = m->tv + 4 * (size_t)t;
+      for (int f = 0; f < 4; f++) {
+        if (f == ip || !((fl >> f) & 1)) continue;
+        pa_idx key[3] = {v[rm3d_face[f][0]], v[rm3d_face[f][1]],
+                         v[rm3d_face[f][2]]};
+        pa_idx r = pa__rm3d_table_find(&m->tri, key);
+        if (r < 0)
+          return pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
+                           "rm3d: tagged face not in the table");
+        int seen = 0;
+        for (int j = 0; j < ntri; j++) seen |= trec[j] == r;
+        if (seen) continue;
+        if (ntri >= R3_COL_MAXTRI) return st;
+        if (m->tri.flag[r] & PA_FLAG_REQUIRED) return st;
+        trec[ntri++] = r;
+      }
+    }
+    int32_t tref0 = ntri ? m->tri.ref[trec[0]] : 0;
+    for (int j = 0; j < ntri; j++) {
+      const pa_idx *tvv = m->tri.v + 3 * (size_t)trec[j];
+      int hasq = tvv[0] == q || tvv[1] == q || tvv[2] == q;
+      if (hasq) {
+        onsurf = 1;
+        continue;
+      }
+      if (!(tp & R3V_FEAT) && m->tri.ref[trec[j]] != tref0) return st;
+      /* The renamed triangle must not exist yet, and must stay close to
+       * the old surface. */
+      pa_idx nk[3];
+      const double *y[3], *yo[3];
+      for (int c = 0; c < 3; c++) {
+        nk[c] = tvv[c] == p ? q : tvv[c];
+        y[c] = m->x + 3 * (size_t)nk[c];
+        yo[c] = m->x + 3 * (size_t)tvv[c];
+      }
+      if (pa__rm3d_table_find(&m->tri, nk) >= 0) return st;
+      double n0[3], n1[3];
+      tri_normal(yo[0], yo[1], yo[2], n0);
+      if (tri_normal(y[0], y[1], y[2], n1) <= 0) return st;
+      if (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] < 0.98) return st;
+      double d = fabs((xp[0] - y[0][0]) * n1[0] + (xp[1] - y[0][1]) * n1[1] +
+                      (xp[2] - y[0][2]) * n1[2]);
+      if (d > m->hausd) return st;
+    }
+    if (!onsurf) return st;
+    if (tp & R3V_FEAT) {
+      /* Feature edges at p: exactly (p,q) and (p,r), r on the line qp. */
+      for (int i = 0; i < n; i++) {
+        const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
+        for (int j = 0; j < 4; j++) {
+          pa_idx x = v[j];
+          if (x == p || (m->vtag[x] & R3V_MARK)) continue;
+          m->vtag[x] |= R3V_MARK;
+          if (!(m->vtag[x] & R3V_FEAT)) continue;
+          pa_idx key[2] = {p, x};
+          pa_idx r = pa__rm3d_table_find(&m->edg, key);
+          if (r < 0) continue;
+          if (nerec < 4) erec[nerec] = r;
+          nerec++;
+        }
+      }
+      for (int i = 0; i < n; i++) {
+        const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
+        for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~R3V_MARK;
+      }
+      if (nerec != 2) return st;
+      int iq = -1;
+      for (int j = 0; j < 2; j++) {
+        const pa_idx *ev = m->edg.v + 2 * (size_t)erec[j];
+        if (ev[0] == q || ev[1] == q) iq = j;
+        if (m->edg.flag[erec[j]] & PA_FLAG_REQUIRED) return st;
+      }
+      if (iq < 0) return st;
+      const pa_idx *eo = m->edg.v + 2 * (size_t)erec[1 - iq];
+      pa_idx r = eo[0] == p ? eo[1] : eo[0];
+      if (r == q) return st;
+      pa_idx key[2] = {q, r};
+      if (pa__rm3d_table_find(&m->edg, key) >= 0) return st;
+      const double *xr = m->x + 3 * (size_t)r;
+      double u[3] = {xr[0] - xq[0], xr[1] - xq[1], xr[2] - xq[2]};
+      double w[3] = {xp[0] - xq[0], xp[1] - xq[1], xp[2] - xq[2]};
+      double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+      double uw = u[0] * w[0] + u[1] * w[1] + u[2] * w[2];
+      if (uu <= 0 || uw <= 0 || uw >= uu) return st;
+      double d2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2] - uw * uw / uu;
+      if (d2 > m->hausd * m->hausd) return st;
+    }
+  }
+  /* Apply: glue the faces around the deleted tets, then rename p. */
+  for (int i = 0; i < n; i++) {
+    if (nq[i] >= 0) continue;
+    pa_idx t = ball[i] >> 2;
+    int ip = ball[i] & 3;
+    const pa_idx *v = m->tv + 4 * (size_t)t;
+    int iq = rm3d_loc(v, q);
+    pa_idx o1 = m->adj[4 * (size_t)t + iq], o2 = m->adj[4 * (size_t)t + ip];
+    unsigned tag = ((m->tflag[t] >> iq) | (m->tflag[t] >> ip)) & 1u;
+    if (o1 >= 0) {
+      m->adj[o1] = o2;
+      if (tag) m->tflag[o1 >> 2] |= (uint8_t)(1u << (o1 & 3));
+    }
+    if (o2 >= 0) {
+      m->adj[o2] = o1;
+      if (tag) m->tflag[o2 >> 2] |= (uint8_t)(1u << (o2 & 3));
+    }
+    pa_idx keep = o1 >= 0 ? (o1 >> 2) : (o2 >> 2);
+    for (int j = 0; j < 4; j++)
+      if (j != ip && j != iq) m->vtet[v[j]] = keep;
+    m->tflag[t] = R3T_DEAD;
+    m->ndead_t++;
+  }
+  for (int i = 0; i < n; i++) {
+    if (nq[i] < 0) continue;
+    pa_idx t = ball[i] >> 2;
+    m->tv[4 * (size_t)t + (ball[i] & 3)] = q;
+    m->q[t] = nq[i];
+    m->vtet[q] = t;
+  }
+  for (int j = 0; j < ntri; j++) {
+    pa_idx r = trec[j];
+    pa_idx tv3[3];
+    memcpy(tv3, m->tri.v + 3 * (size_t)r, sizeof tv3);
+    int32_t ref = m->tri.ref[r];
+    uint8_t fl = m->tri.flag[r];
+    pa__rm3d_table_remove(&m->tri, r);
+    if (tv3[0] == q || tv3[1] == q || tv3[2] == q) continue;
+    for (int c = 0; c < 3; c++)
+      if (tv3[c] == p) tv3[c] = q;
+    PA_CALL(pa__rm3d_table_add(&m->tri, tv3, ref, fl, NULL));
+  }
+  if (nerec == 2) {
+    for (int j = 0; j < 2; j++) {
+      pa_idx r = erec[j];
+      pa_idx ev[2];
+      memcpy(ev, m->edg.v + 2 * (size_t)r, sizeof ev);
+      int32_t ref = m->edg.ref[r];
+      uint8_t fl = m->edg.flag[r];
+      pa__rm3d_table_remove(&m->edg, r);
+      if (ev[0] == q || ev[1] == q) continue;
+      for (int c = 0; c < 2; c++)
+        if (ev[c] == p) ev[c] = q;
+      PA_CALL(pa__rm3d_table_add(&m->edg, ev, ref, fl, NULL));
+    }
+  }
+  m->vtag[p] = R3V_DEAD;
+  m->ndead_v++;
+  m->ncollapse++;
+  *done = 1;
+cleanup:
+  return st;
+}

@@ -1,0 +1,297 @@
+/*
+ * rm3d_driver.c -- the 3D remesher's passes and its entry point
+ * pa__remesh3d().
+ *
+ * Schedule: up to 20 rounds of (split edges longer than sqrt 2, each tet's
+ * longest edge first; collapse edges shorter than 1/sqrt 2, shortest first,
+ * never creating an edge longer than sqrt 2; swap around tets of quality
+ * < 0.3; smooth), until a round changes fewer than 0.1 % of the tets; then
+ * three rounds of swaps and smoothing and a final pass against slivers.
+ * Every pass visits tets and vertices in index order, and every operator is
+ * deterministic, so the output is identical from run to run.
+ *
+ * Outcome: PA_REMESH_SUCCESS when at least 90 % of the edges of free tets
+ * are in [1/sqrt 2, sqrt 2) and the worst free tet has quality >= 0.01,
+ * PA_REMESH_TARGET_MISSED otherwise. Any error leaves the caller's mesh as
+ * given (the working structure is a copy, written back only at the end).
+ */
+#include "remesh/remesh3d.h"
+
+#define RM3D_QSMOOTH 0.6 /* smooth the vertices of tets below this quality */
+
+static void lengths6(const rm3d *m, const pa_idx *v, double *L) {
+  for (int e = 0; e < 6; e++)
+    L[e] = rm3d_len(m, v[rm3d_edge[e][0]], v[rm3d_edge[e][1]]);
+}
+
+/* Order of the 6 edges by length, decreasing (dir > 0) or increasing. */
+static void order6(const double *L, int dir, int *ord) {
+  for (int i = 0; i < 6; i++) ord[i] = i;
+  for (int i = 1; i < 6; i++) {
+    int x = ord[i], j = i - 1;
+    while (j >= 0 && (dir > 0 ? L[ord[j]] < L[x] : L[ord[j]] > L[x])) {
+      ord[j + 1] = ord[j];
+      j--;
+    }
+    ord[j + 1] = x;
+  }
+}
+
+pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count) {
+  pa_status st = PA_SUCCESS;
+  long c = 0;
+  for (pa_idx k = 0; k < m->ne; k++) {
+    for (int guard = 0; guard < 64; guard++) {
+      if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) break;
+      double L[6];
+      int ord[6], did = 0;
+      lengths6(m, m->tv + 4 * (size_t)k, L);
+      order6(L, 1, ord);
+      for (int i = 0; i < 6 && L[ord[i]] > thr; i++) {
+        pa_idx a = m->tv[4 * (size_t)k + rm3d_edge[ord[i]][0]];
+        pa_idx b = m->tv[4 * (size_t)k + rm3d_edge[ord[i]][1]];
+        int done;
+        PA_CALL(pa__rm3d_split_edge(m, k, a, b, &done));
+        if (done) {
+          did = 1;
+          c++;
+          break;
+        }
+      }
+      if (!did) break;
+    }
+  }
+cleanup:
+  *count = c;
+  return st;
+}
+
+/* Each vertex is tried for removal at most once per pass (R3V_TODO), so a
+ * collapse that fails is not retried from every tet of the vertex. */
+pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, long *count) {
+  pa_status st = PA_SUCCESS;
+  long c = 0;
+  for (pa_idx i = 0; i < m->nv; i++) m->vtag[i] |= R3V_TODO;
+  for (pa_idx k = 0; k < m->ne; k++) {
+    if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) continue;
+    double L[6];
+    int ord[6];
+    lengths6(m, m->tv + 4 * (size_t)k, L);
+    order6(L, -1, ord);
+    for (int i = 0; i < 6 && L[ord[i]] < thr; i++) {
+      pa_idx a = m->tv[4 * (size_t)k + rm3d_edge[ord[i]][0]];
+      pa_idx b = m->tv[4 * (size_t)k + rm3d_edge[ord[i]][1]];
+      int done = 0;
+      for (int dir = 0; dir < 2 && !done; dir++) {
+        pa_idx p = dir ? b : a, q = dir ? a : b;
+        if (!(m->vtag[p] & R3V_TODO)) continue;
+        PA_CALL(pa__rm3d_collapse(m, p, q, RM3D_LMAX, &done));
+        if (!done) m->vtag[p] &= (uint8_t)~R3V_TODO;
+      }
+      if (done) {
+        c++;
+        break;
+      }
+    }
+  }
+cleanup:
+  for (pa_idx i = 0; i < m->nv; i++) m->vtag[i] &= (uint8_t)~R3V_TODO;
+  *count = c;
+  return st;
+}
+
+pa_status pa__rm3d_swap_pass(rm3d *m, double qthr, double gain, long *count) {
+  pa_status st = PA_SUCCESS;
+  long c = 0;
+  pa_idx ne0 = m->ne;
+  for (pa_idx k = 0; k < ne0; k++) {
+    if ((m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) || m->q[k] >= qthr) continue;
+    int done = 0;
+    for (int e = 0; e < 6 && !done; e++) {
+      pa_idx a = m->tv[4 * (size_t)k + rm3d_edge[e][0]];
+      pa_idx b = m->tv[4 * (size_t)k + rm3d_edge[e][1]];
+      PA_CALL(pa__rm3d_swap_edge(m, k, a, b, gain, &done));
+    }
+    for (int f = 0; f < 4 && !done; f++)
+      PA_CALL(pa__rm3d_swap_face(m, k, f, gain, &done));
+    c += done;
+  }
+cleanup:
+  *count = c;
+  return st;
+}
+
+pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, long *count) {
+  pa_status st = PA_SUCCESS;
+  pa_idx ball[RM3D_MAXBALL];
+  long c = 0;
+  for (pa_idx k = 0; k < m->ne; k++) {
+    if ((m->tflag[k] & R3T_DEAD) || m->q[k] >= qthr) continue;
+    for (int j = 0; j < 4; j++) m->vtag[m->tv[4 * (size_t)k + j]] |= R3V_TODO;
+  }
+  for (pa_idx p = 0; p < m->nv; p++) {
+    if (!(m->vtag[p] & R3V_TODO)) continue;
+    m->vtag[p] &= (uint8_t)~R3V_TODO;
+    c += pa__rm3d_smooth_vertex(m, p, ball);
+  }
+  *count = c;
+  return st;
+}
+
+/* Fraction of edges of free tets in range (each edge counted once per tet
+ * holding it) and worst quality of free tets. */
+static void measure(const rm3d *m, double *inrange, double *qworst,
+                    double *qmean) {
+  long nin = 0, nall = 0, nt = 0;
+  double qw = 1, qs = 0;
+  for (pa_idx k = 0; k < m->ne; k++) {
+    if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) continue;
+    double L[6];
+    lengths6(m, m->tv + 4 * (size_t)k, L);
+    for (int e = 0; e < 6; e++) nin += L[e] >= RM3D_LMIN && L[e] < RM3D_LMAX;
+    nall += 6;
+    double q = rm3d_qual_v(m, m->tv + 4 * (size_t)k);
+    if (q < qw) qw = q;
+    qs += q;
+    nt++;
+  }
+  *inrange = nall ? (double)nin / nall : 1.0;
+  *qworst = qw;
+  *qmean = nt ? qs / nt : 1.0;
+}
+
+/* Longest edge of free tets. */
+static double max_length(const rm3d *m) {
+  double lmax = 0;
+  for (pa_idx k = 0; k < m->ne; k++) {
+    if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) continue;
+    double L[6];
+    lengths6(m, m->tv + 4 * (size_t)k, L);
+    for (int e = 0; e < 6; e++)
+      if (L[e] > lmax) lmax = L[e];
+  }
+  return lmax;
+}
+
+/* Expected number of tets of the adapted mesh: metric volume over the
+ * volume of the unit regular tet. */
+static double estimate_ntets(const rm3d *m) {
+  double s = 0;
+  for (pa_idx k = 0; k < m->ne; k++) {
+    const pa_idx *v = m->tv + 4 * (size_t)k;
+    const double *p0 = m->x + 3 * (size_t)v[0], *p1 = m->x + 3 * (size_t)v[1],
+                 *p2 = m->x + 3 * (size_t)v[2], *p3 = m->x + 3 * (size_t)v[3];
+    double a[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+    double b[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+    double c[3] = {p3[0] - p0[0], p3[1] - p0[1], p3[2] - p0[2]};
+    double vol = (a[0] * (b[1] * c[2] - b[2] * c[1]) -
+                  a[1] * (b[0] * c[2] - b[2] * c[0]) +
+                  a[2] * (b[0] * c[1] - b[1] * c[0])) /
+                 6.0;
+    double d = 0;
+    for (int j = 0; j < 4; j++) {
+      const double *mt = m->met + (size_t)m->mc * v[j];
+      if (m->mc == 1)
+        d += 1.0 / (mt[0] * mt[0] * mt[0]);
+      else
+        d += sqrt(fabs(mt[0] * (mt[2] * mt[5] - mt[4] * mt[4]) -
+                       mt[1] * (mt[1] * mt[5] - mt[4] * mt[3]) +
+                       mt[3] * (mt[1] * mt[4] - mt[2] * mt[3])));
+    }
+    s += vol * d / 4.0;
+  }
+  return s / 0.11785113019775792; /* sqrt(2)/12 */
+}
+
+pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
+                       pa_remesh_report *report) {
+  pa_status st = PA_SUCCESS;
+  rm3d m;
+  int built = 0;
+  double t0 = pa_wtime();
+  PA_CHECK(mesh && opts && report, PA_ERR_ARG, "pa__remesh3d: NULL argument");
+  memset(report, 0, sizeof *report);
+  report->outcome = PA_REMESH_FAILED;
+  PA_CALL(pa__rm3d_build(&m, mesh, opts));
+  built = 1;
+  if (m.surf) PA_CALL(pa__rm3d_surface_analyze(&m, !opts->no_angle));
+  {
+    double est = estimate_ntets(&m) * 1.25;
+    if (est > m.ne && est < 1.5e9) {
+      size_t ne = (size_t)est;
+      PA_CALL(pa__rm3d_reserve(&m, ne / 5 + (size_t)m.nv, ne));
+    }
+  }
+  int npass = 0;
+  if (!opts->no_insert) {
+    /* Far too coarse input: split longest edges first, in bands of lengths
+     * decreasing by a constant factor, so that tets are bisected roughly in
+     * the order of a global longest-edge refinement (no needles). */
+    for (int it = 0; it < 40; it++) {
+      double thr = max_length(&m) / 1.5;
+      if (thr < RM3D_LMAX) thr = RM3D_LMAX;
+      long ns = 0;
+      double t1 = pa_wtime();
+      PA_CALL(pa__rm3d_split_pass(&m, thr, &ns));
+      if (m.verbosity > 0)
+        fprintf(stderr, "  rm3d band %.2f: %ld splits (%.2fs), %d tets\n",
+                thr, ns, pa_wtime() - t1, (int)(m.ne - m.ndead_t));
+      if (!ns || thr == RM3D_LMAX) break;
+    }
+    PA_CALL(pa__rm3d_reorder(&m));
+    for (int it = 0; it < 20; it++, npass++) {
+      long ns = 0, nc = 0, nw = 0, nm = 0;
+      double t1 = pa_wtime();
+      PA_CALL(pa__rm3d_split_pass(&m, RM3D_LMAX, &ns));
+      double t2 = pa_wtime();
+      PA_CALL(pa__rm3d_collapse_pass(&m, RM3D_LMIN, &nc));
+      double t3 = pa_wtime();
+      if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(&m, 0.3, 1.02, &nw));
+      double t4 = pa_wtime();
+      if (!opts->no_move) PA_CALL(pa__rm3d_smooth_pass(&m, RM3D_QSMOOTH, &nm));
+      double t5 = pa_wtime();
+      if (m.ndead_t > m.ne / 8) PA_CALL(pa__rm3d_compact(&m, 1));
+      if (m.verbosity > 0)
+        fprintf(stderr,
+                "  rm3d round %d: %ld splits (%.2fs) %ld collapses (%.2fs) "
+                "%ld swaps (%.2fs) %ld moves (%.2fs), %d tets\n",
+                it, ns, t2 - t1, nc, t3 - t2, nw, t4 - t3, nm, t5 - t4,
+                (int)(m.ne - m.ndead_t));
+      if (ns + nc <= (m.ne - m.ndead_t) / 1000) break;
+    }
+  }
+  for (int it = 0; it < 3; it++, npass++) {
+    long nw = 0, nm = 0;
+    if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(&m, 0.5, 1.01, &nw));
+    if (!opts->no_move) PA_CALL(pa__rm3d_smooth_pass(&m, RM3D_QSMOOTH, &nm));
+    if (m.verbosity > 0)
+      fprintf(stderr, "  rm3d optimisation %d: %ld swaps %ld moves\n", it, nw,
+              nm);
+  }
+  if (!opts->no_swap) {
+    long nw = 0;
+    PA_CALL(pa__rm3d_swap_pass(&m, 0.1, 1.0, &nw));
+    npass++;
+  }
+#ifndef NDEBUG
+  PA_CALL(pa__rm3d_check(&m));
+#endif
+  double inrange, qworst, qmean;
+  measure(&m, &inrange, &qworst, &qmean);
+  if (m.verbosity > 0)
+    fprintf(stderr, "  rm3d: %.2f%% edges in range, worst Q %.3f, mean Q %.3f\n",
+            100 * inrange, qworst, qmean);
+  report->nsplit = m.nsplit;
+  report->ncollapse = m.ncollapse;
+  report->nswap = m.nswap;
+  report->nmove = m.nmove;
+  report->npass = npass;
+  PA_CALL(pa__rm3d_write(&m, mesh));
+  report->outcome = (inrange >= 0.9 && qworst >= 0.01)
+                        ? PA_REMESH_SUCCESS
+                        : PA_REMESH_TARGET_MISSED;
+cleanup:
+  if (built) pa__rm3d_free(&m);
+  if (report) report->time_s = pa_wtime() - t0;
+  return st;
+}

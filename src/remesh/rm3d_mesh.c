@@ -1,0 +1,804 @@
+/*
+ * rm3d_mesh.c -- the 3D remesher's working structure (struct rm3d, see
+ * remesh3d.h): keyed tables of boundary triangles and feature edges, building
+ * it from a pa_mesh, growth, compaction, writing it back, and a checker.
+ *
+ * Invariants (checked by pa__rm3d_check):
+ *  - every live tet is positively oriented; adjacency is symmetric and the
+ *    faces it pairs carry the same three vertices; face bit i of tflag is set
+ *    exactly when face i is a boundary triangle (a live record of tri), on
+ *    both sides of an interior boundary triangle; every face with no
+ *    neighbour is a boundary triangle;
+ *  - vtet[v] is a live tet holding v for every live vertex v;
+ *  - vertices of frozen tets, frozen triangles, required edges and required
+ *    vertices carry R3V_LOCK; vertices of boundary triangles R3V_BDRY.
+ * Building fails, leaving the caller's mesh untouched, on a non-conforming or
+ * inverted input. Writing back builds a complete new pa_mesh first and swaps
+ * it in only when nothing can fail any more.
+ */
+#include "remesh/remesh3d.h"
+
+const int rm3d_edge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+const int rm3d_compl[4][4][2] = {
+    {{-1, -1}, {2, 3}, {3, 1}, {1, 2}},
+    {{3, 2}, {-1, -1}, {0, 3}, {2, 0}},
+    {{1, 3}, {3, 0}, {-1, -1}, {0, 1}},
+    {{2, 1}, {0, 2}, {1, 0}, {-1, -1}}};
+const int rm3d_face[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+/* ---- keyed tables ------------------------------------------------------ */
+
+static void sort_key(const pa_idx *v, int nk, pa_idx *k) {
+  for (int i = 0; i < nk; i++) k[i] = v[i];
+  pa__sort_small(k, nk);
+}
+
+static int same_key(const rm3d_table *t, pa_idx r, const pa_idx *key) {
+  pa_idx k[3];
+  sort_key(t->v + (size_t)t->nk * r, t->nk, k);
+  for (int i = 0; i < t->nk; i++)
+    if (k[i] != key[i]) return 0;
+  return 1;
+}
+
+pa_idx pa__rm3d_table_find(const rm3d_table *t, const pa_idx *v) {
+  if (!t->nslot) return -1;
+  pa_idx key[3];
+  sort_key(v, t->nk, key);
+  size_t mask = t->nslot - 1;
+  size_t h = (size_t)pa__hash_idx(key, t->nk) & mask;
+  for (;;) {
+    pa_idx r = t->slot[h];
+    if (r == -1) return -1;
+    if (r >= 0 && same_key(t, r, key)) return r;
+    h = (h + 1) & mask;
+  }
+}
+
+static pa_status table_rehash(rm3d_table *t, size_t nslot) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *slot = NULL;
+  PA_ALLOC(slot, nslot);
+  for (size_t i = 0; i < nslot; i++) slot[i] = -1;
+  size_t nfull = 0;
+  for (pa_idx r = 0; r < t->n; r++) {
+    if (t->flag[r] & R3_REC_DEAD) continue;
+    pa_idx key[3];
+    sort_key(t->v + (size_t)t->nk * r, t->nk, key);
+    size_t h = (size_t)pa__hash_idx(key, t->nk) & (nslot - 1);
+    while (slot[h] != -1) h = (h + 1) & (nslot - 1);
+    slot[h] = r;
+    nfull++;
+  }
+  pa__free(t->slot);
+  t->slot = slot;
+  t->nslot = nslot;
+  t->nfull = nfull;
+cleanup:
+  return st;
+}
+
+pa_status pa__rm3d_table_add(rm3d_table *t, const pa_idx *v, int32_t ref,
+                             uint8_t flag, pa_idx *index) {
+  pa_status st = PA_SUCCESS;
+  if ((size_t)t->n + 1 > t->cap) {
+    size_t cap = t->cap + t->cap / 2 + 64;
+    pa_idx *nv = pa__realloc(t->v, cap * t->nk * sizeof *nv);
+    if (!nv) PA_FAIL(PA_ERR_MEMORY, "out of memory (boundary table)");
+    t->v = nv;
+    int32_t *nr = pa__realloc(t->ref, cap * sizeof *nr);
+    if (!nr) PA_FAIL(PA_ERR_MEMORY, "out of memory (boundary table)");
+    t->ref = nr;
+    uint8_t *nf = pa__realloc(t->flag, cap);
+    if (!nf) PA_FAIL(PA_ERR_MEMORY, "out of memory (boundary table)");
+    t->flag = nf;
+    t->cap = cap;
+  }
+  if (2 * (t->nfull + 1) > t->nslot) {
+    size_t ns = 64;
+    while (ns < 4 * ((size_t)t->n + 1)) ns *= 2;
+    PA_CALL(table_rehash(t, ns));
+  }
+  pa_idx r = t->n++;
+  memcpy(t->v + (size_t)t->nk * r, v, t->nk * sizeof *v);
+  t->ref[r] = ref;
+  t->flag[r] = flag & (uint8_t)~R3_REC_DEAD;
+  pa_idx key[3];
+  sort_key(v, t->nk, key);
+  size_t mask = t->nslot - 1;
+  size_t h = (size_t)pa__hash_idx(key, t->nk) & mask;
+  while (t->slot[h] >= 0) h = (h + 1) & mask;
+  if (t->slot[h] == -1) t->nfull++;
+  t->slot[h] = r;
+  if (index) *index = r;
+cleanup:
+  return st;
+}
+
+void pa__rm3d_table_remove(rm3d_table *t, pa_idx r) {
+  pa_idx key[3];
+  sort_key(t->v + (size_t)t->nk * r, t->nk, key);
+  size_t mask = t->nslot - 1;
+  size_t h = (size_t)pa__hash_idx(key, t->nk) & mask;
+  while (t->slot[h] != r) h = (h + 1) & mask;
+  t->slot[h] = -2;
+  t->flag[r] |= R3_REC_DEAD;
+}
+
+static void table_free(rm3d_table *t) {
+  pa__free(t->v);
+  pa__free(t->ref);
+  pa__free(t->flag);
+  pa__free(t->slot);
+  memset(t, 0, sizeof *t);
+}
+
+/* ---- growth ------------------------------------------------------------ */
+
+#define GROW_TO(ptr, n)                                                      \
+  do {                                                                       \
+    void *np_ = pa__realloc((ptr), (n) * sizeof *(ptr));                     \
+    if (!np_) PA_FAIL(PA_ERR_MEMORY, "out of memory (3D remesher)");         \
+    (ptr) = np_;                                                             \
+  } while (0)
+
+pa_status pa__rm3d_reserve(rm3d *m, size_t nv, size_t ne) {
+  pa_status st = PA_SUCCESS;
+  if (nv > m->capv) {
+    size_t cap = m->capv + m->capv / 4 + 1024;
+    if (cap < nv) cap = nv;
+    PA_CHECK(cap <= INT32_MAX, PA_ERR_ARG, "too many vertices");
+    GROW_TO(m->x, 3 * cap);
+    GROW_TO(m->met, (size_t)m->mc * cap);
+    GROW_TO(m->vref, cap);
+    GROW_TO(m->vpf, cap);
+    GROW_TO(m->vtag, cap);
+    GROW_TO(m->vtet, cap);
+    if (m->nrm) GROW_TO(m->nrm, 3 * cap);
+    for (int k = 0; k < m->nfield; k++)
+      GROW_TO(m->fval[k], (size_t)m->fcomp[k] * cap);
+    m->capv = cap;
+  }
+  if (ne > m->cape) {
+    size_t cap = m->cape + m->cape / 4 + 4096;
+    if (cap < ne) cap = ne;
+    PA_CHECK(cap <= INT32_MAX / 4, PA_ERR_ARG, "too many tetrahedra");
+    GROW_TO(m->tv, 4 * cap);
+    GROW_TO(m->adj, 4 * cap);
+    GROW_TO(m->q, cap);
+    GROW_TO(m->tflag, cap);
+    GROW_TO(m->tpf, cap);
+    GROW_TO(m->tref, cap);
+    m->cape = cap;
+  }
+cleanup:
+  return st;
+}
+
+pa_status pa__rm3d_new_vertex(rm3d *m, const double *x, const double *met,
+                              pa_idx *index) {
+  pa_status st = PA_SUCCESS;
+  PA_CALL(pa__rm3d_reserve(m, (size_t)m->nv + 1, 0));
+  pa_idx i = m->nv++;
+  memcpy(m->x + 3 * (size_t)i, x, 3 * sizeof *x);
+  if (met) memcpy(m->met + (size_t)m->mc * i, met, m->mc * sizeof *met);
+  m->vref[i] = 0;
+  m->vpf[i] = 0;
+  m->vtag[i] = 0;
+  m->vtet[i] = -1;
+  if (m->nrm) memset(m->nrm + 3 * (size_t)i, 0, 3 * sizeof(double));
+  for (int k = 0; k < m->nfield; k++)
+    memset(m->fval[k] + (size_t)m->fcomp[k] * i, 0,
+           m->fcomp[k] * sizeof(double));
+  *index = i;
+cleanup:
+  return st;
+}
+
+void pa__rm3d_interp(rm3d *m, pa_idx dst, int n, const pa_idx *src,
+                     const double *w) {
+  int mc = m->mc;
+  double *md = m->met + (size_t)mc * dst;
+  if (mc == 1) {
+    double lh = 0;
+    for (int i = 0; i < n; i++) lh += w[i] * log(m->met[src[i]]);
+    md[0] = exp(lh);
+  } else {
+    const double *ms[8];
+    double out[6];
+    for (int i = 0; i < n; i++) ms[i] = m->met + 6 * (size_t)src[i];
+    pa__metric_interp(3, 6, n, ms, w, out); /* dst may be one of src */
+    memcpy(md, out, sizeof out);
+  }
+  for (int k = 0; k < m->nfield; k++) {
+    int c = m->fcomp[k];
+    double *fd = m->fval[k] + (size_t)c * dst;
+    for (int j = 0; j < c; j++) {
+      double s = 0;
+      for (int i = 0; i < n; i++) s += w[i] * m->fval[k][(size_t)c * src[i] + j];
+      fd[j] = s;
+    }
+  }
+}
+
+void pa__rm3d_free(rm3d *m) {
+  pa__free(m->x);
+  pa__free(m->met);
+  pa__free(m->vref);
+  pa__free(m->vpf);
+  pa__free(m->vtag);
+  pa__free(m->vtet);
+  pa__free(m->nrm);
+  pa__free(m->tv);
+  pa__free(m->adj);
+  pa__free(m->q);
+  pa__free(m->tflag);
+  pa__free(m->tpf);
+  pa__free(m->tref);
+  for (int k = 0; k < m->nfield; k++) pa__free(m->fval[k]);
+  table_free(&m->tri);
+  table_free(&m->edg);
+  memset(m, 0, sizeof *m);
+}
+
+/* ---- build ------------------------------------------------------------- */
+
+/* Pair tet faces (and locate boundary triangles) by bucketing each face on
+ * its smallest vertex: O(n) time, 4 ints per tet of temporary memory. */
+static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *start = NULL, *face = NULL, *fill = NULL;
+  pa_idx nv = m->nv, ne = m->ne;
+  PA_CALLOC(start, (size_t)nv + 1);
+  PA_ALLOC(face, 4 * (size_t)ne);
+  PA_ALLOC(fill, (size_t)nv);
+  for (pa_idx k = 0; k < ne; k++)
+    for (int i = 0; i < 4; i++) {
+      pa_idx f[3] = {m->tv[4 * k + rm3d_face[i][0]], m->tv[4 * k + rm3d_face[i][1]],
+                     m->tv[4 * k + rm3d_face[i][2]]};
+      pa__sort_small(f, 3);
+      start[f[0] + 1]++;
+      m->adj[4 * k + i] = -1;
+    }
+  for (pa_idx v = 0; v < nv; v++) start[v + 1] += start[v];
+  memcpy(fill, start, nv * sizeof *fill);
+  for (pa_idx k = 0; k < ne; k++)
+    for (int i = 0; i < 4; i++) {
+      pa_idx f[3] = {m->tv[4 * k + rm3d_face[i][0]], m->tv[4 * k + rm3d_face[i][1]],
+                     m->tv[4 * k + rm3d_face[i][2]]};
+      pa__sort_small(f, 3);
+      face[fill[f[0]]++] = 4 * k + i;
+    }
+  /* Match faces within each bucket. */
+  for (pa_idx v = 0; v < nv; v++) {
+    for (pa_idx s = start[v]; s < start[v + 1]; s++) {
+      pa_idx fs = face[s];
+      if (m->adj[fs] != -1) continue;
+      pa_idx ks = fs >> 2;
+      int is = fs & 3;
+      pa_idx a[3] = {m->tv[4 * ks + rm3d_face[is][0]],
+                     m->tv[4 * ks + rm3d_face[is][1]],
+                     m->tv[4 * ks + rm3d_face[is][2]]};
+      pa__sort_small(a, 3);
+      for (pa_idx t = s + 1; t < start[v + 1]; t++) {
+        pa_idx ft = face[t];
+        pa_idx kt = ft >> 2;
+        int it = ft & 3;
+        pa_idx b[3] = {m->tv[4 * kt + rm3d_face[it][0]],
+                       m->tv[4 * kt + rm3d_face[it][1]],
+                       m->tv[4 * kt + rm3d_face[it][2]]};
+        pa__sort_small(b, 3);
+        if (a[1] != b[1] || a[2] != b[2]) continue;
+        PA_CHECK(m->adj[ft] == -1, PA_ERR_MESH,
+                 "face (%d %d %d) is shared by more than two tetrahedra",
+                 (int)a[0] + 1, (int)a[1] + 1, (int)a[2] + 1);
+        m->adj[fs] = ft;
+        m->adj[ft] = fs;
+      }
+    }
+  }
+  /* Boundary triangles: records in the table, face bits on the tets. */
+  for (pa_idx b = 0; b < mesh->nb; b++) {
+    const pa_idx *tb = mesh->bdry + 3 * (size_t)b;
+    pa_idx a[3] = {tb[0], tb[1], tb[2]};
+    pa__sort_small(a, 3);
+    PA_CHECK(a[0] >= 0 && a[2] < nv && a[0] != a[1] && a[1] != a[2],
+             PA_ERR_MESH, "boundary triangle %d: invalid vertices", (int)b + 1);
+    if (pa__rm3d_table_find(&m->tri, tb) >= 0) continue; /* duplicate */
+    int found = 0;
+    for (pa_idx s = start[a[0]]; s < start[a[0] + 1]; s++) {
+      pa_idx k = face[s] >> 2;
+      int i = face[s] & 3;
+      pa_idx c[3] = {m->tv[4 * k + rm3d_face[i][0]],
+                     m->tv[4 * k + rm3d_face[i][1]],
+                     m->tv[4 * k + rm3d_face[i][2]]};
+      pa__sort_small(c, 3);
+      if (c[1] == a[1] && c[2] == a[2]) {
+        m->tflag[k] |= (uint8_t)(1u << i);
+        found = 1;
+      }
+    }
+    PA_CHECK(found, PA_ERR_MESH,
+             "boundary triangle %d is not a face of any tetrahedron",
+             (int)b + 1);
+    PA_CALL(pa__rm3d_table_add(&m->tri, tb, mesh->bref[b], mesh->bflag[b],
+                               NULL));
+    uint8_t lock = (mesh->bflag[b] & PA_FLAG_REQUIRED) ? R3V_LOCK : 0;
+    for (int j = 0; j < 3; j++) m->vtag[tb[j]] |= (uint8_t)(R3V_BDRY | lock);
+  }
+  /* Faces without neighbour that the input did not list: add them. */
+  for (pa_idx k = 0; k < ne; k++)
+    for (int i = 0; i < 4; i++) {
+      if (m->adj[4 * k + i] != -1 || (m->tflag[k] & (1u << i))) continue;
+      pa_idx f[3] = {m->tv[4 * k + rm3d_face[i][0]], m->tv[4 * k + rm3d_face[i][1]],
+                     m->tv[4 * k + rm3d_face[i][2]]};
+      PA_CALL(pa__rm3d_table_add(&m->tri, f, 0, 0, NULL));
+      m->tflag[k] |= (uint8_t)(1u << i);
+      for (int j = 0; j < 3; j++) m->vtag[f[j]] |= R3V_BDRY;
+    }
+cleanup:
+  pa__free(start);
+  pa__free(face);
+  pa__free(fill);
+  return st;
+}
+
+pa_status pa__rm3d_build(rm3d *m, pa_mesh *mesh, const pa_remesh_opts *opts) {
+  pa_status st = PA_SUCCESS;
+  memset(m, 0, sizeof *m);
+  PA_CHECK(mesh->dim == 3, PA_ERR_ARG, "the 3D remesher needs a 3D mesh");
+  PA_CHECK(mesh->ne > 0, PA_ERR_ARG, "the mesh has no tetrahedra");
+  int mc = mesh->met_ncomp;
+  PA_CHECK(mc == 1 || mc == 6 || opts->hsiz > 0, PA_ERR_ARG,
+           "the mesh has no metric and no -hsiz was given");
+  if (opts->hsiz > 0) mc = 1;
+  m->mc = mc;
+  m->tri.nk = 3;
+  m->edg.nk = 2;
+  m->nfield = mesh->nfield;
+  for (int k = 0; k < mesh->nfield; k++) m->fcomp[k] = mesh->field[k].ncomp;
+  m->surf = !opts->no_surf;
+  m->hausd = opts->hausd > 0 ? opts->hausd : 0.01;
+  m->ridge_cos = cos((opts->angle > 0 ? opts->angle : 45.0) * M_PI / 180.0);
+  m->verbosity = opts->verbosity;
+  pa_idx nv = mesh->nv, ne = mesh->ne;
+  PA_CALL(pa__rm3d_reserve(m, (size_t)nv, (size_t)ne));
+  m->nv = nv;
+  m->ne = ne;
+  memcpy(m->x, mesh->coord, 3 * sizeof(double) * (size_t)nv);
+  for (pa_idx i = 0; i < nv; i++) {
+    const double *p = m->x + 3 * (size_t)i;
+    PA_CHECK(isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]), PA_ERR_MESH,
+             "vertex %d has a non-finite coordinate", (int)i + 1);
+  }
+  if (opts->hsiz > 0) {
+    for (pa_idx i = 0; i < nv; i++) m->met[i] = opts->hsiz;
+  } else {
+    memcpy(m->met, mesh->met, sizeof(double) * (size_t)mc * nv);
+  }
+  memcpy(m->vref, mesh->vref, sizeof(int32_t) * (size_t)nv);
+  memcpy(m->vpf, mesh->vflag, (size_t)nv);
+  for (pa_idx i = 0; i < nv; i++) {
+    uint8_t f = mesh->vflag[i], t = 0;
+    if (f & PA_FLAG_REQUIRED) t |= R3V_LOCK;
+    if (f & PA_FLAG_CORNER) t |= R3V_LOCK | R3V_CORNER;
+    m->vtag[i] = t;
+    m->vtet[i] = -1;
+  }
+  for (int k = 0; k < m->nfield; k++)
+    memcpy(m->fval[k], mesh->field[k].val,
+           sizeof(double) * (size_t)m->fcomp[k] * nv);
+  memcpy(m->tv, mesh->elem, 4 * sizeof(pa_idx) * (size_t)ne);
+  memcpy(m->tref, mesh->eref, sizeof(int32_t) * (size_t)ne);
+  memcpy(m->tpf, mesh->eflag, (size_t)ne);
+  for (pa_idx k = 0; k < ne; k++) {
+    const pa_idx *v = m->tv + 4 * (size_t)k;
+    for (int j = 0; j < 4; j++)
+      PA_CHECK(v[j] >= 0 && v[j] < nv, PA_ERR_MESH,
+               "tetrahedron %d: vertex index out of range", (int)k + 1);
+    PA_CHECK(v[0] != v[1] && v[0] != v[2] && v[0] != v[3] && v[1] != v[2] &&
+                 v[1] != v[3] && v[2] != v[3],
+             PA_ERR_MESH, "tetrahedron %d has a repeated vertex", (int)k + 1);
+    PA_CHECK(pa__orient3d(m->x + 3 * (size_t)v[0], m->x + 3 * (size_t)v[1],
+                          m->x + 3 * (size_t)v[2], m->x + 3 * (size_t)v[3]) > 0,
+             PA_ERR_MESH, "tetrahedron %d is inverted or flat", (int)k + 1);
+    m->tflag[k] = (m->tpf[k] & PA_FLAG_REQUIRED) ? R3T_FROZEN : 0;
+    for (int j = 0; j < 4; j++) {
+      m->vtet[v[j]] = k;
+      if (m->tflag[k] & R3T_FROZEN) m->vtag[v[j]] |= R3V_LOCK;
+    }
+    m->q[k] = (float)rm3d_qual_v(m, v);
+  }
+  for (pa_idx i = 0; i < nv; i++)
+    PA_CHECK(m->vtet[i] >= 0, PA_ERR_MESH,
+             "vertex %d belongs to no tetrahedron", (int)i + 1);
+  PA_CALL(build_adjacency(m, mesh));
+  for (pa_idx e = 0; e < mesh->ned; e++) {
+    const pa_idx *ev = mesh->edge + 2 * (size_t)e;
+    PA_CHECK(ev[0] >= 0 && ev[0] < nv && ev[1] >= 0 && ev[1] < nv &&
+                 ev[0] != ev[1],
+             PA_ERR_MESH, "edge %d: invalid vertices", (int)e + 1);
+    if (pa__rm3d_table_find(&m->edg, ev) >= 0) continue;
+    PA_CALL(pa__rm3d_table_add(&m->edg, ev, mesh->edref[e], mesh->edflag[e],
+                               NULL));
+    uint8_t t = R3V_FEAT;
+    if (mesh->edflag[e] & PA_FLAG_REQUIRED) t |= R3V_LOCK;
+    m->vtag[ev[0]] |= t;
+    m->vtag[ev[1]] |= t;
+  }
+cleanup:
+  if (st != PA_SUCCESS) pa__rm3d_free(m);
+  return st;
+}
+
+/* ---- compaction -------------------------------------------------------- */
+
+pa_status pa__rm3d_compact(rm3d *m, int keep_q) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *newt = NULL;
+  if (m->ndead_t == 0 && m->ndead_v == 0 && (keep_q || !m->q)) return st;
+  /* The quality cache is rebuilt afterwards: free it first so that the
+   * renumbering scratch does not raise the memory peak. */
+  pa__free(m->q);
+  m->q = NULL;
+  PA_ALLOC(newt, (size_t)m->ne + 1);
+  /* Tetrahedra: new index = rank among live ones; adjacency remapped. The
+   * vertex array vtet is reused as scratch only after tets are done. */
+  pa_idx ne = 0;
+  for (pa_idx k = 0; k < m->ne; k++)
+    newt[k] = (m->tflag[k] & R3T_DEAD) ? -1 : ne++;
+  for (pa_idx k = 0; k < m->ne; k++) {
+    pa_idx j = newt[k];
+    if (j < 0) continue;
+    for (int i = 0; i < 4; i++) {
+      if (m->adj) {
+        pa_idx a = m->adj[4 * (size_t)k + i];
+        m->adj[4 * (size_t)j + i] = a < 0 ? a : 4 * newt[a >> 2] + (a & 3);
+      }
+      m->tv[4 * (size_t)j + i] = m->tv[4 * (size_t)k + i];
+    }
+    m->tflag[j] = m->tflag[k];
+    m->tpf[j] = m->tpf[k];
+    m->tref[j] = m->tref[k];
+  }
+  m->ne = ne;
+  /* Vertices: renumber in order; tets and tables remapped. */
+  pa_idx nv = 0;
+  pa_idx *newv = m->vtet;
+  for (pa_idx i = 0; i < m->nv; i++)
+    newv[i] = (m->vtag[i] & R3V_DEAD) ? -1 : nv++;
+  for (size_t i = 0; i < 4 * (size_t)ne; i++) m->tv[i] = newv[m->tv[i]];
+  rm3d_table *tabs[2] = {&m->tri, &m->edg};
+  for (int t = 0; t < 2; t++) {
+    rm3d_table *tb = tabs[t];
+    pa_idx n = 0;
+    for (pa_idx r = 0; r < tb->n; r++) {
+      if (tb->flag[r] & R3_REC_DEAD) continue;
+      for (int j = 0; j < tb->nk; j++)
+        tb->v[(size_t)tb->nk * n + j] = newv[tb->v[(size_t)tb->nk * r + j]];
+      tb->ref[n] = tb->ref[r];
+      tb->flag[n] = tb->flag[r];
+      n++;
+    }
+    tb->n = n;
+    /* Rehash in place: the slot array is large enough. */
+    for (size_t s = 0; s < tb->nslot; s++) tb->slot[s] = -1;
+    tb->nfull = 0;
+    for (pa_idx r = 0; r < n; r++) {
+      pa_idx key[3];
+      sort_key(tb->v + (size_t)tb->nk * r, tb->nk, key);
+      size_t h = (size_t)pa__hash_idx(key, tb->nk) & (tb->nslot - 1);
+      while (tb->slot[h] != -1) h = (h + 1) & (tb->nslot - 1);
+      tb->slot[h] = r;
+      tb->nfull++;
+    }
+  }
+  for (pa_idx i = 0; i < m->nv; i++) {
+    pa_idx j = newv[i];
+    if (j < 0) continue;
+    memmove(m->x + 3 * (size_t)j, m->x + 3 * (size_t)i, 3 * sizeof(double));
+    memmove(m->met + (size_t)m->mc * j, m->met + (size_t)m->mc * i,
+            m->mc * sizeof(double));
+    if (m->nrm)
+      memmove(m->nrm + 3 * (size_t)j, m->nrm + 3 * (size_t)i,
+              3 * sizeof(double));
+    m->vref[j] = m->vref[i];
+    m->vpf[j] = m->vpf[i];
+    m->vtag[j] = m->vtag[i];
+    for (int k = 0; k < m->nfield; k++) {
+      int c = m->fcomp[k];
+      memmove(m->fval[k] + (size_t)c * j, m->fval[k] + (size_t)c * i,
+              c * sizeof(double));
+    }
+  }
+  m->nv = nv;
+  for (pa_idx k = 0; k < ne; k++)
+    for (int i = 0; i < 4; i++) m->vtet[m->tv[4 * (size_t)k + i]] = k;
+  m->ndead_t = m->ndead_v = 0;
+  pa__free(newt);
+  newt = NULL;
+  if (keep_q) {
+    PA_ALLOC(m->q, m->cape);
+    for (pa_idx k = 0; k < ne; k++)
+      m->q[k] = (float)rm3d_qual_v(m, m->tv + 4 * (size_t)k);
+  }
+cleanup:
+  pa__free(newt);
+  return st;
+}
+
+/* ---- write back -------------------------------------------------------- */
+
+pa_status pa__rm3d_write(rm3d *m, pa_mesh *mesh) {
+  pa_status st = PA_SUCCESS;
+  pa_mesh *out = NULL;
+  /* Adjacency and qualities are not needed any more: free them first so
+   * that the peak memory holds the output and the rest, not both. */
+  pa__free(m->adj);
+  m->adj = NULL;
+  PA_CALL(pa__rm3d_compact(m, 0));
+  pa_idx nb = 0, ned = 0;
+  for (pa_idx r = 0; r < m->tri.n; r++) nb += !(m->tri.flag[r] & R3_REC_DEAD);
+  for (pa_idx r = 0; r < m->edg.n; r++) ned += !(m->edg.flag[r] & R3_REC_DEAD);
+  PA_CALL(pa_mesh_create(3, &out));
+  out->met_ncomp = mesh->met_ncomp ? mesh->met_ncomp : 0;
+  if (out->met_ncomp && out->met_ncomp != m->mc) out->met_ncomp = m->mc;
+  out->nfield = mesh->nfield;
+  for (int k = 0; k < mesh->nfield; k++) {
+    memcpy(out->field[k].name, mesh->field[k].name, PA_FIELD_NAME_LEN);
+    out->field[k].ncomp = mesh->field[k].ncomp;
+  }
+  PA_CALL(pa_mesh_reserve(out, m->nv, m->ne, nb, ned));
+  out->nv = m->nv;
+  out->ne = m->ne;
+  memcpy(out->coord, m->x, 3 * sizeof(double) * (size_t)m->nv);
+  memcpy(out->vref, m->vref, sizeof(int32_t) * (size_t)m->nv);
+  memcpy(out->vflag, m->vpf, (size_t)m->nv);
+  if (out->met_ncomp)
+    memcpy(out->met, m->met, sizeof(double) * (size_t)m->mc * m->nv);
+  for (int k = 0; k < m->nfield; k++)
+    memcpy(out->field[k].val, m->fval[k],
+           sizeof(double) * (size_t)m->fcomp[k] * m->nv);
+  memcpy(out->elem, m->tv, 4 * sizeof(pa_idx) * (size_t)m->ne);
+  memcpy(out->eref, m->tref, sizeof(int32_t) * (size_t)m->ne);
+  memcpy(out->eflag, m->tpf, (size_t)m->ne);
+  for (pa_idx r = 0; r < m->tri.n; r++) {
+    if (m->tri.flag[r] & R3_REC_DEAD) continue;
+    memcpy(out->bdry + 3 * (size_t)out->nb, m->tri.v + 3 * (size_t)r,
+           3 * sizeof(pa_idx));
+    out->bref[out->nb] = m->tri.ref[r];
+    out->bflag[out->nb] = m->tri.flag[r];
+    out->nb++;
+  }
+  for (pa_idx r = 0; r < m->edg.n; r++) {
+    if (m->edg.flag[r] & R3_REC_DEAD) continue;
+    memcpy(out->edge + 2 * (size_t)out->ned, m->edg.v + 2 * (size_t)r,
+           2 * sizeof(pa_idx));
+    out->edref[out->ned] = m->edg.ref[r];
+    out->edflag[out->ned] = m->edg.flag[r];
+    out->ned++;
+  }
+  /* Swap contents: the caller's handle now holds the new mesh. */
+  {
+    pa_mesh tmp = *mesh;
+    *mesh = *out;
+    *out = tmp;
+  }
+cleanup:
+  pa_mesh_destroy(out);
+  return st;
+}
+
+/* ---- checker ----------------------------------------------------------- */
+
+pa_status pa__rm3d_check(rm3d *m) {
+  pa_status st = PA_SUCCESS;
+  for (pa_idx k = 0; k < m->ne; k++) {
+    if (m->tflag[k] & R3T_DEAD) continue;
+    const pa_idx *v = m->tv + 4 * (size_t)k;
+    for (int i = 0; i < 4; i++) {
+      PA_CHECK(v[i] >= 0 && v[i] < m->nv && !(m->vtag[v[i]] & R3V_DEAD),
+               PA_ERR_INTERNAL, "rm3d: tet %d has a dead vertex", (int)k);
+    }
+    PA_CHECK(pa__orient3d(m->x + 3 * (size_t)v[0], m->x + 3 * (size_t)v[1],
+                          m->x + 3 * (size_t)v[2], m->x + 3 * (size_t)v[3]) > 0,
+             PA_ERR_INTERNAL, "rm3d: tet %d is not positive", (int)k);
+    PA_CHECK(!(m->tflag[k] & R3T_MARK), PA_ERR_INTERNAL,
+             "rm3d: tet %d left marked", (int)k);
+    for (int i = 0; i < 4; i++) {
+      pa_idx a = m->adj[4 * (size_t)k + i];
+      pa_idx f[3] = {v[rm3d_face[i][0]], v[rm3d_face[i][1]], v[rm3d_face[i][2]]};
+      pa__sort_small(f, 3);
+      int tagged = (m->tflag[k] >> i) & 1;
+      if (tagged)
+        PA_CHECK(pa__rm3d_table_find(&m->tri, f) >= 0, PA_ERR_INTERNAL,
+                 "rm3d: tet %d face %d tagged but not in the table", (int)k, i);
+      else
+        PA_CHECK(pa__rm3d_table_find(&m->tri, f) < 0, PA_ERR_INTERNAL,
+                 "rm3d: tet %d face %d in the table but not tagged", (int)k, i);
+      if (a < 0) {
+        PA_CHECK(tagged, PA_ERR_INTERNAL,
+                 "rm3d: tet %d face %d has no neighbour and no triangle",
+                 (int)k, i);
+        continue;
+      }
+      pa_idx l = a >> 2;
+      int j = a & 3;
+      PA_CHECK(l < m->ne && !(m->tflag[l] & R3T_DEAD), PA_ERR_INTERNAL,
+               "rm3d: tet %d face %d points at a dead tet", (int)k, i);
+      PA_CHECK(m->adj[4 * (size_t)l + j] == 4 * k + i, PA_ERR_INTERNAL,
+               "rm3d: adjacency of tet %d face %d not symmetric", (int)k, i);
+      const pa_idx *w = m->tv + 4 * (size_t)l;
+      pa_idx g[3] = {w[rm3d_face[j][0]], w[rm3d_face[j][1]], w[rm3d_face[j][2]]};
+      pa__sort_small(g, 3);
+      PA_CHECK(f[0] == g[0] && f[1] == g[1] && f[2] == g[2], PA_ERR_INTERNAL,
+               "rm3d: tet %d face %d and its neighbour differ", (int)k, i);
+      PA_CHECK(((m->tflag[l] >> j) & 1) == tagged, PA_ERR_INTERNAL,
+               "rm3d: face tag of tet %d face %d not symmetric", (int)k, i);
+    }
+  }
+  for (pa_idx i = 0; i < m->nv; i++) {
+    if (m->vtag[i] & R3V_DEAD) continue;
+    pa_idx k = m->vtet[i];
+    PA_CHECK(k >= 0 && k < m->ne && !(m->tflag[k] & R3T_DEAD) &&
+                 rm3d_loc(m->tv + 4 * (size_t)k, i) >= 0,
+             PA_ERR_INTERNAL, "rm3d: vtet of vertex %d is wrong", (int)i);
+  }
+cleanup:
+  return st;
+}
+
+/* ---- spatial reordering ------------------------------------------------ */
+
+typedef struct sort_key64 {
+  uint64_t key;
+  pa_idx idx;
+} sort_key64;
+
+static int key64_cmp(const void *a, const void *b) {
+  const sort_key64 *p = a, *q = b;
+  if (p->key != q->key) return p->key < q->key ? -1 : 1;
+  return (p->idx > q->idx) - (p->idx < q->idx);
+}
+
+static uint64_t spread3(uint64_t x) {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffull;
+  x = (x | x << 16) & 0x1f0000ff0000ffull;
+  x = (x | x << 8) & 0x100f00f00f00f00full;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+  x = (x | x << 2) & 0x1249249249249249ull;
+  return x;
+}
+
+/* Apply the permutation "old slot i goes to slot pos[i]" to n records of
+ * size sz in place, following cycles; done[] is n bytes of scratch. */
+static void permute(void *base, size_t sz, const pa_idx *pos, pa_idx n,
+                    uint8_t *done) {
+  char tmp[64], tmp2[64];
+  char *a = base;
+  memset(done, 0, (size_t)n);
+  for (pa_idx s = 0; s < n; s++) {
+    if (done[s]) continue;
+    memcpy(tmp, a + sz * s, sz);
+    pa_idx i = s;
+    for (;;) {
+      pa_idx j = pos[i];
+      done[i] = 1;
+      if (j == s) {
+        memcpy(a + sz * s, tmp, sz);
+        break;
+      }
+      memcpy(tmp2, a + sz * j, sz);
+      memcpy(a + sz * j, tmp, sz);
+      memcpy(tmp, tmp2, sz);
+      i = j;
+    }
+  }
+}
+
+pa_status pa__rm3d_reorder(rm3d *m) {
+  pa_status st = PA_SUCCESS;
+  sort_key64 *key = NULL;
+  pa_idx *pos = NULL, *start = NULL;
+  uint8_t *done = NULL;
+  for (int k = 0; k < m->nfield; k++)
+    if (m->fcomp[k] > 8) return pa__rm3d_compact(m, 1); /* no reordering */
+  PA_CALL(pa__rm3d_compact(m, 0)); /* q is rebuilt at the end */
+  pa_idx nv = m->nv, ne = m->ne;
+  size_t nmax = (size_t)(nv > ne ? nv : ne);
+  PA_ALLOC(key, (size_t)nv + 1);
+  PA_ALLOC(pos, (size_t)nv + 1);
+  PA_ALLOC(done, nmax);
+  /* Vertices along the Morton curve of the bounding box. */
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (pa_idx i = 0; i < nv; i++)
+    for (int j = 0; j < 3; j++) {
+      double c = m->x[3 * (size_t)i + j];
+      if (c < lo[j]) lo[j] = c;
+      if (c > hi[j]) hi[j] = c;
+    }
+  double sc = 0;
+  for (int j = 0; j < 3; j++)
+    if (hi[j] - lo[j] > sc) sc = hi[j] - lo[j];
+  sc = sc > 0 ? 2097151.0 / sc : 0;
+  for (pa_idx i = 0; i < nv; i++) {
+    const double *p = m->x + 3 * (size_t)i;
+    key[i].key = spread3((uint64_t)((p[0] - lo[0]) * sc)) |
+                 spread3((uint64_t)((p[1] - lo[1]) * sc)) << 1 |
+                 spread3((uint64_t)((p[2] - lo[2]) * sc)) << 2;
+    key[i].idx = i;
+  }
+  qsort(key, (size_t)nv, sizeof *key, key64_cmp);
+  for (pa_idx i = 0; i < nv; i++) pos[key[i].idx] = i;
+  permute(m->x, 3 * sizeof(double), pos, nv, done);
+  permute(m->met, (size_t)m->mc * sizeof(double), pos, nv, done);
+  if (m->nrm) permute(m->nrm, 3 * sizeof(double), pos, nv, done);
+  permute(m->vref, sizeof(int32_t), pos, nv, done);
+  permute(m->vpf, 1, pos, nv, done);
+  permute(m->vtag, 1, pos, nv, done);
+  for (int k = 0; k < m->nfield; k++)
+    permute(m->fval[k], (size_t)m->fcomp[k] * sizeof(double), pos, nv, done);
+  for (size_t i = 0; i < 4 * (size_t)ne; i++) m->tv[i] = pos[m->tv[i]];
+  rm3d_table *tabs[2] = {&m->tri, &m->edg};
+  for (int t = 0; t < 2; t++) {
+    rm3d_table *tb = tabs[t];
+    for (size_t i = 0; i < (size_t)tb->nk * tb->n; i++) tb->v[i] = pos[tb->v[i]];
+    for (size_t s = 0; s < tb->nslot; s++) tb->slot[s] = -1;
+    tb->nfull = 0;
+    for (pa_idx r = 0; r < tb->n; r++) {
+      pa_idx kk[3];
+      sort_key(tb->v + (size_t)tb->nk * r, tb->nk, kk);
+      size_t h = (size_t)pa__hash_idx(kk, tb->nk) & (tb->nslot - 1);
+      while (tb->slot[h] != -1) h = (h + 1) & (tb->nslot - 1);
+      tb->slot[h] = r;
+      tb->nfull++;
+    }
+  }
+  /* Tets by their smallest vertex: a stable counting sort. */
+  pa__free(key);
+  key = NULL;
+  pa__free(pos);
+  pos = NULL;
+  PA_CALLOC(start, (size_t)nv + 1);
+  PA_ALLOC(pos, (size_t)ne + 1);
+  for (pa_idx k = 0; k < ne; k++) {
+    const pa_idx *v = m->tv + 4 * (size_t)k;
+    pa_idx a = v[0] < v[1] ? v[0] : v[1], b = v[2] < v[3] ? v[2] : v[3];
+    start[(a < b ? a : b) + 1]++;
+  }
+  for (pa_idx i = 0; i < nv; i++) start[i + 1] += start[i];
+  for (pa_idx k = 0; k < ne; k++) {
+    const pa_idx *v = m->tv + 4 * (size_t)k;
+    pa_idx a = v[0] < v[1] ? v[0] : v[1], b = v[2] < v[3] ? v[2] : v[3];
+    pos[k] = start[a < b ? a : b]++;
+  }
+  pa__free(start);
+  start = NULL;
+  for (size_t i = 0; i < 4 * (size_t)ne; i++) {
+    pa_idx a = m->adj[i];
+    if (a >= 0) m->adj[i] = 4 * pos[a >> 2] + (a & 3);
+  }
+  permute(m->tv, 4 * sizeof(pa_idx), pos, ne, done);
+  permute(m->adj, 4 * sizeof(pa_idx), pos, ne, done);
+  permute(m->tflag, 1, pos, ne, done);
+  permute(m->tpf, 1, pos, ne, done);
+  permute(m->tref, sizeof(int32_t), pos, ne, done);
+  for (pa_idx k = 0; k < ne; k++)
+    for (int i = 0; i < 4; i++) m->vtet[m->tv[4 * (size_t)k + i]] = k;
+  pa__free(key);
+  key = NULL;
+  pa__free(pos);
+  pos = NULL;
+  pa__free(done);
+  done = NULL;
+  PA_ALLOC(m->q, m->cape);
+  for (pa_idx k = 0; k < ne; k++)
+    m->q[k] = (float)rm3d_qual_v(m, m->tv + 4 * (size_t)k);
+cleanup:
+  pa__free(key);
+  pa__free(pos);
+  pa__free(start);
+  pa__free(done);
+  return st;
+}

@@ -1,0 +1,210 @@
+/*
+ * rm3d_split.c -- edge split: a new vertex on the edge (a,b), every tet of
+ * the shell cut in two (a,m,r_i,r_i+1) + (m,b,r_i,r_i+1).
+ *
+ * Checked before applied: no frozen tet in the shell; a boundary edge only
+ * in surface mode and only when none of its triangles / feature edges is
+ * required; every new tet passes rm3d_q_ok against its parent (only validity for an
+ * edge longer than 2 sqrt 2). The new vertex is the
+ * midpoint, or for an edge of a curved surface patch the midpoint of the
+ * cubic curve given by the end normals (exact on planes, so planar patches
+ * stay planar). Boundary triangles and feature edges holding (a,b) are split
+ * too, keeping references and flags.
+ */
+#include "remesh/remesh3d.h"
+
+/* Midpoint of the cubic Hermite-like curve between a and b whose tangents
+ * are the chord projected on the tangent planes of na, nb (PN triangles). */
+static void curved_mid(const double *a, const double *b, const double *na,
+                       const double *nb, double *p) {
+  double e[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  double wa = e[0] * na[0] + e[1] * na[1] + e[2] * na[2];
+  double wb = -(e[0] * nb[0] + e[1] * nb[1] + e[2] * nb[2]);
+  for (int i = 0; i < 3; i++) {
+    double b1 = a[i] + (e[i] - wa * na[i]) / 3.0;
+    double b2 = b[i] - (e[i] + wb * nb[i]) / 3.0;
+    p[i] = (a[i] + 3.0 * b1 + 3.0 * b2 + b[i]) / 8.0;
+  }
+}
+
+pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
+                              int *done) {
+  pa_status st = PA_SUCCESS;
+  pa_idx tets[RM3D_MAXSHELL], ring[RM3D_MAXSHELL + 1];
+  float q1[RM3D_MAXSHELL], q2[RM3D_MAXSHELL];
+  pa_idx trec[RM3D_MAXSHELL + 1];
+  int ntri = 0;
+  pa_idx erec = -1;
+  *done = 0;
+  int info;
+  int n = pa__rm3d_shell(m, k, a, b, tets, ring, RM3D_MAXSHELL, &info);
+  if (n < 0 || (info & R3SH_FROZEN)) return st;
+  int bdry = (info & R3SH_BDRY) != 0;
+  if (bdry) {
+    if (!m->surf) return st;
+    /* Boundary triangles holding (a,b): faces crossed between shell tets,
+     * plus both ends of an open shell. */
+    for (int i = 0; i <= n; i++) {
+      pa_idx t, r;
+      int f;
+      if (i < n) { /* forward face of tets[i]: (a, b, ring[i+1]) */
+        t = tets[i];
+        const pa_idx *v = m->tv + 4 * (size_t)t;
+        f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][0];
+        r = ring[i + 1];
+      } else { /* start face of an open shell: (a, b, ring[0]) */
+        if (info & R3SH_CLOSED) break;
+        t = tets[0];
+        const pa_idx *v = m->tv + 4 * (size_t)t;
+        f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][1];
+        r = ring[0];
+      }
+      if (!((m->tflag[t] >> f) & 1)) continue;
+      pa_idx key[3] = {a, b, r};
+      pa_idx rec = pa__rm3d_table_find(&m->tri, key);
+      if (rec < 0)
+        return pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
+                         "rm3d: tagged face not in the table");
+      if (m->tri.flag[rec] & PA_FLAG_REQUIRED) return st;
+      trec[ntri++] = rec;
+    }
+    pa_idx key[2] = {a, b};
+    erec = pa__rm3d_table_find(&m->edg, key);
+    if (erec >= 0 && (m->edg.flag[erec] & PA_FLAG_REQUIRED)) return st;
+  }
+  const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b;
+  double p[3];
+  if (bdry && erec < 0 && m->nrm && (m->vtag[a] & R3V_CURVED) &&
+      (m->vtag[b] & R3V_CURVED))
+    curved_mid(xa, xb, m->nrm + 3 * (size_t)a, m->nrm + 3 * (size_t)b, p);
+  else
+    for (int i = 0; i < 3; i++) p[i] = 0.5 * (xa[i] + xb[i]);
+  double mp[6];
+  int mc = m->mc;
+  if (mc == 1) {
+    mp[0] = sqrt(m->met[a] * m->met[b]);
+  } else {
+    const double *ms[2] = {m->met + 6 * (size_t)a, m->met + 6 * (size_t)b};
+    double w[2] = {0.5, 0.5};
+    pa__metric_interp(3, 6, 2, ms, w, mp);
+  }
+  /* Check every new tet. A far too long edge is split whenever the result
+   * is valid: keeping it would be worse than a poor tet the later passes
+   * improve. */
+  int relax = rm3d_len(m, a, b) > 2.0 * RM3D_LMAX;
+  for (int i = 0; i < n; i++) {
+    const pa_idx *v = m->tv + 4 * (size_t)tets[i];
+    const double *px[4], *pm[4];
+    for (int j = 0; j < 4; j++) {
+      px[j] = m->x + 3 * (size_t)v[j];
+      pm[j] = m->met + (size_t)mc * v[j];
+    }
+    int ia = rm3d_loc(v, a), ib = rm3d_loc(v, b);
+    const double *sx = px[ib], *sm = pm[ib];
+    px[ib] = p;
+    pm[ib] = mp;
+    double qa = rm3d_qual_pts(mc, px[0], px[1], px[2], px[3], pm[0], pm[1],
+                              pm[2], pm[3]);
+    px[ib] = sx;
+    pm[ib] = sm;
+    px[ia] = p;
+    pm[ia] = mp;
+    double qb = rm3d_qual_pts(mc, px[0], px[1], px[2], px[3], pm[0], pm[1],
+                              pm[2], pm[3]);
+    double qp = m->q[tets[i]];
+    if (relax ? (qa < RM3D_QABS || qb < RM3D_QABS)
+              : (!rm3d_q_ok(qa, qp) || !rm3d_q_ok(qb, qp)))
+      return st;
+    q1[i] = (float)qa;
+    q2[i] = (float)qb;
+  }
+  /* Apply. */
+  PA_CALL(pa__rm3d_reserve(m, (size_t)m->nv + 1, (size_t)m->ne + n));
+  pa_idx pm_;
+  PA_CALL(pa__rm3d_new_vertex(m, p, mp, &pm_));
+  {
+    pa_idx src[2] = {a, b};
+    double w[2] = {0.5, 0.5};
+    if (m->nfield) pa__rm3d_interp(m, pm_, 2, src, w);
+    if (mc == 6) memcpy(m->met + 6 * (size_t)pm_, mp, sizeof mp);
+  }
+  if (m->vref[a] == m->vref[b]) m->vref[pm_] = m->vref[a];
+  pa_idx base = m->ne;
+  m->ne += n;
+  for (int i = 0; i < n; i++) {
+    pa_idx t = tets[i], nt = base + i;
+    pa_idx *v = m->tv + 4 * (size_t)t, *w = m->tv + 4 * (size_t)nt;
+    int ia = rm3d_loc(v, a), ib = rm3d_loc(v, b);
+    int ic = rm3d_compl[ia][ib][0], id = rm3d_compl[ia][ib][1];
+    memcpy(w, v, 4 * sizeof *w);
+    w[ia] = pm_;
+    v[ib] = pm_;
+    pa_idx *at = m->adj + 4 * (size_t)t, *an = m->adj + 4 * (size_t)nt;
+    pa_idx oa = at[ia];
+    an[ia] = oa;
+    if (oa >= 0) m->adj[oa] = 4 * nt + ia;
+    at[ia] = 4 * nt + ib;
+    an[ib] = 4 * t + ia;
+    pa_idx fw = at[ic], bw = at[id];
+    an[ic] = fw < 0 ? -1 : 4 * (base + (i + 1 == n ? 0 : i + 1)) + (fw & 3);
+    an[id] = bw < 0 ? -1 : 4 * (base + (i == 0 ? n - 1 : i - 1)) + (bw & 3);
+    m->tflag[nt] = (uint8_t)(m->tflag[t] & ~(1u << ib) & ~R3T_MARK);
+    m->tflag[t] &= (uint8_t)~(1u << ia);
+    m->tpf[nt] = m->tpf[t];
+    m->tref[nt] = m->tref[t];
+    m->q[t] = q1[i];
+    m->q[nt] = q2[i];
+  }
+  m->vtet[b] = base;
+  m->vtet[pm_] = tets[0];
+  if (bdry) {
+    m->vtag[pm_] |= R3V_BDRY;
+    if ((m->vtag[a] & R3V_CURVED) && (m->vtag[b] & R3V_CURVED) && m->nrm &&
+        erec < 0) {
+      double *np = m->nrm + 3 * (size_t)pm_;
+      const double *na = m->nrm + 3 * (size_t)a, *nb = m->nrm + 3 * (size_t)b;
+      double s = 0;
+      for (int i = 0; i < 3; i++) {
+        np[i] = na[i] + nb[i];
+        s += np[i] * np[i];
+      }
+      s = s > 0 ? 1.0 / sqrt(s) : 0;
+      for (int i = 0; i < 3; i++) np[i] *= s;
+      m->vtag[pm_] |= R3V_CURVED;
+    }
+    for (int i = 0; i < ntri; i++) {
+      pa_idx r = trec[i];
+      pa_idx t1[3], t2[3];
+      memcpy(t1, m->tri.v + 3 * (size_t)r, sizeof t1);
+      memcpy(t2, t1, sizeof t2);
+      for (int j = 0; j < 3; j++) {
+        if (t1[j] == b) t1[j] = pm_;
+        if (t2[j] == a) t2[j] = pm_;
+      }
+      int32_t ref = m->tri.ref[r];
+      uint8_t fl = m->tri.flag[r];
+      pa__rm3d_table_remove(&m->tri, r);
+      PA_CALL(pa__rm3d_table_add(&m->tri, t1, ref, fl, NULL));
+      PA_CALL(pa__rm3d_table_add(&m->tri, t2, ref, fl, NULL));
+    }
+    if (erec >= 0) {
+      pa_idx e1[2], e2[2];
+      memcpy(e1, m->edg.v + 2 * (size_t)erec, sizeof e1);
+      memcpy(e2, e1, sizeof e2);
+      for (int j = 0; j < 2; j++) {
+        if (e1[j] == b) e1[j] = pm_;
+        if (e2[j] == a) e2[j] = pm_;
+      }
+      int32_t ref = m->edg.ref[erec];
+      uint8_t fl = m->edg.flag[erec];
+      pa__rm3d_table_remove(&m->edg, erec);
+      PA_CALL(pa__rm3d_table_add(&m->edg, e1, ref, fl, NULL));
+      PA_CALL(pa__rm3d_table_add(&m->edg, e2, ref, fl, NULL));
+      m->vtag[pm_] |= R3V_FEAT;
+    }
+  }
+  m->nsplit++;
+  *done = 1;
+cleanup:
+  return st;
+}

@@ -1,0 +1,180 @@
+/*
+ * rm3d_surface.c -- analysis of the boundary surface before remeshing it:
+ * feature (ridge) edges, corners and vertex normals of curved patches.
+ *
+ * A boundary edge becomes a feature edge (added to the edge table with
+ * PA_FLAG_RIDGE unless already listed) when it is not shared by exactly two
+ * boundary triangles, when its two triangles have different references, or
+ * (unless -nr) when their normals make an angle above -ar. A vertex with a
+ * number of feature edges other than 0 or 2, or whose two feature edges turn
+ * by more than -ar, is a corner (locked). Boundary vertices off features get
+ * the mean normal of their triangles and R3V_CURVED when these normals are
+ * not all equal, which lets splits place new points on a smooth (cubic)
+ * reconstruction; planar patches have no curved vertex and stay planar.
+ */
+#include "remesh/remesh3d.h"
+
+typedef struct bedge {
+  pa_idx a, b;   /* a < b */
+  pa_idx rec;    /* triangle record */
+  int dir;       /* +1 when the triangle runs a -> b */
+} bedge;
+
+static int bedge_cmp(const void *x, const void *y) {
+  const bedge *p = x, *q = y;
+  if (p->a != q->a) return p->a < q->a ? -1 : 1;
+  if (p->b != q->b) return p->b < q->b ? -1 : 1;
+  return p->rec < q->rec ? -1 : p->rec > q->rec;
+}
+
+static void rec_normal(const rm3d *m, pa_idx r, double *n) {
+  const pa_idx *v = m->tri.v + 3 * (size_t)r;
+  const double *a = m->x + 3 * (size_t)v[0], *b = m->x + 3 * (size_t)v[1],
+               *c = m->x + 3 * (size_t)v[2];
+  double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  n[0] = u[1] * w[2] - u[2] * w[1];
+  n[1] = u[2] * w[0] - u[0] * w[2];
+  n[2] = u[0] * w[1] - u[1] * w[0];
+}
+
+static double unit(double *n) {
+  double s = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (s > 0)
+    for (int i = 0; i < 3; i++) n[i] /= s;
+  return s;
+}
+
+pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
+  pa_status st = PA_SUCCESS;
+  bedge *be = NULL;
+  uint8_t *nfeat = NULL;
+  pa_idx *other = NULL;
+  size_t nbe = 0;
+  PA_ALLOC(be, 3 * (size_t)m->tri.n + 1);
+  for (pa_idx r = 0; r < m->tri.n; r++) {
+    if (m->tri.flag[r] & R3_REC_DEAD) continue;
+    const pa_idx *v = m->tri.v + 3 * (size_t)r;
+    for (int i = 0; i < 3; i++) {
+      pa_idx x = v[i], y = v[(i + 1) % 3];
+      bedge *e = &be[nbe++];
+      e->a = x < y ? x : y;
+      e->b = x < y ? y : x;
+      e->rec = r;
+      e->dir = x < y ? 1 : -1;
+    }
+  }
+  qsort(be, nbe, sizeof *be, bedge_cmp);
+  for (size_t i = 0; i < nbe;) {
+    size_t j = i + 1;
+    while (j < nbe && be[j].a == be[i].a && be[j].b == be[i].b) j++;
+    int feat = 0;
+    if (j - i != 2) {
+      feat = 1;
+    } else if (m->tri.ref[be[i].rec] != m->tri.ref[be[i + 1].rec]) {
+      feat = 1;
+    } else if (use_angle) {
+      double n1[3], n2[3];
+      rec_normal(m, be[i].rec, n1);
+      rec_normal(m, be[i + 1].rec, n2);
+      unit(n1);
+      unit(n2);
+      double d = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2];
+      if (be[i].dir == be[i + 1].dir) d = -d; /* inconsistent orientations */
+      if (d < m->ridge_cos) feat = 1;
+    }
+    if (feat) {
+      pa_idx ev[2] = {be[i].a, be[i].b};
+      if (pa__rm3d_table_find(&m->edg, ev) < 0)
+        PA_CALL(pa__rm3d_table_add(&m->edg, ev, 0, PA_FLAG_RIDGE, NULL));
+    }
+    i = j;
+  }
+  /* Corners: feature degree other than 0 or 2, or a sharp turn. */
+  PA_CALLOC(nfeat, (size_t)m->nv);
+  PA_ALLOC(other, 2 * (size_t)m->nv);
+  for (pa_idx r = 0; r < m->edg.n; r++) {
+    if (m->edg.flag[r] & R3_REC_DEAD) continue;
+    const pa_idx *ev = m->edg.v + 2 * (size_t)r;
+    for (int s = 0; s < 2; s++) {
+      pa_idx x = ev[s];
+      if (nfeat[x] < 2) other[2 * (size_t)x + nfeat[x]] = ev[1 - s];
+      if (nfeat[x] < 255) nfeat[x]++;
+      m->vtag[x] |= R3V_FEAT;
+    }
+  }
+  for (pa_idx x = 0; x < m->nv; x++) {
+    if (!nfeat[x]) continue;
+    int corner = nfeat[x] != 2;
+    if (!corner && use_angle) {
+      const double *p = m->x + 3 * (size_t)x;
+      const double *a = m->x + 3 * (size_t)other[2 * (size_t)x];
+      const double *b = m->x + 3 * (size_t)other[2 * (size_t)x + 1];
+      double u[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
+      double w[3] = {b[0] - p[0], b[1] - p[1], b[2] - p[2]};
+      unit(u);
+      unit(w);
+      if (u[0] * w[0] + u[1] * w[1] + u[2] * w[2] < m->ridge_cos) corner = 1;
+    }
+    if (corner) {
+      m->vtag[x] |= R3V_CORNER | R3V_LOCK;
+      if (!(m->vpf[x] & PA_FLAG_REQUIRED)) m->vpf[x] |= PA_FLAG_CORNER;
+    }
+  }
+  /* Normals of boundary vertices off features, from the outward faces. */
+  PA_CALLOC(m->nrm, 3 * m->capv);
+  for (pa_idx k = 0; k < m->ne; k++) {
+    if (!(m->tflag[k] & R3T_FACES)) continue;
+    for (int f = 0; f < 4; f++) {
+      if (!((m->tflag[k] >> f) & 1) || m->adj[4 * (size_t)k + f] >= 0) continue;
+      const pa_idx *v = m->tv + 4 * (size_t)k;
+      pa_idx fv[3] = {v[rm3d_face[f][0]], v[rm3d_face[f][1]],
+                      v[rm3d_face[f][2]]};
+      const double *a = m->x + 3 * (size_t)fv[0], *b = m->x + 3 * (size_t)fv[1],
+                   *c = m->x + 3 * (size_t)fv[2];
+      double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+      double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                     u[0] * w[1] - u[1] * w[0]};
+      for (int j = 0; j < 3; j++)
+        for (int c2 = 0; c2 < 3; c2++) m->nrm[3 * (size_t)fv[j] + c2] += n[c2];
+    }
+  }
+  for (pa_idx x = 0; x < m->nv; x++) unit(m->nrm + 3 * (size_t)x);
+  /* A vertex is curved when one of its faces deviates from its normal. */
+  int ncurved = 0;
+  for (pa_idx k = 0; k < m->ne; k++) {
+    if (!(m->tflag[k] & R3T_FACES)) continue;
+    for (int f = 0; f < 4; f++) {
+      if (!((m->tflag[k] >> f) & 1) || m->adj[4 * (size_t)k + f] >= 0) continue;
+      const pa_idx *v = m->tv + 4 * (size_t)k;
+      pa_idx fv[3] = {v[rm3d_face[f][0]], v[rm3d_face[f][1]],
+                      v[rm3d_face[f][2]]};
+      const double *a = m->x + 3 * (size_t)fv[0], *b = m->x + 3 * (size_t)fv[1],
+                   *c = m->x + 3 * (size_t)fv[2];
+      double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+      double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                     u[0] * w[1] - u[1] * w[0]};
+      unit(n);
+      for (int j = 0; j < 3; j++) {
+        pa_idx x = fv[j];
+        if (m->vtag[x] & (R3V_FEAT | R3V_CURVED)) continue;
+        const double *nx = m->nrm + 3 * (size_t)x;
+        if (n[0] * nx[0] + n[1] * nx[1] + n[2] * nx[2] < 1.0 - 1e-10) {
+          m->vtag[x] |= R3V_CURVED;
+          ncurved++;
+        }
+      }
+    }
+  }
+  if (!ncurved) {
+    pa__free(m->nrm);
+    m->nrm = NULL;
+  }
+cleanup:
+  pa__free(be);
+  pa__free(nfeat);
+  pa__free(other);
+  return st;
+}

@@ -1,0 +1,187 @@
+/*
+ * rm3d_topo.c -- topological primitives of the 3D remesher: edge shells,
+ * vertex balls and the generic cavity replacement used by the swaps.
+ *
+ * Invariants: these functions leave no R3T_MARK bit set; pa__rm3d_replace
+ * keeps every invariant of rm3d_mesh.c provided the new tetrahedra tile the
+ * cavity exactly (same outer faces), which callers guarantee by checking
+ * orientation and quality before calling it.
+ */
+#include "remesh/remesh3d.h"
+
+int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
+                   pa_idx *ring, int max, int *info) {
+  int inf = 0, steps = 0;
+  pa_idx t = k, start = k;
+  /* Walk backwards to the start of an open shell (or around a closed one). */
+  for (;;) {
+    const pa_idx *v = m->tv + 4 * (size_t)t;
+    int ia = rm3d_loc(v, a), ib = rm3d_loc(v, b);
+    int id = rm3d_compl[ia][ib][1];
+    pa_idx nb = m->adj[4 * (size_t)t + id];
+    if (nb < 0) {
+      start = t;
+      break;
+    }
+    t = nb >> 2;
+    if (t == k) {
+      inf |= R3SH_CLOSED;
+      break;
+    }
+    if (++steps > max) return -1;
+  }
+  int n = 0;
+  int32_t ref0 = m->tref[start];
+  t = start;
+  for (;;) {
+    if (n >= max) return -1;
+    const pa_idx *v = m->tv + 4 * (size_t)t;
+    int ia = rm3d_loc(v, a), ib = rm3d_loc(v, b);
+    int ic = rm3d_compl[ia][ib][0], id = rm3d_compl[ia][ib][1];
+    tets[n] = t;
+    ring[n] = v[ic];
+    n++;
+    uint8_t fl = m->tflag[t];
+    if (fl & ((1u << ic) | (1u << id))) inf |= R3SH_BDRY;
+    if (fl & R3T_FROZEN) inf |= R3SH_FROZEN;
+    if (m->tref[t] != ref0) inf |= R3SH_REFS;
+    pa_idx nb = m->adj[4 * (size_t)t + ic];
+    if (nb < 0) {
+      ring[n] = v[id];
+      break;
+    }
+    t = nb >> 2;
+    if (t == start) {
+      ring[n] = ring[0];
+      break;
+    }
+  }
+  *info = inf;
+  return n;
+}
+
+int pa__rm3d_ball(rm3d *m, pa_idx p, pa_idx *ball, int max) {
+  pa_idx k = m->vtet[p];
+  int n = 0, head = 0, over = 0;
+  ball[n++] = 4 * k + rm3d_loc(m->tv + 4 * (size_t)k, p);
+  m->tflag[k] |= R3T_MARK;
+  while (head < n && !over) {
+    pa_idx t = ball[head] >> 2;
+    int ip = ball[head] & 3;
+    head++;
+    for (int i = 0; i < 4; i++) {
+      if (i == ip) continue;
+      pa_idx nb = m->adj[4 * (size_t)t + i];
+      if (nb < 0) continue;
+      pa_idx u = nb >> 2;
+      if (m->tflag[u] & R3T_MARK) continue;
+      if (n >= max) {
+        over = 1;
+        break;
+      }
+      m->tflag[u] |= R3T_MARK;
+      ball[n++] = 4 * u + rm3d_loc(m->tv + 4 * (size_t)u, p);
+    }
+  }
+  for (int i = 0; i < n; i++) m->tflag[ball[i] >> 2] &= (uint8_t)~R3T_MARK;
+  return over ? -1 : n;
+}
+
+typedef struct face_key {
+  pa_idx k[3];
+  pa_idx slot; /* outer neighbour slot (ext) or new tet slot (pending) */
+  int tag;
+} face_key;
+
+static void face_sorted(const pa_idx *v, int f, pa_idx *k) {
+  k[0] = v[rm3d_face[f][0]];
+  k[1] = v[rm3d_face[f][1]];
+  k[2] = v[rm3d_face[f][2]];
+  pa__sort_small(k, 3);
+}
+
+#define R3_REPLACE_MAXOLD 24
+#define R3_REPLACE_MAXNEW 48
+
+pa_status pa__rm3d_replace(rm3d *m, const pa_idx *old, int nold,
+                           const pa_idx *nv4, int nnew, int32_t ref,
+                           uint8_t pf) {
+  pa_status st = PA_SUCCESS;
+  face_key ext[4 * R3_REPLACE_MAXOLD], pend[4 * R3_REPLACE_MAXNEW];
+  int next = 0, npend = 0;
+  pa_idx idx[R3_REPLACE_MAXNEW];
+  PA_CHECK(nold <= R3_REPLACE_MAXOLD && nnew <= R3_REPLACE_MAXNEW,
+           PA_ERR_INTERNAL, "rm3d: cavity too large");
+  PA_CALL(pa__rm3d_reserve(m, 0, (size_t)m->ne + nnew));
+  for (int i = 0; i < nold; i++) m->tflag[old[i]] |= R3T_MARK;
+  for (int i = 0; i < nold; i++) {
+    pa_idx t = old[i];
+    for (int f = 0; f < 4; f++) {
+      pa_idx a = m->adj[4 * (size_t)t + f];
+      if (a >= 0 && (m->tflag[a >> 2] & R3T_MARK)) continue;
+      face_sorted(m->tv + 4 * (size_t)t, f, ext[next].k);
+      ext[next].slot = a;
+      ext[next].tag = (m->tflag[t] >> f) & 1;
+      next++;
+    }
+  }
+  for (int i = 0; i < nold; i++) m->tflag[old[i]] &= (uint8_t)~R3T_MARK;
+  for (int i = 0; i < nnew; i++) idx[i] = i < nold ? old[i] : m->ne++;
+  for (int i = nnew; i < nold; i++) {
+    m->tflag[old[i]] = R3T_DEAD;
+    m->ndead_t++;
+  }
+  for (int i = 0; i < nnew; i++) {
+    pa_idx t = idx[i];
+    memcpy(m->tv + 4 * (size_t)t, nv4 + 4 * i, 4 * sizeof(pa_idx));
+    m->tflag[t] = 0;
+    m->tpf[t] = pf;
+    m->tref[t] = ref;
+  }
+  for (int i = 0; i < nnew; i++) {
+    pa_idx t = idx[i];
+    for (int f = 0; f < 4; f++) {
+      pa_idx key[3];
+      face_sorted(nv4 + 4 * i, f, key);
+      pa_idx self = 4 * t + f;
+      int j;
+      for (j = 0; j < next; j++)
+        if (ext[j].k[0] == key[0] && ext[j].k[1] == key[1] &&
+            ext[j].k[2] == key[2])
+          break;
+      if (j < next) {
+        pa_idx a = ext[j].slot;
+        m->adj[self] = a;
+        if (a >= 0) m->adj[a] = self;
+        if (ext[j].tag) m->tflag[t] |= (uint8_t)(1u << f);
+        ext[j] = ext[--next];
+        continue;
+      }
+      for (j = 0; j < npend; j++)
+        if (pend[j].k[0] == key[0] && pend[j].k[1] == key[1] &&
+            pend[j].k[2] == key[2])
+          break;
+      if (j < npend) {
+        m->adj[self] = pend[j].slot;
+        m->adj[pend[j].slot] = self;
+        pend[j] = pend[--npend];
+        continue;
+      }
+      PA_CHECK(npend < 4 * R3_REPLACE_MAXNEW, PA_ERR_INTERNAL,
+               "rm3d: cavity faces overflow");
+      memcpy(pend[npend].k, key, sizeof key);
+      pend[npend].slot = self;
+      npend++;
+    }
+  }
+  PA_CHECK(npend == 0 && next == 0, PA_ERR_INTERNAL,
+           "rm3d: new tetrahedra do not fill the cavity");
+  for (int i = 0; i < nnew; i++) {
+    pa_idx t = idx[i];
+    const pa_idx *v = m->tv + 4 * (size_t)t;
+    for (int j = 0; j < 4; j++) m->vtet[v[j]] = t;
+    m->q[t] = (float)rm3d_qual_v(m, v);
+  }
+cleanup:
+  return st;
+}

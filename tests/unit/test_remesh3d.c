@@ -1,0 +1,385 @@
+/* test_remesh3d.c -- the sequential 3D remesher (pa__remesh3d): validity,
+ * volume, references/ridges/corners, frozen regions bit for bit, anisotropic
+ * fields, a curved domain, field interpolation, determinism, failure with the
+ * input left intact. */
+#include "testutil.h"
+#include "mesh/mesh.h"
+#include "metric/metric.h"
+#include "remesh/remesh3d.h"
+
+static pa_mesh *box(int n, double h) {
+  pa_mesh *m = NULL;
+  CHECK_OK(pa_mesh_generate_box(3, n, &m));
+  if (m && h > 0) {
+    double *s = malloc(sizeof *s * m->nv);
+    for (pa_idx i = 0; i < m->nv; i++) s[i] = h;
+    CHECK_OK(pa_mesh_set_metric(m, 1, s));
+    free(s);
+  }
+  return m;
+}
+
+static void opts_for(pa_remesh_opts *o) {
+  pa_remesh_opts_default(o);
+  o->verbosity = 0;
+}
+
+/* Fraction of unique edges in [1/sqrt2, sqrt2) and worst / mean quality. */
+static void edge_stats(pa_mesh *m, double *inrange, double *qworst,
+                       double *qmean) {
+  pa_stats s;
+  CHECK_OK(pa_mesh_stats(m, &s));
+  *inrange = s.nedge ? (double)s.edge_hist[PA_STATS_EDGE_NBIN - 1] / s.nedge : 0;
+  *qworst = s.qual_min;
+  *qmean = s.nelem ? s.qual_sum / s.nelem : 0;
+}
+
+static int has_point(pa_mesh *m, const double *x) {
+  for (pa_idx i = 0; i < m->nv; i++)
+    if (!memcmp(m->coord + 3 * (size_t)i, x, 3 * sizeof(double))) return 1;
+  return 0;
+}
+
+/* Remeshing without any operator gives back the same mesh. */
+static void test_identity(void) {
+  pa_mesh *m = box(3, 0.3), *c = NULL;
+  CHECK_OK(pa_mesh_copy(m, &c));
+  pa_remesh_opts o;
+  opts_for(&o);
+  o.no_insert = o.no_swap = o.no_move = 1;
+  pa_remesh_report r;
+  CHECK_OK(pa__remesh3d(m, &o, &r));
+  CHECK(m->nv == c->nv && m->ne == c->ne && m->nb == c->nb);
+  CHECK(!memcmp(m->elem, c->elem, sizeof(pa_idx) * 4 * c->ne));
+  CHECK(!memcmp(m->coord, c->coord, sizeof(double) * 3 * c->nv));
+  CHECK(!memcmp(m->bdry, c->bdry, sizeof(pa_idx) * 3 * c->nb));
+  CHECK(!memcmp(m->bref, c->bref, sizeof(int32_t) * c->nb));
+  CHECK(m->ned == c->ned);
+  CHECK_OK(pa_mesh_check(m));
+  pa_mesh_destroy(m);
+  pa_mesh_destroy(c);
+}
+
+/* Uniform refinement of the cube with surface remeshing. */
+static void test_refine_cube(void) {
+  pa_mesh *m = box(3, 0.1);
+  pa_remesh_opts o;
+  opts_for(&o);
+  pa_remesh_report r;
+  CHECK_OK(pa__remesh3d(m, &o, &r));
+  CHECK_OK(pa_mesh_check(m));
+  CHECK(r.nsplit > 0);
+  CHECK(m->ne > 1500);
+  CHECK_NEAR(pa_mesh_volume(m), 1.0, 1e-12);
+  double in, qw, qm;
+  edge_stats(m, &in, &qw, &qm);
+  printf("refine cube: %d tets, %.1f%% in range, worst Q %.3f mean %.3f\n",
+         (int)m->ne, 100 * in, qw, qm);
+  CHECK(in > 0.83);
+  CHECK(qw > 0.1);
+  CHECK(qm > 0.65);
+  CHECK(r.outcome != PA_REMESH_FAILED);
+  /* References 1..6 all kept, boundary points on their faces, corners kept. */
+  int seen[7] = {0};
+  for (pa_idx b = 0; b < m->nb; b++) {
+    int ref = m->bref[b];
+    CHECK(ref >= 1 && ref <= 6);
+    if (ref < 1 || ref > 6) continue;
+    seen[ref] = 1;
+    int axis = (ref - 1) / 2;
+    double val = (ref - 1) % 2;
+    for (int j = 0; j < 3; j++)
+      CHECK(m->coord[3 * (size_t)m->bdry[3 * b + j] + axis] == val);
+  }
+  for (int i = 1; i <= 6; i++) CHECK(seen[i]);
+  for (int c = 0; c < 8; c++) {
+    double x[3] = {c & 1, (c >> 1) & 1, (c >> 2) & 1};
+    CHECK(has_point(m, x));
+  }
+  /* Ridges: every feature edge lies on a box edge. */
+  CHECK(m->ned >= 12 * 3);
+  for (pa_idx e = 0; e < m->ned; e++) {
+    int nbound = 0;
+    const double *a = m->coord + 3 * (size_t)m->edge[2 * e];
+    const double *b = m->coord + 3 * (size_t)m->edge[2 * e + 1];
+    for (int j = 0; j < 3; j++)
+      nbound += (a[j] == 0 || a[j] == 1) && a[j] == b[j];
+    CHECK(nbound == 2);
+  }
+  pa_mesh_destroy(m);
+}
+
+/* -nosurf: the boundary comes back unchanged. */
+static void test_nosurf(void) {
+  pa_mesh *m = box(3, 0.12), *c = NULL;
+  CHECK_OK(pa_mesh_copy(m, &c));
+  pa_remesh_opts o;
+  opts_for(&o);
+  o.no_surf = 1;
+  pa_remesh_report r;
+  CHECK_OK(pa__remesh3d(m, &o, &r));
+  CHECK_OK(pa_mesh_check(m));
+  CHECK(m->nb == c->nb);
+  CHECK(m->ne > c->ne);
+  CHECK_NEAR(pa_mesh_volume(m), 1.0, 1e-12);
+  for (pa_idx b = 0; b < c->nb && b < m->nb; b++)
+    for (int j = 0; j < 3; j++)
+      CHECK(!memcmp(m->coord + 3 * (size_t)m->bdry[3 * b + j],
+                    c->coord + 3 * (size_t)c->bdry[3 * b + j],
+                    3 * sizeof(double)));
+  pa_mesh_destroy(m);
+  pa_mesh_destroy(c);
+}
+
+/* Coarsening a fine cube. */
+static void test_coarsen(void) {
+  pa_mesh *m = box(10, 0.3);
+  pa_remesh_opts o;
+  opts_for(&o);
+  pa_remesh_report r;
+  CHECK_OK(pa__remesh3d(m, &o, &r));
+  CHECK_OK(pa_mesh_check(m));
+  CHECK(r.ncollapse > 0);
+  CHECK(m->ne < 6000);
+  CHECK_NEAR(pa_mesh_volume(m), 1.0, 1e-12);
+  double in, qw, qm;
+  edge_stats(m, &in, &qw, &qm);
+  printf("coarsen cube: %d tets, %.1f%% in range, worst Q %.3f mean %.3f\n",
+         (int)m->ne, 100 * in, qw, qm);
+  CHECK(in > 0.6);
+  CHECK(qw > 0.05);
+  for (int c = 0; c < 8; c++) {
+    double x[3] = {c & 1, (c >> 1) & 1, (c >> 2) & 1};
+    CHECK(has_point(m, x));
+  }
+  pa_mesh_destroy(m);
+}
+
+/* Does out contain tet k of in with the same coordinates (same order), the
+ * same reference and flags? */
+static int find_tet(pa_mesh *in, pa_idx k, pa_mesh *out) {
+  const double *x0 = in->coord + 3 * (size_t)in->elem[4 * k];
+  for (pa_idx l = 0; l < out->ne; l++) {
+    if (memcmp(out->coord + 3 * (size_t)out->elem[4 * l], x0, 3 * sizeof(double)))
+      continue;
+    int same = out->eref[l] == in->eref[k] && out->eflag[l] == in->eflag[k];
+    for (int j = 1; j < 4 && same; j++) {
+      pa_idx a = in->elem[4 * k + j], b = out->elem[4 * l + j];
+      same = !memcmp(in->coord + 3 * (size_t)a, out->coord + 3 * (size_t)b,
+                     3 * sizeof(double)) &&
+             in->vref[a] == out->vref[b] && in->vflag[a] == out->vflag[b] &&
+             !memcmp(in->met + (size_t)in->met_ncomp * a,
+                     out->met + (size_t)out->met_ncomp * b,
+                     in->met_ncomp * sizeof(double));
+    }
+    if (same) return 1;
+  }
+  return 0;
+}
+
+static void check_frozen(pa_mesh *in, pa_mesh *out) {
+  int nf = 0, nok = 0;
+  for (pa_idx k = 0; k < in->ne; k++) {
+    if (!(in->eflag[k] & PA_FLAG_REQUIRED)) continue;
+    nf++;
+    nok += find_tet(in, k, out);
+  }
+  CHECK(nf > 0);
+  CHECK(nok == nf);
+}
+
+/* Random frozen tetrahedra come back bit for bit. */
+static void test_frozen_random(void) {
+  pa_test_seed(42);
+  pa_mesh *m = box(4, 0.1), *c = NULL;
+  for (pa_idx k = 0; k < m->ne; k++)
+    if (pa_test_rand() < 0.1) m->eflag[k] |= PA_FLAG_REQUIRED;
+  m->eref[3] = 7;
+  m->eflag[3] |= PA_FLAG_REQUIRED;
+  CHECK_OK(pa_mesh_copy(m, &c));
+  pa_remesh_opts o;
+  opts_for(&o);
+  pa_remesh_report r;
+  CHECK_OK(pa__remesh3d(m, &o, &r));
+  CHECK_OK(pa_mesh_check(m));
+  CHECK(m->ne > c->ne);
+  CHECK_NEAR(pa_mesh_volume(m), 1.0, 1e-12);
+  check_frozen(c, m);
+  pa_mesh_destroy(m);
+  pa_mesh_destroy(c);
+}
+
+/* A frozen skin (every tet touching the boundary) around a free core that is
+ * refined. */
+static void test_frozen_skin(void) {
+  pa_mesh *m = box(5, 0.06), *c = NULL;
+  for (pa_idx k = 0; k < m->ne; k++)
+    for (int j = 0; j < 4; j++) {
+      const double *x = m->coord + 3 * (size_t)m->elem[4 * k + j];
+      if (x[0] == 0 || x[0] == 1 || x[1] == 0 || x[1] == 1 || x[2] == 0 ||
+          x[2] == 1)
+        m->eflag[k] |= PA_FLAG_REQUIRED;
+    }
+  for (pa_idx b = 0; b < m->nb; b++) m->bflag[b] |= PA_FLAG_REQUIRED;
+  CHECK_OK(pa_mesh_copy(m, &c));
+  pa_remesh_opts o;
+  opts_for(&o);
+  pa_remesh_report r;
+  CHECK_OK(pa__remesh3d(m, &o, &r));
+  CHECK_OK(pa_mesh_check(m));
+  CHECK(m->ne > 2 * c->ne);
+  CHECK_NEAR(pa_mesh_volume(m), 1.0, 1e-12);
+  check_frozen(c, m);
+  CHECK(m->nb == c->nb);
+  pa_mesh_destroy(m);
+  pa_mesh_destroy(c);
+}
+
+/* Identical output on repeated runs. */
+static void test_deterministic(void) {
+  pa_mesh *a = box(3, 0.12), *b = NULL;
+  CHECK_OK(pa_metric_analytic(a, "iso-shell:0.3"));
+  CHECK_OK(pa_mesh_copy(a, &b));
+  pa_remesh_opts o;
+  opts_for(&o);
+  pa_remesh_report r;
+  CHECK_OK(pa__remesh3d(a, &o, &r));
+  CHECK_OK(pa__remesh3d(b, &o, &r));
+  CHECK(a->nv == b->nv && a->ne == b->ne && a->nb == b->nb);
+  if (a->nv == b->nv && a->ne == b->ne) {
+    CHECK(!memcmp(a->coord, b->coord, sizeof(double) * 3 * a->nv));
+    CHECK(!memcmp(a->elem, b->elem, sizeof(pa_idx) * 4 * a->ne));
+  }
+  CHECK_OK(pa_mesh_check(a));
+  pa_mesh_destroy(a);
+  pa_mesh_destroy(b);
+}
+
+/* Built-in analytic fields, isotropic and anisotropic. */
+static void test_fields(void) {
+  /* Lower bounds: measured values with a margin (the 1:100 layer on a
+   * 4^3 box is far from converged: validity is what is checked there). */
+  const char *specs[] = {"uniform:0.15", "iso-shell:0.3", "layer:0.4",
+                         "shell:0.5"};
+  const double min_in[] = {0.75, 0.85, 0.4, 0.65};
+  const double min_q[] = {0.2, 0.2, 1e-9, 0.1};
+  for (int i = 0; i < 4; i++) {
+    pa_mesh *m = box(4, 0);
+    CHECK_OK(pa_metric_analytic(m, specs[i]));
+    pa_remesh_opts o;
+    opts_for(&o);
+    pa_remesh_report r;
+    CHECK_OK(pa__remesh3d(m, &o, &r));
+    CHECK_OK(pa_mesh_check(m));
+    CHECK_NEAR(pa_mesh_volume(m), 1.0, 1e-12);
+    double in, qw, qm;
+    edge_stats(m, &in, &qw, &qm);
+    printf("%s: %d tets, %.1f%% in range, worst Q %.3f mean %.3f, %s\n",
+           specs[i], (int)m->ne, 100 * in, qw, qm,
+           r.outcome == PA_REMESH_SUCCESS ? "success" : "target missed");
+    CHECK(in > min_in[i]);
+    CHECK(qw > min_q[i]);
+    pa_mesh_destroy(m);
+  }
+}
+
+/* A linear user field is reproduced exactly at new vertices. */
+static void test_field_interp(void) {
+  pa_mesh *m = box(3, 0.15);
+  double *f = malloc(sizeof *f * 2 * m->nv);
+  for (pa_idx i = 0; i < m->nv; i++) {
+    const double *x = m->coord + 3 * (size_t)i;
+    f[2 * i] = x[0] + 2 * x[1] - 3 * x[2];
+    f[2 * i + 1] = 1.5;
+  }
+  CHECK_OK(pa_mesh_add_field(m, "lin", 2, f));
+  free(f);
+  pa_remesh_opts o;
+  opts_for(&o);
+  pa_remesh_report r;
+  CHECK_OK(pa__remesh3d(m, &o, &r));
+  CHECK(m->nfield == 1);
+  double err = 0;
+  for (pa_idx i = 0; i < m->nv; i++) {
+    const double *x = m->coord + 3 * (size_t)i;
+    double e = fabs(m->field[0].val[2 * i] - (x[0] + 2 * x[1] - 3 * x[2])) +
+               fabs(m->field[0].val[2 * i + 1] - 1.5);
+    if (e > err) err = e;
+  }
+  CHECK(err < 1e-9);
+  pa_mesh_destroy(m);
+}
+
+/* A ball: the cube mapped radially onto the sphere of radius 0.5. */
+static pa_mesh *ball(int n, double h) {
+  pa_mesh *m = box(n, h);
+  for (pa_idx i = 0; i < m->nv; i++) {
+    double *x = m->coord + 3 * (size_t)i;
+    double d[3] = {x[0] - 0.5, x[1] - 0.5, x[2] - 0.5};
+    double linf = fmax(fabs(d[0]), fmax(fabs(d[1]), fabs(d[2])));
+    double l2 = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    double s = l2 > 0 ? linf / l2 : 0;
+    for (int j = 0; j < 3; j++) x[j] = 0.5 + d[j] * s;
+    m->vflag[i] = 0;
+  }
+  for (pa_idx b = 0; b < m->nb; b++) m->bref[b] = 1;
+  m->ned = 0;
+  return m;
+}
+
+static void test_sphere(void) {
+  pa_mesh *m = ball(6, 0.06);
+  CHECK_OK(pa_mesh_check(m));
+  double v0 = pa_mesh_volume(m);
+  pa_remesh_opts o;
+  opts_for(&o);
+  pa_remesh_report r;
+  CHECK_OK(pa__remesh3d(m, &o, &r));
+  CHECK_OK(pa_mesh_check(m));
+  double v1 = pa_mesh_volume(m), vs = 4.0 / 3.0 * M_PI * 0.125;
+  printf("sphere: %d tets, volume %.5f (input %.5f, sphere %.5f)\n",
+         (int)m->ne, v1, v0, vs);
+  CHECK(fabs(v1 - vs) < fabs(v0 - vs) + 1e-3);
+  double dmax = 0;
+  for (pa_idx b = 0; b < m->nb; b++)
+    for (int j = 0; j < 3; j++) {
+      const double *x = m->coord + 3 * (size_t)m->bdry[3 * b + j];
+      double rr = sqrt((x[0] - .5) * (x[0] - .5) + (x[1] - .5) * (x[1] - .5) +
+                       (x[2] - .5) * (x[2] - .5));
+      if (fabs(rr - 0.5) > dmax) dmax = fabs(rr - 0.5);
+    }
+  printf("sphere: max boundary distance to the sphere %.2e\n", dmax);
+  CHECK(dmax < 0.01);
+  double in, qw, qm;
+  edge_stats(m, &in, &qw, &qm);
+  printf("sphere: %.1f%% in range, worst Q %.3f mean %.3f\n", 100 * in, qw, qm);
+  CHECK(qw > 0.05);
+  pa_mesh_destroy(m);
+}
+
+/* Failing allocations: an error, no leak, the mesh as given. */
+static void test_alloc_failure(void) {
+  pa_mesh *m = box(2, 0.2), *c = NULL;
+  CHECK_OK(pa_mesh_copy(m, &c));
+  pa_remesh_opts o;
+  opts_for(&o);
+  pa_remesh_report r;
+  int nfail = 0;
+  for (long n = 1; n < 400; n += 7) {
+    pa_memory_fail_after(n);
+    pa_status st = pa__remesh3d(m, &o, &r);
+    pa_memory_fail_after(0);
+    if (st == PA_SUCCESS) break;
+    nfail++;
+    CHECK(st == PA_ERR_MEMORY);
+    CHECK(m->ne == c->ne && m->nv == c->nv);
+    CHECK(!memcmp(m->elem, c->elem, sizeof(pa_idx) * 4 * c->ne));
+  }
+  CHECK(nfail > 3);
+  pa_mesh_destroy(m);
+  pa_mesh_destroy(c);
+}
+
+TEST_MAIN(test_identity, test_refine_cube, test_nosurf, test_coarsen,
+          test_frozen_random, test_frozen_skin, test_deterministic,
+          test_fields, test_field_interp, test_sphere, test_alloc_failure)
