@@ -406,7 +406,7 @@ typedef struct pa_remesher {
   void *ctx;
 } pa_remesher;
 
-/** The built-in remesher (2D triangles; 3D when available). */
+/** The built-in remesher (2D triangles and 3D tetrahedra). */
 const pa_remesher *pa_remesher_builtin(void);
 
 /**

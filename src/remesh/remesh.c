@@ -13,6 +13,7 @@
  *    with -hsiz on a mesh without a metric every vertex gets hsiz.
  */
 #include "remesh/remesh.h"
+#include "remesh/remesh3d.h"
 
 void pa_remesh_opts_default(pa_remesh_opts *o) {
   memset(o, 0, sizeof *o);
@@ -28,9 +29,7 @@ static pa_status builtin_remesh(void *ctx, pa_mesh *mesh,
   pa_status st = PA_SUCCESS;
   pa__rmesh *rm = NULL;
   (void)ctx;
-  PA_CHECK(mesh->dim == 2, PA_ERR_UNSUPPORTED,
-           "the built-in remesher handles 2D meshes only for now (3D "
-           "tetrahedra: issue #4)");
+  if (mesh->dim == 3) return pa__remesh3d(mesh, opts, report);
   PA_CALL(pa__rm_create(mesh, opts, &rm));
   PA_CALL(pa__rm_adapt(rm, &pa__rm_ops_2d, report));
   if (report->outcome != PA_REMESH_FAILED) PA_CALL(pa__rm_writeback(rm, mesh));
@@ -40,7 +39,8 @@ cleanup:
 }
 
 const pa_remesher *pa_remesher_builtin(void) {
-  static const pa_remesher builtin = {"padapt", 1u << 2, builtin_remesh, NULL};
+  static const pa_remesher builtin = {"padapt", (1u << 2) | (1u << 3),
+                                     builtin_remesh, NULL};
   return &builtin;
 }
 
