@@ -1,6 +1,8 @@
 /* testutil.c -- see testutil.h. */
 #include "testutil.h"
 
+#include <mpi.h>
+
 int pa_test_failures;
 int pa_test_checks;
 static unsigned long long pa_rng = 88172645463325252ull;
@@ -36,4 +38,38 @@ double pa_test_rand(void) {
 
 double pa_test_rand_range(double lo, double hi) {
   return lo + (hi - lo) * pa_test_rand();
+}
+
+int pa_test_rank, pa_test_size = 1;
+
+int pa_test_run_mpi(int argc, char **argv, const char *name,
+                    const pa_test_fn *tests, const char *names, int n) {
+  int provided;
+  MPI_Init_thread(&argc, &argv, MPI_THREAD_MULTIPLE, &provided);
+  MPI_Comm_rank(MPI_COMM_WORLD, &pa_test_rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &pa_test_size);
+  if (getenv("PA_TEST_VERBOSE")) pa_set_verbosity(atoi(getenv("PA_TEST_VERBOSE")));
+  size_t mem0 = pa_memory_current();
+  for (int i = 0; i < n; i++) {
+    int before = pa_test_failures;
+    double t0 = MPI_Wtime();
+    tests[i]();
+    if (pa_test_failures != before)
+      fprintf(stderr, "%s: rank %d: test %d of (%s) failed\n", name,
+              pa_test_rank, i + 1, names);
+    if (pa_test_rank == 0)
+      printf("%s: test %d done in %.2f s\n", name, i + 1, MPI_Wtime() - t0);
+  }
+  if (pa_memory_current() != mem0) {
+    fprintf(stderr, "%s: rank %d: %zu bytes of padapt memory leaked\n", name,
+            pa_test_rank, pa_memory_current() - mem0);
+    pa_test_failures++;
+  }
+  int fails = pa_test_failures;
+  MPI_Allreduce(MPI_IN_PLACE, &fails, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+  if (pa_test_rank == 0)
+    printf("%s: %d ranks, %d checks on rank 0, %d failed\n", name,
+           pa_test_size, pa_test_checks, fails);
+  MPI_Finalize();
+  return fails ? 1 : 0;
 }

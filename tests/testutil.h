@@ -60,6 +60,20 @@ int pa_test_run(const char *name, const pa_test_fn *tests, const char **names,
     return pa_test_run(__FILE__, fns, &names, sizeof fns / sizeof *fns);     \
   }
 
+/* MPI tests: MPI_Init_thread(MULTIPLE), pa_test_rank/pa_test_size set, each
+ * test run in turn (timed on rank 0), padapt memory checked back to its start
+ * on every rank, failures summed over the ranks; returns the exit status. */
+extern int pa_test_rank, pa_test_size;
+int pa_test_run_mpi(int argc, char **argv, const char *name,
+                    const pa_test_fn *tests, const char *names, int n);
+
+#define TEST_MPI_MAIN(...)                                                   \
+  int main(int argc, char **argv) {                                          \
+    pa_test_fn fns[] = {__VA_ARGS__};                                        \
+    return pa_test_run_mpi(argc, argv, __FILE__, fns, #__VA_ARGS__,          \
+                           (int)(sizeof fns / sizeof *fns));                 \
+  }
+
 /* Deterministic random numbers (xorshift64*), seeded per test. */
 void pa_test_seed(unsigned long long seed);
 double pa_test_rand(void);              /* uniform in [0,1) */
