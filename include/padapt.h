@@ -665,6 +665,22 @@ pa_status pa_dmesh_bdry_elems(pa_dmesh *dm, pa_idx b, pa_idx e[2]);
  */
 pa_status pa_dmesh_reorder(pa_dmesh *dm);
 
+/** Element orderings of pa_dmesh_reorder_by. */
+typedef enum pa_dmesh_ordering {
+  PA_ORDER_HILBERT = 0, /**< Hilbert curve index of the centroid (geometric) */
+  PA_ORDER_SCOTCH = 1   /**< Scotch ordering (Gibbs-Poole-Stockmeyer,
+                             bandwidth reducing) of the local dual graph
+                             (faces), one group at a time (owned, then each
+                             ghost layer): topological */
+} pa_dmesh_ordering;
+
+/**
+ * pa_dmesh_reorder with a choice of element ordering (pa_dmesh_reorder is
+ * PA_ORDER_HILBERT); vertices, boundary entities and edges follow the new
+ * element order as there. Collective.
+ */
+pa_status pa_dmesh_reorder_by(pa_dmesh *dm, pa_dmesh_ordering how);
+
 /**
  * Move elements to new owners and migrate their vertices, boundary entities,
  * edges and every value; ghosts are rebuilt, global ids kept. newpart: new
@@ -756,6 +772,13 @@ typedef struct pa_adapt_opts {
    *  own: fewer pieces are made when the tagged work is small (default
    *  2000; tests lower it to get many pieces on small meshes). */
   double min_piece_work;
+  /** Smallest piece as a fraction of the mean number of elements per rank
+   *  (default 0.25): an iteration rebuilds the whole distributed mesh, so a
+   *  small tagged set is remeshed in fewer, larger pieces (0: off). */
+  double min_piece_ratio;
+  /** Skip the final rebalance when the owned elements per rank are within
+   *  this ratio of the mean (default 1.05). */
+  double rebalance_tol;
   /** Repartition and redistribute for balance after the loop (default 1). */
   int rebalance;
   /** Check every remeshed piece (pa_mesh_check) before using it (default 1);
@@ -792,7 +815,8 @@ typedef struct pa_adapt_report {
 
 /** Default options: built-in remesher, pa_remesh_opts_default, no memory
  *  bound, quality threshold 0.3, 30 iterations, 1 piece per rank, 2 skin
- *  layers, min_piece_work 2000, rebalance and piece checks on. */
+ *  layers, min_piece_work 2000, min_piece_ratio 0.25, rebalance (tolerance
+ *  1.05) and piece checks on. */
 void pa_adapt_opts_default(pa_adapt_opts *opts);
 
 /**

@@ -23,6 +23,10 @@ int pa_cli_stats(const pa_cli *cli, int argc, char **argv);
 int pa_cli_convert(const pa_cli *cli, int argc, char **argv);
 int pa_cli_adapt(const pa_cli *cli, int argc, char **argv);
 int pa_cli_partition(const pa_cli *cli, int argc, char **argv);
+/* The parallel `padapt adapt` (pa_dmesh_adapt), called by pa_cli_adapt on more
+ * than one rank: same arguments plus -distributed-output, -mem MB, -max-iter
+ * N, -pieces K. Collective; the exit status is the same on every rank. */
+int pa_cli_adapt_parallel(const pa_cli *cli, int argc, char **argv);
 
 /* Print "padapt: <message>" on stderr (every rank that calls it); returns 1. */
 int pa_cli_error(const pa_cli *cli, const char *fmt, ...)

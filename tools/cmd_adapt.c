@@ -105,6 +105,12 @@ static pa_status write_fields(pa_mesh *mesh, const char *path) {
 }
 
 int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
+  /* On several ranks, or when asked for a distributed output, the parallel
+   * piece loop (tools/cmd_padapt.c) does the work. */
+  if (cli->size > 1) return pa_cli_adapt_parallel(cli, argc, argv);
+  for (int i = 1; i < argc; i++)
+    if (!strcmp(argv[i], "-distributed-output") || !strcmp(argv[i], "-mem"))
+      return pa_cli_adapt_parallel(cli, argc, argv);
   const char *in = NULL, *out = NULL, *met = NULL, *outsol = NULL;
   const char *field = NULL, *outfield = NULL, *json = NULL;
   int nosol = 0, rc = 1;

@@ -4,8 +4,11 @@
  *
  * Invariants: Scotch sees 0-based (baseval 0) 32-bit SCOTCH_Num arrays copied
  * from the caller's CSR; integer vertex loads are the caller's weights scaled
- * to [1, 10^6]; every collective step agrees on the status first (one
- * MPI_Allreduce), so a failure on one rank never leaves another waiting.
+ * to [1, S] with S = min(10^6, 2^30 / global vertex count), so that the sum
+ * of the loads, which Scotch keeps in a SCOTCH_Num, cannot overflow (it did
+ * with S = 10^6: 2:1 weights on 1.3 M elements gave a 1.96 imbalance); every
+ * collective step agrees on the status first (one MPI_Allreduce), so a
+ * failure on one rank never leaves another waiting.
  */
 #include "partition/partition.h"
 
@@ -58,9 +61,11 @@ pa_status pa__partition_dgraph(MPI_Comm comm, pa_idx n, const pa_idx *xadj,
   for (pa_idx i = 0; i <= n; i++) vert[i] = xadj[i];
   for (pa_idx j = 0; j < xadj[n]; j++) edge[j] = (SCOTCH_Num)adj[j];
   if (weights) {
+    double scale = (double)(1 << 30) / (double)(nglob ? nglob : 1);
+    if (scale > 1e6) scale = 1e6;
     PA_ALLOC(velo, n);
     for (pa_idx i = 0; i < n; i++) {
-      double w = weights[i] / wmax * 1e6;
+      double w = weights[i] / wmax * scale;
       velo[i] = w < 1 ? 1 : (SCOTCH_Num)w;
     }
   }
@@ -92,8 +97,15 @@ cleanup:
   st = agree(comm, st);
   if (st) goto done;
 #endif
+  /* Scotch's default strategy: measured against SCOTCH_stratDgraphMapBuild
+   * with SCOTCH_STRATSPEED / QUALITY / BALANCE (bench/bench_scotch.c, see
+   * docs/DMESH.md), none is faster on 2+ ranks; BALANCE costs 15-20 % more
+   * edge cut; SPEED halves the time only on one rank. */
   SCOTCH_stratInit(&strat);
   strat_init = 1;
+  /* Scotch's random state persists across calls in a process: reset it so
+   * that the same graph always gets the same partition. */
+  SCOTCH_randomReset();
   if (SCOTCH_dgraphPart(&graph, nparts, &strat, parttab) != 0)
     st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
                    "SCOTCH_dgraphPart failed (%d parts)", nparts);
@@ -168,5 +180,51 @@ done:
   pa__free(c);
   pa__free(map);
   pa__free(used);
+  return st;
+}
+
+pa_status pa__order_graph(pa_idx n, const pa_idx *xadj, const pa_idx *adj,
+                          pa_idx *perm) {
+  pa_status st = PA_SUCCESS;
+  SCOTCH_Num *vert = NULL, *edge = NULL, *permtab = NULL, *peritab = NULL;
+  SCOTCH_Graph graph;
+  SCOTCH_Strat strat;
+  int graph_init = 0, strat_init = 0;
+  if (n <= 1) {
+    for (pa_idx i = 0; i < n; i++) perm[i] = i;
+    return PA_SUCCESS;
+  }
+  PA_ALLOC(vert, n + 1);
+  PA_ALLOC(edge, xadj[n]);
+  PA_ALLOC(permtab, n);
+  PA_ALLOC(peritab, n);
+  for (pa_idx i = 0; i <= n; i++) vert[i] = xadj[i];
+  for (pa_idx j = 0; j < xadj[n]; j++) edge[j] = adj[j];
+  PA_CHECK(SCOTCH_graphInit(&graph) == 0, PA_ERR_PARTITION,
+           "SCOTCH_graphInit failed");
+  graph_init = 1;
+  PA_CHECK(SCOTCH_graphBuild(&graph, 0, n, vert, NULL, NULL, NULL, xadj[n],
+                             edge, NULL) == 0,
+           PA_ERR_PARTITION, "SCOTCH_graphBuild failed (%d vertices)", (int)n);
+  PA_CHECK(SCOTCH_stratInit(&strat) == 0, PA_ERR_PARTITION,
+           "SCOTCH_stratInit failed");
+  strat_init = 1;
+  /* Gibbs-Poole-Stockmeyer: a bandwidth-reducing ordering in linear time,
+   * what locality needs; Scotch's default nested dissection (for sparse
+   * factorisation) took 20x longer than the whole Hilbert reordering for a
+   * similar locality (docs/DMESH.md) */
+  PA_CHECK(SCOTCH_stratGraphOrder(&strat, "g") == 0, PA_ERR_PARTITION,
+           "SCOTCH_stratGraphOrder failed");
+  PA_CHECK(SCOTCH_graphOrder(&graph, &strat, permtab, peritab, NULL, NULL,
+                             NULL) == 0,
+           PA_ERR_PARTITION, "SCOTCH_graphOrder failed (%d vertices)", (int)n);
+  for (pa_idx k = 0; k < n; k++) perm[k] = (pa_idx)peritab[k];
+cleanup:
+  if (strat_init) SCOTCH_stratExit(&strat);
+  if (graph_init) SCOTCH_graphExit(&graph);
+  pa__free(vert);
+  pa__free(edge);
+  pa__free(permtab);
+  pa__free(peritab);
   return st;
 }

@@ -1,0 +1,280 @@
+/*
+ * adapt.c -- pa_dmesh_adapt: the outer loop of the piece algorithm (tag,
+ * pieces, extract, remesh, reintegrate; see adapt.h), its options and
+ * report, and the final rebalance.
+ *
+ * Before the loop, hsiz/hmin/hmax are folded into the metric of every local
+ * vertex (the same on owner and ghosts, so no exchange is needed); the
+ * element value PA__DONE_VALUE marks the elements produced by a remesh so
+ * they are never tagged again (except those produced next to a tagged frozen
+ * element, see tag.c). The loop stops when no element is tagged
+ * (converged), or when it stalls: each iteration in which the estimated
+ * work of the tagged elements did not decrease by 1 % halves the number of
+ * pieces of the next one (other borders, and fewer of them; one piece has
+ * no inner border), and an iteration with one piece that makes no progress
+ * (and rolled nothing back) ends the loop; so does max_iter (both reported
+ * as stalled). Every step is collective and agrees on its status,
+ * so all ranks leave the loop together.
+ */
+#include "adapt/adapt.h"
+
+#include <math.h>
+
+void pa_adapt_opts_default(pa_adapt_opts *o) {
+  if (!o) return;
+  memset(o, 0, sizeof *o);
+  pa_remesh_opts_default(&o->remesh);
+  o->qual_threshold = 0.3;
+  o->max_iter = 30;
+  o->pieces_per_rank = 1;
+  o->skin_layers = 2;
+  o->min_piece_work = 2000;
+  o->min_piece_ratio = 0.25;
+  o->rebalance_tol = 1.05;
+  o->rebalance = 1;
+  o->check_pieces = 1;
+}
+
+void pa__iter_free(pa__iter *it) {
+  pa__free(it->tag);
+  pa__free(it->work);
+  pa__free(it->label);
+  pa__free(it->frozen);
+  pa__free(it->piece_work);
+  pa__free(it->piece_rank);
+  pa__free(it->piece_failed);
+  for (int q = 0; it->pieces && q < it->npiece_local; q++) {
+    pa__piece *pc = &it->pieces[q];
+    pa_mesh_destroy(pc->in);
+    pa_mesh_destroy(pc->out);
+    pa__free(pc->vgid);
+    pa__free(pc->skin);
+    pa__free(pc->hot);
+    pa__free(pc->match);
+  }
+  pa__free(it->pieces);
+  memset(it, 0, sizeof *it);
+}
+
+/* Fold hsiz, hmin and hmax into the metric of every local vertex (user-
+ * required vertices keep theirs). Local: owners and ghosts hold the same
+ * data and get the same result. */
+static pa_status prepare_metric(pa_dmesh *dm, const pa_remesh_opts *ro) {
+  pa_status st = PA_SUCCESS;
+  pa_mesh *m = dm->mesh;
+  int d = dm->dim;
+  double *h = NULL;
+  if (!m->met_ncomp) {
+    PA_ALLOC(h, m->nv);
+    for (pa_idx v = 0; v < m->nv; v++) h[v] = ro->hsiz;
+    PA_CALL(pa_mesh_set_metric(m, 1, h));
+  } else if (ro->hsiz > 0) {
+    int nc = m->met_ncomp;
+    for (pa_idx v = 0; v < m->nv; v++) {
+      if (m->vflag[v] & PA_FLAG_REQUIRED) continue;
+      double *x = m->met + (size_t)nc * v;
+      if (nc == 1) {
+        x[0] = ro->hsiz;
+      } else {
+        for (int i = 0; i < nc; i++) x[i] = 0;
+        for (int i = 0; i < d; i++)
+          x[pa__sym_index(i, i)] = 1.0 / (ro->hsiz * ro->hsiz);
+      }
+    }
+  }
+  if (ro->hmin > 0 || ro->hmax > 0)
+    for (pa_idx v = 0; v < m->nv; v++)
+      if (!(m->vflag[v] & PA_FLAG_REQUIRED))
+        pa__metric_clamp(d, m->met_ncomp, m->met + (size_t)m->met_ncomp * v,
+                         ro->hmin, ro->hmax);
+cleanup:
+  pa__free(h);
+  return st;
+}
+
+static pa_status check_opts(pa_dmesh *dm, const pa_adapt_opts *o) {
+  pa_status st = PA_SUCCESS;
+  const pa_remesh_opts *ro = &o->remesh;
+  const pa_remesher *r = o->remesher ? o->remesher : pa_remesher_builtin();
+  PA_CHECK(r && r->remesh, PA_ERR_ARG, "pa_dmesh_adapt: no remesher");
+  PA_CHECK(r->dims & (1u << dm->dim), PA_ERR_UNSUPPORTED,
+           "remesher '%s' does not handle %dD meshes", r->name ? r->name : "?",
+           dm->dim);
+  PA_CHECK(dm->mesh->met_ncomp || ro->hsiz > 0, PA_ERR_ARG,
+           "pa_dmesh_adapt: the mesh has no metric and no constant size "
+           "(hsiz) was given");
+  PA_CHECK(isfinite(ro->hsiz) && isfinite(ro->hmin) && isfinite(ro->hmax) &&
+               isfinite(o->mem_mb) && isfinite(o->qual_threshold) &&
+               isfinite(o->min_piece_work),
+           PA_ERR_ARG, "pa_dmesh_adapt: options must be finite numbers");
+  PA_CHECK(!(ro->hmin > 0 && ro->hmax > 0 && ro->hmin > ro->hmax), PA_ERR_ARG,
+           "pa_dmesh_adapt: hmin (%g) is larger than hmax (%g)", ro->hmin,
+           ro->hmax);
+  PA_CHECK(o->max_iter >= 1, PA_ERR_ARG, "max_iter must be >= 1, got %d",
+           o->max_iter);
+  PA_CHECK(o->pieces_per_rank >= 1, PA_ERR_ARG,
+           "pieces_per_rank must be >= 1, got %d", o->pieces_per_rank);
+  PA_CHECK(dm->mesh->nfield < PA_MAX_FIELDS, PA_ERR_UNSUPPORTED,
+           "parallel adaptation needs a free field slot: the mesh has %d "
+           "vertex fields (at most %d)", dm->mesh->nfield, PA_MAX_FIELDS - 1);
+cleanup:
+  return st;
+}
+
+/* Max over the ranks of n doubles and the sum of one more. */
+static pa_status max_times(MPI_Comm comm, double *t, int n, double *busy) {
+  pa_status st = PA_SUCCESS;
+  PA_CALL(pa__allreduce(comm, t, n, MPI_DOUBLE, MPI_MAX));
+  PA_CALL(pa__allreduce(comm, busy, 1, MPI_DOUBLE, MPI_SUM));
+cleanup:
+  return st;
+}
+
+pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
+                         pa_adapt_report *report) {
+  pa_status st = PA_SUCCESS;
+  pa_adapt_opts def;
+  pa_adapt_report rep;
+  pa__iter it;
+  pa_dmesh_value *done = NULL;
+  double t0 = pa_wtime();
+  memset(&it, 0, sizeof it);
+  memset(&rep, 0, sizeof rep);
+  PA_CHECK(dm, PA_ERR_ARG, "pa_dmesh_adapt: NULL dmesh");
+  pa__agree_reset();
+  if (!opts) {
+    pa_adapt_opts_default(&def);
+    opts = &def;
+  }
+  rep.nranks = dm->size;
+  rep.nelem_initial = dm->nglob[PA_ELEMENT];
+  rep.nvert_initial = dm->nglob[PA_VERTEX];
+  PA_CALL(check_opts(dm, opts));
+  PA_CALL(prepare_metric(dm, &opts->remesh));
+  PA_CALL(pa__agree(dm->comm, st));
+  PA_CALL(pa_dmesh_value_add(dm, PA_ELEMENT, PA__DONE_VALUE, MPI_UINT8_T, 1, -1,
+                             &done));
+
+  double last = -1;
+  int nostep = 0, lastpieces = 0, lastfailed = 0;
+  for (int iter = 1;; iter++) {
+    pa_adapt_iter ir;
+    double t[5], busy, ta = pa_wtime(), tb;
+    int nfail = 0;
+    memset(&ir, 0, sizeof ir);
+    it.dm = dm;
+    it.opts = opts;
+    it.rank = dm->rank;
+    it.size = dm->size;
+    it.dim = dm->dim;
+    it.nve = dm->dim + 1;
+    PA_CALL(pa__adapt_tag(&it, done, iter == 1));
+    t[0] = pa_wtime() - ta;
+    rep.ntagged_left = it.ntagged;
+    if (it.ntagged == 0) {
+      rep.converged = 1;
+      pa__iter_free(&it);
+      break;
+    }
+    if (iter > opts->max_iter) {
+      rep.stalled = 1;
+      pa__iter_free(&it);
+      break;
+    }
+    nostep = last >= 0 && it.tagwork >= 0.99 * last ? nostep + 1 : 0;
+    if ((nostep >= 1 && lastpieces == 1 && !lastfailed) || nostep >= 6) {
+      rep.stalled = 1;
+      pa__info(1, "padapt: adaptation stalled: %lld elements still tagged\n",
+               (long long)it.ntagged);
+      pa__iter_free(&it);
+      break;
+    }
+    last = it.tagwork;
+    ta = pa_wtime();
+    {
+      /* no progress: halve the pieces (other borders, fewer of them) */
+      int np = dm->size * opts->pieces_per_rank;
+      for (int k = 0; k < nostep && np > 1; k++) np = (np + 1) / 2;
+      if (nostep && np >= lastpieces) np = lastpieces > 1 ? lastpieces - 1 : 1;
+      PA_CALL(pa__adapt_pieces(&it, np));
+      lastpieces = it.npieces;
+    }
+    tb = pa_wtime();
+    t[1] = tb - ta;
+    PA_CALL(pa__adapt_extract(&it));
+    ta = pa_wtime();
+    t[2] = ta - tb;
+    st = pa__adapt_remesh(&it, &nfail);
+    busy = pa_wtime() - ta;
+    PA_CALL(pa__agree(dm->comm, st)); /* the ranks wait for the slowest */
+    tb = pa_wtime();
+    t[3] = tb - ta;
+    PA_CALL(pa__adapt_reintegrate(&it, done));
+    t[4] = pa_wtime() - tb;
+    PA_CALL(max_times(dm->comm, t, 5, &busy));
+    {
+      double x[2] = {(double)nfail, it.bytes_moved};
+      PA_CALL(pa__allreduce(dm->comm, x, 2, MPI_DOUBLE, MPI_SUM));
+      ir.nfailed = (int)x[0];
+      lastfailed = ir.nfailed > 0;
+      ir.bytes_moved = x[1];
+    }
+    ir.iter = iter;
+    ir.ntagged = it.ntagged;
+    ir.nelem = dm->nglob[PA_ELEMENT];
+    ir.npieces = it.npieces;
+    ir.imbalance = it.imbalance;
+    ir.t_tag = t[0];
+    ir.t_pieces = t[1];
+    ir.t_gather = t[2];
+    ir.t_remesh = t[3];
+    ir.t_reintegrate = t[4];
+    ir.remesh_busy = busy;
+    rep.niter = iter;
+    rep.npieces += ir.npieces;
+    rep.nfailed += ir.nfailed;
+    rep.t_tag += t[0];
+    rep.t_pieces += t[1];
+    rep.t_gather += t[2];
+    rep.t_remesh += t[3];
+    rep.t_reintegrate += t[4];
+    rep.remesh_busy += busy;
+    rep.bytes_moved += ir.bytes_moved;
+    if (rep.niter_recorded < PA_ADAPT_MAX_ITERS) rep.iters[rep.niter_recorded++] = ir;
+    pa__iter_free(&it);
+    if (opts->progress) opts->progress(&ir, opts->progress_ctx);
+  }
+  {
+    double ta = pa_wtime();
+    if (opts->rebalance && dm->size > 1) {
+      double x[1] = {(double)dm->nown[PA_ELEMENT]};
+      PA_CALL(pa__allreduce(dm->comm, x, 1, MPI_DOUBLE, MPI_MAX));
+      double mean = (double)dm->nglob[PA_ELEMENT] / dm->size;
+      if (mean > 0 && x[0] > opts->rebalance_tol * mean)
+        PA_CALL(pa_dmesh_redistribute(dm, NULL, NULL));
+    }
+    rep.t_rebalance = pa_wtime() - ta;
+    PA_CALL(pa__allreduce(dm->comm, &rep.t_rebalance, 1, MPI_DOUBLE, MPI_MAX));
+  }
+  PA_CALL(pa_dmesh_value_remove(dm, done));
+  done = NULL;
+  if (opts->check_pieces) PA_CALL(pa_dmesh_check(dm));
+cleanup:
+  pa__iter_free(&it);
+  if (dm) {
+    st = pa__agree_end(dm->comm, st);
+    if (done) pa_dmesh_value_remove(dm, done);
+    if (st) return st;
+    uint64_t mem[2] = {pa_memory_peak(), pa_peak_rss()};
+    MPI_Allreduce(MPI_IN_PLACE, mem, 2, MPI_UINT64_T, MPI_MAX, dm->comm);
+    rep.peak_memory = (size_t)mem[0];
+    rep.peak_rss = (size_t)mem[1];
+    rep.nelem_final = dm->nglob[PA_ELEMENT];
+    rep.nvert_final = dm->nglob[PA_VERTEX];
+    rep.time_total = pa_wtime() - t0;
+    MPI_Allreduce(MPI_IN_PLACE, &rep.time_total, 1, MPI_DOUBLE, MPI_MAX,
+                  dm->comm);
+    if (report) *report = rep;
+  }
+  return st;
+}

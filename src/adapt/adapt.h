@@ -1,0 +1,124 @@
+/*
+ * adapt.h -- private header of the parallel adaptation driver
+ * (pa_dmesh_adapt): the state of one iteration of the piece algorithm and
+ * the steps that share it.
+ *
+ *   tag.c         step 1: tag owned elements, estimate their remeshing work
+ *   pieces.c      step 2: partition the tagged elements into pieces, grow the
+ *                 labels into a skin, mark the frozen outer layer
+ *   extract.c     step 3: map pieces to ranks, ship their fragments, build
+ *                 one sequential mesh per piece
+ *   reintegrate.c steps 4-5: remesh the local pieces, check the outputs,
+ *                 rebuild the distributed mesh with the new entities
+ *   adapt.c       the loop, options, report, the final rebalance
+ *   dstats.c      pa_dmesh_stats (statistics of a distributed mesh)
+ *
+ * Invariants of an iteration (see docs/ADAPT.md for the argument):
+ *  - label[e] (owned elements) is a piece in [0, npieces) or -1; every
+ *    tagged element is labelled; pieces are disjoint;
+ *  - frozen[e] = 1 for a labelled element that is user-required or has a
+ *    vertex touching an element of another label or of none: every vertex a
+ *    piece shares with the outside is a vertex of a frozen element, so a
+ *    piece remeshed with its frozen elements untouched fits back exactly;
+ *  - an element stays (same global id, same values) when it is unlabelled,
+ *    frozen, or its piece failed; all other labelled elements are replaced by
+ *    the non-frozen output elements of their piece;
+ *  - every vertex, boundary entity and edge is given to the rebuild exactly
+ *    once: by its old owner if it lies in a staying element, otherwise by
+ *    the rank that remeshed its piece.
+ */
+#ifndef PA_ADAPT_H
+#define PA_ADAPT_H
+
+#include "dmesh/dmesh.h"
+#include "metric/metric.h"
+
+/* Flag bits of element records in transit: the element is frozen; it is
+ * frozen and tagged (it will be remeshed in a later iteration). */
+#define PA__FROZEN_TRANSIT 0x80
+#define PA__TAGGED_TRANSIT 0x40
+/* Values of the "done" element value: 0 never remeshed, 1 remeshed (never
+ * tagged again), 2 remeshed near a tagged frozen element (the remesher was
+ * constrained there: tagged again if it fails the criteria). */
+#define PA__DONE 1
+#define PA__DONE_NEAR_SKIN 2
+/* Name of the vertex field carrying the global ids through a remesher. */
+#define PA__GID_FIELD "pa.adapt.gid"
+/* Name of the element value marking elements produced in this run. */
+#define PA__DONE_VALUE "pa.adapt.done"
+/* Reference of the artificial boundary entities of a piece's outer surface. */
+#define PA__SKIN_REF (-2000000001)
+/* Estimated bytes of remesher memory per unit of work (one output element). */
+#define PA__BYTES_PER_WORK 1000.0
+
+/* A piece received by this rank and its remeshed output. */
+typedef struct pa__piece {
+  int id;              /* piece number */
+  pa_mesh *in;         /* the piece as extracted (kept for checks) */
+  pa_mesh *out;        /* remeshed copy, NULL if it failed */
+  pa_gid *vgid;        /* in->nv: global id of each input vertex */
+  uint8_t *skin;       /* in->nv: vertex of a frozen element */
+  uint8_t *hot;        /* in->nv: vertex of a frozen tagged element */
+  pa_idx nfrozen;      /* frozen input elements */
+  pa_idx *match;       /* out->nv: input vertex it is (same gid and
+                          coordinates), or -1 for a new vertex */
+  pa_remesh_report rep;
+} pa__piece;
+
+/* The state of one iteration. Arrays over owned elements have ne entries. */
+typedef struct pa__iter {
+  pa_dmesh *dm;
+  const pa_adapt_opts *opts;
+  int rank, size, dim, nve;
+  pa_idx ne;           /* owned elements */
+  uint8_t *tag;        /* tagged for remeshing */
+  double *work;        /* estimated work of each owned element */
+  int *label;          /* piece or -1 */
+  uint8_t *frozen;     /* labelled and frozen */
+  int npieces;
+  double *piece_work;  /* npieces: estimated work */
+  int *piece_rank;     /* npieces: destination rank */
+  int *piece_failed;   /* npieces: 1 if the piece was rolled back */
+  int npiece_local;
+  pa__piece *pieces;   /* the pieces remeshed by this rank */
+  double bytes_moved;  /* record bytes this rank sent to other ranks */
+  double imbalance;    /* estimated work: max over ranks / mean */
+  pa_gid ntagged;      /* global */
+  double tagwork;      /* global work of the tagged elements */
+} pa__iter;
+
+void pa__iter_free(pa__iter *it);
+
+/* Owned vertex -> owned elements (CSR), built on the local mesh. */
+pa_status pa__owned_balls(pa_dmesh *dm, pa_idx **start, pa_idx **elems);
+
+/* Step 1. Collective: tag the owned elements (it->tag), count them
+ * (it->ntagged, global) and estimate their work (it->work). done: the
+ * element value marking elements produced in this run (never tagged). */
+pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int first);
+
+/* Step 2. Collective: pieces, labels, skin and frozen marks. npieces_max is
+ * the number of pieces wanted (reduced when the work is small). */
+pa_status pa__adapt_pieces(pa__iter *it, int npieces_max);
+
+/* Step 3. Collective: map pieces to ranks, ship their fragments and build
+ * the local pieces (it->pieces). */
+pa_status pa__adapt_extract(pa__iter *it);
+
+/* Step 4. Local: remesh the local pieces; failures are recorded, not
+ * returned (only hard internal errors are). *nfail receives the number of
+ * local pieces rolled back. */
+pa_status pa__adapt_remesh(pa__iter *it, int *nfail);
+
+/* Step 5. Collective: rebuild dm from the staying entities and the outputs.
+ * done: the element value marking produced elements (set to 1 on them). */
+pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done);
+
+/* Bytes of the payload of a new entity of a kind and reference: zero for
+ * every value but `done`, which gets doneval. buf has room for every
+ * value. */
+size_t pa__new_payload(const pa_dmesh *dm, int kind, int32_t ref,
+                       const pa_dmesh_value *done, uint8_t doneval,
+                       unsigned char *buf);
+
+#endif /* PA_ADAPT_H */

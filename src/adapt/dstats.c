@@ -1,0 +1,195 @@
+/*
+ * dstats.c -- pa_dmesh_stats: the statistics of pa_mesh_stats for a
+ * distributed mesh, without gathering it.
+ *
+ * Elements are counted by their owner (volume, inversion, quality). Each
+ * edge is measured once over the ranks: an edge with an endpoint that has
+ * no copy on another rank exists on this rank only and is counted here;
+ * every other edge is sent (as a record keyed by a hash of its two vertex
+ * global ids) to the rank hash % size, which counts each distinct pair
+ * once. Lengths are computed with the endpoints in global-id order, so every
+ * rank computes the same value for the same edge. Bins and conventions are
+ * those of pa_mesh_stats (stats.c).
+ */
+#include "adapt/adapt.h"
+
+#include <math.h>
+
+static const double edge_bounds[PA_STATS_EDGE_NBIN - 2] = {
+    0.3, 0.6, 0.7071, 0.9, 1.3, 1.4142, 2.0, 5.0};
+
+static void add_edge(pa_stats *s, double len) {
+  int b = 0;
+  while (b < PA_STATS_EDGE_NBIN - 2 && len >= edge_bounds[b]) b++;
+  s->edge_hist[b]++;
+  if (len >= 0.7071 && len < 1.4142) s->edge_hist[PA_STATS_EDGE_NBIN - 1]++;
+  if (s->nedge == 0 || len < s->edge_min) s->edge_min = len;
+  if (s->nedge == 0 || len > s->edge_max) s->edge_max = len;
+  s->edge_sum += len;
+  s->nedge++;
+}
+
+static void add_quality(pa_stats *s, double q, pa_gid before) {
+  int b = (int)floor(q / 0.2);
+  if (!(b >= 0)) b = 0;
+  if (b >= PA_STATS_QUAL_NBIN) b = PA_STATS_QUAL_NBIN - 1;
+  s->qual_hist[b]++;
+  if (q > 0.5) s->qual_above_05++;
+  if (q > 0.12) s->qual_above_012++;
+  if (before == 0 || q < s->qual_min) s->qual_min = q;
+  if (before == 0 || q > s->qual_max) s->qual_max = q;
+  s->qual_sum += q;
+}
+
+static uint64_t pair_hash(pa_gid a, pa_gid b) {
+  return pa__mix64(pa__mix64((uint64_t)a) ^ (uint64_t)b) >> 1;
+}
+
+/* Combine the partial statistics of the ranks. */
+static pa_status combine(MPI_Comm comm, pa_stats *s) {
+  pa_status st = PA_SUCCESS;
+  pa_gid c[4 + PA_STATS_EDGE_NBIN + PA_STATS_QUAL_NBIN];
+  double sum[3] = {s->volume, s->edge_sum, s->qual_sum};
+  double mn[2] = {s->nedge ? s->edge_min : INFINITY,
+                  s->nelem ? s->qual_min : INFINITY};
+  double mx[2] = {s->nedge ? s->edge_max : -INFINITY,
+                  s->nelem ? s->qual_max : -INFINITY};
+  int n = 0;
+  c[n++] = s->ninverted;
+  c[n++] = s->nedge;
+  c[n++] = s->qual_above_05;
+  c[n++] = s->qual_above_012;
+  for (int k = 0; k < PA_STATS_EDGE_NBIN; k++) c[n++] = s->edge_hist[k];
+  for (int k = 0; k < PA_STATS_QUAL_NBIN; k++) c[n++] = s->qual_hist[k];
+  PA_CALL(pa__allreduce(comm, c, n, MPI_INT64_T, MPI_SUM));
+  PA_CALL(pa__allreduce(comm, sum, 3, MPI_DOUBLE, MPI_SUM));
+  PA_CALL(pa__allreduce(comm, mn, 2, MPI_DOUBLE, MPI_MIN));
+  PA_CALL(pa__allreduce(comm, mx, 2, MPI_DOUBLE, MPI_MAX));
+  n = 0;
+  s->ninverted = c[n++];
+  s->nedge = c[n++];
+  s->qual_above_05 = c[n++];
+  s->qual_above_012 = c[n++];
+  for (int k = 0; k < PA_STATS_EDGE_NBIN; k++) s->edge_hist[k] = c[n++];
+  for (int k = 0; k < PA_STATS_QUAL_NBIN; k++) s->qual_hist[k] = c[n++];
+  s->volume = sum[0];
+  s->edge_sum = sum[1];
+  s->qual_sum = sum[2];
+  s->edge_min = s->nedge ? mn[0] : 0;
+  s->edge_max = s->nedge ? mx[0] : 0;
+  s->qual_min = isfinite(mn[1]) ? mn[1] : 0;
+  s->qual_max = isfinite(mx[1]) ? mx[1] : 0;
+cleanup:
+  return st;
+}
+
+pa_status pa_dmesh_stats(pa_dmesh *dm, pa_stats *stats) {
+  pa_status st = PA_SUCCESS;
+  pa_stats s;
+  uint8_t *shared = NULL;
+  pa_gid *key = NULL;
+  int *dest = NULL;
+  pa__recs S, R;
+  pa__recs_init(&S, PA_EDGE, 2, 1);
+  pa__recs_init(&R, PA_EDGE, 2, 1);
+  memset(&s, 0, sizeof s);
+  PA_CHECK(dm && stats, PA_ERR_ARG, "pa_dmesh_stats: NULL argument");
+  pa__agree_reset();
+  pa_mesh *m = dm->mesh;
+  int d = dm->dim, nve = d + 1, nc = m->met_ncomp;
+  pa_idx ne = dm->nown[PA_ELEMENT], nv = dm->nloc[PA_VERTEX];
+  const pa_gid *vg = dm->gid[PA_VERTEX];
+  s.dim = d;
+  s.has_metric = nc > 0;
+  s.nvert = dm->nglob[PA_VERTEX];
+  s.nelem = dm->nglob[PA_ELEMENT];
+  s.nbdry = dm->nglob[PA_BOUNDARY];
+
+  /* elements */
+  for (pa_idx e = 0; e < ne; e++) {
+    const pa_idx *v = m->elem + (size_t)nve * e;
+    const double *x[4], *mm[4];
+    for (int k = 0; k < nve; k++) {
+      x[k] = m->coord + (size_t)d * v[k];
+      mm[k] = nc ? m->met + (size_t)nc * v[k] : NULL;
+    }
+    double vol = pa__simplex_volume(d, x);
+    s.volume += vol;
+    if (vol <= 0) s.ninverted++;
+    add_quality(&s, pa__quality(d, nc, x, mm), e);
+  }
+
+  /* vertices with copies elsewhere: ghosts, and owned ones with ghosts */
+  {
+    pa_dmesh_iter iv;
+    pa_idx v;
+    PA_CALLOC(shared, nv);
+    for (pa_idx i = 0; i < nv; i++) shared[i] = 1;
+    PA_CALL(pa_dmesh_iter_init(dm, PA_VERTEX, PA_INTERIOR, &iv));
+    while (pa_dmesh_iter_next(&iv, &v)) shared[v] = 0;
+  }
+
+  /* unique local edges (local vertex pairs), then local or sent */
+  {
+    size_t n = 0;
+    pa_gid N = nv > 0 ? nv : 1;
+    PA_ALLOC(key, (size_t)ne * nve * d / 2 + 1);
+    for (pa_idx e = 0; e < ne; e++) {
+      const pa_idx *v = m->elem + (size_t)nve * e;
+      for (int i = 0; i < nve; i++)
+        for (int j = i + 1; j < nve; j++) {
+          pa_idx a = v[i], b = v[j];
+          if (a == b) continue;
+          if (vg[a] > vg[b]) {
+            pa_idx t = a;
+            a = b;
+            b = t;
+          }
+          key[n++] = (pa_gid)a * N + b;
+        }
+    }
+    n = pa__gid_sort_unique(key, n);
+    PA_ALLOC(dest, n);
+    size_t ns = 0;
+    for (size_t i = 0; i < n; i++) {
+      pa_idx a = (pa_idx)(key[i] / N), b = (pa_idx)(key[i] % N);
+      double len = pa__edge_length(d, nc, m->coord + (size_t)d * a,
+                                   m->coord + (size_t)d * b,
+                                   nc ? m->met + (size_t)nc * a : NULL,
+                                   nc ? m->met + (size_t)nc * b : NULL);
+      if (!shared[a] || !shared[b]) {
+        add_edge(&s, len);
+        continue;
+      }
+      pa_gid ab[2] = {vg[a], vg[b]};
+      uint64_t h = pair_hash(ab[0], ab[1]);
+      PA_CALL(pa__recs_add(&S, (pa_gid)h, ab, 0, 0, 0, &len, NULL, 0));
+      dest[ns++] = (int)(h % (uint64_t)dm->size);
+    }
+  }
+  PA_CALL(pa__recs_migrate(dm->comm, &S, dest, &R));
+  /* R is sorted by hash: equal pairs are in the same run of equal hashes */
+  for (size_t i = 0; i < R.n; i++) {
+    int dup = 0;
+    for (size_t j = i; j > 0 && R.gid[j - 1] == R.gid[i] && !dup; j--)
+      dup = R.vgid[2 * (j - 1)] == R.vgid[2 * i] &&
+            R.vgid[2 * (j - 1) + 1] == R.vgid[2 * i + 1];
+    if (!dup) add_edge(&s, R.dbl[i]);
+  }
+  PA_CALL(combine(dm->comm, &s));
+  {
+    pa_status c = pa_dmesh_check(dm);
+    if (c == PA_ERR_MEMORY) PA_CALL(c);
+    s.valid = c == PA_SUCCESS;
+    if (!s.valid) pa_clear_error();
+  }
+  *stats = s;
+cleanup:
+  if (dm) st = pa__agree_end(dm->comm, st);
+  pa__free(shared);
+  pa__free(key);
+  pa__free(dest);
+  pa__recs_free(&S);
+  pa__recs_free(&R);
+  return st;
+}

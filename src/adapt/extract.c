@@ -1,0 +1,415 @@
+/*
+ * extract.c -- step 3 of the piece algorithm: map the pieces to ranks and
+ * gather each piece's fragments onto its rank as one sequential mesh.
+ *
+ * Mapping: the piece x rank matrix of element counts and the work of every
+ * piece are summed over the ranks (every rank then computes the same map).
+ * Pieces are taken heaviest first; each goes to the rank holding most of
+ * its elements unless that rank would exceed the mean load by 10 %, else to
+ * the least loaded rank (ties: lowest rank), so little data moves and the
+ * estimated work is balanced.
+ *
+ * Gathering: each rank sends, for every labelled owned element, the element
+ * (aux = piece, frozen in a transit flag bit), and for every (piece, entity)
+ * pair the vertices, boundary entities and edges of the piece's elements it
+ * holds (vertices with coordinates, metric and fields). pa__recs_migrate
+ * moves them; the receiver drops duplicates (an entity held by several
+ * ranks) and assembles each of its pieces, numbered by increasing global id,
+ * so the piece does not depend on how its fragments were spread.
+ *
+ * The piece mesh carries the vertex global ids as an extra field
+ * (PA__GID_FIELD) so that skin vertices can be matched after remeshing; its
+ * frozen elements are flagged PA_FLAG_REQUIRED; the faces of its outer
+ * surface that are not boundary entities become boundary entities of
+ * reference PA__SKIN_REF flagged PA_FLAG_REQUIRED (they all lie on frozen
+ * elements).
+ */
+#include "adapt/adapt.h"
+
+#include <math.h>
+#include <stdio.h>
+
+/* 1 if owned element e contains the k vertices f (local indices). */
+static int contains(const pa_mesh *m, pa_idx e, const pa_idx *f, int k) {
+  const pa_idx *v = m->elem + (size_t)(m->dim + 1) * e;
+  for (int i = 0; i < k; i++) {
+    int in = 0;
+    for (int j = 0; j <= m->dim; j++) in |= v[j] == f[i];
+    if (!in) return 0;
+  }
+  return 1;
+}
+
+/* Heaviest-first greedy map of pieces to ranks (see the file comment). */
+static pa_status map_pieces(pa__iter *it, const double *cnt) {
+  pa_status st = PA_SUCCESS;
+  int np = it->npieces, P = it->size;
+  int *order = NULL;
+  double *load = NULL, total = 0;
+  PA_ALLOC(order, np);
+  PA_CALLOC(load, P);
+  for (int p = 0; p < np; p++) {
+    order[p] = p;
+    total += it->piece_work[p];
+  }
+  /* insertion sort by work descending, then id: np is small */
+  for (int i = 1; i < np; i++) {
+    int x = order[i], j = i - 1;
+    while (j >= 0 && (it->piece_work[order[j]] < it->piece_work[x] ||
+                      (it->piece_work[order[j]] == it->piece_work[x] &&
+                       order[j] > x))) {
+      order[j + 1] = order[j];
+      j--;
+    }
+    order[j + 1] = x;
+  }
+  double mean = total / P;
+  for (int i = 0; i < np; i++) {
+    int p = order[i], best = 0, least = 0;
+    for (int r = 1; r < P; r++) {
+      if (cnt[(size_t)p * P + r] > cnt[(size_t)p * P + best]) best = r;
+      if (load[r] < load[least]) least = r;
+    }
+    int r = best;
+    if (load[best] > 0 && load[best] + it->piece_work[p] > 1.1 * mean) r = least;
+    it->piece_rank[p] = r;
+    load[r] += it->piece_work[p];
+    if (it->rank == 0)
+      pa__info(2, "padapt: piece %d: work %.0f, %.0f elements on its rank "
+                  "%d (most on %d)\n", p, it->piece_work[p],
+               cnt[(size_t)p * P + r], r, best);
+  }
+  {
+    double mx = 0;
+    for (int r = 0; r < P; r++) mx = load[r] > mx ? load[r] : mx;
+    it->imbalance = mean > 0 ? mx / mean : 1.0;
+  }
+cleanup:
+  pa__free(order);
+  pa__free(load);
+  return st;
+}
+
+/* Sort and deduplicate keys piece * n + entity; returns the count. */
+static size_t pairs_unique(pa_gid *key, size_t n) {
+  return pa__gid_sort_unique(key, n);
+}
+
+/* Records of the (piece, entity) pairs of a kind held by this rank. */
+static pa_status pair_records(pa__iter *it, int kind, const pa_idx *bstart,
+                              const pa_idx *belem, pa__recs *R, int **dest) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  const pa_mesh *m = dm->mesh;
+  int d = it->dim, nv = pa__kind_nv(d, kind);
+  pa_idx nloc = dm->nloc[kind];
+  size_t n = 0, cap = 0;
+  pa_gid *key = NULL, N = nloc > 0 ? nloc : 1;
+  double *dbl = NULL;
+  pa__layout lay;
+  pa__dmesh_layout(dm, &lay);
+  if (kind == PA_VERTEX) {
+    PA_ALLOC(key, (size_t)it->ne * it->nve);
+    for (pa_idx e = 0; e < it->ne; e++)
+      if (it->label[e] >= 0)
+        for (int k = 0; k < it->nve; k++)
+          key[n++] = (pa_gid)it->label[e] * N + m->elem[(size_t)it->nve * e + k];
+  } else {
+    const pa_idx *conn = kind == PA_BOUNDARY ? m->bdry : m->edge;
+    for (pa_idx b = 0; b < nloc; b++) {
+      const pa_idx *f = conn + (size_t)nv * b;
+      for (pa_idx q = bstart[f[0]]; q < bstart[f[0] + 1]; q++) {
+        pa_idx e = belem[q];
+        if (it->label[e] < 0 || !contains(m, e, f, nv)) continue;
+        PA_GROW(key, cap, n + 1);
+        key[n++] = (pa_gid)it->label[e] * N + b;
+      }
+    }
+  }
+  n = pairs_unique(key, n);
+  PA_ALLOC(*dest, n);
+  if (kind == PA_VERTEX) PA_ALLOC(dbl, R->ndbl);
+  for (size_t i = 0; i < n; i++) {
+    int p = (int)(key[i] / N);
+    pa_idx x = (pa_idx)(key[i] % N);
+    pa_gid vg[4];
+    int32_t ref;
+    uint8_t flag;
+    if (kind == PA_VERTEX) {
+      double *y = dbl;
+      memcpy(y, m->coord + (size_t)d * x, d * sizeof *y);
+      y += d;
+      if (m->met_ncomp) {
+        memcpy(y, m->met + (size_t)m->met_ncomp * x, m->met_ncomp * sizeof *y);
+        y += m->met_ncomp;
+      }
+      for (int f = 0; f < m->nfield; f++) {
+        memcpy(y, m->field[f].val + (size_t)m->field[f].ncomp * x,
+               m->field[f].ncomp * sizeof *y);
+        y += m->field[f].ncomp;
+      }
+      ref = m->vref[x];
+      flag = m->vflag[x];
+    } else {
+      const pa_idx *conn = kind == PA_BOUNDARY ? m->bdry : m->edge;
+      for (int j = 0; j < nv; j++)
+        vg[j] = dm->gid[PA_VERTEX][conn[(size_t)nv * x + j]];
+      ref = kind == PA_BOUNDARY ? m->bref[x] : m->edref[x];
+      flag = kind == PA_BOUNDARY ? m->bflag[x] : m->edflag[x];
+    }
+    PA_CALL(pa__recs_add(R, dm->gid[kind][x], vg, ref, flag, p, dbl, NULL, 0));
+    (*dest)[i] = it->piece_rank[p];
+  }
+cleanup:
+  pa__free(key);
+  pa__free(dbl);
+  return st;
+}
+
+/* Wire bytes of the records going to other ranks. */
+static double bytes_out(const pa__recs *R, const int *dest, int rank) {
+  double b = 0;
+  for (size_t i = 0; i < R->n; i++)
+    if (dest[i] != rank) b += (double)pa__recs_wire(R, i);
+  return b;
+}
+
+/* Record indices of R grouped by piece (aux), by gid within a piece,
+ * without duplicate gids: piece p's are idx[start[p] .. start[p+1]). */
+static pa_status group_by_piece(const pa__recs *R, int npieces, pa_idx **idxp,
+                                pa_idx **startp) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *idx = NULL, *start = NULL;
+  PA_CALLOC(start, (size_t)npieces + 1);
+  PA_ALLOC(idx, R->n);
+  for (size_t i = 0; i < R->n; i++) start[R->aux[i] + 1]++;
+  for (int p = 0; p < npieces; p++) start[p + 1] += start[p];
+  for (size_t i = 0; i < R->n; i++) idx[start[R->aux[i]]++] = (pa_idx)i;
+  for (int p = npieces; p > 0; p--) start[p] = start[p - 1];
+  start[0] = 0;
+  /* R is sorted by gid, so each group is too: drop repeated gids */
+  {
+    pa_idx w = 0;
+    for (int p = 0; p < npieces; p++) {
+      pa_idx s = start[p], e = start[p + 1];
+      start[p] = w;
+      for (pa_idx q = s; q < e; q++)
+        if (q == s || R->gid[idx[q]] != R->gid[idx[q - 1]]) idx[w++] = idx[q];
+    }
+    start[npieces] = w;
+  }
+  *idxp = idx;
+  *startp = start;
+  idx = start = NULL;
+cleanup:
+  pa__free(idx);
+  pa__free(start);
+  return st;
+}
+
+/* Assemble piece p from the received records. */
+static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
+                             pa_idx *const *idx, pa_idx *const *start,
+                             pa__piece *pc) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  int d = it->dim;
+  pa_mesh *m = NULL;
+  pa__gidmap map = {0};
+  const pa__recs *V = &R[PA_VERTEX], *E = &R[PA_ELEMENT];
+  pa_idx nv = start[PA_VERTEX][p + 1] - start[PA_VERTEX][p];
+  pa_idx ne = start[PA_ELEMENT][p + 1] - start[PA_ELEMENT][p];
+  pa_idx nb = start[PA_BOUNDARY][p + 1] - start[PA_BOUNDARY][p];
+  pa_idx nd = start[PA_EDGE][p + 1] - start[PA_EDGE][p];
+  const pa_mesh *dmm = dm->mesh;
+  memset(pc, 0, sizeof *pc);
+  pc->id = p;
+  PA_CHECK(dmm->nfield < PA_MAX_FIELDS, PA_ERR_UNSUPPORTED,
+           "parallel adaptation needs one free vertex field slot (the mesh "
+           "has %d fields, at most %d)", dmm->nfield, PA_MAX_FIELDS - 1);
+  PA_CALL(pa_mesh_create(d, &m));
+  m->met_ncomp = dmm->met_ncomp;
+  m->nfield = dmm->nfield + 1;
+  for (int f = 0; f < dmm->nfield; f++) {
+    snprintf(m->field[f].name, PA_FIELD_NAME_LEN, "%s", dmm->field[f].name);
+    m->field[f].ncomp = dmm->field[f].ncomp;
+  }
+  snprintf(m->field[dmm->nfield].name, PA_FIELD_NAME_LEN, "%s", PA__GID_FIELD);
+  m->field[dmm->nfield].ncomp = 1;
+  PA_CALL(pa_mesh_reserve(m, nv, ne, nb, nd));
+  PA_ALLOC(pc->vgid, nv);
+  PA_CALLOC(pc->skin, nv);
+  PA_CALLOC(pc->hot, nv);
+  PA_CALL(pa__gidmap_init(&map, (size_t)nv));
+  for (pa_idx k = 0; k < nv; k++) {
+    size_t i = (size_t)idx[PA_VERTEX][start[PA_VERTEX][p] + k];
+    const double *y = V->dbl + (size_t)V->ndbl * i;
+    memcpy(m->coord + (size_t)d * k, y, d * sizeof *y);
+    y += d;
+    if (m->met_ncomp) {
+      memcpy(m->met + (size_t)m->met_ncomp * k, y, m->met_ncomp * sizeof *y);
+      y += m->met_ncomp;
+    }
+    for (int f = 0; f < dmm->nfield; f++) {
+      memcpy(m->field[f].val + (size_t)m->field[f].ncomp * k, y,
+             m->field[f].ncomp * sizeof *y);
+      y += m->field[f].ncomp;
+    }
+    m->field[dmm->nfield].val[k] = (double)V->gid[i];
+    m->vref[k] = V->ref[i];
+    m->vflag[k] = V->flag[i];
+    pc->vgid[k] = V->gid[i];
+    PA_CALL(pa__gidmap_put(&map, V->gid[i], k, NULL, NULL));
+  }
+  m->nv = nv;
+  for (pa_idx k = 0; k < ne; k++) {
+    size_t i = (size_t)idx[PA_ELEMENT][start[PA_ELEMENT][p] + k];
+    int fr = (E->flag[i] & PA__FROZEN_TRANSIT) != 0;
+    int hot = (E->flag[i] & PA__TAGGED_TRANSIT) != 0;
+    for (int j = 0; j <= d; j++) {
+      pa_idx v = pa__gidmap_get(&map, E->vgid[(size_t)(d + 1) * i + j]);
+      PA_CHECK(v >= 0, PA_ERR_INTERNAL, "piece %d: vertex %lld of element "
+               "%lld was not gathered", p,
+               (long long)E->vgid[(size_t)(d + 1) * i + j], (long long)E->gid[i]);
+      m->elem[(size_t)(d + 1) * k + j] = v;
+      if (fr) pc->skin[v] = 1;
+      if (hot) pc->hot[v] = 1;
+    }
+    m->eref[k] = E->ref[i];
+    m->eflag[k] = (uint8_t)((E->flag[i] & ~(PA__FROZEN_TRANSIT | PA__TAGGED_TRANSIT)) |
+                            (fr ? PA_FLAG_REQUIRED : 0));
+    pc->nfrozen += fr;
+  }
+  m->ne = ne;
+  for (int kind = PA_BOUNDARY; kind <= PA_EDGE; kind++) {
+    const pa__recs *B = &R[kind];
+    int nvk = pa__kind_nv(d, kind);
+    pa_idx n = start[kind][p + 1] - start[kind][p];
+    pa_idx *conn = kind == PA_BOUNDARY ? m->bdry : m->edge;
+    for (pa_idx k = 0; k < n; k++) {
+      size_t i = (size_t)idx[kind][start[kind][p] + k];
+      for (int j = 0; j < nvk; j++) {
+        pa_idx v = pa__gidmap_get(&map, B->vgid[(size_t)nvk * i + j]);
+        PA_CHECK(v >= 0, PA_ERR_INTERNAL, "piece %d: a vertex of %s %lld was "
+                 "not gathered", p, kind == PA_BOUNDARY ? "boundary entity" : "edge",
+                 (long long)B->gid[i]);
+        conn[(size_t)nvk * k + j] = v;
+      }
+      if (kind == PA_BOUNDARY) {
+        m->bref[k] = B->ref[i];
+        m->bflag[k] = B->flag[i];
+      } else {
+        m->edref[k] = B->ref[i];
+        m->edflag[k] = B->flag[i];
+      }
+    }
+    if (kind == PA_BOUNDARY) m->nb = n;
+    else m->ned = n;
+  }
+  /* the outer surface: artificial, frozen boundary entities */
+  {
+    pa_idx nb0 = m->nb;
+    PA_CALL(pa_mesh_build_boundary(m, PA__SKIN_REF, NULL));
+    for (pa_idx b = nb0; b < m->nb; b++) m->bflag[b] |= PA_FLAG_REQUIRED;
+  }
+  pc->in = m;
+  m = NULL;
+cleanup:
+  pa_mesh_destroy(m);
+  pa__gidmap_free(&map);
+  return st;
+}
+
+pa_status pa__adapt_extract(pa__iter *it) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  const pa_mesh *m = dm->mesh;
+  int np = it->npieces, P = it->size;
+  double *buf = NULL;
+  pa_idx *bstart = NULL, *belem = NULL;
+  pa__recs S[PA_NKIND], R[PA_NKIND];
+  int *dest[PA_NKIND] = {NULL, NULL, NULL, NULL};
+  pa_idx *idx[PA_NKIND] = {NULL, NULL, NULL, NULL};
+  pa_idx *start[PA_NKIND] = {NULL, NULL, NULL, NULL};
+  pa__layout lay;
+  pa__dmesh_layout(dm, &lay);
+  for (int k = 0; k < PA_NKIND; k++) {
+    pa__recs_init(&S[k], k, pa__kind_nv(it->dim, k),
+                  k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
+    pa__recs_init(&R[k], k, pa__kind_nv(it->dim, k),
+                  k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
+  }
+
+  /* 1. the piece x rank matrix and the work of every piece */
+  PA_ALLOC(it->piece_work, np);
+  PA_ALLOC(it->piece_rank, np);
+  PA_CALLOC(it->piece_failed, np);
+  PA_CALLOC(buf, (size_t)np * P + np);
+  for (pa_idx e = 0; e < it->ne; e++)
+    if (it->label[e] >= 0) {
+      buf[(size_t)it->label[e] * P + it->rank] += 1;
+      buf[(size_t)np * P + it->label[e]] += it->work[e];
+    }
+  PA_CALL(pa__allreduce(dm->comm, buf, np * P + np, MPI_DOUBLE, MPI_SUM));
+  memcpy(it->piece_work, buf + (size_t)np * P, np * sizeof *buf);
+  PA_CALL(map_pieces(it, buf));
+
+  /* 2. records to ship */
+  {
+    pa_idx n = 0;
+    for (pa_idx e = 0; e < it->ne; e++) n += it->label[e] >= 0;
+    PA_ALLOC(dest[PA_ELEMENT], n);
+    n = 0;
+    for (pa_idx e = 0; e < it->ne; e++) {
+      if (it->label[e] < 0) continue;
+      pa_gid vg[4];
+      for (int j = 0; j < it->nve; j++)
+        vg[j] = dm->gid[PA_VERTEX][m->elem[(size_t)it->nve * e + j]];
+      uint8_t fl = (uint8_t)(m->eflag[e] | (it->frozen[e] ? PA__FROZEN_TRANSIT : 0) |
+                             (it->frozen[e] && it->tag[e] ? PA__TAGGED_TRANSIT : 0));
+      PA_CALL(pa__recs_add(&S[PA_ELEMENT], dm->gid[PA_ELEMENT][e], vg,
+                           m->eref[e], fl, it->label[e], NULL, NULL, 0));
+      dest[PA_ELEMENT][n++] = it->piece_rank[it->label[e]];
+    }
+  }
+  PA_CALL(pa__owned_balls(dm, &bstart, &belem));
+  PA_CALL(pair_records(it, PA_VERTEX, NULL, NULL, &S[PA_VERTEX], &dest[PA_VERTEX]));
+  PA_CALL(pair_records(it, PA_BOUNDARY, bstart, belem, &S[PA_BOUNDARY],
+                       &dest[PA_BOUNDARY]));
+  PA_CALL(pair_records(it, PA_EDGE, bstart, belem, &S[PA_EDGE], &dest[PA_EDGE]));
+  pa__free(bstart);
+  pa__free(belem);
+  bstart = belem = NULL;
+
+  /* 3. ship */
+  for (int k = 0; k < PA_NKIND; k++) {
+    it->bytes_moved += bytes_out(&S[k], dest[k], it->rank);
+    PA_CALL(pa__recs_migrate(dm->comm, &S[k], dest[k], &R[k]));
+    pa__recs_free(&S[k]);
+    pa__free(dest[k]);
+    dest[k] = NULL;
+  }
+
+  /* 4. assemble the local pieces */
+  for (int k = 0; k < PA_NKIND; k++)
+    PA_CALL(group_by_piece(&R[k], np, &idx[k], &start[k]));
+  it->npiece_local = 0;
+  for (int p = 0; p < np; p++) it->npiece_local += it->piece_rank[p] == it->rank;
+  PA_CALLOC(it->pieces, it->npiece_local);
+  for (int p = 0, q = 0; p < np; p++)
+    if (it->piece_rank[p] == it->rank)
+      PA_CALL(build_piece(it, p, R, idx, start, &it->pieces[q++]));
+cleanup:
+  st = pa__agree_end(dm->comm, st);
+  pa__free(buf);
+  pa__free(bstart);
+  pa__free(belem);
+  for (int k = 0; k < PA_NKIND; k++) {
+    pa__recs_free(&S[k]);
+    pa__recs_free(&R[k]);
+    pa__free(dest[k]);
+    pa__free(idx[k]);
+    pa__free(start[k]);
+  }
+  return st;
+}

@@ -1,0 +1,176 @@
+/*
+ * pieces.c -- step 2 of the piece algorithm: split the tagged elements into
+ * disjoint pieces and give each piece a skin whose outer layer is frozen.
+ *
+ *  1. The number of pieces: npieces_max (processes x pieces per process),
+ *     fewer when the tagged work is small (min_piece_work each, and
+ *     min_piece_ratio of the mean elements per rank), more when a piece
+ *     would not fit the memory bound (mem_mb).
+ *  2. PT-Scotch partitions the distributed dual graph of the tagged elements
+ *     only (pa__dual_graph on their vertex ids), weighted by the work.
+ *  3. The labels grow skin_layers vertex layers outward: every vertex takes
+ *     the smallest label of the labelled owned elements around it (reduced
+ *     over the ranks, then sent back to the ghosts), and every unlabelled
+ *     owned element takes the smallest label of its vertices. After one
+ *     layer, every element sharing a vertex with a tagged element is
+ *     labelled.
+ *  4. A labelled element is frozen when it is user-required or one of its
+ *     vertices touches an element of another label or of none (per vertex
+ *     the smallest and largest label around it, reduced the same way).
+ *     So the outer layer of every piece is frozen, every vertex shared with
+ *     the outside lies on it, and tagged elements are frozen only where two
+ *     pieces meet.
+ * Only vertex values with reduce/halo cross the ranks here: no point-to-point
+ * code, and the result does not depend on timing.
+ */
+#include "adapt/adapt.h"
+#include "partition/partition.h"
+
+#include <limits.h>
+#include <math.h>
+
+#define NOLABEL INT_MAX
+
+/* Vertex value comp 0 = min over the owned elements around v of lab(e),
+ * comp 1 = min of -lab(e), where lab = label or NOLABEL; only_labelled skips
+ * unlabelled elements. Reduced (MIN) and sent to the ghosts. */
+static pa_status vertex_labels(pa__iter *it, pa_dmesh_value *val,
+                               int only_labelled) {
+  pa_status st = PA_SUCCESS;
+  pa_idx n;
+  int *d = pa_dmesh_value_data(val, &n, NULL);
+  const pa_idx *conn = it->dm->mesh->elem;
+  for (pa_idx v = 0; v < n; v++) d[2 * v] = d[2 * v + 1] = NOLABEL;
+  for (pa_idx e = 0; e < it->ne; e++) {
+    int l = it->label[e] < 0 ? NOLABEL : it->label[e];
+    if (only_labelled && l == NOLABEL) continue;
+    for (int k = 0; k < it->nve; k++) {
+      int *x = d + 2 * conn[(size_t)it->nve * e + k];
+      if (l < x[0]) x[0] = l;
+      if (-l < x[1]) x[1] = -l;
+    }
+  }
+  PA_CALL(pa__agree(it->dm->comm, st));
+  PA_CALL(pa_dmesh_reduce(it->dm, val, MPI_MIN));
+  PA_CALL(pa_dmesh_halo(it->dm, val));
+cleanup:
+  return st;
+}
+
+pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  const pa_adapt_opts *o = it->opts;
+  pa_idx nt = 0, *xadj = NULL;
+  pa_gid *vg = NULL, *adj = NULL;
+  double *wt = NULL, wsum = 0;
+  int *part = NULL, added = 0;
+  pa_dmesh_value *val = NULL;
+  const pa_idx *conn = dm->mesh->elem;
+
+  PA_ALLOC(it->label, it->ne);
+  PA_CALLOC(it->frozen, it->ne);
+  for (pa_idx e = 0; e < it->ne; e++) {
+    it->label[e] = -1;
+    if (it->tag[e]) {
+      nt++;
+      wsum += it->work[e];
+    }
+  }
+  PA_ALLOC(vg, (size_t)nt * it->nve);
+  PA_ALLOC(wt, nt);
+  PA_ALLOC(part, nt);
+  for (pa_idx e = 0, k = 0; e < it->ne; e++)
+    if (it->tag[e]) {
+      for (int j = 0; j < it->nve; j++)
+        vg[(size_t)it->nve * k + j] = dm->gid[PA_VERTEX][conn[(size_t)it->nve * e + j]];
+      wt[k++] = it->work[e];
+    }
+  PA_CALL(pa__allreduce(dm->comm, &wsum, 1, MPI_DOUBLE, MPI_SUM));
+
+  /* 1. number of pieces (the same on every rank: from global figures). A
+   * piece must be worth an iteration: at least min_piece_work, and at least
+   * min_piece_ratio of the mean number of elements per rank (each
+   * iteration rebuilds the whole distributed mesh, so splitting a small
+   * tagged set costs more iterations than it saves). */
+  {
+    double np = npieces_max;
+    double minw = o->min_piece_work > 0 ? o->min_piece_work : 1;
+    double byrank = o->min_piece_ratio * (double)dm->nglob[PA_ELEMENT] / it->size;
+    if (byrank > minw) minw = byrank;
+    if (np > floor(wsum / minw)) np = floor(wsum / minw);
+    if (o->mem_mb > 0) {
+      double npm = ceil(wsum * PA__BYTES_PER_WORK / (o->mem_mb * 1e6));
+      if (npm > np) np = npm;
+    }
+    if (np > (double)it->ntagged) np = (double)it->ntagged;
+    if (np > 1e6) np = 1e6;
+    if (np < 1) np = 1;
+    it->npieces = (int)np;
+  }
+
+  /* 2. partition the tagged elements. pa__partition_dgraph scales the
+   * weights to integer loads up to 1e6 per vertex, whose sum must stay below
+   * 2^31 (32-bit SCOTCH_Num): beyond that, unit weights. */
+  if (it->npieces > 1) {
+    int weighted = (double)it->ntagged * 1e6 < 2147483647.0;
+    PA_CALL(pa__dual_graph(dm->comm, it->dim, nt, vg, &xadj, &adj, NULL, NULL));
+    st = pa__partition_dgraph(dm->comm, nt, xadj, adj, weighted ? wt : NULL,
+                              it->npieces, part);
+    PA_CALL(pa__agree(dm->comm, st));
+  } else {
+    for (pa_idx k = 0; k < nt; k++) part[k] = 0;
+  }
+  for (pa_idx e = 0, k = 0; e < it->ne; e++)
+    if (it->tag[e]) it->label[e] = part[k++];
+
+  /* 3. grow the labels */
+  PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.adapt.label", MPI_INT, 2, -1,
+                             &val));
+  added = 1;
+  for (int layer = 0; layer < (o->skin_layers > 0 ? o->skin_layers : 1);
+       layer++) {
+    PA_CALL(vertex_labels(it, val, 1));
+    const int *d = pa_dmesh_value_data(val, NULL, NULL);
+    for (pa_idx e = 0; e < it->ne; e++) {
+      if (it->label[e] >= 0) continue;
+      int l = NOLABEL;
+      for (int k = 0; k < it->nve; k++) {
+        int x = d[2 * conn[(size_t)it->nve * e + k]];
+        if (x < l) l = x;
+      }
+      /* labels of this layer are set after the loop: use a marker */
+      if (l != NOLABEL) it->label[e] = -2 - l;
+    }
+    for (pa_idx e = 0; e < it->ne; e++)
+      if (it->label[e] <= -2) it->label[e] = -2 - it->label[e];
+  }
+
+  /* 4. frozen outer layer */
+  PA_CALL(vertex_labels(it, val, 0));
+  {
+    const int *d = pa_dmesh_value_data(val, NULL, NULL);
+    for (pa_idx e = 0; e < it->ne; e++) {
+      int l = it->label[e];
+      if (l < 0) continue;
+      int fr = (dm->mesh->eflag[e] & PA_FLAG_REQUIRED) != 0;
+      for (int k = 0; k < it->nve && !fr; k++) {
+        const int *x = d + 2 * conn[(size_t)it->nve * e + k];
+        fr = x[0] != l || -x[1] != l;
+      }
+      it->frozen[e] = (uint8_t)fr;
+    }
+  }
+cleanup:
+  st = pa__agree_end(dm->comm, st);
+  if (added) {
+    pa_status s2 = pa_dmesh_value_remove(dm, val);
+    if (!st) st = s2;
+  }
+  pa__free(vg);
+  pa__free(wt);
+  pa__free(part);
+  pa__free(xadj);
+  pa__free(adj);
+  return st;
+}

@@ -1,0 +1,547 @@
+/*
+ * reintegrate.c -- steps 4 and 5 of the piece algorithm: remesh the local
+ * pieces through the public remesher interface, check each output, and
+ * rebuild the distributed mesh with the new entities.
+ *
+ * Remesh: each piece is copied and remeshed (pa_remesh, hsiz already folded
+ * into the metric). An output is used only if the remesher succeeded (or
+ * missed its target) and the output is consistent: same metric and fields,
+ * as many required elements as frozen ones, every skin vertex back at the
+ * same coordinates with its global id (field PA__GID_FIELD), each required
+ * element on skin vertices only, and (opts->check_pieces) pa_mesh_check
+ * passes. Otherwise the piece is rolled back: its elements stay, still
+ * tagged.
+ *
+ * Rebuild (see adapt.h for the invariants): staying elements are the
+ * unlabelled, frozen and rolled-back ones. An owned vertex, boundary entity
+ * or edge is kept by its owner when some staying element contains it (a MAX
+ * reduction of a per-entity value over the ranks); every other one vanished
+ * or comes back through a piece output. From an output, the remeshing rank
+ * gives: the vertices that are not skin vertices (matched input vertices
+ * keep their global id, the others get fresh ids), the elements that are
+ * not required (fresh ids, "done" value PA__DONE, or PA__DONE_NEAR_SKIN
+ * within NEAR_SKIN vertex layers of a frozen tagged element; other values
+ * zero), and the
+ * boundary entities and edges that do not lie on a required element (fresh
+ * ids; this drops the artificial skin faces, which all lie on frozen
+ * elements). Fresh ids are the global maximum + 1 + an exclusive scan of the
+ * per-rank counts, pieces in increasing order on each rank: deterministic
+ * for a given input and number of ranks.
+ */
+#include "adapt/adapt.h"
+
+#include <math.h>
+
+/* ---- a set of sorted vertex tuples (faces or edges of an output) ---- */
+
+typedef struct tset {
+  size_t cap; /* power of two */
+  pa_idx *key; /* 3 per slot; key[3s] = -1: empty */
+} tset;
+
+static uint64_t tset_hash(const pa_idx *k) { return pa__hash_idx(k, 3); }
+
+static pa_status tset_init(tset *s, size_t n) {
+  pa_status st = PA_SUCCESS;
+  s->cap = 16;
+  while (s->cap < 2 * n + 2) s->cap *= 2;
+  PA_ALLOC(s->key, 3 * s->cap);
+  for (size_t i = 0; i < 3 * s->cap; i++) s->key[i] = -1;
+cleanup:
+  return st;
+}
+
+static void tset_free(tset *s) {
+  pa__free(s->key);
+  s->key = NULL;
+  s->cap = 0;
+}
+
+/* Sorted 3-key of n (2 or 3) vertices, padded with -1. */
+static void tkey(const pa_idx *v, int n, pa_idx *k) {
+  k[2] = -1;
+  for (int i = 0; i < n; i++) k[i] = v[i];
+  pa__sort_small(k, n);
+}
+
+static int tset_find(const tset *s, const pa_idx *k, int insert) {
+  size_t h = tset_hash(k) & (s->cap - 1);
+  for (;;) {
+    pa_idx *x = s->key + 3 * h;
+    if (x[0] == -1 && x[1] == -1 && x[2] == -1) {
+      if (insert) memcpy(x, k, 3 * sizeof *k);
+      return 0;
+    }
+    if (x[0] == k[0] && x[1] == k[1] && x[2] == k[2]) return 1;
+    h = (h + 1) & (s->cap - 1);
+  }
+}
+
+/* ---- step 4: remesh ---- */
+
+/* Check an output against its piece; fills pc->match. Returns 1 if usable. */
+static int output_ok(const pa__iter *it, pa__piece *pc, pa_mesh *out,
+                     pa_status *hard) {
+  pa_status st = PA_SUCCESS;
+  const pa_mesh *in = pc->in;
+  int d = in->dim, ok = 0, gf = in->nfield - 1;
+  pa__gidmap map = {0};
+  uint8_t *seen = NULL;
+  *hard = PA_SUCCESS;
+  if (out->met_ncomp != in->met_ncomp || out->nfield != in->nfield ||
+      strcmp(out->field[gf].name, PA__GID_FIELD) != 0) {
+    pa__info(1, "padapt: piece %d: the remesher changed the metric or the "
+                "fields\n", pc->id);
+    goto cleanup;
+  }
+  {
+    pa_idx nreq = 0;
+    for (pa_idx e = 0; e < out->ne; e++) nreq += (out->eflag[e] & PA_FLAG_REQUIRED) != 0;
+    if (nreq != pc->nfrozen) {
+      pa__info(1, "padapt: piece %d: %d required elements in, %d out\n", pc->id,
+               (int)pc->nfrozen, (int)nreq);
+      goto cleanup;
+    }
+  }
+  PA_CALL(pa__gidmap_init(&map, (size_t)in->nv));
+  for (pa_idx i = 0; i < in->nv; i++)
+    PA_CALL(pa__gidmap_put(&map, pc->vgid[i], i, NULL, NULL));
+  PA_ALLOC(pc->match, out->nv);
+  PA_CALLOC(seen, in->nv);
+  for (pa_idx j = 0; j < out->nv; j++) {
+    double g = out->field[gf].val[j];
+    pc->match[j] = -1;
+    if (!(g >= 0 && g < 9007199254740992.0) || g != floor(g)) continue;
+    pa_idx i = pa__gidmap_get(&map, (pa_gid)g);
+    if (i < 0 || memcmp(in->coord + (size_t)d * i, out->coord + (size_t)d * j,
+                        d * sizeof(double)) != 0)
+      continue;
+    if (seen[i]) {
+      pa__info(1, "padapt: piece %d: vertex %lld comes back twice\n", pc->id,
+               (long long)pc->vgid[i]);
+      goto cleanup;
+    }
+    seen[i] = 1;
+    pc->match[j] = i;
+  }
+  for (pa_idx i = 0; i < in->nv; i++)
+    if (pc->skin[i] && !seen[i]) {
+      pa__info(1, "padapt: piece %d: skin vertex %lld was moved or removed\n",
+               pc->id, (long long)pc->vgid[i]);
+      goto cleanup;
+    }
+  for (pa_idx e = 0; e < out->ne; e++) {
+    if (!(out->eflag[e] & PA_FLAG_REQUIRED)) continue;
+    for (int k = 0; k <= d; k++) {
+      pa_idx i = pc->match[out->elem[(size_t)(d + 1) * e + k]];
+      if (i < 0 || !pc->skin[i]) {
+        pa__info(1, "padapt: piece %d: a required element changed\n", pc->id);
+        goto cleanup;
+      }
+    }
+  }
+  if (it->opts->check_pieces) {
+    pa_status c = pa_mesh_check(out);
+    if (c == PA_ERR_MEMORY) PA_CALL(c);
+    if (c) {
+      pa__info(1, "padapt: piece %d: invalid output: %s\n", pc->id,
+               pa_last_error());
+      pa_clear_error();
+      goto cleanup;
+    }
+  }
+  ok = 1;
+cleanup:
+  *hard = st;
+  pa__gidmap_free(&map);
+  pa__free(seen);
+  if (!ok) {
+    pa__free(pc->match);
+    pc->match = NULL;
+  }
+  return ok;
+}
+
+pa_status pa__adapt_remesh(pa__iter *it, int *nfail) {
+  pa_status st = PA_SUCCESS;
+  pa_remesh_opts ro = it->opts->remesh;
+  const pa_remesher *r =
+      it->opts->remesher ? it->opts->remesher : pa_remesher_builtin();
+  pa_mesh *out = NULL;
+  ro.hsiz = 0; /* folded into the metric before the loop */
+  *nfail = 0;
+  for (int q = 0; q < it->npiece_local; q++) {
+    pa__piece *pc = &it->pieces[q];
+    if (pc->in->ne == 0) continue; /* Scotch may leave a part empty */
+    double t0 = pa_wtime(), t1, t2;
+    PA_CALL(pa_mesh_copy(pc->in, &out));
+    pa_status s = pa_remesh(r, out, &ro, &pc->rep);
+    t1 = pa_wtime();
+    int ok = s == PA_SUCCESS && pc->rep.outcome != PA_REMESH_FAILED;
+    if (!ok)
+      pa__info(1, "padapt: piece %d (%d elements): the remesher failed: %s\n",
+               pc->id, (int)pc->in->ne,
+               s ? pa_last_error() : "outcome FAILED");
+    if (ok) {
+      pa_status hard;
+      ok = output_ok(it, pc, out, &hard);
+      PA_CALL(hard);
+    }
+    t2 = pa_wtime();
+    pa__info(2, "padapt: rank %d: piece %d: %d -> %d elements (%d frozen), "
+                "remesh %.3f s, check %.3f s%s\n", it->rank, pc->id,
+             (int)pc->in->ne, ok ? (int)out->ne : -1, (int)pc->nfrozen,
+             t1 - t0, t2 - t1, ok ? "" : ", rolled back");
+    if (ok) {
+      pc->out = out;
+      out = NULL;
+    } else {
+      pa_clear_error();
+      pa_mesh_destroy(out);
+      out = NULL;
+      it->piece_failed[pc->id] = 1;
+      (*nfail)++;
+    }
+  }
+cleanup:
+  pa_mesh_destroy(out);
+  return st;
+}
+
+/* ---- step 5: rebuild ---- */
+
+/* Output elements within this many vertex layers of a frozen tagged element
+ * are marked PA__DONE_NEAR_SKIN: the frozen border constrained the remesher
+ * there (a remesher's choices reach a few layers, e.g. longest-edge
+ * propagation), so they may be tagged again. */
+#define NEAR_SKIN 2
+
+size_t pa__new_payload(const pa_dmesh *dm, int kind, int32_t ref,
+                       const pa_dmesh_value *done, uint8_t doneval,
+                       unsigned char *buf) {
+  size_t n = 0;
+  for (int k = 0; k < dm->nvalue; k++) {
+    const pa_dmesh_value *v = dm->value[k];
+    if ((int)v->kind != kind || (v->ref >= 0 && v->ref != ref)) continue;
+    memset(buf + n, 0, v->unit);
+    if (v == done) buf[n] = doneval;
+    n += v->unit;
+  }
+  return n;
+}
+
+/* Keep the records i of R with keep[i] (in place). */
+static void recs_filter(pa__recs *R, const uint8_t *keep) {
+  size_t k = 0;
+  int nv = R->nv, nd = R->ndbl;
+  for (size_t i = 0; i < R->n; i++) {
+    if (!keep[i]) continue;
+    if (k != i) {
+      R->gid[k] = R->gid[i];
+      memcpy(R->vgid + (size_t)nv * k, R->vgid + (size_t)nv * i, nv * sizeof *R->vgid);
+      R->ref[k] = R->ref[i];
+      R->flag[k] = R->flag[i];
+      R->aux[k] = R->aux[i];
+      memcpy(R->dbl + (size_t)nd * k, R->dbl + (size_t)nd * i, nd * sizeof *R->dbl);
+      if (R->poff) {
+        size_t len = R->poff[i + 1] - R->poff[i];
+        memmove(R->pay + R->poff[k], R->pay + R->poff[i], len);
+        R->poff[k + 1] = R->poff[k] + len;
+      }
+    } else if (R->poff) {
+      R->poff[k + 1] = R->poff[k] + (R->poff[i + 1] - R->poff[i]);
+    }
+    k++;
+  }
+  R->n = k;
+}
+
+/* Per-entity "kept" flags of a kind: 1 if a staying owned element (keep)
+ * contains it, MAX-reduced over the ranks; *out receives the owned flags. */
+static pa_status kept_flags(pa__iter *it, int kind, const uint8_t *keep,
+                            const pa_idx *bstart, const pa_idx *belem,
+                            uint8_t **out) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  const pa_mesh *m = dm->mesh;
+  pa_dmesh_value *val = NULL;
+  int nv = pa__kind_nv(it->dim, kind);
+  PA_CALL(pa_dmesh_value_add(dm, (pa_entity)kind, "pa.adapt.kept", MPI_INT, 1,
+                             -1, &val));
+  {
+    pa_idx n;
+    int *x = pa_dmesh_value_data(val, &n, NULL);
+    if (kind == PA_VERTEX) {
+      for (pa_idx e = 0; e < it->ne; e++)
+        if (keep[e])
+          for (int k = 0; k < it->nve; k++) x[m->elem[(size_t)it->nve * e + k]] = 1;
+    } else {
+      const pa_idx *conn = kind == PA_BOUNDARY ? m->bdry : m->edge;
+      for (pa_idx b = 0; b < n; b++) {
+        const pa_idx *f = conn + (size_t)nv * b;
+        for (pa_idx q = bstart[f[0]]; q < bstart[f[0] + 1] && !x[b]; q++) {
+          pa_idx e = belem[q];
+          if (!keep[e]) continue;
+          const pa_idx *ev = m->elem + (size_t)it->nve * e;
+          int all = 1;
+          for (int i = 1; i < nv && all; i++) {
+            int in = 0;
+            for (int j = 0; j < it->nve; j++) in |= ev[j] == f[i];
+            all = in;
+          }
+          x[b] = all;
+        }
+      }
+    }
+  }
+  PA_CALL(pa_dmesh_reduce(dm, val, MPI_MAX));
+  {
+    pa_idx nown = dm->nown[kind];
+    const int *x = pa_dmesh_value_data(val, NULL, NULL);
+    PA_ALLOC(*out, nown);
+    for (pa_idx i = 0; i < nown; i++) (*out)[i] = (uint8_t)(x[i] != 0);
+  }
+cleanup:
+  st = pa__agree_end(dm->comm, st);
+  if (val) {
+    pa_status s2 = pa_dmesh_value_remove(dm, val);
+    if (!st) st = s2;
+  }
+  return st;
+}
+
+/* Which boundary entities / edges of an output to give (not on a required
+ * element); counts in cnt[PA_BOUNDARY], cnt[PA_EDGE]. */
+static pa_status output_emit(const pa_mesh *out, uint8_t **bemit,
+                             uint8_t **demit, pa_gid *cnt) {
+  pa_status st = PA_SUCCESS;
+  tset fs = {0, NULL}, es = {0, NULL};
+  int d = out->dim, nve = d + 1;
+  pa_idx nreq = 0;
+  for (pa_idx e = 0; e < out->ne; e++) nreq += (out->eflag[e] & PA_FLAG_REQUIRED) != 0;
+  PA_CALL(tset_init(&fs, (size_t)nreq * nve));
+  PA_CALL(tset_init(&es, (size_t)nreq * 6));
+  for (pa_idx e = 0; e < out->ne; e++) {
+    if (!(out->eflag[e] & PA_FLAG_REQUIRED)) continue;
+    const pa_idx *v = out->elem + (size_t)nve * e;
+    for (int i = 0; i < nve; i++) {
+      pa_idx f[3], k[3];
+      int n = 0;
+      for (int j = 0; j < nve; j++)
+        if (j != i) f[n++] = v[j];
+      tkey(f, d, k);
+      tset_find(&fs, k, 1);
+      for (int j = i + 1; j < nve; j++) {
+        pa_idx ed[2] = {v[i], v[j]};
+        tkey(ed, 2, k);
+        tset_find(&es, k, 1);
+      }
+    }
+  }
+  PA_CALLOC(*bemit, out->nb);
+  PA_CALLOC(*demit, out->ned);
+  for (pa_idx b = 0; b < out->nb; b++) {
+    pa_idx k[3];
+    tkey(out->bdry + (size_t)d * b, d, k);
+    (*bemit)[b] = !tset_find(&fs, k, 0);
+    cnt[PA_BOUNDARY] += (*bemit)[b];
+  }
+  for (pa_idx b = 0; b < out->ned; b++) {
+    pa_idx k[3];
+    tkey(out->edge + (size_t)2 * b, 2, k);
+    (*demit)[b] = !tset_find(&es, k, 0);
+    cnt[PA_EDGE] += (*demit)[b];
+  }
+cleanup:
+  tset_free(&fs);
+  tset_free(&es);
+  return st;
+}
+
+/* Append the records an output gives (see the file comment). next[k]: next
+ * fresh id of each kind (advanced). */
+static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemit,
+                                const uint8_t *demit, pa_gid *next,
+                                const pa_dmesh_value *done, pa__recs *R,
+                                unsigned char *pay) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  const pa_mesh *o = pc->out;
+  int d = o->dim, nuser = o->nfield - 1;
+  pa_gid *vg = NULL;
+  double *dbl = NULL;
+  int *dist = NULL;
+  PA_ALLOC(vg, o->nv);
+  PA_ALLOC(dbl, R[PA_VERTEX].ndbl);
+  for (pa_idx j = 0; j < o->nv; j++) {
+    pa_idx i = pc->match[j];
+    if (i >= 0 && pc->skin[i]) {
+      vg[j] = pc->vgid[i]; /* kept by its owner */
+      continue;
+    }
+    vg[j] = i >= 0 ? pc->vgid[i] : next[PA_VERTEX]++;
+    double *y = dbl;
+    memcpy(y, o->coord + (size_t)d * j, d * sizeof *y);
+    y += d;
+    if (o->met_ncomp) {
+      memcpy(y, o->met + (size_t)o->met_ncomp * j, o->met_ncomp * sizeof *y);
+      y += o->met_ncomp;
+    }
+    for (int f = 0; f < nuser; f++) {
+      memcpy(y, o->field[f].val + (size_t)o->field[f].ncomp * j,
+             o->field[f].ncomp * sizeof *y);
+      y += o->field[f].ncomp;
+    }
+    size_t pl = pa__new_payload(dm, PA_VERTEX, o->vref[j], done, 0, pay);
+    PA_CALL(pa__recs_add(&R[PA_VERTEX], vg[j], NULL, o->vref[j], o->vflag[j],
+                         it->rank, dbl, pay, pl));
+  }
+  /* elements within NEAR_SKIN vertex layers of a frozen tagged element */
+  PA_ALLOC(dist, o->nv);
+  for (pa_idx j = 0; j < o->nv; j++)
+    dist[j] = pc->match[j] >= 0 && pc->hot[pc->match[j]] ? 0 : NEAR_SKIN;
+  for (int layer = 0; layer < NEAR_SKIN; layer++)
+    for (pa_idx e = 0; e < o->ne; e++) {
+      const pa_idx *v = o->elem + (size_t)(d + 1) * e;
+      int mn = NEAR_SKIN;
+      for (int k = 0; k <= d; k++) mn = dist[v[k]] < mn ? dist[v[k]] : mn;
+      if (mn < NEAR_SKIN)
+        for (int k = 0; k <= d; k++)
+          if (dist[v[k]] > mn + 1) dist[v[k]] = mn + 1;
+    }
+  for (pa_idx e = 0; e < o->ne; e++) {
+    if (o->eflag[e] & PA_FLAG_REQUIRED) continue;
+    pa_gid ev[4];
+    uint8_t dv = PA__DONE;
+    for (int k = 0; k <= d; k++) {
+      pa_idx j = o->elem[(size_t)(d + 1) * e + k];
+      ev[k] = vg[j];
+      if (dist[j] < NEAR_SKIN) dv = PA__DONE_NEAR_SKIN;
+    }
+    size_t pl = pa__new_payload(dm, PA_ELEMENT, o->eref[e], done, dv, pay);
+    PA_CALL(pa__recs_add(&R[PA_ELEMENT], next[PA_ELEMENT]++, ev, o->eref[e],
+                         o->eflag[e], it->rank, NULL, pay, pl));
+  }
+  for (pa_idx b = 0; b < o->nb; b++) {
+    if (!bemit[b]) continue;
+    pa_gid bv[3];
+    for (int k = 0; k < d; k++) bv[k] = vg[o->bdry[(size_t)d * b + k]];
+    size_t pl = pa__new_payload(dm, PA_BOUNDARY, o->bref[b], done, 0, pay);
+    PA_CALL(pa__recs_add(&R[PA_BOUNDARY], next[PA_BOUNDARY]++, bv, o->bref[b],
+                         o->bflag[b], it->rank, NULL, pay, pl));
+  }
+  for (pa_idx b = 0; b < o->ned; b++) {
+    if (!demit[b]) continue;
+    pa_gid bv[2] = {vg[o->edge[2 * b]], vg[o->edge[2 * b + 1]]};
+    size_t pl = pa__new_payload(dm, PA_EDGE, o->edref[b], done, 0, pay);
+    PA_CALL(pa__recs_add(&R[PA_EDGE], next[PA_EDGE]++, bv, o->edref[b],
+                         o->edflag[b], it->rank, NULL, pay, pl));
+  }
+cleanup:
+  pa__free(vg);
+  pa__free(dbl);
+  pa__free(dist);
+  return st;
+}
+
+pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  uint8_t *keep = NULL, *kv = NULL, *kb = NULL, *kd = NULL;
+  pa_idx *bstart = NULL, *belem = NULL;
+  uint8_t **bemit = NULL, **demit = NULL;
+  unsigned char *pay = NULL;
+  pa__recs R[PA_NKIND];
+  pa__layout lay;
+  pa_gid cnt[PA_NKIND] = {0, 0, 0, 0}, off[PA_NKIND] = {0, 0, 0, 0};
+  pa_gid base[PA_NKIND] = {-1, -1, -1, -1};
+  int built = 0;
+  double t0 = pa_wtime(), t1;
+  memset(R, 0, sizeof R);
+
+  /* 1. which pieces failed, which elements stay */
+  PA_CALL(pa__allreduce(dm->comm, it->piece_failed, it->npieces, MPI_INT,
+                        MPI_MAX));
+  PA_ALLOC(keep, it->ne);
+  for (pa_idx e = 0; e < it->ne; e++)
+    keep[e] = it->label[e] < 0 || it->frozen[e] || it->piece_failed[it->label[e]];
+
+  /* 2. kept vertices, boundary entities and edges */
+  PA_CALL(pa__owned_balls(dm, &bstart, &belem));
+  PA_CALL(kept_flags(it, PA_VERTEX, keep, bstart, belem, &kv));
+  PA_CALL(kept_flags(it, PA_BOUNDARY, keep, bstart, belem, &kb));
+  PA_CALL(kept_flags(it, PA_EDGE, keep, bstart, belem, &kd));
+  pa__free(bstart);
+  pa__free(belem);
+  bstart = belem = NULL;
+
+  /* 3. records of the staying owned entities */
+  pa__dmesh_layout(dm, &lay);
+  PA_CALL(pa__dmesh_owned_recs(dm, NULL, &R[PA_ELEMENT], &R[PA_VERTEX],
+                               &R[PA_BOUNDARY], &R[PA_EDGE]));
+  recs_filter(&R[PA_ELEMENT], keep);
+  recs_filter(&R[PA_VERTEX], kv);
+  recs_filter(&R[PA_BOUNDARY], kb);
+  recs_filter(&R[PA_EDGE], kd);
+
+  /* 4. fresh ids */
+  for (int k = 0; k < PA_NKIND; k++)
+    for (pa_idx i = 0; i < dm->nown[k]; i++)
+      if (dm->gid[k][i] > base[k]) base[k] = dm->gid[k][i];
+  PA_CALLOC(bemit, it->npiece_local);
+  PA_CALLOC(demit, it->npiece_local);
+  for (int q = 0; q < it->npiece_local; q++) {
+    pa__piece *pc = &it->pieces[q];
+    if (!pc->out) continue;
+    for (pa_idx j = 0; j < pc->out->nv; j++) cnt[PA_VERTEX] += pc->match[j] < 0;
+    for (pa_idx e = 0; e < pc->out->ne; e++)
+      cnt[PA_ELEMENT] += !(pc->out->eflag[e] & PA_FLAG_REQUIRED);
+    PA_CALL(output_emit(pc->out, &bemit[q], &demit[q], cnt));
+  }
+  PA_CALL(pa__allreduce(dm->comm, base, PA_NKIND, MPI_INT64_T, MPI_MAX));
+  PA_CALL(pa__agree(dm->comm, st));
+  MPI_Exscan(cnt, off, PA_NKIND, MPI_INT64_T, MPI_SUM, dm->comm);
+  if (it->rank == 0)
+    for (int k = 0; k < PA_NKIND; k++) off[k] = 0;
+  for (int k = 0; k < PA_NKIND; k++) off[k] += base[k] + 1;
+
+  /* 5. records of the outputs */
+  {
+    size_t maxpay = 0;
+    for (int k = 0; k < dm->nvalue; k++) maxpay += dm->value[k]->unit;
+    PA_ALLOC(pay, maxpay);
+  }
+  for (int q = 0; q < it->npiece_local; q++) {
+    pa__piece *pc = &it->pieces[q];
+    if (!pc->out) continue;
+    PA_CALL(output_records(it, pc, bemit[q], demit[q], off, done, R, pay));
+  }
+  for (int k = 0; k < PA_NKIND; k++)
+    for (size_t i = 0; i < R[k].n; i++) it->bytes_moved += (double)pa__recs_wire(&R[k], i);
+
+  /* 6. rebuild */
+  PA_CALL(pa__agree(dm->comm, st));
+  pa__dmesh_clear(dm);
+  built = 1;
+  t1 = pa_wtime();
+  PA_CALL(pa__dmesh_build(dm, &lay, dm->overlap, &R[PA_ELEMENT], &R[PA_VERTEX],
+                          &R[PA_BOUNDARY], &R[PA_EDGE]));
+  pa__info(2, "padapt: rank %d: reintegrate: records %.3f s, build %.3f s\n",
+           it->rank, t1 - t0, pa_wtime() - t1);
+cleanup:
+  (void)built;
+  st = pa__agree_end(dm->comm, st);
+  for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&R[k]);
+  pa__free(keep);
+  pa__free(kv);
+  pa__free(kb);
+  pa__free(kd);
+  pa__free(bstart);
+  pa__free(belem);
+  pa__free(pay);
+  for (int q = 0; bemit && q < it->npiece_local; q++) pa__free(bemit[q]);
+  for (int q = 0; demit && q < it->npiece_local; q++) pa__free(demit[q]);
+  pa__free(bemit);
+  pa__free(demit);
+  return st;
+}

@@ -1,0 +1,121 @@
+/*
+ * tag.c -- step 1 of the piece algorithm: which owned elements to remesh and
+ * how much work each is.
+ *
+ * An owned element is tagged when it is not user-required, was not produced
+ * by a remesh of this run (the "done" element value), and either carries
+ * PA_FLAG_USER or (unless opts->user_tags_only) has an edge whose length in
+ * the metric lies outside [0.7071, 1.4142) or a quality below
+ * opts->qual_threshold. An element produced next to a tagged frozen element
+ * (done value PA__DONE_NEAR_SKIN: the remesher could not touch that side)
+ * is tagged again if it fails the length or quality criteria. Work ~ expected output elements + 1: the element's
+ * volume in the metric over the volume of the unit regular simplex, plus one
+ * for removing the element itself (the coarsening term). Every figure is a
+ * function of the element's own data, so it is the same whatever the
+ * distribution.
+ */
+#include "adapt/adapt.h"
+
+#include <math.h>
+
+#define LEN_LO 0.7071
+#define LEN_HI 1.4142
+
+pa_status pa__owned_balls(pa_dmesh *dm, pa_idx **startp, pa_idx **elemsp) {
+  pa_status st = PA_SUCCESS;
+  const pa_mesh *m = dm->mesh;
+  int nve = dm->dim + 1;
+  pa_idx nv = dm->nloc[PA_VERTEX], ne = dm->nown[PA_ELEMENT];
+  pa_idx *start = NULL, *el = NULL;
+  PA_CALLOC(start, (size_t)nv + 1);
+  PA_ALLOC(el, (size_t)ne * nve);
+  for (size_t k = 0; k < (size_t)ne * nve; k++) start[m->elem[k] + 1]++;
+  for (pa_idx v = 0; v < nv; v++) start[v + 1] += start[v];
+  for (size_t k = 0; k < (size_t)ne * nve; k++)
+    el[start[m->elem[k]]++] = (pa_idx)(k / nve);
+  for (pa_idx v = nv; v > 0; v--) start[v] = start[v - 1];
+  start[0] = 0;
+  *startp = start;
+  *elemsp = el;
+  start = NULL;
+  el = NULL;
+cleanup:
+  pa__free(start);
+  pa__free(el);
+  return st;
+}
+
+/* Estimated work of element e: expected output elements + 1. */
+static double elem_work(const pa_mesh *m, pa_idx e) {
+  int d = m->dim, nc = m->met_ncomp, tc = pa__tensor_ncomp(d);
+  const pa_idx *v = m->elem + (size_t)(d + 1) * e;
+  const double *x[4];
+  double mean[6] = {0, 0, 0, 0, 0, 0}, t[6];
+  for (int k = 0; k <= d; k++) {
+    x[k] = m->coord + (size_t)d * v[k];
+    pa__metric_tensor(d, nc, m->met + (size_t)nc * v[k], t);
+    for (int c = 0; c < tc; c++) mean[c] += t[c] / (d + 1);
+  }
+  double vol = fabs(pa__simplex_volume(d, x));
+  double det = pa__sym_det(d, mean);
+  double vreg = d == 2 ? sqrt(3.0) / 4.0 : sqrt(2.0) / 12.0;
+  double w = det > 0 ? vol * sqrt(det) / vreg : 0;
+  return (isfinite(w) ? w : 0) + 1.0;
+}
+
+/* 1 if an edge of element e is outside [LEN_LO, LEN_HI) in the metric. */
+static int bad_edge(const pa_mesh *m, pa_idx e) {
+  int d = m->dim, nc = m->met_ncomp;
+  const pa_idx *v = m->elem + (size_t)(d + 1) * e;
+  for (int i = 0; i <= d; i++)
+    for (int j = i + 1; j <= d; j++) {
+      double l = pa__edge_length(d, nc, m->coord + (size_t)d * v[i],
+                                 m->coord + (size_t)d * v[j],
+                                 m->met + (size_t)nc * v[i],
+                                 m->met + (size_t)nc * v[j]);
+      if (!(l >= LEN_LO && l < LEN_HI)) return 1;
+    }
+  return 0;
+}
+
+pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int first) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  const pa_mesh *m = dm->mesh;
+  const pa_adapt_opts *o = it->opts;
+  const uint8_t *dn = pa_dmesh_value_data(done, NULL, NULL);
+  double x[2] = {0, 0};
+  (void)first;
+  it->ne = dm->nown[PA_ELEMENT];
+  PA_CALLOC(it->tag, it->ne);
+  PA_ALLOC(it->work, it->ne);
+  for (pa_idx e = 0; e < it->ne; e++) {
+    const pa_idx *v = m->elem + (size_t)it->nve * e;
+    it->work[e] = elem_work(m, e);
+    if (dn[e] == PA__DONE || (m->eflag[e] & PA_FLAG_REQUIRED)) continue;
+    if (dn[e] && o->user_tags_only) continue;
+    int t = !dn[e] && (m->eflag[e] & PA_FLAG_USER) != 0;
+    if (!t && !o->user_tags_only) {
+      t = bad_edge(m, e);
+      if (!t && o->qual_threshold > 0) {
+        const double *x[4], *mm[4];
+        for (int k = 0; k < it->nve; k++) {
+          x[k] = m->coord + (size_t)it->dim * v[k];
+          mm[k] = m->met + (size_t)m->met_ncomp * v[k];
+        }
+        t = pa__quality(it->dim, m->met_ncomp, x, mm) < o->qual_threshold;
+      }
+    }
+    it->tag[e] = (uint8_t)t;
+    x[0] += t;
+    x[1] += t ? it->work[e] : 0;
+  }
+cleanup:
+  st = pa__agree(dm->comm, st);
+  if (st == PA_SUCCESS) {
+    st = pa__allreduce(dm->comm, x, 2, MPI_DOUBLE, MPI_SUM);
+    it->ntagged = (pa_gid)x[0];
+    it->tagwork = x[1];
+  }
+  return st;
+}

@@ -1,0 +1,147 @@
+/*
+ * test_adapt.c -- the parallel adaptation driver (pa_dmesh_adapt) with the
+ * example bisection remesher and the built-in remesher: valid conforming
+ * output (collective check, and again after gathering), volume kept,
+ * convergence, and the statistics of pa_dmesh_stats equal to those of the
+ * gathered mesh. Runs at any number of ranks.
+ */
+#include "testutil.h"
+#include "bisect_remesher.h"
+
+#include <mpi.h>
+
+static int rank, size;
+
+/* A box of dimension dim on rank 0 with an analytic metric (or none),
+ * distributed with the given overlap. */
+static pa_dmesh *make(int dim, int n, const char *metric, int overlap) {
+  pa_mesh *m = NULL;
+  pa_dmesh *dm = NULL;
+  if (rank == 0) {
+    CHECK_OK(pa_mesh_generate_box(dim, n, &m));
+    if (metric) CHECK_OK(pa_metric_analytic(m, metric));
+  }
+  CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, m, overlap, &dm));
+  pa_mesh_destroy(m);
+  return dm;
+}
+
+/* Collective check, then gather and check sequentially; returns the
+ * gathered statistics on every rank (broadcast). */
+static void check_valid(pa_dmesh *dm, pa_stats *gs) {
+  pa_mesh *g = NULL;
+  pa_stats s;
+  memset(&s, 0, sizeof s);
+  CHECK_OK(pa_dmesh_check(dm));
+  CHECK_OK(pa_dmesh_gather(dm, 0, &g));
+  if (rank == 0) {
+    CHECK(g != NULL);
+    if (g) {
+      CHECK_OK(pa_mesh_check(g));
+      CHECK_OK(pa_mesh_stats(g, &s));
+      CHECK_NEAR(pa_mesh_volume(g), 1.0, 1e-9);
+    }
+  }
+  MPI_Bcast(&s, sizeof s, MPI_BYTE, 0, MPI_COMM_WORLD);
+  if (gs) *gs = s;
+  pa_mesh_destroy(g);
+}
+
+static void opts_small(pa_adapt_opts *o, const pa_remesher *r) {
+  pa_adapt_opts_default(o);
+  o->remesher = r;
+  o->min_piece_work = 20; /* many pieces even on small meshes */
+  o->min_piece_ratio = 0;
+}
+
+static void test_bisect_uniform(void) {
+  pa_dmesh *dm = make(2, 8, NULL, 0);
+  pa_adapt_opts o;
+  pa_adapt_report rep;
+  pa_stats s, ds;
+  opts_small(&o, bisect_remesher());
+  o.remesh.hsiz = 0.05;
+  CHECK_OK(pa_dmesh_adapt(dm, &o, &rep));
+  CHECK(rep.converged);
+  CHECK(rep.nfailed == 0);
+  CHECK(rep.nelem_final > rep.nelem_initial);
+  check_valid(dm, &s);
+  CHECK_OK(pa_dmesh_stats(dm, &ds));
+  CHECK(ds.nelem == s.nelem && ds.nedge == s.nedge && ds.nvert == s.nvert);
+  for (int k = 0; k < PA_STATS_EDGE_NBIN; k++) CHECK(ds.edge_hist[k] == s.edge_hist[k]);
+  CHECK(ds.valid);
+  /* bisection never makes an edge longer than sqrt 2 stay */
+  CHECK(ds.edge_max <= 1.4142);
+  if (rank == 0)
+    printf("bisect 2D: %lld -> %lld elements, %d iterations, %ld pieces, "
+           "edges in range %.1f %%\n", (long long)rep.nelem_initial,
+           (long long)rep.nelem_final, rep.niter, rep.npieces,
+           100.0 * s.edge_hist[PA_STATS_EDGE_NBIN - 1] / (double)s.nedge);
+  pa_dmesh_destroy(dm);
+}
+
+static void test_bisect_3d(void) {
+  pa_dmesh *dm = make(3, 3, NULL, 1);
+  pa_adapt_opts o;
+  pa_adapt_report rep;
+  opts_small(&o, bisect_remesher());
+  o.remesh.hsiz = 0.15;
+  CHECK_OK(pa_dmesh_adapt(dm, &o, &rep));
+  CHECK(rep.converged);
+  CHECK(rep.nfailed == 0);
+  check_valid(dm, NULL);
+  if (rank == 0)
+    printf("bisect 3D: %lld -> %lld elements, %d iterations\n",
+           (long long)rep.nelem_initial, (long long)rep.nelem_final, rep.niter);
+  pa_dmesh_destroy(dm);
+}
+
+static void test_builtin(void) {
+  pa_dmesh *dm = make(2, 8, "iso-shell:0.2", 0);
+  pa_adapt_opts o;
+  pa_adapt_report rep;
+  pa_stats s;
+  opts_small(&o, NULL);
+  CHECK_OK(pa_dmesh_adapt(dm, &o, &rep));
+  CHECK(rep.converged);
+  check_valid(dm, &s);
+  if (rank == 0)
+    printf("builtin 2D: %lld -> %lld elements, %d iterations, %ld pieces, "
+           "edges in range %.1f %%, worst quality %.3f\n",
+           (long long)rep.nelem_initial, (long long)rep.nelem_final, rep.niter,
+           rep.npieces,
+           100.0 * s.edge_hist[PA_STATS_EDGE_NBIN - 1] / (double)s.nedge,
+           s.qual_min);
+  pa_dmesh_destroy(dm);
+}
+
+int main(int argc, char **argv) {
+  int provided;
+  MPI_Init_thread(&argc, &argv, MPI_THREAD_MULTIPLE, &provided);
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  if (getenv("PA_TEST_VERBOSE")) pa_set_verbosity(atoi(getenv("PA_TEST_VERBOSE")));
+  size_t mem0 = pa_memory_current();
+  pa_test_fn tests[] = {test_bisect_uniform, test_bisect_3d, test_builtin};
+  const char *names[] = {"bisect_uniform", "bisect_3d", "builtin"};
+  for (size_t t = 0; t < sizeof tests / sizeof *tests; t++) {
+    int before = pa_test_failures;
+    double t0 = MPI_Wtime();
+    tests[t]();
+    if (pa_test_failures != before)
+      fprintf(stderr, "rank %d: test %s failed\n", rank, names[t]);
+    if (rank == 0) printf("%s: %.2f s\n", names[t], MPI_Wtime() - t0);
+  }
+  if (pa_memory_current() != mem0) {
+    fprintf(stderr, "rank %d: %zu bytes leaked\n", rank,
+            pa_memory_current() - mem0);
+    pa_test_failures++;
+  }
+  int fails = pa_test_failures;
+  MPI_Allreduce(MPI_IN_PLACE, &fails, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+  if (rank == 0)
+    printf("%s: %d ranks, %d checks on rank 0, %d failures\n", __FILE__, size,
+           pa_test_checks, fails);
+  MPI_Finalize();
+  return fails ? 1 : 0;
+}

@@ -1,0 +1,542 @@
+/*
+ * cmd_padapt.c -- the parallel `padapt adapt`:
+ *
+ *   mpiexec -n P padapt adapt IN [-met SOL | -hsiz H] -out OUT
+ *       [-distributed-output] [-field F.sol] [-mem MB] [-json REPORT.json]
+ *       [-max-iter N] [-pieces K] [remesher options]
+ *
+ * Reads IN (a sequential mesh on rank 0 with its metric and fields, then
+ * distributed; or a distributed set written by pa_dmesh_write, read by all
+ * ranks), runs
+ * pa_dmesh_adapt, prints one progress line per iteration and the final
+ * report in the form of Table 1 of the seed paper (Lachat, Dobrzynski,
+ * Pellegrini) on rank 0, and writes OUT gathered on rank 0 (with OUT.sol and
+ * <OUT stem>.fields.sol) or, with -distributed-output, as a distributed set.
+ * The JSON report holds the statistics of the output, the times of every
+ * step and iteration, the bytes moved and the peak memory of every rank.
+ *
+ * Every rank parses the same arguments, so usage errors are seen by all
+ * ranks at once; failures on rank 0 alone (reading) are broadcast before
+ * any collective call. Exit status: 0 on success (also when the loop
+ * stalled: a warning says so), 1 on any error (no output written).
+ */
+#include "cli.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *padapt_usage =
+    "usage: mpiexec -n P padapt adapt IN [-met SOL | -hsiz H] -out OUT [options]\n"
+    "  -in IN            input mesh, or a distributed set OUT.<r>.meshb\n"
+    "  -met/-sol SOL     metric: sizes (scalar) or tensors, .sol/.solb\n"
+    "  -hsiz H           constant size H (replaces the metric)\n"
+    "  -out OUT          output mesh (.mesh .meshb .msh .vtu), gathered on rank 0\n"
+    "  -distributed-output  write OUT as a distributed set instead\n"
+    "  -nosol            do not write the output metric (OUT.sol)\n"
+    "  -field F.sol      vertex fields to interpolate (written to\n"
+    "                    <OUT stem>.fields.sol)\n"
+    "  -mem MB           memory bound per process for one piece\n"
+    "  -json R.json      report: statistics, times per step and iteration,\n"
+    "                    bytes moved, peak memory per rank\n"
+    "  -max-iter N       at most N iterations (default 30)\n"
+    "  -pieces K         pieces per process (default 1)\n"
+    "  -hmin H -hmax H -hgrad G -hausd D -ar A -nr -noinsert -noswap -nomove\n"
+    "                    remesher options, as in the sequential adapt\n"
+    "  -v N              verbosity\n";
+
+static int parse_num(const char *s, double *v) {
+  char *end;
+  if (!s || !*s) return 0;
+  *v = strtod(s, &end);
+  return *end == '\0' && isfinite(*v);
+}
+
+static char *replace_ext(const char *path, const char *ext) {
+  const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
+  size_t n = (dot && (!slash || dot > slash)) ? (size_t)(dot - path) : strlen(path);
+  char *s = malloc(n + strlen(ext) + 1);
+  if (!s) return NULL;
+  memcpy(s, path, n);
+  strcpy(s + n, ext);
+  return s;
+}
+
+/* Attach every field of a .sol file as a user field of the mesh. */
+static pa_status attach_fields(pa_mesh *mesh, const char *path, int *mismatch) {
+  pa_sol *sol = NULL;
+  pa_status st = pa_sol_read(path, &sol);
+  *mismatch = 0;
+  if (st) return st;
+  if (pa_sol_nvert(sol) != pa_mesh_nvert(mesh)) {
+    pa_sol_destroy(sol);
+    *mismatch = 1;
+    return PA_ERR_FORMAT;
+  }
+  for (int k = 0; k < pa_sol_nfield(sol) && st == PA_SUCCESS; k++) {
+    pa_sol_kind kind;
+    int nc;
+    double *val;
+    char name[32];
+    st = pa_sol_field(sol, k, &kind, &nc, &val);
+    snprintf(name, sizeof name, "field%d", k + 1);
+    if (st == PA_SUCCESS) st = pa_mesh_add_field(mesh, name, nc, val);
+  }
+  pa_sol_destroy(sol);
+  return st;
+}
+
+static pa_status write_fields(pa_mesh *mesh, const char *path) {
+  pa_sol *sol = NULL;
+  int d = pa_mesh_dim(mesh);
+  pa_status st = pa_sol_create(d, pa_mesh_nvert(mesh), &sol);
+  for (int k = 0; k < pa_mesh_nfield(mesh) && st == PA_SUCCESS; k++) {
+    int nc;
+    double *val;
+    st = pa_mesh_field(mesh, k, NULL, &nc, &val);
+    pa_sol_kind kind = nc == 1 ? PA_SOL_SCALAR : nc == d ? PA_SOL_VECTOR : PA_SOL_TENSOR;
+    if (st == PA_SUCCESS) st = pa_sol_add_field(sol, kind, val);
+  }
+  if (st == PA_SUCCESS) st = pa_sol_write(sol, path);
+  pa_sol_destroy(sol);
+  return st;
+}
+
+/* Rank 0, after pa_cli_read_mesh: attach the metric and the fields. Prints
+ * its own errors; returns 1 on success. */
+static int prepare_root(const pa_cli *cli, pa_mesh *mesh, const char *met,
+                        const char *field, double hsiz) {
+  pa_status st = PA_SUCCESS;
+  if (met) {
+    pa_sol *sol = NULL;
+    st = pa_sol_read(met, &sol);
+    if (st == PA_SUCCESS) st = pa_mesh_metric_from_sol(mesh, sol, 0);
+    pa_sol_destroy(sol);
+  } else if (hsiz <= 0 && pa_mesh_metric_ncomp(mesh) == 0) {
+    pa_cli_error(cli, "adapt: no metric: give -met SOL, -sol SOL or -hsiz H");
+    return 0;
+  }
+  if (st == PA_SUCCESS && field) {
+    int mismatch;
+    st = attach_fields(mesh, field, &mismatch);
+    if (st && mismatch) {
+      pa_cli_error(cli, "%s: the number of values does not match the mesh's "
+                        "%d vertices", field, (int)pa_mesh_nvert(mesh));
+      return 0;
+    }
+  }
+  /* statistics before the adaptation are taken in the target size */
+  if (st == PA_SUCCESS && hsiz > 0 && pa_mesh_metric_ncomp(mesh) == 0) {
+    pa_idx nv = pa_mesh_nvert(mesh);
+    double *h = malloc(sizeof(double) * (nv ? nv : 1));
+    if (!h) {
+      pa_cli_error(cli, "adapt: out of memory");
+      return 0;
+    }
+    for (pa_idx v = 0; v < nv; v++) h[v] = hsiz;
+    st = pa_mesh_set_metric(mesh, 1, h);
+    free(h);
+  }
+  if (st) {
+    pa_cli_fail(cli, st);
+    return 0;
+  }
+  return 1;
+}
+
+/* A growable string for the JSON report. */
+typedef struct sbuf {
+  char *p;
+  size_t n, cap;
+  int fail;
+} sbuf;
+
+static void sb_printf(sbuf *b, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+static void sb_printf(sbuf *b, const char *fmt, ...) {
+  if (b->fail) return;
+  for (;;) {
+    va_list ap;
+    va_start(ap, fmt);
+    int k = vsnprintf(b->p ? b->p + b->n : NULL, b->p ? b->cap - b->n : 0, fmt, ap);
+    va_end(ap);
+    if (k < 0) {
+      b->fail = 1;
+      return;
+    }
+    if (b->p && b->n + (size_t)k < b->cap) {
+      b->n += (size_t)k;
+      return;
+    }
+    size_t cap = (b->cap + (size_t)k + 1) * 2;
+    char *q = realloc(b->p, cap);
+    if (!q) {
+      b->fail = 1;
+      return;
+    }
+    b->p = q;
+    b->cap = cap;
+  }
+}
+
+static void progress(const pa_adapt_iter *it, void *ctx) {
+  const pa_cli *cli = ctx;
+  if (cli->rank != 0) return;
+  printf("  iter %2d: %9lld tagged, %4d pieces, imbalance %.2f, %3d failed, "
+         "%10lld elements | tag %.2f pieces %.2f gather %.2f remesh %.2f "
+         "reintegrate %.2f s\n",
+         it->iter, (long long)it->ntagged, it->npieces, it->imbalance,
+         it->nfailed, (long long)it->nelem, it->t_tag, it->t_pieces,
+         it->t_gather, it->t_remesh, it->t_reintegrate);
+  fflush(stdout);
+}
+
+/* Report the failure of a collective call (same error on every rank) once. */
+static void fail_collective(const pa_cli *cli, pa_status st) {
+  if (cli->rank == 0) pa_cli_fail(cli, st);
+}
+
+static double pct(pa_gid n, pa_gid total) {
+  return total > 0 ? 100.0 * (double)n / (double)total : 0.0;
+}
+
+/* Table 1 of the seed paper, from the report and the output statistics. */
+static void print_table(const pa_cli *cli, const pa_adapt_report *r,
+                        const pa_stats *s, const char *remesher) {
+  printf(" -- PARALLEL ADAPTATION (%d processes, remesher %s)\n", cli->size,
+         remesher);
+  printf("    initial elements              %lld\n", (long long)r->nelem_initial);
+  printf("    final elements                %lld\n", (long long)r->nelem_final);
+  printf("    elapsed time                  %.3f s\n", r->time_total);
+  printf("    elapsed time x processes      %.3f s\n", r->time_total * cli->size);
+  printf("    smallest edge length          %.4f\n", s->edge_min);
+  printf("    largest edge length           %.4f\n", s->edge_max);
+  printf("    worst element quality         %.4f\n", s->qual_min);
+  printf("    elements with Q in (0.5, 1]   %.2f %%\n", pct(s->qual_above_05, s->nelem));
+  printf("    edges in [0.71, 1.41]         %.2f %%\n",
+         pct(s->edge_hist[PA_STATS_EDGE_NBIN - 1], s->nedge));
+  printf("    iterations %d (%s), pieces %ld, rolled back %ld\n", r->niter,
+         r->converged ? "converged" : "stalled", r->npieces, r->nfailed);
+  printf("    steps: tag %.3f pieces %.3f gather %.3f remesh %.3f "
+         "reintegrate %.3f rebalance %.3f s\n",
+         r->t_tag, r->t_pieces, r->t_gather, r->t_remesh, r->t_reintegrate,
+         r->t_rebalance);
+  printf("    remeshing busy time (all ranks) %.3f s, bytes moved %.3g, "
+         "peak memory per rank %.1f MB\n",
+         r->remesh_busy, r->bytes_moved, r->peak_memory / 1e6);
+  fflush(stdout);
+}
+
+/* The JSON members added to the output statistics. */
+static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
+                        const pa_stats *before, const uint64_t *mem,
+                        const uint64_t *rss, const char *remesher) {
+  sbuf b = {NULL, 0, 0, 0};
+  sb_printf(&b, "\"processes\": %d, \"remesher\": \"%s\", \"time_s\": %.6f, "
+                "\"time_x_processes_s\": %.6f, \"iterations\": %d, "
+                "\"converged\": %s, \"stalled\": %s, \"pieces\": %ld, "
+                "\"pieces_rolled_back\": %ld, \"elements_before\": %lld, "
+                "\"vertices_before\": %lld, \"edge_in_range_before\": %.6f, "
+                "\"bytes_moved\": %.0f, \"remesh_busy_s\": %.6f, ",
+            cli->size, remesher, r->time_total, r->time_total * cli->size,
+            r->niter, r->converged ? "true" : "false",
+            r->stalled ? "true" : "false", r->npieces, r->nfailed,
+            (long long)before->nelem, (long long)before->nvert,
+            before->nedge ? (double)before->edge_hist[PA_STATS_EDGE_NBIN - 1] /
+                                (double)before->nedge
+                          : 0.0,
+            r->bytes_moved, r->remesh_busy);
+  sb_printf(&b, "\"steps_s\": {\"tag\": %.6f, \"pieces\": %.6f, \"gather\": "
+                "%.6f, \"remesh\": %.6f, \"reintegrate\": %.6f, \"rebalance\": "
+                "%.6f}, ",
+            r->t_tag, r->t_pieces, r->t_gather, r->t_remesh, r->t_reintegrate,
+            r->t_rebalance);
+  sb_printf(&b, "\"peak_memory_bytes_per_rank\": [");
+  for (int k = 0; k < cli->size; k++)
+    sb_printf(&b, "%s%llu", k ? ", " : "", (unsigned long long)mem[k]);
+  sb_printf(&b, "], \"peak_rss_bytes_per_rank\": [");
+  for (int k = 0; k < cli->size; k++)
+    sb_printf(&b, "%s%llu", k ? ", " : "", (unsigned long long)rss[k]);
+  sb_printf(&b, "], \"iteration_detail\": [");
+  for (int k = 0; k < r->niter_recorded; k++) {
+    const pa_adapt_iter *it = &r->iters[k];
+    sb_printf(&b, "%s{\"iter\": %d, \"tagged\": %lld, \"pieces\": %d, "
+                  "\"rolled_back\": %d, \"imbalance\": %.4f, \"elements\": %lld, "
+                  "\"tag_s\": %.6f, \"pieces_s\": %.6f, \"gather_s\": %.6f, "
+                  "\"remesh_s\": %.6f, \"reintegrate_s\": %.6f, "
+                  "\"remesh_busy_s\": %.6f, \"bytes_moved\": %.0f}",
+              k ? ", " : "", it->iter, (long long)it->ntagged, it->npieces,
+              it->nfailed, it->imbalance, (long long)it->nelem, it->t_tag,
+              it->t_pieces, it->t_gather, it->t_remesh, it->t_reintegrate,
+              it->remesh_busy, it->bytes_moved);
+  }
+  sb_printf(&b, "]");
+  if (b.fail) {
+    free(b.p);
+    return NULL;
+  }
+  return b.p;
+}
+
+int pa_cli_adapt_parallel(const pa_cli *cli, int argc, char **argv) {
+  const char *in = NULL, *out = NULL, *met = NULL, *field = NULL, *json = NULL;
+  int distributed = 0, nosol = 0, rc = 1;
+  pa_adapt_opts opts;
+  pa_adapt_opts_default(&opts);
+  opts.remesh.verbosity = cli->verbosity;
+
+  for (int i = 1; i < argc; i++) {
+    const char *a = argv[i];
+    const char *val = i + 1 < argc ? argv[i + 1] : NULL;
+    double x;
+#define NEEDS_FILE(what)                                                     \
+  do {                                                                       \
+    if (!val) return pa_cli_error(cli, "adapt: %s needs %s", a, what);       \
+    i++;                                                                     \
+  } while (0)
+#define NEEDS_NUM(lo_ok)                                                     \
+  do {                                                                       \
+    if (!parse_num(val, &x) || !(lo_ok))                                     \
+      return pa_cli_error(cli, "adapt: %s needs a %s number, got '%s'", a,   \
+                          #lo_ok, val ? val : "nothing");                    \
+    i++;                                                                     \
+  } while (0)
+    if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+      if (cli->rank == 0) fputs(padapt_usage, stdout);
+      return 0;
+    } else if (!strcmp(a, "-in")) {
+      NEEDS_FILE("a mesh file");
+      if (in) return pa_cli_error(cli, "adapt: more than one input mesh");
+      in = val;
+    } else if (!strcmp(a, "-met") || !strcmp(a, "-sol")) {
+      NEEDS_FILE("a .sol file");
+      met = val;
+    } else if (!strcmp(a, "-out")) {
+      NEEDS_FILE("a mesh file");
+      out = val;
+    } else if (!strcmp(a, "-distributed-output")) {
+      distributed = 1;
+    } else if (!strcmp(a, "-nosol")) {
+      nosol = 1;
+    } else if (!strcmp(a, "-field")) {
+      NEEDS_FILE("a .sol file");
+      field = val;
+    } else if (!strcmp(a, "-json")) {
+      NEEDS_FILE("a file");
+      json = val;
+    } else if (!strcmp(a, "-mem")) {
+      NEEDS_NUM(x > 0);
+      opts.mem_mb = x;
+    } else if (!strcmp(a, "-max-iter")) {
+      NEEDS_NUM(x >= 1 && x <= 1000 && x == floor(x));
+      opts.max_iter = (int)x;
+    } else if (!strcmp(a, "-pieces")) {
+      NEEDS_NUM(x >= 1 && x <= 1000 && x == floor(x));
+      opts.pieces_per_rank = (int)x;
+    } else if (!strcmp(a, "-hsiz")) {
+      NEEDS_NUM(x > 0);
+      opts.remesh.hsiz = x;
+    } else if (!strcmp(a, "-hmin")) {
+      NEEDS_NUM(x > 0);
+      opts.remesh.hmin = x;
+    } else if (!strcmp(a, "-hmax")) {
+      NEEDS_NUM(x > 0);
+      opts.remesh.hmax = x;
+    } else if (!strcmp(a, "-hgrad")) {
+      NEEDS_NUM(x >= 0);
+      opts.remesh.hgrad = x;
+    } else if (!strcmp(a, "-hausd")) {
+      NEEDS_NUM(x > 0);
+      opts.remesh.hausd = x;
+    } else if (!strcmp(a, "-ar")) {
+      NEEDS_NUM(x >= 0 && x <= 180);
+      opts.remesh.angle = x;
+    } else if (!strcmp(a, "-v")) {
+      NEEDS_NUM(x >= 0 && x <= 10);
+      opts.remesh.verbosity = (int)x;
+      pa_set_verbosity((int)x);
+    } else if (!strcmp(a, "-nr")) {
+      opts.remesh.no_angle = 1;
+    } else if (!strcmp(a, "-noinsert")) {
+      opts.remesh.no_insert = 1;
+    } else if (!strcmp(a, "-noswap")) {
+      opts.remesh.no_swap = 1;
+    } else if (!strcmp(a, "-nomove")) {
+      opts.remesh.no_move = 1;
+    } else if (!strcmp(a, "-nosurf")) {
+      opts.remesh.no_surf = 1;
+    } else if (a[0] == '-' && a[1]) {
+      return pa_cli_error(cli, "adapt: unknown option '%s' (see padapt adapt -h)", a);
+    } else if (!in) {
+      in = a;
+    } else {
+      return pa_cli_error(cli, "adapt: more than one input mesh ('%s')", a);
+    }
+#undef NEEDS_FILE
+#undef NEEDS_NUM
+  }
+  if (!in) return pa_cli_error(cli, "adapt: no input mesh\n%s", padapt_usage);
+  if (!out) return pa_cli_error(cli, "adapt: no output mesh (-out OUT)");
+  if (met && opts.remesh.hsiz > 0)
+    return pa_cli_error(cli, "adapt: give either -met/-sol or -hsiz, not both");
+  if (opts.remesh.hmin > 0 && opts.remesh.hmax > 0 &&
+      opts.remesh.hmin > opts.remesh.hmax)
+    return pa_cli_error(cli, "adapt: -hmin (%g) is larger than -hmax (%g)",
+                        opts.remesh.hmin, opts.remesh.hmax);
+  int set = cli->rank == 0 ? pa_dmesh_is_set(in) : 0;
+  MPI_Bcast(&set, 1, MPI_INT, 0, cli->comm);
+  if (set && (met || field)) {
+    if (cli->rank == 0)
+      pa_cli_error(cli, "adapt: -met and -field need a sequential input mesh, "
+                        "not a distributed set");
+    return 1;
+  }
+
+  pa_dmesh *dm = NULL;
+  pa_mesh *mesh = NULL, *g = NULL;
+  pa_stats before, after;
+  pa_adapt_report rep;
+  pa_status st = PA_SUCCESS;
+  char *extra = NULL, *path = NULL;
+  uint64_t mine[2], *mem = NULL, *rss = NULL;
+  const pa_remesher *r = pa_remesher_builtin();
+  int ok = 1;
+  opts.progress = progress;
+  opts.progress_ctx = (void *)cli;
+  memset(&rep, 0, sizeof rep);
+
+  /* read */
+  if (set) {
+    st = pa_dmesh_read(cli->comm, in, 0, &dm);
+    if (st) {
+      fail_collective(cli, st);
+      goto done;
+    }
+  } else {
+    st = pa_cli_read_mesh(cli, in, &mesh); /* collective */
+    if (cli->rank == 0) {
+      if (st) pa_cli_fail(cli, st);
+      ok = st == PA_SUCCESS && prepare_root(cli, mesh, met, field, opts.remesh.hsiz);
+    }
+    MPI_Bcast(&ok, 1, MPI_INT, 0, cli->comm);
+    if (!ok) goto done;
+    st = pa_dmesh_distribute(cli->comm, 0, mesh, 0, &dm);
+    pa_mesh_destroy(mesh);
+    mesh = NULL;
+    if (st) {
+      fail_collective(cli, st);
+      goto done;
+    }
+  }
+  if (pa_mesh_metric_ncomp(pa_dmesh_mesh(dm)) == 0 && opts.remesh.hsiz <= 0) {
+    if (cli->rank == 0) pa_cli_error(cli, "adapt: no metric: give -hsiz H");
+    goto done;
+  }
+  if (pa_mesh_metric_ncomp(pa_dmesh_mesh(dm)) > 0) {
+    st = pa_dmesh_stats(dm, &before);
+    if (st) {
+      fail_collective(cli, st);
+      goto done;
+    }
+  } else {
+    memset(&before, 0, sizeof before);
+    before.nelem = pa_dmesh_nglobal(dm, PA_ELEMENT);
+    before.nvert = pa_dmesh_nglobal(dm, PA_VERTEX);
+  }
+  if (cli->rank == 0) {
+    printf(" -- INPUT %s (%d processes)\n", in, cli->size);
+    if (before.nedge) pa_stats_print(&before, stdout);
+    printf(" -- ITERATIONS\n");
+    fflush(stdout);
+  }
+
+  /* adapt */
+  st = pa_dmesh_adapt(dm, &opts, &rep);
+  if (st) {
+    fail_collective(cli, st);
+    goto done;
+  }
+  st = pa_dmesh_stats(dm, &after);
+  if (st) {
+    fail_collective(cli, st);
+    goto done;
+  }
+  if (cli->rank == 0) {
+    printf(" -- OUTPUT %s\n", out);
+    pa_stats_print(&after, stdout);
+    print_table(cli, &rep, &after, r->name);
+    if (!rep.converged)
+      fprintf(stderr, "padapt: warning: adapt: the loop stalled with %lld "
+                      "elements still tagged (valid mesh)\n",
+              (long long)rep.ntagged_left);
+  }
+
+  /* write */
+  if (distributed) {
+    st = pa_dmesh_write(dm, out);
+  } else {
+    st = pa_dmesh_gather(dm, 0, &g);
+    if (st == PA_SUCCESS && cli->rank == 0) {
+      st = pa_mesh_write(g, out, NULL);
+      if (st == PA_SUCCESS && !nosol) {
+        pa_sol *sol = NULL;
+        path = replace_ext(out, ".sol");
+        st = pa_mesh_metric_to_sol(g, 0, &sol);
+        if (st == PA_SUCCESS) st = pa_sol_write(sol, path);
+        pa_sol_destroy(sol);
+        free(path);
+        path = NULL;
+      }
+      if (st == PA_SUCCESS && pa_mesh_nfield(g) > 0) {
+        path = replace_ext(out, ".fields.sol");
+        st = write_fields(g, path);
+      }
+    }
+    ok = st == PA_SUCCESS;
+    MPI_Bcast(&ok, 1, MPI_INT, 0, cli->comm);
+    if (!ok && st == PA_SUCCESS) st = PA_ERR_IO;
+  }
+  if (st) {
+    if (cli->rank == 0) pa_cli_fail(cli, st);
+    goto done;
+  }
+
+  /* JSON */
+  mine[0] = pa_memory_peak();
+  mine[1] = pa_peak_rss();
+  if (cli->rank == 0) {
+    mem = calloc((size_t)cli->size, sizeof *mem);
+    rss = calloc((size_t)cli->size, sizeof *rss);
+  }
+  {
+    uint64_t *both = cli->rank == 0 ? calloc(2 * (size_t)cli->size, sizeof *both) : NULL;
+    MPI_Gather(mine, 2, MPI_UINT64_T, both, 2, MPI_UINT64_T, 0, cli->comm);
+    if (cli->rank == 0 && both && mem && rss)
+      for (int k = 0; k < cli->size; k++) {
+        mem[k] = both[2 * k];
+        rss[k] = both[2 * k + 1];
+      }
+    free(both);
+  }
+  ok = 1;
+  if (json && cli->rank == 0) {
+    extra = mem && rss ? json_extra(cli, &rep, &before, mem, rss, r->name) : NULL;
+    st = extra ? pa_stats_write_json(&after, extra, json) : PA_ERR_MEMORY;
+    if (st) {
+      pa_cli_fail(cli, st);
+      ok = 0;
+    }
+  }
+  MPI_Bcast(&ok, 1, MPI_INT, 0, cli->comm);
+  rc = ok ? 0 : 1;
+done:
+  free(extra);
+  free(path);
+  free(mem);
+  free(rss);
+  pa_mesh_destroy(g);
+  pa_mesh_destroy(mesh);
+  pa_dmesh_destroy(dm);
+  return rc;
+}
