@@ -10,14 +10,13 @@
 
 #include <mpi.h>
 
-static int rank, size;
 
-/* A box of dimension dim on rank 0 with an analytic metric (or none),
+/* A box of dimension dim on pa_test_rank 0 with an analytic metric (or none),
  * distributed with the given overlap. */
 static pa_dmesh *make(int dim, int n, const char *metric, int overlap) {
   pa_mesh *m = NULL;
   pa_dmesh *dm = NULL;
-  if (rank == 0) {
+  if (pa_test_rank == 0) {
     CHECK_OK(pa_mesh_generate_box(dim, n, &m));
     if (metric) CHECK_OK(pa_metric_analytic(m, metric));
   }
@@ -27,14 +26,14 @@ static pa_dmesh *make(int dim, int n, const char *metric, int overlap) {
 }
 
 /* Collective check, then gather and check sequentially; returns the
- * gathered statistics on every rank (broadcast). */
+ * gathered statistics on every pa_test_rank (broadcast). */
 static void check_valid(pa_dmesh *dm, pa_stats *gs) {
   pa_mesh *g = NULL;
   pa_stats s;
   memset(&s, 0, sizeof s);
   CHECK_OK(pa_dmesh_check(dm));
   CHECK_OK(pa_dmesh_gather(dm, 0, &g));
-  if (rank == 0) {
+  if (pa_test_rank == 0) {
     CHECK(g != NULL);
     if (g) {
       CHECK_OK(pa_mesh_check(g));
@@ -72,7 +71,7 @@ static void test_bisect_uniform(void) {
   CHECK(ds.valid);
   /* bisection never makes an edge longer than sqrt 2 stay */
   CHECK(ds.edge_max <= 1.4142);
-  if (rank == 0)
+  if (pa_test_rank == 0)
     printf("bisect 2D: %lld -> %lld elements, %d iterations, %ld pieces, "
            "edges in range %.1f %%\n", (long long)rep.nelem_initial,
            (long long)rep.nelem_final, rep.niter, rep.npieces,
@@ -90,7 +89,7 @@ static void test_bisect_3d(void) {
   CHECK(rep.converged);
   CHECK(rep.nfailed == 0);
   check_valid(dm, NULL);
-  if (rank == 0)
+  if (pa_test_rank == 0)
     printf("bisect 3D: %lld -> %lld elements, %d iterations\n",
            (long long)rep.nelem_initial, (long long)rep.nelem_final, rep.niter);
   pa_dmesh_destroy(dm);
@@ -105,7 +104,7 @@ static void test_builtin(void) {
   CHECK_OK(pa_dmesh_adapt(dm, &o, &rep));
   CHECK(rep.converged);
   check_valid(dm, &s);
-  if (rank == 0)
+  if (pa_test_rank == 0)
     printf("builtin 2D: %lld -> %lld elements, %d iterations, %ld pieces, "
            "edges in range %.1f %%, worst quality %.3f\n",
            (long long)rep.nelem_initial, (long long)rep.nelem_final, rep.niter,
@@ -115,33 +114,4 @@ static void test_builtin(void) {
   pa_dmesh_destroy(dm);
 }
 
-int main(int argc, char **argv) {
-  int provided;
-  MPI_Init_thread(&argc, &argv, MPI_THREAD_MULTIPLE, &provided);
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
-  if (getenv("PA_TEST_VERBOSE")) pa_set_verbosity(atoi(getenv("PA_TEST_VERBOSE")));
-  size_t mem0 = pa_memory_current();
-  pa_test_fn tests[] = {test_bisect_uniform, test_bisect_3d, test_builtin};
-  const char *names[] = {"bisect_uniform", "bisect_3d", "builtin"};
-  for (size_t t = 0; t < sizeof tests / sizeof *tests; t++) {
-    int before = pa_test_failures;
-    double t0 = MPI_Wtime();
-    tests[t]();
-    if (pa_test_failures != before)
-      fprintf(stderr, "rank %d: test %s failed\n", rank, names[t]);
-    if (rank == 0) printf("%s: %.2f s\n", names[t], MPI_Wtime() - t0);
-  }
-  if (pa_memory_current() != mem0) {
-    fprintf(stderr, "rank %d: %zu bytes leaked\n", rank,
-            pa_memory_current() - mem0);
-    pa_test_failures++;
-  }
-  int fails = pa_test_failures;
-  MPI_Allreduce(MPI_IN_PLACE, &fails, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
-  if (rank == 0)
-    printf("%s: %d ranks, %d checks on rank 0, %d failures\n", __FILE__, size,
-           pa_test_checks, fails);
-  MPI_Finalize();
-  return fails ? 1 : 0;
-}
+TEST_MPI_MAIN(test_bisect_uniform, test_bisect_3d, test_builtin)

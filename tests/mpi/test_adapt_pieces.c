@@ -1,7 +1,7 @@
 /*
  * test_adapt_pieces.c -- steps 1-2 of the parallel adaptation (internal
  * API, src/adapt/adapt.h): tagging and pieces. The labels and frozen marks
- * of every owned element are gathered on rank 0 and checked by brute force
+ * of every owned element are gathered on pa_test_rank 0 and checked by brute force
  * against the invariants: pieces are disjoint and cover the tagged elements,
  * every element sharing a vertex with a tagged one is labelled, and a
  * labelled element is frozen exactly when it is required or one of its
@@ -14,10 +14,9 @@
 
 #include <mpi.h>
 
-static int rank, size;
 
 /* Gather (label, frozen, tagged, required, vertex gids) of the owned
- * elements and check the invariants on rank 0. */
+ * elements and check the invariants on pa_test_rank 0. */
 static void check_labels(pa__iter *it) {
   pa_dmesh *dm = it->dm;
   int nve = it->nve, w = 4 + nve;
@@ -34,14 +33,14 @@ static void check_labels(pa__iter *it) {
     for (int k = 0; k < nve; k++) r[4 + k] = vg[el[nve * e + k]];
   }
   int cnt = (int)(it->ne * w), *counts = NULL, *displs = NULL, total = 0;
-  if (rank == 0) {
-    counts = malloc(sizeof(int) * size);
-    displs = malloc(sizeof(int) * size);
+  if (pa_test_rank == 0) {
+    counts = malloc(sizeof(int) * pa_test_size);
+    displs = malloc(sizeof(int) * pa_test_size);
   }
   MPI_Gather(&cnt, 1, MPI_INT, counts, 1, MPI_INT, 0, MPI_COMM_WORLD);
   long long *all = NULL;
-  if (rank == 0) {
-    for (int r = 0; r < size; r++) {
+  if (pa_test_rank == 0) {
+    for (int r = 0; r < pa_test_size; r++) {
       displs[r] = total;
       total += counts[r];
     }
@@ -49,7 +48,7 @@ static void check_labels(pa__iter *it) {
   }
   MPI_Gatherv(mine, cnt, MPI_LONG_LONG, all, counts, displs, MPI_LONG_LONG, 0,
               MPI_COMM_WORLD);
-  if (rank == 0) {
+  if (pa_test_rank == 0) {
     int ne = total / w;
     pa_gid nv = pa_dmesh_nglobal(dm, PA_VERTEX) + 1, maxg = 0;
     for (int e = 0; e < ne; e++)
@@ -115,7 +114,7 @@ static void run(int dim, int n, const char *metric, int npieces, int layers) {
   pa_adapt_opts o;
   pa__iter it;
   memset(&it, 0, sizeof it);
-  if (rank == 0) {
+  if (pa_test_rank == 0) {
     CHECK_OK(pa_mesh_generate_box(dim, n, &m));
     CHECK_OK(pa_metric_analytic(m, metric));
     /* a few required elements */
@@ -131,8 +130,8 @@ static void run(int dim, int n, const char *metric, int npieces, int layers) {
                               -1, &done));
   it.dm = dm;
   it.opts = &o;
-  it.rank = rank;
-  it.size = size;
+  it.rank = pa_test_rank;
+  it.size = pa_test_size;
   it.dim = dim;
   it.nve = dim + 1;
   CHECK_OK(pa__adapt_tag(&it, done, 1));
@@ -147,42 +146,14 @@ static void run(int dim, int n, const char *metric, int npieces, int layers) {
 }
 
 static void test_pieces_2d(void) {
-  run(2, 16, "iso-shell:0.1", 2 * size, 2);
+  run(2, 16, "iso-shell:0.1", 2 * pa_test_size, 2);
   run(2, 16, "iso-shell:0.1", 1, 1);
-  run(2, 16, "uniform:0.02", 3 * size, 1);
+  run(2, 16, "uniform:0.02", 3 * pa_test_size, 1);
 }
 
 static void test_pieces_3d(void) {
-  run(3, 5, "iso-shell:0.2", 2 * size, 2);
+  run(3, 5, "iso-shell:0.2", 2 * pa_test_size, 2);
   run(3, 5, "iso-shell:0.2", 1, 2);
 }
 
-int main(int argc, char **argv) {
-  int provided;
-  MPI_Init_thread(&argc, &argv, MPI_THREAD_MULTIPLE, &provided);
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
-  size_t mem0 = pa_memory_current();
-  pa_test_fn tests[] = {test_pieces_2d, test_pieces_3d};
-  const char *names[] = {"pieces_2d", "pieces_3d"};
-  for (size_t t = 0; t < sizeof tests / sizeof *tests; t++) {
-    int before = pa_test_failures;
-    double t0 = MPI_Wtime();
-    tests[t]();
-    if (pa_test_failures != before)
-      fprintf(stderr, "rank %d: test %s failed\n", rank, names[t]);
-    if (rank == 0) printf("%s: %.2f s\n", names[t], MPI_Wtime() - t0);
-  }
-  if (pa_memory_current() != mem0) {
-    fprintf(stderr, "rank %d: %zu bytes leaked\n", rank,
-            pa_memory_current() - mem0);
-    pa_test_failures++;
-  }
-  int fails = pa_test_failures;
-  MPI_Allreduce(MPI_IN_PLACE, &fails, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
-  if (rank == 0)
-    printf("%s: %d ranks, %d checks on rank 0, %d failures\n", __FILE__, size,
-           pa_test_checks, fails);
-  MPI_Finalize();
-  return fails ? 1 : 0;
-}
+TEST_MPI_MAIN(test_pieces_2d, test_pieces_3d)

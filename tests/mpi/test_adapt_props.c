@@ -14,7 +14,6 @@
 
 #include <mpi.h>
 
-static int rank, size;
 
 static pa_dmesh *distribute(pa_mesh *m, int overlap) {
   pa_dmesh *dm = NULL;
@@ -22,10 +21,10 @@ static pa_dmesh *distribute(pa_mesh *m, int overlap) {
   return dm;
 }
 
-/* box2d n with an analytic metric on rank 0 (NULL elsewhere) */
+/* box2d n with an analytic metric on pa_test_rank 0 (NULL elsewhere) */
 static pa_mesh *box(int dim, int n, const char *metric) {
   pa_mesh *m = NULL;
-  if (rank != 0) return NULL;
+  if (pa_test_rank != 0) return NULL;
   CHECK_OK(pa_mesh_generate_box(dim, n, &m));
   if (metric) CHECK_OK(pa_metric_analytic(m, metric));
   return m;
@@ -42,12 +41,12 @@ static double in_range(const pa_stats *s) {
   return s->nedge ? 100.0 * s->edge_hist[PA_STATS_EDGE_NBIN - 1] / (double)s->nedge : 0;
 }
 
-/* Gather, check, and return the gathered mesh on rank 0. */
+/* Gather, check, and return the gathered mesh on pa_test_rank 0. */
 static pa_mesh *gather_checked(pa_dmesh *dm) {
   pa_mesh *g = NULL;
   CHECK_OK(pa_dmesh_check(dm));
   CHECK_OK(pa_dmesh_gather(dm, 0, &g));
-  if (rank == 0) {
+  if (pa_test_rank == 0) {
     CHECK(g != NULL);
     if (g) CHECK_OK(pa_mesh_check(g));
   }
@@ -75,7 +74,7 @@ static void test_vs_sequential(void) {
     pa_mesh *m = box(2, 8, fields[f]);
     pa_stats seq, par;
     memset(&seq, 0, sizeof seq);
-    if (rank == 0) {
+    if (pa_test_rank == 0) {
       pa_mesh *c = NULL;
       pa_remesh_report r;
       CHECK_OK(pa_mesh_copy(m, &c));
@@ -94,7 +93,7 @@ static void test_vs_sequential(void) {
     CHECK(par.valid);
     CHECK(in_range(&par) >= in_range(&seq) - 1.0);
     CHECK(par.ninverted == 0);
-    if (rank == 0)
+    if (pa_test_rank == 0)
       printf("  %s: sequential %lld elements, %.2f %% in range, worst Q %.3f;"
              " parallel %lld elements, %.2f %% in range, worst Q %.3f\n",
              fields[f], (long long)seq.nelem, in_range(&seq), seq.qual_min,
@@ -155,7 +154,7 @@ static void test_required(void) {
     pa_mesh *m = box(2, 8, "uniform:0.04");
     ckey *k0[2] = {NULL, NULL};
     int n0[2] = {0, 0};
-    if (rank == 0) {
+    if (pa_test_rank == 0) {
       /* required: the elements of a band, and the boundary edges x = 0 */
       int d = 2;
       const pa_idx *el = pa_mesh_elems(m);
@@ -177,7 +176,7 @@ static void test_required(void) {
     CHECK_OK(pa_dmesh_adapt(dm, &o, &rep));
     CHECK(rep.nelem_final > rep.nelem_initial);
     pa_mesh *g = gather_checked(dm);
-    if (rank == 0 && g) {
+    if (pa_test_rank == 0 && g) {
       for (int t = 0; t < 2; t++) {
         int n1;
         ckey *k1 = required_keys(g, t, &n1);
@@ -199,7 +198,7 @@ static void test_linear_field(void) {
   const pa_remesher *rs[2] = {NULL, bisect_remesher()};
   for (int r = 0; r < 2; r++) {
     pa_mesh *m = box(2, 6, "iso-shell:0.15");
-    if (rank == 0) {
+    if (pa_test_rank == 0) {
       pa_idx nv = pa_mesh_nvert(m);
       double *f = malloc(sizeof(double) * 2 * nv);
       const double *x = pa_mesh_coords(m);
@@ -215,7 +214,7 @@ static void test_linear_field(void) {
     opts_small(&o, rs[r]);
     CHECK_OK(pa_dmesh_adapt(dm, &o, NULL));
     pa_mesh *g = gather_checked(dm);
-    if (rank == 0 && g) {
+    if (pa_test_rank == 0 && g) {
       CHECK(pa_mesh_nfield(g) == 1);
       int nc;
       double *f, err = 0;
@@ -252,7 +251,7 @@ static void test_every_field(void) {
     CHECK(rep.converged);
     CHECK_OK(pa_dmesh_stats(dm, &s));
     CHECK(s.valid && s.ninverted == 0);
-    if (rank == 0)
+    if (pa_test_rank == 0)
       printf("  %s: %lld -> %lld elements, %d iterations, %.1f %% in range, "
              "worst Q %.3f\n", spec, (long long)rep.nelem_initial,
              (long long)rep.nelem_final, rep.niter, in_range(&s), s.qual_min);
@@ -261,7 +260,7 @@ static void test_every_field(void) {
   }
 }
 
-/* A remesher that fails its first call on rank 0 and otherwise calls the
+/* A remesher that fails its first call on pa_test_rank 0 and otherwise calls the
  * wrapped one. */
 typedef struct failing {
   const pa_remesher *inner;
@@ -272,7 +271,7 @@ static pa_status failing_remesh(void *ctx, pa_mesh *mesh,
                                 const pa_remesh_opts *opts,
                                 pa_remesh_report *rep) {
   failing *f = ctx;
-  if (rank == 0 && f->calls++ == 0) {
+  if (pa_test_rank == 0 && f->calls++ == 0) {
     rep->outcome = PA_REMESH_FAILED;
     return PA_SUCCESS;
   }
@@ -297,42 +296,11 @@ static void test_rollback(void) {
     CHECK(s.valid);
     CHECK(in_range(&s) > 95);
     pa_mesh *g = gather_checked(dm);
-    if (rank == 0 && g) CHECK_NEAR(pa_mesh_volume(g), 1.0, 1e-9);
+    if (pa_test_rank == 0 && g) CHECK_NEAR(pa_mesh_volume(g), 1.0, 1e-9);
     pa_mesh_destroy(g);
     pa_dmesh_destroy(dm);
     pa_mesh_destroy(m);
   }
 }
 
-int main(int argc, char **argv) {
-  int provided;
-  MPI_Init_thread(&argc, &argv, MPI_THREAD_MULTIPLE, &provided);
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
-  if (getenv("PA_TEST_VERBOSE")) pa_set_verbosity(atoi(getenv("PA_TEST_VERBOSE")));
-  size_t mem0 = pa_memory_current();
-  pa_test_fn tests[] = {test_deterministic, test_vs_sequential, test_required,
-                        test_linear_field, test_every_field, test_rollback};
-  const char *names[] = {"deterministic", "vs_sequential", "required",
-                         "linear_field", "every_field", "rollback"};
-  for (size_t t = 0; t < sizeof tests / sizeof *tests; t++) {
-    int before = pa_test_failures;
-    double t0 = MPI_Wtime();
-    tests[t]();
-    if (pa_test_failures != before)
-      fprintf(stderr, "rank %d: test %s failed\n", rank, names[t]);
-    if (rank == 0) printf("%s: %.2f s\n", names[t], MPI_Wtime() - t0);
-  }
-  if (pa_memory_current() != mem0) {
-    fprintf(stderr, "rank %d: %zu bytes leaked\n", rank,
-            pa_memory_current() - mem0);
-    pa_test_failures++;
-  }
-  int fails = pa_test_failures;
-  MPI_Allreduce(MPI_IN_PLACE, &fails, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
-  if (rank == 0)
-    printf("%s: %d ranks, %d checks on rank 0, %d failures\n", __FILE__, size,
-           pa_test_checks, fails);
-  MPI_Finalize();
-  return fails ? 1 : 0;
-}
+TEST_MPI_MAIN(test_deterministic, test_vs_sequential, test_required, test_linear_field, test_every_field, test_rollback)
