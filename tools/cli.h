@@ -40,6 +40,17 @@ int pa_cli_fail(const pa_cli *cli, pa_status st);
  * mesh is checked, and errors name the file. *mesh is set on rank 0 only. */
 pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path, pa_mesh **mesh);
 
+/* Strict number parsing: the whole argument, finite. Returns 1 on success. */
+int pa_cli_parse_num(const char *s, double *v);
+/* path with its extension replaced by ext (with the dot); malloc'ed. */
+char *pa_cli_replace_ext(const char *path, const char *ext);
+/* Parse the remesher option at argv[*i] (-hsiz -hmin -hmax -hgrad -hausd -ar
+ * -v -nr -noinsert -noswap -nomove -nosurf) into opts, moving *i past its
+ * value. Returns 1 when it was one, 0 when argv[*i] is not a remesher
+ * option, -1 after printing an error. */
+int pa_cli_remesh_option(const pa_cli *cli, int argc, char **argv, int *i,
+                         pa_remesh_opts *opts);
+
 /* Set the library's last error message to msg; returns st. */
 pa_status pa_cli_set_error(pa_status st, const char *msg);
 

@@ -40,25 +40,6 @@ static const char *adapt_usage =
     "  -json R.json    write the after-statistics, time and counts as JSON\n"
     "  -v N            verbosity\n";
 
-/* Strict number parsing: the whole argument, finite. */
-static int parse_num(const char *s, double *v) {
-  char *end;
-  if (!s || !*s) return 0;
-  *v = strtod(s, &end);
-  return *end == '\0' && isfinite(*v);
-}
-
-/* path with its extension replaced by ext (ext includes the dot). */
-static char *replace_ext(const char *path, const char *ext) {
-  const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
-  size_t n = (dot && (!slash || dot > slash)) ? (size_t)(dot - path) : strlen(path);
-  char *s = malloc(n + strlen(ext) + 1);
-  if (!s) return NULL;
-  memcpy(s, path, n);
-  strcpy(s + n, ext);
-  return s;
-}
-
 static const char *outcome_name(pa_remesh_outcome o) {
   return o == PA_REMESH_SUCCESS         ? "success"
          : o == PA_REMESH_TARGET_MISSED ? "target missed"
@@ -121,19 +102,14 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i];
     const char *val = i + 1 < argc ? argv[i + 1] : NULL;
-    double x;
 #define NEEDS_FILE(what)                                                     \
   do {                                                                       \
     if (!val) return pa_cli_error(cli, "adapt: %s needs %s", a, what);       \
     i++;                                                                     \
   } while (0)
-#define NEEDS_NUM(lo_ok)                                                     \
-  do {                                                                       \
-    if (!parse_num(val, &x) || !(lo_ok))                                     \
-      return pa_cli_error(cli, "adapt: %s needs a %s number, got '%s'", a,   \
-                          #lo_ok, val ? val : "nothing");                    \
-    i++;                                                                     \
-  } while (0)
+    int r = pa_cli_remesh_option(cli, argc, argv, &i, &opts);
+    if (r < 0) return 1;
+    if (r > 0) continue;
     if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
       if (cli->rank == 0) fputs(adapt_usage, stdout);
       return 0;
@@ -161,38 +137,6 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
     } else if (!strcmp(a, "-json")) {
       NEEDS_FILE("a file");
       json = val;
-    } else if (!strcmp(a, "-hsiz")) {
-      NEEDS_NUM(x > 0);
-      opts.hsiz = x;
-    } else if (!strcmp(a, "-hmin")) {
-      NEEDS_NUM(x > 0);
-      opts.hmin = x;
-    } else if (!strcmp(a, "-hmax")) {
-      NEEDS_NUM(x > 0);
-      opts.hmax = x;
-    } else if (!strcmp(a, "-hgrad")) {
-      NEEDS_NUM(x >= 0);
-      opts.hgrad = x;
-    } else if (!strcmp(a, "-hausd")) {
-      NEEDS_NUM(x > 0);
-      opts.hausd = x;
-    } else if (!strcmp(a, "-ar")) {
-      NEEDS_NUM(x >= 0 && x <= 180);
-      opts.angle = x;
-    } else if (!strcmp(a, "-v")) {
-      NEEDS_NUM(x >= 0 && x <= 10);
-      opts.verbosity = (int)x;
-      pa_set_verbosity((int)x);
-    } else if (!strcmp(a, "-nr")) {
-      opts.no_angle = 1;
-    } else if (!strcmp(a, "-noinsert")) {
-      opts.no_insert = 1;
-    } else if (!strcmp(a, "-noswap")) {
-      opts.no_swap = 1;
-    } else if (!strcmp(a, "-nomove")) {
-      opts.no_move = 1;
-    } else if (!strcmp(a, "-nosurf")) {
-      opts.no_surf = 1;
     } else if (a[0] == '-' && a[1]) {
       return pa_cli_error(cli, "adapt: unknown option '%s' (see padapt adapt -h)", a);
     } else if (!in) {
@@ -201,7 +145,6 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
       return pa_cli_error(cli, "adapt: more than one input mesh ('%s')", a);
     }
 #undef NEEDS_FILE
-#undef NEEDS_NUM
   }
   if (!in) return pa_cli_error(cli, "adapt: no input mesh\n%s", adapt_usage);
   if (!out) return pa_cli_error(cli, "adapt: no output mesh (-out OUT)");
@@ -303,14 +246,14 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
 
   st = pa_mesh_write(mesh, out, NULL);
   if (st == PA_SUCCESS && !nosol) {
-    solpath = outsol ? NULL : replace_ext(out, ".sol");
+    solpath = outsol ? NULL : pa_cli_replace_ext(out, ".sol");
     st = pa_mesh_metric_to_sol(mesh, 0, &sol);
     if (st == PA_SUCCESS) st = pa_sol_write(sol, outsol ? outsol : solpath);
     pa_sol_destroy(sol);
     sol = NULL;
   }
   if (st == PA_SUCCESS && pa_mesh_nfield(mesh) > 0) {
-    fieldpath = outfield ? NULL : replace_ext(out, ".fields.sol");
+    fieldpath = outfield ? NULL : pa_cli_replace_ext(out, ".fields.sol");
     st = write_fields(mesh, outfield ? outfield : fieldpath);
   }
   if (st == PA_SUCCESS && json) {

@@ -46,23 +46,6 @@ static const char *padapt_usage =
     "                    remesher options, as in the sequential adapt\n"
     "  -v N              verbosity\n";
 
-static int parse_num(const char *s, double *v) {
-  char *end;
-  if (!s || !*s) return 0;
-  *v = strtod(s, &end);
-  return *end == '\0' && isfinite(*v);
-}
-
-static char *replace_ext(const char *path, const char *ext) {
-  const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
-  size_t n = (dot && (!slash || dot > slash)) ? (size_t)(dot - path) : strlen(path);
-  char *s = malloc(n + strlen(ext) + 1);
-  if (!s) return NULL;
-  memcpy(s, path, n);
-  strcpy(s + n, ext);
-  return s;
-}
-
 /* Attach every field of a .sol file as a user field of the mesh. */
 static pa_status attach_fields(pa_mesh *mesh, const char *path, int *mismatch) {
   pa_sol *sol = NULL;
@@ -297,11 +280,14 @@ int pa_cli_adapt_parallel(const pa_cli *cli, int argc, char **argv) {
   } while (0)
 #define NEEDS_NUM(lo_ok)                                                     \
   do {                                                                       \
-    if (!parse_num(val, &x) || !(lo_ok))                                     \
+    if (!pa_cli_parse_num(val, &x) || !(lo_ok))                                     \
       return pa_cli_error(cli, "adapt: %s needs a %s number, got '%s'", a,   \
                           #lo_ok, val ? val : "nothing");                    \
     i++;                                                                     \
   } while (0)
+    int r = pa_cli_remesh_option(cli, argc, argv, &i, &opts.remesh);
+    if (r < 0) return 1;
+    if (r > 0) continue;
     if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
       if (cli->rank == 0) fputs(padapt_usage, stdout);
       return 0;
@@ -334,38 +320,6 @@ int pa_cli_adapt_parallel(const pa_cli *cli, int argc, char **argv) {
     } else if (!strcmp(a, "-pieces")) {
       NEEDS_NUM(x >= 1 && x <= 1000 && x == floor(x));
       opts.pieces_per_rank = (int)x;
-    } else if (!strcmp(a, "-hsiz")) {
-      NEEDS_NUM(x > 0);
-      opts.remesh.hsiz = x;
-    } else if (!strcmp(a, "-hmin")) {
-      NEEDS_NUM(x > 0);
-      opts.remesh.hmin = x;
-    } else if (!strcmp(a, "-hmax")) {
-      NEEDS_NUM(x > 0);
-      opts.remesh.hmax = x;
-    } else if (!strcmp(a, "-hgrad")) {
-      NEEDS_NUM(x >= 0);
-      opts.remesh.hgrad = x;
-    } else if (!strcmp(a, "-hausd")) {
-      NEEDS_NUM(x > 0);
-      opts.remesh.hausd = x;
-    } else if (!strcmp(a, "-ar")) {
-      NEEDS_NUM(x >= 0 && x <= 180);
-      opts.remesh.angle = x;
-    } else if (!strcmp(a, "-v")) {
-      NEEDS_NUM(x >= 0 && x <= 10);
-      opts.remesh.verbosity = (int)x;
-      pa_set_verbosity((int)x);
-    } else if (!strcmp(a, "-nr")) {
-      opts.remesh.no_angle = 1;
-    } else if (!strcmp(a, "-noinsert")) {
-      opts.remesh.no_insert = 1;
-    } else if (!strcmp(a, "-noswap")) {
-      opts.remesh.no_swap = 1;
-    } else if (!strcmp(a, "-nomove")) {
-      opts.remesh.no_move = 1;
-    } else if (!strcmp(a, "-nosurf")) {
-      opts.remesh.no_surf = 1;
     } else if (a[0] == '-' && a[1]) {
       return pa_cli_error(cli, "adapt: unknown option '%s' (see padapt adapt -h)", a);
     } else if (!in) {
@@ -481,7 +435,7 @@ int pa_cli_adapt_parallel(const pa_cli *cli, int argc, char **argv) {
       st = pa_mesh_write(g, out, NULL);
       if (st == PA_SUCCESS && !nosol) {
         pa_sol *sol = NULL;
-        path = replace_ext(out, ".sol");
+        path = pa_cli_replace_ext(out, ".sol");
         st = pa_mesh_metric_to_sol(g, 0, &sol);
         if (st == PA_SUCCESS) st = pa_sol_write(sol, path);
         pa_sol_destroy(sol);
@@ -489,7 +443,7 @@ int pa_cli_adapt_parallel(const pa_cli *cli, int argc, char **argv) {
         path = NULL;
       }
       if (st == PA_SUCCESS && pa_mesh_nfield(g) > 0) {
-        path = replace_ext(out, ".fields.sol");
+        path = pa_cli_replace_ext(out, ".fields.sol");
         st = write_fields(g, path);
       }
     }

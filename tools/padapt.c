@@ -11,6 +11,7 @@
 
 #include "core/core.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -92,6 +93,80 @@ pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path,
     st = pa_cli_set_error(st, msg);
   }
   return st;
+}
+
+int pa_cli_parse_num(const char *s, double *v) {
+  char *end;
+  if (!s || !*s) return 0;
+  *v = strtod(s, &end);
+  return *end == '\0' && isfinite(*v);
+}
+
+char *pa_cli_replace_ext(const char *path, const char *ext) {
+  const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
+  size_t n = (dot && (!slash || dot > slash)) ? (size_t)(dot - path)
+                                               : strlen(path);
+  char *s = malloc(n + strlen(ext) + 1);
+  if (!s) return NULL;
+  memcpy(s, path, n);
+  strcpy(s + n, ext);
+  return s;
+}
+
+int pa_cli_remesh_option(const pa_cli *cli, int argc, char **argv, int *i,
+                         pa_remesh_opts *opts) {
+  static const struct {
+    const char *name;
+    int flag; /* 1: a switch, 0: takes a number */
+  } known[] = {{"-hsiz", 0},   {"-hmin", 0},    {"-hmax", 0},
+               {"-hgrad", 0},  {"-hausd", 0},   {"-ar", 0},
+               {"-v", 0},      {"-nr", 1},      {"-noinsert", 1},
+               {"-noswap", 1}, {"-nomove", 1},  {"-nosurf", 1}};
+  const char *a = argv[*i];
+  size_t k = 0, nk = sizeof known / sizeof *known;
+  while (k < nk && strcmp(a, known[k].name)) k++;
+  if (k == nk) return 0;
+  if (known[k].flag) {
+    if (!strcmp(a, "-nr")) opts->no_angle = 1;
+    if (!strcmp(a, "-noinsert")) opts->no_insert = 1;
+    if (!strcmp(a, "-noswap")) opts->no_swap = 1;
+    if (!strcmp(a, "-nomove")) opts->no_move = 1;
+    if (!strcmp(a, "-nosurf")) opts->no_surf = 1;
+    return 1;
+  }
+  double x;
+  const char *val = *i + 1 < argc ? argv[*i + 1] : NULL;
+  int ok = pa_cli_parse_num(val, &x);
+  const char *want = "a positive number";
+  if (!strcmp(a, "-hgrad")) {
+    want = "a non-negative number";
+    ok = ok && x >= 0;
+  } else if (!strcmp(a, "-ar")) {
+    want = "an angle in [0, 180] degrees";
+    ok = ok && x >= 0 && x <= 180;
+  } else if (!strcmp(a, "-v")) {
+    want = "a verbosity level in [0, 10]";
+    ok = ok && x >= 0 && x <= 10;
+  } else {
+    ok = ok && x > 0;
+  }
+  if (!ok) {
+    pa_cli_error(cli, "adapt: %s needs %s, got '%s'", a, want,
+                 val ? val : "nothing");
+    return -1;
+  }
+  (*i)++;
+  if (!strcmp(a, "-hsiz")) opts->hsiz = x;
+  if (!strcmp(a, "-hmin")) opts->hmin = x;
+  if (!strcmp(a, "-hmax")) opts->hmax = x;
+  if (!strcmp(a, "-hgrad")) opts->hgrad = x;
+  if (!strcmp(a, "-hausd")) opts->hausd = x;
+  if (!strcmp(a, "-ar")) opts->angle = x;
+  if (!strcmp(a, "-v")) {
+    opts->verbosity = (int)x;
+    pa_set_verbosity((int)x);
+  }
+  return 1;
 }
 
 /* Report a failed read on rank 0 (the other ranks return quietly). */
