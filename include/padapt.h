@@ -480,7 +480,9 @@ pa_status pa_dmesh_read(MPI_Comm comm, const char *path, int overlap,
  * rank r writes OUT.<r>.meshb: its owned elements with their vertices and
  * boundary entities as a standard Medit file (readable by any Medit reader),
  * plus ParMmg's vertex communicators and padapt keywords (global ids, owners,
- * number of ranks); rank 0 also writes OUT.pvtu referencing OUT.<r>.vtu (owned
+ * number of ranks, metric and fields, and the user values: pa_dmesh_read
+ * recreates them by name, kind, reference and type -- a value of a derived
+ * datatype comes back as MPI_BYTE x its size); rank 0 also writes OUT.pvtu referencing OUT.<r>.vtu (owned
  * elements, cell fields "rank" and "ref"), which ParaView opens. Each file is
  * written atomically (temporary name, then rename).
  */

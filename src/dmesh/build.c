@@ -211,7 +211,12 @@ typedef struct bstate {
   pa__recs L;               /* local elements: owned first; aux = owner */
   uint8_t *layer;           /* per L record */
   size_t caplayer;
-  pa__gidmap emap;          /* element gid -> L index */
+  pa__gidmap emap;          /* ghost element gid -> L index */
+  /* owned elements around each vertex of an owned element (one sort) */
+  size_t nu;                /* vertices of owned elements */
+  pa_gid *ukey;             /* their gids, ascending */
+  pa_idx *ustart, *uelem;   /* CSR: u -> owned L indices */
+  pa__gidmap umap;          /* gid -> u */
   pa__recs LV, LB, LD;      /* local vertices / bdry / edges (aux = owner) */
 } bstate;
 
@@ -233,6 +238,12 @@ static void bstate_free(bstate *s) {
   s->layer = NULL;
   s->caplayer = 0;
   pa__gidmap_free(&s->emap);
+  pa__free(s->ukey);
+  pa__free(s->ustart);
+  pa__free(s->uelem);
+  s->ukey = NULL;
+  s->ustart = s->uelem = NULL;
+  pa__gidmap_free(&s->umap);
   pa__recs_free(&s->LV);
   pa__recs_free(&s->LB);
   pa__recs_free(&s->LD);
@@ -281,14 +292,11 @@ static pa_status build_directory(bstate *s, pa__recs *verts, pa__recs *bdry,
   if (edges->n > nmax) nmax = edges->n;
   PA_ALLOC(dest, nmax);
   for (size_t i = 0; i < verts->n; i++) dest[i] = dir_rank(&s->vdir, verts->gid[i]);
-  PA_CALL(pa__recs_migrate(s->comm, verts, dest, &s->V));
-  pa__recs_free(verts);
+  PA_CALL(pa__recs_migrate_free(s->comm, verts, dest, &s->V));
   for (size_t i = 0; i < bdry->n; i++) dest[i] = dir_rank(&s->vdir, min_vgid(bdry, i));
-  PA_CALL(pa__recs_migrate(s->comm, bdry, dest, &s->B));
-  pa__recs_free(bdry);
+  PA_CALL(pa__recs_migrate_free(s->comm, bdry, dest, &s->B));
   for (size_t i = 0; i < edges->n; i++) dest[i] = dir_rank(&s->vdir, min_vgid(edges, i));
-  PA_CALL(pa__recs_migrate(s->comm, edges, dest, &s->D));
-  pa__recs_free(edges);
+  PA_CALL(pa__recs_migrate_free(s->comm, edges, dest, &s->D));
   PA_CALL(pa__gidmap_init(&s->vmap, s->V.n));
   for (size_t i = 0; i < s->V.n; i++) {
     int found;
@@ -307,9 +315,61 @@ cleanup:
   return st;
 }
 
-/* Unique vertex gids of the L elements with layer in [l0, l1]. */
-static pa_status elem_verts(bstate *s, int l0, int l1, pa_gid **out,
-                            size_t *nout) {
+/* The owned elements around each vertex of an owned element: ukey (sorted
+ * unique gids), CSR ustart/uelem and the map umap. Vertices are numbered by
+ * hashing, and only the nu unique gids are sorted (not the (dim+1) nown
+ * element slots): the one sort of the owned elements' vertex ids in a
+ * build. */
+static pa_status owned_csr(bstate *s, pa_idx nown) {
+  pa_status st = PA_SUCCESS;
+  size_t np = (size_t)nown * s->nve, nu = 0;
+  pa_idx *slotu = NULL, *ord = NULL, *rankof = NULL;
+  pa_gid *key = NULL;
+  PA_ALLOC(slotu, np);
+  /* a map sized to the vertices (about n/5 in 3D, n/2 in 2D), not to the
+   * slots: smaller, so it stays in cache (it grows if needed) */
+  PA_CALL(pa__gidmap_init(&s->umap, (size_t)nown / (s->dim == 3 ? 5 : 2) + 16));
+  for (size_t p = 0; p < np; p++) {
+    int found;
+    pa_idx old;
+    PA_CALL(pa__gidmap_put(&s->umap, s->L.vgid[p], (pa_idx)nu, &found, &old));
+    slotu[p] = found ? old : (pa_idx)nu++;
+  }
+  /* first-seen numbers -> ascending gid numbers */
+  PA_ALLOC(key, nu);
+  PA_ALLOC(ord, nu);
+  PA_ALLOC(rankof, nu);
+  for (size_t p = 0; p < np; p++) key[slotu[p]] = s->L.vgid[p];
+  for (size_t u = 0; u < nu; u++) ord[u] = (pa_idx)u;
+  PA_CALL(pa__sort_by_gid(ord, nu, key));
+  PA_ALLOC(s->ukey, nu);
+  for (size_t k = 0; k < nu; k++) {
+    s->ukey[k] = key[ord[k]];
+    rankof[ord[k]] = (pa_idx)k;
+  }
+  for (size_t q = 0; q < s->umap.cap; q++)
+    if (s->umap.key[q] >= 0) s->umap.val[q] = rankof[s->umap.val[q]];
+  PA_CALLOC(s->ustart, nu + 1);
+  PA_ALLOC(s->uelem, np);
+  for (size_t p = 0; p < np; p++) s->ustart[rankof[slotu[p]] + 1]++;
+  for (size_t u = 0; u < nu; u++) s->ustart[u + 1] += s->ustart[u];
+  for (size_t p = 0; p < np; p++)
+    s->uelem[s->ustart[rankof[slotu[p]]]++] = (pa_idx)(p / s->nve);
+  for (size_t u = nu; u > 0; u--) s->ustart[u] = s->ustart[u - 1];
+  s->ustart[0] = 0;
+  s->nu = nu;
+cleanup:
+  pa__free(slotu);
+  pa__free(ord);
+  pa__free(rankof);
+  pa__free(key);
+  return st;
+}
+
+/* Unique vertex gids, ascending, of the ghost elements with layer in
+ * [l0, l1] that are not vertices of owned elements. */
+static pa_status ghost_verts(bstate *s, int l0, int l1, pa_gid **out,
+                             size_t *nout) {
   pa_status st = PA_SUCCESS;
   size_t n = 0;
   pa_gid *g = NULL;
@@ -319,7 +379,10 @@ static pa_status elem_verts(bstate *s, int l0, int l1, pa_gid **out,
   n = 0;
   for (size_t e = 0; e < s->L.n; e++)
     if (s->layer[e] >= l0 && s->layer[e] <= l1)
-      for (int k = 0; k < s->nve; k++) g[n++] = s->L.vgid[(size_t)s->nve * e + k];
+      for (int k = 0; k < s->nve; k++) {
+        pa_gid v = s->L.vgid[(size_t)s->nve * e + k];
+        if (pa__gidmap_get(&s->umap, v) < 0) g[n++] = v;
+      }
   *nout = pa__gid_sort_unique(g, n);
   *out = g;
 cleanup:
@@ -334,10 +397,10 @@ static pa_status build_touch(bstate *s) {
   int *dest = NULL;
   size_t n, *rcnt = NULL;
   void *recv = NULL;
-  PA_CALL(elem_verts(s, 0, 0, &g, &n));
+  n = s->nu;
   PA_ALLOC(dest, n);
-  for (size_t i = 0; i < n; i++) dest[i] = dir_rank(&s->vdir, g[i]);
-  PA_CALL(send_items(s->comm, n, sizeof(pa_gid), g, dest, &rcnt, &recv));
+  for (size_t i = 0; i < n; i++) dest[i] = dir_rank(&s->vdir, s->ukey[i]);
+  PA_CALL(send_items(s->comm, n, sizeof(pa_gid), s->ukey, dest, &rcnt, &recv));
   const pa_gid *rg = recv;
   size_t nV = s->V.n, tot = 0;
   PA_CALLOC(s->tstart, nV + 1);
@@ -388,7 +451,10 @@ cleanup:
 
 /* Step 4: ghost layers. For layer l, the vertices of layer l-1 not queried
  * yet go to the directory, which forwards (vertex, requester) to every other
- * rank owning elements around the vertex; those reply with these elements. */
+ * rank owning elements around the vertex; those reply with these elements
+ * (one record block per requester). Owned elements never come back to their
+ * owner (queries are forwarded to the other touching ranks only), so only
+ * ghosts enter emap. */
 static pa_status build_layers(bstate *s, int overlap, pa_idx nown) {
   pa_status st = PA_SUCCESS;
   pa_gid *g = NULL, *pair = NULL, *fw = NULL;
@@ -396,53 +462,26 @@ static pa_status build_layers(bstate *s, int overlap, pa_idx nown) {
   size_t *rcnt = NULL, *fcnt = NULL, *ecnt = NULL, *bcnt = NULL;
   void *recv = NULL, *frecv = NULL, *erecv = NULL;
   pa__gidmap queried = {0};
-  pa_idx *ustart = NULL, *uelem = NULL;
-  pa__gidmap umap = {0};
-  pa_gid *ukey = NULL;
-  pa__buf b = {0};
+  pa_idx *sel = NULL;
+  unsigned char *sbuf = NULL;
   pa__recs tmp;
   pa__recs_init(&tmp, PA_ELEMENT, s->nve, 0);
   if (overlap <= 0) goto cleanup;
   PA_CALL(pa__gidmap_init(&queried, 16));
-  /* owned elements around each vertex: CSR over the unique vertex gids */
-  {
-    size_t np = (size_t)nown * s->nve, nu = 0;
-    pa_idx *order;
-    PA_ALLOC(order, np);
-    for (size_t p = 0; p < np; p++) order[p] = (pa_idx)p;
-    st = pa__sort_by_gid(order, np, s->L.vgid);
-    if (st) {
-      pa__free(order);
-      goto cleanup;
-    }
-    ukey = pa__malloc((np ? np : 1) * sizeof *ukey);
-    ustart = pa__malloc((np + 1) * sizeof *ustart);
-    uelem = pa__malloc((np ? np : 1) * sizeof *uelem);
-    if (!ukey || !ustart || !uelem) {
-      pa__free(order);
-      PA_FAIL(PA_ERR_MEMORY, "out of memory");
-    }
-    for (size_t p = 0; p < np; p++) {
-      pa_gid key = s->L.vgid[order[p]];
-      if (nu == 0 || ukey[nu - 1] != key) {
-        ukey[nu] = key;
-        ustart[nu++] = (pa_idx)p;
-      }
-      uelem[p] = order[p] / s->nve;
-    }
-    ustart[nu] = (pa_idx)np;
-    pa__free(order);
-    PA_CALL(pa__gidmap_init(&umap, nu));
-    for (size_t u = 0; u < nu; u++)
-      PA_CALL(pa__gidmap_put(&umap, ukey[u], (pa_idx)u, NULL, NULL));
-  }
   for (int l = 1; l <= overlap; l++) {
     size_t n, nq = 0;
-    PA_CALL(elem_verts(s, l - 1, l - 1, &g, &n));
-    for (size_t i = 0; i < n; i++) {
-      int found;
-      PA_CALL(pa__gidmap_put(&queried, g[i], 0, &found, NULL));
-      if (!found) g[nq++] = g[i];
+    if (l == 1) { /* the vertices of the owned elements */
+      n = s->nu;
+      PA_ALLOC(g, n);
+      memcpy(g, s->ukey, n * sizeof *g);
+      nq = n;
+    } else {
+      PA_CALL(ghost_verts(s, l - 1, l - 1, &g, &n));
+      for (size_t i = 0; i < n; i++) {
+        int found;
+        PA_CALL(pa__gidmap_put(&queried, g[i], 0, &found, NULL));
+        if (!found) g[nq++] = g[i];
+      }
     }
     PA_ALLOC(dest, nq);
     for (size_t i = 0; i < nq; i++) dest[i] = dir_rank(&s->vdir, g[i]);
@@ -492,55 +531,88 @@ static pa_status build_layers(bstate *s, int overlap, pa_idx nown) {
     for (int r = 0; r < s->size; r++) nf += fcnt[r];
     const pa_gid *fr = frecv;
     for (size_t j = 0; j < nf; j++) {
-      pa_idx u = pa__gidmap_get(&umap, fr[2 * j]);
+      pa_idx u = pa__gidmap_get(&s->umap, fr[2 * j]);
       PA_CHECK(u >= 0, PA_ERR_INTERNAL, "forwarded query of vertex %lld "
                "that no owned element has", (long long)fr[2 * j]);
-      npair += (size_t)(ustart[u + 1] - ustart[u]);
+      npair += (size_t)(s->ustart[u + 1] - s->ustart[u]);
     }
     PA_ALLOC(pair, npair);
     npair = 0;
     for (size_t j = 0; j < nf; j++) {
-      pa_idx u = pa__gidmap_get(&umap, fr[2 * j]);
-      for (pa_idx p = ustart[u]; p < ustart[u + 1]; p++)
-        pair[npair++] = fr[2 * j + 1] * (pa_gid)nown + uelem[p];
+      pa_idx u = pa__gidmap_get(&s->umap, fr[2 * j]);
+      for (pa_idx p = s->ustart[u]; p < s->ustart[u + 1]; p++)
+        pair[npair++] = fr[2 * j + 1] * (pa_gid)nown + s->uelem[p];
     }
-    npair = pa__gid_sort_unique(pair, npair);
-    {
-      size_t *cnt;
-      PA_CALLOC(ecnt, s->size);
-      cnt = ecnt;
-      size_t bytes = 0;
-      for (size_t p = 0; p < npair; p++)
-        bytes += pa__recs_wire(&s->L, (size_t)(pair[p] % (nown ? nown : 1)));
-      PA_CALL(pa__buf_reserve(&b, bytes));
-      for (size_t p = 0; p < npair; p++) {
-        int r = (int)(pair[p] / (nown ? nown : 1));
-        size_t e = (size_t)(pair[p] % (nown ? nown : 1));
-        size_t before = b.n;
-        pa__recs_pack(&s->L, e, &b);
-        cnt[r] += b.n - before;
-      }
-    }
-    pa__free(pair);
-    pair = NULL;
     pa__free(frecv);
     frecv = NULL;
     pa__free(fcnt);
     fcnt = NULL;
-    PA_CALL(pa__xchg_sparse(s->comm, ecnt, b.p, &bcnt, &erecv));
-    pa__buf_free(&b);
+    npair = pa__gid_sort_unique(pair, npair);
+    /* one block per requester */
+    {
+      pa_gid div = nown ? nown : 1;
+      size_t *pstart, bytes = 0;
+      PA_CALLOC(ecnt, s->size);
+      PA_ALLOC(sel, npair);
+      pstart = pa__calloc((size_t)s->size + 1, sizeof *pstart);
+      PA_CHECK(pstart, PA_ERR_MEMORY, "out of memory");
+      for (size_t p = 0; p < npair; p++) {
+        sel[p] = (pa_idx)(pair[p] % div);
+        pstart[pair[p] / div + 1]++;
+      }
+      for (int r = 0; r < s->size; r++) pstart[r + 1] += pstart[r];
+      for (int r = 0; r < s->size; r++) {
+        size_t c = pstart[r + 1] - pstart[r];
+        ecnt[r] = c ? pa__recblock_bytes(s->nve, 0, c,
+                                         pa__recs_paybytes(&s->L, sel + pstart[r], c))
+                    : 0;
+        bytes += ecnt[r];
+      }
+      sbuf = pa__malloc(bytes ? bytes : 1);
+      if (!sbuf) {
+        pa__free(pstart);
+        PA_FAIL(PA_ERR_MEMORY, "out of memory");
+      }
+      size_t off = 0;
+      for (int r = 0; r < s->size; r++) {
+        size_t c = pstart[r + 1] - pstart[r];
+        if (c) off += pa__recs_put(&s->L, sel + pstart[r], c, sbuf + off);
+      }
+      pa__free(pstart);
+    }
+    pa__free(pair);
+    pair = NULL;
+    pa__free(sel);
+    sel = NULL;
+    PA_CALL(pa__xchg_sparse(s->comm, ecnt, sbuf, &bcnt, &erecv));
+    pa__free(sbuf);
+    sbuf = NULL;
     pa__free(ecnt);
     ecnt = NULL;
-    /* requester side: new elements become layer l, owner = sender */
+    /* requester side: new elements become layer l, owner = sender (room
+     * reserved first: L is large, growing it would copy it) */
     {
-      size_t q = 0;
+      size_t q = 0, tot = 0, nrec = 0, npay = 0;
+      for (int r = 0; r < s->size; r++) tot += bcnt[r];
+      while (q < tot) {
+        pa__recblock bk;
+        pa__recblock_map((unsigned char *)erecv + q, s->nve, 0, &bk);
+        nrec += bk.n;
+        npay += bk.paybytes;
+        q += bk.bytes;
+      }
+      PA_CALL(pa__recs_reserve(&s->L, s->L.n + nrec,
+                               (s->L.poff ? s->L.poff[s->L.n] : 0) + npay));
+      PA_GROW(s->layer, s->caplayer, s->L.n + nrec);
+      q = 0;
       for (int r = 0; r < s->size; r++) {
         size_t end = q + bcnt[r];
         while (q < end) {
           tmp.n = 0;
           if (tmp.poff) tmp.poff[0] = 0;
-          PA_CALL(pa__recs_unpack(&tmp, erecv, &q));
-          PA_CALL(add_local_elem(s, &tmp, 0, r, l));
+          PA_CALL(pa__recs_get(&tmp, erecv, &q));
+          for (size_t i = 0; i < tmp.n; i++)
+            PA_CALL(add_local_elem(s, &tmp, i, r, l));
         }
       }
     }
@@ -563,103 +635,168 @@ cleanup:
   pa__free(recv);
   pa__free(frecv);
   pa__free(erecv);
+  pa__free(sel);
+  pa__free(sbuf);
   pa__gidmap_free(&queried);
-  pa__gidmap_free(&umap);
-  pa__free(ukey);
-  pa__free(ustart);
-  pa__free(uelem);
-  pa__buf_free(&b);
   pa__recs_free(&tmp);
   return st;
 }
 
 /* Step 5: fetch the records of every local vertex (aux = owner) with the
- * boundary entities and edges attached to it. */
+ * boundary entities and edges attached to it: the directory answers each
+ * requester with three record blocks (vertices in the order asked, their
+ * boundary entities, their edges). Requests are sorted and directory ranks
+ * own increasing gid ranges, so LV arrives sorted by gid. */
 static pa_status fetch_vertices(bstate *s) {
   pa_status st = PA_SUCCESS;
-  pa_gid *g = NULL;
+  pa_gid *g = NULL, *gg = NULL;
   int *dest = NULL;
-  size_t n, *rcnt = NULL, *cnt = NULL, *bcnt = NULL;
+  size_t n, ng, *rcnt = NULL, *cnt = NULL, *bcnt = NULL;
+  size_t *vs = NULL, *bs = NULL, *ds = NULL;
+  pa_idx *vi = NULL, *bi = NULL, *di = NULL;
   void *recv = NULL, *brecv = NULL;
-  pa__buf b = {0};
-  PA_CALL(elem_verts(s, 0, 255, &g, &n));
+  unsigned char *sbuf = NULL;
+  /* local vertices: those of the owned elements, merged with the ghosts' */
+  PA_CALL(ghost_verts(s, 1, 255, &gg, &ng));
+  PA_ALLOC(g, s->nu + ng);
+  {
+    size_t i = 0, j = 0;
+    n = 0;
+    while (i < s->nu || j < ng)
+      g[n++] = j >= ng || (i < s->nu && s->ukey[i] < gg[j]) ? s->ukey[i++]
+                                                              : gg[j++];
+  }
+  pa__free(gg);
+  gg = NULL;
   PA_ALLOC(dest, n);
   for (size_t i = 0; i < n; i++) dest[i] = dir_rank(&s->vdir, g[i]);
   PA_CALL(send_items(s->comm, n, sizeof(pa_gid), g, dest, &rcnt, &recv));
   pa__free(g);
   g = NULL;
+  pa__free(dest);
+  dest = NULL;
   const pa_gid *rg = recv;
-  PA_CALLOC(cnt, s->size);
-  size_t j = 0;
-  for (int r = 0; r < s->size; r++)
-    for (size_t q = 0; q < rcnt[r]; q++, j++) {
-      pa_idx v = pa__gidmap_get(&s->vmap, rg[j]);
-      PA_CHECK(v >= 0 && s->tstart[v + 1] > s->tstart[v], PA_ERR_INTERNAL,
-               "vertex %lld requested but untouched", (long long)rg[j]);
-      int32_t nb = s->bstart[v + 1] - s->bstart[v];
-      int32_t nd = s->dstart[v + 1] - s->dstart[v];
-      size_t need = pa__recs_wire(&s->V, (size_t)v) + 8;
-      for (pa_idx k = s->bstart[v]; k < s->bstart[v + 1]; k++)
-        need += pa__recs_wire(&s->B, (size_t)s->blist[k]);
-      for (pa_idx k = s->dstart[v]; k < s->dstart[v + 1]; k++)
-        need += pa__recs_wire(&s->D, (size_t)s->dlist[k]);
-      PA_CALL(pa__buf_reserve(&b, need));
-      size_t before = b.n;
-      s->V.aux[v] = s->trank[s->tstart[v]]; /* owner: lowest touching rank */
-      pa__recs_pack(&s->V, (size_t)v, &b);
-      pa__buf_put(&b, &nb, 4);
-      for (pa_idx k = s->bstart[v]; k < s->bstart[v + 1]; k++)
-        pa__recs_pack(&s->B, (size_t)s->blist[k], &b);
-      pa__buf_put(&b, &nd, 4);
-      for (pa_idx k = s->dstart[v]; k < s->dstart[v + 1]; k++)
-        pa__recs_pack(&s->D, (size_t)s->dlist[k], &b);
-      cnt[r] += b.n - before;
-    }
-  PA_CALL(pa__xchg_sparse(s->comm, cnt, b.p, &bcnt, &brecv));
-  pa__buf_free(&b);
+  size_t tot = 0, totb = 0, totd = 0;
+  for (int r = 0; r < s->size; r++) tot += rcnt[r];
+  PA_ALLOC(vi, tot);
+  PA_CALLOC(vs, (size_t)s->size + 1);
+  PA_CALLOC(bs, (size_t)s->size + 1);
+  PA_CALLOC(ds, (size_t)s->size + 1);
   {
-    size_t tot = 0, q = 0;
-    for (int r = 0; r < s->size; r++) tot += bcnt[r];
-    while (q < tot) {
-      int32_t nb, nd;
-      PA_CALL(pa__recs_unpack(&s->LV, brecv, &q));
-      pa__get(brecv, &q, &nb, 4);
-      for (int32_t k = 0; k < nb; k++) PA_CALL(pa__recs_unpack(&s->LB, brecv, &q));
-      pa__get(brecv, &q, &nd, 4);
-      for (int32_t k = 0; k < nd; k++) PA_CALL(pa__recs_unpack(&s->LD, brecv, &q));
+    size_t j = 0;
+    for (int r = 0; r < s->size; r++)
+      for (size_t q = 0; q < rcnt[r]; q++, j++) {
+        pa_idx v = pa__gidmap_get(&s->vmap, rg[j]);
+        PA_CHECK(v >= 0 && s->tstart[v + 1] > s->tstart[v], PA_ERR_INTERNAL,
+                 "vertex %lld requested but untouched", (long long)rg[j]);
+        vi[j] = v;
+        s->V.aux[v] = s->trank[s->tstart[v]]; /* owner: lowest touching rank */
+        bs[r + 1] += (size_t)(s->bstart[v + 1] - s->bstart[v]);
+        ds[r + 1] += (size_t)(s->dstart[v + 1] - s->dstart[v]);
+      }
+  }
+  pa__free(recv);
+  recv = NULL;
+  for (int r = 0; r < s->size; r++) {
+    vs[r + 1] = vs[r] + rcnt[r];
+    bs[r + 1] += bs[r];
+    ds[r + 1] += ds[r];
+  }
+  totb = bs[s->size];
+  totd = ds[s->size];
+  PA_ALLOC(bi, totb);
+  PA_ALLOC(di, totd);
+  for (size_t j = 0, kb = 0, kd = 0; j < tot; j++) {
+    pa_idx v = vi[j];
+    for (pa_idx k = s->bstart[v]; k < s->bstart[v + 1]; k++) bi[kb++] = s->blist[k];
+    for (pa_idx k = s->dstart[v]; k < s->dstart[v + 1]; k++) di[kd++] = s->dlist[k];
+  }
+  PA_CALLOC(cnt, s->size);
+  size_t bytes = 0;
+  for (int r = 0; r < s->size; r++) {
+    size_t nv = vs[r + 1] - vs[r], nb = bs[r + 1] - bs[r], nd = ds[r + 1] - ds[r];
+    if (!nv) continue;
+    cnt[r] = pa__recblock_bytes(0, s->V.ndbl, nv, pa__recs_paybytes(&s->V, vi + vs[r], nv)) +
+             pa__recblock_bytes(s->B.nv, 0, nb, pa__recs_paybytes(&s->B, bi + bs[r], nb)) +
+             pa__recblock_bytes(2, 0, nd, pa__recs_paybytes(&s->D, di + ds[r], nd));
+    bytes += cnt[r];
+  }
+  PA_ALLOC(sbuf, bytes);
+  {
+    size_t off = 0;
+    for (int r = 0; r < s->size; r++) {
+      size_t nv = vs[r + 1] - vs[r];
+      if (!nv) continue;
+      off += pa__recs_put(&s->V, vi + vs[r], nv, sbuf + off);
+      off += pa__recs_put(&s->B, bi + bs[r], bs[r + 1] - bs[r], sbuf + off);
+      off += pa__recs_put(&s->D, di + ds[r], ds[r + 1] - ds[r], sbuf + off);
+    }
+  }
+  pa__free(vi);
+  pa__free(bi);
+  pa__free(di);
+  vi = bi = di = NULL;
+  PA_CALL(pa__xchg_sparse(s->comm, cnt, sbuf, &bcnt, &brecv));
+  pa__free(sbuf);
+  sbuf = NULL;
+  {
+    size_t btot = 0, q = 0, n3[3] = {0, 0, 0}, p3[3] = {0, 0, 0};
+    pa__recs *R3[3] = {&s->LV, &s->LB, &s->LD};
+    for (int r = 0; r < s->size; r++) btot += bcnt[r];
+    for (int t = 0; q < btot; t = (t + 1) % 3) { /* exact reservations */
+      pa__recblock bk;
+      pa__recblock_map((unsigned char *)brecv + q, R3[t]->nv, R3[t]->ndbl, &bk);
+      n3[t] += bk.n;
+      p3[t] += bk.paybytes;
+      q += bk.bytes;
+    }
+    for (int t = 0; t < 3; t++) PA_CALL(pa__recs_reserve(R3[t], n3[t], p3[t]));
+    q = 0;
+    while (q < btot) {
+      PA_CALL(pa__recs_get(&s->LV, brecv, &q));
+      PA_CALL(pa__recs_get(&s->LB, brecv, &q));
+      PA_CALL(pa__recs_get(&s->LD, brecv, &q));
     }
   }
 cleanup:
   st = pa__agree_end(s->comm, st);
   pa__free(g);
+  pa__free(gg);
   pa__free(dest);
   pa__free(rcnt);
   pa__free(cnt);
   pa__free(bcnt);
+  pa__free(vs);
+  pa__free(bs);
+  pa__free(ds);
+  pa__free(vi);
+  pa__free(bi);
+  pa__free(di);
   pa__free(recv);
   pa__free(brecv);
-  pa__buf_free(&b);
+  pa__free(sbuf);
   return st;
 }
 
 /* Order of local entities: owned (aux == rank) first, each group by gid (and
- * elements by layer). out[k] = record index of local entity k. */
+ * elements by layer). out[k] = record index of local entity k. A stable
+ * counting pass by group, then a sort by gid of each group, skipped when it
+ * is already in order (the owned elements and the vertices arrive sorted). */
 static pa_status number_local(const pa__recs *R, const uint8_t *layer,
                               int rank, pa_idx *out, pa_idx *nown) {
   pa_status st = PA_SUCCESS;
-  pa_gid *key = NULL;
-  PA_ALLOC(key, R->n);
-  for (size_t i = 0; i < R->n; i++) out[i] = (pa_idx)i;
-  PA_CALL(pa__sort_by_gid(out, R->n, R->gid));
-  /* stable partition by group: owned, then ghost layers 1.. */
-  for (size_t i = 0; i < R->n; i++)
-    key[i] = layer ? layer[i] : (R->aux[i] == rank ? 0 : 1);
-  PA_CALL(pa__sort_by_gid(out, R->n, key));
-  pa_idx k = 0;
-  while ((size_t)k < R->n && key[out[k]] == 0) k++;
-  *nown = k;
+  size_t c[258] = {0};
+#define GROUP(i) (layer ? layer[i] : (R->aux[i] == rank ? 0 : 1))
+  for (size_t i = 0; i < R->n; i++) c[GROUP(i) + 2]++;
+  for (int b = 0; b < 256; b++) c[b + 2] += c[b + 1];
+  *nown = (pa_idx)c[2];
+  for (size_t i = 0; i < R->n; i++) out[c[GROUP(i) + 1]++] = (pa_idx)i;
+#undef GROUP
+  /* now c[g] is the start of group g */
+  for (int g = 0; g < 256; g++)
+    if (c[g + 1] > c[g] + 1)
+      PA_CALL(pa__sort_by_gid(out + c[g], c[g + 1] - c[g], R->gid));
 cleanup:
-  pa__free(key);
   return st;
 }
 
@@ -730,6 +867,8 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
     m->vflag[k] = s->LV.flag[i];
   }
   m->nv = (pa_idx)s->LV.n;
+  pa__free(s->LV.dbl); /* in the mesh now: lower the peak */
+  s->LV.dbl = NULL;
   for (size_t k = 0; k < s->L.n; k++) {
     size_t i = (size_t)ordE[k];
     for (int j = 0; j <= d; j++) {
@@ -741,6 +880,8 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
     m->eflag[k] = s->L.flag[i];
   }
   m->ne = (pa_idx)s->L.n;
+  pa__free(s->L.vgid); /* in the mesh now */
+  s->L.vgid = NULL;
 
   /* vertex -> local elements, for the containment tests */
   PA_CALLOC(vstart, (size_t)m->nv + 1);
@@ -940,41 +1081,49 @@ pa_status pa__dmesh_build(pa_dmesh *dm, const pa__layout *lay, int overlap,
   PA_CALL(pa__allreduce(s.comm, &maxg, 1, MPI_INT64_T, MPI_MAX));
   dir_init(&s.vdir, maxg, s.size);
 
-  /* 1. elements to their owners */
-  {
-    pa__recs E;
-    PA_CALL(pa__recs_migrate(s.comm, elems, NULL, &E));
-    pa__recs_free(elems);
-    PA_CALL(pa__gidmap_init(&s.emap, E.n));
-    for (size_t i = 0; i < E.n; i++) {
-      int found;
-      if (i && E.gid[i] == E.gid[i - 1]) {
-        pa__recs_free(&E);
-        PA_FAIL(PA_ERR_MESH, "element global id %lld is given twice",
-                (long long)E.gid[i]);
-      }
-      st = add_local_elem(&s, &E, i, s.rank, 0);
-      if (st) {
-        pa__recs_free(&E);
-        goto cleanup;
-      }
-      (void)found;
-    }
-    pa__recs_free(&E);
-  }
+  /* 1. elements to their owners: the received records become the owned
+   * part of L (aux = destination = this rank), sorted by gid */
+  PA_CALL(pa__recs_migrate_free(s.comm, elems, NULL, &s.L));
+  for (size_t i = 1; i < s.L.n; i++)
+    PA_CHECK(s.L.gid[i] != s.L.gid[i - 1], PA_ERR_MESH,
+             "element global id %lld is given twice", (long long)s.L.gid[i]);
+  PA_CALLOC(s.layer, s.L.n);
+  s.caplayer = s.L.n;
+  PA_CALL(pa__gidmap_init(&s.emap, 16));
   pa_idx nown_e = (pa_idx)s.L.n;
   double t1 = pa_wtime();
   /* 2-3. directory and touch lists */
   PA_CALL(build_directory(&s, verts, bdry, edges));
+  st = owned_csr(&s, nown_e);
+  PA_CALL(pa__agree(s.comm, st));
   PA_CALL(build_touch(&s));
   /* 4. ghost layers */
   PA_CALL(build_layers(&s, overlap, nown_e));
   double t2 = pa_wtime();
   /* 5. vertices, boundary entities, edges */
   PA_CALL(fetch_vertices(&s));
-  pa__recs_free(&s.V);
-  pa__recs_free(&s.B);
-  pa__recs_free(&s.D);
+  { /* the directory and the owned-vertex index are done with */
+    bstate keep = s;
+    memset(&keep.V, 0, sizeof keep.V);
+    memset(&keep.B, 0, sizeof keep.B);
+    memset(&keep.D, 0, sizeof keep.D);
+    memset(&keep.vmap, 0, sizeof keep.vmap);
+    keep.bstart = keep.blist = keep.dstart = keep.dlist = keep.tstart = NULL;
+    keep.trank = NULL;
+    memset(&keep.emap, 0, sizeof keep.emap);
+    keep.nu = 0;
+    keep.ukey = NULL;
+    keep.ustart = keep.uelem = NULL;
+    memset(&keep.umap, 0, sizeof keep.umap);
+    /* free what keep no longer references */
+    memset(&s.L, 0, sizeof s.L);
+    s.layer = NULL;
+    memset(&s.LV, 0, sizeof s.LV);
+    memset(&s.LB, 0, sizeof s.LB);
+    memset(&s.LD, 0, sizeof s.LD);
+    bstate_free(&s);
+    s = keep;
+  }
   /* 6-9. numbering, local mesh, values */
   PA_CALL(assemble(dm, &s, lay));
   bstate_free(&s);

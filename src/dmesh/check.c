@@ -393,15 +393,33 @@ pa_status pa_dmesh_partition_stats(pa_dmesh *dm, pa_gid *nelem,
   int d = dm->dim;
   pa_idx ne = dm->nown[PA_ELEMENT];
   PA_ALLOC(all, dm->size);
-  PA_ALLOC(vg, (size_t)ne * (d + 1));
-  for (size_t k = 0; k < (size_t)ne * (d + 1); k++)
-    vg[k] = dm->gid[PA_VERTEX][dm->mesh->elem[k]];
   PA_CALL(pa__agree(dm->comm, st));
   pa_gid mine = ne;
   MPI_Allgather(&mine, 1, MPI_INT64_T, all, 1, MPI_INT64_T, dm->comm);
-  PA_CALL(pa__dual_graph(dm->comm, d, ne, vg, &xadj, &adj, &adjrank, NULL));
   pa_gid cut = 0, tot = 0, mx = 0;
-  for (pa_idx j = 0; j < xadj[ne]; j++) cut += adjrank[j] != dm->rank;
+  if (dm->overlap >= 1) {
+    /* every face neighbour of an owned element is local: count the owned
+     * elements' faces shared with a ghost (pa_dmesh_elem_neighbours) */
+    const pa_idx *nb;
+    int had = dm->adja != NULL;
+    st = ne ? pa_dmesh_elem_neighbours(dm, 0, &nb) : PA_SUCCESS;
+    PA_CALL(pa__agree(dm->comm, st));
+    for (size_t k = 0; k < (size_t)ne * (d + 1); k++)
+      cut += dm->adja[k] >= ne;
+    if (!had) { /* leave no cache behind */
+      pa__free(dm->adja);
+      dm->adja = NULL;
+    }
+  } else {
+    st = PA_SUCCESS;
+    vg = pa__malloc(((size_t)ne * (d + 1) + 1) * sizeof *vg);
+    if (!vg) st = pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+    for (size_t k = 0; vg && k < (size_t)ne * (d + 1); k++)
+      vg[k] = dm->gid[PA_VERTEX][dm->mesh->elem[k]];
+    PA_CALL(pa__agree(dm->comm, st));
+    PA_CALL(pa__dual_graph(dm->comm, d, ne, vg, &xadj, &adj, &adjrank, NULL));
+    for (pa_idx j = 0; j < xadj[ne]; j++) cut += adjrank[j] != dm->rank;
+  }
   PA_CALL(pa__allreduce(dm->comm, &cut, 1, MPI_INT64_T, MPI_SUM));
   for (int r = 0; r < dm->size; r++) {
     tot += all[r];

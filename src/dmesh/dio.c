@@ -16,7 +16,9 @@
  *  - padapt keywords (codes 2101-2110, unknown to other readers, which skip
  *    them through the next-keyword position): header, global ids and owner
  *    ranks of vertices / boundary entities / edges, element global ids,
- *    metric and fields, entity flags.
+ *    metric and fields, entity flags, and one keyword per user value
+ *    (description, then the value of every file entity holding it, in file
+ *    order).
  * Every keyword starts with its code (int32) and the absolute position of the
  * next keyword (int32 in versions 1-2, int64 in 3-4), as libMeshb does.
  * Invariants: files are complete or absent (written under a temporary name,
@@ -45,6 +47,7 @@ enum {
   KW_DOWNER = 2108,        /* PadaptEdgeOwners */
   KW_VDBL = 2109,          /* PadaptVertexData: metric and fields */
   KW_FLAGS = 2110,         /* PadaptFlags: uint8 per V, E, B, D entity */
+  KW_VALUE = 2111,         /* PadaptValue: one user value (vdesc + data) */
   KW_END = 54,
   FORMAT_VERSION = 1
 };
@@ -172,6 +175,68 @@ cleanup:
   return st;
 }
 
+/* ---- user values ---- */
+
+/* Description of a user value in a file (keyword 2111, then count * unit
+ * bytes of data). type: code of a predefined MPI type (value_type), 0 for
+ * the bytes of a derived type (read back as MPI_BYTE x unit). */
+typedef struct vdesc {
+  char name[PA_VALUE_NAME_LEN];
+  int32_t kind, ref, ncomp, type;
+  int64_t count; /* file entities holding the value */
+} vdesc;
+
+enum { NVALUE_TYPES = 18 };
+
+static MPI_Datatype value_type(int code) {
+  switch (code) {
+  case 1: return MPI_DOUBLE;
+  case 2: return MPI_FLOAT;
+  case 3: return MPI_INT;
+  case 4: return MPI_LONG;
+  case 5: return MPI_LONG_LONG;
+  case 6: return MPI_UNSIGNED;
+  case 7: return MPI_UNSIGNED_LONG;
+  case 8: return MPI_SHORT;
+  case 9: return MPI_CHAR;
+  case 10: return MPI_UNSIGNED_CHAR;
+  case 11: return MPI_INT8_T;
+  case 12: return MPI_INT16_T;
+  case 13: return MPI_INT32_T;
+  case 14: return MPI_INT64_T;
+  case 15: return MPI_UINT8_T;
+  case 16: return MPI_UINT16_T;
+  case 17: return MPI_UINT32_T;
+  case 18: return MPI_UINT64_T;
+  default: return MPI_BYTE;
+  }
+}
+
+static int value_code(MPI_Datatype t) {
+  for (int c = 1; c <= NVALUE_TYPES; c++)
+    if (value_type(c) == t) return c;
+  return t == MPI_BYTE ? 19 : 0;
+}
+
+/* Bytes per entity of a described value. */
+static size_t vdesc_unit(const vdesc *d) {
+  int ts = 1;
+  if (d->type >= 1 && d->type <= NVALUE_TYPES) MPI_Type_size(value_type(d->type), &ts);
+  return (size_t)ts * (size_t)d->ncomp;
+}
+
+/* The description of value v as stored (derived types as bytes). */
+static void vdesc_of(const pa_dmesh_value *v, int64_t count, vdesc *d) {
+  memset(d, 0, sizeof *d);
+  snprintf(d->name, sizeof d->name, "%s", v->name);
+  d->kind = (int32_t)v->kind;
+  d->ref = v->ref;
+  d->type = value_code(v->type);
+  d->ncomp = d->type ? v->ncomp : (int32_t)v->unit;
+  if (!d->type) d->type = 19; /* bytes */
+  d->count = count;
+}
+
 /* ---- scanning our keywords ---- */
 
 typedef struct dfile {
@@ -184,6 +249,9 @@ typedef struct dfile {
   double *vdbl;
   uint8_t *flags;
   int have_header;
+  int nval;
+  vdesc *val;              /* nval descriptions */
+  unsigned char **valdata; /* nval blocks of count * unit bytes */
 } dfile;
 
 static void dfile_free(dfile *f) {
@@ -193,6 +261,9 @@ static void dfile_free(dfile *f) {
   }
   pa__free(f->vdbl);
   pa__free(f->flags);
+  for (int q = 0; q < f->nval; q++) pa__free(f->valdata[q]);
+  pa__free(f->val);
+  pa__free(f->valdata);
   memset(f, 0, sizeof *f);
 }
 
@@ -288,6 +359,29 @@ static pa_status scan_file(const char *path, dfile *f) {
       room = (next ? next : INT64_MAX) - ftello(fp);
       PA_CALL(read_block(fp, path, &p, sizeof(double) * nd * (size_t)H[H_NFILE], room));
       f->vdbl = p;
+      break;
+    }
+    case KW_VALUE: {
+      vdesc d;
+      PA_CHECK(f->have_header && room >= (int64_t)sizeof d &&
+                   fread(&d, sizeof d, 1, fp) == 1,
+               PA_ERR_FORMAT, "%s: truncated value keyword", path);
+      d.name[PA_VALUE_NAME_LEN - 1] = '\0';
+      PA_CHECK(d.kind >= 0 && d.kind < PA_NKIND && d.ncomp >= 1 &&
+                   d.ncomp < (1 << 24) && d.ref >= -1 && d.type >= 1 &&
+                   d.type <= NVALUE_TYPES + 1 && d.count >= 0 &&
+                   d.count <= H[H_NFILE + d.kind] && f->nval < 4096,
+               PA_ERR_FORMAT, "%s: bad description of value '%s'", path, d.name);
+      void *grown = pa__realloc(f->val, (size_t)(f->nval + 1) * sizeof *f->val);
+      PA_CHECK(grown, PA_ERR_MEMORY, "out of memory reading %s", path);
+      f->val = grown;
+      grown = pa__realloc(f->valdata, (size_t)(f->nval + 1) * sizeof *f->valdata);
+      PA_CHECK(grown, PA_ERR_MEMORY, "out of memory reading %s", path);
+      f->valdata = grown;
+      room = (next ? next : INT64_MAX) - ftello(fp);
+      PA_CALL(read_block(fp, path, &p, vdesc_unit(&d) * (size_t)d.count, room));
+      f->val[f->nval] = d;
+      f->valdata[f->nval++] = p;
       break;
     }
     case KW_FLAGS: {
@@ -665,6 +759,37 @@ pa_status pa_dmesh_write(pa_dmesh *dm, const char *path) {
       base_off += (size_t)nfile[k];
     }
     PA_CALL(kw_write(&kw, KW_FLAGS, flags, nf, NULL, 0, NULL, 0));
+    /* user values: the owned copies are authoritative; the file holds the
+     * value of every file entity with it (ghost vertices included), and the
+     * reader keeps the one of the owner's file */
+    for (int q = 0; q < dm->nvalue; q++) {
+      const pa_dmesh_value *v = dm->value[q];
+      int k = (int)v->kind;
+      pa_idx *fslot;
+      unsigned char *vb;
+      vdesc d;
+      int64_t count = 0;
+      PA_ALLOC(fslot, nfile[k]);
+      for (pa_idx f = 0; f < nfile[k]; f++) fslot[f] = -1;
+      for (pa_idx i = 0; i < dm->nloc[k]; i++) {
+        pa_idx sl = v->slot ? v->slot[i] : i;
+        if (map[k][i] >= 0 && sl >= 0) fslot[map[k][i]] = sl;
+      }
+      for (pa_idx f = 0; f < nfile[k]; f++) count += fslot[f] >= 0;
+      vb = pa__malloc((size_t)count * v->unit + 1);
+      if (!vb) {
+        pa__free(fslot);
+        PA_FAIL(PA_ERR_MEMORY, "out of memory writing value '%s'", v->name);
+      }
+      for (pa_idx f = 0, c = 0; f < nfile[k]; f++)
+        if (fslot[f] >= 0)
+          memcpy(vb + v->unit * (size_t)c++, v->data + v->unit * (size_t)fslot[f], v->unit);
+      vdesc_of(v, count, &d);
+      st = kw_write(&kw, KW_VALUE, &d, sizeof d, vb, v->unit * (size_t)count, NULL, 0);
+      pa__free(fslot);
+      pa__free(vb);
+      if (st) goto cleanup;
+    }
   }
   PA_CALL(kw_close(&kw));
   PA_CHECK(rename(tpath, fpath) == 0, PA_ERR_IO, "%s: cannot rename: %s", fpath,
@@ -694,12 +819,37 @@ cleanup:
 /* ---- reading ---- */
 
 /* Records of the entities file f owns (elements: all). */
+/* Payload of file entity i of kind k (reference ref): the data of the values
+ * of kind k holding it, in value order; advances their cursors. */
+static pa_status file_payload(const char *path, const dfile *df, int k,
+                              int32_t ref, int64_t *cur, unsigned char *pay,
+                              size_t *len) {
+  pa_status st = PA_SUCCESS;
+  *len = 0;
+  for (int q = 0; q < df->nval; q++) {
+    const vdesc *v = &df->val[q];
+    if (v->kind != k || (v->ref >= 0 && v->ref != ref)) continue;
+    PA_CHECK(cur[q] < v->count, PA_ERR_FORMAT,
+             "%s: value '%s' has data for %lld entities, more hold it", path,
+             v->name, (long long)v->count);
+    size_t u = vdesc_unit(v);
+    memcpy(pay + *len, df->valdata[q] + u * (size_t)cur[q]++, u);
+    *len += u;
+  }
+cleanup:
+  return st;
+}
+
 static pa_status file_records(const char *path, int f, int nwriters,
                               const dfile *df, const pa_mesh *fm,
-                              const pa__layout *lay, int me, pa__recs *R) {
+                              const pa__layout *lay, const vdesc *vals,
+                              int nval, int me, pa__recs *R) {
   pa_status st = PA_SUCCESS;
   int d = fm->dim;
   double *dbl = NULL;
+  int64_t *cur = NULL;
+  unsigned char *pay = NULL;
+  size_t plen;
   const int64_t *h = df->h;
   PA_CHECK(h[H_NRANKS] == nwriters && h[H_RANK] == f, PA_ERR_FORMAT,
            "%s: this is the file of rank %lld of %lld, expected rank %d of %d",
@@ -713,17 +863,32 @@ static pa_status file_records(const char *path, int f, int nwriters,
   PA_CHECK(df->met_ncomp == lay->met_ncomp && df->nfield == lay->nfield,
            PA_ERR_FORMAT, "%s: metric or fields differ from rank 0's file", path);
   int nd = pa__layout_ndbl(lay) - d;
+  /* user values: same descriptions as rank 0's file; cur[q] walks value q's
+   * data over the file entities holding it, in file order */
+  PA_CHECK(df->nval == nval, PA_ERR_FORMAT,
+           "%s: %d user values, rank 0's file has %d", path, df->nval, nval);
+  size_t maxpay = 0;
+  for (int q = 0; q < nval; q++) {
+    PA_CHECK(!strcmp(df->val[q].name, vals[q].name) &&
+                 df->val[q].kind == vals[q].kind && df->val[q].ref == vals[q].ref &&
+                 df->val[q].ncomp == vals[q].ncomp && df->val[q].type == vals[q].type,
+             PA_ERR_FORMAT, "%s: user value %d differs from rank 0's file", path, q);
+    maxpay += vdesc_unit(&vals[q]);
+  }
+  PA_CALLOC(cur, nval);
+  PA_ALLOC(pay, maxpay);
   PA_ALLOC(dbl, d + nd);
   for (pa_idx v = 0; v < fm->nv; v++) {
     PA_CHECK(df->owner[0][v] >= 0 && df->owner[0][v] < nwriters, PA_ERR_FORMAT,
              "%s: vertex %d has owner %d out of range", path, (int)v + 1,
              df->owner[0][v]);
+    PA_CALL(file_payload(path, df, PA_VERTEX, fm->vref[v], cur, pay, &plen));
     if (df->owner[0][v] != f) continue;
     memcpy(dbl, fm->coord + (size_t)d * v, sizeof(double) * d);
     if (nd) memcpy(dbl + d, df->vdbl + (size_t)nd * v, sizeof(double) * nd);
     uint8_t flag = df->flags ? df->flags[v] : fm->vflag[v];
     PA_CALL(pa__recs_add(&R[PA_VERTEX], df->gid[0][v], NULL, fm->vref[v], flag,
-                         me, dbl, NULL, 0));
+                         me, dbl, pay, plen));
   }
   size_t foff = (size_t)fm->nv;
   for (int k = PA_ELEMENT; k < PA_NKIND; k++) {
@@ -733,17 +898,24 @@ static pa_status file_records(const char *path, int f, int nwriters,
     const int32_t *ref = k == PA_ELEMENT ? fm->eref : k == PA_BOUNDARY ? fm->bref : fm->edref;
     const uint8_t *fl = k == PA_ELEMENT ? fm->eflag : k == PA_BOUNDARY ? fm->bflag : fm->edflag;
     for (pa_idx i = 0; i < n; i++) {
+      PA_CALL(file_payload(path, df, k, ref[i], cur, pay, &plen));
       if (k != PA_ELEMENT && df->owner[k][i] != f) continue;
       pa_gid vg[4];
       for (int j = 0; j < nv; j++) vg[j] = df->gid[0][conn[(size_t)nv * i + j]];
       uint8_t flag = df->flags ? df->flags[foff + (size_t)i] : fl[i];
       PA_CALL(pa__recs_add(&R[k], df->gid[k][i], vg, ref[i], flag, me, NULL,
-                           NULL, 0));
+                           pay, plen));
     }
     foff += (size_t)n;
   }
+  for (int q = 0; q < nval; q++)
+    PA_CHECK(cur[q] == df->val[q].count, PA_ERR_FORMAT,
+             "%s: value '%s' has data for %lld entities, %lld hold it", path,
+             df->val[q].name, (long long)df->val[q].count, (long long)cur[q]);
 cleanup:
   pa__free(dbl);
+  pa__free(cur);
+  pa__free(pay);
   return st;
 }
 
@@ -758,7 +930,8 @@ static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
   int64_t hdr[H_WORDS];
   pa__recs R[PA_NKIND];
   pa_dmesh *dm = NULL;
-  int *part = NULL;
+  int *part = NULL, nval = 0;
+  vdesc *vals = NULL;
   memset(&df, 0, sizeof df);
   memset(R, 0, sizeof R);
   memset(&lay, 0, sizeof lay);
@@ -779,11 +952,21 @@ static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
     PA_CHECK(hdr[H_NRANKS] >= 1 && hdr[H_NRANKS] < (1 << 24) &&
                  (hdr[H_DIM] == 2 || hdr[H_DIM] == 3),
              PA_ERR_FORMAT, "%s: bad header", fpath);
+    nval = df.nval;
+    PA_ALLOC(vals, nval);
+    if (nval) memcpy(vals, df.val, (size_t)nval * sizeof *vals);
     dfile_free(&df);
   }
   PA_CALL(pa__agree(comm, st));
   MPI_Bcast(hdr, H_WORDS, MPI_INT64_T, 0, comm);
   MPI_Bcast(&lay, (int)sizeof lay, MPI_BYTE, 0, comm);
+  MPI_Bcast(&nval, 1, MPI_INT, 0, comm);
+  if (rank != 0) {
+    vals = pa__malloc(((size_t)nval + 1) * sizeof *vals);
+    st = vals ? PA_SUCCESS : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+  }
+  PA_CALL(pa__agree(comm, st));
+  MPI_Bcast(vals, (int)((size_t)nval * sizeof *vals), MPI_BYTE, 0, comm);
   int nw = (int)hdr[H_NRANKS];
   for (int k = 0; k < PA_NKIND; k++)
     pa__recs_init(&R[k], k, pa__kind_nv(lay.dim, k),
@@ -797,7 +980,7 @@ static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
              fpath, path, nw);
     PA_CALL(scan_file(fpath, &df));
     PA_CALL(pa_mesh_read(fpath, &fm));
-    PA_CALL(file_records(fpath, f, nw, &df, fm, &lay, rank, R));
+    PA_CALL(file_records(fpath, f, nw, &df, fm, &lay, vals, nval, rank, R));
     for (int k = 0; k < PA_NKIND; k++)
       PA_CHECK(df.h[H_NGLOB + k] == hdr[H_NGLOB + k], PA_ERR_FORMAT,
                "%s: global counts differ from rank 0's file", fpath);
@@ -821,6 +1004,10 @@ static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
   PA_CALL(pa__gids_unique(comm, R[PA_BOUNDARY].n, R[PA_BOUNDARY].gid, "boundary entity"));
   PA_CALL(pa__gids_unique(comm, R[PA_EDGE].n, R[PA_EDGE].gid, "edge"));
   PA_CALL(pa__dmesh_create(comm, lay.dim, &dm));
+  for (int q = 0; q < nval && !st; q++) /* same on every rank: no agreement */
+    st = pa__value_define(dm, vals[q].kind, vals[q].name, value_type(vals[q].type),
+                          vals[q].ncomp, vals[q].ref);
+  PA_CALL(pa__agree(comm, st));
   if (nw != size) { /* another number of ranks: repartition */
     part = pa__malloc((R[PA_ELEMENT].n + 1) * sizeof *part);
     st = part ? PA_SUCCESS : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
@@ -840,6 +1027,7 @@ cleanup:
   for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&R[k]);
   pa_dmesh_destroy(dm);
   pa__free(part);
+  pa__free(vals);
   return st;
 }
 

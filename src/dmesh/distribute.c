@@ -44,79 +44,72 @@ cleanup:
   return st;
 }
 
-/* Pack block r of P of the root mesh: counts, then records of each kind. */
+/* Pack block r of P of the root mesh: one record block per kind (vertices,
+ * elements, boundary entities, edges), filled array by array straight from
+ * the mesh arrays. */
 static pa_status pack_block(pa_mesh *m, const pa__layout *lay, int r, int P,
                             pa__buf *b) {
   pa_status st = PA_SUCCESS;
-  int d = m->dim;
-  pa__recs R[PA_NKIND];
-  double *dbl = NULL;
-  int64_t n[PA_NKIND] = {m->nv, m->ne, m->nb, m->ned};
-  for (int k = 0; k < PA_NKIND; k++)
-    pa__recs_init(&R[k], k, pa__kind_nv(d, k), k == PA_VERTEX ? pa__layout_ndbl(lay) : 0);
-  PA_ALLOC(dbl, pa__layout_ndbl(lay));
+  int d = m->dim, ndbl = pa__layout_ndbl(lay);
+  int64_t n[PA_NKIND] = {m->nv, m->ne, m->nb, m->ned}, lo[PA_NKIND],
+          cnt[PA_NKIND];
+  size_t bytes = 0;
   for (int k = 0; k < PA_NKIND; k++) {
-    int64_t lo = n[k] * r / P, hi = n[k] * (r + 1) / P;
-    int nv = pa__kind_nv(d, k);
-    const pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
-    for (int64_t i = lo; i < hi; i++) {
-      pa_gid vg[4];
-      for (int j = 0; j < nv; j++) vg[j] = conn[(size_t)nv * i + j];
-      int32_t ref;
-      uint8_t flag;
-      if (k == PA_VERTEX) {
-        double *x = dbl;
-        memcpy(x, m->coord + (size_t)d * i, d * sizeof(double));
-        x += d;
-        if (m->met_ncomp) {
-          memcpy(x, m->met + (size_t)m->met_ncomp * i, m->met_ncomp * sizeof(double));
-          x += m->met_ncomp;
-        }
-        for (int f = 0; f < m->nfield; f++) {
-          memcpy(x, m->field[f].val + (size_t)m->field[f].ncomp * i,
-                 m->field[f].ncomp * sizeof(double));
-          x += m->field[f].ncomp;
-        }
-        ref = m->vref[i];
-        flag = m->vflag[i];
-      } else if (k == PA_ELEMENT) {
-        ref = m->eref[i];
-        flag = m->eflag[i];
-      } else if (k == PA_BOUNDARY) {
-        ref = m->bref[i];
-        flag = m->bflag[i];
-      } else {
-        ref = m->edref[i];
-        flag = m->edflag[i];
-      }
-      PA_CALL(pa__recs_add(&R[k], i, vg, ref, flag, r, dbl, NULL, 0));
-    }
+    lo[k] = n[k] * r / P;
+    cnt[k] = n[k] * (r + 1) / P - lo[k];
+    bytes += pa__recblock_bytes(pa__kind_nv(d, k), k == PA_VERTEX ? ndbl : 0,
+                                (size_t)cnt[k], 0);
   }
-  size_t bytes = sizeof(int64_t) * PA_NKIND;
-  for (int k = 0; k < PA_NKIND; k++)
-    for (size_t i = 0; i < R[k].n; i++) bytes += pa__recs_wire(&R[k], i);
   b->n = 0;
   PA_CALL(pa__buf_reserve(b, bytes));
   for (int k = 0; k < PA_NKIND; k++) {
-    int64_t c = (int64_t)R[k].n;
-    pa__buf_put(b, &c, sizeof c);
+    int nv = pa__kind_nv(d, k);
+    size_t c = (size_t)cnt[k], l = (size_t)lo[k];
+    pa__recblock B;
+    pa__recblock_init(b->p + b->n, nv, k == PA_VERTEX ? ndbl : 0, c, 0, &B);
+    const pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
+    const int32_t *ref = k == PA_VERTEX ? m->vref : k == PA_ELEMENT ? m->eref
+                         : k == PA_BOUNDARY ? m->bref : m->edref;
+    const uint8_t *flag = k == PA_VERTEX ? m->vflag : k == PA_ELEMENT ? m->eflag
+                          : k == PA_BOUNDARY ? m->bflag : m->edflag;
+    for (size_t i = 0; i < c; i++) B.gid[i] = (pa_gid)(l + i);
+    for (size_t i = 0; i < c * (size_t)nv; i++)
+      B.vgid[i] = conn[(size_t)nv * l + i];
+    if (c) {
+      memcpy(B.ref, ref + l, c * sizeof *B.ref);
+      memcpy(B.flag, flag + l, c);
+    }
+    for (size_t i = 0; i < c; i++) B.aux[i] = r;
+    if (k == PA_VERTEX) {
+      int o = 0;
+      for (size_t i = 0; i < c; i++)
+        memcpy(B.dbl + (size_t)ndbl * i, m->coord + (size_t)d * (l + i),
+               d * sizeof(double));
+      o = d;
+      for (size_t i = 0; m->met_ncomp && i < c; i++)
+        memcpy(B.dbl + (size_t)ndbl * i + o,
+               m->met + (size_t)m->met_ncomp * (l + i),
+               m->met_ncomp * sizeof(double));
+      o += m->met_ncomp;
+      for (int f = 0; f < m->nfield; f++) {
+        int nc = m->field[f].ncomp;
+        for (size_t i = 0; i < c; i++)
+          memcpy(B.dbl + (size_t)ndbl * i + o,
+                 m->field[f].val + (size_t)nc * (l + i), nc * sizeof(double));
+        o += nc;
+      }
+    }
+    b->n += B.bytes;
   }
-  for (int k = 0; k < PA_NKIND; k++)
-    for (size_t i = 0; i < R[k].n; i++) pa__recs_pack(&R[k], i, b);
 cleanup:
-  for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&R[k]);
-  pa__free(dbl);
   return st;
 }
 
+/* Append the record blocks of every kind in p[0..n) to R[kind]. */
 static pa_status unpack_block(const unsigned char *p, size_t n, pa__recs *R) {
   pa_status st = PA_SUCCESS;
   size_t pos = 0;
-  int64_t c[PA_NKIND];
-  PA_CHECK(n >= sizeof c, PA_ERR_INTERNAL, "short block");
-  for (int k = 0; k < PA_NKIND; k++) pa__get(p, &pos, &c[k], sizeof c[k]);
-  for (int k = 0; k < PA_NKIND; k++)
-    for (int64_t i = 0; i < c[k]; i++) PA_CALL(pa__recs_unpack(&R[k], p, &pos));
+  for (int k = 0; k < PA_NKIND; k++) PA_CALL(pa__recs_get(&R[k], p, &pos));
   PA_CHECK(pos == n, PA_ERR_INTERNAL, "block of %zu bytes, %zu read", n, pos);
 cleanup:
   return st;
@@ -257,6 +250,143 @@ static void sort_key(pa_gid *k, int n) {
   }
 }
 
+/* Sorted vertex gids of local face i (element i / nf, opposite vertex
+ * i % nf) in key[0..nk), -1 after. */
+static void face_key(const pa_gid *vgid, int nf, size_t i, pa_gid *key,
+                     int nk) {
+  size_t e = i / (size_t)nf;
+  int fi = (int)(i % (size_t)nf), k = 0;
+  for (int j = 0; j < nf; j++)
+    if (j != fi) key[k++] = vgid[e * (size_t)nf + (size_t)j];
+  for (; k < 3; k++) key[k] = -1;
+  sort_key(key, nk);
+}
+
+typedef struct fitem {
+  uint64_t key; /* the face's other local vertices (b << 32 | c) */
+  pa_idx face;  /* local face number e*nf+i */
+} fitem;
+
+static int fitem_cmp(const void *x, const void *y) {
+  const fitem *a = x, *b = y;
+  return a->key < b->key ? -1 : a->key > b->key;
+}
+
+/* Faces are bucketed by their smallest local vertex (counting sort) and each
+ * bucket (a few dozen faces) is sorted by the other vertices, so that equal
+ * faces are adjacent: linear work, memory access following the mesh order. */
+/* Smallest vertex and key (other vertices, b << 32 | c) of local face fe. */
+static pa_idx face_min_key(int dim, const pa_idx *lv, size_t fe, uint64_t *key) {
+  int nf = dim + 1, i = (int)(fe % (size_t)nf), k = 0;
+  const pa_idx *ev = lv + fe / (size_t)nf * (size_t)nf;
+  pa_idx v[3] = {0, 0, 0};
+  for (int j = 0; j < nf; j++)
+    if (j != i) v[k++] = ev[j];
+  for (int x = 1; x < dim; x++) /* sort the dim vertices */
+    for (int y = x; y > 0 && v[y - 1] > v[y]; y--) {
+      pa_idx t = v[y];
+      v[y] = v[y - 1];
+      v[y - 1] = t;
+    }
+  *key = dim == 3 ? (uint64_t)v[1] << 32 | (uint64_t)v[2] : (uint64_t)v[1];
+  return v[0];
+}
+
+pa_status pa__match_faces(int dim, pa_idx n, const pa_idx *lv, pa_idx nv,
+                          const pa_gid *vgid, pa_gid *mate) {
+  pa_status st = PA_SUCCESS;
+  int nf = dim + 1;
+  size_t nface = (size_t)n * nf, maxb = 0;
+  pa_idx *fstart = NULL, *bucket = NULL;
+  fitem *it = NULL;
+  uint64_t key;
+  /* memory: mate (the output, holding each face's key meanwhile), the
+   * buckets (4 bytes per face) and one bucket of scratch */
+  PA_CALLOC(fstart, (size_t)nv + 1);
+  PA_ALLOC(bucket, nface);
+  for (size_t fe = 0; fe < nface; fe++) {
+    fstart[face_min_key(dim, lv, fe, &key) + 1]++;
+    mate[fe] = (pa_gid)key;
+  }
+  for (pa_idx x = 0; x < nv; x++) {
+    if ((size_t)fstart[x + 1] > maxb) maxb = (size_t)fstart[x + 1];
+    fstart[x + 1] += fstart[x];
+  }
+  for (size_t fe = 0; fe < nface; fe++)
+    bucket[fstart[face_min_key(dim, lv, fe, &key)]++] = (pa_idx)fe;
+  for (pa_idx x = nv; x > 0; x--) fstart[x] = fstart[x - 1];
+  fstart[0] = 0;
+  PA_ALLOC(it, maxb);
+  for (pa_idx x = 0; x < nv; x++) {
+    size_t m = (size_t)(fstart[x + 1] - fstart[x]);
+    fitem *b = it;
+    for (size_t p = 0; p < m; p++) {
+      pa_idx fe = bucket[fstart[x] + (pa_idx)p];
+      b[p].key = (uint64_t)mate[fe];
+      b[p].face = fe;
+      mate[fe] = -1;
+    }
+    if (m > 48) {
+      qsort(b, m, sizeof *b, fitem_cmp);
+    } else {
+      for (size_t p = 1; p < m; p++) {
+        fitem t = b[p];
+        size_t q = p;
+        while (q > 0 && b[q - 1].key > t.key) {
+          b[q] = b[q - 1];
+          q--;
+        }
+        b[q] = t;
+      }
+    }
+    for (size_t p = 0; p + 1 < m; p++)
+      if (b[p].key == b[p + 1].key) {
+        size_t fe = (size_t)b[p].face;
+        if (p + 2 < m && b[p + 2].key == b[p].key) {
+          size_t e0 = fe / nf * nf, i = fe % nf;
+          size_t v0 = e0 + (i == 0), v1 = e0 + (i <= 1) + 1;
+          PA_FAIL(PA_ERR_MESH,
+                  "non-conforming mesh: a face (vertices %lld %lld%s) is "
+                  "shared by more than two elements",
+                  (long long)(vgid ? vgid[v0] : lv[v0]),
+                  (long long)(vgid ? vgid[v1] : lv[v1]), dim > 2 ? " ..." : "");
+        }
+        mate[fe] = b[p + 1].face;
+        mate[b[p + 1].face] = (pa_gid)fe;
+        p++;
+      }
+  }
+cleanup:
+  pa__free(fstart);
+  pa__free(bucket);
+  pa__free(it);
+  return st;
+}
+
+/* pa__match_faces on elements given by vertex gids (numbered locally with a
+ * hash map). */
+static pa_status match_local(int dim, pa_idx n, const pa_gid *vgid,
+                             pa_gid *mate) {
+  pa_status st = PA_SUCCESS;
+  size_t nc = (size_t)n * (dim + 1);
+  pa__gidmap vm = {0};
+  pa_idx *lv = NULL, nv = 0;
+  PA_ALLOC(lv, nc);
+  PA_CALL(pa__gidmap_init(&vm, (size_t)n / (dim == 3 ? 5 : 2) + 16));
+  for (size_t k = 0; k < nc; k++) {
+    int found;
+    pa_idx old;
+    PA_CALL(pa__gidmap_put(&vm, vgid[k], nv, &found, &old));
+    lv[k] = found ? old : nv++;
+  }
+  pa__gidmap_free(&vm);
+  PA_CALL(pa__match_faces(dim, n, lv, nv, vgid, mate));
+cleanup:
+  pa__gidmap_free(&vm);
+  pa__free(lv);
+  return st;
+}
+
 /* Match faces pairwise with a hash table: mate[i] = j for faces sharing a
  * key, -1 for faces seen once. A key seen three times is an error. */
 static pa_status match_faces(const face *f, size_t n, int nk, pa_gid *mate) {
@@ -298,7 +428,7 @@ pa_status pa__dual_graph(MPI_Comm comm, int dim, pa_idx n, const pa_gid *vgid,
   pa_status st = PA_SUCCESS;
   int rank, size, nk = dim, nf = dim + 1;
   size_t nface = (size_t)n * nf;
-  face *f = NULL, *sendf = NULL;
+  face *sendf = NULL;
   pa_gid *mate = NULL, *rmate = NULL;
   int *dest = NULL, *rdest = NULL;
   size_t *rcnt = NULL, *bcnt = NULL, *cnt = NULL, *pos = NULL;
@@ -314,40 +444,30 @@ pa_status pa__dual_graph(MPI_Comm comm, int dim, pa_idx n, const pa_gid *vgid,
     MPI_Exscan(&nn, &offset, 1, MPI_INT64_T, MPI_SUM, comm);
     if (rank == 0) offset = 0;
   }
-  PA_ALLOC(f, nface);
   PA_ALLOC(mate, nface);
-  for (pa_idx e = 0; e < n; e++)
-    for (int i = 0; i < nf; i++) {
-      face *fc = &f[(size_t)e * nf + i];
-      int k = 0;
-      for (int j = 0; j < nf; j++)
-        if (j != i) fc->key[k++] = vgid[(size_t)e * nf + j];
-      for (; k < 3; k++) fc->key[k] = -1;
-      sort_key(fc->key, nk);
-      fc->who = (pa_gid)e * nf + i;
-    }
-  PA_CALL(match_faces(f, nface, nk, mate));
-  /* neighbour per face: global graph vertex and rank (-1: none yet) */
-  PA_ALLOC(nbr, nface);
+  PA_CALL(match_local(dim, n, vgid, mate));
+  /* neighbour per face (in place of mate): global graph vertex and rank
+   * (-1: none yet) */
+  nbr = mate;
+  mate = NULL;
   PA_ALLOC(nbrrank, nface);
   size_t nun = 0;
   for (size_t i = 0; i < nface; i++) {
-    nbr[i] = mate[i] >= 0 ? offset + mate[i] / nf : -1;
-    nbrrank[i] = mate[i] >= 0 ? rank : -1;
-    nun += mate[i] < 0;
+    nbrrank[i] = nbr[i] >= 0 ? rank : -1;
+    nun += nbr[i] < 0;
+    if (nbr[i] >= 0) nbr[i] = offset + nbr[i] / nf;
   }
   /* unmatched faces meet at the rank hash(key) % size */
   PA_ALLOC(sendf, nun);
   PA_ALLOC(dest, nun);
   nun = 0;
   for (size_t i = 0; i < nface; i++)
-    if (mate[i] < 0) {
-      sendf[nun] = f[i];
+    if (nbr[i] < 0) {
+      face_key(vgid, nf, i, sendf[nun].key, nk);
       sendf[nun].who = offset + (pa_gid)(i / nf); /* graph vertex */
-      dest[nun++] = (int)(face_hash(f[i].key, nk) % (uint64_t)size);
+      dest[nun] = (int)(face_hash(sendf[nun].key, nk) % (uint64_t)size);
+      nun++;
     }
-  pa__free(f);
-  f = NULL;
   PA_CALLOC(cnt, size);
   PA_CALLOC(pos, (size_t)size + 1);
   for (size_t i = 0; i < nun; i++) cnt[dest[i]]++;
@@ -407,14 +527,10 @@ pa_status pa__dual_graph(MPI_Comm comm, int dim, pa_idx n, const pa_gid *vgid,
     PA_CHECK(cur, PA_ERR_MEMORY, "out of memory");
     memcpy(cur, pos, ((size_t)size + 1) * sizeof *cur);
     for (size_t i = 0; i < nface; i++)
-      if (mate[i] < 0) {
+      if (nbrrank[i] < 0) {
         /* recompute the destination of face i (same order as sent) */
         pa_gid key[3];
-        pa_idx e = (pa_idx)(i / nf);
-        int fi = (int)(i % nf), k = 0;
-        for (int jv = 0; jv < nf; jv++)
-          if (jv != fi) key[k++] = vgid[(size_t)e * nf + jv];
-        sort_key(key, nk);
+        face_key(vgid, nf, i, key, nk);
         int r = (int)(face_hash(key, nk) % (uint64_t)size);
         size_t q = cur[r]++;
         nbr[i] = a[2 * q];
@@ -446,7 +562,6 @@ pa_status pa__dual_graph(MPI_Comm comm, int dim, pa_idx n, const pa_gid *vgid,
   adjrank = NULL;
 cleanup:
   st = pa__agree_end(comm, st);
-  pa__free(f);
   pa__free(sendf);
   pa__free(mate);
   pa__free(rmate);
@@ -478,12 +593,17 @@ pa_status pa__dmesh_partition(MPI_Comm comm, int dim, pa_idx n,
     for (pa_idx i = 0; i < n; i++) part[i] = 0;
     return pa__agree(comm, PA_SUCCESS);
   }
+  double t0 = pa_wtime(), t1, t2;
   PA_CALL(pa__dual_graph(comm, dim, n, vgid, &xadj, &adj, NULL, NULL));
   PA_CALL(pa__agree(comm, PA_SUCCESS));
+  t1 = pa_wtime();
   st = pa__partition_dgraph(comm, n, xadj, adj, weights, size, part);
   PA_CALL(pa__agree(comm, st));
+  t2 = pa_wtime();
   st = pa__partition_remap(comm, n, part, weights);
   PA_CALL(pa__agree(comm, st));
+  pa__info(2, "padapt: partition: dual graph %.3f s, PT-Scotch %.3f s, "
+              "remap %.3f s\n", t1 - t0, t2 - t1, pa_wtime() - t2);
 cleanup:
   st = pa__agree_end(comm, st);
   pa__free(xadj);
@@ -522,10 +642,14 @@ pa_status pa_dmesh_redistribute(pa_dmesh *dm, const int *newpart,
       vg[k] = dm->gid[PA_VERTEX][dm->mesh->elem[k]];
     PA_CALL(pa__agree(dm->comm, st));
     PA_CALL(pa__dmesh_partition(dm->comm, d, ne, vg, weights, part));
+    pa__free(vg);
+    vg = NULL;
   }
   pa__dmesh_layout(dm, &lay);
   PA_CALL(pa__dmesh_owned_recs(dm, part, &R[PA_ELEMENT], &R[PA_VERTEX],
                                &R[PA_BOUNDARY], &R[PA_EDGE]));
+  pa__free(part);
+  part = NULL;
   PA_CALL(pa__agree(dm->comm, st));
   pa__dmesh_clear(dm);
   PA_CALL(pa__dmesh_build(dm, &lay, dm->overlap, &R[PA_ELEMENT], &R[PA_VERTEX],
@@ -603,16 +727,12 @@ pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
     if (st) goto cleanup;
   }
   {
-    size_t bytes = sizeof(int64_t) * PA_NKIND;
+    size_t bytes = 0;
     for (int k = 0; k < PA_NKIND; k++)
-      for (size_t i = 0; i < R[k].n; i++) bytes += pa__recs_wire(&R[k], i);
+      bytes += pa__recblock_bytes(R[k].nv, R[k].ndbl, R[k].n, 0);
     PA_CALL(pa__buf_reserve(&b, bytes));
     for (int k = 0; k < PA_NKIND; k++) {
-      int64_t c = (int64_t)R[k].n;
-      pa__buf_put(&b, &c, sizeof c);
-    }
-    for (int k = 0; k < PA_NKIND; k++) {
-      for (size_t i = 0; i < R[k].n; i++) pa__recs_pack(&R[k], i, &b);
+      b.n += pa__recs_put(&R[k], NULL, R[k].n, b.p + b.n);
       int kind = R[k].kind, nv = R[k].nv, nd = R[k].ndbl;
       pa__recs_free(&R[k]);
       pa__recs_init(&A[k], kind, nv, nd);

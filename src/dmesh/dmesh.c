@@ -284,6 +284,30 @@ cleanup:
   return st;
 }
 
+pa_status pa__value_define(pa_dmesh *dm, int kind, const char *name,
+                           MPI_Datatype type, int ncomp, int32_t ref) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh_value *v = NULL;
+  int tsize = 0;
+  PA_CHECK(kind >= 0 && kind < PA_NKIND && ncomp >= 1 && ref >= -1 &&
+               strlen(name) < PA_VALUE_NAME_LEN && !pa_dmesh_value_find(dm, name),
+           PA_ERR_FORMAT, "bad or duplicate value description '%.64s'", name);
+  MPI_Type_size(type, &tsize);
+  PA_GROW(dm->value, dm->capvalue, dm->nvalue + 1);
+  PA_CALLOC(v, 1);
+  v->id = dm->nextid++;
+  v->kind = (pa_entity)kind;
+  snprintf(v->name, sizeof v->name, "%s", name);
+  v->type = type;
+  v->double_type = type == MPI_DOUBLE;
+  v->ncomp = ncomp;
+  v->unit = (size_t)tsize * ncomp;
+  v->ref = ref;
+  dm->value[dm->nvalue++] = v;
+cleanup:
+  return st;
+}
+
 pa_dmesh_value *pa_dmesh_value_find(pa_dmesh *dm, const char *name) {
   if (!dm || !name) return NULL;
   for (int k = 0; k < dm->nvalue; k++)
@@ -463,6 +487,13 @@ static pa_status owned_kind(pa_dmesh *dm, int kind, const int *dest,
                        : kind == PA_BOUNDARY ? m->bdry
                                              : m->edge;
   if (kind == PA_VERTEX) PA_ALLOC(dbl, R->ndbl);
+  { /* exact sizes: no growth, no realloc copies at the peak */
+    size_t paybytes = 0;
+    for (int k = 0; k < dm->nvalue; k++)
+      if ((int)dm->value[k]->kind == kind)
+        paybytes += (size_t)dm->value[k]->nslotown * dm->value[k]->unit;
+    PA_CALL(pa__recs_reserve(R, (size_t)dm->nown[kind], paybytes));
+  }
   for (pa_idx e = 0; e < dm->nown[kind]; e++) {
     pa_gid vg[4];
     for (int j = 0; j < nv; j++)

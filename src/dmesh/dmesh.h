@@ -127,6 +127,44 @@ pa_status pa__recs_unpack(pa__recs *r, const unsigned char *p, size_t *pos);
 pa_status pa__recs_migrate(MPI_Comm comm, const pa__recs *in, const int *dest,
                            pa__recs *out);
 
+/* Collective: as pa__recs_migrate, but frees *in as soon as it is packed
+ * (before the exchange), to lower the peak memory. */
+pa_status pa__recs_migrate_free(MPI_Comm comm, pa__recs *in, const int *dest,
+                                pa__recs *out);
+
+/* Bulk transfer of records: a block of n records stored array by array
+ * (format in recs.c), filled and read in place. */
+typedef struct pa__recblock {
+  size_t n, paybytes, bytes; /* records, payload bytes, block bytes */
+  pa_gid *gid, *vgid;
+  double *dbl;
+  int32_t *ref, *aux;
+  uint32_t *paylen;          /* NULL if paybytes == 0 */
+  uint8_t *flag;
+  unsigned char *pay;
+} pa__recblock;
+/* Bytes of a block (a multiple of 8: consecutive blocks stay aligned). */
+size_t pa__recblock_bytes(int nv, int ndbl, size_t n, size_t paybytes);
+/* Write the header of a block at p (8-byte aligned) and map its arrays. */
+void pa__recblock_init(unsigned char *p, int nv, int ndbl, size_t n,
+                       size_t paybytes, pa__recblock *b);
+/* Map the arrays of the block at p. */
+void pa__recblock_map(const unsigned char *p, int nv, int ndbl,
+                      pa__recblock *b);
+/* Payload bytes of records idx[0..n) of r (idx NULL: the first n). */
+size_t pa__recs_paybytes(const pa__recs *r, const pa_idx *idx, size_t n);
+/* Write records idx[0..n) of r (idx NULL: the first n) as one block at p
+ * (pa__recblock_bytes(r->nv, r->ndbl, n, pa__recs_paybytes(...)) bytes);
+ * returns the bytes written. */
+size_t pa__recs_put(const pa__recs *r, const pa_idx *idx, size_t n,
+                    unsigned char *p);
+/* Append the block at p + *pos to r and advance *pos. */
+pa_status pa__recs_get(pa__recs *r, const unsigned char *p, size_t *pos);
+/* Reserve room for n records and paybytes payload bytes in total. */
+pa_status pa__recs_reserve(pa__recs *r, size_t n, size_t paybytes);
+/* Sort records by gid (stable; nothing done if already sorted). */
+pa_status pa__recs_sort(pa__recs *r);
+
 /* Description of the values and fields carried by a build. */
 typedef struct pa__layout {
   int dim;
@@ -169,6 +207,12 @@ pa_status pa__dmesh_owned_recs(pa_dmesh *dm, const int *dest, pa__recs *elems,
                                pa__recs *edges);
 /* Bytes of the payload of entity i of kind (sum of matching values). */
 size_t pa__value_paylen(const pa_dmesh *dm, int kind, int32_t ref);
+/* Local: add the definition of a value of a predefined MPI type to a
+ * pa_dmesh without distribution (no data: the next build allocates it and
+ * fills it from the record payloads). Fails with PA_ERR_FORMAT on a bad or
+ * duplicate description (it comes from a file). */
+pa_status pa__value_define(pa_dmesh *dm, int kind, const char *name,
+                           MPI_Datatype type, int ncomp, int32_t ref);
 /* Local: (re)compute the value's slots from the entity references and
  * allocate its data (zeroed) for the current distribution. */
 pa_status pa__value_alloc(pa_dmesh *dm, pa_dmesh_value *v);
@@ -187,6 +231,15 @@ int32_t pa__dmesh_ref(const pa_dmesh *dm, int kind, pa_idx e);
 pa_status pa__dual_graph(MPI_Comm comm, int dim, pa_idx n, const pa_gid *vgid,
                          pa_idx **xadj, pa_gid **adj, int **adjrank,
                          pa_gid *offset);
+
+/* Local: match the faces of n elements (dim+1 local vertex numbers in
+ * [0, nv) each in lv): mate[e*(dim+1)+i] = f*(dim+1)+j if face i of element
+ * e (opposite its vertex i) is face j of element f, -1 if no other element
+ * has it. Linear time (faces bucketed by their smallest vertex). Fails with
+ * PA_ERR_MESH if a face is in three elements or more (vgid, if not NULL,
+ * names its vertices by global id). */
+pa_status pa__match_faces(int dim, pa_idx n, const pa_idx *lv, pa_idx nv,
+                          const pa_gid *vgid, pa_gid *mate);
 
 /* Collective: new owner rank of each of the n owned elements, by PT-Scotch on
  * the dual graph (weights per element or NULL), remapped so that ranks keep

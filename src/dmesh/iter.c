@@ -1,7 +1,8 @@
 /*
  * iter.c -- iterators over owned / ghost / interior / frontier entities,
  * adjacency queries on the local mesh (valid across the overlap), and the
- * locality reordering (Hilbert curve) of local entities.
+ * locality reordering of local entities (Hilbert curve, or Scotch ordering
+ * of the local dual graph).
  *
  * Invariants: "shared" marks the local entities that have copies on other
  * ranks (roots with leaves, and leaves); an owned entity is interior when
@@ -11,6 +12,7 @@
  * so the owned-first invariant holds, then rebuilds the star forests.
  */
 #include "dmesh/dmesh.h"
+#include "partition/partition.h"
 
 /* ---- iterators ---- */
 
@@ -137,30 +139,18 @@ static int contains(const pa_mesh *m, pa_idx e, const pa_idx *f, int k) {
 
 static pa_status build_adja(pa_dmesh *dm) {
   pa_status st = PA_SUCCESS;
+  pa_gid *mate = NULL;
   if (dm->adja) return PA_SUCCESS;
-  PA_CALL(build_balls(dm));
   pa_mesh *m = dm->mesh;
-  int d = dm->dim;
-  PA_ALLOC(dm->adja, (size_t)m->ne * (d + 1));
-  /* face i of e (opposite vertex i): the other element containing it is in
-   * the ball of any of its vertices */
-  for (pa_idx e = 0; e < m->ne; e++)
-    for (int i = 0; i <= d; i++) {
-      pa_idx f[3];
-      int k = 0;
-      for (int j = 0; j <= d; j++)
-        if (j != i) f[k++] = m->elem[(size_t)(d + 1) * e + j];
-      pa_idx nb = -1;
-      for (pa_idx q = dm->vstart[f[0]]; q < dm->vstart[f[0] + 1]; q++) {
-        pa_idx g = dm->velem[q];
-        if (g != e && contains(m, g, f, d)) {
-          nb = g;
-          break;
-        }
-      }
-      dm->adja[(size_t)(d + 1) * e + i] = nb;
-    }
+  int nf = dm->dim + 1;
+  size_t nface = (size_t)m->ne * nf;
+  PA_ALLOC(mate, nface);
+  PA_CALL(pa__match_faces(dm->dim, m->ne, m->elem, m->nv, NULL, mate));
+  PA_ALLOC(dm->adja, nface);
+  for (size_t k = 0; k < nface; k++)
+    dm->adja[k] = mate[k] < 0 ? -1 : (pa_idx)(mate[k] / nf);
 cleanup:
+  pa__free(mate);
   return st;
 }
 
@@ -222,7 +212,64 @@ static pa_status sort_range(pa_idx *perm, pa_idx lo, pa_idx hi,
   return pa__sort_by_gid(perm + lo, (size_t)(hi - lo), key);
 }
 
+/* Scotch ordering of the elements, one group (owned, each ghost layer) at a
+ * time, on the dual graph restricted to the group. pe[k] = old element at
+ * new position k; groups stay in layer order. */
+static pa_status scotch_elements(pa_dmesh *dm, pa_idx *pe) {
+  pa_status st = PA_SUCCESS;
+  pa_mesh *m = dm->mesh;
+  int nf = dm->dim + 1;
+  pa_gid *mate = NULL;
+  pa_idx *byl = NULL, *loc = NULL, *xadj = NULL, *adj = NULL, *sub = NULL;
+  size_t c[257] = {0};
+  PA_ALLOC(mate, (size_t)m->ne * nf);
+  PA_CALL(pa__match_faces(dm->dim, m->ne, m->elem, m->nv, NULL, mate));
+  /* elements by layer (stable), and their index inside their group */
+  PA_ALLOC(byl, m->ne);
+  PA_ALLOC(loc, m->ne);
+  for (pa_idx e = 0; e < m->ne; e++) c[dm->layer[e] + 1]++;
+  for (int l = 0; l < 256; l++) c[l + 1] += c[l];
+  for (pa_idx e = 0; e < m->ne; e++) {
+    size_t k = c[dm->layer[e]]++;
+    byl[k] = e;
+  }
+  PA_ALLOC(xadj, m->ne + 1);
+  PA_ALLOC(adj, (size_t)m->ne * nf);
+  PA_ALLOC(sub, m->ne);
+  for (size_t g0 = 0; g0 < (size_t)m->ne;) {
+    int l = dm->layer[byl[g0]];
+    size_t g1 = g0;
+    while (g1 < (size_t)m->ne && dm->layer[byl[g1]] == l) g1++;
+    pa_idx n = (pa_idx)(g1 - g0);
+    for (pa_idx i = 0; i < n; i++) loc[byl[g0 + i]] = i;
+    xadj[0] = 0;
+    for (pa_idx i = 0; i < n; i++) {
+      pa_idx e = byl[g0 + i], k = xadj[i];
+      for (int j = 0; j < nf; j++) {
+        pa_gid f = mate[(size_t)e * nf + j];
+        if (f >= 0 && dm->layer[f / nf] == l) adj[k++] = loc[f / nf];
+      }
+      xadj[i + 1] = k;
+    }
+    PA_CALL(pa__order_graph(n, xadj, adj, sub));
+    for (pa_idx i = 0; i < n; i++) pe[g0 + i] = byl[g0 + sub[i]];
+    g0 = g1;
+  }
+cleanup:
+  pa__free(mate);
+  pa__free(byl);
+  pa__free(loc);
+  pa__free(xadj);
+  pa__free(adj);
+  pa__free(sub);
+  return st;
+}
+
 pa_status pa_dmesh_reorder(pa_dmesh *dm) {
+  return pa_dmesh_reorder_by(dm, PA_ORDER_HILBERT);
+}
+
+pa_status pa_dmesh_reorder_by(pa_dmesh *dm, pa_dmesh_ordering how) {
   pa_status st = PA_SUCCESS;
   pa_gid *key = NULL;
   pa_idx *pe = NULL, *pv = NULL, *ivn = NULL, *pb = NULL, *pd = NULL;
@@ -230,6 +277,8 @@ pa_status pa_dmesh_reorder(pa_dmesh *dm) {
   unsigned char *tmp = NULL;
   PA_CHECK(dm && dm->mesh, PA_ERR_ARG, "pa_dmesh_reorder: NULL dmesh");
   pa__agree_reset();
+  PA_CHECK(how == PA_ORDER_HILBERT || how == PA_ORDER_SCOTCH, PA_ERR_ARG,
+           "pa_dmesh_reorder_by: unknown ordering %d", (int)how);
   pa_mesh *m = dm->mesh;
   int d = dm->dim, b = d == 2 ? 31 : 21;
   for (int k = 0; k < dm->nvalue; k++)
@@ -253,19 +302,23 @@ pa_status pa_dmesh_reorder(pa_dmesh *dm) {
   if ((size_t)m->ned > nmax) nmax = (size_t)m->ned;
   PA_ALLOC(key, nmax);
   PA_ALLOC(pe, m->ne);
-  for (pa_idx e = 0; e < m->ne; e++) {
-    uint32_t x[3];
-    for (int c = 0; c < d; c++) {
-      double s = 0;
-      for (int j = 0; j <= d; j++) s += m->coord[(size_t)d * m->elem[(size_t)(d + 1) * e + j] + c];
-      s /= d + 1;
-      double t = hi[c] > lo[c] ? (s - lo[c]) / (hi[c] - lo[c]) : 0;
-      x[c] = (uint32_t)(t * (double)((1u << b) - 1));
+  if (how == PA_ORDER_SCOTCH) {
+    PA_CALL(scotch_elements(dm, pe));
+  } else {
+    for (pa_idx e = 0; e < m->ne; e++) {
+      uint32_t x[3];
+      for (int c = 0; c < d; c++) {
+        double s = 0;
+        for (int j = 0; j <= d; j++) s += m->coord[(size_t)d * m->elem[(size_t)(d + 1) * e + j] + c];
+        s /= d + 1;
+        double t = hi[c] > lo[c] ? (s - lo[c]) / (hi[c] - lo[c]) : 0;
+        x[c] = (uint32_t)(t * (double)((1u << b) - 1));
+      }
+      key[e] = (pa_gid)(hilbert(x, d, b) >> 4) + ((pa_gid)dm->layer[e] << 59);
+      pe[e] = e;
     }
-    key[e] = (pa_gid)(hilbert(x, d, b) >> 4) + ((pa_gid)dm->layer[e] << 59);
-    pe[e] = e;
+    PA_CALL(sort_range(pe, 0, m->ne, key)); /* layer bits keep owned first */
   }
-  PA_CALL(sort_range(pe, 0, m->ne, key)); /* layer bits keep owned first */
   /* vertices: by first use in the new element order, owned then ghosts */
   PA_ALLOC(ivn, m->nv);
   for (pa_idx v = 0; v < m->nv; v++) ivn[v] = -1;

@@ -4,6 +4,14 @@
  * Wire format of one record, native byte order (all ranks of a run share it):
  *   gid int64 | nv vertex gids int64 | ref int32 | flag uint8 | aux int32 |
  *   ndbl doubles | payload length uint32 | payload bytes.
+ * Bulk format of a block of n records (pa__recblock, used by every bulk
+ * transfer: migration, scatter, gather, the build's fetches): a header of two
+ * int64 (n, payload bytes), then the arrays gid[n], vgid[nv n], dbl[ndbl n],
+ * ref[n], aux[n], paylen[n] (uint32, only if payload bytes > 0), flag[n],
+ * payload bytes, padded to a multiple of 8 bytes; every array is naturally
+ * aligned when the block starts on an 8-byte boundary, so blocks are filled
+ * and read in place, array by array.
+ *
  * Invariants: arrays of a set share the capacity cap; poff is NULL until the
  * first non-empty payload, after which poff[0..n] are valid offsets into pay.
  */
@@ -29,10 +37,12 @@ void pa__recs_free(pa__recs *r) {
   pa__recs_init(r, kind, nv, ndbl);
 }
 
-static pa_status recs_grow(pa__recs *r, size_t need) {
+/* Room for need records: grown by a factor (exact: to need exactly, for
+ * reservations of a known size). */
+static pa_status recs_grow_to(pa__recs *r, size_t need, int exact) {
   pa_status st = PA_SUCCESS;
   if (need <= r->cap) return PA_SUCCESS;
-  size_t cap = r->cap + r->cap / 2 + 64;
+  size_t cap = exact ? need : r->cap + r->cap / 2 + 64;
   if (cap < need) cap = need;
   void *p;
 #define GROW1(f, m)                                                          \
@@ -56,6 +66,10 @@ static pa_status recs_grow(pa__recs *r, size_t need) {
   r->cap = cap;
 cleanup:
   return st;
+}
+
+static pa_status recs_grow(pa__recs *r, size_t need) {
+  return recs_grow_to(r, need, 0);
 }
 
 pa_status pa__recs_add(pa__recs *r, pa_gid gid, const pa_gid *vgid,
@@ -139,68 +153,445 @@ cleanup:
   return st;
 }
 
-pa_status pa__recs_migrate(MPI_Comm comm, const pa__recs *in, const int *dest,
-                           pa__recs *out) {
+size_t pa__recblock_bytes(int nv, int ndbl, size_t n, size_t paybytes) {
+  size_t b = 16 + n * (8 + 8 * (size_t)nv + 8 * (size_t)ndbl + 4 + 4 + 1) +
+             (paybytes ? 4 * n + paybytes : 0);
+  return (b + 7) & ~(size_t)7;
+}
+
+/* Point the arrays of b at the block starting at p (header already set). */
+static void block_map(unsigned char *p, int nv, int ndbl, pa__recblock *b) {
+  int64_t h[2];
+  memcpy(h, p, sizeof h);
+  size_t n = (size_t)h[0];
+  b->n = n;
+  b->paybytes = (size_t)h[1];
+  p += 16;
+  b->gid = (pa_gid *)(void *)p;
+  p += 8 * n;
+  b->vgid = (pa_gid *)(void *)p;
+  p += 8 * (size_t)nv * n;
+  b->dbl = (double *)(void *)p;
+  p += 8 * (size_t)ndbl * n;
+  b->ref = (int32_t *)(void *)p;
+  p += 4 * n;
+  b->aux = (int32_t *)(void *)p;
+  p += 4 * n;
+  b->paylen = NULL;
+  if (b->paybytes) {
+    b->paylen = (uint32_t *)(void *)p;
+    p += 4 * n;
+  }
+  b->flag = p;
+  p += n;
+  b->pay = p;
+  b->bytes = pa__recblock_bytes(nv, ndbl, n, b->paybytes);
+}
+
+void pa__recblock_init(unsigned char *p, int nv, int ndbl, size_t n,
+                       size_t paybytes, pa__recblock *b) {
+  int64_t h[2] = {(int64_t)n, (int64_t)paybytes};
+  memcpy(p, h, sizeof h);
+  block_map(p, nv, ndbl, b);
+}
+
+void pa__recblock_map(const unsigned char *p, int nv, int ndbl,
+                      pa__recblock *b) {
+  block_map((unsigned char *)(uintptr_t)p, nv, ndbl, b);
+}
+
+size_t pa__recs_paybytes(const pa__recs *r, const pa_idx *idx, size_t n) {
+  size_t s = 0;
+  if (!r->poff) return 0;
+  for (size_t k = 0; k < n; k++) {
+    size_t i = idx ? (size_t)idx[k] : k;
+    s += r->poff[i + 1] - r->poff[i];
+  }
+  return s;
+}
+
+size_t pa__recs_put(const pa__recs *r, const pa_idx *idx, size_t n,
+                    unsigned char *p) {
+  pa__recblock b;
+  int nv = r->nv, nd = r->ndbl;
+  pa__recblock_init(p, nv, nd, n, pa__recs_paybytes(r, idx, n), &b);
+#define SEL(k) (idx ? (size_t)idx[k] : (k))
+  for (size_t k = 0; k < n; k++) b.gid[k] = r->gid[SEL(k)];
+  if (nv)
+    for (size_t k = 0; k < n; k++)
+      memcpy(b.vgid + (size_t)nv * k, r->vgid + (size_t)nv * SEL(k),
+             (size_t)nv * sizeof(pa_gid));
+  if (nd)
+    for (size_t k = 0; k < n; k++)
+      memcpy(b.dbl + (size_t)nd * k, r->dbl + (size_t)nd * SEL(k),
+             (size_t)nd * sizeof(double));
+  for (size_t k = 0; k < n; k++) b.ref[k] = r->ref[SEL(k)];
+  for (size_t k = 0; k < n; k++) b.aux[k] = r->aux[SEL(k)];
+  for (size_t k = 0; k < n; k++) b.flag[k] = r->flag[SEL(k)];
+  if (b.paybytes) {
+    unsigned char *q = b.pay;
+    for (size_t k = 0; k < n; k++) {
+      size_t i = SEL(k), len = r->poff[i + 1] - r->poff[i];
+      b.paylen[k] = (uint32_t)len;
+      memcpy(q, r->pay + r->poff[i], len);
+      q += len;
+    }
+  }
+#undef SEL
+  return b.bytes;
+}
+
+pa_status pa__recs_reserve(pa__recs *r, size_t n, size_t paybytes) {
+  pa_status st = PA_SUCCESS;
+  PA_CALL(recs_grow_to(r, n, 1));
+  if (paybytes && !r->poff) {
+    PA_CALLOC(r->poff, r->cap + 1);
+  }
+  if (r->poff && paybytes > r->paycap) {
+    void *p = pa__realloc(r->pay, paybytes);
+    PA_CHECK(p, PA_ERR_MEMORY, "out of memory reserving %zu payload bytes",
+             paybytes);
+    r->pay = p;
+    r->paycap = paybytes;
+  }
+cleanup:
+  return st;
+}
+
+pa_status pa__recs_get(pa__recs *r, const unsigned char *p, size_t *pos) {
+  pa_status st = PA_SUCCESS;
+  pa__recblock b;
+  int nv = r->nv, nd = r->ndbl;
+  PA_CHECK((*pos & 7) == 0 && ((uintptr_t)p & 7) == 0, PA_ERR_INTERNAL,
+           "misaligned record block");
+  pa__recblock_map(p + *pos, nv, nd, &b);
+  size_t n0 = r->n, n = b.n;
+  size_t pay0 = r->poff ? r->poff[n0] : 0;
+  if (!n) {
+    *pos += b.bytes;
+    return PA_SUCCESS;
+  }
+  /* grown by a factor: callers that know the total reserve it first */
+  PA_CALL(recs_grow(r, n0 + n));
+  if (b.paybytes && !r->poff) PA_CALLOC(r->poff, r->cap + 1);
+  if (r->poff) PA_GROW(r->pay, r->paycap, pay0 + b.paybytes);
+  memcpy(r->gid + n0, b.gid, n * sizeof(pa_gid));
+  memcpy(r->vgid + (size_t)nv * n0, b.vgid, (size_t)nv * n * sizeof(pa_gid));
+  memcpy(r->dbl + (size_t)nd * n0, b.dbl, (size_t)nd * n * sizeof(double));
+  memcpy(r->ref + n0, b.ref, n * sizeof(int32_t));
+  memcpy(r->aux + n0, b.aux, n * sizeof(int));
+  memcpy(r->flag + n0, b.flag, n);
+  if (r->poff) {
+    size_t off = pay0;
+    for (size_t k = 0; k < n; k++) {
+      r->poff[n0 + k] = off;
+      off += b.paybytes ? b.paylen[k] : 0;
+    }
+    r->poff[n0 + n] = off;
+    if (b.paybytes) memcpy(r->pay + pay0, b.pay, b.paybytes);
+  }
+  r->n = n0 + n;
+  *pos += b.bytes;
+cleanup:
+  return st;
+}
+
+/* Permute the fixed-size array a (n items of u bytes) in place so that
+ * item k becomes old item ord[k], following the cycles of ord (done marks
+ * visited items; cleared on return). */
+static void permute_array(unsigned char *a, size_t u, size_t n,
+                          const pa_idx *ord, uint8_t *done) {
+  unsigned char t[64];
+  if (!u) return;
+  for (size_t k = 0; k < n; k++) {
+    if (done[k] || (size_t)ord[k] == k) continue;
+    memcpy(t, a + u * k, u);
+    size_t j = k;
+    for (;;) {
+      size_t i = (size_t)ord[j];
+      done[j] = 1;
+      if (i == k) {
+        memcpy(a + u * j, t, u);
+        break;
+      }
+      memcpy(a + u * j, a + u * i, u);
+      j = i;
+    }
+  }
+  memset(done, 0, n);
+}
+
+/* Permute the records of r so that record k becomes old record ord[k]
+ * (array by array, in place; payloads through a new buffer). */
+static pa_status recs_permute(pa__recs *r, const pa_idx *ord) {
+  pa_status st = PA_SUCCESS;
+  size_t n = r->n;
+  uint8_t *done = NULL;
+  unsigned char *pay = NULL;
+  size_t *poff = NULL;
+  PA_CALLOC(done, n);
+  PA_CHECK(8 * (size_t)r->nv <= 64, PA_ERR_INTERNAL, "record too wide");
+  permute_array((unsigned char *)r->gid, 8, n, ord, done);
+  permute_array((unsigned char *)r->vgid, 8 * (size_t)r->nv, n, ord, done);
+  permute_array((unsigned char *)r->ref, 4, n, ord, done);
+  permute_array((unsigned char *)r->aux, sizeof(int), n, ord, done);
+  permute_array(r->flag, 1, n, ord, done);
+  if (r->ndbl) { /* wide rows: in chunks of 8 doubles */
+    double *tmp;
+    size_t nd = (size_t)r->ndbl;
+    PA_ALLOC(tmp, n * nd);
+    for (size_t k = 0; k < n; k++)
+      memcpy(tmp + nd * k, r->dbl + nd * (size_t)ord[k], nd * sizeof(double));
+    memcpy(r->dbl, tmp, n * nd * sizeof(double));
+    pa__free(tmp);
+  }
+  if (r->poff) {
+    PA_ALLOC(pay, r->poff[n]);
+    PA_ALLOC(poff, r->cap + 1);
+    size_t off = 0;
+    for (size_t k = 0; k < n; k++) {
+      size_t i = (size_t)ord[k], len = r->poff[i + 1] - r->poff[i];
+      poff[k] = off;
+      memcpy(pay + off, r->pay + r->poff[i], len);
+      off += len;
+    }
+    poff[n] = off;
+    pa__free(r->pay);
+    pa__free(r->poff);
+    r->pay = pay;
+    r->paycap = off;
+    r->poff = poff;
+    pay = NULL;
+    poff = NULL;
+  }
+cleanup:
+  pa__free(done);
+  pa__free(pay);
+  pa__free(poff);
+  return st;
+}
+
+/* Merge the sorted runs [run[q], run[q+1]) of ord (keys gid) pairwise until
+ * one is left (stable); tmp holds n indices. */
+static void merge_runs(pa_idx *ord, pa_idx *tmp, size_t *run, size_t nrun,
+                       const pa_gid *gid) {
+  pa_idx *src = ord, *dst = tmp;
+  while (nrun > 1) {
+    size_t m = 0;
+    for (size_t q = 0; q < nrun; q += 2) {
+      size_t lo = run[q], mid = run[q + 1], hi = q + 2 <= nrun ? run[q + 2] : mid;
+      size_t i = lo, j = mid, k = lo;
+      if (q + 1 >= nrun) mid = hi = run[q + 1];
+      while (i < mid && j < hi)
+        dst[k++] = gid[src[j]] < gid[src[i]] ? src[j++] : src[i++];
+      while (i < mid) dst[k++] = src[i++];
+      while (j < hi) dst[k++] = src[j++];
+      run[m++] = lo;
+    }
+    run[m] = run[nrun];
+    nrun = m;
+    pa_idx *t = src;
+    src = dst;
+    dst = t;
+  }
+  if (src != ord) memcpy(ord, src, run[1] * sizeof *ord);
+}
+
+pa_status pa__recs_sort(pa__recs *r) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *ord = NULL, *tmp = NULL;
+  size_t *run = NULL, nrun = 1;
+  for (size_t i = 1; i < r->n; i++) nrun += r->gid[i] < r->gid[i - 1];
+  if (r->n < 2 || nrun == 1) return PA_SUCCESS; /* already sorted */
+  PA_ALLOC(ord, r->n);
+  for (size_t k = 0; k < r->n; k++) ord[k] = (pa_idx)k;
+  if (nrun <= 64) { /* a few sorted runs (one per source rank): merge */
+    PA_ALLOC(tmp, r->n);
+    PA_ALLOC(run, nrun + 1);
+    size_t q = 0;
+    run[q++] = 0;
+    for (size_t i = 1; i < r->n; i++)
+      if (r->gid[i] < r->gid[i - 1]) run[q++] = i;
+    run[q] = r->n;
+    merge_runs(ord, tmp, run, nrun, r->gid);
+    pa__free(tmp);
+    tmp = NULL;
+  } else {
+    PA_CALL(pa__sort_by_gid(ord, r->n, r->gid));
+  }
+  PA_CALL(recs_permute(r, ord));
+cleanup:
+  pa__free(ord);
+  pa__free(tmp);
+  pa__free(run);
+  return st;
+}
+
+/* Copy record k of block b to the end of r (room reserved). */
+static void take(pa__recs *r, const pa__recblock *b, size_t k,
+                 const unsigned char *pay) {
+  size_t i = r->n, nv = (size_t)r->nv, nd = (size_t)r->ndbl;
+  r->gid[i] = b->gid[k];
+  if (nv) memcpy(r->vgid + nv * i, b->vgid + nv * k, nv * sizeof(pa_gid));
+  if (nd) memcpy(r->dbl + nd * i, b->dbl + nd * k, nd * sizeof(double));
+  r->ref[i] = b->ref[k];
+  r->aux[i] = b->aux[k];
+  r->flag[i] = b->flag[k];
+  if (r->poff) {
+    size_t len = b->paybytes ? b->paylen[k] : 0;
+    if (len) memcpy(r->pay + r->poff[i], pay, len);
+    r->poff[i + 1] = r->poff[i] + len;
+  }
+  r->n++;
+}
+
+/* Append the record blocks of buf[0..tot) to r (room reserved), sorted by
+ * gid: a merge of the blocks when each is sorted (the usual case: senders
+ * hold sorted records), so no sort and no permutation; otherwise append
+ * and sort. Ties keep the block order (stable). */
+static pa_status merge_blocks(pa__recs *r, const unsigned char *buf,
+                              size_t tot) {
+  pa_status st = PA_SUCCESS;
+  pa__recblock *b = NULL;
+  size_t nb = 0, q = 0, *cur = NULL, *pcur = NULL;
+  int sorted = 1;
+  for (q = 0; q < tot; nb++) {
+    pa__recblock t;
+    pa__recblock_map(buf + q, r->nv, r->ndbl, &t);
+    q += t.bytes;
+  }
+  PA_ALLOC(b, nb);
+  PA_CALLOC(cur, nb);
+  PA_CALLOC(pcur, nb);
+  q = 0;
+  for (size_t k = 0; k < nb; k++) {
+    pa__recblock_map(buf + q, r->nv, r->ndbl, &b[k]);
+    q += b[k].bytes;
+    for (size_t i = 1; i < b[k].n && sorted; i++) sorted = b[k].gid[i - 1] <= b[k].gid[i];
+  }
+  if (!sorted || nb > 64) {
+    q = 0;
+    while (q < tot) PA_CALL(pa__recs_get(r, buf, &q));
+    PA_CALL(pa__recs_sort(r));
+    goto cleanup;
+  }
+  for (;;) { /* smallest head; a linear scan over at most 64 blocks */
+    size_t best = nb;
+    for (size_t k = 0; k < nb; k++)
+      if (cur[k] < b[k].n &&
+          (best == nb || b[k].gid[cur[k]] < b[best].gid[cur[best]]))
+        best = k;
+    if (best == nb) break;
+    /* take the run of best that stays below every other head */
+    pa_gid lim = INT64_MAX;
+    for (size_t k = 0; k < nb; k++)
+      if (k != best && cur[k] < b[k].n && b[k].gid[cur[k]] < lim)
+        lim = b[k].gid[cur[k]];
+    const pa__recblock *bb = &b[best];
+    do {
+      size_t k = cur[best]++;
+      take(r, bb, k, bb->pay + pcur[best]);
+      if (bb->paybytes) pcur[best] += bb->paylen[k];
+    } while (cur[best] < bb->n && bb->gid[cur[best]] < lim);
+  }
+cleanup:
+  pa__free(b);
+  pa__free(cur);
+  pa__free(pcur);
+  return st;
+}
+
+/* Migration; with consume, the input is freed once packed. */
+static pa_status migrate(MPI_Comm comm, pa__recs *in, const int *dest,
+                         pa__recs *out, int consume) {
   pa_status st = PA_SUCCESS;
   int size;
-  size_t *cnt = NULL, *rcnt = NULL, *pos = NULL;
-  pa__buf b = {0};
+  size_t *cnt = NULL, *rcnt = NULL, *start = NULL, *pay = NULL;
+  pa_idx *byrank = NULL;
+  unsigned char *sbuf = NULL;
   void *recv = NULL;
-  pa_idx *order = NULL;
-  pa__recs tmp;
   MPI_Comm_size(comm, &size);
   pa__recs_init(out, in->kind, in->nv, in->ndbl);
-  pa__recs_init(&tmp, in->kind, in->nv, in->ndbl);
   if (!dest) dest = in->aux;
   PA_CALLOC(cnt, size);
-  PA_CALLOC(pos, (size_t)size + 1);
+  PA_CALLOC(pay, size);
+  PA_CALLOC(start, (size_t)size + 1);
   for (size_t i = 0; i < in->n; i++) {
     PA_CHECK(dest[i] >= 0 && dest[i] < size, PA_ERR_ARG,
              "destination rank %d of entity %lld out of [0, %d)", dest[i],
              (long long)in->gid[i], size);
-    cnt[dest[i]] += pa__recs_wire(in, i);
+    start[dest[i] + 1]++;
+    if (in->poff) pay[dest[i]] += in->poff[i + 1] - in->poff[i];
   }
-  for (int r = 0; r < size; r++) pos[r + 1] = pos[r] + cnt[r];
-  PA_CALL(pa__buf_reserve(&b, pos[size]));
-  /* Pack in place by destination: write each record at its rank's cursor. */
-  for (size_t i = 0; i < in->n; i++) {
-    pa__buf w = {b.p, pos[dest[i]], b.cap};
-    pa__recs_pack(in, i, &w);
-    pos[dest[i]] = w.n;
-  }
-  b.n = pos[size - 1 + 1];
-  PA_CALL(pa__xchg_sparse(comm, cnt, b.p, &rcnt, &recv));
-  pa__buf_free(&b);
+  for (int r = 0; r < size; r++) start[r + 1] += start[r];
+  /* records by destination (stable) */
+  PA_ALLOC(byrank, in->n);
   {
-    size_t total = 0;
-    for (int r = 0; r < size; r++) total += rcnt[r];
-    size_t q = 0;
-    while (q < total) PA_CALL(pa__recs_unpack(&tmp, recv, &q));
+    size_t *cur;
+    PA_ALLOC(cur, size);
+    memcpy(cur, start, (size_t)size * sizeof *cur);
+    for (size_t i = 0; i < in->n; i++) byrank[cur[dest[i]]++] = (pa_idx)i;
+    pa__free(cur);
+  }
+  size_t total = 0;
+  for (int r = 0; r < size; r++) {
+    size_t nr = start[r + 1] - start[r];
+    cnt[r] = nr ? pa__recblock_bytes(in->nv, in->ndbl, nr, pay[r]) : 0;
+    total += cnt[r];
+  }
+  PA_ALLOC(sbuf, total);
+  {
+    size_t off = 0;
+    for (int r = 0; r < size; r++) {
+      size_t nr = start[r + 1] - start[r];
+      if (nr) off += pa__recs_put(in, byrank + start[r], nr, sbuf + off);
+    }
+  }
+  pa__free(byrank);
+  byrank = NULL;
+  if (consume) pa__recs_free(in);
+  PA_CALL(pa__xchg_sparse(comm, cnt, sbuf, &rcnt, &recv));
+  pa__free(sbuf);
+  sbuf = NULL;
+  {
+    size_t tot = 0, nrec = 0, npay = 0, q = 0;
+    for (int r = 0; r < size; r++) tot += rcnt[r];
+    while (q < tot) {
+      pa__recblock b;
+      pa__recblock_map((unsigned char *)recv + q, out->nv, out->ndbl, &b);
+      nrec += b.n;
+      npay += b.paybytes;
+      q += b.bytes;
+    }
+    PA_CHECK(q == tot, PA_ERR_INTERNAL, "record blocks of %zu bytes, %zu read",
+             tot, q);
+    PA_CALL(pa__recs_reserve(out, nrec, npay));
+    PA_CALL(merge_blocks(out, recv, tot));
   }
   pa__free(recv);
   recv = NULL;
-  /* Sort by gid, so that the result does not depend on arrival order. */
-  PA_ALLOC(order, tmp.n);
-  for (size_t i = 0; i < tmp.n; i++) order[i] = (pa_idx)i;
-  PA_CALL(pa__sort_by_gid(order, tmp.n, tmp.gid));
-  PA_CALL(recs_grow(out, tmp.n));
-  for (size_t k = 0; k < tmp.n; k++) {
-    size_t i = (size_t)order[k];
-    PA_CALL(pa__recs_add(out, tmp.gid[i], tmp.vgid + (size_t)tmp.nv * i,
-                         tmp.ref[i], tmp.flag[i], tmp.aux[i],
-                         tmp.dbl + (size_t)tmp.ndbl * i,
-                         tmp.poff ? tmp.pay + tmp.poff[i] : NULL,
-                         paylen_of(&tmp, i)));
-  }
+  /* Sort by gid, so that the result does not depend on arrival order (runs
+   * of sorted sources are merged). */
+  PA_CALL(pa__recs_sort(out));
 cleanup:
   st = pa__agree_end(comm, st);
   pa__free(cnt);
   pa__free(rcnt);
-  pa__free(pos);
-  pa__buf_free(&b);
+  pa__free(start);
+  pa__free(pay);
+  pa__free(byrank);
+  pa__free(sbuf);
   pa__free(recv);
-  pa__free(order);
-  pa__recs_free(&tmp);
   if (st) pa__recs_free(out);
   return st;
+}
+
+pa_status pa__recs_migrate(MPI_Comm comm, const pa__recs *in, const int *dest,
+                           pa__recs *out) {
+  return migrate(comm, (pa__recs *)(uintptr_t)in, dest, out, 0);
+}
+
+pa_status pa__recs_migrate_free(MPI_Comm comm, pa__recs *in, const int *dest,
+                                pa__recs *out) {
+  return migrate(comm, in, dest, out, 1);
 }

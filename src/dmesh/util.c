@@ -49,36 +49,15 @@ cleanup:
   return st;
 }
 
-pa_status pa__gidmap_put(pa__gidmap *m, pa_gid key, pa_idx val, int *found,
-                         pa_idx *old) {
+pa_status pa__gidmap_put_slow(pa__gidmap *m, pa_gid key, pa_idx val,
+                              int *found, pa_idx *old) {
   pa_status st = PA_SUCCESS;
   if (found) *found = 0;
   PA_CHECK(key >= 0, PA_ERR_ARG, "negative global id %lld", (long long)key);
   if (m->cap == 0 || 2 * (m->n + 1) > m->cap) PA_CALL(gidmap_grow(m));
-  size_t s = slot_of(m, key);
-  while (m->key[s] >= 0) {
-    if (m->key[s] == key) {
-      if (found) *found = 1;
-      if (old) *old = m->val[s];
-      return PA_SUCCESS;
-    }
-    s = (s + 1) & (m->cap - 1);
-  }
-  m->key[s] = key;
-  m->val[s] = val;
-  m->n++;
+  return pa__gidmap_put(m, key, val, found, old);
 cleanup:
   return st;
-}
-
-pa_idx pa__gidmap_get(const pa__gidmap *m, pa_gid key) {
-  if (m->cap == 0 || key < 0) return -1;
-  size_t s = slot_of(m, key);
-  while (m->key[s] >= 0) {
-    if (m->key[s] == key) return m->val[s];
-    s = (s + 1) & (m->cap - 1);
-  }
-  return -1;
 }
 
 pa_status pa__buf_reserve(pa__buf *b, size_t extra) {
@@ -172,6 +151,9 @@ size_t pa__gid_sort_unique(pa_gid *a, size_t n) {
 pa_status pa__sort_by_gid(pa_idx *idx, size_t n, const pa_gid *key) {
   pa_status st = PA_SUCCESS;
   kv *p = NULL;
+  size_t s = 1;
+  while (s < n && key[idx[s - 1]] <= key[idx[s]]) s++;
+  if (s >= n) return PA_SUCCESS; /* already in order */
   PA_ALLOC(p, n);
   for (size_t i = 0; i < n; i++) {
     p[i].k = (uint64_t)key[idx[i]];

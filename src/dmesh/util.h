@@ -19,12 +19,42 @@ typedef struct pa__gidmap {
 
 pa_status pa__gidmap_init(pa__gidmap *m, size_t nexpected);
 void pa__gidmap_free(pa__gidmap *m);
+/* Insert, slow path (negative key, growth). */
+pa_status pa__gidmap_put_slow(pa__gidmap *m, pa_gid key, pa_idx val,
+                              int *found, pa_idx *old);
+static inline uint64_t pa__mix64(uint64_t x);
 /* Insert key -> val; if key is present, leave it and return its value in
- * *old (may be NULL) with *found = 1. */
-pa_status pa__gidmap_put(pa__gidmap *m, pa_gid key, pa_idx val, int *found,
-                         pa_idx *old);
+ * *old (may be NULL) with *found = 1. Inline: hash maps sit in the inner
+ * loops of the build. */
+static inline pa_status pa__gidmap_put(pa__gidmap *m, pa_gid key, pa_idx val,
+                                       int *found, pa_idx *old) {
+  if (key < 0 || m->cap == 0 || 2 * (m->n + 1) > m->cap)
+    return pa__gidmap_put_slow(m, key, val, found, old);
+  size_t s = (size_t)pa__mix64((uint64_t)key) & (m->cap - 1);
+  while (m->key[s] >= 0) {
+    if (m->key[s] == key) {
+      if (found) *found = 1;
+      if (old) *old = m->val[s];
+      return PA_SUCCESS;
+    }
+    s = (s + 1) & (m->cap - 1);
+  }
+  if (found) *found = 0;
+  m->key[s] = key;
+  m->val[s] = val;
+  m->n++;
+  return PA_SUCCESS;
+}
 /* Value of key, or -1 if absent. */
-pa_idx pa__gidmap_get(const pa__gidmap *m, pa_gid key);
+static inline pa_idx pa__gidmap_get(const pa__gidmap *m, pa_gid key) {
+  if (m->cap == 0 || key < 0) return -1;
+  size_t s = (size_t)pa__mix64((uint64_t)key) & (m->cap - 1);
+  while (m->key[s] >= 0) {
+    if (m->key[s] == key) return m->val[s];
+    s = (s + 1) & (m->cap - 1);
+  }
+  return -1;
+}
 
 /* Growable byte buffer. */
 typedef struct pa__buf {

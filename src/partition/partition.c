@@ -215,6 +215,7 @@ pa_status pa__order_graph(pa_idx n, const pa_idx *xadj, const pa_idx *adj,
    * similar locality (docs/DMESH.md) */
   PA_CHECK(SCOTCH_stratGraphOrder(&strat, "g") == 0, PA_ERR_PARTITION,
            "SCOTCH_stratGraphOrder failed");
+  SCOTCH_randomReset(); /* reproducible, as the partitions */
   PA_CHECK(SCOTCH_graphOrder(&graph, &strat, permtab, peritab, NULL, NULL,
                              NULL) == 0,
            PA_ERR_PARTITION, "SCOTCH_graphOrder failed (%d vertices)", (int)n);

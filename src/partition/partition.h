@@ -28,4 +28,11 @@ pa_status pa__partition_dgraph(MPI_Comm comm, pa_idx n, const pa_idx *xadj,
 pa_status pa__partition_remap(MPI_Comm comm, pa_idx n, int *part,
                               const double *weights);
 
+/* Local: Scotch ordering (SCOTCH_graphOrder, Gibbs-Poole-Stockmeyer
+ * strategy "g": bandwidth reduction, for locality) of a sequential graph of n vertices in CSR form (0-based,
+ * symmetric, no self loop). perm[k] receives the old vertex placed at new
+ * position k. Fails with PA_ERR_PARTITION if Scotch does. */
+pa_status pa__order_graph(pa_idx n, const pa_idx *xadj, const pa_idx *adj,
+                          pa_idx *perm);
+
 #endif /* PA_PARTITION_H */

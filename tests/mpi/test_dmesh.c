@@ -238,7 +238,7 @@ static void test_redistribute(void) {
       pa_dmesh_destroy(dm);
       continue;
     }
-    for (int round = 0; round < 3; round++) {
+    for (int round = 0; round < 4; round++) {
       pa_idx n, nown;
       double *x = pa_dmesh_value_data(vx, &n, &nown);
       const double *c = pa_mesh_coords(pa_dmesh_mesh(dm));
@@ -279,8 +279,18 @@ static void test_redistribute(void) {
         for (pa_idx i = 0; i < ne; i++) w[i] = 1.0 + (eg[i] % 3);
         CHECK_OK(pa_dmesh_redistribute(dm, NULL, w));
         free(w);
-      } else {
+        /* balanced by weight (the loads once overflowed Scotch's sum) */
+        double wl = 0, wmax = 0, wsum = 0;
+        ne = pa_dmesh_nowned(dm, PA_ELEMENT);
+        eg = pa_dmesh_gids(dm, PA_ELEMENT);
+        for (pa_idx i = 0; i < ne; i++) wl += 1.0 + (eg[i] % 3);
+        MPI_Allreduce(&wl, &wmax, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+        MPI_Allreduce(&wl, &wsum, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+        CHECK(wmax * size / wsum < 1.15);
+      } else if (round == 2) {
         CHECK_OK(pa_dmesh_reorder(dm));
+      } else {
+        CHECK_OK(pa_dmesh_reorder_by(dm, PA_ORDER_SCOTCH));
       }
       CHECK_OK(pa_dmesh_check(dm));
       CHECK_OK(pa_dmesh_checksum(dm, &after));
@@ -288,6 +298,30 @@ static void test_redistribute(void) {
     }
     pa_dmesh_destroy(dm);
   }
+}
+
+/* PT-Scotch balances weighted loads on a mesh large enough for the loads
+ * to have overflowed Scotch's 32-bit sum (they were scaled to [1, 10^6]). */
+static void test_weighted_balance(void) {
+  pa_mesh *in = box_on_root(3, 12); /* 10,368 tetrahedra */
+  pa_dmesh *dm = NULL;
+  CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, in, 1, &dm));
+  pa_mesh_destroy(in);
+  if (!dm) return;
+  for (int pass = 0; pass < 2; pass++) {
+    pa_idx ne = pa_dmesh_nowned(dm, PA_ELEMENT);
+    const double *x = pa_mesh_coords(pa_dmesh_mesh(dm));
+    const pa_idx *el = pa_mesh_elems(pa_dmesh_mesh(dm));
+    double *w = malloc(sizeof(double) * (ne + 1)), wl = 0, wmax, wsum;
+    for (pa_idx e = 0; e < ne; e++) wl += w[e] = x[3 * el[4 * e]] < 0.5 ? 2.0 : 1.0;
+    MPI_Allreduce(&wl, &wmax, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+    MPI_Allreduce(&wl, &wsum, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    if (pass == 1) CHECK(wmax * size / wsum < 1.06);
+    if (pass == 0) CHECK_OK(pa_dmesh_redistribute(dm, NULL, w));
+    free(w);
+  }
+  CHECK_OK(pa_dmesh_check(dm));
+  pa_dmesh_destroy(dm);
 }
 
 /* Adjacency queries agree with each other across the overlap. */
@@ -360,6 +394,23 @@ static void test_bad_input(void) {
   CHECK(strstr(pa_last_error(), "boundary") != NULL);
   pa_dmesh_destroy(dm);
   pa_mesh_destroy(in);
+  /* a face in three elements (the last element given twice: the three are
+   * in the last rank's block of the scatter): the dual graph, built when
+   * partitioning on more than one rank, refuses it */
+  in = box_on_root(2, 4);
+  if (rank == 0) {
+    pa_idx v[3];
+    memcpy(v, pa_mesh_elems(in) + 3 * (pa_mesh_nelem(in) - 1), sizeof v);
+    CHECK_OK(pa_mesh_add_elem(in, v, 1, NULL));
+  }
+  st = pa_dmesh_distribute(MPI_COMM_WORLD, 0, in, 0, &dm);
+  if (size > 1) {
+    CHECK(st == PA_ERR_MESH);
+    CHECK(strstr(pa_last_error(), "more than two") != NULL);
+  }
+  pa_dmesh_destroy(dm);
+  dm = NULL;
+  pa_mesh_destroy(in);
   /* a bad argument on one rank only */
   in = box_on_root(2, 3);
   st = pa_dmesh_distribute(MPI_COMM_WORLD, 0, in, rank == size - 1 ? -1 : 0, &dm);
@@ -386,9 +437,10 @@ int main(int argc, char **argv) {
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   size_t mem0 = pa_memory_current();
-  pa_test_fn tests[] = {test_distribute, test_redistribute, test_adjacency,
-                        test_bad_input};
-  const char *names[] = {"distribute", "redistribute", "adjacency", "bad_input"};
+  pa_test_fn tests[] = {test_distribute, test_redistribute,
+                        test_weighted_balance, test_adjacency, test_bad_input};
+  const char *names[] = {"distribute", "redistribute", "weighted_balance",
+                         "adjacency", "bad_input"};
   for (size_t t = 0; t < sizeof tests / sizeof *tests; t++) {
     int before = pa_test_failures;
     double t0 = MPI_Wtime();

@@ -1,7 +1,7 @@
 /*
  * test_dmesh_io.c -- distributed I/O: round trip of a distributed set (same
  * and different numbers of ranks, through sub-communicators), gather from a
- * set, ParaView files, and bad sets (a missing rank file, inconsistent
+ * set, ParaView files, user values in the files, and bad sets (a missing rank file, inconsistent
  * interfaces) that must fail with the same error on every rank, never hang.
  */
 #include "testutil.h"
@@ -147,6 +147,108 @@ static void test_round_trip(void) {
   pa_mesh_destroy(in);
 }
 
+/* Values of test_values: a function of the global id (and component). */
+static double vval(pa_gid g, int c) { return 0.5 * (double)g + c; }
+typedef struct sh2 { short a, b; } sh2;
+
+/* Set (fill = 1) or check (fill = 0) the values of test_values on every
+ * local entity holding them. */
+static void values_fill(pa_dmesh *dm, int fill) {
+  pa_dmesh_value *vd = pa_dmesh_value_find(dm, "vd"),
+                 *ei = pa_dmesh_value_find(dm, "ei"),
+                 *bs = pa_dmesh_value_find(dm, "bsub"),
+                 *vs = pa_dmesh_value_find(dm, "vs");
+  CHECK(vd && ei && bs && vs);
+  if (!vd || !ei || !bs || !vs) return;
+  pa_idx n, nown, bad = 0;
+  double *d = pa_dmesh_value_data(vd, &n, &nown);
+  const pa_gid *g = pa_dmesh_gids(dm, PA_VERTEX);
+  for (pa_idx i = 0; i < n; i++)
+    for (int c = 0; c < 3; c++) {
+      if (fill) d[3 * i + c] = vval(g[i], c);
+      else bad += d[3 * i + c] != vval(g[i], c);
+    }
+  sh2 *h = pa_dmesh_value_data(vs, &n, &nown);
+  for (pa_idx i = 0; i < n; i++) {
+    if (fill) h[i] = (sh2){(short)(g[i] % 1000), (short)-(g[i] % 777)};
+    else bad += h[i].a != (short)(g[i] % 1000) || h[i].b != (short)-(g[i] % 777);
+  }
+  int64_t *e = pa_dmesh_value_data(ei, &n, &nown);
+  g = pa_dmesh_gids(dm, PA_ELEMENT);
+  for (pa_idx i = 0; i < n; i++) {
+    if (fill) e[i] = 7 * g[i] + 1;
+    else bad += e[i] != 7 * g[i] + 1;
+  }
+  float *b = pa_dmesh_value_data(bs, &n, &nown);
+  const pa_idx *ent = pa_dmesh_value_entities(bs);
+  g = pa_dmesh_gids(dm, PA_BOUNDARY);
+  for (pa_idx i = 0; i < n; i++) {
+    if (fill) b[i] = (float)g[ent[i]];
+    else bad += b[i] != (float)g[ent[i]];
+  }
+  if (!fill) CHECK(bad == 0);
+}
+
+/* User values (all entities and a sub-class, predefined and derived types)
+ * survive a write and a read at the same and at another number of ranks. */
+static void test_values(void) {
+  pa_mesh *in = input();
+  pa_dmesh *dm = NULL, *back = NULL;
+  pa_dmesh_value *v;
+  MPI_Datatype t2;
+  MPI_Type_contiguous(2, MPI_SHORT, &t2);
+  MPI_Type_commit(&t2);
+  CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, in, 1, &dm));
+  pa_mesh_destroy(in);
+  if (!dm) {
+    MPI_Type_free(&t2);
+    return;
+  }
+  int32_t bref = pa_mesh_bdry_refs(pa_dmesh_mesh(dm))[0];
+  MPI_Allreduce(MPI_IN_PLACE, &bref, 1, MPI_INT32_T, MPI_MIN, MPI_COMM_WORLD);
+  CHECK_OK(pa_dmesh_value_add(dm, PA_VERTEX, "vd", MPI_DOUBLE, 3, -1, &v));
+  CHECK_OK(pa_dmesh_value_add(dm, PA_ELEMENT, "ei", MPI_INT64_T, 1, -1, &v));
+  CHECK_OK(pa_dmesh_value_add(dm, PA_BOUNDARY, "bsub", MPI_FLOAT, 1, bref, &v));
+  CHECK_OK(pa_dmesh_value_add(dm, PA_VERTEX, "vs", t2, 1, -1, &v));
+  values_fill(dm, 1);
+  uint64_t ref = checksum(dm);
+  CHECK_OK(pa_dmesh_write(dm, "io_v.meshb"));
+  CHECK_OK(pa_dmesh_read(MPI_COMM_WORLD, "io_v.meshb", 1, &back));
+  if (back) {
+    CHECK_OK(pa_dmesh_check(back));
+    values_fill(back, 0);
+    pa_dmesh_value *w = pa_dmesh_value_find(back, "vs");
+    if (w) {
+      pa_entity kind;
+      const char *name;
+      MPI_Datatype type;
+      int ncomp;
+      int32_t r;
+      pa_dmesh_value_info(w, &kind, &name, &type, &ncomp, &r);
+      CHECK(type == MPI_BYTE && ncomp == 4); /* a derived type comes back as bytes */
+    }
+    CHECK(checksum(back) == ref);
+  }
+  pa_dmesh_destroy(back);
+  back = NULL;
+  if (size >= 2) { /* fewer readers: repartitioned, values follow */
+    MPI_Comm sub;
+    MPI_Comm_split(MPI_COMM_WORLD, rank < size - 1 ? 0 : MPI_UNDEFINED, rank, &sub);
+    if (sub != MPI_COMM_NULL) {
+      CHECK_OK(pa_dmesh_read(sub, "io_v.meshb", 1, &back));
+      if (back) {
+        CHECK_OK(pa_dmesh_check(back));
+        values_fill(back, 0);
+        CHECK(checksum(back) == ref);
+      }
+      pa_dmesh_destroy(back);
+      MPI_Comm_free(&sub);
+    }
+  }
+  pa_dmesh_destroy(dm);
+  MPI_Type_free(&t2);
+}
+
 static void test_bad_sets(void) {
   pa_mesh *in = input();
   pa_dmesh *dm = NULL, *back = NULL;
@@ -213,6 +315,9 @@ int main(int argc, char **argv) {
   test_round_trip();
   if (pa_test_failures) fprintf(stderr, "rank %d: round trip failed\n", rank);
   int before = pa_test_failures;
+  test_values();
+  if (pa_test_failures != before) fprintf(stderr, "rank %d: values failed\n", rank);
+  before = pa_test_failures;
   test_bad_sets();
   if (pa_test_failures != before) fprintf(stderr, "rank %d: bad sets failed\n", rank);
   if (pa_memory_current() != mem0) {
