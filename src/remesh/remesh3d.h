@@ -94,6 +94,7 @@ typedef struct rm3d {
   rm3d_table tri, edg;
   /* options */
   int surf;  /* remesh the boundary surface */
+  int swap;  /* swaps allowed (not -noswap) */
   double hausd, ridge_cos;
   int verbosity;
   /* counters */
@@ -257,20 +258,38 @@ pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
 /* Collapse the edge (p,q): p removed, q kept. *done = 1 when collapsed. */
 pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
                             int *done);
+/* Contract the edge (p,q) to its midpoint: q moves there (only where it
+ * stays on its entity: interior, plane, straight ridge), then p collapses
+ * onto it with every check of pa__rm3d_collapse; q moves back otherwise. */
+pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
+                                int *done);
 /* Replace tets old[0..nold) by nnew tets (vertex quadruples, positive),
  * matching faces to rebuild adjacency; new tets take reference ref and PA
- * flags pf. Face tags follow the cavity's outer faces. */
+ * flags pf. Face tags follow the cavity's outer faces. nbswap > 0 for a
+ * boundary swap: that many old domain-boundary faces disappear and as many
+ * unmatched new faces become boundary faces (the caller updates the
+ * triangle table). */
 pa_status pa__rm3d_replace(rm3d *m, const pa_idx *old, int nold,
                            const pa_idx *nv4, int nnew, int32_t ref,
-                           uint8_t pf);
+                           uint8_t pf, int nbswap);
 /* Try to improve the worst quality around edge (a,b) of tet k by edge
- * removal (best triangulation of the ring, closed shells of 3..7 tets).
- * Accept if the new worst quality exceeds gain * the old one. */
+ * removal (best triangulation of the ring, closed shells of 3..7 tets) or,
+ * for a boundary edge in surface mode (open shell of 2..7 tets), by the
+ * boundary swap of its two surface triangles. Accept if the new worst
+ * quality exceeds gain * the old one. gain < 1 removes a short interior
+ * edge: the new worst may drop to gain * the old one (never under the
+ * rm3d_q_ok floor), and no new edge may be longer than sqrt 2. */
 pa_status pa__rm3d_swap_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
                              double gain, int *done);
 /* 2-3 swap of face f of tet k. */
 pa_status pa__rm3d_swap_face(rm3d *m, pa_idx k, int f, double gain,
                              int *done);
+/* How the boundary vertex p (ball[0..n)) may move and keep the surface
+ * exactly: 2 in the plane of its coplanar triangles (dir = unit normal), 1
+ * along a straight ridge (two collinear feature edges; dir = unit tangent),
+ * 0 not at all (curved patch, corner, required ridge, -nosurf). */
+int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
+                          double *dir);
 /* Relocate vertex p to raise the worst quality of its ball. */
 int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball);
 
@@ -278,9 +297,13 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball);
  * (rm3d_surface.c); use_angle = 0 for -nr. */
 pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle);
 
-/* Passes (rm3d_driver.c). */
+/* Passes (rm3d_driver.c). Split edges longer than thr; collapse edges
+ * shorter than thr creating no edge longer than guard; swap around tets of
+ * quality < qthr (new worst > gain * old); smooth the vertices of tets of
+ * quality < qthr. */
 pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count);
-pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, long *count);
+pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, double guard,
+                                 long *count);
 pa_status pa__rm3d_swap_pass(rm3d *m, double qthr, double gain, long *count);
 pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, long *count);
 

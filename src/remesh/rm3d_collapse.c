@@ -12,6 +12,13 @@
  * faces glued, and the new surface stays within hausd of p (exactly planar
  * on planar patches, since no point moves). For an interior p, positive
  * volumes of the new tets imply that they tile p's old ball.
+ *
+ * Midpoint collapse (pa__rm3d_collapse_mid): q first moves to the middle of
+ * (p,q) where it stays on its entity (interior; plane of a planar patch
+ * holding p; straight ridge holding p), its ball checked like a collapse;
+ * then p collapses onto it with all the checks above, or q moves back bit
+ * for bit. The new edges are about half the short edge shorter than from
+ * either end, which unlocks most collapses the length guard refuses.
  */
 #include "remesh/remesh3d.h"
 
@@ -29,6 +36,75 @@ static double tri_normal(const double *a, const double *b, const double *c,
 }
 
 #define R3_COL_MAXTRI 128
+
+/* Apply a checked collapse p -> q: glue the faces around the deleted tets
+ * (nq[i] < 0), rename p in the others (new qualities nq), then rename the
+ * surface records trec[0..ntri) and feature edges erec[0..nerec). */
+static pa_status collapse_apply(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball,
+                                int n, const float *nq, const pa_idx *trec,
+                                int ntri, const pa_idx *erec, int nerec) {
+  pa_status st = PA_SUCCESS;
+  for (int i = 0; i < n; i++) {
+    if (nq[i] >= 0) continue;
+    pa_idx t = ball[i] >> 2;
+    int ip = ball[i] & 3;
+    const pa_idx *v = m->tv + 4 * (size_t)t;
+    int iq = rm3d_loc(v, q);
+    pa_idx o1 = m->adj[4 * (size_t)t + iq], o2 = m->adj[4 * (size_t)t + ip];
+    unsigned tag = ((m->tflag[t] >> iq) | (m->tflag[t] >> ip)) & 1u;
+    if (o1 >= 0) {
+      m->adj[o1] = o2;
+      if (tag) m->tflag[o1 >> 2] |= (uint8_t)(1u << (o1 & 3));
+    }
+    if (o2 >= 0) {
+      m->adj[o2] = o1;
+      if (tag) m->tflag[o2 >> 2] |= (uint8_t)(1u << (o2 & 3));
+    }
+    pa_idx keep = o1 >= 0 ? (o1 >> 2) : (o2 >> 2);
+    for (int j = 0; j < 4; j++)
+      if (j != ip && j != iq) m->vtet[v[j]] = keep;
+    m->tflag[t] = R3T_DEAD;
+    m->ndead_t++;
+  }
+  for (int i = 0; i < n; i++) {
+    if (nq[i] < 0) continue;
+    pa_idx t = ball[i] >> 2;
+    m->tv[4 * (size_t)t + (ball[i] & 3)] = q;
+    m->q[t] = nq[i];
+    m->vtet[q] = t;
+  }
+  for (int j = 0; j < ntri; j++) {
+    pa_idx r = trec[j];
+    pa_idx tv3[3];
+    memcpy(tv3, m->tri.v + 3 * (size_t)r, sizeof tv3);
+    int32_t ref = m->tri.ref[r];
+    uint8_t fl = m->tri.flag[r];
+    pa__rm3d_table_remove(&m->tri, r);
+    if (tv3[0] == q || tv3[1] == q || tv3[2] == q) continue;
+    for (int c = 0; c < 3; c++)
+      if (tv3[c] == p) tv3[c] = q;
+    PA_CALL(pa__rm3d_table_add(&m->tri, tv3, ref, fl, NULL));
+  }
+  if (nerec == 2) {
+    for (int j = 0; j < 2; j++) {
+      pa_idx r = erec[j];
+      pa_idx ev[2];
+      memcpy(ev, m->edg.v + 2 * (size_t)r, sizeof ev);
+      int32_t ref = m->edg.ref[r];
+      uint8_t fl = m->edg.flag[r];
+      pa__rm3d_table_remove(&m->edg, r);
+      if (ev[0] == q || ev[1] == q) continue;
+      for (int c = 0; c < 2; c++)
+        if (ev[c] == p) ev[c] = q;
+      PA_CALL(pa__rm3d_table_add(&m->edg, ev, ref, fl, NULL));
+    }
+  }
+  m->vtag[p] = R3V_DEAD;
+  m->ndead_v++;
+  m->ncollapse++;
+cleanup:
+  return st;
+}
 
 pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
                             int *done) {
@@ -197,66 +273,129 @@ pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
       if (d2 > m->hausd * m->hausd) return st;
     }
   }
-  /* Apply: glue the faces around the deleted tets, then rename p. */
-  for (int i = 0; i < n; i++) {
-    if (nq[i] >= 0) continue;
-    pa_idx t = ball[i] >> 2;
-    int ip = ball[i] & 3;
-    const pa_idx *v = m->tv + 4 * (size_t)t;
-    int iq = rm3d_loc(v, q);
-    pa_idx o1 = m->adj[4 * (size_t)t + iq], o2 = m->adj[4 * (size_t)t + ip];
-    unsigned tag = ((m->tflag[t] >> iq) | (m->tflag[t] >> ip)) & 1u;
-    if (o1 >= 0) {
-      m->adj[o1] = o2;
-      if (tag) m->tflag[o1 >> 2] |= (uint8_t)(1u << (o1 & 3));
-    }
-    if (o2 >= 0) {
-      m->adj[o2] = o1;
-      if (tag) m->tflag[o2 >> 2] |= (uint8_t)(1u << (o2 & 3));
-    }
-    pa_idx keep = o1 >= 0 ? (o1 >> 2) : (o2 >> 2);
-    for (int j = 0; j < 4; j++)
-      if (j != ip && j != iq) m->vtet[v[j]] = keep;
-    m->tflag[t] = R3T_DEAD;
-    m->ndead_t++;
-  }
-  for (int i = 0; i < n; i++) {
-    if (nq[i] < 0) continue;
-    pa_idx t = ball[i] >> 2;
-    m->tv[4 * (size_t)t + (ball[i] & 3)] = q;
-    m->q[t] = nq[i];
-    m->vtet[q] = t;
-  }
-  for (int j = 0; j < ntri; j++) {
-    pa_idx r = trec[j];
-    pa_idx tv3[3];
-    memcpy(tv3, m->tri.v + 3 * (size_t)r, sizeof tv3);
-    int32_t ref = m->tri.ref[r];
-    uint8_t fl = m->tri.flag[r];
-    pa__rm3d_table_remove(&m->tri, r);
-    if (tv3[0] == q || tv3[1] == q || tv3[2] == q) continue;
-    for (int c = 0; c < 3; c++)
-      if (tv3[c] == p) tv3[c] = q;
-    PA_CALL(pa__rm3d_table_add(&m->tri, tv3, ref, fl, NULL));
-  }
-  if (nerec == 2) {
-    for (int j = 0; j < 2; j++) {
-      pa_idx r = erec[j];
-      pa_idx ev[2];
-      memcpy(ev, m->edg.v + 2 * (size_t)r, sizeof ev);
-      int32_t ref = m->edg.ref[r];
-      uint8_t fl = m->edg.flag[r];
-      pa__rm3d_table_remove(&m->edg, r);
-      if (ev[0] == q || ev[1] == q) continue;
-      for (int c = 0; c < 2; c++)
-        if (ev[c] == p) ev[c] = q;
-      PA_CALL(pa__rm3d_table_add(&m->edg, ev, ref, fl, NULL));
-    }
-  }
-  m->vtag[p] = R3V_DEAD;
-  m->ndead_v++;
-  m->ncollapse++;
+  PA_CALL(collapse_apply(m, p, q, ball, n, nq, trec, ntri, erec, nerec));
   *done = 1;
+cleanup:
+  return st;
+}
+
+/* Midpoint collapse: q first moves to the middle of (p,q) -- only where it
+ * stays on its entity: an interior q (then p is interior too), a q of a
+ * planar patch with p in that plane, a q of a straight ridge with p on that
+ * line --, its ball checked like a collapse (quality, length guard); then
+ * p collapses onto it with every check of pa__rm3d_collapse. When that
+ * collapse is refused, q goes back (coordinates, metric, cached qualities
+ * bit for bit). */
+pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
+                                int *done) {
+  pa_status st = PA_SUCCESS;
+  pa_idx bq[RM3D_MAXBALL];
+  float oq[RM3D_MAXBALL], nq[RM3D_MAXBALL];
+  *done = 0;
+  uint8_t tp = m->vtag[p], tq = m->vtag[q];
+  if ((tp | tq) & (R3V_LOCK | R3V_CORNER | R3V_DEAD)) return st;
+  int nb = pa__rm3d_ball(m, q, bq, RM3D_MAXBALL);
+  if (nb < 0) return st;
+  int mc = m->mc;
+  double *xq = m->x + 3 * (size_t)q;
+  const double *xp = m->x + 3 * (size_t)p;
+  if (tq & R3V_BDRY) {
+    if (!m->surf || !(tp & R3V_BDRY) || ((tp ^ tq) & R3V_FEAT)) return st;
+    double dir[3];
+    int kind = pa__rm3d_bdry_freedom(m, q, bq, nb, dir);
+    if (kind != ((tq & R3V_FEAT) ? 1 : 2)) return st;
+    double e[3] = {xp[0] - xq[0], xp[1] - xq[1], xp[2] - xq[2]};
+    double le = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+    if (kind == 2) {
+      if (fabs(e[0] * dir[0] + e[1] * dir[1] + e[2] * dir[2]) > 1e-12 * le)
+        return st;
+    } else {
+      double c[3] = {e[1] * dir[2] - e[2] * dir[1],
+                     e[2] * dir[0] - e[0] * dir[2],
+                     e[0] * dir[1] - e[1] * dir[0]};
+      if (sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) > 1e-12 * le)
+        return st;
+    }
+  } else if (tp & R3V_BDRY) {
+    return st;
+  }
+  double xm[3], mm[6], xo[3], mo[6];
+  for (int i = 0; i < 3; i++) xm[i] = 0.5 * (xp[i] + xq[i]);
+  if (mc == 1) {
+    mm[0] = sqrt(m->met[p] * m->met[q]);
+  } else {
+    const double *ms[2] = {m->met + 6 * (size_t)p, m->met + 6 * (size_t)q};
+    double w[2] = {0.5, 0.5};
+    pa__metric_interp(3, 6, 2, ms, w, mm);
+  }
+  /* q's ball with q at the midpoint (tets holding p are checked by the
+   * collapse). */
+  double qold = 1e30, qnew = 1e30;
+  for (int i = 0; i < nb; i++) {
+    pa_idx t = bq[i] >> 2;
+    int iq = bq[i] & 3;
+    if (m->tflag[t] & R3T_FROZEN) return st;
+    const pa_idx *v = m->tv + 4 * (size_t)t;
+    oq[i] = m->q[t];
+    if (m->q[t] < qold) qold = m->q[t];
+    if (rm3d_loc(v, p) >= 0) {
+      nq[i] = -1;
+      continue;
+    }
+    const double *px[4], *pm[4];
+    for (int j = 0; j < 4; j++) {
+      px[j] = m->x + 3 * (size_t)v[j];
+      pm[j] = m->met + (size_t)mc * v[j];
+    }
+    px[iq] = xm;
+    pm[iq] = mm;
+    double qq = rm3d_qual_pts(mc, px[0], px[1], px[2], px[3], pm[0], pm[1],
+                              pm[2], pm[3]);
+    if (qq < RM3D_QABS) return st;
+    if (qq < qnew) qnew = qq;
+    nq[i] = (float)qq;
+  }
+  if (qnew < 0.3 * qold || !rm3d_q_ok(qnew, qold)) return st;
+  int ok = 1;
+  for (int i = 0; i < nb && ok; i++) {
+    if (nq[i] < 0) continue;
+    const pa_idx *v = m->tv + 4 * (size_t)(bq[i] >> 2);
+    for (int j = 0; j < 4; j++) {
+      pa_idx x = v[j];
+      if (x == q || (m->vtag[x] & R3V_MARK)) continue;
+      m->vtag[x] |= R3V_MARK;
+      if (rm3d_len_pts(mc, xm, m->x + 3 * (size_t)x, mm,
+                       m->met + (size_t)mc * x) > lguard) {
+        ok = 0;
+        break;
+      }
+    }
+  }
+  for (int i = 0; i < nb; i++) {
+    const pa_idx *v = m->tv + 4 * (size_t)(bq[i] >> 2);
+    for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~R3V_MARK;
+  }
+  if (!ok) return st;
+  /* Move q, try the collapse, move back if refused. */
+  memcpy(xo, xq, sizeof xo);
+  memcpy(mo, m->met + (size_t)mc * q, (size_t)mc * sizeof(double));
+  memcpy(xq, xm, sizeof xm);
+  memcpy(m->met + (size_t)mc * q, mm, (size_t)mc * sizeof(double));
+  for (int i = 0; i < nb; i++)
+    if (nq[i] >= 0) m->q[bq[i] >> 2] = nq[i];
+  PA_CALL(pa__rm3d_collapse(m, p, q, lguard, done));
+  if (!*done) {
+    memcpy(xq, xo, sizeof xo);
+    memcpy(m->met + (size_t)mc * q, mo, (size_t)mc * sizeof(double));
+    for (int i = 0; i < nb; i++) m->q[bq[i] >> 2] = oq[i];
+  } else {
+    for (int k = 0; k < m->nfield; k++) {
+      int c = m->fcomp[k];
+      double *fq = m->fval[k] + (size_t)c * q;
+      const double *fp = m->fval[k] + (size_t)c * p;
+      for (int j = 0; j < c; j++) fq[j] = 0.5 * (fq[j] + fp[j]);
+    }
+  }
 cleanup:
   return st;
 }

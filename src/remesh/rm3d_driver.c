@@ -2,11 +2,22 @@
  * rm3d_driver.c -- the 3D remesher's passes and its entry point
  * pa__remesh3d().
  *
- * Schedule: up to 20 rounds of (split edges longer than sqrt 2, each tet's
- * longest edge first; collapse edges shorter than 1/sqrt 2, shortest first,
- * never creating an edge longer than sqrt 2; swap around tets of quality
- * < 0.3; smooth), until a round changes fewer than 0.1 % of the tets; then
- * three rounds of swaps and smoothing and a final pass against slivers.
+ * Schedule (docs/REMESHER3D.md):
+ *  1. refinement bands: split edges longer than thr = max(sqrt 2, Lmax/1.5)
+ *     (each tet's longest edge first), then collapse edges shorter than
+ *     1/sqrt 2 creating no edge longer than thr. Collapsing inside every band
+ *     keeps anisotropic refinement from overshooting: bisection alone refines
+ *     isotropically, and the collapses remove the tangential excess before it
+ *     is split again;
+ *  2. at least 3 and at most 20 rounds of split (> sqrt 2), collapse
+ *     (< 1/sqrt 2, no new edge longer than sqrt 2: p onto q, q onto p, both
+ *     onto the midpoint, either onto another neighbour, else the edge
+ *     removed by a swap), swaps around
+ *     tets of quality < 0.3 (interior edge removal, 2-3, boundary edge swap)
+ *     and smoothing of the vertices of tets below 0.75, until a round
+ *     changes fewer than 0.5 % of the tets;
+ *  3. three rounds of swaps (quality < 0.7: this lifts the mean quality by
+ *     about 0.03) and smoothing, and a final pass against slivers (< 0.1).
  * Every pass visits tets and vertices in index order, and every operator is
  * deterministic, so the output is identical from run to run.
  *
@@ -17,7 +28,8 @@
  */
 #include "remesh/remesh3d.h"
 
-#define RM3D_QSMOOTH 0.6 /* smooth the vertices of tets below this quality */
+#define RM3D_QSMOOTH 0.75 /* smooth the vertices of tets below this quality */
+#define RM3D_STOP 5e-3    /* rounds stop under this fraction of changed tets */
 
 static void lengths6(const rm3d *m, const pa_idx *v, double *L) {
   for (int e = 0; e < 6; e++)
@@ -68,7 +80,51 @@ cleanup:
 
 /* Each vertex is tried for removal at most once per pass (R3V_TODO), so a
  * collapse that fails is not retried from every tet of the vertex. */
-pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, long *count) {
+/* Fallback for a short edge (a,b) neither end of which collapses onto the
+ * other: remove a or b onto another neighbour, shortest edges first (only
+ * edges shorter than 1, so the vertex goes where it is crowded). */
+static pa_status collapse_other(rm3d *m, pa_idx a, pa_idx b, double guard,
+                                int *done) {
+  pa_status st = PA_SUCCESS;
+  pa_idx ball[RM3D_MAXBALL], nb[64];
+  double ln[64];
+  for (int s = 0; s < 2 && !*done; s++) {
+    pa_idx p = s ? b : a, o = s ? a : b;
+    if (m->vtag[p] & (R3V_LOCK | R3V_CORNER)) continue;
+    int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
+    if (n < 0) continue;
+    int k = 0;
+    for (int i = 0; i < n; i++) {
+      const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
+      for (int j = 0; j < 4; j++) {
+        pa_idx x = v[j];
+        if (x == p || x == o || (m->vtag[x] & R3V_MARK)) continue;
+        m->vtag[x] |= R3V_MARK;
+        double l = rm3d_len(m, p, x);
+        if (l >= 1.0 || k >= 64) continue;
+        int at = k++;
+        while (at > 0 && ln[at - 1] > l) {
+          ln[at] = ln[at - 1];
+          nb[at] = nb[at - 1];
+          at--;
+        }
+        ln[at] = l;
+        nb[at] = x;
+      }
+    }
+    for (int i = 0; i < n; i++) {
+      const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
+      for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~R3V_MARK;
+    }
+    for (int i = 0; i < k && !*done; i++)
+      PA_CALL(pa__rm3d_collapse(m, p, nb[i], guard, done));
+  }
+cleanup:
+  return st;
+}
+
+pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, double guard,
+                                 long *count) {
   pa_status st = PA_SUCCESS;
   long c = 0;
   for (pa_idx i = 0; i < m->nv; i++) m->vtag[i] |= R3V_TODO;
@@ -85,7 +141,15 @@ pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, long *count) {
       for (int dir = 0; dir < 2 && !done; dir++) {
         pa_idx p = dir ? b : a, q = dir ? a : b;
         if (!(m->vtag[p] & R3V_TODO)) continue;
-        PA_CALL(pa__rm3d_collapse(m, p, q, RM3D_LMAX, &done));
+        PA_CALL(pa__rm3d_collapse(m, p, q, guard, &done));
+        /* Both ends refused: meet in the middle (new edges about half the
+         * short edge shorter than from either end). */
+        if (!done && dir == 1 && (m->vtag[b] & R3V_TODO))
+          PA_CALL(pa__rm3d_collapse_mid(m, a, b, guard, &done));
+        if (!done && dir == 1) PA_CALL(collapse_other(m, a, b, guard, &done));
+        /* Last resort: remove the edge by a swap (its ring stays). */
+        if (!done && dir == 1 && m->swap)
+          PA_CALL(pa__rm3d_swap_edge(m, k, a, b, 0.3, &done));
         if (!done) m->vtag[p] &= (uint8_t)~R3V_TODO;
       }
       if (done) {
@@ -154,6 +218,38 @@ static void measure(const rm3d *m, double *inrange, double *qworst,
     if (q < qw) qw = q;
     qs += q;
     nt++;
+  }
+  if (m->verbosity > 1) {
+    /* Where the misses are: short / long edges with both ends on the
+     * boundary surface versus the others (tet-edge counts). */
+    long c[2][3] = {{0, 0, 0}, {0, 0, 0}};
+    for (pa_idx k = 0; k < m->ne; k++) {
+      if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) continue;
+      const pa_idx *v = m->tv + 4 * (size_t)k;
+      double L[6];
+      lengths6(m, v, L);
+      for (int e = 0; e < 6; e++) {
+        int b = (m->vtag[v[rm3d_edge[e][0]]] & m->vtag[v[rm3d_edge[e][1]]] &
+                 R3V_BDRY) != 0;
+        c[b][L[e] < RM3D_LMIN ? 0 : L[e] < RM3D_LMAX ? 1 : 2]++;
+      }
+    }
+    long nb[4] = {0, 0, 0, 0};
+    for (pa_idx k = 0; k < m->ne; k++) {
+      if ((m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) || m->q[k] >= 0.2) continue;
+      const pa_idx *v = m->tv + 4 * (size_t)k;
+      int nbv = 0;
+      for (int j = 0; j < 4; j++) nbv += (m->vtag[v[j]] & R3V_BDRY) != 0;
+      nb[(m->tflag[k] & R3T_FACES) ? 3 : nbv ? 2 : m->q[k] < 0.1 ? 1 : 0]++;
+    }
+    fprintf(stderr,
+            "  rm3d Q<0.2: interior %ld (+%ld < 0.1), bdry vertex %ld, bdry "
+            "face %ld\n",
+            nb[0], nb[1], nb[2], nb[3]);
+    fprintf(stderr,
+            "  rm3d edges: interior %ld short %ld long %ld ok; surface %ld "
+            "short %ld long %ld ok\n",
+            c[0][0], c[0][2], c[0][1], c[1][0], c[1][2], c[1][1]);
   }
   *inrange = nall ? (double)nin / nall : 1.0;
   *qworst = qw;
@@ -233,9 +329,15 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
       long ns = 0;
       double t1 = pa_wtime();
       PA_CALL(pa__rm3d_split_pass(&m, thr, &ns));
+      long nc = 0;
+      PA_CALL(pa__rm3d_collapse_pass(&m, RM3D_LMIN, thr, &nc));
+      if (m.ndead_t > m.ne / 8) PA_CALL(pa__rm3d_compact(&m, 1));
       if (m.verbosity > 0)
-        fprintf(stderr, "  rm3d band %.2f: %ld splits (%.2fs), %d tets\n",
-                thr, ns, pa_wtime() - t1, (int)(m.ne - m.ndead_t));
+        fprintf(stderr,
+                "  rm3d band %.2f: %ld splits %ld collapses (%.2fs), %d tets "
+                "(%d slots), memory %.1f MB (peak %.1f)\n",
+                thr, ns, nc, pa_wtime() - t1, (int)(m.ne - m.ndead_t),
+                (int)m.ne, pa_memory_current() / 1e6, pa_memory_peak() / 1e6);
       if (!ns || thr == RM3D_LMAX) break;
     }
     PA_CALL(pa__rm3d_reorder(&m));
@@ -244,7 +346,7 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
       double t1 = pa_wtime();
       PA_CALL(pa__rm3d_split_pass(&m, RM3D_LMAX, &ns));
       double t2 = pa_wtime();
-      PA_CALL(pa__rm3d_collapse_pass(&m, RM3D_LMIN, &nc));
+      PA_CALL(pa__rm3d_collapse_pass(&m, RM3D_LMIN, RM3D_LMAX, &nc));
       double t3 = pa_wtime();
       if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(&m, 0.3, 1.02, &nw));
       double t4 = pa_wtime();
@@ -257,12 +359,14 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
                 "%ld swaps (%.2fs) %ld moves (%.2fs), %d tets\n",
                 it, ns, t2 - t1, nc, t3 - t2, nw, t4 - t3, nm, t5 - t4,
                 (int)(m.ne - m.ndead_t));
-      if (ns + nc <= (m.ne - m.ndead_t) / 1000) break;
+      /* The first rounds change little while swaps and moves unlock the
+       * collapses the refinement bands refused: at least three rounds. */
+      if (it >= 2 && ns + nc <= RM3D_STOP * (m.ne - m.ndead_t)) break;
     }
   }
   for (int it = 0; it < 3; it++, npass++) {
     long nw = 0, nm = 0;
-    if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(&m, 0.5, 1.01, &nw));
+    if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(&m, 0.7, 1.01, &nw));
     if (!opts->no_move) PA_CALL(pa__rm3d_smooth_pass(&m, RM3D_QSMOOTH, &nm));
     if (m.verbosity > 0)
       fprintf(stderr, "  rm3d optimisation %d: %ld swaps %ld moves\n", it, nw,

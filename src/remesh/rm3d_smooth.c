@@ -3,10 +3,22 @@
  * the mean of the "ideal points" of its ball (for each tet, the apex of the
  * regular tet standing on the opposite face); the move is accepted only when
  * the worst quality of the ball rises, halving the step up to three times.
- * Locked, corner and boundary vertices never move here, so frozen entities
- * and the boundary surface are untouched. The moved vertex's metric and
- * fields are re-interpolated in the old ball (metric only when anisotropic:
- * an isotropic size field is treated as attached to the vertex).
+ * The ideal apex is that of the regular tetrahedron with unit edges in the
+ * metric of p, so the move evens out edge lengths as well as shapes.
+ *
+ * Boundary vertices move only in surface mode and only where the surface
+ * stays exactly what it was: a vertex whose boundary triangles are coplanar
+ * moves in their plane (the target's normal component removed; an
+ * axis-aligned plane keeps its coordinate bit for bit), a vertex of a
+ * straight ridge (exactly two feature edges, collinear) moves along the
+ * line; a vertex of a curved patch moves in its tangent plane and then onto
+ * the PN surface (cubic patch from the vertex normals, the surface the
+ * curved splits sample) of the boundary triangle below the target, if that
+ * stays within hausd of the flat triangle; its normal is interpolated.
+ * Locked and corner vertices never move, so frozen entities stay
+ * untouched. The moved vertex's metric and fields are re-interpolated in the
+ * old ball (metric only when anisotropic: an isotropic size field is treated
+ * as attached to the vertex).
  */
 #include "remesh/remesh3d.h"
 
@@ -33,13 +45,213 @@ static int bary(const double *p0, const double *p1, const double *p2,
   return 1;
 }
 
+static double unit3(double *u) {
+  double s = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+  if (s > 0)
+    for (int i = 0; i < 3; i++) u[i] /= s;
+  return s;
+}
+
+int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
+                          double *dir) {
+  if (!m->surf || (m->vtag[p] & (R3V_CURVED))) return 0;
+  if (m->vtag[p] & R3V_FEAT) {
+    pa_idx r[2];
+    int nr = 0;
+    for (int i = 0; i < n && nr <= 2; i++) {
+      const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
+      for (int j = 0; j < 4 && nr <= 2; j++) {
+        pa_idx x = v[j];
+        if (x == p || !(m->vtag[x] & R3V_FEAT)) continue;
+        if (nr > 0 && (x == r[0] || (nr > 1 && x == r[1]))) continue;
+        pa_idx key[2] = {p, x};
+        pa_idx e = pa__rm3d_table_find(&m->edg, key);
+        if (e < 0) continue;
+        if (m->edg.flag[e] & PA_FLAG_REQUIRED) return 0;
+        if (nr < 2) r[nr] = x;
+        nr++;
+      }
+    }
+    if (nr != 2) return 0;
+    const double *xp = m->x + 3 * (size_t)p, *a = m->x + 3 * (size_t)r[0],
+                 *b = m->x + 3 * (size_t)r[1];
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double w[3] = {xp[0] - a[0], xp[1] - a[1], xp[2] - a[2]};
+    double cr[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                    u[0] * w[1] - u[1] * w[0]};
+    double lu = unit3(u);
+    if (!(lu > 0) || unit3(cr) > 1e-12 * lu * lu) return 0;
+    memcpy(dir, u, sizeof u);
+    return 1;
+  }
+  int found = 0;
+  for (int i = 0; i < n; i++) {
+    pa_idx t = ball[i] >> 2;
+    int ip = ball[i] & 3;
+    uint8_t fl = m->tflag[t] & R3T_FACES & (uint8_t)~(1u << ip);
+    if (!fl) continue;
+    const pa_idx *v = m->tv + 4 * (size_t)t;
+    for (int f = 0; f < 4; f++) {
+      if (!((fl >> f) & 1)) continue;
+      const double *a = m->x + 3 * (size_t)v[rm3d_face[f][0]];
+      const double *b = m->x + 3 * (size_t)v[rm3d_face[f][1]];
+      const double *c = m->x + 3 * (size_t)v[rm3d_face[f][2]];
+      double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+      double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      double nn[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                      u[0] * w[1] - u[1] * w[0]};
+      if (!(unit3(nn) > 0)) return 0;
+      if (!found) {
+        memcpy(dir, nn, sizeof nn);
+        found = 1;
+      } else if (nn[0] * dir[0] + nn[1] * dir[1] + nn[2] * dir[2] <
+                 1.0 - 1e-12) {
+        return 0;
+      }
+    }
+  }
+  return found ? 2 : 0;
+}
+
+/* Point at barycentric (u, v, w) of the PN triangle (cubic Bezier patch) on
+ * vertices P[0..2] with unit normals N[0..2]; its edges are the curves the
+ * curved splits use. */
+static void pn_eval(const double *const *P, const double *const *N, double u,
+                    double v, double w, double *out) {
+  const double *P1 = P[0], *P2 = P[1], *P3 = P[2];
+  const double *N1 = N[0], *N2 = N[1], *N3 = N[2];
+  double w12 = 0, w21 = 0, w23 = 0, w32 = 0, w31 = 0, w13 = 0;
+  for (int i = 0; i < 3; i++) {
+    w12 += (P2[i] - P1[i]) * N1[i];
+    w21 += (P1[i] - P2[i]) * N2[i];
+    w23 += (P3[i] - P2[i]) * N2[i];
+    w32 += (P2[i] - P3[i]) * N3[i];
+    w31 += (P1[i] - P3[i]) * N3[i];
+    w13 += (P3[i] - P1[i]) * N1[i];
+  }
+  for (int i = 0; i < 3; i++) {
+    double b210 = (2 * P1[i] + P2[i] - w12 * N1[i]) / 3;
+    double b120 = (2 * P2[i] + P1[i] - w21 * N2[i]) / 3;
+    double b021 = (2 * P2[i] + P3[i] - w23 * N2[i]) / 3;
+    double b012 = (2 * P3[i] + P2[i] - w32 * N3[i]) / 3;
+    double b102 = (2 * P3[i] + P1[i] - w31 * N3[i]) / 3;
+    double b201 = (2 * P1[i] + P3[i] - w13 * N1[i]) / 3;
+    double e = (b210 + b120 + b021 + b012 + b102 + b201) / 6;
+    double vv = (P1[i] + P2[i] + P3[i]) / 3;
+    double b111 = e + (e - vv) / 2;
+    out[i] = P1[i] * u * u * u + P2[i] * v * v * v + P3[i] * w * w * w +
+             3 * (b210 * u * u * v + b120 * u * v * v + b201 * u * u * w +
+                  b021 * v * v * w + b102 * u * w * w + b012 * v * w * w) +
+             6 * b111 * u * v * w;
+  }
+}
+
+/* Curved patch: the point of the PN surface over the boundary triangle
+ * around p whose plane projection holds y (tri[3 * i..] vertex triples);
+ * its normal interpolated in *nrm_out. 0 when none holds y, a vertex has no
+ * normal (ridge), or the patch leaves the flat triangle by more than hausd. */
+static int curved_point(const rm3d *m, const pa_idx *tri, int ntri,
+                        const double *y, double *out, double *nrm_out) {
+  for (int t = 0; t < ntri; t++) {
+    const pa_idx *v = tri + 3 * t;
+    const double *P[3], *N[3];
+    for (int j = 0; j < 3; j++) {
+      P[j] = m->x + 3 * (size_t)v[j];
+      N[j] = m->nrm + 3 * (size_t)v[j];
+      if (!(m->vtag[v[j]] & R3V_CURVED)) return 0;
+    }
+    double e1[3], e2[3], nn[3];
+    for (int j = 0; j < 3; j++) {
+      e1[j] = P[1][j] - P[0][j];
+      e2[j] = P[2][j] - P[0][j];
+    }
+    nn[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    nn[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    nn[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    double a2 = nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2];
+    if (!(a2 > 0)) continue;
+    double bc[3];
+    for (int j = 0; j < 3; j++) {
+      const double *q1 = P[(j + 1) % 3], *q2 = P[(j + 2) % 3];
+      double a[3] = {q1[0] - y[0], q1[1] - y[1], q1[2] - y[2]};
+      double b[3] = {q2[0] - y[0], q2[1] - y[1], q2[2] - y[2]};
+      double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]};
+      bc[j] = (c[0] * nn[0] + c[1] * nn[1] + c[2] * nn[2]) / a2;
+    }
+    if (bc[0] < -1e-9 || bc[1] < -1e-9 || bc[2] < -1e-9) continue;
+    double sb = bc[0] + bc[1] + bc[2];
+    for (int j = 0; j < 3; j++) bc[j] /= sb;
+    pn_eval(P, N, bc[0], bc[1], bc[2], out);
+    double la = sqrt(a2), d = 0;
+    for (int j = 0; j < 3; j++) d += (out[j] - P[0][j]) * nn[j] / la;
+    if (fabs(d) > m->hausd) return 0;
+    double sn = 0;
+    for (int j = 0; j < 3; j++) {
+      nrm_out[j] = bc[0] * N[0][j] + bc[1] * N[1][j] + bc[2] * N[2][j];
+      sn += nrm_out[j] * nrm_out[j];
+    }
+    if (!(sn > 0)) return 0;
+    for (int j = 0; j < 3; j++) nrm_out[j] /= sqrt(sn);
+    return 1;
+  }
+  return 0;
+}
+
 int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
-  if (m->vtag[p] & (R3V_LOCK | R3V_CORNER | R3V_BDRY | R3V_DEAD)) return 0;
+  if (m->vtag[p] & (R3V_LOCK | R3V_CORNER | R3V_DEAD)) return 0;
+  if ((m->vtag[p] & R3V_BDRY) && !m->surf) return 0;
   int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
   if (n < 0) return 0;
+  int kind = 0;
+  double dir[3];
+  pa_idx tri[3 * 32];
+  int ntri = 0;
+  if ((m->vtag[p] & (R3V_BDRY | R3V_CURVED | R3V_FEAT)) ==
+          (R3V_BDRY | R3V_CURVED) &&
+      m->surf && m->nrm) {
+    /* Curved patch: move in the tangent plane, then onto the PN surface. */
+    kind = 3;
+    memcpy(dir, m->nrm + 3 * (size_t)p, sizeof dir);
+    for (int i = 0; i < n; i++) {
+      pa_idx t = ball[i] >> 2;
+      int ip = ball[i] & 3;
+      uint8_t fl = m->tflag[t] & R3T_FACES & (uint8_t)~(1u << ip);
+      const pa_idx *v = m->tv + 4 * (size_t)t;
+      for (int f = 0; f < 4; f++) {
+        if (!((fl >> f) & 1)) continue;
+        if (ntri == 32) return 0;
+        for (int j = 0; j < 3; j++) tri[3 * ntri + j] = v[rm3d_face[f][j]];
+        ntri++;
+      }
+    }
+  } else if (m->vtag[p] & R3V_BDRY) {
+    kind = pa__rm3d_bdry_freedom(m, p, ball, n, dir);
+    if (!kind) return 0;
+  }
   int mc = m->mc;
   double *xp = m->x + 3 * (size_t)p;
   double qold = 1e30, c[3] = {0, 0, 0};
+  /* Inverse metric at p (the ideal apex over a face with normal n sits at
+   * height sqrt(2/3) along M^-1 n / sqrt(n^T M^-1 n): the regular tet of unit
+   * edges in the metric). */
+  double mi[6];
+  const double *mp = m->met + (size_t)mc * p;
+  if (mc == 1) {
+    for (int j = 0; j < 6; j++) mi[j] = 0;
+    mi[0] = mi[2] = mi[5] = mp[0] * mp[0];
+  } else {
+    double a = mp[0], b = mp[1], cc = mp[2], d = mp[3], e = mp[4], f = mp[5];
+    double det = a * (cc * f - e * e) - b * (b * f - e * d) +
+                 d * (b * e - cc * d);
+    if (!(det > 0)) return 0;
+    mi[0] = (cc * f - e * e) / det;
+    mi[1] = (d * e - b * f) / det;
+    mi[2] = (a * f - d * d) / det;
+    mi[3] = (b * e - cc * d) / det;
+    mi[4] = (b * d - a * e) / det;
+    mi[5] = (a * cc - b * b) / det;
+  }
   int32_t ref0 = m->tref[ball[0] >> 2];
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
@@ -52,25 +264,35 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
     const double *f2 = m->x + 3 * (size_t)v[rm3d_face[ip][2]];
     double u[3] = {f1[0] - f0[0], f1[1] - f0[1], f1[2] - f0[2]};
     double w[3] = {f2[0] - f0[0], f2[1] - f0[1], f2[2] - f0[2]};
-    double z[3] = {f2[0] - f1[0], f2[1] - f1[1], f2[2] - f1[2]};
     /* Outward normal of the face points away from p. */
     double nn[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
                     u[0] * w[1] - u[1] * w[0]};
-    double ln = sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
-    double le = (sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) +
-                 sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) +
-                 sqrt(z[0] * z[0] + z[1] * z[1] + z[2] * z[2])) /
-                3.0;
-    double h = le * 0.816496580927726 / (ln > 0 ? ln : 1);
+    double dn[3] = {mi[0] * nn[0] + mi[1] * nn[1] + mi[3] * nn[2],
+                    mi[1] * nn[0] + mi[2] * nn[1] + mi[4] * nn[2],
+                    mi[3] * nn[0] + mi[4] * nn[1] + mi[5] * nn[2]};
+    double s2 = dn[0] * nn[0] + dn[1] * nn[1] + dn[2] * nn[2];
+    double h = s2 > 0 ? 0.816496580927726 / sqrt(s2) : 0;
     for (int j = 0; j < 3; j++)
-      c[j] += (f0[j] + f1[j] + f2[j]) / 3.0 - h * nn[j];
+      c[j] += (f0[j] + f1[j] + f2[j]) / 3.0 - h * dn[j];
   }
-  for (int j = 0; j < 3; j++) c[j] /= n;
+  for (int j = 0; j < 3; j++) c[j] = c[j] / n - xp[j];
+  if (kind == 2 || kind == 3) { /* remove the normal component */
+    double d = c[0] * dir[0] + c[1] * dir[1] + c[2] * dir[2];
+    for (int j = 0; j < 3; j++) c[j] -= d * dir[j];
+  } else if (kind == 1) { /* keep the tangential component */
+    double d = c[0] * dir[0] + c[1] * dir[1] + c[2] * dir[2];
+    for (int j = 0; j < 3; j++) c[j] = d * dir[j];
+  }
   double np[3], step = 1.0;
   float nq[RM3D_MAXBALL];
-  const double *mp = m->met + (size_t)mc * p;
   for (int tr = 0; tr < 3; tr++, step *= 0.5) {
-    for (int j = 0; j < 3; j++) np[j] = xp[j] + step * (c[j] - xp[j]);
+    for (int j = 0; j < 3; j++) np[j] = xp[j] + step * c[j];
+    double nnew[3];
+    if (kind == 3) {
+      double y[3];
+      memcpy(y, np, sizeof y);
+      if (!curved_point(m, tri, ntri, y, np, nnew)) continue;
+    }
     int ok = 1;
     for (int i = 0; i < n && ok; i++) {
       pa_idx t = ball[i] >> 2;
@@ -104,6 +326,7 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
       }
     }
     memcpy(xp, np, sizeof np);
+    if (kind == 3) memcpy(m->nrm + 3 * (size_t)p, nnew, sizeof nnew);
     for (int i = 0; i < n; i++) {
       pa_idx t = ball[i] >> 2;
       m->q[t] = mc == 6 ? (float)rm3d_qual_v(m, m->tv + 4 * (size_t)t) : nq[i];

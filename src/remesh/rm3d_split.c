@@ -8,8 +8,10 @@
  * edge longer than 2 sqrt 2). The new vertex is the
  * midpoint, or for an edge of a curved surface patch the midpoint of the
  * cubic curve given by the end normals (exact on planes, so planar patches
- * stay planar). Boundary triangles and feature edges holding (a,b) are split
- * too, keeping references and flags.
+ * stay planar); for a ridge edge, the midpoint of the cubic given by the
+ * ridge tangents at both ends (exact midpoint on straight ridges).
+ * Boundary triangles and feature edges holding (a,b) are split too, keeping
+ * references and flags.
  */
 #include "remesh/remesh3d.h"
 
@@ -25,6 +27,80 @@ static void curved_mid(const double *a, const double *b, const double *na,
     double b2 = b[i] - (e[i] + wb * nb[i]) / 3.0;
     p[i] = (a[i] + 3.0 * b1 + 3.0 * b2 + b[i]) / 8.0;
   }
+}
+
+/* Unit tangent of the ridge through v, oriented away from its feature
+ * neighbour r other than w (so towards w's side): the tangent at v of the
+ * circle through r, v, w. 0 when v has not exactly two feature edges. */
+static int ridge_tangent(rm3d *m, pa_idx v, pa_idx w, double *t) {
+  pa_idx ball[RM3D_MAXBALL];
+  if (m->vtag[v] & R3V_CORNER) return 0;
+  int n = pa__rm3d_ball(m, v, ball, RM3D_MAXBALL);
+  if (n < 0) return 0;
+  pa_idx r = -1;
+  int nr = 0;
+  for (int i = 0; i < n && nr < 3; i++) {
+    const pa_idx *tv = m->tv + 4 * (size_t)(ball[i] >> 2);
+    for (int j = 0; j < 4; j++) {
+      pa_idx x = tv[j];
+      if (x == v || x == w || x == r || !(m->vtag[x] & R3V_FEAT)) continue;
+      pa_idx key[2] = {v, x};
+      if (pa__rm3d_table_find(&m->edg, key) < 0) continue;
+      r = x;
+      nr++;
+    }
+  }
+  if (nr != 1) return 0;
+  const double *xv = m->x + 3 * (size_t)v, *xw = m->x + 3 * (size_t)w,
+               *xr = m->x + 3 * (size_t)r;
+  double u[3] = {xw[0] - xv[0], xw[1] - xv[1], xw[2] - xv[2]};
+  double z[3] = {xv[0] - xr[0], xv[1] - xr[1], xv[2] - xr[2]};
+  double lu = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+  double lz = sqrt(z[0] * z[0] + z[1] * z[1] + z[2] * z[2]);
+  if (!(lu > 0) || !(lz > 0)) return 0;
+  /* Weights exact for points on a circle (the tangent of the circle through
+   * r, v, w at v). */
+  for (int i = 0; i < 3; i++) t[i] = u[i] * (lz / lu) + z[i] * (lu / lz);
+  double lt = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+  if (!(lt > 0)) return 0;
+  for (int i = 0; i < 3; i++) t[i] /= lt;
+  return 1;
+}
+
+/* Point of a ridge edge (a,b): the midpoint of the cubic Hermite curve with
+ * the ridge tangents at both ends (a corner end mirrors the other), so curved
+ * ridges are followed; straight ridges (tangents along the chord to 1e-12)
+ * get the exact midpoint. */
+static void ridge_mid(rm3d *m, pa_idx a, pa_idx b, double *p) {
+  const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b;
+  double e[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
+  double le = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+  for (int i = 0; i < 3; i++) p[i] = 0.5 * (xa[i] + xb[i]);
+  if (!(le > 0)) return;
+  double ta[3], tb[3], ue[3] = {e[0] / le, e[1] / le, e[2] / le};
+  int ha = ridge_tangent(m, a, b, ta), hb = ridge_tangent(m, b, a, tb);
+  if (!ha && !hb) return;
+  /* An end without a tangent (corner) takes the mirror image of the other
+   * end's tangent across the chord's bisecting plane (exact on a circle). */
+  if (!ha) {
+    double d = -(tb[0] * ue[0] + tb[1] * ue[1] + tb[2] * ue[2]);
+    for (int i = 0; i < 3; i++) ta[i] = 2.0 * d * ue[i] + tb[i];
+  }
+  if (!hb) {
+    double d = ta[0] * ue[0] + ta[1] * ue[1] + ta[2] * ue[2];
+    for (int i = 0; i < 3; i++) tb[i] = -(2.0 * d * ue[i] - ta[i]);
+  }
+  /* tb points from b towards a: the curve's tangent at b is -tb. */
+  double ca = (ta[0] * e[0] + ta[1] * e[1] + ta[2] * e[2]) / le;
+  double cb = -(tb[0] * e[0] + tb[1] * e[1] + tb[2] * e[2]) / le;
+  if (ca < 0.77 || cb < 0.77) return; /* turns by more than ~40 degrees */
+  double d[3], ld = 0;
+  for (int i = 0; i < 3; i++) {
+    d[i] = le / 8.0 * (ta[i] + tb[i]);
+    ld += d[i] * d[i];
+  }
+  if (sqrt(ld) <= 1e-12 * le) return;
+  for (int i = 0; i < 3; i++) p[i] += d[i];
 }
 
 pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
@@ -77,6 +153,8 @@ pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
   if (bdry && erec < 0 && m->nrm && (m->vtag[a] & R3V_CURVED) &&
       (m->vtag[b] & R3V_CURVED))
     curved_mid(xa, xb, m->nrm + 3 * (size_t)a, m->nrm + 3 * (size_t)b, p);
+  else if (erec >= 0)
+    ridge_mid(m, a, b, p);
   else
     for (int i = 0; i < 3; i++) p[i] = 0.5 * (xa[i] + xb[i]);
   double mp[6];

@@ -5,38 +5,42 @@
  * Shewchuk's "Two discrete optimization algorithms for the topological
  * improvement of tetrahedral meshes") and the 2-3 face swap.
  *
- * Checked before applied: closed shell, no boundary triangle containing the
- * edge, no frozen tet, one reference; the new worst quality exceeds gain
- * times the old one (gain >= 1), so a swap never lowers the worst quality.
+ * Boundary edge swap (surface mode): for a boundary edge (a,b) with an open
+ * shell, the two surface triangles (a,b,c), (a,b,d) become (a,c,d), (b,d,c)
+ * and the shell's ring polygon c..d is triangulated by the same dynamic
+ * programming (edge cd as its base). Only where the surface is kept: ab is
+ * no feature edge, both triangles free with one reference and flags, and
+ * coplanar (normals equal to 1e-12, so planar patches stay exactly planar)
+ * or, on a curved patch, the distance between the diagonals ab and cd is at
+ * most hausd; cd must not be an edge yet.
+ *
+ * Checked before applied: no frozen tet, one reference; interior swaps need
+ * a closed shell with no boundary triangle around the edge; the new worst
+ * quality exceeds gain times the old one (gain >= 1), so a swap never lowers
+ * the worst quality.
  */
 #include "remesh/remesh3d.h"
 
 #define R3_SWAP_MAXRING 7
+#define R3_SWAP_MAXPOLY (R3_SWAP_MAXRING + 1)
 
-pa_status pa__rm3d_swap_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
-                             double gain, int *done) {
-  pa_status st = PA_SUCCESS;
-  pa_idx tets[R3_SWAP_MAXRING], ring[R3_SWAP_MAXRING + 1];
-  float tq[R3_SWAP_MAXRING][R3_SWAP_MAXRING][R3_SWAP_MAXRING];
-  float best[R3_SWAP_MAXRING][R3_SWAP_MAXRING];
-  signed char arg[R3_SWAP_MAXRING][R3_SWAP_MAXRING];
-  *done = 0;
-  int info;
-  int n = pa__rm3d_shell(m, k, a, b, tets, ring, R3_SWAP_MAXRING, &info);
-  if (n < 3 || !(info & R3SH_CLOSED) ||
-      (info & (R3SH_BDRY | R3SH_FROZEN | R3SH_REFS)))
-    return st;
-  double qold = 1e30;
-  for (int i = 0; i < n; i++)
-    if (m->q[tets[i]] < qold) qold = m->q[tets[i]];
-  double target = gain * qold;
+/* Best triangulation of the polygon ring[0..nr) (base edge ring[0] ring[nr-1])
+ * for the edge (a,b): each triangle (i,l,j) gives the tets (r_i, r_l, r_j, b)
+ * and (r_i, r_j, r_l, a). Maximises the worst quality by dynamic programming
+ * over sub-polygons. Returns the worst quality reached (-1 when none beats
+ * target) and the new tets in nv4[0..4 * *nnew). */
+static double ring_dp(const rm3d *m, pa_idx a, pa_idx b, const pa_idx *ring,
+                      int nr, double target, pa_idx *nv4, int *nnew) {
+  float tq[R3_SWAP_MAXPOLY][R3_SWAP_MAXPOLY][R3_SWAP_MAXPOLY];
+  float best[R3_SWAP_MAXPOLY][R3_SWAP_MAXPOLY];
+  signed char arg[R3_SWAP_MAXPOLY][R3_SWAP_MAXPOLY];
   int mc = m->mc;
   const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b;
   const double *ma = m->met + (size_t)mc * a, *mb = m->met + (size_t)mc * b;
   /* Quality of the two tets over each ring triangle (i < j < l). */
-  for (int i = 0; i < n; i++)
-    for (int j = i + 1; j < n; j++)
-      for (int l = j + 1; l < n; l++) {
+  for (int i = 0; i < nr; i++)
+    for (int j = i + 1; j < nr; j++)
+      for (int l = j + 1; l < nr; l++) {
         const double *xi = m->x + 3 * (size_t)ring[i];
         const double *xj = m->x + 3 * (size_t)ring[j];
         const double *xl = m->x + 3 * (size_t)ring[l];
@@ -50,8 +54,8 @@ pa_status pa__rm3d_swap_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
         tq[i][j][l] = (float)(q1 < q2 ? q1 : q2);
       }
   /* best[i][j]: best worst quality triangulating ring[i..j] (j - i >= 2). */
-  for (int len = 2; len < n; len++)
-    for (int i = 0; i + len < n; i++) {
+  for (int len = 2; len < nr; len++)
+    for (int i = 0; i + len < nr; i++) {
       int j = i + len;
       float bq = -1;
       signed char bk = -1;
@@ -67,18 +71,17 @@ pa_status pa__rm3d_swap_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
       best[i][j] = bq;
       arg[i][j] = bk;
     }
-  if (!(best[0][n - 1] > target) || best[0][n - 1] < RM3D_QABS) return st;
-  /* Rebuild the triangulation and the new tets. */
-  pa_idx nv4[4 * 2 * (R3_SWAP_MAXRING - 2)];
-  int nnew = 0;
-  int stack[2 * R3_SWAP_MAXRING], sp = 0;
+  double bw = best[0][nr - 1];
+  if (!(bw > target) || bw < RM3D_QABS) return -1;
+  int n = 0;
+  int stack[2 * R3_SWAP_MAXPOLY], sp = 0;
   stack[sp++] = 0;
-  stack[sp++] = n - 1;
+  stack[sp++] = nr - 1;
   while (sp) {
     int j = stack[--sp], i = stack[--sp];
     if (j - i < 2) continue;
     int l = arg[i][j];
-    pa_idx *t1 = nv4 + 4 * nnew++, *t2 = nv4 + 4 * nnew++;
+    pa_idx *t1 = nv4 + 4 * n++, *t2 = nv4 + 4 * n++;
     t1[0] = ring[i];
     t1[1] = ring[l];
     t1[2] = ring[j];
@@ -92,8 +95,167 @@ pa_status pa__rm3d_swap_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
     stack[sp++] = l;
     stack[sp++] = j;
   }
+  *nnew = n;
+  return bw;
+}
+
+static double tri_unit_normal(const double *a, const double *b,
+                              const double *c, double *n) {
+  double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  n[0] = u[1] * w[2] - u[2] * w[1];
+  n[1] = u[2] * w[0] - u[0] * w[2];
+  n[2] = u[0] * w[1] - u[1] * w[0];
+  double s = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (s > 0)
+    for (int i = 0; i < 3; i++) n[i] /= s;
+  return s;
+}
+
+/* Is d a neighbour of c (an edge (c,d) exists)? */
+static int has_edge(rm3d *m, pa_idx c, pa_idx d) {
+  pa_idx ball[RM3D_MAXBALL];
+  int n = pa__rm3d_ball(m, c, ball, RM3D_MAXBALL);
+  if (n < 0) return 1;
+  for (int i = 0; i < n; i++)
+    if (rm3d_loc(m->tv + 4 * (size_t)(ball[i] >> 2), d) >= 0) return 1;
+  return 0;
+}
+
+/* Boundary edge (a,b) with the open shell tets[0..n), ring[0..n]: the two
+ * surface triangles (a,b,c = ring[0]) and (a,b,d = ring[n]) become (a,c,d)
+ * and (b,c,d). Allowed when ab is no feature edge, both triangles are free,
+ * have one reference and lie in one plane (or, on a curved patch, the new
+ * diagonal is within hausd of the old one), and cd is no edge yet. */
+static pa_status swap_bdry(rm3d *m, pa_idx a, pa_idx b, const pa_idx *tets,
+                           const pa_idx *ring, int n, double qold,
+                           double gain, int *done) {
+  pa_status st = PA_SUCCESS;
+  pa_idx nv4[4 * 2 * (R3_SWAP_MAXPOLY - 2)];
+  int nnew = 0;
+  if (n < 2 || !m->surf) return st;
+  pa_idx c = ring[0], d = ring[n];
+  if (c == d) return st;
+  /* The faces crossed inside the shell are no boundary triangles; the two
+   * end faces are. */
+  for (int i = 0; i + 1 < n; i++) {
+    const pa_idx *v = m->tv + 4 * (size_t)tets[i];
+    int f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][0];
+    if ((m->tflag[tets[i]] >> f) & 1) return st;
+  }
+  pa_idx ek[2] = {a, b};
+  if (pa__rm3d_table_find(&m->edg, ek) >= 0) return st;
+  pa_idx k1[3] = {a, b, c}, k2[3] = {a, b, d};
+  pa_idx r1 = pa__rm3d_table_find(&m->tri, k1);
+  pa_idx r2 = pa__rm3d_table_find(&m->tri, k2);
+  if (r1 < 0 || r2 < 0)
+    return pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
+                     "rm3d: boundary face of a shell not in the table");
+  if (((m->tri.flag[r1] | m->tri.flag[r2]) & PA_FLAG_REQUIRED) ||
+      m->tri.ref[r1] != m->tri.ref[r2] || m->tri.flag[r1] != m->tri.flag[r2])
+    return st;
+  const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b,
+               *xc = m->x + 3 * (size_t)c, *xd = m->x + 3 * (size_t)d;
+  /* Outward normals of the old faces (the shell's end faces). */
+  double n1[3], n2[3];
+  {
+    const pa_idx *v = m->tv + 4 * (size_t)tets[0];
+    int f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][1];
+    tri_unit_normal(m->x + 3 * (size_t)v[rm3d_face[f][0]],
+                    m->x + 3 * (size_t)v[rm3d_face[f][1]],
+                    m->x + 3 * (size_t)v[rm3d_face[f][2]], n1);
+    v = m->tv + 4 * (size_t)tets[n - 1];
+    f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][0];
+    tri_unit_normal(m->x + 3 * (size_t)v[rm3d_face[f][0]],
+                    m->x + 3 * (size_t)v[rm3d_face[f][1]],
+                    m->x + 3 * (size_t)v[rm3d_face[f][2]], n2);
+  }
+  double nt1[3], nt2[3];
+  if (!(tri_unit_normal(xa, xc, xd, nt1) > 0) ||
+      !(tri_unit_normal(xb, xd, xc, nt2) > 0))
+    return st;
+  double dot = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2];
+  if (dot < 1.0 - 1e-12) {
+    /* Curved patch: the diagonals cd and ab stay within hausd. */
+    if (!(m->vtag[a] & m->vtag[b] & m->vtag[c] & m->vtag[d] & R3V_CURVED) ||
+        dot < 0.98)
+      return st;
+    double u[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
+    double w[3] = {xd[0] - xc[0], xd[1] - xc[1], xd[2] - xc[2]};
+    double z[3] = {xc[0] - xa[0], xc[1] - xa[1], xc[2] - xa[2]};
+    double cr[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                    u[0] * w[1] - u[1] * w[0]};
+    double lc = sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
+    double vol = fabs(cr[0] * z[0] + cr[1] * z[1] + cr[2] * z[2]);
+    if (!(lc > 0) || vol > m->hausd * lc) return st;
+  }
+  /* New faces (a,c,d) / (b,d,c) must face outwards like the old ones. */
+  double no[3] = {n1[0] + n2[0], n1[1] + n2[1], n1[2] + n2[2]};
+  if (nt1[0] * no[0] + nt1[1] * no[1] + nt1[2] * no[2] <= 0 ||
+      nt2[0] * no[0] + nt2[1] * no[1] + nt2[2] * no[2] <= 0)
+    return st;
+  if (ring_dp(m, a, b, ring, n + 1, gain * qold, nv4, &nnew) < 0) return st;
+  if (has_edge(m, c, d)) return st;
+  /* Orientation of the records: keep the old convention (outward or not). */
+  const pa_idx *ov = m->tri.v + 3 * (size_t)r1;
+  double on[3];
+  tri_unit_normal(m->x + 3 * (size_t)ov[0], m->x + 3 * (size_t)ov[1],
+                  m->x + 3 * (size_t)ov[2], on);
+  int outward = on[0] * n1[0] + on[1] * n1[1] + on[2] * n1[2] > 0;
+  int32_t ref = m->tri.ref[r1];
+  uint8_t fl = m->tri.flag[r1];
   PA_CALL(pa__rm3d_replace(m, tets, n, nv4, nnew, m->tref[tets[0]],
-                           m->tpf[tets[0]]));
+                           m->tpf[tets[0]], 2));
+  pa__rm3d_table_remove(&m->tri, r1);
+  pa__rm3d_table_remove(&m->tri, r2);
+  pa_idx t1[3] = {a, c, d}, t2[3] = {b, d, c};
+  if (!outward) {
+    t1[1] = d;
+    t1[2] = c;
+    t2[1] = c;
+    t2[2] = d;
+  }
+  PA_CALL(pa__rm3d_table_add(&m->tri, t1, ref, fl, NULL));
+  PA_CALL(pa__rm3d_table_add(&m->tri, t2, ref, fl, NULL));
+  m->nswap++;
+  *done = 1;
+cleanup:
+  return st;
+}
+
+pa_status pa__rm3d_swap_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
+                             double gain, int *done) {
+  pa_status st = PA_SUCCESS;
+  pa_idx tets[R3_SWAP_MAXRING], ring[R3_SWAP_MAXRING + 1];
+  pa_idx nv4[4 * 2 * (R3_SWAP_MAXPOLY - 2)];
+  int nnew = 0;
+  *done = 0;
+  int info;
+  int n = pa__rm3d_shell(m, k, a, b, tets, ring, R3_SWAP_MAXRING, &info);
+  if (n < 1 || (info & (R3SH_FROZEN | R3SH_REFS))) return st;
+  double qold = 1e30;
+  for (int i = 0; i < n; i++)
+    if (m->q[tets[i]] < qold) qold = m->q[tets[i]];
+  if (!(info & R3SH_CLOSED))
+    return gain < 1.0 ? st
+                      : swap_bdry(m, a, b, tets, ring, n, qold, gain, done);
+  if (n < 3 || (info & R3SH_BDRY)) return st;
+  double bw = ring_dp(m, a, b, ring, n, gain * qold, nv4, &nnew);
+  if (bw < 0) return st;
+  if (gain < 1.0) {
+    /* Removal of a short edge: the quality floor, and no new edge longer
+     * than sqrt 2. */
+    if (!rm3d_q_ok(bw, qold)) return st;
+    for (int i = 0; i < nnew; i++) {
+      const pa_idx *t = nv4 + 4 * i;
+      for (int e = 0; e < 3; e++) {
+        double l = rm3d_len(m, t[e], t[(e + 1) % 3]);
+        if (l > RM3D_LMAX) return st;
+      }
+    }
+  }
+  PA_CALL(pa__rm3d_replace(m, tets, n, nv4, nnew, m->tref[tets[0]],
+                           m->tpf[tets[0]], 0));
   m->nswap++;
   *done = 1;
 cleanup:
@@ -126,7 +288,7 @@ pa_status pa__rm3d_swap_face(rm3d *m, pa_idx k, int f, double gain,
     if (!(q > target) || q < RM3D_QABS) return st;
   }
   pa_idx old[2] = {k, l};
-  PA_CALL(pa__rm3d_replace(m, old, 2, nv4, 3, m->tref[k], m->tpf[k]));
+  PA_CALL(pa__rm3d_replace(m, old, 2, nv4, 3, m->tref[k], m->tpf[k], 0));
   m->nswap++;
   *done = 1;
 cleanup:

@@ -105,7 +105,7 @@ static void face_sorted(const pa_idx *v, int f, pa_idx *k) {
 
 pa_status pa__rm3d_replace(rm3d *m, const pa_idx *old, int nold,
                            const pa_idx *nv4, int nnew, int32_t ref,
-                           uint8_t pf) {
+                           uint8_t pf, int nbswap) {
   pa_status st = PA_SUCCESS;
   face_key ext[4 * R3_REPLACE_MAXOLD], pend[4 * R3_REPLACE_MAXNEW];
   int next = 0, npend = 0;
@@ -174,8 +174,18 @@ pa_status pa__rm3d_replace(rm3d *m, const pa_idx *old, int nold,
       npend++;
     }
   }
-  PA_CHECK(npend == 0 && next == 0, PA_ERR_INTERNAL,
+  /* A boundary swap leaves nbswap old domain-boundary faces unmatched and
+   * as many new faces without a partner: these become the new boundary. */
+  PA_CHECK(npend == nbswap && next == nbswap, PA_ERR_INTERNAL,
            "rm3d: new tetrahedra do not fill the cavity");
+  for (int j = 0; j < next; j++)
+    PA_CHECK(ext[j].slot < 0 && ext[j].tag, PA_ERR_INTERNAL,
+             "rm3d: boundary swap would open an interior face");
+  for (int j = 0; j < npend; j++) {
+    pa_idx self = pend[j].slot;
+    m->adj[self] = -1;
+    m->tflag[self >> 2] |= (uint8_t)(1u << (self & 3));
+  }
   for (int i = 0; i < nnew; i++) {
     pa_idx t = idx[i];
     const pa_idx *v = m->tv + 4 * (size_t)t;
