@@ -15,6 +15,14 @@
  * (and rolled nothing back) ends the loop; so does max_iter (both reported
  * as stalled). Every step is collective and agrees on its status,
  * so all ranks leave the loop together.
+ *
+ * An iteration with a single piece, nothing rolled back and no tagged
+ * frozen element (always so with one piece: the skin labels every element
+ * touching a tagged one) is the last one: every element it produced is
+ * marked done (none lies near a tagged frozen element), and every other
+ * element is unchanged and was not tagged by this iteration's tag (the
+ * criteria depend on the element's own data only), so the next tag would
+ * find nothing. The loop stops as converged without that tag pass.
  */
 #include "adapt/adapt.h"
 
@@ -43,6 +51,8 @@ void pa__iter_free(pa__iter *it) {
   pa__free(it->piece_work);
   pa__free(it->piece_rank);
   pa__free(it->piece_failed);
+  pa__free(it->bstart);
+  pa__free(it->belem);
   for (int q = 0; it->pieces && q < it->npiece_local; q++) {
     pa__piece *pc = &it->pieces[q];
     pa_mesh_destroy(pc->in);
@@ -241,8 +251,18 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
     rep.remesh_busy += busy;
     rep.bytes_moved += ir.bytes_moved;
     if (rep.niter_recorded < PA_ADAPT_MAX_ITERS) rep.iters[rep.niter_recorded++] = ir;
-    pa__iter_free(&it);
-    if (opts->progress) opts->progress(&ir, opts->progress_ctx);
+    {
+      /* One piece remeshed with no tagged frozen element: the next tag
+       * would find nothing (see the file comment), skip it. */
+      int final = ir.npieces == 1 && ir.nfailed == 0 && it.nhot == 0;
+      pa__iter_free(&it);
+      if (opts->progress) opts->progress(&ir, opts->progress_ctx);
+      if (final) {
+        rep.ntagged_left = 0;
+        rep.converged = 1;
+        break;
+      }
+    }
   }
   {
     double ta = pa_wtime();

@@ -72,17 +72,21 @@ typedef struct pa__iter {
   int rank, size, dim, nve;
   pa_idx ne;           /* owned elements */
   uint8_t *tag;        /* tagged for remeshing */
-  double *work;        /* estimated work of each owned element */
+  double *work;        /* estimated work of each owned element that may be
+                          tagged, -1 for the others (pa__elem_work) */
   int *label;          /* piece or -1 */
   uint8_t *frozen;     /* labelled and frozen */
   int npieces;
   double *piece_work;  /* npieces: estimated work */
   int *piece_rank;     /* npieces: destination rank */
   int *piece_failed;   /* npieces: 1 if the piece was rolled back */
+  pa_idx *bstart, *belem; /* owned balls (pa__owned_balls), built by
+                             extract.c, reused by reintegrate.c */
   int npiece_local;
   pa__piece *pieces;   /* the pieces remeshed by this rank */
   double bytes_moved;  /* record bytes this rank sent to other ranks */
   double imbalance;    /* estimated work: max over ranks / mean */
+  pa_gid nhot;         /* global: frozen tagged elements (extract.c) */
   pa_gid ntagged;      /* global */
   double tagwork;      /* global work of the tagged elements */
 } pa__iter;
@@ -91,6 +95,9 @@ void pa__iter_free(pa__iter *it);
 
 /* Owned vertex -> owned elements (CSR), built on the local mesh. */
 pa_status pa__owned_balls(pa_dmesh *dm, pa_idx **start, pa_idx **elems);
+
+/* Estimated work of local element e: expected output elements + 1. */
+double pa__elem_work(const pa_mesh *m, pa_idx e);
 
 /* Step 1. Collective: tag the owned elements (it->tag), count them
  * (it->ntagged, global) and estimate their work (it->work). done: the

@@ -2,8 +2,8 @@
  * extract.c -- step 3 of the piece algorithm: map the pieces to ranks and
  * gather each piece's fragments onto its rank as one sequential mesh.
  *
- * Mapping: the piece x rank matrix of element counts and the work of every
- * piece are summed over the ranks (every rank then computes the same map).
+ * Mapping: the piece x rank matrix of element counts, the work of every
+ * piece and the number of frozen tagged elements are summed over the ranks (every rank then computes the same map).
  * Pieces are taken heaviest first; each goes to the rank holding most of
  * its elements unless that rank would exceed the mean load by 10 %, else to
  * the least loaded rank (ties: lowest rank), so little data moves and the
@@ -326,7 +326,6 @@ pa_status pa__adapt_extract(pa__iter *it) {
   const pa_mesh *m = dm->mesh;
   int np = it->npieces, P = it->size;
   double *buf = NULL;
-  pa_idx *bstart = NULL, *belem = NULL;
   pa__recs S[PA_NKIND], R[PA_NKIND];
   int *dest[PA_NKIND] = {NULL, NULL, NULL, NULL};
   pa_idx *idx[PA_NKIND] = {NULL, NULL, NULL, NULL};
@@ -344,14 +343,17 @@ pa_status pa__adapt_extract(pa__iter *it) {
   PA_ALLOC(it->piece_work, np);
   PA_ALLOC(it->piece_rank, np);
   PA_CALLOC(it->piece_failed, np);
-  PA_CALLOC(buf, (size_t)np * P + np);
+  PA_CALLOC(buf, (size_t)np * P + np + 1);
   for (pa_idx e = 0; e < it->ne; e++)
     if (it->label[e] >= 0) {
+      buf[(size_t)np * P + np] += it->frozen[e] && it->tag[e];
       buf[(size_t)it->label[e] * P + it->rank] += 1;
-      buf[(size_t)np * P + it->label[e]] += it->work[e];
+      buf[(size_t)np * P + it->label[e]] +=
+          it->work[e] >= 0 ? it->work[e] : pa__elem_work(m, e);
     }
-  PA_CALL(pa__allreduce(dm->comm, buf, np * P + np, MPI_DOUBLE, MPI_SUM));
+  PA_CALL(pa__allreduce(dm->comm, buf, np * P + np + 1, MPI_DOUBLE, MPI_SUM));
   memcpy(it->piece_work, buf + (size_t)np * P, np * sizeof *buf);
+  it->nhot = (pa_gid)buf[(size_t)np * P + np];
   PA_CALL(map_pieces(it, buf));
 
   /* 2. records to ship */
@@ -372,14 +374,12 @@ pa_status pa__adapt_extract(pa__iter *it) {
       dest[PA_ELEMENT][n++] = it->piece_rank[it->label[e]];
     }
   }
-  PA_CALL(pa__owned_balls(dm, &bstart, &belem));
+  if (!it->bstart) PA_CALL(pa__owned_balls(dm, &it->bstart, &it->belem));
   PA_CALL(pair_records(it, PA_VERTEX, NULL, NULL, &S[PA_VERTEX], &dest[PA_VERTEX]));
-  PA_CALL(pair_records(it, PA_BOUNDARY, bstart, belem, &S[PA_BOUNDARY],
+  PA_CALL(pair_records(it, PA_BOUNDARY, it->bstart, it->belem, &S[PA_BOUNDARY],
                        &dest[PA_BOUNDARY]));
-  PA_CALL(pair_records(it, PA_EDGE, bstart, belem, &S[PA_EDGE], &dest[PA_EDGE]));
-  pa__free(bstart);
-  pa__free(belem);
-  bstart = belem = NULL;
+  PA_CALL(pair_records(it, PA_EDGE, it->bstart, it->belem, &S[PA_EDGE],
+                       &dest[PA_EDGE]));
 
   /* 3. ship */
   for (int k = 0; k < PA_NKIND; k++) {
@@ -402,8 +402,6 @@ pa_status pa__adapt_extract(pa__iter *it) {
 cleanup:
   st = pa__agree_end(dm->comm, st);
   pa__free(buf);
-  pa__free(bstart);
-  pa__free(belem);
   for (int k = 0; k < PA_NKIND; k++) {
     pa__recs_free(&S[k]);
     pa__recs_free(&R[k]);

@@ -230,32 +230,6 @@ size_t pa__new_payload(const pa_dmesh *dm, int kind, int32_t ref,
   return n;
 }
 
-/* Keep the records i of R with keep[i] (in place). */
-static void recs_filter(pa__recs *R, const uint8_t *keep) {
-  size_t k = 0;
-  int nv = R->nv, nd = R->ndbl;
-  for (size_t i = 0; i < R->n; i++) {
-    if (!keep[i]) continue;
-    if (k != i) {
-      R->gid[k] = R->gid[i];
-      memcpy(R->vgid + (size_t)nv * k, R->vgid + (size_t)nv * i, nv * sizeof *R->vgid);
-      R->ref[k] = R->ref[i];
-      R->flag[k] = R->flag[i];
-      R->aux[k] = R->aux[i];
-      memcpy(R->dbl + (size_t)nd * k, R->dbl + (size_t)nd * i, nd * sizeof *R->dbl);
-      if (R->poff) {
-        size_t len = R->poff[i + 1] - R->poff[i];
-        memmove(R->pay + R->poff[k], R->pay + R->poff[i], len);
-        R->poff[k + 1] = R->poff[k] + len;
-      }
-    } else if (R->poff) {
-      R->poff[k + 1] = R->poff[k] + (R->poff[i + 1] - R->poff[i]);
-    }
-    k++;
-  }
-  R->n = k;
-}
-
 /* Per-entity "kept" flags of a kind: 1 if a staying owned element (keep)
  * contains it, MAX-reduced over the ranks; *out receives the owned flags. */
 static pa_status kept_flags(pa__iter *it, int kind, const uint8_t *keep,
@@ -448,7 +422,6 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
   uint8_t *keep = NULL, *kv = NULL, *kb = NULL, *kd = NULL;
-  pa_idx *bstart = NULL, *belem = NULL;
   uint8_t **bemit = NULL, **demit = NULL;
   unsigned char *pay = NULL;
   pa__recs R[PA_NKIND];
@@ -467,22 +440,36 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
     keep[e] = it->label[e] < 0 || it->frozen[e] || it->piece_failed[it->label[e]];
 
   /* 2. kept vertices, boundary entities and edges */
-  PA_CALL(pa__owned_balls(dm, &bstart, &belem));
-  PA_CALL(kept_flags(it, PA_VERTEX, keep, bstart, belem, &kv));
-  PA_CALL(kept_flags(it, PA_BOUNDARY, keep, bstart, belem, &kb));
-  PA_CALL(kept_flags(it, PA_EDGE, keep, bstart, belem, &kd));
-  pa__free(bstart);
-  pa__free(belem);
-  bstart = belem = NULL;
+  if (!it->bstart) PA_CALL(pa__owned_balls(dm, &it->bstart, &it->belem));
+  PA_CALL(kept_flags(it, PA_VERTEX, keep, it->bstart, it->belem, &kv));
+  PA_CALL(kept_flags(it, PA_BOUNDARY, keep, it->bstart, it->belem, &kb));
+  PA_CALL(kept_flags(it, PA_EDGE, keep, it->bstart, it->belem, &kd));
+  /* the balls describe the mesh about to be rebuilt */
+  pa__free(it->bstart);
+  pa__free(it->belem);
+  it->bstart = it->belem = NULL;
 
-  /* 3. records of the staying owned entities */
+  /* 3. records of the staying owned entities, straight from the local
+   * arrays, with room for every output record (no regrowth) */
   pa__dmesh_layout(dm, &lay);
-  PA_CALL(pa__dmesh_owned_recs(dm, NULL, &R[PA_ELEMENT], &R[PA_VERTEX],
-                               &R[PA_BOUNDARY], &R[PA_EDGE]));
-  recs_filter(&R[PA_ELEMENT], keep);
-  recs_filter(&R[PA_VERTEX], kv);
-  recs_filter(&R[PA_BOUNDARY], kb);
-  recs_filter(&R[PA_EDGE], kd);
+  {
+    size_t add[PA_NKIND] = {0, 0, 0, 0};
+    const uint8_t *kk[PA_NKIND];
+    kk[PA_VERTEX] = kv;
+    kk[PA_ELEMENT] = keep;
+    kk[PA_BOUNDARY] = kb;
+    kk[PA_EDGE] = kd;
+    for (int q = 0; q < it->npiece_local; q++) {
+      const pa_mesh *o = it->pieces[q].out;
+      if (!o) continue;
+      add[PA_VERTEX] += (size_t)o->nv;
+      add[PA_ELEMENT] += (size_t)o->ne;
+      add[PA_BOUNDARY] += (size_t)o->nb;
+      add[PA_EDGE] += (size_t)o->ned;
+    }
+    PA_CALL(pa__dmesh_kept_recs(dm, kk, add, &R[PA_ELEMENT], &R[PA_VERTEX],
+                                &R[PA_BOUNDARY], &R[PA_EDGE]));
+  }
 
   /* 4. fresh ids */
   for (int k = 0; k < PA_NKIND; k++)
@@ -536,8 +523,6 @@ cleanup:
   pa__free(kv);
   pa__free(kb);
   pa__free(kd);
-  pa__free(bstart);
-  pa__free(belem);
   pa__free(pay);
   for (int q = 0; bemit && q < it->npiece_local; q++) pa__free(bemit[q]);
   for (int q = 0; demit && q < it->npiece_local; q++) pa__free(demit[q]);

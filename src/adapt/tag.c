@@ -8,11 +8,14 @@
  * the metric lies outside [0.7071, 1.4142) or a quality below
  * opts->qual_threshold. An element produced next to a tagged frozen element
  * (done value PA__DONE_NEAR_SKIN: the remesher could not touch that side)
- * is tagged again if it fails the length or quality criteria. Work ~ expected output elements + 1: the element's
+ * is tagged again if it fails the length or quality criteria. Work ~
+ * expected output elements + 1: the element's
  * volume in the metric over the volume of the unit regular simplex, plus one
  * for removing the element itself (the coarsening term). Every figure is a
  * function of the element's own data, so it is the same whatever the
- * distribution.
+ * distribution. The work is computed only for elements that may be tagged
+ * (-1 for the others: done or required); extract.c computes it for the
+ * untagged skin elements it needs.
  */
 #include "adapt/adapt.h"
 
@@ -45,11 +48,10 @@ cleanup:
   return st;
 }
 
-/* Estimated work of element e: expected output elements + 1. */
-static double elem_work(const pa_mesh *m, pa_idx e) {
+double pa__elem_work(const pa_mesh *m, pa_idx e) {
   int d = m->dim, nc = m->met_ncomp, tc = pa__tensor_ncomp(d);
   const pa_idx *v = m->elem + (size_t)(d + 1) * e;
-  const double *x[4];
+  const double *x[4] = {NULL, NULL, NULL, NULL};
   double mean[6] = {0, 0, 0, 0, 0, 0}, t[6];
   for (int k = 0; k <= d; k++) {
     x[k] = m->coord + (size_t)d * v[k];
@@ -91,8 +93,11 @@ pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int first) {
   PA_ALLOC(it->work, it->ne);
   for (pa_idx e = 0; e < it->ne; e++) {
     const pa_idx *v = m->elem + (size_t)it->nve * e;
-    it->work[e] = elem_work(m, e);
+    /* never tagged: its work is only needed if it joins a piece's skin
+     * (extract.c computes it then) */
+    it->work[e] = -1;
     if (dn[e] == PA__DONE || (m->eflag[e] & PA_FLAG_REQUIRED)) continue;
+    it->work[e] = pa__elem_work(m, e);
     if (dn[e] && o->user_tags_only) continue;
     int t = !dn[e] && (m->eflag[e] & PA_FLAG_USER) != 0;
     if (!t && !o->user_tags_only) {

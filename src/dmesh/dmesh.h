@@ -248,4 +248,15 @@ pa_status pa__dmesh_partition(MPI_Comm comm, int dim, pa_idx n,
                               const pa_gid *vgid, const double *weights,
                               int *part);
 
+/* ---- incremental rebuilds (incremental.c) ---- */
+
+/* Local: records of the owned entities of dm (with value payloads, aux =
+ * this rank) whose keep[kind][i] is set (keep NULL, or keep[kind] NULL: all
+ * of that kind), written straight from the local arrays into record sets
+ * reserved for extra[kind] more records (extra NULL: none) and their
+ * largest payloads. Initialises the four record sets (freed on failure). */
+pa_status pa__dmesh_kept_recs(pa_dmesh *dm, const uint8_t *const keep[PA_NKIND],
+                              const size_t extra[PA_NKIND], pa__recs *E,
+                              pa__recs *V, pa__recs *B, pa__recs *D);
+
 #endif /* PA_DMESH_H */

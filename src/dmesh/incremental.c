@@ -1,0 +1,103 @@
+/*
+ * incremental.c -- services for rebuilding a distributed mesh that changed
+ * only in part (the parallel adaptation loop): records of the owned
+ * entities that stay, written straight from the arrays of the local mesh
+ * into exactly reserved record sets.
+ */
+#include "dmesh/dmesh.h"
+
+/* Records of the owned entities of one kind with keep[i] (keep NULL: all),
+ * with room for extra more records. */
+static pa_status kept_kind(pa_dmesh *dm, int kind, const uint8_t *keep,
+                           size_t extra, pa__recs *R) {
+  pa_status st = PA_SUCCESS;
+  const pa_mesh *m = dm->mesh;
+  int d = dm->dim, nv = pa__kind_nv(d, kind), nd = R->ndbl;
+  pa_idx nown = dm->nown[kind];
+  const pa_idx *conn = kind == PA_ELEMENT    ? m->elem
+                       : kind == PA_BOUNDARY ? m->bdry
+                                             : m->edge;
+  const uint8_t *fl = kind == PA_VERTEX    ? m->vflag
+                      : kind == PA_ELEMENT ? m->eflag
+                      : kind == PA_BOUNDARY ? m->bflag
+                                            : m->edflag;
+  size_t n = 0, unit = 0, paybytes = 0;
+  for (int k = 0; k < dm->nvalue; k++)
+    if ((int)dm->value[k]->kind == kind) unit += dm->value[k]->unit;
+  for (pa_idx e = 0; e < nown; e++) {
+    if (keep && !keep[e]) continue;
+    n++;
+    if (!unit) continue;
+    int32_t ref = pa__dmesh_ref(dm, kind, e);
+    for (int k = 0; k < dm->nvalue; k++) {
+      const pa_dmesh_value *v = dm->value[k];
+      if ((int)v->kind == kind && (v->ref < 0 || v->ref == ref)) paybytes += v->unit;
+    }
+  }
+  PA_CALL(pa__recs_reserve(R, n + extra, paybytes + extra * unit));
+  for (pa_idx e = 0; e < nown; e++) {
+    if (keep && !keep[e]) continue;
+    size_t i = R->n++;
+    R->gid[i] = dm->gid[kind][e];
+    for (int j = 0; j < nv; j++)
+      R->vgid[(size_t)nv * i + j] = dm->gid[PA_VERTEX][conn[(size_t)nv * e + j]];
+    int32_t ref = pa__dmesh_ref(dm, kind, e);
+    R->ref[i] = ref;
+    R->flag[i] = fl[e];
+    R->aux[i] = dm->rank;
+    if (nd) {
+      double *x = R->dbl + (size_t)nd * i;
+      memcpy(x, m->coord + (size_t)d * e, d * sizeof(double));
+      x += d;
+      if (m->met_ncomp) {
+        memcpy(x, m->met + (size_t)m->met_ncomp * e, m->met_ncomp * sizeof(double));
+        x += m->met_ncomp;
+      }
+      for (int f = 0; f < m->nfield; f++) {
+        memcpy(x, m->field[f].val + (size_t)m->field[f].ncomp * e,
+               m->field[f].ncomp * sizeof(double));
+        x += m->field[f].ncomp;
+      }
+    }
+    if (R->poff) {
+      size_t off = R->poff[i];
+      for (int k = 0; k < dm->nvalue; k++) {
+        const pa_dmesh_value *v = dm->value[k];
+        if ((int)v->kind != kind || (v->ref >= 0 && v->ref != ref)) continue;
+        pa_idx slot = v->slot ? v->slot[e] : e;
+        memcpy(R->pay + off, v->data + v->unit * (size_t)slot, v->unit);
+        off += v->unit;
+      }
+      R->poff[i + 1] = off;
+    }
+  }
+cleanup:
+  return st;
+}
+
+pa_status pa__dmesh_kept_recs(pa_dmesh *dm, const uint8_t *const keep[PA_NKIND],
+                              const size_t extra[PA_NKIND], pa__recs *E,
+                              pa__recs *V, pa__recs *B, pa__recs *D) {
+  pa_status st = PA_SUCCESS;
+  pa__layout lay;
+  pa__recs *R[PA_NKIND];
+  pa__dmesh_layout(dm, &lay);
+  pa__recs_init(E, PA_ELEMENT, dm->dim + 1, 0);
+  pa__recs_init(V, PA_VERTEX, 0, pa__layout_ndbl(&lay));
+  pa__recs_init(B, PA_BOUNDARY, dm->dim, 0);
+  pa__recs_init(D, PA_EDGE, 2, 0);
+  R[PA_VERTEX] = V;
+  R[PA_ELEMENT] = E;
+  R[PA_BOUNDARY] = B;
+  R[PA_EDGE] = D;
+  for (int k = 0; k < PA_NKIND; k++)
+    PA_CALL(kept_kind(dm, k, keep ? keep[k] : NULL, extra ? extra[k] : 0, R[k]));
+cleanup:
+  if (st) {
+    pa__recs_free(E);
+    pa__recs_free(V);
+    pa__recs_free(B);
+    pa__recs_free(D);
+  }
+  return st;
+}
