@@ -5,7 +5,9 @@
  *
  * Schedule (see docs/REMESHER.md):
  *  1. refinement rounds (at most 80) while splits + collapses change more
- *     than 0.02 % of the elements, or until three stalled rounds: split
+ *     than 0.02 % of the elements, or until three stalled rounds (splits
+ *     and collapses balanced, or under 0.5 % of the elements, and their
+ *     count did not fall by 5 %): split
  *     edges longer than 1.4142 (longest-edge propagation), collapse edges
  *     shorter than 0.7071 (no new edge longer than 1.4142), swap around
  *     elements of quality < 0.6, and relocate once the splits are few;
@@ -61,7 +63,7 @@ pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
   rm->lguard = RM_LLONG;
 
   if (!o->no_insert) {
-    long prev = -1;
+    long ref = -1; /* splits + collapses when the count last fell by 5 % */
     int stall = 0;
     for (int it = 0; it < 80; it++) {
       long ns = 0, nc = 0, nw = 0, nm = 0;
@@ -84,11 +86,21 @@ pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
       }
       pass++;
       if (ns + nc <= 2e-4 * rm->nelive) break;
-      /* a few operations undoing each other: stop after three such rounds */
-      stall = (prev >= 0 && ns + nc >= prev && ns + nc <= 5e-3 * rm->nelive)
-                  ? stall + 1 : 0;
-      if (stall >= 3) break;
-      prev = ns + nc;
+      /* Operations undoing each other (ping-pong, e.g. next to frozen
+       * elements whose edges cannot reach the size): when the count is a
+       * tiny part of the mesh, or splits and collapses balance (within a
+       * factor 3: pure refinement or coarsening fronts are one-sided, so
+       * they never stall here), stop after three rounds without a 5 % drop
+       * since the last one. A count that keeps falling, however slowly,
+       * keeps going (up to the round limit). */
+      int pingpong = ns + nc <= 5e-3 * rm->nelive ||
+                     (3 * ns >= nc && 3 * nc >= ns);
+      if (ref < 0 || ns + nc < 0.95 * ref || !pingpong) {
+        ref = ns + nc;
+        stall = 0;
+      } else if (++stall >= 3) {
+        break;
+      }
     }
     report_figures(rm, ops, "after refinement");
   }

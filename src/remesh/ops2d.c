@@ -72,6 +72,30 @@ static inline void attach(pa__rmesh *rm, pa_idx code, pa_idx o, pa_idx oldcode) 
   }
 }
 
+/* Element k is rewritten or about to be killed, or one of its vertices
+ * moved: drop the caches that depend on it (RME_INRANGE of k, RME_NOSWAP of
+ * k and its neighbours, RMV_SETTLED of its vertices, whose balls change).
+ * Call with k's current vertices and, on a rewrite, before its adjacency is
+ * updated (the old neighbours are the ones to tell; a new neighbour of a
+ * rewritten element is an old neighbour of the rewritten group). */
+static inline void elem_changed(pa__rmesh *rm, pa_idx k) {
+  const pa_idx *v = rm->ev + 3 * (size_t)k;
+  const pa_idx *a = rm->adj + 3 * (size_t)k;
+  rm->etag[k] &= (uint8_t)~(RME_INRANGE | RME_NOSWAP);
+  /* neighbours: their swaps across k see a new k (swaps never cross a
+   * feature record, so only direct neighbours matter) */
+  if (a[0] >= 0) rm->etag[a[0] / 3] &= (uint8_t)~RME_NOSWAP;
+  if (a[1] >= 0) rm->etag[a[1] / 3] &= (uint8_t)~RME_NOSWAP;
+  if (a[2] >= 0) rm->etag[a[2] / 3] &= (uint8_t)~RME_NOSWAP;
+  rm->vtag[v[0]] &= (uint8_t)~RMV_SETTLED;
+  rm->vtag[v[1]] &= (uint8_t)~RMV_SETTLED;
+  rm->vtag[v[2]] &= (uint8_t)~RMV_SETTLED;
+}
+
+/* Write element k (an existing or a new slot). The caller has called
+ * elem_changed on every existing element it rewrites, before the rewrite;
+ * the vertices of the new elements are then those old ones plus new vertices
+ * (no cached flags), and new slots start with no cached flags either. */
 static inline void set_elem(pa__rmesh *rm, pa_idx k, pa_idx a, pa_idx b,
                             pa_idx c, double q) {
   rm->ev[3 * k] = a;
@@ -140,6 +164,8 @@ static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
     fA = rm->adj[3 * f + j2];
   }
   pa_idx k2, f2 = -1, nb2 = -1;
+  elem_changed(rm, k);
+  if (f >= 0) elem_changed(rm, f);
   pa__rm_new_elem(rm, &k2);
   rm->eref[k2] = rm->eref[k];
   rm->etag[k2] = rm->etag[k] & 0x0F;
@@ -202,19 +228,23 @@ static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
   return 1;
 }
 
-/* Longest free edge of element k above thr: face index or -1, length in *len. */
-static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len) {
+/* Longest free edge of element k above thr: face index or -1, length in *len;
+ * *inr (may be NULL) = all three edges in [RM_LSHORT, RM_LLONG]. */
+static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
+                        int *inr) {
   const pa_idx *v = rm->ev + 3 * (size_t)k;
-  int best = -1;
+  int best = -1, in = 1;
   double lb = thr;
   for (int i = 0; i < 3; i++) {
     double l = edge_len(rm, v[NX3(i)], v[PV3(i)]);
+    in &= l >= RM_LSHORT && l <= RM_LLONG;
     if (l > lb && edge_free(rm, 3 * k + i)) {
       lb = l;
       best = i;
     }
   }
   *len = lb;
+  if (inr) *inr = in;
   return best;
 }
 
@@ -225,8 +255,11 @@ pa_status pa__rm_split_pass_2d(pa__rmesh *rm, double thr, long *n) {
   for (pa_idx k = 0; k < rm->ne; k++) {
     uint8_t t = rm->etag[k];
     if (t & (RME_DEAD | RME_TOUCHED | RME_FROZEN)) continue;
+    if ((t & RME_INRANGE) && thr >= RM_LLONG) continue; /* nothing above thr */
     double l;
-    int i = longest_free(rm, k, thr, &l);
+    int inr;
+    int i = longest_free(rm, k, thr, &l, &inr);
+    if (inr) rm->etag[k] |= RME_INRANGE;
     if (i < 0) continue;
     /* Longest-edge propagation: split only if the edge is also the longest
      * free edge of the neighbour (else the neighbour goes first). */
@@ -235,7 +268,7 @@ pa_status pa__rm_split_pass_2d(pa__rmesh *rm, double thr, long *n) {
       pa_idx f = s / 3;
       if (rm->etag[f] & RME_TOUCHED) continue;
       double lf;
-      int jf = longest_free(rm, f, l * (1 + 1e-12), &lf);
+      int jf = longest_free(rm, f, l * (1 + 1e-12), &lf, NULL);
       if (jf >= 0 && jf != s % 3) continue;
     }
     cnt += split_edge(rm, k, i, &st);
@@ -409,7 +442,9 @@ static int collapse_edge(pa__rmesh *rm, pa_idx k, int fi, int ip, double qrel) {
   for (int t = 0; t < n; t++) {
     pa_idx e = el[t];
     if (e == k || e == f) continue;
+    elem_changed(rm, e);
     rm->ev[3 * e + loc[t]] = q;
+    elem_changed(rm, e);
     const pa_idx *v = rm->ev + 3 * (size_t)e;
     rm->q[e] = (float)elem_qual(rm, v[0], v[1], v[2]);
     rm->etag[e] |= RME_TOUCHED;
@@ -440,6 +475,8 @@ static int collapse_edge(pa__rmesh *rm, pa_idx k, int fi, int ip, double qrel) {
     rm->btan[4 * r1 + 2 * pe + 1] = sgn * tqy;
     pa__rm_kill_feat(rm, r2);
   }
+  elem_changed(rm, k); /* the third vertices' balls lose k and f */
+  if (f >= 0) elem_changed(rm, f);
   pa__rm_kill_elem(rm, k);
   if (f >= 0) pa__rm_kill_elem(rm, f);
   pa__rm_kill_vertex(rm, p);
@@ -502,17 +539,20 @@ pa_status pa__rm_collapse_pass_2d(pa__rmesh *rm, double thr, long *n) {
   for (pa_idx k = 0; k < rm->ne; k++) {
     uint8_t t = rm->etag[k];
     if (t & (RME_DEAD | RME_TOUCHED | RME_FROZEN)) continue;
+    if ((t & RME_INRANGE) && thr <= RM_LSHORT) continue; /* nothing below thr */
     const pa_idx *v = rm->ev + 3 * (size_t)k;
     /* shortest edge first */
-    int best = -1;
+    int best = -1, inr = 1;
     double lb = thr;
     for (int i = 0; i < 3; i++) {
       double l = edge_len(rm, v[NX3(i)], v[PV3(i)]);
+      inr &= l >= RM_LSHORT && l <= RM_LLONG;
       if (l < lb) {
         lb = l;
         best = i;
       }
     }
+    if (inr) rm->etag[k] |= RME_INRANGE;
     if (best < 0) continue;
     pa_idx s = other_side(rm, 3 * k + best);
     if (s >= 0 && (rm->etag[s / 3] & RME_TOUCHED)) continue;
@@ -548,6 +588,8 @@ static int swap_edge(pa__rmesh *rm, pa_idx k, int i, double gain) {
   pa_idx oA = rm->adj[3 * k + i1], oB = rm->adj[3 * k + i2];
   pa_idx fB = rm->adj[3 * f + j1], fA = rm->adj[3 * f + j2];
   /* T1 = k (p0 a p1), T2 = f (p1 b p0) */
+  elem_changed(rm, k);
+  elem_changed(rm, f);
   set_elem(rm, k, p0, a, p1, q1);
   set_elem(rm, f, p1, b, p0, q2);
   attach(rm, 3 * k, fB, 3 * f + j1);
@@ -566,15 +608,19 @@ long pa__rm_swap_pass_2d(pa__rmesh *rm, double qmax) {
   for (pa_idx k = 0; k < rm->ne; k++) {
     uint8_t t = rm->etag[k];
     if (t & (RME_DEAD | RME_TOUCHED | RME_FROZEN)) continue;
-    if (rm->q[k] >= qmax) continue;
-    for (int i = 0; i < 3; i++) {
+    if (rm->q[k] >= qmax || (t & RME_NOSWAP)) continue;
+    int done = 0, all = 1;
+    for (int i = 0; i < 3 && !done; i++) {
       pa_idx o = rm->adj[3 * k + i];
-      if (o < 0 || (rm->etag[o / 3] & RME_TOUCHED)) continue;
-      if (swap_edge(rm, k, i, 1.02)) {
-        cnt++;
-        break;
+      if (o < 0) continue;
+      if (rm->etag[o / 3] & RME_TOUCHED) {
+        all = 0; /* not tried: no verdict for this face */
+        continue;
       }
+      done = swap_edge(rm, k, i, 1.02);
     }
+    cnt += done;
+    if (!done && all) rm->etag[k] |= RME_NOSWAP;
   }
   return cnt;
 }
@@ -680,6 +726,7 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
     for (int s = 0; s < n; s++) {
       const pa_idx *v = rm->ev + 3 * (size_t)el[s];
       rm->q[el[s]] = (float)elem_qual(rm, v[0], v[1], v[2]);
+      elem_changed(rm, el[s]); /* p's neighbours see a new ball */
     }
     rm->nmove++;
     return 1;
@@ -698,8 +745,14 @@ long pa__rm_smooth_pass_2d(pa__rmesh *rm) {
       pa_idx p = rm->ev[3 * k + i];
       uint8_t tp = rm->vtag[p];
       if (tp & (RMV_DONE | RMV_FROZEN | RMV_CORNER | RMV_FEAT)) continue;
+      /* DONE even when skipped: a neighbour's move later in this pass must
+       * not make p eligible again from another start element */
       rm->vtag[p] |= RMV_DONE;
-      cnt += move_vertex(rm, k, i);
+      /* the answer depends only on p's ball: a rejected p stays settled
+       * until an operator or a move changes that ball (elem_changed) */
+      if (tp & RMV_SETTLED) continue;
+      if (move_vertex(rm, k, i)) cnt++;
+      else rm->vtag[p] |= RMV_SETTLED;
     }
   }
   return cnt;

@@ -16,7 +16,9 @@
  *  - q[k] is the element quality (Mmg's normalisation) with the current
  *    coordinates and metric;
  *  - tag bits RME_TOUCHED / RMV_MARK are scratch, cleared by each pass that
- *    uses them;
+ *    uses them; RME_INRANGE / RME_NOSWAP / RMV_SETTLED are caches that skip work a pass
+ *    would find useless, cleared by any change that could invalidate them
+ *    (so the passes decide exactly as without them);
  *  - a frozen element (PA_FLAG_REQUIRED in its flags) is never rewritten; its
  *    vertices carry RMV_FROZEN, so they are never moved or removed.
  */
@@ -34,7 +36,13 @@ enum {
   RMV_FEAT = 4,   /* lies on a feature line (boundary or interior curve) */
   RMV_DEAD = 8,
   RMV_MARK = 16,  /* scratch */
-  RMV_DONE = 32   /* scratch */
+  RMV_DONE = 32,  /* scratch */
+  /* A relocation of this vertex was tried and rejected, and no element of
+   * its ball changed since (nor any vertex of them moved): trying again
+   * would give the same answer, so relocation passes skip it. Cleared by
+   * every operator on the vertices of each element it rewrites or kills,
+   * and by a move on the vertices of the moved vertex's ball. */
+  RMV_SETTLED = 64
 };
 
 /* Element tags share the byte with the input flags (PA_FLAG_*, low nibble). */
@@ -42,7 +50,15 @@ enum {
   RME_FROZEN = PA_FLAG_REQUIRED,
   RME_DEAD = 16,
   RME_TOUCHED = 32, /* modified during the current pass */
-  RME_MARK = 64     /* scratch */
+  /* Every swap of the element at the swap pass's gain was tried and
+   * rejected, and neither it nor a neighbour changed since: skipped by swap
+   * passes. Cleared with RME_INRANGE, on the element and its neighbours. */
+  RME_NOSWAP = 64,
+  /* The three edges lie in [RM_LSHORT, RM_LLONG] with the current
+   * coordinates and metric, so split and collapse passes at those
+   * thresholds have nothing to do here. Cleared with RMV_SETTLED (an element
+   * rewritten, or one of its vertices moved); new elements start without. */
+  RME_INRANGE = 128
 };
 
 /* Feature-record tags (high nibble; low nibble = input PA_FLAG_*). */
@@ -73,7 +89,10 @@ typedef struct pa__rmesh {
   pa_idx nv, vfree;  /* slots in use (live + dead), free-list head (-1) */
   size_t capv;
   double *x;        /* dim * capv */
-  double *met;      /* mcomp * capv */
+  double *met;      /* mcomp * capv: the working metric the operators use */
+  double *met0;     /* mcomp * capv or NULL: the target metric, written back,
+                       when the working one was relaxed at frozen skins
+                       (rmesh.c); interpolated alongside met */
   double *fld;      /* fcomp * capv (NULL without fields) */
   int32_t *vref;    /* free list link for dead vertices */
   uint8_t *vflag;   /* input PA_FLAG_* */

@@ -36,6 +36,8 @@ static pa_status grow_vertices(pa__rmesh *rm, size_t need) {
            cap);
   PA_CALL(grow((void **)&rm->x, cap * rm->dim, sizeof(double)));
   PA_CALL(grow((void **)&rm->met, cap * rm->mcomp, sizeof(double)));
+  if (rm->met0)
+    PA_CALL(grow((void **)&rm->met0, cap * rm->mcomp, sizeof(double)));
   if (rm->fcomp)
     PA_CALL(grow((void **)&rm->fld, cap * rm->fcomp, sizeof(double)));
   PA_CALL(grow((void **)&rm->vref, cap, sizeof(int32_t)));
@@ -171,26 +173,33 @@ void pa__rm_kill_feat(pa__rmesh *rm, pa_idx b) {
 
 /* ---- interpolation ---- */
 
-void pa__rm_interp(pa__rmesh *rm, pa_idx v, int n, const pa_idx *src,
-                   const double *w) {
+/* Log-Euclidean interpolation of the metric array met (rm->met or rm->met0). */
+static void interp_metric(const pa__rmesh *rm, double *met, pa_idx v, int n,
+                          const pa_idx *src, const double *w) {
   int mc = rm->mcomp;
-  double *mv = rm->met + (size_t)mc * v;
+  double *mv = met + (size_t)mc * v;
   if (mc == 1) {
     double s = 0;
-    for (int i = 0; i < n; i++) s += w[i] * log(rm->met[src[i]]);
+    for (int i = 0; i < n; i++) s += w[i] * log(met[src[i]]);
     mv[0] = exp(s);
   } else if (rm->dim == 2) {
     double acc[3] = {0, 0, 0}, l[3];
     for (int i = 0; i < n; i++) {
-      rm_sym2_fun(rm->met + 3 * (size_t)src[i], l, 1);
+      rm_sym2_fun(met + 3 * (size_t)src[i], l, 1);
       for (int c = 0; c < 3; c++) acc[c] += w[i] * l[c];
     }
     rm_sym2_fun(acc, mv, 0);
   } else {
     const double *ms[8];
-    for (int i = 0; i < n && i < 8; i++) ms[i] = rm->met + (size_t)mc * src[i];
+    for (int i = 0; i < n && i < 8; i++) ms[i] = met + (size_t)mc * src[i];
     pa__metric_interp(rm->dim, mc, n < 8 ? n : 8, ms, w, mv);
   }
+}
+
+void pa__rm_interp(pa__rmesh *rm, pa_idx v, int n, const pa_idx *src,
+                   const double *w) {
+  interp_metric(rm, rm->met, v, n, src, w);
+  if (rm->met0) interp_metric(rm, rm->met0, v, n, src, w);
   int fc = rm->fcomp;
   if (fc) {
     double *fv = rm->fld + (size_t)fc * v;
@@ -226,6 +235,101 @@ static double expected_elems(pa_mesh *mesh) {
     if (det > 0 && area > 0) sum += area * sqrt(det);
   }
   return sum / 0.4330127018922193; /* area of the unit equilateral triangle */
+}
+
+/*
+ * Frozen skins (2D). The edges of frozen elements and frozen feature records
+ * cannot change, so where their length in the metric is far from 1 (a piece
+ * of the parallel loop whose frozen skin is the coarse input, refined to a
+ * much smaller size, or the reverse) the free elements next to them must
+ * bridge the difference. Left to the target metric, longest-edge bisection
+ * of the triangle on a long frozen edge flattens it towards the quality
+ * floor, and the pass loop ping-pongs there without converging.
+ *
+ * The working metric is therefore relaxed at the skin: a frozen vertex whose
+ * frozen edges have a mean length lambda outside [RM_LSHORT, RM_LLONG] gets
+ * its size scaled by f = lambda / RM_LLONG (or lambda / RM_LSHORT), the least
+ * change that puts that mean in range; the size then varies log-linearly
+ * (interpolation) to the target over the first ring of input elements
+ * (ParMmg #74: grade the metric away from frozen entities). Relaxing further
+ * (to length 1) widens the band of elements left coarser than the target,
+ * which the parallel loop must adapt again: its iterations then stop
+ * converging (test_adapt_props at 3-4 ranks); relaxing less (to 2) brings
+ * the slivers back. The target metric is kept in met0,
+ * interpolated alongside, and it is what the write-back returns: frozen
+ * vertices come back bit for bit and new vertices carry the target, so a
+ * later pass (the next iteration of the parallel loop) sees the elements
+ * near the old skin as still to adapt. met0 stays NULL when nothing changed.
+ */
+static pa_status skin_relax_2d(pa__rmesh *rm) {
+  pa_status st = PA_SUCCESS;
+  int mc = rm->mcomp;
+  double *acc = NULL;
+  int32_t *cnt = NULL;
+  pa_idx nv = rm->nv;
+  int any = 0;
+  for (pa_idx k = 0; k < rm->ne && !any; k++) any = rm->etag[k] & RME_FROZEN;
+  for (pa_idx b = 0; b < rm->nb && !any; b++) any = rm->btag[b] & RMB_FROZEN;
+  if (!any) return PA_SUCCESS;
+  PA_CALLOC(acc, nv);
+  PA_CALLOC(cnt, nv);
+  /* mean length of the frozen edges at each vertex (edges shared by two
+   * frozen elements count twice: a weighting, not a fault) */
+  for (pa_idx k = 0; k < rm->ne; k++) {
+    if (!(rm->etag[k] & RME_FROZEN)) continue;
+    const pa_idx *v = rm->ev + 3 * (size_t)k;
+    for (int i = 0; i < 3; i++) {
+      pa_idx a = v[i], c = v[i == 2 ? 0 : i + 1];
+      double l = rm_len2(mc, rm->x + 2 * (size_t)a, rm->x + 2 * (size_t)c,
+                         rm->met + (size_t)mc * a, rm->met + (size_t)mc * c);
+      acc[a] += l;
+      acc[c] += l;
+      cnt[a]++;
+      cnt[c]++;
+    }
+  }
+  for (pa_idx b = 0; b < rm->nb; b++) {
+    if ((rm->btag[b] & RMB_DEAD) || !(rm->btag[b] & RMB_FROZEN)) continue;
+    pa_idx a = rm->bv[2 * b], c = rm->bv[2 * b + 1];
+    double l = rm_len2(mc, rm->x + 2 * (size_t)a, rm->x + 2 * (size_t)c,
+                       rm->met + (size_t)mc * a, rm->met + (size_t)mc * c);
+    acc[a] += l;
+    acc[c] += l;
+    cnt[a]++;
+    cnt[c]++;
+  }
+  /* every lambda is computed from the target metric before any change */
+  for (pa_idx v = 0; v < nv; v++) {
+    if (!cnt[v]) continue;
+    double lam = acc[v] / cnt[v];
+    if (!(lam > RM_LLONG || lam < RM_LSHORT) || !(lam > 0) || !isfinite(lam))
+      continue;
+    if (!rm->met0) {
+      PA_ALLOC(rm->met0, rm->capv * mc);
+      memcpy(rm->met0, rm->met, sizeof(double) * mc * (size_t)nv);
+    }
+    /* the least change that brings the mean into range: to the bound */
+    double f = lam > RM_LLONG ? lam / RM_LLONG : lam / RM_LSHORT;
+    double *m = rm->met + (size_t)mc * v;
+    if (mc == 1) {
+      m[0] *= f;
+    } else {
+      double s = 1.0 / (f * f);
+      for (int c = 0; c < mc; c++) m[c] *= s;
+    }
+  }
+  if (rm->met0)
+    for (pa_idx k = 0; k < rm->ne; k++) {
+      const pa_idx *v = rm->ev + 3 * (size_t)k;
+      rm->q[k] = (float)rm_qual2(
+          mc, rm->x + 2 * (size_t)v[0], rm->x + 2 * (size_t)v[1],
+          rm->x + 2 * (size_t)v[2], rm->met + (size_t)mc * v[0],
+          rm->met + (size_t)mc * v[1], rm->met + (size_t)mc * v[2]);
+    }
+cleanup:
+  pa__free(acc);
+  pa__free(cnt);
+  return st;
 }
 
 pa_status pa__rm_create(pa_mesh *mesh, const pa_remesh_opts *opts,
@@ -339,6 +443,7 @@ pa_status pa__rm_create(pa_mesh *mesh, const pa_remesh_opts *opts,
 
   if (d == 2) {
     PA_CALL(pa__rm_features_2d_init(rm, mesh, bstart, ball));
+    PA_CALL(skin_relax_2d(rm));
   } else {
     PA_FAIL(PA_ERR_UNSUPPORTED, "remesher: 3D is not available yet");
   }
@@ -355,6 +460,7 @@ void pa__rm_destroy(pa__rmesh *rm) {
   if (!rm) return;
   pa__free(rm->x);
   pa__free(rm->met);
+  pa__free(rm->met0);
   pa__free(rm->fld);
   pa__free(rm->vref);
   pa__free(rm->vflag);
@@ -400,12 +506,15 @@ pa_status pa__rm_writeback(pa__rmesh *rm, pa_mesh *mesh) {
     if (map[v] >= 0)
       memcpy(coord + (size_t)d * map[v], rm->x + (size_t)d * v, d * sizeof(double));
   FREE_NULL(rm->x);
+  /* the target metric goes back, not the working one relaxed at skins */
+  const double *mtarget = rm->met0 ? rm->met0 : rm->met;
   PA_ALLOC(met, (size_t)mc * nvl);
   for (pa_idx v = 0; v < rm->nv; v++)
     if (map[v] >= 0)
-      memcpy(met + (size_t)mc * map[v], rm->met + (size_t)mc * v,
+      memcpy(met + (size_t)mc * map[v], mtarget + (size_t)mc * v,
              mc * sizeof(double));
   FREE_NULL(rm->met);
+  FREE_NULL(rm->met0);
   int off = 0;
   for (int k = 0; k < rm->nfield; k++) {
     int nc = rm->fncomp[k];
@@ -533,6 +642,17 @@ pa_status pa__rm_check(const pa__rmesh *rm) {
     double area = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
     PA_CHECK(area > 0, PA_ERR_INTERNAL,
              "remesher: element %d is not positively oriented", (int)k);
+    if (rm->etag[k] & RME_INRANGE) { /* the cache is still true */
+      int mc = rm->mcomp;
+      for (int i = 0; i < 3; i++) {
+        pa_idx p = v[i], q = v[i == 2 ? 0 : i + 1];
+        double l = rm_len2(mc, rm->x + 2 * (size_t)p, rm->x + 2 * (size_t)q,
+                           rm->met + (size_t)mc * p, rm->met + (size_t)mc * q);
+        PA_CHECK(l >= RM_LSHORT && l <= RM_LLONG, PA_ERR_INTERNAL,
+                 "remesher: element %d is marked in range, edge %d has "
+                 "length %g", (int)k, i, l);
+      }
+    }
     for (int i = 0; i < 3; i++) {
       pa_idx code = 3 * k + i, o = rm->adj[code];
       pa_idx e0 = v[(i + 1) % 3], e1 = v[(i + 2) % 3];
