@@ -17,7 +17,9 @@
  *     and smoothing of the vertices of tets below 0.75, until a round
  *     changes fewer than 0.5 % of the tets;
  *  3. three rounds of swaps (quality < 0.7: this lifts the mean quality by
- *     about 0.03) and smoothing, and a final pass against slivers (< 0.1).
+ *     about 0.03) and smoothing, the first two preceded by a collapse pass
+ *     (the swaps and moves unlock short edges the rounds left), and a final
+ *     pass against slivers (< 0.1).
  * Every pass visits tets and vertices in index order, and every operator is
  * deterministic, so the output is identical from run to run.
  *
@@ -365,12 +367,19 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
     }
   }
   for (int it = 0; it < 3; it++, npass++) {
-    long nw = 0, nm = 0;
+    long nc = 0, nw = 0, nm = 0;
+    /* The swaps (Q < 0.7) and moves of this phase unlock short edges the
+     * rounds could not collapse (mostly interior ones refused by the length
+     * guard): collapse again in the first two rounds; the last one only
+     * swaps and smooths, so the worst quality is repaired after them. */
+    if (it < 2 && !opts->no_insert)
+      PA_CALL(pa__rm3d_collapse_pass(&m, RM3D_LMIN, RM3D_LMAX, &nc));
     if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(&m, 0.7, 1.01, &nw));
     if (!opts->no_move) PA_CALL(pa__rm3d_smooth_pass(&m, RM3D_QSMOOTH, &nm));
     if (m.verbosity > 0)
-      fprintf(stderr, "  rm3d optimisation %d: %ld swaps %ld moves\n", it, nw,
-              nm);
+      fprintf(stderr,
+              "  rm3d optimisation %d: %ld collapses %ld swaps %ld moves\n",
+              it, nc, nw, nm);
   }
   if (!opts->no_swap) {
     long nw = 0;

@@ -372,8 +372,10 @@ static void test_targets(void) {
   } c[] = {{4, "uniform:0.05", 0.97, 0.25, 0.80},
            {10, "layer:0.15", 0.95, 0.2, 0.75},
            {6, "shell:0.2", 0.95, 0.2, 0.75},
-           {16, "uniform:0.25", 0.93, 0.25, 0.75}};
-  for (int i = 0; i < 4; i++) {
+           {16, "uniform:0.25", 0.93, 0.25, 0.75},
+           /* coarsening, same size ratio as box3d 40 -> 0.1 */
+           {20, "uniform:0.1", 0.97, 0.25, 0.80}};
+  for (int i = 0; i < 5; i++) {
     pa_mesh *m = box(c[i].n, 0);
     CHECK_OK(pa_metric_analytic(m, c[i].spec));
     pa_remesh_opts o;
