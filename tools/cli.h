@@ -51,6 +51,15 @@ char *pa_cli_replace_ext(const char *path, const char *ext);
 int pa_cli_remesh_option(const pa_cli *cli, int argc, char **argv, int *i,
                          pa_remesh_opts *opts);
 
+/* Attach field 0 of a .sol/.solb file as the mesh's metric. */
+pa_status pa_cli_attach_metric(pa_mesh *mesh, const char *path);
+/* Attach every field of a .sol file to the mesh as user fields field1, ...
+ * (the vertex count must match: the error names the file). */
+pa_status pa_cli_attach_fields(pa_mesh *mesh, const char *path);
+/* Write the mesh's user fields as one .sol file (scalar, vector or tensor by
+ * number of components). */
+pa_status pa_cli_write_fields(pa_mesh *mesh, const char *path);
+
 /* Set the library's last error message to msg; returns st. */
 pa_status pa_cli_set_error(pa_status st, const char *msg);
 

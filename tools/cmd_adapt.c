@@ -46,45 +46,6 @@ static const char *outcome_name(pa_remesh_outcome o) {
                                         : "failed";
 }
 
-/* Attach every field of a .sol file as a user field of the mesh. */
-static pa_status attach_fields(pa_mesh *mesh, const char *path) {
-  pa_sol *sol = NULL;
-  pa_status st = pa_sol_read(path, &sol);
-  if (st) return st;
-  if (pa_sol_nvert(sol) != pa_mesh_nvert(mesh)) {
-    pa_sol_destroy(sol);
-    return PA_ERR_FORMAT;
-  }
-  for (int k = 0; k < pa_sol_nfield(sol) && st == PA_SUCCESS; k++) {
-    pa_sol_kind kind;
-    int nc;
-    double *val;
-    char name[32];
-    st = pa_sol_field(sol, k, &kind, &nc, &val);
-    snprintf(name, sizeof name, "field%d", k + 1);
-    if (st == PA_SUCCESS) st = pa_mesh_add_field(mesh, name, nc, val);
-  }
-  pa_sol_destroy(sol);
-  return st;
-}
-
-/* Write the user fields of the mesh as one .sol file. */
-static pa_status write_fields(pa_mesh *mesh, const char *path) {
-  pa_sol *sol = NULL;
-  int d = pa_mesh_dim(mesh);
-  pa_status st = pa_sol_create(d, pa_mesh_nvert(mesh), &sol);
-  for (int k = 0; k < pa_mesh_nfield(mesh) && st == PA_SUCCESS; k++) {
-    int nc;
-    double *val;
-    st = pa_mesh_field(mesh, k, NULL, &nc, &val);
-    pa_sol_kind kind = nc == 1 ? PA_SOL_SCALAR : nc == d ? PA_SOL_VECTOR : PA_SOL_TENSOR;
-    if (st == PA_SUCCESS) st = pa_sol_add_field(sol, kind, val);
-  }
-  if (st == PA_SUCCESS) st = pa_sol_write(sol, path);
-  pa_sol_destroy(sol);
-  return st;
-}
-
 int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
   /* On several ranks, or when asked for a distributed output, the parallel
    * piece loop (tools/cmd_padapt.c) does the work. */
@@ -166,10 +127,7 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
     goto done;
   }
   if (met) {
-    st = pa_sol_read(met, &sol);
-    if (st == PA_SUCCESS) st = pa_mesh_metric_from_sol(mesh, sol, 0);
-    pa_sol_destroy(sol);
-    sol = NULL;
+    st = pa_cli_attach_metric(mesh, met);
     if (st) {
       pa_cli_fail(cli, st);
       goto done;
@@ -179,13 +137,9 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
     goto done;
   }
   if (field) {
-    st = attach_fields(mesh, field);
+    st = pa_cli_attach_fields(mesh, field);
     if (st) {
-      if (st == PA_ERR_FORMAT && !pa_last_error()[0])
-        pa_cli_error(cli, "%s: the number of values does not match the mesh's "
-                          "%d vertices", field, (int)pa_mesh_nvert(mesh));
-      else
-        pa_cli_fail(cli, st);
+      pa_cli_fail(cli, st);
       goto done;
     }
   }
@@ -254,7 +208,7 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
   }
   if (st == PA_SUCCESS && pa_mesh_nfield(mesh) > 0) {
     fieldpath = outfield ? NULL : pa_cli_replace_ext(out, ".fields.sol");
-    st = write_fields(mesh, outfield ? outfield : fieldpath);
+    st = pa_cli_write_fields(mesh, outfield ? outfield : fieldpath);
   }
   if (st == PA_SUCCESS && json) {
     size_t n = 512;

@@ -46,69 +46,18 @@ static const char *padapt_usage =
     "                    remesher options, as in the sequential adapt\n"
     "  -v N              verbosity\n";
 
-/* Attach every field of a .sol file as a user field of the mesh. */
-static pa_status attach_fields(pa_mesh *mesh, const char *path, int *mismatch) {
-  pa_sol *sol = NULL;
-  pa_status st = pa_sol_read(path, &sol);
-  *mismatch = 0;
-  if (st) return st;
-  if (pa_sol_nvert(sol) != pa_mesh_nvert(mesh)) {
-    pa_sol_destroy(sol);
-    *mismatch = 1;
-    return PA_ERR_FORMAT;
-  }
-  for (int k = 0; k < pa_sol_nfield(sol) && st == PA_SUCCESS; k++) {
-    pa_sol_kind kind;
-    int nc;
-    double *val;
-    char name[32];
-    st = pa_sol_field(sol, k, &kind, &nc, &val);
-    snprintf(name, sizeof name, "field%d", k + 1);
-    if (st == PA_SUCCESS) st = pa_mesh_add_field(mesh, name, nc, val);
-  }
-  pa_sol_destroy(sol);
-  return st;
-}
-
-static pa_status write_fields(pa_mesh *mesh, const char *path) {
-  pa_sol *sol = NULL;
-  int d = pa_mesh_dim(mesh);
-  pa_status st = pa_sol_create(d, pa_mesh_nvert(mesh), &sol);
-  for (int k = 0; k < pa_mesh_nfield(mesh) && st == PA_SUCCESS; k++) {
-    int nc;
-    double *val;
-    st = pa_mesh_field(mesh, k, NULL, &nc, &val);
-    pa_sol_kind kind = nc == 1 ? PA_SOL_SCALAR : nc == d ? PA_SOL_VECTOR : PA_SOL_TENSOR;
-    if (st == PA_SUCCESS) st = pa_sol_add_field(sol, kind, val);
-  }
-  if (st == PA_SUCCESS) st = pa_sol_write(sol, path);
-  pa_sol_destroy(sol);
-  return st;
-}
-
 /* Rank 0, after pa_cli_read_mesh: attach the metric and the fields. Prints
  * its own errors; returns 1 on success. */
 static int prepare_root(const pa_cli *cli, pa_mesh *mesh, const char *met,
                         const char *field, double hsiz) {
   pa_status st = PA_SUCCESS;
   if (met) {
-    pa_sol *sol = NULL;
-    st = pa_sol_read(met, &sol);
-    if (st == PA_SUCCESS) st = pa_mesh_metric_from_sol(mesh, sol, 0);
-    pa_sol_destroy(sol);
+    st = pa_cli_attach_metric(mesh, met);
   } else if (hsiz <= 0 && pa_mesh_metric_ncomp(mesh) == 0) {
     pa_cli_error(cli, "adapt: no metric: give -met SOL, -sol SOL or -hsiz H");
     return 0;
   }
-  if (st == PA_SUCCESS && field) {
-    int mismatch;
-    st = attach_fields(mesh, field, &mismatch);
-    if (st && mismatch) {
-      pa_cli_error(cli, "%s: the number of values does not match the mesh's "
-                        "%d vertices", field, (int)pa_mesh_nvert(mesh));
-      return 0;
-    }
-  }
+  if (st == PA_SUCCESS && field) st = pa_cli_attach_fields(mesh, field);
   /* statistics before the adaptation are taken in the target size */
   if (st == PA_SUCCESS && hsiz > 0 && pa_mesh_metric_ncomp(mesh) == 0) {
     pa_idx nv = pa_mesh_nvert(mesh);
@@ -444,7 +393,7 @@ int pa_cli_adapt_parallel(const pa_cli *cli, int argc, char **argv) {
       }
       if (st == PA_SUCCESS && pa_mesh_nfield(g) > 0) {
         path = pa_cli_replace_ext(out, ".fields.sol");
-        st = write_fields(g, path);
+        st = pa_cli_write_fields(g, path);
       }
     }
     ok = st == PA_SUCCESS;

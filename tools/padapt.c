@@ -169,13 +169,55 @@ int pa_cli_remesh_option(const pa_cli *cli, int argc, char **argv, int *i,
   return 1;
 }
 
+pa_status pa_cli_attach_fields(pa_mesh *mesh, const char *path) {
+  pa_sol *sol = NULL;
+  char msg[600];
+  pa_status st = pa_sol_read(path, &sol);
+  if (st) return st;
+  if (pa_sol_nvert(sol) != pa_mesh_nvert(mesh)) {
+    snprintf(msg, sizeof msg,
+             "%s: %d values per field, but the mesh has %d vertices", path,
+             (int)pa_sol_nvert(sol), (int)pa_mesh_nvert(mesh));
+    pa_sol_destroy(sol);
+    return pa_cli_set_error(PA_ERR_FORMAT, msg);
+  }
+  for (int k = 0; k < pa_sol_nfield(sol) && st == PA_SUCCESS; k++) {
+    pa_sol_kind kind;
+    int nc;
+    double *val;
+    char name[32];
+    st = pa_sol_field(sol, k, &kind, &nc, &val);
+    snprintf(name, sizeof name, "field%d", k + 1);
+    if (st == PA_SUCCESS) st = pa_mesh_add_field(mesh, name, nc, val);
+  }
+  pa_sol_destroy(sol);
+  return st;
+}
+
+pa_status pa_cli_write_fields(pa_mesh *mesh, const char *path) {
+  pa_sol *sol = NULL;
+  int d = pa_mesh_dim(mesh);
+  pa_status st = pa_sol_create(d, pa_mesh_nvert(mesh), &sol);
+  for (int k = 0; k < pa_mesh_nfield(mesh) && st == PA_SUCCESS; k++) {
+    int nc;
+    double *val;
+    st = pa_mesh_field(mesh, k, NULL, &nc, &val);
+    pa_sol_kind kind = nc == 1   ? PA_SOL_SCALAR
+                       : nc == d ? PA_SOL_VECTOR
+                                 : PA_SOL_TENSOR;
+    if (st == PA_SUCCESS) st = pa_sol_add_field(sol, kind, val);
+  }
+  if (st == PA_SUCCESS) st = pa_sol_write(sol, path);
+  pa_sol_destroy(sol);
+  return st;
+}
+
 /* Report a failed read on rank 0 (the other ranks return quietly). */
 static int read_failed(const pa_cli *cli, pa_status st) {
   return cli->rank == 0 ? pa_cli_fail(cli, st) : 1;
 }
 
-/* Attach the metric stored in field 0 of a .sol/.solb file. */
-static pa_status attach_metric(pa_mesh *mesh, const char *path) {
+pa_status pa_cli_attach_metric(pa_mesh *mesh, const char *path) {
   pa_sol *sol = NULL;
   pa_status st = pa_sol_read(path, &sol);
   if (st == PA_SUCCESS) st = pa_mesh_metric_from_sol(mesh, sol, 0);
@@ -260,7 +302,7 @@ int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
     pa_idx nadded = 0;
     if (pa_mesh_build_boundary(mesh, 0, &nadded) != PA_SUCCESS) pa_clear_error();
   }
-  if (st == PA_SUCCESS && met) st = attach_metric(mesh, met);
+  if (st == PA_SUCCESS && met) st = pa_cli_attach_metric(mesh, met);
   if (st == PA_SUCCESS) st = pa_mesh_stats(mesh, &stats);
   if (st == PA_SUCCESS) {
     pa_stats_print(&stats, stdout);
@@ -307,7 +349,7 @@ int pa_cli_convert(const pa_cli *cli, int argc, char **argv) {
   pa_status st = pa_cli_read_mesh(cli, in, &mesh);
   if (st != PA_SUCCESS) return read_failed(cli, st);
   if (cli->rank != 0) return 0;
-  if (met) st = attach_metric(mesh, met);
+  if (met) st = pa_cli_attach_metric(mesh, met);
   if (st == PA_SUCCESS) st = pa_mesh_write(mesh, out, &opts);
   pa_mesh_destroy(mesh);
   return pa_cli_fail(cli, st);
