@@ -79,7 +79,9 @@ typedef struct rm3d {
   pa_idx nv, ne;
   size_t capv, cape;
   double *x;
-  double *met;
+  double *met;  /* working metric (relaxed at frozen skins, see met0) */
+  double *met0; /* mc * capv or NULL: the target metric, written back, when
+                   the working one was relaxed at frozen vertices */
   int32_t *vref;
   uint8_t *vpf, *vtag;
   pa_idx *vtet;
@@ -113,6 +115,7 @@ extern const int rm3d_face[4][3];
 #define RM3D_SQRT2 1.4142135623730951
 #define RM3D_LMAX 1.4142135623730951 /* split above */
 #define RM3D_LMIN 0.7071067811865476 /* collapse below */
+#define RM3D_LRELAX 1.2 /* mean frozen edge length at a relaxed vertex */
 #define RM3D_QFLOOR 1e-3 /* operators create no worse element... */
 #define RM3D_QABS 1e-9   /* ...unless replacing worse ones, and never this */
 
@@ -213,6 +216,11 @@ static inline double rm3d_qual_v(const rm3d *m, const pa_idx *v) {
 /* ---- rm3d_mesh.c: structure, tables, build, write back, check --------- */
 
 pa_status pa__rm3d_build(rm3d *m, pa_mesh *mesh, const pa_remesh_opts *opts);
+/* Relax the working metric at frozen vertices whose frozen edges are on
+ * average far from unit length (target kept in met0); *nrelaxed vertices. */
+pa_status pa__rm3d_skin_relax(rm3d *m, pa_idx *nrelaxed);
+/* met0[dst] = log-mean of met0[a] and met0[b] (no-op without met0). */
+void pa__rm3d_met0_mid(rm3d *m, pa_idx dst, pa_idx a, pa_idx b);
 void pa__rm3d_free(rm3d *m);
 /* Make room for nv vertices and ne tetrahedra in total. */
 pa_status pa__rm3d_reserve(rm3d *m, size_t nv, size_t ne);

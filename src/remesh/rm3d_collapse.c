@@ -319,7 +319,7 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
   } else if (tp & R3V_BDRY) {
     return st;
   }
-  double xm[3], mm[6], xo[3], mo[6];
+  double xm[3], mm[6], xo[3], mo[6], mo0[6];
   for (int i = 0; i < 3; i++) xm[i] = 0.5 * (xp[i] + xq[i]);
   if (mc == 1) {
     mm[0] = sqrt(m->met[p] * m->met[q]);
@@ -381,12 +381,18 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
   memcpy(mo, m->met + (size_t)mc * q, (size_t)mc * sizeof(double));
   memcpy(xq, xm, sizeof xm);
   memcpy(m->met + (size_t)mc * q, mm, (size_t)mc * sizeof(double));
+  if (m->met0) {
+    memcpy(mo0, m->met0 + (size_t)mc * q, (size_t)mc * sizeof(double));
+    pa__rm3d_met0_mid(m, q, p, q);
+  }
   for (int i = 0; i < nb; i++)
     if (nq[i] >= 0) m->q[bq[i] >> 2] = nq[i];
   PA_CALL(pa__rm3d_collapse(m, p, q, lguard, done));
   if (!*done) {
     memcpy(xq, xo, sizeof xo);
     memcpy(m->met + (size_t)mc * q, mo, (size_t)mc * sizeof(double));
+    if (m->met0)
+      memcpy(m->met0 + (size_t)mc * q, mo0, (size_t)mc * sizeof(double));
     for (int i = 0; i < nb; i++) m->q[bq[i] >> 2] = oq[i];
   } else {
     for (int k = 0; k < m->nfield; k++) {

@@ -205,6 +205,7 @@ pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
     double w[2] = {0.5, 0.5};
     if (m->nfield) pa__rm3d_interp(m, pm_, 2, src, w);
     if (mc == 6) memcpy(m->met + 6 * (size_t)pm_, mp, sizeof mp);
+    pa__rm3d_met0_mid(m, pm_, a, b); /* the target, when relaxed */
   }
   if (m->vref[a] == m->vref[b]) m->vref[pm_] = m->vref[a];
   pa_idx base = m->ne;

@@ -235,6 +235,68 @@ static void test_frozen_skin(void) {
   pa_mesh_destroy(c);
 }
 
+/* A frozen skin whose edges are ~5 times the target size (a piece of the
+ * parallel loop, docs/REMESHER3D.md "Frozen skins"): the free tets next to it
+ * used to flatten to Q 0.000 while splits and collapses undid each other for
+ * all 20 rounds (box 5 -> 0.04: 201 382 splits and 183 546 collapses for
+ * 88 k tets, 24 passes). The working metric is relaxed at the skin and the
+ * rounds stop when they stall: now ~2 100 + 1 450 operations, 8 passes, worst
+ * free Q 0.37. */
+static void test_frozen_skin_refine(void) {
+  const double h = 0.04;
+  pa_mesh *m = box(5, h), *c = NULL, *d = NULL;
+  for (pa_idx k = 0; k < m->ne; k++)
+    for (int j = 0; j < 4; j++) {
+      const double *x = m->coord + 3 * (size_t)m->elem[4 * k + j];
+      if (x[0] == 0 || x[0] == 1 || x[1] == 0 || x[1] == 1 || x[2] == 0 ||
+          x[2] == 1)
+        m->eflag[k] |= PA_FLAG_REQUIRED;
+    }
+  for (pa_idx b = 0; b < m->nb; b++) m->bflag[b] |= PA_FLAG_REQUIRED;
+  CHECK_OK(pa_mesh_copy(m, &c));
+  CHECK_OK(pa_mesh_copy(m, &d));
+  pa_remesh_opts o;
+  opts_for(&o);
+  pa_remesh_report r;
+  CHECK_OK(pa__remesh3d(m, &o, &r));
+  CHECK(r.outcome == PA_REMESH_SUCCESS);
+  CHECK_OK(pa_mesh_check(m));
+  CHECK_NEAR(pa_mesh_volume(m), 1.0, 1e-12);
+  check_frozen(c, m);
+  CHECK(m->nb == c->nb);
+  CHECK(m->ne > 2 * c->ne);
+  /* bounded work: no ping-pong */
+  CHECK(r.npass <= 12);
+  CHECK(r.nsplit + r.ncollapse <= 2 * (long)m->ne);
+  CHECK(r.nswap <= (long)m->ne);
+  /* worst quality of the free tets */
+  double qw = 1;
+  for (pa_idx k = 0; k < m->ne; k++) {
+    if (m->eflag[k] & PA_FLAG_REQUIRED) continue;
+    const pa_idx *v = m->elem + 4 * (size_t)k;
+    double q = rm3d_qual_pts(1, m->coord + 3 * (size_t)v[0],
+                             m->coord + 3 * (size_t)v[1],
+                             m->coord + 3 * (size_t)v[2],
+                             m->coord + 3 * (size_t)v[3], m->met, m->met,
+                             m->met, m->met);
+    if (q < qw) qw = q;
+  }
+  CHECK(qw >= 0.25);
+  /* the target metric is written back, not the relaxed one */
+  CHECK(m->met_ncomp == 1);
+  for (pa_idx i = 0; i < m->nv; i++) CHECK_NEAR(m->met[i], h, 1e-15);
+  /* deterministic */
+  CHECK_OK(pa__remesh3d(d, &o, &r));
+  CHECK(d->nv == m->nv && d->ne == m->ne);
+  if (d->nv == m->nv && d->ne == m->ne) {
+    CHECK(!memcmp(d->coord, m->coord, sizeof(double) * 3 * m->nv));
+    CHECK(!memcmp(d->elem, m->elem, sizeof(pa_idx) * 4 * m->ne));
+  }
+  pa_mesh_destroy(m);
+  pa_mesh_destroy(c);
+  pa_mesh_destroy(d);
+}
+
 /* Identical output on repeated runs. */
 static void test_deterministic(void) {
   pa_mesh *a = box(3, 0.12), *b = NULL;
@@ -467,7 +529,8 @@ static void test_alloc_failure(void) {
 }
 
 TEST_MAIN(test_identity, test_refine_cube, test_nosurf, test_coarsen,
-          test_frozen_random, test_frozen_skin, test_deterministic,
+          test_frozen_random, test_frozen_skin, test_frozen_skin_refine,
+          test_deterministic,
           test_fields, test_field_interp, test_sphere, test_targets,
           test_curved_ridge,
           test_alloc_failure)
