@@ -23,10 +23,22 @@ int pa_cli_stats(const pa_cli *cli, int argc, char **argv);
 int pa_cli_convert(const pa_cli *cli, int argc, char **argv);
 int pa_cli_adapt(const pa_cli *cli, int argc, char **argv);
 int pa_cli_partition(const pa_cli *cli, int argc, char **argv);
+
+/* The arguments of `padapt adapt`, sequential and parallel alike. */
+typedef struct pa_cli_adapt_args {
+  const char *in, *out, *met, *outsol, *field, *outfield, *json;
+  int nosol;       /* -nosol: no output metric file */
+  int distributed; /* -distributed-output */
+  double mem_mb;   /* -mem MB (0: none) */
+  int max_iter;    /* -max-iter N (0: default) */
+  int pieces;      /* -pieces K (0: default) */
+  pa_remesh_opts remesh;
+} pa_cli_adapt_args;
+
 /* The parallel `padapt adapt` (pa_dmesh_adapt), called by pa_cli_adapt on more
- * than one rank: same arguments plus -distributed-output, -mem MB, -max-iter
- * N, -pieces K. Collective; the exit status is the same on every rank. */
-int pa_cli_adapt_parallel(const pa_cli *cli, int argc, char **argv);
+ * than one rank or for -distributed-output/-mem, with the parsed arguments.
+ * Collective; the exit status is the same on every rank. */
+int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args);
 
 /* Print "padapt: <message>" on stderr (every rank that calls it); returns 1. */
 int pa_cli_error(const pa_cli *cli, const char *fmt, ...)

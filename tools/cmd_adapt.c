@@ -12,8 +12,8 @@
  * valid mesh that misses some edge lengths: a warning says so, and the JSON
  * report's "outcome" field), 1 on any error (no output written).
  *
- * With several MPI ranks, rank 0 does the work (the parallel driver is
- * `padapt adapt` with distributed input, issue #6).
+ * On several MPI ranks (or with -distributed-output or -mem) the parallel
+ * piece loop of tools/cmd_padapt.c does the work, with the same arguments.
  */
 #include "cli.h"
 
@@ -38,7 +38,12 @@ static const char *adapt_usage =
     "  -field F.sol    vertex fields to interpolate; written to\n"
     "                  <OUT stem>.fields.sol (or -outfield PATH)\n"
     "  -json R.json    write the after-statistics, time and counts as JSON\n"
-    "  -v N            verbosity\n";
+    "  -v N            verbosity\n"
+    "Parallel (mpiexec -n P, P > 1; IN may be a distributed set OUT.<r>.meshb):\n"
+    "  -distributed-output  write OUT as a distributed set\n"
+    "  -mem MB         memory bound per process for one piece\n"
+    "  -max-iter N     at most N iterations (default 30)\n"
+    "  -pieces K       pieces per process (default 1)\n";
 
 static const char *outcome_name(pa_remesh_outcome o) {
   return o == PA_REMESH_SUCCESS         ? "success"
@@ -46,74 +51,94 @@ static const char *outcome_name(pa_remesh_outcome o) {
                                         : "failed";
 }
 
-int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
-  /* On several ranks, or when asked for a distributed output, the parallel
-   * piece loop (tools/cmd_padapt.c) does the work. */
-  if (cli->size > 1) return pa_cli_adapt_parallel(cli, argc, argv);
-  for (int i = 1; i < argc; i++)
-    if (!strcmp(argv[i], "-distributed-output") || !strcmp(argv[i], "-mem"))
-      return pa_cli_adapt_parallel(cli, argc, argv);
-  const char *in = NULL, *out = NULL, *met = NULL, *outsol = NULL;
-  const char *field = NULL, *outfield = NULL, *json = NULL;
-  int nosol = 0, rc = 1;
-  pa_remesh_opts opts;
-  pa_remesh_opts_default(&opts);
-  opts.verbosity = cli->verbosity;
-
+/* Parse the arguments of `padapt adapt`. Returns 0 when parsed, 1 after
+ * printing an error, -1 after printing the usage (-h). */
+static int parse_args(const pa_cli *cli, int argc, char **argv,
+                      pa_cli_adapt_args *a) {
+  memset(a, 0, sizeof *a);
+  pa_remesh_opts_default(&a->remesh);
+  a->remesh.verbosity = cli->verbosity;
   for (int i = 1; i < argc; i++) {
-    const char *a = argv[i];
+    const char *o = argv[i];
     const char *val = i + 1 < argc ? argv[i + 1] : NULL;
-#define NEEDS_FILE(what)                                                     \
-  do {                                                                       \
-    if (!val) return pa_cli_error(cli, "adapt: %s needs %s", a, what);       \
-    i++;                                                                     \
-  } while (0)
-    int r = pa_cli_remesh_option(cli, argc, argv, &i, &opts);
+    const char **file = NULL, *what = "a file";
+    int r = pa_cli_remesh_option(cli, argc, argv, &i, &a->remesh);
     if (r < 0) return 1;
     if (r > 0) continue;
-    if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+    if (!strcmp(o, "-h") || !strcmp(o, "--help")) {
       if (cli->rank == 0) fputs(adapt_usage, stdout);
-      return 0;
-    } else if (!strcmp(a, "-in")) {
-      NEEDS_FILE("a mesh file");
-      if (in) return pa_cli_error(cli, "adapt: more than one input mesh");
-      in = val;
-    } else if (!strcmp(a, "-met") || !strcmp(a, "-sol")) {
-      NEEDS_FILE("a .sol file");
-      met = val;
-    } else if (!strcmp(a, "-out")) {
-      NEEDS_FILE("a mesh file");
-      out = val;
-    } else if (!strcmp(a, "-outsol")) {
-      NEEDS_FILE("a .sol file");
-      outsol = val;
-    } else if (!strcmp(a, "-nosol")) {
-      nosol = 1;
-    } else if (!strcmp(a, "-field")) {
-      NEEDS_FILE("a .sol file");
-      field = val;
-    } else if (!strcmp(a, "-outfield")) {
-      NEEDS_FILE("a .sol file");
-      outfield = val;
-    } else if (!strcmp(a, "-json")) {
-      NEEDS_FILE("a file");
-      json = val;
-    } else if (a[0] == '-' && a[1]) {
-      return pa_cli_error(cli, "adapt: unknown option '%s' (see padapt adapt -h)", a);
-    } else if (!in) {
-      in = a;
+      return -1;
+    } else if (!strcmp(o, "-in")) {
+      if (a->in) return pa_cli_error(cli, "adapt: more than one input mesh");
+      file = &a->in, what = "a mesh file";
+    } else if (!strcmp(o, "-met") || !strcmp(o, "-sol")) {
+      file = &a->met, what = "a .sol file";
+    } else if (!strcmp(o, "-out")) {
+      file = &a->out, what = "a mesh file";
+    } else if (!strcmp(o, "-outsol")) {
+      file = &a->outsol, what = "a .sol file";
+    } else if (!strcmp(o, "-field")) {
+      file = &a->field, what = "a .sol file";
+    } else if (!strcmp(o, "-outfield")) {
+      file = &a->outfield, what = "a .sol file";
+    } else if (!strcmp(o, "-json")) {
+      file = &a->json;
+    } else if (!strcmp(o, "-nosol")) {
+      a->nosol = 1;
+    } else if (!strcmp(o, "-distributed-output")) {
+      a->distributed = 1;
+    } else if (!strcmp(o, "-mem") || !strcmp(o, "-max-iter") ||
+               !strcmp(o, "-pieces")) {
+      double x;
+      int count = strcmp(o, "-mem") != 0;
+      if (!pa_cli_parse_num(val, &x) || x <= 0 ||
+          (count && (x > 1000 || x != floor(x))))
+        return pa_cli_error(cli, "adapt: %s needs %s, got '%s'", o,
+                            count ? "an integer in [1, 1000]"
+                                  : "a positive number",
+                            val ? val : "nothing");
+      i++;
+      if (!strcmp(o, "-mem")) a->mem_mb = x;
+      if (!strcmp(o, "-max-iter")) a->max_iter = (int)x;
+      if (!strcmp(o, "-pieces")) a->pieces = (int)x;
+    } else if (o[0] == '-' && o[1]) {
+      return pa_cli_error(cli, "adapt: unknown option '%s' (see padapt adapt -h)",
+                          o);
+    } else if (!a->in) {
+      a->in = o;
     } else {
-      return pa_cli_error(cli, "adapt: more than one input mesh ('%s')", a);
+      return pa_cli_error(cli, "adapt: more than one input mesh ('%s')", o);
     }
-#undef NEEDS_FILE
+    if (file) {
+      if (!val) return pa_cli_error(cli, "adapt: %s needs %s", o, what);
+      *file = val;
+      i++;
+    }
   }
-  if (!in) return pa_cli_error(cli, "adapt: no input mesh\n%s", adapt_usage);
-  if (!out) return pa_cli_error(cli, "adapt: no output mesh (-out OUT)");
-  if (met && opts.hsiz > 0)
+  if (!a->in) return pa_cli_error(cli, "adapt: no input mesh\n%s", adapt_usage);
+  if (!a->out) return pa_cli_error(cli, "adapt: no output mesh (-out OUT)");
+  if (a->met && a->remesh.hsiz > 0)
     return pa_cli_error(cli, "adapt: give either -met/-sol or -hsiz, not both");
-  if (opts.hmin > 0 && opts.hmax > 0 && opts.hmin > opts.hmax)
+  if (a->remesh.hmin > 0 && a->remesh.hmax > 0 &&
+      a->remesh.hmin > a->remesh.hmax)
     return pa_cli_error(cli, "adapt: -hmin (%g) is larger than -hmax (%g)",
-                        opts.hmin, opts.hmax);
+                        a->remesh.hmin, a->remesh.hmax);
+  return 0;
+}
+
+int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
+  pa_cli_adapt_args args;
+  int prc = parse_args(cli, argc, argv, &args);
+  if (prc) return prc > 0 ? 1 : 0;
+  /* On several ranks, or when asked for a distributed output or a memory
+   * bound, the parallel piece loop (tools/cmd_padapt.c) does the work. */
+  if (cli->size > 1 || args.distributed || args.mem_mb > 0)
+    return pa_cli_adapt_parallel(cli, &args);
+  const char *in = args.in, *out = args.out, *met = args.met;
+  const char *outsol = args.outsol, *field = args.field;
+  const char *outfield = args.outfield, *json = args.json;
+  int nosol = args.nosol, rc = 1;
+  pa_remesh_opts opts = args.remesh;
 
   pa_mesh *mesh = NULL;
   pa_sol *sol = NULL;

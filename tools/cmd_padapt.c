@@ -27,25 +27,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const char *padapt_usage =
-    "usage: mpiexec -n P padapt adapt IN [-met SOL | -hsiz H] -out OUT [options]\n"
-    "  -in IN            input mesh, or a distributed set OUT.<r>.meshb\n"
-    "  -met/-sol SOL     metric: sizes (scalar) or tensors, .sol/.solb\n"
-    "  -hsiz H           constant size H (replaces the metric)\n"
-    "  -out OUT          output mesh (.mesh .meshb .msh .vtu), gathered on rank 0\n"
-    "  -distributed-output  write OUT as a distributed set instead\n"
-    "  -nosol            do not write the output metric (OUT.sol)\n"
-    "  -field F.sol      vertex fields to interpolate (written to\n"
-    "                    <OUT stem>.fields.sol)\n"
-    "  -mem MB           memory bound per process for one piece\n"
-    "  -json R.json      report: statistics, times per step and iteration,\n"
-    "                    bytes moved, peak memory per rank\n"
-    "  -max-iter N       at most N iterations (default 30)\n"
-    "  -pieces K         pieces per process (default 1)\n"
-    "  -hmin H -hmax H -hgrad G -hausd D -ar A -nr -noinsert -noswap -nomove\n"
-    "                    remesher options, as in the sequential adapt\n"
-    "  -v N              verbosity\n";
-
 /* Rank 0, after pa_cli_read_mesh: attach the metric and the fields. Prints
  * its own errors; returns 1 on success. */
 static int prepare_root(const pa_cli *cli, pa_mesh *mesh, const char *met,
@@ -211,82 +192,16 @@ static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
   return b.p;
 }
 
-int pa_cli_adapt_parallel(const pa_cli *cli, int argc, char **argv) {
-  const char *in = NULL, *out = NULL, *met = NULL, *field = NULL, *json = NULL;
-  int distributed = 0, nosol = 0, rc = 1;
+int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
+  const char *in = args->in, *out = args->out, *met = args->met;
+  const char *field = args->field, *json = args->json;
+  int distributed = args->distributed, nosol = args->nosol, rc = 1;
   pa_adapt_opts opts;
   pa_adapt_opts_default(&opts);
-  opts.remesh.verbosity = cli->verbosity;
-
-  for (int i = 1; i < argc; i++) {
-    const char *a = argv[i];
-    const char *val = i + 1 < argc ? argv[i + 1] : NULL;
-    double x;
-#define NEEDS_FILE(what)                                                     \
-  do {                                                                       \
-    if (!val) return pa_cli_error(cli, "adapt: %s needs %s", a, what);       \
-    i++;                                                                     \
-  } while (0)
-#define NEEDS_NUM(lo_ok)                                                     \
-  do {                                                                       \
-    if (!pa_cli_parse_num(val, &x) || !(lo_ok))                                     \
-      return pa_cli_error(cli, "adapt: %s needs a %s number, got '%s'", a,   \
-                          #lo_ok, val ? val : "nothing");                    \
-    i++;                                                                     \
-  } while (0)
-    int r = pa_cli_remesh_option(cli, argc, argv, &i, &opts.remesh);
-    if (r < 0) return 1;
-    if (r > 0) continue;
-    if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-      if (cli->rank == 0) fputs(padapt_usage, stdout);
-      return 0;
-    } else if (!strcmp(a, "-in")) {
-      NEEDS_FILE("a mesh file");
-      if (in) return pa_cli_error(cli, "adapt: more than one input mesh");
-      in = val;
-    } else if (!strcmp(a, "-met") || !strcmp(a, "-sol")) {
-      NEEDS_FILE("a .sol file");
-      met = val;
-    } else if (!strcmp(a, "-out")) {
-      NEEDS_FILE("a mesh file");
-      out = val;
-    } else if (!strcmp(a, "-distributed-output")) {
-      distributed = 1;
-    } else if (!strcmp(a, "-nosol")) {
-      nosol = 1;
-    } else if (!strcmp(a, "-field")) {
-      NEEDS_FILE("a .sol file");
-      field = val;
-    } else if (!strcmp(a, "-json")) {
-      NEEDS_FILE("a file");
-      json = val;
-    } else if (!strcmp(a, "-mem")) {
-      NEEDS_NUM(x > 0);
-      opts.mem_mb = x;
-    } else if (!strcmp(a, "-max-iter")) {
-      NEEDS_NUM(x >= 1 && x <= 1000 && x == floor(x));
-      opts.max_iter = (int)x;
-    } else if (!strcmp(a, "-pieces")) {
-      NEEDS_NUM(x >= 1 && x <= 1000 && x == floor(x));
-      opts.pieces_per_rank = (int)x;
-    } else if (a[0] == '-' && a[1]) {
-      return pa_cli_error(cli, "adapt: unknown option '%s' (see padapt adapt -h)", a);
-    } else if (!in) {
-      in = a;
-    } else {
-      return pa_cli_error(cli, "adapt: more than one input mesh ('%s')", a);
-    }
-#undef NEEDS_FILE
-#undef NEEDS_NUM
-  }
-  if (!in) return pa_cli_error(cli, "adapt: no input mesh\n%s", padapt_usage);
-  if (!out) return pa_cli_error(cli, "adapt: no output mesh (-out OUT)");
-  if (met && opts.remesh.hsiz > 0)
-    return pa_cli_error(cli, "adapt: give either -met/-sol or -hsiz, not both");
-  if (opts.remesh.hmin > 0 && opts.remesh.hmax > 0 &&
-      opts.remesh.hmin > opts.remesh.hmax)
-    return pa_cli_error(cli, "adapt: -hmin (%g) is larger than -hmax (%g)",
-                        opts.remesh.hmin, opts.remesh.hmax);
+  opts.remesh = args->remesh;
+  if (args->mem_mb > 0) opts.mem_mb = args->mem_mb;
+  if (args->max_iter > 0) opts.max_iter = args->max_iter;
+  if (args->pieces > 0) opts.pieces_per_rank = args->pieces;
   int set = cli->rank == 0 ? pa_dmesh_is_set(in) : 0;
   MPI_Bcast(&set, 1, MPI_INT, 0, cli->comm);
   if (set && (met || field)) {
@@ -386,14 +301,15 @@ int pa_cli_adapt_parallel(const pa_cli *cli, int argc, char **argv) {
         pa_sol *sol = NULL;
         path = pa_cli_replace_ext(out, ".sol");
         st = pa_mesh_metric_to_sol(g, 0, &sol);
-        if (st == PA_SUCCESS) st = pa_sol_write(sol, path);
+        if (st == PA_SUCCESS)
+          st = pa_sol_write(sol, args->outsol ? args->outsol : path);
         pa_sol_destroy(sol);
         free(path);
         path = NULL;
       }
       if (st == PA_SUCCESS && pa_mesh_nfield(g) > 0) {
         path = pa_cli_replace_ext(out, ".fields.sol");
-        st = pa_cli_write_fields(g, path);
+        st = pa_cli_write_fields(g, args->outfield ? args->outfield : path);
       }
     }
     ok = st == PA_SUCCESS;
