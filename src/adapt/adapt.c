@@ -9,7 +9,8 @@
  * they are never tagged again (except those produced next to a tagged frozen
  * element, see tag.c). The loop stops when no element is tagged
  * (converged), or when it stalls: each iteration in which the estimated
- * work of the tagged elements did not decrease by 1 % halves the number of
+ * work of the tagged elements did not fall 1 % below the least seen so far
+ * halves the number of
  * pieces of the next one (other borders, and fewer of them; one piece has
  * no inner border), and an iteration with one piece that makes no progress
  * (and rolled nothing back) ends the loop; so does max_iter (both reported
@@ -27,6 +28,7 @@
 #include "adapt/adapt.h"
 
 #include <math.h>
+#include <stdlib.h>
 
 void pa_adapt_opts_default(pa_adapt_opts *o) {
   if (!o) return;
@@ -48,6 +50,8 @@ void pa__iter_free(pa__iter *it) {
   pa__free(it->work);
   pa__free(it->label);
   pa__free(it->frozen);
+  pa__free(it->vlab);
+  pa__free(it->vinner);
   pa__free(it->piece_work);
   pa__free(it->piece_rank);
   pa__free(it->piece_failed);
@@ -61,6 +65,8 @@ void pa__iter_free(pa__iter *it) {
     pa__free(pc->skin);
     pa__free(pc->hot);
     pa__free(pc->match);
+    pa__free(pc->ifgid);
+    pa__free(pc->ifgive);
   }
   pa__free(it->pieces);
   memset(it, 0, sizeof *it);
@@ -178,6 +184,7 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
     it.size = dm->size;
     it.dim = dm->dim;
     it.nve = dm->dim + 1;
+    it.face_skins = getenv("PA_OLDSKIN") == NULL;
     PA_CALL(pa__adapt_tag(&it, done, iter == 1));
     t[0] = pa_wtime() - ta;
     rep.ntagged_left = it.ntagged;
@@ -191,6 +198,9 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
       pa__iter_free(&it);
       break;
     }
+    /* progress: 1 % below the least work seen so far (work that goes up
+     * and down, e.g. the same badly shaped elements tagged again next to
+     * other borders, is no progress) */
     nostep = last >= 0 && it.tagwork >= 0.99 * last ? nostep + 1 : 0;
     if ((nostep >= 1 && lastpieces == 1 && !lastfailed) || nostep >= 6) {
       rep.stalled = 1;
@@ -199,7 +209,7 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
       pa__iter_free(&it);
       break;
     }
-    last = it.tagwork;
+    if (last < 0 || it.tagwork < last) last = it.tagwork;
     ta = pa_wtime();
     {
       /* no progress: halve the pieces (other borders, fewer of them) */

@@ -37,6 +37,23 @@
  * frozen and tagged (it will be remeshed in a later iteration). */
 #define PA__FROZEN_TRANSIT 0x80
 #define PA__TAGGED_TRANSIT 0x40
+/* Flag bits of vertex records in transit (face skins): the vertex lies on
+ * the piece's skin; it touches a tagged element of another piece. */
+#define PA__SKIN_TRANSIT 0x80
+#define PA__HOT_TRANSIT 0x40
+/* ... its skin edges may be refined (bisect.c: every element around it is in
+ * a piece, it lies on no boundary or feature entity, is no corner nor
+ * required) */
+#define PA__INNER_TRANSIT 0x20
+/* Temporary ids of the vertices bisect.c adds to a piece (above every
+ * global id; exact as a double) */
+#define PA__TEMP_GID ((pa_gid)1 << 52)
+/* bisect.c: skin edges are bisected while longer than PA__LEB_SKIN, edges
+ * inside the piece while longer than PA__LEB_INNER (in the metric) */
+#define PA__LEB_SKIN 1.4142
+#define PA__LEB_INNER 2.0
+/* No label (pieces.c, extract.c). */
+#define PA__NOLABEL 2147483647
 /* Values of the "done" element value: 0 never remeshed, 1 remeshed (never
  * tagged again), 2 remeshed near a tagged frozen element (the remesher was
  * constrained there: tagged again if it fails the criteria). */
@@ -60,6 +77,10 @@ typedef struct pa__piece {
   uint8_t *skin;       /* in->nv: vertex of a frozen element */
   uint8_t *hot;        /* in->nv: vertex of a frozen tagged element */
   pa_idx nfrozen;      /* frozen input elements */
+  pa_idx nsplit;       /* vertices added on the skin (bisect.c) */
+  pa_gid *ifgid;       /* in->nv (with skin refinement): global id agreed
+                          for each vertex added by bisect.c, else unused */
+  uint8_t *ifgive;     /* in->nv: 1 if this piece gives that vertex */
   pa_idx *match;       /* out->nv: input vertex it is (same gid and
                           coordinates), or -1 for a new vertex */
   pa_remesh_report rep;
@@ -87,6 +108,13 @@ typedef struct pa__iter {
   double bytes_moved;  /* record bytes this rank sent to other ranks */
   double imbalance;    /* estimated work: max over ranks / mean */
   pa_gid nhot;         /* global: frozen tagged elements (extract.c) */
+  int face_skins;      /* 1: no frozen elements, the piece's outer faces
+                          are its skin */
+  uint8_t *vinner;     /* nloc (face skins): PA__INNER_TRANSIT or 0 */
+  int *vlab;           /* nloc x 2 (face skins): min label and max label of
+                          the labelled-or-not elements around each local
+                          vertex, then min and max label of the tagged ones
+                          (NOLABEL if none): 4 ints per vertex */
   pa_gid ntagged;      /* global */
   double tagwork;      /* global work of the tagged elements */
 } pa__iter;
@@ -111,6 +139,10 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max);
 /* Step 3. Collective: map pieces to ranks, ship their fragments and build
  * the local pieces (it->pieces). */
 pa_status pa__adapt_extract(pa__iter *it);
+
+/* Face skins: refine the skin faces pc shares with other pieces
+ * (bisect.c); inner[v]: see PA__INNER_TRANSIT. */
+pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner);
 
 /* Step 4. Local: remesh the local pieces; failures are recorded, not
  * returned (only hard internal errors are). *nfail receives the number of

@@ -40,6 +40,23 @@ static int contains(const pa_mesh *m, pa_idx e, const pa_idx *f, int k) {
   return 1;
 }
 
+/* Face skins: 1 if local vertex v, in a piece of label l, touches a tagged
+ * element of another piece (the remesher cannot reach across: elements
+ * produced near it may need another pass). */
+static int hot_vertex(const pa__iter *it, pa_idx v, int l) {
+  const int *x = it->vlab + 4 * (size_t)v;
+  return x[2] != PA__NOLABEL && (x[2] != l || x[3] != l);
+}
+
+/* Face skins: 1 if owned element e is tagged and touches a hot vertex. */
+static int hot_elem(const pa__iter *it, pa_idx e) {
+  if (!it->tag[e]) return 0;
+  for (int k = 0; k < it->nve; k++)
+    if (hot_vertex(it, it->dm->mesh->elem[(size_t)it->nve * e + k], it->label[e]))
+      return 1;
+  return 0;
+}
+
 /* Heaviest-first greedy map of pieces to ranks (see the file comment). */
 static pa_status map_pieces(pa__iter *it, const double *cnt) {
   pa_status st = PA_SUCCESS;
@@ -150,6 +167,12 @@ static pa_status pair_records(pa__iter *it, int kind, const pa_idx *bstart,
       }
       ref = m->vref[x];
       flag = m->vflag[x];
+      if (it->face_skins) {
+        const int *l = it->vlab + 4 * (size_t)x;
+        if (l[0] != l[1]) flag |= PA__SKIN_TRANSIT;
+        if (hot_vertex(it, x, p)) flag |= PA__HOT_TRANSIT;
+        flag |= it->vinner[x];
+      }
     } else {
       const pa_idx *conn = kind == PA_BOUNDARY ? m->bdry : m->edge;
       for (int j = 0; j < nv; j++)
@@ -216,6 +239,7 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
   int d = it->dim;
   pa_mesh *m = NULL;
   pa__gidmap map = {0};
+  uint8_t *inner = NULL;
   const pa__recs *V = &R[PA_VERTEX], *E = &R[PA_ELEMENT];
   pa_idx nv = start[PA_VERTEX][p + 1] - start[PA_VERTEX][p];
   pa_idx ne = start[PA_ELEMENT][p + 1] - start[PA_ELEMENT][p];
@@ -240,6 +264,7 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
   PA_ALLOC(pc->vgid, nv);
   PA_CALLOC(pc->skin, nv);
   PA_CALLOC(pc->hot, nv);
+  PA_CALLOC(inner, nv);
   PA_CALL(pa__gidmap_init(&map, (size_t)nv));
   for (pa_idx k = 0; k < nv; k++) {
     size_t i = (size_t)idx[PA_VERTEX][start[PA_VERTEX][p] + k];
@@ -258,6 +283,12 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
     m->field[dmm->nfield].val[k] = (double)V->gid[i];
     m->vref[k] = V->ref[i];
     m->vflag[k] = V->flag[i];
+    if (it->face_skins) {
+      pc->skin[k] = (V->flag[i] & PA__SKIN_TRANSIT) != 0;
+      pc->hot[k] = (V->flag[i] & PA__HOT_TRANSIT) != 0;
+      inner[k] = (V->flag[i] & PA__INNER_TRANSIT) != 0;
+      m->vflag[k] &= (uint8_t)~(PA__SKIN_TRANSIT | PA__HOT_TRANSIT | PA__INNER_TRANSIT);
+    }
     pc->vgid[k] = V->gid[i];
     PA_CALL(pa__gidmap_put(&map, V->gid[i], k, NULL, NULL));
   }
@@ -314,9 +345,11 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
   }
   pc->in = m;
   m = NULL;
+  if (it->face_skins) PA_CALL(pa__piece_refine_skin(pc, inner));
 cleanup:
   pa_mesh_destroy(m);
   pa__gidmap_free(&map);
+  pa__free(inner);
   return st;
 }
 
@@ -346,7 +379,8 @@ pa_status pa__adapt_extract(pa__iter *it) {
   PA_CALLOC(buf, (size_t)np * P + np + 1);
   for (pa_idx e = 0; e < it->ne; e++)
     if (it->label[e] >= 0) {
-      buf[(size_t)np * P + np] += it->frozen[e] && it->tag[e];
+      buf[(size_t)np * P + np] += it->face_skins ? hot_elem(it, e)
+                                                 : it->frozen[e] && it->tag[e];
       buf[(size_t)it->label[e] * P + it->rank] += 1;
       buf[(size_t)np * P + it->label[e]] +=
           it->work[e] >= 0 ? it->work[e] : pa__elem_work(m, e);

@@ -29,13 +29,14 @@
 #include <limits.h>
 #include <math.h>
 
-#define NOLABEL INT_MAX
+#define NOLABEL PA__NOLABEL
 
 /* Vertex value comp 0 = min over the owned elements around v of lab(e),
  * comp 1 = min of -lab(e), where lab = label or NOLABEL; only_labelled skips
  * unlabelled elements. Reduced (MIN) and sent to the ghosts. */
 static pa_status vertex_labels(pa__iter *it, pa_dmesh_value *val,
                                int only_labelled) {
+  /* only_labelled == 2: the tagged elements only */
   pa_status st = PA_SUCCESS;
   pa_idx n;
   int *d = pa_dmesh_value_data(val, &n, NULL);
@@ -44,6 +45,7 @@ static pa_status vertex_labels(pa__iter *it, pa_dmesh_value *val,
   for (pa_idx e = 0; e < it->ne; e++) {
     int l = it->label[e] < 0 ? NOLABEL : it->label[e];
     if (only_labelled && l == NOLABEL) continue;
+    if (only_labelled == 2 && !it->tag[e]) continue;
     for (int k = 0; k < it->nve; k++) {
       int *x = d + 2 * conn[(size_t)it->nve * e + k];
       if (l < x[0]) x[0] = l;
@@ -134,6 +136,7 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
     const int *d = pa_dmesh_value_data(val, NULL, NULL);
     for (pa_idx e = 0; e < it->ne; e++) {
       if (it->label[e] >= 0) continue;
+      if (it->face_skins && (dm->mesh->eflag[e] & PA_FLAG_REQUIRED)) continue;
       int l = NOLABEL;
       for (int k = 0; k < it->nve; k++) {
         int x = d[2 * conn[(size_t)it->nve * e + k]];
@@ -148,7 +151,54 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
 
   /* 4. frozen outer layer */
   PA_CALL(vertex_labels(it, val, 0));
-  {
+  if (it->face_skins) {
+    /* no frozen element: the skin is the piece's outer surface; keep the
+     * label range around every local vertex, and that of the tagged
+     * elements (hot skin vertices) */
+    pa_idx nloc = dm->nloc[PA_VERTEX];
+    PA_ALLOC(it->vlab, (size_t)4 * nloc);
+    {
+      const int *d = pa_dmesh_value_data(val, NULL, NULL);
+      for (pa_idx v = 0; v < nloc; v++) {
+        it->vlab[4 * v] = d[2 * v];
+        it->vlab[4 * v + 1] = -d[2 * v + 1];
+      }
+    }
+    PA_CALL(vertex_labels(it, val, 2));
+    {
+      const int *d = pa_dmesh_value_data(val, NULL, NULL);
+      for (pa_idx v = 0; v < nloc; v++) {
+        it->vlab[4 * v + 2] = d[2 * v];
+        it->vlab[4 * v + 3] = -d[2 * v + 1];
+      }
+    }
+    /* inner vertices (bisect.c): only pieces around, on no feature edge nor
+     * required boundary entity (reduced over the ranks: every piece sees
+     * the same) */
+    {
+      int *d = pa_dmesh_value_data(val, NULL, NULL);
+      const pa_mesh *m = dm->mesh;
+      for (pa_idx v = 0; v < nloc; v++) d[2 * v] = d[2 * v + 1] = 0;
+      for (pa_idx b = 0; b < m->nb; b++)
+        if (m->bflag[b] & PA_FLAG_REQUIRED)
+          for (int k = 0; k < it->dim; k++) d[2 * m->bdry[(size_t)it->dim * b + k]] = 1;
+      for (pa_idx b = 0; b < m->ned; b++)
+        for (int k = 0; k < 2; k++) d[2 * m->edge[2 * (size_t)b + k]] = 1;
+    }
+    PA_CALL(pa__agree(dm->comm, st));
+    PA_CALL(pa_dmesh_reduce(dm, val, MPI_MAX));
+    PA_CALL(pa_dmesh_halo(dm, val));
+    PA_ALLOC(it->vinner, nloc);
+    {
+      const int *d = pa_dmesh_value_data(val, NULL, NULL);
+      const uint8_t *vf = dm->mesh->vflag;
+      for (pa_idx v = 0; v < nloc; v++)
+        it->vinner[v] =
+            (uint8_t)(!d[2 * v] && it->vlab[4 * v + 1] != NOLABEL &&
+                              !(vf[v] & (PA_FLAG_CORNER | PA_FLAG_RIDGE | PA_FLAG_REQUIRED))
+                          ? PA__INNER_TRANSIT : 0);
+    }
+  } else {
     const int *d = pa_dmesh_value_data(val, NULL, NULL);
     for (pa_idx e = 0; e < it->ne; e++) {
       int l = it->label[e];

@@ -30,7 +30,10 @@
  */
 #include "adapt/adapt.h"
 
+#include <limits.h>
 #include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
 
 /* ---- a set of sorted vertex tuples (faces or edges of an output) ---- */
 
@@ -105,7 +108,8 @@ static int output_ok(const pa__iter *it, pa__piece *pc, pa_mesh *out,
   }
   PA_CALL(pa__gidmap_init(&map, (size_t)in->nv));
   for (pa_idx i = 0; i < in->nv; i++)
-    PA_CALL(pa__gidmap_put(&map, pc->vgid[i], i, NULL, NULL));
+    if (pc->vgid[i] >= 0) /* -1: added inside the piece by bisect.c */
+      PA_CALL(pa__gidmap_put(&map, pc->vgid[i], i, NULL, NULL));
   PA_ALLOC(pc->match, out->nv);
   PA_CALLOC(seen, in->nv);
   for (pa_idx j = 0; j < out->nv; j++) {
@@ -201,6 +205,15 @@ pa_status pa__adapt_remesh(pa__iter *it, int *nfail) {
       out = NULL;
       it->piece_failed[pc->id] = 1;
       (*nfail)++;
+      if (it->face_skins) {
+        /* the piece comes back as it was given (with its refined skin,
+         * which its neighbours share), still to adapt */
+        PA_CALL(pa_mesh_copy(pc->in, &pc->out));
+        pa__free(pc->match);
+        PA_ALLOC(pc->match, pc->in->nv);
+        for (pa_idx j = 0; j < pc->in->nv; j++)
+          pc->match[j] = pc->vgid[j] >= 0 ? j : -1; /* -1: added inside */
+      }
     }
   }
 cleanup:
@@ -240,22 +253,33 @@ static pa_status kept_flags(pa__iter *it, int kind, const uint8_t *keep,
   const pa_mesh *m = dm->mesh;
   pa_dmesh_value *val = NULL;
   int nv = pa__kind_nv(it->dim, kind);
-  PA_CALL(pa_dmesh_value_add(dm, (pa_entity)kind, "pa.adapt.kept", MPI_INT, 1,
+  /* comp 0: in a staying element; comps 1, 2 (face skins): max of -label
+   * and of label over the elements containing it (it lies on a skin when
+   * they differ) */
+  PA_CALL(pa_dmesh_value_add(dm, (pa_entity)kind, "pa.adapt.kept", MPI_INT, 3,
                              -1, &val));
   {
     pa_idx n;
     int *x = pa_dmesh_value_data(val, &n, NULL);
+    for (pa_idx b = 0; b < n; b++) {
+      x[3 * b] = 0;
+      x[3 * b + 1] = x[3 * b + 2] = INT_MIN;
+    }
     if (kind == PA_VERTEX) {
       for (pa_idx e = 0; e < it->ne; e++)
         if (keep[e])
-          for (int k = 0; k < it->nve; k++) x[m->elem[(size_t)it->nve * e + k]] = 1;
+          for (int k = 0; k < it->nve; k++) x[3 * m->elem[(size_t)it->nve * e + k]] = 1;
+      if (it->face_skins)
+        for (pa_idx v = 0; v < n; v++)
+          if (it->vlab[4 * v] != it->vlab[4 * v + 1]) x[3 * v] = 1;
     } else {
       const pa_idx *conn = kind == PA_BOUNDARY ? m->bdry : m->edge;
       for (pa_idx b = 0; b < n; b++) {
         const pa_idx *f = conn + (size_t)nv * b;
-        for (pa_idx q = bstart[f[0]]; q < bstart[f[0] + 1] && !x[b]; q++) {
+        int *y = x + 3 * b;
+        for (pa_idx q = bstart[f[0]]; q < bstart[f[0] + 1] && !y[0]; q++) {
           pa_idx e = belem[q];
-          if (!keep[e]) continue;
+          if (!keep[e] && !it->face_skins) continue;
           const pa_idx *ev = m->elem + (size_t)it->nve * e;
           int all = 1;
           for (int i = 1; i < nv && all; i++) {
@@ -263,7 +287,11 @@ static pa_status kept_flags(pa__iter *it, int kind, const uint8_t *keep,
             for (int j = 0; j < it->nve; j++) in |= ev[j] == f[i];
             all = in;
           }
-          x[b] = all;
+          if (!all) continue;
+          if (keep[e]) y[0] = 1;
+          int l = it->label[e];
+          if (-l > y[1]) y[1] = -l;
+          if (l > y[2]) y[2] = l;
         }
       }
     }
@@ -273,7 +301,10 @@ static pa_status kept_flags(pa__iter *it, int kind, const uint8_t *keep,
     pa_idx nown = dm->nown[kind];
     const int *x = pa_dmesh_value_data(val, NULL, NULL);
     PA_ALLOC(*out, nown);
-    for (pa_idx i = 0; i < nown; i++) (*out)[i] = (uint8_t)(x[i] != 0);
+    for (pa_idx i = 0; i < nown; i++) {
+      const int *y = x + 3 * i;
+      (*out)[i] = (uint8_t)(y[0] != 0 || (y[2] != INT_MIN && -y[1] != y[2]));
+    }
   }
 cleanup:
   st = pa__agree_end(dm->comm, st);
@@ -293,8 +324,23 @@ static pa_status output_emit(const pa_mesh *out, uint8_t **bemit,
   int d = out->dim, nve = d + 1;
   pa_idx nreq = 0;
   for (pa_idx e = 0; e < out->ne; e++) nreq += (out->eflag[e] & PA_FLAG_REQUIRED) != 0;
+  for (pa_idx b = 0; b < out->nb; b++) nreq += out->bref[b] == PA__SKIN_REF;
   PA_CALL(tset_init(&fs, (size_t)nreq * nve));
   PA_CALL(tset_init(&es, (size_t)nreq * 6));
+  /* the artificial skin faces and their edges */
+  for (pa_idx b = 0; b < out->nb; b++) {
+    if (out->bref[b] != PA__SKIN_REF) continue;
+    const pa_idx *v = out->bdry + (size_t)d * b;
+    pa_idx k[3];
+    tkey(v, d, k);
+    tset_find(&fs, k, 1);
+    for (int i = 0; i < d; i++)
+      for (int j = i + 1; j < d; j++) {
+        pa_idx ed[2] = {v[i], v[j]};
+        tkey(ed, 2, k);
+        tset_find(&es, k, 1);
+      }
+  }
   for (pa_idx e = 0; e < out->ne; e++) {
     if (!(out->eflag[e] & PA_FLAG_REQUIRED)) continue;
     const pa_idx *v = out->elem + (size_t)nve * e;
@@ -349,11 +395,15 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   PA_ALLOC(dbl, R[PA_VERTEX].ndbl);
   for (pa_idx j = 0; j < o->nv; j++) {
     pa_idx i = pc->match[j];
-    if (i >= 0 && pc->skin[i]) {
+    if (i >= 0 && pc->skin[i] && pc->vgid[i] >= PA__TEMP_GID) {
+      vg[j] = pc->ifgid[i]; /* added by bisect.c: one piece gives it */
+      if (!pc->ifgive[i]) continue;
+    } else if (i >= 0 && pc->skin[i]) {
       vg[j] = pc->vgid[i]; /* kept by its owner */
       continue;
+    } else {
+      vg[j] = i >= 0 ? pc->vgid[i] : next[PA_VERTEX]++;
     }
-    vg[j] = i >= 0 ? pc->vgid[i] : next[PA_VERTEX]++;
     double *y = dbl;
     memcpy(y, o->coord + (size_t)d * j, d * sizeof *y);
     y += d;
@@ -386,11 +436,11 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   for (pa_idx e = 0; e < o->ne; e++) {
     if (o->eflag[e] & PA_FLAG_REQUIRED) continue;
     pa_gid ev[4];
-    uint8_t dv = PA__DONE;
+    uint8_t dv = it->piece_failed[pc->id] ? 0 : PA__DONE;
     for (int k = 0; k <= d; k++) {
       pa_idx j = o->elem[(size_t)(d + 1) * e + k];
       ev[k] = vg[j];
-      if (dist[j] < NEAR_SKIN) dv = PA__DONE_NEAR_SKIN;
+      if (dist[j] < NEAR_SKIN && dv) dv = PA__DONE_NEAR_SKIN;
     }
     size_t pl = pa__new_payload(dm, PA_ELEMENT, o->eref[e], done, dv, pay);
     PA_CALL(pa__recs_add(&R[PA_ELEMENT], next[PA_ELEMENT]++, ev, o->eref[e],
@@ -418,6 +468,160 @@ cleanup:
   return st;
 }
 
+/* ---- ids of the vertices bisect.c added ---- */
+
+/* A request: coordinates, then the piece. */
+typedef struct ifreq {
+  double x[3];
+  int64_t piece;
+  int64_t src; /* position in the sender's order (on the home rank) */
+} ifreq;
+
+static int ifreq_cmp(const void *p, const void *q) {
+  const ifreq *a = p, *b = q;
+  for (int k = 0; k < 3; k++)
+    if (a->x[k] != b->x[k]) return a->x[k] < b->x[k] ? -1 : 1;
+  return (a->piece > b->piece) - (a->piece < b->piece);
+}
+
+static int home_rank(const double *x, int d, int P) {
+  uint64_t h = 1469598103934665603ull;
+  for (int k = 0; k < d; k++) {
+    uint64_t b;
+    memcpy(&b, &x[k], sizeof b);
+    h = (h ^ b) * 1099511628211ull;
+    h ^= h >> 29;
+  }
+  return (int)(h % (uint64_t)P);
+}
+
+/* Every vertex bisect.c added lies on the skins of all the pieces around
+ * its edge, each holding an identical copy (same coordinates). The copies
+ * meet on a home rank chosen by their coordinates, which numbers the
+ * distinct vertices from first (consecutive on each home rank, ranks in
+ * order) and names the piece that gives each vertex to the rebuild (the
+ * smallest). A vertex met once means the pieces disagree: an internal
+ * error, reported. */
+static pa_status skin_vertex_ids(pa__iter *it, pa_gid first) {
+  pa_status st = PA_SUCCESS;
+  MPI_Comm comm = it->dm->comm;
+  int P = it->size, d = it->dim;
+  size_t n = 0, *scnt = NULL, *rcnt = NULL, *rcnt2 = NULL, *pos = NULL;
+  ifreq *sbuf = NULL, *rbuf = NULL, *srt = NULL;
+  int64_t *ans = NULL, *back = NULL;
+  int *home = NULL;
+  pa_gid ndist = 0, off = 0;
+  for (int q = 0; q < it->npiece_local; q++) {
+    pa__piece *pc = &it->pieces[q];
+    if (!pc->out) continue;
+    for (pa_idx i = 0; i < pc->in->nv; i++) n += pc->vgid[i] >= PA__TEMP_GID;
+    /* (only skin vertices carry temporary ids) */
+  }
+  PA_CALLOC(scnt, P);
+  PA_CALLOC(pos, (size_t)P + 1);
+  PA_ALLOC(home, n ? n : 1);
+  PA_ALLOC(sbuf, n ? n : 1);
+  /* requests grouped by home rank, in (piece, vertex) order within each */
+  {
+    size_t k = 0;
+    for (int q = 0; q < it->npiece_local; q++) {
+      pa__piece *pc = &it->pieces[q];
+      if (!pc->out) continue;
+      for (pa_idx i = 0; i < pc->in->nv; i++)
+        if (pc->vgid[i] >= PA__TEMP_GID) {
+          home[k] = home_rank(pc->in->coord + (size_t)d * i, d, P);
+          scnt[home[k]]++;
+          k++;
+        }
+    }
+    for (int r = 0; r < P; r++) pos[r + 1] = pos[r] + scnt[r];
+    k = 0;
+    for (int q = 0; q < it->npiece_local; q++) {
+      pa__piece *pc = &it->pieces[q];
+      if (!pc->out) continue;
+      for (pa_idx i = 0; i < pc->in->nv; i++)
+        if (pc->vgid[i] >= PA__TEMP_GID) {
+          ifreq *r = &sbuf[pos[home[k]]++];
+          memset(r, 0, sizeof *r);
+          memcpy(r->x, pc->in->coord + (size_t)d * i, d * sizeof(double));
+          r->piece = pc->id;
+          k++;
+        }
+    }
+    for (int r = 0; r < P; r++) scnt[r] *= sizeof(ifreq);
+  }
+  PA_CALL(pa__xchg_sparse(comm, scnt, sbuf, &rcnt, (void **)&rbuf));
+  /* home: sort, number the distinct coordinates, answer in arrival order */
+  {
+    size_t nr = 0;
+    for (int r = 0; r < P; r++) nr += rcnt[r] / sizeof(ifreq);
+    PA_ALLOC(srt, nr ? nr : 1);
+    memcpy(srt, rbuf, nr * sizeof *srt);
+    for (size_t i = 0; i < nr; i++) srt[i].src = (int64_t)i;
+    qsort(srt, nr, sizeof *srt, ifreq_cmp);
+    int bad = 0;
+    for (size_t i = 0; i < nr;) {
+      size_t j = i + 1;
+      while (j < nr && memcmp(srt[j].x, srt[i].x, sizeof srt[i].x) == 0) j++;
+      bad |= j - i < 2;
+      ndist++;
+      i = j;
+    }
+    PA_CHECK(!bad, PA_ERR_INTERNAL, "parallel adaptation: a vertex added to "
+             "refine a piece's skin was not added by the piece on the other "
+             "side");
+  }
+  PA_CALL(pa__agree(comm, st));
+  MPI_Exscan(&ndist, &off, 1, MPI_INT64_T, MPI_SUM, comm);
+  if (it->rank == 0) off = 0;
+  {
+    size_t nr = 0;
+    for (int r = 0; r < P; r++) nr += rcnt[r] / sizeof(ifreq);
+    PA_ALLOC(ans, 2 * (nr ? nr : 1));
+    pa_gid g = first + off - 1;
+    for (size_t i = 0; i < nr; i++) {
+      int isnew = i == 0 || memcmp(srt[i].x, srt[i - 1].x, sizeof srt[i].x) != 0;
+      if (isnew) g++;
+      ans[2 * srt[i].src] = g;
+      ans[2 * srt[i].src + 1] = isnew; /* the smallest piece gives it */
+    }
+    for (int r = 0; r < P; r++) rcnt[r] = rcnt[r] / sizeof(ifreq) * 2 * sizeof(int64_t);
+  }
+  PA_CALL(pa__xchg_sparse(comm, rcnt, ans, &rcnt2, (void **)&back));
+  /* the answers come back in the order of the requests */
+  {
+    for (int r = 0; r < P; r++) pos[r] = 0;
+    for (int r = 1; r < P; r++) pos[r] = pos[r - 1] + scnt[r - 1] / sizeof(ifreq);
+    size_t k = 0;
+    for (int q = 0; q < it->npiece_local; q++) {
+      pa__piece *pc = &it->pieces[q];
+      if (!pc->out) continue;
+      PA_CALLOC(pc->ifgid, pc->in->nv);
+      PA_CALLOC(pc->ifgive, pc->in->nv);
+      for (pa_idx i = 0; i < pc->in->nv; i++)
+        if (pc->vgid[i] >= PA__TEMP_GID) {
+          size_t a = pos[home[k]]++;
+          pc->ifgid[i] = back[2 * a];
+          pc->ifgive[i] = (uint8_t)back[2 * a + 1];
+          k++;
+        }
+    }
+  }
+cleanup:
+  st = pa__agree_end(comm, st);
+  pa__free(scnt);
+  pa__free(rcnt);
+  pa__free(rcnt2);
+  pa__free(pos);
+  pa__free(sbuf);
+  pa__free(rbuf);
+  pa__free(srt);
+  pa__free(ans);
+  pa__free(back);
+  pa__free(home);
+  return st;
+}
+
 pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
@@ -437,7 +641,8 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
                         MPI_MAX));
   PA_ALLOC(keep, it->ne);
   for (pa_idx e = 0; e < it->ne; e++)
-    keep[e] = it->label[e] < 0 || it->frozen[e] || it->piece_failed[it->label[e]];
+    keep[e] = it->label[e] < 0 || it->frozen[e] ||
+              (!it->face_skins && it->piece_failed[it->label[e]]);
 
   /* 2. kept vertices, boundary entities and edges */
   if (!it->bstart) PA_CALL(pa__owned_balls(dm, &it->bstart, &it->belem));
@@ -491,6 +696,12 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
   if (it->rank == 0)
     for (int k = 0; k < PA_NKIND; k++) off[k] = 0;
   for (int k = 0; k < PA_NKIND; k++) off[k] += base[k] + 1;
+  if (it->face_skins) {
+    /* the vertices bisect.c added take ids after every other new vertex */
+    pa_gid tot = cnt[PA_VERTEX];
+    PA_CALL(pa__allreduce(dm->comm, &tot, 1, MPI_INT64_T, MPI_SUM));
+    PA_CALL(skin_vertex_ids(it, base[PA_VERTEX] + 1 + tot));
+  }
 
   /* 5. records of the outputs */
   {

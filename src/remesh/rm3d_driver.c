@@ -335,9 +335,14 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
     /* Far too coarse input: split longest edges first, in bands of lengths
      * decreasing by a constant factor, so that tets are bisected roughly in
      * the order of a global longest-edge refinement (no needles). */
+    double prev = HUGE_VAL;
     for (int it = 0; it < 40; it++) {
+      /* decreasing even when the longest edge cannot be split (frozen, or
+       * refused next to a frozen skin): the bands must reach RM3D_LMAX */
       double thr = max_length(&m) / 1.5;
+      if (thr > prev / 1.5) thr = prev / 1.5;
       if (thr < RM3D_LMAX) thr = RM3D_LMAX;
+      prev = thr;
       long ns = 0;
       double t1 = pa_wtime();
       PA_CALL(pa__rm3d_split_pass(&m, thr, &ns));
@@ -350,7 +355,7 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
                 "(%d slots), memory %.1f MB (peak %.1f)\n",
                 thr, ns, nc, pa_wtime() - t1, (int)(m.ne - m.ndead_t),
                 (int)m.ne, pa_memory_current() / 1e6, pa_memory_peak() / 1e6);
-      if (!ns || thr == RM3D_LMAX) break;
+      if (thr == RM3D_LMAX) break;
     }
     PA_CALL(pa__rm3d_reorder(&m));
     long ref = -1; /* splits + collapses when the count last fell by 5 % */

@@ -1,0 +1,23 @@
+/*
+ * leb.h -- longest-edge bisection of a simplex mesh in its metric (leb.c).
+ */
+#ifndef PA_LEB_H
+#define PA_LEB_H
+
+#include "metric/metric.h"
+
+typedef struct pa__leb_opts {
+  double lmax;            /* split inner edges longer than this */
+  int32_t skin_ref;       /* boundary entities of this reference are a skin */
+  const uint8_t *skin_ok; /* per vertex (or NULL: no skin): skin edges
+                             between two marked vertices may be split */
+  double skin_lmax;       /* split such skin edges longer than this */
+} pa__leb_opts;
+
+/* Refine m in place (see leb.c). New vertices are appended; *parent (if not
+ * NULL) receives the two ends of the edge each was added on, *onskin (if
+ * not NULL, and vertices were added) 1 for those added on a skin edge. */
+pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parent,
+                         uint8_t **onskin);
+
+#endif /* PA_LEB_H */
