@@ -118,7 +118,8 @@ static pa_status push(bis *s, pa_idx a, pa_idx b) {
     b = t;
   }
   double len = elen(m, a, b);
-  double lo = s->o->lmax < s->o->skin_lmax ? s->o->lmax : s->o->skin_lmax;
+  double lo = s->o->skin_ok && s->o->skin_lmax < s->o->lmax ? s->o->skin_lmax
+                                                           : s->o->lmax;
   if (!(len > lo) || !isfinite(len)) return PA_SUCCESS;
   PA_GROW(s->heap, s->capheap, s->nheap + 1);
   size_t i = s->nheap++;

@@ -14,12 +14,46 @@
  */
 #include "remesh/remesh.h"
 #include "remesh/remesh3d.h"
+#include "remesh/leb.h"
+
+#include <stdio.h>
+
+/* leb.c before the 3D passes: bisect edges longer than this */
+#define PA__LEB_PRE 2.0
 
 void pa_remesh_opts_default(pa_remesh_opts *o) {
   memset(o, 0, sizeof *o);
   o->hgrad = 1.3;
   o->hausd = 0.01;
   o->angle = 45;
+}
+
+/* 3D: longest-edge bisection to length PA__LEB_PRE first (leb.c: cheaper
+ * than the band splits, and well-shaped), on a copy so that a FAILED
+ * outcome leaves the mesh as given. */
+static pa_status remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
+                          pa_remesh_report *report) {
+  pa_status st = PA_SUCCESS;
+  pa_mesh *w = NULL;
+  pa__leb_opts lo;
+  double t0 = pa_wtime();
+  memset(&lo, 0, sizeof lo);
+  lo.lmax = PA__LEB_PRE;
+  if (opts->no_insert) return pa__remesh3d(mesh, opts, report);
+  PA_CALL(pa_mesh_copy(mesh, &w));
+  PA_CALL(pa__leb_refine(w, &lo, NULL, NULL));
+  if (opts->verbosity > 0)
+    fprintf(stderr, "  leb: %d -> %d tets in %.2fs\n", (int)mesh->ne, (int)w->ne,
+            pa_wtime() - t0);
+  PA_CALL(pa__remesh3d(w, opts, report));
+  if (report->outcome != PA_REMESH_FAILED) {
+    pa_mesh t = *mesh;
+    *mesh = *w;
+    *w = t;
+  }
+cleanup:
+  pa_mesh_destroy(w);
+  return st;
 }
 
 /* The built-in remesher's callback. */
@@ -29,7 +63,7 @@ static pa_status builtin_remesh(void *ctx, pa_mesh *mesh,
   pa_status st = PA_SUCCESS;
   pa__rmesh *rm = NULL;
   (void)ctx;
-  if (mesh->dim == 3) return pa__remesh3d(mesh, opts, report);
+  if (mesh->dim == 3) return remesh3d(mesh, opts, report);
   PA_CALL(pa__rm_create(mesh, opts, &rm));
   PA_CALL(pa__rm_adapt(rm, &pa__rm_ops_2d, report));
   if (report->outcome != PA_REMESH_FAILED) PA_CALL(pa__rm_writeback(rm, mesh));
