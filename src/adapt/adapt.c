@@ -6,24 +6,24 @@
  * Before the loop, hsiz/hmin/hmax are folded into the metric of every local
  * vertex (the same on owner and ghosts, so no exchange is needed); the
  * element value PA__DONE_VALUE marks the elements produced by a remesh so
- * they are never tagged again (except those produced next to a tagged frozen
- * element, see tag.c). The loop stops when no element is tagged
- * (converged), or when it stalls: each iteration in which the estimated
- * work of the tagged elements did not fall 1 % below the least seen so far
- * halves the number of
- * pieces of the next one (other borders, and fewer of them; one piece has
- * no inner border), and an iteration with one piece that makes no progress
- * (and rolled nothing back) ends the loop; so does max_iter (both reported
- * as stalled). Every step is collective and agrees on its status,
- * so all ranks leave the loop together.
+ * they are never tagged again (except, with a looser criterion, those
+ * produced next to the skin of another piece, see tag.c). The loop stops
+ * when no element is tagged (converged), or when it stalls: each iteration
+ * in which the estimated work of the tagged elements did not fall 1 % below
+ * the least seen so far halves the number of pieces of the next one (other
+ * borders, and fewer of them; one piece has no inner border), and an
+ * iteration with one piece that makes no progress (and rolled nothing back)
+ * ends the loop; so does max_iter (both reported as stalled). Every step is
+ * collective and agrees on its status, so all ranks leave the loop
+ * together.
  *
- * An iteration with a single piece, nothing rolled back and no tagged
- * frozen element (always so with one piece: the skin labels every element
- * touching a tagged one) is the last one: every element it produced is
- * marked done (none lies near a tagged frozen element), and every other
- * element is unchanged and was not tagged by this iteration's tag (the
- * criteria depend on the element's own data only), so the next tag would
- * find nothing. The loop stops as converged without that tag pass.
+ * An iteration with a single piece, nothing rolled back and no hot skin
+ * vertex (always so with one piece: no other piece touches it) is the last
+ * one: every element it produced is marked done (none lies near a hot
+ * vertex), and every other element is unchanged and was not tagged by this
+ * iteration's tag (the criteria depend on the element's own data only), so
+ * the next tag would find nothing. The loop stops as converged without that
+ * tag pass.
  */
 #include "adapt/adapt.h"
 
@@ -49,7 +49,6 @@ void pa__iter_free(pa__iter *it) {
   pa__free(it->tag);
   pa__free(it->work);
   pa__free(it->label);
-  pa__free(it->frozen);
   pa__free(it->vlab);
   pa__free(it->vinner);
   pa__free(it->piece_work);
@@ -184,7 +183,6 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
     it.size = dm->size;
     it.dim = dm->dim;
     it.nve = dm->dim + 1;
-    it.face_skins = getenv("PA_OLDSKIN") == NULL;
     PA_CALL(pa__adapt_tag(&it, done, iter == 1));
     t[0] = pa_wtime() - ta;
     rep.ntagged_left = it.ntagged;
@@ -262,7 +260,7 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
     rep.bytes_moved += ir.bytes_moved;
     if (rep.niter_recorded < PA_ADAPT_MAX_ITERS) rep.iters[rep.niter_recorded++] = ir;
     {
-      /* One piece remeshed with no tagged frozen element: the next tag
+      /* One piece remeshed with no hot skin vertex: the next tag
        * would find nothing (see the file comment), skip it. */
       int final = ir.npieces == 1 && ir.nfailed == 0 && it.nhot == 0;
       pa__iter_free(&it);

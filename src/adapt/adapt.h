@@ -5,9 +5,11 @@
  *
  *   tag.c         step 1: tag owned elements, estimate their remeshing work
  *   pieces.c      step 2: partition the tagged elements into pieces, grow the
- *                 labels into a skin, mark the frozen outer layer
+ *                 labels into a skin, mark skin, hot and inner vertices
  *   extract.c     step 3: map pieces to ranks, ship their fragments, build
  *                 one sequential mesh per piece
+ *   bisect.c      (in step 3) refine the skins pieces share, identically on
+ *                 both sides (remesh/leb.c)
  *   reintegrate.c steps 4-5: remesh the local pieces, check the outputs,
  *                 rebuild the distributed mesh with the new entities
  *   adapt.c       the loop, options, report, the final rebalance
@@ -16,16 +18,22 @@
  * Invariants of an iteration (see docs/ADAPT.md for the argument):
  *  - label[e] (owned elements) is a piece in [0, npieces) or -1; every
  *    tagged element is labelled; pieces are disjoint;
- *  - frozen[e] = 1 for a labelled element that is user-required or has a
- *    vertex touching an element of another label or of none: every vertex a
- *    piece shares with the outside is a vertex of a frozen element, so a
- *    piece remeshed with its frozen elements untouched fits back exactly;
- *  - an element stays (same global id, same values) when it is unlabelled,
- *    frozen, or its piece failed; all other labelled elements are replaced by
- *    the non-frozen output elements of their piece;
+ *    user-required elements are never labelled;
+ *  - a piece's skin is the set of faces it shares with elements of another
+ *    label or of none; every vertex and edge a piece shares with the outside
+ *    lies on it. The skin is frozen while the piece is remeshed, after
+ *    bisect.c refined, in every piece, the skin faces whose vertices are
+ *    all inner (only pieces around them): that refinement depends only on
+ *    the face, so both sides of an interface agree and a piece remeshed
+ *    with its skin untouched fits back exactly;
+ *  - an element stays (same global id, same values) when it is unlabelled;
+ *    all labelled elements are replaced by the output of their piece (a
+ *    failed piece gives its input back, with its refined skin);
  *  - every vertex, boundary entity and edge is given to the rebuild exactly
- *    once: by its old owner if it lies in a staying element, otherwise by
- *    the rank that remeshed its piece.
+ *    once: by its old owner if it lies in a staying element or on the skin
+ *    between two pieces, a vertex bisect.c added by the piece with the
+ *    smallest id among those sharing it, otherwise by the rank that
+ *    remeshed its piece.
  */
 #ifndef PA_ADAPT_H
 #define PA_ADAPT_H
@@ -33,17 +41,11 @@
 #include "dmesh/dmesh.h"
 #include "metric/metric.h"
 
-/* Flag bits of element records in transit: the element is frozen; it is
- * frozen and tagged (it will be remeshed in a later iteration). */
-#define PA__FROZEN_TRANSIT 0x80
-#define PA__TAGGED_TRANSIT 0x40
-/* Flag bits of vertex records in transit (face skins): the vertex lies on
- * the piece's skin; it touches a tagged element of another piece. */
+/* Flag bits of vertex records in transit: the vertex lies on the piece's
+ * skin; it touches a tagged element of another piece (hot). */
 #define PA__SKIN_TRANSIT 0x80
 #define PA__HOT_TRANSIT 0x40
-/* ... its skin edges may be refined (bisect.c: every element around it is in
- * a piece, it lies on no boundary or feature entity, is no corner nor
- * required) */
+/* ... skin edges may be refined there (inner, see pieces.c) */
 #define PA__INNER_TRANSIT 0x20
 /* Temporary ids of the vertices bisect.c adds to a piece (above every
  * global id; exact as a double) */
@@ -55,8 +57,8 @@
 /* No label (pieces.c, extract.c). */
 #define PA__NOLABEL 2147483647
 /* Values of the "done" element value: 0 never remeshed, 1 remeshed (never
- * tagged again), 2 remeshed near a tagged frozen element (the remesher was
- * constrained there: tagged again if it fails the criteria). */
+ * tagged again), 2 remeshed near a hot skin vertex (the remesher was
+ * constrained there: tagged again if it fails the looser criteria). */
 #define PA__DONE 1
 #define PA__DONE_NEAR_SKIN 2
 /* Name of the vertex field carrying the global ids through a remesher. */
@@ -74,9 +76,9 @@ typedef struct pa__piece {
   pa_mesh *in;         /* the piece as extracted (kept for checks) */
   pa_mesh *out;        /* remeshed copy, NULL if it failed */
   pa_gid *vgid;        /* in->nv: global id of each input vertex */
-  uint8_t *skin;       /* in->nv: vertex of a frozen element */
-  uint8_t *hot;        /* in->nv: vertex of a frozen tagged element */
-  pa_idx nfrozen;      /* frozen input elements */
+  uint8_t *skin;       /* in->nv: vertex on the skin (frozen) */
+  uint8_t *hot;        /* in->nv: skin vertex a tagged element of another
+                          piece touches */
   pa_idx nsplit;       /* vertices added on the skin (bisect.c) */
   pa_gid *ifgid;       /* in->nv (with skin refinement): global id agreed
                           for each vertex added by bisect.c, else unused */
@@ -96,7 +98,6 @@ typedef struct pa__iter {
   double *work;        /* estimated work of each owned element that may be
                           tagged, -1 for the others (pa__elem_work) */
   int *label;          /* piece or -1 */
-  uint8_t *frozen;     /* labelled and frozen */
   int npieces;
   double *piece_work;  /* npieces: estimated work */
   int *piece_rank;     /* npieces: destination rank */
@@ -107,14 +108,13 @@ typedef struct pa__iter {
   pa__piece *pieces;   /* the pieces remeshed by this rank */
   double bytes_moved;  /* record bytes this rank sent to other ranks */
   double imbalance;    /* estimated work: max over ranks / mean */
-  pa_gid nhot;         /* global: frozen tagged elements (extract.c) */
-  int face_skins;      /* 1: no frozen elements, the piece's outer faces
-                          are its skin */
-  uint8_t *vinner;     /* nloc (face skins): PA__INNER_TRANSIT or 0 */
-  int *vlab;           /* nloc x 2 (face skins): min label and max label of
-                          the labelled-or-not elements around each local
-                          vertex, then min and max label of the tagged ones
-                          (NOLABEL if none): 4 ints per vertex */
+  pa_gid nhot;         /* global: tagged elements touching a hot skin vertex
+                          (extract.c) */
+  uint8_t *vinner;     /* nloc: PA__INNER_TRANSIT (inner vertex) or 0 */
+  int *vlab;           /* 4 x nloc: smallest and largest label of the
+                          elements around each local vertex (PA__NOLABEL
+                          for unlabelled ones), then of the tagged ones
+                          (PA__NOLABEL, -PA__NOLABEL if none) */
   pa_gid ntagged;      /* global */
   double tagwork;      /* global work of the tagged elements */
 } pa__iter;
@@ -132,7 +132,8 @@ double pa__elem_work(const pa_mesh *m, pa_idx e);
  * element value marking elements produced in this run (never tagged). */
 pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int first);
 
-/* Step 2. Collective: pieces, labels, skin and frozen marks. npieces_max is
+/* Step 2. Collective: pieces, labels, vertex label ranges and inner marks
+ * (it->vlab, it->vinner). npieces_max is
  * the number of pieces wanted (reduced when the work is small). */
 pa_status pa__adapt_pieces(pa__iter *it, int npieces_max);
 
@@ -140,8 +141,8 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max);
  * the local pieces (it->pieces). */
 pa_status pa__adapt_extract(pa__iter *it);
 
-/* Face skins: refine the skin faces pc shares with other pieces
- * (bisect.c); inner[v]: see PA__INNER_TRANSIT. */
+/* Refine the skin faces pc shares with other pieces (bisect.c); inner[v]:
+ * the vertex is inner (see pieces.c). */
 pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner);
 
 /* Step 4. Local: remesh the local pieces; failures are recorded, not

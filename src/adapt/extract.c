@@ -3,26 +3,29 @@
  * gather each piece's fragments onto its rank as one sequential mesh.
  *
  * Mapping: the piece x rank matrix of element counts, the work of every
- * piece and the number of frozen tagged elements are summed over the ranks (every rank then computes the same map).
+ * piece and the number of hot tagged elements (tagged, touching a hot skin
+ * vertex) are summed over the ranks (every rank then computes the same
+ * map).
  * Pieces are taken heaviest first; each goes to the rank holding most of
  * its elements unless that rank would exceed the mean load by 10 %, else to
  * the least loaded rank (ties: lowest rank), so little data moves and the
  * estimated work is balanced.
  *
  * Gathering: each rank sends, for every labelled owned element, the element
- * (aux = piece, frozen in a transit flag bit), and for every (piece, entity)
- * pair the vertices, boundary entities and edges of the piece's elements it
- * holds (vertices with coordinates, metric and fields). pa__recs_migrate
+ * (aux = piece), and for every (piece, entity) pair the vertices (with
+ * coordinates, metric, fields, and transit flag bits: skin, hot, inner for
+ * that piece), boundary entities and edges of the piece's elements it
+ * holds. pa__recs_migrate
  * moves them; the receiver drops duplicates (an entity held by several
  * ranks) and assembles each of its pieces, numbered by increasing global id,
  * so the piece does not depend on how its fragments were spread.
  *
  * The piece mesh carries the vertex global ids as an extra field
- * (PA__GID_FIELD) so that skin vertices can be matched after remeshing; its
- * frozen elements are flagged PA_FLAG_REQUIRED; the faces of its outer
- * surface that are not boundary entities become boundary entities of
- * reference PA__SKIN_REF flagged PA_FLAG_REQUIRED (they all lie on frozen
- * elements).
+ * (PA__GID_FIELD) so that skin vertices can be matched after remeshing;
+ * the faces of its outer surface that are not boundary entities become
+ * boundary entities of reference PA__SKIN_REF flagged PA_FLAG_REQUIRED
+ * (its skin, frozen), which bisect.c then refines where the piece meets
+ * another one.
  */
 #include "adapt/adapt.h"
 
@@ -167,7 +170,7 @@ static pa_status pair_records(pa__iter *it, int kind, const pa_idx *bstart,
       }
       ref = m->vref[x];
       flag = m->vflag[x];
-      if (it->face_skins) {
+      {
         const int *l = it->vlab + 4 * (size_t)x;
         if (l[0] != l[1]) flag |= PA__SKIN_TRANSIT;
         if (hot_vertex(it, x, p)) flag |= PA__HOT_TRANSIT;
@@ -283,33 +286,25 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
     m->field[dmm->nfield].val[k] = (double)V->gid[i];
     m->vref[k] = V->ref[i];
     m->vflag[k] = V->flag[i];
-    if (it->face_skins) {
-      pc->skin[k] = (V->flag[i] & PA__SKIN_TRANSIT) != 0;
-      pc->hot[k] = (V->flag[i] & PA__HOT_TRANSIT) != 0;
-      inner[k] = (V->flag[i] & PA__INNER_TRANSIT) != 0;
-      m->vflag[k] &= (uint8_t)~(PA__SKIN_TRANSIT | PA__HOT_TRANSIT | PA__INNER_TRANSIT);
-    }
+    pc->skin[k] = (V->flag[i] & PA__SKIN_TRANSIT) != 0;
+    pc->hot[k] = (V->flag[i] & PA__HOT_TRANSIT) != 0;
+    inner[k] = (V->flag[i] & PA__INNER_TRANSIT) != 0;
+    m->vflag[k] &= (uint8_t)~(PA__SKIN_TRANSIT | PA__HOT_TRANSIT | PA__INNER_TRANSIT);
     pc->vgid[k] = V->gid[i];
     PA_CALL(pa__gidmap_put(&map, V->gid[i], k, NULL, NULL));
   }
   m->nv = nv;
   for (pa_idx k = 0; k < ne; k++) {
     size_t i = (size_t)idx[PA_ELEMENT][start[PA_ELEMENT][p] + k];
-    int fr = (E->flag[i] & PA__FROZEN_TRANSIT) != 0;
-    int hot = (E->flag[i] & PA__TAGGED_TRANSIT) != 0;
     for (int j = 0; j <= d; j++) {
       pa_idx v = pa__gidmap_get(&map, E->vgid[(size_t)(d + 1) * i + j]);
       PA_CHECK(v >= 0, PA_ERR_INTERNAL, "piece %d: vertex %lld of element "
                "%lld was not gathered", p,
                (long long)E->vgid[(size_t)(d + 1) * i + j], (long long)E->gid[i]);
       m->elem[(size_t)(d + 1) * k + j] = v;
-      if (fr) pc->skin[v] = 1;
-      if (hot) pc->hot[v] = 1;
     }
     m->eref[k] = E->ref[i];
-    m->eflag[k] = (uint8_t)((E->flag[i] & ~(PA__FROZEN_TRANSIT | PA__TAGGED_TRANSIT)) |
-                            (fr ? PA_FLAG_REQUIRED : 0));
-    pc->nfrozen += fr;
+    m->eflag[k] = E->flag[i];
   }
   m->ne = ne;
   for (int kind = PA_BOUNDARY; kind <= PA_EDGE; kind++) {
@@ -337,7 +332,7 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
     if (kind == PA_BOUNDARY) m->nb = n;
     else m->ned = n;
   }
-  /* the outer surface: artificial, frozen boundary entities */
+  /* the outer surface: artificial, frozen boundary entities (the skin) */
   {
     pa_idx nb0 = m->nb;
     PA_CALL(pa_mesh_build_boundary(m, PA__SKIN_REF, NULL));
@@ -345,7 +340,7 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
   }
   pc->in = m;
   m = NULL;
-  if (it->face_skins) PA_CALL(pa__piece_refine_skin(pc, inner));
+  PA_CALL(pa__piece_refine_skin(pc, inner));
 cleanup:
   pa_mesh_destroy(m);
   pa__gidmap_free(&map);
@@ -379,8 +374,7 @@ pa_status pa__adapt_extract(pa__iter *it) {
   PA_CALLOC(buf, (size_t)np * P + np + 1);
   for (pa_idx e = 0; e < it->ne; e++)
     if (it->label[e] >= 0) {
-      buf[(size_t)np * P + np] += it->face_skins ? hot_elem(it, e)
-                                                 : it->frozen[e] && it->tag[e];
+      buf[(size_t)np * P + np] += hot_elem(it, e);
       buf[(size_t)it->label[e] * P + it->rank] += 1;
       buf[(size_t)np * P + it->label[e]] +=
           it->work[e] >= 0 ? it->work[e] : pa__elem_work(m, e);
@@ -401,10 +395,8 @@ pa_status pa__adapt_extract(pa__iter *it) {
       pa_gid vg[4];
       for (int j = 0; j < it->nve; j++)
         vg[j] = dm->gid[PA_VERTEX][m->elem[(size_t)it->nve * e + j]];
-      uint8_t fl = (uint8_t)(m->eflag[e] | (it->frozen[e] ? PA__FROZEN_TRANSIT : 0) |
-                             (it->frozen[e] && it->tag[e] ? PA__TAGGED_TRANSIT : 0));
       PA_CALL(pa__recs_add(&S[PA_ELEMENT], dm->gid[PA_ELEMENT][e], vg,
-                           m->eref[e], fl, it->label[e], NULL, NULL, 0));
+                           m->eref[e], m->eflag[e], it->label[e], NULL, NULL, 0));
       dest[PA_ELEMENT][n++] = it->piece_rank[it->label[e]];
     }
   }

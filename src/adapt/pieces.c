@@ -1,6 +1,6 @@
 /*
  * pieces.c -- step 2 of the piece algorithm: split the tagged elements into
- * disjoint pieces and give each piece a skin whose outer layer is frozen.
+ * disjoint pieces and grow each into a skin of neighbours.
  *
  *  1. The number of pieces: npieces_max (processes x pieces per process),
  *     fewer when the tagged work is small (min_piece_work each, and
@@ -13,13 +13,17 @@
  *     over the ranks, then sent back to the ghosts), and every unlabelled
  *     owned element takes the smallest label of its vertices. After one
  *     layer, every element sharing a vertex with a tagged element is
- *     labelled.
- *  4. A labelled element is frozen when it is user-required or one of its
- *     vertices touches an element of another label or of none (per vertex
- *     the smallest and largest label around it, reduced the same way).
- *     So the outer layer of every piece is frozen, every vertex shared with
- *     the outside lies on it, and tagged elements are frozen only where two
- *     pieces meet.
+ *     labelled, except user-required ones: they stay outside the pieces.
+ *  4. Per local vertex, the smallest and largest label of the elements
+ *     around it (unlabelled: PA__NOLABEL), and of the tagged ones, reduced
+ *     the same way (it->vlab). A piece's skin is its outer surface: the
+ *     faces it shares with elements of another label or of none, frozen
+ *     while it is remeshed; its vertices are those whose two labels differ.
+ *     A skin vertex is hot for piece p when a tagged element of another
+ *     piece touches it (extract.c). A vertex is inner (it->vinner, may be
+ *     refined around by bisect.c) when only labelled elements touch it and
+ *     it lies on no feature edge nor required boundary entity and is no
+ *     corner, ridge or required vertex.
  * Only vertex values with reduce/halo cross the ranks here: no point-to-point
  * code, and the result does not depend on timing.
  */
@@ -71,7 +75,6 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
   const pa_idx *conn = dm->mesh->elem;
 
   PA_ALLOC(it->label, it->ne);
-  PA_CALLOC(it->frozen, it->ne);
   for (pa_idx e = 0; e < it->ne; e++) {
     it->label[e] = -1;
     if (it->tag[e]) {
@@ -136,7 +139,7 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
     const int *d = pa_dmesh_value_data(val, NULL, NULL);
     for (pa_idx e = 0; e < it->ne; e++) {
       if (it->label[e] >= 0) continue;
-      if (it->face_skins && (dm->mesh->eflag[e] & PA_FLAG_REQUIRED)) continue;
+      if (dm->mesh->eflag[e] & PA_FLAG_REQUIRED) continue;
       int l = NOLABEL;
       for (int k = 0; k < it->nve; k++) {
         int x = d[2 * conn[(size_t)it->nve * e + k]];
@@ -149,12 +152,9 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
       if (it->label[e] <= -2) it->label[e] = -2 - it->label[e];
   }
 
-  /* 4. frozen outer layer */
+  /* 4. label ranges around the vertices (skin, hot), inner vertices */
   PA_CALL(vertex_labels(it, val, 0));
-  if (it->face_skins) {
-    /* no frozen element: the skin is the piece's outer surface; keep the
-     * label range around every local vertex, and that of the tagged
-     * elements (hot skin vertices) */
+  {
     pa_idx nloc = dm->nloc[PA_VERTEX];
     PA_ALLOC(it->vlab, (size_t)4 * nloc);
     {
@@ -197,18 +197,6 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
             (uint8_t)(!d[2 * v] && it->vlab[4 * v + 1] != NOLABEL &&
                               !(vf[v] & (PA_FLAG_CORNER | PA_FLAG_RIDGE | PA_FLAG_REQUIRED))
                           ? PA__INNER_TRANSIT : 0);
-    }
-  } else {
-    const int *d = pa_dmesh_value_data(val, NULL, NULL);
-    for (pa_idx e = 0; e < it->ne; e++) {
-      int l = it->label[e];
-      if (l < 0) continue;
-      int fr = (dm->mesh->eflag[e] & PA_FLAG_REQUIRED) != 0;
-      for (int k = 0; k < it->nve && !fr; k++) {
-        const int *x = d + 2 * conn[(size_t)it->nve * e + k];
-        fr = x[0] != l || -x[1] != l;
-      }
-      it->frozen[e] = (uint8_t)fr;
     }
   }
 cleanup:

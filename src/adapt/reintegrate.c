@@ -6,27 +6,28 @@
  * Remesh: each piece is copied and remeshed (pa_remesh, hsiz already folded
  * into the metric). An output is used only if the remesher succeeded (or
  * missed its target) and the output is consistent: same metric and fields,
- * as many required elements as frozen ones, every skin vertex back at the
- * same coordinates with its global id (field PA__GID_FIELD), each required
- * element on skin vertices only, and (opts->check_pieces) pa_mesh_check
- * passes. Otherwise the piece is rolled back: its elements stay, still
- * tagged.
+ * every skin vertex back at the same coordinates with its global id (field
+ * PA__GID_FIELD), exactly the skin faces of the input, and
+ * (opts->check_pieces) pa_mesh_check passes. Otherwise the piece is rolled
+ * back: it comes back as it was given (with its skin refined by bisect.c,
+ * which its neighbours share), its elements not marked done.
  *
  * Rebuild (see adapt.h for the invariants): staying elements are the
- * unlabelled, frozen and rolled-back ones. An owned vertex, boundary entity
- * or edge is kept by its owner when some staying element contains it (a MAX
- * reduction of a per-entity value over the ranks); every other one vanished
- * or comes back through a piece output. From an output, the remeshing rank
- * gives: the vertices that are not skin vertices (matched input vertices
- * keep their global id, the others get fresh ids), the elements that are
- * not required (fresh ids, "done" value PA__DONE, or PA__DONE_NEAR_SKIN
- * within NEAR_SKIN vertex layers of a frozen tagged element; other values
- * zero), and the
- * boundary entities and edges that do not lie on a required element (fresh
- * ids; this drops the artificial skin faces, which all lie on frozen
- * elements). Fresh ids are the global maximum + 1 + an exclusive scan of the
- * per-rank counts, pieces in increasing order on each rank: deterministic
- * for a given input and number of ranks.
+ * unlabelled ones. An owned vertex, boundary entity or edge is kept by its
+ * owner when some staying element contains it, or elements of two labels do
+ * (it lies on a skin between two pieces; MAX reductions of per-entity values
+ * over the ranks); every other one vanished or comes back through a piece
+ * output. From an output, the remeshing rank gives: the vertices that are
+ * not skin vertices (matched input vertices keep their global id, the others
+ * get fresh ids) and the skin vertices bisect.c added, when it is their
+ * giver (skin_vertex_ids); every element (fresh ids, "done" value PA__DONE,
+ * or PA__DONE_NEAR_SKIN within NEAR_SKIN vertex layers of a hot skin vertex,
+ * or 0 for a rolled-back piece; other values zero); and the boundary
+ * entities and edges that do not lie on the skin (fresh ids; this drops the
+ * artificial skin faces). Fresh ids are the global maximum + 1 + an
+ * exclusive scan of the per-rank counts, pieces in increasing order on each
+ * rank, then the added skin vertices: deterministic for a given input and
+ * number of ranks.
  */
 #include "adapt/adapt.h"
 
@@ -90,21 +91,13 @@ static int output_ok(const pa__iter *it, pa__piece *pc, pa_mesh *out,
   int d = in->dim, ok = 0, gf = in->nfield - 1;
   pa__gidmap map = {0};
   uint8_t *seen = NULL;
+  tset skin = {0, NULL};
   *hard = PA_SUCCESS;
   if (out->met_ncomp != in->met_ncomp || out->nfield != in->nfield ||
       strcmp(out->field[gf].name, PA__GID_FIELD) != 0) {
     pa__info(1, "padapt: piece %d: the remesher changed the metric or the "
                 "fields\n", pc->id);
     goto cleanup;
-  }
-  {
-    pa_idx nreq = 0;
-    for (pa_idx e = 0; e < out->ne; e++) nreq += (out->eflag[e] & PA_FLAG_REQUIRED) != 0;
-    if (nreq != pc->nfrozen) {
-      pa__info(1, "padapt: piece %d: %d required elements in, %d out\n", pc->id,
-               (int)pc->nfrozen, (int)nreq);
-      goto cleanup;
-    }
   }
   PA_CALL(pa__gidmap_init(&map, (size_t)in->nv));
   for (pa_idx i = 0; i < in->nv; i++)
@@ -134,14 +127,35 @@ static int output_ok(const pa__iter *it, pa__piece *pc, pa_mesh *out,
                pc->id, (long long)pc->vgid[i]);
       goto cleanup;
     }
-  for (pa_idx e = 0; e < out->ne; e++) {
-    if (!(out->eflag[e] & PA_FLAG_REQUIRED)) continue;
-    for (int k = 0; k <= d; k++) {
-      pa_idx i = pc->match[out->elem[(size_t)(d + 1) * e + k]];
-      if (i < 0 || !pc->skin[i]) {
-        pa__info(1, "padapt: piece %d: a required element changed\n", pc->id);
-        goto cleanup;
+  {
+    /* the skin faces, as they were given */
+    pa_idx nin = 0, nout = 0, found = 0;
+    for (pa_idx b = 0; b < in->nb; b++) nin += in->bref[b] == PA__SKIN_REF;
+    PA_CALL(tset_init(&skin, (size_t)nin));
+    for (pa_idx b = 0; b < in->nb; b++)
+      if (in->bref[b] == PA__SKIN_REF) {
+        pa_idx k[3];
+        tkey(in->bdry + (size_t)d * b, d, k);
+        tset_find(&skin, k, 1);
       }
+    for (pa_idx b = 0; b < out->nb; b++) {
+      if (out->bref[b] != PA__SKIN_REF) continue;
+      pa_idx f[3], k[3];
+      int all = 1;
+      nout++;
+      for (int j = 0; j < d; j++) {
+        f[j] = pc->match[out->bdry[(size_t)d * b + j]];
+        all &= f[j] >= 0;
+      }
+      if (!all) continue;
+      tkey(f, d, k);
+      found += tset_find(&skin, k, 0);
+    }
+    if (nout != nin || found != nin) {
+      pa__info(1, "padapt: piece %d: the skin faces changed (%d given, %d "
+                  "back, %d of them unchanged)\n", pc->id, (int)nin, (int)nout,
+               (int)found);
+      goto cleanup;
     }
   }
   if (it->opts->check_pieces) {
@@ -159,6 +173,7 @@ cleanup:
   *hard = st;
   pa__gidmap_free(&map);
   pa__free(seen);
+  tset_free(&skin);
   if (!ok) {
     pa__free(pc->match);
     pc->match = NULL;
@@ -192,9 +207,9 @@ pa_status pa__adapt_remesh(pa__iter *it, int *nfail) {
       PA_CALL(hard);
     }
     t2 = pa_wtime();
-    pa__info(2, "padapt: rank %d: piece %d: %d -> %d elements (%d frozen), "
-                "remesh %.3f s, check %.3f s%s\n", it->rank, pc->id,
-             (int)pc->in->ne, ok ? (int)out->ne : -1, (int)pc->nfrozen,
+    pa__info(2, "padapt: rank %d: piece %d: %d -> %d elements (%d skin "
+                "vertices added), remesh %.3f s, check %.3f s%s\n", it->rank,
+             pc->id, (int)pc->in->ne, ok ? (int)out->ne : -1, (int)pc->nsplit,
              t1 - t0, t2 - t1, ok ? "" : ", rolled back");
     if (ok) {
       pc->out = out;
@@ -205,15 +220,13 @@ pa_status pa__adapt_remesh(pa__iter *it, int *nfail) {
       out = NULL;
       it->piece_failed[pc->id] = 1;
       (*nfail)++;
-      if (it->face_skins) {
-        /* the piece comes back as it was given (with its refined skin,
-         * which its neighbours share), still to adapt */
-        PA_CALL(pa_mesh_copy(pc->in, &pc->out));
-        pa__free(pc->match);
-        PA_ALLOC(pc->match, pc->in->nv);
-        for (pa_idx j = 0; j < pc->in->nv; j++)
-          pc->match[j] = pc->vgid[j] >= 0 ? j : -1; /* -1: added inside */
-      }
+      /* the piece comes back as it was given (with its refined skin, which
+       * its neighbours share), still to adapt */
+      PA_CALL(pa_mesh_copy(pc->in, &pc->out));
+      pa__free(pc->match);
+      PA_ALLOC(pc->match, pc->in->nv);
+      for (pa_idx j = 0; j < pc->in->nv; j++)
+        pc->match[j] = pc->vgid[j] >= 0 ? j : -1; /* -1: added inside */
     }
   }
 cleanup:
@@ -223,8 +236,9 @@ cleanup:
 
 /* ---- step 5: rebuild ---- */
 
-/* Output elements within this many vertex layers of a frozen tagged element
- * are marked PA__DONE_NEAR_SKIN: the frozen border constrained the remesher
+/* Output elements within this many vertex layers of a hot skin vertex (one
+ * a tagged element of another piece touches) are marked
+ * PA__DONE_NEAR_SKIN: the frozen skin constrained the remesher
  * there (a remesher's choices reach a few layers, e.g. longest-edge
  * propagation), so they may be tagged again. */
 #define NEAR_SKIN 2
@@ -269,8 +283,7 @@ static pa_status kept_flags(pa__iter *it, int kind, const uint8_t *keep,
       for (pa_idx e = 0; e < it->ne; e++)
         if (keep[e])
           for (int k = 0; k < it->nve; k++) x[3 * m->elem[(size_t)it->nve * e + k]] = 1;
-      if (it->face_skins)
-        for (pa_idx v = 0; v < n; v++)
+      for (pa_idx v = 0; v < n; v++)
           if (it->vlab[4 * v] != it->vlab[4 * v + 1]) x[3 * v] = 1;
     } else {
       const pa_idx *conn = kind == PA_BOUNDARY ? m->bdry : m->edge;
@@ -279,7 +292,6 @@ static pa_status kept_flags(pa__iter *it, int kind, const uint8_t *keep,
         int *y = x + 3 * b;
         for (pa_idx q = bstart[f[0]]; q < bstart[f[0] + 1] && !y[0]; q++) {
           pa_idx e = belem[q];
-          if (!keep[e] && !it->face_skins) continue;
           const pa_idx *ev = m->elem + (size_t)it->nve * e;
           int all = 1;
           for (int i = 1; i < nv && all; i++) {
@@ -315,18 +327,17 @@ cleanup:
   return st;
 }
 
-/* Which boundary entities / edges of an output to give (not on a required
- * element); counts in cnt[PA_BOUNDARY], cnt[PA_EDGE]. */
+/* Which boundary entities / edges of an output to give (not on the skin);
+ * counts in cnt[PA_BOUNDARY], cnt[PA_EDGE]. */
 static pa_status output_emit(const pa_mesh *out, uint8_t **bemit,
                              uint8_t **demit, pa_gid *cnt) {
   pa_status st = PA_SUCCESS;
   tset fs = {0, NULL}, es = {0, NULL};
-  int d = out->dim, nve = d + 1;
-  pa_idx nreq = 0;
-  for (pa_idx e = 0; e < out->ne; e++) nreq += (out->eflag[e] & PA_FLAG_REQUIRED) != 0;
-  for (pa_idx b = 0; b < out->nb; b++) nreq += out->bref[b] == PA__SKIN_REF;
-  PA_CALL(tset_init(&fs, (size_t)nreq * nve));
-  PA_CALL(tset_init(&es, (size_t)nreq * 6));
+  int d = out->dim;
+  pa_idx nskin = 0;
+  for (pa_idx b = 0; b < out->nb; b++) nskin += out->bref[b] == PA__SKIN_REF;
+  PA_CALL(tset_init(&fs, (size_t)nskin));
+  PA_CALL(tset_init(&es, (size_t)nskin * 3));
   /* the artificial skin faces and their edges */
   for (pa_idx b = 0; b < out->nb; b++) {
     if (out->bref[b] != PA__SKIN_REF) continue;
@@ -340,23 +351,6 @@ static pa_status output_emit(const pa_mesh *out, uint8_t **bemit,
         tkey(ed, 2, k);
         tset_find(&es, k, 1);
       }
-  }
-  for (pa_idx e = 0; e < out->ne; e++) {
-    if (!(out->eflag[e] & PA_FLAG_REQUIRED)) continue;
-    const pa_idx *v = out->elem + (size_t)nve * e;
-    for (int i = 0; i < nve; i++) {
-      pa_idx f[3], k[3];
-      int n = 0;
-      for (int j = 0; j < nve; j++)
-        if (j != i) f[n++] = v[j];
-      tkey(f, d, k);
-      tset_find(&fs, k, 1);
-      for (int j = i + 1; j < nve; j++) {
-        pa_idx ed[2] = {v[i], v[j]};
-        tkey(ed, 2, k);
-        tset_find(&es, k, 1);
-      }
-    }
   }
   PA_CALLOC(*bemit, out->nb);
   PA_CALLOC(*demit, out->ned);
@@ -420,7 +414,7 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
     PA_CALL(pa__recs_add(&R[PA_VERTEX], vg[j], NULL, o->vref[j], o->vflag[j],
                          it->rank, dbl, pay, pl));
   }
-  /* elements within NEAR_SKIN vertex layers of a frozen tagged element */
+  /* elements within NEAR_SKIN vertex layers of a hot skin vertex */
   PA_ALLOC(dist, o->nv);
   for (pa_idx j = 0; j < o->nv; j++)
     dist[j] = pc->match[j] >= 0 && pc->hot[pc->match[j]] ? 0 : NEAR_SKIN;
@@ -434,7 +428,6 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
           if (dist[v[k]] > mn + 1) dist[v[k]] = mn + 1;
     }
   for (pa_idx e = 0; e < o->ne; e++) {
-    if (o->eflag[e] & PA_FLAG_REQUIRED) continue;
     pa_gid ev[4];
     uint8_t dv = it->piece_failed[pc->id] ? 0 : PA__DONE;
     for (int k = 0; k <= d; k++) {
@@ -641,8 +634,7 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
                         MPI_MAX));
   PA_ALLOC(keep, it->ne);
   for (pa_idx e = 0; e < it->ne; e++)
-    keep[e] = it->label[e] < 0 || it->frozen[e] ||
-              (!it->face_skins && it->piece_failed[it->label[e]]);
+    keep[e] = it->label[e] < 0;
 
   /* 2. kept vertices, boundary entities and edges */
   if (!it->bstart) PA_CALL(pa__owned_balls(dm, &it->bstart, &it->belem));
@@ -687,7 +679,7 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
     if (!pc->out) continue;
     for (pa_idx j = 0; j < pc->out->nv; j++) cnt[PA_VERTEX] += pc->match[j] < 0;
     for (pa_idx e = 0; e < pc->out->ne; e++)
-      cnt[PA_ELEMENT] += !(pc->out->eflag[e] & PA_FLAG_REQUIRED);
+      cnt[PA_ELEMENT]++;
     PA_CALL(output_emit(pc->out, &bemit[q], &demit[q], cnt));
   }
   PA_CALL(pa__allreduce(dm->comm, base, PA_NKIND, MPI_INT64_T, MPI_MAX));
@@ -696,7 +688,7 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
   if (it->rank == 0)
     for (int k = 0; k < PA_NKIND; k++) off[k] = 0;
   for (int k = 0; k < PA_NKIND; k++) off[k] += base[k] + 1;
-  if (it->face_skins) {
+  {
     /* the vertices bisect.c added take ids after every other new vertex */
     pa_gid tot = cnt[PA_VERTEX];
     PA_CALL(pa__allreduce(dm->comm, &tot, 1, MPI_INT64_T, MPI_SUM));

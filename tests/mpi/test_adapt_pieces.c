@@ -1,44 +1,31 @@
 /*
  * test_adapt_pieces.c -- steps 1-2 of the parallel adaptation (internal
- * API, src/adapt/adapt.h): tagging and pieces. The labels and frozen marks
- * of every owned element are gathered on pa_test_rank 0 and checked by brute force
- * against the invariants: pieces are disjoint and cover the tagged elements,
- * every element sharing a vertex with a tagged one is labelled, and a
- * labelled element is frozen exactly when it is required or one of its
- * vertices touches an element of another label or of none (so every vertex
- * a piece shares with the outside lies on a frozen element). With one piece,
- * no tagged element is frozen. Runs at any number of ranks.
+ * API, src/adapt/adapt.h): tagging and pieces. The labels of every owned
+ * element, and the label ranges and inner marks of every local vertex, are
+ * gathered on pa_test_rank 0 and checked by brute force against the
+ * invariants: pieces are disjoint and cover the tagged elements, every
+ * element sharing a vertex with a tagged one is labelled unless it is
+ * required (required elements never are), the smallest and largest label
+ * around each vertex (of all elements, and of the tagged ones) are those
+ * the elements give, every copy of a vertex (owner and ghosts) agrees, and
+ * a vertex is inner only when labelled elements alone touch it (and always
+ * then, for a vertex inside the box). Runs at any number of ranks.
  */
 #include "testutil.h"
 #include "adapt/adapt.h"
 
 #include <mpi.h>
 
-
-/* Gather (label, frozen, tagged, required, vertex gids) of the owned
- * elements and check the invariants on pa_test_rank 0. */
-static void check_labels(pa__iter *it) {
-  pa_dmesh *dm = it->dm;
-  int nve = it->nve, w = 4 + nve;
-  long long *mine = malloc(sizeof(long long) * (size_t)w * (it->ne + 1));
-  const pa_idx *el = pa_mesh_elems(pa_dmesh_mesh(dm));
-  const uint8_t *fl = pa_mesh_elem_flags(pa_dmesh_mesh(dm));
-  const pa_gid *vg = pa_dmesh_gids(dm, PA_VERTEX);
-  for (pa_idx e = 0; e < it->ne; e++) {
-    long long *r = mine + (size_t)w * e;
-    r[0] = it->label[e];
-    r[1] = it->frozen[e];
-    r[2] = it->tag[e];
-    r[3] = (fl[e] & PA_FLAG_REQUIRED) != 0;
-    for (int k = 0; k < nve; k++) r[4 + k] = vg[el[nve * e + k]];
-  }
-  int cnt = (int)(it->ne * w), *counts = NULL, *displs = NULL, total = 0;
+/* Gather rows of w long longs from every rank on rank 0; *n receives the
+ * number of rows there. */
+static long long *gather_rows(const long long *mine, int nrow, int w, int *n) {
+  int cnt = nrow * w, *counts = NULL, *displs = NULL, total = 0;
+  long long *all = NULL;
   if (pa_test_rank == 0) {
     counts = malloc(sizeof(int) * pa_test_size);
     displs = malloc(sizeof(int) * pa_test_size);
   }
   MPI_Gather(&cnt, 1, MPI_INT, counts, 1, MPI_INT, 0, MPI_COMM_WORLD);
-  long long *all = NULL;
   if (pa_test_rank == 0) {
     for (int r = 0; r < pa_test_size; r++) {
       displs[r] = total;
@@ -48,63 +35,110 @@ static void check_labels(pa__iter *it) {
   }
   MPI_Gatherv(mine, cnt, MPI_LONG_LONG, all, counts, displs, MPI_LONG_LONG, 0,
               MPI_COMM_WORLD);
+  *n = total / w;
+  free(counts);
+  free(displs);
+  return all;
+}
+
+static void check_labels(pa__iter *it) {
+  pa_dmesh *dm = it->dm;
+  pa_mesh *m = pa_dmesh_mesh(dm);
+  int nve = it->nve, w = 3 + nve, wv = 7;
+  pa_idx nloc = pa_dmesh_nlocal(dm, PA_VERTEX);
+  long long *mine = malloc(sizeof(long long) * (size_t)w * (it->ne + 1));
+  long long *vmine = malloc(sizeof(long long) * (size_t)wv * (nloc + 1));
+  const pa_idx *el = pa_mesh_elems(m);
+  const uint8_t *fl = pa_mesh_elem_flags(m);
+  const double *x = pa_mesh_coords(m);
+  const pa_gid *vg = pa_dmesh_gids(dm, PA_VERTEX);
+  for (pa_idx e = 0; e < it->ne; e++) {
+    long long *r = mine + (size_t)w * e;
+    r[0] = it->label[e];
+    r[1] = it->tag[e];
+    r[2] = (fl[e] & PA_FLAG_REQUIRED) != 0;
+    for (int k = 0; k < nve; k++) r[3 + k] = vg[el[nve * e + k]];
+  }
+  for (pa_idx v = 0; v < nloc; v++) {
+    long long *r = vmine + (size_t)wv * v;
+    int nb = 0;
+    for (int k = 0; k < it->dim; k++) {
+      double c = x[(size_t)it->dim * v + k];
+      nb += c == 0.0 || c == 1.0;
+    }
+    r[0] = vg[v];
+    for (int k = 0; k < 4; k++) r[1 + k] = it->vlab[4 * v + k];
+    r[5] = it->vinner[v] != 0;
+    r[6] = nb;
+  }
+  int ne = 0, nvr = 0;
+  long long *all = gather_rows(mine, (int)it->ne, w, &ne);
+  long long *vall = gather_rows(vmine, (int)nloc, wv, &nvr);
   if (pa_test_rank == 0) {
-    int ne = total / w;
-    pa_gid nv = pa_dmesh_nglobal(dm, PA_VERTEX) + 1, maxg = 0;
+    pa_gid nv = 0;
     for (int e = 0; e < ne; e++)
       for (int k = 0; k < nve; k++)
-        if (all[(size_t)w * e + 4 + k] > maxg) maxg = all[(size_t)w * e + 4 + k];
-    nv = maxg + 1;
-    /* per vertex: min and max label (unlabelled = INT_MAX), tagged nearby */
-    long long *vmin = malloc(sizeof(long long) * nv), *vmax = malloc(sizeof(long long) * nv);
+        if (all[(size_t)w * e + 3 + k] + 1 > nv) nv = all[(size_t)w * e + 3 + k] + 1;
+    /* per vertex: min and max label (unlabelled = PA__NOLABEL), the same
+     * over the tagged elements, tagged nearby */
+    long long *lo = malloc(sizeof(long long) * nv), *hi = malloc(sizeof(long long) * nv);
+    long long *tlo = malloc(sizeof(long long) * nv), *thi = malloc(sizeof(long long) * nv);
     char *vtag = calloc((size_t)nv, 1);
     for (pa_gid v = 0; v < nv; v++) {
-      vmin[v] = 1LL << 40;
-      vmax[v] = -1;
+      lo[v] = tlo[v] = PA__NOLABEL;
+      hi[v] = thi[v] = -PA__NOLABEL;
     }
-    int bad_cover = 0, bad_frozen = 0, bad_grow = 0, nfree_tagged = 0, nfrozen_tagged = 0;
+    int bad_cover = 0, bad_grow = 0, bad_req = 0, bad_range = 0, bad_inner = 0;
+    int ninner = 0;
     for (int e = 0; e < ne; e++) {
       const long long *r = all + (size_t)w * e;
-      long long l = r[0] < 0 ? (1LL << 40) : r[0];
-      bad_cover += r[2] && r[0] < 0;
+      long long l = r[0] < 0 ? PA__NOLABEL : r[0];
+      bad_cover += r[1] && r[0] < 0;
+      bad_req += r[2] && r[0] >= 0;
       for (int k = 0; k < nve; k++) {
-        long long v = r[4 + k];
-        if (l < vmin[v]) vmin[v] = l;
-        if (l > vmax[v]) vmax[v] = l;
-        if (r[2]) vtag[v] = 1;
+        long long v = r[3 + k];
+        if (l < lo[v]) lo[v] = l;
+        if (l > hi[v]) hi[v] = l;
+        if (r[1]) {
+          vtag[v] = 1;
+          if (l < tlo[v]) tlo[v] = l;
+          if (l > thi[v]) thi[v] = l;
+        }
       }
     }
     for (int e = 0; e < ne; e++) {
       const long long *r = all + (size_t)w * e;
-      int near_tag = 0, mixed = 0;
-      for (int k = 0; k < nve; k++) {
-        long long v = r[4 + k];
-        near_tag |= vtag[v];
-        mixed |= vmin[v] != r[0] || vmax[v] != r[0];
-      }
-      bad_grow += near_tag && r[0] < 0;
-      if (r[0] >= 0) bad_frozen += r[1] != (mixed || r[3]);
-      else bad_frozen += r[1] != 0;
-      if (r[2]) {
-        nfree_tagged += !r[1];
-        nfrozen_tagged += r[1];
-      }
+      int near_tag = 0;
+      for (int k = 0; k < nve; k++) near_tag |= vtag[r[3 + k]];
+      bad_grow += near_tag && r[0] < 0 && !r[2];
+    }
+    for (int i = 0; i < nvr; i++) {
+      const long long *r = vall + (size_t)wv * i;
+      long long v = r[0];
+      bad_range += r[1] != lo[v] || r[2] != hi[v] || r[3] != tlo[v] || r[4] != thi[v];
+      int labelled = hi[v] != PA__NOLABEL;
+      bad_inner += r[5] && !labelled;
+      bad_inner += !r[5] && labelled && r[6] == 0;
+      ninner += r[5] != 0;
     }
     CHECK(bad_cover == 0);
     CHECK(bad_grow == 0);
-    CHECK(bad_frozen == 0);
-    CHECK(nfree_tagged > 0);
-    if (it->npieces == 1) CHECK(nfrozen_tagged == 0);
-    printf("  %d pieces: %d tagged free, %d tagged frozen\n", it->npieces,
-           nfree_tagged, nfrozen_tagged);
-    free(vmin);
-    free(vmax);
+    CHECK(bad_req == 0);
+    CHECK(bad_range == 0);
+    CHECK(bad_inner == 0);
+    CHECK(ninner > 0);
+    printf("  %d pieces: %d elements, %d vertex copies, %d inner\n",
+           it->npieces, ne, nvr, ninner);
+    free(lo);
+    free(hi);
+    free(tlo);
+    free(thi);
     free(vtag);
   }
   free(mine);
-  free(counts);
-  free(displs);
+  free(vmine);
   free(all);
+  free(vall);
 }
 
 static void run(int dim, int n, const char *metric, int npieces, int layers) {

@@ -1,0 +1,469 @@
+/*
+ * test_leb.c -- longest-edge bisection (remesh/leb.c), in 2D and 3D:
+ *  - plain refinement: a valid mesh of the same volume, boundary entities and
+ *    original vertices untouched, and every inner edge longer than lmax lies
+ *    in an element with a longer edge (the rule that stops the bisection);
+ *  - frozen (PA_FLAG_REQUIRED) elements come back bit for bit;
+ *  - every new vertex is the exact midpoint of its two parents, which are
+ *    earlier vertices, and a linear field is carried as the parents' mean;
+ *  - skins: the two halves of a box, refined separately, end with the same
+ *    skin vertices (coordinates and metric, bit for bit) and skin faces, no
+ *    splittable skin edge longer than skin_lmax, and onskin marking exactly
+ *    the new vertices on the skin;
+ *  - a failed allocation leaks nothing.
+ */
+#include "testutil.h"
+
+#include "remesh/leb.h"
+
+#define SKIN_REF 77
+#define LMAX 2.0
+#define SKIN_LMAX 1.4142
+
+/* ---- helpers ---- */
+
+/* Unit box of n cells per side with the uniform size h. */
+static pa_mesh *box(int dim, int n, double h) {
+  pa_mesh *m = NULL;
+  CHECK_OK(pa_mesh_generate_box(dim, n, &m));
+  double *s = malloc(sizeof *s * m->nv);
+  for (pa_idx v = 0; v < m->nv; v++) s[v] = h;
+  CHECK_OK(pa_mesh_set_metric(m, 1, s));
+  free(s);
+  return m;
+}
+
+/* Lexicographic order of the coordinates of a and b (as leb.c orders ends). */
+static int vcmp(const pa_mesh *m, pa_idx a, pa_idx b) {
+  const double *x = m->coord + (size_t)m->dim * a;
+  const double *y = m->coord + (size_t)m->dim * b;
+  for (int k = 0; k < m->dim; k++)
+    if (x[k] != y[k]) return x[k] < y[k] ? -1 : 1;
+  return 0;
+}
+
+/* Metric length of edge ab, computed from its ends in coordinate order. */
+static double elen(const pa_mesh *m, pa_idx a, pa_idx b) {
+  if (vcmp(m, a, b) > 0) return elen(m, b, a);
+  int d = m->dim, nc = m->met_ncomp;
+  return pa__edge_length(d, nc, m->coord + (size_t)d * a,
+                         m->coord + (size_t)d * b, m->met + (size_t)nc * a,
+                         m->met + (size_t)nc * b);
+}
+
+static uint64_t ekey(pa_idx a, pa_idx b) {
+  return a < b ? (uint64_t)a << 32 | (uint32_t)b : (uint64_t)b << 32 | (uint32_t)a;
+}
+
+static int ucmp(const void *p, const void *q) {
+  uint64_t a = *(const uint64_t *)p, b = *(const uint64_t *)q;
+  return a < b ? -1 : a > b;
+}
+
+/* Sorted keys of the edges of boundary entities and feature edges. */
+static uint64_t *bdry_edges(const pa_mesh *m, size_t *n) {
+  int d = m->dim, per = d == 2 ? 1 : 3;
+  uint64_t *k = malloc(sizeof *k * ((size_t)per * m->nb + m->ned + 1));
+  *n = 0;
+  for (pa_idx b = 0; b < m->nb; b++) {
+    const pa_idx *v = m->bdry + (size_t)d * b;
+    for (int i = 0; i < per; i++) k[(*n)++] = ekey(v[i], v[(i + 1) % d]);
+  }
+  for (pa_idx e = 0; e < m->ned; e++) k[(*n)++] = ekey(m->edge[2 * e], m->edge[2 * e + 1]);
+  qsort(k, *n, sizeof *k, ucmp);
+  return k;
+}
+
+typedef struct edge_figures {
+  double inner_max; /* longest edge on no boundary entity */
+  double bdry_max;  /* longest edge of a boundary entity */
+  int unblocked;    /* inner edges longer than lmax with no longer edge in an
+                       element around them: leb should have split them */
+} edge_figures;
+
+static edge_figures measure_edges(pa_mesh *m, double lmax) {
+  edge_figures f = {0, 0, 0};
+  const pa_idx *start, *ball;
+  CHECK_OK(pa_mesh_build_balls(m, &start, &ball));
+  size_t nk;
+  uint64_t *bk = bdry_edges(m, &nk);
+  int nve = m->dim + 1;
+  for (pa_idx e = 0; e < m->ne; e++) {
+    const pa_idx *v = m->elem + (size_t)nve * e;
+    for (int i = 0; i < nve; i++)
+      for (int j = i + 1; j < nve; j++) {
+        double len = elen(m, v[i], v[j]);
+        uint64_t key = ekey(v[i], v[j]);
+        if (bsearch(&key, bk, nk, sizeof key, ucmp)) {
+          f.bdry_max = fmax(f.bdry_max, len);
+          continue;
+        }
+        f.inner_max = fmax(f.inner_max, len);
+        if (!(len > lmax)) continue;
+        int blocked = 0;
+        for (pa_idx q = start[v[i]]; q < start[v[i] + 1] && !blocked; q++) {
+          const pa_idx *w = m->elem + (size_t)nve * ball[q];
+          int hasb = 0;
+          for (int k = 0; k < nve; k++) hasb |= w[k] == v[j];
+          for (int k = 0; k < nve && hasb; k++)
+            for (int l = k + 1; l < nve; l++)
+              if (ekey(w[k], w[l]) != key && elen(m, w[k], w[l]) >= len)
+                blocked = 1;
+        }
+        f.unblocked += !blocked;
+      }
+  }
+  free(bk);
+  return f;
+}
+
+/* New vertices (index >= nv0) that are not the exact midpoint of two earlier
+ * vertices named by parent, or whose fields are not the parents' mean. */
+static int bad_midpoints(const pa_mesh *m, pa_idx nv0, const pa_idx *parent) {
+  int bad = 0, d = m->dim;
+  for (pa_idx v = nv0; v < m->nv; v++) {
+    pa_idx a = parent[2 * (v - nv0)], b = parent[2 * (v - nv0) + 1];
+    if (a < 0 || b < 0 || a >= v || b >= v || a == b) {
+      bad++;
+      continue;
+    }
+    const double *x = m->coord + (size_t)d * v;
+    const double *xa = m->coord + (size_t)d * a, *xb = m->coord + (size_t)d * b;
+    int ok = 1;
+    for (int k = 0; k < d; k++) ok &= x[k] == 0.5 * xa[k] + 0.5 * xb[k];
+    for (int f = 0; f < m->nfield; f++) {
+      int nc = m->field[f].ncomp;
+      const double *y = m->field[f].val;
+      for (int c = 0; c < nc; c++)
+        ok &= y[(size_t)nc * v + c] ==
+              0.5 * y[(size_t)nc * a + c] + 0.5 * y[(size_t)nc * b + c];
+    }
+    bad += !ok;
+  }
+  return bad;
+}
+
+/* ---- plain refinement ---- */
+
+static void plain(int dim) {
+  pa_mesh *m = box(dim, 4, 0.05), *m0 = NULL;
+  CHECK_OK(pa_mesh_copy(m, &m0));
+  edge_figures f0 = measure_edges(m0, LMAX);
+  CHECK(f0.unblocked > 0); /* the input needs refining */
+  pa__leb_opts o = {LMAX, 0, NULL, 0};
+  pa_idx *parent = NULL;
+  uint8_t *onskin = NULL;
+  CHECK_OK(pa__leb_refine(m, &o, &parent, &onskin));
+  CHECK_OK(pa_mesh_check(m));
+  CHECK_NEAR(pa_mesh_volume(m), pa_mesh_volume(m0), 1e-12);
+  CHECK(m->ne > 4 * m0->ne);
+  /* Boundary entities and original vertices are untouched. */
+  CHECK(m->nb == m0->nb && m->ned == m0->ned);
+  CHECK(!memcmp(m->bdry, m0->bdry, sizeof(pa_idx) * dim * m0->nb));
+  CHECK(!memcmp(m->bref, m0->bref, sizeof(int32_t) * m0->nb));
+  CHECK(!memcmp(m->coord, m0->coord, sizeof(double) * dim * m0->nv));
+  CHECK(parent && bad_midpoints(m, m0->nv, parent) == 0);
+  int nskin = 0;
+  for (pa_idx v = m0->nv; v < m->nv && onskin; v++) nskin += onskin[v - m0->nv];
+  CHECK(onskin && nskin == 0);
+  /* Inner edges end short, except where a longer (boundary) edge blocks. */
+  edge_figures f = measure_edges(m, LMAX);
+  printf("plain %dD: %d -> %d elements, inner edges %.2f -> %.2f (boundary "
+         "%.2f)\n", dim, (int)m0->ne, (int)m->ne, f0.inner_max, f.inner_max,
+         f.bdry_max);
+  CHECK(f.unblocked == 0);
+  CHECK(f.inner_max <= fmax(LMAX, f.bdry_max));
+  CHECK(f.inner_max < 0.75 * f0.inner_max);
+  pa__free(parent);
+  pa__free(onskin);
+  pa_mesh_destroy(m);
+  pa_mesh_destroy(m0);
+}
+
+/* ---- frozen elements ---- */
+
+/* 1 for the elements of the first column of cells (centroid x < 0.25). */
+static int in_first_column(const pa_mesh *m, pa_idx e) {
+  int d = m->dim, nve = d + 1;
+  double cx = 0.0;
+  for (int k = 0; k < nve; k++) cx += m->coord[(size_t)d * m->elem[(size_t)nve * e + k]];
+  return cx / nve < 0.25;
+}
+
+static void frozen(int dim) {
+  pa_mesh *m = box(dim, 4, 0.05), *m0 = NULL;
+  int nve = dim + 1, nfrozen = 0;
+  for (pa_idx e = 0; e < m->ne; e++)
+    if (in_first_column(m, e)) {
+      m->eflag[e] |= PA_FLAG_REQUIRED;
+      nfrozen++;
+    }
+  CHECK_OK(pa_mesh_copy(m, &m0));
+  pa__leb_opts o = {LMAX, 0, NULL, 0};
+  CHECK_OK(pa__leb_refine(m, &o, NULL, NULL));
+  CHECK_OK(pa_mesh_check(m));
+  CHECK_NEAR(pa_mesh_volume(m), pa_mesh_volume(m0), 1e-12);
+  CHECK(m->ne > 4 * m0->ne);
+  int same = 0, now = 0;
+  for (pa_idx e = 0; e < m0->ne; e++)
+    same += (m0->eflag[e] & PA_FLAG_REQUIRED) && (m->eflag[e] & PA_FLAG_REQUIRED) &&
+            !memcmp(m->elem + (size_t)nve * e, m0->elem + (size_t)nve * e,
+                    sizeof(pa_idx) * nve);
+  for (pa_idx e = 0; e < m->ne; e++) now += (m->eflag[e] & PA_FLAG_REQUIRED) != 0;
+  CHECK(nfrozen > 0 && same == nfrozen && now == nfrozen);
+  pa_mesh_destroy(m);
+  pa_mesh_destroy(m0);
+}
+
+/* ---- fields ---- */
+
+static void linear(const double *x, int dim, double *y) {
+  double z = dim == 3 ? x[2] : 0.0;
+  y[0] = 1.0 + 2.0 * x[0] - 3.0 * x[1] + 0.5 * z;
+  y[1] = -x[0] + 4.0 * x[1] + 0.25 * z;
+}
+
+static void fields(int dim) {
+  pa_mesh *m = box(dim, 4, 0.05);
+  pa_idx nv0 = m->nv;
+  double *y = malloc(sizeof *y * 2 * nv0);
+  for (pa_idx v = 0; v < nv0; v++) linear(m->coord + (size_t)dim * v, dim, y + 2 * v);
+  CHECK_OK(pa_mesh_add_field(m, "linear", 2, y));
+  free(y);
+  pa__leb_opts o = {LMAX, 0, NULL, 0};
+  pa_idx *parent = NULL;
+  CHECK_OK(pa__leb_refine(m, &o, &parent, NULL));
+  CHECK(m->nv > nv0 && parent && bad_midpoints(m, nv0, parent) == 0);
+  double *val, err = 0.0;
+  int nc;
+  CHECK_OK(pa_mesh_field(m, 0, NULL, &nc, &val));
+  for (pa_idx v = 0; v < m->nv; v++) {
+    double exact[2];
+    linear(m->coord + (size_t)dim * v, dim, exact);
+    for (int c = 0; c < 2; c++) err = fmax(err, fabs(val[2 * v + c] - exact[c]));
+  }
+  CHECK(nc == 2 && err <= 1e-13);
+  pa__free(parent);
+  pa_mesh_destroy(m);
+}
+
+/* ---- skins ---- */
+
+/* A vertex on the cut x = 0.5, as a sortable tuple: coordinates then metric;
+ * or a skin face: the coordinates of its vertices in coordinate order. */
+typedef struct tuple {
+  double x[9];
+} tuple;
+
+static int tuple_cmp(const void *p, const void *q) {
+  const double *a = ((const tuple *)p)->x, *b = ((const tuple *)q)->x;
+  for (int k = 0; k < 9; k++)
+    if (a[k] != b[k]) return a[k] < b[k] ? -1 : 1;
+  return 0;
+}
+
+static int on_cut(const pa_mesh *m, pa_idx v) {
+  return m->coord[(size_t)m->dim * v] == 0.5;
+}
+
+/* On the cut and off the box's boundary: skin edges may be split there. */
+static int skin_inner(const pa_mesh *m, pa_idx v) {
+  const double *x = m->coord + (size_t)m->dim * v;
+  int ok = x[0] == 0.5;
+  for (int k = 1; k < m->dim; k++) ok &= x[k] > 0.0 && x[k] < 1.0;
+  return ok;
+}
+
+static tuple *cut_vertices(const pa_mesh *m, int *n) {
+  tuple *t = calloc((size_t)m->nv + 1, sizeof *t);
+  int d = m->dim, nc = m->met_ncomp;
+  *n = 0;
+  for (pa_idx v = 0; v < m->nv; v++) {
+    if (!on_cut(m, v)) continue;
+    memcpy(t[*n].x, m->coord + (size_t)d * v, sizeof(double) * d);
+    memcpy(t[*n].x + d, m->met + (size_t)nc * v, sizeof(double) * nc);
+    (*n)++;
+  }
+  qsort(t, (size_t)*n, sizeof *t, tuple_cmp);
+  return t;
+}
+
+static tuple *skin_faces(const pa_mesh *m, int *n) {
+  tuple *t = calloc((size_t)m->nb + 1, sizeof *t);
+  int d = m->dim;
+  *n = 0;
+  for (pa_idx b = 0; b < m->nb; b++) {
+    if (m->bref[b] != SKIN_REF) continue;
+    pa_idx v[3];
+    memcpy(v, m->bdry + (size_t)d * b, sizeof(pa_idx) * d);
+    for (int i = 1; i < d; i++)
+      for (int j = i; j > 0 && vcmp(m, v[j - 1], v[j]) > 0; j--) {
+        pa_idx s = v[j];
+        v[j] = v[j - 1];
+        v[j - 1] = s;
+      }
+    for (int i = 0; i < d; i++)
+      memcpy(t[*n].x + d * i, m->coord + (size_t)d * v[i], sizeof(double) * d);
+    (*n)++;
+  }
+  qsort(t, (size_t)*n, sizeof *t, tuple_cmp);
+  return t;
+}
+
+static int same_tuples(const tuple *a, int na, const tuple *b, int nb) {
+  if (na != nb) return 0;
+  for (int i = 0; i < na; i++)
+    if (tuple_cmp(a + i, b + i)) return 0;
+  return 1;
+}
+
+/* The elements of box on one side of x = 0.5 (side 0: centroid below) as a
+ * mesh of their own: vertices renumbered, metric copied, the box's boundary
+ * entities of that side kept and the faces on the cut added as SKIN_REF. */
+static pa_mesh *half(const pa_mesh *box, int side) {
+  int d = box->dim, nve = d + 1, nc = box->met_ncomp;
+  pa_mesh *m = NULL;
+  CHECK_OK(pa_mesh_create(d, &m));
+  pa_idx *map = malloc(sizeof *map * box->nv);
+  double *met = malloc(sizeof *met * nc * box->nv);
+  for (pa_idx v = 0; v < box->nv; v++) map[v] = -1;
+  for (pa_idx e = 0; e < box->ne; e++) {
+    const pa_idx *v = box->elem + (size_t)nve * e;
+    double cx = 0.0;
+    for (int k = 0; k < nve; k++) cx += box->coord[(size_t)d * v[k]] / nve;
+    if ((cx < 0.5) != (side == 0)) continue;
+    pa_idx w[4];
+    for (int k = 0; k < nve; k++) {
+      if (map[v[k]] < 0) {
+        CHECK_OK(pa_mesh_add_vertex(m, box->coord + (size_t)d * v[k], 0, &map[v[k]]));
+        memcpy(met + (size_t)nc * map[v[k]], box->met + (size_t)nc * v[k],
+               sizeof(double) * nc);
+      }
+      w[k] = map[v[k]];
+    }
+    CHECK_OK(pa_mesh_add_elem(m, w, 1, NULL));
+  }
+  CHECK_OK(pa_mesh_set_metric(m, nc, met));
+  for (pa_idx b = 0; b < box->nb; b++) {
+    pa_idx w[3], in = 1;
+    for (int k = 0; k < d; k++) in &= (w[k] = map[box->bdry[(size_t)d * b + k]]) >= 0;
+    if (in) CHECK_OK(pa_mesh_add_bdry(m, w, box->bref[b], NULL));
+  }
+  pa_idx nadded = 0;
+  CHECK_OK(pa_mesh_build_boundary(m, SKIN_REF, &nadded));
+  int off = 0;
+  for (pa_idx b = m->nb - nadded; b < m->nb; b++)
+    for (int k = 0; k < d; k++) off += !on_cut(m, m->bdry[(size_t)d * b + k]);
+  CHECK(nadded > 0 && off == 0);
+  CHECK_OK(pa_mesh_check(m));
+  free(map);
+  free(met);
+  return m;
+}
+
+/* Refine one half with its skin, and check it on its own: valid, same
+ * volume, the box's boundary entities untouched, exact midpoints, onskin set
+ * exactly on the cut, no splittable skin edge longer than SKIN_LMAX. */
+static void refine_half(pa_mesh *m) {
+  int d = m->dim;
+  pa_idx nv0 = m->nv, nb0 = m->nb, nbox = 0, *parent = NULL;
+  while (nbox < m->nb && m->bref[nbox] != SKIN_REF) nbox++;
+  pa_idx *bdry0 = malloc(sizeof *bdry0 * d * (nbox + 1));
+  memcpy(bdry0, m->bdry, sizeof *bdry0 * d * nbox);
+  double vol0 = pa_mesh_volume(m);
+  uint8_t *ok = malloc((size_t)nv0), *onskin = NULL;
+  for (pa_idx v = 0; v < nv0; v++) ok[v] = (uint8_t)skin_inner(m, v);
+  pa__leb_opts o = {LMAX, SKIN_REF, ok, SKIN_LMAX};
+  CHECK_OK(pa__leb_refine(m, &o, &parent, &onskin));
+  CHECK_OK(pa_mesh_check(m));
+  CHECK_NEAR(pa_mesh_volume(m), vol0, 1e-12);
+  CHECK(!memcmp(m->bdry, bdry0, sizeof *bdry0 * d * nbox));
+  int nbad = 0;
+  for (pa_idx f = nbox; f < m->nb; f++) nbad += m->bref[f] != SKIN_REF;
+  CHECK(nbad == 0);
+  CHECK(m->nv > nv0 && parent && onskin);
+  CHECK(parent && bad_midpoints(m, nv0, parent) == 0);
+  int wrong = 0, nchecked = 0, nlong = 0;
+  for (pa_idx v = nv0; v < m->nv && onskin; v++)
+    wrong += onskin[v - nv0] != on_cut(m, v);
+  for (pa_idx f = nbox; f < m->nb; f++) {
+    const pa_idx *v = m->bdry + (size_t)d * f;
+    for (int i = 0; i < (d == 2 ? 1 : 3); i++) {
+      pa_idx x = v[i], y = v[(i + 1) % d];
+      if (!skin_inner(m, x) || !skin_inner(m, y)) continue;
+      nchecked++;
+      nlong += elen(m, x, y) > SKIN_LMAX;
+    }
+  }
+  CHECK(wrong == 0);
+  CHECK(nchecked > 0 && nlong == 0);
+  printf("skin %dD half: %d -> %d vertices, %d -> %d skin faces\n", d,
+         (int)nv0, (int)m->nv, (int)(nb0 - nbox), (int)(m->nb - nbox));
+  free(bdry0);
+  free(ok);
+  pa__free(parent);
+  pa__free(onskin);
+}
+
+/* The key property: both halves of a cut box, refined on their own, agree on
+ * the cut (vertices with their metric, and faces) bit for bit. */
+static void skin(int dim, int n, const char *spec) {
+  pa_mesh *b = NULL, *p[2];
+  CHECK_OK(pa_mesh_generate_box(dim, n, &b));
+  /* iso-shell sizes scaled by 0.5 + x: the halves see different fields */
+  CHECK_OK(pa_metric_analytic(b, spec));
+  for (pa_idx v = 0; v < b->nv; v++) b->met[v] *= 0.5 + b->coord[(size_t)dim * v];
+  int n0, ncut[2], nface[2];
+  tuple *t0 = cut_vertices(b, &n0), *cut[2], *face[2];
+  for (int s = 0; s < 2; s++) {
+    p[s] = half(b, s);
+    refine_half(p[s]);
+    cut[s] = cut_vertices(p[s], &ncut[s]);
+    face[s] = skin_faces(p[s], &nface[s]);
+    CHECK(ncut[s] > 2 * n0);
+  }
+  CHECK(same_tuples(cut[0], ncut[0], cut[1], ncut[1]));
+  CHECK(same_tuples(face[0], nface[0], face[1], nface[1]));
+  for (int s = 0; s < 2; s++) {
+    free(cut[s]);
+    free(face[s]);
+    pa_mesh_destroy(p[s]);
+  }
+  free(t0);
+  pa_mesh_destroy(b);
+}
+
+/* ---- allocation failure ---- */
+
+static void test_alloc_failure(void) {
+  int nfail = 0;
+  for (int n = 1; n < 10000; n++) {
+    pa_mesh *m = box(2, 4, 0.05);
+    pa_idx *parent = NULL;
+    uint8_t *onskin = NULL;
+    pa__leb_opts o = {LMAX, 0, NULL, 0};
+    pa_memory_fail_after(n);
+    pa_status st = pa__leb_refine(m, &o, &parent, &onskin);
+    pa_memory_fail_after(0);
+    pa__free(parent);
+    pa__free(onskin);
+    pa_mesh_destroy(m);
+    if (st == PA_SUCCESS) break;
+    CHECK(st == PA_ERR_MEMORY && !parent && !onskin);
+    nfail++;
+  }
+  CHECK(nfail > 10);
+}
+
+static void test_plain_2d(void) { plain(2); }
+static void test_plain_3d(void) { plain(3); }
+static void test_frozen_2d(void) { frozen(2); }
+static void test_frozen_3d(void) { frozen(3); }
+static void test_fields_2d(void) { fields(2); }
+static void test_fields_3d(void) { fields(3); }
+static void test_skin_2d(void) { skin(2, 8, "iso-shell:0.1"); }
+static void test_skin_3d(void) { skin(3, 6, "iso-shell:0.1"); }
+
+TEST_MAIN(test_plain_2d, test_plain_3d, test_frozen_2d, test_frozen_3d,
+          test_fields_2d, test_fields_3d, test_skin_2d, test_skin_3d,
+          test_alloc_failure)
