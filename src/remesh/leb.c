@@ -188,7 +188,7 @@ static pa_status split_cells(bis *s, int faces, pa_idx a, pa_idx b, pa_idx mid) 
   pa_idx *x = NULL;
   int n = ball[a].n;
   PA_ALLOC(x, n ? n : 1);
-  memcpy(x, ball[a].x, (size_t)n * sizeof *x);
+  if (n) memcpy(x, ball[a].x, (size_t)n * sizeof *x);
   for (int q = 0; q < n; q++) {
     pa_idx k = x[q], k2;
     pa_idx *cv = (faces ? m->bdry : m->elem) + (size_t)nvc * k;
