@@ -15,12 +15,14 @@
  * required boundary entity, and are no corner, ridge or required vertex;
  * from reduced vertex values, so every piece sees the same). Such an edge
  * lies in no staying element, and every piece containing it has it on its
- * skin. In 3D, edges inside the piece longer than PA__LEB_INNER are
- * bisected too, in the same longest-first order: otherwise the tets on a
- * refined skin face are fans of slivers, which the remesher turns into
- * 1.4 x more tets at half the speed (box3d 10 -> 0.019, 2 ranks). In 2D
- * the remesher's own refinement is faster than the bisection and handles
- * fans of triangles well: only the skin is refined.
+ * skin. Edges inside the piece longer than PA__LEB_INNER are bisected too,
+ * in the same longest-first order: otherwise the elements on a refined skin
+ * face are fans of slivers. In 3D the built-in remesher turns those into
+ * 1.4 x more tets at half the speed (box3d 10 -> 0.019, 2 ranks); in 2D it
+ * repairs fans itself, but a plain bisection remesher (examples/) cannot,
+ * nor can anything repair a rolled-back piece, which comes back as refined
+ * here (test_adapt_props: 3 or more leaves fans). In 2D this costs about
+ * 0.2 s on box2d 100 -> 0.0013 (1.3 M triangles, 2 ranks).
  *
  * New skin vertices get temporary ids (PA__TEMP_GID + index), in the gid
  * field too, so they are matched after the remesh like the others;
@@ -31,7 +33,7 @@
 #include "adapt/adapt.h"
 #include "remesh/leb.h"
 
-#include <math.h>
+
 
 pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner) {
   pa_status st = PA_SUCCESS;
@@ -40,7 +42,7 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner) {
   uint8_t *onskin = NULL;
   int gf = m->nfield - 1;
   pa__leb_opts o;
-  o.lmax = m->dim == 3 ? PA__LEB_INNER : HUGE_VAL;
+  o.lmax = PA__LEB_INNER;
   o.skin_ref = PA__SKIN_REF;
   o.skin_ok = inner;
   o.skin_lmax = PA__LEB_SKIN;
