@@ -63,6 +63,7 @@ void pa__iter_free(pa__iter *it) {
     pa__free(pc->vgid);
     pa__free(pc->skin);
     pa__free(pc->hot);
+    pa__free(pc->vrank);
     pa__free(pc->match);
     pa__free(pc->ifgid);
     pa__free(pc->ifgive);

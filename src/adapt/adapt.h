@@ -79,6 +79,8 @@ typedef struct pa__piece {
   uint8_t *skin;       /* in->nv: vertex on the skin (frozen) */
   uint8_t *hot;        /* in->nv: skin vertex a tagged element of another
                           piece touches */
+  int *vrank;          /* in->nv: a rank that sent an element containing it
+                          (the smallest) */
   pa_idx nsplit;       /* vertices added on the skin (bisect.c) */
   pa_gid *ifgid;       /* in->nv (with skin refinement): global id agreed
                           for each vertex added by bisect.c, else unused */

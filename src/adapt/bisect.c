@@ -57,6 +57,9 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner) {
     uint8_t *h = pa__realloc(pc->hot, (size_t)m->nv);
     PA_CHECK(h, PA_ERR_MEMORY, "out of memory refining a piece's skin");
     pc->hot = h;
+    int *r = pa__realloc(pc->vrank, (size_t)m->nv * sizeof *r);
+    PA_CHECK(r, PA_ERR_MEMORY, "out of memory refining a piece's skin");
+    pc->vrank = r;
     for (pa_idx v = nv0; v < m->nv; v++) {
       int s = onskin[v - nv0];
       pa_idx a = parent[2 * (v - nv0)], b = parent[2 * (v - nv0) + 1];
@@ -64,6 +67,7 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner) {
       pc->skin[v] = (uint8_t)s;
       /* hot if an end is: elements produced near it may be tagged again */
       pc->hot[v] = (uint8_t)(s && (pc->hot[a] || pc->hot[b]));
+      pc->vrank[v] = pc->vrank[a] < pc->vrank[b] ? pc->vrank[a] : pc->vrank[b];
       m->field[gf].val[v] = (double)pc->vgid[v];
       pc->nsplit += s;
     }

@@ -29,6 +29,7 @@
  */
 #include "adapt/adapt.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 
@@ -267,6 +268,7 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
   PA_ALLOC(pc->vgid, nv);
   PA_CALLOC(pc->skin, nv);
   PA_CALLOC(pc->hot, nv);
+  PA_ALLOC(pc->vrank, nv);
   PA_CALLOC(inner, nv);
   PA_CALL(pa__gidmap_init(&map, (size_t)nv));
   for (pa_idx k = 0; k < nv; k++) {
@@ -286,6 +288,7 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
     m->field[dmm->nfield].val[k] = (double)V->gid[i];
     m->vref[k] = V->ref[i];
     m->vflag[k] = V->flag[i];
+    pc->vrank[k] = INT_MAX;
     pc->skin[k] = (V->flag[i] & PA__SKIN_TRANSIT) != 0;
     pc->hot[k] = (V->flag[i] & PA__HOT_TRANSIT) != 0;
     inner[k] = (V->flag[i] & PA__INNER_TRANSIT) != 0;
@@ -302,6 +305,9 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
                "%lld was not gathered", p,
                (long long)E->vgid[(size_t)(d + 1) * i + j], (long long)E->gid[i]);
       m->elem[(size_t)(d + 1) * k + j] = v;
+      int32_t from;
+      memcpy(&from, E->pay + E->poff[i], sizeof from);
+      if (from < pc->vrank[v]) pc->vrank[v] = from;
     }
     m->eref[k] = E->ref[i];
     m->eflag[k] = E->flag[i];
@@ -395,8 +401,10 @@ pa_status pa__adapt_extract(pa__iter *it) {
       pa_gid vg[4];
       for (int j = 0; j < it->nve; j++)
         vg[j] = dm->gid[PA_VERTEX][m->elem[(size_t)it->nve * e + j]];
+      int32_t from = it->rank; /* payload: the sender */
       PA_CALL(pa__recs_add(&S[PA_ELEMENT], dm->gid[PA_ELEMENT][e], vg,
-                           m->eref[e], m->eflag[e], it->label[e], NULL, NULL, 0));
+                           m->eref[e], m->eflag[e], it->label[e], NULL, &from,
+                           sizeof from));
       dest[PA_ELEMENT][n++] = it->piece_rank[it->label[e]];
     }
   }

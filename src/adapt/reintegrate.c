@@ -372,6 +372,78 @@ cleanup:
   return st;
 }
 
+/* Destination rank of each output element: with fewer pieces than ranks
+ * (one piece remeshed on one rank while the others wait), the output goes
+ * back where its input came from, so that the mesh stays balanced without
+ * a repartition: every output vertex takes the rank of the nearest matched
+ * input vertex (breadth-first over the output, from the matched vertices
+ * in index order), every element the rank of its vertex nearest to them
+ * (ties: the smaller rank). Otherwise everything stays on this rank (the
+ * pieces were balanced by work). */
+static pa_status output_dest(const pa__iter *it, const pa__piece *pc,
+                             int **destp) {
+  pa_status st = PA_SUCCESS;
+  const pa_mesh *o = pc->out;
+  int nve = o->dim + 1;
+  int *dest = NULL, *vr = NULL, *dist = NULL;
+  pa_idx *start = NULL, *ball = NULL, *queue = NULL;
+  PA_ALLOC(dest, o->ne ? o->ne : 1);
+  for (pa_idx e = 0; e < o->ne; e++) dest[e] = it->rank;
+  if (it->npieces < it->size && o->nv > 0) {
+    PA_ALLOC(vr, o->nv);
+    PA_ALLOC(dist, o->nv);
+    PA_ALLOC(queue, o->nv);
+    PA_CALLOC(start, (size_t)o->nv + 1);
+    PA_ALLOC(ball, (size_t)o->ne * nve + 1);
+    for (size_t k = 0; k < (size_t)o->ne * nve; k++) start[o->elem[k] + 1]++;
+    for (pa_idx v = 0; v < o->nv; v++) start[v + 1] += start[v];
+    for (size_t k = 0; k < (size_t)o->ne * nve; k++)
+      ball[start[o->elem[k]]++] = (pa_idx)(k / nve);
+    for (pa_idx v = o->nv; v > 0; v--) start[v] = start[v - 1];
+    start[0] = 0;
+    pa_idx head = 0, tail = 0;
+    for (pa_idx v = 0; v < o->nv; v++) {
+      pa_idx i = pc->match[v];
+      vr[v] = i >= 0 && pc->vrank[i] != INT_MAX ? pc->vrank[i] : -1;
+      dist[v] = vr[v] >= 0 ? 0 : -1;
+      if (vr[v] >= 0) queue[tail++] = v;
+    }
+    while (head < tail) {
+      pa_idx v = queue[head++];
+      for (pa_idx q = start[v]; q < start[v + 1]; q++) {
+        const pa_idx *ev = o->elem + (size_t)nve * ball[q];
+        for (int k = 0; k < nve; k++)
+          if (dist[ev[k]] < 0) {
+            dist[ev[k]] = dist[v] + 1;
+            vr[ev[k]] = vr[v];
+            queue[tail++] = ev[k];
+          }
+      }
+    }
+    for (pa_idx e = 0; e < o->ne; e++) {
+      const pa_idx *ev = o->elem + (size_t)nve * e;
+      int best = -1, bd = INT_MAX;
+      for (int k = 0; k < nve; k++)
+        if (dist[ev[k]] >= 0 &&
+            (dist[ev[k]] < bd || (dist[ev[k]] == bd && vr[ev[k]] < best))) {
+          bd = dist[ev[k]];
+          best = vr[ev[k]];
+        }
+      if (best >= 0) dest[e] = best;
+    }
+  }
+  *destp = dest;
+  dest = NULL;
+cleanup:
+  pa__free(dest);
+  pa__free(vr);
+  pa__free(dist);
+  pa__free(queue);
+  pa__free(start);
+  pa__free(ball);
+  return st;
+}
+
 /* Append the records an output gives (see the file comment). next[k]: next
  * fresh id of each kind (advanced). */
 static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemit,
@@ -384,7 +456,8 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   int d = o->dim, nuser = o->nfield - 1;
   pa_gid *vg = NULL;
   double *dbl = NULL;
-  int *dist = NULL;
+  int *dist = NULL, *dest = NULL;
+  PA_CALL(output_dest(it, pc, &dest));
   PA_ALLOC(vg, o->nv);
   PA_ALLOC(dbl, R[PA_VERTEX].ndbl);
   for (pa_idx j = 0; j < o->nv; j++) {
@@ -437,7 +510,7 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
     }
     size_t pl = pa__new_payload(dm, PA_ELEMENT, o->eref[e], done, dv, pay);
     PA_CALL(pa__recs_add(&R[PA_ELEMENT], next[PA_ELEMENT]++, ev, o->eref[e],
-                         o->eflag[e], it->rank, NULL, pay, pl));
+                         o->eflag[e], dest[e], NULL, pay, pl));
   }
   for (pa_idx b = 0; b < o->nb; b++) {
     if (!bemit[b]) continue;
@@ -458,6 +531,7 @@ cleanup:
   pa__free(vg);
   pa__free(dbl);
   pa__free(dist);
+  pa__free(dest);
   return st;
 }
 
