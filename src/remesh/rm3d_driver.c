@@ -266,10 +266,17 @@ static double max_length(const rm3d *m) {
   double lmax = 0;
   for (pa_idx k = 0; k < m->ne; k++) {
     if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) continue;
+    const pa_idx *v = m->tv + 4 * (size_t)k;
     double L[6];
-    lengths6(m, m->tv + 4 * (size_t)k, L);
-    for (int e = 0; e < 6; e++)
+    lengths6(m, v, L);
+    for (int e = 0; e < 6; e++) {
+      /* between two locked vertices (a frozen skin, mostly): skipped, it
+       * would keep the bands from reaching their end */
+      if ((m->vtag[v[rm3d_edge[e][0]]] & R3V_LOCK) &&
+          (m->vtag[v[rm3d_edge[e][1]]] & R3V_LOCK))
+        continue;
       if (L[e] > lmax) lmax = L[e];
+    }
   }
   return lmax;
 }
