@@ -4,7 +4,9 @@
  * report, and the final rebalance.
  *
  * Before the loop, hsiz/hmin/hmax are folded into the metric of every local
- * vertex (the same on owner and ghosts, so no exchange is needed); the
+ * vertex (the same on owner and ghosts, so no exchange is needed), and the
+ * metric is graded over the whole mesh (grade.c; pieces are remeshed
+ * without gradation, as the sequential remesher grades its input once); the
  * element value PA__DONE_VALUE marks the elements produced by a remesh so
  * they are never tagged again (except, with a looser criterion, those
  * produced next to the skin of another piece, see tag.c). The loop stops
@@ -168,6 +170,7 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
   PA_CALL(check_opts(dm, opts));
   PA_CALL(prepare_metric(dm, &opts->remesh));
   PA_CALL(pa__agree(dm->comm, st));
+  PA_CALL(pa__adapt_grade(dm, opts->remesh.hgrad, NULL));
   PA_CALL(pa_dmesh_value_add(dm, PA_ELEMENT, PA__DONE_VALUE, MPI_UINT8_T, 1, -1,
                              &done));
 
@@ -184,6 +187,7 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
     it.size = dm->size;
     it.dim = dm->dim;
     it.nve = dm->dim + 1;
+    it.iter = iter;
     PA_CALL(pa__adapt_tag(&it, done, iter == 1));
     t[0] = pa_wtime() - ta;
     rep.ntagged_left = it.ntagged;

@@ -12,6 +12,7 @@
  *                 both sides (remesh/leb.c)
  *   reintegrate.c steps 4-5: remesh the local pieces, check the outputs,
  *                 rebuild the distributed mesh with the new entities
+ *   grade.c       metric gradation of the whole mesh, before the loop
  *   adapt.c       the loop, options, report, the final rebalance
  *   dstats.c      pa_dmesh_stats (statistics of a distributed mesh)
  *
@@ -58,9 +59,12 @@
 #define PA__NOLABEL 2147483647
 /* Values of the "done" element value: 0 never remeshed, 1 remeshed (never
  * tagged again), 2 remeshed near a hot skin vertex (the remesher was
- * constrained there: tagged again if it fails the looser criteria). */
+ * constrained there: tagged again if it fails the criteria), 3 the same
+ * with an edge between two hot skin vertices (tagged again with a looser
+ * length range, tag.c). */
 #define PA__DONE 1
 #define PA__DONE_NEAR_SKIN 2
+#define PA__DONE_ON_SKIN 3
 /* Name of the vertex field carrying the global ids through a remesher. */
 #define PA__GID_FIELD "pa.adapt.gid"
 /* Name of the element value marking elements produced in this run. */
@@ -95,6 +99,7 @@ typedef struct pa__iter {
   pa_dmesh *dm;
   const pa_adapt_opts *opts;
   int rank, size, dim, nve;
+  int iter;            /* 1-based iteration number */
   pa_idx ne;           /* owned elements */
   uint8_t *tag;        /* tagged for remeshing */
   double *work;        /* estimated work of each owned element that may be
@@ -128,6 +133,10 @@ pa_status pa__owned_balls(pa_dmesh *dm, pa_idx **start, pa_idx **elems);
 
 /* Estimated work of local element e: expected output elements + 1. */
 double pa__elem_work(const pa_mesh *m, pa_idx e);
+
+/* Collective: grade the metric of the whole distributed mesh (grade.c),
+ * once before the loop; *nrounds (may be NULL) receives the rounds. */
+pa_status pa__adapt_grade(pa_dmesh *dm, double hgrad, int *nrounds);
 
 /* Step 1. Collective: tag the owned elements (it->tag), count them
  * (it->ntagged, global) and estimate their work (it->work). done: the

@@ -421,6 +421,15 @@ pa_status pa_dmesh_reduce_end(pa_dmesh *dm, pa_dmesh_value *v, MPI_Op op) {
   return PA_SUCCESS;
 }
 
+pa_status pa__dmesh_reduce_fn(pa_dmesh *dm, pa_dmesh_value *v,
+                              pa__combine_fn fn, void *ctx) {
+  pa_status st = value_ok(dm, v, 1);
+  if (st) return st;
+  pa__sf_reduce_begin(&v->op, v->data);
+  pa__sf_reduce_end_fn(&v->op, v->data, fn, ctx);
+  return PA_SUCCESS;
+}
+
 pa_status pa_dmesh_reduce(pa_dmesh *dm, pa_dmesh_value *v, MPI_Op op) {
   pa_status st = pa_dmesh_reduce_begin(dm, v);
   if (st) return st;

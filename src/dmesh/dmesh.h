@@ -176,6 +176,11 @@ typedef struct pa__layout {
 /* Doubles per vertex record: dim + metric + fields. */
 int pa__layout_ndbl(const pa__layout *l);
 
+/* Collective: pa_dmesh_reduce with a combining function (see
+ * pa__sf_reduce_end_fn); v may have any datatype. */
+pa_status pa__dmesh_reduce_fn(pa_dmesh *dm, pa_dmesh_value *v,
+                              pa__combine_fn fn, void *ctx);
+
 /* Collective: build a distributed mesh from records. elems: the owned
  * elements, aux = destination rank; verts, bdry, edges: every vertex,
  * boundary entity and edge exactly once over the ranks, anywhere. Records

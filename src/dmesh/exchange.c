@@ -442,8 +442,26 @@ void pa__sf_reduce_begin(pa__sfop *op, const void *data) {
   op->active = 2;
 }
 
+/* Combine with an MPI operation (see reduce_end). */
+typedef struct mpi_combine {
+  MPI_Datatype type;
+  int count;
+  MPI_Op op;
+} mpi_combine;
+
+static void combine_mpi(const void *in, void *inout, pa_idx n, void *ctx) {
+  mpi_combine *c = ctx;
+  MPI_Reduce_local(in, inout, c->count * (int)n, c->type, c->op);
+}
+
 void pa__sf_reduce_end(pa__sfop *op, void *data, MPI_Datatype type, int count,
                        MPI_Op mop) {
+  mpi_combine c = {type, count, mop};
+  pa__sf_reduce_end_fn(op, data, combine_mpi, &c);
+}
+
+void pa__sf_reduce_end_fn(pa__sfop *op, void *data, pa__combine_fn fn,
+                          void *ctx) {
   const pa__sf *sf = op->sf;
   unsigned char *d = data;
   size_t u = op->unit;
@@ -456,7 +474,7 @@ void pa__sf_reduce_end(pa__sfop *op, void *data, MPI_Datatype type, int count,
     unsigned char *in = op->rootbuf + u * (size_t)j0;
     for (pa_idx j = 0; j < n; j++)
       memcpy(op->scratch + u * (size_t)j, d + u * (size_t)sf->rootidx[j0 + j], u);
-    MPI_Reduce_local(in, op->scratch, count * (int)n, type, mop);
+    fn(in, op->scratch, n, ctx);
     for (pa_idx j = 0; j < n; j++)
       memcpy(d + u * (size_t)sf->rootidx[j0 + j], op->scratch + u * (size_t)j, u);
   }

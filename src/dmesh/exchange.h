@@ -107,6 +107,13 @@ void pa__sf_bcast_end(pa__sfop *op, void *data);
 void pa__sf_reduce_begin(pa__sfop *op, const void *data);
 void pa__sf_reduce_end(pa__sfop *op, void *data, MPI_Datatype type, int count,
                        MPI_Op mop);
+/* The same with a combining function instead of an MPI operation:
+ * fn(in, inout, n, ctx) combines n leaf values into n root values (each of
+ * the op's unit bytes), for operations MPI has no name for (e.g. the
+ * intersection of metric tensors). Ranks are combined in increasing order. */
+typedef void (*pa__combine_fn)(const void *in, void *inout, pa_idx n, void *ctx);
+void pa__sf_reduce_end_fn(pa__sfop *op, void *data, pa__combine_fn fn,
+                          void *ctx);
 
 /* ---- setup traffic ---- */
 
