@@ -373,6 +373,10 @@ typedef struct pa_remesh_opts {
   int no_move;      /**< -nomove */
   int no_surf;      /**< -nosurf: boundary left unchanged (3D) */
   int verbosity;
+  /** 1: the caller guarantees a valid, conforming mesh (as pa_mesh_check
+   *  would find it), so pa_remesh skips that check (the parallel loop's
+   *  pieces, built valid; default 0) */
+  int trusted;
 } pa_remesh_opts;
 
 /** Default options: no hmin/hmax/hsiz, hgrad 1.3, hausd 0.01, angle 45. */

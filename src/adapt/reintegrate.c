@@ -188,6 +188,8 @@ pa_status pa__adapt_remesh(pa__iter *it, int *nfail) {
       it->opts->remesher ? it->opts->remesher : pa_remesher_builtin();
   pa_mesh *out = NULL;
   ro.hsiz = 0; /* folded into the metric before the loop */
+  ro.trusted = 1; /* built valid: extract.c and bisect.c (the output is
+                     checked, check_pieces) */
   /* Graded once over the whole mesh before the loop (grade.c), like the
    * sequential remesher grades its input once: grading each piece again
    * would stop at its frozen skin, and on the finer mesh of a later
