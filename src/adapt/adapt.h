@@ -153,8 +153,10 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max);
 pa_status pa__adapt_extract(pa__iter *it);
 
 /* Refine the skin faces pc shares with other pieces (bisect.c); inner[v]:
- * the vertex is inner (see pieces.c). */
-pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner);
+ * the vertex is inner (see pieces.c); inside: bisect the edges inside the
+ * piece too. */
+pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
+                                int inside);
 
 /* Step 4. Local: remesh the local pieces; failures are recorded, not
  * returned (only hard internal errors are). *nfail receives the number of

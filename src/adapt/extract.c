@@ -346,7 +346,12 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
   }
   pc->in = m;
   m = NULL;
-  PA_CALL(pa__piece_refine_skin(pc, inner));
+  {
+    /* the built-in 2D remesher repairs fans of triangles itself */
+    const pa_remesher *r = it->opts->remesher;
+    int builtin2d = d == 2 && (!r || r == pa_remesher_builtin());
+    PA_CALL(pa__piece_refine_skin(pc, inner, !builtin2d));
+  }
 cleanup:
   pa_mesh_destroy(m);
   pa__gidmap_free(&map);
