@@ -44,7 +44,7 @@ static pa_status ilist_add(ilist *l, pa_idx k) {
   if (l->n == l->cap) {
     int cap = l->cap ? 2 * l->cap : 8;
     pa_idx *x = pa__realloc(l->x, (size_t)cap * sizeof *x);
-    PA_CHECK(x, PA_ERR_MEMORY, "out of memory refining a piece's skin");
+    PA_CHECK(x, PA_ERR_MEMORY, "out of memory in longest-edge bisection");
     l->x = x;
     l->cap = cap;
   }
@@ -64,7 +64,6 @@ static void ilist_del(ilist *l, pa_idx k) {
 typedef struct qedge {
   double len;
   pa_idx a, b; /* canonical order: a before b by coordinates */
-  int skin;    /* set when popped: on a skin face */
 } qedge;
 
 typedef struct bis {
@@ -77,6 +76,8 @@ typedef struct bis {
                          bit 2 added on the skin */
   qedge *heap;
   size_t nheap, capheap;
+  uint64_t *feat;     /* feature edges as sorted (lo << 32 | hi) pairs */
+  size_t nfeat;
 } bis;
 
 /* Lexicographic comparison of the coordinates of vertices a and b. */
@@ -123,7 +124,7 @@ static pa_status push(bis *s, pa_idx a, pa_idx b) {
   if (!(len > lo) || !isfinite(len)) return PA_SUCCESS;
   PA_GROW(s->heap, s->capheap, s->nheap + 1);
   size_t i = s->nheap++;
-  qedge e = {len, a, b, 0};
+  qedge e = {len, a, b};
   while (i > 0 && qbefore(m, &e, &s->heap[(i - 1) / 2])) {
     s->heap[i] = s->heap[(i - 1) / 2];
     i = (i - 1) / 2;
@@ -148,6 +149,21 @@ static qedge pop(bis *s) {
   return top;
 }
 
+static int cmp_u64(const void *p, const void *q) {
+  uint64_t a = *(const uint64_t *)p, b = *(const uint64_t *)q;
+  return (a > b) - (a < b);
+}
+
+static uint64_t pair_key(pa_idx a, pa_idx b) {
+  return a < b ? ((uint64_t)a << 32) | (uint32_t)b : ((uint64_t)b << 32) | (uint32_t)a;
+}
+
+/* 1 if ab is a feature edge of the input (those are never split). */
+static int is_feature(const bis *s, pa_idx a, pa_idx b) {
+  uint64_t k = pair_key(a, b);
+  return s->nfeat && bsearch(&k, s->feat, s->nfeat, sizeof k, cmp_u64) != NULL;
+}
+
 static int has(const pa_idx *v, int n, pa_idx x) {
   for (int k = 0; k < n; k++)
     if (v[k] == x) return 1;
@@ -161,13 +177,13 @@ static pa_status grow_balls(bis *s, size_t nv) {
   size_t n = s->nball ? 2 * s->nball : 64;
   if (n < nv) n = nv;
   ilist *e = pa__realloc(s->eball, n * sizeof *e);
-  PA_CHECK(e, PA_ERR_MEMORY, "out of memory refining a piece's skin");
+  PA_CHECK(e, PA_ERR_MEMORY, "out of memory in longest-edge bisection");
   s->eball = e;
   ilist *b = pa__realloc(s->bball, n * sizeof *b);
-  PA_CHECK(b, PA_ERR_MEMORY, "out of memory refining a piece's skin");
+  PA_CHECK(b, PA_ERR_MEMORY, "out of memory in longest-edge bisection");
   s->bball = b;
   uint8_t *in = pa__realloc(s->inner, n);
-  PA_CHECK(in, PA_ERR_MEMORY, "out of memory refining a piece's skin");
+  PA_CHECK(in, PA_ERR_MEMORY, "out of memory in longest-edge bisection");
   s->inner = in;
   memset(s->eball + s->nball, 0, (n - s->nball) * sizeof *e);
   memset(s->bball + s->nball, 0, (n - s->nball) * sizeof *b);
@@ -179,7 +195,7 @@ cleanup:
 
 /* Split the cells (elements: nvc = d + 1, or faces: nvc = d) of the list of
  * a that contain b: each keeps b with m for a and a copy keeps a with m for
- * b. New skin edges of split skin faces are queued. */
+ * b. The new edges of split elements are queued. */
 static pa_status split_cells(bis *s, int faces, pa_idx a, pa_idx b, pa_idx mid) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = s->m;
@@ -231,7 +247,7 @@ static int longer_around(const bis *s, const qedge *e) {
     if (!has(v, nve, e->b)) continue;
     for (int i = 0; i < nve; i++)
       for (int j = i + 1; j < nve; j++) {
-        qedge f = {0, v[i], v[j], 0};
+        qedge f = {0, v[i], v[j]};
         if ((f.a == e->a && f.b == e->b) || (f.a == e->b && f.b == e->a)) continue;
         if (vcmp(m, f.a, f.b) > 0) {
           f.a = v[j];
@@ -261,6 +277,13 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o,
   PA_CALL(grow_balls(&s, (size_t)nv0));
   if (o->skin_ok)
     for (pa_idx v = 0; v < nv0; v++) s.inner[v] = o->skin_ok[v] ? 1 : 0;
+  if (m->ned) {
+    PA_ALLOC(s.feat, m->ned);
+    for (pa_idx r = 0; r < m->ned; r++)
+      s.feat[r] = pair_key(m->edge[2 * (size_t)r], m->edge[2 * (size_t)r + 1]);
+    s.nfeat = (size_t)m->ned;
+    qsort(s.feat, s.nfeat, sizeof *s.feat, cmp_u64);
+  }
   for (pa_idx e = 0; e < m->ne; e++)
     for (int j = 0; j <= s.d; j++)
       PA_CALL(ilist_add(&s.eball[m->elem[(size_t)(s.d + 1) * e + j]], e));
@@ -290,9 +313,7 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o,
       if (o->skin_ok && m->bref[r] == o->skin_ref) skin = 1;
       else bnd = 1;
     }
-    for (pa_idx r = 0; r < m->ned && !bnd; r++)
-      bnd = (m->edge[2 * r] == e.a && m->edge[2 * r + 1] == e.b) ||
-            (m->edge[2 * r] == e.b && m->edge[2 * r + 1] == e.a);
+    bnd |= is_feature(&s, e.a, e.b);
     if (skin) {
       if (!(s.inner[e.a] & 1) || !(s.inner[e.b] & 1) || !(e.len > o->skin_lmax))
         continue;
@@ -346,6 +367,7 @@ cleanup:
   pa__free(s.bball);
   pa__free(s.inner);
   pa__free(s.heap);
+  pa__free(s.feat);
   pa__free(parent);
   return st;
 }
