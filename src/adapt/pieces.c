@@ -34,6 +34,10 @@
 #include <math.h>
 
 #define NOLABEL PA__NOLABEL
+/* Load imbalance tolerance of the piece partition: the iteration waits for
+ * the heaviest piece (Scotch's default 5 % left a 4.8 % gap in estimated
+ * work on box3d 10 -> 0.019, 2 ranks). */
+#define PIECE_KBAL 0.01
 
 /* Vertex value comp 0 = min over the owned elements around v of lab(e),
  * comp 1 = min of -lab(e), where lab = label or NOLABEL; only_labelled skips
@@ -121,7 +125,7 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
     int weighted = (double)it->ntagged * 1e6 < 2147483647.0;
     PA_CALL(pa__dual_graph(dm->comm, it->dim, nt, vg, &xadj, &adj, NULL, NULL));
     st = pa__partition_dgraph(dm->comm, nt, xadj, adj, weighted ? wt : NULL,
-                              it->npieces, part);
+                              it->npieces, PIECE_KBAL, part);
     PA_CALL(pa__agree(dm->comm, st));
   } else {
     for (pa_idx k = 0; k < nt; k++) part[k] = 0;

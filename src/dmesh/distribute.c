@@ -597,7 +597,7 @@ pa_status pa__dmesh_partition(MPI_Comm comm, int dim, pa_idx n,
   PA_CALL(pa__dual_graph(comm, dim, n, vgid, &xadj, &adj, NULL, NULL));
   PA_CALL(pa__agree(comm, PA_SUCCESS));
   t1 = pa_wtime();
-  st = pa__partition_dgraph(comm, n, xadj, adj, weights, size, part);
+  st = pa__partition_dgraph(comm, n, xadj, adj, weights, size, 0, part);
   PA_CALL(pa__agree(comm, st));
   t2 = pa_wtime();
   st = pa__partition_remap(comm, n, part, weights);

@@ -33,7 +33,7 @@ static pa_status agree(MPI_Comm comm, pa_status st) {
 
 pa_status pa__partition_dgraph(MPI_Comm comm, pa_idx n, const pa_idx *xadj,
                                const int64_t *adj, const double *weights,
-                               int nparts, int *part) {
+                               int nparts, double kbal, int *part) {
   pa_status st = PA_SUCCESS;
   SCOTCH_Num *vert = NULL, *edge = NULL, *velo = NULL, *parttab = NULL;
   SCOTCH_Dgraph graph;
@@ -103,6 +103,16 @@ cleanup:
    * edge cut; SPEED halves the time only on one rank. */
   SCOTCH_stratInit(&strat);
   strat_init = 1;
+  if (kbal > 0) {
+    int size;
+    MPI_Comm_size(comm, &size);
+    if (SCOTCH_stratDgraphMapBuild(&strat, SCOTCH_STRATDEFAULT, size, nparts,
+                                   kbal) != 0)
+      st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
+                     "SCOTCH_stratDgraphMapBuild failed");
+    st = agree(comm, st);
+    if (st) goto done;
+  }
   /* Scotch's random state persists across calls in a process: reset it so
    * that the same graph always gets the same partition. */
   SCOTCH_randomReset();

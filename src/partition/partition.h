@@ -15,12 +15,14 @@
  * numbered offset(r) + i globally (offsets: exclusive scan of n); the
  * neighbours of local vertex i are adj[xadj[i] .. xadj[i+1]-1] (global
  * numbers, symmetric graph, no self loop). weights: per vertex (> 0) or NULL.
+ * kbal > 0: the load imbalance tolerated (a strategy built by
+ * SCOTCH_stratDgraphMapBuild), else Scotch's default strategy.
  * part[i] receives the part of local vertex i in [0, nparts). Fails with
  * PA_ERR_PARTITION if Scotch does, PA_ERR_ARG if the graph has 2^31 vertices
  * or more (SCOTCH_Num is 32-bit). */
 pa_status pa__partition_dgraph(MPI_Comm comm, pa_idx n, const pa_idx *xadj,
                                const int64_t *adj, const double *weights,
-                               int nparts, int *part);
+                               int nparts, double kbal, int *part);
 
 /* Collective: map parts to ranks (nparts == number of ranks) so that the
  * weight kept in place is large: greedy on the part x rank matrix of weights
