@@ -15,15 +15,16 @@
  * required boundary entity, and are no corner, ridge or required vertex;
  * from reduced vertex values, so every piece sees the same). Such an edge
  * lies in no staying element, and every piece containing it has it on its
- * skin. Edges inside the piece longer than PA__LEB_INNER are bisected too,
- * in the same longest-first order: otherwise the elements on a refined skin
- * face are fans of slivers. In 3D the built-in remesher turns those into
- * 1.4 x more tets at half the speed (box3d 10 -> 0.019, 2 ranks); in 2D it
- * repairs fans itself, but a plain bisection remesher (examples/) cannot,
- * nor can anything repair a rolled-back piece, which comes back as refined
- * here (test_adapt_props: 3 or more leaves fans); the built-in 2D remesher
- * is spared it (inside = 0: it repairs fans faster than the bisection
- * makes them, 0.2 s on box2d 100 -> 0.0013, 1.3 M triangles, 2 ranks).
+ * skin. With inside, edges inside the piece longer than PA__LEB_INNER are
+ * bisected too, in the same longest-first order: otherwise the elements on
+ * a refined skin face are fans of slivers. The built-in 3D remesher turns
+ * those into 1.4 x more tets at half the speed (box3d 10 -> 0.019, 2
+ * ranks); a plain bisection remesher (examples/) cannot repair them at all,
+ * nor the next iteration's one a rolled-back piece, which comes back as
+ * refined here (test_adapt_props: a threshold of 3 or more leaves fans).
+ * The built-in 2D remesher repairs fans of triangles itself, faster than
+ * the bisection (0.2 s on box2d 100 -> 0.0013, 1.3 M triangles, 2 ranks):
+ * extract.c passes inside = 0 for it.
  *
  * New skin vertices get temporary ids (PA__TEMP_GID + index), in the gid
  * field too, so they are matched after the remesh like the others;
@@ -35,8 +36,6 @@
 #include "remesh/leb.h"
 
 #include <math.h>
-
-
 
 pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
                                 int inside) {
