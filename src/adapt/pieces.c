@@ -22,8 +22,8 @@
  *     A skin vertex is hot for piece p when a tagged element of another
  *     piece touches it (extract.c). A vertex is inner (it->vinner, may be
  *     refined around by bisect.c) when only labelled elements touch it and
- *     it lies on no feature edge nor required boundary entity and is no
- *     corner, ridge or required vertex.
+ *     it lies on no feature edge, required boundary entity or curved
+ *     boundary and is no corner, ridge or required vertex.
  * Only vertex values with reduce/halo cross the ranks here: no point-to-point
  * code, and the result does not depend on timing.
  */
@@ -64,6 +64,74 @@ static pa_status vertex_labels(pa__iter *it, pa_dmesh_value *val,
   PA_CALL(pa_dmesh_reduce(it->dm, val, MPI_MIN));
   PA_CALL(pa_dmesh_halo(it->dm, val));
 cleanup:
+  return st;
+}
+
+/* curved[v] = 1 for a local vertex on boundary entities that do not all lie
+ * in one plane (one line in 2D), over every rank: a skin edge there is not
+ * bisected (its midpoint would lie on the chord, inside a curved boundary,
+ * and stay there frozen). Per vertex, the smallest and largest component of
+ * the unit normals of its boundary entities (sign made canonical), reduced. */
+static pa_status curved_vertices(pa_dmesh *dm, uint8_t *curved) {
+  pa_status st = PA_SUCCESS;
+  const pa_mesh *m = dm->mesh;
+  int d = dm->dim;
+  pa_idx nv = dm->nloc[PA_VERTEX];
+  pa_dmesh_value *val = NULL;
+  PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.adapt.normals", MPI_DOUBLE,
+                             2 * d, -1, &val));
+  {
+    double *x = pa_dmesh_value_data(val, NULL, NULL);
+    for (size_t i = 0; i < (size_t)2 * d * nv; i++) x[i] = HUGE_VAL;
+    for (pa_idx b = 0; b < m->nb; b++) {
+      const pa_idx *f = m->bdry + (size_t)d * b;
+      const double *p0 = m->coord + (size_t)d * f[0], *p1 = m->coord + (size_t)d * f[1];
+      double n[3] = {0, 0, 0};
+      if (d == 2) {
+        n[0] = p1[1] - p0[1];
+        n[1] = p0[0] - p1[0];
+      } else {
+        const double *p2 = m->coord + 3 * (size_t)f[2];
+        double u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+        double w[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+        n[0] = u[1] * w[2] - u[2] * w[1];
+        n[1] = u[2] * w[0] - u[0] * w[2];
+        n[2] = u[0] * w[1] - u[1] * w[0];
+      }
+      double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      if (!(len > 0)) continue;
+      int k0 = 0; /* the largest component made positive */
+      for (int k = 1; k < d; k++)
+        if (fabs(n[k]) > fabs(n[k0])) k0 = k;
+      double s = n[k0] < 0 ? -1.0 / len : 1.0 / len;
+      for (int j = 0; j < d; j++) {
+        double *y = x + (size_t)2 * d * f[j];
+        for (int k = 0; k < d; k++) {
+          double c = n[k] * s;
+          if (c < y[k]) y[k] = c;
+          if (-c < y[d + k]) y[d + k] = -c;
+        }
+      }
+    }
+  }
+  PA_CALL(pa_dmesh_reduce(dm, val, MPI_MIN));
+  PA_CALL(pa_dmesh_halo(dm, val));
+  {
+    const double *x = pa_dmesh_value_data(val, NULL, NULL);
+    for (pa_idx v = 0; v < nv; v++) {
+      const double *y = x + (size_t)2 * d * v;
+      int c = 0;
+      for (int k = 0; k < d; k++)
+        c |= y[k] != HUGE_VAL && -y[d + k] - y[k] > 1e-9;
+      curved[v] = (uint8_t)c;
+    }
+  }
+cleanup:
+  st = pa__agree_end(dm->comm, st);
+  if (val) {
+    pa_status s2 = pa_dmesh_value_remove(dm, val);
+    if (!st) st = s2;
+  }
   return st;
 }
 
@@ -177,8 +245,8 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
       }
     }
     /* inner vertices (bisect.c): only pieces around, on no feature edge nor
-     * required boundary entity (reduced over the ranks: every piece sees
-     * the same) */
+     * required boundary entity nor curved boundary (reduced over the ranks:
+     * every piece sees the same) */
     {
       int *d = pa_dmesh_value_data(val, NULL, NULL);
       const pa_mesh *m = dm->mesh;
@@ -193,12 +261,13 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
     PA_CALL(pa_dmesh_reduce(dm, val, MPI_MAX));
     PA_CALL(pa_dmesh_halo(dm, val));
     PA_ALLOC(it->vinner, nloc);
+    PA_CALL(curved_vertices(dm, it->vinner)); /* 1: curved, for now */
     {
       const int *d = pa_dmesh_value_data(val, NULL, NULL);
       const uint8_t *vf = dm->mesh->vflag;
       for (pa_idx v = 0; v < nloc; v++)
         it->vinner[v] =
-            (uint8_t)(!d[2 * v] && it->vlab[4 * v + 1] != NOLABEL &&
+            (uint8_t)(!d[2 * v] && !it->vinner[v] && it->vlab[4 * v + 1] != NOLABEL &&
                               !(vf[v] & (PA_FLAG_CORNER | PA_FLAG_RIDGE | PA_FLAG_REQUIRED))
                           ? PA__INNER_TRANSIT : 0);
     }
