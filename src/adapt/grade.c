@@ -47,26 +47,19 @@ static void combine_metric(const void *in, void *inout, pa_idx n, void *ctx) {
 /* 1 for the vertices that keep their metric, agreed by every copy. */
 static pa_status frozen_vertices(pa_dmesh *dm, uint8_t **frozenp) {
   pa_status st = PA_SUCCESS;
-  const pa_mesh *m = dm->mesh;
-  int d = dm->dim;
   pa_idx nv = dm->nloc[PA_VERTEX];
   pa_dmesh_value *val = NULL;
   uint8_t *f = NULL;
   PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.adapt.gradefrozen", MPI_INT, 1,
                              -1, &val));
+  PA_ALLOC(f, nv ? nv : 1);
+  pa__mesh_frozen_vertices(dm->mesh, f); /* the local view */
   {
     int *x = pa_dmesh_value_data(val, NULL, NULL);
-    for (pa_idx v = 0; v < nv; v++) x[v] = (m->vflag[v] & PA_FLAG_REQUIRED) != 0;
-    for (pa_idx k = 0; k < m->ne; k++)
-      if (m->eflag[k] & PA_FLAG_REQUIRED)
-        for (int i = 0; i <= d; i++) x[m->elem[(size_t)(d + 1) * k + i]] = 1;
-    for (pa_idx b = 0; b < m->nb; b++)
-      if (m->bflag[b] & PA_FLAG_REQUIRED)
-        for (int i = 0; i < d; i++) x[m->bdry[(size_t)d * b + i]] = 1;
+    for (pa_idx v = 0; v < nv; v++) x[v] = f[v];
   }
   PA_CALL(pa_dmesh_reduce(dm, val, MPI_MAX));
   PA_CALL(pa_dmesh_halo(dm, val));
-  PA_ALLOC(f, nv ? nv : 1);
   {
     const int *x = pa_dmesh_value_data(val, NULL, NULL);
     for (pa_idx v = 0; v < nv; v++) f[v] = (uint8_t)(x[v] != 0);

@@ -326,3 +326,14 @@ size_t pa_mesh_memory_used(const pa_mesh *m) {
   for (int k = 0; k < m->nfield; k++) n += pa__alloc_size(m->field[k].val);
   return n;
 }
+
+void pa__mesh_frozen_vertices(const pa_mesh *m, uint8_t *f) {
+  int d = m->dim;
+  for (pa_idx v = 0; v < m->nv; v++) f[v] = (m->vflag[v] & PA_FLAG_REQUIRED) != 0;
+  for (pa_idx k = 0; k < m->ne; k++)
+    if (m->eflag[k] & PA_FLAG_REQUIRED)
+      for (int i = 0; i <= d; i++) f[m->elem[(size_t)(d + 1) * k + i]] = 1;
+  for (pa_idx b = 0; b < m->nb; b++)
+    if (m->bflag[b] & PA_FLAG_REQUIRED)
+      for (int i = 0; i < d; i++) f[m->bdry[(size_t)d * b + i]] = 1;
+}

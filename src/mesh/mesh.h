@@ -111,4 +111,9 @@ double pa__orient(int dim, const double *const *x);
 /* Grow vertex arrays (and metric/fields) to hold at least n vertices. */
 pa_status pa__mesh_grow_vertices(pa_mesh *mesh, size_t n);
 
+/* f[v] = 1 (mesh->nv entries) for the vertices whose metric a remesh keeps:
+ * required vertices and the vertices of required elements and boundary
+ * entities; 0 for the others. */
+void pa__mesh_frozen_vertices(const pa_mesh *mesh, uint8_t *f);
+
 #endif /* PA_MESH_H */

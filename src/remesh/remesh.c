@@ -87,15 +87,8 @@ const pa_remesher *pa_remesher_builtin(void) {
 static pa_status frozen_mask(const pa_mesh *m, uint8_t **mask) {
   pa_status st = PA_SUCCESS;
   uint8_t *f = NULL;
-  int d = m->dim;
   PA_CALLOC(f, m->nv);
-  for (pa_idx v = 0; v < m->nv; v++) f[v] = (m->vflag[v] & PA_FLAG_REQUIRED) != 0;
-  for (pa_idx k = 0; k < m->ne; k++)
-    if (m->eflag[k] & PA_FLAG_REQUIRED)
-      for (int i = 0; i <= d; i++) f[m->elem[(size_t)(d + 1) * k + i]] = 1;
-  for (pa_idx b = 0; b < m->nb; b++)
-    if (m->bflag[b] & PA_FLAG_REQUIRED)
-      for (int i = 0; i < d; i++) f[m->bdry[(size_t)d * b + i]] = 1;
+  pa__mesh_frozen_vertices(m, f);
   *mask = f;
 cleanup:
   return st;
