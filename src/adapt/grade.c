@@ -56,22 +56,20 @@ static pa_status frozen_vertices(pa_dmesh *dm, uint8_t **frozenp) {
   pa__mesh_frozen_vertices(dm->mesh, f); /* the local view */
   {
     int *x = pa_dmesh_value_data(val, NULL, NULL);
-    for (pa_idx v = 0; v < nv; v++) x[v] = f[v];
+    for (pa_idx v = 0; v < nv; v++)
+      x[v] = f[v];
   }
   PA_CALL(pa_dmesh_reduce(dm, val, MPI_MAX));
   PA_CALL(pa_dmesh_halo(dm, val));
   {
     const int *x = pa_dmesh_value_data(val, NULL, NULL);
-    for (pa_idx v = 0; v < nv; v++) f[v] = (uint8_t)(x[v] != 0);
+    for (pa_idx v = 0; v < nv; v++)
+      f[v] = (uint8_t)(x[v] != 0);
   }
   *frozenp = f;
   f = NULL;
 cleanup:
-  st = pa__agree_end(dm->comm, st);
-  if (val) {
-    pa_status s2 = pa_dmesh_value_remove(dm, val);
-    if (!st) st = s2;
-  }
+  st = pa__dmesh_value_drop(dm, val, pa__agree_end(dm->comm, st));
   pa__free(f);
   return st;
 }
@@ -107,11 +105,7 @@ pa_status pa__adapt_grade(pa_dmesh *dm, double hgrad, int *nrounds) {
   }
   if (nrounds) *nrounds = round;
 cleanup:
-  st = pa__agree_end(dm->comm, st);
-  if (val) {
-    pa_status s2 = pa_dmesh_value_remove(dm, val);
-    if (!st) st = s2;
-  }
+  st = pa__dmesh_value_drop(dm, val, pa__agree_end(dm->comm, st));
   pa__free(frozen);
   return st;
 }

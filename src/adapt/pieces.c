@@ -127,11 +127,7 @@ static pa_status curved_vertices(pa_dmesh *dm, uint8_t *curved) {
     }
   }
 cleanup:
-  st = pa__agree_end(dm->comm, st);
-  if (val) {
-    pa_status s2 = pa_dmesh_value_remove(dm, val);
-    if (!st) st = s2;
-  }
+  st = pa__dmesh_value_drop(dm, val, pa__agree_end(dm->comm, st));
   return st;
 }
 
@@ -273,11 +269,8 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
     }
   }
 cleanup:
-  st = pa__agree_end(dm->comm, st);
-  if (added) {
-    pa_status s2 = pa_dmesh_value_remove(dm, val);
-    if (!st) st = s2;
-  }
+  st = pa__dmesh_value_drop(dm, added ? val : NULL,
+                            pa__agree_end(dm->comm, st));
   pa__free(vg);
   pa__free(wt);
   pa__free(part);

@@ -328,11 +328,7 @@ static pa_status kept_flags(pa__iter *it, int kind, const uint8_t *keep,
     }
   }
 cleanup:
-  st = pa__agree_end(dm->comm, st);
-  if (val) {
-    pa_status s2 = pa_dmesh_value_remove(dm, val);
-    if (!st) st = s2;
-  }
+  st = pa__dmesh_value_drop(dm, val, pa__agree_end(dm->comm, st));
   return st;
 }
 

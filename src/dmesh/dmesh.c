@@ -421,6 +421,13 @@ pa_status pa_dmesh_reduce_end(pa_dmesh *dm, pa_dmesh_value *v, MPI_Op op) {
   return PA_SUCCESS;
 }
 
+pa_status pa__dmesh_value_drop(pa_dmesh *dm, pa_dmesh_value *val,
+                               pa_status st) {
+  if (!val) return st;
+  pa_status s2 = pa_dmesh_value_remove(dm, val);
+  return st ? st : s2;
+}
+
 pa_status pa__dmesh_reduce_fn(pa_dmesh *dm, pa_dmesh_value *v,
                               pa__combine_fn fn, void *ctx) {
   pa_status st = value_ok(dm, v, 1);

@@ -176,6 +176,11 @@ typedef struct pa__layout {
 /* Doubles per vertex record: dim + metric + fields. */
 int pa__layout_ndbl(const pa__layout *l);
 
+/* Collective: remove value val (if not NULL) at the end of a collective
+ * function; returns st, or the removal's status if st is PA_SUCCESS. */
+pa_status pa__dmesh_value_drop(pa_dmesh *dm, pa_dmesh_value *val,
+                               pa_status st);
+
 /* Collective: pa_dmesh_reduce with a combining function (see
  * pa__sf_reduce_end_fn); v may have any datatype. */
 pa_status pa__dmesh_reduce_fn(pa_dmesh *dm, pa_dmesh_value *v,

@@ -70,19 +70,20 @@ typedef struct bis {
   pa_mesh *m;
   const pa__leb_opts *o;
   int d;
-  size_t nball;       /* entries of eball, bball, inner */
+  size_t nball; /* entries of eball, bball, inner */
   ilist *eball, *bball;
-  uint8_t *inner;     /* per vertex: bit 0 skin edges may be split there,
-                         bit 2 added on the skin */
+  uint8_t *inner; /* per vertex: bit 0 skin edges may be split there,
+                     bit 2 added on the skin */
   qedge *heap;
   size_t nheap, capheap;
-  uint64_t *feat;     /* feature edges as sorted (lo << 32 | hi) pairs */
+  uint64_t *feat; /* feature edges as sorted (lo << 32 | hi) pairs */
   size_t nfeat;
 } bis;
 
 /* Lexicographic comparison of the coordinates of vertices a and b. */
 static int vcmp(const pa_mesh *m, pa_idx a, pa_idx b) {
-  const double *x = m->coord + (size_t)m->dim * a, *y = m->coord + (size_t)m->dim * b;
+  const double *x = m->coord + (size_t)m->dim * a,
+               *y = m->coord + (size_t)m->dim * b;
   for (int k = 0; k < m->dim; k++)
     if (x[k] != y[k]) return x[k] < y[k] ? -1 : 1;
   return 0;
@@ -120,7 +121,7 @@ static pa_status push(bis *s, pa_idx a, pa_idx b) {
   }
   double len = elen(m, a, b);
   double lo = s->o->skin_ok && s->o->skin_lmax < s->o->lmax ? s->o->skin_lmax
-                                                           : s->o->lmax;
+                                                            : s->o->lmax;
   if (!(len > lo) || !isfinite(len)) return PA_SUCCESS;
   PA_GROW(s->heap, s->capheap, s->nheap + 1);
   size_t i = s->nheap++;
@@ -155,7 +156,8 @@ static int cmp_u64(const void *p, const void *q) {
 }
 
 static uint64_t pair_key(pa_idx a, pa_idx b) {
-  return a < b ? ((uint64_t)a << 32) | (uint32_t)b : ((uint64_t)b << 32) | (uint32_t)a;
+  return a < b ? ((uint64_t)a << 32) | (uint32_t)b
+               : ((uint64_t)b << 32) | (uint32_t)a;
 }
 
 /* 1 if ab is a feature edge of the input (those are never split). */
@@ -196,7 +198,8 @@ cleanup:
 /* Split the cells (elements: nvc = d + 1, or faces: nvc = d) of the list of
  * a that contain b: each keeps b with m for a and a copy keeps a with m for
  * b. The new edges of split elements are queued. */
-static pa_status split_cells(bis *s, int faces, pa_idx a, pa_idx b, pa_idx mid) {
+static pa_status split_cells(bis *s, int faces, pa_idx a, pa_idx b,
+                             pa_idx mid) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = s->m;
   int nvc = faces ? s->d : s->d + 1;
@@ -210,7 +213,8 @@ static pa_status split_cells(bis *s, int faces, pa_idx a, pa_idx b, pa_idx mid) 
     pa_idx *cv = (faces ? m->bdry : m->elem) + (size_t)nvc * k;
     if (!has(cv, nvc, b)) continue;
     pa_idx v2[4];
-    for (int j = 0; j < nvc; j++) v2[j] = cv[j] == b ? mid : cv[j];
+    for (int j = 0; j < nvc; j++)
+      v2[j] = cv[j] == b ? mid : cv[j];
     if (faces) {
       PA_CALL(pa_mesh_add_bdry(m, v2, m->bref[k], &k2));
       m->bflag[k2] = m->bflag[k];
@@ -248,7 +252,8 @@ static int longer_around(const bis *s, const qedge *e) {
     for (int i = 0; i < nve; i++)
       for (int j = i + 1; j < nve; j++) {
         qedge f = {0, v[i], v[j]};
-        if ((f.a == e->a && f.b == e->b) || (f.a == e->b && f.b == e->a)) continue;
+        if ((f.a == e->a && f.b == e->b) || (f.a == e->b && f.b == e->a))
+          continue;
         if (vcmp(m, f.a, f.b) > 0) {
           f.a = v[j];
           f.b = v[i];
@@ -260,9 +265,8 @@ static int longer_around(const bis *s, const qedge *e) {
   return 0;
 }
 
-
-pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o,
-                         pa_idx **parentp, uint8_t **onskinp) {
+pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
+                         uint8_t **onskinp) {
   pa_status st = PA_SUCCESS;
   bis s;
   pa_idx nv0 = m->nv;
@@ -276,7 +280,8 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o,
   if (onskinp) *onskinp = NULL;
   PA_CALL(grow_balls(&s, (size_t)nv0));
   if (o->skin_ok)
-    for (pa_idx v = 0; v < nv0; v++) s.inner[v] = o->skin_ok[v] ? 1 : 0;
+    for (pa_idx v = 0; v < nv0; v++)
+      s.inner[v] = o->skin_ok[v] ? 1 : 0;
   if (m->ned) {
     PA_ALLOC(s.feat, m->ned);
     for (pa_idx r = 0; r < m->ned; r++)
@@ -293,7 +298,8 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o,
   for (pa_idx e = 0; e < m->ne; e++) {
     const pa_idx *v = m->elem + (size_t)(s.d + 1) * e;
     for (int i = 0; i <= s.d; i++)
-      for (int j = i + 1; j <= s.d; j++) PA_CALL(push(&s, v[i], v[j]));
+      for (int j = i + 1; j <= s.d; j++)
+        PA_CALL(push(&s, v[i], v[j]));
   }
   while (s.nheap) {
     qedge e = pop(&s);
@@ -310,8 +316,10 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o,
     for (int q = 0; q < s.bball[e.a].n; q++) {
       pa_idx r = s.bball[e.a].x[q];
       if (!has(m->bdry + (size_t)s.d * r, s.d, e.b)) continue;
-      if (o->skin_ok && m->bref[r] == o->skin_ref) skin = 1;
-      else bnd = 1;
+      if (o->skin_ok && m->bref[r] == o->skin_ref)
+        skin = 1;
+      else
+        bnd = 1;
     }
     bnd |= is_feature(&s, e.a, e.b);
     if (skin) {
@@ -322,14 +330,17 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o,
     }
     /* the midpoint, from the ends in canonical order */
     double x[3];
-    const double *xa = m->coord + (size_t)s.d * e.a, *xb = m->coord + (size_t)s.d * e.b;
-    for (int k = 0; k < s.d; k++) x[k] = 0.5 * xa[k] + 0.5 * xb[k];
+    const double *xa = m->coord + (size_t)s.d * e.a,
+                 *xb = m->coord + (size_t)s.d * e.b;
+    for (int k = 0; k < s.d; k++)
+      x[k] = 0.5 * xa[k] + 0.5 * xb[k];
     pa_idx mid;
     PA_CALL(pa_mesh_add_vertex(m, x, 0, &mid));
     PA_CALL(grow_balls(&s, (size_t)m->nv));
     if (m->met_ncomp) {
       int nc = m->met_ncomp;
-      const double *mm[2] = {m->met + (size_t)nc * e.a, m->met + (size_t)nc * e.b};
+      const double *mm[2] = {m->met + (size_t)nc * e.a,
+                             m->met + (size_t)nc * e.b};
       const double w[2] = {0.5, 0.5};
       pa__metric_interp(s.d, nc, 2, mm, w, m->met + (size_t)nc * mid);
     }
@@ -352,7 +363,8 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o,
   }
   if (onskinp && m->nv > nv0) {
     PA_ALLOC(*onskinp, (size_t)(m->nv - nv0));
-    for (pa_idx v = nv0; v < m->nv; v++) (*onskinp)[v - nv0] = (s.inner[v] & 4) != 0;
+    for (pa_idx v = nv0; v < m->nv; v++)
+      (*onskinp)[v - nv0] = (s.inner[v] & 4) != 0;
   }
   if (parentp) {
     *parentp = parent;
