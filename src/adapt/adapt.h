@@ -59,12 +59,10 @@
 #define PA__NOLABEL 2147483647
 /* Values of the "done" element value: 0 never remeshed, 1 remeshed (never
  * tagged again), 2 remeshed near a hot skin vertex (the remesher was
- * constrained there: tagged again if it fails the criteria), 3 the same
- * with an edge between two hot skin vertices (tagged again with a looser
- * length range, tag.c). */
+ * constrained there: tagged again if it fails the looser criteria of
+ * tag.c). */
 #define PA__DONE 1
 #define PA__DONE_NEAR_SKIN 2
-#define PA__DONE_ON_SKIN 3
 /* Name of the vertex field carrying the global ids through a remesher. */
 #define PA__GID_FIELD "pa.adapt.gid"
 /* Name of the element value marking elements produced in this run. */

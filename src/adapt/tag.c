@@ -8,9 +8,8 @@
  * the metric lies outside [0.7071, 1.4142) or a quality below
  * opts->qual_threshold. An element produced next to the skin of another
  * piece that was tagged (done value PA__DONE_NEAR_SKIN: the remesher could
- * not touch that side) is tagged again if it fails the criteria; one with
- * an edge on that skin (PA__DONE_ON_SKIN) if it fails the quality
- * criterion or an edge lies outside the looser [LEN_LO_SKIN, LEN_HI_SKIN).
+ * not touch that side) is tagged again if it fails the quality criterion
+ * or an edge lies outside the looser [LEN_LO_SKIN, LEN_HI_SKIN).
  * Work ~
  * expected output elements + 1: the element's
  * volume in the metric over the volume of the unit regular simplex, plus one
@@ -26,17 +25,16 @@
 
 #define LEN_LO 0.7071
 #define LEN_HI 1.4142
-/* Elements produced with an edge on the skin of another piece (done value
- * PA__DONE_ON_SKIN) are tagged again only for edges clearly off: a skin
- * face refined by bisection (bisect.c) keeps edges a little shorter than
- * LEN_LO, which only another iteration could change, and edges just
- * outside the range are as many as the sequential remesher leaves
- * anywhere; the other elements near such a skin (PA__DONE_NEAR_SKIN) with
- * the strict range. Box 3D 10 -> 0.019 on 2 ranks, elements tagged again:
- * 16 k with the strict range everywhere (a piece of 138 k elements, 0.8 s),
- * 2.4 k with this range for every element near a skin but 1.3 points fewer
- * edges in range than the sequential remesher on the 4-rank 2D test of
- * test_adapt_props, 4.5 k (0.45 s) and 0.7 point as it is. */
+/* Elements produced next to the skin of another piece are tagged again only
+ * for edges clearly off: a skin face refined by bisection (bisect.c) keeps
+ * edges a little shorter than LEN_LO, which only another iteration could
+ * change, and edges just outside the range are as many as the sequential
+ * remesher leaves anywhere (2-3 % with an anisotropic metric). Tagging them
+ * with the strict range makes every iteration's borders the next one's
+ * work: 3D shell:0.1 on box3d 5 at 4 ranks took 10 iterations (3 with
+ * this range), box3d 10 -> 0.019 on 2 ranks tagged 16 k elements again (a
+ * piece of 138 k elements, 0.8 s; 3 k with this range). Both end with the
+ * edges in range within 1 point of the sequential remesher. */
 #define LEN_LO_SKIN 0.65
 #define LEN_HI_SKIN 1.5
 
@@ -117,7 +115,7 @@ pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int first) {
     if (dn[e] && o->user_tags_only) continue;
     int t = !dn[e] && (m->eflag[e] & PA_FLAG_USER) != 0;
     if (!t && !o->user_tags_only) {
-      t = dn[e] == PA__DONE_ON_SKIN ? bad_edge(m, e, LEN_LO_SKIN, LEN_HI_SKIN)
+      t = dn[e] ? bad_edge(m, e, LEN_LO_SKIN, LEN_HI_SKIN)
                 : bad_edge(m, e, LEN_LO, LEN_HI);
       if (!t && o->qual_threshold > 0) {
         const double *x[4], *mm[4];
