@@ -203,6 +203,22 @@ static inline double rm3d_qual_pts(int mc, const double *p0, const double *p1,
   return 20.784609690826528 * det * sqrt(dm) / (s * sqrt(s));
 }
 
+/* Quality of tet t with its local vertex ip moved to x, with metric met
+ * (the operators' trial of a move, a collapse or a midpoint). */
+static inline double rm3d_qual_moved(const rm3d *m, pa_idx t, int ip,
+                                     const double *x, const double *met) {
+  const pa_idx *v = m->tv + 4 * (size_t)t;
+  const double *px[4], *pm[4];
+  for (int j = 0; j < 4; j++) {
+    px[j] = m->x + 3 * (size_t)v[j];
+    pm[j] = m->met + (size_t)m->mc * v[j];
+  }
+  px[ip] = x;
+  pm[ip] = met;
+  return rm3d_qual_pts(m->mc, px[0], px[1], px[2], px[3], pm[0], pm[1], pm[2],
+                       pm[3]);
+}
+
 /* Quality of the tetrahedron with vertices v[0..3]. */
 static inline double rm3d_qual_v(const rm3d *m, const pa_idx *v) {
   const double *x = m->x, *mt = m->met;

@@ -141,15 +141,7 @@ pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
       nq[i] = -1;
       continue;
     }
-    const double *px[4], *pm[4];
-    for (int j = 0; j < 4; j++) {
-      px[j] = m->x + 3 * (size_t)v[j];
-      pm[j] = m->met + (size_t)mc * v[j];
-    }
-    px[ip] = xq;
-    pm[ip] = mq;
-    double qq = rm3d_qual_pts(mc, px[0], px[1], px[2], px[3], pm[0], pm[1],
-                              pm[2], pm[3]);
+    double qq = rm3d_qual_moved(m, t, ip, xq, mq);
     if (qq < RM3D_QABS) return st;
     if (qq < qnew) qnew = qq;
     nq[i] = (float)qq;
@@ -342,15 +334,7 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
       nq[i] = -1;
       continue;
     }
-    const double *px[4], *pm[4];
-    for (int j = 0; j < 4; j++) {
-      px[j] = m->x + 3 * (size_t)v[j];
-      pm[j] = m->met + (size_t)mc * v[j];
-    }
-    px[iq] = xm;
-    pm[iq] = mm;
-    double qq = rm3d_qual_pts(mc, px[0], px[1], px[2], px[3], pm[0], pm[1],
-                              pm[2], pm[3]);
+    double qq = rm3d_qual_moved(m, t, iq, xm, mm);
     if (qq < RM3D_QABS) return st;
     if (qq < qnew) qnew = qq;
     nq[i] = (float)qq;

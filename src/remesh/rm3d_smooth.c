@@ -297,16 +297,7 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
     for (int i = 0; i < n && ok; i++) {
       pa_idx t = ball[i] >> 2;
       int ip = ball[i] & 3;
-      const pa_idx *v = m->tv + 4 * (size_t)t;
-      const double *px[4], *pm[4];
-      for (int j = 0; j < 4; j++) {
-        px[j] = m->x + 3 * (size_t)v[j];
-        pm[j] = m->met + (size_t)mc * v[j];
-      }
-      px[ip] = np;
-      pm[ip] = mp;
-      double q = rm3d_qual_pts(mc, px[0], px[1], px[2], px[3], pm[0], pm[1],
-                               pm[2], pm[3]);
+      double q = rm3d_qual_moved(m, t, ip, np, mp);
       if (!(q > qold) || q < RM3D_QABS) ok = 0;
       nq[i] = (float)q;
     }
