@@ -203,6 +203,31 @@ static inline double rm3d_qual_pts(int mc, const double *p0, const double *p1,
   return 20.784609690826528 * det * sqrt(dm) / (s * sqrt(s));
 }
 
+/* (b - a) x (c - a): the normal of triangle abc, twice its area long. */
+static inline void rm3d_tri_cross(const double *a, const double *b,
+                                  const double *c, double *n) {
+  double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  n[0] = u[1] * w[2] - u[2] * w[1];
+  n[1] = u[2] * w[0] - u[0] * w[2];
+  n[2] = u[0] * w[1] - u[1] * w[0];
+}
+
+/* Scale n to unit length (left as is if zero); returns its old length. */
+static inline double rm3d_unit(double *n) {
+  double s = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (s > 0)
+    for (int i = 0; i < 3; i++) n[i] /= s;
+  return s;
+}
+
+/* Unit normal of triangle abc; returns twice its area (0: degenerate). */
+static inline double rm3d_tri_normal(const double *a, const double *b,
+                                     const double *c, double *n) {
+  rm3d_tri_cross(a, b, c, n);
+  return rm3d_unit(n);
+}
+
 /* Quality of tet t with its local vertex ip moved to x, with metric met
  * (the operators' trial of a move, a collapse or a midpoint). */
 static inline double rm3d_qual_moved(const rm3d *m, pa_idx t, int ip,

@@ -22,19 +22,6 @@
  */
 #include "remesh/remesh3d.h"
 
-static double tri_normal(const double *a, const double *b, const double *c,
-                         double *n) {
-  double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-  double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-  n[0] = u[1] * v[2] - u[2] * v[1];
-  n[1] = u[2] * v[0] - u[0] * v[2];
-  n[2] = u[0] * v[1] - u[1] * v[0];
-  double s = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-  if (s > 0)
-    for (int i = 0; i < 3; i++) n[i] /= s;
-  return s;
-}
-
 #define R3_COL_MAXTRI 128
 
 /* Apply a checked collapse p -> q: glue the faces around the deleted tets
@@ -214,8 +201,8 @@ pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
       }
       if (pa__rm3d_table_find(&m->tri, nk) >= 0) return st;
       double n0[3], n1[3];
-      tri_normal(yo[0], yo[1], yo[2], n0);
-      if (tri_normal(y[0], y[1], y[2], n1) <= 0) return st;
+      rm3d_tri_normal(yo[0], yo[1], yo[2], n0);
+      if (rm3d_tri_normal(y[0], y[1], y[2], n1) <= 0) return st;
       if (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] < 0.98) return st;
       double d = fabs((xp[0] - y[0][0]) * n1[0] + (xp[1] - y[0][1]) * n1[1] +
                       (xp[2] - y[0][2]) * n1[2]);

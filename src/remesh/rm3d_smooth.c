@@ -45,13 +45,6 @@ static int bary(const double *p0, const double *p1, const double *p2,
   return 1;
 }
 
-static double unit3(double *u) {
-  double s = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-  if (s > 0)
-    for (int i = 0; i < 3; i++) u[i] /= s;
-  return s;
-}
-
 int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
                           double *dir) {
   if (!m->surf || (m->vtag[p] & (R3V_CURVED))) return 0;
@@ -79,8 +72,8 @@ int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
     double w[3] = {xp[0] - a[0], xp[1] - a[1], xp[2] - a[2]};
     double cr[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
                     u[0] * w[1] - u[1] * w[0]};
-    double lu = unit3(u);
-    if (!(lu > 0) || unit3(cr) > 1e-12 * lu * lu) return 0;
+    double lu = rm3d_unit(u);
+    if (!(lu > 0) || rm3d_unit(cr) > 1e-12 * lu * lu) return 0;
     memcpy(dir, u, sizeof u);
     return 1;
   }
@@ -93,14 +86,11 @@ int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
     const pa_idx *v = m->tv + 4 * (size_t)t;
     for (int f = 0; f < 4; f++) {
       if (!((fl >> f) & 1)) continue;
-      const double *a = m->x + 3 * (size_t)v[rm3d_face[f][0]];
-      const double *b = m->x + 3 * (size_t)v[rm3d_face[f][1]];
-      const double *c = m->x + 3 * (size_t)v[rm3d_face[f][2]];
-      double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-      double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-      double nn[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                      u[0] * w[1] - u[1] * w[0]};
-      if (!(unit3(nn) > 0)) return 0;
+      double nn[3];
+      if (!(rm3d_tri_normal(m->x + 3 * (size_t)v[rm3d_face[f][0]],
+                            m->x + 3 * (size_t)v[rm3d_face[f][1]],
+                            m->x + 3 * (size_t)v[rm3d_face[f][2]], nn) > 0))
+        return 0;
       if (!found) {
         memcpy(dir, nn, sizeof nn);
         found = 1;
@@ -262,11 +252,9 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
     const double *f0 = m->x + 3 * (size_t)v[rm3d_face[ip][0]];
     const double *f1 = m->x + 3 * (size_t)v[rm3d_face[ip][1]];
     const double *f2 = m->x + 3 * (size_t)v[rm3d_face[ip][2]];
-    double u[3] = {f1[0] - f0[0], f1[1] - f0[1], f1[2] - f0[2]};
-    double w[3] = {f2[0] - f0[0], f2[1] - f0[1], f2[2] - f0[2]};
     /* Outward normal of the face points away from p. */
-    double nn[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                    u[0] * w[1] - u[1] * w[0]};
+    double nn[3];
+    rm3d_tri_cross(f0, f1, f2, nn);
     double dn[3] = {mi[0] * nn[0] + mi[1] * nn[1] + mi[3] * nn[2],
                     mi[1] * nn[0] + mi[2] * nn[1] + mi[4] * nn[2],
                     mi[3] * nn[0] + mi[4] * nn[1] + mi[5] * nn[2]};

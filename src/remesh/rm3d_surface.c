@@ -29,20 +29,19 @@ static int bedge_cmp(const void *x, const void *y) {
 
 static void rec_normal(const rm3d *m, pa_idx r, double *n) {
   const pa_idx *v = m->tri.v + 3 * (size_t)r;
-  const double *a = m->x + 3 * (size_t)v[0], *b = m->x + 3 * (size_t)v[1],
-               *c = m->x + 3 * (size_t)v[2];
-  double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-  double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-  n[0] = u[1] * w[2] - u[2] * w[1];
-  n[1] = u[2] * w[0] - u[0] * w[2];
-  n[2] = u[0] * w[1] - u[1] * w[0];
+  rm3d_tri_cross(m->x + 3 * (size_t)v[0], m->x + 3 * (size_t)v[1],
+                 m->x + 3 * (size_t)v[2], n);
 }
 
-static double unit(double *n) {
-  double s = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-  if (s > 0)
-    for (int i = 0; i < 3; i++) n[i] /= s;
-  return s;
+/* 1 if face f of tet k lies on the outer surface; then fv receives its
+ * vertices and n its normal (twice its area long). */
+static int outer_face(const rm3d *m, pa_idx k, int f, pa_idx *fv, double *n) {
+  if (!((m->tflag[k] >> f) & 1) || m->adj[4 * (size_t)k + f] >= 0) return 0;
+  const pa_idx *v = m->tv + 4 * (size_t)k;
+  for (int j = 0; j < 3; j++) fv[j] = v[rm3d_face[f][j]];
+  rm3d_tri_cross(m->x + 3 * (size_t)fv[0], m->x + 3 * (size_t)fv[1],
+                 m->x + 3 * (size_t)fv[2], n);
+  return 1;
 }
 
 pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
@@ -77,8 +76,8 @@ pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
       double n1[3], n2[3];
       rec_normal(m, be[i].rec, n1);
       rec_normal(m, be[i + 1].rec, n2);
-      unit(n1);
-      unit(n2);
+      rm3d_unit(n1);
+      rm3d_unit(n2);
       double d = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2];
       if (be[i].dir == be[i + 1].dir) d = -d; /* inconsistent orientations */
       if (d < m->ridge_cos) feat = 1;
@@ -112,8 +111,8 @@ pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
       const double *b = m->x + 3 * (size_t)other[2 * (size_t)x + 1];
       double u[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
       double w[3] = {b[0] - p[0], b[1] - p[1], b[2] - p[2]};
-      unit(u);
-      unit(w);
+      rm3d_unit(u);
+      rm3d_unit(w);
       if (u[0] * w[0] + u[1] * w[1] + u[2] * w[2] < m->ridge_cos) corner = 1;
     }
     if (corner) {
@@ -126,37 +125,23 @@ pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
   for (pa_idx k = 0; k < m->ne; k++) {
     if (!(m->tflag[k] & R3T_FACES)) continue;
     for (int f = 0; f < 4; f++) {
-      if (!((m->tflag[k] >> f) & 1) || m->adj[4 * (size_t)k + f] >= 0) continue;
-      const pa_idx *v = m->tv + 4 * (size_t)k;
-      pa_idx fv[3] = {v[rm3d_face[f][0]], v[rm3d_face[f][1]],
-                      v[rm3d_face[f][2]]};
-      const double *a = m->x + 3 * (size_t)fv[0], *b = m->x + 3 * (size_t)fv[1],
-                   *c = m->x + 3 * (size_t)fv[2];
-      double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-      double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-      double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                     u[0] * w[1] - u[1] * w[0]};
+      pa_idx fv[3];
+      double n[3];
+      if (!outer_face(m, k, f, fv, n)) continue;
       for (int j = 0; j < 3; j++)
         for (int c2 = 0; c2 < 3; c2++) m->nrm[3 * (size_t)fv[j] + c2] += n[c2];
     }
   }
-  for (pa_idx x = 0; x < m->nv; x++) unit(m->nrm + 3 * (size_t)x);
+  for (pa_idx x = 0; x < m->nv; x++) rm3d_unit(m->nrm + 3 * (size_t)x);
   /* A vertex is curved when one of its faces deviates from its normal. */
   int ncurved = 0;
   for (pa_idx k = 0; k < m->ne; k++) {
     if (!(m->tflag[k] & R3T_FACES)) continue;
     for (int f = 0; f < 4; f++) {
-      if (!((m->tflag[k] >> f) & 1) || m->adj[4 * (size_t)k + f] >= 0) continue;
-      const pa_idx *v = m->tv + 4 * (size_t)k;
-      pa_idx fv[3] = {v[rm3d_face[f][0]], v[rm3d_face[f][1]],
-                      v[rm3d_face[f][2]]};
-      const double *a = m->x + 3 * (size_t)fv[0], *b = m->x + 3 * (size_t)fv[1],
-                   *c = m->x + 3 * (size_t)fv[2];
-      double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-      double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-      double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                     u[0] * w[1] - u[1] * w[0]};
-      unit(n);
+      pa_idx fv[3];
+      double n[3];
+      if (!outer_face(m, k, f, fv, n)) continue;
+      rm3d_unit(n);
       for (int j = 0; j < 3; j++) {
         pa_idx x = fv[j];
         if (m->vtag[x] & (R3V_FEAT | R3V_CURVED)) continue;

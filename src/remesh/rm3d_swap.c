@@ -99,19 +99,6 @@ static double ring_dp(const rm3d *m, pa_idx a, pa_idx b, const pa_idx *ring,
   return bw;
 }
 
-static double tri_unit_normal(const double *a, const double *b,
-                              const double *c, double *n) {
-  double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-  double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-  n[0] = u[1] * w[2] - u[2] * w[1];
-  n[1] = u[2] * w[0] - u[0] * w[2];
-  n[2] = u[0] * w[1] - u[1] * w[0];
-  double s = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-  if (s > 0)
-    for (int i = 0; i < 3; i++) n[i] /= s;
-  return s;
-}
-
 /* Is d a neighbour of c (an edge (c,d) exists)? */
 static int has_edge(rm3d *m, pa_idx c, pa_idx d) {
   pa_idx ball[RM3D_MAXBALL];
@@ -161,18 +148,18 @@ static pa_status swap_bdry(rm3d *m, pa_idx a, pa_idx b, const pa_idx *tets,
   {
     const pa_idx *v = m->tv + 4 * (size_t)tets[0];
     int f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][1];
-    tri_unit_normal(m->x + 3 * (size_t)v[rm3d_face[f][0]],
+    rm3d_tri_normal(m->x + 3 * (size_t)v[rm3d_face[f][0]],
                     m->x + 3 * (size_t)v[rm3d_face[f][1]],
                     m->x + 3 * (size_t)v[rm3d_face[f][2]], n1);
     v = m->tv + 4 * (size_t)tets[n - 1];
     f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][0];
-    tri_unit_normal(m->x + 3 * (size_t)v[rm3d_face[f][0]],
+    rm3d_tri_normal(m->x + 3 * (size_t)v[rm3d_face[f][0]],
                     m->x + 3 * (size_t)v[rm3d_face[f][1]],
                     m->x + 3 * (size_t)v[rm3d_face[f][2]], n2);
   }
   double nt1[3], nt2[3];
-  if (!(tri_unit_normal(xa, xc, xd, nt1) > 0) ||
-      !(tri_unit_normal(xb, xd, xc, nt2) > 0))
+  if (!(rm3d_tri_normal(xa, xc, xd, nt1) > 0) ||
+      !(rm3d_tri_normal(xb, xd, xc, nt2) > 0))
     return st;
   double dot = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2];
   if (dot < 1.0 - 1e-12) {
@@ -199,7 +186,7 @@ static pa_status swap_bdry(rm3d *m, pa_idx a, pa_idx b, const pa_idx *tets,
   /* Orientation of the records: keep the old convention (outward or not). */
   const pa_idx *ov = m->tri.v + 3 * (size_t)r1;
   double on[3];
-  tri_unit_normal(m->x + 3 * (size_t)ov[0], m->x + 3 * (size_t)ov[1],
+  rm3d_tri_normal(m->x + 3 * (size_t)ov[0], m->x + 3 * (size_t)ov[1],
                   m->x + 3 * (size_t)ov[2], on);
   int outward = on[0] * n1[0] + on[1] * n1[1] + on[2] * n1[2] > 0;
   int32_t ref = m->tri.ref[r1];
