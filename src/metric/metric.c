@@ -51,20 +51,6 @@ static inline int is_diagonal(int dim, const double *m) {
   return m[1] == 0.0 && m[3] == 0.0 && m[4] == 0.0;
 }
 
-/* Logarithmic mean of two metric lengths: (la - lb) / ln(la / lb), the
- * arithmetic mean when they differ by less than 1e-3 relatively (also when
- * both are zero or one is not finite, where the log form is undefined). */
-static inline double log_mean(double la, double lb) {
-  if (la < lb) { /* symmetric to the last bit: L(a,b) == L(b,a) */
-    double t = la;
-    la = lb;
-    lb = t;
-  }
-  double d = la - lb;
-  if (!(d >= 1e-3 * la) || !(lb > 0.0)) return 0.5 * (la + lb);
-  return d / log(la / lb);
-}
-
 /* a*c - b*b with one rounding error at most (Kahan's fma trick). */
 static inline double det2_accurate(double a, double b, double c) {
   double w = b * b;
@@ -506,11 +492,11 @@ double pa__edge_length(int dim, int ncomp, const double *a, const double *b,
     double n = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
     if (ncomp == 0) return n;
     /* la = n / ha, lb = n / hb: L = n * logmean(1/ha, 1/hb). */
-    return n * log_mean(1.0 / ma[0], 1.0 / mb[0]);
+    return n * pa__log_mean(1.0 / ma[0], 1.0 / mb[0]);
   }
   double la = sqrt(pa__metric_sqlen(dim, ncomp, ma, e));
   double lb = sqrt(pa__metric_sqlen(dim, ncomp, mb, e));
-  return log_mean(la, lb);
+  return pa__log_mean(la, lb);
 }
 
 double pa_metric_edge_length(int dim, int ncomp, const double *a,

@@ -19,6 +19,8 @@
 
 #include "mesh/mesh.h"
 
+#include <math.h>
+
 /* Index of entry (i,j) of a symmetric tensor stored m11 m12 m22 m13 m23 m33. */
 static inline int pa__sym_index(int i, int j) {
   if (i > j) { int t = i; i = j; j = t; }
@@ -62,6 +64,22 @@ void pa__metric_clamp(int dim, int ncomp, double *m, double hmin, double hmax);
 
 /* Squared length of vector e in metric m (value of ncomp components). */
 double pa__metric_sqlen(int dim, int ncomp, const double *m, const double *e);
+
+/* Logarithmic mean of two metric lengths: (la - lb) / ln(la / lb), the
+ * arithmetic mean when they differ by less than 1e-3 relatively (also when
+ * both are zero or one is not finite, where the log form is undefined).
+ * Mmg's edge length from the two end lengths; the remeshers use it too, so
+ * that their decisions and the statistics see the same lengths. */
+static inline double pa__log_mean(double la, double lb) {
+  if (la < lb) { /* symmetric to the last bit: L(a,b) == L(b,a) */
+    double t = la;
+    la = lb;
+    lb = t;
+  }
+  double d = la - lb;
+  if (!(d >= 1e-3 * la) || !(lb > 0.0)) return 0.5 * (la + lb);
+  return d / log(la / lb);
+}
 
 /* Edge length between points a and b with end metrics ma, mb. */
 double pa__edge_length(int dim, int ncomp, const double *a, const double *b,

@@ -219,32 +219,17 @@ static inline void rm_tensor2(int mc, const double *m, double *t) {
   }
 }
 
-/* Mmg's edge length from the two end lengths: the logarithmic mean, the
- * arithmetic one when they differ by less than 1e-3 relatively. Written
- * exactly as pa__edge_length (metric.c), so that the statistics printed see
- * the lengths the operators decided on, to the last bit. */
-static inline double rm_log_mean(double la, double lb) {
-  if (la < lb) {
-    double t = la;
-    la = lb;
-    lb = t;
-  }
-  double d = la - lb;
-  if (!(d >= 1e-3 * la) || !(lb > 0.0)) return 0.5 * (la + lb);
-  return d / log(la / lb);
-}
-
 /* Length of edge a-b in the metric (ends ma, mb of mc components). */
 static inline double rm_len2(int mc, const double *a, const double *b,
                              const double *ma, const double *mb) {
   double x = b[0] - a[0], y = b[1] - a[1];
   if (mc == 1) {
     double n = sqrt(x * x + y * y + 0.0);
-    return n * rm_log_mean(1.0 / ma[0], 1.0 / mb[0]);
+    return n * pa__log_mean(1.0 / ma[0], 1.0 / mb[0]);
   }
   double la = sqrt(ma[0] * x * x + 2.0 * ma[1] * x * y + ma[2] * y * y);
   double lb = sqrt(mb[0] * x * x + 2.0 * mb[1] * x * y + mb[2] * y * y);
-  return rm_log_mean(la, lb);
+  return pa__log_mean(la, lb);
 }
 
 /* Quality 4 sqrt(3) A_M / sum l_M^2 of triangle abc (Mmg's normalisation),

@@ -138,23 +138,16 @@ static inline double rm3d_sq(const double *m, const double *e) {
          2.0 * (m[1] * e[0] * e[1] + m[3] * e[0] * e[2] + m[4] * e[1] * e[2]);
 }
 
-/* Metric length from the two end lengths (metric.h's convention). */
-static inline double rm3d_len_ends(double la, double lb) {
-  double d = la - lb;
-  double mx = la > lb ? la : lb;
-  if (fabs(d) < 1e-3 * mx) return 0.5 * (la + lb);
-  return d / log(la / lb);
-}
-
 /* Metric length of the segment between points pa, pb with metrics ma, mb. */
 static inline double rm3d_len_pts(int mc, const double *pa, const double *pb,
                                   const double *ma, const double *mb) {
   double e[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]};
   if (mc == 1) {
+    /* as pa__edge_length does: the statistics see the same lengths */
     double d = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-    return rm3d_len_ends(d / ma[0], d / mb[0]);
+    return d * pa__log_mean(1.0 / ma[0], 1.0 / mb[0]);
   }
-  return rm3d_len_ends(sqrt(rm3d_sq(ma, e)), sqrt(rm3d_sq(mb, e)));
+  return pa__log_mean(sqrt(rm3d_sq(ma, e)), sqrt(rm3d_sq(mb, e)));
 }
 
 static inline double rm3d_len(const rm3d *m, pa_idx a, pa_idx b) {
