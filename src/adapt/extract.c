@@ -157,18 +157,7 @@ static pa_status pair_records(pa__iter *it, int kind, const pa_idx *bstart,
     int32_t ref;
     uint8_t flag;
     if (kind == PA_VERTEX) {
-      double *y = dbl;
-      memcpy(y, m->coord + (size_t)d * x, d * sizeof *y);
-      y += d;
-      if (m->met_ncomp) {
-        memcpy(y, m->met + (size_t)m->met_ncomp * x, m->met_ncomp * sizeof *y);
-        y += m->met_ncomp;
-      }
-      for (int f = 0; f < m->nfield; f++) {
-        memcpy(y, m->field[f].val + (size_t)m->field[f].ncomp * x,
-               m->field[f].ncomp * sizeof *y);
-        y += m->field[f].ncomp;
-      }
+      pa__vertex_doubles(m, x, m->nfield, dbl);
       ref = m->vref[x];
       flag = m->vflag[x];
       {

@@ -476,18 +476,7 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
     } else {
       vg[j] = i >= 0 ? pc->vgid[i] : next[PA_VERTEX]++;
     }
-    double *y = dbl;
-    memcpy(y, o->coord + (size_t)d * j, d * sizeof *y);
-    y += d;
-    if (o->met_ncomp) {
-      memcpy(y, o->met + (size_t)o->met_ncomp * j, o->met_ncomp * sizeof *y);
-      y += o->met_ncomp;
-    }
-    for (int f = 0; f < nuser; f++) {
-      memcpy(y, o->field[f].val + (size_t)o->field[f].ncomp * j,
-             o->field[f].ncomp * sizeof *y);
-      y += o->field[f].ncomp;
-    }
+    pa__vertex_doubles(o, j, nuser, dbl); /* without the gid field */
     size_t pl = pa__new_payload(dm, PA_VERTEX, o->vref[j], done, 0, pay);
     PA_CALL(pa__recs_add(&R[PA_VERTEX], vg[j], NULL, o->vref[j], o->vflag[j],
                          it->rank, dbl, pay, pl));

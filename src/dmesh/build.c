@@ -1044,6 +1044,22 @@ int pa__layout_ndbl(const pa__layout *l) {
   return n;
 }
 
+int pa__vertex_doubles(const pa_mesh *m, pa_idx v, int nfield, double *out) {
+  int d = m->dim, n = 0;
+  memcpy(out, m->coord + (size_t)d * v, d * sizeof *out);
+  n += d;
+  if (m->met_ncomp) {
+    memcpy(out + n, m->met + (size_t)m->met_ncomp * v, m->met_ncomp * sizeof *out);
+    n += m->met_ncomp;
+  }
+  for (int f = 0; f < nfield; f++) {
+    int nc = m->field[f].ncomp;
+    memcpy(out + n, m->field[f].val + (size_t)nc * v, nc * sizeof *out);
+    n += nc;
+  }
+  return n;
+}
+
 pa_status pa__dmesh_build(pa_dmesh *dm, const pa__layout *lay, int overlap,
                           pa__recs *elems, pa__recs *verts, pa__recs *bdry,
                           pa__recs *edges) {

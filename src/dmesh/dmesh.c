@@ -514,20 +514,7 @@ static pa_status owned_kind(pa_dmesh *dm, int kind, const int *dest,
     pa_gid vg[4];
     for (int j = 0; j < nv; j++)
       vg[j] = dm->gid[PA_VERTEX][conn[(size_t)nv * e + j]];
-    if (dbl) {
-      double *x = dbl;
-      memcpy(x, m->coord + (size_t)d * e, d * sizeof(double));
-      x += d;
-      if (m->met_ncomp) {
-        memcpy(x, m->met + (size_t)m->met_ncomp * e, m->met_ncomp * sizeof(double));
-        x += m->met_ncomp;
-      }
-      for (int f = 0; f < m->nfield; f++) {
-        memcpy(x, m->field[f].val + (size_t)m->field[f].ncomp * e,
-               m->field[f].ncomp * sizeof(double));
-        x += m->field[f].ncomp;
-      }
-    }
+    if (dbl) pa__vertex_doubles(m, e, m->nfield, dbl);
     int32_t ref = pa__dmesh_ref(dm, kind, e);
     size_t pl = 0;
     for (int k = 0; k < dm->nvalue; k++) {

@@ -175,6 +175,9 @@ typedef struct pa__layout {
 } pa__layout;
 /* Doubles per vertex record: dim + metric + fields. */
 int pa__layout_ndbl(const pa__layout *l);
+/* The doubles of the record of vertex v of m: coordinates, metric, then the
+ * first nfield fields (in that order, the layout's); returns the count. */
+int pa__vertex_doubles(const pa_mesh *m, pa_idx v, int nfield, double *out);
 
 /* Collective: remove value val (if not NULL) at the end of a collective
  * function; returns st, or the removal's status if st is PA_SUCCESS. */

@@ -45,20 +45,7 @@ static pa_status kept_kind(pa_dmesh *dm, int kind, const uint8_t *keep,
     R->ref[i] = ref;
     R->flag[i] = fl[e];
     R->aux[i] = dm->rank;
-    if (nd) {
-      double *x = R->dbl + (size_t)nd * i;
-      memcpy(x, m->coord + (size_t)d * e, d * sizeof(double));
-      x += d;
-      if (m->met_ncomp) {
-        memcpy(x, m->met + (size_t)m->met_ncomp * e, m->met_ncomp * sizeof(double));
-        x += m->met_ncomp;
-      }
-      for (int f = 0; f < m->nfield; f++) {
-        memcpy(x, m->field[f].val + (size_t)m->field[f].ncomp * e,
-               m->field[f].ncomp * sizeof(double));
-        x += m->field[f].ncomp;
-      }
-    }
+    if (nd) pa__vertex_doubles(m, e, m->nfield, R->dbl + (size_t)nd * i);
     if (R->poff) {
       size_t off = R->poff[i];
       for (int k = 0; k < dm->nvalue; k++) {
