@@ -398,14 +398,7 @@ static pa_status output_dest(const pa__iter *it, const pa__piece *pc,
     PA_ALLOC(vr, o->nv);
     PA_ALLOC(dist, o->nv);
     PA_ALLOC(queue, o->nv);
-    PA_CALLOC(start, (size_t)o->nv + 1);
-    PA_ALLOC(ball, (size_t)o->ne * nve + 1);
-    for (size_t k = 0; k < (size_t)o->ne * nve; k++) start[o->elem[k] + 1]++;
-    for (pa_idx v = 0; v < o->nv; v++) start[v + 1] += start[v];
-    for (size_t k = 0; k < (size_t)o->ne * nve; k++)
-      ball[start[o->elem[k]]++] = (pa_idx)(k / nve);
-    for (pa_idx v = o->nv; v > 0; v--) start[v] = start[v - 1];
-    start[0] = 0;
+    PA_CALL(pa__balls(o->elem, o->ne, nve, o->nv, &start, &ball));
     pa_idx head = 0, tail = 0;
     for (pa_idx v = 0; v < o->nv; v++) {
       pa_idx i = pc->match[v];

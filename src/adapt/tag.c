@@ -40,25 +40,9 @@
 
 pa_status pa__owned_balls(pa_dmesh *dm, pa_idx **startp, pa_idx **elemsp) {
   pa_status st = PA_SUCCESS;
-  const pa_mesh *m = dm->mesh;
-  int nve = dm->dim + 1;
-  pa_idx nv = dm->nloc[PA_VERTEX], ne = dm->nown[PA_ELEMENT];
-  pa_idx *start = NULL, *el = NULL;
-  PA_CALLOC(start, (size_t)nv + 1);
-  PA_ALLOC(el, (size_t)ne * nve);
-  for (size_t k = 0; k < (size_t)ne * nve; k++) start[m->elem[k] + 1]++;
-  for (pa_idx v = 0; v < nv; v++) start[v + 1] += start[v];
-  for (size_t k = 0; k < (size_t)ne * nve; k++)
-    el[start[m->elem[k]]++] = (pa_idx)(k / nve);
-  for (pa_idx v = nv; v > 0; v--) start[v] = start[v - 1];
-  start[0] = 0;
-  *startp = start;
-  *elemsp = el;
-  start = NULL;
-  el = NULL;
+  PA_CALL(pa__balls(dm->mesh->elem, dm->nown[PA_ELEMENT], dm->dim + 1,
+                    dm->nloc[PA_VERTEX], startp, elemsp));
 cleanup:
-  pa__free(start);
-  pa__free(el);
   return st;
 }
 

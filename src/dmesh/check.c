@@ -226,14 +226,7 @@ pa_status pa_dmesh_check(pa_dmesh *dm) {
     }
   }
   /* ownership rule and uniqueness of global ids */
-  PA_CALLOC(vstart, (size_t)m->nv + 1);
-  PA_ALLOC(vel, (size_t)m->ne * (d + 1));
-  for (size_t k = 0; k < (size_t)m->ne * (d + 1); k++) vstart[m->elem[k] + 1]++;
-  for (pa_idx v = 0; v < m->nv; v++) vstart[v + 1] += vstart[v];
-  for (size_t k = 0; k < (size_t)m->ne * (d + 1); k++)
-    vel[vstart[m->elem[k]]++] = (pa_idx)(k / (d + 1));
-  for (pa_idx v = m->nv; v > 0; v--) vstart[v] = vstart[v - 1];
-  vstart[0] = 0;
+  PA_CALL(pa__balls(m->elem, m->ne, d + 1, m->nv, &vstart, &vel));
   for (int k = 0; k < PA_NKIND; k++) {
     pa_idx n = dm->nloc[k];
     pa__free(cand);

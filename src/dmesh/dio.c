@@ -525,13 +525,7 @@ static pa_status file_mesh(pa_dmesh *dm, pa_mesh **fmp, pa_idx *map[PA_NKIND],
   for (pa_idx v = 0; v < m->nv; v++)
     if (map[PA_VERTEX][v] == 0) map[PA_VERTEX][v] = nfile[PA_VERTEX]++;
   /* owned elements around each vertex */
-  PA_CALLOC(vstart, (size_t)m->nv + 1);
-  PA_ALLOC(vel, (size_t)ne * (d + 1));
-  for (size_t q = 0; q < (size_t)ne * (d + 1); q++) vstart[m->elem[q] + 1]++;
-  for (pa_idx v = 0; v < m->nv; v++) vstart[v + 1] += vstart[v];
-  for (size_t q = 0; q < (size_t)ne * (d + 1); q++) vel[vstart[m->elem[q]]++] = (pa_idx)(q / (d + 1));
-  for (pa_idx v = m->nv; v > 0; v--) vstart[v] = vstart[v - 1];
-  vstart[0] = 0;
+  PA_CALL(pa__balls(m->elem, ne, d + 1, m->nv, &vstart, &vel));
   for (int k = PA_BOUNDARY; k <= PA_EDGE; k++) {
     int nv = pa__kind_nv(d, k);
     const pa_idx *conn = k == PA_BOUNDARY ? m->bdry : m->edge;

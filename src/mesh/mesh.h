@@ -111,6 +111,12 @@ double pa__orient(int dim, const double *const *x);
 /* Grow vertex arrays (and metric/fields) to hold at least n vertices. */
 pa_status pa__mesh_grow_vertices(pa_mesh *mesh, size_t n);
 
+/* Vertex balls as a CSR: the elements (ne of nve vertices in elem, indices
+ * below nv) around vertex v are (*ball)[(*start)[v] .. (*start)[v+1]), in
+ * increasing order. Both arrays are allocated here. */
+pa_status pa__balls(const pa_idx *elem, pa_idx ne, int nve, pa_idx nv,
+                    pa_idx **start, pa_idx **ball);
+
 /* f[v] = 1 (mesh->nv entries) for the vertices whose metric a remesh keeps:
  * required vertices and the vertices of required elements and boundary
  * entities; 0 for the others. */

@@ -265,6 +265,28 @@ cleanup:
 
 /* ---- vertex balls ------------------------------------------------------- */
 
+pa_status pa__balls(const pa_idx *elem, pa_idx ne, int nve, pa_idx nv,
+                    pa_idx **pstart, pa_idx **pball) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *start = NULL, *ball = NULL;
+  size_t n = (size_t)nve * ne;
+  *pstart = *pball = NULL;
+  PA_CALLOC(start, (size_t)nv + 1);
+  PA_ALLOC(ball, n ? n : 1);
+  for (size_t k = 0; k < n; k++) start[elem[k] + 1]++;
+  for (pa_idx v = 0; v < nv; v++) start[v + 1] += start[v];
+  for (size_t k = 0; k < n; k++) ball[start[elem[k]]++] = (pa_idx)(k / (size_t)nve);
+  for (pa_idx v = nv; v > 0; v--) start[v] = start[v - 1];
+  start[0] = 0;
+  *pstart = start;
+  *pball = ball;
+  start = ball = NULL;
+cleanup:
+  pa__free(start);
+  pa__free(ball);
+  return st;
+}
+
 static pa_status balls_compute(const pa_mesh *m, pa_idx **pstart,
                                pa_idx **pball) {
   pa_status st = PA_SUCCESS;
@@ -274,15 +296,7 @@ static pa_status balls_compute(const pa_mesh *m, pa_idx **pstart,
   *pstart = *pball = NULL;
   PA_CALL(check_code_range(m));
   PA_CALL(check_elem_range(m));
-  size_t n = (size_t)nf * ne;
-  PA_CALLOC(start, (size_t)nv + 1);
-  PA_ALLOC(ball, n);
-  for (size_t k = 0; k < n; k++) start[m->elem[k] + 1]++;
-  for (pa_idx v = 0; v < nv; v++) start[v + 1] += start[v];
-  for (size_t k = 0; k < n; k++)
-    ball[start[m->elem[k]]++] = (pa_idx)(k / (size_t)nf);
-  for (pa_idx v = nv; v > 0; v--) start[v] = start[v - 1];
-  start[0] = 0;
+  PA_CALL(pa__balls(m->elem, ne, nf, nv, &start, &ball));
   *pstart = start;
   *pball = ball;
   start = ball = NULL;

@@ -401,14 +401,7 @@ pa_status pa__rm_create(pa_mesh *mesh, const pa_remesh_opts *opts,
 
   /* Vertex balls (CSR), then face adjacency by scanning the ball of the
    * face's first vertex. */
-  PA_CALLOC(bstart, (size_t)nv + 1);
-  for (size_t i = 0; i < (size_t)nvpe * ne; i++) bstart[rm->ev[i] + 1]++;
-  for (pa_idx v = 0; v < nv; v++) bstart[v + 1] += bstart[v];
-  PA_ALLOC(ball, bstart[nv]);
-  for (pa_idx k = 0; k < ne; k++)
-    for (int i = 0; i < nvpe; i++) ball[bstart[rm->ev[(size_t)nvpe * k + i]]++] = k;
-  for (pa_idx v = nv; v > 0; v--) bstart[v] = bstart[v - 1];
-  bstart[0] = 0;
+  PA_CALL(pa__balls(rm->ev, ne, nvpe, nv, &bstart, &ball));
   for (pa_idx k = 0; k < ne; k++) {
     const pa_idx *vk = rm->ev + (size_t)nvpe * k;
     for (int i = 0; i < nvpe; i++) {
