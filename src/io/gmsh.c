@@ -204,6 +204,15 @@ static pa_status rd_need(reader *r, size_t n, const char *what) {
   return PA_SUCCESS;
 }
 
+/* Copy the next n bytes of binary data to v. */
+static pa_status rd_bytes(reader *r, void *v, size_t n, const char *what) {
+  pa_status st = rd_need(r, n, what);
+  if (st) return st;
+  memcpy(v, r->buf + r->pos, n);
+  r->pos += n;
+  return PA_SUCCESS;
+}
+
 /* Items of the MSH 4.1 layout: int, size_t and double, ASCII or binary. */
 static pa_status get_int(reader *r, int32_t *v, const char *what) {
   if (!r->binary) {
@@ -212,29 +221,17 @@ static pa_status get_int(reader *r, int32_t *v, const char *what) {
     *v = (int32_t)x;
     return st;
   }
-  pa_status st = rd_need(r, 4, what);
-  if (st) return st;
-  memcpy(v, r->buf + r->pos, 4);
-  r->pos += 4;
-  return PA_SUCCESS;
+  return rd_bytes(r, v, 4, what);
 }
 
 static pa_status get_size(reader *r, uint64_t *v, const char *what) {
   if (!r->binary) return rd_u64(r, v, what);
-  pa_status st = rd_need(r, 8, what);
-  if (st) return st;
-  memcpy(v, r->buf + r->pos, 8);
-  r->pos += 8;
-  return PA_SUCCESS;
+  return rd_bytes(r, v, 8, what);
 }
 
 static pa_status get_f64(reader *r, double *v, const char *what) {
   if (!r->binary) return rd_f64(r, v, what);
-  pa_status st = rd_need(r, 8, what);
-  if (st) return st;
-  memcpy(v, r->buf + r->pos, 8);
-  r->pos += 8;
-  return PA_SUCCESS;
+  return rd_bytes(r, v, 8, what);
 }
 
 /* Bytes left after the cursor. */
