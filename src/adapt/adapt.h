@@ -46,8 +46,10 @@
  * skin; it touches a tagged element of another piece (hot). */
 #define PA__SKIN_TRANSIT 0x80
 #define PA__HOT_TRANSIT 0x40
-/* ... skin edges may be refined there (inner, see pieces.c) */
+/* ... skin edges may be refined there (inner, see pieces.c); only pieces
+ * around, but not inner: skin edges towards an inner vertex may be refined */
 #define PA__INNER_TRANSIT 0x20
+#define PA__LABELLED_TRANSIT 0x10
 /* Temporary ids of the vertices bisect.c adds to a piece (above every
  * global id; exact as a double) */
 #define PA__TEMP_GID ((pa_gid)1 << 52)
@@ -58,11 +60,12 @@
 /* No label (pieces.c, extract.c). */
 #define PA__NOLABEL 2147483647
 /* Values of the "done" element value: 0 never remeshed, 1 remeshed (never
- * tagged again), 2 remeshed near a hot skin vertex (the remesher was
- * constrained there: tagged again if it fails the looser criteria of
- * tag.c). */
+ * tagged again), 2 remeshed near a hot skin vertex, 3 with two vertices or
+ * more on a hot skin (the remesher was constrained there: tagged again if
+ * it fails the looser criteria of tag.c). */
 #define PA__DONE 1
 #define PA__DONE_NEAR_SKIN 2
+#define PA__DONE_ON_SKIN 3
 /* Name of the vertex field carrying the global ids through a remesher. */
 #define PA__GID_FIELD "pa.adapt.gid"
 /* Name of the element value marking elements produced in this run. */
@@ -115,7 +118,9 @@ typedef struct pa__iter {
   double imbalance;    /* estimated work: max over ranks / mean */
   pa_gid nhot;         /* global: tagged elements touching a hot skin vertex
                           (extract.c) */
-  uint8_t *vinner;     /* nloc: PA__INNER_TRANSIT (inner vertex) or 0 */
+  uint8_t *vinner;     /* nloc: PA__INNER_TRANSIT (inner vertex),
+                          PA__LABELLED_TRANSIT (only pieces around, not
+                          inner) or 0 */
   int *vlab;           /* 4 x nloc: smallest and largest label of the
                           elements around each local vertex (PA__NOLABEL
                           for unlabelled ones), then of the tagged ones

@@ -12,10 +12,18 @@
  *
  * Which skin edges: those whose two vertices are "inner" (pieces.c: every
  * element around them is in a piece, they lie on no feature edge nor
- * required boundary entity, and are no corner, ridge or required vertex;
- * from reduced vertex values, so every piece sees the same). Such an edge
- * lies in no staying element, and every piece containing it has it on its
- * skin. With inside, edges inside the piece longer than PA__LEB_INNER are
+ * required boundary entity nor curved boundary, and are no corner, ridge or
+ * required vertex; from reduced vertex values, so every piece sees the
+ * same), and those between an inner vertex and a "labelled" one (only
+ * pieces around it, but on a ridge, a corner, a curved boundary...). Such
+ * an edge lies in no staying element, and every piece containing it has it
+ * on its skin. An inner-labelled edge is no feature edge (the inner end is
+ * on none); if it lies on the boundary, its boundary faces contain the
+ * inner end, whose faces are coplanar, so its midpoint is on the surface.
+ * Without the labelled ends, every skin face touching a ridge of a box
+ * stayed as coarse as the input, and its neighbours were remeshed again in
+ * another iteration: box3d 10 -> 0.019 on 2 ranks tagged 3 076 elements
+ * again instead of 783, and the worst piece quality was 0.001 (0.400). With inside, edges inside the piece longer than PA__LEB_INNER are
  * bisected too, in the same longest-first order: otherwise the elements on
  * a refined skin face are fans of slivers. The built-in 3D remesher turns
  * those into 1.4 x more tets at half the speed (box3d 10 -> 0.019, 2

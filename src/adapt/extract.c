@@ -280,8 +280,11 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
     pc->vrank[k] = INT_MAX;
     pc->skin[k] = (V->flag[i] & PA__SKIN_TRANSIT) != 0;
     pc->hot[k] = (V->flag[i] & PA__HOT_TRANSIT) != 0;
-    inner[k] = (V->flag[i] & PA__INNER_TRANSIT) != 0;
-    m->vflag[k] &= (uint8_t)~(PA__SKIN_TRANSIT | PA__HOT_TRANSIT | PA__INNER_TRANSIT);
+    inner[k] = (V->flag[i] & PA__INNER_TRANSIT)      ? 1
+               : (V->flag[i] & PA__LABELLED_TRANSIT) ? 2
+                                                     : 0;
+    m->vflag[k] &= (uint8_t) ~(PA__SKIN_TRANSIT | PA__HOT_TRANSIT |
+                               PA__INNER_TRANSIT | PA__LABELLED_TRANSIT);
     pc->vgid[k] = V->gid[i];
     PA_CALL(pa__gidmap_put(&map, V->gid[i], k, NULL, NULL));
   }

@@ -20,10 +20,15 @@
  *     faces it shares with elements of another label or of none, frozen
  *     while it is remeshed; its vertices are those whose two labels differ.
  *     A skin vertex is hot for piece p when a tagged element of another
- *     piece touches it (extract.c). A vertex is inner (it->vinner, may be
- *     refined around by bisect.c) when only labelled elements touch it and
- *     it lies on no feature edge, required boundary entity or curved
- *     boundary and is no corner, ridge or required vertex.
+ *     piece touches it (extract.c). A vertex is inner (it->vinner =
+ *     PA__INNER_TRANSIT) when only labelled elements touch it and it lies
+ *     on no feature edge, required boundary entity or curved boundary and
+ *     is no corner, ridge or required vertex; the other vertices that only
+ *     labelled elements touch (on a ridge, a curved boundary, ...) are
+ *     PA__LABELLED_TRANSIT. bisect.c splits a skin edge between two inner
+ *     vertices, or between an inner and a labelled one: such an edge is
+ *     interior, or lies in the plane of the inner end's boundary faces, so
+ *     its midpoint is exact.
  * Only vertex values with reduce/halo cross the ranks here: no point-to-point
  * code, and the result does not depend on timing.
  */
@@ -261,11 +266,13 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
     {
       const int *d = pa_dmesh_value_data(val, NULL, NULL);
       const uint8_t *vf = dm->mesh->vflag;
-      for (pa_idx v = 0; v < nloc; v++)
-        it->vinner[v] =
-            (uint8_t)(!d[2 * v] && !it->vinner[v] && it->vlab[4 * v + 1] != NOLABEL &&
-                              !(vf[v] & (PA_FLAG_CORNER | PA_FLAG_RIDGE | PA_FLAG_REQUIRED))
-                          ? PA__INNER_TRANSIT : 0);
+      for (pa_idx v = 0; v < nloc; v++) {
+        int labelled = it->vlab[4 * v + 1] != NOLABEL;
+        int inner = labelled && !d[2 * v] && !it->vinner[v] &&
+                    !(vf[v] & (PA_FLAG_CORNER | PA_FLAG_RIDGE | PA_FLAG_REQUIRED));
+        it->vinner[v] = (uint8_t)(inner ? PA__INNER_TRANSIT
+                                        : labelled ? PA__LABELLED_TRANSIT : 0);
+      }
     }
   }
 cleanup:

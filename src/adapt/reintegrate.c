@@ -490,11 +490,14 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   for (pa_idx e = 0; e < o->ne; e++) {
     pa_gid ev[4];
     uint8_t dv = it->piece_failed[pc->id] ? 0 : PA__DONE;
+    int nhot = 0;
     for (int k = 0; k <= d; k++) {
       pa_idx j = o->elem[(size_t)(d + 1) * e + k];
       ev[k] = vg[j];
       if (dist[j] < NEAR_SKIN && dv) dv = PA__DONE_NEAR_SKIN;
+      nhot += dist[j] == 0;
     }
+    if (dv && nhot >= 2) dv = PA__DONE_ON_SKIN;
     size_t pl = pa__new_payload(dm, PA_ELEMENT, o->eref[e], done, dv, pay);
     PA_CALL(pa__recs_add(&R[PA_ELEMENT], next[PA_ELEMENT]++, ev, o->eref[e],
                          o->eflag[e], dest[e], NULL, pay, pl));

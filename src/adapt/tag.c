@@ -37,6 +37,8 @@
  * edges in range within 1 point of the sequential remesher. */
 #define LEN_LO_SKIN 0.65
 #define LEN_HI_SKIN 1.5
+#define LEN_LO_NEAR 0.5
+#define LEN_HI_NEAR 2.0
 
 pa_status pa__owned_balls(pa_dmesh *dm, pa_idx **startp, pa_idx **elemsp) {
   pa_status st = PA_SUCCESS;
@@ -99,8 +101,9 @@ pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int first) {
     if (dn[e] && o->user_tags_only) continue;
     int t = !dn[e] && (m->eflag[e] & PA_FLAG_USER) != 0;
     if (!t && !o->user_tags_only) {
-      t = dn[e] ? bad_edge(m, e, LEN_LO_SKIN, LEN_HI_SKIN)
-                : bad_edge(m, e, LEN_LO, LEN_HI);
+      t = dn[e] == PA__DONE_ON_SKIN ? bad_edge(m, e, LEN_LO_SKIN, LEN_HI_SKIN)
+          : dn[e]                  ? bad_edge(m, e, LEN_LO_NEAR, LEN_HI_NEAR)
+                                   : bad_edge(m, e, LEN_LO, LEN_HI);
       if (!t && o->qual_threshold > 0) {
         const double *x[4], *mm[4];
         for (int k = 0; k < it->nve; k++) {

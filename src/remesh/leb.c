@@ -13,12 +13,20 @@
  *
  *  - An edge of a boundary entity of reference o->skin_ref (a piece's skin)
  *    is split while longer than o->skin_lmax if o->skin_ok marks both its
- *    ends (and new vertices on such edges). With the longest edge first,
+ *    ends, one of them with bit 0 (1: inner, any marked partner; 2:
+ *    labelled, an inner partner only). A vertex added on such an edge is
+ *    inner, but never pairs with a labelled vertex if an end was labelled
+ *    or so descended: otherwise a skin face whose longest edge joins two
+ *    labelled vertices (a ridge) would have its other edges bisected
+ *    towards it without end, the apex sliding to the ridge (a denormal
+ *    away after 1075 steps, on box3d 3). With the longest edge first,
  *    the edge split is the longest of every skin face whose edges can all be
  *    split, so each such face is refined as by recursive longest-edge
- *    bisection of that face alone; a face with one splittable edge is
- *    refined by the bisections of that edge, which depend on the edge
- *    alone: the result depends only on the face's vertices.
+ *    bisection of that face alone. In every case, whether a skin edge is
+ *    split, and in which order, depends only on its length, its ends'
+ *    coordinates and marks: the result depends only on the face's vertices
+ *    (a face with one or two splittable edges is cut by the bisections of
+ *    those edges, in their own order).
  *  - Any other edge on a boundary entity or feature edge, or on a frozen
  *    element, is never split (the surface is the remesher's business).
  *  - Any other edge is split while longer than o->lmax, when no element
@@ -281,7 +289,7 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
   PA_CALL(grow_balls(&s, (size_t)nv0));
   if (o->skin_ok)
     for (pa_idx v = 0; v < nv0; v++)
-      s.inner[v] = o->skin_ok[v] ? 1 : 0;
+      s.inner[v] = o->skin_ok[v] & 3;
   if (m->ned) {
     PA_ALLOC(s.feat, m->ned);
     for (pa_idx r = 0; r < m->ned; r++)
@@ -323,8 +331,9 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
     }
     bnd |= is_feature(&s, e.a, e.b);
     if (skin) {
-      if (!(s.inner[e.a] & 1) || !(s.inner[e.b] & 1) || !(e.len > o->skin_lmax))
-        continue;
+      int ia = s.inner[e.a], ib = s.inner[e.b];
+      if (!(ia & 3) || !(ib & 3) || !(e.len > o->skin_lmax)) continue;
+      if ((ia & 2) ? !(ib & 1) || (ib & 8) : (ib & 2) && (ia & 8)) continue;
     } else if (bnd || !(e.len > o->lmax) || longer_around(&s, &e)) {
       continue;
     }
@@ -351,7 +360,11 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
         y[(size_t)nc * mid + c] =
             0.5 * y[(size_t)nc * e.a + c] + 0.5 * y[(size_t)nc * e.b + c];
     }
-    s.inner[mid] = skin ? 1 | 4 : 0;
+    /* a vertex added on the skin is inner; descended from a labelled
+     * vertex, it never pairs with one (see the file comment) */
+    s.inner[mid] =
+        skin ? (uint8_t)(1 | 4 | ((s.inner[e.a] | s.inner[e.b]) & (2 | 8) ? 8 : 0))
+             : 0;
     PA_GROW(parent, capp, 2 * (np + 1));
     parent[2 * np] = e.a;
     parent[2 * np + 1] = e.b;

@@ -10,7 +10,9 @@ typedef struct pa__leb_opts {
   double lmax;            /* split inner edges longer than this */
   int32_t skin_ref;       /* boundary entities of this reference are a skin */
   const uint8_t *skin_ok; /* per vertex (or NULL: no skin): skin edges
-                             between two marked vertices may be split */
+                             between two marked vertices, one of them with
+                             bit 0, may be split (1: any marked partner, 2:
+                             a partner marked 1 only) */
   double skin_lmax;       /* split such skin edges longer than this */
 } pa__leb_opts;
 

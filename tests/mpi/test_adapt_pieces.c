@@ -64,7 +64,7 @@ static int on_curved_top(const double *p, int dim) {
 static void check_labels(pa__iter *it) {
   pa_dmesh *dm = it->dm;
   pa_mesh *m = pa_dmesh_mesh(dm);
-  int nve = it->nve, w = 3 + nve, wv = 8;
+  int nve = it->nve, w = 3 + nve, wv = 9;
   pa_idx nloc = pa_dmesh_nlocal(dm, PA_VERTEX);
   long long *mine = malloc(sizeof(long long) * (size_t)w * (it->ne + 1));
   long long *vmine = malloc(sizeof(long long) * (size_t)wv * (nloc + 1));
@@ -88,7 +88,8 @@ static void check_labels(pa__iter *it) {
     }
     r[0] = vg[v];
     for (int k = 0; k < 4; k++) r[1 + k] = it->vlab[4 * v + k];
-    r[5] = it->vinner[v] != 0;
+    r[5] = it->vinner[v] == PA__INNER_TRANSIT;
+    r[8] = it->vinner[v] == PA__LABELLED_TRANSIT;
     r[6] = nb;
     r[7] = on_curved_top(x + (size_t)it->dim * v, it->dim);
   }
@@ -110,7 +111,7 @@ static void check_labels(pa__iter *it) {
       hi[v] = thi[v] = -PA__NOLABEL;
     }
     int bad_cover = 0, bad_grow = 0, bad_req = 0, bad_range = 0, bad_inner = 0;
-    int ninner = 0, ncurved = 0;
+    int ninner = 0, ncurved = 0, nlabelled = 0;
     for (int e = 0; e < ne; e++) {
       const long long *r = all + (size_t)w * e;
       long long l = r[0] < 0 ? PA__NOLABEL : r[0];
@@ -140,6 +141,9 @@ static void check_labels(pa__iter *it) {
       int labelled = hi[v] != PA__NOLABEL;
       bad_inner += r[5] && (!labelled || r[7]);
       bad_inner += !r[5] && labelled && r[6] == 0 && !r[7];
+      /* labelled only, not inner: skin edges towards an inner vertex only */
+      bad_inner += r[8] != (labelled && !r[5]);
+      nlabelled += r[8] != 0;
       ncurved += r[7] != 0;
       ninner += r[5] != 0;
     }
@@ -149,9 +153,11 @@ static void check_labels(pa__iter *it) {
     CHECK(bad_range == 0);
     CHECK(bad_inner == 0);
     CHECK(ninner > 0);
+    CHECK(nlabelled > 0);
     if (warp) CHECK(ncurved > 0);
-    printf("  %d pieces: %d elements, %d vertex copies, %d inner, %d on a "
-           "curved boundary\n", it->npieces, ne, nvr, ninner, ncurved);
+    printf("  %d pieces: %d elements, %d vertex copies, %d inner, %d "
+           "labelled only, %d on a curved boundary\n", it->npieces, ne, nvr,
+           ninner, nlabelled, ncurved);
     free(lo);
     free(hi);
     free(tlo);

@@ -366,6 +366,10 @@ static pa_mesh *half(const pa_mesh *box, int side) {
 /* Refine one half with its skin, and check it on its own: valid, same
  * volume, the box's boundary entities untouched, exact midpoints, onskin set
  * exactly on the cut, no splittable skin edge longer than SKIN_LMAX. */
+/* labelled: the vertices of the cut on the box's boundary are marked 2
+ * (labelled: bisected only towards an inner vertex), else 0. */
+static int labelled;
+
 static void refine_half(pa_mesh *m) {
   int d = m->dim;
   pa_idx nv0 = m->nv, nb0 = m->nb, nbox = 0, *parent = NULL;
@@ -376,7 +380,7 @@ static void refine_half(pa_mesh *m) {
   double vol0 = pa_mesh_volume(m);
   uint8_t *ok = malloc((size_t)nv0), *onskin = NULL;
   for (pa_idx v = 0; v < nv0; v++)
-    ok[v] = (uint8_t)skin_inner(m, v);
+    ok[v] = (uint8_t)(skin_inner(m, v) ? 1 : labelled && on_cut(m, v) ? 2 : 0);
   pa__leb_opts o = {LMAX, SKIN_REF, ok, SKIN_LMAX};
   CHECK_OK(pa__leb_refine(m, &o, &parent, &onskin));
   CHECK_OK(pa_mesh_check(m));
@@ -388,9 +392,14 @@ static void refine_half(pa_mesh *m) {
   CHECK(nbad == 0);
   CHECK(m->nv > nv0 && parent && onskin);
   CHECK(parent && bad_midpoints(m, nv0, parent) == 0);
-  int wrong = 0, nchecked = 0, nlong = 0;
-  for (pa_idx v = nv0; v < m->nv && onskin; v++)
+  int wrong = 0, nchecked = 0, nlong = 0, nlab = 0;
+  for (pa_idx v = nv0; v < m->nv && onskin; v++) {
     wrong += onskin[v - nv0] != on_cut(m, v);
+    /* split next to a labelled vertex: one end inner, the other not */
+    pa_idx a = parent[2 * (v - nv0)], b = parent[2 * (v - nv0) + 1];
+    if (a < nv0 && b < nv0) nlab += ok[a] + ok[b] == 3;
+  }
+  CHECK(labelled ? nlab > 0 : nlab == 0);
   for (pa_idx f = nbox; f < m->nb; f++) {
     const pa_idx *v = m->bdry + (size_t)d * f;
     for (int i = 0; i < (d == 2 ? 1 : 3); i++) {
@@ -468,6 +477,22 @@ static void test_frozen_2d(void) { frozen(2); }
 static void test_frozen_3d(void) { frozen(3); }
 static void test_skin_2d(void) { skin(2, 8, "iso-shell:0.1"); }
 static void test_skin_3d(void) { skin(3, 6, "iso-shell:0.1"); }
+/* With labelled vertices on the cut's border: skin faces leaning on an
+ * unsplittable border edge are bisected from their inner vertex, and still
+ * terminate (an apex sliding to that edge without end was a bug) and agree
+ * on both sides. */
+static void test_skin_labelled_2d(void) {
+  labelled = 1;
+  skin(2, 8, "iso-shell:0.1");
+  labelled = 0;
+}
+static void test_skin_labelled_3d(void) {
+  labelled = 1;
+  skin(3, 2, "uniform:0.15");
+  skin(3, 6, "iso-shell:0.1");
+  labelled = 0;
+}
 
 TEST_MAIN(test_plain_2d, test_plain_3d, test_frozen_2d, test_frozen_3d,
-          test_skin_2d, test_skin_3d, test_alloc_failure)
+          test_skin_2d, test_skin_3d, test_skin_labelled_2d,
+          test_skin_labelled_3d, test_alloc_failure)
