@@ -32,6 +32,7 @@ typedef struct pa_cli_adapt_args {
   double mem_mb;   /* -mem MB (0: none) */
   int max_iter;    /* -max-iter N (0: default) */
   int pieces;      /* -pieces K (0: default) */
+  int check;       /* -check: check every piece and the result */
   pa_remesh_opts remesh;
 } pa_cli_adapt_args;
 

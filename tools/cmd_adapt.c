@@ -43,7 +43,9 @@ static const char *adapt_usage =
     "  -distributed-output  write OUT as a distributed set\n"
     "  -mem MB         memory bound per process for one piece\n"
     "  -max-iter N     at most N iterations (default 30)\n"
-    "  -pieces K       pieces per process (default 1)\n";
+    "  -pieces K       pieces per process (default 1)\n"
+    "  -check          check every remeshed piece and the distributed result\n"
+    "                  (always done with a plug-in remesher)\n";
 
 static const char *outcome_name(pa_remesh_outcome o) {
   return o == PA_REMESH_SUCCESS         ? "success"
@@ -87,6 +89,8 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
       a->nosol = 1;
     } else if (!strcmp(o, "-distributed-output")) {
       a->distributed = 1;
+    } else if (!strcmp(o, "-check")) {
+      a->check = 1;
     } else if (!strcmp(o, "-mem") || !strcmp(o, "-max-iter") ||
                !strcmp(o, "-pieces")) {
       double x;

@@ -202,6 +202,7 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   if (args->mem_mb > 0) opts.mem_mb = args->mem_mb;
   if (args->max_iter > 0) opts.max_iter = args->max_iter;
   if (args->pieces > 0) opts.pieces_per_rank = args->pieces;
+  if (args->check) opts.check_pieces = 1;
   int set = cli->rank == 0 ? pa_dmesh_is_set(in) : 0;
   MPI_Bcast(&set, 1, MPI_INT, 0, cli->comm);
   if (set && (met || field)) {

@@ -44,7 +44,7 @@ void pa_adapt_opts_default(pa_adapt_opts *o) {
   o->min_piece_ratio = 0.25;
   o->rebalance_tol = 1.05;
   o->rebalance = 1;
-  o->check_pieces = 1;
+  o->check_pieces = -1;
 }
 
 void pa__iter_free(pa__iter *it) {
@@ -173,6 +173,8 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
   PA_CALL(pa__adapt_grade(dm, opts->remesh.hgrad, NULL));
   PA_CALL(pa_dmesh_value_add(dm, PA_ELEMENT, PA__DONE_VALUE, MPI_UINT8_T, 1, -1,
                              &done));
+  pa__info(2, "padapt: rank %d: metric and gradation %.3f s\n", dm->rank,
+           pa_wtime() - t0);
 
   double last = -1;
   int nostep = 0, lastpieces = 0, lastfailed = 0;
@@ -291,7 +293,12 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
   }
   PA_CALL(pa_dmesh_value_remove(dm, done));
   done = NULL;
-  if (opts->check_pieces) PA_CALL(pa_dmesh_check(dm));
+  if (pa__adapt_checks(opts)) {
+    double ta = pa_wtime();
+    PA_CALL(pa_dmesh_check(dm));
+    pa__info(2, "padapt: rank %d: final check %.3f s\n", dm->rank,
+             pa_wtime() - ta);
+  }
 cleanup:
   pa__iter_free(&it);
   if (dm) {

@@ -75,6 +75,14 @@
 /* Estimated bytes of remesher memory per unit of work (one output element). */
 #define PA__BYTES_PER_WORK 1000.0
 
+/* 1 if pieces and the result are checked (opts->check_pieces: -1 means
+ * with a plug-in remesher only). */
+static inline int pa__adapt_checks(const pa_adapt_opts *o) {
+  return o->check_pieces > 0 ||
+         (o->check_pieces < 0 && o->remesher &&
+          o->remesher != pa_remesher_builtin());
+}
+
 /* A piece received by this rank and its remeshed output. */
 typedef struct pa__piece {
   int id;              /* piece number */

@@ -7,8 +7,8 @@
  * into the metric). An output is used only if the remesher succeeded (or
  * missed its target) and the output is consistent: same metric and fields,
  * every skin vertex back at the same coordinates with its global id (field
- * PA__GID_FIELD), exactly the skin faces of the input, and
- * (opts->check_pieces) pa_mesh_check passes. Otherwise the piece is rolled
+ * PA__GID_FIELD), exactly the skin faces of the input, and (with a
+ * plug-in remesher, or opts->check_pieces 1) pa_mesh_check passes. Otherwise the piece is rolled
  * back: it comes back as it was given (with its skin refined by bisect.c,
  * which its neighbours share), its elements not marked done.
  *
@@ -158,7 +158,7 @@ static int output_ok(const pa__iter *it, pa__piece *pc, pa_mesh *out,
       goto cleanup;
     }
   }
-  if (it->opts->check_pieces) {
+  if (pa__adapt_checks(it->opts)) {
     pa_status c = pa_mesh_check(out);
     if (c == PA_ERR_MEMORY) PA_CALL(c);
     if (c) {
@@ -188,8 +188,7 @@ pa_status pa__adapt_remesh(pa__iter *it, int *nfail) {
       it->opts->remesher ? it->opts->remesher : pa_remesher_builtin();
   pa_mesh *out = NULL;
   ro.hsiz = 0; /* folded into the metric before the loop */
-  ro.trusted = 1; /* built valid: extract.c and bisect.c (the output is
-                     checked, check_pieces) */
+  ro.trusted = 1; /* built valid by extract.c and bisect.c */
   /* Graded once over the whole mesh before the loop (grade.c), like the
    * sequential remesher grades its input once: grading each piece again
    * would stop at its frozen skin, and on the finer mesh of a later

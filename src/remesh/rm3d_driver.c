@@ -351,7 +351,9 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
        * refused next to a frozen skin): the bands must reach RM3D_LMAX */
       double thr = max_length(&m) / 1.5;
       if (thr > prev / 1.5) thr = prev / 1.5;
-      if (thr < RM3D_LMAX) thr = RM3D_LMAX;
+      /* a band just above the last one would cost a sweep for little: 1.45
+       * then 1.41 took 0.13 s of a 2.2 s piece (box3d 10 -> 0.019) */
+      if (thr < 1.1 * RM3D_LMAX) thr = RM3D_LMAX;
       prev = thr;
       long ns = 0;
       double t1 = pa_wtime();
