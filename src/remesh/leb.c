@@ -128,8 +128,13 @@ static pa_status push(bis *s, pa_idx a, pa_idx b) {
     b = t;
   }
   double len = elen(m, a, b);
-  double lo = s->o->skin_ok && s->o->skin_lmax < s->o->lmax ? s->o->skin_lmax
-                                                            : s->o->lmax;
+  /* the skin threshold only for an edge both of whose ends are marked (any
+   * other edge that short is split neither as a skin nor as an inner edge):
+   * a third of the queue in a piece's bisection */
+  double lo = s->o->lmax;
+  if (s->o->skin_ok && s->o->skin_lmax < lo && (s->inner[a] & 3) &&
+      (s->inner[b] & 3))
+    lo = s->o->skin_lmax;
   if (!(len > lo) || !isfinite(len)) return PA_SUCCESS;
   PA_GROW(s->heap, s->capheap, s->nheap + 1);
   size_t i = s->nheap++;
@@ -254,9 +259,13 @@ cleanup:
 static int longer_around(const bis *s, const qedge *e) {
   const pa_mesh *m = s->m;
   int nve = s->d + 1;
-  for (int q = 0; q < s->eball[e->a].n; q++) {
-    const pa_idx *v = m->elem + (size_t)nve * s->eball[e->a].x[q];
-    if (!has(v, nve, e->b)) continue;
+  /* the elements of the end with the smaller ball */
+  int sw = s->eball[e->b].n < s->eball[e->a].n;
+  const ilist *ball = &s->eball[sw ? e->b : e->a];
+  pa_idx other = sw ? e->a : e->b;
+  for (int q = 0; q < ball->n; q++) {
+    const pa_idx *v = m->elem + (size_t)nve * ball->x[q];
+    if (!has(v, nve, other)) continue;
     for (int i = 0; i < nve; i++)
       for (int j = i + 1; j < nve; j++) {
         qedge f = {0, v[i], v[j]};
@@ -313,17 +322,23 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
     qedge e = pop(&s);
     /* skip an edge queued twice and already split; note a frozen element */
     int live = 0, frozen = 0;
-    for (int q = 0; q < s.eball[e.a].n; q++) {
-      pa_idx k = s.eball[e.a].x[q];
-      if (!has(m->elem + (size_t)(s.d + 1) * k, s.d + 1, e.b)) continue;
+    int sw = s.eball[e.b].n < s.eball[e.a].n; /* the smaller ball */
+    const ilist *eb = &s.eball[sw ? e.b : e.a];
+    pa_idx other = sw ? e.a : e.b;
+    for (int q = 0; q < eb->n; q++) {
+      pa_idx k = eb->x[q];
+      if (!has(m->elem + (size_t)(s.d + 1) * k, s.d + 1, other)) continue;
       live = 1;
       frozen |= (m->eflag[k] & PA_FLAG_REQUIRED) != 0;
     }
     if (!live || frozen) continue;
     int skin = 0, bnd = 0;
-    for (int q = 0; q < s.bball[e.a].n; q++) {
-      pa_idx r = s.bball[e.a].x[q];
-      if (!has(m->bdry + (size_t)s.d * r, s.d, e.b)) continue;
+    sw = s.bball[e.b].n < s.bball[e.a].n;
+    const ilist *bb = &s.bball[sw ? e.b : e.a];
+    other = sw ? e.a : e.b;
+    for (int q = 0; q < bb->n; q++) {
+      pa_idx r = bb->x[q];
+      if (!has(m->bdry + (size_t)s.d * r, s.d, other)) continue;
       if (o->skin_ok && m->bref[r] == o->skin_ref)
         skin = 1;
       else
