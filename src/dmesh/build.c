@@ -207,6 +207,11 @@ typedef struct bstate {
   pa_idx *dstart, *dlist;   /* V index -> D records */
   pa_idx *tstart;           /* V index -> touching ranks (CSR) */
   int *trank;
+  /* the touch messages, kept: they are also the layer-1 queries and the
+   * owned-vertex part of the fetch (the same gids to the same ranks) */
+  size_t *tcnt;             /* items received from each rank */
+  pa_gid *tgid;             /* their gids, by source rank */
+  pa_idx *tv;               /* their V indices */
   /* local side */
   pa__recs L;               /* local elements: owned first; aux = owner */
   uint8_t *layer;           /* per L record */
@@ -217,6 +222,11 @@ typedef struct bstate {
   pa_gid *ukey;             /* their gids, ascending */
   pa_idx *ustart, *uelem;   /* CSR: u -> owned L indices */
   pa__gidmap umap;          /* gid -> u */
+  pa_idx *uslot;            /* u of each vertex slot of the owned elements */
+  pa_idx *ulv;              /* LV record of each u (fetch), then its local
+                             * vertex (assemble): the owned elements' vertices
+                             * are numbered by two array reads a slot, not by
+                             * a hash lookup (the map is far beyond cache) */
   pa__recs LV, LB, LD;      /* local vertices / bdry / edges (aux = owner) */
 } bstate;
 
@@ -233,6 +243,12 @@ static void bstate_free(bstate *s) {
   pa__free(s->trank);
   s->bstart = s->blist = s->dstart = s->dlist = s->tstart = NULL;
   s->trank = NULL;
+  pa__free(s->tcnt);
+  pa__free(s->tgid);
+  pa__free(s->tv);
+  s->tcnt = NULL;
+  s->tgid = NULL;
+  s->tv = NULL;
   pa__recs_free(&s->L);
   pa__free(s->layer);
   s->layer = NULL;
@@ -244,6 +260,9 @@ static void bstate_free(bstate *s) {
   s->ukey = NULL;
   s->ustart = s->uelem = NULL;
   pa__gidmap_free(&s->umap);
+  pa__free(s->uslot);
+  pa__free(s->ulv);
+  s->uslot = s->ulv = NULL;
   pa__recs_free(&s->LV);
   pa__recs_free(&s->LB);
   pa__recs_free(&s->LD);
@@ -316,7 +335,8 @@ cleanup:
 }
 
 /* The owned elements around each vertex of an owned element: ukey (sorted
- * unique gids), CSR ustart/uelem and the map umap. Vertices are numbered by
+ * unique gids), CSR ustart/uelem, the map umap and the u of each vertex slot
+ * (uslot). Vertices are numbered by
  * hashing, and only the nu unique gids are sorted (not the (dim+1) nown
  * element slots): the one sort of the owned elements' vertex ids in a
  * build. */
@@ -353,11 +373,15 @@ static pa_status owned_csr(bstate *s, pa_idx nown) {
   PA_ALLOC(s->uelem, np);
   for (size_t p = 0; p < np; p++) s->ustart[rankof[slotu[p]] + 1]++;
   for (size_t u = 0; u < nu; u++) s->ustart[u + 1] += s->ustart[u];
-  for (size_t p = 0; p < np; p++)
-    s->uelem[s->ustart[rankof[slotu[p]]]++] = (pa_idx)(p / s->nve);
+  for (size_t p = 0; p < np; p++) {
+    slotu[p] = rankof[slotu[p]];
+    s->uelem[s->ustart[slotu[p]]++] = (pa_idx)(p / s->nve);
+  }
   for (size_t u = nu; u > 0; u--) s->ustart[u] = s->ustart[u - 1];
   s->ustart[0] = 0;
   s->nu = nu;
+  s->uslot = slotu;
+  slotu = NULL;
 cleanup:
   pa__free(slotu);
   pa__free(ord);
@@ -390,45 +414,46 @@ cleanup:
 }
 
 /* Step 3: the directory records which ranks own elements touching each
- * vertex. */
+ * vertex. The messages stay in s (tcnt, tgid, tv) for the layer-1 queries
+ * and the fetch. */
 static pa_status build_touch(bstate *s) {
   pa_status st = PA_SUCCESS;
-  pa_gid *g = NULL;
   int *dest = NULL;
-  size_t n, *rcnt = NULL;
+  size_t n;
   void *recv = NULL;
   n = s->nu;
   PA_ALLOC(dest, n);
   for (size_t i = 0; i < n; i++) dest[i] = dir_rank(&s->vdir, s->ukey[i]);
-  PA_CALL(send_items(s->comm, n, sizeof(pa_gid), s->ukey, dest, &rcnt, &recv));
-  const pa_gid *rg = recv;
+  PA_CALL(send_items(s->comm, n, sizeof(pa_gid), s->ukey, dest, &s->tcnt,
+                     &recv));
+  s->tgid = recv;
+  recv = NULL;
+  const pa_gid *rg = s->tgid;
   size_t nV = s->V.n, tot = 0;
   PA_CALLOC(s->tstart, nV + 1);
-  for (int r = 0; r < s->size; r++) tot += rcnt[r];
+  for (int r = 0; r < s->size; r++) tot += s->tcnt[r];
   PA_ALLOC(s->trank, tot);
+  PA_ALLOC(s->tv, tot);
   for (size_t j = 0; j < tot; j++) {
     pa_idx v = pa__gidmap_get(&s->vmap, rg[j]);
     PA_CHECK(v >= 0, PA_ERR_MESH,
              "an element references vertex %lld, which does not exist",
              (long long)rg[j]);
+    s->tv[j] = v;
     s->tstart[v + 1]++;
   }
   for (size_t v = 0; v < nV; v++) s->tstart[v + 1] += s->tstart[v];
   {
     size_t j = 0;
     for (int r = 0; r < s->size; r++) /* by rank: lists come out sorted */
-      for (size_t q = 0; q < rcnt[r]; q++, j++) {
-        pa_idx v = pa__gidmap_get(&s->vmap, rg[j]);
-        s->trank[s->tstart[v]++] = r;
-      }
+      for (size_t q = 0; q < s->tcnt[r]; q++, j++)
+        s->trank[s->tstart[s->tv[j]]++] = r;
   }
   for (size_t v = nV; v > 0; v--) s->tstart[v] = s->tstart[v - 1];
   s->tstart[0] = 0;
 cleanup:
   st = pa__agree_end(s->comm, st);
-  pa__free(g);
   pa__free(dest);
-  pa__free(rcnt);
   pa__free(recv);
   return st;
 }
@@ -462,51 +487,62 @@ static pa_status build_layers(bstate *s, int overlap, pa_idx nown) {
   size_t *rcnt = NULL, *fcnt = NULL, *ecnt = NULL, *bcnt = NULL;
   void *recv = NULL, *frecv = NULL, *erecv = NULL;
   pa__gidmap queried = {0};
-  pa_idx *sel = NULL;
+  pa_idx *sel = NULL, *vq = NULL;
   unsigned char *sbuf = NULL;
   pa__recs tmp;
   pa__recs_init(&tmp, PA_ELEMENT, s->nve, 0);
   if (overlap <= 0) goto cleanup;
   PA_CALL(pa__gidmap_init(&queried, 16));
   for (int l = 1; l <= overlap; l++) {
-    size_t n, nq = 0;
-    if (l == 1) { /* the vertices of the owned elements */
-      n = s->nu;
-      PA_ALLOC(g, n);
-      memcpy(g, s->ukey, n * sizeof *g);
-      nq = n;
+    /* queries received by the directory: their count per source rank, gids
+     * and V indices */
+    const size_t *qcnt;
+    const pa_gid *rg;
+    const pa_idx *qv;
+    size_t tot = 0;
+    if (l == 1) { /* the vertices of the owned elements: sent already, as
+                   * the touch messages */
+      qcnt = s->tcnt;
+      rg = s->tgid;
+      qv = s->tv;
+      for (int r = 0; r < s->size; r++) tot += qcnt[r];
     } else {
+      size_t n, nq = 0;
       PA_CALL(ghost_verts(s, l - 1, l - 1, &g, &n));
       for (size_t i = 0; i < n; i++) {
         int found;
         PA_CALL(pa__gidmap_put(&queried, g[i], 0, &found, NULL));
         if (!found) g[nq++] = g[i];
       }
+      PA_ALLOC(dest, nq);
+      for (size_t i = 0; i < nq; i++) dest[i] = dir_rank(&s->vdir, g[i]);
+      PA_CALL(send_items(s->comm, nq, sizeof(pa_gid), g, dest, &rcnt, &recv));
+      pa__free(g);
+      g = NULL;
+      pa__free(dest);
+      dest = NULL;
+      rg = recv;
+      for (int r = 0; r < s->size; r++) tot += rcnt[r];
+      PA_ALLOC(vq, tot);
+      for (size_t j = 0; j < tot; j++) {
+        vq[j] = pa__gidmap_get(&s->vmap, rg[j]);
+        PA_CHECK(vq[j] >= 0, PA_ERR_INTERNAL,
+                 "ghost query of unknown vertex %lld", (long long)rg[j]);
+      }
+      qcnt = rcnt;
+      qv = vq;
     }
-    PA_ALLOC(dest, nq);
-    for (size_t i = 0; i < nq; i++) dest[i] = dir_rank(&s->vdir, g[i]);
-    PA_CALL(send_items(s->comm, nq, sizeof(pa_gid), g, dest, &rcnt, &recv));
-    pa__free(g);
-    g = NULL;
-    pa__free(dest);
-    dest = NULL;
     /* directory: forward (vertex, requester) to the other touching ranks */
-    size_t nfw = 0, tot = 0;
-    const pa_gid *rg = recv;
-    for (int r = 0; r < s->size; r++) tot += rcnt[r];
-    for (size_t j = 0; j < tot; j++) {
-      pa_idx v = pa__gidmap_get(&s->vmap, rg[j]);
-      PA_CHECK(v >= 0, PA_ERR_INTERNAL, "ghost query of unknown vertex %lld",
-               (long long)rg[j]);
-      nfw += (size_t)(s->tstart[v + 1] - s->tstart[v]);
-    }
+    size_t nfw = 0;
+    for (size_t j = 0; j < tot; j++)
+      nfw += (size_t)(s->tstart[qv[j] + 1] - s->tstart[qv[j]]);
     PA_ALLOC(fw, 2 * nfw);
     PA_ALLOC(fwdest, nfw);
     {
       size_t j = 0, k = 0;
       for (int r = 0; r < s->size; r++)
-        for (size_t q = 0; q < rcnt[r]; q++, j++) {
-          pa_idx v = pa__gidmap_get(&s->vmap, rg[j]);
+        for (size_t q = 0; q < qcnt[r]; q++, j++) {
+          pa_idx v = qv[j];
           for (pa_idx t = s->tstart[v]; t < s->tstart[v + 1]; t++)
             if (s->trank[t] != r) {
               fw[2 * k] = rg[j];
@@ -520,6 +556,8 @@ static pa_status build_layers(bstate *s, int overlap, pa_idx nown) {
     recv = NULL;
     pa__free(rcnt);
     rcnt = NULL;
+    pa__free(vq);
+    vq = NULL;
     PA_CALL(send_items(s->comm, nfw, 2 * sizeof(pa_gid), fw, fwdest, &fcnt,
                        &frecv));
     pa__free(fw);
@@ -636,6 +674,7 @@ cleanup:
   pa__free(frecv);
   pa__free(erecv);
   pa__free(sel);
+  pa__free(vq);
   pa__free(sbuf);
   pa__gidmap_free(&queried);
   pa__recs_free(&tmp);
@@ -649,25 +688,16 @@ cleanup:
  * own increasing gid ranges, so LV arrives sorted by gid. */
 static pa_status fetch_vertices(bstate *s) {
   pa_status st = PA_SUCCESS;
-  pa_gid *g = NULL, *gg = NULL;
+  pa_gid *g = NULL;
   int *dest = NULL;
-  size_t n, ng, *rcnt = NULL, *cnt = NULL, *bcnt = NULL;
+  size_t n, *rcnt = NULL, *cnt = NULL, *bcnt = NULL;
   size_t *vs = NULL, *bs = NULL, *ds = NULL;
   pa_idx *vi = NULL, *bi = NULL, *di = NULL;
   void *recv = NULL, *brecv = NULL;
   unsigned char *sbuf = NULL;
-  /* local vertices: those of the owned elements, merged with the ghosts' */
-  PA_CALL(ghost_verts(s, 1, 255, &gg, &ng));
-  PA_ALLOC(g, s->nu + ng);
-  {
-    size_t i = 0, j = 0;
-    n = 0;
-    while (i < s->nu || j < ng)
-      g[n++] = j >= ng || (i < s->nu && s->ukey[i] < gg[j]) ? s->ukey[i++]
-                                                              : gg[j++];
-  }
-  pa__free(gg);
-  gg = NULL;
+  /* local vertices: those of the owned elements, which the directory has
+   * from the touch messages, and the ghosts' (not among them), sent now */
+  PA_CALL(ghost_verts(s, 1, 255, &g, &n));
   PA_ALLOC(dest, n);
   for (size_t i = 0; i < n; i++) dest[i] = dir_rank(&s->vdir, g[i]);
   PA_CALL(send_items(s->comm, n, sizeof(pa_gid), g, dest, &rcnt, &recv));
@@ -677,28 +707,38 @@ static pa_status fetch_vertices(bstate *s) {
   dest = NULL;
   const pa_gid *rg = recv;
   size_t tot = 0, totb = 0, totd = 0;
-  for (int r = 0; r < s->size; r++) tot += rcnt[r];
+  for (int r = 0; r < s->size; r++) tot += rcnt[r] + s->tcnt[r];
   PA_ALLOC(vi, tot);
   PA_CALLOC(vs, (size_t)s->size + 1);
   PA_CALLOC(bs, (size_t)s->size + 1);
   PA_CALLOC(ds, (size_t)s->size + 1);
   {
-    size_t j = 0;
-    for (int r = 0; r < s->size; r++)
-      for (size_t q = 0; q < rcnt[r]; q++, j++) {
-        pa_idx v = pa__gidmap_get(&s->vmap, rg[j]);
-        PA_CHECK(v >= 0 && s->tstart[v + 1] > s->tstart[v], PA_ERR_INTERNAL,
-                 "vertex %lld requested but untouched", (long long)rg[j]);
-        vi[j] = v;
+    /* per requester, its two sorted lists merged by gid: the vertices come
+     * back sorted */
+    size_t i = 0, j = 0, k = 0;
+    for (int r = 0; r < s->size; r++) {
+      size_t iend = i + s->tcnt[r], jend = j + rcnt[r];
+      while (i < iend || j < jend) {
+        pa_idx v;
+        if (j >= jend || (i < iend && s->tgid[i] < rg[j])) {
+          v = s->tv[i++];
+        } else {
+          v = pa__gidmap_get(&s->vmap, rg[j]);
+          PA_CHECK(v >= 0 && s->tstart[v + 1] > s->tstart[v], PA_ERR_INTERNAL,
+                   "vertex %lld requested but untouched", (long long)rg[j]);
+          j++;
+        }
+        vi[k++] = v;
         s->V.aux[v] = s->trank[s->tstart[v]]; /* owner: lowest touching rank */
         bs[r + 1] += (size_t)(s->bstart[v + 1] - s->bstart[v]);
         ds[r + 1] += (size_t)(s->dstart[v + 1] - s->dstart[v]);
       }
+      vs[r + 1] = vs[r] + s->tcnt[r] + rcnt[r];
+    }
   }
   pa__free(recv);
   recv = NULL;
   for (int r = 0; r < s->size; r++) {
-    vs[r + 1] = vs[r] + rcnt[r];
     bs[r + 1] += bs[r];
     ds[r + 1] += ds[r];
   }
@@ -758,10 +798,16 @@ static pa_status fetch_vertices(bstate *s) {
       PA_CALL(pa__recs_get(&s->LD, brecv, &q));
     }
   }
+  /* the LV record of each owned element's vertex (-1: not fetched, an
+   * internal error reported by assemble); both lists are sorted by gid */
+  PA_ALLOC(s->ulv, s->nu);
+  for (size_t u = 0, i = 0; u < s->nu; u++) {
+    while (i < s->LV.n && s->LV.gid[i] < s->ukey[u]) i++;
+    s->ulv[u] = i < s->LV.n && s->LV.gid[i] == s->ukey[u] ? (pa_idx)i : -1;
+  }
 cleanup:
   st = pa__agree_end(s->comm, st);
   pa__free(g);
-  pa__free(gg);
   pa__free(dest);
   pa__free(rcnt);
   pa__free(cnt);
@@ -820,6 +866,7 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
   pa_status st = PA_SUCCESS;
   int d = s->dim, rank = s->rank;
   pa_idx *ordV = NULL, *ordE = NULL, *ordB = NULL, *ordD = NULL;
+  pa_idx *lvof = NULL; /* LV record -> local vertex */
   pa__gidmap lv = {0};
   pa_idx *vstart = NULL, *vel = NULL;
   pa__recs *SB[2] = {&s->LB, &s->LD};
@@ -833,8 +880,11 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
   PA_CALL(number_local(&s->LV, NULL, rank, ordV, &dm->nown[PA_VERTEX]));
   dm->nloc[PA_VERTEX] = (pa_idx)s->LV.n;
   PA_CALL(pa__gidmap_init(&lv, s->LV.n));
-  for (size_t k = 0; k < s->LV.n; k++)
+  PA_ALLOC(lvof, s->LV.n);
+  for (size_t k = 0; k < s->LV.n; k++) {
     PA_CALL(pa__gidmap_put(&lv, s->LV.gid[ordV[k]], (pa_idx)k, NULL, NULL));
+    lvof[ordV[k]] = (pa_idx)k;
+  }
   /* elements */
   PA_ALLOC(ordE, s->L.n);
   PA_CALL(number_local(&s->L, s->layer, rank, ordE, &dm->nown[PA_ELEMENT]));
@@ -869,10 +919,17 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
   m->nv = (pa_idx)s->LV.n;
   pa__free(s->LV.dbl); /* in the mesh now: lower the peak */
   s->LV.dbl = NULL;
+  /* owned elements (records [0, nown)): vertex slot -> u -> LV record ->
+   * local vertex, two array reads; ghost elements by the hash map */
+  for (size_t u = 0; u < s->nu; u++)
+    if (s->ulv[u] >= 0) s->ulv[u] = lvof[s->ulv[u]];
   for (size_t k = 0; k < s->L.n; k++) {
     size_t i = (size_t)ordE[k];
     for (int j = 0; j <= d; j++) {
-      pa_idx v = pa__gidmap_get(&lv, s->L.vgid[(size_t)(d + 1) * i + j]);
+      size_t p = (size_t)(d + 1) * i + j;
+      pa_idx v = i < (size_t)dm->nown[PA_ELEMENT]
+                     ? s->ulv[s->uslot[p]]
+                     : pa__gidmap_get(&lv, s->L.vgid[p]);
       PA_CHECK(v >= 0, PA_ERR_INTERNAL, "element vertex not fetched");
       m->elem[(size_t)(d + 1) * k + j] = v;
     }
@@ -880,6 +937,9 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
     m->eflag[k] = s->L.flag[i];
   }
   m->ne = (pa_idx)s->L.n;
+  pa__free(s->uslot);
+  pa__free(s->ulv);
+  s->uslot = s->ulv = NULL;
   pa__free(s->L.vgid); /* in the mesh now */
   s->L.vgid = NULL;
 
@@ -1021,6 +1081,7 @@ cleanup:
   pa__free(ordE);
   pa__free(ordB);
   pa__free(ordD);
+  pa__free(lvof);
   pa__gidmap_free(&lv);
   pa__free(vstart);
   pa__free(vel);
@@ -1119,11 +1180,14 @@ pa_status pa__dmesh_build(pa_dmesh *dm, const pa__layout *lay, int overlap,
     memset(&keep.vmap, 0, sizeof keep.vmap);
     keep.bstart = keep.blist = keep.dstart = keep.dlist = keep.tstart = NULL;
     keep.trank = NULL;
+    keep.tcnt = NULL;
+    keep.tgid = NULL;
+    keep.tv = NULL;
     memset(&keep.emap, 0, sizeof keep.emap);
-    keep.nu = 0;
-    keep.ukey = NULL;
+    keep.ukey = NULL; /* keep.nu stays: the count of keep.ulv */
     keep.ustart = keep.uelem = NULL;
     memset(&keep.umap, 0, sizeof keep.umap);
+    s.uslot = s.ulv = NULL;
     /* free what keep no longer references */
     memset(&s.L, 0, sizeof s.L);
     s.layer = NULL;

@@ -208,7 +208,7 @@ pa_status pa__sf_build(MPI_Comm comm, pa_idx n, const pa_gid *gid,
   pa_status st = PA_SUCCESS;
   int rank, size;
   size_t *cnt = NULL, *rcnt = NULL;
-  pa_idx *order = NULL;
+  pa_idx *order = NULL, *next = NULL;
   pa_gid *sendg = NULL;
   void *recv = NULL;
   pa__gidmap map = {0};
@@ -264,12 +264,9 @@ pa_status pa__sf_build(MPI_Comm comm, pa_idx n, const pa_gid *gid,
   PA_ALLOC(sendg, nleaf);
   for (pa_idx j = 0; j < nleaf; j++) sendg[j] = gid[order[j]];
   for (int r = 0; r < size; r++) cnt[r] *= sizeof(pa_gid);
-  /* Owned gids -> local index, to resolve the requests. */
-  pa_idx nown = 0;
-  for (pa_idx i = 0; i < n; i++) nown += owner[i] == rank;
-  PA_CALL(pa__gidmap_init(&map, (size_t)nown));
   for (pa_idx i = 0; i < n; i++)
-    if (owner[i] == rank) PA_CALL(pa__gidmap_put(&map, gid[i], i, NULL, NULL));
+    PA_CHECK(owner[i] != rank || gid[i] >= 0, PA_ERR_ARG,
+             "negative global id %lld", (long long)gid[i]);
   PA_CALL(pa__xchg_sparse(comm, cnt, sendg, &rcnt, &recv));
   int nrr = 0;
   size_t nroot = 0;
@@ -282,21 +279,43 @@ pa_status pa__sf_build(MPI_Comm comm, pa_idx n, const pa_gid *gid,
   PA_ALLOC(sf->rootidx, nroot);
   sf->nrootrank = nrr;
   sf->rootoff[0] = 0;
+  /* Resolve the requests: a map of the requested gids (chained through next
+   * when several ranks ask for one gid), then one pass over the owned
+   * entities. The requests are the ghosts of the neighbours, far fewer than
+   * the owned entities, so the map stays in cache, where a map of every owned
+   * gid would not. The first owned entity of a gid wins. */
   {
     const pa_gid *rg = recv;
+    PA_ALLOC(next, nroot);
+    PA_CALL(pa__gidmap_init(&map, nroot));
+    for (size_t j = 0; j < nroot; j++) {
+      int found;
+      pa_idx first;
+      sf->rootidx[j] = -1;
+      next[j] = -1;
+      if (rg[j] < 0) continue; /* never owned: reported below */
+      PA_CALL(pa__gidmap_put(&map, rg[j], (pa_idx)j, &found, &first));
+      if (found) { /* insert j second in the chain of its gid */
+        next[j] = next[first];
+        next[first] = (pa_idx)j;
+      }
+    }
+    for (pa_idx i = 0; i < n && nroot; i++) {
+      if (owner[i] != rank) continue;
+      pa_idx j = pa__gidmap_get(&map, gid[i]);
+      if (j < 0 || sf->rootidx[j] >= 0) continue;
+      for (; j >= 0; j = next[j]) sf->rootidx[j] = i;
+    }
     size_t j = 0;
     for (int r = 0, k = 0; r < size; r++) {
       if (!rcnt[r]) continue;
       size_t m = rcnt[r] / sizeof(pa_gid);
       sf->rootrank[k] = r;
       sf->rootoff[k + 1] = sf->rootoff[k] + (pa_idx)m;
-      for (size_t q = 0; q < m; q++, j++) {
-        pa_idx li = pa__gidmap_get(&map, rg[j]);
-        PA_CHECK(li >= 0, PA_ERR_MESH,
+      for (size_t q = 0; q < m; q++, j++)
+        PA_CHECK(sf->rootidx[j] >= 0, PA_ERR_MESH,
                  "rank %d holds a ghost of gid %lld that its owner %d does not "
                  "own", r, (long long)rg[j], rank);
-        sf->rootidx[j] = li;
-      }
       k++;
     }
   }
@@ -308,6 +327,7 @@ cleanup:
   pa__free(order);
   pa__free(sendg);
   pa__free(recv);
+  pa__free(next);
   pa__gidmap_free(&map);
   return st;
 }

@@ -84,9 +84,9 @@ typedef struct pa__sfop {
 
 /* Collective: build the sf of an entity kind from the owner rank and the
  * global id of every local entity (n entities, ghosts are those with
- * owner != my rank). The owners resolve the requested gids with their own
- * list of owned gids (nown first entries must be the owned ones). Fails with
- * PA_ERR_MESH if an owner does not know a requested gid. */
+ * owner != my rank). The owners resolve the requested gids against their
+ * owned entities (the first one with a gid wins). Fails with PA_ERR_MESH if
+ * an owner does not own a requested gid. */
 pa_status pa__sf_build(MPI_Comm comm, pa_idx n, const pa_gid *gid,
                        const int *owner, pa__sf *sf);
 /* Restrict an sf to the indices with slot[i] >= 0 and renumber them to slots.
