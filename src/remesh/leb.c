@@ -80,8 +80,10 @@ typedef struct bis {
   int d;
   size_t nball; /* entries of eball, bball, inner */
   ilist *eball, *bball;
-  uint8_t *inner; /* per vertex: bit 0 skin edges may be split there,
-                     bit 2 added on the skin */
+  uint8_t *inner; /* per vertex: bit 0 inner (skin edges may be split
+                     there), bit 1 labelled (only towards an inner vertex),
+                     bit 2 added on the skin, bit 3 never with a labelled
+                     partner */
   qedge *heap;
   size_t nheap, capheap;
   uint64_t *feat; /* feature edges as sorted (lo << 32 | hi) pairs */
@@ -129,8 +131,8 @@ static pa_status push(bis *s, pa_idx a, pa_idx b) {
   }
   double len = elen(m, a, b);
   /* the skin threshold only for an edge both of whose ends are marked (any
-   * other edge that short is split neither as a skin nor as an inner edge):
-   * a third of the queue in a piece's bisection */
+   * other edge that short is split neither as a skin nor as an inner edge,
+   * and a piece has many inner edges between the two thresholds) */
   double lo = s->o->lmax;
   if (s->o->skin_ok && s->o->skin_lmax < lo && (s->inner[a] & 3) &&
       (s->inner[b] & 3))
