@@ -769,8 +769,14 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
     if (!pc->out) continue;
     PA_CALL(output_records(it, pc, bemit[q], demit[q], off, done, R, pay));
   }
+  /* wire bytes of every record: a fixed part each, plus the payloads */
   for (int k = 0; k < PA_NKIND; k++)
-    for (size_t i = 0; i < R[k].n; i++) it->bytes_moved += (double)pa__recs_wire(&R[k], i);
+    if (R[k].n) {
+      const size_t *po = R[k].poff;
+      size_t fixed = pa__recs_wire(&R[k], 0) - (po ? po[1] - po[0] : 0);
+      it->bytes_moved +=
+          (double)(R[k].n * fixed + (po ? po[R[k].n] - po[0] : 0));
+    }
 
   /* 6. rebuild */
   PA_CALL(pa__agree(dm->comm, st));

@@ -202,7 +202,7 @@ typedef struct bstate {
   dirmap vdir;
   /* directory side */
   pa__recs V, B, D;         /* vertex records, bdry/edges by smallest vertex */
-  pa__gidmap vmap;          /* vertex gid -> index in V */
+  pa__gidindex vix;         /* vertex gid -> index in V */
   pa_idx *bstart, *blist;   /* V index -> B records (CSR) */
   pa_idx *dstart, *dlist;   /* V index -> D records */
   pa_idx *tstart;           /* V index -> touching ranks (CSR) */
@@ -221,12 +221,12 @@ typedef struct bstate {
   size_t nu;                /* vertices of owned elements */
   pa_gid *ukey;             /* their gids, ascending */
   pa_idx *ustart, *uelem;   /* CSR: u -> owned L indices */
-  pa__gidmap umap;          /* gid -> u */
+  pa__gidindex uix;         /* gid -> u */
   pa_idx *uslot;            /* u of each vertex slot of the owned elements */
   pa_idx *ulv;              /* LV record of each u (fetch), then its local
                              * vertex (assemble): the owned elements' vertices
                              * are numbered by two array reads a slot, not by
-                             * a hash lookup (the map is far beyond cache) */
+                             * a lookup in uix each */
   pa__recs LV, LB, LD;      /* local vertices / bdry / edges (aux = owner) */
 } bstate;
 
@@ -234,7 +234,7 @@ static void bstate_free(bstate *s) {
   pa__recs_free(&s->V);
   pa__recs_free(&s->B);
   pa__recs_free(&s->D);
-  pa__gidmap_free(&s->vmap);
+  pa__gidindex_free(&s->vix);
   pa__free(s->bstart);
   pa__free(s->blist);
   pa__free(s->dstart);
@@ -259,7 +259,7 @@ static void bstate_free(bstate *s) {
   pa__free(s->uelem);
   s->ukey = NULL;
   s->ustart = s->uelem = NULL;
-  pa__gidmap_free(&s->umap);
+  pa__gidindex_free(&s->uix);
   pa__free(s->uslot);
   pa__free(s->ulv);
   s->uslot = s->ulv = NULL;
@@ -284,7 +284,7 @@ static pa_status attach(bstate *s, const pa__recs *R, pa_idx **start,
   PA_CALLOC(*start, nV + 1);
   PA_ALLOC(*list, R->n);
   for (size_t i = 0; i < R->n; i++) {
-    pa_idx v = pa__gidmap_get(&s->vmap, min_vgid(R, i));
+    pa_idx v = pa__gidindex_get(&s->vix, min_vgid(R, i));
     PA_CHECK(v >= 0, PA_ERR_MESH,
              "%s of global id %lld references vertex %lld, which does not "
              "exist", R->kind == PA_BOUNDARY ? "boundary entity" : "edge",
@@ -293,7 +293,7 @@ static pa_status attach(bstate *s, const pa__recs *R, pa_idx **start,
   }
   for (size_t v = 0; v < nV; v++) (*start)[v + 1] += (*start)[v];
   for (size_t i = 0; i < R->n; i++) {
-    pa_idx v = pa__gidmap_get(&s->vmap, min_vgid(R, i));
+    pa_idx v = pa__gidindex_get(&s->vix, min_vgid(R, i));
     (*list)[(*start)[v]++] = (pa_idx)i;
   }
   for (size_t v = nV; v > 0; v--) (*start)[v] = (*start)[v - 1];
@@ -316,10 +316,12 @@ static pa_status build_directory(bstate *s, pa__recs *verts, pa__recs *bdry,
   PA_CALL(pa__recs_migrate_free(s->comm, bdry, dest, &s->B));
   for (size_t i = 0; i < edges->n; i++) dest[i] = dir_rank(&s->vdir, min_vgid(edges, i));
   PA_CALL(pa__recs_migrate_free(s->comm, edges, dest, &s->D));
-  PA_CALL(pa__gidmap_init(&s->vmap, s->V.n));
+  /* V is sorted by gid and holds the gids of this directory's block: dense */
+  PA_CALL(pa__gidindex_init(&s->vix, s->V.n ? s->V.gid[0] : 0,
+                            s->V.n ? s->V.gid[s->V.n - 1] + 1 : 0, s->V.n));
   for (size_t i = 0; i < s->V.n; i++) {
     int found;
-    PA_CALL(pa__gidmap_put(&s->vmap, s->V.gid[i], (pa_idx)i, &found, NULL));
+    PA_CALL(pa__gidindex_put(&s->vix, s->V.gid[i], (pa_idx)i, &found, NULL));
     PA_CHECK(!found, PA_ERR_MESH, "vertex global id %lld is given twice",
              (long long)s->V.gid[i]);
   }
@@ -335,48 +337,71 @@ cleanup:
 }
 
 /* The owned elements around each vertex of an owned element: ukey (sorted
- * unique gids), CSR ustart/uelem, the map umap and the u of each vertex slot
- * (uslot). Vertices are numbered by
- * hashing, and only the nu unique gids are sorted (not the (dim+1) nown
- * element slots): the one sort of the owned elements' vertex ids in a
- * build. */
+ * unique gids), CSR ustart/uelem, the index uix (gid -> u) and the u of
+ * each vertex slot (uslot). When the gids of the slots are dense (uix is an
+ * array over their range: the usual case), marking the range and one scan
+ * of it number the vertices in ascending gid order, with no sort; otherwise
+ * they are numbered by hashing and only the nu unique gids are sorted (not
+ * the (dim+1) nown element slots). */
 static pa_status owned_csr(bstate *s, pa_idx nown) {
   pa_status st = PA_SUCCESS;
   size_t np = (size_t)nown * s->nve, nu = 0;
   pa_idx *slotu = NULL, *ord = NULL, *rankof = NULL;
-  pa_gid *key = NULL;
+  pa_gid *key = NULL, lo = INT64_MAX, hi = -1;
+  const pa_gid *vg = s->L.vgid;
   PA_ALLOC(slotu, np);
-  /* a map sized to the vertices (about n/5 in 3D, n/2 in 2D), not to the
-   * slots: smaller, so it stays in cache (it grows if needed) */
-  PA_CALL(pa__gidmap_init(&s->umap, (size_t)nown / (s->dim == 3 ? 5 : 2) + 16));
   for (size_t p = 0; p < np; p++) {
-    int found;
-    pa_idx old;
-    PA_CALL(pa__gidmap_put(&s->umap, s->L.vgid[p], (pa_idx)nu, &found, &old));
-    slotu[p] = found ? old : (pa_idx)nu++;
+    if (vg[p] < lo) lo = vg[p];
+    if (vg[p] > hi) hi = vg[p];
   }
-  /* first-seen numbers -> ascending gid numbers */
-  PA_ALLOC(key, nu);
-  PA_ALLOC(ord, nu);
-  PA_ALLOC(rankof, nu);
-  for (size_t p = 0; p < np; p++) key[slotu[p]] = s->L.vgid[p];
-  for (size_t u = 0; u < nu; u++) ord[u] = (pa_idx)u;
-  PA_CALL(pa__sort_by_gid(ord, nu, key));
-  PA_ALLOC(s->ukey, nu);
-  for (size_t k = 0; k < nu; k++) {
-    s->ukey[k] = key[ord[k]];
-    rankof[ord[k]] = (pa_idx)k;
+  /* sized to the vertices (about n/5 in 3D, n/2 in 2D), not to the slots:
+   * smaller, so it stays closer to cache (a map grows if needed) */
+  PA_CALL(pa__gidindex_init(&s->uix, np ? lo : 0, hi + 1,
+                            (size_t)nown / (s->dim == 3 ? 5 : 2) + 16));
+  if (s->uix.dense) {
+    pa_idx *u = s->uix.dense; /* u[gid - lo] */
+    for (size_t p = 0; p < np; p++)
+      if (u[vg[p] - lo] == -1) { /* -2: present, not numbered yet */
+        u[vg[p] - lo] = -2;
+        nu++;
+      }
+    PA_ALLOC(s->ukey, nu);
+    for (pa_gid g = lo, k = 0; g <= hi; g++)
+      if (u[g - lo] == -2) {
+        s->ukey[k] = g;
+        u[g - lo] = (pa_idx)k++;
+      }
+    for (size_t p = 0; p < np; p++) slotu[p] = u[vg[p] - lo];
+  } else {
+    for (size_t p = 0; p < np; p++) {
+      int found;
+      pa_idx old;
+      PA_CALL(pa__gidmap_put(&s->uix.map, vg[p], (pa_idx)nu, &found, &old));
+      slotu[p] = found ? old : (pa_idx)nu++;
+    }
+    /* first-seen numbers -> ascending gid numbers */
+    PA_ALLOC(key, nu);
+    PA_ALLOC(ord, nu);
+    PA_ALLOC(rankof, nu);
+    for (size_t p = 0; p < np; p++) key[slotu[p]] = vg[p];
+    for (size_t u = 0; u < nu; u++) ord[u] = (pa_idx)u;
+    PA_CALL(pa__sort_by_gid(ord, nu, key));
+    PA_ALLOC(s->ukey, nu);
+    for (size_t k = 0; k < nu; k++) {
+      s->ukey[k] = key[ord[k]];
+      rankof[ord[k]] = (pa_idx)k;
+    }
+    pa__gidmap *m = &s->uix.map;
+    for (size_t q = 0; q < m->cap; q++)
+      if (m->key[q] >= 0) m->val[q] = rankof[m->val[q]];
+    for (size_t p = 0; p < np; p++) slotu[p] = rankof[slotu[p]];
   }
-  for (size_t q = 0; q < s->umap.cap; q++)
-    if (s->umap.key[q] >= 0) s->umap.val[q] = rankof[s->umap.val[q]];
   PA_CALLOC(s->ustart, nu + 1);
   PA_ALLOC(s->uelem, np);
-  for (size_t p = 0; p < np; p++) s->ustart[rankof[slotu[p]] + 1]++;
+  for (size_t p = 0; p < np; p++) s->ustart[slotu[p] + 1]++;
   for (size_t u = 0; u < nu; u++) s->ustart[u + 1] += s->ustart[u];
-  for (size_t p = 0; p < np; p++) {
-    slotu[p] = rankof[slotu[p]];
+  for (size_t p = 0; p < np; p++)
     s->uelem[s->ustart[slotu[p]]++] = (pa_idx)(p / s->nve);
-  }
   for (size_t u = nu; u > 0; u--) s->ustart[u] = s->ustart[u - 1];
   s->ustart[0] = 0;
   s->nu = nu;
@@ -405,7 +430,7 @@ static pa_status ghost_verts(bstate *s, int l0, int l1, pa_gid **out,
     if (s->layer[e] >= l0 && s->layer[e] <= l1)
       for (int k = 0; k < s->nve; k++) {
         pa_gid v = s->L.vgid[(size_t)s->nve * e + k];
-        if (pa__gidmap_get(&s->umap, v) < 0) g[n++] = v;
+        if (pa__gidindex_get(&s->uix, v) < 0) g[n++] = v;
       }
   *nout = pa__gid_sort_unique(g, n);
   *out = g;
@@ -435,7 +460,7 @@ static pa_status build_touch(bstate *s) {
   PA_ALLOC(s->trank, tot);
   PA_ALLOC(s->tv, tot);
   for (size_t j = 0; j < tot; j++) {
-    pa_idx v = pa__gidmap_get(&s->vmap, rg[j]);
+    pa_idx v = pa__gidindex_get(&s->vix, rg[j]);
     PA_CHECK(v >= 0, PA_ERR_MESH,
              "an element references vertex %lld, which does not exist",
              (long long)rg[j]);
@@ -525,7 +550,7 @@ static pa_status build_layers(bstate *s, int overlap, pa_idx nown) {
       for (int r = 0; r < s->size; r++) tot += rcnt[r];
       PA_ALLOC(vq, tot);
       for (size_t j = 0; j < tot; j++) {
-        vq[j] = pa__gidmap_get(&s->vmap, rg[j]);
+        vq[j] = pa__gidindex_get(&s->vix, rg[j]);
         PA_CHECK(vq[j] >= 0, PA_ERR_INTERNAL,
                  "ghost query of unknown vertex %lld", (long long)rg[j]);
       }
@@ -569,7 +594,7 @@ static pa_status build_layers(bstate *s, int overlap, pa_idx nown) {
     for (int r = 0; r < s->size; r++) nf += fcnt[r];
     const pa_gid *fr = frecv;
     for (size_t j = 0; j < nf; j++) {
-      pa_idx u = pa__gidmap_get(&s->umap, fr[2 * j]);
+      pa_idx u = pa__gidindex_get(&s->uix, fr[2 * j]);
       PA_CHECK(u >= 0, PA_ERR_INTERNAL, "forwarded query of vertex %lld "
                "that no owned element has", (long long)fr[2 * j]);
       npair += (size_t)(s->ustart[u + 1] - s->ustart[u]);
@@ -577,7 +602,7 @@ static pa_status build_layers(bstate *s, int overlap, pa_idx nown) {
     PA_ALLOC(pair, npair);
     npair = 0;
     for (size_t j = 0; j < nf; j++) {
-      pa_idx u = pa__gidmap_get(&s->umap, fr[2 * j]);
+      pa_idx u = pa__gidindex_get(&s->uix, fr[2 * j]);
       for (pa_idx p = s->ustart[u]; p < s->ustart[u + 1]; p++)
         pair[npair++] = fr[2 * j + 1] * (pa_gid)nown + s->uelem[p];
     }
@@ -723,7 +748,7 @@ static pa_status fetch_vertices(bstate *s) {
         if (j >= jend || (i < iend && s->tgid[i] < rg[j])) {
           v = s->tv[i++];
         } else {
-          v = pa__gidmap_get(&s->vmap, rg[j]);
+          v = pa__gidindex_get(&s->vix, rg[j]);
           PA_CHECK(v >= 0 && s->tstart[v + 1] > s->tstart[v], PA_ERR_INTERNAL,
                    "vertex %lld requested but untouched", (long long)rg[j]);
           j++;
@@ -860,6 +885,32 @@ static void unpack_payload(pa_dmesh *dm, int kind, const pa__recs *R, size_t i,
   }
 }
 
+/* The elements of m around each vertex v with need[v] (CSR, every vertex
+ * has a range, empty unless needed; elements in increasing order). */
+static pa_status balls_of(const pa_mesh *m, const uint8_t *need,
+                          pa_idx **pstart, pa_idx **pball) {
+  pa_status st = PA_SUCCESS;
+  size_t n = (size_t)(m->dim + 1) * m->ne;
+  pa_idx *start = NULL, *ball = NULL;
+  const pa_idx *ev = m->elem;
+  PA_CALLOC(start, (size_t)m->nv + 1);
+  for (size_t k = 0; k < n; k++)
+    if (need[ev[k]]) start[ev[k] + 1]++;
+  for (pa_idx v = 0; v < m->nv; v++) start[v + 1] += start[v];
+  PA_ALLOC(ball, start[m->nv]);
+  for (size_t k = 0; k < n; k++)
+    if (need[ev[k]]) ball[start[ev[k]]++] = (pa_idx)(k / (size_t)(m->dim + 1));
+  for (pa_idx v = m->nv; v > 0; v--) start[v] = start[v - 1];
+  start[0] = 0;
+  *pstart = start;
+  *pball = ball;
+  start = ball = NULL;
+cleanup:
+  pa__free(start);
+  pa__free(ball);
+  return st;
+}
+
 /* Steps 6-9: filter and own the boundary entities / edges, number all local
  * entities, fill dm. */
 static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
@@ -867,10 +918,10 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
   int d = s->dim, rank = s->rank;
   pa_idx *ordV = NULL, *ordE = NULL, *ordB = NULL, *ordD = NULL;
   pa_idx *lvof = NULL; /* LV record -> local vertex */
-  pa__gidmap lv = {0};
+  pa__gidindex lv = {0};
   pa_idx *vstart = NULL, *vel = NULL;
   pa__recs *SB[2] = {&s->LB, &s->LD};
-  uint8_t *keep = NULL, *cand = NULL;
+  uint8_t *keep = NULL, *cand = NULL, *need = NULL;
   pa_gid *kg = NULL;
   int *kown = NULL;
   pa_mesh *m = NULL;
@@ -879,10 +930,17 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
   PA_ALLOC(ordV, s->LV.n);
   PA_CALL(number_local(&s->LV, NULL, rank, ordV, &dm->nown[PA_VERTEX]));
   dm->nloc[PA_VERTEX] = (pa_idx)s->LV.n;
-  PA_CALL(pa__gidmap_init(&lv, s->LV.n));
+  {
+    pa_gid lo = INT64_MAX, hi = -1;
+    for (size_t i = 0; i < s->LV.n; i++) {
+      if (s->LV.gid[i] < lo) lo = s->LV.gid[i];
+      if (s->LV.gid[i] > hi) hi = s->LV.gid[i];
+    }
+    PA_CALL(pa__gidindex_init(&lv, s->LV.n ? lo : 0, hi + 1, s->LV.n));
+  }
   PA_ALLOC(lvof, s->LV.n);
   for (size_t k = 0; k < s->LV.n; k++) {
-    PA_CALL(pa__gidmap_put(&lv, s->LV.gid[ordV[k]], (pa_idx)k, NULL, NULL));
+    PA_CALL(pa__gidindex_put(&lv, s->LV.gid[ordV[k]], (pa_idx)k, NULL, NULL));
     lvof[ordV[k]] = (pa_idx)k;
   }
   /* elements */
@@ -920,7 +978,7 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
   pa__free(s->LV.dbl); /* in the mesh now: lower the peak */
   s->LV.dbl = NULL;
   /* owned elements (records [0, nown)): vertex slot -> u -> LV record ->
-   * local vertex, two array reads; ghost elements by the hash map */
+   * local vertex, two array reads; ghost elements through the index lv */
   for (size_t u = 0; u < s->nu; u++)
     if (s->ulv[u] >= 0) s->ulv[u] = lvof[s->ulv[u]];
   for (size_t k = 0; k < s->L.n; k++) {
@@ -929,7 +987,7 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
       size_t p = (size_t)(d + 1) * i + j;
       pa_idx v = i < (size_t)dm->nown[PA_ELEMENT]
                      ? s->ulv[s->uslot[p]]
-                     : pa__gidmap_get(&lv, s->L.vgid[p]);
+                     : pa__gidindex_get(&lv, s->L.vgid[p]);
       PA_CHECK(v >= 0, PA_ERR_INTERNAL, "element vertex not fetched");
       m->elem[(size_t)(d + 1) * k + j] = v;
     }
@@ -943,8 +1001,18 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
   pa__free(s->L.vgid); /* in the mesh now */
   s->L.vgid = NULL;
 
-  /* vertex -> local elements, for the containment tests */
-  PA_CALL(pa__balls(m->elem, m->ne, d + 1, m->nv, &vstart, &vel));
+  /* vertex -> local elements, for the containment tests: only for the
+   * first vertex of each boundary entity and edge (the balls of a few
+   * thousand vertices, not of the whole local mesh) */
+  PA_CALLOC(need, m->nv);
+  for (int t = 0; t < 2; t++)
+    for (size_t i = 0; i < SB[t]->n; i++) {
+      pa_idx v = pa__gidindex_get(&lv, SB[t]->vgid[(size_t)SB[t]->nv * i]);
+      if (v >= 0) need[v] = 1;
+    }
+  PA_CALL(balls_of(m, need, &vstart, &vel));
+  pa__free(need);
+  need = NULL;
 
   /* boundary entities and edges: keep those inside a local element; the
    * owner is the lowest rank with an owned element containing them */
@@ -962,7 +1030,7 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
       pa_idx lvx[4];
       int ok = 1;
       for (int j = 0; j < nv; j++) {
-        lvx[j] = pa__gidmap_get(&lv, R->vgid[(size_t)nv * i + j]);
+        lvx[j] = pa__gidindex_get(&lv, R->vgid[(size_t)nv * i + j]);
         if (lvx[j] < 0) ok = 0;
       }
       if (!ok) continue;
@@ -1027,7 +1095,7 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
   for (size_t k = 0; k < s->LB.n; k++) {
     size_t i = (size_t)ordB[k];
     for (int j = 0; j < d; j++)
-      m->bdry[(size_t)d * k + j] = pa__gidmap_get(&lv, s->LB.vgid[(size_t)d * i + j]);
+      m->bdry[(size_t)d * k + j] = pa__gidindex_get(&lv, s->LB.vgid[(size_t)d * i + j]);
     m->bref[k] = s->LB.ref[i];
     m->bflag[k] = s->LB.flag[i];
   }
@@ -1035,7 +1103,7 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
   for (size_t k = 0; k < s->LD.n; k++) {
     size_t i = (size_t)ordD[k];
     for (int j = 0; j < 2; j++)
-      m->edge[2 * k + j] = pa__gidmap_get(&lv, s->LD.vgid[2 * i + j]);
+      m->edge[2 * k + j] = pa__gidindex_get(&lv, s->LD.vgid[2 * i + j]);
     m->edref[k] = s->LD.ref[i];
     m->edflag[k] = s->LD.flag[i];
   }
@@ -1082,11 +1150,12 @@ cleanup:
   pa__free(ordB);
   pa__free(ordD);
   pa__free(lvof);
-  pa__gidmap_free(&lv);
+  pa__gidindex_free(&lv);
   pa__free(vstart);
   pa__free(vel);
   pa__free(keep);
   pa__free(cand);
+  pa__free(need);
   pa__free(kg);
   pa__free(kown);
   return st;
@@ -1177,7 +1246,7 @@ pa_status pa__dmesh_build(pa_dmesh *dm, const pa__layout *lay, int overlap,
     memset(&keep.V, 0, sizeof keep.V);
     memset(&keep.B, 0, sizeof keep.B);
     memset(&keep.D, 0, sizeof keep.D);
-    memset(&keep.vmap, 0, sizeof keep.vmap);
+    memset(&keep.vix, 0, sizeof keep.vix);
     keep.bstart = keep.blist = keep.dstart = keep.dlist = keep.tstart = NULL;
     keep.trank = NULL;
     keep.tcnt = NULL;
@@ -1186,7 +1255,7 @@ pa_status pa__dmesh_build(pa_dmesh *dm, const pa__layout *lay, int overlap,
     memset(&keep.emap, 0, sizeof keep.emap);
     keep.ukey = NULL; /* keep.nu stays: the count of keep.ulv */
     keep.ustart = keep.uelem = NULL;
-    memset(&keep.umap, 0, sizeof keep.umap);
+    memset(&keep.uix, 0, sizeof keep.uix);
     s.uslot = s.ulv = NULL;
     /* free what keep no longer references */
     memset(&s.L, 0, sizeof s.L);

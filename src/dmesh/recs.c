@@ -81,16 +81,19 @@ pa_status pa__recs_add(pa__recs *r, pa_gid gid, const pa_gid *vgid,
     PA_CALLOC(r->poff, r->cap + 1);
   }
   size_t i = r->n;
+  /* plain loops, not memcpy: a few items each, called once per record (a
+   * library call per array cost more than the copy) */
   r->gid[i] = gid;
-  if (r->nv) memcpy(r->vgid + (size_t)r->nv * i, vgid, r->nv * sizeof *vgid);
+  for (int k = 0; k < r->nv; k++) r->vgid[(size_t)r->nv * i + k] = vgid[k];
   r->ref[i] = ref;
   r->flag[i] = flag;
   r->aux[i] = aux;
-  if (r->ndbl) memcpy(r->dbl + (size_t)r->ndbl * i, dbl, r->ndbl * sizeof *dbl);
+  for (int k = 0; k < r->ndbl; k++) r->dbl[(size_t)r->ndbl * i + k] = dbl[k];
   if (r->poff) {
     size_t off = r->poff[i];
     PA_GROW(r->pay, r->paycap, off + paylen);
-    if (paylen) memcpy(r->pay + off, pay, paylen);
+    for (size_t k = 0; k < paylen; k++)
+      r->pay[off + k] = ((const unsigned char *)pay)[k];
     r->poff[i + 1] = off + paylen;
   }
   r->n++;
@@ -445,71 +448,119 @@ static void take(pa__recs *r, const pa__recblock *b, size_t k,
   r->n++;
 }
 
-/* Append the record blocks of buf[0..tot) to r (room reserved), sorted by
- * gid: a merge of the blocks when each is sorted (the usual case: senders
- * hold sorted records), so no sort and no permutation; otherwise append
- * and sort. Ties keep the block order (stable). */
-static pa_status merge_blocks(pa__recs *r, const unsigned char *buf,
-                              size_t tot) {
+/* Copy record k of the set in to the end of r (room reserved). */
+static void take_rec(pa__recs *r, const pa__recs *in, size_t k) {
+  size_t i = r->n, nv = (size_t)r->nv, nd = (size_t)r->ndbl;
+  r->gid[i] = in->gid[k];
+  if (nv) memcpy(r->vgid + nv * i, in->vgid + nv * k, nv * sizeof(pa_gid));
+  if (nd) memcpy(r->dbl + nd * i, in->dbl + nd * k, nd * sizeof(double));
+  r->ref[i] = in->ref[k];
+  r->aux[i] = in->aux[k];
+  r->flag[i] = in->flag[k];
+  if (r->poff) {
+    size_t len = paylen_of(in, k);
+    if (len) memcpy(r->pay + r->poff[i], in->pay + in->poff[k], len);
+    r->poff[i + 1] = r->poff[i] + len;
+  }
+  r->n++;
+}
+
+/* One sorted source of a merge: a received block (sel NULL), or the
+ * records sel[0..n) of the set being migrated (those staying here). */
+typedef struct msrc {
+  pa__recblock b;
+  const pa_idx *sel;
+  size_t n, cur, pcur; /* records, next one, its payload offset in b */
+} msrc;
+
+static pa_gid msrc_gid(const msrc *q, const pa__recs *in, size_t k) {
+  return q->sel ? in->gid[q->sel[k]] : q->b.gid[k];
+}
+
+static void msrc_take(pa__recs *r, msrc *q, const pa__recs *in) {
+  size_t k = q->cur++;
+  if (q->sel) {
+    take_rec(r, in, (size_t)q->sel[k]);
+  } else {
+    take(r, &q->b, k, q->b.pay + q->pcur);
+    if (q->b.paybytes) q->pcur += q->b.paylen[k];
+  }
+}
+
+/* Append to r (room reserved) the records of the received blocks
+ * buf[0..tot) (one per rank with a nonzero rcnt, in rank order) and the
+ * records sel[0..nsel) of in, which stay on this rank (me), sorted by gid,
+ * ties in rank order (stable). Senders sort each block (and sel), so this
+ * is a merge: no sort and no permutation of the records; beyond 64 sources
+ * the records are appended in rank order and sorted. */
+static pa_status merge_sources(pa__recs *r, const unsigned char *buf,
+                               const size_t *rcnt, int me, int size,
+                               const pa__recs *in, const pa_idx *sel,
+                               size_t nsel) {
   pa_status st = PA_SUCCESS;
-  pa__recblock *b = NULL;
-  size_t nb = 0, q = 0, *cur = NULL, *pcur = NULL;
-  int sorted = 1;
-  for (q = 0; q < tot; nb++) {
-    pa__recblock t;
-    pa__recblock_map(buf + q, r->nv, r->ndbl, &t);
-    q += t.bytes;
+  msrc *src = NULL;
+  size_t ns = 0, q = 0;
+  PA_CALLOC(src, (size_t)size);
+  for (int p = 0; p < size; p++) {
+    if (p == me && nsel) {
+      src[ns].sel = sel;
+      src[ns++].n = nsel;
+    }
+    if (rcnt[p]) {
+      pa__recblock_map(buf + q, r->nv, r->ndbl, &src[ns].b);
+      q += src[ns].b.bytes;
+      src[ns].n = src[ns].b.n;
+      ns++;
+    }
   }
-  PA_ALLOC(b, nb);
-  PA_CALLOC(cur, nb);
-  PA_CALLOC(pcur, nb);
-  q = 0;
-  for (size_t k = 0; k < nb; k++) {
-    pa__recblock_map(buf + q, r->nv, r->ndbl, &b[k]);
-    q += b[k].bytes;
-    for (size_t i = 1; i < b[k].n && sorted; i++) sorted = b[k].gid[i - 1] <= b[k].gid[i];
-  }
-  if (!sorted || nb > 64) {
-    q = 0;
-    while (q < tot) PA_CALL(pa__recs_get(r, buf, &q));
+  for (size_t k = 0; k < ns; k++)
+    for (size_t i = 1; i < src[k].n; i++)
+      PA_ASSERT(msrc_gid(&src[k], in, i - 1) <= msrc_gid(&src[k], in, i));
+  if (ns > 64) {
+    for (size_t k = 0; k < ns; k++)
+      while (src[k].cur < src[k].n) msrc_take(r, &src[k], in);
     PA_CALL(pa__recs_sort(r));
     goto cleanup;
   }
-  for (;;) { /* smallest head; a linear scan over at most 64 blocks */
-    size_t best = nb;
-    for (size_t k = 0; k < nb; k++)
-      if (cur[k] < b[k].n &&
-          (best == nb || b[k].gid[cur[k]] < b[best].gid[cur[best]]))
+  for (;;) { /* smallest head; a linear scan over at most 64 sources */
+    size_t best = ns;
+    for (size_t k = 0; k < ns; k++)
+      if (src[k].cur < src[k].n &&
+          (best == ns || msrc_gid(&src[k], in, src[k].cur) <
+                             msrc_gid(&src[best], in, src[best].cur)))
         best = k;
-    if (best == nb) break;
+    if (best == ns) break;
     /* take the run of best that stays below every other head */
     pa_gid lim = INT64_MAX;
-    for (size_t k = 0; k < nb; k++)
-      if (k != best && cur[k] < b[k].n && b[k].gid[cur[k]] < lim)
-        lim = b[k].gid[cur[k]];
-    const pa__recblock *bb = &b[best];
+    for (size_t k = 0; k < ns; k++)
+      if (k != best && src[k].cur < src[k].n &&
+          msrc_gid(&src[k], in, src[k].cur) < lim)
+        lim = msrc_gid(&src[k], in, src[k].cur);
+    msrc *bq = &src[best];
     do {
-      size_t k = cur[best]++;
-      take(r, bb, k, bb->pay + pcur[best]);
-      if (bb->paybytes) pcur[best] += bb->paylen[k];
-    } while (cur[best] < bb->n && bb->gid[cur[best]] < lim);
+      msrc_take(r, bq, in);
+    } while (bq->cur < bq->n && msrc_gid(bq, in, bq->cur) < lim);
   }
 cleanup:
-  pa__free(b);
-  pa__free(cur);
-  pa__free(pcur);
+  pa__free(src);
   return st;
 }
 
-/* Migration; with consume, the input is freed once packed. */
+/* Migration; with consume, the input is freed once its records are out.
+ * The records of each destination are sorted by gid at the sender (an
+ * index sort: the packing gathers through the index anyway), so the
+ * receiver merges the blocks instead of sorting and permuting every array.
+ * The records staying on this rank (most of them in the adaptation loop)
+ * are neither packed nor sent: they are merged straight from in. */
 static pa_status migrate(MPI_Comm comm, pa__recs *in, const int *dest,
                          pa__recs *out, int consume) {
   pa_status st = PA_SUCCESS;
-  int size;
+  int rank, size;
   size_t *cnt = NULL, *rcnt = NULL, *start = NULL, *pay = NULL;
   pa_idx *byrank = NULL;
   unsigned char *sbuf = NULL;
   void *recv = NULL;
+  MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
   pa__recs_init(out, in->kind, in->nv, in->ndbl);
   if (!dest) dest = in->aux;
@@ -524,7 +575,7 @@ static pa_status migrate(MPI_Comm comm, pa__recs *in, const int *dest,
     if (in->poff) pay[dest[i]] += in->poff[i + 1] - in->poff[i];
   }
   for (int r = 0; r < size; r++) start[r + 1] += start[r];
-  /* records by destination (stable) */
+  /* records by destination (stable), each destination's sorted by gid */
   PA_ALLOC(byrank, in->n);
   {
     size_t *cur;
@@ -533,29 +584,41 @@ static pa_status migrate(MPI_Comm comm, pa__recs *in, const int *dest,
     for (size_t i = 0; i < in->n; i++) byrank[cur[dest[i]]++] = (pa_idx)i;
     pa__free(cur);
   }
-  size_t total = 0;
+  for (int r = 0; r < size; r++)
+    PA_CALL(pa__sort_by_gid(byrank + start[r], start[r + 1] - start[r],
+                            in->gid));
+  size_t total = 0, nself = start[rank + 1] - start[rank];
   for (int r = 0; r < size; r++) {
     size_t nr = start[r + 1] - start[r];
-    cnt[r] = nr ? pa__recblock_bytes(in->nv, in->ndbl, nr, pay[r]) : 0;
+    cnt[r] = nr && r != rank
+                 ? pa__recblock_bytes(in->nv, in->ndbl, nr, pay[r])
+                 : 0;
     total += cnt[r];
   }
   PA_ALLOC(sbuf, total);
   {
     size_t off = 0;
-    for (int r = 0; r < size; r++) {
-      size_t nr = start[r + 1] - start[r];
-      if (nr) off += pa__recs_put(in, byrank + start[r], nr, sbuf + off);
-    }
+    for (int r = 0; r < size; r++)
+      if (cnt[r])
+        off += pa__recs_put(in, byrank + start[r], start[r + 1] - start[r],
+                            sbuf + off);
   }
-  pa__free(byrank);
-  byrank = NULL;
-  if (consume) pa__recs_free(in);
+  if (consume && !nself) pa__recs_free(in);
   PA_CALL(pa__xchg_sparse(comm, cnt, sbuf, &rcnt, &recv));
   pa__free(sbuf);
   sbuf = NULL;
   {
-    size_t tot = 0, nrec = 0, npay = 0, q = 0;
+    size_t tot = 0, nrec = nself, q = 0;
+    size_t npay = pa__recs_paybytes(in, byrank + start[rank], nself);
     for (int r = 0; r < size; r++) tot += rcnt[r];
+    if (consume && nself == in->n && !tot) {
+      /* nothing moves: the input becomes the output, sorted (in place,
+       * unless it is in order already) */
+      *out = *in;
+      pa__recs_init(in, out->kind, out->nv, out->ndbl);
+      PA_CALL(pa__recs_sort(out));
+      goto cleanup;
+    }
     while (q < tot) {
       pa__recblock b;
       pa__recblock_map((unsigned char *)recv + q, out->nv, out->ndbl, &b);
@@ -566,15 +629,12 @@ static pa_status migrate(MPI_Comm comm, pa__recs *in, const int *dest,
     PA_CHECK(q == tot, PA_ERR_INTERNAL, "record blocks of %zu bytes, %zu read",
              tot, q);
     PA_CALL(pa__recs_reserve(out, nrec, npay));
-    PA_CALL(merge_blocks(out, recv, tot));
+    PA_CALL(merge_sources(out, recv, rcnt, rank, size, in,
+                          byrank + start[rank], nself));
   }
-  pa__free(recv);
-  recv = NULL;
-  /* Sort by gid, so that the result does not depend on arrival order (runs
-   * of sorted sources are merged). */
-  PA_CALL(pa__recs_sort(out));
 cleanup:
   st = pa__agree_end(comm, st);
+  if (consume) pa__recs_free(in);
   pa__free(cnt);
   pa__free(rcnt);
   pa__free(start);

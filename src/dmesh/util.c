@@ -2,8 +2,9 @@
  * util.c -- gid hash map, byte buffers and sorting helpers of src/dmesh/.
  *
  * Invariants: a gidmap is at most half full, so probing always ends on an
- * empty slot; sorting is an LSD radix sort on (key, index) pairs, stable, with
- * as many 8-bit passes as the largest key needs.
+ * empty slot; a gidindex holds either its dense array or its map; sorting
+ * is an LSD radix sort on (key, index) pairs, stable, with as few passes of
+ * digits of at most 11 bits as the largest key needs.
  */
 #include "dmesh/util.h"
 
@@ -60,6 +61,31 @@ cleanup:
   return st;
 }
 
+pa_status pa__gidindex_init(pa__gidindex *x, pa_gid lo, pa_gid hi,
+                            size_t nexpected) {
+  pa_status st = PA_SUCCESS;
+  memset(x, 0, sizeof *x);
+  if (hi < lo) hi = lo;
+  x->lo = lo;
+  x->hi = hi;
+  /* (negative keys go to the map, which reports them) */
+  if (lo >= 0 &&
+      (uint64_t)(hi - lo) <= PA__GIDINDEX_DENSE * (uint64_t)nexpected + 64) {
+    PA_ALLOC(x->dense, hi - lo);
+    memset(x->dense, 0xff, (size_t)(hi - lo) * sizeof *x->dense); /* -1 */
+  } else {
+    PA_CALL(pa__gidmap_init(&x->map, nexpected));
+  }
+cleanup:
+  return st;
+}
+
+void pa__gidindex_free(pa__gidindex *x) {
+  pa__free(x->dense);
+  pa__gidmap_free(&x->map);
+  memset(x, 0, sizeof *x);
+}
+
 pa_status pa__buf_reserve(pa__buf *b, size_t extra) {
   pa_status st = PA_SUCCESS;
   PA_GROW(b->p, b->cap, b->n + extra);
@@ -67,7 +93,7 @@ cleanup:
   return st;
 }
 
-/* Stable LSD radix sort of n (key, idx) pairs on the key bytes needed. */
+/* Stable LSD radix sort of n (key, idx) pairs on the key bits needed. */
 typedef struct kv {
   uint64_t k;
   pa_idx i;
@@ -93,11 +119,17 @@ static pa_status radix_sort(kv *a, size_t n) {
   }
   PA_ALLOC(tmp, n);
   kv *src = a, *dst = tmp;
-  for (int shift = 0; shift < 64 && (maxk >> shift); shift += 8) {
-    size_t cnt[257] = {0};
-    for (size_t i = 0; i < n; i++) cnt[((src[i].k >> shift) & 255) + 1]++;
-    for (int b = 0; b < 256; b++) cnt[b + 1] += cnt[b];
-    for (size_t i = 0; i < n; i++) dst[cnt[(src[i].k >> shift) & 255]++] = src[i];
+  /* as few passes as digits of at most 11 bits allow (a 20-bit key: two
+   * passes of 10 bits, not three of 8), the counts staying in L1 */
+  int bits = 0;
+  while (bits < 64 && (maxk >> bits)) bits++;
+  int passes = (bits + 10) / 11, width = passes ? (bits + passes - 1) / passes : 1;
+  uint64_t mask = ((uint64_t)1 << width) - 1;
+  for (int shift = 0; shift < 64 && (maxk >> shift); shift += width) {
+    size_t cnt[(1 << 11) + 1] = {0};
+    for (size_t i = 0; i < n; i++) cnt[((src[i].k >> shift) & mask) + 1]++;
+    for (uint64_t b = 0; b < mask + 1; b++) cnt[b + 1] += cnt[b];
+    for (size_t i = 0; i < n; i++) dst[cnt[(src[i].k >> shift) & mask]++] = src[i];
     kv *t = src;
     src = dst;
     dst = t;

@@ -56,6 +56,45 @@ static inline pa_idx pa__gidmap_get(const pa__gidmap *m, pa_gid key) {
   return -1;
 }
 
+/* Index gid -> pa_idx for keys known to lie in [lo, hi) (other keys are
+ * absent). When the range holds at most PA__GIDINDEX_DENSE times the
+ * expected count of keys, a plain array over the range (the keys are dense:
+ * one array read per lookup, and nearby gids -- nearby entities -- share
+ * cache lines, where a hash spreads them over a map far beyond cache); it
+ * then takes no more memory than the hash map, which is used otherwise. */
+#define PA__GIDINDEX_DENSE 4
+typedef struct pa__gidindex {
+  pa_gid lo, hi;  /* the key range */
+  pa_idx *dense;  /* hi - lo values, -1: absent; NULL: map is used */
+  pa__gidmap map;
+} pa__gidindex;
+
+pa_status pa__gidindex_init(pa__gidindex *x, pa_gid lo, pa_gid hi,
+                            size_t nexpected);
+void pa__gidindex_free(pa__gidindex *x);
+/* As pa__gidmap_put; fails with PA_ERR_INTERNAL for a key out of [lo, hi). */
+static inline pa_status pa__gidindex_put(pa__gidindex *x, pa_gid key,
+                                         pa_idx val, int *found, pa_idx *old) {
+  if (!x->dense) return pa__gidmap_put(&x->map, key, val, found, old);
+  if (key < x->lo || key >= x->hi)
+    return pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
+                     "global id %lld out of the index range [%lld, %lld)",
+                     (long long)key, (long long)x->lo, (long long)x->hi);
+  pa_idx *v = x->dense + (key - x->lo);
+  if (found) *found = *v >= 0;
+  if (*v >= 0) {
+    if (old) *old = *v;
+  } else {
+    *v = val;
+  }
+  return PA_SUCCESS;
+}
+/* Value of key, or -1 if absent. */
+static inline pa_idx pa__gidindex_get(const pa__gidindex *x, pa_gid key) {
+  if (!x->dense) return pa__gidmap_get(&x->map, key);
+  return key >= x->lo && key < x->hi ? x->dense[key - x->lo] : -1;
+}
+
 /* Growable byte buffer. */
 typedef struct pa__buf {
   unsigned char *p;
