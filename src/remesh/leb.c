@@ -41,32 +41,75 @@
 #include <math.h>
 #include <stdlib.h>
 
-/* A growable list of entity indices (the elements or faces of a vertex). */
+/* The elements (or boundary entities) of each vertex, as segments of one
+ * pool: the initial mesh's lists are laid out by a counting pass, and a list
+ * that outgrows its segment moves to the end of the pool with twice the room
+ * (its old segment is left unused), so no vertex has an allocation of its
+ * own. The order within a list (appends at the end; a deletion moves the
+ * last entry into the hole) fixes the numbering of the entities that
+ * split_cells adds. */
 typedef struct ilist {
-  pa_idx *x;
+  size_t off; /* first entry in the pool */
   int n, cap;
 } ilist;
 
-static pa_status ilist_add(ilist *l, pa_idx k) {
+typedef struct balls {
+  ilist *l; /* per vertex */
+  pa_idx *pool;
+  size_t npool, cappool;
+} balls;
+
+static pa_status ball_add(balls *b, pa_idx v, pa_idx k) {
   pa_status st = PA_SUCCESS;
+  ilist *l = &b->l[v];
   if (l->n == l->cap) {
-    int cap = l->cap ? 2 * l->cap : 8;
-    pa_idx *x = pa__realloc(l->x, (size_t)cap * sizeof *x);
-    PA_CHECK(x, PA_ERR_MEMORY, "out of memory in longest-edge bisection");
-    l->x = x;
-    l->cap = cap;
+    size_t cap = l->cap ? 2 * (size_t)l->cap : 8;
+    if (l->off + (size_t)l->cap == b->npool) { /* the last segment: in place */
+      PA_GROW(b->pool, b->cappool, l->off + cap);
+    } else {
+      PA_GROW(b->pool, b->cappool, b->npool + cap);
+      memcpy(b->pool + b->npool, b->pool + l->off,
+             (size_t)l->n * sizeof *b->pool);
+      l->off = b->npool;
+    }
+    b->npool = l->off + cap;
+    l->cap = (int)cap;
   }
-  l->x[l->n++] = k;
+  b->pool[l->off + (size_t)l->n++] = k;
 cleanup:
   return st;
 }
 
-static void ilist_del(ilist *l, pa_idx k) {
+static void ball_del(balls *b, pa_idx v, pa_idx k) {
+  ilist *l = &b->l[v];
+  pa_idx *x = b->pool + l->off;
   for (int i = 0; i < l->n; i++)
-    if (l->x[i] == k) {
-      l->x[i] = l->x[--l->n];
+    if (x[i] == k) {
+      x[i] = x[--l->n];
       return;
     }
+}
+
+/* The lists of the ncell cells (nvc vertices each) of the initial mesh, each
+ * in cell order, in segments of exactly their size. */
+static pa_status balls_init(balls *b, const pa_idx *cell, pa_idx ncell, int nvc,
+                            size_t nv) {
+  pa_status st = PA_SUCCESS;
+  size_t nent = (size_t)ncell * nvc, off = 0;
+  for (size_t i = 0; i < nent; i++)
+    b->l[cell[i]].cap++;
+  for (size_t v = 0; v < nv; v++) {
+    b->l[v].off = off;
+    off += (size_t)b->l[v].cap;
+  }
+  PA_GROW(b->pool, b->cappool, off);
+  b->npool = off;
+  for (size_t i = 0; i < nent; i++) {
+    ilist *l = &b->l[cell[i]];
+    b->pool[l->off + (size_t)l->n++] = (pa_idx)(i / (size_t)nvc);
+  }
+cleanup:
+  return st;
 }
 
 typedef struct qedge {
@@ -78,8 +121,8 @@ typedef struct bis {
   pa_mesh *m;
   const pa__leb_opts *o;
   int d;
-  size_t nball; /* entries of eball, bball, inner */
-  ilist *eball, *bball;
+  size_t nball; /* entries of eball.l, bball.l, inner */
+  balls eball, bball;
   uint8_t *inner; /* per vertex: bit 0 inner (skin edges may be split
                      there), bit 1 labelled (only towards an inner vertex),
                      bit 2 added on the skin, bit 3 never with a labelled
@@ -88,6 +131,11 @@ typedef struct bis {
   size_t nheap, capheap;
   uint64_t *feat; /* feature edges as sorted (lo << 32 | hi) pairs */
   size_t nfeat;
+  pa_idx *el, *fc; /* the elements and boundary entities around the edge
+                      popped last */
+  size_t capel, capfc;
+  pa_idx *tmp; /* scratch of order_as_list, split_cells, longer_around */
+  size_t captmp;
 } bis;
 
 /* Lexicographic comparison of the coordinates of vertices a and b. */
@@ -193,40 +241,57 @@ static pa_status grow_balls(bis *s, size_t nv) {
   if (nv <= s->nball) return PA_SUCCESS;
   size_t n = s->nball ? 2 * s->nball : 64;
   if (n < nv) n = nv;
-  ilist *e = pa__realloc(s->eball, n * sizeof *e);
+  ilist *e = pa__realloc(s->eball.l, n * sizeof *e);
   PA_CHECK(e, PA_ERR_MEMORY, "out of memory in longest-edge bisection");
-  s->eball = e;
-  ilist *b = pa__realloc(s->bball, n * sizeof *b);
+  s->eball.l = e;
+  ilist *b = pa__realloc(s->bball.l, n * sizeof *b);
   PA_CHECK(b, PA_ERR_MEMORY, "out of memory in longest-edge bisection");
-  s->bball = b;
+  s->bball.l = b;
   uint8_t *in = pa__realloc(s->inner, n);
   PA_CHECK(in, PA_ERR_MEMORY, "out of memory in longest-edge bisection");
   s->inner = in;
-  memset(s->eball + s->nball, 0, (n - s->nball) * sizeof *e);
-  memset(s->bball + s->nball, 0, (n - s->nball) * sizeof *b);
+  memset(s->eball.l + s->nball, 0, (n - s->nball) * sizeof *e);
+  memset(s->bball.l + s->nball, 0, (n - s->nball) * sizeof *b);
   memset(s->inner + s->nball, 0, n - s->nball);
   s->nball = n;
 cleanup:
   return st;
 }
 
-/* Split the cells (elements: nvc = d + 1, or faces: nvc = d) of the list of
- * a that contain b: each keeps b with m for a and a copy keeps a with m for
- * b. The new edges of split elements are queued. */
-static pa_status split_cells(bis *s, int faces, pa_idx a, pa_idx b,
-                             pa_idx mid) {
+/* Put the n cells c of vertex a (elements, or faces) in the order of its
+ * list, which fixes the numbering of the cells split_cells adds. */
+static pa_status order_as_list(bis *s, const balls *ball, pa_idx a, pa_idx *c,
+                               int n) {
+  pa_status st = PA_SUCCESS;
+  const ilist *l = &ball->l[a];
+  int k = 0;
+  if (n < 2) return PA_SUCCESS;
+  PA_GROW(s->tmp, s->captmp, (size_t)n);
+  for (int q = 0; q < l->n && k < n; q++)
+    if (has(c, n, ball->pool[l->off + (size_t)q]))
+      s->tmp[k++] = ball->pool[l->off + (size_t)q];
+  memcpy(c, s->tmp, (size_t)n * sizeof *c);
+cleanup:
+  return st;
+}
+
+/* Split the n cells c (elements: nvc = d + 1, or faces: nvc = d) around
+ * edge ab, in the order of the list of a: each keeps b with m for a and a
+ * copy keeps a with m for b. The new edges of split elements are queued,
+ * each once (the queue order does not depend on the order of pushes, and a
+ * second copy of an edge would only be popped and judged again). */
+static pa_status split_cells(bis *s, int faces, pa_idx a, pa_idx b, pa_idx mid,
+                             const pa_idx *c, int n) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = s->m;
-  int nvc = faces ? s->d : s->d + 1;
-  ilist *ball = faces ? s->bball : s->eball;
-  pa_idx *x = NULL;
-  int n = ball[a].n;
-  PA_ALLOC(x, n ? n : 1);
-  if (n) memcpy(x, ball[a].x, (size_t)n * sizeof *x);
+  int nvc = faces ? s->d : s->d + 1, nfar = 0;
+  balls *ball = faces ? &s->bball : &s->eball;
+  /* the far ends of the new edges */
+  PA_GROW(s->tmp, s->captmp, (size_t)n * (size_t)(nvc - 2) + 1);
+  pa_idx *far = s->tmp;
   for (int q = 0; q < n; q++) {
-    pa_idx k = x[q], k2;
+    pa_idx k = c[q], k2;
     pa_idx *cv = (faces ? m->bdry : m->elem) + (size_t)nvc * k;
-    if (!has(cv, nvc, b)) continue;
     pa_idx v2[4];
     for (int j = 0; j < nvc; j++)
       v2[j] = cv[j] == b ? mid : cv[j];
@@ -241,46 +306,54 @@ static pa_status split_cells(bis *s, int faces, pa_idx a, pa_idx b,
     }
     for (int j = 0; j < nvc; j++)
       if (cv[j] == a) cv[j] = mid;
-    ilist_del(&ball[a], k);
-    PA_CALL(ilist_add(&ball[a], k2));
-    PA_CALL(ilist_add(&ball[mid], k));
-    PA_CALL(ilist_add(&ball[mid], k2));
+    ball_del(ball, a, k);
+    PA_CALL(ball_add(ball, a, k2));
+    PA_CALL(ball_add(ball, mid, k));
+    PA_CALL(ball_add(ball, mid, k2));
     for (int j = 0; j < nvc; j++)
       if (v2[j] != mid && v2[j] != a) {
-        PA_CALL(ilist_add(&ball[v2[j]], k2));
-        if (!faces) PA_CALL(push(s, mid, v2[j]));
+        PA_CALL(ball_add(ball, v2[j], k2));
+        if (!faces && !has(far, nfar, v2[j])) far[nfar++] = v2[j];
       }
   }
+  for (int j = 0; j < nfar; j++)
+    PA_CALL(push(s, mid, far[j]));
 cleanup:
-  pa__free(x);
   return st;
 }
 
-/* 1 if an element containing edge e has another edge before it in the
- * queue order (longer, or as long with smaller ends). */
-static int longer_around(const bis *s, const qedge *e) {
-  const pa_mesh *m = s->m;
-  int nve = s->d + 1;
-  /* the elements of the end with the smaller ball */
-  int sw = s->eball[e->b].n < s->eball[e->a].n;
-  const ilist *ball = &s->eball[sw ? e->b : e->a];
-  pa_idx other = sw ? e->a : e->b;
-  for (int q = 0; q < ball->n; q++) {
-    const pa_idx *v = m->elem + (size_t)nve * ball->x[q];
-    if (!has(v, nve, other)) continue;
-    for (int i = 0; i < nve; i++)
-      for (int j = i + 1; j < nve; j++) {
-        qedge f = {0, v[i], v[j]};
-        if ((f.a == e->a && f.b == e->b) || (f.a == e->b && f.b == e->a))
-          continue;
-        if (vcmp(m, f.a, f.b) > 0) {
-          f.a = v[j];
-          f.b = v[i];
-        }
-        f.len = elen(m, f.a, f.b);
-        if (qbefore(m, &f, e)) return 1;
-      }
+/* 1 if edge xy comes before edge e in the queue order. */
+static int before(const pa_mesh *m, pa_idx x, pa_idx y, const qedge *e) {
+  qedge f = {0, x, y};
+  if (vcmp(m, x, y) > 0) {
+    f.a = y;
+    f.b = x;
   }
+  f.len = elen(m, f.a, f.b);
+  return qbefore(m, &f, e);
+}
+
+/* 1 if one of the nel elements el (those containing edge e) has another
+ * edge before e in the queue order (longer, or as long with smaller ends).
+ * The edges from the ends of e to a far vertex are in two elements each:
+ * they are judged once per far vertex, listed in far (room for
+ * nel * (d - 1)). */
+static int longer_around(const bis *s, const qedge *e, const pa_idx *el,
+                         int nel, pa_idx *far) {
+  const pa_mesh *m = s->m;
+  int nve = s->d + 1, nfar = 0;
+  for (int q = 0; q < nel; q++) {
+    const pa_idx *v = m->elem + (size_t)nve * el[q];
+    pa_idx c[2];
+    int nc = 0;
+    for (int i = 0; i < nve; i++)
+      if (v[i] != e->a && v[i] != e->b) c[nc++] = v[i];
+    if (nc == 2 && before(m, c[0], c[1], e)) return 1;
+    for (int i = 0; i < nc; i++)
+      if (!has(far, nfar, c[i])) far[nfar++] = c[i];
+  }
+  for (int i = 0; i < nfar; i++)
+    if (before(m, e->a, far[i], e) || before(m, e->b, far[i], e)) return 1;
   return 0;
 }
 
@@ -290,7 +363,7 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
   bis s;
   pa_idx nv0 = m->nv;
   size_t capp = 0, np = 0;
-  pa_idx *parent = NULL;
+  pa_idx *parent = NULL, *seen = NULL;
   memset(&s, 0, sizeof s);
   s.m = m;
   s.o = o;
@@ -308,50 +381,66 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
     s.nfeat = (size_t)m->ned;
     qsort(s.feat, s.nfeat, sizeof *s.feat, cmp_u64);
   }
-  for (pa_idx e = 0; e < m->ne; e++)
-    for (int j = 0; j <= s.d; j++)
-      PA_CALL(ilist_add(&s.eball[m->elem[(size_t)(s.d + 1) * e + j]], e));
-  for (pa_idx b = 0; b < m->nb; b++)
-    for (int j = 0; j < s.d; j++)
-      PA_CALL(ilist_add(&s.bball[m->bdry[(size_t)s.d * b + j]], b));
-  for (pa_idx e = 0; e < m->ne; e++) {
-    const pa_idx *v = m->elem + (size_t)(s.d + 1) * e;
-    for (int i = 0; i <= s.d; i++)
-      for (int j = i + 1; j <= s.d; j++)
-        PA_CALL(push(&s, v[i], v[j]));
+  PA_CALL(balls_init(&s.eball, m->elem, m->ne, s.d + 1, (size_t)nv0));
+  PA_CALL(balls_init(&s.bball, m->bdry, m->nb, s.d, (size_t)nv0));
+  /* queue each edge once (an edge is in several elements): those of a to
+   * its later neighbours b, found in its ball; seen[b] == a marks b done */
+  PA_ALLOC(seen, nv0);
+  for (pa_idx v = 0; v < nv0; v++)
+    seen[v] = -1;
+  for (pa_idx a = 0; a < nv0; a++) {
+    const ilist *l = &s.eball.l[a];
+    for (int q = 0; q < l->n; q++) {
+      const pa_idx *v =
+          m->elem + (size_t)(s.d + 1) * s.eball.pool[l->off + (size_t)q];
+      for (int j = 0; j <= s.d; j++)
+        if (v[j] > a && seen[v[j]] != a) {
+          seen[v[j]] = a;
+          PA_CALL(push(&s, a, v[j]));
+        }
+    }
   }
+  pa__free(seen);
+  seen = NULL;
   while (s.nheap) {
     qedge e = pop(&s);
-    /* skip an edge queued twice and already split; note a frozen element */
-    int live = 0, frozen = 0;
-    int sw = s.eball[e.b].n < s.eball[e.a].n; /* the smaller ball */
-    const ilist *eb = &s.eball[sw ? e.b : e.a];
-    pa_idx other = sw ? e.a : e.b;
+    /* the elements around e, from the smaller ball (none if e is gone:
+     * skip it); note a frozen one */
+    int nel = 0, nfc = 0, frozen = 0;
+    int esw = s.eball.l[e.b].n < s.eball.l[e.a].n;
+    const ilist *eb = &s.eball.l[esw ? e.b : e.a];
+    pa_idx other = esw ? e.a : e.b;
+    PA_GROW(s.el, s.capel, (size_t)eb->n);
     for (int q = 0; q < eb->n; q++) {
-      pa_idx k = eb->x[q];
+      pa_idx k = s.eball.pool[eb->off + (size_t)q];
       if (!has(m->elem + (size_t)(s.d + 1) * k, s.d + 1, other)) continue;
-      live = 1;
+      s.el[nel++] = k;
       frozen |= (m->eflag[k] & PA_FLAG_REQUIRED) != 0;
     }
-    if (!live || frozen) continue;
+    if (!nel || frozen) continue;
+    /* the boundary entities around e */
     int skin = 0, bnd = 0;
-    sw = s.bball[e.b].n < s.bball[e.a].n;
-    const ilist *bb = &s.bball[sw ? e.b : e.a];
-    other = sw ? e.a : e.b;
+    int bsw = s.bball.l[e.b].n < s.bball.l[e.a].n;
+    const ilist *bb = &s.bball.l[bsw ? e.b : e.a];
+    other = bsw ? e.a : e.b;
+    PA_GROW(s.fc, s.capfc, (size_t)bb->n);
     for (int q = 0; q < bb->n; q++) {
-      pa_idx r = bb->x[q];
+      pa_idx r = s.bball.pool[bb->off + (size_t)q];
       if (!has(m->bdry + (size_t)s.d * r, s.d, other)) continue;
+      s.fc[nfc++] = r;
       if (o->skin_ok && m->bref[r] == o->skin_ref)
         skin = 1;
       else
         bnd = 1;
     }
     bnd |= is_feature(&s, e.a, e.b);
+    PA_GROW(s.tmp, s.captmp, (size_t)nel * (size_t)(s.d - 1)); /* far */
     if (skin) {
       int ia = s.inner[e.a], ib = s.inner[e.b];
       if (!(ia & 3) || !(ib & 3) || !(e.len > o->skin_lmax)) continue;
       if ((ia & 2) ? !(ib & 1) || (ib & 8) : (ib & 2) && (ia & 8)) continue;
-    } else if (bnd || !(e.len > o->lmax) || longer_around(&s, &e)) {
+    } else if (bnd || !(e.len > o->lmax) ||
+               longer_around(&s, &e, s.el, nel, s.tmp)) {
       continue;
     }
     /* the midpoint, from the ends in canonical order */
@@ -380,14 +469,18 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
     /* a vertex added on the skin is inner; descended from a labelled
      * vertex, it never pairs with one (see the file comment) */
     s.inner[mid] =
-        skin ? (uint8_t)(1 | 4 | ((s.inner[e.a] | s.inner[e.b]) & (2 | 8) ? 8 : 0))
+        skin ? (uint8_t)(1 | 4 |
+                         ((s.inner[e.a] | s.inner[e.b]) & (2 | 8) ? 8 : 0))
              : 0;
     PA_GROW(parent, capp, 2 * (np + 1));
     parent[2 * np] = e.a;
     parent[2 * np + 1] = e.b;
     np++;
-    PA_CALL(split_cells(&s, 0, e.a, e.b, mid));
-    PA_CALL(split_cells(&s, 1, e.a, e.b, mid));
+    /* split_cells takes the cells in the order of the lists of e.a */
+    if (esw) PA_CALL(order_as_list(&s, &s.eball, e.a, s.el, nel));
+    if (bsw) PA_CALL(order_as_list(&s, &s.bball, e.a, s.fc, nfc));
+    PA_CALL(split_cells(&s, 0, e.a, e.b, mid, s.el, nel));
+    PA_CALL(split_cells(&s, 1, e.a, e.b, mid, s.fc, nfc));
     PA_CALL(push(&s, e.a, mid));
     PA_CALL(push(&s, mid, e.b));
   }
@@ -401,12 +494,14 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
     parent = NULL;
   }
 cleanup:
-  for (size_t v = 0; v < s.nball; v++) {
-    pa__free(s.eball[v].x);
-    pa__free(s.bball[v].x);
-  }
-  pa__free(s.eball);
-  pa__free(s.bball);
+  pa__free(s.eball.l);
+  pa__free(s.eball.pool);
+  pa__free(s.bball.l);
+  pa__free(s.bball.pool);
+  pa__free(s.el);
+  pa__free(s.fc);
+  pa__free(s.tmp);
+  pa__free(seen);
   pa__free(s.inner);
   pa__free(s.heap);
   pa__free(s.feat);
