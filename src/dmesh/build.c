@@ -885,32 +885,6 @@ static void unpack_payload(pa_dmesh *dm, int kind, const pa__recs *R, size_t i,
   }
 }
 
-/* The elements of m around each vertex v with need[v] (CSR, every vertex
- * has a range, empty unless needed; elements in increasing order). */
-static pa_status balls_of(const pa_mesh *m, const uint8_t *need,
-                          pa_idx **pstart, pa_idx **pball) {
-  pa_status st = PA_SUCCESS;
-  size_t n = (size_t)(m->dim + 1) * m->ne;
-  pa_idx *start = NULL, *ball = NULL;
-  const pa_idx *ev = m->elem;
-  PA_CALLOC(start, (size_t)m->nv + 1);
-  for (size_t k = 0; k < n; k++)
-    if (need[ev[k]]) start[ev[k] + 1]++;
-  for (pa_idx v = 0; v < m->nv; v++) start[v + 1] += start[v];
-  PA_ALLOC(ball, start[m->nv]);
-  for (size_t k = 0; k < n; k++)
-    if (need[ev[k]]) ball[start[ev[k]]++] = (pa_idx)(k / (size_t)(m->dim + 1));
-  for (pa_idx v = m->nv; v > 0; v--) start[v] = start[v - 1];
-  start[0] = 0;
-  *pstart = start;
-  *pball = ball;
-  start = ball = NULL;
-cleanup:
-  pa__free(start);
-  pa__free(ball);
-  return st;
-}
-
 /* Steps 6-9: filter and own the boundary entities / edges, number all local
  * entities, fill dm. */
 static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
@@ -1010,7 +984,8 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
       pa_idx v = pa__gidindex_get(&lv, SB[t]->vgid[(size_t)SB[t]->nv * i]);
       if (v >= 0) need[v] = 1;
     }
-  PA_CALL(balls_of(m, need, &vstart, &vel));
+  PA_CALL(pa__balls_of(m->elem, m->ne, m->dim + 1, m->nv, need, &vstart,
+                       &vel));
   pa__free(need);
   need = NULL;
 

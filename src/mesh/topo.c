@@ -265,17 +265,19 @@ cleanup:
 
 /* ---- vertex balls ------------------------------------------------------- */
 
-pa_status pa__balls(const pa_idx *elem, pa_idx ne, int nve, pa_idx nv,
-                    pa_idx **pstart, pa_idx **pball) {
+pa_status pa__balls_of(const pa_idx *elem, pa_idx ne, int nve, pa_idx nv,
+                       const uint8_t *need, pa_idx **pstart, pa_idx **pball) {
   pa_status st = PA_SUCCESS;
   pa_idx *start = NULL, *ball = NULL;
   size_t n = (size_t)nve * ne;
   *pstart = *pball = NULL;
   PA_CALLOC(start, (size_t)nv + 1);
-  PA_ALLOC(ball, n ? n : 1);
-  for (size_t k = 0; k < n; k++) start[elem[k] + 1]++;
+  for (size_t k = 0; k < n; k++)
+    if (!need || need[elem[k]]) start[elem[k] + 1]++;
   for (pa_idx v = 0; v < nv; v++) start[v + 1] += start[v];
-  for (size_t k = 0; k < n; k++) ball[start[elem[k]]++] = (pa_idx)(k / (size_t)nve);
+  PA_ALLOC(ball, start[nv] ? (size_t)start[nv] : 1);
+  for (size_t k = 0; k < n; k++)
+    if (!need || need[elem[k]]) ball[start[elem[k]]++] = (pa_idx)(k / (size_t)nve);
   for (pa_idx v = nv; v > 0; v--) start[v] = start[v - 1];
   start[0] = 0;
   *pstart = start;
@@ -285,6 +287,11 @@ cleanup:
   pa__free(start);
   pa__free(ball);
   return st;
+}
+
+pa_status pa__balls(const pa_idx *elem, pa_idx ne, int nve, pa_idx nv,
+                    pa_idx **pstart, pa_idx **pball) {
+  return pa__balls_of(elem, ne, nve, nv, NULL, pstart, pball);
 }
 
 static pa_status balls_compute(const pa_mesh *m, pa_idx **pstart,
