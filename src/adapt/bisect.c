@@ -23,7 +23,9 @@
  * Without the labelled ends, every skin face touching a ridge of a box
  * stayed as coarse as the input, and its neighbours were remeshed again in
  * another iteration: box3d 10 -> 0.019 on 2 ranks tagged 3 076 elements
- * again instead of 783, and the worst piece quality was 0.001 (0.400). With inside, edges inside the piece longer than PA__LEB_INNER are
+ * again instead of 783, and the worst piece quality was 0.001 (0.400).
+ *
+ * With inside, edges inside the piece longer than PA__LEB_INNER are
  * bisected too, in the same longest-first order: otherwise the elements on
  * a refined skin face are fans of slivers. The built-in 3D remesher turns
  * those into 1.4 x more tets at half the speed (box3d 10 -> 0.019, 2

@@ -8,8 +8,8 @@
  * missed its target) and the output is consistent: same metric and fields,
  * every skin vertex back at the same coordinates with its global id (field
  * PA__GID_FIELD), exactly the skin faces of the input, and (with a
- * plug-in remesher, or opts->check_pieces 1) pa_mesh_check passes. Otherwise the piece is rolled
- * back: it comes back as it was given (with its skin refined by bisect.c,
+ * plug-in remesher, or opts->check_pieces 1) pa_mesh_check passes.
+ * Otherwise the piece is rolled back: it comes back as it was given (with its skin refined by bisect.c,
  * which its neighbours share), its elements not marked done.
  *
  * Rebuild (see adapt.h for the invariants): staying elements are the

@@ -438,19 +438,30 @@ cleanup:
   return st;
 }
 
+/* Collective: send the n vertex gids g to their rendezvous ranks (as
+ * send_items). */
+static pa_status send_to_directory(bstate *s, const pa_gid *g, size_t n,
+                                   size_t **rcnt, void **recv) {
+  pa_status st = PA_SUCCESS;
+  int *dest = NULL;
+  PA_ALLOC(dest, n ? n : 1);
+  for (size_t i = 0; i < n; i++) dest[i] = dir_rank(&s->vdir, g[i]);
+  PA_CALL(send_items(s->comm, n, sizeof(pa_gid), g, dest, rcnt, recv));
+cleanup:
+  st = pa__agree_end(s->comm, st);
+  pa__free(dest);
+  return st;
+}
+
 /* Step 3: the directory records which ranks own elements touching each
  * vertex. The messages stay in s (tcnt, tgid, tv) for the layer-1 queries
  * and the fetch. */
 static pa_status build_touch(bstate *s) {
   pa_status st = PA_SUCCESS;
-  int *dest = NULL;
   size_t n;
   void *recv = NULL;
   n = s->nu;
-  PA_ALLOC(dest, n);
-  for (size_t i = 0; i < n; i++) dest[i] = dir_rank(&s->vdir, s->ukey[i]);
-  PA_CALL(send_items(s->comm, n, sizeof(pa_gid), s->ukey, dest, &s->tcnt,
-                     &recv));
+  PA_CALL(send_to_directory(s, s->ukey, n, &s->tcnt, &recv));
   s->tgid = recv;
   recv = NULL;
   const pa_gid *rg = s->tgid;
@@ -478,7 +489,6 @@ static pa_status build_touch(bstate *s) {
   s->tstart[0] = 0;
 cleanup:
   st = pa__agree_end(s->comm, st);
-  pa__free(dest);
   pa__free(recv);
   return st;
 }
@@ -508,7 +518,7 @@ cleanup:
 static pa_status build_layers(bstate *s, int overlap, pa_idx nown) {
   pa_status st = PA_SUCCESS;
   pa_gid *g = NULL, *pair = NULL, *fw = NULL;
-  int *dest = NULL, *fwdest = NULL;
+  int *fwdest = NULL;
   size_t *rcnt = NULL, *fcnt = NULL, *ecnt = NULL, *bcnt = NULL;
   void *recv = NULL, *frecv = NULL, *erecv = NULL;
   pa__gidmap queried = {0};
@@ -539,13 +549,9 @@ static pa_status build_layers(bstate *s, int overlap, pa_idx nown) {
         PA_CALL(pa__gidmap_put(&queried, g[i], 0, &found, NULL));
         if (!found) g[nq++] = g[i];
       }
-      PA_ALLOC(dest, nq);
-      for (size_t i = 0; i < nq; i++) dest[i] = dir_rank(&s->vdir, g[i]);
-      PA_CALL(send_items(s->comm, nq, sizeof(pa_gid), g, dest, &rcnt, &recv));
+      PA_CALL(send_to_directory(s, g, nq, &rcnt, &recv));
       pa__free(g);
       g = NULL;
-      pa__free(dest);
-      dest = NULL;
       rg = recv;
       for (int r = 0; r < s->size; r++) tot += rcnt[r];
       PA_ALLOC(vq, tot);
@@ -689,7 +695,6 @@ cleanup:
   pa__free(g);
   pa__free(pair);
   pa__free(fw);
-  pa__free(dest);
   pa__free(fwdest);
   pa__free(rcnt);
   pa__free(fcnt);
@@ -714,7 +719,6 @@ cleanup:
 static pa_status fetch_vertices(bstate *s) {
   pa_status st = PA_SUCCESS;
   pa_gid *g = NULL;
-  int *dest = NULL;
   size_t n, *rcnt = NULL, *cnt = NULL, *bcnt = NULL;
   size_t *vs = NULL, *bs = NULL, *ds = NULL;
   pa_idx *vi = NULL, *bi = NULL, *di = NULL;
@@ -723,13 +727,9 @@ static pa_status fetch_vertices(bstate *s) {
   /* local vertices: those of the owned elements, which the directory has
    * from the touch messages, and the ghosts' (not among them), sent now */
   PA_CALL(ghost_verts(s, 1, 255, &g, &n));
-  PA_ALLOC(dest, n);
-  for (size_t i = 0; i < n; i++) dest[i] = dir_rank(&s->vdir, g[i]);
-  PA_CALL(send_items(s->comm, n, sizeof(pa_gid), g, dest, &rcnt, &recv));
+  PA_CALL(send_to_directory(s, g, n, &rcnt, &recv));
   pa__free(g);
   g = NULL;
-  pa__free(dest);
-  dest = NULL;
   const pa_gid *rg = recv;
   size_t tot = 0, totb = 0, totd = 0;
   for (int r = 0; r < s->size; r++) tot += rcnt[r] + s->tcnt[r];
@@ -833,7 +833,6 @@ static pa_status fetch_vertices(bstate *s) {
 cleanup:
   st = pa__agree_end(s->comm, st);
   pa__free(g);
-  pa__free(dest);
   pa__free(rcnt);
   pa__free(cnt);
   pa__free(bcnt);

@@ -430,39 +430,38 @@ cleanup:
   return st;
 }
 
-/* Copy record k of block b to the end of r (room reserved). */
-static void take(pa__recs *r, const pa__recblock *b, size_t k,
-                 const unsigned char *pay) {
+/* Append one record to r (room reserved): the fields of record k of a
+ * block (take) or of a record set (take_rec). */
+static void put_one(pa__recs *r, pa_gid gid, const pa_gid *vgid,
+                    const double *dbl, int32_t ref, int aux, uint8_t flag,
+                    const unsigned char *pay, size_t len) {
   size_t i = r->n, nv = (size_t)r->nv, nd = (size_t)r->ndbl;
-  r->gid[i] = b->gid[k];
-  if (nv) memcpy(r->vgid + nv * i, b->vgid + nv * k, nv * sizeof(pa_gid));
-  if (nd) memcpy(r->dbl + nd * i, b->dbl + nd * k, nd * sizeof(double));
-  r->ref[i] = b->ref[k];
-  r->aux[i] = b->aux[k];
-  r->flag[i] = b->flag[k];
+  r->gid[i] = gid;
+  if (nv) memcpy(r->vgid + nv * i, vgid, nv * sizeof(pa_gid));
+  if (nd) memcpy(r->dbl + nd * i, dbl, nd * sizeof(double));
+  r->ref[i] = ref;
+  r->aux[i] = aux;
+  r->flag[i] = flag;
   if (r->poff) {
-    size_t len = b->paybytes ? b->paylen[k] : 0;
     if (len) memcpy(r->pay + r->poff[i], pay, len);
     r->poff[i + 1] = r->poff[i] + len;
   }
   r->n++;
 }
 
-/* Copy record k of the set in to the end of r (room reserved). */
+static void take(pa__recs *r, const pa__recblock *b, size_t k,
+                 const unsigned char *pay) {
+  size_t nv = (size_t)r->nv, nd = (size_t)r->ndbl;
+  put_one(r, b->gid[k], nv ? b->vgid + nv * k : NULL,
+          nd ? b->dbl + nd * k : NULL, b->ref[k], b->aux[k], b->flag[k], pay,
+          b->paybytes ? b->paylen[k] : 0);
+}
+
 static void take_rec(pa__recs *r, const pa__recs *in, size_t k) {
-  size_t i = r->n, nv = (size_t)r->nv, nd = (size_t)r->ndbl;
-  r->gid[i] = in->gid[k];
-  if (nv) memcpy(r->vgid + nv * i, in->vgid + nv * k, nv * sizeof(pa_gid));
-  if (nd) memcpy(r->dbl + nd * i, in->dbl + nd * k, nd * sizeof(double));
-  r->ref[i] = in->ref[k];
-  r->aux[i] = in->aux[k];
-  r->flag[i] = in->flag[k];
-  if (r->poff) {
-    size_t len = paylen_of(in, k);
-    if (len) memcpy(r->pay + r->poff[i], in->pay + in->poff[k], len);
-    r->poff[i + 1] = r->poff[i] + len;
-  }
-  r->n++;
+  size_t nv = (size_t)r->nv, nd = (size_t)r->ndbl;
+  put_one(r, in->gid[k], nv ? in->vgid + nv * k : NULL,
+          nd ? in->dbl + nd * k : NULL, in->ref[k], in->aux[k], in->flag[k],
+          in->pay ? in->pay + in->poff[k] : NULL, paylen_of(in, k));
 }
 
 /* One sorted source of a merge: a received block (sel NULL), or the
