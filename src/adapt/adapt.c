@@ -132,9 +132,6 @@ static pa_status check_opts(pa_dmesh *dm, const pa_adapt_opts *o) {
            o->max_iter);
   PA_CHECK(o->pieces_per_rank >= 1, PA_ERR_ARG,
            "pieces_per_rank must be >= 1, got %d", o->pieces_per_rank);
-  PA_CHECK(dm->mesh->nfield < PA_MAX_FIELDS, PA_ERR_UNSUPPORTED,
-           "parallel adaptation needs a free field slot: the mesh has %d "
-           "vertex fields (at most %d)", dm->mesh->nfield, PA_MAX_FIELDS - 1);
 cleanup:
   return st;
 }

@@ -70,8 +70,6 @@
 #define PA__DONE 1
 #define PA__DONE_NEAR_SKIN 2
 #define PA__DONE_ON_SKIN 3
-/* Name of the vertex field carrying the global ids through a remesher. */
-#define PA__GID_FIELD "pa.adapt.gid"
 /* Name of the element value marking elements produced in this run. */
 #define PA__DONE_VALUE "pa.adapt.done"
 /* Reference of the artificial boundary entities of a piece's outer surface. */

@@ -36,8 +36,8 @@
  * the bisection (0.2 s on box2d 100 -> 0.0013, 1.3 M triangles, 2 ranks):
  * extract.c passes inside = 0 for it.
  *
- * New skin vertices get temporary ids (PA__TEMP_GID + index), in the gid
- * field too, so they are matched after the remesh like the others;
+ * New skin vertices get temporary ids (PA__TEMP_GID + index), and are
+ * matched after the remesh by their coordinates like the others;
  * reintegrate.c gives the copies of one vertex in several pieces one global
  * id by their coordinates. New inner vertices get no id (-1): they are new
  * vertices like those the remesher adds.
@@ -53,7 +53,6 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
   pa_mesh *m = pc->in;
   pa_idx nv0 = m->nv, *parent = NULL;
   uint8_t *onskin = NULL;
-  int gf = m->nfield - 1;
   pa__leb_opts o;
   o.lmax = inside ? PA__LEB_INNER : HUGE_VAL;
   o.skin_ref = PA__SKIN_REF;
@@ -81,7 +80,6 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
       /* hot if an end is: elements produced near it may be tagged again */
       pc->hot[v] = (uint8_t)(s && (pc->hot[a] || pc->hot[b]));
       pc->vrank[v] = pc->vrank[a] < pc->vrank[b] ? pc->vrank[a] : pc->vrank[b];
-      m->field[gf].val[v] = (double)pc->vgid[v];
       pc->nsplit += s;
     }
   }

@@ -20,9 +20,9 @@
  * ranks) and assembles each of its pieces, numbered by increasing global id,
  * so the piece does not depend on how its fragments were spread.
  *
- * The piece mesh carries the vertex global ids as an extra field
- * (PA__GID_FIELD) so that skin vertices can be matched after remeshing;
- * the faces of its outer surface that are not boundary entities become
+ * The piece keeps the global id of each of its vertices (pc->vgid; the
+ * remesher never sees them: reintegrate.c matches the output's vertices
+ * by their coordinates); the faces of its outer surface that are not boundary entities become
  * boundary entities of reference PA__SKIN_REF flagged PA_FLAG_REQUIRED
  * (its skin, frozen), which bisect.c then refines where the piece meets
  * another one.
@@ -241,18 +241,13 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
   const pa_mesh *dmm = dm->mesh;
   memset(pc, 0, sizeof *pc);
   pc->id = p;
-  PA_CHECK(dmm->nfield < PA_MAX_FIELDS, PA_ERR_UNSUPPORTED,
-           "parallel adaptation needs one free vertex field slot (the mesh "
-           "has %d fields, at most %d)", dmm->nfield, PA_MAX_FIELDS - 1);
   PA_CALL(pa_mesh_create(d, &m));
   m->met_ncomp = dmm->met_ncomp;
-  m->nfield = dmm->nfield + 1;
+  m->nfield = dmm->nfield;
   for (int f = 0; f < dmm->nfield; f++) {
     snprintf(m->field[f].name, PA_FIELD_NAME_LEN, "%s", dmm->field[f].name);
     m->field[f].ncomp = dmm->field[f].ncomp;
   }
-  snprintf(m->field[dmm->nfield].name, PA_FIELD_NAME_LEN, "%s", PA__GID_FIELD);
-  m->field[dmm->nfield].ncomp = 1;
   PA_CALL(pa_mesh_reserve(m, nv, ne, nb, nd));
   PA_ALLOC(pc->vgid, nv);
   PA_CALLOC(pc->skin, nv);
@@ -274,7 +269,6 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
              m->field[f].ncomp * sizeof *y);
       y += m->field[f].ncomp;
     }
-    m->field[dmm->nfield].val[k] = (double)V->gid[i];
     m->vref[k] = V->ref[i];
     m->vflag[k] = V->flag[i];
     pc->vrank[k] = INT_MAX;
