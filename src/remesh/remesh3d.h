@@ -44,7 +44,13 @@ enum {
   R3T_FACES = 0x0f,  /* face i is a boundary triangle (bit i) */
   R3T_FROZEN = 0x10, /* caller's PA_FLAG_REQUIRED: never touched */
   R3T_DEAD = 0x20,
-  R3T_MARK = 0x40 /* transient visit mark (always cleared after use) */
+  R3T_MARK = 0x40, /* transient visit mark (always cleared after use) */
+  /* Clean: its six edges were in [RM3D_LMIN, RM3D_LMAX] when last measured
+   * and neither its vertices nor their positions or metrics changed since.
+   * The split and collapse passes at the final thresholds skip it: on a
+   * mostly adapted mesh they measured every tet again for nothing. Every
+   * change of a tet clears it (where its cached quality q is set). */
+  R3T_CLEAN = 0x80
 };
 
 enum {

@@ -58,6 +58,7 @@ static pa_status collapse_apply(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball,
     pa_idx t = ball[i] >> 2;
     m->tv[4 * (size_t)t + (ball[i] & 3)] = q;
     m->q[t] = nq[i];
+    m->tflag[t] &= (uint8_t)~R3T_CLEAN;
     m->vtet[q] = t;
   }
   for (int j = 0; j < ntri; j++) {
@@ -356,8 +357,10 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
     memcpy(mo0, m->met0 + (size_t)mc * q, (size_t)mc * sizeof(double));
     pa__rm3d_met0_mid(m, q, p, q);
   }
-  for (int i = 0; i < nb; i++)
+  for (int i = 0; i < nb; i++) { /* q moves: its ball changes */
+    m->tflag[bq[i] >> 2] &= (uint8_t)~R3T_CLEAN;
     if (nq[i] >= 0) m->q[bq[i] >> 2] = nq[i];
+  }
   PA_CALL(pa__rm3d_collapse(m, p, q, lguard, done));
   if (!*done) {
     memcpy(xq, xo, sizeof xo);

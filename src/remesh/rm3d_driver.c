@@ -54,15 +54,31 @@ static void order6(const double *L, int dir, int *ord) {
   }
 }
 
+/* 1 if the six lengths are in [RM3D_LMIN, RM3D_LMAX]. */
+static int in_range6(const double *L) {
+  for (int e = 0; e < 6; e++)
+    if (!(L[e] >= RM3D_LMIN && L[e] <= RM3D_LMAX)) return 0;
+  return 1;
+}
+
+/* The split and collapse passes skip clean tets (R3T_CLEAN) when their
+ * threshold is the final one, and mark clean the tets they measure in
+ * range: skipping a tet with no edge to split or collapse changes nothing,
+ * so the output is the same as without the marks. */
 pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count) {
   pa_status st = PA_SUCCESS;
   long c = 0;
+  uint8_t skip = thr >= RM3D_LMAX ? R3T_CLEAN : 0;
   for (pa_idx k = 0; k < m->ne; k++) {
     for (int guard = 0; guard < 64; guard++) {
-      if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) break;
+      if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN | skip)) break;
       double L[6];
       int ord[6], did = 0;
       lengths6(m, m->tv + 4 * (size_t)k, L);
+      if (in_range6(L)) {
+        m->tflag[k] |= R3T_CLEAN;
+        if (skip) break;
+      }
       order6(L, 1, ord);
       for (int i = 0; i < 6 && L[ord[i]] > thr; i++) {
         pa_idx a = m->tv[4 * (size_t)k + rm3d_edge[ord[i]][0]];
@@ -132,12 +148,17 @@ pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, double guard,
                                  long *count) {
   pa_status st = PA_SUCCESS;
   long c = 0;
+  uint8_t skip = thr <= RM3D_LMIN ? R3T_CLEAN : 0;
   for (pa_idx i = 0; i < m->nv; i++) m->vtag[i] |= R3V_TODO;
   for (pa_idx k = 0; k < m->ne; k++) {
-    if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) continue;
+    if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN | skip)) continue;
     double L[6];
     int ord[6];
     lengths6(m, m->tv + 4 * (size_t)k, L);
+    if (in_range6(L)) {
+      m->tflag[k] |= R3T_CLEAN;
+      if (skip) continue;
+    }
     order6(L, -1, ord);
     for (int i = 0; i < 6 && L[ord[i]] < thr; i++) {
       pa_idx a = m->tv[4 * (size_t)k + rm3d_edge[ord[i]][0]];

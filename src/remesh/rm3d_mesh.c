@@ -931,6 +931,8 @@ pa_status pa__rm3d_skin_relax(rm3d *m, pa_idx *nrelaxed) {
   if (m->met0 && mc == 6) /* isotropic qualities do not see a size change */
     for (pa_idx k = 0; k < m->ne; k++)
       m->q[k] = (float)rm3d_qual_v(m, m->tv + 4 * (size_t)k);
+  if (nr) /* lengths changed */
+    for (pa_idx k = 0; k < m->ne; k++) m->tflag[k] &= (uint8_t)~R3T_CLEAN;
   *nrelaxed = nr;
 cleanup:
   pa__free(acc);

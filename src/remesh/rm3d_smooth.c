@@ -309,6 +309,7 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
     for (int i = 0; i < n; i++) {
       pa_idx t = ball[i] >> 2;
       m->q[t] = mc == 6 ? (float)rm3d_qual_v(m, m->tv + 4 * (size_t)t) : nq[i];
+      m->tflag[t] &= (uint8_t)~R3T_CLEAN;
     }
     m->nmove++;
     return 1;

@@ -227,8 +227,8 @@ pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
     pa_idx fw = at[ic], bw = at[id];
     an[ic] = fw < 0 ? -1 : 4 * (base + (i + 1 == n ? 0 : i + 1)) + (fw & 3);
     an[id] = bw < 0 ? -1 : 4 * (base + (i == 0 ? n - 1 : i - 1)) + (bw & 3);
-    m->tflag[nt] = (uint8_t)(m->tflag[t] & ~(1u << ib) & ~R3T_MARK);
-    m->tflag[t] &= (uint8_t)~(1u << ia);
+    m->tflag[nt] = (uint8_t)(m->tflag[t] & ~(1u << ib) & ~(R3T_MARK | R3T_CLEAN));
+    m->tflag[t] &= (uint8_t)~((1u << ia) | R3T_CLEAN);
     m->tpf[nt] = m->tpf[t];
     m->tref[nt] = m->tref[t];
     m->q[t] = q1[i];

@@ -191,6 +191,7 @@ pa_status pa__rm3d_replace(rm3d *m, const pa_idx *old, int nold,
     const pa_idx *v = m->tv + 4 * (size_t)t;
     for (int j = 0; j < 4; j++) m->vtet[v[j]] = t;
     m->q[t] = (float)rm3d_qual_v(m, v);
+    m->tflag[t] &= (uint8_t)~R3T_CLEAN;
   }
 cleanup:
   return st;
