@@ -9,8 +9,9 @@
 #   bash bench/bench_adapt.sh [BUILD_DIR] [WORK_DIR]
 #
 # Environment: PROCS (default "1 2 4 8"), TIMED (default "1 2"),
-# H2D / H3D (target sizes, default 0.0013 and 0.019: about 1.4 M triangles
-# and 1.2 M tetrahedra), N2D / N3D (initial boxes, default 100 and 10),
+# H2D / H3D (target sizes, default 0.0013 and 0.012: 1.28 M triangles and
+# 5.8 M tetrahedra), N2D / N3D (initial boxes, default 100 and 20; box3d 10
+# -> 0.019, 0.84 M tetrahedra, is the quick 3D case),
 # EXTRA (more `padapt adapt` options, e.g. "-nomove"), DIMS (default "2 3").
 # At 1 process `padapt adapt` runs the sequential remesher (the baseline);
 # at P > 1 the parallel driver (pa_dmesh_adapt). 3D is skipped with a message
@@ -22,9 +23,9 @@ PADAPT=${PADAPT:-$BUILD/bin/padapt}
 PROCS=${PROCS:-"1 2 4 8"}
 TIMED=${TIMED:-"1 2"}
 H2D=${H2D:-0.0013}
-H3D=${H3D:-0.019}
+H3D=${H3D:-0.012}
 N2D=${N2D:-100}
-N3D=${N3D:-10}
+N3D=${N3D:-20}
 EXTRA=${EXTRA:-}
 DIMS=${DIMS:-"2 3"}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1

@@ -630,6 +630,13 @@ pa_status pa__rm3d_check(rm3d *m) {
              PA_ERR_INTERNAL, "rm3d: tet %d is not positive", (int)k);
     PA_CHECK(!(m->tflag[k] & R3T_MARK), PA_ERR_INTERNAL,
              "rm3d: tet %d left marked", (int)k);
+    if (m->tflag[k] & R3T_CLEAN) /* a change did not clear the mark */
+      for (int e = 0; e < 6; e++) {
+        double l = rm3d_len(m, v[rm3d_edge[e][0]], v[rm3d_edge[e][1]]);
+        PA_CHECK(l >= RM3D_LMIN && l <= RM3D_LMAX, PA_ERR_INTERNAL,
+                 "rm3d: tet %d is marked clean, its edge %d has length %g",
+                 (int)k, e, l);
+      }
     for (int i = 0; i < 4; i++) {
       pa_idx a = m->adj[4 * (size_t)k + i];
       pa_idx f[3] = {v[rm3d_face[i][0]], v[rm3d_face[i][1]], v[rm3d_face[i][2]]};
