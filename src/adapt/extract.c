@@ -22,8 +22,8 @@
  *
  * The piece keeps the global id of each of its vertices (pc->vgid; the
  * remesher never sees them: reintegrate.c matches the output's vertices
- * by their coordinates); the faces of its outer surface that are not boundary entities become
- * boundary entities of reference PA__SKIN_REF flagged PA_FLAG_REQUIRED
+ * by their coordinates); the faces of its outer surface that are not
+ * boundary entities become boundary entities of reference PA__SKIN_REF flagged PA_FLAG_REQUIRED
  * (its skin, frozen), which bisect.c then refines where the piece meets
  * another one.
  */

@@ -93,7 +93,9 @@ typedef struct cset {
   int d;
 } cset;
 
-static uint64_t cset_hash(const double *p, int d) {
+/* Hash of d coordinates, bit for bit (also picks the home rank of the
+ * vertices bisect.c added). */
+static uint64_t coord_hash(const double *p, int d) {
   uint64_t h = 0x9e3779b97f4a7c15ull;
   for (int k = 0; k < d; k++) {
     uint64_t b;
@@ -105,7 +107,7 @@ static uint64_t cset_hash(const double *p, int d) {
 
 /* Index of the input vertex at exactly p, or -1; insert: add i if absent. */
 static pa_idx cset_find(cset *s, const double *p, pa_idx insert) {
-  size_t h = cset_hash(p, s->d) & (s->cap - 1);
+  size_t h = coord_hash(p, s->d) & (s->cap - 1);
   for (;;) {
     pa_idx i = s->slot[h];
     if (i < 0) {
@@ -577,14 +579,7 @@ static int ifreq_cmp(const void *p, const void *q) {
 }
 
 static int home_rank(const double *x, int d, int P) {
-  uint64_t h = 1469598103934665603ull;
-  for (int k = 0; k < d; k++) {
-    uint64_t b;
-    memcpy(&b, &x[k], sizeof b);
-    h = (h ^ b) * 1099511628211ull;
-    h ^= h >> 29;
-  }
-  return (int)(h % (uint64_t)P);
+  return (int)(coord_hash(x, d) % (uint64_t)P);
 }
 
 /* Every vertex bisect.c added lies on the skins of all the pieces around
