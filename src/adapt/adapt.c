@@ -19,13 +19,13 @@
  * collective and agrees on its status, so all ranks leave the loop
  * together.
  *
- * An iteration with a single piece, nothing rolled back and no hot skin
- * vertex (always so with one piece: no other piece touches it) is the last
- * one: every element it produced is marked done (none lies near a hot
- * vertex), and every other element is unchanged and was not tagged by this
- * iteration's tag (the criteria depend on the element's own data only), so
- * the next tag would find nothing. The loop stops as converged without that
- * tag pass.
+ * An iteration with a single piece, nothing rolled back, no hot skin
+ * vertex (always so with one piece: no other piece touches it) and no poor
+ * element marked next to its skin (BAD_NEAR_SKIN in reintegrate.c) is the
+ * last one: every element it produced is marked done, and every other
+ * element is unchanged and was not tagged by this iteration's tag (the
+ * criteria depend on the element's own data only), so the next tag would
+ * find nothing. The loop stops as converged without that tag pass.
  */
 #include "adapt/adapt.h"
 
@@ -235,8 +235,9 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
     t[4] = pa_wtime() - tb;
     PA_CALL(max_times(dm->comm, t, 5, &busy));
     {
-      double x[2] = {(double)nfail, it.bytes_moved};
-      PA_CALL(pa__allreduce(dm->comm, x, 2, MPI_DOUBLE, MPI_SUM));
+      double x[3] = {(double)nfail, it.bytes_moved, (double)it.nbadskin};
+      PA_CALL(pa__allreduce(dm->comm, x, 3, MPI_DOUBLE, MPI_SUM));
+      it.nbadskin = (pa_gid)x[2];
       ir.nfailed = (int)x[0];
       lastfailed = ir.nfailed > 0;
       ir.bytes_moved = x[1];
@@ -264,9 +265,11 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
     rep.bytes_moved += ir.bytes_moved;
     if (rep.niter_recorded < PA_ADAPT_MAX_ITERS) rep.iters[rep.niter_recorded++] = ir;
     {
-      /* One piece remeshed with no hot skin vertex: the next tag
-       * would find nothing (see the file comment), skip it. */
-      int final = ir.npieces == 1 && ir.nfailed == 0 && it.nhot == 0;
+      /* One piece remeshed with no hot skin vertex and no poor element
+       * at its skin: the next tag would find nothing (see the file
+       * comment), skip it. */
+      int final = ir.npieces == 1 && ir.nfailed == 0 && it.nhot == 0 &&
+                  it.nbadskin == 0;
       pa__iter_free(&it);
       if (opts->progress) opts->progress(&ir, opts->progress_ctx);
       if (final) {

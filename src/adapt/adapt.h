@@ -135,6 +135,9 @@ typedef struct pa__iter {
                           elements around each local vertex (PA__NOLABEL
                           for unlabelled ones), then of the tagged ones
                           (PA__NOLABEL, -PA__NOLABEL if none) */
+  pa_gid nbadskin;     /* output elements of this rank's pieces marked
+                          again for their quality at the skin
+                          (reintegrate.c, BAD_NEAR_SKIN) */
   pa_gid ntagged;      /* global */
   double tagwork;      /* global work of the tagged elements */
 } pa__iter;

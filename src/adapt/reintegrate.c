@@ -289,6 +289,53 @@ cleanup:
  * propagation), so they may be tagged again. */
 #define NEAR_SKIN 2
 
+/* BAD_NEAR_SKIN: an output element within NEAR_SKIN vertex layers of the
+ * piece's frozen skin, whose quality is below opts->qual_threshold and below
+ * the worst the remesher left in the next NEAR_SKIN layers, is marked
+ * PA__DONE_NEAR_SKIN even far from a hot skin vertex: the frozen faces of
+ * already remeshed neighbours forced it, so it is tagged again and remeshed
+ * inside the next piece, where those faces are free. Without this, box3d 20
+ * -> 0.012 ended with a worst quality of 0.199 at 4 ranks and 0.232 at 8
+ * (0.361 sequential), box3d 4 -> 0.08 with 0.213 at 3 ranks (0.437).
+ * Nothing is marked when the remesher reported neither swaps nor moves (it
+ * does not improve shapes: the plug-in bisection of examples/ would make
+ * the same shapes next to the new skin, iteration after iteration), and
+ * not above the worst quality of the band beyond (shapes the remesher
+ * leaves anyway; a piece with no such band marks nothing). */
+
+/* dist[v] = min(nl, vertex layers from the vertices where it is 0; the
+ * others start at nl), over the elements of o. */
+static void vertex_layers(const pa_mesh *o, int nl, int *dist) {
+  int d = o->dim;
+  for (int layer = 0; layer < nl; layer++)
+    for (pa_idx e = 0; e < o->ne; e++) {
+      const pa_idx *v = o->elem + (size_t)(d + 1) * e;
+      int mn = nl;
+      for (int k = 0; k <= d; k++) mn = dist[v[k]] < mn ? dist[v[k]] : mn;
+      if (mn < nl)
+        for (int k = 0; k <= d; k++)
+          if (dist[v[k]] > mn + 1) dist[v[k]] = mn + 1;
+    }
+}
+
+/* Smallest of dist over the vertices of element e of o. */
+static int elem_layer(const pa_mesh *o, const int *dist, pa_idx e) {
+  const pa_idx *v = o->elem + (size_t)(o->dim + 1) * e;
+  int mn = dist[v[0]];
+  for (int k = 1; k <= o->dim; k++) mn = dist[v[k]] < mn ? dist[v[k]] : mn;
+  return mn;
+}
+
+static double out_quality(const pa_mesh *o, pa_idx e) {
+  const double *x[4], *mm[4];
+  const pa_idx *v = o->elem + (size_t)(o->dim + 1) * e;
+  for (int k = 0; k <= o->dim; k++) {
+    x[k] = o->coord + (size_t)o->dim * v[k];
+    mm[k] = o->met + (size_t)o->met_ncomp * v[k];
+  }
+  return pa__quality(o->dim, o->met_ncomp, x, mm);
+}
+
 size_t pa__new_payload(const pa_dmesh *dm, int kind, int32_t ref,
                        const pa_dmesh_value *done, uint8_t doneval,
                        unsigned char *buf) {
@@ -491,7 +538,7 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   int d = o->dim;
   pa_gid *vg = NULL;
   double *dbl = NULL;
-  int *dist = NULL, *dest = NULL;
+  int *dist = NULL, *dsk = NULL, *dest = NULL;
   PA_CALL(output_dest(it, pc, &dest));
   PA_ALLOC(vg, o->nv);
   PA_ALLOC(dbl, R[PA_VERTEX].ndbl);
@@ -511,19 +558,27 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
     PA_CALL(pa__recs_add(&R[PA_VERTEX], vg[j], NULL, o->vref[j], o->vflag[j],
                          it->rank, dbl, pay, pl));
   }
-  /* elements within NEAR_SKIN vertex layers of a hot skin vertex */
+  /* elements within NEAR_SKIN vertex layers of a hot skin vertex (dist),
+   * of any skin vertex (dsk, counted up to 2 NEAR_SKIN: the band beyond
+   * gives the quality the remesher reached away from the skin, qband) */
   PA_ALLOC(dist, o->nv);
-  for (pa_idx j = 0; j < o->nv; j++)
-    dist[j] = pc->match[j] >= 0 && pc->hot[pc->match[j]] ? 0 : NEAR_SKIN;
-  for (int layer = 0; layer < NEAR_SKIN; layer++)
-    for (pa_idx e = 0; e < o->ne; e++) {
-      const pa_idx *v = o->elem + (size_t)(d + 1) * e;
-      int mn = NEAR_SKIN;
-      for (int k = 0; k <= d; k++) mn = dist[v[k]] < mn ? dist[v[k]] : mn;
-      if (mn < NEAR_SKIN)
-        for (int k = 0; k <= d; k++)
-          if (dist[v[k]] > mn + 1) dist[v[k]] = mn + 1;
-    }
+  PA_ALLOC(dsk, o->nv);
+  for (pa_idx j = 0; j < o->nv; j++) {
+    pa_idx i = pc->match[j];
+    dist[j] = i >= 0 && pc->hot[i] ? 0 : NEAR_SKIN;
+    dsk[j] = i >= 0 && pc->skin[i] ? 0 : 2 * NEAR_SKIN;
+  }
+  vertex_layers(o, NEAR_SKIN, dist);
+  vertex_layers(o, 2 * NEAR_SKIN, dsk);
+  double qthr = it->piece_failed[pc->id] ||
+                        (pc->rep.nswap == 0 && pc->rep.nmove == 0)
+                    ? 0
+                    : it->opts->qual_threshold;
+  double qband = qthr;
+  for (pa_idx e = 0; qthr > 0 && e < o->ne; e++) {
+    int l = elem_layer(o, dsk, e);
+    if (l >= NEAR_SKIN && l < 2 * NEAR_SKIN) qband = fmin(qband, out_quality(o, e));
+  }
   for (pa_idx e = 0; e < o->ne; e++) {
     pa_gid ev[4];
     uint8_t dv = it->piece_failed[pc->id] ? 0 : PA__DONE;
@@ -535,6 +590,11 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
       nhot += dist[j] == 0;
     }
     if (dv && nhot >= 2) dv = PA__DONE_ON_SKIN;
+    if (dv == PA__DONE && qband > 0 && elem_layer(o, dsk, e) < NEAR_SKIN &&
+        out_quality(o, e) < qband) {
+      dv = PA__DONE_NEAR_SKIN; /* see BAD_NEAR_SKIN */
+      it->nbadskin++;
+    }
     size_t pl = pa__new_payload(dm, PA_ELEMENT, o->eref[e], done, dv, pay);
     PA_CALL(pa__recs_add(&R[PA_ELEMENT], next[PA_ELEMENT]++, ev, o->eref[e],
                          o->eflag[e], dest[e], NULL, pay, pl));
@@ -558,6 +618,7 @@ cleanup:
   pa__free(vg);
   pa__free(dbl);
   pa__free(dist);
+  pa__free(dsk);
   pa__free(dest);
   return st;
 }

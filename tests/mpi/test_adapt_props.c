@@ -7,6 +7,7 @@
  *  - user-required elements and boundary entities come back untouched;
  *  - a linear user field is interpolated exactly;
  *  - convergence on every built-in metric field;
+ *  - no poor element left next to a piece's skin (3D);
  *  - a piece made to fail is rolled back and the result is still valid.
  */
 #include "testutil.h"
@@ -260,6 +261,30 @@ static void test_every_field(void) {
   }
 }
 
+/* Elements next to a piece's frozen skin below the quality threshold are
+ * remeshed again inside the next piece: a uniform refinement, whose
+ * sequential worst quality is 0.44, ends with none below the threshold
+ * (without that rule, 0.213 at 3 ranks). */
+static void test_skin_quality(void) {
+  pa_mesh *m = box(3, 4, "uniform:0.08");
+  pa_dmesh *dm = distribute(m, 0);
+  pa_adapt_opts o;
+  pa_adapt_report rep;
+  pa_stats s;
+  pa_adapt_opts_default(&o);
+  CHECK_OK(pa_dmesh_adapt(dm, &o, &rep));
+  CHECK(rep.converged);
+  CHECK_OK(pa_dmesh_stats(dm, &s));
+  CHECK(s.valid && s.ninverted == 0);
+  CHECK(s.qual_min >= o.qual_threshold);
+  if (pa_test_rank == 0)
+    printf("  box3d 4 -> uniform:0.08: %lld elements, %d iterations, "
+           "%.2f %% in range, worst Q %.3f\n", (long long)rep.nelem_final,
+           rep.niter, in_range(&s), s.qual_min);
+  pa_dmesh_destroy(dm);
+  pa_mesh_destroy(m);
+}
+
 /* A remesher that fails its first call on pa_test_rank 0 and otherwise calls the
  * wrapped one. */
 typedef struct failing {
@@ -303,4 +328,4 @@ static void test_rollback(void) {
   }
 }
 
-TEST_MPI_MAIN(test_deterministic, test_vs_sequential, test_required, test_linear_field, test_every_field, test_rollback)
+TEST_MPI_MAIN(test_deterministic, test_vs_sequential, test_required, test_linear_field, test_every_field, test_skin_quality, test_rollback)
