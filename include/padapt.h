@@ -774,6 +774,11 @@ typedef struct pa_adapt_opts {
   /** Vertex layers of untagged elements added around the tagged ones
    *  (default 2, at least 1). */
   int skin_layers;
+  /** The same from the second iteration on (default 1, at least 1): its
+   *  tagged elements lie next to the last skins, and each layer multiplies
+   *  a piece's size by about 10 in 3D; a poor element forced by the closer
+   *  frozen faces is tagged again (docs/ADAPT.md, Convergence). */
+  int skin_layers_later;
   /** Smallest estimated work (about output elements) worth a piece of its
    *  own: fewer pieces are made when the tagged work is small (default
    *  2000; tests lower it to get many pieces on small meshes). */
@@ -824,7 +829,7 @@ typedef struct pa_adapt_report {
 
 /** Default options: built-in remesher, pa_remesh_opts_default, no memory
  *  bound, quality threshold 0.3, 30 iterations, 1 piece per rank, 2 skin
- *  layers, min_piece_work 2000, min_piece_ratio 0.25, rebalance (tolerance
+ *  layers (1 from the second iteration), min_piece_work 2000, min_piece_ratio 0.25, rebalance (tolerance
  *  1.05) and piece checks on. */
 void pa_adapt_opts_default(pa_adapt_opts *opts);
 

@@ -221,9 +221,11 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   uint64_t mine[2], *mem = NULL, *rss = NULL;
   const pa_remesher *r = pa_remesher_builtin();
   int ok = 1;
+  double tstep[6], t0 = pa_wtime(); /* read, stats, adapt, stats, write */
   opts.progress = progress;
   opts.progress_ctx = (void *)cli;
   memset(&rep, 0, sizeof rep);
+  memset(tstep, 0, sizeof tstep);
 
   /* read */
   if (set) {
@@ -252,6 +254,8 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
     if (cli->rank == 0) pa_cli_error(cli, "adapt: no metric: give -hsiz H");
     goto done;
   }
+  tstep[0] = pa_wtime() - t0;
+  t0 = pa_wtime();
   if (pa_mesh_metric_ncomp(pa_dmesh_mesh(dm)) > 0) {
     st = pa_dmesh_stats(dm, &before);
     if (st) {
@@ -271,11 +275,15 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   }
 
   /* adapt */
+  tstep[1] = pa_wtime() - t0;
+  t0 = pa_wtime();
   st = pa_dmesh_adapt(dm, &opts, &rep);
   if (st) {
     fail_collective(cli, st);
     goto done;
   }
+  tstep[2] = pa_wtime() - t0;
+  t0 = pa_wtime();
   st = pa_dmesh_stats(dm, &after);
   if (st) {
     fail_collective(cli, st);
@@ -292,6 +300,8 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   }
 
   /* write */
+  tstep[3] = pa_wtime() - t0;
+  t0 = pa_wtime();
   if (distributed) {
     st = pa_dmesh_write(dm, out);
   } else {
@@ -321,6 +331,11 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
     if (cli->rank == 0) pa_cli_fail(cli, st);
     goto done;
   }
+  tstep[4] = pa_wtime() - t0;
+  if (cli->verbosity >= 2 && cli->rank == 0)
+    fprintf(stderr, "padapt: rank 0: read and distribute %.3f s, stats %.3f s, "
+                    "adapt %.3f s, stats %.3f s, gather and write %.3f s\n",
+            tstep[0], tstep[1], tstep[2], tstep[3], tstep[4]);
 
   /* JSON */
   mine[0] = pa_memory_peak();

@@ -40,6 +40,7 @@ void pa_adapt_opts_default(pa_adapt_opts *o) {
   o->max_iter = 30;
   o->pieces_per_rank = 1;
   o->skin_layers = 2;
+  o->skin_layers_later = 1;
   o->min_piece_work = 2000;
   o->min_piece_ratio = 0.25;
   o->rebalance_tol = 1.05;

@@ -8,7 +8,8 @@
  *     would not fit the memory bound (mem_mb).
  *  2. PT-Scotch partitions the distributed dual graph of the tagged elements
  *     only (pa__dual_graph on their vertex ids), weighted by the work.
- *  3. The labels grow skin_layers vertex layers outward: every vertex takes
+ *  3. The labels grow skin_layers vertex layers outward (skin_layers_later
+ *     from the second iteration on): every vertex takes
  *     the smallest label of the labelled owned elements around it (reduced
  *     over the ranks, then sent back to the ghosts), and every unlabelled
  *     owned element takes the smallest label of its vertices. After one
@@ -206,8 +207,8 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
   PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.adapt.label", MPI_INT, 2, -1,
                              &val));
   added = 1;
-  for (int layer = 0; layer < (o->skin_layers > 0 ? o->skin_layers : 1);
-       layer++) {
+  int nlayer = it->iter > 1 ? o->skin_layers_later : o->skin_layers;
+  for (int layer = 0; layer < (nlayer > 0 ? nlayer : 1); layer++) {
     PA_CALL(vertex_labels(it, val, 1));
     const int *d = pa_dmesh_value_data(val, NULL, NULL);
     for (pa_idx e = 0; e < it->ne; e++) {

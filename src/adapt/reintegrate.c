@@ -558,26 +558,42 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
     PA_CALL(pa__recs_add(&R[PA_VERTEX], vg[j], NULL, o->vref[j], o->vflag[j],
                          it->rank, dbl, pay, pl));
   }
-  /* elements within NEAR_SKIN vertex layers of a hot skin vertex (dist),
-   * of any skin vertex (dsk, counted up to 2 NEAR_SKIN: the band beyond
-   * gives the quality the remesher reached away from the skin, qband) */
+  /* elements within NEAR_SKIN vertex layers of a hot skin vertex (dist) */
   PA_ALLOC(dist, o->nv);
-  PA_ALLOC(dsk, o->nv);
   for (pa_idx j = 0; j < o->nv; j++) {
     pa_idx i = pc->match[j];
     dist[j] = i >= 0 && pc->hot[i] ? 0 : NEAR_SKIN;
-    dsk[j] = i >= 0 && pc->skin[i] ? 0 : 2 * NEAR_SKIN;
   }
   vertex_layers(o, NEAR_SKIN, dist);
-  vertex_layers(o, 2 * NEAR_SKIN, dsk);
+  /* BAD_NEAR_SKIN: layers from any skin vertex (dsk); only if some element
+   * near the skin is poor, up to 2 NEAR_SKIN for the worst quality of the
+   * band beyond (qband; 0: nothing is marked) */
   double qthr = it->piece_failed[pc->id] ||
                         (pc->rep.nswap == 0 && pc->rep.nmove == 0)
                     ? 0
                     : it->opts->qual_threshold;
-  double qband = qthr;
-  for (pa_idx e = 0; qthr > 0 && e < o->ne; e++) {
-    int l = elem_layer(o, dsk, e);
-    if (l >= NEAR_SKIN && l < 2 * NEAR_SKIN) qband = fmin(qband, out_quality(o, e));
+  double qband = 0;
+  if (qthr > 0) {
+    int poor = 0;
+    PA_ALLOC(dsk, o->nv);
+    for (int pass = 0; pass < 2 && (pass == 0 || poor); pass++) {
+      int cap = pass ? 2 * NEAR_SKIN : NEAR_SKIN;
+      for (pa_idx j = 0; j < o->nv; j++) {
+        pa_idx i = pc->match[j];
+        dsk[j] = i >= 0 && pc->skin[i] ? 0 : cap;
+      }
+      vertex_layers(o, cap, dsk);
+      for (pa_idx e = 0; !pass && !poor && e < o->ne; e++)
+        poor = elem_layer(o, dsk, e) < NEAR_SKIN && out_quality(o, e) < qthr;
+    }
+    if (poor) {
+      qband = qthr;
+      for (pa_idx e = 0; e < o->ne; e++) {
+        int l = elem_layer(o, dsk, e);
+        if (l >= NEAR_SKIN && l < 2 * NEAR_SKIN)
+          qband = fmin(qband, out_quality(o, e));
+      }
+    }
   }
   for (pa_idx e = 0; e < o->ne; e++) {
     pa_gid ev[4];

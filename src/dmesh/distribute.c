@@ -676,7 +676,7 @@ pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
   void *rbuf = NULL;
   pa_mesh *m = NULL;
   pa__layout lay;
-  pa__gidmap vmap = {0};
+  pa__gidindex vmap = {0};
   pa_idx *ord = NULL;
   int vals[PA_MAX_FIELDS], nvals = 0;
   memset(R, 0, sizeof R);
@@ -770,7 +770,15 @@ pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
     size_t nmax = 0;
     for (int k = 0; k < PA_NKIND; k++) nmax = A[k].n > nmax ? A[k].n : nmax;
     PA_ALLOC(ord, nmax);
-    PA_CALL(pa__gidmap_init(&vmap, A[PA_VERTEX].n));
+    {
+      pa_gid lo = INT64_MAX, hi = -1;
+      for (size_t i = 0; i < A[PA_VERTEX].n; i++) {
+        if (A[PA_VERTEX].gid[i] < lo) lo = A[PA_VERTEX].gid[i];
+        if (A[PA_VERTEX].gid[i] > hi) hi = A[PA_VERTEX].gid[i];
+      }
+      PA_CALL(pa__gidindex_init(&vmap, A[PA_VERTEX].n ? lo : 0, hi + 1,
+                                A[PA_VERTEX].n));
+    }
     for (int k = 0; k < PA_NKIND; k++) {
       pa__recs *Q = &A[k];
       for (size_t i = 0; i < Q->n; i++) ord[i] = (pa_idx)i;
@@ -793,7 +801,7 @@ pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
           m->vref[j] = Q->ref[i];
           m->vflag[j] = Q->flag[i];
           int found;
-          PA_CALL(pa__gidmap_put(&vmap, Q->gid[i], (pa_idx)j, &found, NULL));
+          PA_CALL(pa__gidindex_put(&vmap, Q->gid[i], (pa_idx)j, &found, NULL));
           PA_CHECK(!found, PA_ERR_MESH, "vertex global id %lld owned twice",
                    (long long)Q->gid[i]);
           continue;
@@ -802,7 +810,7 @@ pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
         int32_t *ref = k == PA_ELEMENT ? m->eref : k == PA_BOUNDARY ? m->bref : m->edref;
         uint8_t *flag = k == PA_ELEMENT ? m->eflag : k == PA_BOUNDARY ? m->bflag : m->edflag;
         for (int q = 0; q < Q->nv; q++) {
-          pa_idx v = pa__gidmap_get(&vmap, Q->vgid[(size_t)Q->nv * i + q]);
+          pa_idx v = pa__gidindex_get(&vmap, Q->vgid[(size_t)Q->nv * i + q]);
           PA_CHECK(v >= 0, PA_ERR_MESH, "gather: vertex %lld is owned by no rank",
                    (long long)Q->vgid[(size_t)Q->nv * i + q]);
           conn[(size_t)Q->nv * j + q] = v;
@@ -831,7 +839,7 @@ cleanup:
   pa__buf_free(&b);
   pa__free(rbuf);
   pa_mesh_destroy(m);
-  pa__gidmap_free(&vmap);
+  pa__gidindex_free(&vmap);
   pa__free(ord);
   return st;
 }
