@@ -8,7 +8,9 @@
  * required (required elements never are), the smallest and largest label
  * around each vertex (of all elements, and of the tagged ones) are those
  * the elements give, every copy of a vertex (owner and ghosts) agrees, and
- * a vertex is inner only when labelled elements alone touch it (and always
+ * exactly the elements within the skin layers of the iteration (first or
+ * later) are labelled, a vertex is inner only when labelled elements alone
+ * touch it (and always
  * then, for a vertex inside the box), never on a curved boundary (a box
  * whose top is bent). Runs at any number of ranks.
  */
@@ -46,6 +48,7 @@ static long long *gather_rows(const long long *mine, int nrow, int w, int *n) {
 /* The top face z = 1 (y = 1 in 2D) is bent into a curve by warp(): the
  * skins must not be bisected there. */
 static int warp;
+static int sparse = 0; /* a few user-tagged elements (run_iter) */
 
 static double bump(double x) { return 1.0 + 0.05 * sin(3.141592653589793 * x); }
 
@@ -59,6 +62,13 @@ static void warp_mesh(pa_mesh *m, int dim) {
 
 static int on_curved_top(const double *p, int dim) {
   return warp && p[0] > 0 && p[0] < 1 && fabs(p[dim - 1] - bump(p[0])) < 1e-12;
+}
+
+/* The number of skin layers the pieces grew (pieces.c): skin_layers in the
+ * first iteration, skin_layers_later after. */
+static int layers_of(const pa__iter *it) {
+  int l = it->iter > 1 ? it->opts->skin_layers_later : it->opts->skin_layers;
+  return l > 0 ? l : 1;
 }
 
 static void check_labels(pa__iter *it) {
@@ -134,6 +144,29 @@ static void check_labels(pa__iter *it) {
       for (int k = 0; k < nve; k++) near_tag |= vtag[r[3 + k]];
       bad_grow += near_tag && r[0] < 0 && !r[2];
     }
+    /* exactly the elements within layers_of(it) vertex layers of the
+     * tagged ones are labelled (required elements neither are nor pass a
+     * layer on) */
+    int bad_layers = 0;
+    {
+      char *lab = calloc((size_t)ne + 1, 1), *vm = calloc((size_t)nv + 1, 1);
+      for (int e = 0; e < ne; e++) lab[e] = all[(size_t)w * e + 1] != 0;
+      for (int l = 0; l < layers_of(it); l++) {
+        memset(vm, 0, (size_t)nv);
+        for (int e = 0; e < ne; e++)
+          if (lab[e])
+            for (int k = 0; k < nve; k++) vm[all[(size_t)w * e + 3 + k]] = 1;
+        for (int e = 0; e < ne; e++) {
+          const long long *r = all + (size_t)w * e;
+          for (int k = 0; k < nve && !lab[e] && !r[2]; k++)
+            if (vm[r[3 + k]]) lab[e] = 2; /* 2: this layer */
+        }
+        for (int e = 0; e < ne; e++) lab[e] = lab[e] != 0;
+      }
+      for (int e = 0; e < ne; e++) bad_layers += lab[e] != (all[(size_t)w * e] >= 0);
+      free(lab);
+      free(vm);
+    }
     for (int i = 0; i < nvr; i++) {
       const long long *r = vall + (size_t)wv * i;
       long long v = r[0];
@@ -149,15 +182,22 @@ static void check_labels(pa__iter *it) {
     }
     CHECK(bad_cover == 0);
     CHECK(bad_grow == 0);
+    CHECK(bad_layers == 0);
     CHECK(bad_req == 0);
     CHECK(bad_range == 0);
     CHECK(bad_inner == 0);
     CHECK(ninner > 0);
-    CHECK(nlabelled > 0);
+    if (!sparse) CHECK(nlabelled > 0); /* sparse tags may miss the sides */
     if (warp) CHECK(ncurved > 0);
-    printf("  %d pieces: %d elements, %d vertex copies, %d inner, %d "
-           "labelled only, %d on a curved boundary\n", it->npieces, ne, nvr,
-           ninner, nlabelled, ncurved);
+    int ntag = 0, nlab = 0;
+    for (int e = 0; e < ne; e++) {
+      ntag += all[(size_t)w * e + 1] != 0;
+      nlab += all[(size_t)w * e] >= 0;
+    }
+    printf("  %d pieces, %d skin layers: %d elements (%d tagged, %d "
+           "labelled), %d vertex copies, %d inner, %d labelled only, %d on a "
+           "curved boundary\n", it->npieces, layers_of(it), ne, ntag, nlab,
+           nvr, ninner, nlabelled, ncurved);
     free(lo);
     free(hi);
     free(tlo);
@@ -170,7 +210,10 @@ static void check_labels(pa__iter *it) {
   free(vall);
 }
 
-static void run(int dim, int n, const char *metric, int npieces, int layers) {
+/* iter: the iteration the pieces are made for (1, or 2 for the layers of
+ * the later iterations: layers then goes to skin_layers_later). */
+static void run_iter(int dim, int n, const char *metric, int npieces,
+                     int layers, int iter) {
   pa_mesh *m = NULL;
   pa_dmesh *dm = NULL;
   pa_dmesh_value *done = NULL;
@@ -184,12 +227,21 @@ static void run(int dim, int n, const char *metric, int npieces, int layers) {
     /* a few required elements */
     for (pa_idx e = 0; e < pa_mesh_nelem(m); e += 17)
       pa_mesh_elem_flags(m)[e] |= PA_FLAG_REQUIRED;
+    /* sparse: a few user tags in a mesh that fits its metric, so that the
+     * skin layers do not reach every element */
+    for (pa_idx e = 5; sparse && e < pa_mesh_nelem(m); e += 61)
+      pa_mesh_elem_flags(m)[e] |= PA_FLAG_USER;
   }
   CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, m, 0, &dm));
   pa_adapt_opts_default(&o);
   o.min_piece_work = 1;
   o.min_piece_ratio = 0;
-  o.skin_layers = layers;
+  if (iter > 1) {
+    o.skin_layers = 3; /* not these */
+    o.skin_layers_later = layers;
+  } else {
+    o.skin_layers = layers;
+  }
   CHECK_OK(pa_dmesh_value_add(dm, PA_ELEMENT, PA__DONE_VALUE, MPI_UINT8_T, 1,
                               -1, &done));
   it.dm = dm;
@@ -198,6 +250,7 @@ static void run(int dim, int n, const char *metric, int npieces, int layers) {
   it.size = pa_test_size;
   it.dim = dim;
   it.nve = dim + 1;
+  it.iter = iter;
   CHECK_OK(pa__adapt_tag(&it, done, 1));
   CHECK(it.ntagged > 0);
   CHECK_OK(pa__adapt_pieces(&it, npieces));
@@ -207,6 +260,10 @@ static void run(int dim, int n, const char *metric, int npieces, int layers) {
   CHECK_OK(pa_dmesh_value_remove(dm, done));
   pa_dmesh_destroy(dm);
   pa_mesh_destroy(m);
+}
+
+static void run(int dim, int n, const char *metric, int npieces, int layers) {
+  run_iter(dim, n, metric, npieces, layers, 1);
 }
 
 static void test_pieces_2d(void) {
@@ -220,6 +277,19 @@ static void test_pieces_3d(void) {
   run(3, 5, "iso-shell:0.2", 1, 2);
 }
 
+/* Few tagged elements: exactly skin_layers (first iteration) or
+ * skin_layers_later vertex layers are grown around them. The metrics fit
+ * the boxes (edges and qualities in range): only the user tags count. */
+static void test_pieces_layers(void) {
+  sparse = 1;
+  for (int layers = 1; layers <= 3; layers++)
+    for (int iter = 1; iter <= 2; iter++) {
+      run_iter(2, 16, "uniform:0.07", pa_test_size, layers, iter);
+      run_iter(3, 5, "uniform:0.25", pa_test_size, layers, iter);
+    }
+  sparse = 0;
+}
+
 static void test_pieces_curved(void) {
   warp = 1;
   run(2, 16, "uniform:0.02", 2 * pa_test_size, 1);
@@ -227,4 +297,5 @@ static void test_pieces_curved(void) {
   warp = 0;
 }
 
-TEST_MPI_MAIN(test_pieces_2d, test_pieces_3d, test_pieces_curved)
+TEST_MPI_MAIN(test_pieces_2d, test_pieces_3d, test_pieces_layers,
+              test_pieces_curved)
