@@ -103,6 +103,10 @@ typedef struct rm3d {
   /* options */
   int surf;  /* remesh the boundary surface */
   int swap;  /* swaps allowed (not -noswap) */
+  /* A lattice crowd was found before the last refinement band (see
+   * rm3d_driver.c): the split passes at sqrt 2 spread the splits of edges
+   * shorter than RM3D_LSPREAD. */
+  int spread;
   double hausd, ridge_cos;
   int verbosity;
   /* counters */
@@ -122,6 +126,7 @@ extern const int rm3d_face[4][3];
 #define RM3D_LMAX 1.4142135623730951 /* split above */
 #define RM3D_LMIN 0.7071067811865476 /* collapse below */
 #define RM3D_LRELAX 1.2 /* mean frozen edge length at a relaxed vertex */
+#define RM3D_LSPREAD 1.6 /* split halves shorter than 0.8: see m->spread */
 #define RM3D_QFLOOR 1e-3 /* operators create no worse element... */
 #define RM3D_QABS 1e-9   /* ...unless replacing worse ones, and never this */
 
@@ -340,6 +345,10 @@ int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
                           double *dir);
 /* Relocate vertex p to raise the worst quality of its ball. */
 int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball);
+/* Move the free interior vertex p by delta (metric length) in a direction
+ * drawn from the bits of its coordinates, if no tet of its ball falls under
+ * half the ball's worst quality (nor under RM3D_QFLOOR). 1 when moved. */
+int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball);
 
 /* Feature edges, corners and normals of the boundary surface
  * (rm3d_surface.c); use_angle = 0 for -nr. */

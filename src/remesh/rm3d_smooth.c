@@ -19,6 +19,11 @@
  * untouched. The moved vertex's metric and fields are re-interpolated in the
  * old ball (metric only when anisotropic: an isotropic size field is treated
  * as attached to the vertex).
+ *
+ * The jiggle (pa__rm3d_jiggle_vertex) moves a free interior vertex by a
+ * fixed metric length in a direction drawn from its coordinates' bits,
+ * accepting a loss of quality down to half the ball's worst: the driver
+ * uses it once, to break a lattice the passes would only refine further.
  */
 #include "remesh/remesh3d.h"
 
@@ -188,6 +193,33 @@ static int curved_point(const rm3d *m, const pa_idx *tri, int ntri,
   return 0;
 }
 
+/* Move p to np (its ball[0..n) of qualities nq when isotropic): the fields
+ * (and an anisotropic metric) are re-interpolated in the old ball first. */
+static void apply_move(rm3d *m, pa_idx p, const pa_idx *ball, int n,
+                       const double *np, const float *nq) {
+  int mc = m->mc;
+  if (m->nfield || mc == 6) {
+    for (int i = 0; i < n; i++) {
+      const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
+      double w[4];
+      if (!bary(m->x + 3 * (size_t)v[0], m->x + 3 * (size_t)v[1],
+                m->x + 3 * (size_t)v[2], m->x + 3 * (size_t)v[3], np, w))
+        continue;
+      if (w[0] < -1e-12 || w[1] < -1e-12 || w[2] < -1e-12 || w[3] < -1e-12)
+        continue;
+      pa__rm3d_interp(m, p, 4, v, w);
+      break;
+    }
+  }
+  memcpy(m->x + 3 * (size_t)p, np, 3 * sizeof *np);
+  for (int i = 0; i < n; i++) {
+    pa_idx t = ball[i] >> 2;
+    m->q[t] = mc == 6 ? (float)rm3d_qual_v(m, m->tv + 4 * (size_t)t) : nq[i];
+    m->tflag[t] &= (uint8_t)~R3T_CLEAN;
+  }
+  m->nmove++;
+}
+
 int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
   if (m->vtag[p] & (R3V_LOCK | R3V_CORNER | R3V_DEAD)) return 0;
   if ((m->vtag[p] & R3V_BDRY) && !m->surf) return 0;
@@ -290,29 +322,58 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
       nq[i] = (float)q;
     }
     if (!ok) continue;
-    /* Accepted: re-interpolate in the old ball, then move. */
-    if (m->nfield || mc == 6) {
-      for (int i = 0; i < n; i++) {
-        const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
-        double w[4];
-        if (!bary(m->x + 3 * (size_t)v[0], m->x + 3 * (size_t)v[1],
-                  m->x + 3 * (size_t)v[2], m->x + 3 * (size_t)v[3], np, w))
-          continue;
-        if (w[0] < -1e-12 || w[1] < -1e-12 || w[2] < -1e-12 || w[3] < -1e-12)
-          continue;
-        pa__rm3d_interp(m, p, 4, v, w);
-        break;
-      }
-    }
-    memcpy(xp, np, sizeof np);
     if (kind == 3) memcpy(m->nrm + 3 * (size_t)p, nnew, sizeof nnew);
-    for (int i = 0; i < n; i++) {
-      pa_idx t = ball[i] >> 2;
-      m->q[t] = mc == 6 ? (float)rm3d_qual_v(m, m->tv + 4 * (size_t)t) : nq[i];
-      m->tflag[t] &= (uint8_t)~R3T_CLEAN;
-    }
-    m->nmove++;
+    apply_move(m, p, ball, n, np, nq);
     return 1;
   }
   return 0;
+}
+
+/* Splitmix64 finaliser: the jiggle's directions. */
+static uint64_t mix64(uint64_t h) {
+  h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
+  h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
+  return h ^ (h >> 31);
+}
+
+int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball) {
+  if (m->vtag[p] & (R3V_LOCK | R3V_CORNER | R3V_DEAD | R3V_BDRY)) return 0;
+  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
+  if (n < 0) return 0;
+  int mc = m->mc;
+  double *xp = m->x + 3 * (size_t)p, qold = 1e30;
+  const double *mp = m->met + (size_t)mc * p;
+  int32_t ref0 = m->tref[ball[0] >> 2];
+  for (int i = 0; i < n; i++) {
+    pa_idx t = ball[i] >> 2;
+    if (m->tref[t] != ref0 || (m->tflag[t] & R3T_FROZEN)) return 0;
+    if (m->q[t] < qold) qold = m->q[t];
+  }
+  /* A direction uniform in the cube [-1,1]^3 (normalised), drawn from the
+   * coordinates' bits: the same on every run and for any numbering. */
+  uint64_t h = 0x2545f4914f6cdd1dull;
+  for (int j = 0; j < 3; j++) {
+    uint64_t u;
+    memcpy(&u, xp + j, sizeof u);
+    h = mix64(h ^ u);
+  }
+  double d[3], s2 = 0;
+  for (int j = 0; j < 3; j++) {
+    h = mix64(h + 0x9e3779b97f4a7c15ull);
+    d[j] = (double)(h >> 11) * (2.0 / 9007199254740992.0) - 1.0;
+    s2 += d[j] * d[j];
+  }
+  /* length delta in the metric of p */
+  double lm = mc == 1 ? sqrt(s2) / mp[0] : sqrt(rm3d_sq(mp, d));
+  if (!(lm > 0)) return 0;
+  double np[3];
+  for (int j = 0; j < 3; j++) np[j] = xp[j] + delta * d[j] / lm;
+  float nq[RM3D_MAXBALL];
+  for (int i = 0; i < n; i++) {
+    double q = rm3d_qual_moved(m, ball[i] >> 2, ball[i] & 3, np, mp);
+    if (!(q >= 0.5 * qold) || q < RM3D_QFLOOR) return 0;
+    nq[i] = (float)q;
+  }
+  apply_move(m, p, ball, n, np, nq);
+  return 1;
 }

@@ -1,7 +1,7 @@
 /* test_remesh3d.c -- the sequential 3D remesher (pa__remesh3d): validity,
  * volume, references/ridges/corners, frozen regions bit for bit, anisotropic
  * fields, a curved domain, field interpolation, determinism, failure with the
- * input left intact. */
+ * input left intact, the count through a lattice crowd. */
 #include "testutil.h"
 #include "mesh/mesh.h"
 #include "metric/metric.h"
@@ -461,6 +461,50 @@ static void test_targets(void) {
   }
 }
 
+/* The count follows the size through a lattice crowd. box3d 4 bisected
+ * towards hsiz 0.17 leaves its axis edges just above sqrt 2 (1.47), whose
+ * midpoints are in range of every other vertex: splitting them all gave
+ * the next lattice, every edge in range and 2 980 tets (mean Q 0.67), where
+ * hsiz 0.175 gives 1 855. A 3 % smaller size should give 1/h^3 = 9 % more
+ * tets; 30 % more is allowed for the noise of a 2 k-tet mesh, and the count
+ * stays within 1.3 x the metric volume over a regular unit tet's (1 727).
+ * With the crowd broken (rm3d_driver.c, lattice_crowd): 1 672 and 1 913. */
+static void test_lattice_crowd(void) {
+  const double h[3] = {0.175, 0.17, 0.17};
+  pa_idx ne[3];
+  for (int i = 0; i < 3; i++) {
+    pa_mesh *m = box(4, i < 2 ? h[i] : 0);
+    if (i == 2) { /* the same size as a tensor: the anisotropic code paths */
+      double *t = calloc(6 * (size_t)m->nv, sizeof *t);
+      for (pa_idx v = 0; v < m->nv; v++)
+        t[6 * v] = t[6 * v + 2] = t[6 * v + 5] = 1.0 / (h[i] * h[i]);
+      CHECK_OK(pa_mesh_set_metric(m, 6, t));
+      free(t);
+    }
+    pa_remesh_opts o;
+    opts_for(&o);
+    pa_remesh_report r;
+    double t = pa_wtime();
+    CHECK_OK(pa_remesh(pa_remesher_builtin(), m, &o, &r));
+    t = pa_wtime() - t;
+    CHECK_OK(pa_mesh_check(m));
+    double in, qw, qm;
+    edge_stats(m, &in, &qw, &qm);
+    printf("lattice crowd box 4 -> %.3f%s: %d tets in %.2f s, %.2f%% in "
+           "range, worst Q %.3f mean %.3f\n",
+           h[i], i == 2 ? " (tensor)" : "", (int)m->ne, t, 100 * in, qw, qm);
+    CHECK(r.outcome == PA_REMESH_SUCCESS);
+    CHECK(in >= 0.95);
+    CHECK(qw >= 0.25);
+    ne[i] = m->ne;
+    pa_mesh_destroy(m);
+  }
+  double law = pow(h[0] / h[1], 3);
+  CHECK((double)ne[1] <= 1.3 * law * ne[0]);
+  CHECK((double)ne[1] * 0.11785113019775792 * pow(h[1], 3) <= 1.3);
+  CHECK((double)ne[2] * 0.11785113019775792 * pow(h[2], 3) <= 1.3);
+}
+
 /* Curved ridges: the cube mapped onto a quarter of a thick cylinder
  * (radii 0.5 and 1, angle 0..pi/2). Its four circular edges are ridges; the
  * points added on them follow the arcs (chord midpoints would be off by up
@@ -532,5 +576,5 @@ TEST_MAIN(test_identity, test_refine_cube, test_nosurf, test_coarsen,
           test_frozen_random, test_frozen_skin, test_frozen_skin_refine,
           test_deterministic,
           test_fields, test_field_interp, test_sphere, test_targets,
-          test_curved_ridge,
+          test_lattice_crowd, test_curved_ridge,
           test_alloc_failure)
