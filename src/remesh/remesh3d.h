@@ -343,6 +343,9 @@ pa_status pa__rm3d_swap_face(rm3d *m, pa_idx k, int f, double gain,
  * 0 not at all (curved patch, corner, required ridge, -nosurf). */
 int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
                           double *dir);
+/* The metric at the midpoint of edge ab (geometric mean of the sizes, or
+ * the interpolated tensor), as the split uses it (rm3d_split.c). */
+void pa__rm3d_mid_metric(const rm3d *m, pa_idx a, pa_idx b, double *mp);
 /* Relocate vertex p to raise the worst quality of its ball. */
 int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball);
 /* Move the free interior vertex p by delta (metric length) in a direction

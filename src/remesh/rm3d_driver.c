@@ -338,13 +338,7 @@ static double lattice_crowd(rm3d *m, double *longer) {
       const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b;
       double x[3], mp[6];
       for (int i = 0; i < 3; i++) x[i] = 0.5 * (xa[i] + xb[i]);
-      if (mc == 1) {
-        mp[0] = sqrt(m->met[a] * m->met[b]);
-      } else {
-        const double *ms[2] = {m->met + 6 * (size_t)a, m->met + 6 * (size_t)b};
-        double w[2] = {0.5, 0.5};
-        pa__metric_interp(3, 6, 2, ms, w, mp);
-      }
+      pa__rm3d_mid_metric(m, a, b, mp);
       int far = 1;
       for (int j = 0; j < 4 && far; j++) {
         pa_idx c = v[j];

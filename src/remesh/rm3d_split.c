@@ -67,6 +67,16 @@ static int ridge_tangent(rm3d *m, pa_idx v, pa_idx w, double *t) {
   return 1;
 }
 
+void pa__rm3d_mid_metric(const rm3d *m, pa_idx a, pa_idx b, double *mp) {
+  if (m->mc == 1) {
+    mp[0] = sqrt(m->met[a] * m->met[b]);
+  } else {
+    const double *ms[2] = {m->met + 6 * (size_t)a, m->met + 6 * (size_t)b};
+    double w[2] = {0.5, 0.5};
+    pa__metric_interp(3, 6, 2, ms, w, mp);
+  }
+}
+
 /* Point of a ridge edge (a,b): the midpoint of the cubic Hermite curve with
  * the ridge tangents at both ends (a corner end mirrors the other), so curved
  * ridges are followed; straight ridges (tangents along the chord to 1e-12)
@@ -159,13 +169,7 @@ pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
     for (int i = 0; i < 3; i++) p[i] = 0.5 * (xa[i] + xb[i]);
   double mp[6];
   int mc = m->mc;
-  if (mc == 1) {
-    mp[0] = sqrt(m->met[a] * m->met[b]);
-  } else {
-    const double *ms[2] = {m->met + 6 * (size_t)a, m->met + 6 * (size_t)b};
-    double w[2] = {0.5, 0.5};
-    pa__metric_interp(3, 6, 2, ms, w, mp);
-  }
+  pa__rm3d_mid_metric(m, a, b, mp);
   /* Check every new tet. A far too long edge is split whenever the result
    * is valid: keeping it would be worse than a poor tet the later passes
    * improve. */
