@@ -192,6 +192,13 @@ static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
   return b.p;
 }
 
+/* Seconds since *t0, which becomes now (the -v 2 phase timings). */
+static double lap(double *t0) {
+  double t = pa_wtime(), dt = t - *t0;
+  *t0 = t;
+  return dt;
+}
+
 int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   const char *in = args->in, *out = args->out, *met = args->met;
   const char *field = args->field, *json = args->json;
@@ -221,7 +228,7 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   uint64_t mine[2], *mem = NULL, *rss = NULL;
   const pa_remesher *r = pa_remesher_builtin();
   int ok = 1;
-  double tstep[6], t0 = pa_wtime(); /* read, stats, adapt, stats, write */
+  double tstep[5], t0 = pa_wtime(); /* read, stats, adapt, stats, write */
   opts.progress = progress;
   opts.progress_ctx = (void *)cli;
   memset(&rep, 0, sizeof rep);
@@ -254,8 +261,7 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
     if (cli->rank == 0) pa_cli_error(cli, "adapt: no metric: give -hsiz H");
     goto done;
   }
-  tstep[0] = pa_wtime() - t0;
-  t0 = pa_wtime();
+  tstep[0] = lap(&t0);
   if (pa_mesh_metric_ncomp(pa_dmesh_mesh(dm)) > 0) {
     st = pa_dmesh_stats(dm, &before);
     if (st) {
@@ -275,15 +281,13 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   }
 
   /* adapt */
-  tstep[1] = pa_wtime() - t0;
-  t0 = pa_wtime();
+  tstep[1] = lap(&t0);
   st = pa_dmesh_adapt(dm, &opts, &rep);
   if (st) {
     fail_collective(cli, st);
     goto done;
   }
-  tstep[2] = pa_wtime() - t0;
-  t0 = pa_wtime();
+  tstep[2] = lap(&t0);
   st = pa_dmesh_stats(dm, &after);
   if (st) {
     fail_collective(cli, st);
@@ -300,8 +304,7 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   }
 
   /* write */
-  tstep[3] = pa_wtime() - t0;
-  t0 = pa_wtime();
+  tstep[3] = lap(&t0);
   if (distributed) {
     st = pa_dmesh_write(dm, out);
   } else {
@@ -331,7 +334,7 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
     if (cli->rank == 0) pa_cli_fail(cli, st);
     goto done;
   }
-  tstep[4] = pa_wtime() - t0;
+  tstep[4] = lap(&t0);
   if (cli->verbosity >= 2 && cli->rank == 0)
     fprintf(stderr, "padapt: rank 0: read and distribute %.3f s, stats %.3f s, "
                     "adapt %.3f s, stats %.3f s, gather and write %.3f s\n",

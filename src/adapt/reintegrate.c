@@ -326,14 +326,17 @@ static int elem_layer(const pa_mesh *o, const int *dist, pa_idx e) {
   return mn;
 }
 
-static double out_quality(const pa_mesh *o, pa_idx e) {
-  const double *x[4], *mm[4];
-  const pa_idx *v = o->elem + (size_t)(o->dim + 1) * e;
-  for (int k = 0; k <= o->dim; k++) {
-    x[k] = o->coord + (size_t)o->dim * v[k];
-    mm[k] = o->met + (size_t)o->met_ncomp * v[k];
+/* dist over the output of pc: 0 at the output vertices matching an input
+ * vertex marked in mark (pc->hot, pc->skin), else the vertex layers from
+ * them, at most nl. */
+static void layers_from(const pa__piece *pc, const uint8_t *mark, int nl,
+                        int *dist) {
+  const pa_mesh *o = pc->out;
+  for (pa_idx j = 0; j < o->nv; j++) {
+    pa_idx i = pc->match[j];
+    dist[j] = i >= 0 && mark[i] ? 0 : nl;
   }
-  return pa__quality(o->dim, o->met_ncomp, x, mm);
+  vertex_layers(o, nl, dist);
 }
 
 size_t pa__new_payload(const pa_dmesh *dm, int kind, int32_t ref,
@@ -560,13 +563,9 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   }
   /* elements within NEAR_SKIN vertex layers of a hot skin vertex (dist) */
   PA_ALLOC(dist, o->nv);
-  for (pa_idx j = 0; j < o->nv; j++) {
-    pa_idx i = pc->match[j];
-    dist[j] = i >= 0 && pc->hot[i] ? 0 : NEAR_SKIN;
-  }
-  vertex_layers(o, NEAR_SKIN, dist);
-  /* BAD_NEAR_SKIN: layers from any skin vertex (dsk); only if some element
-   * near the skin is poor, up to 2 NEAR_SKIN for the worst quality of the
+  layers_from(pc, pc->hot, NEAR_SKIN, dist);
+  /* BAD_NEAR_SKIN: layers from any skin vertex (dsk); only if an element
+   * near the skin is poor, counted further for the worst quality of the
    * band beyond (qband; 0: nothing is marked) */
   double qthr = it->piece_failed[pc->id] ||
                         (pc->rep.nswap == 0 && pc->rep.nmove == 0)
@@ -576,22 +575,17 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   if (qthr > 0) {
     int poor = 0;
     PA_ALLOC(dsk, o->nv);
-    for (int pass = 0; pass < 2 && (pass == 0 || poor); pass++) {
-      int cap = pass ? 2 * NEAR_SKIN : NEAR_SKIN;
-      for (pa_idx j = 0; j < o->nv; j++) {
-        pa_idx i = pc->match[j];
-        dsk[j] = i >= 0 && pc->skin[i] ? 0 : cap;
-      }
-      vertex_layers(o, cap, dsk);
-      for (pa_idx e = 0; !pass && !poor && e < o->ne; e++)
-        poor = elem_layer(o, dsk, e) < NEAR_SKIN && out_quality(o, e) < qthr;
-    }
+    layers_from(pc, pc->skin, NEAR_SKIN, dsk);
+    for (pa_idx e = 0; !poor && e < o->ne; e++)
+      poor = elem_layer(o, dsk, e) < NEAR_SKIN &&
+             pa_mesh_elem_quality(pc->out, e) < qthr;
     if (poor) {
+      layers_from(pc, pc->skin, 2 * NEAR_SKIN, dsk);
       qband = qthr;
       for (pa_idx e = 0; e < o->ne; e++) {
         int l = elem_layer(o, dsk, e);
         if (l >= NEAR_SKIN && l < 2 * NEAR_SKIN)
-          qband = fmin(qband, out_quality(o, e));
+          qband = fmin(qband, pa_mesh_elem_quality(pc->out, e));
       }
     }
   }
@@ -607,7 +601,7 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
     }
     if (dv && nhot >= 2) dv = PA__DONE_ON_SKIN;
     if (dv == PA__DONE && qband > 0 && elem_layer(o, dsk, e) < NEAR_SKIN &&
-        out_quality(o, e) < qband) {
+        pa_mesh_elem_quality(pc->out, e) < qband) {
       dv = PA__DONE_NEAR_SKIN; /* see BAD_NEAR_SKIN */
       it->nbadskin++;
     }

@@ -903,14 +903,7 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
   PA_ALLOC(ordV, s->LV.n);
   PA_CALL(number_local(&s->LV, NULL, rank, ordV, &dm->nown[PA_VERTEX]));
   dm->nloc[PA_VERTEX] = (pa_idx)s->LV.n;
-  {
-    pa_gid lo = INT64_MAX, hi = -1;
-    for (size_t i = 0; i < s->LV.n; i++) {
-      if (s->LV.gid[i] < lo) lo = s->LV.gid[i];
-      if (s->LV.gid[i] > hi) hi = s->LV.gid[i];
-    }
-    PA_CALL(pa__gidindex_init(&lv, s->LV.n ? lo : 0, hi + 1, s->LV.n));
-  }
+  PA_CALL(pa__gidindex_init_keys(&lv, s->LV.gid, s->LV.n));
   PA_ALLOC(lvof, s->LV.n);
   for (size_t k = 0; k < s->LV.n; k++) {
     PA_CALL(pa__gidindex_put(&lv, s->LV.gid[ordV[k]], (pa_idx)k, NULL, NULL));

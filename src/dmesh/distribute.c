@@ -770,15 +770,7 @@ pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
     size_t nmax = 0;
     for (int k = 0; k < PA_NKIND; k++) nmax = A[k].n > nmax ? A[k].n : nmax;
     PA_ALLOC(ord, nmax);
-    {
-      pa_gid lo = INT64_MAX, hi = -1;
-      for (size_t i = 0; i < A[PA_VERTEX].n; i++) {
-        if (A[PA_VERTEX].gid[i] < lo) lo = A[PA_VERTEX].gid[i];
-        if (A[PA_VERTEX].gid[i] > hi) hi = A[PA_VERTEX].gid[i];
-      }
-      PA_CALL(pa__gidindex_init(&vmap, A[PA_VERTEX].n ? lo : 0, hi + 1,
-                                A[PA_VERTEX].n));
-    }
+    PA_CALL(pa__gidindex_init_keys(&vmap, A[PA_VERTEX].gid, A[PA_VERTEX].n));
     for (int k = 0; k < PA_NKIND; k++) {
       pa__recs *Q = &A[k];
       for (size_t i = 0; i < Q->n; i++) ord[i] = (pa_idx)i;

@@ -80,6 +80,16 @@ cleanup:
   return st;
 }
 
+pa_status pa__gidindex_init_keys(pa__gidindex *x, const pa_gid *keys,
+                                 size_t n) {
+  pa_gid lo = INT64_MAX, hi = -1;
+  for (size_t i = 0; i < n; i++) {
+    if (keys[i] < lo) lo = keys[i];
+    if (keys[i] > hi) hi = keys[i];
+  }
+  return pa__gidindex_init(x, n ? lo : 0, hi + 1, n);
+}
+
 void pa__gidindex_free(pa__gidindex *x) {
   pa__free(x->dense);
   pa__gidmap_free(&x->map);

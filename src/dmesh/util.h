@@ -71,6 +71,9 @@ typedef struct pa__gidindex {
 
 pa_status pa__gidindex_init(pa__gidindex *x, pa_gid lo, pa_gid hi,
                             size_t nexpected);
+/* pa__gidindex_init over the range of the n keys (nexpected = n). */
+pa_status pa__gidindex_init_keys(pa__gidindex *x, const pa_gid *keys,
+                                 size_t n);
 void pa__gidindex_free(pa__gidindex *x);
 /* As pa__gidmap_put; fails with PA_ERR_INTERNAL for a key out of [lo, hi). */
 static inline pa_status pa__gidindex_put(pa__gidindex *x, pa_gid key,

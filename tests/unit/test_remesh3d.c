@@ -426,6 +426,24 @@ static void test_sphere(void) {
  * to 0.02) >= 97 % of the edges in range, worst quality >= 0.25, mean >=
  * 0.80; the anisotropic boundary layer (1:100) and shell >= 95 % in range,
  * worst >= 0.2; coarsening box 16 to 0.25, worst >= 0.25. */
+/* Remesh m with the test options, check it is valid and succeeded, print
+ * its figures under label; in, qw, qm: edges in range, worst and mean
+ * quality. */
+static void remesh_measured(pa_mesh *m, const char *label, double *in,
+                            double *qw, double *qm) {
+  pa_remesh_opts o;
+  opts_for(&o);
+  pa_remesh_report r;
+  double t = pa_wtime();
+  CHECK_OK(pa_remesh(pa_remesher_builtin(), m, &o, &r));
+  t = pa_wtime() - t;
+  CHECK_OK(pa_mesh_check(m));
+  CHECK(r.outcome == PA_REMESH_SUCCESS);
+  edge_stats(m, in, qw, qm);
+  printf("%s: %d tets in %.2f s, %.2f%% in range, worst Q %.3f mean %.3f\n",
+         label, (int)m->ne, t, 100 * *in, *qw, *qm);
+}
+
 static void test_targets(void) {
   struct {
     int n;
@@ -440,20 +458,11 @@ static void test_targets(void) {
   for (int i = 0; i < 5; i++) {
     pa_mesh *m = box(c[i].n, 0);
     CHECK_OK(pa_metric_analytic(m, c[i].spec));
-    pa_remesh_opts o;
-    opts_for(&o);
-    pa_remesh_report r;
-    double t = pa_wtime();
-    CHECK_OK(pa_remesh(pa_remesher_builtin(), m, &o, &r));
-    t = pa_wtime() - t;
-    CHECK_OK(pa_mesh_check(m));
-    CHECK_NEAR(pa_mesh_volume(m), 1.0, 1e-12);
+    char label[64];
     double in, qw, qm;
-    edge_stats(m, &in, &qw, &qm);
-    printf("targets box %d %s: %d tets in %.2f s, %.2f%% in range, worst Q "
-           "%.3f mean %.3f\n",
-           c[i].n, c[i].spec, (int)m->ne, t, 100 * in, qw, qm);
-    CHECK(r.outcome == PA_REMESH_SUCCESS);
+    snprintf(label, sizeof label, "targets box %d %s", c[i].n, c[i].spec);
+    remesh_measured(m, label, &in, &qw, &qm);
+    CHECK_NEAR(pa_mesh_volume(m), 1.0, 1e-12);
     CHECK(in >= c[i].min_in);
     CHECK(qw >= c[i].min_qw);
     CHECK(qm >= c[i].min_qm);
@@ -481,19 +490,11 @@ static void test_lattice_crowd(void) {
       CHECK_OK(pa_mesh_set_metric(m, 6, t));
       free(t);
     }
-    pa_remesh_opts o;
-    opts_for(&o);
-    pa_remesh_report r;
-    double t = pa_wtime();
-    CHECK_OK(pa_remesh(pa_remesher_builtin(), m, &o, &r));
-    t = pa_wtime() - t;
-    CHECK_OK(pa_mesh_check(m));
+    char label[64];
     double in, qw, qm;
-    edge_stats(m, &in, &qw, &qm);
-    printf("lattice crowd box 4 -> %.3f%s: %d tets in %.2f s, %.2f%% in "
-           "range, worst Q %.3f mean %.3f\n",
-           h[i], i == 2 ? " (tensor)" : "", (int)m->ne, t, 100 * in, qw, qm);
-    CHECK(r.outcome == PA_REMESH_SUCCESS);
+    snprintf(label, sizeof label, "lattice crowd box 4 -> %.3f%s", h[i],
+             i == 2 ? " (tensor)" : "");
+    remesh_measured(m, label, &in, &qw, &qm);
     CHECK(in >= 0.95);
     CHECK(qw >= 0.25);
     ne[i] = m->ne;
