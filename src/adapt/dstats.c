@@ -2,7 +2,10 @@
  * dstats.c -- pa_dmesh_stats: the statistics of pa_mesh_stats for a
  * distributed mesh, without gathering it.
  *
- * Elements are counted by their owner (volume, inversion, quality). Each
+ * Elements are counted by their owner (volume, inversion, quality). The
+ * local edges are found as in pa_mesh_stats (instances filed under one
+ * endpoint, here the one of smaller global id, and deduplicated with a
+ * marker array: linear time). Each
  * edge is measured once over the ranks: an edge with an endpoint that has
  * no copy on another rank exists on this rank only and is counted here;
  * every other edge is sent (as a record keyed by a hash of its two vertex
@@ -87,7 +90,7 @@ pa_status pa_dmesh_stats(pa_dmesh *dm, pa_stats *stats) {
   pa_status st = PA_SUCCESS;
   pa_stats s;
   uint8_t *shared = NULL;
-  pa_gid *key = NULL;
+  pa_idx *pos = NULL, *other = NULL, *mark = NULL;
   int *dest = NULL;
   pa__recs S, R;
   pa__recs_init(&S, PA_EDGE, 2, 1);
@@ -129,11 +132,20 @@ pa_status pa_dmesh_stats(pa_dmesh *dm, pa_stats *stats) {
     while (pa_dmesh_iter_next(&iv, &v)) shared[v] = 0;
   }
 
-  /* unique local edges (local vertex pairs), then local or sent */
+  /* unique local edges, each filed under its endpoint of smaller global id
+   * (a CSR of edge instances, deduplicated with a marker array as in
+   * pa_mesh_stats: linear, no sort), then counted here or sent */
   {
-    size_t n = 0;
-    pa_gid N = nv > 0 ? nv : 1;
-    PA_ALLOC(key, (size_t)ne * nve * d / 2 + 1);
+    size_t ns = 0, ninst = (size_t)ne * nve * d / 2;
+    PA_CALLOC(pos, (size_t)nv + 1);
+    for (pa_idx e = 0; e < ne; e++) {
+      const pa_idx *v = m->elem + (size_t)nve * e;
+      for (int i = 0; i < nve; i++)
+        for (int j = i + 1; j < nve; j++)
+          if (v[i] != v[j]) pos[(vg[v[i]] < vg[v[j]] ? v[i] : v[j]) + 1]++;
+    }
+    for (pa_idx i = 0; i < nv; i++) pos[i + 1] += pos[i];
+    PA_ALLOC(other, ninst ? ninst : 1);
     for (pa_idx e = 0; e < ne; e++) {
       const pa_idx *v = m->elem + (size_t)nve * e;
       for (int i = 0; i < nve; i++)
@@ -145,27 +157,34 @@ pa_status pa_dmesh_stats(pa_dmesh *dm, pa_stats *stats) {
             a = b;
             b = t;
           }
-          key[n++] = (pa_gid)a * N + b;
+          other[pos[a]++] = b; /* pos[a] ends at the end of a's range */
         }
     }
-    n = pa__gid_sort_unique(key, n);
-    PA_ALLOC(dest, n);
-    size_t ns = 0;
-    for (size_t i = 0; i < n; i++) {
-      pa_idx a = (pa_idx)(key[i] / N), b = (pa_idx)(key[i] % N);
-      double len = pa__edge_length(d, nc, m->coord + (size_t)d * a,
-                                   m->coord + (size_t)d * b,
-                                   nc ? m->met + (size_t)nc * a : NULL,
-                                   nc ? m->met + (size_t)nc * b : NULL);
-      if (!shared[a] || !shared[b]) {
-        add_edge(&s, len);
-        continue;
+    PA_ALLOC(mark, nv ? (size_t)nv : 1);
+    for (pa_idx i = 0; i < nv; i++) mark[i] = -1;
+    PA_ALLOC(dest, ninst ? ninst : 1);
+    for (pa_idx a = 0; a < nv; a++)
+      for (pa_idx k = a ? pos[a - 1] : 0; k < pos[a]; k++) {
+        pa_idx b = other[k];
+        if (mark[b] == a) continue;
+        mark[b] = a;
+        double len = pa__edge_length(d, nc, m->coord + (size_t)d * a,
+                                     m->coord + (size_t)d * b,
+                                     nc ? m->met + (size_t)nc * a : NULL,
+                                     nc ? m->met + (size_t)nc * b : NULL);
+        if (!shared[a] || !shared[b]) {
+          add_edge(&s, len);
+          continue;
+        }
+        pa_gid ab[2] = {vg[a], vg[b]};
+        uint64_t h = pair_hash(ab[0], ab[1]);
+        PA_CALL(pa__recs_add(&S, (pa_gid)h, ab, 0, 0, 0, &len, NULL, 0));
+        dest[ns++] = (int)(h % (uint64_t)dm->size);
       }
-      pa_gid ab[2] = {vg[a], vg[b]};
-      uint64_t h = pair_hash(ab[0], ab[1]);
-      PA_CALL(pa__recs_add(&S, (pa_gid)h, ab, 0, 0, 0, &len, NULL, 0));
-      dest[ns++] = (int)(h % (uint64_t)dm->size);
-    }
+    pa__free(pos);
+    pa__free(other);
+    pa__free(mark);
+    pos = other = mark = NULL;
   }
   PA_CALL(pa__recs_migrate(dm->comm, &S, dest, &R));
   /* R is sorted by hash: equal pairs are in the same run of equal hashes */
@@ -187,7 +206,9 @@ pa_status pa_dmesh_stats(pa_dmesh *dm, pa_stats *stats) {
 cleanup:
   if (dm) st = pa__agree_end(dm->comm, st);
   pa__free(shared);
-  pa__free(key);
+  pa__free(pos);
+  pa__free(other);
+  pa__free(mark);
   pa__free(dest);
   pa__recs_free(&S);
   pa__recs_free(&R);

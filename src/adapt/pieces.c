@@ -193,7 +193,8 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
    * 2^31 (32-bit SCOTCH_Num): beyond that, unit weights. */
   if (it->npieces > 1) {
     int weighted = (double)it->ntagged * 1e6 < 2147483647.0;
-    PA_CALL(pa__dual_graph(dm->comm, it->dim, nt, vg, &xadj, &adj, NULL, NULL));
+    PA_CALL(pa__dual_graph(dm->comm, it->dim, nt, vg, NULL, 0, &xadj, &adj,
+                           NULL, NULL));
     st = pa__partition_dgraph(dm->comm, nt, xadj, adj, weighted ? wt : NULL,
                               it->npieces, PIECE_KBAL, part);
     PA_CALL(pa__agree(dm->comm, st));

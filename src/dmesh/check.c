@@ -266,7 +266,8 @@ pa_status pa_dmesh_check(pa_dmesh *dm) {
     for (size_t k = 0; k < (size_t)ne * (d + 1); k++)
       vg[k] = dm->gid[PA_VERTEX][m->elem[k]];
     PA_CALL(pa__agree(dm->comm, st));
-    PA_CALL(pa__dual_graph(dm->comm, d, ne, vg, &xadj, &adj, NULL, NULL));
+    PA_CALL(pa__dual_graph(dm->comm, d, ne, vg, m->elem, m->nv, &xadj, &adj,
+                           NULL, NULL));
   }
   /* counts */
   {
@@ -410,7 +411,8 @@ pa_status pa_dmesh_partition_stats(pa_dmesh *dm, pa_gid *nelem,
     for (size_t k = 0; vg && k < (size_t)ne * (d + 1); k++)
       vg[k] = dm->gid[PA_VERTEX][dm->mesh->elem[k]];
     PA_CALL(pa__agree(dm->comm, st));
-    PA_CALL(pa__dual_graph(dm->comm, d, ne, vg, &xadj, &adj, &adjrank, NULL));
+    PA_CALL(pa__dual_graph(dm->comm, d, ne, vg, dm->mesh->elem, dm->mesh->nv,
+                           &xadj, &adj, &adjrank, NULL));
     for (pa_idx j = 0; j < xadj[ne]; j++) cut += adjrank[j] != dm->rank;
   }
   PA_CALL(pa__allreduce(dm->comm, &cut, 1, MPI_INT64_T, MPI_SUM));

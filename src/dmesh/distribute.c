@@ -423,8 +423,8 @@ cleanup:
 }
 
 pa_status pa__dual_graph(MPI_Comm comm, int dim, pa_idx n, const pa_gid *vgid,
-                         pa_idx **xadjp, pa_gid **adjp, int **adjrankp,
-                         pa_gid *offsetp) {
+                         const pa_idx *lv, pa_idx nv, pa_idx **xadjp,
+                         pa_gid **adjp, int **adjrankp, pa_gid *offsetp) {
   pa_status st = PA_SUCCESS;
   int rank, size, nk = dim, nf = dim + 1;
   size_t nface = (size_t)n * nf;
@@ -445,7 +445,10 @@ pa_status pa__dual_graph(MPI_Comm comm, int dim, pa_idx n, const pa_gid *vgid,
     if (rank == 0) offset = 0;
   }
   PA_ALLOC(mate, nface);
-  PA_CALL(match_local(dim, n, vgid, mate));
+  if (lv)
+    PA_CALL(pa__match_faces(dim, n, lv, nv, vgid, mate));
+  else
+    PA_CALL(match_local(dim, n, vgid, mate));
   /* neighbour per face (in place of mate): global graph vertex and rank
    * (-1: none yet) */
   nbr = mate;
@@ -594,7 +597,7 @@ pa_status pa__dmesh_partition(MPI_Comm comm, int dim, pa_idx n,
     return pa__agree(comm, PA_SUCCESS);
   }
   double t0 = pa_wtime(), t1, t2;
-  PA_CALL(pa__dual_graph(comm, dim, n, vgid, &xadj, &adj, NULL, NULL));
+  PA_CALL(pa__dual_graph(comm, dim, n, vgid, NULL, 0, &xadj, &adj, NULL, NULL));
   PA_CALL(pa__agree(comm, PA_SUCCESS));
   t1 = pa_wtime();
   st = pa__partition_dgraph(comm, n, xadj, adj, weights, size, 0, part);

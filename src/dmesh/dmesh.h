@@ -236,14 +236,16 @@ pa_status pa__value_setup(pa_dmesh *dm, pa_dmesh_value *v);
 int32_t pa__dmesh_ref(const pa_dmesh *dm, int kind, pa_idx e);
 
 /* Collective: the distributed dual graph of n elements (vertex gids in
- * vgid, dim+1 per element): for element i, its face neighbours are
+ * vgid, dim+1 per element; lv, if not NULL, the same vertices as local
+ * numbers in [0, nv), which saves numbering them here through a hash map):
+ * for element i, its face neighbours are
  * adj[xadj[i] .. xadj[i+1]-1], given as global graph vertex numbers
  * (offset of the holding rank + its local index; offsets from an exclusive
  * scan of n), with the holding rank in adjrank. Fails with PA_ERR_MESH if a
  * face is shared by more than two elements. */
 pa_status pa__dual_graph(MPI_Comm comm, int dim, pa_idx n, const pa_gid *vgid,
-                         pa_idx **xadj, pa_gid **adj, int **adjrank,
-                         pa_gid *offset);
+                         const pa_idx *lv, pa_idx nv, pa_idx **xadj,
+                         pa_gid **adj, int **adjrank, pa_gid *offset);
 
 /* Local: match the faces of n elements (dim+1 local vertex numbers in
  * [0, nv) each in lv): mate[e*(dim+1)+i] = f*(dim+1)+j if face i of element
