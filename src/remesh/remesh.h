@@ -156,7 +156,9 @@ void pa__rm_interp(pa__rmesh *rm, pa_idx v, int n, const pa_idx *src,
 /* Write the working mesh back into mesh, renumbered compactly. Frees the
  * working arrays as it goes; on failure the mesh is left as it was. */
 pa_status pa__rm_writeback(pa__rmesh *rm, pa_mesh *mesh);
-/* Check the working mesh invariants; PA_ERR_INTERNAL naming the first fault. */
+/* Check the working mesh invariants; PA_ERR_INTERNAL naming the first fault.
+ * The RME_INRANGE cache is checked in debug builds only (a stale mark costs
+ * operations, not validity). */
 pa_status pa__rm_check(const pa__rmesh *rm);
 /* Edge-length and quality figures over the modifiable part of the mesh. */
 typedef struct pa__rm_figures {

@@ -635,6 +635,10 @@ pa_status pa__rm_check(const pa__rmesh *rm) {
     double area = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
     PA_CHECK(area > 0, PA_ERR_INTERNAL,
              "remesher: element %d is not positively oriented", (int)k);
+#ifndef NDEBUG
+    /* the in-range mark is a cache: a stale one costs operations, never
+     * validity, so only debug builds check it (it is most of this check's
+     * time: three metric lengths per element) */
     if (rm->etag[k] & RME_INRANGE) { /* the cache is still true */
       int mc = rm->mcomp;
       for (int i = 0; i < 3; i++) {
@@ -646,6 +650,7 @@ pa_status pa__rm_check(const pa__rmesh *rm) {
                  "length %g", (int)k, i, l);
       }
     }
+#endif
     for (int i = 0; i < 3; i++) {
       pa_idx code = 3 * k + i, o = rm->adj[code];
       pa_idx e0 = v[(i + 1) % 3], e1 = v[(i + 2) % 3];
