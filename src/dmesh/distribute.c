@@ -292,6 +292,17 @@ static pa_idx face_min_key(int dim, const pa_idx *lv, size_t fe, uint64_t *key) 
   return v[0];
 }
 
+/* Smallest vertex of local face fe alone (the second pass over the faces
+ * needs no key). */
+static pa_idx face_min(int dim, const pa_idx *lv, size_t fe) {
+  int nf = dim + 1, i = (int)(fe % (size_t)nf);
+  const pa_idx *ev = lv + fe / (size_t)nf * (size_t)nf;
+  pa_idx m = -1;
+  for (int j = 0; j < nf; j++)
+    if (j != i && (m < 0 || ev[j] < m)) m = ev[j];
+  return m;
+}
+
 pa_status pa__match_faces(int dim, pa_idx n, const pa_idx *lv, pa_idx nv,
                           const pa_gid *vgid, pa_gid *mate) {
   pa_status st = PA_SUCCESS;
@@ -313,7 +324,7 @@ pa_status pa__match_faces(int dim, pa_idx n, const pa_idx *lv, pa_idx nv,
     fstart[x + 1] += fstart[x];
   }
   for (size_t fe = 0; fe < nface; fe++)
-    bucket[fstart[face_min_key(dim, lv, fe, &key)]++] = (pa_idx)fe;
+    bucket[fstart[face_min(dim, lv, fe)]++] = (pa_idx)fe;
   for (pa_idx x = nv; x > 0; x--) fstart[x] = fstart[x - 1];
   fstart[0] = 0;
   PA_ALLOC(it, maxb);
