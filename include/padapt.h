@@ -699,6 +699,19 @@ pa_status pa_dmesh_redistribute(pa_dmesh *dm, const int *newpart,
                                 const double *weights);
 
 /**
+ * Even out the load (weights: one per owned element, or NULL for element
+ * counts) when a rank holds more than tol (>= 1) times the mean, by moving
+ * only the excess across the existing interfaces: diffusion flows on the
+ * graph of ranks, each served by a band of elements along the interface,
+ * then pa_dmesh_redistribute. Nothing moves when the load is within tol.
+ * Falls back to a full PT-Scotch repartition when the ranks' graph is
+ * disconnected or the flows cannot be served. *nmoved (may be NULL): elements moved, 0 if none, -1 after a
+ * fallback. Collective.
+ */
+pa_status pa_dmesh_rebalance(pa_dmesh *dm, const double *weights, double tol,
+                             pa_gid *nmoved);
+
+/**
  * Check the distributed mesh; collective, returns the same status on every
  * rank (PA_ERR_MESH with a message naming the entity): global ids unique and
  * counts consistent, every ghost equal to its owner (coordinates, reference,
@@ -788,9 +801,10 @@ typedef struct pa_adapt_opts {
    *  small tagged set is remeshed in fewer, larger pieces (0: off). */
   double min_piece_ratio;
   /** Skip the final rebalance when the owned elements per rank are within
-   *  this ratio of the mean (default 1.05). */
+   *  this ratio of the mean (default 1.05; >= 1). */
   double rebalance_tol;
-  /** Repartition and redistribute for balance after the loop (default 1). */
+  /** Rebalance after the loop (pa_dmesh_rebalance: only the excess moves;
+   *  default 1). */
   int rebalance;
   /** Check every remeshed piece (pa_mesh_check) before using it, and the
    *  result (pa_dmesh_check) after the loop: 1 always, 0 never, -1 (default)

@@ -133,6 +133,8 @@ static pa_status check_opts(pa_dmesh *dm, const pa_adapt_opts *o) {
            o->max_iter);
   PA_CHECK(o->pieces_per_rank >= 1, PA_ERR_ARG,
            "pieces_per_rank must be >= 1, got %d", o->pieces_per_rank);
+  PA_CHECK(!o->rebalance || o->rebalance_tol >= 1, PA_ERR_ARG,
+           "rebalance_tol must be >= 1, got %g", o->rebalance_tol);
 cleanup:
   return st;
 }
@@ -282,13 +284,8 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
   }
   {
     double ta = pa_wtime();
-    if (opts->rebalance && dm->size > 1) {
-      double x[1] = {(double)dm->nown[PA_ELEMENT]};
-      PA_CALL(pa__allreduce(dm->comm, x, 1, MPI_DOUBLE, MPI_MAX));
-      double mean = (double)dm->nglob[PA_ELEMENT] / dm->size;
-      if (mean > 0 && x[0] > opts->rebalance_tol * mean)
-        PA_CALL(pa_dmesh_redistribute(dm, NULL, NULL));
-    }
+    if (opts->rebalance && dm->size > 1)
+      PA_CALL(pa_dmesh_rebalance(dm, NULL, opts->rebalance_tol, NULL));
     rep.t_rebalance = pa_wtime() - ta;
     PA_CALL(pa__allreduce(dm->comm, &rep.t_rebalance, 1, MPI_DOUBLE, MPI_MAX));
   }

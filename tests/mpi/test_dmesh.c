@@ -302,6 +302,82 @@ static void test_redistribute(void) {
 
 /* PT-Scotch balances weighted loads on a mesh large enough for the loads
  * to have overflowed Scotch's 32-bit sum (they were scaled to [1, 10^6]). */
+/* pa_dmesh_rebalance (overlap 0 and 1): a band of elements (centroid
+ * x < 0.3) is moved to rank 0, then rebalanced: within the tolerance, no fallback to a full
+ * repartition, only about the excess moved (not the whole mesh), the mesh
+ * and its values the same (checksum), and a balanced mesh left alone. */
+static void test_rebalance(void) {
+  for (int dim = 2; dim <= 3; dim++) {
+    pa_mesh *in = box_on_root(dim, dim == 2 ? 40 : 8);
+    pa_dmesh *dm = NULL;
+    /* 2D without ghosts (the adaptation's case), 3D with one layer */
+    CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, in, dim == 2 ? 0 : 1, &dm));
+    pa_mesh_destroy(in);
+    if (!dm) continue;
+    pa_dmesh_value *ve = NULL;
+    CHECK_OK(pa_dmesh_value_add(dm, PA_ELEMENT, "ve", MPI_INT64_T, 1, -1, &ve));
+    if (ve) {
+      pa_idx n, nown;
+      int64_t *v = pa_dmesh_value_data(ve, &n, &nown);
+      const pa_gid *eg = pa_dmesh_gids(dm, PA_ELEMENT);
+      for (pa_idx i = 0; i < n; i++) v[i] = 3 * eg[i] + 2;
+    }
+    pa_idx ne = pa_dmesh_nowned(dm, PA_ELEMENT);
+    const double *x = pa_mesh_coords(pa_dmesh_mesh(dm));
+    int *part = malloc(sizeof(int) * (ne + 1));
+    for (pa_idx e = 0; e < ne; e++) {
+      const pa_idx *ev = pa_dmesh_elem_verts(dm, e);
+      double cx = 0;
+      for (int k = 0; k <= dim; k++) cx += x[dim * ev[k]] / (dim + 1);
+      part[e] = cx < 0.3 ? 0 : rank;
+    }
+    CHECK_OK(pa_dmesh_redistribute(dm, part, NULL));
+    free(part);
+    uint64_t before = 0, after = 0;
+    CHECK_OK(pa_dmesh_checksum(dm, &before));
+    long mine = pa_dmesh_nowned(dm, PA_ELEMENT), mx, tot, excess;
+    MPI_Allreduce(&mine, &mx, 1, MPI_LONG, MPI_MAX, MPI_COMM_WORLD);
+    MPI_Allreduce(&mine, &tot, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
+    long over = mine > tot / size ? mine - tot / size : 0;
+    MPI_Allreduce(&over, &excess, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
+    pa_gid moved = -2;
+    CHECK_OK(pa_dmesh_rebalance(dm, NULL, 1.05, &moved));
+    mine = pa_dmesh_nowned(dm, PA_ELEMENT);
+    long mx2;
+    MPI_Allreduce(&mine, &mx2, 1, MPI_LONG, MPI_MAX, MPI_COMM_WORLD);
+    double mean = (double)tot / size;
+    if (size == 1) {
+      CHECK(moved == 0);
+    } else {
+      CHECK(mx > 1.05 * mean); /* the set-up was imbalanced */
+      CHECK(moved > 0);        /* diffusion, no fallback (-1) */
+      CHECK(mx2 <= 1.05 * mean + size + 1);
+      CHECK(moved <= (size - 1) * excess + 10 * size);
+      CHECK(moved < tot / 2);
+    }
+    CHECK_OK(pa_dmesh_check(dm));
+    CHECK_OK(pa_dmesh_checksum(dm, &after));
+    CHECK(before == after);
+    if (ve) {
+      pa_idx n, nown;
+      int64_t *v = pa_dmesh_value_data(ve, &n, &nown);
+      const pa_gid *eg = pa_dmesh_gids(dm, PA_ELEMENT);
+      int bad = 0;
+      for (pa_idx i = 0; i < n; i++) bad += v[i] != 3 * eg[i] + 2;
+      CHECK(bad == 0);
+    }
+    /* balanced now: nothing moves */
+    pa_gid moved2 = -2;
+    CHECK_OK(pa_dmesh_rebalance(dm, NULL, 1.05, &moved2));
+    CHECK(moved2 == 0);
+    if (rank == 0)
+      printf("rebalance %dD: max %ld -> %ld elements per rank (mean %.0f), "
+             "excess %ld, moved %lld\n", dim, mx, mx2, mean, excess,
+             (long long)moved);
+    pa_dmesh_destroy(dm);
+  }
+}
+
 static void test_weighted_balance(void) {
   pa_mesh *in = box_on_root(3, 12); /* 10,368 tetrahedra */
   pa_dmesh *dm = NULL;
@@ -437,10 +513,10 @@ int main(int argc, char **argv) {
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   size_t mem0 = pa_memory_current();
-  pa_test_fn tests[] = {test_distribute, test_redistribute,
+  pa_test_fn tests[] = {test_distribute, test_redistribute, test_rebalance,
                         test_weighted_balance, test_adjacency, test_bad_input};
-  const char *names[] = {"distribute", "redistribute", "weighted_balance",
-                         "adjacency", "bad_input"};
+  const char *names[] = {"distribute", "redistribute", "rebalance",
+                         "weighted_balance", "adjacency", "bad_input"};
   for (size_t t = 0; t < sizeof tests / sizeof *tests; t++) {
     int before = pa_test_failures;
     double t0 = MPI_Wtime();

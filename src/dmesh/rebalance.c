@@ -1,0 +1,310 @@
+/*
+ * rebalance.c -- pa_dmesh_rebalance: even out the owned elements (or their
+ * weights) over the ranks by moving only the excess across the existing
+ * interfaces, instead of repartitioning the whole mesh.
+ *
+ *  1. Every rank learns the load of every rank and which ranks share faces
+ *     (from the distributed dual graph of the owned elements, which needs
+ *     no ghosts): allgathers of P loads and of the neighbour lists.
+ *  2. Every rank solves, identically (same data, same operations), L x = b
+ *     on that graph of ranks, L its Laplacian and b the load minus the mean
+ *     (conjugate gradients, P unknowns). The flow from rank r to a neighbour
+ *     s is x_r - x_s: the diffusion solution of minimal Euclidean norm (Hu
+ *     and Blake, 1999), which moves the excess along the shortest routes.
+ *  3. Rank r gives each neighbour s with a positive flow that much load of
+ *     its own elements, taken breadth-first from the faces it shares with s
+ *     (a band along the interface moves), and pa_dmesh_redistribute moves
+ *     them. Flows through a rank (r -> s -> t) are served by s's own
+ *     elements, so one redistribution does it.
+ * Falls back to a PT-Scotch repartition (pa_dmesh_redistribute(dm, NULL, w))
+ * when the graph of ranks is disconnected or the predicted loads still
+ * exceed tol x mean (a flow larger than what is reachable from an interface).
+ */
+#include "dmesh/dmesh.h"
+
+#include <math.h>
+
+/* Load of owned element e. */
+static double elem_load(const double *w, pa_idx e) { return w ? w[e] : 1.0; }
+
+/* y = L x on the graph of ranks (CSR xadj/adj, unit edge weights). */
+static void laplacian(int P, const int *xadj, const int *adj, const double *x,
+                      double *y) {
+  for (int r = 0; r < P; r++) {
+    double s = (double)(xadj[r + 1] - xadj[r]) * x[r];
+    for (int k = xadj[r]; k < xadj[r + 1]; k++) s -= x[adj[k]];
+    y[r] = s;
+  }
+}
+
+/* Solve L x = b (b sums to zero, the graph is connected) by conjugate
+ * gradients; x has zero mean. Deterministic: every rank gets the same x. */
+static pa_status diffusion(int P, const int *xadj, const int *adj,
+                           const double *b, double *x) {
+  pa_status st = PA_SUCCESS;
+  double *r = NULL, *p = NULL, *q = NULL;
+  PA_ALLOC(r, P);
+  PA_ALLOC(p, P);
+  PA_ALLOC(q, P);
+  double bb = 0, rr = 0;
+  for (int i = 0; i < P; i++) {
+    x[i] = 0;
+    r[i] = p[i] = b[i];
+    bb += b[i] * b[i];
+  }
+  rr = bb;
+  for (int it = 0; it < 10 * P + 10 && rr > 1e-24 * bb; it++) {
+    laplacian(P, xadj, adj, p, q);
+    double pq = 0;
+    for (int i = 0; i < P; i++) pq += p[i] * q[i];
+    if (!(pq > 0)) break;
+    double a = rr / pq, rn = 0;
+    for (int i = 0; i < P; i++) {
+      x[i] += a * p[i];
+      r[i] -= a * q[i];
+      rn += r[i] * r[i];
+    }
+    for (int i = 0; i < P; i++) p[i] = r[i] + rn / rr * p[i];
+    rr = rn;
+  }
+cleanup:
+  pa__free(r);
+  pa__free(p);
+  pa__free(q);
+  return st;
+}
+
+/* The graph of ranks: s is a neighbour of r if an owned element of r has a
+ * face neighbour owned by s (eadjrank: the owner of each face neighbour in
+ * the distributed dual graph exadj). Symmetrised; CSR over all P ranks,
+ * neighbours ascending. *mine: this rank's neighbours, *nmine of them. */
+static pa_status rank_graph(pa_dmesh *dm, const pa_idx *exadj,
+                            const int *eadjrank, int **xadjp, int **adjp,
+                            int **minep, int *nminep) {
+  pa_status st = PA_SUCCESS;
+  int P = dm->size;
+  uint8_t *nbr = NULL;
+  int *mine = NULL, *deg = NULL, *off = NULL, *all = NULL, *xadj = NULL,
+      *adj = NULL, nmine = 0;
+  PA_CALLOC(nbr, P);
+  for (pa_idx k = 0; k < exadj[dm->nown[PA_ELEMENT]]; k++) nbr[eadjrank[k]] = 1;
+  PA_ALLOC(mine, P);
+  for (int s = 0; s < P; s++)
+    if (nbr[s] && s != dm->rank) mine[nmine++] = s;
+  PA_ALLOC(deg, P);
+  PA_ALLOC(off, P + 1);
+  PA_CALL(pa__agree(dm->comm, st));
+  MPI_Allgather(&nmine, 1, MPI_INT, deg, 1, MPI_INT, dm->comm);
+  off[0] = 0;
+  for (int r = 0; r < P; r++) off[r + 1] = off[r] + deg[r];
+  PA_ALLOC(all, off[P] ? off[P] : 1);
+  MPI_Allgatherv(mine, nmine, MPI_INT, all, deg, off, MPI_INT, dm->comm);
+  /* symmetrise: s in r's list or r in s's list */
+  PA_CALLOC(xadj, P + 1);
+  for (int r = 0; r < P; r++)
+    for (int k = off[r]; k < off[r + 1]; k++) {
+      xadj[r + 1]++;
+      xadj[all[k] + 1]++;
+    }
+  for (int r = 0; r < P; r++) xadj[r + 1] += xadj[r];
+  PA_ALLOC(adj, xadj[P] ? xadj[P] : 1);
+  {
+    int *pos = deg; /* reused as fill positions */
+    for (int r = 0; r < P; r++) pos[r] = xadj[r];
+    for (int r = 0; r < P; r++)
+      for (int k = off[r]; k < off[r + 1]; k++) {
+        adj[pos[r]++] = all[k];
+        adj[pos[all[k]]++] = r;
+      }
+  }
+  /* sort and deduplicate each list (short lists: insertion sort) */
+  {
+    int w = 0;
+    for (int r = 0; r < P; r++) {
+      int b = xadj[r], e = xadj[r + 1];
+      for (int i = b + 1; i < e; i++)
+        for (int j = i; j > b && adj[j - 1] > adj[j]; j--) {
+          int t = adj[j];
+          adj[j] = adj[j - 1];
+          adj[j - 1] = t;
+        }
+      xadj[r] = w;
+      for (int i = b; i < e; i++)
+        if (i == b || adj[i] != adj[i - 1]) adj[w++] = adj[i];
+    }
+    xadj[P] = w;
+  }
+  *xadjp = xadj;
+  *adjp = adj;
+  *minep = mine;
+  *nminep = nmine;
+  xadj = adj = mine = NULL;
+cleanup:
+  pa__free(nbr);
+  pa__free(mine);
+  pa__free(deg);
+  pa__free(off);
+  pa__free(all);
+  pa__free(xadj);
+  pa__free(adj);
+  return st;
+}
+
+/* Is the graph of ranks connected? */
+static int connected(int P, const int *xadj, const int *adj, int *queue,
+                     uint8_t *seen) {
+  int head = 0, tail = 0;
+  memset(seen, 0, (size_t)P);
+  queue[tail++] = 0;
+  seen[0] = 1;
+  while (head < tail) {
+    int r = queue[head++];
+    for (int k = xadj[r]; k < xadj[r + 1]; k++)
+      if (!seen[adj[k]]) {
+        seen[adj[k]] = 1;
+        queue[tail++] = adj[k];
+      }
+  }
+  return tail == P;
+}
+
+pa_status pa_dmesh_rebalance(pa_dmesh *dm, const double *weights, double tol,
+                             pa_gid *nmoved) {
+  pa_status st = PA_SUCCESS;
+  int P, fallback = 0;
+  double *load = NULL, *b = NULL, *x = NULL, *delta = NULL;
+  int *xadj = NULL, *adj = NULL, *mine = NULL, *part = NULL, *queue = NULL;
+  pa_idx *bfs = NULL, *exadj = NULL;
+  pa_gid *vg = NULL, *eadj = NULL, eoff = 0;
+  int *eadjrank = NULL;
+  uint8_t *seen = NULL;
+  int nmine = 0;
+  pa_gid moved = 0;
+  PA_CHECK(dm && tol >= 1.0, PA_ERR_ARG,
+           "pa_dmesh_rebalance: NULL dmesh or tolerance below 1");
+  pa__agree_reset();
+  P = dm->size;
+  pa_idx ne = dm->nown[PA_ELEMENT];
+  if (weights)
+    for (pa_idx e = 0; e < ne; e++)
+      PA_CHECK(isfinite(weights[e]) && weights[e] >= 0, PA_ERR_ARG,
+               "pa_dmesh_rebalance: weight of owned element %d is %g",
+               (int)e, weights[e]);
+  PA_CALLOC(load, P);
+  for (pa_idx e = 0; e < ne; e++) load[dm->rank] += elem_load(weights, e);
+  PA_CALL(pa__allreduce(dm->comm, load, P, MPI_DOUBLE, MPI_SUM));
+  double mean = 0, mx = 0;
+  for (int r = 0; r < P; r++) {
+    mean += load[r] / P;
+    mx = fmax(mx, load[r]);
+  }
+  if (P == 1 || mx <= tol * mean) goto done; /* balanced enough */
+
+  /* 1-2. the owned elements' dual graph (face neighbours with their owner,
+   * whatever the overlap), the graph of ranks and the diffusion flows */
+  {
+    int d = dm->dim;
+    PA_ALLOC(vg, (size_t)ne * (d + 1) + 1);
+    for (size_t k = 0; k < (size_t)ne * (d + 1); k++)
+      vg[k] = dm->gid[PA_VERTEX][dm->mesh->elem[k]];
+    PA_CALL(pa__agree(dm->comm, st));
+    PA_CALL(pa__dual_graph(dm->comm, d, ne, vg, dm->mesh->elem, dm->mesh->nv,
+                           &exadj, &eadj, &eadjrank, &eoff));
+  }
+  PA_CALL(rank_graph(dm, exadj, eadjrank, &xadj, &adj, &mine, &nmine));
+  PA_ALLOC(queue, P);
+  PA_ALLOC(seen, P);
+  if (!connected(P, xadj, adj, queue, seen)) {
+    fallback = 1;
+    goto done;
+  }
+  PA_ALLOC(b, P);
+  PA_ALLOC(x, P);
+  for (int r = 0; r < P; r++) b[r] = load[r] - mean;
+  PA_CALL(diffusion(P, xadj, adj, b, x));
+
+  /* 3. breadth-first from each interface with a positive outflow */
+  PA_ALLOC(part, ne ? ne : 1);
+  PA_ALLOC(bfs, ne ? ne : 1);
+  PA_CALLOC(delta, P);
+  for (pa_idx e = 0; e < ne; e++) part[e] = dm->rank;
+  for (int k = xadj[dm->rank]; k < xadj[dm->rank + 1]; k++) {
+    int s = adj[k];
+    double want = x[dm->rank] - x[s], given = 0;
+    if (want <= 0) continue;
+    pa_idx head = 0, tail = 0;
+    for (pa_idx e = 0; e < ne; e++) { /* seeds: owned faces next to s */
+      if (part[e] != dm->rank) continue;
+      for (pa_idx q = exadj[e]; q < exadj[e + 1]; q++)
+        if (eadjrank[q] == s) {
+          part[e] = -1 - s; /* queued for s */
+          bfs[tail++] = e;
+          break;
+        }
+    }
+    while (head < tail) {
+      pa_idx e = bfs[head++];
+      double w = elem_load(weights, e);
+      if (given + 0.5 * w > want) {
+        part[e] = dm->rank; /* not taken: back home */
+        continue;
+      }
+      part[e] = s;
+      given += w;
+      for (pa_idx q = exadj[e]; q < exadj[e + 1]; q++) {
+        pa_idx f = (pa_idx)(eadj[q] - eoff); /* local if on this rank */
+        if (eadjrank[q] == dm->rank && part[f] == dm->rank) {
+          part[f] = -1 - s;
+          bfs[tail++] = f;
+        }
+      }
+    }
+    delta[s] += given;
+    delta[dm->rank] -= given;
+  }
+  PA_CALL(pa__allreduce(dm->comm, delta, P, MPI_DOUBLE, MPI_SUM));
+  {
+    double after = 0, wmax = 0;
+    int maxdeg = 0;
+    for (pa_idx e = 0; e < ne; e++) wmax = fmax(wmax, elem_load(weights, e));
+    PA_CALL(pa__allreduce(dm->comm, &wmax, 1, MPI_DOUBLE, MPI_MAX));
+    for (int r = 0; r < P; r++) {
+      after = fmax(after, load[r] + delta[r]);
+      if (xadj[r + 1] - xadj[r] > maxdeg) maxdeg = xadj[r + 1] - xadj[r];
+    }
+    /* rounding each flow to whole elements is off by half an element per
+     * neighbour; more means the flows could not be served (too few elements
+     * reachable from an interface) */
+    if (after > tol * mean + 0.5 * (maxdeg + 1) * wmax) fallback = 1;
+  }
+  if (!fallback) {
+    for (pa_idx e = 0; e < ne; e++) moved += part[e] != dm->rank;
+    PA_CALL(pa__allreduce(dm->comm, &moved, 1, MPI_INT64_T, MPI_SUM));
+    PA_CALL(pa_dmesh_redistribute(dm, part, weights));
+  }
+done:
+  if (fallback) {
+    pa__info(2, "padapt: rebalance: repartitioning with PT-Scotch\n");
+    moved = -1;
+    PA_CALL(pa_dmesh_redistribute(dm, NULL, weights));
+  }
+  if (nmoved) *nmoved = moved;
+cleanup:
+  if (dm) st = pa__agree_end(dm->comm, st);
+  pa__free(load);
+  pa__free(b);
+  pa__free(x);
+  pa__free(delta);
+  pa__free(xadj);
+  pa__free(adj);
+  pa__free(mine);
+  pa__free(part);
+  pa__free(queue);
+  pa__free(bfs);
+  pa__free(seen);
+  pa__free(vg);
+  pa__free(exadj);
+  pa__free(eadj);
+  pa__free(eadjrank);
+  return st;
+}
