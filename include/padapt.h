@@ -704,8 +704,9 @@ pa_status pa_dmesh_redistribute(pa_dmesh *dm, const int *newpart,
  * only the excess across the existing interfaces: diffusion flows on the
  * graph of ranks, each served by a band of elements along the interface,
  * then pa_dmesh_redistribute. Nothing moves when the load is within tol.
- * Falls back to a full PT-Scotch repartition when the ranks' graph is
- * disconnected or the flows cannot be served. *nmoved (may be NULL): elements moved, 0 if none, -1 after a
+ * Falls back to a full PT-Scotch repartition when a rank holds more than
+ * 1.5 times the mean, the ranks' graph is disconnected or the flows cannot
+ * be served. *nmoved (may be NULL): elements moved, 0 if none, -1 after a
  * fallback. Collective.
  */
 pa_status pa_dmesh_rebalance(pa_dmesh *dm, const double *weights, double tol,

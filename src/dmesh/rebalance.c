@@ -12,17 +12,23 @@
  *     s is x_r - x_s: the diffusion solution of minimal Euclidean norm (Hu
  *     and Blake, 1999), which moves the excess along the shortest routes.
  *  3. Rank r gives each neighbour s with a positive flow that much load of
- *     its own elements, taken breadth-first from the faces it shares with s
- *     (a band along the interface moves), and pa_dmesh_redistribute moves
- *     them. Flows through a rank (r -> s -> t) are served by s's own
+ *     its own elements, grown greedily from the faces it shares with s: the
+ *     element with the most faces on s's side first (a compact band, a low
+ *     cut), and pa_dmesh_redistribute moves them. Flows through a rank (r -> s -> t) are served by s's own
  *     elements, so one redistribution does it.
  * Falls back to a PT-Scotch repartition (pa_dmesh_redistribute(dm, NULL, w))
- * when the graph of ranks is disconnected or the predicted loads still
- * exceed tol x mean (a flow larger than what is reachable from an interface).
+ * when a rank holds more than 1.5 times the mean (RB_DIFFUSE_MAX), the
+ * graph of ranks is disconnected, or the predicted loads still exceed
+ * tol x mean (a flow larger than what is reachable from an interface).
  */
 #include "dmesh/dmesh.h"
 
 #include <math.h>
+
+/* Above this load over the mean, a fresh partition: moving that much as
+ * bands along the interfaces (up to half a rank's elements at 1.5) grows
+ * the cut by 1.4-2 times in the tests, where PT-Scotch's is lower. */
+#define RB_DIFFUSE_MAX 1.5
 
 /* Load of owned element e. */
 static double elem_load(const double *w, pa_idx e) { return w ? w[e] : 1.0; }
@@ -168,13 +174,45 @@ static int connected(int P, const int *xadj, const int *adj, int *queue,
   return tail == P;
 }
 
+/* Max-heap of keys gain << 32 | (UINT32_MAX - e): the largest gain first,
+ * then the lowest element index. */
+static uint64_t gain_key(int gain, pa_idx e) {
+  return (uint64_t)gain << 32 | (uint64_t)(UINT32_MAX - (uint32_t)e);
+}
+
+static void heap_push(uint64_t *h, size_t *n, uint64_t key) {
+  size_t i = (*n)++;
+  while (i > 0 && h[(i - 1) / 2] < key) {
+    h[i] = h[(i - 1) / 2];
+    i = (i - 1) / 2;
+  }
+  h[i] = key;
+}
+
+static uint64_t heap_pop(uint64_t *h, size_t *n) {
+  uint64_t top = h[0], last = h[--*n];
+  size_t i = 0;
+  for (;;) {
+    size_t c = 2 * i + 1;
+    if (c >= *n) break;
+    if (c + 1 < *n && h[c + 1] > h[c]) c++;
+    if (h[c] <= last) break;
+    h[i] = h[c];
+    i = c;
+  }
+  h[i] = last;
+  return top;
+}
+
 pa_status pa_dmesh_rebalance(pa_dmesh *dm, const double *weights, double tol,
                              pa_gid *nmoved) {
   pa_status st = PA_SUCCESS;
   int P, fallback = 0;
   double *load = NULL, *b = NULL, *x = NULL, *delta = NULL;
   int *xadj = NULL, *adj = NULL, *mine = NULL, *part = NULL, *queue = NULL;
-  pa_idx *bfs = NULL, *exadj = NULL;
+  pa_idx *exadj = NULL;
+  int *gain = NULL;
+  uint64_t *heap = NULL;
   pa_gid *vg = NULL, *eadj = NULL, eoff = 0;
   int *eadjrank = NULL;
   uint8_t *seen = NULL;
@@ -199,6 +237,10 @@ pa_status pa_dmesh_rebalance(pa_dmesh *dm, const double *weights, double tol,
     mx = fmax(mx, load[r]);
   }
   if (P == 1 || mx <= tol * mean) goto done; /* balanced enough */
+  if (mx > RB_DIFFUSE_MAX * mean) { /* a large excess: repartition */
+    fallback = 1;
+    goto done;
+  }
 
   /* 1-2. the owned elements' dual graph (face neighbours with their owner,
    * whatever the overlap), the graph of ranks and the diffusion flows */
@@ -223,40 +265,37 @@ pa_status pa_dmesh_rebalance(pa_dmesh *dm, const double *weights, double tol,
   for (int r = 0; r < P; r++) b[r] = load[r] - mean;
   PA_CALL(diffusion(P, xadj, adj, b, x));
 
-  /* 3. breadth-first from each interface with a positive outflow */
+  /* 3. serve each positive outflow greedily: the element with the most
+   * faces on s's side goes first (a lazy max-heap keyed by that gain, then
+   * the lowest index), so the band grows compact and the cut stays low */
   PA_ALLOC(part, ne ? ne : 1);
-  PA_ALLOC(bfs, ne ? ne : 1);
+  PA_ALLOC(gain, ne ? ne : 1);
+  PA_ALLOC(heap, (size_t)ne * (dm->dim + 1) + 1);
   PA_CALLOC(delta, P);
   for (pa_idx e = 0; e < ne; e++) part[e] = dm->rank;
   for (int k = xadj[dm->rank]; k < xadj[dm->rank + 1]; k++) {
     int s = adj[k];
     double want = x[dm->rank] - x[s], given = 0;
     if (want <= 0) continue;
-    pa_idx head = 0, tail = 0;
-    for (pa_idx e = 0; e < ne; e++) { /* seeds: owned faces next to s */
+    size_t nh = 0;
+    for (pa_idx e = 0; e < ne; e++) {
+      gain[e] = 0;
       if (part[e] != dm->rank) continue;
-      for (pa_idx q = exadj[e]; q < exadj[e + 1]; q++)
-        if (eadjrank[q] == s) {
-          part[e] = -1 - s; /* queued for s */
-          bfs[tail++] = e;
-          break;
-        }
+      for (pa_idx q = exadj[e]; q < exadj[e + 1]; q++) gain[e] += eadjrank[q] == s;
+      if (gain[e]) heap_push(heap, &nh, gain_key(gain[e], e));
     }
-    while (head < tail) {
-      pa_idx e = bfs[head++];
+    while (nh > 0) {
+      uint64_t key = heap_pop(heap, &nh);
+      pa_idx e = (pa_idx)(UINT32_MAX - (uint32_t)key);
+      if (part[e] != dm->rank || (int)(key >> 32) != gain[e]) continue; /* stale */
       double w = elem_load(weights, e);
-      if (given + 0.5 * w > want) {
-        part[e] = dm->rank; /* not taken: back home */
-        continue;
-      }
+      if (given + 0.5 * w > want) break;
       part[e] = s;
       given += w;
       for (pa_idx q = exadj[e]; q < exadj[e + 1]; q++) {
         pa_idx f = (pa_idx)(eadj[q] - eoff); /* local if on this rank */
-        if (eadjrank[q] == dm->rank && part[f] == dm->rank) {
-          part[f] = -1 - s;
-          bfs[tail++] = f;
-        }
+        if (eadjrank[q] == dm->rank && part[f] == dm->rank)
+          heap_push(heap, &nh, gain_key(++gain[f], f));
       }
     }
     delta[s] += given;
@@ -300,7 +339,8 @@ cleanup:
   pa__free(mine);
   pa__free(part);
   pa__free(queue);
-  pa__free(bfs);
+  pa__free(gain);
+  pa__free(heap);
   pa__free(seen);
   pa__free(vg);
   pa__free(exadj);

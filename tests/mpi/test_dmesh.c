@@ -303,11 +303,14 @@ static void test_redistribute(void) {
 /* PT-Scotch balances weighted loads on a mesh large enough for the loads
  * to have overflowed Scotch's 32-bit sum (they were scaled to [1, 10^6]). */
 /* pa_dmesh_rebalance (overlap 0 and 1): a band of elements (centroid
- * x < 0.3) is moved to rank 0, then rebalanced: within the tolerance, no fallback to a full
- * repartition, only about the excess moved (not the whole mesh), the mesh
- * and its values the same (checksum), and a balanced mesh left alone. */
+ * x < band) is moved to rank 0, then rebalanced: within the tolerance;
+ * under 1.5 times the mean, by diffusion moving about the excess (not the
+ * whole mesh), above by a PT-Scotch repartition; the mesh and its values
+ * the same (checksum); a balanced mesh left alone. */
 static void test_rebalance(void) {
-  for (int dim = 2; dim <= 3; dim++) {
+  for (int c = 0; c < 4; c++) {
+    int dim = 2 + c % 2;
+    double band = c < 2 ? 0.08 : 0.45; /* a moderate and a large excess */
     pa_mesh *in = box_on_root(dim, dim == 2 ? 40 : 8);
     pa_dmesh *dm = NULL;
     /* 2D without ghosts (the adaptation's case), 3D with one layer */
@@ -329,12 +332,15 @@ static void test_rebalance(void) {
       const pa_idx *ev = pa_dmesh_elem_verts(dm, e);
       double cx = 0;
       for (int k = 0; k <= dim; k++) cx += x[dim * ev[k]] / (dim + 1);
-      part[e] = cx < 0.3 ? 0 : rank;
+      part[e] = cx < band ? 0 : rank;
     }
     CHECK_OK(pa_dmesh_redistribute(dm, part, NULL));
     free(part);
     uint64_t before = 0, after = 0;
     CHECK_OK(pa_dmesh_checksum(dm, &before));
+    double imb;
+    pa_gid cut0 = 0, cut = 0, cutscotch = 0;
+    CHECK_OK(pa_dmesh_partition_stats(dm, NULL, &imb, &cut0));
     long mine = pa_dmesh_nowned(dm, PA_ELEMENT), mx, tot, excess;
     MPI_Allreduce(&mine, &mx, 1, MPI_LONG, MPI_MAX, MPI_COMM_WORLD);
     MPI_Allreduce(&mine, &tot, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
@@ -348,6 +354,9 @@ static void test_rebalance(void) {
     double mean = (double)tot / size;
     if (size == 1) {
       CHECK(moved == 0);
+    } else if (mx > 1.5 * mean) { /* large: a full repartition */
+      CHECK(moved == -1);
+      CHECK(mx2 <= 1.05 * mean + size + 1);
     } else {
       CHECK(mx > 1.05 * mean); /* the set-up was imbalanced */
       CHECK(moved > 0);        /* diffusion, no fallback (-1) */
@@ -370,10 +379,18 @@ static void test_rebalance(void) {
     pa_gid moved2 = -2;
     CHECK_OK(pa_dmesh_rebalance(dm, NULL, 1.05, &moved2));
     CHECK(moved2 == 0);
+    /* the cut: the band that moves adds some interface (measured, not
+     * checked: it depends on the shape of the excess), against a PT-Scotch
+     * repartition of the same mesh */
+    CHECK_OK(pa_dmesh_partition_stats(dm, NULL, &imb, &cut));
+    CHECK_OK(pa_dmesh_redistribute(dm, NULL, NULL));
+    CHECK_OK(pa_dmesh_partition_stats(dm, NULL, &imb, &cutscotch));
     if (rank == 0)
-      printf("rebalance %dD: max %ld -> %ld elements per rank (mean %.0f), "
-             "excess %ld, moved %lld\n", dim, mx, mx2, mean, excess,
-             (long long)moved);
+      printf("rebalance %dD, band %.2f: max %ld -> %ld elements per rank "
+             "(mean %.0f), excess %ld, moved %lld, cut %lld -> %lld "
+             "(PT-Scotch: %lld)\n",
+             dim, band, mx, mx2, mean, excess, (long long)moved, (long long)cut0,
+             (long long)cut, (long long)cutscotch);
     pa_dmesh_destroy(dm);
   }
 }
