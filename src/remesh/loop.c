@@ -55,11 +55,30 @@ static void report_figures(const pa__rmesh *rm, const pa__rm_ops *ops,
            f.qmean);
 }
 
+/* Renumber the working mesh for locality (ops->reorder) each time it has
+ * doubled since the last renumbering (or since the start), from RM_REORDER_MIN
+ * live elements on: the new entities of splits sit at the end of the arrays,
+ * and the passes are memory-bound. O(n log n) each, O(n log n) in all. */
+#define RM_REORDER_MIN 50000
+static pa_status maybe_reorder(pa__rmesh *rm, const pa__rm_ops *ops,
+                               int pass, pa_idx *last) {
+  pa_status st = PA_SUCCESS;
+  if (!ops->reorder || rm->nelive < RM_REORDER_MIN || rm->nelive < 2 * *last)
+    return PA_SUCCESS;
+  PA_CALL(ops->reorder(rm));
+  DEBUG_CHECK(rm);
+  *last = rm->nelive;
+  report_pass(rm, "reorder", pass, rm->nelive);
+cleanup:
+  return st;
+}
+
 pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
                        pa_remesh_report *report) {
   pa_status st = PA_SUCCESS;
   const pa_remesh_opts *o = rm->opts;
   int pass = 0;
+  pa_idx reordered = rm->nelive; /* live elements at the last renumbering */
   rm->lguard = RM_LLONG;
 
   if (!o->no_insert) {
@@ -70,6 +89,7 @@ pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
       PA_CALL(ops->split_pass(rm, RM_LLONG, &ns));
       DEBUG_CHECK(rm);
       report_pass(rm, "split", pass, ns);
+      PA_CALL(maybe_reorder(rm, ops, pass, &reordered));
       PA_CALL(ops->collapse_pass(rm, RM_LSHORT, &nc));
       DEBUG_CHECK(rm);
       report_pass(rm, "collapse", pass, nc);

@@ -798,4 +798,5 @@ long pa__rm_sliver_pass_2d(pa__rmesh *rm, double qbad) {
 
 const pa__rm_ops pa__rm_ops_2d = {
     pa__rm_split_pass_2d, pa__rm_collapse_pass_2d, pa__rm_swap_pass_2d,
-    pa__rm_smooth_pass_2d, pa__rm_sliver_pass_2d, pa__rm_figures_2d};
+    pa__rm_smooth_pass_2d, pa__rm_sliver_pass_2d, pa__rm_figures_2d,
+    pa__rm_reorder};

@@ -156,6 +156,14 @@ void pa__rm_interp(pa__rmesh *rm, pa_idx v, int n, const pa_idx *src,
 /* Write the working mesh back into mesh, renumbered compactly. Frees the
  * working arrays as it goes; on failure the mesh is left as it was. */
 pa_status pa__rm_writeback(pa__rmesh *rm, pa_mesh *mesh);
+/* 2D: renumber the live vertices along the Morton curve of their bounding
+ * box and the live elements by their smallest vertex, dropping the dead
+ * slots of both (feature records keep theirs). The passes are memory-bound:
+ * entities created by splits sit at the end of the arrays, far from their
+ * neighbours. A failure (out of memory) may leave the working mesh partly
+ * reordered: the remesh then fails as a whole, the caller's mesh untouched
+ * (it is only written at write-back). */
+pa_status pa__rm_reorder(pa__rmesh *rm);
 /* Check the working mesh invariants; PA_ERR_INTERNAL naming the first fault.
  * The RME_INRANGE cache is checked in debug builds only (a stale mark costs
  * operations, not validity). */
@@ -197,6 +205,7 @@ typedef struct pa__rm_ops {
   long (*smooth_pass)(pa__rmesh *rm);
   long (*sliver_pass)(pa__rmesh *rm, double qbad);
   void (*figures)(const pa__rmesh *rm, pa__rm_figures *f);
+  pa_status (*reorder)(pa__rmesh *rm); /* locality renumbering, or NULL */
 } pa__rm_ops;
 
 extern const pa__rm_ops pa__rm_ops_2d;
