@@ -191,3 +191,9 @@ void pa__permute(void *base, size_t sz, const pa_idx *pos, pa_idx n,
     }
   }
 }
+
+int pa__key64_cmp(const void *a, const void *b) {
+  const pa__key64 *p = a, *q = b;
+  if (p->key != q->key) return p->key < q->key ? -1 : 1;
+  return (p->idx > q->idx) - (p->idx < q->idx);
+}

@@ -127,6 +127,14 @@ static inline void pa__sort_small(pa_idx *a, int n) {
   }
 }
 
+/* A 64-bit sort key and the index it belongs to; pa__key64_cmp (for qsort)
+ * orders by key, then index: the remeshers' spatial (Morton) orders. */
+typedef struct pa__key64 {
+  uint64_t key;
+  pa_idx idx;
+} pa__key64;
+int pa__key64_cmp(const void *a, const void *b);
+
 /* Apply the permutation "old slot i goes to slot pos[i]" (a bijection of
  * [0, n)) to n records of sz <= 64 bytes at base, in place, following
  * cycles; done is n bytes of scratch. The remeshers' spatial reordering. */

@@ -682,17 +682,6 @@ cleanup:
 
 /* ---- spatial reordering ------------------------------------------------ */
 
-typedef struct sort_key64 {
-  uint64_t key;
-  pa_idx idx;
-} sort_key64;
-
-static int key64_cmp(const void *a, const void *b) {
-  const sort_key64 *p = a, *q = b;
-  if (p->key != q->key) return p->key < q->key ? -1 : 1;
-  return (p->idx > q->idx) - (p->idx < q->idx);
-}
-
 static uint64_t spread3(uint64_t x) {
   x &= 0x1fffff;
   x = (x | x << 32) & 0x1f00000000ffffull;
@@ -705,7 +694,7 @@ static uint64_t spread3(uint64_t x) {
 
 pa_status pa__rm3d_reorder(rm3d *m) {
   pa_status st = PA_SUCCESS;
-  sort_key64 *key = NULL;
+  pa__key64 *key = NULL;
   pa_idx *pos = NULL, *start = NULL;
   uint8_t *done = NULL;
   for (int k = 0; k < m->nfield; k++)
@@ -735,7 +724,7 @@ pa_status pa__rm3d_reorder(rm3d *m) {
                  spread3((uint64_t)((p[2] - lo[2]) * sc)) << 2;
     key[i].idx = i;
   }
-  qsort(key, (size_t)nv, sizeof *key, key64_cmp);
+  qsort(key, (size_t)nv, sizeof *key, pa__key64_cmp);
   for (pa_idx i = 0; i < nv; i++) pos[key[i].idx] = i;
   pa__permute(m->x, 3 * sizeof(double), pos, nv, done);
   pa__permute(m->met, (size_t)m->mc * sizeof(double), pos, nv, done);

@@ -484,17 +484,6 @@ static uint64_t spread2(uint64_t x) {
   return x;
 }
 
-typedef struct rm_key {
-  uint64_t key;
-  pa_idx idx;
-} rm_key;
-
-static int rm_key_cmp(const void *a, const void *b) {
-  const rm_key *p = a, *q = b;
-  if (p->key != q->key) return p->key < q->key ? -1 : 1;
-  return (p->idx > q->idx) - (p->idx < q->idx);
-}
-
 /* Replace the array *p (cap records of sz bytes; NULL: nothing) by its
  * records old[0..n) in that order. */
 static pa_status regather(void **p, size_t cap, size_t sz, const pa_idx *old,
@@ -513,7 +502,7 @@ static pa_status regather(void **p, size_t cap, size_t sz, const pa_idx *old,
 
 pa_status pa__rm_reorder(pa__rmesh *rm) {
   pa_status st = PA_SUCCESS;
-  rm_key *key = NULL;
+  pa__key64 *key = NULL;
   pa_idx *posv = NULL, *pose = NULL, *cnt = NULL, *inv = NULL;
   const int nvpe = rm->nvpe;
   const pa_idx nv = rm->nv, ne = rm->ne, n = rm->nvlive;
@@ -543,7 +532,7 @@ pa_status pa__rm_reorder(pa__rmesh *rm) {
     key[k++].idx = v;
   }
   PA_CHECK(k == n, PA_ERR_INTERNAL, "remesher: live vertex count is off");
-  qsort(key, (size_t)n, sizeof *key, rm_key_cmp);
+  qsort(key, (size_t)n, sizeof *key, pa__key64_cmp);
   for (pa_idx i = 0; i < n; i++) posv[key[i].idx] = i;
   pa__free(key);
   key = NULL;
