@@ -320,10 +320,16 @@ pa_status pa_dmesh_rebalance(pa_dmesh *dm, const double *weights, double tol,
     for (pa_idx e = 0; e < ne; e++) moved += part[e] != dm->rank;
     PA_CALL(pa__allreduce(dm->comm, &moved, 1, MPI_INT64_T, MPI_SUM));
     PA_CALL(pa_dmesh_redistribute(dm, part, weights));
+    if (dm->rank == 0)
+      pa__info(2, "padapt: rebalance: largest load %.6g (mean %.6g, tolerance "
+               "%g): %lld elements moved by diffusion\n", mx, mean, tol,
+               (long long)moved);
   }
 done:
   if (fallback) {
-    pa__info(2, "padapt: rebalance: repartitioning with PT-Scotch\n");
+    if (dm->rank == 0)
+      pa__info(2, "padapt: rebalance: largest load %.6g (mean %.6g): "
+               "repartitioning with PT-Scotch\n", mx, mean);
     moved = -1;
     PA_CALL(pa_dmesh_redistribute(dm, NULL, weights));
   }
