@@ -3,9 +3,8 @@
  * distributed mesh, without gathering it.
  *
  * Elements are counted by their owner (volume, inversion, quality). The
- * local edges are found as in pa_mesh_stats (instances filed under one
- * endpoint, here the one of smaller global id, and deduplicated with a
- * marker array: linear time). Each
+ * local edges come from pa__edges_csr, as in pa_mesh_stats, filed under
+ * their endpoint of smaller global id. Each
  * edge is measured once over the ranks: an edge with an endpoint that has
  * no copy on another rank exists on this rank only and is counted here;
  * every other edge is sent (as a record keyed by a hash of its two vertex
@@ -90,7 +89,8 @@ pa_status pa_dmesh_stats(pa_dmesh *dm, pa_stats *stats) {
   pa_status st = PA_SUCCESS;
   pa_stats s;
   uint8_t *shared = NULL;
-  pa_idx *pos = NULL, *other = NULL, *mark = NULL;
+  size_t *pos = NULL;
+  pa_idx *other = NULL;
   int *dest = NULL;
   pa__recs S, R;
   pa__recs_init(&S, PA_EDGE, 2, 1);
@@ -133,41 +133,14 @@ pa_status pa_dmesh_stats(pa_dmesh *dm, pa_stats *stats) {
   }
 
   /* unique local edges, each filed under its endpoint of smaller global id
-   * (a CSR of edge instances, deduplicated with a marker array as in
-   * pa_mesh_stats: linear, no sort), then counted here or sent */
+   * (pa__edges_csr), then counted here or sent */
   {
-    size_t ns = 0, ninst = (size_t)ne * nve * d / 2;
-    PA_CALLOC(pos, (size_t)nv + 1);
-    for (pa_idx e = 0; e < ne; e++) {
-      const pa_idx *v = m->elem + (size_t)nve * e;
-      for (int i = 0; i < nve; i++)
-        for (int j = i + 1; j < nve; j++)
-          if (v[i] != v[j]) pos[(vg[v[i]] < vg[v[j]] ? v[i] : v[j]) + 1]++;
-    }
-    for (pa_idx i = 0; i < nv; i++) pos[i + 1] += pos[i];
-    PA_ALLOC(other, ninst ? ninst : 1);
-    for (pa_idx e = 0; e < ne; e++) {
-      const pa_idx *v = m->elem + (size_t)nve * e;
-      for (int i = 0; i < nve; i++)
-        for (int j = i + 1; j < nve; j++) {
-          pa_idx a = v[i], b = v[j];
-          if (a == b) continue;
-          if (vg[a] > vg[b]) {
-            pa_idx t = a;
-            a = b;
-            b = t;
-          }
-          other[pos[a]++] = b; /* pos[a] ends at the end of a's range */
-        }
-    }
-    PA_ALLOC(mark, nv ? (size_t)nv : 1);
-    for (pa_idx i = 0; i < nv; i++) mark[i] = -1;
-    PA_ALLOC(dest, ninst ? ninst : 1);
+    size_t ns = 0;
+    PA_CALL(pa__edges_csr(m->elem, ne, nve, nv, vg, &pos, &other));
+    PA_ALLOC(dest, pos[nv] ? pos[nv] : 1);
     for (pa_idx a = 0; a < nv; a++)
-      for (pa_idx k = a ? pos[a - 1] : 0; k < pos[a]; k++) {
+      for (size_t k = pos[a]; k < pos[a + 1]; k++) {
         pa_idx b = other[k];
-        if (mark[b] == a) continue;
-        mark[b] = a;
         double len = pa__edge_length(d, nc, m->coord + (size_t)d * a,
                                      m->coord + (size_t)d * b,
                                      nc ? m->met + (size_t)nc * a : NULL,
@@ -183,8 +156,8 @@ pa_status pa_dmesh_stats(pa_dmesh *dm, pa_stats *stats) {
       }
     pa__free(pos);
     pa__free(other);
-    pa__free(mark);
-    pos = other = mark = NULL;
+    pos = NULL;
+    other = NULL;
   }
   PA_CALL(pa__recs_migrate(dm->comm, &S, dest, &R));
   /* R is sorted by hash: equal pairs are in the same run of equal hashes */
@@ -208,7 +181,6 @@ cleanup:
   pa__free(shared);
   pa__free(pos);
   pa__free(other);
-  pa__free(mark);
   pa__free(dest);
   pa__recs_free(&S);
   pa__recs_free(&R);

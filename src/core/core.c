@@ -167,31 +167,6 @@ double pa_wtime(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-void pa__permute(void *base, size_t sz, const pa_idx *pos, pa_idx n,
-                 uint8_t *done) {
-  char tmp[64], tmp2[64];
-  char *a = base;
-  PA_ASSERT(sz <= sizeof tmp);
-  memset(done, 0, (size_t)n);
-  for (pa_idx s = 0; s < n; s++) {
-    if (done[s]) continue;
-    memcpy(tmp, a + sz * s, sz);
-    pa_idx i = s;
-    for (;;) {
-      pa_idx j = pos[i];
-      done[i] = 1;
-      if (j == s) {
-        memcpy(a + sz * s, tmp, sz);
-        break;
-      }
-      memcpy(tmp2, a + sz * j, sz);
-      memcpy(a + sz * j, tmp, sz);
-      memcpy(tmp, tmp2, sz);
-      i = j;
-    }
-  }
-}
-
 int pa__key64_cmp(const void *a, const void *b) {
   const pa__key64 *p = a, *q = b;
   if (p->key != q->key) return p->key < q->key ? -1 : 1;

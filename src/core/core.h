@@ -135,12 +135,6 @@ typedef struct pa__key64 {
 } pa__key64;
 int pa__key64_cmp(const void *a, const void *b);
 
-/* Apply the permutation "old slot i goes to slot pos[i]" (a bijection of
- * [0, n)) to n records of sz <= 64 bytes at base, in place, following
- * cycles; done is n bytes of scratch. The remeshers' spatial reordering. */
-void pa__permute(void *base, size_t sz, const pa_idx *pos, pa_idx n,
-                 uint8_t *done);
-
 /* Hash of a small sorted key of pa_idx. */
 static inline uint64_t pa__hash_idx(const pa_idx *k, int n) {
   uint64_t h = 0x9E3779B97F4A7C15ull;

@@ -14,8 +14,9 @@
  *  3. Rank r gives each neighbour s with a positive flow that much load of
  *     its own elements, grown greedily from the faces it shares with s: the
  *     element with the most faces on s's side first (a compact band, a low
- *     cut), and pa_dmesh_redistribute moves them. Flows through a rank (r -> s -> t) are served by s's own
- *     elements, so one redistribution does it.
+ *     cut), and pa_dmesh_redistribute moves them. Flows through a rank
+ *     (r -> s -> t) are served by s's own elements, so one redistribution
+ *     does it.
  * Falls back to a PT-Scotch repartition (pa_dmesh_redistribute(dm, NULL, w))
  * when a rank holds more than 1.5 times the mean (RB_DIFFUSE_MAX), the
  * graph of ranks is disconnected, or the predicted loads still exceed
@@ -82,75 +83,34 @@ cleanup:
 
 /* The graph of ranks: s is a neighbour of r if an owned element of r has a
  * face neighbour owned by s (eadjrank: the owner of each face neighbour in
- * the distributed dual graph exadj). Symmetrised; CSR over all P ranks,
- * neighbours ascending. *mine: this rank's neighbours, *nmine of them. */
+ * the distributed dual graph exadj), which is symmetric: every rank's own
+ * list, gathered, is its row. CSR over all P ranks, neighbours ascending. */
 static pa_status rank_graph(pa_dmesh *dm, const pa_idx *exadj,
-                            const int *eadjrank, int **xadjp, int **adjp,
-                            int **minep, int *nminep) {
+                            const int *eadjrank, int **xadjp, int **adjp) {
   pa_status st = PA_SUCCESS;
-  int P = dm->size;
+  int P = dm->size, nmine = 0;
   uint8_t *nbr = NULL;
-  int *mine = NULL, *deg = NULL, *off = NULL, *all = NULL, *xadj = NULL,
-      *adj = NULL, nmine = 0;
+  int *mine = NULL, *deg = NULL, *xadj = NULL, *adj = NULL;
   PA_CALLOC(nbr, P);
   for (pa_idx k = 0; k < exadj[dm->nown[PA_ELEMENT]]; k++) nbr[eadjrank[k]] = 1;
   PA_ALLOC(mine, P);
   for (int s = 0; s < P; s++)
     if (nbr[s] && s != dm->rank) mine[nmine++] = s;
   PA_ALLOC(deg, P);
-  PA_ALLOC(off, P + 1);
+  PA_ALLOC(xadj, P + 1);
   PA_CALL(pa__agree(dm->comm, st));
   MPI_Allgather(&nmine, 1, MPI_INT, deg, 1, MPI_INT, dm->comm);
-  off[0] = 0;
-  for (int r = 0; r < P; r++) off[r + 1] = off[r] + deg[r];
-  PA_ALLOC(all, off[P] ? off[P] : 1);
-  MPI_Allgatherv(mine, nmine, MPI_INT, all, deg, off, MPI_INT, dm->comm);
-  /* symmetrise: s in r's list or r in s's list */
-  PA_CALLOC(xadj, P + 1);
-  for (int r = 0; r < P; r++)
-    for (int k = off[r]; k < off[r + 1]; k++) {
-      xadj[r + 1]++;
-      xadj[all[k] + 1]++;
-    }
-  for (int r = 0; r < P; r++) xadj[r + 1] += xadj[r];
+  xadj[0] = 0;
+  for (int r = 0; r < P; r++) xadj[r + 1] = xadj[r] + deg[r];
   PA_ALLOC(adj, xadj[P] ? xadj[P] : 1);
-  {
-    int *pos = deg; /* reused as fill positions */
-    for (int r = 0; r < P; r++) pos[r] = xadj[r];
-    for (int r = 0; r < P; r++)
-      for (int k = off[r]; k < off[r + 1]; k++) {
-        adj[pos[r]++] = all[k];
-        adj[pos[all[k]]++] = r;
-      }
-  }
-  /* sort and deduplicate each list (short lists: insertion sort) */
-  {
-    int w = 0;
-    for (int r = 0; r < P; r++) {
-      int b = xadj[r], e = xadj[r + 1];
-      for (int i = b + 1; i < e; i++)
-        for (int j = i; j > b && adj[j - 1] > adj[j]; j--) {
-          int t = adj[j];
-          adj[j] = adj[j - 1];
-          adj[j - 1] = t;
-        }
-      xadj[r] = w;
-      for (int i = b; i < e; i++)
-        if (i == b || adj[i] != adj[i - 1]) adj[w++] = adj[i];
-    }
-    xadj[P] = w;
-  }
+  MPI_Allgatherv(mine, nmine, MPI_INT, adj, deg, xadj, MPI_INT, dm->comm);
   *xadjp = xadj;
   *adjp = adj;
-  *minep = mine;
-  *nminep = nmine;
-  xadj = adj = mine = NULL;
+  xadj = adj = NULL;
 cleanup:
   pa__free(nbr);
   pa__free(mine);
   pa__free(deg);
-  pa__free(off);
-  pa__free(all);
   pa__free(xadj);
   pa__free(adj);
   return st;
@@ -209,14 +169,13 @@ pa_status pa_dmesh_rebalance(pa_dmesh *dm, const double *weights, double tol,
   pa_status st = PA_SUCCESS;
   int P, fallback = 0;
   double *load = NULL, *b = NULL, *x = NULL, *delta = NULL;
-  int *xadj = NULL, *adj = NULL, *mine = NULL, *part = NULL, *queue = NULL;
+  int *xadj = NULL, *adj = NULL, *part = NULL, *queue = NULL;
   pa_idx *exadj = NULL;
   int *gain = NULL;
   uint64_t *heap = NULL;
   pa_gid *vg = NULL, *eadj = NULL, eoff = 0;
   int *eadjrank = NULL;
   uint8_t *seen = NULL;
-  int nmine = 0;
   pa_gid moved = 0;
   PA_CHECK(dm && tol >= 1.0, PA_ERR_ARG,
            "pa_dmesh_rebalance: NULL dmesh or tolerance below 1");
@@ -253,7 +212,7 @@ pa_status pa_dmesh_rebalance(pa_dmesh *dm, const double *weights, double tol,
     PA_CALL(pa__dual_graph(dm->comm, d, ne, vg, dm->mesh->elem, dm->mesh->nv,
                            &exadj, &eadj, &eadjrank, &eoff));
   }
-  PA_CALL(rank_graph(dm, exadj, eadjrank, &xadj, &adj, &mine, &nmine));
+  PA_CALL(rank_graph(dm, exadj, eadjrank, &xadj, &adj));
   PA_ALLOC(queue, P);
   PA_ALLOC(seen, P);
   if (!connected(P, xadj, adj, queue, seen)) {
@@ -342,7 +301,6 @@ cleanup:
   pa__free(delta);
   pa__free(xadj);
   pa__free(adj);
-  pa__free(mine);
   pa__free(part);
   pa__free(queue);
   pa__free(gain);

@@ -120,6 +120,16 @@ pa_status pa__balls_of(const pa_idx *elem, pa_idx ne, int nve, pa_idx nv,
 pa_status pa__balls(const pa_idx *elem, pa_idx ne, int nve, pa_idx nv,
                     pa_idx **start, pa_idx **ball);
 
+/* Unique edges of ne elements (nve vertex indices each, below nv) as a CSR:
+ * each edge filed once under its endpoint of smaller key (key: one per
+ * vertex, e.g. global ids, all distinct; NULL: the index), the other
+ * endpoints of vertex a being (*other)[(*start)[a] .. (*start)[a+1]) in the
+ * order first met over the elements. Two equal vertices of an element make
+ * no edge. Linear time (counting, fill, then deduplication with a marker
+ * array); 4 bytes per edge instance plus 12 per vertex. */
+pa_status pa__edges_csr(const pa_idx *elem, pa_idx ne, int nve, pa_idx nv,
+                        const pa_gid *key, size_t **start, pa_idx **other);
+
 /* f[v] = 1 (mesh->nv entries) for the vertices whose metric a remesh keeps:
  * required vertices and the vertices of required elements and boundary
  * entities; 0 for the others. */

@@ -294,6 +294,60 @@ pa_status pa__balls(const pa_idx *elem, pa_idx ne, int nve, pa_idx nv,
   return pa__balls_of(elem, ne, nve, nv, NULL, pstart, pball);
 }
 
+pa_status pa__edges_csr(const pa_idx *elem, pa_idx ne, int nve, pa_idx nv,
+                        const pa_gid *key, size_t **pstart, pa_idx **pother) {
+  pa_status st = PA_SUCCESS;
+  size_t *start = NULL;
+  pa_idx *other = NULL, *mark = NULL;
+  *pstart = NULL;
+  *pother = NULL;
+#define LOW(a, b) ((key ? key[a] < key[b] : (a) < (b)) ? (a) : (b))
+  PA_CALLOC(start, (size_t)nv + 1);
+  for (pa_idx e = 0; e < ne; e++) {
+    const pa_idx *v = elem + (size_t)nve * e;
+    for (int i = 0; i < nve; i++)
+      for (int j = i + 1; j < nve; j++)
+        if (v[i] != v[j]) start[LOW(v[i], v[j]) + 1]++;
+  }
+  for (pa_idx a = 0; a < nv; a++) start[a + 1] += start[a];
+  PA_ALLOC(other, start[nv] ? start[nv] : 1);
+  for (pa_idx e = 0; e < ne; e++) { /* start[a] moves to the end of a's range */
+    const pa_idx *v = elem + (size_t)nve * e;
+    for (int i = 0; i < nve; i++)
+      for (int j = i + 1; j < nve; j++)
+        if (v[i] != v[j]) {
+          pa_idx a = LOW(v[i], v[j]);
+          other[start[a]++] = a == v[i] ? v[j] : v[i];
+        }
+  }
+#undef LOW
+  for (pa_idx a = nv; a > 0; a--) start[a] = start[a - 1];
+  start[0] = 0;
+  /* keep the first instance of each edge, compacting in place */
+  PA_ALLOC(mark, nv ? (size_t)nv : 1);
+  for (pa_idx a = 0; a < nv; a++) mark[a] = -1;
+  size_t w = 0;
+  for (pa_idx a = 0; a < nv; a++) {
+    size_t b0 = start[a], b1 = start[a + 1];
+    start[a] = w;
+    for (size_t k = b0; k < b1; k++)
+      if (mark[other[k]] != a) {
+        mark[other[k]] = a;
+        other[w++] = other[k];
+      }
+  }
+  start[nv] = w;
+  *pstart = start;
+  *pother = other;
+  start = NULL;
+  other = NULL;
+cleanup:
+  pa__free(start);
+  pa__free(other);
+  pa__free(mark);
+  return st;
+}
+
 static pa_status balls_compute(const pa_mesh *m, pa_idx **pstart,
                                pa_idx **pball) {
   pa_status st = PA_SUCCESS;

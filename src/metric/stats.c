@@ -2,15 +2,12 @@
  * stats.c -- element quality and mesh statistics (pa_mesh_stats), their
  * human-readable report and their JSON form.
  *
- * pa_mesh_stats makes three streaming passes and never builds the mesh's
+ * pa_mesh_stats makes two streaming passes and never builds the mesh's
  * derived structures itself:
- *  1. over elements: index check, signed volume, quality, and the number of
- *     edge instances (v, w) filed under their smaller vertex v;
- *  2. over elements again: the larger vertex of each instance written into a
- *     CSR array keyed by the smaller one (6 pa_idx per tetrahedron);
- *  3. over vertices v: the instances filed under v, deduplicated with a
- *     marker array (mark[w] == v means (v, w) was seen), each unique edge
- *     measured once with pa__edge_length.
+ *  1. over elements: index check, signed volume, quality;
+ *  2. over the unique edges of pa__edges_csr (mesh/topo.c: the instances
+ *     filed under their smaller vertex, deduplicated with a marker array),
+ *     each measured once with pa__edge_length.
  * Time O(nelem + nvert), memory 4 bytes per edge instance plus 12 bytes per
  * vertex, all freed before returning. The validity check (pa_mesh_check)
  * runs last, after that memory is released.
@@ -87,7 +84,7 @@ static void add_quality(pa_stats *s, ksum *sum, double q, pa_gid count_before) {
 pa_status pa_mesh_stats(pa_mesh *mesh, pa_stats *stats) {
   pa_status st = PA_SUCCESS;
   size_t *pos = NULL;
-  pa_idx *other = NULL, *mark = NULL;
+  pa_idx *other = NULL;
   PA_CHECK(mesh && stats, PA_ERR_ARG, "pa_mesh_stats: NULL argument");
   pa_stats s;
   memset(&s, 0, sizeof s);
@@ -100,8 +97,7 @@ pa_status pa_mesh_stats(pa_mesh *mesh, pa_stats *stats) {
   s.nbdry = mesh->nb;
   ksum vol_sum = {0, 0}, edge_sum = {0, 0}, qual_sum = {0, 0};
 
-  /* Pass 1: volumes, qualities, edge instances per smaller vertex. */
-  PA_CALLOC(pos, (size_t)nv + 1);
+  /* Pass 1: volumes, qualities (and the index check). */
   for (pa_idx e = 0; e < ne; e++) {
     const pa_idx *v = mesh->elem + (size_t)nve * e;
     const double *x[4], *m[4];
@@ -117,43 +113,15 @@ pa_status pa_mesh_stats(pa_mesh *mesh, pa_stats *stats) {
     ksum_add(&vol_sum, vol);
     if (vol <= 0.0) s.ninverted++;
     add_quality(&s, &qual_sum, pa__quality(dim, nc, x, m), e);
-    for (int i = 0; i < nve; i++)
-      for (int j = i + 1; j < nve; j++)
-        if (v[i] != v[j]) pos[(v[i] < v[j] ? v[i] : v[j]) + 1]++;
-  }
-  for (pa_idx i = 0; i < nv; i++)
-    pos[i + 1] += pos[i];
-
-  /* Pass 2: fill; pos[v] moves from the start to the end of v's range, so
-   * afterwards v's instances are other[v ? pos[v-1] : 0 .. pos[v]-1]. */
-  PA_ALLOC(other, pos[nv]);
-  for (pa_idx e = 0; e < ne; e++) {
-    const pa_idx *v = mesh->elem + (size_t)nve * e;
-    for (int i = 0; i < nve; i++)
-      for (int j = i + 1; j < nve; j++) {
-        pa_idx a = v[i], b = v[j];
-        if (a == b) continue;
-        if (a > b) {
-          pa_idx t = a;
-          a = b;
-          b = t;
-        }
-        other[pos[a]++] = b;
-      }
   }
 
-  /* Pass 3: unique edges and their lengths. */
-  PA_ALLOC(mark, nv);
-  for (pa_idx i = 0; i < nv; i++)
-    mark[i] = -1;
+  /* Pass 2: unique edges (filed under their smaller vertex) and lengths. */
+  PA_CALL(pa__edges_csr(mesh->elem, ne, nve, nv, NULL, &pos, &other));
   for (pa_idx v = 0; v < nv; v++) {
-    size_t begin = v ? pos[v - 1] : 0, end = pos[v];
     const double *xv = mesh->coord + (size_t)dim * v;
     const double *mv = nc ? mesh->met + (size_t)nc * v : NULL;
-    for (size_t k = begin; k < end; k++) {
+    for (size_t k = pos[v]; k < pos[v + 1]; k++) {
       pa_idx w = other[k];
-      if (mark[w] == v) continue;
-      mark[w] = v;
       const double *xw = mesh->coord + (size_t)dim * w;
       const double *mw = nc ? mesh->met + (size_t)nc * w : NULL;
       add_edge_length(&s, &edge_sum, pa__edge_length(dim, nc, xv, xw, mv, mw));
@@ -164,9 +132,8 @@ pa_status pa_mesh_stats(pa_mesh *mesh, pa_stats *stats) {
   s.qual_sum = qual_sum.s + qual_sum.c;
   pa__free(pos);
   pa__free(other);
-  pa__free(mark);
   pos = NULL;
-  other = mark = NULL;
+  other = NULL;
 
   /* Validity last: it may build adjacency, so our arrays are gone by now. */
   pa_status chk = pa_mesh_check(mesh);
@@ -180,7 +147,6 @@ pa_status pa_mesh_stats(pa_mesh *mesh, pa_stats *stats) {
 cleanup:
   pa__free(pos);
   pa__free(other);
-  pa__free(mark);
   return st;
 }
 

@@ -692,6 +692,34 @@ static uint64_t spread3(uint64_t x) {
   return x;
 }
 
+/* Apply the permutation "old slot i goes to slot pos[i]" to n records of
+ * size sz <= 64 in place, following cycles; done[] is n bytes of scratch
+ * (in place: the reordering does not raise the memory peak). */
+static void permute(void *base, size_t sz, const pa_idx *pos, pa_idx n,
+                    uint8_t *done) {
+  char tmp[64], tmp2[64];
+  char *a = base;
+  PA_ASSERT(sz <= sizeof tmp);
+  memset(done, 0, (size_t)n);
+  for (pa_idx s = 0; s < n; s++) {
+    if (done[s]) continue;
+    memcpy(tmp, a + sz * s, sz);
+    pa_idx i = s;
+    for (;;) {
+      pa_idx j = pos[i];
+      done[i] = 1;
+      if (j == s) {
+        memcpy(a + sz * s, tmp, sz);
+        break;
+      }
+      memcpy(tmp2, a + sz * j, sz);
+      memcpy(a + sz * j, tmp, sz);
+      memcpy(tmp, tmp2, sz);
+      i = j;
+    }
+  }
+}
+
 pa_status pa__rm3d_reorder(rm3d *m) {
   pa_status st = PA_SUCCESS;
   pa__key64 *key = NULL;
@@ -726,15 +754,15 @@ pa_status pa__rm3d_reorder(rm3d *m) {
   }
   qsort(key, (size_t)nv, sizeof *key, pa__key64_cmp);
   for (pa_idx i = 0; i < nv; i++) pos[key[i].idx] = i;
-  pa__permute(m->x, 3 * sizeof(double), pos, nv, done);
-  pa__permute(m->met, (size_t)m->mc * sizeof(double), pos, nv, done);
-  if (m->met0) pa__permute(m->met0, (size_t)m->mc * sizeof(double), pos, nv, done);
-  if (m->nrm) pa__permute(m->nrm, 3 * sizeof(double), pos, nv, done);
-  pa__permute(m->vref, sizeof(int32_t), pos, nv, done);
-  pa__permute(m->vpf, 1, pos, nv, done);
-  pa__permute(m->vtag, 1, pos, nv, done);
+  permute(m->x, 3 * sizeof(double), pos, nv, done);
+  permute(m->met, (size_t)m->mc * sizeof(double), pos, nv, done);
+  if (m->met0) permute(m->met0, (size_t)m->mc * sizeof(double), pos, nv, done);
+  if (m->nrm) permute(m->nrm, 3 * sizeof(double), pos, nv, done);
+  permute(m->vref, sizeof(int32_t), pos, nv, done);
+  permute(m->vpf, 1, pos, nv, done);
+  permute(m->vtag, 1, pos, nv, done);
   for (int k = 0; k < m->nfield; k++)
-    pa__permute(m->fval[k], (size_t)m->fcomp[k] * sizeof(double), pos, nv, done);
+    permute(m->fval[k], (size_t)m->fcomp[k] * sizeof(double), pos, nv, done);
   for (size_t i = 0; i < 4 * (size_t)ne; i++) m->tv[i] = pos[m->tv[i]];
   rm3d_table *tabs[2] = {&m->tri, &m->edg};
   for (int t = 0; t < 2; t++) {
@@ -775,11 +803,11 @@ pa_status pa__rm3d_reorder(rm3d *m) {
     pa_idx a = m->adj[i];
     if (a >= 0) m->adj[i] = 4 * pos[a >> 2] + (a & 3);
   }
-  pa__permute(m->tv, 4 * sizeof(pa_idx), pos, ne, done);
-  pa__permute(m->adj, 4 * sizeof(pa_idx), pos, ne, done);
-  pa__permute(m->tflag, 1, pos, ne, done);
-  pa__permute(m->tpf, 1, pos, ne, done);
-  pa__permute(m->tref, sizeof(int32_t), pos, ne, done);
+  permute(m->tv, 4 * sizeof(pa_idx), pos, ne, done);
+  permute(m->adj, 4 * sizeof(pa_idx), pos, ne, done);
+  permute(m->tflag, 1, pos, ne, done);
+  permute(m->tpf, 1, pos, ne, done);
+  permute(m->tref, sizeof(int32_t), pos, ne, done);
   for (pa_idx k = 0; k < ne; k++)
     for (int i = 0; i < 4; i++) m->vtet[m->tv[4 * (size_t)k + i]] = k;
   pa__free(key);

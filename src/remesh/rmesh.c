@@ -548,23 +548,15 @@ pa_status pa__rm_reorder(pa__rmesh *rm) {
       v[i] = posv[v[i]];
       if (v[i] < m) m = v[i];
     }
+    pose[e] = m; /* the sort key until the positions are known */
     cnt[m + 1]++;
   }
   for (pa_idx i = 0; i < n; i++) cnt[i + 1] += cnt[i];
   PA_CHECK(cnt[n] == rm->nelive, PA_ERR_INTERNAL,
            "remesher: live element count is off");
   dead = rm->nelive;
-  for (pa_idx e = 0; e < ne; e++) {
-    if (rm->etag[e] & RME_DEAD) {
-      pose[e] = dead++;
-      continue;
-    }
-    const pa_idx *v = rm->ev + (size_t)nvpe * e;
-    pa_idx m = v[0];
-    for (int i = 1; i < nvpe; i++)
-      if (v[i] < m) m = v[i];
-    pose[e] = cnt[m]++;
-  }
+  for (pa_idx e = 0; e < ne; e++)
+    pose[e] = rm->etag[e] & RME_DEAD ? dead++ : cnt[pose[e]]++;
   for (pa_idx e = 0; e < ne; e++) {
     if (rm->etag[e] & RME_DEAD) continue;
     for (int i = 0; i < nvpe; i++) {
