@@ -303,18 +303,22 @@ cleanup:
  * not above the worst quality of the band beyond (shapes the remesher
  * leaves anyway; a piece with no such band marks nothing). */
 
-/* dist[v] = min(nl, vertex layers from the vertices where it is 0; the
- * others start at nl), over the elements of o. */
-static void vertex_layers(const pa_mesh *o, int nl, int *dist) {
+/* For each of the nd arrays dist[0..nd): dist[a][v] = min(nl, vertex
+ * layers from the vertices where it is 0; the others start at nl), over the
+ * elements of o. The arrays advance together: one sweep over the elements
+ * a layer, whatever nd. */
+static void vertex_layers(const pa_mesh *o, int nl, int nd, int *const *dist) {
   int d = o->dim;
   for (int layer = 0; layer < nl; layer++)
     for (pa_idx e = 0; e < o->ne; e++) {
       const pa_idx *v = o->elem + (size_t)(d + 1) * e;
-      int mn = nl;
-      for (int k = 0; k <= d; k++) mn = dist[v[k]] < mn ? dist[v[k]] : mn;
-      if (mn < nl)
-        for (int k = 0; k <= d; k++)
-          if (dist[v[k]] > mn + 1) dist[v[k]] = mn + 1;
+      for (int a = 0; a < nd; a++) {
+        int *x = dist[a], mn = nl;
+        for (int k = 0; k <= d; k++) mn = x[v[k]] < mn ? x[v[k]] : mn;
+        if (mn < nl)
+          for (int k = 0; k <= d; k++)
+            if (x[v[k]] > mn + 1) x[v[k]] = mn + 1;
+      }
     }
 }
 
@@ -326,17 +330,18 @@ static int elem_layer(const pa_mesh *o, const int *dist, pa_idx e) {
   return mn;
 }
 
-/* dist over the output of pc: 0 at the output vertices matching an input
- * vertex marked in mark (pc->hot, pc->skin), else the vertex layers from
- * them, at most nl. */
-static void layers_from(const pa__piece *pc, const uint8_t *mark, int nl,
-                        int *dist) {
+/* dist[a] over the output of pc for each of the nd marks mark[a] (pc->hot,
+ * pc->skin): 0 at the output vertices matching a marked input vertex, else
+ * the vertex layers from them, at most nl. */
+static void layers_from(const pa__piece *pc, int nd,
+                        const uint8_t *const *mark, int nl, int *const *dist) {
   const pa_mesh *o = pc->out;
-  for (pa_idx j = 0; j < o->nv; j++) {
-    pa_idx i = pc->match[j];
-    dist[j] = i >= 0 && mark[i] ? 0 : nl;
-  }
-  vertex_layers(o, nl, dist);
+  for (int a = 0; a < nd; a++)
+    for (pa_idx j = 0; j < o->nv; j++) {
+      pa_idx i = pc->match[j];
+      dist[a][j] = i >= 0 && mark[a][i] ? 0 : nl;
+    }
+  vertex_layers(o, nl, nd, dist);
 }
 
 size_t pa__new_payload(const pa_dmesh *dm, int kind, int32_t ref,
@@ -351,6 +356,29 @@ size_t pa__new_payload(const pa_dmesh *dm, int kind, int32_t ref,
     n += v->unit;
   }
   return n;
+}
+
+/* pa__new_payload for a run of records: recomputed only when the kind,
+ * reference or "done" value changes (one payload per record cost more than
+ * the record itself). */
+typedef struct paycache {
+  int kind;
+  int32_t ref;
+  uint8_t doneval;
+  size_t len; /* (size_t)-1: empty */
+} paycache;
+
+static size_t payload_of(paycache *c, const pa_dmesh *dm, int kind,
+                         int32_t ref, const pa_dmesh_value *done,
+                         uint8_t doneval, unsigned char *buf) {
+  if (c->len == (size_t)-1 || c->kind != kind || c->ref != ref ||
+      c->doneval != doneval) {
+    c->len = pa__new_payload(dm, kind, ref, done, doneval, buf);
+    c->kind = kind;
+    c->ref = ref;
+    c->doneval = doneval;
+  }
+  return c->len;
 }
 
 /* Per-entity "kept" flags of a kind: 1 if a staying owned element (keep)
@@ -542,6 +570,7 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   pa_gid *vg = NULL;
   double *dbl = NULL;
   int *dist = NULL, *dsk = NULL, *dest = NULL;
+  paycache pcache = {0, 0, 0, (size_t)-1};
   PA_CALL(output_dest(it, pc, &dest));
   PA_ALLOC(vg, o->nv);
   PA_ALLOC(dbl, R[PA_VERTEX].ndbl);
@@ -557,30 +586,35 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
       vg[j] = i >= 0 ? pc->vgid[i] : next[PA_VERTEX]++;
     }
     pa__vertex_doubles(o, j, o->nfield, dbl);
-    size_t pl = pa__new_payload(dm, PA_VERTEX, o->vref[j], done, 0, pay);
+    size_t pl = payload_of(&pcache, dm, PA_VERTEX, o->vref[j], done, 0, pay);
     PA_CALL(pa__recs_add(&R[PA_VERTEX], vg[j], NULL, o->vref[j], o->vflag[j],
                          it->rank, dbl, pay, pl));
   }
-  /* elements within NEAR_SKIN vertex layers of a hot skin vertex (dist) */
-  PA_ALLOC(dist, o->nv);
-  layers_from(pc, pc->hot, NEAR_SKIN, dist);
-  /* BAD_NEAR_SKIN: layers from any skin vertex (dsk); only if an element
-   * near the skin is poor, counted further for the worst quality of the
-   * band beyond (qband; 0: nothing is marked) */
+  /* elements within NEAR_SKIN vertex layers of a hot skin vertex (dist);
+   * BAD_NEAR_SKIN: layers from any skin vertex (dsk), in the same sweeps;
+   * only if an element near the skin is poor, counted further for the worst
+   * quality of the band beyond (qband; 0: nothing is marked) */
   double qthr = it->piece_failed[pc->id] ||
                         (pc->rep.nswap == 0 && pc->rep.nmove == 0)
                     ? 0
                     : it->opts->qual_threshold;
   double qband = 0;
+  PA_ALLOC(dist, o->nv);
+  if (qthr > 0) PA_ALLOC(dsk, o->nv);
+  {
+    const uint8_t *mk[2] = {pc->hot, pc->skin};
+    int *const ds[2] = {dist, dsk};
+    layers_from(pc, qthr > 0 ? 2 : 1, mk, NEAR_SKIN, ds);
+  }
   if (qthr > 0) {
     int poor = 0;
-    PA_ALLOC(dsk, o->nv);
-    layers_from(pc, pc->skin, NEAR_SKIN, dsk);
     for (pa_idx e = 0; !poor && e < o->ne; e++)
       poor = elem_layer(o, dsk, e) < NEAR_SKIN &&
              pa_mesh_elem_quality(pc->out, e) < qthr;
     if (poor) {
-      layers_from(pc, pc->skin, 2 * NEAR_SKIN, dsk);
+      const uint8_t *mk[1] = {pc->skin};
+      int *const ds[1] = {dsk};
+      layers_from(pc, 1, mk, 2 * NEAR_SKIN, ds);
       qband = qthr;
       for (pa_idx e = 0; e < o->ne; e++) {
         int l = elem_layer(o, dsk, e);
@@ -605,7 +639,7 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
       dv = PA__DONE_NEAR_SKIN; /* see BAD_NEAR_SKIN */
       it->nbadskin++;
     }
-    size_t pl = pa__new_payload(dm, PA_ELEMENT, o->eref[e], done, dv, pay);
+    size_t pl = payload_of(&pcache, dm, PA_ELEMENT, o->eref[e], done, dv, pay);
     PA_CALL(pa__recs_add(&R[PA_ELEMENT], next[PA_ELEMENT]++, ev, o->eref[e],
                          o->eflag[e], dest[e], NULL, pay, pl));
   }
@@ -613,14 +647,14 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
     if (!bemit[b]) continue;
     pa_gid bv[3];
     for (int k = 0; k < d; k++) bv[k] = vg[o->bdry[(size_t)d * b + k]];
-    size_t pl = pa__new_payload(dm, PA_BOUNDARY, o->bref[b], done, 0, pay);
+    size_t pl = payload_of(&pcache, dm, PA_BOUNDARY, o->bref[b], done, 0, pay);
     PA_CALL(pa__recs_add(&R[PA_BOUNDARY], next[PA_BOUNDARY]++, bv, o->bref[b],
                          o->bflag[b], it->rank, NULL, pay, pl));
   }
   for (pa_idx b = 0; b < o->ned; b++) {
     if (!demit[b]) continue;
     pa_gid bv[2] = {vg[o->edge[2 * b]], vg[o->edge[2 * b + 1]]};
-    size_t pl = pa__new_payload(dm, PA_EDGE, o->edref[b], done, 0, pay);
+    size_t pl = payload_of(&pcache, dm, PA_EDGE, o->edref[b], done, 0, pay);
     PA_CALL(pa__recs_add(&R[PA_EDGE], next[PA_EDGE]++, bv, o->edref[b],
                          o->edflag[b], it->rank, NULL, pay, pl));
   }

@@ -400,8 +400,9 @@ static pa_status owned_csr(bstate *s, pa_idx nown) {
   PA_ALLOC(s->uelem, np);
   for (size_t p = 0; p < np; p++) s->ustart[slotu[p] + 1]++;
   for (size_t u = 0; u < nu; u++) s->ustart[u + 1] += s->ustart[u];
-  for (size_t p = 0; p < np; p++)
-    s->uelem[s->ustart[slotu[p]]++] = (pa_idx)(p / s->nve);
+  for (size_t e = 0, p = 0; e < (size_t)nown; e++)
+    for (int k = 0; k < s->nve; k++, p++)
+      s->uelem[s->ustart[slotu[p]]++] = (pa_idx)e;
   for (size_t u = nu; u > 0; u--) s->ustart[u] = s->ustart[u - 1];
   s->ustart[0] = 0;
   s->nu = nu;
@@ -870,17 +871,47 @@ cleanup:
   return st;
 }
 
-/* Copy the payload of record i of R into the values of kind at entity e. */
-static void unpack_payload(pa_dmesh *dm, int kind, const pa__recs *R, size_t i,
-                           pa_idx e) {
+/* Copy the payloads of the records ord[0..n) of R (kind) into the values
+ * of that kind at local entities 0..n. A value restricted to a reference
+ * is in a record's payload only when the record has that reference; when
+ * no value of the kind is restricted (the usual case), the layout of every
+ * payload is the same (checked) and the values are filled one after the
+ * other. */
+static void unpack_payloads(pa_dmesh *dm, int kind, const pa__recs *R,
+                            const pa_idx *ord, pa_idx n) {
   if (!R->poff) return;
-  const unsigned char *p = R->pay + R->poff[i];
-  for (int k = 0; k < dm->nvalue; k++) {
-    pa_dmesh_value *v = dm->value[k];
-    if ((int)v->kind != kind || (v->ref >= 0 && v->ref != R->ref[i])) continue;
-    pa_idx slot = v->slot ? v->slot[e] : e;
-    memcpy(v->data + v->unit * (size_t)slot, p, v->unit);
-    p += v->unit;
+  int anyref = 0;
+  size_t off = 0, tot = 0;
+  for (int k = 0; k < dm->nvalue; k++)
+    if ((int)dm->value[k]->kind == kind) {
+      anyref |= dm->value[k]->ref >= 0;
+      tot += dm->value[k]->unit;
+    }
+  for (pa_idx e = 0; e < n && !anyref; e++)
+    anyref = R->poff[ord[e] + 1] - R->poff[ord[e]] != tot;
+  if (!anyref) {
+    for (int k = 0; k < dm->nvalue; k++) {
+      pa_dmesh_value *v = dm->value[k];
+      if ((int)v->kind != kind) continue;
+      for (pa_idx e = 0; e < n; e++) {
+        const unsigned char *p = R->pay + R->poff[ord[e]] + off;
+        unsigned char *q = v->data + v->unit * (size_t)(v->slot ? v->slot[e] : e);
+        for (size_t b = 0; b < v->unit; b++) q[b] = p[b];
+      }
+      off += v->unit;
+    }
+    return;
+  }
+  for (pa_idx e = 0; e < n; e++) {
+    size_t i = (size_t)ord[e];
+    const unsigned char *p = R->pay + R->poff[i];
+    for (int k = 0; k < dm->nvalue; k++) {
+      pa_dmesh_value *v = dm->value[k];
+      if ((int)v->kind != kind || (v->ref >= 0 && v->ref != R->ref[i])) continue;
+      pa_idx slot = v->slot ? v->slot[e] : e;
+      memcpy(v->data + v->unit * (size_t)slot, p, v->unit);
+      p += v->unit;
+    }
   }
 }
 
@@ -1106,8 +1137,7 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
       /* slots from the references (local); sfs are built later */
       for (int k = 0; k < dm->nvalue; k++) PA_CALL(pa__value_alloc(dm, dm->value[k]));
       for (int kind = 0; kind < PA_NKIND; kind++)
-        for (pa_idx e = 0; e < dm->nloc[kind]; e++)
-          unpack_payload(dm, kind, R[kind], (size_t)ord[kind][e], e);
+        unpack_payloads(dm, kind, R[kind], ord[kind], dm->nloc[kind]);
     }
   }
 cleanup:
@@ -1134,18 +1164,14 @@ int pa__layout_ndbl(const pa__layout *l) {
   return n;
 }
 
+/* (plain loops: a few doubles each, once per vertex of every transfer) */
 int pa__vertex_doubles(const pa_mesh *m, pa_idx v, int nfield, double *out) {
-  int d = m->dim, n = 0;
-  memcpy(out, m->coord + (size_t)d * v, d * sizeof *out);
-  n += d;
-  if (m->met_ncomp) {
-    memcpy(out + n, m->met + (size_t)m->met_ncomp * v, m->met_ncomp * sizeof *out);
-    n += m->met_ncomp;
-  }
+  int d = m->dim, n = 0, nm = m->met_ncomp;
+  for (int k = 0; k < d; k++) out[n++] = m->coord[(size_t)d * v + k];
+  for (int k = 0; k < nm; k++) out[n++] = m->met[(size_t)nm * v + k];
   for (int f = 0; f < nfield; f++) {
     int nc = m->field[f].ncomp;
-    memcpy(out + n, m->field[f].val + (size_t)nc * v, nc * sizeof *out);
-    n += nc;
+    for (int k = 0; k < nc; k++) out[n++] = m->field[f].val[(size_t)nc * v + k];
   }
   return n;
 }

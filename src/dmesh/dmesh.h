@@ -111,10 +111,38 @@ typedef struct pa__recs {
 
 void pa__recs_init(pa__recs *r, int kind, int nv, int ndbl);
 void pa__recs_free(pa__recs *r);
-/* Append one record (vgid nv ids, dbl ndbl doubles, pay of paylen bytes). */
-pa_status pa__recs_add(pa__recs *r, pa_gid gid, const pa_gid *vgid,
-                       int32_t ref, uint8_t flag, int aux, const double *dbl,
-                       const void *pay, size_t paylen);
+/* Grow r for one more record with a payload of paylen bytes (the slow path
+ * of pa__recs_add). */
+pa_status pa__recs_room(pa__recs *r, size_t paylen);
+/* Append one record (vgid nv ids, dbl ndbl doubles, pay of paylen bytes).
+ * Inline: it runs once per entity in every transfer and rebuild, and the
+ * arrays are usually reserved already (plain loops, not memcpy: a few items
+ * each, a library call per array cost more than the copy). */
+static inline pa_status pa__recs_add(pa__recs *r, pa_gid gid,
+                                     const pa_gid *vgid, int32_t ref,
+                                     uint8_t flag, int aux, const double *dbl,
+                                     const void *pay, size_t paylen) {
+  size_t i = r->n;
+  if (i >= r->cap || (paylen && !r->poff) ||
+      (r->poff && r->poff[i] + paylen > r->paycap)) {
+    pa_status st = pa__recs_room(r, paylen);
+    if (st) return st;
+  }
+  r->gid[i] = gid;
+  for (int k = 0; k < r->nv; k++) r->vgid[(size_t)r->nv * i + k] = vgid[k];
+  r->ref[i] = ref;
+  r->flag[i] = flag;
+  r->aux[i] = aux;
+  for (int k = 0; k < r->ndbl; k++) r->dbl[(size_t)r->ndbl * i + k] = dbl[k];
+  if (r->poff) {
+    size_t off = r->poff[i];
+    for (size_t k = 0; k < paylen; k++)
+      r->pay[off + k] = ((const unsigned char *)pay)[k];
+    r->poff[i + 1] = off + paylen;
+  }
+  r->n = i + 1;
+  return PA_SUCCESS;
+}
 /* Bytes of record i on the wire. */
 size_t pa__recs_wire(const pa__recs *r, size_t i);
 /* Append record i to a buffer (reserve pa__recs_wire bytes first). */

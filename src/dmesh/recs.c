@@ -72,31 +72,13 @@ static pa_status recs_grow(pa__recs *r, size_t need) {
   return recs_grow_to(r, need, 0);
 }
 
-pa_status pa__recs_add(pa__recs *r, pa_gid gid, const pa_gid *vgid,
-                       int32_t ref, uint8_t flag, int aux, const double *dbl,
-                       const void *pay, size_t paylen) {
+pa_status pa__recs_room(pa__recs *r, size_t paylen) {
   pa_status st = PA_SUCCESS;
   PA_CALL(recs_grow(r, r->n + 1));
   if (paylen && !r->poff) {
     PA_CALLOC(r->poff, r->cap + 1);
   }
-  size_t i = r->n;
-  /* plain loops, not memcpy: a few items each, called once per record (a
-   * library call per array cost more than the copy) */
-  r->gid[i] = gid;
-  for (int k = 0; k < r->nv; k++) r->vgid[(size_t)r->nv * i + k] = vgid[k];
-  r->ref[i] = ref;
-  r->flag[i] = flag;
-  r->aux[i] = aux;
-  for (int k = 0; k < r->ndbl; k++) r->dbl[(size_t)r->ndbl * i + k] = dbl[k];
-  if (r->poff) {
-    size_t off = r->poff[i];
-    PA_GROW(r->pay, r->paycap, off + paylen);
-    for (size_t k = 0; k < paylen; k++)
-      r->pay[off + k] = ((const unsigned char *)pay)[k];
-    r->poff[i + 1] = off + paylen;
-  }
-  r->n++;
+  if (r->poff) PA_GROW(r->pay, r->paycap, r->poff[r->n] + paylen);
 cleanup:
   return st;
 }
