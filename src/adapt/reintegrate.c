@@ -558,11 +558,13 @@ cleanup:
 }
 
 /* Append the records an output gives (see the file comment). next[k]: next
- * fresh id of each kind (advanced). */
+ * fresh id of each kind (advanced). Rp (NULL: none): the private vertices
+ * (pa__dmesh_build_priv), the fresh ones of an output whose elements all
+ * stay on this rank: only they reference them. */
 static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemit,
                                 const uint8_t *demit, pa_gid *next,
                                 const pa_dmesh_value *done, pa__recs *R,
-                                unsigned char *pay) {
+                                pa__recs *Rp, unsigned char *pay) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
   const pa_mesh *o = pc->out;
@@ -572,6 +574,8 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   int *dist = NULL, *dsk = NULL, *dest = NULL;
   paycache pcache = {0, 0, 0, (size_t)-1};
   PA_CALL(output_dest(it, pc, &dest));
+  for (pa_idx e = 0; Rp && e < o->ne; e++)
+    if (dest[e] != it->rank) Rp = NULL;
   PA_ALLOC(vg, o->nv);
   PA_ALLOC(dbl, R[PA_VERTEX].ndbl);
   for (pa_idx j = 0; j < o->nv; j++) {
@@ -587,8 +591,8 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
     }
     pa__vertex_doubles(o, j, o->nfield, dbl);
     size_t pl = payload_of(&pcache, dm, PA_VERTEX, o->vref[j], done, 0, pay);
-    PA_CALL(pa__recs_add(&R[PA_VERTEX], vg[j], NULL, o->vref[j], o->vflag[j],
-                         it->rank, dbl, pay, pl));
+    PA_CALL(pa__recs_add(i < 0 && Rp ? Rp : &R[PA_VERTEX], vg[j], NULL,
+                         o->vref[j], o->vflag[j], it->rank, dbl, pay, pl));
   }
   /* elements within NEAR_SKIN vertex layers of a hot skin vertex (dist);
    * BAD_NEAR_SKIN: layers from any skin vertex (dsk), in the same sweeps;
@@ -820,13 +824,14 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
   uint8_t *keep = NULL, *kv = NULL, *kb = NULL, *kd = NULL;
   uint8_t **bemit = NULL, **demit = NULL;
   unsigned char *pay = NULL;
-  pa__recs R[PA_NKIND];
+  pa__recs R[PA_NKIND], Rp;
   pa__layout lay;
   pa_gid cnt[PA_NKIND] = {0, 0, 0, 0}, off[PA_NKIND] = {0, 0, 0, 0};
   pa_gid base[PA_NKIND] = {-1, -1, -1, -1};
   int built = 0;
   double t0 = pa_wtime(), t1;
   memset(R, 0, sizeof R);
+  memset(&Rp, 0, sizeof Rp);
 
   /* 1. which pieces failed, which elements stay */
   PA_CALL(pa__allreduce(dm->comm, it->piece_failed, it->npieces, MPI_INT,
@@ -865,6 +870,8 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
     }
     PA_CALL(pa__dmesh_kept_recs(dm, kk, add, &R[PA_ELEMENT], &R[PA_VERTEX],
                                 &R[PA_BOUNDARY], &R[PA_EDGE]));
+    pa__recs_init(&Rp, PA_VERTEX, 0, R[PA_VERTEX].ndbl);
+    PA_CALL(pa__recs_reserve(&Rp, add[PA_VERTEX], 0));
   }
 
   /* 4. fresh ids */
@@ -903,7 +910,8 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
   for (int q = 0; q < it->npiece_local; q++) {
     pa__piece *pc = &it->pieces[q];
     if (!pc->out) continue;
-    PA_CALL(output_records(it, pc, bemit[q], demit[q], off, done, R, pay));
+    PA_CALL(output_records(it, pc, bemit[q], demit[q], off, done, R,
+                           &Rp, pay));
   }
   /* wire bytes of every record: a fixed part each, plus the payloads */
   for (int k = 0; k < PA_NKIND; k++)
@@ -919,14 +927,16 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
   pa__dmesh_clear(dm);
   built = 1;
   t1 = pa_wtime();
-  PA_CALL(pa__dmesh_build(dm, &lay, dm->overlap, &R[PA_ELEMENT], &R[PA_VERTEX],
-                          &R[PA_BOUNDARY], &R[PA_EDGE]));
+  PA_CALL(pa__dmesh_build_priv(dm, &lay, dm->overlap, &R[PA_ELEMENT],
+                               &R[PA_VERTEX], &R[PA_BOUNDARY], &R[PA_EDGE],
+                               &Rp));
   pa__info(2, "padapt: rank %d: reintegrate: records %.3f s, build %.3f s\n",
            it->rank, t1 - t0, pa_wtime() - t1);
 cleanup:
   (void)built;
   st = pa__agree_end(dm->comm, st);
   for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&R[k]);
+  pa__recs_free(&Rp);
   pa__free(keep);
   pa__free(kv);
   pa__free(kb);

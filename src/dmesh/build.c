@@ -228,6 +228,10 @@ typedef struct bstate {
                              * are numbered by two array reads a slot, not by
                              * a lookup in uix each */
   pa__recs LV, LB, LD;      /* local vertices / bdry / edges (aux = owner) */
+  /* private vertices (pa__dmesh_build_priv): records kept here, sorted by
+   * gid, out of the directory; upriv[u]: vertex u is one of them */
+  pa__recs *P;
+  uint8_t *upriv;
 } bstate;
 
 static void bstate_free(bstate *s) {
@@ -266,6 +270,20 @@ static void bstate_free(bstate *s) {
   pa__recs_free(&s->LV);
   pa__recs_free(&s->LB);
   pa__recs_free(&s->LD);
+  pa__free(s->upriv);
+  s->upriv = NULL;
+}
+
+/* 1 if g is the gid of a private vertex (binary search in s->P). */
+static int is_private(const bstate *s, pa_gid g) {
+  if (!s->P || !s->P->n) return 0;
+  size_t lo = 0, hi = s->P->n;
+  while (lo < hi) {
+    size_t mid = lo + (hi - lo) / 2;
+    if (s->P->gid[mid] < g) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo < s->P->n && s->P->gid[lo] == g;
 }
 
 static pa_gid min_vgid(const pa__recs *r, size_t i) {
@@ -276,7 +294,9 @@ static pa_gid min_vgid(const pa__recs *r, size_t i) {
   return m;
 }
 
-/* Attach records of R (bdry or edges) to their smallest vertex in V (CSR). */
+/* Attach records of R (bdry or edges) to their smallest vertex in V (CSR);
+ * those whose smallest vertex is private (sent to this rank, see
+ * build_directory) are left out: they are local here. */
 static pa_status attach(bstate *s, const pa__recs *R, pa_idx **start,
                         pa_idx **list) {
   pa_status st = PA_SUCCESS;
@@ -285,6 +305,7 @@ static pa_status attach(bstate *s, const pa__recs *R, pa_idx **start,
   PA_ALLOC(*list, R->n);
   for (size_t i = 0; i < R->n; i++) {
     pa_idx v = pa__gidindex_get(&s->vix, min_vgid(R, i));
+    if (v < 0 && is_private(s, min_vgid(R, i))) continue;
     PA_CHECK(v >= 0, PA_ERR_MESH,
              "%s of global id %lld references vertex %lld, which does not "
              "exist", R->kind == PA_BOUNDARY ? "boundary entity" : "edge",
@@ -294,7 +315,7 @@ static pa_status attach(bstate *s, const pa__recs *R, pa_idx **start,
   for (size_t v = 0; v < nV; v++) (*start)[v + 1] += (*start)[v];
   for (size_t i = 0; i < R->n; i++) {
     pa_idx v = pa__gidindex_get(&s->vix, min_vgid(R, i));
-    (*list)[(*start)[v]++] = (pa_idx)i;
+    if (v >= 0) (*list)[(*start)[v]++] = (pa_idx)i;
   }
   for (size_t v = nV; v > 0; v--) (*start)[v] = (*start)[v - 1];
   (*start)[0] = 0;
@@ -312,9 +333,15 @@ static pa_status build_directory(bstate *s, pa__recs *verts, pa__recs *bdry,
   PA_ALLOC(dest, nmax);
   for (size_t i = 0; i < verts->n; i++) dest[i] = dir_rank(&s->vdir, verts->gid[i]);
   PA_CALL(pa__recs_migrate_free(s->comm, verts, dest, &s->V));
-  for (size_t i = 0; i < bdry->n; i++) dest[i] = dir_rank(&s->vdir, min_vgid(bdry, i));
+  /* (a boundary entity or edge whose smallest vertex is private is in
+   * local elements only: it stays here) */
+  for (size_t i = 0; i < bdry->n; i++)
+    dest[i] = is_private(s, min_vgid(bdry, i)) ? s->rank
+                                               : dir_rank(&s->vdir, min_vgid(bdry, i));
   PA_CALL(pa__recs_migrate_free(s->comm, bdry, dest, &s->B));
-  for (size_t i = 0; i < edges->n; i++) dest[i] = dir_rank(&s->vdir, min_vgid(edges, i));
+  for (size_t i = 0; i < edges->n; i++)
+    dest[i] = is_private(s, min_vgid(edges, i)) ? s->rank
+                                                : dir_rank(&s->vdir, min_vgid(edges, i));
   PA_CALL(pa__recs_migrate_free(s->comm, edges, dest, &s->D));
   /* V is sorted by gid and holds the gids of this directory's block: dense */
   PA_CALL(pa__gidindex_init(&s->vix, s->V.n ? s->V.gid[0] : 0,
@@ -461,8 +488,20 @@ static pa_status build_touch(bstate *s) {
   pa_status st = PA_SUCCESS;
   size_t n;
   void *recv = NULL;
+  pa_gid *g = NULL;
   n = s->nu;
-  PA_CALL(send_to_directory(s, s->ukey, n, &s->tcnt, &recv));
+  if (s->P && s->P->n) {
+    /* mark the private vertices (both lists sorted) and leave them out */
+    PA_CALLOC(s->upriv, s->nu ? s->nu : 1);
+    PA_ALLOC(g, s->nu ? s->nu : 1);
+    n = 0;
+    for (size_t u = 0, i = 0; u < s->nu; u++) {
+      while (i < s->P->n && s->P->gid[i] < s->ukey[u]) i++;
+      if (i < s->P->n && s->P->gid[i] == s->ukey[u]) s->upriv[u] = 1;
+      else g[n++] = s->ukey[u];
+    }
+  }
+  PA_CALL(send_to_directory(s, g ? g : s->ukey, n, &s->tcnt, &recv));
   s->tgid = recv;
   recv = NULL;
   const pa_gid *rg = s->tgid;
@@ -491,6 +530,7 @@ static pa_status build_touch(bstate *s) {
 cleanup:
   st = pa__agree_end(s->comm, st);
   pa__free(recv);
+  pa__free(g);
   return st;
 }
 
@@ -712,6 +752,51 @@ cleanup:
   return st;
 }
 
+/* Append record k of in to r (owner aux). */
+static pa_status rec_copy(pa__recs *r, const pa__recs *in, size_t k, int aux) {
+  const unsigned char *pay = in->poff ? in->pay + in->poff[k] : NULL;
+  size_t len = in->poff ? in->poff[k + 1] - in->poff[k] : 0;
+  return pa__recs_add(r, in->gid[k], in->nv ? in->vgid + (size_t)in->nv * k : NULL,
+                      in->ref[k], in->flag[k], aux,
+                      in->ndbl ? in->dbl + (size_t)in->ndbl * k : NULL, pay, len);
+}
+
+/* The private vertices join LV (owned here; both sorted by gid, merged),
+ * and the boundary entities and edges whose smallest vertex is private,
+ * which stayed here out of the directory, join LB and LD. */
+static pa_status add_private(bstate *s) {
+  pa_status st = PA_SUCCESS;
+  const pa__recs *P = s->P;
+  pa__recs M;
+  pa__recs_init(&M, PA_VERTEX, 0, s->LV.ndbl);
+  size_t pb = (s->LV.poff ? s->LV.poff[s->LV.n] : 0) + (P->poff ? P->poff[P->n] : 0);
+  PA_CALL(pa__recs_reserve(&M, s->LV.n + P->n, pb));
+  for (size_t i = 0, j = 0; i < s->LV.n || j < P->n;) {
+    if (j >= P->n || (i < s->LV.n && s->LV.gid[i] < P->gid[j])) {
+      PA_CALL(rec_copy(&M, &s->LV, i, s->LV.aux[i]));
+      i++;
+    } else {
+      PA_CHECK(i >= s->LV.n || s->LV.gid[i] != P->gid[j], PA_ERR_INTERNAL,
+               "private vertex %lld is also in the directory",
+               (long long)P->gid[j]);
+      PA_CALL(rec_copy(&M, P, j, s->rank));
+      j++;
+    }
+  }
+  pa__recs_free(&s->LV);
+  s->LV = M;
+  memset(&M, 0, sizeof M);
+  for (int t = 0; t < 2; t++) {
+    const pa__recs *R = t ? &s->D : &s->B;
+    pa__recs *L = t ? &s->LD : &s->LB;
+    for (size_t i = 0; i < R->n; i++)
+      if (is_private(s, min_vgid(R, i))) PA_CALL(rec_copy(L, R, i, s->rank));
+  }
+cleanup:
+  pa__recs_free(&M);
+  return st;
+}
+
 /* Step 5: fetch the records of every local vertex (aux = owner) with the
  * boundary entities and edges attached to it: the directory answers each
  * requester with three record blocks (vertices in the order asked, their
@@ -824,13 +909,19 @@ static pa_status fetch_vertices(bstate *s) {
       PA_CALL(pa__recs_get(&s->LD, brecv, &q));
     }
   }
+  if (s->P && s->P->n) PA_CALL(add_private(s));
   /* the LV record of each owned element's vertex (-1: not fetched, an
    * internal error reported by assemble); both lists are sorted by gid */
   PA_ALLOC(s->ulv, s->nu);
+  size_t npriv = 0;
   for (size_t u = 0, i = 0; u < s->nu; u++) {
     while (i < s->LV.n && s->LV.gid[i] < s->ukey[u]) i++;
     s->ulv[u] = i < s->LV.n && s->LV.gid[i] == s->ukey[u] ? (pa_idx)i : -1;
+    npriv += s->upriv && s->upriv[u];
   }
+  PA_CHECK(!s->P || npriv == s->P->n, PA_ERR_INTERNAL,
+           "%zu private vertices are in no owned element",
+           s->P ? s->P->n - npriv : 0);
 cleanup:
   st = pa__agree_end(s->comm, st);
   pa__free(g);
@@ -1179,6 +1270,14 @@ int pa__vertex_doubles(const pa_mesh *m, pa_idx v, int nfield, double *out) {
 pa_status pa__dmesh_build(pa_dmesh *dm, const pa__layout *lay, int overlap,
                           pa__recs *elems, pa__recs *verts, pa__recs *bdry,
                           pa__recs *edges) {
+  return pa__dmesh_build_priv(dm, lay, overlap, elems, verts, bdry, edges,
+                              NULL);
+}
+
+pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
+                               int overlap, pa__recs *elems, pa__recs *verts,
+                               pa__recs *bdry, pa__recs *edges,
+                               pa__recs *priv) {
   pa_status st = PA_SUCCESS;
   bstate s;
   double t0 = pa_wtime();
@@ -1207,6 +1306,21 @@ pa_status pa__dmesh_build(pa_dmesh *dm, const pa__layout *lay, int overlap,
            PA_ERR_INTERNAL, "record layout mismatch");
   PA_CHECK(overlap >= 0 && overlap <= 8, PA_ERR_ARG,
            "overlap must be in [0, 8], got %d", overlap);
+  if (priv && priv->n) {
+    PA_CHECK(priv->ndbl == ndbl && priv->kind == PA_VERTEX, PA_ERR_INTERNAL,
+             "record layout mismatch");
+    for (size_t i = 1; i < priv->n; i++)
+      PA_CHECK(priv->gid[i] > priv->gid[i - 1], PA_ERR_INTERNAL,
+               "private vertices not sorted by global id");
+    cnt_in[PA_VERTEX] += (pa_gid)priv->n;
+    if (overlap > 0) { /* ghosts of other ranks may need them: directory */
+      for (size_t i = 0; i < priv->n; i++)
+        PA_CALL(rec_copy(verts, priv, i, priv->aux[i]));
+    } else {
+      s.P = priv;
+      maxg = priv->gid[priv->n - 1];
+    }
+  }
   for (size_t i = 0; i < verts->n; i++)
     if (verts->gid[i] > maxg) maxg = verts->gid[i];
   PA_CALL(pa__allreduce(s.comm, cnt_in, PA_NKIND, MPI_INT64_T, MPI_SUM));
@@ -1242,6 +1356,7 @@ pa_status pa__dmesh_build(pa_dmesh *dm, const pa__layout *lay, int overlap,
     memset(&keep.vix, 0, sizeof keep.vix);
     keep.bstart = keep.blist = keep.dstart = keep.dlist = keep.tstart = NULL;
     keep.trank = NULL;
+    keep.upriv = NULL;
     keep.tcnt = NULL;
     keep.tgid = NULL;
     keep.tv = NULL;
@@ -1317,5 +1432,6 @@ cleanup:
   pa__recs_free(verts);
   pa__recs_free(bdry);
   pa__recs_free(edges);
+  if (priv) pa__recs_free(priv);
   return st;
 }

@@ -227,6 +227,18 @@ pa_status pa__dmesh_reduce_fn(pa_dmesh *dm, pa_dmesh_value *v,
 pa_status pa__dmesh_build(pa_dmesh *dm, const pa__layout *lay, int overlap,
                           pa__recs *elems, pa__recs *verts, pa__recs *bdry,
                           pa__recs *edges);
+/* As pa__dmesh_build, with private vertices: records (sorted by gid, on
+ * the rank that gives them) of vertices that only elements owned by this
+ * rank after the migration reference, owned here. With overlap 0 they skip
+ * the directory (no migration there, no touch list, no fetch back): the
+ * rebuild after a remeshing, whose new vertices are nearly all private.
+ * With overlap > 0 (ghost elements elsewhere reference them) they are
+ * ordinary vertex records. A private vertex in no owned element, or
+ * referenced by another rank's elements, is an error. priv is freed. */
+pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
+                               int overlap, pa__recs *elems, pa__recs *verts,
+                               pa__recs *bdry, pa__recs *edges,
+                               pa__recs *priv);
 
 /* Collective: fail with PA_ERR_FORMAT naming the first global id given
  * twice over the ranks (what: "element", ...). */
