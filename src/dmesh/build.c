@@ -363,14 +363,14 @@ cleanup:
   return st;
 }
 
-/* The owned elements around each vertex of an owned element: ukey (sorted
- * unique gids), CSR ustart/uelem, the index uix (gid -> u) and the u of
- * each vertex slot (uslot). When the gids of the slots are dense (uix is an
+/* The vertices of the owned elements: ukey (sorted unique gids), the index
+ * uix (gid -> u), the u of each vertex slot (uslot) and, if csr (ghost
+ * layers to build), the owned elements around each (CSR ustart/uelem). When the gids of the slots are dense (uix is an
  * array over their range: the usual case), marking the range and one scan
  * of it number the vertices in ascending gid order, with no sort; otherwise
  * they are numbered by hashing and only the nu unique gids are sorted (not
  * the (dim+1) nown element slots). */
-static pa_status owned_csr(bstate *s, pa_idx nown) {
+static pa_status owned_csr(bstate *s, pa_idx nown, int csr) {
   pa_status st = PA_SUCCESS;
   size_t np = (size_t)nown * s->nve, nu = 0;
   pa_idx *slotu = NULL, *ord = NULL, *rankof = NULL;
@@ -423,18 +423,19 @@ static pa_status owned_csr(bstate *s, pa_idx nown) {
       if (m->key[q] >= 0) m->val[q] = rankof[m->val[q]];
     for (size_t p = 0; p < np; p++) slotu[p] = rankof[slotu[p]];
   }
-  PA_CALLOC(s->ustart, nu + 1);
-  PA_ALLOC(s->uelem, np);
-  for (size_t p = 0; p < np; p++) s->ustart[slotu[p] + 1]++;
-  for (size_t u = 0; u < nu; u++) s->ustart[u + 1] += s->ustart[u];
-  for (size_t e = 0, p = 0; e < (size_t)nown; e++)
-    for (int k = 0; k < s->nve; k++, p++)
-      s->uelem[s->ustart[slotu[p]]++] = (pa_idx)e;
-  for (size_t u = nu; u > 0; u--) s->ustart[u] = s->ustart[u - 1];
-  s->ustart[0] = 0;
   s->nu = nu;
   s->uslot = slotu;
   slotu = NULL;
+  if (!csr) goto cleanup;
+  PA_CALLOC(s->ustart, nu + 1);
+  PA_ALLOC(s->uelem, np);
+  for (size_t p = 0; p < np; p++) s->ustart[s->uslot[p] + 1]++;
+  for (size_t u = 0; u < nu; u++) s->ustart[u + 1] += s->ustart[u];
+  for (size_t e = 0, p = 0; e < (size_t)nown; e++)
+    for (int k = 0; k < s->nve; k++, p++)
+      s->uelem[s->ustart[s->uslot[p]]++] = (pa_idx)e;
+  for (size_t u = nu; u > 0; u--) s->ustart[u] = s->ustart[u - 1];
+  s->ustart[0] = 0;
 cleanup:
   pa__free(slotu);
   pa__free(ord);
@@ -766,11 +767,13 @@ static pa_status rec_copy(pa__recs *r, const pa__recs *in, size_t k, int aux) {
  * which stayed here out of the directory, join LB and LD. */
 static pa_status add_private(bstate *s) {
   pa_status st = PA_SUCCESS;
-  const pa__recs *P = s->P;
+  pa__recs *P = s->P;
   pa__recs M;
   pa__recs_init(&M, PA_VERTEX, 0, s->LV.ndbl);
   size_t pb = (s->LV.poff ? s->LV.poff[s->LV.n] : 0) + (P->poff ? P->poff[P->n] : 0);
   PA_CALL(pa__recs_reserve(&M, s->LV.n + P->n, pb));
+  for (size_t j = 0; j < P->n; j++) P->aux[j] = s->rank;
+  /* runs of P between the (few) LV records, copied array by array */
   for (size_t i = 0, j = 0; i < s->LV.n || j < P->n;) {
     if (j >= P->n || (i < s->LV.n && s->LV.gid[i] < P->gid[j])) {
       PA_CALL(rec_copy(&M, &s->LV, i, s->LV.aux[i]));
@@ -779,8 +782,10 @@ static pa_status add_private(bstate *s) {
       PA_CHECK(i >= s->LV.n || s->LV.gid[i] != P->gid[j], PA_ERR_INTERNAL,
                "private vertex %lld is also in the directory",
                (long long)P->gid[j]);
-      PA_CALL(rec_copy(&M, P, j, s->rank));
-      j++;
+      size_t j1 = j + 1;
+      while (j1 < P->n && (i >= s->LV.n || P->gid[j1] < s->LV.gid[i])) j1++;
+      PA_CALL(pa__recs_append(&M, P, j, j1 - j));
+      j = j1;
     }
   }
   pa__recs_free(&s->LV);
@@ -1340,7 +1345,7 @@ pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
   double t1 = pa_wtime();
   /* 2-3. directory and touch lists */
   PA_CALL(build_directory(&s, verts, bdry, edges));
-  st = owned_csr(&s, nown_e);
+  st = owned_csr(&s, nown_e, overlap > 0);
   PA_CALL(pa__agree(s.comm, st));
   PA_CALL(build_touch(&s));
   /* 4. ghost layers */

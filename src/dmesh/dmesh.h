@@ -143,6 +143,10 @@ static inline pa_status pa__recs_add(pa__recs *r, pa_gid gid,
   r->n = i + 1;
   return PA_SUCCESS;
 }
+/* Append the records [k0, k0 + n) of in (same layout) to r, array by
+ * array. */
+pa_status pa__recs_append(pa__recs *r, const pa__recs *in, size_t k0,
+                          size_t n);
 /* Bytes of record i on the wire. */
 size_t pa__recs_wire(const pa__recs *r, size_t i);
 /* Append record i to a buffer (reserve pa__recs_wire bytes first). */

@@ -83,6 +83,34 @@ cleanup:
   return st;
 }
 
+pa_status pa__recs_append(pa__recs *r, const pa__recs *in, size_t k0,
+                          size_t n) {
+  pa_status st = PA_SUCCESS;
+  size_t nv = (size_t)r->nv, nd = (size_t)r->ndbl, i0 = r->n;
+  size_t pay = in->poff ? in->poff[k0 + n] - in->poff[k0] : 0;
+  PA_ASSERT(in->nv == r->nv && in->ndbl == r->ndbl);
+  if (!n) return PA_SUCCESS;
+  PA_CALL(recs_grow(r, i0 + n));
+  if (pay && !r->poff) PA_CALLOC(r->poff, r->cap + 1);
+  memcpy(r->gid + i0, in->gid + k0, n * sizeof *r->gid);
+  if (nv) memcpy(r->vgid + nv * i0, in->vgid + nv * k0, nv * n * sizeof *r->vgid);
+  memcpy(r->ref + i0, in->ref + k0, n * sizeof *r->ref);
+  memcpy(r->flag + i0, in->flag + k0, n * sizeof *r->flag);
+  memcpy(r->aux + i0, in->aux + k0, n * sizeof *r->aux);
+  if (nd) memcpy(r->dbl + nd * i0, in->dbl + nd * k0, nd * n * sizeof *r->dbl);
+  if (r->poff) {
+    size_t off = r->poff[i0];
+    PA_GROW(r->pay, r->paycap, off + pay);
+    if (pay) memcpy(r->pay + off, in->pay + in->poff[k0], pay);
+    for (size_t i = 0; i < n; i++)
+      r->poff[i0 + i + 1] =
+          off + (in->poff ? in->poff[k0 + i + 1] - in->poff[k0] : 0);
+  }
+  r->n = i0 + n;
+cleanup:
+  return st;
+}
+
 static size_t paylen_of(const pa__recs *r, size_t i) {
   return r->poff ? r->poff[i + 1] - r->poff[i] : 0;
 }
