@@ -307,23 +307,25 @@ cleanup:
  * layers from the vertices where it is 0; the others start at nl), over the
  * elements of o. The arrays advance together: one sweep over the elements
  * a layer, whatever nd. */
-static void vertex_layers(const pa_mesh *o, int nl, int nd, int *const *dist) {
+static void vertex_layers(const pa_mesh *o, int nl, int nd,
+                          uint8_t *const *dist) {
   int d = o->dim;
   for (int layer = 0; layer < nl; layer++)
     for (pa_idx e = 0; e < o->ne; e++) {
       const pa_idx *v = o->elem + (size_t)(d + 1) * e;
       for (int a = 0; a < nd; a++) {
-        int *x = dist[a], mn = nl;
+        uint8_t *x = dist[a];
+        int mn = nl;
         for (int k = 0; k <= d; k++) mn = x[v[k]] < mn ? x[v[k]] : mn;
         if (mn < nl)
           for (int k = 0; k <= d; k++)
-            if (x[v[k]] > mn + 1) x[v[k]] = mn + 1;
+            if (x[v[k]] > mn + 1) x[v[k]] = (uint8_t)(mn + 1);
       }
     }
 }
 
 /* Smallest of dist over the vertices of element e of o. */
-static int elem_layer(const pa_mesh *o, const int *dist, pa_idx e) {
+static int elem_layer(const pa_mesh *o, const uint8_t *dist, pa_idx e) {
   const pa_idx *v = o->elem + (size_t)(o->dim + 1) * e;
   int mn = dist[v[0]];
   for (int k = 1; k <= o->dim; k++) mn = dist[v[k]] < mn ? dist[v[k]] : mn;
@@ -334,12 +336,13 @@ static int elem_layer(const pa_mesh *o, const int *dist, pa_idx e) {
  * pc->skin): 0 at the output vertices matching a marked input vertex, else
  * the vertex layers from them, at most nl. */
 static void layers_from(const pa__piece *pc, int nd,
-                        const uint8_t *const *mark, int nl, int *const *dist) {
+                        const uint8_t *const *mark, int nl,
+                        uint8_t *const *dist) {
   const pa_mesh *o = pc->out;
   for (int a = 0; a < nd; a++)
     for (pa_idx j = 0; j < o->nv; j++) {
       pa_idx i = pc->match[j];
-      dist[a][j] = i >= 0 && mark[a][i] ? 0 : nl;
+      dist[a][j] = (uint8_t)(i >= 0 && mark[a][i] ? 0 : nl);
     }
   vertex_layers(o, nl, nd, dist);
 }
@@ -571,7 +574,8 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   int d = o->dim;
   pa_gid *vg = NULL;
   double *dbl = NULL;
-  int *dist = NULL, *dsk = NULL, *dest = NULL;
+  uint8_t *dist = NULL, *dsk = NULL;
+  int *dest = NULL;
   paycache pcache = {0, 0, 0, (size_t)-1};
   PA_CALL(output_dest(it, pc, &dest));
   for (pa_idx e = 0; Rp && e < o->ne; e++)
@@ -607,7 +611,7 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   if (qthr > 0) PA_ALLOC(dsk, o->nv);
   {
     const uint8_t *mk[2] = {pc->hot, pc->skin};
-    int *const ds[2] = {dist, dsk};
+    uint8_t *const ds[2] = {dist, dsk};
     layers_from(pc, qthr > 0 ? 2 : 1, mk, NEAR_SKIN, ds);
   }
   if (qthr > 0) {
@@ -617,7 +621,7 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
              pa_mesh_elem_quality(pc->out, e) < qthr;
     if (poor) {
       const uint8_t *mk[1] = {pc->skin};
-      int *const ds[1] = {dsk};
+      uint8_t *const ds[1] = {dsk};
       layers_from(pc, 1, mk, 2 * NEAR_SKIN, ds);
       qband = qthr;
       for (pa_idx e = 0; e < o->ne; e++) {
@@ -818,10 +822,34 @@ cleanup:
   return st;
 }
 
+/* The kept owned vertices that can be private in the rebuild
+ * (pa__dmesh_build_priv): no labelled element on any rank around them (no
+ * piece has them) and no copy on another rank (only this rank's elements,
+ * which stay, contain them). *vpriv stays NULL when the owned vertices are
+ * not in global id order (pa_dmesh_reorder), which private records need. */
+static pa_status private_kept(const pa__iter *it, const uint8_t *kv,
+                              uint8_t **vpriv) {
+  pa_status st = PA_SUCCESS;
+  const pa_dmesh *dm = it->dm;
+  pa_idx nown = dm->nown[PA_VERTEX];
+  const pa_gid *g = dm->gid[PA_VERTEX];
+  const pa__sf *sf = &dm->sf[PA_VERTEX];
+  *vpriv = NULL;
+  for (pa_idx v = 1; v < nown; v++)
+    if (g[v] <= g[v - 1]) return PA_SUCCESS;
+  PA_ALLOC(*vpriv, nown ? nown : 1);
+  for (pa_idx v = 0; v < nown; v++)
+    (*vpriv)[v] = (uint8_t)(kv[v] && it->vlab[4 * v] == PA__NOLABEL);
+  for (pa_idx q = 0; sf->rootoff && q < sf->rootoff[sf->nrootrank]; q++)
+    (*vpriv)[sf->rootidx[q]] = 0; /* copies on other ranks */
+cleanup:
+  return st;
+}
+
 pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
-  uint8_t *keep = NULL, *kv = NULL, *kb = NULL, *kd = NULL;
+  uint8_t *keep = NULL, *kv = NULL, *kb = NULL, *kd = NULL, *vpriv = NULL;
   uint8_t **bemit = NULL, **demit = NULL;
   unsigned char *pay = NULL;
   pa__recs R[PA_NKIND], Rp;
@@ -868,10 +896,9 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
       add[PA_BOUNDARY] += (size_t)o->nb;
       add[PA_EDGE] += (size_t)o->ned;
     }
+    PA_CALL(private_kept(it, kv, &vpriv));
     PA_CALL(pa__dmesh_kept_recs(dm, kk, add, &R[PA_ELEMENT], &R[PA_VERTEX],
-                                &R[PA_BOUNDARY], &R[PA_EDGE]));
-    pa__recs_init(&Rp, PA_VERTEX, 0, R[PA_VERTEX].ndbl);
-    PA_CALL(pa__recs_reserve(&Rp, add[PA_VERTEX], 0));
+                                &R[PA_BOUNDARY], &R[PA_EDGE], vpriv, &Rp));
   }
 
   /* 4. fresh ids */
@@ -938,6 +965,7 @@ cleanup:
   for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&R[k]);
   pa__recs_free(&Rp);
   pa__free(keep);
+  pa__free(vpriv);
   pa__free(kv);
   pa__free(kb);
   pa__free(kd);

@@ -313,9 +313,13 @@ pa_status pa__dmesh_partition(MPI_Comm comm, int dim, pa_idx n,
  * this rank) whose keep[kind][i] is set (keep NULL, or keep[kind] NULL: all
  * of that kind), written straight from the local arrays into record sets
  * reserved for extra[kind] more records (extra NULL: none) and their
- * largest payloads. Initialises the four record sets (freed on failure). */
+ * largest payloads; the owned vertices with vpriv[i] (vpriv NULL: none) go
+ * to P (the private vertices of pa__dmesh_build_priv), also reserved for
+ * extra[PA_VERTEX] more. Initialises the five record sets (freed on
+ * failure). */
 pa_status pa__dmesh_kept_recs(pa_dmesh *dm, const uint8_t *const keep[PA_NKIND],
                               const size_t extra[PA_NKIND], pa__recs *E,
-                              pa__recs *V, pa__recs *B, pa__recs *D);
+                              pa__recs *V, pa__recs *B, pa__recs *D,
+                              const uint8_t *vpriv, pa__recs *P);
 
 #endif /* PA_DMESH_H */

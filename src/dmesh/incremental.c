@@ -7,9 +7,11 @@
 #include "dmesh/dmesh.h"
 
 /* Records of the owned entities of one kind with keep[i] (keep NULL: all),
- * with room for extra more records. */
+ * with room for extra more records; those with priv[i] (priv NULL: none)
+ * go to P instead of R, also with room for extra more. */
 static pa_status kept_kind(pa_dmesh *dm, int kind, const uint8_t *keep,
-                           size_t extra, pa__recs *R) {
+                           size_t extra, pa__recs *R, const uint8_t *priv,
+                           pa__recs *P) {
   pa_status st = PA_SUCCESS;
   const pa_mesh *m = dm->mesh;
   int d = dm->dim, nv = pa__kind_nv(d, kind), nd = R->ndbl;
@@ -21,41 +23,44 @@ static pa_status kept_kind(pa_dmesh *dm, int kind, const uint8_t *keep,
                       : kind == PA_ELEMENT ? m->eflag
                       : kind == PA_BOUNDARY ? m->bflag
                                             : m->edflag;
-  size_t n = 0, unit = 0, paybytes = 0;
+  size_t n[2] = {0, 0}, unit = 0, paybytes[2] = {0, 0};
   for (int k = 0; k < dm->nvalue; k++)
     if ((int)dm->value[k]->kind == kind) unit += dm->value[k]->unit;
   for (pa_idx e = 0; e < nown; e++) {
     if (keep && !keep[e]) continue;
-    n++;
+    int t = priv && priv[e];
+    n[t]++;
     if (!unit) continue;
     int32_t ref = pa__dmesh_ref(dm, kind, e);
     for (int k = 0; k < dm->nvalue; k++) {
       const pa_dmesh_value *v = dm->value[k];
-      if ((int)v->kind == kind && (v->ref < 0 || v->ref == ref)) paybytes += v->unit;
+      if ((int)v->kind == kind && (v->ref < 0 || v->ref == ref)) paybytes[t] += v->unit;
     }
   }
-  PA_CALL(pa__recs_reserve(R, n + extra, paybytes + extra * unit));
+  PA_CALL(pa__recs_reserve(R, n[0] + extra, paybytes[0] + extra * unit));
+  if (priv) PA_CALL(pa__recs_reserve(P, n[1] + extra, paybytes[1] + extra * unit));
   for (pa_idx e = 0; e < nown; e++) {
     if (keep && !keep[e]) continue;
-    size_t i = R->n++;
-    R->gid[i] = dm->gid[kind][e];
+    pa__recs *T = priv && priv[e] ? P : R;
+    size_t i = T->n++;
+    T->gid[i] = dm->gid[kind][e];
     for (int j = 0; j < nv; j++)
-      R->vgid[(size_t)nv * i + j] = dm->gid[PA_VERTEX][conn[(size_t)nv * e + j]];
+      T->vgid[(size_t)nv * i + j] = dm->gid[PA_VERTEX][conn[(size_t)nv * e + j]];
     int32_t ref = pa__dmesh_ref(dm, kind, e);
-    R->ref[i] = ref;
-    R->flag[i] = fl[e];
-    R->aux[i] = dm->rank;
-    if (nd) pa__vertex_doubles(m, e, m->nfield, R->dbl + (size_t)nd * i);
-    if (R->poff) {
-      size_t off = R->poff[i];
+    T->ref[i] = ref;
+    T->flag[i] = fl[e];
+    T->aux[i] = dm->rank;
+    if (nd) pa__vertex_doubles(m, e, m->nfield, T->dbl + (size_t)nd * i);
+    if (T->poff) {
+      size_t off = T->poff[i];
       for (int k = 0; k < dm->nvalue; k++) {
         const pa_dmesh_value *v = dm->value[k];
         if ((int)v->kind != kind || (v->ref >= 0 && v->ref != ref)) continue;
         pa_idx slot = v->slot ? v->slot[e] : e;
-        memcpy(R->pay + off, v->data + v->unit * (size_t)slot, v->unit);
+        memcpy(T->pay + off, v->data + v->unit * (size_t)slot, v->unit);
         off += v->unit;
       }
-      R->poff[i + 1] = off;
+      T->poff[i + 1] = off;
     }
   }
 cleanup:
@@ -64,7 +69,8 @@ cleanup:
 
 pa_status pa__dmesh_kept_recs(pa_dmesh *dm, const uint8_t *const keep[PA_NKIND],
                               const size_t extra[PA_NKIND], pa__recs *E,
-                              pa__recs *V, pa__recs *B, pa__recs *D) {
+                              pa__recs *V, pa__recs *B, pa__recs *D,
+                              const uint8_t *vpriv, pa__recs *P) {
   pa_status st = PA_SUCCESS;
   pa__layout lay;
   pa__recs *R[PA_NKIND];
@@ -73,18 +79,21 @@ pa_status pa__dmesh_kept_recs(pa_dmesh *dm, const uint8_t *const keep[PA_NKIND],
   pa__recs_init(V, PA_VERTEX, 0, pa__layout_ndbl(&lay));
   pa__recs_init(B, PA_BOUNDARY, dm->dim, 0);
   pa__recs_init(D, PA_EDGE, 2, 0);
+  pa__recs_init(P, PA_VERTEX, 0, pa__layout_ndbl(&lay));
   R[PA_VERTEX] = V;
   R[PA_ELEMENT] = E;
   R[PA_BOUNDARY] = B;
   R[PA_EDGE] = D;
   for (int k = 0; k < PA_NKIND; k++)
-    PA_CALL(kept_kind(dm, k, keep ? keep[k] : NULL, extra ? extra[k] : 0, R[k]));
+    PA_CALL(kept_kind(dm, k, keep ? keep[k] : NULL, extra ? extra[k] : 0, R[k],
+                      k == PA_VERTEX ? vpriv : NULL, P));
 cleanup:
   if (st) {
     pa__recs_free(E);
     pa__recs_free(V);
     pa__recs_free(B);
     pa__recs_free(D);
+    pa__recs_free(P);
   }
   return st;
 }
