@@ -214,6 +214,7 @@ typedef struct bstate {
   pa_idx *tv;               /* their V indices */
   /* local side */
   pa__recs L;               /* local elements: owned first; aux = owner */
+  size_t nownel;            /* of which owned (the ghosts follow) */
   uint8_t *layer;           /* per L record */
   size_t caplayer;
   pa__gidmap emap;          /* ghost element gid -> L index */
@@ -817,7 +818,8 @@ static pa_status fetch_vertices(bstate *s) {
   unsigned char *sbuf = NULL;
   /* local vertices: those of the owned elements, which the directory has
    * from the touch messages, and the ghosts' (not among them), sent now */
-  PA_CALL(ghost_verts(s, 1, 255, &g, &n));
+  n = 0;
+  if (s->L.n > s->nownel) PA_CALL(ghost_verts(s, 1, 255, &g, &n));
   PA_CALL(send_to_directory(s, g, n, &rcnt, &recv));
   pa__free(g);
   g = NULL;
@@ -1342,6 +1344,7 @@ pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
   s.caplayer = s.L.n;
   PA_CALL(pa__gidmap_init(&s.emap, 16));
   pa_idx nown_e = (pa_idx)s.L.n;
+  s.nownel = s.L.n;
   double t1 = pa_wtime();
   /* 2-3. directory and touch lists */
   PA_CALL(build_directory(&s, verts, bdry, edges));

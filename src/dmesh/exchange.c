@@ -279,12 +279,33 @@ pa_status pa__sf_build(MPI_Comm comm, pa_idx n, const pa_gid *gid,
   PA_ALLOC(sf->rootidx, nroot);
   sf->nrootrank = nrr;
   sf->rootoff[0] = 0;
-  /* Resolve the requests: a map of the requested gids (chained through next
-   * when several ranks ask for one gid), then one pass over the owned
-   * entities. The requests are the ghosts of the neighbours, far fewer than
-   * the owned entities, so the map stays in cache, where a map of every owned
-   * gid would not. The first owned entity of a gid wins. */
-  {
+  /* Resolve the requests. When the owned entities come first, in strictly
+   * increasing gid order (what every build leaves), each request is a
+   * binary search among them. Otherwise (after pa_dmesh_reorder): a map of
+   * the requested gids (chained through next when several ranks ask for
+   * one gid), then one pass over the owned entities; the requests are the
+   * ghosts of the neighbours, far fewer than the owned entities, so the map
+   * stays in cache, where a map of every owned gid would not. The first
+   * owned entity of a gid wins. */
+  pa_idx nown = 0;
+  int sorted = 1;
+  while (nown < n && owner[nown] == rank) {
+    if (nown && gid[nown] <= gid[nown - 1]) sorted = 0;
+    nown++;
+  }
+  for (pa_idx i = nown; sorted && i < n; i++) sorted = owner[i] != rank;
+  if (sorted) {
+    const pa_gid *rg = recv;
+    for (size_t j = 0; j < nroot; j++) {
+      pa_idx lo = 0, hi = nown;
+      while (lo < hi) {
+        pa_idx mid = lo + (hi - lo) / 2;
+        if (gid[mid] < rg[j]) lo = mid + 1;
+        else hi = mid;
+      }
+      sf->rootidx[j] = lo < nown && gid[lo] == rg[j] ? lo : -1;
+    }
+  } else {
     const pa_gid *rg = recv;
     PA_ALLOC(next, nroot);
     PA_CALL(pa__gidmap_init(&map, nroot));
@@ -306,6 +327,9 @@ pa_status pa__sf_build(MPI_Comm comm, pa_idx n, const pa_gid *gid,
       if (j < 0 || sf->rootidx[j] >= 0) continue;
       for (; j >= 0; j = next[j]) sf->rootidx[j] = i;
     }
+  }
+  {
+    const pa_gid *rg = recv;
     size_t j = 0;
     for (int r = 0, k = 0; r < size; r++) {
       if (!rcnt[r]) continue;
