@@ -8,6 +8,7 @@
  *  - a linear user field is interpolated exactly;
  *  - convergence on every built-in metric field, and on a reordered mesh;
  *  - no poor element left next to a piece's skin (3D);
+ *  - user values of untouched entities come back unchanged;
  *  - a piece made to fail is rolled back and the result is still valid.
  */
 #include "testutil.h"
@@ -289,6 +290,76 @@ static void test_reordered(void) {
   CHECK(fabs(pct[1] - pct[0]) <= 1.0);
 }
 
+/* User values of the entities a sparse adaptation does not touch come back
+ * unchanged (their records go through the rebuild with the values as
+ * payloads, most vertices as private ones), those of new entities are zero:
+ * a vertex value, an element value and a boundary value restricted to
+ * reference 1 (a per-record payload layout), set to a function of the
+ * global id. Every local copy, ghosts included, holds f(gid) or 0, and
+ * most entities keep f(gid). */
+static int64_t fval(int k, pa_gid g) { return g * (3 + 2 * k) + 1 + k; }
+
+static void test_values_kept(void) {
+  static const pa_entity kinds[3] = {PA_VERTEX, PA_ELEMENT, PA_BOUNDARY};
+  pa_mesh *m = box(2, 16, "uniform:0.06");
+  if (m)
+    for (pa_idx e = 5; e < pa_mesh_nelem(m); e += 97)
+      pa_mesh_elem_flags(m)[e] |= PA_FLAG_USER;
+  pa_dmesh *dm = distribute(m, 0);
+  pa_dmesh_value *val[3];
+  pa_gid before[3];
+  for (int k = 0; k < 3; k++) {
+    char name[16];
+    snprintf(name, sizeof name, "test.v%d", k);
+    CHECK_OK(pa_dmesh_value_add(dm, kinds[k], name, MPI_INT64_T, 1,
+                                kinds[k] == PA_BOUNDARY ? 1 : -1, &val[k]));
+  }
+  for (int round = 0; round < 2; round++) {
+    pa_gid kept[3] = {0, 0, 0}, bad = 0, own[3] = {0, 0, 0};
+    for (int k = 0; k < 3; k++) {
+      pa_idx n, nown;
+      int64_t *x = pa_dmesh_value_data(val[k], &n, &nown);
+      const pa_idx *ent = pa_dmesh_value_entities(val[k]);
+      const pa_gid *g = pa_dmesh_gids(dm, kinds[k]);
+      for (pa_idx i = 0; i < n; i++) {
+        pa_gid gi = g[ent ? ent[i] : i];
+        if (round == 0) {
+          x[i] = fval(k, gi);
+        } else {
+          bad += x[i] != 0 && x[i] != fval(k, gi);
+          if (i < nown) kept[k] += x[i] == fval(k, gi);
+        }
+      }
+      own[k] = nown;
+    }
+    if (round == 0) {
+      for (int k = 0; k < 3; k++) before[k] = own[k];
+      MPI_Allreduce(MPI_IN_PLACE, before, 3, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+      pa_adapt_opts o;
+      pa_adapt_report rep;
+      opts_small(&o, NULL);
+      o.user_tags_only = 1;
+      CHECK_OK(pa_dmesh_adapt(dm, &o, &rep));
+      CHECK(rep.converged);
+    } else {
+      pa_gid t[7] = {kept[0], kept[1], kept[2], bad, own[0], own[1], own[2]};
+      MPI_Allreduce(MPI_IN_PLACE, t, 7, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+      if (pa_test_rank == 0)
+        printf("  values kept: %lld / %lld vertices, %lld / %lld elements, "
+               "%lld / %lld boundary (ref 1) of %lld / %lld / %lld before; "
+               "%lld wrong\n", (long long)t[0], (long long)t[4],
+               (long long)t[1], (long long)t[5], (long long)t[2],
+               (long long)t[6], (long long)before[0], (long long)before[1],
+               (long long)before[2], (long long)t[3]);
+      CHECK(t[3] == 0);
+      CHECK(t[0] * 2 > before[0] && t[1] * 2 > before[1] && t[2] * 2 > before[2]);
+    }
+  }
+  CHECK_OK(pa_dmesh_check(dm));
+  pa_dmesh_destroy(dm);
+  pa_mesh_destroy(m);
+}
+
 /* Elements next to a piece's frozen skin below the quality threshold are
  * remeshed again inside the next piece: a uniform refinement, whose
  * sequential worst quality is 0.43, ends with none below the threshold
@@ -356,4 +427,4 @@ static void test_rollback(void) {
   }
 }
 
-TEST_MPI_MAIN(test_deterministic, test_vs_sequential, test_required, test_linear_field, test_every_field, test_reordered, test_skin_quality, test_rollback)
+TEST_MPI_MAIN(test_deterministic, test_vs_sequential, test_required, test_linear_field, test_every_field, test_reordered, test_values_kept, test_skin_quality, test_rollback)
