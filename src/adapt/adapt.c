@@ -70,6 +70,8 @@ void pa__iter_free(pa__iter *it) {
     pa__free(pc->match);
     pa__free(pc->ifgid);
     pa__free(pc->ifgive);
+    pa__free(pc->vpoff);
+    pa__free(pc->vpay);
   }
   pa__free(it->pieces);
   memset(it, 0, sizeof *it);

@@ -102,6 +102,10 @@ typedef struct pa__piece {
   uint8_t *ifgive;     /* in->nv: 1 if this piece gives that vertex */
   pa_idx *match;       /* out->nv: input vertex it is (same gid and
                           coordinates), or -1 for a new vertex */
+  pa_idx nvpay;        /* gathered vertices with their user values: */
+  size_t *vpoff;       /* nvpay + 1 offsets into vpay (NULL: no vertex
+                          values), the bytes of pa__entity_payload */
+  unsigned char *vpay;
   pa_remesh_report rep;
 } pa__piece;
 

@@ -127,6 +127,8 @@ static pa_status pair_records(pa__iter *it, int kind, const pa_idx *bstart,
   size_t n = 0, cap = 0;
   pa_gid *key = NULL, N = nloc > 0 ? nloc : 1;
   double *dbl = NULL;
+  size_t punit = 0;
+  unsigned char *pay = NULL;
   pa__layout lay;
   pa__dmesh_layout(dm, &lay);
   if (kind == PA_VERTEX) {
@@ -150,6 +152,10 @@ static pa_status pair_records(pa__iter *it, int kind, const pa_idx *bstart,
   n = pairs_unique(key, n);
   PA_ALLOC(*dest, n);
   if (kind == PA_VERTEX) PA_ALLOC(dbl, R->ndbl);
+  /* vertices: their user values go as payloads */
+  for (int k = 0; kind == PA_VERTEX && k < dm->nvalue; k++)
+    if ((int)dm->value[k]->kind == PA_VERTEX) punit += dm->value[k]->unit;
+  if (punit) PA_ALLOC(pay, punit);
   for (size_t i = 0; i < n; i++) {
     int p = (int)(key[i] / N);
     pa_idx x = (pa_idx)(key[i] % N);
@@ -173,12 +179,14 @@ static pa_status pair_records(pa__iter *it, int kind, const pa_idx *bstart,
       ref = kind == PA_BOUNDARY ? m->bref[x] : m->edref[x];
       flag = kind == PA_BOUNDARY ? m->bflag[x] : m->edflag[x];
     }
-    PA_CALL(pa__recs_add(R, dm->gid[kind][x], vg, ref, flag, p, dbl, NULL, 0));
+    size_t pl = punit ? pa__entity_payload(dm, kind, x, pay) : 0;
+    PA_CALL(pa__recs_add(R, dm->gid[kind][x], vg, ref, flag, p, dbl, pay, pl));
     (*dest)[i] = it->piece_rank[p];
   }
 cleanup:
   pa__free(key);
   pa__free(dbl);
+  pa__free(pay);
   return st;
 }
 
@@ -283,6 +291,23 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
     PA_CALL(pa__gidmap_put(&map, V->gid[i], k, NULL, NULL));
   }
   m->nv = nv;
+  if (V->poff) { /* the vertices' user values, for those the remesher keeps */
+    size_t tot = 0;
+    for (pa_idx k = 0; k < nv; k++) {
+      size_t i = (size_t)idx[PA_VERTEX][start[PA_VERTEX][p] + k];
+      tot += V->poff[i + 1] - V->poff[i];
+    }
+    PA_ALLOC(pc->vpoff, (size_t)nv + 1);
+    PA_ALLOC(pc->vpay, tot ? tot : 1);
+    pc->vpoff[0] = 0;
+    for (pa_idx k = 0; k < nv; k++) {
+      size_t i = (size_t)idx[PA_VERTEX][start[PA_VERTEX][p] + k];
+      size_t len = V->poff[i + 1] - V->poff[i];
+      memcpy(pc->vpay + pc->vpoff[k], V->pay + V->poff[i], len);
+      pc->vpoff[k + 1] = pc->vpoff[k] + len;
+    }
+    pc->nvpay = nv;
+  }
   for (pa_idx k = 0; k < ne; k++) {
     size_t i = (size_t)idx[PA_ELEMENT][start[PA_ELEMENT][p] + k];
     for (int j = 0; j <= d; j++) {
@@ -400,6 +425,11 @@ pa_status pa__adapt_extract(pa__iter *it) {
     }
   }
   if (!it->bstart) PA_CALL(pa__owned_balls(dm, &it->bstart, &it->belem));
+  /* the user's vertex values travel with the vertices (a vertex the
+   * remesher keeps keeps them): ghosts first take their owner's */
+  for (int k = 0; k < dm->nvalue; k++)
+    if ((int)dm->value[k]->kind == PA_VERTEX)
+      PA_CALL(pa_dmesh_halo(dm, dm->value[k]));
   PA_CALL(pair_records(it, PA_VERTEX, NULL, NULL, &S[PA_VERTEX], &dest[PA_VERTEX]));
   PA_CALL(pair_records(it, PA_BOUNDARY, it->bstart, it->belem, &S[PA_BOUNDARY],
                        &dest[PA_BOUNDARY]));

@@ -594,9 +594,18 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
       vg[j] = i >= 0 ? pc->vgid[i] : next[PA_VERTEX]++;
     }
     pa__vertex_doubles(o, j, o->nfield, dbl);
-    size_t pl = payload_of(&pcache, dm, PA_VERTEX, o->vref[j], done, 0, pay);
+    /* a vertex the remesher kept keeps its user values (gathered with it),
+     * a new one gets zeros */
+    const unsigned char *vp = pay;
+    size_t pl;
+    if (i >= 0 && i < pc->nvpay && pc->vpoff && o->vref[j] == pc->in->vref[i]) {
+      vp = pc->vpay + pc->vpoff[i];
+      pl = pc->vpoff[i + 1] - pc->vpoff[i];
+    } else {
+      pl = payload_of(&pcache, dm, PA_VERTEX, o->vref[j], done, 0, pay);
+    }
     PA_CALL(pa__recs_add(i < 0 && Rp ? Rp : &R[PA_VERTEX], vg[j], NULL,
-                         o->vref[j], o->vflag[j], it->rank, dbl, pay, pl));
+                         o->vref[j], o->vflag[j], it->rank, dbl, vp, pl));
   }
   /* elements within NEAR_SKIN vertex layers of a hot skin vertex (dist);
    * BAD_NEAR_SKIN: layers from any skin vertex (dsk), in the same sweeps;

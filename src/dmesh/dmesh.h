@@ -309,6 +309,12 @@ pa_status pa__dmesh_partition(MPI_Comm comm, int dim, pa_idx n,
 
 /* ---- incremental rebuilds (incremental.c) ---- */
 
+/* Local: the bytes of the values of local entity e of a kind (those whose
+ * reference filter it passes, in the order of dm->value) into buf; returns
+ * their count (the payload of its record). */
+size_t pa__entity_payload(const pa_dmesh *dm, int kind, pa_idx e,
+                          unsigned char *buf);
+
 /* Local: records of the owned entities of dm (with value payloads, aux =
  * this rank) whose keep[kind][i] is set (keep NULL, or keep[kind] NULL: all
  * of that kind), written straight from the local arrays into record sets

@@ -6,6 +6,20 @@
  */
 #include "dmesh/dmesh.h"
 
+size_t pa__entity_payload(const pa_dmesh *dm, int kind, pa_idx e,
+                          unsigned char *buf) {
+  int32_t ref = pa__dmesh_ref(dm, kind, e);
+  size_t off = 0;
+  for (int k = 0; k < dm->nvalue; k++) {
+    const pa_dmesh_value *v = dm->value[k];
+    if ((int)v->kind != kind || (v->ref >= 0 && v->ref != ref)) continue;
+    pa_idx slot = v->slot ? v->slot[e] : e;
+    memcpy(buf + off, v->data + v->unit * (size_t)slot, v->unit);
+    off += v->unit;
+  }
+  return off;
+}
+
 /* Records of the owned entities of one kind with keep[i] (keep NULL: all),
  * with room for extra more records; those with priv[i] (priv NULL: none)
  * go to P instead of R, also with room for extra more. */
@@ -46,22 +60,13 @@ static pa_status kept_kind(pa_dmesh *dm, int kind, const uint8_t *keep,
     T->gid[i] = dm->gid[kind][e];
     for (int j = 0; j < nv; j++)
       T->vgid[(size_t)nv * i + j] = dm->gid[PA_VERTEX][conn[(size_t)nv * e + j]];
-    int32_t ref = pa__dmesh_ref(dm, kind, e);
-    T->ref[i] = ref;
+    T->ref[i] = pa__dmesh_ref(dm, kind, e);
     T->flag[i] = fl[e];
     T->aux[i] = dm->rank;
     if (nd) pa__vertex_doubles(m, e, m->nfield, T->dbl + (size_t)nd * i);
-    if (T->poff) {
-      size_t off = T->poff[i];
-      for (int k = 0; k < dm->nvalue; k++) {
-        const pa_dmesh_value *v = dm->value[k];
-        if ((int)v->kind != kind || (v->ref >= 0 && v->ref != ref)) continue;
-        pa_idx slot = v->slot ? v->slot[e] : e;
-        memcpy(T->pay + off, v->data + v->unit * (size_t)slot, v->unit);
-        off += v->unit;
-      }
-      T->poff[i + 1] = off;
-    }
+    if (T->poff)
+      T->poff[i + 1] =
+          T->poff[i] + pa__entity_payload(dm, kind, e, T->pay + T->poff[i]);
   }
 cleanup:
   return st;
