@@ -19,8 +19,9 @@
  * (it lies on a skin between two pieces; MAX reductions of per-entity values
  * over the ranks); every other one vanished or comes back through a piece
  * output. From an output, the remeshing rank gives: the vertices that are
- * not skin vertices (matched input vertices keep their global id, the others
- * get fresh ids) and the skin vertices bisect.c added, when it is their
+ * not skin vertices (matched input vertices keep their global id and user
+ * values, gathered with them; the others get fresh ids and zeros) and the
+ * skin vertices bisect.c added, when it is their
  * giver (skin_vertex_ids); every element (fresh ids, "done" value PA__DONE,
  * or PA__DONE_NEAR_SKIN within NEAR_SKIN vertex layers of a hot skin vertex,
  * or 0 for a rolled-back piece; other values zero); and the boundary
@@ -28,7 +29,9 @@
  * artificial skin faces). Fresh ids are the global maximum + 1 + an
  * exclusive scan of the per-rank counts, pieces in increasing order on each
  * rank, then the added skin vertices: deterministic for a given input and
- * number of ranks.
+ * number of ranks. The vertices only this rank's elements will contain
+ * (fresh ones of outputs that stay here, kept ones far from every piece and
+ * rank interface) go to the rebuild as private (pa__dmesh_build_priv).
  */
 #include "adapt/adapt.h"
 
