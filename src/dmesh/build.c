@@ -337,12 +337,14 @@ static pa_status build_directory(bstate *s, pa__recs *verts, pa__recs *bdry,
   /* (a boundary entity or edge whose smallest vertex is private is in
    * local elements only: it stays here) */
   for (size_t i = 0; i < bdry->n; i++)
-    dest[i] = is_private(s, min_vgid(bdry, i)) ? s->rank
-                                               : dir_rank(&s->vdir, min_vgid(bdry, i));
+    dest[i] = is_private(s, min_vgid(bdry, i))
+                  ? s->rank
+                  : dir_rank(&s->vdir, min_vgid(bdry, i));
   PA_CALL(pa__recs_migrate_free(s->comm, bdry, dest, &s->B));
   for (size_t i = 0; i < edges->n; i++)
-    dest[i] = is_private(s, min_vgid(edges, i)) ? s->rank
-                                                : dir_rank(&s->vdir, min_vgid(edges, i));
+    dest[i] = is_private(s, min_vgid(edges, i))
+                  ? s->rank
+                  : dir_rank(&s->vdir, min_vgid(edges, i));
   PA_CALL(pa__recs_migrate_free(s->comm, edges, dest, &s->D));
   /* V is sorted by gid and holds the gids of this directory's block: dense */
   PA_CALL(pa__gidindex_init(&s->vix, s->V.n ? s->V.gid[0] : 0,
@@ -366,11 +368,12 @@ cleanup:
 
 /* The vertices of the owned elements: ukey (sorted unique gids), the index
  * uix (gid -> u), the u of each vertex slot (uslot) and, if csr (ghost
- * layers to build), the owned elements around each (CSR ustart/uelem). When the gids of the slots are dense (uix is an
- * array over their range: the usual case), marking the range and one scan
- * of it number the vertices in ascending gid order, with no sort; otherwise
- * they are numbered by hashing and only the nu unique gids are sorted (not
- * the (dim+1) nown element slots). */
+ * layers to build), the owned elements around each (CSR ustart/uelem).
+ * When the gids of the slots are dense (uix is an array over their range:
+ * the usual case), marking the range and one scan of it number the
+ * vertices in ascending gid order, with no sort; otherwise they are
+ * numbered by hashing and only the nu unique gids are sorted (not the
+ * (dim+1) nown element slots). */
 static pa_status owned_csr(bstate *s, pa_idx nown, int csr) {
   pa_status st = PA_SUCCESS;
   size_t np = (size_t)nown * s->nve, nu = 0;
@@ -758,9 +761,10 @@ cleanup:
 static pa_status rec_copy(pa__recs *r, const pa__recs *in, size_t k, int aux) {
   const unsigned char *pay = in->poff ? in->pay + in->poff[k] : NULL;
   size_t len = in->poff ? in->poff[k + 1] - in->poff[k] : 0;
-  return pa__recs_add(r, in->gid[k], in->nv ? in->vgid + (size_t)in->nv * k : NULL,
-                      in->ref[k], in->flag[k], aux,
-                      in->ndbl ? in->dbl + (size_t)in->ndbl * k : NULL, pay, len);
+  const pa_gid *vg = in->nv ? in->vgid + (size_t)in->nv * k : NULL;
+  const double *dbl = in->ndbl ? in->dbl + (size_t)in->ndbl * k : NULL;
+  return pa__recs_add(r, in->gid[k], vg, in->ref[k], in->flag[k], aux, dbl,
+                      pay, len);
 }
 
 /* The private vertices join LV (owned here; both sorted by gid, merged),
@@ -771,7 +775,8 @@ static pa_status add_private(bstate *s) {
   pa__recs *P = s->P;
   pa__recs M;
   pa__recs_init(&M, PA_VERTEX, 0, s->LV.ndbl);
-  size_t pb = (s->LV.poff ? s->LV.poff[s->LV.n] : 0) + (P->poff ? P->poff[P->n] : 0);
+  size_t pb = (s->LV.poff ? s->LV.poff[s->LV.n] : 0) +
+              (P->poff ? P->poff[P->n] : 0);
   PA_CALL(pa__recs_reserve(&M, s->LV.n + P->n, pb));
   for (size_t j = 0; j < P->n; j++) P->aux[j] = s->rank;
   /* runs of P between the (few) LV records, copied array by array */
@@ -993,7 +998,8 @@ static void unpack_payloads(pa_dmesh *dm, int kind, const pa__recs *R,
       if ((int)v->kind != kind) continue;
       for (pa_idx e = 0; e < n; e++) {
         const unsigned char *p = R->pay + R->poff[ord[e]] + off;
-        unsigned char *q = v->data + v->unit * (size_t)(v->slot ? v->slot[e] : e);
+        pa_idx slot = v->slot ? v->slot[e] : e;
+        unsigned char *q = v->data + v->unit * (size_t)slot;
         for (size_t b = 0; b < v->unit; b++) q[b] = p[b];
       }
       off += v->unit;

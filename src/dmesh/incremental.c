@@ -48,18 +48,21 @@ static pa_status kept_kind(pa_dmesh *dm, int kind, const uint8_t *keep,
     int32_t ref = pa__dmesh_ref(dm, kind, e);
     for (int k = 0; k < dm->nvalue; k++) {
       const pa_dmesh_value *v = dm->value[k];
-      if ((int)v->kind == kind && (v->ref < 0 || v->ref == ref)) paybytes[t] += v->unit;
+      if ((int)v->kind == kind && (v->ref < 0 || v->ref == ref))
+        paybytes[t] += v->unit;
     }
   }
   PA_CALL(pa__recs_reserve(R, n[0] + extra, paybytes[0] + extra * unit));
-  if (priv) PA_CALL(pa__recs_reserve(P, n[1] + extra, paybytes[1] + extra * unit));
+  if (priv)
+    PA_CALL(pa__recs_reserve(P, n[1] + extra, paybytes[1] + extra * unit));
   for (pa_idx e = 0; e < nown; e++) {
     if (keep && !keep[e]) continue;
     pa__recs *T = priv && priv[e] ? P : R;
     size_t i = T->n++;
     T->gid[i] = dm->gid[kind][e];
     for (int j = 0; j < nv; j++)
-      T->vgid[(size_t)nv * i + j] = dm->gid[PA_VERTEX][conn[(size_t)nv * e + j]];
+      T->vgid[(size_t)nv * i + j] =
+          dm->gid[PA_VERTEX][conn[(size_t)nv * e + j]];
     T->ref[i] = pa__dmesh_ref(dm, kind, e);
     T->flag[i] = fl[e];
     T->aux[i] = dm->rank;

@@ -93,7 +93,8 @@ pa_status pa__recs_append(pa__recs *r, const pa__recs *in, size_t k0,
   PA_CALL(recs_grow(r, i0 + n));
   if (pay && !r->poff) PA_CALLOC(r->poff, r->cap + 1);
   memcpy(r->gid + i0, in->gid + k0, n * sizeof *r->gid);
-  if (nv) memcpy(r->vgid + nv * i0, in->vgid + nv * k0, nv * n * sizeof *r->vgid);
+  if (nv)
+    memcpy(r->vgid + nv * i0, in->vgid + nv * k0, nv * n * sizeof *r->vgid);
   memcpy(r->ref + i0, in->ref + k0, n * sizeof *r->ref);
   memcpy(r->flag + i0, in->flag + k0, n * sizeof *r->flag);
   memcpy(r->aux + i0, in->aux + k0, n * sizeof *r->aux);

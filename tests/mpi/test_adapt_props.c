@@ -335,8 +335,10 @@ static void test_values_kept(void) {
     }
     if (round == 0) {
       for (int k = 0; k < 3; k++) before[k] = own[k];
-      MPI_Allreduce(MPI_IN_PLACE, before, 3, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
-      MPI_Allreduce(MPI_IN_PLACE, maxg, 3, MPI_INT64_T, MPI_MAX, MPI_COMM_WORLD);
+      MPI_Allreduce(MPI_IN_PLACE, before, 3, MPI_INT64_T, MPI_SUM,
+                    MPI_COMM_WORLD);
+      MPI_Allreduce(MPI_IN_PLACE, maxg, 3, MPI_INT64_T, MPI_MAX,
+                    MPI_COMM_WORLD);
       pa_adapt_opts o;
       pa_adapt_report rep;
       opts_small(&o, NULL);
@@ -354,7 +356,8 @@ static void test_values_kept(void) {
                (long long)t[6], (long long)before[0], (long long)before[1],
                (long long)before[2], (long long)t[3]);
       CHECK(t[3] == 0);
-      CHECK(t[0] * 2 > before[0] && t[1] * 2 > before[1] && t[2] * 2 > before[2]);
+      CHECK(t[0] * 2 > before[0] && t[1] * 2 > before[1] &&
+            t[2] * 2 > before[2]);
     }
   }
   CHECK_OK(pa_dmesh_check(dm));
@@ -429,4 +432,6 @@ static void test_rollback(void) {
   }
 }
 
-TEST_MPI_MAIN(test_deterministic, test_vs_sequential, test_required, test_linear_field, test_every_field, test_reordered, test_values_kept, test_skin_quality, test_rollback)
+TEST_MPI_MAIN(test_deterministic, test_vs_sequential, test_required,
+              test_linear_field, test_every_field, test_reordered,
+              test_values_kept, test_skin_quality, test_rollback)
