@@ -1011,7 +1011,8 @@ static void unpack_payloads(pa_dmesh *dm, int kind, const pa__recs *R,
     const unsigned char *p = R->pay + R->poff[i];
     for (int k = 0; k < dm->nvalue; k++) {
       pa_dmesh_value *v = dm->value[k];
-      if ((int)v->kind != kind || (v->ref >= 0 && v->ref != R->ref[i])) continue;
+      if ((int)v->kind != kind || (v->ref >= 0 && v->ref != R->ref[i]))
+        continue;
       pa_idx slot = v->slot ? v->slot[e] : e;
       memcpy(v->data + v->unit * (size_t)slot, p, v->unit);
       p += v->unit;
