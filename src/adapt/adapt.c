@@ -72,6 +72,10 @@ void pa__iter_free(pa__iter *it) {
     pa__free(pc->ifgive);
     pa__free(pc->vpoff);
     pa__free(pc->vpay);
+    pa__free(pc->egid);
+    pa__free(pc->epoff);
+    pa__free(pc->epay);
+    pa__free(pc->ereuse);
   }
   pa__free(it->pieces);
   memset(it, 0, sizeof *it);

@@ -324,6 +324,26 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
     m->eflag[k] = E->flag[i];
   }
   m->ne = ne;
+  pc->nv0 = nv;
+  pc->ne0 = ne;
+  { /* element ids and values, for the elements given back unchanged */
+    size_t tot = 0, f = sizeof(int32_t);
+    for (pa_idx k = 0; k < ne; k++) {
+      size_t i = (size_t)idx[PA_ELEMENT][start[PA_ELEMENT][p] + k];
+      tot += E->poff[i + 1] - E->poff[i] - f;
+    }
+    PA_ALLOC(pc->egid, ne ? ne : 1);
+    PA_ALLOC(pc->epoff, (size_t)ne + 1);
+    PA_ALLOC(pc->epay, tot ? tot : 1);
+    pc->epoff[0] = 0;
+    for (pa_idx k = 0; k < ne; k++) {
+      size_t i = (size_t)idx[PA_ELEMENT][start[PA_ELEMENT][p] + k];
+      size_t len = E->poff[i + 1] - E->poff[i] - f;
+      pc->egid[k] = E->gid[i];
+      memcpy(pc->epay + pc->epoff[k], E->pay + E->poff[i] + f, len);
+      pc->epoff[k + 1] = pc->epoff[k] + len;
+    }
+  }
   for (int kind = PA_BOUNDARY; kind <= PA_EDGE; kind++) {
     const pa__recs *B = &R[kind];
     int nvk = pa__kind_nv(d, kind);
@@ -376,6 +396,7 @@ pa_status pa__adapt_extract(pa__iter *it) {
   const pa_mesh *m = dm->mesh;
   int np = it->npieces, P = it->size;
   double *buf = NULL;
+  unsigned char *epay = NULL;
   pa__recs S[PA_NKIND], R[PA_NKIND];
   int *dest[PA_NKIND] = {NULL, NULL, NULL, NULL};
   pa_idx *idx[PA_NKIND] = {NULL, NULL, NULL, NULL};
@@ -411,16 +432,25 @@ pa_status pa__adapt_extract(pa__iter *it) {
     pa_idx n = 0;
     for (pa_idx e = 0; e < it->ne; e++) n += it->label[e] >= 0;
     PA_ALLOC(dest[PA_ELEMENT], n);
+    /* payload: the sender, then the element's values (an element the
+     * remesher gives back unchanged keeps them) */
+    size_t unit = sizeof(int32_t);
+    for (int k = 0; k < dm->nvalue; k++)
+      if ((int)dm->value[k]->kind == PA_ELEMENT) unit += dm->value[k]->unit;
+    PA_ALLOC(epay, unit);
     n = 0;
     for (pa_idx e = 0; e < it->ne; e++) {
       if (it->label[e] < 0) continue;
       pa_gid vg[4];
       for (int j = 0; j < it->nve; j++)
         vg[j] = dm->gid[PA_VERTEX][m->elem[(size_t)it->nve * e + j]];
-      int32_t from = it->rank; /* payload: the sender */
+      int32_t from = it->rank;
+      memcpy(epay, &from, sizeof from);
+      size_t pl = sizeof from +
+                  pa__entity_payload(dm, PA_ELEMENT, e, epay + sizeof from);
       PA_CALL(pa__recs_add(&S[PA_ELEMENT], dm->gid[PA_ELEMENT][e], vg,
-                           m->eref[e], m->eflag[e], it->label[e], NULL, &from,
-                           sizeof from));
+                           m->eref[e], m->eflag[e], it->label[e], NULL, epay,
+                           pl));
       dest[PA_ELEMENT][n++] = it->piece_rank[it->label[e]];
     }
   }
@@ -457,6 +487,7 @@ pa_status pa__adapt_extract(pa__iter *it) {
 cleanup:
   st = pa__agree_end(dm->comm, st);
   pa__free(buf);
+  pa__free(epay);
   for (int k = 0; k < PA_NKIND; k++) {
     pa__recs_free(&S[k]);
     pa__recs_free(&R[k]);

@@ -21,10 +21,12 @@
  * output. From an output, the remeshing rank gives: the vertices that are
  * not skin vertices (matched input vertices keep their global id and user
  * values, gathered with them; the others get fresh ids and zeros) and the
- * skin vertices bisect.c added, when it is their
- * giver (skin_vertex_ids); every element (fresh ids, "done" value PA__DONE,
- * or PA__DONE_NEAR_SKIN within NEAR_SKIN vertex layers of a hot skin vertex,
- * or 0 for a rolled-back piece; other values zero); and the boundary
+ * skin vertices bisect.c added, when it is their giver (skin_vertex_ids);
+ * every element ("done" value PA__DONE, or PA__DONE_NEAR_SKIN within
+ * NEAR_SKIN vertex layers of a hot skin vertex, or 0 for a rolled-back
+ * piece; one with the same vertices as an input element keeps its id and
+ * other values, output_reuse; the others get fresh ids and zeros); and the
+ * boundary
  * entities and edges that do not lie on the skin (fresh ids; this drops the
  * artificial skin faces). Fresh ids are the global maximum + 1 + an
  * exclusive scan of the per-rank counts, pieces in increasing order on each
@@ -498,6 +500,81 @@ cleanup:
   return st;
 }
 
+/* ---- output elements that are input elements ---- */
+
+/* Sorted vertex numbers of element e of m (nve of them), padded with -1. */
+static void elem_key(const pa_mesh *m, pa_idx e, const pa_idx *map,
+                     pa_idx *k) {
+  int nve = m->dim + 1;
+  k[3] = -1;
+  for (int i = 0; i < nve; i++) {
+    pa_idx v = m->elem[(size_t)nve * e + i];
+    k[i] = map ? map[v] : v;
+  }
+  pa__sort_small(k, nve);
+}
+
+/* pc->ereuse: the input element each output element is (same vertices,
+ * none of them added by bisect.c, and same reference), or -1. Such an
+ * element keeps its global id and values; with a rolled-back piece, every
+ * element bisect.c left whole. */
+static pa_status output_reuse(pa__piece *pc) {
+  pa_status st = PA_SUCCESS;
+  const pa_mesh *in = pc->in, *o = pc->out;
+  size_t cap = 16;
+  pa_idx *tab = NULL; /* 5 per slot: 4 keys, the input element; -1 empty */
+  pa__free(pc->ereuse);
+  pc->ereuse = NULL;
+  PA_ALLOC(pc->ereuse, o->ne ? o->ne : 1);
+  while (cap < 2 * (size_t)pc->ne0 + 2) cap *= 2;
+  PA_ALLOC(tab, 5 * cap);
+  for (size_t i = 0; i < 5 * cap; i++) tab[i] = -1;
+  for (pa_idx e = 0; e < pc->ne0; e++) {
+    pa_idx k[4];
+    elem_key(in, e, NULL, k);
+    if (k[in->dim] >= pc->nv0) continue; /* bisected: not the gathered one */
+    size_t h = pa__hash_idx(k, 4) & (cap - 1);
+    while (tab[5 * h] != -1) h = (h + 1) & (cap - 1);
+    memcpy(tab + 5 * h, k, 4 * sizeof *k);
+    tab[5 * h + 4] = e;
+  }
+  for (pa_idx e = 0; e < o->ne; e++) {
+    pa_idx k[4];
+    int ok = 1;
+    pc->ereuse[e] = -1;
+    for (int i = 0; i <= o->dim && ok; i++) {
+      pa_idx j = pc->match[o->elem[(size_t)(o->dim + 1) * e + i]];
+      ok = j >= 0 && j < pc->nv0;
+    }
+    if (!ok) continue;
+    elem_key(o, e, pc->match, k);
+    size_t h = pa__hash_idx(k, 4) & (cap - 1);
+    for (; tab[5 * h] != -1; h = (h + 1) & (cap - 1))
+      if (!memcmp(tab + 5 * h, k, 4 * sizeof *k)) {
+        pa_idx q = tab[5 * h + 4];
+        if (in->eref[q] == o->eref[e]) pc->ereuse[e] = q;
+        break;
+      }
+  }
+cleanup:
+  pa__free(tab);
+  return st;
+}
+
+/* Offset of the "done" value in the payload of an element of reference
+ * ref (the values of its kind that pass their filter, in order). */
+static size_t done_offset(const pa_dmesh *dm, int32_t ref,
+                          const pa_dmesh_value *done) {
+  size_t n = 0;
+  for (int k = 0; k < dm->nvalue; k++) {
+    const pa_dmesh_value *v = dm->value[k];
+    if ((int)v->kind != PA_ELEMENT || (v->ref >= 0 && v->ref != ref)) continue;
+    if (v == done) return n;
+    n += v->unit;
+  }
+  return (size_t)-1;
+}
+
 /* Destination rank of each output element: with fewer pieces than ranks
  * (one piece remeshed on one rank while the others wait), the output goes
  * back where its input came from, so that the mesh stays balanced without
@@ -658,6 +735,19 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
         pa_mesh_elem_quality(pc->out, e) < qband) {
       dv = PA__DONE_NEAR_SKIN; /* see BAD_NEAR_SKIN */
       it->nbadskin++;
+    }
+    pa_idx q = pc->ereuse[e];
+    if (q >= 0) { /* an input element: its id and values, done updated */
+      size_t pl = pc->epoff[q + 1] - pc->epoff[q];
+      size_t at = done_offset(dm, o->eref[e], done);
+      PA_CHECK(at != (size_t)-1 && at < pl, PA_ERR_INTERNAL,
+               "element payload without its done value");
+      memcpy(pay, pc->epay + pc->epoff[q], pl);
+      pay[at] = dv;
+      pcache.len = (size_t)-1; /* pay no longer holds the cached payload */
+      PA_CALL(pa__recs_add(&R[PA_ELEMENT], pc->egid[q], ev, o->eref[e],
+                           o->eflag[e], dest[e], NULL, pay, pl));
+      continue;
     }
     size_t pl = payload_of(&pcache, dm, PA_ELEMENT, o->eref[e], done, dv, pay);
     PA_CALL(pa__recs_add(&R[PA_ELEMENT], next[PA_ELEMENT]++, ev, o->eref[e],
@@ -923,8 +1013,9 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
     pa__piece *pc = &it->pieces[q];
     if (!pc->out) continue;
     for (pa_idx j = 0; j < pc->out->nv; j++) cnt[PA_VERTEX] += pc->match[j] < 0;
+    PA_CALL(output_reuse(pc));
     for (pa_idx e = 0; e < pc->out->ne; e++)
-      cnt[PA_ELEMENT]++;
+      cnt[PA_ELEMENT] += pc->ereuse[e] < 0;
     PA_CALL(output_emit(pc->out, &bemit[q], &demit[q], cnt));
   }
   PA_CALL(pa__allreduce(dm->comm, base, PA_NKIND, MPI_INT64_T, MPI_MAX));
