@@ -72,10 +72,12 @@ void pa__iter_free(pa__iter *it) {
     pa__free(pc->ifgive);
     pa__free(pc->vpoff);
     pa__free(pc->vpay);
-    pa__free(pc->egid);
-    pa__free(pc->epoff);
-    pa__free(pc->epay);
-    pa__free(pc->ereuse);
+    for (int k = 0; k < 4; k++) {
+      pa__free(pc->kgid[k]);
+      pa__free(pc->kpoff[k]);
+      pa__free(pc->kpay[k]);
+      pa__free(pc->reuse[k]);
+    }
   }
   pa__free(it->pieces);
   memset(it, 0, sizeof *it);

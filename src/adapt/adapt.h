@@ -102,15 +102,17 @@ typedef struct pa__piece {
   uint8_t *ifgive;     /* in->nv: 1 if this piece gives that vertex */
   pa_idx *match;       /* out->nv: input vertex it is (same gid and
                           coordinates), or -1 for a new vertex */
-  pa_idx nv0, ne0;     /* vertices and elements as gathered (bisect.c
-                          appends more) */
-  pa_gid *egid;        /* ne0: global id of each input element */
-  size_t *epoff;       /* ne0 + 1 offsets into epay: the bytes of each
-                          input element's values (pa__entity_payload) */
-  unsigned char *epay;
-  pa_idx *ereuse;      /* out->ne: input element an output element is
-                          (same vertices and reference: it keeps its id and
-                          values), or -1 */
+  pa_idx nv0;          /* vertices as gathered (bisect.c appends more) */
+  /* per kind (elements, boundary entities, edges; [PA_VERTEX] unused): */
+  pa_idx n0[4];        /* entities as gathered (bisect.c, the skin faces
+                          append more) */
+  pa_gid *kgid[4];     /* n0: global id of each input entity */
+  size_t *kpoff[4];    /* n0 + 1 offsets into kpay: the bytes of each
+                          input entity's values (pa__entity_payload) */
+  unsigned char *kpay[4];
+  pa_idx *reuse[4];    /* per output entity: the input entity it is (same
+                          vertices, none added by bisect.c, same reference:
+                          it keeps its id and values), or -1 */
   pa_idx nvpay;        /* gathered vertices with their user values: */
   size_t *vpoff;       /* nvpay + 1 offsets into vpay (NULL: no vertex
                           values), the bytes of pa__entity_payload */

@@ -152,9 +152,10 @@ static pa_status pair_records(pa__iter *it, int kind, const pa_idx *bstart,
   n = pairs_unique(key, n);
   PA_ALLOC(*dest, n);
   if (kind == PA_VERTEX) PA_ALLOC(dbl, R->ndbl);
-  /* vertices: their user values go as payloads */
-  for (int k = 0; kind == PA_VERTEX && k < dm->nvalue; k++)
-    if ((int)dm->value[k]->kind == PA_VERTEX) punit += dm->value[k]->unit;
+  /* their user values go as payloads (vertices, boundary entities and
+   * edges the remesher keeps keep them) */
+  for (int k = 0; k < dm->nvalue; k++)
+    if ((int)dm->value[k]->kind == kind) punit += dm->value[k]->unit;
   if (punit) PA_ALLOC(pay, punit);
   for (size_t i = 0; i < n; i++) {
     int p = (int)(key[i] / N);
@@ -228,6 +229,36 @@ static pa_status group_by_piece(const pa__recs *R, int npieces, pa_idx **idxp,
 cleanup:
   pa__free(idx);
   pa__free(start);
+  return st;
+}
+
+/* The global ids and value bytes (the payloads after skip bytes) of the
+ * entities of a kind as gathered for piece p: an entity the remesher gives
+ * back unchanged keeps them (reintegrate.c, output_reuse). */
+static pa_status keep_ids(pa__piece *pc, int kind, const pa__recs *R,
+                          pa_idx *const *idx, pa_idx *const *start, int p,
+                          size_t skip) {
+  pa_status st = PA_SUCCESS;
+  pa_idx n = start[kind][p + 1] - start[kind][p];
+  size_t tot = 0;
+  for (pa_idx k = 0; R->poff && k < n; k++) {
+    size_t i = (size_t)idx[kind][start[kind][p] + k];
+    tot += R->poff[i + 1] - R->poff[i] - skip;
+  }
+  pc->n0[kind] = n;
+  PA_ALLOC(pc->kgid[kind], n ? n : 1);
+  PA_ALLOC(pc->kpoff[kind], (size_t)n + 1);
+  PA_ALLOC(pc->kpay[kind], tot ? tot : 1);
+  pc->kpoff[kind][0] = 0;
+  for (pa_idx k = 0; k < n; k++) {
+    size_t i = (size_t)idx[kind][start[kind][p] + k];
+    size_t len = R->poff ? R->poff[i + 1] - R->poff[i] - skip : 0;
+    pc->kgid[kind][k] = R->gid[i];
+    if (len) memcpy(pc->kpay[kind] + pc->kpoff[kind][k],
+                    R->pay + R->poff[i] + skip, len);
+    pc->kpoff[kind][k + 1] = pc->kpoff[kind][k] + len;
+  }
+cleanup:
   return st;
 }
 
@@ -325,25 +356,8 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
   }
   m->ne = ne;
   pc->nv0 = nv;
-  pc->ne0 = ne;
-  { /* element ids and values, for the elements given back unchanged */
-    size_t tot = 0, f = sizeof(int32_t);
-    for (pa_idx k = 0; k < ne; k++) {
-      size_t i = (size_t)idx[PA_ELEMENT][start[PA_ELEMENT][p] + k];
-      tot += E->poff[i + 1] - E->poff[i] - f;
-    }
-    PA_ALLOC(pc->egid, ne ? ne : 1);
-    PA_ALLOC(pc->epoff, (size_t)ne + 1);
-    PA_ALLOC(pc->epay, tot ? tot : 1);
-    pc->epoff[0] = 0;
-    for (pa_idx k = 0; k < ne; k++) {
-      size_t i = (size_t)idx[PA_ELEMENT][start[PA_ELEMENT][p] + k];
-      size_t len = E->poff[i + 1] - E->poff[i] - f;
-      pc->egid[k] = E->gid[i];
-      memcpy(pc->epay + pc->epoff[k], E->pay + E->poff[i] + f, len);
-      pc->epoff[k + 1] = pc->epoff[k] + len;
-    }
-  }
+  PA_CALL(keep_ids(pc, PA_ELEMENT, &R[PA_ELEMENT], idx, start, p,
+                   sizeof(int32_t)));
   for (int kind = PA_BOUNDARY; kind <= PA_EDGE; kind++) {
     const pa__recs *B = &R[kind];
     int nvk = pa__kind_nv(d, kind);
@@ -368,6 +382,7 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
     }
     if (kind == PA_BOUNDARY) m->nb = n;
     else m->ned = n;
+    PA_CALL(keep_ids(pc, kind, B, idx, start, p, 0));
   }
   /* the outer surface: artificial, frozen boundary entities (the skin) */
   {
@@ -455,10 +470,11 @@ pa_status pa__adapt_extract(pa__iter *it) {
     }
   }
   if (!it->bstart) PA_CALL(pa__owned_balls(dm, &it->bstart, &it->belem));
-  /* the user's vertex values travel with the vertices (a vertex the
-   * remesher keeps keeps them): ghosts first take their owner's */
+  /* the user's values travel with the entities (one the remesher keeps
+   * keeps them); vertices, boundary entities and edges may be sent from a
+   * ghost copy, which first takes its owner's */
   for (int k = 0; k < dm->nvalue; k++)
-    if ((int)dm->value[k]->kind == PA_VERTEX)
+    if ((int)dm->value[k]->kind != PA_ELEMENT)
       PA_CALL(pa_dmesh_halo(dm, dm->value[k]));
   PA_CALL(pair_records(it, PA_VERTEX, NULL, NULL, &S[PA_VERTEX], &dest[PA_VERTEX]));
   PA_CALL(pair_records(it, PA_BOUNDARY, it->bstart, it->belem, &S[PA_BOUNDARY],

@@ -26,8 +26,8 @@
  * NEAR_SKIN vertex layers of a hot skin vertex, or 0 for a rolled-back
  * piece; one with the same vertices as an input element keeps its id and
  * other values, output_reuse; the others get fresh ids and zeros); and the
- * boundary
- * entities and edges that do not lie on the skin (fresh ids; this drops the
+ * boundary entities (an unchanged one keeps its id and values, as
+ * elements) and edges that do not lie on the skin (this drops the
  * artificial skin faces). Fresh ids are the global maximum + 1 + an
  * exclusive scan of the per-rank counts, pieces in increasing order on each
  * rank, then the added skin vertices: deterministic for a given input and
@@ -456,9 +456,10 @@ cleanup:
 }
 
 /* Which boundary entities / edges of an output to give (not on the skin);
- * counts in cnt[PA_BOUNDARY], cnt[PA_EDGE]. */
-static pa_status output_emit(const pa_mesh *out, uint8_t **bemit,
-                             uint8_t **demit, pa_gid *cnt) {
+ * counts of those needing fresh ids (breuse[b] < 0 for boundary entities)
+ * in cnt[PA_BOUNDARY], cnt[PA_EDGE]. */
+static pa_status output_emit(const pa_mesh *out, const pa_idx *breuse,
+                             uint8_t **bemit, uint8_t **demit, pa_gid *cnt) {
   pa_status st = PA_SUCCESS;
   tset fs = {0, NULL}, es = {0, NULL};
   int d = out->dim;
@@ -486,7 +487,7 @@ static pa_status output_emit(const pa_mesh *out, uint8_t **bemit,
     pa_idx k[3];
     tkey(out->bdry + (size_t)d * b, d, k);
     (*bemit)[b] = !tset_find(&fs, k, 0);
-    cnt[PA_BOUNDARY] += (*bemit)[b];
+    cnt[PA_BOUNDARY] += (*bemit)[b] && breuse[b] < 0;
   }
   for (pa_idx b = 0; b < out->ned; b++) {
     pa_idx k[3];
@@ -502,57 +503,69 @@ cleanup:
 
 /* ---- output elements that are input elements ---- */
 
-/* Sorted vertex numbers of element e of m (nve of them), padded with -1. */
-static void elem_key(const pa_mesh *m, pa_idx e, const pa_idx *map,
-                     pa_idx *k) {
-  int nve = m->dim + 1;
-  k[3] = -1;
-  for (int i = 0; i < nve; i++) {
-    pa_idx v = m->elem[(size_t)nve * e + i];
-    k[i] = map ? map[v] : v;
-  }
-  pa__sort_small(k, nve);
+/* Entities of a kind of mesh m: connectivity, vertices each, references. */
+static const pa_idx *kind_conn(const pa_mesh *m, int kind, int *nvk,
+                               const int32_t **ref) {
+  *nvk = pa__kind_nv(m->dim, kind);
+  *ref = kind == PA_ELEMENT ? m->eref : kind == PA_BOUNDARY ? m->bref : m->edref;
+  return kind == PA_ELEMENT ? m->elem : kind == PA_BOUNDARY ? m->bdry : m->edge;
 }
 
-/* pc->ereuse: the input element each output element is (same vertices,
- * none of them added by bisect.c, and same reference), or -1. Such an
- * element keeps its global id and values; with a rolled-back piece, every
- * element bisect.c left whole. */
-static pa_status output_reuse(pa__piece *pc) {
+/* Sorted vertex numbers (through map, if not NULL) of the nvk vertices at
+ * v, padded with -1. */
+static void ent_key(const pa_idx *v, int nvk, const pa_idx *map, pa_idx *k) {
+  k[3] = k[2] = -1;
+  for (int i = 0; i < nvk; i++) k[i] = map ? map[v[i]] : v[i];
+  pa__sort_small(k, nvk);
+}
+
+/* pc->reuse[kind]: the input entity each output entity of a kind
+ * (elements, boundary entities, edges) is (same vertices, none of them
+ * added by bisect.c, and same reference), or -1. Such an entity keeps its
+ * global id and values; with a rolled-back piece, every one bisect.c left
+ * whole. */
+static pa_status output_reuse(pa__piece *pc, int kind) {
   pa_status st = PA_SUCCESS;
   const pa_mesh *in = pc->in, *o = pc->out;
+  int nvk;
+  const int32_t *iref, *oref;
+  const pa_idx *ic = kind_conn(in, kind, &nvk, &iref);
+  const pa_idx *oc = kind_conn(o, kind, &nvk, &oref);
+  pa_idx n0 = pc->n0[kind];
+  pa_idx no = kind == PA_ELEMENT ? o->ne : kind == PA_BOUNDARY ? o->nb : o->ned;
   size_t cap = 16;
-  pa_idx *tab = NULL; /* 5 per slot: 4 keys, the input element; -1 empty */
-  pa__free(pc->ereuse);
-  pc->ereuse = NULL;
-  PA_ALLOC(pc->ereuse, o->ne ? o->ne : 1);
-  while (cap < 2 * (size_t)pc->ne0 + 2) cap *= 2;
+  pa_idx *tab = NULL; /* 5 per slot: 4 keys, the input entity; -1 empty */
+  pa__free(pc->reuse[kind]);
+  pc->reuse[kind] = NULL;
+  PA_ALLOC(pc->reuse[kind], no ? no : 1);
+  while (cap < 2 * (size_t)n0 + 2) cap *= 2;
   PA_ALLOC(tab, 5 * cap);
   for (size_t i = 0; i < 5 * cap; i++) tab[i] = -1;
-  for (pa_idx e = 0; e < pc->ne0; e++) {
+  for (pa_idx e = 0; e < n0; e++) {
     pa_idx k[4];
-    elem_key(in, e, NULL, k);
-    if (k[in->dim] >= pc->nv0) continue; /* bisected: not the gathered one */
+    ent_key(ic + (size_t)nvk * e, nvk, NULL, k);
+    if (k[nvk - 1] >= pc->nv0) continue; /* bisected: not the gathered one */
     size_t h = pa__hash_idx(k, 4) & (cap - 1);
     while (tab[5 * h] != -1) h = (h + 1) & (cap - 1);
     memcpy(tab + 5 * h, k, 4 * sizeof *k);
     tab[5 * h + 4] = e;
   }
-  for (pa_idx e = 0; e < o->ne; e++) {
+  for (pa_idx e = 0; e < no; e++) {
+    const pa_idx *v = oc + (size_t)nvk * e;
     pa_idx k[4];
     int ok = 1;
-    pc->ereuse[e] = -1;
-    for (int i = 0; i <= o->dim && ok; i++) {
-      pa_idx j = pc->match[o->elem[(size_t)(o->dim + 1) * e + i]];
+    pc->reuse[kind][e] = -1;
+    for (int i = 0; i < nvk && ok; i++) {
+      pa_idx j = pc->match[v[i]];
       ok = j >= 0 && j < pc->nv0;
     }
     if (!ok) continue;
-    elem_key(o, e, pc->match, k);
+    ent_key(v, nvk, pc->match, k);
     size_t h = pa__hash_idx(k, 4) & (cap - 1);
     for (; tab[5 * h] != -1; h = (h + 1) & (cap - 1))
       if (!memcmp(tab + 5 * h, k, 4 * sizeof *k)) {
         pa_idx q = tab[5 * h + 4];
-        if (in->eref[q] == o->eref[e]) pc->ereuse[e] = q;
+        if (iref[q] == oref[e]) pc->reuse[kind][e] = q;
         break;
       }
   }
@@ -736,17 +749,18 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
       dv = PA__DONE_NEAR_SKIN; /* see BAD_NEAR_SKIN */
       it->nbadskin++;
     }
-    pa_idx q = pc->ereuse[e];
+    pa_idx q = pc->reuse[PA_ELEMENT][e];
     if (q >= 0) { /* an input element: its id and values, done updated */
-      size_t pl = pc->epoff[q + 1] - pc->epoff[q];
+      const size_t *po = pc->kpoff[PA_ELEMENT];
+      size_t pl = po[q + 1] - po[q];
       size_t at = done_offset(dm, o->eref[e], done);
       PA_CHECK(at != (size_t)-1 && at < pl, PA_ERR_INTERNAL,
                "element payload without its done value");
-      memcpy(pay, pc->epay + pc->epoff[q], pl);
+      memcpy(pay, pc->kpay[PA_ELEMENT] + po[q], pl);
       pay[at] = dv;
       pcache.len = (size_t)-1; /* pay no longer holds the cached payload */
-      PA_CALL(pa__recs_add(&R[PA_ELEMENT], pc->egid[q], ev, o->eref[e],
-                           o->eflag[e], dest[e], NULL, pay, pl));
+      PA_CALL(pa__recs_add(&R[PA_ELEMENT], pc->kgid[PA_ELEMENT][q], ev,
+                           o->eref[e], o->eflag[e], dest[e], NULL, pay, pl));
       continue;
     }
     size_t pl = payload_of(&pcache, dm, PA_ELEMENT, o->eref[e], done, dv, pay);
@@ -757,6 +771,14 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
     if (!bemit[b]) continue;
     pa_gid bv[3];
     for (int k = 0; k < d; k++) bv[k] = vg[o->bdry[(size_t)d * b + k]];
+    pa_idx q = pc->reuse[PA_BOUNDARY][b];
+    if (q >= 0) { /* an input boundary entity: its id and values */
+      const size_t *po = pc->kpoff[PA_BOUNDARY];
+      PA_CALL(pa__recs_add(&R[PA_BOUNDARY], pc->kgid[PA_BOUNDARY][q], bv,
+                           o->bref[b], o->bflag[b], it->rank, NULL,
+                           pc->kpay[PA_BOUNDARY] + po[q], po[q + 1] - po[q]));
+      continue;
+    }
     size_t pl = payload_of(&pcache, dm, PA_BOUNDARY, o->bref[b], done, 0, pay);
     PA_CALL(pa__recs_add(&R[PA_BOUNDARY], next[PA_BOUNDARY]++, bv, o->bref[b],
                          o->bflag[b], it->rank, NULL, pay, pl));
@@ -1013,10 +1035,15 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
     pa__piece *pc = &it->pieces[q];
     if (!pc->out) continue;
     for (pa_idx j = 0; j < pc->out->nv; j++) cnt[PA_VERTEX] += pc->match[j] < 0;
-    PA_CALL(output_reuse(pc));
+    /* elements and boundary entities given back unchanged keep their ids
+     * (not edges: one on a piece's border but on none of its skin faces
+     * would be given twice, by its owner too) */
+    PA_CALL(output_reuse(pc, PA_ELEMENT));
+    PA_CALL(output_reuse(pc, PA_BOUNDARY));
     for (pa_idx e = 0; e < pc->out->ne; e++)
-      cnt[PA_ELEMENT] += pc->ereuse[e] < 0;
-    PA_CALL(output_emit(pc->out, &bemit[q], &demit[q], cnt));
+      cnt[PA_ELEMENT] += pc->reuse[PA_ELEMENT][e] < 0;
+    PA_CALL(output_emit(pc->out, pc->reuse[PA_BOUNDARY], &bemit[q], &demit[q],
+                        cnt));
   }
   PA_CALL(pa__allreduce(dm->comm, base, PA_NKIND, MPI_INT64_T, MPI_MAX));
   PA_CALL(pa__agree(dm->comm, st));

@@ -295,8 +295,8 @@ static void test_reordered(void) {
  * per-record payload layout), set to a function of the global id. After a
  * sparse adaptation every local copy, ghosts included, of an entity whose
  * global id existed before (untouched, a vertex the remesher kept inside a
- * piece, an element it gave back unchanged) holds f(gid), every new one 0,
- * and most entities keep f(gid). */
+ * piece, an element or boundary entity it gave back unchanged) holds
+ * f(gid), every new one 0, and most entities keep f(gid). */
 static int64_t fval(int k, pa_gid g) { return g * (3 + 2 * k) + 1 + k; }
 
 static void test_values_kept(void) {
