@@ -852,9 +852,9 @@ void pa_adapt_opts_default(pa_adapt_opts *opts);
  * Adapt a distributed mesh to its metric (or to opts->remesh.hsiz) in place.
  * Collective; the same status and report on every rank. Entities never
  * touched keep their global ids and values, and so do the vertices the
- * remesher keeps inside a remeshed region and the elements and boundary
- * entities it gives back unchanged (same vertices and reference); new
- * entities (and the edges of remeshed regions) get fresh global
+ * remesher keeps inside a remeshed region and the elements, boundary
+ * entities and edges it gives back unchanged (same vertices and
+ * reference); new entities get fresh global
  * ids (ids stay unique, not contiguous) and zero user values. Metric and user
  * vertex fields of the local mesh are interpolated by the remesher.
  * Elements and boundary entities flagged PA_FLAG_REQUIRED are kept as they

@@ -26,9 +26,9 @@
  * NEAR_SKIN vertex layers of a hot skin vertex, or 0 for a rolled-back
  * piece; one with the same vertices as an input element keeps its id and
  * other values, output_reuse; the others get fresh ids and zeros); and the
- * boundary entities (an unchanged one keeps its id and values, as
- * elements) and edges that do not lie on the skin (this drops the
- * artificial skin faces). Fresh ids are the global maximum + 1 + an
+ * boundary entities and edges that do not lie on the skin (this drops the
+ * artificial skin faces; an unchanged one keeps its id and values, as
+ * elements). Fresh ids are the global maximum + 1 + an
  * exclusive scan of the per-rank counts, pieces in increasing order on each
  * rank, then the added skin vertices: deterministic for a given input and
  * number of ranks. The vertices only this rank's elements will contain
@@ -456,10 +456,11 @@ cleanup:
 }
 
 /* Which boundary entities / edges of an output to give (not on the skin);
- * counts of those needing fresh ids (breuse[b] < 0 for boundary entities)
- * in cnt[PA_BOUNDARY], cnt[PA_EDGE]. */
+ * counts of those needing fresh ids (breuse, dreuse < 0) in
+ * cnt[PA_BOUNDARY], cnt[PA_EDGE]. */
 static pa_status output_emit(const pa_mesh *out, const pa_idx *breuse,
-                             uint8_t **bemit, uint8_t **demit, pa_gid *cnt) {
+                             const pa_idx *dreuse, uint8_t **bemit,
+                             uint8_t **demit, pa_gid *cnt) {
   pa_status st = PA_SUCCESS;
   tset fs = {0, NULL}, es = {0, NULL};
   int d = out->dim;
@@ -493,7 +494,7 @@ static pa_status output_emit(const pa_mesh *out, const pa_idx *breuse,
     pa_idx k[3];
     tkey(out->edge + (size_t)2 * b, 2, k);
     (*demit)[b] = !tset_find(&es, k, 0);
-    cnt[PA_EDGE] += (*demit)[b];
+    cnt[PA_EDGE] += (*demit)[b] && dreuse[b] < 0;
   }
 cleanup:
   tset_free(&fs);
@@ -786,6 +787,14 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   for (pa_idx b = 0; b < o->ned; b++) {
     if (!demit[b]) continue;
     pa_gid bv[2] = {vg[o->edge[2 * b]], vg[o->edge[2 * b + 1]]};
+    pa_idx q = pc->reuse[PA_EDGE][b];
+    if (q >= 0) { /* an input edge: its id and values */
+      const size_t *po = pc->kpoff[PA_EDGE];
+      PA_CALL(pa__recs_add(&R[PA_EDGE], pc->kgid[PA_EDGE][q], bv, o->edref[b],
+                           o->edflag[b], it->rank, NULL,
+                           pc->kpay[PA_EDGE] + po[q], po[q + 1] - po[q]));
+      continue;
+    }
     size_t pl = payload_of(&pcache, dm, PA_EDGE, o->edref[b], done, 0, pay);
     PA_CALL(pa__recs_add(&R[PA_EDGE], next[PA_EDGE]++, bv, o->edref[b],
                          o->edflag[b], it->rank, NULL, pay, pl));
@@ -1035,15 +1044,15 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
     pa__piece *pc = &it->pieces[q];
     if (!pc->out) continue;
     for (pa_idx j = 0; j < pc->out->nv; j++) cnt[PA_VERTEX] += pc->match[j] < 0;
-    /* elements and boundary entities given back unchanged keep their ids
-     * (not edges: one on a piece's border but on none of its skin faces
-     * would be given twice, by its owner too) */
-    PA_CALL(output_reuse(pc, PA_ELEMENT));
-    PA_CALL(output_reuse(pc, PA_BOUNDARY));
+    /* entities given back unchanged keep their ids (one that is given is
+     * not on the skin, so its owner does not keep it: an element, boundary
+     * entity or edge that a piece shares with the outside lies on a skin
+     * face) */
+    for (int k = PA_ELEMENT; k <= PA_EDGE; k++) PA_CALL(output_reuse(pc, k));
     for (pa_idx e = 0; e < pc->out->ne; e++)
       cnt[PA_ELEMENT] += pc->reuse[PA_ELEMENT][e] < 0;
-    PA_CALL(output_emit(pc->out, pc->reuse[PA_BOUNDARY], &bemit[q], &demit[q],
-                        cnt));
+    PA_CALL(output_emit(pc->out, pc->reuse[PA_BOUNDARY], pc->reuse[PA_EDGE],
+                        &bemit[q], &demit[q], cnt));
   }
   PA_CALL(pa__allreduce(dm->comm, base, PA_NKIND, MPI_INT64_T, MPI_MAX));
   PA_CALL(pa__agree(dm->comm, st));
