@@ -70,8 +70,6 @@ void pa__iter_free(pa__iter *it) {
     pa__free(pc->match);
     pa__free(pc->ifgid);
     pa__free(pc->ifgive);
-    pa__free(pc->vpoff);
-    pa__free(pc->vpay);
     for (int k = 0; k < 4; k++) {
       pa__free(pc->kgid[k]);
       pa__free(pc->kpoff[k]);

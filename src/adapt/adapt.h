@@ -103,20 +103,17 @@ typedef struct pa__piece {
   pa_idx *match;       /* out->nv: input vertex it is (same gid and
                           coordinates), or -1 for a new vertex */
   pa_idx nv0;          /* vertices as gathered (bisect.c appends more) */
-  /* per kind (elements, boundary entities, edges; [PA_VERTEX] unused): */
-  pa_idx n0[4];        /* entities as gathered (bisect.c, the skin faces
-                          append more) */
-  pa_gid *kgid[4];     /* n0: global id of each input entity */
-  size_t *kpoff[4];    /* n0 + 1 offsets into kpay: the bytes of each
-                          input entity's values (pa__entity_payload) */
+  /* per kind, as gathered (bisect.c and the skin faces append more): */
+  pa_idx n0[4];        /* entities */
+  pa_gid *kgid[4];     /* n0: global id of each (not vertices: vgid) */
+  size_t *kpoff[4];    /* n0 + 1 offsets into kpay, or NULL (no values):
+                          the bytes of each one's values
+                          (pa__entity_payload) */
   unsigned char *kpay[4];
-  pa_idx *reuse[4];    /* per output entity: the input entity it is (same
-                          vertices, none added by bisect.c, same reference:
-                          it keeps its id and values), or -1 */
-  pa_idx nvpay;        /* gathered vertices with their user values: */
-  size_t *vpoff;       /* nvpay + 1 offsets into vpay (NULL: no vertex
-                          values), the bytes of pa__entity_payload */
-  unsigned char *vpay;
+  pa_idx *reuse[4];    /* per output element, boundary entity or edge: the
+                          input one it is (same vertices, none added by
+                          bisect.c, same reference: it keeps its id and
+                          values), or -1 */
   pa_remesh_report rep;
 } pa__piece;
 

@@ -232,30 +232,32 @@ cleanup:
   return st;
 }
 
-/* The global ids and value bytes (the payloads after skip bytes) of the
- * entities of a kind as gathered for piece p: an entity the remesher gives
- * back unchanged keeps them (reintegrate.c, output_reuse). */
+/* The global ids (not of vertices: pc->vgid has them) and value bytes (the
+ * payloads after skip bytes; kpoff NULL when none) of the entities of a
+ * kind as gathered for piece p: an entity the remesher gives back
+ * unchanged keeps them (reintegrate.c). */
 static pa_status keep_ids(pa__piece *pc, int kind, const pa__recs *R,
                           pa_idx *const *idx, pa_idx *const *start, int p,
                           size_t skip) {
   pa_status st = PA_SUCCESS;
   pa_idx n = start[kind][p + 1] - start[kind][p];
+  const pa_idx *sel = idx[kind] + start[kind][p];
   size_t tot = 0;
-  for (pa_idx k = 0; R->poff && k < n; k++) {
-    size_t i = (size_t)idx[kind][start[kind][p] + k];
-    tot += R->poff[i + 1] - R->poff[i] - skip;
-  }
   pc->n0[kind] = n;
-  PA_ALLOC(pc->kgid[kind], n ? n : 1);
+  if (kind != PA_VERTEX) {
+    PA_ALLOC(pc->kgid[kind], n ? n : 1);
+    for (pa_idx k = 0; k < n; k++) pc->kgid[kind][k] = R->gid[sel[k]];
+  }
+  if (!R->poff) goto cleanup;
+  for (pa_idx k = 0; k < n; k++)
+    tot += R->poff[sel[k] + 1] - R->poff[sel[k]] - skip;
   PA_ALLOC(pc->kpoff[kind], (size_t)n + 1);
   PA_ALLOC(pc->kpay[kind], tot ? tot : 1);
   pc->kpoff[kind][0] = 0;
   for (pa_idx k = 0; k < n; k++) {
-    size_t i = (size_t)idx[kind][start[kind][p] + k];
-    size_t len = R->poff ? R->poff[i + 1] - R->poff[i] - skip : 0;
-    pc->kgid[kind][k] = R->gid[i];
-    if (len) memcpy(pc->kpay[kind] + pc->kpoff[kind][k],
-                    R->pay + R->poff[i] + skip, len);
+    size_t i = (size_t)sel[k], len = R->poff[i + 1] - R->poff[i] - skip;
+    memcpy(pc->kpay[kind] + pc->kpoff[kind][k], R->pay + R->poff[i] + skip,
+           len);
     pc->kpoff[kind][k + 1] = pc->kpoff[kind][k] + len;
   }
 cleanup:
@@ -322,23 +324,8 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
     PA_CALL(pa__gidmap_put(&map, V->gid[i], k, NULL, NULL));
   }
   m->nv = nv;
-  if (V->poff) { /* the vertices' user values, for those the remesher keeps */
-    size_t tot = 0;
-    for (pa_idx k = 0; k < nv; k++) {
-      size_t i = (size_t)idx[PA_VERTEX][start[PA_VERTEX][p] + k];
-      tot += V->poff[i + 1] - V->poff[i];
-    }
-    PA_ALLOC(pc->vpoff, (size_t)nv + 1);
-    PA_ALLOC(pc->vpay, tot ? tot : 1);
-    pc->vpoff[0] = 0;
-    for (pa_idx k = 0; k < nv; k++) {
-      size_t i = (size_t)idx[PA_VERTEX][start[PA_VERTEX][p] + k];
-      size_t len = V->poff[i + 1] - V->poff[i];
-      memcpy(pc->vpay + pc->vpoff[k], V->pay + V->poff[i], len);
-      pc->vpoff[k + 1] = pc->vpoff[k] + len;
-    }
-    pc->nvpay = nv;
-  }
+  /* the vertices' user values, for those the remesher keeps */
+  PA_CALL(keep_ids(pc, PA_VERTEX, V, idx, start, p, 0));
   for (pa_idx k = 0; k < ne; k++) {
     size_t i = (size_t)idx[PA_ELEMENT][start[PA_ELEMENT][p] + k];
     for (int j = 0; j <= d; j++) {

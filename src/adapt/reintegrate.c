@@ -692,9 +692,11 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
      * a new one gets zeros */
     const unsigned char *vp = pay;
     size_t pl;
-    if (i >= 0 && i < pc->nvpay && pc->vpoff && o->vref[j] == pc->in->vref[i]) {
-      vp = pc->vpay + pc->vpoff[i];
-      pl = pc->vpoff[i + 1] - pc->vpoff[i];
+    const size_t *vo = pc->kpoff[PA_VERTEX];
+    if (vo && i >= 0 && i < pc->n0[PA_VERTEX] &&
+        o->vref[j] == pc->in->vref[i]) {
+      vp = pc->kpay[PA_VERTEX] + vo[i];
+      pl = vo[i + 1] - vo[i];
     } else {
       pl = payload_of(&pcache, dm, PA_VERTEX, o->vref[j], done, 0, pay);
     }
@@ -777,7 +779,8 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
       const size_t *po = pc->kpoff[PA_BOUNDARY];
       PA_CALL(pa__recs_add(&R[PA_BOUNDARY], pc->kgid[PA_BOUNDARY][q], bv,
                            o->bref[b], o->bflag[b], it->rank, NULL,
-                           pc->kpay[PA_BOUNDARY] + po[q], po[q + 1] - po[q]));
+                           po ? pc->kpay[PA_BOUNDARY] + po[q] : NULL,
+                           po ? po[q + 1] - po[q] : 0));
       continue;
     }
     size_t pl = payload_of(&pcache, dm, PA_BOUNDARY, o->bref[b], done, 0, pay);
@@ -792,7 +795,8 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
       const size_t *po = pc->kpoff[PA_EDGE];
       PA_CALL(pa__recs_add(&R[PA_EDGE], pc->kgid[PA_EDGE][q], bv, o->edref[b],
                            o->edflag[b], it->rank, NULL,
-                           pc->kpay[PA_EDGE] + po[q], po[q + 1] - po[q]));
+                           po ? pc->kpay[PA_EDGE] + po[q] : NULL,
+                           po ? po[q + 1] - po[q] : 0));
       continue;
     }
     size_t pl = payload_of(&pcache, dm, PA_EDGE, o->edref[b], done, 0, pay);

@@ -214,7 +214,6 @@ typedef struct bstate {
   pa_idx *tv;               /* their V indices */
   /* local side */
   pa__recs L;               /* local elements: owned first; aux = owner */
-  size_t nownel;            /* of which owned (the ghosts follow) */
   uint8_t *layer;           /* per L record */
   size_t caplayer;
   pa__gidmap emap;          /* ghost element gid -> L index */
@@ -757,16 +756,6 @@ cleanup:
   return st;
 }
 
-/* Append record k of in to r (owner aux). */
-static pa_status rec_copy(pa__recs *r, const pa__recs *in, size_t k, int aux) {
-  const unsigned char *pay = in->poff ? in->pay + in->poff[k] : NULL;
-  size_t len = in->poff ? in->poff[k + 1] - in->poff[k] : 0;
-  const pa_gid *vg = in->nv ? in->vgid + (size_t)in->nv * k : NULL;
-  const double *dbl = in->ndbl ? in->dbl + (size_t)in->ndbl * k : NULL;
-  return pa__recs_add(r, in->gid[k], vg, in->ref[k], in->flag[k], aux, dbl,
-                      pay, len);
-}
-
 /* The private vertices join LV (owned here; both sorted by gid, merged),
  * and the boundary entities and edges whose smallest vertex is private,
  * which stayed here out of the directory, join LB and LD. */
@@ -779,20 +768,19 @@ static pa_status add_private(bstate *s) {
               (P->poff ? P->poff[P->n] : 0);
   PA_CALL(pa__recs_reserve(&M, s->LV.n + P->n, pb));
   for (size_t j = 0; j < P->n; j++) P->aux[j] = s->rank;
-  /* runs of P between the (few) LV records, copied array by array */
+  /* merged by runs, copied array by array */
   for (size_t i = 0, j = 0; i < s->LV.n || j < P->n;) {
-    if (j >= P->n || (i < s->LV.n && s->LV.gid[i] < P->gid[j])) {
-      PA_CALL(rec_copy(&M, &s->LV, i, s->LV.aux[i]));
-      i++;
-    } else {
-      PA_CHECK(i >= s->LV.n || s->LV.gid[i] != P->gid[j], PA_ERR_INTERNAL,
-               "private vertex %lld is also in the directory",
-               (long long)P->gid[j]);
-      size_t j1 = j + 1;
+    PA_CHECK(i >= s->LV.n || j >= P->n || s->LV.gid[i] != P->gid[j],
+             PA_ERR_INTERNAL, "private vertex %lld is also in the directory",
+             (long long)P->gid[j]);
+    size_t i1 = i, j1 = j;
+    while (i1 < s->LV.n && (j >= P->n || s->LV.gid[i1] < P->gid[j])) i1++;
+    if (i1 == i)
       while (j1 < P->n && (i >= s->LV.n || P->gid[j1] < s->LV.gid[i])) j1++;
-      PA_CALL(pa__recs_append(&M, P, j, j1 - j));
-      j = j1;
-    }
+    PA_CALL(pa__recs_append(&M, &s->LV, i, i1 - i));
+    PA_CALL(pa__recs_append(&M, P, j, j1 - j));
+    i = i1;
+    j = j1;
   }
   pa__recs_free(&s->LV);
   s->LV = M;
@@ -800,8 +788,8 @@ static pa_status add_private(bstate *s) {
   for (int t = 0; t < 2; t++) {
     const pa__recs *R = t ? &s->D : &s->B;
     pa__recs *L = t ? &s->LD : &s->LB;
-    for (size_t i = 0; i < R->n; i++)
-      if (is_private(s, min_vgid(R, i))) PA_CALL(rec_copy(L, R, i, s->rank));
+    for (size_t i = 0; i < R->n; i++) /* (their owner: assemble) */
+      if (is_private(s, min_vgid(R, i))) PA_CALL(pa__recs_append(L, R, i, 1));
   }
 cleanup:
   pa__recs_free(&M);
@@ -824,7 +812,7 @@ static pa_status fetch_vertices(bstate *s) {
   /* local vertices: those of the owned elements, which the directory has
    * from the touch messages, and the ghosts' (not among them), sent now */
   n = 0;
-  if (s->L.n > s->nownel) PA_CALL(ghost_verts(s, 1, 255, &g, &n));
+  if (s->emap.n) PA_CALL(ghost_verts(s, 1, 255, &g, &n)); /* ghosts */
   PA_CALL(send_to_directory(s, g, n, &rcnt, &recv));
   pa__free(g);
   g = NULL;
@@ -1328,8 +1316,7 @@ pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
                "private vertices not sorted by global id");
     cnt_in[PA_VERTEX] += (pa_gid)priv->n;
     if (overlap > 0) { /* ghosts of other ranks may need them: directory */
-      for (size_t i = 0; i < priv->n; i++)
-        PA_CALL(rec_copy(verts, priv, i, priv->aux[i]));
+      PA_CALL(pa__recs_append(verts, priv, 0, priv->n));
     } else {
       s.P = priv;
       maxg = priv->gid[priv->n - 1];
@@ -1351,7 +1338,6 @@ pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
   s.caplayer = s.L.n;
   PA_CALL(pa__gidmap_init(&s.emap, 16));
   pa_idx nown_e = (pa_idx)s.L.n;
-  s.nownel = s.L.n;
   double t1 = pa_wtime();
   /* 2-3. directory and touch lists */
   PA_CALL(build_directory(&s, verts, bdry, edges));
