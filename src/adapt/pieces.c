@@ -188,15 +188,17 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
     it->npieces = (int)np;
   }
 
-  /* 2. partition the tagged elements. pa__partition_dgraph scales the
-   * weights to integer loads up to 1e6 per vertex, whose sum must stay below
-   * 2^31 (32-bit SCOTCH_Num): beyond that, unit weights. */
+  /* 2. partition the tagged elements, weighted by their work.
+   * pa__partition_dgraph scales the weights to integer loads in [1, S], S =
+   * min(1e6, 2^30 / tagged elements), so that their sum fits Scotch's 32-bit
+   * integers whatever the count. (Until 2026-11-22 a stale guard here
+   * dropped the weights beyond 2147 tagged elements: every real partition
+   * balanced element counts, not work.) */
   if (it->npieces > 1) {
-    int weighted = (double)it->ntagged * 1e6 < 2147483647.0;
     PA_CALL(pa__dual_graph(dm->comm, it->dim, nt, vg, NULL, 0, &xadj, &adj,
                            NULL, NULL));
-    st = pa__partition_dgraph(dm->comm, nt, xadj, adj, weighted ? wt : NULL,
-                              it->npieces, PIECE_KBAL, part);
+    st = pa__partition_dgraph(dm->comm, nt, xadj, adj, wt, it->npieces,
+                              PIECE_KBAL, part);
     PA_CALL(pa__agree(dm->comm, st));
   } else {
     for (pa_idx k = 0; k < nt; k++) part[k] = 0;

@@ -297,5 +297,76 @@ static void test_pieces_curved(void) {
   warp = 0;
 }
 
+/* The pieces balance the estimated work, not the element counts: a graded
+ * metric (sizes 0.005 to 0.05 on a 40 x 40 box, 3 200 tagged triangles whose
+ * work varies by a factor over 10) in 2 pieces per rank. Until 2026-11-22 a
+ * guard dropped the weights beyond 2147 tagged elements: the counts were
+ * balanced and one piece had 1.6 times the mean work. */
+static void test_pieces_weighted(void) {
+  pa_mesh *m = NULL;
+  pa_dmesh *dm = NULL;
+  pa_dmesh_value *done = NULL;
+  pa_adapt_opts o;
+  pa__iter it;
+  memset(&it, 0, sizeof it);
+  if (pa_test_rank == 0) {
+    CHECK_OK(pa_mesh_generate_box(2, 40, &m));
+    CHECK_OK(pa_metric_analytic(m, "iso-shell:0.05"));
+  }
+  CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, m, 0, &dm));
+  pa_adapt_opts_default(&o);
+  o.min_piece_work = 1;
+  o.min_piece_ratio = 0;
+  CHECK_OK(pa_dmesh_value_add(dm, PA_ELEMENT, PA__DONE_VALUE, MPI_UINT8_T, 1,
+                              -1, &done));
+  it.dm = dm;
+  it.opts = &o;
+  it.rank = pa_test_rank;
+  it.size = pa_test_size;
+  it.dim = 2;
+  it.nve = 3;
+  it.iter = 1;
+  CHECK_OK(pa__adapt_tag(&it, done, 1));
+  CHECK(it.ntagged > 2147);
+  int np = 2 * pa_test_size;
+  CHECK_OK(pa__adapt_pieces(&it, np));
+  CHECK(it.npieces == np);
+  /* per piece: work and count of its tagged elements; the work range */
+  double *w = calloc((size_t)np, sizeof *w), *c = calloc((size_t)np, sizeof *c);
+  double wr[2] = {1e300, 1e300}; /* min, -max */
+  for (pa_idx e = 0; e < it.ne; e++) {
+    if (!it.tag[e]) continue;
+    CHECK(it.label[e] >= 0 && it.label[e] < np);
+    w[it.label[e]] += it.work[e];
+    c[it.label[e]] += 1;
+    wr[0] = fmin(wr[0], it.work[e]);
+    wr[1] = fmin(wr[1], -it.work[e]);
+  }
+  MPI_Allreduce(MPI_IN_PLACE, w, np, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+  MPI_Allreduce(MPI_IN_PLACE, c, np, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+  MPI_Allreduce(MPI_IN_PLACE, wr, 2, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+  double wsum = 0, wmax = 0, csum = 0, cmax = 0;
+  for (int p = 0; p < np; p++) {
+    wsum += w[p];
+    wmax = fmax(wmax, w[p]);
+    csum += c[p];
+    cmax = fmax(cmax, c[p]);
+  }
+  if (pa_test_rank == 0)
+    printf("weighted pieces: work %.3g-%.3g per element, max piece %.3f x "
+           "mean work, %.3f x mean count\n",
+           wr[0], -wr[1], wmax * np / wsum, cmax * np / csum);
+  CHECK(-wr[1] > 10 * wr[0]); /* the work is far from uniform */
+  CHECK(wmax <= 1.05 * wsum / np);
+  /* and balancing it unbalances the counts (else the case proves nothing) */
+  CHECK(cmax >= 1.1 * csum / np);
+  free(w);
+  free(c);
+  pa__iter_free(&it);
+  CHECK_OK(pa_dmesh_value_remove(dm, done));
+  pa_dmesh_destroy(dm);
+  pa_mesh_destroy(m);
+}
+
 TEST_MPI_MAIN(test_pieces_2d, test_pieces_3d, test_pieces_layers,
-              test_pieces_curved)
+              test_pieces_curved, test_pieces_weighted)
