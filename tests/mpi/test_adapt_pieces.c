@@ -210,56 +210,79 @@ static void check_labels(pa__iter *it) {
   free(vall);
 }
 
+/* A run of steps 1-2 on a box with an analytic metric. */
+typedef struct prun {
+  pa_mesh *m;
+  pa_dmesh *dm;
+  pa_dmesh_value *done;
+  pa_adapt_opts o;
+  pa__iter it;
+} prun;
+
+/* Rank 0 makes the box (n cells a side) with its metric and applies prep
+ * (if not NULL); then distribute and tag for iteration iter with layers skin
+ * layers (skin_layers_later from the second iteration on), as the driver
+ * does. Released by end_iter. */
+static void start_iter(prun *r, int dim, int n, const char *metric,
+                       void (*prep)(pa_mesh *, int), int layers, int iter) {
+  memset(r, 0, sizeof *r);
+  if (pa_test_rank == 0) {
+    CHECK_OK(pa_mesh_generate_box(dim, n, &r->m));
+    CHECK_OK(pa_metric_analytic(r->m, metric));
+    if (prep) prep(r->m, dim);
+  }
+  CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, r->m, 0, &r->dm));
+  pa_adapt_opts_default(&r->o);
+  r->o.min_piece_work = 1;
+  r->o.min_piece_ratio = 0;
+  if (iter > 1) {
+    r->o.skin_layers = 3; /* not these */
+    r->o.skin_layers_later = layers;
+  } else {
+    r->o.skin_layers = layers;
+  }
+  CHECK_OK(pa_dmesh_value_add(r->dm, PA_ELEMENT, PA__DONE_VALUE, MPI_UINT8_T,
+                              1, -1, &r->done));
+  pa__iter *it = &r->it;
+  it->dm = r->dm;
+  it->opts = &r->o;
+  it->rank = pa_test_rank;
+  it->size = pa_test_size;
+  it->dim = dim;
+  it->nve = dim + 1;
+  it->iter = iter;
+  CHECK_OK(pa__adapt_tag(it, r->done, 1));
+  CHECK(it->ntagged > 0);
+}
+
+static void end_iter(prun *r) {
+  pa__iter_free(&r->it);
+  CHECK_OK(pa_dmesh_value_remove(r->dm, r->done));
+  pa_dmesh_destroy(r->dm);
+  pa_mesh_destroy(r->m);
+}
+
+/* The meshes of run_iter: warped (warp), a few required elements, and with
+ * sparse a few user tags in a mesh that fits its metric, so that the skin
+ * layers do not reach every element. */
+static void prep_box(pa_mesh *m, int dim) {
+  if (warp) warp_mesh(m, dim);
+  for (pa_idx e = 0; e < pa_mesh_nelem(m); e += 17)
+    pa_mesh_elem_flags(m)[e] |= PA_FLAG_REQUIRED;
+  for (pa_idx e = 5; sparse && e < pa_mesh_nelem(m); e += 61)
+    pa_mesh_elem_flags(m)[e] |= PA_FLAG_USER;
+}
+
 /* iter: the iteration the pieces are made for (1, or 2 for the layers of
  * the later iterations: layers then goes to skin_layers_later). */
 static void run_iter(int dim, int n, const char *metric, int npieces,
                      int layers, int iter) {
-  pa_mesh *m = NULL;
-  pa_dmesh *dm = NULL;
-  pa_dmesh_value *done = NULL;
-  pa_adapt_opts o;
-  pa__iter it;
-  memset(&it, 0, sizeof it);
-  if (pa_test_rank == 0) {
-    CHECK_OK(pa_mesh_generate_box(dim, n, &m));
-    CHECK_OK(pa_metric_analytic(m, metric));
-    if (warp) warp_mesh(m, dim);
-    /* a few required elements */
-    for (pa_idx e = 0; e < pa_mesh_nelem(m); e += 17)
-      pa_mesh_elem_flags(m)[e] |= PA_FLAG_REQUIRED;
-    /* sparse: a few user tags in a mesh that fits its metric, so that the
-     * skin layers do not reach every element */
-    for (pa_idx e = 5; sparse && e < pa_mesh_nelem(m); e += 61)
-      pa_mesh_elem_flags(m)[e] |= PA_FLAG_USER;
-  }
-  CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, m, 0, &dm));
-  pa_adapt_opts_default(&o);
-  o.min_piece_work = 1;
-  o.min_piece_ratio = 0;
-  if (iter > 1) {
-    o.skin_layers = 3; /* not these */
-    o.skin_layers_later = layers;
-  } else {
-    o.skin_layers = layers;
-  }
-  CHECK_OK(pa_dmesh_value_add(dm, PA_ELEMENT, PA__DONE_VALUE, MPI_UINT8_T, 1,
-                              -1, &done));
-  it.dm = dm;
-  it.opts = &o;
-  it.rank = pa_test_rank;
-  it.size = pa_test_size;
-  it.dim = dim;
-  it.nve = dim + 1;
-  it.iter = iter;
-  CHECK_OK(pa__adapt_tag(&it, done, 1));
-  CHECK(it.ntagged > 0);
-  CHECK_OK(pa__adapt_pieces(&it, npieces));
-  CHECK(it.npieces == npieces);
-  check_labels(&it);
-  pa__iter_free(&it);
-  CHECK_OK(pa_dmesh_value_remove(dm, done));
-  pa_dmesh_destroy(dm);
-  pa_mesh_destroy(m);
+  prun r;
+  start_iter(&r, dim, n, metric, prep_box, layers, iter);
+  CHECK_OK(pa__adapt_pieces(&r.it, npieces));
+  CHECK(r.it.npieces == npieces);
+  check_labels(&r.it);
+  end_iter(&r);
 }
 
 static void run(int dim, int n, const char *metric, int npieces, int layers) {
@@ -298,49 +321,29 @@ static void test_pieces_curved(void) {
 }
 
 /* The pieces balance the estimated work, not the element counts: a graded
- * metric (sizes 0.005 to 0.05 on a 40 x 40 box, 3 200 tagged triangles whose
- * work varies by a factor over 10) in 2 pieces per rank. Until 2026-11-22 a
+ * metric (sizes 0.005 to 0.05 on a 40 x 40 box: of its 3 200 triangles,
+ * more than 2 147 are tagged, their work varies by a factor over 10) in 2
+ * pieces per rank. Until 2026-11-22 a
  * guard dropped the weights beyond 2147 tagged elements: the counts were
  * balanced and one piece had 1.6 times the mean work. */
 static void test_pieces_weighted(void) {
-  pa_mesh *m = NULL;
-  pa_dmesh *dm = NULL;
-  pa_dmesh_value *done = NULL;
-  pa_adapt_opts o;
-  pa__iter it;
-  memset(&it, 0, sizeof it);
-  if (pa_test_rank == 0) {
-    CHECK_OK(pa_mesh_generate_box(2, 40, &m));
-    CHECK_OK(pa_metric_analytic(m, "iso-shell:0.05"));
-  }
-  CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, m, 0, &dm));
-  pa_adapt_opts_default(&o);
-  o.min_piece_work = 1;
-  o.min_piece_ratio = 0;
-  CHECK_OK(pa_dmesh_value_add(dm, PA_ELEMENT, PA__DONE_VALUE, MPI_UINT8_T, 1,
-                              -1, &done));
-  it.dm = dm;
-  it.opts = &o;
-  it.rank = pa_test_rank;
-  it.size = pa_test_size;
-  it.dim = 2;
-  it.nve = 3;
-  it.iter = 1;
-  CHECK_OK(pa__adapt_tag(&it, done, 1));
-  CHECK(it.ntagged > 2147);
+  prun r;
+  start_iter(&r, 2, 40, "iso-shell:0.05", NULL, 2, 1);
+  pa__iter *it = &r.it;
+  CHECK(it->ntagged > 2147);
   int np = 2 * pa_test_size;
-  CHECK_OK(pa__adapt_pieces(&it, np));
-  CHECK(it.npieces == np);
+  CHECK_OK(pa__adapt_pieces(it, np));
+  CHECK(it->npieces == np);
   /* per piece: work and count of its tagged elements; the work range */
   double *w = calloc((size_t)np, sizeof *w), *c = calloc((size_t)np, sizeof *c);
   double wr[2] = {1e300, 1e300}; /* min, -max */
-  for (pa_idx e = 0; e < it.ne; e++) {
-    if (!it.tag[e]) continue;
-    CHECK(it.label[e] >= 0 && it.label[e] < np);
-    w[it.label[e]] += it.work[e];
-    c[it.label[e]] += 1;
-    wr[0] = fmin(wr[0], it.work[e]);
-    wr[1] = fmin(wr[1], -it.work[e]);
+  for (pa_idx e = 0; e < it->ne; e++) {
+    if (!it->tag[e]) continue;
+    CHECK(it->label[e] >= 0 && it->label[e] < np);
+    w[it->label[e]] += it->work[e];
+    c[it->label[e]] += 1;
+    wr[0] = fmin(wr[0], it->work[e]);
+    wr[1] = fmin(wr[1], -it->work[e]);
   }
   MPI_Allreduce(MPI_IN_PLACE, w, np, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
   MPI_Allreduce(MPI_IN_PLACE, c, np, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
@@ -362,10 +365,7 @@ static void test_pieces_weighted(void) {
   CHECK(cmax >= 1.1 * csum / np);
   free(w);
   free(c);
-  pa__iter_free(&it);
-  CHECK_OK(pa_dmesh_value_remove(dm, done));
-  pa_dmesh_destroy(dm);
-  pa_mesh_destroy(m);
+  end_iter(&r);
 }
 
 TEST_MPI_MAIN(test_pieces_2d, test_pieces_3d, test_pieces_layers,
