@@ -770,38 +770,30 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
     PA_CALL(pa__recs_add(&R[PA_ELEMENT], next[PA_ELEMENT]++, ev, o->eref[e],
                          o->eflag[e], dest[e], NULL, pay, pl));
   }
-  for (pa_idx b = 0; b < o->nb; b++) {
-    if (!bemit[b]) continue;
-    pa_gid bv[3];
-    for (int k = 0; k < d; k++) bv[k] = vg[o->bdry[(size_t)d * b + k]];
-    pa_idx q = pc->reuse[PA_BOUNDARY][b];
-    if (q >= 0) { /* an input boundary entity: its id and values */
-      const size_t *po = pc->kpoff[PA_BOUNDARY];
-      PA_CALL(pa__recs_add(&R[PA_BOUNDARY], pc->kgid[PA_BOUNDARY][q], bv,
-                           o->bref[b], o->bflag[b], it->rank, NULL,
-                           po ? pc->kpay[PA_BOUNDARY] + po[q] : NULL,
-                           po ? po[q + 1] - po[q] : 0));
-      continue;
+  /* boundary entities and edges not on the skin */
+  for (int kind = PA_BOUNDARY; kind <= PA_EDGE; kind++) {
+    int nvk;
+    const int32_t *ref;
+    const pa_idx *conn = kind_conn(o, kind, &nvk, &ref);
+    const uint8_t *fl = kind == PA_BOUNDARY ? o->bflag : o->edflag;
+    const uint8_t *emit = kind == PA_BOUNDARY ? bemit : demit;
+    const size_t *po = pc->kpoff[kind];
+    pa_idx n = kind == PA_BOUNDARY ? o->nb : o->ned;
+    for (pa_idx b = 0; b < n; b++) {
+      if (!emit[b]) continue;
+      pa_gid bv[3];
+      for (int k = 0; k < nvk; k++) bv[k] = vg[conn[(size_t)nvk * b + k]];
+      pa_idx q = pc->reuse[kind][b];
+      if (q >= 0) { /* an input entity: its id and values */
+        PA_CALL(pa__recs_add(&R[kind], pc->kgid[kind][q], bv, ref[b], fl[b],
+                             it->rank, NULL, po ? pc->kpay[kind] + po[q] : NULL,
+                             po ? po[q + 1] - po[q] : 0));
+        continue;
+      }
+      size_t pl = payload_of(&pcache, dm, kind, ref[b], done, 0, pay);
+      PA_CALL(pa__recs_add(&R[kind], next[kind]++, bv, ref[b], fl[b], it->rank,
+                           NULL, pay, pl));
     }
-    size_t pl = payload_of(&pcache, dm, PA_BOUNDARY, o->bref[b], done, 0, pay);
-    PA_CALL(pa__recs_add(&R[PA_BOUNDARY], next[PA_BOUNDARY]++, bv, o->bref[b],
-                         o->bflag[b], it->rank, NULL, pay, pl));
-  }
-  for (pa_idx b = 0; b < o->ned; b++) {
-    if (!demit[b]) continue;
-    pa_gid bv[2] = {vg[o->edge[2 * b]], vg[o->edge[2 * b + 1]]};
-    pa_idx q = pc->reuse[PA_EDGE][b];
-    if (q >= 0) { /* an input edge: its id and values */
-      const size_t *po = pc->kpoff[PA_EDGE];
-      PA_CALL(pa__recs_add(&R[PA_EDGE], pc->kgid[PA_EDGE][q], bv, o->edref[b],
-                           o->edflag[b], it->rank, NULL,
-                           po ? pc->kpay[PA_EDGE] + po[q] : NULL,
-                           po ? po[q + 1] - po[q] : 0));
-      continue;
-    }
-    size_t pl = payload_of(&pcache, dm, PA_EDGE, o->edref[b], done, 0, pay);
-    PA_CALL(pa__recs_add(&R[PA_EDGE], next[PA_EDGE]++, bv, o->edref[b],
-                         o->edflag[b], it->rank, NULL, pay, pl));
   }
 cleanup:
   pa__free(vg);
