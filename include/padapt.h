@@ -238,7 +238,14 @@ pa_status pa_mesh_generate_box(int dim, int n, pa_mesh **mesh);
  *  - "shell[:h]"     anisotropic spherical (circular in 2D) shell of radius
  *                    0.3 centred at the box centre, size h/50 normally at the
  *                    shell, h tangentially;
- *  - "iso-shell[:h]" the isotropic version of "shell" (size h/10 at the shell).
+ *  - "iso-shell[:h]" the isotropic version of "shell" (size h/10 at the shell);
+ *  - "ugawg-linear", "ugawg-polar1", "ugawg-polar2": the anisotropic fields
+ *                    of the UGAWG benchmark (exact at the default h = 0.1):
+ *                    size h0 = h/100 at the plane z = 0.5 (y = 0.5 in 2D),
+ *                    resp. the cylinder r = 0.5 around the z axis, growing
+ *                    linearly to h; polar2 also shrinks the tangential size
+ *                    to h/4 near the cylinder. Exact formulas in
+ *                    src/metric/analytic.c.
  */
 pa_status pa_metric_analytic(pa_mesh *mesh, const char *spec);
 
@@ -364,7 +371,11 @@ typedef struct pa_remesh_opts {
   double hmin;      /**< minimal size (<= 0: none) */
   double hmax;      /**< maximal size (<= 0: none) */
   double hsiz;      /**< > 0: constant isotropic size, replaces the metric */
-  double hgrad;     /**< gradation (size ratio bound along an edge); <= 1: off */
+  double hgrad;     /**< gradation: bound on the size ratio along an edge of
+                         unit length (Mmg's -hgrad); <= 1 (e.g. -1): off */
+  double hgradreq;  /**< the same from required (frozen) vertices towards the
+                         others (Mmg's -hgradreq); <= 1: they constrain
+                         nothing */
   double hausd;     /**< max distance of the new boundary to the reconstructed one */
   double angle;     /**< ridge/corner detection angle in degrees (-ar) */
   int no_angle;     /**< -nr: no corner/ridge detection by angle */
@@ -379,7 +390,8 @@ typedef struct pa_remesh_opts {
   int trusted;
 } pa_remesh_opts;
 
-/** Default options: no hmin/hmax/hsiz, hgrad 1.3, hausd 0.01, angle 45. */
+/** Default options: no hmin/hmax/hsiz, hgrad 1.3, hgradreq 2.3 (Mmg's),
+ *  hausd 0.01, angle 45. */
 void pa_remesh_opts_default(pa_remesh_opts *opts);
 
 /** What a remesh did. */
@@ -769,7 +781,8 @@ typedef struct pa_adapt_iter {
 /** Options of pa_dmesh_adapt. */
 typedef struct pa_adapt_opts {
   /** Options given to the remesher for every piece. hsiz, hmin and hmax are
-   *  applied to the whole metric before the loop; hgrad per piece. */
+   *  applied to the whole metric before the loop, then the gradation (hgrad,
+   *  hgradreq); the pieces are remeshed without gradation. */
   pa_remesh_opts remesh;
   /** The sequential remesher (NULL: pa_remesher_builtin()). */
   const pa_remesher *remesher;

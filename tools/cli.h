@@ -57,7 +57,8 @@ pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path, pa_mesh **mesh);
 int pa_cli_parse_num(const char *s, double *v);
 /* path with its extension replaced by ext (with the dot); malloc'ed. */
 char *pa_cli_replace_ext(const char *path, const char *ext);
-/* Parse the remesher option at argv[*i] (-hsiz -hmin -hmax -hgrad -hausd -ar
+/* Parse the remesher option at argv[*i] (-hsiz -hmin -hmax -hgrad -hgradreq
+ * -hausd -ar
  * -v -nr -noinsert -noswap -nomove -nosurf) into opts, moving *i past its
  * value. Returns 1 when it was one, 0 when argv[*i] is not a remesher
  * option, -1 after printing an error. */

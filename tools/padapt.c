@@ -23,7 +23,8 @@ static const char *usage_text =
     "  generate box2d|box3d N OUT     unit square (n x n x 2 triangles) or cube\n"
     "                                 (n^3 x 6 tetrahedra) with boundary refs\n"
     "  metric NAME[:h] IN OUT.sol     a built-in analytic metric on IN's vertices\n"
-    "                                 (names: uniform layer shell iso-shell)\n"
+    "                                 (uniform layer shell iso-shell\n"
+    "                                 ugawg-linear ugawg-polar1 ugawg-polar2)\n"
     "  stats IN [-met SOL] [-json OUT.json]\n"
     "                                 counts, volume, edge lengths in the metric,\n"
     "                                 quality, validity (exit 1 if invalid)\n"
@@ -119,7 +120,8 @@ int pa_cli_remesh_option(const pa_cli *cli, int argc, char **argv, int *i,
     const char *name;
     int flag; /* 1: a switch, 0: takes a number */
   } known[] = {{"-hsiz", 0},   {"-hmin", 0},    {"-hmax", 0},
-               {"-hgrad", 0},  {"-hausd", 0},   {"-ar", 0},
+               {"-hgrad", 0},  {"-hgradreq", 0}, {"-hausd", 0},
+               {"-ar", 0},
                {"-v", 0},      {"-nr", 1},      {"-noinsert", 1},
                {"-noswap", 1}, {"-nomove", 1},  {"-nosurf", 1}};
   const char *a = argv[*i];
@@ -138,9 +140,8 @@ int pa_cli_remesh_option(const pa_cli *cli, int argc, char **argv, int *i,
   const char *val = *i + 1 < argc ? argv[*i + 1] : NULL;
   int ok = pa_cli_parse_num(val, &x);
   const char *want = "a positive number";
-  if (!strcmp(a, "-hgrad")) {
-    want = "a non-negative number";
-    ok = ok && x >= 0;
+  if (!strcmp(a, "-hgrad") || !strcmp(a, "-hgradreq")) {
+    want = "a number (> 1; -1 or any value <= 1 disables)";
   } else if (!strcmp(a, "-ar")) {
     want = "an angle in [0, 180] degrees";
     ok = ok && x >= 0 && x <= 180;
@@ -160,6 +161,7 @@ int pa_cli_remesh_option(const pa_cli *cli, int argc, char **argv, int *i,
   if (!strcmp(a, "-hmin")) opts->hmin = x;
   if (!strcmp(a, "-hmax")) opts->hmax = x;
   if (!strcmp(a, "-hgrad")) opts->hgrad = x;
+  if (!strcmp(a, "-hgradreq")) opts->hgradreq = x;
   if (!strcmp(a, "-hausd")) opts->hausd = x;
   if (!strcmp(a, "-ar")) opts->angle = x;
   if (!strcmp(a, "-v")) {

@@ -176,7 +176,8 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
   PA_CALL(check_opts(dm, opts));
   PA_CALL(prepare_metric(dm, &opts->remesh));
   PA_CALL(pa__agree(dm->comm, st));
-  PA_CALL(pa__adapt_grade(dm, opts->remesh.hgrad, NULL));
+  PA_CALL(pa__adapt_grade(dm, opts->remesh.hgrad, opts->remesh.hgradreq,
+                          NULL));
   PA_CALL(pa_dmesh_value_add(dm, PA_ELEMENT, PA__DONE_VALUE, MPI_UINT8_T, 1, -1,
                              &done));
   pa__info(2, "padapt: rank %d: metric and gradation %.3f s\n", dm->rank,

@@ -164,7 +164,8 @@ double pa__elem_work(const pa_mesh *m, pa_idx e);
 
 /* Collective: grade the metric of the whole distributed mesh (grade.c),
  * once before the loop; *nrounds (may be NULL) receives the rounds. */
-pa_status pa__adapt_grade(pa_dmesh *dm, double hgrad, int *nrounds);
+pa_status pa__adapt_grade(pa_dmesh *dm, double hgrad, double hgradreq,
+                          int *nrounds);
 
 /* Step 1. Collective: tag the owned elements (it->tag), count them
  * (it->ntagged, global) and estimate their work (it->work). done: the

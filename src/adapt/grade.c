@@ -74,7 +74,8 @@ cleanup:
   return st;
 }
 
-pa_status pa__adapt_grade(pa_dmesh *dm, double hgrad, int *nrounds) {
+pa_status pa__adapt_grade(pa_dmesh *dm, double hgrad, double hgradreq,
+                          int *nrounds) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = dm->mesh;
   int nc = m->met_ncomp;
@@ -84,14 +85,14 @@ pa_status pa__adapt_grade(pa_dmesh *dm, double hgrad, int *nrounds) {
   grade_ctx ctx = {dm->dim, nc};
   int round = 0;
   if (nrounds) *nrounds = 0;
-  if (!(hgrad > 1.0) || nc == 0) return PA_SUCCESS;
+  if (!(hgrad > 1.0 || hgradreq > 1.0) || nc == 0) return PA_SUCCESS;
   PA_CALL(frozen_vertices(dm, &frozen));
   PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.adapt.grademet", MPI_DOUBLE, nc,
                              -1, &val));
   for (round = 1; round <= MAX_ROUNDS; round++) {
     pa_idx nch = 0;
     PA_CALL(pa__metric_gradation(dm->dim, nc, nv, m->coord, m->met, m->ne,
-                                 m->elem, frozen, hgrad, &nch));
+                                 m->elem, frozen, hgrad, hgradreq, &nch));
     PA_CALL(pa__agree(dm->comm, st));
     double changed = (double)nch;
     PA_CALL(pa__allreduce(dm->comm, &changed, 1, MPI_DOUBLE, MPI_SUM));

@@ -26,6 +26,20 @@
  *  iso-shell  ncomp 1, size hs(d) = h/10 + (h - h/10) * min(d, 0.2) / 0.2
  *             with d as in "shell".
  *
+ *  ugawg-linear, ugawg-polar1, ugawg-polar2: the fields of the UGAWG
+ *             benchmark (Ibanez, Barral, Krakos, Loseille, Michal, Park, "A
+ *             benchmark case for unstructured mesh adaptation"), exactly as
+ *             published for h = 0.1 (other h scale them). h0 = h/100,
+ *             ramp(s) = h0 + 2 (h - h0) |s - 0.5|:
+ *               linear  M = diag(1/h^2, 1/ramp(x_dim)^2) in 2D (x_dim = y),
+ *                       diag(1/h^2, 1/h^2, 1/ramp(z)^2) in 3D;
+ *               polar1  r = sqrt(x^2 + y^2), t = atan2(y, x): radial size
+ *                       h_r = ramp(r), tangential size h_t = h, axial (3D)
+ *                       size h: M = R diag(1/h_r^2, 1/h_t^2 [, 1/h^2]) R^T,
+ *                       R the rotation by t about the z axis;
+ *               polar2  polar1 with h_t = h d0 + (h/4)(1 - d0),
+ *                       d0 = min(10 |r - 0.5|, 1).
+ *
  * Sizes vary linearly with the distance, so along the normal consecutive
  * elements grow by a constant ratio 1 + dh/dd (about 1.4-1.5 for h = 0.1),
  * which a remesher can reach; the fields are continuous and piecewise smooth
@@ -36,10 +50,20 @@
 #include <errno.h>
 #include <math.h>
 
-enum { FIELD_UNIFORM, FIELD_LAYER, FIELD_SHELL, FIELD_ISO_SHELL, FIELD_COUNT };
+enum {
+  FIELD_UNIFORM,
+  FIELD_LAYER,
+  FIELD_SHELL,
+  FIELD_ISO_SHELL,
+  FIELD_UGAWG_LINEAR,
+  FIELD_UGAWG_POLAR1,
+  FIELD_UGAWG_POLAR2,
+  FIELD_COUNT
+};
 
 static const char *const field_names[FIELD_COUNT + 1] = {
-    "uniform", "layer", "shell", "iso-shell", NULL};
+    "uniform",      "layer",        "shell",        "iso-shell",
+    "ugawg-linear", "ugawg-polar1", "ugawg-polar2", NULL};
 
 #define DEFAULT_H 0.1
 #define LAYER_PLANE 0.5
@@ -72,8 +96,42 @@ static double shell_distance(int dim, const double *x, double *n) {
   return fabs(r - SHELL_RADIUS);
 }
 
+/* The UGAWG fields (see the file comment). */
+#define UGAWG_H0_RATIO 100.0
+#define UGAWG_POLAR2_BAND 0.1
+#define UGAWG_POLAR2_RATIO 4.0
+
+static void eval_ugawg(int field, int dim, double h, const double *x,
+                       double *m) {
+  int nt = pa__tensor_ncomp(dim);
+  double h0 = h / UGAWG_H0_RATIO;
+  for (int k = 0; k < nt; k++)
+    m[k] = 0.0;
+  for (int i = 0; i < dim; i++)
+    m[pa__sym_index(i, i)] = 1.0 / (h * h);
+  if (field == FIELD_UGAWG_LINEAR) {
+    double hl = h0 + 2.0 * (h - h0) * fabs(x[dim - 1] - 0.5);
+    m[pa__sym_index(dim - 1, dim - 1)] = 1.0 / (hl * hl);
+    return;
+  }
+  double r = sqrt(x[0] * x[0] + x[1] * x[1]), t = atan2(x[1], x[0]);
+  double hr = h0 + 2.0 * (h - h0) * fabs(r - 0.5), ht = h;
+  if (field == FIELD_UGAWG_POLAR2) {
+    double d0 = fmin(fabs(r - 0.5) / UGAWG_POLAR2_BAND, 1.0);
+    ht = h * d0 + (h / UGAWG_POLAR2_RATIO) * (1.0 - d0);
+  }
+  double c = cos(t), s = sin(t), lr = 1.0 / (hr * hr), lt = 1.0 / (ht * ht);
+  m[0] = lr * c * c + lt * s * s;
+  m[1] = (lr - lt) * c * s;
+  m[2] = lr * s * s + lt * c * c;
+}
+
 static void eval_field(int field, int dim, double h, const double *x,
                        double *m) {
+  if (field >= FIELD_UGAWG_LINEAR) {
+    eval_ugawg(field, dim, h, x, m);
+    return;
+  }
   int nt = pa__tensor_ncomp(dim);
   double n[3];
   switch (field) {
@@ -123,7 +181,8 @@ static pa_status parse_spec(const char *spec, int *field, double *h) {
       *field = f;
   PA_CHECK(*field >= 0, PA_ERR_ARG,
            "unknown metric field '%.*s' (valid names: uniform, layer, shell, "
-           "iso-shell; each optionally followed by ':h', h > 0)",
+           "iso-shell, ugawg-linear, ugawg-polar1, ugawg-polar2; each "
+           "optionally followed by ':h', h > 0)",
            (int)(len > 200 ? 200 : len), spec);
   *h = DEFAULT_H;
   if (colon) {

@@ -215,7 +215,7 @@ pa_status pa__rm_features_2d_init(pa__rmesh *rm, pa_mesh *mesh,
     PA_ALLOC(frz, nv);
     for (pa_idx v = 0; v < nv; v++) frz[v] = (rm->vtag[v] & RMV_FROZEN) != 0;
     PA_CALL(pa__metric_gradation(2, rm->mcomp, nv, rm->x, rm->met, rm->ne,
-                                 rm->ev, frz, o->hgrad, NULL));
+                                 rm->ev, frz, o->hgrad, o->hgradreq, NULL));
   }
 
   /* element qualities */

@@ -28,6 +28,7 @@
 void pa_remesh_opts_default(pa_remesh_opts *o) {
   memset(o, 0, sizeof *o);
   o->hgrad = 1.3;
+  o->hgradreq = 2.3;
   o->hausd = 0.01;
   o->angle = 45;
 }
@@ -118,7 +119,8 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
            "pa_remesh: the mesh has no metric and no constant size (hsiz) was "
            "given");
   PA_CHECK(isfinite(opts->hsiz) && isfinite(opts->hmin) && isfinite(opts->hmax) &&
-               isfinite(opts->hgrad) && isfinite(opts->hausd) &&
+               isfinite(opts->hgrad) && isfinite(opts->hgradreq) &&
+               isfinite(opts->hausd) &&
                isfinite(opts->angle),
            PA_ERR_ARG, "pa_remesh: options must be finite numbers");
   PA_CHECK(!(opts->hmin > 0 && opts->hmax > 0 && opts->hmin > opts->hmax),
@@ -155,7 +157,8 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
       if (!frozen[v])
         pa__metric_clamp(d, nc, newmet + (size_t)nc * v, opts->hmin, opts->hmax);
   PA_CALL(pa__metric_gradation(d, nc, mesh->nv, mesh->coord, newmet, mesh->ne,
-                               mesh->elem, frozen, opts->hgrad, NULL));
+                               mesh->elem, frozen, opts->hgrad, opts->hgradreq,
+                               NULL));
   pa__free(frozen);
   frozen = NULL;
 

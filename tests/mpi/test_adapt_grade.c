@@ -53,16 +53,16 @@ static void run(int dim, int n, const char *metric, int overlap) {
     pa_mesh_elem_flags(m)[0] |= PA_FLAG_REQUIRED;
     CHECK_OK(pa_mesh_copy(m, &seq));
     pa__metric_gradation(dim, seq->met_ncomp, seq->nv, seq->coord, seq->met,
-                         seq->ne, seq->elem, NULL, 1.3, NULL);
+                         seq->ne, seq->elem, NULL, 1.3, 1.3, NULL);
   }
   CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, m, overlap, &dm));
   int rounds = 0;
-  CHECK_OK(pa__adapt_grade(dm, 1.3, &rounds));
+  CHECK_OK(pa__adapt_grade(dm, 1.3, 1.3, &rounds));
   CHECK(rounds >= 1);
   CHECK(copies_agree(dm));
   /* a second gradation: nothing left to do */
   int rounds2 = 0;
-  CHECK_OK(pa__adapt_grade(dm, 1.3, &rounds2));
+  CHECK_OK(pa__adapt_grade(dm, 1.3, 1.3, &rounds2));
   CHECK(rounds2 == 1);
   pa_mesh *g = gather(dm);
   if (pa_test_rank == 0 && g) {
@@ -83,7 +83,7 @@ static void run(int dim, int n, const char *metric, int overlap) {
       pa_mesh *s2 = NULL;
       CHECK_OK(pa_mesh_copy(m, &s2));
       pa__metric_gradation(dim, 1, s2->nv, s2->coord, s2->met, s2->ne,
-                           s2->elem, fr, 1.3, NULL);
+                           s2->elem, fr, 1.3, 1.3, NULL);
       pa_idx bad = 0;
       for (pa_idx v = 0; v < g->nv; v++)
         bad += fabs(g->met[v] - s2->met[v]) > 1e-12 * s2->met[v];
@@ -101,7 +101,7 @@ static void run(int dim, int n, const char *metric, int overlap) {
     uint8_t *fr = calloc((size_t)g->nv, 1);
     for (int i = 0; i <= dim; i++) fr[m->elem[i]] = 1;
     pa__metric_gradation(dim, nc, g->nv, g->coord, g->met, g->ne, g->elem, fr,
-                         1.3, &changed);
+                         1.3, 1.3, &changed);
     free(fr);
     CHECK(changed == 0);
     if (nc > 1)

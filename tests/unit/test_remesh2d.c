@@ -663,7 +663,7 @@ static void test_gradation(void) {
   fz[nv - 1] = 1; /* frozen far corner keeps its size */
   pa_idx nch = 0;
   CHECK_OK(pa__metric_gradation(2, 1, nv, pa_mesh_coords(m), h, pa_mesh_nelem(m),
-                                pa_mesh_elems(m), fz, 1.3, &nch));
+                                pa_mesh_elems(m), fz, 1.3, 1.3, &nch));
   CHECK(nch > 0);
   CHECK(h[nv - 1] == 1.0);
   const pa_idx *el = pa_mesh_elems(m);
@@ -685,7 +685,7 @@ static void test_gradation(void) {
     t[3 * v + 2] = 1;
   }
   t[0] = 1e6;
-  CHECK_OK(pa__metric_gradation(2, 3, nv, x, t, pa_mesh_nelem(m), el, NULL, 1.3, &nch));
+  CHECK_OK(pa__metric_gradation(2, 3, nv, x, t, pa_mesh_nelem(m), el, NULL, 1.3, 1.3, &nch));
   CHECK(nch > 0);
   CHECK(t[3 * 1] > 1.0 && t[3 * 1] < 1e6); /* neighbour (0.1, 0) constrained */
   CHECK(t[3 * 1 + 2] >= 1.0 - 1e-12 && t[3 * 1 + 2] < 1.01); /* not along y */

@@ -476,7 +476,7 @@ static void test_analytic(void) {
   int count = 0;
   while (names[count])
     count++;
-  CHECK(count == 4);
+  CHECK(count == 7);
   for (int dim = 2; dim <= 3; dim++) {
     int nt = dim == 2 ? 3 : 6;
     pa_mesh *m = NULL;
@@ -540,6 +540,29 @@ static void test_analytic(void) {
             double hn = h / 50 + (h - h / 50) * d / 0.2;
             CHECK_NEAR(SIZE_AT(4, ey), hn, 1e-9 * h);
             CHECK_NEAR(SIZE_AT(4, ex), h, 1e-9 * h);
+          }
+        } else if (!strncmp(names[k], "ugawg-", 6)) {
+          /* the published formulas, at every vertex, along the radial,
+           * tangential and axial directions (UGAWG benchmark paper) */
+          double h0 = h / 100;
+          for (pa_idx i = 0; i < pa_mesh_nvert(m); i++) {
+            const double *x = pa_mesh_coords(m) + dim * i;
+            if (!strcmp(names[k], "ugawg-linear")) {
+              double hl = h0 + 2 * (h - h0) * fabs(x[dim - 1] - 0.5);
+              CHECK_NEAR(SIZE_AT(i, en), hl, 1e-12 * h);
+              CHECK_NEAR(SIZE_AT(i, ex), h, 1e-12 * h);
+              continue;
+            }
+            double r = hypot(x[0], x[1]);
+            double ur[3] = {x[0] / r, x[1] / r, 0}, ut[3] = {-ur[1], ur[0], 0};
+            double hr = h0 + 2 * (h - h0) * fabs(r - 0.5), ht = h;
+            if (!strcmp(names[k], "ugawg-polar2")) {
+              double d0 = fmin(10 * fabs(r - 0.5), 1);
+              ht = h * d0 + h / 4 * (1 - d0);
+            }
+            CHECK_NEAR(SIZE_AT(i, ur), hr, 1e-9 * hr);
+            CHECK_NEAR(SIZE_AT(i, ut), ht, 1e-9 * ht);
+            if (dim == 3) CHECK_NEAR(SIZE_AT(i, ez), h, 1e-9 * h);
           }
         } else { /* iso-shell */
           CHECK_NEAR(met[0], h, 1e-15);
