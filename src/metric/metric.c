@@ -1,6 +1,6 @@
 /*
  * metric.c -- Riemannian metric algebra: validity, symmetric eigen-
- * decomposition, log/exp, log-Euclidean interpolation, intersection,
+ * decomposition, log/exp, interpolation (linear in size), intersection,
  * clamping, lengths in the metric and element quality.
  *
  * Every function here except pa_mesh_metric_clamp is an inner-loop kernel:
@@ -309,6 +309,11 @@ void pa__metric_exp(int dim, const double *logm, double *m) {
   sym_apply(dim, logm, m, exp);
 }
 
+/* Size tensor H = M^-1/2 and back (M = H^-2); an eigenvalue that rounding
+ * pushed to zero or below is floored at DBL_MIN. */
+static double inv_sqrt(double x) { return 1.0 / sqrt(x > DBL_MIN ? x : DBL_MIN); }
+static double inv_sq(double x) { return 1.0 / (x * x); }
+
 void pa__metric_interp(int dim, int ncomp, int n, const double *const *m,
                        const double *w, double *out) {
   int same = 1;
@@ -326,18 +331,18 @@ void pa__metric_interp(int dim, int ncomp, int n, const double *const *m,
   if (ncomp == 1) {
     double s = 0.0;
     for (int i = 0; i < n; i++)
-      if (w[i] != 0.0) s += w[i] * log(m[i][0]);
-    out[0] = exp(s);
+      s += w[i] * m[i][0];
+    out[0] = s;
     return;
   }
-  double acc[6] = {0, 0, 0, 0, 0, 0}, lg[6];
+  double acc[6] = {0, 0, 0, 0, 0, 0}, h[6];
   for (int i = 0; i < n; i++) {
     if (w[i] == 0.0) continue;
-    pa__metric_log(dim, m[i], lg);
+    sym_apply(dim, m[i], h, inv_sqrt);
     for (int k = 0; k < ncomp; k++)
-      acc[k] += w[i] * lg[k];
+      acc[k] += w[i] * h[k];
   }
-  pa__metric_exp(dim, acc, out);
+  sym_apply(dim, acc, out, inv_sq);
 }
 
 /* ------------------------------------------------------------------------ */

@@ -48,9 +48,16 @@ int pa__sym_inverse(int dim, const double *m, double *inv);
 void pa__metric_log(int dim, const double *m, double *logm);
 void pa__metric_exp(int dim, const double *logm, double *m);
 
-/* Log-Euclidean interpolation of n metrics with weights w (sum to 1):
- * exp(sum w_i log M_i). Sizes interpolate as h = prod h_i^w_i. Output in the
- * same ncomp as the inputs. */
+/* Interpolation of n metrics with weights w (sum to 1) at a new vertex,
+ * linear in size: M = (sum w_i M_i^-1/2)^-2, h = sum w_i h_i (Mmg's
+ * choice). The one interpolation of the code: splits, moves, bisection,
+ * 2D and 3D. Chosen by measurement over log-Euclidean interpolation
+ * (exp(sum w_i log M_i), exact where sizes vary geometrically): exact on
+ * sizes that vary linearly, which is what the gradation leaves and what
+ * the UGAWG fields are; one pass of box3d 10 to ugawg-linear, judged
+ * against the analytic field: 97.4 % of edges in range with 44 k tets in
+ * 1.4 s, against 81 % with 76 k tets in 3.5 s (docs/BENCHMARKS.md). Output
+ * in the same ncomp as the inputs. */
 void pa__metric_interp(int dim, int ncomp, int n, const double *const *m,
                        const double *w, double *out);
 

@@ -7,8 +7,8 @@
  * Edges are taken longest first (length in the metric; ties by the
  * coordinates of their ends) and split at their midpoint in every element
  * and boundary entity containing them; the new edges join the queue. The
- * new vertex gets the mean of the ends' fields and their log-Euclidean mean
- * metric, computed from the ends in coordinate order (so the same bits
+ * new vertex gets the mean of the ends' fields and their interpolated
+ * metric (pa__metric_interp), computed from the ends in coordinate order (so the same bits
  * wherever the same edge is split).
  *
  *  - An edge of a boundary entity of reference o->skin_ref (a piece's skin)

@@ -149,8 +149,8 @@ void pa__rm_kill_feat(pa__rmesh *rm, pa_idx b);
  * cannot fail). */
 pa_status pa__rm_reserve(pa__rmesh *rm, pa_idx nvmore, pa_idx nemore,
                          pa_idx nbmore);
-/* Interpolate metric (log-Euclidean) and fields (linear) of vertex v from n
- * vertices src with weights w (sum 1). */
+/* Interpolate the metric (pa__metric_interp) and fields (linearly) of
+ * vertex v from n vertices src with weights w (sum 1). */
 void pa__rm_interp(pa__rmesh *rm, pa_idx v, int n, const pa_idx *src,
                    const double *w);
 /* Write the working mesh back into mesh, renumbered compactly. Frees the
@@ -265,25 +265,6 @@ static inline double rm_qual2(int mc, const double *a, const double *b,
              2 * m1 * (e1x * e1y + e2x * e2y + e3x * e3y) +
              m2 * (e1y * e1y + e2y * e2y + e3y * e3y);
   return 6.928203230275509 * area * sqrt(det > 0 ? det : 0) / s;
-}
-
-/* f(M) for a symmetric 2x2 M by its spectral projector; f = log or exp. */
-static inline void rm_sym2_fun(const double *m, double *out, int is_log) {
-  double a = m[0], b = m[1], c = m[2];
-  double hm = 0.5 * (a + c), hd = 0.5 * (a - c);
-  double r = sqrt(hd * hd + b * b);
-  double l1 = hm + r, l2 = hm - r;
-  if (is_log && l1 > 0) l2 = (a * c - b * b) / l1; /* accurate small value */
-  double f1 = is_log ? log(l1) : exp(l1);
-  double f2 = is_log ? log(l2) : exp(l2);
-  double s;
-  if (r <= 1e-12 * fabs(hm) || r == 0)
-    s = is_log ? 1.0 / hm : exp(hm); /* derivative: divided difference limit */
-  else
-    s = (f1 - f2) / (l1 - l2);
-  out[0] = f2 + s * (a - l2);
-  out[1] = s * b;
-  out[2] = f2 + s * (c - l2);
 }
 
 #endif /* PA_REMESH_H */

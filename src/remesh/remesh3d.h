@@ -368,7 +368,7 @@ pa_status pa__rm3d_swap_pass(rm3d *m, double qthr, double gain, long *count);
 pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, long *count);
 
 /* Interpolation of a new vertex's metric and fields as a weighted mean of
- * vertices src[0..n) (log-Euclidean for the metric). */
+ * vertices src[0..n) (pa__metric_interp for the metric). */
 void pa__rm3d_interp(rm3d *m, pa_idx dst, int n, const pa_idx *src,
                      const double *w);
 

@@ -301,13 +301,7 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
   }
   double xm[3], mm[6], xo[3], mo[6], mo0[6];
   for (int i = 0; i < 3; i++) xm[i] = 0.5 * (xp[i] + xq[i]);
-  if (mc == 1) {
-    mm[0] = sqrt(m->met[p] * m->met[q]);
-  } else {
-    const double *ms[2] = {m->met + 6 * (size_t)p, m->met + 6 * (size_t)q};
-    double w[2] = {0.5, 0.5};
-    pa__metric_interp(3, 6, 2, ms, w, mm);
-  }
+  pa__rm3d_mid_metric(m, p, q, mm);
   /* q's ball with q at the midpoint (tets holding p are checked by the
    * collapse). */
   double qold = 1e30, qnew = 1e30;

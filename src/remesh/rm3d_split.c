@@ -68,13 +68,10 @@ static int ridge_tangent(rm3d *m, pa_idx v, pa_idx w, double *t) {
 }
 
 void pa__rm3d_mid_metric(const rm3d *m, pa_idx a, pa_idx b, double *mp) {
-  if (m->mc == 1) {
-    mp[0] = sqrt(m->met[a] * m->met[b]);
-  } else {
-    const double *ms[2] = {m->met + 6 * (size_t)a, m->met + 6 * (size_t)b};
-    double w[2] = {0.5, 0.5};
-    pa__metric_interp(3, 6, 2, ms, w, mp);
-  }
+  int mc = m->mc;
+  const double *ms[2] = {m->met + (size_t)mc * a, m->met + (size_t)mc * b};
+  double w[2] = {0.5, 0.5};
+  pa__metric_interp(3, mc, 2, ms, w, mp);
 }
 
 /* Point of a ridge edge (a,b): the midpoint of the cubic Hermite curve with
@@ -208,7 +205,7 @@ pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
     pa_idx src[2] = {a, b};
     double w[2] = {0.5, 0.5};
     if (m->nfield) pa__rm3d_interp(m, pm_, 2, src, w);
-    if (mc == 6) memcpy(m->met + 6 * (size_t)pm_, mp, sizeof mp);
+    memcpy(m->met + (size_t)mc * pm_, mp, sizeof(double) * mc);
     pa__rm3d_met0_mid(m, pm_, a, b); /* the target, when relaxed */
   }
   if (m->vref[a] == m->vref[b]) m->vref[pm_] = m->vref[a];

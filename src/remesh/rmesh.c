@@ -173,27 +173,16 @@ void pa__rm_kill_feat(pa__rmesh *rm, pa_idx b) {
 
 /* ---- interpolation ---- */
 
-/* Log-Euclidean interpolation of the metric array met (rm->met or rm->met0). */
+/* Interpolation of the metric array met (rm->met or rm->met0): the metric
+ * kernel's. */
 static void interp_metric(const pa__rmesh *rm, double *met, pa_idx v, int n,
                           const pa_idx *src, const double *w) {
   int mc = rm->mcomp;
-  double *mv = met + (size_t)mc * v;
-  if (mc == 1) {
-    double s = 0;
-    for (int i = 0; i < n; i++) s += w[i] * log(met[src[i]]);
-    mv[0] = exp(s);
-  } else if (rm->dim == 2) {
-    double acc[3] = {0, 0, 0}, l[3];
-    for (int i = 0; i < n; i++) {
-      rm_sym2_fun(met + 3 * (size_t)src[i], l, 1);
-      for (int c = 0; c < 3; c++) acc[c] += w[i] * l[c];
-    }
-    rm_sym2_fun(acc, mv, 0);
-  } else {
-    const double *ms[8];
-    for (int i = 0; i < n && i < 8; i++) ms[i] = met + (size_t)mc * src[i];
-    pa__metric_interp(rm->dim, mc, n < 8 ? n : 8, ms, w, mv);
-  }
+  const double *ms[8] = {NULL};
+  double out[6];
+  for (int i = 0; i < n && i < 8; i++) ms[i] = met + (size_t)mc * src[i];
+  pa__metric_interp(rm->dim, mc, n < 8 ? n : 8, ms, w, out);
+  memcpy(met + (size_t)mc * v, out, sizeof(double) * mc); /* v may be a src */
 }
 
 void pa__rm_interp(pa__rmesh *rm, pa_idx v, int n, const pa_idx *src,
@@ -249,7 +238,7 @@ static double expected_elems(pa_mesh *mesh) {
  * The working metric is therefore relaxed at the skin: a frozen vertex whose
  * frozen edges have a mean length lambda outside [RM_LSHORT, RM_LLONG] gets
  * its size scaled by f = lambda / RM_LLONG (or lambda / RM_LSHORT), the least
- * change that puts that mean in range; the size then varies log-linearly
+ * change that puts that mean in range; the size then varies linearly
  * (interpolation) to the target over the first ring of input elements
  * (ParMmg #74: grade the metric away from frozen entities). Relaxing further
  * (to length 1) widens the band of elements left coarser than the target,
