@@ -166,9 +166,19 @@ int pa_mesh_metric_ncomp(const pa_mesh *mesh);
 /** The metric array (nvert * ncomp), NULL when there is none. */
 double *pa_mesh_metric(pa_mesh *mesh);
 
+/** A vertex field whose name starts with this prefix and that has 1 (size)
+ *  or 3/6 (tensor) components holds a metric: the remeshers interpolate it
+ *  at new vertices as they interpolate the metric, not component by
+ *  component. pa_remesh and pa_dmesh_adapt carry the caller's metric so
+ *  (as "metric:user", removed before they return) to measure the result
+ *  against it. */
+#define PA_FIELD_METRIC_PREFIX "metric:"
+
 /** Attach a named user vertex field of ncomp components (copied). */
 pa_status pa_mesh_add_field(pa_mesh *mesh, const char *name, int ncomp,
                             const double *values);
+/** Remove field k (the later fields move down by one). */
+pa_status pa_mesh_remove_field(pa_mesh *mesh, int k);
 int pa_mesh_nfield(const pa_mesh *mesh);
 /** Field k: its name, number of components and values (nvert * ncomp). */
 pa_status pa_mesh_field(pa_mesh *mesh, int k, const char **name, int *ncomp,
@@ -300,6 +310,41 @@ void pa_stats_print(const pa_stats *stats, FILE *out);
 pa_status pa_stats_write_json(const pa_stats *stats, const char *extra,
                               const char *path);
 
+/** The tolerance to which an adapted mesh meets a metric: at least this share
+ *  of its edges in [0.7071, 1.4142) ... */
+#define PA_TARGET_IN_RANGE 0.9
+/** ... and no element of quality below this. */
+#define PA_TARGET_QUALITY 0.01
+/** 1 if the statistics meet PA_TARGET_IN_RANGE and PA_TARGET_QUALITY. */
+int pa_stats_target_met(const pa_stats *stats);
+
+/** What made the metric a remesher used differ from the caller's. */
+enum {
+  PA_CHANGED_HMIN = 1u,      /**< -hmin shrank some size */
+  PA_CHANGED_HMAX = 2u,      /**< -hmax capped some size */
+  PA_CHANGED_GRADATION = 4u  /**< the gradation shrank some size */
+};
+
+/**
+ * How an adapted mesh meets the metric the caller gave. `user`: the output
+ * measured in the caller's metric (before hmin/hmax and gradation; at new
+ * vertices interpolated from the input as the remesher interpolates its
+ * own); `used`: measured in the metric the remesher worked with. Equal when
+ * nothing changed the caller's metric (changed == 0).
+ */
+typedef struct pa_fidelity {
+  int measured;     /**< 1 when the figures below were computed (0: not
+                         asked for, or out of memory after the remesh) */
+  pa_stats user, used;
+  int target_met;   /**< pa_stats_target_met(&user) */
+  unsigned changed; /**< PA_CHANGED_* bits */
+} pa_fidelity;
+
+/** One line saying how the result meets the caller's metric and, if not,
+ *  what limited it (hmin/hmax, gradation, or the remesher in the metric it
+ *  used), into buf (at most n bytes, NUL-terminated). */
+void pa_fidelity_describe(const pa_fidelity *f, char *buf, size_t n);
+
 /* ------------------------------------------------------------------------ */
 /* Solutions (.sol / .solb) and mesh files                                  */
 /* ------------------------------------------------------------------------ */
@@ -388,6 +433,9 @@ typedef struct pa_remesh_opts {
    *  would find it), so pa_remesh skips that check (the parallel loop's
    *  pieces, built valid; default 0) */
   int trusted;
+  /** 1: pa_remesh leaves report->fidelity empty and carries no copy of the
+   *  caller's metric (the parallel loop's pieces; default 0) */
+  int no_stats;
 } pa_remesh_opts;
 
 /** Default options: no hmin/hmax/hsiz, hgrad 1.3, hgradreq 2.3 (Mmg's),
@@ -396,10 +444,13 @@ void pa_remesh_opts_default(pa_remesh_opts *opts);
 
 /** What a remesh did. */
 typedef struct pa_remesh_report {
+  /** The remesher's verdict on the metric it worked with. */
   pa_remesh_outcome outcome;
   long nsplit, ncollapse, nswap, nmove;
   int npass;
   double time_s;
+  /** Filled by pa_remesh unless opts->no_stats (not by remesher callbacks). */
+  pa_fidelity fidelity;
 } pa_remesh_report;
 
 /**
@@ -853,6 +904,9 @@ typedef struct pa_adapt_report {
   size_t peak_rss;     /**< max over ranks of pa_peak_rss() at the end */
   int niter_recorded;  /**< entries of iters (at most PA_ADAPT_MAX_ITERS) */
   pa_adapt_iter iters[PA_ADAPT_MAX_ITERS];
+  /** The result measured in the caller's metric and in the metric used
+   *  (unless opts->remesh.no_stats). */
+  pa_fidelity fidelity;
 } pa_adapt_report;
 
 /** Default options: built-in remesher, pa_remesh_opts_default, no memory

@@ -74,6 +74,23 @@ pa_status pa_cli_attach_fields(pa_mesh *mesh, const char *path);
  * number of components). */
 pa_status pa_cli_write_fields(pa_mesh *mesh, const char *path);
 
+/* A growable string (the JSON reports); fail is set when out of memory. */
+typedef struct pa_cli_sbuf {
+  char *p;
+  size_t n, cap;
+  int fail;
+} pa_cli_sbuf;
+void pa_cli_sb_printf(pa_cli_sbuf *b, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+
+/* How the result meets the given metric (pa_fidelity): the figures in the
+ * metric used, when it differs, and the outcome line, on out. */
+void pa_cli_print_fidelity(const pa_fidelity *f, FILE *out);
+/* The same as JSON members ("outcome", "target_met", "limited_by",
+ * "metric_used"), for pa_stats_write_json's extra; malloc'ed, NULL when out
+ * of memory. */
+char *pa_cli_fidelity_json(const pa_fidelity *f);
+
 /* Set the library's last error message to msg; returns st. */
 pa_status pa_cli_set_error(pa_status st, const char *msg);
 

@@ -150,7 +150,7 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
   pa_mesh *mesh = NULL;
   pa_sol *sol = NULL;
   char *solpath = NULL, *fieldpath = NULL, *extra = NULL;
-  pa_stats before, after;
+  pa_stats before;
   pa_remesh_report rep;
   pa_status st = pa_cli_read_mesh(cli, in, &mesh); /* collective */
   if (cli->rank != 0) return st ? 1 : 0;
@@ -211,24 +211,28 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
                  pa_last_error()[0] ? pa_last_error() : "no detail");
     goto done;
   }
-  st = pa_mesh_stats(mesh, &after);
-  if (st) {
-    pa_cli_fail(cli, st);
-    goto done;
+  if (!rep.fidelity.measured) { /* out of memory measuring: try once more */
+    st = pa_mesh_stats(mesh, &rep.fidelity.user);
+    if (st) {
+      pa_cli_fail(cli, st);
+      goto done;
+    }
   }
-  printf(" -- OUTPUT %s\n", out);
-  pa_stats_print(&after, stdout);
+  const pa_stats *after = &rep.fidelity.user;
+  printf(" -- OUTPUT %s, in the given metric\n", out);
+  pa_stats_print(after, stdout);
+  pa_cli_print_fidelity(&rep.fidelity, stdout);
   printf(" -- ADAPTATION\n"
          "    splits %ld, collapses %ld, swaps %ld, moves %ld, passes %d\n"
          "    time %.3f s (%.0f output elements/s), peak padapt memory %.1f MB\n"
-         "    outcome %s\n",
+         "    remesher verdict on the metric used: %s\n",
          rep.nsplit, rep.ncollapse, rep.nswap, rep.nmove, rep.npass, rep.time_s,
          rep.time_s > 0 ? pa_mesh_nelem(mesh) / rep.time_s : 0.0,
          pa_memory_peak() / 1e6, outcome_name(rep.outcome));
   fflush(stdout);
-  if (rep.outcome == PA_REMESH_TARGET_MISSED)
+  if (!rep.fidelity.target_met)
     fprintf(stderr, "padapt: warning: adapt: target missed (valid mesh, but "
-                    "some edge lengths or qualities are off target)\n");
+                    "the given metric is not met; see the outcome line)\n");
 
   st = pa_mesh_write(mesh, out, NULL);
   if (st == PA_SUCCESS && !nosol) {
@@ -243,20 +247,23 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
     st = pa_cli_write_fields(mesh, outfield ? outfield : fieldpath);
   }
   if (st == PA_SUCCESS && json) {
-    size_t n = 512;
-    extra = malloc(n);
-    if (extra)
-      snprintf(extra, n,
-               "\"time_s\": %.6f, \"peak_rss_bytes\": %zu, "
-               "\"peak_memory_bytes\": %zu, \"outcome\": \"%s\", "
-               "\"nsplit\": %ld, \"ncollapse\": %ld, \"nswap\": %ld, "
-               "\"nmove\": %ld, \"npass\": %d, \"elements_before\": %lld, "
-               "\"vertices_before\": %lld",
-               rep.time_s, pa_peak_rss(), pa_memory_peak(),
-               outcome_name(rep.outcome), rep.nsplit, rep.ncollapse, rep.nswap,
-               rep.nmove, rep.npass, (long long)before.nelem,
-               (long long)before.nvert);
-    st = pa_stats_write_json(&after, extra, json);
+    char *fid = pa_cli_fidelity_json(&rep.fidelity);
+    pa_cli_sbuf b = {NULL, 0, 0, 0};
+    pa_cli_sb_printf(&b,
+                     "\"time_s\": %.6f, \"peak_rss_bytes\": %zu, "
+                     "\"peak_memory_bytes\": %zu, \"remesher_outcome\": "
+                     "\"%s\", \"nsplit\": %ld, \"ncollapse\": %ld, "
+                     "\"nswap\": %ld, \"nmove\": %ld, \"npass\": %d, "
+                     "\"elements_before\": %lld, \"vertices_before\": %lld, "
+                     "%s",
+                     rep.time_s, pa_peak_rss(), pa_memory_peak(),
+                     outcome_name(rep.outcome), rep.nsplit, rep.ncollapse,
+                     rep.nswap, rep.nmove, rep.npass, (long long)before.nelem,
+                     (long long)before.nvert, fid ? fid : "");
+    free(fid);
+    extra = b.fail || !fid ? NULL : b.p;
+    if (!extra) free(b.p);
+    st = extra ? pa_stats_write_json(after, extra, json) : PA_ERR_MEMORY;
   }
   if (st != PA_SUCCESS) {
     pa_cli_fail(cli, st);

@@ -23,7 +23,6 @@
 #include "cli.h"
 
 #include <math.h>
-#include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -58,40 +57,6 @@ static int prepare_root(const pa_cli *cli, pa_mesh *mesh, const char *met,
   return 1;
 }
 
-/* A growable string for the JSON report. */
-typedef struct sbuf {
-  char *p;
-  size_t n, cap;
-  int fail;
-} sbuf;
-
-static void sb_printf(sbuf *b, const char *fmt, ...)
-    __attribute__((format(printf, 2, 3)));
-static void sb_printf(sbuf *b, const char *fmt, ...) {
-  if (b->fail) return;
-  for (;;) {
-    va_list ap;
-    va_start(ap, fmt);
-    int k = vsnprintf(b->p ? b->p + b->n : NULL, b->p ? b->cap - b->n : 0, fmt, ap);
-    va_end(ap);
-    if (k < 0) {
-      b->fail = 1;
-      return;
-    }
-    if (b->p && b->n + (size_t)k < b->cap) {
-      b->n += (size_t)k;
-      return;
-    }
-    size_t cap = (b->cap + (size_t)k + 1) * 2;
-    char *q = realloc(b->p, cap);
-    if (!q) {
-      b->fail = 1;
-      return;
-    }
-    b->p = q;
-    b->cap = cap;
-  }
-}
 
 static void progress(const pa_adapt_iter *it, void *ctx) {
   const pa_cli *cli = ctx;
@@ -145,8 +110,8 @@ static void print_table(const pa_cli *cli, const pa_adapt_report *r,
 static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
                         const pa_stats *before, const uint64_t *mem,
                         const uint64_t *rss, const char *remesher) {
-  sbuf b = {NULL, 0, 0, 0};
-  sb_printf(&b, "\"processes\": %d, \"remesher\": \"%s\", \"time_s\": %.6f, "
+  pa_cli_sbuf b = {NULL, 0, 0, 0};
+  pa_cli_sb_printf(&b, "\"processes\": %d, \"remesher\": \"%s\", \"time_s\": %.6f, "
                 "\"time_x_processes_s\": %.6f, \"iterations\": %d, "
                 "\"converged\": %s, \"stalled\": %s, \"pieces\": %ld, "
                 "\"pieces_rolled_back\": %ld, \"elements_before\": %lld, "
@@ -160,21 +125,21 @@ static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
                                 (double)before->nedge
                           : 0.0,
             r->bytes_moved, r->remesh_busy);
-  sb_printf(&b, "\"steps_s\": {\"tag\": %.6f, \"pieces\": %.6f, \"gather\": "
+  pa_cli_sb_printf(&b, "\"steps_s\": {\"tag\": %.6f, \"pieces\": %.6f, \"gather\": "
                 "%.6f, \"remesh\": %.6f, \"reintegrate\": %.6f, \"rebalance\": "
                 "%.6f}, ",
             r->t_tag, r->t_pieces, r->t_gather, r->t_remesh, r->t_reintegrate,
             r->t_rebalance);
-  sb_printf(&b, "\"peak_memory_bytes_per_rank\": [");
+  pa_cli_sb_printf(&b, "\"peak_memory_bytes_per_rank\": [");
   for (int k = 0; k < cli->size; k++)
-    sb_printf(&b, "%s%llu", k ? ", " : "", (unsigned long long)mem[k]);
-  sb_printf(&b, "], \"peak_rss_bytes_per_rank\": [");
+    pa_cli_sb_printf(&b, "%s%llu", k ? ", " : "", (unsigned long long)mem[k]);
+  pa_cli_sb_printf(&b, "], \"peak_rss_bytes_per_rank\": [");
   for (int k = 0; k < cli->size; k++)
-    sb_printf(&b, "%s%llu", k ? ", " : "", (unsigned long long)rss[k]);
-  sb_printf(&b, "], \"iteration_detail\": [");
+    pa_cli_sb_printf(&b, "%s%llu", k ? ", " : "", (unsigned long long)rss[k]);
+  pa_cli_sb_printf(&b, "], \"iteration_detail\": [");
   for (int k = 0; k < r->niter_recorded; k++) {
     const pa_adapt_iter *it = &r->iters[k];
-    sb_printf(&b, "%s{\"iter\": %d, \"tagged\": %lld, \"pieces\": %d, "
+    pa_cli_sb_printf(&b, "%s{\"iter\": %d, \"tagged\": %lld, \"pieces\": %d, "
                   "\"rolled_back\": %d, \"imbalance\": %.4f, \"elements\": %lld, "
                   "\"tag_s\": %.6f, \"pieces_s\": %.6f, \"gather_s\": %.6f, "
                   "\"remesh_s\": %.6f, \"reintegrate_s\": %.6f, "
@@ -184,7 +149,10 @@ static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
               it->t_pieces, it->t_gather, it->t_remesh, it->t_reintegrate,
               it->remesh_busy, it->bytes_moved);
   }
-  sb_printf(&b, "]");
+  char *fid = pa_cli_fidelity_json(&r->fidelity);
+  pa_cli_sb_printf(&b, "], %s", fid ? fid : "");
+  if (!fid) b.fail = 1;
+  free(fid);
   if (b.fail) {
     free(b.p);
     return NULL;
@@ -221,7 +189,7 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
 
   pa_dmesh *dm = NULL;
   pa_mesh *mesh = NULL, *g = NULL;
-  pa_stats before, after;
+  pa_stats before;
   pa_adapt_report rep;
   pa_status st = PA_SUCCESS;
   char *extra = NULL, *path = NULL;
@@ -288,15 +256,16 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
     goto done;
   }
   tstep[2] = lap(&t0);
-  st = pa_dmesh_stats(dm, &after);
-  if (st) {
-    fail_collective(cli, st);
-    goto done;
-  }
+  const pa_stats *after = &rep.fidelity.user;
   if (cli->rank == 0) {
-    printf(" -- OUTPUT %s\n", out);
-    pa_stats_print(&after, stdout);
-    print_table(cli, &rep, &after, r->name);
+    printf(" -- OUTPUT %s, in the given metric\n", out);
+    pa_stats_print(after, stdout);
+    print_table(cli, &rep, after, r->name);
+    pa_cli_print_fidelity(&rep.fidelity, stdout);
+    fflush(stdout);
+    if (!rep.fidelity.target_met)
+      fprintf(stderr, "padapt: warning: adapt: target missed (valid mesh, but "
+                      "the given metric is not met; see the outcome line)\n");
     if (!rep.converged)
       fprintf(stderr, "padapt: warning: adapt: the loop stalled with %lld "
                       "elements still tagged (valid mesh)\n",
@@ -360,7 +329,7 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   ok = 1;
   if (json && cli->rank == 0) {
     extra = mem && rss ? json_extra(cli, &rep, &before, mem, rss, r->name) : NULL;
-    st = extra ? pa_stats_write_json(&after, extra, json) : PA_ERR_MEMORY;
+    st = extra ? pa_stats_write_json(after, extra, json) : PA_ERR_MEMORY;
     if (st) {
       pa_cli_fail(cli, st);
       ok = 0;

@@ -171,6 +171,95 @@ int pa_cli_remesh_option(const pa_cli *cli, int argc, char **argv, int *i,
   return 1;
 }
 
+void pa_cli_sb_printf(pa_cli_sbuf *b, const char *fmt, ...) {
+  if (b->fail) return;
+  for (;;) {
+    va_list ap;
+    va_start(ap, fmt);
+    int k = vsnprintf(b->p ? b->p + b->n : NULL, b->p ? b->cap - b->n : 0, fmt, ap);
+    va_end(ap);
+    if (k < 0) {
+      b->fail = 1;
+      return;
+    }
+    if (b->p && b->n + (size_t)k < b->cap) {
+      b->n += (size_t)k;
+      return;
+    }
+    size_t cap = (b->cap + (size_t)k + 1) * 2;
+    char *q = realloc(b->p, cap);
+    if (!q) {
+      b->fail = 1;
+      return;
+    }
+    b->p = q;
+    b->cap = cap;
+  }
+}
+
+void pa_cli_print_fidelity(const pa_fidelity *f, FILE *out) {
+  const pa_stats *u = &f->used;
+  char line[512];
+  if (!f->measured) {
+    fprintf(out, "    outcome not measured (out of memory after the remesh)\n");
+    return;
+  }
+  if (f->changed) {
+    fprintf(out, " -- IN THE METRIC USED (the given one after%s%s%s)\n",
+            f->changed & PA_CHANGED_HMIN ? " -hmin" : "",
+            f->changed & PA_CHANGED_HMAX ? " -hmax" : "",
+            f->changed & PA_CHANGED_GRADATION ? " -hgrad" : "");
+    fprintf(out, "    edges in [0.7071, 1.4142)  %6.2f %%   length [%.4g, %.4g]\n",
+            u->nedge ? 100.0 * (double)u->edge_hist[PA_STATS_EDGE_NBIN - 1] /
+                           (double)u->nedge
+                     : 0.0,
+            u->edge_min, u->edge_max);
+    fprintf(out, "    quality worst %.4g, average %.4f\n", u->qual_min,
+            u->nelem ? u->qual_sum / (double)u->nelem : 0.0);
+  }
+  pa_fidelity_describe(f, line, sizeof line);
+  fprintf(out, "    outcome %s: %s\n",
+          f->target_met ? "success" : "target missed", line);
+}
+
+char *pa_cli_fidelity_json(const pa_fidelity *f) {
+  pa_cli_sbuf b = {NULL, 0, 0, 0};
+  const pa_stats *u = &f->used;
+  int met = pa_stats_target_met(u);
+  if (!f->measured) {
+    pa_cli_sb_printf(&b, "\"outcome\": \"not measured\"");
+    return b.fail ? (free(b.p), NULL) : b.p;
+  }
+  pa_cli_sb_printf(&b, "\"outcome\": \"%s\", \"target_met\": %s, \"limited_by\": [",
+                   f->target_met ? "success" : "target missed",
+                   f->target_met ? "true" : "false");
+  if (!f->target_met) {
+    int n = 0;
+    if (!met) pa_cli_sb_printf(&b, "\"remesher\""), n++;
+    if (met && (f->changed & PA_CHANGED_HMIN))
+      pa_cli_sb_printf(&b, "%s\"hmin\"", n++ ? ", " : "");
+    if (met && (f->changed & PA_CHANGED_HMAX))
+      pa_cli_sb_printf(&b, "%s\"hmax\"", n++ ? ", " : "");
+    if (met && (f->changed & PA_CHANGED_GRADATION))
+      pa_cli_sb_printf(&b, "%s\"gradation\"", n++ ? ", " : "");
+  }
+  pa_cli_sb_printf(
+      &b,
+      "], \"metric_used\": {\"changed\": %s, \"edge_in_range\": %.6f, "
+      "\"edge_min\": %.6g, \"edge_max\": %.6g, \"quality_worst\": %.6g, "
+      "\"quality_mean\": %.6f, \"target_met\": %s}",
+      f->changed ? "true" : "false",
+      u->nedge ? (double)u->edge_hist[PA_STATS_EDGE_NBIN - 1] / (double)u->nedge
+               : 0.0,
+      u->edge_min, u->edge_max, u->qual_min,
+      u->nelem ? u->qual_sum / (double)u->nelem : 0.0, met ? "true" : "false");
+  if (b.fail) {
+    free(b.p);
+    return NULL;
+  }
+  return b.p;
+}
+
 pa_status pa_cli_attach_fields(pa_mesh *mesh, const char *path) {
   pa_sol *sol = NULL;
   char msg[600];

@@ -81,39 +81,66 @@ void pa__iter_free(pa__iter *it) {
   memset(it, 0, sizeof *it);
 }
 
-/* Fold hsiz, hmin and hmax into the metric of every local vertex (user-
- * required vertices keep theirs). Local: owners and ghosts hold the same
- * data and get the same result. */
-static pa_status prepare_metric(pa_dmesh *dm, const pa_remesh_opts *ro) {
+/* The metric the pieces are remeshed to, as pa_remesh prepares it: the
+ * caller's (hsiz folded in), a copy of it carried as the vertex field
+ * "metric:user" (for the final report), then hmin/hmax and the gradation
+ * over the whole distributed mesh; the copy is dropped again when they
+ * changed nothing. Frozen vertices keep their metric. Collective; owners
+ * and ghosts get the same result. *changed: PA_CHANGED_* bits, all ranks. */
+static pa_status prepare_metric(pa_dmesh *dm, const pa_remesh_opts *ro,
+                                unsigned *changed) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = dm->mesh;
-  int d = dm->dim;
+  int d = dm->dim, rounds = 0;
   double *h = NULL;
+  uint8_t *frozen = NULL;
+  *changed = 0;
+  PA_CALL(pa__adapt_frozen(dm, &frozen));
   if (!m->met_ncomp) {
-    PA_ALLOC(h, m->nv);
+    PA_ALLOC(h, m->nv ? m->nv : 1);
     for (pa_idx v = 0; v < m->nv; v++) h[v] = ro->hsiz;
     PA_CALL(pa_mesh_set_metric(m, 1, h));
   } else if (ro->hsiz > 0) {
-    int nc = m->met_ncomp;
-    for (pa_idx v = 0; v < m->nv; v++) {
-      if (m->vflag[v] & PA_FLAG_REQUIRED) continue;
-      double *x = m->met + (size_t)nc * v;
-      if (nc == 1) {
-        x[0] = ro->hsiz;
-      } else {
-        for (int i = 0; i < nc; i++) x[i] = 0;
-        for (int i = 0; i < d; i++)
-          x[pa__sym_index(i, i)] = 1.0 / (ro->hsiz * ro->hsiz);
-      }
-    }
+    pa__metric_set_hsiz(d, m->met_ncomp, m->nv, m->met, frozen, ro->hsiz);
   }
-  if (ro->hmin > 0 || ro->hmax > 0)
-    for (pa_idx v = 0; v < m->nv; v++)
-      if (!(m->vflag[v] & PA_FLAG_REQUIRED))
-        pa__metric_clamp(d, m->met_ncomp, m->met + (size_t)m->met_ncomp * v,
-                         ro->hmin, ro->hmax);
+  int carry = !ro->no_stats && m->nfield < PA_MAX_FIELDS;
+  PA_CALL(pa__agree(dm->comm, st));
+  if (carry) PA_CALL(pa_mesh_add_field(m, PA__USER_METRIC, m->met_ncomp, m->met));
+  *changed = pa__metric_clamp_all(d, m->met_ncomp, m->nv, m->met, frozen,
+                                  ro->hmin, ro->hmax);
+  PA_CALL(pa__agree(dm->comm, st));
+  PA_CALL(pa__adapt_grade(dm, ro->hgrad, ro->hgradreq, &rounds));
+  if (rounds > 1) *changed |= PA_CHANGED_GRADATION;
+  {
+    int c = (int)*changed;
+    PA_CALL(pa__allreduce(dm->comm, &c, 1, MPI_INT, MPI_BOR));
+    *changed = (unsigned)c;
+  }
+  if (carry && !*changed)
+    PA_CALL(pa_mesh_remove_field(m, pa__user_metric_field(m)));
 cleanup:
   pa__free(h);
+  pa__free(frozen);
+  return st;
+}
+
+/* The result in the metric used and in the caller's (report->fidelity),
+ * then the carried copy of the caller's metric removed. Collective. */
+static pa_status measure(pa_dmesh *dm, unsigned changed, pa_fidelity *f) {
+  pa_status st = PA_SUCCESS;
+  pa_mesh *m = dm->mesh;
+  int k = pa__user_metric_field(m);
+  PA_CALL(pa_dmesh_stats(dm, &f->used));
+  f->user = f->used;
+  if (k >= 0) {
+    PA_CALL(pa__dmesh_stats_met(dm, m->field[k].ncomp, m->field[k].val, 0,
+                                &f->user));
+    f->user.valid = f->used.valid;
+    PA_CALL(pa_mesh_remove_field(m, k));
+  }
+  f->changed = changed;
+  f->target_met = pa_stats_target_met(&f->user);
+cleanup:
   return st;
 }
 
@@ -161,6 +188,7 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
   pa_adapt_report rep;
   pa__iter it;
   pa_dmesh_value *done = NULL;
+  unsigned changed = 0;
   double t0 = pa_wtime();
   memset(&it, 0, sizeof it);
   memset(&rep, 0, sizeof rep);
@@ -174,10 +202,7 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
   rep.nelem_initial = dm->nglob[PA_ELEMENT];
   rep.nvert_initial = dm->nglob[PA_VERTEX];
   PA_CALL(check_opts(dm, opts));
-  PA_CALL(prepare_metric(dm, &opts->remesh));
-  PA_CALL(pa__agree(dm->comm, st));
-  PA_CALL(pa__adapt_grade(dm, opts->remesh.hgrad, opts->remesh.hgradreq,
-                          NULL));
+  PA_CALL(prepare_metric(dm, &opts->remesh, &changed));
   PA_CALL(pa_dmesh_value_add(dm, PA_ELEMENT, PA__DONE_VALUE, MPI_UINT8_T, 1, -1,
                              &done));
   pa__info(2, "padapt: rank %d: metric and gradation %.3f s\n", dm->rank,
@@ -304,9 +329,13 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
     pa__info(2, "padapt: rank %d: final check %.3f s\n", dm->rank,
              pa_wtime() - ta);
   }
+  if (!opts->remesh.no_stats) PA_CALL(measure(dm, changed, &rep.fidelity));
+  rep.fidelity.measured = !opts->remesh.no_stats;
 cleanup:
   pa__iter_free(&it);
   if (dm) {
+    int k = pa__user_metric_field(dm->mesh); /* left by an error */
+    if (k >= 0) pa_mesh_remove_field(dm->mesh, k);
     st = pa__agree_end(dm->comm, st);
     if (done) pa_dmesh_value_remove(dm, done);
     if (st) return st;

@@ -162,8 +162,20 @@ pa_status pa__owned_balls(pa_dmesh *dm, pa_idx **start, pa_idx **elems);
 /* Estimated work of local element e: expected output elements + 1. */
 double pa__elem_work(const pa_mesh *m, pa_idx e);
 
+/* Collective: the vertices that keep their metric (required, or on a
+ * required element or boundary entity on any rank), agreed by every copy:
+ * *frozen (pa__malloc'ed, local vertices) 1 for them (grade.c). */
+pa_status pa__adapt_frozen(pa_dmesh *dm, uint8_t **frozen);
+
 /* Collective: grade the metric of the whole distributed mesh (grade.c),
- * once before the loop; *nrounds (may be NULL) receives the rounds. */
+ * once before the loop; *nrounds (may be NULL) receives the rounds (1 when
+ * the first changed nothing). */
+/* pa_dmesh_stats measured in the metric met (local vertex values of nc
+ * components) instead of the mesh's own (dstats.c); check 0 skips the
+ * validity check (stats->valid is then 1). Collective. */
+pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
+                              int check, pa_stats *stats);
+
 pa_status pa__adapt_grade(pa_dmesh *dm, double hgrad, double hgradreq,
                           int *nrounds);
 

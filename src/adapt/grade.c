@@ -44,8 +44,7 @@ static void combine_metric(const void *in, void *inout, pa_idx n, void *ctx) {
   }
 }
 
-/* 1 for the vertices that keep their metric, agreed by every copy. */
-static pa_status frozen_vertices(pa_dmesh *dm, uint8_t **frozenp) {
+pa_status pa__adapt_frozen(pa_dmesh *dm, uint8_t **frozenp) {
   pa_status st = PA_SUCCESS;
   pa_idx nv = dm->nloc[PA_VERTEX];
   pa_dmesh_value *val = NULL;
@@ -86,7 +85,7 @@ pa_status pa__adapt_grade(pa_dmesh *dm, double hgrad, double hgradreq,
   int round = 0;
   if (nrounds) *nrounds = 0;
   if (!(hgrad > 1.0 || hgradreq > 1.0) || nc == 0) return PA_SUCCESS;
-  PA_CALL(frozen_vertices(dm, &frozen));
+  PA_CALL(pa__adapt_frozen(dm, &frozen));
   PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.adapt.grademet", MPI_DOUBLE, nc,
                              -1, &val));
   for (round = 1; round <= MAX_ROUNDS; round++) {

@@ -266,6 +266,18 @@ cleanup:
   return st;
 }
 
+pa_status pa_mesh_remove_field(pa_mesh *m, int k) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(m && k >= 0 && k < m->nfield, PA_ERR_ARG,
+           "pa_mesh_remove_field: no field %d", k);
+  pa__free(m->field[k].val);
+  for (int f = k; f + 1 < m->nfield; f++) m->field[f] = m->field[f + 1];
+  m->nfield--;
+  memset(&m->field[m->nfield], 0, sizeof m->field[0]);
+cleanup:
+  return st;
+}
+
 pa_status pa_mesh_copy(const pa_mesh *src, pa_mesh **dst) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = NULL;

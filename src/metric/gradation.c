@@ -16,24 +16,26 @@
  *    is the size law above (the smaller size gives the longer length), and an
  *    edge that leaves p along its long axis but crosses q's thin one (a chord
  *    of a polar field) is measured by both ends;
- *  - T the rotation that takes the principal frame of p's *input* metric onto
- *    q's (ranks matched), on the axes both input metrics define (eigenvalues
- *    apart by more than GRAD_GAP_MIN), and by at most GRAD_ROT_RATE radians
- *    per unit length (at least one unit); T = I where a frame is undefined.
+ *  - T the rotation that takes the principal frame of M_p onto M_q's (ranks
+ *    matched), on the axes both define (eigenvalues apart by more than
+ *    GRAD_GAP_MIN), and by at most GRAD_ROT_RATE radians per unit length
+ *    (at least one unit); T = I where a frame is undefined.
  * The frame of an anisotropic field may turn smoothly: on the UGAWG polar
  * fields it turns by 0.2 rad from one vertex to the next. The usual law
  * (T = I) makes two thin ellipses at an angle refine each other in every
  * direction and turns a 1:100 stretching into an isotropic over-refinement;
  * with T, a field whose sizes grow slowly enough is left exactly as it is,
- * however its frame turns. T is fixed per edge (taken from the input), so
- * the law is a plain monotone fixed point, and where the input is isotropic
- * (the centre of a shell, which the thin directions around it must grade
- * in every direction) it is the usual intersection. When the bound is
- * violated, M_q becomes M_q cap (T M_p T^T / eta^2) (simultaneous
- * reduction), which contains M_q and satisfies the bound. An edge between two
- * vertices still at their input metric, whose frames T matches exactly,
- * costs two metric lengths and a comparison of cached eigenvalues; a second
- * gradation changes nothing.
+ * however its frame turns. Where a metric is isotropic it is the usual
+ * intersection, and the bound on the turn keeps the law honest where the
+ * directions really disagree (the centre of a shell, which the thin
+ * directions around it at right angles must grade in every direction).
+ * When the bound is violated, M_q becomes M_q cap (T M_p T^T / eta^2)
+ * (simultaneous reduction), which contains M_q and satisfies the bound.
+ * Metrics only grow, by at least GRAD_TOL each time, so the sweeps end; at
+ * the end every edge satisfies the bound with the final frames, so a second
+ * gradation changes nothing. The eigen-decompositions are cached: an edge
+ * whose frames T matches exactly costs two metric lengths and a comparison
+ * of eigenvalues.
  *
  * Frozen vertices keep their metric; they constrain their neighbours with
  * hgradreq instead of hgrad. A rate <= 1 turns its propagation off.
@@ -65,9 +67,8 @@ typedef struct grad_ctx {
   const double *coord;
   double *met;
   /* tensors: eigenvalues (descending) and eigenvectors (pa__sym_eigen's
-   * layout) of every vertex's input metric */
-  const double *lam, *vec;
-  const uint8_t *chg; /* bit 1: the vertex's metric has changed */
+   * layout) of every vertex's metric */
+  double *lam, *vec;
 } grad_ctx;
 
 /* Size law: constrain q by p; 1 if q changed. */
@@ -221,8 +222,9 @@ static int relax_tensor(const grad_ctx *c, pa_idx p, pa_idx q, double lnb) {
   const double *xq = c->coord + (size_t)dim * q;
   const double *mp = c->met + (size_t)nc * p;
   double *mq = c->met + (size_t)nc * q;
-  const double *lp = c->lam + (size_t)dim * p, *lq = c->lam + (size_t)dim * q;
-  const double *vp = c->vec + (size_t)nd * p, *vq = c->vec + (size_t)nd * q;
+  const double *lp = c->lam + (size_t)dim * p;
+  const double *vp = c->vec + (size_t)nd * p;
+  double *lq = c->lam + (size_t)dim * q, *vq = c->vec + (size_t)nd * q;
   double e[3] = {0, 0, 0};
   for (int k = 0; k < dim; k++)
     e[k] = xq[k] - xp[k];
@@ -233,8 +235,7 @@ static int relax_tensor(const grad_ctx *c, pa_idx p, pa_idx q, double lnb) {
   double t[9];
   int full = dim == 2 ? transport2(lp, vp, lq, vq, amax, t)
                       : transport3(lp, vp, lq, vq, amax, t);
-  if (full && !(c->chg[p] & 1) && !(c->chg[q] & 1)) {
-    /* both at their input metric: compare the eigenvalues rank by rank */
+  if (full) { /* compare the eigenvalues rank by rank */
     int fits = 1;
     for (int k = 0; k < dim; k++)
       if (s * lp[k] > lq[k] * (1.0 + GRAD_TOL)) fits = 0;
@@ -245,6 +246,7 @@ static int relax_tensor(const grad_ctx *c, pa_idx p, pa_idx q, double lnb) {
   pa__metric_intersect(dim, nc, mq, g, a);
   if (pa__sym_det(dim, a) <= pa__sym_det(dim, mq) * (1.0 + GRAD_TOL)) return 0;
   memcpy(mq, a, sizeof(double) * nc);
+  pa__sym_eigen(dim, mq, lq, vq);
   return 1;
 }
 
@@ -317,7 +319,7 @@ pa_status pa__metric_gradation(int dim, int ncomp, pa_idx nv,
   /* ln of the growth rate from p; 0: p constrains nothing */
   double lnb = hgrad > 1.0 ? log(hgrad) : 0.0;
   double lnbreq = hgradreq > 1.0 ? log(hgradreq) : 0.0;
-  grad_ctx c = {dim, ncomp, coord, met, NULL, NULL, NULL};
+  grad_ctx c = {dim, ncomp, coord, met, NULL, NULL};
   int (*relax)(const grad_ctx *, pa_idx, pa_idx, double) =
       ncomp == 1 ? relax_size : relax_tensor;
 
@@ -334,7 +336,6 @@ pa_status pa__metric_gradation(int dim, int ncomp, pa_idx nv,
 
   PA_ALLOC(act, nv);
   PA_CALLOC(chg, nv);
-  c.chg = chg;
   memset(act, 1, (size_t)nv);
   for (int sweep = 0; sweep < GRAD_MAXSWEEP; sweep++) {
     int any = 0;

@@ -30,6 +30,7 @@
 #include "metric/metric.h"
 
 #include <float.h>
+#include <string.h>
 #include <math.h>
 
 /* Relative threshold below which an eigenvalue (or Cholesky pivot) counts as
@@ -345,6 +346,34 @@ void pa__metric_interp(int dim, int ncomp, int n, const double *const *m,
   sym_apply(dim, acc, out, inv_sq);
 }
 
+int pa__user_metric_field(const pa_mesh *mesh) {
+  for (int k = 0; k < mesh->nfield; k++)
+    if (!strcmp(mesh->field[k].name, PA__USER_METRIC) &&
+        pa__field_is_metric(mesh->dim, mesh->field[k].name,
+                            mesh->field[k].ncomp))
+      return k;
+  return -1;
+}
+
+int pa__field_is_metric(int dim, const char *name, int ncomp) {
+  size_t n = strlen(PA_FIELD_METRIC_PREFIX);
+  return name && !strncmp(name, PA_FIELD_METRIC_PREFIX, n) &&
+         (ncomp == 1 || ncomp == pa__tensor_ncomp(dim));
+}
+
+void pa__field_interp(int dim, int ncomp, int is_metric, int n,
+                      const double *const *v, const double *w, double *out) {
+  if (is_metric) {
+    pa__metric_interp(dim, ncomp, n, v, w, out);
+    return;
+  }
+  for (int c = 0; c < ncomp; c++) { /* component c read before written */
+    double x = 0;
+    for (int i = 0; i < n; i++) x += w[i] * v[i][c];
+    out[c] = x;
+  }
+}
+
 /* ------------------------------------------------------------------------ */
 /* Intersection, clamping                                                   */
 /* ------------------------------------------------------------------------ */
@@ -432,25 +461,49 @@ void pa__metric_intersect(int dim, int ncomp, const double *m1,
     }
 }
 
-void pa__metric_clamp(int dim, int ncomp, double *m, double hmin, double hmax) {
+unsigned pa__metric_clamp(int dim, int ncomp, double *m, double hmin,
+                          double hmax) {
+  unsigned changed = 0;
   if (ncomp == 1) {
-    if (hmin > 0.0 && m[0] < hmin) m[0] = hmin;
-    if (hmax > 0.0 && m[0] > hmax) m[0] = hmax;
-    return;
+    if (hmin > 0.0 && m[0] < hmin) m[0] = hmin, changed |= PA_CHANGED_HMIN;
+    if (hmax > 0.0 && m[0] > hmax) m[0] = hmax, changed |= PA_CHANGED_HMAX;
+    return changed;
   }
   double lo = hmax > 0.0 ? 1.0 / (hmax * hmax) : 0.0;
   double hi = hmin > 0.0 ? 1.0 / (hmin * hmin) : INFINITY;
   double lambda[3], vec[9];
   pa__sym_eigen(dim, m, lambda, vec);
-  int changed = 0;
   for (int i = 0; i < dim; i++) {
-    double l = lambda[i];
-    if (l < lo) l = lo;
-    if (l > hi) l = hi;
-    if (l != lambda[i]) changed = 1;
-    lambda[i] = l;
+    if (lambda[i] < lo) lambda[i] = lo, changed |= PA_CHANGED_HMAX;
+    if (lambda[i] > hi) lambda[i] = hi, changed |= PA_CHANGED_HMIN;
   }
   if (changed) pa__sym_from_eigen(dim, lambda, vec, m);
+  return changed;
+}
+
+void pa__metric_set_hsiz(int dim, int nc, pa_idx nv, double *met,
+                         const uint8_t *frozen, double hsiz) {
+  for (pa_idx v = 0; v < nv; v++) {
+    if (frozen && frozen[v]) continue;
+    double *m = met + (size_t)nc * v;
+    if (nc == 1) {
+      m[0] = hsiz;
+    } else {
+      for (int i = 0; i < nc; i++) m[i] = 0;
+      for (int i = 0; i < dim; i++) m[pa__sym_index(i, i)] = 1.0 / (hsiz * hsiz);
+    }
+  }
+}
+
+unsigned pa__metric_clamp_all(int dim, int nc, pa_idx nv, double *met,
+                              const uint8_t *frozen, double hmin,
+                              double hmax) {
+  unsigned changed = 0;
+  if (!(hmin > 0) && !(hmax > 0)) return 0;
+  for (pa_idx v = 0; v < nv; v++)
+    if (!(frozen && frozen[v]))
+      changed |= pa__metric_clamp(dim, nc, met + (size_t)nc * v, hmin, hmax);
+  return changed;
 }
 
 pa_status pa_mesh_metric_clamp(pa_mesh *mesh, double hmin, double hmax) {

@@ -61,13 +61,37 @@ void pa__metric_exp(int dim, const double *logm, double *m);
 void pa__metric_interp(int dim, int ncomp, int n, const double *const *m,
                        const double *w, double *out);
 
+/* 1 if a vertex field holds a metric (PA_FIELD_METRIC_PREFIX name and 1 or
+ * the tensor count of components): the remeshers interpolate it as one. */
+int pa__field_is_metric(int dim, const char *name, int ncomp);
+
+/* Interpolation of one vertex field value (ncomp components) from n values
+ * v[i] with weights w: pa__metric_interp for a metric field, linear
+ * otherwise. out may alias one of v. */
+void pa__field_interp(int dim, int ncomp, int is_metric, int n,
+                      const double *const *v, const double *w, double *out);
+
 /* Intersection by simultaneous reduction: the largest metric contained in
  * both (full tensors in, full tensor out; sizes: out = min). */
 void pa__metric_intersect(int dim, int ncomp, const double *m1,
                           const double *m2, double *out);
 
-/* Clamp eigenvalues into [1/hmax^2, 1/hmin^2]; a bound <= 0 is ignored. */
-void pa__metric_clamp(int dim, int ncomp, double *m, double hmin, double hmax);
+/* Clamp eigenvalues into [1/hmax^2, 1/hmin^2]; a bound <= 0 is ignored.
+ * Returns the PA_CHANGED_HMIN / PA_CHANGED_HMAX bits of the bounds that
+ * changed m. */
+unsigned pa__metric_clamp(int dim, int ncomp, double *m, double hmin,
+                          double hmax);
+
+/* The metric preparation shared by pa_remesh and pa_dmesh_adapt, on nv
+ * values of nc components; vertices with frozen[v] (frozen may be NULL)
+ * keep theirs. set_hsiz gives every vertex the size hsiz (the caller's
+ * metric then); clamp_all clamps into [hmin, hmax] and returns the
+ * PA_CHANGED_* bits of what it changed. The gradation follows
+ * (gradation.h). */
+void pa__metric_set_hsiz(int dim, int nc, pa_idx nv, double *met,
+                         const uint8_t *frozen, double hsiz);
+unsigned pa__metric_clamp_all(int dim, int nc, pa_idx nv, double *met,
+                              const uint8_t *frozen, double hmin, double hmax);
 
 /* Squared length of vector e in metric m (value of ncomp components). */
 double pa__metric_sqlen(int dim, int ncomp, const double *m, const double *e);
@@ -96,5 +120,17 @@ double pa__edge_length(int dim, int ncomp, const double *a, const double *b,
  * m[0..dim] (ncomp 0: identity metric, m may be NULL). */
 double pa__quality(int dim, int ncomp, const double *const *x,
                    const double *const *m);
+
+/* pa_mesh_stats measured in the metric met (nv values of nc components; nc
+ * 0: identity) instead of the mesh's own (stats.c); check 0 skips the
+ * validity check (stats->valid is then 1). */
+pa_status pa__mesh_stats_met(pa_mesh *mesh, int nc, const double *met,
+                             int check, pa_stats *stats);
+
+#define PA__USER_METRIC PA_FIELD_METRIC_PREFIX "user"
+
+/* The index of the vertex field holding the caller's metric ("metric:user",
+ * PA_FIELD_METRIC_PREFIX), or -1. */
+int pa__user_metric_field(const pa_mesh *mesh);
 
 #endif /* PA_METRIC_H */

@@ -82,13 +82,22 @@ static void add_quality(pa_stats *s, ksum *sum, double q, pa_gid count_before) {
 }
 
 pa_status pa_mesh_stats(pa_mesh *mesh, pa_stats *stats) {
+  if (!mesh)
+    return pa__error(PA_ERR_ARG, __FILE__, __LINE__,
+                     "pa_mesh_stats: NULL argument");
+  return pa__mesh_stats_met(mesh, mesh->met_ncomp, mesh->met, 1, stats);
+}
+
+pa_status pa__mesh_stats_met(pa_mesh *mesh, int nc, const double *met,
+                             int check, pa_stats *stats) {
   pa_status st = PA_SUCCESS;
   size_t *pos = NULL;
   pa_idx *other = NULL;
-  PA_CHECK(mesh && stats, PA_ERR_ARG, "pa_mesh_stats: NULL argument");
+  PA_CHECK(mesh && stats && (nc == 0 || met), PA_ERR_ARG,
+           "pa_mesh_stats: NULL argument");
   pa_stats s;
   memset(&s, 0, sizeof s);
-  int dim = mesh->dim, nve = dim + 1, nc = mesh->met_ncomp;
+  int dim = mesh->dim, nve = dim + 1;
   pa_idx nv = mesh->nv, ne = mesh->ne;
   s.dim = dim;
   s.has_metric = nc > 0;
@@ -107,7 +116,7 @@ pa_status pa_mesh_stats(pa_mesh *mesh, pa_stats *stats) {
                "vertices)",
                (long)e + 1, (long)v[k] + 1, (long)nv);
       x[k] = mesh->coord + (size_t)dim * v[k];
-      m[k] = nc ? mesh->met + (size_t)nc * v[k] : NULL;
+      m[k] = nc ? met + (size_t)nc * v[k] : NULL;
     }
     double vol = pa__simplex_volume(dim, x);
     ksum_add(&vol_sum, vol);
@@ -119,11 +128,11 @@ pa_status pa_mesh_stats(pa_mesh *mesh, pa_stats *stats) {
   PA_CALL(pa__edges_csr(mesh->elem, ne, nve, nv, NULL, &pos, &other));
   for (pa_idx v = 0; v < nv; v++) {
     const double *xv = mesh->coord + (size_t)dim * v;
-    const double *mv = nc ? mesh->met + (size_t)nc * v : NULL;
+    const double *mv = nc ? met + (size_t)nc * v : NULL;
     for (size_t k = pos[v]; k < pos[v + 1]; k++) {
       pa_idx w = other[k];
       const double *xw = mesh->coord + (size_t)dim * w;
-      const double *mw = nc ? mesh->met + (size_t)nc * w : NULL;
+      const double *mw = nc ? met + (size_t)nc * w : NULL;
       add_edge_length(&s, &edge_sum, pa__edge_length(dim, nc, xv, xw, mv, mw));
     }
   }
@@ -136,7 +145,7 @@ pa_status pa_mesh_stats(pa_mesh *mesh, pa_stats *stats) {
   other = NULL;
 
   /* Validity last: it may build adjacency, so our arrays are gone by now. */
-  pa_status chk = pa_mesh_check(mesh);
+  pa_status chk = check ? pa_mesh_check(mesh) : PA_SUCCESS;
   if (chk == PA_ERR_MEMORY) PA_CALL(chk);
   s.valid = chk == PA_SUCCESS;
   if (!s.valid) {
@@ -263,4 +272,50 @@ pa_status pa_stats_write_json(const pa_stats *s, const char *extra,
 cleanup:
   pa__out_abort(&out);
   return st;
+}
+
+int pa_stats_target_met(const pa_stats *s) {
+  if (!s) return 0;
+  return ratio(s->edge_hist[PA_STATS_EDGE_NBIN - 1], s->nedge) >=
+             PA_TARGET_IN_RANGE &&
+         (s->nelem == 0 || s->qual_min >= PA_TARGET_QUALITY);
+}
+
+void pa_fidelity_describe(const pa_fidelity *f, char *buf, size_t n) {
+  if (!buf || n == 0) return;
+  buf[0] = '\0';
+  if (!f) return;
+  double in = 100 * ratio(f->user.edge_hist[PA_STATS_EDGE_NBIN - 1],
+                          f->user.nedge);
+  double inu = 100 * ratio(f->used.edge_hist[PA_STATS_EDGE_NBIN - 1],
+                           f->used.nedge);
+  if (f->target_met) {
+    snprintf(buf, n,
+             "the given metric is met: %.2f %% of the edges in range, worst "
+             "quality %.3g",
+             in, f->user.qual_min);
+    return;
+  }
+  char why[160] = "";
+  if (pa_stats_target_met(&f->used) && f->changed)
+    snprintf(why, sizeof why, "limited by %s%s%s%s%s (the metric used: %.2f %% "
+             "in range)",
+             f->changed & PA_CHANGED_HMIN ? "-hmin" : "",
+             (f->changed & PA_CHANGED_HMIN) && (f->changed & ~PA_CHANGED_HMIN)
+                 ? ", " : "",
+             f->changed & PA_CHANGED_HMAX ? "-hmax" : "",
+             (f->changed & PA_CHANGED_HMAX) && (f->changed & PA_CHANGED_GRADATION)
+                 ? ", " : "",
+             f->changed & PA_CHANGED_GRADATION ? "the gradation (-hgrad)" : "",
+             inu);
+  else
+    snprintf(why, sizeof why,
+             "the remesher did not reach the metric it used either (%.2f %% "
+             "in range, worst quality %.3g)",
+             inu, f->used.qual_min);
+  snprintf(buf, n,
+           "the given metric is not met: %.2f %% of the edges in range "
+           "(target %.0f %%), worst quality %.3g (target %g); %s",
+           in, 100 * PA_TARGET_IN_RANGE, f->user.qual_min, PA_TARGET_QUALITY,
+           why);
 }

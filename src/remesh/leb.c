@@ -462,9 +462,10 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
     for (int f = 0; f < m->nfield; f++) {
       int nc = m->field[f].ncomp;
       double *y = m->field[f].val;
-      for (int c = 0; c < nc; c++)
-        y[(size_t)nc * mid + c] =
-            0.5 * y[(size_t)nc * e.a + c] + 0.5 * y[(size_t)nc * e.b + c];
+      const double *yy[2] = {y + (size_t)nc * e.a, y + (size_t)nc * e.b};
+      const double w[2] = {0.5, 0.5};
+      pa__field_interp(s.d, nc, pa__field_is_metric(s.d, m->field[f].name, nc),
+                       2, yy, w, y + (size_t)nc * mid);
     }
     /* a vertex added on the skin is inner; descended from a labelled
      * vertex, it never pairs with one (see the file comment) */

@@ -95,6 +95,29 @@ cleanup:
   return st;
 }
 
+/* Remove the copy of the caller's metric, if the mesh carries one. */
+static pa_status drop_user_metric(pa_mesh *mesh) {
+  int k = pa__user_metric_field(mesh);
+  return k >= 0 ? pa_mesh_remove_field(mesh, k) : PA_SUCCESS;
+}
+
+/* The output in the metric used and in the caller's (the carried copy, or
+ * the metric used when nothing changed it). */
+static pa_status measure(pa_mesh *mesh, int carried, pa_fidelity *f) {
+  pa_status st = PA_SUCCESS;
+  int k = carried ? pa__user_metric_field(mesh) : -1;
+  PA_CALL(pa_mesh_stats(mesh, &f->used));
+  f->user = f->used;
+  if (k >= 0) {
+    PA_CALL(pa__mesh_stats_met(mesh, mesh->field[k].ncomp, mesh->field[k].val,
+                               0, &f->user));
+    f->user.valid = f->used.valid;
+  }
+  f->target_met = pa_stats_target_met(&f->user);
+cleanup:
+  return st;
+}
+
 pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
                     const pa_remesh_opts *opts, pa_remesh_report *report) {
   pa_status st = PA_SUCCESS;
@@ -102,7 +125,7 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   pa_remesh_report dummy;
   uint8_t *frozen = NULL;
   double *newmet = NULL, *oldmet = NULL;
-  int oldnc = 0, installed = 0;
+  int oldnc = 0, installed = 0, carried = 0;
   double t0 = pa_wtime();
   PA_CHECK(r && r->remesh && mesh, PA_ERR_ARG, "pa_remesh: NULL argument");
   if (!opts) {
@@ -132,33 +155,34 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
            opts->angle);
   if (!opts->trusted) PA_CALL(pa_mesh_check(mesh));
 
-  /* prepare the metric in a new array */
+  /* prepare the metric in a new array: the caller's (hsiz), then hmin/hmax
+   * and the gradation */
   int d = mesh->dim, nc = mesh->met_ncomp ? mesh->met_ncomp : 1;
   size_t cap = mesh->capv > (size_t)mesh->nv ? mesh->capv : (size_t)mesh->nv;
+  pa_idx ngraded = 0;
+  unsigned changed = 0;
   PA_CALL(frozen_mask(mesh, &frozen));
   PA_ALLOC(newmet, (cap ? cap : 1) * nc);
   if (mesh->met_ncomp)
     memcpy(newmet, mesh->met, sizeof(double) * nc * mesh->nv);
-  if (opts->hsiz > 0) {
-    for (pa_idx v = 0; v < mesh->nv; v++) {
-      if (mesh->met_ncomp && frozen[v]) continue;
-      double *m = newmet + (size_t)nc * v;
-      if (nc == 1) {
-        m[0] = opts->hsiz;
-      } else {
-        double t = 1.0 / (opts->hsiz * opts->hsiz);
-        for (int i = 0; i < nc; i++) m[i] = 0;
-        for (int i = 0; i < d; i++) m[pa__sym_index(i, i)] = t;
-      }
-    }
+  if (opts->hsiz > 0)
+    pa__metric_set_hsiz(d, nc, mesh->nv, newmet,
+                        mesh->met_ncomp ? frozen : NULL, opts->hsiz);
+  if (!opts->no_stats && mesh->nfield < PA_MAX_FIELDS &&
+      pa__user_metric_field(mesh) < 0) {
+    PA_CALL(pa_mesh_add_field(mesh, PA__USER_METRIC, nc, newmet));
+    carried = 1;
   }
-  if (opts->hmin > 0 || opts->hmax > 0)
-    for (pa_idx v = 0; v < mesh->nv; v++)
-      if (!frozen[v])
-        pa__metric_clamp(d, nc, newmet + (size_t)nc * v, opts->hmin, opts->hmax);
+  changed = pa__metric_clamp_all(d, nc, mesh->nv, newmet, frozen, opts->hmin,
+                                 opts->hmax);
   PA_CALL(pa__metric_gradation(d, nc, mesh->nv, mesh->coord, newmet, mesh->ne,
                                mesh->elem, frozen, opts->hgrad, opts->hgradreq,
-                               NULL));
+                               &ngraded));
+  if (ngraded) changed |= PA_CHANGED_GRADATION;
+  if (!changed && carried) { /* the metric used is the caller's */
+    PA_CALL(drop_user_metric(mesh));
+    carried = 0;
+  }
   pa__free(frozen);
   frozen = NULL;
 
@@ -174,12 +198,25 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   pa__free(oldmet);
   oldmet = NULL;
   installed = 0;
+  if (!opts->no_stats) {
+    /* the mesh is the result now: a failure to measure it is no error */
+    pa_fidelity *f = &report->fidelity;
+    if (measure(mesh, carried, f) == PA_SUCCESS) {
+      f->measured = 1;
+      f->changed = changed;
+    } else {
+      memset(f, 0, sizeof *f);
+      pa_clear_error();
+    }
+  }
 cleanup:
   if (installed) { /* error or FAILED: give the mesh back as it was */
     pa__free(mesh->met);
     mesh->met = oldmet;
     mesh->met_ncomp = oldnc;
   }
+  if (carried && drop_user_metric(mesh) != PA_SUCCESS && st == PA_SUCCESS)
+    st = PA_ERR_INTERNAL;
   pa__free(frozen);
   pa__free(newmet);
   if (st != PA_SUCCESS) report->outcome = PA_REMESH_FAILED;

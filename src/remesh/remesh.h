@@ -84,6 +84,7 @@ typedef struct pa__rmesh {
   int fcomp; /* total user field components per vertex */
   int nfield;
   int fncomp[PA_MAX_FIELDS];
+  uint8_t fmetric[PA_MAX_FIELDS]; /* field holds a metric (metric.h) */
 
   /* vertices */
   pa_idx nv, vfree;  /* slots in use (live + dead), free-list head (-1) */

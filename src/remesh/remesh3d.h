@@ -98,6 +98,7 @@ typedef struct rm3d {
   double *nrm; /* 3 * capv: unit normal of curved surface vertices */
   int nfield;
   int fcomp[PA_MAX_FIELDS];
+  uint8_t fmetric[PA_MAX_FIELDS]; /* field holds a metric (metric.h) */
   double *fval[PA_MAX_FIELDS];
   rm3d_table tri, edg;
   /* options */

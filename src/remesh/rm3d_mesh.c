@@ -221,12 +221,10 @@ void pa__rm3d_interp(rm3d *m, pa_idx dst, int n, const pa_idx *src,
   if (m->met0) interp_met(mc, m->met0, dst, n, src, w);
   for (int k = 0; k < m->nfield; k++) {
     int c = m->fcomp[k];
-    double *fd = m->fval[k] + (size_t)c * dst;
-    for (int j = 0; j < c; j++) {
-      double s = 0;
-      for (int i = 0; i < n; i++) s += w[i] * m->fval[k][(size_t)c * src[i] + j];
-      fd[j] = s;
-    }
+    const double *vs[8] = {NULL};
+    for (int i = 0; i < n && i < 8; i++) vs[i] = m->fval[k] + (size_t)c * src[i];
+    pa__field_interp(3, c, m->fmetric[k], n < 8 ? n : 8, vs, w,
+                     m->fval[k] + (size_t)c * dst);
   }
 }
 
@@ -366,7 +364,11 @@ pa_status pa__rm3d_build(rm3d *m, pa_mesh *mesh, const pa_remesh_opts *opts) {
   m->tri.nk = 3;
   m->edg.nk = 2;
   m->nfield = mesh->nfield;
-  for (int k = 0; k < mesh->nfield; k++) m->fcomp[k] = mesh->field[k].ncomp;
+  for (int k = 0; k < mesh->nfield; k++) {
+    m->fcomp[k] = mesh->field[k].ncomp;
+    m->fmetric[k] = (uint8_t)pa__field_is_metric(3, mesh->field[k].name,
+                                                 mesh->field[k].ncomp);
+  }
   m->surf = !opts->no_surf;
   m->swap = !opts->no_swap;
   m->hausd = opts->hausd > 0 ? opts->hausd : 0.01;

@@ -189,14 +189,14 @@ void pa__rm_interp(pa__rmesh *rm, pa_idx v, int n, const pa_idx *src,
                    const double *w) {
   interp_metric(rm, rm->met, v, n, src, w);
   if (rm->met0) interp_metric(rm, rm->met0, v, n, src, w);
-  int fc = rm->fcomp;
-  if (fc) {
-    double *fv = rm->fld + (size_t)fc * v;
-    for (int c = 0; c < fc; c++) {
-      double s = 0;
-      for (int i = 0; i < n; i++) s += w[i] * rm->fld[(size_t)fc * src[i] + c];
-      fv[c] = s;
-    }
+  int fc = rm->fcomp, off = 0;
+  for (int k = 0; k < rm->nfield; k++) {
+    const double *vs[8] = {NULL};
+    for (int i = 0; i < n && i < 8; i++)
+      vs[i] = rm->fld + (size_t)fc * src[i] + off;
+    pa__field_interp(rm->dim, rm->fncomp[k], rm->fmetric[k], n < 8 ? n : 8,
+                     vs, w, rm->fld + (size_t)fc * v + off);
+    off += rm->fncomp[k];
   }
 }
 
@@ -340,6 +340,8 @@ pa_status pa__rm_create(pa_mesh *mesh, const pa_remesh_opts *opts,
   rm->nfield = mesh->nfield;
   for (int k = 0; k < mesh->nfield; k++) {
     rm->fncomp[k] = mesh->field[k].ncomp;
+    rm->fmetric[k] = (uint8_t)pa__field_is_metric(
+        d, mesh->field[k].name, mesh->field[k].ncomp);
     rm->fcomp += mesh->field[k].ncomp;
   }
 
