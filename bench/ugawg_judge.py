@@ -53,7 +53,7 @@ def polar_sizes(field, r):
         ht = np.full_like(r, H)
     else:
         d0 = np.minimum(10.0 * np.abs(r - 0.5), 1.0)
-        ht = 0.1 * d0 + 0.025 * (1.0 - d0)
+        ht = H * d0 + (H / 4.0) * (1.0 - d0)
     return hr, ht
 
 
