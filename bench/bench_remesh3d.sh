@@ -14,7 +14,8 @@
 # output tets per second, peak padapt memory per output tet
 # (pa_memory_peak) and peak RSS per output tet, % of unique edges in
 # [0.7071, 1.4142), worst and mean quality, validity and outcome, taken from
-# the -json report. The machine load is printed first: the figures are only
+# the -json report (in-range: in the given metric, and in the metric used,
+# after the gradation). The machine load is printed first: the figures are only
 # comparable on a quiet machine (time is wall clock on one core).
 #
 # The issue #4 cases:
@@ -34,6 +35,9 @@ cd "$WORK"
 
 # Value of a number/boolean/string key in the flat JSON report.
 jget() { grep -o "\"$1\": *[^,}]*" r.json | head -1 | sed 's/.*: *//; s/"//g'; }
+# The same inside the "metric_used" object (the metric after the gradation).
+jused() { grep -o '"metric_used": {[^}]*}' r.json | grep -o "\"$1\": *[^,}]*" |
+          sed 's/.*: *//'; }
 
 run() {
   local n=$1 spec=$2
@@ -48,11 +52,12 @@ run() {
       -v mem="$(jget peak_memory_bytes)" -v rss="$(jget peak_rss_bytes)" \
       -v inr="$(jget edge_in_range)" -v qw="$(jget quality_worst)" \
       -v qm="$(jget quality_mean)" -v valid="$(jget valid)" \
-      -v outcome="$(jget outcome)" 'BEGIN {
+      -v outcome="$(jget outcome)" -v inu="$(jused edge_in_range)" 'BEGIN {
     printf "%-14s box%-3d %9d tets %7.2f s %8.0f tets/s %6.1f B/tet (rss %6.1f)" \
-           " in-range %5.2f%% worst %.3f mean %.3f valid %s %s\n",
-           spec, n, ne, t, ne / t, mem / ne, rss / ne, 100 * inr, qw, qm,
-           valid, outcome }'
+           " in-range %5.2f%% (metric used %5.2f%%) worst %.3f mean %.3f" \
+           " valid %s %s\n",
+           spec, n, ne, t, ne / t, mem / ne, rss / ne, 100 * inr, 100 * inu,
+           qw, qm, valid, outcome }'
 }
 
 echo "# $(date -u +%F) $(uname -m) $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2)"

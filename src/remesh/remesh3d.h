@@ -136,6 +136,14 @@ extern const int rm3d_face[4][3];
 static inline int rm3d_q_ok(double q, double qref) {
   return q >= RM3D_QABS && (q >= RM3D_QFLOOR || q >= 0.5 * qref);
 }
+/* A length move may lower the ball's worst quality down to this (never
+ * below the old worst if that is lower): the lengths are the target, a
+ * quality of 0.5 is a good tet. */
+#define RM3D_QLEN 0.5
+/* A length move that leaves as many edges out of range must cut their sum
+ * of ln^2 L by 3 %. */
+#define RM3D_LGAIN 0.97
+#define RM3D_LNB 128 /* neighbours of a vertex a length move handles */
 #define RM3D_MAXSHELL 64
 #define RM3D_MAXBALL 512
 
@@ -347,6 +355,12 @@ int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
 /* The metric at the midpoint of edge ab (geometric mean of the sizes, or
  * the interpolated tensor), as the split uses it (rm3d_split.c). */
 void pa__rm3d_mid_metric(const rm3d *m, pa_idx a, pa_idx b, double *mp);
+/* Relocate vertex p to bring the lengths of its edges into range: a
+ * Gauss-Newton step on sum ln^2 L_i over its edges, halved up to three
+ * times, kept when fewer of its edges are out of range (or as many, with
+ * the sum down by RM3D_LGAIN) and the ball's worst quality stays at least
+ * min(its old worst, RM3D_QLEN). 1 when moved. */
+int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball);
 /* Relocate vertex p to raise the worst quality of its ball. */
 int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball);
 /* Move the free interior vertex p by delta (metric length) in a direction
@@ -367,6 +381,7 @@ pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, double guard,
                                  long *count);
 pa_status pa__rm3d_swap_pass(rm3d *m, double qthr, double gain, long *count);
 pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, long *count);
+pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count);
 
 /* Interpolation of a new vertex's metric and fields as a weighted mean of
  * vertices src[0..n) (pa__metric_interp for the metric). */

@@ -39,6 +39,11 @@
 
 #define RM3D_QSMOOTH 0.75 /* smooth the vertices of tets below this quality */
 #define RM3D_STOP 5e-3    /* rounds stop under this fraction of changed tets */
+/* Sweeps of length moves after each optimisation round's quality moves (which
+ * disregard lengths) and at the end. UGAWG polar-1 (bench/ugawg.sh, 3D box,
+ * 5 passes): 97.3 % of edges in range with 1 sweep, 98.0 % with 2, 98.1 %
+ * with 3 (at 10 % more time). */
+#define RM3D_LENGTH_SWEEPS 2
 
 static void lengths6(const rm3d *m, const pa_idx *v, double *L) {
   for (int e = 0; e < 6; e++)
@@ -244,6 +249,56 @@ pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, long *count) {
     c += pa__rm3d_smooth_vertex(m, p, ball);
   }
   *count = c;
+  return st;
+}
+
+/* Relocate the ends of the edges out of range (pa__rm3d_length_vertex),
+ * then sweeps-1 more times those around a vertex that moved: a vertex whose
+ * ball did not change gives the same answer again, so this is the same as
+ * repeating the whole sweep. */
+pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count) {
+  pa_status st = PA_SUCCESS;
+  pa_idx ball[RM3D_MAXBALL];
+  uint8_t *again = NULL;
+  long c = 0;
+  for (pa_idx k = 0; k < m->ne; k++) {
+    if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN | R3T_CLEAN)) continue;
+    const pa_idx *v = m->tv + 4 * (size_t)k;
+    double L[6];
+    int clean = 1;
+    lengths6(m, v, L);
+    for (int e = 0; e < 6; e++)
+      if (!(L[e] >= RM3D_LMIN && L[e] < RM3D_LMAX)) {
+        m->vtag[v[rm3d_edge[e][0]]] |= R3V_TODO;
+        m->vtag[v[rm3d_edge[e][1]]] |= R3V_TODO;
+        clean = 0;
+      }
+    if (clean) m->tflag[k] |= R3T_CLEAN;
+  }
+  if (sweeps > 1) PA_CALLOC(again, (size_t)m->nv);
+  for (int s = 0; s < sweeps; s++) {
+    long moved = 0;
+    for (pa_idx p = 0; p < m->nv; p++) {
+      if (!(m->vtag[p] & R3V_TODO)) continue;
+      m->vtag[p] &= (uint8_t)~R3V_TODO;
+      if (!pa__rm3d_length_vertex(m, p, ball)) continue;
+      moved++;
+      if (!again) continue;
+      int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
+      for (int i = 0; i < n; i++)
+        for (int j = 0; j < 4; j++) again[m->tv[4 * (size_t)(ball[i] >> 2) + j]] = 1;
+    }
+    c += moved;
+    if (!moved || !again) break;
+    for (pa_idx p = 0; p < m->nv; p++)
+      if (again[p]) {
+        again[p] = 0;
+        if (!(m->vtag[p] & R3V_DEAD)) m->vtag[p] |= R3V_TODO;
+      }
+  }
+  *count = c;
+cleanup:
+  pa__free(again);
   return st;
 }
 
@@ -508,7 +563,12 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
       double t3 = pa_wtime();
       if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(&m, 0.3, 1.02, &nw));
       double t4 = pa_wtime();
-      if (!opts->no_move) PA_CALL(pa__rm3d_smooth_pass(&m, RM3D_QSMOOTH, &nm));
+      if (!opts->no_move) {
+        long nl = 0;
+        PA_CALL(pa__rm3d_smooth_pass(&m, RM3D_QSMOOTH, &nm));
+        PA_CALL(pa__rm3d_length_pass(&m, 1, &nl));
+        nm += nl;
+      }
       double t5 = pa_wtime();
       if (m.ndead_t > m.ne / 8) PA_CALL(pa__rm3d_compact(&m, 1));
       if (m.verbosity > 0)
@@ -545,7 +605,12 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
     if (it < 2 && !opts->no_insert)
       PA_CALL(pa__rm3d_collapse_pass(&m, RM3D_LMIN, RM3D_LMAX, &nc));
     if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(&m, 0.7, 1.01, &nw));
-    if (!opts->no_move) PA_CALL(pa__rm3d_smooth_pass(&m, RM3D_QSMOOTH, &nm));
+    if (!opts->no_move) {
+      long nl = 0;
+      PA_CALL(pa__rm3d_smooth_pass(&m, RM3D_QSMOOTH, &nm));
+      PA_CALL(pa__rm3d_length_pass(&m, RM3D_LENGTH_SWEEPS, &nl));
+      nm += nl;
+    }
     if (m.verbosity > 0)
       fprintf(stderr,
               "  rm3d optimisation %d: %ld collapses %ld swaps %ld moves\n",
@@ -555,6 +620,13 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
     long nw = 0;
     PA_CALL(pa__rm3d_swap_pass(&m, 0.1, 1.0, &nw));
     npass++;
+  }
+  /* Last, lengths: the sliver swaps changed a few (and the length moves
+   * keep the worst quality at min(its old value, RM3D_QLEN)). */
+  if (!opts->no_move) {
+    long nl = 0;
+    PA_CALL(pa__rm3d_length_pass(&m, RM3D_LENGTH_SWEEPS, &nl));
+    if (m.verbosity > 0) fprintf(stderr, "  rm3d length moves: %ld\n", nl);
   }
 #ifndef NDEBUG
   PA_CALL(pa__rm3d_check(&m));

