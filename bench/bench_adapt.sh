@@ -53,6 +53,8 @@ PAIRS=${PAIRS:-5}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 export OMPI_MCA_rmaps_base_oversubscribe=1 SCOTCH_PTHREAD_NUMBER=1
 MPIEXEC=${MPIEXEC:-mpiexec}
+# shellcheck source=bench/gmsh_box.sh
+. "$(cd "$(dirname "$0")" && pwd)/gmsh_box.sh"
 
 if [ ! -x "$PADAPT" ]; then
   echo "bench_adapt: $PADAPT not found (build first: make build)" >&2
@@ -66,26 +68,9 @@ echo "# binary: $PADAPT; extra options: ${EXTRA:-none}"
 # make_gmsh DIM OUT: an unstructured Delaunay mesh of the unit square (2D,
 # characteristic length 0.01) or cube (3D, 0.1), boundary references 1.
 make_gmsh() {
-  local dim=$1 out=$2 geo="$WORK/unit$1d.geo"
-  if [ "$dim" = 2 ]; then
-    cat >"$geo" <<'GEO'
-lc = 0.01;
-Point(1) = {0, 0, 0, lc}; Point(2) = {1, 0, 0, lc};
-Point(3) = {1, 1, 0, lc}; Point(4) = {0, 1, 0, lc};
-Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};
-Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};
-Physical Surface(1) = {1}; Physical Curve(1) = {1, 2, 3, 4};
-GEO
-  else
-    cat >"$geo" <<'GEO'
-SetFactory("OpenCASCADE");
-Box(1) = {0, 0, 0, 1, 1, 1};
-Mesh.CharacteristicLengthMax = 0.1;
-Physical Volume(1) = {1};
-Physical Surface(1) = {1, 2, 3, 4, 5, 6};
-GEO
-  fi
-  gmsh "-$dim" "$geo" -format mesh -o "$out" >"$WORK/gmsh$dim.log" 2>&1
+  local lc=0.1
+  [ "$1" = 2 ] && lc=0.01
+  gmsh_box "$1" "$lc" "$WORK/unit$1d.geo" "$2"
 }
 
 run_case() { # dim kind(box|gmsh) n h
@@ -102,7 +87,7 @@ run_case() { # dim kind(box|gmsh) n h
       return 0
     fi
     in="$WORK/$tag.mesh"
-    make_gmsh "$dim" "$in" || { echo "## gmsh failed, see $WORK/gmsh$dim.log"; return 1; }
+    make_gmsh "$dim" "$in" || { echo "## gmsh failed, see $in.log"; return 1; }
   fi
   if [ "$dim" = 3 ]; then
     # probe: does the built-in remesher handle tetrahedra?

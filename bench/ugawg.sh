@@ -42,6 +42,8 @@ TOOLS=${TOOLS:-"padapt mmg"}
 PY=/usr/bin/python3
 HERE=$(cd "$(dirname "$0")" && pwd)
 JUDGE="$HERE/ugawg_judge.py"
+# shellcheck source=bench/gmsh_box.sh
+. "$HERE/gmsh_box.sh"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 export OMPI_MCA_rmaps_base_oversubscribe=1 SCOTCH_PTHREAD_NUMBER=1
 MPIEXEC=${MPIEXEC:-mpiexec}
@@ -92,26 +94,10 @@ make_start() {
   fi
   command -v gmsh >/dev/null || return 2
   local geo="$WORK/start/unit${dim}d.geo" raw="$WORK/start/gmsh${dim}d_raw.mesh"
-  if [ "$dim" = 2 ]; then
-    cat >"$geo" <<'GEO'
-lc = 0.05;
-Point(1) = {0, 0, 0, lc}; Point(2) = {1, 0, 0, lc};
-Point(3) = {1, 1, 0, lc}; Point(4) = {0, 1, 0, lc};
-Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};
-Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};
-Physical Surface(1) = {1}; Physical Curve(1) = {1, 2, 3, 4};
-GEO
-  else
-    cat >"$geo" <<'GEO'
-SetFactory("OpenCASCADE");
-Box(1) = {0, 0, 0, 1, 1, 1};
-Mesh.CharacteristicLengthMax = 0.1;
-Physical Volume(1) = {1};
-Physical Surface(1) = {1, 2, 3, 4, 5, 6};
-GEO
-  fi
-  gmsh "-$dim" "$geo" -format mesh -o "$raw" >"$WORK/start/gmsh${dim}d.log" 2>&1 ||
-    { echo "# gmsh failed, see $WORK/start/gmsh${dim}d.log" >&2; return 1; }
+  local lc=0.1
+  [ "$dim" = 2 ] && lc=0.05
+  gmsh_box "$dim" "$lc" "$geo" "$raw" ||
+    { echo "# gmsh failed, see $raw.log" >&2; return 1; }
   # gmsh writes 2D meshes with z = 0 in Dimension 3: rewrite them as the
   # plain Medit file both tools read alike.
   "$PADAPT" convert "$raw" "$out" >/dev/null

@@ -629,6 +629,38 @@ long pa__rm_swap_pass_2d(pa__rmesh *rm, double qmax) {
 /* Relocation                                                               */
 /* ------------------------------------------------------------------------ */
 
+/* Move interior vertex p (its closed ball el[0..n), local indices loc) to
+ * np: metric and fields interpolated from the old triangle holding np
+ * (barycentric; linear fields stay exact), qualities updated. */
+static void apply_move(pa__rmesh *rm, pa_idx p, const pa_idx *el,
+                       const int *loc, int n, const double *np) {
+  double *xp = rm->x + 2 * (size_t)p;
+  double x0 = xp[0], y0 = xp[1];
+  for (int s = 0; s < n; s++) {
+    const pa_idx *v = rm->ev + 3 * (size_t)el[s];
+    pa_idx va = v[NX3(loc[s])], vb = v[PV3(loc[s])];
+    const double *a = X(va), *b = X(vb);
+    double area = (a[0] - x0) * (b[1] - y0) - (a[1] - y0) * (b[0] - x0);
+    double wa = ((np[0] - x0) * (b[1] - y0) - (np[1] - y0) * (b[0] - x0)) / area;
+    double wb = ((a[0] - x0) * (np[1] - y0) - (a[1] - y0) * (np[0] - x0)) / area;
+    double wp = 1 - wa - wb;
+    if (wa >= -1e-12 && wb >= -1e-12 && wp >= -1e-12) {
+      pa_idx src[3] = {p, va, vb};
+      double w[3] = {wp, wa, wb};
+      pa__rm_interp(rm, p, 3, src, w);
+      break;
+    }
+  }
+  xp[0] = np[0];
+  xp[1] = np[1];
+  for (int s = 0; s < n; s++) {
+    const pa_idx *v = rm->ev + 3 * (size_t)el[s];
+    rm->q[el[s]] = (float)elem_qual(rm, v[0], v[1], v[2]);
+    elem_changed(rm, el[s]); /* p's neighbours see a new ball */
+  }
+  rm->nmove++;
+}
+
 /* Move interior vertex p = v[ip] of element k towards the mean of the ideal
  * apexes of its ball (equilateral in the metric of p). Returns 1 if moved. */
 static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
@@ -702,33 +734,11 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
       ok = l >= RM_LSHORT && l <= RM_LLONG;
     }
     if (!ok) continue;
-    /* accepted: interpolate metric and fields from the old ball */
+    /* accepted */
     double np[2] = {xp[0], xp[1]};
     xp[0] = x0;
     xp[1] = y0;
-    for (int s = 0; s < n; s++) {
-      const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-      pa_idx va = v[NX3(loc[s])], vb = v[PV3(loc[s])];
-      const double *a = X(va), *b = X(vb);
-      double area = (a[0] - x0) * (b[1] - y0) - (a[1] - y0) * (b[0] - x0);
-      double wa = ((np[0] - x0) * (b[1] - y0) - (np[1] - y0) * (b[0] - x0)) / area;
-      double wb = ((a[0] - x0) * (np[1] - y0) - (a[1] - y0) * (np[0] - x0)) / area;
-      double wp = 1 - wa - wb;
-      if (wa >= -1e-12 && wb >= -1e-12 && wp >= -1e-12) {
-        pa_idx src[3] = {p, va, vb};
-        double w[3] = {wp, wa, wb};
-        pa__rm_interp(rm, p, 3, src, w);
-        break;
-      }
-    }
-    xp[0] = np[0];
-    xp[1] = np[1];
-    for (int s = 0; s < n; s++) {
-      const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-      rm->q[el[s]] = (float)elem_qual(rm, v[0], v[1], v[2]);
-      elem_changed(rm, el[s]); /* p's neighbours see a new ball */
-    }
-    rm->nmove++;
+    apply_move(rm, p, el, loc, n, np);
     return 1;
   }
   xp[0] = x0;
@@ -840,7 +850,6 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   double d[2] = {(jj[2] * jr[0] - jj[1] * jr[1]) / det,
                  (jj[0] * jr[1] - jj[1] * jr[0]) / det};
   double x0 = xp[0], y0 = xp[1], step = 1.0, qfloor = fmin(qold, RM_QLEN);
-  double qn[BALL_MAX];
   for (int tr = 0; tr < 8; tr++, step *= 0.5) {
     if (tr == 4) step = 1.0;
     const double *dd = tr < 4 ? d : d2;
@@ -852,36 +861,13 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
     int ok = 1;
     for (int s = 0; s < n && ok; s++) {
       const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-      qn[s] = elem_qual(rm, v[0], v[1], v[2]);
-      if (!(qn[s] >= qfloor) || qn[s] < RM_QFLOOR) ok = 0;
+      double q = elem_qual(rm, v[0], v[1], v[2]);
+      if (!(q >= qfloor) || q < RM_QFLOOR) ok = 0;
     }
     xp[0] = x0;
     xp[1] = y0;
     if (!ok) continue;
-    /* accepted: metric and fields from the old ball, as move_vertex */
-    for (int s = 0; s < n; s++) {
-      const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-      pa_idx va = v[NX3(loc[s])], vb = v[PV3(loc[s])];
-      const double *a = X(va), *b = X(vb);
-      double area = (a[0] - x0) * (b[1] - y0) - (a[1] - y0) * (b[0] - x0);
-      double wa = ((np[0] - x0) * (b[1] - y0) - (np[1] - y0) * (b[0] - x0)) / area;
-      double wb = ((a[0] - x0) * (np[1] - y0) - (a[1] - y0) * (np[0] - x0)) / area;
-      double wp = 1 - wa - wb;
-      if (wa >= -1e-12 && wb >= -1e-12 && wp >= -1e-12) {
-        pa_idx src[3] = {p, va, vb};
-        double w[3] = {wp, wa, wb};
-        pa__rm_interp(rm, p, 3, src, w);
-        break;
-      }
-    }
-    xp[0] = np[0];
-    xp[1] = np[1];
-    for (int s = 0; s < n; s++) {
-      const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-      rm->q[el[s]] = (float)elem_qual(rm, v[0], v[1], v[2]);
-      elem_changed(rm, el[s]);
-    }
-    rm->nmove++;
+    apply_move(rm, p, el, loc, n, np);
     return 1;
   }
   return 0;
