@@ -444,6 +444,47 @@ static void test_rollback(void) {
   }
 }
 
+/* The report measures the result in the caller's metric: a field the
+ * gradation changes (shell:0.1, normal sizes growing faster than ln 1.3 per
+ * unit length) is met in the metric used, not in the caller's, and the
+ * report says the gradation changed it; with the gradation off both sets of
+ * figures are the same and met. The carried copy of the caller's metric
+ * ("metric:user") is gone afterwards, on every rank. */
+static void test_fidelity(void) {
+  for (int grade = 1; grade >= 0; grade--) {
+    pa_mesh *m = box(2, 16, "shell:0.1");
+    pa_dmesh *dm = distribute(m, 0);
+    pa_adapt_opts o;
+    pa_adapt_report rep;
+    opts_small(&o, NULL);
+    if (!grade) o.remesh.hgrad = -1;
+    CHECK_OK(pa_dmesh_adapt(dm, &o, &rep));
+    const pa_fidelity *f = &rep.fidelity;
+    CHECK(f->measured);
+    CHECK(pa_mesh_nfield(pa_dmesh_mesh(dm)) == 0);
+    if (grade) {
+      CHECK(f->changed == PA_CHANGED_GRADATION);
+      CHECK(pa_stats_target_met(&f->used));
+      CHECK(!f->target_met);
+      CHECK(in_range(&f->user) < in_range(&f->used));
+    } else {
+      CHECK(f->changed == 0);
+      CHECK(f->target_met);
+      CHECK(in_range(&f->user) == in_range(&f->used));
+    }
+    char line[512];
+    pa_fidelity_describe(f, line, sizeof line);
+    if (pa_test_rank == 0)
+      printf("  shell:0.1 %s: given %.1f %%, used %.1f %% in range: %s\n",
+             grade ? "graded" : "-hgrad -1", in_range(&f->user),
+             in_range(&f->used), line);
+    CHECK(strstr(line, grade ? "gradation" : "is met") != NULL);
+    pa_dmesh_destroy(dm);
+    pa_mesh_destroy(m);
+  }
+}
+
 TEST_MPI_MAIN(test_deterministic, test_vs_sequential, test_required,
               test_linear_field, test_every_field, test_reordered,
-              test_values_kept, test_skin_quality, test_rollback)
+              test_values_kept, test_skin_quality, test_rollback,
+              test_fidelity)
