@@ -478,8 +478,13 @@ const pa_remesher *pa_remesher_builtin(void);
 
 /**
  * Remesh through a remesher: checks the input (valid mesh, metric present or
- * opts->hsiz > 0), applies hsiz/hmin/hmax/hgrad to the metric, calls
- * r->remesh and times it. Not collective.
+ * opts->hsiz > 0), prepares the metric (hsiz replaces the caller's; then
+ * hmin/hmax and the gradation hgrad/hgradreq), calls r->remesh and times it,
+ * then (unless opts->no_stats) measures the result in the caller's metric
+ * and in the metric used (report->fidelity; the caller's metric travels
+ * through the remesher as the vertex field "metric:user", removed before
+ * return). The mesh keeps the metric used, interpolated at new vertices.
+ * Not collective.
  */
 pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
                     const pa_remesh_opts *opts, pa_remesh_report *report);
