@@ -268,6 +268,107 @@ const char *const *pa_metric_analytic_names(void);
  */
 pa_status pa_mesh_metric_clamp(pa_mesh *mesh, double hmin, double hmax);
 
+/* ---- metric toolbox (src/metric/recovery.c, hessian.c, levelset.c) ---- */
+
+/** How a gradient and a Hessian are recovered from vertex values. */
+typedef enum pa_recovery {
+  /** weighted least-squares quadratic fit over each vertex's neighbours
+   *  (the 2-ring where the 1-ring is too small): exact for quadratics */
+  PA_RECOVER_LSQ = 0,
+  /** double L2 projection: volume-weighted means of the element gradients,
+   *  twice; exact for linear fields only */
+  PA_RECOVER_L2 = 1
+} pa_recovery;
+
+/**
+ * Gradient and Hessian of the scalar vertex field u (value of vertex v at
+ * u[v * stride]) at every vertex. grad (dim values per vertex) and hess
+ * (3 or 6 per vertex: xx xy yy [xz yz zz]) may each be NULL. Not collective.
+ */
+pa_status pa_mesh_recover(pa_mesh *mesh, const double *u, int stride,
+                          pa_recovery method, double *grad, double *hess);
+
+/** Complexity of a metric on the mesh, the integral of sqrt(det M) (ncomp
+ *  1: sizes, M = I/h^2), by the vertex mean over each element: the number
+ *  of unit elements it asks for is about 4/sqrt(3) C (2D) or 6 sqrt(2) C
+ *  (3D). */
+pa_status pa_metric_complexity(pa_mesh *mesh, int ncomp, const double *met,
+                               double *complexity);
+
+/** Options of pa_metric_from_hessian (pa_metric_hessian_opts_default). */
+typedef struct pa_metric_hessian_opts {
+  double p;       /**< Lp norm of the interpolation error (default 2;
+                       <= 0: L-infinity) */
+  double target;  /**< complexity to reach (> 0), or ... */
+  double err;     /**< ... the Lp interpolation error to reach (> 0) */
+  double hmin, hmax; /**< size bounds (<= 0: none) */
+  double hgrad;   /**< gradation of the result (<= 1: none; default 1.3) */
+  pa_recovery recovery; /**< default PA_RECOVER_LSQ */
+} pa_metric_hessian_opts;
+void pa_metric_hessian_opts_default(pa_metric_hessian_opts *opts);
+
+/**
+ * The Lp-optimal metric of a scalar vertex field u (Loseille & Alauzet's
+ * multiscale metric): M = D det|H|^(-1/(2p+d)) |H|, |H| the recovered
+ * Hessian with absolute eigenvalues, D set so that the complexity is
+ * opts->target (or the estimated Lp error opts->err), then clamped and
+ * graded; the complexity is reached again after clamping and gradation.
+ * met: the tensor metric (3 or 6 values per vertex). Not collective.
+ */
+pa_status pa_metric_from_hessian(pa_mesh *mesh, const double *u, int stride,
+                                 const pa_metric_hessian_opts *opts,
+                                 double *met);
+
+/** Scale a metric (ncomp 1 or the tensor count per vertex) so that its
+ *  complexity becomes target. */
+pa_status pa_metric_scale_complexity(pa_mesh *mesh, int ncomp, double *met,
+                                     double target);
+
+/** Intersection of two metrics of ncomp components per vertex (the largest
+ *  metric contained in both, by simultaneous reduction), into out (which
+ *  may be a or b). */
+pa_status pa_metric_intersect_all(int dim, int ncomp, pa_idx nv,
+                                  const double *a, const double *b,
+                                  double *out);
+
+/** Grade the mesh's metric in place (see pa_remesh_opts: hgrad, hgradreq;
+ *  required vertices keep their metric). */
+pa_status pa_mesh_metric_grade(pa_mesh *mesh, double hgrad, double hgradreq);
+
+/**
+ * Signed distance to an analytic surface at every vertex (negative inside):
+ *  "sphere:R[:cx,cy,cz]", "ellipsoid:a,b,c[:cx,cy,cz]" (semi-axes along x, y,
+ *  z; in 2D "ellipse:a,b[:cx,cy]"), "box:lx,ly,lz[:cx,cy,cz]" (half
+ *  lengths; 2D "box:lx,ly[:cx,cy]"), "plane:nx,ny,nz,d" (nx x + ... = d;
+ *  2D "plane:nx,ny,d", a line). In 2D "sphere" is a circle and
+ *  "ellipsoid:a,b" an ellipse. phi: one value
+ *  per vertex.
+ */
+pa_status pa_levelset_analytic(pa_mesh *mesh, const char *spec, double *phi);
+
+/** Options of pa_metric_from_levelset (pa_metric_levelset_opts_default). */
+typedef struct pa_metric_levelset_opts {
+  double eps;        /**< distance bound between the surface and the mesh */
+  double hmin, hmax; /**< size bounds (hmin: the normal size at the surface) */
+  double band;       /**< half-width of the anisotropic band around the zero
+                          set (<= 0: 5 hmax) */
+  double hgrad;      /**< gradation away from the interface (default 1.3) */
+} pa_metric_levelset_opts;
+void pa_metric_levelset_opts_default(pa_metric_levelset_opts *opts);
+
+/**
+ * The metric that captures the zero set of the level set phi (one value per
+ * vertex) to within eps: inside the band, along the recovered gradient of
+ * phi the size hmin at the zero set growing linearly to hmax at the band's
+ * edge, along the principal curvature directions of the iso-surface the
+ * chord bound sqrt(8 eps / |kappa|) clamped to [hmin, hmax]; hmax outside;
+ * then graded. met: tensors (3 or 6 per vertex). Not
+ * collective.
+ */
+pa_status pa_metric_from_levelset(pa_mesh *mesh, const double *phi,
+                                  const pa_metric_levelset_opts *opts,
+                                  double *met);
+
 /** Edge length in the metric (geometric formula), the metric of each end given. */
 double pa_metric_edge_length(int dim, int ncomp, const double *a,
                              const double *b, const double *ma,
@@ -937,6 +1038,22 @@ void pa_adapt_opts_default(pa_adapt_opts *opts);
  */
 pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
                          pa_adapt_report *report);
+
+/**
+ * The metric toolbox on a distributed mesh of overlap 2 (the recovery uses
+ * each vertex's 2-ring): pa_metric_from_hessian of component comp
+ * (0-based) of vertex field `field` of the local mesh, and
+ * pa_metric_from_levelset of field `field` (a scalar); the result becomes
+ * the metric of the distributed mesh (every copy of a vertex the same).
+ * The complexity is that of the mesh's metric over the owned elements,
+ * summed over the ranks. Collective. Without gradation the result does not
+ * depend on the number of ranks (round-off apart).
+ */
+pa_status pa_dmesh_metric_from_hessian(pa_dmesh *dm, int field, int comp,
+                                       const pa_metric_hessian_opts *opts);
+pa_status pa_dmesh_metric_from_levelset(pa_dmesh *dm, int field,
+                                        const pa_metric_levelset_opts *opts);
+pa_status pa_dmesh_metric_complexity(pa_dmesh *dm, double *complexity);
 
 /**
  * Statistics of a distributed mesh, equal to pa_mesh_stats of the gathered

@@ -133,4 +133,41 @@ pa_status pa__mesh_stats_met(pa_mesh *mesh, int nc, const double *met,
  * PA_FIELD_METRIC_PREFIX), or -1. */
 int pa__user_metric_field(const pa_mesh *mesh);
 
+/* pa_mesh_recover at the vertices with mask[v] only (mask NULL: all); the
+ * others' grad and hess are left as they are (recovery.c). */
+pa_status pa__recover(pa_mesh *mesh, const double *u, int stride,
+                      pa_recovery method, const uint8_t *mask, double *grad,
+                      double *hess);
+
+/* The complexity's contribution of element e (its volume times the mean of
+ * sqrt(det M) at its vertices; ops.c). */
+double pa__elem_complexity(const pa_mesh *mesh, int ncomp, const double *met,
+                           pa_idx e);
+
+/* The Lp metric of a recovered Hessian h (tensor) before scaling:
+ * det|H|^(-1/(2p+d)) |H| with the eigenvalues of |H| floored at lmin (> 0),
+ * into m (tensor; hessian.c). p <= 0: L-infinity (|H| itself). */
+void pa__lp_metric(int dim, const double *h, double p, double lmin, double *m);
+
+/* Where a whole-field metric operation runs: the mesh, the first nelem of
+ * its elements (the owned ones of a distributed mesh) as the domain, the
+ * global sum and maximum of a local value, and the gradation of a tensor
+ * field of the mesh's vertices. The sequential context sums locally and
+ * grades with pa__metric_gradation; the distributed one (src/adapt/
+ * dmetric.c) reduces over the ranks and grades over the distributed mesh. */
+typedef struct pa__metric_ctx {
+  pa_mesh *mesh;
+  pa_idx nelem;
+  pa_status (*sum)(void *ctx, double *x); /* in place: local -> global */
+  pa_status (*max)(void *ctx, double *x);
+  pa_status (*grade)(void *ctx, double *met, double hgrad);
+  void *ctx;
+} pa__metric_ctx;
+
+/* pa_metric_from_hessian from the recovered Hessian h (tensor per vertex,
+ * every local vertex) in the context c (hessian.c). */
+pa_status pa__metric_from_hessian(const pa__metric_ctx *c, const double *h,
+                                  const pa_metric_hessian_opts *o,
+                                  double *met);
+
 #endif /* PA_METRIC_H */

@@ -1,0 +1,109 @@
+/*
+ * ops.c -- operations on whole metric fields: complexity, scaling to a
+ * complexity, intersection of two fields, gradation of a mesh's metric.
+ *
+ * Complexity C = integral of sqrt(det M): on each element, its volume times
+ * the mean of sqrt(det M) at its vertices. Scaling a metric by s^2 scales
+ * the complexity by s^dim, so pa_metric_scale_complexity is exact in one
+ * step.
+ */
+#include "metric/gradation.h"
+
+#include <math.h>
+
+/* sqrt(det M) of a metric value (a size: h^-dim). */
+static double density(int dim, int nc, const double *m) {
+  if (nc == 1) return pow(m[0], -dim);
+  double det = pa__sym_det(dim, m);
+  return det > 0 ? sqrt(det) : 0.0;
+}
+
+double pa__elem_complexity(const pa_mesh *mesh, int nc, const double *met,
+                           pa_idx e) {
+  int d = mesh->dim, nve = d + 1;
+  const pa_idx *v = mesh->elem + (size_t)nve * e;
+  const double *x[4];
+  double s = 0;
+  for (int k = 0; k < nve; k++) {
+    x[k] = mesh->coord + (size_t)d * v[k];
+    s += density(d, nc, met + (size_t)nc * v[k]);
+  }
+  return fabs(pa__simplex_volume(d, x)) * s / nve;
+}
+
+static pa_status check_field(const pa_mesh *mesh, int nc, const double *met,
+                             const char *who) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(mesh && met, PA_ERR_ARG, "%s: NULL argument", who);
+  PA_CHECK(nc == 1 || nc == pa__tensor_ncomp(mesh->dim), PA_ERR_ARG,
+           "%s: %d metric components in %dD", who, nc, mesh->dim);
+cleanup:
+  return st;
+}
+
+pa_status pa_metric_complexity(pa_mesh *mesh, int nc, const double *met,
+                               double *complexity) {
+  pa_status st = PA_SUCCESS;
+  PA_CALL(check_field(mesh, nc, met, "pa_metric_complexity"));
+  double c = 0;
+  for (pa_idx e = 0; e < mesh->ne; e++)
+    c += pa__elem_complexity(mesh, nc, met, e);
+  *complexity = c;
+cleanup:
+  return st;
+}
+
+pa_status pa_metric_scale_complexity(pa_mesh *mesh, int nc, double *met,
+                                     double target) {
+  pa_status st = PA_SUCCESS;
+  double c = 0;
+  PA_CHECK(isfinite(target) && target > 0, PA_ERR_ARG,
+           "pa_metric_scale_complexity: the target must be positive, got %g",
+           target);
+  PA_CALL(pa_metric_complexity(mesh, nc, met, &c));
+  PA_CHECK(c > 0, PA_ERR_METRIC,
+           "pa_metric_scale_complexity: the metric "
+           "has no complexity on this mesh");
+  /* M -> s^2 M multiplies sqrt(det M) by s^dim; a size h -> h / s */
+  double s = pow(target / c, 1.0 / mesh->dim);
+  for (pa_idx v = 0; v < mesh->nv; v++) {
+    double *m = met + (size_t)nc * v;
+    if (nc == 1)
+      m[0] /= s;
+    else
+      for (int k = 0; k < nc; k++)
+        m[k] *= s * s;
+  }
+cleanup:
+  return st;
+}
+
+pa_status pa_metric_intersect_all(int dim, int nc, pa_idx nv, const double *a,
+                                  const double *b, double *out) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(a && b && out && (dim == 2 || dim == 3) &&
+               (nc == 1 || nc == pa__tensor_ncomp(dim)),
+           PA_ERR_ARG, "pa_metric_intersect_all: bad arguments");
+  for (pa_idx v = 0; v < nv; v++)
+    pa__metric_intersect(dim, nc, a + (size_t)nc * v, b + (size_t)nc * v,
+                         out + (size_t)nc * v);
+cleanup:
+  return st;
+}
+
+pa_status pa_mesh_metric_grade(pa_mesh *mesh, double hgrad, double hgradreq) {
+  pa_status st = PA_SUCCESS;
+  uint8_t *frozen = NULL;
+  PA_CHECK(mesh && mesh->met_ncomp, PA_ERR_ARG,
+           "pa_mesh_metric_grade: the mesh has no metric");
+  PA_CHECK(isfinite(hgrad) && isfinite(hgradreq), PA_ERR_ARG,
+           "pa_mesh_metric_grade: the rates must be numbers");
+  PA_CALLOC(frozen, mesh->nv ? mesh->nv : 1);
+  pa__mesh_frozen_vertices(mesh, frozen);
+  PA_CALL(pa__metric_gradation(mesh->dim, mesh->met_ncomp, mesh->nv,
+                               mesh->coord, mesh->met, mesh->ne, mesh->elem,
+                               frozen, hgrad, hgradreq, NULL));
+cleanup:
+  pa__free(frozen);
+  return st;
+}
