@@ -19,6 +19,7 @@ typedef struct pa_cli {
 /* Commands: argv[0] is the command name; argv[1..argc-1] its arguments. */
 int pa_cli_generate(const pa_cli *cli, int argc, char **argv);
 int pa_cli_metric(const pa_cli *cli, int argc, char **argv);
+int pa_cli_levelset(const pa_cli *cli, int argc, char **argv);
 int pa_cli_stats(const pa_cli *cli, int argc, char **argv);
 int pa_cli_convert(const pa_cli *cli, int argc, char **argv);
 int pa_cli_adapt(const pa_cli *cli, int argc, char **argv);

@@ -25,6 +25,10 @@ static const char *usage_text =
     "  metric NAME[:h] IN OUT.sol     a built-in analytic metric on IN's vertices\n"
     "                                 (uniform layer shell iso-shell\n"
     "                                 ugawg-linear ugawg-polar1 ugawg-polar2)\n"
+    "  metric hessian|levelset|intersect|scale|clamp|grade|complexity ...\n"
+    "                                 the metric toolbox (padapt metric -h)\n"
+    "  levelset NAME IN OUT.sol       signed distance to a sphere, ellipsoid,\n"
+    "                                 box or plane on IN's vertices\n"
     "  stats IN [-met SOL] [-json OUT.json]\n"
     "                                 counts, volume, edge lengths in the metric,\n"
     "                                 quality, validity (exit 1 if invalid)\n"
@@ -340,22 +344,6 @@ int pa_cli_generate(const pa_cli *cli, int argc, char **argv) {
   return pa_cli_fail(cli, st);
 }
 
-int pa_cli_metric(const pa_cli *cli, int argc, char **argv) {
-  if (argc != 4)
-    return pa_cli_error(cli, "usage: padapt metric NAME[:h] IN OUT.sol");
-  pa_mesh *mesh = NULL;
-  pa_sol *sol = NULL;
-  pa_status st = pa_cli_read_mesh(cli, argv[2], &mesh);
-  if (st != PA_SUCCESS) return read_failed(cli, st);
-  if (cli->rank != 0) return 0;
-  st = pa_metric_analytic(mesh, argv[1]);
-  if (st == PA_SUCCESS) st = pa_mesh_metric_to_sol(mesh, 0, &sol);
-  if (st == PA_SUCCESS) st = pa_sol_write(sol, argv[3]);
-  pa_sol_destroy(sol);
-  pa_mesh_destroy(mesh);
-  return pa_cli_fail(cli, st);
-}
-
 int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
   const char *in = NULL, *met = NULL, *json = NULL;
   for (int i = 1; i < argc; i++) {
@@ -452,8 +440,9 @@ static const struct {
   const char *name;
   pa_cli_cmd run;
 } commands[] = {{"generate", pa_cli_generate}, {"metric", pa_cli_metric},
-                {"stats", pa_cli_stats},       {"convert", pa_cli_convert},
-                {"adapt", pa_cli_adapt},       {"partition", pa_cli_partition}};
+                {"levelset", pa_cli_levelset}, {"stats", pa_cli_stats},
+                {"convert", pa_cli_convert},   {"adapt", pa_cli_adapt},
+                {"partition", pa_cli_partition}};
 
 static int dispatch(pa_cli *cli, int argc, char **argv) {
   int i = 1;

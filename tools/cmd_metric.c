@@ -1,0 +1,502 @@
+/*
+ * cmd_metric.c -- `padapt metric ...` and `padapt levelset ...`: the metric
+ * toolbox on the command line.
+ *
+ *   padapt metric NAME[:h] IN OUT.sol          a built-in analytic metric
+ *   padapt metric hessian IN -field U.sol [-comp K] (-target N | -err E)
+ *                 [-p P] [-hmin H] [-hmax H] [-hgrad G] [-recovery lsq|l2]
+ *                 OUT.sol                      the Lp metric of a field
+ *   padapt metric levelset IN -ls PHI.sol -eps E -hmin H -hmax H
+ *                 [-band W] [-hgrad G] OUT.sol the metric of a zero set
+ *   padapt metric intersect IN A.sol B.sol OUT.sol
+ *   padapt metric scale IN M.sol -target N OUT.sol
+ *   padapt metric clamp IN M.sol [-hmin H] [-hmax H] OUT.sol
+ *   padapt metric grade IN M.sol [-hgrad G] [-hgradreq G] OUT.sol
+ *   padapt metric complexity IN M.sol          prints C and the element count
+ *   padapt levelset NAME IN OUT.sol            signed distance to a surface
+ *
+ * Under mpiexec with more than one process (or with a distributed set as
+ * IN), hessian, levelset and complexity run on the distributed mesh (overlap
+ * 2: the recovery stencils of the owned vertices are complete), with halo
+ * exchanges at the partition frontiers; the result is gathered into OUT.sol.
+ * The other operations are vertex by vertex and run on rank 0.
+ */
+#include "cli.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The parsed options of a metric subcommand. */
+typedef struct metric_args {
+  const char *in, *field, *ls, *files[3], *out;
+  int nfile;
+  int comp; /* -comp K, 1-based (0: a scalar field) */
+  double target, err, p, hmin, hmax, hgrad, hgradreq, eps, band;
+  int hgrad_set, recovery;
+} metric_args;
+
+static const char *const metric_usage =
+    "usage: padapt metric NAME[:h] IN OUT.sol\n"
+    "       padapt metric hessian IN -field U.sol [-comp K] (-target N | -err "
+    "E)\n"
+    "                     [-p P] [-hmin H] [-hmax H] [-hgrad G]\n"
+    "                     [-recovery lsq|l2] OUT.sol\n"
+    "       padapt metric levelset IN -ls PHI.sol -eps E -hmin H -hmax H\n"
+    "                     [-band W] [-hgrad G] OUT.sol\n"
+    "       padapt metric intersect IN A.sol B.sol OUT.sol\n"
+    "       padapt metric scale IN M.sol -target N OUT.sol\n"
+    "       padapt metric clamp IN M.sol [-hmin H] [-hmax H] OUT.sol\n"
+    "       padapt metric grade IN M.sol [-hgrad G] [-hgradreq G] OUT.sol\n"
+    "       padapt metric complexity IN M.sol\n"
+    "  hessian   the Lp-optimal metric of field U (component K of a vector\n"
+    "            field), scaled to the complexity N (about N/2 vertices in\n"
+    "            2D) or to the interpolation error E; p = 2 by default, 0\n"
+    "            for L-infinity; hgrad 1.3 by default (-1: none)\n"
+    "  levelset  the metric capturing the zero set of PHI within E:\n"
+    "            size hmin across it, sqrt(8 E / curvature) along it\n"
+    "  complexity  prints the integral of sqrt(det M) and the number of\n"
+    "            unit elements it asks for\n";
+
+/* Parse argv[1..] of a subcommand (argv[0] its name) into a; nfiles: how many
+ * positional .sol files before OUT. Returns 0, or 1 after an error. */
+static int parse(const pa_cli *cli, int argc, char **argv, int nfiles,
+                 int has_out, metric_args *a) {
+  memset(a, 0, sizeof *a);
+  a->p = 2;
+  a->hgrad = 1.3;
+  a->hgradreq = 2.3;
+  int npos = 0;
+  const char *pos[6];
+  for (int i = 1; i < argc; i++) {
+    const char *o = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
+    double x = 0;
+    if (o[0] != '-' || !o[1]) {
+      if (npos == 6)
+        return pa_cli_error(cli, "metric %s: too many arguments", argv[0]);
+      pos[npos++] = o;
+      continue;
+    }
+    if (!strcmp(o, "-field") || !strcmp(o, "-ls")) {
+      if (!val)
+        return pa_cli_error(cli, "metric %s: %s needs a .sol file", argv[0], o);
+      *(!strcmp(o, "-field") ? &a->field : &a->ls) = val;
+      i++;
+      continue;
+    }
+    if (!strcmp(o, "-recovery")) {
+      if (!val || (strcmp(val, "lsq") && strcmp(val, "l2")))
+        return pa_cli_error(cli, "metric %s: -recovery needs lsq or l2",
+                            argv[0]);
+      a->recovery = !strcmp(val, "l2") ? PA_RECOVER_L2 : PA_RECOVER_LSQ;
+      i++;
+      continue;
+    }
+    static const char *const num[] = {"-comp", "-target", "-err",   "-p",
+                                      "-hmin", "-hmax",   "-hgrad", "-hgradreq",
+                                      "-eps",  "-band",   NULL};
+    int k = 0;
+    while (num[k] && strcmp(o, num[k]))
+      k++;
+    if (!num[k])
+      return pa_cli_error(cli, "metric %s: unknown option '%s'\n%s", argv[0], o,
+                          metric_usage);
+    if (!pa_cli_parse_num(val, &x))
+      return pa_cli_error(cli, "metric %s: %s needs a number, got '%s'",
+                          argv[0], o, val ? val : "nothing");
+    i++;
+    int positive = k == 1 || k == 2 || k == 4 || k == 5 || k == 8;
+    if (positive && !(x > 0))
+      return pa_cli_error(cli, "metric %s: %s needs a positive number, got %g",
+                          argv[0], o, x);
+    switch (k) {
+    case 0:
+      if (x < 1 || x != floor(x))
+        return pa_cli_error(cli,
+                            "metric %s: -comp needs a component number "
+                            ">= 1, got %g",
+                            argv[0], x);
+      a->comp = (int)x;
+      break;
+    case 1:
+      a->target = x;
+      break;
+    case 2:
+      a->err = x;
+      break;
+    case 3:
+      a->p = x;
+      break;
+    case 4:
+      a->hmin = x;
+      break;
+    case 5:
+      a->hmax = x;
+      break;
+    case 6:
+      a->hgrad = x;
+      a->hgrad_set = 1;
+      break;
+    case 7:
+      a->hgradreq = x;
+      break;
+    case 8:
+      a->eps = x;
+      break;
+    default:
+      a->band = x;
+      break;
+    }
+  }
+  if (npos != 1 + nfiles + has_out)
+    return pa_cli_error(cli,
+                        "metric %s: expected %d file arguments, got %d\n%s",
+                        argv[0], 1 + nfiles + has_out, npos, metric_usage);
+  a->in = pos[0];
+  for (int k = 0; k < nfiles; k++)
+    a->files[k] = pos[1 + k];
+  a->nfile = nfiles;
+  a->out = has_out ? pos[npos - 1] : NULL;
+  if (a->hmin > 0 && a->hmax > 0 && a->hmin > a->hmax)
+    return pa_cli_error(cli, "metric %s: -hmin (%g) is larger than -hmax (%g)",
+                        argv[0], a->hmin, a->hmax);
+  return 0;
+}
+
+/* One scalar field of a .sol file on a mesh of nv vertices: field 1 (its
+ * component comp, 1-based, of a vector or tensor field). *vals malloc'ed;
+ * *stride 1. The error names the file. */
+static pa_status read_scalar(const char *path, pa_idx nv, int comp,
+                             double **vals) {
+  pa_sol *sol = NULL;
+  char msg[700];
+  pa_status st = pa_sol_read(path, &sol);
+  if (st) return st;
+  pa_sol_kind kind;
+  int nc = 0;
+  double *v = NULL;
+  st = pa_sol_field(sol, 0, &kind, &nc, &v);
+  if (st == PA_SUCCESS && pa_sol_nvert(sol) != nv) {
+    snprintf(msg, sizeof msg, "%s: %d values, but the mesh has %d vertices",
+             path, (int)pa_sol_nvert(sol), (int)nv);
+    st = pa_cli_set_error(PA_ERR_FORMAT, msg);
+  } else if (st == PA_SUCCESS && (comp > nc || (nc > 1 && comp == 0))) {
+    snprintf(msg, sizeof msg,
+             "%s: its first field has %d components; choose one with -comp "
+             "(1 to %d)",
+             path, nc, nc);
+    st = pa_cli_set_error(PA_ERR_ARG, msg);
+  }
+  if (st == PA_SUCCESS) {
+    *vals = malloc(sizeof(double) * (nv ? (size_t)nv : 1));
+    if (!*vals) st = pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
+    for (pa_idx i = 0; i < nv && *vals && st == PA_SUCCESS; i++) {
+      (*vals)[i] = v[(size_t)nc * i + (comp ? comp - 1 : 0)];
+      if (!isfinite((*vals)[i])) {
+        snprintf(msg, sizeof msg, "%s: the value at vertex %d is not a number",
+                 path, (int)i + 1);
+        st = pa_cli_set_error(PA_ERR_FORMAT, msg);
+      }
+    }
+    if (st) {
+      free(*vals);
+      *vals = NULL;
+    }
+  }
+  pa_sol_destroy(sol);
+  return st;
+}
+
+/* A metric value as a full tensor (a size h: I / h^2). */
+static void as_tensor(int dim, int nc, const double *m, double *t) {
+  int nt = dim == 2 ? 3 : 6;
+  if (nc == nt) {
+    memcpy(t, m, sizeof(double) * nt);
+    return;
+  }
+  for (int k = 0; k < nt; k++)
+    t[k] = 0;
+  t[0] = t[2] = 1.0 / (m[0] * m[0]);
+  if (dim == 3) t[5] = t[0];
+}
+
+/* Attach met (ncomp per vertex) as the mesh's metric and write it to path. */
+static pa_status write_metric(pa_mesh *mesh, int ncomp, const double *met,
+                              const char *path) {
+  pa_sol *sol = NULL;
+  pa_status st = pa_mesh_set_metric(mesh, ncomp, met);
+  if (st == PA_SUCCESS) st = pa_mesh_metric_to_sol(mesh, 0, &sol);
+  if (st == PA_SUCCESS) st = pa_sol_write(sol, path);
+  pa_sol_destroy(sol);
+  return st;
+}
+
+/* Print a metric's complexity and the unit elements it asks for. */
+static void print_complexity(int dim, double c, const char *what) {
+  /* unit simplices: area sqrt(3)/4, volume sqrt(2)/12 */
+  double ne = dim == 2 ? c * 4 / sqrt(3.0) : c * 12 / sqrt(2.0);
+  printf("%s: complexity %.6g (about %.0f unit %s, %.0f vertices)\n", what, c,
+         ne, dim == 2 ? "triangles" : "tetrahedra",
+         dim == 2 ? c * 4 / sqrt(3.0) / 2 : ne / 5.5);
+}
+
+/* The operations on a metric read from files (vertex by vertex, rank 0). */
+static pa_status run_ops(const pa_cli *cli, const char *op, pa_mesh *mesh,
+                         const metric_args *a) {
+  pa_status st = PA_SUCCESS;
+  double *out = NULL;
+  int d = pa_mesh_dim(mesh);
+  pa_idx nv = pa_mesh_nvert(mesh);
+  (void)cli;
+  st = pa_cli_attach_metric(mesh, a->files[0]);
+  if (st) return st;
+  int nc = pa_mesh_metric_ncomp(mesh);
+  if (!strcmp(op, "intersect")) {
+    pa_mesh *m2 = NULL;
+    st = pa_mesh_copy(mesh, &m2);
+    if (st == PA_SUCCESS) st = pa_cli_attach_metric(m2, a->files[1]);
+    if (st == PA_SUCCESS) {
+      /* a size and a tensor: both as tensors */
+      int n1 = pa_mesh_metric_ncomp(mesh), n2 = pa_mesh_metric_ncomp(m2);
+      int nt = n1 == n2 ? n1 : (d == 2 ? 3 : 6);
+      double *ta = malloc(sizeof(double) * nt * (nv ? nv : 1));
+      double *tb = malloc(sizeof(double) * nt * (nv ? nv : 1));
+      out = malloc(sizeof(double) * nt * (nv ? nv : 1));
+      if (!ta || !tb || !out)
+        st = pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
+      for (pa_idx v = 0; st == PA_SUCCESS && v < nv; v++) {
+        const double *x = pa_mesh_metric(mesh) + (size_t)n1 * v;
+        const double *y = pa_mesh_metric(m2) + (size_t)n2 * v;
+        if (nt == 1) {
+          ta[v] = x[0];
+          tb[v] = y[0];
+          continue;
+        }
+        as_tensor(d, n1, x, ta + (size_t)nt * v);
+        as_tensor(d, n2, y, tb + (size_t)nt * v);
+      }
+      if (st == PA_SUCCESS)
+        st = pa_metric_intersect_all(d, nt, nv, ta, tb, out);
+      if (st == PA_SUCCESS) st = write_metric(mesh, nt, out, a->out);
+      free(ta);
+      free(tb);
+    }
+    pa_mesh_destroy(m2);
+  } else if (!strcmp(op, "scale")) {
+    st = pa_metric_scale_complexity(mesh, nc, pa_mesh_metric(mesh), a->target);
+    if (st == PA_SUCCESS)
+      st = write_metric(mesh, nc, pa_mesh_metric(mesh), a->out);
+  } else if (!strcmp(op, "clamp")) {
+    st = pa_mesh_metric_clamp(mesh, a->hmin, a->hmax);
+    if (st == PA_SUCCESS)
+      st = write_metric(mesh, nc, pa_mesh_metric(mesh), a->out);
+  } else if (!strcmp(op, "grade")) {
+    st = pa_mesh_metric_grade(mesh, a->hgrad, a->hgradreq);
+    if (st == PA_SUCCESS)
+      st = write_metric(mesh, nc, pa_mesh_metric(mesh), a->out);
+  } else { /* complexity */
+    double c = 0;
+    st = pa_metric_complexity(mesh, nc, pa_mesh_metric(mesh), &c);
+    if (st == PA_SUCCESS) print_complexity(d, c, a->files[0]);
+  }
+  free(out);
+  return st;
+}
+
+/* hessian or levelset on rank 0's whole mesh. */
+static pa_status run_field(const char *op, pa_mesh *mesh,
+                           const metric_args *a) {
+  pa_status st;
+  int d = pa_mesh_dim(mesh), nt = d == 2 ? 3 : 6;
+  pa_idx nv = pa_mesh_nvert(mesh);
+  double *u = NULL, *met = malloc(sizeof(double) * nt * (nv ? nv : 1));
+  if (!met) return pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
+  if (!strcmp(op, "hessian")) {
+    pa_metric_hessian_opts o;
+    pa_metric_hessian_opts_default(&o);
+    o.p = a->p;
+    o.target = a->target;
+    o.err = a->err;
+    o.hmin = a->hmin;
+    o.hmax = a->hmax;
+    o.hgrad = a->hgrad;
+    o.recovery = (pa_recovery)a->recovery;
+    st = read_scalar(a->field, nv, a->comp, &u);
+    if (st == PA_SUCCESS) st = pa_metric_from_hessian(mesh, u, 1, &o, met);
+  } else {
+    pa_metric_levelset_opts o;
+    pa_metric_levelset_opts_default(&o);
+    o.eps = a->eps;
+    o.hmin = a->hmin;
+    o.hmax = a->hmax;
+    o.band = a->band;
+    if (a->hgrad_set) o.hgrad = a->hgrad;
+    st = read_scalar(a->ls, nv, a->comp, &u);
+    if (st == PA_SUCCESS) st = pa_metric_from_levelset(mesh, u, &o, met);
+  }
+  if (st == PA_SUCCESS) st = write_metric(mesh, nt, met, a->out);
+  if (st == PA_SUCCESS) {
+    double c = 0;
+    st = pa_metric_complexity(mesh, nt, met, &c);
+    if (st == PA_SUCCESS) print_complexity(d, c, a->out);
+  }
+  free(u);
+  free(met);
+  return st;
+}
+
+/* The name of the field the distributed path carries. */
+#define CLI_FIELD "pa.cli.field"
+
+/* hessian or levelset on the distributed mesh (more than one rank): rank 0
+ * reads the field and distributes the mesh with it (overlap 2), every rank
+ * computes its part, rank 0 gathers the metric and writes it. Collective. */
+static pa_status run_field_dist(const pa_cli *cli, const char *op,
+                                pa_mesh *mesh, const metric_args *a) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = NULL;
+  pa_mesh *g = NULL;
+  double *u = NULL, c = 0;
+  if (cli->rank == 0) {
+    st = read_scalar(!strcmp(op, "hessian") ? a->field : a->ls,
+                     pa_mesh_nvert(mesh), a->comp, &u);
+    if (st == PA_SUCCESS) st = pa_mesh_add_field(mesh, CLI_FIELD, 1, u);
+  }
+  int bad = st != PA_SUCCESS;
+  MPI_Bcast(&bad, 1, MPI_INT, 0, cli->comm);
+  if (bad) goto done;
+  st = pa_dmesh_distribute(cli->comm, 0, mesh, 2, &dm);
+  if (st) goto done;
+  pa_mesh *lm = pa_dmesh_mesh(dm);
+  int field = pa_mesh_nfield(lm) - 1; /* the one added last */
+  if (!strcmp(op, "hessian")) {
+    pa_metric_hessian_opts o;
+    pa_metric_hessian_opts_default(&o);
+    o.p = a->p;
+    o.target = a->target;
+    o.err = a->err;
+    o.hmin = a->hmin;
+    o.hmax = a->hmax;
+    o.hgrad = a->hgrad;
+    o.recovery = (pa_recovery)a->recovery;
+    st = pa_dmesh_metric_from_hessian(dm, field, 0, &o);
+  } else {
+    pa_metric_levelset_opts o;
+    pa_metric_levelset_opts_default(&o);
+    o.eps = a->eps;
+    o.hmin = a->hmin;
+    o.hmax = a->hmax;
+    o.band = a->band;
+    if (a->hgrad_set) o.hgrad = a->hgrad;
+    st = pa_dmesh_metric_from_levelset(dm, field, &o);
+  }
+  if (st == PA_SUCCESS) st = pa_dmesh_metric_complexity(dm, &c);
+  if (st == PA_SUCCESS) st = pa_dmesh_gather(dm, 0, &g);
+  if (st == PA_SUCCESS && cli->rank == 0) {
+    pa_sol *sol = NULL;
+    st = pa_mesh_metric_to_sol(g, 0, &sol);
+    if (st == PA_SUCCESS) st = pa_sol_write(sol, a->out);
+    pa_sol_destroy(sol);
+    if (st == PA_SUCCESS) print_complexity(pa_mesh_dim(g), c, a->out);
+  }
+  {
+    int ok = st == PA_SUCCESS;
+    MPI_Bcast(&ok, 1, MPI_INT, 0, cli->comm);
+    if (!ok && st == PA_SUCCESS) st = PA_ERR_IO;
+  }
+done:
+  free(u);
+  pa_mesh_destroy(g);
+  pa_dmesh_destroy(dm);
+  return st;
+}
+
+int pa_cli_metric(const pa_cli *cli, int argc, char **argv) {
+  if (argc < 2) return pa_cli_error(cli, "%s", metric_usage);
+  const char *op = argv[1];
+  if (!strcmp(op, "-h") || !strcmp(op, "--help")) {
+    if (cli->rank == 0) fputs(metric_usage, stdout);
+    return 0;
+  }
+  static const struct {
+    const char *name;
+    int nfiles, out;
+  } ops[] = {{"hessian", 0, 1},   {"levelset", 0, 1}, {"intersect", 2, 1},
+             {"scale", 1, 1},     {"clamp", 1, 1},    {"grade", 1, 1},
+             {"complexity", 1, 0}};
+  int k = 0, nops = sizeof ops / sizeof *ops;
+  while (k < nops && strcmp(op, ops[k].name))
+    k++;
+  if (k == nops) { /* a built-in analytic field */
+    if (argc != 4)
+      return pa_cli_error(cli, "usage: padapt metric NAME[:h] IN OUT.sol "
+                               "(or a subcommand: padapt metric -h)");
+    pa_mesh *mesh = NULL;
+    pa_sol *sol = NULL;
+    pa_status st = pa_cli_read_mesh(cli, argv[2], &mesh);
+    if (cli->rank != 0) return st ? 1 : 0;
+    if (st == PA_SUCCESS) st = pa_metric_analytic(mesh, op);
+    if (st == PA_SUCCESS) st = pa_mesh_metric_to_sol(mesh, 0, &sol);
+    if (st == PA_SUCCESS) st = pa_sol_write(sol, argv[3]);
+    pa_sol_destroy(sol);
+    pa_mesh_destroy(mesh);
+    return pa_cli_fail(cli, st);
+  }
+  metric_args a;
+  if (parse(cli, argc - 1, argv + 1, ops[k].nfiles, ops[k].out, &a)) return 1;
+  if (!strcmp(op, "hessian") && (!a.field || (a.target > 0) == (a.err > 0)))
+    return pa_cli_error(cli, "metric hessian: give -field U.sol and either "
+                             "-target N or -err E");
+  if (!strcmp(op, "levelset") &&
+      (!a.ls || !(a.eps > 0) || !(a.hmin > 0) || !(a.hmax > 0)))
+    return pa_cli_error(cli, "metric levelset: give -ls PHI.sol, -eps E, "
+                             "-hmin H and -hmax H");
+  if (!strcmp(op, "scale") && !(a.target > 0))
+    return pa_cli_error(cli, "metric scale: give -target N");
+  pa_mesh *mesh = NULL;
+  pa_status st = pa_cli_read_mesh(cli, a.in, &mesh);
+  if (k < 2 && cli->size > 1) { /* distributed */
+    int bad = cli->rank == 0 && st != PA_SUCCESS;
+    MPI_Bcast(&bad, 1, MPI_INT, 0, cli->comm);
+    if (bad) {
+      pa_mesh_destroy(mesh);
+      return pa_cli_fail(cli, st);
+    }
+    st = run_field_dist(cli, op, mesh, &a);
+    pa_mesh_destroy(mesh);
+    return cli->rank == 0 ? pa_cli_fail(cli, st) : (st ? 1 : 0);
+  }
+  if (cli->rank != 0) return st ? 1 : 0;
+  if (st == PA_SUCCESS)
+    st = k < 2 ? run_field(op, mesh, &a) : run_ops(cli, op, mesh, &a);
+  pa_mesh_destroy(mesh);
+  return pa_cli_fail(cli, st);
+}
+
+int pa_cli_levelset(const pa_cli *cli, int argc, char **argv) {
+  if (argc != 4)
+    return pa_cli_error(
+        cli, "usage: padapt levelset NAME IN OUT.sol\n"
+             "  NAME: sphere:R[:cx,cy,cz] ellipsoid:a,b,c[:cx,cy,cz]\n"
+             "        box:lx,ly,lz[:cx,cy,cz] plane:nx,ny,nz,d\n"
+             "        (2D: circle as sphere:R[:cx,cy], ellipse:a,b,\n"
+             "        box:lx,ly, plane:nx,ny,d)");
+  pa_mesh *mesh = NULL;
+  pa_sol *sol = NULL;
+  double *phi = NULL;
+  pa_status st = pa_cli_read_mesh(cli, argv[2], &mesh);
+  if (cli->rank != 0) return st ? 1 : 0;
+  if (st == PA_SUCCESS) {
+    pa_idx nv = pa_mesh_nvert(mesh);
+    phi = malloc(sizeof(double) * (nv ? nv : 1));
+    if (!phi) st = pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
+    if (st == PA_SUCCESS) st = pa_levelset_analytic(mesh, argv[1], phi);
+    if (st == PA_SUCCESS) st = pa_sol_create(pa_mesh_dim(mesh), nv, &sol);
+    if (st == PA_SUCCESS) st = pa_sol_add_field(sol, PA_SOL_SCALAR, phi);
+    if (st == PA_SUCCESS) st = pa_sol_write(sol, argv[3]);
+  }
+  pa_sol_destroy(sol);
+  free(phi);
+  pa_mesh_destroy(mesh);
+  return pa_cli_fail(cli, st);
+}
