@@ -270,6 +270,26 @@ def levelset_2d():
               "levelset on 2 ranks: same metric as on 1 (%.1e)" % rel)
 
 
+def vector_component():
+    # component 2 of a vector field (velocity-like: (0.3, u)) is the scalar u
+    x, _ = seed_field.read("box.mesh", 2)
+    u = seed_field.u_of(x)
+    with open("vec.sol", "w") as f:
+        f.write("MeshVersionFormatted 2\nDimension 2\nSolAtVertices\n%d\n1 2\n" % len(u))
+        f.write("\n".join("0.3 %.17g" % v for v in u))
+        f.write("\nEnd\n")
+    seed_field.write_sol("u.sol", 2, u)
+    run("metric", "hessian", "box.mesh", "-field", "u.sol", "-target", 500, "s1.sol")
+    run("metric", "hessian", "box.mesh", "-field", "vec.sol", "-comp", 2, "-target", 500,
+        "s2.sol")
+    check(np.array_equal(read_sol("s1.sol"), read_sol("s2.sol")),
+          "hessian: -comp 2 of a vector field is that component")
+    out = run("metric", "hessian", "box.mesh", "-field", "vec.sol", "-target", 500,
+              "bad.sol", fail=True)
+    check("-comp" in out and not os.path.exists("bad.sol"),
+          "hessian: a vector field without -comp is refused")
+
+
 def bad_input():
     # a field with the wrong number of values
     seed_field.write_sol("short.sol", 2, np.zeros(7))
@@ -306,6 +326,7 @@ def bad_input():
 hessian_2d()
 ops_2d()
 levelset_2d()
+vector_component()
 bad_input()
 if failures:
     print("%d failure(s)" % len(failures))
