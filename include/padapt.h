@@ -473,7 +473,8 @@ pa_status pa_sol_field(pa_sol *sol, int k, pa_sol_kind *kind, int *ncomp,
 
 /** Read .sol (ASCII) or .solb (binary, versions 1-4), chosen by extension. */
 pa_status pa_sol_read(const char *path, pa_sol **sol);
-/** Write .sol or .solb (by extension), atomically (temporary file + rename). */
+/** Write .sol or .solb (by extension), through a temporary file (see
+ *  pa_output_begin). */
 pa_status pa_sol_write(const pa_sol *sol, const char *path);
 
 /** Attach field k of sol as the mesh's metric (scalar: size, tensor: SPD). */
@@ -495,11 +496,69 @@ pa_status pa_mesh_read(const char *path, pa_mesh **mesh);
 /**
  * Write a mesh, format chosen by extension: .mesh/.meshb, .msh (Gmsh 4.1),
  * .vtu (VTK XML, appended raw binary; point data: metric and fields; cell
- * data: reference and quality). Written to a temporary file then renamed, so a
- * failure never leaves a partial file. opts may be NULL.
+ * data: reference and quality). Written to a temporary file then renamed (see
+ * pa_output_begin), so a failure never leaves a partial file. opts may be
+ * NULL.
  */
 pa_status pa_mesh_write(pa_mesh *mesh, const char *path,
                         const pa_write_opts *opts);
+
+/* ------------------------------------------------------------------------ */
+/* Output transactions: several output files, all or nothing                */
+/* ------------------------------------------------------------------------ */
+
+/**
+ * An output transaction of the calling thread. Every file padapt writes
+ * (pa_mesh_write, pa_sol_write, pa_stats_write_json, pa_dmesh_write) goes to
+ * a temporary "PATH.tmp.PID" in PATH's directory, flushed, synced and closed
+ * before anything is renamed. Outside a transaction each file is renamed
+ * onto PATH as soon as it is complete; between pa_output_begin and
+ * pa_output_commit the temporaries wait, and the commit renames them all
+ * only if none failed. A path that exists and is not a regular file (a
+ * directory, a symbolic link, a device such as /dev/null) is refused: the
+ * write fails naming it and the transaction fails.
+ */
+typedef struct pa_output pa_output;
+
+/**
+ * Open an output transaction in the calling thread, or join the one already
+ * open (transactions nest; only the outermost commit or abort acts). Not
+ * collective. Fails only on a NULL argument.
+ */
+pa_status pa_output_begin(pa_output **tx);
+/**
+ * End the transaction: if no file of it failed, rename every temporary onto
+ * its path (with SIGINT and SIGTERM blocked, so that those signals never
+ * stop the renames half-way); otherwise remove every temporary, leave every
+ * path as it was and return the first failure. Not collective. A rename that
+ * fails (the directory changed meanwhile) is reported naming the file; the
+ * files renamed before it stay.
+ */
+pa_status pa_output_commit(pa_output *tx);
+/** End the transaction removing every temporary: no path changes. */
+void pa_output_abort(pa_output *tx);
+/**
+ * Collective end of one transaction per rank: commit on every rank if st is
+ * PA_SUCCESS on every rank, abort everywhere otherwise. Returns the same
+ * status on every rank.
+ */
+pa_status pa_output_end(MPI_Comm comm, pa_output *tx, pa_status st);
+/**
+ * Check, before a long computation, that path can be written: refused if it
+ * exists and is not a regular file, or if its directory is missing or not
+ * writable. Not collective.
+ */
+pa_status pa_output_check(const char *path);
+/**
+ * Install handlers of SIGINT and SIGTERM that remove the temporaries of every
+ * output being written (async-signal-safe calls only), then end the process
+ * by the signal's default action. A signal that is ignored or already has a
+ * handler is left alone. The handler runs in the thread that receives the
+ * signal: block SIGINT/SIGTERM in threads that may free output names while
+ * another thread runs it (the padapt CLI blocks them before MPI starts its
+ * threads). Not collective.
+ */
+pa_status pa_output_handle_signals(void);
 
 /* ------------------------------------------------------------------------ */
 /* Sequential remeshers (plug-in interface)                                 */
@@ -643,7 +702,10 @@ pa_status pa_dmesh_distribute(MPI_Comm comm, int root, pa_mesh *mesh,
  * a distributed set written by pa_dmesh_write (see pa_dmesh_is_set) by any
  * number of ranks: with as many ranks as writers each rank reads its own
  * file; otherwise the files are shared out and the mesh is repartitioned.
- * A missing or inconsistent file gives the same error on every rank.
+ * Every rank file is checked against the set's manifest OUT.manifest (size,
+ * FNV-1a checksum, counts) and its own header: a missing file, a stale file
+ * of another write or a modified one gives the same error on every rank,
+ * naming the file. A set without manifest gets the header checks only.
  */
 pa_status pa_dmesh_read(MPI_Comm comm, const char *path, int overlap,
                         pa_dmesh **dm);
@@ -655,15 +717,21 @@ pa_status pa_dmesh_read(MPI_Comm comm, const char *path, int overlap,
  * plus ParMmg's vertex communicators and padapt keywords (global ids, owners,
  * number of ranks, metric and fields, and the user values: pa_dmesh_read
  * recreates them by name, kind, reference and type -- a value of a derived
- * datatype comes back as MPI_BYTE x its size); rank 0 also writes OUT.pvtu referencing OUT.<r>.vtu (owned
- * elements, cell fields "rank" and "ref"), which ParaView opens. Each file is
- * written atomically (temporary name, then rename).
+ * datatype comes back as MPI_BYTE x its size); rank 0 also writes OUT.pvtu
+ * referencing OUT.<r>.vtu (owned elements, cell fields "rank" and "ref"),
+ * which ParaView opens, and the manifest OUT.manifest (number of ranks,
+ * counts, size and FNV-1a 64 checksum of every rank file). All the files are
+ * one output transaction per rank (pa_output_begin; or part of the caller's
+ * open transaction), committed only when every rank wrote all of its files;
+ * the commit also removes a file at path itself and the rank files of ranks
+ * beyond the communicator's size, which would shadow or pollute the set.
  */
 pa_status pa_dmesh_write(pa_dmesh *dm, const char *path);
 
 /**
  * 1 if path ("OUT.meshb" or "OUT.mesh") names a distributed set: the file
- * itself does not exist but OUT.0.meshb (or OUT.0.mesh) does. Not collective.
+ * itself does not exist but OUT.manifest or OUT.0.meshb does. Not
+ * collective.
  */
 int pa_dmesh_is_set(const char *path);
 

@@ -48,6 +48,20 @@ int pa_cli_error(const pa_cli *cli, const char *fmt, ...)
 /* Print the library's last error for status st; returns 1 (0 on success). */
 int pa_cli_fail(const pa_cli *cli, pa_status st);
 
+/* Check, on rank 0 before the work starts, that the n output paths (NULL
+ * entries skipped) can be written and are all different; prints the error
+ * ("CMD: ...") and returns 1 on every rank if not, 0 if they can.
+ * Collective. */
+int pa_cli_check_outputs(const pa_cli *cli, const char *cmd,
+                         const char *const *paths, int n);
+/* End the output transaction of a command (pa_output_end over comm:
+ * MPI_COMM_SELF for outputs written by rank 0 alone). Collective over comm.
+ * Test hook: with PADAPT_TEST_HOLD_OUTPUT=FILE in the environment and every
+ * output written, rank 0 creates FILE and every rank waits 30 s before the
+ * commit, so that a test can signal the command while its temporaries
+ * exist. */
+pa_status pa_cli_output_end(MPI_Comm comm, pa_output *tx, pa_status st);
+
 /* Read a mesh given on the command line: a sequential file (read by rank 0)
  * or a distributed set OUT.<r>.meshb (read by all ranks, gathered on rank 0).
  * Collective. A mesh listing no boundary entity gets them all (ref 0); the

@@ -10,7 +10,10 @@
  * -outfield PATH). Prints `padapt stats` before and after, the operation
  * counts and the time. Exit status: 0 on success and on "target missed" (a
  * valid mesh that misses some edge lengths: a warning says so, and the JSON
- * report's "outcome" field), 1 on any error (no output written).
+ * report's "outcome" field), 1 on any error. The outputs are checked before
+ * the work starts (pa_cli_check_outputs) and written in one output
+ * transaction: on any error none of them is written and files already at
+ * their paths stay as they were.
  *
  * On several MPI ranks (or with -distributed-output or -mem) the parallel
  * piece loop of tools/cmd_padapt.c does the work, with the same arguments.
@@ -133,10 +136,28 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
   return 0;
 }
 
+/* The outputs of `padapt adapt`, checked before the work starts. */
+static int check_outputs(const pa_cli *cli, const pa_cli_adapt_args *a) {
+  char *sol = NULL, *fields = NULL;
+  const char *paths[4] = {a->out, NULL, NULL, a->json};
+  if (!a->distributed) { /* a set carries its metric and fields */
+    if (!a->nosol)
+      paths[1] = a->outsol ? a->outsol : (sol = pa_cli_replace_ext(a->out, ".sol"));
+    if (a->field)
+      paths[2] = a->outfield ? a->outfield
+                             : (fields = pa_cli_replace_ext(a->out, ".fields.sol"));
+  }
+  int bad = pa_cli_check_outputs(cli, "adapt", paths, 4);
+  free(sol);
+  free(fields);
+  return bad;
+}
+
 int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
   pa_cli_adapt_args args;
   int prc = parse_args(cli, argc, argv, &args);
   if (prc) return prc > 0 ? 1 : 0;
+  if (check_outputs(cli, &args)) return 1;
   /* On several ranks, or when asked for a distributed output or a memory
    * bound, the parallel piece loop (tools/cmd_padapt.c) does the work. */
   if (cli->size > 1 || args.distributed || args.mem_mb > 0)
@@ -234,7 +255,10 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
     fprintf(stderr, "padapt: warning: adapt: target missed (valid mesh, but "
                     "the given metric is not met; see the outcome line)\n");
 
-  st = pa_mesh_write(mesh, out, NULL);
+  /* every output in one transaction: all of them or none */
+  pa_output *tx = NULL;
+  st = pa_output_begin(&tx);
+  if (st == PA_SUCCESS) st = pa_mesh_write(mesh, out, NULL);
   if (st == PA_SUCCESS && !nosol) {
     solpath = outsol ? NULL : pa_cli_replace_ext(out, ".sol");
     st = pa_mesh_metric_to_sol(mesh, 0, &sol);
@@ -263,10 +287,13 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
     free(fid);
     extra = b.fail || !fid ? NULL : b.p;
     if (!extra) free(b.p);
-    st = extra ? pa_stats_write_json(after, extra, json) : PA_ERR_MEMORY;
+    st = extra ? pa_stats_write_json(after, extra, json)
+               : pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
   }
+  st = pa_cli_output_end(MPI_COMM_SELF, tx, st);
   if (st != PA_SUCCESS) {
     pa_cli_fail(cli, st);
+    pa_cli_error(cli, "adapt: no output written");
     goto done;
   }
   rc = 0;

@@ -18,7 +18,10 @@
  * Every rank parses the same arguments, so usage errors are seen by all
  * ranks at once; failures on rank 0 alone (reading) are broadcast before
  * any collective call. Exit status: 0 on success (also when the loop
- * stalled: a warning says so), 1 on any error (no output written).
+ * stalled: a warning says so), 1 on any error. Every output (the mesh or
+ * the set, the metric, the fields, the JSON report) is written in one output
+ * transaction per rank, committed only when every rank wrote all of its
+ * files: on any error none of them is written.
  */
 #include "cli.h"
 
@@ -272,12 +275,14 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
               (long long)rep.ntagged_left);
   }
 
-  /* write */
+  /* write: every output of every rank in one transaction */
   tstep[3] = lap(&t0);
+  pa_output *tx = NULL;
+  st = pa_output_begin(&tx);
   if (distributed) {
-    st = pa_dmesh_write(dm, out);
+    if (st == PA_SUCCESS) st = pa_dmesh_write(dm, out);
   } else {
-    st = pa_dmesh_gather(dm, 0, &g);
+    if (st == PA_SUCCESS) st = pa_dmesh_gather(dm, 0, &g);
     if (st == PA_SUCCESS && cli->rank == 0) {
       st = pa_mesh_write(g, out, NULL);
       if (st == PA_SUCCESS && !nosol) {
@@ -295,21 +300,8 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
         st = pa_cli_write_fields(g, args->outfield ? args->outfield : path);
       }
     }
-    ok = st == PA_SUCCESS;
-    MPI_Bcast(&ok, 1, MPI_INT, 0, cli->comm);
-    if (!ok && st == PA_SUCCESS) st = PA_ERR_IO;
   }
-  if (st) {
-    if (cli->rank == 0) pa_cli_fail(cli, st);
-    goto done;
-  }
-  tstep[4] = lap(&t0);
-  if (cli->verbosity >= 2 && cli->rank == 0)
-    fprintf(stderr, "padapt: rank 0: read and distribute %.3f s, stats %.3f s, "
-                    "adapt %.3f s, stats %.3f s, gather and write %.3f s\n",
-            tstep[0], tstep[1], tstep[2], tstep[3], tstep[4]);
-
-  /* JSON */
+  /* the peak memory of every rank, writing included, for the report */
   mine[0] = pa_memory_peak();
   mine[1] = pa_peak_rss();
   if (cli->rank == 0) {
@@ -326,17 +318,25 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
       }
     free(both);
   }
-  ok = 1;
-  if (json && cli->rank == 0) {
+  if (st == PA_SUCCESS && json && cli->rank == 0) {
     extra = mem && rss ? json_extra(cli, &rep, &before, mem, rss, r->name) : NULL;
-    st = extra ? pa_stats_write_json(after, extra, json) : PA_ERR_MEMORY;
-    if (st) {
-      pa_cli_fail(cli, st);
-      ok = 0;
-    }
+    st = extra ? pa_stats_write_json(after, extra, json)
+               : pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
   }
-  MPI_Bcast(&ok, 1, MPI_INT, 0, cli->comm);
-  rc = ok ? 0 : 1;
+  st = pa_cli_output_end(cli->comm, tx, st);
+  if (st) {
+    if (cli->rank == 0) {
+      pa_cli_fail(cli, st);
+      pa_cli_error(cli, "adapt: no output written");
+    }
+    goto done;
+  }
+  tstep[4] = lap(&t0);
+  if (cli->verbosity >= 2 && cli->rank == 0)
+    fprintf(stderr, "padapt: rank 0: read and distribute %.3f s, stats %.3f s, "
+                    "adapt %.3f s, stats %.3f s, gather and write %.3f s\n",
+            tstep[0], tstep[1], tstep[2], tstep[3], tstep[4]);
+  rc = 0;
 done:
   free(extra);
   free(path);

@@ -10,7 +10,9 @@
  * per rank, the imbalance (max / mean) and the edge cut (faces between
  * elements of different ranks). -check runs the collective check of the
  * distributed mesh. With -v 2, each rank reports its time and peak memory per
- * step.
+ * step. The set is written in one output transaction per rank: all of its
+ * files, or (on any error, or on SIGINT/SIGTERM) none, with the files of a
+ * previous set of the same name left as they were.
  */
 #include "cli.h"
 
@@ -68,6 +70,7 @@ int pa_cli_partition(const pa_cli *cli, int argc, char **argv) {
     if (cli->rank == 0) fputs(partition_usage, stderr);
     return 1;
   }
+  if (pa_cli_check_outputs(cli, "partition", &out, 1)) return 1;
   pa_dmesh *dm = NULL;
   pa_gid *nel = NULL;
   double imb = 0, t;
@@ -95,7 +98,10 @@ int pa_cli_partition(const pa_cli *cli, int argc, char **argv) {
     goto done;
   }
   t = pa_wtime();
-  st = pa_dmesh_write(dm, out);
+  pa_output *tx = NULL;
+  st = pa_output_begin(&tx);
+  if (st == PA_SUCCESS) st = pa_dmesh_write(dm, out);
+  st = pa_cli_output_end(cli->comm, tx, st);
   report(cli, "write", pa_wtime() - t);
   if (st) {
     rc = pa_cli_fail(cli, st);

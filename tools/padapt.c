@@ -6,15 +6,23 @@
  * Every command returns an exit status; main() makes the ranks agree on it
  * (the maximum) so that `mpiexec` reports a failure on any rank. Commands that
  * work on one sequential mesh run on rank 0 while the other ranks wait.
+ *
+ * Outputs: every file goes through the library's output transactions; a
+ * command writing several files writes them in one (pa_cli_output_end), so
+ * they all appear or none does. SIGINT and SIGTERM remove the temporaries
+ * being written (pa_output_handle_signals); main() blocks both before MPI
+ * starts its threads, so that only the main thread ever runs the handler.
  */
 #include "cli.h"
 
 #include "core/core.h"
 
 #include <math.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 static const char *usage_text =
     "usage: padapt [-v N] COMMAND [ARGS]\n"
@@ -307,6 +315,44 @@ pa_status pa_cli_write_fields(pa_mesh *mesh, const char *path) {
   return st;
 }
 
+int pa_cli_check_outputs(const pa_cli *cli, const char *cmd,
+                         const char *const *paths, int n) {
+  int bad = 0;
+  if (cli->rank == 0) {
+    for (int i = 0; i < n && !bad; i++) {
+      if (!paths[i]) continue;
+      for (int j = 0; j < i && !bad; j++)
+        if (paths[j] && !strcmp(paths[i], paths[j]))
+          bad = pa_cli_error(cli, "%s: %s is given for two outputs", cmd,
+                             paths[i]);
+      pa_status st = bad ? PA_SUCCESS : pa_output_check(paths[i]);
+      if (st) bad = pa_cli_fail(cli, st);
+    }
+  }
+  MPI_Bcast(&bad, 1, MPI_INT, 0, cli->comm);
+  return bad;
+}
+
+/* How long the test hook of pa_cli_output_end holds the outputs: long
+ * enough for a test under the sanitizers to send its signal, short enough
+ * that a forgotten hook only delays a run. */
+#define PA_CLI_HOLD_S 30
+
+pa_status pa_cli_output_end(MPI_Comm comm, pa_output *tx, pa_status st) {
+  const char *hold = getenv("PADAPT_TEST_HOLD_OUTPUT");
+  if (hold && hold[0] && st == PA_SUCCESS) {
+    int rank = 0;
+    MPI_Comm_rank(comm, &rank);
+    if (rank == 0) {
+      FILE *fp = fopen(hold, "w");
+      if (fp) fclose(fp);
+    }
+    struct timespec tenth = {0, 100000000};
+    for (int i = 0; i < 10 * PA_CLI_HOLD_S; i++) nanosleep(&tenth, NULL);
+  }
+  return pa_output_end(comm, tx, st);
+}
+
 /* Report a failed read on rank 0 (the other ranks return quietly). */
 static int read_failed(const pa_cli *cli, pa_status st) {
   return cli->rank == 0 ? pa_cli_fail(cli, st) : 1;
@@ -474,11 +520,19 @@ static int dispatch(pa_cli *cli, int argc, char **argv) {
 
 int main(int argc, char **argv) {
   int provided = 0;
+  sigset_t term, old;
+  sigemptyset(&term);
+  sigaddset(&term, SIGINT);
+  sigaddset(&term, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &term, &old); /* inherited by MPI's threads */
   if (MPI_Init_thread(&argc, &argv, MPI_THREAD_MULTIPLE, &provided) !=
       MPI_SUCCESS) {
     fprintf(stderr, "padapt: MPI initialisation failed\n");
     return 1;
   }
+  if (pa_output_handle_signals() != PA_SUCCESS)
+    fprintf(stderr, "padapt: warning: %s\n", pa_last_error());
+  pthread_sigmask(SIG_SETMASK, &old, NULL);
   pa_cli cli = {MPI_COMM_WORLD, 0, 1, 0};
   MPI_Comm_rank(cli.comm, &cli.rank);
   MPI_Comm_size(cli.comm, &cli.size);

@@ -1,6 +1,7 @@
 /*
- * dio.c -- distributed I/O: a set of per-rank Medit files OUT.<r>.meshb plus
- * OUT.pvtu / OUT.<r>.vtu for ParaView, readable by any number of ranks.
+ * dio.c -- distributed I/O: a set of per-rank Medit files OUT.<r>.meshb, its
+ * manifest OUT.manifest, plus OUT.pvtu / OUT.<r>.vtu for ParaView, readable
+ * by any number of ranks; and the collective end of output transactions.
  *
  * File convention (docs/DMESH.md): OUT.<r>.meshb is a standard binary Medit
  * mesh (written by pa_mesh_write) of the elements owned by rank r, all their
@@ -21,9 +22,16 @@
  *    order).
  * Every keyword starts with its code (int32) and the absolute position of the
  * next keyword (int32 in versions 1-2, int64 in 3-4), as libMeshb does.
- * Invariants: files are complete or absent (written under a temporary name,
- * renamed last); a reader checks each file's header (number of ranks, own
- * rank, global counts) before trusting it.
+ * The manifest (text, written by rank 0) lists the number of ranks, the
+ * dimension, the global counts and, per rank file, its entity counts, size
+ * and FNV-1a 64 checksum.
+ * Invariants: the files of one write are one output transaction per rank,
+ * committed only when every rank wrote all of its files (pa__output_end); a
+ * write also removes what would shadow or pollute the set (a file at OUT
+ * itself, rank files of higher ranks left by a write on more ranks). A
+ * reader checks every rank file against the manifest (size, checksum,
+ * counts) and its header (number of ranks, own rank, global counts) before
+ * trusting it; a set without manifest gets the header checks only.
  */
 #include "dmesh/dmesh.h"
 #include "io/io.h"
@@ -49,8 +57,16 @@ enum {
   KW_FLAGS = 2110,         /* PadaptFlags: uint8 per V, E, B, D entity */
   KW_VALUE = 2111,         /* PadaptValue: one user value (vdesc + data) */
   KW_END = 54,
-  FORMAT_VERSION = 1
+  FORMAT_VERSION = 1,
+  MANIFEST_VERSION = 1
 };
+
+/* Words per rank in a manifest: file counts (V, E, B, D), bytes, checksum. */
+enum { MF_COUNT = 0, MF_BYTES = PA_NKIND, MF_HASH, MF_WORDS };
+
+/* Entity kinds as messages name them. */
+static const char *const kind_name[PA_NKIND] = {"vertices", "elements",
+                                                "boundary entities", "edges"};
 
 /* Header words. */
 enum { H_FORMAT, H_NRANKS, H_RANK, H_DIM, H_NGLOB, H_NFILE = H_NGLOB + 4,
@@ -71,35 +87,43 @@ static void rank_path(const char *base, int r, const char *ext, char *out,
   snprintf(out, len, "%s.%d%s", base, r, ext);
 }
 
+static void manifest_path(const char *base, char *out, size_t len) {
+  snprintf(out, len, "%s.manifest", base);
+}
+
 static int file_exists(const char *p) {
   struct stat sb;
   return stat(p, &sb) == 0;
 }
 
 int pa_dmesh_is_set(const char *path) {
-  char base[4096], p0[4200];
+  char base[4096], p[4200];
   if (!path || file_exists(path)) return 0;
   path_base(path, base, sizeof base);
-  rank_path(base, 0, ".meshb", p0, sizeof p0);
-  return file_exists(p0);
+  manifest_path(base, p, sizeof p);
+  if (file_exists(p)) return 1;
+  rank_path(base, 0, ".meshb", p, sizeof p);
+  return file_exists(p);
 }
 
 /* ---- appending keywords to a binary Medit file ---- */
 
 typedef struct kwfile {
-  FILE *fp;
+  FILE *fp; /* the temporary of path, open in out */
   const char *path;
   int ver;
   int64_t pos; /* where the next keyword starts */
 } kwfile;
 
-static pa_status kw_open_append(kwfile *k, const char *path) {
+/* Reopen path, a Medit file completed in the open output transaction, to
+ * append keywords after its End. */
+static pa_status kw_open_append(kwfile *k, pa_outfile *out, const char *path) {
   pa_status st = PA_SUCCESS;
   int32_t h[2];
   memset(k, 0, sizeof *k);
   k->path = path;
-  k->fp = fopen(path, "r+b");
-  PA_CHECK(k->fp, PA_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+  PA_CALL(pa__out_reopen(out, path));
+  k->fp = out->fp;
   PA_CHECK(fread(h, 4, 2, k->fp) == 2 && h[0] == 1 && h[1] >= 1 && h[1] <= 4,
            PA_ERR_FORMAT, "%s: not a native binary Medit file", path);
   k->ver = h[1];
@@ -129,10 +153,6 @@ static pa_status kw_open_append(kwfile *k, const char *path) {
   PA_CHECK(fseeko(k->fp, k->pos, SEEK_SET) == 0, PA_ERR_IO, "%s: seek failed",
            path);
 cleanup:
-  if (st && k->fp) {
-    fclose(k->fp);
-    k->fp = NULL;
-  }
   return st;
 }
 
@@ -161,16 +181,18 @@ cleanup:
   return st;
 }
 
-static pa_status kw_close(kwfile *k) {
+/* Write the final End and complete the file (pa__out_commit). */
+static pa_status kw_close(kwfile *k, pa_outfile *out) {
   pa_status st = PA_SUCCESS;
   int32_t end = KW_END;
   int64_t zero = 0;
   int ok = fwrite(&end, 4, 1, k->fp) == 1;
   ok &= fwrite(&zero, k->ver >= 3 ? 8 : 4, 1, k->fp) == 1;
+  ok &= fflush(k->fp) == 0;
   ok &= ftruncate(fileno(k->fp), k->pos + 4 + (k->ver >= 3 ? 8 : 4)) == 0;
-  ok &= fclose(k->fp) == 0;
-  k->fp = NULL;
   PA_CHECK(ok, PA_ERR_IO, "%s: write error: %s", k->path, strerror(errno));
+  k->fp = NULL;
+  PA_CALL(pa__out_commit(out));
 cleanup:
   return st;
 }
@@ -503,6 +525,159 @@ cleanup:
   return st;
 }
 
+/* ---- the manifest ---- */
+
+/* Rank 0: the manifest of a set of dm->size rank files; info: MF_WORDS per
+ * rank. */
+static pa_status write_manifest(const char *base, const pa_dmesh *dm,
+                                const int64_t *info) {
+  pa_status st = PA_SUCCESS;
+  pa_outfile out;
+  char path[4200];
+  memset(&out, 0, sizeof out);
+  manifest_path(base, path, sizeof path);
+  PA_CALL(pa__out_open(&out, path));
+  fprintf(out.fp, "padapt-distributed-set %d\nranks %d\ndim %d\n",
+          MANIFEST_VERSION, dm->size, dm->dim);
+  fprintf(out.fp, "global vertices %lld elements %lld boundary %lld edges %lld\n",
+          (long long)dm->nglob[PA_VERTEX], (long long)dm->nglob[PA_ELEMENT],
+          (long long)dm->nglob[PA_BOUNDARY], (long long)dm->nglob[PA_EDGE]);
+  for (int r = 0; r < dm->size; r++) {
+    const int64_t *w = info + (size_t)MF_WORDS * r;
+    fprintf(out.fp,
+            "rank %d vertices %lld elements %lld boundary %lld edges %lld "
+            "bytes %lld fnv1a64 %016llx\n",
+            r, (long long)w[MF_COUNT + PA_VERTEX],
+            (long long)w[MF_COUNT + PA_ELEMENT],
+            (long long)w[MF_COUNT + PA_BOUNDARY], (long long)w[MF_COUNT + PA_EDGE],
+            (long long)w[MF_BYTES], (unsigned long long)w[MF_HASH]);
+  }
+  PA_CALL(pa__out_commit(&out));
+cleanup:
+  pa__out_abort(&out);
+  return st;
+}
+
+/* Rank 0: remove, when the write commits, what would shadow the set or be
+ * taken for part of it: a file at path itself (pa_dmesh_is_set prefers it)
+ * and the rank files of ranks >= nranks (a write on more ranks). */
+static pa_status remove_shadows(const char *path, const char *base,
+                                int nranks) {
+  pa_status st = PA_SUCCESS;
+  char p[4200];
+  struct stat sb;
+  if (lstat(path, &sb) == 0) PA_CALL(pa__out_remove(path));
+  for (int r = nranks;; r++) {
+    int found = 0;
+    static const char *const ext[] = {".meshb", ".vtu"};
+    for (int i = 0; i < 2; i++) {
+      rank_path(base, r, ext[i], p, sizeof p);
+      if (lstat(p, &sb) != 0) continue;
+      found = 1;
+      PA_CALL(pa__out_remove(p));
+    }
+    if (!found) break;
+  }
+cleanup:
+  return st;
+}
+
+/* A manifest as read: nranks lines of MF_WORDS. */
+typedef struct manifest {
+  int nranks, dim;
+  int64_t nglob[PA_NKIND];
+  int64_t *rk;
+} manifest;
+
+/* Read "path" (rank 0). Errors name path and the line. */
+static pa_status manifest_read(const char *path, manifest *mf) {
+  pa_status st = PA_SUCCESS;
+  FILE *fp = NULL;
+  char line[512];
+  int lno = 0, ver = 0, n = -1;
+  long long a[PA_NKIND + 2];
+  memset(mf, 0, sizeof *mf);
+  fp = fopen(path, "r");
+  PA_CHECK(fp, PA_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+#define MF_LINE()                                                            \
+  do {                                                                       \
+    lno++;                                                                   \
+    PA_CHECK(fgets(line, sizeof line, fp), PA_ERR_FORMAT,                    \
+             "%s:%d: truncated manifest", path, lno);                        \
+  } while (0)
+  MF_LINE();
+  PA_CHECK(sscanf(line, "padapt-distributed-set %d %n", &ver, &n) == 1 &&
+               line[n] == '\0',
+           PA_ERR_FORMAT, "%s:%d: not a padapt manifest", path, lno);
+  PA_CHECK(ver == MANIFEST_VERSION, PA_ERR_UNSUPPORTED,
+           "%s:%d: manifest version %d, expected %d", path, lno, ver,
+           MANIFEST_VERSION);
+  MF_LINE();
+  n = -1;
+  PA_CHECK(sscanf(line, "ranks %d %n", &mf->nranks, &n) == 1 && line[n] == '\0' &&
+               mf->nranks >= 1 && mf->nranks < (1 << 24),
+           PA_ERR_FORMAT, "%s:%d: expected 'ranks N'", path, lno);
+  MF_LINE();
+  n = -1;
+  PA_CHECK(sscanf(line, "dim %d %n", &mf->dim, &n) == 1 && line[n] == '\0' &&
+               (mf->dim == 2 || mf->dim == 3),
+           PA_ERR_FORMAT, "%s:%d: expected 'dim 2' or 'dim 3'", path, lno);
+  MF_LINE();
+  n = -1;
+  PA_CHECK(sscanf(line, "global vertices %lld elements %lld boundary %lld edges %lld %n",
+                  &a[0], &a[1], &a[2], &a[3], &n) == 4 && line[n] == '\0',
+           PA_ERR_FORMAT, "%s:%d: expected the global counts", path, lno);
+  for (int k = 0; k < PA_NKIND; k++) mf->nglob[k] = a[k];
+  PA_ALLOC(mf->rk, (size_t)MF_WORDS * mf->nranks);
+  for (int r = 0; r < mf->nranks; r++) {
+    int rr = -1;
+    unsigned long long h = 0;
+    MF_LINE();
+    n = -1;
+    PA_CHECK(sscanf(line,
+                    "rank %d vertices %lld elements %lld boundary %lld edges "
+                    "%lld bytes %lld fnv1a64 %16llx %n",
+                    &rr, &a[0], &a[1], &a[2], &a[3], &a[4], &h, &n) == 7 &&
+                 line[n] == '\0' && rr == r,
+             PA_ERR_FORMAT, "%s:%d: expected the line of rank %d", path, lno, r);
+    int64_t *w = mf->rk + (size_t)MF_WORDS * r;
+    for (int k = 0; k < PA_NKIND; k++) w[MF_COUNT + k] = a[k];
+    w[MF_BYTES] = a[4];
+    w[MF_HASH] = (int64_t)h;
+  }
+  PA_CHECK(!fgets(line, sizeof line, fp), PA_ERR_FORMAT,
+           "%s:%d: text after the last rank", path, lno + 1);
+#undef MF_LINE
+cleanup:
+  if (fp) fclose(fp);
+  if (st) {
+    pa__free(mf->rk);
+    mf->rk = NULL;
+  }
+  return st;
+}
+
+/* Check rank file f of a set against its manifest line w: size, checksum. */
+static pa_status manifest_check_file(const char *fpath, const char *mpath,
+                                     int f, const int64_t *w) {
+  pa_status st = PA_SUCCESS;
+  int64_t bytes = 0;
+  uint64_t hash = 0;
+  PA_CALL(pa__file_fnv1a64(fpath, &bytes, &hash));
+  PA_CHECK(bytes == w[MF_BYTES], PA_ERR_FORMAT,
+           "%s: not the file of rank %d of this set: %lld bytes, its manifest "
+           "%s lists %lld (a stale file of another write, or a modified one)",
+           fpath, f, (long long)bytes, mpath, (long long)w[MF_BYTES]);
+  PA_CHECK(hash == (uint64_t)w[MF_HASH], PA_ERR_FORMAT,
+           "%s: not the file of rank %d of this set: its FNV-1a checksum "
+           "%016llx differs from %016llx in its manifest %s (a stale file of "
+           "another write, or a modified one)",
+           fpath, f, (unsigned long long)hash, (unsigned long long)w[MF_HASH],
+           mpath);
+cleanup:
+  return st;
+}
+
 /* ---- writing a set ---- */
 
 /* The file mesh of this rank: owned elements, their vertices, the boundary
@@ -621,8 +796,11 @@ cleanup:
 
 pa_status pa_dmesh_write(pa_dmesh *dm, const char *path) {
   pa_status st = PA_SUCCESS;
-  char base[4096], fpath[4200], tpath[4300];
+  char base[4096], fpath[4200];
   pa_mesh *fm = NULL;
+  pa_output *tx = NULL;
+  pa_outfile kwout;
+  int64_t info[MF_WORDS], *all = NULL;
   pa_idx *map[PA_NKIND] = {NULL}, nfile[PA_NKIND] = {0};
   uint64_t *mask = NULL;
   pa_gid *g = NULL;
@@ -631,20 +809,19 @@ pa_status pa_dmesh_write(pa_dmesh *dm, const char *path) {
   uint8_t *flags = NULL;
   unsigned char *fdesc = NULL;
   kwfile kw;
-  int tmp_written = 0;
   memset(&kw, 0, sizeof kw);
+  memset(&kwout, 0, sizeof kwout);
   PA_CHECK(dm && path, PA_ERR_ARG, "pa_dmesh_write: NULL argument");
   pa__agree_reset();
+  PA_CALL(pa_output_begin(&tx)); /* or join the caller's */
   path_base(path, base, sizeof base);
   pa_mesh *m = dm->mesh;
   int words = (dm->size + 63) / 64;
   PA_CALL(file_mesh(dm, &fm, map, nfile));
   PA_CALL(touch_masks(dm, words, &mask));
   rank_path(base, dm->rank, ".meshb", fpath, sizeof fpath);
-  snprintf(tpath, sizeof tpath, "%s.%d.tmp%ld.meshb", base, dm->rank, (long)getpid());
-  tmp_written = 1;
-  PA_CALL(pa_mesh_write(fm, tpath, NULL));
-  PA_CALL(kw_open_append(&kw, tpath));
+  PA_CALL(pa_mesh_write(fm, fpath, NULL));
+  PA_CALL(kw_open_append(&kw, &kwout, fpath));
   /* ParMmg vertex communicators */
   {
     int ncomm = 0;
@@ -785,18 +962,36 @@ pa_status pa_dmesh_write(pa_dmesh *dm, const char *path) {
       if (st) goto cleanup;
     }
   }
-  PA_CALL(kw_close(&kw));
-  PA_CHECK(rename(tpath, fpath) == 0, PA_ERR_IO, "%s: cannot rename: %s", fpath,
-           strerror(errno));
-  tmp_written = 0;
+  PA_CALL(kw_close(&kw, &kwout));
+  /* this rank's line of the manifest */
+  {
+    const char *tmp = pa__out_tmppath(fpath);
+    uint64_t hash = 0;
+    PA_CHECK(tmp, PA_ERR_INTERNAL, "%s: its temporary is not listed", fpath);
+    PA_CALL(pa__file_fnv1a64(tmp, &info[MF_BYTES], &hash));
+    info[MF_HASH] = (int64_t)hash;
+    for (int k = 0; k < PA_NKIND; k++) info[MF_COUNT + k] = nfile[k];
+  }
   /* ParaView: per-rank vtu of the owned elements, and the pvtu */
   rank_path(base, dm->rank, ".vtu", fpath, sizeof fpath);
   PA_CALL(write_vtu(fm, dm->rank, fpath));
-  if (dm->rank == 0) PA_CALL(write_pvtu(base, dm->size));
+  if (dm->rank == 0) {
+    all = pa__malloc(sizeof *all * MF_WORDS * (size_t)dm->size);
+    if (!all) st = pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+  }
+  PA_CALL(pa__agree(dm->comm, st));
+  MPI_Gather(info, MF_WORDS, MPI_INT64_T, all, MF_WORDS, MPI_INT64_T, 0,
+             dm->comm);
+  if (dm->rank == 0) {
+    PA_CALL(write_pvtu(base, dm->size));
+    PA_CALL(write_manifest(base, dm, all));
+    PA_CALL(remove_shadows(path, base, dm->size));
+  }
 cleanup:
-  if (kw.fp) fclose(kw.fp);
-  if (tmp_written) remove(tpath);
-  if (dm) st = pa__agree_end(dm->comm, st);
+  pa__out_abort(&kwout);
+  if (dm && tx) st = pa__output_end(dm->comm, tx, st);
+  else if (dm) st = pa__agree_end(dm->comm, st);
+  pa__free(all);
   pa_mesh_destroy(fm);
   for (int k = 0; k < PA_NKIND; k++) pa__free(map[k]);
   pa__free(mask);
@@ -917,15 +1112,17 @@ static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
                           pa_dmesh **dmp) {
   pa_status st = PA_SUCCESS;
   int rank, size;
-  char base[4096], fpath[4200];
+  char base[4096], fpath[4200], mpath[4200];
   dfile df;
   pa_mesh *fm = NULL;
   pa__layout lay;
   int64_t hdr[H_WORDS];
   pa__recs R[PA_NKIND];
   pa_dmesh *dm = NULL;
-  int *part = NULL, nval = 0;
+  int *part = NULL, nval = 0, have_mf = 0;
   vdesc *vals = NULL;
+  manifest mf;
+  memset(&mf, 0, sizeof mf);
   memset(&df, 0, sizeof df);
   memset(R, 0, sizeof R);
   memset(&lay, 0, sizeof lay);
@@ -933,9 +1130,17 @@ static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
   path_base(path, base, sizeof base);
-  /* rank 0's file fixes the number of writers and the layout */
+  manifest_path(base, mpath, sizeof mpath);
+  /* the manifest (or, without one, rank 0's file) fixes the number of
+   * writers; rank 0's file fixes the layout */
   if (rank == 0) {
+    have_mf = file_exists(mpath);
+    if (have_mf) PA_CALL(manifest_read(mpath, &mf));
     rank_path(base, 0, ".meshb", fpath, sizeof fpath);
+    PA_CHECK(file_exists(fpath), PA_ERR_IO,
+             "%s: missing file of the distributed set %s (rank 0 of %d)",
+             fpath, path, have_mf ? mf.nranks : 1);
+    if (have_mf) PA_CALL(manifest_check_file(fpath, mpath, 0, mf.rk));
     PA_CALL(scan_file(fpath, &df));
     memcpy(hdr, df.h, sizeof hdr);
     lay.dim = (int)df.h[H_DIM];
@@ -946,6 +1151,16 @@ static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
     PA_CHECK(hdr[H_NRANKS] >= 1 && hdr[H_NRANKS] < (1 << 24) &&
                  (hdr[H_DIM] == 2 || hdr[H_DIM] == 3),
              PA_ERR_FORMAT, "%s: bad header", fpath);
+    if (have_mf) {
+      PA_CHECK(hdr[H_NRANKS] == mf.nranks && hdr[H_DIM] == mf.dim,
+               PA_ERR_FORMAT,
+               "%s: written by %lld ranks in %lldD, its manifest %s lists %d "
+               "ranks in %dD", fpath, (long long)hdr[H_NRANKS],
+               (long long)hdr[H_DIM], mpath, mf.nranks, mf.dim);
+      for (int k = 0; k < PA_NKIND; k++)
+        PA_CHECK(hdr[H_NGLOB + k] == mf.nglob[k], PA_ERR_FORMAT,
+                 "%s: global counts differ from its manifest %s", fpath, mpath);
+    }
     nval = df.nval;
     PA_ALLOC(vals, nval);
     if (nval) memcpy(vals, df.val, (size_t)nval * sizeof *vals);
@@ -962,19 +1177,36 @@ static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
   PA_CALL(pa__agree(comm, st));
   MPI_Bcast(vals, (int)((size_t)nval * sizeof *vals), MPI_BYTE, 0, comm);
   int nw = (int)hdr[H_NRANKS];
+  MPI_Bcast(&have_mf, 1, MPI_INT, 0, comm);
+  if (have_mf) {
+    if (rank != 0) {
+      mf.rk = pa__malloc(sizeof *mf.rk * MF_WORDS * (size_t)nw);
+      st = mf.rk ? PA_SUCCESS
+                 : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+    }
+    PA_CALL(pa__agree(comm, st));
+    MPI_Bcast(mf.rk, MF_WORDS * nw, MPI_INT64_T, 0, comm);
+  }
   for (int k = 0; k < PA_NKIND; k++)
     pa__recs_init(&R[k], k, pa__kind_nv(lay.dim, k),
                   k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
   /* files [rank*nw/size, (rank+1)*nw/size) */
   int f0 = (int)((int64_t)rank * nw / size), f1 = (int)((int64_t)(rank + 1) * nw / size);
   for (int f = f0; f < f1; f++) {
+    const int64_t *w = have_mf ? mf.rk + (size_t)MF_WORDS * f : NULL;
     rank_path(base, f, ".meshb", fpath, sizeof fpath);
     PA_CHECK(file_exists(fpath), PA_ERR_IO,
-             "%s: missing file of the distributed set %s (written by %d ranks)",
-             fpath, path, nw);
+             "%s: missing file of the distributed set %s (rank %d of %d)",
+             fpath, path, f, nw);
+    if (w && f > 0) PA_CALL(manifest_check_file(fpath, mpath, f, w));
     PA_CALL(scan_file(fpath, &df));
     PA_CALL(pa_mesh_read(fpath, &fm));
     PA_CALL(file_records(fpath, f, nw, &df, fm, &lay, vals, nval, rank, R));
+    for (int k = 0; w && k < PA_NKIND; k++)
+      PA_CHECK(df.h[H_NFILE + k] == w[MF_COUNT + k], PA_ERR_FORMAT,
+               "%s: %lld %s, its manifest %s lists %lld", fpath,
+               (long long)df.h[H_NFILE + k], kind_name[k], mpath,
+               (long long)w[MF_COUNT + k]);
     for (int k = 0; k < PA_NKIND; k++)
       PA_CHECK(df.h[H_NGLOB + k] == hdr[H_NGLOB + k], PA_ERR_FORMAT,
                "%s: global counts differ from rank 0's file", fpath);
@@ -987,11 +1219,10 @@ static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
     int64_t n[PA_NKIND];
     for (int k = 0; k < PA_NKIND; k++) n[k] = (int64_t)R[k].n;
     PA_CALL(pa__allreduce(comm, n, PA_NKIND, MPI_INT64_T, MPI_SUM));
-    static const char *what[] = {"vertices", "elements", "boundary entities", "edges"};
     for (int k = 0; k < PA_NKIND; k++)
       PA_CHECK(n[k] == hdr[H_NGLOB + k], PA_ERR_FORMAT,
                "%s: inconsistent distributed set: the files own %lld %s, the "
-               "header says %lld", path, (long long)n[k], what[k],
+               "header says %lld", path, (long long)n[k], kind_name[k],
                (long long)hdr[H_NGLOB + k]);
   }
   PA_CALL(pa__gids_unique(comm, R[PA_ELEMENT].n, R[PA_ELEMENT].gid, "element"));
@@ -1016,6 +1247,7 @@ static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
   dm = NULL;
 cleanup:
   st = pa__agree_end(comm, st);
+  pa__free(mf.rk);
   dfile_free(&df);
   pa_mesh_destroy(fm);
   for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&R[k]);
@@ -1073,4 +1305,20 @@ cleanup:
   if (!st) st = pa_dmesh_gather(dm, root, mesh);
   pa_dmesh_destroy(dm);
   return st;
+}
+
+/* ---- the collective end of output transactions ---- */
+
+pa_status pa__output_end(MPI_Comm comm, pa_output *tx, pa_status st) {
+  st = pa__agree_end(comm, st);
+  if (st) {
+    pa_output_abort(tx);
+    return st;
+  }
+  return pa__agree(comm, pa_output_commit(tx));
+}
+
+pa_status pa_output_end(MPI_Comm comm, pa_output *tx, pa_status st) {
+  pa__agree_reset();
+  return pa__output_end(comm, tx, st);
 }

@@ -307,6 +307,14 @@ pa_status pa__dmesh_partition(MPI_Comm comm, int dim, pa_idx n,
                               const pa_gid *vgid, const double *weights,
                               int *part);
 
+/* ---- output transactions (dio.c) ---- */
+
+/* Collective end of one output transaction per rank (pa_output_end without
+ * its reset of the agreement): agrees on st with pa__agree_end, so a
+ * collective routine calls it at its cleanup label; commits everywhere if
+ * every rank succeeded, aborts everywhere otherwise. */
+pa_status pa__output_end(MPI_Comm comm, pa_output *tx, pa_status st);
+
 /* ---- incremental rebuilds (incremental.c) ---- */
 
 /* Local: the bytes of the values of local entity e of a kind (those whose

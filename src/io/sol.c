@@ -19,7 +19,7 @@
  * must agree; a scalar field fits a mesh of any dimension, and 3D tensors fit
  * a 2D mesh (a planar mesh stored in 3D) when they do not couple z with x, y.
  * Writing: one SolAtVertices keyword holding every field, binary version 2
- * (3 beyond 2 GiB), written atomically.
+ * (3 beyond 2 GiB), through a temporary file (output.c).
  */
 #include "io/io.h"
 

@@ -16,7 +16,7 @@
  *  - CellData: "ref" (Int32) the element references and "quality" (Float64,
  *    pa_mesh_elem_quality).
  * The appended section ends with a newline before </AppendedData>. The file
- * is written to a temporary file and renamed, so a failure leaves no file.
+ * is written through a temporary file (output.c), so a failure leaves none.
  */
 #include "io/io.h"
 

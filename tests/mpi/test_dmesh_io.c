@@ -2,11 +2,17 @@
  * test_dmesh_io.c -- distributed I/O: round trip of a distributed set (same
  * and different numbers of ranks, through sub-communicators), gather from a
  * set, ParaView files, user values in the files, and bad sets (a missing rank file, inconsistent
- * interfaces) that must fail with the same error on every rank, never hang.
+ * interfaces) that must fail with the same error on every rank, never hang;
+ * the manifest (a stale rank file of a write on more ranks or a modified one
+ * is refused naming it; a write removes what would shadow the set) and the
+ * output transaction (a write failing on one rank writes nothing anywhere;
+ * inside a caller's transaction nothing appears before its end).
  */
 #include "testutil.h"
 
+#include <dirent.h>
 #include <mpi.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 static int rank, size;
@@ -306,6 +312,169 @@ static void test_bad_sets(void) {
   pa_dmesh_destroy(dm);
 }
 
+/* Number of "*.tmp.*" entries in the working directory. */
+static int ntemps(void) {
+  DIR *d = opendir(".");
+  struct dirent *e;
+  int n = 0;
+  if (!d) return -1;
+  while ((e = readdir(d)))
+    if (strstr(e->d_name, ".tmp.")) n++;
+  closedir(d);
+  return n;
+}
+
+/* The same status on every rank. */
+static int same_everywhere(pa_status st) {
+  int v = (int)st, mn, mx;
+  MPI_Allreduce(&v, &mn, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  MPI_Allreduce(&v, &mx, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  return mn == mx;
+}
+
+/* Reading path fails with a format error naming file on every rank (the
+ * message of the rank that found it travels to all). */
+static void check_refused(const char *path, const char *file) {
+  pa_dmesh *back = NULL;
+  pa_status st = pa_dmesh_read(MPI_COMM_WORLD, path, 1, &back);
+  CHECK(st == PA_ERR_FORMAT);
+  CHECK(back == NULL);
+  CHECK(same_everywhere(st));
+  CHECK(strstr(pa_last_error(), file) != NULL);
+  if (!strstr(pa_last_error(), file))
+    fprintf(stderr, "rank %d: '%s' does not name %s\n", rank, pa_last_error(), file);
+  pa_dmesh_destroy(back);
+}
+
+static void test_manifest(void) {
+  pa_mesh *in = input();
+  pa_dmesh *dm = NULL, *back = NULL;
+  char p[64];
+  CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, in, 1, &dm));
+  pa_mesh_destroy(in);
+  if (!dm) return;
+  uint64_t ref = checksum(dm);
+  /* an older sequential file at the set's name, rank files of a write on
+   * more ranks: the write removes both */
+  if (rank == 0) {
+    FILE *fp = fopen("io_m.meshb", "w");
+    if (fp) fclose(fp);
+    for (int r = size; r < size + 2; r++) {
+      snprintf(p, sizeof p, "io_m.%d.meshb", r);
+      copy_file("io_w.0.meshb", p);
+      snprintf(p, sizeof p, "io_m.%d.vtu", r);
+      copy_file("io_w.0.vtu", p);
+    }
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+  CHECK(!pa_dmesh_is_set("io_m.meshb"));
+  CHECK_OK(pa_dmesh_write(dm, "io_m.meshb"));
+  CHECK(file_exists("io_m.manifest"));
+  CHECK(!file_exists("io_m.meshb"));
+  for (int r = size; r < size + 2; r++) {
+    snprintf(p, sizeof p, "io_m.%d.meshb", r);
+    CHECK(!file_exists(p));
+    snprintf(p, sizeof p, "io_m.%d.vtu", r);
+    CHECK(!file_exists(p));
+  }
+  CHECK(pa_dmesh_is_set("io_m.meshb"));
+  CHECK_OK(pa_dmesh_read(MPI_COMM_WORLD, "io_m.meshb", 1, &back));
+  if (back) CHECK(checksum(back) == ref);
+  pa_dmesh_destroy(back);
+  back = NULL;
+  /* the last rank's file of the set written on all ranks, put into a set
+   * written on one rank fewer (same name, same rank number) */
+  if (size >= 2) {
+    snprintf(p, sizeof p, "io_m.%d.meshb", size - 2);
+    if (rank == 0) copy_file(p, "io_m_stale.meshb");
+    MPI_Comm sub;
+    MPI_Comm_split(MPI_COMM_WORLD, rank < size - 1 ? 0 : MPI_UNDEFINED, rank, &sub);
+    if (sub != MPI_COMM_NULL) {
+      CHECK_OK(pa_dmesh_read(sub, "io_m.meshb", 1, &back));
+      if (back) CHECK_OK(pa_dmesh_write(back, "io_m.meshb"));
+      pa_dmesh_destroy(back);
+      back = NULL;
+      MPI_Comm_free(&sub);
+    }
+    MPI_Barrier(MPI_COMM_WORLD);
+    snprintf(p, sizeof p, "io_m.%d.meshb", size - 1);
+    CHECK(!file_exists(p)); /* the file of the removed rank is gone */
+    CHECK_OK(pa_dmesh_read(MPI_COMM_WORLD, "io_m.meshb", 1, &back));
+    if (back) CHECK(checksum(back) == ref);
+    pa_dmesh_destroy(back);
+    back = NULL;
+    snprintf(p, sizeof p, "io_m.%d.meshb", size - 2);
+    if (rank == 0) {
+      copy_file(p, "io_m_good.meshb");
+      copy_file("io_m_stale.meshb", p);
+    }
+    MPI_Barrier(MPI_COMM_WORLD);
+    check_refused("io_m.meshb", p);
+    if (rank == 0) copy_file("io_m_good.meshb", p);
+    MPI_Barrier(MPI_COMM_WORLD);
+  }
+  /* one byte changed in the last rank file */
+  snprintf(p, sizeof p, "io_m.%d.meshb", size >= 2 ? size - 2 : 0);
+  if (rank == 0) {
+    FILE *fp = fopen(p, "r+b");
+    CHECK(fp != NULL);
+    if (fp) {
+      fseek(fp, 100, SEEK_SET);
+      int c = fgetc(fp);
+      fseek(fp, 100, SEEK_SET);
+      fputc(c ^ 1, fp);
+      fclose(fp);
+    }
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+  check_refused("io_m.meshb", p);
+  CHECK(strstr(pa_last_error(), "checksum") != NULL);
+  /* a write failing on one rank writes nothing on any rank */
+  if (rank == size - 1) {
+    snprintf(p, sizeof p, "io_f.%d.vtu", rank);
+    CHECK(mkdir(p, 0755) == 0);
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+  pa_status st = pa_dmesh_write(dm, "io_f.meshb");
+  CHECK(st == PA_ERR_IO);
+  CHECK(same_everywhere(st));
+  MPI_Barrier(MPI_COMM_WORLD);
+  snprintf(p, sizeof p, "io_f.%d.meshb", rank);
+  CHECK(!file_exists(p));
+  CHECK(!file_exists("io_f.manifest") && !file_exists("io_f.pvtu"));
+  CHECK(ntemps() == 0);
+  if (rank == size - 1) {
+    snprintf(p, sizeof p, "io_f.%d.vtu", rank);
+    rmdir(p);
+  }
+  /* a set without manifest reads (header checks only) */
+  CHECK_OK(pa_dmesh_write(dm, "io_l.meshb"));
+  MPI_Barrier(MPI_COMM_WORLD);
+  if (rank == 0) CHECK(remove("io_l.manifest") == 0);
+  MPI_Barrier(MPI_COMM_WORLD);
+  CHECK(pa_dmesh_is_set("io_l.meshb"));
+  CHECK_OK(pa_dmesh_read(MPI_COMM_WORLD, "io_l.meshb", 1, &back));
+  if (back) CHECK(checksum(back) == ref);
+  pa_dmesh_destroy(back);
+  back = NULL;
+  /* inside the caller's transaction: nothing before its end */
+  snprintf(p, sizeof p, "io_t.%d.meshb", rank);
+  remove(p); /* from an earlier run in this directory */
+  if (rank == 0) remove("io_t.manifest");
+  MPI_Barrier(MPI_COMM_WORLD);
+  pa_output *tx = NULL;
+  CHECK_OK(pa_output_begin(&tx));
+  CHECK_OK(pa_dmesh_write(dm, "io_t.meshb"));
+  MPI_Barrier(MPI_COMM_WORLD);
+  snprintf(p, sizeof p, "io_t.%d.meshb", rank);
+  CHECK(!file_exists(p) && !file_exists("io_t.manifest"));
+  CHECK_OK(pa_output_end(MPI_COMM_WORLD, tx, PA_SUCCESS));
+  MPI_Barrier(MPI_COMM_WORLD);
+  CHECK(file_exists(p) && file_exists("io_t.manifest"));
+  CHECK(ntemps() == 0);
+  pa_dmesh_destroy(dm);
+}
+
 int main(int argc, char **argv) {
   int provided;
   MPI_Init_thread(&argc, &argv, MPI_THREAD_MULTIPLE, &provided);
@@ -320,6 +489,9 @@ int main(int argc, char **argv) {
   before = pa_test_failures;
   test_bad_sets();
   if (pa_test_failures != before) fprintf(stderr, "rank %d: bad sets failed\n", rank);
+  before = pa_test_failures;
+  test_manifest();
+  if (pa_test_failures != before) fprintf(stderr, "rank %d: manifest failed\n", rank);
   if (pa_memory_current() != mem0) {
     fprintf(stderr, "rank %d: %zu bytes leaked\n", rank, pa_memory_current() - mem0);
     pa_test_failures++;
