@@ -7,25 +7,17 @@
  * vertex (the same on owner and ghosts, so no exchange is needed), and the
  * metric is graded over the whole mesh (grade.c; pieces are remeshed
  * without gradation, as the sequential remesher grades its input once); the
- * element value PA__DONE_VALUE marks the elements produced by a remesh so
- * they are never tagged again (except, with a looser criterion, those
- * produced next to the skin of another piece, see tag.c). The loop stops
- * when no element is tagged (converged), or when it stalls: each iteration
- * in which the estimated work of the tagged elements did not fall 1 % below
- * the least seen so far halves the number of pieces of the next one (other
- * borders, and fewer of them; one piece has no inner border), and an
- * iteration with one piece that makes no progress (and rolled nothing back)
- * ends the loop; so does max_iter (both reported as stalled). Every step is
- * collective and agrees on its status, so all ranks leave the loop
- * together.
- *
- * An iteration with a single piece, nothing rolled back, no hot skin
- * vertex (always so with one piece: no other piece touches it) and no poor
- * element marked next to its skin (BAD_NEAR_SKIN in reintegrate.c) is the
- * last one: every element it produced is marked done, and every other
- * element is unchanged and was not tagged by this iteration's tag (the
- * criteria depend on the element's own data only), so the next tag would
- * find nothing. The loop stops as converged without that tag pass.
+ * element value PA__DONE_VALUE marks the elements produced by a remesh, which
+ * tag.c tags again only with looser criteria (by how much their piece's
+ * frozen skin constrained them). The loop stops when a tag pass over the
+ * whole mesh finds nothing (converged: every element of the final mesh meets
+ * its criterion), or when it stalls: each iteration in which the estimated
+ * work of the tagged elements did not fall 1 % below the least seen so far
+ * halves the number of pieces of the next one (other borders, and fewer of
+ * them; one piece has no inner border), and an iteration with one piece that
+ * makes no progress (and rolled nothing back) ends the loop; so does
+ * max_iter (both reported as stalled). Every step is collective and agrees
+ * on its status, so all ranks leave the loop together.
  */
 #include "adapt/adapt.h"
 
@@ -299,20 +291,8 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
     rep.remesh_busy += busy;
     rep.bytes_moved += ir.bytes_moved;
     if (rep.niter_recorded < PA_ADAPT_MAX_ITERS) rep.iters[rep.niter_recorded++] = ir;
-    {
-      /* One piece remeshed with no hot skin vertex and no poor element
-       * at its skin: the next tag would find nothing (see the file
-       * comment), skip it. */
-      int final = ir.npieces == 1 && ir.nfailed == 0 && it.nhot == 0 &&
-                  it.nbadskin == 0;
-      pa__iter_free(&it);
-      if (opts->progress) opts->progress(&ir, opts->progress_ctx);
-      if (final) {
-        rep.ntagged_left = 0;
-        rep.converged = 1;
-        break;
-      }
-    }
+    pa__iter_free(&it);
+    if (opts->progress) opts->progress(&ir, opts->progress_ctx);
   }
   {
     double ta = pa_wtime();

@@ -63,13 +63,19 @@
 #define PA__LEB_INNER 2.0
 /* No label (pieces.c, extract.c). */
 #define PA__NOLABEL 2147483647
-/* Values of the "done" element value: 0 never remeshed, 1 remeshed (never
- * tagged again), 2 remeshed near a hot skin vertex, 3 with two vertices or
- * more on a hot skin (the remesher was constrained there: tagged again if
- * it fails the looser criteria of tag.c). */
+/* Values of the "done" element value (tag.c gives the criteria each is
+ * tagged again with): 0 never remeshed; 1 remeshed; 2 remeshed near a hot
+ * skin vertex; 3 with two vertices or more on a hot skin (the remesher was
+ * constrained there); 4 remeshed by an iteration with a single piece, away
+ * from its skin: what the sequential remesher makes with its whole
+ * neighbourhood free. */
 #define PA__DONE 1
 #define PA__DONE_NEAR_SKIN 2
 #define PA__DONE_ON_SKIN 3
+#define PA__DONE_FREE 4
+/* The range of edge lengths in the metric an element must meet (Mmg's). */
+#define PA__LEN_LO 0.7071
+#define PA__LEN_HI 1.4142
 /* Name of the element value marking elements produced in this run. */
 #define PA__DONE_VALUE "pa.adapt.done"
 /* Reference of the artificial boundary entities of a piece's outer surface. */

@@ -22,9 +22,9 @@
  * not skin vertices (matched input vertices keep their global id and user
  * values, gathered with them; the others get fresh ids and zeros) and the
  * skin vertices bisect.c added, when it is their giver (skin_vertex_ids);
- * every element ("done" value PA__DONE, or PA__DONE_NEAR_SKIN within
- * NEAR_SKIN vertex layers of a hot skin vertex, or 0 for a rolled-back
- * piece; one with the same vertices as an input element keeps its id and
+ * every element ("done" value PA__DONE, PA__DONE_FREE from a single
+ * piece, or PA__DONE_NEAR_SKIN within NEAR_SKIN vertex layers of a hot skin
+ * vertex, or 0 for a rolled-back piece; one with the same vertices as an input element keeps its id and
  * other values, output_reuse; the others get fresh ids and zeros); and the
  * boundary entities and edges that do not lie on the skin (this drops the
  * artificial skin faces; an unchanged one keeps its id and values, as
@@ -754,6 +754,7 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
       dv = PA__DONE_NEAR_SKIN; /* see BAD_NEAR_SKIN */
       it->nbadskin++;
     }
+    if (dv == PA__DONE && it->npieces == 1) dv = PA__DONE_FREE;
     pa_idx q = pc->reuse[PA_ELEMENT][e];
     if (q >= 0) { /* an input element: its id and values, done updated */
       const size_t *po = pc->kpoff[PA_ELEMENT];

@@ -2,47 +2,77 @@
  * tag.c -- step 1 of the piece algorithm: which owned elements to remesh and
  * how much work each is.
  *
- * An owned element is tagged when it is not user-required, was not produced
- * by a remesh of this run (the "done" element value), and either carries
- * PA_FLAG_USER or (unless opts->user_tags_only) has an edge whose length in
- * the metric lies outside [0.7071, 1.4142) or a quality below
- * opts->qual_threshold. An element produced with two vertices or more on
- * the skin of another piece that was tagged (done value PA__DONE_ON_SKIN:
- * the remesher could not touch the edge or face it leans on) is tagged
- * again if it fails the quality criterion or an edge lies outside the
- * looser [LEN_LO_SKIN, LEN_HI_SKIN); one merely near such a skin
- * (PA__DONE_NEAR_SKIN) only for its quality or an edge outside [LEN_LO_NEAR,
- * LEN_HI_NEAR), clearly off: the remesher was free to fix it, as anywhere
- * else. Work ~ expected output elements + 1: the element's
+ * An owned element is tagged when it is not user-required and either
+ * carries PA_FLAG_USER (and was not produced by a remesh of this run: the
+ * "done" element value) or (unless opts->user_tags_only) has an edge whose
+ * length in the metric lies outside [0.7071, 1.4142) or a quality below
+ * opts->qual_threshold; an element produced in this run, with the looser
+ * criteria below, by how much its piece's frozen skin constrained it. So
+ * the loop ends (nothing tagged) only when every element of the final mesh
+ * passes its criterion. Work ~ expected output elements + 1: the element's
  * volume in the metric over the volume of the unit regular simplex, plus one
  * for removing the element itself (the coarsening term). Every figure is a
  * function of the element's own data, so it is the same whatever the
  * distribution. The work is computed only for elements that may be tagged
- * (-1 for the others: done or required); extract.c computes it for the
- * untagged skin elements it needs.
+ * (-1 for the required ones); extract.c computes it for the untagged skin
+ * elements it needs.
  */
 #include "adapt/adapt.h"
 
 #include <math.h>
 
-#define LEN_LO 0.7071
-#define LEN_HI 1.4142
-/* Elements produced next to the skin of another piece are tagged again only
- * for edges clearly off: a skin face refined by bisection (bisect.c) keeps
- * edges a little shorter than LEN_LO, which only another iteration could
- * change, and edges just outside the range are as many as the sequential
- * remesher leaves anywhere (2-3 % with an anisotropic metric). Tagging them
- * with the strict range makes every iteration's borders the next one's
- * work: 3D shell:0.1 on box3d 5 at 4 ranks took 10 iterations (3 with
- * this range), box3d 10 -> 0.019 on 2 ranks tagged 16 k elements again (a
- * piece of 138 k elements, 0.8 s; 3 k with this range). Both end with the
- * edges in range within 1 point of the sequential remesher. */
+/* Elements produced in this run are tagged again with looser criteria
+ * than the others, by how much the frozen skin of their piece constrained
+ * them (their done value; see criteria()):
+ *
+ * - on a hot skin (PA__DONE_ON_SKIN): an edge outside [0.65, 1.5). A skin
+ *   face refined by bisection (bisect.c) keeps edges a little shorter than
+ *   0.7071, which only another iteration could change, and edges just
+ *   outside the range are as many as the sequential remesher leaves
+ *   anywhere (2-3 % with an anisotropic metric). Tagging them with the
+ *   strict range makes every iteration's borders the next one's work: 3D
+ *   shell:0.1 on box3d 5 at 4 ranks took 10 iterations (3 with this
+ *   range), box3d 10 -> 0.019 on 2 ranks tagged 16 k elements again (3 k).
+ * - elsewhere in a piece among several (PA__DONE, PA__DONE_NEAR_SKIN): an
+ *   edge outside [0.5, 1.5). The remesher relaxes its working metric at
+ *   frozen skin vertices whose edges are far from the target (rmesh.c,
+ *   rm3d skin relax) over the first ring of input elements, which may be
+ *   many output layers wide: those elements come back coarser than the
+ *   target, away from any hot vertex, and only another iteration refines
+ *   them. With an upper bound of 2 (or none), the 2D plate of issue #19
+ *   kept 45-380 edges of length 1.5-3.5 at 2-4 ranks (none at 1).
+ * - made by a single piece away from its skin (PA__DONE_FREE): only what
+ *   the remesher itself calls missed (an edge of 2 or more, a quality below
+ *   QUAL_CLEARLY_BAD; loop.c): another pass would remesh it the same way.
+ *   With [0.5, 1.5), the sequential remesher's leftovers (0.1-0.3 % of the
+ *   edges in 3D, up to 1.7 long) came back iteration after iteration (the
+ *   gmsh rod at -hsiz 0.035 on 2 ranks: 184, 76, 58, 39, 26, 22, 20
+ *   elements in iterations 3-9, then stalled).
+ * Quality: below opts->qual_threshold, or below QUAL_CLEARLY_BAD for
+ * PA__DONE and PA__DONE_FREE (the sequential remesher leaves elements
+ * between the two: its worst on the gmsh rod and the UGAWG fields are
+ * 0.1-0.4). */
 #define LEN_LO_SKIN 0.65
-#define LEN_HI_SKIN 1.5
-/* Near the skin only: box3d 10 -> 0.019 on 2 ranks tagged 783 elements
- * again with the skin range, 389 with this one, same result. */
-#define LEN_LO_NEAR 0.5
-#define LEN_HI_NEAR 2.0
+#define LEN_LO_DONE 0.5
+#define LEN_HI_DONE 1.5
+#define LEN_HI_FREE 2.0
+#define QUAL_CLEARLY_BAD 0.05
+
+/* The edge-length range [lo, hi) and the least quality an element of done
+ * value dn must meet. */
+static void criteria(uint8_t dn, double qual_threshold, double *lo,
+                     double *hi, double *qmin) {
+  *lo = PA__LEN_LO;
+  *hi = PA__LEN_HI;
+  *qmin = qual_threshold;
+  if (!dn) return;
+  *lo = dn == PA__DONE_ON_SKIN ? LEN_LO_SKIN
+        : dn == PA__DONE_FREE  ? 0
+                               : LEN_LO_DONE;
+  *hi = dn == PA__DONE_FREE ? LEN_HI_FREE : LEN_HI_DONE;
+  if (dn == PA__DONE || dn == PA__DONE_FREE)
+    *qmin = fmin(QUAL_CLEARLY_BAD, qual_threshold);
+}
 
 pa_status pa__owned_balls(pa_dmesh *dm, pa_idx **startp, pa_idx **elemsp) {
   pa_status st = PA_SUCCESS;
@@ -100,21 +130,21 @@ pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int first) {
     /* never tagged: its work is only needed if it joins a piece's skin
      * (extract.c computes it then) */
     it->work[e] = -1;
-    if (dn[e] == PA__DONE || (m->eflag[e] & PA_FLAG_REQUIRED)) continue;
+    if (m->eflag[e] & PA_FLAG_REQUIRED) continue;
     it->work[e] = pa__elem_work(m, e);
     if (dn[e] && o->user_tags_only) continue;
     int t = !dn[e] && (m->eflag[e] & PA_FLAG_USER) != 0;
     if (!t && !o->user_tags_only) {
-      t = dn[e] == PA__DONE_ON_SKIN ? bad_edge(m, e, LEN_LO_SKIN, LEN_HI_SKIN)
-          : dn[e]                  ? bad_edge(m, e, LEN_LO_NEAR, LEN_HI_NEAR)
-                                   : bad_edge(m, e, LEN_LO, LEN_HI);
-      if (!t && o->qual_threshold > 0) {
+      double lo, hi, qmin;
+      criteria(dn[e], o->qual_threshold, &lo, &hi, &qmin);
+      t = bad_edge(m, e, lo, hi);
+      if (!t && qmin > 0) {
         const double *x[4], *mm[4];
         for (int k = 0; k < it->nve; k++) {
           x[k] = m->coord + (size_t)it->dim * v[k];
           mm[k] = m->met + (size_t)m->met_ncomp * v[k];
         }
-        t = pa__quality(it->dim, m->met_ncomp, x, mm) < o->qual_threshold;
+        t = pa__quality(it->dim, m->met_ncomp, x, mm) < qmin;
       }
     }
     it->tag[e] = (uint8_t)t;

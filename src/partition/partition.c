@@ -31,14 +31,27 @@ static pa_status agree(MPI_Comm comm, pa_status st) {
   return any && st ? st : (pa_status)any;
 }
 
+/* A Scotch context whose threads and random generator behave the same on
+ * every run (0 on success; SCOTCH_contextExit it then). */
+static int deterministic_context(SCOTCH_Context *ctx) {
+  if (SCOTCH_contextInit(ctx) != 0) return 1;
+  if (SCOTCH_contextOptionSetNum(ctx, SCOTCH_OPTIONNUMDETERMINISTIC, 1) != 0 ||
+      SCOTCH_contextOptionSetNum(ctx, SCOTCH_OPTIONNUMRANDOMFIXEDSEED, 1) != 0) {
+    SCOTCH_contextExit(ctx);
+    return 1;
+  }
+  return 0;
+}
+
 pa_status pa__partition_dgraph(MPI_Comm comm, pa_idx n, const pa_idx *xadj,
                                const int64_t *adj, const double *weights,
                                int nparts, double kbal, int *part) {
   pa_status st = PA_SUCCESS;
   SCOTCH_Num *vert = NULL, *edge = NULL, *velo = NULL, *parttab = NULL;
-  SCOTCH_Dgraph graph;
+  SCOTCH_Dgraph graph, bound;
   SCOTCH_Strat strat;
-  int graph_init = 0, strat_init = 0;
+  SCOTCH_Context ctx;
+  int graph_init = 0, strat_init = 0, ctx_init = 0, bound_init = 0;
   int64_t nglob = n, wmax_ok = 1;
   double wmax = 0;
 
@@ -113,16 +126,36 @@ cleanup:
     st = agree(comm, st);
     if (st) goto done;
   }
-  /* Scotch's random state persists across calls in a process: reset it so
-   * that the same graph always gets the same partition. */
+  /* The same graph always gets the same partition: Scotch's random state
+   * persists across calls in a process (reset it), and its threads
+   * (SCOTCH_PTHREAD_NUMBER, all cores by default) race unless the
+   * context bound to the graph asks for deterministic behaviour (without
+   * it, three np=4 runs of the gmsh rod gave three different meshes). */
   SCOTCH_randomReset();
-  if (SCOTCH_dgraphPart(&graph, nparts, &strat, parttab) != 0)
+  if (deterministic_context(&ctx) != 0)
+    st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
+                   "SCOTCH_contextInit failed");
+  else
+    ctx_init = 1;
+  if (!st && SCOTCH_dgraphInit(&bound, comm) != 0)
+    st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
+                   "SCOTCH_dgraphInit failed");
+  else if (!st)
+    bound_init = 1;
+  if (!st && SCOTCH_contextBindDgraph(&ctx, &graph, &bound) != 0)
+    st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
+                   "SCOTCH_contextBindDgraph failed");
+  st = agree(comm, st);
+  if (st) goto done;
+  if (SCOTCH_dgraphPart(&bound, nparts, &strat, parttab) != 0)
     st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
                    "SCOTCH_dgraphPart failed (%d parts)", nparts);
   st = agree(comm, st);
   if (st) goto done;
   for (pa_idx i = 0; i < n; i++) part[i] = (int)parttab[i];
 done:
+  if (bound_init) SCOTCH_dgraphExit(&bound);
+  if (ctx_init) SCOTCH_contextExit(&ctx);
   if (strat_init) SCOTCH_stratExit(&strat);
   if (graph_init) SCOTCH_dgraphExit(&graph);
   pa__free(vert);
@@ -197,9 +230,10 @@ pa_status pa__order_graph(pa_idx n, const pa_idx *xadj, const pa_idx *adj,
                           pa_idx *perm) {
   pa_status st = PA_SUCCESS;
   SCOTCH_Num *vert = NULL, *edge = NULL, *permtab = NULL, *peritab = NULL;
-  SCOTCH_Graph graph;
+  SCOTCH_Graph graph, bound;
   SCOTCH_Strat strat;
-  int graph_init = 0, strat_init = 0;
+  SCOTCH_Context ctx;
+  int graph_init = 0, strat_init = 0, ctx_init = 0, bound_init = 0;
   if (n <= 1) {
     for (pa_idx i = 0; i < n; i++) perm[i] = i;
     return PA_SUCCESS;
@@ -226,11 +260,21 @@ pa_status pa__order_graph(pa_idx n, const pa_idx *xadj, const pa_idx *adj,
   PA_CHECK(SCOTCH_stratGraphOrder(&strat, "g") == 0, PA_ERR_PARTITION,
            "SCOTCH_stratGraphOrder failed");
   SCOTCH_randomReset(); /* reproducible, as the partitions */
-  PA_CHECK(SCOTCH_graphOrder(&graph, &strat, permtab, peritab, NULL, NULL,
+  PA_CHECK(deterministic_context(&ctx) == 0, PA_ERR_PARTITION,
+           "SCOTCH_contextInit failed");
+  ctx_init = 1;
+  PA_CHECK(SCOTCH_graphInit(&bound) == 0, PA_ERR_PARTITION,
+           "SCOTCH_graphInit failed");
+  bound_init = 1;
+  PA_CHECK(SCOTCH_contextBindGraph(&ctx, &graph, &bound) == 0,
+           PA_ERR_PARTITION, "SCOTCH_contextBindGraph failed");
+  PA_CHECK(SCOTCH_graphOrder(&bound, &strat, permtab, peritab, NULL, NULL,
                              NULL) == 0,
            PA_ERR_PARTITION, "SCOTCH_graphOrder failed (%d vertices)", (int)n);
   for (pa_idx k = 0; k < n; k++) perm[k] = (pa_idx)peritab[k];
 cleanup:
+  if (bound_init) SCOTCH_graphExit(&bound);
+  if (ctx_init) SCOTCH_contextExit(&ctx);
   if (strat_init) SCOTCH_stratExit(&strat);
   if (graph_init) SCOTCH_graphExit(&graph);
   pa__free(vert);
