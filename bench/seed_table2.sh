@@ -11,7 +11,7 @@
 #   bash bench/seed_table2.sh [BUILD_DIR] [WORK_DIR]
 #
 # Environment: EPS (default "0.003 0.001": a 0.3 M-tetrahedron run, then
-# about 2.7 M; the count grows as EPS^-2 with HMIN = EPS), HMAX (default 2),
+# about 1 M; EPS / 3 gave 3.1 times the count), HMAX (default 2),
 # PASSES (default 3), PROCS (default "1 2"), LCIN / LCOUT (gmsh sizes of the
 # initial mesh inside radius 0.7 / at the sphere, default 0.05 / 2: 69 k
 # tetrahedra).
