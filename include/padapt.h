@@ -644,7 +644,9 @@ const pa_remesher *pa_remesher_builtin(void);
  * and in the metric used (report->fidelity; the caller's metric travels
  * through the remesher as the vertex field "metric:user", removed before
  * return). The mesh keeps the metric used, interpolated at new vertices.
- * Not collective.
+ * Unless opts->trusted, a metric whose output would not fit in the
+ * available memory (estimated from its complexity) is refused with
+ * PA_ERR_MEMORY before any work, the mesh untouched. Not collective.
  */
 pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
                     const pa_remesh_opts *opts, pa_remesh_report *report);
@@ -1011,8 +1013,10 @@ typedef struct pa_adapt_opts {
   pa_remesh_opts remesh;
   /** The sequential remesher (NULL: pa_remesher_builtin()). */
   const pa_remesher *remesher;
-  /** Memory bound per process for one piece, in MB (<= 0: none): the number
-   *  of pieces grows so that each piece's estimated remesher memory fits. */
+  /** Memory bound per process, in MB (<= 0: the memory available on each
+   *  node, shared by its ranks): the number of pieces grows so that each
+   *  piece's estimated remesher memory fits, and a metric whose whole output
+   *  would not fit is refused (PA_ERR_MEMORY). */
   double mem_mb;
   /** Tag elements whose quality is below this (default 0.3; <= 0: off). */
   double qual_threshold;
@@ -1102,6 +1106,10 @@ void pa_adapt_opts_default(pa_adapt_opts *opts);
  * are. A piece whose remesh fails is rolled back: its elements stay, still
  * tagged, and the mesh stays valid; if the tagged count stops decreasing the
  * loop stops with report->stalled = 1 and PA_SUCCESS (the mesh is valid).
+ * report->converged is set only when a tag pass over the final mesh finds
+ * nothing. A metric whose output would not fit (estimated from its
+ * complexity, against opts->mem_mb per rank or the memory available on each
+ * node) is refused with PA_ERR_MEMORY before any remeshing.
  * opts may be NULL (defaults), report may be NULL.
  */
 pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,

@@ -164,6 +164,34 @@ cleanup:
   return st;
 }
 
+/* Refuse a metric whose output would not fit: the estimate from its
+ * complexity against opts->mem_mb per process, or else the memory available
+ * on each node shared by its ranks (the least over the nodes). Collective. */
+static pa_status check_size(pa_dmesh *dm, const pa_adapt_opts *o) {
+  pa_status st = PA_SUCCESS;
+  MPI_Comm node = MPI_COMM_NULL;
+  double c = 0, budget = 0;
+  char what[64] = "the available memory";
+  PA_CALL(pa_dmesh_metric_complexity(dm, &c));
+  if (o->mem_mb > 0) {
+    budget = o->mem_mb * 1e6;
+    snprintf(what, sizeof what, "-mem %g", o->mem_mb);
+  } else {
+    int nlocal = 1;
+    if (MPI_Comm_split_type(dm->comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL,
+                            &node) == MPI_SUCCESS)
+      MPI_Comm_size(node, &nlocal);
+    double b = (double)pa__mem_available() / nlocal;
+    if (b <= 0) b = -1; /* unknown somewhere: no bound */
+    PA_CALL(pa__allreduce(dm->comm, &b, 1, MPI_DOUBLE, MPI_MIN));
+    budget = b;
+  }
+  st = pa__check_output_size(dm->dim, c, dm->size, 1, budget, what, NULL);
+cleanup:
+  if (node != MPI_COMM_NULL) MPI_Comm_free(&node);
+  return st;
+}
+
 /* Max over the ranks of n doubles and the sum of one more. */
 static pa_status max_times(MPI_Comm comm, double *t, int n, double *busy) {
   pa_status st = PA_SUCCESS;
@@ -195,6 +223,7 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
   rep.nvert_initial = dm->nglob[PA_VERTEX];
   PA_CALL(check_opts(dm, opts));
   PA_CALL(prepare_metric(dm, &opts->remesh, &changed));
+  PA_CALL(check_size(dm, opts));
   PA_CALL(pa_dmesh_value_add(dm, PA_ELEMENT, PA__DONE_VALUE, MPI_UINT8_T, 1, -1,
                              &done));
   pa__info(2, "padapt: rank %d: metric and gradation %.3f s\n", dm->rank,

@@ -148,6 +148,39 @@ size_t pa_peak_rss(void) {
   return (size_t)ru.ru_maxrss * 1024; /* Linux reports KiB */
 }
 
+/* A number in a one-line file such as /sys/fs/cgroup/memory.max (0 if
+ * absent or not a number, e.g. "max"). */
+static double file_number(const char *path) {
+  FILE *f = fopen(path, "r");
+  double x = 0;
+  if (!f) return 0;
+  if (fscanf(f, "%lf", &x) != 1) x = 0;
+  fclose(f);
+  return x;
+}
+
+size_t pa__mem_available(void) {
+  double avail = 0;
+  FILE *f = fopen("/proc/meminfo", "r");
+  if (f) {
+    char line[256];
+    while (fgets(line, sizeof line, f)) {
+      double kb;
+      if (sscanf(line, "MemAvailable: %lf kB", &kb) == 1) {
+        avail = kb * 1024;
+        break;
+      }
+    }
+    fclose(f);
+  }
+  /* a container's limit (cgroup v2) counts too */
+  double lim = file_number("/sys/fs/cgroup/memory.max");
+  double cur = file_number("/sys/fs/cgroup/memory.current");
+  if (lim > 0 && (avail <= 0 || lim - cur < avail))
+    avail = lim > cur ? lim - cur : 0;
+  return avail > 0 ? (size_t)avail : 0;
+}
+
 /* ---- verbosity and time ---- */
 
 void pa_set_verbosity(int level) { pa_verbose = level; }

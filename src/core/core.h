@@ -145,4 +145,8 @@ static inline uint64_t pa__hash_idx(const pa_idx *k, int n) {
   return h ^ (h >> 31);
 }
 
+/* Bytes of memory this process may still use: MemAvailable of
+ * /proc/meminfo, lowered to a cgroup v2 limit; 0 if unknown. */
+size_t pa__mem_available(void);
+
 #endif /* PA_CORE_H */

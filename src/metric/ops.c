@@ -107,3 +107,34 @@ cleanup:
   pa__free(frozen);
   return st;
 }
+
+/* Peak bytes per output element, [parallel][dim == 3]: the sequential
+ * remesher's (75 B per triangle on the gmsh plate, 138-162 B per tetrahedron
+ * on the gmsh rod, padapt's counting allocator; BENCHMARKS.md) and a rank's
+ * of the parallel driver per local element (256-300 B at 2 ranks), rounded
+ * up. */
+static const double bytes_per_elem[2][2] = {{100, 200}, {350, 350}};
+
+pa_status pa__check_output_size(int dim, double complexity, int nproc,
+                                int parallel, double budget,
+                                const char *budget_what, double *nelem) {
+  pa_status st = PA_SUCCESS;
+  double vreg = dim == 2 ? sqrt(3.0) / 4.0 : sqrt(2.0) / 12.0;
+  double n = complexity / vreg;
+  const char *what = dim == 2 ? "triangles" : "tetrahedra";
+  if (nelem) *nelem = n;
+  PA_CHECK(isfinite(n) && n >= 0, PA_ERR_METRIC,
+           "the metric asks for an unbounded number of %s (complexity %g): "
+           "a size is zero or not finite",
+           what, complexity);
+  double need = n / (nproc > 0 ? nproc : 1) * bytes_per_elem[parallel != 0][dim == 3];
+  PA_CHECK(!(budget > 0 && need > budget), PA_ERR_MEMORY,
+           "the metric asks for about %.3g %s (complexity %.3g): about "
+           "%.3g GiB per process at %d process%s, more than %s allows "
+           "(%.3g GiB); give larger sizes (-hsiz, -hmin, the metric)%s",
+           n, what, complexity, need / 1073741824.0, nproc > 0 ? nproc : 1,
+           nproc > 1 ? "es" : "", budget_what, budget / 1073741824.0,
+           parallel ? " or more processes" : " or run in parallel");
+cleanup:
+  return st;
+}
