@@ -30,6 +30,7 @@ typedef struct pa_cli_adapt_args {
   const char *in, *out, *met, *outsol, *field, *outfield, *json;
   int nosol;       /* -nosol: no output metric file */
   int distributed; /* -distributed-output */
+  int best_effort; /* -best-effort: write the mesh even if the loop stalled */
   double mem_mb;   /* -mem MB (0: none) */
   int max_iter;    /* -max-iter N (0: default) */
   int pieces;      /* -pieces K (0: default) */

@@ -50,6 +50,8 @@ static const char *adapt_usage =
     "  -mem MB         memory bound per process (default: the available memory;\n"
     "                  a metric whose output would not fit is refused)\n"
     "  -max-iter N     at most N iterations (default 30)\n"
+    "  -best-effort    write the (valid) mesh even if the loop stalled; without\n"
+    "                  it a stalled loop is an error and nothing is written\n"
     "  -pieces K       pieces per process (default 1)\n"
     "  -check          check every remeshed piece and the distributed result\n"
     "                  (always done with a plug-in remesher)\n";
@@ -98,6 +100,8 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
       a->distributed = 1;
     } else if (!strcmp(o, "-check")) {
       a->check = 1;
+    } else if (!strcmp(o, "-best-effort")) {
+      a->best_effort = 1;
     } else if (!strcmp(o, "-mem") || !strcmp(o, "-max-iter") ||
                !strcmp(o, "-pieces")) {
       double x;

@@ -17,8 +17,9 @@
  *
  * Every rank parses the same arguments, so usage errors are seen by all
  * ranks at once; failures on rank 0 alone (reading) are broadcast before
- * any collective call. Exit status: 0 on success (also when the loop
- * stalled: a warning says so), 1 on any error. Every output (the mesh or
+ * any collective call. Exit status: 0 on success, 1 on any error,
+ * including a loop that stalled (unless -best-effort: then the valid mesh
+ * is written and a warning says so). Every output (the mesh or
  * the set, the metric, the fields, the JSON report) is written in one output
  * transaction per rank, committed only when every rank wrote all of its
  * files: on any error none of them is written.
@@ -269,10 +270,20 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
     if (!rep.fidelity.target_met)
       fprintf(stderr, "padapt: warning: adapt: target missed (valid mesh, but "
                       "the given metric is not met; see the outcome line)\n");
-    if (!rep.converged)
+    if (!rep.converged && args->best_effort)
       fprintf(stderr, "padapt: warning: adapt: the loop stalled with %lld "
-                      "elements still tagged (valid mesh)\n",
+                      "elements still tagged (valid mesh, written: "
+                      "-best-effort)\n",
               (long long)rep.ntagged_left);
+  }
+  if (!rep.converged && !args->best_effort) { /* rep is the same on all ranks */
+    if (cli->rank == 0)
+      pa_cli_error(cli, "adapt: the loop stalled with %lld elements still "
+                        "tagged after %d iteration%s: no output written "
+                        "(-best-effort writes the valid mesh anyway)",
+                   (long long)rep.ntagged_left, rep.niter,
+                   rep.niter > 1 ? "s" : "");
+    goto done;
   }
 
   /* write: every output of every rank in one transaction */

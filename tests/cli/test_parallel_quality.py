@@ -24,6 +24,9 @@ The same run twice at 2, 3 and 4 processes, with Scotch's threads on, must
 give the same bytes (before issue #19's fix, three np=4 runs of the rod
 gave three different meshes).
 
+A loop that stops before converging (here -max-iter 1) is an error, with
+nothing written, unless -best-effort, which writes the valid mesh.
+
 The sanitizer build (PADAPT_SANITIZE=1) runs the plate only, at 1 and 2.
 """
 import json
@@ -166,9 +169,32 @@ def reproducible(tag, mesh, h, procs):
         check(outs[0] == outs[1], "%s np=%d: two runs give the same output" % (tag, p))
 
 
+def stall(mesh, h, extra):
+    """A loop stopped by -max-iter 1 before converging is an error (exit 1,
+    nothing written); -best-effort writes the valid mesh."""
+    out = "stall.mesh"
+    for f in (out, "stall.sol", "stall.json"):
+        if os.path.exists(f):
+            os.remove(f)
+    base = [MPIEXEC, "-n", "2", PADAPT, "adapt", mesh, "-hsiz", str(h),
+            "-max-iter", "1", "-out", out, "-json", "stall.json"] + extra
+    r = subprocess.run(base, capture_output=True, text=True)
+    check(r.returncode != 0 and "stalled" in r.stderr and
+          not os.path.exists(out) and not os.path.exists("stall.json"),
+          "stalled loop: exit %d, nothing written" % r.returncode)
+    r = subprocess.run(base + ["-best-effort"], capture_output=True, text=True)
+    ok = r.returncode == 0 and os.path.exists(out)
+    if ok:
+        j = judge(out, h)
+        ok = j["positive"] and j["conforming"]
+    check(ok and "stalled" in r.stderr,
+          "stalled loop with -best-effort: exit %d, a valid mesh written" % r.returncode)
+
+
 def main():
     plate = os.path.join(DATA, "plate2d.mesh")
     rod = os.path.join(DATA, "rod3d.mesh")
+    stall(plate, 0.006, ["-hausd", "0.0005"])
     if SANITIZE:
         case("plate", plate, 0.006, [2], ["-hausd", "0.0005"])
     else:
