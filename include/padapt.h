@@ -465,6 +465,10 @@ void pa_sol_destroy(pa_sol *sol);
 int pa_sol_dim(const pa_sol *sol);
 pa_idx pa_sol_nvert(const pa_sol *sol);
 int pa_sol_nfield(const pa_sol *sol);
+/** Where the solution's vertex count was read, for messages: "u.sol:3" (the
+ *  line of its SolAtVertices keyword) or "u.solb: byte 40"; the path if
+ *  unknown; NULL for a solution built in memory. */
+const char *pa_sol_origin(const pa_sol *sol);
 /** Append a field; values (nvert * ncomp, ncomp from kind and dim) copied. */
 pa_status pa_sol_add_field(pa_sol *sol, pa_sol_kind kind, const double *values);
 /** Field k: kind, components per vertex and values. */

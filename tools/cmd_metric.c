@@ -178,7 +178,7 @@ static pa_status read_scalar(const char *path, pa_idx nv, int comp,
   st = pa_sol_field(sol, 0, &kind, &nc, &v);
   if (st == PA_SUCCESS && pa_sol_nvert(sol) != nv) {
     snprintf(msg, sizeof msg, "%s: %d values, but the mesh has %d vertices",
-             path, (int)pa_sol_nvert(sol), (int)nv);
+             pa_sol_origin(sol), (int)pa_sol_nvert(sol), (int)nv);
     st = pa_cli_set_error(PA_ERR_FORMAT, msg);
   } else if (st == PA_SUCCESS && (comp > nc || (nc > 1 && comp == 0))) {
     snprintf(msg, sizeof msg,

@@ -279,8 +279,9 @@ pa_status pa_cli_attach_fields(pa_mesh *mesh, const char *path) {
   if (st) return st;
   if (pa_sol_nvert(sol) != pa_mesh_nvert(mesh)) {
     snprintf(msg, sizeof msg,
-             "%s: %d values per field, but the mesh has %d vertices", path,
-             (int)pa_sol_nvert(sol), (int)pa_mesh_nvert(mesh));
+             "%s: %d values per field, but the mesh has %d vertices",
+             pa_sol_origin(sol), (int)pa_sol_nvert(sol),
+             (int)pa_mesh_nvert(mesh));
     pa_sol_destroy(sol);
     return pa_cli_set_error(PA_ERR_FORMAT, msg);
   }

@@ -133,6 +133,9 @@ pa_status pa__gmf_records(pa_gmf *gmf, size_t n, int nreal, int nint,
 int64_t pa__gmf_loc(const pa_gmf *gmf);
 int64_t pa__gmf_rec_loc(const pa_gmf *gmf, size_t k);
 int64_t pa__gmf_kwd_loc(const pa_gmf *gmf);
+/* "PATH:LINE" (ASCII) or "PATH: byte OFFSET" (binary) of a location, as
+ * the messages name it. */
+void pa__gmf_where(const pa_gmf *gmf, int64_t loc, char *buf, size_t n);
 /* Raise "FILE:LINE: msg" (ASCII) or "FILE: byte OFFSET: msg" (binary). */
 pa_status pa__gmf_error(const pa_gmf *gmf, int64_t loc, pa_status code,
                         const char *fmt, ...)

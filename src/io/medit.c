@@ -217,11 +217,16 @@ pa_status pa__gmf_error(const pa_gmf *g, int64_t loc, pa_status code,
   va_start(ap, fmt);
   vsnprintf(msg, sizeof msg, fmt, ap);
   va_end(ap);
+  char where[600];
+  pa__gmf_where(g, loc, where, sizeof where);
+  return pa__error(code, __FILE__, __LINE__, "%s: %s", where, msg);
+}
+
+void pa__gmf_where(const pa_gmf *g, int64_t loc, char *buf, size_t n) {
   if (g->binary)
-    return pa__error(code, __FILE__, __LINE__, "%s: byte %lld: %s", g->path,
-                     (long long)loc, msg);
-  return pa__error(code, __FILE__, __LINE__, "%s:%lld: %s", g->path,
-                   (long long)loc, msg);
+    snprintf(buf, n, "%s: byte %lld", g->path, (long long)loc);
+  else
+    snprintf(buf, n, "%s:%lld", g->path, (long long)loc);
 }
 
 /* Name of the current keyword for messages. */

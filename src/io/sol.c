@@ -35,7 +35,8 @@ struct pa_sol {
   int nfield;
   size_t capfield;
   sol_field *field;
-  char *path; /* file read from, NULL if built in memory */
+  char *path;   /* file read from, NULL if built in memory */
+  char *origin; /* where its vertex count was read ("u.sol:3"), or NULL */
 };
 
 /* Components of a field of this kind, 0 if the kind is invalid. */
@@ -75,7 +76,12 @@ void pa_sol_destroy(pa_sol *sol) {
     pa__free(sol->field[k].val);
   pa__free(sol->field);
   pa__free(sol->path);
+  pa__free(sol->origin);
   pa__free(sol);
+}
+
+const char *pa_sol_origin(const pa_sol *sol) {
+  return sol ? (sol->origin ? sol->origin : sol->path) : NULL;
 }
 
 int pa_sol_dim(const pa_sol *sol) { return sol->dim; }
@@ -161,8 +167,15 @@ static pa_status read_sol_at_vertices(pa_gmf *g, pa_sol **sp) {
     size += kind_ncomp(dim, type[i]);
   }
   PA_CALL(pa__gmf_check_room(g, n, size, 0));
-  if (!*sp)
+  if (!*sp) {
+    char where[600];
+    size_t len;
     PA_CALL(pa_sol_create(dim, n, sp));
+    pa__gmf_where(g, loc, where, sizeof where);
+    len = strlen(where);
+    PA_ALLOC((*sp)->origin, len + 1);
+    memcpy((*sp)->origin, where, len + 1);
+  }
   else if ((*sp)->nvert != n)
     PA_GMF_FAIL(g, loc, "SolAtVertices with %d vertices after one with %d",
                 (int)n, (int)(*sp)->nvert);
@@ -285,8 +298,8 @@ pa_status pa_mesh_metric_from_sol(pa_mesh *mesh, const pa_sol *sol, int k) {
            "%s: no field %d (the solution has %d)", src, k, sol->nfield);
   const sol_field *f = &sol->field[k];
   PA_CHECK(sol->nvert == mesh->nv, bad,
-           "%s: %d vertices in the solution but %d in the mesh", src,
-           (int)sol->nvert, (int)mesh->nv);
+           "%s: %d vertices in the solution but %d in the mesh",
+           sol->origin ? sol->origin : src, (int)sol->nvert, (int)mesh->nv);
   PA_CHECK(f->kind != PA_SOL_VECTOR, PA_ERR_ARG,
            "%s: field %d is a vector, not a metric (expected a scalar size or "
            "a symmetric tensor)",

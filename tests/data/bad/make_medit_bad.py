@@ -337,7 +337,7 @@ iso = [[0.2]] * nv
 t = sol_text(2, nv, [1], iso[:-1])
 put("sol_short.sol", t, ":%d:" % line_of(t, "End"))
 
-put("sol_count.sol", sol_text(2, 5, [1], iso[:5]), "5 vertices in the solution")
+put("sol_count.sol", sol_text(2, 5, [1], iso[:5]), "sol_count.sol:5: 5 vertices in the solution")
 
 rows = [[1.0, 0.0, 1.0]] * nv
 rows = rows[:2] + [[1.0, 2.0, 1.0]] + rows[3:]      # indefinite at vertex 3
@@ -396,7 +396,7 @@ put("sol_truncated.solb", buf[:m.offsets[62][1] + 3 * 8 + 4],
 m, buf = solb(2, 2, nv, [1], [], count=2147483647)
 put("sol_huge_count.solb", buf, "count 2147483647")
 m, buf = solb(3, 3, 7, [1], [[0.1]] * 7)
-put("sol_3d_count.solb", buf, "7 vertices in the solution")
+put("sol_3d_count.solb", buf, "sol_3d_count.solb: byte 24: 7 vertices in the solution")
 m, buf = solb(2, 2, nv, [4], [[1, 0, 0, 1]] * nv)
 put("sol_full_matrix.solb", buf, "type 4")
 rows = [[0.2]] * nv
