@@ -219,7 +219,10 @@ double pa_mesh_volume(const pa_mesh *mesh);
  * invariant and the entity: indices in range, positive orientation, no face
  * shared by more than two elements, symmetric adjacency, every topological
  * boundary face listed as a boundary entity, no unused vertex, finite
- * coordinates, valid metric.
+ * coordinates, valid metric, manifold vertices (the elements around a vertex
+ * connected through faces: no two fans or cones touching only there), no
+ * two vertices at the same point (a crack: duplicated vertices along an
+ * interior face).
  */
 pa_status pa_mesh_check(pa_mesh *mesh);
 

@@ -135,6 +135,15 @@ typedef struct pa__key64 {
 } pa__key64;
 int pa__key64_cmp(const void *a, const void *b);
 
+/* 64-bit mix of a value (splitmix64 finaliser). */
+static inline uint64_t pa__mix64(uint64_t x) {
+  x ^= x >> 30;
+  x *= 0xBF58476D1CE4E5B9ull;
+  x ^= x >> 27;
+  x *= 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
 /* Hash of a small sorted key of pa_idx. */
 static inline uint64_t pa__hash_idx(const pa_idx *k, int n) {
   uint64_t h = 0x9E3779B97F4A7C15ull;

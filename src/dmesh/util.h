@@ -22,7 +22,6 @@ void pa__gidmap_free(pa__gidmap *m);
 /* Insert, slow path (negative key, growth). */
 pa_status pa__gidmap_put_slow(pa__gidmap *m, pa_gid key, pa_idx val,
                               int *found, pa_idx *old);
-static inline uint64_t pa__mix64(uint64_t x);
 /* Insert key -> val; if key is present, leave it and return its value in
  * *old (may be NULL) with *found = 1. Inline: hash maps sit in the inner
  * loops of the build. */
@@ -126,13 +125,5 @@ static inline void pa__get(const unsigned char *p, size_t *pos, void *x,
 size_t pa__gid_sort_unique(pa_gid *a, size_t n);
 /* Sort idx[0..n) so that key[idx[i]] is ascending (stable). */
 pa_status pa__sort_by_gid(pa_idx *idx, size_t n, const pa_gid *key);
-/* 64-bit mix of a value (splitmix64 finaliser). */
-static inline uint64_t pa__mix64(uint64_t x) {
-  x ^= x >> 30;
-  x *= 0xBF58476D1CE4E5B9ull;
-  x ^= x >> 27;
-  x *= 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
 
 #endif /* PA_DMESH_UTIL_H */

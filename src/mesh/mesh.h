@@ -79,6 +79,10 @@ int pa__metric_valid(int dim, int ncomp, const double *m);
 
 /* Free derived structures after a topological change. */
 void pa__mesh_invalidate(pa_mesh *mesh);
+/* pa_mesh_check; input 0 leaves out what only a user's input must meet
+ * (manifold vertices, no two vertices at one point): a piece of the
+ * parallel loop may touch itself at a vertex. */
+pa_status pa__mesh_check(pa_mesh *mesh, int input);
 
 /* Number of metric components of a full tensor in dimension dim (3 or 6). */
 static inline int pa__tensor_ncomp(int dim) { return dim == 2 ? 3 : 6; }

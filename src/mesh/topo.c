@@ -543,7 +543,98 @@ cleanup:
   return st;
 }
 
-pa_status pa_mesh_check(pa_mesh *m) {
+/* Each vertex's elements form one group connected through the faces that
+ * contain it (no two fans or cones touching only at the vertex), from the
+ * adjacency and the balls. */
+static pa_status check_manifold_vertices(const pa_mesh *m) {
+  pa_status st = PA_SUCCESS;
+  const int nf = m->dim + 1;
+  pa_idx *stamp = NULL, *stack = NULL;
+  PA_ALLOC(stamp, m->ne ? (size_t)m->ne : 1);
+  PA_ALLOC(stack, m->ne ? (size_t)m->ne : 1);
+  for (pa_idx e = 0; e < m->ne; e++) stamp[e] = -1;
+  for (pa_idx v = 0; v < m->nv; v++) {
+    pa_idx b0 = m->ball_start[v], n = m->ball_start[v + 1] - b0, seen = 1,
+           top = 0;
+    if (n == 0) continue;
+    stack[top++] = m->ball[b0];
+    stamp[m->ball[b0]] = v;
+    while (top) {
+      pa_idx e = stack[--top];
+      const pa_idx *ev = m->elem + (size_t)nf * e;
+      for (int i = 0; i < nf; i++) {
+        if (ev[i] == v) continue; /* face i does not contain v */
+        pa_idx a = m->adja[(size_t)nf * e + i];
+        if (a < 0 || stamp[a / nf] == v) continue;
+        stamp[a / nf] = v;
+        stack[top++] = a / nf;
+        seen++;
+      }
+    }
+    PA_CHECK(seen == n, PA_ERR_MESH,
+             "vertex %d is non-manifold: its %d elements form separate "
+             "groups that touch only at it (e.g. element %d and element %d); "
+             "padapt needs a manifold mesh: split the vertex or fill the gap",
+             (int)v + 1, (int)n, (int)m->ball[b0] + 1,
+             (int)m->ball[b0 + n - 1] + 1);
+  }
+cleanup:
+  pa__free(stamp);
+  pa__free(stack);
+  return st;
+}
+
+/* No two vertices at the same coordinates (a crack: duplicated vertices
+ * along an interior face, or a mesh glued from parts without merging). */
+static pa_status check_coincident(const pa_mesh *m) {
+  pa_status st = PA_SUCCESS;
+  const int d = m->dim;
+  size_t cap = 16;
+  pa_idx *slot = NULL;
+  while (cap < 2 * (size_t)m->nv + 2) cap *= 2;
+  PA_ALLOC(slot, cap);
+  for (size_t k = 0; k < cap; k++) slot[k] = -1;
+  for (pa_idx v = 0; v < m->nv; v++) {
+    const double *x = m->coord + (size_t)d * v;
+    uint64_t h = 0x9e3779b97f4a7c15ull;
+    for (int k = 0; k < d; k++) {
+      double c = x[k] == 0 ? 0.0 : x[k]; /* -0 and +0 alike */
+      uint64_t b;
+      memcpy(&b, &c, sizeof b);
+      h = pa__mix64(h ^ b);
+    }
+    size_t i = (size_t)h & (cap - 1);
+    for (;; i = (i + 1) & (cap - 1)) {
+      pa_idx u = slot[i];
+      if (u < 0) {
+        slot[i] = v;
+        break;
+      }
+      const double *y = m->coord + (size_t)d * u;
+      int same = 1;
+      for (int k = 0; k < d; k++) same &= x[k] == y[k];
+      if (same) {
+        char pt[96];
+        if (d == 3)
+          snprintf(pt, sizeof pt, "%g, %g, %g", x[0], x[1], x[2]);
+        else
+          snprintf(pt, sizeof pt, "%g, %g", x[0], x[1]);
+        PA_CHECK(0, PA_ERR_MESH,
+                 "vertices %d and %d are at the same point (%s): a crack or "
+                 "a duplicated vertex; padapt needs a conforming mesh: merge "
+                 "them",
+                 (int)u + 1, (int)v + 1, pt);
+      }
+    }
+  }
+cleanup:
+  pa__free(slot);
+  return st;
+}
+
+pa_status pa_mesh_check(pa_mesh *m) { return pa__mesh_check(m, 1); }
+
+pa_status pa__mesh_check(pa_mesh *m, int input) {
   pa_status st = PA_SUCCESS;
   uint8_t *used = NULL;
   pa_idx *adja = NULL, *bstart = NULL, *ball = NULL, *bh = NULL;
@@ -659,6 +750,10 @@ pa_status pa_mesh_check(pa_mesh *m) {
                m->met_ncomp == 1 ? "a finite positive size"
                                  : "a finite symmetric positive definite "
                                    "tensor");
+  }
+  if (input) {
+    PA_CALL(check_manifold_vertices(m));
+    PA_CALL(check_coincident(m));
   }
 cleanup:
   pa__free(used);
