@@ -1,6 +1,8 @@
 /* testutil.c -- see testutil.h. */
 #include "testutil.h"
 
+#include <dirent.h>
+
 #include <mpi.h>
 
 int pa_test_failures;
@@ -72,4 +74,15 @@ int pa_test_run_mpi(int argc, char **argv, const char *name,
            pa_test_size, pa_test_checks, fails);
   MPI_Finalize();
   return fails ? 1 : 0;
+}
+
+int pa_test_ntemps(void) {
+  DIR *d = opendir(".");
+  struct dirent *e;
+  int n = 0;
+  if (!d) return -1;
+  while ((e = readdir(d)))
+    if (strstr(e->d_name, ".tmp.")) n++;
+  closedir(d);
+  return n;
 }

@@ -75,6 +75,9 @@ int pa_test_run_mpi(int argc, char **argv, const char *name,
   }
 
 /* Deterministic random numbers (xorshift64*), seeded per test. */
+/* Number of "*.tmp.*" entries (output temporaries) in the working
+ * directory, -1 if it cannot be read. */
+int pa_test_ntemps(void);
 void pa_test_seed(unsigned long long seed);
 double pa_test_rand(void);              /* uniform in [0,1) */
 double pa_test_rand_range(double lo, double hi);

@@ -10,7 +10,6 @@
  */
 #include "testutil.h"
 
-#include <dirent.h>
 #include <mpi.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -312,17 +311,6 @@ static void test_bad_sets(void) {
   pa_dmesh_destroy(dm);
 }
 
-/* Number of "*.tmp.*" entries in the working directory. */
-static int ntemps(void) {
-  DIR *d = opendir(".");
-  struct dirent *e;
-  int n = 0;
-  if (!d) return -1;
-  while ((e = readdir(d)))
-    if (strstr(e->d_name, ".tmp.")) n++;
-  closedir(d);
-  return n;
-}
 
 /* The same status on every rank. */
 static int same_everywhere(pa_status st) {
@@ -442,7 +430,7 @@ static void test_manifest(void) {
   snprintf(p, sizeof p, "io_f.%d.meshb", rank);
   CHECK(!file_exists(p));
   CHECK(!file_exists("io_f.manifest") && !file_exists("io_f.pvtu"));
-  CHECK(ntemps() == 0);
+  CHECK(pa_test_ntemps() == 0);
   if (rank == size - 1) {
     snprintf(p, sizeof p, "io_f.%d.vtu", rank);
     rmdir(p);
@@ -471,7 +459,7 @@ static void test_manifest(void) {
   CHECK_OK(pa_output_end(MPI_COMM_WORLD, tx, PA_SUCCESS));
   MPI_Barrier(MPI_COMM_WORLD);
   CHECK(file_exists(p) && file_exists("io_t.manifest"));
-  CHECK(ntemps() == 0);
+  CHECK(pa_test_ntemps() == 0);
   pa_dmesh_destroy(dm);
 }
 

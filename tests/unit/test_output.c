@@ -7,23 +7,11 @@
  */
 #include "testutil.h"
 
-#include <dirent.h>
 #include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-/* Number of "*.tmp.*" entries in the working directory. */
-static int ntemps(void) {
-  DIR *d = opendir(".");
-  struct dirent *e;
-  int n = 0;
-  if (!d) return -1;
-  while ((e = readdir(d)))
-    if (strstr(e->d_name, ".tmp.")) n++;
-  closedir(d);
-  return n;
-}
 
 static int exists(const char *p) {
   struct stat sb;
@@ -79,13 +67,13 @@ static void test_commit(void) {
   CHECK_OK(pa_mesh_write(m, "c.mesh", NULL));
   CHECK_OK(pa_stats_write_json(&s, NULL, "c.json"));
   CHECK(!exists("c.mesh") && !exists("c.json"));
-  CHECK(ntemps() == 2);
+  CHECK(pa_test_ntemps() == 2);
   CHECK_OK(pa_output_commit(tx));
   CHECK(exists("c.mesh") && exists("c.json"));
-  CHECK(ntemps() == 0);
+  CHECK(pa_test_ntemps() == 0);
   /* outside a transaction a file is renamed at once */
   CHECK_OK(pa_mesh_write(m, "c2.mesh", NULL));
-  CHECK(exists("c2.mesh") && ntemps() == 0);
+  CHECK(exists("c2.mesh") && pa_test_ntemps() == 0);
   pa_mesh_destroy(m);
 }
 
@@ -112,7 +100,7 @@ static void test_failure(void) {
     }
     CHECK(!strcmp(content("f.mesh", buf, sizeof buf), "old mesh"));
     CHECK(!strcmp(content("f.json", buf, sizeof buf), "old json"));
-    CHECK(ntemps() == 0);
+    CHECK(pa_test_ntemps() == 0);
   }
   /* the next transaction starts clean */
   CHECK_OK(pa_output_begin(&tx));
@@ -144,7 +132,7 @@ static void test_nested(void) {
   CHECK_OK(pa_output_begin(&inner));
   pa_output_abort(inner);
   CHECK(pa_output_commit(outer) != PA_SUCCESS);
-  CHECK(!exists("n1.mesh") && ntemps() == 0);
+  CHECK(!exists("n1.mesh") && pa_test_ntemps() == 0);
   /* a commit with none open is a caller mistake */
   CHECK(pa_output_commit(outer) == PA_ERR_ARG);
   pa_mesh_destroy(m);
@@ -168,7 +156,7 @@ static void test_refused(void) {
   CHECK(msg_has("dir.mesh") && msg_has("directory"));
   CHECK(pa_stats_write_json(&s, NULL, "/dev/null") == PA_ERR_IO);
   CHECK(msg_has("/dev/null") && msg_has("device"));
-  CHECK(ntemps() == 0);
+  CHECK(pa_test_ntemps() == 0);
   /* pa_output_check: the same, plus the directory */
   CHECK(pa_output_check("link.mesh") == PA_ERR_IO);
   CHECK(pa_output_check("/dev/null") == PA_ERR_IO);
@@ -185,7 +173,7 @@ static void test_refused(void) {
   CHECK(pa_stats_write_json(&s, NULL, "twice.json") == PA_ERR_ARG);
   CHECK(msg_has("twice.json"));
   CHECK(pa_output_commit(tx) != PA_SUCCESS);
-  CHECK(!exists("twice.json") && ntemps() == 0);
+  CHECK(!exists("twice.json") && pa_test_ntemps() == 0);
   /* a temporary name already taken is never written through nor removed */
   char tmp[64];
   snprintf(tmp, sizeof tmp, "taken.json.tmp.%ld", (long)getpid());
@@ -214,7 +202,7 @@ static void test_signal(void) {
     if (pa_output_handle_signals() || pa_mesh_generate_box(2, 3, &m) ||
         pa_mesh_stats(m, &s) || pa_output_begin(&tx) ||
         pa_mesh_write(m, "sig.mesh", NULL) ||
-        pa_stats_write_json(&s, NULL, "sig.json") || ntemps() != 2)
+        pa_stats_write_json(&s, NULL, "sig.json") || pa_test_ntemps() != 2)
       _exit(3);
     raise(SIGTERM);
     _exit(4); /* not reached */
@@ -222,7 +210,7 @@ static void test_signal(void) {
   int status = 0;
   CHECK(waitpid(pid, &status, 0) == pid);
   CHECK(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM);
-  CHECK(ntemps() == 0);
+  CHECK(pa_test_ntemps() == 0);
   CHECK(!exists("sig.mesh"));
   CHECK(!strcmp(content("sig.json", buf, sizeof buf), "old json"));
 }
