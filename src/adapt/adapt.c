@@ -16,7 +16,8 @@
  * halves the number of pieces of the next one (other borders, and fewer of
  * them; one piece has no inner border), and an iteration with one piece that
  * makes no progress (and rolled nothing back) ends the loop; so does
- * max_iter (both reported as stalled). Every step is collective and agrees
+ * max_iter: as converged if nothing still tagged is what the remesher
+ * itself calls missed (pa__adapt_count_missed), else as stalled. Every step is collective and agrees
  * on its status, so all ranks leave the loop together.
  */
 #include "adapt/adapt.h"
@@ -251,19 +252,22 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
       pa__iter_free(&it);
       break;
     }
-    if (iter > opts->max_iter) {
-      rep.stalled = 1;
-      pa__iter_free(&it);
-      break;
-    }
     /* progress: 1 % below the least work seen so far (work that goes up
      * and down, e.g. the same badly shaped elements tagged again next to
      * other borders, is no progress) */
     nostep = last >= 0 && it.tagwork >= 0.99 * last ? nostep + 1 : 0;
-    if ((nostep >= 1 && lastpieces == 1 && !lastfailed) || nostep >= 6) {
-      rep.stalled = 1;
-      pa__info(1, "padapt: adaptation stalled: %lld elements still tagged\n",
-               (long long)it.ntagged);
+    if (iter > opts->max_iter ||
+        (nostep >= 1 && lastpieces == 1 && !lastfailed) || nostep >= 6) {
+      /* the loop ends: converged all the same if nothing still tagged is
+       * what the sequential remesher would call missed */
+      pa_gid missed = 0;
+      PA_CALL(pa__adapt_count_missed(&it, &missed));
+      rep.converged = missed == 0;
+      rep.stalled = missed > 0;
+      pa__info(1, "padapt: the loop ends with %lld elements tagged, %lld "
+                  "of them clearly off: %s\n",
+               (long long)it.ntagged, (long long)missed,
+               missed ? "stalled" : "converged");
       pa__iter_free(&it);
       break;
     }

@@ -99,6 +99,18 @@ double pa__elem_work(const pa_mesh *m, pa_idx e) {
   return (isfinite(w) ? w : 0) + 1.0;
 }
 
+/* Quality of element e in the metric. */
+static double elem_quality(const pa_mesh *m, pa_idx e) {
+  int d = m->dim;
+  const pa_idx *v = m->elem + (size_t)(d + 1) * e;
+  const double *x[4], *mm[4];
+  for (int k = 0; k <= d; k++) {
+    x[k] = m->coord + (size_t)d * v[k];
+    mm[k] = m->met + (size_t)m->met_ncomp * v[k];
+  }
+  return pa__quality(d, m->met_ncomp, x, mm);
+}
+
 /* 1 if an edge of element e is outside [lo, hi) in the metric. */
 static int bad_edge(const pa_mesh *m, pa_idx e, double lo, double hi) {
   int d = m->dim, nc = m->met_ncomp;
@@ -126,7 +138,6 @@ pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int first) {
   PA_CALLOC(it->tag, it->ne);
   PA_ALLOC(it->work, it->ne);
   for (pa_idx e = 0; e < it->ne; e++) {
-    const pa_idx *v = m->elem + (size_t)it->nve * e;
     /* never tagged: its work is only needed if it joins a piece's skin
      * (extract.c computes it then) */
     it->work[e] = -1;
@@ -138,14 +149,7 @@ pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int first) {
       double lo, hi, qmin;
       criteria(dn[e], o->qual_threshold, &lo, &hi, &qmin);
       t = bad_edge(m, e, lo, hi);
-      if (!t && qmin > 0) {
-        const double *x[4], *mm[4];
-        for (int k = 0; k < it->nve; k++) {
-          x[k] = m->coord + (size_t)it->dim * v[k];
-          mm[k] = m->met + (size_t)m->met_ncomp * v[k];
-        }
-        t = pa__quality(it->dim, m->met_ncomp, x, mm) < qmin;
-      }
+      if (!t && qmin > 0) t = elem_quality(m, e) < qmin;
     }
     it->tag[e] = (uint8_t)t;
     x[0] += t;
@@ -158,5 +162,22 @@ cleanup:
     it->ntagged = (pa_gid)x[0];
     it->tagwork = x[1];
   }
+  return st;
+}
+
+pa_status pa__adapt_count_missed(pa__iter *it, pa_gid *missed) {
+  pa_status st = PA_SUCCESS;
+  const pa_mesh *m = it->dm->mesh;
+  double lo, hi, qmin, n = 0;
+  criteria(PA__DONE_FREE, it->opts->qual_threshold, &lo, &hi, &qmin);
+  for (pa_idx e = 0; e < it->ne; e++) {
+    if (!it->tag[e]) continue;
+    int bad = bad_edge(m, e, lo, hi);
+    if (!bad && qmin > 0) bad = elem_quality(m, e) < qmin;
+    n += bad;
+  }
+  PA_CALL(pa__allreduce(it->dm->comm, &n, 1, MPI_DOUBLE, MPI_SUM));
+  *missed = (pa_gid)n;
+cleanup:
   return st;
 }
