@@ -537,6 +537,12 @@ int main(int argc, char **argv) {
   pa_cli cli = {MPI_COMM_WORLD, 0, 1, 0};
   MPI_Comm_rank(cli.comm, &cli.rank);
   MPI_Comm_size(cli.comm, &cli.size);
+  {
+    /* test hook: fail the k-th allocation of padapt's allocator (fault
+     * injection, tests/cli/test_alloc_faults.sh) */
+    const char *k = getenv("PADAPT_TEST_FAIL_ALLOC");
+    if (k && k[0]) pa_memory_fail_after(atol(k));
+  }
   int rc = dispatch(&cli, argc, argv);
   int all = rc;
   MPI_Allreduce(&rc, &all, 1, MPI_INT, MPI_MAX, cli.comm);

@@ -72,6 +72,10 @@ refused "write failing on rank 1" set.1.vtu "directory" \
 rmdir set.1.vtu
 
 # SIGTERM while every rank's temporaries exist (test hook, see tools/cli.h).
+# mpiexec forwards the signal, then kills the ranks after
+# odls_base_sigkill_timeout (1 s by default): on a loaded machine a rank may
+# not have run its handler by then (a SIGKILL leaves temporaries behind).
+export OMPI_MCA_odls_base_sigkill_timeout=20
 rm -f hold.flag
 PADAPT_TEST_HOLD_OUTPUT=hold.flag "$MPIEXEC" -n 2 "$PADAPT" partition cube.mesh \
   -out set.meshb > out.txt 2>&1 &
