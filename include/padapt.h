@@ -1115,8 +1115,8 @@ void pa_adapt_opts_default(pa_adapt_opts *opts);
  * loop stops with report->stalled = 1 and PA_SUCCESS (the mesh is valid).
  * report->converged is set when a tag pass over the final mesh finds
  * nothing, or when the loop ends (no progress, max_iter) with nothing
- * tagged that the remesher itself would call missed (an edge of length 2 or
- * more, a quality below 0.05); otherwise report->stalled. A metric whose output would not fit (estimated from its
+ * tagged clearly off (an edge of length 2.5 or more, a quality below 0.05);
+ * otherwise report->stalled. A metric whose output would not fit (estimated from its
  * complexity, against opts->mem_mb per rank or the memory available on each
  * node) is refused with PA_ERR_MEMORY before any remeshing.
  * opts may be NULL (defaults), report may be NULL.

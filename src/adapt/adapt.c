@@ -16,8 +16,8 @@
  * halves the number of pieces of the next one (other borders, and fewer of
  * them; one piece has no inner border), and an iteration with one piece that
  * makes no progress (and rolled nothing back) ends the loop; so does
- * max_iter: as converged if nothing still tagged is what the remesher
- * itself calls missed (pa__adapt_count_missed), else as stalled. Every step is collective and agrees
+ * max_iter: as converged if nothing still tagged is clearly off
+ * (pa__adapt_count_missed), else as stalled. Every step is collective and agrees
  * on its status, so all ranks leave the loop together.
  */
 #include "adapt/adapt.h"

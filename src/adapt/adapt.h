@@ -189,9 +189,8 @@ pa_status pa__adapt_grade(pa_dmesh *dm, double hgrad, double hgradreq,
  * (it->ntagged, global) and estimate their work (it->work). done: the
  * element value marking elements produced in this run (never tagged). */
 pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int first);
-/* *missed (all ranks): the tagged elements that fail what the remesher
- * itself calls missed (an edge of 2 or more, a quality below 0.05; the
- * criteria of PA__DONE_FREE). Collective; after pa__adapt_tag. */
+/* *missed (all ranks): the tagged elements clearly off (an edge of 2.5 or
+ * more, a quality below 0.05; tag.c). Collective; after pa__adapt_tag. */
 pa_status pa__adapt_count_missed(pa__iter *it, pa_gid *missed);
 
 /* Step 2. Collective: pieces, labels, vertex label ranges and inner marks

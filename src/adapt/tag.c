@@ -57,6 +57,13 @@
 #define LEN_HI_DONE 1.5
 #define LEN_HI_FREE 2.0
 #define QUAL_CLEARLY_BAD 0.05
+/* When the loop ends without converging, what is still tagged makes it a
+ * failure (stalled) only with an edge of LEN_CLEARLY_OFF or more or a
+ * quality below QUAL_CLEARLY_BAD: the UGAWG polar-1 field on 2 ranks ends
+ * its third pass with 2 elements tagged for an edge of 2.02 (the
+ * sequential remesher's verdict bound is 2), while the defects this must
+ * catch are far off (edges of 3-12, qualities of 0.016 and below). */
+#define LEN_CLEARLY_OFF 2.5
 
 /* The edge-length range [lo, hi) and the least quality an element of done
  * value dn must meet. */
@@ -170,6 +177,7 @@ pa_status pa__adapt_count_missed(pa__iter *it, pa_gid *missed) {
   const pa_mesh *m = it->dm->mesh;
   double lo, hi, qmin, n = 0;
   criteria(PA__DONE_FREE, it->opts->qual_threshold, &lo, &hi, &qmin);
+  hi = LEN_CLEARLY_OFF;
   for (pa_idx e = 0; e < it->ne; e++) {
     if (!it->tag[e]) continue;
     int bad = bad_edge(m, e, lo, hi);
