@@ -17,8 +17,8 @@
  * them; one piece has no inner border), and an iteration with one piece that
  * makes no progress (and rolled nothing back) ends the loop; so does
  * max_iter: as converged if nothing still tagged is clearly off
- * (pa__adapt_count_missed), else as stalled. Every step is collective and agrees
- * on its status, so all ranks leave the loop together.
+ * (pa__adapt_count_missed), else as stalled. Every step is collective and
+ * agrees on its status, so all ranks leave the loop together.
  */
 #include "adapt/adapt.h"
 
@@ -187,7 +187,7 @@ static pa_status check_size(pa_dmesh *dm, const pa_adapt_opts *o) {
     PA_CALL(pa__allreduce(dm->comm, &b, 1, MPI_DOUBLE, MPI_MIN));
     budget = b;
   }
-  st = pa__check_output_size(dm->dim, c, dm->size, 1, budget, what, NULL);
+  st = pa__check_output_size(dm->dim, c, dm->size, 1, budget, what);
 cleanup:
   if (node != MPI_COMM_NULL) MPI_Comm_free(&node);
   return st;
@@ -259,7 +259,7 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
     if (iter > opts->max_iter ||
         (nostep >= 1 && lastpieces == 1 && !lastfailed) || nostep >= 6) {
       /* the loop ends: converged all the same if nothing still tagged is
-       * what the sequential remesher would call missed */
+       * clearly off */
       pa_gid missed = 0;
       PA_CALL(pa__adapt_count_missed(&it, &missed));
       rep.converged = missed == 0;
@@ -295,9 +295,8 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
     t[4] = pa_wtime() - tb;
     PA_CALL(max_times(dm->comm, t, 5, &busy));
     {
-      double x[3] = {(double)nfail, it.bytes_moved, (double)it.nbadskin};
-      PA_CALL(pa__allreduce(dm->comm, x, 3, MPI_DOUBLE, MPI_SUM));
-      it.nbadskin = (pa_gid)x[2];
+      double x[2] = {(double)nfail, it.bytes_moved};
+      PA_CALL(pa__allreduce(dm->comm, x, 2, MPI_DOUBLE, MPI_SUM));
       ir.nfailed = (int)x[0];
       lastfailed = ir.nfailed > 0;
       ir.bytes_moved = x[1];

@@ -144,8 +144,6 @@ typedef struct pa__iter {
   pa__piece *pieces;   /* the pieces remeshed by this rank */
   double bytes_moved;  /* record bytes this rank sent to other ranks */
   double imbalance;    /* estimated work: max over ranks / mean */
-  pa_gid nhot;         /* global: tagged elements touching a hot skin vertex
-                          (extract.c) */
   uint8_t *vinner;     /* nloc: PA__INNER_TRANSIT (inner vertex),
                           PA__LABELLED_TRANSIT (only pieces around, not
                           inner) or 0 */
@@ -153,9 +151,6 @@ typedef struct pa__iter {
                           elements around each local vertex (PA__NOLABEL
                           for unlabelled ones), then of the tagged ones
                           (PA__NOLABEL, -PA__NOLABEL if none) */
-  pa_gid nbadskin;     /* output elements of this rank's pieces marked
-                          again for their quality at the skin
-                          (reintegrate.c, BAD_NEAR_SKIN) */
   pa_gid ntagged;      /* global */
   double tagwork;      /* global work of the tagged elements */
 } pa__iter;

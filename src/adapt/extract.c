@@ -52,15 +52,6 @@ static int hot_vertex(const pa__iter *it, pa_idx v, int l) {
   return x[2] != PA__NOLABEL && (x[2] != l || x[3] != l);
 }
 
-/* Face skins: 1 if owned element e is tagged and touches a hot vertex. */
-static int hot_elem(const pa__iter *it, pa_idx e) {
-  if (!it->tag[e]) return 0;
-  for (int k = 0; k < it->nve; k++)
-    if (hot_vertex(it, it->dm->mesh->elem[(size_t)it->nve * e + k], it->label[e]))
-      return 1;
-  return 0;
-}
-
 /* Heaviest-first greedy map of pieces to ranks (see the file comment). */
 static pa_status map_pieces(pa__iter *it, const double *cnt) {
   pa_status st = PA_SUCCESS;
@@ -416,17 +407,15 @@ pa_status pa__adapt_extract(pa__iter *it) {
   PA_ALLOC(it->piece_work, np);
   PA_ALLOC(it->piece_rank, np);
   PA_CALLOC(it->piece_failed, np);
-  PA_CALLOC(buf, (size_t)np * P + np + 1);
+  PA_CALLOC(buf, (size_t)np * P + np);
   for (pa_idx e = 0; e < it->ne; e++)
     if (it->label[e] >= 0) {
-      buf[(size_t)np * P + np] += hot_elem(it, e);
       buf[(size_t)it->label[e] * P + it->rank] += 1;
       buf[(size_t)np * P + it->label[e]] +=
           it->work[e] >= 0 ? it->work[e] : pa__elem_work(m, e);
     }
-  PA_CALL(pa__allreduce(dm->comm, buf, np * P + np + 1, MPI_DOUBLE, MPI_SUM));
+  PA_CALL(pa__allreduce(dm->comm, buf, np * P + np, MPI_DOUBLE, MPI_SUM));
   memcpy(it->piece_work, buf + (size_t)np * P, np * sizeof *buf);
-  it->nhot = (pa_gid)buf[(size_t)np * P + np];
   PA_CALL(map_pieces(it, buf));
 
   /* 2. records to ship */

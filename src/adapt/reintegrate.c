@@ -752,7 +752,6 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
     if (dv == PA__DONE && qband > 0 && elem_layer(o, dsk, e) < NEAR_SKIN &&
         pa_mesh_elem_quality(pc->out, e) < qband) {
       dv = PA__DONE_NEAR_SKIN; /* see BAD_NEAR_SKIN */
-      it->nbadskin++;
     }
     if (dv == PA__DONE && it->npieces == 1) dv = PA__DONE_FREE;
     pa_idx q = pc->reuse[PA_ELEMENT][e];

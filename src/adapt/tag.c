@@ -13,9 +13,9 @@
  * volume in the metric over the volume of the unit regular simplex, plus one
  * for removing the element itself (the coarsening term). Every figure is a
  * function of the element's own data, so it is the same whatever the
- * distribution. The work is computed only for elements that may be tagged
- * (-1 for the required ones); extract.c computes it for the untagged skin
- * elements it needs.
+ * distribution. The work is computed only for the tagged elements (-1 for
+ * the others); extract.c computes it for the untagged skin elements it
+ * needs.
  */
 #include "adapt/adapt.h"
 
@@ -101,8 +101,7 @@ double pa__elem_work(const pa_mesh *m, pa_idx e) {
   }
   double vol = fabs(pa__simplex_volume(d, x));
   double det = pa__sym_det(d, mean);
-  double vreg = d == 2 ? sqrt(3.0) / 4.0 : sqrt(2.0) / 12.0;
-  double w = det > 0 ? vol * sqrt(det) / vreg : 0;
+  double w = det > 0 ? vol * sqrt(det) / pa__unit_simplex_volume(d) : 0;
   return (isfinite(w) ? w : 0) + 1.0;
 }
 
@@ -145,11 +144,10 @@ pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int first) {
   PA_CALLOC(it->tag, it->ne);
   PA_ALLOC(it->work, it->ne);
   for (pa_idx e = 0; e < it->ne; e++) {
-    /* never tagged: its work is only needed if it joins a piece's skin
-     * (extract.c computes it then) */
+    /* the work of an untagged element is only needed if it joins a
+     * piece's skin (extract.c computes it then) */
     it->work[e] = -1;
     if (m->eflag[e] & PA_FLAG_REQUIRED) continue;
-    it->work[e] = pa__elem_work(m, e);
     if (dn[e] && o->user_tags_only) continue;
     int t = !dn[e] && (m->eflag[e] & PA_FLAG_USER) != 0;
     if (!t && !o->user_tags_only) {
@@ -159,6 +157,7 @@ pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int first) {
       if (!t && qmin > 0) t = elem_quality(m, e) < qmin;
     }
     it->tag[e] = (uint8_t)t;
+    if (t) it->work[e] = pa__elem_work(m, e);
     x[0] += t;
     x[1] += t ? it->work[e] : 0;
   }

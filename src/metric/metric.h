@@ -144,17 +144,23 @@ pa_status pa__recover(pa_mesh *mesh, const double *u, int stride,
 double pa__elem_complexity(const pa_mesh *mesh, int ncomp, const double *met,
                            pa_idx e);
 
+/* Volume of the regular simplex of unit edge: an element of the unit mesh
+ * of a metric, so the complexity / this is the expected element count. */
+static inline double pa__unit_simplex_volume(int dim) {
+  return dim == 2 ? 0.4330127018922193 /* sqrt 3 / 4 */
+                  : 0.1178511301977579 /* sqrt 2 / 12 */;
+}
+
 /* Refuse, before any work, a metric that asks for more elements than the
  * memory holds: about complexity / (volume of the unit regular simplex)
  * output elements, spread over nproc processes, at the peak bytes per
  * element of the sequential remesher (parallel 0) or of a rank of the
  * parallel driver (1), against budget bytes per process (<= 0: unknown,
  * only a non-finite estimate is refused). PA_ERR_MEMORY names the
- * estimate, what it needs and the budget (budget_what, e.g. "-mem 100").
- * *nelem (may be NULL): the estimate. */
+ * estimate, what it needs and the budget (budget_what, e.g. "-mem 100"). */
 pa_status pa__check_output_size(int dim, double complexity, int nproc,
                                 int parallel, double budget,
-                                const char *budget_what, double *nelem);
+                                const char *budget_what);
 
 /* The Lp metric of a recovered Hessian h (tensor) before scaling:
  * det|H|^(-1/(2p+d)) |H| with the eigenvalues of |H| floored at lmin (> 0),

@@ -117,12 +117,10 @@ static const double bytes_per_elem[2][2] = {{100, 200}, {350, 350}};
 
 pa_status pa__check_output_size(int dim, double complexity, int nproc,
                                 int parallel, double budget,
-                                const char *budget_what, double *nelem) {
+                                const char *budget_what) {
   pa_status st = PA_SUCCESS;
-  double vreg = dim == 2 ? sqrt(3.0) / 4.0 : sqrt(2.0) / 12.0;
-  double n = complexity / vreg;
+  double n = complexity / pa__unit_simplex_volume(dim);
   const char *what = dim == 2 ? "triangles" : "tetrahedra";
-  if (nelem) *nelem = n;
   PA_CHECK(isfinite(n) && n >= 0, PA_ERR_METRIC,
            "the metric asks for an unbounded number of %s (complexity %g): "
            "a size is zero or not finite",

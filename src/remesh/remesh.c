@@ -187,10 +187,9 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   frozen = NULL;
   if (!opts->trusted) { /* the parallel driver checks for its pieces */
     double c = 0;
-    for (pa_idx e = 0; e < mesh->ne; e++)
-      c += pa__elem_complexity(mesh, nc, newmet, e);
+    PA_CALL(pa_metric_complexity(mesh, nc, newmet, &c));
     PA_CALL(pa__check_output_size(d, c, 1, 0, (double)pa__mem_available(),
-                                  "the available memory", NULL));
+                                  "the available memory"));
   }
 
   oldmet = mesh->met;

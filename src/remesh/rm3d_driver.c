@@ -462,7 +462,7 @@ static double estimate_ntets(const rm3d *m) {
     }
     s += vol * d / 4.0;
   }
-  return s / 0.11785113019775792; /* sqrt(2)/12 */
+  return s / pa__unit_simplex_volume(3);
 }
 
 pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,

@@ -223,7 +223,7 @@ static double expected_elems(pa_mesh *mesh) {
     double det = t[0] * t[2] - t[1] * t[1];
     if (det > 0 && area > 0) sum += area * sqrt(det);
   }
-  return sum / 0.4330127018922193; /* area of the unit equilateral triangle */
+  return sum / pa__unit_simplex_volume(2);
 }
 
 /*
