@@ -538,10 +538,13 @@ int main(int argc, char **argv) {
   MPI_Comm_rank(cli.comm, &cli.rank);
   MPI_Comm_size(cli.comm, &cli.size);
   {
-    /* test hook: fail the k-th allocation of padapt's allocator (fault
-     * injection, tests/cli/test_alloc_faults.sh) */
+    /* test hook: fail the k-th allocation of padapt's allocator, on every
+     * rank or on rank PADAPT_TEST_FAIL_RANK only (fault injection,
+     * tests/cli/test_alloc_faults.sh) */
     const char *k = getenv("PADAPT_TEST_FAIL_ALLOC");
-    if (k && k[0]) pa_memory_fail_after(atol(k));
+    const char *r = getenv("PADAPT_TEST_FAIL_RANK");
+    if (k && k[0] && (!r || !r[0] || atoi(r) == cli.rank))
+      pa_memory_fail_after(atol(k));
   }
   int rc = dispatch(&cli, argc, argv);
   int all = rc;

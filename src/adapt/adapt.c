@@ -346,7 +346,8 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
 cleanup:
   pa__iter_free(&it);
   if (dm) {
-    int k = pa__user_metric_field(dm->mesh); /* left by an error */
+    /* a field left by an error (a failed step may have dropped the mesh) */
+    int k = dm->mesh ? pa__user_metric_field(dm->mesh) : -1;
     if (k >= 0) pa_mesh_remove_field(dm->mesh, k);
     st = pa__agree_end(dm->comm, st);
     if (done) pa_dmesh_value_remove(dm, done);

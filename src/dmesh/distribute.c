@@ -171,7 +171,7 @@ cleanup:
                   k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
   /* blocks, one in flight */
   for (int r = 0; r < size; r++) {
-    if (rank == root) st = pack_block(mesh, &lay, r, size, &b);
+    if (rank == root && !st) st = pack_block(mesh, &lay, r, size, &b);
     st = pa__agree(dm->comm, st);
     if (st) goto fail;
     if (r == root) {

@@ -91,11 +91,15 @@ pa_status pa__xchg_sparse(MPI_Comm comm, const size_t *sendcount,
   MPI_Request *req = NULL;
   *recvcountp = NULL;
   *recvbufp = NULL;
-  PA_CALL(pa__agree(comm, PA_SUCCESS));
   MPI_Comm_size(comm, &size);
-  PA_ALLOC(sc, size);
-  PA_ALLOC(rc, size);
-  PA_ALLOC(recvcount, size);
+  sc = pa__malloc((size_t)size * sizeof *sc);
+  rc = pa__malloc((size_t)size * sizeof *rc);
+  recvcount = pa__malloc((size_t)size * sizeof *recvcount);
+  st = (!sc || !rc || !recvcount)
+           ? pa__error(PA_ERR_MEMORY, __FILE__, __LINE__,
+                       "out of memory exchanging counts")
+           : PA_SUCCESS;
+  PA_CALL(pa__agree(comm, st));
   for (int r = 0; r < size; r++) sc[r] = sendcount[r];
   MPI_Alltoall(sc, 1, MPI_UINT64_T, rc, 1, MPI_UINT64_T, comm);
   size_t total = 0;

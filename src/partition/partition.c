@@ -18,17 +18,32 @@
 /* PT-Scotch needs these before its header. */
 #include <mpi.h>
 #include <stdint.h>
+#include <string.h>
 #include <scotch/ptscotch.h>
 
-/* Agree on a status over comm (max of the codes); a rank that did not fail
- * gets a message saying another one did. */
+/* Agree on a status over comm: every rank gets the status and the message
+ * of the lowest failing rank (prefixed "rank R: "), as the exchange layer's
+ * pa__agree does for the components above this one. */
 static pa_status agree(MPI_Comm comm, pa_status st) {
-  int mine = (int)st, any;
-  MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, comm);
-  if (any && !st)
-    return pa__error((pa_status)any, __FILE__, __LINE__,
-                     "partitioning failed on another rank");
-  return any && st ? st : (pa_status)any;
+  int rank, size, mine, first;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  mine = st != PA_SUCCESS ? rank : size;
+  MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, comm);
+  if (first == size) return PA_SUCCESS;
+  struct {
+    int code;
+    char msg[1000];
+  } m;
+  memset(&m, 0, sizeof m);
+  if (rank == first) {
+    m.code = (int)st;
+    snprintf(m.msg, sizeof m.msg, "%s", pa_last_error());
+  }
+  MPI_Bcast(&m, (int)sizeof m, MPI_BYTE, first, comm);
+  if (rank == first) return st;
+  return pa__error((pa_status)m.code, __FILE__, __LINE__, "rank %d: %s",
+                   first, m.msg);
 }
 
 /* A Scotch context whose threads and random generator behave the same on

@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
-# Fault injection (issue #19): the k-th allocation of padapt's allocator
-# fails (PADAPT_TEST_FAIL_ALLOC=k) during a small sequential adaptation, for
-# every k until the run needs no more allocations than k. Every failed run
-# must end in a clean error (exit status 1, an "out of memory" message, no
-# crash nor sanitizer report, no hang), the previous output untouched and no
-# temporary left; the first run that gets through writes a valid mesh.
-# The same sweep on several processes is bench/alloc_faults.sh (some
-# failures there still hang: issue #19).
+# Fault injection: the k-th allocation of padapt's allocator fails
+# (PADAPT_TEST_FAIL_ALLOC=k) during a small adaptation: sequentially for
+# every k until the run needs no more allocations than k; on 2 processes for
+# k growing geometrically, on every rank and on rank 1 only
+# (PADAPT_TEST_FAIL_RANK=1: the other rank carries on, so any collective
+# entered without agreeing first hangs). Every failed run must end in a clean
+# error (exit status 1, an "out of memory" message, no crash nor sanitizer
+# report, no hang), the previous output untouched and no temporary left; the
+# first run that gets through writes a valid mesh. bench/alloc_faults.sh
+# runs a denser sweep at any number of processes.
 set -u
 : "${PADAPT:?PADAPT must point to the padapt binary}"
 MPIEXEC=${MPIEXEC:-mpiexec}
@@ -19,7 +21,7 @@ echo previous > out.mesh
 run() { # np k
   rm -f log.txt
   if [ "$1" -gt 1 ]; then
-    PADAPT_TEST_FAIL_ALLOC=$2 timeout 120 "$MPIEXEC" -n "$1" "$PADAPT" adapt \
+    PADAPT_TEST_FAIL_ALLOC=$2 timeout 60 "$MPIEXEC" -n "$1" "$PADAPT" adapt \
       in.mesh -hsiz 0.05 -out out.mesh > log.txt 2>&1
   else
     PADAPT_TEST_FAIL_ALLOC=$2 timeout 120 "$PADAPT" adapt in.mesh -hsiz 0.05 \
@@ -59,8 +61,14 @@ sweep() { # np, then the values of k
   fail "np=$np: every injected failure failed the run (more allocations than swept)"
 }
 
-# every k; every third under the sanitizers (each run is slower there)
-step=1
-[ "${PADAPT_SANITIZE:-0}" = 1 ] && step=3
+# k growing by a factor g from 1 to 4000
+geometric() { awk -v g="$1" 'BEGIN { for (k = 1; k <= 4000; k = int(k * g) + 1) print k }'; }
+
+# every k sequentially; every third under the sanitizers (each run is
+# slower there); a sparser ladder on 2 processes
+step=1 g=1.5
+[ "${PADAPT_SANITIZE:-0}" = 1 ] && step=3 g=2.2
 sweep 1 $(seq 1 "$step" 2000)
+sweep 2 $(geometric $g)
+PADAPT_TEST_FAIL_RANK=1 sweep 2 $(geometric $g)
 [ $fails -eq 0 ] && echo "all checks passed" || { echo "$fails check(s) failed"; exit 1; }
