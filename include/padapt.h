@@ -32,6 +32,10 @@ extern "C" {
 #define PADAPT_VERSION_MINOR 1
 #define PADAPT_VERSION_PATCH 0
 
+/** The library's version, "MAJOR.MINOR.PATCH" (the macros above, as the
+ *  library was built: compare both to detect a header/library mismatch). */
+const char *pa_version(void);
+
 /** Local index (vertex, element, ...) on one process. */
 typedef int32_t pa_idx;
 /** Global id of an entity across all processes. */
@@ -578,6 +582,25 @@ typedef enum pa_remesh_outcome {
   PA_REMESH_FAILED = 2         /**< failed; the mesh was left as it was given */
 } pa_remesh_outcome;
 
+/** Where a running adaptation stands (pa_remesh_opts.progress,
+ *  pa_progress_of_iter). */
+typedef struct pa_progress {
+  const char *stage;     /**< "pass" (a remesher's) or "iteration" (the
+                              parallel loop's) */
+  int step;              /**< pass or iteration number, from 1 */
+  double nelem;          /**< elements now (over every rank in parallel) */
+  double nelem_initial;  /**< elements when the adaptation started */
+  double nelem_expected; /**< the metric's estimate of the final count
+                              (complexity over the unit simplex volume;
+                              0: unknown) */
+  double done;           /**< share of the elements that meet their target
+                              ([0, 1]; -1: not measured) */
+  double elapsed;        /**< seconds since the adaptation started */
+} pa_progress;
+
+/** A progress callback; ctx is the caller's. It must not call padapt. */
+typedef void (*pa_progress_fn)(const pa_progress *p, void *ctx);
+
 /** Options common to every remesher (the CLI's -hmin, -hmax, ... flags). */
 typedef struct pa_remesh_opts {
   double hmin;      /**< minimal size (<= 0: none) */
@@ -603,6 +626,13 @@ typedef struct pa_remesh_opts {
   /** 1: pa_remesh leaves report->fidelity empty and carries no copy of the
    *  caller's metric (the parallel loop's pieces; default 0) */
   int no_stats;
+  /** Called by the remesher after each pass (may be NULL; the parallel
+   *  loop's pieces never call it): a remesher fills stage, step and nelem,
+   *  pa_remesh adds nelem_initial, nelem_expected and elapsed.
+   *  pa_dmesh_adapt calls it after each tag pass, on every rank with the
+   *  same figures. */
+  pa_progress_fn progress;
+  void *progress_ctx;
 } pa_remesh_opts;
 
 /** Default options: no hmin/hmax/hsiz, hgrad 1.3, hgradreq 2.3 (Mmg's),

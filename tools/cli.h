@@ -25,6 +25,24 @@ int pa_cli_convert(const pa_cli *cli, int argc, char **argv);
 int pa_cli_adapt(const pa_cli *cli, int argc, char **argv);
 int pa_cli_partition(const pa_cli *cli, int argc, char **argv);
 
+/* Set the verbosity of the library and the CLI: -1 silences the reports on
+ * stdout (errors and warnings still go to stderr), 0 is the default, 1-10
+ * add detail on stderr. */
+void pa_cli_set_verbosity(int level);
+
+/* The live progress line on stderr (tools/progress.c): give
+ * pa_cli_progress_cb and the state as pa_remesh_opts.progress and its ctx;
+ * enabled on rank 0 at verbosity >= 0. */
+typedef struct pa_cli_progress {
+  int enabled, tty, printed;
+  double last;  /* elapsed time of the last line, -1 before the first */
+  double after; /* seconds of silence at the start */
+} pa_cli_progress;
+void pa_cli_progress_init(pa_cli_progress *pr, int enabled);
+void pa_cli_progress_cb(const pa_progress *p, void *ctx);
+/* End the line rewritten on a terminal. */
+void pa_cli_progress_end(pa_cli_progress *pr);
+
 /* The arguments of `padapt adapt`, sequential and parallel alike. */
 typedef struct pa_cli_adapt_args {
   const char *in, *out, *met, *outsol, *field, *outfield, *json;
@@ -36,6 +54,9 @@ typedef struct pa_cli_adapt_args {
   int pieces;      /* -pieces K (0: default) */
   int check;       /* -check: check every piece and the result */
   pa_remesh_opts remesh;
+  /* storage of the defaults a Mmg user expects: OUT = IN.o.EXT when -out is
+   * not given, the metric IN.sol when it exists and none is given */
+  char out_default[4096], met_default[4096];
 } pa_cli_adapt_args;
 
 /* The parallel `padapt adapt` (pa_dmesh_adapt), called by pa_cli_adapt on more

@@ -23,13 +23,15 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static const char *adapt_usage =
-    "usage: padapt adapt IN [-met SOL | -sol SOL | -hsiz H] -out OUT [options]\n"
+    "usage: padapt adapt IN [-met SOL | -sol SOL | -hsiz H] [-out OUT] [options]\n"
     "  -in IN          input mesh (same as the positional IN)\n"
     "  -met/-sol SOL   metric: sizes (scalar) or tensors, .sol/.solb\n"
+    "                  (default: IN.sol or IN.solb when it exists)\n"
     "  -hsiz H         constant size H (replaces the metric)\n"
-    "  -out OUT        output mesh (.mesh .meshb .msh .vtu)\n"
+    "  -out OUT        output mesh (.mesh .meshb .msh .vtu; default IN.o.EXT)\n"
     "  -outsol PATH    output metric (default: OUT with extension .sol)\n"
     "  -nosol          do not write the output metric\n"
     "  -hmin H -hmax H clamp the sizes\n"
@@ -41,25 +43,70 @@ static const char *adapt_usage =
     "  -ar A           corner detection angle in degrees (default 45)\n"
     "  -nr             no corner detection by angle\n"
     "  -noinsert -noswap -nomove   disable operators\n"
+    "  -nosurf         leave the boundary unchanged (3D)\n"
     "  -field F.sol    vertex fields to interpolate; written to\n"
     "                  <OUT stem>.fields.sol (or -outfield PATH)\n"
     "  -json R.json    write the after-statistics, time and counts as JSON\n"
-    "  -v N            verbosity\n"
+    "  -v N            verbosity: -1 errors and warnings only, 0 the report\n"
+    "                  (default), 1-10 more detail on stderr\n"
     "Parallel (mpiexec -n P, P > 1; IN may be a distributed set OUT.<r>.meshb):\n"
     "  -distributed-output  write OUT as a distributed set\n"
-    "  -mem MB         memory bound per process (default: the available memory;\n"
+    "  -mem MB, -m MB  memory bound per process (default: the available memory;\n"
     "                  a metric whose output would not fit is refused)\n"
     "  -max-iter N     at most N iterations (default 30)\n"
     "  -best-effort    write the (valid) mesh even if the loop stalled; without\n"
     "                  it a stalled loop is an error and nothing is written\n"
     "  -pieces K       pieces per process (default 1)\n"
     "  -check          check every remeshed piece and the distributed result\n"
-    "                  (always done with a plug-in remesher)\n";
+    "                  (always done with a plug-in remesher)\n"
+    "Exit status: 0 success (also \"target missed\": a valid mesh, written,\n"
+    "with a warning); 1 failure, nothing written (previous files untouched).\n";
 
 static const char *outcome_name(pa_remesh_outcome o) {
   return o == PA_REMESH_SUCCESS         ? "success"
          : o == PA_REMESH_TARGET_MISSED ? "target missed"
                                         : "failed";
+}
+
+/* IN's name without its extension (a distributed set's name ends at its
+ * extension as well) into buf. */
+static int stem(const char *in, char *buf, size_t n) {
+  const char *dot = strrchr(in, '.'), *slash = strrchr(in, '/');
+  size_t k = dot && (!slash || dot > slash) ? (size_t)(dot - in) : strlen(in);
+  return snprintf(buf, n, "%.*s", (int)k, in) < (int)n;
+}
+
+/* Mmg's default output name: IN.o.EXT with IN's extension (.mesh when IN
+ * has none). */
+static int default_paths(const pa_cli *cli, pa_cli_adapt_args *a) {
+  char base[4096];
+  const char *dot = strrchr(a->in, '.'), *slash = strrchr(a->in, '/');
+  const char *ext = dot && (!slash || dot > slash) ? dot : ".mesh";
+  if (!stem(a->in, base, sizeof base) ||
+      snprintf(a->out_default, sizeof a->out_default, "%s.o%s", base, ext) >=
+          (int)sizeof a->out_default)
+    return pa_cli_error(cli, "adapt: input name too long for a default output");
+  a->out = a->out_default;
+  return 0;
+}
+
+/* As Mmg does: with no metric option, IN.sol (or IN.solb) beside the mesh is
+ * its metric when it exists. */
+static void find_metric(const pa_cli *cli, pa_cli_adapt_args *a) {
+  static const char *ext[] = {".sol", ".solb"};
+  char base[4000];
+  if (!stem(a->in, base, sizeof base)) return;
+  for (int k = 0; k < 2; k++) {
+    if (snprintf(a->met_default, sizeof a->met_default, "%s%s", base,
+                 ext[k]) >= (int)sizeof a->met_default)
+      return;
+    if (access(a->met_default, R_OK) == 0) {
+      a->met = a->met_default;
+      if (cli->rank == 0 && a->remesh.verbosity >= 0)
+        printf("padapt: adapt: metric %s (found beside %s)\n", a->met, a->in);
+      return;
+    }
+  }
 }
 
 /* Parse the arguments of `padapt adapt`. Returns 0 when parsed, 1 after
@@ -102,10 +149,10 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
       a->check = 1;
     } else if (!strcmp(o, "-best-effort")) {
       a->best_effort = 1;
-    } else if (!strcmp(o, "-mem") || !strcmp(o, "-max-iter") ||
-               !strcmp(o, "-pieces")) {
+    } else if (!strcmp(o, "-mem") || !strcmp(o, "-m") ||
+               !strcmp(o, "-max-iter") || !strcmp(o, "-pieces")) {
       double x;
-      int count = strcmp(o, "-mem") != 0;
+      int count = strcmp(o, "-mem") && strcmp(o, "-m");
       if (!pa_cli_parse_num(val, &x) || x <= 0 ||
           (count && (x > 1000 || x != floor(x))))
         return pa_cli_error(cli, "adapt: %s needs %s, got '%s'", o,
@@ -113,7 +160,7 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
                                   : "a positive number",
                             val ? val : "nothing");
       i++;
-      if (!strcmp(o, "-mem")) a->mem_mb = x;
+      if (!count) a->mem_mb = x;
       if (!strcmp(o, "-max-iter")) a->max_iter = (int)x;
       if (!strcmp(o, "-pieces")) a->pieces = (int)x;
     } else if (o[0] == '-' && o[1]) {
@@ -131,7 +178,8 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
     }
   }
   if (!a->in) return pa_cli_error(cli, "adapt: no input mesh\n%s", adapt_usage);
-  if (!a->out) return pa_cli_error(cli, "adapt: no output mesh (-out OUT)");
+  if (!a->out && default_paths(cli, a)) return 1;
+  if (!a->met && a->remesh.hsiz <= 0) find_metric(cli, a);
   if (a->met && a->remesh.hsiz > 0)
     return pa_cli_error(cli, "adapt: give either -met/-sol or -hsiz, not both");
   if (a->remesh.hmin > 0 && a->remesh.hmax > 0 &&
@@ -227,7 +275,12 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
   pa_stats_print(&before, stdout);
   fflush(stdout);
 
+  pa_cli_progress live;
+  pa_cli_progress_init(&live, opts.verbosity >= 0);
+  opts.progress = pa_cli_progress_cb;
+  opts.progress_ctx = &live;
   st = pa_remesh(pa_remesher_builtin(), mesh, &opts, &rep);
+  pa_cli_progress_end(&live);
   if (st != PA_SUCCESS) {
     pa_cli_fail(cli, st);
     goto done;

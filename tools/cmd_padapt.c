@@ -201,8 +201,12 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   const pa_remesher *r = pa_remesher_builtin();
   int ok = 1;
   double tstep[5], t0 = pa_wtime(); /* read, stats, adapt, stats, write */
+  pa_cli_progress live;
   opts.progress = progress;
   opts.progress_ctx = (void *)cli;
+  pa_cli_progress_init(&live, cli->rank == 0 && opts.remesh.verbosity >= 0);
+  opts.remesh.progress = pa_cli_progress_cb;
+  opts.remesh.progress_ctx = &live;
   memset(&rep, 0, sizeof rep);
   memset(tstep, 0, sizeof tstep);
 
@@ -255,6 +259,7 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   /* adapt */
   tstep[1] = lap(&t0);
   st = pa_dmesh_adapt(dm, &opts, &rep);
+  pa_cli_progress_end(&live);
   if (st) {
     fail_collective(cli, st);
     goto done;

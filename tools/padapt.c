@@ -47,7 +47,8 @@ static const char *usage_text =
     "  partition IN -out OUT [-overlap K]\n"
     "                                 write a distributed set OUT.<rank>.meshb\n"
     "\n"
-    "Global options: -v N (verbosity), -h/--help.\n"
+    "Global options: -v N (verbosity: -1 errors only, 0 the reports (default),\n"
+    "1-10 more detail), -h/--help, --version.\n"
     "Meshes: Medit .mesh/.meshb, Gmsh .msh (4.1, 2.2); metrics: .sol/.solb.\n"
     "A mesh that lists no boundary entity gets them all (reference 0) on\n"
     "reading; one that lists some must list them all.\n";
@@ -108,6 +109,12 @@ pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path,
   return st;
 }
 
+void pa_cli_set_verbosity(int level) {
+  pa_set_verbosity(level);
+  /* -v -1: errors and warnings only (stderr); the reports go nowhere */
+  if (level < 0 && !freopen("/dev/null", "w", stdout)) fclose(stdout);
+}
+
 int pa_cli_parse_num(const char *s, double *v) {
   char *end;
   if (!s || !*s) return 0;
@@ -158,8 +165,8 @@ int pa_cli_remesh_option(const pa_cli *cli, int argc, char **argv, int *i,
     want = "an angle in [0, 180] degrees";
     ok = ok && x >= 0 && x <= 180;
   } else if (!strcmp(a, "-v")) {
-    want = "a verbosity level in [0, 10]";
-    ok = ok && x >= 0 && x <= 10;
+    want = "a verbosity level in [-1, 10]";
+    ok = ok && x >= -1 && x <= 10 && x == floor(x);
   } else {
     ok = ok && x > 0;
   }
@@ -178,7 +185,7 @@ int pa_cli_remesh_option(const pa_cli *cli, int argc, char **argv, int *i,
   if (!strcmp(a, "-ar")) opts->angle = x;
   if (!strcmp(a, "-v")) {
     opts->verbosity = (int)x;
-    pa_set_verbosity((int)x);
+    pa_cli_set_verbosity((int)x);
   }
   return 1;
 }
@@ -491,20 +498,38 @@ static const struct {
                 {"convert", pa_cli_convert},   {"adapt", pa_cli_adapt},
                 {"partition", pa_cli_partition}};
 
+/* padapt's version, and the MPI library's, as they run. */
+static void print_version(void) {
+  char mpi[MPI_MAX_LIBRARY_VERSION_STRING];
+  int n = 0;
+  MPI_Get_library_version(mpi, &n);
+  mpi[strcspn(mpi, "\n,")] = '\0';
+  printf("padapt %s (header %d.%d.%d)\nMPI: %s\n", pa_version(),
+         PADAPT_VERSION_MAJOR, PADAPT_VERSION_MINOR, PADAPT_VERSION_PATCH, mpi);
+}
+
 static int dispatch(pa_cli *cli, int argc, char **argv) {
   int i = 1;
   while (i < argc && argv[i][0] == '-') {
     if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) {
       if (cli->rank == 0) fputs(usage_text, stdout);
       return 0;
+    } else if (!strcmp(argv[i], "--version") || !strcmp(argv[i], "-version")) {
+      if (cli->rank == 0) print_version();
+      return 0;
     } else if (!strcmp(argv[i], "-v") && i + 1 < argc) {
-      cli->verbosity = atoi(argv[i + 1]);
+      double v;
+      if (!pa_cli_parse_num(argv[i + 1], &v) || v < -1 || v > 10 ||
+          v != floor(v))
+        return pa_cli_error(cli, "-v needs a verbosity level in [-1, 10], "
+                                 "got '%s'", argv[i + 1]);
+      cli->verbosity = (int)v;
       i += 2;
     } else {
       break;
     }
   }
-  pa_set_verbosity(cli->verbosity);
+  pa_cli_set_verbosity(cli->verbosity);
   if (i >= argc) {
     if (cli->rank == 0) fputs(usage_text, stderr);
     return 1;

@@ -168,12 +168,14 @@ cleanup:
 /* Refuse a metric whose output would not fit: the estimate from its
  * complexity against opts->mem_mb per process, or else the memory available
  * on each node shared by its ranks (the least over the nodes). Collective. */
-static pa_status check_size(pa_dmesh *dm, const pa_adapt_opts *o) {
+static pa_status check_size(pa_dmesh *dm, const pa_adapt_opts *o,
+                            double *expected) {
   pa_status st = PA_SUCCESS;
   MPI_Comm node = MPI_COMM_NULL;
   double c = 0, budget = 0;
   char what[64] = "the available memory";
   PA_CALL(pa_dmesh_metric_complexity(dm, &c));
+  *expected = c / pa__unit_simplex_volume(dm->dim);
   if (o->mem_mb > 0) {
     budget = o->mem_mb * 1e6;
     snprintf(what, sizeof what, "-mem %g", o->mem_mb);
@@ -193,6 +195,18 @@ cleanup:
   return st;
 }
 
+/* The progress callback after a tag pass: the share of elements that meet
+ * their criterion is the untagged share (the same on every rank). */
+static void report_progress(const pa_dmesh *dm, const pa_adapt_opts *o,
+                            int iter, pa_gid ntagged, double initial,
+                            double expected, double t0) {
+  if (!o->remesh.progress) return;
+  double n = (double)dm->nglob[PA_ELEMENT];
+  pa_progress p = {"iteration", iter, n, initial, expected,
+                   n > 0 ? 1 - (double)ntagged / n : 1, pa_wtime() - t0};
+  o->remesh.progress(&p, o->remesh.progress_ctx);
+}
+
 /* Max over the ranks of n doubles and the sum of one more. */
 static pa_status max_times(MPI_Comm comm, double *t, int n, double *busy) {
   pa_status st = PA_SUCCESS;
@@ -210,7 +224,7 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
   pa__iter it;
   pa_dmesh_value *done = NULL;
   unsigned changed = 0;
-  double t0 = pa_wtime();
+  double t0 = pa_wtime(), expected = 0;
   memset(&it, 0, sizeof it);
   memset(&rep, 0, sizeof rep);
   PA_CHECK(dm, PA_ERR_ARG, "pa_dmesh_adapt: NULL dmesh");
@@ -224,7 +238,7 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
   rep.nvert_initial = dm->nglob[PA_VERTEX];
   PA_CALL(check_opts(dm, opts));
   PA_CALL(prepare_metric(dm, &opts->remesh, &changed));
-  PA_CALL(check_size(dm, opts));
+  PA_CALL(check_size(dm, opts, &expected));
   PA_CALL(pa_dmesh_value_add(dm, PA_ELEMENT, PA__DONE_VALUE, MPI_UINT8_T, 1, -1,
                              &done));
   pa__info(2, "padapt: rank %d: metric and gradation %.3f s\n", dm->rank,
@@ -246,6 +260,8 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
     it.iter = iter;
     PA_CALL(pa__adapt_tag(&it, done, iter == 1));
     t[0] = pa_wtime() - ta;
+    report_progress(dm, opts, iter, it.ntagged, (double)rep.nelem_initial,
+                    expected, t0);
     rep.ntagged_left = it.ntagged;
     if (it.ntagged == 0) {
       rep.converged = 1;

@@ -241,6 +241,7 @@ pa_status pa__adapt_remesh(pa__iter *it, int *nfail) {
   ro.hgrad = 0;
   ro.hgradreq = 0;
   ro.no_stats = 1; /* pa_dmesh_adapt measures the whole result */
+  ro.progress = NULL; /* pa_dmesh_adapt reports per iteration */
   *nfail = 0;
   for (int q = 0; q < it->npiece_local; q++) {
     pa__piece *pc = &it->pieces[q];

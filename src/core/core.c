@@ -183,6 +183,13 @@ size_t pa__mem_available(void) {
 
 /* ---- verbosity and time ---- */
 
+#define PA_STR_(x) #x
+#define PA_STR(x) PA_STR_(x)
+const char *pa_version(void) {
+  return PA_STR(PADAPT_VERSION_MAJOR) "." PA_STR(PADAPT_VERSION_MINOR) "."
+      PA_STR(PADAPT_VERSION_PATCH);
+}
+
 void pa_set_verbosity(int level) { pa_verbose = level; }
 int pa_verbosity(void) { return pa_verbose; }
 

@@ -237,6 +237,7 @@ pa_status pa_stats_write_json(const pa_stats *s, const char *extra,
   PA_CALL(pa__out_open(&out, path));
   FILE *fp = out.fp;
   fprintf(fp, "{\n");
+  fprintf(fp, "  \"padapt_version\": \"%s\",\n", pa_version());
   fprintf(fp, "  \"dim\": %d,\n", s->dim);
   fprintf(fp, "  \"vertices\": %lld,\n", (long long)s->nvert);
   fprintf(fp, "  \"elements\": %lld,\n", (long long)s->nelem);

@@ -57,6 +57,14 @@ static void report_pass(pa__rmesh *rm, const char *what, int pass, long n) {
   rm->tlast = now;
 }
 
+/* The caller's progress callback (pa_remesh_opts.progress) after a pass. */
+static void progress(const pa__rmesh *rm, int pass) {
+  const pa_remesh_opts *o = rm->opts;
+  if (!o->progress) return;
+  pa_progress p = {"pass", pass, (double)rm->nelive, 0, 0, -1, 0};
+  o->progress(&p, o->progress_ctx);
+}
+
 static void report_figures(const pa__rmesh *rm, const pa__rm_ops *ops,
                            const char *when) {
   if (pa_verbosity() < 2) return;
@@ -120,6 +128,7 @@ pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
         report_pass(rm, "move", pass, nm);
       }
       pass++;
+      progress(rm, pass);
       if (ns + nc <= 2e-4 * rm->nelive) break;
       /* Operations undoing each other (ping-pong, e.g. next to frozen
        * elements whose edges cannot reach the size): when the count is a
@@ -163,6 +172,7 @@ pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
     }
     report_pass(rm, "optimise", pass, nw + nm + ns + nc);
     pass++;
+    progress(rm, pass);
     if (ns + nc == 0 && nw + nm <= 1e-3 * rm->nelive) break;
   }
   if (!o->no_insert) { /* cut what the relaxed collapses left long */

@@ -118,15 +118,34 @@ cleanup:
   return st;
 }
 
+/* The caller's progress callback, given what the remesher does not know:
+ * the expected count and the time since pa_remesh started. */
+typedef struct progress_wrap {
+  pa_progress_fn fn;
+  void *ctx;
+  double initial, expected, t0;
+} progress_wrap;
+
+static void progress_relay(const pa_progress *p, void *ctx) {
+  const progress_wrap *w = ctx;
+  pa_progress q = *p;
+  q.nelem_initial = w->initial;
+  q.nelem_expected = w->expected;
+  q.elapsed = pa_wtime() - w->t0;
+  w->fn(&q, w->ctx);
+}
+
 pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
                     const pa_remesh_opts *opts, pa_remesh_report *report) {
   pa_status st = PA_SUCCESS;
-  pa_remesh_opts def;
+  pa_remesh_opts def, relayed;
   pa_remesh_report dummy;
+  progress_wrap wrap = {NULL, NULL, 0, 0, 0};
   uint8_t *frozen = NULL;
   double *newmet = NULL, *oldmet = NULL;
   int oldnc = 0, installed = 0, carried = 0;
   double t0 = pa_wtime();
+  wrap.t0 = t0;
   PA_CHECK(r && r->remesh && mesh, PA_ERR_ARG, "pa_remesh: NULL argument");
   if (!opts) {
     pa_remesh_opts_default(&def);
@@ -185,11 +204,22 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   }
   pa__free(frozen);
   frozen = NULL;
-  if (!opts->trusted) { /* the parallel driver checks for its pieces */
+  if (!opts->trusted || opts->progress) {
     double c = 0;
     PA_CALL(pa_metric_complexity(mesh, nc, newmet, &c));
-    PA_CALL(pa__check_output_size(d, c, 1, 0, (double)pa__mem_available(),
-                                  "the available memory"));
+    if (!opts->trusted) /* the parallel driver checks for its pieces */
+      PA_CALL(pa__check_output_size(d, c, 1, 0, (double)pa__mem_available(),
+                                    "the available memory"));
+    wrap.expected = c / pa__unit_simplex_volume(d);
+  }
+  if (opts->progress) {
+    wrap.fn = opts->progress;
+    wrap.initial = mesh->ne;
+    wrap.ctx = opts->progress_ctx;
+    relayed = *opts;
+    relayed.progress = progress_relay;
+    relayed.progress_ctx = &wrap;
+    opts = &relayed;
   }
 
   oldmet = mesh->met;

@@ -416,6 +416,14 @@ static double lattice_crowd(rm3d *m, double *longer) {
 }
 
 /* Longest edge of free tets. */
+/* The caller's progress callback (pa_remesh_opts.progress) after a band
+ * or a round. */
+static void progress(const pa_remesh_opts *o, int step, const rm3d *m) {
+  if (!o->progress) return;
+  pa_progress p = {"pass", step, (double)(m->ne - m->ndead_t), 0, 0, -1, 0};
+  o->progress(&p, o->progress_ctx);
+}
+
 static double max_length(const rm3d *m) {
   double lmax = 0;
   for (pa_idx k = 0; k < m->ne; k++) {
@@ -494,7 +502,7 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
       PA_CALL(pa__rm3d_reserve(&m, ne / 5 + (size_t)m.nv, ne));
     }
   }
-  int npass = 0;
+  int npass = 0, step = 0;
   if (!opts->no_insert) {
     /* Far too coarse input: split longest edges first, in bands of lengths
      * decreasing by a constant factor, so that tets are bisected roughly in
@@ -545,6 +553,7 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
                 "(%d slots), memory %.1f MB (peak %.1f)\n",
                 thr, ns, nc, pa_wtime() - t1, (int)(m.ne - m.ndead_t),
                 (int)m.ne, pa_memory_current() / 1e6, pa_memory_peak() / 1e6);
+      progress(opts, ++step, &m);
       if (thr == RM3D_LMAX) break;
     }
     PA_CALL(pa__rm3d_reorder(&m));
@@ -577,6 +586,7 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
                 "%ld swaps (%.2fs) %ld moves (%.2fs), %d tets\n",
                 it, ns, t2 - t1, nc, t3 - t2, nw, t4 - t3, nm, t5 - t4,
                 (int)(m.ne - m.ndead_t));
+      progress(opts, ++step, &m);
       /* The first rounds change little while swaps and moves unlock the
        * collapses the refinement bands refused: at least three rounds. */
       if (it >= 2 && ns + nc <= RM3D_STOP * (m.ne - m.ndead_t)) break;

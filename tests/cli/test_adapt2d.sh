@@ -63,7 +63,9 @@ for args in "-hsiz -1" "-hsiz abc" "-hmin 0.2 -hmax 0.1 -hsiz 0.1" "-bogus" \
   [ -s err.txt ] || fail "adapt $args: no message"
   [ -e bad.mesh ] && fail "adapt $args: wrote an output"
 done
-"$PADAPT" adapt sq.mesh -hsiz 0.1 > /dev/null 2> err.txt && fail "no -out accepted"
+rm -f sq.o.mesh
+"$PADAPT" adapt sq.mesh -hsiz 0.1 > /dev/null 2> err.txt && [ -s sq.o.mesh ] ||
+  fail "no -out: no default output sq.o.mesh (Mmg's IN.o.mesh)"
 "$PADAPT" adapt missing.mesh -hsiz 0.1 -out x.mesh > /dev/null 2> err.txt && fail "missing input accepted"
 grep -q "missing.mesh" err.txt || fail "missing input: message does not name the file"
 
