@@ -45,3 +45,10 @@ out=$(LD_LIBRARY_PATH="$prefix/lib:$prefix/lib/x86_64-linux-gnu" ./consumer/buil
 echo "ok   CMake consumer"
 [ -x "$prefix/bin/padapt" ] || { echo "FAIL padapt not installed"; exit 1; }
 echo "ok   CLI installed"
+# the installed CLI finds the installed library by itself (RPATH $ORIGIN)
+out=$(env -u LD_LIBRARY_PATH "$prefix/bin/padapt" --version | head -1)
+case "$out" in "padapt "*) echo "ok   installed CLI runs without LD_LIBRARY_PATH" ;;
+  *) echo "FAIL installed CLI: '$out'"; exit 1 ;; esac
+ldd "$prefix/bin/padapt" | grep -q "libpadapt.*$prefix" ||
+  { echo "FAIL installed CLI does not use the installed library"; exit 1; }
+echo "ok   installed CLI uses $prefix's library"
