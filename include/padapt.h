@@ -495,8 +495,11 @@ pa_status pa_mesh_metric_to_sol(pa_mesh *mesh, int with_fields, pa_sol **sol);
 
 /** Options for writing mesh files. */
 typedef struct pa_write_opts {
-  int binary;  /**< Gmsh .msh: 1 binary, 0 ASCII (default) */
-  int version; /**< .meshb: file version 1-4 (0: default 2) */
+  int binary;      /**< Gmsh .msh: 1 binary, 0 ASCII (default) */
+  int version;     /**< .meshb: file version 1-4 (0: default 2) */
+  int diagnostics; /**< .vtu: 1 adds the cell data "edge_min" and
+                        "edge_max", each element's extreme edge lengths in
+                        its metric (default 0) */
 } pa_write_opts;
 
 /**

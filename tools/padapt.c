@@ -40,8 +40,9 @@ static const char *usage_text =
     "  stats IN [-met SOL] [-json OUT.json]\n"
     "                                 counts, volume, edge lengths in the metric,\n"
     "                                 quality, validity (exit 1 if invalid)\n"
-    "  convert IN OUT [-met SOL] [-binary] [-meshb-version V]\n"
+    "  convert IN OUT [-met SOL] [-binary] [-meshb-version V] [-diag]\n"
     "                                 formats by extension: .mesh .meshb .msh .vtu\n"
+    "                                 (-diag: .vtu cell data edge_min, edge_max)\n"
     "  adapt IN [-met SOL|-sol SOL|-hsiz H] -out OUT [options]\n"
     "                                 adapt the mesh to the metric (see adapt -h)\n"
     "  partition IN -out OUT [-overlap K]\n"
@@ -454,13 +455,15 @@ int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
 
 int pa_cli_convert(const pa_cli *cli, int argc, char **argv) {
   const char *in = NULL, *out = NULL, *met = NULL;
-  pa_write_opts opts = {0, 0};
+  pa_write_opts opts = {0, 0, 0};
   for (int i = 1; i < argc; i++) {
     if (!strcmp(argv[i], "-met") || !strcmp(argv[i], "-sol")) {
       if (++i >= argc) return pa_cli_error(cli, "convert: -met needs a file");
       met = argv[i];
     } else if (!strcmp(argv[i], "-binary")) {
       opts.binary = 1;
+    } else if (!strcmp(argv[i], "-diag")) {
+      opts.diagnostics = 1;
     } else if (!strcmp(argv[i], "-meshb-version")) {
       if (++i >= argc || atoi(argv[i]) < 1 || atoi(argv[i]) > 4)
         return pa_cli_error(cli, "convert: -meshb-version needs 1, 2, 3 or 4");
@@ -477,7 +480,7 @@ int pa_cli_convert(const pa_cli *cli, int argc, char **argv) {
   }
   if (!in || !out)
     return pa_cli_error(cli, "usage: padapt convert IN OUT [-met SOL] "
-                             "[-binary] [-meshb-version V]");
+                             "[-binary] [-meshb-version V] [-diag]");
   pa_mesh *mesh = NULL;
   pa_status st = pa_cli_read_mesh(cli, in, &mesh);
   if (st != PA_SUCCESS) return read_failed(cli, st);

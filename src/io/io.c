@@ -40,7 +40,7 @@ pa_status pa_mesh_write(pa_mesh *mesh, const char *path,
                         const pa_write_opts *opts) {
   pa_status st = PA_SUCCESS;
   char ext[16];
-  pa_write_opts def = {0, 0};
+  pa_write_opts def = {0, 0, 0};
   PA_CHECK(path && mesh, PA_ERR_ARG, "pa_mesh_write: NULL argument");
   if (!opts) opts = &def;
   pa__path_ext(path, ext, sizeof ext);
@@ -51,7 +51,7 @@ pa_status pa_mesh_write(pa_mesh *mesh, const char *path,
   else if (!strcmp(ext, ".msh"))
     PA_CALL(pa__gmsh_write(mesh, path, opts->binary));
   else if (!strcmp(ext, ".vtu"))
-    PA_CALL(pa__vtu_write(mesh, path));
+    PA_CALL(pa__vtu_write(mesh, path, opts->diagnostics));
   else
     PA_FAIL(PA_ERR_UNSUPPORTED,
             "%s: unknown mesh file extension '%s' (expected .mesh, .meshb, "

@@ -66,7 +66,7 @@ pa_status pa__medit_write(pa_mesh *mesh, const char *path, int binary,
                           int version);
 pa_status pa__gmsh_read(const char *path, pa_mesh **mesh);
 pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary);
-pa_status pa__vtu_write(pa_mesh *mesh, const char *path);
+pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics);
 
 /* ---- Medit keyword files (libMeshb layout), shared by medit.c and sol.c ----
  * Defined in medit.c; the layout and the reader's invariants are described at

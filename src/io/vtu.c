@@ -6,21 +6,31 @@
  * header_type="UInt64": each block is its byte count as a UInt64 followed by
  * the bytes), in the host's byte order, which the header declares.
  *  - Points: Float64, 3 components (z = 0 in 2D).
- *  - Cells: the elements only (triangles, VTK type 5; tetrahedra, type 10);
- *    boundary entities and feature edges are not written. connectivity and
- *    offsets Int64, types UInt8.
- *  - PointData: "metric" (when the mesh has one) with the stored components:
- *    1 (size h) or 3/6 (m11 m12 m22 [m13 m23 m33], named by ComponentName
- *    attributes); every user field under its own name and component count;
- *    "ref" (Int32) the vertex references.
- *  - CellData: "ref" (Int32) the element references and "quality" (Float64,
- *    pa_mesh_elem_quality).
+ *  - Cells: the elements (triangles, VTK type 5; tetrahedra, type 10), then
+ *    the boundary entities (2D edges, type 3; 3D triangles, type 5), then
+ *    the feature edges (type 3). connectivity and offsets Int64, types UInt8.
+ *  - PointData: "metric" (when the mesh has one) as a full 3 x 3 tensor in
+ *    VTK's order (xx xy xz yx yy yz zx zy zz; a size h is I/h^2; zeros in
+ *    the third row and column in 2D), and "size", the tensor M^(-1/2) whose
+ *    ellipsoid (ParaView's Tensor Glyph) is the unit ball of the metric:
+ *    its axes are the sizes asked for along its principal directions; every
+ *    user field under its own name and component count; "ref" (Int32) the
+ *    vertex references.
+ *  - CellData: "ref" (Int32) the references of every cell; "entity" (UInt8)
+ *    0 element, 1 boundary entity, 2 feature edge (ParaView's Threshold
+ *    selects one kind); "quality" (Float64, pa_mesh_elem_quality; NaN on
+ *    boundary entities and edges); with opts->diagnostics, "edge_min" and
+ *    "edge_max", the shortest and longest edge of each element in its
+ *    metric (NaN on the other cells, and everywhere without a metric).
  * The appended section ends with a newline before </AppendedData>. The file
  * is written through a temporary file (output.c), so a failure leaves none.
  */
 #include "io/io.h"
 
+#include "metric/metric.h"
+
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 
 /* One appended array: what goes in the XML header and how big it is. */
@@ -80,19 +90,62 @@ static void put_block(FILE *fp, const void *data, uint64_t nbytes) {
  * are sticky on the FILE and caught by pa__out_commit). */
 #define VTU_CHUNK 8192
 
-pa_status pa__vtu_write(pa_mesh *mesh, const char *path) {
+/* The 3 x 3 metric tensor (sq 0) or M^(-1/2) (sq 1) of a metric value of nc
+ * components, in VTK's row-major order. */
+static void tensor9(int dim, int nc, const double *m, int sq, double *t) {
+  double lam[3], vec[9], full[6];
+  memset(t, 0, 9 * sizeof *t);
+  if (nc == 1) {
+    double v = sq ? m[0] : 1.0 / (m[0] * m[0]);
+    for (int k = 0; k < dim; k++) t[4 * k] = v;
+    return;
+  }
+  if (!sq) {
+    /* Medit order m11 m12 m22 [m13 m23 m33] */
+    t[0] = m[0], t[1] = t[3] = m[1], t[4] = m[2];
+    if (dim == 3) t[2] = t[6] = m[3], t[5] = t[7] = m[4], t[8] = m[5];
+    return;
+  }
+  pa__sym_eigen(dim, m, lam, vec);
+  for (int k = 0; k < dim; k++) lam[k] = lam[k] > 0 ? 1.0 / sqrt(lam[k]) : 0;
+  pa__sym_from_eigen(dim, lam, vec, full);
+  double *u = full;
+  t[0] = u[0], t[1] = t[3] = u[1], t[4] = u[2];
+  if (dim == 3) t[2] = t[6] = u[3], t[5] = t[7] = u[4], t[8] = u[5];
+}
+
+/* Shortest and longest edge of element e in the mesh's metric. */
+static void edge_range(const pa_mesh *m, pa_idx e, double *lo, double *hi) {
+  int nn = m->dim + 1, nc = m->met_ncomp;
+  const pa_idx *v = m->elem + (size_t)nn * e;
+  *lo = HUGE_VAL;
+  *hi = 0;
+  for (int i = 0; i < nn; i++)
+    for (int j = i + 1; j < nn; j++) {
+      double l = pa__edge_length(m->dim, nc, m->coord + (size_t)m->dim * v[i],
+                                 m->coord + (size_t)m->dim * v[j],
+                                 m->met + (size_t)nc * v[i],
+                                 m->met + (size_t)nc * v[j]);
+      if (l < *lo) *lo = l;
+      if (l > *hi) *hi = l;
+    }
+}
+
+pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics) {
   pa_status st = PA_SUCCESS;
   pa_outfile out = {0};
   int64_t *i64 = NULL;
   double *f64 = NULL;
   uint8_t *u8 = NULL;
-  static const char *const met2[] = {"m11", "m12", "m22"};
-  static const char *const met3[] = {"m11", "m12", "m22", "m13", "m23", "m33"};
   enum {
     A_MET,
+    A_SIZE,
     A_VREF,
-    A_EREF,
+    A_REF,
+    A_ENT,
     A_QUAL,
+    A_LMIN,
+    A_LMAX,
     A_PTS,
     A_CONN,
     A_OFFS,
@@ -102,26 +155,26 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path) {
   vtu_array arr[A_FIELD + PA_MAX_FIELDS];
   PA_CHECK(mesh && path, PA_ERR_ARG, "pa__vtu_write: NULL argument");
   pa_mesh *m = mesh;
-  int dim = m->dim, nn = dim + 1;
+  int dim = m->dim, nn = dim + 1, nc = m->met_ncomp;
   uint64_t nv = (uint64_t)m->nv, ne = (uint64_t)m->ne;
+  uint64_t nb = (uint64_t)m->nb, nd = dim == 3 ? (uint64_t)m->ned : 0;
+  uint64_t ncell = ne + nb + nd;
+  uint64_t nconn = ne * (uint64_t)nn + nb * (uint64_t)dim + nd * 2;
+  int diag = diagnostics != 0;
 
   memset(arr, 0, sizeof arr);
-  arr[A_MET] = (vtu_array){"metric",
-                           "Float64",
-                           m->met_ncomp,
-                           m->met_ncomp == 3   ? met2
-                           : m->met_ncomp == 6 ? met3
-                                               : NULL,
-                           8 * nv * (uint64_t)m->met_ncomp,
-                           0};
+  arr[A_MET] = (vtu_array){"metric", "Float64", 9, NULL, 72 * nv, 0};
+  arr[A_SIZE] = (vtu_array){"size", "Float64", 9, NULL, 72 * nv, 0};
   arr[A_VREF] = (vtu_array){"ref", "Int32", 1, NULL, 4 * nv, 0};
-  arr[A_EREF] = (vtu_array){"ref", "Int32", 1, NULL, 4 * ne, 0};
-  arr[A_QUAL] = (vtu_array){"quality", "Float64", 1, NULL, 8 * ne, 0};
+  arr[A_REF] = (vtu_array){"ref", "Int32", 1, NULL, 4 * ncell, 0};
+  arr[A_ENT] = (vtu_array){"entity", "UInt8", 1, NULL, ncell, 0};
+  arr[A_QUAL] = (vtu_array){"quality", "Float64", 1, NULL, 8 * ncell, 0};
+  arr[A_LMIN] = (vtu_array){"edge_min", "Float64", 1, NULL, 8 * ncell, 0};
+  arr[A_LMAX] = (vtu_array){"edge_max", "Float64", 1, NULL, 8 * ncell, 0};
   arr[A_PTS] = (vtu_array){NULL, "Float64", 3, NULL, 24 * nv, 0};
-  arr[A_CONN] =
-      (vtu_array){"connectivity", "Int64", 1, NULL, 8 * ne * (uint64_t)nn, 0};
-  arr[A_OFFS] = (vtu_array){"offsets", "Int64", 1, NULL, 8 * ne, 0};
-  arr[A_TYPES] = (vtu_array){"types", "UInt8", 1, NULL, ne, 0};
+  arr[A_CONN] = (vtu_array){"connectivity", "Int64", 1, NULL, 8 * nconn, 0};
+  arr[A_OFFS] = (vtu_array){"offsets", "Int64", 1, NULL, 8 * ncell, 0};
+  arr[A_TYPES] = (vtu_array){"types", "UInt8", 1, NULL, ncell, 0};
   for (int k = 0; k < m->nfield; k++)
     arr[A_FIELD + k] = (vtu_array){m->field[k].name,
                                    "Float64",
@@ -130,13 +183,16 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path) {
                                    8 * nv * (uint64_t)m->field[k].ncomp,
                                    0};
   /* Appended order: point data, cell data, points, cells. */
-  int order[A_FIELD + PA_MAX_FIELDS], no = 0;
-  if (m->met_ncomp) order[no++] = A_MET;
-  for (int k = 0; k < m->nfield; k++)
-    order[no++] = A_FIELD + k;
+  int order[A_FIELD + PA_MAX_FIELDS], no = 0, npoint, ncelld;
+  if (nc) order[no++] = A_MET, order[no++] = A_SIZE;
+  for (int k = 0; k < m->nfield; k++) order[no++] = A_FIELD + k;
   order[no++] = A_VREF;
-  order[no++] = A_EREF;
+  npoint = no;
+  order[no++] = A_REF;
+  order[no++] = A_ENT;
   order[no++] = A_QUAL;
+  if (diag) order[no++] = A_LMIN, order[no++] = A_LMAX;
+  ncelld = no - npoint;
   order[no++] = A_PTS;
   order[no++] = A_CONN;
   order[no++] = A_OFFS;
@@ -148,7 +204,7 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path) {
   }
 
   PA_ALLOC(i64, VTU_CHUNK * 4);
-  PA_ALLOC(f64, VTU_CHUNK * 3);
+  PA_ALLOC(f64, VTU_CHUNK * 9);
   PA_ALLOC(u8, VTU_CHUNK);
   PA_CALL(pa__out_open(&out, path));
   FILE *fp = out.fp;
@@ -161,15 +217,11 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path) {
           "  <UnstructuredGrid>\n"
           "    <Piece NumberOfPoints=\"%llu\" NumberOfCells=\"%llu\">\n",
           little ? "LittleEndian" : "BigEndian", (unsigned long long)nv,
-          (unsigned long long)ne);
-  fputs("      <PointData>\n", fp);
-  if (m->met_ncomp) put_array(fp, &arr[A_MET]);
-  for (int k = 0; k < m->nfield; k++)
-    put_array(fp, &arr[A_FIELD + k]);
-  put_array(fp, &arr[A_VREF]);
-  fputs("      </PointData>\n      <CellData>\n", fp);
-  put_array(fp, &arr[A_EREF]);
-  put_array(fp, &arr[A_QUAL]);
+          (unsigned long long)ncell);
+  fprintf(fp, "      <PointData%s>\n", nc ? " Tensors=\"size\"" : "");
+  for (int i = 0; i < npoint; i++) put_array(fp, &arr[order[i]]);
+  fputs("      </PointData>\n      <CellData Scalars=\"quality\">\n", fp);
+  for (int i = npoint; i < npoint + ncelld; i++) put_array(fp, &arr[order[i]]);
   fputs("      </CellData>\n      <Points>\n", fp);
   put_array(fp, &arr[A_PTS]);
   fputs("      </Points>\n      <Cells>\n", fp);
@@ -181,17 +233,49 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path) {
         fp);
 
   /* Blocks in the order of the offsets computed above. */
-  if (m->met_ncomp) put_block(fp, m->met, arr[A_MET].nbytes);
+  for (int sq = 0; sq < 2 && nc; sq++) {
+    fwrite(&arr[sq ? A_SIZE : A_MET].nbytes, 8, 1, fp);
+    for (uint64_t v0 = 0; v0 < nv; v0 += VTU_CHUNK) {
+      size_t n = (size_t)(nv - v0 < VTU_CHUNK ? nv - v0 : VTU_CHUNK);
+      for (size_t v = 0; v < n; v++)
+        tensor9(dim, nc, m->met + (size_t)nc * (v0 + v), sq, f64 + 9 * v);
+      fwrite(f64, sizeof *f64, 9 * n, fp);
+    }
+  }
   for (int k = 0; k < m->nfield; k++)
     put_block(fp, m->field[k].val, arr[A_FIELD + k].nbytes);
   put_block(fp, m->vref, arr[A_VREF].nbytes);
-  put_block(fp, m->eref, arr[A_EREF].nbytes);
-  fwrite(&arr[A_QUAL].nbytes, 8, 1, fp);
-  for (uint64_t e0 = 0; e0 < ne; e0 += VTU_CHUNK) {
-    size_t n = (size_t)(ne - e0 < VTU_CHUNK ? ne - e0 : VTU_CHUNK);
-    for (size_t e = 0; e < n; e++)
-      f64[e] = pa_mesh_elem_quality(m, (pa_idx)(e0 + e));
-    fwrite(f64, sizeof *f64, n, fp);
+  fwrite(&arr[A_REF].nbytes, 8, 1, fp);
+  fwrite(m->eref, 4, (size_t)ne, fp);
+  fwrite(m->bref, 4, (size_t)nb, fp);
+  if (nd) fwrite(m->edref, 4, (size_t)nd, fp);
+  fwrite(&arr[A_ENT].nbytes, 8, 1, fp);
+  for (int kind = 0; kind < 3; kind++) {
+    uint64_t n = kind == 0 ? ne : kind == 1 ? nb : nd;
+    memset(u8, kind, VTU_CHUNK);
+    for (uint64_t c = 0; c < n; c += VTU_CHUNK)
+      fwrite(u8, 1, (size_t)(n - c < VTU_CHUNK ? n - c : VTU_CHUNK), fp);
+  }
+  /* quality, then the diagnostics: element values, NaN on the rest */
+  for (int a = 0; a < (diag ? 3 : 1); a++) {
+    fwrite(&arr[A_QUAL].nbytes, 8, 1, fp);
+    for (uint64_t e0 = 0; e0 < ne; e0 += VTU_CHUNK) {
+      size_t n = (size_t)(ne - e0 < VTU_CHUNK ? ne - e0 : VTU_CHUNK);
+      for (size_t e = 0; e < n; e++) {
+        double lo = NAN, hi = NAN;
+        if (a == 0)
+          f64[e] = pa_mesh_elem_quality(m, (pa_idx)(e0 + e));
+        else if (nc)
+          edge_range(m, (pa_idx)(e0 + e), &lo, &hi), f64[e] = a == 1 ? lo : hi;
+        else
+          f64[e] = NAN;
+      }
+      fwrite(f64, sizeof *f64, n, fp);
+    }
+    for (size_t k = 0; k < VTU_CHUNK; k++) f64[k] = NAN;
+    for (uint64_t c = 0; c < nb + nd; c += VTU_CHUNK)
+      fwrite(f64, sizeof *f64,
+             (size_t)(nb + nd - c < VTU_CHUNK ? nb + nd - c : VTU_CHUNK), fp);
   }
   if (dim == 3) {
     put_block(fp, m->coord, arr[A_PTS].nbytes);
@@ -207,25 +291,36 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path) {
       fwrite(f64, sizeof *f64, 3 * n, fp);
     }
   }
-  fwrite(&arr[A_CONN].nbytes, 8, 1, fp);
-  for (uint64_t e0 = 0; e0 < ne; e0 += VTU_CHUNK) {
-    size_t n = (size_t)(ne - e0 < VTU_CHUNK ? ne - e0 : VTU_CHUNK);
-    for (size_t k = 0; k < n * nn; k++)
-      i64[k] = m->elem[(size_t)nn * e0 + k];
-    fwrite(i64, sizeof *i64, n * nn, fp);
-  }
-  fwrite(&arr[A_OFFS].nbytes, 8, 1, fp);
-  for (uint64_t e0 = 0; e0 < ne; e0 += VTU_CHUNK) {
-    size_t n = (size_t)(ne - e0 < VTU_CHUNK ? ne - e0 : VTU_CHUNK);
-    for (size_t e = 0; e < n; e++)
-      i64[e] = (int64_t)((e0 + e + 1) * nn);
-    fwrite(i64, sizeof *i64, n, fp);
-  }
-  fwrite(&arr[A_TYPES].nbytes, 8, 1, fp);
-  memset(u8, dim == 2 ? 5 : 10, VTU_CHUNK);
-  for (uint64_t e0 = 0; e0 < ne; e0 += VTU_CHUNK) {
-    size_t n = (size_t)(ne - e0 < VTU_CHUNK ? ne - e0 : VTU_CHUNK);
-    fwrite(u8, 1, n, fp);
+  /* connectivity, offsets and types of the three kinds of cells */
+  {
+    const pa_idx *src[3] = {m->elem, m->bdry, m->edge};
+    int width[3] = {nn, dim, 2};
+    uint8_t type[3] = {dim == 2 ? 5 : 10, dim == 2 ? 3 : 5, 3};
+    uint64_t count[3] = {ne, nb, nd}, end = 0;
+    fwrite(&arr[A_CONN].nbytes, 8, 1, fp);
+    for (int kind = 0; kind < 3; kind++)
+      for (uint64_t c0 = 0; c0 < count[kind]; c0 += VTU_CHUNK) {
+        size_t n = (size_t)(count[kind] - c0 < VTU_CHUNK ? count[kind] - c0
+                                                         : VTU_CHUNK);
+        size_t w = (size_t)width[kind];
+        for (size_t k = 0; k < n * w; k++) i64[k] = src[kind][w * c0 + k];
+        fwrite(i64, sizeof *i64, n * w, fp);
+      }
+    fwrite(&arr[A_OFFS].nbytes, 8, 1, fp);
+    for (int kind = 0; kind < 3; kind++)
+      for (uint64_t c0 = 0; c0 < count[kind]; c0 += VTU_CHUNK) {
+        size_t n = (size_t)(count[kind] - c0 < VTU_CHUNK ? count[kind] - c0
+                                                         : VTU_CHUNK);
+        for (size_t c = 0; c < n; c++) i64[c] = (int64_t)(end += width[kind]);
+        fwrite(i64, sizeof *i64, n, fp);
+      }
+    fwrite(&arr[A_TYPES].nbytes, 8, 1, fp);
+    for (int kind = 0; kind < 3; kind++) {
+      memset(u8, type[kind], VTU_CHUNK);
+      for (uint64_t c = 0; c < count[kind]; c += VTU_CHUNK)
+        fwrite(u8, 1, (size_t)(count[kind] - c < VTU_CHUNK ? count[kind] - c
+                                                           : VTU_CHUNK), fp);
+    }
   }
   fputs("\n  </AppendedData>\n</VTKFile>\n", fp);
   PA_CALL(pa__out_commit(&out));

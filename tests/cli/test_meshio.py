@@ -10,8 +10,11 @@ and checks with meshio (Debian's python3-meshio, 5.x):
     1e-12 (and bit for bit between .msh, binary .msh and .vtu, which all
     carry exact doubles), and per cell type the same cells (as a multiset of
     vertex tuples) and the same references (Gmsh physical tags = Medit refs);
-    the .vtu holds the elements only, with point data "ref" and cell data
-    "ref" and "quality"; the .meshb matches the .mesh;
+    the .vtu holds the elements, boundary entities and feature edges, with
+    point data "ref", "metric" (3 x 3, equal to the .sol's tensors) and
+    "size" (S with S M S = I), and cell data "ref", "entity" (0/1/2 by
+    kind), "quality" (NaN off the elements) and "edge_max"; the .meshb
+    matches the .mesh;
   - files written by meshio itself (Medit, Gmsh 4.1 ASCII and binary with
     entities and physical tags, Gmsh 2.2 with one cell block) are read by
     `$PADAPT stats FILE -json s.json` with
@@ -172,17 +175,23 @@ def check_case(stem, shape, n, elem, bdry, feature):
         if np.any(got.points[:, 2] != 0) and dim == 2:
             fail("%s: a 2D mesh has non-zero z" % path)
 
-    # VTK XML: elements only, with references and quality.
+    # VTK XML: elements, boundary entities and feature edges as their own
+    # cells, with references, the entity kind and quality; the metric as a
+    # full 3 x 3 tensor and the size tensor M^(-1/2); edge lengths on
+    # request.
     vtu = stem + ".vtu"
-    run("convert", mesh_file, vtu)
+    sol = stem + ".sol"
+    run("metric", "shell", mesh_file, sol)
+    run("convert", mesh_file, vtu, "-met", sol, "-diag")
     got_vtu = meshio.read(vtu)
-    compare(vtu, ref, got_vtu, [elem], with_refs=True)
-    extra = [c.type for c in got_vtu.cells if c.type != elem]
-    if extra:
-        fail("%s: cells other than %s: %s" % (vtu, elem, sorted(set(extra))))
-    nelem = len(ref.cells_dict.get(elem, []))
+    compare(vtu, ref, got_vtu, types, with_refs=True)
+    ncell = sum(len(c.data) for c in got_vtu.cells)
     for key, kind, size in (("ref", "point", len(ref.points)),
-                            ("ref", "cell", nelem), ("quality", "cell", nelem)):
+                            ("ref", "cell", ncell), ("quality", "cell", ncell),
+                            ("entity", "cell", ncell),
+                            ("edge_max", "cell", ncell),
+                            ("metric", "point", len(ref.points)),
+                            ("size", "point", len(ref.points))):
         data = got_vtu.point_data if kind == "point" else got_vtu.cell_data
         if key not in data:
             fail("%s: no %s data '%s'" % (vtu, kind, key))
@@ -191,6 +200,36 @@ def check_case(stem, shape, n, elem, bdry, feature):
         if len(arr) != size:
             fail("%s: %s data '%s' has %d values, expected %d" %
                  (vtu, kind, key, len(arr), size))
+    want_kind = {elem: 0, bdry: 1, feature: 2}
+    for c, ent, q in zip(got_vtu.cells, got_vtu.cell_data.get("entity", []),
+                         got_vtu.cell_data.get("quality", [])):
+        if np.any(ent != want_kind.get(c.type, -1)):
+            fail("%s: %s cells have entity %s" % (vtu, c.type, np.unique(ent)))
+        if (c.type == elem) != bool(np.all(np.isfinite(q))):
+            fail("%s: quality of the %s cells: %s" % (vtu, c.type, q[:3]))
+    if "metric" in got_vtu.point_data and "size" in got_vtu.point_data:
+        # the tensors of our .sol (Medit order m11 m12 m22 [m13 m23 m33])
+        with open(sol) as f:
+            tok = f.read().split()
+        i = tok.index("SolAtVertices")
+        nval = 3 if dim == 2 else 6
+        vals = np.array(tok[i + 4:i + 4 + nval * len(ref.points)],
+                        dtype=float).reshape(-1, nval)
+        met = got_vtu.point_data["metric"].reshape(-1, 3, 3)
+        size = got_vtu.point_data["size"].reshape(-1, 3, 3)
+        order = [(0, 0), (0, 1), (1, 1)] + ([(0, 2), (1, 2), (2, 2)]
+                                            if dim == 3 else [])
+        for k, (a, b) in enumerate(order):
+            if not (np.allclose(met[:, a, b], vals[:, k], rtol=1e-12) and
+                    np.allclose(met[:, b, a], vals[:, k], rtol=1e-12)):
+                fail("%s: metric component %d%d differs from %s" %
+                     (vtu, a + 1, b + 1, sol))
+        d = slice(0, dim)
+        prod = size[:, d, d] @ met[:, d, d] @ size[:, d, d]
+        if not np.allclose(prod, np.eye(dim)[None], atol=1e-9):
+            fail("%s: the size tensor S does not give S M S = I" % vtu)
+        if dim == 2 and np.any(met[:, 2, :] != 0):
+            fail("%s: a 2D metric has a third row" % vtu)
     if np.any(got_vtu.points[:, 2] != 0) and dim == 2:
         fail("%s: a 2D mesh has non-zero z" % vtu)
 

@@ -160,7 +160,7 @@ static void check_same(pa_mesh *a, pa_mesh *b) {
 }
 
 static void roundtrip(pa_mesh *m, const char *path, int binary) {
-  pa_write_opts opts = {binary, 0};
+  pa_write_opts opts = {binary, 0, 0};
   pa_mesh *r = NULL;
   CHECK_OK(pa_mesh_write(m, path, &opts));
   CHECK_OK(pa_mesh_read(path, &r));
@@ -462,7 +462,7 @@ static void truncations(const char *src, const char *dst) {
 
 static void test_truncated(void) {
   pa_mesh *m = make_cube(1);
-  pa_write_opts bin = {1, 0};
+  pa_write_opts bin = {1, 0, 0};
   CHECK_OK(pa_mesh_write(m, "trunc_a.msh", NULL));
   CHECK_OK(pa_mesh_write(m, "trunc_b.msh", &bin));
   truncations("trunc_a.msh", "cut.msh");
@@ -475,7 +475,7 @@ static void test_truncated(void) {
  * indices are in range. */
 static void test_corrupted(void) {
   pa_mesh *m = make_square(2);
-  pa_write_opts bin = {1, 0};
+  pa_write_opts bin = {1, 0, 0};
   CHECK_OK(pa_mesh_write(m, "fuzz_b.msh", &bin));
   CHECK_OK(pa_mesh_write(m, "fuzz_a.msh", NULL));
   pa_mesh_destroy(m);
@@ -524,7 +524,7 @@ static void test_corrupted(void) {
  * and no file left behind by a failed write. */
 static void test_alloc_failures(void) {
   pa_mesh *m = make_cube(1), *r = NULL;
-  pa_write_opts bin = {1, 0};
+  pa_write_opts bin = {1, 0, 0};
   CHECK_OK(pa_mesh_write(m, "alloc.msh", &bin));
   int nok = 0, nbad = 0;
   for (long k = 1; k < 200; k++) {
@@ -598,7 +598,7 @@ static void test_bad_corpus(void) {
 /* A larger mesh: both encodings round trip, binary is the faster. */
 static void test_larger(void) {
   pa_mesh *m = make_cube(16), *r = NULL;
-  pa_write_opts bin = {1, 0};
+  pa_write_opts bin = {1, 0, 0};
   double t0 = pa_wtime();
   CHECK_OK(pa_mesh_write(m, "big.msh", &bin));
   CHECK_OK(pa_mesh_read("big.msh", &r));

@@ -169,7 +169,7 @@ static int file_version(const char *path) {
 }
 
 static void round_trip(pa_mesh *m, const char *path, int version) {
-  pa_write_opts opts = {0, version};
+  pa_write_opts opts = {0, version, 0};
   pa_mesh *r = NULL;
   CHECK_OK(pa_mesh_write(m, path, &opts));
   if (strstr(path, ".meshb"))
@@ -198,7 +198,7 @@ static void test_round_trips(void) {
       round_trip(ms[i], "rt.meshb", v);
   }
   /* ASCII always writes version 2 and ignores the option. */
-  pa_write_opts v1 = {0, 1};
+  pa_write_opts v1 = {0, 1, 0};
   pa_mesh *r = NULL;
   CHECK_OK(pa_mesh_write(m2, "rt1.mesh", &v1));
   CHECK_OK(pa_mesh_read("rt1.mesh", &r));
@@ -729,10 +729,10 @@ static void test_failing_writes(void) {
   CHECK(pa_mesh_write(m, "no-such-dir/out.mesh", NULL) == PA_ERR_IO);
   CHECK(msg_has("no-such-dir/out.mesh"));
   CHECK(!file_exists("no-such-dir/out.mesh"));
-  pa_write_opts bad = {0, 5};
+  pa_write_opts bad = {0, 5, 0};
   CHECK(pa_mesh_write(m, "v5.meshb", &bad) == PA_ERR_ARG);
   CHECK(!file_exists("v5.meshb") && no_temp_files());
-  pa_write_opts v1 = {0, 1};
+  pa_write_opts v1 = {0, 1, 0};
   pa_mesh_coords(m)[7] = 1e300; /* beyond float */
   CHECK(pa_mesh_write(m, "v1.meshb", &v1) == PA_ERR_ARG);
   CHECK(msg_has("does not fit in a float"));
