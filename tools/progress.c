@@ -6,10 +6,11 @@
  * it, e.g. 0 in the tests). On a terminal one line rewrites itself (at most every
  * 0.2 s); into a file or a pipe, plain lines, at most one per second (each
  * iteration of the parallel loop gets its line). The estimate of the time
- * left extrapolates the elapsed time over the share of the way from the
- * initial element count to the count the metric asks for (a refinement's
- * or a coarsening's remeshing cost follows the elements it creates or
- * removes); it is shown once that share is between 5 % and 100 %.
+ * left extrapolates the elapsed time over the share of the way done: the
+ * share of elements that meet their target (parallel iterations), or else
+ * the share of the way from the initial element count to the count the
+ * metric asks for (a remesher's cost follows the elements it creates or
+ * removes); it is shown while that share is between 5 % and 100 %.
  */
 #include "cli.h"
 
@@ -60,13 +61,13 @@ void pa_cli_progress_cb(const pa_progress *p, void *ctx) {
     k += snprintf(line + k, sizeof line - (size_t)k, ", %.1f %% done",
                   100 * p->done);
   k += snprintf(line + k, sizeof line - (size_t)k, ", %.1f s", p->elapsed);
-  double way = p->nelem_expected - p->nelem_initial;
-  if (p->nelem_expected > 0 && fabs(way) > 0.05 * p->nelem_expected) {
-    double f = (p->nelem - p->nelem_initial) / way;
-    if (f > 0.05 && f < 1)
-      snprintf(line + k, sizeof line - (size_t)k, ", ~%.0f s left",
-               p->elapsed * (1 - f) / f);
-  }
+  /* the share of the way: measured (done) when known, else by elements */
+  double f = p->done, way = p->nelem_expected - p->nelem_initial;
+  if (f < 0 && p->nelem_expected > 0 && fabs(way) > 0.05 * p->nelem_expected)
+    f = (p->nelem - p->nelem_initial) / way;
+  if (f > 0.05 && f < 1)
+    snprintf(line + k, sizeof line - (size_t)k, ", ~%.0f s left",
+             p->elapsed * (1 - f) / f);
   if (pr->tty)
     fprintf(stderr, "\r%s\033[K", line);
   else

@@ -435,72 +435,67 @@ cleanup:
 
 /* ---- VTU output ---- */
 
-static pa_status write_vtu(const pa_mesh *m, int rank, const char *path) {
+/* This rank's ParaView file: the file mesh fm with its metric and fields
+ * (vd: nd values per file vertex, metric first), global ids, ghost types
+ * and rank (pa__vtu_write). */
+static pa_status write_vtu(const pa_dmesh *dm, pa_mesh *fm,
+                           pa_idx *const map[PA_NKIND],
+                           const pa_idx nfile[PA_NKIND], const double *vd,
+                           int nd, const char *path) {
   pa_status st = PA_SUCCESS;
-  pa_outfile out;
-  int d = m->dim, nv = d + 1;
-  uint64_t nb;
-  size_t np = (size_t)m->nv, nc = (size_t)m->ne, off = 0;
-  memset(&out, 0, sizeof out);
-  PA_CALL(pa__out_open(&out, path));
-  FILE *fp = out.fp;
-  size_t sz[6] = {np * 3 * 8, nc * nv * 8, nc * 8, nc, nc * 4, nc * 4};
-  size_t o[6];
-  for (int i = 0; i < 6; i++) {
-    o[i] = off;
-    off += 8 + sz[i];
+  const pa_mesh *m = dm->mesh;
+  pa_idx nv = nfile[PA_VERTEX];
+  size_t ncell = (size_t)nfile[PA_ELEMENT] + (size_t)nfile[PA_BOUNDARY] +
+                 (dm->dim == 3 ? (size_t)nfile[PA_EDGE] : 0);
+  int64_t *vgid = NULL, *cgid = NULL;
+  uint8_t *ghost = NULL;
+  double *col = NULL;
+  PA_ALLOC(vgid, nv);
+  PA_ALLOC(ghost, nv);
+  PA_ALLOC(cgid, ncell);
+  for (pa_idx v = 0; v < m->nv; v++) {
+    pa_idx f = map[PA_VERTEX][v];
+    if (f < 0) continue;
+    vgid[f] = dm->gid[PA_VERTEX][v];
+    ghost[f] = dm->owner[PA_VERTEX][v] != dm->rank;
   }
-  fprintf(fp,
-          "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" "
-          "version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
-          "<UnstructuredGrid>\n<Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">\n"
-          "<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" "
-          "format=\"appended\" offset=\"%zu\"/></Points>\n<Cells>\n"
-          "<DataArray type=\"Int64\" Name=\"connectivity\" format=\"appended\" offset=\"%zu\"/>\n"
-          "<DataArray type=\"Int64\" Name=\"offsets\" format=\"appended\" offset=\"%zu\"/>\n"
-          "<DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"%zu\"/>\n"
-          "</Cells>\n<CellData Scalars=\"rank\">\n"
-          "<DataArray type=\"Int32\" Name=\"rank\" format=\"appended\" offset=\"%zu\"/>\n"
-          "<DataArray type=\"Int32\" Name=\"ref\" format=\"appended\" offset=\"%zu\"/>\n"
-          "</CellData>\n</Piece>\n</UnstructuredGrid>\n<AppendedData encoding=\"raw\">\n_",
-          np, nc, o[0], o[1], o[2], o[3], o[4], o[5]);
-  nb = sz[0];
-  fwrite(&nb, 8, 1, fp);
-  for (size_t i = 0; i < np; i++) {
-    double x[3] = {0, 0, 0};
-    memcpy(x, m->coord + (size_t)d * i, sizeof(double) * d);
-    fwrite(x, 8, 3, fp);
+  {
+    size_t base = 0;
+    for (int k = PA_ELEMENT; k <= PA_EDGE; k++) {
+      if (k == PA_EDGE && dm->dim != 3) break;
+      for (pa_idx i = 0; i < dm->nloc[k]; i++)
+        if (map[k][i] >= 0) cgid[base + (size_t)map[k][i]] = dm->gid[k][i];
+      base += (size_t)nfile[k];
+    }
   }
-  nb = sz[1];
-  fwrite(&nb, 8, 1, fp);
-  for (size_t i = 0; i < nc * nv; i++) {
-    int64_t v = m->elem[i];
-    fwrite(&v, 8, 1, fp);
+  /* the metric and fields, one array each, as pa_mesh holds them */
+  int off = 0;
+  PA_ALLOC(col, (size_t)nv * (nd ? nd : 1));
+  for (int q = -1; q < m->nfield; q++) {
+    int nc = q < 0 ? m->met_ncomp : m->field[q].ncomp;
+    if (!nc) continue;
+    for (pa_idx f = 0; f < nv; f++)
+      memcpy(col + (size_t)nc * f, vd + (size_t)nd * f + off, sizeof(double) * nc);
+    if (q < 0)
+      PA_CALL(pa_mesh_set_metric(fm, nc, col));
+    else
+      PA_CALL(pa_mesh_add_field(fm, m->field[q].name, nc, col));
+    off += nc;
   }
-  nb = sz[2];
-  fwrite(&nb, 8, 1, fp);
-  for (size_t i = 0; i < nc; i++) {
-    int64_t v = (int64_t)(i + 1) * nv;
-    fwrite(&v, 8, 1, fp);
+  {
+    pa__vtu_extra x = {dm->rank, vgid, ghost, cgid};
+    PA_CALL(pa__vtu_write(fm, path, 0, &x));
   }
-  nb = sz[3];
-  fwrite(&nb, 8, 1, fp);
-  uint8_t type = d == 2 ? 5 : 10; /* VTK_TRIANGLE, VTK_TETRA */
-  for (size_t i = 0; i < nc; i++) fwrite(&type, 1, 1, fp);
-  nb = sz[4];
-  fwrite(&nb, 8, 1, fp);
-  for (size_t i = 0; i < nc; i++) fwrite(&rank, 4, 1, fp);
-  nb = sz[5];
-  fwrite(&nb, 8, 1, fp);
-  fwrite(m->eref, 4, nc, fp);
-  fprintf(fp, "\n</AppendedData>\n</VTKFile>\n");
-  PA_CALL(pa__out_commit(&out));
 cleanup:
-  pa__out_abort(&out);
+  pa__free(vgid);
+  pa__free(ghost);
+  pa__free(cgid);
+  pa__free(col);
   return st;
 }
 
-static pa_status write_pvtu(const char *base, int nranks) {
+/* The ParaView index of the rank files: the arrays write_vtu gives each. */
+static pa_status write_pvtu(const char *base, int nranks, const pa_mesh *m) {
   pa_status st = PA_SUCCESS;
   pa_outfile out;
   char path[4200];
@@ -509,16 +504,34 @@ static pa_status write_pvtu(const char *base, int nranks) {
   memset(&out, 0, sizeof out);
   snprintf(path, sizeof path, "%s.pvtu", base);
   PA_CALL(pa__out_open(&out, path));
-  fprintf(out.fp,
+  FILE *fp = out.fp;
+  fprintf(fp,
           "<?xml version=\"1.0\"?>\n<VTKFile type=\"PUnstructuredGrid\" "
           "version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
           "<PUnstructuredGrid GhostLevel=\"0\">\n"
           "<PPoints><PDataArray type=\"Float64\" NumberOfComponents=\"3\"/></PPoints>\n"
-          "<PCellData Scalars=\"rank\">\n<PDataArray type=\"Int32\" Name=\"rank\"/>\n"
-          "<PDataArray type=\"Int32\" Name=\"ref\"/>\n</PCellData>\n");
+          "<PPointData GlobalIds=\"gid\"%s>\n",
+          m->met_ncomp ? " Tensors=\"size\"" : "");
+  if (m->met_ncomp)
+    fprintf(fp, "<PDataArray type=\"Float64\" Name=\"metric\" NumberOfComponents=\"9\"/>\n"
+                "<PDataArray type=\"Float64\" Name=\"size\" NumberOfComponents=\"9\"/>\n");
+  for (int q = 0; q < m->nfield; q++)
+    fprintf(fp, "<PDataArray type=\"Float64\" Name=\"%s\" NumberOfComponents=\"%d\"/>\n",
+            m->field[q].name, m->field[q].ncomp);
+  fprintf(fp,
+          "<PDataArray type=\"Int32\" Name=\"ref\"/>\n"
+          "<PDataArray type=\"Int64\" Name=\"gid\"/>\n"
+          "<PDataArray type=\"UInt8\" Name=\"vtkGhostType\"/>\n"
+          "</PPointData>\n<PCellData Scalars=\"rank\">\n"
+          "<PDataArray type=\"Int32\" Name=\"ref\"/>\n"
+          "<PDataArray type=\"UInt8\" Name=\"entity\"/>\n"
+          "<PDataArray type=\"Float64\" Name=\"quality\"/>\n"
+          "<PDataArray type=\"Int32\" Name=\"rank\"/>\n"
+          "<PDataArray type=\"Int64\" Name=\"gid\"/>\n"
+          "</PCellData>\n");
   for (int r = 0; r < nranks; r++)
-    fprintf(out.fp, "<Piece Source=\"%s.%d.vtu\"/>\n", name, r);
-  fprintf(out.fp, "</PUnstructuredGrid>\n</VTKFile>\n");
+    fprintf(fp, "<Piece Source=\"%s.%d.vtu\"/>\n", name, r);
+  fprintf(fp, "</PUnstructuredGrid>\n</VTKFile>\n");
   PA_CALL(pa__out_commit(&out));
 cleanup:
   pa__out_abort(&out);
@@ -802,6 +815,7 @@ pa_status pa_dmesh_write(pa_dmesh *dm, const char *path) {
   pa_outfile kwout;
   int64_t info[MF_WORDS], *all = NULL;
   pa_idx *map[PA_NKIND] = {NULL}, nfile[PA_NKIND] = {0};
+  int vtu_nd = 0;
   uint64_t *mask = NULL;
   pa_gid *g = NULL;
   int32_t *o = NULL, *items = NULL, *comms = NULL;
@@ -896,6 +910,7 @@ pa_status pa_dmesh_write(pa_dmesh *dm, const char *path) {
     /* metric and fields */
     int nd = m->met_ncomp;
     for (int f = 0; f < m->nfield; f++) nd += m->field[f].ncomp;
+    vtu_nd = nd;
     PA_ALLOC(vd, (size_t)nd * nfile[PA_VERTEX]);
     for (pa_idx v = 0; v < m->nv; v++) {
       pa_idx f = map[PA_VERTEX][v];
@@ -974,7 +989,7 @@ pa_status pa_dmesh_write(pa_dmesh *dm, const char *path) {
   }
   /* ParaView: per-rank vtu of the owned elements, and the pvtu */
   rank_path(base, dm->rank, ".vtu", fpath, sizeof fpath);
-  PA_CALL(write_vtu(fm, dm->rank, fpath));
+  PA_CALL(write_vtu(dm, fm, map, nfile, vd, vtu_nd, fpath));
   if (dm->rank == 0) {
     all = pa__malloc(sizeof *all * MF_WORDS * (size_t)dm->size);
     if (!all) st = pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
@@ -983,7 +998,7 @@ pa_status pa_dmesh_write(pa_dmesh *dm, const char *path) {
   MPI_Gather(info, MF_WORDS, MPI_INT64_T, all, MF_WORDS, MPI_INT64_T, 0,
              dm->comm);
   if (dm->rank == 0) {
-    PA_CALL(write_pvtu(base, dm->size));
+    PA_CALL(write_pvtu(base, dm->size, m));
     PA_CALL(write_manifest(base, dm, all));
     PA_CALL(remove_shadows(path, base, dm->size));
   }

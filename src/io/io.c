@@ -51,7 +51,7 @@ pa_status pa_mesh_write(pa_mesh *mesh, const char *path,
   else if (!strcmp(ext, ".msh"))
     PA_CALL(pa__gmsh_write(mesh, path, opts->binary));
   else if (!strcmp(ext, ".vtu"))
-    PA_CALL(pa__vtu_write(mesh, path, opts->diagnostics));
+    PA_CALL(pa__vtu_write(mesh, path, opts->diagnostics, NULL));
   else
     PA_FAIL(PA_ERR_UNSUPPORTED,
             "%s: unknown mesh file extension '%s' (expected .mesh, .meshb, "

@@ -66,7 +66,19 @@ pa_status pa__medit_write(pa_mesh *mesh, const char *path, int binary,
                           int version);
 pa_status pa__gmsh_read(const char *path, pa_mesh **mesh);
 pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary);
-pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics);
+/* The arrays a distributed set's rank file adds (src/dmesh/dio.c); NULL
+ * members are not written. */
+typedef struct pa__vtu_extra {
+  int rank;              /* cell data "rank" of every cell */
+  const int64_t *vgid;   /* point data "gid", the points' GlobalIds */
+  const uint8_t *vghost; /* point data "vtkGhostType": 1 (a duplicate) on
+                            the vertices another rank owns */
+  const int64_t *cgid;   /* cell data "gid": each cell's global id among
+                            the entities of its kind (elements, boundary
+                            entities, edges: the "entity" array) */
+} pa__vtu_extra;
+pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics,
+                        const pa__vtu_extra *extra);
 
 /* ---- Medit keyword files (libMeshb layout), shared by medit.c and sol.c ----
  * Defined in medit.c; the layout and the reader's invariants are described at

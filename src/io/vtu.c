@@ -22,6 +22,9 @@
  *    boundary entities and edges); with opts->diagnostics, "edge_min" and
  *    "edge_max", the shortest and longest edge of each element in its
  *    metric (NaN on the other cells, and everywhere without a metric).
+ *  - A distributed set's rank file adds (pa__vtu_extra) the point data
+ *    "gid" (declared GlobalIds) and "vtkGhostType" (1 on the vertices
+ *    another rank owns), and the cell data "rank" and "gid".
  * The appended section ends with a newline before </AppendedData>. The file
  * is written through a temporary file (output.c), so a failure leaves none.
  */
@@ -131,7 +134,8 @@ static void edge_range(const pa_mesh *m, pa_idx e, double *lo, double *hi) {
     }
 }
 
-pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics) {
+pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics,
+                        const pa__vtu_extra *x) {
   pa_status st = PA_SUCCESS;
   pa_outfile out = {0};
   int64_t *i64 = NULL;
@@ -150,6 +154,10 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics) {
     A_CONN,
     A_OFFS,
     A_TYPES,
+    A_VGID,
+    A_VGHOST,
+    A_RANK,
+    A_CGID,
     A_FIELD
   };
   vtu_array arr[A_FIELD + PA_MAX_FIELDS];
@@ -175,6 +183,10 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics) {
   arr[A_CONN] = (vtu_array){"connectivity", "Int64", 1, NULL, 8 * nconn, 0};
   arr[A_OFFS] = (vtu_array){"offsets", "Int64", 1, NULL, 8 * ncell, 0};
   arr[A_TYPES] = (vtu_array){"types", "UInt8", 1, NULL, ncell, 0};
+  arr[A_VGID] = (vtu_array){"gid", "Int64", 1, NULL, 8 * nv, 0};
+  arr[A_VGHOST] = (vtu_array){"vtkGhostType", "UInt8", 1, NULL, nv, 0};
+  arr[A_RANK] = (vtu_array){"rank", "Int32", 1, NULL, 4 * ncell, 0};
+  arr[A_CGID] = (vtu_array){"gid", "Int64", 1, NULL, 8 * ncell, 0};
   for (int k = 0; k < m->nfield; k++)
     arr[A_FIELD + k] = (vtu_array){m->field[k].name,
                                    "Float64",
@@ -187,11 +199,15 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics) {
   if (nc) order[no++] = A_MET, order[no++] = A_SIZE;
   for (int k = 0; k < m->nfield; k++) order[no++] = A_FIELD + k;
   order[no++] = A_VREF;
+  if (x && x->vgid) order[no++] = A_VGID;
+  if (x && x->vghost) order[no++] = A_VGHOST;
   npoint = no;
   order[no++] = A_REF;
   order[no++] = A_ENT;
   order[no++] = A_QUAL;
   if (diag) order[no++] = A_LMIN, order[no++] = A_LMAX;
+  if (x) order[no++] = A_RANK;
+  if (x && x->cgid) order[no++] = A_CGID;
   ncelld = no - npoint;
   order[no++] = A_PTS;
   order[no++] = A_CONN;
@@ -218,7 +234,8 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics) {
           "    <Piece NumberOfPoints=\"%llu\" NumberOfCells=\"%llu\">\n",
           little ? "LittleEndian" : "BigEndian", (unsigned long long)nv,
           (unsigned long long)ncell);
-  fprintf(fp, "      <PointData%s>\n", nc ? " Tensors=\"size\"" : "");
+  fprintf(fp, "      <PointData%s%s>\n", nc ? " Tensors=\"size\"" : "",
+          x && x->vgid ? " GlobalIds=\"gid\"" : "");
   for (int i = 0; i < npoint; i++) put_array(fp, &arr[order[i]]);
   fputs("      </PointData>\n      <CellData Scalars=\"quality\">\n", fp);
   for (int i = npoint; i < npoint + ncelld; i++) put_array(fp, &arr[order[i]]);
@@ -245,6 +262,8 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics) {
   for (int k = 0; k < m->nfield; k++)
     put_block(fp, m->field[k].val, arr[A_FIELD + k].nbytes);
   put_block(fp, m->vref, arr[A_VREF].nbytes);
+  if (x && x->vgid) put_block(fp, x->vgid, arr[A_VGID].nbytes);
+  if (x && x->vghost) put_block(fp, x->vghost, arr[A_VGHOST].nbytes);
   fwrite(&arr[A_REF].nbytes, 8, 1, fp);
   fwrite(m->eref, 4, (size_t)ne, fp);
   fwrite(m->bref, 4, (size_t)nb, fp);
@@ -277,6 +296,11 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics) {
       fwrite(f64, sizeof *f64,
              (size_t)(nb + nd - c < VTU_CHUNK ? nb + nd - c : VTU_CHUNK), fp);
   }
+  if (x) {
+    fwrite(&arr[A_RANK].nbytes, 8, 1, fp);
+    for (uint64_t c = 0; c < ncell; c++) fwrite(&x->rank, 4, 1, fp);
+  }
+  if (x && x->cgid) put_block(fp, x->cgid, arr[A_CGID].nbytes);
   if (dim == 3) {
     put_block(fp, m->coord, arr[A_PTS].nbytes);
   } else {
