@@ -35,6 +35,8 @@ typedef struct pa_cli_adapt_args {
   int max_iter;    /* -max-iter N (0: default) */
   int pieces;      /* -pieces K (0: default) */
   int check;       /* -check: check every piece and the result */
+  const char *checkpoint; /* -checkpoint DIR: a checkpoint per iteration */
+  const char *restart;    /* -restart DIR: resume from DIR's checkpoint */
   pa_remesh_opts remesh;
 } pa_cli_adapt_args;
 

@@ -27,6 +27,7 @@
 #include "cli.h"
 
 #include <math.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -62,9 +63,21 @@ static int prepare_root(const pa_cli *cli, pa_mesh *mesh, const char *met,
 }
 
 
+/* The progress callback's context. kill_iter: test hook, see progress. */
+typedef struct progress_ctx {
+  const pa_cli *cli;
+  int kill_iter;
+} progress_ctx;
+
+/* One line per iteration on rank 0. Test hook: with PADAPT_TEST_KILL_ITER=K
+ * in the environment, rank 0 kills itself (SIGKILL, no handler runs) when
+ * iteration K reports, after its remeshing and before its checkpoint
+ * (tests/cli/test_checkpoint.sh). */
 static void progress(const pa_adapt_iter *it, void *ctx) {
-  const pa_cli *cli = ctx;
+  const progress_ctx *pc = ctx;
+  const pa_cli *cli = pc->cli;
   if (cli->rank != 0) return;
+  if (it->iter == pc->kill_iter) raise(SIGKILL);
   printf("  iter %2d: %9lld tagged, %4d pieces, imbalance %.2f, %3d failed, "
          "%10lld elements | tag %.2f pieces %.2f gather %.2f remesh %.2f "
          "reintegrate %.2f s\n",
@@ -182,9 +195,14 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   if (args->max_iter > 0) opts.max_iter = args->max_iter;
   if (args->pieces > 0) opts.pieces_per_rank = args->pieces;
   if (args->check) opts.check_pieces = 1;
-  int set = cli->rank == 0 ? pa_dmesh_is_set(in) : 0;
+  int set = cli->rank == 0 && in ? pa_dmesh_is_set(in) : 0;
   MPI_Bcast(&set, 1, MPI_INT, 0, cli->comm);
-  if (set && (met || field)) {
+  if (args->restart) {
+    if (cli->rank == 0 && (in || met || field))
+      fprintf(stderr, "padapt: adapt: -restart: the mesh, its metric and "
+                      "fields come from the checkpoint (IN, -met and -field "
+                      "are not read)\n");
+  } else if (set && (met || field)) {
     if (cli->rank == 0)
       pa_cli_error(cli, "adapt: -met and -field need a sequential input mesh, "
                         "not a distributed set");
@@ -201,12 +219,33 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   const pa_remesher *r = pa_remesher_builtin();
   int ok = 1;
   double tstep[5], t0 = pa_wtime(); /* read, stats, adapt, stats, write */
+  const char *kill_iter = getenv("PADAPT_TEST_KILL_ITER");
+  progress_ctx pctx = {cli, kill_iter && kill_iter[0] ? atoi(kill_iter) : 0};
   opts.progress = progress;
-  opts.progress_ctx = (void *)cli;
+  opts.progress_ctx = &pctx;
+  opts.checkpoint_dir = args->checkpoint;
   memset(&rep, 0, sizeof rep);
   memset(tstep, 0, sizeof tstep);
 
-  /* read */
+  /* read, or resume from the checkpoint */
+  if (args->restart) {
+    if (cli->rank == 0) {
+      printf(" -- RESTART from %s (%d processes)\n -- ITERATIONS\n",
+             args->restart, cli->size);
+      fflush(stdout);
+    }
+    st = pa_dmesh_adapt_resume(cli->comm, args->restart, &opts, &dm, &rep);
+    if (st) {
+      fail_collective(cli, st);
+      if (cli->rank == 0) pa_cli_error(cli, "adapt: no output written");
+      goto done;
+    }
+    memset(&before, 0, sizeof before);
+    before.nelem = rep.nelem_initial;
+    before.nvert = rep.nvert_initial;
+    tstep[2] = lap(&t0);
+    goto adapted;
+  }
   if (set) {
     st = pa_dmesh_read(cli->comm, in, 0, &dm);
     if (st) {
@@ -260,6 +299,7 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
     goto done;
   }
   tstep[2] = lap(&t0);
+adapted:;
   const pa_stats *after = &rep.fidelity.user;
   if (cli->rank == 0) {
     printf(" -- OUTPUT %s, in the given metric\n", out);
