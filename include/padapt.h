@@ -1074,7 +1074,9 @@ typedef struct pa_adapt_opts {
    *  only then, so a run killed at any point leaves the latest complete
    *  checkpoint. The directory is created if missing (its parent must
    *  exist); pa_dmesh_adapt must then be called outside an output
-   *  transaction. pa_dmesh_adapt_resume continues from it. */
+   *  transaction. A checkpoint that cannot be written fails the call
+   *  (PA_ERR_IO naming the file; the previous checkpoint stays).
+   *  pa_dmesh_adapt_resume continues from it. */
   const char *checkpoint_dir;
 } pa_adapt_opts;
 

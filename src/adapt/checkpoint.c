@@ -190,7 +190,8 @@ cleanup:
 
 /* Rank 0, in the open output transaction: remove the files of the sets
  * other than `set` and the temporaries left by killed writes (iter-*,
- * checkpoint.tmp.*) except the state file's own temporary. */
+ * checkpoint.tmp.*) except the state file's own temporary. Only regular
+ * files: anything else of those names is left alone. */
 static pa_status remove_older(const char *dir, const char *set,
                               const char *statepath) {
   pa_status st = PA_SUCCESS;
@@ -205,8 +206,11 @@ static pa_status remove_older(const char *dir, const char *set,
     int ours = !strncmp(n, CKPT_SET_PREFIX, strlen(CKPT_SET_PREFIX)) &&
                (strncmp(n, keep, strlen(keep)) || strstr(n, ".tmp."));
     ours |= !strncmp(n, CKPT_FILE ".tmp.", strlen(CKPT_FILE ".tmp."));
+    struct stat sb;
     snprintf(p, sizeof p, "%s/%s", dir, n);
-    if (ours && !(mine && !strcmp(p, mine))) PA_CALL(pa__out_remove(p));
+    if (ours && !(mine && !strcmp(p, mine)) && lstat(p, &sb) == 0 &&
+        S_ISREG(sb.st_mode))
+      PA_CALL(pa__out_remove(p));
   }
 cleanup:
   if (d) closedir(d);
