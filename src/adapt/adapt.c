@@ -246,7 +246,8 @@ static pa_status iterate(pa_dmesh *dm, const pa_adapt_opts *opts,
   /* progress: 1 % below the least work seen so far (work that goes up and
    * down, e.g. the same badly shaped elements tagged again next to other
    * borders, is no progress) */
-  L->nostep = L->least >= 0 && it.tagwork >= 0.99 * L->least ? L->nostep + 1 : 0;
+  L->nostep =
+      L->least >= 0 && it.tagwork >= 0.99 * L->least ? L->nostep + 1 : 0;
   if (iter > opts->max_iter ||
       (L->nostep >= 1 && L->lastpieces == 1 && !L->lastfailed) ||
       L->nostep >= 6) {

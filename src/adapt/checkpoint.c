@@ -66,47 +66,72 @@ typedef struct field {
   size_t off;
 } field;
 
-#define LOOP(t, f) {#f, t, offsetof(pa__loop, f)}
-static const field loop_fields[] = {
-    LOOP('i', iter),           LOOP('d', least),
-    LOOP('i', nostep),         LOOP('i', lastpieces),
-    LOOP('i', lastfailed),     LOOP('u', changed),
-    LOOP('d', time),           LOOP('i', rep.nranks),
-    LOOP('i', rep.niter),      LOOP('g', rep.nelem_initial),
-    LOOP('g', rep.nvert_initial), LOOP('g', rep.ntagged_left),
-    LOOP('l', rep.npieces),    LOOP('l', rep.nfailed),
-    LOOP('d', rep.t_tag),      LOOP('d', rep.t_pieces),
-    LOOP('d', rep.t_gather),   LOOP('d', rep.t_remesh),
-    LOOP('d', rep.t_reintegrate), LOOP('d', rep.remesh_busy),
-    LOOP('d', rep.bytes_moved), LOOP('i', rep.niter_recorded)};
+#define LOOP(t, f)                                                             \
+  { #f, t, offsetof(pa__loop, f) }
+static const field loop_fields[] = {LOOP('i', iter),
+                                    LOOP('d', least),
+                                    LOOP('i', nostep),
+                                    LOOP('i', lastpieces),
+                                    LOOP('i', lastfailed),
+                                    LOOP('u', changed),
+                                    LOOP('d', time),
+                                    LOOP('i', rep.nranks),
+                                    LOOP('i', rep.niter),
+                                    LOOP('g', rep.nelem_initial),
+                                    LOOP('g', rep.nvert_initial),
+                                    LOOP('g', rep.ntagged_left),
+                                    LOOP('l', rep.npieces),
+                                    LOOP('l', rep.nfailed),
+                                    LOOP('d', rep.t_tag),
+                                    LOOP('d', rep.t_pieces),
+                                    LOOP('d', rep.t_gather),
+                                    LOOP('d', rep.t_remesh),
+                                    LOOP('d', rep.t_reintegrate),
+                                    LOOP('d', rep.remesh_busy),
+                                    LOOP('d', rep.bytes_moved),
+                                    LOOP('i', rep.niter_recorded)};
 #define NLOOP (int)(sizeof loop_fields / sizeof *loop_fields)
 
-#define ITER(t, f) {#f, t, offsetof(pa_adapt_iter, f)}
+#define ITER(t, f)                                                             \
+  { #f, t, offsetof(pa_adapt_iter, f) }
 static const field iter_fields[] = {
-    ITER('i', iter),        ITER('g', ntagged),     ITER('g', nelem),
-    ITER('i', npieces),     ITER('i', nfailed),     ITER('d', imbalance),
-    ITER('d', t_tag),       ITER('d', t_pieces),    ITER('d', t_gather),
-    ITER('d', t_remesh),    ITER('d', t_reintegrate),
-    ITER('d', remesh_busy), ITER('d', bytes_moved)};
+    ITER('i', iter),       ITER('g', ntagged),       ITER('g', nelem),
+    ITER('i', npieces),    ITER('i', nfailed),       ITER('d', imbalance),
+    ITER('d', t_tag),      ITER('d', t_pieces),      ITER('d', t_gather),
+    ITER('d', t_remesh),   ITER('d', t_reintegrate), ITER('d', remesh_busy),
+    ITER('d', bytes_moved)};
 #define NITER (int)(sizeof iter_fields / sizeof *iter_fields)
 
 /* The options that can change the result (not the callbacks, the
  * checkpoint directory nor the verbosity). */
-#define OPT(t, f) {#f, t, offsetof(pa_adapt_opts, f)}
-static const field opt_fields[] = {
-    OPT('d', remesh.hmin),      OPT('d', remesh.hmax),
-    OPT('d', remesh.hsiz),      OPT('d', remesh.hgrad),
-    OPT('d', remesh.hgradreq),  OPT('d', remesh.hausd),
-    OPT('d', remesh.angle),     OPT('i', remesh.no_angle),
-    OPT('i', remesh.no_insert), OPT('i', remesh.no_swap),
-    OPT('i', remesh.no_move),   OPT('i', remesh.no_surf),
-    OPT('i', remesh.trusted),   OPT('i', remesh.no_stats),
-    OPT('d', mem_mb),           OPT('d', qual_threshold),
-    OPT('i', user_tags_only),   OPT('i', max_iter),
-    OPT('i', pieces_per_rank),  OPT('i', skin_layers),
-    OPT('i', skin_layers_later), OPT('d', min_piece_work),
-    OPT('d', min_piece_ratio),  OPT('d', rebalance_tol),
-    OPT('i', rebalance),        OPT('i', check_pieces)};
+#define OPT(t, f)                                                              \
+  { #f, t, offsetof(pa_adapt_opts, f) }
+static const field opt_fields[] = {OPT('d', remesh.hmin),
+                                   OPT('d', remesh.hmax),
+                                   OPT('d', remesh.hsiz),
+                                   OPT('d', remesh.hgrad),
+                                   OPT('d', remesh.hgradreq),
+                                   OPT('d', remesh.hausd),
+                                   OPT('d', remesh.angle),
+                                   OPT('i', remesh.no_angle),
+                                   OPT('i', remesh.no_insert),
+                                   OPT('i', remesh.no_swap),
+                                   OPT('i', remesh.no_move),
+                                   OPT('i', remesh.no_surf),
+                                   OPT('i', remesh.trusted),
+                                   OPT('i', remesh.no_stats),
+                                   OPT('d', mem_mb),
+                                   OPT('d', qual_threshold),
+                                   OPT('i', user_tags_only),
+                                   OPT('i', max_iter),
+                                   OPT('i', pieces_per_rank),
+                                   OPT('i', skin_layers),
+                                   OPT('i', skin_layers_later),
+                                   OPT('d', min_piece_work),
+                                   OPT('d', min_piece_ratio),
+                                   OPT('d', rebalance_tol),
+                                   OPT('i', rebalance),
+                                   OPT('i', check_pieces)};
 #define NOPT (int)(sizeof opt_fields / sizeof *opt_fields)
 
 /* The value of field f of the struct at base, as written ("%.17g" for
@@ -115,18 +140,27 @@ static void format_value(const field *f, const void *base, char *buf,
                          size_t len) {
   const char *p = (const char *)base + f->off;
   switch (f->type) {
-  case 'i': snprintf(buf, len, "%d", *(const int *)p); break;
-  case 'u': snprintf(buf, len, "%u", *(const unsigned *)p); break;
-  case 'l': snprintf(buf, len, "%ld", *(const long *)p); break;
-  case 'g': snprintf(buf, len, "%lld", (long long)*(const pa_gid *)p); break;
-  default: snprintf(buf, len, "%.17g", *(const double *)p); break;
+  case 'i':
+    snprintf(buf, len, "%d", *(const int *)p);
+    break;
+  case 'u':
+    snprintf(buf, len, "%u", *(const unsigned *)p);
+    break;
+  case 'l':
+    snprintf(buf, len, "%ld", *(const long *)p);
+    break;
+  case 'g':
+    snprintf(buf, len, "%lld", (long long)*(const pa_gid *)p);
+    break;
+  default:
+    snprintf(buf, len, "%.17g", *(const double *)p);
+    break;
   }
 }
 
 /* Parse the number at s into field f of the struct at base; *end: after
  * it. Returns 1 if s starts with a number of the field's type. */
-static int parse_value(const field *f, void *base, const char *s,
-                       char **end) {
+static int parse_value(const field *f, void *base, const char *s, char **end) {
   char *p = (char *)base + f->off;
   errno = 0;
   if (f->type == 'd') {
@@ -138,10 +172,18 @@ static int parse_value(const field *f, void *base, const char *s,
   long long x = strtoll(s, end, 10);
   if (*end == s || errno) return 0;
   switch (f->type) {
-  case 'i': *(int *)p = (int)x; return x >= INT32_MIN && x <= INT32_MAX;
-  case 'u': *(unsigned *)p = (unsigned)x; return x >= 0 && x <= UINT32_MAX;
-  case 'l': *(long *)p = (long)x; return 1;
-  default: *(pa_gid *)p = (pa_gid)x; return 1;
+  case 'i':
+    *(int *)p = (int)x;
+    return x >= INT32_MIN && x <= INT32_MAX;
+  case 'u':
+    *(unsigned *)p = (unsigned)x;
+    return x >= 0 && x <= UINT32_MAX;
+  case 'l':
+    *(long *)p = (long)x;
+    return 1;
+  default:
+    *(pa_gid *)p = (pa_gid)x;
+    return 1;
   }
 }
 
@@ -162,8 +204,9 @@ static pa_status write_state(const char *path, const pa_dmesh *dm,
   memset(&out, 0, sizeof out);
   PA_CALL(pa__out_open(&out, path));
   FILE *fp = out.fp;
-  fprintf(fp, "padapt-checkpoint %d\nranks %d\ndim %d\noverlap %d\nset %s\n"
-              "manifest %" PRId64 " %016" PRIx64 "\n",
+  fprintf(fp,
+          "padapt-checkpoint %d\nranks %d\ndim %d\noverlap %d\nset %s\n"
+          "manifest %" PRId64 " %016" PRIx64 "\n",
           CKPT_VERSION, dm->size, dm->dim, dm->overlap, set, mbytes, mhash);
   for (int k = 0; k < NLOOP; k++) {
     format_value(&loop_fields[k], L, v, sizeof v);
@@ -245,8 +288,7 @@ pa_status pa__adapt_checkpoint(pa_dmesh *dm, const pa_adapt_opts *o,
     st = pa_output_commit(tx);
     tx = NULL;
     PA_CALL(st);
-    pa__info(2, "padapt: checkpoint %s after iteration %d\n", setpath,
-             L->iter);
+    pa__info(2, "padapt: checkpoint %s after iteration %d\n", setpath, L->iter);
   }
 cleanup:
   if (tx) pa_output_abort(tx);
@@ -274,8 +316,8 @@ static int next_line(FILE *fp, char *line, int *lineno) {
 
 /* Rank 0: read and check path (the state file), options against o and the
  * number of ranks against size. */
-static pa_status read_state(const char *path, const pa_adapt_opts *o,
-                            int size, state *S) {
+static pa_status read_state(const char *path, const pa_adapt_opts *o, int size,
+                            state *S) {
   pa_status st = PA_SUCCESS;
   char line[CKPT_LINE], key[64], *p;
   int ln = 0, ver = 0, nseen = 0, nopt = 0, niter = 0, end = 0, have = 0;
@@ -289,8 +331,7 @@ static pa_status read_state(const char *path, const pa_adapt_opts *o,
                sscanf(line, "padapt-checkpoint %d", &ver) == 1,
            PA_ERR_FORMAT, "%s:1: not a padapt checkpoint", path);
   PA_CHECK(ver == CKPT_VERSION, PA_ERR_UNSUPPORTED,
-           "%s:1: checkpoint version %d, expected %d", path, ver,
-           CKPT_VERSION);
+           "%s:1: checkpoint version %d, expected %d", path, ver, CKPT_VERSION);
   while (!end && next_line(fp, line, &ln)) {
     int n = 0;
     PA_CHECK(sscanf(line, "%63s %n", key, &n) == 1, PA_ERR_FORMAT,
@@ -314,16 +355,15 @@ static pa_status read_state(const char *path, const pa_adapt_opts *o,
               << 4;
     } else if (!strncmp(key, "loop.", 5)) {
       int k = 0;
-      while (k < NLOOP && strcmp(key + 5, loop_fields[k].name)) k++;
-      PA_CHECK(k < NLOOP && parse_value(&loop_fields[k], &S->L, val, &p) &&
-                   !*p,
+      while (k < NLOOP && strcmp(key + 5, loop_fields[k].name))
+        k++;
+      PA_CHECK(k < NLOOP && parse_value(&loop_fields[k], &S->L, val, &p) && !*p,
                PA_ERR_FORMAT, "%s:%d: bad line '%s'", path, ln, line);
       nseen += !seen[k];
       seen[k] = 1;
     } else if (!strcmp(key, "iteration")) {
       PA_CHECK(niter < PA_ADAPT_MAX_ITERS, PA_ERR_FORMAT,
-               "%s:%d: more than %d iterations", path, ln,
-               PA_ADAPT_MAX_ITERS);
+               "%s:%d: more than %d iterations", path, ln, PA_ADAPT_MAX_ITERS);
       p = (char *)val;
       for (int k = 0; k < NITER; k++)
         PA_CHECK(parse_value(&iter_fields[k], &S->L.rep.iters[niter], p, &p),
@@ -339,7 +379,8 @@ static pa_status read_state(const char *path, const pa_adapt_opts *o,
         snprintf(mine, sizeof mine, "%s", remesher_name(o));
       } else {
         int k = 0;
-        while (k < NOPT && strcmp(name, opt_fields[k].name)) k++;
+        while (k < NOPT && strcmp(name, opt_fields[k].name))
+          k++;
         PA_CHECK(k < NOPT, PA_ERR_FORMAT, "%s:%d: unknown option '%s'", path,
                  ln, name);
         format_value(&opt_fields[k], o, mine, sizeof mine);
@@ -413,7 +454,9 @@ pa_status pa__adapt_restore(MPI_Comm comm, const char *dir,
   *L = S.L;
 cleanup:
   st = pa__agree_end(comm, st);
-  if (st) pa_dmesh_destroy(dm);
-  else *dmp = dm;
+  if (st)
+    pa_dmesh_destroy(dm);
+  else
+    *dmp = dm;
   return st;
 }
