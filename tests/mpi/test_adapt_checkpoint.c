@@ -2,8 +2,8 @@
  * test_adapt_checkpoint.c -- checkpoints of pa_dmesh_adapt and
  * pa_dmesh_adapt_resume through the library API, with a plug-in remesher
  * and a ghost layer: a copy of the checkpoint of iteration 1, taken while
- * the run goes on, resumes to the same mesh (checksum) and the same report
- * figures; a resume with other options, from
+ * the run goes on, resumes to the same mesh (checksum), the same local
+ * numbering on every rank and the same report figures; a resume with other options, from
  * a directory without checkpoint, and checkpoints asked for inside an
  * output transaction are refused with no mesh and no leak. Runs at any
  * number of ranks.
@@ -96,6 +96,21 @@ static uint64_t checksum(pa_dmesh *dm) {
   return c;
 }
 
+/* 1 if a and b hold, on this rank, the same entities of every kind in the
+ * same local order (owned, then ghosts). */
+static int same_local(const pa_dmesh *a, const pa_dmesh *b) {
+  for (int k = 0; k < 4; k++) {
+    pa_entity kind = (pa_entity)k;
+    pa_idx n = pa_dmesh_nlocal(a, kind);
+    if (n != pa_dmesh_nlocal(b, kind) ||
+        pa_dmesh_nowned(a, kind) != pa_dmesh_nowned(b, kind) ||
+        (n && memcmp(pa_dmesh_gids(a, kind), pa_dmesh_gids(b, kind),
+                     sizeof(pa_gid) * (size_t)n)))
+      return 0;
+  }
+  return 1;
+}
+
 static void test_resume_same_result(void) {
   pa_dmesh *dm = make(), *res = NULL;
   pa_adapt_opts o;
@@ -122,6 +137,7 @@ static void test_resume_same_result(void) {
   if (res) {
     CHECK_OK(pa_dmesh_check(res));
     CHECK(checksum(res) == checksum(dm));
+    CHECK(same_local(res, dm));
   }
   CHECK(r2.niter == r1.niter && r2.npieces == r1.npieces &&
         r2.converged == r1.converged && r2.nelem_final == r1.nelem_final &&
