@@ -1099,6 +1099,18 @@ typedef struct pa_adapt_opts {
    *  NULL), e.g. to print a progress line on rank 0. */
   void (*progress)(const pa_adapt_iter *iter, void *ctx);
   void *progress_ctx;
+  /** Checkpoint directory (NULL, the default: none). After each iteration
+   *  (after the progress call) the distributed mesh with its values and the
+   *  loop's state are written there: the set DIR/iter-K (K iterations done;
+   *  see pa_dmesh_write) and, once every rank wrote its file, the text file
+   *  DIR/checkpoint naming it, renamed into place; the older set is removed
+   *  only then, so a run killed at any point leaves the latest complete
+   *  checkpoint. The directory is created if missing (its parent must
+   *  exist); pa_dmesh_adapt must then be called outside an output
+   *  transaction. A checkpoint that cannot be written fails the call
+   *  (PA_ERR_IO naming the file; the previous checkpoint stays).
+   *  pa_dmesh_adapt_resume continues from it. */
+  const char *checkpoint_dir;
 } pa_adapt_opts;
 
 #define PA_ADAPT_MAX_ITERS 64
@@ -1156,6 +1168,32 @@ void pa_adapt_opts_default(pa_adapt_opts *opts);
  */
 pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
                          pa_adapt_report *report);
+
+/**
+ * Resume the pa_dmesh_adapt run whose latest checkpoint is in dir (that
+ * run's opts->checkpoint_dir) and carry it on to its end. Collective over
+ * comm, which must have as many ranks as the run that wrote the checkpoint
+ * (each rank reads back its own local mesh, in its own order): the result
+ * is then the uninterrupted run's, bit for bit, and so is the report but
+ * for its times (time_total adds the time spent before the checkpoint).
+ * opts must be the options of that run: every option that can change the
+ * result (all but progress, progress_ctx, checkpoint_dir and
+ * remesh.verbosity) is compared with the checkpoint's, and a difference
+ * fails naming the option; opts may be NULL (defaults). With
+ * opts->checkpoint_dir set (dir itself or another directory) the resumed
+ * run goes on writing checkpoints.
+ *
+ * dm: receives the adapted distributed mesh (pa_dmesh_destroy it), NULL on
+ * failure. report: as pa_dmesh_adapt's (may be NULL).
+ * Returns the same status on every rank: PA_ERR_ARG for another number of
+ * ranks (the message names the checkpoint's) or other options; PA_ERR_IO or
+ * PA_ERR_FORMAT for a missing, altered or inconsistent checkpoint, naming
+ * the file (DIR/checkpoint, the set's manifest or a rank file); nothing is
+ * written then.
+ */
+pa_status pa_dmesh_adapt_resume(MPI_Comm comm, const char *dir,
+                                const pa_adapt_opts *opts, pa_dmesh **dm,
+                                pa_adapt_report *report);
 
 /**
  * The metric toolbox on a distributed mesh of overlap 2 (the recovery uses

@@ -53,6 +53,8 @@ typedef struct pa_cli_adapt_args {
   int max_iter;    /* -max-iter N (0: default) */
   int pieces;      /* -pieces K (0: default) */
   int check;       /* -check: check every piece and the result */
+  const char *checkpoint; /* -checkpoint DIR: a checkpoint per iteration */
+  const char *restart;    /* -restart DIR: resume from DIR's checkpoint */
   pa_remesh_opts remesh;
   /* storage of the defaults a Mmg user expects: OUT = IN.o.EXT when -out is
    * not given, the metric IN.sol when it exists and none is given */

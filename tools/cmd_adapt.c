@@ -15,14 +15,16 @@
  * transaction: on any error none of them is written and files already at
  * their paths stay as they were.
  *
- * On several MPI ranks (or with -distributed-output or -mem) the parallel
- * piece loop of tools/cmd_padapt.c does the work, with the same arguments.
+ * On several MPI ranks (or with -distributed-output, -mem, -checkpoint or
+ * -restart) the parallel piece loop of tools/cmd_padapt.c does the work,
+ * with the same arguments.
  */
 #include "cli.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 static const char *adapt_usage =
@@ -59,6 +61,13 @@ static const char *adapt_usage =
     "  -pieces K       pieces per process (default 1)\n"
     "  -check          check every remeshed piece and the distributed result\n"
     "                  (always done with a plug-in remesher)\n"
+    "  -checkpoint DIR after each iteration, write the distributed state to\n"
+    "                  DIR (created if missing; only the latest checkpoint\n"
+    "                  is kept, replaced atomically)\n"
+    "  -restart DIR    resume the run whose checkpoint is in DIR: same number\n"
+    "                  of processes and same options (IN, -met and -field are\n"
+    "                  not read: the checkpoint holds the mesh); the output\n"
+    "                  is the uninterrupted run's, byte for byte\n"
     "Exit status: 0 success (also \"target missed\": a valid mesh, written,\n"
     "with a warning); 1 failure, nothing written (previous files untouched).\n";
 
@@ -141,6 +150,10 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
       file = &a->outfield, what = "a .sol file";
     } else if (!strcmp(o, "-json")) {
       file = &a->json;
+    } else if (!strcmp(o, "-checkpoint")) {
+      file = &a->checkpoint, what = "a directory";
+    } else if (!strcmp(o, "-restart")) {
+      file = &a->restart, what = "a checkpoint directory";
     } else if (!strcmp(o, "-nosol")) {
       a->nosol = 1;
     } else if (!strcmp(o, "-distributed-output")) {
@@ -177,9 +190,12 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
       i++;
     }
   }
-  if (!a->in) return pa_cli_error(cli, "adapt: no input mesh\n%s", adapt_usage);
+  if (!a->in && !a->restart)
+    return pa_cli_error(cli, "adapt: no input mesh\n%s", adapt_usage);
+  if (!a->out && !a->in)
+    return pa_cli_error(cli, "adapt: no output mesh (-out OUT)");
   if (!a->out && default_paths(cli, a)) return 1;
-  if (!a->met && a->remesh.hsiz <= 0) find_metric(cli, a);
+  if (!a->met && a->remesh.hsiz <= 0 && !a->restart) find_metric(cli, a);
   if (a->met && a->remesh.hsiz > 0)
     return pa_cli_error(cli, "adapt: give either -met/-sol or -hsiz, not both");
   if (a->remesh.hmin > 0 && a->remesh.hmax > 0 &&
@@ -201,6 +217,16 @@ static int check_outputs(const pa_cli *cli, const pa_cli_adapt_args *a) {
                              : (fields = pa_cli_replace_ext(a->out, ".fields.sol"));
   }
   int bad = pa_cli_check_outputs(cli, "adapt", paths, 4);
+  if (!bad && a->checkpoint) {
+    /* the state file in an existing directory, or the directory itself */
+    struct stat sb;
+    size_t n = strlen(a->checkpoint) + sizeof "/checkpoint";
+    char *state = malloc(n);
+    if (state) snprintf(state, n, "%s/checkpoint", a->checkpoint);
+    const char *p = stat(a->checkpoint, &sb) == 0 ? state : a->checkpoint;
+    bad = pa_cli_check_outputs(cli, "adapt -checkpoint", &p, 1);
+    free(state);
+  }
   free(sol);
   free(fields);
   return bad;
@@ -213,7 +239,8 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
   if (check_outputs(cli, &args)) return 1;
   /* On several ranks, or when asked for a distributed output or a memory
    * bound, the parallel piece loop (tools/cmd_padapt.c) does the work. */
-  if (cli->size > 1 || args.distributed || args.mem_mb > 0)
+  if (cli->size > 1 || args.distributed || args.mem_mb > 0 ||
+      args.checkpoint || args.restart)
     return pa_cli_adapt_parallel(cli, &args);
   const char *in = args.in, *out = args.out, *met = args.met;
   const char *outsol = args.outsol, *field = args.field;

@@ -3,7 +3,8 @@
  *
  *   mpiexec -n P padapt adapt IN [-met SOL | -hsiz H] -out OUT
  *       [-distributed-output] [-field F.sol] [-mem MB] [-json REPORT.json]
- *       [-max-iter N] [-pieces K] [remesher options]
+ *       [-max-iter N] [-pieces K] [-checkpoint DIR] [remesher options]
+ *   mpiexec -n P padapt adapt -restart DIR -out OUT [the same options]
  *
  * Reads IN (a sequential mesh on rank 0 with its metric and fields, then
  * distributed; or a distributed set written by pa_dmesh_write, read by all
@@ -14,6 +15,10 @@
  * <OUT stem>.fields.sol) or, with -distributed-output, as a distributed set.
  * The JSON report holds the statistics of the output, the times of every
  * step and iteration, the bytes moved and the peak memory of every rank.
+ * With -checkpoint DIR the loop writes a checkpoint after each iteration
+ * (pa_adapt_opts.checkpoint_dir); -restart DIR resumes the run it belongs
+ * to (pa_dmesh_adapt_resume) instead of reading IN, on as many ranks and
+ * with the same options, and writes the uninterrupted run's output.
  *
  * Every rank parses the same arguments, so usage errors are seen by all
  * ranks at once; failures on rank 0 alone (reading) are broadcast before
@@ -27,6 +32,7 @@
 #include "cli.h"
 
 #include <math.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -62,9 +68,21 @@ static int prepare_root(const pa_cli *cli, pa_mesh *mesh, const char *met,
 }
 
 
+/* The progress callback's context. kill_iter: test hook, see progress. */
+typedef struct progress_ctx {
+  const pa_cli *cli;
+  int kill_iter;
+} progress_ctx;
+
+/* One line per iteration on rank 0. Test hook: with PADAPT_TEST_KILL_ITER=K
+ * in the environment, rank 0 kills itself (SIGKILL, no handler runs) when
+ * iteration K reports, after its remeshing and before its checkpoint
+ * (tests/cli/test_checkpoint.sh). */
 static void progress(const pa_adapt_iter *it, void *ctx) {
-  const pa_cli *cli = ctx;
+  const progress_ctx *pc = ctx;
+  const pa_cli *cli = pc->cli;
   if (cli->rank != 0) return;
+  if (it->iter == pc->kill_iter) raise(SIGKILL);
   printf("  iter %2d: %9lld tagged, %4d pieces, imbalance %.2f, %3d failed, "
          "%10lld elements | tag %.2f pieces %.2f gather %.2f remesh %.2f "
          "reintegrate %.2f s\n",
@@ -171,6 +189,95 @@ static double lap(double *t0) {
   return dt;
 }
 
+/* Read IN (a set, or a mesh on rank 0 with its metric and fields, then
+ * distributed), print its statistics and adapt it into *dm: the statistics
+ * before in *before, the report in *rep, the read and stats times in
+ * tstep[0..1]. Collective; returns 1 on success, 0 after printing the
+ * error (*dm may then be set: the caller destroys it). */
+static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
+                          int set, const pa_adapt_opts *opts, pa_dmesh **dm,
+                          pa_stats *before, pa_adapt_report *rep,
+                          double *tstep, double *t0) {
+  const char *in = args->in;
+  pa_mesh *mesh = NULL;
+  pa_status st;
+  int ok = 1;
+  if (set) {
+    st = pa_dmesh_read(cli->comm, in, 0, dm);
+    if (st) {
+      fail_collective(cli, st);
+      return 0;
+    }
+  } else {
+    st = pa_cli_read_mesh(cli, in, &mesh); /* collective */
+    if (cli->rank == 0) {
+      if (st) pa_cli_fail(cli, st);
+      ok = st == PA_SUCCESS &&
+           prepare_root(cli, mesh, args->met, args->field, opts->remesh.hsiz);
+    }
+    MPI_Bcast(&ok, 1, MPI_INT, 0, cli->comm);
+    if (ok) st = pa_dmesh_distribute(cli->comm, 0, mesh, 0, dm);
+    pa_mesh_destroy(mesh);
+    if (!ok) return 0;
+    if (st) {
+      fail_collective(cli, st);
+      return 0;
+    }
+  }
+  if (pa_mesh_metric_ncomp(pa_dmesh_mesh(*dm)) == 0 && opts->remesh.hsiz <= 0) {
+    if (cli->rank == 0) pa_cli_error(cli, "adapt: no metric: give -hsiz H");
+    return 0;
+  }
+  tstep[0] = lap(t0);
+  if (pa_mesh_metric_ncomp(pa_dmesh_mesh(*dm)) > 0) {
+    st = pa_dmesh_stats(*dm, before);
+    if (st) {
+      fail_collective(cli, st);
+      return 0;
+    }
+  } else {
+    memset(before, 0, sizeof *before);
+    before->nelem = pa_dmesh_nglobal(*dm, PA_ELEMENT);
+    before->nvert = pa_dmesh_nglobal(*dm, PA_VERTEX);
+  }
+  if (cli->rank == 0) {
+    printf(" -- INPUT %s (%d processes)\n", in, cli->size);
+    if (before->nedge) pa_stats_print(before, stdout);
+    printf(" -- ITERATIONS\n");
+    fflush(stdout);
+  }
+  tstep[1] = lap(t0);
+  st = pa_dmesh_adapt(*dm, opts, rep);
+  if (st) {
+    fail_collective(cli, st);
+    return 0;
+  }
+  return 1;
+}
+
+/* -restart DIR: resume the checkpointed run into *dm (pa_dmesh_adapt_resume;
+ * the statistics before are not known: *before holds the counts only).
+ * Collective; returns 1 on success, 0 after printing the error. */
+static int resume(const pa_cli *cli, const pa_cli_adapt_args *args,
+                  const pa_adapt_opts *opts, pa_dmesh **dm, pa_stats *before,
+                  pa_adapt_report *rep) {
+  if (cli->rank == 0) {
+    printf(" -- RESTART from %s (%d processes)\n -- ITERATIONS\n",
+           args->restart, cli->size);
+    fflush(stdout);
+  }
+  pa_status st = pa_dmesh_adapt_resume(cli->comm, args->restart, opts, dm, rep);
+  if (st) {
+    fail_collective(cli, st);
+    if (cli->rank == 0) pa_cli_error(cli, "adapt: no output written");
+    return 0;
+  }
+  memset(before, 0, sizeof *before);
+  before->nelem = rep->nelem_initial;
+  before->nvert = rep->nvert_initial;
+  return 1;
+}
+
 int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   const char *in = args->in, *out = args->out, *met = args->met;
   const char *field = args->field, *json = args->json;
@@ -182,9 +289,14 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   if (args->max_iter > 0) opts.max_iter = args->max_iter;
   if (args->pieces > 0) opts.pieces_per_rank = args->pieces;
   if (args->check) opts.check_pieces = 1;
-  int set = cli->rank == 0 ? pa_dmesh_is_set(in) : 0;
+  int set = cli->rank == 0 && in ? pa_dmesh_is_set(in) : 0;
   MPI_Bcast(&set, 1, MPI_INT, 0, cli->comm);
-  if (set && (met || field)) {
+  if (args->restart) {
+    if (cli->rank == 0 && (in || met || field))
+      fprintf(stderr, "padapt: adapt: -restart: the mesh, its metric and "
+                      "fields come from the checkpoint (IN, -met and -field "
+                      "are not read)\n");
+  } else if (set && (met || field)) {
     if (cli->rank == 0)
       pa_cli_error(cli, "adapt: -met and -field need a sequential input mesh, "
                         "not a distributed set");
@@ -192,78 +304,33 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   }
 
   pa_dmesh *dm = NULL;
-  pa_mesh *mesh = NULL, *g = NULL;
+  pa_mesh *g = NULL;
   pa_stats before;
   pa_adapt_report rep;
   pa_status st = PA_SUCCESS;
   char *extra = NULL, *path = NULL;
   uint64_t mine[2], *mem = NULL, *rss = NULL;
   const pa_remesher *r = pa_remesher_builtin();
-  int ok = 1;
   double tstep[5], t0 = pa_wtime(); /* read, stats, adapt, stats, write */
+  const char *kill_iter = getenv("PADAPT_TEST_KILL_ITER");
+  progress_ctx pctx = {cli, kill_iter && kill_iter[0] ? atoi(kill_iter) : 0};
   pa_cli_progress live;
   opts.progress = progress;
-  opts.progress_ctx = (void *)cli;
+  opts.progress_ctx = &pctx;
+  opts.checkpoint_dir = args->checkpoint;
   pa_cli_progress_init(&live, cli->rank == 0 && opts.remesh.verbosity >= 0);
   opts.remesh.progress = pa_cli_progress_cb;
   opts.remesh.progress_ctx = &live;
   memset(&rep, 0, sizeof rep);
   memset(tstep, 0, sizeof tstep);
 
-  /* read */
-  if (set) {
-    st = pa_dmesh_read(cli->comm, in, 0, &dm);
-    if (st) {
-      fail_collective(cli, st);
-      goto done;
-    }
-  } else {
-    st = pa_cli_read_mesh(cli, in, &mesh); /* collective */
-    if (cli->rank == 0) {
-      if (st) pa_cli_fail(cli, st);
-      ok = st == PA_SUCCESS && prepare_root(cli, mesh, met, field, opts.remesh.hsiz);
-    }
-    MPI_Bcast(&ok, 1, MPI_INT, 0, cli->comm);
-    if (!ok) goto done;
-    st = pa_dmesh_distribute(cli->comm, 0, mesh, 0, &dm);
-    pa_mesh_destroy(mesh);
-    mesh = NULL;
-    if (st) {
-      fail_collective(cli, st);
-      goto done;
-    }
-  }
-  if (pa_mesh_metric_ncomp(pa_dmesh_mesh(dm)) == 0 && opts.remesh.hsiz <= 0) {
-    if (cli->rank == 0) pa_cli_error(cli, "adapt: no metric: give -hsiz H");
-    goto done;
-  }
-  tstep[0] = lap(&t0);
-  if (pa_mesh_metric_ncomp(pa_dmesh_mesh(dm)) > 0) {
-    st = pa_dmesh_stats(dm, &before);
-    if (st) {
-      fail_collective(cli, st);
-      goto done;
-    }
-  } else {
-    memset(&before, 0, sizeof before);
-    before.nelem = pa_dmesh_nglobal(dm, PA_ELEMENT);
-    before.nvert = pa_dmesh_nglobal(dm, PA_VERTEX);
-  }
-  if (cli->rank == 0) {
-    printf(" -- INPUT %s (%d processes)\n", in, cli->size);
-    if (before.nedge) pa_stats_print(&before, stdout);
-    printf(" -- ITERATIONS\n");
-    fflush(stdout);
-  }
-
-  /* adapt */
-  tstep[1] = lap(&t0);
-  st = pa_dmesh_adapt(dm, &opts, &rep);
+  /* read and adapt, or resume from the checkpoint */
+  int adapted = args->restart
+                    ? resume(cli, args, &opts, &dm, &before, &rep)
+                    : read_and_adapt(cli, args, set, &opts, &dm, &before,
+                                     &rep, tstep, &t0);
   pa_cli_progress_end(&live);
-  if (st) {
-    fail_collective(cli, st);
-    goto done;
-  }
+  if (!adapted) goto done;
   tstep[2] = lap(&t0);
   const pa_stats *after = &rep.fidelity.user;
   if (cli->rank == 0) {
@@ -359,7 +426,6 @@ done:
   free(mem);
   free(rss);
   pa_mesh_destroy(g);
-  pa_mesh_destroy(mesh);
   pa_dmesh_destroy(dm);
   return rc;
 }

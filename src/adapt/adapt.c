@@ -19,8 +19,17 @@
  * max_iter: as converged if nothing still tagged is clearly off
  * (pa__adapt_count_missed), else as stalled. Every step is collective and
  * agrees on its status, so all ranks leave the loop together.
+ *
+ * The driver is a sequence of named phases: check_opts, begin (metric, size
+ * check, the done value), run (iterate, each iteration followed by a
+ * checkpoint when opts->checkpoint_dir is set), finish (rebalance, check,
+ * measure) and conclude (the report). Everything an iteration depends on
+ * besides the distributed mesh is in pa__loop, so pa_dmesh_adapt_resume
+ * continues a run from a checkpoint (checkpoint.c) through the same run and
+ * finish.
  */
 #include "adapt/adapt.h"
+#include "io/io.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -161,6 +170,9 @@ static pa_status check_opts(pa_dmesh *dm, const pa_adapt_opts *o) {
            "pieces_per_rank must be >= 1, got %d", o->pieces_per_rank);
   PA_CHECK(!o->rebalance || o->rebalance_tol >= 1, PA_ERR_ARG,
            "rebalance_tol must be >= 1, got %g", o->rebalance_tol);
+  PA_CHECK(!o->checkpoint_dir || !pa__output_depth(), PA_ERR_ARG,
+           "pa_dmesh_adapt: checkpoints are written outside an output "
+           "transaction, and one is open (pa_output_begin)");
 cleanup:
   return st;
 }
@@ -198,12 +210,12 @@ cleanup:
 /* The progress callback after a tag pass: the share of elements that meet
  * their criterion is the untagged share (the same on every rank). */
 static void report_progress(const pa_dmesh *dm, const pa_adapt_opts *o,
-                            int iter, pa_gid ntagged, double initial,
-                            double expected, double t0) {
+                            int iter, pa_gid ntagged, const pa__loop *L) {
   if (!o->remesh.progress) return;
   double n = (double)dm->nglob[PA_ELEMENT];
-  pa_progress p = {"iteration", iter, n, initial, expected,
-                   n > 0 ? 1 - (double)ntagged / n : 1, pa_wtime() - t0};
+  pa_progress p = {"iteration", iter, n, (double)L->rep.nelem_initial,
+                   L->expected, n > 0 ? 1 - (double)ntagged / n : 1,
+                   L->time + pa_wtime() - L->t0};
   o->remesh.progress(&p, o->remesh.progress_ctx);
 }
 
@@ -216,168 +228,263 @@ cleanup:
   return st;
 }
 
+/* One iteration: tag, then (unless the loop ends there) pieces, extract,
+ * remesh and reintegrate; its figures go to L->rep and the progress
+ * callback. *end: the loop ended at the tag (L->rep says how). Collective. */
+static pa_status iterate(pa_dmesh *dm, const pa_adapt_opts *opts,
+                         pa_dmesh_value *done, pa__loop *L, int *end) {
+  pa_status st = PA_SUCCESS;
+  pa_adapt_report *rep = &L->rep;
+  pa__iter it;
+  pa_adapt_iter ir;
+  double t[5], busy, ta = pa_wtime(), tb;
+  int nfail = 0, iter = L->iter + 1;
+  memset(&it, 0, sizeof it);
+  memset(&ir, 0, sizeof ir);
+  *end = 0;
+  it.dm = dm;
+  it.opts = opts;
+  it.rank = dm->rank;
+  it.size = dm->size;
+  it.dim = dm->dim;
+  it.nve = dm->dim + 1;
+  it.iter = iter;
+  PA_CALL(pa__adapt_tag(&it, done, iter == 1));
+  t[0] = pa_wtime() - ta;
+  report_progress(dm, opts, iter, it.ntagged, L);
+  rep->ntagged_left = it.ntagged;
+  if (it.ntagged == 0) {
+    rep->converged = 1;
+    *end = 1;
+    goto cleanup;
+  }
+  /* progress: 1 % below the least work seen so far (work that goes up and
+   * down, e.g. the same badly shaped elements tagged again next to other
+   * borders, is no progress) */
+  L->nostep =
+      L->least >= 0 && it.tagwork >= 0.99 * L->least ? L->nostep + 1 : 0;
+  if (iter > opts->max_iter ||
+      (L->nostep >= 1 && L->lastpieces == 1 && !L->lastfailed) ||
+      L->nostep >= 6) {
+    /* the loop ends: converged all the same if nothing still tagged is
+     * clearly off */
+    pa_gid missed = 0;
+    PA_CALL(pa__adapt_count_missed(&it, &missed));
+    rep->converged = missed == 0;
+    rep->stalled = missed > 0;
+    pa__info(1, "padapt: the loop ends with %lld elements tagged, %lld "
+                "of them clearly off: %s\n",
+             (long long)it.ntagged, (long long)missed,
+             missed ? "stalled" : "converged");
+    *end = 1;
+    goto cleanup;
+  }
+  if (L->least < 0 || it.tagwork < L->least) L->least = it.tagwork;
+  ta = pa_wtime();
+  {
+    /* no progress: halve the pieces (other borders, fewer of them) */
+    int np = dm->size * opts->pieces_per_rank;
+    for (int k = 0; k < L->nostep && np > 1; k++) np = (np + 1) / 2;
+    if (L->nostep && np >= L->lastpieces)
+      np = L->lastpieces > 1 ? L->lastpieces - 1 : 1;
+    PA_CALL(pa__adapt_pieces(&it, np));
+    L->lastpieces = it.npieces;
+  }
+  tb = pa_wtime();
+  t[1] = tb - ta;
+  PA_CALL(pa__adapt_extract(&it));
+  ta = pa_wtime();
+  t[2] = ta - tb;
+  st = pa__adapt_remesh(&it, &nfail);
+  busy = pa_wtime() - ta;
+  PA_CALL(pa__agree(dm->comm, st)); /* the ranks wait for the slowest */
+  tb = pa_wtime();
+  t[3] = tb - ta;
+  PA_CALL(pa__adapt_reintegrate(&it, done));
+  t[4] = pa_wtime() - tb;
+  PA_CALL(max_times(dm->comm, t, 5, &busy));
+  {
+    double x[2] = {(double)nfail, it.bytes_moved};
+    PA_CALL(pa__allreduce(dm->comm, x, 2, MPI_DOUBLE, MPI_SUM));
+    ir.nfailed = (int)x[0];
+    L->lastfailed = ir.nfailed > 0;
+    ir.bytes_moved = x[1];
+  }
+  ir.iter = iter;
+  ir.ntagged = it.ntagged;
+  ir.nelem = dm->nglob[PA_ELEMENT];
+  ir.npieces = it.npieces;
+  ir.imbalance = it.imbalance;
+  ir.t_tag = t[0];
+  ir.t_pieces = t[1];
+  ir.t_gather = t[2];
+  ir.t_remesh = t[3];
+  ir.t_reintegrate = t[4];
+  ir.remesh_busy = busy;
+  L->iter = iter;
+  rep->niter = iter;
+  rep->npieces += ir.npieces;
+  rep->nfailed += ir.nfailed;
+  rep->t_tag += t[0];
+  rep->t_pieces += t[1];
+  rep->t_gather += t[2];
+  rep->t_remesh += t[3];
+  rep->t_reintegrate += t[4];
+  rep->remesh_busy += busy;
+  rep->bytes_moved += ir.bytes_moved;
+  if (rep->niter_recorded < PA_ADAPT_MAX_ITERS)
+    rep->iters[rep->niter_recorded++] = ir;
+  pa__iter_free(&it);
+  if (opts->progress) opts->progress(&ir, opts->progress_ctx);
+cleanup:
+  pa__iter_free(&it);
+  return st;
+}
+
+/* Before the loop: the report's initial figures, the metric the pieces are
+ * remeshed to, the size check, and the element value marking what the loop
+ * produces (*done). Collective. */
+static pa_status begin(pa_dmesh *dm, const pa_adapt_opts *opts, pa__loop *L,
+                       pa_dmesh_value **done) {
+  pa_status st = PA_SUCCESS;
+  double t0 = pa_wtime();
+  L->least = -1;
+  L->rep.nranks = dm->size;
+  L->rep.nelem_initial = dm->nglob[PA_ELEMENT];
+  L->rep.nvert_initial = dm->nglob[PA_VERTEX];
+  PA_CALL(prepare_metric(dm, &opts->remesh, &L->changed));
+  PA_CALL(check_size(dm, opts, &L->expected));
+  PA_CALL(pa_dmesh_value_add(dm, PA_ELEMENT, PA__DONE_VALUE, MPI_UINT8_T, 1,
+                             -1, done));
+  pa__info(2, "padapt: rank %d: metric and gradation %.3f s\n", dm->rank,
+           pa_wtime() - t0);
+cleanup:
+  return st;
+}
+
+/* The iterations, each followed by a checkpoint when asked for; t0: when
+ * this call started (the checkpoint's time adds to L->time). Collective. */
+static pa_status run(pa_dmesh *dm, const pa_adapt_opts *opts,
+                     pa_dmesh_value *done, pa__loop *L, double t0) {
+  pa_status st = PA_SUCCESS;
+  for (;;) {
+    int end = 0;
+    PA_CALL(iterate(dm, opts, done, L, &end));
+    if (end) break;
+    if (opts->checkpoint_dir)
+      PA_CALL(pa__adapt_checkpoint(dm, opts, L, L->time + pa_wtime() - t0));
+  }
+cleanup:
+  return st;
+}
+
+/* After the loop: rebalance, drop the done value, check (if asked) and
+ * measure the result. Collective. */
+static pa_status finish(pa_dmesh *dm, const pa_adapt_opts *opts,
+                        pa_dmesh_value **done, pa__loop *L) {
+  pa_status st = PA_SUCCESS;
+  pa_adapt_report *rep = &L->rep;
+  double ta = pa_wtime();
+  if (opts->rebalance && dm->size > 1)
+    PA_CALL(pa_dmesh_rebalance(dm, NULL, opts->rebalance_tol, NULL));
+  rep->t_rebalance = pa_wtime() - ta;
+  PA_CALL(pa__allreduce(dm->comm, &rep->t_rebalance, 1, MPI_DOUBLE, MPI_MAX));
+  PA_CALL(pa_dmesh_value_remove(dm, *done));
+  *done = NULL;
+  if (pa__adapt_checks(opts)) {
+    ta = pa_wtime();
+    PA_CALL(pa_dmesh_check(dm));
+    pa__info(2, "padapt: rank %d: final check %.3f s\n", dm->rank,
+             pa_wtime() - ta);
+  }
+  if (!opts->remesh.no_stats) PA_CALL(measure(dm, L->changed, &rep->fidelity));
+  rep->fidelity.measured = !opts->remesh.no_stats;
+cleanup:
+  return st;
+}
+
+/* The common end of pa_dmesh_adapt and pa_dmesh_adapt_resume: drop what an
+ * error left, agree on st, complete the report (memory, final counts, the
+ * time since t0 plus L->time) into *report. Collective (dm not NULL). */
+static pa_status conclude(pa_dmesh *dm, pa_status st, pa_dmesh_value *done,
+                          pa__loop *L, double t0, pa_adapt_report *report) {
+  if (!dm) return st;
+  /* a field left by an error (a failed step may have dropped the mesh) */
+  int k = dm->mesh ? pa__user_metric_field(dm->mesh) : -1;
+  if (k >= 0) pa_mesh_remove_field(dm->mesh, k);
+  st = pa__agree_end(dm->comm, st);
+  if (done) pa_dmesh_value_remove(dm, done);
+  if (st) return st;
+  pa_adapt_report *rep = &L->rep;
+  uint64_t mem[2] = {pa_memory_peak(), pa_peak_rss()};
+  MPI_Allreduce(MPI_IN_PLACE, mem, 2, MPI_UINT64_T, MPI_MAX, dm->comm);
+  rep->peak_memory = (size_t)mem[0];
+  rep->peak_rss = (size_t)mem[1];
+  rep->nelem_final = dm->nglob[PA_ELEMENT];
+  rep->nvert_final = dm->nglob[PA_VERTEX];
+  rep->time_total = pa_wtime() - t0;
+  MPI_Allreduce(MPI_IN_PLACE, &rep->time_total, 1, MPI_DOUBLE, MPI_MAX,
+                dm->comm);
+  rep->time_total += L->time;
+  if (report) *report = *rep;
+  return st;
+}
+
 pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
                          pa_adapt_report *report) {
   pa_status st = PA_SUCCESS;
   pa_adapt_opts def;
-  pa_adapt_report rep;
-  pa__iter it;
+  pa__loop L;
   pa_dmesh_value *done = NULL;
-  unsigned changed = 0;
-  double t0 = pa_wtime(), expected = 0;
-  memset(&it, 0, sizeof it);
-  memset(&rep, 0, sizeof rep);
+  double t0 = pa_wtime();
+  memset(&L, 0, sizeof L);
+  L.t0 = t0;
   PA_CHECK(dm, PA_ERR_ARG, "pa_dmesh_adapt: NULL dmesh");
   pa__agree_reset();
   if (!opts) {
     pa_adapt_opts_default(&def);
     opts = &def;
   }
-  rep.nranks = dm->size;
-  rep.nelem_initial = dm->nglob[PA_ELEMENT];
-  rep.nvert_initial = dm->nglob[PA_VERTEX];
   PA_CALL(check_opts(dm, opts));
-  PA_CALL(prepare_metric(dm, &opts->remesh, &changed));
-  PA_CALL(check_size(dm, opts, &expected));
-  PA_CALL(pa_dmesh_value_add(dm, PA_ELEMENT, PA__DONE_VALUE, MPI_UINT8_T, 1, -1,
-                             &done));
-  pa__info(2, "padapt: rank %d: metric and gradation %.3f s\n", dm->rank,
-           pa_wtime() - t0);
-
-  double last = -1;
-  int nostep = 0, lastpieces = 0, lastfailed = 0;
-  for (int iter = 1;; iter++) {
-    pa_adapt_iter ir;
-    double t[5], busy, ta = pa_wtime(), tb;
-    int nfail = 0;
-    memset(&ir, 0, sizeof ir);
-    it.dm = dm;
-    it.opts = opts;
-    it.rank = dm->rank;
-    it.size = dm->size;
-    it.dim = dm->dim;
-    it.nve = dm->dim + 1;
-    it.iter = iter;
-    PA_CALL(pa__adapt_tag(&it, done, iter == 1));
-    t[0] = pa_wtime() - ta;
-    report_progress(dm, opts, iter, it.ntagged, (double)rep.nelem_initial,
-                    expected, t0);
-    rep.ntagged_left = it.ntagged;
-    if (it.ntagged == 0) {
-      rep.converged = 1;
-      pa__iter_free(&it);
-      break;
-    }
-    /* progress: 1 % below the least work seen so far (work that goes up
-     * and down, e.g. the same badly shaped elements tagged again next to
-     * other borders, is no progress) */
-    nostep = last >= 0 && it.tagwork >= 0.99 * last ? nostep + 1 : 0;
-    if (iter > opts->max_iter ||
-        (nostep >= 1 && lastpieces == 1 && !lastfailed) || nostep >= 6) {
-      /* the loop ends: converged all the same if nothing still tagged is
-       * clearly off */
-      pa_gid missed = 0;
-      PA_CALL(pa__adapt_count_missed(&it, &missed));
-      rep.converged = missed == 0;
-      rep.stalled = missed > 0;
-      pa__info(1, "padapt: the loop ends with %lld elements tagged, %lld "
-                  "of them clearly off: %s\n",
-               (long long)it.ntagged, (long long)missed,
-               missed ? "stalled" : "converged");
-      pa__iter_free(&it);
-      break;
-    }
-    if (last < 0 || it.tagwork < last) last = it.tagwork;
-    ta = pa_wtime();
-    {
-      /* no progress: halve the pieces (other borders, fewer of them) */
-      int np = dm->size * opts->pieces_per_rank;
-      for (int k = 0; k < nostep && np > 1; k++) np = (np + 1) / 2;
-      if (nostep && np >= lastpieces) np = lastpieces > 1 ? lastpieces - 1 : 1;
-      PA_CALL(pa__adapt_pieces(&it, np));
-      lastpieces = it.npieces;
-    }
-    tb = pa_wtime();
-    t[1] = tb - ta;
-    PA_CALL(pa__adapt_extract(&it));
-    ta = pa_wtime();
-    t[2] = ta - tb;
-    st = pa__adapt_remesh(&it, &nfail);
-    busy = pa_wtime() - ta;
-    PA_CALL(pa__agree(dm->comm, st)); /* the ranks wait for the slowest */
-    tb = pa_wtime();
-    t[3] = tb - ta;
-    PA_CALL(pa__adapt_reintegrate(&it, done));
-    t[4] = pa_wtime() - tb;
-    PA_CALL(max_times(dm->comm, t, 5, &busy));
-    {
-      double x[2] = {(double)nfail, it.bytes_moved};
-      PA_CALL(pa__allreduce(dm->comm, x, 2, MPI_DOUBLE, MPI_SUM));
-      ir.nfailed = (int)x[0];
-      lastfailed = ir.nfailed > 0;
-      ir.bytes_moved = x[1];
-    }
-    ir.iter = iter;
-    ir.ntagged = it.ntagged;
-    ir.nelem = dm->nglob[PA_ELEMENT];
-    ir.npieces = it.npieces;
-    ir.imbalance = it.imbalance;
-    ir.t_tag = t[0];
-    ir.t_pieces = t[1];
-    ir.t_gather = t[2];
-    ir.t_remesh = t[3];
-    ir.t_reintegrate = t[4];
-    ir.remesh_busy = busy;
-    rep.niter = iter;
-    rep.npieces += ir.npieces;
-    rep.nfailed += ir.nfailed;
-    rep.t_tag += t[0];
-    rep.t_pieces += t[1];
-    rep.t_gather += t[2];
-    rep.t_remesh += t[3];
-    rep.t_reintegrate += t[4];
-    rep.remesh_busy += busy;
-    rep.bytes_moved += ir.bytes_moved;
-    if (rep.niter_recorded < PA_ADAPT_MAX_ITERS) rep.iters[rep.niter_recorded++] = ir;
-    pa__iter_free(&it);
-    if (opts->progress) opts->progress(&ir, opts->progress_ctx);
-  }
-  {
-    double ta = pa_wtime();
-    if (opts->rebalance && dm->size > 1)
-      PA_CALL(pa_dmesh_rebalance(dm, NULL, opts->rebalance_tol, NULL));
-    rep.t_rebalance = pa_wtime() - ta;
-    PA_CALL(pa__allreduce(dm->comm, &rep.t_rebalance, 1, MPI_DOUBLE, MPI_MAX));
-  }
-  PA_CALL(pa_dmesh_value_remove(dm, done));
-  done = NULL;
-  if (pa__adapt_checks(opts)) {
-    double ta = pa_wtime();
-    PA_CALL(pa_dmesh_check(dm));
-    pa__info(2, "padapt: rank %d: final check %.3f s\n", dm->rank,
-             pa_wtime() - ta);
-  }
-  if (!opts->remesh.no_stats) PA_CALL(measure(dm, changed, &rep.fidelity));
-  rep.fidelity.measured = !opts->remesh.no_stats;
+  PA_CALL(begin(dm, opts, &L, &done));
+  PA_CALL(run(dm, opts, done, &L, t0));
+  PA_CALL(finish(dm, opts, &done, &L));
 cleanup:
-  pa__iter_free(&it);
-  if (dm) {
-    /* a field left by an error (a failed step may have dropped the mesh) */
-    int k = dm->mesh ? pa__user_metric_field(dm->mesh) : -1;
-    if (k >= 0) pa_mesh_remove_field(dm->mesh, k);
-    st = pa__agree_end(dm->comm, st);
-    if (done) pa_dmesh_value_remove(dm, done);
-    if (st) return st;
-    uint64_t mem[2] = {pa_memory_peak(), pa_peak_rss()};
-    MPI_Allreduce(MPI_IN_PLACE, mem, 2, MPI_UINT64_T, MPI_MAX, dm->comm);
-    rep.peak_memory = (size_t)mem[0];
-    rep.peak_rss = (size_t)mem[1];
-    rep.nelem_final = dm->nglob[PA_ELEMENT];
-    rep.nvert_final = dm->nglob[PA_VERTEX];
-    rep.time_total = pa_wtime() - t0;
-    MPI_Allreduce(MPI_IN_PLACE, &rep.time_total, 1, MPI_DOUBLE, MPI_MAX,
-                  dm->comm);
-    if (report) *report = rep;
+  return conclude(dm, st, done, &L, t0, report);
+}
+
+pa_status pa_dmesh_adapt_resume(MPI_Comm comm, const char *dir,
+                                const pa_adapt_opts *opts, pa_dmesh **dmp,
+                                pa_adapt_report *report) {
+  pa_status st = PA_SUCCESS;
+  pa_adapt_opts def;
+  pa__loop L;
+  pa_dmesh *dm = NULL;
+  pa_dmesh_value *done = NULL;
+  double t0 = pa_wtime();
+  memset(&L, 0, sizeof L);
+  pa__agree_reset();
+  if (!dir || !dmp)
+    return pa__error(PA_ERR_ARG, __FILE__, __LINE__,
+                     "pa_dmesh_adapt_resume: NULL argument");
+  *dmp = NULL;
+  if (!opts) {
+    pa_adapt_opts_default(&def);
+    opts = &def;
   }
+  PA_CALL(pa__adapt_restore(comm, dir, opts, &dm, &L));
+  done = pa_dmesh_value_find(dm, PA__DONE_VALUE);
+  PA_CALL(check_opts(dm, opts));
+  L.t0 = t0;
+  if (opts->remesh.progress) { /* the checkpoint holds the prepared metric */
+    PA_CALL(pa_dmesh_metric_complexity(dm, &L.expected));
+    L.expected /= pa__unit_simplex_volume(dm->dim);
+  }
+  PA_CALL(run(dm, opts, done, &L, t0));
+  PA_CALL(finish(dm, opts, &done, &L));
+cleanup:
+  st = conclude(dm, st, done, &L, t0, report);
+  if (st) pa_dmesh_destroy(dm);
+  else *dmp = dm;
   return st;
 }

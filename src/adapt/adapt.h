@@ -14,6 +14,7 @@
  *                 rebuild the distributed mesh with the new entities
  *   grade.c       metric gradation of the whole mesh, before the loop
  *   adapt.c       the loop, options, report, the final rebalance
+ *   checkpoint.c  checkpoints of the loop and the resume from one
  *   dstats.c      pa_dmesh_stats (statistics of a distributed mesh)
  *
  * Invariants of an iteration (see docs/ADAPT.md for the argument):
@@ -156,6 +157,37 @@ typedef struct pa__iter {
 } pa__iter;
 
 void pa__iter_free(pa__iter *it);
+
+/* What the loop carries from one iteration to the next besides the
+ * distributed mesh (whose element value PA__DONE_VALUE is part of the
+ * state): what a checkpoint holds with the mesh. */
+typedef struct pa__loop {
+  int iter;            /* iterations done */
+  double least;        /* least estimated work of the tagged elements seen at
+                          a tag, -1 before the first */
+  int nostep;          /* iterations in a row without progress */
+  int lastpieces;      /* pieces of the last iteration */
+  int lastfailed;      /* 1 if the last iteration rolled a piece back */
+  unsigned changed;    /* PA_CHANGED_* bits of the metric preparation */
+  double time;         /* seconds spent before this call (a resumed run) */
+  pa_adapt_report rep; /* the report so far */
+  /* for the progress callback, set by each call (not checkpointed) */
+  double t0;           /* when this call started */
+  double expected;     /* the metric's estimate of the final element count */
+} pa__loop;
+
+/* Collective: write the checkpoint of the loop after L->iter iterations in
+ * opts->checkpoint_dir (created if missing) and remove the older one;
+ * elapsed: seconds of the run so far. checkpoint.c. */
+pa_status pa__adapt_checkpoint(pa_dmesh *dm, const pa_adapt_opts *opts,
+                               const pa__loop *L, double elapsed);
+/* Collective: read the latest checkpoint in dir into *dm (created on comm,
+ * which must have as many ranks as the run that wrote it) and *L, after
+ * checking it against opts (the options that change the result must be the
+ * checkpoint's). Errors name the file; *dm is NULL on failure. */
+pa_status pa__adapt_restore(MPI_Comm comm, const char *dir,
+                            const pa_adapt_opts *opts, pa_dmesh **dm,
+                            pa__loop *L);
 
 /* Owned vertex -> owned elements (CSR), built on the local mesh. */
 pa_status pa__owned_balls(pa_dmesh *dm, pa_idx **start, pa_idx **elems);

@@ -43,6 +43,8 @@ pa_status pa__out_reopen(pa_outfile *out, const char *path);
 pa_status pa__out_remove(const char *path);
 /* The temporary of path, completed in the open transaction, or NULL. */
 const char *pa__out_tmppath(const char *path);
+/* Open begins of the calling thread's output transaction (0: none). */
+int pa__output_depth(void);
 
 /* FNV-1a 64 of n bytes, continuing from h (start with PA_FNV1A64_INIT). */
 #define PA_FNV1A64_INIT 0xcbf29ce484222325ull

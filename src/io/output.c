@@ -451,6 +451,8 @@ const char *pa__out_tmppath(const char *path) {
   return k >= 0 ? current.file[k].tmppath : NULL;
 }
 
+int pa__output_depth(void) { return current.depth; }
+
 pa_status pa__file_fnv1a64(const char *path, int64_t *bytes, uint64_t *hash) {
   pa_status st = PA_SUCCESS;
   unsigned char *buf = NULL;
