@@ -318,7 +318,7 @@ pa_status pa_cli_svg_histograms(const char *path, const char *title,
     double y = 48 + 20 * s;
     pa_cli_svg_rect(&svg, HIST_LEFT, y - 11, 14, 14, series_fill[nser - 1][s],
                     "legend");
-    if (t->nelem > 0)
+    if (t->nelem > 0 && t->nedge > 0) /* 0 edges: not measured */
       pa_cli_svg_text(
           &svg, HIST_LEFT + 20, y, "start", 12,
           "%s%s%lld %s, %lld edges (%s): %.2f %% in [%g, %g); quality worst "
@@ -329,7 +329,7 @@ pa_status pa_cli_svg_histograms(const char *path, const char *title,
           share(t->edge_hist[ne], t->nedge), lo, hi, t->qual_min,
           t->qual_sum / (double)t->nelem);
     else
-      pa_cli_svg_text(&svg, HIST_LEFT + 20, y, "start", 12, "%s%sno statistics",
+      pa_cli_svg_text(&svg, HIST_LEFT + 20, y, "start", 12, "%s%snot measured",
                       names && names[s] ? names[s] : "",
                       names && names[s] ? ": " : "");
   }
