@@ -407,6 +407,31 @@ typedef struct pa_stats {
   pa_gid qual_above_05, qual_above_012;
 } pa_stats;
 
+/**
+ * Bounds of bin b of pa_stats.edge_hist: lengths L with *lo <= L < *hi.
+ * Bins 0 .. PA_STATS_EDGE_NBIN - 2 partition [0, inf) (the last of them has
+ * *hi = INFINITY); bin PA_STATS_EDGE_NBIN - 1 is the in-range band
+ * [0.7071, 1.4142), the union of bins 3, 4 and 5. The values are Mmg's
+ * printed ones (0.7071 is not 1/sqrt(2)). Not collective.
+ *
+ * \param[in]  b   bin index, 0 <= b < PA_STATS_EDGE_NBIN
+ * \param[out] lo  lower bound (included)
+ * \param[out] hi  upper bound (excluded)
+ * \return PA_SUCCESS, or PA_ERR_ARG for b out of range or a NULL pointer.
+ */
+pa_status pa_stats_edge_bin(int b, double *lo, double *hi);
+/**
+ * Bounds of bin b of pa_stats.qual_hist: qualities Q with *lo <= Q < *hi,
+ * except that bin 0 also holds every Q < 0 (inverted elements) and the
+ * last bin also holds Q = 1 (its *hi is 1). Not collective.
+ *
+ * \param[in]  b   bin index, 0 <= b < PA_STATS_QUAL_NBIN
+ * \param[out] lo  lower bound
+ * \param[out] hi  upper bound
+ * \return PA_SUCCESS, or PA_ERR_ARG for b out of range or a NULL pointer.
+ */
+pa_status pa_stats_qual_bin(int b, double *lo, double *hi);
+
 /** Compute the statistics of a mesh (metric: the attached one, or identity). */
 pa_status pa_mesh_stats(pa_mesh *mesh, pa_stats *stats);
 /** Print the statistics in human-readable form. */

@@ -24,6 +24,7 @@ int pa_cli_stats(const pa_cli *cli, int argc, char **argv);
 int pa_cli_convert(const pa_cli *cli, int argc, char **argv);
 int pa_cli_adapt(const pa_cli *cli, int argc, char **argv);
 int pa_cli_partition(const pa_cli *cli, int argc, char **argv);
+int pa_cli_plot(const pa_cli *cli, int argc, char **argv);
 
 /* Set the verbosity of the library and the CLI: -1 silences the reports on
  * stdout (errors and warnings still go to stderr), 0 is the default, 1-10
@@ -46,6 +47,7 @@ void pa_cli_progress_end(pa_cli_progress *pr);
 /* The arguments of `padapt adapt`, sequential and parallel alike. */
 typedef struct pa_cli_adapt_args {
   const char *in, *out, *met, *outsol, *field, *outfield, *json;
+  const char *svg; /* -svg: before/after histograms */
   int nosol;       /* -nosol: no output metric file */
   int distributed; /* -distributed-output */
   int best_effort; /* -best-effort: write the mesh even if the loop stalled */
@@ -65,6 +67,10 @@ typedef struct pa_cli_adapt_args {
  * than one rank or for -distributed-output/-mem, with the parsed arguments.
  * Collective; the exit status is the same on every rank. */
 int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args);
+/* Write the -svg picture of `padapt adapt` (args->svg): the histograms
+ * before and after, side by side. Not collective. */
+pa_status pa_cli_adapt_svg(const pa_cli_adapt_args *args, const pa_stats *before,
+                           const pa_stats *after);
 
 /* Print "padapt: <message>" on stderr (every rank that calls it); returns 1. */
 int pa_cli_error(const pa_cli *cli, const char *fmt, ...)
@@ -94,6 +100,8 @@ pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path, pa_mesh **mesh);
 
 /* Strict number parsing: the whole argument, finite. Returns 1 on success. */
 int pa_cli_parse_num(const char *s, double *v);
+/* 1 if path ends with ".svg" (any case): the only picture format written. */
+int pa_cli_is_svg(const char *path);
 /* path with its extension replaced by ext (with the dot); malloc'ed. */
 char *pa_cli_replace_ext(const char *path, const char *ext);
 /* Parse the remesher option at argv[*i] (-hsiz -hmin -hmax -hgrad -hgradreq

@@ -7,8 +7,9 @@
  * Outputs: the mesh OUT (format by extension), its metric in OUT's name with
  * the extension replaced by .sol (or -outsol PATH; -nosol for none), the
  * interpolated user fields (-field F.sol) in <OUT stem>.fields.sol (or
- * -outfield PATH). Prints `padapt stats` before and after, the operation
- * counts and the time. Exit status: 0 on success and on "target missed" (a
+ * -outfield PATH), the JSON report (-json) and the picture of the
+ * histograms before and after (-svg). Prints `padapt stats` before and
+ * after, the operation counts and the time. Exit status: 0 on success and on "target missed" (a
  * valid mesh that misses some edge lengths: a warning says so, and the JSON
  * report's "outcome" field), 1 on any error. The outputs are checked before
  * the work starts (pa_cli_check_outputs) and written in one output
@@ -20,6 +21,7 @@
  * with the same arguments.
  */
 #include "cli.h"
+#include "svg.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -49,6 +51,8 @@ static const char *adapt_usage =
     "  -field F.sol    vertex fields to interpolate; written to\n"
     "                  <OUT stem>.fields.sol (or -outfield PATH)\n"
     "  -json R.json    write the after-statistics, time and counts as JSON\n"
+    "  -svg H.svg      picture of the edge-length and quality histograms,\n"
+    "                  before and after\n"
     "  -v N            verbosity: -1 errors and warnings only, 0 the report\n"
     "                  (default), 1-10 more detail on stderr\n"
     "Parallel (mpiexec -n P, P > 1; IN may be a distributed set OUT.<r>.meshb):\n"
@@ -154,6 +158,8 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
       file = &a->checkpoint, what = "a directory";
     } else if (!strcmp(o, "-restart")) {
       file = &a->restart, what = "a checkpoint directory";
+    } else if (!strcmp(o, "-svg")) {
+      file = &a->svg, what = "an .svg file";
     } else if (!strcmp(o, "-nosol")) {
       a->nosol = 1;
     } else if (!strcmp(o, "-distributed-output")) {
@@ -196,6 +202,10 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
     return pa_cli_error(cli, "adapt: no output mesh (-out OUT)");
   if (!a->out && default_paths(cli, a)) return 1;
   if (!a->met && a->remesh.hsiz <= 0 && !a->restart) find_metric(cli, a);
+  if (a->svg && !pa_cli_is_svg(a->svg))
+    return pa_cli_error(cli, "adapt: -svg %s: only SVG pictures are written "
+                             "(.svg); convert with e.g. rsvg-convert",
+                        a->svg);
   if (a->met && a->remesh.hsiz > 0)
     return pa_cli_error(cli, "adapt: give either -met/-sol or -hsiz, not both");
   if (a->remesh.hmin > 0 && a->remesh.hmax > 0 &&
@@ -208,7 +218,7 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
 /* The outputs of `padapt adapt`, checked before the work starts. */
 static int check_outputs(const pa_cli *cli, const pa_cli_adapt_args *a) {
   char *sol = NULL, *fields = NULL;
-  const char *paths[4] = {a->out, NULL, NULL, a->json};
+  const char *paths[5] = {a->out, NULL, NULL, a->json, a->svg};
   if (!a->distributed) { /* a set carries its metric and fields */
     if (!a->nosol)
       paths[1] = a->outsol ? a->outsol : (sol = pa_cli_replace_ext(a->out, ".sol"));
@@ -216,7 +226,7 @@ static int check_outputs(const pa_cli *cli, const pa_cli_adapt_args *a) {
       paths[2] = a->outfield ? a->outfield
                              : (fields = pa_cli_replace_ext(a->out, ".fields.sol"));
   }
-  int bad = pa_cli_check_outputs(cli, "adapt", paths, 4);
+  int bad = pa_cli_check_outputs(cli, "adapt", paths, 5);
   if (!bad && a->checkpoint) {
     /* the state file in an existing directory, or the directory itself */
     struct stat sb;
@@ -230,6 +240,16 @@ static int check_outputs(const pa_cli *cli, const pa_cli_adapt_args *a) {
   free(sol);
   free(fields);
   return bad;
+}
+
+pa_status pa_cli_adapt_svg(const pa_cli_adapt_args *a, const pa_stats *before,
+                           const pa_stats *after) {
+  pa_stats two[2] = {*before, *after};
+  const char *names[2] = {"before", "after"};
+  char title[1200];
+  snprintf(title, sizeof title, "%s -> %s%s%s", a->in, a->out,
+           a->met ? ", in the metric " : "", a->met ? a->met : "");
+  return pa_cli_svg_histograms(a->svg, title, two, 2, names);
 }
 
 int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
@@ -375,6 +395,7 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
     st = extra ? pa_stats_write_json(after, extra, json)
                : pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
   }
+  if (st == PA_SUCCESS && args.svg) st = pa_cli_adapt_svg(&args, &before, after);
   st = pa_cli_output_end(MPI_COMM_SELF, tx, st);
   if (st != PA_SUCCESS) {
     pa_cli_fail(cli, st);

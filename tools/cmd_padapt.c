@@ -3,7 +3,8 @@
  *
  *   mpiexec -n P padapt adapt IN [-met SOL | -hsiz H] -out OUT
  *       [-distributed-output] [-field F.sol] [-mem MB] [-json REPORT.json]
- *       [-max-iter N] [-pieces K] [-checkpoint DIR] [remesher options]
+ *       [-svg HIST.svg] [-max-iter N] [-pieces K] [-checkpoint DIR]
+ *       [remesher options]
  *   mpiexec -n P padapt adapt -restart DIR -out OUT [the same options]
  *
  * Reads IN (a sequential mesh on rank 0 with its metric and fields, then
@@ -24,10 +25,10 @@
  * ranks at once; failures on rank 0 alone (reading) are broadcast before
  * any collective call. Exit status: 0 on success, 1 on any error,
  * including a loop that stalled (unless -best-effort: then the valid mesh
- * is written and a warning says so). Every output (the mesh or
- * the set, the metric, the fields, the JSON report) is written in one output
- * transaction per rank, committed only when every rank wrote all of its
- * files: on any error none of them is written.
+ * is written and a warning says so). Every output (the mesh or the set,
+ * the metric, the fields, the JSON report, the -svg histograms) is written
+ * in one output transaction per rank, committed only when every rank wrote
+ * all of its files: on any error none of them is written.
  */
 #include "cli.h"
 
@@ -406,6 +407,8 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
     st = extra ? pa_stats_write_json(after, extra, json)
                : pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
   }
+  if (st == PA_SUCCESS && args->svg && cli->rank == 0)
+    st = pa_cli_adapt_svg(args, &before, after);
   st = pa_cli_output_end(cli->comm, tx, st);
   if (st) {
     if (cli->rank == 0) {

@@ -16,12 +16,14 @@
 #include "cli.h"
 
 #include "core/core.h"
+#include "svg.h"
 
 #include <math.h>
 #include <signal.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <time.h>
 
 static const char *usage_text =
@@ -37,9 +39,10 @@ static const char *usage_text =
     "                                 the metric toolbox (padapt metric -h)\n"
     "  levelset NAME IN OUT.sol       signed distance to a sphere, ellipsoid,\n"
     "                                 box or plane on IN's vertices\n"
-    "  stats IN [-met SOL] [-json OUT.json]\n"
+    "  stats IN [-met SOL] [-json OUT.json] [-svg OUT.svg]\n"
     "                                 counts, volume, edge lengths in the metric,\n"
-    "                                 quality, validity (exit 1 if invalid)\n"
+    "                                 quality, validity (exit 1 if invalid);\n"
+    "                                 -svg: their histograms as a picture\n"
     "  convert IN OUT [-met SOL] [-binary] [-meshb-version V] [-diag]\n"
     "                                 formats by extension: .mesh .meshb .msh .vtu\n"
     "                                 (-diag: .vtu cell data edge_min, edge_max)\n"
@@ -47,6 +50,9 @@ static const char *usage_text =
     "                                 adapt the mesh to the metric (see adapt -h)\n"
     "  partition IN -out OUT [-overlap K]\n"
     "                                 write a distributed set OUT.<rank>.meshb\n"
+    "  plot IN OUT.svg [-color quality|ref] [-window X0 Y0 X1 Y1] [-cut z=V]\n"
+    "                                 picture of a 2D mesh or of a 3D cut\n"
+    "                                 (see plot -h)\n"
     "\n"
     "Global options: -v N (verbosity: -1 errors only, 0 the reports (default),\n"
     "1-10 more detail), -h/--help, --version.\n"
@@ -121,6 +127,11 @@ int pa_cli_parse_num(const char *s, double *v) {
   if (!s || !*s) return 0;
   *v = strtod(s, &end);
   return *end == '\0' && isfinite(*v);
+}
+
+int pa_cli_is_svg(const char *path) {
+  size_t n = strlen(path);
+  return n > 4 && !strcasecmp(path + n - 4, ".svg");
 }
 
 char *pa_cli_replace_ext(const char *path, const char *ext) {
@@ -400,7 +411,7 @@ int pa_cli_generate(const pa_cli *cli, int argc, char **argv) {
 }
 
 int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
-  const char *in = NULL, *met = NULL, *json = NULL;
+  const char *in = NULL, *met = NULL, *json = NULL, *svg = NULL;
   for (int i = 1; i < argc; i++) {
     if (!strcmp(argv[i], "-met") || !strcmp(argv[i], "-sol")) {
       if (++i >= argc) return pa_cli_error(cli, "stats: -met needs a file");
@@ -408,6 +419,13 @@ int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
     } else if (!strcmp(argv[i], "-json")) {
       if (++i >= argc) return pa_cli_error(cli, "stats: -json needs a file");
       json = argv[i];
+    } else if (!strcmp(argv[i], "-svg")) {
+      if (++i >= argc) return pa_cli_error(cli, "stats: -svg needs a file");
+      svg = argv[i];
+      if (!pa_cli_is_svg(svg))
+        return pa_cli_error(cli, "stats: %s: only SVG pictures are written "
+                                 "(.svg); convert with e.g. rsvg-convert",
+                            svg);
     } else if (argv[i][0] == '-' && argv[i][1]) {
       return pa_cli_error(cli, "stats: unknown option '%s'", argv[i]);
     } else if (!in) {
@@ -417,8 +435,10 @@ int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
     }
   }
   if (!in)
-    return pa_cli_error(cli,
-                        "usage: padapt stats IN [-met SOL] [-json OUT.json]");
+    return pa_cli_error(cli, "usage: padapt stats IN [-met SOL] "
+                             "[-json OUT.json] [-svg OUT.svg]");
+  const char *outs[2] = {json, svg};
+  if (pa_cli_check_outputs(cli, "stats", outs, 2)) return 1;
   pa_mesh *mesh = NULL;
   pa_stats stats;
   int valid = 1;
@@ -441,7 +461,17 @@ int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
   if (st == PA_SUCCESS) {
     pa_stats_print(&stats, stdout);
     fflush(stdout);
-    if (json) st = pa_stats_write_json(&stats, NULL, json);
+    /* both outputs or neither */
+    pa_output *tx = NULL;
+    st = pa_output_begin(&tx);
+    if (st == PA_SUCCESS && json) st = pa_stats_write_json(&stats, NULL, json);
+    if (st == PA_SUCCESS && svg) {
+      char title[1200];
+      snprintf(title, sizeof title, "%s%s%s", in, met ? " in the metric " : "",
+               met ? met : "");
+      st = pa_cli_svg_histograms(svg, title, &stats, 1, NULL);
+    }
+    st = pa_cli_output_end(MPI_COMM_SELF, tx, st);
   }
   if (st == PA_SUCCESS && !stats.valid) {
     valid = 0;
@@ -499,7 +529,7 @@ static const struct {
 } commands[] = {{"generate", pa_cli_generate}, {"metric", pa_cli_metric},
                 {"levelset", pa_cli_levelset}, {"stats", pa_cli_stats},
                 {"convert", pa_cli_convert},   {"adapt", pa_cli_adapt},
-                {"partition", pa_cli_partition}};
+                {"partition", pa_cli_partition}, {"plot", pa_cli_plot}};
 
 /* padapt's version, and the MPI library's, as they run. */
 static void print_version(void) {

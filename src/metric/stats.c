@@ -159,6 +159,33 @@ cleanup:
   return st;
 }
 
+pa_status pa_stats_edge_bin(int b, double *lo, double *hi) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(b >= 0 && b < PA_STATS_EDGE_NBIN && lo && hi, PA_ERR_ARG,
+           "pa_stats_edge_bin: bin %d out of [0, %d) or NULL argument", b,
+           PA_STATS_EDGE_NBIN);
+  if (b == PA_STATS_EDGE_NBIN - 1) {
+    *lo = IN_RANGE_LO;
+    *hi = IN_RANGE_HI;
+  } else {
+    *lo = b > 0 ? edge_bounds[b - 1] : 0.0;
+    *hi = b < PA_STATS_EDGE_NBIN - 2 ? edge_bounds[b] : INFINITY;
+  }
+cleanup:
+  return st;
+}
+
+pa_status pa_stats_qual_bin(int b, double *lo, double *hi) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(b >= 0 && b < PA_STATS_QUAL_NBIN && lo && hi, PA_ERR_ARG,
+           "pa_stats_qual_bin: bin %d out of [0, %d) or NULL argument", b,
+           PA_STATS_QUAL_NBIN);
+  *lo = (double)b / PA_STATS_QUAL_NBIN;
+  *hi = (double)(b + 1) / PA_STATS_QUAL_NBIN;
+cleanup:
+  return st;
+}
+
 static double pct(pa_gid n, pa_gid total) {
   return total > 0 ? 100.0 * (double)n / (double)total : 0.0;
 }

@@ -1,7 +1,8 @@
-/* test_stats.c -- pa_mesh_stats, its report and JSON, element quality and the
- * analytic metric fields, against brute-force computations written here
- * independently (unique edges by pairwise search, lengths and qualities by
- * their formulas, bins by plain comparisons). Meshes are built by hand. */
+/* test_stats.c -- pa_mesh_stats, its report and JSON, its bin bounds,
+ * element quality and the analytic metric fields, against brute-force
+ * computations written here independently (unique edges by pairwise search,
+ * lengths and qualities by their formulas, bins by plain comparisons).
+ * Meshes are built by hand. */
 #include "metric/metric.h"
 #include "testutil.h"
 
@@ -600,5 +601,33 @@ static void test_analytic(void) {
   }
 }
 
+/* pa_stats_edge_bin / pa_stats_qual_bin: the bounds the counting uses
+ * (bounds[] here), contiguous from 0 to inf, and the in-range band. */
+static void test_bins(void) {
+  double lo, hi, prev = 0;
+  for (int b = 0; b < PA_STATS_EDGE_NBIN - 1; b++) {
+    CHECK_OK(pa_stats_edge_bin(b, &lo, &hi));
+    CHECK(lo == prev && lo < hi);
+    CHECK(b < 8 ? hi == bounds[b] : isinf(hi));
+    prev = hi;
+  }
+  CHECK_OK(pa_stats_edge_bin(PA_STATS_EDGE_NBIN - 1, &lo, &hi));
+  CHECK(lo == 0.7071 && hi == 1.4142);
+  prev = 0;
+  for (int b = 0; b < PA_STATS_QUAL_NBIN; b++) {
+    CHECK_OK(pa_stats_qual_bin(b, &lo, &hi));
+    CHECK_NEAR(lo, prev, 1e-15);
+    CHECK_NEAR(hi, 0.2 * (b + 1), 1e-15);
+    prev = hi;
+  }
+  CHECK(prev == 1.0);
+  CHECK(pa_stats_edge_bin(-1, &lo, &hi) == PA_ERR_ARG);
+  CHECK(pa_stats_edge_bin(PA_STATS_EDGE_NBIN, &lo, &hi) == PA_ERR_ARG);
+  CHECK(pa_stats_edge_bin(0, NULL, &hi) == PA_ERR_ARG);
+  CHECK(pa_stats_qual_bin(PA_STATS_QUAL_NBIN, &lo, &hi) == PA_ERR_ARG);
+  CHECK(pa_stats_qual_bin(0, &lo, NULL) == PA_ERR_ARG);
+  pa_clear_error();
+}
+
 TEST_MAIN(test_stats_2d, test_stats_3d, test_stats_big, test_stats_errors,
-          test_report_json, test_analytic)
+          test_report_json, test_analytic, test_bins)

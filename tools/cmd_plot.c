@@ -1,0 +1,668 @@
+/*
+ * cmd_plot.c -- `padapt plot`: an SVG picture of a 2D mesh, or of the cut of
+ * a 3D mesh by a plane.
+ *
+ *   padapt plot IN OUT.svg [-met SOL] [-color quality|ref]
+ *       [-window XMIN YMIN XMAX YMAX] [-cut x=V|y=V|z=V | -plane A B C D]
+ *       [-width PX]
+ *
+ * Each element (2D) or each intersection polygon of a tetrahedron with the
+ * plane (3D) is filled by its quality (in the metric of -met, else
+ * Euclidean; a colour ramp with its legend) or by its reference; the
+ * boundary (boundary edges in 2D, the cut of the boundary triangles in 3D)
+ * is drawn thicker. In 3D the picture is in the plane's own axes: (x, y) for
+ * a cut z = V, (y, z) for x = V, (x, z) for y = V, and for -plane the
+ * projection onto it of the two axes closest to it. Without -cut or -plane
+ * the cut is z = the middle of the mesh's z range.
+ *
+ * Size: an element whose bounding box misses the window is not written
+ * (culled); one smaller than PLOT_SUBPIXEL_PX (2) pixels in both directions
+ * on screen is not drawn alone but merged into a square cell of
+ * PLOT_CELL_PX (2) pixels, drawn once with the worst quality (or the
+ * smallest reference) of the elements merged into it; the cells of one
+ * colour form one SVG path, a run of them along a row one rectangle
+ * (about 16 bytes). So the elements drawn are at least 2 pixels across,
+ * and a million triangles at 800 pixels give a file of at most about
+ * 2.5 MB. Elements smaller than PLOT_EDGE_PX
+ * are drawn without their edges, which would hide their colour.
+ *
+ * A 3D vertex exactly on the plane counts on the positive side, so a face
+ * lying in the plane is drawn once (from the tetrahedron on the negative
+ * side), and a tetrahedron touching the plane at one edge or vertex (its
+ * cut has fewer than 3 distinct points) not at all. The output is written
+ * through the output transactions (svg.h): on any error nothing is written.
+ */
+#include "svg.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Default size of the longer side of the plot area, pixels. */
+#define PLOT_WIDTH 800
+/* Bounds of -width: below, the legend dwarfs the mesh; above, the merge
+ * grid of sub-pixel elements (16 bytes per cell) reaches tens of MB. */
+#define PLOT_MIN_WIDTH 100
+#define PLOT_MAX_WIDTH 4000
+/* Side of the merge cells, pixels: 2 keeps the file at a quarter of one
+ * polygon per pixel while the picture still shows where the small elements
+ * are. */
+#define PLOT_CELL_PX 2.0
+/* An element smaller than this on screen (both directions, pixels) is merged
+ * into a cell: drawn alone it would show as a speck of its edges' colour. */
+#define PLOT_SUBPIXEL_PX PLOT_CELL_PX
+/* Elements smaller than this (longer side, pixels) are drawn without edges. */
+#define PLOT_EDGE_PX 6.0
+/* Margin around the mesh when no window is given, relative to its size. */
+#define PLOT_MARGIN 0.02
+/* Narrowest picture, pixels: the title and the counts line fit. */
+#define PLOT_MIN_PICTURE_W 720
+/* Distinct references listed in the legend of -color ref. */
+#define PLOT_MAX_REFS 24
+
+static const char *plot_usage =
+    "usage: padapt plot IN OUT.svg [-met SOL] [-color quality|ref]\n"
+    "                   [-window XMIN YMIN XMAX YMAX] [-cut x=V|y=V|z=V |\n"
+    "                   -plane A B C D] [-width PX]\n"
+    "  -met SOL        quality in this metric (default: Euclidean)\n"
+    "  -color C        fill by element quality (default) or reference\n"
+    "  -window ...     zoom: draw only what lies in this rectangle (in 3D, in\n"
+    "                  the coordinates of the cut plane)\n"
+    "  -cut AXIS=V     3D: cut by the plane x=V, y=V or z=V (default: z at "
+    "the\n"
+    "                  middle of the mesh)\n"
+    "  -plane A B C D  3D: cut by the plane A x + B y + C z = D\n"
+    "  -width PX       size of the plot's longer side (default 800)\n"
+    "Only SVG is written; convert to PNG with e.g. `rsvg-convert -o OUT.png\n"
+    "OUT.svg` or `inkscape OUT.svg -o OUT.png`.\n";
+
+typedef struct plot {
+  pa_mesh *mesh;
+  int dim;
+  const double *coord;
+  const pa_idx *elem, *bdry;
+  double n[3], d;    /* 3D: the plane n.x = d */
+  double u[3], v[3]; /* 3D: the picture's axes in the plane */
+  char uname[16], vname[16];
+  /* the window and the screen frame */
+  double win[4]; /* xmin ymin xmax ymax */
+  double scale, x0, y0;
+} plot;
+
+static double dot3(const double *a, const double *b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/* The picture's axes for the plane of normal n: the two coordinate axes
+ * closest to the plane, projected onto it and orthonormalised. */
+static void plane_axes(plot *p) {
+  double *n = p->n, len = sqrt(dot3(n, n));
+  for (int k = 0; k < 3; k++)
+    n[k] /= len;
+  p->d /= len;
+  int big = 0; /* the axis closest to the normal */
+  for (int k = 1; k < 3; k++)
+    if (fabs(n[k]) > fabs(n[big])) big = k;
+  int ua = big == 0 ? 1 : 0, va = big == 2 ? 1 : 2;
+  const char *names = "xyz";
+  double e[3] = {0, 0, 0};
+  e[ua] = 1;
+  double c = dot3(e, n);
+  for (int k = 0; k < 3; k++)
+    p->u[k] = e[k] - c * n[k];
+  len = sqrt(dot3(p->u, p->u));
+  for (int k = 0; k < 3; k++)
+    p->u[k] /= len;
+  /* v: orthogonal to n and u, pointing along axis va */
+  p->v[0] = n[1] * p->u[2] - n[2] * p->u[1];
+  p->v[1] = n[2] * p->u[0] - n[0] * p->u[2];
+  p->v[2] = n[0] * p->u[1] - n[1] * p->u[0];
+  if (p->v[va] < 0)
+    for (int k = 0; k < 3; k++)
+      p->v[k] = -p->v[k];
+  snprintf(p->uname, sizeof p->uname, "%c", names[ua]);
+  snprintf(p->vname, sizeof p->vname, "%c", names[va]);
+}
+
+/* "z = 0.5" for a plane normal to an axis, else "A x + B y + C z = D"
+ * (normalised); a static buffer. */
+static const char *plane_name(const plot *p) {
+  static char buf[128];
+  for (int k = 0; k < 3; k++)
+    if (p->n[k] == 1 && p->n[(k + 1) % 3] == 0 && p->n[(k + 2) % 3] == 0) {
+      snprintf(buf, sizeof buf, "%c = %g", "xyz"[k], p -> d);
+      return buf;
+    }
+  snprintf(buf, sizeof buf, "%.4g x + %.4g y + %.4g z = %.4g", p->n[0], p->n[1],
+           p->n[2], p->d);
+  return buf;
+}
+
+/* The intersection of points a (side sa) and b (sb) with the plane,
+ * projected on the picture's axes. */
+static void cut_point(const plot *p, const double *a, const double *b,
+                      double sa, double sb, double *xy) {
+  double t = sa / (sa - sb), x[3];
+  for (int k = 0; k < 3; k++)
+    x[k] = a[k] + t * (b[k] - a[k]);
+  xy[0] = dot3(x, p->u);
+  xy[1] = dot3(x, p->v);
+}
+
+/* The polygon of the n vertices vtx (3 or 4) cut by the plane, in xy;
+ * returns its number of points (0: not cut). */
+static int cut_simplex(const plot *p, const pa_idx *vtx, int n, double *xy) {
+  const double *x[4];
+  double s[4];
+  int npos = 0, m = 0;
+  for (int k = 0; k < n; k++) {
+    x[k] = p->coord + 3 * (size_t)vtx[k];
+    s[k] = dot3(x[k], p->n) - p->d;
+    npos += s[k] >= 0;
+  }
+  if (npos == 0 || npos == n) return 0;
+  for (int i = 0; i < n; i++)
+    for (int j = i + 1; j < n; j++)
+      if ((s[i] >= 0) != (s[j] >= 0)) {
+        /* from the end on the positive side: exactly it when on the plane */
+        int a = s[i] >= 0 ? i : j, b = s[i] >= 0 ? j : i;
+        cut_point(p, x[a], x[b], s[a], s[b], xy + 2 * m);
+        /* a vertex on the plane ends several crossing edges: keep it once */
+        int dup = 0;
+        for (int k = 0; k < m && !dup; k++)
+          dup = xy[2 * k] == xy[2 * m] && xy[2 * k + 1] == xy[2 * m + 1];
+        m += !dup;
+      }
+  /* a simplex touching the plane at a vertex or an edge (from below) */
+  if (m < n - 1) return 0;
+  if (m == 4) { /* order the quadrilateral around its centre */
+    double cx = 0, cy = 0, ang[4];
+    for (int k = 0; k < 4; k++)
+      cx += xy[2 * k] / 4, cy += xy[2 * k + 1] / 4;
+    for (int k = 0; k < 4; k++)
+      ang[k] = atan2(xy[2 * k + 1] - cy, xy[2 * k] - cx);
+    for (int i = 1; i < 4; i++)
+      for (int j = i; j > 0 && ang[j] < ang[j - 1]; j--) {
+        double t = ang[j];
+        ang[j] = ang[j - 1], ang[j - 1] = t;
+        for (int k = 0; k < 2; k++) {
+          t = xy[2 * j + k];
+          xy[2 * j + k] = xy[2 * (j - 1) + k], xy[2 * (j - 1) + k] = t;
+        }
+      }
+  }
+  return m;
+}
+
+/* Element e as a polygon in the picture's coordinates; returns its number of
+ * points (0: not in the picture). */
+static int elem_polygon(const plot *p, pa_idx e, double *xy) {
+  const pa_idx *v = p->elem + (size_t)(p->dim + 1) * e;
+  if (p->dim == 3) return cut_simplex(p, v, 4, xy);
+  for (int k = 0; k < 3; k++) {
+    xy[2 * k] = p->coord[2 * (size_t)v[k]];
+    xy[2 * k + 1] = p->coord[2 * (size_t)v[k] + 1];
+  }
+  return 3;
+}
+
+/* Boundary entity b as a segment; returns 2, or 0 when not in the picture. */
+static int bdry_segment(const plot *p, pa_idx b, double *xy) {
+  const pa_idx *v = p->bdry + (size_t)p->dim * b;
+  if (p->dim == 3) return cut_simplex(p, v, 3, xy) == 2 ? 2 : 0;
+  for (int k = 0; k < 2; k++) {
+    xy[2 * k] = p->coord[2 * (size_t)v[k]];
+    xy[2 * k + 1] = p->coord[2 * (size_t)v[k] + 1];
+  }
+  return 2;
+}
+
+static void bbox(int n, const double *xy, double *box) {
+  box[0] = box[2] = xy[0];
+  box[1] = box[3] = xy[1];
+  for (int k = 1; k < n; k++) {
+    box[0] = fmin(box[0], xy[2 * k]);
+    box[2] = fmax(box[2], xy[2 * k]);
+    box[1] = fmin(box[1], xy[2 * k + 1]);
+    box[3] = fmax(box[3], xy[2 * k + 1]);
+  }
+}
+
+static int in_window(const plot *p, const double *box) {
+  return box[2] >= p->win[0] && box[0] <= p->win[2] && box[3] >= p->win[1] &&
+         box[1] <= p->win[3];
+}
+
+/* To screen coordinates, in place. */
+static void to_screen(const plot *p, int n, double *xy) {
+  for (int k = 0; k < n; k++) {
+    xy[2 * k] = p->x0 + (xy[2 * k] - p->win[0]) * p->scale;
+    xy[2 * k + 1] = p->y0 + (p->win[3] - xy[2 * k + 1]) * p->scale;
+  }
+}
+
+static int cmp_ref(const void *a, const void *b) {
+  int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+  return (x > y) - (x < y);
+}
+
+/* The arguments of `padapt plot`. */
+typedef struct plot_args {
+  const char *in, *out, *met;
+  int by_ref, has_window, has_plane;
+  double win[4], plane[4];
+  double width;
+} plot_args;
+
+static int parse_args(const pa_cli *cli, int argc, char **argv, plot_args *a) {
+  memset(a, 0, sizeof *a);
+  a->width = PLOT_WIDTH;
+  for (int i = 1; i < argc; i++) {
+    const char *o = argv[i];
+    int left = argc - i - 1;
+    if (!strcmp(o, "-h") || !strcmp(o, "--help")) {
+      if (cli->rank == 0) fputs(plot_usage, stdout);
+      return -1;
+    } else if (!strcmp(o, "-met") || !strcmp(o, "-sol")) {
+      if (!left) return pa_cli_error(cli, "plot: %s needs a .sol file", o);
+      a->met = argv[++i];
+    } else if (!strcmp(o, "-color") || !strcmp(o, "-colour")) {
+      const char *c = left ? argv[++i] : "nothing";
+      if (!strcmp(c, "ref"))
+        a->by_ref = 1;
+      else if (strcmp(c, "quality"))
+        return pa_cli_error(cli, "plot: -color needs quality or ref, got '%s'",
+                            c);
+    } else if (!strcmp(o, "-window")) {
+      int ok = left >= 4;
+      for (int k = 0; ok && k < 4; k++)
+        ok = pa_cli_parse_num(argv[i + 1 + k], &a->win[k]);
+      if (!ok || a->win[0] >= a->win[2] || a->win[1] >= a->win[3])
+        return pa_cli_error(cli, "plot: -window needs XMIN YMIN XMAX YMAX, "
+                                 "numbers with XMIN < XMAX and YMIN < YMAX");
+      a->has_window = 1;
+      i += 4;
+    } else if (!strcmp(o, "-cut")) {
+      const char *c = left ? argv[++i] : "";
+      double v;
+      int axis = c[0] == 'x' ? 0 : c[0] == 'y' ? 1 : c[0] == 'z' ? 2 : -1;
+      if (axis < 0 || c[1] != '=' || !pa_cli_parse_num(c + 2, &v))
+        return pa_cli_error(cli, "plot: -cut needs x=V, y=V or z=V, got '%s'",
+                            left ? c : "nothing");
+      memset(a->plane, 0, sizeof a->plane);
+      a->plane[axis] = 1;
+      a->plane[3] = v;
+      a->has_plane = 1;
+    } else if (!strcmp(o, "-plane")) {
+      int ok = left >= 4;
+      for (int k = 0; ok && k < 4; k++)
+        ok = pa_cli_parse_num(argv[i + 1 + k], &a->plane[k]);
+      if (!ok || (a->plane[0] == 0 && a->plane[1] == 0 && a->plane[2] == 0))
+        return pa_cli_error(cli,
+                            "plot: -plane needs A B C D (numbers, A B C "
+                            "not all 0) for the plane A x + B y + C z = D");
+      a->has_plane = 1;
+      i += 4;
+    } else if (!strcmp(o, "-width")) {
+      double w;
+      if (!left || !pa_cli_parse_num(argv[i + 1], &w) || w < PLOT_MIN_WIDTH ||
+          w > PLOT_MAX_WIDTH)
+        return pa_cli_error(cli,
+                            "plot: -width needs a number of pixels in "
+                            "[%d, %d], got '%s'",
+                            PLOT_MIN_WIDTH, PLOT_MAX_WIDTH,
+                            left ? argv[i + 1] : "nothing");
+      a->width = w;
+      i++;
+    } else if (o[0] == '-' && o[1]) {
+      return pa_cli_error(cli, "plot: unknown option '%s' (see padapt plot -h)",
+                          o);
+    } else if (!a->in) {
+      a->in = o;
+    } else if (!a->out) {
+      a->out = o;
+    } else {
+      return pa_cli_error(cli, "plot: too many arguments ('%s')", o);
+    }
+  }
+  if (!a->in || !a->out)
+    return pa_cli_error(cli, "plot: needs IN and OUT.svg\n%s", plot_usage);
+  if (!pa_cli_is_svg(a->out))
+    return pa_cli_error(cli,
+                        "plot: %s: only SVG output is written (.svg); "
+                        "convert it to PNG with e.g. rsvg-convert or "
+                        "inkscape",
+                        a->out);
+  return 0;
+}
+
+/* A merge cell drawn: its colour (0xrrggbb) and its index in the grid. */
+typedef struct plot_cell {
+  uint32_t rgb, k;
+} plot_cell;
+
+static int cmp_cell(const void *a, const void *b) {
+  const plot_cell *x = a, *y = b;
+  if (x->rgb != y->rgb) return x->rgb < y->rgb ? -1 : 1;
+  return (x->k > y->k) - (x->k < y->k);
+}
+
+/* Counts of one drawing, for the title and the summary line. */
+typedef struct plot_counts {
+  pa_idx ncut;    /* elements in the picture (2D: all; 3D: cut) */
+  pa_idx ninside; /* ... in the window */
+  pa_idx ndrawn;  /* ... drawn as polygons */
+  pa_idx nmerged; /* ... merged into cells */
+  pa_idx ncells;  /* cells drawn */
+  int32_t refs[PLOT_MAX_REFS];
+  int nrefs, more_refs;
+} plot_counts;
+
+/* Write the picture: pass 1 merges the sub-pixel elements into a grid of
+ * cells (NaN: empty), pass 2 draws the cells, the other elements in the
+ * window, the boundary and the legend. */
+static pa_status draw(plot *p, const plot_args *a, plot_counts *c, double pw,
+                      double ph, const char *title) {
+  pa_mesh *mesh = p->mesh;
+  pa_idx ne = pa_mesh_nelem(mesh), nb = pa_mesh_nbdry(mesh);
+  int32_t *eref = pa_mesh_elem_refs(mesh);
+  int gw = (int)ceil(pw / PLOT_CELL_PX), gh = (int)ceil(ph / PLOT_CELL_PX);
+  double *cell = malloc(sizeof(double) * (size_t)gw * (size_t)gh);
+  plot_cell *bycol = malloc(sizeof(plot_cell) * (size_t)gw * (size_t)gh);
+  double xy[8], box[4];
+  char col[8];
+  pa_cli_svg svg;
+  if (!cell || !bycol) {
+    free(cell);
+    free(bycol);
+    return pa_cli_set_error(PA_ERR_MEMORY, "plot: out of memory");
+  }
+  for (size_t k = 0; k < (size_t)gw * (size_t)gh; k++)
+    cell[k] = NAN;
+
+  /* pass 1: merge the sub-pixel elements into cells */
+  for (pa_idx e = 0; e < ne; e++) {
+    int n = elem_polygon(p, e, xy);
+    if (!n) continue;
+    bbox(n, xy, box);
+    if (!in_window(p, box)) continue;
+    to_screen(p, n, xy);
+    bbox(n, xy, box);
+    if (box[2] - box[0] >= PLOT_SUBPIXEL_PX ||
+        box[3] - box[1] >= PLOT_SUBPIXEL_PX)
+      continue;
+    int i = (int)floor(((box[0] + box[2]) / 2 - p->x0) / PLOT_CELL_PX);
+    int j = (int)floor(((box[1] + box[3]) / 2 - p->y0) / PLOT_CELL_PX);
+    /* an element straddling the window's side goes to the cell inside */
+    i = i < 0 ? 0 : i >= gw ? gw - 1 : i;
+    j = j < 0 ? 0 : j >= gh ? gh - 1 : j;
+    double val = a->by_ref ? (double)eref[e] : pa_mesh_elem_quality(mesh, e);
+    double *cv = &cell[(size_t)j * gw + i];
+    if (isnan(*cv)) c->ncells++;
+    if (isnan(*cv) || val < *cv) *cv = val;
+    c->nmerged++;
+  }
+
+  c->ndrawn = c->ninside - c->nmerged;
+  /* room for the legend on the right and for the title above */
+  double W = fmax(16 + pw + 170, PLOT_MIN_PICTURE_W),
+         H = 64 + fmax(ph, 330) + 30;
+  pa_status st = pa_cli_svg_begin(&svg, a->out, W, H);
+  if (st) {
+    free(cell);
+    free(bycol);
+    return st;
+  }
+  pa_cli_svg_text(&svg, 16, 22, "start", 14, "%s", title);
+  pa_cli_svg_text(&svg, 16, 42, "start", 11,
+                  "%lld polygons drawn, %lld sub-pixel elements merged into "
+                  "%lld cells; %s in [%g, %g], %s in [%g, %g]",
+                  (long long)c->ndrawn, (long long)c->nmerged,
+                  (long long)c->ncells, p->uname, p->win[0], p->win[2],
+                  p->vname, p->win[1], p->win[3]);
+  pa_cli_svg_raw(&svg,
+                 "<clipPath id=\"window\"><rect x=\"%.2f\" y=\"%.2f\" "
+                 "width=\"%.2f\" height=\"%.2f\"/></clipPath>\n",
+                 p->x0, p->y0, pw, ph);
+  pa_cli_svg_rect(&svg, p->x0, p->y0, pw, ph, "#f7f7f7", "frame");
+
+  /* the cells, one path per colour, then the polygons over them */
+  pa_cli_svg_raw(&svg, "<g clip-path=\"url(#window)\" class=\"cells\">\n");
+  size_t nc = 0;
+  for (size_t k = 0; k < (size_t)gw * (size_t)gh; k++) {
+    if (isnan(cell[k])) continue;
+    if (a->by_ref)
+      pa_cli_svg_ref_colour((int32_t)cell[k], col);
+    else
+      pa_cli_svg_quality_colour(cell[k], col);
+    bycol[nc].rgb = (uint32_t)strtoul(col + 1, NULL, 16);
+    bycol[nc++].k = (uint32_t)k;
+  }
+  qsort(bycol, nc, sizeof *bycol, cmp_cell);
+  for (size_t k = 0, run; k < nc; k += run) {
+    if (k == 0 || bycol[k].rgb != bycol[k - 1].rgb)
+      pa_cli_svg_raw(&svg, "%s<path fill=\"#%06x\" d=\"", k ? "\"/>\n" : "",
+                     (unsigned)bycol[k].rgb);
+    /* a run of cells of this colour along a row: one rectangle */
+    long i = (long)(bycol[k].k % (uint32_t)gw),
+         j = (long)(bycol[k].k / (uint32_t)gw);
+    for (run = 1; k + run < nc && bycol[k + run].rgb == bycol[k].rgb &&
+                  bycol[k + run].k == bycol[k].k + run && i + (long)run < gw;
+         run++)
+      ;
+    /* the frame's origin is a whole pixel and cells are PLOT_CELL_PX wide */
+    double w = (double)run * PLOT_CELL_PX;
+    pa_cli_svg_raw(
+        &svg, "M%ld %ldh%gv%gh-%gz", lround(p->x0 + (double)i * PLOT_CELL_PX),
+        lround(p->y0 + (double)j * PLOT_CELL_PX), w, PLOT_CELL_PX, w);
+  }
+  if (nc) pa_cli_svg_raw(&svg, "\"/>\n");
+  pa_cli_svg_raw(&svg, "</g>\n<g clip-path=\"url(#window)\" class=\"elements\" "
+                       "stroke=\"#303030\" stroke-width=\"0.5\" "
+                       "stroke-linejoin=\"round\">\n");
+  for (pa_idx e = 0; e < ne; e++) {
+    int n = elem_polygon(p, e, xy);
+    if (!n) continue;
+    bbox(n, xy, box);
+    if (!in_window(p, box)) continue;
+    to_screen(p, n, xy);
+    bbox(n, xy, box);
+    double sx = box[2] - box[0], sy = box[3] - box[1];
+    if (sx < PLOT_SUBPIXEL_PX && sy < PLOT_SUBPIXEL_PX) continue;
+    if (a->by_ref)
+      pa_cli_svg_ref_colour(eref[e], col);
+    else
+      pa_cli_svg_quality_colour(pa_mesh_elem_quality(mesh, e), col);
+    /* small ones: stroked with their own colour, so that no seam shows */
+    pa_cli_svg_polygon(&svg, n, xy, col,
+                       fmax(sx, sy) < PLOT_EDGE_PX ? col : NULL);
+  }
+  pa_cli_svg_raw(&svg, "</g>\n<g clip-path=\"url(#window)\" class=\"boundary\" "
+                       "stroke=\"#000000\" stroke-width=\"1.6\" "
+                       "stroke-linecap=\"round\">\n");
+  for (pa_idx b = 0; b < nb; b++) {
+    if (!bdry_segment(p, b, xy)) continue;
+    bbox(2, xy, box);
+    if (!in_window(p, box)) continue;
+    to_screen(p, 2, xy);
+    pa_cli_svg_line(&svg, xy[0], xy[1], xy[2], xy[3], NULL, 0);
+  }
+  pa_cli_svg_raw(&svg, "</g>\n");
+  pa_cli_svg_raw(&svg,
+                 "<rect x=\"%.2f\" y=\"%.2f\" width=\"%.2f\" height=\"%.2f\" "
+                 "fill=\"none\" stroke=\"#666666\"/>\n",
+                 p->x0, p->y0, pw, ph);
+
+  /* the legend */
+  double lx = p->x0 + pw + 24, ly = p->y0;
+  if (a->by_ref) {
+    pa_cli_svg_text(&svg, lx, ly + 12, "start", 13, "reference");
+    for (int k = 0; k < c->nrefs; k++) {
+      pa_cli_svg_ref_colour(c->refs[k], col);
+      pa_cli_svg_rect(&svg, lx, ly + 24 + 20 * k, 14, 14, col, "legend");
+      pa_cli_svg_text(&svg, lx + 20, ly + 36 + 20 * k, "start", 12, "%ld",
+                      (long)c->refs[k]);
+    }
+    if (c->more_refs)
+      pa_cli_svg_text(&svg, lx, ly + 36 + 20 * c->nrefs, "start", 12,
+                      "and more (colours repeat every 10)");
+  } else {
+    const int nstep = 50;
+    const double bh = 240;
+    pa_cli_svg_text(&svg, lx, ly + 12, "start", 13, "quality");
+    for (int k = 0; k < nstep; k++) {
+      double q = 1.0 - (k + 0.5) / nstep;
+      pa_cli_svg_quality_colour(q, col);
+      /* each step overlaps the next by a pixel, so that no seam shows */
+      pa_cli_svg_rect(&svg, lx, ly + 24 + bh * k / nstep, 18,
+                      bh / nstep + (k < nstep - 1 ? 1 : 0), col, "legend");
+    }
+    for (int k = 0; k <= 5; k++)
+      pa_cli_svg_text(&svg, lx + 24, ly + 28 + bh * k / 5, "start", 11, "%.1f",
+                      1.0 - k / 5.0);
+    pa_cli_svg_text(&svg, lx, ly + 24 + bh + 22, "start", 11,
+                    pa_mesh_metric_ncomp(mesh) ? "in the metric" : "Euclidean");
+  }
+  free(cell);
+  free(bycol);
+  st = pa_cli_svg_end(&svg);
+  if (st) pa_cli_svg_abort(&svg);
+  return st;
+}
+
+int pa_cli_plot(const pa_cli *cli, int argc, char **argv) {
+  plot_args a;
+  int prc = parse_args(cli, argc, argv, &a);
+  if (prc) return prc > 0 ? 1 : 0;
+  const char *out = a.out;
+  if (pa_cli_check_outputs(cli, "plot", &out, 1)) return 1;
+  pa_mesh *mesh = NULL;
+  pa_status st = pa_cli_read_mesh(cli, a.in, &mesh); /* collective */
+  if (cli->rank != 0) return st ? 1 : 0;
+  if (st) return pa_cli_fail(cli, st);
+  int rc = 1;
+  plot p;
+  plot_counts c;
+  double xy[8], box[4];
+  char title[1200];
+  memset(&p, 0, sizeof p);
+  memset(&c, 0, sizeof c);
+  p.mesh = mesh;
+  p.dim = pa_mesh_dim(mesh);
+  p.coord = pa_mesh_coords(mesh);
+  p.elem = pa_mesh_elems(mesh);
+  p.bdry = pa_mesh_bdrys(mesh);
+  pa_idx ne = pa_mesh_nelem(mesh), nv = pa_mesh_nvert(mesh);
+  int32_t *eref = pa_mesh_elem_refs(mesh);
+  if (a.met && (st = pa_cli_attach_metric(mesh, a.met))) {
+    pa_cli_fail(cli, st);
+    goto done;
+  }
+  if (p.dim == 2 && a.has_plane) {
+    pa_cli_error(cli, "plot: -cut and -plane need a 3D mesh; %s is 2D", a.in);
+    goto done;
+  }
+  if (ne == 0) {
+    pa_cli_error(cli, "plot: %s has no element", a.in);
+    goto done;
+  }
+  if (p.dim == 3) {
+    if (a.has_plane) {
+      for (int k = 0; k < 3; k++)
+        p.n[k] = a.plane[k];
+      p.d = a.plane[3];
+    } else { /* z = the middle of the z range */
+      double zmin = p.coord[2], zmax = p.coord[2];
+      for (pa_idx v = 1; v < nv; v++) {
+        zmin = fmin(zmin, p.coord[3 * v + 2]);
+        zmax = fmax(zmax, p.coord[3 * v + 2]);
+      }
+      p.n[2] = 1;
+      p.d = 0.5 * (zmin + zmax);
+    }
+    plane_axes(&p);
+  } else {
+    snprintf(p.uname, sizeof p.uname, "x");
+    snprintf(p.vname, sizeof p.vname, "y");
+  }
+
+  /* the window: given, or the extent of the picture plus a margin; the
+   * counts and the references shown */
+  double ext[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY};
+  for (int k = 0; k < 4; k++)
+    p.win[k] = a.has_window ? a.win[k] : ext[k];
+  for (pa_idx e = 0; e < ne; e++) {
+    int n = elem_polygon(&p, e, xy);
+    if (!n) continue;
+    c.ncut++;
+    bbox(n, xy, box);
+    for (int k = 0; k < 2; k++) {
+      ext[k] = fmin(ext[k], box[k]);
+      ext[k + 2] = fmax(ext[k + 2], box[k + 2]);
+    }
+  }
+  if (!a.has_window && c.ncut > 0) {
+    double m = PLOT_MARGIN * fmax(ext[2] - ext[0], ext[3] - ext[1]);
+    if (!(m > 0)) m = 1;
+    p.win[0] = ext[0] - m, p.win[1] = ext[1] - m;
+    p.win[2] = ext[2] + m, p.win[3] = ext[3] + m;
+  }
+  for (pa_idx e = 0; e < ne; e++) {
+    int n = elem_polygon(&p, e, xy);
+    if (!n) continue;
+    bbox(n, xy, box);
+    if (!in_window(&p, box)) continue;
+    c.ninside++;
+    if (a.by_ref) {
+      int k = 0;
+      while (k < c.nrefs && c.refs[k] != eref[e])
+        k++;
+      if (k == c.nrefs && c.nrefs < PLOT_MAX_REFS)
+        c.refs[c.nrefs++] = eref[e];
+      else if (k == c.nrefs)
+        c.more_refs = 1;
+    }
+  }
+  qsort(c.refs, (size_t)c.nrefs, sizeof *c.refs, cmp_ref);
+  if (c.ncut == 0) {
+    pa_cli_error(cli, "plot: the plane %s does not cut %s", plane_name(&p),
+                 a.in);
+    goto done;
+  }
+  if (c.ninside == 0) {
+    pa_cli_error(cli,
+                 "plot: the window [%g, %g] x [%g, %g] holds no element "
+                 "of %s (its extent: [%g, %g] x [%g, %g])",
+                 p.win[0], p.win[2], p.win[1], p.win[3], a.in, ext[0], ext[2],
+                 ext[1], ext[3]);
+    goto done;
+  }
+
+  /* the screen frame: the window's longer side is a.width pixels */
+  double dx = p.win[2] - p.win[0], dy = p.win[3] - p.win[1];
+  p.scale = a.width / fmax(dx, dy);
+  p.x0 = 16;
+  p.y0 = 64;
+  double pw = dx * p.scale, ph = dy * p.scale;
+  if (p.dim == 2)
+    snprintf(title, sizeof title, "%s: %lld triangles, coloured by %s", a.in,
+             (long long)ne, a.by_ref ? "reference" : "quality");
+  else
+    snprintf(title, sizeof title,
+             "%s: %lld of %lld tetrahedra cut by the plane %s, coloured by %s",
+             a.in, (long long)c.ncut, (long long)ne, plane_name(&p),
+             a.by_ref ? "reference" : "quality");
+  st = draw(&p, &a, &c, pw, ph, title);
+  if (st) {
+    pa_cli_fail(cli, st);
+    goto done;
+  }
+  printf("plot: %s: %lld polygons, %lld sub-pixel elements merged into %lld "
+         "cells, %lld elements outside the window\n",
+         a.out, (long long)c.ndrawn, (long long)c.nmerged, (long long)c.ncells,
+         (long long)(c.ncut - c.ninside));
+  rc = 0;
+done:
+  pa_mesh_destroy(mesh);
+  return rc;
+}
