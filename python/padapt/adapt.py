@@ -178,10 +178,10 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
     dim, nv = mesh.dim, mesh.nvert
     met = None if metric is None else as_metric("metric", metric, dim, nv)
     flds = [(n,) + as_field(n, v, nv) for n, v in (fields or {}).items()]
-    if met is None and opts.hsiz <= 0 and lib.pa_mesh_metric_ncomp(mesh._h) == 0:
-        raise ValueError("adapt: no metric: give metric=... or hsiz=..., or set mesh.metric")
     if hsiz is not None and opts.hsiz <= 0:
         raise ValueError("hsiz: expected a positive size, got %r" % (hsiz,))
+    if met is None and opts.hsiz <= 0 and lib.pa_mesh_metric_ncomp(mesh._h) == 0:
+        raise ValueError("adapt: no metric: give metric=... or hsiz=..., or set mesh.metric")
 
     out = mesh.copy()
     if met is not None:

@@ -82,6 +82,23 @@ def _h(obj, cls):
     return cls(MPI._handleof(obj))
 
 
+def _agree(comm, check_fn):
+    """Run the rank-local argument check check_fn() on every rank and raise
+    the same ValueError/TypeError on every rank if it failed on any, so
+    that no rank enters a collective call that another has left. Returns
+    check_fn()'s result."""
+    try:
+        out, err = check_fn(), None
+    except (ValueError, TypeError) as exc:
+        out, err = None, exc
+    errs = comm.allgather(None if err is None else (type(err).__name__, str(err)))
+    bad = [(r, e) for r, e in enumerate(errs) if e is not None]
+    if bad:
+        cls = TypeError if all(e[0] == "TypeError" for _, e in bad) else ValueError
+        raise cls("; ".join("rank %d: %s" % (r, e[1]) for r, e in bad))
+    return out
+
+
 def _kind(kind):
     if kind not in KINDS:
         raise ValueError("kind: one of %s, got %r" % (", ".join(KINDS), kind))
@@ -206,8 +223,13 @@ class DistributedMesh(object):
         None there) over comm (default MPI.COMM_WORLD) with overlap ghost
         layers. Its metric and fields come along. Collective."""
         comm = MPI.COMM_WORLD if comm is None else comm
-        if comm.rank == root and not isinstance(mesh, Mesh):
-            raise TypeError("distribute: rank %d needs a padapt.Mesh" % root)
+
+        def args():
+            if not 0 <= int(root) < comm.size or int(overlap) < 0:
+                raise ValueError("distribute: root in [0, %d) and overlap >= 0" % comm.size)
+            if comm.rank == root and not isinstance(mesh, Mesh):
+                raise TypeError("distribute: rank %d needs a padapt.Mesh" % root)
+        _agree(comm, args)
         h = ctypes.c_void_p()
         st = lib.pa_dmesh_distribute(_h(comm, c_comm), int(root),
                                      mesh._h if comm.rank == root else None,
@@ -339,21 +361,29 @@ class DistributedMesh(object):
         or for all local vertices (nlocal rows): sizes or 3|6-component
         tensors; ghosts then receive their owners' values. Collective."""
         lm, no, nl = self.local_mesh, self.nowned("vertex"), self.nlocal("vertex")
-        v = np.asarray(values)
-        if v.ndim >= 1 and v.shape[0] == no and no != nl:
-            v = np.concatenate([v, np.repeat(v[:1] if no else v, nl - no, axis=0)])
-        lm.metric = v
+
+        def args():
+            v = np.asarray(values)
+            if v.ndim >= 1 and v.shape[0] == no and no != nl:
+                v = np.concatenate([v, np.repeat(v[:1], nl - no, axis=0)]) if no else v
+            return as_metric("metric", v, self.dim, nl)
+        m, nc = _agree(self.comm, args)
+        check(lib.pa_mesh_set_metric(lm._h, nc, _lib.ptr(m)))
         self.sync_mesh()
 
     def add_field(self, name, values):
         """Attach a vertex field (owned or local rows, as set_metric),
         interpolated by adapt(). Collective."""
         lm, no, nl = self.local_mesh, self.nowned("vertex"), self.nlocal("vertex")
-        v = np.asarray(values)
-        if v.ndim >= 1 and v.shape[0] == no and no != nl:
-            pad = np.zeros((nl - no,) + v.shape[1:], v.dtype if v.dtype.kind in "fiu" else float)
-            v = np.concatenate([v, pad])
-        lm.add_field(name, v)
+
+        def args():
+            if not isinstance(name, str) or not name or len(name.encode()) >= 64:
+                raise ValueError("field names must be non-empty strings of under 64 bytes: %r" % (name,))
+            v = np.asarray(values)
+            if v.ndim >= 1 and v.shape[0] == no and no != nl and v.dtype.kind in "fiu":
+                v = np.concatenate([v, np.zeros((nl - no,) + v.shape[1:], v.dtype)])
+            return as_field(name, v, nl)[0]
+        lm.add_field(name, _agree(self.comm, args))
         self.sync_mesh()
 
     def memory_used(self):
@@ -365,13 +395,17 @@ class DistributedMesh(object):
         """Attach a value of ncomp items of dtype (float64, float32, int32,
         int64, uint8) to every entity of a kind, or only to those of
         reference ref; initialised to zero. Returns a Value. Collective."""
-        dtype = np.dtype(dtype)
-        if dtype not in _DTYPES:
-            raise ValueError("dtype: one of %s, got %s" % (", ".join(str(d) for d in _DTYPES), dtype))
-        if int(ncomp) < 1:
-            raise ValueError("ncomp: expected >= 1, got %r" % (ncomp,))
-        if not isinstance(name, str) or not name:
-            raise ValueError("name: a non-empty string")
+        def args():
+            dt = np.dtype(dtype)
+            if dt not in _DTYPES:
+                raise ValueError("dtype: one of %s, got %s" % (", ".join(str(d) for d in _DTYPES), dt))
+            if int(ncomp) < 1:
+                raise ValueError("ncomp: expected >= 1, got %r" % (ncomp,))
+            if not isinstance(name, str) or not name:
+                raise ValueError("name: a non-empty string")
+            _kind(kind)
+            return dt
+        dtype = _agree(self.comm, args)
         v = ctypes.c_void_p()
         check(lib.pa_dmesh_value_add(self._live(), _kind(kind), name.encode(),
                                      _h(_DTYPES[dtype], c_type), int(ncomp), int(ref),
@@ -384,16 +418,22 @@ class DistributedMesh(object):
         ints), or repartition with PT-Scotch when None (weights: one per
         owned element). Collective; invalidates views."""
         ne = self.nowned("element")
-        p = w = None
-        if newpart is not None:
-            newpart = np.ascontiguousarray(newpart, dtype=np.int32)
-            if newpart.shape != (ne,) or (ne and (newpart.min() < 0 or newpart.max() >= self.comm.size)):
-                raise ValueError("newpart: (%d,) ranks in [0, %d)" % (ne, self.comm.size))
-            p = newpart.ctypes.data_as(ctypes.POINTER(ctypes.c_int))
-        if weights is not None:
-            from .mesh import as_float
-            weights = as_float("weights", weights, (ne,))
-            w = _lib.ptr(weights)
+
+        def args():
+            part = wts = None
+            if newpart is not None:
+                a = np.asarray(newpart)
+                if a.dtype.kind not in "iu" or a.shape != (ne,) or \
+                        (ne and (a.min() < 0 or a.max() >= self.comm.size)):
+                    raise ValueError("newpart: (%d,) integer ranks in [0, %d)" % (ne, self.comm.size))
+                part = np.ascontiguousarray(a, dtype=np.int32)
+            if weights is not None:
+                from .mesh import as_float
+                wts = as_float("weights", weights, (ne,))
+            return part, wts
+        part, wts = _agree(self.comm, args)
+        p = None if part is None else part.ctypes.data_as(ctypes.POINTER(ctypes.c_int))
+        w = None if wts is None else _lib.ptr(wts)
         self._changed()
         check(lib.pa_dmesh_redistribute(self._live(), p, w))
 
@@ -489,20 +529,24 @@ class DistributedMesh(object):
         (True/False), rebalance (True/False). Returns a Report with the
         members of `mpiexec padapt adapt -json` (the same on every rank).
         Collective; invalidates views. The GIL is released meanwhile."""
-        o = _lib.AdaptOpts()
-        lib.pa_adapt_opts_default(ctypes.byref(o))
-        remesh_options(o.remesh, hsiz=hsiz, hmin=hmin, hmax=hmax, hgrad=hgrad, hausd=hausd, **options)
-        for k, v in (("max_iter", max_iter), ("pieces_per_rank", pieces_per_rank),
-                     ("check_pieces", check_pieces), ("rebalance", rebalance)):
-            if v is not None:
-                setattr(o, k, int(v))
-        if mem_mb is not None:
-            o.mem_mb = float(mem_mb)
-        if hsiz is not None and o.remesh.hsiz <= 0:
-            raise ValueError("hsiz: expected a positive size, got %r" % (hsiz,))
-        lm = self.local_mesh
-        if o.remesh.hsiz <= 0 and lib.pa_mesh_metric_ncomp(lm._h) == 0:
-            raise ValueError("adapt: no metric: set one (set_metric, metric_from_hessian) or give hsiz=")
+        def args():
+            o = _lib.AdaptOpts()
+            lib.pa_adapt_opts_default(ctypes.byref(o))
+            remesh_options(o.remesh, hsiz=hsiz, hmin=hmin, hmax=hmax, hgrad=hgrad, hausd=hausd,
+                           **options)
+            for k, v in (("max_iter", max_iter), ("pieces_per_rank", pieces_per_rank),
+                         ("check_pieces", check_pieces), ("rebalance", rebalance)):
+                if v is not None:
+                    setattr(o, k, int(v))
+            if mem_mb is not None:
+                o.mem_mb = float(mem_mb)
+            if hsiz is not None and o.remesh.hsiz <= 0:
+                raise ValueError("hsiz: expected a positive size, got %r" % (hsiz,))
+            if o.remesh.hsiz <= 0 and lib.pa_mesh_metric_ncomp(self.local_mesh._h) == 0:
+                raise ValueError("adapt: no metric: set one (set_metric, metric_from_hessian) "
+                                 "or give hsiz=")
+            return o
+        o = _agree(self.comm, args)
         before = (self.nglobal("element"), self.nglobal("vertex"))
         r = _lib.AdaptReport()
         self._changed()
