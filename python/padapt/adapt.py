@@ -102,6 +102,7 @@ class Report(collections.abc.Mapping):
         return bool(self._d.get("target_met", False))
 
     def to_json(self, **kw):
+        """The report as JSON text (keyword arguments go to json.dumps)."""
         return json.dumps(self._d, allow_nan=False, **kw)
 
     def __repr__(self):

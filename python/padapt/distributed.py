@@ -159,6 +159,7 @@ class Value(object):
 
     @property
     def nowned(self):
+        """Number of owned blocks (the first ones of data)."""
         return self._counts()[2]
 
     @property
@@ -289,6 +290,7 @@ class DistributedMesh(object):
     # ------------------------------------------------------------- queries
     @property
     def dim(self):
+        """2 (triangles) or 3 (tetrahedra)."""
         return lib.pa_dmesh_dim(self._live())
 
     @property
