@@ -460,7 +460,8 @@ class Mesh(object):
         """A Mesh from a meshio.Mesh. dim: 3 if there are tetrahedra, else 2
         (points must then lie in the plane z = 0 if they have 3 coordinates).
         Elements: "tetra" (3D) or "triangle" (2D); boundary: "triangle" (3D)
-        or "line" (2D), else computed; feature edges: "line" (3D).
+        or "line" (2D), completed with reference 0 where faces without a
+        neighbour are not listed; feature edges: "line" (3D).
         References from cell data "medit:ref", else "gmsh:physical"; vertex
         references from point data "medit:ref". Point data "metric" becomes
         the metric, other real point data with one value (or row) per vertex
@@ -508,10 +509,13 @@ class Mesh(object):
             elif k not in ("medit:ref", "gmsh:dim_tags") and v.dtype.kind in "fiu" \
                     and v.ndim in (1, 2) and v.shape[0] == len(pts):
                 fields[k] = v
-        return cls(pts, cells, bdry, edges=edges,
+        mesh = cls(pts, cells, bdry, edges=edges,
                    point_refs=None if vref is None else np.asarray(vref).astype(np.int64),
                    cell_refs=crefs, boundary_refs=brefs, edge_refs=erefs,
                    metric=metric, fields=fields)
+        if bdry is not None:  # complete a partial list (physical groups on some sides)
+            check(lib.pa_mesh_build_boundary(mesh._h, 0, None))
+        return mesh
 
 
 def read(path):

@@ -131,6 +131,18 @@ class Meshio(unittest.TestCase):
             np.testing.assert_array_equal(np.sort(x.boundary_refs), np.sort(m.boundary_refs))
 
 
+    def test_partial_boundary_completed(self):
+        m = padapt.Mesh.generate_box(2, 4)
+        mm = m.to_meshio()
+        keep = m.boundary_refs == 1  # only the side x = 0 listed, as one physical group
+        mm = meshio.Mesh(mm.points, [("triangle", m.cells.copy()), ("line", m.boundary[keep].copy())],
+                         cell_data={"gmsh:physical": [m.cell_refs.copy(), m.boundary_refs[keep].copy()]})
+        b = padapt.Mesh.from_meshio(mm)
+        b.check()
+        self.assertEqual(b.nbdry, m.nbdry)
+        self.assertEqual(sorted(b.boundary_refs.tolist()), sorted([0] * int((~keep).sum()) + [1] * int(keep.sum())))
+
+
 class BadInput(unittest.TestCase):
     """One case per check: each must raise before the library sees it."""
 
