@@ -190,6 +190,10 @@ class Mesh(object):
         if p.ndim != 2 or p.shape[1] not in (2, 3):
             raise ValueError("points: expected shape (n, 2) or (n, 3), got %s" % (p.shape,))
         dim = p.shape[1]
+        c0 = np.shape(cells)
+        if dim == 3 and len(c0) == 2 and c0[1] == 3:
+            raise ValueError("cells: triangles with 3D points; a 2D mesh takes (n, 2) points "
+                             "(points[:, :2]); surface meshes are not supported")
         p = as_float("points", p, (None, dim))
         nv = p.shape[0]
         if nv > _INT32_MAX:

@@ -160,6 +160,7 @@ class BadInput(unittest.TestCase):
         self.bad("points: expected shape", points=self.pts.ravel())
         self.bad("points: expected shape", points=np.zeros((4, 4)))
         self.bad("cells: expected shape (n, 3)", cells=self.cells[:, :2])
+        self.bad("a 2D mesh takes (n, 2) points", points=np.c_[self.pts, np.zeros(len(self.pts))])
         self.bad("boundary: expected shape (n, 2)", boundary=self.bdry.T)
         self.bad("cell_refs: expected shape", cell_refs=np.zeros(3, int))
         self.bad("required_points: expected shape", required_points=np.zeros(2, bool))
