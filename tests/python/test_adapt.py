@@ -175,6 +175,25 @@ class Adapt(unittest.TestCase):
         self.assertLess(gap, 0.5 * min(calls), "main thread stalled %.3f s in calls of %s s" % (gap, calls))
 
 
+    def test_own_metric_and_no_leak(self):
+        import gc
+        gc.collect()
+        base = padapt.memory_current()
+        mesh = padapt.Mesh.generate_box(3, 2)
+        mesh.metric = np.full(mesh.nvert, 0.3)
+        new, _, rep = padapt.adapt(mesh)  # the mesh's own metric
+        new.check()
+        self.assertGreater(new.nelem, mesh.nelem)
+        self.assertIsNotNone(mesh.metric)
+        pts = new.points
+        del mesh, new, rep
+        gc.collect()
+        self.assertGreater(padapt.memory_current(), base)  # pts keeps its mesh alive
+        del pts
+        gc.collect()
+        self.assertEqual(padapt.memory_current(), base, "library memory not freed")
+
+
 class AdaptBadInput(unittest.TestCase):
     def setUp(self):
         self.mesh = padapt.Mesh.generate_box(2, 3)
