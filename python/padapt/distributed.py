@@ -393,7 +393,7 @@ class DistributedMesh(object):
         return lib.pa_dmesh_memory_used(self._live())
 
     # -------------------------------------------------------------- values
-    def add_value(self, name, kind="vertex", ncomp=1, dtype=np.float64, ref=-1):
+    def add_value(self, name, kind="vertex", ncomp=1, dtype="float64", ref=-1):
         """Attach a value of ncomp items of dtype (float64, float32, int32,
         int64, uint8) to every entity of a kind, or only to those of
         reference ref; initialised to zero. Returns a Value. Collective."""

@@ -4,7 +4,8 @@ distribute a mesh built from numpy, values and halo exchange / reduction as
 numpy arrays against the global ids, entity sets, the Hessian metric and
 the parallel adaptation (fields interpolated exactly, the gathered result
 judged by meshio), a distributed set written and read back with the same
-checksum, and bad input on one rank refused on both.
+checksum, kept through redistribute and rebalance, and bad input on one
+rank refused on both.
 
 Run: mpiexec -n 2 python3 mpi_distributed.py (CTest: python.distributed.np2).
 Exits 0 on every rank on success; an assertion stops the run (mpi4py
@@ -101,6 +102,16 @@ def main():
         back.check()
         assert back.nglobal("element") == rep["elements"]
         assert back.checksum() == sum1, "checksum changed through the set"
+        # moving elements changes neither the mesh nor its checksum
+        ne = back.nowned("element")
+        back.redistribute(np.where(np.arange(ne) < ne // 2, 0, 1))
+        back.check()
+        assert back.checksum() == sum1, "checksum changed by redistribute"
+        moved = back.rebalance(tol=1.05)
+        back.check()
+        counts, imbalance, cut = back.partition_stats()
+        assert counts.sum() == rep["elements"] and imbalance <= 1.06 and cut > 0, (counts, imbalance)
+        assert back.checksum() == sum1 and isinstance(moved, int)
 
     # ---- bad input on one rank only: every rank raises, none hangs
     met = np.full(dm.nowned("vertex"), 0.05)
