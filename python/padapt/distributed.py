@@ -21,7 +21,7 @@ import numpy as np
 from mpi4py import MPI
 
 from . import _lib
-from ._lib import lib, check, Error
+from ._lib import lib, check
 from .mesh import Mesh, as_metric, as_field
 from .adapt import Report, stats_dict, fidelity_dict, describe, remesh_options
 
