@@ -448,6 +448,13 @@ class DistributedMesh(object):
         check(lib.pa_dmesh_rebalance(self._live(), None, float(tol), ctypes.byref(n)))
         return n.value
 
+    def reorder(self):
+        """Renumber owned and ghost entities for locality (elements along
+        the Hilbert curve, the other kinds following them); values, ids and
+        owners follow. Collective; invalidates views."""
+        self._changed()
+        check(lib.pa_dmesh_reorder(self._live()))
+
     def check(self):
         """Check the distributed mesh (ids, ghosts equal owners, conformity
         across ranks, orientation); raise padapt.Error on every rank.

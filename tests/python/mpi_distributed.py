@@ -4,7 +4,7 @@ distribute a mesh built from numpy, values and halo exchange / reduction as
 numpy arrays against the global ids, entity sets, the Hessian metric and
 the parallel adaptation (fields interpolated exactly, the gathered result
 judged by meshio), a distributed set written and read back with the same
-checksum, kept through redistribute and rebalance, and bad input on one
+checksum, kept through redistribute, rebalance and reorder, and bad input on one
 rank refused on both.
 
 Run: mpiexec -n 2 python3 mpi_distributed.py (CTest: python.distributed.np2).
@@ -112,6 +112,9 @@ def main():
         counts, imbalance, cut = back.partition_stats()
         assert counts.sum() == rep["elements"] and imbalance <= 1.06 and cut > 0, (counts, imbalance)
         assert back.checksum() == sum1 and isinstance(moved, int)
+        back.reorder()
+        back.check()
+        assert back.checksum() == sum1, "checksum changed by reorder"
 
     # ---- bad input on one rank only: every rank raises, none hangs
     met = np.full(dm.nowned("vertex"), 0.05)
