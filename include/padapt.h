@@ -141,6 +141,17 @@ pa_status pa_mesh_add_bdry(pa_mesh *mesh, const pa_idx *v, int32_t ref,
 pa_status pa_mesh_add_edge(pa_mesh *mesh, const pa_idx *v, int32_t ref,
                            pa_idx *index);
 
+/**
+ * Set the entity counts at once, to fill the entities through the raw
+ * accessors below (e.g. from arrays): the entities added are zeroed
+ * (coordinates, vertex indices, references, flags, metric and fields), a
+ * smaller count drops the last entities. Drops the cached adjacency, balls
+ * and boundary lookup. The caller makes the filled mesh valid (see
+ * pa_mesh_check). Not collective.
+ */
+pa_status pa_mesh_resize(pa_mesh *mesh, pa_idx nvert, pa_idx nelem,
+                         pa_idx nbdry, pa_idx nedge);
+
 /*
  * Raw array access (structure of arrays). Pointers are valid until the next
  * call that adds entities. Layouts: coords[dim*i + k], elems[(dim+1)*e + k],

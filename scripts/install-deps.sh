@@ -3,7 +3,7 @@
 # through sudo; does nothing (and needs no privilege) when all are present.
 set -euo pipefail
 pkgs=(cmake gcc make pkg-config libptscotch-dev libscotch-dev openmpi-bin
-      libopenmpi-dev python3 python3-meshio python3-numpy)
+      libopenmpi-dev python3 python3-meshio python3-numpy python3-mpi4py)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

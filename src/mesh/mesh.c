@@ -116,6 +116,55 @@ cleanup:
   return st;
 }
 
+/* Set *count to n for one cell kind: grown entries zeroed, shrinking drops
+ * the last ones. */
+static pa_status resize_cells(pa_idx **v, int32_t **ref, uint8_t **flag,
+                              size_t *cap, pa_idx *count, pa_idx n, int nv) {
+  pa_status st = PA_SUCCESS;
+  PA_CALL(grow_cells(v, ref, flag, cap, (size_t)n, nv));
+  if (n > *count) {
+    size_t d = (size_t)(n - *count);
+    memset(*v + (size_t)nv * *count, 0, d * nv * sizeof(pa_idx));
+    memset(*ref + *count, 0, d * sizeof(int32_t));
+    memset(*flag + *count, 0, d);
+  }
+  *count = n;
+cleanup:
+  return st;
+}
+
+pa_status pa_mesh_resize(pa_mesh *m, pa_idx nvert, pa_idx nelem, pa_idx nbdry,
+                         pa_idx nedge) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(m && nvert >= 0 && nelem >= 0 && nbdry >= 0 && nedge >= 0,
+           PA_ERR_ARG, "pa_mesh_resize: invalid arguments");
+  PA_CHECK(m->dim == 3 || nedge == 0, PA_ERR_ARG,
+           "pa_mesh_resize: feature edges exist in 3D only");
+  PA_CALL(pa_mesh_reserve(m, nvert, nelem, nbdry, nedge));
+  if (nvert > m->nv) {
+    size_t i = (size_t)m->nv, d = (size_t)(nvert - m->nv);
+    memset(m->coord + (size_t)m->dim * i, 0, d * m->dim * sizeof(double));
+    memset(m->vref + i, 0, d * sizeof(int32_t));
+    memset(m->vflag + i, 0, d);
+    if (m->met_ncomp)
+      memset(m->met + (size_t)m->met_ncomp * i, 0,
+             d * m->met_ncomp * sizeof(double));
+    for (int k = 0; k < m->nfield; k++)
+      memset(m->field[k].val + (size_t)m->field[k].ncomp * i, 0,
+             d * m->field[k].ncomp * sizeof(double));
+  }
+  m->nv = nvert;
+  PA_CALL(resize_cells(&m->elem, &m->eref, &m->eflag, &m->cape, &m->ne, nelem,
+                       m->dim + 1));
+  PA_CALL(resize_cells(&m->bdry, &m->bref, &m->bflag, &m->capb, &m->nb, nbdry,
+                       m->dim));
+  PA_CALL(resize_cells(&m->edge, &m->edref, &m->edflag, &m->caped, &m->ned,
+                       nedge, 2));
+  pa__mesh_invalidate(m);
+cleanup:
+  return st;
+}
+
 pa_status pa_mesh_add_vertex(pa_mesh *m, const double *x, int32_t ref,
                              pa_idx *index) {
   pa_status st = PA_SUCCESS;

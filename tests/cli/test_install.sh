@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # `cmake --install` gives a usable package: a program builds against the
 # installed library through pkg-config and through CMake's find_package, and
-# runs.
+# runs; the Python package imports from the prefix and uses the installed
+# library.
 set -eu
 : "${PADAPT:?PADAPT must point to the padapt binary}"
 build=$(cd "$(dirname "$PADAPT")/.." && pwd)
@@ -52,3 +53,16 @@ case "$out" in "padapt "*) echo "ok   installed CLI runs without LD_LIBRARY_PATH
 ldd "$prefix/bin/padapt" | grep -q "libpadapt.*$prefix" ||
   { echo "FAIL installed CLI does not use the installed library"; exit 1; }
 echo "ok   installed CLI uses $prefix's library"
+# Python package (not in a sanitizer build: python3 cannot load it there)
+if [ -z "$san" ] && [ -x /usr/bin/python3 ]; then
+  init=$(find "$prefix" -path '*/padapt/__init__.py' | head -1)
+  [ -n "$init" ] || { echo "FAIL Python package not installed"; exit 1; }
+  out=$(cd / && env -u PADAPT_LIB PYTHONPATH="$(dirname "$(dirname "$init")")" /usr/bin/python3 -c '
+import padapt
+m = padapt.Mesh.generate_box(2, 3)
+print(padapt.library_path(), m.nelem)')
+  case "$out" in
+    "$prefix"/*" 18") echo "ok   Python package ($out)" ;;
+    *) echo "FAIL Python package printed '$out'"; exit 1 ;;
+  esac
+fi

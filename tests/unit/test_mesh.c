@@ -398,6 +398,45 @@ static void test_caches(void) {
   pa_mesh_destroy(m);
 }
 
+/* pa_mesh_resize then filling the raw arrays gives the same mesh as the
+ * one-at-a-time adds; growing zeroes the new entities, shrinking drops the
+ * last ones. */
+static void test_resize(void) {
+  pa_mesh *m = NULL, *c = NULL;
+  CHECK_OK(pa_mesh_generate_box(3, 2, &m));
+  CHECK_OK(pa_mesh_create(3, &c));
+  if (!m || !c) return;
+  pa_idx nv = pa_mesh_nvert(m), ne = pa_mesh_nelem(m), nb = pa_mesh_nbdry(m);
+  double x0[3] = {0, 0, 0};
+  CHECK_OK(pa_mesh_add_vertex(c, x0, 7, NULL));
+  CHECK_OK(pa_mesh_add_field(c, "u", 2, (double[]){5, 5}));
+  CHECK_OK(pa_mesh_resize(c, nv, ne, nb, 0));
+  CHECK(pa_mesh_nvert(c) == nv && pa_mesh_nelem(c) == ne &&
+        pa_mesh_nbdry(c) == nb);
+  double *u = NULL;
+  CHECK_OK(pa_mesh_field(c, 0, NULL, NULL, &u));
+  CHECK(u && u[0] == 5 && u[2 * (nv - 1) + 1] == 0);
+  CHECK(pa_mesh_vert_refs(c)[nv - 1] == 0 && pa_mesh_elems(c)[4 * ne - 1] == 0);
+  memcpy(pa_mesh_coords(c), pa_mesh_coords(m), sizeof(double) * 3 * nv);
+  memcpy(pa_mesh_vert_refs(c), pa_mesh_vert_refs(m), sizeof(int32_t) * nv);
+  memcpy(pa_mesh_elems(c), pa_mesh_elems(m), sizeof(pa_idx) * 4 * ne);
+  memcpy(pa_mesh_elem_refs(c), pa_mesh_elem_refs(m), sizeof(int32_t) * ne);
+  memcpy(pa_mesh_bdrys(c), pa_mesh_bdrys(m), sizeof(pa_idx) * 3 * nb);
+  memcpy(pa_mesh_bdry_refs(c), pa_mesh_bdry_refs(m), sizeof(int32_t) * nb);
+  CHECK_OK(pa_mesh_check(c));
+  CHECK_NEAR(pa_mesh_volume(c), 1.0, 1e-12);
+  CHECK_OK(pa_mesh_resize(c, nv, ne - 1, nb, 0));
+  CHECK(pa_mesh_nelem(c) == ne - 1);
+  CHECK(pa_mesh_check(c) == PA_ERR_MESH); /* a hole: faces not listed */
+  CHECK(pa_mesh_resize(c, -1, 0, 0, 0) == PA_ERR_ARG);
+  pa_mesh_destroy(c);
+  c = NULL;
+  CHECK_OK(pa_mesh_create(2, &c));
+  CHECK(pa_mesh_resize(c, 3, 1, 0, 1) == PA_ERR_ARG); /* no 2D feature edges */
+  pa_mesh_destroy(c);
+  pa_mesh_destroy(m);
+}
+
 /* ---- boundary completion ------------------------------------------------ */
 
 static void test_build_boundary(void) {
@@ -839,6 +878,6 @@ static void test_predicate_random(void) {
 }
 
 TEST_MAIN(test_generate_counts, test_generate_geometry, test_generate_large,
-          test_topology_brute, test_caches, test_build_boundary,
+          test_topology_brute, test_caches, test_resize, test_build_boundary,
           test_check_violations, test_check_hand_meshes, test_alloc_failures,
           test_predicate_degenerate, test_predicate_random)
