@@ -13,12 +13,12 @@ mpi4py: padapt.DistributedMesh. Errors of the library raise padapt.Error
 carrying its message; bad arrays raise ValueError before any library call.
 See docs/guide/python.md.
 """
-from ._lib import Error, LIBPATH as _LIBPATH
+from ._lib import Error, LIBPATH as _LIBPATH, lib as _clib
 from .mesh import Mesh, read, FLAG_CORNER, FLAG_RIDGE, FLAG_REQUIRED, FLAG_USER
 from .adapt import adapt, AdaptResult, Report
 from . import metric
 
-__version__ = "0.1.0"
+__version__ = _clib.pa_version().decode()  # the library's (padapt.h)
 __all__ = ["Error", "Mesh", "read", "adapt", "AdaptResult", "Report", "metric",
            "DistributedMesh", "FLAG_CORNER", "FLAG_RIDGE", "FLAG_REQUIRED",
            "FLAG_USER", "library_path", "memory_current", "memory_peak"]

@@ -90,7 +90,8 @@ class RemeshOpts(ctypes.Structure):
                 ("hmin", "hmax", "hsiz", "hgrad", "hgradreq", "hausd", "angle")] + \
                [(n, ctypes.c_int) for n in
                 ("no_angle", "no_insert", "no_swap", "no_move", "no_surf",
-                 "verbosity", "trusted", "no_stats")]
+                 "verbosity", "trusted", "no_stats")] + \
+               [("progress", ctypes.c_void_p), ("progress_ctx", ctypes.c_void_p)]
 
 
 class RemeshReport(ctypes.Structure):
@@ -128,7 +129,8 @@ class AdaptOpts(ctypes.Structure):
                 ("min_piece_ratio", ctypes.c_double),
                 ("rebalance_tol", ctypes.c_double), ("rebalance", ctypes.c_int),
                 ("check_pieces", ctypes.c_int), ("progress", ctypes.c_void_p),
-                ("progress_ctx", ctypes.c_void_p)]
+                ("progress_ctx", ctypes.c_void_p),
+                ("checkpoint_dir", ctypes.c_char_p)]
 
 
 class AdaptReport(ctypes.Structure):
@@ -168,6 +170,7 @@ def _proto(name, restype, *argtypes):
 
 for _n, _r, _a in [
         ("pa_status_string", cstr, [I]), ("pa_last_error", cstr, []),
+        ("pa_version", cstr, []),
         ("pa_clear_error", None, []),
         ("pa_memory_current", ctypes.c_size_t, []), ("pa_memory_peak", ctypes.c_size_t, []),
         ("pa_memory_reset_peak", None, []), ("pa_peak_rss", ctypes.c_size_t, []),

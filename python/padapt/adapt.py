@@ -25,6 +25,7 @@ def _ratio(n, total):
 def stats_dict(s):
     """The members of pa_stats_write_json, from a pa_stats."""
     return {
+        "padapt_version": _lib.lib.pa_version().decode(),
         "dim": s.dim, "vertices": s.nvert, "elements": s.nelem, "boundary": s.nbdry,
         "volume": _num(s.volume), "inverted": s.ninverted, "valid": bool(s.valid),
         "has_metric": bool(s.has_metric), "edges": s.nedge,

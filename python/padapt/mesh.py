@@ -28,7 +28,8 @@ _INT32_MAX = 2 ** 31 - 1
 
 
 class _WriteOpts(ctypes.Structure):
-    _fields_ = [("binary", ctypes.c_int), ("version", ctypes.c_int)]
+    _fields_ = [("binary", ctypes.c_int), ("version", ctypes.c_int),
+                ("diagnostics", ctypes.c_int)]
 
 
 lib.pa_mesh_write.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.POINTER(_WriteOpts)]
