@@ -286,6 +286,14 @@ const char *const *pa_metric_analytic_names(void);
  */
 pa_status pa_mesh_metric_clamp(pa_mesh *mesh, double hmin, double hmax);
 
+/**
+ * Replace the metric by the sizes of the mesh itself: at each vertex the
+ * mean length of its edges (isotropic; Mmg's -optim), so that a remesh
+ * keeps the sizes and improves the quality. PA_ERR_MESH if a vertex
+ * belongs to no element.
+ */
+pa_status pa_mesh_metric_from_edges(pa_mesh *mesh);
+
 /* ---- metric toolbox (src/metric/recovery.c, hessian.c, levelset.c) ---- */
 
 /** How a gradient and a Hessian are recovered from vertex values. */

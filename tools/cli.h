@@ -55,6 +55,7 @@ typedef struct pa_cli_adapt_args {
   int max_iter;    /* -max-iter N (0: default) */
   int pieces;      /* -pieces K (0: default) */
   int check;       /* -check: check every piece and the result */
+  int optim;       /* -optim: the metric is the input mesh's own sizes */
   const char *checkpoint; /* -checkpoint DIR: a checkpoint per iteration */
   const char *restart;    /* -restart DIR: resume from DIR's checkpoint */
   pa_remesh_opts remesh;

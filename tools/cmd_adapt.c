@@ -48,6 +48,8 @@ static const char *adapt_usage =
     "  -nr             no corner detection by angle\n"
     "  -noinsert -noswap -nomove   disable operators\n"
     "  -nosurf         leave the boundary unchanged (3D)\n"
+    "  -optim          keep the sizes of the input mesh (the mean length of\n"
+    "                  each vertex's edges), improve the quality\n"
     "  -field F.sol    vertex fields to interpolate; written to\n"
     "                  <OUT stem>.fields.sol (or -outfield PATH)\n"
     "  -json R.json    write the after-statistics, time and counts as JSON\n"
@@ -168,6 +170,8 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
       a->check = 1;
     } else if (!strcmp(o, "-best-effort")) {
       a->best_effort = 1;
+    } else if (!strcmp(o, "-optim")) {
+      a->optim = 1;
     } else if (!strcmp(o, "-mem") || !strcmp(o, "-m") ||
                !strcmp(o, "-max-iter") || !strcmp(o, "-pieces")) {
       double x;
@@ -201,7 +205,11 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
   if (!a->out && !a->in)
     return pa_cli_error(cli, "adapt: no output mesh (-out OUT)");
   if (!a->out && default_paths(cli, a)) return 1;
-  if (!a->met && a->remesh.hsiz <= 0 && !a->restart) find_metric(cli, a);
+  if (a->optim && (a->met || a->remesh.hsiz > 0))
+    return pa_cli_error(cli, "adapt: -optim takes the sizes of the input "
+                             "mesh: give no -met/-sol/-hsiz");
+  if (!a->met && a->remesh.hsiz <= 0 && !a->restart && !a->optim)
+    find_metric(cli, a);
   if (a->svg && !pa_cli_is_svg(a->svg))
     return pa_cli_error(cli, "adapt: -svg %s: only SVG pictures are written "
                              "(.svg); convert with e.g. rsvg-convert",
@@ -279,7 +287,13 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
     pa_cli_fail(cli, st);
     goto done;
   }
-  if (met) {
+  if (args.optim) {
+    st = pa_mesh_metric_from_edges(mesh);
+    if (st) {
+      pa_cli_fail(cli, st);
+      goto done;
+    }
+  } else if (met) {
     st = pa_cli_attach_metric(mesh, met);
     if (st) {
       pa_cli_fail(cli, st);

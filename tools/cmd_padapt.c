@@ -40,9 +40,11 @@
 /* Rank 0, after pa_cli_read_mesh: attach the metric and the fields. Prints
  * its own errors; returns 1 on success. */
 static int prepare_root(const pa_cli *cli, pa_mesh *mesh, const char *met,
-                        const char *field, double hsiz) {
+                        const char *field, double hsiz, int optim) {
   pa_status st = PA_SUCCESS;
-  if (met) {
+  if (optim) {
+    st = pa_mesh_metric_from_edges(mesh);
+  } else if (met) {
     st = pa_cli_attach_metric(mesh, met);
   } else if (hsiz <= 0 && pa_mesh_metric_ncomp(mesh) == 0) {
     pa_cli_error(cli, "adapt: no metric: give -met SOL, -sol SOL or -hsiz H");
@@ -214,7 +216,8 @@ static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
     if (cli->rank == 0) {
       if (st) pa_cli_fail(cli, st);
       ok = st == PA_SUCCESS &&
-           prepare_root(cli, mesh, args->met, args->field, opts->remesh.hsiz);
+           prepare_root(cli, mesh, args->met, args->field, opts->remesh.hsiz,
+                        args->optim);
     }
     MPI_Bcast(&ok, 1, MPI_INT, 0, cli->comm);
     if (ok) st = pa_dmesh_distribute(cli->comm, 0, mesh, 0, dm);

@@ -108,6 +108,43 @@ cleanup:
   return st;
 }
 
+pa_status pa_mesh_metric_from_edges(pa_mesh *mesh) {
+  pa_status st = PA_SUCCESS;
+  size_t *start = NULL;
+  pa_idx *other = NULL, *count = NULL;
+  double *h = NULL;
+  PA_CHECK(mesh, PA_ERR_ARG, "pa_mesh_metric_from_edges: NULL mesh");
+  int d = mesh->dim;
+  PA_CALL(pa__edges_csr(mesh->elem, mesh->ne, d + 1, mesh->nv, NULL, &start,
+                        &other));
+  PA_CALLOC(h, mesh->nv ? mesh->nv : 1);
+  PA_CALLOC(count, mesh->nv ? mesh->nv : 1);
+  for (pa_idx a = 0; a < mesh->nv; a++)
+    for (size_t k = start[a]; k < start[a + 1]; k++) {
+      pa_idx b = other[k];
+      double l = 0;
+      for (int c = 0; c < d; c++) {
+        double e = mesh->coord[(size_t)d * a + c] - mesh->coord[(size_t)d * b + c];
+        l += e * e;
+      }
+      l = sqrt(l);
+      h[a] += l, h[b] += l;
+      count[a]++, count[b]++;
+    }
+  for (pa_idx v = 0; v < mesh->nv; v++) {
+    PA_CHECK(count[v] > 0 && h[v] > 0, PA_ERR_MESH,
+             "vertex %d belongs to no element: it has no size", (int)v + 1);
+    h[v] /= count[v];
+  }
+  PA_CALL(pa_mesh_set_metric(mesh, 1, h));
+cleanup:
+  pa__free(start);
+  pa__free(other);
+  pa__free(count);
+  pa__free(h);
+  return st;
+}
+
 /* Peak bytes per output element, [parallel][dim == 3]: the sequential
  * remesher's (75 B per triangle on the gmsh plate, 138-162 B per tetrahedron
  * on the gmsh rod, padapt's counting allocator; BENCHMARKS.md) and a rank's

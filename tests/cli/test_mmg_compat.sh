@@ -2,7 +2,7 @@
 # What a Mmg user expects of the command line, and the live progress line:
 # --version (and the version in the JSON report), -v -1 (errors only), the
 # default output IN.o.EXT with its IN.o.sol, IN.sol picked up as the metric
-# when it lies beside IN, -m MB as -mem, -hgrad -1, the exit status, and
+# when it lies beside IN, -optim, -m MB as -mem, -hgrad -1, the exit status, and
 # progress lines on stderr (per pass, per parallel iteration), silenced by
 # -v -1.
 set -u
@@ -52,6 +52,25 @@ ne=$(json r.json elements)
 # -hgrad -1 disables the gradation (Mmg's convention)
 "$PADAPT" adapt sq.mesh -met sq.sol -hgrad -1 -out g.mesh > g.txt 2>&1 && ok "-hgrad -1 accepted" ||
   bad "-hgrad -1: $(tail -1 g.txt)"
+
+# -optim: the input's own sizes, quality improved: the element count stays
+# within 20 %, the worst quality does not fall; sequential and on 2 ranks
+cp "$PADAPT_SRC/tests/data/plate2d.mesh" o.mesh
+"$PADAPT" stats o.mesh -json o0.json > /dev/null
+for np in 1 2; do
+  if [ $np = 1 ]; then "$PADAPT" adapt o.mesh -optim -out oo.mesh -json o.json > o.txt 2>&1
+  else "$MPIEXEC" -n 2 "$PADAPT" adapt o.mesh -optim -out oo.mesh -json o.json > o.txt 2>&1; fi
+  rc=$?
+  /usr/bin/python3 - o0.json o.json <<'PY' && [ $rc -eq 0 ] && ok "-optim np=$np" || bad "-optim np=$np (exit $rc)"
+import json, sys
+a, b = (json.load(open(f)) for f in sys.argv[1:3])
+ok = abs(b["elements"] / a["elements"] - 1) < 0.2 and b["quality_worst"] >= a["quality_worst"] - 1e-9
+print("  elements %d -> %d, worst quality %.3f -> %.3f" % (a["elements"], b["elements"], a["quality_worst"], b["quality_worst"]))
+sys.exit(0 if ok else 1)
+PY
+done
+"$PADAPT" adapt o.mesh -optim -hsiz 0.1 -out x.mesh > /dev/null 2> err.txt && bad "-optim with -hsiz accepted" ||
+  { grep -q "optim" err.txt && ok "-optim with -hsiz refused" || bad "-optim -hsiz message: $(cat err.txt)"; }
 
 # -m MB is -mem: a bound too small for the metric is refused, nothing written
 rm -f m.mesh
