@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # `cmake --install` gives a usable package: a program builds against the
 # installed library through pkg-config and through CMake's find_package, and
-# runs.
+# runs; the CLI and its man page are installed.
 set -eu
 : "${PADAPT:?PADAPT must point to the padapt binary}"
 build=$(cd "$(dirname "$PADAPT")/.." && pwd)
@@ -45,3 +45,5 @@ out=$(LD_LIBRARY_PATH="$prefix/lib:$prefix/lib/x86_64-linux-gnu" ./consumer/buil
 echo "ok   CMake consumer"
 [ -x "$prefix/bin/padapt" ] || { echo "FAIL padapt not installed"; exit 1; }
 echo "ok   CLI installed"
+[ -s "$prefix/share/man/man1/padapt.1" ] || { echo "FAIL man page not installed"; exit 1; }
+echo "ok   man page installed"
