@@ -21,14 +21,14 @@
  * names the file and line or the entity at fault. Collective functions
  * return the same status on every rank, so every rank takes the same
  * branch. */
-#define CALL(call)                                                        \
-  do {                                                                    \
-    st = (call);                                                          \
-    if (st != PA_SUCCESS) {                                               \
-      fprintf(stderr, "rank %d: %s: %s (%s)\n", rank, #call,              \
-              pa_last_error(), pa_status_string(st));                     \
-      goto cleanup;                                                       \
-    }                                                                     \
+#define CALL(call)                                                             \
+  do {                                                                         \
+    st = (call);                                                               \
+    if (st != PA_SUCCESS) {                                                    \
+      fprintf(stderr, "rank %d: %s: %s (%s)\n", rank, #call, pa_last_error(),  \
+              pa_status_string(st));                                           \
+      goto cleanup;                                                            \
+    }                                                                          \
   } while (0)
 
 /* The metric: a 2D tensor m11 m12 m22 per vertex (Medit's order), fine
@@ -135,11 +135,13 @@ int main(int argc, char **argv) {
   pa_idx n = 0, nowned = 0, e;
   CALL(pa_dmesh_value_add(dm, PA_VERTEX, "owner", MPI_INT, 1, -1, &owner));
   int *who = pa_dmesh_value_data(owner, &n, &nowned);
-  for (pa_idx v = 0; v < nowned; v++) who[v] = rank;
+  for (pa_idx v = 0; v < nowned; v++)
+    who[v] = rank;
   CALL(pa_dmesh_halo(dm, owner));
   const int *owners = pa_dmesh_owners(dm, PA_VERTEX);
   int bad = 0;
-  for (pa_idx v = 0; v < n; v++) bad += who[v] != owners[v];
+  for (pa_idx v = 0; v < n; v++)
+    bad += who[v] != owners[v];
 
   pa_dmesh_iter it;
   double area = 0;
