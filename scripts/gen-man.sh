@@ -101,7 +101,8 @@ path, a metric too fine for the memory, a stalled parallel loop. The message
 on stderr names the file and line or the entity at fault; nothing is
 written. \fBstats\fR also exits with 1 on an invalid mesh.
 .PP
-Under \fBmpiexec\fR every rank exits with the same status.
+Under \fBmpiexec\fR every rank exits with the same status. SIGINT and SIGTERM
+remove the files being written, then end the process as the signal would.
 .SH ENVIRONMENT
 .TP
 .B SCOTCH_PTHREAD_NUMBER
@@ -121,6 +122,7 @@ Set to 1 to run more ranks than cores with Open MPI.
 .nf
 padapt generate box3d 10 cube.mesh
 padapt adapt cube.mesh \-hsiz 0.05 \-out fine.mesh
+padapt metric uniform:0.05 cube.mesh cube.sol
 mpiexec \-n 4 padapt adapt cube.mesh \-met cube.sol \-out out.meshb
 padapt stats out.meshb \-met out.sol
 .fi
