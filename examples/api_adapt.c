@@ -169,6 +169,12 @@ int main(int argc, char **argv) {
 cleanup:
   pa_dmesh_destroy(dm); /* collective */
   pa_mesh_destroy(input);
+  /* padapt counts its allocations: everything was freed */
+  if (pa_memory_current() != 0) {
+    fprintf(stderr, "rank %d: %zu bytes still allocated by padapt\n", rank,
+            pa_memory_current());
+    rc = 1;
+  }
   /* every rank exits with the same status */
   MPI_Allreduce(MPI_IN_PLACE, &rc, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
   MPI_Finalize();
