@@ -473,14 +473,20 @@ int pa_cli_metric(const pa_cli *cli, int argc, char **argv) {
   return pa_cli_fail(cli, st);
 }
 
+static const char *const levelset_usage =
+    "usage: padapt levelset NAME IN OUT.sol\n"
+    "  NAME: sphere:R[:cx,cy,cz] ellipsoid:a,b,c[:cx,cy,cz]\n"
+    "        box:lx,ly,lz[:cx,cy,cz] plane:nx,ny,nz,d\n"
+    "        (2D: circle as sphere:R[:cx,cy], ellipse:a,b,\n"
+    "        box:lx,ly, plane:nx,ny,d)\n"
+    "  writes the signed distance (negative inside) at IN's vertices\n";
+
 int pa_cli_levelset(const pa_cli *cli, int argc, char **argv) {
-  if (argc != 4)
-    return pa_cli_error(
-        cli, "usage: padapt levelset NAME IN OUT.sol\n"
-             "  NAME: sphere:R[:cx,cy,cz] ellipsoid:a,b,c[:cx,cy,cz]\n"
-             "        box:lx,ly,lz[:cx,cy,cz] plane:nx,ny,nz,d\n"
-             "        (2D: circle as sphere:R[:cx,cy], ellipse:a,b,\n"
-             "        box:lx,ly, plane:nx,ny,d)");
+  if (argc == 2 && (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help"))) {
+    if (cli->rank == 0) fputs(levelset_usage, stdout);
+    return 0;
+  }
+  if (argc != 4) return pa_cli_error(cli, "%s", levelset_usage);
   pa_mesh *mesh = NULL;
   pa_sol *sol = NULL;
   double *phi = NULL;

@@ -22,7 +22,8 @@
 static const char *partition_usage =
     "usage: mpiexec -n P padapt partition IN -out OUT [-overlap K] [-check]\n"
     "  IN           mesh file, or distributed set OUT.meshb (OUT.<r>.meshb)\n"
-    "  -out OUT     output set: OUT.<rank>.meshb and OUT.pvtu\n"
+    "  -out OUT     output set: OUT.<rank>.meshb, OUT.manifest, and\n"
+    "               OUT.<rank>.vtu + OUT.pvtu for ParaView\n"
     "  -overlap K   ghost element layers kept in memory (default 1)\n"
     "  -check       check the distributed mesh (collective)\n";
 

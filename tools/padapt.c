@@ -386,7 +386,19 @@ pa_status pa_cli_attach_metric(pa_mesh *mesh, const char *path) {
   return st;
 }
 
+static const char *generate_usage =
+    "usage: padapt generate box2d|box3d N OUT\n"
+    "  box2d N      unit square, n x n x 2 triangles; boundary refs x=0:1\n"
+    "               x=1:2 y=0:3 y=1:4, element ref 1\n"
+    "  box3d N      unit cube, n^3 x 6 tetrahedra; boundary refs as box2d,\n"
+    "               z=0:5 z=1:6\n"
+    "  N            1 to 2000; OUT: .mesh .meshb .msh .vtu\n";
+
 int pa_cli_generate(const pa_cli *cli, int argc, char **argv) {
+  if (argc == 2 && (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help"))) {
+    if (cli->rank == 0) fputs(generate_usage, stdout);
+    return 0;
+  }
   if (argc != 4)
     return pa_cli_error(cli, "usage: padapt generate box2d|box3d N OUT");
   int dim = !strcmp(argv[1], "box2d") ? 2 : !strcmp(argv[1], "box3d") ? 3 : 0;
@@ -410,10 +422,22 @@ int pa_cli_generate(const pa_cli *cli, int argc, char **argv) {
   return pa_cli_fail(cli, st);
 }
 
+static const char *stats_usage =
+    "usage: padapt stats IN [-met SOL] [-json OUT.json]\n"
+    "  IN             mesh file, or distributed set OUT.meshb (OUT.<r>.meshb)\n"
+    "  -met/-sol SOL  measure edge lengths and qualities in this metric\n"
+    "                 (default: the unit metric)\n"
+    "  -json OUT.json write the statistics as JSON\n"
+    "Exit status: 0 valid mesh; 1 invalid mesh (the message names the\n"
+    "entity) or error.\n";
+
 int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
   const char *in = NULL, *met = NULL, *json = NULL, *svg = NULL;
   for (int i = 1; i < argc; i++) {
-    if (!strcmp(argv[i], "-met") || !strcmp(argv[i], "-sol")) {
+    if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) {
+      if (cli->rank == 0) fputs(stats_usage, stdout);
+      return 0;
+    } else if (!strcmp(argv[i], "-met") || !strcmp(argv[i], "-sol")) {
       if (++i >= argc) return pa_cli_error(cli, "stats: -met needs a file");
       met = argv[i];
     } else if (!strcmp(argv[i], "-json")) {
@@ -483,11 +507,24 @@ int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
   return valid ? 0 : 1;
 }
 
+static const char *convert_usage =
+    "usage: padapt convert IN OUT [-met SOL] [-binary] [-meshb-version V]\n"
+    "  IN                 .mesh .meshb .msh, or distributed set OUT.meshb\n"
+    "  OUT                format by extension: .mesh .meshb .msh .vtu\n"
+    "  -met/-sol SOL      check this metric and write it as the point data\n"
+    "                     \"metric\" of a .vtu (the other formats keep no metric)\n"
+    "  -binary            binary Gmsh .msh (default ASCII)\n"
+    "  -meshb-version V   .meshb file version 1-4 (default 2; 3 when the\n"
+    "                     file needs 64-bit positions)\n";
+
 int pa_cli_convert(const pa_cli *cli, int argc, char **argv) {
   const char *in = NULL, *out = NULL, *met = NULL;
   pa_write_opts opts = {0, 0, 0};
   for (int i = 1; i < argc; i++) {
-    if (!strcmp(argv[i], "-met") || !strcmp(argv[i], "-sol")) {
+    if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) {
+      if (cli->rank == 0) fputs(convert_usage, stdout);
+      return 0;
+    } else if (!strcmp(argv[i], "-met") || !strcmp(argv[i], "-sol")) {
       if (++i >= argc) return pa_cli_error(cli, "convert: -met needs a file");
       met = argv[i];
     } else if (!strcmp(argv[i], "-binary")) {

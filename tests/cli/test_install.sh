@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # `cmake --install` gives a usable package: a program builds against the
 # installed library through pkg-config and through CMake's find_package, and
-# runs; the Python package imports from the prefix and uses the installed
-# library.
+# runs; the CLI and its man page are installed; the Python package imports
+# from the prefix and uses the installed library.
 set -eu
 : "${PADAPT:?PADAPT must point to the padapt binary}"
 build=$(cd "$(dirname "$PADAPT")/.." && pwd)
@@ -66,3 +66,5 @@ print(padapt.library_path(), m.nelem)')
     *) echo "FAIL Python package printed '$out'"; exit 1 ;;
   esac
 fi
+[ -s "$prefix/share/man/man1/padapt.1" ] || { echo "FAIL man page not installed"; exit 1; }
+echo "ok   man page installed"
