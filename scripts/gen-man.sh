@@ -17,7 +17,7 @@ bin="$build/bin/padapt"
 # starts no daemon then: 0.5 s instead of 1.2 s per call).
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 export OMPI_MCA_ess_singleton_isolated=1
-commands="generate metric levelset stats convert adapt partition"
+commands="generate metric levelset stats convert adapt partition plot"
 dir=${2:-}
 if [ -z "$dir" ]; then
   dir=$(mktemp -d)

@@ -423,11 +423,12 @@ int pa_cli_generate(const pa_cli *cli, int argc, char **argv) {
 }
 
 static const char *stats_usage =
-    "usage: padapt stats IN [-met SOL] [-json OUT.json]\n"
+    "usage: padapt stats IN [-met SOL] [-json OUT.json] [-svg OUT.svg]\n"
     "  IN             mesh file, or distributed set OUT.meshb (OUT.<r>.meshb)\n"
     "  -met/-sol SOL  measure edge lengths and qualities in this metric\n"
     "                 (default: the unit metric)\n"
     "  -json OUT.json write the statistics as JSON\n"
+    "  -svg OUT.svg   draw the edge-length and quality histograms\n"
     "Exit status: 0 valid mesh; 1 invalid mesh (the message names the\n"
     "entity) or error.\n";
 
@@ -509,13 +510,17 @@ int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
 
 static const char *convert_usage =
     "usage: padapt convert IN OUT [-met SOL] [-binary] [-meshb-version V]\n"
+    "                     [-diag]\n"
     "  IN                 .mesh .meshb .msh, or distributed set OUT.meshb\n"
     "  OUT                format by extension: .mesh .meshb .msh .vtu\n"
     "  -met/-sol SOL      check this metric and write it as the point data\n"
-    "                     \"metric\" of a .vtu (the other formats keep no metric)\n"
+    "                     \"metric\" and \"size\" of a .vtu (the other\n"
+    "                     formats keep no metric)\n"
     "  -binary            binary Gmsh .msh (default ASCII)\n"
     "  -meshb-version V   .meshb file version 1-4 (default 2; 3 when the\n"
-    "                     file needs 64-bit positions)\n";
+    "                     file needs 64-bit positions)\n"
+    "  -diag              .vtu: the cell data edge_min and edge_max, each\n"
+    "                     element's extreme edge lengths in the metric\n";
 
 int pa_cli_convert(const pa_cli *cli, int argc, char **argv) {
   const char *in = NULL, *out = NULL, *met = NULL;

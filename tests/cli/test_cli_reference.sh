@@ -52,7 +52,7 @@ def check(ok, msg):
     global fails
     print(("ok   " if ok else "FAIL ") + msg)
     fails += not ok
-for c in "top generate metric levelset stats convert adapt partition".split():
+for c in "top generate metric levelset stats convert adapt partition plot".split():
     name = "padapt -h" if c == "top" else "padapt %s -h" % c
     helptok = tokens(open("%s/help.%s" % (helpdir, c)).read())
     if c == "top":
