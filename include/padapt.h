@@ -648,6 +648,19 @@ typedef struct pa_progress {
 /** A progress callback; ctx is the caller's. It must not call padapt. */
 typedef void (*pa_progress_fn)(const pa_progress *p, void *ctx);
 
+/** A local parameter (Mmg's parameter file): the entities of one kind with
+ *  one reference get their own size bounds and Hausdorff distance. At a
+ *  vertex of such entities the local hmin/hmax replace the global ones
+ *  (several local parameters at a vertex: the largest hmin and the
+ *  smallest hmax, hmax winning a conflict); the local hausd bounds the
+ *  boundary entities of that reference (kind PA_BOUNDARY; on elements it
+ *  has no effect). A bound <= 0 keeps the global value. */
+typedef struct pa_local_param {
+  int kind;    /**< PA_ELEMENT or PA_BOUNDARY (pa_entity) */
+  int ref;     /**< the entities' reference */
+  double hmin, hmax, hausd;
+} pa_local_param;
+
 /** Options common to every remesher (the CLI's -hmin, -hmax, ... flags). */
 typedef struct pa_remesh_opts {
   double hmin;      /**< minimal size (<= 0: none) */
@@ -680,6 +693,10 @@ typedef struct pa_remesh_opts {
    *  same figures. */
   pa_progress_fn progress;
   void *progress_ctx;
+  /** Local parameters per reference (the CLI's -f FILE; NULL, 0: none);
+   *  the array must live as long as the options are used. */
+  const pa_local_param *local;
+  int nlocal;
 } pa_remesh_opts;
 
 /** Default options: no hmin/hmax/hsiz, hgrad 1.3, hgradreq 2.3 (Mmg's),

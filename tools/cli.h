@@ -44,6 +44,12 @@ void pa_cli_progress_cb(const pa_progress *p, void *ctx);
 /* End the line rewritten on a terminal. */
 void pa_cli_progress_end(pa_cli_progress *pr);
 
+/* Read Mmg's parameter file (tools/params.c) for a mesh of dimension dim
+ * into *out (malloc'ed, *nout entries). Returns 0, or 1 after printing the
+ * error (file:line). */
+int pa_cli_read_params(const pa_cli *cli, const char *path, int dim,
+                       pa_local_param **out, int *nout);
+
 /* The arguments of `padapt adapt`, sequential and parallel alike. */
 typedef struct pa_cli_adapt_args {
   const char *in, *out, *met, *outsol, *field, *outfield, *json;
@@ -56,12 +62,13 @@ typedef struct pa_cli_adapt_args {
   int pieces;      /* -pieces K (0: default) */
   int check;       /* -check: check every piece and the result */
   int optim;       /* -optim: the metric is the input mesh's own sizes */
+  const char *params; /* -f FILE, or IN.padapt when it exists */
   const char *checkpoint; /* -checkpoint DIR: a checkpoint per iteration */
   const char *restart;    /* -restart DIR: resume from DIR's checkpoint */
   pa_remesh_opts remesh;
   /* storage of the defaults a Mmg user expects: OUT = IN.o.EXT when -out is
    * not given, the metric IN.sol when it exists and none is given */
-  char out_default[4096], met_default[4096];
+  char out_default[4096], met_default[4096], params_default[4096];
 } pa_cli_adapt_args;
 
 /* The parallel `padapt adapt` (pa_dmesh_adapt), called by pa_cli_adapt on more

@@ -48,6 +48,9 @@ static const char *adapt_usage =
     "  -nr             no corner detection by angle\n"
     "  -noinsert -noswap -nomove   disable operators\n"
     "  -nosurf         leave the boundary unchanged (3D)\n"
+    "  -f FILE         local parameters per reference (Mmg's format: REF\n"
+    "                  Triangles|Tetrahedra|Edges HMIN HMAX HAUSD; default\n"
+    "                  IN.padapt when it exists)\n"
     "  -optim          keep the sizes of the input mesh (the mean length of\n"
     "                  each vertex's edges), improve the quality\n"
     "  -field F.sol    vertex fields to interpolate; written to\n"
@@ -124,6 +127,21 @@ static void find_metric(const pa_cli *cli, pa_cli_adapt_args *a) {
   }
 }
 
+/* As Mmg reads IN.mmg3d: IN.padapt beside the mesh holds its local
+ * parameters when it exists. */
+static void find_params(const pa_cli *cli, pa_cli_adapt_args *a) {
+  char base[4000];
+  if (!stem(a->in, base, sizeof base) ||
+      snprintf(a->params_default, sizeof a->params_default, "%s.padapt",
+               base) >= (int)sizeof a->params_default ||
+      access(a->params_default, R_OK) != 0)
+    return;
+  a->params = a->params_default;
+  if (cli->rank == 0 && a->remesh.verbosity >= 0)
+    printf("padapt: adapt: local parameters %s (found beside %s)\n",
+           a->params, a->in);
+}
+
 /* Parse the arguments of `padapt adapt`. Returns 0 when parsed, 1 after
  * printing an error, -1 after printing the usage (-h). */
 static int parse_args(const pa_cli *cli, int argc, char **argv,
@@ -172,6 +190,8 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
       a->best_effort = 1;
     } else if (!strcmp(o, "-optim")) {
       a->optim = 1;
+    } else if (!strcmp(o, "-f")) {
+      file = &a->params, what = "a parameter file";
     } else if (!strcmp(o, "-mem") || !strcmp(o, "-m") ||
                !strcmp(o, "-max-iter") || !strcmp(o, "-pieces")) {
       double x;
@@ -210,6 +230,10 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
                              "mesh: give no -met/-sol/-hsiz");
   if (!a->met && a->remesh.hsiz <= 0 && !a->restart && !a->optim)
     find_metric(cli, a);
+  if (!a->params && a->in && !a->restart) find_params(cli, a);
+  if (a->params && a->restart)
+    return pa_cli_error(cli, "adapt: -f and -restart: the local parameters "
+                             "are not checkpointed; restart without them");
   if (a->svg && !pa_cli_is_svg(a->svg))
     return pa_cli_error(cli, "adapt: -svg %s: only SVG pictures are written "
                              "(.svg); convert with e.g. rsvg-convert",
@@ -278,6 +302,7 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
 
   pa_mesh *mesh = NULL;
   pa_sol *sol = NULL;
+  pa_local_param *local = NULL;
   char *solpath = NULL, *fieldpath = NULL, *extra = NULL;
   pa_stats before;
   pa_remesh_report rep;
@@ -302,6 +327,12 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
   } else if (opts.hsiz <= 0 && pa_mesh_metric_ncomp(mesh) == 0) {
     pa_cli_error(cli, "adapt: no metric: give -met SOL, -sol SOL or -hsiz H");
     goto done;
+  }
+  if (args.params) {
+    if (pa_cli_read_params(cli, args.params, pa_mesh_dim(mesh), &local,
+                           &opts.nlocal))
+      goto done;
+    opts.local = local;
   }
   if (field) {
     st = pa_cli_attach_fields(mesh, field);
@@ -418,6 +449,7 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
   }
   rc = 0;
 done:
+  free(local);
   free(solpath);
   free(fieldpath);
   free(extra);

@@ -251,7 +251,21 @@ static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
     fflush(stdout);
   }
   tstep[1] = lap(t0);
-  st = pa_dmesh_adapt(*dm, opts, rep);
+  /* the local parameters, read by every rank: the pieces need them */
+  pa_adapt_opts o = *opts;
+  pa_local_param *local = NULL;
+  if (args->params) {
+    int bad = pa_cli_read_params(cli, args->params, pa_dmesh_dim(*dm), &local,
+                                 &o.remesh.nlocal), any = bad;
+    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, cli->comm);
+    if (any) {
+      free(local);
+      return 0;
+    }
+    o.remesh.local = local;
+  }
+  st = pa_dmesh_adapt(*dm, &o, rep);
+  free(local);
   if (st) {
     fail_collective(cli, st);
     return 0;

@@ -91,7 +91,8 @@ class RemeshOpts(ctypes.Structure):
                [(n, ctypes.c_int) for n in
                 ("no_angle", "no_insert", "no_swap", "no_move", "no_surf",
                  "verbosity", "trusted", "no_stats")] + \
-               [("progress", ctypes.c_void_p), ("progress_ctx", ctypes.c_void_p)]
+               [("progress", ctypes.c_void_p), ("progress_ctx", ctypes.c_void_p),
+                ("local", ctypes.c_void_p), ("nlocal", ctypes.c_int)]
 
 
 class RemeshReport(ctypes.Structure):

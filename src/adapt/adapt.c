@@ -108,9 +108,7 @@ static pa_status prepare_metric(pa_dmesh *dm, const pa_remesh_opts *ro,
   int carry = !ro->no_stats && m->nfield < PA_MAX_FIELDS;
   PA_CALL(pa__agree(dm->comm, st));
   if (carry) PA_CALL(pa_mesh_add_field(m, PA__USER_METRIC, m->met_ncomp, m->met));
-  *changed = pa__metric_clamp_all(d, m->met_ncomp, m->nv, m->met, frozen,
-                                  ro->hmin, ro->hmax);
-  PA_CALL(pa__agree(dm->comm, st));
+  PA_CALL(pa__adapt_clamp(dm, ro, frozen, changed));
   PA_CALL(pa__adapt_grade(dm, ro->hgrad, ro->hgradreq, &rounds));
   if (rounds > 1) *changed |= PA_CHANGED_GRADATION;
   {

@@ -211,6 +211,12 @@ pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
 
 pa_status pa__adapt_grade(pa_dmesh *dm, double hgrad, double hgradreq,
                           int *nrounds);
+/* Collective: clamp the metric into ro's bounds, the local parameters'
+ * (ro->local) at the vertices of their entities, merged over every copy of
+ * a vertex so that owner and ghosts agree; frozen vertices keep theirs.
+ * *changed: PA_CHANGED_HMIN/HMAX bits of this rank. grade.c. */
+pa_status pa__adapt_clamp(pa_dmesh *dm, const pa_remesh_opts *ro,
+                          const uint8_t *frozen, unsigned *changed);
 
 /* Step 1. Collective: tag the owned elements (it->tag), count them
  * (it->ntagged, global) and estimate their work (it->work). done: the

@@ -506,6 +506,77 @@ unsigned pa__metric_clamp_all(int dim, int nc, pa_idx nv, double *met,
   return changed;
 }
 
+/* Merge the bounds triple (seen, lo, hi) in into inout: a first one is
+ * taken as it is, then the largest lo and the smallest positive hi. */
+void pa__local_bounds_merge(const double *in, double *inout) {
+  if (!(in[0] > 0)) return;
+  if (!(inout[0] > 0)) {
+    memcpy(inout, in, 3 * sizeof *in);
+    return;
+  }
+  if (in[1] > inout[1]) inout[1] = in[1];
+  if (in[2] > 0 && (!(inout[2] > 0) || in[2] < inout[2])) inout[2] = in[2];
+}
+
+void pa__local_bounds(const pa_mesh *mesh, const pa_remesh_opts *o,
+                      double *b) {
+  int d = mesh->dim;
+  for (pa_idx v = 0; v < mesh->nv; v++)
+    b[3 * v] = 0, b[3 * v + 1] = o->hmin, b[3 * v + 2] = o->hmax;
+  for (int k = 0; o->local && k < o->nlocal; k++) {
+    const pa_local_param *p = &o->local[k];
+    int elem = p->kind == PA_ELEMENT, nn = elem ? d + 1 : d;
+    pa_idx n = elem ? mesh->ne : mesh->nb;
+    const pa_idx *conn = elem ? mesh->elem : mesh->bdry;
+    const int32_t *ref = elem ? mesh->eref : mesh->bref;
+    double t[3] = {1, p->hmin > 0 ? p->hmin : o->hmin,
+                   p->hmax > 0 ? p->hmax : o->hmax};
+    for (pa_idx e = 0; e < n; e++)
+      if (ref[e] == p->ref)
+        for (int j = 0; j < nn; j++)
+          pa__local_bounds_merge(t, b + 3 * (size_t)conn[(size_t)nn * e + j]);
+  }
+}
+
+unsigned pa__metric_clamp_bounds(int dim, int nc, pa_idx nv, double *met,
+                                 const uint8_t *frozen, const double *b) {
+  unsigned changed = 0;
+  for (pa_idx v = 0; v < nv; v++) {
+    if (frozen && frozen[v]) continue;
+    double l = b[3 * v + 1], h = b[3 * v + 2];
+    if (l > 0 && h > 0 && l > h) l = h; /* hmax wins a conflict */
+    changed |= pa__metric_clamp(dim, nc, met + (size_t)nc * v, l, h);
+  }
+  return changed;
+}
+
+pa_status pa__metric_clamp_opts(const pa_mesh *mesh, int nc, double *met,
+                                const uint8_t *frozen,
+                                const pa_remesh_opts *o, unsigned *changed) {
+  pa_status st = PA_SUCCESS;
+  double *b = NULL;
+  *changed = 0;
+  if (!o->local || o->nlocal <= 0) {
+    *changed = pa__metric_clamp_all(mesh->dim, nc, mesh->nv, met, frozen,
+                                    o->hmin, o->hmax);
+    return PA_SUCCESS;
+  }
+  PA_ALLOC(b, 3 * (size_t)mesh->nv);
+  pa__local_bounds(mesh, o, b);
+  *changed = pa__metric_clamp_bounds(mesh->dim, nc, mesh->nv, met, frozen, b);
+cleanup:
+  pa__free(b);
+  return st;
+}
+
+double pa__local_hausd(const pa_remesh_opts *o, int ref, double def) {
+  for (int k = 0; o->local && k < o->nlocal; k++)
+    if (o->local[k].kind == PA_BOUNDARY && o->local[k].ref == ref &&
+        o->local[k].hausd > 0)
+      return o->local[k].hausd;
+  return def;
+}
+
 pa_status pa_mesh_metric_clamp(pa_mesh *mesh, double hmin, double hmax) {
   pa_status st = PA_SUCCESS;
   PA_CHECK(mesh, PA_ERR_ARG, "pa_mesh_metric_clamp: NULL mesh");

@@ -92,6 +92,25 @@ void pa__metric_set_hsiz(int dim, int nc, pa_idx nv, double *met,
                          const uint8_t *frozen, double hsiz);
 unsigned pa__metric_clamp_all(int dim, int nc, pa_idx nv, double *met,
                               const uint8_t *frozen, double hmin, double hmax);
+/* The same with the local parameters of o (o->local): at the vertices of
+ * the entities they name their bounds replace o->hmin/o->hmax
+ * (pa_local_param); met holds mesh->nv values. *changed: PA_CHANGED_*.
+ * In three steps, for a distributed mesh whose copies of a vertex must
+ * merge their bounds first: pa__local_bounds gives each vertex the triple
+ * (seen, hmin, hmax) of the local parameters of its entities (seen 0: the
+ * global bounds), pa__local_bounds_merge merges two triples, and
+ * pa__metric_clamp_bounds clamps. */
+void pa__local_bounds(const pa_mesh *mesh, const pa_remesh_opts *o,
+                      double *b);
+void pa__local_bounds_merge(const double *in, double *inout);
+unsigned pa__metric_clamp_bounds(int dim, int nc, pa_idx nv, double *met,
+                                 const uint8_t *frozen, const double *b);
+pa_status pa__metric_clamp_opts(const pa_mesh *mesh, int nc, double *met,
+                                const uint8_t *frozen,
+                                const pa_remesh_opts *o, unsigned *changed);
+/* The Hausdorff distance bounding the boundary entities of reference ref:
+ * a local parameter's (kind PA_BOUNDARY) or the global one, def. */
+double pa__local_hausd(const pa_remesh_opts *o, int ref, double def);
 
 /* Squared length of vector e in metric m (value of ncomp components). */
 double pa__metric_sqlen(int dim, int ncomp, const double *m, const double *e);

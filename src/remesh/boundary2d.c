@@ -197,7 +197,9 @@ pa_status pa__rm_features_2d_init(pa__rmesh *rm, pa_mesh *mesh,
     double ang = fabs(atan2(e0x * e1y - e0y * e1x, e0x * e1x + e0y * e1y));
     double kappa = ang / (0.5 * (l0 + l1));
     if (kappa <= 1e-12) continue;
-    double hb = sqrt(8.0 * rm->hausd / kappa);
+    double hv = pa__local_hausd(o, rm->bref[r0[v]], rm->hausd);
+    double hw = pa__local_hausd(o, rm->bref[r1[v]], rm->hausd);
+    double hb = sqrt(8.0 * (hv < hw ? hv : hw) / kappa);
     if (o->hmin > 0 && hb < o->hmin) hb = o->hmin;
     double *m = rm->met + (size_t)rm->mcomp * v;
     if (rm->mcomp == 1) {

@@ -418,7 +418,10 @@ static int collapse_edge(pa__rmesh *rm, pa_idx k, int fi, int ip, double qrel) {
     pa_idx u = rm->bv[2 * r1] == p ? rm->bv[2 * r1 + 1] : rm->bv[2 * r1];
     if (u == q) return 0;
     const double *xu = X(u), *xq = X(q);
-    if (dist_point_segment(X(p), xu, xq) > rm->hausd) return 0;
+    double ha = pa__local_hausd(rm->opts, rm->bref[r1], rm->hausd);
+    double hb = pa__local_hausd(rm->opts, rm->bref[r2], rm->hausd);
+    double hausd = ha < hb ? ha : hb;
+    if (dist_point_segment(X(p), xu, xq) > hausd) return 0;
     /* sagitta of the merged arc: tangent at u from r1, at q from r2 */
     double tu[2], tq[2];
     int ue = rm->bv[2 * r1] == u ? 0 : 1, qe = rm->bv[2 * r2] == q ? 0 : 1;
@@ -433,7 +436,7 @@ static int collapse_edge(pa__rmesh *rm, pa_idx k, int fi, int ip, double qrel) {
     double L = sqrt(dx * dx + dy * dy);
     /* Hermite midpoint minus chord midpoint = L/8 (tu - tq) */
     double sx = 0.125 * L * (tu[0] - tq[0]), sy = 0.125 * L * (tu[1] - tq[1]);
-    if (sqrt(sx * sx + sy * sy) > rm->hausd) return 0;
+    if (sqrt(sx * sx + sy * sy) > hausd) return 0;
     /* the new arc must not fold: both tangents point forward */
     if (tu[0] * dx + tu[1] * dy <= 0 || tq[0] * dx + tq[1] * dy <= 0) return 0;
   }

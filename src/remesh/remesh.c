@@ -192,8 +192,7 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
     PA_CALL(pa_mesh_add_field(mesh, PA__USER_METRIC, nc, newmet));
     carried = 1;
   }
-  changed = pa__metric_clamp_all(d, nc, mesh->nv, newmet, frozen, opts->hmin,
-                                 opts->hmax);
+  PA_CALL(pa__metric_clamp_opts(mesh, nc, newmet, frozen, opts, &changed));
   PA_CALL(pa__metric_gradation(d, nc, mesh->nv, mesh->coord, newmet, mesh->ne,
                                mesh->elem, frozen, opts->hgrad, opts->hgradreq,
                                &ngraded));

@@ -110,6 +110,7 @@ typedef struct rm3d {
   int spread;
   double hausd, ridge_cos;
   int verbosity;
+  const pa_remesh_opts *opts; /* the caller's (local parameters) */
   /* counters */
   long nsplit, ncollapse, nswap, nmove;
   pa_idx ndead_t, ndead_v;
@@ -133,6 +134,14 @@ extern const int rm3d_face[4][3];
 
 /* May an operator create an element of quality q where the worst element it
  * replaces had quality qref? */
+/* The Hausdorff distance bounding surface triangle record r: its
+ * reference's local parameter (pa_local_param) or m->hausd. */
+static inline double rm3d_tri_hausd(const rm3d *m, pa_idx r) {
+  return m->opts && m->opts->nlocal > 0
+             ? pa__local_hausd(m->opts, m->tri.ref[r], m->hausd)
+             : m->hausd;
+}
+
 static inline int rm3d_q_ok(double q, double qref) {
   return q >= RM3D_QABS && (q >= RM3D_QFLOOR || q >= 0.5 * qref);
 }

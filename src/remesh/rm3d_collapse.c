@@ -207,7 +207,7 @@ pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
       if (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] < 0.98) return st;
       double d = fabs((xp[0] - y[0][0]) * n1[0] + (xp[1] - y[0][1]) * n1[1] +
                       (xp[2] - y[0][2]) * n1[2]);
-      if (d > m->hausd) return st;
+      if (d > rm3d_tri_hausd(m, trec[j])) return st;
     }
     if (!onsurf) return st;
     if (tp & R3V_FEAT) {
@@ -250,7 +250,12 @@ pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
       double uw = u[0] * w[0] + u[1] * w[1] + u[2] * w[2];
       if (uu <= 0 || uw <= 0 || uw >= uu) return st;
       double d2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2] - uw * uw / uu;
-      if (d2 > m->hausd * m->hausd) return st;
+      double h = m->hausd; /* the least over the triangles at p */
+      for (int j = 0; j < ntri; j++) {
+        double hj = rm3d_tri_hausd(m, trec[j]);
+        if (hj < h || j == 0) h = hj;
+      }
+      if (d2 > h * h) return st;
     }
   }
   PA_CALL(collapse_apply(m, p, q, ball, n, nq, trec, ntri, erec, nerec));

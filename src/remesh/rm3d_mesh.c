@@ -372,6 +372,7 @@ pa_status pa__rm3d_build(rm3d *m, pa_mesh *mesh, const pa_remesh_opts *opts) {
   m->surf = !opts->no_surf;
   m->swap = !opts->no_swap;
   m->hausd = opts->hausd > 0 ? opts->hausd : 0.01;
+  m->opts = opts;
   m->ridge_cos = cos((opts->angle > 0 ? opts->angle : 45.0) * M_PI / 180.0);
   m->verbosity = opts->verbosity;
   pa_idx nv = mesh->nv, ne = mesh->ne;

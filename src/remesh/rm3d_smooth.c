@@ -146,7 +146,8 @@ static void pn_eval(const double *const *P, const double *const *N, double u,
  * its normal interpolated in *nrm_out. 0 when none holds y, a vertex has no
  * normal (ridge), or the patch leaves the flat triangle by more than hausd. */
 static int curved_point(const rm3d *m, const pa_idx *tri, int ntri,
-                        const double *y, double *out, double *nrm_out) {
+                        double hausd, const double *y, double *out,
+                        double *nrm_out) {
   for (int t = 0; t < ntri; t++) {
     const pa_idx *v = tri + 3 * t;
     const double *P[3], *N[3];
@@ -180,7 +181,7 @@ static int curved_point(const rm3d *m, const pa_idx *tri, int ntri,
     pn_eval(P, N, bc[0], bc[1], bc[2], out);
     double la = sqrt(a2), d = 0;
     for (int j = 0; j < 3; j++) d += (out[j] - P[0][j]) * nn[j] / la;
-    if (fabs(d) > m->hausd) return 0;
+    if (fabs(d) > hausd) return 0;
     double sn = 0;
     for (int j = 0; j < 3; j++) {
       nrm_out[j] = bc[0] * N[0][j] + bc[1] * N[1][j] + bc[2] * N[2][j];
@@ -230,6 +231,7 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
   double dir[3];
   pa_idx tri[3 * 32];
   int ntri = 0;
+  double hausd = m->hausd;
   if ((m->vtag[p] & (R3V_BDRY | R3V_CURVED | R3V_FEAT)) ==
           (R3V_BDRY | R3V_CURVED) &&
       m->surf && m->nrm) {
@@ -247,6 +249,12 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
         for (int j = 0; j < 3; j++) tri[3 * ntri + j] = v[rm3d_face[f][j]];
         ntri++;
       }
+    }
+    /* the least Hausdorff distance of the patch's references */
+    for (int t = 0; t < ntri && m->opts && m->opts->nlocal > 0; t++) {
+      pa_idx r = pa__rm3d_table_find(&m->tri, tri + 3 * t);
+      double h = r >= 0 ? rm3d_tri_hausd(m, r) : m->hausd;
+      if (t == 0 || h < hausd) hausd = h;
     }
   } else if (m->vtag[p] & R3V_BDRY) {
     kind = pa__rm3d_bdry_freedom(m, p, ball, n, dir);
@@ -312,7 +320,7 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
     if (kind == 3) {
       double y[3];
       memcpy(y, np, sizeof y);
-      if (!curved_point(m, tri, ntri, y, np, nnew)) continue;
+      if (!curved_point(m, tri, ntri, hausd, y, np, nnew)) continue;
     }
     int ok = 1;
     for (int i = 0; i < n && ok; i++) {

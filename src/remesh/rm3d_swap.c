@@ -174,7 +174,7 @@ static pa_status swap_bdry(rm3d *m, pa_idx a, pa_idx b, const pa_idx *tets,
                     u[0] * w[1] - u[1] * w[0]};
     double lc = sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
     double vol = fabs(cr[0] * z[0] + cr[1] * z[1] + cr[2] * z[2]);
-    if (!(lc > 0) || vol > m->hausd * lc) return st;
+    if (!(lc > 0) || vol > rm3d_tri_hausd(m, r1) * lc) return st;
   }
   /* New faces (a,c,d) / (b,d,c) must face outwards like the old ones. */
   double no[3] = {n1[0] + n2[0], n1[1] + n2[1], n1[2] + n2[2]};

@@ -29,6 +29,7 @@ int main(void) {
   OFF(pa_remesh_opts, hausd);
   OFF(pa_remesh_opts, no_stats);
   OFF(pa_remesh_opts, progress);
+  OFF(pa_remesh_opts, nlocal);
   OFF(pa_adapt_opts, remesher);
   OFF(pa_adapt_opts, check_pieces);
   OFF(pa_adapt_opts, progress);

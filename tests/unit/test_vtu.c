@@ -2,7 +2,8 @@
  * test_vtu.c -- the VTK XML (.vtu) writer, checked by an independent minimal
  * parser: counts in the header, every DataArray's appended block (size prefix,
  * contiguous tiling of the appended section) and its bytes (points,
- * connectivity, offsets, types, references, quality, metric, fields), XML
+ * connectivity, offsets, types of the element, boundary and edge cells,
+ * references, entity kinds, quality, the metric and size tensors, fields), XML
  * escaping of field names, atomic writes.
  */
 #include "testutil.h"
@@ -65,9 +66,11 @@ static const unsigned char *array(const vtu_file *f, const char *sect,
                                   const char *name, const char *type, int ncomp,
                                   size_t nbytes) {
   char open[64], close[64];
-  snprintf(open, sizeof open, "<%s>", sect);
+  snprintf(open, sizeof open, "<%s", sect); /* then '>' or attributes */
   snprintf(close, sizeof close, "</%s>", sect);
-  const char *s = strstr((const char *)f->buf, open);
+  const char *s = (const char *)f->buf;
+  while ((s = strstr(s, open)) && s[strlen(open)] != '>' && s[strlen(open)] != ' ')
+    s++;
   const char *e = s ? strstr(s, close) : NULL;
   if (!s || !e) return NULL;
   for (const char *d = strstr(s, "<DataArray"); d && d < e;
@@ -122,7 +125,15 @@ static void check_file(pa_mesh *m, const char *path) {
   CHECK(attr_is(hdr, hend, "header_type", "UInt64"));
   CHECK(attr_is(hdr, hend, "byte_order", "LittleEndian"));
   CHECK(attr_int(hdr, hend, "NumberOfPoints") == (long long)nv);
-  CHECK(attr_int(hdr, hend, "NumberOfCells") == (long long)ne);
+  size_t nb = (size_t)pa_mesh_nbdry(m), ned = d == 3 ? (size_t)pa_mesh_nedge(m) : 0;
+  size_t nc = ne + nb + ned; /* elements, boundary entities, feature edges */
+  size_t width[3] = {(size_t)nn, (size_t)d, 2}, count[3] = {ne, nb, ned};
+  const pa_idx *conn[3] = {pa_mesh_elems(m), pa_mesh_bdrys(m), pa_mesh_edges(m)};
+  const int32_t *refs[3] = {pa_mesh_elem_refs(m), pa_mesh_bdry_refs(m),
+                            pa_mesh_edge_refs(m)};
+  uint8_t type[3] = {d == 2 ? 5 : 10, d == 2 ? 3 : 5, 3};
+  size_t nconn = nn * ne + d * nb + 2 * ned;
+  CHECK(attr_int(hdr, hend, "NumberOfCells") == (long long)nc);
   CHECK(tiled(&f));
 
   const unsigned char *p = array(&f, "Points", NULL, "Float64", 3, 24 * nv);
@@ -137,49 +148,71 @@ static void check_file(pa_mesh *m, const char *path) {
     }
   CHECK(ok);
 
-  p = array(&f, "Cells", "connectivity", "Int64", 1, 8 * nn * ne);
-  CHECK(p != NULL);
-  ok = p != NULL;
-  for (size_t k = 0; p && k < nn * ne; k++) {
-    int64_t v;
-    memcpy(&v, p + 8 * k, 8);
-    if (v != pa_mesh_elems(m)[k]) ok = 0;
-  }
+  /* cells of the three kinds in turn, with their refs and entity kinds */
+  const unsigned char *pc = array(&f, "Cells", "connectivity", "Int64", 1, 8 * nconn);
+  const unsigned char *po = array(&f, "Cells", "offsets", "Int64", 1, 8 * nc);
+  const unsigned char *pt = array(&f, "Cells", "types", "UInt8", 1, nc);
+  const unsigned char *pr = array(&f, "CellData", "ref", "Int32", 1, 4 * nc);
+  const unsigned char *pe = array(&f, "CellData", "entity", "UInt8", 1, nc);
+  const unsigned char *pq = array(&f, "CellData", "quality", "Float64", 1, 8 * nc);
+  CHECK(pc && po && pt && pr && pe && pq);
+  ok = pc && po && pt && pr && pe && pq;
+  size_t cell = 0, at = 0;
+  for (int kind = 0; ok && kind < 3; kind++)
+    for (size_t i = 0; i < count[kind]; i++, cell++) {
+      for (size_t j = 0; j < width[kind]; j++, at++) {
+        int64_t v;
+        memcpy(&v, pc + 8 * at, 8);
+        if (v != conn[kind][width[kind] * i + j]) ok = 0;
+      }
+      int64_t off;
+      int32_t r;
+      double q;
+      memcpy(&off, po + 8 * cell, 8);
+      memcpy(&r, pr + 4 * cell, 4);
+      memcpy(&q, pq + 8 * cell, 8);
+      if (off != (int64_t)at || pt[cell] != type[kind] || pe[cell] != kind ||
+          r != refs[kind][i])
+        ok = 0;
+      if (kind == 0) {
+        double want = pa_mesh_elem_quality(m, (pa_idx)i);
+        if (memcmp(&q, &want, 8)) ok = 0;
+      } else if (!isnan(q)) {
+        ok = 0;
+      }
+    }
   CHECK(ok);
-  p = array(&f, "Cells", "offsets", "Int64", 1, 8 * ne);
-  CHECK(p != NULL);
-  ok = p != NULL;
-  for (size_t e = 0; p && e < ne; e++) {
-    int64_t v;
-    memcpy(&v, p + 8 * e, 8);
-    if (v != (int64_t)((e + 1) * nn)) ok = 0;
-  }
-  CHECK(ok);
-  p = array(&f, "Cells", "types", "UInt8", 1, ne);
-  CHECK(p != NULL);
-  ok = p != NULL;
-  for (size_t e = 0; p && e < ne; e++)
-    if (p[e] != (d == 2 ? 5 : 10)) ok = 0;
-  CHECK(ok);
-
-  p = array(&f, "CellData", "ref", "Int32", 1, 4 * ne);
-  CHECK(p && (!ne || !memcmp(p, pa_mesh_elem_refs(m), 4 * ne)));
   p = array(&f, "PointData", "ref", "Int32", 1, 4 * nv);
   CHECK(p && (!nv || !memcmp(p, pa_mesh_vert_refs(m), 4 * nv)));
-  p = array(&f, "CellData", "quality", "Float64", 1, 8 * ne);
-  CHECK(p != NULL);
-  ok = p != NULL;
-  for (size_t e = 0; p && e < ne; e++) {
-    double q, want = pa_mesh_elem_quality(m, (pa_idx)e);
-    memcpy(&q, p + 8 * e, 8);
-    if (memcmp(&q, &want, 8)) ok = 0;
+
+  /* the metric as a 3 x 3 tensor, and the size tensor S with S M S = I */
+  int mc = pa_mesh_metric_ncomp(m);
+  const unsigned char *pm = array(&f, "PointData", "metric", "Float64", 9, 72 * nv);
+  const unsigned char *ps = array(&f, "PointData", "size", "Float64", 9, 72 * nv);
+  CHECK(mc ? pm && ps : !pm && !ps);
+  ok = 1;
+  for (size_t v = 0; mc && pm && ps && v < nv; v++) {
+    double M[9], S[9], full[9] = {0};
+    const double *mv = pa_mesh_metric(m) + (size_t)mc * v;
+    memcpy(M, pm + 72 * v, 72);
+    memcpy(S, ps + 72 * v, 72);
+    if (mc == 1) {
+      for (int k = 0; k < d; k++) full[4 * k] = 1 / (mv[0] * mv[0]);
+    } else {
+      full[0] = mv[0], full[1] = full[3] = mv[1], full[4] = mv[2];
+      if (d == 3)
+        full[2] = full[6] = mv[3], full[5] = full[7] = mv[4], full[8] = mv[5];
+    }
+    if (memcmp(M, full, 72)) ok = 0;
+    for (int i = 0; i < d; i++)
+      for (int j = 0; j < d; j++) {
+        double sms = 0;
+        for (int k = 0; k < d; k++)
+          for (int l = 0; l < d; l++) sms += S[3 * i + k] * M[3 * k + l] * S[3 * l + j];
+        if (fabs(sms - (i == j)) > 1e-9) ok = 0;
+      }
   }
   CHECK(ok);
-
-  int mc = pa_mesh_metric_ncomp(m);
-  p = array(&f, "PointData", "metric", "Float64", mc ? mc : 1, 8 * mc * nv);
-  CHECK(mc ? p && !memcmp(p, pa_mesh_metric(m), 8 * mc * nv) : p == NULL);
-  if (mc == 3) CHECK(strstr(hdr, " ComponentName1=\"m12\"") != NULL);
   for (int k = 0; k < pa_mesh_nfield(m); k++) {
     const char *name;
     int nc;
