@@ -13,7 +13,7 @@
  * time over the repeats, the process CPU time summed over the ranks (with
  * R = 1 it is the real work, immune to the other jobs of a loaded machine),
  * the edge cut and the (weighted) imbalance. Used to choose the strategy of
- * src/partition/partition.c (docs/DMESH.md). Built by bench/bench_dmesh.sh.
+ * src/partition/partition.c (docs/design/DMESH.md). Built by bench/bench_dmesh.sh.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "padapt.h"

@@ -758,7 +758,7 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
 
 /*
  * A mesh distributed over the ranks of an MPI communicator (2D or 3D), in the
- * spirit of PaMPA. Ownership rule (see docs/DMESH.md):
+ * spirit of PaMPA. Ownership rule (see docs/design/DMESH.md):
  *  - every element is owned by exactly one rank (its part);
  *  - a vertex is owned by the lowest rank owning an element that contains it;
  *  - a boundary entity or a feature edge is owned by the lowest rank owning an
@@ -1089,7 +1089,7 @@ pa_status pa_dmesh_partition_stats(pa_dmesh *dm, pa_gid *nelem,
  * pieces with PT-Scotch, give each piece a frozen skin, gather each piece on
  * one process, remesh the pieces concurrently, put them back, and repeat
  * until no element is tagged; then repartition for balance. See
- * docs/ADAPT.md.
+ * docs/design/ADAPT.md.
  */
 
 /** Figures of one iteration (the same on every rank). Times are wall-clock
@@ -1134,7 +1134,7 @@ typedef struct pa_adapt_opts {
   /** The same from the second iteration on (default 1, at least 1): its
    *  tagged elements lie next to the last skins, and each layer multiplies
    *  a piece's size by about 10 in 3D; a poor element forced by the closer
-   *  frozen faces is tagged again (docs/ADAPT.md, Convergence). */
+   *  frozen faces is tagged again (docs/design/ADAPT.md, Convergence). */
   int skin_layers_later;
   /** Smallest estimated work (about output elements) worth a piece of its
    *  own: fewer pieces are made when the tagged work is small (default

@@ -6,7 +6,7 @@
  *
  * IN is a sequential mesh (read on rank 0, scattered, partitioned) or a
  * distributed set written by any number of ranks. Writes OUT.<r>.meshb for
- * every rank and OUT.pvtu (see docs/DMESH.md), then prints the owned elements
+ * every rank and OUT.pvtu (see docs/design/DMESH.md), then prints the owned elements
  * per rank, the imbalance (max / mean) and the edge cut (faces between
  * elements of different ranks). -check runs the collective check of the
  * distributed mesh. With -v 2, each rank reports its time and peak memory per

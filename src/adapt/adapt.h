@@ -17,7 +17,7 @@
  *   checkpoint.c  checkpoints of the loop and the resume from one
  *   dstats.c      pa_dmesh_stats (statistics of a distributed mesh)
  *
- * Invariants of an iteration (see docs/ADAPT.md for the argument):
+ * Invariants of an iteration (see docs/design/ADAPT.md for the argument):
  *  - label[e] (owned elements) is a piece in [0, npieces) or -1; every
  *    tagged element is labelled; pieces are disjoint;
  *    user-required elements are never labelled;

@@ -3,7 +3,7 @@
  * manifest OUT.manifest, plus OUT.pvtu / OUT.<r>.vtu for ParaView, readable
  * by any number of ranks; and the collective end of output transactions.
  *
- * File convention (docs/DMESH.md): OUT.<r>.meshb is a standard binary Medit
+ * File convention (docs/design/DMESH.md): OUT.<r>.meshb is a standard binary Medit
  * mesh (written by pa_mesh_write) of the elements owned by rank r, all their
  * vertices and the boundary entities / edges they contain, in the rank's
  * local order, with its End keyword; after that End we append (as ParMmg

@@ -3,7 +3,7 @@
  * the parallel adaptation builds on (record sets, the build pipeline, the
  * distributed dual graph).
  *
- * Distribution (see docs/DMESH.md):
+ * Distribution (see docs/design/DMESH.md):
  *  - every element is owned by exactly one rank;
  *  - a vertex is owned by the lowest rank owning an element that contains it;
  *  - a boundary entity (and a 3D feature edge) is owned by the lowest rank

@@ -127,7 +127,7 @@ cleanup:
 #endif
   /* Scotch's default strategy: measured against SCOTCH_stratDgraphMapBuild
    * with SCOTCH_STRATSPEED / QUALITY / BALANCE (bench/bench_scotch.c, see
-   * docs/DMESH.md), none is faster on 2+ ranks; BALANCE costs 15-20 % more
+   * docs/design/DMESH.md), none is faster on 2+ ranks; BALANCE costs 15-20 % more
    * edge cut; SPEED halves the time only on one rank. */
   SCOTCH_stratInit(&strat);
   strat_init = 1;
@@ -271,7 +271,7 @@ pa_status pa__order_graph(pa_idx n, const pa_idx *xadj, const pa_idx *adj,
   /* Gibbs-Poole-Stockmeyer: a bandwidth-reducing ordering in linear time,
    * what locality needs; Scotch's default nested dissection (for sparse
    * factorisation) took 20x longer than the whole Hilbert reordering for a
-   * similar locality (docs/DMESH.md) */
+   * similar locality (docs/design/DMESH.md) */
   PA_CHECK(SCOTCH_stratGraphOrder(&strat, "g") == 0, PA_ERR_PARTITION,
            "SCOTCH_stratGraphOrder failed");
   SCOTCH_randomReset(); /* reproducible, as the partitions */

@@ -3,7 +3,7 @@
  * split / collapse / swap passes until the edge lengths settle, then swap and
  * relocation passes, a pass on the worst elements, and the verdict.
  *
- * Schedule (see docs/REMESHER.md):
+ * Schedule (see docs/design/REMESHER.md):
  *  1. refinement rounds (at most 80) while splits + collapses change more
  *     than 0.02 % of the elements, or until three stalled rounds (splits
  *     and collapses balanced, or under 0.5 % of the elements, and their

@@ -2,7 +2,7 @@
  * rm3d_driver.c -- the 3D remesher's passes and its entry point
  * pa__remesh3d().
  *
- * Schedule (docs/REMESHER3D.md):
+ * Schedule (docs/design/REMESHER3D.md):
  *  1. refinement bands: split edges longer than thr = max(sqrt 2, Lmax/1.5)
  *     (each tet's longest edge first), then collapse edges shorter than
  *     1/sqrt 2 creating no edge longer than thr. Collapsing inside every band
@@ -591,7 +591,7 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
        * collapses the refinement bands refused: at least three rounds. */
       if (it >= 2 && ns + nc <= RM3D_STOP * (m.ne - m.ndead_t)) break;
       /* Operations undoing each other (next to frozen entities whose edges
-       * cannot reach the size; the 2D remesher's rule, docs/REMESHER.md):
+       * cannot reach the size; the 2D remesher's rule, docs/design/REMESHER.md):
        * splits and collapses within a factor 3 of each other, stop after
        * three rounds without a 5 % drop of their sum since the last one. A
        * refinement or coarsening front is one-sided and never stalls. Only

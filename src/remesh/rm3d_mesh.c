@@ -830,7 +830,7 @@ cleanup:
  * difference. In the target metric a tet on a long frozen edge or face can
  * only be split on its free edges, so it flattens towards the quality floor
  * and splits and collapses undo each other there round after round (the
- * 2D remesher had the same disease, docs/REMESHER.md).
+ * 2D remesher had the same disease, docs/design/REMESHER.md).
  *
  * The working metric is relaxed at the skin (the 2D cure, skin_relax_2d): a
  * frozen vertex whose frozen edges have a mean length lambda outside
@@ -840,7 +840,7 @@ cleanup:
  * splits). 1.2 rather than the 2D's sqrt 2: the free apex over a frozen
  * face whose mean edge is sqrt 2 is pulled towards it by the smaller sizes
  * around, worst Q 0.16-0.19 on the reproducers, 0.29-0.34 at 1.2, 0.32 at
- * 1.0 (docs/REMESHER3D.md). Every lambda comes from the target metric
+ * 1.0 (docs/design/REMESHER3D.md). Every lambda comes from the target metric
  * before any change. The
  * target stays in met0, interpolated alongside, and is what the write-back
  * returns: frozen vertices come back bit for bit, new vertices carry the

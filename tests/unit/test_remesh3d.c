@@ -236,7 +236,7 @@ static void test_frozen_skin(void) {
 }
 
 /* A frozen skin whose edges are ~5 times the target size (a piece of the
- * parallel loop, docs/REMESHER3D.md "Frozen skins"): the free tets next to it
+ * parallel loop, docs/design/REMESHER3D.md "Frozen skins"): the free tets next to it
  * used to flatten to Q 0.000 while splits and collapses undid each other for
  * all 20 rounds (box 5 -> 0.04: 201 382 splits and 183 546 collapses for
  * 88 k tets, 24 passes). The working metric is relaxed at the skin and the
