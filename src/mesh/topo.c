@@ -452,7 +452,7 @@ pa_status pa_mesh_build_boundary(pa_mesh *mesh, int32_t ref, pa_idx *nadded) {
   PA_CHECK(mesh, PA_ERR_ARG, "pa_mesh_build_boundary: NULL mesh");
   if (nadded) *nadded = 0;
   const int d = mesh->dim, nf = d + 1;
-  const pa_idx *adja;
+  const pa_idx *adja = NULL;
   PA_CALL(pa_mesh_build_adjacency(mesh, &adja));
   PA_CALL(bhash_build(mesh));
   int64_t nadd = 0;
