@@ -8,9 +8,10 @@ MPIEXEC = mpiexec:
     MSH 4.1 file with physical names (field_data), physical tags per cell
     and point data: a view "metric" (2D: a constant anisotropic 3 x 3
     tensor; 3D: a size, one value per node), a scalar "u" = x + 2y + 3z
-    and a vector "vel" (z = 0 in 2D);
-  - `padapt convert IN OUT.msh` (ASCII and -binary): meshio reads OUT back
-    with the same names, tags and point data, bit for bit;
+    and a vector "vel" (z = 0 in 2D), in ASCII and in binary;
+  - `padapt convert IN OUT.msh` (ASCII and -binary, and from meshio's
+    binary file): meshio reads OUT back with the same names, points and
+    point data, bit for bit;
   - `padapt adapt IN -out OUT.msh -nosol`, with no -met: the file's metric
     is the metric (the output has more vertices), and meshio reads OUT with
     the same names, the metric view equal to the constant input metric and
@@ -98,6 +99,8 @@ def make_input(dim, path):
                       field_data={k: np.array(v) for k, v in
                                   NAMES[dim].items()})
     meshio.write(path, out, file_format="gmsh", binary=False)
+    meshio.write(path.replace(".msh", "_bin.msh"), out, file_format="gmsh",
+                 binary=True)
     return out
 
 
@@ -178,6 +181,10 @@ def main():
             if run("convert", inp, out, *(["-binary"] if binary else [])):
                 check_same("convert %dD%s" % (dim, " -binary" if binary
                                               else ""), ref, out, dim)
+        # meshio's binary views (4-byte node tags) read the same
+        if run("convert", "in%dd_bin.msh" % dim, "frombin%dd.msh" % dim):
+            check_same("convert of meshio's binary %dD" % dim, ref,
+                       "frombin%dd.msh" % dim, dim)
         # a round trip of our own file is byte for byte
         if run("convert", "conv%dd.msh" % dim, "again%dd.msh" % dim):
             with open("conv%dd.msh" % dim, "rb") as a, \
