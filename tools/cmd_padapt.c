@@ -70,7 +70,6 @@ static int prepare_root(const pa_cli *cli, pa_mesh *mesh, const char *met,
   return 1;
 }
 
-
 /* Give dst copies of the physical names of src (the distributed mesh does
  * not carry them: rank 0 keeps the input's and puts them on the gathered
  * output). */
@@ -236,7 +235,8 @@ static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
           pa_mesh_metric_ncomp(mesh) > 0) {
         if (opts->remesh.verbosity >= 0)
           printf("padapt: adapt: metric: the view \"metric\" of %s (not "
-                 "%s)\n", in, met);
+                 "%s)\n",
+                 in, met);
         met = NULL; /* the file's own metric comes first */
       }
       ok = st == PA_SUCCESS &&

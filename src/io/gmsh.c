@@ -1048,8 +1048,10 @@ static pa_status read_node_data(reader *r, msh *w) {
               (unsigned long long)tag);
     for (int k = 0; k < nc; k++)
       if (!isfinite(x[k]))
-        RD_FAIL(r, PA_ERR_FORMAT, "view \"%s\": the value of node %llu is not "
-                "finite", name, (unsigned long long)tag);
+        RD_FAIL(r, PA_ERR_FORMAT,
+                "view \"%s\": the value of node %llu is not "
+                "finite",
+                name, (unsigned long long)tag);
     v->seen[idx] = 1;
     memcpy(v->val + (size_t)nc * idx, x, (size_t)nc * sizeof *x);
   }
@@ -1108,9 +1110,9 @@ cleanup:
 
 /* 1 for the sections whose binary layout we know but do not read. */
 static int binary_layout_section(const char *name) {
-  static const char *const known[] = {
-      "PartitionedEntities", "Periodic",           "GhostElements",
-      "Parametrizations",    "InterpolationScheme"};
+  static const char *const known[] = {"PartitionedEntities", "Periodic",
+                                      "GhostElements", "Parametrizations",
+                                      "InterpolationScheme"};
   for (size_t i = 0; i < sizeof known / sizeof *known; i++)
     if (!strcmp(name, known[i])) return 1;
   return 0;
@@ -1189,8 +1191,8 @@ static pa_status read_sections(reader *r, msh *w) {
       PA_CALL(w->version == 41 ? read_elements41(r, w) : read_elements22(r, w));
     else if (!strcmp(name, "NodeData"))
       PA_CALL(read_node_data(r, w));
-    else if (r->binary && (!strcmp(name, "ElementData") ||
-                           !strcmp(name, "ElementNodeData")))
+    else if (r->binary &&
+             (!strcmp(name, "ElementData") || !strcmp(name, "ElementNodeData")))
       PA_CALL(skip_binary_data(r, name));
     else if (r->binary && binary_layout_section(name)) {
       if (w->have_nodes && w->have_elems) {
@@ -1278,8 +1280,8 @@ static pa_status attach_views(reader *r, msh *w, pa_mesh *m) {
       RD_FAIL(r, PA_ERR_FORMAT, "view \"metric\" has no value at node %llu",
               (unsigned long long)w->tag[miss]);
     if (miss < n) { /* valid Gmsh, but a field has a value at every vertex */
-      pa__info(1, "%s: view \"%s\" ignored: no value at node %llu\n",
-               r->path, v->name, (unsigned long long)w->tag[miss]);
+      pa__info(1, "%s: view \"%s\" ignored: no value at node %llu\n", r->path,
+               v->name, (unsigned long long)w->tag[miss]);
       continue;
     }
     int nc = v->ncomp; /* components kept */

@@ -329,7 +329,8 @@ cleanup:
 }
 
 void pa__mesh_free_names(pa_mesh *m) {
-  for (int k = 0; k < m->nname; k++) pa__free(m->names[k].name);
+  for (int k = 0; k < m->nname; k++)
+    pa__free(m->names[k].name);
   pa__free(m->names);
   m->names = NULL;
   m->nname = 0;
@@ -362,7 +363,8 @@ pa_status pa__mesh_copy_names(pa_mesh *dst, const pa_mesh *src) {
   names = NULL;
 cleanup:
   if (names)
-    for (int k = 0; k < n; k++) pa__free(names[k].name);
+    for (int k = 0; k < n; k++)
+      pa__free(names[k].name);
   pa__free(names);
   return st;
 }
@@ -381,8 +383,7 @@ cleanup:
   return st;
 }
 
-pa_status pa_mesh_add_name(pa_mesh *m, int dim, int32_t tag,
-                           const char *name) {
+pa_status pa_mesh_add_name(pa_mesh *m, int dim, int32_t tag, const char *name) {
   pa_status st = PA_SUCCESS;
   char *copy = NULL;
   PA_CHECK(m, PA_ERR_ARG, "pa_mesh_add_name: NULL mesh");
@@ -392,9 +393,8 @@ pa_status pa_mesh_add_name(pa_mesh *m, int dim, int32_t tag,
            "pa_mesh_add_name: a physical name is non-empty and holds no "
            "double quote nor line break");
   int k = 0; /* first entry not below (dim, tag) */
-  while (k < m->nname &&
-         (m->names[k].dim < dim ||
-          (m->names[k].dim == dim && m->names[k].tag < tag)))
+  while (k < m->nname && (m->names[k].dim < dim ||
+                          (m->names[k].dim == dim && m->names[k].tag < tag)))
     k++;
   int found = k < m->nname && m->names[k].dim == dim && m->names[k].tag == tag;
   if (!name) {
@@ -488,7 +488,8 @@ size_t pa_mesh_memory_used(const pa_mesh *m) {
     n += pa__alloc_size(blocks[i]);
   for (int k = 0; k < m->nfield; k++) n += pa__alloc_size(m->field[k].val);
   n += pa__alloc_size(m->names);
-  for (int k = 0; k < m->nname; k++) n += pa__alloc_size(m->names[k].name);
+  for (int k = 0; k < m->nname; k++)
+    n += pa__alloc_size(m->names[k].name);
   return n;
 }
 

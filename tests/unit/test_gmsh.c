@@ -633,8 +633,7 @@ static void check_same_data(pa_mesh *a, pa_mesh *b) {
     CHECK_OK(pa_mesh_field(a, k, &na, &ca, &va));
     CHECK_OK(pa_mesh_field(b, k, &nb, &cb, &vb));
     CHECK(!strcmp(na, nb) && ca == cb);
-    if (ca == cb)
-      CHECK(!memcmp(va, vb, (size_t)nv * ca * sizeof(double)));
+    if (ca == cb) CHECK(!memcmp(va, vb, (size_t)nv * ca * sizeof(double)));
   }
 }
 
@@ -655,7 +654,8 @@ static void add_data(pa_mesh *m, int met_ncomp) {
     if (met_ncomp == 1) {
       v[i] = 0.1 + x / 7;
     } else { /* diagonally dominant: SPD */
-      for (int k = 0; k < tn; k++) t[k] = 0.01 * x * (k + 1);
+      for (int k = 0; k < tn; k++)
+        t[k] = 0.01 * x * (k + 1);
       t[0] += 2 + x;
       t[2] += 3;
       if (d == 3) t[5] += 4 / x;
@@ -667,7 +667,8 @@ static void add_data(pa_mesh *m, int met_ncomp) {
                                  "four"};
   for (int f = 0; f < 5; f++) {
     int c = nc[f] == 0 ? d : nc[f] < 0 ? tn : nc[f];
-    for (size_t k = 0; k < (size_t)nv * c; k++) v[k] = sin(0.7 * k + f) / 3;
+    for (size_t k = 0; k < (size_t)nv * c; k++)
+      v[k] = sin(0.7 * k + f) / 3;
     CHECK_OK(pa_mesh_add_field(m, names[f], c, v));
   }
   free(v);
@@ -759,66 +760,81 @@ static void test_names_api(void) {
 /* A $NodeData section (it starts at line 19 after HEAD NODES3 ELEMS1; its
  * string tag count, where the view's messages point, at line 20). */
 #define VIEW(name, nc, body)                                                   \
-  "$NodeData\n1\n\"" name "\"\n1\n0.0\n3\n0\n" #nc "\n3\n" body               \
+  "$NodeData\n1\n\"" name "\"\n1\n0.0\n3\n0\n" #nc "\n3\n" body                \
   "$EndNodeData\n"
 
 /* Malformed names and node data: errors naming the file and the line. */
 static void test_data_errors(void) {
   expect_error(HEAD "$PhysicalNames\n2\n1 3 \"a\"\n1 3 \"b\"\n"
                     "$EndPhysicalNames\n" NODES3 ELEMS1,
-               PA_ERR_FORMAT, ":5: $PhysicalNames names (dimension 1, tag 3) "
-                              "twice", NULL);
+               PA_ERR_FORMAT,
+               ":5: $PhysicalNames names (dimension 1, tag 3) "
+               "twice",
+               NULL);
   expect_error(HEAD "$PhysicalNames\n1\n1 3 \"\"\n$EndPhysicalNames\n",
                PA_ERR_FORMAT, ":6: empty physical name", NULL);
   expect_error(HEAD "$PhysicalNames\n1\n1 3 \"open\n$EndPhysicalNames\n",
                PA_ERR_FORMAT, ":6: unterminated quoted physical name", NULL);
-  expect_error(HEAD "$NodeData\n1\n\"u\"\n0\n3\n0\n1\n0\n$EndNodeData\n"
-               NODES3 ELEMS1,
-               PA_ERR_FORMAT, ":4: $NodeData before $Nodes", NULL);
-  expect_error(HEAD NODES3 ELEMS1
-               VIEW("metric", 3, "1 1 0 1\n2 1 0 1\n3 1 0 1\n"),
-               PA_ERR_UNSUPPORTED, ":20: view \"metric\" has 3 components",
-               "1 (a size) or 9");
+  expect_error(
+      HEAD "$NodeData\n1\n\"u\"\n0\n3\n0\n1\n0\n$EndNodeData\n" NODES3 ELEMS1,
+      PA_ERR_FORMAT, ":4: $NodeData before $Nodes", NULL);
+  expect_error(
+      HEAD NODES3 ELEMS1 VIEW("metric", 3, "1 1 0 1\n2 1 0 1\n3 1 0 1\n"),
+      PA_ERR_UNSUPPORTED, ":20: view \"metric\" has 3 components",
+      "1 (a size) or 9");
   expect_error(HEAD NODES3 ELEMS1 VIEW("u", 1, "1 1\n2 2\n7 3\n"),
                PA_ERR_FORMAT, ":30: view \"u\": unknown node tag 7", NULL);
   expect_error(HEAD NODES3 ELEMS1 VIEW("u", 1, "1 1\n1 2\n3 3\n"),
                PA_ERR_FORMAT, ":29: view \"u\": node 1 has two values", NULL);
   expect_error(HEAD NODES3 ELEMS1 VIEW("u", 1, "1 1\n2 inf\n3 3\n"),
-               PA_ERR_FORMAT, ":29: view \"u\": the value of node 2 is not "
-                              "finite", NULL);
+               PA_ERR_FORMAT,
+               ":29: view \"u\": the value of node 2 is not "
+               "finite",
+               NULL);
   expect_error(HEAD NODES3 ELEMS1 VIEW("u", 1, "1 1\n2 2x\n3 3\n"),
                PA_ERR_FORMAT, ":29: expected a node value, found '2x'", NULL);
-  expect_error(HEAD NODES3 ELEMS1 VIEW("u", 1, "1 1\n2 2\n"),
-               PA_ERR_FORMAT, ":30:", "expected a node tag");
+  expect_error(HEAD NODES3 ELEMS1 VIEW("u", 1, "1 1\n2 2\n"), PA_ERR_FORMAT,
+               ":30:", "expected a node tag");
   expect_error(HEAD NODES3 ELEMS1 VIEW("metric", 1, "1 1\n2 -2\n3 3\n"),
-               PA_ERR_METRIC, ":20: view \"metric\": the value at node 2 is "
-                              "not a finite positive size", NULL);
-  expect_error(HEAD NODES3 ELEMS1 VIEW("metric", 9, "1 1 0 0 0 1 0 0 0 1\n"
+               PA_ERR_METRIC,
+               ":20: view \"metric\": the value at node 2 is "
+               "not a finite positive size",
+               NULL);
+  expect_error(HEAD NODES3 ELEMS1 VIEW("metric", 9,
+                                       "1 1 0 0 0 1 0 0 0 1\n"
                                        "2 1 0.5 0 0 1 0 0 0 1\n"
                                        "3 1 0 0 0 1 0 0 0 1\n"),
-               PA_ERR_METRIC, ":20: view \"metric\": the tensor at node 2 "
-                              "is not symmetric", NULL);
+               PA_ERR_METRIC,
+               ":20: view \"metric\": the tensor at node 2 "
+               "is not symmetric",
+               NULL);
   expect_error(HEAD NODES3 ELEMS1 "$NodeData\n1\n\"metric\"\n1\n0.0\n3\n0\n"
-                                "1\n2\n1 1\n3 3\n$EndNodeData\n",
+                                  "1\n2\n1 1\n3 3\n$EndNodeData\n",
                PA_ERR_FORMAT, ":20: view \"metric\" has no value at node 2",
                NULL);
-  expect_error(HEAD NODES3 ELEMS1 VIEW("v", 3, "1 1 0 0\n2 1 0 0.5\n"
+  expect_error(HEAD NODES3 ELEMS1 VIEW("v", 3,
+                                       "1 1 0 0\n2 1 0 0.5\n"
                                        "3 1 0 0\n"),
-               PA_ERR_UNSUPPORTED, ":20: view \"v\": the vector at node 2 has "
-                                   "z = 0.5, but the mesh is 2D", NULL);
+               PA_ERR_UNSUPPORTED,
+               ":20: view \"v\": the vector at node 2 has "
+               "z = 0.5, but the mesh is 2D",
+               NULL);
   expect_error(HEAD NODES3 ELEMS1 VIEW("u", 10, "1 1\n2 2\n3 3\n"),
-               PA_ERR_FORMAT, ":26: a number of components (1 to 9) 10 is "
-                              "out of range", NULL);
+               PA_ERR_FORMAT,
+               ":26: a number of components (1 to 9) 10 is "
+               "out of range",
+               NULL);
   expect_error(HEAD NODES3 ELEMS1
                "$NodeData\n0\n1\n0.0\n3\n0\n1\n0\n$EndNodeData\n",
                PA_ERR_FORMAT, ":20: a data section needs a string tag", NULL);
   expect_error(HEAD NODES3 ELEMS1
                "$NodeData\n1\n\"u\"\n0\n2\n0\n1\n$EndNodeData\n",
                PA_ERR_FORMAT, ":23: a data section needs 3 integer tags", NULL);
-  expect_error(HEAD NODES3 ELEMS1 VIEW("u", 1, "1 1\n2 2\n3 3\n")
-               "$NodeData\n1\n\"u\"\n1\n0.0\n3\n1\n1\n1\n1 1\n$EndNodeData\n",
-               PA_ERR_UNSUPPORTED, ":33: view \"u\" has several time steps",
-               NULL);
+  expect_error(
+      HEAD NODES3 ELEMS1 VIEW(
+          "u", 1, "1 1\n2 2\n3 3\n") "$NodeData\n1\n\"u\"\n1\n0."
+                                     "0\n3\n1\n1\n1\n1 1\n$EndNodeData\n",
+      PA_ERR_UNSUPPORTED, ":33: view \"u\" has several time steps", NULL);
   /* a view in parts (by partition) is one view */
   pa_mesh *m = NULL;
   write_text("parts.msh", HEAD NODES3 ELEMS1
