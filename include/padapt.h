@@ -114,7 +114,7 @@ enum {
 pa_status pa_mesh_create(int dim, pa_mesh **mesh);
 /** Destroy a mesh (NULL allowed). */
 void pa_mesh_destroy(pa_mesh *mesh);
-/** Deep copy of a mesh, including metric and fields. */
+/** Deep copy of a mesh, including metric, fields and physical names. */
 pa_status pa_mesh_copy(const pa_mesh *src, pa_mesh **dst);
 
 int pa_mesh_dim(const pa_mesh *mesh);
@@ -198,6 +198,31 @@ int pa_mesh_nfield(const pa_mesh *mesh);
 /** Field k: its name, number of components and values (nvert * ncomp). */
 pa_status pa_mesh_field(pa_mesh *mesh, int k, const char **name, int *ncomp,
                         double **values);
+
+/*
+ * Physical names: Gmsh's names of the entities of one dimension and one
+ * reference ($PhysicalNames), e.g. (2, 3, "inlet"). The .msh reader stores
+ * them and the .msh writer writes them all back; pa_mesh_copy copies them and
+ * pa_remesh keeps them. Medit and VTU files do not hold them.
+ */
+/** Number of physical names of the mesh. Not collective. */
+int pa_mesh_nnames(const pa_mesh *mesh);
+/**
+ * Physical name k (0 <= k < pa_mesh_nnames; sorted by dimension, then tag):
+ * the dimension of its entities (0 points, 1 lines, 2 surfaces, 3 volumes),
+ * their reference (the Gmsh physical tag) and the name, valid until the
+ * names change. Any out-pointer may be NULL. Not collective.
+ */
+pa_status pa_mesh_name(const pa_mesh *mesh, int k, int *dim, int32_t *tag,
+                       const char **name);
+/**
+ * Name the entities of dimension dim (0-3) and reference tag: the name
+ * (copied) replaces the one (dim, tag) had; name NULL removes it. A name is
+ * non-empty and holds no double quote nor line break (Gmsh writes it quoted
+ * on one line): PA_ERR_ARG otherwise. Not collective.
+ */
+pa_status pa_mesh_add_name(pa_mesh *mesh, int dim, int32_t tag,
+                           const char *name);
 
 /**
  * Build element-to-element adjacency: adja[(dim+1)*e + i] = (dim+1)*f + j when
@@ -548,13 +573,18 @@ typedef struct pa_write_opts {
 
 /**
  * Read a mesh, format chosen by extension: .mesh/.meshb (Medit), .msh (Gmsh
- * 4.1 ASCII or binary, or 2.2 ASCII). Errors name the file and the line.
+ * 4.1 ASCII or binary, or 2.2 ASCII). From a .msh: the physical names, and
+ * the $NodeData views: the one named "metric" (1 component: sizes; 9: a
+ * symmetric tensor) becomes the metric, the others fields of their names
+ * (docs/guide/gmsh.md). Errors name the file and the line.
  */
 pa_status pa_mesh_read(const char *path, pa_mesh **mesh);
 /**
- * Write a mesh, format chosen by extension: .mesh/.meshb, .msh (Gmsh 4.1),
- * .vtu (VTK XML, appended raw binary; point data: metric and fields; cell
- * data: reference and quality). Written to a temporary file then renamed (see
+ * Write a mesh, format chosen by extension: .mesh/.meshb, .msh (Gmsh 4.1:
+ * with the physical names, and the metric and fields as $NodeData views;
+ * PA_ERR_UNSUPPORTED for a field named "metric"), .vtu (VTK XML, appended
+ * raw binary; point data: metric and fields; cell data: reference and
+ * quality). Written to a temporary file then renamed (see
  * pa_output_begin), so a failure never leaves a partial file. opts may be
  * NULL.
  */

@@ -33,7 +33,8 @@ static const char *adapt_usage =
     "usage: padapt adapt IN [-met SOL | -sol SOL | -hsiz H] [-out OUT] [options]\n"
     "  -in IN          input mesh (same as the positional IN)\n"
     "  -met/-sol SOL   metric: sizes (scalar) or tensors, .sol/.solb\n"
-    "                  (default: IN.sol or IN.solb when it exists)\n"
+    "                  (default: IN.sol or IN.solb when it exists, else the\n"
+    "                  view \"metric\" of a Gmsh IN.msh)\n"
     "  -hsiz H         constant size H (replaces the metric)\n"
     "  -out OUT        output mesh (.mesh .meshb .msh .vtu; default IN.o.EXT)\n"
     "  -outsol PATH    output metric (default: OUT with extension .sol)\n"
@@ -312,6 +313,12 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
     pa_cli_fail(cli, st);
     goto done;
   }
+  if (met == args.met_default && pa_mesh_metric_ncomp(mesh) > 0) {
+    if (opts.verbosity >= 0)
+      printf("padapt: adapt: metric: the view \"metric\" of %s (not %s)\n",
+             in, met);
+    met = NULL; /* the file's own metric comes first */
+  }
   if (args.optim) {
     st = pa_mesh_metric_from_edges(mesh);
     if (st) {
@@ -325,7 +332,8 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
       goto done;
     }
   } else if (opts.hsiz <= 0 && pa_mesh_metric_ncomp(mesh) == 0) {
-    pa_cli_error(cli, "adapt: no metric: give -met SOL, -sol SOL or -hsiz H");
+    pa_cli_error(cli, "adapt: no metric: give -met SOL, -sol SOL or -hsiz H "
+                      "(or a view \"metric\" in a .msh input)");
     goto done;
   }
   if (args.params) {

@@ -14,6 +14,8 @@
  * report in the form of Table 1 of the seed paper (Lachat, Dobrzynski,
  * Pellegrini) on rank 0, and writes OUT gathered on rank 0 (with OUT.sol and
  * <OUT stem>.fields.sol) or, with -distributed-output, as a distributed set.
+ * The physical names of the input (Gmsh $PhysicalNames) stay on rank 0 and
+ * go onto the gathered output; a distributed set carries none.
  * The JSON report holds the statistics of the output, the times of every
  * step and iteration, the bytes moved and the peak memory of every rank.
  * With -checkpoint DIR the loop writes a checkpoint after each iteration
@@ -70,6 +72,20 @@ static int prepare_root(const pa_cli *cli, pa_mesh *mesh, const char *met,
   return 1;
 }
 
+/* Give dst copies of the physical names of src (the distributed mesh does
+ * not carry them: rank 0 keeps the input's and puts them on the gathered
+ * output). */
+static pa_status copy_names(pa_mesh *dst, const pa_mesh *src) {
+  pa_status st = PA_SUCCESS;
+  for (int k = 0; k < pa_mesh_nnames(src) && st == PA_SUCCESS; k++) {
+    int dim;
+    int32_t tag;
+    const char *name;
+    st = pa_mesh_name(src, k, &dim, &tag, &name);
+    if (st == PA_SUCCESS) st = pa_mesh_add_name(dst, dim, tag, name);
+  }
+  return st;
+}
 
 /* The progress callback's context. kill_iter: test hook, see progress. */
 typedef struct progress_ctx {
@@ -195,12 +211,13 @@ static double lap(double *t0) {
 /* Read IN (a set, or a mesh on rank 0 with its metric and fields, then
  * distributed), print its statistics and adapt it into *dm: the statistics
  * before in *before, the report in *rep, the read and stats times in
- * tstep[0..1]. Collective; returns 1 on success, 0 after printing the
- * error (*dm may then be set: the caller destroys it). */
+ * tstep[0..1], on rank 0 the input's physical names on a mesh of their own
+ * in *names. Collective; returns 1 on success, 0 after printing the error
+ * (*dm and *names may then be set: the caller destroys them). */
 static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
                           int set, const pa_adapt_opts *opts, pa_dmesh **dm,
-                          pa_stats *before, pa_adapt_report *rep,
-                          double *tstep, double *t0) {
+                          pa_mesh **names, pa_stats *before,
+                          pa_adapt_report *rep, double *tstep, double *t0) {
   const char *in = args->in;
   pa_mesh *mesh = NULL;
   pa_status st;
@@ -215,9 +232,23 @@ static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
     st = pa_cli_read_mesh(cli, in, &mesh); /* collective */
     if (cli->rank == 0) {
       if (st) pa_cli_fail(cli, st);
+      const char *met = args->met;
+      if (st == PA_SUCCESS && met == args->met_default &&
+          pa_mesh_metric_ncomp(mesh) > 0) {
+        if (opts->remesh.verbosity >= 0)
+          printf("padapt: adapt: metric: the view \"metric\" of %s (not "
+                 "%s)\n",
+                 in, met);
+        met = NULL; /* the file's own metric comes first */
+      }
       ok = st == PA_SUCCESS &&
-           prepare_root(cli, mesh, args->met, args->field, opts->remesh.hsiz,
+           prepare_root(cli, mesh, met, args->field, opts->remesh.hsiz,
                         args->optim);
+      if (ok && pa_mesh_nnames(mesh) > 0) {
+        st = pa_mesh_create(pa_mesh_dim(mesh), names);
+        if (st == PA_SUCCESS) st = copy_names(*names, mesh);
+        if (st) ok = !pa_cli_fail(cli, st);
+      }
     }
     MPI_Bcast(&ok, 1, MPI_INT, 0, cli->comm);
     if (ok) st = pa_dmesh_distribute(cli->comm, 0, mesh, 0, dm);
@@ -322,7 +353,7 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   }
 
   pa_dmesh *dm = NULL;
-  pa_mesh *g = NULL;
+  pa_mesh *g = NULL, *names = NULL;
   pa_stats before;
   pa_adapt_report rep;
   pa_status st = PA_SUCCESS;
@@ -345,8 +376,8 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   /* read and adapt, or resume from the checkpoint */
   int adapted = args->restart
                     ? resume(cli, args, &opts, &dm, &before, &rep)
-                    : read_and_adapt(cli, args, set, &opts, &dm, &before,
-                                     &rep, tstep, &t0);
+                    : read_and_adapt(cli, args, set, &opts, &dm, &names,
+                                     &before, &rep, tstep, &t0);
   pa_cli_progress_end(&live);
   if (!adapted) goto done;
   tstep[2] = lap(&t0);
@@ -385,7 +416,8 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   } else {
     if (st == PA_SUCCESS) st = pa_dmesh_gather(dm, 0, &g);
     if (st == PA_SUCCESS && cli->rank == 0) {
-      st = pa_mesh_write(g, out, NULL);
+      if (names) st = copy_names(g, names);
+      if (st == PA_SUCCESS) st = pa_mesh_write(g, out, NULL);
       if (st == PA_SUCCESS && !nosol) {
         pa_sol *sol = NULL;
         path = pa_cli_replace_ext(out, ".sol");
@@ -446,6 +478,7 @@ done:
   free(mem);
   free(rss);
   pa_mesh_destroy(g);
+  pa_mesh_destroy(names);
   pa_dmesh_destroy(dm);
   return rc;
 }

@@ -381,6 +381,27 @@ class Mesh(object):
             raise KeyError(name)
         check(lib.pa_mesh_remove_field(self._h, names.index(name)))
 
+    @property
+    def names(self):
+        """The physical names (Gmsh $PhysicalNames) as a list of (dim, tag,
+        name), sorted by dim then tag: the entities of dimension dim (0-3)
+        and reference tag are called name. Assign such a list to replace
+        them all (names are non-empty, without double quote or line break)."""
+        out = []
+        for k in range(lib.pa_mesh_nnames(self._h)):
+            d, t, n = ctypes.c_int(), ctypes.c_int32(), ctypes.c_char_p()
+            check(lib.pa_mesh_name(self._h, k, ctypes.byref(d), ctypes.byref(t), ctypes.byref(n)))
+            out.append((d.value, t.value, n.value.decode()))
+        return out
+
+    @names.setter
+    def names(self, items):
+        items = [(int(d), int(t), str(n)) for d, t, n in items]
+        for d, t, _ in self.names:
+            check(lib.pa_mesh_add_name(self._h, d, t, None))
+        for d, t, n in items:
+            check(lib.pa_mesh_add_name(self._h, d, t, n.encode()))
+
     # ------------------------------------------------------------- checks
     def check(self):
         """Check the mesh (indices, orientation, conformity, boundary listed,
@@ -443,7 +464,8 @@ class Mesh(object):
         """A meshio.Mesh: cells "triangle"/"tetra", boundary cells "line"
         (2D) or "triangle" (3D), feature edges "line" (3D); references as
         cell data "medit:ref" and point data "medit:ref"; the metric as point
-        data "metric" and each field under its name. Arrays are copies."""
+        data "metric" and each field under its name; the physical names as
+        field_data {name: [tag, dim]}. Arrays are copies."""
         import meshio
         dim = self.dim
         kind = {2: ("triangle", "line"), 3: ("tetra", "triangle")}[dim]
@@ -458,7 +480,8 @@ class Mesh(object):
         point_data.update(self.fields)
         return meshio.Mesh(self.points.copy(), [(t, c) for t, c, _ in blocks],
                            point_data=point_data,
-                           cell_data={"medit:ref": [r for _, _, r in blocks]})
+                           cell_data={"medit:ref": [r for _, _, r in blocks]},
+                           field_data={n: np.array([t, d]) for d, t, n in self.names})
 
     @classmethod
     def from_meshio(cls, m, dim=None):
@@ -470,7 +493,8 @@ class Mesh(object):
         References from cell data "medit:ref", else "gmsh:physical"; vertex
         references from point data "medit:ref". Point data "metric" becomes
         the metric, other real point data with one value (or row) per vertex
-        become fields. Other cell types are ignored."""
+        become fields. field_data entries [tag, dim] become the physical
+        names. Other cell types are ignored."""
         types = [b.type for b in m.cells]
         if dim is None:
             dim = 3 if "tetra" in types else 2
@@ -520,6 +544,8 @@ class Mesh(object):
                    metric=metric, fields=fields)
         if bdry is not None:  # complete a partial list (physical groups on some sides)
             check(lib.pa_mesh_build_boundary(mesh._h, 0, None))
+        mesh.names = [(int(v[1]), int(v[0]), k) for k, v in (m.field_data or {}).items()
+                      if np.asarray(v).shape == (2,)]
         return mesh
 
 

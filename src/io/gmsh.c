@@ -24,7 +24,22 @@
  *    Cells are written grouped by reference, stably: the order of cells with
  *    equal references is kept, so a mesh whose references are sorted comes
  *    back in its own order. All nodes go in one block, tags 1..nvert.
- *  - Flags other than corners, the metric and the user fields are not stored.
+ *  - $PhysicalNames: every name is kept on the mesh (pa_mesh_name) and
+ *    written back, used by a cell or not, sorted by (dimension, tag).
+ *  - $NodeData views (one time step; a view may come in several sections,
+ *    e.g. one per partition): the view "metric" is the metric, 1 component
+ *    a size, 9 a symmetric 3 x 3 tensor (row-major; 2D: no z coupling, zz
+ *    ignored) stored as 3 (2D) or 6 (3D) values; every other view is a user
+ *    field of its name: a 3-component vector in 2D (z = 0) keeps x and y, a
+ *    symmetric 9-component tensor becomes 3/6 values, anything else is kept
+ *    as it is. A field view that misses nodes is ignored (Gmsh allows views
+ *    on part of the mesh; a field has a value at every vertex); a metric
+ *    view must cover every node. On write: the metric as "metric" (size: 1
+ *    component; tensor: 9, with zz = 1 in 2D), then each field: 1 component,
+ *    a vector (dim components) as 3, a symmetric tensor (3 in 2D, 6 in 3D)
+ *    as 9 (zz = 0 in 2D), other counts as they are. Binary files write the
+ *    node tags of views as 4-byte ints, as Gmsh and meshio do.
+ *  - Flags other than corners are not stored.
  *  - Node tags may be sparse and unordered: vertices are numbered in
  *    increasing tag order (tags 1..n give vertex tag - 1, whatever the order
  *    of the node blocks).
@@ -34,8 +49,9 @@
  * bytes left in the file before anything is allocated for it. Errors are
  * "FILE:LINE: message" in ASCII files and "FILE: byte OFFSET: message" in
  * binary ones. Binary files must have data size 8 and the endianness of the
- * machine reading them. In binary files the sections whose binary layout we
- * do not parse ($Periodic, $NodeData...) are refused before $Elements and
+ * machine reading them. In binary files $ElementData and $ElementNodeData
+ * are skipped record by record; the sections whose binary layout we do not
+ * parse ($Periodic, $GhostElements...) are refused before $Elements and
  * ignored, with everything after them, once the mesh is read; other unknown
  * sections are skipped up to their $End line.
  */
@@ -295,6 +311,22 @@ typedef struct tagidx {
   pa_idx idx;
 } tagidx;
 
+/* A $NodeData view being read: values by node index (the vertex numbering
+ * of build_node_map). Sections of one name (a view written in parts) fill
+ * the same view. */
+typedef struct view {
+  char name[PA_FIELD_NAME_LEN];
+  int ncomp;
+  int32_t step;  /* time step index */
+  double *val;   /* nnode * ncomp */
+  uint8_t *seen; /* nnode: 1 once the node has its value */
+  long line;     /* where its first section starts, for messages */
+  size_t pos;
+} view;
+
+/* Most views read: the fields and the metric. */
+#define MSH_MAX_VIEWS (PA_MAX_FIELDS + 1)
+
 typedef struct msh {
   int version; /* 41 or 22 */
   size_t nnode;
@@ -310,10 +342,21 @@ typedef struct msh {
   entity *ent[4];
   size_t nent[4];
   cellbuf cell[4];
-  int have_nodes, have_elems;
+  int have_nodes, have_elems, have_names;
+  pa_name *names; /* $PhysicalNames, sorted by (dim, tag) once checked */
+  size_t nname;
+  view views[MSH_MAX_VIEWS];
+  int nview;
 } msh;
 
 static void msh_free(msh *w) {
+  for (size_t k = 0; k < w->nname; k++)
+    pa__free(w->names[k].name);
+  pa__free(w->names);
+  for (int k = 0; k < w->nview; k++) {
+    pa__free(w->views[k].val);
+    pa__free(w->views[k].seen);
+  }
   pa__free(w->xyz);
   pa__free(w->tag);
   pa__free(w->dense);
@@ -518,25 +561,69 @@ static int32_t entity_ref(const msh *w, int dim, int32_t tag) {
 /* Reading: sections                                                        */
 /* ------------------------------------------------------------------------ */
 
-/* $PhysicalNames (always ASCII): checked and skipped, names are not kept. */
-static pa_status read_physical_names(reader *r) {
+/* A double-quoted string on the current line: its first byte at *start, its
+ * length in *len (the quotes not included). */
+static pa_status rd_quoted(reader *r, size_t *start, size_t *len,
+                           const char *what) {
+  if (!rd_mark(r)) return rd_eof(r, what);
+  if (r->buf[r->pos] != '"') return rd_bad(r, what);
+  size_t e = r->pos + 1;
+  while (e < r->len && r->buf[e] != '"' && r->buf[e] != '\n')
+    e++;
+  if (e >= r->len || r->buf[e] != '"')
+    return rd_error(r, PA_ERR_FORMAT, "unterminated %s", what);
+  *start = r->pos + 1;
+  *len = e - r->pos - 1;
+  r->pos = e + 1;
+  return PA_SUCCESS;
+}
+
+static int cmp_name(const void *a, const void *b) {
+  const pa_name *x = a, *y = b;
+  if (x->dim != y->dim) return (x->dim > y->dim) - (x->dim < y->dim);
+  return (x->tag > y->tag) - (x->tag < y->tag);
+}
+
+/* $PhysicalNames (always ASCII): the names, each (dimension, tag) once. */
+static pa_status read_physical_names(reader *r, msh *w) {
   pa_status st = PA_SUCCESS;
   uint64_t n;
-  int64_t x;
+  int64_t dim, tag;
+  if (w->have_names)
+    RD_FAIL(r, PA_ERR_UNSUPPORTED, "repeated $PhysicalNames section");
+  w->have_names = 1;
   PA_CALL(rd_u64(r, &n, "the number of physical names"));
+  long line = r->tokline;
+  size_t pos = r->tokpos;
   PA_CALL(rd_fits(r, n, 6, 6, "$PhysicalNames header"));
+  if (n > INT32_MAX)
+    RD_FAIL(r, PA_ERR_UNSUPPORTED, "more than %d physical names", INT32_MAX);
+  PA_CALLOC(w->names, n);
   for (uint64_t k = 0; k < n; k++) {
-    PA_CALL(rd_i64(r, 0, 3, &x, "a physical dimension"));
-    PA_CALL(rd_i64(r, INT32_MIN, INT32_MAX, &x, "a physical tag"));
-    if (!rd_mark(r)) PA_CALL(rd_eof(r, "a quoted physical name"));
-    if (r->buf[r->pos] != '"') PA_CALL(rd_bad(r, "a quoted physical name"));
-    size_t e = r->pos + 1;
-    while (e < r->len && r->buf[e] != '"' && r->buf[e] != '\n')
-      e++;
-    if (e >= r->len || r->buf[e] != '"')
-      RD_FAIL(r, PA_ERR_FORMAT, "unterminated physical name");
-    r->pos = e + 1;
+    size_t start = 0, len = 0;
+    PA_CALL(rd_i64(r, 0, 3, &dim, "a physical dimension"));
+    PA_CALL(rd_i64(r, INT32_MIN, INT32_MAX, &tag, "a physical tag"));
+    PA_CALL(rd_quoted(r, &start, &len, "quoted physical name"));
+    if (!len) RD_FAIL(r, PA_ERR_FORMAT, "empty physical name");
+    if (memchr(r->buf + start, '\0', len) || memchr(r->buf + start, '\r', len))
+      RD_FAIL(r, PA_ERR_FORMAT, "physical name holds a NUL or CR byte");
+    pa_name *p = &w->names[w->nname];
+    PA_ALLOC(p->name, len + 1);
+    memcpy(p->name, r->buf + start, len);
+    p->name[len] = '\0';
+    p->dim = (int)dim;
+    p->tag = (int32_t)tag;
+    w->nname++;
   }
+  qsort(w->names, w->nname, sizeof *w->names, cmp_name);
+  for (size_t k = 1; k < w->nname; k++)
+    if (!cmp_name(&w->names[k - 1], &w->names[k])) {
+      r->tokline = line;
+      r->tokpos = pos;
+      RD_FAIL(r, PA_ERR_FORMAT,
+              "$PhysicalNames names (dimension %d, tag %d) twice",
+              w->names[k].dim, (int)w->names[k].tag);
+    }
   PA_CALL(rd_expect(r, "$EndPhysicalNames"));
 cleanup:
   return st;
@@ -822,6 +909,181 @@ cleanup:
   return st;
 }
 
+/* The header of a $NodeData, $ElementData or $ElementNodeData section (its
+ * tags are ASCII in binary files too): the first string tag (the view name)
+ * at name/namelen, the time step, the number of components and of records.
+ * In binary files the data starts after the line of the last integer tag. */
+static pa_status read_data_header(reader *r, size_t *name, size_t *namelen,
+                                  int32_t *step, int32_t *ncomp, uint64_t *n) {
+  pa_status st = PA_SUCCESS;
+  uint64_t nstr, nreal, nint;
+  double x;
+  int64_t t[3] = {0, 0, 0}, extra;
+  PA_CALL(rd_u64(r, &nstr, "the number of string tags"));
+  if (nstr < 1)
+    RD_FAIL(r, PA_ERR_FORMAT, "a data section needs a string tag (its name)");
+  PA_CALL(rd_fits(r, nstr, 3, 3, "string tag list"));
+  for (uint64_t k = 0; k < nstr; k++) {
+    size_t a = 0, l = 0;
+    PA_CALL(rd_quoted(r, &a, &l, "quoted string tag"));
+    if (k == 0) {
+      *name = a;
+      *namelen = l;
+    }
+  }
+  PA_CALL(rd_u64(r, &nreal, "the number of real tags"));
+  PA_CALL(rd_fits(r, nreal, 2, 2, "real tag list"));
+  for (uint64_t k = 0; k < nreal; k++)
+    PA_CALL(rd_f64(r, &x, "a real tag"));
+  PA_CALL(rd_u64(r, &nint, "the number of integer tags"));
+  if (nint < 3)
+    RD_FAIL(r, PA_ERR_FORMAT,
+            "a data section needs 3 integer tags (time step, number of "
+            "components, number of values), found %llu",
+            (unsigned long long)nint);
+  PA_CALL(rd_fits(r, nint, 2, 2, "integer tag list"));
+  PA_CALL(rd_i64(r, 0, INT32_MAX, &t[0], "a time step index"));
+  PA_CALL(rd_i64(r, 1, 9, &t[1], "a number of components (1 to 9)"));
+  PA_CALL(rd_i64(r, 0, INT64_MAX, &t[2], "a number of values"));
+  for (uint64_t k = 3; k < nint; k++)
+    PA_CALL(rd_i64(r, INT32_MIN, INT32_MAX, &extra, "an integer tag"));
+  if (r->binary) {
+    while (r->pos < r->len && (r->buf[r->pos] == ' ' || r->buf[r->pos] == '\t'))
+      r->pos++;
+    PA_CALL(rd_eol(r));
+  }
+  *step = (int32_t)t[0];
+  *ncomp = (int32_t)t[1];
+  *n = (uint64_t)t[2];
+cleanup:
+  return st;
+}
+
+/* The view named name (created when new, with ncomp components and time
+ * step step; an existing one must agree). */
+static pa_status find_view(reader *r, msh *w, const char *name, int32_t ncomp,
+                           int32_t step, view **out) {
+  pa_status st = PA_SUCCESS;
+  view *v = NULL;
+  for (int k = 0; k < w->nview; k++)
+    if (!strcmp(w->views[k].name, name)) v = &w->views[k];
+  if (v) {
+    if (v->step != step)
+      RD_FAIL(r, PA_ERR_UNSUPPORTED,
+              "view \"%s\" has several time steps (%d and %d); padapt reads "
+              "views of one time step",
+              name, (int)v->step, (int)step);
+    if (v->ncomp != ncomp)
+      RD_FAIL(r, PA_ERR_FORMAT,
+              "view \"%s\" has %d components here and %d in an earlier "
+              "section",
+              name, (int)ncomp, v->ncomp);
+  } else {
+    if (w->nview == MSH_MAX_VIEWS)
+      RD_FAIL(r, PA_ERR_UNSUPPORTED,
+              "more than %d node data views (the metric and %d fields)",
+              MSH_MAX_VIEWS, PA_MAX_FIELDS);
+    v = &w->views[w->nview++]; /* counted now: msh_free frees its arrays */
+    snprintf(v->name, sizeof v->name, "%s", name);
+    v->ncomp = ncomp;
+    v->step = step;
+    v->line = r->tokline;
+    v->pos = r->tokpos;
+    PA_CALLOC(v->val, w->nnode * (size_t)ncomp);
+    PA_CALLOC(v->seen, w->nnode);
+  }
+  *out = v;
+cleanup:
+  return st;
+}
+
+/* $NodeData: one view (or part of one) of values at the nodes. */
+static pa_status read_node_data(reader *r, msh *w) {
+  pa_status st = PA_SUCCESS;
+  size_t a = 0, l = 0;
+  int32_t step, nc;
+  uint64_t n;
+  char name[PA_FIELD_NAME_LEN];
+  view *v = NULL;
+  if (!w->have_nodes) RD_FAIL(r, PA_ERR_FORMAT, "$NodeData before $Nodes");
+  rd_mark(r);
+  long line = r->tokline;
+  size_t pos = r->tokpos;
+  PA_CALL(read_data_header(r, &a, &l, &step, &nc, &n));
+  if (l == 0 || l >= sizeof name || memchr(r->buf + a, '\0', l) ||
+      memchr(r->buf + a, '\r', l)) {
+    r->tokline = line;
+    r->tokpos = pos;
+    RD_FAIL(r, PA_ERR_FORMAT,
+            "a view name has 1 to %d bytes, none of them NUL or CR",
+            (int)sizeof name - 1);
+  }
+  memcpy(name, r->buf + a, l);
+  name[l] = '\0';
+  r->tokline = line;
+  r->tokpos = pos;
+  PA_CALL(find_view(r, w, name, nc, step, &v));
+  PA_CALL(rd_fits(r, n, 2 + 2 * (size_t)nc, 4 + 8 * (size_t)nc,
+                  "$NodeData header"));
+  for (uint64_t i = 0; i < n; i++) {
+    uint64_t tag;
+    double x[9];
+    if (r->binary) {
+      int32_t t32;
+      PA_CALL(rd_bytes(r, &t32, 4, "a node tag"));
+      tag = t32 < 0 ? 0 : (uint64_t)t32;
+      for (int k = 0; k < nc; k++)
+        PA_CALL(rd_bytes(r, &x[k], 8, "a node value"));
+    } else {
+      PA_CALL(rd_u64(r, &tag, "a node tag"));
+      for (int k = 0; k < nc; k++)
+        PA_CALL(rd_f64(r, &x[k], "a node value"));
+    }
+    pa_idx idx = node_index(w, tag);
+    if (idx < 0)
+      RD_FAIL(r, PA_ERR_FORMAT, "view \"%s\": unknown node tag %llu", name,
+              (unsigned long long)tag);
+    if (v->seen[idx])
+      RD_FAIL(r, PA_ERR_FORMAT, "view \"%s\": node %llu has two values", name,
+              (unsigned long long)tag);
+    for (int k = 0; k < nc; k++)
+      if (!isfinite(x[k]))
+        RD_FAIL(r, PA_ERR_FORMAT,
+                "view \"%s\": the value of node %llu is not "
+                "finite",
+                name, (unsigned long long)tag);
+    v->seen[idx] = 1;
+    memcpy(v->val + (size_t)nc * idx, x, (size_t)nc * sizeof *x);
+  }
+  PA_CALL(rd_expect(r, "$EndNodeData"));
+cleanup:
+  return st;
+}
+
+/* A binary $ElementData or $ElementNodeData section: skipped record by
+ * record (elements carry no data in padapt). */
+static pa_status skip_binary_data(reader *r, const char *name) {
+  pa_status st = PA_SUCCESS;
+  size_t a, l;
+  int32_t step, nc;
+  uint64_t n;
+  int pernode = !strcmp(name, "ElementNodeData");
+  PA_CALL(read_data_header(r, &a, &l, &step, &nc, &n));
+  PA_CALL(rd_fits(r, n, 1, 4 + (pernode ? 4 : 8 * (size_t)nc), name));
+  for (uint64_t i = 0; i < n; i++) {
+    int32_t hdr[2] = {0, 1};
+    PA_CALL(rd_bytes(r, hdr, pernode ? 8 : 4, "an element tag"));
+    if (hdr[1] < 0)
+      RD_FAIL(r, PA_ERR_FORMAT, "negative number of nodes per element");
+    size_t bytes = 8 * (size_t)nc * (size_t)hdr[1];
+    PA_CALL(rd_need(r, bytes, "element values"));
+    r->pos += bytes;
+  }
+  PA_CALL(rd_expect(r, pernode ? "$EndElementNodeData" : "$EndElementData"));
+cleanup:
+  return st;
+}
+
 /* Skip a section we do not read, up to its "$End<name>" line. */
 static pa_status skip_section(reader *r, const char *name) {
   pa_status st = PA_SUCCESS;
@@ -848,10 +1110,9 @@ cleanup:
 
 /* 1 for the sections whose binary layout we know but do not read. */
 static int binary_layout_section(const char *name) {
-  static const char *const known[] = {
-      "PartitionedEntities", "Periodic",           "GhostElements",
-      "Parametrizations",    "NodeData",           "ElementData",
-      "ElementNodeData",     "InterpolationScheme"};
+  static const char *const known[] = {"PartitionedEntities", "Periodic",
+                                      "GhostElements", "Parametrizations",
+                                      "InterpolationScheme"};
   for (size_t i = 0; i < sizeof known / sizeof *known; i++)
     if (!strcmp(name, known[i])) return 1;
   return 0;
@@ -921,13 +1182,18 @@ static pa_status read_sections(reader *r, msh *w) {
     r->pos += len;
     const char *name = word + 1;
     if (!strcmp(name, "PhysicalNames"))
-      PA_CALL(read_physical_names(r));
+      PA_CALL(read_physical_names(r, w));
     else if (!strcmp(name, "Entities") && w->version == 41)
       PA_CALL(read_entities(r, w));
     else if (!strcmp(name, "Nodes"))
       PA_CALL(w->version == 41 ? read_nodes41(r, w) : read_nodes22(r, w));
     else if (!strcmp(name, "Elements"))
       PA_CALL(w->version == 41 ? read_elements41(r, w) : read_elements22(r, w));
+    else if (!strcmp(name, "NodeData"))
+      PA_CALL(read_node_data(r, w));
+    else if (r->binary &&
+             (!strcmp(name, "ElementData") || !strcmp(name, "ElementNodeData")))
+      PA_CALL(skip_binary_data(r, name));
     else if (r->binary && binary_layout_section(name)) {
       if (w->have_nodes && w->have_elems) {
         pa__info(2, "%s: ignoring binary section $%s and what follows\n",
@@ -965,6 +1231,111 @@ static pa_status adopt_cells(cellbuf *c, int nn, pa_idx **v, int32_t **ref,
   c->ref = NULL;
   c->n = c->capv = c->capr = 0;
 cleanup:
+  return st;
+}
+
+/* How far a 3 x 3 tensor of a view may be from symmetric (and, in 2D, from
+ * having no z coupling), relative to its largest entry, and still be read
+ * as a symmetric tensor: the two halves of a symmetric tensor written by a
+ * program are equal; the margin covers writers that print each half after
+ * its own rounding. */
+#define VIEW_SYM_TOL 1e-12
+
+/* The symmetric tensor (3 values in 2D: m11 m12 m22; 6 in 3D: m11 m12 m22
+ * m13 m23 m33) of a row-major 3 x 3 tensor t; 0 if t is not symmetric or,
+ * in 2D, couples z with x or y (its zz entry is ignored). */
+static int sym_tensor(int dim, const double *t, double *out) {
+  double big = 0;
+  for (int k = 0; k < 9; k++)
+    big = fmax(big, fabs(t[k]));
+  double tol = VIEW_SYM_TOL * big;
+  if (fabs(t[1] - t[3]) > tol || fabs(t[2] - t[6]) > tol ||
+      fabs(t[5] - t[7]) > tol)
+    return 0;
+  out[0] = t[0];
+  out[1] = 0.5 * (t[1] + t[3]);
+  out[2] = t[4];
+  if (dim == 2) return fabs(t[2]) <= tol && fabs(t[5]) <= tol;
+  out[3] = 0.5 * (t[2] + t[6]);
+  out[4] = 0.5 * (t[5] + t[7]);
+  out[5] = t[8];
+  return 1;
+}
+
+/* The views become the metric ("metric") and the fields of m. */
+static pa_status attach_views(reader *r, msh *w, pa_mesh *m) {
+  pa_status st = PA_SUCCESS;
+  double *buf = NULL;
+  int d = m->dim, tn = pa__tensor_ncomp(d);
+  size_t n = w->nnode;
+  for (int k = 0; k < w->nview; k++) {
+    view *v = &w->views[k];
+    int ismet = !strcmp(v->name, "metric");
+    r->tokline = v->line;
+    r->tokpos = v->pos;
+    size_t miss = 0;
+    while (miss < n && v->seen[miss])
+      miss++;
+    if (miss < n && ismet)
+      RD_FAIL(r, PA_ERR_FORMAT, "view \"metric\" has no value at node %llu",
+              (unsigned long long)w->tag[miss]);
+    if (miss < n) { /* valid Gmsh, but a field has a value at every vertex */
+      pa__info(1, "%s: view \"%s\" ignored: no value at node %llu\n", r->path,
+               v->name, (unsigned long long)w->tag[miss]);
+      continue;
+    }
+    int nc = v->ncomp; /* components kept */
+    if (ismet && nc != 1 && nc != 9)
+      RD_FAIL(r, PA_ERR_UNSUPPORTED,
+              "view \"metric\" has %d components: padapt reads 1 (a size) or "
+              "9 (a symmetric tensor)",
+              nc);
+    if (v->ncomp == 9) {
+      PA_ALLOC(buf, n * (size_t)tn);
+      size_t i = 0;
+      while (i < n && sym_tensor(d, v->val + 9 * i, buf + (size_t)tn * i))
+        i++;
+      if (i < n && ismet)
+        RD_FAIL(r, PA_ERR_METRIC,
+                "view \"metric\": the tensor at node %llu is not symmetric%s",
+                (unsigned long long)w->tag[i],
+                d == 2 ? " or couples z with x, y (2D mesh)" : "");
+      if (i == n) {
+        nc = tn;
+        pa__free(v->val);
+        v->val = buf;
+        buf = NULL;
+      }
+      pa__free(buf);
+      buf = NULL;
+    } else if (v->ncomp == 3 && d == 2 && !ismet) {
+      for (size_t i = 0; i < n; i++)
+        if (v->val[3 * i + 2] != 0.0)
+          RD_FAIL(r, PA_ERR_UNSUPPORTED,
+                  "view \"%s\": the vector at node %llu has z = %g, but the "
+                  "mesh is 2D",
+                  v->name, (unsigned long long)w->tag[i], v->val[3 * i + 2]);
+      for (size_t i = 0; i < n; i++) {
+        v->val[2 * i] = v->val[3 * i];
+        v->val[2 * i + 1] = v->val[3 * i + 1];
+      }
+      nc = 2;
+    }
+    if (ismet) {
+      for (size_t i = 0; i < n; i++)
+        if (!pa__metric_valid(d, nc, v->val + (size_t)nc * i))
+          RD_FAIL(r, PA_ERR_METRIC,
+                  "view \"metric\": the value at node %llu is not %s",
+                  (unsigned long long)w->tag[i],
+                  nc == 1 ? "a finite positive size"
+                          : "a symmetric positive definite tensor");
+      PA_CALL(pa_mesh_set_metric(m, nc, v->val));
+    } else {
+      PA_CALL(pa_mesh_add_field(m, v->name, nc, v->val));
+    }
+  }
+cleanup:
+  pa__free(buf);
   return st;
 }
 
@@ -1015,6 +1386,11 @@ static pa_status build_mesh(reader *r, msh *w, pa_mesh **out) {
   if (dim == 3)
     PA_CALL(adopt_cells(&w->cell[1], 2, &m->edge, &m->edref, &m->edflag,
                         &m->caped, &m->ned));
+  m->names = w->names; /* sorted, each (dim, tag) once */
+  m->nname = (int)w->nname;
+  w->names = NULL;
+  w->nname = 0;
+  PA_CALL(attach_views(r, w, m));
   *out = m;
   m = NULL;
 cleanup:
@@ -1286,6 +1662,78 @@ static void write_entity(writer *b, int32_t tag, const double *bb, int nphys,
   wr_eol(b);
 }
 
+/* Components of the view of a vertex array of nc values per vertex: a
+ * size or scalar 1, a vector (nc = dim) 3, a symmetric tensor (3 in 2D, 6
+ * in 3D) 9; any other count as it is. */
+static int view_ncomp(int dim, int nc) {
+  if (nc == 1) return 1;
+  if (nc == dim) return 3;
+  if (nc == pa__tensor_ncomp(dim)) return 9;
+  return nc;
+}
+
+/* One $NodeData view of the vertex array val (nc values per vertex) named
+ * name, time step 0, time 0. Vectors get z = 0 in 2D; symmetric tensors are
+ * written whole, row-major, with zz = zz2d in 2D. */
+static void write_view(writer *b, const pa_mesh *m, const char *name, int nc,
+                       const double *val, double zz2d) {
+  char head[PA_FIELD_NAME_LEN + 64];
+  int d = m->dim, vc = view_ncomp(d, nc);
+  snprintf(head, sizeof head, "$NodeData\n1\n\"%s\"\n1\n0\n3\n0\n%d\n%lld\n",
+           name, vc, (long long)m->nv);
+  wr_text(b, head);
+  for (pa_idx i = 0; i < m->nv; i++) {
+    const double *x = val + (size_t)nc * i;
+    double t[9] = {0};
+    if (vc == 3 && nc == d) {
+      for (int k = 0; k < d; k++)
+        t[k] = x[k];
+    } else if (vc == 9 && nc == pa__tensor_ncomp(d)) {
+      /* m11 m12 m22 [m13 m23 m33] */
+      t[0] = x[0];
+      t[1] = t[3] = x[1];
+      t[4] = x[2];
+      t[8] = d == 2 ? zz2d : x[5];
+      if (d == 3) {
+        t[2] = t[6] = x[3];
+        t[5] = t[7] = x[4];
+      }
+    } else {
+      memcpy(t, x, (size_t)nc * sizeof *t);
+    }
+    if (b->binary)
+      wr_int(b, (int32_t)i + 1);
+    else
+      wr_u64(b, (uint64_t)i + 1);
+    for (int k = 0; k < vc; k++)
+      wr_f64(b, t[k]);
+    wr_eol(b);
+  }
+  wr_end(b, "$EndNodeData\n");
+}
+
+/* Check that the fields of m can be written as views: names that fit a
+ * quoted string tag and do not read back as the metric. */
+static pa_status check_view_names(const pa_mesh *m, const char *path) {
+  pa_status st = PA_SUCCESS;
+  for (int k = 0; k < m->nfield; k++) {
+    const pa_field *f = &m->field[k];
+    PA_CHECK(strcmp(f->name, "metric"), PA_ERR_UNSUPPORTED,
+             "%s: a field named \"metric\" would read back as the metric; "
+             "rename it",
+             path);
+    PA_CHECK(f->name[0] && !strpbrk(f->name, "\"\n\r"), PA_ERR_UNSUPPORTED,
+             "%s: field %d's name '%s' is empty or holds a quote or line "
+             "break, which a Gmsh string tag cannot hold",
+             path, k + 1, f->name);
+    PA_CHECK(f->ncomp <= 9, PA_ERR_UNSUPPORTED,
+             "%s: field \"%s\" has %d components; a Gmsh view has at most 9",
+             path, f->name, f->ncomp);
+  }
+cleanup:
+  return st;
+}
+
 pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary) {
   pa_status st = PA_SUCCESS;
   pa_outfile out = {0};
@@ -1297,6 +1745,7 @@ pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary) {
   PA_CHECK(mesh && path, PA_ERR_ARG, "pa__gmsh_write: NULL argument");
   const pa_mesh *m = mesh;
   int dim = m->dim;
+  PA_CALL(check_view_names(m, path));
 
   /* Groups in Gmsh dimension order: 2D lines, triangles; 3D lines,
    * triangles, tetrahedra. */
@@ -1331,6 +1780,21 @@ pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary) {
     wr_text(&b, "\n");
   }
   wr_text(&b, "$EndMeshFormat\n");
+
+  /* $PhysicalNames (ASCII in binary files too) */
+  if (m->nname) {
+    char line[40];
+    snprintf(line, sizeof line, "$PhysicalNames\n%d\n", m->nname);
+    wr_text(&b, line);
+    for (int k = 0; k < m->nname; k++) {
+      snprintf(line, sizeof line, "%d %d \"", m->names[k].dim,
+               (int)m->names[k].tag);
+      wr_text(&b, line);
+      wr_text(&b, m->names[k].name);
+      wr_text(&b, "\"\n");
+    }
+    wr_text(&b, "$EndPhysicalNames\n");
+  }
 
   /* $Entities */
   wr_text(&b, "$Entities\n");
@@ -1438,6 +1902,13 @@ pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary) {
     }
   }
   wr_end(&b, "$EndElements\n");
+
+  /* $NodeData: the metric (a 2D tensor gets zz = 1, as Mmg writes it, so
+   * that it is positive definite in 3D too), then the fields */
+  if (m->met_ncomp) write_view(&b, m, "metric", m->met_ncomp, m->met, 1.0);
+  for (int k = 0; k < m->nfield; k++)
+    write_view(&b, m, m->field[k].name, m->field[k].ncomp, m->field[k].val,
+               0.0);
   wr_flush(&b);
   PA_CHECK(!b.err, PA_ERR_IO, "%s: write error: %s", path, strerror(errno));
   PA_CALL(pa__out_commit(&out));

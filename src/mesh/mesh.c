@@ -1,6 +1,6 @@
 /*
  * mesh.c -- creation, growth, copy and raw access of struct pa_mesh, its
- * metric and user fields, and memory accounting.
+ * metric, user fields and physical names, and memory accounting.
  *
  * Vertex-attached arrays (coord, vref, vflag, met, field values) always share
  * the capacity capv; every growth goes through pa__mesh_grow_vertices().
@@ -53,6 +53,7 @@ void pa_mesh_destroy(pa_mesh *mesh) {
   pa__free(mesh->edflag);
   pa__free(mesh->met);
   for (int k = 0; k < mesh->nfield; k++) pa__free(mesh->field[k].val);
+  pa__mesh_free_names(mesh);
   pa__free(mesh);
 }
 
@@ -327,6 +328,106 @@ cleanup:
   return st;
 }
 
+void pa__mesh_free_names(pa_mesh *m) {
+  for (int k = 0; k < m->nname; k++)
+    pa__free(m->names[k].name);
+  pa__free(m->names);
+  m->names = NULL;
+  m->nname = 0;
+}
+
+/* A copy of s by the counting allocator, NULL when out of memory. */
+static char *copy_string(const char *s) {
+  size_t n = strlen(s) + 1;
+  char *c = pa__malloc(n);
+  if (c) memcpy(c, s, n);
+  return c;
+}
+
+pa_status pa__mesh_copy_names(pa_mesh *dst, const pa_mesh *src) {
+  pa_status st = PA_SUCCESS;
+  pa_name *names = NULL;
+  int n = 0;
+  if (src->nname) {
+    PA_CALLOC(names, src->nname);
+    for (; n < src->nname; n++) {
+      names[n] = src->names[n];
+      names[n].name = copy_string(src->names[n].name);
+      PA_CHECK(names[n].name, PA_ERR_MEMORY,
+               "out of memory copying a physical name");
+    }
+  }
+  pa__mesh_free_names(dst);
+  dst->names = names;
+  dst->nname = src->nname;
+  names = NULL;
+cleanup:
+  if (names)
+    for (int k = 0; k < n; k++)
+      pa__free(names[k].name);
+  pa__free(names);
+  return st;
+}
+
+int pa_mesh_nnames(const pa_mesh *m) { return m ? m->nname : 0; }
+
+pa_status pa_mesh_name(const pa_mesh *m, int k, int *dim, int32_t *tag,
+                       const char **name) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(m && k >= 0 && k < m->nname, PA_ERR_ARG,
+           "pa_mesh_name: no physical name %d", k);
+  if (dim) *dim = m->names[k].dim;
+  if (tag) *tag = m->names[k].tag;
+  if (name) *name = m->names[k].name;
+cleanup:
+  return st;
+}
+
+pa_status pa_mesh_add_name(pa_mesh *m, int dim, int32_t tag, const char *name) {
+  pa_status st = PA_SUCCESS;
+  char *copy = NULL;
+  PA_CHECK(m, PA_ERR_ARG, "pa_mesh_add_name: NULL mesh");
+  PA_CHECK(dim >= 0 && dim <= 3, PA_ERR_ARG,
+           "pa_mesh_add_name: dimension %d is not 0, 1, 2 or 3", dim);
+  PA_CHECK(!name || (name[0] && !strpbrk(name, "\"\n\r")), PA_ERR_ARG,
+           "pa_mesh_add_name: a physical name is non-empty and holds no "
+           "double quote nor line break");
+  int k = 0; /* first entry not below (dim, tag) */
+  while (k < m->nname && (m->names[k].dim < dim ||
+                          (m->names[k].dim == dim && m->names[k].tag < tag)))
+    k++;
+  int found = k < m->nname && m->names[k].dim == dim && m->names[k].tag == tag;
+  if (!name) {
+    if (found) {
+      pa__free(m->names[k].name);
+      memmove(m->names + k, m->names + k + 1,
+              (size_t)(m->nname - k - 1) * sizeof *m->names);
+      m->nname--;
+    }
+    return PA_SUCCESS;
+  }
+  copy = copy_string(name);
+  PA_CHECK(copy, PA_ERR_MEMORY, "out of memory storing a physical name");
+  if (found) {
+    pa__free(m->names[k].name);
+  } else {
+    PA_CHECK(m->nname < INT32_MAX, PA_ERR_ARG, "too many physical names");
+    void *p = pa__realloc(m->names, (size_t)(m->nname + 1) * sizeof *m->names);
+    PA_CHECK(p, PA_ERR_MEMORY, "out of memory storing a physical name");
+    m->names = p;
+    memmove(m->names + k + 1, m->names + k,
+            (size_t)(m->nname - k) * sizeof *m->names);
+    m->nname++;
+    m->names[k].dim = dim;
+    m->names[k].tag = tag;
+  }
+  m->names[k].name = copy;
+  copy = NULL;
+cleanup:
+  pa__free(copy);
+  return st;
+}
+
 pa_status pa_mesh_copy(const pa_mesh *src, pa_mesh **dst) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = NULL;
@@ -368,6 +469,7 @@ pa_status pa_mesh_copy(const pa_mesh *src, pa_mesh **dst) {
     PA_COPY(m->field[k].val, src->field[k].val,
             (size_t)src->field[k].ncomp * src->nv);
 #undef PA_COPY
+  PA_CALL(pa__mesh_copy_names(m, src));
   *dst = m;
   m = NULL;
 cleanup:
@@ -385,6 +487,9 @@ size_t pa_mesh_memory_used(const pa_mesh *m) {
   for (size_t i = 0; i < sizeof blocks / sizeof *blocks; i++)
     n += pa__alloc_size(blocks[i]);
   for (int k = 0; k < m->nfield; k++) n += pa__alloc_size(m->field[k].val);
+  n += pa__alloc_size(m->names);
+  for (int k = 0; k < m->nname; k++)
+    n += pa__alloc_size(m->names[k].name);
   return n;
 }
 

@@ -24,6 +24,14 @@ typedef struct pa_field {
   double *val; /* capv * ncomp */
 } pa_field;
 
+/* A physical name (Gmsh $PhysicalNames): the name of the entities of
+ * topological dimension dim (0-3) whose reference is tag. */
+typedef struct pa_name {
+  int dim;
+  int32_t tag;
+  char *name; /* NUL-terminated, allocated */
+} pa_name;
+
 struct pa_mesh {
   int dim; /* 2 or 3 */
 
@@ -63,6 +71,10 @@ struct pa_mesh {
   int nfield;
   pa_field field[PA_MAX_FIELDS];
 
+  /* physical names, sorted by (dim, tag), each (dim, tag) once */
+  int nname;
+  pa_name *names;
+
   /* derived structures, NULL when not built */
   pa_idx *adja;       /* (dim+1) * ne: (dim+1)*f + j, or -1 */
   pa_idx *ball_start; /* nv + 1 */
@@ -76,6 +88,11 @@ struct pa_mesh {
  * tensor. Implemented in src/metric/metric.c; declared here because the mesh
  * check uses it and mesh/ sits below metric/. */
 int pa__metric_valid(int dim, int ncomp, const double *m);
+
+/* Free the physical names (the mesh then has none). */
+void pa__mesh_free_names(pa_mesh *mesh);
+/* Replace the physical names of dst by copies of those of src. */
+pa_status pa__mesh_copy_names(pa_mesh *dst, const pa_mesh *src);
 
 /* Free derived structures after a topological change. */
 void pa__mesh_invalidate(pa_mesh *mesh);

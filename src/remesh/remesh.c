@@ -144,6 +144,8 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   uint8_t *frozen = NULL;
   double *newmet = NULL, *oldmet = NULL;
   int oldnc = 0, installed = 0, carried = 0;
+  pa_name *names = NULL; /* the caller's physical names, held aside */
+  int nname = 0;
   double t0 = pa_wtime();
   wrap.t0 = t0;
   PA_CHECK(r && r->remesh && mesh, PA_ERR_ARG, "pa_remesh: NULL argument");
@@ -228,6 +230,11 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   newmet = NULL;
   installed = 1;
 
+  /* A remesher may replace the mesh's contents: the names wait aside. */
+  names = mesh->names;
+  nname = mesh->nname;
+  mesh->names = NULL;
+  mesh->nname = 0;
   PA_CALL(r->remesh(r->ctx, mesh, opts, report));
   if (report->outcome == PA_REMESH_FAILED) goto cleanup;
   pa__free(oldmet);
@@ -246,6 +253,11 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
     }
   }
 cleanup:
+  if (names) {
+    pa__mesh_free_names(mesh);
+    mesh->names = names;
+    mesh->nname = nname;
+  }
   if (installed) { /* error or FAILED: give the mesh back as it was */
     pa__free(mesh->met);
     mesh->met = oldmet;

@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """test_mesh.py -- padapt.Mesh: numpy arrays in and out (views, no copy),
 meshio round trips and files written by the C writers read back by meshio,
+physical names,
 and the bad inputs that must raise ValueError (before any library call) or
 padapt.Error (the library's message).
 
@@ -130,6 +131,25 @@ class Meshio(unittest.TestCase):
             self.assertEqual((x.dim, x.nvert, x.nelem, x.nbdry), (2, m.nvert, m.nelem, m.nbdry))
             np.testing.assert_array_equal(np.sort(x.boundary_refs), np.sort(m.boundary_refs))
 
+
+    def test_physical_names(self):
+        # names and views survive Mesh -> .msh -> padapt.read, and meshio's
+        # field_data both ways
+        m = padapt.Mesh.generate_box(2, 3)
+        m.names = [(1, 2, "right"), (2, 0, "fluid"), (1, 1, "left side")]
+        m.add_field("u", m.points[:, 0] + 2 * m.points[:, 1])
+        m.write("named.msh", binary=True)
+        r = padapt.read("named.msh")
+        self.assertEqual(r.names, [(1, 1, "left side"), (1, 2, "right"), (2, 0, "fluid")])
+        np.testing.assert_array_equal(r.fields["u"], m.fields["u"])
+        mm = r.to_meshio()
+        self.assertEqual({k: v.tolist() for k, v in mm.field_data.items()},
+                         {"left side": [1, 1], "right": [2, 1], "fluid": [0, 2]})
+        self.assertEqual(padapt.Mesh.from_meshio(mm).names, r.names)
+        r.names = []
+        self.assertEqual(r.names, [])
+        with self.assertRaises(padapt.Error):
+            r.names = [(1, 1, 'a "quoted" name')]
 
     def test_partial_boundary_completed(self):
         m = padapt.Mesh.generate_box(2, 4)

@@ -3,10 +3,12 @@
  * and binary (coordinates bit for bit, connectivity, references, boundary,
  * feature edges, corners), hand-written MSH 4.1 and 2.2 files, error messages,
  * every truncation and random corruptions of a file, allocation failures, and
- * the malformed files of tests/data/bad (gmsh.expected).
+ * the malformed files of tests/data/bad (gmsh.expected); physical names and
+ * node data views (metric and fields) in both encodings, and their errors.
  */
 #include "testutil.h"
 
+#include <math.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -274,6 +276,15 @@ static void test_read_handwritten41(void) {
   CHECK(pa_mesh_vert_flags(m)[0] & PA_FLAG_CORNER);
   CHECK(pa_mesh_vert_refs(m)[0] == 11);
   CHECK(!(pa_mesh_vert_flags(m)[1] & PA_FLAG_CORNER));
+  /* the names, sorted by (dimension, tag); the view "u" covers one node
+   * only: ignored */
+  CHECK(pa_mesh_nnames(m) == 3);
+  int dim = -1;
+  int32_t tag = 0;
+  const char *name = NULL;
+  CHECK_OK(pa_mesh_name(m, 1, &dim, &tag, &name));
+  CHECK(dim == 2 && tag == 100 && name && !strcmp(name, "left part"));
+  CHECK(pa_mesh_nfield(m) == 0 && pa_mesh_metric_ncomp(m) == 0);
   pa_mesh_destroy(m);
 }
 
@@ -595,6 +606,305 @@ static void test_bad_corpus(void) {
   CHECK(n >= 8);
 }
 
+/* ---- physical names and node data ---- */
+
+/* Names, metric and fields: equal after a round trip, values bit for bit. */
+static void check_same_data(pa_mesh *a, pa_mesh *b) {
+  CHECK(pa_mesh_nnames(b) == pa_mesh_nnames(a));
+  for (int k = 0; k < pa_mesh_nnames(a) && k < pa_mesh_nnames(b); k++) {
+    int da, db;
+    int32_t ta, tb;
+    const char *na, *nb;
+    CHECK_OK(pa_mesh_name(a, k, &da, &ta, &na));
+    CHECK_OK(pa_mesh_name(b, k, &db, &tb, &nb));
+    CHECK(da == db && ta == tb && !strcmp(na, nb));
+  }
+  pa_idx nv = pa_mesh_nvert(a);
+  int nc = pa_mesh_metric_ncomp(a);
+  CHECK(pa_mesh_metric_ncomp(b) == nc);
+  if (nc && pa_mesh_metric_ncomp(b) == nc)
+    CHECK(!memcmp(pa_mesh_metric(a), pa_mesh_metric(b),
+                  (size_t)nv * nc * sizeof(double)));
+  CHECK(pa_mesh_nfield(b) == pa_mesh_nfield(a));
+  for (int k = 0; k < pa_mesh_nfield(a) && k < pa_mesh_nfield(b); k++) {
+    const char *na, *nb;
+    int ca, cb;
+    double *va, *vb;
+    CHECK_OK(pa_mesh_field(a, k, &na, &ca, &va));
+    CHECK_OK(pa_mesh_field(b, k, &nb, &cb, &vb));
+    CHECK(!strcmp(na, nb) && ca == cb);
+    if (ca == cb) CHECK(!memcmp(va, vb, (size_t)nv * ca * sizeof(double)));
+  }
+}
+
+/* Attach names, a metric of ncomp values and fields of 1, dim (vector),
+ * tensor, 9 (not symmetric) and 4 components to m. */
+static void add_data(pa_mesh *m, int met_ncomp) {
+  int d = pa_mesh_dim(m), tn = d == 2 ? 3 : 6;
+  pa_idx nv = pa_mesh_nvert(m);
+  double *v = malloc(sizeof(double) * 9 * (size_t)nv);
+  CHECK_OK(pa_mesh_add_name(m, d, 2, "right half"));
+  CHECK_OK(pa_mesh_add_name(m, d - 1, 3, "bottom"));
+  CHECK_OK(pa_mesh_add_name(m, 0, 7, "corner points"));
+  CHECK_OK(pa_mesh_add_name(m, d, 1, "left"));
+  CHECK_OK(pa_mesh_add_name(m, 3, 1000, "unused: kept all the same"));
+  for (pa_idx i = 0; i < nv; i++) {
+    double x = pa_mesh_coords(m)[(size_t)d * i] + 1.0 / 3;
+    double *t = v + (size_t)tn * i;
+    if (met_ncomp == 1) {
+      v[i] = 0.1 + x / 7;
+    } else { /* diagonally dominant: SPD */
+      for (int k = 0; k < tn; k++)
+        t[k] = 0.01 * x * (k + 1);
+      t[0] += 2 + x;
+      t[2] += 3;
+      if (d == 3) t[5] += 4 / x;
+    }
+  }
+  CHECK_OK(pa_mesh_set_metric(m, met_ncomp, v));
+  static const int nc[5] = {1, 0, -1, 9, 4}; /* 0: dim, -1: tensor */
+  static const char *names[5] = {"u", "velocity", "stress tensor", "grad",
+                                 "four"};
+  for (int f = 0; f < 5; f++) {
+    int c = nc[f] == 0 ? d : nc[f] < 0 ? tn : nc[f];
+    for (size_t k = 0; k < (size_t)nv * c; k++)
+      v[k] = sin(0.7 * k + f) / 3;
+    CHECK_OK(pa_mesh_add_field(m, names[f], c, v));
+  }
+  free(v);
+}
+
+static void roundtrip_data(pa_mesh *m, const char *path, int binary) {
+  pa_write_opts opts = {binary, 0, 0};
+  pa_mesh *r = NULL;
+  CHECK_OK(pa_mesh_write(m, path, &opts));
+  CHECK_OK(pa_mesh_read(path, &r));
+  if (r) {
+    check_same(m, r);
+    check_same_data(m, r);
+  }
+  pa_mesh_destroy(r);
+}
+
+static void test_roundtrip_data(void) {
+  pa_mesh *m = make_square(4), *c = NULL;
+  add_data(m, 3);
+  roundtrip_data(m, "data2_ascii.msh", 0);
+  roundtrip_data(m, "data2_binary.msh", 1);
+  CHECK_OK(pa_mesh_copy(m, &c));
+  if (c) check_same_data(m, c);
+  pa_mesh_destroy(c);
+  pa_mesh_destroy(m);
+  m = make_cube(2);
+  add_data(m, 6);
+  roundtrip_data(m, "data3_ascii.msh", 0);
+  roundtrip_data(m, "data3_binary.msh", 1);
+  pa_mesh_destroy(m);
+  m = make_cube(1);
+  add_data(m, 1);
+  roundtrip_data(m, "data3s_ascii.msh", 0);
+  roundtrip_data(m, "data3s_binary.msh", 1);
+  /* the view of a 2D tensor and of a 3D vector, as Gmsh shows them */
+  pa_mesh_destroy(m);
+  m = make_square(1);
+  double met[12] = {1, 2, 9, 1, 2, 9, 1, 2, 9, 1, 2, 9};
+  CHECK_OK(pa_mesh_set_metric(m, 3, met));
+  CHECK_OK(pa_mesh_write(m, "view2d.msh", NULL));
+  FILE *fp = fopen("view2d.msh", "r");
+  char buf[4096];
+  size_t n = fp ? fread(buf, 1, sizeof buf - 1, fp) : 0;
+  buf[n] = '\0';
+  if (fp) fclose(fp);
+  CHECK(strstr(buf, "$NodeData\n1\n\"metric\"\n1\n0\n3\n0\n9\n4\n"
+                    "1 1 2 0 2 9 0 0 0 1\n") != NULL);
+  pa_mesh_destroy(m);
+}
+
+/* The names API: sorted, replaced, removed, checked. */
+static void test_names_api(void) {
+  pa_mesh *m = NULL;
+  const char *name = NULL;
+  int dim = -1;
+  int32_t tag = 0;
+  CHECK_OK(pa_mesh_create(2, &m));
+  CHECK(pa_mesh_nnames(m) == 0);
+  CHECK_OK(pa_mesh_add_name(m, 2, 5, "b"));
+  CHECK_OK(pa_mesh_add_name(m, 1, 9, "a"));
+  CHECK_OK(pa_mesh_add_name(m, 2, -1, "c"));
+  CHECK_OK(pa_mesh_add_name(m, 2, 5, "b again"));
+  CHECK(pa_mesh_nnames(m) == 3);
+  CHECK_OK(pa_mesh_name(m, 0, &dim, &tag, &name));
+  CHECK(dim == 1 && tag == 9 && !strcmp(name, "a"));
+  CHECK_OK(pa_mesh_name(m, 2, &dim, &tag, &name));
+  CHECK(dim == 2 && tag == 5 && !strcmp(name, "b again"));
+  CHECK_OK(pa_mesh_add_name(m, 2, -1, NULL));
+  CHECK_OK(pa_mesh_add_name(m, 0, 1, NULL)); /* nothing to remove */
+  CHECK(pa_mesh_nnames(m) == 2);
+  CHECK(pa_mesh_add_name(m, 4, 1, "x") == PA_ERR_ARG);
+  CHECK(pa_mesh_add_name(m, 1, 1, "") == PA_ERR_ARG);
+  CHECK(pa_mesh_add_name(m, 1, 1, "a \"quote\"") == PA_ERR_ARG);
+  CHECK(pa_mesh_add_name(m, 1, 1, "two\nlines") == PA_ERR_ARG);
+  CHECK(pa_mesh_name(m, 2, NULL, NULL, NULL) == PA_ERR_ARG);
+  /* a field named "metric" cannot be written as a view */
+  double u = 1;
+  double x[2] = {0, 0};
+  CHECK_OK(pa_mesh_add_vertex(m, x, 0, NULL));
+  CHECK_OK(pa_mesh_add_field(m, "metric", 1, &u));
+  CHECK(pa_mesh_write(m, "metric_field.msh", NULL) == PA_ERR_UNSUPPORTED);
+  CHECK(strstr(pa_last_error(), "named \"metric\"") != NULL);
+  CHECK(access("metric_field.msh", F_OK) != 0);
+  pa_mesh_destroy(m);
+}
+
+#define ELEMS1 "$Elements\n1 1 1 1\n2 1 2 1\n1 1 2 3\n$EndElements\n"
+/* A $NodeData section (it starts at line 19 after HEAD NODES3 ELEMS1; its
+ * string tag count, where the view's messages point, at line 20). */
+#define VIEW(name, nc, body)                                                   \
+  "$NodeData\n1\n\"" name "\"\n1\n0.0\n3\n0\n" #nc "\n3\n" body                \
+  "$EndNodeData\n"
+
+/* Malformed names and node data: errors naming the file and the line. */
+static void test_data_errors(void) {
+  expect_error(HEAD "$PhysicalNames\n2\n1 3 \"a\"\n1 3 \"b\"\n"
+                    "$EndPhysicalNames\n" NODES3 ELEMS1,
+               PA_ERR_FORMAT,
+               ":5: $PhysicalNames names (dimension 1, tag 3) "
+               "twice",
+               NULL);
+  expect_error(HEAD "$PhysicalNames\n1\n1 3 \"\"\n$EndPhysicalNames\n",
+               PA_ERR_FORMAT, ":6: empty physical name", NULL);
+  expect_error(HEAD "$PhysicalNames\n1\n1 3 \"open\n$EndPhysicalNames\n",
+               PA_ERR_FORMAT, ":6: unterminated quoted physical name", NULL);
+  expect_error(
+      HEAD "$NodeData\n1\n\"u\"\n0\n3\n0\n1\n0\n$EndNodeData\n" NODES3 ELEMS1,
+      PA_ERR_FORMAT, ":4: $NodeData before $Nodes", NULL);
+  expect_error(
+      HEAD NODES3 ELEMS1 VIEW("metric", 3, "1 1 0 1\n2 1 0 1\n3 1 0 1\n"),
+      PA_ERR_UNSUPPORTED, ":20: view \"metric\" has 3 components",
+      "1 (a size) or 9");
+  expect_error(HEAD NODES3 ELEMS1 VIEW("u", 1, "1 1\n2 2\n7 3\n"),
+               PA_ERR_FORMAT, ":30: view \"u\": unknown node tag 7", NULL);
+  expect_error(HEAD NODES3 ELEMS1 VIEW("u", 1, "1 1\n1 2\n3 3\n"),
+               PA_ERR_FORMAT, ":29: view \"u\": node 1 has two values", NULL);
+  expect_error(HEAD NODES3 ELEMS1 VIEW("u", 1, "1 1\n2 inf\n3 3\n"),
+               PA_ERR_FORMAT,
+               ":29: view \"u\": the value of node 2 is not "
+               "finite",
+               NULL);
+  expect_error(HEAD NODES3 ELEMS1 VIEW("u", 1, "1 1\n2 2x\n3 3\n"),
+               PA_ERR_FORMAT, ":29: expected a node value, found '2x'", NULL);
+  expect_error(HEAD NODES3 ELEMS1 VIEW("u", 1, "1 1\n2 2\n"), PA_ERR_FORMAT,
+               ":30:", "expected a node tag");
+  expect_error(HEAD NODES3 ELEMS1 VIEW("metric", 1, "1 1\n2 -2\n3 3\n"),
+               PA_ERR_METRIC,
+               ":20: view \"metric\": the value at node 2 is "
+               "not a finite positive size",
+               NULL);
+  expect_error(HEAD NODES3 ELEMS1 VIEW("metric", 9,
+                                       "1 1 0 0 0 1 0 0 0 1\n"
+                                       "2 1 0.5 0 0 1 0 0 0 1\n"
+                                       "3 1 0 0 0 1 0 0 0 1\n"),
+               PA_ERR_METRIC,
+               ":20: view \"metric\": the tensor at node 2 "
+               "is not symmetric",
+               NULL);
+  expect_error(HEAD NODES3 ELEMS1 "$NodeData\n1\n\"metric\"\n1\n0.0\n3\n0\n"
+                                  "1\n2\n1 1\n3 3\n$EndNodeData\n",
+               PA_ERR_FORMAT, ":20: view \"metric\" has no value at node 2",
+               NULL);
+  expect_error(HEAD NODES3 ELEMS1 VIEW("v", 3,
+                                       "1 1 0 0\n2 1 0 0.5\n"
+                                       "3 1 0 0\n"),
+               PA_ERR_UNSUPPORTED,
+               ":20: view \"v\": the vector at node 2 has "
+               "z = 0.5, but the mesh is 2D",
+               NULL);
+  expect_error(HEAD NODES3 ELEMS1 VIEW("u", 10, "1 1\n2 2\n3 3\n"),
+               PA_ERR_FORMAT,
+               ":26: a number of components (1 to 9) 10 is "
+               "out of range",
+               NULL);
+  expect_error(HEAD NODES3 ELEMS1
+               "$NodeData\n0\n1\n0.0\n3\n0\n1\n0\n$EndNodeData\n",
+               PA_ERR_FORMAT, ":20: a data section needs a string tag", NULL);
+  expect_error(HEAD NODES3 ELEMS1
+               "$NodeData\n1\n\"u\"\n0\n2\n0\n1\n$EndNodeData\n",
+               PA_ERR_FORMAT, ":23: a data section needs 3 integer tags", NULL);
+  expect_error(
+      HEAD NODES3 ELEMS1 VIEW(
+          "u", 1, "1 1\n2 2\n3 3\n") "$NodeData\n1\n\"u\"\n1\n0."
+                                     "0\n3\n1\n1\n1\n1 1\n$EndNodeData\n",
+      PA_ERR_UNSUPPORTED, ":33: view \"u\" has several time steps", NULL);
+  /* a view in parts (by partition) is one view */
+  pa_mesh *m = NULL;
+  write_text("parts.msh", HEAD NODES3 ELEMS1
+             "$NodeData\n1\n\"u\"\n1\n0.0\n4\n0\n1\n2\n1\n1 10\n3 30\n"
+             "$EndNodeData\n"
+             "$NodeData\n1\n\"u\"\n1\n0.0\n4\n0\n1\n1\n2\n2 20\n"
+             "$EndNodeData\n");
+  CHECK_OK(pa_mesh_read("parts.msh", &m));
+  double *u = NULL;
+  if (m) CHECK_OK(pa_mesh_field(m, 0, NULL, NULL, &u));
+  CHECK(u && u[0] == 10 && u[1] == 20 && u[2] == 30);
+  pa_mesh_destroy(m);
+}
+
+/* Every truncation of a file with names and a view is refused, except the
+ * two that end the file right after $EndElements (a valid file without the
+ * view); every allocation of its read may fail. */
+static void test_data_truncated(void) {
+  pa_mesh *m = make_square(1);
+  double h[4] = {0.5, 0.25, 0.125, 1};
+  CHECK_OK(pa_mesh_set_metric(m, 1, h));
+  CHECK_OK(pa_mesh_add_name(m, 1, 3, "bottom"));
+  for (int binary = 0; binary < 2; binary++) {
+    pa_write_opts opts = {binary, 0, 0};
+    CHECK_OK(pa_mesh_write(m, "trunc_d.msh", &opts));
+    size_t len = 0;
+    unsigned char *buf = slurp("trunc_d.msh", &len);
+    if (!buf) continue;
+    const char *p = strstr((const char *)buf, "$NodeData");
+    if (binary) { /* strstr stops at the first NUL byte */
+      p = NULL;
+      for (size_t k = 0; k + 9 < len && !p; k++)
+        if (!memcmp(buf + k, "$NodeData", 9)) p = (const char *)buf + k;
+    }
+    CHECK(p != NULL);
+    size_t at = p ? (size_t)(p - (const char *)buf) : 0;
+    int bad = 0;
+    for (size_t cut = 0; cut + 1 < len; cut++) {
+      spill("cut_d.msh", buf, cut);
+      pa_mesh *r = NULL;
+      pa_status st = pa_mesh_read("cut_d.msh", &r);
+      int whole = cut == at || cut + 1 == at;
+      if (whole ? st != PA_SUCCESS : (st != PA_ERR_FORMAT || r)) {
+        if (!bad++)
+          fprintf(stderr, "  trunc_d.msh cut at %zu: %s: %s\n", cut,
+                  pa_status_string(st), pa_last_error());
+      }
+      pa_mesh_destroy(r);
+    }
+    CHECK(bad == 0);
+    free(buf);
+    int nok = 0, nbad = 0;
+    for (long k = 1; k < 60; k++) {
+      pa_mesh *r = NULL;
+      pa_memory_fail_after(k);
+      pa_status st = pa_mesh_read("trunc_d.msh", &r);
+      pa_memory_fail_after(0);
+      if (st == PA_SUCCESS) {
+        nok++;
+        check_same_data(m, r);
+      } else if (st != PA_ERR_MEMORY || r) {
+        nbad++;
+      }
+      pa_mesh_destroy(r);
+    }
+    CHECK(nok > 0 && nbad == 0);
+  }
+  pa_mesh_destroy(m);
+}
+
 /* A larger mesh: both encodings round trip, binary is the faster. */
 static void test_larger(void) {
   pa_mesh *m = make_cube(16), *r = NULL;
@@ -619,4 +929,5 @@ static void test_larger(void) {
 TEST_MAIN(test_roundtrip_2d, test_roundtrip_3d, test_roundtrip_refs,
           test_read_handwritten41, test_read_sparse_tags,
           test_read_handwritten22, test_errors, test_truncated, test_corrupted,
-          test_alloc_failures, test_bad_corpus, test_larger)
+          test_alloc_failures, test_bad_corpus, test_roundtrip_data,
+          test_names_api, test_data_errors, test_data_truncated, test_larger)
