@@ -123,25 +123,7 @@ void pa_cli_svg_text(pa_cli_svg *svg, double x, double y, const char *anchor,
   fprintf(fp, "\" font-size=\"");
   num(fp, size);
   fprintf(fp, "\" text-anchor=\"%s\">", anchor);
-  for (const char *c = buf; *c; c++) {
-    switch (*c) {
-    case '&':
-      fputs("&amp;", fp);
-      break;
-    case '<':
-      fputs("&lt;", fp);
-      break;
-    case '>':
-      fputs("&gt;", fp);
-      break;
-    case '"':
-      fputs("&quot;", fp);
-      break;
-    default:
-      /* control characters are not allowed in XML 1.0 */
-      fputc((unsigned char)*c < 0x20 ? '?' : *c, fp);
-    }
-  }
+  pa__xml_escape(fp, buf);
   fprintf(fp, "</text>\n");
 }
 

@@ -158,4 +158,18 @@ static inline uint64_t pa__hash_idx(const pa_idx *k, int n) {
  * /proc/meminfo, lowered to a cgroup v2 limit; 0 if unknown. */
 size_t pa__mem_available(void);
 
+/* ---- agreement of collective routines (agree.c) ---- */
+
+/* Collective: combine the local status st of every rank. Returns PA_SUCCESS if
+ * every rank succeeded; otherwise, on every rank, the status of the lowest
+ * failing rank, whose error message is copied to every rank (prefixed with
+ * "rank R: " on the others). */
+pa_status pa__agree(MPI_Comm comm, pa_status st);
+/* Collective end of a collective routine: agree on st unless st is an error
+ * that was already agreed on by every rank (returned by pa__agree). */
+pa_status pa__agree_end(MPI_Comm comm, pa_status st);
+/* Forget any earlier agreed failure: public collective functions call it on
+ * entry, so that a failure of an earlier call is never taken as agreed. */
+void pa__agree_reset(void);
+
 #endif /* PA_CORE_H */

@@ -23,49 +23,6 @@ enum {
   CHUNK = 1 << 30 /* bytes per message at most */
 };
 
-/* ---- agreement ---- */
-
-static _Thread_local int agreed_fail;                 /* last agree failed */
-static _Thread_local char agreed_msg[256];            /* its message prefix */
-
-void pa__agree_reset(void) { agreed_fail = 0; }
-
-pa_status pa__agree(MPI_Comm comm, pa_status st) {
-  int rank, size, first;
-  MPI_Comm_rank(comm, &rank);
-  MPI_Comm_size(comm, &size);
-  int mine = st != PA_SUCCESS ? rank : size;
-  MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, comm);
-  if (first == size) {
-    agreed_fail = 0;
-    return PA_SUCCESS;
-  }
-  /* Broadcast the status and message of the lowest failing rank. */
-  struct {
-    int code;
-    char msg[1000];
-  } m;
-  memset(&m, 0, sizeof m);
-  if (rank == first) {
-    m.code = (int)st;
-    snprintf(m.msg, sizeof m.msg, "%s", pa_last_error());
-  }
-  MPI_Bcast(&m, (int)sizeof m, MPI_BYTE, first, comm);
-  pa_status code = (pa_status)m.code;
-  if (rank != first)
-    pa__error(code, __FILE__, __LINE__, "rank %d: %s", first, m.msg);
-  agreed_fail = 1;
-  snprintf(agreed_msg, sizeof agreed_msg, "%s", pa_last_error());
-  return code;
-}
-
-pa_status pa__agree_end(MPI_Comm comm, pa_status st) {
-  if (st != PA_SUCCESS && agreed_fail &&
-      !strncmp(agreed_msg, pa_last_error(), sizeof agreed_msg - 1))
-    return st;
-  return pa__agree(comm, st);
-}
-
 pa_status pa__allreduce(MPI_Comm comm, void *buf, int n, MPI_Datatype t,
                         MPI_Op op) {
   pa_status st = pa__agree(comm, PA_SUCCESS);

@@ -37,17 +37,7 @@
 
 /* ---- agreement ---- */
 
-/* Collective: combine the local status st of every rank. Returns PA_SUCCESS if
- * every rank succeeded; otherwise, on every rank, the status of the lowest
- * failing rank, whose error message is copied to every rank (prefixed with
- * "rank R: " on the others). */
-pa_status pa__agree(MPI_Comm comm, pa_status st);
-/* Collective end of a collective routine: agree on st unless st is an error
- * that was already agreed on by every rank (returned by pa__agree). */
-pa_status pa__agree_end(MPI_Comm comm, pa_status st);
-/* Forget any earlier agreed failure: public collective functions call it on
- * entry, so that a failure of an earlier call is never taken as agreed. */
-void pa__agree_reset(void);
+/* pa__agree, pa__agree_end, pa__agree_reset: core/core.h (agree.c). */
 
 /* Agreeing Allreduce (sum/min/max of n values of type t). */
 pa_status pa__allreduce(MPI_Comm comm, void *buf, int n, MPI_Datatype t,

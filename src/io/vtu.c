@@ -46,8 +46,7 @@ typedef struct vtu_array {
   uint64_t offset;
 } vtu_array;
 
-/* Write name with the XML special characters escaped. */
-static void put_escaped(FILE *fp, const char *s) {
+void pa__xml_escape(FILE *fp, const char *s) {
   for (; *s; s++) {
     switch (*s) {
     case '&':
@@ -62,8 +61,8 @@ static void put_escaped(FILE *fp, const char *s) {
     case '"':
       fputs("&quot;", fp);
       break;
-    default:
-      fputc(*s, fp);
+    default: /* control characters are not allowed in XML 1.0 */
+      fputc((unsigned char)*s < 0x20 ? '?' : *s, fp);
     }
   }
 }
@@ -72,7 +71,7 @@ static void put_array(FILE *fp, const vtu_array *a) {
   fprintf(fp, "        <DataArray type=\"%s\"", a->type);
   if (a->name) {
     fputs(" Name=\"", fp);
-    put_escaped(fp, a->name);
+    pa__xml_escape(fp, a->name);
     fputc('"', fp);
   }
   if (a->ncomp > 1) fprintf(fp, " NumberOfComponents=\"%d\"", a->ncomp);

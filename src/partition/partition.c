@@ -21,31 +21,6 @@
 #include <string.h>
 #include <scotch/ptscotch.h>
 
-/* Agree on a status over comm: every rank gets the status and the message
- * of the lowest failing rank (prefixed "rank R: "), as the exchange layer's
- * pa__agree does for the components above this one. */
-static pa_status agree(MPI_Comm comm, pa_status st) {
-  int rank, size, mine, first;
-  MPI_Comm_rank(comm, &rank);
-  MPI_Comm_size(comm, &size);
-  mine = st != PA_SUCCESS ? rank : size;
-  MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, comm);
-  if (first == size) return PA_SUCCESS;
-  struct {
-    int code;
-    char msg[1000];
-  } m;
-  memset(&m, 0, sizeof m);
-  if (rank == first) {
-    m.code = (int)st;
-    snprintf(m.msg, sizeof m.msg, "%s", pa_last_error());
-  }
-  MPI_Bcast(&m, (int)sizeof m, MPI_BYTE, first, comm);
-  if (rank == first) return st;
-  return pa__error((pa_status)m.code, __FILE__, __LINE__, "rank %d: %s",
-                   first, m.msg);
-}
-
 /* A Scotch context whose threads and random generator behave the same on
  * every run (0 on success; SCOTCH_contextExit it then). */
 static int deterministic_context(SCOTCH_Context *ctx) {
@@ -98,7 +73,7 @@ pa_status pa__partition_dgraph(MPI_Comm comm, pa_idx n, const pa_idx *xadj,
     }
   }
 cleanup:
-  st = agree(comm, st);
+  st = pa__agree(comm, st);
   if (st) goto done;
   if (nparts == 1) {
     for (pa_idx i = 0; i < n; i++) part[i] = 0;
@@ -109,20 +84,20 @@ cleanup:
                    "SCOTCH_dgraphInit failed");
   else
     graph_init = 1;
-  st = agree(comm, st);
+  st = pa__agree(comm, st);
   if (st) goto done;
   if (SCOTCH_dgraphBuild(&graph, 0, n, n, vert, NULL, velo, NULL, xadj[n],
                          xadj[n], edge, NULL, NULL) != 0)
     st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
                    "SCOTCH_dgraphBuild failed on a graph of %d local vertices",
                    (int)n);
-  st = agree(comm, st);
+  st = pa__agree(comm, st);
   if (st) goto done;
 #ifndef NDEBUG
   if (SCOTCH_dgraphCheck(&graph) != 0)
     st = pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
                    "SCOTCH_dgraphCheck: the dual graph is inconsistent");
-  st = agree(comm, st);
+  st = pa__agree(comm, st);
   if (st) goto done;
 #endif
   /* Scotch's default strategy: measured against SCOTCH_stratDgraphMapBuild
@@ -138,7 +113,7 @@ cleanup:
                                    kbal) != 0)
       st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
                      "SCOTCH_stratDgraphMapBuild failed");
-    st = agree(comm, st);
+    st = pa__agree(comm, st);
     if (st) goto done;
   }
   /* The same graph always gets the same partition: Scotch's random state
@@ -160,12 +135,12 @@ cleanup:
   if (!st && SCOTCH_contextBindDgraph(&ctx, &graph, &bound) != 0)
     st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
                    "SCOTCH_contextBindDgraph failed");
-  st = agree(comm, st);
+  st = pa__agree(comm, st);
   if (st) goto done;
   if (SCOTCH_dgraphPart(&bound, nparts, &strat, parttab) != 0)
     st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
                    "SCOTCH_dgraphPart failed (%d parts)", nparts);
-  st = agree(comm, st);
+  st = pa__agree(comm, st);
   if (st) goto done;
   for (pa_idx i = 0; i < n; i++) part[i] = (int)parttab[i];
 done:
@@ -211,7 +186,7 @@ pa_status pa__partition_remap(MPI_Comm comm, pa_idx n, int *part,
     mine[part[i]] += weights ? weights[i] : 1.0;
   }
 cleanup:
-  st = agree(comm, st);
+  st = pa__agree(comm, st);
   if (st) goto done;
   /* all[r * size + p]: weight of part p currently on rank r. */
   MPI_Allgather(mine, size, MPI_DOUBLE, all, size, MPI_DOUBLE, comm);
