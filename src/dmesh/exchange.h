@@ -5,8 +5,10 @@
  *
  * Three services:
  *
- *  1. Agreement. pa__agree() is the one synchronisation point of collective
- *     routines: every rank passes its local status, every rank gets back the
+ *  1. Agreement (pa__agree, defined in core/agree.c so that the partitioner
+ *     below this layer shares it). pa__agree() is the one synchronisation
+ *     point of collective routines: every rank passes its local status,
+ *     every rank gets back the
  *     status (and the message) of the lowest failing rank. A rank that fails
  *     locally jumps to its cleanup label and calls pa__agree_end(), which
  *     matches the pa__agree() the other ranks are blocked in; so no rank is
