@@ -494,18 +494,9 @@ class DistributedMesh(object):
         """Set the metric to the Hessian metric of component comp of vertex
         field `field` (see padapt.metric.hessian); needs overlap >= 2.
         Collective."""
-        from .metric import _opt, _RECOVERY
-        if (target is None) == (err is None):
-            raise ValueError("metric_from_hessian: give exactly one of target= and err=")
-        o = _lib.HessianOpts()
-        lib.pa_metric_hessian_opts_default(ctypes.byref(o))
-        o.p = _opt("p", p)
-        o.target = _opt("target", target, True) or 0.0
-        o.err = _opt("err", err, True) or 0.0
-        o.hmin = _opt("hmin", hmin, True) or 0.0
-        o.hmax = _opt("hmax", hmax, True) or 0.0
-        o.hgrad = -1.0 if hgrad is None else _opt("hgrad", hgrad)
-        o.recovery = _RECOVERY[recovery]
+        from .metric import _hessian_opts
+        o = _hessian_opts("metric_from_hessian", target, err, p, hmin, hmax, hgrad,
+                          recovery)
         check(lib.pa_dmesh_metric_from_hessian(self._live(), self._field_index(field), int(comp),
                                                ctypes.byref(o)))
 

@@ -78,18 +78,10 @@ def recover(mesh, u, method="lsq"):
     return g, h
 
 
-def hessian(mesh, u, *, target=None, err=None, p=2, hmin=None, hmax=None, hgrad=1.3,
-            recovery="lsq"):
-    """The Lp-optimal metric of the scalar vertex field u (Loseille and
-    Alauzet's multiscale metric M = D det|H|^(-1/(2p+d)) |H|), scaled to the
-    complexity target (about 2.3 target triangles, 8.5 target tetrahedra)
-    or to the estimated Lp interpolation error err (give one), clamped to
-    [hmin, hmax] and graded by hgrad (None or <= 1: no gradation). p <= 0:
-    L-infinity. Returns tensors (nvert, 3|6)."""
-    _mesh(mesh)
-    u = _scalar("u", u, mesh)
+def _hessian_opts(who, target, err, p, hmin, hmax, hgrad, recovery):
+    """pa_metric_hessian_opts from the keyword arguments, checked."""
     if (target is None) == (err is None):
-        raise ValueError("hessian: give exactly one of target= and err=")
+        raise ValueError("%s: give exactly one of target= and err=" % who)
     o = _lib.HessianOpts()
     lib.pa_metric_hessian_opts_default(ctypes.byref(o))
     o.p = _opt("p", p)
@@ -101,6 +93,20 @@ def hessian(mesh, u, *, target=None, err=None, p=2, hmin=None, hmax=None, hgrad=
     if recovery not in _RECOVERY:
         raise ValueError("recovery: 'lsq' or 'l2', got %r" % (recovery,))
     o.recovery = _RECOVERY[recovery]
+    return o
+
+
+def hessian(mesh, u, *, target=None, err=None, p=2, hmin=None, hmax=None, hgrad=1.3,
+            recovery="lsq"):
+    """The Lp-optimal metric of the scalar vertex field u (Loseille and
+    Alauzet's multiscale metric M = D det|H|^(-1/(2p+d)) |H|), scaled to the
+    complexity target (about 2.3 target triangles, 8.5 target tetrahedra)
+    or to the estimated Lp interpolation error err (give one), clamped to
+    [hmin, hmax] and graded by hgrad (None or <= 1: no gradation). p <= 0:
+    L-infinity. Returns tensors (nvert, 3|6)."""
+    _mesh(mesh)
+    u = _scalar("u", u, mesh)
+    o = _hessian_opts("hessian", target, err, p, hmin, hmax, hgrad, recovery)
     met = _out(mesh, tensor_ncomp(mesh.dim))
     check(lib.pa_metric_from_hessian(mesh._h, _lib.ptr(u), 1, ctypes.byref(o), _lib.ptr(met)))
     return met
