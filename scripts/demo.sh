@@ -20,9 +20,10 @@ echo "-- input mesh, lengths and qualities in the metric --"
 echo
 echo "-- mpiexec -n 2 padapt adapt --"
 mpiexec -n 2 "$padapt" adapt "$out/square.mesh" -met "$out/square.sol" \
-  -out "$out/adapted.mesh" -json "$out/report.json"
+  -out "$out/adapted.mesh" -json "$out/report.json" -svg "$out/hist.svg"
 "$padapt" convert "$out/adapted.mesh" "$out/adapted.vtu" -met "$out/adapted.sol"
 echo
 echo "Output in $out/: adapted.mesh + adapted.sol (mesh and metric), report.json,"
-echo "adapted.vtu (ParaView: cell data 'quality' and 'ref', point data 'metric'),"
+echo "adapted.vtu (ParaView: cell data 'quality', 'ref' and 'entity', point data 'metric'"
+echo "and 'size' for the Tensor Glyph filter), hist.svg (the histograms before and after),"
 echo "and the input square.mesh + square.sol."
