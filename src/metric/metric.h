@@ -140,6 +140,11 @@ double pa__edge_length(int dim, int ncomp, const double *a, const double *b,
 double pa__quality(int dim, int ncomp, const double *const *x,
                    const double *const *m);
 
+/* n / total, 0 when total is 0 (the shares of the statistics). */
+static inline double pa__share(pa_gid n, pa_gid total) {
+  return total > 0 ? (double)n / (double)total : 0.0;
+}
+
 /* pa_mesh_stats measured in the metric met (nv values of nc components; nc
  * 0: identity) instead of the mesh's own (stats.c); check 0 skips the
  * validity check (stats->valid is then 1). */

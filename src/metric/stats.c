@@ -1,6 +1,6 @@
 /*
  * stats.c -- element quality and mesh statistics (pa_mesh_stats), their
- * human-readable report and their JSON form.
+ * human-readable report (the JSON form: io/json.c).
  *
  * pa_mesh_stats makes two streaming passes and never builds the mesh's
  * derived structures itself:
@@ -19,7 +19,6 @@
  * every element in exactly one bin. When there are no edges (elements),
  * their min/max/sum are 0.
  */
-#include "io/io.h"
 #include "metric/metric.h"
 
 #include <math.h>
@@ -186,9 +185,7 @@ cleanup:
   return st;
 }
 
-static double pct(pa_gid n, pa_gid total) {
-  return total > 0 ? 100.0 * (double)n / (double)total : 0.0;
-}
+static double pct(pa_gid n, pa_gid total) { return 100 * pa__share(n, total); }
 
 void pa_stats_print(const pa_stats *s, FILE *out) {
   if (!s || !out) return;
@@ -244,67 +241,9 @@ void pa_stats_print(const pa_stats *s, FILE *out) {
   }
 }
 
-/* A JSON number (%.17g round-trips), or null when not finite. */
-static void json_double(FILE *fp, const char *key, double x) {
-  if (isfinite(x))
-    fprintf(fp, "  \"%s\": %.17g,\n", key, x);
-  else
-    fprintf(fp, "  \"%s\": null,\n", key);
-}
-
-static double ratio(pa_gid n, pa_gid total) {
-  return total > 0 ? (double)n / (double)total : 0.0;
-}
-
-pa_status pa_stats_write_json(const pa_stats *s, const char *extra,
-                              const char *path) {
-  pa_status st = PA_SUCCESS;
-  pa_outfile out = {0};
-  PA_CHECK(s && path, PA_ERR_ARG, "pa_stats_write_json: NULL argument");
-  PA_CALL(pa__out_open(&out, path));
-  FILE *fp = out.fp;
-  fprintf(fp, "{\n");
-  fprintf(fp, "  \"padapt_version\": \"%s\",\n", pa_version());
-  fprintf(fp, "  \"dim\": %d,\n", s->dim);
-  fprintf(fp, "  \"vertices\": %lld,\n", (long long)s->nvert);
-  fprintf(fp, "  \"elements\": %lld,\n", (long long)s->nelem);
-  fprintf(fp, "  \"boundary\": %lld,\n", (long long)s->nbdry);
-  json_double(fp, "volume", s->volume);
-  fprintf(fp, "  \"inverted\": %lld,\n", (long long)s->ninverted);
-  fprintf(fp, "  \"valid\": %s,\n", s->valid ? "true" : "false");
-  fprintf(fp, "  \"has_metric\": %s,\n", s->has_metric ? "true" : "false");
-  fprintf(fp, "  \"edges\": %lld,\n", (long long)s->nedge);
-  json_double(fp, "edge_min", s->edge_min);
-  json_double(fp, "edge_max", s->edge_max);
-  json_double(fp, "edge_mean",
-              s->nedge > 0 ? s->edge_sum / (double)s->nedge : 0.0);
-  json_double(fp, "edge_in_range",
-              ratio(s->edge_hist[PA_STATS_EDGE_NBIN - 1], s->nedge));
-  fprintf(fp, "  \"edge_hist\": [");
-  for (int b = 0; b < PA_STATS_EDGE_NBIN; b++)
-    fprintf(fp, "%s%lld", b ? ", " : "", (long long)s->edge_hist[b]);
-  fprintf(fp, "],\n");
-  json_double(fp, "quality_worst", s->qual_min);
-  json_double(fp, "quality_mean",
-              s->nelem > 0 ? s->qual_sum / (double)s->nelem : 0.0);
-  json_double(fp, "quality_best", s->qual_max);
-  json_double(fp, "quality_above_0.5", ratio(s->qual_above_05, s->nelem));
-  json_double(fp, "quality_above_0.12", ratio(s->qual_above_012, s->nelem));
-  fprintf(fp, "  \"quality_hist\": [");
-  for (int b = 0; b < PA_STATS_QUAL_NBIN; b++)
-    fprintf(fp, "%s%lld", b ? ", " : "", (long long)s->qual_hist[b]);
-  fprintf(fp, "]");
-  if (extra && extra[0]) fprintf(fp, ",\n  %s", extra);
-  fprintf(fp, "\n}\n");
-  PA_CALL(pa__out_commit(&out));
-cleanup:
-  pa__out_abort(&out);
-  return st;
-}
-
 int pa_stats_target_met(const pa_stats *s) {
   if (!s) return 0;
-  return ratio(s->edge_hist[PA_STATS_EDGE_NBIN - 1], s->nedge) >=
+  return pa__share(s->edge_hist[PA_STATS_EDGE_NBIN - 1], s->nedge) >=
              PA_TARGET_IN_RANGE &&
          (s->nelem == 0 || s->qual_min >= PA_TARGET_QUALITY);
 }
@@ -313,10 +252,8 @@ void pa_fidelity_describe(const pa_fidelity *f, char *buf, size_t n) {
   if (!buf || n == 0) return;
   buf[0] = '\0';
   if (!f) return;
-  double in = 100 * ratio(f->user.edge_hist[PA_STATS_EDGE_NBIN - 1],
-                          f->user.nedge);
-  double inu = 100 * ratio(f->used.edge_hist[PA_STATS_EDGE_NBIN - 1],
-                           f->used.nedge);
+  double in = pct(f->user.edge_hist[PA_STATS_EDGE_NBIN - 1], f->user.nedge);
+  double inu = pct(f->used.edge_hist[PA_STATS_EDGE_NBIN - 1], f->used.nedge);
   if (f->target_met) {
     snprintf(buf, n,
              "the given metric is met: %.2f %% of the edges in range, worst "
