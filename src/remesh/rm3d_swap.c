@@ -12,7 +12,8 @@
  * no feature edge, both triangles free with one reference and flags, and
  * coplanar (normals equal to 1e-12, so planar patches stay exactly planar)
  * or, on a curved patch, the distance between the diagonals ab and cd is at
- * most hausd; cd must not be an edge yet.
+ * most hausd; the new triangles face the way the old ones do (normals
+ * within RM3D_NORMAL_COS of their mean); cd must not be an edge yet.
  *
  * Checked before applied: no frozen tet, one reference; interior swaps need
  * a closed shell with no boundary triangle around the edge; the new worst
@@ -165,7 +166,7 @@ static pa_status swap_bdry(rm3d *m, pa_idx a, pa_idx b, const pa_idx *tets,
   if (dot < 1.0 - 1e-12) {
     /* Curved patch: the diagonals cd and ab stay within hausd. */
     if (!(m->vtag[a] & m->vtag[b] & m->vtag[c] & m->vtag[d] & R3V_CURVED) ||
-        dot < 0.98)
+        dot < RM3D_NORMAL_COS)
       return st;
     double u[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
     double w[3] = {xd[0] - xc[0], xd[1] - xc[1], xd[2] - xc[2]};
@@ -176,10 +177,15 @@ static pa_status swap_bdry(rm3d *m, pa_idx a, pa_idx b, const pa_idx *tets,
     double vol = fabs(cr[0] * z[0] + cr[1] * z[1] + cr[2] * z[2]);
     if (!(lc > 0) || vol > m->hausd * lc) return st;
   }
-  /* New faces (a,c,d) / (b,d,c) must face outwards like the old ones. */
+  /* New faces (a,c,d) / (b,d,c) must face outwards like the old ones and
+   * stay within RM3D_NORMAL_COS of their mean normal: on a curved patch a
+   * quad abcd that is nearly not convex passes the hausd test, and its swap
+   * stood a triangle across the surface (at 84 degrees to the old ones, the
+   * gmsh rod in a piece of the parallel loop). */
   double no[3] = {n1[0] + n2[0], n1[1] + n2[1], n1[2] + n2[2]};
-  if (nt1[0] * no[0] + nt1[1] * no[1] + nt1[2] * no[2] <= 0 ||
-      nt2[0] * no[0] + nt2[1] * no[1] + nt2[2] * no[2] <= 0)
+  rm3d_unit(no);
+  if (nt1[0] * no[0] + nt1[1] * no[1] + nt1[2] * no[2] < RM3D_NORMAL_COS ||
+      nt2[0] * no[0] + nt2[1] * no[1] + nt2[2] * no[2] < RM3D_NORMAL_COS)
     return st;
   if (ring_dp(m, a, b, ring, n + 1, gain * qold, nv4, &nnew) < 0) return st;
   if (has_edge(m, c, d)) return st;
