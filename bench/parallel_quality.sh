@@ -9,6 +9,11 @@
 #
 # e.g. bash bench/parallel_quality.sh build /tmp/pq tests/data/plate2d.mesh \
 #        -hsiz 0.003 -hausd 0.0005
+# The curved boundaries of the gmsh rod at larger scale (one to two minutes
+# each on 2 cores): PROCS="1 4" ... tests/data/rod3d.mesh -hsiz 0.02 and
+# PROCS="1 8" ... -hsiz 0.03 must converge with a worst quality near the
+# sequential one (folds of the surface left Q 0.0055 and 0.016 there;
+# docs/design/REMESHER3D.md, "Folds of a curved surface").
 # Environment: PROCS (default "1 2 3 4"; 1 runs the sequential remesher,
 # P > 1 `mpiexec -n P padapt adapt`). Figures from each run's JSON report.
 set -u

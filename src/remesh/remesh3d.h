@@ -131,6 +131,13 @@ extern const int rm3d_face[4][3];
 #define RM3D_LSPREAD 1.6 /* split halves shorter than 0.8: see m->spread */
 #define RM3D_QFLOOR 1e-3 /* operators create no worse element... */
 #define RM3D_QABS 1e-9   /* ...unless replacing worse ones, and never this */
+/* Least cosine between a boundary triangle's normal before and after an
+ * operation (about 11 degrees): a collapse's renamed triangles, a boundary
+ * swap's new ones against the old pair's mean, a split's halves, a move's
+ * triangles. The tets of a ball or shell may all stay valid while a
+ * triangle stands up across a curved patch whose vertices are nearly
+ * aligned: a fold, whose slivers no later operation removes. */
+#define RM3D_NORMAL_COS 0.98
 
 /* May an operator create an element of quality q where the worst element it
  * replaces had quality qref? */

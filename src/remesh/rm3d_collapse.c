@@ -204,7 +204,8 @@ pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
       double n0[3], n1[3];
       rm3d_tri_normal(yo[0], yo[1], yo[2], n0);
       if (rm3d_tri_normal(y[0], y[1], y[2], n1) <= 0) return st;
-      if (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] < 0.98) return st;
+      if (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] < RM3D_NORMAL_COS)
+        return st;
       double d = fabs((xp[0] - y[0][0]) * n1[0] + (xp[1] - y[0][1]) * n1[1] +
                       (xp[2] - y[0][2]) * n1[2]);
       if (d > rm3d_tri_hausd(m, trec[j])) return st;

@@ -14,7 +14,8 @@
  * line; a vertex of a curved patch moves in its tangent plane and then onto
  * the PN surface (cubic patch from the vertex normals, the surface the
  * curved splits sample) of the boundary triangle below the target, if that
- * stays within hausd of the flat triangle; its normal is interpolated.
+ * stays within hausd of the flat triangle and turns none of its triangles
+ * by more than about 11 degrees; its normal is interpolated.
  * Locked and corner vertices never move, so frozen entities stay
  * untouched. The moved vertex's metric and fields are re-interpolated in the
  * old ball (metric only when anisotropic: an isotropic size field is treated
@@ -195,6 +196,26 @@ static int curved_point(const rm3d *m, const pa_idx *tri, int ntri,
 }
 
 
+/* 1 if moving p to np keeps each of the ntri boundary triangles tri
+ * (vertex triples holding p) valid and within RM3D_NORMAL_COS of its
+ * normal before the move. */
+static int surface_kept(const rm3d *m, const pa_idx *tri, int ntri, pa_idx p,
+                        const double *np) {
+  for (int i = 0; i < ntri; i++) {
+    const double *y[3], *yn[3];
+    for (int j = 0; j < 3; j++) {
+      y[j] = m->x + 3 * (size_t)tri[3 * i + j];
+      yn[j] = tri[3 * i + j] == p ? np : y[j];
+    }
+    double n0[3], n1[3];
+    if (!(rm3d_tri_normal(y[0], y[1], y[2], n0) > 0)) continue;
+    if (!(rm3d_tri_normal(yn[0], yn[1], yn[2], n1) > 0)) return 0;
+    if (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] < RM3D_NORMAL_COS)
+      return 0;
+  }
+  return 1;
+}
+
 /* Move p to np (its ball[0..n) of qualities nq when isotropic): the fields
  * (and an anisotropic metric) are re-interpolated in the old ball first. */
 static void apply_move(rm3d *m, pa_idx p, const pa_idx *ball, int n,
@@ -321,6 +342,7 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
       double y[3];
       memcpy(y, np, sizeof y);
       if (!curved_point(m, tri, ntri, hausd, y, np, nnew)) continue;
+      if (!surface_kept(m, tri, ntri, p, np)) continue;
     }
     int ok = 1;
     for (int i = 0; i < n && ok; i++) {

@@ -11,9 +11,16 @@
  * stay planar); for a ridge edge, the midpoint of the cubic given by the
  * ridge tangents at both ends (exact midpoint on straight ridges).
  * Boundary triangles and feature edges holding (a,b) are split too, keeping
- * references and flags.
+ * references and flags; each half of a boundary triangle stays within
+ * RM3D_NORMAL_COS of its normal. When that point fails, points closer to
+ * the chord are tried (CURVE_BACKOFF).
  */
 #include "remesh/remesh3d.h"
+
+/* Points tried on a curved or ridge edge: the curve's midpoint, then 1/2
+ * and 1/4 of its offset from the chord, then the chord's midpoint (valid
+ * whenever the shell is, and in the plane of each boundary triangle). */
+#define CURVE_BACKOFF 4
 
 /* Midpoint of the cubic Hermite-like curve between a and b whose tangents
  * are the chord projected on the tangent planes of na, nb (PN triangles). */
@@ -110,6 +117,67 @@ static void ridge_mid(rm3d *m, pa_idx a, pa_idx b, double *p) {
   for (int i = 0; i < 3; i++) p[i] += d[i];
 }
 
+/* Qualities of the two halves of each of the n tets of the shell of (a,b)
+ * when a point p (metric mp) is put on the edge, in q1 (the half holding a)
+ * and q2; 1 if every one is accepted: valid when relax, else rm3d_q_ok
+ * against its parent. */
+static int shell_qualities(const rm3d *m, const pa_idx *tets, int n, pa_idx a,
+                           pa_idx b, const double *p, const double *mp,
+                           int relax, float *q1, float *q2) {
+  int mc = m->mc;
+  for (int i = 0; i < n; i++) {
+    const pa_idx *v = m->tv + 4 * (size_t)tets[i];
+    const double *px[4], *pm[4];
+    for (int j = 0; j < 4; j++) {
+      px[j] = m->x + 3 * (size_t)v[j];
+      pm[j] = m->met + (size_t)mc * v[j];
+    }
+    int ia = rm3d_loc(v, a), ib = rm3d_loc(v, b);
+    const double *sx = px[ib], *sm = pm[ib];
+    px[ib] = p;
+    pm[ib] = mp;
+    double qa = rm3d_qual_pts(mc, px[0], px[1], px[2], px[3], pm[0], pm[1],
+                              pm[2], pm[3]);
+    px[ib] = sx;
+    pm[ib] = sm;
+    px[ia] = p;
+    pm[ia] = mp;
+    double qb = rm3d_qual_pts(mc, px[0], px[1], px[2], px[3], pm[0], pm[1],
+                              pm[2], pm[3]);
+    double qp = m->q[tets[i]];
+    if (relax ? (qa < RM3D_QABS || qb < RM3D_QABS)
+              : (!rm3d_q_ok(qa, qp) || !rm3d_q_ok(qb, qp)))
+      return 0;
+    q1[i] = (float)qa;
+    q2[i] = (float)qb;
+  }
+  return 1;
+}
+
+/* 1 if the halves of each of the ntri boundary triangles trec of edge
+ * (a,b), split at p, are valid and within RM3D_NORMAL_COS of its normal. */
+static int split_surface_kept(const rm3d *m, const pa_idx *trec, int ntri,
+                              pa_idx a, pa_idx b, const double *p) {
+  for (int i = 0; i < ntri; i++) {
+    const pa_idx *v = m->tri.v + 3 * (size_t)trec[i];
+    const double *y[3], *ya[3], *yb[3];
+    for (int j = 0; j < 3; j++) {
+      y[j] = m->x + 3 * (size_t)v[j];
+      ya[j] = v[j] == b ? p : y[j];
+      yb[j] = v[j] == a ? p : y[j];
+    }
+    double n0[3], na[3], nb[3];
+    if (!(rm3d_tri_normal(y[0], y[1], y[2], n0) > 0)) continue;
+    if (!(rm3d_tri_normal(ya[0], ya[1], ya[2], na) > 0) ||
+        !(rm3d_tri_normal(yb[0], yb[1], yb[2], nb) > 0))
+      return 0;
+    if (n0[0] * na[0] + n0[1] * na[1] + n0[2] * na[2] < RM3D_NORMAL_COS ||
+        n0[0] * nb[0] + n0[1] * nb[1] + n0[2] * nb[2] < RM3D_NORMAL_COS)
+      return 0;
+  }
+  return 1;
+}
+
 pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
                               int *done) {
   pa_status st = PA_SUCCESS;
@@ -156,47 +224,37 @@ pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
     if (erec >= 0 && (m->edg.flag[erec] & PA_FLAG_REQUIRED)) return st;
   }
   const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b;
-  double p[3];
+  double p[3], c[3], p0[3];
+  for (int i = 0; i < 3; i++) c[i] = 0.5 * (xa[i] + xb[i]);
   if (bdry && erec < 0 && m->nrm && (m->vtag[a] & R3V_CURVED) &&
       (m->vtag[b] & R3V_CURVED))
-    curved_mid(xa, xb, m->nrm + 3 * (size_t)a, m->nrm + 3 * (size_t)b, p);
+    curved_mid(xa, xb, m->nrm + 3 * (size_t)a, m->nrm + 3 * (size_t)b, p0);
   else if (erec >= 0)
-    ridge_mid(m, a, b, p);
+    ridge_mid(m, a, b, p0);
   else
-    for (int i = 0; i < 3; i++) p[i] = 0.5 * (xa[i] + xb[i]);
+    memcpy(p0, c, sizeof c);
   double mp[6];
   int mc = m->mc;
   pa__rm3d_mid_metric(m, a, b, mp);
-  /* Check every new tet. A far too long edge is split whenever the result
-   * is valid: keeping it would be worse than a poor tet the later passes
-   * improve. */
+  /* A far too long edge is split whenever the result is valid: keeping it
+   * would be worse than a poor tet the later passes improve. The point on
+   * the curve lies off the chord by the curve's sagitta: next to a flat tet
+   * of the shell it may invert it, and next to a boundary triangle whose
+   * apex is nearly on the chord it stands the halves up across the
+   * surface. Then the point goes closer to the chord, where the halves stay
+   * in the triangle's plane (a surface tilt is always retried, a refused
+   * quality only for a far too long edge). */
   int relax = rm3d_len(m, a, b) > 2.0 * RM3D_LMAX;
-  for (int i = 0; i < n; i++) {
-    const pa_idx *v = m->tv + 4 * (size_t)tets[i];
-    const double *px[4], *pm[4];
-    for (int j = 0; j < 4; j++) {
-      px[j] = m->x + 3 * (size_t)v[j];
-      pm[j] = m->met + (size_t)mc * v[j];
-    }
-    int ia = rm3d_loc(v, a), ib = rm3d_loc(v, b);
-    const double *sx = px[ib], *sm = pm[ib];
-    px[ib] = p;
-    pm[ib] = mp;
-    double qa = rm3d_qual_pts(mc, px[0], px[1], px[2], px[3], pm[0], pm[1],
-                              pm[2], pm[3]);
-    px[ib] = sx;
-    pm[ib] = sm;
-    px[ia] = p;
-    pm[ia] = mp;
-    double qb = rm3d_qual_pts(mc, px[0], px[1], px[2], px[3], pm[0], pm[1],
-                              pm[2], pm[3]);
-    double qp = m->q[tets[i]];
-    if (relax ? (qa < RM3D_QABS || qb < RM3D_QABS)
-              : (!rm3d_q_ok(qa, qp) || !rm3d_q_ok(qb, qp)))
-      return st;
-    q1[i] = (float)qa;
-    q2[i] = (float)qb;
+  int ok = 0;
+  for (int f = 0; f < CURVE_BACKOFF && !ok; f++) {
+    double s = f == CURVE_BACKOFF - 1 ? 0 : ldexp(1.0, -f);
+    if (f && !memcmp(p0, c, sizeof c)) break;
+    for (int i = 0; i < 3; i++) p[i] = f ? c[i] + s * (p0[i] - c[i]) : p0[i];
+    if (!split_surface_kept(m, trec, ntri, a, b, p)) continue;
+    ok = shell_qualities(m, tets, n, a, b, p, mp, relax, q1, q2);
+    if (!ok && !relax) break;
   }
+  if (!ok) return st;
   /* Apply. */
   PA_CALL(pa__rm3d_reserve(m, (size_t)m->nv + 1, (size_t)m->ne + n));
   pa_idx pm_;

@@ -8,9 +8,11 @@
  * (unless -nr) when their normals make an angle above -ar. A vertex with a
  * number of feature edges other than 0 or 2, or whose two feature edges turn
  * by more than -ar, is a corner (locked). Boundary vertices off features get
- * the mean normal of their triangles and R3V_CURVED when these normals are
- * not all equal, which lets splits place new points on a smooth (cubic)
- * reconstruction; planar patches have no curved vertex and stay planar.
+ * the mean normal of their free triangles and R3V_CURVED when these normals
+ * are not all equal, which lets splits place new points on a smooth (cubic)
+ * reconstruction; planar patches have no curved vertex and stay planar. So
+ * does a vertex whose feature edges all separate a free triangle from a
+ * frozen one (where a piece's frozen skin meets the boundary).
  */
 #include "remesh/remesh3d.h"
 
@@ -44,10 +46,16 @@ static int outer_face(const rm3d *m, pa_idx k, int f, pa_idx *fv, double *n) {
   return 1;
 }
 
+/* 1 if the boundary triangle fv is frozen (required). */
+static int frozen_face(const rm3d *m, const pa_idx *fv) {
+  pa_idx r = pa__rm3d_table_find(&m->tri, fv);
+  return r >= 0 && (m->tri.flag[r] & PA_FLAG_REQUIRED);
+}
+
 pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
   pa_status st = PA_SUCCESS;
   bedge *be = NULL;
-  uint8_t *nfeat = NULL;
+  uint8_t *nfeat = NULL, *nborder = NULL;
   pa_idx *other = NULL;
   size_t nbe = 0;
   PA_ALLOC(be, 3 * (size_t)m->tri.n + 1);
@@ -64,6 +72,7 @@ pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
     }
   }
   qsort(be, nbe, sizeof *be, bedge_cmp);
+  PA_CALLOC(nborder, (size_t)m->nv);
   for (size_t i = 0; i < nbe;) {
     size_t j = i + 1;
     while (j < nbe && be[j].a == be[i].a && be[j].b == be[i].b) j++;
@@ -82,6 +91,13 @@ pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
       if (be[i].dir == be[i + 1].dir) d = -d; /* inconsistent orientations */
       if (d < m->ridge_cos) feat = 1;
     }
+    if (feat && j - i == 2 &&
+        ((m->tri.flag[be[i].rec] ^ m->tri.flag[be[i + 1].rec]) &
+         PA_FLAG_REQUIRED))
+      for (int s2 = 0; s2 < 2; s2++) {
+        pa_idx x = s2 ? be[i].b : be[i].a;
+        if (nborder[x] < 255) nborder[x]++;
+      }
     if (feat) {
       pa_idx ev[2] = {be[i].a, be[i].b};
       if (pa__rm3d_table_find(&m->edg, ev) < 0)
@@ -120,14 +136,20 @@ pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
       if (!(m->vpf[x] & PA_FLAG_REQUIRED)) m->vpf[x] |= PA_FLAG_CORNER;
     }
   }
-  /* Normals of boundary vertices off features, from the outward faces. */
+  /* Normals of boundary vertices off features, from their outward free
+   * faces. A vertex whose feature edges all border a frozen triangle (the
+   * skin of a piece of the parallel loop meeting the boundary) gets one
+   * too: without it every split towards it took the chord's midpoint, so
+   * the input's facets stayed flat along every skin on a curved boundary,
+   * their vertices planar in the next iteration, and the junctions with
+   * the curved refinement around made needles and folds. */
   PA_CALLOC(m->nrm, 3 * m->capv);
   for (pa_idx k = 0; k < m->ne; k++) {
     if (!(m->tflag[k] & R3T_FACES)) continue;
     for (int f = 0; f < 4; f++) {
       pa_idx fv[3];
       double n[3];
-      if (!outer_face(m, k, f, fv, n)) continue;
+      if (!outer_face(m, k, f, fv, n) || frozen_face(m, fv)) continue;
       for (int j = 0; j < 3; j++)
         for (int c2 = 0; c2 < 3; c2++) m->nrm[3 * (size_t)fv[j] + c2] += n[c2];
     }
@@ -140,11 +162,12 @@ pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
     for (int f = 0; f < 4; f++) {
       pa_idx fv[3];
       double n[3];
-      if (!outer_face(m, k, f, fv, n)) continue;
+      if (!outer_face(m, k, f, fv, n) || frozen_face(m, fv)) continue;
       rm3d_unit(n);
       for (int j = 0; j < 3; j++) {
         pa_idx x = fv[j];
-        if (m->vtag[x] & (R3V_FEAT | R3V_CURVED)) continue;
+        if (m->vtag[x] & R3V_CURVED) continue;
+        if ((m->vtag[x] & R3V_FEAT) && nborder[x] != nfeat[x]) continue;
         const double *nx = m->nrm + 3 * (size_t)x;
         if (n[0] * nx[0] + n[1] * nx[1] + n[2] * nx[2] < 1.0 - 1e-10) {
           m->vtag[x] |= R3V_CURVED;
@@ -159,6 +182,7 @@ pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
   }
 cleanup:
   pa__free(be);
+  pa__free(nborder);
   pa__free(nfeat);
   pa__free(other);
   return st;

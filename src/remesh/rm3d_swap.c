@@ -12,7 +12,10 @@
  * no feature edge, both triangles free with one reference and flags, and
  * coplanar (normals equal to 1e-12, so planar patches stay exactly planar)
  * or, on a curved patch, the distance between the diagonals ab and cd is at
- * most hausd; cd must not be an edge yet.
+ * most hausd; the new triangles face the way the old ones do (normals
+ * within RM3D_NORMAL_COS of their mean); cd must not be an edge yet. A
+ * boundary edge held by one tet only (a cap) has no ring: that tet is
+ * removed instead (remove_cap).
  *
  * Checked before applied: no frozen tet, one reference; interior swaps need
  * a closed shell with no boundary triangle around the edge; the new worst
@@ -109,6 +112,125 @@ static int has_edge(rm3d *m, pa_idx c, pa_idx d) {
   return 0;
 }
 
+/* Remove the cap t = (a,b,c,d): a tet whose two boundary triangles (a,b,c)
+ * and (a,b,d) meet at its edge ab, held by no other tet (an open shell of
+ * one, where swap_bdry has no ring to retriangulate). Its faces (a,c,d) and
+ * (b,d,c) become the boundary. With the checks of a boundary swap on a
+ * curved patch (ab no feature edge, both triangles free with one reference
+ * and flags, normals within RM3D_NORMAL_COS or the new pair closer to each
+ * other than the old (a kink the removal smooths), the diagonals within hausd,
+ * the new triangles within RM3D_NORMAL_COS of the old pair's mean; the two
+ * triangles of a cap are never coplanar, so a vertex without a normal is
+ * allowed), when cd lies on no boundary triangle yet and the two tets
+ * behind the new triangles are free. The worst quality can only rise. */
+static pa_status remove_cap(rm3d *m, pa_idx a, pa_idx b, pa_idx t,
+                            pa_idx c, pa_idx d, int *done) {
+  pa_status st = PA_SUCCESS;
+  const pa_idx *v = m->tv + 4 * (size_t)t;
+  int la = rm3d_loc(v, a), lb = rm3d_loc(v, b), lc = rm3d_loc(v, c),
+      ld = rm3d_loc(v, d);
+  if (la < 0 || lb < 0 || lc < 0 || ld < 0) return st;
+  uint8_t fl = m->tflag[t];
+  if (!((fl >> lc) & 1) || !((fl >> ld) & 1) || ((fl >> la) & 1) ||
+      ((fl >> lb) & 1))
+    return st;
+  pa_idx o1 = m->adj[4 * (size_t)t + lb], o2 = m->adj[4 * (size_t)t + la];
+  if (o1 < 0 || o2 < 0 || (o1 >> 2) == (o2 >> 2)) return st;
+  if ((m->tflag[o1 >> 2] | m->tflag[o2 >> 2]) & R3T_FROZEN) return st;
+  if (m->tref[o1 >> 2] != m->tref[t] || m->tref[o2 >> 2] != m->tref[t])
+    return st;
+  pa_idx ek[2] = {a, b};
+  if (pa__rm3d_table_find(&m->edg, ek) >= 0) return st;
+  pa_idx k1[3] = {a, b, c}, k2[3] = {a, b, d};
+  pa_idx r1 = pa__rm3d_table_find(&m->tri, k1);
+  pa_idx r2 = pa__rm3d_table_find(&m->tri, k2);
+  if (r1 < 0 || r2 < 0)
+    return pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
+                     "rm3d: boundary face of a cap not in the table");
+  if (((m->tri.flag[r1] | m->tri.flag[r2]) & PA_FLAG_REQUIRED) ||
+      m->tri.ref[r1] != m->tri.ref[r2] || m->tri.flag[r1] != m->tri.flag[r2])
+    return st;
+  /* cd on no boundary triangle: its shell is closed, with none */
+  {
+    pa_idx tets[R3_SWAP_MAXRING + 1], ring[R3_SWAP_MAXRING + 2];
+    int info;
+    int n = pa__rm3d_shell(m, t, c, d, tets, ring, R3_SWAP_MAXRING + 1, &info);
+    if (n < 0 || !(info & R3SH_CLOSED) || (info & R3SH_BDRY)) return st;
+  }
+  /* Outward normals: old faces (a,b,c), (a,b,d) of t; new faces seen from
+   * the tets behind them, i.e. t's faces opposite b and a turned over. */
+  double n1[3], n2[3], nt1[3], nt2[3];
+  const double *x[4];
+  for (int j = 0; j < 4; j++) x[j] = m->x + 3 * (size_t)v[j];
+  rm3d_tri_normal(x[rm3d_face[ld][0]], x[rm3d_face[ld][1]],
+                  x[rm3d_face[ld][2]], n1);
+  rm3d_tri_normal(x[rm3d_face[lc][0]], x[rm3d_face[lc][1]],
+                  x[rm3d_face[lc][2]], n2);
+  if (!(rm3d_tri_normal(x[rm3d_face[lb][0]], x[rm3d_face[lb][2]],
+                        x[rm3d_face[lb][1]], nt1) > 0) ||
+      !(rm3d_tri_normal(x[rm3d_face[la][0]], x[rm3d_face[la][2]],
+                        x[rm3d_face[la][1]], nt2) > 0))
+    return st;
+  /* the old pair within RM3D_NORMAL_COS, or a kink the new pair smooths */
+  double dold = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2];
+  double dnew = nt1[0] * nt2[0] + nt1[1] * nt2[1] + nt1[2] * nt2[2];
+  if (dold < RM3D_NORMAL_COS && !(dnew > dold)) return st;
+  const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b,
+               *xc = m->x + 3 * (size_t)c, *xd = m->x + 3 * (size_t)d;
+  {
+    double u[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
+    double w[3] = {xd[0] - xc[0], xd[1] - xc[1], xd[2] - xc[2]};
+    double z[3] = {xc[0] - xa[0], xc[1] - xa[1], xc[2] - xa[2]};
+    double cr[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                    u[0] * w[1] - u[1] * w[0]};
+    double lcr = sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
+    double vol = fabs(cr[0] * z[0] + cr[1] * z[1] + cr[2] * z[2]);
+    if (!(lcr > 0) || vol > m->hausd * lcr) return st;
+  }
+  double no[3] = {n1[0] + n2[0], n1[1] + n2[1], n1[2] + n2[2]};
+  rm3d_unit(no);
+  if (nt1[0] * no[0] + nt1[1] * no[1] + nt1[2] * no[2] < RM3D_NORMAL_COS ||
+      nt2[0] * no[0] + nt2[1] * no[1] + nt2[2] * no[2] < RM3D_NORMAL_COS)
+    return st;
+  /* Orientation of the records: keep the old convention (outward or not). */
+  const pa_idx *ov = m->tri.v + 3 * (size_t)r1;
+  double on[3];
+  rm3d_tri_normal(m->x + 3 * (size_t)ov[0], m->x + 3 * (size_t)ov[1],
+                  m->x + 3 * (size_t)ov[2], on);
+  int outward = on[0] * n1[0] + on[1] * n1[1] + on[2] * n1[2] > 0;
+  int32_t ref = m->tri.ref[r1];
+  uint8_t tfl = m->tri.flag[r1];
+  pa_idx t1[3] = {a, c, d}, t2[3] = {b, d, c};
+  {
+    /* the records' vertex order: outward like nt1 / nt2, or reversed */
+    double q1[3];
+    rm3d_tri_normal(xa, xc, xd, q1);
+    if ((q1[0] * nt1[0] + q1[1] * nt1[1] + q1[2] * nt1[2] > 0) != outward) {
+      t1[1] = d;
+      t1[2] = c;
+      t2[1] = c;
+      t2[2] = d;
+    }
+  }
+  pa__rm3d_table_remove(&m->tri, r1);
+  pa__rm3d_table_remove(&m->tri, r2);
+  PA_CALL(pa__rm3d_table_add(&m->tri, t1, ref, tfl, NULL));
+  PA_CALL(pa__rm3d_table_add(&m->tri, t2, ref, tfl, NULL));
+  m->adj[o1] = -1;
+  m->adj[o2] = -1;
+  m->tflag[o1 >> 2] |= (uint8_t)(1u << (o1 & 3));
+  m->tflag[o2 >> 2] |= (uint8_t)(1u << (o2 & 3));
+  pa_idx keep[4] = {a, b, c, d};
+  for (int j = 0; j < 4; j++)
+    if (m->vtet[keep[j]] == t) m->vtet[keep[j]] = j == 1 ? o2 >> 2 : o1 >> 2;
+  m->tflag[t] = R3T_DEAD;
+  m->ndead_t++;
+  m->nswap++;
+  *done = 1;
+cleanup:
+  return st;
+}
+
 /* Boundary edge (a,b) with the open shell tets[0..n), ring[0..n]: the two
  * surface triangles (a,b,c = ring[0]) and (a,b,d = ring[n]) become (a,c,d)
  * and (b,c,d). Allowed when ab is no feature edge, both triangles are free,
@@ -120,7 +242,9 @@ static pa_status swap_bdry(rm3d *m, pa_idx a, pa_idx b, const pa_idx *tets,
   pa_status st = PA_SUCCESS;
   pa_idx nv4[4 * 2 * (R3_SWAP_MAXPOLY - 2)];
   int nnew = 0;
-  if (n < 2 || !m->surf) return st;
+  if (!m->surf) return st;
+  if (n == 1) return remove_cap(m, a, b, tets[0], ring[0], ring[1], done);
+  if (n < 2) return st;
   pa_idx c = ring[0], d = ring[n];
   if (c == d) return st;
   /* The faces crossed inside the shell are no boundary triangles; the two
@@ -165,7 +289,7 @@ static pa_status swap_bdry(rm3d *m, pa_idx a, pa_idx b, const pa_idx *tets,
   if (dot < 1.0 - 1e-12) {
     /* Curved patch: the diagonals cd and ab stay within hausd. */
     if (!(m->vtag[a] & m->vtag[b] & m->vtag[c] & m->vtag[d] & R3V_CURVED) ||
-        dot < 0.98)
+        dot < RM3D_NORMAL_COS)
       return st;
     double u[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
     double w[3] = {xd[0] - xc[0], xd[1] - xc[1], xd[2] - xc[2]};
@@ -176,10 +300,15 @@ static pa_status swap_bdry(rm3d *m, pa_idx a, pa_idx b, const pa_idx *tets,
     double vol = fabs(cr[0] * z[0] + cr[1] * z[1] + cr[2] * z[2]);
     if (!(lc > 0) || vol > rm3d_tri_hausd(m, r1) * lc) return st;
   }
-  /* New faces (a,c,d) / (b,d,c) must face outwards like the old ones. */
+  /* New faces (a,c,d) / (b,d,c) must face outwards like the old ones and
+   * stay within RM3D_NORMAL_COS of their mean normal: on a curved patch a
+   * quad abcd that is nearly not convex passes the hausd test, and its swap
+   * stood a triangle across the surface (at 84 degrees to the old ones, the
+   * gmsh rod in a piece of the parallel loop). */
   double no[3] = {n1[0] + n2[0], n1[1] + n2[1], n1[2] + n2[2]};
-  if (nt1[0] * no[0] + nt1[1] * no[1] + nt1[2] * no[2] <= 0 ||
-      nt2[0] * no[0] + nt2[1] * no[1] + nt2[2] * no[2] <= 0)
+  rm3d_unit(no);
+  if (nt1[0] * no[0] + nt1[1] * no[1] + nt1[2] * no[2] < RM3D_NORMAL_COS ||
+      nt2[0] * no[0] + nt2[1] * no[1] + nt2[2] * no[2] < RM3D_NORMAL_COS)
     return st;
   if (ring_dp(m, a, b, ring, n + 1, gain * qold, nv4, &nnew) < 0) return st;
   if (has_edge(m, c, d)) return st;

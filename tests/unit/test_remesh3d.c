@@ -1,7 +1,8 @@
 /* test_remesh3d.c -- the sequential 3D remesher (pa__remesh3d): validity,
  * volume, references/ridges/corners, frozen regions bit for bit, anisotropic
  * fields, a curved domain, field interpolation, determinism, failure with the
- * input left intact, the count through a lattice crowd. */
+ * input left intact, the count through a lattice crowd, no fold of a curved
+ * surface nor cap left in pieces of the parallel loop. */
 #include "testutil.h"
 #include "mesh/mesh.h"
 #include "metric/metric.h"
@@ -553,6 +554,108 @@ static void test_curved_ridge(void) {
 }
 
 /* Failing allocations: an error, no leak, the mesh as given. */
+/* Pairs of free boundary triangles of one reference sharing an edge whose
+ * normals are more than 60 degrees apart: folds of the surface (a triangle
+ * standing across it). */
+static int count_folds(pa_mesh *m) {
+  int nf = 0;
+  for (pa_idx b = 0; b < m->nb; b++) {
+    if (m->bflag[b] & PA_FLAG_REQUIRED) continue;
+    const pa_idx *f = m->bdry + 3 * (size_t)b;
+    for (pa_idx c = b + 1; c < m->nb; c++) {
+      if ((m->bflag[c] & PA_FLAG_REQUIRED) || m->bref[c] != m->bref[b])
+        continue;
+      const pa_idx *g = m->bdry + 3 * (size_t)c;
+      int shared = 0;
+      for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) shared += f[i] == g[j];
+      if (shared != 2) continue;
+      double n[2][3];
+      for (int k = 0; k < 2; k++) {
+        const pa_idx *t = k ? g : f;
+        const double *x0 = m->coord + 3 * (size_t)t[0],
+                     *x1 = m->coord + 3 * (size_t)t[1],
+                     *x2 = m->coord + 3 * (size_t)t[2];
+        double u[3] = {x1[0] - x0[0], x1[1] - x0[1], x1[2] - x0[2]};
+        double w[3] = {x2[0] - x0[0], x2[1] - x0[1], x2[2] - x0[2]};
+        n[k][0] = u[1] * w[2] - u[2] * w[1];
+        n[k][1] = u[2] * w[0] - u[0] * w[2];
+        n[k][2] = u[0] * w[1] - u[1] * w[0];
+        double l = sqrt(n[k][0] * n[k][0] + n[k][1] * n[k][1] +
+                        n[k][2] * n[k][2]);
+        for (int i = 0; i < 3; i++) n[k][i] /= l > 0 ? l : 1;
+      }
+      double d = n[0][0] * n[1][0] + n[0][1] * n[1][1] + n[0][2] * n[1][2];
+      nf += fabs(d) < 0.5;
+    }
+  }
+  return nf;
+}
+
+/* A piece of the parallel loop (the gmsh rod at -hsiz 0.03 on 8 ranks,
+ * iteration 1: 1 857 tets, its skin frozen), remeshed as the loop does
+ * (no gradation). On its bore (a cylinder of radius 0.3) a boundary swap,
+ * then a move, then a split at the curve's midpoint stood a triangle
+ * across the surface where a triangle's apex was nearly on the opposite
+ * edge: 4 folded pairs, whose slivers no later pass removed (the piece's
+ * worst quality 0.001, and the whole run stalled). None now. */
+/* Read tests/data/NAME.mesh and NAME.sol (its metric) and remesh it as the
+ * parallel loop remeshes a piece (no gradation); NULL without
+ * PADAPT_TESTDATA. */
+static pa_mesh *remesh_piece(const char *name) {
+  const char *dir = getenv("PADAPT_TESTDATA");
+  char path[2048];
+  pa_mesh *m = NULL;
+  pa_sol *sol = NULL;
+  if (!dir) {
+    fprintf(stderr, "  PADAPT_TESTDATA not set: %s skipped\n", name);
+    return NULL;
+  }
+  snprintf(path, sizeof path, "%s/%s.mesh", dir, name);
+  CHECK_OK(pa_mesh_read(path, &m));
+  snprintf(path, sizeof path, "%s/%s.sol", dir, name);
+  CHECK_OK(pa_sol_read(path, &sol));
+  if (m && sol) {
+    CHECK_OK(pa_mesh_metric_from_sol(m, sol, 0));
+    CHECK(count_folds(m) == 0);
+    pa_remesh_opts o;
+    opts_for(&o);
+    o.hgrad = 0;
+    o.hgradreq = 0;
+    pa_remesh_report r;
+    CHECK_OK(pa_remesh(pa_remesher_builtin(), m, &o, &r));
+    CHECK_OK(pa_mesh_check(m));
+  }
+  pa_sol_destroy(sol);
+  return m;
+}
+
+static void test_piece_folds(void) {
+  pa_mesh *m = remesh_piece("rod3d_piece");
+  if (!m) return;
+  int nf = count_folds(m);
+  printf("rod piece: %d tets, %d folded pairs of boundary triangles\n",
+         (int)m->ne, nf);
+  CHECK(nf == 0);
+  pa_mesh_destroy(m);
+}
+
+/* A cap left on the rod's small bore by the parallel loop (-hsiz 0.03, 8
+ * ranks), with the 125 tets around it, its outer faces frozen: a tet whose
+ * two boundary triangles meet at its longest edge, held by no other tet
+ * (quality 0.102, every edge in range). A boundary swap needs a shell of
+ * two tets or more; the cap is now removed (worst quality 0.46). */
+static void test_piece_cap(void) {
+  pa_mesh *m = remesh_piece("rod3d_cap");
+  if (!m) return;
+  double in, qw, qm;
+  edge_stats(m, &in, &qw, &qm);
+  printf("rod cap: %d tets, worst Q %.3f\n", (int)m->ne, qw);
+  CHECK(qw > 0.3);
+  CHECK(count_folds(m) == 0);
+  pa_mesh_destroy(m);
+}
+
 static void test_alloc_failure(void) {
   pa_mesh *m = box(2, 0.2), *c = NULL;
   CHECK_OK(pa_mesh_copy(m, &c));
@@ -579,5 +682,5 @@ TEST_MAIN(test_identity, test_refine_cube, test_nosurf, test_coarsen,
           test_frozen_random, test_frozen_skin, test_frozen_skin_refine,
           test_deterministic,
           test_fields, test_field_interp, test_sphere, test_targets,
-          test_lattice_crowd, test_curved_ridge,
-          test_alloc_failure)
+          test_lattice_crowd, test_curved_ridge, test_piece_folds,
+          test_piece_cap, test_alloc_failure)
