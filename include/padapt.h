@@ -670,10 +670,16 @@ typedef struct pa_progress {
   double nelem_expected; /**< the metric's estimate of the final count
                               (complexity over the unit simplex volume;
                               0: unknown) */
-  double done;           /**< share of the elements that meet their target
-                              ([0, 1]; -1: not measured) */
+  double done;           /**< the share done ([0, 1]; -1: not measured):
+                              for an iteration the share of elements that
+                              meet their criterion, for a pass the share
+                              of edges in range on a sample of about
+                              PA_PROGRESS_SAMPLE elements */
   double elapsed;        /**< seconds since the adaptation started */
 } pa_progress;
+
+/** Elements sampled by a remesher pass to measure pa_progress.done. */
+#define PA_PROGRESS_SAMPLE 20000
 
 /** A progress callback; ctx is the caller's. It must not call padapt. */
 typedef void (*pa_progress_fn)(const pa_progress *p, void *ctx);

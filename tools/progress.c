@@ -7,10 +7,10 @@
  * 0.2 s); into a file or a pipe, plain lines, at most one per second (each
  * iteration of the parallel loop gets its line). The estimate of the time
  * left extrapolates the elapsed time over the share of the way done: the
- * share of elements that meet their target (parallel iterations), or else
- * the share of the way from the initial element count to the count the
- * metric asks for (a remesher's cost follows the elements it creates or
- * removes); it is shown while that share is between 5 % and 100 %.
+ * share of elements that meet their target (parallel iterations) or of
+ * edges in range (a remesher's passes, measured on a sample), or else the
+ * share of the way from the initial element count to the count the metric
+ * asks for; it is shown while that share is between 5 % and 100 %.
  */
 #include "cli.h"
 
@@ -57,17 +57,19 @@ void pa_cli_progress_cb(const pa_progress *p, void *ctx) {
     count(want, sizeof want, p->nelem_expected);
     k += snprintf(line + k, sizeof line - (size_t)k, " (metric: ~%s)", want);
   }
-  if (p->done >= 0)
-    k += snprintf(line + k, sizeof line - (size_t)k, ", %.1f %% done",
-                  100 * p->done);
+  if (p->done >= 0) /* iterations: elements meeting their criterion */
+    k += snprintf(line + k, sizeof line - (size_t)k, ", %.1f %% %s",
+                  100 * p->done, iteration ? "done" : "of edges in range");
   k += snprintf(line + k, sizeof line - (size_t)k, ", %.1f s", p->elapsed);
   /* the share of the way: measured (done) when known, else by elements */
   double f = p->done, way = p->nelem_expected - p->nelem_initial;
   if (f < 0 && p->nelem_expected > 0 && fabs(way) > 0.05 * p->nelem_expected)
     f = (p->nelem - p->nelem_initial) / way;
-  if (f > 0.05 && f < 1)
-    snprintf(line + k, sizeof line - (size_t)k, ", ~%.0f s left",
-             p->elapsed * (1 - f) / f);
+  if (f > 0.05 && f < 1) {
+    double left = p->elapsed * (1 - f) / f;
+    snprintf(line + k, sizeof line - (size_t)k, ", ~%.*f s left",
+             left < 10 ? 1 : 0, left);
+  }
   if (pr->tty)
     fprintf(stderr, "\r%s\033[K", line);
   else

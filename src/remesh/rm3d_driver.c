@@ -420,7 +420,19 @@ static double lattice_crowd(rm3d *m, double *longer) {
  * or a round. */
 static void progress(const pa_remesh_opts *o, int step, const rm3d *m) {
   if (!o->progress) return;
-  pa_progress p = {"pass", step, (double)(m->ne - m->ndead_t), 0, 0, -1, 0};
+  /* the share of tet edges in range on a sample of about
+   * PA_PROGRESS_SAMPLE tets (every k-th): cheap at any size */
+  pa_idx stride = m->ne / PA_PROGRESS_SAMPLE + 1;
+  long nin = 0, n = 0;
+  for (pa_idx k = 0; k < m->ne; k += stride) {
+    if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) continue;
+    double L[6];
+    lengths6(m, m->tv + 4 * (size_t)k, L);
+    for (int e = 0; e < 6; e++) nin += L[e] >= RM3D_LMIN && L[e] < RM3D_LMAX;
+    n += 6;
+  }
+  pa_progress p = {"pass", step, (double)(m->ne - m->ndead_t), 0, 0,
+                   n ? (double)nin / (double)n : -1, 0};
   o->progress(&p, o->progress_ctx);
 }
 

@@ -83,7 +83,8 @@ rm -f m.mesh
 
 # progress: lines on stderr (not a terminal here), per pass and per iteration
 PADAPT_PROGRESS_AFTER=0 "$PADAPT" adapt sq.mesh -hsiz 0.01 -out p.mesh > /dev/null 2> err.txt
-grep -Eq "^padapt: pass 1: [0-9.]+ (k |M )?elements \(metric: ~" err.txt && ok "progress per pass" ||
+grep -Eq "^padapt: pass 1: [0-9.]+ (k |M )?elements \(metric: ~[0-9.]+( k| M)?\), [0-9.]+ % of edges in range" err.txt &&
+  ok "progress per pass" ||
   bad "no progress line: $(head -2 err.txt)"
 PADAPT_PROGRESS_AFTER=0 "$PADAPT" adapt sq.mesh -hsiz 0.01 -out p.mesh -v -1 > /dev/null 2> err.txt
 [ ! -s err.txt ] && ok "-v -1 silences the progress" || bad "-v -1 progress: $(head -1 err.txt)"
