@@ -264,8 +264,8 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics,
   if (x && x->vgid) put_block(fp, x->vgid, arr[A_VGID].nbytes);
   if (x && x->vghost) put_block(fp, x->vghost, arr[A_VGHOST].nbytes);
   fwrite(&arr[A_REF].nbytes, 8, 1, fp);
-  fwrite(m->eref, 4, (size_t)ne, fp);
-  fwrite(m->bref, 4, (size_t)nb, fp);
+  if (ne) fwrite(m->eref, 4, (size_t)ne, fp);
+  if (nb) fwrite(m->bref, 4, (size_t)nb, fp);
   if (nd) fwrite(m->edref, 4, (size_t)nd, fp);
   fwrite(&arr[A_ENT].nbytes, 8, 1, fp);
   for (int kind = 0; kind < 3; kind++) {
@@ -297,7 +297,10 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics,
   }
   if (x) {
     fwrite(&arr[A_RANK].nbytes, 8, 1, fp);
-    for (uint64_t c = 0; c < ncell; c++) fwrite(&x->rank, 4, 1, fp);
+    int32_t rk[VTU_CHUNK];
+    for (size_t i = 0; i < VTU_CHUNK; i++) rk[i] = x->rank;
+    for (uint64_t c = 0; c < ncell; c += VTU_CHUNK)
+      fwrite(rk, 4, (size_t)(ncell - c < VTU_CHUNK ? ncell - c : VTU_CHUNK), fp);
   }
   if (x && x->cgid) put_block(fp, x->cgid, arr[A_CGID].nbytes);
   if (dim == 3) {
