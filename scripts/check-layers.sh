@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# check-layers.sh -- the library's components include one another one way
+# only (docs/ARCHITECTURE.md): each may include the headers of the
+# components listed for it below, and its own. Prints every #include that
+# crosses a layer the wrong way and exits 1 if there is one.
+#
+#   bash scripts/check-layers.sh [SOURCE_DIR]
+set -u
+src=${1:-$(cd "$(dirname "$0")/.." && pwd)}/src
+declare -A allowed=(
+  [core]=""
+  [mesh]="core"
+  [metric]="core mesh"
+  [io]="core mesh metric"
+  [partition]="core"
+  [remesh]="core mesh metric io"
+  [dmesh]="core mesh metric io partition"
+  [adapt]="core mesh metric io partition remesh dmesh"
+)
+bad=0
+for dir in "$src"/*/; do
+  comp=$(basename "$dir")
+  if [ -z "${allowed[$comp]+set}" ]; then
+    echo "check-layers: src/$comp is not a known component (add it here)"
+    bad=1
+    continue
+  fi
+  while IFS=: read -r file line text; do
+    inc=$(sed -E 's/.*#include "([a-z0-9_]+)\/.*/\1/' <<< "$text")
+    [ "$inc" = "$comp" ] && continue
+    case " ${allowed[$comp]} " in
+      *" $inc "*) ;;
+      *) echo "check-layers: ${file#"$src"/}:$line: $comp includes $inc: $text"; bad=1 ;;
+    esac
+  done < <(grep -Hn '^#include "[a-z0-9_]*/' "$dir"*.[ch] 2>/dev/null)
+done
+[ $bad -eq 0 ] && echo "check-layers: every include goes down the layers"
+exit $bad
