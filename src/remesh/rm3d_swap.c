@@ -112,6 +112,26 @@ static int has_edge(rm3d *m, pa_idx c, pa_idx d) {
   return 0;
 }
 
+/* The boundary triangles (a,b,c) and (a,b,d) of the surface edge ab, as
+ * records *r1 and *r2; *pair 1 when a swap may replace them: ab is no
+ * feature edge and they are free, with one reference and the same flags. */
+static pa_status surface_pair(const rm3d *m, pa_idx a, pa_idx b, pa_idx c,
+                              pa_idx d, const char *what, pa_idx *r1,
+                              pa_idx *r2, int *pair) {
+  pa_idx ek[2] = {a, b}, k1[3] = {a, b, c}, k2[3] = {a, b, d};
+  *pair = 0;
+  if (pa__rm3d_table_find(&m->edg, ek) >= 0) return PA_SUCCESS;
+  *r1 = pa__rm3d_table_find(&m->tri, k1);
+  *r2 = pa__rm3d_table_find(&m->tri, k2);
+  if (*r1 < 0 || *r2 < 0)
+    return pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
+                     "rm3d: boundary face of a %s not in the table", what);
+  *pair = !((m->tri.flag[*r1] | m->tri.flag[*r2]) & PA_FLAG_REQUIRED) &&
+          m->tri.ref[*r1] == m->tri.ref[*r2] &&
+          m->tri.flag[*r1] == m->tri.flag[*r2];
+  return PA_SUCCESS;
+}
+
 /* Remove the cap t = (a,b,c,d): a tet whose two boundary triangles (a,b,c)
  * and (a,b,d) meet at its edge ab, held by no other tet (an open shell of
  * one, where swap_bdry has no ring to retriangulate). Its faces (a,c,d) and
@@ -139,17 +159,10 @@ static pa_status remove_cap(rm3d *m, pa_idx a, pa_idx b, pa_idx t,
   if ((m->tflag[o1 >> 2] | m->tflag[o2 >> 2]) & R3T_FROZEN) return st;
   if (m->tref[o1 >> 2] != m->tref[t] || m->tref[o2 >> 2] != m->tref[t])
     return st;
-  pa_idx ek[2] = {a, b};
-  if (pa__rm3d_table_find(&m->edg, ek) >= 0) return st;
-  pa_idx k1[3] = {a, b, c}, k2[3] = {a, b, d};
-  pa_idx r1 = pa__rm3d_table_find(&m->tri, k1);
-  pa_idx r2 = pa__rm3d_table_find(&m->tri, k2);
-  if (r1 < 0 || r2 < 0)
-    return pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
-                     "rm3d: boundary face of a cap not in the table");
-  if (((m->tri.flag[r1] | m->tri.flag[r2]) & PA_FLAG_REQUIRED) ||
-      m->tri.ref[r1] != m->tri.ref[r2] || m->tri.flag[r1] != m->tri.flag[r2])
-    return st;
+  pa_idx r1, r2;
+  int pair = 0;
+  st = surface_pair(m, a, b, c, d, "cap", &r1, &r2, &pair);
+  if (st || !pair) return st;
   /* cd on no boundary triangle: its shell is closed, with none */
   {
     pa_idx tets[R3_SWAP_MAXRING + 1], ring[R3_SWAP_MAXRING + 2];
@@ -254,17 +267,10 @@ static pa_status swap_bdry(rm3d *m, pa_idx a, pa_idx b, const pa_idx *tets,
     int f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][0];
     if ((m->tflag[tets[i]] >> f) & 1) return st;
   }
-  pa_idx ek[2] = {a, b};
-  if (pa__rm3d_table_find(&m->edg, ek) >= 0) return st;
-  pa_idx k1[3] = {a, b, c}, k2[3] = {a, b, d};
-  pa_idx r1 = pa__rm3d_table_find(&m->tri, k1);
-  pa_idx r2 = pa__rm3d_table_find(&m->tri, k2);
-  if (r1 < 0 || r2 < 0)
-    return pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
-                     "rm3d: boundary face of a shell not in the table");
-  if (((m->tri.flag[r1] | m->tri.flag[r2]) & PA_FLAG_REQUIRED) ||
-      m->tri.ref[r1] != m->tri.ref[r2] || m->tri.flag[r1] != m->tri.flag[r2])
-    return st;
+  pa_idx r1, r2;
+  int pair = 0;
+  st = surface_pair(m, a, b, c, d, "shell", &r1, &r2, &pair);
+  if (st || !pair) return st;
   const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b,
                *xc = m->x + 3 * (size_t)c, *xd = m->x + 3 * (size_t)d;
   /* Outward normals of the old faces (the shell's end faces). */
