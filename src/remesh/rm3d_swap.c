@@ -112,6 +112,21 @@ static int has_edge(rm3d *m, pa_idx c, pa_idx d) {
   return 0;
 }
 
+/* The diagonals ab and cd of a curved quad stay within hausd of each
+ * other: their distance (the volume of a, b, c, d over |ab x cd|) is at
+ * most hausd. 0 also for parallel diagonals. */
+static int diagonals_close(const double *xa, const double *xb,
+                           const double *xc, const double *xd, double hausd) {
+  double u[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
+  double w[3] = {xd[0] - xc[0], xd[1] - xc[1], xd[2] - xc[2]};
+  double z[3] = {xc[0] - xa[0], xc[1] - xa[1], xc[2] - xa[2]};
+  double cr[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                  u[0] * w[1] - u[1] * w[0]};
+  double lc = sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
+  double vol = fabs(cr[0] * z[0] + cr[1] * z[1] + cr[2] * z[2]);
+  return lc > 0 && vol <= hausd * lc;
+}
+
 /* The boundary triangles (a,b,c) and (a,b,d) of the surface edge ab, as
  * records *r1 and *r2; *pair 1 when a swap may replace them: ab is no
  * feature edge and they are free, with one reference and the same flags. */
@@ -190,16 +205,7 @@ static pa_status remove_cap(rm3d *m, pa_idx a, pa_idx b, pa_idx t,
   if (dold < RM3D_NORMAL_COS && !(dnew > dold)) return st;
   const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b,
                *xc = m->x + 3 * (size_t)c, *xd = m->x + 3 * (size_t)d;
-  {
-    double u[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
-    double w[3] = {xd[0] - xc[0], xd[1] - xc[1], xd[2] - xc[2]};
-    double z[3] = {xc[0] - xa[0], xc[1] - xa[1], xc[2] - xa[2]};
-    double cr[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                    u[0] * w[1] - u[1] * w[0]};
-    double lcr = sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
-    double vol = fabs(cr[0] * z[0] + cr[1] * z[1] + cr[2] * z[2]);
-    if (!(lcr > 0) || vol > m->hausd * lcr) return st;
-  }
+  if (!diagonals_close(xa, xb, xc, xd, rm3d_tri_hausd(m, r1))) return st;
   double no[3] = {n1[0] + n2[0], n1[1] + n2[1], n1[2] + n2[2]};
   rm3d_unit(no);
   if (nt1[0] * no[0] + nt1[1] * no[1] + nt1[2] * no[2] < RM3D_NORMAL_COS ||
@@ -297,14 +303,7 @@ static pa_status swap_bdry(rm3d *m, pa_idx a, pa_idx b, const pa_idx *tets,
     if (!(m->vtag[a] & m->vtag[b] & m->vtag[c] & m->vtag[d] & R3V_CURVED) ||
         dot < RM3D_NORMAL_COS)
       return st;
-    double u[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
-    double w[3] = {xd[0] - xc[0], xd[1] - xc[1], xd[2] - xc[2]};
-    double z[3] = {xc[0] - xa[0], xc[1] - xa[1], xc[2] - xa[2]};
-    double cr[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                    u[0] * w[1] - u[1] * w[0]};
-    double lc = sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
-    double vol = fabs(cr[0] * z[0] + cr[1] * z[1] + cr[2] * z[2]);
-    if (!(lc > 0) || vol > rm3d_tri_hausd(m, r1) * lc) return st;
+    if (!diagonals_close(xa, xb, xc, xd, rm3d_tri_hausd(m, r1))) return st;
   }
   /* New faces (a,c,d) / (b,d,c) must face outwards like the old ones and
    * stay within RM3D_NORMAL_COS of their mean normal: on a curved patch a
