@@ -1140,6 +1140,13 @@ typedef struct pa_adapt_iter {
   double t_tag, t_pieces, t_gather, t_remesh, t_reintegrate;
   double remesh_busy;  /**< seconds spent remeshing, summed over the ranks */
   double bytes_moved;  /**< bytes of records sent between ranks */
+  /** Peak bytes of padapt memory (pa_memory_peak's count) during each step,
+   *  the maximum over the ranks. */
+  double mem_tag, mem_pieces, mem_gather, mem_remesh, mem_reintegrate;
+  /** Bytes of padapt memory held at the end of the reintegration (the
+   *  distributed mesh, its values, the iteration's bookkeeping and whatever
+   *  the caller holds), the maximum over the ranks. */
+  double mem_after;
 } pa_adapt_iter;
 
 /** Options of pa_dmesh_adapt. */

@@ -104,10 +104,12 @@ static void progress(const pa_adapt_iter *it, void *ctx) {
   if (it->iter == pc->kill_iter) raise(SIGKILL);
   printf("  iter %2d: %9lld tagged, %4d pieces, imbalance %.2f, %3d failed, "
          "%10lld elements | tag %.2f pieces %.2f gather %.2f remesh %.2f "
-         "reintegrate %.2f s\n",
+         "reintegrate %.2f s | peak MB remesh %.0f reintegrate %.0f, "
+         "after %.0f\n",
          it->iter, (long long)it->ntagged, it->npieces, it->imbalance,
          it->nfailed, (long long)it->nelem, it->t_tag, it->t_pieces,
-         it->t_gather, it->t_remesh, it->t_reintegrate);
+         it->t_gather, it->t_remesh, it->t_reintegrate, it->mem_remesh / 1e6,
+         it->mem_reintegrate / 1e6, it->mem_after / 1e6);
   fflush(stdout);
 }
 
@@ -184,11 +186,16 @@ static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
                   "\"rolled_back\": %d, \"imbalance\": %.4f, \"elements\": %lld, "
                   "\"tag_s\": %.6f, \"pieces_s\": %.6f, \"gather_s\": %.6f, "
                   "\"remesh_s\": %.6f, \"reintegrate_s\": %.6f, "
-                  "\"remesh_busy_s\": %.6f, \"bytes_moved\": %.0f}",
+                  "\"remesh_busy_s\": %.6f, \"bytes_moved\": %.0f, "
+                  "\"peak_bytes\": {\"tag\": %.0f, \"pieces\": %.0f, "
+                  "\"gather\": %.0f, \"remesh\": %.0f, \"reintegrate\": %.0f}, "
+                  "\"bytes_after\": %.0f}",
               k ? ", " : "", it->iter, (long long)it->ntagged, it->npieces,
               it->nfailed, it->imbalance, (long long)it->nelem, it->t_tag,
               it->t_pieces, it->t_gather, it->t_remesh, it->t_reintegrate,
-              it->remesh_busy, it->bytes_moved);
+              it->remesh_busy, it->bytes_moved, it->mem_tag, it->mem_pieces,
+              it->mem_gather, it->mem_remesh, it->mem_reintegrate,
+              it->mem_after);
   }
   char *fid = pa_cli_fidelity_json(&r->fidelity);
   pa_cli_sb_printf(&b, "], %s", fid ? fid : "");

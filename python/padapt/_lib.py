@@ -117,7 +117,9 @@ class AdaptIter(ctypes.Structure):
                 ("npieces", ctypes.c_int), ("nfailed", ctypes.c_int)] + \
                [(n, ctypes.c_double) for n in
                 ("imbalance", "t_tag", "t_pieces", "t_gather", "t_remesh",
-                 "t_reintegrate", "remesh_busy", "bytes_moved")]
+                 "t_reintegrate", "remesh_busy", "bytes_moved",
+                 "mem_tag", "mem_pieces", "mem_gather", "mem_remesh",
+                 "mem_reintegrate", "mem_after")]
 
 
 class AdaptOpts(ctypes.Structure):

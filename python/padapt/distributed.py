@@ -575,7 +575,11 @@ class DistributedMesh(object):
                  "rolled_back": it.nfailed, "imbalance": it.imbalance, "elements": it.nelem,
                  "tag_s": it.t_tag, "pieces_s": it.t_pieces, "gather_s": it.t_gather,
                  "remesh_s": it.t_remesh, "reintegrate_s": it.t_reintegrate,
-                 "remesh_busy_s": it.remesh_busy, "bytes_moved": it.bytes_moved}
+                 "remesh_busy_s": it.remesh_busy, "bytes_moved": it.bytes_moved,
+                 "peak_bytes": {"tag": it.mem_tag, "pieces": it.mem_pieces,
+                                "gather": it.mem_gather, "remesh": it.mem_remesh,
+                                "reintegrate": it.mem_reintegrate},
+                 "bytes_after": it.mem_after}
                 for it in r.iters[:r.niter_recorded]],
         })
         d.update(fidelity_dict(r.fidelity))

@@ -235,8 +235,11 @@ static pa_status iterate(pa_dmesh *dm, const pa_adapt_opts *opts,
   pa_adapt_report *rep = &L->rep;
   pa__iter it;
   pa_adapt_iter ir;
-  double t[5], busy, ta = pa_wtime(), tb;
+  /* per step: t[0..4] seconds, t[5..9] peak bytes, t[10] bytes held at
+   * the end (the maximum over the ranks of each) */
+  double t[11], busy, ta = pa_wtime(), tb;
   int nfail = 0, iter = L->iter + 1;
+  pa__memory_window_begin();
   memset(&it, 0, sizeof it);
   memset(&ir, 0, sizeof ir);
   *end = 0;
@@ -249,6 +252,7 @@ static pa_status iterate(pa_dmesh *dm, const pa_adapt_opts *opts,
   it.iter = iter;
   PA_CALL(pa__adapt_tag(&it, done, iter == 1));
   t[0] = pa_wtime() - ta;
+  t[5] = (double)pa__memory_window_peak();
   report_progress(dm, opts, iter, it.ntagged, L);
   rep->ntagged_left = it.ntagged;
   if (it.ntagged == 0) {
@@ -279,6 +283,7 @@ static pa_status iterate(pa_dmesh *dm, const pa_adapt_opts *opts,
   }
   if (L->least < 0 || it.tagwork < L->least) L->least = it.tagwork;
   ta = pa_wtime();
+  pa__memory_window_begin();
   {
     /* no progress: halve the pieces (other borders, fewer of them) */
     int np = dm->size * opts->pieces_per_rank;
@@ -290,17 +295,25 @@ static pa_status iterate(pa_dmesh *dm, const pa_adapt_opts *opts,
   }
   tb = pa_wtime();
   t[1] = tb - ta;
+  t[6] = (double)pa__memory_window_peak();
+  pa__memory_window_begin();
   PA_CALL(pa__adapt_extract(&it));
   ta = pa_wtime();
   t[2] = ta - tb;
+  t[7] = (double)pa__memory_window_peak();
+  pa__memory_window_begin();
   st = pa__adapt_remesh(&it, &nfail);
   busy = pa_wtime() - ta;
   PA_CALL(pa__agree(dm->comm, st)); /* the ranks wait for the slowest */
   tb = pa_wtime();
   t[3] = tb - ta;
+  t[8] = (double)pa__memory_window_peak();
+  pa__memory_window_begin();
   PA_CALL(pa__adapt_reintegrate(&it, done));
   t[4] = pa_wtime() - tb;
-  PA_CALL(max_times(dm->comm, t, 5, &busy));
+  t[9] = (double)pa__memory_window_peak();
+  t[10] = (double)pa_memory_current();
+  PA_CALL(max_times(dm->comm, t, 11, &busy));
   {
     double x[2] = {(double)nfail, it.bytes_moved};
     PA_CALL(pa__allreduce(dm->comm, x, 2, MPI_DOUBLE, MPI_SUM));
@@ -318,6 +331,12 @@ static pa_status iterate(pa_dmesh *dm, const pa_adapt_opts *opts,
   ir.t_gather = t[2];
   ir.t_remesh = t[3];
   ir.t_reintegrate = t[4];
+  ir.mem_tag = t[5];
+  ir.mem_pieces = t[6];
+  ir.mem_gather = t[7];
+  ir.mem_remesh = t[8];
+  ir.mem_reintegrate = t[9];
+  ir.mem_after = t[10];
   ir.remesh_busy = busy;
   L->iter = iter;
   rep->niter = iter;
@@ -383,9 +402,13 @@ static pa_status finish(pa_dmesh *dm, const pa_adapt_opts *opts,
   pa_status st = PA_SUCCESS;
   pa_adapt_report *rep = &L->rep;
   double ta = pa_wtime();
+  pa__memory_window_begin();
   if (opts->rebalance && dm->size > 1)
     PA_CALL(pa_dmesh_rebalance(dm, NULL, opts->rebalance_tol, NULL));
   rep->t_rebalance = pa_wtime() - ta;
+  pa__info(2, "padapt: rank %d: rebalance %.3f s, peak %.1f MB, then %.1f MB\n",
+           dm->rank, rep->t_rebalance, pa__memory_window_peak() / 1e6,
+           pa_memory_current() / 1e6);
   PA_CALL(pa__allreduce(dm->comm, &rep->t_rebalance, 1, MPI_DOUBLE, MPI_MAX));
   PA_CALL(pa_dmesh_value_remove(dm, *done));
   *done = NULL;
@@ -395,7 +418,11 @@ static pa_status finish(pa_dmesh *dm, const pa_adapt_opts *opts,
     pa__info(2, "padapt: rank %d: final check %.3f s\n", dm->rank,
              pa_wtime() - ta);
   }
+  pa__memory_window_begin();
+  ta = pa_wtime();
   if (!opts->remesh.no_stats) PA_CALL(measure(dm, L->changed, &rep->fidelity));
+  pa__info(2, "padapt: rank %d: statistics %.3f s, peak %.1f MB\n", dm->rank,
+           pa_wtime() - ta, pa__memory_window_peak() / 1e6);
   rep->fidelity.measured = !opts->remesh.no_stats;
 cleanup:
   return st;

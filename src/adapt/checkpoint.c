@@ -99,7 +99,9 @@ static const field iter_fields[] = {
     ITER('i', npieces),    ITER('i', nfailed),       ITER('d', imbalance),
     ITER('d', t_tag),      ITER('d', t_pieces),      ITER('d', t_gather),
     ITER('d', t_remesh),   ITER('d', t_reintegrate), ITER('d', remesh_busy),
-    ITER('d', bytes_moved)};
+    ITER('d', bytes_moved),    ITER('d', mem_tag),     ITER('d', mem_pieces),
+    ITER('d', mem_gather),     ITER('d', mem_remesh),  ITER('d', mem_reintegrate),
+    ITER('d', mem_after)};
 #define NITER (int)(sizeof iter_fields / sizeof *iter_fields)
 
 /* The options that can change the result (not the callbacks, the

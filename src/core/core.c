@@ -17,6 +17,7 @@
 static _Thread_local char pa_msg[PA_MSG_LEN];
 static atomic_size_t pa_mem_cur;
 static atomic_size_t pa_mem_peak;
+static atomic_size_t pa_mem_window; /* peak since pa__memory_window_begin */
 static atomic_long pa_fail_countdown;
 static int pa_verbose;
 
@@ -84,6 +85,9 @@ static void pa_count_add(size_t n) {
   size_t peak = atomic_load(&pa_mem_peak);
   while (cur > peak && !atomic_compare_exchange_weak(&pa_mem_peak, &peak, cur))
     ;
+  size_t win = atomic_load(&pa_mem_window);
+  while (cur > win && !atomic_compare_exchange_weak(&pa_mem_window, &win, cur))
+    ;
 }
 
 void *pa__malloc(size_t size) {
@@ -138,6 +142,10 @@ size_t pa_memory_peak(void) { return atomic_load(&pa_mem_peak); }
 void pa_memory_reset_peak(void) {
   atomic_store(&pa_mem_peak, atomic_load(&pa_mem_cur));
 }
+void pa__memory_window_begin(void) {
+  atomic_store(&pa_mem_window, atomic_load(&pa_mem_cur));
+}
+size_t pa__memory_window_peak(void) { return atomic_load(&pa_mem_window); }
 void pa_memory_fail_after(long n) {
   atomic_store(&pa_fail_countdown, n > 0 ? n : 0);
 }

@@ -158,6 +158,13 @@ static inline uint64_t pa__hash_idx(const pa_idx *k, int n) {
  * /proc/meminfo, lowered to a cgroup v2 limit; 0 if unknown. */
 size_t pa__mem_available(void);
 
+/* A second high-water mark of the counting allocator, for the figures of
+ * one step: pa__memory_window_begin sets it to the current bytes, and
+ * pa__memory_window_peak returns the largest count since (process-wide, as
+ * pa_memory_peak, which it leaves alone). */
+void pa__memory_window_begin(void);
+size_t pa__memory_window_peak(void);
+
 /* ---- agreement of collective routines (agree.c) ---- */
 
 /* Collective: combine the local status st of every rank. Returns PA_SUCCESS if

@@ -59,18 +59,32 @@ cleanup:
   return st;
 }
 
-/* Rendezvous check: every rank sends (gid, claimed owner, candidate) for
- * each local entity; at the rendezvous, the owner must be unique among the
- * claims, owned by exactly one rank, and the lowest candidate. */
+/* A claim on an entity, sent to its rendezvous rank: the sender's view of
+ * its owner, and whether the sender is a candidate owner (2 * rank + cand). */
+typedef struct claim {
+  pa_gid gid;
+  int32_t owner;
+  int32_t rank_cand;
+} claim;
+
+static int claim_cmp(const void *x, const void *y) {
+  const claim *a = x, *b = y;
+  if (a->gid != b->gid) return a->gid < b->gid ? -1 : 1;
+  return (a->rank_cand > b->rank_cand) - (a->rank_cand < b->rank_cand);
+}
+
+/* Rendezvous check: every rank sends a claim for each local entity to the
+ * rank of its block of global ids; there, the owner must be unique among
+ * the claims, owned by exactly one rank, and the lowest candidate. Memory:
+ * 16 bytes per local entity sent, and as much received. */
 static pa_status check_rule(pa_dmesh *dm, int kind, const uint8_t *cand) {
   pa_status st = PA_SUCCESS;
   int size = dm->size;
   pa_idx n = dm->nloc[kind];
   pa_gid maxg = -1, block;
   size_t *cnt = NULL, *pos = NULL, *rcnt = NULL;
-  pa_gid *item = NULL;
+  claim *item = NULL;
   void *recv = NULL;
-  pa_idx *ord = NULL;
   for (pa_idx i = 0; i < n; i++)
     if (dm->gid[kind][i] > maxg) maxg = dm->gid[kind][i];
   PA_CALL(pa__allreduce(dm->comm, &maxg, 1, MPI_INT64_T, MPI_MAX));
@@ -78,7 +92,7 @@ static pa_status check_rule(pa_dmesh *dm, int kind, const uint8_t *cand) {
   if (block < 1) block = 1;
   PA_CALLOC(cnt, size);
   PA_CALLOC(pos, (size_t)size + 1);
-  PA_ALLOC(item, 4 * (size_t)n);
+  PA_ALLOC(item, (size_t)n);
   for (pa_idx i = 0; i < n; i++) {
     pa_gid r = dm->gid[kind][i] / block;
     cnt[r >= size ? size - 1 : r]++;
@@ -86,40 +100,31 @@ static pa_status check_rule(pa_dmesh *dm, int kind, const uint8_t *cand) {
   for (int r = 0; r < size; r++) pos[r + 1] = pos[r] + cnt[r];
   for (pa_idx i = 0; i < n; i++) {
     pa_gid r = dm->gid[kind][i] / block;
-    size_t k = pos[r >= size ? size - 1 : r]++;
-    item[4 * k] = dm->gid[kind][i];
-    item[4 * k + 1] = dm->owner[kind][i];
-    item[4 * k + 2] = cand[i];
-    item[4 * k + 3] = dm->rank;
+    claim *c = item + pos[r >= size ? size - 1 : r]++;
+    c->gid = dm->gid[kind][i];
+    c->owner = dm->owner[kind][i];
+    c->rank_cand = 2 * dm->rank + (cand[i] != 0);
   }
-  for (int r = 0; r < size; r++) cnt[r] *= 4 * sizeof(pa_gid);
+  for (int r = 0; r < size; r++) cnt[r] *= sizeof(claim);
   PA_CALL(pa__xchg_sparse(dm->comm, cnt, item, &rcnt, &recv));
+  pa__free(item);
+  item = NULL;
   size_t nr = 0;
-  for (int r = 0; r < size; r++) nr += rcnt[r] / (4 * sizeof(pa_gid));
-  const pa_gid *it = recv;
-  pa_gid *keys;
-  PA_ALLOC(ord, nr);
-  keys = pa__malloc((nr ? nr : 1) * sizeof *keys);
-  PA_CHECK(keys, PA_ERR_MEMORY, "out of memory");
-  for (size_t j = 0; j < nr; j++) {
-    ord[j] = (pa_idx)j;
-    keys[j] = it[4 * j];
-  }
-  st = pa__sort_by_gid(ord, nr, keys);
-  pa__free(keys);
-  if (st) goto cleanup;
+  for (int r = 0; r < size; r++) nr += rcnt[r] / sizeof(claim);
+  claim *it = recv;
+  if (nr) qsort(it, nr, sizeof *it, claim_cmp);
   for (size_t a = 0; a < nr;) {
     size_t b = a;
-    pa_gid g = it[4 * (size_t)ord[a]];
-    pa_gid own = it[4 * (size_t)ord[a] + 1], mincand = size;
+    pa_gid g = it[a].gid, own = it[a].owner, mincand = size;
     int nowners = 0;
-    for (; b < nr && it[4 * (size_t)ord[b]] == g; b++) {
-      const pa_gid *x = it + 4 * (size_t)ord[b];
-      PA_CHECK(x[1] == own, PA_ERR_MESH,
+    for (; b < nr && it[b].gid == g; b++) {
+      int rank = it[b].rank_cand >> 1;
+      PA_CHECK(it[b].owner == own, PA_ERR_MESH,
                "%s %lld: ranks disagree on its owner (%lld and %lld)",
-               kind_name(kind), (long long)g, (long long)own, (long long)x[1]);
-      if (x[3] == x[1]) nowners++;
-      if (x[2] && x[3] < mincand) mincand = x[3];
+               kind_name(kind), (long long)g, (long long)own,
+               (long long)it[b].owner);
+      if (rank == it[b].owner) nowners++;
+      if ((it[b].rank_cand & 1) && rank < mincand) mincand = rank;
     }
     PA_CHECK(nowners == 1, PA_ERR_MESH,
              "%s global id %lld is owned %d times", kind_name(kind),
@@ -136,7 +141,6 @@ cleanup:
   pa__free(rcnt);
   pa__free(item);
   pa__free(recv);
-  pa__free(ord);
   return st;
 }
 
@@ -144,8 +148,7 @@ pa_status pa_dmesh_check(pa_dmesh *dm) {
   pa_status st = PA_SUCCESS;
   pa_gid *vg = NULL;
   uint8_t *cand = NULL;
-  pa_idx *xadj = NULL, *vstart = NULL, *vel = NULL;
-  pa_gid *adj = NULL;
+  pa_idx *vstart = NULL, *vel = NULL;
   PA_CHECK(dm && dm->mesh, PA_ERR_ARG, "pa_dmesh_check: NULL dmesh");
   pa__agree_reset();
   pa_mesh *m = dm->mesh;
@@ -259,16 +262,15 @@ pa_status pa_dmesh_check(pa_dmesh *dm) {
     PA_CALL(pa__agree(dm->comm, st));
     PA_CALL(check_rule(dm, k, cand));
   }
+  pa__free(cand);
+  pa__free(vstart);
+  pa__free(vel);
+  cand = NULL;
+  vstart = vel = NULL;
   /* conformity across ranks */
-  {
-    pa_idx ne = dm->nown[PA_ELEMENT];
-    PA_ALLOC(vg, (size_t)ne * (d + 1));
-    for (size_t k = 0; k < (size_t)ne * (d + 1); k++)
-      vg[k] = dm->gid[PA_VERTEX][m->elem[k]];
-    PA_CALL(pa__agree(dm->comm, st));
-    PA_CALL(pa__dual_graph(dm->comm, d, ne, vg, m->elem, m->nv, &xadj, &adj,
-                           NULL, NULL));
-  }
+  PA_CALL(pa__agree(dm->comm, st));
+  PA_CALL(pa__faces_conform(dm->comm, d, dm->nown[PA_ELEMENT], m->elem, m->nv,
+                            dm->gid[PA_VERTEX], dm->gid[PA_ELEMENT]));
   /* counts */
   {
     pa_gid own[PA_NKIND];
@@ -283,8 +285,6 @@ cleanup:
   if (dm) st = pa__agree_end(dm->comm, st);
   pa__free(vg);
   pa__free(cand);
-  pa__free(xadj);
-  pa__free(adj);
   pa__free(vstart);
   pa__free(vel);
   return st;

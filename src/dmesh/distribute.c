@@ -433,6 +433,74 @@ cleanup:
   return st;
 }
 
+/* Sorted vertex gids (vglob per local vertex) of local face i of the
+ * elements lv, and its meeting rank hash % size. */
+static int face_key_rank(const pa_idx *lv, const pa_gid *vglob, int nf,
+                         size_t i, int size, pa_gid *key) {
+  const pa_idx *ev = lv + i / (size_t)nf * (size_t)nf;
+  int k = 0;
+  key[0] = key[1] = key[2] = -1;
+  for (int j = 0; j < nf; j++)
+    if (j != (int)(i % (size_t)nf)) key[k++] = vglob[ev[j]];
+  sort_key(key, nf - 1);
+  return (int)(face_hash(key, nf - 1) % (uint64_t)size);
+}
+
+pa_status pa__faces_conform(MPI_Comm comm, int dim, pa_idx n,
+                            const pa_idx *lv, pa_idx nv, const pa_gid *vglob,
+                            const pa_gid *egid) {
+  pa_status st = PA_SUCCESS;
+  int size, nf = dim + 1;
+  size_t nface = (size_t)n * nf, nr = 0;
+  pa_gid *mate = NULL, *rmate = NULL;
+  face *sendf = NULL;
+  size_t *cnt = NULL, *pos = NULL, *rcnt = NULL;
+  void *recv = NULL;
+  MPI_Comm_size(comm, &size);
+  /* faces matched here; the unmatched ones, by meeting rank */
+  mate = pa__malloc((nface ? nface : 1) * sizeof *mate);
+  cnt = pa__calloc((size_t)size, sizeof *cnt);
+  pos = pa__calloc((size_t)size + 1, sizeof *pos);
+  st = mate && cnt && pos
+           ? pa__match_faces(dim, n, lv, nv, NULL, mate)
+           : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+  if (st == PA_SUCCESS) {
+    pa_gid key[3];
+    for (size_t i = 0; i < nface; i++)
+      if (mate[i] < 0) cnt[face_key_rank(lv, vglob, nf, i, size, key)]++;
+    for (int r = 0; r < size; r++) pos[r + 1] = pos[r] + cnt[r];
+    sendf = pa__malloc((pos[size] ? pos[size] : 1) * sizeof *sendf);
+    if (!sendf) st = pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+  }
+  PA_CALL(pa__agree(comm, st));
+  for (size_t i = 0; i < nface; i++) {
+    if (mate[i] >= 0) continue;
+    pa_gid key[3];
+    face *f = sendf + pos[face_key_rank(lv, vglob, nf, i, size, key)]++;
+    memcpy(f->key, key, sizeof key);
+    f->who = egid[i / (size_t)nf];
+  }
+  pa__free(mate);
+  mate = NULL;
+  for (int r = 0; r < size; r++) cnt[r] *= sizeof(face);
+  PA_CALL(pa__xchg_sparse(comm, cnt, sendf, &rcnt, &recv));
+  pa__free(sendf);
+  sendf = NULL;
+  for (int r = 0; r < size; r++) nr += rcnt[r] / sizeof(face);
+  rmate = pa__malloc((nr ? nr : 1) * sizeof *rmate);
+  st = rmate ? match_faces(recv, nr, dim, rmate)
+             : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+cleanup:
+  pa__free(mate);
+  pa__free(rmate);
+  pa__free(sendf);
+  pa__free(cnt);
+  pa__free(pos);
+  pa__free(rcnt);
+  pa__free(recv);
+  return pa__agree(comm, st);
+}
+
 pa_status pa__dual_graph(MPI_Comm comm, int dim, pa_idx n, const pa_gid *vgid,
                          const pa_idx *lv, pa_idx nv, pa_idx **xadjp,
                          pa_gid **adjp, int **adjrankp, pa_gid *offsetp) {

@@ -291,6 +291,16 @@ pa_status pa__dual_graph(MPI_Comm comm, int dim, pa_idx n, const pa_gid *vgid,
                          const pa_idx *lv, pa_idx nv, pa_idx **xadj,
                          pa_gid **adj, int **adjrank, pa_gid *offset);
 
+/* Collective: every face of the n elements lv (dim+1 local vertex numbers in
+ * [0, nv) each; vglob the global id of each local vertex, egid of each
+ * element) is in at most one other of the elements given on all the ranks.
+ * Faces are matched locally, and the unmatched ones at the rank hash % size.
+ * The memory it takes: 8 bytes per local face and the unmatched faces.
+ * Fails with PA_ERR_MESH, naming the face, on every rank. */
+pa_status pa__faces_conform(MPI_Comm comm, int dim, pa_idx n,
+                            const pa_idx *lv, pa_idx nv, const pa_gid *vglob,
+                            const pa_gid *egid);
+
 /* Local: match the faces of n elements (dim+1 local vertex numbers in
  * [0, nv) each in lv): mate[e*(dim+1)+i] = f*(dim+1)+j if face i of element
  * e (opposite its vertex i) is face j of element f, -1 if no other element

@@ -524,6 +524,50 @@ static void test_bad_input(void) {
   }
 }
 
+/* pa_dmesh_check finds a corrupted mesh on every rank: an element given the
+ * vertices of another (faces in three elements; with one rank nothing else
+ * is wrong, so the conformity check must say so), then two elements with
+ * the same global id (the ownership rendezvous must say so). */
+static void test_check_detects(void) {
+  for (int what = 0; what < 2; what++) {
+    pa_mesh *in = box_on_root(3, 4);
+    pa_dmesh *dm = NULL;
+    CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, in, 1, &dm));
+    pa_mesh_destroy(in);
+    CHECK_OK(pa_dmesh_check(dm));
+    pa_mesh *m = pa_dmesh_mesh(dm);
+    pa_idx ne = pa_dmesh_nowned(dm, PA_ELEMENT);
+    int corrupted = what == 1;
+    if (rank == 0 && what == 0) {
+      /* B: an owned element with no vertex on the cube's surface */
+      const double *x = pa_mesh_coords(m);
+      pa_idx *ev = pa_mesh_elems(m), b = -1;
+      for (pa_idx e = 1; e < ne && b < 0; e++) {
+        int inside = 1;
+        for (int j = 0; j < 4; j++)
+          for (int k = 0; k < 3; k++) {
+            double c = x[3 * ev[4 * e + j] + k];
+            inside &= c > 1e-9 && c < 1 - 1e-9;
+          }
+        if (inside) b = e;
+      }
+      CHECK(b > 0 || size > 1);
+      if (b > 0) memcpy(ev + 4 * b, ev, 4 * sizeof *ev);
+      corrupted = b > 0;
+    }
+    MPI_Bcast(&corrupted, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    if (rank == 0 && what == 1 && ne > 1) {
+      pa_gid *g = (pa_gid *)pa_dmesh_gids(dm, PA_ELEMENT);
+      g[1] = g[0];
+    }
+    pa_status st = pa_dmesh_check(dm);
+    if (corrupted) CHECK(st == PA_ERR_MESH);
+    if (size == 1)
+      CHECK(strstr(pa_last_error(), what ? "owned 2 times" : "more than two"));
+    pa_dmesh_destroy(dm);
+  }
+}
+
 int main(int argc, char **argv) {
   int provided;
   MPI_Init_thread(&argc, &argv, MPI_THREAD_MULTIPLE, &provided);
@@ -531,9 +575,11 @@ int main(int argc, char **argv) {
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   size_t mem0 = pa_memory_current();
   pa_test_fn tests[] = {test_distribute, test_redistribute, test_rebalance,
-                        test_weighted_balance, test_adjacency, test_bad_input};
+                        test_weighted_balance, test_adjacency, test_bad_input,
+                        test_check_detects};
   const char *names[] = {"distribute", "redistribute", "rebalance",
-                         "weighted_balance", "adjacency", "bad_input"};
+                         "weighted_balance", "adjacency", "bad_input",
+                         "check_detects"};
   for (size_t t = 0; t < sizeof tests / sizeof *tests; t++) {
     int before = pa_test_failures;
     double t0 = MPI_Wtime();
