@@ -156,7 +156,14 @@ typedef struct pa__iter {
   double tagwork;      /* global work of the tagged elements */
 } pa__iter;
 
+/* Free everything of the iteration (pa__iter_free), only the data of one
+ * piece (pa__piece_release: once its records are made, its meshes and
+ * arrays are no longer needed; its id and report stay), or only the arrays
+ * over the local elements and vertices (pa__iter_release_elements: before
+ * the rebuild, which changes the local numbering). */
 void pa__iter_free(pa__iter *it);
+void pa__piece_release(pa__piece *pc);
+void pa__iter_release_elements(pa__iter *it);
 
 /* What the loop carries from one iteration to the next besides the
  * distributed mesh (whose element value PA__DONE_VALUE is part of the

@@ -1077,6 +1077,10 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
     if (!pc->out) continue;
     PA_CALL(output_records(it, pc, bemit[q], demit[q], off, done, R,
                            &Rp, pay));
+    pa__piece_release(pc);
+    pa__free(bemit[q]);
+    pa__free(demit[q]);
+    bemit[q] = demit[q] = NULL;
   }
   /* wire bytes of every record: a fixed part each, plus the payloads */
   for (int k = 0; k < PA_NKIND; k++)
@@ -1087,8 +1091,17 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
           (double)(R[k].n * fixed + (po ? po[R[k].n] - po[0] : 0));
     }
 
-  /* 6. rebuild */
+  /* 6. rebuild: what the records replace goes first */
   PA_CALL(pa__agree(dm->comm, st));
+  pa__iter_release_elements(it);
+  pa__free(keep);
+  pa__free(vpriv);
+  pa__free(kv);
+  pa__free(kb);
+  pa__free(kd);
+  pa__free(pay);
+  keep = vpriv = kv = kb = kd = NULL;
+  pay = NULL;
   pa__dmesh_clear(dm);
   built = 1;
   t1 = pa_wtime();
