@@ -3,7 +3,8 @@
 # row each, to see whether the parallel driver is as good as the sequential
 # remesher (issue #19): elements, edges in [0.7071, 1.4142) in the given
 # metric, longest edge, edges of 1.4142-2 / 2-5 / 5 and more, worst quality,
-# elements of quality < 0.2, iterations, converged, outcome, time_s.
+# elements of quality < 0.2, iterations, converged, valid (the collective
+# mesh check of the result), outcome, time_s.
 #
 #   bash bench/parallel_quality.sh BUILD_DIR WORK_DIR MESH [adapt options]
 #
@@ -29,7 +30,7 @@ mkdir -p "$WORK"
 echo "# parallel_quality: $MESH $*, $(date -u +%Y-%m-%dT%H:%M:%SZ)"
 echo "# host: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'); load $(cut -d' ' -f1-3 /proc/loadavg)"
 echo "# repo $(git -C "$(dirname "$0")" rev-parse --short HEAD 2>/dev/null); binary $PADAPT"
-printf "%3s %10s %8s %7s %6s %5s %5s %7s %6s %5s %5s %-14s %7s\n" np elements inrange% longest 1.41-2 2-5 5+ worstQ "Q<0.2" iters conv outcome time_s
+printf "%3s %10s %8s %7s %6s %5s %5s %7s %6s %5s %5s %5s %-14s %7s\n" np elements inrange% longest 1.41-2 2-5 5+ worstQ "Q<0.2" iters conv valid outcome time_s
 for p in $PROCS; do
   j="$WORK/np$p.json"
   rm -f "$j"
@@ -46,10 +47,11 @@ for p in $PROCS; do
 import json, sys
 p, j = sys.argv[1], json.load(open(sys.argv[2]))
 eh, qh = j["edge_hist"], j["quality_hist"]
-print("%3s %10d %8.3f %7.3f %6d %5d %5d %7.4f %6d %5s %5s %-14s %7.2f" % (
+yn = {True: "yes", False: "no"}
+print("%3s %10d %8.3f %7.3f %6d %5d %5d %7.4f %6d %5s %5s %5s %-14s %7.2f" % (
     p, j["elements"], 100 * j["edge_in_range"], j["edge_max"], eh[6], eh[7],
     eh[8], j["quality_worst"], qh[0], j.get("iterations", "-"),
-    {True: "yes", False: "no"}.get(j.get("converged"), "-"), j["outcome"],
+    yn.get(j.get("converged"), "-"), yn.get(j.get("valid"), "-"), j["outcome"],
     j["time_s"]))
 EOF
 done

@@ -123,7 +123,9 @@ static pa_status pair_records(pa__iter *it, int kind, const pa_idx *bstart,
   pa__layout lay;
   pa__dmesh_layout(dm, &lay);
   if (kind == PA_VERTEX) {
-    PA_ALLOC(key, (size_t)it->ne * it->nve);
+    size_t nlab = 0; /* the pieces' elements only: a later piece is small */
+    for (pa_idx e = 0; e < it->ne; e++) nlab += it->label[e] >= 0;
+    PA_ALLOC(key, (nlab ? nlab : 1) * it->nve);
     for (pa_idx e = 0; e < it->ne; e++)
       if (it->label[e] >= 0)
         for (int k = 0; k < it->nve; k++)
