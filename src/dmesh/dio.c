@@ -807,216 +807,276 @@ cleanup:
   return st;
 }
 
+/* What the phases of pa_dmesh_write share: the rank file's mesh (fm, with
+ * map[k][i] the file index of local entity i, -1 if not in the file), the
+ * ranks each local vertex touches (mask, words per vertex), the keyword
+ * appender, the vertex doubles (metric, then fields; kept for the vtu) and
+ * this rank's line of the manifest. */
+typedef struct dwriter {
+  pa_dmesh *dm;
+  pa_mesh *fm;
+  pa_idx *map[PA_NKIND], nfile[PA_NKIND];
+  int words;
+  uint64_t *mask;
+  kwfile kw;
+  pa_outfile kwout;
+  double *vd;
+  int nd;
+  int64_t info[MF_WORDS];
+} dwriter;
+
+/* ParMmg's vertex communicators: per neighbour rank, the file vertices it
+ * also holds, in global id order (ParMmg's convention). */
+static pa_status write_comms(dwriter *w) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = w->dm;
+  const pa_mesh *m = dm->mesh;
+  const pa_idx *vmap = w->map[PA_VERTEX];
+  int words = w->words, ncomm = 0;
+  size_t nitem = 0, k = 0;
+  int32_t *comms = NULL, *items = NULL;
+  pa_idx *ord = NULL;
+  PA_ALLOC(comms, 1 + 2 * (size_t)dm->size);
+  int32_t *cnt = comms + 1;
+  for (int r = 0; r < dm->size; r++) {
+    if (r == dm->rank) continue;
+    int32_t c = 0;
+    for (pa_idx v = 0; v < m->nv; v++)
+      if (vmap[v] >= 0 && (w->mask[(size_t)words * v + r / 64] >> (r % 64) & 1)) c++;
+    if (c) {
+      cnt[2 * ncomm] = r;
+      cnt[2 * ncomm + 1] = c;
+      ncomm++;
+      nitem += (size_t)c;
+    }
+  }
+  comms[0] = ncomm;
+  PA_ALLOC(items, 3 * nitem);
+  PA_ALLOC(ord, m->nv);
+  for (pa_idx v = 0; v < m->nv; v++) ord[v] = v;
+  PA_CALL(pa__sort_by_gid(ord, (size_t)m->nv, dm->gid[PA_VERTEX]));
+  for (int c = 0; c < ncomm; c++) {
+    int r = cnt[2 * c], idx = 0;
+    for (pa_idx q = 0; q < m->nv; q++) {
+      pa_idx v = ord[q];
+      if (vmap[v] >= 0 && (w->mask[(size_t)words * v + r / 64] >> (r % 64) & 1)) {
+        items[3 * k] = vmap[v] + 1;
+        items[3 * k + 1] = ++idx;
+        items[3 * k + 2] = c;
+        k++;
+      }
+    }
+  }
+  PA_CALL(kw_write(&w->kw, KW_PARMMG_VCOMMS, comms, 4 * (1 + 2 * (size_t)ncomm), NULL, 0, NULL, 0));
+  PA_CALL(kw_write(&w->kw, KW_PARMMG_VITEMS, items, 12 * nitem, NULL, 0, NULL, 0));
+cleanup:
+  pa__free(ord);
+  pa__free(items);
+  pa__free(comms);
+  return st;
+}
+
+/* The header, then the global id (and owner) of every file entity. */
+static pa_status write_ids(dwriter *w) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = w->dm;
+  const pa_mesh *m = dm->mesh;
+  pa_gid *g = NULL;
+  int32_t *o = NULL;
+  int64_t h[H_WORDS] = {0};
+  h[H_FORMAT] = FORMAT_VERSION;
+  h[H_NRANKS] = dm->size;
+  h[H_RANK] = dm->rank;
+  h[H_DIM] = dm->dim;
+  for (int k = 0; k < PA_NKIND; k++) {
+    h[H_NGLOB + k] = dm->nglob[k];
+    h[H_NFILE + k] = w->nfile[k];
+  }
+  h[H_MET] = m->met_ncomp;
+  h[H_NFIELD] = m->nfield;
+  PA_CALL(kw_write(&w->kw, KW_HEADER, h, sizeof h, NULL, 0, NULL, 0));
+  pa_idx nmax = 0;
+  for (int k = 0; k < PA_NKIND; k++) nmax = w->nfile[k] > nmax ? w->nfile[k] : nmax;
+  PA_ALLOC(g, nmax);
+  PA_ALLOC(o, nmax);
+  static const int kwg[PA_NKIND] = {KW_VGID, KW_EGID, KW_BGID, KW_DGID};
+  static const int kwo[PA_NKIND] = {KW_VOWNER, 0, KW_BOWNER, KW_DOWNER};
+  for (int k = 0; k < PA_NKIND; k++) {
+    for (pa_idx i = 0; i < dm->nloc[k]; i++)
+      if (w->map[k][i] >= 0) {
+        g[w->map[k][i]] = dm->gid[k][i];
+        o[w->map[k][i]] = dm->owner[k][i];
+      }
+    PA_CALL(kw_write(&w->kw, kwg[k], g, sizeof(pa_gid) * w->nfile[k], NULL, 0, NULL, 0));
+    if (kwo[k]) PA_CALL(kw_write(&w->kw, kwo[k], o, 4 * (size_t)w->nfile[k], NULL, 0, NULL, 0));
+  }
+cleanup:
+  pa__free(g);
+  pa__free(o);
+  return st;
+}
+
+/* The metric and the fields of every file vertex (w->vd, kept for the vtu),
+ * after a description of the fields. */
+static pa_status write_vertex_doubles(dwriter *w) {
+  pa_status st = PA_SUCCESS;
+  const pa_mesh *m = w->dm->mesh;
+  const pa_idx *vmap = w->map[PA_VERTEX];
+  unsigned char *fdesc = NULL;
+  int nd = m->met_ncomp;
+  for (int f = 0; f < m->nfield; f++) nd += m->field[f].ncomp;
+  w->nd = nd;
+  PA_ALLOC(w->vd, (size_t)nd * w->nfile[PA_VERTEX]);
+  for (pa_idx v = 0; v < m->nv; v++) {
+    pa_idx f = vmap[v];
+    if (f < 0) continue;
+    double *x = w->vd + (size_t)nd * f;
+    if (m->met_ncomp) memcpy(x, m->met + (size_t)m->met_ncomp * v, sizeof(double) * m->met_ncomp);
+    x += m->met_ncomp;
+    for (int q = 0; q < m->nfield; q++) {
+      memcpy(x, m->field[q].val + (size_t)m->field[q].ncomp * v, sizeof(double) * m->field[q].ncomp);
+      x += m->field[q].ncomp;
+    }
+  }
+  size_t dl = 8 + (size_t)m->nfield * (PA_FIELD_NAME_LEN + 4);
+  PA_CALLOC(fdesc, dl);
+  int32_t mn[2] = {m->met_ncomp, m->nfield};
+  memcpy(fdesc, mn, 8);
+  for (int q = 0; q < m->nfield; q++) {
+    memcpy(fdesc + 8 + (size_t)q * (PA_FIELD_NAME_LEN + 4), m->field[q].name, PA_FIELD_NAME_LEN);
+    int32_t nc = m->field[q].ncomp;
+    memcpy(fdesc + 8 + (size_t)q * (PA_FIELD_NAME_LEN + 4) + PA_FIELD_NAME_LEN, &nc, 4);
+  }
+  PA_CALL(kw_write(&w->kw, KW_VDBL, fdesc, dl, w->vd, sizeof(double) * nd * w->nfile[PA_VERTEX], NULL, 0));
+cleanup:
+  pa__free(fdesc);
+  return st;
+}
+
+/* The flags of every file entity, kind after kind. */
+static pa_status write_flags(dwriter *w) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = w->dm;
+  const pa_mesh *m = dm->mesh;
+  uint8_t *flags = NULL;
+  size_t nf = 0, off = 0;
+  for (int k = 0; k < PA_NKIND; k++) nf += (size_t)w->nfile[k];
+  PA_ALLOC(flags, nf);
+  const uint8_t *src[PA_NKIND] = {m->vflag, m->eflag, m->bflag, m->edflag};
+  for (int k = 0; k < PA_NKIND; k++) {
+    for (pa_idx i = 0; i < dm->nloc[k]; i++)
+      if (w->map[k][i] >= 0) flags[off + w->map[k][i]] = src[k][i];
+    off += (size_t)w->nfile[k];
+  }
+  PA_CALL(kw_write(&w->kw, KW_FLAGS, flags, nf, NULL, 0, NULL, 0));
+cleanup:
+  pa__free(flags);
+  return st;
+}
+
+/* The user values: the owned copies are authoritative; the file holds the
+ * value of every file entity with it (ghost vertices included), and the
+ * reader keeps the one of the owner's file. */
+static pa_status write_values(dwriter *w) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = w->dm;
+  pa_idx *fslot = NULL;
+  unsigned char *vb = NULL;
+  for (int q = 0; q < dm->nvalue; q++) {
+    const pa_dmesh_value *v = dm->value[q];
+    int k = (int)v->kind;
+    vdesc d;
+    int64_t count = 0;
+    PA_ALLOC(fslot, w->nfile[k]);
+    for (pa_idx f = 0; f < w->nfile[k]; f++) fslot[f] = -1;
+    for (pa_idx i = 0; i < dm->nloc[k]; i++) {
+      pa_idx sl = v->slot ? v->slot[i] : i;
+      if (w->map[k][i] >= 0 && sl >= 0) fslot[w->map[k][i]] = sl;
+    }
+    for (pa_idx f = 0; f < w->nfile[k]; f++) count += fslot[f] >= 0;
+    vb = pa__malloc((size_t)count * v->unit + 1);
+    PA_CHECK(vb, PA_ERR_MEMORY, "out of memory writing value '%s'", v->name);
+    for (pa_idx f = 0, c = 0; f < w->nfile[k]; f++)
+      if (fslot[f] >= 0)
+        memcpy(vb + v->unit * (size_t)c++, v->data + v->unit * (size_t)fslot[f], v->unit);
+    vdesc_of(v, count, &d);
+    PA_CALL(kw_write(&w->kw, KW_VALUE, &d, sizeof d, vb, v->unit * (size_t)count, NULL, 0));
+    pa__free(fslot);
+    pa__free(vb);
+    fslot = NULL;
+    vb = NULL;
+  }
+cleanup:
+  pa__free(fslot);
+  pa__free(vb);
+  return st;
+}
+
+/* This rank's line of the manifest: its entity counts, and the size and
+ * hash of its rank file as written (its temporary). */
+static pa_status manifest_line(dwriter *w, const char *fpath) {
+  pa_status st = PA_SUCCESS;
+  const char *tmp = pa__out_tmppath(fpath);
+  uint64_t hash = 0;
+  PA_CHECK(tmp, PA_ERR_INTERNAL, "%s: its temporary is not listed", fpath);
+  PA_CALL(pa__file_fnv1a64(tmp, &w->info[MF_BYTES], &hash));
+  w->info[MF_HASH] = (int64_t)hash;
+  for (int k = 0; k < PA_NKIND; k++) w->info[MF_COUNT + k] = w->nfile[k];
+cleanup:
+  return st;
+}
+
 pa_status pa_dmesh_write(pa_dmesh *dm, const char *path) {
   pa_status st = PA_SUCCESS;
   char base[4096], fpath[4200];
-  pa_mesh *fm = NULL;
   pa_output *tx = NULL;
-  pa_outfile kwout;
-  int64_t info[MF_WORDS], *all = NULL;
-  pa_idx *map[PA_NKIND] = {NULL}, nfile[PA_NKIND] = {0};
-  int vtu_nd = 0;
-  uint64_t *mask = NULL;
-  pa_gid *g = NULL;
-  int32_t *o = NULL, *items = NULL, *comms = NULL;
-  double *vd = NULL;
-  uint8_t *flags = NULL;
-  unsigned char *fdesc = NULL;
-  kwfile kw;
-  memset(&kw, 0, sizeof kw);
-  memset(&kwout, 0, sizeof kwout);
+  int64_t *all = NULL;
+  dwriter w;
+  memset(&w, 0, sizeof w);
   PA_CHECK(dm && path, PA_ERR_ARG, "pa_dmesh_write: NULL argument");
   pa__agree_reset();
   PA_CALL(pa_output_begin(&tx)); /* or join the caller's */
+  w.dm = dm;
+  w.words = (dm->size + 63) / 64;
   path_base(path, base, sizeof base);
-  pa_mesh *m = dm->mesh;
-  int words = (dm->size + 63) / 64;
-  PA_CALL(file_mesh(dm, &fm, map, nfile));
-  PA_CALL(touch_masks(dm, words, &mask));
+  /* the rank file: its mesh, then padapt's and ParMmg's keywords */
+  PA_CALL(file_mesh(dm, &w.fm, w.map, w.nfile));
+  PA_CALL(touch_masks(dm, w.words, &w.mask));
   rank_path(base, dm->rank, ".meshb", fpath, sizeof fpath);
-  PA_CALL(pa_mesh_write(fm, fpath, NULL));
-  PA_CALL(kw_open_append(&kw, &kwout, fpath));
-  /* ParMmg vertex communicators */
-  {
-    int ncomm = 0;
-    size_t nitem = 0;
-    PA_ALLOC(comms, 1 + 2 * (size_t)dm->size);
-    int32_t *cnt = comms + 1;
-    for (int r = 0; r < dm->size; r++) {
-      if (r == dm->rank) continue;
-      int32_t c = 0;
-      for (pa_idx v = 0; v < m->nv; v++)
-        if (map[PA_VERTEX][v] >= 0 && (mask[(size_t)words * v + r / 64] >> (r % 64) & 1)) c++;
-      if (c) {
-        cnt[2 * ncomm] = r;
-        cnt[2 * ncomm + 1] = c;
-        ncomm++;
-        nitem += (size_t)c;
-      }
-    }
-    comms[0] = ncomm;
-    PA_ALLOC(items, 3 * nitem);
-    pa_idx *ord;
-    PA_ALLOC(ord, m->nv);
-    for (pa_idx v = 0; v < m->nv; v++) ord[v] = v;
-    st = pa__sort_by_gid(ord, (size_t)m->nv, dm->gid[PA_VERTEX]);
-    size_t k = 0;
-    for (int c = 0; c < ncomm && !st; c++) {
-      int r = cnt[2 * c], idx = 0;
-      for (pa_idx q = 0; q < m->nv; q++) {
-        pa_idx v = ord[q];
-        if (map[PA_VERTEX][v] >= 0 && (mask[(size_t)words * v + r / 64] >> (r % 64) & 1)) {
-          items[3 * k] = map[PA_VERTEX][v] + 1;
-          items[3 * k + 1] = ++idx;
-          items[3 * k + 2] = c;
-          k++;
-        }
-      }
-    }
-    pa__free(ord);
-    if (st) goto cleanup;
-    PA_CALL(kw_write(&kw, KW_PARMMG_VCOMMS, comms, 4 * (1 + 2 * (size_t)ncomm), NULL, 0, NULL, 0));
-    PA_CALL(kw_write(&kw, KW_PARMMG_VITEMS, items, 12 * nitem, NULL, 0, NULL, 0));
-  }
-  /* padapt keywords */
-  {
-    int64_t h[H_WORDS] = {0};
-    h[H_FORMAT] = FORMAT_VERSION;
-    h[H_NRANKS] = dm->size;
-    h[H_RANK] = dm->rank;
-    h[H_DIM] = dm->dim;
-    for (int k = 0; k < PA_NKIND; k++) {
-      h[H_NGLOB + k] = dm->nglob[k];
-      h[H_NFILE + k] = nfile[k];
-    }
-    h[H_MET] = m->met_ncomp;
-    h[H_NFIELD] = m->nfield;
-    PA_CALL(kw_write(&kw, KW_HEADER, h, sizeof h, NULL, 0, NULL, 0));
-    pa_idx nmax = 0;
-    for (int k = 0; k < PA_NKIND; k++) nmax = nfile[k] > nmax ? nfile[k] : nmax;
-    PA_ALLOC(g, nmax);
-    PA_ALLOC(o, nmax);
-    static const int kwg[PA_NKIND] = {KW_VGID, KW_EGID, KW_BGID, KW_DGID};
-    static const int kwo[PA_NKIND] = {KW_VOWNER, 0, KW_BOWNER, KW_DOWNER};
-    for (int k = 0; k < PA_NKIND; k++) {
-      for (pa_idx i = 0; i < dm->nloc[k]; i++)
-        if (map[k][i] >= 0) {
-          g[map[k][i]] = dm->gid[k][i];
-          o[map[k][i]] = dm->owner[k][i];
-        }
-      PA_CALL(kw_write(&kw, kwg[k], g, sizeof(pa_gid) * nfile[k], NULL, 0, NULL, 0));
-      if (kwo[k]) PA_CALL(kw_write(&kw, kwo[k], o, 4 * (size_t)nfile[k], NULL, 0, NULL, 0));
-    }
-    /* metric and fields */
-    int nd = m->met_ncomp;
-    for (int f = 0; f < m->nfield; f++) nd += m->field[f].ncomp;
-    vtu_nd = nd;
-    PA_ALLOC(vd, (size_t)nd * nfile[PA_VERTEX]);
-    for (pa_idx v = 0; v < m->nv; v++) {
-      pa_idx f = map[PA_VERTEX][v];
-      if (f < 0) continue;
-      double *x = vd + (size_t)nd * f;
-      if (m->met_ncomp) memcpy(x, m->met + (size_t)m->met_ncomp * v, sizeof(double) * m->met_ncomp);
-      x += m->met_ncomp;
-      for (int q = 0; q < m->nfield; q++) {
-        memcpy(x, m->field[q].val + (size_t)m->field[q].ncomp * v, sizeof(double) * m->field[q].ncomp);
-        x += m->field[q].ncomp;
-      }
-    }
-    size_t dl = 8 + (size_t)m->nfield * (PA_FIELD_NAME_LEN + 4);
-    PA_CALLOC(fdesc, dl);
-    int32_t mn[2] = {m->met_ncomp, m->nfield};
-    memcpy(fdesc, mn, 8);
-    for (int q = 0; q < m->nfield; q++) {
-      memcpy(fdesc + 8 + (size_t)q * (PA_FIELD_NAME_LEN + 4), m->field[q].name, PA_FIELD_NAME_LEN);
-      int32_t nc = m->field[q].ncomp;
-      memcpy(fdesc + 8 + (size_t)q * (PA_FIELD_NAME_LEN + 4) + PA_FIELD_NAME_LEN, &nc, 4);
-    }
-    PA_CALL(kw_write(&kw, KW_VDBL, fdesc, dl, vd, sizeof(double) * nd * nfile[PA_VERTEX], NULL, 0));
-    /* flags */
-    size_t nf = 0;
-    for (int k = 0; k < PA_NKIND; k++) nf += (size_t)nfile[k];
-    PA_ALLOC(flags, nf);
-    const uint8_t *src[PA_NKIND] = {m->vflag, m->eflag, m->bflag, m->edflag};
-    size_t base_off = 0;
-    for (int k = 0; k < PA_NKIND; k++) {
-      for (pa_idx i = 0; i < dm->nloc[k]; i++)
-        if (map[k][i] >= 0) flags[base_off + map[k][i]] = src[k][i];
-      base_off += (size_t)nfile[k];
-    }
-    PA_CALL(kw_write(&kw, KW_FLAGS, flags, nf, NULL, 0, NULL, 0));
-    /* user values: the owned copies are authoritative; the file holds the
-     * value of every file entity with it (ghost vertices included), and the
-     * reader keeps the one of the owner's file */
-    for (int q = 0; q < dm->nvalue; q++) {
-      const pa_dmesh_value *v = dm->value[q];
-      int k = (int)v->kind;
-      pa_idx *fslot;
-      unsigned char *vb;
-      vdesc d;
-      int64_t count = 0;
-      PA_ALLOC(fslot, nfile[k]);
-      for (pa_idx f = 0; f < nfile[k]; f++) fslot[f] = -1;
-      for (pa_idx i = 0; i < dm->nloc[k]; i++) {
-        pa_idx sl = v->slot ? v->slot[i] : i;
-        if (map[k][i] >= 0 && sl >= 0) fslot[map[k][i]] = sl;
-      }
-      for (pa_idx f = 0; f < nfile[k]; f++) count += fslot[f] >= 0;
-      vb = pa__malloc((size_t)count * v->unit + 1);
-      if (!vb) {
-        pa__free(fslot);
-        PA_FAIL(PA_ERR_MEMORY, "out of memory writing value '%s'", v->name);
-      }
-      for (pa_idx f = 0, c = 0; f < nfile[k]; f++)
-        if (fslot[f] >= 0)
-          memcpy(vb + v->unit * (size_t)c++, v->data + v->unit * (size_t)fslot[f], v->unit);
-      vdesc_of(v, count, &d);
-      st = kw_write(&kw, KW_VALUE, &d, sizeof d, vb, v->unit * (size_t)count, NULL, 0);
-      pa__free(fslot);
-      pa__free(vb);
-      if (st) goto cleanup;
-    }
-  }
-  PA_CALL(kw_close(&kw, &kwout));
-  /* this rank's line of the manifest */
-  {
-    const char *tmp = pa__out_tmppath(fpath);
-    uint64_t hash = 0;
-    PA_CHECK(tmp, PA_ERR_INTERNAL, "%s: its temporary is not listed", fpath);
-    PA_CALL(pa__file_fnv1a64(tmp, &info[MF_BYTES], &hash));
-    info[MF_HASH] = (int64_t)hash;
-    for (int k = 0; k < PA_NKIND; k++) info[MF_COUNT + k] = nfile[k];
-  }
-  /* ParaView: per-rank vtu of the owned elements, and the pvtu */
+  PA_CALL(pa_mesh_write(w.fm, fpath, NULL));
+  PA_CALL(kw_open_append(&w.kw, &w.kwout, fpath));
+  PA_CALL(write_comms(&w));
+  PA_CALL(write_ids(&w));
+  PA_CALL(write_vertex_doubles(&w));
+  PA_CALL(write_flags(&w));
+  PA_CALL(write_values(&w));
+  PA_CALL(kw_close(&w.kw, &w.kwout));
+  PA_CALL(manifest_line(&w, fpath));
+  /* ParaView: per-rank vtu of the owned elements */
   rank_path(base, dm->rank, ".vtu", fpath, sizeof fpath);
-  PA_CALL(write_vtu(dm, fm, map, nfile, vd, vtu_nd, fpath));
+  PA_CALL(write_vtu(dm, w.fm, w.map, w.nfile, w.vd, w.nd, fpath));
+  /* rank 0: the pvtu and the manifest of every rank's line */
   if (dm->rank == 0) {
     all = pa__malloc(sizeof *all * MF_WORDS * (size_t)dm->size);
     if (!all) st = pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
   }
   PA_CALL(pa__agree(dm->comm, st));
-  MPI_Gather(info, MF_WORDS, MPI_INT64_T, all, MF_WORDS, MPI_INT64_T, 0,
+  MPI_Gather(w.info, MF_WORDS, MPI_INT64_T, all, MF_WORDS, MPI_INT64_T, 0,
              dm->comm);
   if (dm->rank == 0) {
-    PA_CALL(write_pvtu(base, dm->size, m));
+    PA_CALL(write_pvtu(base, dm->size, dm->mesh));
     PA_CALL(write_manifest(base, dm, all));
     PA_CALL(remove_shadows(path, base, dm->size));
   }
 cleanup:
-  pa__out_abort(&kwout);
+  pa__out_abort(&w.kwout);
   if (dm && tx) st = pa__output_end(dm->comm, tx, st);
   else if (dm) st = pa__agree_end(dm->comm, st);
   pa__free(all);
-  pa_mesh_destroy(fm);
-  for (int k = 0; k < PA_NKIND; k++) pa__free(map[k]);
-  pa__free(mask);
-  pa__free(g);
-  pa__free(o);
-  pa__free(items);
-  pa__free(comms);
-  pa__free(vd);
-  pa__free(flags);
-  pa__free(fdesc);
+  pa_mesh_destroy(w.fm);
+  for (int k = 0; k < PA_NKIND; k++) pa__free(w.map[k]);
+  pa__free(w.mask);
+  pa__free(w.vd);
   return st;
 }
 
