@@ -1008,38 +1008,48 @@ static void unpack_payloads(pa_dmesh *dm, int kind, const pa__recs *R,
   }
 }
 
-/* Steps 6-9: filter and own the boundary entities / edges, number all local
- * entities, fill dm. */
-static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
+/* What the phases of assemble share: the local order of the records of
+ * each kind (ord[kind][k] = record of local entity k), the local vertex of
+ * each vertex record (lvof) and of each vertex global id (lv), and the local
+ * mesh being filled. */
+typedef struct assembly {
+  pa_idx *ord[PA_NKIND];
+  pa_idx *lvof;
+  pa__gidindex lv;
+  pa_mesh *m;
+} assembly;
+
+/* Step 6: number the local vertices and elements (owned first) and index
+ * the vertices by global id. */
+static pa_status number_vertices_elements(pa_dmesh *dm, bstate *s,
+                                          assembly *a) {
   pa_status st = PA_SUCCESS;
-  int d = s->dim, rank = s->rank;
-  pa_idx *ordV = NULL, *ordE = NULL, *ordB = NULL, *ordD = NULL;
-  pa_idx *lvof = NULL; /* LV record -> local vertex */
-  pa__gidindex lv = {0};
-  pa_idx *vstart = NULL, *vel = NULL;
-  pa__recs *SB[2] = {&s->LB, &s->LD};
-  uint8_t *keep = NULL, *cand = NULL, *need = NULL;
-  pa_gid *kg = NULL;
-  int *kown = NULL;
-  pa_mesh *m = NULL;
-
-  /* vertices */
-  PA_ALLOC(ordV, s->LV.n);
-  PA_CALL(number_local(&s->LV, NULL, rank, ordV, &dm->nown[PA_VERTEX]));
+  PA_ALLOC(a->ord[PA_VERTEX], s->LV.n);
+  PA_CALL(number_local(&s->LV, NULL, s->rank, a->ord[PA_VERTEX],
+                       &dm->nown[PA_VERTEX]));
   dm->nloc[PA_VERTEX] = (pa_idx)s->LV.n;
-  PA_CALL(pa__gidindex_init_keys(&lv, s->LV.gid, s->LV.n));
-  PA_ALLOC(lvof, s->LV.n);
+  PA_CALL(pa__gidindex_init_keys(&a->lv, s->LV.gid, s->LV.n));
+  PA_ALLOC(a->lvof, s->LV.n);
   for (size_t k = 0; k < s->LV.n; k++) {
-    PA_CALL(pa__gidindex_put(&lv, s->LV.gid[ordV[k]], (pa_idx)k, NULL, NULL));
-    lvof[ordV[k]] = (pa_idx)k;
+    pa_idx r = a->ord[PA_VERTEX][k];
+    PA_CALL(pa__gidindex_put(&a->lv, s->LV.gid[r], (pa_idx)k, NULL, NULL));
+    a->lvof[r] = (pa_idx)k;
   }
-  /* elements */
-  PA_ALLOC(ordE, s->L.n);
-  PA_CALL(number_local(&s->L, s->layer, rank, ordE, &dm->nown[PA_ELEMENT]));
+  PA_ALLOC(a->ord[PA_ELEMENT], s->L.n);
+  PA_CALL(number_local(&s->L, s->layer, s->rank, a->ord[PA_ELEMENT],
+                       &dm->nown[PA_ELEMENT]));
   dm->nloc[PA_ELEMENT] = (pa_idx)s->L.n;
+cleanup:
+  return st;
+}
 
-  /* the local mesh */
-  PA_CALL(pa_mesh_create(d, &m));
+/* Step 7a: the local mesh's vertices (coordinates, metric, fields). */
+static pa_status fill_vertices(bstate *s, const pa__layout *lay, assembly *a) {
+  pa_status st = PA_SUCCESS;
+  int d = s->dim;
+  pa_mesh *m = NULL;
+  PA_CALL(pa_mesh_create(d, &a->m));
+  m = a->m;
   m->met_ncomp = lay->met_ncomp;
   m->nfield = lay->nfield;
   for (int f = 0; f < lay->nfield; f++) {
@@ -1048,7 +1058,7 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
   }
   PA_CALL(pa_mesh_reserve(m, (pa_idx)s->LV.n, (pa_idx)s->L.n, 0, 0));
   for (size_t k = 0; k < s->LV.n; k++) {
-    size_t i = (size_t)ordV[k];
+    size_t i = (size_t)a->ord[PA_VERTEX][k];
     const double *x = s->LV.dbl + (size_t)s->LV.ndbl * i;
     memcpy(m->coord + (size_t)d * k, x, d * sizeof(double));
     x += d;
@@ -1067,17 +1077,26 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
   m->nv = (pa_idx)s->LV.n;
   pa__free(s->LV.dbl); /* in the mesh now: lower the peak */
   s->LV.dbl = NULL;
-  /* owned elements (records [0, nown)): vertex slot -> u -> LV record ->
-   * local vertex, two array reads; ghost elements through the index lv */
+cleanup:
+  return st;
+}
+
+/* Step 7b: the local mesh's elements. Owned elements (records [0, nown)):
+ * vertex slot -> u -> LV record -> local vertex, two array reads; ghost
+ * elements through the index lv. */
+static pa_status fill_elements(pa_dmesh *dm, bstate *s, assembly *a) {
+  pa_status st = PA_SUCCESS;
+  int d = s->dim;
+  pa_mesh *m = a->m;
   for (size_t u = 0; u < s->nu; u++)
-    if (s->ulv[u] >= 0) s->ulv[u] = lvof[s->ulv[u]];
+    if (s->ulv[u] >= 0) s->ulv[u] = a->lvof[s->ulv[u]];
   for (size_t k = 0; k < s->L.n; k++) {
-    size_t i = (size_t)ordE[k];
+    size_t i = (size_t)a->ord[PA_ELEMENT][k];
     for (int j = 0; j <= d; j++) {
       size_t p = (size_t)(d + 1) * i + j;
       pa_idx v = i < (size_t)dm->nown[PA_ELEMENT]
                      ? s->ulv[s->uslot[p]]
-                     : pa__gidindex_get(&lv, s->L.vgid[p]);
+                     : pa__gidindex_get(&a->lv, s->L.vgid[p]);
       PA_CHECK(v >= 0, PA_ERR_INTERNAL, "element vertex not fetched");
       m->elem[(size_t)(d + 1) * k + j] = v;
     }
@@ -1090,164 +1109,191 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
   s->uslot = s->ulv = NULL;
   pa__free(s->L.vgid); /* in the mesh now */
   s->L.vgid = NULL;
+cleanup:
+  return st;
+}
 
+/* Step 8 for the records R (boundary entities or edges): keep those inside
+ * a local element (compacted in place); the owner is the lowest rank with
+ * an owned element containing them (in R->aux). vstart/vel: the local
+ * elements around the first vertex of each record. */
+static pa_status own_subentities(pa_dmesh *dm, bstate *s, assembly *a,
+                                 pa__recs *R, const pa_idx *vstart,
+                                 const pa_idx *vel) {
+  pa_status st = PA_SUCCESS;
+  int d = s->dim, nv = R->nv;
+  const pa_mesh *m = a->m;
+  uint8_t *keep = NULL, *cand = NULL;
+  int *kown = NULL;
+  PA_CALLOC(keep, R->n);
+  PA_CALLOC(cand, R->n);
+  size_t nk = 0;
+  for (size_t i = 0; i < R->n; i++) {
+    pa_idx lvx[4];
+    int ok = 1;
+    for (int j = 0; j < nv; j++) {
+      lvx[j] = pa__gidindex_get(&a->lv, R->vgid[(size_t)nv * i + j]);
+      if (lvx[j] < 0) ok = 0;
+    }
+    if (!ok) continue;
+    for (pa_idx q = vstart[lvx[0]]; q < vstart[lvx[0] + 1]; q++) {
+      const pa_idx *ev = m->elem + (size_t)(d + 1) * vel[q];
+      int all = 1;
+      for (int j = 1; j < nv && all; j++) {
+        int in = 0;
+        for (int c = 0; c <= d; c++) in |= ev[c] == lvx[j];
+        all = in;
+      }
+      if (all) {
+        keep[i] = 1;
+        if (vel[q] < dm->nown[PA_ELEMENT]) cand[i] = 1;
+      }
+    }
+    nk += keep[i];
+  }
+  /* compact the kept records in place */
+  size_t k = 0;
+  for (size_t i = 0; i < R->n; i++) {
+    if (!keep[i]) continue;
+    if (k != i) {
+      R->gid[k] = R->gid[i];
+      memcpy(R->vgid + (size_t)nv * k, R->vgid + (size_t)nv * i,
+             nv * sizeof(pa_gid));
+      R->ref[k] = R->ref[i];
+      R->flag[k] = R->flag[i];
+      if (R->poff) { /* payload offsets: move the slice pointers */
+        size_t len = R->poff[i + 1] - R->poff[i];
+        memmove(R->pay + R->poff[k], R->pay + R->poff[i], len);
+        R->poff[k + 1] = R->poff[k] + len;
+      }
+    } else if (R->poff) {
+      R->poff[k + 1] = R->poff[k] + (R->poff[i + 1] - R->poff[i]);
+    }
+    cand[k] = cand[i];
+    k++;
+  }
+  R->n = k;
+  PA_ASSERT(k == nk);
+  (void)nk;
+  PA_ALLOC(kown, R->n);
+  PA_CALL(resolve_owner(s->comm, R->n, R->gid, cand, kown));
+  for (size_t i = 0; i < R->n; i++) {
+    PA_CHECK(kown[i] >= 0, PA_ERR_INTERNAL,
+             "entity %lld is in no owned element", (long long)R->gid[i]);
+    R->aux[i] = kown[i];
+  }
+cleanup:
+  pa__free(keep);
+  pa__free(cand);
+  pa__free(kown);
+  return st;
+}
+
+/* Step 8: own the boundary entities and edges, number them (owned first)
+ * and put them in the local mesh. */
+static pa_status fill_subentities(pa_dmesh *dm, bstate *s, assembly *a) {
+  pa_status st = PA_SUCCESS;
+  int d = s->dim;
+  pa_mesh *m = a->m;
+  pa__recs *SB[2] = {&s->LB, &s->LD};
+  pa_idx *vstart = NULL, *vel = NULL;
+  uint8_t *need = NULL;
   /* vertex -> local elements, for the containment tests: only for the
    * first vertex of each boundary entity and edge (the balls of a few
    * thousand vertices, not of the whole local mesh) */
   PA_CALLOC(need, m->nv);
   for (int t = 0; t < 2; t++)
     for (size_t i = 0; i < SB[t]->n; i++) {
-      pa_idx v = pa__gidindex_get(&lv, SB[t]->vgid[(size_t)SB[t]->nv * i]);
+      pa_idx v = pa__gidindex_get(&a->lv, SB[t]->vgid[(size_t)SB[t]->nv * i]);
       if (v >= 0) need[v] = 1;
     }
   PA_CALL(pa__balls_of(m->elem, m->ne, m->dim + 1, m->nv, need, &vstart,
                        &vel));
   pa__free(need);
   need = NULL;
-
-  /* boundary entities and edges: keep those inside a local element; the
-   * owner is the lowest rank with an owned element containing them */
-  for (int t = 0; t < 2; t++) {
-    pa__recs *R = SB[t];
-    int nv = R->nv;
-    pa__free(keep);
-    pa__free(cand);
-    keep = NULL;
-    cand = NULL;
-    PA_CALLOC(keep, R->n);
-    PA_CALLOC(cand, R->n);
-    size_t nk = 0;
-    for (size_t i = 0; i < R->n; i++) {
-      pa_idx lvx[4];
-      int ok = 1;
-      for (int j = 0; j < nv; j++) {
-        lvx[j] = pa__gidindex_get(&lv, R->vgid[(size_t)nv * i + j]);
-        if (lvx[j] < 0) ok = 0;
-      }
-      if (!ok) continue;
-      for (pa_idx q = vstart[lvx[0]]; q < vstart[lvx[0] + 1]; q++) {
-        const pa_idx *ev = m->elem + (size_t)(d + 1) * vel[q];
-        int all = 1;
-        for (int j = 1; j < nv && all; j++) {
-          int in = 0;
-          for (int c = 0; c <= d; c++) in |= ev[c] == lvx[j];
-          all = in;
-        }
-        if (all) {
-          keep[i] = 1;
-          if (vel[q] < dm->nown[PA_ELEMENT]) cand[i] = 1;
-        }
-      }
-      nk += keep[i];
-    }
-    /* compact the kept records in place */
-    {
-      size_t k = 0;
-      for (size_t i = 0; i < R->n; i++) {
-        if (!keep[i]) continue;
-        if (k != i) {
-          R->gid[k] = R->gid[i];
-          memcpy(R->vgid + (size_t)nv * k, R->vgid + (size_t)nv * i,
-                 nv * sizeof(pa_gid));
-          R->ref[k] = R->ref[i];
-          R->flag[k] = R->flag[i];
-          if (R->poff) { /* payload offsets: move the slice pointers */
-            size_t len = R->poff[i + 1] - R->poff[i];
-            memmove(R->pay + R->poff[k], R->pay + R->poff[i], len);
-            R->poff[k + 1] = R->poff[k] + len;
-          }
-        } else if (R->poff) {
-          R->poff[k + 1] = R->poff[k] + (R->poff[i + 1] - R->poff[i]);
-        }
-        cand[k] = cand[i];
-        k++;
-      }
-      R->n = k;
-      PA_ASSERT(k == nk);
-    }
-    PA_ALLOC(kown, R->n);
-    st = resolve_owner(s->comm, R->n, R->gid, cand, kown);
-    if (st) goto cleanup;
-    for (size_t i = 0; i < R->n; i++) {
-      PA_CHECK(kown[i] >= 0, PA_ERR_INTERNAL,
-               "entity %lld is in no owned element", (long long)R->gid[i]);
-      R->aux[i] = kown[i];
-    }
-    pa__free(kown);
-    kown = NULL;
-  }
-  PA_ALLOC(ordB, s->LB.n);
-  PA_CALL(number_local(&s->LB, NULL, rank, ordB, &dm->nown[PA_BOUNDARY]));
+  for (int t = 0; t < 2; t++)
+    PA_CALL(own_subentities(dm, s, a, SB[t], vstart, vel));
+  PA_ALLOC(a->ord[PA_BOUNDARY], s->LB.n);
+  PA_CALL(number_local(&s->LB, NULL, s->rank, a->ord[PA_BOUNDARY],
+                       &dm->nown[PA_BOUNDARY]));
   dm->nloc[PA_BOUNDARY] = (pa_idx)s->LB.n;
-  PA_ALLOC(ordD, s->LD.n);
-  PA_CALL(number_local(&s->LD, NULL, rank, ordD, &dm->nown[PA_EDGE]));
+  PA_ALLOC(a->ord[PA_EDGE], s->LD.n);
+  PA_CALL(number_local(&s->LD, NULL, s->rank, a->ord[PA_EDGE],
+                       &dm->nown[PA_EDGE]));
   dm->nloc[PA_EDGE] = (pa_idx)s->LD.n;
   PA_CALL(pa_mesh_reserve(m, 0, 0, (pa_idx)s->LB.n, (pa_idx)s->LD.n));
   for (size_t k = 0; k < s->LB.n; k++) {
-    size_t i = (size_t)ordB[k];
+    size_t i = (size_t)a->ord[PA_BOUNDARY][k];
     for (int j = 0; j < d; j++)
-      m->bdry[(size_t)d * k + j] = pa__gidindex_get(&lv, s->LB.vgid[(size_t)d * i + j]);
+      m->bdry[(size_t)d * k + j] =
+          pa__gidindex_get(&a->lv, s->LB.vgid[(size_t)d * i + j]);
     m->bref[k] = s->LB.ref[i];
     m->bflag[k] = s->LB.flag[i];
   }
   m->nb = (pa_idx)s->LB.n;
   for (size_t k = 0; k < s->LD.n; k++) {
-    size_t i = (size_t)ordD[k];
+    size_t i = (size_t)a->ord[PA_EDGE][k];
     for (int j = 0; j < 2; j++)
-      m->edge[2 * k + j] = pa__gidindex_get(&lv, s->LD.vgid[2 * i + j]);
+      m->edge[2 * k + j] = pa__gidindex_get(&a->lv, s->LD.vgid[2 * i + j]);
     m->edref[k] = s->LD.ref[i];
     m->edflag[k] = s->LD.flag[i];
   }
   m->ned = (pa_idx)s->LD.n;
-
-  /* ids, owners, layers */
-  {
-    const pa__recs *R[PA_NKIND] = {&s->LV, &s->L, &s->LB, &s->LD};
-    const pa_idx *ord[PA_NKIND] = {ordV, ordE, ordB, ordD};
-    for (int kind = 0; kind < PA_NKIND; kind++) {
-      pa_idx n = dm->nloc[kind];
-      PA_ALLOC(dm->gid[kind], n);
-      PA_ALLOC(dm->owner[kind], n);
-      for (pa_idx k = 0; k < n; k++) {
-        dm->gid[kind][k] = R[kind]->gid[ord[kind][k]];
-        dm->owner[kind][k] = R[kind]->aux[ord[kind][k]];
-      }
-    }
-    PA_ALLOC(dm->layer, dm->nloc[PA_ELEMENT]);
-    for (pa_idx k = 0; k < dm->nloc[PA_ELEMENT]; k++)
-      dm->layer[k] = s->layer[ordE[k]];
-  }
-  dm->mesh = m;
-  m = NULL;
-
-  /* values: slots for the new distribution, then the payloads */
-  {
-    const pa__recs *R[PA_NKIND] = {&s->LV, &s->L, &s->LB, &s->LD};
-    const pa_idx *ord[PA_NKIND] = {ordV, ordE, ordB, ordD};
-    int any = 0;
-    for (int kind = 0; kind < PA_NKIND; kind++) any |= R[kind]->poff != NULL;
-    if (any || dm->nvalue) {
-      /* slots from the references (local); sfs are built later */
-      for (int k = 0; k < dm->nvalue; k++) PA_CALL(pa__value_alloc(dm, dm->value[k]));
-      for (int kind = 0; kind < PA_NKIND; kind++)
-        unpack_payloads(dm, kind, R[kind], ord[kind], dm->nloc[kind]);
-    }
-  }
 cleanup:
-  pa_mesh_destroy(m);
-  pa__free(ordV);
-  pa__free(ordE);
-  pa__free(ordB);
-  pa__free(ordD);
-  pa__free(lvof);
-  pa__gidindex_free(&lv);
   pa__free(vstart);
   pa__free(vel);
-  pa__free(keep);
-  pa__free(cand);
   pa__free(need);
-  pa__free(kg);
-  pa__free(kown);
+  return st;
+}
+
+/* Step 9: global ids, owners and layers of the local entities, the mesh
+ * into dm, then the values (slots for the new distribution, then the
+ * payloads). */
+static pa_status fill_dmesh(pa_dmesh *dm, bstate *s, assembly *a) {
+  pa_status st = PA_SUCCESS;
+  const pa__recs *R[PA_NKIND] = {&s->LV, &s->L, &s->LB, &s->LD};
+  int any = 0;
+  for (int kind = 0; kind < PA_NKIND; kind++) {
+    pa_idx n = dm->nloc[kind];
+    PA_ALLOC(dm->gid[kind], n);
+    PA_ALLOC(dm->owner[kind], n);
+    for (pa_idx k = 0; k < n; k++) {
+      dm->gid[kind][k] = R[kind]->gid[a->ord[kind][k]];
+      dm->owner[kind][k] = R[kind]->aux[a->ord[kind][k]];
+    }
+  }
+  PA_ALLOC(dm->layer, dm->nloc[PA_ELEMENT]);
+  for (pa_idx k = 0; k < dm->nloc[PA_ELEMENT]; k++)
+    dm->layer[k] = s->layer[a->ord[PA_ELEMENT][k]];
+  dm->mesh = a->m;
+  a->m = NULL;
+  for (int kind = 0; kind < PA_NKIND; kind++) any |= R[kind]->poff != NULL;
+  if (any || dm->nvalue) {
+    /* slots from the references (local); sfs are built later */
+    for (int k = 0; k < dm->nvalue; k++) PA_CALL(pa__value_alloc(dm, dm->value[k]));
+    for (int kind = 0; kind < PA_NKIND; kind++)
+      unpack_payloads(dm, kind, R[kind], a->ord[kind], dm->nloc[kind]);
+  }
+cleanup:
+  return st;
+}
+
+/* Steps 6-9: number all local entities, fill the local mesh, own the
+ * boundary entities / edges, fill dm. */
+static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
+  pa_status st = PA_SUCCESS;
+  assembly a;
+  memset(&a, 0, sizeof a);
+  PA_CALL(number_vertices_elements(dm, s, &a));
+  PA_CALL(fill_vertices(s, lay, &a));
+  PA_CALL(fill_elements(dm, s, &a));
+  PA_CALL(fill_subentities(dm, s, &a));
+  PA_CALL(fill_dmesh(dm, s, &a));
+cleanup:
+  pa_mesh_destroy(a.m);
+  for (int k = 0; k < PA_NKIND; k++) pa__free(a.ord[k]);
+  pa__free(a.lvof);
+  pa__gidindex_free(&a.lv);
   return st;
 }
 
