@@ -554,6 +554,178 @@ cleanup:
   return st;
 }
 
+/* Step 4a (layer l): the vertices queried for layer l, as the directory
+ * received them: their count per source rank (*qcnt), global ids (*rg) and
+ * V indices (*qv), *tot in all. Layer 1 queries the vertices of the owned
+ * elements, sent already as the touch messages; layer l > 1 the vertices of
+ * layer l-1 not queried yet. What it allocates goes to *rcnt, *recv, *vq. */
+static pa_status layer_queries(bstate *s, int l, pa__gidmap *queried,
+                               const size_t **qcnt, const pa_gid **rg,
+                               const pa_idx **qv, size_t *tot, size_t **rcnt,
+                               void **recv, pa_idx **vq) {
+  pa_status st = PA_SUCCESS;
+  pa_gid *g = NULL;
+  *tot = 0;
+  if (l == 1) {
+    *qcnt = s->tcnt;
+    *rg = s->tgid;
+    *qv = s->tv;
+    for (int r = 0; r < s->size; r++) *tot += s->tcnt[r];
+    goto cleanup;
+  }
+  size_t n, nq = 0;
+  PA_CALL(ghost_verts(s, l - 1, l - 1, &g, &n));
+  for (size_t i = 0; i < n; i++) {
+    int found;
+    PA_CALL(pa__gidmap_put(queried, g[i], 0, &found, NULL));
+    if (!found) g[nq++] = g[i];
+  }
+  PA_CALL(send_to_directory(s, g, nq, rcnt, recv));
+  *rg = *recv;
+  for (int r = 0; r < s->size; r++) *tot += (*rcnt)[r];
+  PA_ALLOC(*vq, *tot);
+  for (size_t j = 0; j < *tot; j++) {
+    (*vq)[j] = pa__gidindex_get(&s->vix, (*rg)[j]);
+    PA_CHECK((*vq)[j] >= 0, PA_ERR_INTERNAL,
+             "ghost query of unknown vertex %lld", (long long)(*rg)[j]);
+  }
+  *qcnt = *rcnt;
+  *qv = *vq;
+cleanup:
+  pa__free(g);
+  return st;
+}
+
+/* Step 4b: the directory forwards each query (vertex, requester) to the
+ * other ranks touching the vertex; *fcnt, *frecv: what this rank received
+ * as an owner of elements. */
+static pa_status forward_queries(bstate *s, const size_t *qcnt,
+                                 const pa_gid *rg, const pa_idx *qv,
+                                 size_t tot, size_t **fcnt, void **frecv) {
+  pa_status st = PA_SUCCESS;
+  pa_gid *fw = NULL;
+  int *fwdest = NULL;
+  size_t nfw = 0, j = 0, k = 0;
+  for (size_t q = 0; q < tot; q++)
+    nfw += (size_t)(s->tstart[qv[q] + 1] - s->tstart[qv[q]]);
+  PA_ALLOC(fw, 2 * nfw);
+  PA_ALLOC(fwdest, nfw);
+  for (int r = 0; r < s->size; r++)
+    for (size_t q = 0; q < qcnt[r]; q++, j++) {
+      pa_idx v = qv[j];
+      for (pa_idx t = s->tstart[v]; t < s->tstart[v + 1]; t++)
+        if (s->trank[t] != r) {
+          fw[2 * k] = rg[j];
+          fw[2 * k + 1] = r;
+          fwdest[k++] = s->trank[t];
+        }
+    }
+  PA_CALL(send_items(s->comm, k, 2 * sizeof(pa_gid), fw, fwdest, fcnt, frecv));
+cleanup:
+  pa__free(fw);
+  pa__free(fwdest);
+  return st;
+}
+
+/* Step 4c (owner side): the (requester, owned element) pairs of the
+ * forwarded queries, as requester * nown + element, sorted and unique. */
+static pa_status owner_pairs(bstate *s, pa_idx nown, const size_t *fcnt,
+                             const pa_gid *fr, pa_gid **pair, size_t *npair) {
+  pa_status st = PA_SUCCESS;
+  size_t nf = 0, n = 0;
+  for (int r = 0; r < s->size; r++) nf += fcnt[r];
+  for (size_t j = 0; j < nf; j++) {
+    pa_idx u = pa__gidindex_get(&s->uix, fr[2 * j]);
+    PA_CHECK(u >= 0, PA_ERR_INTERNAL, "forwarded query of vertex %lld "
+             "that no owned element has", (long long)fr[2 * j]);
+    n += (size_t)(s->ustart[u + 1] - s->ustart[u]);
+  }
+  PA_ALLOC(*pair, n);
+  n = 0;
+  for (size_t j = 0; j < nf; j++) {
+    pa_idx u = pa__gidindex_get(&s->uix, fr[2 * j]);
+    for (pa_idx p = s->ustart[u]; p < s->ustart[u + 1]; p++)
+      (*pair)[n++] = fr[2 * j + 1] * (pa_gid)nown + s->uelem[p];
+  }
+  *npair = pa__gid_sort_unique(*pair, n);
+cleanup:
+  return st;
+}
+
+/* Step 4d (owner side): one record block of elements per requester, sent;
+ * *bcnt, *erecv: the blocks this rank received as a requester. */
+static pa_status send_layer_elements(bstate *s, pa_idx nown,
+                                     const pa_gid *pair, size_t npair,
+                                     size_t **bcnt, void **erecv) {
+  pa_status st = PA_SUCCESS;
+  pa_gid div = nown ? nown : 1;
+  size_t *pstart = NULL, *ecnt = NULL, bytes = 0, off = 0;
+  pa_idx *sel = NULL;
+  unsigned char *sbuf = NULL;
+  PA_CALLOC(ecnt, s->size);
+  PA_ALLOC(sel, npair);
+  PA_CALLOC(pstart, (size_t)s->size + 1);
+  for (size_t p = 0; p < npair; p++) {
+    sel[p] = (pa_idx)(pair[p] % div);
+    pstart[pair[p] / div + 1]++;
+  }
+  for (int r = 0; r < s->size; r++) pstart[r + 1] += pstart[r];
+  for (int r = 0; r < s->size; r++) {
+    size_t c = pstart[r + 1] - pstart[r];
+    ecnt[r] = c ? pa__recblock_bytes(s->nve, 0, c,
+                                     pa__recs_paybytes(&s->L, sel + pstart[r], c))
+                : 0;
+    bytes += ecnt[r];
+  }
+  PA_ALLOC(sbuf, bytes ? bytes : 1);
+  for (int r = 0; r < s->size; r++) {
+    size_t c = pstart[r + 1] - pstart[r];
+    if (c) off += pa__recs_put(&s->L, sel + pstart[r], c, sbuf + off);
+  }
+  pa__free(sel);
+  sel = NULL;
+  PA_CALL(pa__xchg_sparse(s->comm, ecnt, sbuf, bcnt, erecv));
+cleanup:
+  pa__free(pstart);
+  pa__free(ecnt);
+  pa__free(sel);
+  pa__free(sbuf);
+  return st;
+}
+
+/* Step 4e (requester side): the received elements become layer l, their
+ * owner the sender (room reserved first: L is large, growing it would copy
+ * it). tmp: scratch records. */
+static pa_status receive_layer(bstate *s, int l, const size_t *bcnt,
+                               void *erecv, pa__recs *tmp) {
+  pa_status st = PA_SUCCESS;
+  size_t q = 0, tot = 0, nrec = 0, npay = 0;
+  for (int r = 0; r < s->size; r++) tot += bcnt[r];
+  while (q < tot) {
+    pa__recblock bk;
+    pa__recblock_map((unsigned char *)erecv + q, s->nve, 0, &bk);
+    nrec += bk.n;
+    npay += bk.paybytes;
+    q += bk.bytes;
+  }
+  PA_CALL(pa__recs_reserve(&s->L, s->L.n + nrec,
+                           (s->L.poff ? s->L.poff[s->L.n] : 0) + npay));
+  PA_GROW(s->layer, s->caplayer, s->L.n + nrec);
+  q = 0;
+  for (int r = 0; r < s->size; r++) {
+    size_t end = q + bcnt[r];
+    while (q < end) {
+      tmp->n = 0;
+      if (tmp->poff) tmp->poff[0] = 0;
+      PA_CALL(pa__recs_get(tmp, erecv, &q));
+      for (size_t i = 0; i < tmp->n; i++)
+        PA_CALL(add_local_elem(s, tmp, i, r, l));
+    }
+  }
+cleanup:
+  return st;
+}
+
 /* Step 4: ghost layers. For layer l, the vertices of layer l-1 not queried
  * yet go to the directory, which forwards (vertex, requester) to every other
  * rank owning elements around the vertex; those reply with these elements
@@ -562,195 +734,53 @@ cleanup:
  * ghosts enter emap. */
 static pa_status build_layers(bstate *s, int overlap, pa_idx nown) {
   pa_status st = PA_SUCCESS;
-  pa_gid *g = NULL, *pair = NULL, *fw = NULL;
-  int *fwdest = NULL;
-  size_t *rcnt = NULL, *fcnt = NULL, *ecnt = NULL, *bcnt = NULL;
+  pa_gid *pair = NULL;
+  size_t *rcnt = NULL, *fcnt = NULL, *bcnt = NULL;
   void *recv = NULL, *frecv = NULL, *erecv = NULL;
   pa__gidmap queried = {0};
-  pa_idx *sel = NULL, *vq = NULL;
-  unsigned char *sbuf = NULL;
+  pa_idx *vq = NULL;
   pa__recs tmp;
   pa__recs_init(&tmp, PA_ELEMENT, s->nve, 0);
   if (overlap <= 0) goto cleanup;
   PA_CALL(pa__gidmap_init(&queried, 16));
   for (int l = 1; l <= overlap; l++) {
-    /* queries received by the directory: their count per source rank, gids
-     * and V indices */
-    const size_t *qcnt;
-    const pa_gid *rg;
-    const pa_idx *qv;
-    size_t tot = 0;
-    if (l == 1) { /* the vertices of the owned elements: sent already, as
-                   * the touch messages */
-      qcnt = s->tcnt;
-      rg = s->tgid;
-      qv = s->tv;
-      for (int r = 0; r < s->size; r++) tot += qcnt[r];
-    } else {
-      size_t n, nq = 0;
-      PA_CALL(ghost_verts(s, l - 1, l - 1, &g, &n));
-      for (size_t i = 0; i < n; i++) {
-        int found;
-        PA_CALL(pa__gidmap_put(&queried, g[i], 0, &found, NULL));
-        if (!found) g[nq++] = g[i];
-      }
-      PA_CALL(send_to_directory(s, g, nq, &rcnt, &recv));
-      pa__free(g);
-      g = NULL;
-      rg = recv;
-      for (int r = 0; r < s->size; r++) tot += rcnt[r];
-      PA_ALLOC(vq, tot);
-      for (size_t j = 0; j < tot; j++) {
-        vq[j] = pa__gidindex_get(&s->vix, rg[j]);
-        PA_CHECK(vq[j] >= 0, PA_ERR_INTERNAL,
-                 "ghost query of unknown vertex %lld", (long long)rg[j]);
-      }
-      qcnt = rcnt;
-      qv = vq;
-    }
-    /* directory: forward (vertex, requester) to the other touching ranks */
-    size_t nfw = 0;
-    for (size_t j = 0; j < tot; j++)
-      nfw += (size_t)(s->tstart[qv[j] + 1] - s->tstart[qv[j]]);
-    PA_ALLOC(fw, 2 * nfw);
-    PA_ALLOC(fwdest, nfw);
-    {
-      size_t j = 0, k = 0;
-      for (int r = 0; r < s->size; r++)
-        for (size_t q = 0; q < qcnt[r]; q++, j++) {
-          pa_idx v = qv[j];
-          for (pa_idx t = s->tstart[v]; t < s->tstart[v + 1]; t++)
-            if (s->trank[t] != r) {
-              fw[2 * k] = rg[j];
-              fw[2 * k + 1] = r;
-              fwdest[k++] = s->trank[t];
-            }
-        }
-      nfw = k;
-    }
+    const size_t *qcnt = NULL;
+    const pa_gid *rg = NULL;
+    const pa_idx *qv = NULL;
+    size_t tot = 0, npair = 0;
+    PA_CALL(layer_queries(s, l, &queried, &qcnt, &rg, &qv, &tot, &rcnt,
+                          &recv, &vq));
+    PA_CALL(forward_queries(s, qcnt, rg, qv, tot, &fcnt, &frecv));
     pa__free(recv);
-    recv = NULL;
     pa__free(rcnt);
-    rcnt = NULL;
     pa__free(vq);
+    recv = NULL;
+    rcnt = NULL;
     vq = NULL;
-    PA_CALL(send_items(s->comm, nfw, 2 * sizeof(pa_gid), fw, fwdest, &fcnt,
-                       &frecv));
-    pa__free(fw);
-    fw = NULL;
-    pa__free(fwdest);
-    fwdest = NULL;
-    /* owner side: (requester, element) pairs, sorted and unique */
-    size_t nf = 0, npair = 0;
-    for (int r = 0; r < s->size; r++) nf += fcnt[r];
-    const pa_gid *fr = frecv;
-    for (size_t j = 0; j < nf; j++) {
-      pa_idx u = pa__gidindex_get(&s->uix, fr[2 * j]);
-      PA_CHECK(u >= 0, PA_ERR_INTERNAL, "forwarded query of vertex %lld "
-               "that no owned element has", (long long)fr[2 * j]);
-      npair += (size_t)(s->ustart[u + 1] - s->ustart[u]);
-    }
-    PA_ALLOC(pair, npair);
-    npair = 0;
-    for (size_t j = 0; j < nf; j++) {
-      pa_idx u = pa__gidindex_get(&s->uix, fr[2 * j]);
-      for (pa_idx p = s->ustart[u]; p < s->ustart[u + 1]; p++)
-        pair[npair++] = fr[2 * j + 1] * (pa_gid)nown + s->uelem[p];
-    }
+    PA_CALL(owner_pairs(s, nown, fcnt, frecv, &pair, &npair));
     pa__free(frecv);
-    frecv = NULL;
     pa__free(fcnt);
+    frecv = NULL;
     fcnt = NULL;
-    npair = pa__gid_sort_unique(pair, npair);
-    /* one block per requester */
-    {
-      pa_gid div = nown ? nown : 1;
-      size_t *pstart, bytes = 0;
-      PA_CALLOC(ecnt, s->size);
-      PA_ALLOC(sel, npair);
-      pstart = pa__calloc((size_t)s->size + 1, sizeof *pstart);
-      PA_CHECK(pstart, PA_ERR_MEMORY, "out of memory");
-      for (size_t p = 0; p < npair; p++) {
-        sel[p] = (pa_idx)(pair[p] % div);
-        pstart[pair[p] / div + 1]++;
-      }
-      for (int r = 0; r < s->size; r++) pstart[r + 1] += pstart[r];
-      for (int r = 0; r < s->size; r++) {
-        size_t c = pstart[r + 1] - pstart[r];
-        ecnt[r] = c ? pa__recblock_bytes(s->nve, 0, c,
-                                         pa__recs_paybytes(&s->L, sel + pstart[r], c))
-                    : 0;
-        bytes += ecnt[r];
-      }
-      sbuf = pa__malloc(bytes ? bytes : 1);
-      if (!sbuf) {
-        pa__free(pstart);
-        PA_FAIL(PA_ERR_MEMORY, "out of memory");
-      }
-      size_t off = 0;
-      for (int r = 0; r < s->size; r++) {
-        size_t c = pstart[r + 1] - pstart[r];
-        if (c) off += pa__recs_put(&s->L, sel + pstart[r], c, sbuf + off);
-      }
-      pa__free(pstart);
-    }
+    PA_CALL(send_layer_elements(s, nown, pair, npair, &bcnt, &erecv));
     pa__free(pair);
     pair = NULL;
-    pa__free(sel);
-    sel = NULL;
-    PA_CALL(pa__xchg_sparse(s->comm, ecnt, sbuf, &bcnt, &erecv));
-    pa__free(sbuf);
-    sbuf = NULL;
-    pa__free(ecnt);
-    ecnt = NULL;
-    /* requester side: new elements become layer l, owner = sender (room
-     * reserved first: L is large, growing it would copy it) */
-    {
-      size_t q = 0, tot = 0, nrec = 0, npay = 0;
-      for (int r = 0; r < s->size; r++) tot += bcnt[r];
-      while (q < tot) {
-        pa__recblock bk;
-        pa__recblock_map((unsigned char *)erecv + q, s->nve, 0, &bk);
-        nrec += bk.n;
-        npay += bk.paybytes;
-        q += bk.bytes;
-      }
-      PA_CALL(pa__recs_reserve(&s->L, s->L.n + nrec,
-                               (s->L.poff ? s->L.poff[s->L.n] : 0) + npay));
-      PA_GROW(s->layer, s->caplayer, s->L.n + nrec);
-      q = 0;
-      for (int r = 0; r < s->size; r++) {
-        size_t end = q + bcnt[r];
-        while (q < end) {
-          tmp.n = 0;
-          if (tmp.poff) tmp.poff[0] = 0;
-          PA_CALL(pa__recs_get(&tmp, erecv, &q));
-          for (size_t i = 0; i < tmp.n; i++)
-            PA_CALL(add_local_elem(s, &tmp, i, r, l));
-        }
-      }
-    }
+    PA_CALL(receive_layer(s, l, bcnt, erecv, &tmp));
     pa__free(erecv);
-    erecv = NULL;
     pa__free(bcnt);
+    erecv = NULL;
     bcnt = NULL;
   }
 cleanup:
   st = pa__agree_end(s->comm, st);
-  pa__free(g);
   pa__free(pair);
-  pa__free(fw);
-  pa__free(fwdest);
   pa__free(rcnt);
   pa__free(fcnt);
-  pa__free(ecnt);
   pa__free(bcnt);
   pa__free(recv);
   pa__free(frecv);
   pa__free(erecv);
-  pa__free(sel);
   pa__free(vq);
-  pa__free(sbuf);
   pa__gidmap_free(&queried);
   pa__recs_free(&tmp);
   return st;
