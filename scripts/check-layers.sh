@@ -13,7 +13,9 @@ declare -A allowed=(
   [metric]="core mesh"
   [io]="core mesh metric"
   [partition]="core"
-  [remesh]="core mesh metric io"
+  [remesh2d]="core mesh metric"
+  [remesh3d]="core mesh metric"
+  [remesh]="core mesh metric io remesh2d remesh3d"
   [dmesh]="core mesh metric io partition"
   [adapt]="core mesh metric io partition remesh dmesh"
 )

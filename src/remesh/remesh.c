@@ -12,8 +12,8 @@
  *    gradation skip them (gradation still lets them constrain neighbours);
  *    with -hsiz on a mesh without a metric every vertex gets hsiz.
  */
-#include "remesh/remesh.h"
-#include "remesh/remesh3d.h"
+#include "remesh2d/remesh2d.h"
+#include "remesh3d/remesh3d.h"
 #include "remesh/leb.h"
 
 #include <stdio.h>

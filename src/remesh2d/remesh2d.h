@@ -1,9 +1,9 @@
 /*
- * remesh.h -- private header of the built-in remesher: the compact working
- * mesh (struct pa__rmesh), its tags, the inline metric kernels of the inner
- * loops, and the interfaces between the dimension-independent parts (driver,
- * pass loop, interpolation, write-back: remesh.c, rmesh.c, loop.c) and the
- * per-dimension operators (ops2d.c, boundary2d.c; 3D will add its own files).
+ * remesh2d.h -- private header of the built-in 2D (triangle) remesher: the
+ * compact working mesh (struct pa__rmesh), its tags, the inline metric
+ * kernels of the inner loops, and the interfaces between its files: the
+ * working mesh (mesh_2d.c), the feature lines (boundary_2d.c), the
+ * operators and their passes (ops_2d.c) and the pass loop (driver_2d.c).
  *
  * Working mesh invariants (checked by pa__rm_check):
  *  - structure of arrays, 0-based, 32-bit indices; a dead entity keeps its slot
@@ -22,8 +22,8 @@
  *  - a frozen element (PA_FLAG_REQUIRED in its flags) is never rewritten; its
  *    vertices carry RMV_FROZEN, so they are never moved or removed.
  */
-#ifndef PA_REMESH_H
-#define PA_REMESH_H
+#ifndef PA_REMESH2D_H
+#define PA_REMESH2D_H
 
 #include "metric/metric.h"
 
@@ -88,7 +88,7 @@ enum {
 #define RM_LSHORT 0.7071
 
 typedef struct pa__rmesh {
-  int dim;   /* 2 (3 with issue #4) */
+  int dim;   /* 2 */
   int nvpe;  /* vertices per element: dim + 1 */
   int mcomp; /* metric components per vertex: 1 or 3 (2D) / 6 (3D) */
   int fcomp; /* total user field components per vertex */
@@ -103,7 +103,7 @@ typedef struct pa__rmesh {
   double *met;      /* mcomp * capv: the working metric the operators use */
   double *met0;     /* mcomp * capv or NULL: the target metric, written back,
                        when the working one was relaxed at frozen skins
-                       (rmesh.c); interpolated alongside met */
+                       (mesh_2d.c); interpolated alongside met */
   double *fld;      /* fcomp * capv (NULL without fields) */
   int32_t *vref;    /* free list link for dead vertices */
   uint8_t *vflag;   /* input PA_FLAG_* */
@@ -140,7 +140,7 @@ typedef struct pa__rmesh {
   double tlast; /* time of the last verbose pass report */
 } pa__rmesh;
 
-/* ---- working mesh (rmesh.c) ---- */
+/* ---- working mesh (mesh_2d.c) ---- */
 
 /* Build the working mesh from a (checked) sequential mesh with a metric.
  * Frozen flags are propagated: vertices of frozen elements and of frozen
@@ -186,7 +186,7 @@ typedef struct pa__rm_figures {
 } pa__rm_figures;
 void pa__rm_figures_2d(const pa__rmesh *rm, pa__rm_figures *f);
 
-/* ---- 2D (boundary2d.c, ops2d.c) ---- */
+/* ---- 2D (boundary_2d.c, ops_2d.c) ---- */
 
 /* Feature analysis, called by pa__rm_create with the input vertex balls (CSR):
  * records from the boundary list, from unlisted boundary edges and from
@@ -207,7 +207,7 @@ long pa__rm_smooth_pass_2d(pa__rmesh *rm);
 long pa__rm_length_pass_2d(pa__rmesh *rm);
 long pa__rm_sliver_pass_2d(pa__rmesh *rm, double qbad);
 
-/* ---- the pass loop (loop.c), dimension-independent ---- */
+/* ---- the pass loop (driver_2d.c) ---- */
 
 /* Per-dimension operator passes driven by pa__rm_adapt. */
 typedef struct pa__rm_ops {
@@ -215,7 +215,7 @@ typedef struct pa__rm_ops {
   pa_status (*collapse_pass)(pa__rmesh *rm, double thr, long *n);
   long (*swap_pass)(pa__rmesh *rm, double qmax);
   long (*smooth_pass)(pa__rmesh *rm);
-  /* relocate the ends of edges out of range (ops2d.c: length_vertex) */
+  /* relocate the ends of edges out of range (ops_2d.c: length_vertex) */
   long (*length_pass)(pa__rmesh *rm);
   long (*sliver_pass)(pa__rmesh *rm, double qbad);
   void (*figures)(const pa__rmesh *rm, pa__rm_figures *f);
@@ -281,4 +281,4 @@ static inline double rm_qual2(int mc, const double *a, const double *b,
   return 6.928203230275509 * area * sqrt(det > 0 ? det : 0) / s;
 }
 
-#endif /* PA_REMESH_H */
+#endif /* PA_REMESH2D_H */

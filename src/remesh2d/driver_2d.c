@@ -1,5 +1,5 @@
 /*
- * loop.c -- the remesher's pass loop, shared by every dimension: alternate
+ * driver_2d.c -- the 2D remesher's pass loop: alternate
  * split / collapse / swap passes until the edge lengths settle, then swap and
  * relocation passes, a pass on the worst elements, and the verdict.
  *
@@ -25,7 +25,7 @@
  * element), fewer than 90 % lie in [1/sqrt(2), sqrt(2)), or one is longer than
  * 2, or the worst modifiable element has quality < 0.05.
  */
-#include "remesh/remesh.h"
+#include "remesh2d/remesh2d.h"
 
 #ifdef NDEBUG
 #define DEBUG_CHECK(rm) ((void)0)
@@ -43,7 +43,7 @@
 #define RM_LSHORT_OPT 0.715
 
 /* Sweeps of length moves after the optimisation rounds' quality moves and
- * at the end (rm3d_driver.c: RM3D_LENGTH_SWEEPS). Not in the refinement
+ * at the end (driver_3d.c: RM3D_LENGTH_SWEEPS). Not in the refinement
  * rounds: there they keep short edges the collapses would remove, 4-8 %
  * more triangles on the UGAWG fields for the same share in range. */
 #define RM_LENGTH_SWEEPS 2

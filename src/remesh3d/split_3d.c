@@ -1,5 +1,5 @@
 /*
- * rm3d_split.c -- edge split: a new vertex on the edge (a,b), every tet of
+ * split_3d.c -- edge split: a new vertex on the edge (a,b), every tet of
  * the shell cut in two (a,m,r_i,r_i+1) + (m,b,r_i,r_i+1).
  *
  * Checked before applied: no frozen tet in the shell; a boundary edge only
@@ -15,7 +15,7 @@
  * RM3D_NORMAL_COS of its normal. When that point fails, points closer to
  * the chord are tried (CURVE_BACKOFF).
  */
-#include "remesh/remesh3d.h"
+#include "remesh3d/remesh3d.h"
 
 /* Points tried on a curved or ridge edge: the curve's midpoint, then 1/2
  * and 1/4 of its offset from the chord, then the chord's midpoint (valid

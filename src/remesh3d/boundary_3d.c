@@ -1,5 +1,5 @@
 /*
- * rm3d_surface.c -- analysis of the boundary surface before remeshing it:
+ * boundary_3d.c -- analysis of the boundary surface before remeshing it:
  * feature (ridge) edges, corners and vertex normals of curved patches.
  *
  * A boundary edge becomes a feature edge (added to the edge table with
@@ -14,7 +14,7 @@
  * does a vertex whose feature edges all separate a free triangle from a
  * frozen one (where a piece's frozen skin meets the boundary).
  */
-#include "remesh/remesh3d.h"
+#include "remesh3d/remesh3d.h"
 
 typedef struct bedge {
   pa_idx a, b;   /* a < b */

@@ -1,5 +1,5 @@
 /*
- * boundary2d.c -- feature lines of the 2D remesher: boundary edges and
+ * boundary_2d.c -- feature lines of the 2D remesher: boundary edges and
  * interior curves, their corners, and the smooth curve reconstructed through
  * them.
  *
@@ -22,7 +22,7 @@
  * two feature edges of different references, or (unless -nr) a turning angle
  * larger than -ar degrees.
  */
-#include "remesh/remesh.h"
+#include "remesh2d/remesh2d.h"
 
 /* Element face code holding edge (a, c) found in the ball of a, or -1. */
 static pa_idx find_face(const pa__rmesh *rm, const pa_idx *bstart,

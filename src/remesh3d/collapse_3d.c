@@ -1,5 +1,5 @@
 /*
- * rm3d_collapse.c -- edge collapse p -> q: vertex p disappears, the tets
+ * collapse_3d.c -- edge collapse p -> q: vertex p disappears, the tets
  * holding the edge (p,q) are deleted, the others of p's ball take q.
  *
  * Checked before applied: p is free (not locked, not a corner, not on a
@@ -20,7 +20,7 @@
  * for bit. The new edges are about half the short edge shorter than from
  * either end, which unlocks most collapses the length guard refuses.
  */
-#include "remesh/remesh3d.h"
+#include "remesh3d/remesh3d.h"
 
 #define R3_COL_MAXTRI 128
 

@@ -1,5 +1,5 @@
 /*
- * rm3d_driver.c -- the 3D remesher's passes and its entry point
+ * driver_3d.c -- the 3D remesher's passes and its entry point
  * pa__remesh3d().
  *
  * Schedule (docs/design/REMESHER3D.md):
@@ -35,7 +35,7 @@
  * PA_REMESH_TARGET_MISSED otherwise. Any error leaves the caller's mesh as
  * given (the working structure is a copy, written back only at the end).
  */
-#include "remesh/remesh3d.h"
+#include "remesh3d/remesh3d.h"
 
 #define RM3D_QSMOOTH 0.75 /* smooth the vertices of tets below this quality */
 #define RM3D_STOP 5e-3    /* rounds stop under this fraction of changed tets */

@@ -1,5 +1,5 @@
 /*
- * ops2d.c -- the 2D local operators and their passes: edge split, edge
+ * ops_2d.c -- the 2D local operators and their passes: edge split, edge
  * collapse, edge swap, vertex relocation, and a pass aimed at the worst
  * elements.
  *
@@ -19,7 +19,7 @@
  * the same pass (RME_TOUCHED), so each neighbourhood changes at most once
  * per pass and the result is deterministic.
  */
-#include "remesh/remesh.h"
+#include "remesh2d/remesh2d.h"
 
 #define BALL_MAX 128
 /* A move is kept when it raises the ball's worst or mean quality by 1 %. */
@@ -797,7 +797,7 @@ static int len_score_2d(const pa__rmesh *rm, const double *y, const double *mp,
  * times), or along its
  * edge furthest out of range; kept when fewer edges are out of range (or as
  * many with the sum RM_LGAIN lower) and the ball's worst quality stays at
- * least min(old worst, RM_QLEN). As 3D (rm3d_smooth.c). 1 if moved. */
+ * least min(old worst, RM_QLEN). As 3D (smooth_3d.c). 1 if moved. */
 static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   int mc = rm->mcomp;
   pa_idx p = rm->ev[3 * k + ip];

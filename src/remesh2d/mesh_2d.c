@@ -1,17 +1,15 @@
 /*
- * rmesh.c -- the remesher's compact working mesh (struct pa__rmesh, see
- * remesh.h): construction from a pa_mesh, slot management with free lists,
- * vertex interpolation, invariant check and the compact write-back.
+ * mesh_2d.c -- the 2D remesher's compact working mesh (struct pa__rmesh,
+ * see remesh2d.h): construction from a pa_mesh, slot management with free
+ * lists, vertex interpolation, the frozen-skin relaxation of the working
+ * metric, locality renumbering, invariant check and the compact write-back.
  *
- * Dimension-independent except where marked (feature records are the 2D
- * boundary edges; 3D will add its own feature tables).
- *
- * Invariants: see remesh.h. In addition, write-back renumbers live entities in
+ * Invariants: see remesh2d.h. In addition, write-back renumbers live entities in
  * slot order, so the output depends only on the sequence of operations (the
  * remesher is deterministic), and it never touches the pa_mesh until every new
  * array has been built: a failure leaves the mesh as it was given.
  */
-#include "remesh/remesh.h"
+#include "remesh2d/remesh2d.h"
 
 #include <float.h>
 
@@ -328,6 +326,7 @@ pa_status pa__rm_create(pa_mesh *mesh, const pa_remesh_opts *opts,
   pa_idx *bstart = NULL, *ball = NULL;
   int d = mesh->dim, nvpe = d + 1;
   *out = NULL;
+  PA_CHECK(d == 2, PA_ERR_INTERNAL, "the 2D remesher was given a %dD mesh", d);
   PA_CHECK(mesh->met_ncomp == 1 || mesh->met_ncomp == pa__tensor_ncomp(d),
            PA_ERR_ARG, "remesher: the mesh has no metric");
   PA_CALLOC(rm, 1);
@@ -425,12 +424,8 @@ pa_status pa__rm_create(pa_mesh *mesh, const pa_remesh_opts *opts,
     }
   }
 
-  if (d == 2) {
-    PA_CALL(pa__rm_features_2d_init(rm, mesh, bstart, ball));
-    PA_CALL(skin_relax_2d(rm));
-  } else {
-    PA_FAIL(PA_ERR_UNSUPPORTED, "remesher: 3D is not available yet");
-  }
+  PA_CALL(pa__rm_features_2d_init(rm, mesh, bstart, ball));
+  PA_CALL(skin_relax_2d(rm));
   *out = rm;
   rm = NULL;
 cleanup:
