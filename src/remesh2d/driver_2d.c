@@ -113,6 +113,11 @@ cleanup:
   return st;
 }
 
+const pa__rm_ops pa__rm_ops_2d = {
+    pa__rm_split_pass_2d,  pa__rm_collapse_pass_2d, pa__rm_swap_pass_2d,
+    pa__rm_smooth_pass_2d, pa__rm_length_pass_2d,   pa__rm_sliver_pass_2d,
+    pa__rm_figures_2d,     pa__rm_reorder};
+
 pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
                        pa_remesh_report *report) {
   pa_status st = PA_SUCCESS;

@@ -3,7 +3,8 @@
  * compact working mesh (struct pa__rmesh), its tags, the inline metric
  * kernels of the inner loops, and the interfaces between its files: the
  * working mesh (mesh_2d.c), the feature lines (boundary_2d.c), the
- * operators and their passes (ops_2d.c) and the pass loop (driver_2d.c).
+ * operators and their passes (split_2d.c, collapse_2d.c, swap_2d.c,
+ * smooth_2d.c, with ops_2d.h) and the pass loop (driver_2d.c).
  *
  * Working mesh invariants (checked by pa__rm_check):
  *  - structure of arrays, 0-based, 32-bit indices; a dead entity keeps its slot
@@ -186,7 +187,7 @@ typedef struct pa__rm_figures {
 } pa__rm_figures;
 void pa__rm_figures_2d(const pa__rmesh *rm, pa__rm_figures *f);
 
-/* ---- 2D (boundary_2d.c, ops_2d.c) ---- */
+/* ---- features (boundary_2d.c) and operator passes ---- */
 
 /* Feature analysis, called by pa__rm_create with the input vertex balls (CSR):
  * records from the boundary list, from unlisted boundary edges and from
@@ -199,7 +200,9 @@ pa_status pa__rm_features_2d_init(pa__rmesh *rm, pa_mesh *mesh,
  * bv[2b] to bv[2b+1]), and its unit tangent oriented the same way. */
 void pa__rm_curve_point_2d(const pa__rmesh *rm, pa_idx b, double s, double *p,
                            double *t);
-/* Passes: each returns the number of operations done. */
+/* Passes (split_2d.c, collapse_2d.c, swap_2d.c with the worst-element pass,
+ * smooth_2d.c with the length moves): each gives the number of operations
+ * done. */
 pa_status pa__rm_split_pass_2d(pa__rmesh *rm, double thr, long *n);
 pa_status pa__rm_collapse_pass_2d(pa__rmesh *rm, double thr, long *n);
 long pa__rm_swap_pass_2d(pa__rmesh *rm, double qmax);
@@ -215,7 +218,7 @@ typedef struct pa__rm_ops {
   pa_status (*collapse_pass)(pa__rmesh *rm, double thr, long *n);
   long (*swap_pass)(pa__rmesh *rm, double qmax);
   long (*smooth_pass)(pa__rmesh *rm);
-  /* relocate the ends of edges out of range (ops_2d.c: length_vertex) */
+  /* relocate the ends of edges out of range (smooth_2d.c: length_vertex) */
   long (*length_pass)(pa__rmesh *rm);
   long (*sliver_pass)(pa__rmesh *rm, double qbad);
   void (*figures)(const pa__rmesh *rm, pa__rm_figures *f);
