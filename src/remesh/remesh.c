@@ -1,7 +1,9 @@
 /*
  * remesh.c -- the remesher plug-in interface: default options, the built-in
- * remesher, and the driver pa_remesh() that validates the input, prepares
- * the metric (hsiz, hmin/hmax, gradation) and calls a remesher.
+ * remesher (its callback sends 2D meshes to src/remesh2d/, 3D ones through
+ * longest-edge bisection, leb.c, to src/remesh3d/), and the driver
+ * pa_remesh() that validates the input, prepares the metric (hsiz,
+ * hmin/hmax, gradation) and calls a remesher.
  *
  * Invariants:
  *  - pa_remesh never leaves a half-changed mesh: the prepared metric is built
@@ -12,8 +14,8 @@
  *    gradation skip them (gradation still lets them constrain neighbours);
  *    with -hsiz on a mesh without a metric every vertex gets hsiz.
  */
-#include "remesh2d/remesh2d.h"
-#include "remesh3d/remesh3d.h"
+#include "metric/gradation.h"
+#include "remesh/remesh.h"
 #include "remesh/leb.h"
 
 #include <stdio.h>
@@ -65,16 +67,9 @@ cleanup:
 static pa_status builtin_remesh(void *ctx, pa_mesh *mesh,
                                 const pa_remesh_opts *opts,
                                 pa_remesh_report *report) {
-  pa_status st = PA_SUCCESS;
-  pa__rmesh *rm = NULL;
   (void)ctx;
   if (mesh->dim == 3) return remesh3d(mesh, opts, report);
-  PA_CALL(pa__rm_create(mesh, opts, &rm));
-  PA_CALL(pa__rm_adapt(rm, &pa__rm_ops_2d, report));
-  if (report->outcome != PA_REMESH_FAILED) PA_CALL(pa__rm_writeback(rm, mesh));
-cleanup:
-  pa__rm_destroy(rm);
-  return st;
+  return pa__remesh2d(mesh, opts, report);
 }
 
 const pa_remesher *pa_remesher_builtin(void) {

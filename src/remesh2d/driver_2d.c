@@ -1,6 +1,7 @@
 /*
- * driver_2d.c -- the 2D remesher's pass loop: alternate
- * split / collapse / swap passes until the edge lengths settle, then swap and
+ * driver_2d.c -- the 2D remesher's entry pa__remesh2d() (working mesh
+ * built, pass loop, written back) and its pass loop: alternate split /
+ * collapse / swap passes until the edge lengths settle, then swap and
  * relocation passes, a pass on the worst elements, and the verdict.
  *
  * Schedule (see docs/design/REMESHER.md):
@@ -82,12 +83,11 @@ static void progress(const pa__rmesh *rm, int pass) {
   o->progress(&p, o->progress_ctx);
 }
 
-static void report_figures(const pa__rmesh *rm, const pa__rm_ops *ops,
-                           const char *when) {
+static void report_figures(const pa__rmesh *rm, const char *when) {
   if (pa_verbosity() < 2) return;
 
   pa__rm_figures f;
-  ops->figures(rm, &f);
+  pa__rm_figures_2d(rm, &f);
   pa__info(2,
            "remesh: %s: %ld/%ld edges in range (%ld long, %ld short), length "
            "[%.3g, %.3g], quality min %.3g mean %.3g\n",
@@ -95,17 +95,16 @@ static void report_figures(const pa__rmesh *rm, const pa__rm_ops *ops,
            f.qmean);
 }
 
-/* Renumber the working mesh for locality (ops->reorder) each time it has
+/* Renumber the working mesh for locality (pa__rm_reorder) each time it has
  * doubled since the last renumbering (or since the start), from RM_REORDER_MIN
  * live elements on: the new entities of splits sit at the end of the arrays,
  * and the passes are memory-bound. O(n log n) each, O(n log n) in all. */
 #define RM_REORDER_MIN 50000
-static pa_status maybe_reorder(pa__rmesh *rm, const pa__rm_ops *ops,
-                               int pass, pa_idx *last) {
+static pa_status maybe_reorder(pa__rmesh *rm, int pass, pa_idx *last) {
   pa_status st = PA_SUCCESS;
-  if (!ops->reorder || rm->nelive < RM_REORDER_MIN || rm->nelive < 2 * *last)
+  if (rm->nelive < RM_REORDER_MIN || rm->nelive < 2 * *last)
     return PA_SUCCESS;
-  PA_CALL(ops->reorder(rm));
+  PA_CALL(pa__rm_reorder(rm));
   DEBUG_CHECK(rm);
   *last = rm->nelive;
   report_pass(rm, "reorder", pass, rm->nelive);
@@ -113,13 +112,9 @@ cleanup:
   return st;
 }
 
-const pa__rm_ops pa__rm_ops_2d = {
-    pa__rm_split_pass_2d,  pa__rm_collapse_pass_2d, pa__rm_swap_pass_2d,
-    pa__rm_smooth_pass_2d, pa__rm_length_pass_2d,   pa__rm_sliver_pass_2d,
-    pa__rm_figures_2d,     pa__rm_reorder};
-
-pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
-                       pa_remesh_report *report) {
+/* Run the pass loop on the working mesh; fills the report's counts and
+ * outcome (SUCCESS or TARGET_MISSED; FAILED when the final check fails). */
+static pa_status adapt(pa__rmesh *rm, pa_remesh_report *report) {
   pa_status st = PA_SUCCESS;
   const pa_remesh_opts *o = rm->opts;
   int pass = 0;
@@ -131,21 +126,21 @@ pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
     int stall = 0;
     for (int it = 0; it < 80; it++) {
       long ns = 0, nc = 0, nw = 0, nm = 0;
-      PA_CALL(ops->split_pass(rm, RM_LLONG, &ns));
+      PA_CALL(pa__rm_split_pass_2d(rm, RM_LLONG, &ns));
       DEBUG_CHECK(rm);
       report_pass(rm, "split", pass, ns);
-      PA_CALL(maybe_reorder(rm, ops, pass, &reordered));
-      PA_CALL(ops->collapse_pass(rm, RM_LSHORT, &nc));
+      PA_CALL(maybe_reorder(rm, pass, &reordered));
+      PA_CALL(pa__rm_collapse_pass_2d(rm, RM_LSHORT, &nc));
       DEBUG_CHECK(rm);
       report_pass(rm, "collapse", pass, nc);
       if (!o->no_swap) {
-        nw = ops->swap_pass(rm, 0.6);
+        nw = pa__rm_swap_pass_2d(rm, 0.6);
         DEBUG_CHECK(rm);
         report_pass(rm, "swap", pass, nw);
       }
       /* once the sizes are nearly reached, relocation helps collapses */
       if (!o->no_move && ns < 0.01 * rm->nelive) {
-        nm = ops->smooth_pass(rm);
+        nm = pa__rm_smooth_pass_2d(rm);
         DEBUG_CHECK(rm);
         report_pass(rm, "move", pass, nm);
       }
@@ -168,7 +163,7 @@ pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
         break;
       }
     }
-    report_figures(rm, ops, "after refinement");
+    report_figures(rm, "after refinement");
   }
   /* Optimisation rounds. The collapse guard is relaxed (a collapse may
    * create an edge up to lguard, which the split that follows cuts in
@@ -176,19 +171,19 @@ pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
   for (int it = 0; it < 8; it++) {
     long nw = 0, nm = 0, ns = 0, nc = 0;
     if (!o->no_swap) {
-      nw = ops->swap_pass(rm, 0.9);
+      nw = pa__rm_swap_pass_2d(rm, 0.9);
       DEBUG_CHECK(rm);
     }
     if (!o->no_move) {
-      nm = ops->smooth_pass(rm);
-      for (int k = 0; k < RM_LENGTH_SWEEPS; k++) nm += ops->length_pass(rm);
+      nm = pa__rm_smooth_pass_2d(rm);
+      for (int k = 0; k < RM_LENGTH_SWEEPS; k++) nm += pa__rm_length_pass_2d(rm);
       DEBUG_CHECK(rm);
     }
     if (!o->no_insert) {
-      PA_CALL(ops->split_pass(rm, RM_LLONG, &ns));
+      PA_CALL(pa__rm_split_pass_2d(rm, RM_LLONG, &ns));
       DEBUG_CHECK(rm);
       rm->lguard = 1.7 + 0.05 * it;
-      PA_CALL(ops->collapse_pass(rm, RM_LSHORT_OPT, &nc));
+      PA_CALL(pa__rm_collapse_pass_2d(rm, RM_LSHORT_OPT, &nc));
       DEBUG_CHECK(rm);
       rm->lguard = RM_LLONG;
     }
@@ -200,25 +195,25 @@ pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
   if (!o->no_insert) { /* cut what the relaxed collapses left long */
     long ns = 0, nc = 0, n1 = 0;
     for (int it = 0; it < 6; it++) {
-      PA_CALL(ops->split_pass(rm, RM_LLONG, &n1));
+      PA_CALL(pa__rm_split_pass_2d(rm, RM_LLONG, &n1));
       DEBUG_CHECK(rm);
       ns += n1;
       if (!n1) break;
     }
-    PA_CALL(ops->collapse_pass(rm, RM_LSHORT, &nc));
+    PA_CALL(pa__rm_collapse_pass_2d(rm, RM_LSHORT, &nc));
     DEBUG_CHECK(rm);
     report_pass(rm, "final", pass, ns + nc);
     pass++;
   }
-  report_figures(rm, ops, "after optimisation");
+  report_figures(rm, "after optimisation");
   {
-    long nb = ops->sliver_pass(rm, 0.45);
+    long nb = pa__rm_sliver_pass_2d(rm, 0.45);
     DEBUG_CHECK(rm);
     report_pass(rm, "worst", pass, nb);
     pass++;
     if (!o->no_move && nb > 0) { /* only if the pass changed something */
       for (int it = 0; it < 2; it++) {
-        long nm = ops->smooth_pass(rm);
+        long nm = pa__rm_smooth_pass_2d(rm);
         DEBUG_CHECK(rm);
         report_pass(rm, "move", pass, nm);
         pass++;
@@ -227,7 +222,7 @@ pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
     }
     /* last, lengths (the quality moves disregard them) */
     for (int it = 0; it < RM_LENGTH_SWEEPS && !o->no_move; it++) {
-      long nl = ops->length_pass(rm);
+      long nl = pa__rm_length_pass_2d(rm);
       DEBUG_CHECK(rm);
       report_pass(rm, "length", pass, nl);
       pass++;
@@ -246,7 +241,7 @@ pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
     goto cleanup;
   }
   pa__rm_figures f;
-  ops->figures(rm, &f);
+  pa__rm_figures_2d(rm, &f);
   int missed = f.nedge > 0 && ((double)f.nin < 0.9 * (double)f.nedge ||
                                f.lmax > 2.0 || f.qmin < 0.05);
   report->outcome = missed ? PA_REMESH_TARGET_MISSED : PA_REMESH_SUCCESS;
@@ -256,5 +251,17 @@ pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
            f.nin, f.nedge, f.lmin, f.lmax, f.qmin, f.qmean,
            missed ? "target missed" : "success");
 cleanup:
+  return st;
+}
+
+pa_status pa__remesh2d(pa_mesh *mesh, const pa_remesh_opts *opts,
+                       pa_remesh_report *report) {
+  pa_status st = PA_SUCCESS;
+  pa__rmesh *rm = NULL;
+  PA_CALL(pa__rm_create(mesh, opts, &rm));
+  PA_CALL(adapt(rm, report));
+  if (report->outcome != PA_REMESH_FAILED) PA_CALL(pa__rm_writeback(rm, mesh));
+cleanup:
+  pa__rm_destroy(rm);
   return st;
 }

@@ -1,10 +1,12 @@
 /*
- * remesh2d.h -- private header of the built-in 2D (triangle) remesher: the
- * compact working mesh (struct pa__rmesh), its tags, the inline metric
- * kernels of the inner loops, and the interfaces between its files: the
- * working mesh (mesh_2d.c), the feature lines (boundary_2d.c), the
- * operators and their passes (split_2d.c, collapse_2d.c, swap_2d.c,
- * smooth_2d.c, with ops_2d.h) and the pass loop (driver_2d.c).
+ * remesh2d.h -- private header of the built-in 2D (triangle) remesher, whose
+ * entry pa__remesh2d() (driver_2d.c) is declared with the driver in
+ * remesh/remesh.h: the compact working mesh (struct pa__rmesh), its tags,
+ * the inline metric kernels of the inner loops, and the interfaces between
+ * its files: the working mesh (mesh_2d.c), the feature lines
+ * (boundary_2d.c), the operators and their passes (split_2d.c,
+ * collapse_2d.c, swap_2d.c, smooth_2d.c, with ops_2d.h) and the pass loop
+ * (driver_2d.c).
  *
  * Working mesh invariants (checked by pa__rm_check):
  *  - structure of arrays, 0-based, 32-bit indices; a dead entity keeps its slot
@@ -27,6 +29,7 @@
 #define PA_REMESH2D_H
 
 #include "metric/metric.h"
+#include "remesh/remesh.h"
 
 #include <math.h>
 
@@ -209,28 +212,6 @@ long pa__rm_swap_pass_2d(pa__rmesh *rm, double qmax);
 long pa__rm_smooth_pass_2d(pa__rmesh *rm);
 long pa__rm_length_pass_2d(pa__rmesh *rm);
 long pa__rm_sliver_pass_2d(pa__rmesh *rm, double qbad);
-
-/* ---- the pass loop (driver_2d.c) ---- */
-
-/* Per-dimension operator passes driven by pa__rm_adapt. */
-typedef struct pa__rm_ops {
-  pa_status (*split_pass)(pa__rmesh *rm, double thr, long *n);
-  pa_status (*collapse_pass)(pa__rmesh *rm, double thr, long *n);
-  long (*swap_pass)(pa__rmesh *rm, double qmax);
-  long (*smooth_pass)(pa__rmesh *rm);
-  /* relocate the ends of edges out of range (smooth_2d.c: length_vertex) */
-  long (*length_pass)(pa__rmesh *rm);
-  long (*sliver_pass)(pa__rmesh *rm, double qbad);
-  void (*figures)(const pa__rmesh *rm, pa__rm_figures *f);
-  pa_status (*reorder)(pa__rmesh *rm); /* locality renumbering, or NULL */
-} pa__rm_ops;
-
-extern const pa__rm_ops pa__rm_ops_2d;
-
-/* Run the operator loop on the working mesh; fills the report's counts and
- * outcome (SUCCESS or TARGET_MISSED; FAILED when the final check fails). */
-pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
-                       pa_remesh_report *report);
 
 /* ---- metric preparation (gradation.c in metric/) ---- */
 #include "metric/gradation.h"

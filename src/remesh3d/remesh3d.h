@@ -1,10 +1,11 @@
 /*
  * remesh3d.h -- padapt's sequential 3D tetrahedral remesher.
  *
- * Entry point: pa__remesh3d(), same contract as pa_remesher.remesh (the
- * builtin remesher calls it for dim 3). The rest of this header is the
- * private working structure shared by the files of src/remesh3d/ and the
- * inline kernels of their inner loops (metric edge length, element quality).
+ * Entry point: pa__remesh3d() (driver_3d.c), declared with the driver in
+ * remesh/remesh.h: same contract as pa_remesher.remesh (the builtin
+ * remesher calls it for dim 3). This header is the private working
+ * structure shared by the files of src/remesh3d/ and the inline kernels of
+ * their inner loops (metric edge length, element quality).
  *
  * Working structure (struct rm3d), structure of arrays, 32-bit indices:
  *  - tetrahedra: tv[4k..4k+3] positively oriented; adj[4k+i] = 4*l+j when
@@ -25,18 +26,9 @@
 #define PA_REMESH3D_H
 
 #include "metric/metric.h"
+#include "remesh/remesh.h"
 
 #include <math.h>
-
-/**
- * Adapt the tetrahedral mesh in place to its metric (or to opts->hsiz when it
- * has none). Contract of pa_remesher.remesh: entities flagged
- * PA_FLAG_REQUIRED come back bit for bit, report->outcome is set on
- * PA_SUCCESS, and on any error or PA_REMESH_FAILED the mesh is as given.
- * Not collective.
- */
-pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
-                       pa_remesh_report *report);
 
 /* ---- private working structure ----------------------------------------- */
 
