@@ -8,10 +8,11 @@
  *  1. refinement rounds (at most 80) while splits + collapses change more
  *     than 0.02 % of the elements, or until three stalled rounds (splits
  *     and collapses balanced, or under 0.5 % of the elements, and their
- *     count did not fall by 5 %): split
- *     edges longer than 1.4142 (longest-edge propagation), collapse edges
- *     shorter than 0.7071 (no new edge longer than 1.4142), swap around
- *     elements of quality < 0.6, and relocate once the splits are few;
+ *     count did not fall by 5 %: the rule shared with 3D, remesh/schedule.h):
+ *     split edges longer than 1.4142 (longest-edge propagation), collapse
+ *     edges shorter than 0.7071 (no new edge longer than 1.4142), swap
+ *     around elements of quality < 0.6, and relocate once the splits are
+ *     few;
  *  2. up to eight optimisation rounds: swap (quality < 0.9), relocate, length
  *     moves, split, collapse (edges < RM_LSHORT_OPT) with a relaxed guard
  *     (new edges up to 1.7 + 0.05 round, cut by the next split), then splits
@@ -26,6 +27,7 @@
  * element), fewer than 90 % lie in [1/sqrt(2), sqrt(2)), or one is longer than
  * 2, or the worst modifiable element has quality < 0.05.
  */
+#include "remesh/schedule.h"
 #include "remesh2d/remesh2d.h"
 
 #ifdef NDEBUG
@@ -33,6 +35,18 @@
 #else
 #define DEBUG_CHECK(rm) PA_CALL(pa__rm_check(rm))
 #endif
+
+/* The refinement rounds (their stopping rule: remesh/schedule.h). Each
+ * splits an element at most once, so a coarse input takes many (box2d 2 ->
+ * hsiz 0.002: 17); the bound only ends the runs that never settle. */
+#define RM_ROUNDS_MAX 80
+/* Splits + collapses at or below this share of the elements: the rounds
+ * have settled (the first version's choice, not tuned since). */
+#define RM_ROUNDS_SETTLED 2e-4
+/* A count at or below this share of the elements is a ping-pong whatever
+ * its balance: a few operations undoing each other (the first version's
+ * whole stall rule, kept beside the balance test). */
+#define RM_ROUNDS_TINY 5e-3
 
 /* The optimisation rounds' relaxed collapses take edges below this, a little
  * above 1/sqrt(2): a split of an edge just above sqrt(2) leaves two halves
@@ -122,9 +136,9 @@ static pa_status adapt(pa__rmesh *rm, pa_remesh_report *report) {
   rm->lguard = RM_LLONG;
 
   if (!o->no_insert) {
-    long ref = -1; /* splits + collapses when the count last fell by 5 % */
-    int stall = 0;
-    for (int it = 0; it < 80; it++) {
+    pa__rounds rounds;
+    pa__rounds_start(&rounds, 1, RM_ROUNDS_SETTLED, RM_ROUNDS_TINY, 1);
+    for (int it = 0; it < RM_ROUNDS_MAX; it++) {
       long ns = 0, nc = 0, nw = 0, nm = 0;
       PA_CALL(pa__rm_split_pass_2d(rm, RM_LLONG, &ns));
       DEBUG_CHECK(rm);
@@ -146,22 +160,7 @@ static pa_status adapt(pa__rmesh *rm, pa_remesh_report *report) {
       }
       pass++;
       progress(rm, pass);
-      if (ns + nc <= 2e-4 * rm->nelive) break;
-      /* Operations undoing each other (ping-pong, e.g. next to frozen
-       * elements whose edges cannot reach the size): when the count is a
-       * tiny part of the mesh, or splits and collapses balance (within a
-       * factor 3: pure refinement or coarsening fronts are one-sided, so
-       * they never stall here), stop after three rounds without a 5 % drop
-       * since the last one. A count that keeps falling, however slowly,
-       * keeps going (up to the round limit). */
-      int pingpong = ns + nc <= 5e-3 * rm->nelive ||
-                     (3 * ns >= nc && 3 * nc >= ns);
-      if (ref < 0 || ns + nc < 0.95 * ref || !pingpong) {
-        ref = ns + nc;
-        stall = 0;
-      } else if (++stall >= 3) {
-        break;
-      }
+      if (pa__rounds_stop(&rounds, ns, nc, rm->nelive)) break;
     }
     report_figures(rm, "after refinement");
   }

@@ -20,7 +20,8 @@
  *     tets of quality < 0.3 (interior edge removal, 2-3, boundary edge swap)
  *     and smoothing of the vertices of tets below 0.75, until a round
  *     changes fewer than 0.5 % of the tets (with frozen entities also when
- *     balanced splits and collapses stall: three rounds without a 5 % drop);
+ *     balanced splits and collapses stall: three rounds without a 5 % drop;
+ *     the rule shared with 2D, remesh/schedule.h);
  *     the working metric is relaxed at frozen vertices beforehand
  *     (pa__rm3d_skin_relax);
  *  3. three rounds of swaps (quality < 0.7: this lifts the mean quality by
@@ -35,10 +36,21 @@
  * PA_REMESH_TARGET_MISSED otherwise. Any error leaves the caller's mesh as
  * given (the working structure is a copy, written back only at the end).
  */
+#include "remesh/schedule.h"
 #include "remesh3d/remesh3d.h"
 
 #define RM3D_QSMOOTH 0.75 /* smooth the vertices of tets below this quality */
-#define RM3D_STOP 5e-3    /* rounds stop under this fraction of changed tets */
+/* The rounds after the bands (their stopping rule: remesh/schedule.h). With
+ * the working metric relaxed at frozen skins they settle in 8-10 rounds;
+ * the bound ends the runs that do not. */
+#define RM3D_ROUNDS_MAX 20
+/* The first rounds change little while swaps and moves unlock the collapses
+ * the refinement bands refused: at least this many rounds. */
+#define RM3D_ROUNDS_MIN 3
+/* Splits + collapses at or below this share of the live tets: settled.
+ * 0.1 % made the anisotropic cases ping-pong for 20 rounds at ~0.3 % each
+ * for a few tenths of a percent in range (docs/design/REMESHER3D.md). */
+#define RM3D_ROUNDS_SETTLED 5e-3
 /* Sweeps of length moves after each optimisation round's quality moves (which
  * disregard lengths) and at the end. UGAWG polar-1 (bench/ugawg.sh, 3D box,
  * 5 passes): 97.3 % of edges in range with 1 sweep, 98.0 % with 2, 98.1 %
@@ -569,13 +581,17 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
       if (thr == RM3D_LMAX) break;
     }
     PA_CALL(pa__rm3d_reorder(&m));
-    long ref = -1; /* splits + collapses when the count last fell by 5 % */
-    int stall = 0, frozen = 0;
+    pa__rounds rounds;
+    int frozen = 0;
     for (pa_idx k = 0; k < m.ne && !frozen; k++)
       frozen = (m.tflag[k] & R3T_FROZEN) != 0;
     for (pa_idx r = 0; r < m.tri.n && !frozen; r++)
       frozen = (m.tri.flag[r] & PA_FLAG_REQUIRED) != 0;
-    for (int it = 0; it < 20; it++, npass++) {
+    /* Balanced splits and collapses are a ping-pong only with frozen
+     * entities: the anisotropic shell balances them too, and stopping it
+     * early cost 0.2 % in range. */
+    pa__rounds_start(&rounds, RM3D_ROUNDS_MIN, RM3D_ROUNDS_SETTLED, 0, frozen);
+    for (int it = 0; it < RM3D_ROUNDS_MAX; it++, npass++) {
       long ns = 0, nc = 0, nw = 0, nm = 0;
       double t1 = pa_wtime();
       PA_CALL(pa__rm3d_split_pass(&m, RM3D_LMAX, &ns));
@@ -599,23 +615,7 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
                 it, ns, t2 - t1, nc, t3 - t2, nw, t4 - t3, nm, t5 - t4,
                 (int)(m.ne - m.ndead_t));
       progress(opts, ++step, &m);
-      /* The first rounds change little while swaps and moves unlock the
-       * collapses the refinement bands refused: at least three rounds. */
-      if (it >= 2 && ns + nc <= RM3D_STOP * (m.ne - m.ndead_t)) break;
-      /* Operations undoing each other (next to frozen entities whose edges
-       * cannot reach the size; the 2D remesher's rule, docs/design/REMESHER.md):
-       * splits and collapses within a factor 3 of each other, stop after
-       * three rounds without a 5 % drop of their sum since the last one. A
-       * refinement or coarsening front is one-sided and never stalls. Only
-       * with frozen entities: the anisotropic shell balances its splits and
-       * collapses too, and stopping it early cost 0.2 % in range. */
-      int pingpong = frozen && 3 * ns >= nc && 3 * nc >= ns;
-      if (ref < 0 || ns + nc < 0.95 * ref || !pingpong) {
-        ref = ns + nc;
-        stall = 0;
-      } else if (it >= 2 && ++stall >= 3) {
-        break;
-      }
+      if (pa__rounds_stop(&rounds, ns, nc, m.ne - m.ndead_t)) break;
     }
   }
   for (int it = 0; it < 3; it++, npass++) {
