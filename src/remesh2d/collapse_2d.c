@@ -19,6 +19,70 @@ static double dist_point_segment(const double *p, const double *a,
   return sqrt(ex * ex + ey * ey);
 }
 
+/* Feature collapse of p onto q along record r2 = (p, q): the other record
+ * at p, *r1 = (u, p), found on the faces of p's ball (el, loc, n), must
+ * merge with r2 into a record (u, q) within hausd of the curve: p within
+ * hausd of the chord uq, the sagitta of the merged Hermite arc within
+ * hausd, and the arc not folded. 1 when it does. */
+static int feature_kept(const pa__rmesh *rm, pa_idx p, pa_idx q, pa_idx r2,
+                        const pa_idx *el, const int *loc, int n, pa_idx *r1p) {
+  pa_idx r1 = -1;
+  for (int t = 0; t < n && r1 < 0; t++) {
+    pa_idx e = el[t];
+    int l = loc[t];
+    for (int side = 0; side < 2; side++) {
+      pa_idx c = 3 * e + (side ? NX3(l) : PV3(l));
+      pa_idx oc = rm->adj[c];
+      if (oc < 0 && -oc - 1 != r2) {
+        r1 = -oc - 1;
+        break;
+      }
+    }
+  }
+  *r1p = r1;
+  if (r1 < 0) return 0;
+  pa_idx u = rm->bv[2 * r1] == p ? rm->bv[2 * r1 + 1] : rm->bv[2 * r1];
+  if (u == q) return 0;
+  const double *xu = X(u), *xq = X(q);
+  double ha = pa__local_hausd(rm->opts, rm->bref[r1], rm->hausd);
+  double hb = pa__local_hausd(rm->opts, rm->bref[r2], rm->hausd);
+  double hausd = ha < hb ? ha : hb;
+  if (dist_point_segment(X(p), xu, xq) > hausd) return 0;
+  /* sagitta of the merged arc: tangent at u from r1, at q from r2 */
+  double tu[2], tq[2];
+  int ue = rm->bv[2 * r1] == u ? 0 : 1, qe = rm->bv[2 * r2] == q ? 0 : 1;
+  /* orient both along u -> p -> q */
+  double dir_r1 = rm->bv[2 * r1] == u ? 1 : -1; /* r1 runs u -> p */
+  double dir_r2 = rm->bv[2 * r2] == p ? 1 : -1; /* r2 runs p -> q */
+  tu[0] = dir_r1 * rm->btan[4 * r1 + 2 * ue];
+  tu[1] = dir_r1 * rm->btan[4 * r1 + 2 * ue + 1];
+  tq[0] = dir_r2 * rm->btan[4 * r2 + 2 * qe];
+  tq[1] = dir_r2 * rm->btan[4 * r2 + 2 * qe + 1];
+  double dx = xq[0] - xu[0], dy = xq[1] - xu[1];
+  double L = sqrt(dx * dx + dy * dy);
+  /* Hermite midpoint minus chord midpoint = L/8 (tu - tq) */
+  double sx = 0.125 * L * (tu[0] - tq[0]), sy = 0.125 * L * (tu[1] - tq[1]);
+  if (sqrt(sx * sx + sy * sy) > hausd) return 0;
+  /* the new arc must not fold: both tangents point forward */
+  return !(tu[0] * dx + tu[1] * dy <= 0 || tq[0] * dx + tq[1] * dy <= 0);
+}
+
+/* The records of a feature collapse merged: r1 = (u, p) becomes (u, q) and
+ * takes r2's tangent at q; r2 = (p, q) dies. */
+static void merge_records(pa__rmesh *rm, pa_idx p, pa_idx q, pa_idx r1,
+                          pa_idx r2) {
+  int qe = rm->bv[2 * r2] == q ? 0 : 1;
+  double arr = qe == 1 ? 1 : -1; /* r2's tangent arriving at q */
+  double tqx = arr * rm->btan[4 * r2 + 2 * qe],
+         tqy = arr * rm->btan[4 * r2 + 2 * qe + 1];
+  int pe = rm->bv[2 * r1] == p ? 0 : 1;
+  double sgn = pe == 1 ? 1 : -1; /* r1 arrives at its end 1 */
+  rm->bv[2 * r1 + pe] = q;
+  rm->btan[4 * r1 + 2 * pe] = sgn * tqx;
+  rm->btan[4 * r1 + 2 * pe + 1] = sgn * tqy;
+  pa__rm_kill_feat(rm, r2);
+}
+
 int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
                             double qrel) {
   pa_idx te = 3 * k + fi;
@@ -77,44 +141,7 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
   pa_idx r2 = -1, r1 = -1;
   if (tp & RMV_FEAT) {
     r2 = -o - 1;
-    /* the other record at p: found on the faces of the ball holding p */
-    for (int t = 0; t < n && r1 < 0; t++) {
-      pa_idx e = el[t];
-      int l = loc[t];
-      for (int side = 0; side < 2; side++) {
-        pa_idx c = 3 * e + (side ? NX3(l) : PV3(l));
-        pa_idx oc = rm->adj[c];
-        if (oc < 0 && -oc - 1 != r2) {
-          r1 = -oc - 1;
-          break;
-        }
-      }
-    }
-    if (r1 < 0) return 0;
-    pa_idx u = rm->bv[2 * r1] == p ? rm->bv[2 * r1 + 1] : rm->bv[2 * r1];
-    if (u == q) return 0;
-    const double *xu = X(u), *xq = X(q);
-    double ha = pa__local_hausd(rm->opts, rm->bref[r1], rm->hausd);
-    double hb = pa__local_hausd(rm->opts, rm->bref[r2], rm->hausd);
-    double hausd = ha < hb ? ha : hb;
-    if (dist_point_segment(X(p), xu, xq) > hausd) return 0;
-    /* sagitta of the merged arc: tangent at u from r1, at q from r2 */
-    double tu[2], tq[2];
-    int ue = rm->bv[2 * r1] == u ? 0 : 1, qe = rm->bv[2 * r2] == q ? 0 : 1;
-    /* orient both along u -> p -> q */
-    double dir_r1 = rm->bv[2 * r1] == u ? 1 : -1; /* r1 runs u -> p */
-    double dir_r2 = rm->bv[2 * r2] == p ? 1 : -1; /* r2 runs p -> q */
-    tu[0] = dir_r1 * rm->btan[4 * r1 + 2 * ue];
-    tu[1] = dir_r1 * rm->btan[4 * r1 + 2 * ue + 1];
-    tq[0] = dir_r2 * rm->btan[4 * r2 + 2 * qe];
-    tq[1] = dir_r2 * rm->btan[4 * r2 + 2 * qe + 1];
-    double dx = xq[0] - xu[0], dy = xq[1] - xu[1];
-    double L = sqrt(dx * dx + dy * dy);
-    /* Hermite midpoint minus chord midpoint = L/8 (tu - tq) */
-    double sx = 0.125 * L * (tu[0] - tq[0]), sy = 0.125 * L * (tu[1] - tq[1]);
-    if (sqrt(sx * sx + sy * sy) > hausd) return 0;
-    /* the new arc must not fold: both tangents point forward */
-    if (tu[0] * dx + tu[1] * dy <= 0 || tq[0] * dx + tq[1] * dy <= 0) return 0;
+    if (!feature_kept(rm, p, q, r2, el, loc, n, &r1)) return 0;
   }
 
   /* apply: rewrite the ball, then stitch the outer faces of k (and f) */
@@ -142,18 +169,7 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
       attach(rm, x1, x2, c2);
     }
   }
-  if (r2 >= 0) {
-    /* r1 = (u, p) becomes (u, q) and takes r2's tangent at q */
-    int qe = rm->bv[2 * r2] == q ? 0 : 1;
-    double arr = qe == 1 ? 1 : -1; /* r2's tangent arriving at q */
-    double tqx = arr * rm->btan[4 * r2 + 2 * qe], tqy = arr * rm->btan[4 * r2 + 2 * qe + 1];
-    int pe = rm->bv[2 * r1] == p ? 0 : 1;
-    double sgn = pe == 1 ? 1 : -1; /* r1 arrives at its end 1 */
-    rm->bv[2 * r1 + pe] = q;
-    rm->btan[4 * r1 + 2 * pe] = sgn * tqx;
-    rm->btan[4 * r1 + 2 * pe + 1] = sgn * tqy;
-    pa__rm_kill_feat(rm, r2);
-  }
+  if (r2 >= 0) merge_records(rm, p, q, r1, r2);
   elem_changed(rm, k); /* the third vertices' balls lose k and f */
   if (f >= 0) elem_changed(rm, f);
   pa__rm_kill_elem(rm, k);

@@ -30,8 +30,14 @@
 #include "remesh/schedule.h"
 #include "remesh2d/remesh2d.h"
 
+/* The working mesh checked after a pass, in debug builds only. In release
+ * builds it is dead code that still refers to the cleanup label, so a phase
+ * that can fail only by this check keeps a used label. */
 #ifdef NDEBUG
-#define DEBUG_CHECK(rm) ((void)0)
+#define DEBUG_CHECK(rm)                                                      \
+  do {                                                                       \
+    if (0) PA_CALL(pa__rm_check(rm));                                        \
+  } while (0)
 #else
 #define DEBUG_CHECK(rm) PA_CALL(pa__rm_check(rm))
 #endif
@@ -126,47 +132,53 @@ cleanup:
   return st;
 }
 
-/* Run the pass loop on the working mesh; fills the report's counts and
- * outcome (SUCCESS or TARGET_MISSED; FAILED when the final check fails). */
-static pa_status adapt(pa__rmesh *rm, pa_remesh_report *report) {
+/* Schedule step 1, the refinement rounds: split, collapse, swap, move,
+ * until the stopping rule (remesh/schedule.h) says they settled or
+ * stalled; the working mesh is renumbered for locality as it grows. *pass
+ * counts the passes. */
+static pa_status refine_rounds(pa__rmesh *rm, int *pass) {
   pa_status st = PA_SUCCESS;
   const pa_remesh_opts *o = rm->opts;
-  int pass = 0;
   pa_idx reordered = rm->nelive; /* live elements at the last renumbering */
-  rm->lguard = RM_LLONG;
-
-  if (!o->no_insert) {
-    pa__rounds rounds;
-    pa__rounds_start(&rounds, 1, RM_ROUNDS_SETTLED, RM_ROUNDS_TINY, 1);
-    for (int it = 0; it < RM_ROUNDS_MAX; it++) {
-      long ns = 0, nc = 0, nw = 0, nm = 0;
-      PA_CALL(pa__rm_split_pass_2d(rm, RM_LLONG, &ns));
+  pa__rounds rounds;
+  pa__rounds_start(&rounds, 1, RM_ROUNDS_SETTLED, RM_ROUNDS_TINY, 1);
+  for (int it = 0; it < RM_ROUNDS_MAX; it++) {
+    long ns = 0, nc = 0, nw = 0, nm = 0;
+    PA_CALL(pa__rm_split_pass_2d(rm, RM_LLONG, &ns));
+    DEBUG_CHECK(rm);
+    report_pass(rm, "split", *pass, ns);
+    PA_CALL(maybe_reorder(rm, *pass, &reordered));
+    PA_CALL(pa__rm_collapse_pass_2d(rm, RM_LSHORT, &nc));
+    DEBUG_CHECK(rm);
+    report_pass(rm, "collapse", *pass, nc);
+    if (!o->no_swap) {
+      nw = pa__rm_swap_pass_2d(rm, 0.6);
       DEBUG_CHECK(rm);
-      report_pass(rm, "split", pass, ns);
-      PA_CALL(maybe_reorder(rm, pass, &reordered));
-      PA_CALL(pa__rm_collapse_pass_2d(rm, RM_LSHORT, &nc));
-      DEBUG_CHECK(rm);
-      report_pass(rm, "collapse", pass, nc);
-      if (!o->no_swap) {
-        nw = pa__rm_swap_pass_2d(rm, 0.6);
-        DEBUG_CHECK(rm);
-        report_pass(rm, "swap", pass, nw);
-      }
-      /* once the sizes are nearly reached, relocation helps collapses */
-      if (!o->no_move && ns < 0.01 * rm->nelive) {
-        nm = pa__rm_smooth_pass_2d(rm);
-        DEBUG_CHECK(rm);
-        report_pass(rm, "move", pass, nm);
-      }
-      pass++;
-      progress(rm, pass);
-      if (pa__rounds_stop(&rounds, ns, nc, rm->nelive)) break;
+      report_pass(rm, "swap", *pass, nw);
     }
-    report_figures(rm, "after refinement");
+    /* once the sizes are nearly reached, relocation helps collapses */
+    if (!o->no_move && ns < 0.01 * rm->nelive) {
+      nm = pa__rm_smooth_pass_2d(rm);
+      DEBUG_CHECK(rm);
+      report_pass(rm, "move", *pass, nm);
+    }
+    (*pass)++;
+    progress(rm, *pass);
+    if (pa__rounds_stop(&rounds, ns, nc, rm->nelive)) break;
   }
-  /* Optimisation rounds. The collapse guard is relaxed (a collapse may
-   * create an edge up to lguard, which the split that follows cuts in
-   * two edges in range): edges in a tight configuration can then go. */
+  report_figures(rm, "after refinement");
+cleanup:
+  return st;
+}
+
+/* Schedule step 2, the optimisation rounds, then splits until none is left
+ * and a strict collapse pass. The collapse guard of the rounds is relaxed
+ * (a collapse may create an edge up to lguard, which the split that
+ * follows cuts in two edges in range): edges in a tight configuration can
+ * then go. *pass counts the passes. */
+static pa_status optimise(pa__rmesh *rm, int *pass) {
+  pa_status st = PA_SUCCESS;
+  const pa_remesh_opts *o = rm->opts;
   for (int it = 0; it < 8; it++) {
     long nw = 0, nm = 0, ns = 0, nc = 0;
     if (!o->no_swap) {
@@ -186,9 +198,9 @@ static pa_status adapt(pa__rmesh *rm, pa_remesh_report *report) {
       DEBUG_CHECK(rm);
       rm->lguard = RM_LLONG;
     }
-    report_pass(rm, "optimise", pass, nw + nm + ns + nc);
-    pass++;
-    progress(rm, pass);
+    report_pass(rm, "optimise", *pass, nw + nm + ns + nc);
+    (*pass)++;
+    progress(rm, *pass);
     if (ns + nc == 0 && nw + nm <= 1e-3 * rm->nelive) break;
   }
   if (!o->no_insert) { /* cut what the relaxed collapses left long */
@@ -201,43 +213,57 @@ static pa_status adapt(pa__rmesh *rm, pa_remesh_report *report) {
     }
     PA_CALL(pa__rm_collapse_pass_2d(rm, RM_LSHORT, &nc));
     DEBUG_CHECK(rm);
-    report_pass(rm, "final", pass, ns + nc);
-    pass++;
+    report_pass(rm, "final", *pass, ns + nc);
+    (*pass)++;
   }
   report_figures(rm, "after optimisation");
-  {
-    long nb = pa__rm_sliver_pass_2d(rm, 0.45);
-    DEBUG_CHECK(rm);
-    report_pass(rm, "worst", pass, nb);
-    pass++;
-    if (!o->no_move && nb > 0) { /* only if the pass changed something */
-      for (int it = 0; it < 2; it++) {
-        long nm = pa__rm_smooth_pass_2d(rm);
-        DEBUG_CHECK(rm);
-        report_pass(rm, "move", pass, nm);
-        pass++;
-        if (!nm) break;
-      }
-    }
-    /* last, lengths (the quality moves disregard them) */
-    for (int it = 0; it < RM_LENGTH_SWEEPS && !o->no_move; it++) {
-      long nl = pa__rm_length_pass_2d(rm);
+cleanup:
+  return st;
+}
+
+/* Schedule step 3, the worst elements: the pass on them, two relocation
+ * passes if it changed anything, and the last length moves (the quality
+ * moves disregard lengths). *pass counts the passes. */
+static pa_status repair_worst(pa__rmesh *rm, int *pass) {
+  pa_status st = PA_SUCCESS;
+  const pa_remesh_opts *o = rm->opts;
+  long nb = pa__rm_sliver_pass_2d(rm, 0.45);
+  DEBUG_CHECK(rm);
+  report_pass(rm, "worst", *pass, nb);
+  (*pass)++;
+  if (!o->no_move && nb > 0) { /* only if the pass changed something */
+    for (int it = 0; it < 2; it++) {
+      long nm = pa__rm_smooth_pass_2d(rm);
       DEBUG_CHECK(rm);
-      report_pass(rm, "length", pass, nl);
-      pass++;
-      if (!nl) break;
+      report_pass(rm, "move", *pass, nm);
+      (*pass)++;
+      if (!nm) break;
     }
   }
+  for (int it = 0; it < RM_LENGTH_SWEEPS && !o->no_move; it++) {
+    long nl = pa__rm_length_pass_2d(rm);
+    DEBUG_CHECK(rm);
+    report_pass(rm, "length", *pass, nl);
+    (*pass)++;
+    if (!nl) break;
+  }
+cleanup:
+  return st;
+}
 
+/* The counts in the report and the verdict (see the opening comment):
+ * FAILED when the final check of the working mesh fails. */
+static void conclude(const pa__rmesh *rm, int npass,
+                     pa_remesh_report *report) {
   report->nsplit = rm->nsplit;
   report->ncollapse = rm->ncollapse;
   report->nswap = rm->nswap;
   report->nmove = rm->nmove;
-  report->npass = pass;
+  report->npass = npass;
   if (pa__rm_check(rm) != PA_SUCCESS) {
     pa__info(1, "remesh: %s\n", pa_last_error());
     report->outcome = PA_REMESH_FAILED;
-    goto cleanup;
+    return;
   }
   pa__rm_figures f;
   pa__rm_figures_2d(rm, &f);
@@ -249,16 +275,19 @@ static pa_status adapt(pa__rmesh *rm, pa_remesh_report *report) {
            "%.3g mean %.3g -> %s\n",
            f.nin, f.nedge, f.lmin, f.lmax, f.qmin, f.qmean,
            missed ? "target missed" : "success");
-cleanup:
-  return st;
 }
 
 pa_status pa__remesh2d(pa_mesh *mesh, const pa_remesh_opts *opts,
                        pa_remesh_report *report) {
   pa_status st = PA_SUCCESS;
   pa__rmesh *rm = NULL;
+  int pass = 0;
   PA_CALL(pa__rm_create(mesh, opts, &rm));
-  PA_CALL(adapt(rm, report));
+  rm->lguard = RM_LLONG;
+  if (!opts->no_insert) PA_CALL(refine_rounds(rm, &pass));
+  PA_CALL(optimise(rm, &pass));
+  PA_CALL(repair_worst(rm, &pass));
+  conclude(rm, pass, report);
   if (report->outcome != PA_REMESH_FAILED) PA_CALL(pa__rm_writeback(rm, mesh));
 cleanup:
   pa__rm_destroy(rm);
