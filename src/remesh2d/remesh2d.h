@@ -195,7 +195,8 @@ void pa__rm_figures_2d(const pa__rmesh *rm, pa__rm_figures *f);
 /* Feature analysis, called by pa__rm_create with the input vertex balls (CSR):
  * records from the boundary list, from unlisted boundary edges and from
  * element-reference interfaces; frozen records freeze their vertices; corners;
- * tangents; the Hausdorff size bound on curved features (then gradation);
+ * tangents; the Hausdorff size bound on curved features (then spread by
+ * the gradation);
  * element qualities. */
 pa_status pa__rm_features_2d_init(pa__rmesh *rm, pa_mesh *mesh,
                                   const pa_idx *bstart, const pa_idx *ball);
