@@ -35,15 +35,17 @@
  *   range), box3d 10 -> 0.019 on 2 ranks tagged 16 k elements again (3 k).
  * - elsewhere in a piece among several (PA__DONE, PA__DONE_NEAR_SKIN): an
  *   edge outside [0.5, 1.5). The remesher relaxes its working metric at
- *   frozen skin vertices whose edges are far from the target (rmesh.c,
- *   rm3d skin relax) over the first ring of input elements, which may be
- *   many output layers wide: those elements come back coarser than the
- *   target, away from any hot vertex, and only another iteration refines
- *   them. With an upper bound of 2 (or none), the 2D plate of issue #19
- *   kept 45-380 edges of length 1.5-3.5 at 2-4 ranks (none at 1).
+ *   frozen skin vertices whose edges are far from the target
+ *   (remesh2d/mesh_2d.c, remesh3d/mesh_3d.c) over the first ring of input
+ *   elements, which may be many output layers wide: those elements come
+ *   back coarser than the target, away from any hot vertex, and only
+ *   another iteration refines them. With an upper bound of 2 (or none),
+ *   the 2D plate of issue #19 kept 45-380 edges of length 1.5-3.5 at 2-4
+ *   ranks (none at 1).
  * - made by a single piece away from its skin (PA__DONE_FREE): only what
  *   the remesher itself calls missed (an edge of 2 or more, a quality below
- *   QUAL_CLEARLY_BAD; loop.c): another pass would remesh it the same way.
+ *   QUAL_CLEARLY_BAD; remesh2d/driver_2d.c): another pass would remesh it
+ *   the same way.
  *   With [0.5, 1.5), the sequential remesher's leftovers (0.1-0.3 % of the
  *   edges in 3D, up to 1.7 long) came back iteration after iteration (the
  *   gmsh rod at -hsiz 0.035 on 2 ranks: 184, 76, 58, 39, 26, 22, 20

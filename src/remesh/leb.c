@@ -357,51 +357,100 @@ static int longer_around(const bis *s, const qedge *e, const pa_idx *el,
   return 0;
 }
 
-pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
-                         uint8_t **onskinp) {
+/* The state of a refinement of s->m (s->m, s->o, s->d set): the skin marks,
+ * the sorted feature edges, the vertex balls of the elements and of the
+ * boundary entities, and every edge queued once. */
+static pa_status start(bis *s) {
   pa_status st = PA_SUCCESS;
-  bis s;
-  pa_idx nv0 = m->nv;
-  size_t capp = 0, np = 0;
-  pa_idx *parent = NULL, *seen = NULL;
-  memset(&s, 0, sizeof s);
-  s.m = m;
-  s.o = o;
-  s.d = m->dim;
-  if (parentp) *parentp = NULL;
-  if (onskinp) *onskinp = NULL;
-  PA_CALL(grow_balls(&s, (size_t)nv0));
+  pa_mesh *m = s->m;
+  const pa__leb_opts *o = s->o;
+  pa_idx nv0 = m->nv, *seen = NULL;
+  PA_CALL(grow_balls(s, (size_t)nv0));
   if (o->skin_ok)
     for (pa_idx v = 0; v < nv0; v++)
-      s.inner[v] = o->skin_ok[v] & 3;
+      s->inner[v] = o->skin_ok[v] & 3;
   if (m->ned) {
-    PA_ALLOC(s.feat, m->ned);
+    PA_ALLOC(s->feat, m->ned);
     for (pa_idx r = 0; r < m->ned; r++)
-      s.feat[r] = pair_key(m->edge[2 * (size_t)r], m->edge[2 * (size_t)r + 1]);
-    s.nfeat = (size_t)m->ned;
-    qsort(s.feat, s.nfeat, sizeof *s.feat, cmp_u64);
+      s->feat[r] = pair_key(m->edge[2 * (size_t)r], m->edge[2 * (size_t)r + 1]);
+    s->nfeat = (size_t)m->ned;
+    qsort(s->feat, s->nfeat, sizeof *s->feat, cmp_u64);
   }
-  PA_CALL(balls_init(&s.eball, m->elem, m->ne, s.d + 1, (size_t)nv0));
-  PA_CALL(balls_init(&s.bball, m->bdry, m->nb, s.d, (size_t)nv0));
+  PA_CALL(balls_init(&s->eball, m->elem, m->ne, s->d + 1, (size_t)nv0));
+  PA_CALL(balls_init(&s->bball, m->bdry, m->nb, s->d, (size_t)nv0));
   /* queue each edge once (an edge is in several elements): those of a to
    * its later neighbours b, found in its ball; seen[b] == a marks b done */
   PA_ALLOC(seen, nv0);
   for (pa_idx v = 0; v < nv0; v++)
     seen[v] = -1;
   for (pa_idx a = 0; a < nv0; a++) {
-    const ilist *l = &s.eball.l[a];
+    const ilist *l = &s->eball.l[a];
     for (int q = 0; q < l->n; q++) {
       const pa_idx *v =
-          m->elem + (size_t)(s.d + 1) * s.eball.pool[l->off + (size_t)q];
-      for (int j = 0; j <= s.d; j++)
+          m->elem + (size_t)(s->d + 1) * s->eball.pool[l->off + (size_t)q];
+      for (int j = 0; j <= s->d; j++)
         if (v[j] > a && seen[v[j]] != a) {
           seen[v[j]] = a;
-          PA_CALL(push(&s, a, v[j]));
+          PA_CALL(push(s, a, v[j]));
         }
     }
   }
+cleanup:
   pa__free(seen);
-  seen = NULL;
+  return st;
+}
+
+/* The vertex *mid at the midpoint of e, from the ends in canonical order,
+ * with their metric and fields interpolated, and its skin mark: a vertex
+ * added on the skin is inner; descended from a labelled vertex, it never
+ * pairs with one (see the file comment). */
+static pa_status add_midpoint(bis *s, const qedge *e, int skin, pa_idx *mid) {
+  pa_status st = PA_SUCCESS;
+  pa_mesh *m = s->m;
+  double x[3];
+  const double *xa = m->coord + (size_t)s->d * e->a,
+               *xb = m->coord + (size_t)s->d * e->b;
+  for (int k = 0; k < s->d; k++)
+    x[k] = 0.5 * xa[k] + 0.5 * xb[k];
+  PA_CALL(pa_mesh_add_vertex(m, x, 0, mid));
+  PA_CALL(grow_balls(s, (size_t)m->nv));
+  if (m->met_ncomp) {
+    int nc = m->met_ncomp;
+    const double *mm[2] = {m->met + (size_t)nc * e->a,
+                           m->met + (size_t)nc * e->b};
+    const double w[2] = {0.5, 0.5};
+    pa__metric_interp(s->d, nc, 2, mm, w, m->met + (size_t)nc * *mid);
+  }
+  for (int f = 0; f < m->nfield; f++) {
+    int nc = m->field[f].ncomp;
+    double *y = m->field[f].val;
+    const double *yy[2] = {y + (size_t)nc * e->a, y + (size_t)nc * e->b};
+    const double w[2] = {0.5, 0.5};
+    pa__field_interp(s->d, nc, pa__field_is_metric(s->d, m->field[f].name, nc),
+                     2, yy, w, y + (size_t)nc * *mid);
+  }
+  s->inner[*mid] =
+      skin ? (uint8_t)(1 | 4 |
+                       ((s->inner[e->a] | s->inner[e->b]) & (2 | 8) ? 8 : 0))
+           : 0;
+cleanup:
+  return st;
+}
+
+pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
+                         uint8_t **onskinp) {
+  pa_status st = PA_SUCCESS;
+  bis s;
+  pa_idx nv0 = m->nv;
+  size_t capp = 0, np = 0;
+  pa_idx *parent = NULL;
+  memset(&s, 0, sizeof s);
+  s.m = m;
+  s.o = o;
+  s.d = m->dim;
+  if (parentp) *parentp = NULL;
+  if (onskinp) *onskinp = NULL;
+  PA_CALL(start(&s));
   while (s.nheap) {
     qedge e = pop(&s);
     /* the elements around e, from the smaller ball (none if e is gone:
@@ -443,36 +492,8 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
                longer_around(&s, &e, s.el, nel, s.tmp)) {
       continue;
     }
-    /* the midpoint, from the ends in canonical order */
-    double x[3];
-    const double *xa = m->coord + (size_t)s.d * e.a,
-                 *xb = m->coord + (size_t)s.d * e.b;
-    for (int k = 0; k < s.d; k++)
-      x[k] = 0.5 * xa[k] + 0.5 * xb[k];
     pa_idx mid;
-    PA_CALL(pa_mesh_add_vertex(m, x, 0, &mid));
-    PA_CALL(grow_balls(&s, (size_t)m->nv));
-    if (m->met_ncomp) {
-      int nc = m->met_ncomp;
-      const double *mm[2] = {m->met + (size_t)nc * e.a,
-                             m->met + (size_t)nc * e.b};
-      const double w[2] = {0.5, 0.5};
-      pa__metric_interp(s.d, nc, 2, mm, w, m->met + (size_t)nc * mid);
-    }
-    for (int f = 0; f < m->nfield; f++) {
-      int nc = m->field[f].ncomp;
-      double *y = m->field[f].val;
-      const double *yy[2] = {y + (size_t)nc * e.a, y + (size_t)nc * e.b};
-      const double w[2] = {0.5, 0.5};
-      pa__field_interp(s.d, nc, pa__field_is_metric(s.d, m->field[f].name, nc),
-                       2, yy, w, y + (size_t)nc * mid);
-    }
-    /* a vertex added on the skin is inner; descended from a labelled
-     * vertex, it never pairs with one (see the file comment) */
-    s.inner[mid] =
-        skin ? (uint8_t)(1 | 4 |
-                         ((s.inner[e.a] | s.inner[e.b]) & (2 | 8) ? 8 : 0))
-             : 0;
+    PA_CALL(add_midpoint(&s, &e, skin, &mid));
     PA_GROW(parent, capp, 2 * (np + 1));
     parent[2 * np] = e.a;
     parent[2 * np + 1] = e.b;
@@ -502,7 +523,6 @@ cleanup:
   pa__free(s.el);
   pa__free(s.fc);
   pa__free(s.tmp);
-  pa__free(seen);
   pa__free(s.inner);
   pa__free(s.heap);
   pa__free(s.feat);

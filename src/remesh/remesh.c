@@ -1,7 +1,9 @@
 /*
  * remesh.c -- the remesher plug-in interface: default options, the built-in
- * remesher, and the driver pa_remesh() that validates the input, prepares
- * the metric (hsiz, hmin/hmax, gradation) and calls a remesher.
+ * remesher (its callback sends 2D meshes to src/remesh2d/, 3D ones through
+ * longest-edge bisection, leb.c, to src/remesh3d/), and the driver
+ * pa_remesh() that validates the input, prepares the metric (hsiz,
+ * hmin/hmax, gradation) and calls a remesher.
  *
  * Invariants:
  *  - pa_remesh never leaves a half-changed mesh: the prepared metric is built
@@ -12,8 +14,8 @@
  *    gradation skip them (gradation still lets them constrain neighbours);
  *    with -hsiz on a mesh without a metric every vertex gets hsiz.
  */
+#include "metric/gradation.h"
 #include "remesh/remesh.h"
-#include "remesh/remesh3d.h"
 #include "remesh/leb.h"
 
 #include <stdio.h>
@@ -65,16 +67,9 @@ cleanup:
 static pa_status builtin_remesh(void *ctx, pa_mesh *mesh,
                                 const pa_remesh_opts *opts,
                                 pa_remesh_report *report) {
-  pa_status st = PA_SUCCESS;
-  pa__rmesh *rm = NULL;
   (void)ctx;
   if (mesh->dim == 3) return remesh3d(mesh, opts, report);
-  PA_CALL(pa__rm_create(mesh, opts, &rm));
-  PA_CALL(pa__rm_adapt(rm, &pa__rm_ops_2d, report));
-  if (report->outcome != PA_REMESH_FAILED) PA_CALL(pa__rm_writeback(rm, mesh));
-cleanup:
-  pa__rm_destroy(rm);
-  return st;
+  return pa__remesh2d(mesh, opts, report);
 }
 
 const pa_remesher *pa_remesher_builtin(void) {
@@ -135,27 +130,11 @@ static void progress_relay(const pa_progress *p, void *ctx) {
   w->fn(&q, w->ctx);
 }
 
-pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
-                    const pa_remesh_opts *opts, pa_remesh_report *report) {
+/* The checks of pa_remesh on its arguments (r and mesh not NULL), its
+ * options, and the mesh unless opts->trusted. */
+static pa_status check_args(const pa_remesher *r, pa_mesh *mesh,
+                            const pa_remesh_opts *opts) {
   pa_status st = PA_SUCCESS;
-  pa_remesh_opts def, relayed;
-  pa_remesh_report dummy;
-  progress_wrap wrap = {NULL, NULL, 0, 0, 0};
-  uint8_t *frozen = NULL;
-  double *newmet = NULL, *oldmet = NULL;
-  int oldnc = 0, installed = 0, carried = 0;
-  pa_name *names = NULL; /* the caller's physical names, held aside */
-  int nname = 0;
-  double t0 = pa_wtime();
-  wrap.t0 = t0;
-  PA_CHECK(r && r->remesh && mesh, PA_ERR_ARG, "pa_remesh: NULL argument");
-  if (!opts) {
-    pa_remesh_opts_default(&def);
-    opts = &def;
-  }
-  if (!report) report = &dummy;
-  memset(report, 0, sizeof *report);
-  report->outcome = PA_REMESH_FAILED;
   PA_CHECK(r->dims & (1u << mesh->dim), PA_ERR_UNSUPPORTED,
            "remesher '%s' does not handle %dD meshes", r->name ? r->name : "?",
            mesh->dim);
@@ -175,15 +154,28 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
            "pa_remesh: the angle must lie in [0, 180] degrees, got %g",
            opts->angle);
   if (!opts->trusted) PA_CALL(pa_mesh_check(mesh));
+cleanup:
+  return st;
+}
 
-  /* prepare the metric in a new array: the caller's (hsiz), then hmin/hmax
-   * and the gradation */
-  int d = mesh->dim, nc = mesh->met_ncomp ? mesh->met_ncomp : 1;
+/* The metric the remesher works with, prepared in a new array *met of nc
+ * components per vertex (the caller frees it): the caller's metric (or
+ * hsiz), then hmin/hmax and the gradation; frozen vertices keep theirs.
+ * Unless opts->no_stats, the caller's metric is carried as the field
+ * metric:user (*carried = 1; the caller drops it) when a step changed it;
+ * *changed says which (PA_CHANGED_*). */
+static pa_status prepare_metric(pa_mesh *mesh, const pa_remesh_opts *opts,
+                                int nc, double **met, int *carried,
+                                unsigned *changed) {
+  pa_status st = PA_SUCCESS;
+  uint8_t *frozen = NULL;
+  double *newmet = NULL;
+  int d = mesh->dim;
   size_t cap = mesh->capv > (size_t)mesh->nv ? mesh->capv : (size_t)mesh->nv;
   pa_idx ngraded = 0;
-  unsigned changed = 0;
   PA_CALL(frozen_mask(mesh, &frozen));
   PA_ALLOC(newmet, (cap ? cap : 1) * nc);
+  *met = newmet;
   if (mesh->met_ncomp)
     memcpy(newmet, mesh->met, sizeof(double) * nc * mesh->nv);
   if (opts->hsiz > 0)
@@ -192,19 +184,47 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   if (!opts->no_stats && mesh->nfield < PA_MAX_FIELDS &&
       pa__user_metric_field(mesh) < 0) {
     PA_CALL(pa_mesh_add_field(mesh, PA__USER_METRIC, nc, newmet));
-    carried = 1;
+    *carried = 1;
   }
-  PA_CALL(pa__metric_clamp_opts(mesh, nc, newmet, frozen, opts, &changed));
+  PA_CALL(pa__metric_clamp_opts(mesh, nc, newmet, frozen, opts, changed));
   PA_CALL(pa__metric_gradation(d, nc, mesh->nv, mesh->coord, newmet, mesh->ne,
                                mesh->elem, frozen, opts->hgrad, opts->hgradreq,
                                &ngraded));
-  if (ngraded) changed |= PA_CHANGED_GRADATION;
-  if (!changed && carried) { /* the metric used is the caller's */
+  if (ngraded) *changed |= PA_CHANGED_GRADATION;
+  if (!*changed && *carried) { /* the metric used is the caller's */
     PA_CALL(drop_user_metric(mesh));
-    carried = 0;
+    *carried = 0;
   }
+cleanup:
   pa__free(frozen);
-  frozen = NULL;
+  return st;
+}
+
+pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
+                    const pa_remesh_opts *opts, pa_remesh_report *report) {
+  pa_status st = PA_SUCCESS;
+  pa_remesh_opts def, relayed;
+  pa_remesh_report dummy;
+  progress_wrap wrap = {NULL, NULL, 0, 0, 0};
+  double *newmet = NULL, *oldmet = NULL;
+  int oldnc = 0, installed = 0, carried = 0;
+  pa_name *names = NULL; /* the caller's physical names, held aside */
+  int nname = 0;
+  double t0 = pa_wtime();
+  wrap.t0 = t0;
+  PA_CHECK(r && r->remesh && mesh, PA_ERR_ARG, "pa_remesh: NULL argument");
+  if (!opts) {
+    pa_remesh_opts_default(&def);
+    opts = &def;
+  }
+  if (!report) report = &dummy;
+  memset(report, 0, sizeof *report);
+  report->outcome = PA_REMESH_FAILED;
+  PA_CALL(check_args(r, mesh, opts));
+
+  int d = mesh->dim, nc = mesh->met_ncomp ? mesh->met_ncomp : 1;
+  unsigned changed = 0;
+  PA_CALL(prepare_metric(mesh, opts, nc, &newmet, &carried, &changed));
   if (!opts->trusted || opts->progress) {
     double c = 0;
     PA_CALL(pa_metric_complexity(mesh, nc, newmet, &c));
@@ -265,7 +285,6 @@ cleanup:
   }
   if (carried && drop_user_metric(mesh) != PA_SUCCESS && st == PA_SUCCESS)
     st = PA_ERR_INTERNAL;
-  pa__free(frozen);
   pa__free(newmet);
   if (st != PA_SUCCESS) report->outcome = PA_REMESH_FAILED;
   if (!(report->time_s > 0)) report->time_s = pa_wtime() - t0;

@@ -1,284 +1,31 @@
 /*
- * remesh.h -- private header of the built-in remesher: the compact working
- * mesh (struct pa__rmesh), its tags, the inline metric kernels of the inner
- * loops, and the interfaces between the dimension-independent parts (driver,
- * pass loop, interpolation, write-back: remesh.c, rmesh.c, loop.c) and the
- * per-dimension operators (ops2d.c, boundary2d.c; 3D will add its own files).
+ * remesh.h -- private header of the remesher driver (remesh.c): the
+ * built-in remesher's entries, one per dimension, which the driver calls
+ * and the remeshers define.
  *
- * Working mesh invariants (checked by pa__rm_check):
- *  - structure of arrays, 0-based, 32-bit indices; a dead entity keeps its slot
- *    (tag RM_*_DEAD) and sits on a free list until reused;
- *  - elements are positively oriented; adj[(dim+1)*k + i] is the face opposite
- *    local vertex i: >= 0 is (dim+1)*f + j (face j of element f), < 0 is
- *    -(b+1) for feature record b (a boundary edge or an interior curve edge in
- *    2D); adjacency is symmetric, and across a feature the two sides are found
- *    through the record (bside);
- *  - q[k] is the element quality (Mmg's normalisation) with the current
- *    coordinates and metric;
- *  - tag bits RME_TOUCHED / RMV_MARK are scratch, cleared by each pass that
- *    uses them; RME_INRANGE / RME_NOSWAP / RMV_SETTLED are caches that skip work a pass
- *    would find useless, cleared by any change that could invalidate them
- *    (so the passes decide exactly as without them);
- *  - a frozen element (PA_FLAG_REQUIRED in its flags) is never rewritten; its
- *    vertices carry RMV_FROZEN, so they are never moved or removed.
+ * Layering (scripts/check-layers.sh): src/remesh2d/ and src/remesh3d/
+ * include the headers of this folder (this one for their entry, schedule.h
+ * for the pass schedule they share), never the reverse, and neither
+ * includes the other. The driver reaches the two remeshers only through the
+ * declarations below; the linker joins them.
  */
 #ifndef PA_REMESH_H
 #define PA_REMESH_H
 
 #include "metric/metric.h"
 
-#include <math.h>
-
-/* Vertex tags. */
-enum {
-  RMV_FROZEN = 1, /* never moved, never removed, metric never changed */
-  RMV_CORNER = 2, /* never moved, never removed */
-  RMV_FEAT = 4,   /* lies on a feature line (boundary or interior curve) */
-  RMV_DEAD = 8,
-  RMV_MARK = 16,  /* scratch */
-  RMV_DONE = 32,  /* scratch */
-  /* A relocation of this vertex was tried and rejected, and no element of
-   * its ball changed since (nor any vertex of them moved): trying again
-   * would give the same answer, so relocation passes skip it. Cleared by
-   * every operator on the vertices of each element it rewrites or kills,
-   * and by a move on the vertices of the moved vertex's ball. */
-  RMV_SETTLED = 64
-};
-
-/* Element tags share the byte with the input flags (PA_FLAG_*, low nibble). */
-enum {
-  RME_FROZEN = PA_FLAG_REQUIRED,
-  RME_DEAD = 16,
-  RME_TOUCHED = 32, /* modified during the current pass */
-  /* Every swap of the element at the swap pass's gain was tried and
-   * rejected, and neither it nor a neighbour changed since: skipped by swap
-   * passes. Cleared with RME_INRANGE, on the element and its neighbours. */
-  RME_NOSWAP = 64,
-  /* The three edges lie in [RM_LSHORT, RM_LLONG] with the current
-   * coordinates and metric, so split and collapse passes at those
-   * thresholds have nothing to do here. Cleared with RMV_SETTLED (an element
-   * rewritten, or one of its vertices moved); new elements start without. */
-  RME_INRANGE = 128
-};
-
-/* Feature-record tags (high nibble; low nibble = input PA_FLAG_*). */
-enum {
-  RMB_FROZEN = PA_FLAG_REQUIRED,
-  RMB_DEAD = 16,
-  RMB_LISTED = 32 /* came from (and goes back to) the mesh's boundary list */
-};
-
-/* Quality floor: no operator creates an element below it. */
-/* Face without neighbour while the working mesh is being built (afterwards
- * every such face holds a feature record). */
-#define RM_NOADJ INT32_MIN
-
-#define RM_QFLOOR 1e-4
-/* A length move may lower the ball's worst quality down to this (never
- * below its old worst if lower), and one that leaves as many edges out of
- * range must cut their sum of ln^2 L by 3 % (as in 3D, remesh3d.h). */
-#define RM_QLEN 0.5
-#define RM_LGAIN 0.97
-/* The length the 2D length moves aim at: a little above 1, where an edge
- * is in range with room on both sides, so the mesh keeps fewer vertices
- * (UGAWG polar-2 2D: 1 881 triangles against 1 901 when aiming at 1, both
- * 99.9 % in range; Mmg makes 1 716 at 94.6 %). */
-#define RM_LTARGET 1.2
-#define RM_LLONG 1.4142 /* the bounds of "edges in range" as Mmg prints them */
-#define RM_LSHORT 0.7071
-
-typedef struct pa__rmesh {
-  int dim;   /* 2 (3 with issue #4) */
-  int nvpe;  /* vertices per element: dim + 1 */
-  int mcomp; /* metric components per vertex: 1 or 3 (2D) / 6 (3D) */
-  int fcomp; /* total user field components per vertex */
-  int nfield;
-  int fncomp[PA_MAX_FIELDS];
-  uint8_t fmetric[PA_MAX_FIELDS]; /* field holds a metric (metric.h) */
-
-  /* vertices */
-  pa_idx nv, vfree;  /* slots in use (live + dead), free-list head (-1) */
-  size_t capv;
-  double *x;        /* dim * capv */
-  double *met;      /* mcomp * capv: the working metric the operators use */
-  double *met0;     /* mcomp * capv or NULL: the target metric, written back,
-                       when the working one was relaxed at frozen skins
-                       (rmesh.c); interpolated alongside met */
-  double *fld;      /* fcomp * capv (NULL without fields) */
-  int32_t *vref;    /* free list link for dead vertices */
-  uint8_t *vflag;   /* input PA_FLAG_* */
-  uint8_t *vtag;    /* RMV_* */
-
-  /* elements */
-  pa_idx ne, efree;
-  size_t cape;
-  pa_idx *ev;  /* nvpe * cape; ev[nvpe*k] is the free-list link if dead */
-  pa_idx *adj; /* nvpe * cape */
-  float *q;
-  int32_t *eref;
-  uint8_t *etag;
-
-  /* 2D feature records: boundary edges and interior-curve edges */
-  pa_idx nb, bfree;
-  size_t capb;
-  pa_idx *bv;     /* 2 * capb: end vertices (bv[2b] is the free link if dead) */
-  pa_idx *bside;  /* 2 * capb: element faces on each side (second -1 on the
-                     domain boundary) */
-  double *btan;   /* 4 * capb: unit tangent of the curve at each end, oriented
-                     from bv[2b] to bv[2b+1] */
-  int32_t *bref;
-  uint8_t *btag;
-
-  /* live counts */
-  pa_idx nvlive, nelive, nblive;
-
-  /* options and statistics */
-  const pa_remesh_opts *opts;
-  double hausd;
-  double lguard; /* no operation creates an edge longer than this */
-  long nsplit, ncollapse, nswap, nmove;
-  double tlast; /* time of the last verbose pass report */
-} pa__rmesh;
-
-/* ---- working mesh (rmesh.c) ---- */
-
-/* Build the working mesh from a (checked) sequential mesh with a metric.
- * Frozen flags are propagated: vertices of frozen elements and of frozen
- * boundary entities are frozen. Capacities are reserved for about `expect`
- * elements. */
-pa_status pa__rm_create(pa_mesh *mesh, const pa_remesh_opts *opts,
-                        pa__rmesh **rm);
-void pa__rm_destroy(pa__rmesh *rm);
-/* New vertex / element / feature slot (from the free list or appended). */
-pa_status pa__rm_new_vertex(pa__rmesh *rm, pa_idx *v);
-pa_status pa__rm_new_elem(pa__rmesh *rm, pa_idx *k);
-pa_status pa__rm_new_feat(pa__rmesh *rm, pa_idx *b);
-void pa__rm_kill_vertex(pa__rmesh *rm, pa_idx v);
-void pa__rm_kill_elem(pa__rmesh *rm, pa_idx k);
-void pa__rm_kill_feat(pa__rmesh *rm, pa_idx b);
-/* Reserve room for n more vertices and elements (so that operators after it
- * cannot fail). */
-pa_status pa__rm_reserve(pa__rmesh *rm, pa_idx nvmore, pa_idx nemore,
-                         pa_idx nbmore);
-/* Interpolate the metric (pa__metric_interp) and fields (linearly) of
- * vertex v from n vertices src with weights w (sum 1). */
-void pa__rm_interp(pa__rmesh *rm, pa_idx v, int n, const pa_idx *src,
-                   const double *w);
-/* Write the working mesh back into mesh, renumbered compactly. Frees the
- * working arrays as it goes; on failure the mesh is left as it was. */
-pa_status pa__rm_writeback(pa__rmesh *rm, pa_mesh *mesh);
-/* 2D: renumber the live vertices along the Morton curve of their bounding
- * box and the live elements by their smallest vertex, dropping the dead
- * slots of both (feature records keep theirs). The passes are memory-bound:
- * entities created by splits sit at the end of the arrays, far from their
- * neighbours. A failure (out of memory) may leave the working mesh partly
- * reordered: the remesh then fails as a whole, the caller's mesh untouched
- * (it is only written at write-back). */
-pa_status pa__rm_reorder(pa__rmesh *rm);
-/* Check the working mesh invariants; PA_ERR_INTERNAL naming the first fault.
- * The RME_INRANGE cache is checked in debug builds only (a stale mark costs
- * operations, not validity). */
-pa_status pa__rm_check(const pa__rmesh *rm);
-/* Edge-length and quality figures over the modifiable part of the mesh. */
-typedef struct pa__rm_figures {
-  long nedge, nin, nlong, nshort; /* modifiable edges, in range, > sqrt2, < 1/sqrt2 */
-  double lmin, lmax, qmin, qmean;
-} pa__rm_figures;
-void pa__rm_figures_2d(const pa__rmesh *rm, pa__rm_figures *f);
-
-/* ---- 2D (boundary2d.c, ops2d.c) ---- */
-
-/* Feature analysis, called by pa__rm_create with the input vertex balls (CSR):
- * records from the boundary list, from unlisted boundary edges and from
- * element-reference interfaces; frozen records freeze their vertices; corners;
- * tangents; the Hausdorff size bound on curved features (then gradation);
- * element qualities. */
-pa_status pa__rm_features_2d_init(pa__rmesh *rm, pa_mesh *mesh,
-                                  const pa_idx *bstart, const pa_idx *ball);
-/* Point at parameter s in [0,1] on the reconstructed curve of record b (from
- * bv[2b] to bv[2b+1]), and its unit tangent oriented the same way. */
-void pa__rm_curve_point_2d(const pa__rmesh *rm, pa_idx b, double s, double *p,
-                           double *t);
-/* Passes: each returns the number of operations done. */
-pa_status pa__rm_split_pass_2d(pa__rmesh *rm, double thr, long *n);
-pa_status pa__rm_collapse_pass_2d(pa__rmesh *rm, double thr, long *n);
-long pa__rm_swap_pass_2d(pa__rmesh *rm, double qmax);
-long pa__rm_smooth_pass_2d(pa__rmesh *rm);
-long pa__rm_length_pass_2d(pa__rmesh *rm);
-long pa__rm_sliver_pass_2d(pa__rmesh *rm, double qbad);
-
-/* ---- the pass loop (loop.c), dimension-independent ---- */
-
-/* Per-dimension operator passes driven by pa__rm_adapt. */
-typedef struct pa__rm_ops {
-  pa_status (*split_pass)(pa__rmesh *rm, double thr, long *n);
-  pa_status (*collapse_pass)(pa__rmesh *rm, double thr, long *n);
-  long (*swap_pass)(pa__rmesh *rm, double qmax);
-  long (*smooth_pass)(pa__rmesh *rm);
-  /* relocate the ends of edges out of range (ops2d.c: length_vertex) */
-  long (*length_pass)(pa__rmesh *rm);
-  long (*sliver_pass)(pa__rmesh *rm, double qbad);
-  void (*figures)(const pa__rmesh *rm, pa__rm_figures *f);
-  pa_status (*reorder)(pa__rmesh *rm); /* locality renumbering, or NULL */
-} pa__rm_ops;
-
-extern const pa__rm_ops pa__rm_ops_2d;
-
-/* Run the operator loop on the working mesh; fills the report's counts and
- * outcome (SUCCESS or TARGET_MISSED; FAILED when the final check fails). */
-pa_status pa__rm_adapt(pa__rmesh *rm, const pa__rm_ops *ops,
+/*
+ * Adapt the triangle mesh (pa__remesh2d, src/remesh2d/driver_2d.c) or the
+ * tetrahedral mesh (pa__remesh3d, src/remesh3d/driver_3d.c) in place to its
+ * metric; the 3D one also takes opts->hsiz when the mesh has none. Contract
+ * of pa_remesher.remesh: entities flagged PA_FLAG_REQUIRED come back bit for
+ * bit, report->outcome is set on PA_SUCCESS, and on any error or
+ * PA_REMESH_FAILED the mesh is as given. The driver prepares the metric
+ * (pa_remesh) and, in 3D, bisects the mesh first (leb.c). Not collective.
+ */
+pa_status pa__remesh2d(pa_mesh *mesh, const pa_remesh_opts *opts,
                        pa_remesh_report *report);
-
-/* ---- metric preparation (gradation.c in metric/) ---- */
-#include "metric/gradation.h"
-
-/* ---- inline 2D kernels ---- */
-
-/* Full tensor (m11 m12 m22) of a 2D metric value of mc components. */
-static inline void rm_tensor2(int mc, const double *m, double *t) {
-  if (mc == 1) {
-    double a = 1.0 / (m[0] * m[0]);
-    t[0] = a; t[1] = 0; t[2] = a;
-  } else {
-    t[0] = m[0]; t[1] = m[1]; t[2] = m[2];
-  }
-}
-
-/* Length of edge a-b in the metric (ends ma, mb of mc components). */
-static inline double rm_len2(int mc, const double *a, const double *b,
-                             const double *ma, const double *mb) {
-  double x = b[0] - a[0], y = b[1] - a[1];
-  if (mc == 1) {
-    double n = sqrt(x * x + y * y + 0.0);
-    return n * pa__log_mean(1.0 / ma[0], 1.0 / mb[0]);
-  }
-  double la = sqrt(ma[0] * x * x + 2.0 * ma[1] * x * y + ma[2] * y * y);
-  double lb = sqrt(mb[0] * x * x + 2.0 * mb[1] * x * y + mb[2] * y * y);
-  return pa__log_mean(la, lb);
-}
-
-/* Quality 4 sqrt(3) A_M / sum l_M^2 of triangle abc (Mmg's normalisation),
- * mean metric of the three vertex tensors; isotropic sizes cancel out. */
-static inline double rm_qual2(int mc, const double *a, const double *b,
-                              const double *c, const double *ma,
-                              const double *mb, const double *mcv) {
-  double e1x = b[0] - a[0], e1y = b[1] - a[1];
-  double e2x = c[0] - a[0], e2y = c[1] - a[1];
-  double e3x = c[0] - b[0], e3y = c[1] - b[1];
-  double area = 0.5 * (e1x * e2y - e1y * e2x);
-  if (mc == 1) {
-    double s = e1x * e1x + e1y * e1y + e2x * e2x + e2y * e2y + e3x * e3x +
-               e3y * e3y;
-    return 6.928203230275509 * area / s;
-  }
-  double m0 = (ma[0] + mb[0] + mcv[0]) * (1.0 / 3.0);
-  double m1 = (ma[1] + mb[1] + mcv[1]) * (1.0 / 3.0);
-  double m2 = (ma[2] + mb[2] + mcv[2]) * (1.0 / 3.0);
-  double det = m0 * m2 - m1 * m1;
-  double s = m0 * (e1x * e1x + e2x * e2x + e3x * e3x) +
-             2 * m1 * (e1x * e1y + e2x * e2y + e3x * e3y) +
-             m2 * (e1y * e1y + e2y * e2y + e3y * e3y);
-  return 6.928203230275509 * area * sqrt(det > 0 ? det : 0) / s;
-}
+pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
+                       pa_remesh_report *report);
 
 #endif /* PA_REMESH_H */

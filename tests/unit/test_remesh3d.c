@@ -6,7 +6,7 @@
 #include "testutil.h"
 #include "mesh/mesh.h"
 #include "metric/metric.h"
-#include "remesh/remesh3d.h"
+#include "remesh3d/remesh3d.h"
 
 static pa_mesh *box(int n, double h) {
   pa_mesh *m = NULL;
@@ -480,7 +480,7 @@ static void test_targets(void) {
  * hsiz 0.175 gives 1 855. A 3 % smaller size should give 1/h^3 = 9 % more
  * tets; 30 % more is allowed for the noise of a 2 k-tet mesh, and the count
  * stays within 1.3 x the metric volume over a regular unit tet's (1 727).
- * With the crowd broken (rm3d_driver.c, lattice_crowd): 1 672 and 1 913. */
+ * With the crowd broken (driver_3d.c, lattice_crowd): 1 672 and 1 913. */
 static void test_lattice_crowd(void) {
   const double h[3] = {0.175, 0.17, 0.17};
   pa_idx ne[3];

@@ -1,10 +1,11 @@
 /*
- * remesh3d.h -- padapt's sequential 3D tetrahedral remesher (issue #4).
+ * remesh3d.h -- padapt's sequential 3D tetrahedral remesher.
  *
- * Entry point: pa__remesh3d(), same contract as pa_remesher.remesh (the
- * builtin remesher calls it for dim 3). The rest of this header is the
- * private working structure shared by the rm3d_*.c files and the inline
- * kernels of their inner loops (metric edge length, element quality).
+ * Entry point: pa__remesh3d() (driver_3d.c), declared with the driver in
+ * remesh/remesh.h: same contract as pa_remesher.remesh (the builtin
+ * remesher calls it for dim 3). This header is the private working
+ * structure shared by the files of src/remesh3d/ and the inline kernels of
+ * their inner loops (metric edge length, element quality).
  *
  * Working structure (struct rm3d), structure of arrays, 32-bit indices:
  *  - tetrahedra: tv[4k..4k+3] positively oriented; adj[4k+i] = 4*l+j when
@@ -25,18 +26,9 @@
 #define PA_REMESH3D_H
 
 #include "metric/metric.h"
+#include "remesh/remesh.h"
 
 #include <math.h>
-
-/**
- * Adapt the tetrahedral mesh in place to its metric (or to opts->hsiz when it
- * has none). Contract of pa_remesher.remesh: entities flagged
- * PA_FLAG_REQUIRED come back bit for bit, report->outcome is set on
- * PA_SUCCESS, and on any error or PA_REMESH_FAILED the mesh is as given.
- * Not collective.
- */
-pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
-                       pa_remesh_report *report);
 
 /* ---- private working structure ----------------------------------------- */
 
@@ -105,7 +97,7 @@ typedef struct rm3d {
   int surf;  /* remesh the boundary surface */
   int swap;  /* swaps allowed (not -noswap) */
   /* A lattice crowd was found before the last refinement band (see
-   * rm3d_driver.c): the split passes at sqrt 2 spread the splits of edges
+   * driver_3d.c): the split passes at sqrt 2 spread the splits of edges
    * shorter than RM3D_LSPREAD. */
   int spread;
   double hausd, ridge_cos;
@@ -283,7 +275,7 @@ static inline double rm3d_qual_v(const rm3d *m, const pa_idx *v) {
                        mt + (size_t)mc * v[2], mt + (size_t)mc * v[3]);
 }
 
-/* ---- rm3d_mesh.c: structure, tables, build, write back, check --------- */
+/* ---- mesh_3d.c: structure, tables, build, write back, check --------- */
 
 pa_status pa__rm3d_build(rm3d *m, pa_mesh *mesh, const pa_remesh_opts *opts);
 /* Relax the working metric at frozen vertices whose frozen edges are on
@@ -369,7 +361,7 @@ pa_status pa__rm3d_swap_face(rm3d *m, pa_idx k, int f, double gain,
 int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
                           double *dir);
 /* The metric at the midpoint of edge ab (geometric mean of the sizes, or
- * the interpolated tensor), as the split uses it (rm3d_split.c). */
+ * the interpolated tensor), as the split uses it (split_3d.c). */
 void pa__rm3d_mid_metric(const rm3d *m, pa_idx a, pa_idx b, double *mp);
 /* Relocate vertex p to bring the lengths of its edges into range: a
  * Gauss-Newton step on sum ln^2 L_i over its edges, halved up to three
@@ -385,10 +377,10 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball);
 int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball);
 
 /* Feature edges, corners and normals of the boundary surface
- * (rm3d_surface.c); use_angle = 0 for -nr. */
+ * (boundary_3d.c); use_angle = 0 for -nr. */
 pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle);
 
-/* Passes (rm3d_driver.c). Split edges longer than thr; collapse edges
+/* Passes (driver_3d.c). Split edges longer than thr; collapse edges
  * shorter than thr creating no edge longer than guard; swap around tets of
  * quality < qthr (new worst > gain * old); smooth the vertices of tets of
  * quality < qthr. */

@@ -1,5 +1,5 @@
 /*
- * rm3d_collapse.c -- edge collapse p -> q: vertex p disappears, the tets
+ * collapse_3d.c -- edge collapse p -> q: vertex p disappears, the tets
  * holding the edge (p,q) are deleted, the others of p's ball take q.
  *
  * Checked before applied: p is free (not locked, not a corner, not on a
@@ -20,7 +20,7 @@
  * for bit. The new edges are about half the short edge shorter than from
  * either end, which unlocks most collapses the length guard refuses.
  */
-#include "remesh/remesh3d.h"
+#include "remesh3d/remesh3d.h"
 
 #define R3_COL_MAXTRI 128
 
@@ -94,49 +94,44 @@ cleanup:
   return st;
 }
 
-pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
-                            int *done) {
-  pa_status st = PA_SUCCESS;
-  pa_idx ball[RM3D_MAXBALL];
-  float nq[RM3D_MAXBALL];
-  pa_idx trec[R3_COL_MAXTRI];
-  pa_idx erec[4];
-  int ntri = 0, nerec = 0;
-  *done = 0;
-  uint8_t tp = m->vtag[p];
-  if (tp & (R3V_LOCK | R3V_CORNER | R3V_DEAD)) return st;
-  int surfp = (tp & R3V_BDRY) != 0;
-  if (surfp && (!m->surf || !(m->vtag[q] & R3V_BDRY))) return st;
-  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
-  if (n < 0) return st;
-  int mc = m->mc;
+/* The qualities nq[i] of the tets of p's ball (ball[0..n)) with p moved to
+ * q, -1 for the tets holding (p,q), which disappear. 1 when the ball has
+ * one reference, no deleted tet is a cap (two boundary faces glued), some
+ * but not all tets disappear, and the new worst quality is acceptable
+ * against the old one. */
+static int ball_qualities(const rm3d *m, pa_idx q, const pa_idx *ball, int n,
+                          float *nq) {
   int32_t ref0 = m->tref[ball[0] >> 2];
   double qold = 1e30, qnew = 1e30;
   int nd = 0;
   const double *xq = m->x + 3 * (size_t)q;
-  const double *mq = m->met + (size_t)mc * q;
+  const double *mq = m->met + (size_t)m->mc * q;
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
     int ip = ball[i] & 3;
-    if (m->tref[t] != ref0) return st;
+    if (m->tref[t] != ref0) return 0;
     const pa_idx *v = m->tv + 4 * (size_t)t;
     if (m->q[t] < qold) qold = m->q[t];
     int iq = rm3d_loc(v, q);
     if (iq >= 0) {
       /* Deleted: both faces (p,x,y) and (q,x,y) on a surface is a cap. */
-      if (((m->tflag[t] >> ip) & 1) && ((m->tflag[t] >> iq) & 1)) return st;
+      if (((m->tflag[t] >> ip) & 1) && ((m->tflag[t] >> iq) & 1)) return 0;
       nd++;
       nq[i] = -1;
       continue;
     }
     double qq = rm3d_qual_moved(m, t, ip, xq, mq);
-    if (qq < RM3D_QABS) return st;
+    if (qq < RM3D_QABS) return 0;
     if (qq < qnew) qnew = qq;
     nq[i] = (float)qq;
   }
-  if (nd == 0 || nd == n) return st;
-  if (qnew < 0.3 * qold || !rm3d_q_ok(qnew, qold)) return st;
-  /* Length guard on the new edges (q, x). */
+  if (nd == 0 || nd == n) return 0;
+  return !(qnew < 0.3 * qold || !rm3d_q_ok(qnew, qold));
+}
+
+/* Length guard: 1 when no new edge (q, x) is longer than lguard. */
+static int new_edges_short(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball,
+                           int n, const float *nq, double lguard) {
   int ok = 1;
   for (int i = 0; i < n && ok; i++) {
     if (nq[i] < 0) continue;
@@ -155,109 +150,153 @@ pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
     const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
     for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~R3V_MARK;
   }
-  if (!ok) return st;
+  return ok;
+}
+
+/* The boundary triangles around the boundary vertex p into trec[0..*ntri),
+ * and whether the surface is kept (*ok): (p,q) is a boundary edge, no
+ * triangle is required, the renamed ones (p -> q) do not exist yet, keep
+ * one reference off features, and stay within RM3D_NORMAL_COS of their
+ * normal and within hausd of p. */
+static pa_status surface_kept(const rm3d *m, pa_idx p, pa_idx q,
+                              const pa_idx *ball, int n, pa_idx *trec,
+                              int *ntri, int *ok) {
+  uint8_t tp = m->vtag[p];
+  int onsurf = 0;
+  const double *xp = m->x + 3 * (size_t)p;
+  *ok = 0;
+  for (int i = 0; i < n; i++) {
+    pa_idx t = ball[i] >> 2;
+    int ip = ball[i] & 3;
+    uint8_t fl = m->tflag[t];
+    if (!(fl & R3T_FACES & ~(1u << ip))) continue;
+    const pa_idx *v = m->tv + 4 * (size_t)t;
+    for (int f = 0; f < 4; f++) {
+      if (f == ip || !((fl >> f) & 1)) continue;
+      pa_idx key[3] = {v[rm3d_face[f][0]], v[rm3d_face[f][1]],
+                       v[rm3d_face[f][2]]};
+      pa_idx r = pa__rm3d_table_find(&m->tri, key);
+      if (r < 0)
+        return pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
+                         "rm3d: tagged face not in the table");
+      int seen = 0;
+      for (int j = 0; j < *ntri; j++) seen |= trec[j] == r;
+      if (seen) continue;
+      if (*ntri >= R3_COL_MAXTRI) return PA_SUCCESS;
+      if (m->tri.flag[r] & PA_FLAG_REQUIRED) return PA_SUCCESS;
+      trec[(*ntri)++] = r;
+    }
+  }
+  int32_t tref0 = *ntri ? m->tri.ref[trec[0]] : 0;
+  for (int j = 0; j < *ntri; j++) {
+    const pa_idx *tvv = m->tri.v + 3 * (size_t)trec[j];
+    int hasq = tvv[0] == q || tvv[1] == q || tvv[2] == q;
+    if (hasq) {
+      onsurf = 1;
+      continue;
+    }
+    if (!(tp & R3V_FEAT) && m->tri.ref[trec[j]] != tref0) return PA_SUCCESS;
+    /* The renamed triangle must not exist yet, and must stay close to
+     * the old surface. */
+    pa_idx nk[3];
+    const double *y[3], *yo[3];
+    for (int c = 0; c < 3; c++) {
+      nk[c] = tvv[c] == p ? q : tvv[c];
+      y[c] = m->x + 3 * (size_t)nk[c];
+      yo[c] = m->x + 3 * (size_t)tvv[c];
+    }
+    if (pa__rm3d_table_find(&m->tri, nk) >= 0) return PA_SUCCESS;
+    double n0[3], n1[3];
+    rm3d_tri_normal(yo[0], yo[1], yo[2], n0);
+    if (rm3d_tri_normal(y[0], y[1], y[2], n1) <= 0) return PA_SUCCESS;
+    if (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] < RM3D_NORMAL_COS)
+      return PA_SUCCESS;
+    double d = fabs((xp[0] - y[0][0]) * n1[0] + (xp[1] - y[0][1]) * n1[1] +
+                    (xp[2] - y[0][2]) * n1[2]);
+    if (d > rm3d_tri_hausd(m, trec[j])) return PA_SUCCESS;
+  }
+  *ok = onsurf;
+  return PA_SUCCESS;
+}
+
+/* The feature edges at the ridge vertex p into erec (*nerec of them, the
+ * first four kept): 1 when they are exactly (p,q) and (p,r), neither
+ * required, (q,r) no feature edge yet, and p projects inside the segment
+ * qr within hausd (the least of the triangles trec[0..ntri) at p). */
+static int ridge_kept(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball, int n,
+                      const pa_idx *trec, int ntri, pa_idx *erec,
+                      int *nerec) {
+  const double *xp = m->x + 3 * (size_t)p, *xq = m->x + 3 * (size_t)q;
+  for (int i = 0; i < n; i++) {
+    const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
+    for (int j = 0; j < 4; j++) {
+      pa_idx x = v[j];
+      if (x == p || (m->vtag[x] & R3V_MARK)) continue;
+      m->vtag[x] |= R3V_MARK;
+      if (!(m->vtag[x] & R3V_FEAT)) continue;
+      pa_idx key[2] = {p, x};
+      pa_idx r = pa__rm3d_table_find(&m->edg, key);
+      if (r < 0) continue;
+      if (*nerec < 4) erec[*nerec] = r;
+      (*nerec)++;
+    }
+  }
+  for (int i = 0; i < n; i++) {
+    const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
+    for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~R3V_MARK;
+  }
+  if (*nerec != 2) return 0;
+  int iq = -1;
+  for (int j = 0; j < 2; j++) {
+    const pa_idx *ev = m->edg.v + 2 * (size_t)erec[j];
+    if (ev[0] == q || ev[1] == q) iq = j;
+    if (m->edg.flag[erec[j]] & PA_FLAG_REQUIRED) return 0;
+  }
+  if (iq < 0) return 0;
+  const pa_idx *eo = m->edg.v + 2 * (size_t)erec[1 - iq];
+  pa_idx r = eo[0] == p ? eo[1] : eo[0];
+  if (r == q) return 0;
+  pa_idx key[2] = {q, r};
+  if (pa__rm3d_table_find(&m->edg, key) >= 0) return 0;
+  const double *xr = m->x + 3 * (size_t)r;
+  double u[3] = {xr[0] - xq[0], xr[1] - xq[1], xr[2] - xq[2]};
+  double w[3] = {xp[0] - xq[0], xp[1] - xq[1], xp[2] - xq[2]};
+  double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+  double uw = u[0] * w[0] + u[1] * w[1] + u[2] * w[2];
+  if (uu <= 0 || uw <= 0 || uw >= uu) return 0;
+  double d2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2] - uw * uw / uu;
+  double h = m->hausd; /* the least over the triangles at p */
+  for (int j = 0; j < ntri; j++) {
+    double hj = rm3d_tri_hausd(m, trec[j]);
+    if (hj < h || j == 0) h = hj;
+  }
+  return !(d2 > h * h);
+}
+
+pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
+                            int *done) {
+  pa_status st = PA_SUCCESS;
+  pa_idx ball[RM3D_MAXBALL];
+  float nq[RM3D_MAXBALL];
+  pa_idx trec[R3_COL_MAXTRI];
+  pa_idx erec[4];
+  int ntri = 0, nerec = 0;
+  *done = 0;
+  uint8_t tp = m->vtag[p];
+  if (tp & (R3V_LOCK | R3V_CORNER | R3V_DEAD)) return st;
+  int surfp = (tp & R3V_BDRY) != 0;
+  if (surfp && (!m->surf || !(m->vtag[q] & R3V_BDRY))) return st;
+  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
+  if (n < 0) return st;
+  if (!ball_qualities(m, q, ball, n, nq)) return st;
+  if (!new_edges_short(m, p, q, ball, n, nq, lguard)) return st;
   if (surfp) {
-    /* Boundary triangles around p; the edge (p,q) must be on the surface. */
-    int onsurf = 0;
-    const double *xp = m->x + 3 * (size_t)p;
-    for (int i = 0; i < n; i++) {
-      pa_idx t = ball[i] >> 2;
-      int ip = ball[i] & 3;
-      uint8_t fl = m->tflag[t];
-      if (!(fl & R3T_FACES & ~(1u << ip))) continue;
-      const pa_idx *v = m->tv + 4 * (size_t)t;
-      for (int f = 0; f < 4; f++) {
-        if (f == ip || !((fl >> f) & 1)) continue;
-        pa_idx key[3] = {v[rm3d_face[f][0]], v[rm3d_face[f][1]],
-                         v[rm3d_face[f][2]]};
-        pa_idx r = pa__rm3d_table_find(&m->tri, key);
-        if (r < 0)
-          return pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
-                           "rm3d: tagged face not in the table");
-        int seen = 0;
-        for (int j = 0; j < ntri; j++) seen |= trec[j] == r;
-        if (seen) continue;
-        if (ntri >= R3_COL_MAXTRI) return st;
-        if (m->tri.flag[r] & PA_FLAG_REQUIRED) return st;
-        trec[ntri++] = r;
-      }
-    }
-    int32_t tref0 = ntri ? m->tri.ref[trec[0]] : 0;
-    for (int j = 0; j < ntri; j++) {
-      const pa_idx *tvv = m->tri.v + 3 * (size_t)trec[j];
-      int hasq = tvv[0] == q || tvv[1] == q || tvv[2] == q;
-      if (hasq) {
-        onsurf = 1;
-        continue;
-      }
-      if (!(tp & R3V_FEAT) && m->tri.ref[trec[j]] != tref0) return st;
-      /* The renamed triangle must not exist yet, and must stay close to
-       * the old surface. */
-      pa_idx nk[3];
-      const double *y[3], *yo[3];
-      for (int c = 0; c < 3; c++) {
-        nk[c] = tvv[c] == p ? q : tvv[c];
-        y[c] = m->x + 3 * (size_t)nk[c];
-        yo[c] = m->x + 3 * (size_t)tvv[c];
-      }
-      if (pa__rm3d_table_find(&m->tri, nk) >= 0) return st;
-      double n0[3], n1[3];
-      rm3d_tri_normal(yo[0], yo[1], yo[2], n0);
-      if (rm3d_tri_normal(y[0], y[1], y[2], n1) <= 0) return st;
-      if (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] < RM3D_NORMAL_COS)
-        return st;
-      double d = fabs((xp[0] - y[0][0]) * n1[0] + (xp[1] - y[0][1]) * n1[1] +
-                      (xp[2] - y[0][2]) * n1[2]);
-      if (d > rm3d_tri_hausd(m, trec[j])) return st;
-    }
-    if (!onsurf) return st;
-    if (tp & R3V_FEAT) {
-      /* Feature edges at p: exactly (p,q) and (p,r), r on the line qp. */
-      for (int i = 0; i < n; i++) {
-        const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
-        for (int j = 0; j < 4; j++) {
-          pa_idx x = v[j];
-          if (x == p || (m->vtag[x] & R3V_MARK)) continue;
-          m->vtag[x] |= R3V_MARK;
-          if (!(m->vtag[x] & R3V_FEAT)) continue;
-          pa_idx key[2] = {p, x};
-          pa_idx r = pa__rm3d_table_find(&m->edg, key);
-          if (r < 0) continue;
-          if (nerec < 4) erec[nerec] = r;
-          nerec++;
-        }
-      }
-      for (int i = 0; i < n; i++) {
-        const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
-        for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~R3V_MARK;
-      }
-      if (nerec != 2) return st;
-      int iq = -1;
-      for (int j = 0; j < 2; j++) {
-        const pa_idx *ev = m->edg.v + 2 * (size_t)erec[j];
-        if (ev[0] == q || ev[1] == q) iq = j;
-        if (m->edg.flag[erec[j]] & PA_FLAG_REQUIRED) return st;
-      }
-      if (iq < 0) return st;
-      const pa_idx *eo = m->edg.v + 2 * (size_t)erec[1 - iq];
-      pa_idx r = eo[0] == p ? eo[1] : eo[0];
-      if (r == q) return st;
-      pa_idx key[2] = {q, r};
-      if (pa__rm3d_table_find(&m->edg, key) >= 0) return st;
-      const double *xr = m->x + 3 * (size_t)r;
-      double u[3] = {xr[0] - xq[0], xr[1] - xq[1], xr[2] - xq[2]};
-      double w[3] = {xp[0] - xq[0], xp[1] - xq[1], xp[2] - xq[2]};
-      double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
-      double uw = u[0] * w[0] + u[1] * w[1] + u[2] * w[2];
-      if (uu <= 0 || uw <= 0 || uw >= uu) return st;
-      double d2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2] - uw * uw / uu;
-      double h = m->hausd; /* the least over the triangles at p */
-      for (int j = 0; j < ntri; j++) {
-        double hj = rm3d_tri_hausd(m, trec[j]);
-        if (hj < h || j == 0) h = hj;
-      }
-      if (d2 > h * h) return st;
-    }
+    int ok;
+    PA_CALL(surface_kept(m, p, q, ball, n, trec, &ntri, &ok));
+    if (!ok) return st;
+    if ((tp & R3V_FEAT) &&
+        !ridge_kept(m, p, q, ball, n, trec, ntri, erec, &nerec))
+      return st;
   }
   PA_CALL(collapse_apply(m, p, q, ball, n, nq, trec, ntri, erec, nerec));
   *done = 1;

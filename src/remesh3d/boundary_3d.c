@@ -1,5 +1,5 @@
 /*
- * rm3d_surface.c -- analysis of the boundary surface before remeshing it:
+ * boundary_3d.c -- analysis of the boundary surface before remeshing it:
  * feature (ridge) edges, corners and vertex normals of curved patches.
  *
  * A boundary edge becomes a feature edge (added to the edge table with
@@ -14,7 +14,7 @@
  * does a vertex whose feature edges all separate a free triangle from a
  * frozen one (where a piece's frozen skin meets the boundary).
  */
-#include "remesh/remesh3d.h"
+#include "remesh3d/remesh3d.h"
 
 typedef struct bedge {
   pa_idx a, b;   /* a < b */
@@ -52,13 +52,11 @@ static int frozen_face(const rm3d *m, const pa_idx *fv) {
   return r >= 0 && (m->tri.flag[r] & PA_FLAG_REQUIRED);
 }
 
-pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
-  pa_status st = PA_SUCCESS;
-  bedge *be = NULL;
-  uint8_t *nfeat = NULL, *nborder = NULL;
-  pa_idx *other = NULL;
+/* The edges of the live boundary triangles into be (three per triangle,
+ * ends sorted), sorted so that the copies of an edge are adjacent. Returns
+ * their count. */
+static size_t sorted_edges(const rm3d *m, bedge *be) {
   size_t nbe = 0;
-  PA_ALLOC(be, 3 * (size_t)m->tri.n + 1);
   for (pa_idx r = 0; r < m->tri.n; r++) {
     if (m->tri.flag[r] & R3_REC_DEAD) continue;
     const pa_idx *v = m->tri.v + 3 * (size_t)r;
@@ -72,7 +70,15 @@ pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
     }
   }
   qsort(be, nbe, sizeof *be, bedge_cmp);
-  PA_CALLOC(nborder, (size_t)m->nv);
+  return nbe;
+}
+
+/* Feature edges (see the opening comment) added to the edge table from the
+ * sorted boundary edges be[0..nbe); nborder[x] counts the feature edges at
+ * x between a frozen and a free triangle. */
+static pa_status add_feature_edges(rm3d *m, int use_angle, const bedge *be,
+                                   size_t nbe, uint8_t *nborder) {
+  pa_status st = PA_SUCCESS;
   for (size_t i = 0; i < nbe;) {
     size_t j = i + 1;
     while (j < nbe && be[j].a == be[i].a && be[j].b == be[i].b) j++;
@@ -105,9 +111,15 @@ pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
     }
     i = j;
   }
-  /* Corners: feature degree other than 0 or 2, or a sharp turn. */
-  PA_CALLOC(nfeat, (size_t)m->nv);
-  PA_ALLOC(other, 2 * (size_t)m->nv);
+cleanup:
+  return st;
+}
+
+/* Corners: feature degree other than 0 or 2, or a sharp turn. nfeat[x]
+ * receives the feature degree of x (at most 255), other[2x..2x+1] the other
+ * ends of its first two feature edges. */
+static void mark_corners(rm3d *m, int use_angle, uint8_t *nfeat,
+                         pa_idx *other) {
   for (pa_idx r = 0; r < m->edg.n; r++) {
     if (m->edg.flag[r] & R3_REC_DEAD) continue;
     const pa_idx *ev = m->edg.v + 2 * (size_t)r;
@@ -136,13 +148,20 @@ pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
       if (!(m->vpf[x] & PA_FLAG_REQUIRED)) m->vpf[x] |= PA_FLAG_CORNER;
     }
   }
-  /* Normals of boundary vertices off features, from their outward free
-   * faces. A vertex whose feature edges all border a frozen triangle (the
-   * skin of a piece of the parallel loop meeting the boundary) gets one
-   * too: without it every split towards it took the chord's midpoint, so
-   * the input's facets stayed flat along every skin on a curved boundary,
-   * their vertices planar in the next iteration, and the junctions with
-   * the curved refinement around made needles and folds. */
+}
+
+/* Normals of boundary vertices off features, from their outward free
+ * faces. A vertex whose feature edges all border a frozen triangle (the
+ * skin of a piece of the parallel loop meeting the boundary: nborder[x] ==
+ * nfeat[x]) gets one too: without it every split towards it took the
+ * chord's midpoint, so the input's facets stayed flat along every skin on a
+ * curved boundary, their vertices planar in the next iteration, and the
+ * junctions with the curved refinement around made needles and folds. A
+ * vertex is curved (R3V_CURVED) when one of its faces deviates from its
+ * normal; m->nrm is kept only if one is. */
+static pa_status curved_normals(rm3d *m, const uint8_t *nborder,
+                                const uint8_t *nfeat) {
+  pa_status st = PA_SUCCESS;
   PA_CALLOC(m->nrm, 3 * m->capv);
   for (pa_idx k = 0; k < m->ne; k++) {
     if (!(m->tflag[k] & R3T_FACES)) continue;
@@ -155,7 +174,6 @@ pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
     }
   }
   for (pa_idx x = 0; x < m->nv; x++) rm3d_unit(m->nrm + 3 * (size_t)x);
-  /* A vertex is curved when one of its faces deviates from its normal. */
   int ncurved = 0;
   for (pa_idx k = 0; k < m->ne; k++) {
     if (!(m->tflag[k] & R3T_FACES)) continue;
@@ -180,6 +198,23 @@ pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
     pa__free(m->nrm);
     m->nrm = NULL;
   }
+cleanup:
+  return st;
+}
+
+pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
+  pa_status st = PA_SUCCESS;
+  bedge *be = NULL;
+  uint8_t *nfeat = NULL, *nborder = NULL;
+  pa_idx *other = NULL;
+  PA_ALLOC(be, 3 * (size_t)m->tri.n + 1);
+  size_t nbe = sorted_edges(m, be);
+  PA_CALLOC(nborder, (size_t)m->nv);
+  PA_CALL(add_feature_edges(m, use_angle, be, nbe, nborder));
+  PA_CALLOC(nfeat, (size_t)m->nv);
+  PA_ALLOC(other, 2 * (size_t)m->nv);
+  mark_corners(m, use_angle, nfeat, other);
+  PA_CALL(curved_normals(m, nborder, nfeat));
 cleanup:
   pa__free(be);
   pa__free(nborder);

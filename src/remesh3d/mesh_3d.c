@@ -1,5 +1,5 @@
 /*
- * rm3d_mesh.c -- the 3D remesher's working structure (struct rm3d, see
+ * mesh_3d.c -- the 3D remesher's working structure (struct rm3d, see
  * remesh3d.h): keyed tables of boundary triangles and feature edges, building
  * it from a pa_mesh, growth, compaction, writing it back, and a checker.
  *
@@ -16,7 +16,7 @@
  * inverted input. Writing back builds a complete new pa_mesh first and swaps
  * it in only when nothing can fail any more.
  */
-#include "remesh/remesh3d.h"
+#include "remesh3d/remesh3d.h"
 
 const int rm3d_edge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
 const int rm3d_compl[4][4][2] = {

@@ -1,17 +1,15 @@
 /*
- * rmesh.c -- the remesher's compact working mesh (struct pa__rmesh, see
- * remesh.h): construction from a pa_mesh, slot management with free lists,
- * vertex interpolation, invariant check and the compact write-back.
+ * mesh_2d.c -- the 2D remesher's compact working mesh (struct pa__rmesh,
+ * see remesh2d.h): construction from a pa_mesh, slot management with free
+ * lists, vertex interpolation, the frozen-skin relaxation of the working
+ * metric, locality renumbering, invariant check and the compact write-back.
  *
- * Dimension-independent except where marked (feature records are the 2D
- * boundary edges; 3D will add its own feature tables).
- *
- * Invariants: see remesh.h. In addition, write-back renumbers live entities in
+ * Invariants: see remesh2d.h. In addition, write-back renumbers live entities in
  * slot order, so the output depends only on the sequence of operations (the
  * remesher is deterministic), and it never touches the pa_mesh until every new
  * array has been built: a failure leaves the mesh as it was given.
  */
-#include "remesh/remesh.h"
+#include "remesh2d/remesh2d.h"
 
 #include <float.h>
 
@@ -321,6 +319,48 @@ cleanup:
   return st;
 }
 
+/* Face adjacency of the working mesh's elements, by scanning the ball
+ * (bstart, ball: CSR) of each face's first vertex; RM_NOADJ where no
+ * element is on the other side. */
+static pa_status build_adjacency(pa__rmesh *rm, const pa_idx *bstart,
+                                 const pa_idx *ball) {
+  pa_status st = PA_SUCCESS;
+  int nvpe = rm->nvpe;
+  for (pa_idx k = 0; k < rm->ne; k++) {
+    const pa_idx *vk = rm->ev + (size_t)nvpe * k;
+    for (int i = 0; i < nvpe; i++) {
+      pa_idx face[3];
+      int nf = 0;
+      for (int j = 0; j < nvpe; j++)
+        if (j != i) face[nf++] = vk[j];
+      pa_idx nb = RM_NOADJ;
+      int cnt = 0;
+      for (pa_idx s = bstart[face[0]]; s < bstart[face[0] + 1]; s++) {
+        pa_idx f = ball[s];
+        if (f == k) continue;
+        const pa_idx *vf = rm->ev + (size_t)nvpe * f;
+        int found = 0, jo = -1;
+        for (int j = 0; j < nvpe; j++) {
+          int in = 0;
+          for (int l = 0; l < nf; l++) in |= vf[j] == face[l];
+          if (in) found++;
+          else jo = j;
+        }
+        if (found == nf) {
+          nb = (pa_idx)nvpe * f + jo;
+          cnt++;
+        }
+      }
+      PA_CHECK(cnt <= 1, PA_ERR_MESH,
+               "remesher: a face of element %d is shared by more than two "
+               "elements", (int)k + 1);
+      rm->adj[(size_t)nvpe * k + i] = nb;
+    }
+  }
+cleanup:
+  return st;
+}
+
 pa_status pa__rm_create(pa_mesh *mesh, const pa_remesh_opts *opts,
                         pa__rmesh **out) {
   pa_status st = PA_SUCCESS;
@@ -328,6 +368,7 @@ pa_status pa__rm_create(pa_mesh *mesh, const pa_remesh_opts *opts,
   pa_idx *bstart = NULL, *ball = NULL;
   int d = mesh->dim, nvpe = d + 1;
   *out = NULL;
+  PA_CHECK(d == 2, PA_ERR_INTERNAL, "the 2D remesher was given a %dD mesh", d);
   PA_CHECK(mesh->met_ncomp == 1 || mesh->met_ncomp == pa__tensor_ncomp(d),
            PA_ERR_ARG, "remesher: the mesh has no metric");
   PA_CALLOC(rm, 1);
@@ -390,47 +431,12 @@ pa_status pa__rm_create(pa_mesh *mesh, const pa_remesh_opts *opts,
   }
   rm->ne = rm->nelive = ne;
 
-  /* Vertex balls (CSR), then face adjacency by scanning the ball of the
-   * face's first vertex. */
+  /* Vertex balls (CSR), then face adjacency. */
   PA_CALL(pa__balls(rm->ev, ne, nvpe, nv, &bstart, &ball));
-  for (pa_idx k = 0; k < ne; k++) {
-    const pa_idx *vk = rm->ev + (size_t)nvpe * k;
-    for (int i = 0; i < nvpe; i++) {
-      pa_idx face[3];
-      int nf = 0;
-      for (int j = 0; j < nvpe; j++)
-        if (j != i) face[nf++] = vk[j];
-      pa_idx nb = RM_NOADJ;
-      int cnt = 0;
-      for (pa_idx s = bstart[face[0]]; s < bstart[face[0] + 1]; s++) {
-        pa_idx f = ball[s];
-        if (f == k) continue;
-        const pa_idx *vf = rm->ev + (size_t)nvpe * f;
-        int found = 0, jo = -1;
-        for (int j = 0; j < nvpe; j++) {
-          int in = 0;
-          for (int l = 0; l < nf; l++) in |= vf[j] == face[l];
-          if (in) found++;
-          else jo = j;
-        }
-        if (found == nf) {
-          nb = (pa_idx)nvpe * f + jo;
-          cnt++;
-        }
-      }
-      PA_CHECK(cnt <= 1, PA_ERR_MESH,
-               "remesher: a face of element %d is shared by more than two "
-               "elements", (int)k + 1);
-      rm->adj[(size_t)nvpe * k + i] = nb;
-    }
-  }
+  PA_CALL(build_adjacency(rm, bstart, ball));
 
-  if (d == 2) {
-    PA_CALL(pa__rm_features_2d_init(rm, mesh, bstart, ball));
-    PA_CALL(skin_relax_2d(rm));
-  } else {
-    PA_FAIL(PA_ERR_UNSUPPORTED, "remesher: 3D is not available yet");
-  }
+  PA_CALL(pa__rm_features_2d_init(rm, mesh, bstart, ball));
+  PA_CALL(skin_relax_2d(rm));
   *out = rm;
   rm = NULL;
 cleanup:

@@ -1,5 +1,5 @@
 /*
- * rm3d_driver.c -- the 3D remesher's passes and its entry point
+ * driver_3d.c -- the 3D remesher's passes and its entry point
  * pa__remesh3d().
  *
  * Schedule (docs/design/REMESHER3D.md):
@@ -20,7 +20,8 @@
  *     tets of quality < 0.3 (interior edge removal, 2-3, boundary edge swap)
  *     and smoothing of the vertices of tets below 0.75, until a round
  *     changes fewer than 0.5 % of the tets (with frozen entities also when
- *     balanced splits and collapses stall: three rounds without a 5 % drop);
+ *     balanced splits and collapses stall: three rounds without a 5 % drop;
+ *     the rule shared with 2D, remesh/schedule.h);
  *     the working metric is relaxed at frozen vertices beforehand
  *     (pa__rm3d_skin_relax);
  *  3. three rounds of swaps (quality < 0.7: this lifts the mean quality by
@@ -35,10 +36,21 @@
  * PA_REMESH_TARGET_MISSED otherwise. Any error leaves the caller's mesh as
  * given (the working structure is a copy, written back only at the end).
  */
-#include "remesh/remesh3d.h"
+#include "remesh/schedule.h"
+#include "remesh3d/remesh3d.h"
 
 #define RM3D_QSMOOTH 0.75 /* smooth the vertices of tets below this quality */
-#define RM3D_STOP 5e-3    /* rounds stop under this fraction of changed tets */
+/* The rounds after the bands (their stopping rule: remesh/schedule.h). With
+ * the working metric relaxed at frozen skins they settle in 8-10 rounds;
+ * the bound ends the runs that do not. */
+#define RM3D_ROUNDS_MAX 20
+/* The first rounds change little while swaps and moves unlock the collapses
+ * the refinement bands refused: at least this many rounds. */
+#define RM3D_ROUNDS_MIN 3
+/* Splits + collapses at or below this share of the live tets: settled.
+ * 0.1 % made the anisotropic cases ping-pong for 20 rounds at ~0.3 % each
+ * for a few tenths of a percent in range (docs/design/REMESHER3D.md). */
+#define RM3D_ROUNDS_SETTLED 5e-3
 /* Sweeps of length moves after each optimisation round's quality moves (which
  * disregard lengths) and at the end. UGAWG polar-1 (bench/ugawg.sh, 3D box,
  * 5 passes): 97.3 % of edges in range with 1 sweep, 98.0 % with 2, 98.1 %
@@ -485,188 +497,228 @@ static double estimate_ntets(const rm3d *m) {
   return s / pa__unit_simplex_volume(3);
 }
 
-pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
-                       pa_remesh_report *report) {
+/* Before the remeshing: the surface analysis, the working metric relaxed
+ * at frozen skins, and room reserved for the expected output. */
+static pa_status prepare(rm3d *m, const pa_remesh_opts *opts) {
   pa_status st = PA_SUCCESS;
-  rm3d m;
-  int built = 0;
-  double t0 = pa_wtime();
-  PA_CHECK(mesh && opts && report, PA_ERR_ARG, "pa__remesh3d: NULL argument");
-  memset(report, 0, sizeof *report);
-  report->outcome = PA_REMESH_FAILED;
-  PA_CALL(pa__rm3d_build(&m, mesh, opts));
-  built = 1;
-  if (m.surf) PA_CALL(pa__rm3d_surface_analyze(&m, !opts->no_angle));
-  {
-    pa_idx nrel = 0;
-    PA_CALL(pa__rm3d_skin_relax(&m, &nrel));
-    if (m.verbosity > 0 && nrel)
-      fprintf(stderr, "  rm3d: metric relaxed at %d frozen vertices\n",
-              (int)nrel);
+  pa_idx nrel = 0;
+  if (m->surf) PA_CALL(pa__rm3d_surface_analyze(m, !opts->no_angle));
+  PA_CALL(pa__rm3d_skin_relax(m, &nrel));
+  if (m->verbosity > 0 && nrel)
+    fprintf(stderr, "  rm3d: metric relaxed at %d frozen vertices\n",
+            (int)nrel);
+  /* the estimate is the metric volume over a regular tet's, about 1.3 x
+   * the final count of a uniform refinement: 0.95 of it is room enough
+   * (the arrays grow by 1.25 if not), 1.25 cost 9 B/tet at the peak */
+  double est = estimate_ntets(m) * 0.95;
+  if (est > m->ne && est < 1.5e9) {
+    size_t ne = (size_t)est;
+    PA_CALL(pa__rm3d_reserve(m, ne / 5 + (size_t)m->nv, ne));
   }
-  {
-    /* the estimate is the metric volume over a regular tet's, about 1.3 x
-     * the final count of a uniform refinement: 0.95 of it is room enough
-     * (the arrays grow by 1.25 if not), 1.25 cost 9 B/tet at the peak */
-    double est = estimate_ntets(&m) * 0.95;
-    if (est > m.ne && est < 1.5e9) {
-      size_t ne = (size_t)est;
-      PA_CALL(pa__rm3d_reserve(&m, ne / 5 + (size_t)m.nv, ne));
-    }
+cleanup:
+  return st;
+}
+
+/* Before the last band: a lattice crowd (see lattice_crowd) at the top of
+ * the lengths is broken. box3d 10 -> hsiz 0.0175..0.016 has 15-20 % of its
+ * tet-edges in one bin and under 6 % longer; the other sizes measured have
+ * under 1.2 % in any bin, or 16-49 % longer edges (the crowd is not the
+ * last class split: 0.028, 0.03, 0.015, where a trial of the cure gave no
+ * fewer tets and took 15-50 % longer). Jiggle the ends of its edges by 0.1
+ * and spread the splits from now on (m->spread). */
+static void break_lattice_crowd(rm3d *m) {
+  double longer, crowd = lattice_crowd(m, &longer);
+  long nj = 0;
+  pa_idx ball[RM3D_MAXBALL];
+  m->spread = crowd > 0.05 && longer < 0.1;
+  for (pa_idx p = 0; p < m->nv; p++) {
+    if (!(m->vtag[p] & R3V_TODO)) continue;
+    m->vtag[p] &= (uint8_t)~R3V_TODO;
+    if (m->spread) nj += pa__rm3d_jiggle_vertex(m, p, 0.1, ball);
   }
-  int npass = 0, step = 0;
-  if (!opts->no_insert) {
-    /* Far too coarse input: split longest edges first, in bands of lengths
-     * decreasing by a constant factor, so that tets are bisected roughly in
-     * the order of a global longest-edge refinement (no needles). */
-    double prev = HUGE_VAL;
-    for (int it = 0; it < 40; it++) {
-      /* decreasing even when the longest edge cannot be split (frozen, or
-       * refused next to a frozen skin): the bands must reach RM3D_LMAX */
-      double thr = max_length(&m) / 1.5;
-      if (thr > prev / 1.5) thr = prev / 1.5;
-      /* a band just above the last one would cost a sweep for little: 1.45
-       * then 1.41 took 0.13 s of a 2.2 s piece (box3d 10 -> 0.019) */
-      if (thr < 1.1 * RM3D_LMAX) thr = RM3D_LMAX;
-      prev = thr;
-      long ns = 0;
-      double t1 = pa_wtime();
-      if (thr == RM3D_LMAX) {
-        /* A lattice crowd (see lattice_crowd) at the top of the lengths:
-         * box3d 10 -> hsiz 0.0175..0.016 has 15-20 % of its tet-edges in
-         * one bin and under 6 % longer; the other sizes measured have under
-         * 1.2 % in any bin, or 16-49 % longer edges (the crowd is not the
-         * last class split: 0.028, 0.03, 0.015, where a trial of the cure
-         * gave no fewer tets and took 15-50 % longer). Jiggle the ends of
-         * its edges by 0.1 and spread the splits from now on. */
-        double longer, crowd = lattice_crowd(&m, &longer);
-        long nj = 0;
-        pa_idx ball[RM3D_MAXBALL];
-        m.spread = crowd > 0.05 && longer < 0.1;
-        for (pa_idx p = 0; p < m.nv; p++) {
-          if (!(m.vtag[p] & R3V_TODO)) continue;
-          m.vtag[p] &= (uint8_t)~R3V_TODO;
-          if (m.spread) nj += pa__rm3d_jiggle_vertex(&m, p, 0.1, ball);
-        }
-        if (m.verbosity > 1 || (m.verbosity > 0 && m.spread))
-          fprintf(stderr,
-                  "  rm3d lattice crowd: %.1f %% of the edges in one bin, "
-                  "%.1f %% longer%s, %ld vertices jiggled\n",
-                  100 * crowd, 100 * longer,
-                  m.spread ? " (splits spread)" : "", nj);
-      }
-      PA_CALL(pa__rm3d_split_pass(&m, thr, &ns));
-      long nc = 0;
-      PA_CALL(pa__rm3d_collapse_pass(&m, RM3D_LMIN, thr, &nc));
-      if (m.ndead_t > m.ne / 8) PA_CALL(pa__rm3d_compact(&m, 1));
-      if (m.verbosity > 0)
-        fprintf(stderr,
-                "  rm3d band %.2f: %ld splits %ld collapses (%.2fs), %d tets "
-                "(%d slots), memory %.1f MB (peak %.1f)\n",
-                thr, ns, nc, pa_wtime() - t1, (int)(m.ne - m.ndead_t),
-                (int)m.ne, pa_memory_current() / 1e6, pa_memory_peak() / 1e6);
-      progress(opts, ++step, &m);
-      if (thr == RM3D_LMAX) break;
-    }
-    PA_CALL(pa__rm3d_reorder(&m));
-    long ref = -1; /* splits + collapses when the count last fell by 5 % */
-    int stall = 0, frozen = 0;
-    for (pa_idx k = 0; k < m.ne && !frozen; k++)
-      frozen = (m.tflag[k] & R3T_FROZEN) != 0;
-    for (pa_idx r = 0; r < m.tri.n && !frozen; r++)
-      frozen = (m.tri.flag[r] & PA_FLAG_REQUIRED) != 0;
-    for (int it = 0; it < 20; it++, npass++) {
-      long ns = 0, nc = 0, nw = 0, nm = 0;
-      double t1 = pa_wtime();
-      PA_CALL(pa__rm3d_split_pass(&m, RM3D_LMAX, &ns));
-      double t2 = pa_wtime();
-      PA_CALL(pa__rm3d_collapse_pass(&m, RM3D_LMIN, RM3D_LMAX, &nc));
-      double t3 = pa_wtime();
-      if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(&m, 0.3, 1.02, &nw));
-      double t4 = pa_wtime();
-      if (!opts->no_move) {
-        long nl = 0;
-        PA_CALL(pa__rm3d_smooth_pass(&m, RM3D_QSMOOTH, &nm));
-        PA_CALL(pa__rm3d_length_pass(&m, 1, &nl));
-        nm += nl;
-      }
-      double t5 = pa_wtime();
-      if (m.ndead_t > m.ne / 8) PA_CALL(pa__rm3d_compact(&m, 1));
-      if (m.verbosity > 0)
-        fprintf(stderr,
-                "  rm3d round %d: %ld splits (%.2fs) %ld collapses (%.2fs) "
-                "%ld swaps (%.2fs) %ld moves (%.2fs), %d tets\n",
-                it, ns, t2 - t1, nc, t3 - t2, nw, t4 - t3, nm, t5 - t4,
-                (int)(m.ne - m.ndead_t));
-      progress(opts, ++step, &m);
-      /* The first rounds change little while swaps and moves unlock the
-       * collapses the refinement bands refused: at least three rounds. */
-      if (it >= 2 && ns + nc <= RM3D_STOP * (m.ne - m.ndead_t)) break;
-      /* Operations undoing each other (next to frozen entities whose edges
-       * cannot reach the size; the 2D remesher's rule, docs/design/REMESHER.md):
-       * splits and collapses within a factor 3 of each other, stop after
-       * three rounds without a 5 % drop of their sum since the last one. A
-       * refinement or coarsening front is one-sided and never stalls. Only
-       * with frozen entities: the anisotropic shell balances its splits and
-       * collapses too, and stopping it early cost 0.2 % in range. */
-      int pingpong = frozen && 3 * ns >= nc && 3 * nc >= ns;
-      if (ref < 0 || ns + nc < 0.95 * ref || !pingpong) {
-        ref = ns + nc;
-        stall = 0;
-      } else if (it >= 2 && ++stall >= 3) {
-        break;
-      }
-    }
+  if (m->verbosity > 1 || (m->verbosity > 0 && m->spread))
+    fprintf(stderr,
+            "  rm3d lattice crowd: %.1f %% of the edges in one bin, "
+            "%.1f %% longer%s, %ld vertices jiggled\n",
+            100 * crowd, 100 * longer, m->spread ? " (splits spread)" : "",
+            nj);
+}
+
+/* Schedule step 1, the refinement bands. Far too coarse input: split
+ * longest edges first, in bands of lengths decreasing by a constant factor,
+ * so that tets are bisected roughly in the order of a global longest-edge
+ * refinement (no needles); each band collapses after its splits. *step
+ * counts the progress reports. */
+static pa_status refine_bands(rm3d *m, const pa_remesh_opts *opts,
+                              int *step) {
+  pa_status st = PA_SUCCESS;
+  double prev = HUGE_VAL;
+  for (int it = 0; it < 40; it++) {
+    /* decreasing even when the longest edge cannot be split (frozen, or
+     * refused next to a frozen skin): the bands must reach RM3D_LMAX */
+    double thr = max_length(m) / 1.5;
+    if (thr > prev / 1.5) thr = prev / 1.5;
+    /* a band just above the last one would cost a sweep for little: 1.45
+     * then 1.41 took 0.13 s of a 2.2 s piece (box3d 10 -> 0.019) */
+    if (thr < 1.1 * RM3D_LMAX) thr = RM3D_LMAX;
+    prev = thr;
+    long ns = 0, nc = 0;
+    double t1 = pa_wtime();
+    if (thr == RM3D_LMAX) break_lattice_crowd(m);
+    PA_CALL(pa__rm3d_split_pass(m, thr, &ns));
+    PA_CALL(pa__rm3d_collapse_pass(m, RM3D_LMIN, thr, &nc));
+    if (m->ndead_t > m->ne / 8) PA_CALL(pa__rm3d_compact(m, 1));
+    if (m->verbosity > 0)
+      fprintf(stderr,
+              "  rm3d band %.2f: %ld splits %ld collapses (%.2fs), %d tets "
+              "(%d slots), memory %.1f MB (peak %.1f)\n",
+              thr, ns, nc, pa_wtime() - t1, (int)(m->ne - m->ndead_t),
+              (int)m->ne, pa_memory_current() / 1e6, pa_memory_peak() / 1e6);
+    progress(opts, ++*step, m);
+    if (thr == RM3D_LMAX) break;
   }
-  for (int it = 0; it < 3; it++, npass++) {
+cleanup:
+  return st;
+}
+
+/* 1 if the mesh has a frozen tet or boundary triangle. */
+static int has_frozen(const rm3d *m) {
+  for (pa_idx k = 0; k < m->ne; k++)
+    if (m->tflag[k] & R3T_FROZEN) return 1;
+  for (pa_idx r = 0; r < m->tri.n; r++)
+    if (m->tri.flag[r] & PA_FLAG_REQUIRED) return 1;
+  return 0;
+}
+
+/* Schedule step 2, the rounds at the final thresholds: split, collapse,
+ * swap, move, until the stopping rule (remesh/schedule.h) says they
+ * settled or stalled. *step counts the progress reports, *npass the
+ * rounds (all but the one that stops them). */
+static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
+                               int *step, int *npass) {
+  pa_status st = PA_SUCCESS;
+  pa__rounds rounds;
+  /* Balanced splits and collapses are a ping-pong only with frozen
+   * entities: the anisotropic shell balances them too, and stopping it
+   * early cost 0.2 % in range. */
+  pa__rounds_start(&rounds, RM3D_ROUNDS_MIN, RM3D_ROUNDS_SETTLED, 0,
+                   has_frozen(m));
+  for (int it = 0; it < RM3D_ROUNDS_MAX; it++, (*npass)++) {
+    long ns = 0, nc = 0, nw = 0, nm = 0;
+    double t1 = pa_wtime();
+    PA_CALL(pa__rm3d_split_pass(m, RM3D_LMAX, &ns));
+    double t2 = pa_wtime();
+    PA_CALL(pa__rm3d_collapse_pass(m, RM3D_LMIN, RM3D_LMAX, &nc));
+    double t3 = pa_wtime();
+    if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(m, 0.3, 1.02, &nw));
+    double t4 = pa_wtime();
+    if (!opts->no_move) {
+      long nl = 0;
+      PA_CALL(pa__rm3d_smooth_pass(m, RM3D_QSMOOTH, &nm));
+      PA_CALL(pa__rm3d_length_pass(m, 1, &nl));
+      nm += nl;
+    }
+    double t5 = pa_wtime();
+    if (m->ndead_t > m->ne / 8) PA_CALL(pa__rm3d_compact(m, 1));
+    if (m->verbosity > 0)
+      fprintf(stderr,
+              "  rm3d round %d: %ld splits (%.2fs) %ld collapses (%.2fs) "
+              "%ld swaps (%.2fs) %ld moves (%.2fs), %d tets\n",
+              it, ns, t2 - t1, nc, t3 - t2, nw, t4 - t3, nm, t5 - t4,
+              (int)(m->ne - m->ndead_t));
+    progress(opts, ++*step, m);
+    if (pa__rounds_stop(&rounds, ns, nc, m->ne - m->ndead_t)) break;
+  }
+cleanup:
+  return st;
+}
+
+/* Schedule step 3, the optimisation: three rounds of swaps and moves, a
+ * pass against slivers, and the last length moves. *npass counts the
+ * passes. */
+static pa_status optimise(rm3d *m, const pa_remesh_opts *opts, int *npass) {
+  pa_status st = PA_SUCCESS;
+  for (int it = 0; it < 3; it++, (*npass)++) {
     long nc = 0, nw = 0, nm = 0;
     /* The swaps (Q < 0.7) and moves of this phase unlock short edges the
      * rounds could not collapse (mostly interior ones refused by the length
      * guard): collapse again in the first two rounds; the last one only
      * swaps and smooths, so the worst quality is repaired after them. */
     if (it < 2 && !opts->no_insert)
-      PA_CALL(pa__rm3d_collapse_pass(&m, RM3D_LMIN, RM3D_LMAX, &nc));
-    if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(&m, 0.7, 1.01, &nw));
+      PA_CALL(pa__rm3d_collapse_pass(m, RM3D_LMIN, RM3D_LMAX, &nc));
+    if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(m, 0.7, 1.01, &nw));
     if (!opts->no_move) {
       long nl = 0;
-      PA_CALL(pa__rm3d_smooth_pass(&m, RM3D_QSMOOTH, &nm));
-      PA_CALL(pa__rm3d_length_pass(&m, RM3D_LENGTH_SWEEPS, &nl));
+      PA_CALL(pa__rm3d_smooth_pass(m, RM3D_QSMOOTH, &nm));
+      PA_CALL(pa__rm3d_length_pass(m, RM3D_LENGTH_SWEEPS, &nl));
       nm += nl;
     }
-    if (m.verbosity > 0)
+    if (m->verbosity > 0)
       fprintf(stderr,
               "  rm3d optimisation %d: %ld collapses %ld swaps %ld moves\n",
               it, nc, nw, nm);
   }
   if (!opts->no_swap) {
     long nw = 0;
-    PA_CALL(pa__rm3d_swap_pass(&m, 0.1, 1.0, &nw));
-    npass++;
+    PA_CALL(pa__rm3d_swap_pass(m, 0.1, 1.0, &nw));
+    (*npass)++;
   }
   /* Last, lengths: the sliver swaps changed a few (and the length moves
    * keep the worst quality at min(its old value, RM3D_QLEN)). */
   if (!opts->no_move) {
     long nl = 0;
-    PA_CALL(pa__rm3d_length_pass(&m, RM3D_LENGTH_SWEEPS, &nl));
-    if (m.verbosity > 0) fprintf(stderr, "  rm3d length moves: %ld\n", nl);
+    PA_CALL(pa__rm3d_length_pass(m, RM3D_LENGTH_SWEEPS, &nl));
+    if (m->verbosity > 0) fprintf(stderr, "  rm3d length moves: %ld\n", nl);
   }
+cleanup:
+  return st;
+}
+
+/* The verdict (see the outcome above) and the counts in the report, and
+ * the working mesh written back into mesh. */
+static pa_status conclude(rm3d *m, pa_mesh *mesh, int npass,
+                          pa_remesh_report *report) {
+  pa_status st = PA_SUCCESS;
 #ifndef NDEBUG
-  PA_CALL(pa__rm3d_check(&m));
+  PA_CALL(pa__rm3d_check(m));
 #endif
   double inrange, qworst, qmean;
-  measure(&m, &inrange, &qworst, &qmean);
-  if (m.verbosity > 0)
+  measure(m, &inrange, &qworst, &qmean);
+  if (m->verbosity > 0)
     fprintf(stderr, "  rm3d: %.2f%% edges in range, worst Q %.3f, mean Q %.3f\n",
             100 * inrange, qworst, qmean);
-  report->nsplit = m.nsplit;
-  report->ncollapse = m.ncollapse;
-  report->nswap = m.nswap;
-  report->nmove = m.nmove;
+  report->nsplit = m->nsplit;
+  report->ncollapse = m->ncollapse;
+  report->nswap = m->nswap;
+  report->nmove = m->nmove;
   report->npass = npass;
-  PA_CALL(pa__rm3d_write(&m, mesh));
+  PA_CALL(pa__rm3d_write(m, mesh));
   report->outcome = (inrange >= 0.9 && qworst >= 0.01)
                         ? PA_REMESH_SUCCESS
                         : PA_REMESH_TARGET_MISSED;
+cleanup:
+  return st;
+}
+
+pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
+                       pa_remesh_report *report) {
+  pa_status st = PA_SUCCESS;
+  rm3d m;
+  int built = 0, npass = 0, step = 0;
+  double t0 = pa_wtime();
+  PA_CHECK(mesh && opts && report, PA_ERR_ARG, "pa__remesh3d: NULL argument");
+  memset(report, 0, sizeof *report);
+  report->outcome = PA_REMESH_FAILED;
+  PA_CALL(pa__rm3d_build(&m, mesh, opts));
+  built = 1;
+  PA_CALL(prepare(&m, opts));
+  if (!opts->no_insert) {
+    PA_CALL(refine_bands(&m, opts, &step));
+    PA_CALL(pa__rm3d_reorder(&m));
+    PA_CALL(refine_rounds(&m, opts, &step, &npass));
+  }
+  PA_CALL(optimise(&m, opts, &npass));
+  PA_CALL(conclude(&m, mesh, npass, report));
 cleanup:
   if (built) pa__rm3d_free(&m);
   if (report) report->time_s = pa_wtime() - t0;

@@ -1,5 +1,5 @@
 /*
- * rm3d_smooth.c -- vertex relocation. An interior free vertex moves towards
+ * smooth_3d.c -- vertex relocation. An interior free vertex moves towards
  * the mean of the "ideal points" of its ball (for each tet, the apex of the
  * regular tet standing on the opposite face); the move is accepted only when
  * the worst quality of the ball rises, halving the step up to three times.
@@ -26,7 +26,7 @@
  * accepting a loss of quality down to half the ball's worst: the driver
  * uses it once, to break a lattice the passes would only refine further.
  */
-#include "remesh/remesh3d.h"
+#include "remesh3d/remesh3d.h"
 
 /* Barycentric coordinates of point x in tet (p0..p3); 0 if degenerate. */
 static int bary(const double *p0, const double *p1, const double *p2,

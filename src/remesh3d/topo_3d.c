@@ -1,13 +1,13 @@
 /*
- * rm3d_topo.c -- topological primitives of the 3D remesher: edge shells,
+ * topo_3d.c -- topological primitives of the 3D remesher: edge shells,
  * vertex balls and the generic cavity replacement used by the swaps.
  *
  * Invariants: these functions leave no R3T_MARK bit set; pa__rm3d_replace
- * keeps every invariant of rm3d_mesh.c provided the new tetrahedra tile the
+ * keeps every invariant of mesh_3d.c provided the new tetrahedra tile the
  * cavity exactly (same outer faces), which callers guarantee by checking
  * orientation and quality before calling it.
  */
-#include "remesh/remesh3d.h"
+#include "remesh3d/remesh3d.h"
 
 int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
                    pa_idx *ring, int max, int *info) {

@@ -1,5 +1,5 @@
 /*
- * rm3d_swap.c -- topological swaps: edge removal (3-2 for a shell of three,
+ * swap_3d.c -- topological swaps: edge removal (3-2 for a shell of three,
  * n -> 2n-4 for closed shells of up to 7 tets, choosing the triangulation of
  * the ring that maximises the worst quality by dynamic programming, as in
  * Shewchuk's "Two discrete optimization algorithms for the topological
@@ -22,7 +22,7 @@
  * quality exceeds gain times the old one (gain >= 1), so a swap never lowers
  * the worst quality.
  */
-#include "remesh/remesh3d.h"
+#include "remesh3d/remesh3d.h"
 
 #define R3_SWAP_MAXRING 7
 #define R3_SWAP_MAXPOLY (R3_SWAP_MAXRING + 1)

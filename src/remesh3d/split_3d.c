@@ -1,5 +1,5 @@
 /*
- * rm3d_split.c -- edge split: a new vertex on the edge (a,b), every tet of
+ * split_3d.c -- edge split: a new vertex on the edge (a,b), every tet of
  * the shell cut in two (a,m,r_i,r_i+1) + (m,b,r_i,r_i+1).
  *
  * Checked before applied: no frozen tet in the shell; a boundary edge only
@@ -15,7 +15,7 @@
  * RM3D_NORMAL_COS of its normal. When that point fails, points closer to
  * the chord are tried (CURVE_BACKOFF).
  */
-#include "remesh/remesh3d.h"
+#include "remesh3d/remesh3d.h"
 
 /* Points tried on a curved or ridge edge: the curve's midpoint, then 1/2
  * and 1/4 of its offset from the chord, then the chord's midpoint (valid
@@ -178,64 +178,74 @@ static int split_surface_kept(const rm3d *m, const pa_idx *trec, int ntri,
   return 1;
 }
 
-pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
-                              int *done) {
-  pa_status st = PA_SUCCESS;
+/* A split of the edge (a,b): what the checks found, which the application
+ * then uses. */
+typedef struct split_plan {
+  pa_idx a, b;
+  int n, info; /* the shell: tets[i] = (a, b, ring[i], ring[i+1]) */
   pa_idx tets[RM3D_MAXSHELL], ring[RM3D_MAXSHELL + 1];
-  float q1[RM3D_MAXSHELL], q2[RM3D_MAXSHELL];
+  int bdry;    /* a boundary edge */
+  int ntri;    /* the boundary triangles holding (a,b): trec[0..ntri) */
   pa_idx trec[RM3D_MAXSHELL + 1];
-  int ntri = 0;
-  pa_idx erec = -1;
-  *done = 0;
-  int info;
-  int n = pa__rm3d_shell(m, k, a, b, tets, ring, RM3D_MAXSHELL, &info);
-  if (n < 0 || (info & R3SH_FROZEN)) return st;
-  int bdry = (info & R3SH_BDRY) != 0;
-  if (bdry) {
-    if (!m->surf) return st;
-    /* Boundary triangles holding (a,b): faces crossed between shell tets,
-     * plus both ends of an open shell. */
-    for (int i = 0; i <= n; i++) {
-      pa_idx t, r;
-      int f;
-      if (i < n) { /* forward face of tets[i]: (a, b, ring[i+1]) */
-        t = tets[i];
-        const pa_idx *v = m->tv + 4 * (size_t)t;
-        f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][0];
-        r = ring[i + 1];
-      } else { /* start face of an open shell: (a, b, ring[0]) */
-        if (info & R3SH_CLOSED) break;
-        t = tets[0];
-        const pa_idx *v = m->tv + 4 * (size_t)t;
-        f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][1];
-        r = ring[0];
-      }
-      if (!((m->tflag[t] >> f) & 1)) continue;
-      pa_idx key[3] = {a, b, r};
-      pa_idx rec = pa__rm3d_table_find(&m->tri, key);
-      if (rec < 0)
-        return pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
-                         "rm3d: tagged face not in the table");
-      if (m->tri.flag[rec] & PA_FLAG_REQUIRED) return st;
-      trec[ntri++] = rec;
+  pa_idx erec; /* the feature edge (a,b), or -1 */
+  double p[3], mp[6];                         /* the new vertex, its metric */
+  float q1[RM3D_MAXSHELL], q2[RM3D_MAXSHELL]; /* qualities of the halves */
+} split_plan;
+
+/* The boundary triangles and the feature edge holding the boundary edge
+ * (a,b): faces crossed between shell tets, plus both ends of an open shell.
+ * *ok = 0 when one of them is required. */
+static pa_status find_bdry_records(const rm3d *m, split_plan *s, int *ok) {
+  pa_idx a = s->a, b = s->b;
+  *ok = 0;
+  for (int i = 0; i <= s->n; i++) {
+    pa_idx t, r;
+    int f;
+    if (i < s->n) { /* forward face of tets[i]: (a, b, ring[i+1]) */
+      t = s->tets[i];
+      const pa_idx *v = m->tv + 4 * (size_t)t;
+      f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][0];
+      r = s->ring[i + 1];
+    } else { /* start face of an open shell: (a, b, ring[0]) */
+      if (s->info & R3SH_CLOSED) break;
+      t = s->tets[0];
+      const pa_idx *v = m->tv + 4 * (size_t)t;
+      f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][1];
+      r = s->ring[0];
     }
-    pa_idx key[2] = {a, b};
-    erec = pa__rm3d_table_find(&m->edg, key);
-    if (erec >= 0 && (m->edg.flag[erec] & PA_FLAG_REQUIRED)) return st;
+    if (!((m->tflag[t] >> f) & 1)) continue;
+    pa_idx key[3] = {a, b, r};
+    pa_idx rec = pa__rm3d_table_find(&m->tri, key);
+    if (rec < 0)
+      return pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
+                       "rm3d: tagged face not in the table");
+    if (m->tri.flag[rec] & PA_FLAG_REQUIRED) return PA_SUCCESS;
+    s->trec[s->ntri++] = rec;
   }
+  pa_idx key[2] = {a, b};
+  s->erec = pa__rm3d_table_find(&m->edg, key);
+  if (s->erec >= 0 && (m->edg.flag[s->erec] & PA_FLAG_REQUIRED))
+    return PA_SUCCESS;
+  *ok = 1;
+  return PA_SUCCESS;
+}
+
+/* The new vertex s->p and its metric s->mp, and the qualities of the
+ * halves: the point on the curve (see the opening comment), else points
+ * closer to the chord. 1 when a point passes every check. */
+static int place_vertex(rm3d *m, split_plan *s) {
+  pa_idx a = s->a, b = s->b;
   const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b;
-  double p[3], c[3], p0[3];
+  double c[3], p0[3];
   for (int i = 0; i < 3; i++) c[i] = 0.5 * (xa[i] + xb[i]);
-  if (bdry && erec < 0 && m->nrm && (m->vtag[a] & R3V_CURVED) &&
+  if (s->bdry && s->erec < 0 && m->nrm && (m->vtag[a] & R3V_CURVED) &&
       (m->vtag[b] & R3V_CURVED))
     curved_mid(xa, xb, m->nrm + 3 * (size_t)a, m->nrm + 3 * (size_t)b, p0);
-  else if (erec >= 0)
+  else if (s->erec >= 0)
     ridge_mid(m, a, b, p0);
   else
     memcpy(p0, c, sizeof c);
-  double mp[6];
-  int mc = m->mc;
-  pa__rm3d_mid_metric(m, a, b, mp);
+  pa__rm3d_mid_metric(m, a, b, s->mp);
   /* A far too long edge is split whenever the result is valid: keeping it
    * would be worse than a poor tet the later passes improve. The point on
    * the curve lies off the chord by the curve's sagitta: next to a flat tet
@@ -247,36 +257,32 @@ pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
   int relax = rm3d_len(m, a, b) > 2.0 * RM3D_LMAX;
   int ok = 0;
   for (int f = 0; f < CURVE_BACKOFF && !ok; f++) {
-    double s = f == CURVE_BACKOFF - 1 ? 0 : ldexp(1.0, -f);
+    double w = f == CURVE_BACKOFF - 1 ? 0 : ldexp(1.0, -f);
     if (f && !memcmp(p0, c, sizeof c)) break;
-    for (int i = 0; i < 3; i++) p[i] = f ? c[i] + s * (p0[i] - c[i]) : p0[i];
-    if (!split_surface_kept(m, trec, ntri, a, b, p)) continue;
-    ok = shell_qualities(m, tets, n, a, b, p, mp, relax, q1, q2);
+    for (int i = 0; i < 3; i++)
+      s->p[i] = f ? c[i] + w * (p0[i] - c[i]) : p0[i];
+    if (!split_surface_kept(m, s->trec, s->ntri, a, b, s->p)) continue;
+    ok = shell_qualities(m, s->tets, s->n, a, b, s->p, s->mp, relax, s->q1,
+                         s->q2);
     if (!ok && !relax) break;
   }
-  if (!ok) return st;
-  /* Apply. */
-  PA_CALL(pa__rm3d_reserve(m, (size_t)m->nv + 1, (size_t)m->ne + n));
-  pa_idx pm_;
-  PA_CALL(pa__rm3d_new_vertex(m, p, mp, &pm_));
-  {
-    pa_idx src[2] = {a, b};
-    double w[2] = {0.5, 0.5};
-    if (m->nfield) pa__rm3d_interp(m, pm_, 2, src, w);
-    memcpy(m->met + (size_t)mc * pm_, mp, sizeof(double) * mc);
-    pa__rm3d_met0_mid(m, pm_, a, b); /* the target, when relaxed */
-  }
-  if (m->vref[a] == m->vref[b]) m->vref[pm_] = m->vref[a];
+  return ok;
+}
+
+/* Cut every tet of the shell in two at the new vertex pm. */
+static void cut_shell(rm3d *m, const split_plan *s, pa_idx pm) {
+  pa_idx a = s->a, b = s->b;
+  int n = s->n;
   pa_idx base = m->ne;
   m->ne += n;
   for (int i = 0; i < n; i++) {
-    pa_idx t = tets[i], nt = base + i;
+    pa_idx t = s->tets[i], nt = base + i;
     pa_idx *v = m->tv + 4 * (size_t)t, *w = m->tv + 4 * (size_t)nt;
     int ia = rm3d_loc(v, a), ib = rm3d_loc(v, b);
     int ic = rm3d_compl[ia][ib][0], id = rm3d_compl[ia][ib][1];
     memcpy(w, v, 4 * sizeof *w);
-    w[ia] = pm_;
-    v[ib] = pm_;
+    w[ia] = pm;
+    v[ib] = pm;
     pa_idx *at = m->adj + 4 * (size_t)t, *an = m->adj + 4 * (size_t)nt;
     pa_idx oa = at[ia];
     an[ia] = oa;
@@ -290,57 +296,101 @@ pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
     m->tflag[t] &= (uint8_t)~((1u << ia) | R3T_CLEAN);
     m->tpf[nt] = m->tpf[t];
     m->tref[nt] = m->tref[t];
-    m->q[t] = q1[i];
-    m->q[nt] = q2[i];
+    m->q[t] = s->q1[i];
+    m->q[nt] = s->q2[i];
   }
   m->vtet[b] = base;
-  m->vtet[pm_] = tets[0];
-  if (bdry) {
-    m->vtag[pm_] |= R3V_BDRY;
-    if ((m->vtag[a] & R3V_CURVED) && (m->vtag[b] & R3V_CURVED) && m->nrm &&
-        erec < 0) {
-      double *np = m->nrm + 3 * (size_t)pm_;
-      const double *na = m->nrm + 3 * (size_t)a, *nb = m->nrm + 3 * (size_t)b;
-      double s = 0;
-      for (int i = 0; i < 3; i++) {
-        np[i] = na[i] + nb[i];
-        s += np[i] * np[i];
-      }
-      s = s > 0 ? 1.0 / sqrt(s) : 0;
-      for (int i = 0; i < 3; i++) np[i] *= s;
-      m->vtag[pm_] |= R3V_CURVED;
+  m->vtet[pm] = s->tets[0];
+}
+
+/* The boundary triangles and the feature edge of a split boundary edge cut
+ * in two at pm, keeping their references and flags; pm's boundary tags and
+ * normal. */
+static pa_status split_bdry_records(rm3d *m, const split_plan *s, pa_idx pm) {
+  pa_status st = PA_SUCCESS;
+  pa_idx a = s->a, b = s->b;
+  m->vtag[pm] |= R3V_BDRY;
+  if ((m->vtag[a] & R3V_CURVED) && (m->vtag[b] & R3V_CURVED) && m->nrm &&
+      s->erec < 0) {
+    double *np = m->nrm + 3 * (size_t)pm;
+    const double *na = m->nrm + 3 * (size_t)a, *nb = m->nrm + 3 * (size_t)b;
+    double w = 0;
+    for (int i = 0; i < 3; i++) {
+      np[i] = na[i] + nb[i];
+      w += np[i] * np[i];
     }
-    for (int i = 0; i < ntri; i++) {
-      pa_idx r = trec[i];
-      pa_idx t1[3], t2[3];
-      memcpy(t1, m->tri.v + 3 * (size_t)r, sizeof t1);
-      memcpy(t2, t1, sizeof t2);
-      for (int j = 0; j < 3; j++) {
-        if (t1[j] == b) t1[j] = pm_;
-        if (t2[j] == a) t2[j] = pm_;
-      }
-      int32_t ref = m->tri.ref[r];
-      uint8_t fl = m->tri.flag[r];
-      pa__rm3d_table_remove(&m->tri, r);
-      PA_CALL(pa__rm3d_table_add(&m->tri, t1, ref, fl, NULL));
-      PA_CALL(pa__rm3d_table_add(&m->tri, t2, ref, fl, NULL));
-    }
-    if (erec >= 0) {
-      pa_idx e1[2], e2[2];
-      memcpy(e1, m->edg.v + 2 * (size_t)erec, sizeof e1);
-      memcpy(e2, e1, sizeof e2);
-      for (int j = 0; j < 2; j++) {
-        if (e1[j] == b) e1[j] = pm_;
-        if (e2[j] == a) e2[j] = pm_;
-      }
-      int32_t ref = m->edg.ref[erec];
-      uint8_t fl = m->edg.flag[erec];
-      pa__rm3d_table_remove(&m->edg, erec);
-      PA_CALL(pa__rm3d_table_add(&m->edg, e1, ref, fl, NULL));
-      PA_CALL(pa__rm3d_table_add(&m->edg, e2, ref, fl, NULL));
-      m->vtag[pm_] |= R3V_FEAT;
-    }
+    w = w > 0 ? 1.0 / sqrt(w) : 0;
+    for (int i = 0; i < 3; i++) np[i] *= w;
+    m->vtag[pm] |= R3V_CURVED;
   }
+  for (int i = 0; i < s->ntri; i++) {
+    pa_idx r = s->trec[i];
+    pa_idx t1[3], t2[3];
+    memcpy(t1, m->tri.v + 3 * (size_t)r, sizeof t1);
+    memcpy(t2, t1, sizeof t2);
+    for (int j = 0; j < 3; j++) {
+      if (t1[j] == b) t1[j] = pm;
+      if (t2[j] == a) t2[j] = pm;
+    }
+    int32_t ref = m->tri.ref[r];
+    uint8_t fl = m->tri.flag[r];
+    pa__rm3d_table_remove(&m->tri, r);
+    PA_CALL(pa__rm3d_table_add(&m->tri, t1, ref, fl, NULL));
+    PA_CALL(pa__rm3d_table_add(&m->tri, t2, ref, fl, NULL));
+  }
+  if (s->erec >= 0) {
+    pa_idx e1[2], e2[2];
+    memcpy(e1, m->edg.v + 2 * (size_t)s->erec, sizeof e1);
+    memcpy(e2, e1, sizeof e2);
+    for (int j = 0; j < 2; j++) {
+      if (e1[j] == b) e1[j] = pm;
+      if (e2[j] == a) e2[j] = pm;
+    }
+    int32_t ref = m->edg.ref[s->erec];
+    uint8_t fl = m->edg.flag[s->erec];
+    pa__rm3d_table_remove(&m->edg, s->erec);
+    PA_CALL(pa__rm3d_table_add(&m->edg, e1, ref, fl, NULL));
+    PA_CALL(pa__rm3d_table_add(&m->edg, e2, ref, fl, NULL));
+    m->vtag[pm] |= R3V_FEAT;
+  }
+cleanup:
+  return st;
+}
+
+pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
+                              int *done) {
+  pa_status st = PA_SUCCESS;
+  split_plan s;
+  int ok = 1;
+  *done = 0;
+  s.a = a;
+  s.b = b;
+  s.ntri = 0;
+  s.erec = -1;
+  s.n = pa__rm3d_shell(m, k, a, b, s.tets, s.ring, RM3D_MAXSHELL, &s.info);
+  if (s.n < 0 || (s.info & R3SH_FROZEN)) return st;
+  s.bdry = (s.info & R3SH_BDRY) != 0;
+  if (s.bdry) {
+    if (!m->surf) return st;
+    PA_CALL(find_bdry_records(m, &s, &ok));
+    if (!ok) return st;
+  }
+  if (!place_vertex(m, &s)) return st;
+  /* Apply. */
+  int mc = m->mc;
+  PA_CALL(pa__rm3d_reserve(m, (size_t)m->nv + 1, (size_t)m->ne + s.n));
+  pa_idx pm;
+  PA_CALL(pa__rm3d_new_vertex(m, s.p, s.mp, &pm));
+  {
+    pa_idx src[2] = {a, b};
+    double w[2] = {0.5, 0.5};
+    if (m->nfield) pa__rm3d_interp(m, pm, 2, src, w);
+    memcpy(m->met + (size_t)mc * pm, s.mp, sizeof(double) * mc);
+    pa__rm3d_met0_mid(m, pm, a, b); /* the target, when relaxed */
+  }
+  if (m->vref[a] == m->vref[b]) m->vref[pm] = m->vref[a];
+  cut_shell(m, &s, pm);
+  if (s.bdry) PA_CALL(split_bdry_records(m, &s, pm));
   m->nsplit++;
   *done = 1;
 cleanup:

@@ -1,0 +1,157 @@
+/*
+ * ops_2d.h -- what the 2D operator files (split_2d.c, collapse_2d.c,
+ * swap_2d.c, smooth_2d.c) share: local numbering, the walk across feature
+ * records, the cache invalidation of a rewritten element, vertex balls.
+ *
+ * Every operator evaluates its result before changing anything ("sim then
+ * apply"): each new element must have quality >= RM_QFLOOR (so its orientation
+ * is certain), plus the operator's own acceptance rule. The frozen contract is
+ * enforced by the operators: an element tagged RME_FROZEN is never rewritten
+ * nor deleted, so none of its edges is split, swapped or collapsed (a collapse
+ * removes a vertex, and vertices of frozen elements are RMV_FROZEN); frozen
+ * and corner vertices never move nor disappear; feature edges are never
+ * swapped.
+ *
+ * Local numbering: in element k = (v0, v1, v2), counter-clockwise, face i is
+ * the edge from v[i+1] to v[i+2] (indices mod 3), opposite v[i]. Across a
+ * shared edge the neighbour runs it the other way.
+ *
+ * Passes visit elements in slot order and skip elements already touched in
+ * the same pass (RME_TOUCHED), so each neighbourhood changes at most once
+ * per pass and the result is deterministic.
+ */
+#ifndef PA_OPS_2D_H
+#define PA_OPS_2D_H
+
+#include "remesh2d/remesh2d.h"
+
+#define BALL_MAX 128
+#define X(v) (rm->x + 2 * (size_t)(v))
+#define M(v) (rm->met + (size_t)mc * (v))
+#define NX3(i) ((i) == 2 ? 0 : (i) + 1)
+#define PV3(i) ((i) == 0 ? 2 : (i) - 1)
+
+static inline double elem_qual(const pa__rmesh *rm, pa_idx a, pa_idx b,
+                               pa_idx c) {
+  int mc = rm->mcomp;
+  return rm_qual2(mc, X(a), X(b), X(c), M(a), M(b), M(c));
+}
+
+static inline double edge_len(const pa__rmesh *rm, pa_idx a, pa_idx b) {
+  int mc = rm->mcomp;
+  return rm_len2(mc, X(a), X(b), M(a), M(b));
+}
+
+/* Face on the other side of face `code` (through a feature record if need
+ * be), or -1 on the domain boundary. */
+static inline pa_idx other_side(const pa__rmesh *rm, pa_idx code) {
+  pa_idx o = rm->adj[code];
+  if (o >= 0) return o;
+  pa_idx b = -o - 1;
+  return rm->bside[2 * b] == code ? rm->bside[2 * b + 1] : rm->bside[2 * b];
+}
+
+/* Edge (face code) can be split, collapsed or swapped: no frozen element on
+ * either side, no frozen feature record. */
+static inline int edge_free(const pa__rmesh *rm, pa_idx code) {
+  if (rm->etag[code / 3] & RME_FROZEN) return 0;
+  pa_idx o = rm->adj[code];
+  if (o < 0 && (rm->btag[-o - 1] & RMB_FROZEN)) return 0;
+  pa_idx s = other_side(rm, code);
+  return s < 0 || !(rm->etag[s / 3] & RME_FROZEN);
+}
+
+/* Attach new face `code` to outer value o, which was attached to `oldcode`. */
+static inline void attach(pa__rmesh *rm, pa_idx code, pa_idx o, pa_idx oldcode) {
+  rm->adj[code] = o;
+  if (o >= 0) {
+    rm->adj[o] = code;
+  } else {
+    pa_idx b = -o - 1;
+    if (rm->bside[2 * b] == oldcode) rm->bside[2 * b] = code;
+    else rm->bside[2 * b + 1] = code;
+  }
+}
+
+/* Element k is rewritten or about to be killed, or one of its vertices
+ * moved: drop the caches that depend on it (RME_INRANGE of k, RME_NOSWAP of
+ * k and its neighbours, RMV_SETTLED of its vertices, whose balls change).
+ * Call with k's current vertices and, on a rewrite, before its adjacency is
+ * updated (the old neighbours are the ones to tell; a new neighbour of a
+ * rewritten element is an old neighbour of the rewritten group). */
+static inline void elem_changed(pa__rmesh *rm, pa_idx k) {
+  const pa_idx *v = rm->ev + 3 * (size_t)k;
+  const pa_idx *a = rm->adj + 3 * (size_t)k;
+  rm->etag[k] &= (uint8_t)~(RME_INRANGE | RME_NOSWAP);
+  /* neighbours: their swaps across k see a new k (swaps never cross a
+   * feature record, so only direct neighbours matter) */
+  if (a[0] >= 0) rm->etag[a[0] / 3] &= (uint8_t)~RME_NOSWAP;
+  if (a[1] >= 0) rm->etag[a[1] / 3] &= (uint8_t)~RME_NOSWAP;
+  if (a[2] >= 0) rm->etag[a[2] / 3] &= (uint8_t)~RME_NOSWAP;
+  rm->vtag[v[0]] &= (uint8_t)~RMV_SETTLED;
+  rm->vtag[v[1]] &= (uint8_t)~RMV_SETTLED;
+  rm->vtag[v[2]] &= (uint8_t)~RMV_SETTLED;
+}
+
+/* Write element k (an existing or a new slot). The caller has called
+ * elem_changed on every existing element it rewrites, before the rewrite;
+ * the vertices of the new elements are then those old ones plus new vertices
+ * (no cached flags), and new slots start with no cached flags either. */
+static inline void set_elem(pa__rmesh *rm, pa_idx k, pa_idx a, pa_idx b,
+                            pa_idx c, double q) {
+  rm->ev[3 * k] = a;
+  rm->ev[3 * k + 1] = b;
+  rm->ev[3 * k + 2] = c;
+  rm->q[k] = (float)q;
+  rm->etag[k] |= RME_TOUCHED;
+}
+
+/*
+ * Elements around vertex p starting from element k (local index ip): counter-
+ * clockwise until back to k or the domain boundary, then clockwise from k.
+ * Fills el[] and loc[] (local index of p) and returns the count, or -1 if the
+ * ball exceeds BALL_MAX. *closed is 1 for an interior vertex.
+ */
+static inline int ball_2d(const pa__rmesh *rm, pa_idx k, int ip, pa_idx *el,
+                          int *loc, int *closed) {
+  int n = 0;
+  el[n] = k;
+  loc[n++] = ip;
+  pa_idx c = k;
+  int l = ip;
+  *closed = 0;
+  for (;;) {
+    pa_idx s = other_side(rm, 3 * c + NX3(l));
+    if (s < 0) break;
+    c = s / 3;
+    l = NX3(s % 3);
+    if (c == k) {
+      *closed = 1;
+      return n;
+    }
+    if (n >= BALL_MAX) return -1;
+    el[n] = c;
+    loc[n++] = l;
+  }
+  /* clockwise from k: the order is then [k, ccw..., cw...] */
+  c = k;
+  l = ip;
+  for (;;) {
+    pa_idx s = other_side(rm, 3 * c + PV3(l));
+    if (s < 0) break;
+    c = s / 3;
+    l = PV3(s % 3);
+    if (n >= BALL_MAX) return -1;
+    el[n] = c;
+    loc[n++] = l;
+  }
+  return n;
+}
+
+/* Collapse vertex p = v[ip] of element k onto q, the other end of face fi of
+ * k (fi != ip), if every new element has quality >= qrel times the ball's old
+ * worst (collapse_2d.c). Returns 1 if done, 0 if rejected. */
+int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
+                            double qrel);
+
+#endif /* PA_OPS_2D_H */

@@ -1,0 +1,178 @@
+/*
+ * split_2d.c -- edge split of the 2D remesher and its pass: the new vertex at
+ * the midpoint of the edge, or of the reconstructed curve on a feature
+ * (boundary_2d.c), the one or two elements on the edge cut in two. The pass
+ * splits the longest free edge of each element above the threshold, with
+ * longest-edge propagation. Shared contract of the operators: ops_2d.h.
+ */
+#include "remesh2d/ops_2d.h"
+
+/*
+ * Split face i of element k at its midpoint (on a feature: the midpoint of
+ * the reconstructed curve). Returns 1 if done, 0 if rejected; *st on memory
+ * failure (then nothing changed).
+ */
+static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
+  pa_idx te = 3 * k + i;
+  int i1 = NX3(i), i2 = PV3(i);
+  pa_idx p0 = rm->ev[3 * k + i], a = rm->ev[3 * k + i1], b = rm->ev[3 * k + i2];
+  pa_idx o = rm->adj[te];
+  pa_idx feat = o < 0 ? -o - 1 : -1;
+  pa_idx fcode = o >= 0 ? o : other_side(rm, te);
+  pa_idx f = -1, p1 = -1;
+  int j = 0, j1 = 0, j2 = 0;
+  if (fcode >= 0) {
+    f = fcode / 3;
+    j = fcode % 3;
+    j1 = NX3(j);
+    j2 = PV3(j);
+    p1 = rm->ev[3 * f + j];
+  }
+  *st = pa__rm_reserve(rm, 1, 2, 1);
+  if (*st) return 0;
+
+  pa_idx m;
+  pa__rm_new_vertex(rm, &m); /* cannot fail after the reserve */
+  double *xm = rm->x + 2 * (size_t)m, tm[2] = {0, 0};
+  if (feat >= 0) {
+    pa__rm_curve_point_2d(rm, feat, 0.5, xm, tm);
+  } else {
+    xm[0] = 0.5 * (X(a)[0] + X(b)[0]);
+    xm[1] = 0.5 * (X(a)[1] + X(b)[1]);
+  }
+  pa_idx src[2] = {a, b};
+  double w[2] = {0.5, 0.5};
+  pa__rm_interp(rm, m, 2, src, w);
+
+  double q1 = elem_qual(rm, p0, a, m), q2 = elem_qual(rm, p0, m, b);
+  double q3 = 1, q4 = 1;
+  if (f >= 0) {
+    q3 = elem_qual(rm, p1, b, m);
+    q4 = elem_qual(rm, p1, m, a);
+  }
+  if (q1 < RM_QFLOOR || q2 < RM_QFLOOR || q3 < RM_QFLOOR || q4 < RM_QFLOOR) {
+    pa__rm_kill_vertex(rm, m);
+    return 0;
+  }
+
+  pa_idx oA = rm->adj[3 * k + i1], oB = rm->adj[3 * k + i2];
+  pa_idx fA = -1, fB = -1;
+  if (f >= 0) {
+    fB = rm->adj[3 * f + j1];
+    fA = rm->adj[3 * f + j2];
+  }
+  pa_idx k2, f2 = -1, nb2 = -1;
+  elem_changed(rm, k);
+  if (f >= 0) elem_changed(rm, f);
+  pa__rm_new_elem(rm, &k2);
+  rm->eref[k2] = rm->eref[k];
+  rm->etag[k2] = rm->etag[k] & 0x0F;
+  if (f >= 0) {
+    pa__rm_new_elem(rm, &f2);
+    rm->eref[f2] = rm->eref[f];
+    rm->etag[f2] = rm->etag[f] & 0x0F;
+  }
+  /* T1 = k (p0 a m), T2 = k2 (p0 m b), T3 = f (p1 b m), T4 = f2 (p1 m a) */
+  set_elem(rm, k, p0, a, m, q1);
+  set_elem(rm, k2, p0, m, b, q2);
+  attach(rm, 3 * k + 2, oB, 3 * k + i2);
+  attach(rm, 3 * k2 + 1, oA, 3 * k + i1);
+  rm->adj[3 * k + 1] = 3 * k2 + 2;
+  rm->adj[3 * k2 + 2] = 3 * k + 1;
+  if (f >= 0) {
+    set_elem(rm, f, p1, b, m, q3);
+    set_elem(rm, f2, p1, m, a, q4);
+    attach(rm, 3 * f + 2, fA, 3 * f + j2);
+    attach(rm, 3 * f2 + 1, fB, 3 * f + j1);
+    rm->adj[3 * f + 1] = 3 * f2 + 2;
+    rm->adj[3 * f2 + 2] = 3 * f + 1;
+  }
+  if (feat < 0) {
+    rm->adj[3 * k] = 3 * f2;
+    rm->adj[3 * f2] = 3 * k;
+    rm->adj[3 * k2] = 3 * f;
+    rm->adj[3 * f] = 3 * k2;
+  } else {
+    /* record (u, w) -> (u, m) + new (m, w); sides by which half they hold */
+    pa__rm_new_feat(rm, &nb2);
+    pa_idx u = rm->bv[2 * feat], wv = rm->bv[2 * feat + 1];
+    rm->bv[2 * nb2] = m;
+    rm->bv[2 * nb2 + 1] = wv;
+    rm->bv[2 * feat + 1] = m;
+    rm->bref[nb2] = rm->bref[feat];
+    rm->btag[nb2] = rm->btag[feat];
+    rm->btan[4 * nb2] = tm[0];
+    rm->btan[4 * nb2 + 1] = tm[1];
+    rm->btan[4 * nb2 + 2] = rm->btan[4 * feat + 2];
+    rm->btan[4 * nb2 + 3] = rm->btan[4 * feat + 3];
+    rm->btan[4 * feat + 2] = tm[0];
+    rm->btan[4 * feat + 3] = tm[1];
+    /* half (a, m) is held by T1 face 0 and T4 face 0 */
+    pa_idx ram = u == a ? feat : nb2, rmb = u == a ? nb2 : feat;
+    rm->adj[3 * k] = -ram - 1;
+    rm->adj[3 * k2] = -rmb - 1;
+    rm->bside[2 * ram] = 3 * k;
+    rm->bside[2 * ram + 1] = f >= 0 ? 3 * f2 : -1;
+    rm->bside[2 * rmb] = 3 * k2;
+    rm->bside[2 * rmb + 1] = f >= 0 ? 3 * f : -1;
+    if (f >= 0) {
+      rm->adj[3 * f2] = -ram - 1;
+      rm->adj[3 * f] = -rmb - 1;
+    }
+    rm->vtag[m] |= RMV_FEAT;
+    rm->vref[m] = rm->bref[feat];
+  }
+  rm->nsplit++;
+  return 1;
+}
+
+/* Longest free edge of element k above thr: face index or -1, length in *len;
+ * *inr (may be NULL) = all three edges in [RM_LSHORT, RM_LLONG]. */
+static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
+                        int *inr) {
+  const pa_idx *v = rm->ev + 3 * (size_t)k;
+  int best = -1, in = 1;
+  double lb = thr;
+  for (int i = 0; i < 3; i++) {
+    double l = edge_len(rm, v[NX3(i)], v[PV3(i)]);
+    in &= l >= RM_LSHORT && l <= RM_LLONG;
+    if (l > lb && edge_free(rm, 3 * k + i)) {
+      lb = l;
+      best = i;
+    }
+  }
+  *len = lb;
+  if (inr) *inr = in;
+  return best;
+}
+
+pa_status pa__rm_split_pass_2d(pa__rmesh *rm, double thr, long *n) {
+  pa_status st = PA_SUCCESS;
+  long cnt = 0;
+  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RME_TOUCHED;
+  for (pa_idx k = 0; k < rm->ne; k++) {
+    uint8_t t = rm->etag[k];
+    if (t & (RME_DEAD | RME_TOUCHED | RME_FROZEN)) continue;
+    if ((t & RME_INRANGE) && thr >= RM_LLONG) continue; /* nothing above thr */
+    double l;
+    int inr;
+    int i = longest_free(rm, k, thr, &l, &inr);
+    if (inr) rm->etag[k] |= RME_INRANGE;
+    if (i < 0) continue;
+    /* Longest-edge propagation: split only if the edge is also the longest
+     * free edge of the neighbour (else the neighbour goes first). */
+    pa_idx s = other_side(rm, 3 * k + i);
+    if (s >= 0) {
+      pa_idx f = s / 3;
+      if (rm->etag[f] & RME_TOUCHED) continue;
+      double lf;
+      int jf = longest_free(rm, f, l * (1 + 1e-12), &lf, NULL);
+      if (jf >= 0 && jf != s % 3) continue;
+    }
+    cnt += split_edge(rm, k, i, &st);
+    if (st) goto cleanup;
+  }
+cleanup:
+  *n = cnt;
+  return st;
+}

@@ -1,0 +1,98 @@
+/*
+ * swap_2d.c -- edge swap of the 2D remesher (the diagonal of the pair of
+ * elements on an edge turned, when the pair's worst quality rises), its
+ * pass, and the pass on the worst elements (swap, else collapse of the
+ * shortest edge when the ball's worst quality rises). Feature edges are
+ * never swapped. Shared contract of the operators: ops_2d.h.
+ */
+#include "remesh2d/ops_2d.h"
+
+/* Swap face i of k if it raises the worst quality of the pair by the factor
+ * gain. Returns 1 if done. */
+static int swap_edge(pa__rmesh *rm, pa_idx k, int i, double gain) {
+  pa_idx o = rm->adj[3 * k + i];
+  if (o < 0) return 0;
+  pa_idx f = o / 3;
+  int j = o % 3;
+  if ((rm->etag[k] | rm->etag[f]) & RME_FROZEN) return 0;
+  int i1 = NX3(i), i2 = PV3(i), j1 = NX3(j), j2 = PV3(j);
+  pa_idx p0 = rm->ev[3 * k + i], a = rm->ev[3 * k + i1], b = rm->ev[3 * k + i2];
+  pa_idx p1 = rm->ev[3 * f + j];
+  double qo = rm->q[k] < rm->q[f] ? rm->q[k] : rm->q[f];
+  double q1 = elem_qual(rm, p0, a, p1);
+  if (q1 < RM_QFLOOR || q1 <= gain * qo) return 0;
+  double q2 = elem_qual(rm, p1, b, p0);
+  if (q2 < RM_QFLOOR || q2 <= gain * qo) return 0;
+  pa_idx oA = rm->adj[3 * k + i1], oB = rm->adj[3 * k + i2];
+  pa_idx fB = rm->adj[3 * f + j1], fA = rm->adj[3 * f + j2];
+  /* T1 = k (p0 a p1), T2 = f (p1 b p0) */
+  elem_changed(rm, k);
+  elem_changed(rm, f);
+  set_elem(rm, k, p0, a, p1, q1);
+  set_elem(rm, f, p1, b, p0, q2);
+  attach(rm, 3 * k, fB, 3 * f + j1);
+  attach(rm, 3 * k + 2, oB, 3 * k + i2);
+  attach(rm, 3 * f, oA, 3 * k + i1);
+  attach(rm, 3 * f + 2, fA, 3 * f + j2);
+  rm->adj[3 * k + 1] = 3 * f + 1;
+  rm->adj[3 * f + 1] = 3 * k + 1;
+  rm->nswap++;
+  return 1;
+}
+
+long pa__rm_swap_pass_2d(pa__rmesh *rm, double qmax) {
+  long cnt = 0;
+  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RME_TOUCHED;
+  for (pa_idx k = 0; k < rm->ne; k++) {
+    uint8_t t = rm->etag[k];
+    if (t & (RME_DEAD | RME_TOUCHED | RME_FROZEN)) continue;
+    if (rm->q[k] >= qmax || (t & RME_NOSWAP)) continue;
+    int done = 0, all = 1;
+    for (int i = 0; i < 3 && !done; i++) {
+      pa_idx o = rm->adj[3 * k + i];
+      if (o < 0) continue;
+      if (rm->etag[o / 3] & RME_TOUCHED) {
+        all = 0; /* not tried: no verdict for this face */
+        continue;
+      }
+      done = swap_edge(rm, k, i, 1.02);
+    }
+    cnt += done;
+    if (!done && all) rm->etag[k] |= RME_NOSWAP;
+  }
+  return cnt;
+}
+
+long pa__rm_sliver_pass_2d(pa__rmesh *rm, double qbad) {
+  long cnt = 0;
+  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RME_TOUCHED;
+  for (pa_idx k = 0; k < rm->ne; k++) {
+    uint8_t t = rm->etag[k];
+    if (t & (RME_DEAD | RME_TOUCHED | RME_FROZEN)) continue;
+    if (rm->q[k] >= qbad) continue;
+    int done = 0;
+    for (int i = 0; i < 3 && !done; i++) done = swap_edge(rm, k, i, 1.0);
+    if (!done && !rm->opts->no_insert) {
+      /* collapse the shortest edge if the ball gets better */
+      const pa_idx *v = rm->ev + 3 * (size_t)k;
+      int best = 0;
+      double lb = 1e300;
+      for (int i = 0; i < 3; i++) {
+        double l = edge_len(rm, v[NX3(i)], v[PV3(i)]);
+        if (l < lb) {
+          lb = l;
+          best = i;
+        }
+      }
+      if (lb < RM_LLONG) {
+        double g = rm->lguard;
+        rm->lguard = RM_LLONG * 1.2;
+        done = pa__rm_collapse_edge_2d(rm, k, best, NX3(best), 1.0 + 1e-9) ||
+               pa__rm_collapse_edge_2d(rm, k, best, PV3(best), 1.0 + 1e-9);
+        rm->lguard = g;
+      }
+    }
+    cnt += done;
+  }
+  return cnt;
+}
