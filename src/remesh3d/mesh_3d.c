@@ -356,10 +356,13 @@ pa_status pa__rm3d_build(rm3d *m, pa_mesh *mesh, const pa_remesh_opts *opts) {
   memset(m, 0, sizeof *m);
   PA_CHECK(mesh->dim == 3, PA_ERR_ARG, "the 3D remesher needs a 3D mesh");
   PA_CHECK(mesh->ne > 0, PA_ERR_ARG, "the mesh has no tetrahedra");
+  /* the metric pa_remesh prepared (hsiz folded in, then hmin/hmax, local
+   * parameters and the gradation); hsiz alone only for a mesh without one
+   * (the remesher called directly) */
   int mc = mesh->met_ncomp;
-  PA_CHECK(mc == 1 || mc == 6 || opts->hsiz > 0, PA_ERR_ARG,
+  PA_CHECK(mc == 1 || mc == 6 || (mc == 0 && opts->hsiz > 0), PA_ERR_ARG,
            "the mesh has no metric and no -hsiz was given");
-  if (opts->hsiz > 0) mc = 1;
+  if (mc == 0) mc = 1;
   m->mc = mc;
   m->tri.nk = 3;
   m->edg.nk = 2;
@@ -385,7 +388,7 @@ pa_status pa__rm3d_build(rm3d *m, pa_mesh *mesh, const pa_remesh_opts *opts) {
     PA_CHECK(isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]), PA_ERR_MESH,
              "vertex %d has a non-finite coordinate", (int)i + 1);
   }
-  if (opts->hsiz > 0) {
+  if (mesh->met_ncomp == 0) {
     for (pa_idx i = 0; i < nv; i++) m->met[i] = opts->hsiz;
   } else {
     memcpy(m->met, mesh->met, sizeof(double) * (size_t)mc * nv);

@@ -4,7 +4,7 @@
 # default output IN.o.EXT with its IN.o.sol, IN.sol picked up as the metric
 # when it lies beside IN, -optim, -m MB as -mem, -hgrad -1, the exit status, and
 # progress lines on stderr (per pass, per parallel iteration), silenced by
-# -v -1.
+# -v -1, and -hmax bounding -hsiz.
 set -u
 : "${PADAPT:?PADAPT must point to the padapt binary}"
 MPIEXEC=${MPIEXEC:-mpiexec}
@@ -96,5 +96,18 @@ last=$(grep "^padapt: iteration" err.txt | tail -1)
 # a run shorter than the quiet time prints no progress
 PADAPT_PROGRESS_AFTER=1000 "$PADAPT" adapt sq.mesh -hsiz 0.01 -out s.mesh > /dev/null 2> err.txt
 ! grep -q "^padapt: pass" err.txt && ok "short run quiet" || bad "progress in a short run"
+
+# -hsiz with -hmax below it: -hmax bounds the sizes in 3D as in 2D (the 3D
+# remesher once took -hsiz over the prepared metric)
+"$PADAPT" generate box3d 4 cube.mesh > /dev/null || exit 1
+for dim in 2 3; do
+  in=$([ $dim = 2 ] && echo sq.mesh || echo cube.mesh)
+  "$PADAPT" adapt "$in" -hsiz 0.2 -out a$dim.mesh -nosol -v -1 -json a$dim.json > /dev/null 2>&1
+  "$PADAPT" adapt "$in" -hsiz 0.2 -hmax 0.1 -out b$dim.mesh -nosol -json b$dim.json > b$dim.log 2>&1
+  na=$(json a$dim.json elements); nb=$(json b$dim.json elements)
+  [ "$nb" -gt $((3 * na)) ] && grep -q "limited by -hmax" b$dim.log &&
+    ok "${dim}D -hsiz 0.2 -hmax 0.1: $nb elements against $na" ||
+    bad "${dim}D -hmax ignored with -hsiz: $nb elements against $na"
+done
 
 [ $fails -eq 0 ] && echo "all checks passed" || { echo "$fails check(s) failed"; exit 1; }
