@@ -1,0 +1,100 @@
+#!/usr/bin/env bash
+# vs_mmg.sh -- padapt side by side with Mmg on uniform refinements, and the
+# small-job parallel efficiency.
+#
+#   bash bench/vs_mmg.sh BUILD_DIR WORK_DIR [CASE...]
+#
+# CASE: kuhn (box3d 10, the Kuhn-subdivided unit cube of 6 000 tets ->
+# -hsiz 0.03), rod (tests/data/rod3d.mesh -> 0.03), plate
+# (tests/data/plate2d.mesh -> 0.002, 2D), small (no Mmg: box3d 10 -> 0.05,
+# about a second sequential, at 1 and 2 processes). Default: all four.
+#
+# For each remeshing case, PAIRS (default 3) back-to-back runs of padapt and
+# of mmg3d/mmg2d (when on PATH; skipped otherwise), both with -hsiz and
+# their defaults; per run the wall time of the whole command and its peak
+# RSS (/usr/bin/time), the output elements, and both outputs judged the
+# same way: `padapt stats` in the uniform metric of the case (edges in
+# [0.7071, 1.4142), worst and mean quality). The line gives the medians and
+# padapt's elements per second over Mmg's. For `small`, PAIRS pairs of
+# `padapt adapt` at 1 then 2 processes, and the median efficiency
+# T1 / (2 T2). Wall clock: meaningful on a quiet machine only (the load is
+# printed first).
+set -u
+BUILD=${1:?BUILD_DIR}
+WORK=${2:?WORK_DIR}
+shift 2
+CASES=${*:-kuhn rod plate small}
+PAIRS=${PAIRS:-3}
+PADAPT=$(cd "$BUILD" && pwd)/bin/padapt
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+export OMPI_MCA_rmaps_base_oversubscribe=1 SCOTCH_PTHREAD_NUMBER=1
+mkdir -p "$WORK"
+cd "$WORK" || exit 1
+echo "# vs_mmg: $(date -u +%Y-%m-%dT%H:%M:%SZ), repo $(git -C "$ROOT" rev-parse --short HEAD)"
+echo "# host: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'); load $(cut -d' ' -f1-3 /proc/loadavg)"
+
+median() { sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
+# "elements in-range% worstQ meanQ" of mesh $1 in the uniform metric $2
+judge() {
+  "$PADAPT" metric "uniform:$2" "$1" judge.sol > /dev/null 2>&1
+  "$PADAPT" stats "$1" -met judge.sol -json judge.json > /dev/null 2>&1
+  /usr/bin/python3 -c "import json; j = json.load(open('judge.json'));
+print(j['elements'], round(100 * j['edge_in_range'], 2), round(j['quality_worst'], 3), round(j['quality_mean'], 3))"
+}
+# wall seconds and peak RSS (MB) of a command, then its output judged
+timed() {
+  /usr/bin/time -f "%e %M" -o t.txt "$@" > /dev/null 2>&1
+  awk '{printf "%s %.0f", $1, $2 / 1024}' t.txt
+}
+
+side_by_side() {
+  local name=$1 in=$2 h=$3 mmg=$4
+  local p m
+  : > p.txt
+  : > m.txt
+  for i in $(seq "$PAIRS"); do
+    echo "$(timed "$PADAPT" adapt "$in" -hsiz "$h" -out p.mesh -nosol -v -1) $(judge p.mesh "$h")" >> p.txt
+    if command -v "$mmg" > /dev/null; then
+      rm -f m.mesh m.sol
+      echo "$(timed "$mmg" "$in" -hsiz "$h" -out m.mesh -v -1) $(judge m.mesh "$h")" >> m.txt
+    fi
+  done
+  row() { # file -> "median_time rss elements inrange worst mean"
+    echo "$(cut -d' ' -f1 "$1" | median) $(tail -1 "$1" | cut -d' ' -f2-)"
+  }
+  p=$(row p.txt)
+  printf "%-6s padapt: %s s, RSS %s MB, %s elements, %s %% in range, worst Q %s, mean Q %s\n" \
+    "$name" $p
+  if [ -s m.txt ]; then
+    m=$(row m.txt)
+    printf "%-6s %s: %s s, RSS %s MB, %s elements, %s %% in range, worst Q %s, mean Q %s\n" \
+      "$name" "$mmg" $m
+    awk -v p="$p" -v m="$m" 'BEGIN { split(p, a, " "); split(m, b, " ");
+      printf "%-6s padapt / %s elements per second: %.2f (times %s)\n", "'"$name"'", "'"$mmg"'",
+        (a[3] / a[1]) / (b[3] / b[1]), "'"$(cut -d' ' -f1 p.txt | tr '\n' ' ')"'/ '"$(cut -d' ' -f1 m.txt | tr '\n' ' ')"'" }'
+  else
+    echo "$name   $mmg not on PATH: no side-by-side"
+  fi
+}
+
+for c in $CASES; do
+  case $c in
+    kuhn) "$PADAPT" generate box3d 10 kuhn.mesh > /dev/null
+          side_by_side kuhn kuhn.mesh 0.03 mmg3d ;;
+    rod) side_by_side rod "$ROOT/tests/data/rod3d.mesh" 0.03 mmg3d ;;
+    plate) side_by_side plate "$ROOT/tests/data/plate2d.mesh" 0.002 mmg2d ;;
+    small)
+      "$PADAPT" generate box3d 10 small.mesh > /dev/null
+      : > e.txt
+      for i in $(seq "$PAIRS"); do
+        t1=$(timed "$PADAPT" adapt small.mesh -hsiz 0.05 -out s1.mesh -nosol -v -1 | cut -d' ' -f1)
+        t2=$(timed mpiexec -n 2 "$PADAPT" adapt small.mesh -hsiz 0.05 -out s2.mesh -nosol -v -1 | cut -d' ' -f1)
+        echo "$t1 $t2" | awk '{print $1 / (2 * $2), $1, $2}' >> e.txt
+      done
+      echo "small  box3d 10 -> 0.05, $(judge s1.mesh 0.05 | cut -d' ' -f1) / $(judge s2.mesh 0.05 | cut -d' ' -f1) elements:" \
+           "median efficiency T1/(2 T2) $(cut -d' ' -f1 e.txt | median)" \
+           "(T1 T2 pairs: $(awk '{printf "%s/%s ", $2, $3}' e.txt))" ;;
+    *) echo "unknown case $c" ;;
+  esac
+done
