@@ -145,12 +145,14 @@ cleanup:
   return st;
 }
 
-/* Peak bytes per output element, [parallel][dim == 3]: the sequential
- * remesher's (75 B per triangle on the gmsh plate, 138-162 B per tetrahedron
- * on the gmsh rod, padapt's counting allocator; BENCHMARKS.md) and a rank's
- * of the parallel driver per local element (256-300 B at 2 ranks), rounded
- * up. */
-static const double bytes_per_elem[2][2] = {{100, 200}, {350, 350}};
+/* Peak bytes per element the metric asks for, [parallel][dim == 3]: the
+ * sequential remesher's (75 B per triangle on the gmsh plate, 138-162 B per
+ * tetrahedron on the gmsh rod, padapt's counting allocator; BENCHMARKS.md),
+ * and a rank's of the parallel driver per local element: in 3D 141-148 B
+ * per output tetrahedron at 2 ranks from 1 M to 20 M (counted and RSS,
+ * BENCHMARKS.md "Scale"), with 15-18 % more tetrahedra than the metric's
+ * count, so 170, rounded up; in 2D 256-300 B, not measured since. */
+static const double bytes_per_elem[2][2] = {{100, 200}, {350, 200}};
 
 pa_status pa__check_output_size(int dim, double complexity, int nproc,
                                 int parallel, double budget,
