@@ -1,7 +1,8 @@
 /*
  * metric.c -- Riemannian metric algebra: validity, symmetric eigen-
  * decomposition, log/exp, interpolation (linear in size), intersection,
- * clamping, lengths in the metric and element quality.
+ * clamping, and the dimension-generic entries of the length and quality
+ * kernels (metric2d.h, metric3d.h).
  *
  * Every function here except pa_mesh_metric_clamp is an inner-loop kernel:
  * no allocation, no error reporting, fixed-size stack arrays only. Inputs are

@@ -140,7 +140,8 @@ pa_status pa__metric_clamp_opts(const pa_mesh *mesh, int nc, double *met,
  * a local parameter's (kind PA_BOUNDARY) or the global one, def. */
 double pa__local_hausd(const pa_remesh_opts *o, int ref, double def);
 
-/* Squared length of vector e in metric m (value of ncomp components). */
+/* Squared length of vector e in metric m (value of ncomp components):
+ * pa__sqlen2 or pa__sqlen3. */
 double pa__metric_sqlen(int dim, int ncomp, const double *m, const double *e);
 
 /* Logarithmic mean of two metric lengths: (la - lb) / ln(la / lb), the
@@ -159,12 +160,14 @@ static inline double pa__log_mean(double la, double lb) {
   return d / log(la / lb);
 }
 
-/* Edge length between points a and b with end metrics ma, mb. */
+/* Edge length between points a and b with end metrics ma, mb: the kernel
+ * of the dimension (pa__len2, metric2d.h; pa__len3, metric3d.h). */
 double pa__edge_length(int dim, int ncomp, const double *a, const double *b,
                        const double *ma, const double *mb);
 
 /* Quality of the simplex with vertex coordinates x[0..dim] and metrics
- * m[0..dim] (ncomp 0: identity metric, m may be NULL). */
+ * m[0..dim] (ncomp 0: identity metric, m may be NULL): the statistics'
+ * kernel of the dimension (pa__qual2_stat, pa__qual3_stat), signed. */
 double pa__quality(int dim, int ncomp, const double *const *x,
                    const double *const *m);
 
