@@ -1,7 +1,8 @@
 /*
  * metric.c -- Riemannian metric algebra: validity, symmetric eigen-
  * decomposition, log/exp, interpolation (linear in size), intersection,
- * clamping, lengths in the metric and element quality.
+ * clamping, and the dimension-generic entries of the length and quality
+ * kernels (metric2d.h, metric3d.h).
  *
  * Every function here except pa_mesh_metric_clamp is an inner-loop kernel:
  * no allocation, no error reporting, fixed-size stack arrays only. Inputs are
@@ -28,6 +29,8 @@
  * orthonormal and column-major: vector k is vec[dim*k .. dim*k+dim-1].
  */
 #include "metric/metric.h"
+#include "metric/metric2d.h"
+#include "metric/metric3d.h"
 
 #include <float.h>
 #include <string.h>
@@ -600,32 +603,18 @@ cleanup:
 /* Lengths and quality                                                      */
 /* ------------------------------------------------------------------------ */
 
+/* The kernels are in metric2d.h and metric3d.h; these entries pick one by
+ * dimension for the callers that hold dim at run time. */
+
 double pa__metric_sqlen(int dim, int ncomp, const double *m, const double *e) {
-  if (dim == 2) {
-    double x = e[0], y = e[1];
-    if (ncomp == 0) return x * x + y * y;
-    if (ncomp == 1) return (x * x + y * y) / (m[0] * m[0]);
-    return m[0] * x * x + 2.0 * m[1] * x * y + m[2] * y * y;
-  }
-  double x = e[0], y = e[1], z = e[2];
-  if (ncomp == 0) return x * x + y * y + z * z;
-  if (ncomp == 1) return (x * x + y * y + z * z) / (m[0] * m[0]);
-  return m[0] * x * x + m[2] * y * y + m[5] * z * z +
-         2.0 * (m[1] * x * y + m[3] * x * z + m[4] * y * z);
+  if (dim == 2) return pa__sqlen2(ncomp, m, e[0], e[1]);
+  return pa__sqlen3(ncomp, m, e);
 }
 
 double pa__edge_length(int dim, int ncomp, const double *a, const double *b,
                        const double *ma, const double *mb) {
-  double e[3] = {b[0] - a[0], b[1] - a[1], dim == 3 ? b[2] - a[2] : 0.0};
-  if (ncomp <= 1) {
-    double n = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-    if (ncomp == 0) return n;
-    /* la = n / ha, lb = n / hb: L = n * logmean(1/ha, 1/hb). */
-    return n * pa__log_mean(1.0 / ma[0], 1.0 / mb[0]);
-  }
-  double la = sqrt(pa__metric_sqlen(dim, ncomp, ma, e));
-  double lb = sqrt(pa__metric_sqlen(dim, ncomp, mb, e));
-  return pa__log_mean(la, lb);
+  if (dim == 2) return pa__len2(ncomp, a, b, ma, mb);
+  return pa__len3(ncomp, a, b, ma, mb);
 }
 
 double pa_metric_edge_length(int dim, int ncomp, const double *a,
@@ -636,31 +625,6 @@ double pa_metric_edge_length(int dim, int ncomp, const double *a,
 
 double pa__quality(int dim, int ncomp, const double *const *x,
                    const double *const *m) {
-  /* An isotropic mean metric s I scales volume and squared lengths alike,
-   * so the quality is the Euclidean one: sizes need not be read. */
-  int tensor = ncomp > 1;
-  double mb[6] = {0, 0, 0, 0, 0, 0};
-  if (tensor) {
-    int nv = dim + 1;
-    for (int i = 0; i < nv; i++)
-      for (int k = 0; k < ncomp; k++)
-        mb[k] += m[i][k];
-    for (int k = 0; k < ncomp; k++)
-      mb[k] /= nv;
-  }
-  int mc = tensor ? ncomp : 0;
-  /* The volume is the mesh's own (pa__simplex_volume), so Q < 0 exactly for
-   * the elements the checker and the statistics count as inverted. */
-  double vol = pa__simplex_volume(dim, x);
-  double s = 0.0;
-  for (int i = 0; i < dim; i++)
-    for (int j = i + 1; j <= dim; j++) {
-      double e[3] = {x[j][0] - x[i][0], x[j][1] - x[i][1],
-                     dim == 3 ? x[j][2] - x[i][2] : 0.0};
-      s += pa__metric_sqlen(dim, mc, mb, e);
-    }
-  if (!(s > 0.0)) return 0.0;
-  double sd = tensor ? sqrt(fmax(pa__sym_det(dim, mb), 0.0)) : 1.0;
-  if (dim == 2) return 4.0 * sqrt(3.0) * vol * sd / s;
-  return 72.0 * sqrt(3.0) * vol * sd / (s * sqrt(s));
+  if (dim == 2) return pa__qual2_stat(ncomp, x, m);
+  return pa__qual3_stat(ncomp, x, m);
 }

@@ -276,9 +276,10 @@ pa_status pa__rm_features_2d_init(pa__rmesh *rm, pa_mesh *mesh,
   int mc = rm->mcomp;
   for (pa_idx k = 0; k < rm->ne; k++) { /* element qualities */
     const pa_idx *v = rm->ev + 3 * (size_t)k;
-    rm->q[k] = (float)rm_qual2(mc, rm->x + 2 * (size_t)v[0], rm->x + 2 * (size_t)v[1],
-                               rm->x + 2 * (size_t)v[2], rm->met + (size_t)mc * v[0],
-                               rm->met + (size_t)mc * v[1], rm->met + (size_t)mc * v[2]);
+    rm->q[k] = (float)pa__qual2(
+        mc, rm->x + 2 * (size_t)v[0], rm->x + 2 * (size_t)v[1],
+        rm->x + 2 * (size_t)v[2], rm->met + (size_t)mc * v[0],
+        rm->met + (size_t)mc * v[1], rm->met + (size_t)mc * v[2]);
   }
 cleanup:
   pa__free(fe.r0);

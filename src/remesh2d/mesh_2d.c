@@ -234,9 +234,9 @@ static double expected_elems(pa_mesh *mesh) {
  * floor, and the pass loop ping-pongs there without converging.
  *
  * The working metric is therefore relaxed at the skin: a frozen vertex whose
- * frozen edges have a mean length lambda outside [RM_LSHORT, RM_LLONG] gets
- * its size scaled by f = lambda / RM_LLONG (or lambda / RM_LSHORT), the least
- * change that puts that mean in range; the size then varies linearly
+ * frozen edges have a mean length lambda outside [PA__LEN_LO, PA__LEN_HI] gets
+ * its size scaled by f = lambda / PA__LEN_HI (or lambda / PA__LEN_LO), the
+ * least change that puts that mean in range; the size then varies linearly
  * (interpolation) to the target over the first ring of input elements
  * (ParMmg #74: grade the metric away from frozen entities). Relaxing further
  * (to length 1) widens the band of elements left coarser than the target,
@@ -267,8 +267,8 @@ static pa_status skin_relax_2d(pa__rmesh *rm) {
     const pa_idx *v = rm->ev + 3 * (size_t)k;
     for (int i = 0; i < 3; i++) {
       pa_idx a = v[i], c = v[i == 2 ? 0 : i + 1];
-      double l = rm_len2(mc, rm->x + 2 * (size_t)a, rm->x + 2 * (size_t)c,
-                         rm->met + (size_t)mc * a, rm->met + (size_t)mc * c);
+      double l = pa__len2(mc, rm->x + 2 * (size_t)a, rm->x + 2 * (size_t)c,
+                          rm->met + (size_t)mc * a, rm->met + (size_t)mc * c);
       acc[a] += l;
       acc[c] += l;
       cnt[a]++;
@@ -278,8 +278,8 @@ static pa_status skin_relax_2d(pa__rmesh *rm) {
   for (pa_idx b = 0; b < rm->nb; b++) {
     if ((rm->btag[b] & RMB_DEAD) || !(rm->btag[b] & RMB_FROZEN)) continue;
     pa_idx a = rm->bv[2 * b], c = rm->bv[2 * b + 1];
-    double l = rm_len2(mc, rm->x + 2 * (size_t)a, rm->x + 2 * (size_t)c,
-                       rm->met + (size_t)mc * a, rm->met + (size_t)mc * c);
+    double l = pa__len2(mc, rm->x + 2 * (size_t)a, rm->x + 2 * (size_t)c,
+                        rm->met + (size_t)mc * a, rm->met + (size_t)mc * c);
     acc[a] += l;
     acc[c] += l;
     cnt[a]++;
@@ -289,14 +289,14 @@ static pa_status skin_relax_2d(pa__rmesh *rm) {
   for (pa_idx v = 0; v < nv; v++) {
     if (!cnt[v]) continue;
     double lam = acc[v] / cnt[v];
-    if (!(lam > RM_LLONG || lam < RM_LSHORT) || !(lam > 0) || !isfinite(lam))
+    if (!(lam > PA__LEN_HI || lam < PA__LEN_LO) || !(lam > 0) || !isfinite(lam))
       continue;
     if (!rm->met0) {
       PA_ALLOC(rm->met0, rm->capv * mc);
       memcpy(rm->met0, rm->met, sizeof(double) * mc * (size_t)nv);
     }
     /* the least change that brings the mean into range: to the bound */
-    double f = lam > RM_LLONG ? lam / RM_LLONG : lam / RM_LSHORT;
+    double f = lam > PA__LEN_HI ? lam / PA__LEN_HI : lam / PA__LEN_LO;
     double *m = rm->met + (size_t)mc * v;
     if (mc == 1) {
       m[0] *= f;
@@ -308,7 +308,7 @@ static pa_status skin_relax_2d(pa__rmesh *rm) {
   if (rm->met0)
     for (pa_idx k = 0; k < rm->ne; k++) {
       const pa_idx *v = rm->ev + 3 * (size_t)k;
-      rm->q[k] = (float)rm_qual2(
+      rm->q[k] = (float)pa__qual2(
           mc, rm->x + 2 * (size_t)v[0], rm->x + 2 * (size_t)v[1],
           rm->x + 2 * (size_t)v[2], rm->met + (size_t)mc * v[0],
           rm->met + (size_t)mc * v[1], rm->met + (size_t)mc * v[2]);
@@ -780,11 +780,12 @@ pa_status pa__rm_check(const pa__rmesh *rm) {
       int mc = rm->mcomp;
       for (int i = 0; i < 3; i++) {
         pa_idx p = v[i], q = v[i == 2 ? 0 : i + 1];
-        double l = rm_len2(mc, rm->x + 2 * (size_t)p, rm->x + 2 * (size_t)q,
-                           rm->met + (size_t)mc * p, rm->met + (size_t)mc * q);
-        PA_CHECK(l >= RM_LSHORT && l <= RM_LLONG, PA_ERR_INTERNAL,
+        double l = pa__len2(mc, rm->x + 2 * (size_t)p, rm->x + 2 * (size_t)q,
+                            rm->met + (size_t)mc * p, rm->met + (size_t)mc * q);
+        PA_CHECK(l >= PA__LEN_LO && l <= PA__LEN_HI, PA_ERR_INTERNAL,
                  "remesher: element %d is marked in range, edge %d has "
-                 "length %g", (int)k, i, l);
+                 "length %g",
+                 (int)k, i, l);
       }
     }
 #endif
@@ -867,13 +868,15 @@ void pa__rm_figures_2d(const pa__rmesh *rm, pa__rm_figures *f) {
       }
       if (frozen) continue;
       pa_idx a = rm->ev[3 * k + (i + 1) % 3], c = rm->ev[3 * k + (i + 2) % 3];
-      double l = rm_len2(mc, rm->x + 2 * (size_t)a, rm->x + 2 * (size_t)c,
-                         rm->met + (size_t)mc * a, rm->met + (size_t)mc * c);
+      double l = pa__len2(mc, rm->x + 2 * (size_t)a, rm->x + 2 * (size_t)c,
+                          rm->met + (size_t)mc * a, rm->met + (size_t)mc * c);
       f->nedge++;
       if (l < f->lmin) f->lmin = l;
       if (l > f->lmax) f->lmax = l;
-      if (l >= RM_LSHORT && l < RM_LLONG) f->nin++;
-      else if (l >= RM_LLONG) f->nlong++;
+      if (l >= PA__LEN_LO && l < PA__LEN_HI)
+        f->nin++;
+      else if (l >= PA__LEN_HI)
+        f->nlong++;
       else {
         f->nshort++;
         if (pa_verbosity() >= 4)

@@ -34,12 +34,12 @@
 static inline double elem_qual(const pa__rmesh *rm, pa_idx a, pa_idx b,
                                pa_idx c) {
   int mc = rm->mcomp;
-  return rm_qual2(mc, X(a), X(b), X(c), M(a), M(b), M(c));
+  return pa__qual2(mc, X(a), X(b), X(c), M(a), M(b), M(c));
 }
 
 static inline double edge_len(const pa__rmesh *rm, pa_idx a, pa_idx b) {
   int mc = rm->mcomp;
-  return rm_len2(mc, X(a), X(b), M(a), M(b));
+  return pa__len2(mc, X(a), X(b), M(a), M(b));
 }
 
 /* Face on the other side of face `code` (through a feature record if need

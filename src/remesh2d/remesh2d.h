@@ -29,6 +29,7 @@
 #define PA_REMESH2D_H
 
 #include "metric/metric.h"
+#include "metric/metric2d.h"
 #include "remesh/remesh.h"
 
 #include <math.h>
@@ -58,7 +59,7 @@ enum {
    * rejected, and neither it nor a neighbour changed since: skipped by swap
    * passes. Cleared with RME_INRANGE, on the element and its neighbours. */
   RME_NOSWAP = 64,
-  /* The three edges lie in [RM_LSHORT, RM_LLONG] with the current
+  /* The three edges lie in [PA__LEN_LO, PA__LEN_HI] with the current
    * coordinates and metric, so split and collapse passes at those
    * thresholds have nothing to do here. Cleared with RMV_SETTLED (an element
    * rewritten, or one of its vertices moved); new elements start without. */
@@ -88,8 +89,6 @@ enum {
  * (UGAWG polar-2 2D: 1 881 triangles against 1 901 when aiming at 1, both
  * 99.9 % in range; Mmg makes 1 716 at 94.6 %). */
 #define RM_LTARGET 1.2
-#define RM_LLONG 1.4142 /* the bounds of "edges in range" as Mmg prints them */
-#define RM_LSHORT 0.7071
 
 typedef struct pa__rmesh {
   int dim;   /* 2 */
@@ -229,41 +228,10 @@ static inline void rm_tensor2(int mc, const double *m, double *t) {
   }
 }
 
-/* Length of edge a-b in the metric (ends ma, mb of mc components). */
-static inline double rm_len2(int mc, const double *a, const double *b,
-                             const double *ma, const double *mb) {
-  double x = b[0] - a[0], y = b[1] - a[1];
-  if (mc == 1) {
-    double n = sqrt(x * x + y * y + 0.0);
-    return n * pa__log_mean(1.0 / ma[0], 1.0 / mb[0]);
-  }
-  double la = sqrt(ma[0] * x * x + 2.0 * ma[1] * x * y + ma[2] * y * y);
-  double lb = sqrt(mb[0] * x * x + 2.0 * mb[1] * x * y + mb[2] * y * y);
-  return pa__log_mean(la, lb);
-}
-
-/* Quality 4 sqrt(3) A_M / sum l_M^2 of triangle abc (Mmg's normalisation),
- * mean metric of the three vertex tensors; isotropic sizes cancel out. */
-static inline double rm_qual2(int mc, const double *a, const double *b,
-                              const double *c, const double *ma,
-                              const double *mb, const double *mcv) {
-  double e1x = b[0] - a[0], e1y = b[1] - a[1];
-  double e2x = c[0] - a[0], e2y = c[1] - a[1];
-  double e3x = c[0] - b[0], e3y = c[1] - b[1];
-  double area = 0.5 * (e1x * e2y - e1y * e2x);
-  if (mc == 1) {
-    double s = e1x * e1x + e1y * e1y + e2x * e2x + e2y * e2y + e3x * e3x +
-               e3y * e3y;
-    return 6.928203230275509 * area / s;
-  }
-  double m0 = (ma[0] + mb[0] + mcv[0]) * (1.0 / 3.0);
-  double m1 = (ma[1] + mb[1] + mcv[1]) * (1.0 / 3.0);
-  double m2 = (ma[2] + mb[2] + mcv[2]) * (1.0 / 3.0);
-  double det = m0 * m2 - m1 * m1;
-  double s = m0 * (e1x * e1x + e2x * e2x + e3x * e3x) +
-             2 * m1 * (e1x * e1y + e2x * e2y + e3x * e3y) +
-             m2 * (e1y * e1y + e2y * e2y + e3y * e3y);
-  return 6.928203230275509 * area * sqrt(det > 0 ? det : 0) / s;
-}
+/* Lengths and qualities are metric/metric2d.h's kernels (pa__len2,
+ * pa__qual2): the statistics measure with the same lengths. The band the
+ * passes aim at is PA__LEN_LO..PA__LEN_HI, the bounds as Mmg prints them
+ * (the 3D remesher's are the exact PA__LEN_*_EXACT; the two differ by
+ * 1e-5 and each remesher's outputs are tuned to its own). */
 
 #endif /* PA_REMESH2D_H */

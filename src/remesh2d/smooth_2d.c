@@ -106,7 +106,7 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
       xp[1] = y0;
       for (int s = 0; s < n; s++) {
         double l = edge_len(rm, p, rm->ev[3 * (size_t)el[s] + NX3(loc[s])]);
-        inr[s] = l >= RM_LSHORT && l <= RM_LLONG;
+        inr[s] = l >= PA__LEN_LO && l <= PA__LEN_HI;
       }
       xp[0] = np[0];
       xp[1] = np[1];
@@ -115,7 +115,7 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
     for (int s = 0; s < n && ok; s++) {
       if (!inr[s]) continue;
       double l = edge_len(rm, p, rm->ev[3 * (size_t)el[s] + NX3(loc[s])]);
-      ok = l >= RM_LSHORT && l <= RM_LLONG;
+      ok = l >= PA__LEN_LO && l <= PA__LEN_HI;
     }
     if (!ok) continue;
     /* accepted */
@@ -152,7 +152,7 @@ long pa__rm_smooth_pass_2d(pa__rmesh *rm) {
   return cnt;
 }
 
-/* Edges at p out of [RM_LSHORT, RM_LLONG] and their sum of ln^2 (L /
+/* Edges at p out of [PA__LEN_LO, PA__LEN_HI] and their sum of ln^2 (L /
  * RM_LTARGET), with p at
  * y (metric mp) and its neighbours nb[0..nn). */
 static int len_score_2d(const pa__rmesh *rm, const double *y, const double *mp,
@@ -160,8 +160,8 @@ static int len_score_2d(const pa__rmesh *rm, const double *y, const double *mp,
   int mc = rm->mcomp, out = 0;
   double s = 0;
   for (int i = 0; i < nn; i++) {
-    double l = rm_len2(mc, y, X(nb[i]), mp, M(nb[i]));
-    out += !(l >= RM_LSHORT && l <= RM_LLONG);
+    double l = pa__len2(mc, y, X(nb[i]), mp, M(nb[i]));
+    out += !(l >= PA__LEN_LO && l <= PA__LEN_HI);
     double g = log(l / RM_LTARGET);
     s += g * g;
   }
@@ -207,7 +207,7 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
     double q = me[0] * e[0] + me[1] * e[1];
     if (!(q > 0)) return 0;
     double g[2] = {-me[0] / q, -me[1] / q};
-    double l = rm_len2(mc, xp, xi, mp, M(nb[s])), r = log(l / RM_LTARGET);
+    double l = pa__len2(mc, xp, xi, mp, M(nb[s])), r = log(l / RM_LTARGET);
     jj[0] += g[0] * g[0];
     jj[1] += g[0] * g[1];
     jj[2] += g[1] * g[1];
@@ -262,9 +262,9 @@ long pa__rm_length_pass_2d(pa__rmesh *rm) {
     const pa_idx *v = rm->ev + 3 * (size_t)k;
     int bad = 0;
     for (int i = 0; i < 3 && !bad; i++) {
-      double l = rm_len2(mc, X(v[NX3(i)]), X(v[PV3(i)]), M(v[NX3(i)]),
-                         M(v[PV3(i)]));
-      bad = !(l >= RM_LSHORT && l <= RM_LLONG);
+      double l =
+          pa__len2(mc, X(v[NX3(i)]), X(v[PV3(i)]), M(v[NX3(i)]), M(v[PV3(i)]));
+      bad = !(l >= PA__LEN_LO && l <= PA__LEN_HI);
     }
     if (!bad) continue;
     for (int i = 0; i < 3; i++) {

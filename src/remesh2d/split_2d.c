@@ -127,7 +127,7 @@ static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
 }
 
 /* Longest free edge of element k above thr: face index or -1, length in *len;
- * *inr (may be NULL) = all three edges in [RM_LSHORT, RM_LLONG]. */
+ * *inr (may be NULL) = all three edges in [PA__LEN_LO, PA__LEN_HI]. */
 static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
                         int *inr) {
   const pa_idx *v = rm->ev + 3 * (size_t)k;
@@ -135,7 +135,7 @@ static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
   double lb = thr;
   for (int i = 0; i < 3; i++) {
     double l = edge_len(rm, v[NX3(i)], v[PV3(i)]);
-    in &= l >= RM_LSHORT && l <= RM_LLONG;
+    in &= l >= PA__LEN_LO && l <= PA__LEN_HI;
     if (l > lb && edge_free(rm, 3 * k + i)) {
       lb = l;
       best = i;
@@ -153,7 +153,8 @@ pa_status pa__rm_split_pass_2d(pa__rmesh *rm, double thr, long *n) {
   for (pa_idx k = 0; k < rm->ne; k++) {
     uint8_t t = rm->etag[k];
     if (t & (RME_DEAD | RME_TOUCHED | RME_FROZEN)) continue;
-    if ((t & RME_INRANGE) && thr >= RM_LLONG) continue; /* nothing above thr */
+    if ((t & RME_INRANGE) && thr >= PA__LEN_HI)
+      continue; /* nothing above thr */
     double l;
     int inr;
     int i = longest_free(rm, k, thr, &l, &inr);

@@ -375,8 +375,8 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
       pa_idx x = v[j];
       if (x == q || (m->vtag[x] & R3V_MARK)) continue;
       m->vtag[x] |= R3V_MARK;
-      if (rm3d_len_pts(mc, xm, m->x + 3 * (size_t)x, mm,
-                       m->met + (size_t)mc * x) > lguard) {
+      if (pa__len3(mc, xm, m->x + 3 * (size_t)x, mm, m->met + (size_t)mc * x) >
+          lguard) {
         ok = 0;
         break;
       }

@@ -26,6 +26,7 @@
 #define PA_REMESH3D_H
 
 #include "metric/metric.h"
+#include "metric/metric3d.h"
 #include "remesh/remesh.h"
 
 #include <math.h>
@@ -37,9 +38,9 @@ enum {
   R3T_FROZEN = 0x10, /* caller's PA_FLAG_REQUIRED: never touched */
   R3T_DEAD = 0x20,
   R3T_MARK = 0x40, /* transient visit mark (always cleared after use) */
-  /* Clean: its six edges were in [RM3D_LMIN, RM3D_LMAX] when last measured
-   * and neither its vertices nor their positions or metrics changed since.
-   * The split and collapse passes at the final thresholds skip it: on a
+  /* Clean: its six edges were in [PA__LEN_LO_EXACT, PA__LEN_HI_EXACT] when last
+   * measured and neither its vertices nor their positions or metrics changed
+   * since. The split and collapse passes at the final thresholds skip it: on a
    * mostly adapted mesh they measured every tet again for nothing. Every
    * change of a tet clears it (where its cached quality q is set). */
   R3T_CLEAN = 0x80
@@ -116,9 +117,6 @@ extern const int rm3d_compl[4][4][2];
 /* Face i as in mesh.h: local vertices in outward order. */
 extern const int rm3d_face[4][3];
 
-#define RM3D_SQRT2 1.4142135623730951
-#define RM3D_LMAX 1.4142135623730951 /* split above */
-#define RM3D_LMIN 0.7071067811865476 /* collapse below */
 #define RM3D_LRELAX 1.2 /* mean frozen edge length at a relaxed vertex */
 #define RM3D_LSPREAD 1.6 /* split halves shorter than 0.8: see m->spread */
 #define RM3D_QFLOOR 1e-3 /* operators create no worse element... */
@@ -160,68 +158,12 @@ static inline int rm3d_loc(const pa_idx *v, pa_idx x) {
   return v[0] == x ? 0 : v[1] == x ? 1 : v[2] == x ? 2 : v[3] == x ? 3 : -1;
 }
 
-/* e^T M e for a tensor m11 m12 m22 m13 m23 m33. */
-static inline double rm3d_sq(const double *m, const double *e) {
-  return m[0] * e[0] * e[0] + m[2] * e[1] * e[1] + m[5] * e[2] * e[2] +
-         2.0 * (m[1] * e[0] * e[1] + m[3] * e[0] * e[2] + m[4] * e[1] * e[2]);
-}
-
-/* Metric length of the segment between points pa, pb with metrics ma, mb. */
-static inline double rm3d_len_pts(int mc, const double *pa, const double *pb,
-                                  const double *ma, const double *mb) {
-  double e[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]};
-  if (mc == 1) {
-    /* as pa__edge_length does: the statistics see the same lengths */
-    double d = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-    return d * pa__log_mean(1.0 / ma[0], 1.0 / mb[0]);
-  }
-  return pa__log_mean(sqrt(rm3d_sq(ma, e)), sqrt(rm3d_sq(mb, e)));
-}
-
+/* Lengths and qualities are metric/metric3d.h's kernels: the statistics
+ * measure with the same lengths, and the band the passes aim at is
+ * PA__LEN_LO_EXACT..PA__LEN_HI_EXACT. */
 static inline double rm3d_len(const rm3d *m, pa_idx a, pa_idx b) {
-  return rm3d_len_pts(m->mc, m->x + 3 * (size_t)a, m->x + 3 * (size_t)b,
-                      m->met + (size_t)m->mc * a, m->met + (size_t)m->mc * b);
-}
-
-/* Quality (Mmg's normalisation) of the tetrahedron p0..p3 with vertex
- * metrics m0..m3. Isotropic sizes cancel out: the value is Euclidean. */
-static inline double rm3d_qual_pts(int mc, const double *p0, const double *p1,
-                                   const double *p2, const double *p3,
-                                   const double *m0, const double *m1,
-                                   const double *m2, const double *m3) {
-  double a[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
-  double b[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
-  double c[3] = {p3[0] - p0[0], p3[1] - p0[1], p3[2] - p0[2]};
-  double det = a[0] * (b[1] * c[2] - b[2] * c[1]) -
-               a[1] * (b[0] * c[2] - b[2] * c[0]) +
-               a[2] * (b[0] * c[1] - b[1] * c[0]);
-  if (det <= 0.0) return det < 0.0 ? -1.0 : 0.0;
-  double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-  double e[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-  double f[3] = {c[0] - b[0], c[1] - b[1], c[2] - b[2]};
-  double s;
-  if (mc == 1) {
-    s = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + b[0] * b[0] + b[1] * b[1] +
-        b[2] * b[2] + c[0] * c[0] + c[1] * c[1] + c[2] * c[2] + d[0] * d[0] +
-        d[1] * d[1] + d[2] * d[2] + e[0] * e[0] + e[1] * e[1] + e[2] * e[2] +
-        f[0] * f[0] + f[1] * f[1] + f[2] * f[2];
-    /* 72 sqrt(3) (det/6) / s^1.5 */
-    return 20.784609690826528 * det / (s * sqrt(s));
-  }
-  /* Euclidean guard: a volume at rounding level has no reliable sign. */
-  double se = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + b[0] * b[0] +
-              b[1] * b[1] + b[2] * b[2] + c[0] * c[0] + c[1] * c[1] +
-              c[2] * c[2];
-  if (det < 1e-11 * se * sqrt(se)) return 0.0;
-  double M[6];
-  for (int i = 0; i < 6; i++) M[i] = 0.25 * (m0[i] + m1[i] + m2[i] + m3[i]);
-  double dm = M[0] * (M[2] * M[5] - M[4] * M[4]) -
-              M[1] * (M[1] * M[5] - M[4] * M[3]) +
-              M[3] * (M[1] * M[4] - M[2] * M[3]);
-  if (dm <= 0.0) return 0.0;
-  s = rm3d_sq(M, a) + rm3d_sq(M, b) + rm3d_sq(M, c) + rm3d_sq(M, d) +
-      rm3d_sq(M, e) + rm3d_sq(M, f);
-  return 20.784609690826528 * det * sqrt(dm) / (s * sqrt(s));
+  return pa__len3(m->mc, m->x + 3 * (size_t)a, m->x + 3 * (size_t)b,
+                  m->met + (size_t)m->mc * a, m->met + (size_t)m->mc * b);
 }
 
 /* (b - a) x (c - a): the normal of triangle abc, twice its area long. */
@@ -261,18 +203,18 @@ static inline double rm3d_qual_moved(const rm3d *m, pa_idx t, int ip,
   }
   px[ip] = x;
   pm[ip] = met;
-  return rm3d_qual_pts(m->mc, px[0], px[1], px[2], px[3], pm[0], pm[1], pm[2],
-                       pm[3]);
+  return pa__qual3(m->mc, px[0], px[1], px[2], px[3], pm[0], pm[1], pm[2],
+                   pm[3]);
 }
 
 /* Quality of the tetrahedron with vertices v[0..3]. */
 static inline double rm3d_qual_v(const rm3d *m, const pa_idx *v) {
   const double *x = m->x, *mt = m->met;
   int mc = m->mc;
-  return rm3d_qual_pts(mc, x + 3 * (size_t)v[0], x + 3 * (size_t)v[1],
-                       x + 3 * (size_t)v[2], x + 3 * (size_t)v[3],
-                       mt + (size_t)mc * v[0], mt + (size_t)mc * v[1],
-                       mt + (size_t)mc * v[2], mt + (size_t)mc * v[3]);
+  return pa__qual3(mc, x + 3 * (size_t)v[0], x + 3 * (size_t)v[1],
+                   x + 3 * (size_t)v[2], x + 3 * (size_t)v[3],
+                   mt + (size_t)mc * v[0], mt + (size_t)mc * v[1],
+                   mt + (size_t)mc * v[2], mt + (size_t)mc * v[3]);
 }
 
 /* ---- mesh_3d.c: structure, tables, build, write back, check --------- */

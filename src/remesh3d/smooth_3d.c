@@ -395,7 +395,7 @@ int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball) {
     s2 += d[j] * d[j];
   }
   /* length delta in the metric of p */
-  double lm = mc == 1 ? sqrt(s2) / mp[0] : sqrt(rm3d_sq(mp, d));
+  double lm = mc == 1 ? sqrt(s2) / mp[0] : sqrt(pa__sqlen3_tensor(mp, d));
   if (!(lm > 0)) return 0;
   double np[3];
   for (int j = 0; j < 3; j++) np[j] = xp[j] + delta * d[j] / lm;
@@ -411,16 +411,16 @@ int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball) {
 
 /* ---- relocation for lengths -------------------------------------------- */
 
-/* Edges at p: out of [RM3D_LMIN, RM3D_LMAX) and the sum of ln^2 L, with p at
- * y (metric mp) and its neighbours nb[0..nn). */
+/* Edges at p: out of [PA__LEN_LO_EXACT, PA__LEN_HI_EXACT) and the sum of ln^2
+ * L, with p at y (metric mp) and its neighbours nb[0..nn). */
 static int len_score(const rm3d *m, const double *y, const double *mp,
                      const pa_idx *nb, int nn, double *sum) {
   int out = 0, mc = m->mc;
   double s = 0;
   for (int i = 0; i < nn; i++) {
-    double l = rm3d_len_pts(mc, y, m->x + 3 * (size_t)nb[i], mp,
-                            m->met + (size_t)mc * nb[i]);
-    out += !(l >= RM3D_LMIN && l < RM3D_LMAX);
+    double l = pa__len3(mc, y, m->x + 3 * (size_t)nb[i], mp,
+                        m->met + (size_t)mc * nb[i]);
+    out += !(l >= PA__LEN_LO_EXACT && l < PA__LEN_HI_EXACT);
     double g = log(l);
     s += g * g;
   }
@@ -499,7 +499,7 @@ int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
       if (!(s > 0)) return 0;
       for (int j = 0; j < 3; j++) g[j] = -me[j] / s;
     }
-    double r = log(rm3d_len_pts(mc, xp, xi, mp, mi));
+    double r = log(pa__len3(mc, xp, xi, mp, mi));
     jj[0] += g[0] * g[0];
     jj[1] += g[0] * g[1];
     jj[2] += g[1] * g[1];
@@ -527,7 +527,7 @@ int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
   double d2[3] = {0, 0, 0}, worst = 0;
   for (int i = 0; i < nn; i++) {
     const double *xi = m->x + 3 * (size_t)nb[i];
-    double l = rm3d_len_pts(mc, xp, xi, mp, m->met + (size_t)mc * nb[i]);
+    double l = pa__len3(mc, xp, xi, mp, m->met + (size_t)mc * nb[i]);
     double g = fabs(log(l));
     if (g <= worst) continue;
     worst = g;

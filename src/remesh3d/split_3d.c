@@ -136,14 +136,14 @@ static int shell_qualities(const rm3d *m, const pa_idx *tets, int n, pa_idx a,
     const double *sx = px[ib], *sm = pm[ib];
     px[ib] = p;
     pm[ib] = mp;
-    double qa = rm3d_qual_pts(mc, px[0], px[1], px[2], px[3], pm[0], pm[1],
-                              pm[2], pm[3]);
+    double qa =
+        pa__qual3(mc, px[0], px[1], px[2], px[3], pm[0], pm[1], pm[2], pm[3]);
     px[ib] = sx;
     pm[ib] = sm;
     px[ia] = p;
     pm[ia] = mp;
-    double qb = rm3d_qual_pts(mc, px[0], px[1], px[2], px[3], pm[0], pm[1],
-                              pm[2], pm[3]);
+    double qb =
+        pa__qual3(mc, px[0], px[1], px[2], px[3], pm[0], pm[1], pm[2], pm[3]);
     double qp = m->q[tets[i]];
     if (relax ? (qa < RM3D_QABS || qb < RM3D_QABS)
               : (!rm3d_q_ok(qa, qp) || !rm3d_q_ok(qb, qp)))
@@ -254,7 +254,7 @@ static int place_vertex(rm3d *m, split_plan *s) {
    * surface. Then the point goes closer to the chord, where the halves stay
    * in the triangle's plane (a surface tilt is always retried, a refused
    * quality only for a far too long edge). */
-  int relax = rm3d_len(m, a, b) > 2.0 * RM3D_LMAX;
+  int relax = rm3d_len(m, a, b) > 2.0 * PA__LEN_HI_EXACT;
   int ok = 0;
   for (int f = 0; f < CURVE_BACKOFF && !ok; f++) {
     double w = f == CURVE_BACKOFF - 1 ? 0 : ldexp(1.0, -f);

@@ -50,10 +50,9 @@ static double ring_dp(const rm3d *m, pa_idx a, pa_idx b, const pa_idx *ring,
         const double *mi = m->met + (size_t)mc * ring[i];
         const double *mj = m->met + (size_t)mc * ring[j];
         const double *ml = m->met + (size_t)mc * ring[l];
-        double q1 = rm3d_qual_pts(mc, xi, xj, xl, xb, mi, mj, ml, mb);
-        double q2 = q1 > target
-                        ? rm3d_qual_pts(mc, xi, xl, xj, xa, mi, ml, mj, ma)
-                        : q1;
+        double q1 = pa__qual3(mc, xi, xj, xl, xb, mi, mj, ml, mb);
+        double q2 =
+            q1 > target ? pa__qual3(mc, xi, xl, xj, xa, mi, ml, mj, ma) : q1;
         tq[i][j][l] = (float)(q1 < q2 ? q1 : q2);
       }
   /* best[i][j]: best worst quality triangulating ring[i..j] (j - i >= 2). */
@@ -371,7 +370,7 @@ pa_status pa__rm3d_swap_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
       const pa_idx *t = nv4 + 4 * i;
       for (int e = 0; e < 3; e++) {
         double l = rm3d_len(m, t[e], t[(e + 1) % 3]);
-        if (l > RM3D_LMAX) return st;
+        if (l > PA__LEN_HI_EXACT) return st;
       }
     }
   }

@@ -277,11 +277,10 @@ static void test_frozen_skin_refine(void) {
   for (pa_idx k = 0; k < m->ne; k++) {
     if (m->eflag[k] & PA_FLAG_REQUIRED) continue;
     const pa_idx *v = m->elem + 4 * (size_t)k;
-    double q = rm3d_qual_pts(1, m->coord + 3 * (size_t)v[0],
-                             m->coord + 3 * (size_t)v[1],
-                             m->coord + 3 * (size_t)v[2],
-                             m->coord + 3 * (size_t)v[3], m->met, m->met,
-                             m->met, m->met);
+    double q =
+        pa__qual3(1, m->coord + 3 * (size_t)v[0], m->coord + 3 * (size_t)v[1],
+                  m->coord + 3 * (size_t)v[2], m->coord + 3 * (size_t)v[3],
+                  m->met, m->met, m->met, m->met);
     if (q < qw) qw = q;
   }
   CHECK(qw >= 0.25);
