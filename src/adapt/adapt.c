@@ -247,131 +247,170 @@ cleanup:
   return st;
 }
 
-/* One iteration: tag, then (unless the loop ends there) pieces, extract,
- * remesh and reintegrate; its figures go to L->rep and the progress
- * callback. *end: the loop ended at the tag (L->rep says how). Collective. */
-static pa_status iterate(pa_dmesh *dm, const pa_adapt_opts *opts,
-                         pa_dmesh_value *done, pa__loop *L, int *end) {
+/* The state of iteration iter of the loop on dm. */
+static void iter_init(pa__iter *it, pa_dmesh *dm, const pa_adapt_opts *opts,
+                      int iter) {
+  memset(it, 0, sizeof *it);
+  it->dm = dm;
+  it->opts = opts;
+  it->rank = dm->rank;
+  it->size = dm->size;
+  it->dim = dm->dim;
+  it->nve = dm->dim + 1;
+  it->iter = iter;
+}
+
+/* The tag pass (t[0], t[5]: its time since t0 and peak memory), and
+ * whether the loop ends with it (*end, L->rep says how): nothing tagged
+ * (converged), or the iterations spent or no progress (converged all the
+ * same if nothing still tagged is clearly off, else stalled). Progress:
+ * the tagged work 1 % below the least seen so far (work that goes up and
+ * down, e.g. the same badly shaped elements tagged again next to other
+ * borders, is no progress). */
+static pa_status tag_step(pa__iter *it, pa_dmesh_value *done, pa__loop *L,
+                          double t0, double *t, int *end) {
   pa_status st = PA_SUCCESS;
+  const pa_adapt_opts *opts = it->opts;
   pa_adapt_report *rep = &L->rep;
-  pa__iter it;
-  pa_adapt_iter ir;
-  /* per step: t[0..4] seconds, t[5..9] peak bytes, t[10] bytes held at
-   * the end (the maximum over the ranks of each) */
-  double t[11], busy, ta = pa_wtime(), tb;
-  int nfail = 0, iter = L->iter + 1;
-  pa__memory_window_begin();
-  memset(&it, 0, sizeof it);
-  memset(&ir, 0, sizeof ir);
-  *end = 0;
-  it.dm = dm;
-  it.opts = opts;
-  it.rank = dm->rank;
-  it.size = dm->size;
-  it.dim = dm->dim;
-  it.nve = dm->dim + 1;
-  it.iter = iter;
-  PA_CALL(pa__adapt_tag(&it, done, iter == 1));
-  t[0] = pa_wtime() - ta;
+  int iter = it->iter;
+  PA_CALL(pa__adapt_tag(it, done, iter == 1));
+  t[0] = pa_wtime() - t0;
   t[5] = (double)pa__memory_window_peak();
-  report_progress(dm, opts, iter, it.ntagged, L);
-  rep->ntagged_left = it.ntagged;
-  if (it.ntagged == 0) {
+  report_progress(it->dm, opts, iter, it->ntagged, L);
+  rep->ntagged_left = it->ntagged;
+  if (it->ntagged == 0) {
     rep->converged = 1;
     *end = 1;
     goto cleanup;
   }
-  /* progress: 1 % below the least work seen so far (work that goes up and
-   * down, e.g. the same badly shaped elements tagged again next to other
-   * borders, is no progress) */
   L->nostep =
-      L->least >= 0 && it.tagwork >= 0.99 * L->least ? L->nostep + 1 : 0;
+      L->least >= 0 && it->tagwork >= 0.99 * L->least ? L->nostep + 1 : 0;
   if (iter > opts->max_iter ||
       (L->nostep >= 1 && L->lastpieces == 1 && !L->lastfailed) ||
       L->nostep >= 6) {
     /* the loop ends: converged all the same if nothing still tagged is
      * clearly off */
     pa_gid missed = 0;
-    PA_CALL(pa__adapt_count_missed(&it, &missed));
+    PA_CALL(pa__adapt_count_missed(it, &missed));
     rep->converged = missed == 0;
     rep->stalled = missed > 0;
     pa__info(1, "padapt: the loop ends with %lld elements tagged, %lld "
                 "of them clearly off: %s\n",
-             (long long)it.ntagged, (long long)missed,
+             (long long)it->ntagged, (long long)missed,
              missed ? "stalled" : "converged");
     *end = 1;
     goto cleanup;
   }
-  if (L->least < 0 || it.tagwork < L->least) L->least = it.tagwork;
-  ta = pa_wtime();
+  if (L->least < 0 || it->tagwork < L->least) L->least = it->tagwork;
+cleanup:
+  return st;
+}
+
+/* The number of pieces wanted: pieces_per_rank per rank, halved for each
+ * iteration without progress (other borders, fewer of them), and then
+ * fewer than the last iteration's. */
+static int pieces_wanted(const pa_dmesh *dm, const pa_adapt_opts *opts,
+                         const pa__loop *L) {
+  int np = dm->size * opts->pieces_per_rank;
+  for (int k = 0; k < L->nostep && np > 1; k++) np = (np + 1) / 2;
+  if (L->nostep && np >= L->lastpieces)
+    np = L->lastpieces > 1 ? L->lastpieces - 1 : 1;
+  return np;
+}
+
+/* The end of step k (1-4: pieces, extract, remesh, reintegrate): its
+ * seconds since *t0 in t[k] and the peak bytes of the memory window in
+ * t[5 + k]; both restart for the next step. */
+static void step_done(double *t, int k, double *t0) {
+  double now = pa_wtime();
+  t[k] = now - *t0;
+  t[5 + k] = (double)pa__memory_window_peak();
+  *t0 = now;
   pa__memory_window_begin();
-  {
-    /* no progress: halve the pieces (other borders, fewer of them) */
-    int np = dm->size * opts->pieces_per_rank;
-    for (int k = 0; k < L->nostep && np > 1; k++) np = (np + 1) / 2;
-    if (L->nostep && np >= L->lastpieces)
-      np = L->lastpieces > 1 ? L->lastpieces - 1 : 1;
-    PA_CALL(pa__adapt_pieces(&it, np));
-    L->lastpieces = it.npieces;
-  }
-  tb = pa_wtime();
-  t[1] = tb - ta;
-  t[6] = (double)pa__memory_window_peak();
-  pa__memory_window_begin();
-  PA_CALL(pa__adapt_extract(&it));
-  ta = pa_wtime();
-  t[2] = ta - tb;
-  t[7] = (double)pa__memory_window_peak();
-  pa__memory_window_begin();
-  st = pa__adapt_remesh(&it, &nfail);
-  busy = pa_wtime() - ta;
-  PA_CALL(pa__agree(dm->comm, st)); /* the ranks wait for the slowest */
-  tb = pa_wtime();
-  t[3] = tb - ta;
-  t[8] = (double)pa__memory_window_peak();
-  pa__memory_window_begin();
-  PA_CALL(pa__adapt_reintegrate(&it, done));
-  t[4] = pa_wtime() - tb;
-  t[9] = (double)pa__memory_window_peak();
-  t[10] = (double)pa_memory_current();
+}
+
+/* The figures of the iteration into *ir and L->rep: times and memory (t,
+ * busy, nfail) over the ranks, the rollbacks and bytes moved summed. */
+static pa_status record_iteration(const pa__iter *it, pa__loop *L, double *t,
+                                  double busy, int nfail, pa_adapt_iter *ir) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  pa_adapt_report *rep = &L->rep;
   PA_CALL(max_times(dm->comm, t, 11, &busy));
   {
-    double x[2] = {(double)nfail, it.bytes_moved};
+    double x[2] = {(double)nfail, it->bytes_moved};
     PA_CALL(pa__allreduce(dm->comm, x, 2, MPI_DOUBLE, MPI_SUM));
-    ir.nfailed = (int)x[0];
-    L->lastfailed = ir.nfailed > 0;
-    ir.bytes_moved = x[1];
+    ir->nfailed = (int)x[0];
+    L->lastfailed = ir->nfailed > 0;
+    ir->bytes_moved = x[1];
   }
-  ir.iter = iter;
-  ir.ntagged = it.ntagged;
-  ir.nelem = dm->nglob[PA_ELEMENT];
-  ir.npieces = it.npieces;
-  ir.imbalance = it.imbalance;
-  ir.t_tag = t[0];
-  ir.t_pieces = t[1];
-  ir.t_gather = t[2];
-  ir.t_remesh = t[3];
-  ir.t_reintegrate = t[4];
-  ir.mem_tag = t[5];
-  ir.mem_pieces = t[6];
-  ir.mem_gather = t[7];
-  ir.mem_remesh = t[8];
-  ir.mem_reintegrate = t[9];
-  ir.mem_after = t[10];
-  ir.remesh_busy = busy;
-  L->iter = iter;
-  rep->niter = iter;
-  rep->npieces += ir.npieces;
-  rep->nfailed += ir.nfailed;
+  ir->iter = it->iter;
+  ir->ntagged = it->ntagged;
+  ir->nelem = dm->nglob[PA_ELEMENT];
+  ir->npieces = it->npieces;
+  ir->imbalance = it->imbalance;
+  ir->t_tag = t[0];
+  ir->t_pieces = t[1];
+  ir->t_gather = t[2];
+  ir->t_remesh = t[3];
+  ir->t_reintegrate = t[4];
+  ir->mem_tag = t[5];
+  ir->mem_pieces = t[6];
+  ir->mem_gather = t[7];
+  ir->mem_remesh = t[8];
+  ir->mem_reintegrate = t[9];
+  ir->mem_after = t[10];
+  ir->remesh_busy = busy;
+  L->iter = it->iter;
+  rep->niter = it->iter;
+  rep->npieces += ir->npieces;
+  rep->nfailed += ir->nfailed;
   rep->t_tag += t[0];
   rep->t_pieces += t[1];
   rep->t_gather += t[2];
   rep->t_remesh += t[3];
   rep->t_reintegrate += t[4];
   rep->remesh_busy += busy;
-  rep->bytes_moved += ir.bytes_moved;
+  rep->bytes_moved += ir->bytes_moved;
   if (rep->niter_recorded < PA_ADAPT_MAX_ITERS)
-    rep->iters[rep->niter_recorded++] = ir;
+    rep->iters[rep->niter_recorded++] = *ir;
+cleanup:
+  return st;
+}
+
+/* One iteration: tag, then (unless the loop ends there) pieces, extract,
+ * remesh and reintegrate; its figures go to L->rep and the progress
+ * callback. *end: the loop ended at the tag (L->rep says how). Collective. */
+static pa_status iterate(pa_dmesh *dm, const pa_adapt_opts *opts,
+                         pa_dmesh_value *done, pa__loop *L, int *end) {
+  pa_status st = PA_SUCCESS;
+  pa__iter it;
+  pa_adapt_iter ir;
+  /* per step: t[0..4] seconds, t[5..9] peak bytes, t[10] bytes held at
+   * the end (the maximum over the ranks of each) */
+  double t[11], busy, ta = pa_wtime();
+  int nfail = 0;
+  pa__memory_window_begin();
+  iter_init(&it, dm, opts, L->iter + 1);
+  memset(&ir, 0, sizeof ir);
+  *end = 0;
+  PA_CALL(tag_step(&it, done, L, ta, t, end));
+  if (*end) goto cleanup;
+  ta = pa_wtime();
+  pa__memory_window_begin();
+  PA_CALL(pa__adapt_pieces(&it, pieces_wanted(dm, opts, L)));
+  L->lastpieces = it.npieces;
+  step_done(t, 1, &ta);
+  PA_CALL(pa__adapt_extract(&it));
+  step_done(t, 2, &ta);
+  st = pa__adapt_remesh(&it, &nfail);
+  busy = pa_wtime() - ta;
+  PA_CALL(pa__agree(dm->comm, st)); /* the ranks wait for the slowest */
+  step_done(t, 3, &ta);
+  PA_CALL(pa__adapt_reintegrate(&it, done));
+  step_done(t, 4, &ta);
+  t[10] = (double)pa_memory_current();
+  PA_CALL(record_iteration(&it, L, t, busy, nfail, &ir));
   pa__iter_free(&it);
   if (opts->progress) opts->progress(&ir, opts->progress_ctx);
 cleanup:

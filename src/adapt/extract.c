@@ -257,25 +257,35 @@ cleanup:
   return st;
 }
 
-/* Assemble piece p from the received records. */
-static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
-                             pa_idx *const *idx, pa_idx *const *start,
-                             pa__piece *pc) {
+/* What the phases of build_piece share: the received records (R; piece
+ * p's of kind k are idx[k][start[k][p] .. start[k][p + 1])), the piece and
+ * its mesh being filled (m), its vertices by global id (map) and their
+ * marks for bisect.c (inner: 1 inner, 2 labelled, see pieces.c). */
+typedef struct pbuild {
+  pa__iter *it;
+  int p;
+  const pa__recs *R;
+  pa_idx *const *idx, *const *start;
+  pa__piece *pc;
+  pa_mesh *m;
+  pa__gidmap map;
+  uint8_t *inner;
+} pbuild;
+
+/* The piece's mesh, with the distributed mesh's metric and fields and room
+ * for its entities, and its per-vertex arrays. */
+static pa_status piece_create(pbuild *b) {
   pa_status st = PA_SUCCESS;
-  pa_dmesh *dm = it->dm;
-  int d = it->dim;
-  pa_mesh *m = NULL;
-  pa__gidmap map = {0};
-  uint8_t *inner = NULL;
-  const pa__recs *V = &R[PA_VERTEX], *E = &R[PA_ELEMENT];
+  const pa_mesh *dmm = b->it->dm->mesh;
+  pa__piece *pc = b->pc;
+  int p = b->p;
+  pa_idx *const *start = b->start;
   pa_idx nv = start[PA_VERTEX][p + 1] - start[PA_VERTEX][p];
   pa_idx ne = start[PA_ELEMENT][p + 1] - start[PA_ELEMENT][p];
   pa_idx nb = start[PA_BOUNDARY][p + 1] - start[PA_BOUNDARY][p];
   pa_idx nd = start[PA_EDGE][p + 1] - start[PA_EDGE][p];
-  const pa_mesh *dmm = dm->mesh;
-  memset(pc, 0, sizeof *pc);
-  pc->id = p;
-  PA_CALL(pa_mesh_create(d, &m));
+  PA_CALL(pa_mesh_create(b->it->dim, &b->m));
+  pa_mesh *m = b->m;
   m->met_ncomp = dmm->met_ncomp;
   m->nfield = dmm->nfield;
   for (int f = 0; f < dmm->nfield; f++) {
@@ -287,10 +297,24 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
   PA_CALLOC(pc->skin, nv);
   PA_CALLOC(pc->hot, nv);
   PA_ALLOC(pc->vrank, nv);
-  PA_CALLOC(inner, nv);
-  PA_CALL(pa__gidmap_init(&map, (size_t)nv));
+  PA_CALLOC(b->inner, nv);
+  PA_CALL(pa__gidmap_init(&b->map, (size_t)nv));
+cleanup:
+  return st;
+}
+
+/* The piece's vertices in gid order: coordinates, metric, fields, and the
+ * transit flag bits turned into pc->skin, pc->hot and inner; their user
+ * values kept for those the remesher keeps. */
+static pa_status piece_vertices(pbuild *b) {
+  pa_status st = PA_SUCCESS;
+  const pa__recs *V = &b->R[PA_VERTEX];
+  pa__piece *pc = b->pc;
+  pa_mesh *m = b->m;
+  int d = m->dim, p = b->p;
+  pa_idx nv = b->start[PA_VERTEX][p + 1] - b->start[PA_VERTEX][p];
   for (pa_idx k = 0; k < nv; k++) {
-    size_t i = (size_t)idx[PA_VERTEX][start[PA_VERTEX][p] + k];
+    size_t i = (size_t)b->idx[PA_VERTEX][b->start[PA_VERTEX][p] + k];
     const double *y = V->dbl + (size_t)V->ndbl * i;
     memcpy(m->coord + (size_t)d * k, y, d * sizeof *y);
     y += d;
@@ -298,7 +322,7 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
       memcpy(m->met + (size_t)m->met_ncomp * k, y, m->met_ncomp * sizeof *y);
       y += m->met_ncomp;
     }
-    for (int f = 0; f < dmm->nfield; f++) {
+    for (int f = 0; f < m->nfield; f++) {
       memcpy(m->field[f].val + (size_t)m->field[f].ncomp * k, y,
              m->field[f].ncomp * sizeof *y);
       y += m->field[f].ncomp;
@@ -308,21 +332,35 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
     pc->vrank[k] = INT_MAX;
     pc->skin[k] = (V->flag[i] & PA__SKIN_TRANSIT) != 0;
     pc->hot[k] = (V->flag[i] & PA__HOT_TRANSIT) != 0;
-    inner[k] = (V->flag[i] & PA__INNER_TRANSIT)      ? 1
-               : (V->flag[i] & PA__LABELLED_TRANSIT) ? 2
-                                                     : 0;
+    b->inner[k] = (V->flag[i] & PA__INNER_TRANSIT)      ? 1
+                  : (V->flag[i] & PA__LABELLED_TRANSIT) ? 2
+                                                        : 0;
     m->vflag[k] &= (uint8_t) ~(PA__SKIN_TRANSIT | PA__HOT_TRANSIT |
                                PA__INNER_TRANSIT | PA__LABELLED_TRANSIT);
     pc->vgid[k] = V->gid[i];
-    PA_CALL(pa__gidmap_put(&map, V->gid[i], k, NULL, NULL));
+    PA_CALL(pa__gidmap_put(&b->map, V->gid[i], k, NULL, NULL));
   }
   m->nv = nv;
   /* the vertices' user values, for those the remesher keeps */
-  PA_CALL(keep_ids(pc, PA_VERTEX, V, idx, start, p, 0));
+  PA_CALL(keep_ids(pc, PA_VERTEX, V, b->idx, b->start, p, 0));
+cleanup:
+  return st;
+}
+
+/* The piece's elements, and the rank each vertex came from (pc->vrank:
+ * the smallest sender of an element around it, in the payload's first
+ * bytes); their ids and values kept for those the remesher keeps. */
+static pa_status piece_elements(pbuild *b) {
+  pa_status st = PA_SUCCESS;
+  const pa__recs *E = &b->R[PA_ELEMENT];
+  pa__piece *pc = b->pc;
+  pa_mesh *m = b->m;
+  int d = m->dim, p = b->p;
+  pa_idx ne = b->start[PA_ELEMENT][p + 1] - b->start[PA_ELEMENT][p];
   for (pa_idx k = 0; k < ne; k++) {
-    size_t i = (size_t)idx[PA_ELEMENT][start[PA_ELEMENT][p] + k];
+    size_t i = (size_t)b->idx[PA_ELEMENT][b->start[PA_ELEMENT][p] + k];
     for (int j = 0; j <= d; j++) {
-      pa_idx v = pa__gidmap_get(&map, E->vgid[(size_t)(d + 1) * i + j]);
+      pa_idx v = pa__gidmap_get(&b->map, E->vgid[(size_t)(d + 1) * i + j]);
       PA_CHECK(v >= 0, PA_ERR_INTERNAL, "piece %d: vertex %lld of element "
                "%lld was not gathered", p,
                (long long)E->vgid[(size_t)(d + 1) * i + j], (long long)E->gid[i]);
@@ -335,18 +373,26 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
     m->eflag[k] = E->flag[i];
   }
   m->ne = ne;
-  pc->nv0 = nv;
-  PA_CALL(keep_ids(pc, PA_ELEMENT, &R[PA_ELEMENT], idx, start, p,
-                   sizeof(int32_t)));
+  pc->nv0 = m->nv;
+  PA_CALL(keep_ids(pc, PA_ELEMENT, E, b->idx, b->start, p, sizeof(int32_t)));
+cleanup:
+  return st;
+}
+
+/* The piece's boundary entities and edges, their ids and values kept. */
+static pa_status piece_subentities(pbuild *b) {
+  pa_status st = PA_SUCCESS;
+  pa_mesh *m = b->m;
+  int d = m->dim, p = b->p;
   for (int kind = PA_BOUNDARY; kind <= PA_EDGE; kind++) {
-    const pa__recs *B = &R[kind];
+    const pa__recs *B = &b->R[kind];
     int nvk = pa__kind_nv(d, kind);
-    pa_idx n = start[kind][p + 1] - start[kind][p];
+    pa_idx n = b->start[kind][p + 1] - b->start[kind][p];
     pa_idx *conn = kind == PA_BOUNDARY ? m->bdry : m->edge;
     for (pa_idx k = 0; k < n; k++) {
-      size_t i = (size_t)idx[kind][start[kind][p] + k];
+      size_t i = (size_t)b->idx[kind][b->start[kind][p] + k];
       for (int j = 0; j < nvk; j++) {
-        pa_idx v = pa__gidmap_get(&map, B->vgid[(size_t)nvk * i + j]);
+        pa_idx v = pa__gidmap_get(&b->map, B->vgid[(size_t)nvk * i + j]);
         PA_CHECK(v >= 0, PA_ERR_INTERNAL, "piece %d: a vertex of %s %lld was "
                  "not gathered", p, kind == PA_BOUNDARY ? "boundary entity" : "edge",
                  (long long)B->gid[i]);
@@ -362,50 +408,67 @@ static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
     }
     if (kind == PA_BOUNDARY) m->nb = n;
     else m->ned = n;
-    PA_CALL(keep_ids(pc, kind, B, idx, start, p, 0));
-  }
-  /* the outer surface: artificial, frozen boundary entities (the skin) */
-  {
-    pa_idx nb0 = m->nb;
-    PA_CALL(pa_mesh_build_boundary(m, PA__SKIN_REF, NULL));
-    for (pa_idx b = nb0; b < m->nb; b++) m->bflag[b] |= PA_FLAG_REQUIRED;
-  }
-  pc->in = m;
-  m = NULL;
-  {
-    /* the built-in 2D remesher repairs fans of triangles itself */
-    const pa_remesher *r = it->opts->remesher;
-    int builtin2d = d == 2 && (!r || r == pa_remesher_builtin());
-    PA_CALL(pa__piece_refine_skin(pc, inner, !builtin2d));
+    PA_CALL(keep_ids(b->pc, kind, B, b->idx, b->start, p, 0));
   }
 cleanup:
-  pa_mesh_destroy(m);
-  pa__gidmap_free(&map);
-  pa__free(inner);
   return st;
 }
 
-pa_status pa__adapt_extract(pa__iter *it) {
+/* The outer surface: artificial, frozen boundary entities (the skin),
+ * refined by bisect.c where the piece meets another; the mesh becomes the
+ * piece's input. */
+static pa_status piece_skin(pbuild *b) {
   pa_status st = PA_SUCCESS;
-  pa_dmesh *dm = it->dm;
-  const pa_mesh *m = dm->mesh;
+  pa_mesh *m = b->m;
+  pa_idx nb0 = m->nb;
+  PA_CALL(pa_mesh_build_boundary(m, PA__SKIN_REF, NULL));
+  for (pa_idx k = nb0; k < m->nb; k++) m->bflag[k] |= PA_FLAG_REQUIRED;
+  b->pc->in = m;
+  b->m = NULL;
+  {
+    /* the built-in 2D remesher repairs fans of triangles itself */
+    const pa_remesher *r = b->it->opts->remesher;
+    int builtin2d = m->dim == 2 && (!r || r == pa_remesher_builtin());
+    PA_CALL(pa__piece_refine_skin(b->pc, b->inner, !builtin2d));
+  }
+cleanup:
+  return st;
+}
+
+/* Assemble piece p from the received records. */
+static pa_status build_piece(pa__iter *it, int p, const pa__recs *R,
+                             pa_idx *const *idx, pa_idx *const *start,
+                             pa__piece *pc) {
+  pa_status st = PA_SUCCESS;
+  pbuild b;
+  memset(&b, 0, sizeof b);
+  b.it = it;
+  b.p = p;
+  b.R = R;
+  b.idx = idx;
+  b.start = start;
+  b.pc = pc;
+  memset(pc, 0, sizeof *pc);
+  pc->id = p;
+  PA_CALL(piece_create(&b));
+  PA_CALL(piece_vertices(&b));
+  PA_CALL(piece_elements(&b));
+  PA_CALL(piece_subentities(&b));
+  PA_CALL(piece_skin(&b));
+cleanup:
+  pa_mesh_destroy(b.m);
+  pa__gidmap_free(&b.map);
+  pa__free(b.inner);
+  return st;
+}
+
+/* Step 1: the piece x rank matrix of element counts and the work of every
+ * piece, summed over the ranks, and the map of the pieces to ranks. */
+static pa_status map_to_ranks(pa__iter *it) {
+  pa_status st = PA_SUCCESS;
+  const pa_mesh *m = it->dm->mesh;
   int np = it->npieces, P = it->size;
   double *buf = NULL;
-  unsigned char *epay = NULL;
-  pa__recs S[PA_NKIND], R[PA_NKIND];
-  int *dest[PA_NKIND] = {NULL, NULL, NULL, NULL};
-  pa_idx *idx[PA_NKIND] = {NULL, NULL, NULL, NULL};
-  pa_idx *start[PA_NKIND] = {NULL, NULL, NULL, NULL};
-  pa__layout lay;
-  pa__dmesh_layout(dm, &lay);
-  for (int k = 0; k < PA_NKIND; k++) {
-    pa__recs_init(&S[k], k, pa__kind_nv(it->dim, k),
-                  k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
-    pa__recs_init(&R[k], k, pa__kind_nv(it->dim, k),
-                  k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
-  }
-
-  /* 1. the piece x rank matrix and the work of every piece */
   PA_ALLOC(it->piece_work, np);
   PA_ALLOC(it->piece_rank, np);
   PA_CALLOC(it->piece_failed, np);
@@ -416,41 +479,56 @@ pa_status pa__adapt_extract(pa__iter *it) {
       buf[(size_t)np * P + it->label[e]] +=
           it->work[e] >= 0 ? it->work[e] : pa__elem_work(m, e);
     }
-  PA_CALL(pa__allreduce(dm->comm, buf, np * P + np, MPI_DOUBLE, MPI_SUM));
+  PA_CALL(pa__allreduce(it->dm->comm, buf, np * P + np, MPI_DOUBLE, MPI_SUM));
   memcpy(it->piece_work, buf + (size_t)np * P, np * sizeof *buf);
   PA_CALL(map_pieces(it, buf));
+cleanup:
+  pa__free(buf);
+  return st;
+}
 
-  /* 2. records to ship */
-  {
-    pa_idx n = 0;
-    for (pa_idx e = 0; e < it->ne; e++) n += it->label[e] >= 0;
-    PA_ALLOC(dest[PA_ELEMENT], n);
-    /* payload: the sender, then the element's values (an element the
-     * remesher gives back unchanged keeps them) */
-    size_t unit = sizeof(int32_t);
-    for (int k = 0; k < dm->nvalue; k++)
-      if ((int)dm->value[k]->kind == PA_ELEMENT) unit += dm->value[k]->unit;
-    PA_ALLOC(epay, unit);
-    n = 0;
-    for (pa_idx e = 0; e < it->ne; e++) {
-      if (it->label[e] < 0) continue;
-      pa_gid vg[4];
-      for (int j = 0; j < it->nve; j++)
-        vg[j] = dm->gid[PA_VERTEX][m->elem[(size_t)it->nve * e + j]];
-      int32_t from = it->rank;
-      memcpy(epay, &from, sizeof from);
-      size_t pl = sizeof from +
-                  pa__entity_payload(dm, PA_ELEMENT, e, epay + sizeof from);
-      PA_CALL(pa__recs_add(&S[PA_ELEMENT], dm->gid[PA_ELEMENT][e], vg,
-                           m->eref[e], m->eflag[e], it->label[e], NULL, epay,
-                           pl));
-      dest[PA_ELEMENT][n++] = it->piece_rank[it->label[e]];
-    }
+/* Step 2a: the records of the labelled owned elements (aux = piece), to
+ * their piece's rank (*dest); payload: the sender, then the element's
+ * values (an element the remesher gives back unchanged keeps them). */
+static pa_status element_records(pa__iter *it, pa__recs *S, int **dest) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  const pa_mesh *m = dm->mesh;
+  unsigned char *epay = NULL;
+  pa_idx n = 0;
+  size_t unit = sizeof(int32_t);
+  for (pa_idx e = 0; e < it->ne; e++) n += it->label[e] >= 0;
+  PA_ALLOC(*dest, n);
+  for (int k = 0; k < dm->nvalue; k++)
+    if ((int)dm->value[k]->kind == PA_ELEMENT) unit += dm->value[k]->unit;
+  PA_ALLOC(epay, unit);
+  n = 0;
+  for (pa_idx e = 0; e < it->ne; e++) {
+    if (it->label[e] < 0) continue;
+    pa_gid vg[4];
+    for (int j = 0; j < it->nve; j++)
+      vg[j] = dm->gid[PA_VERTEX][m->elem[(size_t)it->nve * e + j]];
+    int32_t from = it->rank;
+    memcpy(epay, &from, sizeof from);
+    size_t pl = sizeof from +
+                pa__entity_payload(dm, PA_ELEMENT, e, epay + sizeof from);
+    PA_CALL(pa__recs_add(S, dm->gid[PA_ELEMENT][e], vg, m->eref[e],
+                         m->eflag[e], it->label[e], NULL, epay, pl));
+    (*dest)[n++] = it->piece_rank[it->label[e]];
   }
+cleanup:
+  pa__free(epay);
+  return st;
+}
+
+/* Step 2b: the records of the (piece, vertex / boundary entity / edge)
+ * pairs this rank holds. The user's values travel with the entities (one
+ * the remesher keeps keeps them); an entity may be sent from a ghost copy,
+ * which first takes its owner's values. */
+static pa_status pair_records_all(pa__iter *it, pa__recs *S, int **dest) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
   if (!it->bstart) PA_CALL(pa__owned_balls(dm, &it->bstart, &it->belem));
-  /* the user's values travel with the entities (one the remesher keeps
-   * keeps them); vertices, boundary entities and edges may be sent from a
-   * ghost copy, which first takes its owner's */
   for (int k = 0; k < dm->nvalue; k++)
     if ((int)dm->value[k]->kind != PA_ELEMENT)
       PA_CALL(pa_dmesh_halo(dm, dm->value[k]));
@@ -459,17 +537,17 @@ pa_status pa__adapt_extract(pa__iter *it) {
                        &dest[PA_BOUNDARY]));
   PA_CALL(pair_records(it, PA_EDGE, it->bstart, it->belem, &S[PA_EDGE],
                        &dest[PA_EDGE]));
+cleanup:
+  return st;
+}
 
-  /* 3. ship */
-  for (int k = 0; k < PA_NKIND; k++) {
-    it->bytes_moved += bytes_out(&S[k], dest[k], it->rank);
-    PA_CALL(pa__recs_migrate(dm->comm, &S[k], dest[k], &R[k]));
-    pa__recs_free(&S[k]);
-    pa__free(dest[k]);
-    dest[k] = NULL;
-  }
-
-  /* 4. assemble the local pieces */
+/* Step 4: group the received records by piece and build the pieces mapped
+ * to this rank (it->pieces). */
+static pa_status assemble_local_pieces(pa__iter *it, const pa__recs *R) {
+  pa_status st = PA_SUCCESS;
+  int np = it->npieces;
+  pa_idx *idx[PA_NKIND] = {NULL, NULL, NULL, NULL};
+  pa_idx *start[PA_NKIND] = {NULL, NULL, NULL, NULL};
   for (int k = 0; k < PA_NKIND; k++)
     PA_CALL(group_by_piece(&R[k], np, &idx[k], &start[k]));
   it->npiece_local = 0;
@@ -479,15 +557,46 @@ pa_status pa__adapt_extract(pa__iter *it) {
     if (it->piece_rank[p] == it->rank)
       PA_CALL(build_piece(it, p, R, idx, start, &it->pieces[q++]));
 cleanup:
+  for (int k = 0; k < PA_NKIND; k++) {
+    pa__free(idx[k]);
+    pa__free(start[k]);
+  }
+  return st;
+}
+
+pa_status pa__adapt_extract(pa__iter *it) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  pa__recs S[PA_NKIND], R[PA_NKIND];
+  int *dest[PA_NKIND] = {NULL, NULL, NULL, NULL};
+  pa__layout lay;
+  pa__dmesh_layout(dm, &lay);
+  for (int k = 0; k < PA_NKIND; k++) {
+    pa__recs_init(&S[k], k, pa__kind_nv(it->dim, k),
+                  k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
+    pa__recs_init(&R[k], k, pa__kind_nv(it->dim, k),
+                  k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
+  }
+  /* 1. map the pieces to ranks; 2. the records to ship */
+  PA_CALL(map_to_ranks(it));
+  PA_CALL(element_records(it, &S[PA_ELEMENT], &dest[PA_ELEMENT]));
+  PA_CALL(pair_records_all(it, S, dest));
+  /* 3. ship */
+  for (int k = 0; k < PA_NKIND; k++) {
+    it->bytes_moved += bytes_out(&S[k], dest[k], it->rank);
+    PA_CALL(pa__recs_migrate(dm->comm, &S[k], dest[k], &R[k]));
+    pa__recs_free(&S[k]);
+    pa__free(dest[k]);
+    dest[k] = NULL;
+  }
+  /* 4. assemble the local pieces */
+  PA_CALL(assemble_local_pieces(it, R));
+cleanup:
   st = pa__agree_end(dm->comm, st);
-  pa__free(buf);
-  pa__free(epay);
   for (int k = 0; k < PA_NKIND; k++) {
     pa__recs_free(&S[k]);
     pa__recs_free(&R[k]);
     pa__free(dest[k]);
-    pa__free(idx[k]);
-    pa__free(start[k]);
   }
   return st;
 }

@@ -137,86 +137,109 @@ cleanup:
   return st;
 }
 
-pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
+/* The tagged elements, the graph to partition: nt here, their vertex gids
+ * (vg, nve per element) and work (wt), the work over every rank (wsum);
+ * part receives their pieces. */
+typedef struct tagged {
+  pa_idx nt;
+  pa_gid *vg;
+  double *wt, wsum;
+  int *part;
+} tagged;
+
+/* Every owned element unlabelled (-1), and the tagged ones collected. */
+static pa_status collect_tagged(pa__iter *it, tagged *t) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
-  const pa_adapt_opts *o = it->opts;
-  pa_idx nt = 0, *xadj = NULL;
-  pa_gid *vg = NULL, *adj = NULL;
-  double *wt = NULL, wsum = 0;
-  int *part = NULL, added = 0;
-  pa_dmesh_value *val = NULL;
   const pa_idx *conn = dm->mesh->elem;
-
   PA_ALLOC(it->label, it->ne);
   for (pa_idx e = 0; e < it->ne; e++) {
     it->label[e] = -1;
     if (it->tag[e]) {
-      nt++;
-      wsum += it->work[e];
+      t->nt++;
+      t->wsum += it->work[e];
     }
   }
-  PA_ALLOC(vg, (size_t)nt * it->nve);
-  PA_ALLOC(wt, nt);
-  PA_ALLOC(part, nt);
+  PA_ALLOC(t->vg, (size_t)t->nt * it->nve);
+  PA_ALLOC(t->wt, t->nt);
+  PA_ALLOC(t->part, t->nt);
   for (pa_idx e = 0, k = 0; e < it->ne; e++)
     if (it->tag[e]) {
       for (int j = 0; j < it->nve; j++)
-        vg[(size_t)it->nve * k + j] = dm->gid[PA_VERTEX][conn[(size_t)it->nve * e + j]];
-      wt[k++] = it->work[e];
+        t->vg[(size_t)it->nve * k + j] = dm->gid[PA_VERTEX][conn[(size_t)it->nve * e + j]];
+      t->wt[k++] = it->work[e];
     }
-  PA_CALL(pa__allreduce(dm->comm, &wsum, 1, MPI_DOUBLE, MPI_SUM));
+  PA_CALL(pa__allreduce(dm->comm, &t->wsum, 1, MPI_DOUBLE, MPI_SUM));
+cleanup:
+  return st;
+}
 
-  /* 1. number of pieces (the same on every rank: from global figures). A
-   * piece must be worth an iteration: at least min_piece_work, and at least
-   * min_piece_ratio of the mean number of elements per rank (each
-   * iteration rebuilds the whole distributed mesh, so splitting a small
-   * tagged set costs more iterations than it saves). */
-  {
-    double np = npieces_max;
-    double minw = o->min_piece_work > 0 ? o->min_piece_work : 1;
-    double byrank = o->min_piece_ratio * (double)dm->nglob[PA_ELEMENT] / it->size;
-    if (byrank > minw) minw = byrank;
-    if (np > floor(wsum / minw)) np = floor(wsum / minw);
-    if (o->mem_mb > 0) {
-      double npm = ceil(wsum * PA__BYTES_PER_WORK / (o->mem_mb * 1e6));
-      if (npm > np) np = npm;
-    }
-    if (np > (double)it->ntagged) np = (double)it->ntagged;
-    if (np > 1e6) np = 1e6;
-    if (np < 1) np = 1;
-    it->npieces = (int)np;
+/* Step 1: the number of pieces (the same on every rank: from global
+ * figures). A piece must be worth an iteration: at least min_piece_work,
+ * and at least min_piece_ratio of the mean number of elements per rank
+ * (each iteration rebuilds the whole distributed mesh, so splitting a
+ * small tagged set costs more iterations than it saves). */
+static void count_pieces(pa__iter *it, int npieces_max, double wsum) {
+  const pa_adapt_opts *o = it->opts;
+  double np = npieces_max;
+  double minw = o->min_piece_work > 0 ? o->min_piece_work : 1;
+  double byrank = o->min_piece_ratio * (double)it->dm->nglob[PA_ELEMENT] / it->size;
+  if (byrank > minw) minw = byrank;
+  if (np > floor(wsum / minw)) np = floor(wsum / minw);
+  if (o->mem_mb > 0) {
+    double npm = ceil(wsum * PA__BYTES_PER_WORK / (o->mem_mb * 1e6));
+    if (npm > np) np = npm;
   }
+  if (np > (double)it->ntagged) np = (double)it->ntagged;
+  if (np > 1e6) np = 1e6;
+  if (np < 1) np = 1;
+  it->npieces = (int)np;
+}
 
-  /* 2. partition the tagged elements, weighted by their work.
-   * pa__partition_dgraph scales the weights to integer loads in [1, S], S =
-   * min(1e6, 2^30 / tagged elements), so that their sum fits Scotch's 32-bit
-   * integers whatever the count. (Until 2026-11-22 a stale guard here
-   * dropped the weights beyond 2147 tagged elements: every real partition
-   * balanced element counts, not work.) */
+/* Step 2: partition the tagged elements, weighted by their work, and label
+ * them. pa__partition_dgraph scales the weights to integer loads in [1, S],
+ * S = min(1e6, 2^30 / tagged elements), so that their sum fits Scotch's
+ * 32-bit integers whatever the count. (Until 2026-11-22 a stale guard here
+ * dropped the weights beyond 2147 tagged elements: every real partition
+ * balanced element counts, not work.) */
+static pa_status partition_tagged(pa__iter *it, tagged *t) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  pa_idx *xadj = NULL;
+  pa_gid *adj = NULL;
   if (it->npieces > 1) {
-    PA_CALL(pa__dual_graph(dm->comm, it->dim, nt, vg, NULL, 0, &xadj, &adj,
-                           NULL, NULL));
-    st = pa__partition_dgraph(dm->comm, nt, xadj, adj, wt, it->npieces,
-                              PIECE_KBAL, part);
+    PA_CALL(pa__dual_graph(dm->comm, it->dim, t->nt, t->vg, NULL, 0, &xadj,
+                           &adj, NULL, NULL));
+    st = pa__partition_dgraph(dm->comm, t->nt, xadj, adj, t->wt, it->npieces,
+                              PIECE_KBAL, t->part);
     PA_CALL(pa__agree(dm->comm, st));
   } else {
-    for (pa_idx k = 0; k < nt; k++) part[k] = 0;
+    for (pa_idx k = 0; k < t->nt; k++) t->part[k] = 0;
   }
   for (pa_idx e = 0, k = 0; e < it->ne; e++)
-    if (it->tag[e]) it->label[e] = part[k++];
+    if (it->tag[e]) it->label[e] = t->part[k++];
+cleanup:
+  pa__free(xadj);
+  pa__free(adj);
+  return st;
+}
 
-  /* 3. grow the labels */
-  PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.adapt.label", MPI_INT, 2, -1,
-                             &val));
-  added = 1;
+/* Step 3: grow the labels, one vertex layer at a time (skin_layers, or
+ * skin_layers_later from the second iteration on): every unlabelled owned
+ * element that is not required takes the smallest label of its vertices.
+ * val: the vertex value of vertex_labels. */
+static pa_status grow_labels(pa__iter *it, pa_dmesh_value *val) {
+  pa_status st = PA_SUCCESS;
+  const pa_adapt_opts *o = it->opts;
+  const pa_mesh *m = it->dm->mesh;
+  const pa_idx *conn = m->elem;
   int nlayer = it->iter > 1 ? o->skin_layers_later : o->skin_layers;
   for (int layer = 0; layer < (nlayer > 0 ? nlayer : 1); layer++) {
     PA_CALL(vertex_labels(it, val, 1));
     const int *d = pa_dmesh_value_data(val, NULL, NULL);
     for (pa_idx e = 0; e < it->ne; e++) {
       if (it->label[e] >= 0) continue;
-      if (dm->mesh->eflag[e] & PA_FLAG_REQUIRED) continue;
+      if (m->eflag[e] & PA_FLAG_REQUIRED) continue;
       int l = NOLABEL;
       for (int k = 0; k < it->nve; k++) {
         int x = d[2 * conn[(size_t)it->nve * e + k]];
@@ -228,64 +251,94 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
     for (pa_idx e = 0; e < it->ne; e++)
       if (it->label[e] <= -2) it->label[e] = -2 - it->label[e];
   }
+cleanup:
+  return st;
+}
 
-  /* 4. label ranges around the vertices (skin, hot), inner vertices */
+/* Step 4a: per local vertex, the smallest and largest label of the
+ * elements around it (it->vlab[4v], [4v+1]; unlabelled: NOLABEL) and of
+ * the tagged ones ([4v+2], [4v+3]), over every rank: the skin and the hot
+ * vertices. */
+static pa_status label_ranges(pa__iter *it, pa_dmesh_value *val) {
+  pa_status st = PA_SUCCESS;
+  pa_idx nloc = it->dm->nloc[PA_VERTEX];
+  const int *d;
   PA_CALL(vertex_labels(it, val, 0));
+  PA_ALLOC(it->vlab, (size_t)4 * nloc);
+  d = pa_dmesh_value_data(val, NULL, NULL);
+  for (pa_idx v = 0; v < nloc; v++) {
+    it->vlab[4 * v] = d[2 * v];
+    it->vlab[4 * v + 1] = -d[2 * v + 1];
+  }
+  PA_CALL(vertex_labels(it, val, 2));
+  d = pa_dmesh_value_data(val, NULL, NULL);
+  for (pa_idx v = 0; v < nloc; v++) {
+    it->vlab[4 * v + 2] = d[2 * v];
+    it->vlab[4 * v + 3] = -d[2 * v + 1];
+  }
+cleanup:
+  return st;
+}
+
+/* Step 4b: the inner vertices (bisect.c): only pieces around, on no
+ * feature edge nor required boundary entity nor curved boundary (reduced
+ * over the ranks: every piece sees the same), and no corner, ridge or
+ * required vertex; it->vinner as described at the top of the file. */
+static pa_status inner_vertices(pa__iter *it, pa_dmesh_value *val) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  pa_idx nloc = dm->nloc[PA_VERTEX];
   {
-    pa_idx nloc = dm->nloc[PA_VERTEX];
-    PA_ALLOC(it->vlab, (size_t)4 * nloc);
-    {
-      const int *d = pa_dmesh_value_data(val, NULL, NULL);
-      for (pa_idx v = 0; v < nloc; v++) {
-        it->vlab[4 * v] = d[2 * v];
-        it->vlab[4 * v + 1] = -d[2 * v + 1];
-      }
-    }
-    PA_CALL(vertex_labels(it, val, 2));
-    {
-      const int *d = pa_dmesh_value_data(val, NULL, NULL);
-      for (pa_idx v = 0; v < nloc; v++) {
-        it->vlab[4 * v + 2] = d[2 * v];
-        it->vlab[4 * v + 3] = -d[2 * v + 1];
-      }
-    }
-    /* inner vertices (bisect.c): only pieces around, on no feature edge nor
-     * required boundary entity nor curved boundary (reduced over the ranks:
-     * every piece sees the same) */
-    {
-      int *d = pa_dmesh_value_data(val, NULL, NULL);
-      const pa_mesh *m = dm->mesh;
-      for (pa_idx v = 0; v < nloc; v++) d[2 * v] = d[2 * v + 1] = 0;
-      for (pa_idx b = 0; b < m->nb; b++)
-        if (m->bflag[b] & PA_FLAG_REQUIRED)
-          for (int k = 0; k < it->dim; k++) d[2 * m->bdry[(size_t)it->dim * b + k]] = 1;
-      for (pa_idx b = 0; b < m->ned; b++)
-        for (int k = 0; k < 2; k++) d[2 * m->edge[2 * (size_t)b + k]] = 1;
-    }
-    PA_CALL(pa__agree(dm->comm, st));
-    PA_CALL(pa_dmesh_reduce(dm, val, MPI_MAX));
-    PA_CALL(pa_dmesh_halo(dm, val));
-    PA_ALLOC(it->vinner, nloc);
-    PA_CALL(curved_vertices(dm, it->vinner)); /* 1: curved, for now */
-    {
-      const int *d = pa_dmesh_value_data(val, NULL, NULL);
-      const uint8_t *vf = dm->mesh->vflag;
-      for (pa_idx v = 0; v < nloc; v++) {
-        int labelled = it->vlab[4 * v + 1] != NOLABEL;
-        int inner = labelled && !d[2 * v] && !it->vinner[v] &&
-                    !(vf[v] & (PA_FLAG_CORNER | PA_FLAG_RIDGE | PA_FLAG_REQUIRED));
-        it->vinner[v] = (uint8_t)(inner ? PA__INNER_TRANSIT
-                                        : labelled ? PA__LABELLED_TRANSIT : 0);
-      }
+    int *d = pa_dmesh_value_data(val, NULL, NULL);
+    const pa_mesh *m = dm->mesh;
+    for (pa_idx v = 0; v < nloc; v++) d[2 * v] = d[2 * v + 1] = 0;
+    for (pa_idx b = 0; b < m->nb; b++)
+      if (m->bflag[b] & PA_FLAG_REQUIRED)
+        for (int k = 0; k < it->dim; k++) d[2 * m->bdry[(size_t)it->dim * b + k]] = 1;
+    for (pa_idx b = 0; b < m->ned; b++)
+      for (int k = 0; k < 2; k++) d[2 * m->edge[2 * (size_t)b + k]] = 1;
+  }
+  PA_CALL(pa__agree(dm->comm, st));
+  PA_CALL(pa_dmesh_reduce(dm, val, MPI_MAX));
+  PA_CALL(pa_dmesh_halo(dm, val));
+  PA_ALLOC(it->vinner, nloc);
+  PA_CALL(curved_vertices(dm, it->vinner)); /* 1: curved, for now */
+  {
+    const int *d = pa_dmesh_value_data(val, NULL, NULL);
+    const uint8_t *vf = dm->mesh->vflag;
+    for (pa_idx v = 0; v < nloc; v++) {
+      int labelled = it->vlab[4 * v + 1] != NOLABEL;
+      int inner = labelled && !d[2 * v] && !it->vinner[v] &&
+                  !(vf[v] & (PA_FLAG_CORNER | PA_FLAG_RIDGE | PA_FLAG_REQUIRED));
+      it->vinner[v] = (uint8_t)(inner ? PA__INNER_TRANSIT
+                                      : labelled ? PA__LABELLED_TRANSIT : 0);
     }
   }
 cleanup:
+  return st;
+}
+
+pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  tagged t;
+  int added = 0;
+  pa_dmesh_value *val = NULL;
+  memset(&t, 0, sizeof t);
+  PA_CALL(collect_tagged(it, &t));
+  count_pieces(it, npieces_max, t.wsum);
+  PA_CALL(partition_tagged(it, &t));
+  PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.adapt.label", MPI_INT, 2, -1,
+                             &val));
+  added = 1;
+  PA_CALL(grow_labels(it, val));
+  PA_CALL(label_ranges(it, val));
+  PA_CALL(inner_vertices(it, val));
+cleanup:
   st = pa__dmesh_value_drop(dm, added ? val : NULL,
                             pa__agree_end(dm->comm, st));
-  pa__free(vg);
-  pa__free(wt);
-  pa__free(part);
-  pa__free(xadj);
-  pa__free(adj);
+  pa__free(t.vg);
+  pa__free(t.wt);
+  pa__free(t.part);
   return st;
 }

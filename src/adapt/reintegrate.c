@@ -657,43 +657,55 @@ cleanup:
   return st;
 }
 
-/* Append the records an output gives (see the file comment). next[k]: next
- * fresh id of each kind (advanced). Rp (NULL: none): the private vertices
- * (pa__dmesh_build_priv), the fresh ones of an output whose elements all
- * stay on this rank: only they reference them. */
-static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemit,
-                                const uint8_t *demit, pa_gid *next,
-                                const pa_dmesh_value *done, pa__recs *R,
-                                pa__recs *Rp, unsigned char *pay) {
+/* What the phases of output_records share: the piece and its output, the
+ * global id of each output vertex (vg) and the destination rank of each
+ * output element (dest), the vertex layers from the hot skin vertices
+ * (dist) and from every skin vertex (dsk, only for BAD_NEAR_SKIN) with the
+ * quality bound below which an element near the skin is marked (qband; 0:
+ * none), the records to append to (R; Rp: the private vertices, NULL if
+ * none), the next fresh ids, the "done" value, and a payload buffer with
+ * its cache. */
+typedef struct orecs {
+  pa__iter *it;
+  pa__piece *pc;
+  const pa_mesh *o;
+  pa_gid *vg, *next;
+  int *dest;
+  uint8_t *dist, *dsk;
+  double qband;
+  pa__recs *R, *Rp;
+  const pa_dmesh_value *done;
+  unsigned char *pay;
+  paycache pcache;
+} orecs;
+
+/* The output's vertices: the global id of each (vg) and the records of
+ * those this rank gives: not skin vertices (a matched input vertex keeps
+ * its id and user values, gathered with it; a new one gets a fresh id and
+ * zeros), and the skin vertices bisect.c added that this piece gives. */
+static pa_status output_vertices(orecs *c) {
   pa_status st = PA_SUCCESS;
-  pa_dmesh *dm = it->dm;
-  const pa_mesh *o = pc->out;
-  int d = o->dim;
-  pa_gid *vg = NULL;
+  pa__iter *it = c->it;
+  const pa__piece *pc = c->pc;
+  const pa_mesh *o = c->o;
   double *dbl = NULL;
-  uint8_t *dist = NULL, *dsk = NULL;
-  int *dest = NULL;
-  paycache pcache = {0, 0, 0, (size_t)-1};
-  PA_CALL(output_dest(it, pc, &dest));
-  for (pa_idx e = 0; Rp && e < o->ne; e++)
-    if (dest[e] != it->rank) Rp = NULL;
-  PA_ALLOC(vg, o->nv);
-  PA_ALLOC(dbl, R[PA_VERTEX].ndbl);
+  PA_ALLOC(c->vg, o->nv);
+  PA_ALLOC(dbl, c->R[PA_VERTEX].ndbl);
   for (pa_idx j = 0; j < o->nv; j++) {
     pa_idx i = pc->match[j];
     if (i >= 0 && pc->skin[i] && pc->vgid[i] >= PA__TEMP_GID) {
-      vg[j] = pc->ifgid[i]; /* added by bisect.c: one piece gives it */
+      c->vg[j] = pc->ifgid[i]; /* added by bisect.c: one piece gives it */
       if (!pc->ifgive[i]) continue;
     } else if (i >= 0 && pc->skin[i]) {
-      vg[j] = pc->vgid[i]; /* kept by its owner */
+      c->vg[j] = pc->vgid[i]; /* kept by its owner */
       continue;
     } else {
-      vg[j] = i >= 0 ? pc->vgid[i] : next[PA_VERTEX]++;
+      c->vg[j] = i >= 0 ? pc->vgid[i] : c->next[PA_VERTEX]++;
     }
     pa__vertex_doubles(o, j, o->nfield, dbl);
     /* a vertex the remesher kept keeps its user values (gathered with it),
      * a new one gets zeros */
-    const unsigned char *vp = pay;
+    const unsigned char *vp = c->pay;
     size_t pl;
     const size_t *vo = pc->kpoff[PA_VERTEX];
     if (vo && i >= 0 && i < pc->n0[PA_VERTEX] &&
@@ -701,57 +713,82 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
       vp = pc->kpay[PA_VERTEX] + vo[i];
       pl = vo[i + 1] - vo[i];
     } else {
-      pl = payload_of(&pcache, dm, PA_VERTEX, o->vref[j], done, 0, pay);
+      pl = payload_of(&c->pcache, it->dm, PA_VERTEX, o->vref[j], c->done, 0,
+                      c->pay);
     }
-    PA_CALL(pa__recs_add(i < 0 && Rp ? Rp : &R[PA_VERTEX], vg[j], NULL,
-                         o->vref[j], o->vflag[j], it->rank, dbl, vp, pl));
+    PA_CALL(pa__recs_add(i < 0 && c->Rp ? c->Rp : &c->R[PA_VERTEX], c->vg[j],
+                         NULL, o->vref[j], o->vflag[j], it->rank, dbl, vp, pl));
   }
-  /* elements within NEAR_SKIN vertex layers of a hot skin vertex (dist);
-   * BAD_NEAR_SKIN: layers from any skin vertex (dsk), in the same sweeps;
-   * only if an element near the skin is poor, counted further for the worst
-   * quality of the band beyond (qband; 0: nothing is marked) */
-  double qthr = it->piece_failed[pc->id] ||
+cleanup:
+  pa__free(dbl);
+  return st;
+}
+
+/* The elements within NEAR_SKIN vertex layers of a hot skin vertex (dist);
+ * BAD_NEAR_SKIN: the layers from any skin vertex (dsk), in the same
+ * sweeps, and only if an element near the skin is poor, counted further
+ * for the worst quality of the band beyond (qband). */
+static pa_status near_skin_layers(orecs *c) {
+  pa_status st = PA_SUCCESS;
+  const pa__piece *pc = c->pc;
+  const pa_mesh *o = c->o;
+  double qthr = c->it->piece_failed[pc->id] ||
                         (pc->rep.nswap == 0 && pc->rep.nmove == 0)
                     ? 0
-                    : it->opts->qual_threshold;
-  double qband = 0;
-  PA_ALLOC(dist, o->nv);
-  if (qthr > 0) PA_ALLOC(dsk, o->nv);
+                    : c->it->opts->qual_threshold;
+  c->qband = 0;
+  PA_ALLOC(c->dist, o->nv);
+  if (qthr > 0) PA_ALLOC(c->dsk, o->nv);
   {
     const uint8_t *mk[2] = {pc->hot, pc->skin};
-    uint8_t *const ds[2] = {dist, dsk};
+    uint8_t *const ds[2] = {c->dist, c->dsk};
     layers_from(pc, qthr > 0 ? 2 : 1, mk, NEAR_SKIN, ds);
   }
   if (qthr > 0) {
     int poor = 0;
     for (pa_idx e = 0; !poor && e < o->ne; e++)
-      poor = elem_layer(o, dsk, e) < NEAR_SKIN &&
+      poor = elem_layer(o, c->dsk, e) < NEAR_SKIN &&
              pa_mesh_elem_quality(pc->out, e) < qthr;
     if (poor) {
       const uint8_t *mk[1] = {pc->skin};
-      uint8_t *const ds[1] = {dsk};
+      uint8_t *const ds[1] = {c->dsk};
       layers_from(pc, 1, mk, 2 * NEAR_SKIN, ds);
-      qband = qthr;
+      c->qband = qthr;
       for (pa_idx e = 0; e < o->ne; e++) {
-        int l = elem_layer(o, dsk, e);
+        int l = elem_layer(o, c->dsk, e);
         if (l >= NEAR_SKIN && l < 2 * NEAR_SKIN)
-          qband = fmin(qband, pa_mesh_elem_quality(pc->out, e));
+          c->qband = fmin(c->qband, pa_mesh_elem_quality(pc->out, e));
       }
     }
   }
+cleanup:
+  return st;
+}
+
+/* The output's elements, each with its "done" value (see the file
+ * comment); one that is an input element keeps its id and values, with
+ * done updated, the others get fresh ids and zeros. */
+static pa_status output_elements(orecs *c) {
+  pa_status st = PA_SUCCESS;
+  pa__iter *it = c->it;
+  pa_dmesh *dm = it->dm;
+  const pa__piece *pc = c->pc;
+  const pa_mesh *o = c->o;
+  unsigned char *pay = c->pay;
+  int d = o->dim;
   for (pa_idx e = 0; e < o->ne; e++) {
     pa_gid ev[4];
     uint8_t dv = it->piece_failed[pc->id] ? 0 : PA__DONE;
     int nhot = 0;
     for (int k = 0; k <= d; k++) {
       pa_idx j = o->elem[(size_t)(d + 1) * e + k];
-      ev[k] = vg[j];
-      if (dist[j] < NEAR_SKIN && dv) dv = PA__DONE_NEAR_SKIN;
-      nhot += dist[j] == 0;
+      ev[k] = c->vg[j];
+      if (c->dist[j] < NEAR_SKIN && dv) dv = PA__DONE_NEAR_SKIN;
+      nhot += c->dist[j] == 0;
     }
     if (dv && nhot >= 2) dv = PA__DONE_ON_SKIN;
-    if (dv == PA__DONE && qband > 0 && elem_layer(o, dsk, e) < NEAR_SKIN &&
-        pa_mesh_elem_quality(pc->out, e) < qband) {
+    if (dv == PA__DONE && c->qband > 0 && elem_layer(o, c->dsk, e) < NEAR_SKIN &&
+        pa_mesh_elem_quality(pc->out, e) < c->qband) {
       dv = PA__DONE_NEAR_SKIN; /* see BAD_NEAR_SKIN */
     }
     if (dv == PA__DONE && it->npieces == 1) dv = PA__DONE_FREE;
@@ -759,21 +796,34 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
     if (q >= 0) { /* an input element: its id and values, done updated */
       const size_t *po = pc->kpoff[PA_ELEMENT];
       size_t pl = po[q + 1] - po[q];
-      size_t at = done_offset(dm, o->eref[e], done);
+      size_t at = done_offset(dm, o->eref[e], c->done);
       PA_CHECK(at != (size_t)-1 && at < pl, PA_ERR_INTERNAL,
                "element payload without its done value");
       memcpy(pay, pc->kpay[PA_ELEMENT] + po[q], pl);
       pay[at] = dv;
-      pcache.len = (size_t)-1; /* pay no longer holds the cached payload */
-      PA_CALL(pa__recs_add(&R[PA_ELEMENT], pc->kgid[PA_ELEMENT][q], ev,
-                           o->eref[e], o->eflag[e], dest[e], NULL, pay, pl));
+      c->pcache.len = (size_t)-1; /* pay no longer holds the cached payload */
+      PA_CALL(pa__recs_add(&c->R[PA_ELEMENT], pc->kgid[PA_ELEMENT][q], ev,
+                           o->eref[e], o->eflag[e], c->dest[e], NULL, pay, pl));
       continue;
     }
-    size_t pl = payload_of(&pcache, dm, PA_ELEMENT, o->eref[e], done, dv, pay);
-    PA_CALL(pa__recs_add(&R[PA_ELEMENT], next[PA_ELEMENT]++, ev, o->eref[e],
-                         o->eflag[e], dest[e], NULL, pay, pl));
+    size_t pl = payload_of(&c->pcache, dm, PA_ELEMENT, o->eref[e], c->done, dv,
+                           pay);
+    PA_CALL(pa__recs_add(&c->R[PA_ELEMENT], c->next[PA_ELEMENT]++, ev,
+                         o->eref[e], o->eflag[e], c->dest[e], NULL, pay, pl));
   }
-  /* boundary entities and edges not on the skin */
+cleanup:
+  return st;
+}
+
+/* The output's boundary entities and edges not on the skin (bemit, demit);
+ * an input one keeps its id and values, the others get fresh ids and
+ * zeros. */
+static pa_status output_subentities(orecs *c, const uint8_t *bemit,
+                                    const uint8_t *demit) {
+  pa_status st = PA_SUCCESS;
+  pa__iter *it = c->it;
+  const pa__piece *pc = c->pc;
+  const pa_mesh *o = c->o;
   for (int kind = PA_BOUNDARY; kind <= PA_EDGE; kind++) {
     int nvk;
     const int32_t *ref;
@@ -785,25 +835,56 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
     for (pa_idx b = 0; b < n; b++) {
       if (!emit[b]) continue;
       pa_gid bv[3];
-      for (int k = 0; k < nvk; k++) bv[k] = vg[conn[(size_t)nvk * b + k]];
+      for (int k = 0; k < nvk; k++) bv[k] = c->vg[conn[(size_t)nvk * b + k]];
       pa_idx q = pc->reuse[kind][b];
       if (q >= 0) { /* an input entity: its id and values */
-        PA_CALL(pa__recs_add(&R[kind], pc->kgid[kind][q], bv, ref[b], fl[b],
+        PA_CALL(pa__recs_add(&c->R[kind], pc->kgid[kind][q], bv, ref[b], fl[b],
                              it->rank, NULL, po ? pc->kpay[kind] + po[q] : NULL,
                              po ? po[q + 1] - po[q] : 0));
         continue;
       }
-      size_t pl = payload_of(&pcache, dm, kind, ref[b], done, 0, pay);
-      PA_CALL(pa__recs_add(&R[kind], next[kind]++, bv, ref[b], fl[b], it->rank,
-                           NULL, pay, pl));
+      size_t pl = payload_of(&c->pcache, it->dm, kind, ref[b], c->done, 0,
+                             c->pay);
+      PA_CALL(pa__recs_add(&c->R[kind], c->next[kind]++, bv, ref[b], fl[b],
+                           it->rank, NULL, c->pay, pl));
     }
   }
 cleanup:
-  pa__free(vg);
-  pa__free(dbl);
-  pa__free(dist);
-  pa__free(dsk);
-  pa__free(dest);
+  return st;
+}
+
+/* Append the records an output gives (see the file comment). next[k]: next
+ * fresh id of each kind (advanced). Rp (NULL: none): the private vertices
+ * (pa__dmesh_build_priv), the fresh ones of an output whose elements all
+ * stay on this rank: only they reference them. */
+static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemit,
+                                const uint8_t *demit, pa_gid *next,
+                                const pa_dmesh_value *done, pa__recs *R,
+                                pa__recs *Rp, unsigned char *pay) {
+  pa_status st = PA_SUCCESS;
+  orecs c;
+  memset(&c, 0, sizeof c);
+  c.it = it;
+  c.pc = pc;
+  c.o = pc->out;
+  c.next = next;
+  c.R = R;
+  c.done = done;
+  c.pay = pay;
+  c.pcache.len = (size_t)-1;
+  PA_CALL(output_dest(it, pc, &c.dest));
+  for (pa_idx e = 0; Rp && e < c.o->ne; e++)
+    if (c.dest[e] != it->rank) Rp = NULL;
+  c.Rp = Rp;
+  PA_CALL(output_vertices(&c));
+  PA_CALL(near_skin_layers(&c));
+  PA_CALL(output_elements(&c));
+  PA_CALL(output_subentities(&c, bemit, demit));
+cleanup:
+  pa__free(c.vg);
+  pa__free(c.dist);
+  pa__free(c.dsk);
+  pa__free(c.dest);
   return st;
 }
 
@@ -827,6 +908,147 @@ static int home_rank(const double *x, int d, int P) {
   return (int)(coord_hash(x, d) % (uint64_t)P);
 }
 
+/* What the phases of skin_vertex_ids share: the requests this rank sends,
+ * one per added vertex of its outputs in (piece, vertex) order (n; home[k]
+ * the home rank of the k-th, scnt the bytes to each rank, pos offsets),
+ * and the requests it receives as a home rank (rcnt bytes from each rank,
+ * rbuf), sorted by coordinates in srt (nr in all, src: arrival order). */
+typedef struct ifids {
+  pa__iter *it;
+  size_t n, nr, *scnt, *rcnt, *pos;
+  int *home;
+  ifreq *rbuf, *srt;
+} ifids;
+
+/* The requests sent to the home ranks, grouped by home rank, in (piece,
+ * vertex) order within each. */
+static pa_status send_requests(ifids *c) {
+  pa_status st = PA_SUCCESS;
+  pa__iter *it = c->it;
+  int P = it->size, d = it->dim;
+  size_t k = 0;
+  ifreq *sbuf = NULL;
+  for (int q = 0; q < it->npiece_local; q++) {
+    pa__piece *pc = &it->pieces[q];
+    if (!pc->out) continue;
+    for (pa_idx i = 0; i < pc->in->nv; i++) c->n += pc->vgid[i] >= PA__TEMP_GID;
+    /* (only skin vertices carry temporary ids) */
+  }
+  PA_CALLOC(c->scnt, P);
+  PA_CALLOC(c->pos, (size_t)P + 1);
+  PA_ALLOC(c->home, c->n ? c->n : 1);
+  PA_ALLOC(sbuf, c->n ? c->n : 1);
+  for (int q = 0; q < it->npiece_local; q++) {
+    pa__piece *pc = &it->pieces[q];
+    if (!pc->out) continue;
+    for (pa_idx i = 0; i < pc->in->nv; i++)
+      if (pc->vgid[i] >= PA__TEMP_GID) {
+        c->home[k] = home_rank(pc->in->coord + (size_t)d * i, d, P);
+        c->scnt[c->home[k]]++;
+        k++;
+      }
+  }
+  for (int r = 0; r < P; r++) c->pos[r + 1] = c->pos[r] + c->scnt[r];
+  k = 0;
+  for (int q = 0; q < it->npiece_local; q++) {
+    pa__piece *pc = &it->pieces[q];
+    if (!pc->out) continue;
+    for (pa_idx i = 0; i < pc->in->nv; i++)
+      if (pc->vgid[i] >= PA__TEMP_GID) {
+        ifreq *r = &sbuf[c->pos[c->home[k]]++];
+        memset(r, 0, sizeof *r);
+        memcpy(r->x, pc->in->coord + (size_t)d * i, d * sizeof(double));
+        r->piece = pc->id;
+        k++;
+      }
+  }
+  for (int r = 0; r < P; r++) c->scnt[r] *= sizeof(ifreq);
+  PA_CALL(pa__xchg_sparse(it->dm->comm, c->scnt, sbuf, &c->rcnt,
+                          (void **)&c->rbuf));
+cleanup:
+  pa__free(sbuf);
+  return st;
+}
+
+/* On the home rank: the requests sorted by coordinates (then piece), and
+ * the distinct coordinates counted (*ndist); each must be met at least
+ * twice. */
+static pa_status sort_requests(ifids *c, pa_gid *ndist) {
+  pa_status st = PA_SUCCESS;
+  size_t nr = 0;
+  int bad = 0;
+  for (int r = 0; r < c->it->size; r++) nr += c->rcnt[r] / sizeof(ifreq);
+  c->nr = nr;
+  PA_ALLOC(c->srt, nr ? nr : 1);
+  memcpy(c->srt, c->rbuf, nr * sizeof *c->srt);
+  for (size_t i = 0; i < nr; i++) c->srt[i].src = (int64_t)i;
+  qsort(c->srt, nr, sizeof *c->srt, ifreq_cmp);
+  for (size_t i = 0; i < nr;) {
+    size_t j = i + 1;
+    while (j < nr && memcmp(c->srt[j].x, c->srt[i].x, sizeof c->srt[i].x) == 0) j++;
+    bad |= j - i < 2;
+    (*ndist)++;
+    i = j;
+  }
+  PA_CHECK(!bad, PA_ERR_INTERNAL, "parallel adaptation: a vertex added to "
+           "refine a piece's skin was not added by the piece on the other "
+           "side");
+cleanup:
+  return st;
+}
+
+/* On the home rank: the answers, in arrival order: the id of each
+ * request's vertex (consecutive from first, in coordinate order) and 1 for
+ * the request of the smallest piece, which gives it. *bcnt, *back: the
+ * answers to this rank's requests. */
+static pa_status answer_requests(ifids *c, pa_gid first, size_t **bcnt,
+                                 int64_t **back) {
+  pa_status st = PA_SUCCESS;
+  const ifreq *srt = c->srt;
+  int64_t *ans = NULL;
+  pa_gid g = first - 1;
+  PA_ALLOC(ans, 2 * (c->nr ? c->nr : 1));
+  for (size_t i = 0; i < c->nr; i++) {
+    int isnew = i == 0 || memcmp(srt[i].x, srt[i - 1].x, sizeof srt[i].x) != 0;
+    if (isnew) g++;
+    ans[2 * srt[i].src] = g;
+    ans[2 * srt[i].src + 1] = isnew; /* the smallest piece gives it */
+  }
+  for (int r = 0; r < c->it->size; r++)
+    c->rcnt[r] = c->rcnt[r] / sizeof(ifreq) * 2 * sizeof(int64_t);
+  PA_CALL(pa__xchg_sparse(c->it->dm->comm, c->rcnt, ans, bcnt, (void **)back));
+cleanup:
+  pa__free(ans);
+  return st;
+}
+
+/* The answers come back by home rank in the order of the requests: the id
+ * of every added vertex of each output (pc->ifgid) and whether this piece
+ * gives it (pc->ifgive). */
+static pa_status place_ids(ifids *c, const int64_t *back) {
+  pa_status st = PA_SUCCESS;
+  pa__iter *it = c->it;
+  int P = it->size;
+  size_t k = 0;
+  for (int r = 0; r < P; r++) c->pos[r] = 0;
+  for (int r = 1; r < P; r++) c->pos[r] = c->pos[r - 1] + c->scnt[r - 1] / sizeof(ifreq);
+  for (int q = 0; q < it->npiece_local; q++) {
+    pa__piece *pc = &it->pieces[q];
+    if (!pc->out) continue;
+    PA_CALLOC(pc->ifgid, pc->in->nv);
+    PA_CALLOC(pc->ifgive, pc->in->nv);
+    for (pa_idx i = 0; i < pc->in->nv; i++)
+      if (pc->vgid[i] >= PA__TEMP_GID) {
+        size_t a = c->pos[c->home[k]]++;
+        pc->ifgid[i] = back[2 * a];
+        pc->ifgive[i] = (uint8_t)back[2 * a + 1];
+        k++;
+      }
+  }
+cleanup:
+  return st;
+}
+
 /* Every vertex bisect.c added lies on the skins of all the pieces around
  * its edge, each holding an identical copy (same coordinates). The copies
  * meet on a home rank chosen by their coordinates, which numbers the
@@ -837,120 +1059,29 @@ static int home_rank(const double *x, int d, int P) {
 static pa_status skin_vertex_ids(pa__iter *it, pa_gid first) {
   pa_status st = PA_SUCCESS;
   MPI_Comm comm = it->dm->comm;
-  int P = it->size, d = it->dim;
-  size_t n = 0, *scnt = NULL, *rcnt = NULL, *rcnt2 = NULL, *pos = NULL;
-  ifreq *sbuf = NULL, *rbuf = NULL, *srt = NULL;
-  int64_t *ans = NULL, *back = NULL;
-  int *home = NULL;
+  ifids c;
+  size_t *bcnt = NULL;
+  int64_t *back = NULL;
   pa_gid ndist = 0, off = 0;
-  for (int q = 0; q < it->npiece_local; q++) {
-    pa__piece *pc = &it->pieces[q];
-    if (!pc->out) continue;
-    for (pa_idx i = 0; i < pc->in->nv; i++) n += pc->vgid[i] >= PA__TEMP_GID;
-    /* (only skin vertices carry temporary ids) */
-  }
-  PA_CALLOC(scnt, P);
-  PA_CALLOC(pos, (size_t)P + 1);
-  PA_ALLOC(home, n ? n : 1);
-  PA_ALLOC(sbuf, n ? n : 1);
-  /* requests grouped by home rank, in (piece, vertex) order within each */
-  {
-    size_t k = 0;
-    for (int q = 0; q < it->npiece_local; q++) {
-      pa__piece *pc = &it->pieces[q];
-      if (!pc->out) continue;
-      for (pa_idx i = 0; i < pc->in->nv; i++)
-        if (pc->vgid[i] >= PA__TEMP_GID) {
-          home[k] = home_rank(pc->in->coord + (size_t)d * i, d, P);
-          scnt[home[k]]++;
-          k++;
-        }
-    }
-    for (int r = 0; r < P; r++) pos[r + 1] = pos[r] + scnt[r];
-    k = 0;
-    for (int q = 0; q < it->npiece_local; q++) {
-      pa__piece *pc = &it->pieces[q];
-      if (!pc->out) continue;
-      for (pa_idx i = 0; i < pc->in->nv; i++)
-        if (pc->vgid[i] >= PA__TEMP_GID) {
-          ifreq *r = &sbuf[pos[home[k]]++];
-          memset(r, 0, sizeof *r);
-          memcpy(r->x, pc->in->coord + (size_t)d * i, d * sizeof(double));
-          r->piece = pc->id;
-          k++;
-        }
-    }
-    for (int r = 0; r < P; r++) scnt[r] *= sizeof(ifreq);
-  }
-  PA_CALL(pa__xchg_sparse(comm, scnt, sbuf, &rcnt, (void **)&rbuf));
-  /* home: sort, number the distinct coordinates, answer in arrival order */
-  {
-    size_t nr = 0;
-    for (int r = 0; r < P; r++) nr += rcnt[r] / sizeof(ifreq);
-    PA_ALLOC(srt, nr ? nr : 1);
-    memcpy(srt, rbuf, nr * sizeof *srt);
-    for (size_t i = 0; i < nr; i++) srt[i].src = (int64_t)i;
-    qsort(srt, nr, sizeof *srt, ifreq_cmp);
-    int bad = 0;
-    for (size_t i = 0; i < nr;) {
-      size_t j = i + 1;
-      while (j < nr && memcmp(srt[j].x, srt[i].x, sizeof srt[i].x) == 0) j++;
-      bad |= j - i < 2;
-      ndist++;
-      i = j;
-    }
-    PA_CHECK(!bad, PA_ERR_INTERNAL, "parallel adaptation: a vertex added to "
-             "refine a piece's skin was not added by the piece on the other "
-             "side");
-  }
+  memset(&c, 0, sizeof c);
+  c.it = it;
+  PA_CALL(send_requests(&c));
+  PA_CALL(sort_requests(&c, &ndist));
   PA_CALL(pa__agree(comm, st));
   MPI_Exscan(&ndist, &off, 1, MPI_INT64_T, MPI_SUM, comm);
   if (it->rank == 0) off = 0;
-  {
-    size_t nr = 0;
-    for (int r = 0; r < P; r++) nr += rcnt[r] / sizeof(ifreq);
-    PA_ALLOC(ans, 2 * (nr ? nr : 1));
-    pa_gid g = first + off - 1;
-    for (size_t i = 0; i < nr; i++) {
-      int isnew = i == 0 || memcmp(srt[i].x, srt[i - 1].x, sizeof srt[i].x) != 0;
-      if (isnew) g++;
-      ans[2 * srt[i].src] = g;
-      ans[2 * srt[i].src + 1] = isnew; /* the smallest piece gives it */
-    }
-    for (int r = 0; r < P; r++) rcnt[r] = rcnt[r] / sizeof(ifreq) * 2 * sizeof(int64_t);
-  }
-  PA_CALL(pa__xchg_sparse(comm, rcnt, ans, &rcnt2, (void **)&back));
-  /* the answers come back in the order of the requests */
-  {
-    for (int r = 0; r < P; r++) pos[r] = 0;
-    for (int r = 1; r < P; r++) pos[r] = pos[r - 1] + scnt[r - 1] / sizeof(ifreq);
-    size_t k = 0;
-    for (int q = 0; q < it->npiece_local; q++) {
-      pa__piece *pc = &it->pieces[q];
-      if (!pc->out) continue;
-      PA_CALLOC(pc->ifgid, pc->in->nv);
-      PA_CALLOC(pc->ifgive, pc->in->nv);
-      for (pa_idx i = 0; i < pc->in->nv; i++)
-        if (pc->vgid[i] >= PA__TEMP_GID) {
-          size_t a = pos[home[k]]++;
-          pc->ifgid[i] = back[2 * a];
-          pc->ifgive[i] = (uint8_t)back[2 * a + 1];
-          k++;
-        }
-    }
-  }
+  PA_CALL(answer_requests(&c, first + off, &bcnt, &back));
+  PA_CALL(place_ids(&c, back));
 cleanup:
   st = pa__agree_end(comm, st);
-  pa__free(scnt);
-  pa__free(rcnt);
-  pa__free(rcnt2);
-  pa__free(pos);
-  pa__free(sbuf);
-  pa__free(rbuf);
-  pa__free(srt);
-  pa__free(ans);
+  pa__free(c.scnt);
+  pa__free(c.rcnt);
+  pa__free(c.pos);
+  pa__free(c.home);
+  pa__free(c.rbuf);
+  pa__free(c.srt);
+  pa__free(bcnt);
   pa__free(back);
-  pa__free(home);
   return st;
 }
 
@@ -978,152 +1109,204 @@ cleanup:
   return st;
 }
 
-pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
-  pa_status st = PA_SUCCESS;
-  pa_dmesh *dm = it->dm;
-  uint8_t *keep = NULL, *kv = NULL, *kb = NULL, *kd = NULL, *vpriv = NULL;
-  uint8_t **bemit = NULL, **demit = NULL;
-  unsigned char *pay = NULL;
+/* What the phases of pa__adapt_reintegrate share: the staying owned
+ * elements (keep), the kept owned vertices, boundary entities and edges
+ * (kv, kb, kd) and the kept vertices that can be private (vpriv); per local
+ * piece, the boundary entities and edges its output gives (bemit, demit);
+ * the records of the rebuild (R; Rp: the private vertices) and their
+ * layout; per kind, the largest id in use (base), the fresh ids this rank
+ * needs (cnt) and its first one (off); a payload buffer. */
+typedef struct reint {
+  uint8_t *keep, *kv, *kb, *kd, *vpriv;
+  uint8_t **bemit, **demit;
   pa__recs R[PA_NKIND], Rp;
   pa__layout lay;
-  pa_gid cnt[PA_NKIND] = {0, 0, 0, 0}, off[PA_NKIND] = {0, 0, 0, 0};
-  pa_gid base[PA_NKIND] = {-1, -1, -1, -1};
-  int built = 0;
-  double t0 = pa_wtime(), t1;
-  memset(R, 0, sizeof R);
-  memset(&Rp, 0, sizeof Rp);
+  pa_gid base[PA_NKIND], cnt[PA_NKIND], off[PA_NKIND];
+  unsigned char *pay;
+} reint;
 
-  /* 1. which pieces failed, which elements stay */
-  PA_CALL(pa__allreduce(dm->comm, it->piece_failed, it->npieces, MPI_INT,
+/* Free the flags and the payload buffer (before the rebuild, which they
+ * would only make heavier, and on failure). */
+static void reint_free_flags(reint *r) {
+  pa__free(r->keep);
+  pa__free(r->vpriv);
+  pa__free(r->kv);
+  pa__free(r->kb);
+  pa__free(r->kd);
+  pa__free(r->pay);
+  r->keep = r->vpriv = r->kv = r->kb = r->kd = NULL;
+  r->pay = NULL;
+}
+
+/* Step 1: which pieces failed (over every rank), which owned elements stay
+ * (the unlabelled ones). */
+static pa_status staying_elements(pa__iter *it, reint *r) {
+  pa_status st = PA_SUCCESS;
+  PA_CALL(pa__allreduce(it->dm->comm, it->piece_failed, it->npieces, MPI_INT,
                         MPI_MAX));
-  PA_ALLOC(keep, it->ne);
+  PA_ALLOC(r->keep, it->ne);
   for (pa_idx e = 0; e < it->ne; e++)
-    keep[e] = it->label[e] < 0;
+    r->keep[e] = it->label[e] < 0;
+cleanup:
+  return st;
+}
 
-  /* 2. kept vertices, boundary entities and edges */
+/* Step 2: the kept vertices, boundary entities and edges (kept_flags).
+ * The balls of the owned elements go after: they describe the mesh about
+ * to be rebuilt. */
+static pa_status kept_entities(pa__iter *it, reint *r) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
   if (!it->bstart) PA_CALL(pa__owned_balls(dm, &it->bstart, &it->belem));
-  PA_CALL(kept_flags(it, PA_VERTEX, keep, it->bstart, it->belem, &kv));
-  PA_CALL(kept_flags(it, PA_BOUNDARY, keep, it->bstart, it->belem, &kb));
-  PA_CALL(kept_flags(it, PA_EDGE, keep, it->bstart, it->belem, &kd));
-  /* the balls describe the mesh about to be rebuilt */
+  PA_CALL(kept_flags(it, PA_VERTEX, r->keep, it->bstart, it->belem, &r->kv));
+  PA_CALL(kept_flags(it, PA_BOUNDARY, r->keep, it->bstart, it->belem, &r->kb));
+  PA_CALL(kept_flags(it, PA_EDGE, r->keep, it->bstart, it->belem, &r->kd));
   pa__free(it->bstart);
   pa__free(it->belem);
   it->bstart = it->belem = NULL;
+cleanup:
+  return st;
+}
 
-  /* 3. records of the staying owned entities, straight from the local
-   * arrays, with room for every output record (no regrowth) */
-  pa__dmesh_layout(dm, &lay);
-  {
-    size_t add[PA_NKIND] = {0, 0, 0, 0};
-    const uint8_t *kk[PA_NKIND];
-    kk[PA_VERTEX] = kv;
-    kk[PA_ELEMENT] = keep;
-    kk[PA_BOUNDARY] = kb;
-    kk[PA_EDGE] = kd;
-    for (int q = 0; q < it->npiece_local; q++) {
-      const pa_mesh *o = it->pieces[q].out;
-      if (!o) continue;
-      add[PA_VERTEX] += (size_t)o->nv;
-      add[PA_ELEMENT] += (size_t)o->ne;
-      add[PA_BOUNDARY] += (size_t)o->nb;
-      add[PA_EDGE] += (size_t)o->ned;
-    }
-    PA_CALL(private_kept(it, kv, &vpriv));
-    PA_CALL(pa__dmesh_kept_recs(dm, kk, add, &R[PA_ELEMENT], &R[PA_VERTEX],
-                                &R[PA_BOUNDARY], &R[PA_EDGE], vpriv, &Rp));
+/* Step 3: the records of the staying owned entities, straight from the
+ * local arrays, with room for every output record (no regrowth); the kept
+ * vertices that can be private go to Rp. */
+static pa_status staying_records(pa__iter *it, reint *r) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  size_t add[PA_NKIND] = {0, 0, 0, 0};
+  const uint8_t *kk[PA_NKIND];
+  pa__dmesh_layout(dm, &r->lay);
+  kk[PA_VERTEX] = r->kv;
+  kk[PA_ELEMENT] = r->keep;
+  kk[PA_BOUNDARY] = r->kb;
+  kk[PA_EDGE] = r->kd;
+  for (int q = 0; q < it->npiece_local; q++) {
+    const pa_mesh *o = it->pieces[q].out;
+    if (!o) continue;
+    add[PA_VERTEX] += (size_t)o->nv;
+    add[PA_ELEMENT] += (size_t)o->ne;
+    add[PA_BOUNDARY] += (size_t)o->nb;
+    add[PA_EDGE] += (size_t)o->ned;
   }
+  PA_CALL(private_kept(it, r->kv, &r->vpriv));
+  PA_CALL(pa__dmesh_kept_recs(dm, kk, add, &r->R[PA_ELEMENT], &r->R[PA_VERTEX],
+                              &r->R[PA_BOUNDARY], &r->R[PA_EDGE], r->vpriv,
+                              &r->Rp));
+cleanup:
+  return st;
+}
 
-  /* 4. fresh ids */
+/* Step 4a: the largest id in use here (base), and per output the entities
+ * that keep their id and the boundary entities and edges it gives: the
+ * count of fresh ids this rank needs of each kind (cnt). */
+static pa_status count_fresh(pa__iter *it, reint *r) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
   for (int k = 0; k < PA_NKIND; k++)
     for (pa_idx i = 0; i < dm->nown[k]; i++)
-      if (dm->gid[k][i] > base[k]) base[k] = dm->gid[k][i];
-  PA_CALLOC(bemit, it->npiece_local);
-  PA_CALLOC(demit, it->npiece_local);
+      if (dm->gid[k][i] > r->base[k]) r->base[k] = dm->gid[k][i];
+  PA_CALLOC(r->bemit, it->npiece_local);
+  PA_CALLOC(r->demit, it->npiece_local);
   for (int q = 0; q < it->npiece_local; q++) {
     pa__piece *pc = &it->pieces[q];
     if (!pc->out) continue;
-    for (pa_idx j = 0; j < pc->out->nv; j++) cnt[PA_VERTEX] += pc->match[j] < 0;
+    for (pa_idx j = 0; j < pc->out->nv; j++) r->cnt[PA_VERTEX] += pc->match[j] < 0;
     /* entities given back unchanged keep their ids (one that is given is
      * not on the skin, so its owner does not keep it: an element, boundary
      * entity or edge that a piece shares with the outside lies on a skin
      * face) */
     for (int k = PA_ELEMENT; k <= PA_EDGE; k++) PA_CALL(output_reuse(pc, k));
     for (pa_idx e = 0; e < pc->out->ne; e++)
-      cnt[PA_ELEMENT] += pc->reuse[PA_ELEMENT][e] < 0;
+      r->cnt[PA_ELEMENT] += pc->reuse[PA_ELEMENT][e] < 0;
     PA_CALL(output_emit(pc->out, pc->reuse[PA_BOUNDARY], pc->reuse[PA_EDGE],
-                        &bemit[q], &demit[q], cnt));
+                        &r->bemit[q], &r->demit[q], r->cnt));
   }
-  PA_CALL(pa__allreduce(dm->comm, base, PA_NKIND, MPI_INT64_T, MPI_MAX));
-  PA_CALL(pa__agree(dm->comm, st));
-  MPI_Exscan(cnt, off, PA_NKIND, MPI_INT64_T, MPI_SUM, dm->comm);
-  if (it->rank == 0)
-    for (int k = 0; k < PA_NKIND; k++) off[k] = 0;
-  for (int k = 0; k < PA_NKIND; k++) off[k] += base[k] + 1;
-  {
-    /* the vertices bisect.c added take ids after every other new vertex */
-    pa_gid tot = cnt[PA_VERTEX];
-    PA_CALL(pa__allreduce(dm->comm, &tot, 1, MPI_INT64_T, MPI_SUM));
-    PA_CALL(skin_vertex_ids(it, base[PA_VERTEX] + 1 + tot));
-  }
+cleanup:
+  return st;
+}
 
-  /* 5. records of the outputs */
-  {
-    size_t maxpay = 0;
-    for (int k = 0; k < dm->nvalue; k++) maxpay += dm->value[k]->unit;
-    PA_ALLOC(pay, maxpay);
-  }
+/* Step 4b: this rank's first fresh id of each kind (off): after the largest
+ * id in use on any rank, an exclusive scan of the counts; the vertices
+ * bisect.c added take ids after every other new vertex. */
+static pa_status fresh_ids(pa__iter *it, reint *r) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  pa_gid tot = r->cnt[PA_VERTEX];
+  PA_CALL(pa__allreduce(dm->comm, r->base, PA_NKIND, MPI_INT64_T, MPI_MAX));
+  PA_CALL(pa__agree(dm->comm, st));
+  MPI_Exscan(r->cnt, r->off, PA_NKIND, MPI_INT64_T, MPI_SUM, dm->comm);
+  if (it->rank == 0)
+    for (int k = 0; k < PA_NKIND; k++) r->off[k] = 0;
+  for (int k = 0; k < PA_NKIND; k++) r->off[k] += r->base[k] + 1;
+  PA_CALL(pa__allreduce(dm->comm, &tot, 1, MPI_INT64_T, MPI_SUM));
+  PA_CALL(skin_vertex_ids(it, r->base[PA_VERTEX] + 1 + tot));
+cleanup:
+  return st;
+}
+
+/* Step 5: the records of the outputs, each piece released once done, and
+ * the wire bytes of every record (a fixed part each, plus the payloads). */
+static pa_status outputs_to_records(pa__iter *it, reint *r,
+                                    const pa_dmesh_value *done) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  size_t maxpay = 0;
+  for (int k = 0; k < dm->nvalue; k++) maxpay += dm->value[k]->unit;
+  PA_ALLOC(r->pay, maxpay);
   for (int q = 0; q < it->npiece_local; q++) {
     pa__piece *pc = &it->pieces[q];
     if (!pc->out) continue;
-    PA_CALL(output_records(it, pc, bemit[q], demit[q], off, done, R,
-                           &Rp, pay));
+    PA_CALL(output_records(it, pc, r->bemit[q], r->demit[q], r->off, done,
+                           r->R, &r->Rp, r->pay));
     pa__piece_release(pc);
-    pa__free(bemit[q]);
-    pa__free(demit[q]);
-    bemit[q] = demit[q] = NULL;
+    pa__free(r->bemit[q]);
+    pa__free(r->demit[q]);
+    r->bemit[q] = r->demit[q] = NULL;
   }
-  /* wire bytes of every record: a fixed part each, plus the payloads */
   for (int k = 0; k < PA_NKIND; k++)
-    if (R[k].n) {
-      const size_t *po = R[k].poff;
-      size_t fixed = pa__recs_wire(&R[k], 0) - (po ? po[1] - po[0] : 0);
+    if (r->R[k].n) {
+      const size_t *po = r->R[k].poff;
+      size_t fixed = pa__recs_wire(&r->R[k], 0) - (po ? po[1] - po[0] : 0);
       it->bytes_moved +=
-          (double)(R[k].n * fixed + (po ? po[R[k].n] - po[0] : 0));
+          (double)(r->R[k].n * fixed + (po ? po[r->R[k].n] - po[0] : 0));
     }
+cleanup:
+  return st;
+}
 
+pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  reint r;
+  double t0 = pa_wtime(), t1;
+  memset(&r, 0, sizeof r);
+  for (int k = 0; k < PA_NKIND; k++) r.base[k] = -1;
+  PA_CALL(staying_elements(it, &r));
+  PA_CALL(kept_entities(it, &r));
+  PA_CALL(staying_records(it, &r));
+  PA_CALL(count_fresh(it, &r));
+  PA_CALL(fresh_ids(it, &r));
+  PA_CALL(outputs_to_records(it, &r, done));
   /* 6. rebuild: what the records replace goes first */
   PA_CALL(pa__agree(dm->comm, st));
   pa__iter_release_elements(it);
-  pa__free(keep);
-  pa__free(vpriv);
-  pa__free(kv);
-  pa__free(kb);
-  pa__free(kd);
-  pa__free(pay);
-  keep = vpriv = kv = kb = kd = NULL;
-  pay = NULL;
+  reint_free_flags(&r);
   pa__dmesh_clear(dm);
-  built = 1;
   t1 = pa_wtime();
-  PA_CALL(pa__dmesh_build_priv(dm, &lay, dm->overlap, &R[PA_ELEMENT],
-                               &R[PA_VERTEX], &R[PA_BOUNDARY], &R[PA_EDGE],
-                               &Rp));
+  PA_CALL(pa__dmesh_build_priv(dm, &r.lay, dm->overlap, &r.R[PA_ELEMENT],
+                               &r.R[PA_VERTEX], &r.R[PA_BOUNDARY],
+                               &r.R[PA_EDGE], &r.Rp));
   pa__info(2, "padapt: rank %d: reintegrate: records %.3f s, build %.3f s\n",
            it->rank, t1 - t0, pa_wtime() - t1);
 cleanup:
-  (void)built;
   st = pa__agree_end(dm->comm, st);
-  for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&R[k]);
-  pa__recs_free(&Rp);
-  pa__free(keep);
-  pa__free(vpriv);
-  pa__free(kv);
-  pa__free(kb);
-  pa__free(kd);
-  pa__free(pay);
-  for (int q = 0; bemit && q < it->npiece_local; q++) pa__free(bemit[q]);
-  for (int q = 0; demit && q < it->npiece_local; q++) pa__free(demit[q]);
-  pa__free(bemit);
-  pa__free(demit);
+  for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&r.R[k]);
+  pa__recs_free(&r.Rp);
+  reint_free_flags(&r);
+  for (int q = 0; r.bemit && q < it->npiece_local; q++) pa__free(r.bemit[q]);
+  for (int q = 0; r.demit && q < it->npiece_local; q++) pa__free(r.demit[q]);
+  pa__free(r.bemit);
+  pa__free(r.demit);
   return st;
 }

@@ -826,124 +826,140 @@ cleanup:
   return st;
 }
 
-/* Step 5: fetch the records of every local vertex (aux = owner) with the
- * boundary entities and edges attached to it: the directory answers each
- * requester with three record blocks (vertices in the order asked, their
- * boundary entities, their edges). Requests are sorted and directory ranks
- * own increasing gid ranges, so LV arrives sorted by gid. */
-static pa_status fetch_vertices(bstate *s) {
+/* What the phases of fetch_vertices share, on the directory side: the V
+ * records it answers (tot in all; requester r's are vi[vs[r]..vs[r+1]))
+ * and the B and D records attached to them (bi/bs and di/ds likewise). */
+typedef struct fetch {
+  size_t tot;
+  pa_idx *vi, *bi, *di;
+  size_t *vs, *bs, *ds;
+} fetch;
+
+/* Step 5a (directory side): the vertices each requester gets, its two
+ * sorted lists (the touch messages and the ghost requests rcnt/rg) merged
+ * by gid so that they come back sorted; sets the owner of each (the lowest
+ * touching rank) and counts the boundary entities and edges attached. */
+static pa_status answered_vertices(bstate *s, const size_t *rcnt,
+                                   const pa_gid *rg, fetch *f) {
   pa_status st = PA_SUCCESS;
-  pa_gid *g = NULL;
-  size_t n, *rcnt = NULL, *cnt = NULL, *bcnt = NULL;
-  size_t *vs = NULL, *bs = NULL, *ds = NULL;
-  pa_idx *vi = NULL, *bi = NULL, *di = NULL;
-  void *recv = NULL, *brecv = NULL;
-  unsigned char *sbuf = NULL;
-  /* local vertices: those of the owned elements, which the directory has
-   * from the touch messages, and the ghosts' (not among them), sent now */
-  n = 0;
-  if (s->emap.n) PA_CALL(ghost_verts(s, 1, 255, &g, &n)); /* ghosts */
-  PA_CALL(send_to_directory(s, g, n, &rcnt, &recv));
-  pa__free(g);
-  g = NULL;
-  const pa_gid *rg = recv;
-  size_t tot = 0, totb = 0, totd = 0;
-  for (int r = 0; r < s->size; r++) tot += rcnt[r] + s->tcnt[r];
-  PA_ALLOC(vi, tot);
-  PA_CALLOC(vs, (size_t)s->size + 1);
-  PA_CALLOC(bs, (size_t)s->size + 1);
-  PA_CALLOC(ds, (size_t)s->size + 1);
-  {
-    /* per requester, its two sorted lists merged by gid: the vertices come
-     * back sorted */
-    size_t i = 0, j = 0, k = 0;
-    for (int r = 0; r < s->size; r++) {
-      size_t iend = i + s->tcnt[r], jend = j + rcnt[r];
-      while (i < iend || j < jend) {
-        pa_idx v;
-        if (j >= jend || (i < iend && s->tgid[i] < rg[j])) {
-          v = s->tv[i++];
-        } else {
-          v = pa__gidindex_get(&s->vix, rg[j]);
-          PA_CHECK(v >= 0 && s->tstart[v + 1] > s->tstart[v], PA_ERR_INTERNAL,
-                   "vertex %lld requested but untouched", (long long)rg[j]);
-          j++;
-        }
-        vi[k++] = v;
-        s->V.aux[v] = s->trank[s->tstart[v]]; /* owner: lowest touching rank */
-        bs[r + 1] += (size_t)(s->bstart[v + 1] - s->bstart[v]);
-        ds[r + 1] += (size_t)(s->dstart[v + 1] - s->dstart[v]);
-      }
-      vs[r + 1] = vs[r] + s->tcnt[r] + rcnt[r];
-    }
-  }
-  pa__free(recv);
-  recv = NULL;
+  size_t i = 0, j = 0, k = 0;
+  f->tot = 0;
+  for (int r = 0; r < s->size; r++) f->tot += rcnt[r] + s->tcnt[r];
+  PA_ALLOC(f->vi, f->tot);
+  PA_CALLOC(f->vs, (size_t)s->size + 1);
+  PA_CALLOC(f->bs, (size_t)s->size + 1);
+  PA_CALLOC(f->ds, (size_t)s->size + 1);
   for (int r = 0; r < s->size; r++) {
-    bs[r + 1] += bs[r];
-    ds[r + 1] += ds[r];
+    size_t iend = i + s->tcnt[r], jend = j + rcnt[r];
+    while (i < iend || j < jend) {
+      pa_idx v;
+      if (j >= jend || (i < iend && s->tgid[i] < rg[j])) {
+        v = s->tv[i++];
+      } else {
+        v = pa__gidindex_get(&s->vix, rg[j]);
+        PA_CHECK(v >= 0 && s->tstart[v + 1] > s->tstart[v], PA_ERR_INTERNAL,
+                 "vertex %lld requested but untouched", (long long)rg[j]);
+        j++;
+      }
+      f->vi[k++] = v;
+      s->V.aux[v] = s->trank[s->tstart[v]]; /* owner: lowest touching rank */
+      f->bs[r + 1] += (size_t)(s->bstart[v + 1] - s->bstart[v]);
+      f->ds[r + 1] += (size_t)(s->dstart[v + 1] - s->dstart[v]);
+    }
+    f->vs[r + 1] = f->vs[r] + s->tcnt[r] + rcnt[r];
   }
-  totb = bs[s->size];
-  totd = ds[s->size];
-  PA_ALLOC(bi, totb);
-  PA_ALLOC(di, totd);
-  for (size_t j = 0, kb = 0, kd = 0; j < tot; j++) {
-    pa_idx v = vi[j];
-    for (pa_idx k = s->bstart[v]; k < s->bstart[v + 1]; k++) bi[kb++] = s->blist[k];
-    for (pa_idx k = s->dstart[v]; k < s->dstart[v + 1]; k++) di[kd++] = s->dlist[k];
+cleanup:
+  return st;
+}
+
+/* Step 5b (directory side): the boundary entities and edges attached to
+ * the answered vertices, in the same order. */
+static pa_status attached_records(bstate *s, fetch *f) {
+  pa_status st = PA_SUCCESS;
+  for (int r = 0; r < s->size; r++) {
+    f->bs[r + 1] += f->bs[r];
+    f->ds[r + 1] += f->ds[r];
   }
+  PA_ALLOC(f->bi, f->bs[s->size]);
+  PA_ALLOC(f->di, f->ds[s->size]);
+  for (size_t j = 0, kb = 0, kd = 0; j < f->tot; j++) {
+    pa_idx v = f->vi[j];
+    for (pa_idx k = s->bstart[v]; k < s->bstart[v + 1]; k++) f->bi[kb++] = s->blist[k];
+    for (pa_idx k = s->dstart[v]; k < s->dstart[v + 1]; k++) f->di[kd++] = s->dlist[k];
+  }
+cleanup:
+  return st;
+}
+
+/* Step 5c: the answers sent, three record blocks per requester (its
+ * vertices, their boundary entities, their edges; the lists of f are freed
+ * once packed); *bcnt, *brecv: the blocks this rank receives. */
+static pa_status send_answers(bstate *s, fetch *f, size_t **bcnt,
+                              void **brecv) {
+  pa_status st = PA_SUCCESS;
+  size_t *cnt = NULL, bytes = 0, off = 0;
+  unsigned char *sbuf = NULL;
+  const size_t *vs = f->vs, *bs = f->bs, *ds = f->ds;
   PA_CALLOC(cnt, s->size);
-  size_t bytes = 0;
   for (int r = 0; r < s->size; r++) {
     size_t nv = vs[r + 1] - vs[r], nb = bs[r + 1] - bs[r], nd = ds[r + 1] - ds[r];
     if (!nv) continue;
-    cnt[r] = pa__recblock_bytes(0, s->V.ndbl, nv, pa__recs_paybytes(&s->V, vi + vs[r], nv)) +
-             pa__recblock_bytes(s->B.nv, 0, nb, pa__recs_paybytes(&s->B, bi + bs[r], nb)) +
-             pa__recblock_bytes(2, 0, nd, pa__recs_paybytes(&s->D, di + ds[r], nd));
+    cnt[r] = pa__recblock_bytes(0, s->V.ndbl, nv, pa__recs_paybytes(&s->V, f->vi + vs[r], nv)) +
+             pa__recblock_bytes(s->B.nv, 0, nb, pa__recs_paybytes(&s->B, f->bi + bs[r], nb)) +
+             pa__recblock_bytes(2, 0, nd, pa__recs_paybytes(&s->D, f->di + ds[r], nd));
     bytes += cnt[r];
   }
   PA_ALLOC(sbuf, bytes);
-  {
-    size_t off = 0;
-    for (int r = 0; r < s->size; r++) {
-      size_t nv = vs[r + 1] - vs[r];
-      if (!nv) continue;
-      off += pa__recs_put(&s->V, vi + vs[r], nv, sbuf + off);
-      off += pa__recs_put(&s->B, bi + bs[r], bs[r + 1] - bs[r], sbuf + off);
-      off += pa__recs_put(&s->D, di + ds[r], ds[r + 1] - ds[r], sbuf + off);
-    }
+  for (int r = 0; r < s->size; r++) {
+    size_t nv = vs[r + 1] - vs[r];
+    if (!nv) continue;
+    off += pa__recs_put(&s->V, f->vi + vs[r], nv, sbuf + off);
+    off += pa__recs_put(&s->B, f->bi + bs[r], bs[r + 1] - bs[r], sbuf + off);
+    off += pa__recs_put(&s->D, f->di + ds[r], ds[r + 1] - ds[r], sbuf + off);
   }
-  pa__free(vi);
-  pa__free(bi);
-  pa__free(di);
-  vi = bi = di = NULL;
-  PA_CALL(pa__xchg_sparse(s->comm, cnt, sbuf, &bcnt, &brecv));
+  pa__free(f->vi);
+  pa__free(f->bi);
+  pa__free(f->di);
+  f->vi = f->bi = f->di = NULL;
+  PA_CALL(pa__xchg_sparse(s->comm, cnt, sbuf, bcnt, brecv));
+cleanup:
+  pa__free(cnt);
   pa__free(sbuf);
-  sbuf = NULL;
-  {
-    size_t btot = 0, q = 0, n3[3] = {0, 0, 0}, p3[3] = {0, 0, 0};
-    pa__recs *R3[3] = {&s->LV, &s->LB, &s->LD};
-    for (int r = 0; r < s->size; r++) btot += bcnt[r];
-    for (int t = 0; q < btot; t = (t + 1) % 3) { /* exact reservations */
-      pa__recblock bk;
-      pa__recblock_map((unsigned char *)brecv + q, R3[t]->nv, R3[t]->ndbl, &bk);
-      n3[t] += bk.n;
-      p3[t] += bk.paybytes;
-      q += bk.bytes;
-    }
-    for (int t = 0; t < 3; t++) PA_CALL(pa__recs_reserve(R3[t], n3[t], p3[t]));
-    q = 0;
-    while (q < btot) {
-      PA_CALL(pa__recs_get(&s->LV, brecv, &q));
-      PA_CALL(pa__recs_get(&s->LB, brecv, &q));
-      PA_CALL(pa__recs_get(&s->LD, brecv, &q));
-    }
+  return st;
+}
+
+/* Step 5d (requester side): the received blocks appended to LV, LB and LD
+ * (exact reservations first). */
+static pa_status receive_fetched(bstate *s, const size_t *bcnt, void *brecv) {
+  pa_status st = PA_SUCCESS;
+  size_t btot = 0, q = 0, n3[3] = {0, 0, 0}, p3[3] = {0, 0, 0};
+  pa__recs *R3[3] = {&s->LV, &s->LB, &s->LD};
+  for (int r = 0; r < s->size; r++) btot += bcnt[r];
+  for (int t = 0; q < btot; t = (t + 1) % 3) { /* exact reservations */
+    pa__recblock bk;
+    pa__recblock_map((unsigned char *)brecv + q, R3[t]->nv, R3[t]->ndbl, &bk);
+    n3[t] += bk.n;
+    p3[t] += bk.paybytes;
+    q += bk.bytes;
   }
-  if (s->P && s->P->n) PA_CALL(add_private(s));
-  /* the LV record of each owned element's vertex (-1: not fetched, an
-   * internal error reported by assemble); both lists are sorted by gid */
-  PA_ALLOC(s->ulv, s->nu);
+  for (int t = 0; t < 3; t++) PA_CALL(pa__recs_reserve(R3[t], n3[t], p3[t]));
+  q = 0;
+  while (q < btot) {
+    PA_CALL(pa__recs_get(&s->LV, brecv, &q));
+    PA_CALL(pa__recs_get(&s->LB, brecv, &q));
+    PA_CALL(pa__recs_get(&s->LD, brecv, &q));
+  }
+cleanup:
+  return st;
+}
+
+/* Step 5e: the LV record of each owned element's vertex (-1: not fetched,
+ * an internal error reported by assemble); both lists are sorted by gid.
+ * Every private vertex must be one of them. */
+static pa_status owned_vertex_records(bstate *s) {
+  pa_status st = PA_SUCCESS;
   size_t npriv = 0;
+  PA_ALLOC(s->ulv, s->nu);
   for (size_t u = 0, i = 0; u < s->nu; u++) {
     while (i < s->LV.n && s->LV.gid[i] < s->ukey[u]) i++;
     s->ulv[u] = i < s->LV.n && s->LV.gid[i] == s->ukey[u] ? (pa_idx)i : -1;
@@ -953,20 +969,48 @@ static pa_status fetch_vertices(bstate *s) {
            "%zu private vertices are in no owned element",
            s->P ? s->P->n - npriv : 0);
 cleanup:
+  return st;
+}
+
+/* Step 5: fetch the records of every local vertex (aux = owner) with the
+ * boundary entities and edges attached to it: the directory answers each
+ * requester with three record blocks (vertices in the order asked, their
+ * boundary entities, their edges). Requests are sorted and directory ranks
+ * own increasing gid ranges, so LV arrives sorted by gid. */
+static pa_status fetch_vertices(bstate *s) {
+  pa_status st = PA_SUCCESS;
+  pa_gid *g = NULL;
+  size_t n = 0, *rcnt = NULL, *bcnt = NULL;
+  void *recv = NULL, *brecv = NULL;
+  fetch f;
+  memset(&f, 0, sizeof f);
+  /* local vertices: those of the owned elements, which the directory has
+   * from the touch messages, and the ghosts' (not among them), sent now */
+  if (s->emap.n) PA_CALL(ghost_verts(s, 1, 255, &g, &n)); /* ghosts */
+  PA_CALL(send_to_directory(s, g, n, &rcnt, &recv));
+  pa__free(g);
+  g = NULL;
+  PA_CALL(answered_vertices(s, rcnt, recv, &f));
+  pa__free(recv);
+  recv = NULL;
+  PA_CALL(attached_records(s, &f));
+  PA_CALL(send_answers(s, &f, &bcnt, &brecv));
+  PA_CALL(receive_fetched(s, bcnt, brecv));
+  if (s->P && s->P->n) PA_CALL(add_private(s));
+  PA_CALL(owned_vertex_records(s));
+cleanup:
   st = pa__agree_end(s->comm, st);
   pa__free(g);
   pa__free(rcnt);
-  pa__free(cnt);
   pa__free(bcnt);
-  pa__free(vs);
-  pa__free(bs);
-  pa__free(ds);
-  pa__free(vi);
-  pa__free(bi);
-  pa__free(di);
   pa__free(recv);
   pa__free(brecv);
-  pa__free(sbuf);
+  pa__free(f.vi);
+  pa__free(f.bi);
+  pa__free(f.di);
+  pa__free(f.vs);
+  pa__free(f.bs);
+  pa__free(f.ds);
   return st;
 }
 
@@ -1352,34 +1396,40 @@ pa_status pa__dmesh_build(pa_dmesh *dm, const pa__layout *lay, int overlap,
                               NULL);
 }
 
-pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
-                               int overlap, pa__recs *elems, pa__recs *verts,
-                               pa__recs *bdry, pa__recs *edges,
-                               pa__recs *priv) {
-  pa_status st = PA_SUCCESS;
-  bstate s;
-  double t0 = pa_wtime();
-  memset(&s, 0, sizeof s);
-  s.comm = dm->comm;
-  s.rank = dm->rank;
-  s.size = dm->size;
-  s.dim = dm->dim;
-  s.nve = dm->dim + 1;
-  int ndbl = pa__layout_ndbl(lay);
-  pa__recs_init(&s.L, PA_ELEMENT, s.nve, 0);
-  pa__recs_init(&s.LV, PA_VERTEX, 0, ndbl);
-  pa__recs_init(&s.LB, PA_BOUNDARY, s.dim, 0);
-  pa__recs_init(&s.LD, PA_EDGE, 2, 0);
-  pa__recs_init(&s.V, PA_VERTEX, 0, ndbl);
-  pa__recs_init(&s.B, PA_BOUNDARY, s.dim, 0);
-  pa__recs_init(&s.D, PA_EDGE, 2, 0);
-  dm->overlap = overlap;
+/* The build state of dm's communicator, its record sets empty with ndbl
+ * doubles per vertex. */
+static void bstate_init(bstate *s, const pa_dmesh *dm, int ndbl) {
+  memset(s, 0, sizeof *s);
+  s->comm = dm->comm;
+  s->rank = dm->rank;
+  s->size = dm->size;
+  s->dim = dm->dim;
+  s->nve = dm->dim + 1;
+  pa__recs_init(&s->L, PA_ELEMENT, s->nve, 0);
+  pa__recs_init(&s->LV, PA_VERTEX, 0, ndbl);
+  pa__recs_init(&s->LB, PA_BOUNDARY, s->dim, 0);
+  pa__recs_init(&s->LD, PA_EDGE, 2, 0);
+  pa__recs_init(&s->V, PA_VERTEX, 0, ndbl);
+  pa__recs_init(&s->B, PA_BOUNDARY, s->dim, 0);
+  pa__recs_init(&s->D, PA_EDGE, 2, 0);
+}
 
-  /* input totals and the directory of vertex gids */
-  pa_gid cnt_in[PA_NKIND] = {(pa_gid)verts->n, (pa_gid)elems->n,
-                             (pa_gid)bdry->n, (pa_gid)edges->n};
+/* The input checked (record layouts, overlap, private vertices sorted by
+ * gid), its totals over all ranks (cnt_in, to find dropped entities at the
+ * end) and the directory's blocks (from the largest vertex gid). Private
+ * vertices stay out of the directory (s->P) unless there are ghost layers,
+ * which other ranks' ghosts may need them for: then they join verts. */
+static pa_status count_input(bstate *s, int overlap, const pa__recs *elems,
+                             pa__recs *verts, const pa__recs *bdry,
+                             const pa__recs *edges, pa__recs *priv, int ndbl,
+                             pa_gid *cnt_in) {
+  pa_status st = PA_SUCCESS;
   pa_gid maxg = -1;
-  PA_CHECK(verts->ndbl == ndbl && elems->nv == s.nve && bdry->nv == s.dim &&
+  cnt_in[PA_VERTEX] = (pa_gid)verts->n;
+  cnt_in[PA_ELEMENT] = (pa_gid)elems->n;
+  cnt_in[PA_BOUNDARY] = (pa_gid)bdry->n;
+  cnt_in[PA_EDGE] = (pa_gid)edges->n;
+  PA_CHECK(verts->ndbl == ndbl && elems->nv == s->nve && bdry->nv == s->dim &&
                edges->nv == 2,
            PA_ERR_INTERNAL, "record layout mismatch");
   PA_CHECK(overlap >= 0 && overlap <= 8, PA_ERR_ARG,
@@ -1394,25 +1444,126 @@ pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
     if (overlap > 0) { /* ghosts of other ranks may need them: directory */
       PA_CALL(pa__recs_append(verts, priv, 0, priv->n));
     } else {
-      s.P = priv;
+      s->P = priv;
       maxg = priv->gid[priv->n - 1];
     }
   }
   for (size_t i = 0; i < verts->n; i++)
     if (verts->gid[i] > maxg) maxg = verts->gid[i];
-  PA_CALL(pa__allreduce(s.comm, cnt_in, PA_NKIND, MPI_INT64_T, MPI_SUM));
-  PA_CALL(pa__allreduce(s.comm, &maxg, 1, MPI_INT64_T, MPI_MAX));
-  dir_init(&s.vdir, maxg, s.size);
+  PA_CALL(pa__allreduce(s->comm, cnt_in, PA_NKIND, MPI_INT64_T, MPI_SUM));
+  PA_CALL(pa__allreduce(s->comm, &maxg, 1, MPI_INT64_T, MPI_MAX));
+  dir_init(&s->vdir, maxg, s->size);
+cleanup:
+  return st;
+}
 
-  /* 1. elements to their owners: the received records become the owned
-   * part of L (aux = destination = this rank), sorted by gid */
-  PA_CALL(pa__recs_migrate_free(s.comm, elems, NULL, &s.L));
-  for (size_t i = 1; i < s.L.n; i++)
-    PA_CHECK(s.L.gid[i] != s.L.gid[i - 1], PA_ERR_MESH,
-             "element global id %lld is given twice", (long long)s.L.gid[i]);
-  PA_CALLOC(s.layer, s.L.n);
-  s.caplayer = s.L.n;
-  PA_CALL(pa__gidmap_init(&s.emap, 16));
+/* Step 1: elements to their owners: the received records become the owned
+ * part of L (aux = destination = this rank), sorted by gid, in layer 0. */
+static pa_status migrate_elements(bstate *s, pa__recs *elems) {
+  pa_status st = PA_SUCCESS;
+  PA_CALL(pa__recs_migrate_free(s->comm, elems, NULL, &s->L));
+  for (size_t i = 1; i < s->L.n; i++)
+    PA_CHECK(s->L.gid[i] != s->L.gid[i - 1], PA_ERR_MESH,
+             "element global id %lld is given twice", (long long)s->L.gid[i]);
+  PA_CALLOC(s->layer, s->L.n);
+  s->caplayer = s->L.n;
+  PA_CALL(pa__gidmap_init(&s->emap, 16));
+cleanup:
+  return st;
+}
+
+/* After the fetch: free the directory, the touch lists and messages and
+ * the index of the owned elements' vertices; keep the local records and
+ * what assemble reads (uslot, ulv and their count nu). */
+static void drop_directory(bstate *s) {
+  bstate keep = *s;
+  memset(&keep.V, 0, sizeof keep.V);
+  memset(&keep.B, 0, sizeof keep.B);
+  memset(&keep.D, 0, sizeof keep.D);
+  memset(&keep.vix, 0, sizeof keep.vix);
+  keep.bstart = keep.blist = keep.dstart = keep.dlist = keep.tstart = NULL;
+  keep.trank = NULL;
+  keep.upriv = NULL;
+  keep.tcnt = NULL;
+  keep.tgid = NULL;
+  keep.tv = NULL;
+  memset(&keep.emap, 0, sizeof keep.emap);
+  keep.ukey = NULL; /* keep.nu stays: the count of keep.ulv */
+  keep.ustart = keep.uelem = NULL;
+  memset(&keep.uix, 0, sizeof keep.uix);
+  s->uslot = s->ulv = NULL;
+  /* free what keep no longer references */
+  memset(&s->L, 0, sizeof s->L);
+  s->layer = NULL;
+  memset(&s->LV, 0, sizeof s->LV);
+  memset(&s->LB, 0, sizeof s->LB);
+  memset(&s->LD, 0, sizeof s->LD);
+  bstate_free(s);
+  *s = keep;
+}
+
+/* Step 10: the global counts; an input entity in no element was dropped,
+ * which is an error. */
+static pa_status check_totals(pa_dmesh *dm, const pa_gid *cnt_in) {
+  pa_status st = PA_SUCCESS;
+  pa_gid own[PA_NKIND];
+  for (int k = 0; k < PA_NKIND; k++) own[k] = dm->nown[k];
+  PA_CALL(pa__allreduce(dm->comm, own, PA_NKIND, MPI_INT64_T, MPI_SUM));
+  for (int k = 0; k < PA_NKIND; k++) dm->nglob[k] = own[k];
+  PA_CHECK(own[PA_VERTEX] == cnt_in[PA_VERTEX], PA_ERR_MESH,
+           "%lld of %lld vertices belong to no element",
+           (long long)(cnt_in[PA_VERTEX] - own[PA_VERTEX]),
+           (long long)cnt_in[PA_VERTEX]);
+  PA_CHECK(own[PA_BOUNDARY] == cnt_in[PA_BOUNDARY], PA_ERR_MESH,
+           "%lld of %lld boundary entities are not faces of any element",
+           (long long)(cnt_in[PA_BOUNDARY] - own[PA_BOUNDARY]),
+           (long long)cnt_in[PA_BOUNDARY]);
+  PA_CHECK(own[PA_EDGE] == cnt_in[PA_EDGE], PA_ERR_MESH,
+           "%lld of %lld edges are in no element",
+           (long long)(cnt_in[PA_EDGE] - own[PA_EDGE]),
+           (long long)cnt_in[PA_EDGE]);
+cleanup:
+  return st;
+}
+
+/* The neighbour ranks: those at the other end of any star forest, in
+ * increasing order. */
+static pa_status neighbour_ranks(pa_dmesh *dm) {
+  pa_status st = PA_SUCCESS;
+  uint8_t *mark = NULL;
+  int nn = 0;
+  PA_CALLOC(mark, dm->size);
+  for (int k = 0; k < PA_NKIND; k++) {
+    for (int r = 0; r < dm->sf[k].nrootrank; r++) mark[dm->sf[k].rootrank[r]] = 1;
+    for (int r = 0; r < dm->sf[k].nleafrank; r++) mark[dm->sf[k].leafrank[r]] = 1;
+  }
+  for (int r = 0; r < dm->size; r++) nn += mark[r];
+  dm->neigh = pa__malloc((size_t)(nn ? nn : 1) * sizeof *dm->neigh);
+  PA_CHECK(dm->neigh, PA_ERR_MEMORY, "out of memory");
+  dm->nneigh = 0;
+  for (int r = 0; r < dm->size; r++)
+    if (mark[r]) dm->neigh[dm->nneigh++] = r;
+cleanup:
+  pa__free(mark);
+  return st;
+}
+
+pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
+                               int overlap, pa__recs *elems, pa__recs *verts,
+                               pa__recs *bdry, pa__recs *edges,
+                               pa__recs *priv) {
+  pa_status st = PA_SUCCESS;
+  bstate s;
+  pa_gid cnt_in[PA_NKIND];
+  double t0 = pa_wtime();
+  int ndbl = pa__layout_ndbl(lay);
+  bstate_init(&s, dm, ndbl);
+  dm->overlap = overlap;
+  /* input totals and the directory of vertex gids */
+  PA_CALL(count_input(&s, overlap, elems, verts, bdry, edges, priv, ndbl,
+                      cnt_in));
+  /* 1. elements to their owners */
+  PA_CALL(migrate_elements(&s, elems));
   pa_idx nown_e = (pa_idx)s.L.n;
   double t1 = pa_wtime();
   /* 2-3. directory and touch lists */
@@ -1423,81 +1574,20 @@ pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
   /* 4. ghost layers */
   PA_CALL(build_layers(&s, overlap, nown_e));
   double t2 = pa_wtime();
-  /* 5. vertices, boundary entities, edges */
+  /* 5. vertices, boundary entities, edges; the directory is done with */
   PA_CALL(fetch_vertices(&s));
-  { /* the directory and the owned-vertex index are done with */
-    bstate keep = s;
-    memset(&keep.V, 0, sizeof keep.V);
-    memset(&keep.B, 0, sizeof keep.B);
-    memset(&keep.D, 0, sizeof keep.D);
-    memset(&keep.vix, 0, sizeof keep.vix);
-    keep.bstart = keep.blist = keep.dstart = keep.dlist = keep.tstart = NULL;
-    keep.trank = NULL;
-    keep.upriv = NULL;
-    keep.tcnt = NULL;
-    keep.tgid = NULL;
-    keep.tv = NULL;
-    memset(&keep.emap, 0, sizeof keep.emap);
-    keep.ukey = NULL; /* keep.nu stays: the count of keep.ulv */
-    keep.ustart = keep.uelem = NULL;
-    memset(&keep.uix, 0, sizeof keep.uix);
-    s.uslot = s.ulv = NULL;
-    /* free what keep no longer references */
-    memset(&s.L, 0, sizeof s.L);
-    s.layer = NULL;
-    memset(&s.LV, 0, sizeof s.LV);
-    memset(&s.LB, 0, sizeof s.LB);
-    memset(&s.LD, 0, sizeof s.LD);
-    bstate_free(&s);
-    s = keep;
-  }
+  drop_directory(&s);
   /* 6-9. numbering, local mesh, values */
   PA_CALL(assemble(dm, &s, lay));
   bstate_free(&s);
-
   /* 10. totals: an entity in no element was dropped */
-  {
-    pa_gid own[PA_NKIND];
-    for (int k = 0; k < PA_NKIND; k++) own[k] = dm->nown[k];
-    PA_CALL(pa__allreduce(dm->comm, own, PA_NKIND, MPI_INT64_T, MPI_SUM));
-    for (int k = 0; k < PA_NKIND; k++) dm->nglob[k] = own[k];
-    PA_CHECK(own[PA_VERTEX] == cnt_in[PA_VERTEX], PA_ERR_MESH,
-             "%lld of %lld vertices belong to no element",
-             (long long)(cnt_in[PA_VERTEX] - own[PA_VERTEX]),
-             (long long)cnt_in[PA_VERTEX]);
-    PA_CHECK(own[PA_BOUNDARY] == cnt_in[PA_BOUNDARY], PA_ERR_MESH,
-             "%lld of %lld boundary entities are not faces of any element",
-             (long long)(cnt_in[PA_BOUNDARY] - own[PA_BOUNDARY]),
-             (long long)cnt_in[PA_BOUNDARY]);
-    PA_CHECK(own[PA_EDGE] == cnt_in[PA_EDGE], PA_ERR_MESH,
-             "%lld of %lld edges are in no element",
-             (long long)(cnt_in[PA_EDGE] - own[PA_EDGE]),
-             (long long)cnt_in[PA_EDGE]);
-  }
-  /* 11. star forests and neighbour ranks */
+  PA_CALL(check_totals(dm, cnt_in));
+  /* 11. star forests, neighbour ranks, value exchanges */
   PA_CALL(pa__agree(dm->comm, PA_SUCCESS));
   for (int k = 0; k < PA_NKIND; k++)
     PA_CALL(pa__sf_build(dm->comm, dm->nloc[k], dm->gid[k], dm->owner[k],
                          &dm->sf[k]));
-  {
-    uint8_t *mark;
-    PA_CALLOC(mark, dm->size);
-    for (int k = 0; k < PA_NKIND; k++) {
-      for (int r = 0; r < dm->sf[k].nrootrank; r++) mark[dm->sf[k].rootrank[r]] = 1;
-      for (int r = 0; r < dm->sf[k].nleafrank; r++) mark[dm->sf[k].leafrank[r]] = 1;
-    }
-    int nn = 0;
-    for (int r = 0; r < dm->size; r++) nn += mark[r];
-    dm->neigh = pa__malloc((size_t)(nn ? nn : 1) * sizeof *dm->neigh);
-    if (!dm->neigh) {
-      pa__free(mark);
-      PA_FAIL(PA_ERR_MEMORY, "out of memory");
-    }
-    dm->nneigh = 0;
-    for (int r = 0; r < dm->size; r++)
-      if (mark[r]) dm->neigh[dm->nneigh++] = r;
-    pa__free(mark);
-  }
+  PA_CALL(neighbour_ranks(dm));
   for (int k = 0; k < dm->nvalue; k++)
     PA_CALL(pa__value_setup(dm, dm->value[k]));
   pa__info(2, "padapt: dmesh build: migrate %.3f s, directory+ghosts %.3f s, "

@@ -144,16 +144,14 @@ cleanup:
   return st;
 }
 
-pa_status pa_dmesh_check(pa_dmesh *dm) {
+/* The local structure: counts as the dmesh's, owned-first numbering,
+ * owners in range, layers (0 for owned elements only, at most the
+ * overlap), element vertices in range, owned elements positively
+ * oriented. */
+static pa_status check_local(pa_dmesh *dm) {
   pa_status st = PA_SUCCESS;
-  pa_gid *vg = NULL;
-  uint8_t *cand = NULL;
-  pa_idx *vstart = NULL, *vel = NULL;
-  PA_CHECK(dm && dm->mesh, PA_ERR_ARG, "pa_dmesh_check: NULL dmesh");
-  pa__agree_reset();
-  pa_mesh *m = dm->mesh;
+  const pa_mesh *m = dm->mesh;
   int d = dm->dim;
-  /* local structure */
   PA_CHECK(m->nv == dm->nloc[PA_VERTEX] && m->ne == dm->nloc[PA_ELEMENT] &&
                m->nb == dm->nloc[PA_BOUNDARY] && m->ned == dm->nloc[PA_EDGE],
            PA_ERR_MESH, "rank %d: local mesh counts differ from the dmesh's",
@@ -183,110 +181,150 @@ pa_status pa_dmesh_check(pa_dmesh *dm) {
                "element %lld (rank %d) is inverted or flat (volume %g)",
                (long long)dm->gid[PA_ELEMENT][e], dm->rank, elem_volume(m, e));
   }
-  /* ghosts equal owners */
-  {
-    struct {
-      int kind;
-      const void *a;
-      size_t unit;
-      const char *what;
-    } arr[] = {
-        {PA_VERTEX, dm->gid[PA_VERTEX], sizeof(pa_gid), "global id"},
-        {PA_VERTEX, m->coord, sizeof(double) * d, "coordinates"},
-        {PA_VERTEX, m->vref, 4, "reference"},
-        {PA_ELEMENT, dm->gid[PA_ELEMENT], sizeof(pa_gid), "global id"},
-        {PA_ELEMENT, m->eref, 4, "reference"},
-        {PA_BOUNDARY, dm->gid[PA_BOUNDARY], sizeof(pa_gid), "global id"},
-        {PA_BOUNDARY, m->bref, 4, "reference"},
-        {PA_EDGE, dm->gid[PA_EDGE], sizeof(pa_gid), "global id"},
-        {PA_EDGE, m->edref, 4, "reference"},
-    };
-    for (size_t q = 0; q < sizeof arr / sizeof *arr; q++) {
-      pa_idx bad;
-      PA_CALL(pa__agree(dm->comm, st));
-      PA_CALL(ghosts_equal(dm, arr[q].kind, arr[q].a, arr[q].unit, &bad));
-      PA_CHECK(bad < 0, PA_ERR_MESH,
-               "rank %d: ghost %s %lld differs from its owner's (rank %d) in "
-               "its %s", dm->rank, kind_name(arr[q].kind),
-               (long long)dm->gid[arr[q].kind][bad], dm->owner[arr[q].kind][bad],
-               arr[q].what);
-    }
-    /* connectivity, by vertex global ids */
-    for (int k = PA_ELEMENT; k < PA_NKIND; k++) {
-      int nv = pa__kind_nv(d, k);
-      const pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
-      pa_idx n = dm->nloc[k], bad;
-      PA_ALLOC(vg, (size_t)n * nv);
-      for (size_t i = 0; i < (size_t)n * nv; i++)
-        vg[i] = dm->gid[PA_VERTEX][conn[i]];
-      PA_CALL(pa__agree(dm->comm, st));
-      PA_CALL(ghosts_equal(dm, k, vg, sizeof(pa_gid) * nv, &bad));
-      PA_CHECK(bad < 0, PA_ERR_MESH,
-               "rank %d: ghost %s %lld has other vertices than its owner's",
-               dm->rank, kind_name(k), (long long)dm->gid[k][bad]);
-      pa__free(vg);
-      vg = NULL;
-    }
+cleanup:
+  return st;
+}
+
+/* Every ghost equal to its owner: global ids, coordinates and references,
+ * then connectivity by vertex global ids. Each comparison is agreed. */
+static pa_status check_ghosts(pa_dmesh *dm) {
+  pa_status st = PA_SUCCESS;
+  const pa_mesh *m = dm->mesh;
+  int d = dm->dim;
+  pa_gid *vg = NULL;
+  struct {
+    int kind;
+    const void *a;
+    size_t unit;
+    const char *what;
+  } arr[] = {
+      {PA_VERTEX, dm->gid[PA_VERTEX], sizeof(pa_gid), "global id"},
+      {PA_VERTEX, m->coord, sizeof(double) * d, "coordinates"},
+      {PA_VERTEX, m->vref, 4, "reference"},
+      {PA_ELEMENT, dm->gid[PA_ELEMENT], sizeof(pa_gid), "global id"},
+      {PA_ELEMENT, m->eref, 4, "reference"},
+      {PA_BOUNDARY, dm->gid[PA_BOUNDARY], sizeof(pa_gid), "global id"},
+      {PA_BOUNDARY, m->bref, 4, "reference"},
+      {PA_EDGE, dm->gid[PA_EDGE], sizeof(pa_gid), "global id"},
+      {PA_EDGE, m->edref, 4, "reference"},
+  };
+  for (size_t q = 0; q < sizeof arr / sizeof *arr; q++) {
+    pa_idx bad;
+    PA_CALL(pa__agree(dm->comm, st));
+    PA_CALL(ghosts_equal(dm, arr[q].kind, arr[q].a, arr[q].unit, &bad));
+    PA_CHECK(bad < 0, PA_ERR_MESH,
+             "rank %d: ghost %s %lld differs from its owner's (rank %d) in "
+             "its %s", dm->rank, kind_name(arr[q].kind),
+             (long long)dm->gid[arr[q].kind][bad], dm->owner[arr[q].kind][bad],
+             arr[q].what);
   }
-  /* ownership rule and uniqueness of global ids */
-  PA_CALL(pa__balls(m->elem, m->ne, d + 1, m->nv, &vstart, &vel));
-  for (int k = 0; k < PA_NKIND; k++) {
-    pa_idx n = dm->nloc[k];
-    pa__free(cand);
-    cand = NULL;
-    PA_CALLOC(cand, n);
-    if (k == PA_VERTEX) {
-      for (pa_idx v = 0; v < n; v++)
-        for (pa_idx q = vstart[v]; q < vstart[v + 1]; q++)
-          if (vel[q] < dm->nown[PA_ELEMENT]) cand[v] = 1;
-    } else if (k == PA_ELEMENT) {
-      for (pa_idx e = 0; e < dm->nown[PA_ELEMENT]; e++) cand[e] = 1;
-    } else {
-      int nv = pa__kind_nv(d, k);
-      const pa_idx *conn = k == PA_BOUNDARY ? m->bdry : m->edge;
-      for (pa_idx b = 0; b < n; b++) {
-        const pa_idx *bv = conn + (size_t)nv * b;
-        for (pa_idx q = vstart[bv[0]]; q < vstart[bv[0] + 1] && !cand[b]; q++) {
-          if (vel[q] >= dm->nown[PA_ELEMENT]) continue;
-          const pa_idx *ev = m->elem + (size_t)(d + 1) * vel[q];
-          int all = 1;
-          for (int j = 1; j < nv && all; j++) {
-            int in = 0;
-            for (int c = 0; c <= d; c++) in |= ev[c] == bv[j];
-            all = in;
-          }
-          cand[b] = (uint8_t)all;
+  /* connectivity, by vertex global ids */
+  for (int k = PA_ELEMENT; k < PA_NKIND; k++) {
+    int nv = pa__kind_nv(d, k);
+    const pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
+    pa_idx n = dm->nloc[k], bad;
+    PA_ALLOC(vg, (size_t)n * nv);
+    for (size_t i = 0; i < (size_t)n * nv; i++)
+      vg[i] = dm->gid[PA_VERTEX][conn[i]];
+    PA_CALL(pa__agree(dm->comm, st));
+    PA_CALL(ghosts_equal(dm, k, vg, sizeof(pa_gid) * nv, &bad));
+    PA_CHECK(bad < 0, PA_ERR_MESH,
+             "rank %d: ghost %s %lld has other vertices than its owner's",
+             dm->rank, kind_name(k), (long long)dm->gid[k][bad]);
+    pa__free(vg);
+    vg = NULL;
+  }
+cleanup:
+  pa__free(vg);
+  return st;
+}
+
+/* cand[i] = 1 for the local entities of a kind that an owned element
+ * contains (vstart/vel: the local elements around each vertex): the ranks
+ * that may own them. */
+static void owner_candidates(const pa_dmesh *dm, int k, const pa_idx *vstart,
+                             const pa_idx *vel, uint8_t *cand) {
+  const pa_mesh *m = dm->mesh;
+  int d = dm->dim;
+  pa_idx n = dm->nloc[k];
+  if (k == PA_VERTEX) {
+    for (pa_idx v = 0; v < n; v++)
+      for (pa_idx q = vstart[v]; q < vstart[v + 1]; q++)
+        if (vel[q] < dm->nown[PA_ELEMENT]) cand[v] = 1;
+  } else if (k == PA_ELEMENT) {
+    for (pa_idx e = 0; e < dm->nown[PA_ELEMENT]; e++) cand[e] = 1;
+  } else {
+    int nv = pa__kind_nv(d, k);
+    const pa_idx *conn = k == PA_BOUNDARY ? m->bdry : m->edge;
+    for (pa_idx b = 0; b < n; b++) {
+      const pa_idx *bv = conn + (size_t)nv * b;
+      for (pa_idx q = vstart[bv[0]]; q < vstart[bv[0] + 1] && !cand[b]; q++) {
+        if (vel[q] >= dm->nown[PA_ELEMENT]) continue;
+        const pa_idx *ev = m->elem + (size_t)(d + 1) * vel[q];
+        int all = 1;
+        for (int j = 1; j < nv && all; j++) {
+          int in = 0;
+          for (int c = 0; c <= d; c++) in |= ev[c] == bv[j];
+          all = in;
         }
+        cand[b] = (uint8_t)all;
       }
     }
+  }
+}
+
+/* The ownership rule and the uniqueness of global ids, kind by kind, at
+ * the rendezvous ranks (check_rule). */
+static pa_status check_ownership(pa_dmesh *dm) {
+  pa_status st = PA_SUCCESS;
+  const pa_mesh *m = dm->mesh;
+  uint8_t *cand = NULL;
+  pa_idx *vstart = NULL, *vel = NULL;
+  PA_CALL(pa__balls(m->elem, m->ne, dm->dim + 1, m->nv, &vstart, &vel));
+  for (int k = 0; k < PA_NKIND; k++) {
+    pa__free(cand);
+    cand = NULL;
+    PA_CALLOC(cand, dm->nloc[k]);
+    owner_candidates(dm, k, vstart, vel, cand);
     PA_CALL(pa__agree(dm->comm, st));
     PA_CALL(check_rule(dm, k, cand));
   }
+cleanup:
   pa__free(cand);
   pa__free(vstart);
   pa__free(vel);
-  cand = NULL;
-  vstart = vel = NULL;
+  return st;
+}
+
+/* The owned entities of every kind add up to the global counts. */
+static pa_status check_global_counts(pa_dmesh *dm) {
+  pa_status st = PA_SUCCESS;
+  pa_gid own[PA_NKIND];
+  for (int k = 0; k < PA_NKIND; k++) own[k] = dm->nown[k];
+  PA_CALL(pa__allreduce(dm->comm, own, PA_NKIND, MPI_INT64_T, MPI_SUM));
+  for (int k = 0; k < PA_NKIND; k++)
+    PA_CHECK(own[k] == dm->nglob[k], PA_ERR_MESH,
+             "%lld %s entities owned, %lld expected", (long long)own[k],
+             kind_name(k), (long long)dm->nglob[k]);
+cleanup:
+  return st;
+}
+
+pa_status pa_dmesh_check(pa_dmesh *dm) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(dm && dm->mesh, PA_ERR_ARG, "pa_dmesh_check: NULL dmesh");
+  pa__agree_reset();
+  PA_CALL(check_local(dm));
+  PA_CALL(check_ghosts(dm));
+  PA_CALL(check_ownership(dm));
   /* conformity across ranks */
   PA_CALL(pa__agree(dm->comm, st));
-  PA_CALL(pa__faces_conform(dm->comm, d, dm->nown[PA_ELEMENT], m->elem, m->nv,
-                            dm->gid[PA_VERTEX], dm->gid[PA_ELEMENT]));
-  /* counts */
-  {
-    pa_gid own[PA_NKIND];
-    for (int k = 0; k < PA_NKIND; k++) own[k] = dm->nown[k];
-    PA_CALL(pa__allreduce(dm->comm, own, PA_NKIND, MPI_INT64_T, MPI_SUM));
-    for (int k = 0; k < PA_NKIND; k++)
-      PA_CHECK(own[k] == dm->nglob[k], PA_ERR_MESH,
-               "%lld %s entities owned, %lld expected", (long long)own[k],
-               kind_name(k), (long long)dm->nglob[k]);
-  }
+  PA_CALL(pa__faces_conform(dm->comm, dm->dim, dm->nown[PA_ELEMENT],
+                            dm->mesh->elem, dm->mesh->nv, dm->gid[PA_VERTEX],
+                            dm->gid[PA_ELEMENT]));
+  PA_CALL(check_global_counts(dm));
 cleanup:
   if (dm) st = pa__agree_end(dm->comm, st);
-  pa__free(vg);
-  pa__free(cand);
-  pa__free(vstart);
-  pa__free(vel);
   return st;
 }
 

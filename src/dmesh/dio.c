@@ -301,6 +301,156 @@ cleanup:
   return st;
 }
 
+/* The keyword at byte pos of a version ver file: its code and, unless it
+ * is an End, the position of the next keyword (0: none); fp is left at its
+ * data. */
+static pa_status keyword_at(FILE *fp, const char *path, int ver, int64_t pos,
+                            int32_t *code, int64_t *next) {
+  pa_status st = PA_SUCCESS;
+  *next = 0;
+  PA_CHECK(fseeko(fp, pos, SEEK_SET) == 0 && fread(code, 4, 1, fp) == 1,
+           PA_ERR_FORMAT, "%s: byte %lld: no End keyword", path, (long long)pos);
+  if (*code == KW_END) goto cleanup;
+  if (ver >= 3) {
+    PA_CHECK(fread(next, 8, 1, fp) == 1, PA_ERR_FORMAT, "%s: truncated", path);
+  } else {
+    int32_t n32;
+    PA_CHECK(fread(&n32, 4, 1, fp) == 1, PA_ERR_FORMAT, "%s: truncated", path);
+    *next = n32;
+  }
+  PA_CHECK(*next == 0 || *next > pos, PA_ERR_FORMAT,
+           "%s: byte %lld: bad next keyword position", path, (long long)pos);
+cleanup:
+  return st;
+}
+
+/* KW_HEADER: the distribution header, its version and counts checked. */
+static pa_status read_header_kw(FILE *fp, const char *path, int64_t room,
+                                dfile *f) {
+  pa_status st = PA_SUCCESS;
+  const int64_t *H = f->h;
+  PA_CHECK(room >= (int64_t)sizeof f->h && fread(f->h, sizeof f->h, 1, fp) == 1,
+           PA_ERR_FORMAT, "%s: truncated header", path);
+  PA_CHECK(f->h[H_FORMAT] == FORMAT_VERSION, PA_ERR_UNSUPPORTED,
+           "%s: distributed format version %lld, expected %d", path,
+           (long long)f->h[H_FORMAT], FORMAT_VERSION);
+  for (int k = 0; k < PA_NKIND; k++)
+    PA_CHECK(H[H_NFILE + k] >= 0 && H[H_NFILE + k] < INT32_MAX &&
+                 H[H_NGLOB + k] >= 0,
+             PA_ERR_FORMAT, "%s: bad counts in the header", path);
+  f->have_header = 1;
+cleanup:
+  return st;
+}
+
+/* KW_VDBL: the metric's components and the fields' descriptions, then the
+ * vertex doubles; next: the position of the next keyword (0: none). */
+static pa_status read_vdbl_kw(FILE *fp, const char *path, int64_t room,
+                              int64_t next, dfile *f) {
+  pa_status st = PA_SUCCESS;
+  int32_t mn[2];
+  void *p = NULL;
+  PA_CHECK(f->have_header && room >= 8 && fread(mn, 4, 2, fp) == 2 &&
+               mn[0] >= 0 && mn[0] <= 6 && mn[1] >= 0 && mn[1] <= PA_MAX_FIELDS,
+           PA_ERR_FORMAT, "%s: bad vertex data keyword", path);
+  f->met_ncomp = mn[0];
+  f->nfield = mn[1];
+  int nd = mn[0];
+  for (int q = 0; q < f->nfield; q++) {
+    PA_CHECK(fread(f->fieldname[q], PA_FIELD_NAME_LEN, 1, fp) == 1 &&
+                 fread(&f->fieldncomp[q], 4, 1, fp) == 1 &&
+                 f->fieldncomp[q] > 0 && f->fieldncomp[q] < 1000,
+             PA_ERR_FORMAT, "%s: bad field description", path);
+    f->fieldname[q][PA_FIELD_NAME_LEN - 1] = '\0';
+    nd += f->fieldncomp[q];
+  }
+  room = (next ? next : INT64_MAX) - ftello(fp);
+  PA_CALL(read_block(fp, path, &p, sizeof(double) * nd * (size_t)f->h[H_NFILE], room));
+  f->vdbl = p;
+cleanup:
+  return st;
+}
+
+/* KW_VALUE: one user value's description, checked, then its data. */
+static pa_status read_value_kw(FILE *fp, const char *path, int64_t room,
+                               int64_t next, dfile *f) {
+  pa_status st = PA_SUCCESS;
+  const int64_t *H = f->h;
+  vdesc d;
+  void *p = NULL;
+  PA_CHECK(f->have_header && room >= (int64_t)sizeof d &&
+               fread(&d, sizeof d, 1, fp) == 1,
+           PA_ERR_FORMAT, "%s: truncated value keyword", path);
+  d.name[PA_VALUE_NAME_LEN - 1] = '\0';
+  PA_CHECK(d.kind >= 0 && d.kind < PA_NKIND && d.ncomp >= 1 &&
+               d.ncomp < (1 << 24) && d.ref >= -1 && d.type >= 1 &&
+               d.type <= NVALUE_TYPES + 1 && d.count >= 0 &&
+               d.count <= H[H_NFILE + d.kind] && f->nval < 4096,
+           PA_ERR_FORMAT, "%s: bad description of value '%s'", path, d.name);
+  void *grown = pa__realloc(f->val, (size_t)(f->nval + 1) * sizeof *f->val);
+  PA_CHECK(grown, PA_ERR_MEMORY, "out of memory reading %s", path);
+  f->val = grown;
+  grown = pa__realloc(f->valdata, (size_t)(f->nval + 1) * sizeof *f->valdata);
+  PA_CHECK(grown, PA_ERR_MEMORY, "out of memory reading %s", path);
+  f->valdata = grown;
+  room = (next ? next : INT64_MAX) - ftello(fp);
+  PA_CALL(read_block(fp, path, &p, vdesc_unit(&d) * (size_t)d.count, room));
+  f->val[f->nval] = d;
+  f->valdata[f->nval++] = p;
+cleanup:
+  return st;
+}
+
+/* One keyword of a rank file, fp at its data, next: the position of the
+ * next keyword (0: none): padapt's are read into f, others skipped. */
+static pa_status read_keyword(FILE *fp, const char *path, int32_t code,
+                              int64_t next, dfile *f) {
+  pa_status st = PA_SUCCESS;
+  int64_t room = (next ? next : INT64_MAX) - ftello(fp);
+  const int64_t *H = f->h;
+  void *p = NULL;
+  switch (code) {
+  case KW_HEADER:
+    PA_CALL(read_header_kw(fp, path, room, f));
+    break;
+  case KW_VGID: case KW_EGID: case KW_BGID: case KW_DGID: {
+    int k = code == KW_VGID ? 0 : code == KW_EGID ? 1 : code == KW_BGID ? 2 : 3;
+    PA_CHECK(f->have_header, PA_ERR_FORMAT, "%s: ids before the header", path);
+    PA_CALL(read_block(fp, path, &p, sizeof(pa_gid) * (size_t)H[H_NFILE + k], room));
+    f->gid[k] = p;
+    break;
+  }
+  case KW_VOWNER: case KW_BOWNER: case KW_DOWNER: {
+    int k = code == KW_VOWNER ? 0 : code == KW_BOWNER ? 2 : 3;
+    PA_CHECK(f->have_header, PA_ERR_FORMAT, "%s: owners before the header", path);
+    PA_CALL(read_block(fp, path, &p, 4 * (size_t)H[H_NFILE + k], room));
+    f->owner[k] = p;
+    break;
+  }
+  case KW_VDBL:
+    PA_CALL(read_vdbl_kw(fp, path, room, next, f));
+    break;
+  case KW_VALUE:
+    PA_CALL(read_value_kw(fp, path, room, next, f));
+    break;
+  case KW_FLAGS: {
+    size_t n = 0;
+    for (int k = 0; k < PA_NKIND; k++) n += (size_t)H[H_NFILE + k];
+    PA_CHECK(f->have_header, PA_ERR_FORMAT, "%s: flags before the header", path);
+    PA_CALL(read_block(fp, path, &p, n, room));
+    f->flags = p;
+    break;
+  }
+  default:
+    break;
+  }
+cleanup:
+  return st;
+}
+
+/* Read padapt's keywords of a rank file, after the End of its standard
+ * part, up to the second End; the header, global ids and owners must be
+ * there. */
 static pa_status scan_file(const char *path, dfile *f) {
   pa_status st = PA_SUCCESS;
   FILE *fp = NULL;
@@ -315,108 +465,13 @@ static pa_status scan_file(const char *path, dfile *f) {
   for (;;) {
     int32_t code;
     int64_t next;
-    PA_CHECK(fseeko(fp, pos, SEEK_SET) == 0 && fread(&code, 4, 1, fp) == 1,
-             PA_ERR_FORMAT, "%s: byte %lld: no End keyword", path, (long long)pos);
+    PA_CALL(keyword_at(fp, path, ver, pos, &code, &next));
     if (code == KW_END) { /* the first End closes the standard part */
       if (++nend == 2) break;
       pos += 4 + (ver >= 3 ? 8 : 4);
       continue;
     }
-    if (ver >= 3) {
-      PA_CHECK(fread(&next, 8, 1, fp) == 1, PA_ERR_FORMAT, "%s: truncated", path);
-    } else {
-      int32_t n32;
-      PA_CHECK(fread(&n32, 4, 1, fp) == 1, PA_ERR_FORMAT, "%s: truncated", path);
-      next = n32;
-    }
-    PA_CHECK(next == 0 || next > pos, PA_ERR_FORMAT,
-             "%s: byte %lld: bad next keyword position", path, (long long)pos);
-    int64_t room = (next ? next : INT64_MAX) - ftello(fp);
-    const int64_t *H = f->h;
-    void *p = NULL;
-    switch (code) {
-    case KW_HEADER:
-      PA_CHECK(room >= (int64_t)sizeof f->h &&
-                   fread(f->h, sizeof f->h, 1, fp) == 1,
-               PA_ERR_FORMAT, "%s: truncated header", path);
-      PA_CHECK(f->h[H_FORMAT] == FORMAT_VERSION, PA_ERR_UNSUPPORTED,
-               "%s: distributed format version %lld, expected %d", path,
-               (long long)f->h[H_FORMAT], FORMAT_VERSION);
-      for (int k = 0; k < PA_NKIND; k++)
-        PA_CHECK(H[H_NFILE + k] >= 0 && H[H_NFILE + k] < INT32_MAX &&
-                     H[H_NGLOB + k] >= 0,
-                 PA_ERR_FORMAT, "%s: bad counts in the header", path);
-      f->have_header = 1;
-      break;
-    case KW_VGID: case KW_EGID: case KW_BGID: case KW_DGID: {
-      int k = code == KW_VGID ? 0 : code == KW_EGID ? 1 : code == KW_BGID ? 2 : 3;
-      PA_CHECK(f->have_header, PA_ERR_FORMAT, "%s: ids before the header", path);
-      PA_CALL(read_block(fp, path, &p, sizeof(pa_gid) * (size_t)H[H_NFILE + k], room));
-      f->gid[k] = p;
-      break;
-    }
-    case KW_VOWNER: case KW_BOWNER: case KW_DOWNER: {
-      int k = code == KW_VOWNER ? 0 : code == KW_BOWNER ? 2 : 3;
-      PA_CHECK(f->have_header, PA_ERR_FORMAT, "%s: owners before the header", path);
-      PA_CALL(read_block(fp, path, &p, 4 * (size_t)H[H_NFILE + k], room));
-      f->owner[k] = p;
-      break;
-    }
-    case KW_VDBL: {
-      int32_t mn[2];
-      PA_CHECK(f->have_header && room >= 8 && fread(mn, 4, 2, fp) == 2 &&
-                   mn[0] >= 0 && mn[0] <= 6 && mn[1] >= 0 && mn[1] <= PA_MAX_FIELDS,
-               PA_ERR_FORMAT, "%s: bad vertex data keyword", path);
-      f->met_ncomp = mn[0];
-      f->nfield = mn[1];
-      int nd = mn[0];
-      for (int q = 0; q < f->nfield; q++) {
-        PA_CHECK(fread(f->fieldname[q], PA_FIELD_NAME_LEN, 1, fp) == 1 &&
-                     fread(&f->fieldncomp[q], 4, 1, fp) == 1 &&
-                     f->fieldncomp[q] > 0 && f->fieldncomp[q] < 1000,
-                 PA_ERR_FORMAT, "%s: bad field description", path);
-        f->fieldname[q][PA_FIELD_NAME_LEN - 1] = '\0';
-        nd += f->fieldncomp[q];
-      }
-      room = (next ? next : INT64_MAX) - ftello(fp);
-      PA_CALL(read_block(fp, path, &p, sizeof(double) * nd * (size_t)H[H_NFILE], room));
-      f->vdbl = p;
-      break;
-    }
-    case KW_VALUE: {
-      vdesc d;
-      PA_CHECK(f->have_header && room >= (int64_t)sizeof d &&
-                   fread(&d, sizeof d, 1, fp) == 1,
-               PA_ERR_FORMAT, "%s: truncated value keyword", path);
-      d.name[PA_VALUE_NAME_LEN - 1] = '\0';
-      PA_CHECK(d.kind >= 0 && d.kind < PA_NKIND && d.ncomp >= 1 &&
-                   d.ncomp < (1 << 24) && d.ref >= -1 && d.type >= 1 &&
-                   d.type <= NVALUE_TYPES + 1 && d.count >= 0 &&
-                   d.count <= H[H_NFILE + d.kind] && f->nval < 4096,
-               PA_ERR_FORMAT, "%s: bad description of value '%s'", path, d.name);
-      void *grown = pa__realloc(f->val, (size_t)(f->nval + 1) * sizeof *f->val);
-      PA_CHECK(grown, PA_ERR_MEMORY, "out of memory reading %s", path);
-      f->val = grown;
-      grown = pa__realloc(f->valdata, (size_t)(f->nval + 1) * sizeof *f->valdata);
-      PA_CHECK(grown, PA_ERR_MEMORY, "out of memory reading %s", path);
-      f->valdata = grown;
-      room = (next ? next : INT64_MAX) - ftello(fp);
-      PA_CALL(read_block(fp, path, &p, vdesc_unit(&d) * (size_t)d.count, room));
-      f->val[f->nval] = d;
-      f->valdata[f->nval++] = p;
-      break;
-    }
-    case KW_FLAGS: {
-      size_t n = 0;
-      for (int k = 0; k < PA_NKIND; k++) n += (size_t)H[H_NFILE + k];
-      PA_CHECK(f->have_header, PA_ERR_FORMAT, "%s: flags before the header", path);
-      PA_CALL(read_block(fp, path, &p, n, room));
-      f->flags = p;
-      break;
-    }
-    default:
-      break;
-    }
+    PA_CALL(read_keyword(fp, path, code, next, f));
     if (!next) break;
     pos = next;
   }
@@ -1183,152 +1238,214 @@ cleanup:
   return st;
 }
 
-static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
-                          pa_dmesh **dmp) {
-  pa_status st = PA_SUCCESS;
-  int rank, size;
-  char base[4096], fpath[4200], mpath[4200];
-  dfile df;
-  pa_mesh *fm = NULL;
-  pa__layout lay;
-  int64_t hdr[H_WORDS];
-  pa__recs R[PA_NKIND];
-  pa_dmesh *dm = NULL;
-  int *part = NULL, nval = 0, have_mf = 0;
-  vdesc *vals = NULL;
+/* What the phases of read_set share: the set's base path and manifest path,
+ * its manifest (have_mf; mf.rk broadcast to every rank), rank 0's header
+ * (hdr: nw writers, global counts) and layout, the user values the set
+ * describes (vals), and the records of the files this rank reads (R). */
+typedef struct rset {
+  MPI_Comm comm;
+  int rank, size, nw;
+  const char *path;
+  char base[4096], mpath[4200];
   manifest mf;
-  memset(&mf, 0, sizeof mf);
+  int have_mf;
+  int64_t hdr[H_WORDS];
+  pa__layout lay;
+  vdesc *vals;
+  int nval;
+  pa__recs R[PA_NKIND];
+} rset;
+
+/* On rank 0: the manifest (or, without one, rank 0's file) fixes the number
+ * of writers; rank 0's file, checked against the manifest, fixes the
+ * layout, the global counts and the user values. */
+static pa_status read_first_file(rset *s) {
+  pa_status st = PA_SUCCESS;
+  char fpath[4200];
+  dfile df;
+  int64_t *hdr = s->hdr;
   memset(&df, 0, sizeof df);
-  memset(R, 0, sizeof R);
-  memset(&lay, 0, sizeof lay);
-  memset(hdr, 0, sizeof hdr);
-  MPI_Comm_rank(comm, &rank);
-  MPI_Comm_size(comm, &size);
-  path_base(path, base, sizeof base);
-  manifest_path(base, mpath, sizeof mpath);
-  /* the manifest (or, without one, rank 0's file) fixes the number of
-   * writers; rank 0's file fixes the layout */
-  if (rank == 0) {
-    have_mf = file_exists(mpath);
-    if (have_mf) PA_CALL(manifest_read(mpath, &mf));
-    rank_path(base, 0, ".meshb", fpath, sizeof fpath);
-    PA_CHECK(file_exists(fpath), PA_ERR_IO,
-             "%s: missing file of the distributed set %s (rank 0 of %d)",
-             fpath, path, have_mf ? mf.nranks : 1);
-    if (have_mf) PA_CALL(manifest_check_file(fpath, mpath, 0, mf.rk));
-    PA_CALL(scan_file(fpath, &df));
-    memcpy(hdr, df.h, sizeof hdr);
-    lay.dim = (int)df.h[H_DIM];
-    lay.met_ncomp = df.met_ncomp;
-    lay.nfield = df.nfield;
-    memcpy(lay.fieldname, df.fieldname, sizeof lay.fieldname);
-    memcpy(lay.fieldncomp, df.fieldncomp, sizeof lay.fieldncomp);
-    PA_CHECK(hdr[H_NRANKS] >= 1 && hdr[H_NRANKS] < (1 << 24) &&
-                 (hdr[H_DIM] == 2 || hdr[H_DIM] == 3),
-             PA_ERR_FORMAT, "%s: bad header", fpath);
-    if (have_mf) {
-      PA_CHECK(hdr[H_NRANKS] == mf.nranks && hdr[H_DIM] == mf.dim,
-               PA_ERR_FORMAT,
-               "%s: written by %lld ranks in %lldD, its manifest %s lists %d "
-               "ranks in %dD", fpath, (long long)hdr[H_NRANKS],
-               (long long)hdr[H_DIM], mpath, mf.nranks, mf.dim);
-      for (int k = 0; k < PA_NKIND; k++)
-        PA_CHECK(hdr[H_NGLOB + k] == mf.nglob[k], PA_ERR_FORMAT,
-                 "%s: global counts differ from its manifest %s", fpath, mpath);
-    }
-    nval = df.nval;
-    PA_ALLOC(vals, nval);
-    if (nval) memcpy(vals, df.val, (size_t)nval * sizeof *vals);
-    dfile_free(&df);
+  s->have_mf = file_exists(s->mpath);
+  if (s->have_mf) PA_CALL(manifest_read(s->mpath, &s->mf));
+  rank_path(s->base, 0, ".meshb", fpath, sizeof fpath);
+  PA_CHECK(file_exists(fpath), PA_ERR_IO,
+           "%s: missing file of the distributed set %s (rank 0 of %d)",
+           fpath, s->path, s->have_mf ? s->mf.nranks : 1);
+  if (s->have_mf) PA_CALL(manifest_check_file(fpath, s->mpath, 0, s->mf.rk));
+  PA_CALL(scan_file(fpath, &df));
+  memcpy(hdr, df.h, sizeof s->hdr);
+  s->lay.dim = (int)df.h[H_DIM];
+  s->lay.met_ncomp = df.met_ncomp;
+  s->lay.nfield = df.nfield;
+  memcpy(s->lay.fieldname, df.fieldname, sizeof s->lay.fieldname);
+  memcpy(s->lay.fieldncomp, df.fieldncomp, sizeof s->lay.fieldncomp);
+  PA_CHECK(hdr[H_NRANKS] >= 1 && hdr[H_NRANKS] < (1 << 24) &&
+               (hdr[H_DIM] == 2 || hdr[H_DIM] == 3),
+           PA_ERR_FORMAT, "%s: bad header", fpath);
+  if (s->have_mf) {
+    PA_CHECK(hdr[H_NRANKS] == s->mf.nranks && hdr[H_DIM] == s->mf.dim,
+             PA_ERR_FORMAT,
+             "%s: written by %lld ranks in %lldD, its manifest %s lists %d "
+             "ranks in %dD", fpath, (long long)hdr[H_NRANKS],
+             (long long)hdr[H_DIM], s->mpath, s->mf.nranks, s->mf.dim);
+    for (int k = 0; k < PA_NKIND; k++)
+      PA_CHECK(hdr[H_NGLOB + k] == s->mf.nglob[k], PA_ERR_FORMAT,
+               "%s: global counts differ from its manifest %s", fpath,
+               s->mpath);
   }
-  PA_CALL(pa__agree(comm, st));
-  MPI_Bcast(hdr, H_WORDS, MPI_INT64_T, 0, comm);
-  MPI_Bcast(&lay, (int)sizeof lay, MPI_BYTE, 0, comm);
-  MPI_Bcast(&nval, 1, MPI_INT, 0, comm);
-  if (rank != 0) {
-    vals = pa__malloc(((size_t)nval + 1) * sizeof *vals);
-    st = vals ? PA_SUCCESS : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
-  }
-  PA_CALL(pa__agree(comm, st));
-  MPI_Bcast(vals, (int)((size_t)nval * sizeof *vals), MPI_BYTE, 0, comm);
-  int nw = (int)hdr[H_NRANKS];
-  MPI_Bcast(&have_mf, 1, MPI_INT, 0, comm);
-  if (have_mf) {
-    if (rank != 0) {
-      mf.rk = pa__malloc(sizeof *mf.rk * MF_WORDS * (size_t)nw);
-      st = mf.rk ? PA_SUCCESS
+  s->nval = df.nval;
+  PA_ALLOC(s->vals, s->nval);
+  if (s->nval) memcpy(s->vals, df.val, (size_t)s->nval * sizeof *s->vals);
+cleanup:
+  dfile_free(&df);
+  return st;
+}
+
+/* Rank 0's header, layout, user values and manifest lines to every rank
+ * (rank 0's read agreed before). */
+static pa_status bcast_set_header(rset *s) {
+  pa_status st = PA_SUCCESS;
+  MPI_Comm comm = s->comm;
+  MPI_Bcast(s->hdr, H_WORDS, MPI_INT64_T, 0, comm);
+  MPI_Bcast(&s->lay, (int)sizeof s->lay, MPI_BYTE, 0, comm);
+  MPI_Bcast(&s->nval, 1, MPI_INT, 0, comm);
+  if (s->rank != 0) {
+    s->vals = pa__malloc(((size_t)s->nval + 1) * sizeof *s->vals);
+    st = s->vals ? PA_SUCCESS
                  : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+  }
+  PA_CALL(pa__agree(comm, st));
+  MPI_Bcast(s->vals, (int)((size_t)s->nval * sizeof *s->vals), MPI_BYTE, 0, comm);
+  s->nw = (int)s->hdr[H_NRANKS];
+  MPI_Bcast(&s->have_mf, 1, MPI_INT, 0, comm);
+  if (s->have_mf) {
+    if (s->rank != 0) {
+      s->mf.rk = pa__malloc(sizeof *s->mf.rk * MF_WORDS * (size_t)s->nw);
+      st = s->mf.rk ? PA_SUCCESS
+                    : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
     }
     PA_CALL(pa__agree(comm, st));
-    MPI_Bcast(mf.rk, MF_WORDS * nw, MPI_INT64_T, 0, comm);
+    MPI_Bcast(s->mf.rk, MF_WORDS * s->nw, MPI_INT64_T, 0, comm);
   }
+cleanup:
+  return st;
+}
+
+/* This rank's share of the files, [rank*nw/size, (rank+1)*nw/size): each
+ * checked against the manifest and rank 0's header, its owned entities
+ * appended to R. */
+static pa_status read_my_files(rset *s) {
+  pa_status st = PA_SUCCESS;
+  char fpath[4200];
+  dfile df;
+  pa_mesh *fm = NULL;
+  int nw = s->nw;
+  memset(&df, 0, sizeof df);
   for (int k = 0; k < PA_NKIND; k++)
-    pa__recs_init(&R[k], k, pa__kind_nv(lay.dim, k),
-                  k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
-  /* files [rank*nw/size, (rank+1)*nw/size) */
-  int f0 = (int)((int64_t)rank * nw / size), f1 = (int)((int64_t)(rank + 1) * nw / size);
+    pa__recs_init(&s->R[k], k, pa__kind_nv(s->lay.dim, k),
+                  k == PA_VERTEX ? pa__layout_ndbl(&s->lay) : 0);
+  int f0 = (int)((int64_t)s->rank * nw / s->size),
+      f1 = (int)((int64_t)(s->rank + 1) * nw / s->size);
   for (int f = f0; f < f1; f++) {
-    const int64_t *w = have_mf ? mf.rk + (size_t)MF_WORDS * f : NULL;
-    rank_path(base, f, ".meshb", fpath, sizeof fpath);
+    const int64_t *w = s->have_mf ? s->mf.rk + (size_t)MF_WORDS * f : NULL;
+    rank_path(s->base, f, ".meshb", fpath, sizeof fpath);
     PA_CHECK(file_exists(fpath), PA_ERR_IO,
              "%s: missing file of the distributed set %s (rank %d of %d)",
-             fpath, path, f, nw);
-    if (w && f > 0) PA_CALL(manifest_check_file(fpath, mpath, f, w));
+             fpath, s->path, f, nw);
+    if (w && f > 0) PA_CALL(manifest_check_file(fpath, s->mpath, f, w));
     PA_CALL(scan_file(fpath, &df));
     PA_CALL(pa_mesh_read(fpath, &fm));
-    PA_CALL(file_records(fpath, f, nw, &df, fm, &lay, vals, nval, rank, R));
+    PA_CALL(file_records(fpath, f, nw, &df, fm, &s->lay, s->vals, s->nval,
+                         s->rank, s->R));
     for (int k = 0; w && k < PA_NKIND; k++)
       PA_CHECK(df.h[H_NFILE + k] == w[MF_COUNT + k], PA_ERR_FORMAT,
                "%s: %lld %s, its manifest %s lists %lld", fpath,
-               (long long)df.h[H_NFILE + k], kind_name[k], mpath,
+               (long long)df.h[H_NFILE + k], kind_name[k], s->mpath,
                (long long)w[MF_COUNT + k]);
     for (int k = 0; k < PA_NKIND; k++)
-      PA_CHECK(df.h[H_NGLOB + k] == hdr[H_NGLOB + k], PA_ERR_FORMAT,
+      PA_CHECK(df.h[H_NGLOB + k] == s->hdr[H_NGLOB + k], PA_ERR_FORMAT,
                "%s: global counts differ from rank 0's file", fpath);
     pa_mesh_destroy(fm);
     fm = NULL;
     dfile_free(&df);
   }
-  /* every entity exactly once */
-  {
-    int64_t n[PA_NKIND];
-    for (int k = 0; k < PA_NKIND; k++) n[k] = (int64_t)R[k].n;
-    PA_CALL(pa__allreduce(comm, n, PA_NKIND, MPI_INT64_T, MPI_SUM));
-    for (int k = 0; k < PA_NKIND; k++)
-      PA_CHECK(n[k] == hdr[H_NGLOB + k], PA_ERR_FORMAT,
-               "%s: inconsistent distributed set: the files own %lld %s, the "
-               "header says %lld", path, (long long)n[k], kind_name[k],
-               (long long)hdr[H_NGLOB + k]);
-  }
-  PA_CALL(pa__gids_unique(comm, R[PA_ELEMENT].n, R[PA_ELEMENT].gid, "element"));
-  PA_CALL(pa__gids_unique(comm, R[PA_BOUNDARY].n, R[PA_BOUNDARY].gid, "boundary entity"));
-  PA_CALL(pa__gids_unique(comm, R[PA_EDGE].n, R[PA_EDGE].gid, "edge"));
-  PA_CALL(pa__dmesh_create(comm, lay.dim, &dm));
-  for (int q = 0; q < nval && !st; q++) /* same on every rank: no agreement */
-    st = pa__value_define(dm, vals[q].kind, vals[q].name, value_type(vals[q].type),
-                          vals[q].ncomp, vals[q].ref);
+cleanup:
+  dfile_free(&df);
+  pa_mesh_destroy(fm);
+  return st;
+}
+
+/* Every entity of the set exactly once over the ranks: the counts of the
+ * records read against the header, and their global ids unique. */
+static pa_status check_set_counts(rset *s) {
+  pa_status st = PA_SUCCESS;
+  int64_t n[PA_NKIND];
+  for (int k = 0; k < PA_NKIND; k++) n[k] = (int64_t)s->R[k].n;
+  PA_CALL(pa__allreduce(s->comm, n, PA_NKIND, MPI_INT64_T, MPI_SUM));
+  for (int k = 0; k < PA_NKIND; k++)
+    PA_CHECK(n[k] == s->hdr[H_NGLOB + k], PA_ERR_FORMAT,
+             "%s: inconsistent distributed set: the files own %lld %s, the "
+             "header says %lld", s->path, (long long)n[k], kind_name[k],
+             (long long)s->hdr[H_NGLOB + k]);
+  PA_CALL(pa__gids_unique(s->comm, s->R[PA_ELEMENT].n, s->R[PA_ELEMENT].gid,
+                          "element"));
+  PA_CALL(pa__gids_unique(s->comm, s->R[PA_BOUNDARY].n, s->R[PA_BOUNDARY].gid,
+                          "boundary entity"));
+  PA_CALL(pa__gids_unique(s->comm, s->R[PA_EDGE].n, s->R[PA_EDGE].gid, "edge"));
+cleanup:
+  return st;
+}
+
+/* Read on another number of ranks than wrote the set: PT-Scotch
+ * repartitions the elements read (R[PA_ELEMENT].aux: their new owner). */
+static pa_status repartition_set(pa_dmesh *dm, rset *s) {
+  pa_status st = PA_SUCCESS;
+  pa__recs *E = &s->R[PA_ELEMENT];
+  int *part = pa__malloc((E->n + 1) * sizeof *part);
+  st = part ? PA_SUCCESS : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+  PA_CALL(pa__agree(dm->comm, st));
+  PA_CALL(pa__dmesh_partition(dm->comm, s->lay.dim, (pa_idx)E->n, E->vgid,
+                              NULL, part));
+  for (size_t i = 0; i < E->n; i++) E->aux[i] = part[i];
+cleanup:
+  pa__free(part);
+  return st;
+}
+
+static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
+                          pa_dmesh **dmp) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = NULL;
+  rset s;
+  memset(&s, 0, sizeof s);
+  s.comm = comm;
+  s.path = path;
+  MPI_Comm_rank(comm, &s.rank);
+  MPI_Comm_size(comm, &s.size);
+  path_base(path, s.base, sizeof s.base);
+  manifest_path(s.base, s.mpath, sizeof s.mpath);
+  if (s.rank == 0) PA_CALL(read_first_file(&s));
   PA_CALL(pa__agree(comm, st));
-  if (nw != size) { /* another number of ranks: repartition */
-    part = pa__malloc((R[PA_ELEMENT].n + 1) * sizeof *part);
-    st = part ? PA_SUCCESS : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
-    PA_CALL(pa__agree(dm->comm, st));
-    PA_CALL(pa__dmesh_partition(dm->comm, lay.dim, (pa_idx)R[PA_ELEMENT].n,
-                                R[PA_ELEMENT].vgid, NULL, part));
-    for (size_t i = 0; i < R[PA_ELEMENT].n; i++) R[PA_ELEMENT].aux[i] = part[i];
-  }
-  PA_CALL(pa__dmesh_build(dm, &lay, overlap, &R[PA_ELEMENT], &R[PA_VERTEX],
-                          &R[PA_BOUNDARY], &R[PA_EDGE]));
+  PA_CALL(bcast_set_header(&s));
+  PA_CALL(read_my_files(&s));
+  PA_CALL(check_set_counts(&s));
+  PA_CALL(pa__dmesh_create(comm, s.lay.dim, &dm));
+  for (int q = 0; q < s.nval && !st; q++) /* same on every rank: no agreement */
+    st = pa__value_define(dm, s.vals[q].kind, s.vals[q].name,
+                          value_type(s.vals[q].type), s.vals[q].ncomp,
+                          s.vals[q].ref);
+  PA_CALL(pa__agree(comm, st));
+  if (s.nw != s.size) PA_CALL(repartition_set(dm, &s));
+  PA_CALL(pa__dmesh_build(dm, &s.lay, overlap, &s.R[PA_ELEMENT],
+                          &s.R[PA_VERTEX], &s.R[PA_BOUNDARY], &s.R[PA_EDGE]));
   *dmp = dm;
   dm = NULL;
 cleanup:
   st = pa__agree_end(comm, st);
-  pa__free(mf.rk);
-  dfile_free(&df);
-  pa_mesh_destroy(fm);
-  for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&R[k]);
+  pa__free(s.mf.rk);
+  for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&s.R[k]);
   pa_dmesh_destroy(dm);
-  pa__free(part);
-  pa__free(vals);
+  pa__free(s.vals);
   return st;
 }
 

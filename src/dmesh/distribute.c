@@ -115,23 +115,13 @@ cleanup:
   return st;
 }
 
-pa_status pa_dmesh_distribute(MPI_Comm comm, int root, pa_mesh *mesh,
-                              int overlap, pa_dmesh **dmp) {
+/* The arguments and the root's mesh checked (connectivity in range), and
+ * its header (dimension, layout, counts) broadcast. Every rank returns the
+ * same status. */
+static pa_status bcast_header(MPI_Comm comm, int root, pa_mesh *mesh,
+                              int overlap, header *h) {
   pa_status st = PA_SUCCESS;
   int rank = 0, size = 1;
-  header h;
-  pa__layout lay;
-  pa_dmesh *dm = NULL;
-  pa__recs R[PA_NKIND];
-  pa__buf b = {0};
-  void *rbuf = NULL;
-  int *part = NULL;
-  double t0 = pa_wtime(), t1, t2;
-  memset(&h, 0, sizeof h);
-  memset(R, 0, sizeof R);
-  pa__agree_reset();
-  PA_CHECK(dmp, PA_ERR_ARG, "pa_dmesh_distribute: NULL output pointer");
-  *dmp = NULL;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
   PA_CHECK(root >= 0 && root < size, PA_ERR_ARG, "root %d out of [0, %d)",
@@ -141,39 +131,36 @@ pa_status pa_dmesh_distribute(MPI_Comm comm, int root, pa_mesh *mesh,
   if (rank == root) {
     PA_CHECK(mesh, PA_ERR_ARG, "pa_dmesh_distribute: NULL mesh on the root");
     PA_CALL(check_indices(mesh));
-    h.dim = mesh->dim;
-    h.met_ncomp = mesh->met_ncomp;
-    h.nfield = mesh->nfield;
+    h->dim = mesh->dim;
+    h->met_ncomp = mesh->met_ncomp;
+    h->nfield = mesh->nfield;
     for (int f = 0; f < mesh->nfield; f++) {
-      h.fieldncomp[f] = mesh->field[f].ncomp;
-      snprintf(h.fieldname[f], PA_FIELD_NAME_LEN, "%s", mesh->field[f].name);
+      h->fieldncomp[f] = mesh->field[f].ncomp;
+      snprintf(h->fieldname[f], PA_FIELD_NAME_LEN, "%s", mesh->field[f].name);
     }
-    h.n[PA_VERTEX] = mesh->nv;
-    h.n[PA_ELEMENT] = mesh->ne;
-    h.n[PA_BOUNDARY] = mesh->nb;
-    h.n[PA_EDGE] = mesh->ned;
+    h->n[PA_VERTEX] = mesh->nv;
+    h->n[PA_ELEMENT] = mesh->ne;
+    h->n[PA_BOUNDARY] = mesh->nb;
+    h->n[PA_EDGE] = mesh->ned;
   }
 cleanup:
-  if (!dmp) return st;
   st = pa__agree_end(comm, st);
-  if (st) return st;
-  MPI_Bcast(&h, (int)sizeof h, MPI_BYTE, root, comm);
-  memset(&lay, 0, sizeof lay);
-  lay.dim = h.dim;
-  lay.met_ncomp = h.met_ncomp;
-  lay.nfield = h.nfield;
-  memcpy(lay.fieldncomp, h.fieldncomp, sizeof lay.fieldncomp);
-  memcpy(lay.fieldname, h.fieldname, sizeof lay.fieldname);
-  st = pa__dmesh_create(comm, h.dim, &dm);
-  if (st) return st;
-  for (int k = 0; k < PA_NKIND; k++)
-    pa__recs_init(&R[k], k, pa__kind_nv(h.dim, k),
-                  k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
-  /* blocks, one in flight */
+  if (st == PA_SUCCESS) MPI_Bcast(h, (int)sizeof *h, MPI_BYTE, root, comm);
+  return st;
+}
+
+/* Contiguous blocks of the root's mesh, one per rank and one in flight:
+ * the root packs block r and sends it to rank r, which appends it to R.
+ * Each step is agreed, and so is the end. */
+static pa_status scatter_blocks(pa_dmesh *dm, int root, pa_mesh *mesh,
+                                const pa__layout *lay, pa__recs *R) {
+  pa_status st = PA_SUCCESS;
+  int rank = dm->rank, size = dm->size;
+  pa__buf b = {0};
+  void *rbuf = NULL;
   for (int r = 0; r < size; r++) {
-    if (rank == root && !st) st = pack_block(mesh, &lay, r, size, &b);
-    st = pa__agree(dm->comm, st);
-    if (st) goto fail;
+    if (rank == root && !st) st = pack_block(mesh, lay, r, size, &b);
+    PA_CALL(pa__agree(dm->comm, st));
     if (r == root) {
       if (rank == root) st = unpack_block(b.p, b.n, R);
     } else if (rank == root) {
@@ -187,33 +174,66 @@ cleanup:
     }
     if (rank == root) pa__buf_free(&b);
   }
-  st = pa__agree(dm->comm, st);
-  if (st) goto fail;
-  t1 = pa_wtime();
-  /* partition the blocks, then migrate */
+  PA_CALL(pa__agree(dm->comm, st));
+cleanup:
+  pa__buf_free(&b);
+  pa__free(rbuf);
+  return st;
+}
+
+/* PT-Scotch on the scattered elements: R[PA_ELEMENT].aux = the rank each
+ * element goes to. Agreed. */
+static pa_status partition_blocks(pa_dmesh *dm, pa__recs *R) {
+  pa_status st = PA_SUCCESS;
+  int *part = NULL;
   part = pa__malloc((R[PA_ELEMENT].n ? R[PA_ELEMENT].n : 1) * sizeof *part);
   st = part ? PA_SUCCESS
             : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
-  st = pa__agree(dm->comm, st);
-  if (st) goto fail;
-  st = pa__dmesh_partition(dm->comm, h.dim, (pa_idx)R[PA_ELEMENT].n,
-                           R[PA_ELEMENT].vgid, NULL, part);
-  if (st) goto fail;
+  PA_CALL(pa__agree(dm->comm, st));
+  PA_CALL(pa__dmesh_partition(dm->comm, dm->dim, (pa_idx)R[PA_ELEMENT].n,
+                              R[PA_ELEMENT].vgid, NULL, part));
   for (size_t i = 0; i < R[PA_ELEMENT].n; i++) R[PA_ELEMENT].aux[i] = part[i];
+cleanup:
   pa__free(part);
-  part = NULL;
+  return st;
+}
+
+pa_status pa_dmesh_distribute(MPI_Comm comm, int root, pa_mesh *mesh,
+                              int overlap, pa_dmesh **dmp) {
+  pa_status st = PA_SUCCESS;
+  header h;
+  pa__layout lay;
+  pa_dmesh *dm = NULL;
+  pa__recs R[PA_NKIND];
+  double t0 = pa_wtime(), t1, t2;
+  memset(&h, 0, sizeof h);
+  memset(&lay, 0, sizeof lay);
+  memset(R, 0, sizeof R);
+  pa__agree_reset();
+  PA_CHECK(dmp, PA_ERR_ARG, "pa_dmesh_distribute: NULL output pointer");
+  *dmp = NULL;
+  PA_CALL(bcast_header(comm, root, mesh, overlap, &h));
+  lay.dim = h.dim;
+  lay.met_ncomp = h.met_ncomp;
+  lay.nfield = h.nfield;
+  memcpy(lay.fieldncomp, h.fieldncomp, sizeof lay.fieldncomp);
+  memcpy(lay.fieldname, h.fieldname, sizeof lay.fieldname);
+  PA_CALL(pa__dmesh_create(comm, h.dim, &dm));
+  for (int k = 0; k < PA_NKIND; k++)
+    pa__recs_init(&R[k], k, pa__kind_nv(h.dim, k),
+                  k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
+  /* scatter from the root, partition the blocks, then migrate */
+  PA_CALL(scatter_blocks(dm, root, mesh, &lay, R));
+  t1 = pa_wtime();
+  PA_CALL(partition_blocks(dm, R));
   t2 = pa_wtime();
-  st = pa__dmesh_build(dm, &lay, overlap, &R[PA_ELEMENT], &R[PA_VERTEX],
-                       &R[PA_BOUNDARY], &R[PA_EDGE]);
-  if (st) goto fail;
+  PA_CALL(pa__dmesh_build(dm, &lay, overlap, &R[PA_ELEMENT], &R[PA_VERTEX],
+                          &R[PA_BOUNDARY], &R[PA_EDGE]));
   pa__info(1, "padapt: rank %d: scatter %.3f s, partition %.3f s, "
-              "build %.3f s\n", rank, t1 - t0, t2 - t1, pa_wtime() - t2);
+              "build %.3f s\n", dm->rank, t1 - t0, t2 - t1, pa_wtime() - t2);
   *dmp = dm;
-  return PA_SUCCESS;
-fail:
-  pa__buf_free(&b);
-  pa__free(rbuf);
-  pa__free(part);
+  dm = NULL;
+cleanup:
   for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&R[k]);
   pa_dmesh_destroy(dm);
   return st;
@@ -501,165 +521,211 @@ cleanup:
   return pa__agree(comm, st);
 }
 
-pa_status pa__dual_graph(MPI_Comm comm, int dim, pa_idx n, const pa_gid *vgid,
-                         const pa_idx *lv, pa_idx nv, pa_idx **xadjp,
-                         pa_gid **adjp, int **adjrankp, pa_gid *offsetp) {
+/* What the phases of pa__dual_graph share: the local elements (n, by
+ * vertex gids vgid; nf faces each, nk vertices per face), the first global
+ * graph vertex of this rank (offset), and the neighbour of every local face
+ * e*nf+i: its global graph vertex nbr and rank nbrrank, -1 while unknown.
+ * The nun faces unmatched here meet at rank hash(key) % size: cnt[r] bytes
+ * of faces go to rank r (pos: their offsets, in faces), rcnt/recv are the
+ * faces this rank meets, bcnt/brecv the answers to the faces it sent. */
+typedef struct dgraph {
+  MPI_Comm comm;
+  int rank, size, nk, nf, dim;
+  pa_idx n;
+  size_t nface, nun;
+  const pa_gid *vgid;
+  pa_gid offset, *nbr;
+  int *nbrrank;
+  size_t *cnt, *pos, *rcnt, *bcnt;
+  void *recv, *brecv;
+} dgraph;
+
+/* Faces matched on this rank (by local vertex numbers lv of nv vertices,
+ * or by gids): nbr and nbrrank of the matched ones; counts the others. */
+static pa_status match_local_faces(dgraph *g, const pa_idx *lv, pa_idx nv) {
   pa_status st = PA_SUCCESS;
-  int rank, size, nk = dim, nf = dim + 1;
-  size_t nface = (size_t)n * nf;
-  face *sendf = NULL;
-  pa_gid *mate = NULL, *rmate = NULL;
-  int *dest = NULL, *rdest = NULL;
-  size_t *rcnt = NULL, *bcnt = NULL, *cnt = NULL, *pos = NULL;
-  void *recv = NULL, *brecv = NULL;
-  pa_idx *xadj = NULL;
-  pa_gid *adj = NULL, offset = 0, *nbr = NULL;
-  int *adjrank = NULL, *nbrrank = NULL;
-  MPI_Comm_rank(comm, &rank);
-  MPI_Comm_size(comm, &size);
-  {
-    pa_gid nn = n;
-    PA_CALL(pa__agree(comm, PA_SUCCESS));
-    MPI_Exscan(&nn, &offset, 1, MPI_INT64_T, MPI_SUM, comm);
-    if (rank == 0) offset = 0;
-  }
-  PA_ALLOC(mate, nface);
+  PA_ALLOC(g->nbr, g->nface);
   if (lv)
-    PA_CALL(pa__match_faces(dim, n, lv, nv, vgid, mate));
+    PA_CALL(pa__match_faces(g->dim, g->n, lv, nv, g->vgid, g->nbr));
   else
-    PA_CALL(match_local(dim, n, vgid, mate));
-  /* neighbour per face (in place of mate): global graph vertex and rank
-   * (-1: none yet) */
-  nbr = mate;
-  mate = NULL;
-  PA_ALLOC(nbrrank, nface);
-  size_t nun = 0;
-  for (size_t i = 0; i < nface; i++) {
-    nbrrank[i] = nbr[i] >= 0 ? rank : -1;
-    nun += nbr[i] < 0;
-    if (nbr[i] >= 0) nbr[i] = offset + nbr[i] / nf;
+    PA_CALL(match_local(g->dim, g->n, g->vgid, g->nbr));
+  /* the local mate of each face becomes its global graph vertex */
+  PA_ALLOC(g->nbrrank, g->nface);
+  g->nun = 0;
+  for (size_t i = 0; i < g->nface; i++) {
+    g->nbrrank[i] = g->nbr[i] >= 0 ? g->rank : -1;
+    g->nun += g->nbr[i] < 0;
+    if (g->nbr[i] >= 0) g->nbr[i] = g->offset + g->nbr[i] / g->nf;
   }
-  /* unmatched faces meet at the rank hash(key) % size */
-  PA_ALLOC(sendf, nun);
-  PA_ALLOC(dest, nun);
-  nun = 0;
-  for (size_t i = 0; i < nface; i++)
-    if (nbr[i] < 0) {
-      face_key(vgid, nf, i, sendf[nun].key, nk);
-      sendf[nun].who = offset + (pa_gid)(i / nf); /* graph vertex */
+cleanup:
+  return st;
+}
+
+/* Every unmatched face (its sorted vertex gids and its graph vertex) to
+ * its meeting rank hash(key) % size, in local face order within a rank. */
+static pa_status send_unmatched(dgraph *g) {
+  pa_status st = PA_SUCCESS;
+  int size = g->size, nf = g->nf, nk = g->nk;
+  size_t nun = 0;
+  face *sendf = NULL;
+  int *dest = NULL;
+  PA_ALLOC(sendf, g->nun);
+  PA_ALLOC(dest, g->nun);
+  for (size_t i = 0; i < g->nface; i++)
+    if (g->nbr[i] < 0) {
+      face_key(g->vgid, nf, i, sendf[nun].key, nk);
+      sendf[nun].who = g->offset + (pa_gid)(i / nf); /* graph vertex */
       dest[nun] = (int)(face_hash(sendf[nun].key, nk) % (uint64_t)size);
       nun++;
     }
-  PA_CALLOC(cnt, size);
-  PA_CALLOC(pos, (size_t)size + 1);
-  for (size_t i = 0; i < nun; i++) cnt[dest[i]]++;
-  for (int r = 0; r < size; r++) pos[r + 1] = pos[r] + cnt[r];
+  PA_CALLOC(g->cnt, size);
+  PA_CALLOC(g->pos, (size_t)size + 1);
+  for (size_t i = 0; i < nun; i++) g->cnt[dest[i]]++;
+  for (int r = 0; r < size; r++) g->pos[r + 1] = g->pos[r] + g->cnt[r];
   {
     face *tmp;
     PA_ALLOC(tmp, nun);
     /* remember where each unmatched face went: order within a rank kept */
-    for (size_t i = 0; i < nun; i++) tmp[pos[dest[i]]++] = sendf[i];
+    for (size_t i = 0; i < nun; i++) tmp[g->pos[dest[i]]++] = sendf[i];
     pa__free(sendf);
     sendf = tmp;
-    for (int r = 0; r < size; r++) cnt[r] *= sizeof(face);
+    for (int r = 0; r < size; r++) g->cnt[r] *= sizeof(face);
   }
-  PA_CALL(pa__xchg_sparse(comm, cnt, sendf, &rcnt, &recv));
-  {
-    size_t nr = 0;
-    for (int r = 0; r < size; r++) nr += rcnt[r] / sizeof(face);
-    const face *rf = recv;
-    PA_ALLOC(rmate, nr);
-    PA_CALL(match_faces(rf, nr, nk, rmate));
-    /* reply to every received face, in order: neighbour vertex and rank */
-    pa_gid *ans;
-    PA_ALLOC(ans, 2 * nr);
-    rdest = pa__malloc((nr ? nr : 1) * sizeof *rdest);
-    if (!rdest) {
-      pa__free(ans);
-      PA_FAIL(PA_ERR_MEMORY, "out of memory");
-    }
-    size_t j = 0;
-    for (int r = 0; r < size; r++)
-      for (size_t q = 0; q < rcnt[r] / sizeof(face); q++, j++) rdest[j] = r;
-    for (size_t i = 0; i < nr; i++) {
-      pa_gid m = rmate[i];
-      ans[2 * i] = m >= 0 ? rf[m].who : -1;
-      ans[2 * i + 1] = m >= 0 ? rdest[m] : -1;
-    }
-    size_t *acnt;
-    acnt = pa__calloc((size_t)size, sizeof *acnt);
-    if (!acnt) {
-      pa__free(ans);
-      PA_FAIL(PA_ERR_MEMORY, "out of memory");
-    }
-    for (int r = 0; r < size; r++) acnt[r] = rcnt[r] / sizeof(face) * 2 * sizeof(pa_gid);
-    st = pa__xchg_sparse(comm, acnt, ans, &bcnt, &brecv);
-    pa__free(acnt);
-    pa__free(ans);
-    if (st) goto cleanup;
+  PA_CALL(pa__xchg_sparse(g->comm, g->cnt, sendf, &g->rcnt, &g->recv));
+cleanup:
+  pa__free(sendf);
+  pa__free(dest);
+  return st;
+}
+
+/* At the meeting rank: match the faces received and answer every one, in
+ * the order received, with its neighbour's graph vertex and rank (-1: a
+ * boundary face). */
+static pa_status answer_faces(dgraph *g) {
+  pa_status st = PA_SUCCESS;
+  int size = g->size;
+  size_t nr = 0, j = 0;
+  pa_gid *rmate = NULL, *ans = NULL;
+  int *rdest = NULL;
+  size_t *acnt = NULL;
+  const face *rf = g->recv;
+  for (int r = 0; r < size; r++) nr += g->rcnt[r] / sizeof(face);
+  PA_ALLOC(rmate, nr);
+  PA_CALL(match_faces(rf, nr, g->nk, rmate));
+  PA_ALLOC(ans, 2 * nr);
+  rdest = pa__malloc((nr ? nr : 1) * sizeof *rdest);
+  PA_CHECK(rdest, PA_ERR_MEMORY, "out of memory");
+  for (int r = 0; r < size; r++)
+    for (size_t q = 0; q < g->rcnt[r] / sizeof(face); q++, j++) rdest[j] = r;
+  for (size_t i = 0; i < nr; i++) {
+    pa_gid m = rmate[i];
+    ans[2 * i] = m >= 0 ? rf[m].who : -1;
+    ans[2 * i + 1] = m >= 0 ? rdest[m] : -1;
   }
-  /* answers arrive by directory rank in the order sent */
-  {
-    const pa_gid *a = brecv;
-    for (int r = 0; r < size; r++) pos[r + 1] = pos[r] + cnt[r] / sizeof(face);
-    pos[0] = 0;
-    for (int r = 0; r < size; r++) pos[r + 1] = pos[r] + cnt[r] / sizeof(face);
-    size_t *cur;
-    cur = pa__malloc(((size_t)size + 1) * sizeof *cur);
-    PA_CHECK(cur, PA_ERR_MEMORY, "out of memory");
-    memcpy(cur, pos, ((size_t)size + 1) * sizeof *cur);
-    for (size_t i = 0; i < nface; i++)
-      if (nbrrank[i] < 0) {
-        /* recompute the destination of face i (same order as sent) */
-        pa_gid key[3];
-        face_key(vgid, nf, i, key, nk);
-        int r = (int)(face_hash(key, nk) % (uint64_t)size);
-        size_t q = cur[r]++;
-        nbr[i] = a[2 * q];
-        nbrrank[i] = (int)a[2 * q + 1];
-      }
-    pa__free(cur);
-  }
+  acnt = pa__calloc((size_t)size, sizeof *acnt);
+  PA_CHECK(acnt, PA_ERR_MEMORY, "out of memory");
+  for (int r = 0; r < size; r++) acnt[r] = g->rcnt[r] / sizeof(face) * 2 * sizeof(pa_gid);
+  PA_CALL(pa__xchg_sparse(g->comm, acnt, ans, &g->bcnt, &g->brecv));
+cleanup:
+  pa__free(rmate);
+  pa__free(ans);
+  pa__free(rdest);
+  pa__free(acnt);
+  return st;
+}
+
+/* The answers arrive by meeting rank in the order sent: walk the unmatched
+ * faces again, recomputing each one's meeting rank, and take the next
+ * answer from that rank. */
+static void place_answers(dgraph *g) {
+  const pa_gid *a = g->brecv;
+  size_t *cur = g->pos;
+  cur[0] = 0;
+  for (int r = 0; r < g->size; r++) cur[r + 1] = cur[r] + g->cnt[r] / sizeof(face);
+  for (size_t i = 0; i < g->nface; i++)
+    if (g->nbrrank[i] < 0) {
+      pa_gid key[3];
+      face_key(g->vgid, g->nf, i, key, g->nk);
+      int r = (int)(face_hash(key, g->nk) % (uint64_t)g->size);
+      size_t q = cur[r]++;
+      g->nbr[i] = a[2 * q];
+      g->nbrrank[i] = (int)a[2 * q + 1];
+    }
+}
+
+/* The graph in CSR form: the neighbours of each element (graph vertex and
+ * rank) in face order, boundary faces skipped. */
+static pa_status graph_csr(const dgraph *g, pa_idx **xadjp, pa_gid **adjp,
+                           int **adjrankp) {
+  pa_status st = PA_SUCCESS;
+  pa_idx n = g->n, *xadj = NULL;
+  pa_gid *adj = NULL;
+  int *adjrank = NULL, nf = g->nf;
   PA_ALLOC(xadj, n + 1);
   xadj[0] = 0;
   for (pa_idx e = 0; e < n; e++) {
     pa_idx c = 0;
-    for (int i = 0; i < nf; i++) c += nbr[(size_t)e * nf + i] >= 0;
+    for (int i = 0; i < nf; i++) c += g->nbr[(size_t)e * nf + i] >= 0;
     xadj[e + 1] = xadj[e] + c;
   }
   PA_ALLOC(adj, xadj[n]);
   PA_ALLOC(adjrank, xadj[n]);
   for (pa_idx e = 0, k = 0; e < n; e++)
     for (int i = 0; i < nf; i++)
-      if (nbr[(size_t)e * nf + i] >= 0) {
-        adj[k] = nbr[(size_t)e * nf + i];
-        adjrank[k++] = nbrrank[(size_t)e * nf + i];
+      if (g->nbr[(size_t)e * nf + i] >= 0) {
+        adj[k] = g->nbr[(size_t)e * nf + i];
+        adjrank[k++] = g->nbrrank[(size_t)e * nf + i];
       }
   *xadjp = xadj;
   *adjp = adj;
   if (adjrankp) *adjrankp = adjrank; else pa__free(adjrank);
-  if (offsetp) *offsetp = offset;
   xadj = NULL;
   adj = NULL;
   adjrank = NULL;
 cleanup:
-  st = pa__agree_end(comm, st);
-  pa__free(sendf);
-  pa__free(mate);
-  pa__free(rmate);
-  pa__free(dest);
-  pa__free(rdest);
-  pa__free(rcnt);
-  pa__free(bcnt);
-  pa__free(cnt);
-  pa__free(pos);
-  pa__free(recv);
-  pa__free(brecv);
   pa__free(xadj);
   pa__free(adj);
   pa__free(adjrank);
-  pa__free(nbr);
-  pa__free(nbrrank);
+  return st;
+}
+
+pa_status pa__dual_graph(MPI_Comm comm, int dim, pa_idx n, const pa_gid *vgid,
+                         const pa_idx *lv, pa_idx nv, pa_idx **xadjp,
+                         pa_gid **adjp, int **adjrankp, pa_gid *offsetp) {
+  pa_status st = PA_SUCCESS;
+  dgraph g;
+  memset(&g, 0, sizeof g);
+  g.comm = comm;
+  g.dim = dim;
+  g.nk = dim;
+  g.nf = dim + 1;
+  g.n = n;
+  g.nface = (size_t)n * g.nf;
+  g.vgid = vgid;
+  MPI_Comm_rank(comm, &g.rank);
+  MPI_Comm_size(comm, &g.size);
+  {
+    pa_gid nn = n;
+    PA_CALL(pa__agree(comm, PA_SUCCESS));
+    MPI_Exscan(&nn, &g.offset, 1, MPI_INT64_T, MPI_SUM, comm);
+    if (g.rank == 0) g.offset = 0;
+  }
+  PA_CALL(match_local_faces(&g, lv, nv));
+  PA_CALL(send_unmatched(&g));
+  PA_CALL(answer_faces(&g));
+  place_answers(&g);
+  PA_CALL(graph_csr(&g, xadjp, adjp, adjrankp));
+  if (offsetp) *offsetp = g.offset;
+cleanup:
+  st = pa__agree_end(comm, st);
+  pa__free(g.nbr);
+  pa__free(g.nbrrank);
+  pa__free(g.cnt);
+  pa__free(g.pos);
+  pa__free(g.rcnt);
+  pa__free(g.recv);
+  pa__free(g.bcnt);
+  pa__free(g.brecv);
   return st;
 }
 
@@ -751,32 +817,26 @@ static int gather_value(const pa_dmesh_value *v) {
   return v->kind == PA_VERTEX && v->ref < 0 && v->double_type;
 }
 
-pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
-  pa_status st = PA_SUCCESS;
-  pa__recs R[PA_NKIND], A[PA_NKIND];
-  pa__buf b = {0};
-  void *rbuf = NULL;
-  pa_mesh *m = NULL;
-  pa__layout lay;
-  pa__gidindex vmap = {0};
-  pa_idx *ord = NULL;
-  int vals[PA_MAX_FIELDS], nvals = 0;
-  memset(R, 0, sizeof R);
-  memset(A, 0, sizeof A);
-  PA_CHECK(dm && meshp, PA_ERR_ARG, "pa_dmesh_gather: NULL argument");
-  pa__agree_reset();
-  *meshp = NULL;
-  PA_CHECK(root >= 0 && root < dm->size, PA_ERR_ARG, "root %d out of range",
-           root);
-  /* owned records, without payloads; double vertex values become fields */
-  pa__dmesh_layout(dm, &lay);
-  for (int k = 0; k < dm->nvalue && lay.nfield < PA_MAX_FIELDS; k++)
+/* The layout of the gathered mesh: the distributed mesh's, plus the vertex
+ * values gathered as fields (their indices in vals[0..*nvals)). */
+static void gather_layout(pa_dmesh *dm, pa__layout *lay, int *vals,
+                          int *nvals) {
+  pa__dmesh_layout(dm, lay);
+  *nvals = 0;
+  for (int k = 0; k < dm->nvalue && lay->nfield < PA_MAX_FIELDS; k++)
     if (gather_value(dm->value[k])) {
-      snprintf(lay.fieldname[lay.nfield], PA_FIELD_NAME_LEN, "%s",
+      snprintf(lay->fieldname[lay->nfield], PA_FIELD_NAME_LEN, "%s",
                dm->value[k]->name);
-      lay.fieldncomp[lay.nfield++] = dm->value[k]->ncomp;
-      vals[nvals++] = k;
+      lay->fieldncomp[lay->nfield++] = dm->value[k]->ncomp;
+      vals[(*nvals)++] = k;
     }
+}
+
+/* The owned records of every kind, without payloads; the doubles of the
+ * gathered values vals[0..nvals) appended to the vertex records. */
+static pa_status gather_records(pa_dmesh *dm, const pa__layout *lay,
+                                const int *vals, int nvals, pa__recs *R) {
+  pa_status st = PA_SUCCESS;
   {
     int nvalue = dm->nvalue;
     dm->nvalue = 0; /* no payloads */
@@ -786,7 +846,7 @@ pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
     if (st) goto cleanup;
   }
   if (nvals) { /* append the value doubles to the vertex records */
-    int nd0 = R[PA_VERTEX].ndbl, nd = pa__layout_ndbl(&lay);
+    int nd0 = R[PA_VERTEX].ndbl, nd = pa__layout_ndbl(lay);
     pa__recs V2;
     double *x;
     pa__recs_init(&V2, PA_VERTEX, 0, nd);
@@ -808,25 +868,41 @@ pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
     R[PA_VERTEX] = V2;
     if (st) goto cleanup;
   }
-  {
-    size_t bytes = 0;
-    for (int k = 0; k < PA_NKIND; k++)
-      bytes += pa__recblock_bytes(R[k].nv, R[k].ndbl, R[k].n, 0);
-    PA_CALL(pa__buf_reserve(&b, bytes));
-    for (int k = 0; k < PA_NKIND; k++) {
-      b.n += pa__recs_put(&R[k], NULL, R[k].n, b.p + b.n);
-      int kind = R[k].kind, nv = R[k].nv, nd = R[k].ndbl;
-      pa__recs_free(&R[k]);
-      pa__recs_init(&A[k], kind, nv, nd);
-    }
+cleanup:
+  return st;
+}
+
+/* The records R packed into one buffer b (R freed as they are packed), and
+ * A made ready to receive records of the same kinds. */
+static pa_status pack_records(pa__recs *R, pa__recs *A, pa__buf *b) {
+  pa_status st = PA_SUCCESS;
+  size_t bytes = 0;
+  for (int k = 0; k < PA_NKIND; k++)
+    bytes += pa__recblock_bytes(R[k].nv, R[k].ndbl, R[k].n, 0);
+  PA_CALL(pa__buf_reserve(b, bytes));
+  for (int k = 0; k < PA_NKIND; k++) {
+    b->n += pa__recs_put(&R[k], NULL, R[k].n, b->p + b->n);
+    int kind = R[k].kind, nv = R[k].nv, nd = R[k].ndbl;
+    pa__recs_free(&R[k]);
+    pa__recs_init(&A[k], kind, nv, nd);
   }
-  /* one rank at a time to the root */
+cleanup:
+  return st;
+}
+
+/* Every rank's buffer b to the root, one rank at a time; the root appends
+ * them to A in rank order. Each step is agreed before it starts; the
+ * status of the last one is the caller's to agree. */
+static pa_status blocks_to_root(pa_dmesh *dm, int root, const pa__buf *b,
+                                pa__recs *A) {
+  pa_status st = PA_SUCCESS;
+  void *rbuf = NULL;
   for (int r = 0; r < dm->size; r++) {
     PA_CALL(pa__agree(dm->comm, st));
     if (r == root) {
-      if (dm->rank == root) st = unpack_block(b.p, b.n, A);
+      if (dm->rank == root) st = unpack_block(b->p, b->n, A);
     } else if (dm->rank == r) {
-      st = pa__xchg_send(dm->comm, root, b.p, b.n);
+      st = pa__xchg_send(dm->comm, root, b->p, b->n);
     } else if (dm->rank == root) {
       size_t n;
       st = pa__xchg_recv(dm->comm, r, &rbuf, &n);
@@ -835,71 +911,105 @@ pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
       rbuf = NULL;
     }
   }
+cleanup:
+  pa__free(rbuf);
+  return st;
+}
+
+/* On the root: the mesh of the gathered records A, every kind by
+ * increasing global id, element vertices found by global id. */
+static pa_status assemble_by_gid(int d, const pa__layout *lay, pa__recs *A,
+                                 pa_mesh **mp) {
+  pa_status st = PA_SUCCESS;
+  pa_mesh *m = NULL;
+  pa__gidindex vmap = {0};
+  pa_idx *ord = NULL;
+  PA_CALL(pa_mesh_create(d, &m));
+  m->met_ncomp = lay->met_ncomp;
+  m->nfield = lay->nfield;
+  for (int f = 0; f < lay->nfield; f++) {
+    snprintf(m->field[f].name, PA_FIELD_NAME_LEN, "%s", lay->fieldname[f]);
+    m->field[f].ncomp = lay->fieldncomp[f];
+  }
+  PA_CALL(pa_mesh_reserve(m, (pa_idx)A[0].n, (pa_idx)A[1].n, (pa_idx)A[2].n,
+                          (pa_idx)A[3].n));
+  size_t nmax = 0;
+  for (int k = 0; k < PA_NKIND; k++) nmax = A[k].n > nmax ? A[k].n : nmax;
+  PA_ALLOC(ord, nmax);
+  PA_CALL(pa__gidindex_init_keys(&vmap, A[PA_VERTEX].gid, A[PA_VERTEX].n));
+  for (int k = 0; k < PA_NKIND; k++) {
+    pa__recs *Q = &A[k];
+    for (size_t i = 0; i < Q->n; i++) ord[i] = (pa_idx)i;
+    PA_CALL(pa__sort_by_gid(ord, Q->n, Q->gid));
+    for (size_t j = 0; j < Q->n; j++) {
+      size_t i = (size_t)ord[j];
+      if (k == PA_VERTEX) {
+        const double *x = Q->dbl + (size_t)Q->ndbl * i;
+        memcpy(m->coord + (size_t)d * j, x, d * sizeof(double));
+        x += d;
+        if (m->met_ncomp) {
+          memcpy(m->met + (size_t)m->met_ncomp * j, x, m->met_ncomp * sizeof(double));
+          x += m->met_ncomp;
+        }
+        for (int f = 0; f < m->nfield; f++) {
+          memcpy(m->field[f].val + (size_t)m->field[f].ncomp * j, x,
+                 m->field[f].ncomp * sizeof(double));
+          x += m->field[f].ncomp;
+        }
+        m->vref[j] = Q->ref[i];
+        m->vflag[j] = Q->flag[i];
+        int found;
+        PA_CALL(pa__gidindex_put(&vmap, Q->gid[i], (pa_idx)j, &found, NULL));
+        PA_CHECK(!found, PA_ERR_MESH, "vertex global id %lld owned twice",
+                 (long long)Q->gid[i]);
+        continue;
+      }
+      pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
+      int32_t *ref = k == PA_ELEMENT ? m->eref : k == PA_BOUNDARY ? m->bref : m->edref;
+      uint8_t *flag = k == PA_ELEMENT ? m->eflag : k == PA_BOUNDARY ? m->bflag : m->edflag;
+      for (int q = 0; q < Q->nv; q++) {
+        pa_idx v = pa__gidindex_get(&vmap, Q->vgid[(size_t)Q->nv * i + q]);
+        PA_CHECK(v >= 0, PA_ERR_MESH, "gather: vertex %lld is owned by no rank",
+                 (long long)Q->vgid[(size_t)Q->nv * i + q]);
+        conn[(size_t)Q->nv * j + q] = v;
+      }
+      ref[j] = Q->ref[i];
+      flag[j] = Q->flag[i];
+    }
+  }
+  m->nv = (pa_idx)A[PA_VERTEX].n;
+  m->ne = (pa_idx)A[PA_ELEMENT].n;
+  m->nb = (pa_idx)A[PA_BOUNDARY].n;
+  m->ned = (pa_idx)A[PA_EDGE].n;
+  *mp = m;
+  m = NULL;
+cleanup:
+  pa_mesh_destroy(m);
+  pa__gidindex_free(&vmap);
+  pa__free(ord);
+  return st;
+}
+
+pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
+  pa_status st = PA_SUCCESS;
+  pa__recs R[PA_NKIND], A[PA_NKIND];
+  pa__buf b = {0};
+  pa__layout lay;
+  int vals[PA_MAX_FIELDS], nvals = 0;
+  memset(R, 0, sizeof R);
+  memset(A, 0, sizeof A);
+  PA_CHECK(dm && meshp, PA_ERR_ARG, "pa_dmesh_gather: NULL argument");
+  pa__agree_reset();
+  *meshp = NULL;
+  PA_CHECK(root >= 0 && root < dm->size, PA_ERR_ARG, "root %d out of range",
+           root);
+  gather_layout(dm, &lay, vals, &nvals);
+  PA_CALL(gather_records(dm, &lay, vals, nvals, R));
+  PA_CALL(pack_records(R, A, &b));
+  st = blocks_to_root(dm, root, &b, A);
   pa__buf_free(&b);
   if (st || dm->rank != root) goto cleanup;
-  /* the root assembles the mesh by increasing global id */
-  {
-    int d = dm->dim;
-    PA_CALL(pa_mesh_create(d, &m));
-    m->met_ncomp = lay.met_ncomp;
-    m->nfield = lay.nfield;
-    for (int f = 0; f < lay.nfield; f++) {
-      snprintf(m->field[f].name, PA_FIELD_NAME_LEN, "%s", lay.fieldname[f]);
-      m->field[f].ncomp = lay.fieldncomp[f];
-    }
-    PA_CALL(pa_mesh_reserve(m, (pa_idx)A[0].n, (pa_idx)A[1].n, (pa_idx)A[2].n,
-                            (pa_idx)A[3].n));
-    size_t nmax = 0;
-    for (int k = 0; k < PA_NKIND; k++) nmax = A[k].n > nmax ? A[k].n : nmax;
-    PA_ALLOC(ord, nmax);
-    PA_CALL(pa__gidindex_init_keys(&vmap, A[PA_VERTEX].gid, A[PA_VERTEX].n));
-    for (int k = 0; k < PA_NKIND; k++) {
-      pa__recs *Q = &A[k];
-      for (size_t i = 0; i < Q->n; i++) ord[i] = (pa_idx)i;
-      PA_CALL(pa__sort_by_gid(ord, Q->n, Q->gid));
-      for (size_t j = 0; j < Q->n; j++) {
-        size_t i = (size_t)ord[j];
-        if (k == PA_VERTEX) {
-          const double *x = Q->dbl + (size_t)Q->ndbl * i;
-          memcpy(m->coord + (size_t)d * j, x, d * sizeof(double));
-          x += d;
-          if (m->met_ncomp) {
-            memcpy(m->met + (size_t)m->met_ncomp * j, x, m->met_ncomp * sizeof(double));
-            x += m->met_ncomp;
-          }
-          for (int f = 0; f < m->nfield; f++) {
-            memcpy(m->field[f].val + (size_t)m->field[f].ncomp * j, x,
-                   m->field[f].ncomp * sizeof(double));
-            x += m->field[f].ncomp;
-          }
-          m->vref[j] = Q->ref[i];
-          m->vflag[j] = Q->flag[i];
-          int found;
-          PA_CALL(pa__gidindex_put(&vmap, Q->gid[i], (pa_idx)j, &found, NULL));
-          PA_CHECK(!found, PA_ERR_MESH, "vertex global id %lld owned twice",
-                   (long long)Q->gid[i]);
-          continue;
-        }
-        pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
-        int32_t *ref = k == PA_ELEMENT ? m->eref : k == PA_BOUNDARY ? m->bref : m->edref;
-        uint8_t *flag = k == PA_ELEMENT ? m->eflag : k == PA_BOUNDARY ? m->bflag : m->edflag;
-        for (int q = 0; q < Q->nv; q++) {
-          pa_idx v = pa__gidindex_get(&vmap, Q->vgid[(size_t)Q->nv * i + q]);
-          PA_CHECK(v >= 0, PA_ERR_MESH, "gather: vertex %lld is owned by no rank",
-                   (long long)Q->vgid[(size_t)Q->nv * i + q]);
-          conn[(size_t)Q->nv * j + q] = v;
-        }
-        ref[j] = Q->ref[i];
-        flag[j] = Q->flag[i];
-      }
-    }
-    m->nv = (pa_idx)A[PA_VERTEX].n;
-    m->ne = (pa_idx)A[PA_ELEMENT].n;
-    m->nb = (pa_idx)A[PA_BOUNDARY].n;
-    m->ned = (pa_idx)A[PA_EDGE].n;
-  }
-  *meshp = m;
-  m = NULL;
+  PA_CALL(assemble_by_gid(dm->dim, &lay, A, meshp));
 cleanup:
   if (dm) st = pa__agree_end(dm->comm, st);
   if (st && meshp && *meshp) {
@@ -911,9 +1021,5 @@ cleanup:
     pa__recs_free(&A[k]);
   }
   pa__buf_free(&b);
-  pa__free(rbuf);
-  pa_mesh_destroy(m);
-  pa__gidindex_free(&vmap);
-  pa__free(ord);
   return st;
 }

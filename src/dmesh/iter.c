@@ -269,22 +269,24 @@ pa_status pa_dmesh_reorder(pa_dmesh *dm) {
   return pa_dmesh_reorder_by(dm, PA_ORDER_HILBERT);
 }
 
-pa_status pa_dmesh_reorder_by(pa_dmesh *dm, pa_dmesh_ordering how) {
+/* What the phases of pa_dmesh_reorder_by share: perm[kind][k] = the old
+ * local entity at new position k, ivn[v] = the new position of old vertex
+ * v, a sort key long enough for every kind, and the renumbered local mesh
+ * (nm) until it replaces dm's. */
+typedef struct reorder {
+  pa_idx *perm[PA_NKIND];
+  pa_idx *ivn;
+  pa_gid *key;
+  pa_mesh *nm;
+} reorder;
+
+/* Elements by the Hilbert index of their centroid in the bounding box of
+ * the local vertices; the layer in the key's top bits keeps owned first,
+ * then each ghost layer. pe[k] = old element at new position k. */
+static pa_status hilbert_elements(pa_dmesh *dm, pa_gid *key, pa_idx *pe) {
   pa_status st = PA_SUCCESS;
-  pa_gid *key = NULL;
-  pa_idx *pe = NULL, *pv = NULL, *ivn = NULL, *pb = NULL, *pd = NULL;
-  pa_mesh *nm = NULL;
-  unsigned char *tmp = NULL;
-  PA_CHECK(dm && dm->mesh, PA_ERR_ARG, "pa_dmesh_reorder: NULL dmesh");
-  pa__agree_reset();
-  PA_CHECK(how == PA_ORDER_HILBERT || how == PA_ORDER_SCOTCH, PA_ERR_ARG,
-           "pa_dmesh_reorder_by: unknown ordering %d", (int)how);
-  pa_mesh *m = dm->mesh;
+  const pa_mesh *m = dm->mesh;
   int d = dm->dim, b = d == 2 ? 31 : 21;
-  for (int k = 0; k < dm->nvalue; k++)
-    PA_CHECK(!dm->value[k]->op.active, PA_ERR_ARG,
-             "value '%s' has an exchange in flight", dm->value[k]->name);
-  /* elements: Hilbert key of the centroid, owned then each ghost layer */
   double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
   for (int c = 0; c < d; c++) {
     lo[c] = m->nv ? m->coord[c] : 0;
@@ -296,31 +298,53 @@ pa_status pa_dmesh_reorder_by(pa_dmesh *dm, pa_dmesh_ordering how) {
       lo[c] = x < lo[c] ? x : lo[c];
       hi[c] = x > hi[c] ? x : hi[c];
     }
+  for (pa_idx e = 0; e < m->ne; e++) {
+    uint32_t x[3];
+    for (int c = 0; c < d; c++) {
+      double s = 0;
+      for (int j = 0; j <= d; j++) s += m->coord[(size_t)d * m->elem[(size_t)(d + 1) * e + j] + c];
+      s /= d + 1;
+      double t = hi[c] > lo[c] ? (s - lo[c]) / (hi[c] - lo[c]) : 0;
+      x[c] = (uint32_t)(t * (double)((1u << b) - 1));
+    }
+    key[e] = (pa_gid)(hilbert(x, d, b) >> 4) + ((pa_gid)dm->layer[e] << 59);
+    pe[e] = e;
+  }
+  PA_CALL(sort_range(pe, 0, m->ne, key)); /* layer bits keep owned first */
+cleanup:
+  return st;
+}
+
+/* The new element order (Hilbert or Scotch, owned then each ghost layer);
+ * allocates the sort key, long enough for every kind. */
+static pa_status order_elements(pa_dmesh *dm, pa_dmesh_ordering how,
+                                reorder *r) {
+  pa_status st = PA_SUCCESS;
+  const pa_mesh *m = dm->mesh;
   size_t nmax = (size_t)m->ne;
   if ((size_t)m->nv > nmax) nmax = (size_t)m->nv;
   if ((size_t)m->nb > nmax) nmax = (size_t)m->nb;
   if ((size_t)m->ned > nmax) nmax = (size_t)m->ned;
-  PA_ALLOC(key, nmax);
-  PA_ALLOC(pe, m->ne);
-  if (how == PA_ORDER_SCOTCH) {
-    PA_CALL(scotch_elements(dm, pe));
-  } else {
-    for (pa_idx e = 0; e < m->ne; e++) {
-      uint32_t x[3];
-      for (int c = 0; c < d; c++) {
-        double s = 0;
-        for (int j = 0; j <= d; j++) s += m->coord[(size_t)d * m->elem[(size_t)(d + 1) * e + j] + c];
-        s /= d + 1;
-        double t = hi[c] > lo[c] ? (s - lo[c]) / (hi[c] - lo[c]) : 0;
-        x[c] = (uint32_t)(t * (double)((1u << b) - 1));
-      }
-      key[e] = (pa_gid)(hilbert(x, d, b) >> 4) + ((pa_gid)dm->layer[e] << 59);
-      pe[e] = e;
-    }
-    PA_CALL(sort_range(pe, 0, m->ne, key)); /* layer bits keep owned first */
-  }
-  /* vertices: by first use in the new element order, owned then ghosts */
-  PA_ALLOC(ivn, m->nv);
+  PA_ALLOC(r->key, nmax);
+  PA_ALLOC(r->perm[PA_ELEMENT], m->ne);
+  if (how == PA_ORDER_SCOTCH)
+    PA_CALL(scotch_elements(dm, r->perm[PA_ELEMENT]));
+  else
+    PA_CALL(hilbert_elements(dm, r->key, r->perm[PA_ELEMENT]));
+cleanup:
+  return st;
+}
+
+/* Vertices by first use in the new element order, owned then ghosts;
+ * vertices in no element keep their relative order at the end of their
+ * range. */
+static pa_status order_vertices(pa_dmesh *dm, reorder *r) {
+  pa_status st = PA_SUCCESS;
+  const pa_mesh *m = dm->mesh;
+  const pa_idx *pe = r->perm[PA_ELEMENT];
+  int d = dm->dim;
+  PA_ALLOC(r->ivn, m->nv);
+  pa_idx *ivn = r->ivn;
   for (pa_idx v = 0; v < m->nv; v++) ivn[v] = -1;
   pa_idx nvo = dm->nown[PA_VERTEX], co = 0, cg = nvo;
   for (pa_idx q = 0; q < m->ne; q++)
@@ -330,29 +354,48 @@ pa_status pa_dmesh_reorder_by(pa_dmesh *dm, pa_dmesh_ordering how) {
     }
   for (pa_idx v = 0; v < m->nv; v++)
     if (ivn[v] < 0) ivn[v] = v < nvo ? co++ : cg++;
-  PA_ALLOC(pv, m->nv);
-  for (pa_idx v = 0; v < m->nv; v++) pv[ivn[v]] = v;
-  /* boundary entities and edges: by smallest new vertex, owned first */
-  pa_idx *pk[2];
+  PA_ALLOC(r->perm[PA_VERTEX], m->nv);
+  for (pa_idx v = 0; v < m->nv; v++) r->perm[PA_VERTEX][ivn[v]] = v;
+cleanup:
+  return st;
+}
+
+/* Boundary entities and edges by their smallest new vertex, owned first. */
+static pa_status order_subentities(pa_dmesh *dm, reorder *r) {
+  pa_status st = PA_SUCCESS;
+  const pa_mesh *m = dm->mesh;
+  int d = dm->dim;
   pa_idx cnt[2] = {m->nb, m->ned};
-  PA_ALLOC(pb, m->nb);
-  PA_ALLOC(pd, m->ned);
-  pk[0] = pb;
-  pk[1] = pd;
+  PA_ALLOC(r->perm[PA_BOUNDARY], m->nb);
+  PA_ALLOC(r->perm[PA_EDGE], m->ned);
   for (int t = 0; t < 2; t++) {
     int kind = PA_BOUNDARY + t, nv = pa__kind_nv(d, kind);
     const pa_idx *conn = t ? m->edge : m->bdry;
+    pa_idx *pk = r->perm[kind];
     for (pa_idx i = 0; i < cnt[t]; i++) {
-      pa_idx mn = ivn[conn[(size_t)nv * i]];
+      pa_idx mn = r->ivn[conn[(size_t)nv * i]];
       for (int j = 1; j < nv; j++)
-        if (ivn[conn[(size_t)nv * i + j]] < mn) mn = ivn[conn[(size_t)nv * i + j]];
-      key[i] = (pa_gid)mn + ((pa_gid)(i >= dm->nown[kind]) << 40);
-      pk[t][i] = i;
+        if (r->ivn[conn[(size_t)nv * i + j]] < mn) mn = r->ivn[conn[(size_t)nv * i + j]];
+      r->key[i] = (pa_gid)mn + ((pa_gid)(i >= dm->nown[kind]) << 40);
+      pk[i] = i;
     }
-    PA_CALL(sort_range(pk[t], 0, cnt[t], key));
+    PA_CALL(sort_range(pk, 0, cnt[t], r->key));
   }
-  /* apply: a new local mesh, then ids, owners, layers, values */
-  PA_CALL(pa_mesh_create(d, &nm));
+cleanup:
+  return st;
+}
+
+/* The local mesh in the new order: every entity array gathered through
+ * perm, connectivity renamed through ivn. */
+static pa_status permuted_mesh(pa_dmesh *dm, reorder *r) {
+  pa_status st = PA_SUCCESS;
+  const pa_mesh *m = dm->mesh;
+  const pa_idx *pv = r->perm[PA_VERTEX], *pe = r->perm[PA_ELEMENT],
+               *pb = r->perm[PA_BOUNDARY], *pd = r->perm[PA_EDGE],
+               *ivn = r->ivn;
+  int d = dm->dim;
+  PA_CALL(pa_mesh_create(d, &r->nm));
+  pa_mesh *nm = r->nm;
   nm->met_ncomp = m->met_ncomp;
   nm->nfield = m->nfield;
   for (int f = 0; f < m->nfield; f++) {
@@ -394,50 +437,67 @@ pa_status pa_dmesh_reorder_by(pa_dmesh *dm, pa_dmesh_ordering how) {
   nm->ne = m->ne;
   nm->nb = m->nb;
   nm->ned = m->ned;
-  {
-    const pa_idx *perm[PA_NKIND] = {pv, pe, pb, pd};
-    /* values: gather old blocks in the new entity order */
-    for (int q = 0; q < dm->nvalue; q++) {
-      pa_dmesh_value *v = dm->value[q];
-      const pa_idx *p = perm[v->kind];
-      pa__free(tmp);
-      tmp = NULL;
-      PA_ALLOC(tmp, (size_t)v->nslot * v->unit);
-      pa_idx s = 0;
-      for (pa_idx i = 0; i < dm->nloc[v->kind]; i++) {
-        pa_idx o = p[i];
-        pa_idx os = v->slot ? v->slot[o] : o;
-        if (os < 0) continue;
-        memcpy(tmp + v->unit * (size_t)s++, v->data + v->unit * (size_t)os, v->unit);
-      }
-      memcpy(v->data, tmp, (size_t)v->nslot * v->unit);
+cleanup:
+  return st;
+}
+
+/* The data of every value, its blocks gathered in the new entity order
+ * (sub-class values: the blocks of the entities holding it). */
+static pa_status permute_values(pa_dmesh *dm, const reorder *r) {
+  pa_status st = PA_SUCCESS;
+  unsigned char *tmp = NULL;
+  for (int q = 0; q < dm->nvalue; q++) {
+    pa_dmesh_value *v = dm->value[q];
+    const pa_idx *p = r->perm[v->kind];
+    pa__free(tmp);
+    tmp = NULL;
+    PA_ALLOC(tmp, (size_t)v->nslot * v->unit);
+    pa_idx s = 0;
+    for (pa_idx i = 0; i < dm->nloc[v->kind]; i++) {
+      pa_idx o = p[i];
+      pa_idx os = v->slot ? v->slot[o] : o;
+      if (os < 0) continue;
+      memcpy(tmp + v->unit * (size_t)s++, v->data + v->unit * (size_t)os, v->unit);
     }
-    for (int k = 0; k < PA_NKIND; k++) {
-      pa_gid *g;
-      int *o;
-      PA_ALLOC(g, dm->nloc[k]);
-      o = pa__malloc(((size_t)dm->nloc[k] + 1) * sizeof *o);
-      if (!o) {
-        pa__free(g);
-        PA_FAIL(PA_ERR_MEMORY, "out of memory");
-      }
-      for (pa_idx i = 0; i < dm->nloc[k]; i++) {
-        g[i] = dm->gid[k][perm[k][i]];
-        o[i] = dm->owner[k][perm[k][i]];
-      }
-      pa__free(dm->gid[k]);
-      pa__free(dm->owner[k]);
-      dm->gid[k] = g;
-      dm->owner[k] = o;
-    }
-    for (pa_idx i = 0; i < m->ne; i++) key[i] = dm->layer[pe[i]];
-    for (pa_idx i = 0; i < m->ne; i++) dm->layer[i] = (uint8_t)key[i];
+    memcpy(v->data, tmp, (size_t)v->nslot * v->unit);
   }
-  pa_mesh_destroy(dm->mesh);
-  dm->mesh = nm;
-  nm = NULL;
-  pa__dmesh_invalidate(dm);
-  /* slots of sub-class values, in the new order (data already permuted) */
+cleanup:
+  pa__free(tmp);
+  return st;
+}
+
+/* Global ids and owners of every kind, and the element layers, in the new
+ * order. */
+static pa_status permute_ids(pa_dmesh *dm, reorder *r) {
+  pa_status st = PA_SUCCESS;
+  for (int k = 0; k < PA_NKIND; k++) {
+    pa_gid *g;
+    int *o;
+    PA_ALLOC(g, dm->nloc[k]);
+    o = pa__malloc(((size_t)dm->nloc[k] + 1) * sizeof *o);
+    if (!o) {
+      pa__free(g);
+      PA_FAIL(PA_ERR_MEMORY, "out of memory");
+    }
+    for (pa_idx i = 0; i < dm->nloc[k]; i++) {
+      g[i] = dm->gid[k][r->perm[k][i]];
+      o[i] = dm->owner[k][r->perm[k][i]];
+    }
+    pa__free(dm->gid[k]);
+    pa__free(dm->owner[k]);
+    dm->gid[k] = g;
+    dm->owner[k] = o;
+  }
+  const pa_idx *pe = r->perm[PA_ELEMENT];
+  for (pa_idx i = 0; i < dm->mesh->ne; i++) r->key[i] = dm->layer[pe[i]];
+  for (pa_idx i = 0; i < dm->mesh->ne; i++) dm->layer[i] = (uint8_t)r->key[i];
+cleanup:
+  return st;
+}
+
+/* The slots of sub-class values for the new numbering (their data is
+ * already in the new order). */
+static void renumber_value_slots(pa_dmesh *dm) {
   for (int q = 0; q < dm->nvalue; q++) {
     pa_dmesh_value *v = dm->value[q];
     if (!v->slot) continue;
@@ -447,6 +507,31 @@ pa_status pa_dmesh_reorder_by(pa_dmesh *dm, pa_dmesh_ordering how) {
     for (pa_idx e = 0; e < dm->nloc[v->kind]; e++)
       if (v->slot[e] >= 0) v->ent[v->slot[e]] = e;
   }
+}
+
+pa_status pa_dmesh_reorder_by(pa_dmesh *dm, pa_dmesh_ordering how) {
+  pa_status st = PA_SUCCESS;
+  reorder r;
+  memset(&r, 0, sizeof r);
+  PA_CHECK(dm && dm->mesh, PA_ERR_ARG, "pa_dmesh_reorder: NULL dmesh");
+  pa__agree_reset();
+  PA_CHECK(how == PA_ORDER_HILBERT || how == PA_ORDER_SCOTCH, PA_ERR_ARG,
+           "pa_dmesh_reorder_by: unknown ordering %d", (int)how);
+  for (int k = 0; k < dm->nvalue; k++)
+    PA_CHECK(!dm->value[k]->op.active, PA_ERR_ARG,
+             "value '%s' has an exchange in flight", dm->value[k]->name);
+  /* the permutations, then a new local mesh, values, ids, owners, layers */
+  PA_CALL(order_elements(dm, how, &r));
+  PA_CALL(order_vertices(dm, &r));
+  PA_CALL(order_subentities(dm, &r));
+  PA_CALL(permuted_mesh(dm, &r));
+  PA_CALL(permute_values(dm, &r));
+  PA_CALL(permute_ids(dm, &r));
+  pa_mesh_destroy(dm->mesh);
+  dm->mesh = r.nm;
+  r.nm = NULL;
+  pa__dmesh_invalidate(dm);
+  renumber_value_slots(dm);
   /* exchange patterns for the new numbering */
   for (int k = 0; k < PA_NKIND; k++) {
     pa__sf_free(&dm->sf[k]);
@@ -456,13 +541,9 @@ pa_status pa_dmesh_reorder_by(pa_dmesh *dm, pa_dmesh_ordering how) {
   for (int q = 0; q < dm->nvalue; q++) PA_CALL(pa__value_setup(dm, dm->value[q]));
 cleanup:
   if (dm) st = pa__agree_end(dm->comm, st);
-  pa__free(key);
-  pa__free(pe);
-  pa__free(pv);
-  pa__free(ivn);
-  pa__free(pb);
-  pa__free(pd);
-  pa__free(tmp);
-  pa_mesh_destroy(nm);
+  for (int k = 0; k < PA_NKIND; k++) pa__free(r.perm[k]);
+  pa__free(r.ivn);
+  pa__free(r.key);
+  pa_mesh_destroy(r.nm);
   return st;
 }

@@ -164,77 +164,106 @@ static uint64_t heap_pop(uint64_t *h, size_t *n) {
   return top;
 }
 
-pa_status pa_dmesh_rebalance(pa_dmesh *dm, const double *weights, double tol,
-                             pa_gid *nmoved) {
+/* What the phases of pa_dmesh_rebalance share: the load of every rank
+ * (load; mean, largest mx), the owned elements' dual graph (exadj/eadj:
+ * face neighbours as global graph vertices, eadjrank their owners, eoff
+ * this rank's first graph vertex), the graph of ranks (xadj/adj), the
+ * diffusion solution x (the flow from r to s is x[r] - x[s]), the new
+ * owner of each owned element (part) and the load each rank gains by it
+ * (delta). */
+typedef struct rebal {
+  pa_dmesh *dm;
+  const double *weights;
+  int P;
+  pa_idx ne;
+  double *load, mean, mx;
+  pa_idx *exadj;
+  pa_gid *eadj, eoff;
+  int *eadjrank, *xadj, *adj, *part;
+  double *x, *delta;
+} rebal;
+
+/* The load of every rank, their mean and the largest. */
+static pa_status rank_loads(rebal *c) {
   pa_status st = PA_SUCCESS;
-  int P, fallback = 0;
-  double *load = NULL, *b = NULL, *x = NULL, *delta = NULL;
-  int *xadj = NULL, *adj = NULL, *part = NULL, *queue = NULL;
-  pa_idx *exadj = NULL;
-  int *gain = NULL;
-  uint64_t *heap = NULL;
-  pa_gid *vg = NULL, *eadj = NULL, eoff = 0;
-  int *eadjrank = NULL;
+  pa_dmesh *dm = c->dm;
+  PA_CALLOC(c->load, c->P);
+  for (pa_idx e = 0; e < c->ne; e++) c->load[dm->rank] += elem_load(c->weights, e);
+  PA_CALL(pa__allreduce(dm->comm, c->load, c->P, MPI_DOUBLE, MPI_SUM));
+  c->mean = c->mx = 0;
+  for (int r = 0; r < c->P; r++) {
+    c->mean += c->load[r] / c->P;
+    c->mx = fmax(c->mx, c->load[r]);
+  }
+cleanup:
+  return st;
+}
+
+/* The owned elements' dual graph: face neighbours with their owner,
+ * whatever the overlap. */
+static pa_status owned_dual_graph(rebal *c) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = c->dm;
+  int d = dm->dim;
+  pa_gid *vg = NULL;
+  PA_ALLOC(vg, (size_t)c->ne * (d + 1) + 1);
+  for (size_t k = 0; k < (size_t)c->ne * (d + 1); k++)
+    vg[k] = dm->gid[PA_VERTEX][dm->mesh->elem[k]];
+  PA_CALL(pa__agree(dm->comm, st));
+  PA_CALL(pa__dual_graph(dm->comm, d, c->ne, vg, dm->mesh->elem, dm->mesh->nv,
+                         &c->exadj, &c->eadj, &c->eadjrank, &c->eoff));
+cleanup:
+  pa__free(vg);
+  return st;
+}
+
+/* *ok = 1 if the graph of ranks is connected (the same on every rank). */
+static pa_status ranks_connected(rebal *c, int *ok) {
+  pa_status st = PA_SUCCESS;
+  int *queue = NULL;
   uint8_t *seen = NULL;
-  pa_gid moved = 0;
-  PA_CHECK(dm && tol >= 1.0, PA_ERR_ARG,
-           "pa_dmesh_rebalance: NULL dmesh or tolerance below 1");
-  pa__agree_reset();
-  P = dm->size;
-  pa_idx ne = dm->nown[PA_ELEMENT];
-  if (weights)
-    for (pa_idx e = 0; e < ne; e++)
-      PA_CHECK(isfinite(weights[e]) && weights[e] >= 0, PA_ERR_ARG,
-               "pa_dmesh_rebalance: weight of owned element %d is %g",
-               (int)e, weights[e]);
-  PA_CALLOC(load, P);
-  for (pa_idx e = 0; e < ne; e++) load[dm->rank] += elem_load(weights, e);
-  PA_CALL(pa__allreduce(dm->comm, load, P, MPI_DOUBLE, MPI_SUM));
-  double mean = 0, mx = 0;
-  for (int r = 0; r < P; r++) {
-    mean += load[r] / P;
-    mx = fmax(mx, load[r]);
-  }
-  if (P == 1 || mx <= tol * mean) goto done; /* balanced enough */
-  if (mx > RB_DIFFUSE_MAX * mean) { /* a large excess: repartition */
-    fallback = 1;
-    goto done;
-  }
+  PA_ALLOC(queue, c->P);
+  PA_ALLOC(seen, c->P);
+  *ok = connected(c->P, c->xadj, c->adj, queue, seen);
+cleanup:
+  pa__free(queue);
+  pa__free(seen);
+  return st;
+}
 
-  /* 1-2. the owned elements' dual graph (face neighbours with their owner,
-   * whatever the overlap), the graph of ranks and the diffusion flows */
-  {
-    int d = dm->dim;
-    PA_ALLOC(vg, (size_t)ne * (d + 1) + 1);
-    for (size_t k = 0; k < (size_t)ne * (d + 1); k++)
-      vg[k] = dm->gid[PA_VERTEX][dm->mesh->elem[k]];
-    PA_CALL(pa__agree(dm->comm, st));
-    PA_CALL(pa__dual_graph(dm->comm, d, ne, vg, dm->mesh->elem, dm->mesh->nv,
-                           &exadj, &eadj, &eadjrank, &eoff));
-  }
-  PA_CALL(rank_graph(dm, exadj, eadjrank, &xadj, &adj));
-  PA_ALLOC(queue, P);
-  PA_ALLOC(seen, P);
-  if (!connected(P, xadj, adj, queue, seen)) {
-    fallback = 1;
-    goto done;
-  }
-  PA_ALLOC(b, P);
-  PA_ALLOC(x, P);
-  for (int r = 0; r < P; r++) b[r] = load[r] - mean;
-  PA_CALL(diffusion(P, xadj, adj, b, x));
+/* Step 2: the diffusion solution x of L x = load - mean. */
+static pa_status diffusion_flows(rebal *c) {
+  pa_status st = PA_SUCCESS;
+  double *b = NULL;
+  PA_ALLOC(b, c->P);
+  PA_ALLOC(c->x, c->P);
+  for (int r = 0; r < c->P; r++) b[r] = c->load[r] - c->mean;
+  PA_CALL(diffusion(c->P, c->xadj, c->adj, b, c->x));
+cleanup:
+  pa__free(b);
+  return st;
+}
 
-  /* 3. serve each positive outflow greedily: the element with the most
-   * faces on s's side goes first (a lazy max-heap keyed by that gain, then
-   * the lowest index), so the band grows compact and the cut stays low */
-  PA_ALLOC(part, ne ? ne : 1);
+/* Step 3: serve each positive outflow greedily: the element with the most
+ * faces on s's side goes first (a lazy max-heap keyed by that gain, then
+ * the lowest index), so the band grows compact and the cut stays low. */
+static pa_status serve_outflows(rebal *c) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = c->dm;
+  pa_idx ne = c->ne;
+  const pa_idx *exadj = c->exadj;
+  const int *eadjrank = c->eadjrank;
+  int *part, *gain = NULL;
+  uint64_t *heap = NULL;
+  PA_ALLOC(c->part, ne ? ne : 1);
+  part = c->part;
   PA_ALLOC(gain, ne ? ne : 1);
   PA_ALLOC(heap, (size_t)ne * (dm->dim + 1) + 1);
-  PA_CALLOC(delta, P);
+  PA_CALLOC(c->delta, c->P);
   for (pa_idx e = 0; e < ne; e++) part[e] = dm->rank;
-  for (int k = xadj[dm->rank]; k < xadj[dm->rank + 1]; k++) {
-    int s = adj[k];
-    double want = x[dm->rank] - x[s], given = 0;
+  for (int k = c->xadj[dm->rank]; k < c->xadj[dm->rank + 1]; k++) {
+    int s = c->adj[k];
+    double want = c->x[dm->rank] - c->x[s], given = 0;
     if (want <= 0) continue;
     size_t nh = 0;
     for (pa_idx e = 0; e < ne; e++) {
@@ -247,68 +276,113 @@ pa_status pa_dmesh_rebalance(pa_dmesh *dm, const double *weights, double tol,
       uint64_t key = heap_pop(heap, &nh);
       pa_idx e = (pa_idx)(UINT32_MAX - (uint32_t)key);
       if (part[e] != dm->rank || (int)(key >> 32) != gain[e]) continue; /* stale */
-      double w = elem_load(weights, e);
+      double w = elem_load(c->weights, e);
       if (given + 0.5 * w > want) break;
       part[e] = s;
       given += w;
       for (pa_idx q = exadj[e]; q < exadj[e + 1]; q++) {
-        pa_idx f = (pa_idx)(eadj[q] - eoff); /* local if on this rank */
+        pa_idx f = (pa_idx)(c->eadj[q] - c->eoff); /* local if on this rank */
         if (eadjrank[q] == dm->rank && part[f] == dm->rank)
           heap_push(heap, &nh, gain_key(++gain[f], f));
       }
     }
-    delta[s] += given;
-    delta[dm->rank] -= given;
+    c->delta[s] += given;
+    c->delta[dm->rank] -= given;
   }
-  PA_CALL(pa__allreduce(dm->comm, delta, P, MPI_DOUBLE, MPI_SUM));
-  {
-    double after = 0, wmax = 0;
-    int maxdeg = 0;
-    for (pa_idx e = 0; e < ne; e++) wmax = fmax(wmax, elem_load(weights, e));
-    PA_CALL(pa__allreduce(dm->comm, &wmax, 1, MPI_DOUBLE, MPI_MAX));
-    for (int r = 0; r < P; r++) {
-      after = fmax(after, load[r] + delta[r]);
-      if (xadj[r + 1] - xadj[r] > maxdeg) maxdeg = xadj[r + 1] - xadj[r];
+cleanup:
+  pa__free(gain);
+  pa__free(heap);
+  return st;
+}
+
+/* *ok = 1 if the loads predicted after the moves are within tol x mean,
+ * up to rounding: rounding each flow to whole elements is off by half an
+ * element per neighbour; more means the flows could not be served (too
+ * few elements reachable from an interface). */
+static pa_status flows_served(rebal *c, double tol, int *ok) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = c->dm;
+  double after = 0, wmax = 0;
+  int maxdeg = 0;
+  PA_CALL(pa__allreduce(dm->comm, c->delta, c->P, MPI_DOUBLE, MPI_SUM));
+  for (pa_idx e = 0; e < c->ne; e++) wmax = fmax(wmax, elem_load(c->weights, e));
+  PA_CALL(pa__allreduce(dm->comm, &wmax, 1, MPI_DOUBLE, MPI_MAX));
+  for (int r = 0; r < c->P; r++) {
+    after = fmax(after, c->load[r] + c->delta[r]);
+    if (c->xadj[r + 1] - c->xadj[r] > maxdeg) maxdeg = c->xadj[r + 1] - c->xadj[r];
+  }
+  *ok = !(after > tol * c->mean + 0.5 * (maxdeg + 1) * wmax);
+cleanup:
+  return st;
+}
+
+/* Steps 1-3: the new owners of the owned elements (c->part) that serve the
+ * diffusion flows. *ok = 0 when they cannot: the graph of ranks is
+ * disconnected, or the flows cannot be served. */
+static pa_status diffusion_parts(rebal *c, double tol, int *ok) {
+  pa_status st = PA_SUCCESS;
+  *ok = 0;
+  PA_CALL(owned_dual_graph(c));
+  PA_CALL(rank_graph(c->dm, c->exadj, c->eadjrank, &c->xadj, &c->adj));
+  PA_CALL(ranks_connected(c, ok));
+  if (!*ok) goto cleanup;
+  PA_CALL(diffusion_flows(c));
+  PA_CALL(serve_outflows(c));
+  PA_CALL(flows_served(c, tol, ok));
+cleanup:
+  return st;
+}
+
+pa_status pa_dmesh_rebalance(pa_dmesh *dm, const double *weights, double tol,
+                             pa_gid *nmoved) {
+  pa_status st = PA_SUCCESS;
+  pa_gid moved = 0;
+  rebal c;
+  memset(&c, 0, sizeof c);
+  PA_CHECK(dm && tol >= 1.0, PA_ERR_ARG,
+           "pa_dmesh_rebalance: NULL dmesh or tolerance below 1");
+  pa__agree_reset();
+  c.dm = dm;
+  c.weights = weights;
+  c.P = dm->size;
+  c.ne = dm->nown[PA_ELEMENT];
+  if (weights)
+    for (pa_idx e = 0; e < c.ne; e++)
+      PA_CHECK(isfinite(weights[e]) && weights[e] >= 0, PA_ERR_ARG,
+               "pa_dmesh_rebalance: weight of owned element %d is %g",
+               (int)e, weights[e]);
+  PA_CALL(rank_loads(&c));
+  if (c.P > 1 && c.mx > tol * c.mean) { /* not balanced enough */
+    /* a large excess: a repartition, without trying diffusion */
+    int diffuse = c.mx <= RB_DIFFUSE_MAX * c.mean;
+    if (diffuse) PA_CALL(diffusion_parts(&c, tol, &diffuse));
+    if (diffuse) {
+      for (pa_idx e = 0; e < c.ne; e++) moved += c.part[e] != dm->rank;
+      PA_CALL(pa__allreduce(dm->comm, &moved, 1, MPI_INT64_T, MPI_SUM));
+      PA_CALL(pa_dmesh_redistribute(dm, c.part, weights));
+      if (dm->rank == 0)
+        pa__info(2, "padapt: rebalance: largest load %.6g (mean %.6g, "
+                 "tolerance %g): %lld elements moved by diffusion\n", c.mx,
+                 c.mean, tol, (long long)moved);
+    } else {
+      if (dm->rank == 0)
+        pa__info(2, "padapt: rebalance: largest load %.6g (mean %.6g): "
+                 "repartitioning with PT-Scotch\n", c.mx, c.mean);
+      moved = -1;
+      PA_CALL(pa_dmesh_redistribute(dm, NULL, weights));
     }
-    /* rounding each flow to whole elements is off by half an element per
-     * neighbour; more means the flows could not be served (too few elements
-     * reachable from an interface) */
-    if (after > tol * mean + 0.5 * (maxdeg + 1) * wmax) fallback = 1;
-  }
-  if (!fallback) {
-    for (pa_idx e = 0; e < ne; e++) moved += part[e] != dm->rank;
-    PA_CALL(pa__allreduce(dm->comm, &moved, 1, MPI_INT64_T, MPI_SUM));
-    PA_CALL(pa_dmesh_redistribute(dm, part, weights));
-    if (dm->rank == 0)
-      pa__info(2, "padapt: rebalance: largest load %.6g (mean %.6g, tolerance "
-               "%g): %lld elements moved by diffusion\n", mx, mean, tol,
-               (long long)moved);
-  }
-done:
-  if (fallback) {
-    if (dm->rank == 0)
-      pa__info(2, "padapt: rebalance: largest load %.6g (mean %.6g): "
-               "repartitioning with PT-Scotch\n", mx, mean);
-    moved = -1;
-    PA_CALL(pa_dmesh_redistribute(dm, NULL, weights));
   }
   if (nmoved) *nmoved = moved;
 cleanup:
   if (dm) st = pa__agree_end(dm->comm, st);
-  pa__free(load);
-  pa__free(b);
-  pa__free(x);
-  pa__free(delta);
-  pa__free(xadj);
-  pa__free(adj);
-  pa__free(part);
-  pa__free(queue);
-  pa__free(gain);
-  pa__free(heap);
-  pa__free(seen);
-  pa__free(vg);
-  pa__free(exadj);
-  pa__free(eadj);
-  pa__free(eadjrank);
+  pa__free(c.load);
+  pa__free(c.exadj);
+  pa__free(c.eadj);
+  pa__free(c.eadjrank);
+  pa__free(c.xadj);
+  pa__free(c.adj);
+  pa__free(c.x);
+  pa__free(c.part);
+  pa__free(c.delta);
   return st;
 }
