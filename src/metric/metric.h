@@ -27,8 +27,13 @@ static inline int pa__sym_index(int i, int j) {
   return j * (j + 1) / 2 + i;
 }
 
-/* pa__metric_valid (finite positive size or SPD tensor) is declared in
- * mesh/mesh.h, which the mesh check needs. */
+/* 1 if a metric value is a finite positive size (ncomp 1) or a finite SPD
+ * tensor (metric.c). */
+int pa__metric_valid(int dim, int ncomp, const double *m);
+/* PA_ERR_METRIC naming the first vertex whose metric value is not valid
+ * (ops.c); the part of pa_mesh_check that pa__mesh_check (mesh/topo.c)
+ * leaves to this component. */
+pa_status pa__mesh_check_metric(const pa_mesh *mesh);
 
 /* Expand a metric value to a full tensor (3 or 6 components). */
 void pa__metric_tensor(int dim, int ncomp, const double *m, double *t);
