@@ -240,8 +240,10 @@ void pa_cli_print_fidelity(const pa_fidelity *f, FILE *out) {
             f->changed & PA_CHANGED_HMIN ? " -hmin" : "",
             f->changed & PA_CHANGED_HMAX ? " -hmax" : "",
             f->changed & PA_CHANGED_GRADATION ? " -hgrad" : "");
-    fprintf(out, "    edges in [0.7071, 1.4142)  %6.2f %%   length [%.4g, %.4g]\n",
-            u->nedge ? 100.0 * (double)u->edge_hist[PA_STATS_EDGE_NBIN - 1] /
+    double lo, hi;
+    pa_stats_edge_bin(PA_STATS_EDGE_NBIN - 1, &lo, &hi);
+    fprintf(out, "    edges in [%.4f, %.4f)  %6.2f %%   length [%.4g, %.4g]\n",
+            lo, hi, u->nedge ? 100.0 * (double)u->edge_hist[PA_STATS_EDGE_NBIN - 1] /
                            (double)u->nedge
                      : 0.0,
             u->edge_min, u->edge_max);

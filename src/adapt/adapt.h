@@ -74,9 +74,6 @@
 #define PA__DONE_NEAR_SKIN 2
 #define PA__DONE_ON_SKIN 3
 #define PA__DONE_FREE 4
-/* The range of edge lengths in the metric an element must meet (Mmg's). */
-#define PA__LEN_LO 0.7071
-#define PA__LEN_HI 1.4142
 /* Name of the element value marking elements produced in this run. */
 #define PA__DONE_VALUE "pa.adapt.done"
 /* Reference of the artificial boundary entities of a piece's outer surface. */

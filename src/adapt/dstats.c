@@ -18,13 +18,13 @@
 #include <math.h>
 
 static const double edge_bounds[PA_STATS_EDGE_NBIN - 2] = {
-    0.3, 0.6, 0.7071, 0.9, 1.3, 1.4142, 2.0, 5.0};
+    0.3, 0.6, PA__LEN_LO, 0.9, 1.3, PA__LEN_HI, 2.0, 5.0};
 
 static void add_edge(pa_stats *s, double len) {
   int b = 0;
   while (b < PA_STATS_EDGE_NBIN - 2 && len >= edge_bounds[b]) b++;
   s->edge_hist[b]++;
-  if (len >= 0.7071 && len < 1.4142) s->edge_hist[PA_STATS_EDGE_NBIN - 1]++;
+  if (len >= PA__LEN_LO && len < PA__LEN_HI) s->edge_hist[PA_STATS_EDGE_NBIN - 1]++;
   if (s->nedge == 0 || len < s->edge_min) s->edge_min = len;
   if (s->nedge == 0 || len > s->edge_max) s->edge_max = len;
   s->edge_sum += len;

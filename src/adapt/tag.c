@@ -5,7 +5,8 @@
  * An owned element is tagged when it is not user-required and either
  * carries PA_FLAG_USER (and was not produced by a remesh of this run: the
  * "done" element value) or (unless opts->user_tags_only) has an edge whose
- * length in the metric lies outside [0.7071, 1.4142) or a quality below
+ * length in the metric lies outside the band [PA__LEN_LO, PA__LEN_HI)
+ * (metric/metric.h) or a quality below
  * opts->qual_threshold; an element produced in this run, with the looser
  * criteria below, by how much its piece's frozen skin constrained it. So
  * the loop ends (nothing tagged) only when every element of the final mesh
@@ -27,7 +28,7 @@
  *
  * - on a hot skin (PA__DONE_ON_SKIN): an edge outside [0.65, 1.5). A skin
  *   face refined by bisection (bisect.c) keeps edges a little shorter than
- *   0.7071, which only another iteration could change, and edges just
+ *   PA__LEN_LO, which only another iteration could change, and edges just
  *   outside the range are as many as the sequential remesher leaves
  *   anywhere (2-3 % with an anisotropic metric). Tagging them with the
  *   strict range makes every iteration's borders the next one's work: 3D

@@ -661,6 +661,6 @@ double pa__quality(int dim, int ncomp, const double *const *x,
     }
   if (!(s > 0.0)) return 0.0;
   double sd = tensor ? sqrt(fmax(pa__sym_det(dim, mb), 0.0)) : 1.0;
-  if (dim == 2) return 4.0 * sqrt(3.0) * vol * sd / s;
-  return 72.0 * sqrt(3.0) * vol * sd / (s * sqrt(s));
+  if (dim == 2) return PA__QUAL_NORM_2D * vol * sd / s;
+  return PA__QUAL_NORM_3D * vol * sd / (s * sqrt(s));
 }

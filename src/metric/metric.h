@@ -12,7 +12,8 @@
  *    (la + lb)/2 when |la - lb| < 1e-3 * max(la, lb);
  *  - quality with the arithmetic mean M of the vertex tensors:
  *    3D Q = 72 sqrt(3) V_M / (sum l_M^2)^(3/2), 2D Q = 4 sqrt(3) A_M / sum l_M^2,
- *    V_M = V sqrt(det M), l_M^2 = e^T M e. 1 = regular, 0 = flat, < 0 inverted.
+ *    V_M = V sqrt(det M), l_M^2 = e^T M e. 1 = regular, 0 = flat, < 0 inverted;
+ *  - an edge is "in range" when its length lies in [1/sqrt(2), sqrt(2)).
  */
 #ifndef PA_METRIC_H
 #define PA_METRIC_H
@@ -20,6 +21,33 @@
 #include "mesh/mesh.h"
 
 #include <math.h>
+
+/* The band of edge lengths in range, [1/sqrt(2), sqrt(2)): the target of
+ * every remesher (an edge in it is neither split nor collapsed), and the
+ * share of edges in it measures how a mesh meets its metric. Spelled as Mmg
+ * prints and counts it, 0.7071 and 1.4142, so that the statistics compare
+ * with Mmg's: the statistics' in-range bin (pa_stats_edge_bin), which
+ * PA_TARGET_IN_RANGE judges, and the parallel loop's tags. */
+#define PA__LEN_LO 0.7071
+#define PA__LEN_HI 1.4142
+/* The same band to the last bit (sqrt(1/2) and sqrt(2), correctly
+ * rounded), where a threshold is not compared with Mmg's figures: the 3D
+ * remesher's collapse and split bounds. */
+#define PA__LEN_LO_EXACT 0.7071067811865476
+#define PA__LEN_HI_EXACT 1.4142135623730951
+
+/* The normalisations of the quality (Mmg's), which make it 1 on the
+ * regular simplex:
+ *  - 2D, 4 sqrt(3): Q = 4 sqrt(3) A_M / sum l_M^2 (the equilateral triangle
+ *    of unit edges has A = sqrt(3)/4 and sum l^2 = 3);
+ *  - 3D, 72 sqrt(3): Q = 72 sqrt(3) V_M / (sum l_M^2)^(3/2) (the regular
+ *    tetrahedron of unit edges has V = sqrt(2)/12 and sum l^2 = 6);
+ *  - 3D from the triple product det = 6 V, 12 sqrt(3) = 72 sqrt(3) / 6:
+ *    Q = 12 sqrt(3) det_M / (sum l_M^2)^(3/2).
+ * Each is the double nearest its exact value. */
+#define PA__QUAL_NORM_2D 6.928203230275509
+#define PA__QUAL_NORM_3D 124.70765814495915
+#define PA__QUAL_NORM_3D_DET 20.784609690826528
 
 /* Index of entry (i,j) of a symmetric tensor stored m11 m12 m22 m13 m23 m33. */
 static inline int pa__sym_index(int i, int j) {

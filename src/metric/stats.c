@@ -23,12 +23,10 @@
 
 #include <math.h>
 
-/* Upper bounds of the edge-length bins 0..7 (bin 8 is [5, inf)); literal
- * values as printed by Mmg, so 0.7071 is not 1/sqrt(2). */
+/* Upper bounds of the edge-length bins 0..7 (bin 8 is [5, inf)): Mmg's,
+ * with the in-range band (PA__LEN_LO, PA__LEN_HI) as it prints it. */
 static const double edge_bounds[PA_STATS_EDGE_NBIN - 2] = {
-    0.3, 0.6, 0.7071, 0.9, 1.3, 1.4142, 2.0, 5.0};
-#define IN_RANGE_LO 0.7071
-#define IN_RANGE_HI 1.4142
+    0.3, 0.6, PA__LEN_LO, 0.9, 1.3, PA__LEN_HI, 2.0, 5.0};
 
 double pa_mesh_elem_quality(pa_mesh *mesh, pa_idx e) {
   if (!mesh || e < 0 || e >= mesh->ne) return NAN;
@@ -60,7 +58,7 @@ static void add_edge_length(pa_stats *s, ksum *sum, double len) {
   while (b < PA_STATS_EDGE_NBIN - 2 && len >= edge_bounds[b])
     b++;
   s->edge_hist[b]++;
-  if (len >= IN_RANGE_LO && len < IN_RANGE_HI)
+  if (len >= PA__LEN_LO && len < PA__LEN_HI)
     s->edge_hist[PA_STATS_EDGE_NBIN - 1]++;
   if (s->nedge == 0 || len < s->edge_min) s->edge_min = len;
   if (s->nedge == 0 || len > s->edge_max) s->edge_max = len;
@@ -164,8 +162,8 @@ pa_status pa_stats_edge_bin(int b, double *lo, double *hi) {
            "pa_stats_edge_bin: bin %d out of [0, %d) or NULL argument", b,
            PA_STATS_EDGE_NBIN);
   if (b == PA_STATS_EDGE_NBIN - 1) {
-    *lo = IN_RANGE_LO;
-    *hi = IN_RANGE_HI;
+    *lo = PA__LEN_LO;
+    *hi = PA__LEN_HI;
   } else {
     *lo = b > 0 ? edge_bounds[b - 1] : 0.0;
     *hi = b < PA_STATS_EDGE_NBIN - 2 ? edge_bounds[b] : INFINITY;
@@ -189,6 +187,7 @@ static double pct(pa_gid n, pa_gid total) { return 100 * pa__share(n, total); }
 
 void pa_stats_print(const pa_stats *s, FILE *out) {
   if (!s || !out) return;
+  /* the bins of edge_bounds, aligned */
   static const char *edge_labels[PA_STATS_EDGE_NBIN - 1] = {
       "0      <= L < 0.3   ", "0.3    <= L < 0.6   ", "0.6    <= L < 0.7071",
       "0.7071 <= L < 0.9   ", "0.9    <= L < 1.3   ", "1.3    <= L < 1.4142",
@@ -216,8 +215,8 @@ void pa_stats_print(const pa_stats *s, FILE *out) {
     fprintf(out, "    smallest length       %.6f\n", s->edge_min);
     fprintf(out, "    largest length        %.6f\n", s->edge_max);
     pa_gid inr = s->edge_hist[PA_STATS_EDGE_NBIN - 1];
-    fprintf(out, "    0.7071 <= L < 1.4142  %12lld   %6.2f %%\n",
-            (long long)inr, pct(inr, s->nedge));
+    fprintf(out, "    %.4f <= L < %.4f  %12lld   %6.2f %%\n", PA__LEN_LO,
+            PA__LEN_HI, (long long)inr, pct(inr, s->nedge));
     for (int b = 0; b < PA_STATS_EDGE_NBIN - 1; b++)
       if (s->edge_hist[b] > 0)
         fprintf(out, "      %s  %12lld   %6.2f %%\n", edge_labels[b],
