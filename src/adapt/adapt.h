@@ -15,7 +15,6 @@
  *   grade.c       metric gradation of the whole mesh, before the loop
  *   adapt.c       the loop, options, report, the final rebalance
  *   checkpoint.c  checkpoints of the loop and the resume from one
- *   dstats.c      pa_dmesh_stats (statistics of a distributed mesh)
  *
  * Invariants of an iteration (see docs/design/ADAPT.md for the argument):
  *  - label[e] (owned elements) is a piece in [0, npieces) or -1; every
@@ -200,12 +199,6 @@ pa_status pa__adapt_frozen(pa_dmesh *dm, uint8_t **frozen);
 /* Collective: grade the metric of the whole distributed mesh (grade.c),
  * once before the loop; *nrounds (may be NULL) receives the rounds (1 when
  * the first changed nothing). */
-/* pa_dmesh_stats measured in the metric met (local vertex values of nc
- * components) instead of the mesh's own (dstats.c); check 0 skips the
- * validity check (stats->valid is then 1). Collective. */
-pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
-                              int check, pa_stats *stats);
-
 pa_status pa__adapt_grade(pa_dmesh *dm, double hgrad, double hgradreq,
                           int *nrounds);
 /* Collective: clamp the metric into ro's bounds, the local parameters'

@@ -20,6 +20,7 @@
 
 #include "padapt.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -152,6 +153,18 @@ static inline uint64_t pa__hash_idx(const pa_idx *k, int n) {
     h *= 0xBF58476D1CE4E5B9ull;
   }
   return h ^ (h >> 31);
+}
+
+/* Neumaier's compensated sum: a total that does not drift with the count.
+ * Add with pa__ksum_add, read s + c. */
+typedef struct pa__ksum {
+  double s, c;
+} pa__ksum;
+
+static inline void pa__ksum_add(pa__ksum *k, double x) {
+  double t = k->s + x;
+  k->c += fabs(k->s) >= fabs(x) ? (k->s - t) + x : (x - t) + k->s;
+  k->s = t;
 }
 
 /* Bytes of memory this process may still use: MemAvailable of

@@ -73,14 +73,10 @@ double pa_mesh_elem_volume(const pa_mesh *mesh, pa_idx e) {
 
 double pa_mesh_volume(const pa_mesh *mesh) {
   if (!mesh) return NAN;
-  /* Neumaier's compensated sum: the total does not drift with the count. */
-  double s = 0.0, c = 0.0;
-  for (pa_idx e = 0; e < mesh->ne; e++) {
-    double x = pa_mesh_elem_volume(mesh, e), t = s + x;
-    c += fabs(s) >= fabs(x) ? (s - t) + x : (x - t) + s;
-    s = t;
-  }
-  return s + c;
+  pa__ksum sum = {0, 0};
+  for (pa_idx e = 0; e < mesh->ne; e++)
+    pa__ksum_add(&sum, pa_mesh_elem_volume(mesh, e));
+  return sum.s + sum.c;
 }
 
 /* ---- adjacency ---------------------------------------------------------- */

@@ -178,6 +178,30 @@ static inline double pa__share(pa_gid n, pa_gid total) {
   return total > 0 ? (double)n / (double)total : 0.0;
 }
 
+/* The statistics of a pa_stats accumulated one element and one edge at a
+ * time (stats.c): pa_mesh_stats and pa_dmesh_stats (dmesh/dstats.c) both
+ * count through it, so they bin, count and sum alike. The caller fills the
+ * entity counts and validity of s (dim, has_metric, nvert, nelem, nbdry,
+ * valid); pa__stats_acc_sums then puts the sums in s. */
+typedef struct pa__stats_acc {
+  pa_stats s;
+  pa_gid nelem; /* elements added (s.nelem may be a global count) */
+  pa__ksum volume, edge_sum, qual_sum;
+} pa__stats_acc;
+
+/* Start with nothing counted. */
+void pa__stats_acc_init(pa__stats_acc *a);
+/* Count an element of signed volume vol (inverted when vol <= 0) and
+ * quality q: the quality bins (floor(q / 0.2) clamped to the bins, so an
+ * inverted or NaN quality counts in the first), the shares above 0.5 and
+ * 0.12, extremes and sums. */
+void pa__stats_add_elem(pa__stats_acc *a, double vol, double q);
+/* Count an edge of length len in the metric: its bin, the in-range bin,
+ * extremes and sum. */
+void pa__stats_add_edge(pa__stats_acc *a, double len);
+/* Write the compensated sums into a->s (volume, edge_sum, qual_sum). */
+void pa__stats_acc_sums(pa__stats_acc *a);
+
 /* pa_mesh_stats measured in the metric met (nv values of nc components; nc
  * 0: identity) instead of the mesh's own (stats.c); check 0 skips the
  * validity check (stats->valid is then 1). */
