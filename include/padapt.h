@@ -53,7 +53,10 @@ typedef enum pa_status {
   PA_ERR_FORMAT,      /**< a file is malformed (message names file:line) */
   PA_ERR_MESH,        /**< the mesh is invalid (inverted, non-conforming...) */
   PA_ERR_METRIC,      /**< a metric is not finite or not positive definite */
-  PA_ERR_MPI,         /**< an MPI call failed or ranks disagree */
+  PA_ERR_MPI,         /**< an MPI call failed (the message names it; MPI
+                           returns errors only on a communicator whose
+                           error handler is MPI_ERRORS_RETURN) or ranks
+                           disagree */
   PA_ERR_PARTITION,   /**< the graph partitioner failed */
   PA_ERR_UNSUPPORTED, /**< a feature or file variant that is not supported */
   PA_ERR_INTERNAL     /**< an internal invariant was violated (a bug) */
@@ -971,7 +974,8 @@ void pa_dmesh_value_info(const pa_dmesh_value *value, pa_entity *kind,
  * pa_dmesh_halo = begin + end; between begin and end the caller may work on
  * owned data (not on ghosts); only one exchange per value at a time.
  * Collective over the neighbour ranks (every rank must call it); begin and end
- * never allocate, so they fail only on invalid arguments.
+ * never allocate, so they fail only on invalid arguments (PA_ERR_ARG) or an
+ * MPI error (PA_ERR_MPI naming the call; see PA_ERR_MPI).
  */
 pa_status pa_dmesh_halo(pa_dmesh *dm, pa_dmesh_value *value);
 pa_status pa_dmesh_halo_begin(pa_dmesh *dm, pa_dmesh_value *value);

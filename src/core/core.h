@@ -57,6 +57,26 @@ pa_status pa__error_trace(pa_status code, const char *file, int line);
     }                                                                        \
   } while (0)
 
+/* Call an MPI function: a return other than MPI_SUCCESS becomes PA_ERR_MPI
+ * naming the function and MPI's message, and jumps to cleanup (needs a
+ * local `pa_status st`), as PETSc's PetscCallMPI. MPI returns an error only
+ * where the communicator's error handler is MPI_ERRORS_RETURN (the
+ * communicators padapt duplicates keep the caller's handler); under the
+ * default MPI_ERRORS_ARE_FATAL it ends the job itself. */
+#define PA_CALL_MPI(call)                                                    \
+  do {                                                                       \
+    int pa_mpierr_ = (call);                                                 \
+    if (pa_mpierr_ != MPI_SUCCESS) {                                         \
+      st = pa__mpi_error(pa_mpierr_, #call, __FILE__, __LINE__);             \
+      goto cleanup;                                                          \
+    }                                                                        \
+  } while (0)
+/* Record "MPI_Xxx failed: <MPI's message>" for the MPI error code err of
+ * the call whose source text is call (the function's name is taken from
+ * it); returns PA_ERR_MPI. */
+pa_status pa__mpi_error(int err, const char *call, const char *file,
+                        int line);
+
 /* Internal invariant, debug builds only. */
 #ifdef NDEBUG
 #define PA_ASSERT(cond) ((void)0)
