@@ -146,7 +146,4 @@ void pa_cli_print_fidelity(const pa_fidelity *f, FILE *out);
  * of memory. */
 char *pa_cli_fidelity_json(const pa_fidelity *f);
 
-/* Set the library's last error message to msg; returns st. */
-pa_status pa_cli_set_error(pa_status st, const char *msg);
-
 #endif

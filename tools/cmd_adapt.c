@@ -446,7 +446,7 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
     extra = b.fail || !fid ? NULL : b.p;
     if (!extra) free(b.p);
     st = extra ? pa_stats_write_json(after, extra, json)
-               : pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
+               : pa_set_error(PA_ERR_MEMORY, "out of memory");
   }
   if (st == PA_SUCCESS && args.svg) st = pa_cli_adapt_svg(&args, &before, after);
   st = pa_cli_output_end(MPI_COMM_SELF, tx, st);

@@ -179,23 +179,23 @@ static pa_status read_scalar(const char *path, pa_idx nv, int comp,
   if (st == PA_SUCCESS && pa_sol_nvert(sol) != nv) {
     snprintf(msg, sizeof msg, "%s: %d values, but the mesh has %d vertices",
              pa_sol_origin(sol), (int)pa_sol_nvert(sol), (int)nv);
-    st = pa_cli_set_error(PA_ERR_FORMAT, msg);
+    st = pa_set_error(PA_ERR_FORMAT, "%s", msg);
   } else if (st == PA_SUCCESS && (comp > nc || (nc > 1 && comp == 0))) {
     snprintf(msg, sizeof msg,
              "%s: its first field has %d components; choose one with -comp "
              "(1 to %d)",
              path, nc, nc);
-    st = pa_cli_set_error(PA_ERR_ARG, msg);
+    st = pa_set_error(PA_ERR_ARG, "%s", msg);
   }
   if (st == PA_SUCCESS) {
     *vals = malloc(sizeof(double) * (nv ? (size_t)nv : 1));
-    if (!*vals) st = pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
+    if (!*vals) st = pa_set_error(PA_ERR_MEMORY, "out of memory");
     for (pa_idx i = 0; i < nv && *vals && st == PA_SUCCESS; i++) {
       (*vals)[i] = v[(size_t)nc * i + (comp ? comp - 1 : 0)];
       if (!isfinite((*vals)[i])) {
         snprintf(msg, sizeof msg, "%s: the value at vertex %d is not a number",
                  path, (int)i + 1);
-        st = pa_cli_set_error(PA_ERR_FORMAT, msg);
+        st = pa_set_error(PA_ERR_FORMAT, "%s", msg);
       }
     }
     if (st) {
@@ -263,7 +263,7 @@ static pa_status run_ops(const pa_cli *cli, const char *op, pa_mesh *mesh,
       double *tb = malloc(sizeof(double) * nt * (nv ? nv : 1));
       out = malloc(sizeof(double) * nt * (nv ? nv : 1));
       if (!ta || !tb || !out)
-        st = pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
+        st = pa_set_error(PA_ERR_MEMORY, "out of memory");
       for (pa_idx v = 0; st == PA_SUCCESS && v < nv; v++) {
         const double *x = pa_mesh_metric(mesh) + (size_t)n1 * v;
         const double *y = pa_mesh_metric(m2) + (size_t)n2 * v;
@@ -310,7 +310,7 @@ static pa_status run_field(const char *op, pa_mesh *mesh,
   int d = pa_mesh_dim(mesh), nt = d == 2 ? 3 : 6;
   pa_idx nv = pa_mesh_nvert(mesh);
   double *u = NULL, *met = malloc(sizeof(double) * nt * (nv ? nv : 1));
-  if (!met) return pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
+  if (!met) return pa_set_error(PA_ERR_MEMORY, "out of memory");
   if (!strcmp(op, "hessian")) {
     pa_metric_hessian_opts o;
     pa_metric_hessian_opts_default(&o);
@@ -495,7 +495,7 @@ int pa_cli_levelset(const pa_cli *cli, int argc, char **argv) {
   if (st == PA_SUCCESS) {
     pa_idx nv = pa_mesh_nvert(mesh);
     phi = malloc(sizeof(double) * (nv ? nv : 1));
-    if (!phi) st = pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
+    if (!phi) st = pa_set_error(PA_ERR_MEMORY, "out of memory");
     if (st == PA_SUCCESS) st = pa_levelset_analytic(mesh, argv[1], phi);
     if (st == PA_SUCCESS) st = pa_sol_create(pa_mesh_dim(mesh), nv, &sol);
     if (st == PA_SUCCESS) st = pa_sol_add_field(sol, PA_SOL_SCALAR, phi);

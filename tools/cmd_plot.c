@@ -375,7 +375,7 @@ static pa_status draw(plot *p, const plot_args *a, plot_counts *c, double pw,
   if (!cell || !bycol) {
     free(cell);
     free(bycol);
-    return pa_cli_set_error(PA_ERR_MEMORY, "plot: out of memory");
+    return pa_set_error(PA_ERR_MEMORY, "plot: out of memory");
   }
   for (size_t k = 0; k < (size_t)gw * (size_t)gh; k++)
     cell[k] = NAN;

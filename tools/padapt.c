@@ -14,8 +14,6 @@
  * starts its threads, so that only the main thread ever runs the handler.
  */
 #include "cli.h"
-
-#include "core/core.h"
 #include "svg.h"
 
 #include <math.h>
@@ -71,10 +69,6 @@ int pa_cli_error(const pa_cli *cli, const char *fmt, ...) {
   return 1;
 }
 
-pa_status pa_cli_set_error(pa_status st, const char *msg) {
-  return pa__error(st, __FILE__, __LINE__, "%s", msg);
-}
-
 int pa_cli_fail(const pa_cli *cli, pa_status st) {
   if (st == PA_SUCCESS) return 0;
   const char *msg = pa_last_error();
@@ -111,7 +105,7 @@ pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path,
     snprintf(msg, sizeof msg, "%s: %s", path, pa_last_error());
     pa_mesh_destroy(*mesh);
     *mesh = NULL;
-    st = pa_cli_set_error(st, msg);
+    st = pa_set_error(st, "%s", msg);
   }
   return st;
 }
@@ -304,7 +298,7 @@ pa_status pa_cli_attach_fields(pa_mesh *mesh, const char *path) {
              pa_sol_origin(sol), (int)pa_sol_nvert(sol),
              (int)pa_mesh_nvert(mesh));
     pa_sol_destroy(sol);
-    return pa_cli_set_error(PA_ERR_FORMAT, msg);
+    return pa_set_error(PA_ERR_FORMAT, "%s", msg);
   }
   for (int k = 0; k < pa_sol_nfield(sol) && st == PA_SUCCESS; k++) {
     pa_sol_kind kind;
