@@ -53,7 +53,10 @@ typedef enum pa_status {
   PA_ERR_FORMAT,      /**< a file is malformed (message names file:line) */
   PA_ERR_MESH,        /**< the mesh is invalid (inverted, non-conforming...) */
   PA_ERR_METRIC,      /**< a metric is not finite or not positive definite */
-  PA_ERR_MPI,         /**< an MPI call failed or ranks disagree */
+  PA_ERR_MPI,         /**< an MPI call failed (the message names it; MPI
+                           returns errors only on a communicator whose
+                           error handler is MPI_ERRORS_RETURN) or ranks
+                           disagree */
   PA_ERR_PARTITION,   /**< the graph partitioner failed */
   PA_ERR_UNSUPPORTED, /**< a feature or file variant that is not supported */
   PA_ERR_INTERNAL     /**< an internal invariant was violated (a bug) */
@@ -67,6 +70,23 @@ const char *pa_last_error(void);
 
 /** Clear the calling thread's last error message. */
 void pa_clear_error(void);
+
+/**
+ * Set the calling thread's last error message (printf-style) and return
+ * status, for code whose own failures travel through padapt: a plug-in
+ * remesher's callback (pa_remesher), or the status a caller gives to
+ * pa_output_end, whose agreement gives every rank the message of the
+ * lowest failing rank. Not collective.
+ *
+ * \param[in] status the status to return (PA_ERR_*)
+ * \param[in] fmt    printf format of the message, then its arguments
+ * \return status
+ */
+pa_status pa_set_error(pa_status status, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
 
 /** Bytes currently allocated by padapt in this process. */
 size_t pa_memory_current(void);
@@ -638,6 +658,41 @@ pa_status pa_output_end(MPI_Comm comm, pa_output *tx, pa_status st);
  */
 pa_status pa_output_check(const char *path);
 /**
+ * A file the caller writes itself (a format padapt does not write, e.g. a
+ * picture) as one of padapt's outputs: the same temporary beside its path,
+ * the same checks and the same transaction as pa_mesh_write's files.
+ */
+typedef struct pa_output_file pa_output_file;
+/**
+ * Open path for writing. The stream writes to the temporary
+ * "PATH.tmp.PID"; inside a transaction the file is one of its files (a path
+ * already written in it is refused). Not collective.
+ *
+ * \param[in]  path where the file goes
+ * \param[out] file the handle, for pa_output_file_commit or _abort (NULL
+ *                  on failure)
+ * \param[out] fp   the stream to write (binary mode), valid until then
+ * \return PA_SUCCESS; PA_ERR_IO naming path if it exists and is not a
+ *         regular file, or its temporary cannot be created (the open
+ *         transaction then fails); PA_ERR_ARG for a NULL argument.
+ */
+pa_status pa_output_file_open(const char *path, pa_output_file **file,
+                              FILE **fp);
+/**
+ * Complete the file: flush, sync and close the stream, every write error
+ * checked, then rename the temporary onto the path, or, inside a
+ * transaction, leave it for pa_output_commit. Frees file, also on failure
+ * (the temporary is then removed and the transaction fails). Not
+ * collective.
+ *
+ * \param[in] file from pa_output_file_open
+ * \return PA_SUCCESS, or PA_ERR_IO naming the path.
+ */
+pa_status pa_output_file_commit(pa_output_file *file);
+/** Drop the file: close the stream and remove the temporary (an open
+ *  transaction then fails). Frees file; NULL allowed. Not collective. */
+void pa_output_file_abort(pa_output_file *file);
+/**
  * Install handlers of SIGINT and SIGTERM that remove the temporaries of every
  * output being written (async-signal-safe calls only), then end the process
  * by the signal's default action. A signal that is ignored or already has a
@@ -971,7 +1026,8 @@ void pa_dmesh_value_info(const pa_dmesh_value *value, pa_entity *kind,
  * pa_dmesh_halo = begin + end; between begin and end the caller may work on
  * owned data (not on ghosts); only one exchange per value at a time.
  * Collective over the neighbour ranks (every rank must call it); begin and end
- * never allocate, so they fail only on invalid arguments.
+ * never allocate, so they fail only on invalid arguments (PA_ERR_ARG) or an
+ * MPI error (PA_ERR_MPI naming the call; see PA_ERR_MPI).
  */
 pa_status pa_dmesh_halo(pa_dmesh *dm, pa_dmesh_value *value);
 pa_status pa_dmesh_halo_begin(pa_dmesh *dm, pa_dmesh_value *value);

@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
 # check-layers.sh -- the library's components include one another one way
 # only (docs/ARCHITECTURE.md): each may include the headers of the
-# components listed for it below, and its own. Prints every #include that
-# crosses a layer the wrong way and exits 1 if there is one.
+# components listed for it below, and its own; the CLI (tools/) includes
+# the public header padapt.h and its own headers only. Prints every
+# #include that crosses a layer the wrong way and exits 1 if there is one.
 #
 #   bash scripts/check-layers.sh [SOURCE_DIR]
 set -u
-src=${1:-$(cd "$(dirname "$0")/.." && pwd)}/src
+root=${1:-$(cd "$(dirname "$0")/.." && pwd)}
+src=$root/src
 declare -A allowed=(
   [core]=""
   [mesh]="core"
@@ -39,5 +41,25 @@ for dir in "$src"/*/; do
     esac
   done < <(grep -Hn '^#include "[a-z0-9_]*/' "$dir"*.[ch] 2>/dev/null)
 done
+# tools/: "padapt.h" or a header of tools/ itself, nothing of src/
+while IFS=: read -r file line text; do
+  inc=$(sed -E 's/.*#include "([^"]+)".*/\1/' <<< "$text")
+  [ "$inc" = padapt.h ] && continue
+  case $inc in
+    */*) ;;
+    *) [ -f "$root/tools/$inc" ] && continue ;;
+  esac
+  echo "check-layers: tools/${file#"$root"/tools/}:$line: the CLI includes $inc" \
+       "(only padapt.h and tools/*.h): $text"
+  bad=1
+done < <(grep -Hn '^[[:space:]]*#[[:space:]]*include[[:space:]]*"' "$root"/tools/*.[ch] 2>/dev/null)
+# nor through the system include path
+while IFS=: read -r file line text; do
+  inc=$(sed -E 's/.*#include *<([^>]+)>.*/\1/' <<< "$text")
+  [ -d "$src/${inc%%/*}" ] || continue
+  echo "check-layers: tools/${file#"$root"/tools/}:$line: the CLI includes $inc" \
+       "(only padapt.h and tools/*.h): $text"
+  bad=1
+done < <(grep -Hn '^[[:space:]]*#[[:space:]]*include[[:space:]]*<[a-z0-9_]*/' "$root"/tools/*.[ch] 2>/dev/null)
 [ $bad -eq 0 ] && echo "check-layers: every include goes down the layers"
 exit $bad

@@ -1,7 +1,10 @@
 /*
  * cli.h -- shared declarations of the padapt command-line tool. Each command
- * lives in its own file (tools/cmd_*.c) and returns the process exit status.
- * The CLI is the only code of padapt allowed to exit().
+ * lives in its own file (tools/cmd_*.c; generate, stats and convert in
+ * padapt.c with main) and returns the process exit status; the helpers they
+ * share are in cli_util.c, the option tables' parser and -h printer in
+ * cli_opts.c. The CLI uses the public API only (padapt.h) and is the only
+ * code of padapt allowed to exit().
  */
 #ifndef PA_CLI_H
 #define PA_CLI_H
@@ -112,13 +115,70 @@ int pa_cli_parse_num(const char *s, double *v);
 int pa_cli_is_svg(const char *path);
 /* path with its extension replaced by ext (with the dot); malloc'ed. */
 char *pa_cli_replace_ext(const char *path, const char *ext);
-/* Parse the remesher option at argv[*i] (-hsiz -hmin -hmax -hgrad -hgradreq
- * -hausd -ar
- * -v -nr -noinsert -noswap -nomove -nosurf) into opts, moving *i past its
- * value. Returns 1 when it was one, 0 when argv[*i] is not a remesher
- * option, -1 after printing an error. */
-int pa_cli_remesh_option(const pa_cli *cli, int argc, char **argv, int *i,
-                         pa_remesh_opts *opts);
+
+/* ---- option tables (cli_opts.c) ----
+ *
+ * Each command declares its options once, in a table of pa_cli_opt: the
+ * names, the kind of value and where it goes in the command's argument
+ * struct, and the option's line of -h. pa_cli_parse reads argv by the
+ * table and pa_cli_help prints -h from it. */
+
+/* How an option takes its value (at: its offset in the argument struct). */
+typedef enum pa_cli_kind {
+  PA_CLI_END = 0, /* ends a table */
+  PA_CLI_HELP,    /* no option: a line of -h only (a positional argument
+                     with label, a section title without) */
+  PA_CLI_FLAG,    /* a switch: int at = 1 */
+  PA_CLI_STR,     /* the next argument: const char *at */
+  PA_CLI_POS,     /* a number > 0: double at */
+  PA_CLI_NUM,     /* a number in [lo, hi]: double at */
+  PA_CLI_INT,     /* an integer in [lo, hi]: int at */
+  PA_CLI_FN       /* nval arguments, read by fn */
+} pa_cli_kind;
+
+/* Most arguments a PA_CLI_FN option takes. */
+#define PA_CLI_MAX_VALUES 4
+
+typedef struct pa_cli_spec pa_cli_spec;
+
+/* Read the values of a PA_CLI_FN option given as name: val[0..nval-1]
+ * (NULL where argv ran out). Returns 0, or 1 after printing an error. */
+typedef int (*pa_cli_opt_fn)(const pa_cli *cli, const pa_cli_spec *s,
+                             const char *name, char **val, void *args);
+
+typedef struct pa_cli_opt {
+  const char *names;  /* the option and its aliases: "-met -sol" */
+  pa_cli_kind kind;
+  size_t at;          /* offsetof the value in the argument struct */
+  const char *want;   /* what the value must be, for the messages */
+  double lo, hi;      /* PA_CLI_NUM, PA_CLI_INT: the range accepted */
+  pa_cli_opt_fn fn;   /* PA_CLI_FN: reads its nval values */
+  int nval;
+  const char *label;  /* -h: the left column (NULL: no line of its own) */
+  const char *help;   /* -h: the right column, lines separated by \n; with
+                         neither names nor label, a text of its own */
+} pa_cli_opt;
+
+/* A command's arguments: its options, what to do with a positional
+ * argument, and the -h text around the table. */
+struct pa_cli_spec {
+  const char *cmd;      /* "adapt": messages start with it */
+  const char *help_cmd; /* "padapt HELP_CMD -h" (NULL: cmd) */
+  const char *usage;    /* -h before the table */
+  int width;            /* -h: the width of the table's left column */
+  const pa_cli_opt *opt;
+  const char *tail;     /* -h after the table (may be NULL) */
+  /* a positional argument, in its order among the options: 0, or 1
+   * after printing an error */
+  int (*positional)(const pa_cli *cli, const char *arg, void *args);
+};
+
+/* Parse argv[1..argc-1] into args by s. Returns 0, 1 after printing an
+ * error, -1 after printing the help (-h, --help; rank 0 prints). */
+int pa_cli_parse(const pa_cli *cli, const pa_cli_spec *s, int argc,
+                 char **argv, void *args);
+/* Print the -h text of s. */
+void pa_cli_help(const pa_cli_spec *s, FILE *out);
 
 /* Attach field 0 of a .sol/.solb file as the mesh's metric. */
 pa_status pa_cli_attach_metric(pa_mesh *mesh, const char *path);
@@ -145,8 +205,5 @@ void pa_cli_print_fidelity(const pa_fidelity *f, FILE *out);
  * "metric_used"), for pa_stats_write_json's extra; malloc'ed, NULL when out
  * of memory. */
 char *pa_cli_fidelity_json(const pa_fidelity *f);
-
-/* Set the library's last error message to msg; returns st. */
-pa_status pa_cli_set_error(pa_status st, const char *msg);
 
 #endif

@@ -24,62 +24,166 @@
 #include "svg.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
-static const char *adapt_usage =
-    "usage: padapt adapt IN [-met SOL | -sol SOL | -hsiz H] [-out OUT] [options]\n"
-    "  -in IN          input mesh (same as the positional IN)\n"
-    "  -met/-sol SOL   metric: sizes (scalar) or tensors, .sol/.solb\n"
-    "                  (default: IN.sol or IN.solb when it exists, else the\n"
-    "                  view \"metric\" of a Gmsh IN.msh)\n"
-    "  -hsiz H         constant size H (replaces the metric)\n"
-    "  -out OUT        output mesh (.mesh .meshb .msh .vtu; default IN.o.EXT)\n"
-    "  -outsol PATH    output metric (default: OUT with extension .sol)\n"
-    "  -nosol          do not write the output metric\n"
-    "  -hmin H -hmax H clamp the sizes\n"
-    "  -hgrad G        gradation: size ratio bound along a unit edge\n"
-    "                  (default 1.3; -1 disables)\n"
-    "  -hgradreq G     gradation from required entities (default 2.3;\n"
-    "                  -1: they constrain nothing)\n"
-    "  -hausd D        max boundary deviation from the curve (default 0.01)\n"
-    "  -ar A           corner detection angle in degrees (default 45)\n"
-    "  -nr             no corner detection by angle\n"
-    "  -noinsert -noswap -nomove   disable operators\n"
-    "  -nosurf         leave the boundary unchanged (3D)\n"
-    "  -f FILE         local parameters per reference (Mmg's format: REF\n"
-    "                  Triangles|Tetrahedra|Edges HMIN HMAX HAUSD; default\n"
-    "                  IN.padapt when it exists)\n"
-    "  -optim          keep the sizes of the input mesh (the mean length of\n"
-    "                  each vertex's edges), improve the quality\n"
-    "  -field F.sol    vertex fields to interpolate; written to\n"
-    "                  <OUT stem>.fields.sol (or -outfield PATH)\n"
-    "  -json R.json    write the after-statistics, time and counts as JSON\n"
-    "  -svg H.svg      picture of the edge-length and quality histograms,\n"
-    "                  before and after\n"
-    "  -v N            verbosity: -1 errors and warnings only, 0 the report\n"
-    "                  (default), 1-10 more detail on stderr\n"
-    "Parallel (mpiexec -n P, P > 1; IN may be a distributed set OUT.<r>.meshb):\n"
-    "  -distributed-output  write OUT as a distributed set\n"
-    "  -mem MB, -m MB  memory bound per process (default: the available memory;\n"
-    "                  a metric whose output would not fit is refused)\n"
-    "  -max-iter N     at most N iterations (default 30)\n"
-    "  -best-effort    write the (valid) mesh even if the loop stalled; without\n"
-    "                  it a stalled loop is an error and nothing is written\n"
-    "  -pieces K       pieces per process (default 1)\n"
-    "  -check          check every remeshed piece and the distributed result\n"
-    "                  (always done with a plug-in remesher)\n"
-    "  -checkpoint DIR after each iteration, write the distributed state to\n"
-    "                  DIR (created if missing; only the latest checkpoint\n"
-    "                  is kept, replaced atomically)\n"
-    "  -restart DIR    resume the run whose checkpoint is in DIR: same number\n"
-    "                  of processes and same options (IN, -met and -field are\n"
-    "                  not read: the checkpoint holds the mesh); the output\n"
-    "                  is the uninterrupted run's, byte for byte\n"
-    "Exit status: 0 success (also \"target missed\": a valid mesh, written,\n"
-    "with a warning); 1 failure, nothing written (previous files untouched).\n";
+/* The options of `padapt adapt`, its remesher options among them, in the
+ * order of -h. */
+#define A(f) offsetof(pa_cli_adapt_args, f)
+#define POSITIVE "a positive number"
+
+static int opt_in(const pa_cli *cli, const pa_cli_spec *s, const char *name,
+                  char **val, void *args) {
+  pa_cli_adapt_args *a = args;
+  if (a->in) return pa_cli_error(cli, "%s: more than one input mesh", s->cmd);
+  if (!val[0]) return pa_cli_error(cli, "%s: %s needs a mesh file", s->cmd, name);
+  a->in = val[0];
+  return 0;
+}
+
+static int opt_verbosity(const pa_cli *cli, const pa_cli_spec *s,
+                         const char *name, char **val, void *args) {
+  pa_cli_adapt_args *a = args;
+  double x;
+  if (!pa_cli_parse_num(val[0], &x) || x < -1 || x > 10 || x != floor(x))
+    return pa_cli_error(cli, "%s: %s needs a verbosity level in [-1, 10], "
+                             "got '%s'",
+                        s->cmd, name, val[0] ? val[0] : "nothing");
+  a->remesh.verbosity = (int)x;
+  pa_cli_set_verbosity((int)x);
+  return 0;
+}
+
+static const pa_cli_opt adapt_opts[] = {
+    {.names = "-in", .kind = PA_CLI_FN, .fn = opt_in, .nval = 1,
+     .label = "-in IN", .help = "input mesh (same as the positional IN)"},
+    {.names = "-met -sol", .kind = PA_CLI_STR, .at = A(met),
+     .want = "a .sol file", .label = "-met/-sol SOL",
+     .help = "metric: sizes (scalar) or tensors, .sol/.solb\n"
+             "(default: IN.sol or IN.solb when it exists, else the\n"
+             "view \"metric\" of a Gmsh IN.msh)"},
+    {.names = "-hsiz", .kind = PA_CLI_POS, .at = A(remesh.hsiz),
+     .want = POSITIVE, .label = "-hsiz H",
+     .help = "constant size H (replaces the metric)"},
+    {.names = "-out", .kind = PA_CLI_STR, .at = A(out), .want = "a mesh file",
+     .label = "-out OUT",
+     .help = "output mesh (.mesh .meshb .msh .vtu; default IN.o.EXT)"},
+    {.names = "-outsol", .kind = PA_CLI_STR, .at = A(outsol),
+     .want = "a .sol file", .label = "-outsol PATH",
+     .help = "output metric (default: OUT with extension .sol)"},
+    {.names = "-nosol", .kind = PA_CLI_FLAG, .at = A(nosol), .label = "-nosol",
+     .help = "do not write the output metric"},
+    {.names = "-hmin", .kind = PA_CLI_POS, .at = A(remesh.hmin),
+     .want = POSITIVE, .label = "-hmin H -hmax H", .help = "clamp the sizes"},
+    {.names = "-hmax", .kind = PA_CLI_POS, .at = A(remesh.hmax),
+     .want = POSITIVE},
+    {.names = "-hgrad", .kind = PA_CLI_NUM, .at = A(remesh.hgrad),
+     .want = "a number (> 1; -1 or any value <= 1 disables)",
+     .lo = -INFINITY, .hi = INFINITY, .label = "-hgrad G",
+     .help = "gradation: size ratio bound along a unit edge\n"
+             "(default 1.3; -1 disables)"},
+    {.names = "-hgradreq", .kind = PA_CLI_NUM, .at = A(remesh.hgradreq),
+     .want = "a number (> 1; -1 or any value <= 1 disables)",
+     .lo = -INFINITY, .hi = INFINITY, .label = "-hgradreq G",
+     .help = "gradation from required entities (default 2.3;\n"
+             "-1: they constrain nothing)"},
+    {.names = "-hausd", .kind = PA_CLI_POS, .at = A(remesh.hausd),
+     .want = POSITIVE, .label = "-hausd D",
+     .help = "max boundary deviation from the curve (default 0.01)"},
+    {.names = "-ar", .kind = PA_CLI_NUM, .at = A(remesh.angle),
+     .want = "an angle in [0, 180] degrees", .lo = 0, .hi = 180,
+     .label = "-ar A", .help = "corner detection angle in degrees (default 45)"},
+    {.names = "-nr", .kind = PA_CLI_FLAG, .at = A(remesh.no_angle),
+     .label = "-nr", .help = "no corner detection by angle"},
+    {.names = "-noinsert", .kind = PA_CLI_FLAG, .at = A(remesh.no_insert),
+     .label = "-noinsert -noswap -nomove", .help = "disable operators"},
+    {.names = "-noswap", .kind = PA_CLI_FLAG, .at = A(remesh.no_swap)},
+    {.names = "-nomove", .kind = PA_CLI_FLAG, .at = A(remesh.no_move)},
+    {.names = "-nosurf", .kind = PA_CLI_FLAG, .at = A(remesh.no_surf),
+     .label = "-nosurf", .help = "leave the boundary unchanged (3D)"},
+    {.names = "-f", .kind = PA_CLI_STR, .at = A(params),
+     .want = "a parameter file", .label = "-f FILE",
+     .help = "local parameters per reference (Mmg's format: REF\n"
+             "Triangles|Tetrahedra|Edges HMIN HMAX HAUSD; default\n"
+             "IN.padapt when it exists)"},
+    {.names = "-optim", .kind = PA_CLI_FLAG, .at = A(optim), .label = "-optim",
+     .help = "keep the sizes of the input mesh (the mean length of\n"
+             "each vertex's edges), improve the quality"},
+    {.names = "-field", .kind = PA_CLI_STR, .at = A(field),
+     .want = "a .sol file", .label = "-field F.sol",
+     .help = "vertex fields to interpolate; written to\n"
+             "<OUT stem>.fields.sol (or -outfield PATH)"},
+    {.names = "-outfield", .kind = PA_CLI_STR, .at = A(outfield),
+     .want = "a .sol file"},
+    {.names = "-json", .kind = PA_CLI_STR, .at = A(json), .want = "a file",
+     .label = "-json R.json",
+     .help = "write the after-statistics, time and counts as JSON"},
+    {.names = "-svg", .kind = PA_CLI_STR, .at = A(svg), .want = "an .svg file",
+     .label = "-svg H.svg",
+     .help = "picture of the edge-length and quality histograms,\n"
+             "before and after"},
+    {.names = "-v", .kind = PA_CLI_FN, .fn = opt_verbosity, .nval = 1,
+     .label = "-v N",
+     .help = "verbosity: -1 errors and warnings only, 0 the report\n"
+             "(default), 1-10 more detail on stderr"},
+    {.kind = PA_CLI_HELP,
+     .help = "Parallel (mpiexec -n P, P > 1; IN may be a distributed set "
+             "OUT.<r>.meshb):\n"},
+    {.names = "-distributed-output", .kind = PA_CLI_FLAG,
+     .at = A(distributed), .label = "-distributed-output",
+     .help = "write OUT as a distributed set"},
+    {.names = "-mem -m", .kind = PA_CLI_POS, .at = A(mem_mb), .want = POSITIVE,
+     .label = "-mem MB, -m MB",
+     .help = "memory bound per process (default: the available memory;\n"
+             "a metric whose output would not fit is refused)"},
+    {.names = "-max-iter", .kind = PA_CLI_INT, .at = A(max_iter),
+     .want = "an integer in [1, 1000]", .lo = 1, .hi = 1000,
+     .label = "-max-iter N", .help = "at most N iterations (default 30)"},
+    {.names = "-best-effort", .kind = PA_CLI_FLAG, .at = A(best_effort),
+     .label = "-best-effort",
+     .help = "write the (valid) mesh even if the loop stalled; without\n"
+             "it a stalled loop is an error and nothing is written"},
+    {.names = "-pieces", .kind = PA_CLI_INT, .at = A(pieces),
+     .want = "an integer in [1, 1000]", .lo = 1, .hi = 1000,
+     .label = "-pieces K", .help = "pieces per process (default 1)"},
+    {.names = "-check", .kind = PA_CLI_FLAG, .at = A(check), .label = "-check",
+     .help = "check every remeshed piece and the distributed result\n"
+             "(always done with a plug-in remesher)"},
+    {.names = "-checkpoint", .kind = PA_CLI_STR, .at = A(checkpoint),
+     .want = "a directory", .label = "-checkpoint DIR",
+     .help = "after each iteration, write the distributed state to\n"
+             "DIR (created if missing; only the latest checkpoint\n"
+             "is kept, replaced atomically)"},
+    {.names = "-restart", .kind = PA_CLI_STR, .at = A(restart),
+     .want = "a checkpoint directory", .label = "-restart DIR",
+     .help = "resume the run whose checkpoint is in DIR: same number\n"
+             "of processes and same options (IN, -met and -field are\n"
+             "not read: the checkpoint holds the mesh); the output\n"
+             "is the uninterrupted run's, byte for byte"},
+    {.kind = PA_CLI_END}};
+
+static int adapt_positional(const pa_cli *cli, const char *arg, void *args) {
+  pa_cli_adapt_args *a = args;
+  if (a->in)
+    return pa_cli_error(cli, "adapt: more than one input mesh ('%s')", arg);
+  a->in = arg;
+  return 0;
+}
+
+static const pa_cli_spec adapt_spec = {
+    .cmd = "adapt",
+    .usage = "usage: padapt adapt IN [-met SOL | -sol SOL | -hsiz H] [-out "
+             "OUT] [options]\n",
+    .width = 16,
+    .opt = adapt_opts,
+    .tail = "Exit status: 0 success (also \"target missed\": a valid mesh, "
+            "written,\n"
+            "with a warning); 1 failure, nothing written (previous files "
+            "untouched).\n",
+    .positional = adapt_positional};
 
 static const char *outcome_name(pa_remesh_outcome o) {
   return o == PA_REMESH_SUCCESS         ? "success"
@@ -150,79 +254,13 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
   memset(a, 0, sizeof *a);
   pa_remesh_opts_default(&a->remesh);
   a->remesh.verbosity = cli->verbosity;
-  for (int i = 1; i < argc; i++) {
-    const char *o = argv[i];
-    const char *val = i + 1 < argc ? argv[i + 1] : NULL;
-    const char **file = NULL, *what = "a file";
-    int r = pa_cli_remesh_option(cli, argc, argv, &i, &a->remesh);
-    if (r < 0) return 1;
-    if (r > 0) continue;
-    if (!strcmp(o, "-h") || !strcmp(o, "--help")) {
-      if (cli->rank == 0) fputs(adapt_usage, stdout);
-      return -1;
-    } else if (!strcmp(o, "-in")) {
-      if (a->in) return pa_cli_error(cli, "adapt: more than one input mesh");
-      file = &a->in, what = "a mesh file";
-    } else if (!strcmp(o, "-met") || !strcmp(o, "-sol")) {
-      file = &a->met, what = "a .sol file";
-    } else if (!strcmp(o, "-out")) {
-      file = &a->out, what = "a mesh file";
-    } else if (!strcmp(o, "-outsol")) {
-      file = &a->outsol, what = "a .sol file";
-    } else if (!strcmp(o, "-field")) {
-      file = &a->field, what = "a .sol file";
-    } else if (!strcmp(o, "-outfield")) {
-      file = &a->outfield, what = "a .sol file";
-    } else if (!strcmp(o, "-json")) {
-      file = &a->json;
-    } else if (!strcmp(o, "-checkpoint")) {
-      file = &a->checkpoint, what = "a directory";
-    } else if (!strcmp(o, "-restart")) {
-      file = &a->restart, what = "a checkpoint directory";
-    } else if (!strcmp(o, "-svg")) {
-      file = &a->svg, what = "an .svg file";
-    } else if (!strcmp(o, "-nosol")) {
-      a->nosol = 1;
-    } else if (!strcmp(o, "-distributed-output")) {
-      a->distributed = 1;
-    } else if (!strcmp(o, "-check")) {
-      a->check = 1;
-    } else if (!strcmp(o, "-best-effort")) {
-      a->best_effort = 1;
-    } else if (!strcmp(o, "-optim")) {
-      a->optim = 1;
-    } else if (!strcmp(o, "-f")) {
-      file = &a->params, what = "a parameter file";
-    } else if (!strcmp(o, "-mem") || !strcmp(o, "-m") ||
-               !strcmp(o, "-max-iter") || !strcmp(o, "-pieces")) {
-      double x;
-      int count = strcmp(o, "-mem") && strcmp(o, "-m");
-      if (!pa_cli_parse_num(val, &x) || x <= 0 ||
-          (count && (x > 1000 || x != floor(x))))
-        return pa_cli_error(cli, "adapt: %s needs %s, got '%s'", o,
-                            count ? "an integer in [1, 1000]"
-                                  : "a positive number",
-                            val ? val : "nothing");
-      i++;
-      if (!count) a->mem_mb = x;
-      if (!strcmp(o, "-max-iter")) a->max_iter = (int)x;
-      if (!strcmp(o, "-pieces")) a->pieces = (int)x;
-    } else if (o[0] == '-' && o[1]) {
-      return pa_cli_error(cli, "adapt: unknown option '%s' (see padapt adapt -h)",
-                          o);
-    } else if (!a->in) {
-      a->in = o;
-    } else {
-      return pa_cli_error(cli, "adapt: more than one input mesh ('%s')", o);
-    }
-    if (file) {
-      if (!val) return pa_cli_error(cli, "adapt: %s needs %s", o, what);
-      *file = val;
-      i++;
-    }
+  int rc = pa_cli_parse(cli, &adapt_spec, argc, argv, a);
+  if (rc) return rc;
+  if (!a->in && !a->restart) {
+    pa_cli_error(cli, "adapt: no input mesh");
+    if (cli->rank == 0) pa_cli_help(&adapt_spec, stderr);
+    return 1;
   }
-  if (!a->in && !a->restart)
-    return pa_cli_error(cli, "adapt: no input mesh\n%s", adapt_usage);
   if (!a->out && !a->in)
     return pa_cli_error(cli, "adapt: no output mesh (-out OUT)");
   if (!a->out && default_paths(cli, a)) return 1;
@@ -446,7 +484,7 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
     extra = b.fail || !fid ? NULL : b.p;
     if (!extra) free(b.p);
     st = extra ? pa_stats_write_json(after, extra, json)
-               : pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
+               : pa_set_error(PA_ERR_MEMORY, "out of memory");
   }
   if (st == PA_SUCCESS && args.svg) st = pa_cli_adapt_svg(&args, &before, after);
   st = pa_cli_output_end(MPI_COMM_SELF, tx, st);

@@ -24,142 +24,128 @@
 #include "cli.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
 /* The parsed options of a metric subcommand. */
 typedef struct metric_args {
+  const char *cmd; /* "metric OP", for the messages */
   const char *in, *field, *ls, *files[3], *out;
-  int nfile;
+  const char *pos[6]; /* the positional arguments */
+  int npos, nfile;
   int comp; /* -comp K, 1-based (0: a scalar field) */
   double target, err, p, hmin, hmax, hgrad, hgradreq, eps, band;
-  int hgrad_set, recovery;
+  int recovery;
 } metric_args;
 
-static const char *const metric_usage =
-    "usage: padapt metric NAME[:h] IN OUT.sol\n"
-    "       padapt metric hessian IN -field U.sol [-comp K] (-target N | -err "
-    "E)\n"
-    "                     [-p P] [-hmin H] [-hmax H] [-hgrad G]\n"
-    "                     [-recovery lsq|l2] OUT.sol\n"
-    "       padapt metric levelset IN -ls PHI.sol -eps E -hmin H -hmax H\n"
-    "                     [-band W] [-hgrad G] OUT.sol\n"
-    "       padapt metric intersect IN A.sol B.sol OUT.sol\n"
-    "       padapt metric scale IN M.sol -target N OUT.sol\n"
-    "       padapt metric clamp IN M.sol [-hmin H] [-hmax H] OUT.sol\n"
-    "       padapt metric grade IN M.sol [-hgrad G] [-hgradreq G] OUT.sol\n"
-    "       padapt metric complexity IN M.sol\n"
-    "  hessian   the Lp-optimal metric of field U (component K of a vector\n"
-    "            field), scaled to the complexity N (about N/2 vertices in\n"
-    "            2D) or to the interpolation error E; p = 2 by default, 0\n"
-    "            for L-infinity; hgrad 1.3 by default (-1: none)\n"
-    "  levelset  the metric capturing the zero set of PHI within E:\n"
-    "            size hmin across it, sqrt(8 E / curvature) along it\n"
-    "  complexity  prints the integral of sqrt(det M) and the number of\n"
-    "            unit elements it asks for\n";
+#define M(f) offsetof(metric_args, f)
+#define POSITIVE "a positive number"
+
+static int opt_recovery(const pa_cli *cli, const pa_cli_spec *s,
+                        const char *name, char **val, void *args) {
+  metric_args *a = args;
+  if (!val[0] || (strcmp(val[0], "lsq") && strcmp(val[0], "l2")))
+    return pa_cli_error(cli, "%s: %s needs lsq or l2, got '%s'", s->cmd, name,
+                        val[0] ? val[0] : "nothing");
+  a->recovery = !strcmp(val[0], "l2") ? PA_RECOVER_L2 : PA_RECOVER_LSQ;
+  return 0;
+}
+
+/* The options of the subcommands (the synopsis of -h lists them), then the
+ * help of the subcommands. */
+static const pa_cli_opt metric_opts[] = {
+    {.names = "-field", .kind = PA_CLI_STR, .at = M(field),
+     .want = "a .sol file"},
+    {.names = "-ls", .kind = PA_CLI_STR, .at = M(ls), .want = "a .sol file"},
+    {.names = "-recovery", .kind = PA_CLI_FN, .fn = opt_recovery, .nval = 1},
+    {.names = "-comp", .kind = PA_CLI_INT, .at = M(comp),
+     .want = "a component number >= 1", .lo = 1, .hi = 1e9},
+    {.names = "-target", .kind = PA_CLI_POS, .at = M(target), .want = POSITIVE},
+    {.names = "-err", .kind = PA_CLI_POS, .at = M(err), .want = POSITIVE},
+    {.names = "-p", .kind = PA_CLI_NUM, .at = M(p), .want = "a number",
+     .lo = -INFINITY, .hi = INFINITY},
+    {.names = "-hmin", .kind = PA_CLI_POS, .at = M(hmin), .want = POSITIVE},
+    {.names = "-hmax", .kind = PA_CLI_POS, .at = M(hmax), .want = POSITIVE},
+    {.names = "-hgrad", .kind = PA_CLI_NUM, .at = M(hgrad), .want = "a number",
+     .lo = -INFINITY, .hi = INFINITY},
+    {.names = "-hgradreq", .kind = PA_CLI_NUM, .at = M(hgradreq),
+     .want = "a number", .lo = -INFINITY, .hi = INFINITY},
+    {.names = "-eps", .kind = PA_CLI_POS, .at = M(eps), .want = POSITIVE},
+    {.names = "-band", .kind = PA_CLI_NUM, .at = M(band), .want = "a number",
+     .lo = -INFINITY, .hi = INFINITY},
+    {.kind = PA_CLI_HELP, .label = "hessian",
+     .help = "the Lp-optimal metric of field U (component K of a vector\n"
+             "field), scaled to the complexity N (about N/2 vertices in\n"
+             "2D) or to the interpolation error E; p = 2 by default, 0\n"
+             "for L-infinity; hgrad 1.3 by default (-1: none)"},
+    {.kind = PA_CLI_HELP, .label = "levelset",
+     .help = "the metric capturing the zero set of PHI within E:\n"
+             "size hmin across it, sqrt(8 E / curvature) along it"},
+    {.kind = PA_CLI_HELP, .label = "complexity",
+     .help = "prints the integral of sqrt(det M) and the number of\n"
+             "unit elements it asks for"},
+    {.kind = PA_CLI_END}};
+
+static int metric_positional(const pa_cli *cli, const char *arg,
+                             void *args) {
+  metric_args *a = args;
+  if (a->npos == 6) return pa_cli_error(cli, "%s: too many arguments", a->cmd);
+  a->pos[a->npos++] = arg;
+  return 0;
+}
+
+static const pa_cli_spec metric_spec = {
+    .cmd = "metric",
+    .usage =
+        "usage: padapt metric NAME[:h] IN OUT.sol\n"
+        "       padapt metric hessian IN -field U.sol [-comp K] (-target N | "
+        "-err E)\n"
+        "                     [-p P] [-hmin H] [-hmax H] [-hgrad G]\n"
+        "                     [-recovery lsq|l2] OUT.sol\n"
+        "       padapt metric levelset IN -ls PHI.sol -eps E -hmin H -hmax H\n"
+        "                     [-band W] [-hgrad G] OUT.sol\n"
+        "       padapt metric intersect IN A.sol B.sol OUT.sol\n"
+        "       padapt metric scale IN M.sol -target N OUT.sol\n"
+        "       padapt metric clamp IN M.sol [-hmin H] [-hmax H] OUT.sol\n"
+        "       padapt metric grade IN M.sol [-hgrad G] [-hgradreq G] "
+        "OUT.sol\n"
+        "       padapt metric complexity IN M.sol\n",
+    .width = 10,
+    .opt = metric_opts,
+    .positional = metric_positional};
 
 /* Parse argv[1..] of a subcommand (argv[0] its name) into a; nfiles: how many
- * positional .sol files before OUT. Returns 0, or 1 after an error. */
+ * positional .sol files before OUT. Returns 0, 1 after an error, -1 after
+ * the help. */
 static int parse(const pa_cli *cli, int argc, char **argv, int nfiles,
                  int has_out, metric_args *a) {
   memset(a, 0, sizeof *a);
   a->p = 2;
   a->hgrad = 1.3;
   a->hgradreq = 2.3;
-  int npos = 0;
-  const char *pos[6];
-  for (int i = 1; i < argc; i++) {
-    const char *o = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
-    double x = 0;
-    if (o[0] != '-' || !o[1]) {
-      if (npos == 6)
-        return pa_cli_error(cli, "metric %s: too many arguments", argv[0]);
-      pos[npos++] = o;
-      continue;
-    }
-    if (!strcmp(o, "-field") || !strcmp(o, "-ls")) {
-      if (!val)
-        return pa_cli_error(cli, "metric %s: %s needs a .sol file", argv[0], o);
-      *(!strcmp(o, "-field") ? &a->field : &a->ls) = val;
-      i++;
-      continue;
-    }
-    if (!strcmp(o, "-recovery")) {
-      if (!val || (strcmp(val, "lsq") && strcmp(val, "l2")))
-        return pa_cli_error(cli, "metric %s: -recovery needs lsq or l2",
-                            argv[0]);
-      a->recovery = !strcmp(val, "l2") ? PA_RECOVER_L2 : PA_RECOVER_LSQ;
-      i++;
-      continue;
-    }
-    static const char *const num[] = {"-comp", "-target", "-err",   "-p",
-                                      "-hmin", "-hmax",   "-hgrad", "-hgradreq",
-                                      "-eps",  "-band",   NULL};
-    int k = 0;
-    while (num[k] && strcmp(o, num[k]))
-      k++;
-    if (!num[k])
-      return pa_cli_error(cli, "metric %s: unknown option '%s'\n%s", argv[0], o,
-                          metric_usage);
-    if (!pa_cli_parse_num(val, &x))
-      return pa_cli_error(cli, "metric %s: %s needs a number, got '%s'",
-                          argv[0], o, val ? val : "nothing");
-    i++;
-    int positive = k == 1 || k == 2 || k == 4 || k == 5 || k == 8;
-    if (positive && !(x > 0))
-      return pa_cli_error(cli, "metric %s: %s needs a positive number, got %g",
-                          argv[0], o, x);
-    switch (k) {
-    case 0:
-      if (x < 1 || x != floor(x))
-        return pa_cli_error(cli,
-                            "metric %s: -comp needs a component number "
-                            ">= 1, got %g",
-                            argv[0], x);
-      a->comp = (int)x;
-      break;
-    case 1:
-      a->target = x;
-      break;
-    case 2:
-      a->err = x;
-      break;
-    case 3:
-      a->p = x;
-      break;
-    case 4:
-      a->hmin = x;
-      break;
-    case 5:
-      a->hmax = x;
-      break;
-    case 6:
-      a->hgrad = x;
-      a->hgrad_set = 1;
-      break;
-    case 7:
-      a->hgradreq = x;
-      break;
-    case 8:
-      a->eps = x;
-      break;
-    default:
-      a->band = x;
-      break;
-    }
+  char cmd[64];
+  snprintf(cmd, sizeof cmd, "metric %s", argv[0]);
+  pa_cli_spec spec = metric_spec;
+  spec.cmd = a->cmd = cmd;
+  spec.help_cmd = "metric";
+  int rc = pa_cli_parse(cli, &spec, argc, argv, a);
+  if (rc) return rc;
+  int npos = a->npos;
+  if (npos != 1 + nfiles + has_out) {
+    pa_cli_error(cli, "%s: expected %d file arguments, got %d", cmd,
+                 1 + nfiles + has_out, npos);
+    if (cli->rank == 0) pa_cli_help(&metric_spec, stderr);
+    return 1;
   }
-  if (npos != 1 + nfiles + has_out)
-    return pa_cli_error(cli,
-                        "metric %s: expected %d file arguments, got %d\n%s",
-                        argv[0], 1 + nfiles + has_out, npos, metric_usage);
-  a->in = pos[0];
+  a->in = a->pos[0];
   for (int k = 0; k < nfiles; k++)
-    a->files[k] = pos[1 + k];
+    a->files[k] = a->pos[1 + k];
   a->nfile = nfiles;
-  a->out = has_out ? pos[npos - 1] : NULL;
+  a->out = has_out ? a->pos[npos - 1] : NULL;
   if (a->hmin > 0 && a->hmax > 0 && a->hmin > a->hmax)
-    return pa_cli_error(cli, "metric %s: -hmin (%g) is larger than -hmax (%g)",
-                        argv[0], a->hmin, a->hmax);
+    return pa_cli_error(cli, "%s: -hmin (%g) is larger than -hmax (%g)", cmd,
+                        a->hmin, a->hmax);
   return 0;
 }
 
@@ -179,23 +165,23 @@ static pa_status read_scalar(const char *path, pa_idx nv, int comp,
   if (st == PA_SUCCESS && pa_sol_nvert(sol) != nv) {
     snprintf(msg, sizeof msg, "%s: %d values, but the mesh has %d vertices",
              pa_sol_origin(sol), (int)pa_sol_nvert(sol), (int)nv);
-    st = pa_cli_set_error(PA_ERR_FORMAT, msg);
+    st = pa_set_error(PA_ERR_FORMAT, "%s", msg);
   } else if (st == PA_SUCCESS && (comp > nc || (nc > 1 && comp == 0))) {
     snprintf(msg, sizeof msg,
              "%s: its first field has %d components; choose one with -comp "
              "(1 to %d)",
              path, nc, nc);
-    st = pa_cli_set_error(PA_ERR_ARG, msg);
+    st = pa_set_error(PA_ERR_ARG, "%s", msg);
   }
   if (st == PA_SUCCESS) {
     *vals = malloc(sizeof(double) * (nv ? (size_t)nv : 1));
-    if (!*vals) st = pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
+    if (!*vals) st = pa_set_error(PA_ERR_MEMORY, "out of memory");
     for (pa_idx i = 0; i < nv && *vals && st == PA_SUCCESS; i++) {
       (*vals)[i] = v[(size_t)nc * i + (comp ? comp - 1 : 0)];
       if (!isfinite((*vals)[i])) {
         snprintf(msg, sizeof msg, "%s: the value at vertex %d is not a number",
                  path, (int)i + 1);
-        st = pa_cli_set_error(PA_ERR_FORMAT, msg);
+        st = pa_set_error(PA_ERR_FORMAT, "%s", msg);
       }
     }
     if (st) {
@@ -263,7 +249,7 @@ static pa_status run_ops(const pa_cli *cli, const char *op, pa_mesh *mesh,
       double *tb = malloc(sizeof(double) * nt * (nv ? nv : 1));
       out = malloc(sizeof(double) * nt * (nv ? nv : 1));
       if (!ta || !tb || !out)
-        st = pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
+        st = pa_set_error(PA_ERR_MEMORY, "out of memory");
       for (pa_idx v = 0; st == PA_SUCCESS && v < nv; v++) {
         const double *x = pa_mesh_metric(mesh) + (size_t)n1 * v;
         const double *y = pa_mesh_metric(m2) + (size_t)n2 * v;
@@ -310,7 +296,7 @@ static pa_status run_field(const char *op, pa_mesh *mesh,
   int d = pa_mesh_dim(mesh), nt = d == 2 ? 3 : 6;
   pa_idx nv = pa_mesh_nvert(mesh);
   double *u = NULL, *met = malloc(sizeof(double) * nt * (nv ? nv : 1));
-  if (!met) return pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
+  if (!met) return pa_set_error(PA_ERR_MEMORY, "out of memory");
   if (!strcmp(op, "hessian")) {
     pa_metric_hessian_opts o;
     pa_metric_hessian_opts_default(&o);
@@ -330,7 +316,7 @@ static pa_status run_field(const char *op, pa_mesh *mesh,
     o.hmin = a->hmin;
     o.hmax = a->hmax;
     o.band = a->band;
-    if (a->hgrad_set) o.hgrad = a->hgrad;
+    o.hgrad = a->hgrad;
     st = read_scalar(a->ls, nv, a->comp, &u);
     if (st == PA_SUCCESS) st = pa_metric_from_levelset(mesh, u, &o, met);
   }
@@ -387,7 +373,7 @@ static pa_status run_field_dist(const pa_cli *cli, const char *op,
     o.hmin = a->hmin;
     o.hmax = a->hmax;
     o.band = a->band;
-    if (a->hgrad_set) o.hgrad = a->hgrad;
+    o.hgrad = a->hgrad;
     st = pa_dmesh_metric_from_levelset(dm, field, &o);
   }
   if (st == PA_SUCCESS) st = pa_dmesh_metric_complexity(dm, &c);
@@ -412,10 +398,14 @@ done:
 }
 
 int pa_cli_metric(const pa_cli *cli, int argc, char **argv) {
-  if (argc < 2) return pa_cli_error(cli, "%s", metric_usage);
+  if (argc < 2) {
+    pa_cli_error(cli, "metric: no operation");
+    if (cli->rank == 0) pa_cli_help(&metric_spec, stderr);
+    return 1;
+  }
   const char *op = argv[1];
   if (!strcmp(op, "-h") || !strcmp(op, "--help")) {
-    if (cli->rank == 0) fputs(metric_usage, stdout);
+    if (cli->rank == 0) pa_cli_help(&metric_spec, stdout);
     return 0;
   }
   static const struct {
@@ -443,7 +433,8 @@ int pa_cli_metric(const pa_cli *cli, int argc, char **argv) {
     return pa_cli_fail(cli, st);
   }
   metric_args a;
-  if (parse(cli, argc - 1, argv + 1, ops[k].nfiles, ops[k].out, &a)) return 1;
+  int prc = parse(cli, argc - 1, argv + 1, ops[k].nfiles, ops[k].out, &a);
+  if (prc) return prc > 0 ? 1 : 0;
   if (!strcmp(op, "hessian") && (!a.field || (a.target > 0) == (a.err > 0)))
     return pa_cli_error(cli, "metric hessian: give -field U.sol and either "
                              "-target N or -err E");
@@ -495,7 +486,7 @@ int pa_cli_levelset(const pa_cli *cli, int argc, char **argv) {
   if (st == PA_SUCCESS) {
     pa_idx nv = pa_mesh_nvert(mesh);
     phi = malloc(sizeof(double) * (nv ? nv : 1));
-    if (!phi) st = pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
+    if (!phi) st = pa_set_error(PA_ERR_MEMORY, "out of memory");
     if (st == PA_SUCCESS) st = pa_levelset_analytic(mesh, argv[1], phi);
     if (st == PA_SUCCESS) st = pa_sol_create(pa_mesh_dim(mesh), nv, &sol);
     if (st == PA_SUCCESS) st = pa_sol_add_field(sol, PA_SOL_SCALAR, phi);

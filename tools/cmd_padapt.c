@@ -461,7 +461,7 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   if (st == PA_SUCCESS && json && cli->rank == 0) {
     extra = mem && rss ? json_extra(cli, &rep, &before, mem, rss, r->name) : NULL;
     st = extra ? pa_stats_write_json(after, extra, json)
-               : pa_cli_set_error(PA_ERR_MEMORY, "out of memory");
+               : pa_set_error(PA_ERR_MEMORY, "out of memory");
   }
   if (st == PA_SUCCESS && args->svg && cli->rank == 0)
     st = pa_cli_adapt_svg(args, &before, after);

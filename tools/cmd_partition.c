@@ -16,16 +16,48 @@
  */
 #include "cli.h"
 
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
-static const char *partition_usage =
-    "usage: mpiexec -n P padapt partition IN -out OUT [-overlap K] [-check]\n"
-    "  IN           mesh file, or distributed set OUT.meshb (OUT.<r>.meshb)\n"
-    "  -out OUT     output set: OUT.<rank>.meshb, OUT.manifest, and\n"
-    "               OUT.<rank>.vtu + OUT.pvtu for ParaView\n"
-    "  -overlap K   ghost element layers kept in memory (default 1)\n"
-    "  -check       check the distributed mesh (collective)\n";
+/* The arguments of `padapt partition`. */
+typedef struct partition_args {
+  const char *in, *out;
+  int overlap, check;
+} partition_args;
+
+#define P(f) offsetof(partition_args, f)
+
+static const pa_cli_opt partition_opts[] = {
+    {.kind = PA_CLI_HELP, .label = "IN",
+     .help = "mesh file, or distributed set OUT.meshb (OUT.<r>.meshb)"},
+    {.names = "-out", .kind = PA_CLI_STR, .at = P(out), .want = "a set name",
+     .label = "-out OUT",
+     .help = "output set: OUT.<rank>.meshb, OUT.manifest, and\n"
+             "OUT.<rank>.vtu + OUT.pvtu for ParaView"},
+    {.names = "-overlap", .kind = PA_CLI_INT, .at = P(overlap),
+     .want = "an integer in [0, 8]", .lo = 0, .hi = 8, .label = "-overlap K",
+     .help = "ghost element layers kept in memory (default 1)"},
+    {.names = "-check", .kind = PA_CLI_FLAG, .at = P(check), .label = "-check",
+     .help = "check the distributed mesh (collective)"},
+    {.kind = PA_CLI_END}};
+
+static int partition_positional(const pa_cli *cli, const char *arg,
+                                void *args) {
+  partition_args *a = args;
+  if (a->in)
+    return pa_cli_error(cli, "partition: unexpected argument '%s'", arg);
+  a->in = arg;
+  return 0;
+}
+
+static const pa_cli_spec partition_spec = {
+    .cmd = "partition",
+    .usage = "usage: mpiexec -n P padapt partition IN -out OUT [-overlap K] "
+             "[-check]\n",
+    .width = 13,
+    .opt = partition_opts,
+    .positional = partition_positional};
 
 /* Step report: wall time and peak memory of every rank, printed by rank 0. */
 static void report(const pa_cli *cli, const char *step, double t) {
@@ -44,31 +76,13 @@ static void report(const pa_cli *cli, const char *step, double t) {
 }
 
 int pa_cli_partition(const pa_cli *cli, int argc, char **argv) {
-  const char *in = NULL, *out = NULL;
-  int overlap = 1, check = 0;
-  for (int i = 1; i < argc; i++) {
-    if (!strcmp(argv[i], "-out") && i + 1 < argc) {
-      out = argv[++i];
-    } else if (!strcmp(argv[i], "-overlap") && i + 1 < argc) {
-      char *end;
-      overlap = (int)strtol(argv[++i], &end, 10);
-      if (*end || overlap < 0 || overlap > 8)
-        return pa_cli_error(cli, "partition: -overlap takes 0 to 8, not '%s'",
-                            argv[i]);
-    } else if (!strcmp(argv[i], "-check")) {
-      check = 1;
-    } else if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) {
-      if (cli->rank == 0) fputs(partition_usage, stdout);
-      return 0;
-    } else if (argv[i][0] != '-' && !in) {
-      in = argv[i];
-    } else {
-      if (cli->rank == 0) fputs(partition_usage, stderr);
-      return pa_cli_error(cli, "partition: unexpected argument '%s'", argv[i]);
-    }
-  }
+  partition_args args = {NULL, NULL, 1, 0};
+  int prc = pa_cli_parse(cli, &partition_spec, argc, argv, &args);
+  if (prc) return prc > 0 ? 1 : 0;
+  const char *in = args.in, *out = args.out;
+  int overlap = args.overlap, check = args.check;
   if (!in || !out) {
-    if (cli->rank == 0) fputs(partition_usage, stderr);
+    if (cli->rank == 0) pa_cli_help(&partition_spec, stderr);
     return 1;
   }
   if (pa_cli_check_outputs(cli, "partition", &out, 1)) return 1;

@@ -35,6 +35,7 @@
 #include "svg.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -59,22 +60,6 @@
 #define PLOT_MIN_PICTURE_W 720
 /* Distinct references listed in the legend of -color ref. */
 #define PLOT_MAX_REFS 24
-
-static const char *plot_usage =
-    "usage: padapt plot IN OUT.svg [-met SOL] [-color quality|ref]\n"
-    "                   [-window XMIN YMIN XMAX YMAX] [-cut x=V|y=V|z=V |\n"
-    "                   -plane A B C D] [-width PX]\n"
-    "  -met SOL        quality in this metric (default: Euclidean)\n"
-    "  -color C        fill by element quality (default) or reference\n"
-    "  -window ...     zoom: draw only what lies in this rectangle (in 3D, in\n"
-    "                  the coordinates of the cut plane)\n"
-    "  -cut AXIS=V     3D: cut by the plane x=V, y=V or z=V (default: z at "
-    "the\n"
-    "                  middle of the mesh)\n"
-    "  -plane A B C D  3D: cut by the plane A x + B y + C z = D\n"
-    "  -width PX       size of the plot's longer side (default 800)\n"
-    "Only SVG is written; convert to PNG with e.g. `rsvg-convert -o OUT.png\n"
-    "OUT.svg` or `inkscape OUT.svg -o OUT.png`.\n";
 
 typedef struct plot {
   pa_mesh *mesh;
@@ -254,79 +239,120 @@ typedef struct plot_args {
   double width;
 } plot_args;
 
+#define STR_(x) #x
+#define STR(x) STR_(x)
+#define PL(f) offsetof(plot_args, f)
+
+static int opt_color(const pa_cli *cli, const pa_cli_spec *s,
+                     const char *name, char **val, void *args) {
+  plot_args *a = args;
+  const char *c = val[0] ? val[0] : "nothing";
+  if (!strcmp(c, "ref"))
+    a->by_ref = 1;
+  else if (strcmp(c, "quality"))
+    return pa_cli_error(cli, "%s: %s needs quality or ref, got '%s'", s->cmd,
+                        name, c);
+  return 0;
+}
+
+static int opt_window(const pa_cli *cli, const pa_cli_spec *s,
+                      const char *name, char **val, void *args) {
+  plot_args *a = args;
+  int ok = 1;
+  for (int k = 0; ok && k < 4; k++) ok = pa_cli_parse_num(val[k], &a->win[k]);
+  if (!ok || a->win[0] >= a->win[2] || a->win[1] >= a->win[3])
+    return pa_cli_error(cli, "%s: %s needs XMIN YMIN XMAX YMAX, numbers with "
+                             "XMIN < XMAX and YMIN < YMAX",
+                        s->cmd, name);
+  a->has_window = 1;
+  return 0;
+}
+
+static int opt_cut(const pa_cli *cli, const pa_cli_spec *s, const char *name,
+                   char **val, void *args) {
+  plot_args *a = args;
+  const char *c = val[0] ? val[0] : "";
+  double v;
+  int axis = c[0] == 'x' ? 0 : c[0] == 'y' ? 1 : c[0] == 'z' ? 2 : -1;
+  if (axis < 0 || c[1] != '=' || !pa_cli_parse_num(c + 2, &v))
+    return pa_cli_error(cli, "%s: %s needs x=V, y=V or z=V, got '%s'", s->cmd,
+                        name, val[0] ? c : "nothing");
+  memset(a->plane, 0, sizeof a->plane);
+  a->plane[axis] = 1;
+  a->plane[3] = v;
+  a->has_plane = 1;
+  return 0;
+}
+
+static int opt_plane(const pa_cli *cli, const pa_cli_spec *s,
+                     const char *name, char **val, void *args) {
+  plot_args *a = args;
+  int ok = 1;
+  for (int k = 0; ok && k < 4; k++) ok = pa_cli_parse_num(val[k], &a->plane[k]);
+  if (!ok || (a->plane[0] == 0 && a->plane[1] == 0 && a->plane[2] == 0))
+    return pa_cli_error(cli, "%s: %s needs A B C D (numbers, A B C not all 0) "
+                             "for the plane A x + B y + C z = D",
+                        s->cmd, name);
+  a->has_plane = 1;
+  return 0;
+}
+
+static const pa_cli_opt plot_opts[] = {
+    {.names = "-met -sol", .kind = PA_CLI_STR, .at = PL(met),
+     .want = "a .sol file", .label = "-met SOL",
+     .help = "quality in this metric (default: Euclidean)"},
+    {.names = "-color -colour", .kind = PA_CLI_FN, .fn = opt_color, .nval = 1,
+     .label = "-color C",
+     .help = "fill by element quality (default) or reference"},
+    {.names = "-window", .kind = PA_CLI_FN, .fn = opt_window, .nval = 4,
+     .label = "-window ...",
+     .help = "zoom: draw only what lies in this rectangle (in 3D, in\n"
+             "the coordinates of the cut plane)"},
+    {.names = "-cut", .kind = PA_CLI_FN, .fn = opt_cut, .nval = 1,
+     .label = "-cut AXIS=V",
+     .help = "3D: cut by the plane x=V, y=V or z=V (default: z at the\n"
+             "middle of the mesh)"},
+    {.names = "-plane", .kind = PA_CLI_FN, .fn = opt_plane, .nval = 4,
+     .label = "-plane A B C D",
+     .help = "3D: cut by the plane A x + B y + C z = D"},
+    {.names = "-width", .kind = PA_CLI_NUM, .at = PL(width),
+     .want = "a number of pixels in [" STR(PLOT_MIN_WIDTH) ", " STR(
+         PLOT_MAX_WIDTH) "]",
+     .lo = PLOT_MIN_WIDTH, .hi = PLOT_MAX_WIDTH, .label = "-width PX",
+     .help = "size of the plot's longer side (default " STR(PLOT_WIDTH) ")"},
+    {.kind = PA_CLI_END}};
+
+static int plot_positional(const pa_cli *cli, const char *arg, void *args) {
+  plot_args *a = args;
+  if (a->in && a->out)
+    return pa_cli_error(cli, "plot: too many arguments ('%s')", arg);
+  *(a->in ? &a->out : &a->in) = arg;
+  return 0;
+}
+
+static const pa_cli_spec plot_spec = {
+    .cmd = "plot",
+    .usage = "usage: padapt plot IN OUT.svg [-met SOL] [-color quality|ref]\n"
+             "                   [-window XMIN YMIN XMAX YMAX] [-cut "
+             "x=V|y=V|z=V |\n"
+             "                   -plane A B C D] [-width PX]\n",
+    .width = 16,
+    .opt = plot_opts,
+    .tail = "Only SVG is written; convert to PNG with e.g. `rsvg-convert -o "
+            "OUT.png\n"
+            "OUT.svg` or `inkscape OUT.svg -o OUT.png`.\n",
+    .positional = plot_positional};
+
 static int parse_args(const pa_cli *cli, int argc, char **argv, plot_args *a) {
   memset(a, 0, sizeof *a);
   a->width = PLOT_WIDTH;
-  for (int i = 1; i < argc; i++) {
-    const char *o = argv[i];
-    int left = argc - i - 1;
-    if (!strcmp(o, "-h") || !strcmp(o, "--help")) {
-      if (cli->rank == 0) fputs(plot_usage, stdout);
-      return -1;
-    } else if (!strcmp(o, "-met") || !strcmp(o, "-sol")) {
-      if (!left) return pa_cli_error(cli, "plot: %s needs a .sol file", o);
-      a->met = argv[++i];
-    } else if (!strcmp(o, "-color") || !strcmp(o, "-colour")) {
-      const char *c = left ? argv[++i] : "nothing";
-      if (!strcmp(c, "ref"))
-        a->by_ref = 1;
-      else if (strcmp(c, "quality"))
-        return pa_cli_error(cli, "plot: -color needs quality or ref, got '%s'",
-                            c);
-    } else if (!strcmp(o, "-window")) {
-      int ok = left >= 4;
-      for (int k = 0; ok && k < 4; k++)
-        ok = pa_cli_parse_num(argv[i + 1 + k], &a->win[k]);
-      if (!ok || a->win[0] >= a->win[2] || a->win[1] >= a->win[3])
-        return pa_cli_error(cli, "plot: -window needs XMIN YMIN XMAX YMAX, "
-                                 "numbers with XMIN < XMAX and YMIN < YMAX");
-      a->has_window = 1;
-      i += 4;
-    } else if (!strcmp(o, "-cut")) {
-      const char *c = left ? argv[++i] : "";
-      double v;
-      int axis = c[0] == 'x' ? 0 : c[0] == 'y' ? 1 : c[0] == 'z' ? 2 : -1;
-      if (axis < 0 || c[1] != '=' || !pa_cli_parse_num(c + 2, &v))
-        return pa_cli_error(cli, "plot: -cut needs x=V, y=V or z=V, got '%s'",
-                            left ? c : "nothing");
-      memset(a->plane, 0, sizeof a->plane);
-      a->plane[axis] = 1;
-      a->plane[3] = v;
-      a->has_plane = 1;
-    } else if (!strcmp(o, "-plane")) {
-      int ok = left >= 4;
-      for (int k = 0; ok && k < 4; k++)
-        ok = pa_cli_parse_num(argv[i + 1 + k], &a->plane[k]);
-      if (!ok || (a->plane[0] == 0 && a->plane[1] == 0 && a->plane[2] == 0))
-        return pa_cli_error(cli,
-                            "plot: -plane needs A B C D (numbers, A B C "
-                            "not all 0) for the plane A x + B y + C z = D");
-      a->has_plane = 1;
-      i += 4;
-    } else if (!strcmp(o, "-width")) {
-      double w;
-      if (!left || !pa_cli_parse_num(argv[i + 1], &w) || w < PLOT_MIN_WIDTH ||
-          w > PLOT_MAX_WIDTH)
-        return pa_cli_error(cli,
-                            "plot: -width needs a number of pixels in "
-                            "[%d, %d], got '%s'",
-                            PLOT_MIN_WIDTH, PLOT_MAX_WIDTH,
-                            left ? argv[i + 1] : "nothing");
-      a->width = w;
-      i++;
-    } else if (o[0] == '-' && o[1]) {
-      return pa_cli_error(cli, "plot: unknown option '%s' (see padapt plot -h)",
-                          o);
-    } else if (!a->in) {
-      a->in = o;
-    } else if (!a->out) {
-      a->out = o;
-    } else {
-      return pa_cli_error(cli, "plot: too many arguments ('%s')", o);
-    }
+  int rc = pa_cli_parse(cli, &plot_spec, argc, argv, a);
+  if (rc) return rc;
+  if (!a->in || !a->out) {
+    pa_cli_error(cli, "plot: needs IN and OUT.svg");
+    if (cli->rank == 0) pa_cli_help(&plot_spec, stderr);
+    return 1;
   }
-  if (!a->in || !a->out)
-    return pa_cli_error(cli, "plot: needs IN and OUT.svg\n%s", plot_usage);
   if (!pa_cli_is_svg(a->out))
     return pa_cli_error(cli,
                         "plot: %s: only SVG output is written (.svg); "
@@ -375,7 +401,7 @@ static pa_status draw(plot *p, const plot_args *a, plot_counts *c, double pw,
   if (!cell || !bycol) {
     free(cell);
     free(bycol);
-    return pa_cli_set_error(PA_ERR_MEMORY, "plot: out of memory");
+    return pa_set_error(PA_ERR_MEMORY, "plot: out of memory");
   }
   for (size_t k = 0; k < (size_t)gw * (size_t)gh; k++)
     cell[k] = NAN;

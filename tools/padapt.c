@@ -1,7 +1,9 @@
 /*
  * padapt.c -- entry point of the padapt command-line tool: MPI start-up,
  * global options, command dispatch, and the basic sequential commands
- * (generate, metric, stats, convert). Heavier commands live in cmd_*.c.
+ * (generate, stats, convert). Heavier commands live in cmd_*.c, the helpers
+ * they share in cli_util.c; each command reads its arguments by its option
+ * table (cli_opts.c), which its -h prints.
  *
  * Every command returns an exit status; main() makes the ranks agree on it
  * (the maximum) so that `mpiexec` reports a failure on any rank. Commands that
@@ -14,17 +16,13 @@
  * starts its threads, so that only the main thread ever runs the handler.
  */
 #include "cli.h"
-
-#include "core/core.h"
 #include "svg.h"
 
 #include <math.h>
 #include <signal.h>
-#include <stdarg.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
-#include <time.h>
 
 static const char *usage_text =
     "usage: padapt [-v N] COMMAND [ARGS]\n"
@@ -60,345 +58,32 @@ static const char *usage_text =
     "A mesh that lists no boundary entity gets them all (reference 0) on\n"
     "reading; one that lists some must list them all.\n";
 
-int pa_cli_error(const pa_cli *cli, const char *fmt, ...) {
-  va_list ap;
-  va_start(ap, fmt);
-  fprintf(stderr, "padapt: ");
-  if (cli && cli->size > 1) fprintf(stderr, "[rank %d] ", cli->rank);
-  vfprintf(stderr, fmt, ap);
-  fputc('\n', stderr);
-  va_end(ap);
-  return 1;
-}
-
-pa_status pa_cli_set_error(pa_status st, const char *msg) {
-  return pa__error(st, __FILE__, __LINE__, "%s", msg);
-}
-
-int pa_cli_fail(const pa_cli *cli, pa_status st) {
-  if (st == PA_SUCCESS) return 0;
-  const char *msg = pa_last_error();
-  return pa_cli_error(cli, "%s", msg[0] ? msg : pa_status_string(st));
-}
-
-pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path,
-                           pa_mesh **mesh) {
-  pa_idx nadded = 0;
-  pa_status st;
-  char msg[1100];
-  *mesh = NULL;
-  /* A distributed set is read by every rank and gathered on rank 0; a
-   * sequential file is read by rank 0 alone. */
-  int is_set = cli->rank == 0 ? pa_dmesh_is_set(path) : 0;
-  MPI_Bcast(&is_set, 1, MPI_INT, 0, cli->comm);
-  if (is_set) {
-    st = pa_dmesh_read_gathered(cli->comm, 0, path, mesh);
-    if (cli->rank != 0 || st != PA_SUCCESS) return st;
-  } else {
-    if (cli->rank != 0) return PA_SUCCESS;
-    st = pa_mesh_read(path, mesh);
-    if (st != PA_SUCCESS) return st;
-  }
-  /* A file that lists no boundary at all gets one; a file that lists some
-   * must list all (a missing one reveals a non-conforming mesh). */
-  if (pa_mesh_nbdry(*mesh) == 0) st = pa_mesh_build_boundary(*mesh, 0, &nadded);
-  if (st == PA_SUCCESS && nadded > 0 && cli->verbosity >= 1)
-    fprintf(stderr, "padapt: %s: added %d missing boundary entities (ref 0)\n",
-            path, (int)nadded);
-  if (st == PA_SUCCESS) st = pa_mesh_check(*mesh);
-  if (st != PA_SUCCESS) {
-    /* The topology and check messages name the entity, not the file. */
-    snprintf(msg, sizeof msg, "%s: %s", path, pa_last_error());
-    pa_mesh_destroy(*mesh);
-    *mesh = NULL;
-    st = pa_cli_set_error(st, msg);
-  }
-  return st;
-}
-
-void pa_cli_set_verbosity(int level) {
-  pa_set_verbosity(level);
-  /* -v -1: errors and warnings only (stderr); the reports go nowhere */
-  if (level < 0 && !freopen("/dev/null", "w", stdout)) fclose(stdout);
-}
-
-int pa_cli_parse_num(const char *s, double *v) {
-  char *end;
-  if (!s || !*s) return 0;
-  *v = strtod(s, &end);
-  return *end == '\0' && isfinite(*v);
-}
-
-int pa_cli_is_svg(const char *path) {
-  size_t n = strlen(path);
-  return n > 4 && !strcasecmp(path + n - 4, ".svg");
-}
-
-char *pa_cli_replace_ext(const char *path, const char *ext) {
-  const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
-  size_t n = (dot && (!slash || dot > slash)) ? (size_t)(dot - path)
-                                               : strlen(path);
-  char *s = malloc(n + strlen(ext) + 1);
-  if (!s) return NULL;
-  memcpy(s, path, n);
-  strcpy(s + n, ext);
-  return s;
-}
-
-int pa_cli_remesh_option(const pa_cli *cli, int argc, char **argv, int *i,
-                         pa_remesh_opts *opts) {
-  static const struct {
-    const char *name;
-    int flag; /* 1: a switch, 0: takes a number */
-  } known[] = {{"-hsiz", 0},   {"-hmin", 0},    {"-hmax", 0},
-               {"-hgrad", 0},  {"-hgradreq", 0}, {"-hausd", 0},
-               {"-ar", 0},
-               {"-v", 0},      {"-nr", 1},      {"-noinsert", 1},
-               {"-noswap", 1}, {"-nomove", 1},  {"-nosurf", 1}};
-  const char *a = argv[*i];
-  size_t k = 0, nk = sizeof known / sizeof *known;
-  while (k < nk && strcmp(a, known[k].name)) k++;
-  if (k == nk) return 0;
-  if (known[k].flag) {
-    if (!strcmp(a, "-nr")) opts->no_angle = 1;
-    if (!strcmp(a, "-noinsert")) opts->no_insert = 1;
-    if (!strcmp(a, "-noswap")) opts->no_swap = 1;
-    if (!strcmp(a, "-nomove")) opts->no_move = 1;
-    if (!strcmp(a, "-nosurf")) opts->no_surf = 1;
-    return 1;
-  }
-  double x;
-  const char *val = *i + 1 < argc ? argv[*i + 1] : NULL;
-  int ok = pa_cli_parse_num(val, &x);
-  const char *want = "a positive number";
-  if (!strcmp(a, "-hgrad") || !strcmp(a, "-hgradreq")) {
-    want = "a number (> 1; -1 or any value <= 1 disables)";
-  } else if (!strcmp(a, "-ar")) {
-    want = "an angle in [0, 180] degrees";
-    ok = ok && x >= 0 && x <= 180;
-  } else if (!strcmp(a, "-v")) {
-    want = "a verbosity level in [-1, 10]";
-    ok = ok && x >= -1 && x <= 10 && x == floor(x);
-  } else {
-    ok = ok && x > 0;
-  }
-  if (!ok) {
-    pa_cli_error(cli, "adapt: %s needs %s, got '%s'", a, want,
-                 val ? val : "nothing");
-    return -1;
-  }
-  (*i)++;
-  if (!strcmp(a, "-hsiz")) opts->hsiz = x;
-  if (!strcmp(a, "-hmin")) opts->hmin = x;
-  if (!strcmp(a, "-hmax")) opts->hmax = x;
-  if (!strcmp(a, "-hgrad")) opts->hgrad = x;
-  if (!strcmp(a, "-hgradreq")) opts->hgradreq = x;
-  if (!strcmp(a, "-hausd")) opts->hausd = x;
-  if (!strcmp(a, "-ar")) opts->angle = x;
-  if (!strcmp(a, "-v")) {
-    opts->verbosity = (int)x;
-    pa_cli_set_verbosity((int)x);
-  }
-  return 1;
-}
-
-void pa_cli_sb_printf(pa_cli_sbuf *b, const char *fmt, ...) {
-  if (b->fail) return;
-  for (;;) {
-    va_list ap;
-    va_start(ap, fmt);
-    int k = vsnprintf(b->p ? b->p + b->n : NULL, b->p ? b->cap - b->n : 0, fmt, ap);
-    va_end(ap);
-    if (k < 0) {
-      b->fail = 1;
-      return;
-    }
-    if (b->p && b->n + (size_t)k < b->cap) {
-      b->n += (size_t)k;
-      return;
-    }
-    size_t cap = (b->cap + (size_t)k + 1) * 2;
-    char *q = realloc(b->p, cap);
-    if (!q) {
-      b->fail = 1;
-      return;
-    }
-    b->p = q;
-    b->cap = cap;
-  }
-}
-
-void pa_cli_print_fidelity(const pa_fidelity *f, FILE *out) {
-  const pa_stats *u = &f->used;
-  char line[512];
-  if (!f->measured) {
-    fprintf(out, "    outcome not measured (out of memory after the remesh)\n");
-    return;
-  }
-  if (f->changed) {
-    fprintf(out, " -- IN THE METRIC USED (the given one after%s%s%s)\n",
-            f->changed & PA_CHANGED_HMIN ? " -hmin" : "",
-            f->changed & PA_CHANGED_HMAX ? " -hmax" : "",
-            f->changed & PA_CHANGED_GRADATION ? " -hgrad" : "");
-    double lo, hi;
-    pa_stats_edge_bin(PA_STATS_EDGE_NBIN - 1, &lo, &hi);
-    fprintf(out, "    edges in [%.4f, %.4f)  %6.2f %%   length [%.4g, %.4g]\n",
-            lo, hi, u->nedge ? 100.0 * (double)u->edge_hist[PA_STATS_EDGE_NBIN - 1] /
-                           (double)u->nedge
-                     : 0.0,
-            u->edge_min, u->edge_max);
-    fprintf(out, "    quality worst %.4g, average %.4f\n", u->qual_min,
-            u->nelem ? u->qual_sum / (double)u->nelem : 0.0);
-  }
-  pa_fidelity_describe(f, line, sizeof line);
-  fprintf(out, "    outcome %s: %s\n",
-          f->target_met ? "success" : "target missed", line);
-}
-
-char *pa_cli_fidelity_json(const pa_fidelity *f) {
-  pa_cli_sbuf b = {NULL, 0, 0, 0};
-  const pa_stats *u = &f->used;
-  int met = pa_stats_target_met(u);
-  if (!f->measured) {
-    pa_cli_sb_printf(&b, "\"outcome\": \"not measured\"");
-    return b.fail ? (free(b.p), NULL) : b.p;
-  }
-  pa_cli_sb_printf(&b, "\"outcome\": \"%s\", \"target_met\": %s, \"limited_by\": [",
-                   f->target_met ? "success" : "target missed",
-                   f->target_met ? "true" : "false");
-  if (!f->target_met) {
-    int n = 0;
-    if (!met) pa_cli_sb_printf(&b, "\"remesher\""), n++;
-    if (met && (f->changed & PA_CHANGED_HMIN))
-      pa_cli_sb_printf(&b, "%s\"hmin\"", n++ ? ", " : "");
-    if (met && (f->changed & PA_CHANGED_HMAX))
-      pa_cli_sb_printf(&b, "%s\"hmax\"", n++ ? ", " : "");
-    if (met && (f->changed & PA_CHANGED_GRADATION))
-      pa_cli_sb_printf(&b, "%s\"gradation\"", n++ ? ", " : "");
-  }
-  pa_cli_sb_printf(
-      &b,
-      "], \"metric_used\": {\"changed\": %s, \"edge_in_range\": %.6f, "
-      "\"edge_min\": %.6g, \"edge_max\": %.6g, \"quality_worst\": %.6g, "
-      "\"quality_mean\": %.6f, \"target_met\": %s}",
-      f->changed ? "true" : "false",
-      u->nedge ? (double)u->edge_hist[PA_STATS_EDGE_NBIN - 1] / (double)u->nedge
-               : 0.0,
-      u->edge_min, u->edge_max, u->qual_min,
-      u->nelem ? u->qual_sum / (double)u->nelem : 0.0, met ? "true" : "false");
-  if (b.fail) {
-    free(b.p);
-    return NULL;
-  }
-  return b.p;
-}
-
-pa_status pa_cli_attach_fields(pa_mesh *mesh, const char *path) {
-  pa_sol *sol = NULL;
-  char msg[600];
-  pa_status st = pa_sol_read(path, &sol);
-  if (st) return st;
-  if (pa_sol_nvert(sol) != pa_mesh_nvert(mesh)) {
-    snprintf(msg, sizeof msg,
-             "%s: %d values per field, but the mesh has %d vertices",
-             pa_sol_origin(sol), (int)pa_sol_nvert(sol),
-             (int)pa_mesh_nvert(mesh));
-    pa_sol_destroy(sol);
-    return pa_cli_set_error(PA_ERR_FORMAT, msg);
-  }
-  for (int k = 0; k < pa_sol_nfield(sol) && st == PA_SUCCESS; k++) {
-    pa_sol_kind kind;
-    int nc;
-    double *val;
-    char name[32];
-    st = pa_sol_field(sol, k, &kind, &nc, &val);
-    snprintf(name, sizeof name, "field%d", k + 1);
-    if (st == PA_SUCCESS) st = pa_mesh_add_field(mesh, name, nc, val);
-  }
-  pa_sol_destroy(sol);
-  return st;
-}
-
-pa_status pa_cli_write_fields(pa_mesh *mesh, const char *path) {
-  pa_sol *sol = NULL;
-  int d = pa_mesh_dim(mesh);
-  pa_status st = pa_sol_create(d, pa_mesh_nvert(mesh), &sol);
-  for (int k = 0; k < pa_mesh_nfield(mesh) && st == PA_SUCCESS; k++) {
-    int nc;
-    double *val;
-    st = pa_mesh_field(mesh, k, NULL, &nc, &val);
-    pa_sol_kind kind = nc == 1   ? PA_SOL_SCALAR
-                       : nc == d ? PA_SOL_VECTOR
-                                 : PA_SOL_TENSOR;
-    if (st == PA_SUCCESS) st = pa_sol_add_field(sol, kind, val);
-  }
-  if (st == PA_SUCCESS) st = pa_sol_write(sol, path);
-  pa_sol_destroy(sol);
-  return st;
-}
-
-int pa_cli_check_outputs(const pa_cli *cli, const char *cmd,
-                         const char *const *paths, int n) {
-  int bad = 0;
-  if (cli->rank == 0) {
-    for (int i = 0; i < n && !bad; i++) {
-      if (!paths[i]) continue;
-      for (int j = 0; j < i && !bad; j++)
-        if (paths[j] && !strcmp(paths[i], paths[j]))
-          bad = pa_cli_error(cli, "%s: %s is given for two outputs", cmd,
-                             paths[i]);
-      pa_status st = bad ? PA_SUCCESS : pa_output_check(paths[i]);
-      if (st) bad = pa_cli_fail(cli, st);
-    }
-  }
-  MPI_Bcast(&bad, 1, MPI_INT, 0, cli->comm);
-  return bad;
-}
-
-/* How long the test hook of pa_cli_output_end holds the outputs: long
- * enough for a test under the sanitizers to send its signal, short enough
- * that a forgotten hook only delays a run. */
-#define PA_CLI_HOLD_S 30
-
-pa_status pa_cli_output_end(MPI_Comm comm, pa_output *tx, pa_status st) {
-  const char *hold = getenv("PADAPT_TEST_HOLD_OUTPUT");
-  if (hold && hold[0] && st == PA_SUCCESS) {
-    int rank = 0;
-    MPI_Comm_rank(comm, &rank);
-    if (rank == 0) {
-      FILE *fp = fopen(hold, "w");
-      if (fp) fclose(fp);
-    }
-    struct timespec tenth = {0, 100000000};
-    for (int i = 0; i < 10 * PA_CLI_HOLD_S; i++) nanosleep(&tenth, NULL);
-  }
-  return pa_output_end(comm, tx, st);
-}
-
 /* Report a failed read on rank 0 (the other ranks return quietly). */
 static int read_failed(const pa_cli *cli, pa_status st) {
   return cli->rank == 0 ? pa_cli_fail(cli, st) : 1;
 }
 
-pa_status pa_cli_attach_metric(pa_mesh *mesh, const char *path) {
-  pa_sol *sol = NULL;
-  pa_status st = pa_sol_read(path, &sol);
-  if (st == PA_SUCCESS) st = pa_mesh_metric_from_sol(mesh, sol, 0);
-  pa_sol_destroy(sol);
-  return st;
-}
+/* `padapt generate` takes no option: its table is its arguments' help. */
+static const pa_cli_opt generate_opts[] = {
+    {.kind = PA_CLI_HELP, .label = "box2d N",
+     .help = "unit square, n x n x 2 triangles; boundary refs x=0:1\n"
+             "x=1:2 y=0:3 y=1:4, element ref 1"},
+    {.kind = PA_CLI_HELP, .label = "box3d N",
+     .help = "unit cube, n^3 x 6 tetrahedra; boundary refs as box2d,\n"
+             "z=0:5 z=1:6"},
+    {.kind = PA_CLI_HELP, .label = "N",
+     .help = "1 to 2000; OUT: .mesh .meshb .msh .vtu"},
+    {.kind = PA_CLI_END}};
 
-static const char *generate_usage =
-    "usage: padapt generate box2d|box3d N OUT\n"
-    "  box2d N      unit square, n x n x 2 triangles; boundary refs x=0:1\n"
-    "               x=1:2 y=0:3 y=1:4, element ref 1\n"
-    "  box3d N      unit cube, n^3 x 6 tetrahedra; boundary refs as box2d,\n"
-    "               z=0:5 z=1:6\n"
-    "  N            1 to 2000; OUT: .mesh .meshb .msh .vtu\n";
+static const pa_cli_spec generate_spec = {
+    .cmd = "generate",
+    .usage = "usage: padapt generate box2d|box3d N OUT\n",
+    .width = 13,
+    .opt = generate_opts};
 
 int pa_cli_generate(const pa_cli *cli, int argc, char **argv) {
   if (argc == 2 && (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help"))) {
-    if (cli->rank == 0) fputs(generate_usage, stdout);
+    if (cli->rank == 0) pa_cli_help(&generate_spec, stdout);
     return 0;
   }
   if (argc != 4)
@@ -424,43 +109,56 @@ int pa_cli_generate(const pa_cli *cli, int argc, char **argv) {
   return pa_cli_fail(cli, st);
 }
 
-static const char *stats_usage =
-    "usage: padapt stats IN [-met SOL] [-json OUT.json] [-svg OUT.svg]\n"
-    "  IN             mesh file, or distributed set OUT.meshb (OUT.<r>.meshb)\n"
-    "  -met/-sol SOL  measure edge lengths and qualities in this metric\n"
-    "                 (default: the unit metric)\n"
-    "  -json OUT.json write the statistics as JSON\n"
-    "  -svg OUT.svg   draw the edge-length and quality histograms\n"
-    "Exit status: 0 valid mesh; 1 invalid mesh (the message names the\n"
-    "entity) or error.\n";
+/* The arguments of `padapt stats`. */
+typedef struct stats_args {
+  const char *in, *met, *json, *svg;
+} stats_args;
+
+#define S(f) offsetof(stats_args, f)
+
+static const pa_cli_opt stats_opts[] = {
+    {.kind = PA_CLI_HELP, .label = "IN",
+     .help = "mesh file, or distributed set OUT.meshb (OUT.<r>.meshb)"},
+    {.names = "-met -sol", .kind = PA_CLI_STR, .at = S(met),
+     .want = "a .sol file", .label = "-met/-sol SOL",
+     .help = "measure edge lengths and qualities in this metric\n"
+             "(default: the unit metric)"},
+    {.names = "-json", .kind = PA_CLI_STR, .at = S(json), .want = "a file",
+     .label = "-json OUT.json", .help = "write the statistics as JSON"},
+    {.names = "-svg", .kind = PA_CLI_STR, .at = S(svg), .want = "an .svg file",
+     .label = "-svg OUT.svg",
+     .help = "draw the edge-length and quality histograms"},
+    {.kind = PA_CLI_END}};
+
+static int stats_positional(const pa_cli *cli, const char *arg, void *args) {
+  stats_args *a = args;
+  if (a->in)
+    return pa_cli_error(cli, "stats: more than one input ('%s')", arg);
+  a->in = arg;
+  return 0;
+}
+
+static const pa_cli_spec stats_spec = {
+    .cmd = "stats",
+    .usage = "usage: padapt stats IN [-met SOL] [-json OUT.json] [-svg "
+             "OUT.svg]\n",
+    .width = 15,
+    .opt = stats_opts,
+    .tail = "Exit status: 0 valid mesh; 1 invalid mesh (the message names "
+            "the\n"
+            "entity) or error.\n",
+    .positional = stats_positional};
 
 int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
-  const char *in = NULL, *met = NULL, *json = NULL, *svg = NULL;
-  for (int i = 1; i < argc; i++) {
-    if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) {
-      if (cli->rank == 0) fputs(stats_usage, stdout);
-      return 0;
-    } else if (!strcmp(argv[i], "-met") || !strcmp(argv[i], "-sol")) {
-      if (++i >= argc) return pa_cli_error(cli, "stats: -met needs a file");
-      met = argv[i];
-    } else if (!strcmp(argv[i], "-json")) {
-      if (++i >= argc) return pa_cli_error(cli, "stats: -json needs a file");
-      json = argv[i];
-    } else if (!strcmp(argv[i], "-svg")) {
-      if (++i >= argc) return pa_cli_error(cli, "stats: -svg needs a file");
-      svg = argv[i];
-      if (!pa_cli_is_svg(svg))
-        return pa_cli_error(cli, "stats: %s: only SVG pictures are written "
-                                 "(.svg); convert with e.g. rsvg-convert",
-                            svg);
-    } else if (argv[i][0] == '-' && argv[i][1]) {
-      return pa_cli_error(cli, "stats: unknown option '%s'", argv[i]);
-    } else if (!in) {
-      in = argv[i];
-    } else {
-      return pa_cli_error(cli, "stats: more than one input ('%s')", argv[i]);
-    }
-  }
+  stats_args args = {NULL, NULL, NULL, NULL};
+  int prc = pa_cli_parse(cli, &stats_spec, argc, argv, &args);
+  if (prc) return prc > 0 ? 1 : 0;
+  const char *in = args.in, *met = args.met, *json = args.json;
+  const char *svg = args.svg;
+  if (svg && !pa_cli_is_svg(svg))
+    return pa_cli_error(cli, "stats: %s: only SVG pictures are written "
+                             "(.svg); convert with e.g. rsvg-convert",
+                        svg);
   if (!in)
     return pa_cli_error(cli, "usage: padapt stats IN [-met SOL] "
                              "[-json OUT.json] [-svg OUT.svg]");
@@ -510,48 +208,61 @@ int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
   return valid ? 0 : 1;
 }
 
-static const char *convert_usage =
-    "usage: padapt convert IN OUT [-met SOL] [-binary] [-meshb-version V]\n"
-    "                     [-diag]\n"
-    "  IN                 .mesh .meshb .msh, or distributed set OUT.meshb\n"
-    "  OUT                format by extension: .mesh .meshb .msh .vtu\n"
-    "  -met/-sol SOL      check this metric and write it as the point data\n"
-    "                     \"metric\" and \"size\" of a .vtu (the other\n"
-    "                     formats keep no metric)\n"
-    "  -binary            binary Gmsh .msh (default ASCII)\n"
-    "  -meshb-version V   .meshb file version 1-4 (default 2; 3 when the\n"
-    "                     file needs 64-bit positions)\n"
-    "  -diag              .vtu: the cell data edge_min and edge_max, each\n"
-    "                     element's extreme edge lengths in the metric\n";
+/* The arguments of `padapt convert`. */
+typedef struct convert_args {
+  const char *in, *out, *met;
+  pa_write_opts opts;
+} convert_args;
+
+#define C(f) offsetof(convert_args, f)
+
+static const pa_cli_opt convert_opts[] = {
+    {.kind = PA_CLI_HELP, .label = "IN",
+     .help = ".mesh .meshb .msh, or distributed set OUT.meshb"},
+    {.kind = PA_CLI_HELP, .label = "OUT",
+     .help = "format by extension: .mesh .meshb .msh .vtu"},
+    {.names = "-met -sol", .kind = PA_CLI_STR, .at = C(met),
+     .want = "a .sol file", .label = "-met/-sol SOL",
+     .help = "check this metric and write it as the point data\n"
+             "\"metric\" and \"size\" of a .vtu (the other\n"
+             "formats keep no metric)"},
+    {.names = "-binary", .kind = PA_CLI_FLAG, .at = C(opts.binary),
+     .label = "-binary", .help = "binary Gmsh .msh (default ASCII)"},
+    {.names = "-meshb-version", .kind = PA_CLI_INT, .at = C(opts.version),
+     .want = "1, 2, 3 or 4", .lo = 1, .hi = 4, .label = "-meshb-version V",
+     .help = ".meshb file version 1-4 (default 2; 3 when the\n"
+             "file needs 64-bit positions)"},
+    {.names = "-diag", .kind = PA_CLI_FLAG, .at = C(opts.diagnostics),
+     .label = "-diag",
+     .help = ".vtu: the cell data edge_min and edge_max, each\n"
+             "element's extreme edge lengths in the metric"},
+    {.kind = PA_CLI_END}};
+
+static int convert_positional(const pa_cli *cli, const char *arg,
+                              void *args) {
+  convert_args *a = args;
+  if (a->in && a->out)
+    return pa_cli_error(cli, "convert: too many arguments ('%s')", arg);
+  *(a->in ? &a->out : &a->in) = arg;
+  return 0;
+}
+
+static const pa_cli_spec convert_spec = {
+    .cmd = "convert",
+    .usage = "usage: padapt convert IN OUT [-met SOL] [-binary] "
+             "[-meshb-version V]\n"
+             "                     [-diag]\n",
+    .width = 19,
+    .opt = convert_opts,
+    .positional = convert_positional};
 
 int pa_cli_convert(const pa_cli *cli, int argc, char **argv) {
-  const char *in = NULL, *out = NULL, *met = NULL;
-  pa_write_opts opts = {0, 0, 0};
-  for (int i = 1; i < argc; i++) {
-    if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) {
-      if (cli->rank == 0) fputs(convert_usage, stdout);
-      return 0;
-    } else if (!strcmp(argv[i], "-met") || !strcmp(argv[i], "-sol")) {
-      if (++i >= argc) return pa_cli_error(cli, "convert: -met needs a file");
-      met = argv[i];
-    } else if (!strcmp(argv[i], "-binary")) {
-      opts.binary = 1;
-    } else if (!strcmp(argv[i], "-diag")) {
-      opts.diagnostics = 1;
-    } else if (!strcmp(argv[i], "-meshb-version")) {
-      if (++i >= argc || atoi(argv[i]) < 1 || atoi(argv[i]) > 4)
-        return pa_cli_error(cli, "convert: -meshb-version needs 1, 2, 3 or 4");
-      opts.version = atoi(argv[i]);
-    } else if (argv[i][0] == '-' && argv[i][1]) {
-      return pa_cli_error(cli, "convert: unknown option '%s'", argv[i]);
-    } else if (!in) {
-      in = argv[i];
-    } else if (!out) {
-      out = argv[i];
-    } else {
-      return pa_cli_error(cli, "convert: too many arguments ('%s')", argv[i]);
-    }
-  }
+  convert_args args;
+  memset(&args, 0, sizeof args);
+  int prc = pa_cli_parse(cli, &convert_spec, argc, argv, &args);
+  if (prc) return prc > 0 ? 1 : 0;
+  const char *in = args.in, *out = args.out, *met = args.met;
+  pa_write_opts opts = args.opts;
   if (!in || !out)
     return pa_cli_error(cli, "usage: padapt convert IN OUT [-met SOL] "
                              "[-binary] [-meshb-version V] [-diag]");

@@ -4,8 +4,8 @@
  *
  * Every coordinate is printed with two decimals (a hundredth of a pixel),
  * through one function, so the output is deterministic. Write errors are
- * caught at the end: pa__out_commit checks the stream's error flag, flushes
- * and syncs.
+ * caught at the end: pa_output_file_commit checks the stream's error flag,
+ * flushes and syncs.
  *
  * The histograms take their counts from pa_stats (edge_hist, qual_hist) and
  * their bin bounds from pa_stats_edge_bin / pa_stats_qual_bin: the bins are
@@ -25,12 +25,34 @@ static void num(FILE *fp, double x) {
   fprintf(fp, "%.2f", x);
 }
 
+/* s with XML's special characters escaped and control characters (not
+ * allowed in XML 1.0) as '?'. */
+static void xml_escape(FILE *fp, const char *s) {
+  for (; *s; s++) {
+    switch (*s) {
+    case '&':
+      fputs("&amp;", fp);
+      break;
+    case '<':
+      fputs("&lt;", fp);
+      break;
+    case '>':
+      fputs("&gt;", fp);
+      break;
+    case '"':
+      fputs("&quot;", fp);
+      break;
+    default:
+      fputc((unsigned char)*s < 0x20 ? '?' : *s, fp);
+    }
+  }
+}
+
 pa_status pa_cli_svg_begin(pa_cli_svg *svg, const char *path, double width,
                            double height) {
   memset(svg, 0, sizeof *svg);
-  pa_status st = pa__out_open(&svg->out, path);
+  pa_status st = pa_output_file_open(path, &svg->out, &svg->fp);
   if (st) return st;
-  svg->fp = svg->out.fp;
   fprintf(svg->fp, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
                    "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"");
   num(svg->fp, width);
@@ -49,12 +71,15 @@ pa_status pa_cli_svg_end(pa_cli_svg *svg) {
   if (!svg->fp) return PA_SUCCESS;
   fprintf(svg->fp, "</svg>\n");
   svg->fp = NULL;
-  return pa__out_commit(&svg->out);
+  pa_output_file *out = svg->out;
+  svg->out = NULL;
+  return pa_output_file_commit(out);
 }
 
 void pa_cli_svg_abort(pa_cli_svg *svg) {
   svg->fp = NULL;
-  pa__out_abort(&svg->out);
+  pa_output_file_abort(svg->out);
+  svg->out = NULL;
 }
 
 void pa_cli_svg_rect(pa_cli_svg *svg, double x, double y, double w, double h,
@@ -123,7 +148,7 @@ void pa_cli_svg_text(pa_cli_svg *svg, double x, double y, const char *anchor,
   fprintf(fp, "\" font-size=\"");
   num(fp, size);
   fprintf(fp, "\" text-anchor=\"%s\">", anchor);
-  pa__xml_escape(fp, buf);
+  xml_escape(fp, buf);
   fprintf(fp, "</text>\n");
 }
 
@@ -266,7 +291,7 @@ pa_status pa_cli_svg_histograms(const char *path, const char *title,
   int band0 = -1, band1 = -1;
   pa_status st = PA_SUCCESS;
   if (nser < 1 || nser > 2)
-    return pa_cli_set_error(PA_ERR_ARG, "histograms: 1 or 2 series");
+    return pa_set_error(PA_ERR_ARG, "histograms: 1 or 2 series");
   /* the bins and the in-range band, as the library defines them */
   for (int b = 0; b < ne && st == PA_SUCCESS; b++) {
     st = pa_stats_edge_bin(b, &eb[b], &hi);

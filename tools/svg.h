@@ -3,9 +3,10 @@
  * of `stats -svg` and `adapt -svg`, meshes of `plot`), and the pictures
  * themselves.
  *
- * The file goes through the library's output files (io/io.h): a temporary
- * beside the path, renamed when complete, and part of the open output
- * transaction if there is one. Elements are streamed, never held in memory.
+ * The file goes through the library's output files (pa_output_file_open): a
+ * temporary beside the path, renamed when complete, and part of the open
+ * output transaction if there is one. Elements are streamed, never held in
+ * memory.
  * Every number is printed with a fixed precision (2 decimals, "-0.00"
  * printed as "0.00"), so that the same input gives the same bytes.
  */
@@ -13,11 +14,10 @@
 #define PA_CLI_SVG_H
 
 #include "cli.h"
-#include "io/io.h"
 
 typedef struct pa_cli_svg {
-  pa_outfile out;
-  FILE *fp; /* out.fp, NULL once closed */
+  pa_output_file *out;
+  FILE *fp; /* out's stream, NULL once closed */
 } pa_cli_svg;
 
 /* Open path and write the header of a width x height picture (pixels) on a

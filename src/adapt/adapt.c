@@ -3,10 +3,12 @@
  * pieces, extract, remesh, reintegrate; see adapt.h), its options and
  * report, and the final rebalance.
  *
- * Before the loop, hsiz/hmin/hmax are folded into the metric of every local
- * vertex (the same on owner and ghosts, so no exchange is needed), and the
- * metric is graded over the whole mesh (grade.c; pieces are remeshed
- * without gradation, as the sequential remesher grades its input once); the
+ * Before the loop the metric is prepared as pa_remesh prepares it
+ * (pa__metric_prepare in the distributed context of dmetric.c: hsiz,
+ * hmin/hmax and the local parameters on every local vertex, owner and
+ * ghosts alike, and the gradation over the whole mesh, grade.c; pieces are
+ * remeshed without gradation, as the sequential remesher grades its input
+ * once); the
  * element value PA__DONE_VALUE marks the elements produced by a remesh, which
  * tag.c tags again only with looser criteria (by how much their piece's
  * frozen skin constrained them). The loop stops when a tag pass over the
@@ -104,44 +106,36 @@ void pa__iter_free(pa__iter *it) {
   memset(it, 0, sizeof *it);
 }
 
-/* The metric the pieces are remeshed to, as pa_remesh prepares it: the
- * caller's (hsiz folded in), a copy of it carried as the vertex field
- * "metric:user" (for the final report), then hmin/hmax and the gradation
- * over the whole distributed mesh; the copy is dropped again when they
- * changed nothing. Frozen vertices keep their metric. Collective; owners
- * and ghosts get the same result. *changed: PA_CHANGED_* bits, all ranks. */
+/* The metric the pieces are remeshed to, prepared as pa_remesh prepares
+ * it (pa__metric_prepare: hsiz, the carried copy of the caller's metric,
+ * hmin/hmax, the gradation over the whole distributed mesh), in the
+ * mesh's own metric array: a mesh without one gets the size hsiz first.
+ * Collective; owners and ghosts get the same result. *changed:
+ * PA_CHANGED_* bits, all ranks. */
 static pa_status prepare_metric(pa_dmesh *dm, const pa_remesh_opts *ro,
                                 unsigned *changed) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = dm->mesh;
-  int d = dm->dim, rounds = 0;
   double *h = NULL;
-  uint8_t *frozen = NULL;
+  int carried = 0;
+  pa__metric_ctx c;
   *changed = 0;
-  PA_CALL(pa__adapt_frozen(dm, &frozen));
   if (!m->met_ncomp) {
-    PA_ALLOC(h, m->nv ? m->nv : 1);
-    for (pa_idx v = 0; v < m->nv; v++) h[v] = ro->hsiz;
-    PA_CALL(pa_mesh_set_metric(m, 1, h));
-  } else if (ro->hsiz > 0) {
-    pa__metric_set_hsiz(d, m->met_ncomp, m->nv, m->met, frozen, ro->hsiz);
+    h = pa__malloc(sizeof *h * (size_t)(m->nv ? m->nv : 1));
+    if (!h) {
+      st = pa__error(PA_ERR_MEMORY, __FILE__, __LINE__,
+                     "out of memory allocating the sizes of %ld vertices",
+                     (long)m->nv);
+    } else {
+      for (pa_idx v = 0; v < m->nv; v++) h[v] = ro->hsiz;
+      st = pa_mesh_set_metric(m, 1, h);
+    }
   }
-  int carry = !ro->no_stats && m->nfield < PA_MAX_FIELDS;
   PA_CALL(pa__agree(dm->comm, st));
-  if (carry) PA_CALL(pa_mesh_add_field(m, PA__USER_METRIC, m->met_ncomp, m->met));
-  PA_CALL(pa__adapt_clamp(dm, ro, frozen, changed));
-  PA_CALL(pa__adapt_grade(dm, ro->hgrad, ro->hgradreq, &rounds));
-  if (rounds > 1) *changed |= PA_CHANGED_GRADATION;
-  {
-    int c = (int)*changed;
-    PA_CALL(pa__allreduce(dm->comm, &c, 1, MPI_INT, MPI_BOR));
-    *changed = (unsigned)c;
-  }
-  if (carry && !*changed)
-    PA_CALL(pa_mesh_remove_field(m, pa__user_metric_field(m)));
+  pa__adapt_metric_ctx(dm, &c);
+  PA_CALL(pa__metric_prepare(&c, m->met_ncomp, m->met, ro, changed, &carried));
 cleanup:
   pa__free(h);
-  pa__free(frozen);
   return st;
 }
 

@@ -15,7 +15,6 @@
  *   grade.c       metric gradation of the whole mesh, before the loop
  *   adapt.c       the loop, options, report, the final rebalance
  *   checkpoint.c  checkpoints of the loop and the resume from one
- *   dstats.c      pa_dmesh_stats (statistics of a distributed mesh)
  *
  * Invariants of an iteration (see docs/design/ADAPT.md for the argument):
  *  - label[e] (owned elements) is a piece in [0, npieces) or -1; every
@@ -205,22 +204,16 @@ double pa__elem_work(const pa_mesh *m, pa_idx e);
 pa_status pa__adapt_frozen(pa_dmesh *dm, uint8_t **frozen);
 
 /* Collective: grade the metric of the whole distributed mesh (grade.c),
- * once before the loop; *nrounds (may be NULL) receives the rounds (1 when
- * the first changed nothing). */
-/* pa_dmesh_stats measured in the metric met (local vertex values of nc
- * components) instead of the mesh's own (dstats.c); check 0 skips the
- * validity check (stats->valid is then 1). Collective. */
-pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
-                              int check, pa_stats *stats);
+ * the vertices with frozen[v] (pa__adapt_frozen) keeping theirs; *nrounds
+ * (may be NULL) receives the rounds (1 when the first changed nothing). */
+pa_status pa__adapt_grade(pa_dmesh *dm, const uint8_t *frozen, double hgrad,
+                          double hgradreq, int *nrounds);
 
-pa_status pa__adapt_grade(pa_dmesh *dm, double hgrad, double hgradreq,
-                          int *nrounds);
-/* Collective: clamp the metric into ro's bounds, the local parameters'
- * (ro->local) at the vertices of their entities, merged over every copy of
- * a vertex so that owner and ghosts agree; frozen vertices keep theirs.
- * *changed: PA_CHANGED_HMIN/HMAX bits of this rank. grade.c. */
-pa_status pa__adapt_clamp(pa_dmesh *dm, const pa_remesh_opts *ro,
-                          const uint8_t *frozen, unsigned *changed);
+/* The distributed context of the whole-field metric operations on dm
+ * (pa__metric_ctx; dmetric.c): the owned elements as the domain, sums over
+ * the ranks, the frozen vertices and local-parameter bounds merged over
+ * every copy of a vertex, the gradation pa__adapt_grade. */
+void pa__adapt_metric_ctx(pa_dmesh *dm, pa__metric_ctx *c);
 
 /* Step 1. Collective: tag the owned elements (it->tag), count them
  * (it->ntagged, global) and estimate their work (it->work). done: the

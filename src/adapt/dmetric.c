@@ -1,12 +1,16 @@
 /*
  * dmetric.c -- the metric toolbox on a distributed mesh: the Lp metric of a
  * vertex field (pa_dmesh_metric_from_hessian), the level-set metric
- * (pa_dmesh_metric_from_levelset) and the complexity of the metric.
+ * (pa_dmesh_metric_from_levelset), the complexity of the metric, and the
+ * distributed context of the whole-field metric operations
+ * (pa__adapt_metric_ctx), which pa_dmesh_adapt prepares its metric in too.
  *
  * The same kernels as the sequential functions (src/metric/recovery.c,
  * hessian.c, levelset.c) in a distributed context (pa__metric_ctx): the
  * domain is the owned elements, sums and maxima are reduced over the ranks,
- * the gradation runs over the whole distributed mesh (grade.c). The
+ * the frozen vertices and local-parameter bounds are merged over the copies
+ * of a vertex, the gradation runs over the whole distributed mesh
+ * (grade.c). The
  * recovery needs each owned vertex's 2-ring, which two layers of ghost
  * elements hold: the mesh must have overlap 2. Values are computed at the
  * owned vertices and sent to their ghost copies, so every copy agrees bit
@@ -30,12 +34,75 @@ static pa_status d_max(void *ctx, double *x) {
   return pa__allreduce(dm->comm, x, 1, MPI_DOUBLE, MPI_MAX);
 }
 
-/* The gradation of met, which is the mesh's metric array. */
-static pa_status d_grade(void *ctx, double *met, double hgrad) {
+static pa_status d_bor(void *ctx, unsigned *x) {
+  pa_status st = PA_SUCCESS;
   pa_dmesh *dm = ctx;
-  PA_ASSERT(met == dm->mesh->met);
+  int c = (int)*x;
+  PA_CALL(pa__allreduce(dm->comm, &c, 1, MPI_INT, MPI_BOR));
+  *x = (unsigned)c;
+cleanup:
+  return st;
+}
+
+static pa_status d_agree(void *ctx, pa_status st) {
+  pa_dmesh *dm = ctx;
+  return pa__agree(dm->comm, st);
+}
+
+static pa_status d_frozen(void *ctx, uint8_t **frozen) {
+  return pa__adapt_frozen(ctx, frozen);
+}
+
+static void combine_bounds(const void *in, void *inout, pa_idx n, void *ctx) {
+  (void)ctx;
+  for (pa_idx i = 0; i < n; i++)
+    pa__local_bounds_merge((const double *)in + 3 * (size_t)i,
+                           (double *)inout + 3 * (size_t)i);
+}
+
+/* The bounds of every copy of a vertex merged on the owner, sent back to
+ * the ghosts. */
+static pa_status d_merge_bounds(void *ctx, double *b) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = ctx;
+  pa_dmesh_value *val = NULL;
+  size_t bytes = 3 * sizeof *b * (size_t)dm->nloc[PA_VERTEX];
+  PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.adapt.bounds", MPI_DOUBLE, 3,
+                             -1, &val));
+  memcpy(pa_dmesh_value_data(val, NULL, NULL), b, bytes);
+  PA_CALL(pa__dmesh_reduce_fn(dm, val, combine_bounds, NULL));
+  PA_CALL(pa_dmesh_halo(dm, val));
+  memcpy(b, pa_dmesh_value_data(val, NULL, NULL), bytes);
+cleanup:
+  return pa__dmesh_value_drop(dm, val, pa__agree_end(dm->comm, st));
+}
+
+/* The gradation of met, which is the mesh's metric array. */
+static pa_status d_grade(void *ctx, int nc, double *met, const uint8_t *frozen,
+                         double hgrad, double hgradreq, int *changed) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = ctx;
+  int rounds = 0;
+  PA_ASSERT(met == dm->mesh->met && nc == dm->mesh->met_ncomp);
   (void)met;
-  return pa__adapt_grade(dm, hgrad, 0, NULL);
+  (void)nc;
+  PA_CALL(pa__adapt_grade(dm, frozen, hgrad, hgradreq, &rounds));
+  if (changed) *changed = rounds > 1;
+cleanup:
+  return st;
+}
+
+void pa__adapt_metric_ctx(pa_dmesh *dm, pa__metric_ctx *c) {
+  c->mesh = dm->mesh;
+  c->nelem = dm->nown[PA_ELEMENT];
+  c->sum = d_sum;
+  c->max = d_max;
+  c->bor = d_bor;
+  c->agree = d_agree;
+  c->frozen = d_frozen;
+  c->merge_bounds = d_merge_bounds;
+  c->grade = d_grade;
+  c->ctx = dm;
 }
 
 /* Give every ghost copy the owner's n doubles per local vertex of x. */
@@ -106,7 +173,8 @@ pa_status pa_dmesh_metric_from_hessian(pa_dmesh *dm, int field, int comp,
   PA_CALL(pa__agree(dm->comm, st));
   PA_CALL(halo_doubles(dm, h, nt));
   PA_CALL(install_tensor_metric(m));
-  pa__metric_ctx c = {m, dm->nown[PA_ELEMENT], d_sum, d_max, d_grade, dm};
+  pa__metric_ctx c;
+  pa__adapt_metric_ctx(dm, &c);
   PA_CALL(pa__metric_from_hessian(&c, h, o, m->met));
 cleanup:
   pa__free(h);
@@ -118,6 +186,7 @@ pa_status pa_dmesh_metric_from_levelset(pa_dmesh *dm, int field,
                                         const pa_metric_levelset_opts *o) {
   pa_status st = PA_SUCCESS;
   double *met = NULL, *phi = NULL;
+  uint8_t *frozen = NULL;
   PA_CHECK(dm && o, PA_ERR_ARG, "pa_dmesh_metric_from_levelset: NULL argument");
   pa__agree_reset();
   pa_mesh *m = dm->mesh;
@@ -138,10 +207,14 @@ pa_status pa_dmesh_metric_from_levelset(pa_dmesh *dm, int field,
   PA_CALL(halo_doubles(dm, met, nt));
   PA_CALL(pa_mesh_set_metric(m, nt, met));
   PA_CALL(pa__agree(dm->comm, st));
-  PA_CALL(pa__adapt_grade(dm, o->hgrad, 0, NULL));
+  if (o->hgrad > 1) {
+    PA_CALL(pa__adapt_frozen(dm, &frozen));
+    PA_CALL(pa__adapt_grade(dm, frozen, o->hgrad, 0, NULL));
+  }
 cleanup:
   pa__free(met);
   pa__free(phi);
+  pa__free(frozen);
   return dm ? pa__agree_end(dm->comm, st) : st;
 }
 

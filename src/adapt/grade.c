@@ -73,19 +73,17 @@ cleanup:
   return st;
 }
 
-pa_status pa__adapt_grade(pa_dmesh *dm, double hgrad, double hgradreq,
-                          int *nrounds) {
+pa_status pa__adapt_grade(pa_dmesh *dm, const uint8_t *frozen, double hgrad,
+                          double hgradreq, int *nrounds) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = dm->mesh;
   int nc = m->met_ncomp;
   pa_idx nv = dm->nloc[PA_VERTEX];
   pa_dmesh_value *val = NULL;
-  uint8_t *frozen = NULL;
   grade_ctx ctx = {dm->dim, nc};
   int round = 0;
   if (nrounds) *nrounds = 0;
   if (!(hgrad > 1.0 || hgradreq > 1.0) || nc == 0) return PA_SUCCESS;
-  PA_CALL(pa__adapt_frozen(dm, &frozen));
   PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.adapt.grademet", MPI_DOUBLE, nc,
                              -1, &val));
   for (round = 1; round <= MAX_ROUNDS; round++) {
@@ -104,39 +102,6 @@ pa_status pa__adapt_grade(pa_dmesh *dm, double hgrad, double hgradreq,
     memcpy(m->met, x, sizeof(double) * (size_t)nc * nv);
   }
   if (nrounds) *nrounds = round;
-cleanup:
-  st = pa__dmesh_value_drop(dm, val, pa__agree_end(dm->comm, st));
-  pa__free(frozen);
-  return st;
-}
-
-static void combine_bounds(const void *in, void *inout, pa_idx n, void *ctx) {
-  (void)ctx;
-  for (pa_idx i = 0; i < n; i++)
-    pa__local_bounds_merge((const double *)in + 3 * (size_t)i,
-                           (double *)inout + 3 * (size_t)i);
-}
-
-pa_status pa__adapt_clamp(pa_dmesh *dm, const pa_remesh_opts *ro,
-                          const uint8_t *frozen, unsigned *changed) {
-  pa_status st = PA_SUCCESS;
-  pa_mesh *m = dm->mesh;
-  pa_dmesh_value *val = NULL;
-  *changed = 0;
-  if (!ro->local || ro->nlocal <= 0) {
-    *changed = pa__metric_clamp_all(dm->dim, m->met_ncomp, m->nv, m->met,
-                                    frozen, ro->hmin, ro->hmax);
-    return PA_SUCCESS;
-  }
-  PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.adapt.bounds", MPI_DOUBLE, 3,
-                             -1, &val));
-  double *b = pa_dmesh_value_data(val, NULL, NULL);
-  pa__local_bounds(m, ro, b);
-  PA_CALL(pa__dmesh_reduce_fn(dm, val, combine_bounds, NULL));
-  PA_CALL(pa_dmesh_halo(dm, val));
-  b = pa_dmesh_value_data(val, NULL, NULL);
-  *changed = pa__metric_clamp_bounds(dm->dim, m->met_ncomp, m->nv, m->met,
-                                     frozen, b);
 cleanup:
   return pa__dmesh_value_drop(dm, val, pa__agree_end(dm->comm, st));
 }

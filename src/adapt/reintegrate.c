@@ -203,6 +203,7 @@ static int output_ok(const pa__iter *it, pa__piece *pc, pa_mesh *out,
   }
   if (pa__adapt_checks(it->opts)) {
     pa_status c = pa__mesh_check(out, 0);
+    if (c == PA_SUCCESS) c = pa__mesh_check_metric(out);
     if (c == PA_ERR_MEMORY) PA_CALL(c);
     if (c) {
       pa__info(1, "padapt: piece %d: invalid output: %s\n", pc->id,

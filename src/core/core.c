@@ -42,6 +42,14 @@ const char *pa_last_error(void) { return pa_msg; }
 
 void pa_clear_error(void) { pa_msg[0] = '\0'; }
 
+pa_status pa_set_error(pa_status status, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(pa_msg, sizeof pa_msg, fmt ? fmt : "", ap);
+  va_end(ap);
+  return status;
+}
+
 pa_status pa__error(pa_status code, const char *file, int line,
                     const char *fmt, ...) {
   va_list ap;

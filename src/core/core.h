@@ -20,6 +20,7 @@
 
 #include "padapt.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -55,6 +56,26 @@ pa_status pa__error_trace(pa_status code, const char *file, int line);
       goto cleanup;                                                          \
     }                                                                        \
   } while (0)
+
+/* Call an MPI function: a return other than MPI_SUCCESS becomes PA_ERR_MPI
+ * naming the function and MPI's message, and jumps to cleanup (needs a
+ * local `pa_status st`), as PETSc's PetscCallMPI. MPI returns an error only
+ * where the communicator's error handler is MPI_ERRORS_RETURN (the
+ * communicators padapt duplicates keep the caller's handler); under the
+ * default MPI_ERRORS_ARE_FATAL it ends the job itself. */
+#define PA_CALL_MPI(call)                                                    \
+  do {                                                                       \
+    int pa_mpierr_ = (call);                                                 \
+    if (pa_mpierr_ != MPI_SUCCESS) {                                         \
+      st = pa__mpi_error(pa_mpierr_, #call, __FILE__, __LINE__);             \
+      goto cleanup;                                                          \
+    }                                                                        \
+  } while (0)
+/* Record "MPI_Xxx failed: <MPI's message>" for the MPI error code err of
+ * the call whose source text is call (the function's name is taken from
+ * it); returns PA_ERR_MPI. */
+pa_status pa__mpi_error(int err, const char *call, const char *file,
+                        int line);
 
 /* Internal invariant, debug builds only. */
 #ifdef NDEBUG
@@ -152,6 +173,18 @@ static inline uint64_t pa__hash_idx(const pa_idx *k, int n) {
     h *= 0xBF58476D1CE4E5B9ull;
   }
   return h ^ (h >> 31);
+}
+
+/* Neumaier's compensated sum: a total that does not drift with the count.
+ * Add with pa__ksum_add, read s + c. */
+typedef struct pa__ksum {
+  double s, c;
+} pa__ksum;
+
+static inline void pa__ksum_add(pa__ksum *k, double x) {
+  double t = k->s + x;
+  k->c += fabs(k->s) >= fabs(x) ? (k->s - t) + x : (x - t) + k->s;
+  k->s = t;
 }
 
 /* Bytes of memory this process may still use: MemAvailable of

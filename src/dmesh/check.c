@@ -48,8 +48,8 @@ static pa_status ghosts_equal(pa_dmesh *dm, int kind, const void *a,
          : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
   PA_CALL(pa__agree(dm->comm, st));
   if (n) memcpy(c, a, unit * (size_t)n);
-  pa__sf_bcast_begin(&op, c);
-  pa__sf_bcast_end(&op, c);
+  PA_CALL(pa__sf_bcast_begin(&op, c));
+  PA_CALL(pa__sf_bcast_end(&op, c));
   for (pa_idx i = dm->nown[kind]; i < n && *bad < 0; i++)
     if (memcmp(c + unit * (size_t)i, (const unsigned char *)a + unit * (size_t)i, unit))
       *bad = i;

@@ -850,10 +850,10 @@ static pa_status touch_masks(pa_dmesh *dm, int words, uint64_t **maskp) {
   PA_CALL(pa__agree(dm->comm, st));
   for (size_t q = 0; q < (size_t)dm->nown[PA_ELEMENT] * (d + 1); q++)
     mask[(size_t)words * m->elem[q] + dm->rank / 64] |= 1ull << (dm->rank % 64);
-  pa__sf_reduce_begin(&op, mask);
-  pa__sf_reduce_end(&op, mask, MPI_UINT64_T, words, MPI_BOR);
-  pa__sf_bcast_begin(&op, mask);
-  pa__sf_bcast_end(&op, mask);
+  PA_CALL(pa__sf_reduce_begin(&op, mask));
+  PA_CALL(pa__sf_reduce_end(&op, mask, MPI_UINT64_T, words, MPI_BOR));
+  PA_CALL(pa__sf_bcast_begin(&op, mask));
+  PA_CALL(pa__sf_bcast_end(&op, mask));
   *maskp = mask;
   mask = NULL;
 cleanup:

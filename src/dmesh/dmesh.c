@@ -372,8 +372,7 @@ static pa_status value_ok(pa_dmesh *dm, pa_dmesh_value *v, int idle) {
 pa_status pa_dmesh_halo_begin(pa_dmesh *dm, pa_dmesh_value *v) {
   pa_status st = value_ok(dm, v, 1);
   if (st) return st;
-  pa__sf_bcast_begin(&v->op, v->data);
-  return PA_SUCCESS;
+  return pa__sf_bcast_begin(&v->op, v->data);
 }
 
 pa_status pa_dmesh_halo_end(pa_dmesh *dm, pa_dmesh_value *v) {
@@ -383,8 +382,7 @@ pa_status pa_dmesh_halo_end(pa_dmesh *dm, pa_dmesh_value *v) {
     return pa__error(PA_ERR_ARG, __FILE__, __LINE__,
                      "pa_dmesh_halo_end without pa_dmesh_halo_begin on '%s'",
                      v->name);
-  pa__sf_bcast_end(&v->op, v->data);
-  return PA_SUCCESS;
+  return pa__sf_bcast_end(&v->op, v->data);
 }
 
 pa_status pa_dmesh_halo(pa_dmesh *dm, pa_dmesh_value *v) {
@@ -406,8 +404,7 @@ pa_status pa_dmesh_reduce_begin(pa_dmesh *dm, pa_dmesh_value *v) {
     return pa__error(PA_ERR_ARG, __FILE__, __LINE__,
                      "value '%s': reductions need a predefined datatype",
                      v->name);
-  pa__sf_reduce_begin(&v->op, v->data);
-  return PA_SUCCESS;
+  return pa__sf_reduce_begin(&v->op, v->data);
 }
 
 pa_status pa_dmesh_reduce_end(pa_dmesh *dm, pa_dmesh_value *v, MPI_Op op) {
@@ -417,8 +414,7 @@ pa_status pa_dmesh_reduce_end(pa_dmesh *dm, pa_dmesh_value *v, MPI_Op op) {
     return pa__error(PA_ERR_ARG, __FILE__, __LINE__,
                      "pa_dmesh_reduce_end without pa_dmesh_reduce_begin on '%s'",
                      v->name);
-  pa__sf_reduce_end(&v->op, v->data, v->type, v->ncomp, op);
-  return PA_SUCCESS;
+  return pa__sf_reduce_end(&v->op, v->data, v->type, v->ncomp, op);
 }
 
 pa_status pa__dmesh_value_drop(pa_dmesh *dm, pa_dmesh_value *val,
@@ -432,9 +428,9 @@ pa_status pa__dmesh_reduce_fn(pa_dmesh *dm, pa_dmesh_value *v,
                               pa__combine_fn fn, void *ctx) {
   pa_status st = value_ok(dm, v, 1);
   if (st) return st;
-  pa__sf_reduce_begin(&v->op, v->data);
-  pa__sf_reduce_end_fn(&v->op, v->data, fn, ctx);
-  return PA_SUCCESS;
+  st = pa__sf_reduce_begin(&v->op, v->data);
+  if (st) return st;
+  return pa__sf_reduce_end_fn(&v->op, v->data, fn, ctx);
 }
 
 pa_status pa_dmesh_reduce(pa_dmesh *dm, pa_dmesh_value *v, MPI_Op op) {
@@ -482,9 +478,10 @@ pa_status pa_dmesh_sync_mesh(pa_dmesh *dm) {
       pa__sfop_free(&op);
       goto cleanup;
     }
-    pa__sf_bcast_begin(&op, arr[k].a);
-    pa__sf_bcast_end(&op, arr[k].a);
+    st = pa__sf_bcast_begin(&op, arr[k].a);
+    if (st == PA_SUCCESS) st = pa__sf_bcast_end(&op, arr[k].a);
     pa__sfop_free(&op);
+    if (st) goto cleanup;
   }
 cleanup:
   if (dm) st = pa__agree_end(dm->comm, st);

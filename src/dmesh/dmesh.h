@@ -325,6 +325,14 @@ pa_status pa__dmesh_partition(MPI_Comm comm, int dim, pa_idx n,
  * every rank succeeded, aborts everywhere otherwise. */
 pa_status pa__output_end(MPI_Comm comm, pa_output *tx, pa_status st);
 
+/* ---- statistics (dstats.c) ---- */
+
+/* pa_dmesh_stats measured in the metric met (local vertex values of nc
+ * components) instead of the mesh's own; check 0 skips the validity check
+ * (stats->valid is then 1). Collective. */
+pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
+                              int check, pa_stats *stats);
+
 /* ---- incremental rebuilds (incremental.c) ---- */
 
 /* Local: the bytes of the values of local entity e of a kind (those whose

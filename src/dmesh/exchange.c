@@ -4,10 +4,16 @@
  * reduction, the sparse all-to-all and blocking buffer transfers of setup.
  *
  * This is the only file of padapt that calls point-to-point MPI functions.
+ * Every MPI call is checked (PA_CALL_MPI: a failure is PA_ERR_MPI naming
+ * the call), but for the clean-up on an error path (the wait of
+ * pa__sfop_free, the datatype of an operation that failed to start),
+ * which runs on the way out of an error already being reported.
  * Invariants: an sf lists, for each neighbour rank, root indices on the root
  * side and leaf indices on the leaf side in the same order; messages of one
  * operation use the tag of its pa__sfop, so operations on different values may
- * be in flight at once; setup messages use tags below PA_TAG_OP_BASE.
+ * be in flight at once; setup messages use tags below PA_TAG_OP_BASE; the
+ * requests of an operation not posted yet are MPI_REQUEST_NULL, so an
+ * operation that failed half-way is waited for and freed like any other.
  */
 #include "dmesh/exchange.h"
 #include "dmesh/util.h"
@@ -25,11 +31,11 @@ enum {
 
 pa_status pa__allreduce(MPI_Comm comm, void *buf, int n, MPI_Datatype t,
                         MPI_Op op) {
-  pa_status st = pa__agree(comm, PA_SUCCESS);
-  if (st) return st;
-  if (MPI_Allreduce(MPI_IN_PLACE, buf, n, t, op, comm) != MPI_SUCCESS)
-    return pa__error(PA_ERR_MPI, __FILE__, __LINE__, "MPI_Allreduce failed");
-  return PA_SUCCESS;
+  pa_status st = PA_SUCCESS;
+  PA_CALL(pa__agree(comm, PA_SUCCESS));
+  PA_CALL_MPI(MPI_Allreduce(MPI_IN_PLACE, buf, n, t, op, comm));
+cleanup:
+  return st;
 }
 
 /* ---- sparse all-to-all ---- */
@@ -48,7 +54,7 @@ pa_status pa__xchg_sparse(MPI_Comm comm, const size_t *sendcount,
   MPI_Request *req = NULL;
   *recvcountp = NULL;
   *recvbufp = NULL;
-  MPI_Comm_size(comm, &size);
+  PA_CALL_MPI(MPI_Comm_size(comm, &size));
   sc = pa__malloc((size_t)size * sizeof *sc);
   rc = pa__malloc((size_t)size * sizeof *rc);
   recvcount = pa__malloc((size_t)size * sizeof *recvcount);
@@ -58,7 +64,7 @@ pa_status pa__xchg_sparse(MPI_Comm comm, const size_t *sendcount,
            : PA_SUCCESS;
   PA_CALL(pa__agree(comm, st));
   for (int r = 0; r < size; r++) sc[r] = sendcount[r];
-  MPI_Alltoall(sc, 1, MPI_UINT64_T, rc, 1, MPI_UINT64_T, comm);
+  PA_CALL_MPI(MPI_Alltoall(sc, 1, MPI_UINT64_T, rc, 1, MPI_UINT64_T, comm));
   size_t total = 0;
   int nreq = 0;
   for (int r = 0; r < size; r++) {
@@ -79,8 +85,8 @@ pa_status pa__xchg_sparse(MPI_Comm comm, const size_t *sendcount,
   for (int r = 0; r < size; r++) {
     for (size_t o = 0; o < recvcount[r]; o += CHUNK) {
       size_t n = recvcount[r] - o < CHUNK ? recvcount[r] - o : CHUNK;
-      MPI_Irecv(recvbuf + off + o, (int)n, MPI_BYTE, r, TAG_SPARSE, comm,
-                &req[k++]);
+      PA_CALL_MPI(MPI_Irecv(recvbuf + off + o, (int)n, MPI_BYTE, r,
+                            TAG_SPARSE, comm, &req[k++]));
     }
     off += recvcount[r];
   }
@@ -88,12 +94,12 @@ pa_status pa__xchg_sparse(MPI_Comm comm, const size_t *sendcount,
   for (int r = 0; r < size; r++) {
     for (size_t o = 0; o < sendcount[r]; o += CHUNK) {
       size_t n = sendcount[r] - o < CHUNK ? sendcount[r] - o : CHUNK;
-      MPI_Isend((const unsigned char *)sendbuf + off + o, (int)n, MPI_BYTE, r,
-                TAG_SPARSE, comm, &req[k++]);
+      PA_CALL_MPI(MPI_Isend((const unsigned char *)sendbuf + off + o, (int)n,
+                            MPI_BYTE, r, TAG_SPARSE, comm, &req[k++]));
     }
     off += sendcount[r];
   }
-  MPI_Waitall(k, req, MPI_STATUSES_IGNORE);
+  PA_CALL_MPI(MPI_Waitall(k, req, MPI_STATUSES_IGNORE));
   *recvcountp = recvcount;
   *recvbufp = recvbuf;
   recvcount = NULL;
@@ -110,38 +116,43 @@ cleanup:
 /* ---- point to point buffers ---- */
 
 pa_status pa__xchg_send(MPI_Comm comm, int dest, const void *buf, size_t n) {
+  pa_status st = PA_SUCCESS;
   uint64_t n64 = n;
-  MPI_Send(&n64, 1, MPI_UINT64_T, dest, TAG_P2P_SIZE, comm);
+  PA_CALL_MPI(MPI_Send(&n64, 1, MPI_UINT64_T, dest, TAG_P2P_SIZE, comm));
   for (size_t o = 0; o < n; o += CHUNK) {
     size_t c = n - o < CHUNK ? n - o : CHUNK;
-    MPI_Send((const unsigned char *)buf + o, (int)c, MPI_BYTE, dest,
-             TAG_P2P_DATA, comm);
+    PA_CALL_MPI(MPI_Send((const unsigned char *)buf + o, (int)c, MPI_BYTE,
+                         dest, TAG_P2P_DATA, comm));
   }
-  return PA_SUCCESS;
+cleanup:
+  return st;
 }
 
 pa_status pa__xchg_recv(MPI_Comm comm, int src, void **bufp, size_t *np) {
   pa_status st = PA_SUCCESS;
   uint64_t n64;
   unsigned char *buf = NULL, *sink = NULL;
-  MPI_Recv(&n64, 1, MPI_UINT64_T, src, TAG_P2P_SIZE, comm, MPI_STATUS_IGNORE);
+  PA_CALL_MPI(MPI_Recv(&n64, 1, MPI_UINT64_T, src, TAG_P2P_SIZE, comm,
+                       MPI_STATUS_IGNORE));
   size_t n = (size_t)n64;
   buf = pa__malloc(n ? n : 1);
   if (!buf) { /* drain the message so the sender is not left blocked */
     sink = malloc(CHUNK < n ? CHUNK : (n ? n : 1));
     for (size_t o = 0; o < n; o += CHUNK)
-      MPI_Recv(sink, (int)(n - o < CHUNK ? n - o : CHUNK), MPI_BYTE, src,
-               TAG_P2P_DATA, comm, MPI_STATUS_IGNORE);
-    free(sink);
+      PA_CALL_MPI(MPI_Recv(sink, (int)(n - o < CHUNK ? n - o : CHUNK),
+                           MPI_BYTE, src, TAG_P2P_DATA, comm,
+                           MPI_STATUS_IGNORE));
     PA_FAIL(PA_ERR_MEMORY, "out of memory receiving %zu bytes", n);
   }
   for (size_t o = 0; o < n; o += CHUNK)
-    MPI_Recv(buf + o, (int)(n - o < CHUNK ? n - o : CHUNK), MPI_BYTE, src,
-             TAG_P2P_DATA, comm, MPI_STATUS_IGNORE);
+    PA_CALL_MPI(MPI_Recv(buf + o, (int)(n - o < CHUNK ? n - o : CHUNK),
+                         MPI_BYTE, src, TAG_P2P_DATA, comm,
+                         MPI_STATUS_IGNORE));
   *bufp = buf;
   *np = n;
   buf = NULL;
 cleanup:
+  free(sink);
   pa__free(buf);
   return st;
 }
@@ -175,8 +186,8 @@ pa_status pa__sf_build(MPI_Comm comm, pa_idx n, const pa_gid *gid,
   pa__gidmap map = {0};
   memset(sf, 0, sizeof *sf);
   sf->comm = comm;
-  MPI_Comm_rank(comm, &rank);
-  MPI_Comm_size(comm, &size);
+  PA_CALL_MPI(MPI_Comm_rank(comm, &rank));
+  PA_CALL_MPI(MPI_Comm_size(comm, &size));
   PA_CALLOC(cnt, size);
   /* Leaves: ghosts grouped by owner rank, sorted by gid within a rank. */
   pa_idx nleaf = 0;
@@ -375,9 +386,11 @@ cleanup:
 }
 
 void pa__sfop_free(pa__sfop *op) {
+  /* unchecked: an operation still in flight here is one an error cut
+   * short, and that error is the one to report */
   if (op->active)
-    MPI_Waitall(op->sf->nrootrank + op->sf->nleafrank, op->req,
-                MPI_STATUSES_IGNORE);
+    (void)MPI_Waitall(op->sf->nrootrank + op->sf->nleafrank, op->req,
+                      MPI_STATUSES_IGNORE);
   pa__free(op->rootbuf);
   pa__free(op->leafbuf);
   pa__free(op->scratch);
@@ -387,90 +400,124 @@ void pa__sfop_free(pa__sfop *op) {
 
 /* Every message of an sf fits in one MPI message (counts are 32-bit indices
  * times unit); units above 2^31/n would overflow int, guarded by a derived
- * contiguous datatype of `unit` bytes. */
-static MPI_Datatype unit_type(size_t unit) {
-  MPI_Datatype t;
-  MPI_Type_contiguous((int)unit, MPI_BYTE, &t);
-  MPI_Type_commit(&t);
-  return t;
+ * contiguous datatype of `unit` bytes (*t, to free with MPI_Type_free). */
+static pa_status unit_type(size_t unit, MPI_Datatype *t) {
+  pa_status st = PA_SUCCESS;
+  PA_CALL_MPI(MPI_Type_contiguous((int)unit, MPI_BYTE, t));
+  PA_CALL_MPI(MPI_Type_commit(t));
+cleanup:
+  return st;
 }
 
-void pa__sf_bcast_begin(pa__sfop *op, const void *data) {
+/* Mark op in flight with none of its requests posted yet. */
+static void op_start(pa__sfop *op, int active) {
+  for (int k = 0; k < op->sf->nrootrank + op->sf->nleafrank; k++)
+    op->req[k] = MPI_REQUEST_NULL;
+  op->active = active;
+}
+
+pa_status pa__sf_bcast_begin(pa__sfop *op, const void *data) {
+  pa_status st = PA_SUCCESS;
   const pa__sf *sf = op->sf;
   const unsigned char *d = data;
   size_t u = op->unit;
-  MPI_Datatype t = unit_type(u);
+  MPI_Datatype t = MPI_DATATYPE_NULL;
   int k = 0;
+  op_start(op, 1);
+  PA_CALL(unit_type(u, &t));
   for (int r = 0; r < sf->nleafrank; r++)
-    MPI_Irecv(op->leafbuf + u * (size_t)sf->leafoff[r],
-              (int)(sf->leafoff[r + 1] - sf->leafoff[r]), t, sf->leafrank[r],
-              op->tag, sf->comm, &op->req[k++]);
+    PA_CALL_MPI(MPI_Irecv(op->leafbuf + u * (size_t)sf->leafoff[r],
+                          (int)(sf->leafoff[r + 1] - sf->leafoff[r]), t,
+                          sf->leafrank[r], op->tag, sf->comm, &op->req[k++]));
   for (int r = 0; r < sf->nrootrank; r++) {
     for (pa_idx j = sf->rootoff[r]; j < sf->rootoff[r + 1]; j++)
       memcpy(op->rootbuf + u * (size_t)j, d + u * (size_t)sf->rootidx[j], u);
-    MPI_Isend(op->rootbuf + u * (size_t)sf->rootoff[r],
-              (int)(sf->rootoff[r + 1] - sf->rootoff[r]), t, sf->rootrank[r],
-              op->tag, sf->comm, &op->req[k++]);
+    PA_CALL_MPI(MPI_Isend(op->rootbuf + u * (size_t)sf->rootoff[r],
+                          (int)(sf->rootoff[r + 1] - sf->rootoff[r]), t,
+                          sf->rootrank[r], op->tag, sf->comm, &op->req[k++]));
   }
-  MPI_Type_free(&t);
-  op->active = 1;
+  PA_CALL_MPI(MPI_Type_free(&t));
+cleanup:
+  if (t != MPI_DATATYPE_NULL) (void)MPI_Type_free(&t); /* on an error */
+  return st;
 }
 
-void pa__sf_bcast_end(pa__sfop *op, void *data) {
+pa_status pa__sf_bcast_end(pa__sfop *op, void *data) {
+  pa_status st = PA_SUCCESS;
   const pa__sf *sf = op->sf;
   unsigned char *d = data;
   size_t u = op->unit;
-  MPI_Waitall(sf->nrootrank + sf->nleafrank, op->req, MPI_STATUSES_IGNORE);
+  PA_CALL_MPI(MPI_Waitall(sf->nrootrank + sf->nleafrank, op->req,
+                          MPI_STATUSES_IGNORE));
+  op->active = 0;
   for (pa_idx j = 0; j < sf->leafoff[sf->nleafrank]; j++)
     memcpy(d + u * (size_t)sf->leafidx[j], op->leafbuf + u * (size_t)j, u);
-  op->active = 0;
+cleanup:
+  return st;
 }
 
-void pa__sf_reduce_begin(pa__sfop *op, const void *data) {
+pa_status pa__sf_reduce_begin(pa__sfop *op, const void *data) {
+  pa_status st = PA_SUCCESS;
   const pa__sf *sf = op->sf;
   const unsigned char *d = data;
   size_t u = op->unit;
-  MPI_Datatype t = unit_type(u);
+  MPI_Datatype t = MPI_DATATYPE_NULL;
   int k = 0;
+  op_start(op, 2);
+  PA_CALL(unit_type(u, &t));
   for (int r = 0; r < sf->nrootrank; r++)
-    MPI_Irecv(op->rootbuf + u * (size_t)sf->rootoff[r],
-              (int)(sf->rootoff[r + 1] - sf->rootoff[r]), t, sf->rootrank[r],
-              op->tag, sf->comm, &op->req[k++]);
+    PA_CALL_MPI(MPI_Irecv(op->rootbuf + u * (size_t)sf->rootoff[r],
+                          (int)(sf->rootoff[r + 1] - sf->rootoff[r]), t,
+                          sf->rootrank[r], op->tag, sf->comm, &op->req[k++]));
   for (int r = 0; r < sf->nleafrank; r++) {
     for (pa_idx j = sf->leafoff[r]; j < sf->leafoff[r + 1]; j++)
       memcpy(op->leafbuf + u * (size_t)j, d + u * (size_t)sf->leafidx[j], u);
-    MPI_Isend(op->leafbuf + u * (size_t)sf->leafoff[r],
-              (int)(sf->leafoff[r + 1] - sf->leafoff[r]), t, sf->leafrank[r],
-              op->tag, sf->comm, &op->req[k++]);
+    PA_CALL_MPI(MPI_Isend(op->leafbuf + u * (size_t)sf->leafoff[r],
+                          (int)(sf->leafoff[r + 1] - sf->leafoff[r]), t,
+                          sf->leafrank[r], op->tag, sf->comm, &op->req[k++]));
   }
-  MPI_Type_free(&t);
-  op->active = 2;
+  PA_CALL_MPI(MPI_Type_free(&t));
+cleanup:
+  if (t != MPI_DATATYPE_NULL) (void)MPI_Type_free(&t); /* on an error */
+  return st;
 }
 
-/* Combine with an MPI operation (see reduce_end). */
+/* Combine with an MPI operation (see reduce_end). A combining function
+ * returns nothing: the first error of MPI_Reduce_local waits in err for
+ * pa__sf_reduce_end to report it. */
 typedef struct mpi_combine {
   MPI_Datatype type;
   int count;
   MPI_Op op;
+  int err; /* the first MPI error code, MPI_SUCCESS if none */
 } mpi_combine;
 
 static void combine_mpi(const void *in, void *inout, pa_idx n, void *ctx) {
   mpi_combine *c = ctx;
-  MPI_Reduce_local(in, inout, c->count * (int)n, c->type, c->op);
+  int e = MPI_Reduce_local(in, inout, c->count * (int)n, c->type, c->op);
+  if (e != MPI_SUCCESS && c->err == MPI_SUCCESS) c->err = e;
 }
 
-void pa__sf_reduce_end(pa__sfop *op, void *data, MPI_Datatype type, int count,
-                       MPI_Op mop) {
-  mpi_combine c = {type, count, mop};
-  pa__sf_reduce_end_fn(op, data, combine_mpi, &c);
+pa_status pa__sf_reduce_end(pa__sfop *op, void *data, MPI_Datatype type,
+                            int count, MPI_Op mop) {
+  pa_status st = PA_SUCCESS;
+  mpi_combine c = {type, count, mop, MPI_SUCCESS};
+  PA_CALL(pa__sf_reduce_end_fn(op, data, combine_mpi, &c));
+  if (c.err != MPI_SUCCESS)
+    st = pa__mpi_error(c.err, "MPI_Reduce_local", __FILE__, __LINE__);
+cleanup:
+  return st;
 }
 
-void pa__sf_reduce_end_fn(pa__sfop *op, void *data, pa__combine_fn fn,
-                          void *ctx) {
+pa_status pa__sf_reduce_end_fn(pa__sfop *op, void *data, pa__combine_fn fn,
+                               void *ctx) {
+  pa_status st = PA_SUCCESS;
   const pa__sf *sf = op->sf;
   unsigned char *d = data;
   size_t u = op->unit;
-  MPI_Waitall(sf->nrootrank + sf->nleafrank, op->req, MPI_STATUSES_IGNORE);
+  PA_CALL_MPI(MPI_Waitall(sf->nrootrank + sf->nleafrank, op->req,
+                          MPI_STATUSES_IGNORE));
+  op->active = 0;
   /* Ranks in increasing order, so the result does not depend on timing. A
    * rank's block lists each root once: gather the roots, combine the block
    * in one call, scatter back. */
@@ -483,5 +530,6 @@ void pa__sf_reduce_end_fn(pa__sfop *op, void *data, pa__combine_fn fn,
     for (pa_idx j = 0; j < n; j++)
       memcpy(d + u * (size_t)sf->rootidx[j0 + j], op->scratch + u * (size_t)j, u);
   }
-  op->active = 0;
+cleanup:
+  return st;
 }

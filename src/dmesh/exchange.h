@@ -91,21 +91,23 @@ size_t pa__sf_memory(const pa__sf *sf);
 pa_status pa__sfop_init(pa__sfop *op, const pa__sf *sf, size_t unit, int tag);
 void pa__sfop_free(pa__sfop *op);
 /* Broadcast root values to leaves: data[i*unit] for every root/leaf index i
- * (roots and leaves live in the same array, as owned and ghost entities do). */
-void pa__sf_bcast_begin(pa__sfop *op, const void *data);
-void pa__sf_bcast_end(pa__sfop *op, void *data);
+ * (roots and leaves live in the same array, as owned and ghost entities do).
+ * These four fail only when MPI does (PA_ERR_MPI naming the call); an
+ * operation that failed half-way is still ended by pa__sfop_free. */
+pa_status pa__sf_bcast_begin(pa__sfop *op, const void *data);
+pa_status pa__sf_bcast_end(pa__sfop *op, void *data);
 /* Reduce leaf values onto roots: root = op(root, leaf) for each leaf, with
  * count items of the predefined datatype type per index. */
-void pa__sf_reduce_begin(pa__sfop *op, const void *data);
-void pa__sf_reduce_end(pa__sfop *op, void *data, MPI_Datatype type, int count,
-                       MPI_Op mop);
+pa_status pa__sf_reduce_begin(pa__sfop *op, const void *data);
+pa_status pa__sf_reduce_end(pa__sfop *op, void *data, MPI_Datatype type,
+                            int count, MPI_Op mop);
 /* The same with a combining function instead of an MPI operation:
  * fn(in, inout, n, ctx) combines n leaf values into n root values (each of
  * the op's unit bytes), for operations MPI has no name for (e.g. the
  * intersection of metric tensors). Ranks are combined in increasing order. */
 typedef void (*pa__combine_fn)(const void *in, void *inout, pa_idx n, void *ctx);
-void pa__sf_reduce_end_fn(pa__sfop *op, void *data, pa__combine_fn fn,
-                          void *ctx);
+pa_status pa__sf_reduce_end_fn(pa__sfop *op, void *data, pa__combine_fn fn,
+                               void *ctx);
 
 /* ---- setup traffic ---- */
 

@@ -56,6 +56,7 @@
  * sections are skipped up to their $End line.
  */
 #include "io/io.h"
+#include "metric/metric.h"
 
 #include <errno.h>
 #include <math.h>

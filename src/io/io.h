@@ -68,9 +68,6 @@ pa_status pa__medit_write(pa_mesh *mesh, const char *path, int binary,
                           int version);
 pa_status pa__gmsh_read(const char *path, pa_mesh **mesh);
 pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary);
-/* Write s with XML's special characters escaped (&amp; &lt; &gt; &quot;)
- * and control characters as '?' (not allowed in XML 1.0). */
-void pa__xml_escape(FILE *fp, const char *s);
 
 /* The arrays a distributed set's rank file adds (src/dmesh/dio.c); NULL
  * members are not written. */

@@ -11,7 +11,8 @@
  * removes the paths registered with pa__out_remove; pa_output_abort removes
  * every temporary instead. pa__out_reopen lets a writer append to a file it
  * completed earlier in the same transaction (the distributed writer adds its
- * keywords after the Medit part).
+ * keywords after the Medit part). pa_output_file_open/_commit/_abort give
+ * the same to a caller writing a file of its own (the CLI's pictures).
  *
  * Invariants:
  *  - a path is only ever replaced by a complete file: renames happen after
@@ -315,6 +316,11 @@ void pa_output_abort(pa_output *tx) {
 
 /* ---- files ---- */
 
+/* The public handle of a file the caller writes itself. */
+struct pa_output_file {
+  pa_outfile out;
+};
+
 pa_status pa__out_open(pa_outfile *out, const char *path) {
   pa_status st = PA_SUCCESS;
   int fd = -1;
@@ -426,6 +432,39 @@ void pa__out_abort(pa_outfile *out) {
   pa__free(out->path);
   out->tmppath = out->path = NULL;
   out->slot = -1;
+}
+
+pa_status pa_output_file_open(const char *path, pa_output_file **file,
+                              FILE **fp) {
+  pa_status st = PA_SUCCESS;
+  pa_output_file *f = NULL;
+  PA_CHECK(path && file && fp, PA_ERR_ARG,
+           "pa_output_file_open: NULL argument");
+  *file = NULL;
+  *fp = NULL;
+  PA_CALLOC(f, 1);
+  PA_CALL(pa__out_open(&f->out, path));
+  *fp = f->out.fp;
+  *file = f;
+  f = NULL;
+cleanup:
+  pa__free(f);
+  return st;
+}
+
+pa_status pa_output_file_commit(pa_output_file *file) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(file, PA_ERR_ARG, "pa_output_file_commit: NULL file");
+  st = pa__out_commit(&file->out);
+cleanup:
+  pa__free(file);
+  return st;
+}
+
+void pa_output_file_abort(pa_output_file *file) {
+  if (!file) return;
+  pa__out_abort(&file->out);
+  pa__free(file);
 }
 
 pa_status pa__out_remove(const char *path) {

@@ -46,7 +46,9 @@ typedef struct vtu_array {
   uint64_t offset;
 } vtu_array;
 
-void pa__xml_escape(FILE *fp, const char *s) {
+/* Write s with XML's special characters escaped (&amp; &lt; &gt; &quot;)
+ * and control characters as '?' (not allowed in XML 1.0). */
+static void xml_escape(FILE *fp, const char *s) {
   for (; *s; s++) {
     switch (*s) {
     case '&':
@@ -71,7 +73,7 @@ static void put_array(FILE *fp, const vtu_array *a) {
   fprintf(fp, "        <DataArray type=\"%s\"", a->type);
   if (a->name) {
     fputs(" Name=\"", fp);
-    pa__xml_escape(fp, a->name);
+    xml_escape(fp, a->name);
     fputc('"', fp);
   }
   if (a->ncomp > 1) fprintf(fp, " NumberOfComponents=\"%d\"", a->ncomp);

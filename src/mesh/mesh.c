@@ -1,6 +1,8 @@
 /*
  * mesh.c -- creation, growth, copy and raw access of struct pa_mesh, its
- * metric, user fields and physical names, and memory accounting.
+ * metric storage (the values enter through pa_mesh_set_metric, metric/ops.c,
+ * which validates them), user fields and physical names, and memory
+ * accounting.
  *
  * Vertex-attached arrays (coord, vref, vflag, met, field values) always share
  * the capacity capv; every growth goes through pa__mesh_grow_vertices().
@@ -258,37 +260,6 @@ pa_status pa_mesh_field(pa_mesh *m, int k, const char **name, int *ncomp,
   if (ncomp) *ncomp = m->field[k].ncomp;
   if (values) *values = m->field[k].val;
 cleanup:
-  return st;
-}
-
-pa_status pa_mesh_set_metric(pa_mesh *m, int ncomp, const double *values) {
-  pa_status st = PA_SUCCESS;
-  double *met = NULL;
-  PA_CHECK(m, PA_ERR_ARG, "pa_mesh_set_metric: NULL mesh");
-  PA_CHECK(ncomp == 0 || ncomp == 1 || ncomp == pa__tensor_ncomp(m->dim),
-           PA_ERR_ARG, "a %dD metric has 1 or %d components, not %d", m->dim,
-           pa__tensor_ncomp(m->dim), ncomp);
-  if (ncomp == 0) {
-    pa__free(m->met);
-    m->met = NULL;
-    m->met_ncomp = 0;
-    return PA_SUCCESS;
-  }
-  PA_CHECK(values || m->nv == 0, PA_ERR_ARG, "pa_mesh_set_metric: NULL values");
-  for (pa_idx i = 0; i < m->nv; i++)
-    PA_CHECK(pa__metric_valid(m->dim, ncomp, values + (size_t)ncomp * i),
-             PA_ERR_METRIC,
-             "metric at vertex %d is not %s", (int)i + 1,
-             ncomp == 1 ? "a finite positive size"
-                        : "a finite symmetric positive definite tensor");
-  PA_ALLOC(met, (m->capv ? m->capv : 1) * ncomp);
-  if (m->nv) memcpy(met, values, (size_t)m->nv * ncomp * sizeof(double));
-  pa__free(m->met);
-  m->met = met;
-  met = NULL;
-  m->met_ncomp = ncomp;
-cleanup:
-  pa__free(met);
   return st;
 }
 

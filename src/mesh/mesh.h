@@ -84,11 +84,6 @@ struct pa_mesh {
   size_t bhash_cap;
 };
 
-/* 1 if a metric value is a finite positive size (ncomp 1) or a finite SPD
- * tensor. Implemented in src/metric/metric.c; declared here because the mesh
- * check uses it and mesh/ sits below metric/. */
-int pa__metric_valid(int dim, int ncomp, const double *m);
-
 /* Free the physical names (the mesh then has none). */
 void pa__mesh_free_names(pa_mesh *mesh);
 /* Replace the physical names of dst by copies of those of src. */
@@ -96,9 +91,10 @@ pa_status pa__mesh_copy_names(pa_mesh *dst, const pa_mesh *src);
 
 /* Free derived structures after a topological change. */
 void pa__mesh_invalidate(pa_mesh *mesh);
-/* pa_mesh_check; input 0 leaves out what only a user's input must meet
- * (manifold vertices, no two vertices at one point): a piece of the
- * parallel loop may touch itself at a vertex. */
+/* pa_mesh_check but for the metric values, which the metric component
+ * checks (pa__mesh_check_metric, metric/metric.h); input 0 leaves out what
+ * only a user's input must meet (manifold vertices, no two vertices at one
+ * point): a piece of the parallel loop may touch itself at a vertex. */
 pa_status pa__mesh_check(pa_mesh *mesh, int input);
 
 /* Number of metric components of a full tensor in dimension dim (3 or 6). */

@@ -1,7 +1,8 @@
 /*
  * topo.c -- mesh topology: element faces, element adjacency, vertex balls,
  * boundary-entity lookup, volumes, completion of the boundary and the mesh
- * checker.
+ * checker (pa__mesh_check: everything pa_mesh_check checks but the metric
+ * values, which metric/ops.c checks).
  *
  * Derived structures are caches owned by the mesh (mesh.h): adja, ball_start
  * and ball, bhash. Each is built on first request and stays valid until
@@ -72,14 +73,10 @@ double pa_mesh_elem_volume(const pa_mesh *mesh, pa_idx e) {
 
 double pa_mesh_volume(const pa_mesh *mesh) {
   if (!mesh) return NAN;
-  /* Neumaier's compensated sum: the total does not drift with the count. */
-  double s = 0.0, c = 0.0;
-  for (pa_idx e = 0; e < mesh->ne; e++) {
-    double x = pa_mesh_elem_volume(mesh, e), t = s + x;
-    c += fabs(s) >= fabs(x) ? (s - t) + x : (x - t) + s;
-    s = t;
-  }
-  return s + c;
+  pa__ksum sum = {0, 0};
+  for (pa_idx e = 0; e < mesh->ne; e++)
+    pa__ksum_add(&sum, pa_mesh_elem_volume(mesh, e));
+  return sum.s + sum.c;
 }
 
 /* ---- adjacency ---------------------------------------------------------- */
@@ -632,8 +629,6 @@ cleanup:
   return st;
 }
 
-pa_status pa_mesh_check(pa_mesh *m) { return pa__mesh_check(m, 1); }
-
 pa_status pa__mesh_check(pa_mesh *m, int input) {
   pa_status st = PA_SUCCESS;
   uint8_t *used = NULL;
@@ -742,15 +737,6 @@ pa_status pa__mesh_check(pa_mesh *m, int input) {
              fmt_verts(buf, sizeof buf, bv, d));
   }
 
-  if (m->met_ncomp) {
-    for (pa_idx v = 0; v < nv; v++)
-      PA_CHECK(pa__metric_valid(d, m->met_ncomp,
-                                m->met + (size_t)m->met_ncomp * v),
-               PA_ERR_METRIC, "metric at vertex %d is not %s", (int)v + 1,
-               m->met_ncomp == 1 ? "a finite positive size"
-                                 : "a finite symmetric positive definite "
-                                   "tensor");
-  }
   if (input) {
     PA_CALL(check_manifold_vertices(m));
     PA_CALL(check_coincident(m));

@@ -98,6 +98,7 @@ pa_status pa__metric_from_hessian(const pa__metric_ctx *c, const double *h,
                                   double *met) {
   pa_status st = PA_SUCCESS;
   double *base = NULL, *hdet = NULL;
+  uint8_t *frozen = NULL;
   pa_mesh *mesh = c->mesh;
   int d = mesh->dim, nt = pa__tensor_ncomp(d);
   pa_idx nv = mesh->nv;
@@ -124,6 +125,7 @@ pa_status pa__metric_from_hessian(const pa__metric_ctx *c, const double *h,
   PA_CHECK(lmax > 0, PA_ERR_ARG,
            "pa_metric_from_hessian: the field's Hessian is zero everywhere "
            "(a linear field has no interpolation error to balance)");
+  if (o->hgrad > 1) PA_CALL(c->frozen(c->ctx, &frozen));
   double lmin = HESS_FLOOR * lmax;
   for (pa_idx v = 0; v < nv; v++) {
     double lam[3], vec[9], det = 1;
@@ -150,7 +152,8 @@ pa_status pa__metric_from_hessian(const pa__metric_ctx *c, const double *h,
         m[k] = dfac * base[(size_t)nt * v + k];
       pa__metric_clamp(d, nt, m, o->hmin, o->hmax);
     }
-    if (o->hgrad > 1) PA_CALL(c->grade(c->ctx, met, o->hgrad));
+    if (o->hgrad > 1)
+      PA_CALL(c->grade(c->ctx, nt, met, frozen, o->hgrad, 0, NULL));
     double cm;
     PA_CALL(complexity_of(c, nt, met, &cm));
     if (!(cm > 0) || fabs(cm / target - 1) <= HESS_TOL) break;
@@ -159,27 +162,6 @@ pa_status pa__metric_from_hessian(const pa__metric_ctx *c, const double *h,
 cleanup:
   pa__free(base);
   pa__free(hdet);
-  return st;
-}
-
-/* The sequential context: sums and maxima are local, the gradation is
- * pa__metric_gradation over the whole mesh. */
-static pa_status seq_sum(void *ctx, double *x) {
-  (void)ctx;
-  (void)x;
-  return PA_SUCCESS;
-}
-
-static pa_status seq_grade(void *ctx, double *met, double hgrad) {
-  pa_status st = PA_SUCCESS;
-  pa_mesh *m = ctx;
-  uint8_t *frozen = NULL;
-  PA_CALLOC(frozen, m->nv ? m->nv : 1);
-  pa__mesh_frozen_vertices(m, frozen);
-  PA_CALL(pa__metric_gradation(m->dim, pa__tensor_ncomp(m->dim), m->nv,
-                               m->coord, met, m->ne, m->elem, frozen, hgrad, 0,
-                               NULL));
-cleanup:
   pa__free(frozen);
   return st;
 }
@@ -192,7 +174,8 @@ pa_status pa_metric_from_hessian(pa_mesh *mesh, const double *u, int stride,
            "pa_metric_from_hessian: NULL argument");
   PA_ALLOC(h, (size_t)pa__tensor_ncomp(mesh->dim) * (mesh->nv ? mesh->nv : 1));
   PA_CALL(pa__recover(mesh, u, stride, o->recovery, NULL, NULL, h));
-  pa__metric_ctx c = {mesh, mesh->ne, seq_sum, seq_sum, seq_grade, mesh};
+  pa__metric_ctx c;
+  pa__metric_ctx_seq(mesh, &c);
   PA_CALL(pa__metric_from_hessian(&c, h, o, met));
 cleanup:
   pa__free(h);

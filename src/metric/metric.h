@@ -55,8 +55,13 @@ static inline int pa__sym_index(int i, int j) {
   return j * (j + 1) / 2 + i;
 }
 
-/* pa__metric_valid (finite positive size or SPD tensor) is declared in
- * mesh/mesh.h, which the mesh check needs. */
+/* 1 if a metric value is a finite positive size (ncomp 1) or a finite SPD
+ * tensor (metric.c). */
+int pa__metric_valid(int dim, int ncomp, const double *m);
+/* PA_ERR_METRIC naming the first vertex whose metric value is not valid
+ * (ops.c); the part of pa_mesh_check that pa__mesh_check (mesh/topo.c)
+ * leaves to this component. */
+pa_status pa__mesh_check_metric(const pa_mesh *mesh);
 
 /* Expand a metric value to a full tensor (3 or 6 components). */
 void pa__metric_tensor(int dim, int ncomp, const double *m, double *t);
@@ -110,12 +115,11 @@ void pa__metric_intersect(int dim, int ncomp, const double *m1,
 unsigned pa__metric_clamp(int dim, int ncomp, double *m, double hmin,
                           double hmax);
 
-/* The metric preparation shared by pa_remesh and pa_dmesh_adapt, on nv
- * values of nc components; vertices with frozen[v] (frozen may be NULL)
- * keep theirs. set_hsiz gives every vertex the size hsiz (the caller's
- * metric then); clamp_all clamps into [hmin, hmax] and returns the
- * PA_CHANGED_* bits of what it changed. The gradation follows
- * (gradation.h). */
+/* Steps of the metric preparation (pa__metric_prepare), on nv values of nc
+ * components; vertices with frozen[v] (frozen may be NULL) keep theirs.
+ * set_hsiz gives every vertex the size hsiz (the caller's metric then);
+ * clamp_all clamps into [hmin, hmax] and returns the PA_CHANGED_* bits of
+ * what it changed. */
 void pa__metric_set_hsiz(int dim, int nc, pa_idx nv, double *met,
                          const uint8_t *frozen, double hsiz);
 unsigned pa__metric_clamp_all(int dim, int nc, pa_idx nv, double *met,
@@ -176,6 +180,30 @@ static inline double pa__share(pa_gid n, pa_gid total) {
   return total > 0 ? (double)n / (double)total : 0.0;
 }
 
+/* The statistics of a pa_stats accumulated one element and one edge at a
+ * time (stats.c): pa_mesh_stats and pa_dmesh_stats (dmesh/dstats.c) both
+ * count through it, so they bin, count and sum alike. The caller fills the
+ * entity counts and validity of s (dim, has_metric, nvert, nelem, nbdry,
+ * valid); pa__stats_acc_sums then puts the sums in s. */
+typedef struct pa__stats_acc {
+  pa_stats s;
+  pa_gid nelem; /* elements added (s.nelem may be a global count) */
+  pa__ksum volume, edge_sum, qual_sum;
+} pa__stats_acc;
+
+/* Start with nothing counted. */
+void pa__stats_acc_init(pa__stats_acc *a);
+/* Count an element of signed volume vol (inverted when vol <= 0) and
+ * quality q: the quality bins (floor(q / 0.2) clamped to the bins, so an
+ * inverted or NaN quality counts in the first), the shares above 0.5 and
+ * 0.12, extremes and sums. */
+void pa__stats_add_elem(pa__stats_acc *a, double vol, double q);
+/* Count an edge of length len in the metric: its bin, the in-range bin,
+ * extremes and sum. */
+void pa__stats_add_edge(pa__stats_acc *a, double len);
+/* Write the compensated sums into a->s (volume, edge_sum, qual_sum). */
+void pa__stats_acc_sums(pa__stats_acc *a);
+
 /* pa_mesh_stats measured in the metric met (nv values of nc components; nc
  * 0: identity) instead of the mesh's own (stats.c); check 0 skips the
  * validity check (stats->valid is then 1). */
@@ -223,19 +251,61 @@ pa_status pa__check_output_size(int dim, double complexity, int nproc,
 void pa__lp_metric(int dim, const double *h, double p, double lmin, double *m);
 
 /* Where a whole-field metric operation runs: the mesh, the first nelem of
- * its elements (the owned ones of a distributed mesh) as the domain, the
- * global sum and maximum of a local value, and the gradation of a tensor
- * field of the mesh's vertices. The sequential context sums locally and
- * grades with pa__metric_gradation; the distributed one (src/adapt/
- * dmetric.c) reduces over the ranks and grades over the distributed mesh. */
+ * its elements (the owned ones of a distributed mesh) as the domain, and
+ * the steps that involve other ranks. The sequential context
+ * (pa__metric_ctx_seq) works on the mesh alone; the distributed one
+ * (pa__adapt_metric_ctx, src/adapt/dmetric.c) reduces over the ranks,
+ * merges the copies of a vertex and grades over the distributed mesh, so
+ * that the whole-field operations (pa__metric_from_hessian,
+ * pa__metric_prepare) are written once. Every hook is collective in the
+ * distributed context and returns the same status on every rank. */
 typedef struct pa__metric_ctx {
   pa_mesh *mesh;
   pa_idx nelem;
-  pa_status (*sum)(void *ctx, double *x); /* in place: local -> global */
+  /* in place: the local value -> the global sum, maximum, bitwise or */
+  pa_status (*sum)(void *ctx, double *x);
   pa_status (*max)(void *ctx, double *x);
-  pa_status (*grade)(void *ctx, double *met, double hgrad);
+  pa_status (*bor)(void *ctx, unsigned *x);
+  /* PA_SUCCESS if every rank's st is, else the first failure (pa__agree):
+   * called before a collective step, so a rank that failed on its own
+   * meets the others there */
+  pa_status (*agree)(void *ctx, pa_status st);
+  /* *frozen (pa__malloc'ed, mesh->nv): 1 for the vertices that keep their
+   * metric, pa__mesh_frozen_vertices on any copy of the vertex */
+  pa_status (*frozen)(void *ctx, uint8_t **frozen);
+  /* the local-parameter bounds b (3 per vertex, pa__local_bounds) merged
+   * over every copy of a vertex (pa__local_bounds_merge) */
+  pa_status (*merge_bounds)(void *ctx, double *b);
+  /* grade met, the mesh->nv values of nc components of the mesh's vertices
+   * (in the distributed context: the mesh's own metric array), the frozen
+   * vertices keeping theirs (pa__metric_gradation's rates); *changed (may
+   * be NULL): 1 if a value changed on any rank */
+  pa_status (*grade)(void *ctx, int nc, double *met, const uint8_t *frozen,
+                     double hgrad, double hgradreq, int *changed);
   void *ctx;
 } pa__metric_ctx;
+
+/* The sequential context of mesh (prepare.c). */
+void pa__metric_ctx_seq(pa_mesh *mesh, pa__metric_ctx *c);
+
+/* The metric preparation of pa_remesh and pa_dmesh_adapt (prepare.c), in
+ * the context c, on met: c->mesh->nv values of nc components, the caller's
+ * metric (or, when the mesh has none, nc 1 and any values). In order:
+ *  1. o->hsiz > 0 replaces the caller's metric by the size hsiz, except at
+ *     the frozen vertices (c->frozen) when the mesh has a metric;
+ *  2. unless o->no_stats, a copy of the result is carried as the vertex
+ *     field PA__USER_METRIC (if the mesh has room and carries none yet;
+ *     *carried = 1), for the final report against the caller's metric;
+ *  3. hmin/hmax and the local parameters o->local (pa__metric_clamp_opts,
+ *     the bounds merged over the copies of a vertex);
+ *  4. the gradation o->hgrad, o->hgradreq (c->grade).
+ * Frozen vertices keep their metric throughout (the gradation lets them
+ * constrain their neighbours). *changed: the PA_CHANGED_* bits of what 3
+ * and 4 changed on any rank; when nothing, the carried copy is dropped
+ * again (*carried = 0), and so it is on failure. Collective when c is. */
+pa_status pa__metric_prepare(const pa__metric_ctx *c, int nc, double *met,
+                             const pa_remesh_opts *o, unsigned *changed,
+                             int *carried);
 
 /* pa_metric_from_hessian from the recovered Hessian h (tensor per vertex,
  * every local vertex) in the context c (hessian.c). */

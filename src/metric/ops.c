@@ -1,6 +1,9 @@
 /*
- * ops.c -- operations on whole metric fields: complexity, scaling to a
- * complexity, intersection of two fields, gradation of a mesh's metric.
+ * ops.c -- operations on whole metric fields: attaching a metric to a mesh
+ * and checking it (pa_mesh_set_metric, pa_mesh_check: a metric value enters
+ * a mesh only through them, so the kernels may assume valid values),
+ * complexity, scaling to a complexity, intersection of two fields,
+ * gradation of a mesh's metric.
  *
  * Complexity C = integral of sqrt(det M): on each element, its volume times
  * the mean of sqrt(det M) at its vertices. Scaling a metric by s^2 scales
@@ -10,6 +13,58 @@
 #include "metric/gradation.h"
 
 #include <math.h>
+
+/* PA_ERR_METRIC naming the first of nv values of nc components that is not
+ * a valid metric (pa__metric_valid). */
+static pa_status check_values(int dim, int nc, pa_idx nv, const double *val) {
+  pa_status st = PA_SUCCESS;
+  for (pa_idx v = 0; v < nv; v++)
+    PA_CHECK(pa__metric_valid(dim, nc, val + (size_t)nc * v), PA_ERR_METRIC,
+             "metric at vertex %d is not %s", (int)v + 1,
+             nc == 1 ? "a finite positive size"
+                     : "a finite symmetric positive definite tensor");
+cleanup:
+  return st;
+}
+
+pa_status pa_mesh_set_metric(pa_mesh *m, int ncomp, const double *values) {
+  pa_status st = PA_SUCCESS;
+  double *met = NULL;
+  PA_CHECK(m, PA_ERR_ARG, "pa_mesh_set_metric: NULL mesh");
+  PA_CHECK(ncomp == 0 || ncomp == 1 || ncomp == pa__tensor_ncomp(m->dim),
+           PA_ERR_ARG, "a %dD metric has 1 or %d components, not %d", m->dim,
+           pa__tensor_ncomp(m->dim), ncomp);
+  if (ncomp == 0) {
+    pa__free(m->met);
+    m->met = NULL;
+    m->met_ncomp = 0;
+    return PA_SUCCESS;
+  }
+  PA_CHECK(values || m->nv == 0, PA_ERR_ARG, "pa_mesh_set_metric: NULL values");
+  PA_CALL(check_values(m->dim, ncomp, m->nv, values));
+  PA_ALLOC(met, (m->capv ? m->capv : 1) * ncomp);
+  if (m->nv) memcpy(met, values, (size_t)m->nv * ncomp * sizeof(double));
+  pa__free(m->met);
+  m->met = met;
+  met = NULL;
+  m->met_ncomp = ncomp;
+cleanup:
+  pa__free(met);
+  return st;
+}
+
+pa_status pa__mesh_check_metric(const pa_mesh *mesh) {
+  if (!mesh->met_ncomp) return PA_SUCCESS;
+  return check_values(mesh->dim, mesh->met_ncomp, mesh->nv, mesh->met);
+}
+
+pa_status pa_mesh_check(pa_mesh *mesh) {
+  pa_status st = PA_SUCCESS;
+  PA_CALL(pa__mesh_check(mesh, 1));
+  PA_CALL(pa__mesh_check_metric(mesh));
+cleanup:
+  return st;
+}
 
 /* sqrt(det M) of a metric value (a size: h^-dim). */
 static double density(int dim, int nc, const double *m) {

@@ -12,6 +12,11 @@
  * vertex, all freed before returning. The validity check (pa_mesh_check)
  * runs last, after that memory is released.
  *
+ * Both passes count through the accumulator pa__stats_acc, which
+ * pa_dmesh_stats (dmesh/dstats.c) uses too: the bins, shares, extremes and
+ * compensated sums are written once, here (the volume is then
+ * pa_mesh_volume's, which sums in the same order).
+ *
  * Conventions: edge lengths use the vertex metrics (identity when the mesh
  * has none) and the geometric formula of metric.c; an element whose two
  * vertices coincide contributes no edge. Quality bins take floor(Q / 0.2)
@@ -41,19 +46,10 @@ double pa_mesh_elem_quality(pa_mesh *mesh, pa_idx e) {
   return pa__quality(dim, nc, x, m);
 }
 
-/* Neumaier's compensated sum: totals do not drift with the count (the volume
- * equals pa_mesh_volume's, which sums in the same order). */
-typedef struct ksum {
-  double s, c;
-} ksum;
+void pa__stats_acc_init(pa__stats_acc *a) { memset(a, 0, sizeof *a); }
 
-static inline void ksum_add(ksum *k, double x) {
-  double t = k->s + x;
-  k->c += fabs(k->s) >= fabs(x) ? (k->s - t) + x : (x - t) + k->s;
-  k->s = t;
-}
-
-static void add_edge_length(pa_stats *s, ksum *sum, double len) {
+void pa__stats_add_edge(pa__stats_acc *a, double len) {
+  pa_stats *s = &a->s;
   int b = 0;
   while (b < PA_STATS_EDGE_NBIN - 2 && len >= edge_bounds[b])
     b++;
@@ -62,20 +58,30 @@ static void add_edge_length(pa_stats *s, ksum *sum, double len) {
     s->edge_hist[PA_STATS_EDGE_NBIN - 1]++;
   if (s->nedge == 0 || len < s->edge_min) s->edge_min = len;
   if (s->nedge == 0 || len > s->edge_max) s->edge_max = len;
-  ksum_add(sum, len);
+  pa__ksum_add(&a->edge_sum, len);
   s->nedge++;
 }
 
-static void add_quality(pa_stats *s, ksum *sum, double q, pa_gid count_before) {
+void pa__stats_add_elem(pa__stats_acc *a, double vol, double q) {
+  pa_stats *s = &a->s;
+  pa__ksum_add(&a->volume, vol);
+  if (vol <= 0.0) s->ninverted++;
   int b = (int)floor(q / 0.2);
   if (!(b >= 0)) b = 0; /* also NaN */
   if (b >= PA_STATS_QUAL_NBIN) b = PA_STATS_QUAL_NBIN - 1;
   s->qual_hist[b]++;
   if (q > 0.5) s->qual_above_05++;
   if (q > 0.12) s->qual_above_012++;
-  if (count_before == 0 || q < s->qual_min) s->qual_min = q;
-  if (count_before == 0 || q > s->qual_max) s->qual_max = q;
-  ksum_add(sum, q);
+  if (a->nelem == 0 || q < s->qual_min) s->qual_min = q;
+  if (a->nelem == 0 || q > s->qual_max) s->qual_max = q;
+  pa__ksum_add(&a->qual_sum, q);
+  a->nelem++;
+}
+
+void pa__stats_acc_sums(pa__stats_acc *a) {
+  a->s.volume = a->volume.s + a->volume.c;
+  a->s.edge_sum = a->edge_sum.s + a->edge_sum.c;
+  a->s.qual_sum = a->qual_sum.s + a->qual_sum.c;
 }
 
 pa_status pa_mesh_stats(pa_mesh *mesh, pa_stats *stats) {
@@ -92,16 +98,16 @@ pa_status pa__mesh_stats_met(pa_mesh *mesh, int nc, const double *met,
   pa_idx *other = NULL;
   PA_CHECK(mesh && stats && (nc == 0 || met), PA_ERR_ARG,
            "pa_mesh_stats: NULL argument");
-  pa_stats s;
-  memset(&s, 0, sizeof s);
+  pa__stats_acc acc;
+  pa_stats *s = &acc.s;
+  pa__stats_acc_init(&acc);
   int dim = mesh->dim, nve = dim + 1;
   pa_idx nv = mesh->nv, ne = mesh->ne;
-  s.dim = dim;
-  s.has_metric = nc > 0;
-  s.nvert = nv;
-  s.nelem = ne;
-  s.nbdry = mesh->nb;
-  ksum vol_sum = {0, 0}, edge_sum = {0, 0}, qual_sum = {0, 0};
+  s->dim = dim;
+  s->has_metric = nc > 0;
+  s->nvert = nv;
+  s->nelem = ne;
+  s->nbdry = mesh->nb;
 
   /* Pass 1: volumes, qualities (and the index check). */
   for (pa_idx e = 0; e < ne; e++) {
@@ -115,10 +121,8 @@ pa_status pa__mesh_stats_met(pa_mesh *mesh, int nc, const double *met,
       x[k] = mesh->coord + (size_t)dim * v[k];
       m[k] = nc ? met + (size_t)nc * v[k] : NULL;
     }
-    double vol = pa__simplex_volume(dim, x);
-    ksum_add(&vol_sum, vol);
-    if (vol <= 0.0) s.ninverted++;
-    add_quality(&s, &qual_sum, pa__quality(dim, nc, x, m), e);
+    pa__stats_add_elem(&acc, pa__simplex_volume(dim, x),
+                       pa__quality(dim, nc, x, m));
   }
 
   /* Pass 2: unique edges (filed under their smaller vertex) and lengths. */
@@ -130,12 +134,10 @@ pa_status pa__mesh_stats_met(pa_mesh *mesh, int nc, const double *met,
       pa_idx w = other[k];
       const double *xw = mesh->coord + (size_t)dim * w;
       const double *mw = nc ? met + (size_t)nc * w : NULL;
-      add_edge_length(&s, &edge_sum, pa__edge_length(dim, nc, xv, xw, mv, mw));
+      pa__stats_add_edge(&acc, pa__edge_length(dim, nc, xv, xw, mv, mw));
     }
   }
-  s.volume = vol_sum.s + vol_sum.c;
-  s.edge_sum = edge_sum.s + edge_sum.c;
-  s.qual_sum = qual_sum.s + qual_sum.c;
+  pa__stats_acc_sums(&acc);
   pa__free(pos);
   pa__free(other);
   pos = NULL;
@@ -144,12 +146,12 @@ pa_status pa__mesh_stats_met(pa_mesh *mesh, int nc, const double *met,
   /* Validity last: it may build adjacency, so our arrays are gone by now. */
   pa_status chk = check ? pa_mesh_check(mesh) : PA_SUCCESS;
   if (chk == PA_ERR_MEMORY) PA_CALL(chk);
-  s.valid = chk == PA_SUCCESS;
-  if (!s.valid) {
+  s->valid = chk == PA_SUCCESS;
+  if (!s->valid) {
     pa__info(1, "pa_mesh_stats: mesh check failed: %s", pa_last_error());
     pa_clear_error();
   }
-  *stats = s;
+  *stats = *s;
 cleanup:
   pa__free(pos);
   pa__free(other);

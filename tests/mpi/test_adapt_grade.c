@@ -57,12 +57,15 @@ static void run(int dim, int n, const char *metric, int overlap) {
   }
   CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, m, overlap, &dm));
   int rounds = 0;
-  CHECK_OK(pa__adapt_grade(dm, 1.3, 1.3, &rounds));
+  uint8_t *frozen = NULL;
+  CHECK_OK(pa__adapt_frozen(dm, &frozen));
+  CHECK_OK(pa__adapt_grade(dm, frozen, 1.3, 1.3, &rounds));
   CHECK(rounds >= 1);
   CHECK(copies_agree(dm));
   /* a second gradation: nothing left to do */
   int rounds2 = 0;
-  CHECK_OK(pa__adapt_grade(dm, 1.3, 1.3, &rounds2));
+  CHECK_OK(pa__adapt_grade(dm, frozen, 1.3, 1.3, &rounds2));
+  pa__free(frozen);
   CHECK(rounds2 == 1);
   pa_mesh *g = gather(dm);
   if (pa_test_rank == 0 && g) {

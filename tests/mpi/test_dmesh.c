@@ -2,10 +2,11 @@
  * test_dmesh.c -- distributed mesh: distribution from a root, ghosts, halo
  * exchange (sync and async) of global ids and multi-component fields,
  * reductions, iterators, gather, checksum independence of the number of
- * ranks, reordering, redistribution round trips and bad input. Runs at any
- * number of ranks.
+ * ranks, reordering, redistribution round trips, bad input and MPI errors.
+ * Runs at any number of ranks.
  */
 #include "testutil.h"
+#include "dmesh/exchange.h"
 
 #include <mpi.h>
 
@@ -568,6 +569,24 @@ static void test_check_detects(void) {
   }
 }
 
+/* A failed MPI call on a communicator that returns errors: PA_ERR_MPI
+ * naming the call, the same on every rank for a call every rank makes. */
+static void test_mpi_errors(void) {
+  MPI_Comm comm;
+  double x = 1;
+  MPI_Comm_dup(MPI_COMM_WORLD, &comm);
+  MPI_Comm_set_errhandler(comm, MPI_ERRORS_RETURN);
+  pa_status st = pa__allreduce(comm, &x, -1, MPI_DOUBLE, MPI_SUM);
+  CHECK(st == PA_ERR_MPI);
+  CHECK(strstr(pa_last_error(), "MPI_Allreduce failed: ") != NULL);
+  st = pa__xchg_send(comm, size, &x, sizeof x); /* no such rank */
+  CHECK(st == PA_ERR_MPI);
+  CHECK(strstr(pa_last_error(), "MPI_Send failed: ") != NULL);
+  pa_clear_error();
+  CHECK_OK(pa__agree(comm, PA_SUCCESS)); /* the communicator still works */
+  MPI_Comm_free(&comm);
+}
+
 int main(int argc, char **argv) {
   int provided;
   MPI_Init_thread(&argc, &argv, MPI_THREAD_MULTIPLE, &provided);
@@ -576,10 +595,10 @@ int main(int argc, char **argv) {
   size_t mem0 = pa_memory_current();
   pa_test_fn tests[] = {test_distribute, test_redistribute, test_rebalance,
                         test_weighted_balance, test_adjacency, test_bad_input,
-                        test_check_detects};
+                        test_check_detects, test_mpi_errors};
   const char *names[] = {"distribute", "redistribute", "rebalance",
                          "weighted_balance", "adjacency", "bad_input",
-                         "check_detects"};
+                         "check_detects", "mpi_errors"};
   for (size_t t = 0; t < sizeof tests / sizeof *tests; t++) {
     int before = pa_test_failures;
     double t0 = MPI_Wtime();

@@ -2,8 +2,9 @@
  * test_output.c -- output transactions (src/io/output.c): several files
  * appear together or not at all, a failure leaves the previous files and no
  * temporary, nesting, refused paths (symbolic link, directory, device), a
- * temporary name taken by someone else, pa_output_check, and the SIGTERM
- * handler removing the temporaries of a process killed mid-transaction.
+ * temporary name taken by someone else, pa_output_check, the SIGTERM
+ * handler removing the temporaries of a process killed mid-transaction, and
+ * a file the caller writes itself (pa_output_file_*).
  */
 #include "testutil.h"
 
@@ -107,6 +108,43 @@ static void test_failure(void) {
   CHECK_OK(pa_stats_write_json(&s, NULL, "f.json"));
   CHECK_OK(pa_output_commit(tx));
   CHECK(strcmp(content("f.json", buf, sizeof buf), "old json") != 0);
+  pa_mesh_destroy(m);
+}
+
+/* A file of the caller's own: its temporary waits for the transaction;
+ * one it drops fails the transaction, the previous files untouched. */
+static void test_own_file(void) {
+  pa_mesh *m = square();
+  pa_output *tx = NULL;
+  pa_output_file *f = NULL;
+  FILE *fp = NULL;
+  char buf[64];
+  remove("own.txt");
+  CHECK_OK(pa_output_begin(&tx));
+  CHECK_OK(pa_output_file_open("own.txt", &f, &fp));
+  CHECK(f != NULL && fp != NULL);
+  if (fp) fputs("mine", fp);
+  CHECK_OK(pa_output_file_commit(f));
+  CHECK_OK(pa_mesh_write(m, "own.mesh", NULL));
+  CHECK(!exists("own.txt") && pa_test_ntemps() == 2);
+  CHECK_OK(pa_output_commit(tx));
+  CHECK(!strcmp(content("own.txt", buf, sizeof buf), "mine"));
+  /* dropped: the transaction fails, nothing moves */
+  write_text("own.mesh", "old mesh");
+  CHECK_OK(pa_output_begin(&tx));
+  CHECK_OK(pa_mesh_write(m, "own.mesh", NULL));
+  CHECK_OK(pa_output_file_open("own.txt", &f, &fp));
+  if (fp) fputs("not mine", fp);
+  pa_output_file_abort(f);
+  CHECK(pa_output_commit(tx) == PA_ERR_IO);
+  CHECK(!strcmp(content("own.txt", buf, sizeof buf), "mine"));
+  CHECK(!strcmp(content("own.mesh", buf, sizeof buf), "old mesh"));
+  CHECK(pa_test_ntemps() == 0);
+  /* refused: a directory, and no handle comes back */
+  CHECK(pa_output_file_open(".", &f, &fp) == PA_ERR_IO);
+  CHECK(f == NULL && fp == NULL);
+  pa_output_file_abort(NULL);
+  CHECK(pa_output_file_commit(NULL) == PA_ERR_ARG);
   pa_mesh_destroy(m);
 }
 
@@ -215,4 +253,5 @@ static void test_signal(void) {
   CHECK(!strcmp(content("sig.json", buf, sizeof buf), "old json"));
 }
 
-TEST_MAIN(test_commit, test_failure, test_nested, test_refused, test_signal)
+TEST_MAIN(test_commit, test_failure, test_own_file, test_nested, test_refused,
+          test_signal)

@@ -10,52 +10,31 @@
  * every other edge is sent (as a record keyed by a hash of its two vertex
  * global ids) to the rank hash % size, which counts each distinct pair
  * once. Lengths are computed with the endpoints in global-id order, so every
- * rank computes the same value for the same edge. Bins and conventions are
- * those of pa_mesh_stats (stats.c).
+ * rank computes the same value for the same edge. Each rank counts through
+ * the accumulator of pa_mesh_stats (pa__stats_acc, metric/stats.c), so bins
+ * and conventions are the same; the ranks' partial figures are then
+ * combined.
  */
-#include "adapt/adapt.h"
+#include "dmesh/dmesh.h"
+#include "metric/metric.h"
 
 #include <math.h>
-
-static const double edge_bounds[PA_STATS_EDGE_NBIN - 2] = {
-    0.3, 0.6, PA__LEN_LO, 0.9, 1.3, PA__LEN_HI, 2.0, 5.0};
-
-static void add_edge(pa_stats *s, double len) {
-  int b = 0;
-  while (b < PA_STATS_EDGE_NBIN - 2 && len >= edge_bounds[b]) b++;
-  s->edge_hist[b]++;
-  if (len >= PA__LEN_LO && len < PA__LEN_HI) s->edge_hist[PA_STATS_EDGE_NBIN - 1]++;
-  if (s->nedge == 0 || len < s->edge_min) s->edge_min = len;
-  if (s->nedge == 0 || len > s->edge_max) s->edge_max = len;
-  s->edge_sum += len;
-  s->nedge++;
-}
-
-static void add_quality(pa_stats *s, double q, pa_gid before) {
-  int b = (int)floor(q / 0.2);
-  if (!(b >= 0)) b = 0;
-  if (b >= PA_STATS_QUAL_NBIN) b = PA_STATS_QUAL_NBIN - 1;
-  s->qual_hist[b]++;
-  if (q > 0.5) s->qual_above_05++;
-  if (q > 0.12) s->qual_above_012++;
-  if (before == 0 || q < s->qual_min) s->qual_min = q;
-  if (before == 0 || q > s->qual_max) s->qual_max = q;
-  s->qual_sum += q;
-}
 
 static uint64_t pair_hash(pa_gid a, pa_gid b) {
   return pa__mix64(pa__mix64((uint64_t)a) ^ (uint64_t)b) >> 1;
 }
 
-/* Combine the partial statistics of the ranks. */
-static pa_status combine(MPI_Comm comm, pa_stats *s) {
+/* Combine the partial statistics of the ranks (a rank that counted no
+ * edge or no element takes no part in their extremes). */
+static pa_status combine(MPI_Comm comm, pa__stats_acc *a) {
   pa_status st = PA_SUCCESS;
+  pa_stats *s = &a->s;
   pa_gid c[4 + PA_STATS_EDGE_NBIN + PA_STATS_QUAL_NBIN];
   double sum[3] = {s->volume, s->edge_sum, s->qual_sum};
   double mn[2] = {s->nedge ? s->edge_min : INFINITY,
-                  s->nelem ? s->qual_min : INFINITY};
+                  a->nelem ? s->qual_min : INFINITY};
   double mx[2] = {s->nedge ? s->edge_max : -INFINITY,
-                  s->nelem ? s->qual_max : -INFINITY};
+                  a->nelem ? s->qual_max : -INFINITY};
   int n = 0;
   c[n++] = s->ninverted;
   c[n++] = s->nedge;
@@ -96,7 +75,8 @@ pa_status pa_dmesh_stats(pa_dmesh *dm, pa_stats *stats) {
 pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
                               int check, pa_stats *stats) {
   pa_status st = PA_SUCCESS;
-  pa_stats s;
+  pa__stats_acc acc;
+  pa_stats *s = &acc.s;
   uint8_t *shared = NULL;
   size_t *pos = NULL;
   pa_idx *other = NULL;
@@ -104,18 +84,18 @@ pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
   pa__recs S, R;
   pa__recs_init(&S, PA_EDGE, 2, 1);
   pa__recs_init(&R, PA_EDGE, 2, 1);
-  memset(&s, 0, sizeof s);
+  pa__stats_acc_init(&acc);
   PA_CHECK(dm && stats, PA_ERR_ARG, "pa_dmesh_stats: NULL argument");
   pa__agree_reset();
   pa_mesh *m = dm->mesh;
   int d = dm->dim, nve = d + 1;
   pa_idx ne = dm->nown[PA_ELEMENT], nv = dm->nloc[PA_VERTEX];
   const pa_gid *vg = dm->gid[PA_VERTEX];
-  s.dim = d;
-  s.has_metric = nc > 0;
-  s.nvert = dm->nglob[PA_VERTEX];
-  s.nelem = dm->nglob[PA_ELEMENT];
-  s.nbdry = dm->nglob[PA_BOUNDARY];
+  s->dim = d;
+  s->has_metric = nc > 0;
+  s->nvert = dm->nglob[PA_VERTEX];
+  s->nelem = dm->nglob[PA_ELEMENT];
+  s->nbdry = dm->nglob[PA_BOUNDARY];
 
   /* elements */
   for (pa_idx e = 0; e < ne; e++) {
@@ -125,10 +105,8 @@ pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
       x[k] = m->coord + (size_t)d * v[k];
       mm[k] = nc ? met + (size_t)nc * v[k] : NULL;
     }
-    double vol = pa__simplex_volume(d, x);
-    s.volume += vol;
-    if (vol <= 0) s.ninverted++;
-    add_quality(&s, pa__quality(d, nc, x, mm), e);
+    pa__stats_add_elem(&acc, pa__simplex_volume(d, x),
+                       pa__quality(d, nc, x, mm));
   }
 
   /* vertices with copies elsewhere: ghosts, and owned ones with ghosts */
@@ -155,7 +133,7 @@ pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
                                      nc ? met + (size_t)nc * a : NULL,
                                      nc ? met + (size_t)nc * b : NULL);
         if (!shared[a] || !shared[b]) {
-          add_edge(&s, len);
+          pa__stats_add_edge(&acc, len);
           continue;
         }
         pa_gid ab[2] = {vg[a], vg[b]};
@@ -175,16 +153,17 @@ pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
     for (size_t j = i; j > 0 && R.gid[j - 1] == R.gid[i] && !dup; j--)
       dup = R.vgid[2 * (j - 1)] == R.vgid[2 * i] &&
             R.vgid[2 * (j - 1) + 1] == R.vgid[2 * i + 1];
-    if (!dup) add_edge(&s, R.dbl[i]);
+    if (!dup) pa__stats_add_edge(&acc, R.dbl[i]);
   }
-  PA_CALL(combine(dm->comm, &s));
+  pa__stats_acc_sums(&acc);
+  PA_CALL(combine(dm->comm, &acc));
   {
     pa_status c = check ? pa_dmesh_check(dm) : PA_SUCCESS;
     if (c == PA_ERR_MEMORY) PA_CALL(c);
-    s.valid = c == PA_SUCCESS;
-    if (!s.valid) pa_clear_error();
+    s->valid = c == PA_SUCCESS;
+    if (!s->valid) pa_clear_error();
   }
-  *stats = s;
+  *stats = *s;
 cleanup:
   if (dm) st = pa__agree_end(dm->comm, st);
   pa__free(shared);
