@@ -199,9 +199,7 @@ static void count_pieces(pa__iter *it, int npieces_max, double wsum) {
 /* Step 2: partition the tagged elements, weighted by their work, and label
  * them. pa__partition_dgraph scales the weights to integer loads in [1, S],
  * S = min(1e6, 2^30 / tagged elements), so that their sum fits Scotch's
- * 32-bit integers whatever the count. (Until 2026-11-22 a stale guard here
- * dropped the weights beyond 2147 tagged elements: every real partition
- * balanced element counts, not work.) */
+ * 32-bit integers whatever the count. */
 static pa_status partition_tagged(pa__iter *it, tagged *t) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;

@@ -292,12 +292,17 @@ static void dfile_free(dfile *f) {
 static pa_status read_block(FILE *fp, const char *path, void **p, size_t n,
                             int64_t avail) {
   pa_status st = PA_SUCCESS;
+  *p = NULL;
   PA_CHECK((int64_t)n <= avail, PA_ERR_FORMAT,
            "%s: a padapt keyword is larger than its room in the file", path);
   *p = pa__malloc(n ? n : 1);
   PA_CHECK(*p, PA_ERR_MEMORY, "out of memory reading %s", path);
   PA_CHECK(fread(*p, 1, n, fp) == n, PA_ERR_FORMAT, "%s: truncated", path);
 cleanup:
+  if (st != PA_SUCCESS && *p) { /* the caller keeps only a block it got */
+    pa__free(*p);
+    *p = NULL;
+  }
   return st;
 }
 
