@@ -311,22 +311,11 @@ static pa_status piece_vertices(pbuild *b) {
   const pa__recs *V = &b->R[PA_VERTEX];
   pa__piece *pc = b->pc;
   pa_mesh *m = b->m;
-  int d = m->dim, p = b->p;
+  int p = b->p;
   pa_idx nv = b->start[PA_VERTEX][p + 1] - b->start[PA_VERTEX][p];
   for (pa_idx k = 0; k < nv; k++) {
     size_t i = (size_t)b->idx[PA_VERTEX][b->start[PA_VERTEX][p] + k];
-    const double *y = V->dbl + (size_t)V->ndbl * i;
-    memcpy(m->coord + (size_t)d * k, y, d * sizeof *y);
-    y += d;
-    if (m->met_ncomp) {
-      memcpy(m->met + (size_t)m->met_ncomp * k, y, m->met_ncomp * sizeof *y);
-      y += m->met_ncomp;
-    }
-    for (int f = 0; f < m->nfield; f++) {
-      memcpy(m->field[f].val + (size_t)m->field[f].ncomp * k, y,
-             m->field[f].ncomp * sizeof *y);
-      y += m->field[f].ncomp;
-    }
+    pa__vertex_set_doubles(m, k, V->dbl + (size_t)V->ndbl * i);
     m->vref[k] = V->ref[i];
     m->vflag[k] = V->flag[i];
     pc->vrank[k] = INT_MAX;

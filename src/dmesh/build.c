@@ -1133,18 +1133,7 @@ static pa_status fill_vertices(bstate *s, const pa__layout *lay, assembly *a) {
   PA_CALL(pa_mesh_reserve(m, (pa_idx)s->LV.n, (pa_idx)s->L.n, 0, 0));
   for (size_t k = 0; k < s->LV.n; k++) {
     size_t i = (size_t)a->ord[PA_VERTEX][k];
-    const double *x = s->LV.dbl + (size_t)s->LV.ndbl * i;
-    memcpy(m->coord + (size_t)d * k, x, d * sizeof(double));
-    x += d;
-    if (m->met_ncomp) {
-      memcpy(m->met + (size_t)m->met_ncomp * k, x, m->met_ncomp * sizeof(double));
-      x += m->met_ncomp;
-    }
-    for (int f = 0; f < m->nfield; f++) {
-      memcpy(m->field[f].val + (size_t)m->field[f].ncomp * k, x,
-             m->field[f].ncomp * sizeof(double));
-      x += m->field[f].ncomp;
-    }
+    pa__vertex_set_doubles(m, (pa_idx)k, s->LV.dbl + (size_t)s->LV.ndbl * i);
     m->vref[k] = s->LV.ref[i];
     m->vflag[k] = s->LV.flag[i];
   }
@@ -1387,6 +1376,19 @@ int pa__vertex_doubles(const pa_mesh *m, pa_idx v, int nfield, double *out) {
     for (int k = 0; k < nc; k++) out[n++] = m->field[f].val[(size_t)nc * v + k];
   }
   return n;
+}
+
+void pa__vertex_set_doubles(pa_mesh *m, pa_idx v, const double *in) {
+  int d = m->dim, nm = m->met_ncomp;
+  memcpy(m->coord + (size_t)d * v, in, d * sizeof *in);
+  in += d;
+  if (nm) memcpy(m->met + (size_t)nm * v, in, nm * sizeof *in);
+  in += nm;
+  for (int f = 0; f < m->nfield; f++) {
+    int nc = m->field[f].ncomp;
+    memcpy(m->field[f].val + (size_t)nc * v, in, nc * sizeof *in);
+    in += nc;
+  }
 }
 
 pa_status pa__dmesh_build(pa_dmesh *dm, const pa__layout *lay, int overlap,

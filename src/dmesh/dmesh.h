@@ -210,6 +210,9 @@ int pa__layout_ndbl(const pa__layout *l);
 /* The doubles of the record of vertex v of m: coordinates, metric, then the
  * first nfield fields (in that order, the layout's); returns the count. */
 int pa__vertex_doubles(const pa_mesh *m, pa_idx v, int nfield, double *out);
+/* The inverse for all of m's fields: vertex v of m takes the doubles of a
+ * record (coordinates, metric, fields). */
+void pa__vertex_set_doubles(pa_mesh *m, pa_idx v, const double *in);
 
 /* Collective: remove value val (if not NULL) at the end of a collective
  * function; returns st, or the removal's status if st is PA_SUCCESS. */
