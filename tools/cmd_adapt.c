@@ -323,182 +323,196 @@ pa_status pa_cli_adapt_svg(const pa_cli_adapt_args *a, const pa_stats *before,
   return pa_cli_svg_histograms(a->svg, title, two, 2, names);
 }
 
+/* The metric to adapt to, on the mesh read: the input's own sizes (-optim),
+ * the -met file, or the mesh's own view "metric", which comes before a metric
+ * found beside IN. With -hsiz none is needed. Returns 0, or 1 after printing
+ * the error. */
+static int attach_metric(const pa_cli *cli, const pa_cli_adapt_args *a,
+                         pa_mesh *mesh) {
+  const char *met = a->met;
+  if (met == a->met_default && pa_mesh_metric_ncomp(mesh) > 0) {
+    if (a->remesh.verbosity >= 0)
+      printf("padapt: adapt: metric: the view \"metric\" of %s (not %s)\n",
+             a->in, met);
+    met = NULL;
+  }
+  if (a->optim) return pa_cli_fail(cli, pa_mesh_metric_from_edges(mesh));
+  if (met) return pa_cli_fail(cli, pa_cli_attach_metric(mesh, met));
+  if (a->remesh.hsiz <= 0 && pa_mesh_metric_ncomp(mesh) == 0)
+    return pa_cli_error(cli, "adapt: no metric: give -met SOL, -sol SOL or "
+                             "-hsiz H (or a view \"metric\" in a .msh input)");
+  return 0;
+}
+
+/* Everything the sequential run reads beside the mesh: the metric, the local
+ * parameters (into opts; *local owns them) and the -field fields. Returns 0,
+ * or 1 after printing the error. */
+static int read_inputs(const pa_cli *cli, const pa_cli_adapt_args *a,
+                       pa_mesh *mesh, pa_remesh_opts *opts,
+                       pa_local_param **local) {
+  if (attach_metric(cli, a, mesh)) return 1;
+  if (a->params) {
+    if (pa_cli_read_params(cli, a->params, pa_mesh_dim(mesh), local,
+                           &opts->nlocal))
+      return 1;
+    opts->local = *local;
+  }
+  if (a->field) return pa_cli_fail(cli, pa_cli_attach_fields(mesh, a->field));
+  return 0;
+}
+
+/* The statistics of the input in the target metric (-hsiz's constant size
+ * when the mesh has no metric), printed. Returns 0, or 1 after printing the
+ * error. */
+static int report_before(const pa_cli *cli, const pa_cli_adapt_args *a,
+                         pa_mesh *mesh, pa_stats *before) {
+  double hsiz = a->remesh.hsiz;
+  if (hsiz > 0 && pa_mesh_metric_ncomp(mesh) == 0) {
+    pa_idx nv = pa_mesh_nvert(mesh);
+    double *h = malloc(sizeof(double) * (nv ? nv : 1));
+    if (!h) return pa_cli_error(cli, "adapt: out of memory");
+    for (pa_idx v = 0; v < nv; v++) h[v] = hsiz;
+    pa_status st = pa_mesh_set_metric(mesh, 1, h);
+    free(h);
+    if (st) return pa_cli_fail(cli, st);
+  }
+  pa_status st = pa_mesh_stats(mesh, before);
+  if (st) return pa_cli_fail(cli, st);
+  printf(" -- INPUT %s\n", a->in);
+  pa_stats_print(before, stdout);
+  fflush(stdout);
+  return 0;
+}
+
+/* The built-in remesher on the mesh, with the live progress line; the
+ * figures of the result in the given metric in rep->fidelity.user. Returns 0
+ * for a valid mesh (target met or missed), or 1 after printing the error. */
+static int run_remesher(const pa_cli *cli, pa_mesh *mesh, pa_remesh_opts *opts,
+                        pa_remesh_report *rep) {
+  pa_cli_progress live;
+  pa_cli_progress_init(&live, opts->verbosity >= 0);
+  opts->progress = pa_cli_progress_cb;
+  opts->progress_ctx = &live;
+  pa_status st = pa_remesh(pa_remesher_builtin(), mesh, opts, rep);
+  pa_cli_progress_end(&live);
+  if (st != PA_SUCCESS) return pa_cli_fail(cli, st);
+  if (rep->outcome == PA_REMESH_FAILED)
+    return pa_cli_error(cli, "adapt: the remesher failed (%s); nothing written",
+                        pa_last_error()[0] ? pa_last_error() : "no detail");
+  if (!rep->fidelity.measured) /* out of memory measuring: try once more */
+    return pa_cli_fail(cli, pa_mesh_stats(mesh, &rep->fidelity.user));
+  return 0;
+}
+
+/* The statistics of the output in the given metric, the operation counts and
+ * the remesher's verdict on stdout; the warning of a missed target. */
+static void report_after(const pa_cli_adapt_args *a, const pa_mesh *mesh,
+                         const pa_remesh_report *rep) {
+  printf(" -- OUTPUT %s, in the given metric\n", a->out);
+  pa_stats_print(&rep->fidelity.user, stdout);
+  pa_cli_print_fidelity(&rep->fidelity, stdout);
+  printf(" -- ADAPTATION\n"
+         "    splits %ld, collapses %ld, swaps %ld, moves %ld, passes %d\n"
+         "    time %.3f s (%.0f output elements/s), peak padapt memory %.1f MB\n"
+         "    remesher verdict on the metric used: %s\n",
+         rep->nsplit, rep->ncollapse, rep->nswap, rep->nmove, rep->npass,
+         rep->time_s, rep->time_s > 0 ? pa_mesh_nelem(mesh) / rep->time_s : 0.0,
+         pa_memory_peak() / 1e6, outcome_name(rep->outcome));
+  fflush(stdout);
+  if (!rep->fidelity.target_met)
+    fprintf(stderr, "padapt: warning: adapt: target missed (valid mesh, but "
+                    "the given metric is not met; see the outcome line)\n");
+}
+
+/* The -json report: the after-statistics with the time, memory and counts of
+ * the run and the figures before. */
+static pa_status write_json(const pa_cli_adapt_args *a, const pa_stats *before,
+                            const pa_remesh_report *rep) {
+  char *fid = pa_cli_fidelity_json(&rep->fidelity);
+  pa_cli_sbuf b = {NULL, 0, 0, 0};
+  pa_cli_sb_printf(&b,
+                   "\"time_s\": %.6f, \"peak_rss_bytes\": %zu, "
+                   "\"peak_memory_bytes\": %zu, \"remesher_outcome\": "
+                   "\"%s\", \"nsplit\": %ld, \"ncollapse\": %ld, "
+                   "\"nswap\": %ld, \"nmove\": %ld, \"npass\": %d, "
+                   "\"elements_before\": %lld, \"vertices_before\": %lld, "
+                   "%s",
+                   rep->time_s, pa_peak_rss(), pa_memory_peak(),
+                   outcome_name(rep->outcome), rep->nsplit, rep->ncollapse,
+                   rep->nswap, rep->nmove, rep->npass, (long long)before->nelem,
+                   (long long)before->nvert, fid ? fid : "");
+  pa_status st = b.fail || !fid
+                     ? pa_set_error(PA_ERR_MEMORY, "out of memory")
+                     : pa_stats_write_json(&rep->fidelity.user, b.p, a->json);
+  free(fid);
+  free(b.p);
+  return st;
+}
+
+/* Every output in one transaction, all of them or none: the mesh, its metric
+ * (unless -nosol), its fields, the -json report and the -svg picture.
+ * Returns 0, or 1 after printing the error. */
+static int write_outputs(const pa_cli *cli, const pa_cli_adapt_args *a,
+                         pa_mesh *mesh, const pa_stats *before,
+                         const pa_remesh_report *rep) {
+  char *solpath = NULL, *fieldpath = NULL;
+  pa_output *tx = NULL;
+  pa_status st = pa_output_begin(&tx);
+  if (st == PA_SUCCESS) st = pa_mesh_write(mesh, a->out, NULL);
+  if (st == PA_SUCCESS && !a->nosol) {
+    pa_sol *sol = NULL;
+    solpath = a->outsol ? NULL : pa_cli_replace_ext(a->out, ".sol");
+    st = pa_mesh_metric_to_sol(mesh, 0, &sol);
+    if (st == PA_SUCCESS)
+      st = pa_sol_write(sol, a->outsol ? a->outsol : solpath);
+    pa_sol_destroy(sol);
+  }
+  if (st == PA_SUCCESS && pa_mesh_nfield(mesh) > 0) {
+    fieldpath = a->outfield ? NULL : pa_cli_replace_ext(a->out, ".fields.sol");
+    st = pa_cli_write_fields(mesh, a->outfield ? a->outfield : fieldpath);
+  }
+  if (st == PA_SUCCESS && a->json) st = write_json(a, before, rep);
+  if (st == PA_SUCCESS && a->svg)
+    st = pa_cli_adapt_svg(a, before, &rep->fidelity.user);
+  st = pa_cli_output_end(MPI_COMM_SELF, tx, st);
+  free(solpath);
+  free(fieldpath);
+  if (st == PA_SUCCESS) return 0;
+  pa_cli_fail(cli, st);
+  return pa_cli_error(cli, "adapt: no output written");
+}
+
+/* The sequential adaptation on rank 0 alone: read, report before, remesh,
+ * report after, write. */
+static int adapt_sequential(const pa_cli *cli, const pa_cli_adapt_args *a) {
+  pa_mesh *mesh = NULL;
+  pa_local_param *local = NULL;
+  pa_remesh_opts opts = a->remesh;
+  pa_stats before;
+  pa_remesh_report rep;
+  pa_status st = pa_cli_read_mesh(cli, a->in, &mesh); /* collective */
+  if (cli->rank != 0) return st ? 1 : 0;
+  int rc = pa_cli_fail(cli, st);
+  if (!rc) rc = read_inputs(cli, a, mesh, &opts, &local);
+  if (!rc) rc = report_before(cli, a, mesh, &before);
+  if (!rc) rc = run_remesher(cli, mesh, &opts, &rep);
+  if (!rc) report_after(a, mesh, &rep);
+  if (!rc) rc = write_outputs(cli, a, mesh, &before, &rep);
+  free(local);
+  pa_mesh_destroy(mesh);
+  return rc;
+}
+
 int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
   pa_cli_adapt_args args;
   int prc = parse_args(cli, argc, argv, &args);
   if (prc) return prc > 0 ? 1 : 0;
   if (check_outputs(cli, &args)) return 1;
-  /* On several ranks, or when asked for a distributed output or a memory
-   * bound, the parallel piece loop (tools/cmd_padapt.c) does the work. */
+  /* On several ranks, or when asked for a distributed output, a memory
+   * bound or a checkpoint, the parallel piece loop (tools/cmd_padapt.c) does
+   * the work. */
   if (cli->size > 1 || args.distributed || args.mem_mb > 0 ||
       args.checkpoint || args.restart)
     return pa_cli_adapt_parallel(cli, &args);
-  const char *in = args.in, *out = args.out, *met = args.met;
-  const char *outsol = args.outsol, *field = args.field;
-  const char *outfield = args.outfield, *json = args.json;
-  int nosol = args.nosol, rc = 1;
-  pa_remesh_opts opts = args.remesh;
-
-  pa_mesh *mesh = NULL;
-  pa_sol *sol = NULL;
-  pa_local_param *local = NULL;
-  char *solpath = NULL, *fieldpath = NULL, *extra = NULL;
-  pa_stats before;
-  pa_remesh_report rep;
-  pa_status st = pa_cli_read_mesh(cli, in, &mesh); /* collective */
-  if (cli->rank != 0) return st ? 1 : 0;
-  if (st != PA_SUCCESS) {
-    pa_cli_fail(cli, st);
-    goto done;
-  }
-  if (met == args.met_default && pa_mesh_metric_ncomp(mesh) > 0) {
-    if (opts.verbosity >= 0)
-      printf("padapt: adapt: metric: the view \"metric\" of %s (not %s)\n",
-             in, met);
-    met = NULL; /* the file's own metric comes first */
-  }
-  if (args.optim) {
-    st = pa_mesh_metric_from_edges(mesh);
-    if (st) {
-      pa_cli_fail(cli, st);
-      goto done;
-    }
-  } else if (met) {
-    st = pa_cli_attach_metric(mesh, met);
-    if (st) {
-      pa_cli_fail(cli, st);
-      goto done;
-    }
-  } else if (opts.hsiz <= 0 && pa_mesh_metric_ncomp(mesh) == 0) {
-    pa_cli_error(cli, "adapt: no metric: give -met SOL, -sol SOL or -hsiz H "
-                      "(or a view \"metric\" in a .msh input)");
-    goto done;
-  }
-  if (args.params) {
-    if (pa_cli_read_params(cli, args.params, pa_mesh_dim(mesh), &local,
-                           &opts.nlocal))
-      goto done;
-    opts.local = local;
-  }
-  if (field) {
-    st = pa_cli_attach_fields(mesh, field);
-    if (st) {
-      pa_cli_fail(cli, st);
-      goto done;
-    }
-  }
-
-  /* statistics before, in the target metric */
-  if (opts.hsiz > 0 && pa_mesh_metric_ncomp(mesh) == 0) {
-    pa_idx nv = pa_mesh_nvert(mesh);
-    double *h = malloc(sizeof(double) * (nv ? nv : 1));
-    if (!h) {
-      pa_cli_error(cli, "adapt: out of memory");
-      goto done;
-    }
-    for (pa_idx v = 0; v < nv; v++) h[v] = opts.hsiz;
-    st = pa_mesh_set_metric(mesh, 1, h);
-    free(h);
-    if (st) {
-      pa_cli_fail(cli, st);
-      goto done;
-    }
-  }
-  st = pa_mesh_stats(mesh, &before);
-  if (st) {
-    pa_cli_fail(cli, st);
-    goto done;
-  }
-  printf(" -- INPUT %s\n", in);
-  pa_stats_print(&before, stdout);
-  fflush(stdout);
-
-  pa_cli_progress live;
-  pa_cli_progress_init(&live, opts.verbosity >= 0);
-  opts.progress = pa_cli_progress_cb;
-  opts.progress_ctx = &live;
-  st = pa_remesh(pa_remesher_builtin(), mesh, &opts, &rep);
-  pa_cli_progress_end(&live);
-  if (st != PA_SUCCESS) {
-    pa_cli_fail(cli, st);
-    goto done;
-  }
-  if (rep.outcome == PA_REMESH_FAILED) {
-    pa_cli_error(cli, "adapt: the remesher failed (%s); nothing written",
-                 pa_last_error()[0] ? pa_last_error() : "no detail");
-    goto done;
-  }
-  if (!rep.fidelity.measured) { /* out of memory measuring: try once more */
-    st = pa_mesh_stats(mesh, &rep.fidelity.user);
-    if (st) {
-      pa_cli_fail(cli, st);
-      goto done;
-    }
-  }
-  const pa_stats *after = &rep.fidelity.user;
-  printf(" -- OUTPUT %s, in the given metric\n", out);
-  pa_stats_print(after, stdout);
-  pa_cli_print_fidelity(&rep.fidelity, stdout);
-  printf(" -- ADAPTATION\n"
-         "    splits %ld, collapses %ld, swaps %ld, moves %ld, passes %d\n"
-         "    time %.3f s (%.0f output elements/s), peak padapt memory %.1f MB\n"
-         "    remesher verdict on the metric used: %s\n",
-         rep.nsplit, rep.ncollapse, rep.nswap, rep.nmove, rep.npass, rep.time_s,
-         rep.time_s > 0 ? pa_mesh_nelem(mesh) / rep.time_s : 0.0,
-         pa_memory_peak() / 1e6, outcome_name(rep.outcome));
-  fflush(stdout);
-  if (!rep.fidelity.target_met)
-    fprintf(stderr, "padapt: warning: adapt: target missed (valid mesh, but "
-                    "the given metric is not met; see the outcome line)\n");
-
-  /* every output in one transaction: all of them or none */
-  pa_output *tx = NULL;
-  st = pa_output_begin(&tx);
-  if (st == PA_SUCCESS) st = pa_mesh_write(mesh, out, NULL);
-  if (st == PA_SUCCESS && !nosol) {
-    solpath = outsol ? NULL : pa_cli_replace_ext(out, ".sol");
-    st = pa_mesh_metric_to_sol(mesh, 0, &sol);
-    if (st == PA_SUCCESS) st = pa_sol_write(sol, outsol ? outsol : solpath);
-    pa_sol_destroy(sol);
-    sol = NULL;
-  }
-  if (st == PA_SUCCESS && pa_mesh_nfield(mesh) > 0) {
-    fieldpath = outfield ? NULL : pa_cli_replace_ext(out, ".fields.sol");
-    st = pa_cli_write_fields(mesh, outfield ? outfield : fieldpath);
-  }
-  if (st == PA_SUCCESS && json) {
-    char *fid = pa_cli_fidelity_json(&rep.fidelity);
-    pa_cli_sbuf b = {NULL, 0, 0, 0};
-    pa_cli_sb_printf(&b,
-                     "\"time_s\": %.6f, \"peak_rss_bytes\": %zu, "
-                     "\"peak_memory_bytes\": %zu, \"remesher_outcome\": "
-                     "\"%s\", \"nsplit\": %ld, \"ncollapse\": %ld, "
-                     "\"nswap\": %ld, \"nmove\": %ld, \"npass\": %d, "
-                     "\"elements_before\": %lld, \"vertices_before\": %lld, "
-                     "%s",
-                     rep.time_s, pa_peak_rss(), pa_memory_peak(),
-                     outcome_name(rep.outcome), rep.nsplit, rep.ncollapse,
-                     rep.nswap, rep.nmove, rep.npass, (long long)before.nelem,
-                     (long long)before.nvert, fid ? fid : "");
-    free(fid);
-    extra = b.fail || !fid ? NULL : b.p;
-    if (!extra) free(b.p);
-    st = extra ? pa_stats_write_json(after, extra, json)
-               : pa_set_error(PA_ERR_MEMORY, "out of memory");
-  }
-  if (st == PA_SUCCESS && args.svg) st = pa_cli_adapt_svg(&args, &before, after);
-  st = pa_cli_output_end(MPI_COMM_SELF, tx, st);
-  if (st != PA_SUCCESS) {
-    pa_cli_fail(cli, st);
-    pa_cli_error(cli, "adapt: no output written");
-    goto done;
-  }
-  rc = 0;
-done:
-  free(local);
-  free(solpath);
-  free(fieldpath);
-  free(extra);
-  pa_mesh_destroy(mesh);
-  return rc;
+  return adapt_sequential(cli, &args);
 }

@@ -219,8 +219,8 @@ static double lap(double *t0) {
  * distributed), print its statistics and adapt it into *dm: the statistics
  * before in *before, the report in *rep, the read and stats times in
  * tstep[0..1], on rank 0 the input's physical names on a mesh of their own
- * in *names. Collective; returns 1 on success, 0 after printing the error
- * (*dm and *names may then be set: the caller destroys them). */
+ * in *names. Collective; returns 0, or 1 after printing the error (*dm
+ * and *names may then be set: the caller destroys them). */
 static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
                           int set, const pa_adapt_opts *opts, pa_dmesh **dm,
                           pa_mesh **names, pa_stats *before,
@@ -233,7 +233,7 @@ static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
     st = pa_dmesh_read(cli->comm, in, 0, dm);
     if (st) {
       fail_collective(cli, st);
-      return 0;
+      return 1;
     }
   } else {
     st = pa_cli_read_mesh(cli, in, &mesh); /* collective */
@@ -260,22 +260,22 @@ static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
     MPI_Bcast(&ok, 1, MPI_INT, 0, cli->comm);
     if (ok) st = pa_dmesh_distribute(cli->comm, 0, mesh, 0, dm);
     pa_mesh_destroy(mesh);
-    if (!ok) return 0;
+    if (!ok) return 1;
     if (st) {
       fail_collective(cli, st);
-      return 0;
+      return 1;
     }
   }
   if (pa_mesh_metric_ncomp(pa_dmesh_mesh(*dm)) == 0 && opts->remesh.hsiz <= 0) {
     if (cli->rank == 0) pa_cli_error(cli, "adapt: no metric: give -hsiz H");
-    return 0;
+    return 1;
   }
   tstep[0] = lap(t0);
   if (pa_mesh_metric_ncomp(pa_dmesh_mesh(*dm)) > 0) {
     st = pa_dmesh_stats(*dm, before);
     if (st) {
       fail_collective(cli, st);
-      return 0;
+      return 1;
     }
   } else {
     memset(before, 0, sizeof *before);
@@ -298,7 +298,7 @@ static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
     MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, cli->comm);
     if (any) {
       free(local);
-      return 0;
+      return 1;
     }
     o.remesh.local = local;
   }
@@ -306,14 +306,14 @@ static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
   free(local);
   if (st) {
     fail_collective(cli, st);
-    return 0;
+    return 1;
   }
-  return 1;
+  return 0;
 }
 
 /* -restart DIR: resume the checkpointed run into *dm (pa_dmesh_adapt_resume;
  * the statistics before are not known: *before holds the counts only).
- * Collective; returns 1 on success, 0 after printing the error. */
+ * Collective; returns 0, or 1 after printing the error. */
 static int resume(const pa_cli *cli, const pa_cli_adapt_args *args,
                   const pa_adapt_opts *opts, pa_dmesh **dm, pa_stats *before,
                   pa_adapt_report *rep) {
@@ -326,165 +326,211 @@ static int resume(const pa_cli *cli, const pa_cli_adapt_args *args,
   if (st) {
     fail_collective(cli, st);
     if (cli->rank == 0) pa_cli_error(cli, "adapt: no output written");
-    return 0;
+    return 1;
   }
   memset(before, 0, sizeof *before);
   before->nelem = rep->nelem_initial;
   before->nvert = rep->nvert_initial;
-  return 1;
+  return 0;
 }
 
-int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
-  const char *in = args->in, *out = args->out, *met = args->met;
-  const char *field = args->field, *json = args->json;
-  int distributed = args->distributed, nosol = args->nosol, rc = 1;
-  pa_adapt_opts opts;
-  pa_adapt_opts_default(&opts);
-  opts.remesh = args->remesh;
-  if (args->mem_mb > 0) opts.mem_mb = args->mem_mb;
-  if (args->max_iter > 0) opts.max_iter = args->max_iter;
-  if (args->pieces > 0) opts.pieces_per_rank = args->pieces;
-  if (args->check) opts.check_pieces = 1;
-  int set = cli->rank == 0 && in ? pa_dmesh_is_set(in) : 0;
-  MPI_Bcast(&set, 1, MPI_INT, 0, cli->comm);
+/* Whether IN is a distributed set (*set, the same on every rank), and the
+ * inputs that go with it: -restart reads none of them (a note says so), a
+ * set takes no -met nor -field. Collective; returns 0, or 1 after printing
+ * the error. */
+static int check_input(const pa_cli *cli, const pa_cli_adapt_args *args,
+                       int *set) {
+  const char *in = args->in;
+  *set = cli->rank == 0 && in ? pa_dmesh_is_set(in) : 0;
+  MPI_Bcast(set, 1, MPI_INT, 0, cli->comm);
   if (args->restart) {
-    if (cli->rank == 0 && (in || met || field))
+    if (cli->rank == 0 && (in || args->met || args->field))
       fprintf(stderr, "padapt: adapt: -restart: the mesh, its metric and "
                       "fields come from the checkpoint (IN, -met and -field "
                       "are not read)\n");
-  } else if (set && (met || field)) {
+  } else if (*set && (args->met || args->field)) {
     if (cli->rank == 0)
       pa_cli_error(cli, "adapt: -met and -field need a sequential input mesh, "
                         "not a distributed set");
     return 1;
   }
+  return 0;
+}
 
-  pa_dmesh *dm = NULL;
-  pa_mesh *g = NULL, *names = NULL;
-  pa_stats before;
-  pa_adapt_report rep;
-  pa_status st = PA_SUCCESS;
-  char *extra = NULL, *path = NULL;
-  uint64_t mine[2], *mem = NULL, *rss = NULL;
-  const pa_remesher *r = pa_remesher_builtin();
-  double tstep[5], t0 = pa_wtime(); /* read, stats, adapt, stats, write */
+/* The options of the piece loop from the command's. */
+static void loop_opts(const pa_cli_adapt_args *args, pa_adapt_opts *opts) {
+  pa_adapt_opts_default(opts);
+  opts->remesh = args->remesh;
+  if (args->mem_mb > 0) opts->mem_mb = args->mem_mb;
+  if (args->max_iter > 0) opts->max_iter = args->max_iter;
+  if (args->pieces > 0) opts->pieces_per_rank = args->pieces;
+  if (args->check) opts->check_pieces = 1;
+  opts->checkpoint_dir = args->checkpoint;
+}
+
+/* Read and adapt IN, or resume from the checkpoint (read_and_adapt, resume,
+ * with their arguments), with one progress line per iteration and, on rank
+ * 0, the remesher's live line. Collective; returns 0, or 1 after printing
+ * the error. */
+static int adapt(const pa_cli *cli, const pa_cli_adapt_args *args, int set,
+                 pa_dmesh **dm, pa_mesh **names, pa_stats *before,
+                 pa_adapt_report *rep, double *tstep, double *t0) {
+  pa_adapt_opts opts;
+  loop_opts(args, &opts);
   const char *kill_iter = getenv("PADAPT_TEST_KILL_ITER");
   progress_ctx pctx = {cli, kill_iter && kill_iter[0] ? atoi(kill_iter) : 0};
   pa_cli_progress live;
   opts.progress = progress;
   opts.progress_ctx = &pctx;
-  opts.checkpoint_dir = args->checkpoint;
   pa_cli_progress_init(&live, cli->rank == 0 && opts.remesh.verbosity >= 0);
   opts.remesh.progress = pa_cli_progress_cb;
   opts.remesh.progress_ctx = &live;
-  memset(&rep, 0, sizeof rep);
-  memset(tstep, 0, sizeof tstep);
-
-  /* read and adapt, or resume from the checkpoint */
   int adapted = args->restart
-                    ? resume(cli, args, &opts, &dm, &before, &rep)
-                    : read_and_adapt(cli, args, set, &opts, &dm, &names,
-                                     &before, &rep, tstep, &t0);
+                    ? resume(cli, args, &opts, dm, before, rep)
+                    : read_and_adapt(cli, args, set, &opts, dm, names, before,
+                                     rep, tstep, t0);
   pa_cli_progress_end(&live);
-  if (!adapted) goto done;
-  tstep[2] = lap(&t0);
-  const pa_stats *after = &rep.fidelity.user;
+  return adapted;
+}
+
+/* On rank 0, the output's statistics, Table 1 and the outcome, with the
+ * warnings of a missed target and of a stalled loop written anyway
+ * (-best-effort). Returns 0, or 1 after printing the error of a loop that
+ * stalled without -best-effort (on every rank: rep is the same on all). */
+static int report(const pa_cli *cli, const pa_cli_adapt_args *args,
+                  const pa_adapt_report *rep) {
   if (cli->rank == 0) {
-    printf(" -- OUTPUT %s, in the given metric\n", out);
-    pa_stats_print(after, stdout);
-    print_table(cli, &rep, after, r->name);
-    pa_cli_print_fidelity(&rep.fidelity, stdout);
+    printf(" -- OUTPUT %s, in the given metric\n", args->out);
+    pa_stats_print(&rep->fidelity.user, stdout);
+    print_table(cli, rep, &rep->fidelity.user, pa_remesher_builtin()->name);
+    pa_cli_print_fidelity(&rep->fidelity, stdout);
     fflush(stdout);
-    if (!rep.fidelity.target_met)
+    if (!rep->fidelity.target_met)
       fprintf(stderr, "padapt: warning: adapt: target missed (valid mesh, but "
                       "the given metric is not met; see the outcome line)\n");
-    if (!rep.converged && args->best_effort)
+    if (!rep->converged && args->best_effort)
       fprintf(stderr, "padapt: warning: adapt: the loop stalled with %lld "
                       "elements still tagged (valid mesh, written: "
                       "-best-effort)\n",
-              (long long)rep.ntagged_left);
+              (long long)rep->ntagged_left);
   }
-  if (!rep.converged && !args->best_effort) { /* rep is the same on all ranks */
-    if (cli->rank == 0)
-      pa_cli_error(cli, "adapt: the loop stalled with %lld elements still "
-                        "tagged after %d iteration%s: no output written "
-                        "(-best-effort writes the valid mesh anyway)",
-                   (long long)rep.ntagged_left, rep.niter,
-                   rep.niter > 1 ? "s" : "");
-    goto done;
-  }
+  if (rep->converged || args->best_effort) return 0;
+  if (cli->rank == 0)
+    pa_cli_error(cli, "adapt: the loop stalled with %lld elements still "
+                      "tagged after %d iteration%s: no output written "
+                      "(-best-effort writes the valid mesh anyway)",
+                 (long long)rep->ntagged_left, rep->niter,
+                 rep->niter > 1 ? "s" : "");
+  return 1;
+}
 
-  /* write: every output of every rank in one transaction */
-  tstep[3] = lap(&t0);
-  pa_output *tx = NULL;
-  st = pa_output_begin(&tx);
-  if (distributed) {
-    if (st == PA_SUCCESS) st = pa_dmesh_write(dm, out);
-  } else {
-    if (st == PA_SUCCESS) st = pa_dmesh_gather(dm, 0, &g);
-    if (st == PA_SUCCESS && cli->rank == 0) {
-      if (names) st = copy_names(g, names);
-      if (st == PA_SUCCESS) st = pa_mesh_write(g, out, NULL);
-      if (st == PA_SUCCESS && !nosol) {
-        pa_sol *sol = NULL;
-        path = pa_cli_replace_ext(out, ".sol");
-        st = pa_mesh_metric_to_sol(g, 0, &sol);
-        if (st == PA_SUCCESS)
-          st = pa_sol_write(sol, args->outsol ? args->outsol : path);
-        pa_sol_destroy(sol);
-        free(path);
-        path = NULL;
-      }
-      if (st == PA_SUCCESS && pa_mesh_nfield(g) > 0) {
-        path = pa_cli_replace_ext(out, ".fields.sol");
-        st = pa_cli_write_fields(g, args->outfield ? args->outfield : path);
-      }
-    }
+/* The mesh: a distributed set (which carries its metric and fields), or
+ * gathered into *g on rank 0 with the input's physical names and written
+ * with its metric (unless -nosol) and its fields. Collective. */
+static pa_status write_mesh(const pa_cli *cli, const pa_cli_adapt_args *args,
+                            pa_dmesh *dm, const pa_mesh *names, pa_mesh **g) {
+  const char *out = args->out;
+  if (args->distributed) return pa_dmesh_write(dm, out);
+  pa_status st = pa_dmesh_gather(dm, 0, g);
+  if (st != PA_SUCCESS || cli->rank != 0) return st;
+  char *path = NULL;
+  if (names) st = copy_names(*g, names);
+  if (st == PA_SUCCESS) st = pa_mesh_write(*g, out, NULL);
+  if (st == PA_SUCCESS && !args->nosol) {
+    pa_sol *sol = NULL;
+    path = pa_cli_replace_ext(out, ".sol");
+    st = pa_mesh_metric_to_sol(*g, 0, &sol);
+    if (st == PA_SUCCESS)
+      st = pa_sol_write(sol, args->outsol ? args->outsol : path);
+    pa_sol_destroy(sol);
+    free(path);
+    path = NULL;
   }
-  /* the peak memory of every rank, writing included, for the report */
-  mine[0] = pa_memory_peak();
-  mine[1] = pa_peak_rss();
+  if (st == PA_SUCCESS && pa_mesh_nfield(*g) > 0) {
+    path = pa_cli_replace_ext(out, ".fields.sol");
+    st = pa_cli_write_fields(*g, args->outfield ? args->outfield : path);
+  }
+  free(path);
+  return st;
+}
+
+/* The peak memory of every rank (padapt's, and the resident set) into
+ * mem[] and rss[] on rank 0, malloc'ed (NULL elsewhere, and when out of
+ * memory). Collective. */
+static void gather_peaks(const pa_cli *cli, uint64_t **mem, uint64_t **rss) {
+  uint64_t mine[2] = {pa_memory_peak(), pa_peak_rss()}, *both = NULL;
   if (cli->rank == 0) {
-    mem = calloc((size_t)cli->size, sizeof *mem);
-    rss = calloc((size_t)cli->size, sizeof *rss);
+    *mem = calloc((size_t)cli->size, sizeof **mem);
+    *rss = calloc((size_t)cli->size, sizeof **rss);
+    both = calloc(2 * (size_t)cli->size, sizeof *both);
   }
-  {
-    uint64_t *both = cli->rank == 0 ? calloc(2 * (size_t)cli->size, sizeof *both) : NULL;
-    MPI_Gather(mine, 2, MPI_UINT64_T, both, 2, MPI_UINT64_T, 0, cli->comm);
-    if (cli->rank == 0 && both && mem && rss)
-      for (int k = 0; k < cli->size; k++) {
-        mem[k] = both[2 * k];
-        rss[k] = both[2 * k + 1];
-      }
-    free(both);
-  }
-  if (st == PA_SUCCESS && json && cli->rank == 0) {
-    extra = mem && rss ? json_extra(cli, &rep, &before, mem, rss, r->name) : NULL;
-    st = extra ? pa_stats_write_json(after, extra, json)
+  MPI_Gather(mine, 2, MPI_UINT64_T, both, 2, MPI_UINT64_T, 0, cli->comm);
+  if (cli->rank == 0 && both && *mem && *rss)
+    for (int k = 0; k < cli->size; k++) {
+      (*mem)[k] = both[2 * k];
+      (*rss)[k] = both[2 * k + 1];
+    }
+  free(both);
+}
+
+/* Every output of every rank in one transaction, all of them or none: the
+ * mesh (write_mesh), then on rank 0 the -json report, with the peak memory
+ * of every rank, writing included, and the -svg picture. Collective;
+ * returns 0, or 1 after printing the error. */
+static int write_outputs(const pa_cli *cli, const pa_cli_adapt_args *args,
+                         pa_dmesh *dm, const pa_mesh *names,
+                         const pa_stats *before, const pa_adapt_report *rep) {
+  pa_mesh *g = NULL;
+  uint64_t *mem = NULL, *rss = NULL;
+  pa_output *tx = NULL;
+  pa_status st = pa_output_begin(&tx);
+  if (st == PA_SUCCESS) st = write_mesh(cli, args, dm, names, &g);
+  gather_peaks(cli, &mem, &rss);
+  if (st == PA_SUCCESS && args->json && cli->rank == 0) {
+    char *extra = mem && rss ? json_extra(cli, rep, before, mem, rss,
+                                          pa_remesher_builtin()->name)
+                             : NULL;
+    st = extra ? pa_stats_write_json(&rep->fidelity.user, extra, args->json)
                : pa_set_error(PA_ERR_MEMORY, "out of memory");
+    free(extra);
   }
   if (st == PA_SUCCESS && args->svg && cli->rank == 0)
-    st = pa_cli_adapt_svg(args, &before, after);
+    st = pa_cli_adapt_svg(args, before, &rep->fidelity.user);
   st = pa_cli_output_end(cli->comm, tx, st);
-  if (st) {
-    if (cli->rank == 0) {
-      pa_cli_fail(cli, st);
-      pa_cli_error(cli, "adapt: no output written");
-    }
-    goto done;
-  }
-  tstep[4] = lap(&t0);
-  if (cli->verbosity >= 2 && cli->rank == 0)
-    fprintf(stderr, "padapt: rank 0: read and distribute %.3f s, stats %.3f s, "
-                    "adapt %.3f s, stats %.3f s, gather and write %.3f s\n",
-            tstep[0], tstep[1], tstep[2], tstep[3], tstep[4]);
-  rc = 0;
-done:
-  free(extra);
-  free(path);
   free(mem);
   free(rss);
   pa_mesh_destroy(g);
+  if (st == PA_SUCCESS) return 0;
+  if (cli->rank == 0) {
+    pa_cli_fail(cli, st);
+    pa_cli_error(cli, "adapt: no output written");
+  }
+  return 1;
+}
+
+int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
+  int set;
+  if (check_input(cli, args, &set)) return 1;
+  pa_dmesh *dm = NULL;
+  pa_mesh *names = NULL;
+  pa_stats before;
+  pa_adapt_report rep;
+  double tstep[5] = {0}; /* read, stats, adapt, stats, write */
+  double t0 = pa_wtime();
+  memset(&rep, 0, sizeof rep);
+  int rc = adapt(cli, args, set, &dm, &names, &before, &rep, tstep, &t0);
+  if (!rc) {
+    tstep[2] = lap(&t0);
+    rc = report(cli, args, &rep);
+  }
+  if (!rc) {
+    tstep[3] = lap(&t0);
+    rc = write_outputs(cli, args, dm, names, &before, &rep);
+  }
+  if (!rc && cli->verbosity >= 2 && cli->rank == 0)
+    fprintf(stderr, "padapt: rank 0: read and distribute %.3f s, stats %.3f s, "
+                    "adapt %.3f s, stats %.3f s, gather and write %.3f s\n",
+            tstep[0], tstep[1], tstep[2], tstep[3], lap(&t0));
   pa_mesh_destroy(names);
   pa_dmesh_destroy(dm);
   return rc;
