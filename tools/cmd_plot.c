@@ -69,9 +69,10 @@ typedef struct plot {
   double n[3], d;    /* 3D: the plane n.x = d */
   double u[3], v[3]; /* 3D: the picture's axes in the plane */
   char uname[16], vname[16];
-  /* the window and the screen frame */
+  /* the window and the screen frame: its origin (x0, y0) and size (pw, ph)
+   * in pixels */
   double win[4]; /* xmin ymin xmax ymax */
-  double scale, x0, y0;
+  double scale, x0, y0, pw, ph;
 } plot;
 
 static double dot3(const double *a, const double *b) {
@@ -224,6 +225,18 @@ static void to_screen(const plot *p, int n, double *xy) {
     xy[2 * k] = p->x0 + (xy[2 * k] - p->win[0]) * p->scale;
     xy[2 * k + 1] = p->y0 + (p->win[3] - xy[2 * k + 1]) * p->scale;
   }
+}
+
+/* Element e as a polygon on screen, its screen box in box; returns its
+ * number of points (0: not in the picture, or outside the window). */
+static int screen_polygon(const plot *p, pa_idx e, double *xy, double *box) {
+  int n = elem_polygon(p, e, xy);
+  if (!n) return 0;
+  bbox(n, xy, box);
+  if (!in_window(p, box)) return 0;
+  to_screen(p, n, xy);
+  bbox(n, xy, box);
+  return n;
 }
 
 static int cmp_ref(const void *a, const void *b) {
@@ -384,92 +397,109 @@ typedef struct plot_counts {
   int nrefs, more_refs;
 } plot_counts;
 
-/* Write the picture: pass 1 merges the sub-pixel elements into a grid of
- * cells (NaN: empty), pass 2 draws the cells, the other elements in the
- * window, the boundary and the legend. */
-static pa_status draw(plot *p, const plot_args *a, plot_counts *c, double pw,
-                      double ph, const char *title) {
-  pa_mesh *mesh = p->mesh;
-  pa_idx ne = pa_mesh_nelem(mesh), nb = pa_mesh_nbdry(mesh);
-  int32_t *eref = pa_mesh_elem_refs(mesh);
-  int gw = (int)ceil(pw / PLOT_CELL_PX), gh = (int)ceil(ph / PLOT_CELL_PX);
-  double *cell = malloc(sizeof(double) * (size_t)gw * (size_t)gh);
-  plot_cell *bycol = malloc(sizeof(plot_cell) * (size_t)gw * (size_t)gh);
-  double xy[8], box[4];
-  char col[8];
-  pa_cli_svg svg;
-  if (!cell || !bycol) {
-    free(cell);
-    free(bycol);
+/* The grid of merge cells over the frame: the value of each cell (the worst
+ * quality or the smallest reference merged into it; NaN: empty), and room
+ * to sort the cells by colour. */
+typedef struct plot_grid {
+  int gw, gh;
+  double *val;
+  plot_cell *bycol;
+} plot_grid;
+
+static void grid_destroy(plot_grid *g) {
+  free(g->val);
+  free(g->bycol);
+}
+
+static pa_status grid_create(plot_grid *g, const plot *p) {
+  g->gw = (int)ceil(p->pw / PLOT_CELL_PX);
+  g->gh = (int)ceil(p->ph / PLOT_CELL_PX);
+  size_t n = (size_t)g->gw * (size_t)g->gh;
+  g->val = malloc(sizeof(double) * n);
+  g->bycol = malloc(sizeof(plot_cell) * n);
+  if (!g->val || !g->bycol) {
+    grid_destroy(g);
     return pa_set_error(PA_ERR_MEMORY, "plot: out of memory");
   }
-  for (size_t k = 0; k < (size_t)gw * (size_t)gh; k++)
-    cell[k] = NAN;
+  for (size_t k = 0; k < n; k++)
+    g->val[k] = NAN;
+  return PA_SUCCESS;
+}
 
-  /* pass 1: merge the sub-pixel elements into cells */
+/* Merge the elements smaller than PLOT_SUBPIXEL_PX on screen into the cells
+ * of g under their centres, counting them and the cells in c. */
+static void merge_cells(const plot *p, const plot_args *a, plot_counts *c,
+                        plot_grid *g) {
+  pa_mesh *mesh = p->mesh;
+  pa_idx ne = pa_mesh_nelem(mesh);
+  int32_t *eref = pa_mesh_elem_refs(mesh);
+  double xy[8], box[4];
   for (pa_idx e = 0; e < ne; e++) {
-    int n = elem_polygon(p, e, xy);
-    if (!n) continue;
-    bbox(n, xy, box);
-    if (!in_window(p, box)) continue;
-    to_screen(p, n, xy);
-    bbox(n, xy, box);
+    if (!screen_polygon(p, e, xy, box)) continue;
     if (box[2] - box[0] >= PLOT_SUBPIXEL_PX ||
         box[3] - box[1] >= PLOT_SUBPIXEL_PX)
       continue;
     int i = (int)floor(((box[0] + box[2]) / 2 - p->x0) / PLOT_CELL_PX);
     int j = (int)floor(((box[1] + box[3]) / 2 - p->y0) / PLOT_CELL_PX);
     /* an element straddling the window's side goes to the cell inside */
-    i = i < 0 ? 0 : i >= gw ? gw - 1 : i;
-    j = j < 0 ? 0 : j >= gh ? gh - 1 : j;
+    i = i < 0 ? 0 : i >= g->gw ? g->gw - 1 : i;
+    j = j < 0 ? 0 : j >= g->gh ? g->gh - 1 : j;
     double val = a->by_ref ? (double)eref[e] : pa_mesh_elem_quality(mesh, e);
-    double *cv = &cell[(size_t)j * gw + i];
+    double *cv = &g->val[(size_t)j * g->gw + i];
     if (isnan(*cv)) c->ncells++;
     if (isnan(*cv) || val < *cv) *cv = val;
     c->nmerged++;
   }
+}
 
-  c->ndrawn = c->ninside - c->nmerged;
-  /* room for the legend on the right and for the title above */
-  double W = fmax(16 + pw + 170, PLOT_MIN_PICTURE_W),
-         H = 64 + fmax(ph, 330) + 30;
-  pa_status st = pa_cli_svg_begin(&svg, a->out, W, H);
-  if (st) {
-    free(cell);
-    free(bycol);
-    return st;
-  }
-  pa_cli_svg_text(&svg, 16, 22, "start", 14, "%s", title);
-  pa_cli_svg_text(&svg, 16, 42, "start", 11,
+/* Open the picture, with room for the legend on the right and the title
+ * above, and write the title, the counts line, the window's clip path and
+ * the frame's background. */
+static pa_status begin_picture(pa_cli_svg *svg, const plot *p,
+                               const plot_args *a, const plot_counts *c,
+                               const char *title) {
+  double W = fmax(16 + p->pw + 170, PLOT_MIN_PICTURE_W),
+         H = 64 + fmax(p->ph, 330) + 30;
+  pa_status st = pa_cli_svg_begin(svg, a->out, W, H);
+  if (st) return st;
+  pa_cli_svg_text(svg, 16, 22, "start", 14, "%s", title);
+  pa_cli_svg_text(svg, 16, 42, "start", 11,
                   "%lld polygons drawn, %lld sub-pixel elements merged into "
                   "%lld cells; %s in [%g, %g], %s in [%g, %g]",
                   (long long)c->ndrawn, (long long)c->nmerged,
                   (long long)c->ncells, p->uname, p->win[0], p->win[2],
                   p->vname, p->win[1], p->win[3]);
-  pa_cli_svg_raw(&svg,
+  pa_cli_svg_raw(svg,
                  "<clipPath id=\"window\"><rect x=\"%.2f\" y=\"%.2f\" "
                  "width=\"%.2f\" height=\"%.2f\"/></clipPath>\n",
-                 p->x0, p->y0, pw, ph);
-  pa_cli_svg_rect(&svg, p->x0, p->y0, pw, ph, "#f7f7f7", "frame");
+                 p->x0, p->y0, p->pw, p->ph);
+  pa_cli_svg_rect(svg, p->x0, p->y0, p->pw, p->ph, "#f7f7f7", "frame");
+  return PA_SUCCESS;
+}
 
-  /* the cells, one path per colour, then the polygons over them */
-  pa_cli_svg_raw(&svg, "<g clip-path=\"url(#window)\" class=\"cells\">\n");
+/* The cells of g, one path per colour, a run of cells along a row one
+ * rectangle. */
+static void draw_cells(pa_cli_svg *svg, const plot *p, const plot_args *a,
+                       plot_grid *g) {
+  int gw = g->gw;
+  plot_cell *bycol = g->bycol;
+  char col[8];
   size_t nc = 0;
-  for (size_t k = 0; k < (size_t)gw * (size_t)gh; k++) {
-    if (isnan(cell[k])) continue;
+  pa_cli_svg_raw(svg, "<g clip-path=\"url(#window)\" class=\"cells\">\n");
+  for (size_t k = 0; k < (size_t)gw * (size_t)g->gh; k++) {
+    if (isnan(g->val[k])) continue;
     if (a->by_ref)
-      pa_cli_svg_ref_colour((int32_t)cell[k], col);
+      pa_cli_svg_ref_colour((int32_t)g->val[k], col);
     else
-      pa_cli_svg_quality_colour(cell[k], col);
+      pa_cli_svg_quality_colour(g->val[k], col);
     bycol[nc].rgb = (uint32_t)strtoul(col + 1, NULL, 16);
     bycol[nc++].k = (uint32_t)k;
   }
   qsort(bycol, nc, sizeof *bycol, cmp_cell);
   for (size_t k = 0, run; k < nc; k += run) {
     if (k == 0 || bycol[k].rgb != bycol[k - 1].rgb)
-      pa_cli_svg_raw(&svg, "%s<path fill=\"#%06x\" d=\"", k ? "\"/>\n" : "",
+      pa_cli_svg_raw(svg, "%s<path fill=\"#%06x\" d=\"", k ? "\"/>\n" : "",
                      (unsigned)bycol[k].rgb);
-    /* a run of cells of this colour along a row: one rectangle */
     long i = (long)(bycol[k].k % (uint32_t)gw),
          j = (long)(bycol[k].k / (uint32_t)gw);
     for (run = 1; k + run < nc && bycol[k + run].rgb == bycol[k].rgb &&
@@ -479,20 +509,26 @@ static pa_status draw(plot *p, const plot_args *a, plot_counts *c, double pw,
     /* the frame's origin is a whole pixel and cells are PLOT_CELL_PX wide */
     double w = (double)run * PLOT_CELL_PX;
     pa_cli_svg_raw(
-        &svg, "M%ld %ldh%gv%gh-%gz", lround(p->x0 + (double)i * PLOT_CELL_PX),
+        svg, "M%ld %ldh%gv%gh-%gz", lround(p->x0 + (double)i * PLOT_CELL_PX),
         lround(p->y0 + (double)j * PLOT_CELL_PX), w, PLOT_CELL_PX, w);
   }
-  if (nc) pa_cli_svg_raw(&svg, "\"/>\n");
-  pa_cli_svg_raw(&svg, "</g>\n<g clip-path=\"url(#window)\" class=\"elements\" "
-                       "stroke=\"#303030\" stroke-width=\"0.5\" "
-                       "stroke-linejoin=\"round\">\n");
+  if (nc) pa_cli_svg_raw(svg, "\"/>\n");
+  pa_cli_svg_raw(svg, "</g>\n");
+}
+
+/* The elements in the window not merged into cells, one polygon each. */
+static void draw_elements(pa_cli_svg *svg, const plot *p, const plot_args *a) {
+  pa_mesh *mesh = p->mesh;
+  pa_idx ne = pa_mesh_nelem(mesh);
+  int32_t *eref = pa_mesh_elem_refs(mesh);
+  double xy[8], box[4];
+  char col[8];
+  pa_cli_svg_raw(svg, "<g clip-path=\"url(#window)\" class=\"elements\" "
+                      "stroke=\"#303030\" stroke-width=\"0.5\" "
+                      "stroke-linejoin=\"round\">\n");
   for (pa_idx e = 0; e < ne; e++) {
-    int n = elem_polygon(p, e, xy);
+    int n = screen_polygon(p, e, xy, box);
     if (!n) continue;
-    bbox(n, xy, box);
-    if (!in_window(p, box)) continue;
-    to_screen(p, n, xy);
-    bbox(n, xy, box);
     double sx = box[2] - box[0], sy = box[3] - box[1];
     if (sx < PLOT_SUBPIXEL_PX && sy < PLOT_SUBPIXEL_PX) continue;
     if (a->by_ref)
@@ -500,60 +536,243 @@ static pa_status draw(plot *p, const plot_args *a, plot_counts *c, double pw,
     else
       pa_cli_svg_quality_colour(pa_mesh_elem_quality(mesh, e), col);
     /* small ones: stroked with their own colour, so that no seam shows */
-    pa_cli_svg_polygon(&svg, n, xy, col,
+    pa_cli_svg_polygon(svg, n, xy, col,
                        fmax(sx, sy) < PLOT_EDGE_PX ? col : NULL);
   }
-  pa_cli_svg_raw(&svg, "</g>\n<g clip-path=\"url(#window)\" class=\"boundary\" "
-                       "stroke=\"#000000\" stroke-width=\"1.6\" "
-                       "stroke-linecap=\"round\">\n");
+  pa_cli_svg_raw(svg, "</g>\n");
+}
+
+/* The boundary in the window, thick, and the frame's border. */
+static void draw_boundary(pa_cli_svg *svg, const plot *p) {
+  pa_idx nb = pa_mesh_nbdry(p->mesh);
+  double xy[8], box[4];
+  pa_cli_svg_raw(svg, "<g clip-path=\"url(#window)\" class=\"boundary\" "
+                      "stroke=\"#000000\" stroke-width=\"1.6\" "
+                      "stroke-linecap=\"round\">\n");
   for (pa_idx b = 0; b < nb; b++) {
     if (!bdry_segment(p, b, xy)) continue;
     bbox(2, xy, box);
     if (!in_window(p, box)) continue;
     to_screen(p, 2, xy);
-    pa_cli_svg_line(&svg, xy[0], xy[1], xy[2], xy[3], NULL, 0);
+    pa_cli_svg_line(svg, xy[0], xy[1], xy[2], xy[3], NULL, 0);
   }
-  pa_cli_svg_raw(&svg, "</g>\n");
-  pa_cli_svg_raw(&svg,
+  pa_cli_svg_raw(svg, "</g>\n");
+  pa_cli_svg_raw(svg,
                  "<rect x=\"%.2f\" y=\"%.2f\" width=\"%.2f\" height=\"%.2f\" "
                  "fill=\"none\" stroke=\"#666666\"/>\n",
-                 p->x0, p->y0, pw, ph);
+                 p->x0, p->y0, p->pw, p->ph);
+}
 
-  /* the legend */
-  double lx = p->x0 + pw + 24, ly = p->y0;
+/* The legend right of the frame: the references shown (-color ref), or the
+ * quality ramp. */
+static void draw_legend(pa_cli_svg *svg, const plot *p, const plot_args *a,
+                        const plot_counts *c) {
+  double lx = p->x0 + p->pw + 24, ly = p->y0;
+  char col[8];
   if (a->by_ref) {
-    pa_cli_svg_text(&svg, lx, ly + 12, "start", 13, "reference");
+    pa_cli_svg_text(svg, lx, ly + 12, "start", 13, "reference");
     for (int k = 0; k < c->nrefs; k++) {
       pa_cli_svg_ref_colour(c->refs[k], col);
-      pa_cli_svg_rect(&svg, lx, ly + 24 + 20 * k, 14, 14, col, "legend");
-      pa_cli_svg_text(&svg, lx + 20, ly + 36 + 20 * k, "start", 12, "%ld",
+      pa_cli_svg_rect(svg, lx, ly + 24 + 20 * k, 14, 14, col, "legend");
+      pa_cli_svg_text(svg, lx + 20, ly + 36 + 20 * k, "start", 12, "%ld",
                       (long)c->refs[k]);
     }
     if (c->more_refs)
-      pa_cli_svg_text(&svg, lx, ly + 36 + 20 * c->nrefs, "start", 12,
+      pa_cli_svg_text(svg, lx, ly + 36 + 20 * c->nrefs, "start", 12,
                       "and more (colours repeat every 10)");
-  } else {
-    const int nstep = 50;
-    const double bh = 240;
-    pa_cli_svg_text(&svg, lx, ly + 12, "start", 13, "quality");
-    for (int k = 0; k < nstep; k++) {
-      double q = 1.0 - (k + 0.5) / nstep;
-      pa_cli_svg_quality_colour(q, col);
-      /* each step overlaps the next by a pixel, so that no seam shows */
-      pa_cli_svg_rect(&svg, lx, ly + 24 + bh * k / nstep, 18,
-                      bh / nstep + (k < nstep - 1 ? 1 : 0), col, "legend");
-    }
-    for (int k = 0; k <= 5; k++)
-      pa_cli_svg_text(&svg, lx + 24, ly + 28 + bh * k / 5, "start", 11, "%.1f",
-                      1.0 - k / 5.0);
-    pa_cli_svg_text(&svg, lx, ly + 24 + bh + 22, "start", 11,
-                    pa_mesh_metric_ncomp(mesh) ? "in the metric" : "Euclidean");
+    return;
   }
-  free(cell);
-  free(bycol);
-  st = pa_cli_svg_end(&svg);
-  if (st) pa_cli_svg_abort(&svg);
+  const int nstep = 50;
+  const double bh = 240;
+  pa_cli_svg_text(svg, lx, ly + 12, "start", 13, "quality");
+  for (int k = 0; k < nstep; k++) {
+    double q = 1.0 - (k + 0.5) / nstep;
+    pa_cli_svg_quality_colour(q, col);
+    /* each step overlaps the next by a pixel, so that no seam shows */
+    pa_cli_svg_rect(svg, lx, ly + 24 + bh * k / nstep, 18,
+                    bh / nstep + (k < nstep - 1 ? 1 : 0), col, "legend");
+  }
+  for (int k = 0; k <= 5; k++)
+    pa_cli_svg_text(svg, lx + 24, ly + 28 + bh * k / 5, "start", 11, "%.1f",
+                    1.0 - k / 5.0);
+  pa_cli_svg_text(svg, lx, ly + 24 + bh + 22, "start", 11,
+                  pa_mesh_metric_ncomp(p->mesh) ? "in the metric"
+                                                : "Euclidean");
+}
+
+/* Write the picture: the sub-pixel elements merged into cells, then the
+ * cells, the other elements in the window, the boundary and the legend. */
+static pa_status draw(const plot *p, const plot_args *a, plot_counts *c,
+                      const char *title) {
+  plot_grid g;
+  pa_cli_svg svg;
+  pa_status st = grid_create(&g, p);
+  if (st) return st;
+  merge_cells(p, a, c, &g);
+  c->ndrawn = c->ninside - c->nmerged;
+  st = begin_picture(&svg, p, a, c, title);
+  if (st == PA_SUCCESS) {
+    draw_cells(&svg, p, a, &g);
+    draw_elements(&svg, p, a);
+    draw_boundary(&svg, p);
+    draw_legend(&svg, p, a, c);
+    st = pa_cli_svg_end(&svg);
+    if (st) pa_cli_svg_abort(&svg);
+  }
+  grid_destroy(&g);
   return st;
+}
+
+/* The plane of a 3D plot (-cut, -plane, or z = the middle of the mesh's z
+ * range) and the picture's axes in it; x and y in 2D. */
+static void choose_plane(plot *p, const plot_args *a) {
+  if (p->dim == 2) {
+    snprintf(p->uname, sizeof p->uname, "x");
+    snprintf(p->vname, sizeof p->vname, "y");
+    return;
+  }
+  if (a->has_plane) {
+    for (int k = 0; k < 3; k++)
+      p->n[k] = a->plane[k];
+    p->d = a->plane[3];
+  } else {
+    pa_idx nv = pa_mesh_nvert(p->mesh);
+    double zmin = p->coord[2], zmax = p->coord[2];
+    for (pa_idx v = 1; v < nv; v++) {
+      zmin = fmin(zmin, p->coord[3 * v + 2]);
+      zmax = fmax(zmax, p->coord[3 * v + 2]);
+    }
+    p->n[2] = 1;
+    p->d = 0.5 * (zmin + zmax);
+  }
+  plane_axes(p);
+}
+
+/* The plot of mesh by a: its arrays, its metric (-met) and its plane.
+ * Returns 0, or 1 after printing the error. */
+static int setup(const pa_cli *cli, const plot_args *a, pa_mesh *mesh,
+                 plot *p) {
+  memset(p, 0, sizeof *p);
+  p->mesh = mesh;
+  p->dim = pa_mesh_dim(mesh);
+  p->coord = pa_mesh_coords(mesh);
+  p->elem = pa_mesh_elems(mesh);
+  p->bdry = pa_mesh_bdrys(mesh);
+  if (a->met) {
+    pa_status st = pa_cli_attach_metric(mesh, a->met);
+    if (st) return pa_cli_fail(cli, st);
+  }
+  if (p->dim == 2 && a->has_plane)
+    return pa_cli_error(cli, "plot: -cut and -plane need a 3D mesh; %s is 2D",
+                        a->in);
+  if (pa_mesh_nelem(mesh) == 0)
+    return pa_cli_error(cli, "plot: %s has no element", a->in);
+  choose_plane(p, a);
+  return 0;
+}
+
+/* The extent of the picture (the elements in 2D, their cuts in 3D) into
+ * ext (xmin ymin xmax ymax; empty when nothing is cut) and the elements in
+ * it into c->ncut. */
+static void picture_extent(const plot *p, plot_counts *c, double *ext) {
+  pa_idx ne = pa_mesh_nelem(p->mesh);
+  double xy[8], box[4];
+  ext[0] = ext[1] = INFINITY;
+  ext[2] = ext[3] = -INFINITY;
+  for (pa_idx e = 0; e < ne; e++) {
+    int n = elem_polygon(p, e, xy);
+    if (!n) continue;
+    c->ncut++;
+    bbox(n, xy, box);
+    for (int k = 0; k < 2; k++) {
+      ext[k] = fmin(ext[k], box[k]);
+      ext[k + 2] = fmax(ext[k + 2], box[k + 2]);
+    }
+  }
+}
+
+/* The elements in the window into c->ninside and, for -color ref, their
+ * first PLOT_MAX_REFS references, sorted, into c->refs. */
+static void count_inside(const plot *p, const plot_args *a, plot_counts *c) {
+  pa_idx ne = pa_mesh_nelem(p->mesh);
+  int32_t *eref = pa_mesh_elem_refs(p->mesh);
+  double xy[8], box[4];
+  for (pa_idx e = 0; e < ne; e++) {
+    int n = elem_polygon(p, e, xy);
+    if (!n) continue;
+    bbox(n, xy, box);
+    if (!in_window(p, box)) continue;
+    c->ninside++;
+    if (a->by_ref) {
+      int k = 0;
+      while (k < c->nrefs && c->refs[k] != eref[e])
+        k++;
+      if (k == c->nrefs && c->nrefs < PLOT_MAX_REFS)
+        c->refs[c->nrefs++] = eref[e];
+      else if (k == c->nrefs)
+        c->more_refs = 1;
+    }
+  }
+  qsort(c->refs, (size_t)c->nrefs, sizeof *c->refs, cmp_ref);
+}
+
+/* The window (-window, or the picture's extent plus a margin) and the
+ * counts of what it holds, and the screen frame: the window's longer side
+ * is a->width pixels. Returns 0, or 1 after printing the error of a plane
+ * that cuts nothing or of an empty window. */
+static int frame(const pa_cli *cli, const plot_args *a, plot *p,
+                 plot_counts *c) {
+  double ext[4];
+  memset(c, 0, sizeof *c);
+  picture_extent(p, c, ext);
+  for (int k = 0; k < 4; k++)
+    p->win[k] = a->has_window ? a->win[k] : ext[k];
+  if (!a->has_window && c->ncut > 0) {
+    double m = PLOT_MARGIN * fmax(ext[2] - ext[0], ext[3] - ext[1]);
+    if (!(m > 0)) m = 1;
+    p->win[0] = ext[0] - m, p->win[1] = ext[1] - m;
+    p->win[2] = ext[2] + m, p->win[3] = ext[3] + m;
+  }
+  count_inside(p, a, c);
+  if (c->ncut == 0)
+    return pa_cli_error(cli, "plot: the plane %s does not cut %s",
+                        plane_name(p), a->in);
+  if (c->ninside == 0)
+    return pa_cli_error(cli,
+                        "plot: the window [%g, %g] x [%g, %g] holds no "
+                        "element of %s (its extent: [%g, %g] x [%g, %g])",
+                        p->win[0], p->win[2], p->win[1], p->win[3], a->in,
+                        ext[0], ext[2], ext[1], ext[3]);
+  double dx = p->win[2] - p->win[0], dy = p->win[3] - p->win[1];
+  p->scale = a->width / fmax(dx, dy);
+  p->x0 = 16;
+  p->y0 = 64;
+  p->pw = dx * p->scale;
+  p->ph = dy * p->scale;
+  return 0;
+}
+
+/* Draw the picture under its title and print the summary line. Returns 0,
+ * or 1 after printing the error. */
+static int write_picture(const pa_cli *cli, const plot_args *a, const plot *p,
+                         plot_counts *c) {
+  char title[1200];
+  long long ne = (long long)pa_mesh_nelem(p->mesh);
+  const char *colour = a->by_ref ? "reference" : "quality";
+  if (p->dim == 2)
+    snprintf(title, sizeof title, "%s: %lld triangles, coloured by %s", a->in,
+             ne, colour);
+  else
+    snprintf(title, sizeof title,
+             "%s: %lld of %lld tetrahedra cut by the plane %s, coloured by %s",
+             a->in, (long long)c->ncut, ne, plane_name(p), colour);
+  pa_status st = draw(p, a, c, title);
+  if (st) return pa_cli_fail(cli, st);
+  printf("plot: %s: %lld polygons, %lld sub-pixel elements merged into %lld "
+         "cells, %lld elements outside the window\n",
+         a->out, (long long)c->ndrawn, (long long)c->nmerged,
+         (long long)c->ncells, (long long)(c->ncut - c->ninside));
+  return 0;
 }
 
 int pa_cli_plot(const pa_cli *cli, int argc, char **argv) {
@@ -566,129 +785,11 @@ int pa_cli_plot(const pa_cli *cli, int argc, char **argv) {
   pa_status st = pa_cli_read_mesh(cli, a.in, &mesh); /* collective */
   if (cli->rank != 0) return st ? 1 : 0;
   if (st) return pa_cli_fail(cli, st);
-  int rc = 1;
   plot p;
   plot_counts c;
-  double xy[8], box[4];
-  char title[1200];
-  memset(&p, 0, sizeof p);
-  memset(&c, 0, sizeof c);
-  p.mesh = mesh;
-  p.dim = pa_mesh_dim(mesh);
-  p.coord = pa_mesh_coords(mesh);
-  p.elem = pa_mesh_elems(mesh);
-  p.bdry = pa_mesh_bdrys(mesh);
-  pa_idx ne = pa_mesh_nelem(mesh), nv = pa_mesh_nvert(mesh);
-  int32_t *eref = pa_mesh_elem_refs(mesh);
-  if (a.met && (st = pa_cli_attach_metric(mesh, a.met))) {
-    pa_cli_fail(cli, st);
-    goto done;
-  }
-  if (p.dim == 2 && a.has_plane) {
-    pa_cli_error(cli, "plot: -cut and -plane need a 3D mesh; %s is 2D", a.in);
-    goto done;
-  }
-  if (ne == 0) {
-    pa_cli_error(cli, "plot: %s has no element", a.in);
-    goto done;
-  }
-  if (p.dim == 3) {
-    if (a.has_plane) {
-      for (int k = 0; k < 3; k++)
-        p.n[k] = a.plane[k];
-      p.d = a.plane[3];
-    } else { /* z = the middle of the z range */
-      double zmin = p.coord[2], zmax = p.coord[2];
-      for (pa_idx v = 1; v < nv; v++) {
-        zmin = fmin(zmin, p.coord[3 * v + 2]);
-        zmax = fmax(zmax, p.coord[3 * v + 2]);
-      }
-      p.n[2] = 1;
-      p.d = 0.5 * (zmin + zmax);
-    }
-    plane_axes(&p);
-  } else {
-    snprintf(p.uname, sizeof p.uname, "x");
-    snprintf(p.vname, sizeof p.vname, "y");
-  }
-
-  /* the window: given, or the extent of the picture plus a margin; the
-   * counts and the references shown */
-  double ext[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY};
-  for (int k = 0; k < 4; k++)
-    p.win[k] = a.has_window ? a.win[k] : ext[k];
-  for (pa_idx e = 0; e < ne; e++) {
-    int n = elem_polygon(&p, e, xy);
-    if (!n) continue;
-    c.ncut++;
-    bbox(n, xy, box);
-    for (int k = 0; k < 2; k++) {
-      ext[k] = fmin(ext[k], box[k]);
-      ext[k + 2] = fmax(ext[k + 2], box[k + 2]);
-    }
-  }
-  if (!a.has_window && c.ncut > 0) {
-    double m = PLOT_MARGIN * fmax(ext[2] - ext[0], ext[3] - ext[1]);
-    if (!(m > 0)) m = 1;
-    p.win[0] = ext[0] - m, p.win[1] = ext[1] - m;
-    p.win[2] = ext[2] + m, p.win[3] = ext[3] + m;
-  }
-  for (pa_idx e = 0; e < ne; e++) {
-    int n = elem_polygon(&p, e, xy);
-    if (!n) continue;
-    bbox(n, xy, box);
-    if (!in_window(&p, box)) continue;
-    c.ninside++;
-    if (a.by_ref) {
-      int k = 0;
-      while (k < c.nrefs && c.refs[k] != eref[e])
-        k++;
-      if (k == c.nrefs && c.nrefs < PLOT_MAX_REFS)
-        c.refs[c.nrefs++] = eref[e];
-      else if (k == c.nrefs)
-        c.more_refs = 1;
-    }
-  }
-  qsort(c.refs, (size_t)c.nrefs, sizeof *c.refs, cmp_ref);
-  if (c.ncut == 0) {
-    pa_cli_error(cli, "plot: the plane %s does not cut %s", plane_name(&p),
-                 a.in);
-    goto done;
-  }
-  if (c.ninside == 0) {
-    pa_cli_error(cli,
-                 "plot: the window [%g, %g] x [%g, %g] holds no element "
-                 "of %s (its extent: [%g, %g] x [%g, %g])",
-                 p.win[0], p.win[2], p.win[1], p.win[3], a.in, ext[0], ext[2],
-                 ext[1], ext[3]);
-    goto done;
-  }
-
-  /* the screen frame: the window's longer side is a.width pixels */
-  double dx = p.win[2] - p.win[0], dy = p.win[3] - p.win[1];
-  p.scale = a.width / fmax(dx, dy);
-  p.x0 = 16;
-  p.y0 = 64;
-  double pw = dx * p.scale, ph = dy * p.scale;
-  if (p.dim == 2)
-    snprintf(title, sizeof title, "%s: %lld triangles, coloured by %s", a.in,
-             (long long)ne, a.by_ref ? "reference" : "quality");
-  else
-    snprintf(title, sizeof title,
-             "%s: %lld of %lld tetrahedra cut by the plane %s, coloured by %s",
-             a.in, (long long)c.ncut, (long long)ne, plane_name(&p),
-             a.by_ref ? "reference" : "quality");
-  st = draw(&p, &a, &c, pw, ph, title);
-  if (st) {
-    pa_cli_fail(cli, st);
-    goto done;
-  }
-  printf("plot: %s: %lld polygons, %lld sub-pixel elements merged into %lld "
-         "cells, %lld elements outside the window\n",
-         a.out, (long long)c.ndrawn, (long long)c.nmerged, (long long)c.ncells,
-         (long long)(c.ncut - c.ninside));
-  rc = 0;
-done:
+  int rc = setup(cli, &a, mesh, &p);
+  if (!rc) rc = frame(cli, &a, &p, &c);
+  if (!rc) rc = write_picture(cli, &a, &p, &c);
   pa_mesh_destroy(mesh);
   return rc;
 }
