@@ -22,14 +22,14 @@
  * not skin vertices (matched input vertices keep their global id and user
  * values, gathered with them; the others get fresh ids and zeros) and the
  * skin vertices bisect.c added, when it is their giver (skin_vertex_ids);
- * every element ("done" value PA__DONE, PA__DONE_FREE from a single
- * piece, or PA__DONE_NEAR_SKIN within NEAR_SKIN vertex layers of a hot skin
- * vertex, or 0 for a rolled-back piece; one with the same vertices as an input element keeps its id and
- * other values, output_reuse; the others get fresh ids and zeros); and the
- * boundary entities and edges that do not lie on the skin (this drops the
- * artificial skin faces; an unchanged one keeps its id and values, as
- * elements). Fresh ids are the global maximum + 1 + an
- * exclusive scan of the per-rank counts, pieces in increasing order on each
+ * every element ("done" value PA_ADAPT_DONE, PA_ADAPT_DONE_FREE from a
+ * single piece, or PA_ADAPT_DONE_NEAR_SKIN within NEAR_SKIN vertex layers of
+ * a hot skin vertex, or 0 for a rolled-back piece; one with the same
+ * vertices as an input element keeps its id and other values,
+ * output_reuse; the others get fresh ids and zeros); and the boundary
+ * entities and edges that do not lie on the skin (this drops the artificial
+ * skin faces; an unchanged one keeps its id and values, as elements). Fresh
+ * ids are the global maximum + 1 + an exclusive scan of the per-rank counts, pieces in increasing order on each
  * rank, then the added skin vertices: deterministic for a given input and
  * number of ranks. The vertices only this rank's elements will contain
  * (fresh ones of outputs that stay here, kept ones far from every piece and
@@ -173,16 +173,16 @@ static int output_ok(const pa__iter *it, pa__piece *pc, pa_mesh *out,
   {
     /* the skin faces, as they were given */
     pa_idx nin = 0, nout = 0, found = 0;
-    for (pa_idx b = 0; b < in->nb; b++) nin += in->bref[b] == PA__SKIN_REF;
+    for (pa_idx b = 0; b < in->nb; b++) nin += in->bref[b] == PA_ADAPT_SKIN_REF;
     PA_CALL(tset_init(&skin, (size_t)nin));
     for (pa_idx b = 0; b < in->nb; b++)
-      if (in->bref[b] == PA__SKIN_REF) {
+      if (in->bref[b] == PA_ADAPT_SKIN_REF) {
         pa_idx k[3];
         tkey(in->bdry + (size_t)d * b, d, k);
         tset_find(&skin, k, 1);
       }
     for (pa_idx b = 0; b < out->nb; b++) {
-      if (out->bref[b] != PA__SKIN_REF) continue;
+      if (out->bref[b] != PA_ADAPT_SKIN_REF) continue;
       pa_idx f[3], k[3];
       int all = 1;
       nout++;
@@ -293,7 +293,7 @@ cleanup:
 
 /* Output elements within this many vertex layers of a hot skin vertex (one
  * a tagged element of another piece touches) are marked
- * PA__DONE_NEAR_SKIN: the frozen skin constrained the remesher
+ * PA_ADAPT_DONE_NEAR_SKIN: the frozen skin constrained the remesher
  * there (a remesher's choices reach a few layers, e.g. longest-edge
  * propagation), so they may be tagged again. */
 #define NEAR_SKIN 2
@@ -301,7 +301,7 @@ cleanup:
 /* BAD_NEAR_SKIN: an output element within NEAR_SKIN vertex layers of the
  * piece's frozen skin, whose quality is below opts->qual_threshold and below
  * the worst the remesher left in the next NEAR_SKIN layers, is marked
- * PA__DONE_NEAR_SKIN even far from a hot skin vertex: the frozen faces of
+ * PA_ADAPT_DONE_NEAR_SKIN even far from a hot skin vertex: the frozen faces of
  * already remeshed neighbours forced it, so it is tagged again and remeshed
  * inside the next piece, where those faces are free. Without this, box3d 20
  * -> 0.012 ended with a worst quality of 0.199 at 4 ranks and 0.232 at 8
@@ -469,12 +469,13 @@ static pa_status output_emit(const pa_mesh *out, const pa_idx *breuse,
   tset fs = {0, NULL}, es = {0, NULL};
   int d = out->dim;
   pa_idx nskin = 0;
-  for (pa_idx b = 0; b < out->nb; b++) nskin += out->bref[b] == PA__SKIN_REF;
+  for (pa_idx b = 0; b < out->nb; b++)
+    nskin += out->bref[b] == PA_ADAPT_SKIN_REF;
   PA_CALL(tset_init(&fs, (size_t)nskin));
   PA_CALL(tset_init(&es, (size_t)nskin * 3));
   /* the artificial skin faces and their edges */
   for (pa_idx b = 0; b < out->nb; b++) {
-    if (out->bref[b] != PA__SKIN_REF) continue;
+    if (out->bref[b] != PA_ADAPT_SKIN_REF) continue;
     const pa_idx *v = out->bdry + (size_t)d * b;
     pa_idx k[3];
     tkey(v, d, k);
@@ -682,7 +683,7 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   PA_ALLOC(dbl, R[PA_VERTEX].ndbl);
   for (pa_idx j = 0; j < o->nv; j++) {
     pa_idx i = pc->match[j];
-    if (i >= 0 && pc->skin[i] && pc->vgid[i] >= PA__TEMP_GID) {
+    if (i >= 0 && pc->skin[i] && pc->vgid[i] >= PA_ADAPT_TEMP_GID) {
       vg[j] = pc->ifgid[i]; /* added by bisect.c: one piece gives it */
       if (!pc->ifgive[i]) continue;
     } else if (i >= 0 && pc->skin[i]) {
@@ -742,20 +743,20 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   }
   for (pa_idx e = 0; e < o->ne; e++) {
     pa_gid ev[4];
-    uint8_t dv = it->piece_failed[pc->id] ? 0 : PA__DONE;
+    uint8_t dv = it->piece_failed[pc->id] ? 0 : PA_ADAPT_DONE;
     int nhot = 0;
     for (int k = 0; k <= d; k++) {
       pa_idx j = o->elem[(size_t)(d + 1) * e + k];
       ev[k] = vg[j];
-      if (dist[j] < NEAR_SKIN && dv) dv = PA__DONE_NEAR_SKIN;
+      if (dist[j] < NEAR_SKIN && dv) dv = PA_ADAPT_DONE_NEAR_SKIN;
       nhot += dist[j] == 0;
     }
-    if (dv && nhot >= 2) dv = PA__DONE_ON_SKIN;
-    if (dv == PA__DONE && qband > 0 && elem_layer(o, dsk, e) < NEAR_SKIN &&
+    if (dv && nhot >= 2) dv = PA_ADAPT_DONE_ON_SKIN;
+    if (dv == PA_ADAPT_DONE && qband > 0 && elem_layer(o, dsk, e) < NEAR_SKIN &&
         pa_mesh_elem_quality(pc->out, e) < qband) {
-      dv = PA__DONE_NEAR_SKIN; /* see BAD_NEAR_SKIN */
+      dv = PA_ADAPT_DONE_NEAR_SKIN; /* see BAD_NEAR_SKIN */
     }
-    if (dv == PA__DONE && it->npieces == 1) dv = PA__DONE_FREE;
+    if (dv == PA_ADAPT_DONE && it->npieces == 1) dv = PA_ADAPT_DONE_FREE;
     pa_idx q = pc->reuse[PA_ELEMENT][e];
     if (q >= 0) { /* an input element: its id and values, done updated */
       const size_t *po = pc->kpoff[PA_ELEMENT];
@@ -847,7 +848,8 @@ static pa_status skin_vertex_ids(pa__iter *it, pa_gid first) {
   for (int q = 0; q < it->npiece_local; q++) {
     pa__piece *pc = &it->pieces[q];
     if (!pc->out) continue;
-    for (pa_idx i = 0; i < pc->in->nv; i++) n += pc->vgid[i] >= PA__TEMP_GID;
+    for (pa_idx i = 0; i < pc->in->nv; i++)
+      n += pc->vgid[i] >= PA_ADAPT_TEMP_GID;
     /* (only skin vertices carry temporary ids) */
   }
   PA_CALLOC(scnt, P);
@@ -861,7 +863,7 @@ static pa_status skin_vertex_ids(pa__iter *it, pa_gid first) {
       pa__piece *pc = &it->pieces[q];
       if (!pc->out) continue;
       for (pa_idx i = 0; i < pc->in->nv; i++)
-        if (pc->vgid[i] >= PA__TEMP_GID) {
+        if (pc->vgid[i] >= PA_ADAPT_TEMP_GID) {
           home[k] = home_rank(pc->in->coord + (size_t)d * i, d, P);
           scnt[home[k]]++;
           k++;
@@ -873,7 +875,7 @@ static pa_status skin_vertex_ids(pa__iter *it, pa_gid first) {
       pa__piece *pc = &it->pieces[q];
       if (!pc->out) continue;
       for (pa_idx i = 0; i < pc->in->nv; i++)
-        if (pc->vgid[i] >= PA__TEMP_GID) {
+        if (pc->vgid[i] >= PA_ADAPT_TEMP_GID) {
           ifreq *r = &sbuf[pos[home[k]]++];
           memset(r, 0, sizeof *r);
           memcpy(r->x, pc->in->coord + (size_t)d * i, d * sizeof(double));
@@ -932,7 +934,7 @@ static pa_status skin_vertex_ids(pa__iter *it, pa_gid first) {
       PA_CALLOC(pc->ifgid, pc->in->nv);
       PA_CALLOC(pc->ifgive, pc->in->nv);
       for (pa_idx i = 0; i < pc->in->nv; i++)
-        if (pc->vgid[i] >= PA__TEMP_GID) {
+        if (pc->vgid[i] >= PA_ADAPT_TEMP_GID) {
           size_t a = pos[home[k]]++;
           pc->ifgid[i] = back[2 * a];
           pc->ifgive[i] = (uint8_t)back[2 * a + 1];
@@ -972,7 +974,7 @@ static pa_status private_kept(const pa__iter *it, const uint8_t *kv,
     if (g[v] <= g[v - 1]) return PA_SUCCESS;
   PA_ALLOC(*vpriv, nown ? nown : 1);
   for (pa_idx v = 0; v < nown; v++)
-    (*vpriv)[v] = (uint8_t)(kv[v] && it->vlab[4 * v] == PA__NOLABEL);
+    (*vpriv)[v] = (uint8_t)(kv[v] && it->vlab[4 * v] == PA_ADAPT_NOLABEL);
   for (pa_idx q = 0; sf->rootoff && q < sf->rootoff[sf->nrootrank]; q++)
     (*vpriv)[sf->rootidx[q]] = 0; /* copies on other ranks */
 cleanup:
@@ -985,10 +987,10 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
   uint8_t *keep = NULL, *kv = NULL, *kb = NULL, *kd = NULL, *vpriv = NULL;
   uint8_t **bemit = NULL, **demit = NULL;
   unsigned char *pay = NULL;
-  pa__recs R[PA_NKIND], Rp;
+  pa__recs R[PA_DMESH_NKIND], Rp;
   pa__layout lay;
-  pa_gid cnt[PA_NKIND] = {0, 0, 0, 0}, off[PA_NKIND] = {0, 0, 0, 0};
-  pa_gid base[PA_NKIND] = {-1, -1, -1, -1};
+  pa_gid cnt[PA_DMESH_NKIND] = {0, 0, 0, 0}, off[PA_DMESH_NKIND] = {0, 0, 0, 0};
+  pa_gid base[PA_DMESH_NKIND] = {-1, -1, -1, -1};
   int built = 0;
   double t0 = pa_wtime(), t1;
   memset(R, 0, sizeof R);
@@ -1015,8 +1017,8 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
    * arrays, with room for every output record (no regrowth) */
   pa__dmesh_layout(dm, &lay);
   {
-    size_t add[PA_NKIND] = {0, 0, 0, 0};
-    const uint8_t *kk[PA_NKIND];
+    size_t add[PA_DMESH_NKIND] = {0, 0, 0, 0};
+    const uint8_t *kk[PA_DMESH_NKIND];
     kk[PA_VERTEX] = kv;
     kk[PA_ELEMENT] = keep;
     kk[PA_BOUNDARY] = kb;
@@ -1035,7 +1037,7 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
   }
 
   /* 4. fresh ids */
-  for (int k = 0; k < PA_NKIND; k++)
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     for (pa_idx i = 0; i < dm->nown[k]; i++)
       if (dm->gid[k][i] > base[k]) base[k] = dm->gid[k][i];
   PA_CALLOC(bemit, it->npiece_local);
@@ -1054,12 +1056,12 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
     PA_CALL(output_emit(pc->out, pc->reuse[PA_BOUNDARY], pc->reuse[PA_EDGE],
                         &bemit[q], &demit[q], cnt));
   }
-  PA_CALL(pa__allreduce(dm->comm, base, PA_NKIND, MPI_INT64_T, MPI_MAX));
+  PA_CALL(pa__allreduce(dm->comm, base, PA_DMESH_NKIND, MPI_INT64_T, MPI_MAX));
   PA_CALL(pa__agree(dm->comm, st));
-  MPI_Exscan(cnt, off, PA_NKIND, MPI_INT64_T, MPI_SUM, dm->comm);
+  MPI_Exscan(cnt, off, PA_DMESH_NKIND, MPI_INT64_T, MPI_SUM, dm->comm);
   if (it->rank == 0)
-    for (int k = 0; k < PA_NKIND; k++) off[k] = 0;
-  for (int k = 0; k < PA_NKIND; k++) off[k] += base[k] + 1;
+    for (int k = 0; k < PA_DMESH_NKIND; k++) off[k] = 0;
+  for (int k = 0; k < PA_DMESH_NKIND; k++) off[k] += base[k] + 1;
   {
     /* the vertices bisect.c added take ids after every other new vertex */
     pa_gid tot = cnt[PA_VERTEX];
@@ -1080,7 +1082,7 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
                            &Rp, pay));
   }
   /* wire bytes of every record: a fixed part each, plus the payloads */
-  for (int k = 0; k < PA_NKIND; k++)
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     if (R[k].n) {
       const size_t *po = R[k].poff;
       size_t fixed = pa__recs_wire(&R[k], 0) - (po ? po[1] - po[0] : 0);
@@ -1101,7 +1103,7 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
 cleanup:
   (void)built;
   st = pa__agree_end(dm->comm, st);
-  for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&R[k]);
+  for (int k = 0; k < PA_DMESH_NKIND; k++) pa__recs_free(&R[k]);
   pa__recs_free(&Rp);
   pa__free(keep);
   pa__free(vpriv);

@@ -1202,9 +1202,9 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
 
   /* ids, owners, layers */
   {
-    const pa__recs *R[PA_NKIND] = {&s->LV, &s->L, &s->LB, &s->LD};
-    const pa_idx *ord[PA_NKIND] = {ordV, ordE, ordB, ordD};
-    for (int kind = 0; kind < PA_NKIND; kind++) {
+    const pa__recs *R[PA_DMESH_NKIND] = {&s->LV, &s->L, &s->LB, &s->LD};
+    const pa_idx *ord[PA_DMESH_NKIND] = {ordV, ordE, ordB, ordD};
+    for (int kind = 0; kind < PA_DMESH_NKIND; kind++) {
       pa_idx n = dm->nloc[kind];
       PA_ALLOC(dm->gid[kind], n);
       PA_ALLOC(dm->owner[kind], n);
@@ -1222,14 +1222,15 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
 
   /* values: slots for the new distribution, then the payloads */
   {
-    const pa__recs *R[PA_NKIND] = {&s->LV, &s->L, &s->LB, &s->LD};
-    const pa_idx *ord[PA_NKIND] = {ordV, ordE, ordB, ordD};
+    const pa__recs *R[PA_DMESH_NKIND] = {&s->LV, &s->L, &s->LB, &s->LD};
+    const pa_idx *ord[PA_DMESH_NKIND] = {ordV, ordE, ordB, ordD};
     int any = 0;
-    for (int kind = 0; kind < PA_NKIND; kind++) any |= R[kind]->poff != NULL;
+    for (int kind = 0; kind < PA_DMESH_NKIND; kind++)
+      any |= R[kind]->poff != NULL;
     if (any || dm->nvalue) {
       /* slots from the references (local); sfs are built later */
       for (int k = 0; k < dm->nvalue; k++) PA_CALL(pa__value_alloc(dm, dm->value[k]));
-      for (int kind = 0; kind < PA_NKIND; kind++)
+      for (int kind = 0; kind < PA_DMESH_NKIND; kind++)
         unpack_payloads(dm, kind, R[kind], ord[kind], dm->nloc[kind]);
     }
   }
@@ -1300,7 +1301,7 @@ pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
   dm->overlap = overlap;
 
   /* input totals and the directory of vertex gids */
-  pa_gid cnt_in[PA_NKIND] = {(pa_gid)verts->n, (pa_gid)elems->n,
+  pa_gid cnt_in[PA_DMESH_NKIND] = {(pa_gid)verts->n, (pa_gid)elems->n,
                              (pa_gid)bdry->n, (pa_gid)edges->n};
   pa_gid maxg = -1;
   PA_CHECK(verts->ndbl == ndbl && elems->nv == s.nve && bdry->nv == s.dim &&
@@ -1324,7 +1325,7 @@ pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
   }
   for (size_t i = 0; i < verts->n; i++)
     if (verts->gid[i] > maxg) maxg = verts->gid[i];
-  PA_CALL(pa__allreduce(s.comm, cnt_in, PA_NKIND, MPI_INT64_T, MPI_SUM));
+  PA_CALL(pa__allreduce(s.comm, cnt_in, PA_DMESH_NKIND, MPI_INT64_T, MPI_SUM));
   PA_CALL(pa__allreduce(s.comm, &maxg, 1, MPI_INT64_T, MPI_MAX));
   dir_init(&s.vdir, maxg, s.size);
 
@@ -1381,10 +1382,10 @@ pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
 
   /* 10. totals: an entity in no element was dropped */
   {
-    pa_gid own[PA_NKIND];
-    for (int k = 0; k < PA_NKIND; k++) own[k] = dm->nown[k];
-    PA_CALL(pa__allreduce(dm->comm, own, PA_NKIND, MPI_INT64_T, MPI_SUM));
-    for (int k = 0; k < PA_NKIND; k++) dm->nglob[k] = own[k];
+    pa_gid own[PA_DMESH_NKIND];
+    for (int k = 0; k < PA_DMESH_NKIND; k++) own[k] = dm->nown[k];
+    PA_CALL(pa__allreduce(dm->comm, own, PA_DMESH_NKIND, MPI_INT64_T, MPI_SUM));
+    for (int k = 0; k < PA_DMESH_NKIND; k++) dm->nglob[k] = own[k];
     PA_CHECK(own[PA_VERTEX] == cnt_in[PA_VERTEX], PA_ERR_MESH,
              "%lld of %lld vertices belong to no element",
              (long long)(cnt_in[PA_VERTEX] - own[PA_VERTEX]),
@@ -1400,13 +1401,13 @@ pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
   }
   /* 11. star forests and neighbour ranks */
   PA_CALL(pa__agree(dm->comm, PA_SUCCESS));
-  for (int k = 0; k < PA_NKIND; k++)
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     PA_CALL(pa__sf_build(dm->comm, dm->nloc[k], dm->gid[k], dm->owner[k],
                          &dm->sf[k]));
   {
     uint8_t *mark;
     PA_CALLOC(mark, dm->size);
-    for (int k = 0; k < PA_NKIND; k++) {
+    for (int k = 0; k < PA_DMESH_NKIND; k++) {
       for (int r = 0; r < dm->sf[k].nrootrank; r++) mark[dm->sf[k].rootrank[r]] = 1;
       for (int r = 0; r < dm->sf[k].nleafrank; r++) mark[dm->sf[k].leafrank[r]] = 1;
     }

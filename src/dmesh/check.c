@@ -155,7 +155,7 @@ pa_status pa_dmesh_check(pa_dmesh *dm) {
                m->nb == dm->nloc[PA_BOUNDARY] && m->ned == dm->nloc[PA_EDGE],
            PA_ERR_MESH, "rank %d: local mesh counts differ from the dmesh's",
            dm->rank);
-  for (int k = 0; k < PA_NKIND; k++)
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     for (pa_idx i = 0; i < dm->nloc[k]; i++) {
       PA_CHECK((dm->owner[k][i] == dm->rank) == (i < dm->nown[k]), PA_ERR_MESH,
                "rank %d: local %s %d (gid %lld, owner %d) breaks the owned-first "
@@ -209,7 +209,7 @@ pa_status pa_dmesh_check(pa_dmesh *dm) {
                arr[q].what);
     }
     /* connectivity, by vertex global ids */
-    for (int k = PA_ELEMENT; k < PA_NKIND; k++) {
+    for (int k = PA_ELEMENT; k < PA_DMESH_NKIND; k++) {
       int nv = pa__kind_nv(d, k);
       const pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
       pa_idx n = dm->nloc[k], bad;
@@ -227,7 +227,7 @@ pa_status pa_dmesh_check(pa_dmesh *dm) {
   }
   /* ownership rule and uniqueness of global ids */
   PA_CALL(pa__balls(m->elem, m->ne, d + 1, m->nv, &vstart, &vel));
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     pa_idx n = dm->nloc[k];
     pa__free(cand);
     cand = NULL;
@@ -271,10 +271,10 @@ pa_status pa_dmesh_check(pa_dmesh *dm) {
   }
   /* counts */
   {
-    pa_gid own[PA_NKIND];
-    for (int k = 0; k < PA_NKIND; k++) own[k] = dm->nown[k];
-    PA_CALL(pa__allreduce(dm->comm, own, PA_NKIND, MPI_INT64_T, MPI_SUM));
-    for (int k = 0; k < PA_NKIND; k++)
+    pa_gid own[PA_DMESH_NKIND];
+    for (int k = 0; k < PA_DMESH_NKIND; k++) own[k] = dm->nown[k];
+    PA_CALL(pa__allreduce(dm->comm, own, PA_DMESH_NKIND, MPI_INT64_T, MPI_SUM));
+    for (int k = 0; k < PA_DMESH_NKIND; k++)
       PA_CHECK(own[k] == dm->nglob[k], PA_ERR_MESH,
                "%lld %s entities owned, %lld expected", (long long)own[k],
                kind_name(k), (long long)dm->nglob[k]);
@@ -322,7 +322,7 @@ static void sort_u64(uint64_t *a, int n) {
 
 pa_status pa_dmesh_checksum(pa_dmesh *dm, uint64_t *checksum) {
   pa_status st = PA_SUCCESS;
-  uint64_t *hv = NULL, *he[PA_NKIND] = {NULL};
+  uint64_t *hv = NULL, *he[PA_DMESH_NKIND] = {NULL};
   uint64_t sum = 0;
   PA_CHECK(dm && checksum, PA_ERR_ARG, "pa_dmesh_checksum: NULL argument");
   pa__agree_reset();
@@ -335,7 +335,7 @@ pa_status pa_dmesh_checksum(pa_dmesh *dm, uint64_t *checksum) {
     hv[v] = h;
     if (v < dm->nown[PA_VERTEX]) sum += hash_bytes(h, &m->vflag[v], 1);
   }
-  for (int k = PA_ELEMENT; k < PA_NKIND; k++) {
+  for (int k = PA_ELEMENT; k < PA_DMESH_NKIND; k++) {
     int nv = pa__kind_nv(d, k);
     const pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
     const int32_t *ref = k == PA_ELEMENT ? m->eref : k == PA_BOUNDARY ? m->bref : m->edref;
@@ -370,7 +370,7 @@ cleanup:
     }
   }
   pa__free(hv);
-  for (int k = 0; k < PA_NKIND; k++) pa__free(he[k]);
+  for (int k = 0; k < PA_DMESH_NKIND; k++) pa__free(he[k]);
   return st;
 }
 

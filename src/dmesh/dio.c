@@ -62,10 +62,10 @@ enum {
 };
 
 /* Words per rank in a manifest: file counts (V, E, B, D), bytes, checksum. */
-enum { MF_COUNT = 0, MF_BYTES = PA_NKIND, MF_HASH, MF_WORDS };
+enum { MF_COUNT = 0, MF_BYTES = PA_DMESH_NKIND, MF_HASH, MF_WORDS };
 
 /* Entity kinds as messages name them. */
-static const char *const kind_name[PA_NKIND] = {"vertices", "elements",
+static const char *const kind_name[PA_DMESH_NKIND] = {"vertices", "elements",
                                                 "boundary entities", "edges"};
 
 /* Header words. */
@@ -117,7 +117,7 @@ typedef struct kwfile {
 
 /* Reopen path, a Medit file completed in the open output transaction, to
  * append keywords after its End. */
-static pa_status kw_open_append(kwfile *k, pa_outfile *out, const char *path) {
+static pa_status kw_open_append(kwfile *k, pa__outfile *out, const char *path) {
   pa_status st = PA_SUCCESS;
   int32_t h[2];
   memset(k, 0, sizeof *k);
@@ -182,7 +182,7 @@ cleanup:
 }
 
 /* Write the final End and complete the file (pa__out_commit). */
-static pa_status kw_close(kwfile *k, pa_outfile *out) {
+static pa_status kw_close(kwfile *k, pa__outfile *out) {
   pa_status st = PA_SUCCESS;
   int32_t end = KW_END;
   int64_t zero = 0;
@@ -203,7 +203,7 @@ cleanup:
  * bytes of data). type: code of a predefined MPI type (value_type), 0 for
  * the bytes of a derived type (read back as MPI_BYTE x unit). */
 typedef struct vdesc {
-  char name[PA_VALUE_NAME_LEN];
+  char name[PA_DMESH_VALUE_NAME_LEN];
   int32_t kind, ref, ncomp, type;
   int64_t count; /* file entities holding the value */
 } vdesc;
@@ -263,11 +263,11 @@ static void vdesc_of(const pa_dmesh_value *v, int64_t count, vdesc *d) {
 
 typedef struct dfile {
   int64_t h[H_WORDS];
-  pa_gid *gid[PA_NKIND];
-  int32_t *owner[PA_NKIND];
+  pa_gid *gid[PA_DMESH_NKIND];
+  int32_t *owner[PA_DMESH_NKIND];
   int met_ncomp, nfield;
-  char fieldname[PA_MAX_FIELDS][PA_FIELD_NAME_LEN];
-  int32_t fieldncomp[PA_MAX_FIELDS];
+  char fieldname[PA_MESH_MAX_FIELDS][PA_MESH_FIELD_NAME_LEN];
+  int32_t fieldncomp[PA_MESH_MAX_FIELDS];
   double *vdbl;
   uint8_t *flags;
   int have_header;
@@ -277,7 +277,7 @@ typedef struct dfile {
 } dfile;
 
 static void dfile_free(dfile *f) {
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     pa__free(f->gid[k]);
     pa__free(f->owner[k]);
   }
@@ -342,7 +342,7 @@ static pa_status scan_file(const char *path, dfile *f) {
       PA_CHECK(f->h[H_FORMAT] == FORMAT_VERSION, PA_ERR_UNSUPPORTED,
                "%s: distributed format version %lld, expected %d", path,
                (long long)f->h[H_FORMAT], FORMAT_VERSION);
-      for (int k = 0; k < PA_NKIND; k++)
+      for (int k = 0; k < PA_DMESH_NKIND; k++)
         PA_CHECK(H[H_NFILE + k] >= 0 && H[H_NFILE + k] < INT32_MAX &&
                      H[H_NGLOB + k] >= 0,
                  PA_ERR_FORMAT, "%s: bad counts in the header", path);
@@ -365,17 +365,17 @@ static pa_status scan_file(const char *path, dfile *f) {
     case KW_VDBL: {
       int32_t mn[2];
       PA_CHECK(f->have_header && room >= 8 && fread(mn, 4, 2, fp) == 2 &&
-                   mn[0] >= 0 && mn[0] <= 6 && mn[1] >= 0 && mn[1] <= PA_MAX_FIELDS,
+                   mn[0] >= 0 && mn[0] <= 6 && mn[1] >= 0 && mn[1] <= PA_MESH_MAX_FIELDS,
                PA_ERR_FORMAT, "%s: bad vertex data keyword", path);
       f->met_ncomp = mn[0];
       f->nfield = mn[1];
       int nd = mn[0];
       for (int q = 0; q < f->nfield; q++) {
-        PA_CHECK(fread(f->fieldname[q], PA_FIELD_NAME_LEN, 1, fp) == 1 &&
+        PA_CHECK(fread(f->fieldname[q], PA_MESH_FIELD_NAME_LEN, 1, fp) == 1 &&
                      fread(&f->fieldncomp[q], 4, 1, fp) == 1 &&
                      f->fieldncomp[q] > 0 && f->fieldncomp[q] < 1000,
                  PA_ERR_FORMAT, "%s: bad field description", path);
-        f->fieldname[q][PA_FIELD_NAME_LEN - 1] = '\0';
+        f->fieldname[q][PA_MESH_FIELD_NAME_LEN - 1] = '\0';
         nd += f->fieldncomp[q];
       }
       room = (next ? next : INT64_MAX) - ftello(fp);
@@ -388,12 +388,13 @@ static pa_status scan_file(const char *path, dfile *f) {
       PA_CHECK(f->have_header && room >= (int64_t)sizeof d &&
                    fread(&d, sizeof d, 1, fp) == 1,
                PA_ERR_FORMAT, "%s: truncated value keyword", path);
-      d.name[PA_VALUE_NAME_LEN - 1] = '\0';
-      PA_CHECK(d.kind >= 0 && d.kind < PA_NKIND && d.ncomp >= 1 &&
+      d.name[PA_DMESH_VALUE_NAME_LEN - 1] = '\0';
+      PA_CHECK(d.kind >= 0 && d.kind < PA_DMESH_NKIND && d.ncomp >= 1 &&
                    d.ncomp < (1 << 24) && d.ref >= -1 && d.type >= 1 &&
                    d.type <= NVALUE_TYPES + 1 && d.count >= 0 &&
                    d.count <= H[H_NFILE + d.kind] && f->nval < 4096,
-               PA_ERR_FORMAT, "%s: bad description of value '%s'", path, d.name);
+               PA_ERR_FORMAT, "%s: bad description of value '%s'", path,
+               d.name);
       void *grown = pa__realloc(f->val, (size_t)(f->nval + 1) * sizeof *f->val);
       PA_CHECK(grown, PA_ERR_MEMORY, "out of memory reading %s", path);
       f->val = grown;
@@ -408,7 +409,7 @@ static pa_status scan_file(const char *path, dfile *f) {
     }
     case KW_FLAGS: {
       size_t n = 0;
-      for (int k = 0; k < PA_NKIND; k++) n += (size_t)H[H_NFILE + k];
+      for (int k = 0; k < PA_DMESH_NKIND; k++) n += (size_t)H[H_NFILE + k];
       PA_CHECK(f->have_header, PA_ERR_FORMAT, "%s: flags before the header", path);
       PA_CALL(read_block(fp, path, &p, n, room));
       f->flags = p;
@@ -439,8 +440,8 @@ cleanup:
  * (vd: nd values per file vertex, metric first), global ids, ghost types
  * and rank (pa__vtu_write). */
 static pa_status write_vtu(const pa_dmesh *dm, pa_mesh *fm,
-                           pa_idx *const map[PA_NKIND],
-                           const pa_idx nfile[PA_NKIND], const double *vd,
+                           pa_idx *const map[PA_DMESH_NKIND],
+                           const pa_idx nfile[PA_DMESH_NKIND], const double *vd,
                            int nd, const char *path) {
   pa_status st = PA_SUCCESS;
   const pa_mesh *m = dm->mesh;
@@ -497,7 +498,7 @@ cleanup:
 /* The ParaView index of the rank files: the arrays write_vtu gives each. */
 static pa_status write_pvtu(const char *base, int nranks, const pa_mesh *m) {
   pa_status st = PA_SUCCESS;
-  pa_outfile out;
+  pa__outfile out;
   char path[4200];
   const char *slash = strrchr(base, '/');
   const char *name = slash ? slash + 1 : base;
@@ -545,7 +546,7 @@ cleanup:
 static pa_status write_manifest(const char *base, const pa_dmesh *dm,
                                 const int64_t *info) {
   pa_status st = PA_SUCCESS;
-  pa_outfile out;
+  pa__outfile out;
   char path[4200];
   memset(&out, 0, sizeof out);
   manifest_path(base, path, sizeof path);
@@ -598,7 +599,7 @@ cleanup:
 /* A manifest as read: nranks lines of MF_WORDS. */
 typedef struct manifest {
   int nranks, dim;
-  int64_t nglob[PA_NKIND];
+  int64_t nglob[PA_DMESH_NKIND];
   int64_t *rk;
 } manifest;
 
@@ -608,7 +609,7 @@ static pa_status manifest_read(const char *path, manifest *mf) {
   FILE *fp = NULL;
   char line[512];
   int lno = 0, ver = 0, n = -1;
-  long long a[PA_NKIND + 2];
+  long long a[PA_DMESH_NKIND + 2];
   memset(mf, 0, sizeof *mf);
   fp = fopen(path, "r");
   PA_CHECK(fp, PA_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
@@ -640,7 +641,7 @@ static pa_status manifest_read(const char *path, manifest *mf) {
   PA_CHECK(sscanf(line, "global vertices %lld elements %lld boundary %lld edges %lld %n",
                   &a[0], &a[1], &a[2], &a[3], &n) == 4 && line[n] == '\0',
            PA_ERR_FORMAT, "%s:%d: expected the global counts", path, lno);
-  for (int k = 0; k < PA_NKIND; k++) mf->nglob[k] = a[k];
+  for (int k = 0; k < PA_DMESH_NKIND; k++) mf->nglob[k] = a[k];
   PA_ALLOC(mf->rk, (size_t)MF_WORDS * mf->nranks);
   for (int r = 0; r < mf->nranks; r++) {
     int rr = -1;
@@ -654,7 +655,7 @@ static pa_status manifest_read(const char *path, manifest *mf) {
                  line[n] == '\0' && rr == r,
              PA_ERR_FORMAT, "%s:%d: expected the line of rank %d", path, lno, r);
     int64_t *w = mf->rk + (size_t)MF_WORDS * r;
-    for (int k = 0; k < PA_NKIND; k++) w[MF_COUNT + k] = a[k];
+    for (int k = 0; k < PA_DMESH_NKIND; k++) w[MF_COUNT + k] = a[k];
     w[MF_BYTES] = a[4];
     w[MF_HASH] = (int64_t)h;
   }
@@ -696,13 +697,14 @@ cleanup:
 /* The file mesh of this rank: owned elements, their vertices, the boundary
  * entities and edges they contain. map[k][i] = file index of local entity i
  * of kind k, or -1. */
-static pa_status file_mesh(pa_dmesh *dm, pa_mesh **fmp, pa_idx *map[PA_NKIND],
-                           pa_idx nfile[PA_NKIND]) {
+static pa_status file_mesh(pa_dmesh *dm, pa_mesh **fmp,
+                           pa_idx *map[PA_DMESH_NKIND],
+                           pa_idx nfile[PA_DMESH_NKIND]) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = dm->mesh, *fm = NULL;
   int d = dm->dim;
   pa_idx ne = dm->nown[PA_ELEMENT], *vstart = NULL, *vel = NULL;
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     PA_ALLOC(map[k], dm->nloc[k]);
     for (pa_idx i = 0; i < dm->nloc[k]; i++) map[k][i] = -1;
   }
@@ -812,9 +814,9 @@ pa_status pa_dmesh_write(pa_dmesh *dm, const char *path) {
   char base[4096], fpath[4200];
   pa_mesh *fm = NULL;
   pa_output *tx = NULL;
-  pa_outfile kwout;
+  pa__outfile kwout;
   int64_t info[MF_WORDS], *all = NULL;
-  pa_idx *map[PA_NKIND] = {NULL}, nfile[PA_NKIND] = {0};
+  pa_idx *map[PA_DMESH_NKIND] = {NULL}, nfile[PA_DMESH_NKIND] = {0};
   int vtu_nd = 0;
   uint64_t *mask = NULL;
   pa_gid *g = NULL;
@@ -885,7 +887,7 @@ pa_status pa_dmesh_write(pa_dmesh *dm, const char *path) {
     h[H_NRANKS] = dm->size;
     h[H_RANK] = dm->rank;
     h[H_DIM] = dm->dim;
-    for (int k = 0; k < PA_NKIND; k++) {
+    for (int k = 0; k < PA_DMESH_NKIND; k++) {
       h[H_NGLOB + k] = dm->nglob[k];
       h[H_NFILE + k] = nfile[k];
     }
@@ -893,12 +895,13 @@ pa_status pa_dmesh_write(pa_dmesh *dm, const char *path) {
     h[H_NFIELD] = m->nfield;
     PA_CALL(kw_write(&kw, KW_HEADER, h, sizeof h, NULL, 0, NULL, 0));
     pa_idx nmax = 0;
-    for (int k = 0; k < PA_NKIND; k++) nmax = nfile[k] > nmax ? nfile[k] : nmax;
+    for (int k = 0; k < PA_DMESH_NKIND; k++)
+      nmax = nfile[k] > nmax ? nfile[k] : nmax;
     PA_ALLOC(g, nmax);
     PA_ALLOC(o, nmax);
-    static const int kwg[PA_NKIND] = {KW_VGID, KW_EGID, KW_BGID, KW_DGID};
-    static const int kwo[PA_NKIND] = {KW_VOWNER, 0, KW_BOWNER, KW_DOWNER};
-    for (int k = 0; k < PA_NKIND; k++) {
+    static const int kwg[PA_DMESH_NKIND] = {KW_VGID, KW_EGID, KW_BGID, KW_DGID};
+    static const int kwo[PA_DMESH_NKIND] = {KW_VOWNER, 0, KW_BOWNER, KW_DOWNER};
+    for (int k = 0; k < PA_DMESH_NKIND; k++) {
       for (pa_idx i = 0; i < dm->nloc[k]; i++)
         if (map[k][i] >= 0) {
           g[map[k][i]] = dm->gid[k][i];
@@ -923,23 +926,24 @@ pa_status pa_dmesh_write(pa_dmesh *dm, const char *path) {
         x += m->field[q].ncomp;
       }
     }
-    size_t dl = 8 + (size_t)m->nfield * (PA_FIELD_NAME_LEN + 4);
+    size_t dl = 8 + (size_t)m->nfield * (PA_MESH_FIELD_NAME_LEN + 4);
     PA_CALLOC(fdesc, dl);
     int32_t mn[2] = {m->met_ncomp, m->nfield};
     memcpy(fdesc, mn, 8);
     for (int q = 0; q < m->nfield; q++) {
-      memcpy(fdesc + 8 + (size_t)q * (PA_FIELD_NAME_LEN + 4), m->field[q].name, PA_FIELD_NAME_LEN);
+      memcpy(fdesc + 8 + (size_t)q * (PA_MESH_FIELD_NAME_LEN + 4), m->field[q].name, PA_MESH_FIELD_NAME_LEN);
       int32_t nc = m->field[q].ncomp;
-      memcpy(fdesc + 8 + (size_t)q * (PA_FIELD_NAME_LEN + 4) + PA_FIELD_NAME_LEN, &nc, 4);
+      memcpy(fdesc + 8 + (size_t)q * (PA_MESH_FIELD_NAME_LEN + 4) + PA_MESH_FIELD_NAME_LEN, &nc, 4);
     }
     PA_CALL(kw_write(&kw, KW_VDBL, fdesc, dl, vd, sizeof(double) * nd * nfile[PA_VERTEX], NULL, 0));
     /* flags */
     size_t nf = 0;
-    for (int k = 0; k < PA_NKIND; k++) nf += (size_t)nfile[k];
+    for (int k = 0; k < PA_DMESH_NKIND; k++) nf += (size_t)nfile[k];
     PA_ALLOC(flags, nf);
-    const uint8_t *src[PA_NKIND] = {m->vflag, m->eflag, m->bflag, m->edflag};
+    const uint8_t *src[PA_DMESH_NKIND] = {m->vflag, m->eflag, m->bflag,
+                                          m->edflag};
     size_t base_off = 0;
-    for (int k = 0; k < PA_NKIND; k++) {
+    for (int k = 0; k < PA_DMESH_NKIND; k++) {
       for (pa_idx i = 0; i < dm->nloc[k]; i++)
         if (map[k][i] >= 0) flags[base_off + map[k][i]] = src[k][i];
       base_off += (size_t)nfile[k];
@@ -985,7 +989,7 @@ pa_status pa_dmesh_write(pa_dmesh *dm, const char *path) {
     PA_CHECK(tmp, PA_ERR_INTERNAL, "%s: its temporary is not listed", fpath);
     PA_CALL(pa__file_fnv1a64(tmp, &info[MF_BYTES], &hash));
     info[MF_HASH] = (int64_t)hash;
-    for (int k = 0; k < PA_NKIND; k++) info[MF_COUNT + k] = nfile[k];
+    for (int k = 0; k < PA_DMESH_NKIND; k++) info[MF_COUNT + k] = nfile[k];
   }
   /* ParaView: per-rank vtu of the owned elements, and the pvtu */
   rank_path(base, dm->rank, ".vtu", fpath, sizeof fpath);
@@ -1008,7 +1012,7 @@ cleanup:
   else if (dm) st = pa__agree_end(dm->comm, st);
   pa__free(all);
   pa_mesh_destroy(fm);
-  for (int k = 0; k < PA_NKIND; k++) pa__free(map[k]);
+  for (int k = 0; k < PA_DMESH_NKIND; k++) pa__free(map[k]);
   pa__free(mask);
   pa__free(g);
   pa__free(o);
@@ -1095,7 +1099,7 @@ static pa_status file_records(const char *path, int f, int nwriters,
                          me, dbl, pay, plen));
   }
   size_t foff = (size_t)fm->nv;
-  for (int k = PA_ELEMENT; k < PA_NKIND; k++) {
+  for (int k = PA_ELEMENT; k < PA_DMESH_NKIND; k++) {
     int nv = pa__kind_nv(d, k);
     pa_idx n = (pa_idx)h[H_NFILE + k];
     const pa_idx *conn = k == PA_ELEMENT ? fm->elem : k == PA_BOUNDARY ? fm->bdry : fm->edge;
@@ -1132,7 +1136,7 @@ static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
   pa_mesh *fm = NULL;
   pa__layout lay;
   int64_t hdr[H_WORDS];
-  pa__recs R[PA_NKIND];
+  pa__recs R[PA_DMESH_NKIND];
   pa_dmesh *dm = NULL;
   int *part = NULL, nval = 0, have_mf = 0;
   vdesc *vals = NULL;
@@ -1172,7 +1176,7 @@ static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
                "%s: written by %lld ranks in %lldD, its manifest %s lists %d "
                "ranks in %dD", fpath, (long long)hdr[H_NRANKS],
                (long long)hdr[H_DIM], mpath, mf.nranks, mf.dim);
-      for (int k = 0; k < PA_NKIND; k++)
+      for (int k = 0; k < PA_DMESH_NKIND; k++)
         PA_CHECK(hdr[H_NGLOB + k] == mf.nglob[k], PA_ERR_FORMAT,
                  "%s: global counts differ from its manifest %s", fpath, mpath);
     }
@@ -1202,7 +1206,7 @@ static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
     PA_CALL(pa__agree(comm, st));
     MPI_Bcast(mf.rk, MF_WORDS * nw, MPI_INT64_T, 0, comm);
   }
-  for (int k = 0; k < PA_NKIND; k++)
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     pa__recs_init(&R[k], k, pa__kind_nv(lay.dim, k),
                   k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
   /* files [rank*nw/size, (rank+1)*nw/size) */
@@ -1217,12 +1221,12 @@ static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
     PA_CALL(scan_file(fpath, &df));
     PA_CALL(pa_mesh_read(fpath, &fm));
     PA_CALL(file_records(fpath, f, nw, &df, fm, &lay, vals, nval, rank, R));
-    for (int k = 0; w && k < PA_NKIND; k++)
+    for (int k = 0; w && k < PA_DMESH_NKIND; k++)
       PA_CHECK(df.h[H_NFILE + k] == w[MF_COUNT + k], PA_ERR_FORMAT,
                "%s: %lld %s, its manifest %s lists %lld", fpath,
                (long long)df.h[H_NFILE + k], kind_name[k], mpath,
                (long long)w[MF_COUNT + k]);
-    for (int k = 0; k < PA_NKIND; k++)
+    for (int k = 0; k < PA_DMESH_NKIND; k++)
       PA_CHECK(df.h[H_NGLOB + k] == hdr[H_NGLOB + k], PA_ERR_FORMAT,
                "%s: global counts differ from rank 0's file", fpath);
     pa_mesh_destroy(fm);
@@ -1231,10 +1235,10 @@ static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
   }
   /* every entity exactly once */
   {
-    int64_t n[PA_NKIND];
-    for (int k = 0; k < PA_NKIND; k++) n[k] = (int64_t)R[k].n;
-    PA_CALL(pa__allreduce(comm, n, PA_NKIND, MPI_INT64_T, MPI_SUM));
-    for (int k = 0; k < PA_NKIND; k++)
+    int64_t n[PA_DMESH_NKIND];
+    for (int k = 0; k < PA_DMESH_NKIND; k++) n[k] = (int64_t)R[k].n;
+    PA_CALL(pa__allreduce(comm, n, PA_DMESH_NKIND, MPI_INT64_T, MPI_SUM));
+    for (int k = 0; k < PA_DMESH_NKIND; k++)
       PA_CHECK(n[k] == hdr[H_NGLOB + k], PA_ERR_FORMAT,
                "%s: inconsistent distributed set: the files own %lld %s, the "
                "header says %lld", path, (long long)n[k], kind_name[k],
@@ -1265,7 +1269,7 @@ cleanup:
   pa__free(mf.rk);
   dfile_free(&df);
   pa_mesh_destroy(fm);
-  for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&R[k]);
+  for (int k = 0; k < PA_DMESH_NKIND; k++) pa__recs_free(&R[k]);
   pa_dmesh_destroy(dm);
   pa__free(part);
   pa__free(vals);

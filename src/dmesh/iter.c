@@ -63,7 +63,7 @@ cleanup:
 pa_status pa_dmesh_iter_init(pa_dmesh *dm, pa_entity kind, pa_dmesh_set set,
                              pa_dmesh_iter *it) {
   pa_status st = PA_SUCCESS;
-  PA_CHECK(dm && it && (unsigned)kind < PA_NKIND, PA_ERR_ARG,
+  PA_CHECK(dm && it && (unsigned)kind < PA_DMESH_NKIND, PA_ERR_ARG,
            "pa_dmesh_iter_init: bad argument");
   memset(it, 0, sizeof *it);
   switch (set) {
@@ -395,7 +395,7 @@ pa_status pa_dmesh_reorder_by(pa_dmesh *dm, pa_dmesh_ordering how) {
   nm->nb = m->nb;
   nm->ned = m->ned;
   {
-    const pa_idx *perm[PA_NKIND] = {pv, pe, pb, pd};
+    const pa_idx *perm[PA_DMESH_NKIND] = {pv, pe, pb, pd};
     /* values: gather old blocks in the new entity order */
     for (int q = 0; q < dm->nvalue; q++) {
       pa_dmesh_value *v = dm->value[q];
@@ -412,7 +412,7 @@ pa_status pa_dmesh_reorder_by(pa_dmesh *dm, pa_dmesh_ordering how) {
       }
       memcpy(v->data, tmp, (size_t)v->nslot * v->unit);
     }
-    for (int k = 0; k < PA_NKIND; k++) {
+    for (int k = 0; k < PA_DMESH_NKIND; k++) {
       pa_gid *g;
       int *o;
       PA_ALLOC(g, dm->nloc[k]);
@@ -448,7 +448,7 @@ pa_status pa_dmesh_reorder_by(pa_dmesh *dm, pa_dmesh_ordering how) {
       if (v->slot[e] >= 0) v->ent[v->slot[e]] = e;
   }
   /* exchange patterns for the new numbering */
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     pa__sf_free(&dm->sf[k]);
     PA_CALL(pa__agree(dm->comm, st));
     PA_CALL(pa__sf_build(dm->comm, dm->nloc[k], dm->gid[k], dm->owner[k], &dm->sf[k]));

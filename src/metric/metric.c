@@ -348,7 +348,7 @@ void pa__metric_interp(int dim, int ncomp, int n, const double *const *m,
 
 int pa__user_metric_field(const pa_mesh *mesh) {
   for (int k = 0; k < mesh->nfield; k++)
-    if (!strcmp(mesh->field[k].name, PA__USER_METRIC) &&
+    if (!strcmp(mesh->field[k].name, PA_METRIC_USER) &&
         pa__field_is_metric(mesh->dim, mesh->field[k].name,
                             mesh->field[k].ncomp))
       return k;
@@ -661,6 +661,6 @@ double pa__quality(int dim, int ncomp, const double *const *x,
     }
   if (!(s > 0.0)) return 0.0;
   double sd = tensor ? sqrt(fmax(pa__sym_det(dim, mb), 0.0)) : 1.0;
-  if (dim == 2) return PA__QUAL_NORM_2D * vol * sd / s;
-  return PA__QUAL_NORM_3D * vol * sd / (s * sqrt(s));
+  if (dim == 2) return PA_METRIC_QUAL_NORM_2D * vol * sd / s;
+  return PA_METRIC_QUAL_NORM_3D * vol * sd / (s * sqrt(s));
 }
