@@ -53,12 +53,12 @@
 /* Temporary ids of the vertices bisect.c adds to a piece (above every
  * global id; exact as a double) */
 #define PA_ADAPT_TEMP_GID ((pa_gid)1 << 52)
-/* bisect.c: skin edges are bisected while longer than PA_ADAPT_LEB_SKIN, edges
- * inside the piece while longer than PA_ADAPT_LEB_INNER (in the metric). 1.5,
- * not sqrt 2: bisecting a skin face's edge of 1.47 cuts the obtuse faces of
- * a bisected Kuhn cube with a median half the shortest edge (0.52), frozen
- * until another iteration (box3d 20 -> 0.012 on 2 ranks: 43 k elements
- * tagged again, 1 627 with 1.5; 33.2 -> 31.0 s, 99.34 -> 99.31 % in range) */
+/* bisect.c: skin edges are bisected while longer than PA_ADAPT_LEB_SKIN,
+ * edges inside the piece while longer than PA_ADAPT_LEB_INNER (in the
+ * metric). 1.5, not sqrt 2: bisecting a skin face's edge of 1.47 cuts the
+ * obtuse faces of a bisected Kuhn cube with a median half the shortest edge
+ * (0.52), frozen until another iteration tags its elements again
+ * (docs/design/ADAPT.md has the measurement). */
 #define PA_ADAPT_LEB_SKIN 1.5
 #define PA_ADAPT_LEB_INNER 2.0
 /* No label (pieces.c, extract.c). */

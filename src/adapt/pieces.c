@@ -191,9 +191,7 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
   /* 2. partition the tagged elements, weighted by their work.
    * pa__partition_dgraph scales the weights to integer loads in [1, S], S =
    * min(1e6, 2^30 / tagged elements), so that their sum fits Scotch's 32-bit
-   * integers whatever the count. (Until 2026-11-22 a stale guard here
-   * dropped the weights beyond 2147 tagged elements: every real partition
-   * balanced element counts, not work.) */
+   * integers whatever the count. */
   if (it->npieces > 1) {
     PA_CALL(pa__dual_graph(dm->comm, it->dim, nt, vg, NULL, 0, &xadj, &adj,
                            NULL, NULL));

@@ -127,9 +127,8 @@ static pa_idx cset_find(cset *s, const double *p, pa_idx insert) {
 /* Check an output against its piece; fills pc->match. Returns 1 if usable.
  * Output vertices are matched to input ones by their coordinates, compared
  * bit for bit: a frozen skin vertex must come back exactly, and two
- * vertices of a valid mesh never coincide. (Carrying the global ids through
- * the remesher as a field cost every vertex move an interpolation: 3-4 % of
- * a 3D piece's time.) */
+ * vertices of a valid mesh never coincide; no global id travels through the
+ * remesher, which would interpolate it at every vertex move. */
 static int output_ok(const pa__iter *it, pa__piece *pc, pa_mesh *out,
                      pa_status *hard) {
   pa_status st = PA_SUCCESS;
@@ -236,9 +235,8 @@ pa_status pa__adapt_remesh(pa__iter *it, int *nfail) {
   /* Graded once over the whole mesh before the loop (grade.c), like the
    * sequential remesher grades its input once: grading each piece again
    * would stop at its frozen skin, and on the finer mesh of a later
-   * iteration shrink the sizes further (3D shell:0.1 on 2 ranks: 17 k
-   * elements tagged again made 165 k more tetrahedra, 7.4 s, 19 % more
-   * than the sequential run). */
+   * iteration shrink the sizes further (docs/BENCHMARKS.md, "The parallel
+   * loop", has what that cost). */
   ro.hgrad = 0;
   ro.hgradreq = 0;
   ro.no_stats = 1; /* pa_dmesh_adapt measures the whole result */

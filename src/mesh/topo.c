@@ -13,7 +13,8 @@
  * then the faces of one bucket are sorted by their two other vertices (one in
  * 2D) and equal neighbours paired. Meshes numbered with some locality (all
  * generated and most read ones) keep the elements of a bucket close in memory,
- * so the three passes run at memory speed: about a second for 10 M tets.
+ * so the three passes run at memory speed (docs/BENCHMARKS.md, "The
+ * distributed mesh").
  *
  * The boundary lookup (bhash) is an open-addressing table with linear probing
  * of boundary-entity indices, keyed by the entity's sorted vertex tuple; the

@@ -87,10 +87,8 @@ void pa__metric_exp(int dim, const double *logm, double *m);
  * 2D and 3D. Chosen by measurement over log-Euclidean interpolation
  * (exp(sum w_i log M_i), exact where sizes vary geometrically): exact on
  * sizes that vary linearly, which is what the gradation leaves and what
- * the UGAWG fields are; one pass of box3d 10 to ugawg-linear, judged
- * against the analytic field: 97.4 % of edges in range with 44 k tets in
- * 1.4 s, against 81 % with 76 k tets in 3.5 s (docs/BENCHMARKS.md). Output
- * in the same ncomp as the inputs. */
+ * the UGAWG fields are (the measurement: docs/BENCHMARKS.md, the UGAWG
+ * benchmark). Output in the same ncomp as the inputs. */
 void pa__metric_interp(int dim, int ncomp, int n, const double *const *m,
                        const double *w, double *out);
 
