@@ -351,7 +351,7 @@ void pa__metric_interp(int dim, int ncomp, int n, const double *const *m,
 
 int pa__user_metric_field(const pa_mesh *mesh) {
   for (int k = 0; k < mesh->nfield; k++)
-    if (!strcmp(mesh->field[k].name, PA__USER_METRIC) &&
+    if (!strcmp(mesh->field[k].name, PA_METRIC_USER) &&
         pa__field_is_metric(mesh->dim, mesh->field[k].name,
                             mesh->field[k].ncomp))
       return k;

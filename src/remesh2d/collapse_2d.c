@@ -202,7 +202,7 @@ static int remove_vertex(pa__rmesh *rm, pa_idx k, int ip) {
       int face = side ? NX3(l) : PV3(l);
       pa_idx r = rm->ev[3 * e + (side ? PV3(l) : NX3(l))];
       double len = edge_len(rm, p, r);
-      if (len >= PA__LEN_HI) continue;
+      if (len >= PA_METRIC_LEN_HI) continue;
       int dup = 0;
       for (int c = 0; c < nc; c++) dup |= cr[c] == r;
       if (dup) continue; /* each neighbour once (it is in two elements) */
@@ -234,7 +234,7 @@ pa_status pa__rm_collapse_pass_2d(pa__rmesh *rm, double thr, long *n) {
   for (pa_idx k = 0; k < rm->ne; k++) {
     uint8_t t = rm->etag[k];
     if (t & (RME_DEAD | RME_TOUCHED | RME_FROZEN)) continue;
-    if ((t & RME_INRANGE) && thr <= PA__LEN_LO)
+    if ((t & RME_INRANGE) && thr <= PA_METRIC_LEN_LO)
       continue; /* nothing below thr */
     const pa_idx *v = rm->ev + 3 * (size_t)k;
     /* shortest edge first */
@@ -242,7 +242,7 @@ pa_status pa__rm_collapse_pass_2d(pa__rmesh *rm, double thr, long *n) {
     double lb = thr;
     for (int i = 0; i < 3; i++) {
       double l = edge_len(rm, v[NX3(i)], v[PV3(i)]);
-      inr &= l >= PA__LEN_LO && l <= PA__LEN_HI;
+      inr &= l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
       if (l < lb) {
         lb = l;
         best = i;

@@ -234,15 +234,15 @@ static double expected_elems(pa_mesh *mesh) {
  * floor, and the pass loop ping-pongs there without converging.
  *
  * The working metric is therefore relaxed at the skin: a frozen vertex whose
- * frozen edges have a mean length lambda outside [PA__LEN_LO, PA__LEN_HI] gets
- * its size scaled by f = lambda / PA__LEN_HI (or lambda / PA__LEN_LO), the
- * least change that puts that mean in range; the size then varies linearly
- * (interpolation) to the target over the first ring of input elements
- * (ParMmg #74: grade the metric away from frozen entities). Relaxing further
- * (to length 1) widens the band of elements left coarser than the target,
- * which the parallel loop must adapt again: its iterations then stop
- * converging (test_adapt_props at 3-4 ranks); relaxing less (to 2) brings
- * the slivers back. The target metric is kept in met0,
+ * frozen edges have a mean length lambda outside [PA_METRIC_LEN_LO,
+ * PA_METRIC_LEN_HI] gets its size scaled by f = lambda / PA_METRIC_LEN_HI (or
+ * lambda / PA_METRIC_LEN_LO), the least change that puts that mean in range;
+ * the size then varies linearly (interpolation) to the target over the first
+ * ring of input elements (ParMmg #74: grade the metric away from frozen
+ * entities). Relaxing further (to length 1) widens the band of elements left
+ * coarser than the target, which the parallel loop must adapt again: its
+ * iterations then stop converging (test_adapt_props at 3-4 ranks); relaxing
+ * less (to 2) brings the slivers back. The target metric is kept in met0,
  * interpolated alongside, and it is what the write-back returns: frozen
  * vertices come back bit for bit and new vertices carry the target, so a
  * later pass (the next iteration of the parallel loop) sees the elements
@@ -289,14 +289,16 @@ static pa_status skin_relax_2d(pa__rmesh *rm) {
   for (pa_idx v = 0; v < nv; v++) {
     if (!cnt[v]) continue;
     double lam = acc[v] / cnt[v];
-    if (!(lam > PA__LEN_HI || lam < PA__LEN_LO) || !(lam > 0) || !isfinite(lam))
+    if (!(lam > PA_METRIC_LEN_HI || lam < PA_METRIC_LEN_LO) || !(lam > 0) ||
+        !isfinite(lam))
       continue;
     if (!rm->met0) {
       PA_ALLOC(rm->met0, rm->capv * mc);
       memcpy(rm->met0, rm->met, sizeof(double) * mc * (size_t)nv);
     }
     /* the least change that brings the mean into range: to the bound */
-    double f = lam > PA__LEN_HI ? lam / PA__LEN_HI : lam / PA__LEN_LO;
+    double f = lam > PA_METRIC_LEN_HI ? lam / PA_METRIC_LEN_HI
+                                      : lam / PA_METRIC_LEN_LO;
     double *m = rm->met + (size_t)mc * v;
     if (mc == 1) {
       m[0] *= f;
@@ -782,7 +784,8 @@ pa_status pa__rm_check(const pa__rmesh *rm) {
         pa_idx p = v[i], q = v[i == 2 ? 0 : i + 1];
         double l = pa__len2(mc, rm->x + 2 * (size_t)p, rm->x + 2 * (size_t)q,
                             rm->met + (size_t)mc * p, rm->met + (size_t)mc * q);
-        PA_CHECK(l >= PA__LEN_LO && l <= PA__LEN_HI, PA_ERR_INTERNAL,
+        PA_CHECK(l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI,
+                 PA_ERR_INTERNAL,
                  "remesher: element %d is marked in range, edge %d has "
                  "length %g",
                  (int)k, i, l);
@@ -873,9 +876,9 @@ void pa__rm_figures_2d(const pa__rmesh *rm, pa__rm_figures *f) {
       f->nedge++;
       if (l < f->lmin) f->lmin = l;
       if (l > f->lmax) f->lmax = l;
-      if (l >= PA__LEN_LO && l < PA__LEN_HI)
+      if (l >= PA_METRIC_LEN_LO && l < PA_METRIC_LEN_HI)
         f->nin++;
-      else if (l >= PA__LEN_HI)
+      else if (l >= PA_METRIC_LEN_HI)
         f->nlong++;
       else {
         f->nshort++;

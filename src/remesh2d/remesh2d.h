@@ -59,8 +59,8 @@ enum {
    * rejected, and neither it nor a neighbour changed since: skipped by swap
    * passes. Cleared with RME_INRANGE, on the element and its neighbours. */
   RME_NOSWAP = 64,
-  /* The three edges lie in [PA__LEN_LO, PA__LEN_HI] with the current
-   * coordinates and metric, so split and collapse passes at those
+  /* The three edges lie in [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI] with the
+   * current coordinates and metric, so split and collapse passes at those
    * thresholds have nothing to do here. Cleared with RMV_SETTLED (an element
    * rewritten, or one of its vertices moved); new elements start without. */
   RME_INRANGE = 128
@@ -230,8 +230,8 @@ static inline void rm_tensor2(int mc, const double *m, double *t) {
 
 /* Lengths and qualities are metric/metric2d.h's kernels (pa__len2,
  * pa__qual2): the statistics measure with the same lengths. The band the
- * passes aim at is PA__LEN_LO..PA__LEN_HI, the bounds as Mmg prints them
- * (the 3D remesher's are the exact PA__LEN_*_EXACT; the two differ by
- * 1e-5 and each remesher's outputs are tuned to its own). */
+ * passes aim at is PA_METRIC_LEN_LO..PA_METRIC_LEN_HI, the bounds as Mmg prints
+ * them (the 3D remesher's are the exact PA_METRIC_LEN_*_EXACT; the two differ
+ * by 1e-5 and each remesher's outputs are tuned to its own). */
 
 #endif /* PA_REMESH2D_H */

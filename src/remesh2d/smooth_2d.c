@@ -106,7 +106,7 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
       xp[1] = y0;
       for (int s = 0; s < n; s++) {
         double l = edge_len(rm, p, rm->ev[3 * (size_t)el[s] + NX3(loc[s])]);
-        inr[s] = l >= PA__LEN_LO && l <= PA__LEN_HI;
+        inr[s] = l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
       }
       xp[0] = np[0];
       xp[1] = np[1];
@@ -115,7 +115,7 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
     for (int s = 0; s < n && ok; s++) {
       if (!inr[s]) continue;
       double l = edge_len(rm, p, rm->ev[3 * (size_t)el[s] + NX3(loc[s])]);
-      ok = l >= PA__LEN_LO && l <= PA__LEN_HI;
+      ok = l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
     }
     if (!ok) continue;
     /* accepted */
@@ -152,16 +152,15 @@ long pa__rm_smooth_pass_2d(pa__rmesh *rm) {
   return cnt;
 }
 
-/* Edges at p out of [PA__LEN_LO, PA__LEN_HI] and their sum of ln^2 (L /
- * RM_LTARGET), with p at
- * y (metric mp) and its neighbours nb[0..nn). */
+/* Edges at p out of [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI] and their sum of ln^2
+ * (L / RM_LTARGET), with p at y (metric mp) and its neighbours nb[0..nn). */
 static int len_score_2d(const pa__rmesh *rm, const double *y, const double *mp,
                         const pa_idx *nb, int nn, double *sum) {
   int mc = rm->mcomp, out = 0;
   double s = 0;
   for (int i = 0; i < nn; i++) {
     double l = pa__len2(mc, y, X(nb[i]), mp, M(nb[i]));
-    out += !(l >= PA__LEN_LO && l <= PA__LEN_HI);
+    out += !(l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI);
     double g = log(l / RM_LTARGET);
     s += g * g;
   }
@@ -264,7 +263,7 @@ long pa__rm_length_pass_2d(pa__rmesh *rm) {
     for (int i = 0; i < 3 && !bad; i++) {
       double l =
           pa__len2(mc, X(v[NX3(i)]), X(v[PV3(i)]), M(v[NX3(i)]), M(v[PV3(i)]));
-      bad = !(l >= PA__LEN_LO && l <= PA__LEN_HI);
+      bad = !(l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI);
     }
     if (!bad) continue;
     for (int i = 0; i < 3; i++) {

@@ -127,7 +127,8 @@ static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
 }
 
 /* Longest free edge of element k above thr: face index or -1, length in *len;
- * *inr (may be NULL) = all three edges in [PA__LEN_LO, PA__LEN_HI]. */
+ * *inr (may be NULL) = all three edges in [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI].
+ */
 static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
                         int *inr) {
   const pa_idx *v = rm->ev + 3 * (size_t)k;
@@ -135,7 +136,7 @@ static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
   double lb = thr;
   for (int i = 0; i < 3; i++) {
     double l = edge_len(rm, v[NX3(i)], v[PV3(i)]);
-    in &= l >= PA__LEN_LO && l <= PA__LEN_HI;
+    in &= l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
     if (l > lb && edge_free(rm, 3 * k + i)) {
       lb = l;
       best = i;
@@ -153,7 +154,7 @@ pa_status pa__rm_split_pass_2d(pa__rmesh *rm, double thr, long *n) {
   for (pa_idx k = 0; k < rm->ne; k++) {
     uint8_t t = rm->etag[k];
     if (t & (RME_DEAD | RME_TOUCHED | RME_FROZEN)) continue;
-    if ((t & RME_INRANGE) && thr >= PA__LEN_HI)
+    if ((t & RME_INRANGE) && thr >= PA_METRIC_LEN_HI)
       continue; /* nothing above thr */
     double l;
     int inr;

@@ -84,9 +84,9 @@ long pa__rm_sliver_pass_2d(pa__rmesh *rm, double qbad) {
           best = i;
         }
       }
-      if (lb < PA__LEN_HI) {
+      if (lb < PA_METRIC_LEN_HI) {
         double g = rm->lguard;
-        rm->lguard = PA__LEN_HI * 1.2;
+        rm->lguard = PA_METRIC_LEN_HI * 1.2;
         done = pa__rm_collapse_edge_2d(rm, k, best, NX3(best), 1.0 + 1e-9) ||
                pa__rm_collapse_edge_2d(rm, k, best, PV3(best), 1.0 + 1e-9);
         rm->lguard = g;

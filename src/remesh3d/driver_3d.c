@@ -75,10 +75,12 @@ static void order6(const double *L, int dir, int *ord) {
   }
 }
 
-/* 1 if the six lengths are in [PA__LEN_LO_EXACT, PA__LEN_HI_EXACT]. */
+/* 1 if the six lengths are in [PA_METRIC_LEN_LO_EXACT, PA_METRIC_LEN_HI_EXACT].
+ */
 static int in_range6(const double *L) {
   for (int e = 0; e < 6; e++)
-    if (!(L[e] >= PA__LEN_LO_EXACT && L[e] <= PA__LEN_HI_EXACT)) return 0;
+    if (!(L[e] >= PA_METRIC_LEN_LO_EXACT && L[e] <= PA_METRIC_LEN_HI_EXACT))
+      return 0;
   return 1;
 }
 
@@ -89,8 +91,8 @@ static int in_range6(const double *L) {
 pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count) {
   pa_status st = PA_SUCCESS;
   long c = 0;
-  uint8_t skip = thr >= PA__LEN_HI_EXACT ? R3T_CLEAN : 0;
-  int spread = m->spread && thr <= PA__LEN_HI_EXACT;
+  uint8_t skip = thr >= PA_METRIC_LEN_HI_EXACT ? R3T_CLEAN : 0;
+  int spread = m->spread && thr <= PA_METRIC_LEN_HI_EXACT;
   pa_idx sht[RM3D_MAXSHELL], shr[RM3D_MAXSHELL + 1];
   for (pa_idx k = 0; k < m->ne; k++) {
     for (int guard = 0; guard < 64; guard++) {
@@ -184,7 +186,7 @@ pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, double guard,
                                  long *count) {
   pa_status st = PA_SUCCESS;
   long c = 0;
-  uint8_t skip = thr <= PA__LEN_LO_EXACT ? R3T_CLEAN : 0;
+  uint8_t skip = thr <= PA_METRIC_LEN_LO_EXACT ? R3T_CLEAN : 0;
   for (pa_idx i = 0; i < m->nv; i++) m->vtag[i] |= R3V_TODO;
   for (pa_idx k = 0; k < m->ne; k++) {
     if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN | skip)) continue;
@@ -280,7 +282,7 @@ pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count) {
     int clean = 1;
     lengths6(m, v, L);
     for (int e = 0; e < 6; e++)
-      if (!(L[e] >= PA__LEN_LO_EXACT && L[e] < PA__LEN_HI_EXACT)) {
+      if (!(L[e] >= PA_METRIC_LEN_LO_EXACT && L[e] < PA_METRIC_LEN_HI_EXACT)) {
         m->vtag[v[rm3d_edge[e][0]]] |= R3V_TODO;
         m->vtag[v[rm3d_edge[e][1]]] |= R3V_TODO;
         clean = 0;
@@ -325,7 +327,7 @@ static void measure(const rm3d *m, double *inrange, double *qworst,
     double L[6];
     lengths6(m, m->tv + 4 * (size_t)k, L);
     for (int e = 0; e < 6; e++)
-      nin += L[e] >= PA__LEN_LO_EXACT && L[e] < PA__LEN_HI_EXACT;
+      nin += L[e] >= PA_METRIC_LEN_LO_EXACT && L[e] < PA_METRIC_LEN_HI_EXACT;
     nall += 6;
     double q = rm3d_qual_v(m, m->tv + 4 * (size_t)k);
     if (q < qw) qw = q;
@@ -344,7 +346,9 @@ static void measure(const rm3d *m, double *inrange, double *qworst,
       for (int e = 0; e < 6; e++) {
         int b = (m->vtag[v[rm3d_edge[e][0]]] & m->vtag[v[rm3d_edge[e][1]]] &
                  R3V_BDRY) != 0;
-        c[b][L[e] < PA__LEN_LO_EXACT ? 0 : L[e] < PA__LEN_HI_EXACT ? 1 : 2]++;
+        c[b][L[e] < PA_METRIC_LEN_LO_EXACT   ? 0
+             : L[e] < PA_METRIC_LEN_HI_EXACT ? 1
+                                             : 2]++;
       }
     }
     long nb[4] = {0, 0, 0, 0};
@@ -399,8 +403,8 @@ static double lattice_crowd(rm3d *m, double *longer) {
     nall += 6;
     for (int e = 0; e < 6; e++) {
       nlong += L[e] >= RM3D_LSPREAD;
-      if (!(L[e] > PA__LEN_HI_EXACT && L[e] < RM3D_LSPREAD)) continue;
-      int bin = (int)((L[e] / PA__LEN_HI_EXACT - 1.0) * 100.0);
+      if (!(L[e] > PA_METRIC_LEN_HI_EXACT && L[e] < RM3D_LSPREAD)) continue;
+      int bin = (int)((L[e] / PA_METRIC_LEN_HI_EXACT - 1.0) * 100.0);
       if (bin >= RM3D_NCROWD) continue;
       pa_idx a = v[rm3d_edge[e][0]], b = v[rm3d_edge[e][1]];
       const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b;
@@ -412,7 +416,7 @@ static double lattice_crowd(rm3d *m, double *longer) {
         pa_idx c = v[j];
         if (c != a && c != b &&
             pa__len3(mc, x, m->x + 3 * (size_t)c, mp, m->met + (size_t)mc * c) <
-                PA__LEN_LO_EXACT)
+                PA_METRIC_LEN_LO_EXACT)
           far = 0;
       }
       if (!far) continue;
@@ -442,7 +446,7 @@ static void progress(const pa_remesh_opts *o, int step, const rm3d *m) {
     double L[6];
     lengths6(m, m->tv + 4 * (size_t)k, L);
     for (int e = 0; e < 6; e++)
-      nin += L[e] >= PA__LEN_LO_EXACT && L[e] < PA__LEN_HI_EXACT;
+      nin += L[e] >= PA_METRIC_LEN_LO_EXACT && L[e] < PA_METRIC_LEN_HI_EXACT;
     n += 6;
   }
   pa_progress p = {"pass", step, (double)(m->ne - m->ndead_t), 0, 0,
@@ -557,18 +561,19 @@ static pa_status refine_bands(rm3d *m, const pa_remesh_opts *opts,
   double prev = HUGE_VAL;
   for (int it = 0; it < 40; it++) {
     /* decreasing even when the longest edge cannot be split (frozen, or
-     * refused next to a frozen skin): the bands must reach PA__LEN_HI_EXACT */
+     * refused next to a frozen skin): the bands must reach
+     * PA_METRIC_LEN_HI_EXACT */
     double thr = max_length(m) / 1.5;
     if (thr > prev / 1.5) thr = prev / 1.5;
     /* a band just above the last one would cost a sweep for little: 1.45
      * then 1.41 took 0.13 s of a 2.2 s piece (box3d 10 -> 0.019) */
-    if (thr < 1.1 * PA__LEN_HI_EXACT) thr = PA__LEN_HI_EXACT;
+    if (thr < 1.1 * PA_METRIC_LEN_HI_EXACT) thr = PA_METRIC_LEN_HI_EXACT;
     prev = thr;
     long ns = 0, nc = 0;
     double t1 = pa_wtime();
-    if (thr == PA__LEN_HI_EXACT) break_lattice_crowd(m);
+    if (thr == PA_METRIC_LEN_HI_EXACT) break_lattice_crowd(m);
     PA_CALL(pa__rm3d_split_pass(m, thr, &ns));
-    PA_CALL(pa__rm3d_collapse_pass(m, PA__LEN_LO_EXACT, thr, &nc));
+    PA_CALL(pa__rm3d_collapse_pass(m, PA_METRIC_LEN_LO_EXACT, thr, &nc));
     if (m->ndead_t > m->ne / 8) PA_CALL(pa__rm3d_compact(m, 1));
     if (m->verbosity > 0)
       fprintf(stderr,
@@ -577,7 +582,7 @@ static pa_status refine_bands(rm3d *m, const pa_remesh_opts *opts,
               thr, ns, nc, pa_wtime() - t1, (int)(m->ne - m->ndead_t),
               (int)m->ne, pa_memory_current() / 1e6, pa_memory_peak() / 1e6);
     progress(opts, ++*step, m);
-    if (thr == PA__LEN_HI_EXACT) break;
+    if (thr == PA_METRIC_LEN_HI_EXACT) break;
   }
 cleanup:
   return st;
@@ -608,9 +613,10 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
   for (int it = 0; it < RM3D_ROUNDS_MAX; it++, (*npass)++) {
     long ns = 0, nc = 0, nw = 0, nm = 0;
     double t1 = pa_wtime();
-    PA_CALL(pa__rm3d_split_pass(m, PA__LEN_HI_EXACT, &ns));
+    PA_CALL(pa__rm3d_split_pass(m, PA_METRIC_LEN_HI_EXACT, &ns));
     double t2 = pa_wtime();
-    PA_CALL(pa__rm3d_collapse_pass(m, PA__LEN_LO_EXACT, PA__LEN_HI_EXACT, &nc));
+    PA_CALL(pa__rm3d_collapse_pass(m, PA_METRIC_LEN_LO_EXACT,
+                                   PA_METRIC_LEN_HI_EXACT, &nc));
     double t3 = pa_wtime();
     if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(m, 0.3, 1.02, &nw));
     double t4 = pa_wtime();
@@ -647,8 +653,8 @@ static pa_status optimise(rm3d *m, const pa_remesh_opts *opts, int *npass) {
      * guard): collapse again in the first two rounds; the last one only
      * swaps and smooths, so the worst quality is repaired after them. */
     if (it < 2 && !opts->no_insert)
-      PA_CALL(
-          pa__rm3d_collapse_pass(m, PA__LEN_LO_EXACT, PA__LEN_HI_EXACT, &nc));
+      PA_CALL(pa__rm3d_collapse_pass(m, PA_METRIC_LEN_LO_EXACT,
+                                     PA_METRIC_LEN_HI_EXACT, &nc));
     if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(m, 0.7, 1.01, &nw));
     if (!opts->no_move) {
       long nl = 0;

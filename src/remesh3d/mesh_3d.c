@@ -629,7 +629,7 @@ pa_status pa__rm3d_check(rm3d *m) {
     if (m->tflag[k] & R3T_CLEAN) /* a change did not clear the mark */
       for (int e = 0; e < 6; e++) {
         double l = rm3d_len(m, v[rm3d_edge[e][0]], v[rm3d_edge[e][1]]);
-        PA_CHECK(l >= PA__LEN_LO_EXACT && l <= PA__LEN_HI_EXACT,
+        PA_CHECK(l >= PA_METRIC_LEN_LO_EXACT && l <= PA_METRIC_LEN_HI_EXACT,
                  PA_ERR_INTERNAL,
                  "rm3d: tet %d is marked clean, its edge %d has length %g",
                  (int)k, e, l);
@@ -907,15 +907,15 @@ pa_status pa__rm3d_skin_relax(rm3d *m, pa_idx *nrelaxed) {
   for (pa_idx v = 0; v < nv; v++) {
     if (!cnt[v]) continue;
     double lam = acc[v] / cnt[v];
-    if (!(lam > PA__LEN_HI_EXACT || lam < PA__LEN_LO_EXACT) || !(lam > 0) ||
-        !isfinite(lam))
+    if (!(lam > PA_METRIC_LEN_HI_EXACT || lam < PA_METRIC_LEN_LO_EXACT) ||
+        !(lam > 0) || !isfinite(lam))
       continue;
     if (!m->met0) {
       PA_ALLOC(m->met0, m->capv * (size_t)mc);
       memcpy(m->met0, m->met, sizeof(double) * (size_t)mc * nv);
     }
-    double f =
-        lam > PA__LEN_HI_EXACT ? lam / RM3D_LRELAX : lam / PA__LEN_LO_EXACT;
+    double f = lam > PA_METRIC_LEN_HI_EXACT ? lam / RM3D_LRELAX
+                                            : lam / PA_METRIC_LEN_LO_EXACT;
     double *mt = m->met + (size_t)mc * v;
     if (mc == 1) {
       mt[0] *= f;

@@ -38,11 +38,12 @@ enum {
   R3T_FROZEN = 0x10, /* caller's PA_FLAG_REQUIRED: never touched */
   R3T_DEAD = 0x20,
   R3T_MARK = 0x40, /* transient visit mark (always cleared after use) */
-  /* Clean: its six edges were in [PA__LEN_LO_EXACT, PA__LEN_HI_EXACT] when last
-   * measured and neither its vertices nor their positions or metrics changed
-   * since. The split and collapse passes at the final thresholds skip it: on a
-   * mostly adapted mesh they measured every tet again for nothing. Every
-   * change of a tet clears it (where its cached quality q is set). */
+  /* Clean: its six edges were in [PA_METRIC_LEN_LO_EXACT,
+   * PA_METRIC_LEN_HI_EXACT] when last measured and neither its vertices nor
+   * their positions or metrics changed since. The split and collapse passes at
+   * the final thresholds skip it: on a mostly adapted mesh they measured every
+   * tet again for nothing. Every change of a tet clears it (where its cached
+   * quality q is set). */
   R3T_CLEAN = 0x80
 };
 
@@ -160,7 +161,7 @@ static inline int rm3d_loc(const pa_idx *v, pa_idx x) {
 
 /* Lengths and qualities are metric/metric3d.h's kernels: the statistics
  * measure with the same lengths, and the band the passes aim at is
- * PA__LEN_LO_EXACT..PA__LEN_HI_EXACT. */
+ * PA_METRIC_LEN_LO_EXACT..PA_METRIC_LEN_HI_EXACT. */
 static inline double rm3d_len(const rm3d *m, pa_idx a, pa_idx b) {
   return pa__len3(m->mc, m->x + 3 * (size_t)a, m->x + 3 * (size_t)b,
                   m->met + (size_t)m->mc * a, m->met + (size_t)m->mc * b);

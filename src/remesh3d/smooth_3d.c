@@ -411,8 +411,8 @@ int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball) {
 
 /* ---- relocation for lengths -------------------------------------------- */
 
-/* Edges at p: out of [PA__LEN_LO_EXACT, PA__LEN_HI_EXACT) and the sum of ln^2
- * L, with p at y (metric mp) and its neighbours nb[0..nn). */
+/* Edges at p: out of [PA_METRIC_LEN_LO_EXACT, PA_METRIC_LEN_HI_EXACT) and the
+ * sum of ln^2 L, with p at y (metric mp) and its neighbours nb[0..nn). */
 static int len_score(const rm3d *m, const double *y, const double *mp,
                      const pa_idx *nb, int nn, double *sum) {
   int out = 0, mc = m->mc;
@@ -420,7 +420,7 @@ static int len_score(const rm3d *m, const double *y, const double *mp,
   for (int i = 0; i < nn; i++) {
     double l = pa__len3(mc, y, m->x + 3 * (size_t)nb[i], mp,
                         m->met + (size_t)mc * nb[i]);
-    out += !(l >= PA__LEN_LO_EXACT && l < PA__LEN_HI_EXACT);
+    out += !(l >= PA_METRIC_LEN_LO_EXACT && l < PA_METRIC_LEN_HI_EXACT);
     double g = log(l);
     s += g * g;
   }

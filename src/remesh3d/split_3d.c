@@ -254,7 +254,7 @@ static int place_vertex(rm3d *m, split_plan *s) {
    * surface. Then the point goes closer to the chord, where the halves stay
    * in the triangle's plane (a surface tilt is always retried, a refused
    * quality only for a far too long edge). */
-  int relax = rm3d_len(m, a, b) > 2.0 * PA__LEN_HI_EXACT;
+  int relax = rm3d_len(m, a, b) > 2.0 * PA_METRIC_LEN_HI_EXACT;
   int ok = 0;
   for (int f = 0; f < CURVE_BACKOFF && !ok; f++) {
     double w = f == CURVE_BACKOFF - 1 ? 0 : ldexp(1.0, -f);

@@ -370,7 +370,7 @@ pa_status pa__rm3d_swap_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
       const pa_idx *t = nv4 + 4 * i;
       for (int e = 0; e < 3; e++) {
         double l = rm3d_len(m, t[e], t[(e + 1) % 3]);
-        if (l > PA__LEN_HI_EXACT) return st;
+        if (l > PA_METRIC_LEN_HI_EXACT) return st;
       }
     }
   }
