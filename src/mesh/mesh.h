@@ -33,12 +33,6 @@ typedef struct pa__name {
   char *name; /* NUL-terminated, allocated */
 } pa__name;
 
-/* The names src/remesh/ still spells the old way (the rest of the code uses
- * the ones above). */
-#define PA_MAX_FIELDS PA_MESH_MAX_FIELDS
-#define PA_FIELD_NAME_LEN PA_MESH_FIELD_NAME_LEN
-typedef pa__name pa_name;
-
 struct pa_mesh {
   int dim; /* 2 or 3 */
 

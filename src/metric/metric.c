@@ -553,25 +553,6 @@ unsigned pa__metric_clamp_bounds(int dim, int nc, pa_idx nv, double *met,
   return changed;
 }
 
-pa_status pa__metric_clamp_opts(const pa_mesh *mesh, int nc, double *met,
-                                const uint8_t *frozen,
-                                const pa_remesh_opts *o, unsigned *changed) {
-  pa_status st = PA_SUCCESS;
-  double *b = NULL;
-  *changed = 0;
-  if (!o->local || o->nlocal <= 0) {
-    *changed = pa__metric_clamp_all(mesh->dim, nc, mesh->nv, met, frozen,
-                                    o->hmin, o->hmax);
-    return PA_SUCCESS;
-  }
-  PA_ALLOC(b, 3 * (size_t)mesh->nv);
-  pa__local_bounds(mesh, o, b);
-  *changed = pa__metric_clamp_bounds(mesh->dim, nc, mesh->nv, met, frozen, b);
-cleanup:
-  pa__free(b);
-  return st;
-}
-
 double pa__local_hausd(const pa_remesh_opts *o, int ref, double def) {
   for (int k = 0; o->local && k < o->nlocal; k++)
     if (o->local[k].kind == PA_BOUNDARY && o->local[k].ref == ref &&

@@ -122,22 +122,20 @@ void pa__metric_set_hsiz(int dim, int nc, pa_idx nv, double *met,
                          const uint8_t *frozen, double hsiz);
 unsigned pa__metric_clamp_all(int dim, int nc, pa_idx nv, double *met,
                               const uint8_t *frozen, double hmin, double hmax);
-/* The same with the local parameters of o (o->local): at the vertices of
+/* The clamp with the local parameters of o (o->local): at the vertices of
  * the entities they name their bounds replace o->hmin/o->hmax
- * (pa_local_param); met holds mesh->nv values. *changed: PA_CHANGED_*.
- * In three steps, for a distributed mesh whose copies of a vertex must
- * merge their bounds first: pa__local_bounds gives each vertex the triple
- * (seen, hmin, hmax) of the local parameters of its entities (seen 0: the
- * global bounds), pa__local_bounds_merge merges two triples, and
- * pa__metric_clamp_bounds clamps. */
+ * (pa_local_param). In three steps, so that a distributed mesh can merge
+ * the bounds of the copies of a vertex before clamping: pa__local_bounds
+ * gives each vertex the triple (seen, hmin, hmax) of the local parameters
+ * of its entities (seen 0: the global bounds; b holds 3 * mesh->nv
+ * values), pa__local_bounds_merge merges two triples, and
+ * pa__metric_clamp_bounds clamps met (nv values) and returns the
+ * PA_CHANGED_* bits of what it changed. */
 void pa__local_bounds(const pa_mesh *mesh, const pa_remesh_opts *o,
                       double *b);
 void pa__local_bounds_merge(const double *in, double *inout);
 unsigned pa__metric_clamp_bounds(int dim, int nc, pa_idx nv, double *met,
                                  const uint8_t *frozen, const double *b);
-pa_status pa__metric_clamp_opts(const pa_mesh *mesh, int nc, double *met,
-                                const uint8_t *frozen,
-                                const pa_remesh_opts *o, unsigned *changed);
 /* The Hausdorff distance bounding the boundary entities of reference ref:
  * a local parameter's (kind PA_BOUNDARY) or the global one, def. */
 double pa__local_hausd(const pa_remesh_opts *o, int ref, double def);
@@ -209,10 +207,8 @@ pa_status pa__mesh_stats_met(pa_mesh *mesh, int nc, const double *met,
                              int check, pa_stats *stats);
 
 /* The name of the vertex field carrying the caller's metric
- * (pa__metric_prepare); PA__USER_METRIC is the old spelling src/remesh/
- * still uses. */
+ * (pa__metric_prepare). */
 #define PA_METRIC_USER PA_FIELD_METRIC_PREFIX "user"
-#define PA__USER_METRIC PA_METRIC_USER
 
 /* The index of the vertex field holding the caller's metric ("metric:user",
  * PA_FIELD_METRIC_PREFIX), or -1. */
@@ -298,7 +294,7 @@ void pa__metric_ctx_seq(pa_mesh *mesh, pa__metric_ctx *c);
  *  2. unless o->no_stats, a copy of the result is carried as the vertex
  *     field PA_METRIC_USER (if the mesh has room and carries none yet;
  *     *carried = 1), for the final report against the caller's metric;
- *  3. hmin/hmax and the local parameters o->local (pa__metric_clamp_opts,
+ *  3. hmin/hmax and the local parameters o->local (pa__local_bounds,
  *     the bounds merged over the copies of a vertex);
  *  4. the gradation o->hgrad, o->hgradreq (c->grade).
  * Frozen vertices keep their metric throughout (the gradation lets them

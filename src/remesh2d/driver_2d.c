@@ -89,7 +89,7 @@ static void progress(const pa__rmesh *rm, int pass) {
   long nin = 0, n = 0;
   int mc = rm->mcomp;
   for (pa_idx k = 0; k < rm->ne; k += stride) {
-    if (rm->etag[k] & (RME_DEAD | RME_FROZEN)) continue;
+    if (rm->etag[k] & (RM_E_DEAD | RM_E_FROZEN)) continue;
     for (int i = 0; i < 3; i++) {
       pa_idx a = rm->ev[3 * k + i], c = rm->ev[3 * k + (i + 1) % 3];
       double l = pa__len2(mc, rm->x + 2 * (size_t)a, rm->x + 2 * (size_t)c,
