@@ -3,13 +3,21 @@
  * adaptation of simplex meshes (2D triangles, 3D tetrahedra) to a metric field.
  *
  * Conventions used throughout:
+ *  - Names: pa_<object>_<verb> for functions, pa_<name> for types, PA_ for
+ *    constants; everything named so is declared here and nowhere else.
  *  - Every function that can fail returns a pa_status; results come back through
  *    out-pointers. On failure, pa_last_error() gives a one-line message naming
  *    the file and line (or the entity) at fault.
+ *  - Each function's comment says what it does, what each parameter is
+ *    ("out": the function writes it; "in/out": reads and writes it; the
+ *    others are read only), whether it is collective and what it returns.
+ *    A pa_status return is PA_SUCCESS or the error named; PA_ERR_ARG for a
+ *    NULL pointer where one is needed goes without saying.
  *  - Indices are 0-based. Local indices are pa_idx (32-bit), global ids pa_gid
  *    (64-bit).
  *  - "Collective" means every rank of the communicator must call the function.
- *    Functions not marked collective are local.
+ *    Every function says whether it is; "Not collective" ones are local.
+ *  - Test hooks and expert knobs are apart, in the last section.
  *  - Metric storage per vertex: ncomp = 1 is an isotropic size h (the metric is
  *    I/h^2); ncomp = 3 (2D) or 6 (3D) is a symmetric positive definite tensor
  *    stored as m11 m12 m22 [m13 m23 m33] (Medit's order).
@@ -32,8 +40,9 @@ extern "C" {
 #define PADAPT_VERSION_MINOR 1
 #define PADAPT_VERSION_PATCH 0
 
-/** The library's version, "MAJOR.MINOR.PATCH" (the macros above, as the
- *  library was built: compare both to detect a header/library mismatch). */
+/** Returns the library's version, "MAJOR.MINOR.PATCH" (the macros above, as
+ *  the library was built: compare both to detect a header/library
+ *  mismatch); a static string. Not collective. */
 const char *pa_version(void);
 
 /** Local index (vertex, element, ...) on one process. */
@@ -62,25 +71,24 @@ typedef enum pa_status {
   PA_ERR_INTERNAL     /**< an internal invariant was violated (a bug) */
 } pa_status;
 
-/** Short constant name of a status ("success", "format error", ...). */
+/** Short constant name of status ("success", "format error", ...); a
+ *  static string, "unknown status" for a value out of the enum. Not
+ *  collective. */
 const char *pa_status_string(pa_status status);
 
-/** Message of the last error raised in the calling thread ("" if none). */
+/** Message of the last error raised in the calling thread ("" if none),
+ *  valid until the thread's next error. Not collective. */
 const char *pa_last_error(void);
 
-/** Clear the calling thread's last error message. */
+/** Clear the calling thread's last error message. Not collective. */
 void pa_clear_error(void);
 
 /**
- * Set the calling thread's last error message (printf-style) and return
- * status, for code whose own failures travel through padapt: a plug-in
- * remesher's callback (pa_remesher), or the status a caller gives to
- * pa_output_end, whose agreement gives every rank the message of the
- * lowest failing rank. Not collective.
- *
- * \param[in] status the status to return (PA_ERR_*)
- * \param[in] fmt    printf format of the message, then its arguments
- * \return status
+ * Set the calling thread's last error message to fmt and its arguments
+ * (printf-style) and return status, for code whose own failures travel
+ * through padapt: a plug-in remesher's callback (pa_remesher), or the
+ * status a caller gives to pa_output_end, whose agreement gives every rank
+ * the message of the lowest failing rank. Not collective. Returns status.
  */
 pa_status pa_set_error(pa_status status, const char *fmt, ...)
 #if defined(__GNUC__)
@@ -88,22 +96,28 @@ pa_status pa_set_error(pa_status status, const char *fmt, ...)
 #endif
     ;
 
-/** Bytes currently allocated by padapt in this process. */
+/** Returns the bytes padapt has allocated in this process (every thread)
+ *  and not freed. Not collective. */
 size_t pa_memory_current(void);
-/** Peak of pa_memory_current() since start (or last reset). */
+/** Returns the peak of pa_memory_current() since the start or the last
+ *  pa_memory_reset_peak. Not collective. */
 size_t pa_memory_peak(void);
-/** Reset the peak to the current value. */
+/** Reset the peak to the current value. Not collective. */
 void pa_memory_reset_peak(void);
-/** Peak resident set size of the process in bytes (from the OS), 0 if unknown. */
+/** Returns the peak resident set size of the process in bytes (from the
+ *  OS), 0 if unknown. Not collective. */
 size_t pa_peak_rss(void);
-/** Test hook: make the n-th next allocation fail (n >= 1); n = 0 disables. */
-void pa_memory_fail_after(long n);
 
-/** Verbosity of messages printed by the library on stderr (default 0). */
+/** Set the verbosity of the messages the library prints on stderr (level:
+ *  -1 errors and warnings only, 0 the default, 1-10 more detail).
+ *  Process-wide, not collective. */
 void pa_set_verbosity(int level);
+/** Returns the verbosity set by pa_set_verbosity (default 0). Not
+ *  collective. */
 int pa_verbosity(void);
 
-/** Wall-clock time in seconds (monotonic). */
+/** Returns the wall-clock time in seconds from a fixed origin (monotonic).
+ *  Not collective. */
 double pa_wtime(void);
 
 /* ------------------------------------------------------------------------ */
@@ -130,52 +144,67 @@ enum {
   PA_FLAG_USER = 8      /**< free for callers (e.g. "tagged for remeshing") */
 };
 
-/** Create an empty mesh of dimension dim (2 or 3). Not collective. */
+/** Create an empty mesh of dimension dim (2 or 3) into *mesh (out; free it
+ *  with pa_mesh_destroy). Not collective. Returns PA_ERR_ARG for another
+ *  dim, PA_ERR_MEMORY. */
 pa_status pa_mesh_create(int dim, pa_mesh **mesh);
-/** Destroy a mesh (NULL allowed). */
+/** Destroy mesh (in/out; NULL allowed). Not collective. */
 void pa_mesh_destroy(pa_mesh *mesh);
-/** Deep copy of a mesh, including metric, fields and physical names. */
+/** A deep copy of src, its metric, fields and physical names included, into
+ *  *dst (out). Not collective. Returns PA_ERR_MEMORY. */
 pa_status pa_mesh_copy(const pa_mesh *src, pa_mesh **dst);
 
+/** The counts of mesh: returns its dimension (2 or 3), its vertices,
+ *  elements, boundary entities (edges in 2D, triangles in 3D) and feature
+ *  edges (3D only; 0 in 2D). Not collective. */
 int pa_mesh_dim(const pa_mesh *mesh);
 pa_idx pa_mesh_nvert(const pa_mesh *mesh);
 pa_idx pa_mesh_nelem(const pa_mesh *mesh);
-/** Number of boundary entities (edges in 2D, triangles in 3D). */
 pa_idx pa_mesh_nbdry(const pa_mesh *mesh);
-/** Number of feature edges (3D only; always 0 in 2D). */
 pa_idx pa_mesh_nedge(const pa_mesh *mesh);
 
-/** Reserve room so that adding up to these counts does not reallocate. */
+/** Reserve room in mesh (in/out) so that adding up to these counts of
+ *  entities (>= 0) does not reallocate. Not collective. Returns PA_ERR_ARG
+ *  for a negative count, PA_ERR_MEMORY. */
 pa_status pa_mesh_reserve(pa_mesh *mesh, pa_idx nvert, pa_idx nelem,
                           pa_idx nbdry, pa_idx nedge);
-/** Append a vertex (dim coordinates); its index is returned in *index (may be NULL). */
+/**
+ * Append an entity to mesh (in/out): a vertex of dim coordinates x, an
+ * element of dim+1 vertex indices v, a boundary entity of dim, a feature
+ * edge (3D only; in 2D the boundary edges are boundary entities) of 2; ref
+ * is its reference, its flags are 0. *index (out, may be NULL) receives its
+ * index. The indices are not checked here (pa_mesh_check does). Drops the
+ * cached adjacency, balls and boundary lookup. Not collective. Returns
+ * PA_ERR_ARG beyond INT32_MAX entities or for a feature edge in 2D,
+ * PA_ERR_MEMORY.
+ */
 pa_status pa_mesh_add_vertex(pa_mesh *mesh, const double *x, int32_t ref,
                              pa_idx *index);
-/** Append an element (dim+1 vertex indices). */
 pa_status pa_mesh_add_elem(pa_mesh *mesh, const pa_idx *v, int32_t ref,
                            pa_idx *index);
-/** Append a boundary entity (dim vertex indices). */
 pa_status pa_mesh_add_bdry(pa_mesh *mesh, const pa_idx *v, int32_t ref,
                            pa_idx *index);
-/** Append a feature edge (3D only; in 2D use pa_mesh_add_bdry). */
 pa_status pa_mesh_add_edge(pa_mesh *mesh, const pa_idx *v, int32_t ref,
                            pa_idx *index);
 
 /**
- * Set the entity counts at once, to fill the entities through the raw
- * accessors below (e.g. from arrays): the entities added are zeroed
- * (coordinates, vertex indices, references, flags, metric and fields), a
- * smaller count drops the last entities. Drops the cached adjacency, balls
- * and boundary lookup. The caller makes the filled mesh valid (see
- * pa_mesh_check). Not collective.
+ * Set the entity counts of mesh (in/out) at once, to fill the entities
+ * through the raw accessors below (e.g. from arrays): the entities added
+ * are zeroed (coordinates, vertex indices, references, flags, metric and
+ * fields), a smaller count drops the last entities. Drops the cached
+ * adjacency, balls and boundary lookup. The caller makes the filled mesh
+ * valid (see pa_mesh_check). Not collective. Returns PA_ERR_ARG for a
+ * negative count or feature edges in 2D, PA_ERR_MEMORY.
  */
 pa_status pa_mesh_resize(pa_mesh *mesh, pa_idx nvert, pa_idx nelem,
                          pa_idx nbdry, pa_idx nedge);
 
-/*
- * Raw array access (structure of arrays). Pointers are valid until the next
- * call that adds entities. Layouts: coords[dim*i + k], elems[(dim+1)*e + k],
- * bdry[dim*b + k], edges[2*e + k]; refs and flags one per entity.
+/**
+ * Raw array access (structure of arrays): returns the array of mesh (the
+ * caller may read and write it; after a change of vertex indices call
+ * pa_mesh_invalidate), valid until the next call that adds entities.
+ * Layouts: coords[dim*i + k], elems[(dim+1)*e + k], bdry[dim*b + k],
+ * edges[2*e + k]; refs and flags one per entity. Not collective.
  */
 double *pa_mesh_coords(pa_mesh *mesh);
 pa_idx *pa_mesh_elems(pa_mesh *mesh);
@@ -191,14 +220,19 @@ uint8_t *pa_mesh_bdry_flags(pa_mesh *mesh);
 uint8_t *pa_mesh_edge_flags(pa_mesh *mesh);
 
 /**
- * Attach a metric: ncomp = 1 (size h > 0) or 3 (2D) / 6 (3D) SPD tensors, one
- * per vertex, copied. Fails with PA_ERR_METRIC naming the first vertex whose
- * value is not finite or not positive definite. ncomp = 0 removes the metric.
+ * Attach a metric to mesh (in/out): values holds ncomp = 1 (size h > 0) or
+ * 3 (2D) / 6 (3D) SPD tensor components per vertex, copied; ncomp = 0
+ * removes the metric (values unused). Not collective. Returns PA_ERR_ARG
+ * for another ncomp, PA_ERR_METRIC naming the first vertex whose value is
+ * not finite or not positive definite (the mesh unchanged), PA_ERR_MEMORY.
  */
 pa_status pa_mesh_set_metric(pa_mesh *mesh, int ncomp, const double *values);
-/** Number of metric components per vertex (0 when there is no metric). */
+/** Returns the number of metric components per vertex of mesh (0 when it
+ *  has no metric). Not collective. */
 int pa_mesh_metric_ncomp(const pa_mesh *mesh);
-/** The metric array (nvert * ncomp), NULL when there is none. */
+/** Returns the metric array of mesh (nvert * ncomp values, which the
+ *  caller may change: pa_mesh_check then checks them), NULL when there is
+ *  none. Not collective. */
 double *pa_mesh_metric(pa_mesh *mesh);
 
 /** A vertex field whose name starts with this prefix and that has 1 (size)
@@ -209,13 +243,22 @@ double *pa_mesh_metric(pa_mesh *mesh);
  *  against it. */
 #define PA_FIELD_METRIC_PREFIX "metric:"
 
-/** Attach a named user vertex field of ncomp components (copied). */
+/** Attach to mesh (in/out) a user vertex field called name (its first 63
+ *  bytes), of ncomp > 0 components per vertex: values (nvert * ncomp) are
+ *  copied; it becomes field pa_mesh_nfield - 1. Not collective. Returns
+ *  PA_ERR_ARG for ncomp <= 0, a value that is not finite or a mesh holding
+ *  16 fields already, PA_ERR_MEMORY. */
 pa_status pa_mesh_add_field(pa_mesh *mesh, const char *name, int ncomp,
                             const double *values);
-/** Remove field k (the later fields move down by one). */
+/** Remove field k of mesh (in/out; the later fields move down by one). Not
+ *  collective. Returns PA_ERR_ARG for k out of [0, pa_mesh_nfield). */
 pa_status pa_mesh_remove_field(pa_mesh *mesh, int k);
+/** Returns the number of user vertex fields of mesh. Not collective. */
 int pa_mesh_nfield(const pa_mesh *mesh);
-/** Field k: its name, number of components and values (nvert * ncomp). */
+/** Field k of mesh: *name, *ncomp and *values (out, each may be NULL; the
+ *  values, nvert * ncomp, may be changed in place), valid until the fields
+ *  or the vertices change. Not collective. Returns PA_ERR_ARG for k out of
+ *  [0, pa_mesh_nfield). */
 pa_status pa_mesh_field(pa_mesh *mesh, int k, const char **name, int *ncomp,
                         double **values);
 
@@ -225,75 +268,96 @@ pa_status pa_mesh_field(pa_mesh *mesh, int k, const char **name, int *ncomp,
  * them and the .msh writer writes them all back; pa_mesh_copy copies them and
  * pa_remesh keeps them. Medit and VTU files do not hold them.
  */
-/** Number of physical names of the mesh. Not collective. */
+/** Returns the number of physical names of mesh (0 for NULL). Not
+ *  collective. */
 int pa_mesh_nnames(const pa_mesh *mesh);
 /**
- * Physical name k (0 <= k < pa_mesh_nnames; sorted by dimension, then tag):
- * the dimension of its entities (0 points, 1 lines, 2 surfaces, 3 volumes),
- * their reference (the Gmsh physical tag) and the name, valid until the
- * names change. Any out-pointer may be NULL. Not collective.
+ * Physical name k of mesh (0 <= k < pa_mesh_nnames; sorted by dimension,
+ * then tag): *dim (out) the dimension of its entities (0 points, 1 lines,
+ * 2 surfaces, 3 volumes), *tag (out) their reference (the Gmsh physical
+ * tag) and *name (out) the name, valid until the names change. Any
+ * out-pointer may be NULL. Not collective. Returns PA_ERR_ARG for k out of
+ * range.
  */
 pa_status pa_mesh_name(const pa_mesh *mesh, int k, int *dim, int32_t *tag,
                        const char **name);
 /**
- * Name the entities of dimension dim (0-3) and reference tag: the name
- * (copied) replaces the one (dim, tag) had; name NULL removes it. A name is
- * non-empty and holds no double quote nor line break (Gmsh writes it quoted
- * on one line): PA_ERR_ARG otherwise. Not collective.
+ * Name the entities of dimension dim (0-3) and reference tag of mesh
+ * (in/out): the name (copied) replaces the one (dim, tag) had; name NULL
+ * removes it. Not collective. Returns PA_ERR_ARG for dim out of [0, 3] or
+ * a name that is empty or holds a double quote or a line break (Gmsh writes
+ * it quoted on one line), PA_ERR_MEMORY.
  */
 pa_status pa_mesh_add_name(pa_mesh *mesh, int dim, int32_t tag,
                            const char *name);
 
 /**
- * Build element-to-element adjacency: adja[(dim+1)*e + i] = (dim+1)*f + j when
- * face i of e (the face opposite its vertex i) is face j of element f, -1 on
- * the boundary. Fails with PA_ERR_MESH if a face is shared by more than two
- * elements. O(n log n) or better.
+ * Element-to-element adjacency of mesh (in/out: built once, cached until a
+ * change): *adja (out, nelem * (dim+1) entries, owned by the mesh)
+ * adja[(dim+1)*e + i] = (dim+1)*f + j when face i of e (the face opposite
+ * its vertex i) is face j of element f, -1 on the boundary. O(n log n) or
+ * better. Not collective. Returns PA_ERR_MESH if a face is shared by more
+ * than two elements, PA_ERR_MEMORY.
  */
 pa_status pa_mesh_build_adjacency(pa_mesh *mesh, const pa_idx **adja);
-/** Vertex balls as CSR: elements of vertex v are ball[start[v] .. start[v+1]-1]. */
+/** Vertex balls of mesh (in/out: cached as the adjacency) as CSR: *start
+ *  (out, nvert + 1 entries) and *ball (out): the elements of vertex v are
+ *  ball[start[v] .. start[v+1]-1]; both owned by the mesh. Not collective.
+ *  Returns PA_ERR_MEMORY. */
 pa_status pa_mesh_build_balls(pa_mesh *mesh, const pa_idx **start,
                               const pa_idx **ball);
-/** Find the boundary entity with the given dim vertices (any order); -1 if none. */
+/** The boundary entity of mesh (in/out: the lookup is cached) with the dim
+ *  vertices v (any order) into *index (out; -1 if none). Not collective.
+ *  Returns PA_ERR_MEMORY. */
 pa_status pa_mesh_find_bdry(pa_mesh *mesh, const pa_idx *v, pa_idx *index);
 
 /**
- * Add the missing boundary entities: every element face that has no
- * neighbour and is not yet listed becomes a boundary entity of reference ref.
- * *nadded (may be NULL) receives their number. Meshes read from files that
- * list no boundary get one this way.
+ * Add the missing boundary entities to mesh (in/out): every element face
+ * that has no neighbour and is not yet listed becomes a boundary entity of
+ * reference ref; *nadded (out, may be NULL) receives their number. Meshes
+ * read from files that list no boundary get one this way. Not collective.
+ * Returns PA_ERR_MESH if a face is shared by more than two elements,
+ * PA_ERR_MEMORY.
  */
 pa_status pa_mesh_build_boundary(pa_mesh *mesh, int32_t ref, pa_idx *nadded);
 
-/** Drop the cached adjacency, balls and boundary lookup: call it after
- *  changing entity arrays directly through the raw accessors. */
+/** Drop the cached adjacency, balls and boundary lookup of mesh (in/out):
+ *  call it after changing entity arrays directly through the raw
+ *  accessors. Not collective. */
 void pa_mesh_invalidate(pa_mesh *mesh);
 
-/** Signed volume (3D) or area (2D) of element e. */
+/** Returns the signed volume (3D) or area (2D) of element e of mesh (NaN
+ *  for e out of range). Not collective. */
 double pa_mesh_elem_volume(const pa_mesh *mesh, pa_idx e);
-/** Sum of the signed element volumes (areas in 2D). */
+/** Returns the sum of the signed element volumes (areas in 2D) of mesh,
+ *  compensated (NaN for NULL). Not collective. */
 double pa_mesh_volume(const pa_mesh *mesh);
 
 /**
- * Check the mesh and return PA_ERR_MESH with a message naming the first violated
- * invariant and the entity: indices in range, positive orientation, no face
- * shared by more than two elements, symmetric adjacency, every topological
- * boundary face listed as a boundary entity, no unused vertex, finite
- * coordinates, valid metric, manifold vertices (the elements around a vertex
- * connected through faces: no two fans or cones touching only there), no
- * two vertices at the same point (a crack: duplicated vertices along an
- * interior face).
+ * Check mesh (in/out: may build the cached adjacency, balls and boundary
+ * lookup): indices in range, positive orientation, no face shared by more
+ * than two elements, symmetric adjacency, every topological boundary face
+ * listed as a boundary entity, no unused vertex, finite coordinates,
+ * manifold vertices (the elements around a vertex connected through faces:
+ * no two fans or cones touching only there), no two vertices at the same
+ * point (a crack: duplicated vertices along an interior face), then a valid
+ * metric. Not collective. Returns PA_ERR_MESH (PA_ERR_METRIC for the
+ * metric) with a message naming the first violated invariant and the
+ * entity, PA_ERR_MEMORY.
  */
 pa_status pa_mesh_check(pa_mesh *mesh);
 
-/** Bytes used by the mesh and its derived structures. */
+/** Returns the bytes used by mesh and its derived structures (0 for NULL).
+ *  Not collective. */
 size_t pa_mesh_memory_used(const pa_mesh *mesh);
 
 /**
- * Structured generators: unit square [0,1]^2 split in n x n squares of two
- * triangles; unit cube [0,1]^3 split in n^3 hexahedra of six tetrahedra.
- * Boundary references: 2D x=0:1 x=1:2 y=0:3 y=1:4; 3D x=0:1 x=1:2 y=0:3 y=1:4
- * z=0:5 z=1:6. Element reference 1, vertex reference 0.
+ * Structured generators, into *mesh (out): for dim 2 the unit square
+ * [0,1]^2 split in n x n squares of two triangles; for dim 3 the unit cube
+ * [0,1]^3 split in n^3 hexahedra of six tetrahedra. Boundary references:
+ * 2D x=0:1 x=1:2 y=0:3 y=1:4; 3D x=0:1 x=1:2 y=0:3 y=1:4 z=0:5 z=1:6.
+ * Element reference 1, vertex reference 0. Not collective. Returns
+ * PA_ERR_ARG for another dim or n < 1, PA_ERR_MEMORY.
  */
 pa_status pa_mesh_generate_box(int dim, int n, pa_mesh **mesh);
 
@@ -302,8 +366,9 @@ pa_status pa_mesh_generate_box(int dim, int n, pa_mesh **mesh);
 /* ------------------------------------------------------------------------ */
 
 /**
- * Attach a built-in analytic metric field to the mesh vertices. spec is
- * "NAME" or "NAME:h" where h scales the field's reference size:
+ * Attach a built-in analytic metric field to the vertices of mesh (in/out;
+ * it replaces the metric). spec is "NAME" or "NAME:h" where h scales the
+ * field's reference size:
  *  - "uniform[:h]"   isotropic size h (default 0.1);
  *  - "layer[:h]"     anisotropic boundary layer along the plane x = 0.5, size
  *                    h tangentially and h/100 normally at the plane, growing to
@@ -319,23 +384,28 @@ pa_status pa_mesh_generate_box(int dim, int n, pa_mesh **mesh);
  *                    linearly to h; polar2 also shrinks the tangential size
  *                    to h/4 near the cylinder. Exact formulas in
  *                    src/metric/analytic.c.
+ * Not collective. Returns PA_ERR_ARG for an unknown NAME or a bad h,
+ * PA_ERR_MEMORY.
  */
 pa_status pa_metric_analytic(pa_mesh *mesh, const char *spec);
 
-/** List of the built-in metric field names, NULL-terminated. */
+/** Returns the names of the built-in metric fields, a static
+ *  NULL-terminated list. Not collective. */
 const char *const *pa_metric_analytic_names(void);
 
 /**
- * Clamp the metric: eigenvalues into [1/hmax^2, 1/hmin^2] (sizes into
- * [hmin, hmax]). A bound <= 0 is ignored.
+ * Clamp the metric of mesh (in/out): eigenvalues into [1/hmax^2, 1/hmin^2]
+ * (sizes into [hmin, hmax]); a bound <= 0 is ignored. Not collective.
+ * Returns PA_ERR_ARG if the mesh has no metric, a bound is not a number or
+ * hmin > hmax.
  */
 pa_status pa_mesh_metric_clamp(pa_mesh *mesh, double hmin, double hmax);
 
 /**
- * Replace the metric by the sizes of the mesh itself: at each vertex the
- * mean length of its edges (isotropic; Mmg's -optim), so that a remesh
- * keeps the sizes and improves the quality. PA_ERR_MESH if a vertex
- * belongs to no element.
+ * Replace the metric of mesh (in/out) by the sizes of the mesh itself: at
+ * each vertex the mean length of its edges (isotropic; Mmg's -optim), so
+ * that a remesh keeps the sizes and improves the quality. Not collective.
+ * Returns PA_ERR_MESH if a vertex belongs to no element, PA_ERR_MEMORY.
  */
 pa_status pa_mesh_metric_from_edges(pa_mesh *mesh);
 
@@ -353,16 +423,20 @@ typedef enum pa_recovery {
 
 /**
  * Gradient and Hessian of the scalar vertex field u (value of vertex v at
- * u[v * stride]) at every vertex. grad (dim values per vertex) and hess
- * (3 or 6 per vertex: xx xy yy [xz yz zz]) may each be NULL. Not collective.
+ * u[v * stride]) at every vertex of mesh (in/out: builds its cached
+ * balls), by method, into grad (out, dim values per vertex) and hess (out,
+ * 3 or 6 per vertex: xx xy yy [xz yz zz]); either may be NULL. Not
+ * collective. Returns PA_ERR_MESH where a vertex has too few neighbours
+ * for the fit, PA_ERR_MEMORY.
  */
 pa_status pa_mesh_recover(pa_mesh *mesh, const double *u, int stride,
                           pa_recovery method, double *grad, double *hess);
 
-/** Complexity of a metric on the mesh, the integral of sqrt(det M) (ncomp
- *  1: sizes, M = I/h^2), by the vertex mean over each element: the number
- *  of unit elements it asks for is about 4/sqrt(3) C (2D) or 6 sqrt(2) C
- *  (3D). */
+/** The complexity of the metric met (ncomp 1: sizes, M = I/h^2; or the
+ *  tensor count per vertex) on mesh into *complexity (out): the integral
+ *  of sqrt(det M), by the vertex mean over each element. The number of
+ *  unit elements it asks for is about 4/sqrt(3) C (2D) or 6 sqrt(2) C
+ *  (3D). Not collective. Returns PA_ERR_ARG for another ncomp. */
 pa_status pa_metric_complexity(pa_mesh *mesh, int ncomp, const double *met,
                                double *complexity);
 
@@ -376,44 +450,56 @@ typedef struct pa_metric_hessian_opts {
   double hgrad;   /**< gradation of the result (<= 1: none; default 1.3) */
   pa_recovery recovery; /**< default PA_RECOVER_LSQ */
 } pa_metric_hessian_opts;
+/** Fill *opts (out) with the defaults: p 2, no target nor error, no bounds,
+ *  hgrad 1.3, PA_RECOVER_LSQ. Not collective. */
 void pa_metric_hessian_opts_default(pa_metric_hessian_opts *opts);
 
 /**
- * The Lp-optimal metric of a scalar vertex field u (Loseille & Alauzet's
- * multiscale metric): M = D det|H|^(-1/(2p+d)) |H|, |H| the recovered
- * Hessian with absolute eigenvalues, D set so that the complexity is
- * opts->target (or the estimated Lp error opts->err), then clamped and
- * graded; the complexity is reached again after clamping and gradation.
- * met: the tensor metric (3 or 6 values per vertex). Not collective.
+ * The Lp-optimal metric of a scalar vertex field u of mesh (value of vertex
+ * v at u[v * stride]; Loseille & Alauzet's multiscale metric):
+ * M = D det|H|^(-1/(2p+d)) |H|, |H| the recovered Hessian with absolute
+ * eigenvalues, D set so that the complexity is opts->target (or the
+ * estimated Lp error opts->err), then clamped and graded; the complexity
+ * is reached again after clamping and gradation. met (out): the tensor
+ * metric, 3 or 6 values per vertex (the mesh's own metric is not changed).
+ * Not collective. Returns PA_ERR_ARG for options out of range (both or
+ * neither of target and err, hmin > hmax) or a field whose Hessian is zero
+ * everywhere, PA_ERR_MESH as pa_mesh_recover, PA_ERR_MEMORY.
  */
 pa_status pa_metric_from_hessian(pa_mesh *mesh, const double *u, int stride,
                                  const pa_metric_hessian_opts *opts,
                                  double *met);
 
-/** Scale a metric (ncomp 1 or the tensor count per vertex) so that its
- *  complexity becomes target. */
+/** Scale the metric met (in/out; ncomp 1 or the tensor count per vertex)
+ *  on mesh so that its complexity becomes target (> 0). Not collective.
+ *  Returns PA_ERR_ARG for another ncomp or target, PA_ERR_METRIC if the
+ *  metric has no complexity on the mesh. */
 pa_status pa_metric_scale_complexity(pa_mesh *mesh, int ncomp, double *met,
                                      double target);
 
-/** Intersection of two metrics of ncomp components per vertex (the largest
- *  metric contained in both, by simultaneous reduction), into out (which
- *  may be a or b). */
+/** The intersection of the metrics a and b (nv values of ncomp components
+ *  each, in dimension dim): the largest metric contained in both, by
+ *  simultaneous reduction, into out (out; may be a or b). Not collective.
+ *  Returns PA_ERR_ARG for dim or ncomp out of range. */
 pa_status pa_metric_intersect_all(int dim, int ncomp, pa_idx nv,
                                   const double *a, const double *b,
                                   double *out);
 
-/** Grade the mesh's metric in place (see pa_remesh_opts: hgrad, hgradreq;
- *  required vertices keep their metric). */
+/** Grade the metric of mesh (in/out) in place with the rates hgrad and
+ *  hgradreq (see pa_remesh_opts); required vertices keep their metric. Not
+ *  collective. Returns PA_ERR_ARG if the mesh has no metric or a rate is
+ *  not a number, PA_ERR_MEMORY. */
 pa_status pa_mesh_metric_grade(pa_mesh *mesh, double hgrad, double hgradreq);
 
 /**
- * Signed distance to an analytic surface at every vertex (negative inside):
- *  "sphere:R[:cx,cy,cz]", "ellipsoid:a,b,c[:cx,cy,cz]" (semi-axes along x, y,
- *  z; in 2D "ellipse:a,b[:cx,cy]"), "box:lx,ly,lz[:cx,cy,cz]" (half
- *  lengths; 2D "box:lx,ly[:cx,cy]"), "plane:nx,ny,nz,d" (nx x + ... = d;
- *  2D "plane:nx,ny,d", a line). In 2D "sphere" is a circle and
- *  "ellipsoid:a,b" an ellipse. phi: one value
- *  per vertex.
+ * The signed distance to the analytic surface spec at every vertex of mesh
+ * (negative inside) into phi (out, one value per vertex): spec is
+ * "sphere:R[:cx,cy,cz]", "ellipsoid:a,b,c[:cx,cy,cz]" (semi-axes along x,
+ * y, z; in 2D "ellipse:a,b[:cx,cy]"), "box:lx,ly,lz[:cx,cy,cz]" (half
+ * lengths; 2D "box:lx,ly[:cx,cy]"), "plane:nx,ny,nz,d" (nx x + ... = d; 2D
+ * "plane:nx,ny,d", a line). In 2D "sphere" is a circle and
+ * "ellipsoid:a,b" an ellipse. Not collective. Returns PA_ERR_ARG for a
+ * spec that is not one of these (the message says why).
  */
 pa_status pa_levelset_analytic(pa_mesh *mesh, const char *spec, double *phi);
 
@@ -425,28 +511,36 @@ typedef struct pa_metric_levelset_opts {
                           set (<= 0: 5 hmax) */
   double hgrad;      /**< gradation away from the interface (default 1.3) */
 } pa_metric_levelset_opts;
+/** Fill *opts (out) with the defaults: hgrad 1.3, the rest 0 (eps, hmin
+ *  and hmax must then be set). Not collective. */
 void pa_metric_levelset_opts_default(pa_metric_levelset_opts *opts);
 
 /**
  * The metric that captures the zero set of the level set phi (one value per
- * vertex) to within eps: inside the band, along the recovered gradient of
- * phi the size hmin at the zero set growing linearly to hmax at the band's
- * edge, along the principal curvature directions of the iso-surface the
- * chord bound sqrt(8 eps / |kappa|) clamped to [hmin, hmax]; hmax outside;
- * then graded. met: tensors (3 or 6 per vertex). Not
- * collective.
+ * vertex of mesh) to within opts->eps: inside the band, along the recovered
+ * gradient of phi the size hmin at the zero set growing linearly to hmax at
+ * the band's edge, along the principal curvature directions of the
+ * iso-surface the chord bound sqrt(8 eps / |kappa|) clamped to [hmin,
+ * hmax]; hmax outside; then graded. met (out): tensors (3 or 6 per vertex;
+ * the mesh's own metric is not changed). Not collective. Returns
+ * PA_ERR_ARG for options out of range (eps, hmin <= 0, hmax < hmin, too
+ * large a ratio hmax / hmin) or a value of phi that is not finite,
+ * PA_ERR_MESH as pa_mesh_recover, PA_ERR_MEMORY.
  */
 pa_status pa_metric_from_levelset(pa_mesh *mesh, const double *phi,
                                   const pa_metric_levelset_opts *opts,
                                   double *met);
 
-/** Edge length in the metric (geometric formula), the metric of each end given. */
+/** Returns the length of the edge ab (dim coordinates each) in the metric
+ *  (ncomp components at each end: ma at a, mb at b; ncomp 0: Euclidean,
+ *  ma and mb unused), by the geometric formula of Mmg. Not collective. */
 double pa_metric_edge_length(int dim, int ncomp, const double *a,
                              const double *b, const double *ma,
                              const double *mb);
 
-/** Quality of element e in Mmg's normalisation (1 regular, 0 flat, < 0 inverted).
- *  Uses the identity metric when the mesh has none. */
+/** Returns the quality of element e of mesh in Mmg's normalisation (1
+ *  regular, 0 flat, < 0 inverted), in its metric (the identity when it has
+ *  none); NaN for e or one of its vertices out of range. Not collective. */
 double pa_mesh_elem_quality(pa_mesh *mesh, pa_idx e);
 
 /** Mesh statistics, as printed by `padapt stats`. Sums/min/max so that they can
@@ -496,14 +590,20 @@ pa_status pa_stats_edge_bin(int b, double *lo, double *hi);
  */
 pa_status pa_stats_qual_bin(int b, double *lo, double *hi);
 
-/** Compute the statistics of a mesh (metric: the attached one, or identity). */
+/** The statistics of mesh (in/out: the check builds its cached structures)
+ *  in its metric (the identity when it has none) into *stats (out); an
+ *  invalid mesh is no error (stats->valid 0). Not collective. Returns
+ *  PA_ERR_MESH for a vertex index out of range, PA_ERR_MEMORY. */
 pa_status pa_mesh_stats(pa_mesh *mesh, pa_stats *stats);
-/** Print the statistics in human-readable form. */
+/** Print stats in human-readable form (the report of `padapt stats`) on
+ *  out. Not collective. */
 void pa_stats_print(const pa_stats *stats, FILE *out);
-/** Write the statistics as a JSON object (keys: dim vertices elements boundary
- *  volume inverted valid edge_min edge_max edge_mean edge_in_range
- *  quality_worst quality_mean quality_above_0.5 ...). extra, if not NULL, is
- *  inserted verbatim as further members (e.g. "\"time_s\": 1.0"). */
+/** Write stats as a JSON object to path (keys: dim vertices elements
+ *  boundary volume inverted valid edge_min edge_max edge_mean
+ *  edge_in_range quality_worst quality_mean quality_above_0.5 ...); extra,
+ *  if not NULL, is inserted verbatim as further members (e.g. "\"time_s\":
+ *  1.0"). Written through a temporary (see pa_output_begin). Not
+ *  collective. Returns PA_ERR_IO naming the path. */
 pa_status pa_stats_write_json(const pa_stats *stats, const char *extra,
                               const char *path);
 
@@ -512,7 +612,8 @@ pa_status pa_stats_write_json(const pa_stats *stats, const char *extra,
 #define PA_TARGET_IN_RANGE 0.9
 /** ... and no element of quality below this. */
 #define PA_TARGET_QUALITY 0.01
-/** 1 if the statistics meet PA_TARGET_IN_RANGE and PA_TARGET_QUALITY. */
+/** Returns 1 if stats meet PA_TARGET_IN_RANGE and PA_TARGET_QUALITY, 0
+ *  otherwise (and for NULL). Not collective. */
 int pa_stats_target_met(const pa_stats *stats);
 
 /** What made the metric a remesher used differ from the caller's. */
@@ -537,9 +638,10 @@ typedef struct pa_fidelity {
   unsigned changed; /**< PA_CHANGED_* bits */
 } pa_fidelity;
 
-/** One line saying how the result meets the caller's metric and, if not,
- *  what limited it (hmin/hmax, gradation, or the remesher in the metric it
- *  used), into buf (at most n bytes, NUL-terminated). */
+/** One line saying how the result f describes meets the caller's metric
+ *  and, if not, what limited it (hmin/hmax, gradation, or the remesher in
+ *  the metric it used), into buf (out, at most n bytes, NUL-terminated).
+ *  Not collective. */
 void pa_fidelity_describe(const pa_fidelity *f, char *buf, size_t n);
 
 /* ------------------------------------------------------------------------ */
@@ -556,30 +658,52 @@ typedef enum pa_sol_kind {
 /** A set of fields at the vertices of a mesh (SolAtVertices). */
 typedef struct pa_sol pa_sol;
 
+/** Create an empty solution of dimension dim (2 or 3) for nvert >= 0
+ *  vertices into *sol (out; free it with pa_sol_destroy). Not collective.
+ *  Returns PA_ERR_ARG for another dim or a negative nvert, PA_ERR_MEMORY. */
 pa_status pa_sol_create(int dim, pa_idx nvert, pa_sol **sol);
+/** Destroy sol (in/out; NULL allowed). Not collective. */
 void pa_sol_destroy(pa_sol *sol);
+/** Returns the dimension, the vertex count and the number of fields of
+ *  sol. Not collective. */
 int pa_sol_dim(const pa_sol *sol);
 pa_idx pa_sol_nvert(const pa_sol *sol);
 int pa_sol_nfield(const pa_sol *sol);
-/** Where the solution's vertex count was read, for messages: "u.sol:3" (the
- *  line of its SolAtVertices keyword) or "u.solb: byte 40"; the path if
- *  unknown; NULL for a solution built in memory. */
+/** Returns where the vertex count of sol was read, for messages: "u.sol:3"
+ *  (the line of its SolAtVertices keyword) or "u.solb: byte 40"; the path
+ *  if unknown; NULL for a solution built in memory. Valid as long as sol.
+ *  Not collective. */
 const char *pa_sol_origin(const pa_sol *sol);
-/** Append a field; values (nvert * ncomp, ncomp from kind and dim) copied. */
+/** Append a field of kind to sol (in/out): values (nvert * ncomp, ncomp
+ *  from kind and dim) are copied. Not collective. Returns PA_ERR_ARG for
+ *  an unknown kind, PA_ERR_MEMORY. */
 pa_status pa_sol_add_field(pa_sol *sol, pa_sol_kind kind, const double *values);
-/** Field k: kind, components per vertex and values. */
+/** Field k of sol: *kind, *ncomp (components per vertex) and *values (out,
+ *  each may be NULL; nvert * ncomp values owned by sol). Not collective.
+ *  Returns PA_ERR_ARG for k out of [0, pa_sol_nfield). */
 pa_status pa_sol_field(pa_sol *sol, int k, pa_sol_kind *kind, int *ncomp,
                        double **values);
 
-/** Read .sol (ASCII) or .solb (binary, versions 1-4), chosen by extension. */
+/** Read path, .sol (ASCII) or .solb (binary, versions 1-4) by extension,
+ *  into *sol (out). Not collective. Returns PA_ERR_IO or PA_ERR_FORMAT
+ *  naming the file and line (or byte), PA_ERR_UNSUPPORTED for another
+ *  extension, PA_ERR_MEMORY. */
 pa_status pa_sol_read(const char *path, pa_sol **sol);
-/** Write .sol or .solb (by extension), through a temporary file (see
- *  pa_output_begin). */
+/** Write sol to path, .sol or .solb by extension, through a temporary file
+ *  (see pa_output_begin). Not collective. Returns PA_ERR_ARG for a
+ *  solution without field, PA_ERR_UNSUPPORTED for another extension,
+ *  PA_ERR_IO naming the path. */
 pa_status pa_sol_write(const pa_sol *sol, const char *path);
 
-/** Attach field k of sol as the mesh's metric (scalar: size, tensor: SPD). */
+/** Attach field k of sol as the metric of mesh (in/out; a scalar field:
+ *  sizes, a tensor field: SPD tensors). Not collective. Returns PA_ERR_ARG
+ *  for k out of range or a vector field, PA_ERR_FORMAT (naming the file)
+ *  for a vertex count that is not the mesh's, PA_ERR_METRIC as
+ *  pa_mesh_set_metric. */
 pa_status pa_mesh_metric_from_sol(pa_mesh *mesh, const pa_sol *sol, int k);
-/** A solution holding the mesh's metric (and, if with_fields, its user fields). */
+/** A new solution *sol (out) holding the metric of mesh and, if
+ *  with_fields, its user fields. Not collective. Returns PA_ERR_ARG if
+ *  there is nothing to hold, PA_ERR_MEMORY. */
 pa_status pa_mesh_metric_to_sol(pa_mesh *mesh, int with_fields, pa_sol **sol);
 
 /** Options for writing mesh files. */
@@ -592,21 +716,26 @@ typedef struct pa_write_opts {
 } pa_write_opts;
 
 /**
- * Read a mesh, format chosen by extension: .mesh/.meshb (Medit), .msh (Gmsh
- * 4.1 ASCII or binary, or 2.2 ASCII). From a .msh: the physical names, and
- * the $NodeData views: the one named "metric" (1 component: sizes; 9: a
- * symmetric tensor) becomes the metric, the others fields of their names
- * (docs/guide/gmsh.md). Errors name the file and the line.
+ * Read the mesh at path into *mesh (out), format chosen by extension:
+ * .mesh/.meshb (Medit), .msh (Gmsh 4.1 ASCII or binary, or 2.2 ASCII).
+ * From a .msh: the physical names, and the $NodeData views: the one named
+ * "metric" (1 component: sizes; 9: a symmetric tensor) becomes the metric,
+ * the others fields of their names (docs/guide/gmsh.md). The mesh is not
+ * checked (pa_mesh_check). Not collective. Returns PA_ERR_IO,
+ * PA_ERR_FORMAT or PA_ERR_METRIC naming the file and the line (or byte),
+ * PA_ERR_UNSUPPORTED for another extension or file variant, PA_ERR_MEMORY.
  */
 pa_status pa_mesh_read(const char *path, pa_mesh **mesh);
 /**
- * Write a mesh, format chosen by extension: .mesh/.meshb, .msh (Gmsh 4.1:
- * with the physical names, and the metric and fields as $NodeData views;
- * PA_ERR_UNSUPPORTED for a field named "metric"), .vtu (VTK XML, appended
- * raw binary; point data: metric and fields; cell data: reference and
- * quality). Written to a temporary file then renamed (see
- * pa_output_begin), so a failure never leaves a partial file. opts may be
- * NULL.
+ * Write mesh to path, format chosen by extension: .mesh/.meshb, .msh (Gmsh
+ * 4.1: with the physical names, and the metric and fields as $NodeData
+ * views), .vtu (VTK XML, appended raw binary; point data: metric and
+ * fields; cell data: reference and quality), with opts (may be NULL: the
+ * defaults). Written to a temporary file then renamed (see
+ * pa_output_begin), so a failure never leaves a partial file. mesh is
+ * in/out only for its cached structures. Not collective. Returns PA_ERR_IO
+ * naming the path, PA_ERR_UNSUPPORTED for another extension or a .msh
+ * field named "metric", PA_ERR_ARG for a bad opts->version, PA_ERR_MEMORY.
  */
 pa_status pa_mesh_write(pa_mesh *mesh, const char *path,
                         const pa_write_opts *opts);
@@ -630,31 +759,39 @@ typedef struct pa_output pa_output;
 
 /**
  * Open an output transaction in the calling thread, or join the one already
- * open (transactions nest; only the outermost commit or abort acts). Not
- * collective. Fails only on a NULL argument.
+ * open (transactions nest; only the outermost commit or abort acts): *tx
+ * (out) is the handle to end it with. Not collective. Fails only on a NULL
+ * argument.
  */
 pa_status pa_output_begin(pa_output **tx);
 /**
- * End the transaction: if no file of it failed, rename every temporary onto
- * its path (with SIGINT and SIGTERM blocked, so that those signals never
- * stop the renames half-way); otherwise remove every temporary, leave every
- * path as it was and return the first failure. Not collective. A rename that
- * fails (the directory changed meanwhile) is reported naming the file; the
- * files renamed before it stay.
+ * End the transaction tx (from pa_output_begin): if no file of it failed,
+ * rename every temporary onto its path (with SIGINT and SIGTERM blocked, so
+ * that those signals never stop the renames half-way); otherwise remove
+ * every temporary and leave every path as it was. An inner end of nested
+ * begins only reports the failure so far. Not collective. Returns the
+ * first failure (PA_ERR_IO ... naming the file), PA_ERR_ARG if no
+ * transaction is open. A rename that fails (the directory changed
+ * meanwhile) is reported naming the file; the files renamed before it
+ * stay.
  */
 pa_status pa_output_commit(pa_output *tx);
-/** End the transaction removing every temporary: no path changes. */
+/** End the transaction tx removing every temporary: no path changes (an
+ *  inner end of nested begins marks the transaction failed). Not
+ *  collective. */
 void pa_output_abort(pa_output *tx);
 /**
- * Collective end of one transaction per rank: commit on every rank if st is
- * PA_SUCCESS on every rank, abort everywhere otherwise. Returns the same
- * status on every rank.
+ * Collective end over comm of one transaction per rank (tx, from
+ * pa_output_begin on each rank): commit on every rank if st, the caller's
+ * status, is PA_SUCCESS on every rank, abort everywhere otherwise. Returns
+ * the same status on every rank (the lowest failing rank's, with its
+ * message: see pa_set_error).
  */
 pa_status pa_output_end(MPI_Comm comm, pa_output *tx, pa_status st);
 /**
- * Check, before a long computation, that path can be written: refused if it
- * exists and is not a regular file, or if its directory is missing or not
- * writable. Not collective.
+ * Check, before a long computation, that path can be written. Not
+ * collective. Returns PA_ERR_IO naming the path if it exists and is not a
+ * regular file, or if its directory is missing or not writable.
  */
 pa_status pa_output_check(const char *path);
 /**
@@ -664,33 +801,27 @@ pa_status pa_output_check(const char *path);
  */
 typedef struct pa_output_file pa_output_file;
 /**
- * Open path for writing. The stream writes to the temporary
- * "PATH.tmp.PID"; inside a transaction the file is one of its files (a path
- * already written in it is refused). Not collective.
- *
- * \param[in]  path where the file goes
- * \param[out] file the handle, for pa_output_file_commit or _abort (NULL
- *                  on failure)
- * \param[out] fp   the stream to write (binary mode), valid until then
- * \return PA_SUCCESS; PA_ERR_IO naming path if it exists and is not a
- *         regular file, or its temporary cannot be created (the open
- *         transaction then fails); PA_ERR_ARG for a NULL argument.
+ * Open path for writing: *file (out) is the handle for
+ * pa_output_file_commit or pa_output_file_abort (NULL on failure), *fp
+ * (out) the stream to write (binary mode), valid until then, on the
+ * temporary "PATH.tmp.PID"; inside a transaction the file is one of its
+ * files. Not collective. Returns PA_ERR_IO naming path if it exists and is
+ * not a regular file or its temporary cannot be created (the open
+ * transaction then fails), PA_ERR_ARG for a path already written in the
+ * transaction, PA_ERR_MEMORY.
  */
 pa_status pa_output_file_open(const char *path, pa_output_file **file,
                               FILE **fp);
 /**
- * Complete the file: flush, sync and close the stream, every write error
- * checked, then rename the temporary onto the path, or, inside a
- * transaction, leave it for pa_output_commit. Frees file, also on failure
- * (the temporary is then removed and the transaction fails). Not
- * collective.
- *
- * \param[in] file from pa_output_file_open
- * \return PA_SUCCESS, or PA_ERR_IO naming the path.
+ * Complete file (in/out: freed, also on failure): flush, sync and close
+ * its stream, every write error checked, then rename the temporary onto the
+ * path, or, inside a transaction, leave it for pa_output_commit. On failure
+ * the temporary is removed and the transaction fails. Not collective.
+ * Returns PA_ERR_IO naming the path.
  */
 pa_status pa_output_file_commit(pa_output_file *file);
-/** Drop the file: close the stream and remove the temporary (an open
- *  transaction then fails). Frees file; NULL allowed. Not collective. */
+/** Drop file (in/out: freed; NULL allowed): close its stream and remove
+ *  the temporary (an open transaction then fails). Not collective. */
 void pa_output_file_abort(pa_output_file *file);
 /**
  * Install handlers of SIGINT and SIGTERM that remove the temporaries of every
@@ -699,7 +830,8 @@ void pa_output_file_abort(pa_output_file *file);
  * handler is left alone. The handler runs in the thread that receives the
  * signal: block SIGINT/SIGTERM in threads that may free output names while
  * another thread runs it (the padapt CLI blocks them before MPI starts its
- * threads). Not collective.
+ * threads). Process-wide, not collective. Returns PA_ERR_INTERNAL if
+ * sigaction fails.
  */
 pa_status pa_output_handle_signals(void);
 
@@ -714,8 +846,7 @@ typedef enum pa_remesh_outcome {
   PA_REMESH_FAILED = 2         /**< failed; the mesh was left as it was given */
 } pa_remesh_outcome;
 
-/** Where a running adaptation stands (pa_remesh_opts.progress,
- *  pa_progress_of_iter). */
+/** Where a running adaptation stands (given to pa_remesh_opts.progress). */
 typedef struct pa_progress {
   const char *stage;     /**< "pass" (a remesher's) or "iteration" (the
                               parallel loop's) */
@@ -770,12 +901,12 @@ typedef struct pa_remesh_opts {
   int no_move;      /**< -nomove */
   int no_surf;      /**< -nosurf: boundary left unchanged (3D) */
   int verbosity;
-  /** 1: the caller guarantees a valid, conforming mesh (as pa_mesh_check
-   *  would find it), so pa_remesh skips that check (the parallel loop's
-   *  pieces, built valid; default 0) */
+  /** Expert. 1: the caller guarantees a valid, conforming mesh (as
+   *  pa_mesh_check would find it), so pa_remesh skips that check (the
+   *  parallel loop's pieces, built valid; default 0) */
   int trusted;
-  /** 1: pa_remesh leaves report->fidelity empty and carries no copy of the
-   *  caller's metric (the parallel loop's pieces; default 0) */
+  /** Expert. 1: pa_remesh leaves report->fidelity empty and carries no
+   *  copy of the caller's metric (the parallel loop's pieces; default 0) */
   int no_stats;
   /** Called by the remesher after each pass (may be NULL; the parallel
    *  loop's pieces never call it): a remesher fills stage, step and nelem,
@@ -790,8 +921,9 @@ typedef struct pa_remesh_opts {
   int nlocal;
 } pa_remesh_opts;
 
-/** Default options: no hmin/hmax/hsiz, hgrad 1.3, hgradreq 2.3 (Mmg's),
- *  hausd 0.01, angle 45. */
+/** Fill *opts (out) with the defaults: no hmin/hmax/hsiz, hgrad 1.3,
+ *  hgradreq 2.3 (Mmg's), hausd 0.01, angle 45, the rest 0. Not
+ *  collective. */
 void pa_remesh_opts_default(pa_remesh_opts *opts);
 
 /** What a remesh did. */
@@ -812,9 +944,12 @@ typedef struct pa_remesh_report {
  * element keeps its vertices (coordinates, references, metric, fields), a
  * frozen vertex is never moved or removed, no edge of a frozen element is
  * split, collapsed or swapped. User fields are interpolated onto new vertices.
- * Returns PA_SUCCESS with report->outcome set (on PA_REMESH_FAILED the mesh is
- * as given), or an error status for a hard error (also leaving the mesh as
- * given). Not collective: the parallel driver calls it on one piece.
+ * remesh's parameters: ctx (the remesher's ctx), mesh (in/out), opts, report
+ * (out: outcome and counts; pa_remesh fills the rest). It returns
+ * PA_SUCCESS with report->outcome set (on PA_REMESH_FAILED the mesh is as
+ * given), or an error status for a hard error (also leaving the mesh as
+ * given; pa_set_error gives the message). Not collective: the parallel
+ * driver calls it on one piece.
  */
 typedef struct pa_remesher {
   const char *name;
@@ -825,20 +960,28 @@ typedef struct pa_remesher {
   void *ctx;
 } pa_remesher;
 
-/** The built-in remesher (2D triangles and 3D tetrahedra). */
+/** Returns the built-in remesher (2D triangles and 3D tetrahedra), a static
+ *  object. Not collective. */
 const pa_remesher *pa_remesher_builtin(void);
 
 /**
- * Remesh through a remesher: checks the input (valid mesh, metric present or
- * opts->hsiz > 0), prepares the metric (hsiz replaces the caller's; then
- * hmin/hmax and the gradation hgrad/hgradreq), calls r->remesh and times it,
- * then (unless opts->no_stats) measures the result in the caller's metric
- * and in the metric used (report->fidelity; the caller's metric travels
+ * Remesh mesh (in/out) through the remesher r with opts (NULL: the
+ * defaults): checks the input (valid mesh, metric present or opts->hsiz >
+ * 0), prepares the metric (hsiz replaces the caller's; then hmin/hmax and
+ * the gradation hgrad/hgradreq), calls r->remesh and times it, then
+ * (unless opts->no_stats) measures the result in the caller's metric and
+ * in the metric used (report->fidelity; the caller's metric travels
  * through the remesher as the vertex field "metric:user", removed before
  * return). The mesh keeps the metric used, interpolated at new vertices.
- * Unless opts->trusted, a metric whose output would not fit in the
- * available memory (estimated from its complexity) is refused with
- * PA_ERR_MEMORY before any work, the mesh untouched. Not collective.
+ * *report (out, may be NULL): the outcome, counts, time and fidelity. Not
+ * collective. Returns PA_SUCCESS with report->outcome SUCCESS or
+ * TARGET_MISSED (a valid mesh) or FAILED (the mesh as given); or an error,
+ * the mesh as given: PA_ERR_ARG for options out of range or no metric,
+ * PA_ERR_UNSUPPORTED for a dimension r does not handle, PA_ERR_MESH or
+ * PA_ERR_METRIC from pa_mesh_check (unless opts->trusted), PA_ERR_MEMORY
+ * (also, unless opts->trusted, for a metric whose output would not fit in
+ * the available memory, estimated from its complexity, before any work),
+ * or the remesher's error.
  */
 pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
                     const pa_remesh_opts *opts, pa_remesh_report *report);
@@ -882,10 +1025,14 @@ typedef enum pa_entity {
  * blocks of the mesh to the ranks one at a time (it never holds more than the
  * input plus one block in flight), then the ranks partition the dual graph
  * (elements sharing a face) with PT-Scotch and migrate to the final parts.
- * Global ids are the 0-based indices of the input. mesh: the mesh on root
- * (not modified), ignored elsewhere (may be NULL). overlap: ghost layers.
- * Returns PA_ERR_MESH on an inconsistent mesh (vertex out of range, entity in
- * no element), the same status on every rank.
+ * Global ids are the 0-based indices of the input. comm: the ranks (dm
+ * keeps a duplicate); mesh: the mesh on root (not modified), ignored
+ * elsewhere (may be NULL); overlap: ghost layers (>= 0); *dm (out): the
+ * distributed mesh (pa_dmesh_destroy it), NULL on failure. Returns the
+ * same status on every rank: PA_ERR_ARG for a bad root or overlap,
+ * PA_ERR_MESH on an inconsistent mesh (vertex out of range, entity in no
+ * element, a face in three elements), PA_ERR_PARTITION, PA_ERR_MEMORY,
+ * PA_ERR_MPI.
  */
 pa_status pa_dmesh_distribute(MPI_Comm comm, int root, pa_mesh *mesh,
                               int overlap, pa_dmesh **dm);
@@ -900,6 +1047,10 @@ pa_status pa_dmesh_distribute(MPI_Comm comm, int root, pa_mesh *mesh,
  * FNV-1a checksum, counts) and its own header: a missing file, a stale file
  * of another write or a modified one gives the same error on every rank,
  * naming the file. A set without manifest gets the header checks only.
+ * overlap: ghost layers (>= 0); *dm (out): the distributed mesh, NULL on
+ * failure. Returns the same status on every rank: the errors of
+ * pa_mesh_read and pa_dmesh_distribute, PA_ERR_IO or PA_ERR_FORMAT naming
+ * a rank file or the manifest.
  */
 pa_status pa_dmesh_read(MPI_Comm comm, const char *path, int overlap,
                         pa_dmesh **dm);
@@ -919,20 +1070,25 @@ pa_status pa_dmesh_read(MPI_Comm comm, const char *path, int overlap,
  * open transaction), committed only when every rank wrote all of its files;
  * the commit also removes a file at path itself and the rank files of ranks
  * beyond the communicator's size, which would shadow or pollute the set.
+ * dm is in/out only for its cached structures. Returns the same status on
+ * every rank: PA_ERR_IO naming a file, PA_ERR_UNSUPPORTED for another
+ * extension, PA_ERR_MEMORY; nothing is written then.
  */
 pa_status pa_dmesh_write(pa_dmesh *dm, const char *path);
 
 /**
- * 1 if path ("OUT.meshb" or "OUT.mesh") names a distributed set: the file
- * itself does not exist but OUT.manifest or OUT.0.meshb does. Not
- * collective.
+ * Returns 1 if path ("OUT.meshb" or "OUT.mesh") names a distributed set:
+ * the file itself does not exist but OUT.manifest or OUT.0.meshb does; 0
+ * otherwise. Not collective.
  */
 int pa_dmesh_is_set(const char *path);
 
 /**
- * Read any mesh on rank root: a sequential file is read by root alone; a
- * distributed set is read by all ranks and gathered on root. Collective.
- * *mesh is set on root (NULL elsewhere).
+ * Read any mesh at path onto rank root of comm: a sequential file is read
+ * by root alone; a distributed set is read by all ranks and gathered on
+ * root. Collective. *mesh (out) is set on root, NULL elsewhere. Returns the
+ * errors of pa_mesh_read (on root only, for a sequential file) or of
+ * pa_dmesh_read and pa_dmesh_gather (the same on every rank).
  */
 pa_status pa_dmesh_read_gathered(MPI_Comm comm, int root, const char *path,
                                  pa_mesh **mesh);
@@ -942,43 +1098,57 @@ pa_status pa_dmesh_read_gathered(MPI_Comm comm, int root, const char *path,
  * numbered by global id (so that gathering a freshly distributed mesh gives
  * back the input). Metric and vertex fields are gathered; user values that are
  * vertex values of MPI_DOUBLE on all vertices become vertex fields. Collective;
- * *mesh is set on root, NULL elsewhere.
+ * *mesh (out) is set on root, NULL elsewhere. Returns the same status on
+ * every rank: PA_ERR_ARG for a bad root, PA_ERR_MEMORY (root holds the whole
+ * mesh), PA_ERR_MPI.
  */
 pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **mesh);
 
-/** Destroy a distributed mesh (NULL allowed). Collective (frees a communicator). */
+/** Destroy dm (in/out; NULL allowed). Collective (frees a communicator). */
 void pa_dmesh_destroy(pa_dmesh *dm);
 
-/** The distributed mesh's communicator (a private duplicate). Not collective. */
+/** Returns the communicator of dm (a private duplicate of the caller's:
+ *  do not free it). Not collective. */
 MPI_Comm pa_dmesh_comm(const pa_dmesh *dm);
+/** Returns the dimension of dm (2 or 3). Not collective. */
 int pa_dmesh_dim(const pa_dmesh *dm);
-/** Number of ghost element layers. */
+/** Returns the number of ghost element layers of dm. Not collective. */
 int pa_dmesh_overlap(const pa_dmesh *dm);
-/** Owned entities of a kind on this rank (they are local indices [0, n)). */
+/** Returns the owned entities of a kind on this rank (they are the local
+ *  indices [0, n)). Not collective. */
 pa_idx pa_dmesh_nowned(const pa_dmesh *dm, pa_entity kind);
-/** Local (owned + ghost) entities of a kind on this rank. */
+/** Returns the local (owned + ghost) entities of a kind on this rank. Not
+ *  collective. */
 pa_idx pa_dmesh_nlocal(const pa_dmesh *dm, pa_entity kind);
-/** Global number of entities of a kind (sum of the owned counts). */
+/** Returns the global number of entities of a kind (the sum of the owned
+ *  counts; the same on every rank). Not collective. */
 pa_gid pa_dmesh_nglobal(const pa_dmesh *dm, pa_entity kind);
-/** Global ids of the local entities of a kind (nlocal). */
+/** Returns the global ids of the local entities of a kind (nlocal), owned
+ *  by dm. Not collective. */
 const pa_gid *pa_dmesh_gids(const pa_dmesh *dm, pa_entity kind);
-/** Owner rank of each local entity of a kind (nlocal). */
+/** Returns the owner rank of each local entity of a kind (nlocal), owned
+ *  by dm. Not collective. */
 const int *pa_dmesh_owners(const pa_dmesh *dm, pa_entity kind);
-/** Layer of each local element: 0 owned, k for a ghost of layer k. */
+/** Returns the layer of each local element (0 owned, k for a ghost of
+ *  layer k), owned by dm. Not collective. */
 const uint8_t *pa_dmesh_elem_layers(const pa_dmesh *dm);
-/** The ranks this rank exchanges with; returns their number. */
+/** The ranks this rank exchanges with into *ranks (out, owned by dm);
+ *  returns their number. Not collective. */
 int pa_dmesh_neighbours(const pa_dmesh *dm, const int **ranks);
 /**
- * The local mesh: owned and ghost entities in local numbering. Callers may
- * read it and change coordinates, references, flags, metric and fields (then
- * call pa_dmesh_sync_mesh to make ghosts equal owners again); adding or
- * removing entities breaks the distribution.
+ * Returns the local mesh of dm: owned and ghost entities in local
+ * numbering. Callers may read it and change coordinates, references, flags,
+ * metric and fields (then call pa_dmesh_sync_mesh to make ghosts equal
+ * owners again); adding or removing entities breaks the distribution. Not
+ * collective.
  */
 pa_mesh *pa_dmesh_mesh(pa_dmesh *dm);
-/** Collective: copy coordinates, references, flags, metric and fields of
- *  owned entities to their ghosts. */
+/** Copy the coordinates, references, flags, metric and fields of the owned
+ *  entities of dm (in/out) to their ghosts. Collective. Returns the same
+ *  status on every rank: PA_ERR_MEMORY, PA_ERR_MPI. */
 pa_status pa_dmesh_sync_mesh(pa_dmesh *dm);
-/** Bytes used by this rank's part (mesh, ids, exchange patterns, values). */
+/** Returns the bytes used by this rank's part of dm (mesh, ids, exchange
+ *  patterns, values). Not collective. */
 size_t pa_dmesh_memory_used(const pa_dmesh *dm);
 
 /* ---- values attached to entities ---- */
@@ -987,34 +1157,40 @@ size_t pa_dmesh_memory_used(const pa_dmesh *dm);
 typedef struct pa_dmesh_value pa_dmesh_value;
 
 /**
- * Attach a value (initialised to zero) to the entities of a kind, or only to
- * the entities of reference ref (a sub-class, e.g. boundary faces of
- * reference 3); ref = -1 for all. type: any MPI datatype whose extent equals
- * its size (MPI_DOUBLE, MPI_INT, a contiguous type, MPI_BYTE with ncomp =
- * bytes...); reductions need a predefined type. Values follow the entities
- * through redistribution and reordering. Collective (same calls in the same
- * order on every rank). The value belongs to dm (freed by
- * pa_dmesh_value_remove or pa_dmesh_destroy).
+ * Attach to dm (in/out) a value called name (unique, shorter than 64
+ * bytes), initialised to zero: ncomp items of type per entity of a kind,
+ * or only of the entities of reference ref (a sub-class, e.g. boundary
+ * faces of reference 3); ref = -1 for all. type: any MPI datatype whose
+ * extent equals its size (MPI_DOUBLE, MPI_INT, a contiguous type, MPI_BYTE
+ * with ncomp = bytes...); reductions need a predefined type. Values follow
+ * the entities through redistribution and reordering. *value (out) belongs
+ * to dm (freed by pa_dmesh_value_remove or pa_dmesh_destroy). Collective
+ * (same calls in the same order on every rank). Returns the same status on
+ * every rank: PA_ERR_ARG for a bad kind, ncomp or type, or a name in use
+ * or too long, PA_ERR_MEMORY.
  */
 pa_status pa_dmesh_value_add(pa_dmesh *dm, pa_entity kind, const char *name,
                              MPI_Datatype type, int ncomp, int32_t ref,
                              pa_dmesh_value **value);
-/** Find a value by name (NULL if none). Not collective. */
+/** Returns the value of dm called name, NULL if none. Not collective. */
 pa_dmesh_value *pa_dmesh_value_find(pa_dmesh *dm, const char *name);
-/** Detach and free a value. Collective. */
+/** Detach value from dm (in/out) and free it. Collective. Returns
+ *  PA_ERR_ARG for a value that is not dm's. */
 pa_status pa_dmesh_value_remove(pa_dmesh *dm, pa_dmesh_value *value);
 /**
- * Data of a value: *n (may be NULL) receives the number of local entities
- * holding it (all local entities of the kind when ref = -1), *nowned the
- * number of those that are owned (the first ones); the data holds n blocks of
- * ncomp items. Pointer valid until the distribution changes
- * (pa_dmesh_redistribute, pa_dmesh_reorder).
+ * Returns the data of value, n blocks of ncomp items (read and written by
+ * the caller), valid until the distribution changes
+ * (pa_dmesh_redistribute, pa_dmesh_reorder); *n (out, may be NULL) the
+ * number of local entities holding it (all local entities of the kind when
+ * ref = -1), *nowned (out, may be NULL) the number of those that are owned
+ * (the first ones). Not collective.
  */
 void *pa_dmesh_value_data(pa_dmesh_value *value, pa_idx *n, pa_idx *nowned);
-/** Local entity of each block of a sub-class value (NULL when ref = -1: block
- *  i is entity i). */
+/** Returns the local entity of each block of a sub-class value (NULL when
+ *  ref = -1: block i is entity i), owned by the value. Not collective. */
 const pa_idx *pa_dmesh_value_entities(const pa_dmesh_value *value);
-/** Kind, name, type, number of components and sub-class of a value. */
+/** The *kind, *name, *type, *ncomp and *ref (out, each may be NULL) of
+ *  value. Not collective. */
 void pa_dmesh_value_info(const pa_dmesh_value *value, pa_entity *kind,
                          const char **name, MPI_Datatype *type, int *ncomp,
                          int32_t *ref);
@@ -1022,12 +1198,14 @@ void pa_dmesh_value_info(const pa_dmesh_value *value, pa_entity *kind,
 /* ---- exchange ---- */
 
 /**
- * Owner -> ghost update of a value: every ghost block receives its owner's.
- * pa_dmesh_halo = begin + end; between begin and end the caller may work on
- * owned data (not on ghosts); only one exchange per value at a time.
- * Collective over the neighbour ranks (every rank must call it); begin and end
- * never allocate, so they fail only on invalid arguments (PA_ERR_ARG) or an
- * MPI error (PA_ERR_MPI naming the call; see PA_ERR_MPI).
+ * Owner -> ghost update of value (in/out) of dm: every ghost block receives
+ * its owner's. pa_dmesh_halo = begin + end; between begin and end the
+ * caller may work on owned data (not on ghosts); only one exchange per
+ * value at a time. Collective over the neighbour ranks (every rank must
+ * call it); the status is this rank's. begin and end never allocate, so
+ * they fail only on invalid arguments (PA_ERR_ARG: a value not set up, an
+ * exchange already in flight, an end without its begin) or an MPI error
+ * (PA_ERR_MPI naming the call).
  */
 pa_status pa_dmesh_halo(pa_dmesh *dm, pa_dmesh_value *value);
 pa_status pa_dmesh_halo_begin(pa_dmesh *dm, pa_dmesh_value *value);
@@ -1037,7 +1215,8 @@ pa_status pa_dmesh_halo_end(pa_dmesh *dm, pa_dmesh_value *value);
  * MPI_MIN or MPI_MAX (any predefined MPI_Op on a predefined type). Ghost
  * blocks are left as they are (follow with pa_dmesh_halo to update them).
  * Contributions are combined in rank order, so results do not depend on
- * timing. Same collective rules as pa_dmesh_halo.
+ * timing. Same parameters, collective rules and errors as pa_dmesh_halo
+ * (and PA_ERR_ARG for a type that is not predefined).
  */
 pa_status pa_dmesh_reduce(pa_dmesh *dm, pa_dmesh_value *value, MPI_Op op);
 pa_status pa_dmesh_reduce_begin(pa_dmesh *dm, pa_dmesh_value *value);
@@ -1061,63 +1240,59 @@ typedef struct pa_dmesh_iter {
   pa_idx first, end, pos;
 } pa_dmesh_iter;
 
-/** Start iterating over a set of entities of a kind (builds the interior and
- *  frontier lists on first use). Not collective. */
+/** Start *it (out) iterating over a set of the entities of a kind of dm
+ *  (in/out: builds its interior and frontier lists on first use). Not
+ *  collective. Returns PA_ERR_ARG for a bad kind or set, PA_ERR_MEMORY. */
 pa_status pa_dmesh_iter_init(pa_dmesh *dm, pa_entity kind, pa_dmesh_set set,
                              pa_dmesh_iter *it);
-/** Next local entity index in *i; returns 0 when the set is exhausted. */
+/** Move it (in/out) on: the next local entity index into *i (out); returns
+ *  1, or 0 when the set is exhausted. Not collective. */
 static inline int pa_dmesh_iter_next(pa_dmesh_iter *it, pa_idx *i) {
   if (it->pos >= it->end) return 0;
   *i = it->list ? it->list[it->pos] : it->pos;
   it->pos++;
   return 1;
 }
-/** Number of entities of the set (without moving the iterator). */
+/** Returns the number of entities of the set of it (without moving it).
+ *  Not collective. */
 static inline pa_idx pa_dmesh_iter_count(const pa_dmesh_iter *it) {
   return it->end - it->first;
 }
 
-/** Local vertices of local element e (dim+1). Not collective. */
+/** Returns the dim+1 local vertices of local element e of dm (owned by dm;
+ *  e is not checked). Not collective. */
 const pa_idx *pa_dmesh_elem_verts(pa_dmesh *dm, pa_idx e);
-/** Local elements containing local vertex v: *n of them in (*elems)[0..n).
- *  Complete for owned vertices when overlap >= 1. Not collective. */
+/** The local elements of dm (in/out: builds the cached balls) containing
+ *  local vertex v: *n (out) of them in (*elems)[0..n) (out, owned by dm).
+ *  Complete for owned vertices when overlap >= 1. Not collective. Returns
+ *  PA_ERR_ARG for v out of range, PA_ERR_MEMORY. */
 pa_status pa_dmesh_vert_elems(pa_dmesh *dm, pa_idx v, pa_idx *n,
                               const pa_idx **elems);
 /**
- * Face neighbours of local element e: nb[i] is the local element across the
- * face opposite vertex i, or -1 if there is none in the local mesh (a domain
- * boundary face, or -- for owned elements with overlap 0 and ghosts of the
- * last layer -- a face whose neighbour is not local). Not collective.
+ * The face neighbours of local element e of dm (in/out: builds the cached
+ * adjacency) into *nb (out, dim+1 entries owned by dm): nb[i] is the local
+ * element across the face opposite vertex i, or -1 if there is none in the
+ * local mesh (a domain boundary face, or -- for owned elements with overlap
+ * 0 and ghosts of the last layer -- a face whose neighbour is not local).
+ * Not collective. Returns PA_ERR_ARG for e out of range, PA_ERR_MEMORY.
  */
 pa_status pa_dmesh_elem_neighbours(pa_dmesh *dm, pa_idx e, const pa_idx **nb);
-/** The (one or two) local elements having boundary entity b as a face;
- *  e[1] = -1 if only one. Not collective. */
+/** The (one or two) local elements of dm (in/out: builds the cached
+ *  adjacency) having boundary entity b as a face into e (out; e[1] = -1
+ *  if only one). Not collective. Returns PA_ERR_ARG for b out of range,
+ *  PA_ERR_MEMORY. */
 pa_status pa_dmesh_bdry_elems(pa_dmesh *dm, pa_idx b, pa_idx e[2]);
 
 /**
  * Renumber owned and ghost entities separately for locality: elements by
  * the Hilbert curve index of their centroid, vertices by first use in the
  * new element order, boundary entities and edges by their first vertex.
- * Owned entities stay first; values, ids and owners follow. Collective
- * (rebuilds the exchange patterns).
+ * Owned entities stay first; values, ids and owners follow. dm: in/out.
+ * Collective (rebuilds the exchange patterns). Returns the same status on
+ * every rank: PA_ERR_MEMORY, PA_ERR_MPI. (Another element ordering:
+ * pa_dmesh_reorder_by, in the expert section.)
  */
 pa_status pa_dmesh_reorder(pa_dmesh *dm);
-
-/** Element orderings of pa_dmesh_reorder_by. */
-typedef enum pa_dmesh_ordering {
-  PA_ORDER_HILBERT = 0, /**< Hilbert curve index of the centroid (geometric) */
-  PA_ORDER_SCOTCH = 1   /**< Scotch ordering (Gibbs-Poole-Stockmeyer,
-                             bandwidth reducing) of the local dual graph
-                             (faces), one group at a time (owned, then each
-                             ghost layer): topological */
-} pa_dmesh_ordering;
-
-/**
- * pa_dmesh_reorder with a choice of element ordering (pa_dmesh_reorder is
- * PA_ORDER_HILBERT); vertices, boundary entities and edges follow the new
- * element order as there. Collective.
- */
-pa_status pa_dmesh_reorder_by(pa_dmesh *dm, pa_dmesh_ordering how);
 
 /**
  * Move elements to new owners and migrate their vertices, boundary entities,
@@ -1125,7 +1300,9 @@ pa_status pa_dmesh_reorder_by(pa_dmesh *dm, pa_dmesh_ordering how);
  * owner rank of each owned element, or NULL to repartition with PT-Scotch on
  * the distributed dual graph (weights: one per owned element, or NULL for
  * unit weights), parts being remapped to the ranks that already hold most of
- * them. Collective.
+ * them. dm: in/out. Collective. Returns the same status on every rank:
+ * PA_ERR_ARG for a part out of [0, size), PA_ERR_PARTITION, PA_ERR_MEMORY,
+ * PA_ERR_MPI.
  */
 pa_status pa_dmesh_redistribute(pa_dmesh *dm, const int *newpart,
                                 const double *weights);
@@ -1138,34 +1315,39 @@ pa_status pa_dmesh_redistribute(pa_dmesh *dm, const int *newpart,
  * then pa_dmesh_redistribute. Nothing moves when the load is within tol.
  * Falls back to a full PT-Scotch repartition when a rank holds more than
  * 1.5 times the mean, the ranks' graph is disconnected or the flows cannot
- * be served. *nmoved (may be NULL): elements moved, 0 if none, -1 after a
- * fallback. Collective.
+ * be served. dm: in/out; *nmoved (out, may be NULL): elements moved, 0 if
+ * none, -1 after a fallback. Collective. Returns the same status on every
+ * rank: PA_ERR_ARG for tol < 1, the errors of pa_dmesh_redistribute.
  */
 pa_status pa_dmesh_rebalance(pa_dmesh *dm, const double *weights, double tol,
                              pa_gid *nmoved);
 
 /**
- * Check the distributed mesh; collective, returns the same status on every
- * rank (PA_ERR_MESH with a message naming the entity): global ids unique and
- * counts consistent, every ghost equal to its owner (coordinates, reference,
- * vertices by global id), owners following the ownership rule, conformity
- * across ranks (no face shared by more than two elements), positive
- * orientation of owned elements, owned-first numbering.
+ * Check dm (in/out only for its cached structures): global ids unique and
+ * counts consistent, every ghost equal to its owner (coordinates,
+ * reference, vertices by global id), owners following the ownership rule,
+ * conformity across ranks (no face shared by more than two elements),
+ * positive orientation of owned elements, owned-first numbering.
+ * Collective. Returns the same status on every rank: PA_ERR_MESH with a
+ * message naming the entity, PA_ERR_MEMORY, PA_ERR_MPI.
  */
 pa_status pa_dmesh_check(pa_dmesh *dm);
 
 /**
- * A checksum of the mesh and its values that depends neither on the number
- * of ranks nor on the numbering: the sum over owned entities of hashes of
- * their coordinates, references, sorted vertex coordinates and orientation,
- * and value bytes. Collective; the same on every rank.
+ * A checksum of dm and its values into *checksum (out, the same on every
+ * rank) that depends neither on the number of ranks nor on the numbering:
+ * the sum over owned entities of hashes of their coordinates, references,
+ * sorted vertex coordinates and orientation, and value bytes. Collective.
+ * Returns the same status on every rank: PA_ERR_MEMORY, PA_ERR_MPI.
  */
 pa_status pa_dmesh_checksum(pa_dmesh *dm, uint64_t *checksum);
 
 /**
- * Partition quality: owned elements per rank (nelem array of the
- * communicator's size, may be NULL), imbalance max/mean and edge cut (faces
- * between elements of different owners). Collective, results on every rank.
+ * The partition quality of dm, on every rank: nelem (out, may be NULL; an
+ * array of the communicator's size) the owned elements per rank,
+ * *imbalance (out) max/mean and *edgecut (out) the faces between elements
+ * of different owners. Collective. Returns the same status on every rank:
+ * PA_ERR_MEMORY, PA_ERR_MPI.
  */
 pa_status pa_dmesh_partition_stats(pa_dmesh *dm, pa_gid *nelem,
                                    double *imbalance, pa_gid *edgecut);
@@ -1227,33 +1409,35 @@ typedef struct pa_adapt_opts {
   int max_iter;
   /** Pieces per process (default 1). */
   int pieces_per_rank;
-  /** Vertex layers of untagged elements added around the tagged ones
-   *  (default 2, at least 1). */
+  /** Expert. Vertex layers of untagged elements added around the tagged
+   *  ones (default 2, at least 1). */
   int skin_layers;
-  /** The same from the second iteration on (default 1, at least 1): its
+  /** Expert. The same from the second iteration on (default 1, at least 1): its
    *  tagged elements lie next to the last skins, and each layer multiplies
    *  a piece's size by about 10 in 3D; a poor element forced by the closer
    *  frozen faces is tagged again (docs/design/ADAPT.md, Convergence). */
   int skin_layers_later;
-  /** Smallest estimated work (about output elements) worth a piece of its
-   *  own: fewer pieces are made when the tagged work is small (default
-   *  2000; tests lower it to get many pieces on small meshes). */
+  /** Expert. Smallest estimated work (about output elements) worth a piece
+   *  of its own: fewer pieces are made when the tagged work is small
+   *  (default 2000; tests lower it to get many pieces on small meshes). */
   double min_piece_work;
-  /** Smallest piece as a fraction of the mean number of elements per rank
-   *  (default 0.25): an iteration rebuilds the whole distributed mesh, so a
-   *  small tagged set is remeshed in fewer, larger pieces (0: off). */
+  /** Expert. Smallest piece as a fraction of the mean number of elements
+   *  per rank (default 0.25): an iteration rebuilds the whole distributed
+   *  mesh, so a small tagged set is remeshed in fewer, larger pieces (0:
+   *  off). */
   double min_piece_ratio;
-  /** Skip the final rebalance when the owned elements per rank are within
-   *  this ratio of the mean (default 1.05; >= 1). */
+  /** Expert. Skip the final rebalance when the owned elements per rank are
+   *  within this ratio of the mean (default 1.05; >= 1). */
   double rebalance_tol;
   /** Rebalance after the loop (pa_dmesh_rebalance: only the excess moves;
    *  default 1). */
   int rebalance;
-  /** Check every remeshed piece (pa_mesh_check) before using it, and the
-   *  result (pa_dmesh_check) after the loop: 1 always, 0 never, -1 (default)
-   *  only with a plug-in remesher (the built-in one is trusted: both checks
-   *  cost 9 % of a 3D run on 2 ranks). A piece that fails the check is
-   *  rolled back. Its skin and global ids are checked in every case. */
+  /** Expert. Check every remeshed piece (pa_mesh_check) before using it,
+   *  and the result (pa_dmesh_check) after the loop: 1 always, 0 never, -1
+   *  (default) only with a plug-in remesher (the built-in one is trusted;
+   *  docs/BENCHMARKS.md has what the checks cost). A piece that fails the
+   *  check is rolled back. Its skin and global ids are checked in every
+   *  case. */
   int check_pieces;
   /** Called on every rank after each iteration with the same figures (may be
    *  NULL), e.g. to print a progress line on rank 0. */
@@ -1299,10 +1483,11 @@ typedef struct pa_adapt_report {
   pa_fidelity fidelity;
 } pa_adapt_report;
 
-/** Default options: built-in remesher, pa_remesh_opts_default, no memory
- *  bound, quality threshold 0.3, 30 iterations, 1 piece per rank, 2 skin
- *  layers (1 from the second iteration), min_piece_work 2000, min_piece_ratio 0.25, rebalance (tolerance
- *  1.05) and piece checks on. */
+/** Fill *opts (out) with the defaults: built-in remesher,
+ *  pa_remesh_opts_default, no memory bound, quality threshold 0.3, 30
+ *  iterations, 1 piece per rank, 2 skin layers (1 from the second
+ *  iteration), min_piece_work 2000, min_piece_ratio 0.25, rebalance
+ *  (tolerance 1.05) and piece checks on (NULL: nothing). Not collective. */
 void pa_adapt_opts_default(pa_adapt_opts *opts);
 
 /**
@@ -1321,10 +1506,15 @@ void pa_adapt_opts_default(pa_adapt_opts *opts);
  * report->converged is set when a tag pass over the final mesh finds
  * nothing, or when the loop ends (no progress, max_iter) with nothing
  * tagged clearly off (an edge of length 2.5 or more, a quality below 0.05);
- * otherwise report->stalled. A metric whose output would not fit (estimated from its
- * complexity, against opts->mem_mb per rank or the memory available on each
- * node) is refused with PA_ERR_MEMORY before any remeshing.
- * opts may be NULL (defaults), report may be NULL.
+ * otherwise report->stalled. dm: in/out; opts may be NULL (defaults);
+ * *report (out, may be NULL): the same on every rank. Returns the same
+ * status on every rank: PA_ERR_ARG for options out of range or no metric,
+ * PA_ERR_UNSUPPORTED for a dimension the remesher does not handle,
+ * PA_ERR_MEMORY (also for a metric whose output would not fit, estimated
+ * from its complexity against opts->mem_mb per rank or the memory available
+ * on each node, before any remeshing), PA_ERR_IO for a checkpoint that
+ * cannot be written, PA_ERR_PARTITION, PA_ERR_MPI; the mesh is then not
+ * usable (destroy it).
  */
 pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
                          pa_adapt_report *report);
@@ -1356,14 +1546,18 @@ pa_status pa_dmesh_adapt_resume(MPI_Comm comm, const char *dir,
                                 pa_adapt_report *report);
 
 /**
- * The metric toolbox on a distributed mesh of overlap 2 (the recovery uses
- * each vertex's 2-ring): pa_metric_from_hessian of component comp
- * (0-based) of vertex field `field` of the local mesh, and
- * pa_metric_from_levelset of field `field` (a scalar); the result becomes
- * the metric of the distributed mesh (every copy of a vertex the same).
- * The complexity is that of the mesh's metric over the owned elements,
- * summed over the ranks. Collective. Without gradation the result does not
- * depend on the number of ranks (round-off apart).
+ * The metric toolbox on dm (in/out), a distributed mesh of overlap 2 (the
+ * recovery uses each vertex's 2-ring): pa_metric_from_hessian of component
+ * comp (0-based) of vertex field `field` of the local mesh, and
+ * pa_metric_from_levelset of field `field` (a scalar), with opts; the
+ * result becomes the metric of the distributed mesh (every copy of a
+ * vertex the same). *complexity (out, the same on every rank) is that of
+ * the mesh's metric over the owned elements, summed over the ranks.
+ * Collective. Without gradation the result does not depend on the number of
+ * ranks (round-off apart). Return the same status on every rank: PA_ERR_ARG
+ * for an overlap below 2, a field or component that does not exist, a mesh
+ * without metric (complexity) or the options' errors of the sequential
+ * functions, PA_ERR_MEMORY, PA_ERR_MPI.
  */
 pa_status pa_dmesh_metric_from_hessian(pa_dmesh *dm, int field, int comp,
                                        const pa_metric_hessian_opts *opts);
@@ -1372,12 +1566,51 @@ pa_status pa_dmesh_metric_from_levelset(pa_dmesh *dm, int field,
 pa_status pa_dmesh_metric_complexity(pa_dmesh *dm, double *complexity);
 
 /**
- * Statistics of a distributed mesh, equal to pa_mesh_stats of the gathered
+ * The statistics of dm (in/out only for its cached structures) into *stats
+ * (out, the same on every rank), equal to pa_mesh_stats of the gathered
  * mesh (each edge counted once over the ranks; sums may differ in the last
- * bits). valid is the outcome of pa_dmesh_check. Collective; the same result
- * on every rank.
+ * bits); valid is the outcome of pa_dmesh_check. Collective. Returns the
+ * same status on every rank: PA_ERR_MEMORY, PA_ERR_MPI.
  */
 pa_status pa_dmesh_stats(pa_dmesh *dm, pa_stats *stats);
+
+/* ------------------------------------------------------------------------ */
+/* Test hooks and expert knobs                                              */
+/* ------------------------------------------------------------------------ */
+
+/*
+ * What a program rarely needs: the hooks the tests use to reach the error
+ * paths, and the knobs that tune the algorithms (their defaults are
+ * measured: docs/BENCHMARKS.md). The option structs above hold more knobs,
+ * each marked "Expert" at its field: pa_remesh_opts.trusted and .no_stats
+ * (what the parallel loop tells the remesher about its pieces),
+ * pa_adapt_opts.skin_layers, .skin_layers_later, .min_piece_work,
+ * .min_piece_ratio, .rebalance_tol and .check_pieces.
+ */
+
+/** Test hook: make the n-th next allocation of padapt fail (n >= 1; n = 0
+ *  disables), whichever thread makes it, so that a test reaches every
+ *  out-of-memory path (the CLI sets it from PADAPT_TEST_FAIL_ALLOC).
+ *  Process-wide, not collective. */
+void pa_memory_fail_after(long n);
+
+/** Element orderings of pa_dmesh_reorder_by. */
+typedef enum pa_dmesh_ordering {
+  PA_ORDER_HILBERT = 0, /**< Hilbert curve index of the centroid (geometric) */
+  PA_ORDER_SCOTCH = 1   /**< Scotch ordering (Gibbs-Poole-Stockmeyer,
+                             bandwidth reducing) of the local dual graph
+                             (faces), one group at a time (owned, then each
+                             ghost layer): topological */
+} pa_dmesh_ordering;
+
+/**
+ * pa_dmesh_reorder of dm (in/out) with a choice of element ordering, how
+ * (pa_dmesh_reorder is PA_ORDER_HILBERT, measured the better of the two);
+ * vertices, boundary entities and edges follow the new element order as
+ * there. Collective. Returns the same status on every rank: PA_ERR_ARG for
+ * another ordering, PA_ERR_PARTITION, PA_ERR_MEMORY, PA_ERR_MPI.
+ */
+pa_status pa_dmesh_reorder_by(pa_dmesh *dm, pa_dmesh_ordering how);
 
 #ifdef __cplusplus
 }

@@ -8,15 +8,14 @@
  * hmin/hmax and the local parameters on every local vertex, owner and
  * ghosts alike, and the gradation over the whole mesh, grade.c; pieces are
  * remeshed without gradation, as the sequential remesher grades its input
- * once); the
- * element value PA__DONE_VALUE marks the elements produced by a remesh, which
- * tag.c tags again only with looser criteria (by how much their piece's
- * frozen skin constrained them). The loop stops when a tag pass over the
- * whole mesh finds nothing (converged: every element of the final mesh meets
- * its criterion), or when it stalls: each iteration in which the estimated
- * work of the tagged elements did not fall 1 % below the least seen so far
- * halves the number of pieces of the next one (other borders, and fewer of
- * them; one piece has no inner border), and an iteration with one piece that
+ * once); the element value PA_ADAPT_DONE_VALUE marks the elements produced
+ * by a remesh, which tag.c tags again only with looser criteria (by how much
+ * their piece's frozen skin constrained them). The loop stops when a tag pass
+ * over the whole mesh finds nothing (converged: every element of the final mesh
+ * meets its criterion), or when it stalls: each iteration in which the
+ * estimated work of the tagged elements did not fall 1 % below the least seen
+ * so far halves the number of pieces of the next one (other borders, and fewer
+ * of them; one piece has no inner border), and an iteration with one piece that
  * makes no progress (and rolled nothing back) ends the loop; so does
  * max_iter: as converged if nothing still tagged is clearly off
  * (pa__adapt_count_missed), else as stalled. Every step is collective and
@@ -425,8 +424,8 @@ static pa_status begin(pa_dmesh *dm, const pa_adapt_opts *opts, pa__loop *L,
   L->rep.nvert_initial = dm->nglob[PA_VERTEX];
   PA_CALL(prepare_metric(dm, &opts->remesh, &L->changed));
   PA_CALL(check_size(dm, opts, &L->expected));
-  PA_CALL(pa_dmesh_value_add(dm, PA_ELEMENT, PA__DONE_VALUE, MPI_UINT8_T, 1,
-                             -1, done));
+  PA_CALL(pa_dmesh_value_add(dm, PA_ELEMENT, PA_ADAPT_DONE_VALUE, MPI_UINT8_T,
+                             1, -1, done));
   pa__info(2, "padapt: rank %d: metric and gradation %.3f s\n", dm->rank,
            pa_wtime() - t0);
 cleanup:
@@ -552,7 +551,7 @@ pa_status pa_dmesh_adapt_resume(MPI_Comm comm, const char *dir,
     opts = &def;
   }
   PA_CALL(pa__adapt_restore(comm, dir, opts, &dm, &L));
-  done = pa_dmesh_value_find(dm, PA__DONE_VALUE);
+  done = pa_dmesh_value_find(dm, PA_ADAPT_DONE_VALUE);
   PA_CALL(check_opts(dm, opts));
   L.t0 = t0;
   if (opts->remesh.progress) { /* the checkpoint holds the prepared metric */

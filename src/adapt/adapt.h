@@ -44,41 +44,41 @@
 
 /* Flag bits of vertex records in transit: the vertex lies on the piece's
  * skin; it touches a tagged element of another piece (hot). */
-#define PA__SKIN_TRANSIT 0x80
-#define PA__HOT_TRANSIT 0x40
+#define PA_ADAPT_SKIN_TRANSIT 0x80
+#define PA_ADAPT_HOT_TRANSIT 0x40
 /* ... skin edges may be refined there (inner, see pieces.c); only pieces
  * around, but not inner: skin edges towards an inner vertex may be refined */
-#define PA__INNER_TRANSIT 0x20
-#define PA__LABELLED_TRANSIT 0x10
+#define PA_ADAPT_INNER_TRANSIT 0x20
+#define PA_ADAPT_LABELLED_TRANSIT 0x10
 /* Temporary ids of the vertices bisect.c adds to a piece (above every
  * global id; exact as a double) */
-#define PA__TEMP_GID ((pa_gid)1 << 52)
-/* bisect.c: skin edges are bisected while longer than PA__LEB_SKIN, edges
- * inside the piece while longer than PA__LEB_INNER (in the metric). 1.5,
- * not sqrt 2: bisecting a skin face's edge of 1.47 cuts the obtuse faces of
- * a bisected Kuhn cube with a median half the shortest edge (0.52), frozen
- * until another iteration (box3d 20 -> 0.012 on 2 ranks: 43 k elements
- * tagged again, 1 627 with 1.5; 33.2 -> 31.0 s, 99.34 -> 99.31 % in range) */
-#define PA__LEB_SKIN 1.5
-#define PA__LEB_INNER 2.0
+#define PA_ADAPT_TEMP_GID ((pa_gid)1 << 52)
+/* bisect.c: skin edges are bisected while longer than PA_ADAPT_LEB_SKIN,
+ * edges inside the piece while longer than PA_ADAPT_LEB_INNER (in the
+ * metric). 1.5, not sqrt 2: bisecting a skin face's edge of 1.47 cuts the
+ * obtuse faces of a bisected Kuhn cube with a median half the shortest edge
+ * (0.52), frozen until another iteration tags its elements again
+ * (docs/design/ADAPT.md has the measurement). */
+#define PA_ADAPT_LEB_SKIN 1.5
+#define PA_ADAPT_LEB_INNER 2.0
 /* No label (pieces.c, extract.c). */
-#define PA__NOLABEL 2147483647
+#define PA_ADAPT_NOLABEL 2147483647
 /* Values of the "done" element value (tag.c gives the criteria each is
  * tagged again with): 0 never remeshed; 1 remeshed; 2 remeshed near a hot
  * skin vertex; 3 with two vertices or more on a hot skin (the remesher was
  * constrained there); 4 remeshed by an iteration with a single piece, away
  * from its skin: what the sequential remesher makes with its whole
  * neighbourhood free. */
-#define PA__DONE 1
-#define PA__DONE_NEAR_SKIN 2
-#define PA__DONE_ON_SKIN 3
-#define PA__DONE_FREE 4
+#define PA_ADAPT_DONE 1
+#define PA_ADAPT_DONE_NEAR_SKIN 2
+#define PA_ADAPT_DONE_ON_SKIN 3
+#define PA_ADAPT_DONE_FREE 4
 /* Name of the element value marking elements produced in this run. */
-#define PA__DONE_VALUE "pa.adapt.done"
+#define PA_ADAPT_DONE_VALUE "pa.adapt.done"
 /* Reference of the artificial boundary entities of a piece's outer surface. */
-#define PA__SKIN_REF (-2000000001)
+#define PA_ADAPT_SKIN_REF (-2000000001)
 /* Estimated bytes of remesher memory per unit of work (one output element). */
-#define PA__BYTES_PER_WORK 1000.0
+#define PA_ADAPT_BYTES_PER_WORK 1000.0
 
 /* 1 if pieces and the result are checked (opts->check_pieces: -1 means
  * with a plug-in remesher only). */
@@ -141,13 +141,13 @@ typedef struct pa__iter {
   pa__piece *pieces;   /* the pieces remeshed by this rank */
   double bytes_moved;  /* record bytes this rank sent to other ranks */
   double imbalance;    /* estimated work: max over ranks / mean */
-  uint8_t *vinner;     /* nloc: PA__INNER_TRANSIT (inner vertex),
-                          PA__LABELLED_TRANSIT (only pieces around, not
+  uint8_t *vinner;     /* nloc: PA_ADAPT_INNER_TRANSIT (inner vertex),
+                          PA_ADAPT_LABELLED_TRANSIT (only pieces around, not
                           inner) or 0 */
   int *vlab;           /* 4 x nloc: smallest and largest label of the
-                          elements around each local vertex (PA__NOLABEL
+                          elements around each local vertex (PA_ADAPT_NOLABEL
                           for unlabelled ones), then of the tagged ones
-                          (PA__NOLABEL, -PA__NOLABEL if none) */
+                          (PA_ADAPT_NOLABEL, -PA_ADAPT_NOLABEL if none) */
   pa_gid ntagged;      /* global */
   double tagwork;      /* global work of the tagged elements */
 } pa__iter;
@@ -162,7 +162,7 @@ void pa__piece_release(pa__piece *pc);
 void pa__iter_release_elements(pa__iter *it);
 
 /* What the loop carries from one iteration to the next besides the
- * distributed mesh (whose element value PA__DONE_VALUE is part of the
+ * distributed mesh (whose element value PA_ADAPT_DONE_VALUE is part of the
  * state): what a checkpoint holds with the mesh. */
 typedef struct pa__loop {
   int iter;            /* iterations done */

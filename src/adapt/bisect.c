@@ -21,22 +21,21 @@
  * on none); if it lies on the boundary, its boundary faces contain the
  * inner end, whose faces are coplanar, so its midpoint is on the surface.
  * Without the labelled ends, every skin face touching a ridge of a box
- * stayed as coarse as the input, and its neighbours were remeshed again in
- * another iteration: box3d 10 -> 0.019 on 2 ranks tagged 3 076 elements
- * again instead of 783, and the worst piece quality was 0.001 (0.400).
+ * would stay as coarse as the input, and its neighbours would be remeshed
+ * again in another iteration (docs/design/ADAPT.md has the measurement).
  *
- * With inside, edges inside the piece longer than PA__LEB_INNER are
+ * With inside, edges inside the piece longer than PA_ADAPT_LEB_INNER are
  * bisected too, in the same longest-first order: otherwise the elements on
  * a refined skin face are fans of slivers. The built-in 3D remesher turns
- * those into 1.4 x more tets at half the speed (box3d 10 -> 0.019, 2
- * ranks); a plain bisection remesher (examples/) cannot repair them at all,
- * nor the next iteration's one a rolled-back piece, which comes back as
- * refined here (test_adapt_props: a threshold of 3 or more leaves fans).
- * The built-in 2D remesher repairs fans of triangles itself, faster than
- * the bisection (0.2 s on box2d 100 -> 0.0013, 1.3 M triangles, 2 ranks):
- * extract.c passes inside = 0 for it.
+ * those into more tets, more slowly (docs/design/ADAPT.md); a plain
+ * bisection remesher (examples/) cannot repair them at all, nor the next
+ * iteration's one a rolled-back piece, which comes back as refined here
+ * (test_adapt_props: a threshold of 3 or more leaves fans). The built-in 2D
+ * remesher repairs fans of triangles itself, faster than the bisection
+ * (docs/BENCHMARKS.md, "The parallel loop"): extract.c passes inside = 0
+ * for it.
  *
- * New skin vertices get temporary ids (PA__TEMP_GID + index), and are
+ * New skin vertices get temporary ids (PA_ADAPT_TEMP_GID + index), and are
  * matched after the remesh by their coordinates like the others;
  * reintegrate.c gives the copies of one vertex in several pieces one global
  * id by their coordinates. New inner vertices get no id (-1): they are new
@@ -54,10 +53,10 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
   pa_idx nv0 = m->nv, *parent = NULL;
   uint8_t *onskin = NULL;
   pa__leb_opts o;
-  o.lmax = inside ? PA__LEB_INNER : HUGE_VAL;
-  o.skin_ref = PA__SKIN_REF;
+  o.lmax = inside ? PA_ADAPT_LEB_INNER : HUGE_VAL;
+  o.skin_ref = PA_ADAPT_SKIN_REF;
   o.skin_ok = inner;
-  o.skin_lmax = PA__LEB_SKIN;
+  o.skin_lmax = PA_ADAPT_LEB_SKIN;
   PA_CALL(pa__leb_refine(m, &o, &parent, &onskin));
   if (m->nv > nv0) {
     pa_gid *g = pa__realloc(pc->vgid, (size_t)m->nv * sizeof *g);
@@ -75,7 +74,7 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
     for (pa_idx v = nv0; v < m->nv; v++) {
       int s = onskin[v - nv0];
       pa_idx a = parent[2 * (v - nv0)], b = parent[2 * (v - nv0) + 1];
-      pc->vgid[v] = s ? PA__TEMP_GID + v : -1;
+      pc->vgid[v] = s ? PA_ADAPT_TEMP_GID + v : -1;
       pc->skin[v] = (uint8_t)s;
       /* hot if an end is: elements produced near it may be tagged again */
       pc->hot[v] = (uint8_t)(s && (pc->hot[a] || pc->hot[b]));

@@ -7,7 +7,7 @@
  *  - the distributed set DIR/iter-K (pa_dmesh_write: DIR/iter-K.<r>.meshb,
  *    DIR/iter-K.manifest and the ParaView files), each rank's owned
  *    elements with their vertices, boundary entities, global ids, owners,
- *    metric, fields and user values -- the element value PA__DONE_VALUE of
+ *    metric, fields and user values -- the element value PA_ADAPT_DONE_VALUE of
  *    the loop among them;
  *  - the text file DIR/checkpoint (format below): the number of ranks, the
  *    set's name and the size and FNV-1a checksum of its manifest, the loop's
@@ -201,7 +201,7 @@ static pa_status write_state(const char *path, const pa_dmesh *dm,
                              const pa_adapt_opts *o, const pa__loop *L,
                              const char *set, int64_t mbytes, uint64_t mhash) {
   pa_status st = PA_SUCCESS;
-  pa_outfile out;
+  pa__outfile out;
   char v[64];
   memset(&out, 0, sizeof out);
   PA_CALL(pa__out_open(&out, path));
@@ -448,11 +448,11 @@ pa_status pa__adapt_restore(MPI_Comm comm, const char *dir,
   MPI_Bcast(&S, (int)sizeof S, MPI_BYTE, 0, comm);
   snprintf(path, sizeof path, "%s/%s.meshb", dir, S.set);
   PA_CALL(pa_dmesh_read(comm, path, S.overlap, &dm));
-  PA_CHECK(dm->dim == S.dim && pa_dmesh_value_find(dm, PA__DONE_VALUE),
+  PA_CHECK(dm->dim == S.dim && pa_dmesh_value_find(dm, PA_ADAPT_DONE_VALUE),
            PA_ERR_FORMAT,
            "%s: not the set of a checkpoint (dimension, or no element value "
            "'%s')",
-           path, PA__DONE_VALUE);
+           path, PA_ADAPT_DONE_VALUE);
   *L = S.L;
 cleanup:
   st = pa__agree_end(comm, st);

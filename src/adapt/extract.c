@@ -23,9 +23,9 @@
  * The piece keeps the global id of each of its vertices (pc->vgid; the
  * remesher never sees them: reintegrate.c matches the output's vertices
  * by their coordinates); the faces of its outer surface that are not
- * boundary entities become boundary entities of reference PA__SKIN_REF flagged PA_FLAG_REQUIRED
- * (its skin, frozen), which bisect.c then refines where the piece meets
- * another one.
+ * boundary entities become boundary entities of reference PA_ADAPT_SKIN_REF
+ * flagged PA_FLAG_REQUIRED (its skin, frozen), which bisect.c then refines
+ * where the piece meets another one.
  */
 #include "adapt/adapt.h"
 
@@ -49,7 +49,7 @@ static int contains(const pa_mesh *m, pa_idx e, const pa_idx *f, int k) {
  * produced near it may need another pass). */
 static int hot_vertex(const pa__iter *it, pa_idx v, int l) {
   const int *x = it->vlab + 4 * (size_t)v;
-  return x[2] != PA__NOLABEL && (x[2] != l || x[3] != l);
+  return x[2] != PA_ADAPT_NOLABEL && (x[2] != l || x[3] != l);
 }
 
 /* Heaviest-first greedy map of pieces to ranks (see the file comment). */
@@ -162,8 +162,8 @@ static pa_status pair_records(pa__iter *it, int kind, const pa_idx *bstart,
       flag = m->vflag[x];
       {
         const int *l = it->vlab + 4 * (size_t)x;
-        if (l[0] != l[1]) flag |= PA__SKIN_TRANSIT;
-        if (hot_vertex(it, x, p)) flag |= PA__HOT_TRANSIT;
+        if (l[0] != l[1]) flag |= PA_ADAPT_SKIN_TRANSIT;
+        if (hot_vertex(it, x, p)) flag |= PA_ADAPT_HOT_TRANSIT;
         flag |= it->vinner[x];
       }
     } else {
@@ -289,7 +289,8 @@ static pa_status piece_create(pbuild *b) {
   m->met_ncomp = dmm->met_ncomp;
   m->nfield = dmm->nfield;
   for (int f = 0; f < dmm->nfield; f++) {
-    snprintf(m->field[f].name, PA_FIELD_NAME_LEN, "%s", dmm->field[f].name);
+    snprintf(m->field[f].name, PA_MESH_FIELD_NAME_LEN, "%s",
+             dmm->field[f].name);
     m->field[f].ncomp = dmm->field[f].ncomp;
   }
   PA_CALL(pa_mesh_reserve(m, nv, ne, nb, nd));
@@ -319,13 +320,14 @@ static pa_status piece_vertices(pbuild *b) {
     m->vref[k] = V->ref[i];
     m->vflag[k] = V->flag[i];
     pc->vrank[k] = INT_MAX;
-    pc->skin[k] = (V->flag[i] & PA__SKIN_TRANSIT) != 0;
-    pc->hot[k] = (V->flag[i] & PA__HOT_TRANSIT) != 0;
-    b->inner[k] = (V->flag[i] & PA__INNER_TRANSIT)      ? 1
-                  : (V->flag[i] & PA__LABELLED_TRANSIT) ? 2
-                                                        : 0;
-    m->vflag[k] &= (uint8_t) ~(PA__SKIN_TRANSIT | PA__HOT_TRANSIT |
-                               PA__INNER_TRANSIT | PA__LABELLED_TRANSIT);
+    pc->skin[k] = (V->flag[i] & PA_ADAPT_SKIN_TRANSIT) != 0;
+    pc->hot[k] = (V->flag[i] & PA_ADAPT_HOT_TRANSIT) != 0;
+    b->inner[k] = (V->flag[i] & PA_ADAPT_INNER_TRANSIT)      ? 1
+                  : (V->flag[i] & PA_ADAPT_LABELLED_TRANSIT) ? 2
+                                                             : 0;
+    m->vflag[k] &=
+        (uint8_t) ~(PA_ADAPT_SKIN_TRANSIT | PA_ADAPT_HOT_TRANSIT |
+                    PA_ADAPT_INNER_TRANSIT | PA_ADAPT_LABELLED_TRANSIT);
     pc->vgid[k] = V->gid[i];
     PA_CALL(pa__gidmap_put(&b->map, V->gid[i], k, NULL, NULL));
   }
@@ -410,7 +412,7 @@ static pa_status piece_skin(pbuild *b) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = b->m;
   pa_idx nb0 = m->nb;
-  PA_CALL(pa_mesh_build_boundary(m, PA__SKIN_REF, NULL));
+  PA_CALL(pa_mesh_build_boundary(m, PA_ADAPT_SKIN_REF, NULL));
   for (pa_idx k = nb0; k < m->nb; k++) m->bflag[k] |= PA_FLAG_REQUIRED;
   b->pc->in = m;
   b->m = NULL;
@@ -535,9 +537,9 @@ cleanup:
 static pa_status assemble_local_pieces(pa__iter *it, const pa__recs *R) {
   pa_status st = PA_SUCCESS;
   int np = it->npieces;
-  pa_idx *idx[PA_NKIND] = {NULL, NULL, NULL, NULL};
-  pa_idx *start[PA_NKIND] = {NULL, NULL, NULL, NULL};
-  for (int k = 0; k < PA_NKIND; k++)
+  pa_idx *idx[PA_DMESH_NKIND] = {NULL, NULL, NULL, NULL};
+  pa_idx *start[PA_DMESH_NKIND] = {NULL, NULL, NULL, NULL};
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     PA_CALL(group_by_piece(&R[k], np, &idx[k], &start[k]));
   it->npiece_local = 0;
   for (int p = 0; p < np; p++) it->npiece_local += it->piece_rank[p] == it->rank;
@@ -546,7 +548,7 @@ static pa_status assemble_local_pieces(pa__iter *it, const pa__recs *R) {
     if (it->piece_rank[p] == it->rank)
       PA_CALL(build_piece(it, p, R, idx, start, &it->pieces[q++]));
 cleanup:
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     pa__free(idx[k]);
     pa__free(start[k]);
   }
@@ -556,11 +558,11 @@ cleanup:
 pa_status pa__adapt_extract(pa__iter *it) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
-  pa__recs S[PA_NKIND], R[PA_NKIND];
-  int *dest[PA_NKIND] = {NULL, NULL, NULL, NULL};
+  pa__recs S[PA_DMESH_NKIND], R[PA_DMESH_NKIND];
+  int *dest[PA_DMESH_NKIND] = {NULL, NULL, NULL, NULL};
   pa__layout lay;
   pa__dmesh_layout(dm, &lay);
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     pa__recs_init(&S[k], k, pa__kind_nv(it->dim, k),
                   k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
     pa__recs_init(&R[k], k, pa__kind_nv(it->dim, k),
@@ -571,7 +573,7 @@ pa_status pa__adapt_extract(pa__iter *it) {
   PA_CALL(element_records(it, &S[PA_ELEMENT], &dest[PA_ELEMENT]));
   PA_CALL(pair_records_all(it, S, dest));
   /* 3. ship */
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     it->bytes_moved += bytes_out(&S[k], dest[k], it->rank);
     PA_CALL(pa__recs_migrate(dm->comm, &S[k], dest[k], &R[k]));
     pa__recs_free(&S[k]);
@@ -582,7 +584,7 @@ pa_status pa__adapt_extract(pa__iter *it) {
   PA_CALL(assemble_local_pieces(it, R));
 cleanup:
   st = pa__agree_end(dm->comm, st);
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     pa__recs_free(&S[k]);
     pa__recs_free(&R[k]);
     pa__free(dest[k]);

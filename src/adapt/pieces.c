@@ -16,17 +16,17 @@
  *     layer, every element sharing a vertex with a tagged element is
  *     labelled, except user-required ones: they stay outside the pieces.
  *  4. Per local vertex, the smallest and largest label of the elements
- *     around it (unlabelled: PA__NOLABEL), and of the tagged ones, reduced
+ *     around it (unlabelled: PA_ADAPT_NOLABEL), and of the tagged ones, reduced
  *     the same way (it->vlab). A piece's skin is its outer surface: the
  *     faces it shares with elements of another label or of none, frozen
  *     while it is remeshed; its vertices are those whose two labels differ.
  *     A skin vertex is hot for piece p when a tagged element of another
  *     piece touches it (extract.c). A vertex is inner (it->vinner =
- *     PA__INNER_TRANSIT) when only labelled elements touch it and it lies
+ *     PA_ADAPT_INNER_TRANSIT) when only labelled elements touch it and it lies
  *     on no feature edge, required boundary entity or curved boundary and
  *     is no corner, ridge or required vertex; the other vertices that only
  *     labelled elements touch (on a ridge, a curved boundary, ...) are
- *     PA__LABELLED_TRANSIT. bisect.c splits a skin edge between two inner
+ *     PA_ADAPT_LABELLED_TRANSIT. bisect.c splits a skin edge between two inner
  *     vertices, or between an inner and a labelled one: such an edge is
  *     interior, or lies in the plane of the inner end's boundary faces, so
  *     its midpoint is exact.
@@ -39,7 +39,7 @@
 #include <limits.h>
 #include <math.h>
 
-#define NOLABEL PA__NOLABEL
+#define NOLABEL PA_ADAPT_NOLABEL
 /* Load imbalance tolerance of the piece partition: the iteration waits for
  * the heaviest piece (Scotch's default 5 % left a 4.8 % gap in estimated
  * work on box3d 10 -> 0.019, 2 ranks). */
@@ -187,7 +187,7 @@ static void count_pieces(pa__iter *it, int npieces_max, double wsum) {
   if (byrank > minw) minw = byrank;
   if (np > floor(wsum / minw)) np = floor(wsum / minw);
   if (o->mem_mb > 0) {
-    double npm = ceil(wsum * PA__BYTES_PER_WORK / (o->mem_mb * 1e6));
+    double npm = ceil(wsum * PA_ADAPT_BYTES_PER_WORK / (o->mem_mb * 1e6));
     if (npm > np) np = npm;
   }
   if (np > (double)it->ntagged) np = (double)it->ntagged;
@@ -308,8 +308,9 @@ static pa_status inner_vertices(pa__iter *it, pa_dmesh_value *val) {
       int labelled = it->vlab[4 * v + 1] != NOLABEL;
       int inner = labelled && !d[2 * v] && !it->vinner[v] &&
                   !(vf[v] & (PA_FLAG_CORNER | PA_FLAG_RIDGE | PA_FLAG_REQUIRED));
-      it->vinner[v] = (uint8_t)(inner ? PA__INNER_TRANSIT
-                                      : labelled ? PA__LABELLED_TRANSIT : 0);
+      it->vinner[v] = (uint8_t)(inner      ? PA_ADAPT_INNER_TRANSIT
+                                : labelled ? PA_ADAPT_LABELLED_TRANSIT
+                                           : 0);
     }
   }
 cleanup:

@@ -10,8 +10,9 @@
  * output vertices are matched to input ones: a vertex the remesher kept
  * keeps its global id), exactly the skin faces of the input, and (with a
  * plug-in remesher, or opts->check_pieces 1) pa_mesh_check passes.
- * Otherwise the piece is rolled back: it comes back as it was given (with its skin refined by bisect.c,
- * which its neighbours share), its elements not marked done.
+ * Otherwise the piece is rolled back: it comes back as it was given (with its
+ * skin refined by bisect.c, which its neighbours share), its elements not
+ * marked done.
  *
  * Rebuild (see adapt.h for the invariants): staying elements are the
  * unlabelled ones. An owned vertex, boundary entity or edge is kept by its
@@ -22,18 +23,19 @@
  * not skin vertices (matched input vertices keep their global id and user
  * values, gathered with them; the others get fresh ids and zeros) and the
  * skin vertices bisect.c added, when it is their giver (skin_vertex_ids);
- * every element ("done" value PA__DONE, PA__DONE_FREE from a single
- * piece, or PA__DONE_NEAR_SKIN within NEAR_SKIN vertex layers of a hot skin
- * vertex, or 0 for a rolled-back piece; one with the same vertices as an input element keeps its id and
- * other values, output_reuse; the others get fresh ids and zeros); and the
- * boundary entities and edges that do not lie on the skin (this drops the
- * artificial skin faces; an unchanged one keeps its id and values, as
- * elements). Fresh ids are the global maximum + 1 + an
- * exclusive scan of the per-rank counts, pieces in increasing order on each
- * rank, then the added skin vertices: deterministic for a given input and
- * number of ranks. The vertices only this rank's elements will contain
- * (fresh ones of outputs that stay here, kept ones far from every piece and
- * rank interface) go to the rebuild as private (pa__dmesh_build_priv).
+ * every element ("done" value PA_ADAPT_DONE, PA_ADAPT_DONE_FREE from a
+ * single piece, or PA_ADAPT_DONE_NEAR_SKIN within NEAR_SKIN vertex layers of
+ * a hot skin vertex, or 0 for a rolled-back piece; one with the same
+ * vertices as an input element keeps its id and other values,
+ * output_reuse; the others get fresh ids and zeros); and the boundary
+ * entities and edges that do not lie on the skin (this drops the artificial
+ * skin faces; an unchanged one keeps its id and values, as elements). Fresh
+ * ids are the global maximum + 1 + an exclusive scan of the per-rank counts,
+ * pieces in increasing order on each rank, then the added skin vertices:
+ * deterministic for a given input and number of ranks. The vertices only this
+ * rank's elements will contain (fresh ones of outputs that stay here, kept ones
+ * far from every piece and rank interface) go to the rebuild as private
+ * (pa__dmesh_build_priv).
  */
 #include "adapt/adapt.h"
 
@@ -127,9 +129,8 @@ static pa_idx cset_find(cset *s, const double *p, pa_idx insert) {
 /* Check an output against its piece; fills pc->match. Returns 1 if usable.
  * Output vertices are matched to input ones by their coordinates, compared
  * bit for bit: a frozen skin vertex must come back exactly, and two
- * vertices of a valid mesh never coincide. (Carrying the global ids through
- * the remesher as a field cost every vertex move an interpolation: 3-4 % of
- * a 3D piece's time.) */
+ * vertices of a valid mesh never coincide; no global id travels through the
+ * remesher, which would interpolate it at every vertex move. */
 static int output_ok(const pa__iter *it, pa__piece *pc, pa_mesh *out,
                      pa_status *hard) {
   pa_status st = PA_SUCCESS;
@@ -173,16 +174,16 @@ static int output_ok(const pa__iter *it, pa__piece *pc, pa_mesh *out,
   {
     /* the skin faces, as they were given */
     pa_idx nin = 0, nout = 0, found = 0;
-    for (pa_idx b = 0; b < in->nb; b++) nin += in->bref[b] == PA__SKIN_REF;
+    for (pa_idx b = 0; b < in->nb; b++) nin += in->bref[b] == PA_ADAPT_SKIN_REF;
     PA_CALL(tset_init(&skin, (size_t)nin));
     for (pa_idx b = 0; b < in->nb; b++)
-      if (in->bref[b] == PA__SKIN_REF) {
+      if (in->bref[b] == PA_ADAPT_SKIN_REF) {
         pa_idx k[3];
         tkey(in->bdry + (size_t)d * b, d, k);
         tset_find(&skin, k, 1);
       }
     for (pa_idx b = 0; b < out->nb; b++) {
-      if (out->bref[b] != PA__SKIN_REF) continue;
+      if (out->bref[b] != PA_ADAPT_SKIN_REF) continue;
       pa_idx f[3], k[3];
       int all = 1;
       nout++;
@@ -236,9 +237,8 @@ pa_status pa__adapt_remesh(pa__iter *it, int *nfail) {
   /* Graded once over the whole mesh before the loop (grade.c), like the
    * sequential remesher grades its input once: grading each piece again
    * would stop at its frozen skin, and on the finer mesh of a later
-   * iteration shrink the sizes further (3D shell:0.1 on 2 ranks: 17 k
-   * elements tagged again made 165 k more tetrahedra, 7.4 s, 19 % more
-   * than the sequential run). */
+   * iteration shrink the sizes further (docs/BENCHMARKS.md, "The parallel
+   * loop", has what that cost). */
   ro.hgrad = 0;
   ro.hgradreq = 0;
   ro.no_stats = 1; /* pa_dmesh_adapt measures the whole result */
@@ -293,7 +293,7 @@ cleanup:
 
 /* Output elements within this many vertex layers of a hot skin vertex (one
  * a tagged element of another piece touches) are marked
- * PA__DONE_NEAR_SKIN: the frozen skin constrained the remesher
+ * PA_ADAPT_DONE_NEAR_SKIN: the frozen skin constrained the remesher
  * there (a remesher's choices reach a few layers, e.g. longest-edge
  * propagation), so they may be tagged again. */
 #define NEAR_SKIN 2
@@ -301,7 +301,7 @@ cleanup:
 /* BAD_NEAR_SKIN: an output element within NEAR_SKIN vertex layers of the
  * piece's frozen skin, whose quality is below opts->qual_threshold and below
  * the worst the remesher left in the next NEAR_SKIN layers, is marked
- * PA__DONE_NEAR_SKIN even far from a hot skin vertex: the frozen faces of
+ * PA_ADAPT_DONE_NEAR_SKIN even far from a hot skin vertex: the frozen faces of
  * already remeshed neighbours forced it, so it is tagged again and remeshed
  * inside the next piece, where those faces are free. Without this, box3d 20
  * -> 0.012 ended with a worst quality of 0.199 at 4 ranks and 0.232 at 8
@@ -469,12 +469,13 @@ static pa_status output_emit(const pa_mesh *out, const pa_idx *breuse,
   tset fs = {0, NULL}, es = {0, NULL};
   int d = out->dim;
   pa_idx nskin = 0;
-  for (pa_idx b = 0; b < out->nb; b++) nskin += out->bref[b] == PA__SKIN_REF;
+  for (pa_idx b = 0; b < out->nb; b++)
+    nskin += out->bref[b] == PA_ADAPT_SKIN_REF;
   PA_CALL(tset_init(&fs, (size_t)nskin));
   PA_CALL(tset_init(&es, (size_t)nskin * 3));
   /* the artificial skin faces and their edges */
   for (pa_idx b = 0; b < out->nb; b++) {
-    if (out->bref[b] != PA__SKIN_REF) continue;
+    if (out->bref[b] != PA_ADAPT_SKIN_REF) continue;
     const pa_idx *v = out->bdry + (size_t)d * b;
     pa_idx k[3];
     tkey(v, d, k);
@@ -694,7 +695,7 @@ static pa_status output_vertices(orecs *c) {
   PA_ALLOC(dbl, c->R[PA_VERTEX].ndbl);
   for (pa_idx j = 0; j < o->nv; j++) {
     pa_idx i = pc->match[j];
-    if (i >= 0 && pc->skin[i] && pc->vgid[i] >= PA__TEMP_GID) {
+    if (i >= 0 && pc->skin[i] && pc->vgid[i] >= PA_ADAPT_TEMP_GID) {
       c->vg[j] = pc->ifgid[i]; /* added by bisect.c: one piece gives it */
       if (!pc->ifgive[i]) continue;
     } else if (i >= 0 && pc->skin[i]) {
@@ -779,20 +780,21 @@ static pa_status output_elements(orecs *c) {
   int d = o->dim;
   for (pa_idx e = 0; e < o->ne; e++) {
     pa_gid ev[4];
-    uint8_t dv = it->piece_failed[pc->id] ? 0 : PA__DONE;
+    uint8_t dv = it->piece_failed[pc->id] ? 0 : PA_ADAPT_DONE;
     int nhot = 0;
     for (int k = 0; k <= d; k++) {
       pa_idx j = o->elem[(size_t)(d + 1) * e + k];
       ev[k] = c->vg[j];
-      if (c->dist[j] < NEAR_SKIN && dv) dv = PA__DONE_NEAR_SKIN;
+      if (c->dist[j] < NEAR_SKIN && dv) dv = PA_ADAPT_DONE_NEAR_SKIN;
       nhot += c->dist[j] == 0;
     }
-    if (dv && nhot >= 2) dv = PA__DONE_ON_SKIN;
-    if (dv == PA__DONE && c->qband > 0 && elem_layer(o, c->dsk, e) < NEAR_SKIN &&
+    if (dv && nhot >= 2) dv = PA_ADAPT_DONE_ON_SKIN;
+    if (dv == PA_ADAPT_DONE && c->qband > 0 &&
+        elem_layer(o, c->dsk, e) < NEAR_SKIN &&
         pa_mesh_elem_quality(pc->out, e) < c->qband) {
-      dv = PA__DONE_NEAR_SKIN; /* see BAD_NEAR_SKIN */
+      dv = PA_ADAPT_DONE_NEAR_SKIN; /* see BAD_NEAR_SKIN */
     }
-    if (dv == PA__DONE && it->npieces == 1) dv = PA__DONE_FREE;
+    if (dv == PA_ADAPT_DONE && it->npieces == 1) dv = PA_ADAPT_DONE_FREE;
     pa_idx q = pc->reuse[PA_ELEMENT][e];
     if (q >= 0) { /* an input element: its id and values, done updated */
       const size_t *po = pc->kpoff[PA_ELEMENT];
@@ -932,7 +934,8 @@ static pa_status send_requests(ifids *c) {
   for (int q = 0; q < it->npiece_local; q++) {
     pa__piece *pc = &it->pieces[q];
     if (!pc->out) continue;
-    for (pa_idx i = 0; i < pc->in->nv; i++) c->n += pc->vgid[i] >= PA__TEMP_GID;
+    for (pa_idx i = 0; i < pc->in->nv; i++)
+      c->n += pc->vgid[i] >= PA_ADAPT_TEMP_GID;
     /* (only skin vertices carry temporary ids) */
   }
   PA_CALLOC(c->scnt, P);
@@ -943,7 +946,7 @@ static pa_status send_requests(ifids *c) {
     pa__piece *pc = &it->pieces[q];
     if (!pc->out) continue;
     for (pa_idx i = 0; i < pc->in->nv; i++)
-      if (pc->vgid[i] >= PA__TEMP_GID) {
+      if (pc->vgid[i] >= PA_ADAPT_TEMP_GID) {
         c->home[k] = home_rank(pc->in->coord + (size_t)d * i, d, P);
         c->scnt[c->home[k]]++;
         k++;
@@ -955,7 +958,7 @@ static pa_status send_requests(ifids *c) {
     pa__piece *pc = &it->pieces[q];
     if (!pc->out) continue;
     for (pa_idx i = 0; i < pc->in->nv; i++)
-      if (pc->vgid[i] >= PA__TEMP_GID) {
+      if (pc->vgid[i] >= PA_ADAPT_TEMP_GID) {
         ifreq *r = &sbuf[c->pos[c->home[k]]++];
         memset(r, 0, sizeof *r);
         memcpy(r->x, pc->in->coord + (size_t)d * i, d * sizeof(double));
@@ -1039,7 +1042,7 @@ static pa_status place_ids(ifids *c, const int64_t *back) {
     PA_CALLOC(pc->ifgid, pc->in->nv);
     PA_CALLOC(pc->ifgive, pc->in->nv);
     for (pa_idx i = 0; i < pc->in->nv; i++)
-      if (pc->vgid[i] >= PA__TEMP_GID) {
+      if (pc->vgid[i] >= PA_ADAPT_TEMP_GID) {
         size_t a = c->pos[c->home[k]]++;
         pc->ifgid[i] = back[2 * a];
         pc->ifgive[i] = (uint8_t)back[2 * a + 1];
@@ -1103,7 +1106,7 @@ static pa_status private_kept(const pa__iter *it, const uint8_t *kv,
     if (g[v] <= g[v - 1]) return PA_SUCCESS;
   PA_ALLOC(*vpriv, nown ? nown : 1);
   for (pa_idx v = 0; v < nown; v++)
-    (*vpriv)[v] = (uint8_t)(kv[v] && it->vlab[4 * v] == PA__NOLABEL);
+    (*vpriv)[v] = (uint8_t)(kv[v] && it->vlab[4 * v] == PA_ADAPT_NOLABEL);
   for (pa_idx q = 0; sf->rootoff && q < sf->rootoff[sf->nrootrank]; q++)
     (*vpriv)[sf->rootidx[q]] = 0; /* copies on other ranks */
 cleanup:
@@ -1120,9 +1123,9 @@ cleanup:
 typedef struct reint {
   uint8_t *keep, *kv, *kb, *kd, *vpriv;
   uint8_t **bemit, **demit;
-  pa__recs R[PA_NKIND], Rp;
+  pa__recs R[PA_DMESH_NKIND], Rp;
   pa__layout lay;
-  pa_gid base[PA_NKIND], cnt[PA_NKIND], off[PA_NKIND];
+  pa_gid base[PA_DMESH_NKIND], cnt[PA_DMESH_NKIND], off[PA_DMESH_NKIND];
   unsigned char *pay;
 } reint;
 
@@ -1175,8 +1178,8 @@ cleanup:
 static pa_status staying_records(pa__iter *it, reint *r) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
-  size_t add[PA_NKIND] = {0, 0, 0, 0};
-  const uint8_t *kk[PA_NKIND];
+  size_t add[PA_DMESH_NKIND] = {0, 0, 0, 0};
+  const uint8_t *kk[PA_DMESH_NKIND];
   pa__dmesh_layout(dm, &r->lay);
   kk[PA_VERTEX] = r->kv;
   kk[PA_ELEMENT] = r->keep;
@@ -1204,7 +1207,7 @@ cleanup:
 static pa_status count_fresh(pa__iter *it, reint *r) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
-  for (int k = 0; k < PA_NKIND; k++)
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     for (pa_idx i = 0; i < dm->nown[k]; i++)
       if (dm->gid[k][i] > r->base[k]) r->base[k] = dm->gid[k][i];
   PA_CALLOC(r->bemit, it->npiece_local);
@@ -1234,12 +1237,13 @@ static pa_status fresh_ids(pa__iter *it, reint *r) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
   pa_gid tot = r->cnt[PA_VERTEX];
-  PA_CALL(pa__allreduce(dm->comm, r->base, PA_NKIND, MPI_INT64_T, MPI_MAX));
+  PA_CALL(
+      pa__allreduce(dm->comm, r->base, PA_DMESH_NKIND, MPI_INT64_T, MPI_MAX));
   PA_CALL(pa__agree(dm->comm, st));
-  MPI_Exscan(r->cnt, r->off, PA_NKIND, MPI_INT64_T, MPI_SUM, dm->comm);
+  MPI_Exscan(r->cnt, r->off, PA_DMESH_NKIND, MPI_INT64_T, MPI_SUM, dm->comm);
   if (it->rank == 0)
-    for (int k = 0; k < PA_NKIND; k++) r->off[k] = 0;
-  for (int k = 0; k < PA_NKIND; k++) r->off[k] += r->base[k] + 1;
+    for (int k = 0; k < PA_DMESH_NKIND; k++) r->off[k] = 0;
+  for (int k = 0; k < PA_DMESH_NKIND; k++) r->off[k] += r->base[k] + 1;
   PA_CALL(pa__allreduce(dm->comm, &tot, 1, MPI_INT64_T, MPI_SUM));
   PA_CALL(skin_vertex_ids(it, r->base[PA_VERTEX] + 1 + tot));
 cleanup:
@@ -1265,7 +1269,7 @@ static pa_status outputs_to_records(pa__iter *it, reint *r,
     pa__free(r->demit[q]);
     r->bemit[q] = r->demit[q] = NULL;
   }
-  for (int k = 0; k < PA_NKIND; k++)
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     if (r->R[k].n) {
       const size_t *po = r->R[k].poff;
       size_t fixed = pa__recs_wire(&r->R[k], 0) - (po ? po[1] - po[0] : 0);
@@ -1282,7 +1286,7 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
   reint r;
   double t0 = pa_wtime(), t1;
   memset(&r, 0, sizeof r);
-  for (int k = 0; k < PA_NKIND; k++) r.base[k] = -1;
+  for (int k = 0; k < PA_DMESH_NKIND; k++) r.base[k] = -1;
   PA_CALL(staying_elements(it, &r));
   PA_CALL(kept_entities(it, &r));
   PA_CALL(staying_records(it, &r));
@@ -1302,7 +1306,7 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
            it->rank, t1 - t0, pa_wtime() - t1);
 cleanup:
   st = pa__agree_end(dm->comm, st);
-  for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&r.R[k]);
+  for (int k = 0; k < PA_DMESH_NKIND; k++) pa__recs_free(&r.R[k]);
   pa__recs_free(&r.Rp);
   reint_free_flags(&r);
   for (int q = 0; r.bemit && q < it->npiece_local; q++) pa__free(r.bemit[q]);

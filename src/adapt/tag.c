@@ -5,8 +5,8 @@
  * An owned element is tagged when it is not user-required and either
  * carries PA_FLAG_USER (and was not produced by a remesh of this run: the
  * "done" element value) or (unless opts->user_tags_only) has an edge whose
- * length in the metric lies outside the band [PA__LEN_LO, PA__LEN_HI)
- * (metric/metric.h) or a quality below
+ * length in the metric lies outside the band [PA_METRIC_LEN_LO,
+ * PA_METRIC_LEN_HI) (metric/metric.h) or a quality below
  * opts->qual_threshold; an element produced in this run, with the looser
  * criteria below, by how much its piece's frozen skin constrained it. So
  * the loop ends (nothing tagged) only when every element of the final mesh
@@ -24,37 +24,33 @@
 
 /* Elements produced in this run are tagged again with looser criteria
  * than the others, by how much the frozen skin of their piece constrained
- * them (their done value; see criteria()):
+ * them (their done value; see criteria()). The measurements behind each
+ * bound: docs/design/ADAPT.md, "Convergence".
  *
- * - on a hot skin (PA__DONE_ON_SKIN): an edge outside [0.65, 1.5). A skin
- *   face refined by bisection (bisect.c) keeps edges a little shorter than
- *   PA__LEN_LO, which only another iteration could change, and edges just
- *   outside the range are as many as the sequential remesher leaves
- *   anywhere (2-3 % with an anisotropic metric). Tagging them with the
- *   strict range makes every iteration's borders the next one's work: 3D
- *   shell:0.1 on box3d 5 at 4 ranks took 10 iterations (3 with this
- *   range), box3d 10 -> 0.019 on 2 ranks tagged 16 k elements again (3 k).
- * - elsewhere in a piece among several (PA__DONE, PA__DONE_NEAR_SKIN): an
- *   edge outside [0.5, 1.5). The remesher relaxes its working metric at
- *   frozen skin vertices whose edges are far from the target
- *   (remesh2d/mesh_2d.c, remesh3d/mesh_3d.c) over the first ring of input
- *   elements, which may be many output layers wide: those elements come
- *   back coarser than the target, away from any hot vertex, and only
- *   another iteration refines them. With an upper bound of 2 (or none),
- *   the 2D plate of issue #19 kept 45-380 edges of length 1.5-3.5 at 2-4
- *   ranks (none at 1).
- * - made by a single piece away from its skin (PA__DONE_FREE): only what
- *   the remesher itself calls missed (an edge of 2 or more, a quality below
- *   QUAL_CLEARLY_BAD; remesh2d/driver_2d.c): another pass would remesh it
- *   the same way.
- *   With [0.5, 1.5), the sequential remesher's leftovers (0.1-0.3 % of the
- *   edges in 3D, up to 1.7 long) came back iteration after iteration (the
- *   gmsh rod at -hsiz 0.035 on 2 ranks: 184, 76, 58, 39, 26, 22, 20
- *   elements in iterations 3-9, then stalled).
+ * - on a hot skin (PA_ADAPT_DONE_ON_SKIN): an edge outside [0.65, 1.5). A
+ *   skin face refined by bisection (bisect.c) keeps edges a little shorter
+ *   than PA_METRIC_LEN_LO, which only another iteration could change, and
+ *   edges just outside the range are as many as the sequential remesher
+ *   leaves anywhere (2-3 % with an anisotropic metric): with the strict
+ *   range every iteration's borders would be the next one's work.
+ * - elsewhere in a piece among several (PA_ADAPT_DONE,
+ *   PA_ADAPT_DONE_NEAR_SKIN): an edge outside [0.5, 1.5). The remesher
+ *   relaxes its working metric at frozen skin vertices whose edges are far
+ *   from the target (remesh2d/mesh_2d.c, remesh3d/mesh_3d.c) over the first
+ *   ring of input elements, which may be many output layers wide: those
+ *   elements come back coarser than the target, away from any hot vertex,
+ *   and only another iteration refines them (an upper bound of 2 leaves
+ *   edges of 1.5 to 3.5 there).
+ * - made by a single piece away from its skin (PA_ADAPT_DONE_FREE): only
+ *   what the remesher itself calls missed (an edge of 2 or more, a quality
+ *   below QUAL_CLEARLY_BAD; remesh2d/driver_2d.c): another pass would
+ *   remesh it the same way, and with [0.5, 1.5) the sequential remesher's
+ *   leftovers (0.1-0.3 % of the edges in 3D, up to 1.7 long) would come
+ *   back iteration after iteration until the loop stalls.
  * Quality: below opts->qual_threshold, or below QUAL_CLEARLY_BAD for
- * PA__DONE and PA__DONE_FREE (the sequential remesher leaves elements
- * between the two: its worst on the gmsh rod and the UGAWG fields are
- * 0.1-0.4). */
+ * PA_ADAPT_DONE and PA_ADAPT_DONE_FREE (the sequential remesher leaves
+ * elements between the two: its worst on the gmsh rod and the UGAWG fields
+ * are 0.1-0.4). */
 #define LEN_LO_SKIN 0.65
 #define LEN_LO_DONE 0.5
 #define LEN_HI_DONE 1.5
@@ -72,15 +68,15 @@
  * value dn must meet. */
 static void criteria(uint8_t dn, double qual_threshold, double *lo,
                      double *hi, double *qmin) {
-  *lo = PA__LEN_LO;
-  *hi = PA__LEN_HI;
+  *lo = PA_METRIC_LEN_LO;
+  *hi = PA_METRIC_LEN_HI;
   *qmin = qual_threshold;
   if (!dn) return;
-  *lo = dn == PA__DONE_ON_SKIN ? LEN_LO_SKIN
-        : dn == PA__DONE_FREE  ? 0
-                               : LEN_LO_DONE;
-  *hi = dn == PA__DONE_FREE ? LEN_HI_FREE : LEN_HI_DONE;
-  if (dn == PA__DONE || dn == PA__DONE_FREE)
+  *lo = dn == PA_ADAPT_DONE_ON_SKIN ? LEN_LO_SKIN
+        : dn == PA_ADAPT_DONE_FREE  ? 0
+                                    : LEN_LO_DONE;
+  *hi = dn == PA_ADAPT_DONE_FREE ? LEN_HI_FREE : LEN_HI_DONE;
+  if (dn == PA_ADAPT_DONE || dn == PA_ADAPT_DONE_FREE)
     *qmin = fmin(QUAL_CLEARLY_BAD, qual_threshold);
 }
 
@@ -178,7 +174,7 @@ pa_status pa__adapt_count_missed(pa__iter *it, pa_gid *missed) {
   pa_status st = PA_SUCCESS;
   const pa_mesh *m = it->dm->mesh;
   double lo, hi, qmin, n = 0;
-  criteria(PA__DONE_FREE, it->opts->qual_threshold, &lo, &hi, &qmin);
+  criteria(PA_ADAPT_DONE_FREE, it->opts->qual_threshold, &lo, &hi, &qmin);
   hi = LEN_CLEARLY_OFF;
   for (pa_idx e = 0; e < it->ne; e++) {
     if (!it->tag[e]) continue;

@@ -12,14 +12,14 @@
 #include <sys/resource.h>
 #include <time.h>
 
-#define PA_MSG_LEN 1024
+#define MSG_LEN 1024
 
-static _Thread_local char pa_msg[PA_MSG_LEN];
-static atomic_size_t pa_mem_cur;
-static atomic_size_t pa_mem_peak;
-static atomic_size_t pa_mem_window; /* peak since pa__memory_window_begin */
-static atomic_long pa_fail_countdown;
-static int pa_verbose;
+static _Thread_local char last_msg[MSG_LEN];
+static atomic_size_t mem_cur;
+static atomic_size_t mem_peak;
+static atomic_size_t mem_window; /* peak since pa__memory_window_begin */
+static atomic_long fail_countdown;
+static int verbose;
 
 const char *pa_status_string(pa_status status) {
   switch (status) {
@@ -38,14 +38,14 @@ const char *pa_status_string(pa_status status) {
   return "unknown status";
 }
 
-const char *pa_last_error(void) { return pa_msg; }
+const char *pa_last_error(void) { return last_msg; }
 
-void pa_clear_error(void) { pa_msg[0] = '\0'; }
+void pa_clear_error(void) { last_msg[0] = '\0'; }
 
 pa_status pa_set_error(pa_status status, const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
-  vsnprintf(pa_msg, sizeof pa_msg, fmt ? fmt : "", ap);
+  vsnprintf(last_msg, sizeof last_msg, fmt ? fmt : "", ap);
   va_end(ap);
   return status;
 }
@@ -54,15 +54,16 @@ pa_status pa__error(pa_status code, const char *file, int line,
                     const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
-  vsnprintf(pa_msg, sizeof pa_msg, fmt, ap);
+  vsnprintf(last_msg, sizeof last_msg, fmt, ap);
   va_end(ap);
-  if (pa_verbose >= 3)
-    fprintf(stderr, "padapt: error raised at %s:%d: %s\n", file, line, pa_msg);
+  if (verbose >= 3)
+    fprintf(stderr, "padapt: error raised at %s:%d: %s\n", file, line,
+            last_msg);
   return code;
 }
 
 pa_status pa__error_trace(pa_status code, const char *file, int line) {
-  if (pa_verbose >= 3)
+  if (verbose >= 3)
     fprintf(stderr, "padapt:   propagated from %s:%d\n", file, line);
   return code;
 }
@@ -77,38 +78,38 @@ void pa__assert_fail(const char *expr, const char *file, int line) {
 
 /* ---- counting allocator ---- */
 
-#define PA_HDR 16
+#define HDR_BYTES 16
 
-static int pa_should_fail(void) {
-  long c = atomic_load(&pa_fail_countdown);
+static int should_fail(void) {
+  long c = atomic_load(&fail_countdown);
   while (c > 0) {
-    if (atomic_compare_exchange_weak(&pa_fail_countdown, &c, c - 1))
+    if (atomic_compare_exchange_weak(&fail_countdown, &c, c - 1))
       return c == 1;
   }
   return 0;
 }
 
-static void pa_count_add(size_t n) {
-  size_t cur = atomic_fetch_add(&pa_mem_cur, n) + n;
-  size_t peak = atomic_load(&pa_mem_peak);
-  while (cur > peak && !atomic_compare_exchange_weak(&pa_mem_peak, &peak, cur))
+static void count_add(size_t n) {
+  size_t cur = atomic_fetch_add(&mem_cur, n) + n;
+  size_t peak = atomic_load(&mem_peak);
+  while (cur > peak && !atomic_compare_exchange_weak(&mem_peak, &peak, cur))
     ;
-  size_t win = atomic_load(&pa_mem_window);
-  while (cur > win && !atomic_compare_exchange_weak(&pa_mem_window, &win, cur))
+  size_t win = atomic_load(&mem_window);
+  while (cur > win && !atomic_compare_exchange_weak(&mem_window, &win, cur))
     ;
 }
 
 void *pa__malloc(size_t size) {
-  if (pa_should_fail()) return NULL;
-  char *p = malloc(size + PA_HDR);
+  if (should_fail()) return NULL;
+  char *p = malloc(size + HDR_BYTES);
   if (!p) return NULL;
   memcpy(p, &size, sizeof size);
-  pa_count_add(size);
-  return p + PA_HDR;
+  count_add(size);
+  return p + HDR_BYTES;
 }
 
 void *pa__calloc(size_t nmemb, size_t size) {
-  if (size && nmemb > SIZE_MAX / size - PA_HDR) return NULL;
+  if (size && nmemb > SIZE_MAX / size - HDR_BYTES) return NULL;
   size_t n = nmemb * size;
   void *p = pa__malloc(n);
   if (p) memset(p, 0, n);
@@ -117,45 +118,45 @@ void *pa__calloc(size_t nmemb, size_t size) {
 
 void *pa__realloc(void *ptr, size_t size) {
   if (!ptr) return pa__malloc(size);
-  if (pa_should_fail()) return NULL;
-  char *base = (char *)ptr - PA_HDR;
+  if (should_fail()) return NULL;
+  char *base = (char *)ptr - HDR_BYTES;
   size_t old;
   memcpy(&old, base, sizeof old);
-  char *p = realloc(base, size + PA_HDR);
+  char *p = realloc(base, size + HDR_BYTES);
   if (!p) return NULL;
   memcpy(p, &size, sizeof size);
-  atomic_fetch_sub(&pa_mem_cur, old);
-  pa_count_add(size);
-  return p + PA_HDR;
+  atomic_fetch_sub(&mem_cur, old);
+  count_add(size);
+  return p + HDR_BYTES;
 }
 
 void pa__free(void *ptr) {
   if (!ptr) return;
-  char *base = (char *)ptr - PA_HDR;
+  char *base = (char *)ptr - HDR_BYTES;
   size_t old;
   memcpy(&old, base, sizeof old);
-  atomic_fetch_sub(&pa_mem_cur, old);
+  atomic_fetch_sub(&mem_cur, old);
   free(base);
 }
 
 size_t pa__alloc_size(const void *ptr) {
   if (!ptr) return 0;
   size_t n;
-  memcpy(&n, (const char *)ptr - PA_HDR, sizeof n);
+  memcpy(&n, (const char *)ptr - HDR_BYTES, sizeof n);
   return n;
 }
 
-size_t pa_memory_current(void) { return atomic_load(&pa_mem_cur); }
-size_t pa_memory_peak(void) { return atomic_load(&pa_mem_peak); }
+size_t pa_memory_current(void) { return atomic_load(&mem_cur); }
+size_t pa_memory_peak(void) { return atomic_load(&mem_peak); }
 void pa_memory_reset_peak(void) {
-  atomic_store(&pa_mem_peak, atomic_load(&pa_mem_cur));
+  atomic_store(&mem_peak, atomic_load(&mem_cur));
 }
 void pa__memory_window_begin(void) {
-  atomic_store(&pa_mem_window, atomic_load(&pa_mem_cur));
+  atomic_store(&mem_window, atomic_load(&mem_cur));
 }
-size_t pa__memory_window_peak(void) { return atomic_load(&pa_mem_window); }
+size_t pa__memory_window_peak(void) { return atomic_load(&mem_window); }
 void pa_memory_fail_after(long n) {
-  atomic_store(&pa_fail_countdown, n > 0 ? n : 0);
+  atomic_store(&fail_countdown, n > 0 ? n : 0);
 }
 
 size_t pa_peak_rss(void) {
@@ -199,18 +200,18 @@ size_t pa__mem_available(void) {
 
 /* ---- verbosity and time ---- */
 
-#define PA_STR_(x) #x
-#define PA_STR(x) PA_STR_(x)
+#define STR_(x) #x
+#define STR(x) STR_(x)
 const char *pa_version(void) {
-  return PA_STR(PADAPT_VERSION_MAJOR) "." PA_STR(PADAPT_VERSION_MINOR) "."
-      PA_STR(PADAPT_VERSION_PATCH);
+  return STR(PADAPT_VERSION_MAJOR) "." STR(PADAPT_VERSION_MINOR) "."
+      STR(PADAPT_VERSION_PATCH);
 }
 
-void pa_set_verbosity(int level) { pa_verbose = level; }
-int pa_verbosity(void) { return pa_verbose; }
+void pa_set_verbosity(int level) { verbose = level; }
+int pa_verbosity(void) { return verbose; }
 
 void pa__info(int level, const char *fmt, ...) {
-  if (pa_verbose < level) return;
+  if (verbose < level) return;
   va_list ap;
   va_start(ap, fmt);
   vfprintf(stderr, fmt, ap);

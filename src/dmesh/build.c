@@ -1087,7 +1087,7 @@ static void unpack_payloads(pa_dmesh *dm, int kind, const pa__recs *R,
  * each vertex record (lvof) and of each vertex global id (lv), and the local
  * mesh being filled. */
 typedef struct assembly {
-  pa_idx *ord[PA_NKIND];
+  pa_idx *ord[PA_DMESH_NKIND];
   pa_idx *lvof;
   pa__gidindex lv;
   pa_mesh *m;
@@ -1314,9 +1314,9 @@ cleanup:
  * payloads). */
 static pa_status fill_dmesh(pa_dmesh *dm, bstate *s, assembly *a) {
   pa_status st = PA_SUCCESS;
-  const pa__recs *R[PA_NKIND] = {&s->LV, &s->L, &s->LB, &s->LD};
+  const pa__recs *R[PA_DMESH_NKIND] = {&s->LV, &s->L, &s->LB, &s->LD};
   int any = 0;
-  for (int kind = 0; kind < PA_NKIND; kind++) {
+  for (int kind = 0; kind < PA_DMESH_NKIND; kind++) {
     pa_idx n = dm->nloc[kind];
     PA_ALLOC(dm->gid[kind], n);
     PA_ALLOC(dm->owner[kind], n);
@@ -1330,11 +1330,12 @@ static pa_status fill_dmesh(pa_dmesh *dm, bstate *s, assembly *a) {
     dm->layer[k] = s->layer[a->ord[PA_ELEMENT][k]];
   dm->mesh = a->m;
   a->m = NULL;
-  for (int kind = 0; kind < PA_NKIND; kind++) any |= R[kind]->poff != NULL;
+  for (int kind = 0; kind < PA_DMESH_NKIND; kind++)
+    any |= R[kind]->poff != NULL;
   if (any || dm->nvalue) {
     /* slots from the references (local); sfs are built later */
     for (int k = 0; k < dm->nvalue; k++) PA_CALL(pa__value_alloc(dm, dm->value[k]));
-    for (int kind = 0; kind < PA_NKIND; kind++)
+    for (int kind = 0; kind < PA_DMESH_NKIND; kind++)
       unpack_payloads(dm, kind, R[kind], a->ord[kind], dm->nloc[kind]);
   }
 cleanup:
@@ -1354,7 +1355,7 @@ static pa_status assemble(pa_dmesh *dm, bstate *s, const pa__layout *lay) {
   PA_CALL(fill_dmesh(dm, s, &a));
 cleanup:
   pa_mesh_destroy(a.m);
-  for (int k = 0; k < PA_NKIND; k++) pa__free(a.ord[k]);
+  for (int k = 0; k < PA_DMESH_NKIND; k++) pa__free(a.ord[k]);
   pa__free(a.lvof);
   pa__gidindex_free(&a.lv);
   return st;
@@ -1452,7 +1453,7 @@ static pa_status count_input(bstate *s, int overlap, const pa__recs *elems,
   }
   for (size_t i = 0; i < verts->n; i++)
     if (verts->gid[i] > maxg) maxg = verts->gid[i];
-  PA_CALL(pa__allreduce(s->comm, cnt_in, PA_NKIND, MPI_INT64_T, MPI_SUM));
+  PA_CALL(pa__allreduce(s->comm, cnt_in, PA_DMESH_NKIND, MPI_INT64_T, MPI_SUM));
   PA_CALL(pa__allreduce(s->comm, &maxg, 1, MPI_INT64_T, MPI_MAX));
   dir_init(&s->vdir, maxg, s->size);
 cleanup:
@@ -1508,10 +1509,10 @@ static void drop_directory(bstate *s) {
  * which is an error. */
 static pa_status check_totals(pa_dmesh *dm, const pa_gid *cnt_in) {
   pa_status st = PA_SUCCESS;
-  pa_gid own[PA_NKIND];
-  for (int k = 0; k < PA_NKIND; k++) own[k] = dm->nown[k];
-  PA_CALL(pa__allreduce(dm->comm, own, PA_NKIND, MPI_INT64_T, MPI_SUM));
-  for (int k = 0; k < PA_NKIND; k++) dm->nglob[k] = own[k];
+  pa_gid own[PA_DMESH_NKIND];
+  for (int k = 0; k < PA_DMESH_NKIND; k++) own[k] = dm->nown[k];
+  PA_CALL(pa__allreduce(dm->comm, own, PA_DMESH_NKIND, MPI_INT64_T, MPI_SUM));
+  for (int k = 0; k < PA_DMESH_NKIND; k++) dm->nglob[k] = own[k];
   PA_CHECK(own[PA_VERTEX] == cnt_in[PA_VERTEX], PA_ERR_MESH,
            "%lld of %lld vertices belong to no element",
            (long long)(cnt_in[PA_VERTEX] - own[PA_VERTEX]),
@@ -1535,7 +1536,7 @@ static pa_status neighbour_ranks(pa_dmesh *dm) {
   uint8_t *mark = NULL;
   int nn = 0;
   PA_CALLOC(mark, dm->size);
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     for (int r = 0; r < dm->sf[k].nrootrank; r++) mark[dm->sf[k].rootrank[r]] = 1;
     for (int r = 0; r < dm->sf[k].nleafrank; r++) mark[dm->sf[k].leafrank[r]] = 1;
   }
@@ -1556,7 +1557,7 @@ pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
                                pa__recs *priv) {
   pa_status st = PA_SUCCESS;
   bstate s;
-  pa_gid cnt_in[PA_NKIND];
+  pa_gid cnt_in[PA_DMESH_NKIND];
   double t0 = pa_wtime();
   int ndbl = pa__layout_ndbl(lay);
   bstate_init(&s, dm, ndbl);
@@ -1586,7 +1587,7 @@ pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
   PA_CALL(check_totals(dm, cnt_in));
   /* 11. star forests, neighbour ranks, value exchanges */
   PA_CALL(pa__agree(dm->comm, PA_SUCCESS));
-  for (int k = 0; k < PA_NKIND; k++)
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     PA_CALL(pa__sf_build(dm->comm, dm->nloc[k], dm->gid[k], dm->owner[k],
                          &dm->sf[k]));
   PA_CALL(neighbour_ranks(dm));

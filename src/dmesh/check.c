@@ -156,7 +156,7 @@ static pa_status check_local(pa_dmesh *dm) {
                m->nb == dm->nloc[PA_BOUNDARY] && m->ned == dm->nloc[PA_EDGE],
            PA_ERR_MESH, "rank %d: local mesh counts differ from the dmesh's",
            dm->rank);
-  for (int k = 0; k < PA_NKIND; k++)
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     for (pa_idx i = 0; i < dm->nloc[k]; i++) {
       PA_CHECK((dm->owner[k][i] == dm->rank) == (i < dm->nown[k]), PA_ERR_MESH,
                "rank %d: local %s %d (gid %lld, owner %d) breaks the owned-first "
@@ -219,7 +219,7 @@ static pa_status check_ghosts(pa_dmesh *dm) {
              arr[q].what);
   }
   /* connectivity, by vertex global ids */
-  for (int k = PA_ELEMENT; k < PA_NKIND; k++) {
+  for (int k = PA_ELEMENT; k < PA_DMESH_NKIND; k++) {
     int nv = pa__kind_nv(d, k);
     const pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
     pa_idx n = dm->nloc[k], bad;
@@ -281,7 +281,7 @@ static pa_status check_ownership(pa_dmesh *dm) {
   uint8_t *cand = NULL;
   pa_idx *vstart = NULL, *vel = NULL;
   PA_CALL(pa__balls(m->elem, m->ne, dm->dim + 1, m->nv, &vstart, &vel));
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     pa__free(cand);
     cand = NULL;
     PA_CALLOC(cand, dm->nloc[k]);
@@ -299,10 +299,10 @@ cleanup:
 /* The owned entities of every kind add up to the global counts. */
 static pa_status check_global_counts(pa_dmesh *dm) {
   pa_status st = PA_SUCCESS;
-  pa_gid own[PA_NKIND];
-  for (int k = 0; k < PA_NKIND; k++) own[k] = dm->nown[k];
-  PA_CALL(pa__allreduce(dm->comm, own, PA_NKIND, MPI_INT64_T, MPI_SUM));
-  for (int k = 0; k < PA_NKIND; k++)
+  pa_gid own[PA_DMESH_NKIND];
+  for (int k = 0; k < PA_DMESH_NKIND; k++) own[k] = dm->nown[k];
+  PA_CALL(pa__allreduce(dm->comm, own, PA_DMESH_NKIND, MPI_INT64_T, MPI_SUM));
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     PA_CHECK(own[k] == dm->nglob[k], PA_ERR_MESH,
              "%lld %s entities owned, %lld expected", (long long)own[k],
              kind_name(k), (long long)dm->nglob[k]);
@@ -360,7 +360,7 @@ static void sort_u64(uint64_t *a, int n) {
 
 pa_status pa_dmesh_checksum(pa_dmesh *dm, uint64_t *checksum) {
   pa_status st = PA_SUCCESS;
-  uint64_t *hv = NULL, *he[PA_NKIND] = {NULL};
+  uint64_t *hv = NULL, *he[PA_DMESH_NKIND] = {NULL};
   uint64_t sum = 0;
   PA_CHECK(dm && checksum, PA_ERR_ARG, "pa_dmesh_checksum: NULL argument");
   pa__agree_reset();
@@ -373,7 +373,7 @@ pa_status pa_dmesh_checksum(pa_dmesh *dm, uint64_t *checksum) {
     hv[v] = h;
     if (v < dm->nown[PA_VERTEX]) sum += hash_bytes(h, &m->vflag[v], 1);
   }
-  for (int k = PA_ELEMENT; k < PA_NKIND; k++) {
+  for (int k = PA_ELEMENT; k < PA_DMESH_NKIND; k++) {
     int nv = pa__kind_nv(d, k);
     const pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
     const int32_t *ref = k == PA_ELEMENT ? m->eref : k == PA_BOUNDARY ? m->bref : m->edref;
@@ -408,7 +408,7 @@ cleanup:
     }
   }
   pa__free(hv);
-  for (int k = 0; k < PA_NKIND; k++) pa__free(he[k]);
+  for (int k = 0; k < PA_DMESH_NKIND; k++) pa__free(he[k]);
   return st;
 }
 

@@ -62,11 +62,11 @@ enum {
 };
 
 /* Words per rank in a manifest: file counts (V, E, B, D), bytes, checksum. */
-enum { MF_COUNT = 0, MF_BYTES = PA_NKIND, MF_HASH, MF_WORDS };
+enum { MF_COUNT = 0, MF_BYTES = PA_DMESH_NKIND, MF_HASH, MF_WORDS };
 
 /* Entity kinds as messages name them. */
-static const char *const kind_name[PA_NKIND] = {"vertices", "elements",
-                                                "boundary entities", "edges"};
+static const char *const kind_name[PA_DMESH_NKIND] = {
+    "vertices", "elements", "boundary entities", "edges"};
 
 /* Header words. */
 enum { H_FORMAT, H_NRANKS, H_RANK, H_DIM, H_NGLOB, H_NFILE = H_NGLOB + 4,
@@ -117,7 +117,7 @@ typedef struct kwfile {
 
 /* Reopen path, a Medit file completed in the open output transaction, to
  * append keywords after its End. */
-static pa_status kw_open_append(kwfile *k, pa_outfile *out, const char *path) {
+static pa_status kw_open_append(kwfile *k, pa__outfile *out, const char *path) {
   pa_status st = PA_SUCCESS;
   int32_t h[2];
   memset(k, 0, sizeof *k);
@@ -182,7 +182,7 @@ cleanup:
 }
 
 /* Write the final End and complete the file (pa__out_commit). */
-static pa_status kw_close(kwfile *k, pa_outfile *out) {
+static pa_status kw_close(kwfile *k, pa__outfile *out) {
   pa_status st = PA_SUCCESS;
   int32_t end = KW_END;
   int64_t zero = 0;
@@ -203,7 +203,7 @@ cleanup:
  * bytes of data). type: code of a predefined MPI type (value_type), 0 for
  * the bytes of a derived type (read back as MPI_BYTE x unit). */
 typedef struct vdesc {
-  char name[PA_VALUE_NAME_LEN];
+  char name[PA_DMESH_VALUE_NAME_LEN];
   int32_t kind, ref, ncomp, type;
   int64_t count; /* file entities holding the value */
 } vdesc;
@@ -263,11 +263,11 @@ static void vdesc_of(const pa_dmesh_value *v, int64_t count, vdesc *d) {
 
 typedef struct dfile {
   int64_t h[H_WORDS];
-  pa_gid *gid[PA_NKIND];
-  int32_t *owner[PA_NKIND];
+  pa_gid *gid[PA_DMESH_NKIND];
+  int32_t *owner[PA_DMESH_NKIND];
   int met_ncomp, nfield;
-  char fieldname[PA_MAX_FIELDS][PA_FIELD_NAME_LEN];
-  int32_t fieldncomp[PA_MAX_FIELDS];
+  char fieldname[PA_MESH_MAX_FIELDS][PA_MESH_FIELD_NAME_LEN];
+  int32_t fieldncomp[PA_MESH_MAX_FIELDS];
   double *vdbl;
   uint8_t *flags;
   int have_header;
@@ -277,7 +277,7 @@ typedef struct dfile {
 } dfile;
 
 static void dfile_free(dfile *f) {
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     pa__free(f->gid[k]);
     pa__free(f->owner[k]);
   }
@@ -339,7 +339,7 @@ static pa_status read_header_kw(FILE *fp, const char *path, int64_t room,
   PA_CHECK(f->h[H_FORMAT] == FORMAT_VERSION, PA_ERR_UNSUPPORTED,
            "%s: distributed format version %lld, expected %d", path,
            (long long)f->h[H_FORMAT], FORMAT_VERSION);
-  for (int k = 0; k < PA_NKIND; k++)
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     PA_CHECK(H[H_NFILE + k] >= 0 && H[H_NFILE + k] < INT32_MAX &&
                  H[H_NGLOB + k] >= 0,
              PA_ERR_FORMAT, "%s: bad counts in the header", path);
@@ -356,17 +356,18 @@ static pa_status read_vdbl_kw(FILE *fp, const char *path, int64_t room,
   int32_t mn[2];
   void *p = NULL;
   PA_CHECK(f->have_header && room >= 8 && fread(mn, 4, 2, fp) == 2 &&
-               mn[0] >= 0 && mn[0] <= 6 && mn[1] >= 0 && mn[1] <= PA_MAX_FIELDS,
+               mn[0] >= 0 && mn[0] <= 6 && mn[1] >= 0 &&
+               mn[1] <= PA_MESH_MAX_FIELDS,
            PA_ERR_FORMAT, "%s: bad vertex data keyword", path);
   f->met_ncomp = mn[0];
   f->nfield = mn[1];
   int nd = mn[0];
   for (int q = 0; q < f->nfield; q++) {
-    PA_CHECK(fread(f->fieldname[q], PA_FIELD_NAME_LEN, 1, fp) == 1 &&
+    PA_CHECK(fread(f->fieldname[q], PA_MESH_FIELD_NAME_LEN, 1, fp) == 1 &&
                  fread(&f->fieldncomp[q], 4, 1, fp) == 1 &&
                  f->fieldncomp[q] > 0 && f->fieldncomp[q] < 1000,
              PA_ERR_FORMAT, "%s: bad field description", path);
-    f->fieldname[q][PA_FIELD_NAME_LEN - 1] = '\0';
+    f->fieldname[q][PA_MESH_FIELD_NAME_LEN - 1] = '\0';
     nd += f->fieldncomp[q];
   }
   room = (next ? next : INT64_MAX) - ftello(fp);
@@ -386,8 +387,8 @@ static pa_status read_value_kw(FILE *fp, const char *path, int64_t room,
   PA_CHECK(f->have_header && room >= (int64_t)sizeof d &&
                fread(&d, sizeof d, 1, fp) == 1,
            PA_ERR_FORMAT, "%s: truncated value keyword", path);
-  d.name[PA_VALUE_NAME_LEN - 1] = '\0';
-  PA_CHECK(d.kind >= 0 && d.kind < PA_NKIND && d.ncomp >= 1 &&
+  d.name[PA_DMESH_VALUE_NAME_LEN - 1] = '\0';
+  PA_CHECK(d.kind >= 0 && d.kind < PA_DMESH_NKIND && d.ncomp >= 1 &&
                d.ncomp < (1 << 24) && d.ref >= -1 && d.type >= 1 &&
                d.type <= NVALUE_TYPES + 1 && d.count >= 0 &&
                d.count <= H[H_NFILE + d.kind] && f->nval < 4096,
@@ -440,7 +441,7 @@ static pa_status read_keyword(FILE *fp, const char *path, int32_t code,
     break;
   case KW_FLAGS: {
     size_t n = 0;
-    for (int k = 0; k < PA_NKIND; k++) n += (size_t)H[H_NFILE + k];
+    for (int k = 0; k < PA_DMESH_NKIND; k++) n += (size_t)H[H_NFILE + k];
     PA_CHECK(f->have_header, PA_ERR_FORMAT, "%s: flags before the header", path);
     PA_CALL(read_block(fp, path, &p, n, room));
     f->flags = p;
@@ -499,8 +500,8 @@ cleanup:
  * (vd: nd values per file vertex, metric first), global ids, ghost types
  * and rank (pa__vtu_write). */
 static pa_status write_vtu(const pa_dmesh *dm, pa_mesh *fm,
-                           pa_idx *const map[PA_NKIND],
-                           const pa_idx nfile[PA_NKIND], const double *vd,
+                           pa_idx *const map[PA_DMESH_NKIND],
+                           const pa_idx nfile[PA_DMESH_NKIND], const double *vd,
                            int nd, const char *path) {
   pa_status st = PA_SUCCESS;
   const pa_mesh *m = dm->mesh;
@@ -557,7 +558,7 @@ cleanup:
 /* The ParaView index of the rank files: the arrays write_vtu gives each. */
 static pa_status write_pvtu(const char *base, int nranks, const pa_mesh *m) {
   pa_status st = PA_SUCCESS;
-  pa_outfile out;
+  pa__outfile out;
   char path[4200];
   const char *slash = strrchr(base, '/');
   const char *name = slash ? slash + 1 : base;
@@ -605,7 +606,7 @@ cleanup:
 static pa_status write_manifest(const char *base, const pa_dmesh *dm,
                                 const int64_t *info) {
   pa_status st = PA_SUCCESS;
-  pa_outfile out;
+  pa__outfile out;
   char path[4200];
   memset(&out, 0, sizeof out);
   manifest_path(base, path, sizeof path);
@@ -658,7 +659,7 @@ cleanup:
 /* A manifest as read: nranks lines of MF_WORDS. */
 typedef struct manifest {
   int nranks, dim;
-  int64_t nglob[PA_NKIND];
+  int64_t nglob[PA_DMESH_NKIND];
   int64_t *rk;
 } manifest;
 
@@ -668,7 +669,7 @@ static pa_status manifest_read(const char *path, manifest *mf) {
   FILE *fp = NULL;
   char line[512];
   int lno = 0, ver = 0, n = -1;
-  long long a[PA_NKIND + 2];
+  long long a[PA_DMESH_NKIND + 2];
   memset(mf, 0, sizeof *mf);
   fp = fopen(path, "r");
   PA_CHECK(fp, PA_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
@@ -700,7 +701,7 @@ static pa_status manifest_read(const char *path, manifest *mf) {
   PA_CHECK(sscanf(line, "global vertices %lld elements %lld boundary %lld edges %lld %n",
                   &a[0], &a[1], &a[2], &a[3], &n) == 4 && line[n] == '\0',
            PA_ERR_FORMAT, "%s:%d: expected the global counts", path, lno);
-  for (int k = 0; k < PA_NKIND; k++) mf->nglob[k] = a[k];
+  for (int k = 0; k < PA_DMESH_NKIND; k++) mf->nglob[k] = a[k];
   PA_ALLOC(mf->rk, (size_t)MF_WORDS * mf->nranks);
   for (int r = 0; r < mf->nranks; r++) {
     int rr = -1;
@@ -714,7 +715,7 @@ static pa_status manifest_read(const char *path, manifest *mf) {
                  line[n] == '\0' && rr == r,
              PA_ERR_FORMAT, "%s:%d: expected the line of rank %d", path, lno, r);
     int64_t *w = mf->rk + (size_t)MF_WORDS * r;
-    for (int k = 0; k < PA_NKIND; k++) w[MF_COUNT + k] = a[k];
+    for (int k = 0; k < PA_DMESH_NKIND; k++) w[MF_COUNT + k] = a[k];
     w[MF_BYTES] = a[4];
     w[MF_HASH] = (int64_t)h;
   }
@@ -756,13 +757,14 @@ cleanup:
 /* The file mesh of this rank: owned elements, their vertices, the boundary
  * entities and edges they contain. map[k][i] = file index of local entity i
  * of kind k, or -1. */
-static pa_status file_mesh(pa_dmesh *dm, pa_mesh **fmp, pa_idx *map[PA_NKIND],
-                           pa_idx nfile[PA_NKIND]) {
+static pa_status file_mesh(pa_dmesh *dm, pa_mesh **fmp,
+                           pa_idx *map[PA_DMESH_NKIND],
+                           pa_idx nfile[PA_DMESH_NKIND]) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = dm->mesh, *fm = NULL;
   int d = dm->dim;
   pa_idx ne = dm->nown[PA_ELEMENT], *vstart = NULL, *vel = NULL;
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     PA_ALLOC(map[k], dm->nloc[k]);
     for (pa_idx i = 0; i < dm->nloc[k]; i++) map[k][i] = -1;
   }
@@ -875,11 +877,11 @@ cleanup:
 typedef struct dwriter {
   pa_dmesh *dm;
   pa_mesh *fm;
-  pa_idx *map[PA_NKIND], nfile[PA_NKIND];
+  pa_idx *map[PA_DMESH_NKIND], nfile[PA_DMESH_NKIND];
   int words;
   uint64_t *mask;
   kwfile kw;
-  pa_outfile kwout;
+  pa__outfile kwout;
   double *vd;
   int nd;
   int64_t info[MF_WORDS];
@@ -948,7 +950,7 @@ static pa_status write_ids(dwriter *w) {
   h[H_NRANKS] = dm->size;
   h[H_RANK] = dm->rank;
   h[H_DIM] = dm->dim;
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     h[H_NGLOB + k] = dm->nglob[k];
     h[H_NFILE + k] = w->nfile[k];
   }
@@ -956,12 +958,13 @@ static pa_status write_ids(dwriter *w) {
   h[H_NFIELD] = m->nfield;
   PA_CALL(kw_write(&w->kw, KW_HEADER, h, sizeof h, NULL, 0, NULL, 0));
   pa_idx nmax = 0;
-  for (int k = 0; k < PA_NKIND; k++) nmax = w->nfile[k] > nmax ? w->nfile[k] : nmax;
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
+    nmax = w->nfile[k] > nmax ? w->nfile[k] : nmax;
   PA_ALLOC(g, nmax);
   PA_ALLOC(o, nmax);
-  static const int kwg[PA_NKIND] = {KW_VGID, KW_EGID, KW_BGID, KW_DGID};
-  static const int kwo[PA_NKIND] = {KW_VOWNER, 0, KW_BOWNER, KW_DOWNER};
-  for (int k = 0; k < PA_NKIND; k++) {
+  static const int kwg[PA_DMESH_NKIND] = {KW_VGID, KW_EGID, KW_BGID, KW_DGID};
+  static const int kwo[PA_DMESH_NKIND] = {KW_VOWNER, 0, KW_BOWNER, KW_DOWNER};
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     for (pa_idx i = 0; i < dm->nloc[k]; i++)
       if (w->map[k][i] >= 0) {
         g[w->map[k][i]] = dm->gid[k][i];
@@ -998,14 +1001,17 @@ static pa_status write_vertex_doubles(dwriter *w) {
       x += m->field[q].ncomp;
     }
   }
-  size_t dl = 8 + (size_t)m->nfield * (PA_FIELD_NAME_LEN + 4);
+  size_t dl = 8 + (size_t)m->nfield * (PA_MESH_FIELD_NAME_LEN + 4);
   PA_CALLOC(fdesc, dl);
   int32_t mn[2] = {m->met_ncomp, m->nfield};
   memcpy(fdesc, mn, 8);
   for (int q = 0; q < m->nfield; q++) {
-    memcpy(fdesc + 8 + (size_t)q * (PA_FIELD_NAME_LEN + 4), m->field[q].name, PA_FIELD_NAME_LEN);
+    memcpy(fdesc + 8 + (size_t)q * (PA_MESH_FIELD_NAME_LEN + 4),
+           m->field[q].name, PA_MESH_FIELD_NAME_LEN);
     int32_t nc = m->field[q].ncomp;
-    memcpy(fdesc + 8 + (size_t)q * (PA_FIELD_NAME_LEN + 4) + PA_FIELD_NAME_LEN, &nc, 4);
+    memcpy(fdesc + 8 + (size_t)q * (PA_MESH_FIELD_NAME_LEN + 4) +
+               PA_MESH_FIELD_NAME_LEN,
+           &nc, 4);
   }
   PA_CALL(kw_write(&w->kw, KW_VDBL, fdesc, dl, w->vd, sizeof(double) * nd * w->nfile[PA_VERTEX], NULL, 0));
 cleanup:
@@ -1020,10 +1026,11 @@ static pa_status write_flags(dwriter *w) {
   const pa_mesh *m = dm->mesh;
   uint8_t *flags = NULL;
   size_t nf = 0, off = 0;
-  for (int k = 0; k < PA_NKIND; k++) nf += (size_t)w->nfile[k];
+  for (int k = 0; k < PA_DMESH_NKIND; k++) nf += (size_t)w->nfile[k];
   PA_ALLOC(flags, nf);
-  const uint8_t *src[PA_NKIND] = {m->vflag, m->eflag, m->bflag, m->edflag};
-  for (int k = 0; k < PA_NKIND; k++) {
+  const uint8_t *src[PA_DMESH_NKIND] = {m->vflag, m->eflag, m->bflag,
+                                        m->edflag};
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     for (pa_idx i = 0; i < dm->nloc[k]; i++)
       if (w->map[k][i] >= 0) flags[off + w->map[k][i]] = src[k][i];
     off += (size_t)w->nfile[k];
@@ -1081,7 +1088,7 @@ static pa_status manifest_line(dwriter *w, const char *fpath) {
   PA_CHECK(tmp, PA_ERR_INTERNAL, "%s: its temporary is not listed", fpath);
   PA_CALL(pa__file_fnv1a64(tmp, &w->info[MF_BYTES], &hash));
   w->info[MF_HASH] = (int64_t)hash;
-  for (int k = 0; k < PA_NKIND; k++) w->info[MF_COUNT + k] = w->nfile[k];
+  for (int k = 0; k < PA_DMESH_NKIND; k++) w->info[MF_COUNT + k] = w->nfile[k];
 cleanup:
   return st;
 }
@@ -1134,7 +1141,7 @@ cleanup:
   else if (dm) st = pa__agree_end(dm->comm, st);
   pa__free(all);
   pa_mesh_destroy(w.fm);
-  for (int k = 0; k < PA_NKIND; k++) pa__free(w.map[k]);
+  for (int k = 0; k < PA_DMESH_NKIND; k++) pa__free(w.map[k]);
   pa__free(w.mask);
   pa__free(w.vd);
   return st;
@@ -1215,7 +1222,7 @@ static pa_status file_records(const char *path, int f, int nwriters,
                          me, dbl, pay, plen));
   }
   size_t foff = (size_t)fm->nv;
-  for (int k = PA_ELEMENT; k < PA_NKIND; k++) {
+  for (int k = PA_ELEMENT; k < PA_DMESH_NKIND; k++) {
     int nv = pa__kind_nv(d, k);
     pa_idx n = (pa_idx)h[H_NFILE + k];
     const pa_idx *conn = k == PA_ELEMENT ? fm->elem : k == PA_BOUNDARY ? fm->bdry : fm->edge;
@@ -1258,7 +1265,7 @@ typedef struct rset {
   pa__layout lay;
   vdesc *vals;
   int nval;
-  pa__recs R[PA_NKIND];
+  pa__recs R[PA_DMESH_NKIND];
 } rset;
 
 /* On rank 0: the manifest (or, without one, rank 0's file) fixes the number
@@ -1293,7 +1300,7 @@ static pa_status read_first_file(rset *s) {
              "%s: written by %lld ranks in %lldD, its manifest %s lists %d "
              "ranks in %dD", fpath, (long long)hdr[H_NRANKS],
              (long long)hdr[H_DIM], s->mpath, s->mf.nranks, s->mf.dim);
-    for (int k = 0; k < PA_NKIND; k++)
+    for (int k = 0; k < PA_DMESH_NKIND; k++)
       PA_CHECK(hdr[H_NGLOB + k] == s->mf.nglob[k], PA_ERR_FORMAT,
                "%s: global counts differ from its manifest %s", fpath,
                s->mpath);
@@ -1346,7 +1353,7 @@ static pa_status read_my_files(rset *s) {
   pa_mesh *fm = NULL;
   int nw = s->nw;
   memset(&df, 0, sizeof df);
-  for (int k = 0; k < PA_NKIND; k++)
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     pa__recs_init(&s->R[k], k, pa__kind_nv(s->lay.dim, k),
                   k == PA_VERTEX ? pa__layout_ndbl(&s->lay) : 0);
   int f0 = (int)((int64_t)s->rank * nw / s->size),
@@ -1362,12 +1369,12 @@ static pa_status read_my_files(rset *s) {
     PA_CALL(pa_mesh_read(fpath, &fm));
     PA_CALL(file_records(fpath, f, nw, &df, fm, &s->lay, s->vals, s->nval,
                          s->rank, s->R));
-    for (int k = 0; w && k < PA_NKIND; k++)
+    for (int k = 0; w && k < PA_DMESH_NKIND; k++)
       PA_CHECK(df.h[H_NFILE + k] == w[MF_COUNT + k], PA_ERR_FORMAT,
                "%s: %lld %s, its manifest %s lists %lld", fpath,
                (long long)df.h[H_NFILE + k], kind_name[k], s->mpath,
                (long long)w[MF_COUNT + k]);
-    for (int k = 0; k < PA_NKIND; k++)
+    for (int k = 0; k < PA_DMESH_NKIND; k++)
       PA_CHECK(df.h[H_NGLOB + k] == s->hdr[H_NGLOB + k], PA_ERR_FORMAT,
                "%s: global counts differ from rank 0's file", fpath);
     pa_mesh_destroy(fm);
@@ -1384,10 +1391,10 @@ cleanup:
  * records read against the header, and their global ids unique. */
 static pa_status check_set_counts(rset *s) {
   pa_status st = PA_SUCCESS;
-  int64_t n[PA_NKIND];
-  for (int k = 0; k < PA_NKIND; k++) n[k] = (int64_t)s->R[k].n;
-  PA_CALL(pa__allreduce(s->comm, n, PA_NKIND, MPI_INT64_T, MPI_SUM));
-  for (int k = 0; k < PA_NKIND; k++)
+  int64_t n[PA_DMESH_NKIND];
+  for (int k = 0; k < PA_DMESH_NKIND; k++) n[k] = (int64_t)s->R[k].n;
+  PA_CALL(pa__allreduce(s->comm, n, PA_DMESH_NKIND, MPI_INT64_T, MPI_SUM));
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     PA_CHECK(n[k] == s->hdr[H_NGLOB + k], PA_ERR_FORMAT,
              "%s: inconsistent distributed set: the files own %lld %s, the "
              "header says %lld", s->path, (long long)n[k], kind_name[k],
@@ -1448,7 +1455,7 @@ static pa_status read_set(MPI_Comm comm, const char *path, int overlap,
 cleanup:
   st = pa__agree_end(comm, st);
   pa__free(s.mf.rk);
-  for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&s.R[k]);
+  for (int k = 0; k < PA_DMESH_NKIND; k++) pa__recs_free(&s.R[k]);
   pa_dmesh_destroy(dm);
   pa__free(s.vals);
   return st;

@@ -19,9 +19,9 @@
 
 typedef struct header {
   int dim, met_ncomp, nfield, ok;
-  int fieldncomp[PA_MAX_FIELDS];
-  char fieldname[PA_MAX_FIELDS][PA_FIELD_NAME_LEN];
-  int64_t n[PA_NKIND]; /* vertices, elements, boundary, edges */
+  int fieldncomp[PA_MESH_MAX_FIELDS];
+  char fieldname[PA_MESH_MAX_FIELDS][PA_MESH_FIELD_NAME_LEN];
+  int64_t n[PA_DMESH_NKIND]; /* vertices, elements, boundary, edges */
 } header;
 
 /* Check that every connectivity index of the root mesh is in range. */
@@ -51,10 +51,10 @@ static pa_status pack_block(pa_mesh *m, const pa__layout *lay, int r, int P,
                             pa__buf *b) {
   pa_status st = PA_SUCCESS;
   int d = m->dim, ndbl = pa__layout_ndbl(lay);
-  int64_t n[PA_NKIND] = {m->nv, m->ne, m->nb, m->ned}, lo[PA_NKIND],
-          cnt[PA_NKIND];
+  int64_t n[PA_DMESH_NKIND] = {m->nv, m->ne, m->nb, m->ned}, lo[PA_DMESH_NKIND],
+          cnt[PA_DMESH_NKIND];
   size_t bytes = 0;
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     lo[k] = n[k] * r / P;
     cnt[k] = n[k] * (r + 1) / P - lo[k];
     bytes += pa__recblock_bytes(pa__kind_nv(d, k), k == PA_VERTEX ? ndbl : 0,
@@ -62,7 +62,7 @@ static pa_status pack_block(pa_mesh *m, const pa__layout *lay, int r, int P,
   }
   b->n = 0;
   PA_CALL(pa__buf_reserve(b, bytes));
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     int nv = pa__kind_nv(d, k);
     size_t c = (size_t)cnt[k], l = (size_t)lo[k];
     pa__recblock B;
@@ -109,7 +109,8 @@ cleanup:
 static pa_status unpack_block(const unsigned char *p, size_t n, pa__recs *R) {
   pa_status st = PA_SUCCESS;
   size_t pos = 0;
-  for (int k = 0; k < PA_NKIND; k++) PA_CALL(pa__recs_get(&R[k], p, &pos));
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
+    PA_CALL(pa__recs_get(&R[k], p, &pos));
   PA_CHECK(pos == n, PA_ERR_INTERNAL, "block of %zu bytes, %zu read", n, pos);
 cleanup:
   return st;
@@ -136,7 +137,8 @@ static pa_status bcast_header(MPI_Comm comm, int root, pa_mesh *mesh,
     h->nfield = mesh->nfield;
     for (int f = 0; f < mesh->nfield; f++) {
       h->fieldncomp[f] = mesh->field[f].ncomp;
-      snprintf(h->fieldname[f], PA_FIELD_NAME_LEN, "%s", mesh->field[f].name);
+      snprintf(h->fieldname[f], PA_MESH_FIELD_NAME_LEN, "%s",
+               mesh->field[f].name);
     }
     h->n[PA_VERTEX] = mesh->nv;
     h->n[PA_ELEMENT] = mesh->ne;
@@ -204,7 +206,7 @@ pa_status pa_dmesh_distribute(MPI_Comm comm, int root, pa_mesh *mesh,
   header h;
   pa__layout lay;
   pa_dmesh *dm = NULL;
-  pa__recs R[PA_NKIND];
+  pa__recs R[PA_DMESH_NKIND];
   double t0 = pa_wtime(), t1, t2;
   memset(&h, 0, sizeof h);
   memset(&lay, 0, sizeof lay);
@@ -219,7 +221,7 @@ pa_status pa_dmesh_distribute(MPI_Comm comm, int root, pa_mesh *mesh,
   memcpy(lay.fieldncomp, h.fieldncomp, sizeof lay.fieldncomp);
   memcpy(lay.fieldname, h.fieldname, sizeof lay.fieldname);
   PA_CALL(pa__dmesh_create(comm, h.dim, &dm));
-  for (int k = 0; k < PA_NKIND; k++)
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     pa__recs_init(&R[k], k, pa__kind_nv(h.dim, k),
                   k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
   /* scatter from the root, partition the blocks, then migrate */
@@ -234,7 +236,7 @@ pa_status pa_dmesh_distribute(MPI_Comm comm, int root, pa_mesh *mesh,
   *dmp = dm;
   dm = NULL;
 cleanup:
-  for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&R[k]);
+  for (int k = 0; k < PA_DMESH_NKIND; k++) pa__recs_free(&R[k]);
   pa_dmesh_destroy(dm);
   return st;
 }
@@ -766,7 +768,7 @@ pa_status pa_dmesh_redistribute(pa_dmesh *dm, const int *newpart,
   pa_status st = PA_SUCCESS;
   int *part = NULL;
   pa_gid *vg = NULL;
-  pa__recs R[PA_NKIND];
+  pa__recs R[PA_DMESH_NKIND];
   pa__layout lay;
   memset(R, 0, sizeof R);
   PA_CHECK(dm, PA_ERR_ARG, "pa_dmesh_redistribute: NULL dmesh");
@@ -804,7 +806,7 @@ pa_status pa_dmesh_redistribute(pa_dmesh *dm, const int *newpart,
                           &R[PA_BOUNDARY], &R[PA_EDGE]));
 cleanup:
   if (dm) st = pa__agree_end(dm->comm, st);
-  for (int k = 0; k < PA_NKIND; k++) pa__recs_free(&R[k]);
+  for (int k = 0; k < PA_DMESH_NKIND; k++) pa__recs_free(&R[k]);
   pa__free(part);
   pa__free(vg);
   return st;
@@ -823,9 +825,9 @@ static void gather_layout(pa_dmesh *dm, pa__layout *lay, int *vals,
                           int *nvals) {
   pa__dmesh_layout(dm, lay);
   *nvals = 0;
-  for (int k = 0; k < dm->nvalue && lay->nfield < PA_MAX_FIELDS; k++)
+  for (int k = 0; k < dm->nvalue && lay->nfield < PA_MESH_MAX_FIELDS; k++)
     if (gather_value(dm->value[k])) {
-      snprintf(lay->fieldname[lay->nfield], PA_FIELD_NAME_LEN, "%s",
+      snprintf(lay->fieldname[lay->nfield], PA_MESH_FIELD_NAME_LEN, "%s",
                dm->value[k]->name);
       lay->fieldncomp[lay->nfield++] = dm->value[k]->ncomp;
       vals[(*nvals)++] = k;
@@ -877,10 +879,10 @@ cleanup:
 static pa_status pack_records(pa__recs *R, pa__recs *A, pa__buf *b) {
   pa_status st = PA_SUCCESS;
   size_t bytes = 0;
-  for (int k = 0; k < PA_NKIND; k++)
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     bytes += pa__recblock_bytes(R[k].nv, R[k].ndbl, R[k].n, 0);
   PA_CALL(pa__buf_reserve(b, bytes));
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     b->n += pa__recs_put(&R[k], NULL, R[k].n, b->p + b->n);
     int kind = R[k].kind, nv = R[k].nv, nd = R[k].ndbl;
     pa__recs_free(&R[k]);
@@ -928,16 +930,16 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, pa__recs *A,
   m->met_ncomp = lay->met_ncomp;
   m->nfield = lay->nfield;
   for (int f = 0; f < lay->nfield; f++) {
-    snprintf(m->field[f].name, PA_FIELD_NAME_LEN, "%s", lay->fieldname[f]);
+    snprintf(m->field[f].name, PA_MESH_FIELD_NAME_LEN, "%s", lay->fieldname[f]);
     m->field[f].ncomp = lay->fieldncomp[f];
   }
   PA_CALL(pa_mesh_reserve(m, (pa_idx)A[0].n, (pa_idx)A[1].n, (pa_idx)A[2].n,
                           (pa_idx)A[3].n));
   size_t nmax = 0;
-  for (int k = 0; k < PA_NKIND; k++) nmax = A[k].n > nmax ? A[k].n : nmax;
+  for (int k = 0; k < PA_DMESH_NKIND; k++) nmax = A[k].n > nmax ? A[k].n : nmax;
   PA_ALLOC(ord, nmax);
   PA_CALL(pa__gidindex_init_keys(&vmap, A[PA_VERTEX].gid, A[PA_VERTEX].n));
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     pa__recs *Q = &A[k];
     for (size_t i = 0; i < Q->n; i++) ord[i] = (pa_idx)i;
     PA_CALL(pa__sort_by_gid(ord, Q->n, Q->gid));
@@ -992,10 +994,10 @@ cleanup:
 
 pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
   pa_status st = PA_SUCCESS;
-  pa__recs R[PA_NKIND], A[PA_NKIND];
+  pa__recs R[PA_DMESH_NKIND], A[PA_DMESH_NKIND];
   pa__buf b = {0};
   pa__layout lay;
-  int vals[PA_MAX_FIELDS], nvals = 0;
+  int vals[PA_MESH_MAX_FIELDS], nvals = 0;
   memset(R, 0, sizeof R);
   memset(A, 0, sizeof A);
   PA_CHECK(dm && meshp, PA_ERR_ARG, "pa_dmesh_gather: NULL argument");
@@ -1016,7 +1018,7 @@ cleanup:
     pa_mesh_destroy(*meshp);
     *meshp = NULL;
   }
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     pa__recs_free(&R[k]);
     pa__recs_free(&A[k]);
   }

@@ -34,7 +34,7 @@ cleanup:
 }
 
 void pa__dmesh_invalidate(pa_dmesh *dm) {
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     pa__free(dm->shared[k]);
     dm->shared[k] = NULL;
     for (int s = 0; s < 2; s++) {
@@ -68,7 +68,7 @@ void pa__dmesh_clear(pa_dmesh *dm) {
   for (int k = 0; k < dm->nvalue; k++) value_release(dm->value[k]);
   pa_mesh_destroy(dm->mesh);
   dm->mesh = NULL;
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     pa__free(dm->gid[k]);
     pa__free(dm->owner[k]);
     dm->gid[k] = NULL;
@@ -100,19 +100,19 @@ MPI_Comm pa_dmesh_comm(const pa_dmesh *dm) { return dm->comm; }
 int pa_dmesh_dim(const pa_dmesh *dm) { return dm->dim; }
 int pa_dmesh_overlap(const pa_dmesh *dm) { return dm->overlap; }
 pa_idx pa_dmesh_nowned(const pa_dmesh *dm, pa_entity k) {
-  return (unsigned)k < PA_NKIND ? dm->nown[k] : 0;
+  return (unsigned)k < PA_DMESH_NKIND ? dm->nown[k] : 0;
 }
 pa_idx pa_dmesh_nlocal(const pa_dmesh *dm, pa_entity k) {
-  return (unsigned)k < PA_NKIND ? dm->nloc[k] : 0;
+  return (unsigned)k < PA_DMESH_NKIND ? dm->nloc[k] : 0;
 }
 pa_gid pa_dmesh_nglobal(const pa_dmesh *dm, pa_entity k) {
-  return (unsigned)k < PA_NKIND ? dm->nglob[k] : 0;
+  return (unsigned)k < PA_DMESH_NKIND ? dm->nglob[k] : 0;
 }
 const pa_gid *pa_dmesh_gids(const pa_dmesh *dm, pa_entity k) {
-  return (unsigned)k < PA_NKIND ? dm->gid[k] : NULL;
+  return (unsigned)k < PA_DMESH_NKIND ? dm->gid[k] : NULL;
 }
 const int *pa_dmesh_owners(const pa_dmesh *dm, pa_entity k) {
-  return (unsigned)k < PA_NKIND ? dm->owner[k] : NULL;
+  return (unsigned)k < PA_DMESH_NKIND ? dm->owner[k] : NULL;
 }
 const uint8_t *pa_dmesh_elem_layers(const pa_dmesh *dm) { return dm->layer; }
 int pa_dmesh_neighbours(const pa_dmesh *dm, const int **ranks) {
@@ -128,7 +128,7 @@ size_t pa_dmesh_memory_used(const pa_dmesh *dm) {
              pa__alloc_size(dm->adja) + pa__alloc_size(dm->vstart) +
              pa__alloc_size(dm->velem) + pa__alloc_size(dm->bface) +
              pa__alloc_size(dm->value);
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     n += pa__alloc_size(dm->gid[k]) + pa__alloc_size(dm->owner[k]) +
          pa__sf_memory(&dm->sf[k]) + pa__alloc_size(dm->shared[k]) +
          pa__alloc_size(dm->iterlist[k][0]) + pa__alloc_size(dm->iterlist[k][1]);
@@ -151,7 +151,8 @@ void pa__dmesh_layout(pa_dmesh *dm, pa__layout *lay) {
   lay->met_ncomp = dm->mesh->met_ncomp;
   lay->nfield = dm->mesh->nfield;
   for (int f = 0; f < lay->nfield; f++) {
-    snprintf(lay->fieldname[f], PA_FIELD_NAME_LEN, "%s", dm->mesh->field[f].name);
+    snprintf(lay->fieldname[f], PA_MESH_FIELD_NAME_LEN, "%s",
+             dm->mesh->field[f].name);
     lay->fieldncomp[f] = dm->mesh->field[f].ncomp;
   }
 }
@@ -229,9 +230,10 @@ pa_status pa_dmesh_value_add(pa_dmesh *dm, pa_entity kind, const char *name,
   PA_CHECK(dm && value, PA_ERR_ARG, "pa_dmesh_value_add: NULL argument");
   pa__agree_reset();
   *value = NULL;
-  PA_CHECK((unsigned)kind < PA_NKIND, PA_ERR_ARG, "bad entity kind %d", (int)kind);
-  PA_CHECK(name && strlen(name) < PA_VALUE_NAME_LEN, PA_ERR_ARG,
-           "value name missing or longer than %d", PA_VALUE_NAME_LEN - 1);
+  PA_CHECK((unsigned)kind < PA_DMESH_NKIND, PA_ERR_ARG, "bad entity kind %d",
+           (int)kind);
+  PA_CHECK(name && strlen(name) < PA_DMESH_VALUE_NAME_LEN, PA_ERR_ARG,
+           "value name missing or longer than %d", PA_DMESH_VALUE_NAME_LEN - 1);
   PA_CHECK(!pa_dmesh_value_find(dm, name), PA_ERR_ARG,
            "a value named '%s' already exists", name);
   PA_CHECK(ncomp >= 1, PA_ERR_ARG, "ncomp must be >= 1, got %d", ncomp);
@@ -289,8 +291,9 @@ pa_status pa__value_define(pa_dmesh *dm, int kind, const char *name,
   pa_status st = PA_SUCCESS;
   pa_dmesh_value *v = NULL;
   int tsize = 0;
-  PA_CHECK(kind >= 0 && kind < PA_NKIND && ncomp >= 1 && ref >= -1 &&
-               strlen(name) < PA_VALUE_NAME_LEN && !pa_dmesh_value_find(dm, name),
+  PA_CHECK(kind >= 0 && kind < PA_DMESH_NKIND && ncomp >= 1 && ref >= -1 &&
+               strlen(name) < PA_DMESH_VALUE_NAME_LEN &&
+               !pa_dmesh_value_find(dm, name),
            PA_ERR_FORMAT, "bad or duplicate value description '%.64s'", name);
   MPI_Type_size(type, &tsize);
   PA_GROW(dm->value, dm->capvalue, dm->nvalue + 1);
@@ -453,7 +456,7 @@ pa_status pa_dmesh_sync_mesh(pa_dmesh *dm) {
   pa__agree_reset();
   pa_mesh *m = dm->mesh;
   int d = dm->dim;
-  sync_item arr[12 + PA_MAX_FIELDS];
+  sync_item arr[12 + PA_MESH_MAX_FIELDS];
   int na = 0;
   arr[na++] = (sync_item){PA_VERTEX, m->coord, sizeof(double) * d};
   arr[na++] = (sync_item){PA_VERTEX, m->vref, 4};

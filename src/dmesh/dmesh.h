@@ -28,14 +28,14 @@
 #include "dmesh/util.h"
 #include "mesh/mesh.h"
 
-#define PA_NKIND 4
-#define PA_VALUE_NAME_LEN 64
+#define PA_DMESH_NKIND 4
+#define PA_DMESH_VALUE_NAME_LEN 64
 
 /* A user value attached to entities of one kind (see pa_dmesh_value_add). */
 struct pa_dmesh_value {
   int id;             /* creation number: tag of its messages */
   pa_entity kind;
-  char name[PA_VALUE_NAME_LEN];
+  char name[PA_DMESH_VALUE_NAME_LEN];
   MPI_Datatype type;  /* element type: a predefined one, or our dup */
   int duped;          /* type is a dup of a user type (freed with the value) */
   int ncomp;
@@ -59,13 +59,13 @@ struct pa_dmesh {
   int overlap;
   pa_mesh *mesh;      /* local mesh: owned + ghost entities of every kind */
 
-  pa_idx nown[PA_NKIND];
-  pa_idx nloc[PA_NKIND];
-  pa_gid nglob[PA_NKIND];
-  pa_gid *gid[PA_NKIND];   /* nloc */
-  int *owner[PA_NKIND];    /* nloc */
+  pa_idx nown[PA_DMESH_NKIND];
+  pa_idx nloc[PA_DMESH_NKIND];
+  pa_gid nglob[PA_DMESH_NKIND];
+  pa_gid *gid[PA_DMESH_NKIND];   /* nloc */
+  int *owner[PA_DMESH_NKIND];    /* nloc */
   uint8_t *layer;          /* elements: 0 owned, k ghost of layer k */
-  pa__sf sf[PA_NKIND];     /* owned -> ghost copies */
+  pa__sf sf[PA_DMESH_NKIND];     /* owned -> ghost copies */
 
   int nneigh;              /* neighbour ranks (either side of any sf) */
   int *neigh;
@@ -74,9 +74,10 @@ struct pa_dmesh {
   pa_dmesh_value **value;
 
   /* Derived, built on demand (NULL when not built). */
-  pa_idx *shared[PA_NKIND]; /* 1 if the entity has copies on other ranks */
-  pa_idx *iterlist[PA_NKIND][2]; /* interior / frontier owned entities */
-  pa_idx niter[PA_NKIND][2];
+  /* 1 if the entity has copies on other ranks */
+  pa_idx *shared[PA_DMESH_NKIND];
+  pa_idx *iterlist[PA_DMESH_NKIND][2]; /* interior / frontier owned entities */
+  pa_idx niter[PA_DMESH_NKIND][2];
   pa_idx *adja;            /* (dim+1) * nelem local face neighbours or -1 */
   pa_idx *vstart, *velem;  /* vertex -> local elements (CSR) */
   pa_idx *bface;           /* boundary entity -> 2 elements (-1 if none) */
@@ -202,8 +203,8 @@ typedef struct pa__layout {
   int dim;
   int met_ncomp;
   int nfield;
-  char fieldname[PA_MAX_FIELDS][PA_FIELD_NAME_LEN];
-  int fieldncomp[PA_MAX_FIELDS];
+  char fieldname[PA_MESH_MAX_FIELDS][PA_MESH_FIELD_NAME_LEN];
+  int fieldncomp[PA_MESH_MAX_FIELDS];
 } pa__layout;
 /* Doubles per vertex record: dim + metric + fields. */
 int pa__layout_ndbl(const pa__layout *l);
@@ -352,8 +353,9 @@ size_t pa__entity_payload(const pa_dmesh *dm, int kind, pa_idx e,
  * to P (the private vertices of pa__dmesh_build_priv), also reserved for
  * extra[PA_VERTEX] more. Initialises the five record sets (freed on
  * failure). */
-pa_status pa__dmesh_kept_recs(pa_dmesh *dm, const uint8_t *const keep[PA_NKIND],
-                              const size_t extra[PA_NKIND], pa__recs *E,
+pa_status pa__dmesh_kept_recs(pa_dmesh *dm,
+                              const uint8_t *const keep[PA_DMESH_NKIND],
+                              const size_t extra[PA_DMESH_NKIND], pa__recs *E,
                               pa__recs *V, pa__recs *B, pa__recs *D,
                               const uint8_t *vpriv, pa__recs *P);
 

@@ -11,9 +11,10 @@
  * Invariants: an sf lists, for each neighbour rank, root indices on the root
  * side and leaf indices on the leaf side in the same order; messages of one
  * operation use the tag of its pa__sfop, so operations on different values may
- * be in flight at once; setup messages use tags below PA_TAG_OP_BASE; the
- * requests of an operation not posted yet are MPI_REQUEST_NULL, so an
- * operation that failed half-way is waited for and freed like any other.
+ * be in flight at once; setup messages use tags below those of any operation
+ * (dmesh.c's TAG_SYNC and TAG_VALUE_BASE); the requests of an operation not
+ * posted yet are MPI_REQUEST_NULL, so an operation that failed half-way is
+ * waited for and freed like any other.
  */
 #include "dmesh/exchange.h"
 #include "dmesh/util.h"

@@ -75,13 +75,14 @@ cleanup:
   return st;
 }
 
-pa_status pa__dmesh_kept_recs(pa_dmesh *dm, const uint8_t *const keep[PA_NKIND],
-                              const size_t extra[PA_NKIND], pa__recs *E,
+pa_status pa__dmesh_kept_recs(pa_dmesh *dm,
+                              const uint8_t *const keep[PA_DMESH_NKIND],
+                              const size_t extra[PA_DMESH_NKIND], pa__recs *E,
                               pa__recs *V, pa__recs *B, pa__recs *D,
                               const uint8_t *vpriv, pa__recs *P) {
   pa_status st = PA_SUCCESS;
   pa__layout lay;
-  pa__recs *R[PA_NKIND];
+  pa__recs *R[PA_DMESH_NKIND];
   pa__dmesh_layout(dm, &lay);
   pa__recs_init(E, PA_ELEMENT, dm->dim + 1, 0);
   pa__recs_init(V, PA_VERTEX, 0, pa__layout_ndbl(&lay));
@@ -92,7 +93,7 @@ pa_status pa__dmesh_kept_recs(pa_dmesh *dm, const uint8_t *const keep[PA_NKIND],
   R[PA_ELEMENT] = E;
   R[PA_BOUNDARY] = B;
   R[PA_EDGE] = D;
-  for (int k = 0; k < PA_NKIND; k++)
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     PA_CALL(kept_kind(dm, k, keep ? keep[k] : NULL, extra ? extra[k] : 0, R[k],
                       k == PA_VERTEX ? vpriv : NULL, P));
 cleanup:

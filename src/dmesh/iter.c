@@ -63,7 +63,7 @@ cleanup:
 pa_status pa_dmesh_iter_init(pa_dmesh *dm, pa_entity kind, pa_dmesh_set set,
                              pa_dmesh_iter *it) {
   pa_status st = PA_SUCCESS;
-  PA_CHECK(dm && it && (unsigned)kind < PA_NKIND, PA_ERR_ARG,
+  PA_CHECK(dm && it && (unsigned)kind < PA_DMESH_NKIND, PA_ERR_ARG,
            "pa_dmesh_iter_init: bad argument");
   memset(it, 0, sizeof *it);
   switch (set) {
@@ -274,7 +274,7 @@ pa_status pa_dmesh_reorder(pa_dmesh *dm) {
  * v, a sort key long enough for every kind, and the renumbered local mesh
  * (nm) until it replaces dm's. */
 typedef struct reorder {
-  pa_idx *perm[PA_NKIND];
+  pa_idx *perm[PA_DMESH_NKIND];
   pa_idx *ivn;
   pa_gid *key;
   pa_mesh *nm;
@@ -470,7 +470,7 @@ cleanup:
  * order. */
 static pa_status permute_ids(pa_dmesh *dm, reorder *r) {
   pa_status st = PA_SUCCESS;
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     pa_gid *g;
     int *o;
     PA_ALLOC(g, dm->nloc[k]);
@@ -533,7 +533,7 @@ pa_status pa_dmesh_reorder_by(pa_dmesh *dm, pa_dmesh_ordering how) {
   pa__dmesh_invalidate(dm);
   renumber_value_slots(dm);
   /* exchange patterns for the new numbering */
-  for (int k = 0; k < PA_NKIND; k++) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
     pa__sf_free(&dm->sf[k]);
     PA_CALL(pa__agree(dm->comm, st));
     PA_CALL(pa__sf_build(dm->comm, dm->nloc[k], dm->gid[k], dm->owner[k], &dm->sf[k]));
@@ -541,7 +541,7 @@ pa_status pa_dmesh_reorder_by(pa_dmesh *dm, pa_dmesh_ordering how) {
   for (int q = 0; q < dm->nvalue; q++) PA_CALL(pa__value_setup(dm, dm->value[q]));
 cleanup:
   if (dm) st = pa__agree_end(dm->comm, st);
-  for (int k = 0; k < PA_NKIND; k++) pa__free(r.perm[k]);
+  for (int k = 0; k < PA_DMESH_NKIND; k++) pa__free(r.perm[k]);
   pa__free(r.ivn);
   pa__free(r.key);
   pa_mesh_destroy(r.nm);

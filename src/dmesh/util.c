@@ -69,8 +69,8 @@ pa_status pa__gidindex_init(pa__gidindex *x, pa_gid lo, pa_gid hi,
   x->lo = lo;
   x->hi = hi;
   /* (negative keys go to the map, which reports them) */
-  if (lo >= 0 &&
-      (uint64_t)(hi - lo) <= PA__GIDINDEX_DENSE * (uint64_t)nexpected + 64) {
+  if (lo >= 0 && (uint64_t)(hi - lo) <=
+                     PA_DMESH_GIDINDEX_DENSE * (uint64_t)nexpected + 64) {
     PA_ALLOC(x->dense, hi - lo);
     memset(x->dense, 0xff, (size_t)(hi - lo) * sizeof *x->dense); /* -1 */
   } else {

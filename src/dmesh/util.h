@@ -56,12 +56,12 @@ static inline pa_idx pa__gidmap_get(const pa__gidmap *m, pa_gid key) {
 }
 
 /* Index gid -> pa_idx for keys known to lie in [lo, hi) (other keys are
- * absent). When the range holds at most PA__GIDINDEX_DENSE times the
+ * absent). When the range holds at most PA_DMESH_GIDINDEX_DENSE times the
  * expected count of keys, a plain array over the range (the keys are dense:
  * one array read per lookup, and nearby gids -- nearby entities -- share
  * cache lines, where a hash spreads them over a map far beyond cache); it
  * then takes no more memory than the hash map, which is used otherwise. */
-#define PA__GIDINDEX_DENSE 4
+#define PA_DMESH_GIDINDEX_DENSE 4
 typedef struct pa__gidindex {
   pa_gid lo, hi;  /* the key range */
   pa_idx *dense;  /* hi - lo values, -1: absent; NULL: map is used */

@@ -316,7 +316,7 @@ typedef struct tagidx {
  * of build_node_map). Sections of one name (a view written in parts) fill
  * the same view. */
 typedef struct view {
-  char name[PA_FIELD_NAME_LEN];
+  char name[PA_MESH_FIELD_NAME_LEN];
   int ncomp;
   int32_t step;  /* time step index */
   double *val;   /* nnode * ncomp */
@@ -326,7 +326,7 @@ typedef struct view {
 } view;
 
 /* Most views read: the fields and the metric. */
-#define MSH_MAX_VIEWS (PA_MAX_FIELDS + 1)
+#define MSH_MAX_VIEWS (PA_MESH_MAX_FIELDS + 1)
 
 typedef struct msh {
   int version; /* 41 or 22 */
@@ -344,7 +344,7 @@ typedef struct msh {
   size_t nent[4];
   cellbuf cell[4];
   int have_nodes, have_elems, have_names;
-  pa_name *names; /* $PhysicalNames, sorted by (dim, tag) once checked */
+  pa__name *names; /* $PhysicalNames, sorted by (dim, tag) once checked */
   size_t nname;
   view views[MSH_MAX_VIEWS];
   int nview;
@@ -580,7 +580,7 @@ static pa_status rd_quoted(reader *r, size_t *start, size_t *len,
 }
 
 static int cmp_name(const void *a, const void *b) {
-  const pa_name *x = a, *y = b;
+  const pa__name *x = a, *y = b;
   if (x->dim != y->dim) return (x->dim > y->dim) - (x->dim < y->dim);
   return (x->tag > y->tag) - (x->tag < y->tag);
 }
@@ -608,7 +608,7 @@ static pa_status read_physical_names(reader *r, msh *w) {
     if (!len) RD_FAIL(r, PA_ERR_FORMAT, "empty physical name");
     if (memchr(r->buf + start, '\0', len) || memchr(r->buf + start, '\r', len))
       RD_FAIL(r, PA_ERR_FORMAT, "physical name holds a NUL or CR byte");
-    pa_name *p = &w->names[w->nname];
+    pa__name *p = &w->names[w->nname];
     PA_ALLOC(p->name, len + 1);
     memcpy(p->name, r->buf + start, len);
     p->name[len] = '\0';
@@ -983,7 +983,7 @@ static pa_status find_view(reader *r, msh *w, const char *name, int32_t ncomp,
     if (w->nview == MSH_MAX_VIEWS)
       RD_FAIL(r, PA_ERR_UNSUPPORTED,
               "more than %d node data views (the metric and %d fields)",
-              MSH_MAX_VIEWS, PA_MAX_FIELDS);
+              MSH_MAX_VIEWS, PA_MESH_MAX_FIELDS);
     v = &w->views[w->nview++]; /* counted now: msh_free frees its arrays */
     snprintf(v->name, sizeof v->name, "%s", name);
     v->ncomp = ncomp;
@@ -1004,7 +1004,7 @@ static pa_status read_node_data(reader *r, msh *w) {
   size_t a = 0, l = 0;
   int32_t step, nc;
   uint64_t n;
-  char name[PA_FIELD_NAME_LEN];
+  char name[PA_MESH_FIELD_NAME_LEN];
   view *v = NULL;
   if (!w->have_nodes) RD_FAIL(r, PA_ERR_FORMAT, "$NodeData before $Nodes");
   rd_mark(r);
@@ -1678,7 +1678,7 @@ static int view_ncomp(int dim, int nc) {
  * written whole, row-major, with zz = zz2d in 2D. */
 static void write_view(writer *b, const pa_mesh *m, const char *name, int nc,
                        const double *val, double zz2d) {
-  char head[PA_FIELD_NAME_LEN + 64];
+  char head[PA_MESH_FIELD_NAME_LEN + 64];
   int d = m->dim, vc = view_ncomp(d, nc);
   snprintf(head, sizeof head, "$NodeData\n1\n\"%s\"\n1\n0\n3\n0\n%d\n%lld\n",
            name, vc, (long long)m->nv);
@@ -1718,7 +1718,7 @@ static void write_view(writer *b, const pa_mesh *m, const char *name, int nc,
 static pa_status check_view_names(const pa_mesh *m, const char *path) {
   pa_status st = PA_SUCCESS;
   for (int k = 0; k < m->nfield; k++) {
-    const pa_field *f = &m->field[k];
+    const pa__field *f = &m->field[k];
     PA_CHECK(strcmp(f->name, "metric"), PA_ERR_UNSUPPORTED,
              "%s: a field named \"metric\" would read back as the metric; "
              "rename it",
@@ -1737,7 +1737,7 @@ cleanup:
 
 pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary) {
   pa_status st = PA_SUCCESS;
-  pa_outfile out = {0};
+  pa__outfile out = {0};
   writer b = {0};
   group grp[3] = {{0}};
   int ngrp = 0;

@@ -17,27 +17,27 @@
 #include <stdio.h>
 
 /* A file being written. Zero-initialised, pa__out_abort does nothing. */
-typedef struct pa_outfile {
+typedef struct pa__outfile {
   FILE *fp;
   char *path;    /* final path */
   char *tmppath; /* temporary path written first */
   int slot;      /* its place in the list the signal handler reads */
   int joined;    /* 1: part of an open transaction, renamed at its commit */
-} pa_outfile;
+} pa__outfile;
 
 /* Open a temporary file beside path for writing ("wb"). Refuses a path that
  * exists and is not a regular file, and a path already written in the open
  * transaction. */
-pa_status pa__out_open(pa_outfile *out, const char *path);
+pa_status pa__out_open(pa__outfile *out, const char *path);
 /* Flush, fsync and close, checking every write error; then rename onto the
  * final path, or, inside a transaction, leave it for pa_output_commit. */
-pa_status pa__out_commit(pa_outfile *out);
+pa_status pa__out_commit(pa__outfile *out);
 /* Close and remove the temporary file; inside a transaction, mark it failed
  * (safe to call after commit or twice). */
-void pa__out_abort(pa_outfile *out);
+void pa__out_abort(pa__outfile *out);
 /* Open for update ("r+b") the temporary of path, completed earlier in the
  * open transaction; end it with pa__out_commit or pa__out_abort again. */
-pa_status pa__out_reopen(pa_outfile *out, const char *path);
+pa_status pa__out_reopen(pa__outfile *out, const char *path);
 /* Remove path (a regular file, or nothing) when the open transaction
  * commits. */
 pa_status pa__out_remove(const char *path);
@@ -46,8 +46,8 @@ const char *pa__out_tmppath(const char *path);
 /* Open begins of the calling thread's output transaction (0: none). */
 int pa__output_depth(void);
 
-/* FNV-1a 64 of n bytes, continuing from h (start with PA_FNV1A64_INIT). */
-#define PA_FNV1A64_INIT 0xcbf29ce484222325ull
+/* FNV-1a 64 of n bytes, continuing from h (start with PA_IO_FNV1A64_INIT). */
+#define PA_IO_FNV1A64_INIT 0xcbf29ce484222325ull
 static inline uint64_t pa__fnv1a64(uint64_t h, const void *p, size_t n) {
   const unsigned char *b = p;
   for (size_t i = 0; i < n; i++) {
@@ -90,97 +90,97 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics,
 /* libMeshb keyword codes used by padapt. libMeshb 7 has no code for
  * RequiredTetrahedra (12 is "reserved" there); Mmg writes it as 12. */
 enum {
-  PA_GMF_DIMENSION = 3,
-  PA_GMF_VERTICES = 4,
-  PA_GMF_EDGES = 5,
-  PA_GMF_TRIANGLES = 6,
-  PA_GMF_QUADRILATERALS = 7,
-  PA_GMF_TETRAHEDRA = 8,
-  PA_GMF_PRISMS = 9,
-  PA_GMF_HEXAHEDRA = 10,
-  PA_GMF_REQUIRED_TETRAHEDRA = 12,
-  PA_GMF_CORNERS = 13,
-  PA_GMF_RIDGES = 14,
-  PA_GMF_REQUIRED_VERTICES = 15,
-  PA_GMF_REQUIRED_EDGES = 16,
-  PA_GMF_REQUIRED_TRIANGLES = 17,
-  PA_GMF_PYRAMIDS = 49,
-  PA_GMF_END = 54,
-  PA_GMF_SOL_AT_VERTICES = 62
+  PA_IO_GMF_DIMENSION = 3,
+  PA_IO_GMF_VERTICES = 4,
+  PA_IO_GMF_EDGES = 5,
+  PA_IO_GMF_TRIANGLES = 6,
+  PA_IO_GMF_QUADRILATERALS = 7,
+  PA_IO_GMF_TETRAHEDRA = 8,
+  PA_IO_GMF_PRISMS = 9,
+  PA_IO_GMF_HEXAHEDRA = 10,
+  PA_IO_GMF_REQUIRED_TETRAHEDRA = 12,
+  PA_IO_GMF_CORNERS = 13,
+  PA_IO_GMF_RIDGES = 14,
+  PA_IO_GMF_REQUIRED_VERTICES = 15,
+  PA_IO_GMF_REQUIRED_EDGES = 16,
+  PA_IO_GMF_REQUIRED_TRIANGLES = 17,
+  PA_IO_GMF_PYRAMIDS = 49,
+  PA_IO_GMF_END = 54,
+  PA_IO_GMF_SOL_AT_VERTICES = 62
 };
 /* Most solution types in one SolAtVertices keyword (libMeshb's GmfMaxTyp). */
-#define PA_GMF_MAX_TYPES 1000
+#define PA_IO_GMF_MAX_TYPES 1000
 
 /* A keyword file open for reading (ASCII or binary). */
-typedef struct pa_gmf pa_gmf;
+typedef struct pa__gmf pa__gmf;
 
 /* Open path; binary selects the .meshb/.solb layout. Reads the binary header.
  * path must stay valid until pa__gmf_close. */
-pa_status pa__gmf_open(const char *path, int binary, pa_gmf **gmf);
-void pa__gmf_close(pa_gmf *gmf); /* NULL allowed */
+pa_status pa__gmf_open(const char *path, int binary, pa__gmf **gmf);
+void pa__gmf_close(pa__gmf *gmf); /* NULL allowed */
 /* Dimension read so far (0 if none yet). */
-int pa__gmf_dim(const pa_gmf *gmf);
-/* Next data keyword: its code, PA_GMF_END at End or at the end of an ASCII
+int pa__gmf_dim(const pa__gmf *gmf);
+/* Next data keyword: its code, PA_IO_GMF_END at End or at the end of an ASCII
  * file. MeshVersionFormatted and Dimension are consumed here. An unknown
  * ASCII keyword is an error; unknown binary codes are returned (skip them). */
-pa_status pa__gmf_next(pa_gmf *gmf, int *code);
+pa_status pa__gmf_next(pa__gmf *gmf, int *code);
 /* Skip the data of the current keyword. */
-pa_status pa__gmf_skip(pa_gmf *gmf);
+pa_status pa__gmf_skip(pa__gmf *gmf);
 /* After reading a keyword's data: move to the next keyword. */
-pa_status pa__gmf_done(pa_gmf *gmf);
+pa_status pa__gmf_done(pa__gmf *gmf);
 /* Read the record count of the current keyword and check that n records of
  * nreal reals and nint integers fit in what is left of the file. Fails if no
  * Dimension was read yet. */
-pa_status pa__gmf_count(pa_gmf *gmf, int nreal, int nint, pa_idx *n);
+pa_status pa__gmf_count(pa__gmf *gmf, int nreal, int nint, pa_idx *n);
 /* Check that n records of nreal reals and nint integers fit in the file. */
-pa_status pa__gmf_check_room(pa_gmf *gmf, pa_idx n, int nreal, int nint);
+pa_status pa__gmf_check_room(pa__gmf *gmf, pa_idx n, int nreal, int nint);
 /* Read one 32-bit header word (e.g. the solution types of SolAtVertices). */
-pa_status pa__gmf_word(pa_gmf *gmf, int *value);
+pa_status pa__gmf_word(pa__gmf *gmf, int *value);
 /* Records per pa__gmf_records call that keep its buffers near 4 MiB. */
 size_t pa__gmf_chunk(int nreal, int nint);
 /* Read n records of nreal reals then nint integers. *rv and *iv (either may
  * be NULL) point to internal buffers valid until the next call. */
-pa_status pa__gmf_records(pa_gmf *gmf, size_t n, int nreal, int nint,
+pa_status pa__gmf_records(pa__gmf *gmf, size_t n, int nreal, int nint,
                           const double **rv, const int64_t **iv);
 /* Locations for messages: line (ASCII) or byte offset (binary) of the last
  * token read, of record k of the last pa__gmf_records call, of the current
  * keyword. */
-int64_t pa__gmf_loc(const pa_gmf *gmf);
-int64_t pa__gmf_rec_loc(const pa_gmf *gmf, size_t k);
-int64_t pa__gmf_kwd_loc(const pa_gmf *gmf);
+int64_t pa__gmf_loc(const pa__gmf *gmf);
+int64_t pa__gmf_rec_loc(const pa__gmf *gmf, size_t k);
+int64_t pa__gmf_kwd_loc(const pa__gmf *gmf);
 /* "PATH:LINE" (ASCII) or "PATH: byte OFFSET" (binary) of a location, as
  * the messages name it. */
-void pa__gmf_where(const pa_gmf *gmf, int64_t loc, char *buf, size_t n);
+void pa__gmf_where(const pa__gmf *gmf, int64_t loc, char *buf, size_t n);
 /* Raise "FILE:LINE: msg" (ASCII) or "FILE: byte OFFSET: msg" (binary). */
-pa_status pa__gmf_error(const pa_gmf *gmf, int64_t loc, pa_status code,
+pa_status pa__gmf_error(const pa__gmf *gmf, int64_t loc, pa_status code,
                         const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
 /* Name of a keyword code ("Vertices"), "?" if unknown. */
 const char *pa__gmf_kwd_name(int code);
 
 /* Raise a format error at loc and jump to cleanup (needs `pa_status st`). */
-#define PA_GMF_FAIL(gmf, loc, ...)                                           \
+#define PA_IO_GMF_FAIL(gmf, loc, ...)                                        \
   do {                                                                       \
     st = pa__gmf_error((gmf), (loc), PA_ERR_FORMAT, __VA_ARGS__);            \
     goto cleanup;                                                            \
   } while (0)
 
 /* A keyword file being written, through pa__out_open. */
-typedef struct pa_gmfw pa_gmfw;
+typedef struct pa__gmfw pa__gmfw;
 
 /* Open and write the header; version 1-4 (binary; ASCII always writes 2). */
 pa_status pa__gmfw_open(const char *path, int binary, int version, int dim,
-                        pa_gmfw **gmfw);
+                        pa__gmfw **gmfw);
 /* Start keyword code with n records of nreal reals and nint integers; for a
  * solution keyword, ntype > 0 types follow the count. */
-pa_status pa__gmfw_kwd(pa_gmfw *gmfw, int code, pa_idx n, int nreal, int nint,
+pa_status pa__gmfw_kwd(pa__gmfw *gmfw, int code, pa_idx n, int nreal, int nint,
                        int ntype, const int *type);
 /* Write one record (the nreal reals and nint integers of the keyword). */
-pa_status pa__gmfw_rec(pa_gmfw *gmfw, const double *rv, const int64_t *iv);
+pa_status pa__gmfw_rec(pa__gmfw *gmfw, const double *rv, const int64_t *iv);
 /* Write End and commit the file; frees gmfw, also on failure. */
-pa_status pa__gmfw_close(pa_gmfw *gmfw);
+pa_status pa__gmfw_close(pa__gmfw *gmfw);
 /* Drop the file being written and free gmfw (NULL allowed). */
-void pa__gmfw_abort(pa_gmfw *gmfw);
+void pa__gmfw_abort(pa__gmfw *gmfw);
 /* Binary version to write by default for a payload of about `bytes`: 2, or 3
  * when 32-bit positions cannot address the file. */
 int pa__gmf_default_version(int64_t bytes);

@@ -18,7 +18,7 @@ static void json_double(FILE *fp, const char *key, double x) {
 pa_status pa_stats_write_json(const pa_stats *s, const char *extra,
                               const char *path) {
   pa_status st = PA_SUCCESS;
-  pa_outfile out = {0};
+  pa__outfile out = {0};
   PA_CHECK(s && path, PA_ERR_ARG, "pa_stats_write_json: NULL argument");
   PA_CALL(pa__out_open(&out, path));
   FILE *fp = out.fp;

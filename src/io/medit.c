@@ -1,6 +1,6 @@
 /*
  * medit.c -- Medit mesh files (.mesh ASCII, .meshb binary) and the keyword
- * file layer (pa_gmf reader, pa_gmfw writer) they share with .sol/.solb.
+ * file layer (pa__gmf reader, pa__gmfw writer) they share with .sol/.solb.
  *
  * A Medit file is a sequence of keywords, libMeshb's layout:
  *  - ASCII: a keyword name, for most keywords a record count, then the
@@ -15,7 +15,7 @@
  *    in version 1 and double otherwise, integers int32 in versions 1-3 and
  *    int64 in version 4. Dimension carries one int32; End carries nothing.
  *
- * Reader invariants (pa_gmf):
+ * Reader invariants (pa__gmf):
  *  - nothing is read past the end of the file or of a buffer: a count is
  *    checked against the bytes left in the file before anything is allocated
  *    for it (an ASCII number takes at least 2 bytes), so a corrupt count fails
@@ -80,20 +80,20 @@ typedef struct gmf_kwd {
 
 static const gmf_kwd gmf_kwds[] = {
     {"MeshVersionFormatted", 1, 0, "i"},
-    {"Dimension", PA_GMF_DIMENSION, 0, "i"},
-    {"Vertices", PA_GMF_VERTICES, 1, "Ri"},
-    {"Edges", PA_GMF_EDGES, 1, "iii"},
-    {"Triangles", PA_GMF_TRIANGLES, 1, "iiii"},
-    {"Quadrilaterals", PA_GMF_QUADRILATERALS, 1, "iiiii"},
-    {"Tetrahedra", PA_GMF_TETRAHEDRA, 1, "iiiii"},
-    {"Prisms", PA_GMF_PRISMS, 1, "iiiiiii"},
-    {"Hexahedra", PA_GMF_HEXAHEDRA, 1, "iiiiiiiii"},
-    {"RequiredTetrahedra", PA_GMF_REQUIRED_TETRAHEDRA, 1, "i"},
-    {"Corners", PA_GMF_CORNERS, 1, "i"},
-    {"Ridges", PA_GMF_RIDGES, 1, "i"},
-    {"RequiredVertices", PA_GMF_REQUIRED_VERTICES, 1, "i"},
-    {"RequiredEdges", PA_GMF_REQUIRED_EDGES, 1, "i"},
-    {"RequiredTriangles", PA_GMF_REQUIRED_TRIANGLES, 1, "i"},
+    {"Dimension", PA_IO_GMF_DIMENSION, 0, "i"},
+    {"Vertices", PA_IO_GMF_VERTICES, 1, "Ri"},
+    {"Edges", PA_IO_GMF_EDGES, 1, "iii"},
+    {"Triangles", PA_IO_GMF_TRIANGLES, 1, "iiii"},
+    {"Quadrilaterals", PA_IO_GMF_QUADRILATERALS, 1, "iiiii"},
+    {"Tetrahedra", PA_IO_GMF_TETRAHEDRA, 1, "iiiii"},
+    {"Prisms", PA_IO_GMF_PRISMS, 1, "iiiiiii"},
+    {"Hexahedra", PA_IO_GMF_HEXAHEDRA, 1, "iiiiiiiii"},
+    {"RequiredTetrahedra", PA_IO_GMF_REQUIRED_TETRAHEDRA, 1, "i"},
+    {"Corners", PA_IO_GMF_CORNERS, 1, "i"},
+    {"Ridges", PA_IO_GMF_RIDGES, 1, "i"},
+    {"RequiredVertices", PA_IO_GMF_REQUIRED_VERTICES, 1, "i"},
+    {"RequiredEdges", PA_IO_GMF_REQUIRED_EDGES, 1, "i"},
+    {"RequiredTriangles", PA_IO_GMF_REQUIRED_TRIANGLES, 1, "i"},
     {"RequiredQuadrilaterals", 18, 1, "i"},
     {"TangentAtEdgeVertices", 19, 1, "iii"},
     {"NormalAtVertices", 20, 1, "ii"},
@@ -105,9 +105,9 @@ static const gmf_kwd gmf_kwds[] = {
     {"VerticesOnGeometricTriangles", 42, 1, "iirrr"},
     {"VerticesOnGeometricQuadrilaterals", 43, 1, "iirrr"},
     {"EdgesOnGeometricEdges", 44, 1, "ii"},
-    {"Pyramids", PA_GMF_PYRAMIDS, 1, "iiiiii"},
+    {"Pyramids", PA_IO_GMF_PYRAMIDS, 1, "iiiiii"},
     {"BoundingBox", 50, 0, "RR"},
-    {"End", PA_GMF_END, 0, ""},
+    {"End", PA_IO_GMF_END, 0, ""},
     {"TrianglesOnGeometricTriangles", 55, 1, "ii"},
     {"TrianglesOnGeometricQuadrilaterals", 56, 1, "ii"},
     {"QuadrilateralsOnGeometricTriangles", 57, 1, "ii"},
@@ -115,7 +115,7 @@ static const gmf_kwd gmf_kwds[] = {
     {"Tangents", 59, 1, "R"},
     {"Normals", 60, 1, "R"},
     {"TangentAtVertices", 61, 1, "ii"},
-    {"SolAtVertices", PA_GMF_SOL_AT_VERTICES, 1, "S"},
+    {"SolAtVertices", PA_IO_GMF_SOL_AT_VERTICES, 1, "S"},
     {"SolAtEdges", 63, 1, "S"},
     {"SolAtTriangles", 64, 1, "S"},
     {"SolAtQuadrilaterals", 65, 1, "S"},
@@ -162,7 +162,7 @@ int pa__gmf_default_version(int64_t bytes) {
 /* Reader                                                                   */
 /* ------------------------------------------------------------------------ */
 
-struct pa_gmf {
+struct pa__gmf {
   const char *path;
   FILE *fp;
   int binary;
@@ -197,20 +197,20 @@ struct pa_gmf {
   size_t recsize;
 };
 
-int pa__gmf_dim(const pa_gmf *g) { return g->dim; }
+int pa__gmf_dim(const pa__gmf *g) { return g->dim; }
 
-int64_t pa__gmf_loc(const pa_gmf *g) {
+int64_t pa__gmf_loc(const pa__gmf *g) {
   return g->binary ? g->tokoff : (int64_t)g->tokline;
 }
 
-int64_t pa__gmf_rec_loc(const pa_gmf *g, size_t k) {
+int64_t pa__gmf_rec_loc(const pa__gmf *g, size_t k) {
   return g->binary ? g->recoff + (int64_t)(k * g->recsize)
                    : (int64_t)g->recline[k];
 }
 
-int64_t pa__gmf_kwd_loc(const pa_gmf *g) { return g->kwdloc; }
+int64_t pa__gmf_kwd_loc(const pa__gmf *g) { return g->kwdloc; }
 
-pa_status pa__gmf_error(const pa_gmf *g, int64_t loc, pa_status code,
+pa_status pa__gmf_error(const pa__gmf *g, int64_t loc, pa_status code,
                         const char *fmt, ...) {
   char msg[768];
   va_list ap;
@@ -222,7 +222,7 @@ pa_status pa__gmf_error(const pa_gmf *g, int64_t loc, pa_status code,
   return pa__error(code, __FILE__, __LINE__, "%s: %s", where, msg);
 }
 
-void pa__gmf_where(const pa_gmf *g, int64_t loc, char *buf, size_t n) {
+void pa__gmf_where(const pa__gmf *g, int64_t loc, char *buf, size_t n) {
   if (g->binary)
     snprintf(buf, n, "%s: byte %lld", g->path, (long long)loc);
   else
@@ -230,7 +230,7 @@ void pa__gmf_where(const pa_gmf *g, int64_t loc, char *buf, size_t n) {
 }
 
 /* Name of the current keyword for messages. */
-static const char *cur_name(const pa_gmf *g) {
+static const char *cur_name(const pa__gmf *g) {
   const gmf_kwd *k = kwd_by_code(g->kwd);
   return k ? k->name : "keyword";
 }
@@ -263,13 +263,13 @@ static inline uint64_t rd64(const unsigned char *p, int swap) {
 }
 
 /* Binary: read n bytes at the current offset. */
-static pa_status bin_read(pa_gmf *g, void *dst, size_t n) {
+static pa_status bin_read(pa__gmf *g, void *dst, size_t n) {
   pa_status st = PA_SUCCESS;
   if ((int64_t)n > g->fsize - g->off)
-    PA_GMF_FAIL(g, g->off,
-                "unexpected end of file: %zu bytes needed, %lld left "
-                "(truncated file?)",
-                n, (long long)(g->fsize - g->off));
+    PA_IO_GMF_FAIL(g, g->off,
+                   "unexpected end of file: %zu bytes needed, %lld left "
+                   "(truncated file?)",
+                   n, (long long)(g->fsize - g->off));
   if (n && fread(dst, 1, n, g->fp) != n)
     PA_FAIL(PA_ERR_IO, "%s: read error at byte %lld: %s", g->path,
             (long long)g->off, ferror(g->fp) ? strerror(errno) : "short read");
@@ -279,7 +279,7 @@ cleanup:
   return st;
 }
 
-static pa_status bin_seek(pa_gmf *g, int64_t pos) {
+static pa_status bin_seek(pa__gmf *g, int64_t pos) {
   pa_status st = PA_SUCCESS;
   if (pos == g->off) return PA_SUCCESS;
   PA_CHECK(fseeko(g->fp, (off_t)pos, SEEK_SET) == 0, PA_ERR_IO,
@@ -291,9 +291,9 @@ cleanup:
 }
 
 /* Integer size, real size and position size of a binary file. */
-static size_t int_size(const pa_gmf *g) { return g->ver >= 4 ? 8 : 4; }
-static size_t real_size(const pa_gmf *g) { return g->ver == 1 ? 4 : 8; }
-static size_t pos_size(const pa_gmf *g) { return g->ver >= 3 ? 8 : 4; }
+static size_t int_size(const pa__gmf *g) { return g->ver >= 4 ? 8 : 4; }
+static size_t real_size(const pa__gmf *g) { return g->ver == 1 ? 4 : 8; }
+static size_t pos_size(const pa__gmf *g) { return g->ver >= 3 ? 8 : 4; }
 
 static inline int is_space(char c) {
   return c == ' ' || c == '\n' || c == '\t' || c == '\r' || c == '\v' ||
@@ -301,7 +301,7 @@ static inline int is_space(char c) {
 }
 
 /* ASCII: drop buf[0 .. keep) and read more bytes after the rest. */
-static pa_status refill(pa_gmf *g, size_t keep) {
+static pa_status refill(pa__gmf *g, size_t keep) {
   pa_status st = PA_SUCCESS;
   size_t rest = g->blen - keep;
   memmove(g->buf, g->buf + keep, rest);
@@ -322,7 +322,7 @@ cleanup:
 }
 
 /* ASCII: next token (*tok = NULL at the end of the file). */
-static pa_status next_token(pa_gmf *g, const char **tok, size_t *len) {
+static pa_status next_token(pa__gmf *g, const char **tok, size_t *len) {
   pa_status st = PA_SUCCESS;
   *tok = NULL;
   *len = 0;
@@ -353,10 +353,10 @@ static pa_status next_token(pa_gmf *g, const char **tok, size_t *len) {
     if (e < g->blen || g->eof) break;
     /* The token reaches the end of the window: keep it and read more. */
     if (g->bpos == 0)
-      PA_GMF_FAIL(g, g->line,
-                  "a token longer than %zu bytes (not a Medit "
-                  "ASCII file?)",
-                  GMF_WINDOW);
+      PA_IO_GMF_FAIL(g, g->line,
+                     "a token longer than %zu bytes (not a Medit "
+                     "ASCII file?)",
+                     GMF_WINDOW);
     size_t rel = e - g->bpos;
     PA_CALL(refill(g, g->bpos));
     e = rel;
@@ -394,23 +394,24 @@ static int parse_real(const char *s, size_t n, double *v) {
 }
 
 /* ASCII: read an integer token; what names it in messages. */
-static pa_status tok_int(pa_gmf *g, const char *what, int64_t *v) {
+static pa_status tok_int(pa__gmf *g, const char *what, int64_t *v) {
   pa_status st = PA_SUCCESS;
   const char *t;
   size_t n;
   char buf[48];
   PA_CALL(next_token(g, &t, &n));
-  if (!t) PA_GMF_FAIL(g, g->line, "unexpected end of file: expected %s", what);
+  if (!t)
+    PA_IO_GMF_FAIL(g, g->line, "unexpected end of file: expected %s", what);
   if (!parse_int(t, n, v))
-    PA_GMF_FAIL(g, g->tokline, "expected %s, found '%s'", what,
-                tokstr(t, n, buf));
+    PA_IO_GMF_FAIL(g, g->tokline, "expected %s, found '%s'", what,
+                   tokstr(t, n, buf));
 cleanup:
   return st;
 }
 
-pa_status pa__gmf_open(const char *path, int binary, pa_gmf **out) {
+pa_status pa__gmf_open(const char *path, int binary, pa__gmf **out) {
   pa_status st = PA_SUCCESS;
-  pa_gmf *g = NULL;
+  pa__gmf *g = NULL;
   struct stat sb;
   *out = NULL;
   PA_CALLOC(g, 1);
@@ -434,13 +435,13 @@ pa_status pa__gmf_open(const char *path, int binary, pa_gmf **out) {
     else if (code == 0x01000000u)
       g->swap = 1;
     else
-      PA_GMF_FAIL(g, 0,
-                  "not a binary Medit file: the code word is %u, expected 1",
-                  (unsigned)code);
+      PA_IO_GMF_FAIL(g, 0,
+                     "not a binary Medit file: the code word is %u, expected 1",
+                     (unsigned)code);
     int32_t ver = (int32_t)rd32(h + 4, g->swap);
     if (ver < 1 || ver > 4)
-      PA_GMF_FAIL(g, 4, "unsupported binary Medit version %d (1 to 4)",
-                  (int)ver);
+      PA_IO_GMF_FAIL(g, 4, "unsupported binary Medit version %d (1 to 4)",
+                     (int)ver);
     g->ver = ver;
   } else {
     PA_ALLOC(g->buf, GMF_WINDOW + 1);
@@ -453,7 +454,7 @@ cleanup:
   return st;
 }
 
-void pa__gmf_close(pa_gmf *g) {
+void pa__gmf_close(pa__gmf *g) {
   if (!g) return;
   if (g->fp) fclose(g->fp);
   pa__free(g->buf);
@@ -464,19 +465,20 @@ void pa__gmf_close(pa_gmf *g) {
   pa__free(g);
 }
 
-static pa_status set_dim(pa_gmf *g, int64_t d, int64_t loc) {
+static pa_status set_dim(pa__gmf *g, int64_t d, int64_t loc) {
   pa_status st = PA_SUCCESS;
   if (d != 2 && d != 3)
-    PA_GMF_FAIL(g, loc, "Dimension must be 2 or 3, got %lld", (long long)d);
+    PA_IO_GMF_FAIL(g, loc, "Dimension must be 2 or 3, got %lld", (long long)d);
   if (g->dim && g->dim != d)
-    PA_GMF_FAIL(g, loc, "Dimension %lld contradicts the earlier Dimension %d",
-                (long long)d, g->dim);
+    PA_IO_GMF_FAIL(g, loc,
+                   "Dimension %lld contradicts the earlier Dimension %d",
+                   (long long)d, g->dim);
   g->dim = (int)d;
 cleanup:
   return st;
 }
 
-pa_status pa__gmf_done(pa_gmf *g) {
+pa_status pa__gmf_done(pa__gmf *g) {
   pa_status st = PA_SUCCESS;
   if (!g->binary) return PA_SUCCESS;
   if (!g->next) {
@@ -484,46 +486,46 @@ pa_status pa__gmf_done(pa_gmf *g) {
     return PA_SUCCESS;
   }
   if (g->off > g->next)
-    PA_GMF_FAIL(g, g->kwdloc,
-                "%s: the data runs past the next keyword position %lld",
-                cur_name(g), (long long)g->next);
+    PA_IO_GMF_FAIL(g, g->kwdloc,
+                   "%s: the data runs past the next keyword position %lld",
+                   cur_name(g), (long long)g->next);
   PA_CALL(bin_seek(g, g->next));
 cleanup:
   return st;
 }
 
-static pa_status next_binary(pa_gmf *g, int *code) {
+static pa_status next_binary(pa__gmf *g, int *code) {
   pa_status st = PA_SUCCESS;
   unsigned char h[16];
   size_t ps = pos_size(g);
   for (;;) {
     if (g->last) {
-      g->kwd = PA_GMF_END;
+      g->kwd = PA_IO_GMF_END;
       break;
     }
     int64_t start = g->off;
     if (start >= g->fsize)
-      PA_GMF_FAIL(g, start,
-                  "unexpected end of file: no End keyword "
-                  "(truncated file?)");
+      PA_IO_GMF_FAIL(g, start,
+                     "unexpected end of file: no End keyword "
+                     "(truncated file?)");
     PA_CALL(bin_read(g, h, 4 + ps));
     int c = (int32_t)rd32(h, g->swap);
     int64_t pos = ps == 8 ? (int64_t)rd64(h + 4, g->swap)
                           : (int64_t)(int32_t)rd32(h + 4, g->swap);
     g->kwdloc = g->tokoff = start;
     g->kwd = c;
-    if (c == PA_GMF_END) {
+    if (c == PA_IO_GMF_END) {
       g->last = 1;
       break;
     }
     if (pos != 0 && (pos < g->off || pos > g->fsize))
-      PA_GMF_FAIL(g, start,
-                  "keyword %d (%s): next keyword position %lld is outside "
-                  "[%lld, %lld] (corrupt or truncated file)",
-                  c, pa__gmf_kwd_name(c), (long long)pos, (long long)g->off,
-                  (long long)g->fsize);
+      PA_IO_GMF_FAIL(g, start,
+                     "keyword %d (%s): next keyword position %lld is outside "
+                     "[%lld, %lld] (corrupt or truncated file)",
+                     c, pa__gmf_kwd_name(c), (long long)pos, (long long)g->off,
+                     (long long)g->fsize);
     g->next = pos;
-    if (c == PA_GMF_DIMENSION) {
+    if (c == PA_IO_GMF_DIMENSION) {
       unsigned char d[4];
       PA_CALL(bin_read(g, d, 4));
       PA_CALL(set_dim(g, (int32_t)rd32(d, g->swap), g->tokoff));
@@ -537,7 +539,7 @@ cleanup:
   return st;
 }
 
-static pa_status next_ascii(pa_gmf *g, int *code) {
+static pa_status next_ascii(pa__gmf *g, int *code) {
   pa_status st = PA_SUCCESS;
   const char *t;
   size_t n;
@@ -546,35 +548,35 @@ static pa_status next_ascii(pa_gmf *g, int *code) {
     int64_t v;
     PA_CALL(next_token(g, &t, &n));
     if (!t) {
-      g->kwd = PA_GMF_END;
+      g->kwd = PA_IO_GMF_END;
       break;
     }
     g->kwdloc = g->tokline;
     if (!isalpha((unsigned char)t[0]))
-      PA_GMF_FAIL(g, g->tokline,
-                  "expected a keyword, found '%s' (a count smaller than the "
-                  "data?)",
-                  tokstr(t, n, buf));
+      PA_IO_GMF_FAIL(g, g->tokline,
+                     "expected a keyword, found '%s' (a count smaller than the "
+                     "data?)",
+                     tokstr(t, n, buf));
     const gmf_kwd *k = kwd_by_name(t, n);
     if (!k)
-      PA_GMF_FAIL(g, g->tokline, "unknown keyword '%s'", tokstr(t, n, buf));
+      PA_IO_GMF_FAIL(g, g->tokline, "unknown keyword '%s'", tokstr(t, n, buf));
     g->kwd = k->code;
     if (k->code == 1) {
       PA_CALL(tok_int(g, "the MeshVersionFormatted number", &v));
       if (v < 1 || v > 4)
-        PA_GMF_FAIL(g, g->tokline,
-                    "MeshVersionFormatted must be 1 to 4, got "
-                    "%lld",
-                    (long long)v);
+        PA_IO_GMF_FAIL(g, g->tokline,
+                       "MeshVersionFormatted must be 1 to 4, got "
+                       "%lld",
+                       (long long)v);
       g->ver = (int)v;
       continue;
     }
-    if (k->code == PA_GMF_DIMENSION) {
+    if (k->code == PA_IO_GMF_DIMENSION) {
       PA_CALL(tok_int(g, "the dimension", &v));
       PA_CALL(set_dim(g, v, g->tokline));
       continue;
     }
-    if (k->code == PA_GMF_END) {
+    if (k->code == PA_IO_GMF_END) {
       g->last = 1;
       break;
     }
@@ -585,12 +587,12 @@ cleanup:
   return st;
 }
 
-pa_status pa__gmf_next(pa_gmf *g, int *code) {
-  *code = PA_GMF_END;
+pa_status pa__gmf_next(pa__gmf *g, int *code) {
+  *code = PA_IO_GMF_END;
   return g->binary ? next_binary(g, code) : next_ascii(g, code);
 }
 
-pa_status pa__gmf_check_room(pa_gmf *g, pa_idx n, int nreal, int nint) {
+pa_status pa__gmf_check_room(pa__gmf *g, pa_idx n, int nreal, int nint) {
   pa_status st = PA_SUCCESS;
   int64_t left, need;
   if (g->binary) {
@@ -602,22 +604,23 @@ pa_status pa__gmf_check_room(pa_gmf *g, pa_idx n, int nreal, int nint) {
     need = n ? (int64_t)n * (nreal + nint) * 2 - 1 : 0;
   }
   if (need > left)
-    PA_GMF_FAIL(g, pa__gmf_loc(g),
-                "%s: count %d does not fit in the %lld bytes left in the file "
-                "(truncated file or corrupt count)",
-                cur_name(g), (int)n, (long long)left);
+    PA_IO_GMF_FAIL(
+        g, pa__gmf_loc(g),
+        "%s: count %d does not fit in the %lld bytes left in the file "
+        "(truncated file or corrupt count)",
+        cur_name(g), (int)n, (long long)left);
 cleanup:
   return st;
 }
 
-pa_status pa__gmf_count(pa_gmf *g, int nreal, int nint, pa_idx *n) {
+pa_status pa__gmf_count(pa__gmf *g, int nreal, int nint, pa_idx *n) {
   pa_status st = PA_SUCCESS;
   int64_t v;
   char what[96];
   *n = 0;
   if (!g->dim)
-    PA_GMF_FAIL(g, g->kwdloc, "%s before Dimension (missing Dimension)",
-                cur_name(g));
+    PA_IO_GMF_FAIL(g, g->kwdloc, "%s before Dimension (missing Dimension)",
+                   cur_name(g));
   if (g->binary) {
     unsigned char b[8];
     PA_CALL(bin_read(g, b, int_size(g)));
@@ -628,20 +631,20 @@ pa_status pa__gmf_count(pa_gmf *g, int nreal, int nint, pa_idx *n) {
     PA_CALL(tok_int(g, what, &v));
   }
   if (v < 0)
-    PA_GMF_FAIL(g, pa__gmf_loc(g), "negative count %lld for %s", (long long)v,
-                cur_name(g));
+    PA_IO_GMF_FAIL(g, pa__gmf_loc(g), "negative count %lld for %s",
+                   (long long)v, cur_name(g));
   if (v > INT32_MAX)
-    PA_GMF_FAIL(g, pa__gmf_loc(g),
-                "count %lld for %s is too large (at most "
-                "%d)",
-                (long long)v, cur_name(g), INT32_MAX);
+    PA_IO_GMF_FAIL(g, pa__gmf_loc(g),
+                   "count %lld for %s is too large (at most "
+                   "%d)",
+                   (long long)v, cur_name(g), INT32_MAX);
   PA_CALL(pa__gmf_check_room(g, (pa_idx)v, nreal, nint));
   *n = (pa_idx)v;
 cleanup:
   return st;
 }
 
-pa_status pa__gmf_word(pa_gmf *g, int *value) {
+pa_status pa__gmf_word(pa__gmf *g, int *value) {
   pa_status st = PA_SUCCESS;
   int64_t v;
   char what[96];
@@ -653,7 +656,7 @@ pa_status pa__gmf_word(pa_gmf *g, int *value) {
     snprintf(what, sizeof what, "an integer in the %s header", cur_name(g));
     PA_CALL(tok_int(g, what, &v));
     if (v < INT32_MIN || v > INT32_MAX)
-      PA_GMF_FAIL(g, g->tokline, "integer %lld out of range", (long long)v);
+      PA_IO_GMF_FAIL(g, g->tokline, "integer %lld out of range", (long long)v);
   }
   *value = (int)v;
 cleanup:
@@ -666,7 +669,7 @@ size_t pa__gmf_chunk(int nreal, int nint) {
   return n ? n : 1;
 }
 
-pa_status pa__gmf_records(pa_gmf *g, size_t n, int nreal, int nint,
+pa_status pa__gmf_records(pa__gmf *g, size_t n, int nreal, int nint,
                           const double **rv, const int64_t **iv) {
   pa_status st = PA_SUCCESS;
   char buf[48];
@@ -708,20 +711,21 @@ pa_status pa__gmf_records(pa_gmf *g, size_t n, int nreal, int nint,
         size_t len;
         PA_CALL(next_token(g, &t, &len));
         if (!t)
-          PA_GMF_FAIL(g, g->line,
-                      "unexpected end of file in %s (truncated file or count "
-                      "larger than the data)",
-                      cur_name(g));
+          PA_IO_GMF_FAIL(
+              g, g->line,
+              "unexpected end of file in %s (truncated file or count "
+              "larger than the data)",
+              cur_name(g));
         if (j == 0) g->recline[k] = g->tokline;
         if (j < nreal) {
           if (!parse_real(t, len, r++))
-            PA_GMF_FAIL(g, g->tokline,
-                        "expected a real number in %s, found "
-                        "'%s'",
-                        cur_name(g), tokstr(t, len, buf));
+            PA_IO_GMF_FAIL(g, g->tokline,
+                           "expected a real number in %s, found "
+                           "'%s'",
+                           cur_name(g), tokstr(t, len, buf));
         } else if (!parse_int(t, len, x++)) {
-          PA_GMF_FAIL(g, g->tokline, "expected an integer in %s, found '%s'",
-                      cur_name(g), tokstr(t, len, buf));
+          PA_IO_GMF_FAIL(g, g->tokline, "expected an integer in %s, found '%s'",
+                         cur_name(g), tokstr(t, len, buf));
         }
       }
     }
@@ -733,7 +737,7 @@ cleanup:
 }
 
 /* ASCII: skip to the start of the next line. */
-static pa_status skip_line(pa_gmf *g) {
+static pa_status skip_line(pa__gmf *g) {
   pa_status st = PA_SUCCESS;
   for (;;) {
     while (g->bpos < g->blen) {
@@ -751,7 +755,7 @@ cleanup:
 }
 
 /* ASCII: skip count numbers. */
-static pa_status skip_numbers(pa_gmf *g, int64_t count) {
+static pa_status skip_numbers(pa__gmf *g, int64_t count) {
   pa_status st = PA_SUCCESS;
   char buf[48];
   for (int64_t i = 0; i < count; i++) {
@@ -760,19 +764,19 @@ static pa_status skip_numbers(pa_gmf *g, int64_t count) {
     double v;
     PA_CALL(next_token(g, &t, &len));
     if (!t)
-      PA_GMF_FAIL(g, g->line,
-                  "unexpected end of file in %s (truncated file "
-                  "or count larger than the data)",
-                  cur_name(g));
+      PA_IO_GMF_FAIL(g, g->line,
+                     "unexpected end of file in %s (truncated file "
+                     "or count larger than the data)",
+                     cur_name(g));
     if (!parse_real(t, len, &v))
-      PA_GMF_FAIL(g, g->tokline, "expected a number in %s, found '%s'",
-                  cur_name(g), tokstr(t, len, buf));
+      PA_IO_GMF_FAIL(g, g->tokline, "expected a number in %s, found '%s'",
+                     cur_name(g), tokstr(t, len, buf));
   }
 cleanup:
   return st;
 }
 
-pa_status pa__gmf_skip(pa_gmf *g) {
+pa_status pa__gmf_skip(pa__gmf *g) {
   pa_status st = PA_SUCCESS;
   const gmf_kwd *k;
   pa_idx n = 1;
@@ -789,7 +793,7 @@ pa_status pa__gmf_skip(pa_gmf *g) {
         PA_CALL(next_token(g, &t, &len));
       } while (t && t[len - 1] != '"');
     }
-    if (!t) PA_GMF_FAIL(g, g->line, "unexpected end of file in %s", k->name);
+    if (!t) PA_IO_GMF_FAIL(g, g->line, "unexpected end of file in %s", k->name);
     return PA_SUCCESS;
   }
   if (k->rec[0] == 'L') {
@@ -797,7 +801,7 @@ pa_status pa__gmf_skip(pa_gmf *g) {
     PA_CALL(skip_line(g));
     for (pa_idx i = 0; i < n; i++) {
       if (g->eof && g->bpos == g->blen)
-        PA_GMF_FAIL(g, g->line, "unexpected end of file in %s", k->name);
+        PA_IO_GMF_FAIL(g, g->line, "unexpected end of file in %s", k->name);
       PA_CALL(skip_line(g));
     }
     return PA_SUCCESS;
@@ -806,14 +810,15 @@ pa_status pa__gmf_skip(pa_gmf *g) {
     int ntype, size = 0;
     PA_CALL(pa__gmf_count(g, 1, 0, &n));
     PA_CALL(pa__gmf_word(g, &ntype));
-    if (ntype < 1 || ntype > PA_GMF_MAX_TYPES)
-      PA_GMF_FAIL(g, g->tokline, "%s: %d solution types (1 to %d)", k->name,
-                  ntype, PA_GMF_MAX_TYPES);
+    if (ntype < 1 || ntype > PA_IO_GMF_MAX_TYPES)
+      PA_IO_GMF_FAIL(g, g->tokline, "%s: %d solution types (1 to %d)", k->name,
+                     ntype, PA_IO_GMF_MAX_TYPES);
     for (int i = 0; i < ntype; i++) {
       int t;
       PA_CALL(pa__gmf_word(g, &t));
       if (t < 1 || t > 4)
-        PA_GMF_FAIL(g, g->tokline, "%s: solution type %d (1 to 4)", k->name, t);
+        PA_IO_GMF_FAIL(g, g->tokline, "%s: solution type %d (1 to 4)", k->name,
+                       t);
       size += t == 1   ? 1
               : t == 2 ? g->dim
               : t == 3 ? g->dim * (g->dim + 1) / 2
@@ -836,8 +841,8 @@ cleanup:
 /* Writer                                                                   */
 /* ------------------------------------------------------------------------ */
 
-struct pa_gmfw {
-  pa_outfile out;
+struct pa__gmfw {
+  pa__outfile out;
   const char *path;
   int binary, ver, dim;
   int nreal, nint; /* layout of the current keyword's records */
@@ -847,7 +852,7 @@ struct pa_gmfw {
   int64_t end; /* binary: where the current keyword's data ends */
 };
 
-static pa_status wflush(pa_gmfw *w) {
+static pa_status wflush(pa__gmfw *w) {
   pa_status st = PA_SUCCESS;
   if (w->len && fwrite(w->buf, 1, w->len, w->out.fp) != w->len)
     PA_FAIL(PA_ERR_IO, "%s: write error: %s", w->path, strerror(errno));
@@ -856,7 +861,7 @@ cleanup:
   return st;
 }
 
-static pa_status wbytes(pa_gmfw *w, const void *p, size_t n) {
+static pa_status wbytes(pa__gmfw *w, const void *p, size_t n) {
   pa_status st = PA_SUCCESS;
   if (w->len + n > GMFW_BUF) PA_CALL(wflush(w));
   memcpy(w->buf + w->len, p, n);
@@ -866,12 +871,12 @@ cleanup:
   return st;
 }
 
-static pa_status w32(pa_gmfw *w, int32_t v) { return wbytes(w, &v, 4); }
-static pa_status w64(pa_gmfw *w, int64_t v) { return wbytes(w, &v, 8); }
+static pa_status w32(pa__gmfw *w, int32_t v) { return wbytes(w, &v, 4); }
+static pa_status w64(pa__gmfw *w, int64_t v) { return wbytes(w, &v, 8); }
 
-static pa_status wtext(pa_gmfw *w, const char *fmt, ...)
+static pa_status wtext(pa__gmfw *w, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
-static pa_status wtext(pa_gmfw *w, const char *fmt, ...) {
+static pa_status wtext(pa__gmfw *w, const char *fmt, ...) {
   pa_status st = PA_SUCCESS;
   char line[256];
   va_list ap;
@@ -886,9 +891,9 @@ cleanup:
 }
 
 pa_status pa__gmfw_open(const char *path, int binary, int version, int dim,
-                        pa_gmfw **out) {
+                        pa__gmfw **out) {
   pa_status st = PA_SUCCESS;
-  pa_gmfw *w = NULL;
+  pa__gmfw *w = NULL;
   *out = NULL;
   PA_CHECK(dim == 2 || dim == 3, PA_ERR_ARG, "%s: dimension %d", path, dim);
   PA_CHECK(!binary || (version >= 1 && version <= 4), PA_ERR_ARG,
@@ -905,7 +910,7 @@ pa_status pa__gmfw_open(const char *path, int binary, int version, int dim,
     int64_t next = 8 + 4 + (w->ver >= 3 ? 8 : 4) + 4;
     PA_CALL(w32(w, 1));
     PA_CALL(w32(w, w->ver));
-    PA_CALL(w32(w, PA_GMF_DIMENSION));
+    PA_CALL(w32(w, PA_IO_GMF_DIMENSION));
     PA_CALL(w->ver >= 3 ? w64(w, next) : w32(w, (int32_t)next));
     PA_CALL(w32(w, dim));
   } else {
@@ -919,10 +924,10 @@ cleanup:
   return st;
 }
 
-pa_status pa__gmfw_kwd(pa_gmfw *w, int code, pa_idx n, int nreal, int nint,
+pa_status pa__gmfw_kwd(pa__gmfw *w, int code, pa_idx n, int nreal, int nint,
                        int ntype, const int *type) {
   pa_status st = PA_SUCCESS;
-  PA_CHECK(n >= 0 && ntype >= 0 && ntype <= PA_GMF_MAX_TYPES, PA_ERR_ARG,
+  PA_CHECK(n >= 0 && ntype >= 0 && ntype <= PA_IO_GMF_MAX_TYPES, PA_ERR_ARG,
            "pa__gmfw_kwd: bad arguments");
   PA_CHECK(!w->binary || w->off == w->end, PA_ERR_INTERNAL,
            "%s: keyword %s started before the previous one was complete",
@@ -981,7 +986,7 @@ static int fmt_int(char *s, int64_t v) {
   return k;
 }
 
-pa_status pa__gmfw_rec(pa_gmfw *w, const double *rv, const int64_t *iv) {
+pa_status pa__gmfw_rec(pa__gmfw *w, const double *rv, const int64_t *iv) {
   pa_status st = PA_SUCCESS;
   if (w->binary) {
     for (int j = 0; j < w->nreal; j++) {
@@ -1019,12 +1024,12 @@ cleanup:
   return st;
 }
 
-pa_status pa__gmfw_close(pa_gmfw *w) {
+pa_status pa__gmfw_close(pa__gmfw *w) {
   pa_status st = PA_SUCCESS;
   if (w->binary) {
     PA_CHECK(w->off == w->end, PA_ERR_INTERNAL,
              "%s: the last keyword is incomplete", w->path);
-    PA_CALL(w32(w, PA_GMF_END));
+    PA_CALL(w32(w, PA_IO_GMF_END));
     PA_CALL(w->ver >= 3 ? w64(w, 0) : w32(w, 0));
   } else {
     PA_CALL(wtext(w, "\nEnd\n"));
@@ -1036,7 +1041,7 @@ cleanup:
   return st;
 }
 
-void pa__gmfw_abort(pa_gmfw *w) {
+void pa__gmfw_abort(pa__gmfw *w) {
   if (!w) return;
   pa__out_abort(&w->out);
   pa__free(w->buf);
@@ -1069,15 +1074,15 @@ static const struct {
   int target; /* section the indices refer to */
   const char *what;
 } sec_info[S_NSEC] = {
-    [S_EDGE] = {PA_GMF_EDGES, 2, 1, S_VERT, "edge"},
-    [S_TRI] = {PA_GMF_TRIANGLES, 3, 1, S_VERT, "triangle"},
-    [S_TET] = {PA_GMF_TETRAHEDRA, 4, 1, S_VERT, "tetrahedron"},
-    [S_CORNER] = {PA_GMF_CORNERS, 1, 0, S_VERT, "corner"},
-    [S_RIDGE] = {PA_GMF_RIDGES, 1, 0, S_EDGE, "ridge"},
-    [S_REQV] = {PA_GMF_REQUIRED_VERTICES, 1, 0, S_VERT, "required vertex"},
-    [S_REQE] = {PA_GMF_REQUIRED_EDGES, 1, 0, S_EDGE, "required edge"},
-    [S_REQT] = {PA_GMF_REQUIRED_TRIANGLES, 1, 0, S_TRI, "required triangle"},
-    [S_REQTET] = {PA_GMF_REQUIRED_TETRAHEDRA, 1, 0, S_TET,
+    [S_EDGE] = {PA_IO_GMF_EDGES, 2, 1, S_VERT, "edge"},
+    [S_TRI] = {PA_IO_GMF_TRIANGLES, 3, 1, S_VERT, "triangle"},
+    [S_TET] = {PA_IO_GMF_TETRAHEDRA, 4, 1, S_VERT, "tetrahedron"},
+    [S_CORNER] = {PA_IO_GMF_CORNERS, 1, 0, S_VERT, "corner"},
+    [S_RIDGE] = {PA_IO_GMF_RIDGES, 1, 0, S_EDGE, "ridge"},
+    [S_REQV] = {PA_IO_GMF_REQUIRED_VERTICES, 1, 0, S_VERT, "required vertex"},
+    [S_REQE] = {PA_IO_GMF_REQUIRED_EDGES, 1, 0, S_EDGE, "required edge"},
+    [S_REQT] = {PA_IO_GMF_REQUIRED_TRIANGLES, 1, 0, S_TRI, "required triangle"},
+    [S_REQTET] = {PA_IO_GMF_REQUIRED_TETRAHEDRA, 1, 0, S_TET,
                   "required tetrahedron"},
 };
 
@@ -1119,14 +1124,14 @@ static int64_t target_count(const medit_raw *r, int s) {
   return r->sec[t].present ? r->sec[t].n : -1;
 }
 
-static pa_status read_vertices(pa_gmf *g, medit_raw *r) {
+static pa_status read_vertices(pa__gmf *g, medit_raw *r) {
   pa_status st = PA_SUCCESS;
   int d = pa__gmf_dim(g);
   pa_idx n;
   const double *rv;
   const int64_t *iv;
   if (r->vpresent)
-    PA_GMF_FAIL(g, pa__gmf_kwd_loc(g), "duplicate Vertices section");
+    PA_IO_GMF_FAIL(g, pa__gmf_kwd_loc(g), "duplicate Vertices section");
   PA_CALL(pa__gmf_count(g, d, 1, &n));
   PA_ALLOC(r->coord, (size_t)n * d);
   PA_ALLOC(r->vref, n);
@@ -1140,13 +1145,13 @@ static pa_status read_vertices(pa_gmf *g, medit_raw *r) {
     for (size_t k = 0; k < m; k++) {
       for (int j = 0; j < d; j++)
         if (!isfinite(rv[k * d + j]))
-          PA_GMF_FAIL(g, pa__gmf_rec_loc(g, k),
-                      "vertex %zu: coordinate %d is %s", done + k + 1, j + 1,
-                      isnan(rv[k * d + j]) ? "NaN" : "infinite");
+          PA_IO_GMF_FAIL(g, pa__gmf_rec_loc(g, k),
+                         "vertex %zu: coordinate %d is %s", done + k + 1, j + 1,
+                         isnan(rv[k * d + j]) ? "NaN" : "infinite");
       if (iv[k] < INT32_MIN || iv[k] > INT32_MAX)
-        PA_GMF_FAIL(g, pa__gmf_rec_loc(g, k),
-                    "vertex %zu: reference %lld does not fit in 32 bits",
-                    done + k + 1, (long long)iv[k]);
+        PA_IO_GMF_FAIL(g, pa__gmf_rec_loc(g, k),
+                       "vertex %zu: reference %lld does not fit in 32 bits",
+                       done + k + 1, (long long)iv[k]);
       r->vref[done + k] = (int32_t)iv[k];
     }
     memcpy(r->coord + done * d, rv, m * d * sizeof(double));
@@ -1156,15 +1161,15 @@ cleanup:
   return st;
 }
 
-static pa_status read_section(pa_gmf *g, medit_raw *r, int s) {
+static pa_status read_section(pa__gmf *g, medit_raw *r, int s) {
   pa_status st = PA_SUCCESS;
   msec *sec = &r->sec[s];
   int nper = sec_info[s].nper, ni = nper + sec_info[s].hasref;
   const int64_t *iv;
   pa_idx n;
   if (sec->present)
-    PA_GMF_FAIL(g, pa__gmf_kwd_loc(g), "duplicate %s section",
-                pa__gmf_kwd_name(sec_info[s].code));
+    PA_IO_GMF_FAIL(g, pa__gmf_kwd_loc(g), "duplicate %s section",
+                   pa__gmf_kwd_name(sec_info[s].code));
   sec->loc = pa__gmf_kwd_loc(g);
   PA_CALL(pa__gmf_count(g, 0, ni, &n));
   PA_ALLOC(sec->v, (size_t)n * nper);
@@ -1183,7 +1188,7 @@ static pa_status read_section(pa_gmf *g, medit_raw *r, int s) {
       const int64_t *rec = iv + k * ni;
       for (int j = 0; j < nper; j++) {
         if (rec[j] < 1 || rec[j] > lim)
-          PA_GMF_FAIL(
+          PA_IO_GMF_FAIL(
               g, pa__gmf_rec_loc(g, k),
               "%s %zu: %s index %lld is outside [1, %lld]%s", sec_info[s].what,
               done + k + 1, target_name(sec_info[s].target), (long long)rec[j],
@@ -1192,9 +1197,9 @@ static pa_status read_section(pa_gmf *g, medit_raw *r, int s) {
       }
       if (sec_info[s].hasref) {
         if (rec[nper] < INT32_MIN || rec[nper] > INT32_MAX)
-          PA_GMF_FAIL(g, pa__gmf_rec_loc(g, k),
-                      "%s %zu: reference %lld does not fit in 32 bits",
-                      sec_info[s].what, done + k + 1, (long long)rec[nper]);
+          PA_IO_GMF_FAIL(g, pa__gmf_rec_loc(g, k),
+                         "%s %zu: reference %lld does not fit in 32 bits",
+                         sec_info[s].what, done + k + 1, (long long)rec[nper]);
         sec->ref[done + k] = (int32_t)rec[nper];
       }
     }
@@ -1205,7 +1210,7 @@ cleanup:
 }
 
 /* Check the indices of sections read before the section they refer to. */
-static pa_status check_deferred(pa_gmf *g, medit_raw *r) {
+static pa_status check_deferred(pa__gmf *g, medit_raw *r) {
   pa_status st = PA_SUCCESS;
   for (int s = 0; s < S_NSEC; s++) {
     msec *sec = &r->sec[s];
@@ -1215,11 +1220,11 @@ static pa_status check_deferred(pa_gmf *g, medit_raw *r) {
     int nper = sec_info[s].nper;
     for (size_t i = 0; i < (size_t)sec->n * nper; i++)
       if (sec->v[i] >= lim)
-        PA_GMF_FAIL(g, sec->loc,
-                    "%s: %s %zu refers to %s %lld, outside [1, %lld]",
-                    pa__gmf_kwd_name(sec_info[s].code), sec_info[s].what,
-                    i / nper + 1, target_name(sec_info[s].target),
-                    (long long)sec->v[i] + 1, (long long)lim);
+        PA_IO_GMF_FAIL(g, sec->loc,
+                       "%s: %s %zu refers to %s %lld, outside [1, %lld]",
+                       pa__gmf_kwd_name(sec_info[s].code), sec_info[s].what,
+                       i / nper + 1, target_name(sec_info[s].target),
+                       (long long)sec->v[i] + 1, (long long)lim);
     sec->checked = 1;
   }
 cleanup:
@@ -1315,7 +1320,7 @@ cleanup:
 pa_status pa__medit_read(const char *path, pa_mesh **mesh) {
   pa_status st = PA_SUCCESS;
   medit_raw r;
-  pa_gmf *g = NULL;
+  pa__gmf *g = NULL;
   char ext[16];
   memset(&r, 0, sizeof r);
   *mesh = NULL;
@@ -1325,27 +1330,27 @@ pa_status pa__medit_read(const char *path, pa_mesh **mesh) {
     int code, s = -1;
     pa_idx n;
     PA_CALL(pa__gmf_next(g, &code));
-    if (code == PA_GMF_END) break;
+    if (code == PA_IO_GMF_END) break;
     for (int i = 0; i < S_NSEC; i++)
       if (sec_info[i].code == code) s = i;
     switch (code) {
-    case PA_GMF_VERTICES:
+    case PA_IO_GMF_VERTICES:
       PA_CALL(read_vertices(g, &r));
       break;
-    case PA_GMF_TETRAHEDRA:
+    case PA_IO_GMF_TETRAHEDRA:
       if (pa__gmf_dim(g) == 2)
-        PA_GMF_FAIL(g, pa__gmf_kwd_loc(g),
-                    "Tetrahedra in a mesh of "
-                    "Dimension 2");
+        PA_IO_GMF_FAIL(g, pa__gmf_kwd_loc(g),
+                       "Tetrahedra in a mesh of "
+                       "Dimension 2");
       PA_CALL(read_section(g, &r, s));
       break;
-    case PA_GMF_QUADRILATERALS:
-    case PA_GMF_PRISMS:
-    case PA_GMF_HEXAHEDRA:
-    case PA_GMF_PYRAMIDS: {
-      int nv = code == PA_GMF_QUADRILATERALS ? 4
-               : code == PA_GMF_PRISMS       ? 6
-               : code == PA_GMF_HEXAHEDRA    ? 8
+    case PA_IO_GMF_QUADRILATERALS:
+    case PA_IO_GMF_PRISMS:
+    case PA_IO_GMF_HEXAHEDRA:
+    case PA_IO_GMF_PYRAMIDS: {
+      int nv = code == PA_IO_GMF_QUADRILATERALS ? 4
+               : code == PA_IO_GMF_PRISMS       ? 6
+               : code == PA_IO_GMF_HEXAHEDRA    ? 8
                                              : 5;
       PA_CALL(pa__gmf_count(g, 0, nv + 1, &n));
       if (n)
@@ -1363,9 +1368,9 @@ pa_status pa__medit_read(const char *path, pa_mesh **mesh) {
     }
   }
   if (!pa__gmf_dim(g))
-    PA_GMF_FAIL(g, pa__gmf_loc(g),
-                "missing Dimension keyword (not a Medit "
-                "mesh file?)");
+    PA_IO_GMF_FAIL(g, pa__gmf_loc(g),
+                   "missing Dimension keyword (not a Medit "
+                   "mesh file?)");
   if (!r.vpresent) r.fdim = pa__gmf_dim(g);
   PA_CALL(check_deferred(g, &r));
 
@@ -1386,7 +1391,7 @@ cleanup:
 /* Mesh writing                                                             */
 /* ------------------------------------------------------------------------ */
 
-static pa_status write_cells(pa_gmfw *w, int code, pa_idx n, int nper,
+static pa_status write_cells(pa__gmfw *w, int code, pa_idx n, int nper,
                              const pa_idx *v, const int32_t *ref) {
   pa_status st = PA_SUCCESS;
   int64_t iv[5];
@@ -1402,8 +1407,8 @@ cleanup:
   return st;
 }
 
-static pa_status write_list(pa_gmfw *w, int code, pa_idx n, const uint8_t *flag,
-                            uint8_t bit) {
+static pa_status write_list(pa__gmfw *w, int code, pa_idx n,
+                            const uint8_t *flag, uint8_t bit) {
   pa_status st = PA_SUCCESS;
   pa_idx count = 0;
   for (pa_idx i = 0; i < n; i++)
@@ -1422,7 +1427,7 @@ cleanup:
 pa_status pa__medit_write(pa_mesh *m, const char *path, int binary,
                           int version) {
   pa_status st = PA_SUCCESS;
-  pa_gmfw *w = NULL;
+  pa__gmfw *w = NULL;
   int d = m->dim;
   PA_CHECK(version >= 0 && version <= 4, PA_ERR_ARG,
            "%s: .meshb version must be 1 to 4 (0: default), got %d", path,
@@ -1436,7 +1441,7 @@ pa_status pa__medit_write(pa_mesh *m, const char *path, int binary,
   }
   PA_CALL(pa__gmfw_open(path, binary, version, d, &w));
 
-  PA_CALL(pa__gmfw_kwd(w, PA_GMF_VERTICES, m->nv, d, 1, 0, NULL));
+  PA_CALL(pa__gmfw_kwd(w, PA_IO_GMF_VERTICES, m->nv, d, 1, 0, NULL));
   for (pa_idx i = 0; i < m->nv; i++) {
     int64_t ref = m->vref[i];
     PA_CALL(pa__gmfw_rec(w, m->coord + (size_t)d * i, &ref));
@@ -1450,22 +1455,22 @@ pa_status pa__medit_write(pa_mesh *m, const char *path, int binary,
   const pa_idx *tri = d == 2 ? m->elem : m->bdry;
   const int32_t *triref = d == 2 ? m->eref : m->bref;
   const uint8_t *triflag = d == 2 ? m->eflag : m->bflag;
-  PA_CALL(write_cells(w, PA_GMF_EDGES, nedg, 2, edg, edgref));
-  PA_CALL(write_cells(w, PA_GMF_TRIANGLES, ntri, 3, tri, triref));
+  PA_CALL(write_cells(w, PA_IO_GMF_EDGES, nedg, 2, edg, edgref));
+  PA_CALL(write_cells(w, PA_IO_GMF_TRIANGLES, ntri, 3, tri, triref));
   if (d == 3)
-    PA_CALL(write_cells(w, PA_GMF_TETRAHEDRA, m->ne, 4, m->elem, m->eref));
-  PA_CALL(write_list(w, PA_GMF_CORNERS, m->nv, m->vflag, PA_FLAG_CORNER));
-  PA_CALL(write_list(w, PA_GMF_REQUIRED_VERTICES, m->nv, m->vflag,
+    PA_CALL(write_cells(w, PA_IO_GMF_TETRAHEDRA, m->ne, 4, m->elem, m->eref));
+  PA_CALL(write_list(w, PA_IO_GMF_CORNERS, m->nv, m->vflag, PA_FLAG_CORNER));
+  PA_CALL(write_list(w, PA_IO_GMF_REQUIRED_VERTICES, m->nv, m->vflag,
                      PA_FLAG_REQUIRED));
-  PA_CALL(write_list(w, PA_GMF_RIDGES, nedg, edgflag, PA_FLAG_RIDGE));
+  PA_CALL(write_list(w, PA_IO_GMF_RIDGES, nedg, edgflag, PA_FLAG_RIDGE));
   PA_CALL(
-      write_list(w, PA_GMF_REQUIRED_EDGES, nedg, edgflag, PA_FLAG_REQUIRED));
-  PA_CALL(write_list(w, PA_GMF_REQUIRED_TRIANGLES, ntri, triflag,
+      write_list(w, PA_IO_GMF_REQUIRED_EDGES, nedg, edgflag, PA_FLAG_REQUIRED));
+  PA_CALL(write_list(w, PA_IO_GMF_REQUIRED_TRIANGLES, ntri, triflag,
                      PA_FLAG_REQUIRED));
   if (d == 3)
-    PA_CALL(write_list(w, PA_GMF_REQUIRED_TETRAHEDRA, m->ne, m->eflag,
+    PA_CALL(write_list(w, PA_IO_GMF_REQUIRED_TETRAHEDRA, m->ne, m->eflag,
                        PA_FLAG_REQUIRED));
-  pa_gmfw *done = w;
+  pa__gmfw *done = w;
   w = NULL;
   PA_CALL(pa__gmfw_close(done));
 cleanup:

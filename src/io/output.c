@@ -40,8 +40,8 @@
 /* Temporaries that may exist, process-wide (a signal is handled by whichever
  * thread receives it). Fixed so that the handler reads it without locks; a
  * command writes a handful of files, a rank of a distributed writer four. */
-#define PA_OUT_MAX_TEMPS 256
-static _Atomic(char *) temps[PA_OUT_MAX_TEMPS];
+#define MAX_TEMPS 256
+static _Atomic(char *) temps[MAX_TEMPS];
 
 /* A file of a transaction: a completed temporary waiting for its rename, or
  * (tmppath NULL) a path to remove at commit. */
@@ -64,7 +64,7 @@ static _Thread_local pa_output current;
 /* ---- temporaries and signals ---- */
 
 static int temp_list(char *tmppath) {
-  for (int i = 0; i < PA_OUT_MAX_TEMPS; i++) {
+  for (int i = 0; i < MAX_TEMPS; i++) {
     char *expected = NULL;
     if (atomic_compare_exchange_strong(&temps[i], &expected, tmppath)) return i;
   }
@@ -79,7 +79,7 @@ static void temp_unlist(int slot) {
  * signal again, which then ends the process as it would have without us. */
 static void on_signal(int sig) {
   int saved = errno;
-  for (int i = 0; i < PA_OUT_MAX_TEMPS; i++) {
+  for (int i = 0; i < MAX_TEMPS; i++) {
     char *p = atomic_load(&temps[i]);
     if (p) unlink(p);
   }
@@ -318,10 +318,10 @@ void pa_output_abort(pa_output *tx) {
 
 /* The public handle of a file the caller writes itself. */
 struct pa_output_file {
-  pa_outfile out;
+  pa__outfile out;
 };
 
-pa_status pa__out_open(pa_outfile *out, const char *path) {
+pa_status pa__out_open(pa__outfile *out, const char *path) {
   pa_status st = PA_SUCCESS;
   int fd = -1;
   memset(out, 0, sizeof *out);
@@ -340,7 +340,7 @@ pa_status pa__out_open(pa_outfile *out, const char *path) {
   out->slot = temp_list(out->tmppath);
   PA_CHECK(out->slot >= 0, PA_ERR_IO,
            "%s: more than %d files being written at once", path,
-           PA_OUT_MAX_TEMPS);
+           MAX_TEMPS);
   /* O_EXCL: never write through a file (or link) that is already there */
   fd = open(out->tmppath, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC,
             0666);
@@ -374,7 +374,7 @@ cleanup:
   return st;
 }
 
-pa_status pa__out_reopen(pa_outfile *out, const char *path) {
+pa_status pa__out_reopen(pa__outfile *out, const char *path) {
   pa_status st = PA_SUCCESS;
   memset(out, 0, sizeof *out);
   out->slot = -1;
@@ -397,7 +397,7 @@ cleanup:
   return st;
 }
 
-pa_status pa__out_commit(pa_outfile *out) {
+pa_status pa__out_commit(pa__outfile *out) {
   pa_status st = PA_SUCCESS;
   PA_CHECK(out->fp, PA_ERR_ARG, "output file is not open");
   int err = 0, bad = fflush(out->fp) != 0 || ferror(out->fp);
@@ -421,7 +421,7 @@ cleanup:
   return st;
 }
 
-void pa__out_abort(pa_outfile *out) {
+void pa__out_abort(pa__outfile *out) {
   if (!out->path) return; /* never opened, or committed */
   if (out->fp) fclose(out->fp);
   out->fp = NULL;
@@ -495,7 +495,7 @@ int pa__output_depth(void) { return current.depth; }
 pa_status pa__file_fnv1a64(const char *path, int64_t *bytes, uint64_t *hash) {
   pa_status st = PA_SUCCESS;
   unsigned char *buf = NULL;
-  uint64_t h = PA_FNV1A64_INIT;
+  uint64_t h = PA_IO_FNV1A64_INIT;
   int64_t total = 0;
   size_t n;
   /* large enough to read at disk speed, small beside a mesh */

@@ -137,7 +137,7 @@ cleanup:
 }
 
 /* Read the SolAtVertices keyword g is on; creates *sp on the first one. */
-static pa_status read_sol_at_vertices(pa_gmf *g, pa_sol **sp) {
+static pa_status read_sol_at_vertices(pa__gmf *g, pa_sol **sp) {
   pa_status st = PA_SUCCESS;
   int *type = NULL, ntype = 0, size = 0, first;
   pa_idx n;
@@ -147,11 +147,11 @@ static pa_status read_sol_at_vertices(pa_gmf *g, pa_sol **sp) {
   PA_CALL(pa__gmf_count(g, 1, 0, &n)); /* fails if there is no Dimension */
   dim = pa__gmf_dim(g);
   PA_CALL(pa__gmf_word(g, &ntype));
-  if (ntype < 1 || ntype > PA_GMF_MAX_TYPES)
-    PA_GMF_FAIL(g, pa__gmf_loc(g),
-                "SolAtVertices: %d solution types (1 to "
-                "%d)",
-                ntype, PA_GMF_MAX_TYPES);
+  if (ntype < 1 || ntype > PA_IO_GMF_MAX_TYPES)
+    PA_IO_GMF_FAIL(g, pa__gmf_loc(g),
+                   "SolAtVertices: %d solution types (1 to "
+                   "%d)",
+                   ntype, PA_IO_GMF_MAX_TYPES);
   PA_ALLOC(type, ntype);
   for (int i = 0; i < ntype; i++) {
     PA_CALL(pa__gmf_word(g, &type[i]));
@@ -160,10 +160,10 @@ static pa_status read_sol_at_vertices(pa_gmf *g, pa_sol **sp) {
                             "SolAtVertices: full (non-symmetric) matrix "
                             "solutions (type 4) are not supported"));
     if (type[i] < 1 || type[i] > 3)
-      PA_GMF_FAIL(g, pa__gmf_loc(g),
-                  "SolAtVertices: solution type %d (1 "
-                  "scalar, 2 vector, 3 symmetric tensor)",
-                  type[i]);
+      PA_IO_GMF_FAIL(g, pa__gmf_loc(g),
+                     "SolAtVertices: solution type %d (1 "
+                     "scalar, 2 vector, 3 symmetric tensor)",
+                     type[i]);
     size += kind_ncomp(dim, type[i]);
   }
   PA_CALL(pa__gmf_check_room(g, n, size, 0));
@@ -177,8 +177,8 @@ static pa_status read_sol_at_vertices(pa_gmf *g, pa_sol **sp) {
     memcpy((*sp)->origin, where, len + 1);
   }
   else if ((*sp)->nvert != n)
-    PA_GMF_FAIL(g, loc, "SolAtVertices with %d vertices after one with %d",
-                (int)n, (int)(*sp)->nvert);
+    PA_IO_GMF_FAIL(g, loc, "SolAtVertices with %d vertices after one with %d",
+                   (int)n, (int)(*sp)->nvert);
   pa_sol *s = *sp;
   first = s->nfield;
   for (int i = 0; i < ntype; i++) {
@@ -206,7 +206,7 @@ cleanup:
 
 pa_status pa_sol_read(const char *path, pa_sol **sol) {
   pa_status st = PA_SUCCESS;
-  pa_gmf *g = NULL;
+  pa__gmf *g = NULL;
   pa_sol *s = NULL;
   char ext[16];
   PA_CHECK(path && sol, PA_ERR_ARG, "pa_sol_read: NULL argument");
@@ -219,17 +219,17 @@ pa_status pa_sol_read(const char *path, pa_sol **sol) {
   for (;;) {
     int code;
     PA_CALL(pa__gmf_next(g, &code));
-    if (code == PA_GMF_END) break;
-    if (code == PA_GMF_SOL_AT_VERTICES)
+    if (code == PA_IO_GMF_END) break;
+    if (code == PA_IO_GMF_SOL_AT_VERTICES)
       PA_CALL(read_sol_at_vertices(g, &s));
     else
       PA_CALL(pa__gmf_skip(g));
   }
   if (!pa__gmf_dim(g))
-    PA_GMF_FAIL(g, pa__gmf_loc(g),
-                "missing Dimension keyword (not a Medit "
-                "solution file?)");
-  if (!s) PA_GMF_FAIL(g, pa__gmf_loc(g), "no SolAtVertices keyword");
+    PA_IO_GMF_FAIL(g, pa__gmf_loc(g),
+                   "missing Dimension keyword (not a Medit "
+                   "solution file?)");
+  if (!s) PA_IO_GMF_FAIL(g, pa__gmf_loc(g), "no SolAtVertices keyword");
   size_t len = strlen(path);
   PA_ALLOC(s->path, len + 1);
   memcpy(s->path, path, len + 1);
@@ -243,7 +243,7 @@ cleanup:
 
 pa_status pa_sol_write(const pa_sol *sol, const char *path) {
   pa_status st = PA_SUCCESS;
-  pa_gmfw *w = NULL;
+  pa__gmfw *w = NULL;
   int *type = NULL, size = 0;
   double *rec = NULL;
   char ext[16];
@@ -253,8 +253,8 @@ pa_status pa_sol_write(const pa_sol *sol, const char *path) {
            "%s: unknown solution file extension '%s' (expected .sol or .solb)",
            path, ext);
   PA_CHECK(sol->nfield > 0, PA_ERR_ARG, "%s: the solution has no field", path);
-  PA_CHECK(sol->nfield <= PA_GMF_MAX_TYPES, PA_ERR_ARG,
-           "%s: at most %d fields per file", path, PA_GMF_MAX_TYPES);
+  PA_CHECK(sol->nfield <= PA_IO_GMF_MAX_TYPES, PA_ERR_ARG,
+           "%s: at most %d fields per file", path, PA_IO_GMF_MAX_TYPES);
   PA_ALLOC(type, sol->nfield);
   for (int k = 0; k < sol->nfield; k++) {
     type[k] = (int)sol->field[k].kind;
@@ -264,7 +264,7 @@ pa_status pa_sol_write(const pa_sol *sol, const char *path) {
   int binary = !strcmp(ext, ".solb");
   int version = pa__gmf_default_version((int64_t)sol->nvert * size * 8);
   PA_CALL(pa__gmfw_open(path, binary, version, sol->dim, &w));
-  PA_CALL(pa__gmfw_kwd(w, PA_GMF_SOL_AT_VERTICES, sol->nvert, size, 0,
+  PA_CALL(pa__gmfw_kwd(w, PA_IO_GMF_SOL_AT_VERTICES, sol->nvert, size, 0,
                        sol->nfield, type));
   for (pa_idx i = 0; i < sol->nvert; i++) {
     double *p = rec;
@@ -275,7 +275,7 @@ pa_status pa_sol_write(const pa_sol *sol, const char *path) {
     }
     PA_CALL(pa__gmfw_rec(w, rec, NULL));
   }
-  pa_gmfw *done = w;
+  pa__gmfw *done = w;
   w = NULL;
   PA_CALL(pa__gmfw_close(done));
 cleanup:

@@ -138,7 +138,7 @@ static void edge_range(const pa_mesh *m, pa_idx e, double *lo, double *hi) {
 pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics,
                         const pa__vtu_extra *x) {
   pa_status st = PA_SUCCESS;
-  pa_outfile out = {0};
+  pa__outfile out = {0};
   int64_t *i64 = NULL;
   double *f64 = NULL;
   uint8_t *u8 = NULL;
@@ -161,7 +161,7 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics,
     A_CGID,
     A_FIELD
   };
-  vtu_array arr[A_FIELD + PA_MAX_FIELDS];
+  vtu_array arr[A_FIELD + PA_MESH_MAX_FIELDS];
   PA_CHECK(mesh && path, PA_ERR_ARG, "pa__vtu_write: NULL argument");
   pa_mesh *m = mesh;
   int dim = m->dim, nn = dim + 1, nc = m->met_ncomp;
@@ -196,7 +196,7 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics,
                                    8 * nv * (uint64_t)m->field[k].ncomp,
                                    0};
   /* Appended order: point data, cell data, points, cells. */
-  int order[A_FIELD + PA_MAX_FIELDS], no = 0, npoint, ncelld;
+  int order[A_FIELD + PA_MESH_MAX_FIELDS], no = 0, npoint, ncelld;
   if (nc) order[no++] = A_MET, order[no++] = A_SIZE;
   for (int k = 0; k < m->nfield; k++) order[no++] = A_FIELD + k;
   order[no++] = A_VREF;

@@ -23,7 +23,7 @@
 #include "mesh/mesh.h"
 
 /* Kuhn tetrahedra as cube corners (bit 0: +x, bit 1: +y, bit 2: +z). */
-static const int pa_kuhn[6][4] = {
+static const int kuhn[6][4] = {
     {0, 1, 3, 7}, {0, 2, 6, 7}, {0, 4, 5, 7}, /* even paths */
     {0, 1, 7, 5}, {0, 2, 7, 3}, {0, 4, 7, 6}  /* odd paths, last two swapped */
 };
@@ -89,7 +89,7 @@ static void generate_cube(pa_mesh *m, pa_idx n) {
       for (pa_idx i = 0; i < n; i++) {
         pa_idx base = i + stride[1] * j + stride[2] * k;
         for (int s = 0; s < 6; s++, t += 4)
-          for (int l = 0; l < 4; l++) t[l] = base + off[pa_kuhn[s][l]];
+          for (int l = 0; l < 4; l++) t[l] = base + off[kuhn[s][l]];
       }
 
   /* Side (axis a, low or high): squares in the axes p, q with (p, q, a)

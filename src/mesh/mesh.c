@@ -268,8 +268,8 @@ pa_status pa_mesh_add_field(pa_mesh *m, const char *name, int ncomp,
   pa_status st = PA_SUCCESS;
   double *val = NULL;
   PA_CHECK(m && name && ncomp > 0, PA_ERR_ARG, "pa_mesh_add_field: bad arguments");
-  PA_CHECK(m->nfield < PA_MAX_FIELDS, PA_ERR_ARG,
-           "a mesh holds at most %d fields", PA_MAX_FIELDS);
+  PA_CHECK(m->nfield < PA_MESH_MAX_FIELDS, PA_ERR_ARG,
+           "a mesh holds at most %d fields", PA_MESH_MAX_FIELDS);
   PA_CHECK(values || m->nv == 0, PA_ERR_ARG, "pa_mesh_add_field: NULL values");
   for (size_t i = 0; i < (size_t)m->nv * ncomp; i++)
     PA_CHECK(isfinite(values[i]), PA_ERR_ARG,
@@ -277,7 +277,7 @@ pa_status pa_mesh_add_field(pa_mesh *m, const char *name, int ncomp,
              i / ncomp + 1);
   PA_ALLOC(val, (m->capv ? m->capv : 1) * ncomp);
   if (m->nv) memcpy(val, values, (size_t)m->nv * ncomp * sizeof(double));
-  pa_field *f = &m->field[m->nfield++];
+  pa__field *f = &m->field[m->nfield++];
   snprintf(f->name, sizeof f->name, "%s", name);
   f->ncomp = ncomp;
   f->val = val;
@@ -317,7 +317,7 @@ static char *copy_string(const char *s) {
 
 pa_status pa__mesh_copy_names(pa_mesh *dst, const pa_mesh *src) {
   pa_status st = PA_SUCCESS;
-  pa_name *names = NULL;
+  pa__name *names = NULL;
   int n = 0;
   if (src->nname) {
     PA_CALLOC(names, src->nname);
@@ -418,28 +418,28 @@ pa_status pa_mesh_copy(const pa_mesh *src, pa_mesh **dst) {
   m->ned = src->ned;
   /* Empty arrays may be NULL: copy only what exists (memcpy(NULL,..,0) is
    * undefined behaviour). */
-#define PA_COPY(dst, srcp, n)                                                \
+#define COPY_ARRAY(dst, srcp, n)                                             \
   do {                                                                       \
     if ((n) > 0) memcpy((dst), (srcp), (n) * sizeof(*(srcp)));               \
   } while (0)
-  PA_COPY(m->coord, src->coord, (size_t)d * src->nv);
-  PA_COPY(m->vref, src->vref, (size_t)src->nv);
-  PA_COPY(m->vflag, src->vflag, (size_t)src->nv);
-  PA_COPY(m->elem, src->elem, (size_t)(d + 1) * src->ne);
-  PA_COPY(m->eref, src->eref, (size_t)src->ne);
-  PA_COPY(m->eflag, src->eflag, (size_t)src->ne);
-  PA_COPY(m->bdry, src->bdry, (size_t)d * src->nb);
-  PA_COPY(m->bref, src->bref, (size_t)src->nb);
-  PA_COPY(m->bflag, src->bflag, (size_t)src->nb);
-  PA_COPY(m->edge, src->edge, (size_t)2 * src->ned);
-  PA_COPY(m->edref, src->edref, (size_t)src->ned);
-  PA_COPY(m->edflag, src->edflag, (size_t)src->ned);
+  COPY_ARRAY(m->coord, src->coord, (size_t)d * src->nv);
+  COPY_ARRAY(m->vref, src->vref, (size_t)src->nv);
+  COPY_ARRAY(m->vflag, src->vflag, (size_t)src->nv);
+  COPY_ARRAY(m->elem, src->elem, (size_t)(d + 1) * src->ne);
+  COPY_ARRAY(m->eref, src->eref, (size_t)src->ne);
+  COPY_ARRAY(m->eflag, src->eflag, (size_t)src->ne);
+  COPY_ARRAY(m->bdry, src->bdry, (size_t)d * src->nb);
+  COPY_ARRAY(m->bref, src->bref, (size_t)src->nb);
+  COPY_ARRAY(m->bflag, src->bflag, (size_t)src->nb);
+  COPY_ARRAY(m->edge, src->edge, (size_t)2 * src->ned);
+  COPY_ARRAY(m->edref, src->edref, (size_t)src->ned);
+  COPY_ARRAY(m->edflag, src->edflag, (size_t)src->ned);
   if (src->met_ncomp)
-    PA_COPY(m->met, src->met, (size_t)src->met_ncomp * src->nv);
+    COPY_ARRAY(m->met, src->met, (size_t)src->met_ncomp * src->nv);
   for (int k = 0; k < src->nfield; k++)
-    PA_COPY(m->field[k].val, src->field[k].val,
-            (size_t)src->field[k].ncomp * src->nv);
-#undef PA_COPY
+    COPY_ARRAY(m->field[k].val, src->field[k].val,
+               (size_t)src->field[k].ncomp * src->nv);
+#undef COPY_ARRAY
   PA_CALL(pa__mesh_copy_names(m, src));
   *dst = m;
   m = NULL;

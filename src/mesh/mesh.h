@@ -15,22 +15,23 @@
 
 #include "core/core.h"
 
-#define PA_MAX_FIELDS 16
-#define PA_FIELD_NAME_LEN 64
+/* Most user vertex fields of a mesh, and the longest name of one. */
+#define PA_MESH_MAX_FIELDS 16
+#define PA_MESH_FIELD_NAME_LEN 64
 
-typedef struct pa_field {
-  char name[PA_FIELD_NAME_LEN];
+typedef struct pa__field {
+  char name[PA_MESH_FIELD_NAME_LEN];
   int ncomp;
   double *val; /* capv * ncomp */
-} pa_field;
+} pa__field;
 
 /* A physical name (Gmsh $PhysicalNames): the name of the entities of
  * topological dimension dim (0-3) whose reference is tag. */
-typedef struct pa_name {
+typedef struct pa__name {
   int dim;
   int32_t tag;
   char *name; /* NUL-terminated, allocated */
-} pa_name;
+} pa__name;
 
 struct pa_mesh {
   int dim; /* 2 or 3 */
@@ -69,11 +70,11 @@ struct pa_mesh {
 
   /* user vertex fields */
   int nfield;
-  pa_field field[PA_MAX_FIELDS];
+  pa__field field[PA_MESH_MAX_FIELDS];
 
   /* physical names, sorted by (dim, tag), each (dim, tag) once */
   int nname;
-  pa_name *names;
+  pa__name *names;
 
   /* derived structures, NULL when not built */
   pa_idx *adja;       /* (dim+1) * ne: (dim+1)*f + j, or -1 */

@@ -33,9 +33,9 @@
 #endif
 
 /* Shewchuk's epsilon (half an ulp of 1) and stage-A error bound factors. */
-#define PA_EPS 0x1p-53
-#define PA_CCW_BOUND_A ((3.0 + 16.0 * PA_EPS) * PA_EPS)
-#define PA_O3D_BOUND_A ((7.0 + 56.0 * PA_EPS) * PA_EPS)
+#define EPS 0x1p-53
+#define CCW_BOUND_A ((3.0 + 16.0 * EPS) * EPS)
+#define O3D_BOUND_A ((7.0 + 56.0 * EPS) * EPS)
 
 /* a + b = x + y exactly, x = fl(a + b). */
 static inline void two_sum(double a, double b, double *x, double *y) {
@@ -116,12 +116,12 @@ static int scale_expansion(int elen, const double *e, double b, double *h) {
 }
 
 /* Longest expansion built below: a 192-term 3D determinant. */
-#define PA_EXP_MAX 192
+#define EXP_MAX 192
 
-/* h = e * f (both short); h has room for 2*elen*flen <= PA_EXP_MAX. */
+/* h = e * f (both short); h has room for 2*elen*flen <= EXP_MAX. */
 static int expansion_product(int elen, const double *e, int flen,
                              const double *f, double *h) {
-  double part[PA_EXP_MAX], acc[PA_EXP_MAX];
+  double part[EXP_MAX], acc[EXP_MAX];
   int n = scale_expansion(elen, e, f[0], h);
   for (int j = 1; j < flen; j++) {
     int np = scale_expansion(elen, e, f[j], part);
@@ -170,7 +170,7 @@ static double orient3d_exact(const double *a, const double *b, const double *c,
     diff_expansion(d[k], a[k], w[k]);
   }
   /* det = ux (vy wz - vz wy) + uy (vz wx - vx wz) + uz (vx wy - vy wx) */
-  double minor[16], term[3][64], s01[128], det[PA_EXP_MAX];
+  double minor[16], term[3][64], s01[128], det[EXP_MAX];
   int nterm[3];
   for (int k = 0; k < 3; k++) {
     int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
@@ -186,7 +186,7 @@ double pa__orient2d(const double *a, const double *b, const double *c) {
   double l = (b[0] - a[0]) * (c[1] - a[1]);
   double r = (b[1] - a[1]) * (c[0] - a[0]);
   double det = l - r;
-  double bound = PA_CCW_BOUND_A * (fabs(l) + fabs(r));
+  double bound = CCW_BOUND_A * (fabs(l) + fabs(r));
   if (det > bound || -det > bound) return det;
   return orient2d_exact(a, b, c);
 }
@@ -203,7 +203,7 @@ double pa__orient3d(const double *a, const double *b, const double *c,
   double perm = fabs(ux) * (fabs(vywz) + fabs(vzwy)) +
                 fabs(uy) * (fabs(vzwx) + fabs(vxwz)) +
                 fabs(uz) * (fabs(vxwy) + fabs(vywx));
-  double bound = PA_O3D_BOUND_A * perm;
+  double bound = O3D_BOUND_A * perm;
   if (det > bound || -det > bound) return det;
   return orient3d_exact(a, b, c, d);
 }

@@ -13,7 +13,8 @@
  * then the faces of one bucket are sorted by their two other vertices (one in
  * 2D) and equal neighbours paired. Meshes numbered with some locality (all
  * generated and most read ones) keep the elements of a bucket close in memory,
- * so the three passes run at memory speed: about a second for 10 M tets.
+ * so the three passes run at memory speed (docs/BENCHMARKS.md, "The
+ * distributed mesh").
  *
  * The boundary lookup (bhash) is an open-addressing table with linear probing
  * of boundary-entity indices, keyed by the entity's sorted vertex tuple; the
@@ -28,19 +29,19 @@
 #include <stdio.h>
 
 /* Local vertices of face i of a triangle / tetrahedron, oriented outward. */
-static const int pa_face_tri[3][2] = {{1, 2}, {2, 0}, {0, 1}};
-static const int pa_face_tet[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3},
+static const int face_tri[3][2] = {{1, 2}, {2, 0}, {0, 1}};
+static const int face_tet[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3},
                                       {0, 2, 1}};
 
 void pa__elem_face(const pa_mesh *mesh, pa_idx e, int i, pa_idx *face) {
   const pa_idx *v = mesh->elem + (size_t)(mesh->dim + 1) * e;
   if (mesh->dim == 2) {
-    face[0] = v[pa_face_tri[i][0]];
-    face[1] = v[pa_face_tri[i][1]];
+    face[0] = v[face_tri[i][0]];
+    face[1] = v[face_tri[i][1]];
   } else {
-    face[0] = v[pa_face_tet[i][0]];
-    face[1] = v[pa_face_tet[i][1]];
-    face[2] = v[pa_face_tet[i][2]];
+    face[0] = v[face_tet[i][0]];
+    face[1] = v[face_tet[i][1]];
+    face[2] = v[face_tet[i][2]];
   }
 }
 

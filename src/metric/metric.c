@@ -351,7 +351,7 @@ void pa__metric_interp(int dim, int ncomp, int n, const double *const *m,
 
 int pa__user_metric_field(const pa_mesh *mesh) {
   for (int k = 0; k < mesh->nfield; k++)
-    if (!strcmp(mesh->field[k].name, PA__USER_METRIC) &&
+    if (!strcmp(mesh->field[k].name, PA_METRIC_USER) &&
         pa__field_is_metric(mesh->dim, mesh->field[k].name,
                             mesh->field[k].ncomp))
       return k;
@@ -551,25 +551,6 @@ unsigned pa__metric_clamp_bounds(int dim, int nc, pa_idx nv, double *met,
     changed |= pa__metric_clamp(dim, nc, met + (size_t)nc * v, l, h);
   }
   return changed;
-}
-
-pa_status pa__metric_clamp_opts(const pa_mesh *mesh, int nc, double *met,
-                                const uint8_t *frozen,
-                                const pa_remesh_opts *o, unsigned *changed) {
-  pa_status st = PA_SUCCESS;
-  double *b = NULL;
-  *changed = 0;
-  if (!o->local || o->nlocal <= 0) {
-    *changed = pa__metric_clamp_all(mesh->dim, nc, mesh->nv, met, frozen,
-                                    o->hmin, o->hmax);
-    return PA_SUCCESS;
-  }
-  PA_ALLOC(b, 3 * (size_t)mesh->nv);
-  pa__local_bounds(mesh, o, b);
-  *changed = pa__metric_clamp_bounds(mesh->dim, nc, mesh->nv, met, frozen, b);
-cleanup:
-  pa__free(b);
-  return st;
 }
 
 double pa__local_hausd(const pa_remesh_opts *o, int ref, double def) {

@@ -28,13 +28,13 @@
  * prints and counts it, 0.7071 and 1.4142, so that the statistics compare
  * with Mmg's: the statistics' in-range bin (pa_stats_edge_bin), which
  * PA_TARGET_IN_RANGE judges, and the parallel loop's tags. */
-#define PA__LEN_LO 0.7071
-#define PA__LEN_HI 1.4142
+#define PA_METRIC_LEN_LO 0.7071
+#define PA_METRIC_LEN_HI 1.4142
 /* The same band to the last bit (sqrt(1/2) and sqrt(2), correctly
  * rounded), where a threshold is not compared with Mmg's figures: the 3D
  * remesher's collapse and split bounds. */
-#define PA__LEN_LO_EXACT 0.7071067811865476
-#define PA__LEN_HI_EXACT 1.4142135623730951
+#define PA_METRIC_LEN_LO_EXACT 0.7071067811865476
+#define PA_METRIC_LEN_HI_EXACT 1.4142135623730951
 
 /* The normalisations of the quality (Mmg's), which make it 1 on the
  * regular simplex:
@@ -45,9 +45,9 @@
  *  - 3D from the triple product det = 6 V, 12 sqrt(3) = 72 sqrt(3) / 6:
  *    Q = 12 sqrt(3) det_M / (sum l_M^2)^(3/2).
  * Each is the double nearest its exact value. */
-#define PA__QUAL_NORM_2D 6.928203230275509
-#define PA__QUAL_NORM_3D 124.70765814495915
-#define PA__QUAL_NORM_3D_DET 20.784609690826528
+#define PA_METRIC_QUAL_NORM_2D 6.928203230275509
+#define PA_METRIC_QUAL_NORM_3D 124.70765814495915
+#define PA_METRIC_QUAL_NORM_3D_DET 20.784609690826528
 
 /* Index of entry (i,j) of a symmetric tensor stored m11 m12 m22 m13 m23 m33. */
 static inline int pa__sym_index(int i, int j) {
@@ -87,10 +87,8 @@ void pa__metric_exp(int dim, const double *logm, double *m);
  * 2D and 3D. Chosen by measurement over log-Euclidean interpolation
  * (exp(sum w_i log M_i), exact where sizes vary geometrically): exact on
  * sizes that vary linearly, which is what the gradation leaves and what
- * the UGAWG fields are; one pass of box3d 10 to ugawg-linear, judged
- * against the analytic field: 97.4 % of edges in range with 44 k tets in
- * 1.4 s, against 81 % with 76 k tets in 3.5 s (docs/BENCHMARKS.md). Output
- * in the same ncomp as the inputs. */
+ * the UGAWG fields are (the measurement: docs/BENCHMARKS.md, the UGAWG
+ * benchmark). Output in the same ncomp as the inputs. */
 void pa__metric_interp(int dim, int ncomp, int n, const double *const *m,
                        const double *w, double *out);
 
@@ -124,22 +122,20 @@ void pa__metric_set_hsiz(int dim, int nc, pa_idx nv, double *met,
                          const uint8_t *frozen, double hsiz);
 unsigned pa__metric_clamp_all(int dim, int nc, pa_idx nv, double *met,
                               const uint8_t *frozen, double hmin, double hmax);
-/* The same with the local parameters of o (o->local): at the vertices of
+/* The clamp with the local parameters of o (o->local): at the vertices of
  * the entities they name their bounds replace o->hmin/o->hmax
- * (pa_local_param); met holds mesh->nv values. *changed: PA_CHANGED_*.
- * In three steps, for a distributed mesh whose copies of a vertex must
- * merge their bounds first: pa__local_bounds gives each vertex the triple
- * (seen, hmin, hmax) of the local parameters of its entities (seen 0: the
- * global bounds), pa__local_bounds_merge merges two triples, and
- * pa__metric_clamp_bounds clamps. */
+ * (pa_local_param). In three steps, so that a distributed mesh can merge
+ * the bounds of the copies of a vertex before clamping: pa__local_bounds
+ * gives each vertex the triple (seen, hmin, hmax) of the local parameters
+ * of its entities (seen 0: the global bounds; b holds 3 * mesh->nv
+ * values), pa__local_bounds_merge merges two triples, and
+ * pa__metric_clamp_bounds clamps met (nv values) and returns the
+ * PA_CHANGED_* bits of what it changed. */
 void pa__local_bounds(const pa_mesh *mesh, const pa_remesh_opts *o,
                       double *b);
 void pa__local_bounds_merge(const double *in, double *inout);
 unsigned pa__metric_clamp_bounds(int dim, int nc, pa_idx nv, double *met,
                                  const uint8_t *frozen, const double *b);
-pa_status pa__metric_clamp_opts(const pa_mesh *mesh, int nc, double *met,
-                                const uint8_t *frozen,
-                                const pa_remesh_opts *o, unsigned *changed);
 /* The Hausdorff distance bounding the boundary entities of reference ref:
  * a local parameter's (kind PA_BOUNDARY) or the global one, def. */
 double pa__local_hausd(const pa_remesh_opts *o, int ref, double def);
@@ -210,7 +206,9 @@ void pa__stats_acc_sums(pa__stats_acc *a);
 pa_status pa__mesh_stats_met(pa_mesh *mesh, int nc, const double *met,
                              int check, pa_stats *stats);
 
-#define PA__USER_METRIC PA_FIELD_METRIC_PREFIX "user"
+/* The name of the vertex field carrying the caller's metric
+ * (pa__metric_prepare). */
+#define PA_METRIC_USER PA_FIELD_METRIC_PREFIX "user"
 
 /* The index of the vertex field holding the caller's metric ("metric:user",
  * PA_FIELD_METRIC_PREFIX), or -1. */
@@ -294,9 +292,9 @@ void pa__metric_ctx_seq(pa_mesh *mesh, pa__metric_ctx *c);
  *  1. o->hsiz > 0 replaces the caller's metric by the size hsiz, except at
  *     the frozen vertices (c->frozen) when the mesh has a metric;
  *  2. unless o->no_stats, a copy of the result is carried as the vertex
- *     field PA__USER_METRIC (if the mesh has room and carries none yet;
+ *     field PA_METRIC_USER (if the mesh has room and carries none yet;
  *     *carried = 1), for the final report against the caller's metric;
- *  3. hmin/hmax and the local parameters o->local (pa__metric_clamp_opts,
+ *  3. hmin/hmax and the local parameters o->local (pa__local_bounds,
  *     the bounds merged over the copies of a vertex);
  *  4. the gradation o->hgrad, o->hgradreq (c->grade).
  * Frozen vertices keep their metric throughout (the gradation lets them

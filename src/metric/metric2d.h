@@ -9,9 +9,9 @@
  * isotropic size h (the tensor I/h^2), 3 = a tensor m11 m12 m22.
  *
  * The arithmetic is part of the contract. The remeshers decide on these
- * values (split above PA__LEN_HI, refuse an element below a quality floor)
- * and the statistics print them, and padapt's outputs are reproducible to
- * the bit: each kernel keeps the exact operation order of the copy it
+ * values (split above PA_METRIC_LEN_HI, refuse an element below a quality
+ * floor) and the statistics print them, and padapt's outputs are reproducible
+ * to the bit: each kernel keeps the exact operation order of the copy it
  * replaced. A different association, x / 3 for x * (1.0 / 3.0), changes
  * outputs; so does merging the two quality kernels (see pa__qual2_stat).
  */
@@ -66,11 +66,11 @@ static inline double pa__len2(int mc, const double *a, const double *b,
  * mean M of the three vertex tensors: l_i^2 = e_i^T M e_i and
  * A_M = A sqrt(det M), the area the triangle has once M maps it to the
  * Euclidean plane. The ratio of an area to a squared length depends on the
- * shape alone; PA__QUAL_NORM_2D makes it 1 on the triangle equilateral in M.
- * It tends to 0 as the triangle flattens and is negative when inverted.
- * One mean tensor rather than each edge in its ends' metrics: a shape needs
- * one inner product, and this one is cheap (Mmg's choice too, so that the
- * figures compare).
+ * shape alone; PA_METRIC_QUAL_NORM_2D makes it 1 on the triangle equilateral in
+ * M. It tends to 0 as the triangle flattens and is negative when inverted. One
+ * mean tensor rather than each edge in its ends' metrics: a shape needs one
+ * inner product, and this one is cheap (Mmg's choice too, so that the figures
+ * compare).
  *
  * With sizes (mc 1) the mean M = s I scales the area and every l^2 by s
  * alike: the quality is the Euclidean one and the sizes are not read; so
@@ -85,7 +85,7 @@ static inline double pa__qual2(int mc, const double *a, const double *b,
   if (mc <= 1) {
     double s = e1x * e1x + e1y * e1y + e2x * e2x + e2y * e2y + e3x * e3x +
                e3y * e3y;
-    return PA__QUAL_NORM_2D * area / s;
+    return PA_METRIC_QUAL_NORM_2D * area / s;
   }
   double m0 = (ma[0] + mb[0] + mcv[0]) * (1.0 / 3.0);
   double m1 = (ma[1] + mb[1] + mcv[1]) * (1.0 / 3.0);
@@ -94,7 +94,7 @@ static inline double pa__qual2(int mc, const double *a, const double *b,
   double s = m0 * (e1x * e1x + e2x * e2x + e3x * e3x) +
              2 * m1 * (e1x * e1y + e2x * e2y + e3x * e3y) +
              m2 * (e1y * e1y + e2y * e2y + e3y * e3y);
-  return PA__QUAL_NORM_2D * area * sqrt(det > 0 ? det : 0) / s;
+  return PA_METRIC_QUAL_NORM_2D * area * sqrt(det > 0 ? det : 0) / s;
 }
 
 /* The same quality for the statistics (pa__quality, which the CLI's stats,
@@ -129,7 +129,7 @@ static inline double pa__qual2_stat(int mc, const double *const *x,
       s += pa__sqlen2(mcm, mb, x[j][0] - x[i][0], x[j][1] - x[i][1]);
   if (!(s > 0.0)) return 0.0;
   double sd = tensor ? sqrt(fmax(pa__sym_det(2, mb), 0.0)) : 1.0;
-  return PA__QUAL_NORM_2D * area * sd / s;
+  return PA_METRIC_QUAL_NORM_2D * area * sd / s;
 }
 
 #endif /* PA_METRIC2D_H */

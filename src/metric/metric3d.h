@@ -59,7 +59,7 @@ static inline double pa__len3(int mc, const double *a, const double *b,
  * M of the four vertex tensors, V_M = V sqrt(det M): a volume over a length
  * cubed, so the shape alone; 1 on the tetrahedron regular in M, towards 0
  * as it flattens (Mmg's measure, pa__qual2 says why one mean tensor). From
- * the triple product det = 6 V the factor is PA__QUAL_NORM_3D_DET.
+ * the triple product det = 6 V the factor is PA_METRIC_QUAL_NORM_3D_DET.
  *
  * The remeshers compare qualities against floors and each other, so this
  * one is guarded rather than signed: an inverted tetrahedron is -1, a flat
@@ -88,7 +88,7 @@ static inline double pa__qual3(int mc, const double *p0, const double *p1,
         b[2] * b[2] + c[0] * c[0] + c[1] * c[1] + c[2] * c[2] + d[0] * d[0] +
         d[1] * d[1] + d[2] * d[2] + e[0] * e[0] + e[1] * e[1] + e[2] * e[2] +
         f[0] * f[0] + f[1] * f[1] + f[2] * f[2];
-    return PA__QUAL_NORM_3D_DET * det / (s * sqrt(s));
+    return PA_METRIC_QUAL_NORM_3D_DET * det / (s * sqrt(s));
   }
   double se = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + b[0] * b[0] +
               b[1] * b[1] + b[2] * b[2] + c[0] * c[0] + c[1] * c[1] +
@@ -103,7 +103,7 @@ static inline double pa__qual3(int mc, const double *p0, const double *p1,
   s = pa__sqlen3_tensor(M, a) + pa__sqlen3_tensor(M, b) +
       pa__sqlen3_tensor(M, c) + pa__sqlen3_tensor(M, d) +
       pa__sqlen3_tensor(M, e) + pa__sqlen3_tensor(M, f);
-  return PA__QUAL_NORM_3D_DET * det * sqrt(dm) / (s * sqrt(s));
+  return PA_METRIC_QUAL_NORM_3D_DET * det * sqrt(dm) / (s * sqrt(s));
 }
 
 /* The same quality for the statistics (pa__quality, which the CLI's stats,
@@ -114,10 +114,11 @@ static inline double pa__qual3(int mc, const double *p0, const double *p1,
  *
  * Two kernels because they differ beyond rounding: pa__qual3 clamps
  * (-1 inverted, 0 flat or at rounding level), this one does not. They also
- * round differently: this one scales V = det / 6 by PA__QUAL_NORM_3D where
- * pa__qual3 scales det by PA__QUAL_NORM_3D_DET, forms the edges opposite
- * x[0] as x[j] - x[i] where pa__qual3 subtracts the edge vectors from x[0],
- * and sums l^2 over the edges in a loop. Each one's figures are in use. */
+ * round differently: this one scales V = det / 6 by PA_METRIC_QUAL_NORM_3D
+ * where pa__qual3 scales det by PA_METRIC_QUAL_NORM_3D_DET, forms the edges
+ * opposite x[0] as x[j] - x[i] where pa__qual3 subtracts the edge vectors from
+ * x[0], and sums l^2 over the edges in a loop. Each one's figures are in use.
+ */
 static inline double pa__qual3_stat(int mc, const double *const *x,
                                     const double *const *m) {
   int tensor = mc > 1;
@@ -139,7 +140,7 @@ static inline double pa__qual3_stat(int mc, const double *const *x,
     }
   if (!(s > 0.0)) return 0.0;
   double sd = tensor ? sqrt(fmax(pa__sym_det(3, mb), 0.0)) : 1.0;
-  return PA__QUAL_NORM_3D * vol * sd / (s * sqrt(s));
+  return PA_METRIC_QUAL_NORM_3D * vol * sd / (s * sqrt(s));
 }
 
 #endif /* PA_METRIC3D_H */

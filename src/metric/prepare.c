@@ -16,7 +16,7 @@
  *    any rank) keeps its metric value bit for bit: hsiz, clamping and
  *    gradation skip it, though the gradation lets it constrain its
  *    neighbours; on a mesh without a metric every vertex gets hsiz;
- *  - the copy of the caller's metric (PA__USER_METRIC) is on the mesh
+ *  - the copy of the caller's metric (PA_METRIC_USER) is on the mesh
  *    exactly when *carried says so, on success and on failure;
  *  - in the distributed context, a rank that fails a local step meets the
  *    others at the next agreement (c->agree) before any collective step.
@@ -101,9 +101,9 @@ pa_status pa__metric_prepare(const pa__metric_ctx *c, int nc, double *met,
   if (o->hsiz > 0)
     pa__metric_set_hsiz(d, nc, m->nv, met, m->met_ncomp ? frozen : NULL,
                         o->hsiz);
-  if (!o->no_stats && m->nfield < PA_MAX_FIELDS &&
+  if (!o->no_stats && m->nfield < PA_MESH_MAX_FIELDS &&
       pa__user_metric_field(m) < 0) {
-    st = pa_mesh_add_field(m, PA__USER_METRIC, nc, met);
+    st = pa_mesh_add_field(m, PA_METRIC_USER, nc, met);
     *carried = st == PA_SUCCESS;
   }
   if (st == PA_SUCCESS && local) {

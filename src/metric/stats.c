@@ -29,9 +29,10 @@
 #include <math.h>
 
 /* Upper bounds of the edge-length bins 0..7 (bin 8 is [5, inf)): Mmg's,
- * with the in-range band (PA__LEN_LO, PA__LEN_HI) as it prints it. */
+ * with the in-range band (PA_METRIC_LEN_LO, PA_METRIC_LEN_HI) as it prints
+ * it. */
 static const double edge_bounds[PA_STATS_EDGE_NBIN - 2] = {
-    0.3, 0.6, PA__LEN_LO, 0.9, 1.3, PA__LEN_HI, 2.0, 5.0};
+    0.3, 0.6, PA_METRIC_LEN_LO, 0.9, 1.3, PA_METRIC_LEN_HI, 2.0, 5.0};
 
 double pa_mesh_elem_quality(pa_mesh *mesh, pa_idx e) {
   if (!mesh || e < 0 || e >= mesh->ne) return NAN;
@@ -54,7 +55,7 @@ void pa__stats_add_edge(pa__stats_acc *a, double len) {
   while (b < PA_STATS_EDGE_NBIN - 2 && len >= edge_bounds[b])
     b++;
   s->edge_hist[b]++;
-  if (len >= PA__LEN_LO && len < PA__LEN_HI)
+  if (len >= PA_METRIC_LEN_LO && len < PA_METRIC_LEN_HI)
     s->edge_hist[PA_STATS_EDGE_NBIN - 1]++;
   if (s->nedge == 0 || len < s->edge_min) s->edge_min = len;
   if (s->nedge == 0 || len > s->edge_max) s->edge_max = len;
@@ -164,8 +165,8 @@ pa_status pa_stats_edge_bin(int b, double *lo, double *hi) {
            "pa_stats_edge_bin: bin %d out of [0, %d) or NULL argument", b,
            PA_STATS_EDGE_NBIN);
   if (b == PA_STATS_EDGE_NBIN - 1) {
-    *lo = PA__LEN_LO;
-    *hi = PA__LEN_HI;
+    *lo = PA_METRIC_LEN_LO;
+    *hi = PA_METRIC_LEN_HI;
   } else {
     *lo = b > 0 ? edge_bounds[b - 1] : 0.0;
     *hi = b < PA_STATS_EDGE_NBIN - 2 ? edge_bounds[b] : INFINITY;
@@ -217,8 +218,8 @@ void pa_stats_print(const pa_stats *s, FILE *out) {
     fprintf(out, "    smallest length       %.6f\n", s->edge_min);
     fprintf(out, "    largest length        %.6f\n", s->edge_max);
     pa_gid inr = s->edge_hist[PA_STATS_EDGE_NBIN - 1];
-    fprintf(out, "    %.4f <= L < %.4f  %12lld   %6.2f %%\n", PA__LEN_LO,
-            PA__LEN_HI, (long long)inr, pct(inr, s->nedge));
+    fprintf(out, "    %.4f <= L < %.4f  %12lld   %6.2f %%\n", PA_METRIC_LEN_LO,
+            PA_METRIC_LEN_HI, (long long)inr, pct(inr, s->nedge));
     for (int b = 0; b < PA_STATS_EDGE_NBIN - 1; b++)
       if (s->edge_hist[b] > 0)
         fprintf(out, "      %s  %12lld   %6.2f %%\n", edge_labels[b],

@@ -25,7 +25,7 @@
  * 1.18 M in 7.4 s at 3.0 and 1.33 M in 12 s at 1.6 or 1.41 (bisected
  * Kuhn-type tets are 30 % smaller than regular ones of the same longest
  * edge, so the last factor of 2 is better left to the band splits). */
-#define PA__LEB_PRE 2.0
+#define LEB_PRE 2.0
 
 void pa_remesh_opts_default(pa_remesh_opts *o) {
   memset(o, 0, sizeof *o);
@@ -35,7 +35,7 @@ void pa_remesh_opts_default(pa_remesh_opts *o) {
   o->angle = 45;
 }
 
-/* 3D: longest-edge bisection to length PA__LEB_PRE first (leb.c: cheaper
+/* 3D: longest-edge bisection to length LEB_PRE first (leb.c: cheaper
  * than the band splits, and well-shaped), on a copy so that a FAILED
  * outcome leaves the mesh as given. */
 static pa_status remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
@@ -45,7 +45,7 @@ static pa_status remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
   pa__leb_opts lo;
   double t0 = pa_wtime();
   memset(&lo, 0, sizeof lo);
-  lo.lmax = PA__LEB_PRE;
+  lo.lmax = LEB_PRE;
   if (opts->no_insert) return pa__remesh3d(mesh, opts, report);
   PA_CALL(pa_mesh_copy(mesh, &w));
   PA_CALL(pa__leb_refine(w, &lo, NULL, NULL));
@@ -76,18 +76,6 @@ const pa_remesher *pa_remesher_builtin(void) {
   static const pa_remesher builtin = {"padapt", (1u << 2) | (1u << 3),
                                      builtin_remesh, NULL};
   return &builtin;
-}
-
-/* Frozen-vertex mask: required vertices and vertices of required elements or
- * boundary entities. */
-static pa_status frozen_mask(const pa_mesh *m, uint8_t **mask) {
-  pa_status st = PA_SUCCESS;
-  uint8_t *f = NULL;
-  PA_CALLOC(f, m->nv);
-  pa__mesh_frozen_vertices(m, f);
-  *mask = f;
-cleanup:
-  return st;
 }
 
 /* Remove the copy of the caller's metric, if the mesh carries one. */
@@ -160,7 +148,8 @@ cleanup:
 
 /* The metric the remesher works with, prepared in a new array *met of nc
  * components per vertex (the caller frees it): the caller's metric (or
- * hsiz), then hmin/hmax and the gradation; frozen vertices keep theirs.
+ * hsiz), then hmin/hmax and the gradation (pa__metric_prepare in the
+ * sequential context); frozen vertices keep theirs.
  * Unless opts->no_stats, the caller's metric is carried as the field
  * metric:user (*carried = 1; the caller drops it) when a step changed it;
  * *changed says which (PA_CHANGED_*). */
@@ -168,35 +157,16 @@ static pa_status prepare_metric(pa_mesh *mesh, const pa_remesh_opts *opts,
                                 int nc, double **met, int *carried,
                                 unsigned *changed) {
   pa_status st = PA_SUCCESS;
-  uint8_t *frozen = NULL;
+  pa__metric_ctx c;
   double *newmet = NULL;
-  int d = mesh->dim;
   size_t cap = mesh->capv > (size_t)mesh->nv ? mesh->capv : (size_t)mesh->nv;
-  pa_idx ngraded = 0;
-  PA_CALL(frozen_mask(mesh, &frozen));
   PA_ALLOC(newmet, (cap ? cap : 1) * nc);
   *met = newmet;
   if (mesh->met_ncomp)
     memcpy(newmet, mesh->met, sizeof(double) * nc * mesh->nv);
-  if (opts->hsiz > 0)
-    pa__metric_set_hsiz(d, nc, mesh->nv, newmet,
-                        mesh->met_ncomp ? frozen : NULL, opts->hsiz);
-  if (!opts->no_stats && mesh->nfield < PA_MAX_FIELDS &&
-      pa__user_metric_field(mesh) < 0) {
-    PA_CALL(pa_mesh_add_field(mesh, PA__USER_METRIC, nc, newmet));
-    *carried = 1;
-  }
-  PA_CALL(pa__metric_clamp_opts(mesh, nc, newmet, frozen, opts, changed));
-  PA_CALL(pa__metric_gradation(d, nc, mesh->nv, mesh->coord, newmet, mesh->ne,
-                               mesh->elem, frozen, opts->hgrad, opts->hgradreq,
-                               &ngraded));
-  if (ngraded) *changed |= PA_CHANGED_GRADATION;
-  if (!*changed && *carried) { /* the metric used is the caller's */
-    PA_CALL(drop_user_metric(mesh));
-    *carried = 0;
-  }
+  pa__metric_ctx_seq(mesh, &c);
+  PA_CALL(pa__metric_prepare(&c, nc, newmet, opts, changed, carried));
 cleanup:
-  pa__free(frozen);
   return st;
 }
 
@@ -208,7 +178,7 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   progress_wrap wrap = {NULL, NULL, 0, 0, 0};
   double *newmet = NULL, *oldmet = NULL;
   int oldnc = 0, installed = 0, carried = 0;
-  pa_name *names = NULL; /* the caller's physical names, held aside */
+  pa__name *names = NULL; /* the caller's physical names, held aside */
   int nname = 0;
   double t0 = pa_wtime();
   wrap.t0 = t0;

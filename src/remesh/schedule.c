@@ -11,13 +11,13 @@
  * (2D: a steady ~47 + 47 next to tiny frozen triangles in a 1 500-element
  * piece ran all 80 rounds before this test); a refinement or coarsening
  * front does one of them many times more. */
-#define PA__ROUNDS_BALANCE 3
+#define ROUNDS_BALANCE 3
 /* A count below this share of the last reference (a 5 % drop) is progress:
  * the reference then moves, so a slow steady fall never stalls. */
-#define PA__ROUNDS_DROP 0.95
+#define ROUNDS_DROP 0.95
 /* Ping-pong rounds in a row without such a drop that stop the rounds:
  * three, so that a count falling by 1.7 % a round (5 % in three) goes on. */
-#define PA__ROUNDS_STALL 3
+#define ROUNDS_STALL 3
 
 void pa__rounds_start(pa__rounds *r, int min, double settled, double tiny,
                       int balanced) {
@@ -35,12 +35,12 @@ int pa__rounds_stop(pa__rounds *r, long nsplit, long ncollapse, double nlive) {
   int may_stop = ++r->done >= r->min;
   if (may_stop && n <= r->settled * nlive) return 1;
   int pingpong = (r->tiny > 0 && n <= r->tiny * nlive) ||
-                 (r->balanced && PA__ROUNDS_BALANCE * nsplit >= ncollapse &&
-                  PA__ROUNDS_BALANCE * ncollapse >= nsplit);
-  if (r->ref < 0 || n < PA__ROUNDS_DROP * r->ref || !pingpong) {
+                 (r->balanced && ROUNDS_BALANCE * nsplit >= ncollapse &&
+                  ROUNDS_BALANCE * ncollapse >= nsplit);
+  if (r->ref < 0 || n < ROUNDS_DROP * r->ref || !pingpong) {
     r->ref = n;
     r->stall = 0;
     return 0;
   }
-  return may_stop && ++r->stall >= PA__ROUNDS_STALL;
+  return may_stop && ++r->stall >= ROUNDS_STALL;
 }

@@ -54,11 +54,11 @@ static pa_status add_record(pa__rmesh *rm, pa_idx a, pa_idx c, int32_t ref,
   rm->bside[2 * b + 1] = o >= 0 ? o : -1;
   rm->adj[code] = -b - 1;
   if (o >= 0) rm->adj[o] = -b - 1;
-  rm->vtag[a] |= RMV_FEAT;
-  rm->vtag[c] |= RMV_FEAT;
-  if (tag & RMB_FROZEN) {
-    rm->vtag[a] |= RMV_FROZEN;
-    rm->vtag[c] |= RMV_FROZEN;
+  rm->vtag[a] |= RM_V_FEAT;
+  rm->vtag[c] |= RM_V_FEAT;
+  if (tag & RM_B_FROZEN) {
+    rm->vtag[a] |= RM_V_FROZEN;
+    rm->vtag[c] |= RM_V_FROZEN;
   }
 cleanup:
   return st;
@@ -98,7 +98,7 @@ static pa_status add_records(pa__rmesh *rm, pa_mesh *mesh,
              "remesher: boundary edge %d (%d %d) is not an element edge",
              (int)b + 1, (int)a + 1, (int)c + 1);
     PA_CALL(add_record(rm, a, c, mesh->bref[b],
-                       (mesh->bflag[b] & 0x0F) | RMB_LISTED, code));
+                       (mesh->bflag[b] & 0x0F) | RM_B_LISTED, code));
   }
   pa_idx ne = rm->ne;
   for (pa_idx k = 0; k < ne; k++)
@@ -106,7 +106,7 @@ static pa_status add_records(pa__rmesh *rm, pa_mesh *mesh,
       pa_idx code = 3 * k + i, ob = rm->adj[code];
       pa_idx a = rm->ev[3 * k + (i + 1) % 3], c = rm->ev[3 * k + (i + 2) % 3];
       if (ob == RM_NOADJ)
-        PA_CALL(add_record(rm, a, c, 0, RMB_LISTED, code));
+        PA_CALL(add_record(rm, a, c, 0, RM_B_LISTED, code));
       else if (ob > code && rm->eref[ob / 3] != rm->eref[k])
         PA_CALL(add_record(rm, a, c, 0, 0, code));
     }
@@ -143,7 +143,7 @@ cleanup:
   return st;
 }
 
-/* Corners (RMV_CORNER): other than two feature edges, two of different
+/* Corners (RM_V_CORNER): other than two feature edges, two of different
  * references, or (unless -nr) a turn larger than -ar degrees. */
 static void mark_corners(pa__rmesh *rm, const feat_ends *fe) {
   const pa_remesh_opts *o = rm->opts;
@@ -151,10 +151,10 @@ static void mark_corners(pa__rmesh *rm, const feat_ends *fe) {
   for (pa_idx v = 0; v < rm->nv; v++) {
     if (!fe->cnt[v]) continue;
     if (fe->cnt[v] != 2) {
-      rm->vtag[v] |= RMV_CORNER;
+      rm->vtag[v] |= RM_V_CORNER;
       continue;
     }
-    if (rm->bref[fe->r0[v]] != rm->bref[fe->r1[v]]) rm->vtag[v] |= RMV_CORNER;
+    if (rm->bref[fe->r0[v]] != rm->bref[fe->r1[v]]) rm->vtag[v] |= RM_V_CORNER;
     if (o->no_angle) continue;
     pa_idx u = other_end(rm, fe->r0[v], v), w = other_end(rm, fe->r1[v], v);
     const double *xu = rm->x + 2 * (size_t)u, *xv = rm->x + 2 * (size_t)v,
@@ -163,7 +163,7 @@ static void mark_corners(pa__rmesh *rm, const feat_ends *fe) {
     double e1x = xw[0] - xv[0], e1y = xw[1] - xv[1];
     double c = (e0x * e1x + e0y * e1y) /
                (sqrt(e0x * e0x + e0y * e0y) * sqrt(e1x * e1x + e1y * e1y));
-    if (c < cosar) rm->vtag[v] |= RMV_CORNER;
+    if (c < cosar) rm->vtag[v] |= RM_V_CORNER;
   }
 }
 
@@ -179,7 +179,7 @@ static void set_tangents(pa__rmesh *rm, const feat_ends *fe) {
                   rm->x[2 * (size_t)rm->bv[2 * b] + 1];
       double dl = sqrt(dx * dx + dy * dy);
       double tx = dx / dl, ty = dy / dl;
-      if (!(rm->vtag[v] & RMV_CORNER)) {
+      if (!(rm->vtag[v] & RM_V_CORNER)) {
         pa_idx u = other_end(rm, fe->r0[v], v), w = other_end(rm, fe->r1[v], v);
         const double *xu = rm->x + 2 * (size_t)u, *xw = rm->x + 2 * (size_t)w;
         double e0x = xv[0] - xu[0], e0y = xv[1] - xu[1];
@@ -211,7 +211,8 @@ static int hausdorff_bound(pa__rmesh *rm, const feat_ends *fe) {
   const pa_remesh_opts *o = rm->opts;
   int limited = 0;
   for (pa_idx v = 0; v < rm->nv; v++) {
-    if (fe->cnt[v] != 2 || (rm->vtag[v] & (RMV_CORNER | RMV_FROZEN))) continue;
+    if (fe->cnt[v] != 2 || (rm->vtag[v] & (RM_V_CORNER | RM_V_FROZEN)))
+      continue;
     pa_idx u = other_end(rm, fe->r0[v], v), w = other_end(rm, fe->r1[v], v);
     const double *xu = rm->x + 2 * (size_t)u, *xv = rm->x + 2 * (size_t)v,
                  *xw = rm->x + 2 * (size_t)w;
@@ -255,7 +256,7 @@ static pa_status grade_hausdorff_bound(pa__rmesh *rm) {
   uint8_t *frz = NULL;
   pa_idx nv = rm->nv;
   PA_ALLOC(frz, nv);
-  for (pa_idx v = 0; v < nv; v++) frz[v] = (rm->vtag[v] & RMV_FROZEN) != 0;
+  for (pa_idx v = 0; v < nv; v++) frz[v] = (rm->vtag[v] & RM_V_FROZEN) != 0;
   PA_CALL(pa__metric_gradation(2, rm->mcomp, nv, rm->x, rm->met, rm->ne,
                                rm->ev, frz, o->hgrad, o->hgradreq, NULL));
 cleanup:

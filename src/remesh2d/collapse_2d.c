@@ -31,7 +31,7 @@ static int feature_kept(const pa__rmesh *rm, pa_idx p, pa_idx q, pa_idx r2,
     pa_idx e = el[t];
     int l = loc[t];
     for (int side = 0; side < 2; side++) {
-      pa_idx c = 3 * e + (side ? NX3(l) : PV3(l));
+      pa_idx c = 3 * e + (side ? RM_NX3(l) : RM_PV3(l));
       pa_idx oc = rm->adj[c];
       if (oc < 0 && -oc - 1 != r2) {
         r1 = -oc - 1;
@@ -43,11 +43,11 @@ static int feature_kept(const pa__rmesh *rm, pa_idx p, pa_idx q, pa_idx r2,
   if (r1 < 0) return 0;
   pa_idx u = rm->bv[2 * r1] == p ? rm->bv[2 * r1 + 1] : rm->bv[2 * r1];
   if (u == q) return 0;
-  const double *xu = X(u), *xq = X(q);
+  const double *xu = RM_X(u), *xq = RM_X(q);
   double ha = pa__local_hausd(rm->opts, rm->bref[r1], rm->hausd);
   double hb = pa__local_hausd(rm->opts, rm->bref[r2], rm->hausd);
   double hausd = ha < hb ? ha : hb;
-  if (dist_point_segment(X(p), xu, xq) > hausd) return 0;
+  if (dist_point_segment(RM_X(p), xu, xq) > hausd) return 0;
   /* sagitta of the merged arc: tangent at u from r1, at q from r2 */
   double tu[2], tq[2];
   int ue = rm->bv[2 * r1] == u ? 0 : 1, qe = rm->bv[2 * r2] == q ? 0 : 1;
@@ -90,13 +90,14 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
   int iq = 3 - fi - ip;
   pa_idx q = rm->ev[3 * k + iq];
   uint8_t tp = rm->vtag[p];
-  if (tp & (RMV_FROZEN | RMV_CORNER)) return 0;
+  if (tp & (RM_V_FROZEN | RM_V_CORNER)) return 0;
   pa_idx o = rm->adj[te];
-  if ((tp & RMV_FEAT) && o >= 0) return 0; /* a feature vertex slides only along its feature */
+  /* a feature vertex slides only along its feature */
+  if ((tp & RM_V_FEAT) && o >= 0) return 0;
   if (!edge_free(rm, te)) return 0;
 
-  pa_idx el[BALL_MAX];
-  int loc[BALL_MAX], closed;
+  pa_idx el[RM_BALL_MAX];
+  int loc[RM_BALL_MAX], closed;
   int n = ball_2d(rm, k, ip, el, loc, &closed);
   if (n < 0 || n < (closed ? 3 : 2)) return 0;
 
@@ -109,10 +110,10 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
   for (int t = 0; t < n; t++) {
     pa_idx e = el[t];
     if (e == k || e == f) continue;
-    if (rm->etag[e] & RME_FROZEN) return 0;
+    if (rm->etag[e] & RM_E_FROZEN) return 0;
     const pa_idx *v = rm->ev + 3 * (size_t)e;
     int l = loc[t];
-    pa_idx a = v[NX3(l)], b = v[PV3(l)];
+    pa_idx a = v[RM_NX3(l)], b = v[RM_PV3(l)];
     if (a == q || b == q) return 0; /* q seen twice: not a simple ball */
     double qq = elem_qual(rm, q, a, b);
     if (qq < RM_QFLOOR || qq < qrel * qold) return 0;
@@ -130,7 +131,7 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
   if (f >= 0) {
     jf = s % 3;
     const pa_idx *vf = rm->ev + 3 * (size_t)f;
-    jp = vf[NX3(jf)] == p ? NX3(jf) : PV3(jf);
+    jp = vf[RM_NX3(jf)] == p ? RM_NX3(jf) : RM_PV3(jf);
     jq = 3 - jf - jp;
     o1f = rm->adj[3 * f + jp];
     o2f = rm->adj[3 * f + jq];
@@ -139,7 +140,7 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
 
   /* feature collapse: the merged record must stay within hausd of the curve */
   pa_idx r2 = -1, r1 = -1;
-  if (tp & RMV_FEAT) {
+  if (tp & RM_V_FEAT) {
     r2 = -o - 1;
     if (!feature_kept(rm, p, q, r2, el, loc, n, &r1)) return 0;
   }
@@ -153,7 +154,7 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
     elem_changed(rm, e);
     const pa_idx *v = rm->ev + 3 * (size_t)e;
     rm->q[e] = (float)elem_qual(rm, v[0], v[1], v[2]);
-    rm->etag[e] |= RME_TOUCHED;
+    rm->etag[e] |= RM_E_TOUCHED;
   }
   /* link o1 <-> o2 (at most one of them is a feature record) */
   pa_idx pairs[2][4] = {{o1k, 3 * k + ip, o2k, 3 * k + iq},
@@ -186,23 +187,23 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
  */
 static int remove_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   pa_idx p = rm->ev[3 * k + ip];
-  if (rm->vtag[p] & (RMV_FROZEN | RMV_CORNER)) return 0;
-  pa_idx el[BALL_MAX];
-  int loc[BALL_MAX], closed;
+  if (rm->vtag[p] & (RM_V_FROZEN | RM_V_CORNER)) return 0;
+  pa_idx el[RM_BALL_MAX];
+  int loc[RM_BALL_MAX], closed;
   int n = ball_2d(rm, k, ip, el, loc, &closed);
   if (n < 0) return 0;
   /* candidate edges (element, face) from p, by increasing length */
-  pa_idx ce[BALL_MAX * 2], cr[BALL_MAX * 2];
-  int cf[BALL_MAX * 2], nc = 0;
-  double cl[BALL_MAX * 2];
+  pa_idx ce[RM_BALL_MAX * 2], cr[RM_BALL_MAX * 2];
+  int cf[RM_BALL_MAX * 2], nc = 0;
+  double cl[RM_BALL_MAX * 2];
   for (int t = 0; t < n; t++) {
     pa_idx e = el[t];
     int l = loc[t];
     for (int side = 0; side < 2; side++) {
-      int face = side ? NX3(l) : PV3(l);
-      pa_idx r = rm->ev[3 * e + (side ? PV3(l) : NX3(l))];
+      int face = side ? RM_NX3(l) : RM_PV3(l);
+      pa_idx r = rm->ev[3 * e + (side ? RM_PV3(l) : RM_NX3(l))];
       double len = edge_len(rm, p, r);
-      if (len >= PA__LEN_HI) continue;
+      if (len >= PA_METRIC_LEN_HI) continue;
       int dup = 0;
       for (int c = 0; c < nc; c++) dup |= cr[c] == r;
       if (dup) continue; /* each neighbour once (it is in two elements) */
@@ -230,31 +231,32 @@ static int remove_vertex(pa__rmesh *rm, pa_idx k, int ip) {
 
 pa_status pa__rm_collapse_pass_2d(pa__rmesh *rm, double thr, long *n) {
   long cnt = 0;
-  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RME_TOUCHED;
+  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RM_E_TOUCHED;
   for (pa_idx k = 0; k < rm->ne; k++) {
     uint8_t t = rm->etag[k];
-    if (t & (RME_DEAD | RME_TOUCHED | RME_FROZEN)) continue;
-    if ((t & RME_INRANGE) && thr <= PA__LEN_LO)
+    if (t & (RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN)) continue;
+    if ((t & RM_E_INRANGE) && thr <= PA_METRIC_LEN_LO)
       continue; /* nothing below thr */
     const pa_idx *v = rm->ev + 3 * (size_t)k;
     /* shortest edge first */
     int best = -1, inr = 1;
     double lb = thr;
     for (int i = 0; i < 3; i++) {
-      double l = edge_len(rm, v[NX3(i)], v[PV3(i)]);
-      inr &= l >= PA__LEN_LO && l <= PA__LEN_HI;
+      double l = edge_len(rm, v[RM_NX3(i)], v[RM_PV3(i)]);
+      inr &= l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
       if (l < lb) {
         lb = l;
         best = i;
       }
     }
-    if (inr) rm->etag[k] |= RME_INRANGE;
+    if (inr) rm->etag[k] |= RM_E_INRANGE;
     if (best < 0) continue;
     pa_idx s = other_side(rm, 3 * k + best);
-    if (s >= 0 && (rm->etag[s / 3] & RME_TOUCHED)) continue;
-    if (pa__rm_collapse_edge_2d(rm, k, best, NX3(best), 0.3) ||
-        pa__rm_collapse_edge_2d(rm, k, best, PV3(best), 0.3) ||
-        remove_vertex(rm, k, NX3(best)) || remove_vertex(rm, k, PV3(best)))
+    if (s >= 0 && (rm->etag[s / 3] & RM_E_TOUCHED)) continue;
+    if (pa__rm_collapse_edge_2d(rm, k, best, RM_NX3(best), 0.3) ||
+        pa__rm_collapse_edge_2d(rm, k, best, RM_PV3(best), 0.3) ||
+        remove_vertex(rm, k, RM_NX3(best)) ||
+        remove_vertex(rm, k, RM_PV3(best)))
       cnt++;
   }
   *n = cnt;

@@ -89,12 +89,12 @@ static void progress(const pa__rmesh *rm, int pass) {
   long nin = 0, n = 0;
   int mc = rm->mcomp;
   for (pa_idx k = 0; k < rm->ne; k += stride) {
-    if (rm->etag[k] & (RME_DEAD | RME_FROZEN)) continue;
+    if (rm->etag[k] & (RM_E_DEAD | RM_E_FROZEN)) continue;
     for (int i = 0; i < 3; i++) {
       pa_idx a = rm->ev[3 * k + i], c = rm->ev[3 * k + (i + 1) % 3];
       double l = pa__len2(mc, rm->x + 2 * (size_t)a, rm->x + 2 * (size_t)c,
                           rm->met + (size_t)mc * a, rm->met + (size_t)mc * c);
-      nin += l >= PA__LEN_LO && l < PA__LEN_HI;
+      nin += l >= PA_METRIC_LEN_LO && l < PA_METRIC_LEN_HI;
       n++;
     }
   }
@@ -144,11 +144,11 @@ static pa_status refine_rounds(pa__rmesh *rm, int *pass) {
   pa__rounds_start(&rounds, 1, RM_ROUNDS_SETTLED, RM_ROUNDS_TINY, 1);
   for (int it = 0; it < RM_ROUNDS_MAX; it++) {
     long ns = 0, nc = 0, nw = 0, nm = 0;
-    PA_CALL(pa__rm_split_pass_2d(rm, PA__LEN_HI, &ns));
+    PA_CALL(pa__rm_split_pass_2d(rm, PA_METRIC_LEN_HI, &ns));
     DEBUG_CHECK(rm);
     report_pass(rm, "split", *pass, ns);
     PA_CALL(maybe_reorder(rm, *pass, &reordered));
-    PA_CALL(pa__rm_collapse_pass_2d(rm, PA__LEN_LO, &nc));
+    PA_CALL(pa__rm_collapse_pass_2d(rm, PA_METRIC_LEN_LO, &nc));
     DEBUG_CHECK(rm);
     report_pass(rm, "collapse", *pass, nc);
     if (!o->no_swap) {
@@ -191,12 +191,12 @@ static pa_status optimise(pa__rmesh *rm, int *pass) {
       DEBUG_CHECK(rm);
     }
     if (!o->no_insert) {
-      PA_CALL(pa__rm_split_pass_2d(rm, PA__LEN_HI, &ns));
+      PA_CALL(pa__rm_split_pass_2d(rm, PA_METRIC_LEN_HI, &ns));
       DEBUG_CHECK(rm);
       rm->lguard = 1.7 + 0.05 * it;
       PA_CALL(pa__rm_collapse_pass_2d(rm, RM_LSHORT_OPT, &nc));
       DEBUG_CHECK(rm);
-      rm->lguard = PA__LEN_HI;
+      rm->lguard = PA_METRIC_LEN_HI;
     }
     report_pass(rm, "optimise", *pass, nw + nm + ns + nc);
     (*pass)++;
@@ -206,12 +206,12 @@ static pa_status optimise(pa__rmesh *rm, int *pass) {
   if (!o->no_insert) { /* cut what the relaxed collapses left long */
     long ns = 0, nc = 0, n1 = 0;
     for (int it = 0; it < 6; it++) {
-      PA_CALL(pa__rm_split_pass_2d(rm, PA__LEN_HI, &n1));
+      PA_CALL(pa__rm_split_pass_2d(rm, PA_METRIC_LEN_HI, &n1));
       DEBUG_CHECK(rm);
       ns += n1;
       if (!n1) break;
     }
-    PA_CALL(pa__rm_collapse_pass_2d(rm, PA__LEN_LO, &nc));
+    PA_CALL(pa__rm_collapse_pass_2d(rm, PA_METRIC_LEN_LO, &nc));
     DEBUG_CHECK(rm);
     report_pass(rm, "final", *pass, ns + nc);
     (*pass)++;
@@ -283,7 +283,7 @@ pa_status pa__remesh2d(pa_mesh *mesh, const pa_remesh_opts *opts,
   pa__rmesh *rm = NULL;
   int pass = 0;
   PA_CALL(pa__rm_create(mesh, opts, &rm));
-  rm->lguard = PA__LEN_HI;
+  rm->lguard = PA_METRIC_LEN_HI;
   if (!opts->no_insert) PA_CALL(refine_rounds(rm, &pass));
   PA_CALL(optimise(rm, &pass));
   PA_CALL(repair_worst(rm, &pass));

@@ -149,21 +149,21 @@ cleanup:
 }
 
 void pa__rm_kill_vertex(pa__rmesh *rm, pa_idx v) {
-  rm->vtag[v] = RMV_DEAD;
+  rm->vtag[v] = RM_V_DEAD;
   rm->vref[v] = rm->vfree;
   rm->vfree = v;
   rm->nvlive--;
 }
 
 void pa__rm_kill_elem(pa__rmesh *rm, pa_idx k) {
-  rm->etag[k] = RME_DEAD;
+  rm->etag[k] = RM_E_DEAD;
   rm->ev[(size_t)rm->nvpe * k] = rm->efree;
   rm->efree = k;
   rm->nelive--;
 }
 
 void pa__rm_kill_feat(pa__rmesh *rm, pa_idx b) {
-  rm->btag[b] = RMB_DEAD;
+  rm->btag[b] = RM_B_DEAD;
   rm->bv[2 * (size_t)b] = rm->bfree;
   rm->bfree = b;
   rm->nblive--;
@@ -234,15 +234,15 @@ static double expected_elems(pa_mesh *mesh) {
  * floor, and the pass loop ping-pongs there without converging.
  *
  * The working metric is therefore relaxed at the skin: a frozen vertex whose
- * frozen edges have a mean length lambda outside [PA__LEN_LO, PA__LEN_HI] gets
- * its size scaled by f = lambda / PA__LEN_HI (or lambda / PA__LEN_LO), the
- * least change that puts that mean in range; the size then varies linearly
- * (interpolation) to the target over the first ring of input elements
- * (ParMmg #74: grade the metric away from frozen entities). Relaxing further
- * (to length 1) widens the band of elements left coarser than the target,
- * which the parallel loop must adapt again: its iterations then stop
- * converging (test_adapt_props at 3-4 ranks); relaxing less (to 2) brings
- * the slivers back. The target metric is kept in met0,
+ * frozen edges have a mean length lambda outside [PA_METRIC_LEN_LO,
+ * PA_METRIC_LEN_HI] gets its size scaled by f = lambda / PA_METRIC_LEN_HI (or
+ * lambda / PA_METRIC_LEN_LO), the least change that puts that mean in range;
+ * the size then varies linearly (interpolation) to the target over the first
+ * ring of input elements (ParMmg #74: grade the metric away from frozen
+ * entities). Relaxing further (to length 1) widens the band of elements left
+ * coarser than the target, which the parallel loop must adapt again: its
+ * iterations then stop converging (test_adapt_props at 3-4 ranks); relaxing
+ * less (to 2) brings the slivers back. The target metric is kept in met0,
  * interpolated alongside, and it is what the write-back returns: frozen
  * vertices come back bit for bit and new vertices carry the target, so a
  * later pass (the next iteration of the parallel loop) sees the elements
@@ -255,15 +255,15 @@ static pa_status skin_relax_2d(pa__rmesh *rm) {
   int32_t *cnt = NULL;
   pa_idx nv = rm->nv;
   int any = 0;
-  for (pa_idx k = 0; k < rm->ne && !any; k++) any = rm->etag[k] & RME_FROZEN;
-  for (pa_idx b = 0; b < rm->nb && !any; b++) any = rm->btag[b] & RMB_FROZEN;
+  for (pa_idx k = 0; k < rm->ne && !any; k++) any = rm->etag[k] & RM_E_FROZEN;
+  for (pa_idx b = 0; b < rm->nb && !any; b++) any = rm->btag[b] & RM_B_FROZEN;
   if (!any) return PA_SUCCESS;
   PA_CALLOC(acc, nv);
   PA_CALLOC(cnt, nv);
   /* mean length of the frozen edges at each vertex (edges shared by two
    * frozen elements count twice: a weighting, not a fault) */
   for (pa_idx k = 0; k < rm->ne; k++) {
-    if (!(rm->etag[k] & RME_FROZEN)) continue;
+    if (!(rm->etag[k] & RM_E_FROZEN)) continue;
     const pa_idx *v = rm->ev + 3 * (size_t)k;
     for (int i = 0; i < 3; i++) {
       pa_idx a = v[i], c = v[i == 2 ? 0 : i + 1];
@@ -276,7 +276,7 @@ static pa_status skin_relax_2d(pa__rmesh *rm) {
     }
   }
   for (pa_idx b = 0; b < rm->nb; b++) {
-    if ((rm->btag[b] & RMB_DEAD) || !(rm->btag[b] & RMB_FROZEN)) continue;
+    if ((rm->btag[b] & RM_B_DEAD) || !(rm->btag[b] & RM_B_FROZEN)) continue;
     pa_idx a = rm->bv[2 * b], c = rm->bv[2 * b + 1];
     double l = pa__len2(mc, rm->x + 2 * (size_t)a, rm->x + 2 * (size_t)c,
                         rm->met + (size_t)mc * a, rm->met + (size_t)mc * c);
@@ -289,14 +289,16 @@ static pa_status skin_relax_2d(pa__rmesh *rm) {
   for (pa_idx v = 0; v < nv; v++) {
     if (!cnt[v]) continue;
     double lam = acc[v] / cnt[v];
-    if (!(lam > PA__LEN_HI || lam < PA__LEN_LO) || !(lam > 0) || !isfinite(lam))
+    if (!(lam > PA_METRIC_LEN_HI || lam < PA_METRIC_LEN_LO) || !(lam > 0) ||
+        !isfinite(lam))
       continue;
     if (!rm->met0) {
       PA_ALLOC(rm->met0, rm->capv * mc);
       memcpy(rm->met0, rm->met, sizeof(double) * mc * (size_t)nv);
     }
     /* the least change that brings the mean into range: to the bound */
-    double f = lam > PA__LEN_HI ? lam / PA__LEN_HI : lam / PA__LEN_LO;
+    double f = lam > PA_METRIC_LEN_HI ? lam / PA_METRIC_LEN_HI
+                                      : lam / PA_METRIC_LEN_LO;
     double *m = rm->met + (size_t)mc * v;
     if (mc == 1) {
       m[0] *= f;
@@ -404,8 +406,8 @@ pa_status pa__rm_create(pa_mesh *mesh, const pa_remesh_opts *opts,
   memcpy(rm->vflag, mesh->vflag, nv);
   for (pa_idx v = 0; v < nv; v++) {
     uint8_t f = mesh->vflag[v];
-    rm->vtag[v] = (f & PA_FLAG_REQUIRED ? RMV_FROZEN : 0) |
-                  (f & PA_FLAG_CORNER ? RMV_CORNER : 0);
+    rm->vtag[v] = (f & PA_FLAG_REQUIRED ? RM_V_FROZEN : 0) |
+                  (f & PA_FLAG_CORNER ? RM_V_CORNER : 0);
   }
   if (rm->fcomp) {
     int off = 0;
@@ -427,7 +429,7 @@ pa_status pa__rm_create(pa_mesh *mesh, const pa_remesh_opts *opts,
     rm->etag[k] = mesh->eflag[k] & 0x0F;
     if (mesh->eflag[k] & PA_FLAG_REQUIRED)
       for (int i = 0; i < nvpe; i++)
-        rm->vtag[rm->ev[(size_t)nvpe * k + i]] |= RMV_FROZEN;
+        rm->vtag[rm->ev[(size_t)nvpe * k + i]] |= RM_V_FROZEN;
   }
   rm->ne = rm->nelive = ne;
 
@@ -508,7 +510,7 @@ pa_status pa__rm_reorder(pa__rmesh *rm) {
    * dead slots (dropped) */
   double lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX};
   for (pa_idx v = 0; v < nv; v++)
-    if (!(rm->vtag[v] & RMV_DEAD))
+    if (!(rm->vtag[v] & RM_V_DEAD))
       for (int j = 0; j < 2; j++) {
         lo[j] = fmin(lo[j], rm->x[2 * (size_t)v + j]);
         hi[j] = fmax(hi[j], rm->x[2 * (size_t)v + j]);
@@ -519,7 +521,7 @@ pa_status pa__rm_reorder(pa__rmesh *rm) {
   PA_ALLOC(posv, (size_t)nv + 1);
   pa_idx k = 0, dead = n;
   for (pa_idx v = 0; v < nv; v++) {
-    if (rm->vtag[v] & RMV_DEAD) {
+    if (rm->vtag[v] & RM_V_DEAD) {
       posv[v] = dead++;
       continue;
     }
@@ -539,7 +541,7 @@ pa_status pa__rm_reorder(pa__rmesh *rm) {
   PA_ALLOC(pose, (size_t)ne + 1);
   PA_CALLOC(cnt, (size_t)n + 1);
   for (pa_idx e = 0; e < ne; e++) {
-    if (rm->etag[e] & RME_DEAD) continue;
+    if (rm->etag[e] & RM_E_DEAD) continue;
     pa_idx *v = rm->ev + (size_t)nvpe * e, m = n;
     for (int i = 0; i < nvpe; i++) {
       v[i] = posv[v[i]];
@@ -553,16 +555,16 @@ pa_status pa__rm_reorder(pa__rmesh *rm) {
            "remesher: live element count is off");
   dead = rm->nelive;
   for (pa_idx e = 0; e < ne; e++)
-    pose[e] = rm->etag[e] & RME_DEAD ? dead++ : cnt[pose[e]]++;
+    pose[e] = rm->etag[e] & RM_E_DEAD ? dead++ : cnt[pose[e]]++;
   for (pa_idx e = 0; e < ne; e++) {
-    if (rm->etag[e] & RME_DEAD) continue;
+    if (rm->etag[e] & RM_E_DEAD) continue;
     for (int i = 0; i < nvpe; i++) {
       pa_idx a = rm->adj[(size_t)nvpe * e + i];
       if (a >= 0) rm->adj[(size_t)nvpe * e + i] = nvpe * pose[a / nvpe] + a % nvpe;
     }
   }
   for (pa_idx b = 0; b < rm->nb; b++) { /* feature records keep their slots */
-    if (rm->btag[b] & RMB_DEAD) continue;
+    if (rm->btag[b] & RM_B_DEAD) continue;
     for (int s = 0; s < 2; s++) {
       rm->bv[2 * b + s] = posv[rm->bv[2 * b + s]];
       pa_idx c = rm->bside[2 * b + s];
@@ -620,7 +622,7 @@ pa_status pa__rm_writeback(pa__rmesh *rm, pa_mesh *mesh) {
   pa_status st = PA_SUCCESS;
   int d = rm->dim, nvpe = rm->nvpe, mc = rm->mcomp;
   pa_idx *map = NULL;
-  double *coord = NULL, *met = NULL, *fval[PA_MAX_FIELDS] = {0};
+  double *coord = NULL, *met = NULL, *fval[PA_MESH_MAX_FIELDS] = {0};
   int32_t *vref = NULL, *eref = NULL, *bref = NULL;
   uint8_t *vflag = NULL, *eflag = NULL, *bflag = NULL;
   pa_idx *elem = NULL, *bdry = NULL;
@@ -628,7 +630,7 @@ pa_status pa__rm_writeback(pa__rmesh *rm, pa_mesh *mesh) {
 
   PA_ALLOC(map, rm->nv);
   for (pa_idx v = 0; v < rm->nv; v++)
-    map[v] = (rm->vtag[v] & RMV_DEAD) ? -1 : nvl++;
+    map[v] = (rm->vtag[v] & RM_V_DEAD) ? -1 : nvl++;
 
   /* vertex arrays, freeing the working ones as they are copied */
   PA_ALLOC(coord, (size_t)d * nvl);
@@ -674,7 +676,7 @@ pa_status pa__rm_writeback(pa__rmesh *rm, pa_mesh *mesh) {
   PA_ALLOC(eref, rm->nelive);
   PA_ALLOC(eflag, rm->nelive);
   for (pa_idx k = 0; k < rm->ne; k++) {
-    if (rm->etag[k] & RME_DEAD) continue;
+    if (rm->etag[k] & RM_E_DEAD) continue;
     for (int i = 0; i < nvpe; i++)
       elem[(size_t)nvpe * nel + i] = map[rm->ev[(size_t)nvpe * k + i]];
     eref[nel] = rm->eref[k];
@@ -690,7 +692,7 @@ pa_status pa__rm_writeback(pa__rmesh *rm, pa_mesh *mesh) {
   PA_ALLOC(bref, rm->nblive);
   PA_ALLOC(bflag, rm->nblive);
   for (pa_idx b = 0; b < rm->nb; b++) {
-    if ((rm->btag[b] & RMB_DEAD) || !(rm->btag[b] & RMB_LISTED)) continue;
+    if ((rm->btag[b] & RM_B_DEAD) || !(rm->btag[b] & RM_B_LISTED)) continue;
     bdry[2 * (size_t)nbl] = map[rm->bv[2 * (size_t)b]];
     bdry[2 * (size_t)nbl + 1] = map[rm->bv[2 * (size_t)b + 1]];
     bref[nbl] = rm->bref[b];
@@ -740,7 +742,7 @@ cleanup:
   pa__free(map);
   pa__free(coord);
   pa__free(met);
-  for (int k = 0; k < PA_MAX_FIELDS; k++) pa__free(fval[k]);
+  for (int k = 0; k < PA_MESH_MAX_FIELDS; k++) pa__free(fval[k]);
   pa__free(vref);
   pa__free(vflag);
   pa__free(elem);
@@ -760,11 +762,11 @@ pa_status pa__rm_check(const pa__rmesh *rm) {
   pa_idx nlive = 0;
   PA_CHECK(rm->dim == 2, PA_ERR_INTERNAL, "remesher check: 2D only");
   for (pa_idx k = 0; k < rm->ne; k++) {
-    if (rm->etag[k] & RME_DEAD) continue;
+    if (rm->etag[k] & RM_E_DEAD) continue;
     nlive++;
     const pa_idx *v = rm->ev + (size_t)nvpe * k;
     for (int i = 0; i < nvpe; i++)
-      PA_CHECK(v[i] >= 0 && v[i] < rm->nv && !(rm->vtag[v[i]] & RMV_DEAD),
+      PA_CHECK(v[i] >= 0 && v[i] < rm->nv && !(rm->vtag[v[i]] & RM_V_DEAD),
                PA_ERR_INTERNAL, "remesher: element %d has a dead vertex",
                (int)k);
     const double *a = rm->x + 2 * (size_t)v[0], *b = rm->x + 2 * (size_t)v[1],
@@ -776,13 +778,14 @@ pa_status pa__rm_check(const pa__rmesh *rm) {
     /* the in-range mark is a cache: a stale one costs operations, never
      * validity, so only debug builds check it (it is most of this check's
      * time: three metric lengths per element) */
-    if (rm->etag[k] & RME_INRANGE) { /* the cache is still true */
+    if (rm->etag[k] & RM_E_INRANGE) { /* the cache is still true */
       int mc = rm->mcomp;
       for (int i = 0; i < 3; i++) {
         pa_idx p = v[i], q = v[i == 2 ? 0 : i + 1];
         double l = pa__len2(mc, rm->x + 2 * (size_t)p, rm->x + 2 * (size_t)q,
                             rm->met + (size_t)mc * p, rm->met + (size_t)mc * q);
-        PA_CHECK(l >= PA__LEN_LO && l <= PA__LEN_HI, PA_ERR_INTERNAL,
+        PA_CHECK(l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI,
+                 PA_ERR_INTERNAL,
                  "remesher: element %d is marked in range, edge %d has "
                  "length %g",
                  (int)k, i, l);
@@ -795,7 +798,7 @@ pa_status pa__rm_check(const pa__rmesh *rm) {
       if (o >= 0) {
         pa_idx f = o / 3;
         int j = o % 3;
-        PA_CHECK(!(rm->etag[f] & RME_DEAD) && rm->adj[o] == code,
+        PA_CHECK(!(rm->etag[f] & RM_E_DEAD) && rm->adj[o] == code,
                  PA_ERR_INTERNAL, "remesher: adjacency of element %d face %d "
                  "is not symmetric", (int)k, i);
         PA_CHECK(rm->ev[3 * f + (j + 1) % 3] == e1 &&
@@ -804,7 +807,7 @@ pa_status pa__rm_check(const pa__rmesh *rm) {
                  "its neighbour", (int)k, i);
       } else {
         pa_idx bi = -o - 1;
-        PA_CHECK(bi < rm->nb && !(rm->btag[bi] & RMB_DEAD), PA_ERR_INTERNAL,
+        PA_CHECK(bi < rm->nb && !(rm->btag[bi] & RM_B_DEAD), PA_ERR_INTERNAL,
                  "remesher: element %d face %d points to a dead feature",
                  (int)k, i);
         PA_CHECK(rm->bside[2 * bi] == code || rm->bside[2 * bi + 1] == code,
@@ -820,13 +823,13 @@ pa_status pa__rm_check(const pa__rmesh *rm) {
   PA_CHECK(nlive == rm->nelive, PA_ERR_INTERNAL,
            "remesher: live element count is off");
   for (pa_idx b = 0; b < rm->nb; b++) {
-    if (rm->btag[b] & RMB_DEAD) continue;
+    if (rm->btag[b] & RM_B_DEAD) continue;
     PA_CHECK(rm->bside[2 * b] >= 0, PA_ERR_INTERNAL,
              "remesher: feature %d has no element", (int)b);
     for (int s = 0; s < 2; s++) {
       pa_idx code = rm->bside[2 * b + s];
       if (code < 0) continue;
-      PA_CHECK(!(rm->etag[code / 3] & RME_DEAD) && rm->adj[code] == -b - 1,
+      PA_CHECK(!(rm->etag[code / 3] & RM_E_DEAD) && rm->adj[code] == -b - 1,
                PA_ERR_INTERNAL, "remesher: feature %d side %d is stale",
                (int)b, s);
     }
@@ -846,8 +849,8 @@ void pa__rm_figures_2d(const pa__rmesh *rm, pa__rm_figures *f) {
   double qs = 0;
   for (pa_idx k = 0; k < rm->ne; k++) {
     uint8_t t = rm->etag[k];
-    if (t & RME_DEAD) continue;
-    if (!(t & RME_FROZEN)) {
+    if (t & RM_E_DEAD) continue;
+    if (!(t & RM_E_FROZEN)) {
       double q = rm->q[k];
       if (q < f->qmin) f->qmin = q;
       qs += q;
@@ -855,16 +858,16 @@ void pa__rm_figures_2d(const pa__rmesh *rm, pa__rm_figures *f) {
     }
     for (int i = 0; i < 3; i++) {
       pa_idx code = 3 * k + i, o = rm->adj[code];
-      int frozen = t & RME_FROZEN;
+      int frozen = t & RM_E_FROZEN;
       if (o >= 0) {
         if (o < code) continue; /* count each edge once */
-        frozen |= rm->etag[o / 3] & RME_FROZEN;
+        frozen |= rm->etag[o / 3] & RM_E_FROZEN;
       } else {
         pa_idx b = -o - 1;
         if (rm->bside[2 * b] != code) continue;
-        frozen |= rm->btag[b] & RMB_FROZEN;
+        frozen |= rm->btag[b] & RM_B_FROZEN;
         pa_idx s = rm->bside[2 * b + 1];
-        if (s >= 0) frozen |= rm->etag[s / 3] & RME_FROZEN;
+        if (s >= 0) frozen |= rm->etag[s / 3] & RM_E_FROZEN;
       }
       if (frozen) continue;
       pa_idx a = rm->ev[3 * k + (i + 1) % 3], c = rm->ev[3 * k + (i + 2) % 3];
@@ -873,9 +876,9 @@ void pa__rm_figures_2d(const pa__rmesh *rm, pa__rm_figures *f) {
       f->nedge++;
       if (l < f->lmin) f->lmin = l;
       if (l > f->lmax) f->lmax = l;
-      if (l >= PA__LEN_LO && l < PA__LEN_HI)
+      if (l >= PA_METRIC_LEN_LO && l < PA_METRIC_LEN_HI)
         f->nin++;
-      else if (l >= PA__LEN_HI)
+      else if (l >= PA_METRIC_LEN_HI)
         f->nlong++;
       else {
         f->nshort++;

@@ -6,9 +6,9 @@
  * Every operator evaluates its result before changing anything ("sim then
  * apply"): each new element must have quality >= RM_QFLOOR (so its orientation
  * is certain), plus the operator's own acceptance rule. The frozen contract is
- * enforced by the operators: an element tagged RME_FROZEN is never rewritten
+ * enforced by the operators: an element tagged RM_E_FROZEN is never rewritten
  * nor deleted, so none of its edges is split, swapped or collapsed (a collapse
- * removes a vertex, and vertices of frozen elements are RMV_FROZEN); frozen
+ * removes a vertex, and vertices of frozen elements are RM_V_FROZEN); frozen
  * and corner vertices never move nor disappear; feature edges are never
  * swapped.
  *
@@ -17,7 +17,7 @@
  * shared edge the neighbour runs it the other way.
  *
  * Passes visit elements in slot order and skip elements already touched in
- * the same pass (RME_TOUCHED), so each neighbourhood changes at most once
+ * the same pass (RM_E_TOUCHED), so each neighbourhood changes at most once
  * per pass and the result is deterministic.
  */
 #ifndef PA_OPS_2D_H
@@ -25,21 +25,21 @@
 
 #include "remesh2d/remesh2d.h"
 
-#define BALL_MAX 128
-#define X(v) (rm->x + 2 * (size_t)(v))
-#define M(v) (rm->met + (size_t)mc * (v))
-#define NX3(i) ((i) == 2 ? 0 : (i) + 1)
-#define PV3(i) ((i) == 0 ? 2 : (i) - 1)
+#define RM_BALL_MAX 128
+#define RM_X(v) (rm->x + 2 * (size_t)(v))
+#define RM_M(v) (rm->met + (size_t)mc * (v))
+#define RM_NX3(i) ((i) == 2 ? 0 : (i) + 1)
+#define RM_PV3(i) ((i) == 0 ? 2 : (i) - 1)
 
 static inline double elem_qual(const pa__rmesh *rm, pa_idx a, pa_idx b,
                                pa_idx c) {
   int mc = rm->mcomp;
-  return pa__qual2(mc, X(a), X(b), X(c), M(a), M(b), M(c));
+  return pa__qual2(mc, RM_X(a), RM_X(b), RM_X(c), RM_M(a), RM_M(b), RM_M(c));
 }
 
 static inline double edge_len(const pa__rmesh *rm, pa_idx a, pa_idx b) {
   int mc = rm->mcomp;
-  return pa__len2(mc, X(a), X(b), M(a), M(b));
+  return pa__len2(mc, RM_X(a), RM_X(b), RM_M(a), RM_M(b));
 }
 
 /* Face on the other side of face `code` (through a feature record if need
@@ -54,11 +54,11 @@ static inline pa_idx other_side(const pa__rmesh *rm, pa_idx code) {
 /* Edge (face code) can be split, collapsed or swapped: no frozen element on
  * either side, no frozen feature record. */
 static inline int edge_free(const pa__rmesh *rm, pa_idx code) {
-  if (rm->etag[code / 3] & RME_FROZEN) return 0;
+  if (rm->etag[code / 3] & RM_E_FROZEN) return 0;
   pa_idx o = rm->adj[code];
-  if (o < 0 && (rm->btag[-o - 1] & RMB_FROZEN)) return 0;
+  if (o < 0 && (rm->btag[-o - 1] & RM_B_FROZEN)) return 0;
   pa_idx s = other_side(rm, code);
-  return s < 0 || !(rm->etag[s / 3] & RME_FROZEN);
+  return s < 0 || !(rm->etag[s / 3] & RM_E_FROZEN);
 }
 
 /* Attach new face `code` to outer value o, which was attached to `oldcode`. */
@@ -74,23 +74,23 @@ static inline void attach(pa__rmesh *rm, pa_idx code, pa_idx o, pa_idx oldcode) 
 }
 
 /* Element k is rewritten or about to be killed, or one of its vertices
- * moved: drop the caches that depend on it (RME_INRANGE of k, RME_NOSWAP of
- * k and its neighbours, RMV_SETTLED of its vertices, whose balls change).
+ * moved: drop the caches that depend on it (RM_E_INRANGE of k, RM_E_NOSWAP of
+ * k and its neighbours, RM_V_SETTLED of its vertices, whose balls change).
  * Call with k's current vertices and, on a rewrite, before its adjacency is
  * updated (the old neighbours are the ones to tell; a new neighbour of a
  * rewritten element is an old neighbour of the rewritten group). */
 static inline void elem_changed(pa__rmesh *rm, pa_idx k) {
   const pa_idx *v = rm->ev + 3 * (size_t)k;
   const pa_idx *a = rm->adj + 3 * (size_t)k;
-  rm->etag[k] &= (uint8_t)~(RME_INRANGE | RME_NOSWAP);
+  rm->etag[k] &= (uint8_t)~(RM_E_INRANGE | RM_E_NOSWAP);
   /* neighbours: their swaps across k see a new k (swaps never cross a
    * feature record, so only direct neighbours matter) */
-  if (a[0] >= 0) rm->etag[a[0] / 3] &= (uint8_t)~RME_NOSWAP;
-  if (a[1] >= 0) rm->etag[a[1] / 3] &= (uint8_t)~RME_NOSWAP;
-  if (a[2] >= 0) rm->etag[a[2] / 3] &= (uint8_t)~RME_NOSWAP;
-  rm->vtag[v[0]] &= (uint8_t)~RMV_SETTLED;
-  rm->vtag[v[1]] &= (uint8_t)~RMV_SETTLED;
-  rm->vtag[v[2]] &= (uint8_t)~RMV_SETTLED;
+  if (a[0] >= 0) rm->etag[a[0] / 3] &= (uint8_t)~RM_E_NOSWAP;
+  if (a[1] >= 0) rm->etag[a[1] / 3] &= (uint8_t)~RM_E_NOSWAP;
+  if (a[2] >= 0) rm->etag[a[2] / 3] &= (uint8_t)~RM_E_NOSWAP;
+  rm->vtag[v[0]] &= (uint8_t)~RM_V_SETTLED;
+  rm->vtag[v[1]] &= (uint8_t)~RM_V_SETTLED;
+  rm->vtag[v[2]] &= (uint8_t)~RM_V_SETTLED;
 }
 
 /* Write element k (an existing or a new slot). The caller has called
@@ -103,14 +103,14 @@ static inline void set_elem(pa__rmesh *rm, pa_idx k, pa_idx a, pa_idx b,
   rm->ev[3 * k + 1] = b;
   rm->ev[3 * k + 2] = c;
   rm->q[k] = (float)q;
-  rm->etag[k] |= RME_TOUCHED;
+  rm->etag[k] |= RM_E_TOUCHED;
 }
 
 /*
  * Elements around vertex p starting from element k (local index ip): counter-
  * clockwise until back to k or the domain boundary, then clockwise from k.
  * Fills el[] and loc[] (local index of p) and returns the count, or -1 if the
- * ball exceeds BALL_MAX. *closed is 1 for an interior vertex.
+ * ball exceeds RM_BALL_MAX. *closed is 1 for an interior vertex.
  */
 static inline int ball_2d(const pa__rmesh *rm, pa_idx k, int ip, pa_idx *el,
                           int *loc, int *closed) {
@@ -121,15 +121,15 @@ static inline int ball_2d(const pa__rmesh *rm, pa_idx k, int ip, pa_idx *el,
   int l = ip;
   *closed = 0;
   for (;;) {
-    pa_idx s = other_side(rm, 3 * c + NX3(l));
+    pa_idx s = other_side(rm, 3 * c + RM_NX3(l));
     if (s < 0) break;
     c = s / 3;
-    l = NX3(s % 3);
+    l = RM_NX3(s % 3);
     if (c == k) {
       *closed = 1;
       return n;
     }
-    if (n >= BALL_MAX) return -1;
+    if (n >= RM_BALL_MAX) return -1;
     el[n] = c;
     loc[n++] = l;
   }
@@ -137,11 +137,11 @@ static inline int ball_2d(const pa__rmesh *rm, pa_idx k, int ip, pa_idx *el,
   c = k;
   l = ip;
   for (;;) {
-    pa_idx s = other_side(rm, 3 * c + PV3(l));
+    pa_idx s = other_side(rm, 3 * c + RM_PV3(l));
     if (s < 0) break;
     c = s / 3;
-    l = PV3(s % 3);
-    if (n >= BALL_MAX) return -1;
+    l = RM_PV3(s % 3);
+    if (n >= RM_BALL_MAX) return -1;
     el[n] = c;
     loc[n++] = l;
   }

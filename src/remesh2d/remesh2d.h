@@ -18,12 +18,12 @@
  *    through the record (bside);
  *  - q[k] is the element quality (Mmg's normalisation) with the current
  *    coordinates and metric;
- *  - tag bits RME_TOUCHED / RMV_MARK are scratch, cleared by each pass that
- *    uses them; RME_INRANGE / RME_NOSWAP / RMV_SETTLED are caches that skip work a pass
- *    would find useless, cleared by any change that could invalidate them
- *    (so the passes decide exactly as without them);
+ *  - tag bits RM_E_TOUCHED / RM_V_MARK are scratch, cleared by each pass
+ *    that uses them; RM_E_INRANGE / RM_E_NOSWAP / RM_V_SETTLED are caches
+ *    that skip work a pass would find useless, cleared by any change that
+ *    could invalidate them (so the passes decide exactly as without them);
  *  - a frozen element (PA_FLAG_REQUIRED in its flags) is never rewritten; its
- *    vertices carry RMV_FROZEN, so they are never moved or removed.
+ *    vertices carry RM_V_FROZEN, so they are never moved or removed.
  */
 #ifndef PA_REMESH2D_H
 #define PA_REMESH2D_H
@@ -36,41 +36,41 @@
 
 /* Vertex tags. */
 enum {
-  RMV_FROZEN = 1, /* never moved, never removed, metric never changed */
-  RMV_CORNER = 2, /* never moved, never removed */
-  RMV_FEAT = 4,   /* lies on a feature line (boundary or interior curve) */
-  RMV_DEAD = 8,
-  RMV_MARK = 16,  /* scratch */
-  RMV_DONE = 32,  /* scratch */
+  RM_V_FROZEN = 1, /* never moved, never removed, metric never changed */
+  RM_V_CORNER = 2, /* never moved, never removed */
+  RM_V_FEAT = 4,   /* lies on a feature line (boundary or interior curve) */
+  RM_V_DEAD = 8,
+  RM_V_MARK = 16,  /* scratch */
+  RM_V_DONE = 32,  /* scratch */
   /* A relocation of this vertex was tried and rejected, and no element of
    * its ball changed since (nor any vertex of them moved): trying again
    * would give the same answer, so relocation passes skip it. Cleared by
    * every operator on the vertices of each element it rewrites or kills,
    * and by a move on the vertices of the moved vertex's ball. */
-  RMV_SETTLED = 64
+  RM_V_SETTLED = 64
 };
 
 /* Element tags share the byte with the input flags (PA_FLAG_*, low nibble). */
 enum {
-  RME_FROZEN = PA_FLAG_REQUIRED,
-  RME_DEAD = 16,
-  RME_TOUCHED = 32, /* modified during the current pass */
+  RM_E_FROZEN = PA_FLAG_REQUIRED,
+  RM_E_DEAD = 16,
+  RM_E_TOUCHED = 32, /* modified during the current pass */
   /* Every swap of the element at the swap pass's gain was tried and
    * rejected, and neither it nor a neighbour changed since: skipped by swap
-   * passes. Cleared with RME_INRANGE, on the element and its neighbours. */
-  RME_NOSWAP = 64,
-  /* The three edges lie in [PA__LEN_LO, PA__LEN_HI] with the current
-   * coordinates and metric, so split and collapse passes at those
-   * thresholds have nothing to do here. Cleared with RMV_SETTLED (an element
+   * passes. Cleared with RM_E_INRANGE, on the element and its neighbours. */
+  RM_E_NOSWAP = 64,
+  /* The three edges lie in [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI] with the
+   * current coordinates and metric, so split and collapse passes at those
+   * thresholds have nothing to do here. Cleared with RM_V_SETTLED (an element
    * rewritten, or one of its vertices moved); new elements start without. */
-  RME_INRANGE = 128
+  RM_E_INRANGE = 128
 };
 
 /* Feature-record tags (high nibble; low nibble = input PA_FLAG_*). */
 enum {
-  RMB_FROZEN = PA_FLAG_REQUIRED,
-  RMB_DEAD = 16,
-  RMB_LISTED = 32 /* came from (and goes back to) the mesh's boundary list */
+  RM_B_FROZEN = PA_FLAG_REQUIRED,
+  RM_B_DEAD = 16,
+  RM_B_LISTED = 32 /* came from (and goes back to) the mesh's boundary list */
 };
 
 /* Quality floor: no operator creates an element below it. */
@@ -96,8 +96,8 @@ typedef struct pa__rmesh {
   int mcomp; /* metric components per vertex: 1 or 3 (2D) / 6 (3D) */
   int fcomp; /* total user field components per vertex */
   int nfield;
-  int fncomp[PA_MAX_FIELDS];
-  uint8_t fmetric[PA_MAX_FIELDS]; /* field holds a metric (metric.h) */
+  int fncomp[PA_MESH_MAX_FIELDS];
+  uint8_t fmetric[PA_MESH_MAX_FIELDS]; /* field holds a metric (metric.h) */
 
   /* vertices */
   pa_idx nv, vfree;  /* slots in use (live + dead), free-list head (-1) */
@@ -110,7 +110,7 @@ typedef struct pa__rmesh {
   double *fld;      /* fcomp * capv (NULL without fields) */
   int32_t *vref;    /* free list link for dead vertices */
   uint8_t *vflag;   /* input PA_FLAG_* */
-  uint8_t *vtag;    /* RMV_* */
+  uint8_t *vtag;    /* RM_V_* */
 
   /* elements */
   pa_idx ne, efree;
@@ -179,7 +179,7 @@ pa_status pa__rm_writeback(pa__rmesh *rm, pa_mesh *mesh);
  * (it is only written at write-back). */
 pa_status pa__rm_reorder(pa__rmesh *rm);
 /* Check the working mesh invariants; PA_ERR_INTERNAL naming the first fault.
- * The RME_INRANGE cache is checked in debug builds only (a stale mark costs
+ * The RM_E_INRANGE cache is checked in debug builds only (a stale mark costs
  * operations, not validity). */
 pa_status pa__rm_check(const pa__rmesh *rm);
 /* Edge-length and quality figures over the modifiable part of the mesh. */
@@ -230,8 +230,8 @@ static inline void rm_tensor2(int mc, const double *m, double *t) {
 
 /* Lengths and qualities are metric/metric2d.h's kernels (pa__len2,
  * pa__qual2): the statistics measure with the same lengths. The band the
- * passes aim at is PA__LEN_LO..PA__LEN_HI, the bounds as Mmg prints them
- * (the 3D remesher's are the exact PA__LEN_*_EXACT; the two differ by
- * 1e-5 and each remesher's outputs are tuned to its own). */
+ * passes aim at is PA_METRIC_LEN_LO..PA_METRIC_LEN_HI, the bounds as Mmg prints
+ * them (the 3D remesher's are the exact PA_METRIC_LEN_*_EXACT; the two differ
+ * by 1e-5 and each remesher's outputs are tuned to its own). */
 
 #endif /* PA_REMESH2D_H */

@@ -22,8 +22,8 @@ static void apply_move(pa__rmesh *rm, pa_idx p, const pa_idx *el,
   double x0 = xp[0], y0 = xp[1];
   for (int s = 0; s < n; s++) {
     const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-    pa_idx va = v[NX3(loc[s])], vb = v[PV3(loc[s])];
-    const double *a = X(va), *b = X(vb);
+    pa_idx va = v[RM_NX3(loc[s])], vb = v[RM_PV3(loc[s])];
+    const double *a = RM_X(va), *b = RM_X(vb);
     double area = (a[0] - x0) * (b[1] - y0) - (a[1] - y0) * (b[0] - x0);
     double wa = ((np[0] - x0) * (b[1] - y0) - (np[1] - y0) * (b[0] - x0)) / area;
     double wb = ((a[0] - x0) * (np[1] - y0) - (a[1] - y0) * (np[0] - x0)) / area;
@@ -50,20 +50,20 @@ static void apply_move(pa__rmesh *rm, pa_idx p, const pa_idx *el,
 static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   int mc = rm->mcomp;
   pa_idx p = rm->ev[3 * k + ip];
-  pa_idx el[BALL_MAX];
-  int loc[BALL_MAX], closed;
+  pa_idx el[RM_BALL_MAX];
+  int loc[RM_BALL_MAX], closed;
   int n = ball_2d(rm, k, ip, el, loc, &closed);
   if (n < 3 || !closed) return 0;
   double t[3];
-  rm_tensor2(mc, M(p), t);
+  rm_tensor2(mc, RM_M(p), t);
   double det = t[0] * t[2] - t[1] * t[1];
   if (!(det > 0)) return 0;
   double sd = 1.0 / sqrt(det);
   double cx = 0, cy = 0, qold = 1, qmean = 0;
   for (int s = 0; s < n; s++) {
     const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-    if (rm->etag[el[s]] & RME_FROZEN) return 0;
-    const double *a = X(v[NX3(loc[s])]), *b = X(v[PV3(loc[s])]);
+    if (rm->etag[el[s]] & RM_E_FROZEN) return 0;
+    const double *a = RM_X(v[RM_NX3(loc[s])]), *b = RM_X(v[RM_PV3(loc[s])]);
     double dx = b[0] - a[0], dy = b[1] - a[1];
     /* metric rotation by +90 degrees: adj(M) R d / sqrt(det M) */
     double rx = -dy, ry = dx;
@@ -79,11 +79,11 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   cy /= n;
   /* edge lengths in range before the move must stay in range (computed
    * when a candidate first passes the quality test) */
-  uint8_t inr[BALL_MAX];
+  uint8_t inr[RM_BALL_MAX];
   int have_inr = 0;
   double *xp = rm->x + 2 * (size_t)p;
   double x0 = xp[0], y0 = xp[1];
-  double qn[BALL_MAX];
+  double qn[RM_BALL_MAX];
   double om = 1.0;
   for (int tr = 0; tr < 3; tr++, om *= 0.5) {
     xp[0] = x0 + om * (cx - x0);
@@ -105,8 +105,8 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
       xp[0] = x0;
       xp[1] = y0;
       for (int s = 0; s < n; s++) {
-        double l = edge_len(rm, p, rm->ev[3 * (size_t)el[s] + NX3(loc[s])]);
-        inr[s] = l >= PA__LEN_LO && l <= PA__LEN_HI;
+        double l = edge_len(rm, p, rm->ev[3 * (size_t)el[s] + RM_NX3(loc[s])]);
+        inr[s] = l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
       }
       xp[0] = np[0];
       xp[1] = np[1];
@@ -114,8 +114,8 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
     }
     for (int s = 0; s < n && ok; s++) {
       if (!inr[s]) continue;
-      double l = edge_len(rm, p, rm->ev[3 * (size_t)el[s] + NX3(loc[s])]);
-      ok = l >= PA__LEN_LO && l <= PA__LEN_HI;
+      double l = edge_len(rm, p, rm->ev[3 * (size_t)el[s] + RM_NX3(loc[s])]);
+      ok = l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
     }
     if (!ok) continue;
     /* accepted */
@@ -132,36 +132,35 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
 
 long pa__rm_smooth_pass_2d(pa__rmesh *rm) {
   long cnt = 0;
-  for (pa_idx v = 0; v < rm->nv; v++) rm->vtag[v] &= ~RMV_DONE;
+  for (pa_idx v = 0; v < rm->nv; v++) rm->vtag[v] &= ~RM_V_DONE;
   for (pa_idx k = 0; k < rm->ne; k++) {
-    if (rm->etag[k] & (RME_DEAD | RME_FROZEN)) continue;
+    if (rm->etag[k] & (RM_E_DEAD | RM_E_FROZEN)) continue;
     for (int i = 0; i < 3; i++) {
       pa_idx p = rm->ev[3 * k + i];
       uint8_t tp = rm->vtag[p];
-      if (tp & (RMV_DONE | RMV_FROZEN | RMV_CORNER | RMV_FEAT)) continue;
+      if (tp & (RM_V_DONE | RM_V_FROZEN | RM_V_CORNER | RM_V_FEAT)) continue;
       /* DONE even when skipped: a neighbour's move later in this pass must
        * not make p eligible again from another start element */
-      rm->vtag[p] |= RMV_DONE;
+      rm->vtag[p] |= RM_V_DONE;
       /* the answer depends only on p's ball: a rejected p stays settled
        * until an operator or a move changes that ball (elem_changed) */
-      if (tp & RMV_SETTLED) continue;
+      if (tp & RM_V_SETTLED) continue;
       if (move_vertex(rm, k, i)) cnt++;
-      else rm->vtag[p] |= RMV_SETTLED;
+      else rm->vtag[p] |= RM_V_SETTLED;
     }
   }
   return cnt;
 }
 
-/* Edges at p out of [PA__LEN_LO, PA__LEN_HI] and their sum of ln^2 (L /
- * RM_LTARGET), with p at
- * y (metric mp) and its neighbours nb[0..nn). */
+/* Edges at p out of [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI] and their sum of ln^2
+ * (L / RM_LTARGET), with p at y (metric mp) and its neighbours nb[0..nn). */
 static int len_score_2d(const pa__rmesh *rm, const double *y, const double *mp,
                         const pa_idx *nb, int nn, double *sum) {
   int mc = rm->mcomp, out = 0;
   double s = 0;
   for (int i = 0; i < nn; i++) {
-    double l = pa__len2(mc, y, X(nb[i]), mp, M(nb[i]));
-    out += !(l >= PA__LEN_LO && l <= PA__LEN_HI);
+    double l = pa__len2(mc, y, RM_X(nb[i]), mp, RM_M(nb[i]));
+    out += !(l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI);
     double g = log(l / RM_LTARGET);
     s += g * g;
   }
@@ -178,18 +177,18 @@ static int len_score_2d(const pa__rmesh *rm, const double *y, const double *mp,
 static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   int mc = rm->mcomp;
   pa_idx p = rm->ev[3 * k + ip];
-  pa_idx el[BALL_MAX], nb[BALL_MAX];
-  int loc[BALL_MAX], closed;
+  pa_idx el[RM_BALL_MAX], nb[RM_BALL_MAX];
+  int loc[RM_BALL_MAX], closed;
   int n = ball_2d(rm, k, ip, el, loc, &closed);
   if (n < 3 || !closed) return 0;
   double qold = 1;
   for (int s = 0; s < n; s++) {
-    if (rm->etag[el[s]] & RME_FROZEN) return 0;
+    if (rm->etag[el[s]] & RM_E_FROZEN) return 0;
     if (rm->q[el[s]] < qold) qold = rm->q[el[s]];
-    nb[s] = rm->ev[3 * (size_t)el[s] + NX3(loc[s])];
+    nb[s] = rm->ev[3 * (size_t)el[s] + RM_NX3(loc[s])];
   }
   double *xp = rm->x + 2 * (size_t)p;
-  const double *mp = M(p);
+  const double *mp = RM_M(p);
   double s0;
   int out0 = len_score_2d(rm, xp, mp, nb, n, &s0);
   if (out0 == 0) return 0;
@@ -197,9 +196,9 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   double tp[3];
   rm_tensor2(mc, mp, tp);
   for (int s = 0; s < n; s++) {
-    const double *xi = X(nb[s]);
+    const double *xi = RM_X(nb[s]);
     double ti[3];
-    rm_tensor2(mc, M(nb[s]), ti);
+    rm_tensor2(mc, RM_M(nb[s]), ti);
     double a[3] = {0.5 * (tp[0] + ti[0]), 0.5 * (tp[1] + ti[1]),
                    0.5 * (tp[2] + ti[2])};
     double e[2] = {xi[0] - xp[0], xi[1] - xp[1]};
@@ -207,7 +206,7 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
     double q = me[0] * e[0] + me[1] * e[1];
     if (!(q > 0)) return 0;
     double g[2] = {-me[0] / q, -me[1] / q};
-    double l = pa__len2(mc, xp, xi, mp, M(nb[s])), r = log(l / RM_LTARGET);
+    double l = pa__len2(mc, xp, xi, mp, RM_M(nb[s])), r = log(l / RM_LTARGET);
     jj[0] += g[0] * g[0];
     jj[1] += g[0] * g[1];
     jj[2] += g[1] * g[1];
@@ -256,22 +255,22 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
 long pa__rm_length_pass_2d(pa__rmesh *rm) {
   int mc = rm->mcomp;
   long cnt = 0;
-  for (pa_idx v = 0; v < rm->nv; v++) rm->vtag[v] &= ~RMV_DONE;
+  for (pa_idx v = 0; v < rm->nv; v++) rm->vtag[v] &= ~RM_V_DONE;
   for (pa_idx k = 0; k < rm->ne; k++) {
-    if (rm->etag[k] & (RME_DEAD | RME_FROZEN)) continue;
+    if (rm->etag[k] & (RM_E_DEAD | RM_E_FROZEN)) continue;
     const pa_idx *v = rm->ev + 3 * (size_t)k;
     int bad = 0;
     for (int i = 0; i < 3 && !bad; i++) {
-      double l =
-          pa__len2(mc, X(v[NX3(i)]), X(v[PV3(i)]), M(v[NX3(i)]), M(v[PV3(i)]));
-      bad = !(l >= PA__LEN_LO && l <= PA__LEN_HI);
+      double l = pa__len2(mc, RM_X(v[RM_NX3(i)]), RM_X(v[RM_PV3(i)]),
+                          RM_M(v[RM_NX3(i)]), RM_M(v[RM_PV3(i)]));
+      bad = !(l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI);
     }
     if (!bad) continue;
     for (int i = 0; i < 3; i++) {
       pa_idx p = v[i];
       uint8_t tp = rm->vtag[p];
-      if (tp & (RMV_DONE | RMV_FROZEN | RMV_CORNER | RMV_FEAT)) continue;
-      rm->vtag[p] |= RMV_DONE;
+      if (tp & (RM_V_DONE | RM_V_FROZEN | RM_V_CORNER | RM_V_FEAT)) continue;
+      rm->vtag[p] |= RM_V_DONE;
       cnt += length_vertex(rm, k, i);
     }
   }

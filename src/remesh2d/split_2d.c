@@ -14,7 +14,7 @@
  */
 static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
   pa_idx te = 3 * k + i;
-  int i1 = NX3(i), i2 = PV3(i);
+  int i1 = RM_NX3(i), i2 = RM_PV3(i);
   pa_idx p0 = rm->ev[3 * k + i], a = rm->ev[3 * k + i1], b = rm->ev[3 * k + i2];
   pa_idx o = rm->adj[te];
   pa_idx feat = o < 0 ? -o - 1 : -1;
@@ -24,8 +24,8 @@ static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
   if (fcode >= 0) {
     f = fcode / 3;
     j = fcode % 3;
-    j1 = NX3(j);
-    j2 = PV3(j);
+    j1 = RM_NX3(j);
+    j2 = RM_PV3(j);
     p1 = rm->ev[3 * f + j];
   }
   *st = pa__rm_reserve(rm, 1, 2, 1);
@@ -37,8 +37,8 @@ static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
   if (feat >= 0) {
     pa__rm_curve_point_2d(rm, feat, 0.5, xm, tm);
   } else {
-    xm[0] = 0.5 * (X(a)[0] + X(b)[0]);
-    xm[1] = 0.5 * (X(a)[1] + X(b)[1]);
+    xm[0] = 0.5 * (RM_X(a)[0] + RM_X(b)[0]);
+    xm[1] = 0.5 * (RM_X(a)[1] + RM_X(b)[1]);
   }
   pa_idx src[2] = {a, b};
   double w[2] = {0.5, 0.5};
@@ -119,7 +119,7 @@ static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
       rm->adj[3 * f2] = -ram - 1;
       rm->adj[3 * f] = -rmb - 1;
     }
-    rm->vtag[m] |= RMV_FEAT;
+    rm->vtag[m] |= RM_V_FEAT;
     rm->vref[m] = rm->bref[feat];
   }
   rm->nsplit++;
@@ -127,15 +127,16 @@ static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
 }
 
 /* Longest free edge of element k above thr: face index or -1, length in *len;
- * *inr (may be NULL) = all three edges in [PA__LEN_LO, PA__LEN_HI]. */
+ * *inr (may be NULL) = all three edges in [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI].
+ */
 static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
                         int *inr) {
   const pa_idx *v = rm->ev + 3 * (size_t)k;
   int best = -1, in = 1;
   double lb = thr;
   for (int i = 0; i < 3; i++) {
-    double l = edge_len(rm, v[NX3(i)], v[PV3(i)]);
-    in &= l >= PA__LEN_LO && l <= PA__LEN_HI;
+    double l = edge_len(rm, v[RM_NX3(i)], v[RM_PV3(i)]);
+    in &= l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
     if (l > lb && edge_free(rm, 3 * k + i)) {
       lb = l;
       best = i;
@@ -149,23 +150,23 @@ static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
 pa_status pa__rm_split_pass_2d(pa__rmesh *rm, double thr, long *n) {
   pa_status st = PA_SUCCESS;
   long cnt = 0;
-  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RME_TOUCHED;
+  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RM_E_TOUCHED;
   for (pa_idx k = 0; k < rm->ne; k++) {
     uint8_t t = rm->etag[k];
-    if (t & (RME_DEAD | RME_TOUCHED | RME_FROZEN)) continue;
-    if ((t & RME_INRANGE) && thr >= PA__LEN_HI)
+    if (t & (RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN)) continue;
+    if ((t & RM_E_INRANGE) && thr >= PA_METRIC_LEN_HI)
       continue; /* nothing above thr */
     double l;
     int inr;
     int i = longest_free(rm, k, thr, &l, &inr);
-    if (inr) rm->etag[k] |= RME_INRANGE;
+    if (inr) rm->etag[k] |= RM_E_INRANGE;
     if (i < 0) continue;
     /* Longest-edge propagation: split only if the edge is also the longest
      * free edge of the neighbour (else the neighbour goes first). */
     pa_idx s = other_side(rm, 3 * k + i);
     if (s >= 0) {
       pa_idx f = s / 3;
-      if (rm->etag[f] & RME_TOUCHED) continue;
+      if (rm->etag[f] & RM_E_TOUCHED) continue;
       double lf;
       int jf = longest_free(rm, f, l * (1 + 1e-12), &lf, NULL);
       if (jf >= 0 && jf != s % 3) continue;

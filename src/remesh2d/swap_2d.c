@@ -14,8 +14,8 @@ static int swap_edge(pa__rmesh *rm, pa_idx k, int i, double gain) {
   if (o < 0) return 0;
   pa_idx f = o / 3;
   int j = o % 3;
-  if ((rm->etag[k] | rm->etag[f]) & RME_FROZEN) return 0;
-  int i1 = NX3(i), i2 = PV3(i), j1 = NX3(j), j2 = PV3(j);
+  if ((rm->etag[k] | rm->etag[f]) & RM_E_FROZEN) return 0;
+  int i1 = RM_NX3(i), i2 = RM_PV3(i), j1 = RM_NX3(j), j2 = RM_PV3(j);
   pa_idx p0 = rm->ev[3 * k + i], a = rm->ev[3 * k + i1], b = rm->ev[3 * k + i2];
   pa_idx p1 = rm->ev[3 * f + j];
   double qo = rm->q[k] < rm->q[f] ? rm->q[k] : rm->q[f];
@@ -42,33 +42,33 @@ static int swap_edge(pa__rmesh *rm, pa_idx k, int i, double gain) {
 
 long pa__rm_swap_pass_2d(pa__rmesh *rm, double qmax) {
   long cnt = 0;
-  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RME_TOUCHED;
+  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RM_E_TOUCHED;
   for (pa_idx k = 0; k < rm->ne; k++) {
     uint8_t t = rm->etag[k];
-    if (t & (RME_DEAD | RME_TOUCHED | RME_FROZEN)) continue;
-    if (rm->q[k] >= qmax || (t & RME_NOSWAP)) continue;
+    if (t & (RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN)) continue;
+    if (rm->q[k] >= qmax || (t & RM_E_NOSWAP)) continue;
     int done = 0, all = 1;
     for (int i = 0; i < 3 && !done; i++) {
       pa_idx o = rm->adj[3 * k + i];
       if (o < 0) continue;
-      if (rm->etag[o / 3] & RME_TOUCHED) {
+      if (rm->etag[o / 3] & RM_E_TOUCHED) {
         all = 0; /* not tried: no verdict for this face */
         continue;
       }
       done = swap_edge(rm, k, i, 1.02);
     }
     cnt += done;
-    if (!done && all) rm->etag[k] |= RME_NOSWAP;
+    if (!done && all) rm->etag[k] |= RM_E_NOSWAP;
   }
   return cnt;
 }
 
 long pa__rm_sliver_pass_2d(pa__rmesh *rm, double qbad) {
   long cnt = 0;
-  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RME_TOUCHED;
+  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RM_E_TOUCHED;
   for (pa_idx k = 0; k < rm->ne; k++) {
     uint8_t t = rm->etag[k];
-    if (t & (RME_DEAD | RME_TOUCHED | RME_FROZEN)) continue;
+    if (t & (RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN)) continue;
     if (rm->q[k] >= qbad) continue;
     int done = 0;
     for (int i = 0; i < 3 && !done; i++) done = swap_edge(rm, k, i, 1.0);
@@ -78,17 +78,17 @@ long pa__rm_sliver_pass_2d(pa__rmesh *rm, double qbad) {
       int best = 0;
       double lb = 1e300;
       for (int i = 0; i < 3; i++) {
-        double l = edge_len(rm, v[NX3(i)], v[PV3(i)]);
+        double l = edge_len(rm, v[RM_NX3(i)], v[RM_PV3(i)]);
         if (l < lb) {
           lb = l;
           best = i;
         }
       }
-      if (lb < PA__LEN_HI) {
+      if (lb < PA_METRIC_LEN_HI) {
         double g = rm->lguard;
-        rm->lguard = PA__LEN_HI * 1.2;
-        done = pa__rm_collapse_edge_2d(rm, k, best, NX3(best), 1.0 + 1e-9) ||
-               pa__rm_collapse_edge_2d(rm, k, best, PV3(best), 1.0 + 1e-9);
+        rm->lguard = PA_METRIC_LEN_HI * 1.2;
+        done = pa__rm_collapse_edge_2d(rm, k, best, RM_NX3(best), 1.0 + 1e-9) ||
+               pa__rm_collapse_edge_2d(rm, k, best, RM_PV3(best), 1.0 + 1e-9);
         rm->lguard = g;
       }
     }

@@ -8,7 +8,7 @@
  * (unless -nr) when their normals make an angle above -ar. A vertex with a
  * number of feature edges other than 0 or 2, or whose two feature edges turn
  * by more than -ar, is a corner (locked). Boundary vertices off features get
- * the mean normal of their free triangles and R3V_CURVED when these normals
+ * the mean normal of their free triangles and RM3D_V_CURVED when these normals
  * are not all equal, which lets splits place new points on a smooth (cubic)
  * reconstruction; planar patches have no curved vertex and stay planar. So
  * does a vertex whose feature edges all separate a free triangle from a
@@ -58,7 +58,7 @@ static int frozen_face(const rm3d *m, const pa_idx *fv) {
 static size_t sorted_edges(const rm3d *m, bedge *be) {
   size_t nbe = 0;
   for (pa_idx r = 0; r < m->tri.n; r++) {
-    if (m->tri.flag[r] & R3_REC_DEAD) continue;
+    if (m->tri.flag[r] & RM3D_REC_DEAD) continue;
     const pa_idx *v = m->tri.v + 3 * (size_t)r;
     for (int i = 0; i < 3; i++) {
       pa_idx x = v[i], y = v[(i + 1) % 3];
@@ -121,13 +121,13 @@ cleanup:
 static void mark_corners(rm3d *m, int use_angle, uint8_t *nfeat,
                          pa_idx *other) {
   for (pa_idx r = 0; r < m->edg.n; r++) {
-    if (m->edg.flag[r] & R3_REC_DEAD) continue;
+    if (m->edg.flag[r] & RM3D_REC_DEAD) continue;
     const pa_idx *ev = m->edg.v + 2 * (size_t)r;
     for (int s = 0; s < 2; s++) {
       pa_idx x = ev[s];
       if (nfeat[x] < 2) other[2 * (size_t)x + nfeat[x]] = ev[1 - s];
       if (nfeat[x] < 255) nfeat[x]++;
-      m->vtag[x] |= R3V_FEAT;
+      m->vtag[x] |= RM3D_V_FEAT;
     }
   }
   for (pa_idx x = 0; x < m->nv; x++) {
@@ -144,7 +144,7 @@ static void mark_corners(rm3d *m, int use_angle, uint8_t *nfeat,
       if (u[0] * w[0] + u[1] * w[1] + u[2] * w[2] < m->ridge_cos) corner = 1;
     }
     if (corner) {
-      m->vtag[x] |= R3V_CORNER | R3V_LOCK;
+      m->vtag[x] |= RM3D_V_CORNER | RM3D_V_LOCK;
       if (!(m->vpf[x] & PA_FLAG_REQUIRED)) m->vpf[x] |= PA_FLAG_CORNER;
     }
   }
@@ -157,14 +157,14 @@ static void mark_corners(rm3d *m, int use_angle, uint8_t *nfeat,
  * chord's midpoint, so the input's facets stayed flat along every skin on a
  * curved boundary, their vertices planar in the next iteration, and the
  * junctions with the curved refinement around made needles and folds. A
- * vertex is curved (R3V_CURVED) when one of its faces deviates from its
+ * vertex is curved (RM3D_V_CURVED) when one of its faces deviates from its
  * normal; m->nrm is kept only if one is. */
 static pa_status curved_normals(rm3d *m, const uint8_t *nborder,
                                 const uint8_t *nfeat) {
   pa_status st = PA_SUCCESS;
   PA_CALLOC(m->nrm, 3 * m->capv);
   for (pa_idx k = 0; k < m->ne; k++) {
-    if (!(m->tflag[k] & R3T_FACES)) continue;
+    if (!(m->tflag[k] & RM3D_T_FACES)) continue;
     for (int f = 0; f < 4; f++) {
       pa_idx fv[3];
       double n[3];
@@ -176,7 +176,7 @@ static pa_status curved_normals(rm3d *m, const uint8_t *nborder,
   for (pa_idx x = 0; x < m->nv; x++) rm3d_unit(m->nrm + 3 * (size_t)x);
   int ncurved = 0;
   for (pa_idx k = 0; k < m->ne; k++) {
-    if (!(m->tflag[k] & R3T_FACES)) continue;
+    if (!(m->tflag[k] & RM3D_T_FACES)) continue;
     for (int f = 0; f < 4; f++) {
       pa_idx fv[3];
       double n[3];
@@ -184,11 +184,11 @@ static pa_status curved_normals(rm3d *m, const uint8_t *nborder,
       rm3d_unit(n);
       for (int j = 0; j < 3; j++) {
         pa_idx x = fv[j];
-        if (m->vtag[x] & R3V_CURVED) continue;
-        if ((m->vtag[x] & R3V_FEAT) && nborder[x] != nfeat[x]) continue;
+        if (m->vtag[x] & RM3D_V_CURVED) continue;
+        if ((m->vtag[x] & RM3D_V_FEAT) && nborder[x] != nfeat[x]) continue;
         const double *nx = m->nrm + 3 * (size_t)x;
         if (n[0] * nx[0] + n[1] * nx[1] + n[2] * nx[2] < 1.0 - 1e-10) {
-          m->vtag[x] |= R3V_CURVED;
+          m->vtag[x] |= RM3D_V_CURVED;
           ncurved++;
         }
       }

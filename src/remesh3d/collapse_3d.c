@@ -50,7 +50,7 @@ static pa_status collapse_apply(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball,
     pa_idx keep = o1 >= 0 ? (o1 >> 2) : (o2 >> 2);
     for (int j = 0; j < 4; j++)
       if (j != ip && j != iq) m->vtet[v[j]] = keep;
-    m->tflag[t] = R3T_DEAD;
+    m->tflag[t] = RM3D_T_DEAD;
     m->ndead_t++;
   }
   for (int i = 0; i < n; i++) {
@@ -58,7 +58,7 @@ static pa_status collapse_apply(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball,
     pa_idx t = ball[i] >> 2;
     m->tv[4 * (size_t)t + (ball[i] & 3)] = q;
     m->q[t] = nq[i];
-    m->tflag[t] &= (uint8_t)~R3T_CLEAN;
+    m->tflag[t] &= (uint8_t)~RM3D_T_CLEAN;
     m->vtet[q] = t;
   }
   for (int j = 0; j < ntri; j++) {
@@ -87,7 +87,7 @@ static pa_status collapse_apply(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball,
       PA_CALL(pa__rm3d_table_add(&m->edg, ev, ref, fl, NULL));
     }
   }
-  m->vtag[p] = R3V_DEAD;
+  m->vtag[p] = RM3D_V_DEAD;
   m->ndead_v++;
   m->ncollapse++;
 cleanup:
@@ -138,8 +138,8 @@ static int new_edges_short(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball,
     const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
     for (int j = 0; j < 4; j++) {
       pa_idx x = v[j];
-      if (x == p || (m->vtag[x] & R3V_MARK)) continue;
-      m->vtag[x] |= R3V_MARK;
+      if (x == p || (m->vtag[x] & RM3D_V_MARK)) continue;
+      m->vtag[x] |= RM3D_V_MARK;
       if (rm3d_len(m, q, x) > lguard) {
         ok = 0;
         break;
@@ -148,7 +148,7 @@ static int new_edges_short(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball,
   }
   for (int i = 0; i < n; i++) {
     const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
-    for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~R3V_MARK;
+    for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~RM3D_V_MARK;
   }
   return ok;
 }
@@ -169,7 +169,7 @@ static pa_status surface_kept(const rm3d *m, pa_idx p, pa_idx q,
     pa_idx t = ball[i] >> 2;
     int ip = ball[i] & 3;
     uint8_t fl = m->tflag[t];
-    if (!(fl & R3T_FACES & ~(1u << ip))) continue;
+    if (!(fl & RM3D_T_FACES & ~(1u << ip))) continue;
     const pa_idx *v = m->tv + 4 * (size_t)t;
     for (int f = 0; f < 4; f++) {
       if (f == ip || !((fl >> f) & 1)) continue;
@@ -195,7 +195,7 @@ static pa_status surface_kept(const rm3d *m, pa_idx p, pa_idx q,
       onsurf = 1;
       continue;
     }
-    if (!(tp & R3V_FEAT) && m->tri.ref[trec[j]] != tref0) return PA_SUCCESS;
+    if (!(tp & RM3D_V_FEAT) && m->tri.ref[trec[j]] != tref0) return PA_SUCCESS;
     /* The renamed triangle must not exist yet, and must stay close to
      * the old surface. */
     pa_idx nk[3];
@@ -231,9 +231,9 @@ static int ridge_kept(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball, int n,
     const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
     for (int j = 0; j < 4; j++) {
       pa_idx x = v[j];
-      if (x == p || (m->vtag[x] & R3V_MARK)) continue;
-      m->vtag[x] |= R3V_MARK;
-      if (!(m->vtag[x] & R3V_FEAT)) continue;
+      if (x == p || (m->vtag[x] & RM3D_V_MARK)) continue;
+      m->vtag[x] |= RM3D_V_MARK;
+      if (!(m->vtag[x] & RM3D_V_FEAT)) continue;
       pa_idx key[2] = {p, x};
       pa_idx r = pa__rm3d_table_find(&m->edg, key);
       if (r < 0) continue;
@@ -243,7 +243,7 @@ static int ridge_kept(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball, int n,
   }
   for (int i = 0; i < n; i++) {
     const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
-    for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~R3V_MARK;
+    for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~RM3D_V_MARK;
   }
   if (*nerec != 2) return 0;
   int iq = -1;
@@ -283,9 +283,9 @@ pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
   int ntri = 0, nerec = 0;
   *done = 0;
   uint8_t tp = m->vtag[p];
-  if (tp & (R3V_LOCK | R3V_CORNER | R3V_DEAD)) return st;
-  int surfp = (tp & R3V_BDRY) != 0;
-  if (surfp && (!m->surf || !(m->vtag[q] & R3V_BDRY))) return st;
+  if (tp & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) return st;
+  int surfp = (tp & RM3D_V_BDRY) != 0;
+  if (surfp && (!m->surf || !(m->vtag[q] & RM3D_V_BDRY))) return st;
   int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
   if (n < 0) return st;
   if (!ball_qualities(m, q, ball, n, nq)) return st;
@@ -294,7 +294,7 @@ pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
     int ok;
     PA_CALL(surface_kept(m, p, q, ball, n, trec, &ntri, &ok));
     if (!ok) return st;
-    if ((tp & R3V_FEAT) &&
+    if ((tp & RM3D_V_FEAT) &&
         !ridge_kept(m, p, q, ball, n, trec, ntri, erec, &nerec))
       return st;
   }
@@ -318,17 +318,17 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
   float oq[RM3D_MAXBALL], nq[RM3D_MAXBALL];
   *done = 0;
   uint8_t tp = m->vtag[p], tq = m->vtag[q];
-  if ((tp | tq) & (R3V_LOCK | R3V_CORNER | R3V_DEAD)) return st;
+  if ((tp | tq) & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) return st;
   int nb = pa__rm3d_ball(m, q, bq, RM3D_MAXBALL);
   if (nb < 0) return st;
   int mc = m->mc;
   double *xq = m->x + 3 * (size_t)q;
   const double *xp = m->x + 3 * (size_t)p;
-  if (tq & R3V_BDRY) {
-    if (!m->surf || !(tp & R3V_BDRY) || ((tp ^ tq) & R3V_FEAT)) return st;
+  if (tq & RM3D_V_BDRY) {
+    if (!m->surf || !(tp & RM3D_V_BDRY) || ((tp ^ tq) & RM3D_V_FEAT)) return st;
     double dir[3];
     int kind = pa__rm3d_bdry_freedom(m, q, bq, nb, dir);
-    if (kind != ((tq & R3V_FEAT) ? 1 : 2)) return st;
+    if (kind != ((tq & RM3D_V_FEAT) ? 1 : 2)) return st;
     double e[3] = {xp[0] - xq[0], xp[1] - xq[1], xp[2] - xq[2]};
     double le = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
     if (kind == 2) {
@@ -341,7 +341,7 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
       if (sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) > 1e-12 * le)
         return st;
     }
-  } else if (tp & R3V_BDRY) {
+  } else if (tp & RM3D_V_BDRY) {
     return st;
   }
   double xm[3], mm[6], xo[3], mo[6], mo0[6];
@@ -353,7 +353,7 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
   for (int i = 0; i < nb; i++) {
     pa_idx t = bq[i] >> 2;
     int iq = bq[i] & 3;
-    if (m->tflag[t] & R3T_FROZEN) return st;
+    if (m->tflag[t] & RM3D_T_FROZEN) return st;
     const pa_idx *v = m->tv + 4 * (size_t)t;
     oq[i] = m->q[t];
     if (m->q[t] < qold) qold = m->q[t];
@@ -373,8 +373,8 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
     const pa_idx *v = m->tv + 4 * (size_t)(bq[i] >> 2);
     for (int j = 0; j < 4; j++) {
       pa_idx x = v[j];
-      if (x == q || (m->vtag[x] & R3V_MARK)) continue;
-      m->vtag[x] |= R3V_MARK;
+      if (x == q || (m->vtag[x] & RM3D_V_MARK)) continue;
+      m->vtag[x] |= RM3D_V_MARK;
       if (pa__len3(mc, xm, m->x + 3 * (size_t)x, mm, m->met + (size_t)mc * x) >
           lguard) {
         ok = 0;
@@ -384,7 +384,7 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
   }
   for (int i = 0; i < nb; i++) {
     const pa_idx *v = m->tv + 4 * (size_t)(bq[i] >> 2);
-    for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~R3V_MARK;
+    for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~RM3D_V_MARK;
   }
   if (!ok) return st;
   /* Move q, try the collapse, move back if refused. */
@@ -397,7 +397,7 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
     pa__rm3d_met0_mid(m, q, p, q);
   }
   for (int i = 0; i < nb; i++) { /* q moves: its ball changes */
-    m->tflag[bq[i] >> 2] &= (uint8_t)~R3T_CLEAN;
+    m->tflag[bq[i] >> 2] &= (uint8_t)~RM3D_T_CLEAN;
     if (nq[i] >= 0) m->q[bq[i] >> 2] = nq[i];
   }
   PA_CALL(pa__rm3d_collapse(m, p, q, lguard, done));

@@ -75,31 +75,33 @@ static void order6(const double *L, int dir, int *ord) {
   }
 }
 
-/* 1 if the six lengths are in [PA__LEN_LO_EXACT, PA__LEN_HI_EXACT]. */
+/* 1 if the six lengths are in [PA_METRIC_LEN_LO_EXACT, PA_METRIC_LEN_HI_EXACT].
+ */
 static int in_range6(const double *L) {
   for (int e = 0; e < 6; e++)
-    if (!(L[e] >= PA__LEN_LO_EXACT && L[e] <= PA__LEN_HI_EXACT)) return 0;
+    if (!(L[e] >= PA_METRIC_LEN_LO_EXACT && L[e] <= PA_METRIC_LEN_HI_EXACT))
+      return 0;
   return 1;
 }
 
-/* The split and collapse passes skip clean tets (R3T_CLEAN) when their
+/* The split and collapse passes skip clean tets (RM3D_T_CLEAN) when their
  * threshold is the final one, and mark clean the tets they measure in
  * range: skipping a tet with no edge to split or collapse changes nothing,
  * so the output is the same as without the marks. */
 pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count) {
   pa_status st = PA_SUCCESS;
   long c = 0;
-  uint8_t skip = thr >= PA__LEN_HI_EXACT ? R3T_CLEAN : 0;
-  int spread = m->spread && thr <= PA__LEN_HI_EXACT;
+  uint8_t skip = thr >= PA_METRIC_LEN_HI_EXACT ? RM3D_T_CLEAN : 0;
+  int spread = m->spread && thr <= PA_METRIC_LEN_HI_EXACT;
   pa_idx sht[RM3D_MAXSHELL], shr[RM3D_MAXSHELL + 1];
   for (pa_idx k = 0; k < m->ne; k++) {
     for (int guard = 0; guard < 64; guard++) {
-      if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN | skip)) break;
+      if (m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN | skip)) break;
       double L[6];
       int ord[6], did = 0;
       lengths6(m, m->tv + 4 * (size_t)k, L);
       if (in_range6(L)) {
-        m->tflag[k] |= R3T_CLEAN;
+        m->tflag[k] |= RM3D_T_CLEAN;
         if (skip) break;
       }
       order6(L, 1, ord);
@@ -110,15 +112,15 @@ pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count) {
         /* Spread: an edge whose halves would be shorter than 0.8 waits for
          * the next pass when a split of this pass touched an end. */
         if (spread && L[ord[i]] < RM3D_LSPREAD) {
-          if ((m->vtag[a] | m->vtag[b]) & R3V_TODO) continue;
+          if ((m->vtag[a] | m->vtag[b]) & RM3D_V_TODO) continue;
           nsh = pa__rm3d_shell(m, k, a, b, sht, shr, RM3D_MAXSHELL, &info);
         }
         PA_CALL(pa__rm3d_split_edge(m, k, a, b, &done));
         if (done) {
           if (spread) {
-            m->vtag[a] |= R3V_TODO;
-            m->vtag[b] |= R3V_TODO;
-            for (int j = 0; j < nsh; j++) m->vtag[shr[j]] |= R3V_TODO;
+            m->vtag[a] |= RM3D_V_TODO;
+            m->vtag[b] |= RM3D_V_TODO;
+            for (int j = 0; j < nsh; j++) m->vtag[shr[j]] |= RM3D_V_TODO;
           }
           did = 1;
           c++;
@@ -130,12 +132,12 @@ pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count) {
   }
 cleanup:
   if (spread)
-    for (pa_idx i = 0; i < m->nv; i++) m->vtag[i] &= (uint8_t)~R3V_TODO;
+    for (pa_idx i = 0; i < m->nv; i++) m->vtag[i] &= (uint8_t)~RM3D_V_TODO;
   *count = c;
   return st;
 }
 
-/* Each vertex is tried for removal at most once per pass (R3V_TODO), so a
+/* Each vertex is tried for removal at most once per pass (RM3D_V_TODO), so a
  * collapse that fails is not retried from every tet of the vertex. */
 /* Fallback for a short edge (a,b) neither end of which collapses onto the
  * other: remove a or b onto another neighbour, shortest edges first (only
@@ -147,7 +149,7 @@ static pa_status collapse_other(rm3d *m, pa_idx a, pa_idx b, double guard,
   double ln[64];
   for (int s = 0; s < 2 && !*done; s++) {
     pa_idx p = s ? b : a, o = s ? a : b;
-    if (m->vtag[p] & (R3V_LOCK | R3V_CORNER)) continue;
+    if (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER)) continue;
     int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
     if (n < 0) continue;
     int k = 0;
@@ -155,8 +157,8 @@ static pa_status collapse_other(rm3d *m, pa_idx a, pa_idx b, double guard,
       const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
       for (int j = 0; j < 4; j++) {
         pa_idx x = v[j];
-        if (x == p || x == o || (m->vtag[x] & R3V_MARK)) continue;
-        m->vtag[x] |= R3V_MARK;
+        if (x == p || x == o || (m->vtag[x] & RM3D_V_MARK)) continue;
+        m->vtag[x] |= RM3D_V_MARK;
         double l = rm3d_len(m, p, x);
         if (l >= 1.0 || k >= 64) continue;
         int at = k++;
@@ -171,7 +173,7 @@ static pa_status collapse_other(rm3d *m, pa_idx a, pa_idx b, double guard,
     }
     for (int i = 0; i < n; i++) {
       const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
-      for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~R3V_MARK;
+      for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~RM3D_V_MARK;
     }
     for (int i = 0; i < k && !*done; i++)
       PA_CALL(pa__rm3d_collapse(m, p, nb[i], guard, done));
@@ -184,15 +186,15 @@ pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, double guard,
                                  long *count) {
   pa_status st = PA_SUCCESS;
   long c = 0;
-  uint8_t skip = thr <= PA__LEN_LO_EXACT ? R3T_CLEAN : 0;
-  for (pa_idx i = 0; i < m->nv; i++) m->vtag[i] |= R3V_TODO;
+  uint8_t skip = thr <= PA_METRIC_LEN_LO_EXACT ? RM3D_T_CLEAN : 0;
+  for (pa_idx i = 0; i < m->nv; i++) m->vtag[i] |= RM3D_V_TODO;
   for (pa_idx k = 0; k < m->ne; k++) {
-    if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN | skip)) continue;
+    if (m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN | skip)) continue;
     double L[6];
     int ord[6];
     lengths6(m, m->tv + 4 * (size_t)k, L);
     if (in_range6(L)) {
-      m->tflag[k] |= R3T_CLEAN;
+      m->tflag[k] |= RM3D_T_CLEAN;
       if (skip) continue;
     }
     order6(L, -1, ord);
@@ -202,17 +204,17 @@ pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, double guard,
       int done = 0;
       for (int dir = 0; dir < 2 && !done; dir++) {
         pa_idx p = dir ? b : a, q = dir ? a : b;
-        if (!(m->vtag[p] & R3V_TODO)) continue;
+        if (!(m->vtag[p] & RM3D_V_TODO)) continue;
         PA_CALL(pa__rm3d_collapse(m, p, q, guard, &done));
         /* Both ends refused: meet in the middle (new edges about half the
          * short edge shorter than from either end). */
-        if (!done && dir == 1 && (m->vtag[b] & R3V_TODO))
+        if (!done && dir == 1 && (m->vtag[b] & RM3D_V_TODO))
           PA_CALL(pa__rm3d_collapse_mid(m, a, b, guard, &done));
         if (!done && dir == 1) PA_CALL(collapse_other(m, a, b, guard, &done));
         /* Last resort: remove the edge by a swap (its ring stays). */
         if (!done && dir == 1 && m->swap)
           PA_CALL(pa__rm3d_swap_edge(m, k, a, b, 0.3, &done));
-        if (!done) m->vtag[p] &= (uint8_t)~R3V_TODO;
+        if (!done) m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
       }
       if (done) {
         c++;
@@ -221,7 +223,7 @@ pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, double guard,
     }
   }
 cleanup:
-  for (pa_idx i = 0; i < m->nv; i++) m->vtag[i] &= (uint8_t)~R3V_TODO;
+  for (pa_idx i = 0; i < m->nv; i++) m->vtag[i] &= (uint8_t)~RM3D_V_TODO;
   *count = c;
   return st;
 }
@@ -231,7 +233,8 @@ pa_status pa__rm3d_swap_pass(rm3d *m, double qthr, double gain, long *count) {
   long c = 0;
   pa_idx ne0 = m->ne;
   for (pa_idx k = 0; k < ne0; k++) {
-    if ((m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) || m->q[k] >= qthr) continue;
+    if ((m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN)) || m->q[k] >= qthr)
+      continue;
     int done = 0;
     for (int e = 0; e < 6 && !done; e++) {
       pa_idx a = m->tv[4 * (size_t)k + rm3d_edge[e][0]];
@@ -252,12 +255,13 @@ pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, long *count) {
   pa_idx ball[RM3D_MAXBALL];
   long c = 0;
   for (pa_idx k = 0; k < m->ne; k++) {
-    if ((m->tflag[k] & R3T_DEAD) || m->q[k] >= qthr) continue;
-    for (int j = 0; j < 4; j++) m->vtag[m->tv[4 * (size_t)k + j]] |= R3V_TODO;
+    if ((m->tflag[k] & RM3D_T_DEAD) || m->q[k] >= qthr) continue;
+    for (int j = 0; j < 4; j++)
+      m->vtag[m->tv[4 * (size_t)k + j]] |= RM3D_V_TODO;
   }
   for (pa_idx p = 0; p < m->nv; p++) {
-    if (!(m->vtag[p] & R3V_TODO)) continue;
-    m->vtag[p] &= (uint8_t)~R3V_TODO;
+    if (!(m->vtag[p] & RM3D_V_TODO)) continue;
+    m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
     c += pa__rm3d_smooth_vertex(m, p, ball);
   }
   *count = c;
@@ -274,25 +278,25 @@ pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count) {
   uint8_t *again = NULL;
   long c = 0;
   for (pa_idx k = 0; k < m->ne; k++) {
-    if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN | R3T_CLEAN)) continue;
+    if (m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN | RM3D_T_CLEAN)) continue;
     const pa_idx *v = m->tv + 4 * (size_t)k;
     double L[6];
     int clean = 1;
     lengths6(m, v, L);
     for (int e = 0; e < 6; e++)
-      if (!(L[e] >= PA__LEN_LO_EXACT && L[e] < PA__LEN_HI_EXACT)) {
-        m->vtag[v[rm3d_edge[e][0]]] |= R3V_TODO;
-        m->vtag[v[rm3d_edge[e][1]]] |= R3V_TODO;
+      if (!(L[e] >= PA_METRIC_LEN_LO_EXACT && L[e] < PA_METRIC_LEN_HI_EXACT)) {
+        m->vtag[v[rm3d_edge[e][0]]] |= RM3D_V_TODO;
+        m->vtag[v[rm3d_edge[e][1]]] |= RM3D_V_TODO;
         clean = 0;
       }
-    if (clean) m->tflag[k] |= R3T_CLEAN;
+    if (clean) m->tflag[k] |= RM3D_T_CLEAN;
   }
   if (sweeps > 1) PA_CALLOC(again, (size_t)m->nv);
   for (int s = 0; s < sweeps; s++) {
     long moved = 0;
     for (pa_idx p = 0; p < m->nv; p++) {
-      if (!(m->vtag[p] & R3V_TODO)) continue;
-      m->vtag[p] &= (uint8_t)~R3V_TODO;
+      if (!(m->vtag[p] & RM3D_V_TODO)) continue;
+      m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
       if (!pa__rm3d_length_vertex(m, p, ball)) continue;
       moved++;
       if (!again) continue;
@@ -305,7 +309,7 @@ pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count) {
     for (pa_idx p = 0; p < m->nv; p++)
       if (again[p]) {
         again[p] = 0;
-        if (!(m->vtag[p] & R3V_DEAD)) m->vtag[p] |= R3V_TODO;
+        if (!(m->vtag[p] & RM3D_V_DEAD)) m->vtag[p] |= RM3D_V_TODO;
       }
   }
   *count = c;
@@ -321,11 +325,11 @@ static void measure(const rm3d *m, double *inrange, double *qworst,
   long nin = 0, nall = 0, nt = 0;
   double qw = 1, qs = 0;
   for (pa_idx k = 0; k < m->ne; k++) {
-    if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) continue;
+    if (m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN)) continue;
     double L[6];
     lengths6(m, m->tv + 4 * (size_t)k, L);
     for (int e = 0; e < 6; e++)
-      nin += L[e] >= PA__LEN_LO_EXACT && L[e] < PA__LEN_HI_EXACT;
+      nin += L[e] >= PA_METRIC_LEN_LO_EXACT && L[e] < PA_METRIC_LEN_HI_EXACT;
     nall += 6;
     double q = rm3d_qual_v(m, m->tv + 4 * (size_t)k);
     if (q < qw) qw = q;
@@ -337,23 +341,26 @@ static void measure(const rm3d *m, double *inrange, double *qworst,
      * boundary surface versus the others (tet-edge counts). */
     long c[2][3] = {{0, 0, 0}, {0, 0, 0}};
     for (pa_idx k = 0; k < m->ne; k++) {
-      if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) continue;
+      if (m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN)) continue;
       const pa_idx *v = m->tv + 4 * (size_t)k;
       double L[6];
       lengths6(m, v, L);
       for (int e = 0; e < 6; e++) {
         int b = (m->vtag[v[rm3d_edge[e][0]]] & m->vtag[v[rm3d_edge[e][1]]] &
-                 R3V_BDRY) != 0;
-        c[b][L[e] < PA__LEN_LO_EXACT ? 0 : L[e] < PA__LEN_HI_EXACT ? 1 : 2]++;
+                 RM3D_V_BDRY) != 0;
+        c[b][L[e] < PA_METRIC_LEN_LO_EXACT   ? 0
+             : L[e] < PA_METRIC_LEN_HI_EXACT ? 1
+                                             : 2]++;
       }
     }
     long nb[4] = {0, 0, 0, 0};
     for (pa_idx k = 0; k < m->ne; k++) {
-      if ((m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) || m->q[k] >= 0.2) continue;
+      if ((m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN)) || m->q[k] >= 0.2)
+        continue;
       const pa_idx *v = m->tv + 4 * (size_t)k;
       int nbv = 0;
-      for (int j = 0; j < 4; j++) nbv += (m->vtag[v[j]] & R3V_BDRY) != 0;
-      nb[(m->tflag[k] & R3T_FACES) ? 3 : nbv ? 2 : m->q[k] < 0.1 ? 1 : 0]++;
+      for (int j = 0; j < 4; j++) nbv += (m->vtag[v[j]] & RM3D_V_BDRY) != 0;
+      nb[(m->tflag[k] & RM3D_T_FACES) ? 3 : nbv ? 2 : m->q[k] < 0.1 ? 1 : 0]++;
     }
     fprintf(stderr,
             "  rm3d Q<0.2: interior %ld (+%ld < 0.1), bdry vertex %ld, bdry "
@@ -386,21 +393,21 @@ static void measure(const rm3d *m, double *inrange, double *qworst,
  * RM3D_LSPREAD), counting an edge when its midpoint is at least 1/sqrt 2
  * from the other two vertices of the tet; *longer is the fraction of
  * tet-edges of RM3D_LSPREAD or more. The ends of the edges counted are
- * marked R3V_TODO (the caller clears them). */
+ * marked RM3D_V_TODO (the caller clears them). */
 #define RM3D_NCROWD 14 /* bins up to RM3D_LSPREAD / sqrt 2 = 1.13 */
 static double lattice_crowd(rm3d *m, double *longer) {
   long hist[RM3D_NCROWD] = {0}, nall = 0, nlong = 0;
   int mc = m->mc;
   for (pa_idx k = 0; k < m->ne; k++) {
-    if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) continue;
+    if (m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN)) continue;
     const pa_idx *v = m->tv + 4 * (size_t)k;
     double L[6];
     lengths6(m, v, L);
     nall += 6;
     for (int e = 0; e < 6; e++) {
       nlong += L[e] >= RM3D_LSPREAD;
-      if (!(L[e] > PA__LEN_HI_EXACT && L[e] < RM3D_LSPREAD)) continue;
-      int bin = (int)((L[e] / PA__LEN_HI_EXACT - 1.0) * 100.0);
+      if (!(L[e] > PA_METRIC_LEN_HI_EXACT && L[e] < RM3D_LSPREAD)) continue;
+      int bin = (int)((L[e] / PA_METRIC_LEN_HI_EXACT - 1.0) * 100.0);
       if (bin >= RM3D_NCROWD) continue;
       pa_idx a = v[rm3d_edge[e][0]], b = v[rm3d_edge[e][1]];
       const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b;
@@ -412,13 +419,13 @@ static double lattice_crowd(rm3d *m, double *longer) {
         pa_idx c = v[j];
         if (c != a && c != b &&
             pa__len3(mc, x, m->x + 3 * (size_t)c, mp, m->met + (size_t)mc * c) <
-                PA__LEN_LO_EXACT)
+                PA_METRIC_LEN_LO_EXACT)
           far = 0;
       }
       if (!far) continue;
       hist[bin]++;
-      m->vtag[a] |= R3V_TODO;
-      m->vtag[b] |= R3V_TODO;
+      m->vtag[a] |= RM3D_V_TODO;
+      m->vtag[b] |= RM3D_V_TODO;
     }
   }
   long top = 0;
@@ -438,11 +445,11 @@ static void progress(const pa_remesh_opts *o, int step, const rm3d *m) {
   pa_idx stride = m->ne / PA_PROGRESS_SAMPLE + 1;
   long nin = 0, n = 0;
   for (pa_idx k = 0; k < m->ne; k += stride) {
-    if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) continue;
+    if (m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN)) continue;
     double L[6];
     lengths6(m, m->tv + 4 * (size_t)k, L);
     for (int e = 0; e < 6; e++)
-      nin += L[e] >= PA__LEN_LO_EXACT && L[e] < PA__LEN_HI_EXACT;
+      nin += L[e] >= PA_METRIC_LEN_LO_EXACT && L[e] < PA_METRIC_LEN_HI_EXACT;
     n += 6;
   }
   pa_progress p = {"pass", step, (double)(m->ne - m->ndead_t), 0, 0,
@@ -453,15 +460,15 @@ static void progress(const pa_remesh_opts *o, int step, const rm3d *m) {
 static double max_length(const rm3d *m) {
   double lmax = 0;
   for (pa_idx k = 0; k < m->ne; k++) {
-    if (m->tflag[k] & (R3T_DEAD | R3T_FROZEN)) continue;
+    if (m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN)) continue;
     const pa_idx *v = m->tv + 4 * (size_t)k;
     double L[6];
     lengths6(m, v, L);
     for (int e = 0; e < 6; e++) {
       /* between two locked vertices (a frozen skin, mostly): skipped, it
        * would keep the bands from reaching their end */
-      if ((m->vtag[v[rm3d_edge[e][0]]] & R3V_LOCK) &&
-          (m->vtag[v[rm3d_edge[e][1]]] & R3V_LOCK))
+      if ((m->vtag[v[rm3d_edge[e][0]]] & RM3D_V_LOCK) &&
+          (m->vtag[v[rm3d_edge[e][1]]] & RM3D_V_LOCK))
         continue;
       if (L[e] > lmax) lmax = L[e];
     }
@@ -534,8 +541,8 @@ static void break_lattice_crowd(rm3d *m) {
   pa_idx ball[RM3D_MAXBALL];
   m->spread = crowd > 0.05 && longer < 0.1;
   for (pa_idx p = 0; p < m->nv; p++) {
-    if (!(m->vtag[p] & R3V_TODO)) continue;
-    m->vtag[p] &= (uint8_t)~R3V_TODO;
+    if (!(m->vtag[p] & RM3D_V_TODO)) continue;
+    m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
     if (m->spread) nj += pa__rm3d_jiggle_vertex(m, p, 0.1, ball);
   }
   if (m->verbosity > 1 || (m->verbosity > 0 && m->spread))
@@ -557,18 +564,19 @@ static pa_status refine_bands(rm3d *m, const pa_remesh_opts *opts,
   double prev = HUGE_VAL;
   for (int it = 0; it < 40; it++) {
     /* decreasing even when the longest edge cannot be split (frozen, or
-     * refused next to a frozen skin): the bands must reach PA__LEN_HI_EXACT */
+     * refused next to a frozen skin): the bands must reach
+     * PA_METRIC_LEN_HI_EXACT */
     double thr = max_length(m) / 1.5;
     if (thr > prev / 1.5) thr = prev / 1.5;
     /* a band just above the last one would cost a sweep for little: 1.45
      * then 1.41 took 0.13 s of a 2.2 s piece (box3d 10 -> 0.019) */
-    if (thr < 1.1 * PA__LEN_HI_EXACT) thr = PA__LEN_HI_EXACT;
+    if (thr < 1.1 * PA_METRIC_LEN_HI_EXACT) thr = PA_METRIC_LEN_HI_EXACT;
     prev = thr;
     long ns = 0, nc = 0;
     double t1 = pa_wtime();
-    if (thr == PA__LEN_HI_EXACT) break_lattice_crowd(m);
+    if (thr == PA_METRIC_LEN_HI_EXACT) break_lattice_crowd(m);
     PA_CALL(pa__rm3d_split_pass(m, thr, &ns));
-    PA_CALL(pa__rm3d_collapse_pass(m, PA__LEN_LO_EXACT, thr, &nc));
+    PA_CALL(pa__rm3d_collapse_pass(m, PA_METRIC_LEN_LO_EXACT, thr, &nc));
     if (m->ndead_t > m->ne / 8) PA_CALL(pa__rm3d_compact(m, 1));
     if (m->verbosity > 0)
       fprintf(stderr,
@@ -577,7 +585,7 @@ static pa_status refine_bands(rm3d *m, const pa_remesh_opts *opts,
               thr, ns, nc, pa_wtime() - t1, (int)(m->ne - m->ndead_t),
               (int)m->ne, pa_memory_current() / 1e6, pa_memory_peak() / 1e6);
     progress(opts, ++*step, m);
-    if (thr == PA__LEN_HI_EXACT) break;
+    if (thr == PA_METRIC_LEN_HI_EXACT) break;
   }
 cleanup:
   return st;
@@ -586,7 +594,7 @@ cleanup:
 /* 1 if the mesh has a frozen tet or boundary triangle. */
 static int has_frozen(const rm3d *m) {
   for (pa_idx k = 0; k < m->ne; k++)
-    if (m->tflag[k] & R3T_FROZEN) return 1;
+    if (m->tflag[k] & RM3D_T_FROZEN) return 1;
   for (pa_idx r = 0; r < m->tri.n; r++)
     if (m->tri.flag[r] & PA_FLAG_REQUIRED) return 1;
   return 0;
@@ -608,9 +616,10 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
   for (int it = 0; it < RM3D_ROUNDS_MAX; it++, (*npass)++) {
     long ns = 0, nc = 0, nw = 0, nm = 0;
     double t1 = pa_wtime();
-    PA_CALL(pa__rm3d_split_pass(m, PA__LEN_HI_EXACT, &ns));
+    PA_CALL(pa__rm3d_split_pass(m, PA_METRIC_LEN_HI_EXACT, &ns));
     double t2 = pa_wtime();
-    PA_CALL(pa__rm3d_collapse_pass(m, PA__LEN_LO_EXACT, PA__LEN_HI_EXACT, &nc));
+    PA_CALL(pa__rm3d_collapse_pass(m, PA_METRIC_LEN_LO_EXACT,
+                                   PA_METRIC_LEN_HI_EXACT, &nc));
     double t3 = pa_wtime();
     if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(m, 0.3, 1.02, &nw));
     double t4 = pa_wtime();
@@ -647,8 +656,8 @@ static pa_status optimise(rm3d *m, const pa_remesh_opts *opts, int *npass) {
      * guard): collapse again in the first two rounds; the last one only
      * swaps and smooths, so the worst quality is repaired after them. */
     if (it < 2 && !opts->no_insert)
-      PA_CALL(
-          pa__rm3d_collapse_pass(m, PA__LEN_LO_EXACT, PA__LEN_HI_EXACT, &nc));
+      PA_CALL(pa__rm3d_collapse_pass(m, PA_METRIC_LEN_LO_EXACT,
+                                     PA_METRIC_LEN_HI_EXACT, &nc));
     if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(m, 0.7, 1.01, &nw));
     if (!opts->no_move) {
       long nl = 0;

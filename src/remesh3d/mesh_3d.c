@@ -11,7 +11,7 @@
  *    neighbour is a boundary triangle;
  *  - vtet[v] is a live tet holding v for every live vertex v;
  *  - vertices of frozen tets, frozen triangles, required edges and required
- *    vertices carry R3V_LOCK; vertices of boundary triangles R3V_BDRY.
+ *    vertices carry RM3D_V_LOCK; vertices of boundary triangles RM3D_V_BDRY.
  * Building fails, leaving the caller's mesh untouched, on a non-conforming or
  * inverted input. Writing back builds a complete new pa_mesh first and swaps
  * it in only when nothing can fail any more.
@@ -62,7 +62,7 @@ static pa_status table_rehash(rm3d_table *t, size_t nslot) {
   for (size_t i = 0; i < nslot; i++) slot[i] = -1;
   size_t nfull = 0;
   for (pa_idx r = 0; r < t->n; r++) {
-    if (t->flag[r] & R3_REC_DEAD) continue;
+    if (t->flag[r] & RM3D_REC_DEAD) continue;
     pa_idx key[3];
     sort_key(t->v + (size_t)t->nk * r, t->nk, key);
     size_t h = (size_t)pa__hash_idx(key, t->nk) & (nslot - 1);
@@ -102,7 +102,7 @@ pa_status pa__rm3d_table_add(rm3d_table *t, const pa_idx *v, int32_t ref,
   pa_idx r = t->n++;
   memcpy(t->v + (size_t)t->nk * r, v, t->nk * sizeof *v);
   t->ref[r] = ref;
-  t->flag[r] = flag & (uint8_t)~R3_REC_DEAD;
+  t->flag[r] = flag & (uint8_t)~RM3D_REC_DEAD;
   pa_idx key[3];
   sort_key(v, t->nk, key);
   size_t mask = t->nslot - 1;
@@ -122,7 +122,7 @@ void pa__rm3d_table_remove(rm3d_table *t, pa_idx r) {
   size_t h = (size_t)pa__hash_idx(key, t->nk) & mask;
   while (t->slot[h] != r) h = (h + 1) & mask;
   t->slot[h] = -2;
-  t->flag[r] |= R3_REC_DEAD;
+  t->flag[r] |= RM3D_REC_DEAD;
 }
 
 static void table_free(rm3d_table *t) {
@@ -331,8 +331,8 @@ static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
              (int)b + 1);
     PA_CALL(pa__rm3d_table_add(&m->tri, tb, mesh->bref[b], mesh->bflag[b],
                                NULL));
-    uint8_t lock = (mesh->bflag[b] & PA_FLAG_REQUIRED) ? R3V_LOCK : 0;
-    for (int j = 0; j < 3; j++) m->vtag[tb[j]] |= (uint8_t)(R3V_BDRY | lock);
+    uint8_t lock = (mesh->bflag[b] & PA_FLAG_REQUIRED) ? RM3D_V_LOCK : 0;
+    for (int j = 0; j < 3; j++) m->vtag[tb[j]] |= (uint8_t)(RM3D_V_BDRY | lock);
   }
   /* Faces without neighbour that the input did not list: add them. */
   for (pa_idx k = 0; k < ne; k++)
@@ -342,7 +342,7 @@ static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
                      m->tv[4 * k + rm3d_face[i][2]]};
       PA_CALL(pa__rm3d_table_add(&m->tri, f, 0, 0, NULL));
       m->tflag[k] |= (uint8_t)(1u << i);
-      for (int j = 0; j < 3; j++) m->vtag[f[j]] |= R3V_BDRY;
+      for (int j = 0; j < 3; j++) m->vtag[f[j]] |= RM3D_V_BDRY;
     }
 cleanup:
   pa__free(start);
@@ -397,8 +397,8 @@ pa_status pa__rm3d_build(rm3d *m, pa_mesh *mesh, const pa_remesh_opts *opts) {
   memcpy(m->vpf, mesh->vflag, (size_t)nv);
   for (pa_idx i = 0; i < nv; i++) {
     uint8_t f = mesh->vflag[i], t = 0;
-    if (f & PA_FLAG_REQUIRED) t |= R3V_LOCK;
-    if (f & PA_FLAG_CORNER) t |= R3V_LOCK | R3V_CORNER;
+    if (f & PA_FLAG_REQUIRED) t |= RM3D_V_LOCK;
+    if (f & PA_FLAG_CORNER) t |= RM3D_V_LOCK | RM3D_V_CORNER;
     m->vtag[i] = t;
     m->vtet[i] = -1;
   }
@@ -419,10 +419,10 @@ pa_status pa__rm3d_build(rm3d *m, pa_mesh *mesh, const pa_remesh_opts *opts) {
     PA_CHECK(pa__orient3d(m->x + 3 * (size_t)v[0], m->x + 3 * (size_t)v[1],
                           m->x + 3 * (size_t)v[2], m->x + 3 * (size_t)v[3]) > 0,
              PA_ERR_MESH, "tetrahedron %d is inverted or flat", (int)k + 1);
-    m->tflag[k] = (m->tpf[k] & PA_FLAG_REQUIRED) ? R3T_FROZEN : 0;
+    m->tflag[k] = (m->tpf[k] & PA_FLAG_REQUIRED) ? RM3D_T_FROZEN : 0;
     for (int j = 0; j < 4; j++) {
       m->vtet[v[j]] = k;
-      if (m->tflag[k] & R3T_FROZEN) m->vtag[v[j]] |= R3V_LOCK;
+      if (m->tflag[k] & RM3D_T_FROZEN) m->vtag[v[j]] |= RM3D_V_LOCK;
     }
     m->q[k] = (float)rm3d_qual_v(m, v);
   }
@@ -438,8 +438,8 @@ pa_status pa__rm3d_build(rm3d *m, pa_mesh *mesh, const pa_remesh_opts *opts) {
     if (pa__rm3d_table_find(&m->edg, ev) >= 0) continue;
     PA_CALL(pa__rm3d_table_add(&m->edg, ev, mesh->edref[e], mesh->edflag[e],
                                NULL));
-    uint8_t t = R3V_FEAT;
-    if (mesh->edflag[e] & PA_FLAG_REQUIRED) t |= R3V_LOCK;
+    uint8_t t = RM3D_V_FEAT;
+    if (mesh->edflag[e] & PA_FLAG_REQUIRED) t |= RM3D_V_LOCK;
     m->vtag[ev[0]] |= t;
     m->vtag[ev[1]] |= t;
   }
@@ -463,7 +463,7 @@ pa_status pa__rm3d_compact(rm3d *m, int keep_q) {
    * vertex array vtet is reused as scratch only after tets are done. */
   pa_idx ne = 0;
   for (pa_idx k = 0; k < m->ne; k++)
-    newt[k] = (m->tflag[k] & R3T_DEAD) ? -1 : ne++;
+    newt[k] = (m->tflag[k] & RM3D_T_DEAD) ? -1 : ne++;
   for (pa_idx k = 0; k < m->ne; k++) {
     pa_idx j = newt[k];
     if (j < 0) continue;
@@ -483,14 +483,14 @@ pa_status pa__rm3d_compact(rm3d *m, int keep_q) {
   pa_idx nv = 0;
   pa_idx *newv = m->vtet;
   for (pa_idx i = 0; i < m->nv; i++)
-    newv[i] = (m->vtag[i] & R3V_DEAD) ? -1 : nv++;
+    newv[i] = (m->vtag[i] & RM3D_V_DEAD) ? -1 : nv++;
   for (size_t i = 0; i < 4 * (size_t)ne; i++) m->tv[i] = newv[m->tv[i]];
   rm3d_table *tabs[2] = {&m->tri, &m->edg};
   for (int t = 0; t < 2; t++) {
     rm3d_table *tb = tabs[t];
     pa_idx n = 0;
     for (pa_idx r = 0; r < tb->n; r++) {
-      if (tb->flag[r] & R3_REC_DEAD) continue;
+      if (tb->flag[r] & RM3D_REC_DEAD) continue;
       for (int j = 0; j < tb->nk; j++)
         tb->v[(size_t)tb->nk * n + j] = newv[tb->v[(size_t)tb->nk * r + j]];
       tb->ref[n] = tb->ref[r];
@@ -558,14 +558,15 @@ pa_status pa__rm3d_write(rm3d *m, pa_mesh *mesh) {
   m->adj = NULL;
   PA_CALL(pa__rm3d_compact(m, 0));
   pa_idx nb = 0, ned = 0;
-  for (pa_idx r = 0; r < m->tri.n; r++) nb += !(m->tri.flag[r] & R3_REC_DEAD);
-  for (pa_idx r = 0; r < m->edg.n; r++) ned += !(m->edg.flag[r] & R3_REC_DEAD);
+  for (pa_idx r = 0; r < m->tri.n; r++) nb += !(m->tri.flag[r] & RM3D_REC_DEAD);
+  for (pa_idx r = 0; r < m->edg.n; r++)
+    ned += !(m->edg.flag[r] & RM3D_REC_DEAD);
   PA_CALL(pa_mesh_create(3, &out));
   out->met_ncomp = mesh->met_ncomp ? mesh->met_ncomp : 0;
   if (out->met_ncomp && out->met_ncomp != m->mc) out->met_ncomp = m->mc;
   out->nfield = mesh->nfield;
   for (int k = 0; k < mesh->nfield; k++) {
-    memcpy(out->field[k].name, mesh->field[k].name, PA_FIELD_NAME_LEN);
+    memcpy(out->field[k].name, mesh->field[k].name, PA_MESH_FIELD_NAME_LEN);
     out->field[k].ncomp = mesh->field[k].ncomp;
   }
   PA_CALL(pa_mesh_reserve(out, m->nv, m->ne, nb, ned));
@@ -584,7 +585,7 @@ pa_status pa__rm3d_write(rm3d *m, pa_mesh *mesh) {
   memcpy(out->eref, m->tref, sizeof(int32_t) * (size_t)m->ne);
   memcpy(out->eflag, m->tpf, (size_t)m->ne);
   for (pa_idx r = 0; r < m->tri.n; r++) {
-    if (m->tri.flag[r] & R3_REC_DEAD) continue;
+    if (m->tri.flag[r] & RM3D_REC_DEAD) continue;
     memcpy(out->bdry + 3 * (size_t)out->nb, m->tri.v + 3 * (size_t)r,
            3 * sizeof(pa_idx));
     out->bref[out->nb] = m->tri.ref[r];
@@ -592,7 +593,7 @@ pa_status pa__rm3d_write(rm3d *m, pa_mesh *mesh) {
     out->nb++;
   }
   for (pa_idx r = 0; r < m->edg.n; r++) {
-    if (m->edg.flag[r] & R3_REC_DEAD) continue;
+    if (m->edg.flag[r] & RM3D_REC_DEAD) continue;
     memcpy(out->edge + 2 * (size_t)out->ned, m->edg.v + 2 * (size_t)r,
            2 * sizeof(pa_idx));
     out->edref[out->ned] = m->edg.ref[r];
@@ -615,21 +616,21 @@ cleanup:
 pa_status pa__rm3d_check(rm3d *m) {
   pa_status st = PA_SUCCESS;
   for (pa_idx k = 0; k < m->ne; k++) {
-    if (m->tflag[k] & R3T_DEAD) continue;
+    if (m->tflag[k] & RM3D_T_DEAD) continue;
     const pa_idx *v = m->tv + 4 * (size_t)k;
     for (int i = 0; i < 4; i++) {
-      PA_CHECK(v[i] >= 0 && v[i] < m->nv && !(m->vtag[v[i]] & R3V_DEAD),
+      PA_CHECK(v[i] >= 0 && v[i] < m->nv && !(m->vtag[v[i]] & RM3D_V_DEAD),
                PA_ERR_INTERNAL, "rm3d: tet %d has a dead vertex", (int)k);
     }
     PA_CHECK(pa__orient3d(m->x + 3 * (size_t)v[0], m->x + 3 * (size_t)v[1],
                           m->x + 3 * (size_t)v[2], m->x + 3 * (size_t)v[3]) > 0,
              PA_ERR_INTERNAL, "rm3d: tet %d is not positive", (int)k);
-    PA_CHECK(!(m->tflag[k] & R3T_MARK), PA_ERR_INTERNAL,
+    PA_CHECK(!(m->tflag[k] & RM3D_T_MARK), PA_ERR_INTERNAL,
              "rm3d: tet %d left marked", (int)k);
-    if (m->tflag[k] & R3T_CLEAN) /* a change did not clear the mark */
+    if (m->tflag[k] & RM3D_T_CLEAN) /* a change did not clear the mark */
       for (int e = 0; e < 6; e++) {
         double l = rm3d_len(m, v[rm3d_edge[e][0]], v[rm3d_edge[e][1]]);
-        PA_CHECK(l >= PA__LEN_LO_EXACT && l <= PA__LEN_HI_EXACT,
+        PA_CHECK(l >= PA_METRIC_LEN_LO_EXACT && l <= PA_METRIC_LEN_HI_EXACT,
                  PA_ERR_INTERNAL,
                  "rm3d: tet %d is marked clean, its edge %d has length %g",
                  (int)k, e, l);
@@ -653,7 +654,7 @@ pa_status pa__rm3d_check(rm3d *m) {
       }
       pa_idx l = a >> 2;
       int j = a & 3;
-      PA_CHECK(l < m->ne && !(m->tflag[l] & R3T_DEAD), PA_ERR_INTERNAL,
+      PA_CHECK(l < m->ne && !(m->tflag[l] & RM3D_T_DEAD), PA_ERR_INTERNAL,
                "rm3d: tet %d face %d points at a dead tet", (int)k, i);
       PA_CHECK(m->adj[4 * (size_t)l + j] == 4 * k + i, PA_ERR_INTERNAL,
                "rm3d: adjacency of tet %d face %d not symmetric", (int)k, i);
@@ -667,9 +668,9 @@ pa_status pa__rm3d_check(rm3d *m) {
     }
   }
   for (pa_idx i = 0; i < m->nv; i++) {
-    if (m->vtag[i] & R3V_DEAD) continue;
+    if (m->vtag[i] & RM3D_V_DEAD) continue;
     pa_idx k = m->vtet[i];
-    PA_CHECK(k >= 0 && k < m->ne && !(m->tflag[k] & R3T_DEAD) &&
+    PA_CHECK(k >= 0 && k < m->ne && !(m->tflag[k] & RM3D_T_DEAD) &&
                  rm3d_loc(m->tv + 4 * (size_t)k, i) >= 0,
              PA_ERR_INTERNAL, "rm3d: vtet of vertex %d is wrong", (int)i);
   }
@@ -859,7 +860,7 @@ pa_status pa__rm3d_skin_relax(rm3d *m, pa_idx *nrelaxed) {
   pa_idx nv = m->nv, nr = 0;
   int any = 0;
   *nrelaxed = 0;
-  for (pa_idx k = 0; k < m->ne && !any; k++) any = m->tflag[k] & R3T_FROZEN;
+  for (pa_idx k = 0; k < m->ne && !any; k++) any = m->tflag[k] & RM3D_T_FROZEN;
   for (pa_idx r = 0; r < m->tri.n && !any; r++)
     any = m->tri.flag[r] & PA_FLAG_REQUIRED;
   for (pa_idx r = 0; r < m->edg.n && !any; r++)
@@ -870,7 +871,7 @@ pa_status pa__rm3d_skin_relax(rm3d *m, pa_idx *nrelaxed) {
   /* Edges shared by several frozen entities count once per entity: a
    * weighting, not a fault. */
   for (pa_idx k = 0; k < m->ne; k++) {
-    if (!(m->tflag[k] & R3T_FROZEN)) continue;
+    if (!(m->tflag[k] & RM3D_T_FROZEN)) continue;
     const pa_idx *v = m->tv + 4 * (size_t)k;
     for (int e = 0; e < 6; e++) {
       pa_idx a = v[rm3d_edge[e][0]], b = v[rm3d_edge[e][1]];
@@ -882,7 +883,8 @@ pa_status pa__rm3d_skin_relax(rm3d *m, pa_idx *nrelaxed) {
     }
   }
   for (pa_idx r = 0; r < m->tri.n; r++) {
-    if ((m->tri.flag[r] & R3_REC_DEAD) || !(m->tri.flag[r] & PA_FLAG_REQUIRED))
+    if ((m->tri.flag[r] & RM3D_REC_DEAD) ||
+        !(m->tri.flag[r] & PA_FLAG_REQUIRED))
       continue;
     const pa_idx *v = m->tri.v + 3 * (size_t)r;
     for (int i = 0; i < 3; i++) {
@@ -895,7 +897,8 @@ pa_status pa__rm3d_skin_relax(rm3d *m, pa_idx *nrelaxed) {
     }
   }
   for (pa_idx r = 0; r < m->edg.n; r++) {
-    if ((m->edg.flag[r] & R3_REC_DEAD) || !(m->edg.flag[r] & PA_FLAG_REQUIRED))
+    if ((m->edg.flag[r] & RM3D_REC_DEAD) ||
+        !(m->edg.flag[r] & PA_FLAG_REQUIRED))
       continue;
     pa_idx a = m->edg.v[2 * (size_t)r], b = m->edg.v[2 * (size_t)r + 1];
     double l = rm3d_len(m, a, b);
@@ -907,15 +910,15 @@ pa_status pa__rm3d_skin_relax(rm3d *m, pa_idx *nrelaxed) {
   for (pa_idx v = 0; v < nv; v++) {
     if (!cnt[v]) continue;
     double lam = acc[v] / cnt[v];
-    if (!(lam > PA__LEN_HI_EXACT || lam < PA__LEN_LO_EXACT) || !(lam > 0) ||
-        !isfinite(lam))
+    if (!(lam > PA_METRIC_LEN_HI_EXACT || lam < PA_METRIC_LEN_LO_EXACT) ||
+        !(lam > 0) || !isfinite(lam))
       continue;
     if (!m->met0) {
       PA_ALLOC(m->met0, m->capv * (size_t)mc);
       memcpy(m->met0, m->met, sizeof(double) * (size_t)mc * nv);
     }
-    double f =
-        lam > PA__LEN_HI_EXACT ? lam / RM3D_LRELAX : lam / PA__LEN_LO_EXACT;
+    double f = lam > PA_METRIC_LEN_HI_EXACT ? lam / RM3D_LRELAX
+                                            : lam / PA_METRIC_LEN_LO_EXACT;
     double *mt = m->met + (size_t)mc * v;
     if (mc == 1) {
       mt[0] *= f;
@@ -929,7 +932,7 @@ pa_status pa__rm3d_skin_relax(rm3d *m, pa_idx *nrelaxed) {
     for (pa_idx k = 0; k < m->ne; k++)
       m->q[k] = (float)rm3d_qual_v(m, m->tv + 4 * (size_t)k);
   if (nr) /* lengths changed */
-    for (pa_idx k = 0; k < m->ne; k++) m->tflag[k] &= (uint8_t)~R3T_CLEAN;
+    for (pa_idx k = 0; k < m->ne; k++) m->tflag[k] &= (uint8_t)~RM3D_T_CLEAN;
   *nrelaxed = nr;
 cleanup:
   pa__free(acc);

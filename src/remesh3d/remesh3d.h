@@ -10,16 +10,16 @@
  * Working structure (struct rm3d), structure of arrays, 32-bit indices:
  *  - tetrahedra: tv[4k..4k+3] positively oriented; adj[4k+i] = 4*l+j when
  *    face i of k (opposite its vertex i) is face j of l, -1 on the domain
- *    boundary; q[k] the cached quality; tflag[k] internal bits (R3T_*: bits
+ *    boundary; q[k] the cached quality; tflag[k] internal bits (RM3D_T_*: bits
  *    0..3 say that face i is a boundary triangle), tpf[k] the caller's
  *    PA_FLAG_* byte, tref[k] the reference;
  *  - vertices: x[3i..], met[mc*i..] (mc = 1 size or 6 tensor), vref, vpf (the
- *    caller's PA_FLAG_* byte), vtag (internal R3V_* bits), vtet[i] one live
+ *    caller's PA_FLAG_* byte), vtag (internal RM3D_V_* bits), vtet[i] one live
  *    tetrahedron holding i;
  *  - boundary triangles and feature edges: keyed tables (rm3d_table) holding
  *    each entity's own vertex order, reference and flags; the tetrahedron
  *    faces that are boundary triangles carry the face bit in tflag.
- * Dead tetrahedra/vertices keep their slots (R3T_DEAD / R3V_DEAD) until a
+ * Dead tetrahedra/vertices keep their slots (RM3D_T_DEAD / RM3D_V_DEAD) until a
  * compaction; nothing points at a dead slot.
  */
 #ifndef PA_REMESH3D_H
@@ -34,27 +34,28 @@
 /* ---- private working structure ----------------------------------------- */
 
 enum {
-  R3T_FACES = 0x0f,  /* face i is a boundary triangle (bit i) */
-  R3T_FROZEN = 0x10, /* caller's PA_FLAG_REQUIRED: never touched */
-  R3T_DEAD = 0x20,
-  R3T_MARK = 0x40, /* transient visit mark (always cleared after use) */
-  /* Clean: its six edges were in [PA__LEN_LO_EXACT, PA__LEN_HI_EXACT] when last
-   * measured and neither its vertices nor their positions or metrics changed
-   * since. The split and collapse passes at the final thresholds skip it: on a
-   * mostly adapted mesh they measured every tet again for nothing. Every
-   * change of a tet clears it (where its cached quality q is set). */
-  R3T_CLEAN = 0x80
+  RM3D_T_FACES = 0x0f,  /* face i is a boundary triangle (bit i) */
+  RM3D_T_FROZEN = 0x10, /* caller's PA_FLAG_REQUIRED: never touched */
+  RM3D_T_DEAD = 0x20,
+  RM3D_T_MARK = 0x40, /* transient visit mark (always cleared after use) */
+  /* Clean: its six edges were in [PA_METRIC_LEN_LO_EXACT,
+   * PA_METRIC_LEN_HI_EXACT] when last measured and neither its vertices nor
+   * their positions or metrics changed since. The split and collapse passes at
+   * the final thresholds skip it: on a mostly adapted mesh they measured every
+   * tet again for nothing. Every change of a tet clears it (where its cached
+   * quality q is set). */
+  RM3D_T_CLEAN = 0x80
 };
 
 enum {
-  R3V_BDRY = 1,   /* on a boundary triangle */
-  R3V_LOCK = 2,   /* never moved nor removed (frozen entity, corner) */
-  R3V_FEAT = 4,   /* on a feature (ridge) edge */
-  R3V_CORNER = 8, /* corner: never moved nor removed */
-  R3V_DEAD = 16,
-  R3V_MARK = 32, /* transient */
-  R3V_CURVED = 64, /* on a curved surface patch (has a normal) */
-  R3V_TODO = 128   /* pass scratch: vertex to visit / not tried yet */
+  RM3D_V_BDRY = 1,   /* on a boundary triangle */
+  RM3D_V_LOCK = 2,   /* never moved nor removed (frozen entity, corner) */
+  RM3D_V_FEAT = 4,   /* on a feature (ridge) edge */
+  RM3D_V_CORNER = 8, /* corner: never moved nor removed */
+  RM3D_V_DEAD = 16,
+  RM3D_V_MARK = 32, /* transient */
+  RM3D_V_CURVED = 64, /* on a curved surface patch (has a normal) */
+  RM3D_V_TODO = 128   /* pass scratch: vertex to visit / not tried yet */
 };
 
 /* Boundary triangles (nk = 3) or feature edges (nk = 2): records in an array
@@ -71,7 +72,7 @@ typedef struct rm3d_table {
   size_t nslot;  /* power of two */
   size_t nfull;  /* slots not empty (live + deleted) */
 } rm3d_table;
-#define R3_REC_DEAD 0x80
+#define RM3D_REC_DEAD 0x80
 
 typedef struct rm3d {
   int mc; /* metric components: 1 (size) or 6 (tensor) */
@@ -90,9 +91,9 @@ typedef struct rm3d {
   int32_t *tref;
   double *nrm; /* 3 * capv: unit normal of curved surface vertices */
   int nfield;
-  int fcomp[PA_MAX_FIELDS];
-  uint8_t fmetric[PA_MAX_FIELDS]; /* field holds a metric (metric.h) */
-  double *fval[PA_MAX_FIELDS];
+  int fcomp[PA_MESH_MAX_FIELDS];
+  uint8_t fmetric[PA_MESH_MAX_FIELDS]; /* field holds a metric (metric.h) */
+  double *fval[PA_MESH_MAX_FIELDS];
   rm3d_table tri, edg;
   /* options */
   int surf;  /* remesh the boundary surface */
@@ -160,7 +161,7 @@ static inline int rm3d_loc(const pa_idx *v, pa_idx x) {
 
 /* Lengths and qualities are metric/metric3d.h's kernels: the statistics
  * measure with the same lengths, and the band the passes aim at is
- * PA__LEN_LO_EXACT..PA__LEN_HI_EXACT. */
+ * PA_METRIC_LEN_LO_EXACT..PA_METRIC_LEN_HI_EXACT. */
 static inline double rm3d_len(const rm3d *m, pa_idx a, pa_idx b) {
   return pa__len3(m->mc, m->x + 3 * (size_t)a, m->x + 3 * (size_t)b,
                   m->met + (size_t)m->mc * a, m->met + (size_t)m->mc * b);
@@ -256,7 +257,12 @@ void pa__rm3d_table_remove(rm3d_table *t, pa_idx i);
  * (ring[n] = ring[0] when closed). Returns n, or -1 when longer than max.
  * *info: bit 0 closed, bit 1 a face containing ab is a boundary triangle,
  * bit 2 a frozen tet, bit 3 tets of different references. */
-enum { R3SH_CLOSED = 1, R3SH_BDRY = 2, R3SH_FROZEN = 4, R3SH_REFS = 8 };
+enum {
+  RM3D_SH_CLOSED = 1,
+  RM3D_SH_BDRY = 2,
+  RM3D_SH_FROZEN = 4,
+  RM3D_SH_REFS = 8
+};
 int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
                    pa_idx *ring, int max, int *info);
 /* Ball of vertex p (from vtet[p]): entries 4*t + local index of p. Returns

@@ -53,15 +53,15 @@ static int bary(const double *p0, const double *p1, const double *p2,
 
 int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
                           double *dir) {
-  if (!m->surf || (m->vtag[p] & (R3V_CURVED))) return 0;
-  if (m->vtag[p] & R3V_FEAT) {
+  if (!m->surf || (m->vtag[p] & (RM3D_V_CURVED))) return 0;
+  if (m->vtag[p] & RM3D_V_FEAT) {
     pa_idx r[2];
     int nr = 0;
     for (int i = 0; i < n && nr <= 2; i++) {
       const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
       for (int j = 0; j < 4 && nr <= 2; j++) {
         pa_idx x = v[j];
-        if (x == p || !(m->vtag[x] & R3V_FEAT)) continue;
+        if (x == p || !(m->vtag[x] & RM3D_V_FEAT)) continue;
         if (nr > 0 && (x == r[0] || (nr > 1 && x == r[1]))) continue;
         pa_idx key[2] = {p, x};
         pa_idx e = pa__rm3d_table_find(&m->edg, key);
@@ -87,7 +87,7 @@ int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
     int ip = ball[i] & 3;
-    uint8_t fl = m->tflag[t] & R3T_FACES & (uint8_t)~(1u << ip);
+    uint8_t fl = m->tflag[t] & RM3D_T_FACES & (uint8_t)~(1u << ip);
     if (!fl) continue;
     const pa_idx *v = m->tv + 4 * (size_t)t;
     for (int f = 0; f < 4; f++) {
@@ -155,7 +155,7 @@ static int curved_point(const rm3d *m, const pa_idx *tri, int ntri,
     for (int j = 0; j < 3; j++) {
       P[j] = m->x + 3 * (size_t)v[j];
       N[j] = m->nrm + 3 * (size_t)v[j];
-      if (!(m->vtag[v[j]] & R3V_CURVED)) return 0;
+      if (!(m->vtag[v[j]] & RM3D_V_CURVED)) return 0;
     }
     double e1[3], e2[3], nn[3];
     for (int j = 0; j < 3; j++) {
@@ -238,14 +238,14 @@ static void apply_move(rm3d *m, pa_idx p, const pa_idx *ball, int n,
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
     m->q[t] = mc == 6 ? (float)rm3d_qual_v(m, m->tv + 4 * (size_t)t) : nq[i];
-    m->tflag[t] &= (uint8_t)~R3T_CLEAN;
+    m->tflag[t] &= (uint8_t)~RM3D_T_CLEAN;
   }
   m->nmove++;
 }
 
 int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
-  if (m->vtag[p] & (R3V_LOCK | R3V_CORNER | R3V_DEAD)) return 0;
-  if ((m->vtag[p] & R3V_BDRY) && !m->surf) return 0;
+  if (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) return 0;
+  if ((m->vtag[p] & RM3D_V_BDRY) && !m->surf) return 0;
   int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
   if (n < 0) return 0;
   int kind = 0;
@@ -253,8 +253,8 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
   pa_idx tri[3 * 32];
   int ntri = 0;
   double hausd = m->hausd;
-  if ((m->vtag[p] & (R3V_BDRY | R3V_CURVED | R3V_FEAT)) ==
-          (R3V_BDRY | R3V_CURVED) &&
+  if ((m->vtag[p] & (RM3D_V_BDRY | RM3D_V_CURVED | RM3D_V_FEAT)) ==
+          (RM3D_V_BDRY | RM3D_V_CURVED) &&
       m->surf && m->nrm) {
     /* Curved patch: move in the tangent plane, then onto the PN surface. */
     kind = 3;
@@ -262,7 +262,7 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
     for (int i = 0; i < n; i++) {
       pa_idx t = ball[i] >> 2;
       int ip = ball[i] & 3;
-      uint8_t fl = m->tflag[t] & R3T_FACES & (uint8_t)~(1u << ip);
+      uint8_t fl = m->tflag[t] & RM3D_T_FACES & (uint8_t)~(1u << ip);
       const pa_idx *v = m->tv + 4 * (size_t)t;
       for (int f = 0; f < 4; f++) {
         if (!((fl >> f) & 1)) continue;
@@ -277,7 +277,7 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
       double h = r >= 0 ? rm3d_tri_hausd(m, r) : m->hausd;
       if (t == 0 || h < hausd) hausd = h;
     }
-  } else if (m->vtag[p] & R3V_BDRY) {
+  } else if (m->vtag[p] & RM3D_V_BDRY) {
     kind = pa__rm3d_bdry_freedom(m, p, ball, n, dir);
     if (!kind) return 0;
   }
@@ -308,7 +308,7 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
     int ip = ball[i] & 3;
-    if (m->tref[t] != ref0 || (m->tflag[t] & R3T_FROZEN)) return 0;
+    if (m->tref[t] != ref0 || (m->tflag[t] & RM3D_T_FROZEN)) return 0;
     if (m->q[t] < qold) qold = m->q[t];
     const pa_idx *v = m->tv + 4 * (size_t)t;
     const double *f0 = m->x + 3 * (size_t)v[rm3d_face[ip][0]];
@@ -368,7 +368,8 @@ static uint64_t mix64(uint64_t h) {
 }
 
 int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball) {
-  if (m->vtag[p] & (R3V_LOCK | R3V_CORNER | R3V_DEAD | R3V_BDRY)) return 0;
+  if (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD | RM3D_V_BDRY))
+    return 0;
   int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
   if (n < 0) return 0;
   int mc = m->mc;
@@ -377,7 +378,7 @@ int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball) {
   int32_t ref0 = m->tref[ball[0] >> 2];
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
-    if (m->tref[t] != ref0 || (m->tflag[t] & R3T_FROZEN)) return 0;
+    if (m->tref[t] != ref0 || (m->tflag[t] & RM3D_T_FROZEN)) return 0;
     if (m->q[t] < qold) qold = m->q[t];
   }
   /* A direction uniform in the cube [-1,1]^3 (normalised), drawn from the
@@ -411,8 +412,8 @@ int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball) {
 
 /* ---- relocation for lengths -------------------------------------------- */
 
-/* Edges at p: out of [PA__LEN_LO_EXACT, PA__LEN_HI_EXACT) and the sum of ln^2
- * L, with p at y (metric mp) and its neighbours nb[0..nn). */
+/* Edges at p: out of [PA_METRIC_LEN_LO_EXACT, PA_METRIC_LEN_HI_EXACT) and the
+ * sum of ln^2 L, with p at y (metric mp) and its neighbours nb[0..nn). */
 static int len_score(const rm3d *m, const double *y, const double *mp,
                      const pa_idx *nb, int nn, double *sum) {
   int out = 0, mc = m->mc;
@@ -420,7 +421,7 @@ static int len_score(const rm3d *m, const double *y, const double *mp,
   for (int i = 0; i < nn; i++) {
     double l = pa__len3(mc, y, m->x + 3 * (size_t)nb[i], mp,
                         m->met + (size_t)mc * nb[i]);
-    out += !(l >= PA__LEN_LO_EXACT && l < PA__LEN_HI_EXACT);
+    out += !(l >= PA_METRIC_LEN_LO_EXACT && l < PA_METRIC_LEN_HI_EXACT);
     double g = log(l);
     s += g * g;
   }
@@ -444,13 +445,14 @@ static int solve3(const double *a, const double *b, double *x) {
 }
 
 int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
-  if (m->vtag[p] & (R3V_LOCK | R3V_CORNER | R3V_DEAD | R3V_CURVED)) return 0;
-  if ((m->vtag[p] & R3V_BDRY) && !m->surf) return 0;
+  if (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD | RM3D_V_CURVED))
+    return 0;
+  if ((m->vtag[p] & RM3D_V_BDRY) && !m->surf) return 0;
   int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
   if (n < 0) return 0;
   int kind = 0;
   double dir[3];
-  if (m->vtag[p] & R3V_BDRY) {
+  if (m->vtag[p] & RM3D_V_BDRY) {
     kind = pa__rm3d_bdry_freedom(m, p, ball, n, dir);
     if (!kind) return 0;
   }
@@ -461,7 +463,7 @@ int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
   int32_t ref0 = m->tref[ball[0] >> 2];
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
-    if (m->tref[t] != ref0 || (m->tflag[t] & R3T_FROZEN)) return 0;
+    if (m->tref[t] != ref0 || (m->tflag[t] & RM3D_T_FROZEN)) return 0;
     if (m->q[t] < qold) qold = m->q[t];
     const pa_idx *v = m->tv + 4 * (size_t)t;
     for (int j = 0; j < 4; j++) {

@@ -41,7 +41,7 @@ static void curved_mid(const double *a, const double *b, const double *na,
  * circle through r, v, w. 0 when v has not exactly two feature edges. */
 static int ridge_tangent(rm3d *m, pa_idx v, pa_idx w, double *t) {
   pa_idx ball[RM3D_MAXBALL];
-  if (m->vtag[v] & R3V_CORNER) return 0;
+  if (m->vtag[v] & RM3D_V_CORNER) return 0;
   int n = pa__rm3d_ball(m, v, ball, RM3D_MAXBALL);
   if (n < 0) return 0;
   pa_idx r = -1;
@@ -50,7 +50,7 @@ static int ridge_tangent(rm3d *m, pa_idx v, pa_idx w, double *t) {
     const pa_idx *tv = m->tv + 4 * (size_t)(ball[i] >> 2);
     for (int j = 0; j < 4; j++) {
       pa_idx x = tv[j];
-      if (x == v || x == w || x == r || !(m->vtag[x] & R3V_FEAT)) continue;
+      if (x == v || x == w || x == r || !(m->vtag[x] & RM3D_V_FEAT)) continue;
       pa_idx key[2] = {v, x};
       if (pa__rm3d_table_find(&m->edg, key) < 0) continue;
       r = x;
@@ -207,7 +207,7 @@ static pa_status find_bdry_records(const rm3d *m, split_plan *s, int *ok) {
       f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][0];
       r = s->ring[i + 1];
     } else { /* start face of an open shell: (a, b, ring[0]) */
-      if (s->info & R3SH_CLOSED) break;
+      if (s->info & RM3D_SH_CLOSED) break;
       t = s->tets[0];
       const pa_idx *v = m->tv + 4 * (size_t)t;
       f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][1];
@@ -238,8 +238,8 @@ static int place_vertex(rm3d *m, split_plan *s) {
   const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b;
   double c[3], p0[3];
   for (int i = 0; i < 3; i++) c[i] = 0.5 * (xa[i] + xb[i]);
-  if (s->bdry && s->erec < 0 && m->nrm && (m->vtag[a] & R3V_CURVED) &&
-      (m->vtag[b] & R3V_CURVED))
+  if (s->bdry && s->erec < 0 && m->nrm && (m->vtag[a] & RM3D_V_CURVED) &&
+      (m->vtag[b] & RM3D_V_CURVED))
     curved_mid(xa, xb, m->nrm + 3 * (size_t)a, m->nrm + 3 * (size_t)b, p0);
   else if (s->erec >= 0)
     ridge_mid(m, a, b, p0);
@@ -254,7 +254,7 @@ static int place_vertex(rm3d *m, split_plan *s) {
    * surface. Then the point goes closer to the chord, where the halves stay
    * in the triangle's plane (a surface tilt is always retried, a refused
    * quality only for a far too long edge). */
-  int relax = rm3d_len(m, a, b) > 2.0 * PA__LEN_HI_EXACT;
+  int relax = rm3d_len(m, a, b) > 2.0 * PA_METRIC_LEN_HI_EXACT;
   int ok = 0;
   for (int f = 0; f < CURVE_BACKOFF && !ok; f++) {
     double w = f == CURVE_BACKOFF - 1 ? 0 : ldexp(1.0, -f);
@@ -292,8 +292,9 @@ static void cut_shell(rm3d *m, const split_plan *s, pa_idx pm) {
     pa_idx fw = at[ic], bw = at[id];
     an[ic] = fw < 0 ? -1 : 4 * (base + (i + 1 == n ? 0 : i + 1)) + (fw & 3);
     an[id] = bw < 0 ? -1 : 4 * (base + (i == 0 ? n - 1 : i - 1)) + (bw & 3);
-    m->tflag[nt] = (uint8_t)(m->tflag[t] & ~(1u << ib) & ~(R3T_MARK | R3T_CLEAN));
-    m->tflag[t] &= (uint8_t)~((1u << ia) | R3T_CLEAN);
+    m->tflag[nt] =
+        (uint8_t)(m->tflag[t] & ~(1u << ib) & ~(RM3D_T_MARK | RM3D_T_CLEAN));
+    m->tflag[t] &= (uint8_t)~((1u << ia) | RM3D_T_CLEAN);
     m->tpf[nt] = m->tpf[t];
     m->tref[nt] = m->tref[t];
     m->q[t] = s->q1[i];
@@ -309,8 +310,8 @@ static void cut_shell(rm3d *m, const split_plan *s, pa_idx pm) {
 static pa_status split_bdry_records(rm3d *m, const split_plan *s, pa_idx pm) {
   pa_status st = PA_SUCCESS;
   pa_idx a = s->a, b = s->b;
-  m->vtag[pm] |= R3V_BDRY;
-  if ((m->vtag[a] & R3V_CURVED) && (m->vtag[b] & R3V_CURVED) && m->nrm &&
+  m->vtag[pm] |= RM3D_V_BDRY;
+  if ((m->vtag[a] & RM3D_V_CURVED) && (m->vtag[b] & RM3D_V_CURVED) && m->nrm &&
       s->erec < 0) {
     double *np = m->nrm + 3 * (size_t)pm;
     const double *na = m->nrm + 3 * (size_t)a, *nb = m->nrm + 3 * (size_t)b;
@@ -321,7 +322,7 @@ static pa_status split_bdry_records(rm3d *m, const split_plan *s, pa_idx pm) {
     }
     w = w > 0 ? 1.0 / sqrt(w) : 0;
     for (int i = 0; i < 3; i++) np[i] *= w;
-    m->vtag[pm] |= R3V_CURVED;
+    m->vtag[pm] |= RM3D_V_CURVED;
   }
   for (int i = 0; i < s->ntri; i++) {
     pa_idx r = s->trec[i];
@@ -351,7 +352,7 @@ static pa_status split_bdry_records(rm3d *m, const split_plan *s, pa_idx pm) {
     pa__rm3d_table_remove(&m->edg, s->erec);
     PA_CALL(pa__rm3d_table_add(&m->edg, e1, ref, fl, NULL));
     PA_CALL(pa__rm3d_table_add(&m->edg, e2, ref, fl, NULL));
-    m->vtag[pm] |= R3V_FEAT;
+    m->vtag[pm] |= RM3D_V_FEAT;
   }
 cleanup:
   return st;
@@ -368,8 +369,8 @@ pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
   s.ntri = 0;
   s.erec = -1;
   s.n = pa__rm3d_shell(m, k, a, b, s.tets, s.ring, RM3D_MAXSHELL, &s.info);
-  if (s.n < 0 || (s.info & R3SH_FROZEN)) return st;
-  s.bdry = (s.info & R3SH_BDRY) != 0;
+  if (s.n < 0 || (s.info & RM3D_SH_FROZEN)) return st;
+  s.bdry = (s.info & RM3D_SH_BDRY) != 0;
   if (s.bdry) {
     if (!m->surf) return st;
     PA_CALL(find_bdry_records(m, &s, &ok));

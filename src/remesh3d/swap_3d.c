@@ -170,7 +170,7 @@ static pa_status remove_cap(rm3d *m, pa_idx a, pa_idx b, pa_idx t,
     return st;
   pa_idx o1 = m->adj[4 * (size_t)t + lb], o2 = m->adj[4 * (size_t)t + la];
   if (o1 < 0 || o2 < 0 || (o1 >> 2) == (o2 >> 2)) return st;
-  if ((m->tflag[o1 >> 2] | m->tflag[o2 >> 2]) & R3T_FROZEN) return st;
+  if ((m->tflag[o1 >> 2] | m->tflag[o2 >> 2]) & RM3D_T_FROZEN) return st;
   if (m->tref[o1 >> 2] != m->tref[t] || m->tref[o2 >> 2] != m->tref[t])
     return st;
   pa_idx r1, r2;
@@ -182,7 +182,7 @@ static pa_status remove_cap(rm3d *m, pa_idx a, pa_idx b, pa_idx t,
     pa_idx tets[R3_SWAP_MAXRING + 1], ring[R3_SWAP_MAXRING + 2];
     int info;
     int n = pa__rm3d_shell(m, t, c, d, tets, ring, R3_SWAP_MAXRING + 1, &info);
-    if (n < 0 || !(info & R3SH_CLOSED) || (info & R3SH_BDRY)) return st;
+    if (n < 0 || !(info & RM3D_SH_CLOSED) || (info & RM3D_SH_BDRY)) return st;
   }
   /* Outward normals: old faces (a,b,c), (a,b,d) of t; new faces seen from
    * the tets behind them, i.e. t's faces opposite b and a turned over. */
@@ -241,7 +241,7 @@ static pa_status remove_cap(rm3d *m, pa_idx a, pa_idx b, pa_idx t,
   pa_idx keep[4] = {a, b, c, d};
   for (int j = 0; j < 4; j++)
     if (m->vtet[keep[j]] == t) m->vtet[keep[j]] = j == 1 ? o2 >> 2 : o1 >> 2;
-  m->tflag[t] = R3T_DEAD;
+  m->tflag[t] = RM3D_T_DEAD;
   m->ndead_t++;
   m->nswap++;
   *done = 1;
@@ -299,7 +299,7 @@ static pa_status swap_bdry(rm3d *m, pa_idx a, pa_idx b, const pa_idx *tets,
   double dot = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2];
   if (dot < 1.0 - 1e-12) {
     /* Curved patch: the diagonals cd and ab stay within hausd. */
-    if (!(m->vtag[a] & m->vtag[b] & m->vtag[c] & m->vtag[d] & R3V_CURVED) ||
+    if (!(m->vtag[a] & m->vtag[b] & m->vtag[c] & m->vtag[d] & RM3D_V_CURVED) ||
         dot < RM3D_NORMAL_COS)
       return st;
     if (!diagonals_close(xa, xb, xc, xd, rm3d_tri_hausd(m, r1))) return st;
@@ -352,14 +352,14 @@ pa_status pa__rm3d_swap_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
   *done = 0;
   int info;
   int n = pa__rm3d_shell(m, k, a, b, tets, ring, R3_SWAP_MAXRING, &info);
-  if (n < 1 || (info & (R3SH_FROZEN | R3SH_REFS))) return st;
+  if (n < 1 || (info & (RM3D_SH_FROZEN | RM3D_SH_REFS))) return st;
   double qold = 1e30;
   for (int i = 0; i < n; i++)
     if (m->q[tets[i]] < qold) qold = m->q[tets[i]];
-  if (!(info & R3SH_CLOSED))
+  if (!(info & RM3D_SH_CLOSED))
     return gain < 1.0 ? st
                       : swap_bdry(m, a, b, tets, ring, n, qold, gain, done);
-  if (n < 3 || (info & R3SH_BDRY)) return st;
+  if (n < 3 || (info & RM3D_SH_BDRY)) return st;
   double bw = ring_dp(m, a, b, ring, n, gain * qold, nv4, &nnew);
   if (bw < 0) return st;
   if (gain < 1.0) {
@@ -370,7 +370,7 @@ pa_status pa__rm3d_swap_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
       const pa_idx *t = nv4 + 4 * i;
       for (int e = 0; e < 3; e++) {
         double l = rm3d_len(m, t[e], t[(e + 1) % 3]);
-        if (l > PA__LEN_HI_EXACT) return st;
+        if (l > PA_METRIC_LEN_HI_EXACT) return st;
       }
     }
   }
@@ -389,7 +389,7 @@ pa_status pa__rm3d_swap_face(rm3d *m, pa_idx k, int f, double gain,
   pa_idx o = m->adj[4 * (size_t)k + f];
   if (o < 0 || ((m->tflag[k] >> f) & 1)) return st;
   pa_idx l = o >> 2;
-  if ((m->tflag[k] | m->tflag[l]) & R3T_FROZEN) return st;
+  if ((m->tflag[k] | m->tflag[l]) & RM3D_T_FROZEN) return st;
   if (m->tref[k] != m->tref[l]) return st;
   const pa_idx *vk = m->tv + 4 * (size_t)k;
   pa_idx d = vk[f], e = m->tv[4 * (size_t)l + (o & 3)];

@@ -2,7 +2,7 @@
  * topo_3d.c -- topological primitives of the 3D remesher: edge shells,
  * vertex balls and the generic cavity replacement used by the swaps.
  *
- * Invariants: these functions leave no R3T_MARK bit set; pa__rm3d_replace
+ * Invariants: these functions leave no RM3D_T_MARK bit set; pa__rm3d_replace
  * keeps every invariant of mesh_3d.c provided the new tetrahedra tile the
  * cavity exactly (same outer faces), which callers guarantee by checking
  * orientation and quality before calling it.
@@ -25,7 +25,7 @@ int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
     }
     t = nb >> 2;
     if (t == k) {
-      inf |= R3SH_CLOSED;
+      inf |= RM3D_SH_CLOSED;
       break;
     }
     if (++steps > max) return -1;
@@ -42,9 +42,9 @@ int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
     ring[n] = v[ic];
     n++;
     uint8_t fl = m->tflag[t];
-    if (fl & ((1u << ic) | (1u << id))) inf |= R3SH_BDRY;
-    if (fl & R3T_FROZEN) inf |= R3SH_FROZEN;
-    if (m->tref[t] != ref0) inf |= R3SH_REFS;
+    if (fl & ((1u << ic) | (1u << id))) inf |= RM3D_SH_BDRY;
+    if (fl & RM3D_T_FROZEN) inf |= RM3D_SH_FROZEN;
+    if (m->tref[t] != ref0) inf |= RM3D_SH_REFS;
     pa_idx nb = m->adj[4 * (size_t)t + ic];
     if (nb < 0) {
       ring[n] = v[id];
@@ -64,7 +64,7 @@ int pa__rm3d_ball(rm3d *m, pa_idx p, pa_idx *ball, int max) {
   pa_idx k = m->vtet[p];
   int n = 0, head = 0, over = 0;
   ball[n++] = 4 * k + rm3d_loc(m->tv + 4 * (size_t)k, p);
-  m->tflag[k] |= R3T_MARK;
+  m->tflag[k] |= RM3D_T_MARK;
   while (head < n && !over) {
     pa_idx t = ball[head] >> 2;
     int ip = ball[head] & 3;
@@ -74,16 +74,16 @@ int pa__rm3d_ball(rm3d *m, pa_idx p, pa_idx *ball, int max) {
       pa_idx nb = m->adj[4 * (size_t)t + i];
       if (nb < 0) continue;
       pa_idx u = nb >> 2;
-      if (m->tflag[u] & R3T_MARK) continue;
+      if (m->tflag[u] & RM3D_T_MARK) continue;
       if (n >= max) {
         over = 1;
         break;
       }
-      m->tflag[u] |= R3T_MARK;
+      m->tflag[u] |= RM3D_T_MARK;
       ball[n++] = 4 * u + rm3d_loc(m->tv + 4 * (size_t)u, p);
     }
   }
-  for (int i = 0; i < n; i++) m->tflag[ball[i] >> 2] &= (uint8_t)~R3T_MARK;
+  for (int i = 0; i < n; i++) m->tflag[ball[i] >> 2] &= (uint8_t)~RM3D_T_MARK;
   return over ? -1 : n;
 }
 
@@ -113,22 +113,22 @@ pa_status pa__rm3d_replace(rm3d *m, const pa_idx *old, int nold,
   PA_CHECK(nold <= R3_REPLACE_MAXOLD && nnew <= R3_REPLACE_MAXNEW,
            PA_ERR_INTERNAL, "rm3d: cavity too large");
   PA_CALL(pa__rm3d_reserve(m, 0, (size_t)m->ne + nnew));
-  for (int i = 0; i < nold; i++) m->tflag[old[i]] |= R3T_MARK;
+  for (int i = 0; i < nold; i++) m->tflag[old[i]] |= RM3D_T_MARK;
   for (int i = 0; i < nold; i++) {
     pa_idx t = old[i];
     for (int f = 0; f < 4; f++) {
       pa_idx a = m->adj[4 * (size_t)t + f];
-      if (a >= 0 && (m->tflag[a >> 2] & R3T_MARK)) continue;
+      if (a >= 0 && (m->tflag[a >> 2] & RM3D_T_MARK)) continue;
       face_sorted(m->tv + 4 * (size_t)t, f, ext[next].k);
       ext[next].slot = a;
       ext[next].tag = (m->tflag[t] >> f) & 1;
       next++;
     }
   }
-  for (int i = 0; i < nold; i++) m->tflag[old[i]] &= (uint8_t)~R3T_MARK;
+  for (int i = 0; i < nold; i++) m->tflag[old[i]] &= (uint8_t)~RM3D_T_MARK;
   for (int i = 0; i < nnew; i++) idx[i] = i < nold ? old[i] : m->ne++;
   for (int i = nnew; i < nold; i++) {
-    m->tflag[old[i]] = R3T_DEAD;
+    m->tflag[old[i]] = RM3D_T_DEAD;
     m->ndead_t++;
   }
   for (int i = 0; i < nnew; i++) {
@@ -191,7 +191,7 @@ pa_status pa__rm3d_replace(rm3d *m, const pa_idx *old, int nold,
     const pa_idx *v = m->tv + 4 * (size_t)t;
     for (int j = 0; j < 4; j++) m->vtet[v[j]] = t;
     m->q[t] = (float)rm3d_qual_v(m, v);
-    m->tflag[t] &= (uint8_t)~R3T_CLEAN;
+    m->tflag[t] &= (uint8_t)~RM3D_T_CLEAN;
   }
 cleanup:
   return st;

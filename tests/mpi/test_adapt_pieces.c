@@ -98,8 +98,8 @@ static void check_labels(pa__iter *it) {
     }
     r[0] = vg[v];
     for (int k = 0; k < 4; k++) r[1 + k] = it->vlab[4 * v + k];
-    r[5] = it->vinner[v] == PA__INNER_TRANSIT;
-    r[8] = it->vinner[v] == PA__LABELLED_TRANSIT;
+    r[5] = it->vinner[v] == PA_ADAPT_INNER_TRANSIT;
+    r[8] = it->vinner[v] == PA_ADAPT_LABELLED_TRANSIT;
     r[6] = nb;
     r[7] = on_curved_top(x + (size_t)it->dim * v, it->dim);
   }
@@ -111,20 +111,20 @@ static void check_labels(pa__iter *it) {
     for (int e = 0; e < ne; e++)
       for (int k = 0; k < nve; k++)
         if (all[(size_t)w * e + 3 + k] + 1 > nv) nv = all[(size_t)w * e + 3 + k] + 1;
-    /* per vertex: min and max label (unlabelled = PA__NOLABEL), the same
+    /* per vertex: min and max label (unlabelled = PA_ADAPT_NOLABEL), the same
      * over the tagged elements, tagged nearby */
     long long *lo = malloc(sizeof(long long) * nv), *hi = malloc(sizeof(long long) * nv);
     long long *tlo = malloc(sizeof(long long) * nv), *thi = malloc(sizeof(long long) * nv);
     char *vtag = calloc((size_t)nv, 1);
     for (pa_gid v = 0; v < nv; v++) {
-      lo[v] = tlo[v] = PA__NOLABEL;
-      hi[v] = thi[v] = -PA__NOLABEL;
+      lo[v] = tlo[v] = PA_ADAPT_NOLABEL;
+      hi[v] = thi[v] = -PA_ADAPT_NOLABEL;
     }
     int bad_cover = 0, bad_grow = 0, bad_req = 0, bad_range = 0, bad_inner = 0;
     int ninner = 0, ncurved = 0, nlabelled = 0;
     for (int e = 0; e < ne; e++) {
       const long long *r = all + (size_t)w * e;
-      long long l = r[0] < 0 ? PA__NOLABEL : r[0];
+      long long l = r[0] < 0 ? PA_ADAPT_NOLABEL : r[0];
       bad_cover += r[1] && r[0] < 0;
       bad_req += r[2] && r[0] >= 0;
       for (int k = 0; k < nve; k++) {
@@ -171,7 +171,7 @@ static void check_labels(pa__iter *it) {
       const long long *r = vall + (size_t)wv * i;
       long long v = r[0];
       bad_range += r[1] != lo[v] || r[2] != hi[v] || r[3] != tlo[v] || r[4] != thi[v];
-      int labelled = hi[v] != PA__NOLABEL;
+      int labelled = hi[v] != PA_ADAPT_NOLABEL;
       bad_inner += r[5] && (!labelled || r[7]);
       bad_inner += !r[5] && labelled && r[6] == 0 && !r[7];
       /* labelled only, not inner: skin edges towards an inner vertex only */
@@ -241,8 +241,8 @@ static void start_iter(prun *r, int dim, int n, const char *metric,
   } else {
     r->o.skin_layers = layers;
   }
-  CHECK_OK(pa_dmesh_value_add(r->dm, PA_ELEMENT, PA__DONE_VALUE, MPI_UINT8_T,
-                              1, -1, &r->done));
+  CHECK_OK(pa_dmesh_value_add(r->dm, PA_ELEMENT, PA_ADAPT_DONE_VALUE,
+                              MPI_UINT8_T, 1, -1, &r->done));
   pa__iter *it = &r->it;
   it->dm = r->dm;
   it->opts = &r->o;
