@@ -62,6 +62,8 @@ void pa__piece_release(pa__piece *pc) {
   pa__free(pc->match);
   pa__free(pc->ifgid);
   pa__free(pc->ifgive);
+  pa__free(pc->dest);
+  pc->dest = NULL;
   pc->vgid = pc->ifgid = NULL;
   pc->skin = pc->hot = pc->ifgive = NULL;
   pc->vrank = NULL;

@@ -91,7 +91,9 @@ static inline int pa__adapt_checks(const pa_adapt_opts *o) {
 /* A piece received by this rank and its remeshed output. */
 typedef struct pa__piece {
   int id;              /* piece number */
-  pa_mesh *in;         /* the piece as extracted (kept for checks) */
+  pa_mesh *in;         /* the piece as extracted (kept for checks; only
+                          its vertices once the reintegration has examined
+                          the output) */
   pa_mesh *out;        /* remeshed copy, NULL if it failed */
   pa_gid *vgid;        /* in->nv: global id of each input vertex */
   uint8_t *skin;       /* in->nv: vertex on the skin (frozen) */
@@ -117,6 +119,7 @@ typedef struct pa__piece {
                           input one it is (same vertices, none added by
                           bisect.c, same reference: it keeps its id and
                           values), or -1 */
+  int *dest;           /* out->ne: the rank each output element goes to */
   pa_remesh_report rep;
 } pa__piece;
 

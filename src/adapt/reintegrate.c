@@ -540,21 +540,21 @@ static pa_status output_reuse(pa__piece *pc, int kind) {
   pa_idx n0 = pc->n0[kind];
   pa_idx no = kind == PA_ELEMENT ? o->ne : kind == PA_BOUNDARY ? o->nb : o->ned;
   size_t cap = 16;
-  pa_idx *tab = NULL; /* 5 per slot: 4 keys, the input entity; -1 empty */
+  pa_idx *tab = NULL; /* input entity per slot, keyed by its sorted
+                         vertices; -1 empty */
   pa__free(pc->reuse[kind]);
   pc->reuse[kind] = NULL;
   PA_ALLOC(pc->reuse[kind], no ? no : 1);
   while (cap < 2 * (size_t)n0 + 2) cap *= 2;
-  PA_ALLOC(tab, 5 * cap);
-  for (size_t i = 0; i < 5 * cap; i++) tab[i] = -1;
+  PA_ALLOC(tab, cap);
+  for (size_t i = 0; i < cap; i++) tab[i] = -1;
   for (pa_idx e = 0; e < n0; e++) {
     pa_idx k[4];
     ent_key(ic + (size_t)nvk * e, nvk, NULL, k);
     if (k[nvk - 1] >= pc->nv0) continue; /* bisected: not the gathered one */
     size_t h = pa__hash_idx(k, 4) & (cap - 1);
-    while (tab[5 * h] != -1) h = (h + 1) & (cap - 1);
-    memcpy(tab + 5 * h, k, 4 * sizeof *k);
-    tab[5 * h + 4] = e;
+    while (tab[h] != -1) h = (h + 1) & (cap - 1);
+    tab[h] = e;
   }
   for (pa_idx e = 0; e < no; e++) {
     const pa_idx *v = oc + (size_t)nvk * e;
@@ -568,12 +568,14 @@ static pa_status output_reuse(pa__piece *pc, int kind) {
     if (!ok) continue;
     ent_key(v, nvk, pc->match, k);
     size_t h = pa__hash_idx(k, 4) & (cap - 1);
-    for (; tab[5 * h] != -1; h = (h + 1) & (cap - 1))
-      if (!memcmp(tab + 5 * h, k, 4 * sizeof *k)) {
-        pa_idx q = tab[5 * h + 4];
+    for (; tab[h] != -1; h = (h + 1) & (cap - 1)) {
+      pa_idx q = tab[h], kq[4];
+      ent_key(ic + (size_t)nvk * q, nvk, NULL, kq);
+      if (!memcmp(kq, k, sizeof k)) {
         if (iref[q] == oref[e]) pc->reuse[kind][e] = q;
         break;
       }
+    }
   }
 cleanup:
   pa__free(tab);
@@ -672,7 +674,7 @@ typedef struct orecs {
   pa__piece *pc;
   const pa_mesh *o;
   pa_gid *vg, *next;
-  int *dest;
+  const int *dest;
   uint8_t *dist, *dsk;
   double qband;
   pa__recs *R, *Rp;
@@ -875,7 +877,7 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   c.done = done;
   c.pay = pay;
   c.pcache.len = (size_t)-1;
-  PA_CALL(output_dest(it, pc, &c.dest));
+  c.dest = pc->dest;
   for (pa_idx e = 0; Rp && e < c.o->ne; e++)
     if (c.dest[e] != it->rank) Rp = NULL;
   c.Rp = Rp;
@@ -887,7 +889,6 @@ cleanup:
   pa__free(c.vg);
   pa__free(c.dist);
   pa__free(c.dsk);
-  pa__free(c.dest);
   return st;
 }
 
@@ -1172,7 +1173,66 @@ cleanup:
   return st;
 }
 
-/* Step 3: the records of the staying owned entities, straight from the
+/* A piece's input once its outputs are examined (output_reuse,
+ * output_dest): the rest of the reintegration reads its vertices only
+ * (coordinates, references); the cells, metric and fields go before the
+ * records of the rebuild are made. */
+static void input_trim(pa_mesh *in) {
+  pa__mesh_invalidate(in);
+  pa__free(in->elem);
+  pa__free(in->eref);
+  pa__free(in->eflag);
+  pa__free(in->bdry);
+  pa__free(in->bref);
+  pa__free(in->bflag);
+  pa__free(in->edge);
+  pa__free(in->edref);
+  pa__free(in->edflag);
+  pa__free(in->met);
+  for (int k = 0; k < in->nfield; k++) pa__free(in->field[k].val);
+  in->elem = in->bdry = in->edge = NULL;
+  in->eref = in->bref = in->edref = NULL;
+  in->eflag = in->bflag = in->edflag = NULL;
+  in->met = NULL;
+  in->ne = in->nb = in->ned = 0;
+  in->cape = in->capb = in->caped = 0;
+  in->met_ncomp = in->nfield = 0;
+}
+
+/* Step 3: the largest id in use here (base), and per output the entities
+ * that keep their id, the boundary entities and edges it gives and the
+ * rank of each element (output_dest): the count of fresh ids this rank
+ * needs of each kind (cnt). Then the inputs are trimmed (input_trim), so
+ * that the records of step 4 do not stack on what they no longer need. */
+static pa_status count_fresh(pa__iter *it, reint *r) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
+    for (pa_idx i = 0; i < dm->nown[k]; i++)
+      if (dm->gid[k][i] > r->base[k]) r->base[k] = dm->gid[k][i];
+  PA_CALLOC(r->bemit, it->npiece_local);
+  PA_CALLOC(r->demit, it->npiece_local);
+  for (int q = 0; q < it->npiece_local; q++) {
+    pa__piece *pc = &it->pieces[q];
+    if (!pc->out) continue;
+    for (pa_idx j = 0; j < pc->out->nv; j++) r->cnt[PA_VERTEX] += pc->match[j] < 0;
+    /* entities given back unchanged keep their ids (one that is given is
+     * not on the skin, so its owner does not keep it: an element, boundary
+     * entity or edge that a piece shares with the outside lies on a skin
+     * face) */
+    for (int k = PA_ELEMENT; k <= PA_EDGE; k++) PA_CALL(output_reuse(pc, k));
+    for (pa_idx e = 0; e < pc->out->ne; e++)
+      r->cnt[PA_ELEMENT] += pc->reuse[PA_ELEMENT][e] < 0;
+    PA_CALL(output_emit(pc->out, pc->reuse[PA_BOUNDARY], pc->reuse[PA_EDGE],
+                        &r->bemit[q], &r->demit[q], r->cnt));
+    PA_CALL(output_dest(it, pc, &pc->dest));
+    input_trim(pc->in);
+  }
+cleanup:
+  return st;
+}
+
+/* Step 4: the records of the staying owned entities, straight from the
  * local arrays, with room for every output record (no regrowth); the kept
  * vertices that can be private go to Rp. */
 static pa_status staying_records(pa__iter *it, reint *r) {
@@ -1201,36 +1261,7 @@ cleanup:
   return st;
 }
 
-/* Step 4a: the largest id in use here (base), and per output the entities
- * that keep their id and the boundary entities and edges it gives: the
- * count of fresh ids this rank needs of each kind (cnt). */
-static pa_status count_fresh(pa__iter *it, reint *r) {
-  pa_status st = PA_SUCCESS;
-  pa_dmesh *dm = it->dm;
-  for (int k = 0; k < PA_DMESH_NKIND; k++)
-    for (pa_idx i = 0; i < dm->nown[k]; i++)
-      if (dm->gid[k][i] > r->base[k]) r->base[k] = dm->gid[k][i];
-  PA_CALLOC(r->bemit, it->npiece_local);
-  PA_CALLOC(r->demit, it->npiece_local);
-  for (int q = 0; q < it->npiece_local; q++) {
-    pa__piece *pc = &it->pieces[q];
-    if (!pc->out) continue;
-    for (pa_idx j = 0; j < pc->out->nv; j++) r->cnt[PA_VERTEX] += pc->match[j] < 0;
-    /* entities given back unchanged keep their ids (one that is given is
-     * not on the skin, so its owner does not keep it: an element, boundary
-     * entity or edge that a piece shares with the outside lies on a skin
-     * face) */
-    for (int k = PA_ELEMENT; k <= PA_EDGE; k++) PA_CALL(output_reuse(pc, k));
-    for (pa_idx e = 0; e < pc->out->ne; e++)
-      r->cnt[PA_ELEMENT] += pc->reuse[PA_ELEMENT][e] < 0;
-    PA_CALL(output_emit(pc->out, pc->reuse[PA_BOUNDARY], pc->reuse[PA_EDGE],
-                        &r->bemit[q], &r->demit[q], r->cnt));
-  }
-cleanup:
-  return st;
-}
-
-/* Step 4b: this rank's first fresh id of each kind (off): after the largest
+/* Step 5: this rank's first fresh id of each kind (off): after the largest
  * id in use on any rank, an exclusive scan of the counts; the vertices
  * bisect.c added take ids after every other new vertex. */
 static pa_status fresh_ids(pa__iter *it, reint *r) {
@@ -1250,7 +1281,7 @@ cleanup:
   return st;
 }
 
-/* Step 5: the records of the outputs, each piece released once done, and
+/* Step 6: the records of the outputs, each piece released once done, and
  * the wire bytes of every record (a fixed part each, plus the payloads). */
 static pa_status outputs_to_records(pa__iter *it, reint *r,
                                     const pa_dmesh_value *done) {
@@ -1289,11 +1320,11 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
   for (int k = 0; k < PA_DMESH_NKIND; k++) r.base[k] = -1;
   PA_CALL(staying_elements(it, &r));
   PA_CALL(kept_entities(it, &r));
-  PA_CALL(staying_records(it, &r));
   PA_CALL(count_fresh(it, &r));
+  PA_CALL(staying_records(it, &r));
   PA_CALL(fresh_ids(it, &r));
   PA_CALL(outputs_to_records(it, &r, done));
-  /* 6. rebuild: what the records replace goes first */
+  /* 7. rebuild: what the records replace goes first */
   PA_CALL(pa__agree(dm->comm, st));
   pa__iter_release_elements(it);
   reint_free_flags(&r);
