@@ -82,6 +82,15 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args);
  * before and after, side by side. Not collective. */
 pa_status pa_cli_adapt_svg(const pa_cli_adapt_args *args, const pa_stats *before,
                            const pa_stats *after);
+/* The metric `padapt adapt` adapts to, on the mesh read from args->in (rank
+ * 0 of the parallel run, cli_util.c): the input's own sizes (-optim), the
+ * -met file, or the mesh's own view "metric", which comes before a metric
+ * found beside IN; with -hsiz and no metric, the constant size H, so that
+ * the statistics before are taken in the target size. Returns 0, or 1 after
+ * printing the error (a mesh left without a metric is one). Not
+ * collective. */
+int pa_cli_adapt_metric(const pa_cli *cli, const pa_cli_adapt_args *args,
+                        pa_mesh *mesh);
 
 /* Print "padapt: <message>" on stderr (every rank that calls it); returns 1. */
 int pa_cli_error(const pa_cli *cli, const char *fmt, ...)

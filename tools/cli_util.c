@@ -1,8 +1,9 @@
 /*
  * cli_util.c -- the helpers the commands of the CLI share (cli.h): messages
  * and exit statuses, reading a mesh given on the command line, numbers and
- * paths of arguments, the report of how a result meets the metric, vertex
- * fields in .sol files, and the output checks and transactions.
+ * paths of arguments, the metric `padapt adapt` adapts to, the report of how
+ * a result meets the metric, vertex fields in .sol files, and the output
+ * checks and transactions.
  */
 #include "cli.h"
 
@@ -273,4 +274,36 @@ pa_status pa_cli_attach_metric(pa_mesh *mesh, const char *path) {
   if (st == PA_SUCCESS) st = pa_mesh_metric_from_sol(mesh, sol, 0);
   pa_sol_destroy(sol);
   return st;
+}
+
+int pa_cli_adapt_metric(const pa_cli *cli, const pa_cli_adapt_args *a,
+                        pa_mesh *mesh) {
+  const char *met = a->met;
+  pa_status st = PA_SUCCESS;
+  if (met == a->met_default && pa_mesh_metric_ncomp(mesh) > 0) {
+    if (a->remesh.verbosity >= 0)
+      printf("padapt: adapt: metric: the view \"metric\" of %s (not %s)\n",
+             a->in, met);
+    met = NULL; /* the file's own metric comes first */
+  }
+  if (a->optim)
+    st = pa_mesh_metric_from_edges(mesh);
+  else if (met)
+    st = pa_cli_attach_metric(mesh, met);
+  else if (a->remesh.hsiz <= 0 && pa_mesh_metric_ncomp(mesh) == 0)
+    return pa_cli_error(cli, "adapt: no metric: give -met SOL, -sol SOL or "
+                             "-hsiz H (%s has no view \"metric\" and no .sol "
+                             "beside it)",
+                        a->in);
+  /* the statistics before the adaptation are taken in the target size */
+  if (st == PA_SUCCESS && a->remesh.hsiz > 0 &&
+      pa_mesh_metric_ncomp(mesh) == 0) {
+    pa_idx nv = pa_mesh_nvert(mesh);
+    double *h = malloc(sizeof(double) * (nv ? nv : 1));
+    if (!h) return pa_cli_error(cli, "adapt: out of memory");
+    for (pa_idx v = 0; v < nv; v++) h[v] = a->remesh.hsiz;
+    st = pa_mesh_set_metric(mesh, 1, h);
+    free(h);
+  }
+  return pa_cli_fail(cli, st);
 }

@@ -323,34 +323,13 @@ pa_status pa_cli_adapt_svg(const pa_cli_adapt_args *a, const pa_stats *before,
   return pa_cli_svg_histograms(a->svg, title, two, 2, names);
 }
 
-/* The metric to adapt to, on the mesh read: the input's own sizes (-optim),
- * the -met file, or the mesh's own view "metric", which comes before a metric
- * found beside IN. With -hsiz none is needed. Returns 0, or 1 after printing
- * the error. */
-static int attach_metric(const pa_cli *cli, const pa_cli_adapt_args *a,
-                         pa_mesh *mesh) {
-  const char *met = a->met;
-  if (met == a->met_default && pa_mesh_metric_ncomp(mesh) > 0) {
-    if (a->remesh.verbosity >= 0)
-      printf("padapt: adapt: metric: the view \"metric\" of %s (not %s)\n",
-             a->in, met);
-    met = NULL;
-  }
-  if (a->optim) return pa_cli_fail(cli, pa_mesh_metric_from_edges(mesh));
-  if (met) return pa_cli_fail(cli, pa_cli_attach_metric(mesh, met));
-  if (a->remesh.hsiz <= 0 && pa_mesh_metric_ncomp(mesh) == 0)
-    return pa_cli_error(cli, "adapt: no metric: give -met SOL, -sol SOL or "
-                             "-hsiz H (or a view \"metric\" in a .msh input)");
-  return 0;
-}
-
 /* Everything the sequential run reads beside the mesh: the metric, the local
  * parameters (into opts; *local owns them) and the -field fields. Returns 0,
  * or 1 after printing the error. */
 static int read_inputs(const pa_cli *cli, const pa_cli_adapt_args *a,
                        pa_mesh *mesh, pa_remesh_opts *opts,
                        pa_local_param **local) {
-  if (attach_metric(cli, a, mesh)) return 1;
+  if (pa_cli_adapt_metric(cli, a, mesh)) return 1;
   if (a->params) {
     if (pa_cli_read_params(cli, a->params, pa_mesh_dim(mesh), local,
                            &opts->nlocal))
@@ -361,21 +340,11 @@ static int read_inputs(const pa_cli *cli, const pa_cli_adapt_args *a,
   return 0;
 }
 
-/* The statistics of the input in the target metric (-hsiz's constant size
- * when the mesh has no metric), printed. Returns 0, or 1 after printing the
- * error. */
+/* The statistics of the input in the target metric (pa_cli_adapt_metric:
+ * -hsiz's constant size when the mesh has none), printed. Returns 0, or 1
+ * after printing the error. */
 static int report_before(const pa_cli *cli, const pa_cli_adapt_args *a,
                          pa_mesh *mesh, pa_stats *before) {
-  double hsiz = a->remesh.hsiz;
-  if (hsiz > 0 && pa_mesh_metric_ncomp(mesh) == 0) {
-    pa_idx nv = pa_mesh_nvert(mesh);
-    double *h = malloc(sizeof(double) * (nv ? nv : 1));
-    if (!h) return pa_cli_error(cli, "adapt: out of memory");
-    for (pa_idx v = 0; v < nv; v++) h[v] = hsiz;
-    pa_status st = pa_mesh_set_metric(mesh, 1, h);
-    free(h);
-    if (st) return pa_cli_fail(cli, st);
-  }
   pa_status st = pa_mesh_stats(mesh, before);
   if (st) return pa_cli_fail(cli, st);
   printf(" -- INPUT %s\n", a->in);

@@ -39,36 +39,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Rank 0, after pa_cli_read_mesh: attach the metric and the fields. Prints
- * its own errors; returns 1 on success. */
-static int prepare_root(const pa_cli *cli, pa_mesh *mesh, const char *met,
-                        const char *field, double hsiz, int optim) {
-  pa_status st = PA_SUCCESS;
-  if (optim) {
-    st = pa_mesh_metric_from_edges(mesh);
-  } else if (met) {
-    st = pa_cli_attach_metric(mesh, met);
-  } else if (hsiz <= 0 && pa_mesh_metric_ncomp(mesh) == 0) {
-    pa_cli_error(cli, "adapt: no metric: give -met SOL, -sol SOL or -hsiz H");
+/* Rank 0, after pa_cli_read_mesh: the metric (pa_cli_adapt_metric) and the
+ * fields. Prints its own errors; returns 1 on success. */
+static int prepare_root(const pa_cli *cli, const pa_cli_adapt_args *args,
+                        pa_mesh *mesh) {
+  if (pa_cli_adapt_metric(cli, args, mesh)) return 0;
+  if (args->field && pa_cli_fail(cli, pa_cli_attach_fields(mesh, args->field)))
     return 0;
-  }
-  if (st == PA_SUCCESS && field) st = pa_cli_attach_fields(mesh, field);
-  /* statistics before the adaptation are taken in the target size */
-  if (st == PA_SUCCESS && hsiz > 0 && pa_mesh_metric_ncomp(mesh) == 0) {
-    pa_idx nv = pa_mesh_nvert(mesh);
-    double *h = malloc(sizeof(double) * (nv ? nv : 1));
-    if (!h) {
-      pa_cli_error(cli, "adapt: out of memory");
-      return 0;
-    }
-    for (pa_idx v = 0; v < nv; v++) h[v] = hsiz;
-    st = pa_mesh_set_metric(mesh, 1, h);
-    free(h);
-  }
-  if (st) {
-    pa_cli_fail(cli, st);
-    return 0;
-  }
   return 1;
 }
 
@@ -239,18 +216,7 @@ static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
     st = pa_cli_read_mesh(cli, in, &mesh); /* collective */
     if (cli->rank == 0) {
       if (st) pa_cli_fail(cli, st);
-      const char *met = args->met;
-      if (st == PA_SUCCESS && met == args->met_default &&
-          pa_mesh_metric_ncomp(mesh) > 0) {
-        if (opts->remesh.verbosity >= 0)
-          printf("padapt: adapt: metric: the view \"metric\" of %s (not "
-                 "%s)\n",
-                 in, met);
-        met = NULL; /* the file's own metric comes first */
-      }
-      ok = st == PA_SUCCESS &&
-           prepare_root(cli, mesh, met, args->field, opts->remesh.hsiz,
-                        args->optim);
+      ok = st == PA_SUCCESS && prepare_root(cli, args, mesh);
       if (ok && pa_mesh_nnames(mesh) > 0) {
         st = pa_mesh_create(pa_mesh_dim(mesh), names);
         if (st == PA_SUCCESS) st = copy_names(*names, mesh);
