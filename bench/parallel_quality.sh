@@ -15,6 +15,8 @@
 # PROCS="1 8" ... -hsiz 0.03 must converge with a worst quality near the
 # sequential one (folds of the surface left Q 0.0055 and 0.016 there;
 # docs/design/REMESHER3D.md, "Folds of a curved surface").
+# Beyond one machine: PROCS="1 8 16" ... tests/data/rod3d.mesh -hsiz 0.03
+# (oversubscribed; docs/BENCHMARKS.md, "Scale").
 # Environment: PROCS (default "1 2 3 4"; 1 runs the sequential remesher,
 # P > 1 `mpiexec -n P padapt adapt`). Figures from each run's JSON report.
 set -u
