@@ -718,20 +718,10 @@ static void permute(void *base, size_t sz, const pa_idx *pos, pa_idx n,
   }
 }
 
-pa_status pa__rm3d_reorder(rm3d *m) {
-  pa_status st = PA_SUCCESS;
-  pa__key64 *key = NULL;
-  pa_idx *pos = NULL, *start = NULL;
-  uint8_t *done = NULL;
-  for (int k = 0; k < m->nfield; k++)
-    if (m->fcomp[k] > 8) return pa__rm3d_compact(m, 1); /* no reordering */
-  PA_CALL(pa__rm3d_compact(m, 0)); /* q is rebuilt at the end */
-  pa_idx nv = m->nv, ne = m->ne;
-  size_t nmax = (size_t)(nv > ne ? nv : ne);
-  PA_ALLOC(key, (size_t)nv + 1);
-  PA_ALLOC(pos, (size_t)nv + 1);
-  PA_ALLOC(done, nmax);
-  /* Vertices along the Morton curve of the bounding box. */
+/* pos[i]: the new slot of vertex i, along the Morton curve of the bounding
+ * box (key: nv records of scratch). */
+static void vertex_positions(const rm3d *m, pa__key64 *key, pa_idx *pos) {
+  pa_idx nv = m->nv;
   double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
   for (pa_idx i = 0; i < nv; i++)
     for (int j = 0; j < 3; j++) {
@@ -752,6 +742,12 @@ pa_status pa__rm3d_reorder(rm3d *m) {
   }
   qsort(key, (size_t)nv, sizeof *key, pa__key64_cmp);
   for (pa_idx i = 0; i < nv; i++) pos[key[i].idx] = i;
+}
+
+/* Move the vertex records to slots pos, and renumber the tets and the
+ * entity tables (rehashed) to them. */
+static void move_vertices(rm3d *m, const pa_idx *pos, uint8_t *done) {
+  pa_idx nv = m->nv;
   permute(m->x, 3 * sizeof(double), pos, nv, done);
   permute(m->met, (size_t)m->mc * sizeof(double), pos, nv, done);
   if (m->met0) permute(m->met0, (size_t)m->mc * sizeof(double), pos, nv, done);
@@ -761,7 +757,7 @@ pa_status pa__rm3d_reorder(rm3d *m) {
   permute(m->vtag, 1, pos, nv, done);
   for (int k = 0; k < m->nfield; k++)
     permute(m->fval[k], (size_t)m->fcomp[k] * sizeof(double), pos, nv, done);
-  for (size_t i = 0; i < 4 * (size_t)ne; i++) m->tv[i] = pos[m->tv[i]];
+  for (size_t i = 0; i < 4 * (size_t)m->ne; i++) m->tv[i] = pos[m->tv[i]];
   rm3d_table *tabs[2] = {&m->tri, &m->edg};
   for (int t = 0; t < 2; t++) {
     rm3d_table *tb = tabs[t];
@@ -777,13 +773,12 @@ pa_status pa__rm3d_reorder(rm3d *m) {
       tb->nfull++;
     }
   }
-  /* Tets by their smallest vertex: a stable counting sort. */
-  pa__free(key);
-  key = NULL;
-  pa__free(pos);
-  pos = NULL;
-  PA_CALLOC(start, (size_t)nv + 1);
-  PA_ALLOC(pos, (size_t)ne + 1);
+}
+
+/* pos[k]: the new slot of tet k, by its smallest vertex (a stable counting
+ * sort; start: nv + 1 zeroed counters). */
+static void tet_positions(const rm3d *m, pa_idx *start, pa_idx *pos) {
+  pa_idx nv = m->nv, ne = m->ne;
   for (pa_idx k = 0; k < ne; k++) {
     const pa_idx *v = m->tv + 4 * (size_t)k;
     pa_idx a = v[0] < v[1] ? v[0] : v[1], b = v[2] < v[3] ? v[2] : v[3];
@@ -795,8 +790,12 @@ pa_status pa__rm3d_reorder(rm3d *m) {
     pa_idx a = v[0] < v[1] ? v[0] : v[1], b = v[2] < v[3] ? v[2] : v[3];
     pos[k] = start[a < b ? a : b]++;
   }
-  pa__free(start);
-  start = NULL;
+}
+
+/* Move the tet records to slots pos, renumbering the adjacency, and point
+ * each vertex to a tet holding it. */
+static void move_tets(rm3d *m, const pa_idx *pos, uint8_t *done) {
+  pa_idx ne = m->ne;
   for (size_t i = 0; i < 4 * (size_t)ne; i++) {
     pa_idx a = m->adj[i];
     if (a >= 0) m->adj[i] = 4 * pos[a >> 2] + (a & 3);
@@ -808,8 +807,33 @@ pa_status pa__rm3d_reorder(rm3d *m) {
   permute(m->tref, sizeof(int32_t), pos, ne, done);
   for (pa_idx k = 0; k < ne; k++)
     for (int i = 0; i < 4; i++) m->vtet[m->tv[4 * (size_t)k + i]] = k;
+}
+
+pa_status pa__rm3d_reorder(rm3d *m) {
+  pa_status st = PA_SUCCESS;
+  pa__key64 *key = NULL;
+  pa_idx *pos = NULL, *start = NULL;
+  uint8_t *done = NULL;
+  for (int k = 0; k < m->nfield; k++)
+    if (m->fcomp[k] > 8) return pa__rm3d_compact(m, 1); /* no reordering */
+  PA_CALL(pa__rm3d_compact(m, 0)); /* q is rebuilt at the end */
+  pa_idx nv = m->nv, ne = m->ne;
+  size_t nmax = (size_t)(nv > ne ? nv : ne);
+  PA_ALLOC(key, (size_t)nv + 1);
+  PA_ALLOC(pos, (size_t)nv + 1);
+  PA_ALLOC(done, nmax);
+  vertex_positions(m, key, pos);
+  move_vertices(m, pos, done);
   pa__free(key);
   key = NULL;
+  pa__free(pos);
+  pos = NULL;
+  PA_CALLOC(start, (size_t)nv + 1);
+  PA_ALLOC(pos, (size_t)ne + 1);
+  tet_positions(m, start, pos);
+  pa__free(start);
+  start = NULL;
+  move_tets(m, pos, done);
   pa__free(pos);
   pos = NULL;
   pa__free(done);
