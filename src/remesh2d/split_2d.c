@@ -19,7 +19,7 @@ typedef struct split_cfg {
 static void edge_config(const pa__rmesh *rm, pa_idx k, int i, split_cfg *s) {
   pa_idx te = 3 * k + i;
   pa_idx o = rm->adj[te];
-  pa_idx fcode = o >= 0 ? o : other_side(rm, te);
+  pa_idx fcode = o >= 0 ? o : rm_other_side(rm, te);
   s->k = k;
   s->i = i;
   s->i1 = RM_NX3(i);
@@ -62,13 +62,13 @@ static pa_idx new_midpoint(pa__rmesh *rm, const split_cfg *s, double *tm) {
 /* The qualities q of the four halves (1 where there is no f), and whether
  * all are at least RM_QFLOOR. */
 static int halves_ok(pa__rmesh *rm, const split_cfg *s, pa_idx m, double *q) {
-  q[0] = elem_qual(rm, s->p0, s->a, m);
-  q[1] = elem_qual(rm, s->p0, m, s->b);
+  q[0] = rm_elem_qual(rm, s->p0, s->a, m);
+  q[1] = rm_elem_qual(rm, s->p0, m, s->b);
   q[2] = 1;
   q[3] = 1;
   if (s->f >= 0) {
-    q[2] = elem_qual(rm, s->p1, s->b, m);
-    q[3] = elem_qual(rm, s->p1, m, s->a);
+    q[2] = rm_elem_qual(rm, s->p1, s->b, m);
+    q[3] = rm_elem_qual(rm, s->p1, m, s->a);
   }
   return !(q[0] < RM_QFLOOR || q[1] < RM_QFLOOR || q[2] < RM_QFLOOR ||
            q[3] < RM_QFLOOR);
@@ -87,8 +87,8 @@ static void cut_elements(pa__rmesh *rm, const split_cfg *s, pa_idx m,
     fA = rm->adj[3 * f + s->j2];
   }
   pa_idx k2, f2 = -1;
-  elem_changed(rm, k);
-  if (f >= 0) elem_changed(rm, f);
+  rm_elem_changed(rm, k);
+  if (f >= 0) rm_elem_changed(rm, f);
   pa__rm_new_elem(rm, &k2);
   rm->eref[k2] = rm->eref[k];
   rm->etag[k2] = rm->etag[k] & 0x0F;
@@ -97,17 +97,17 @@ static void cut_elements(pa__rmesh *rm, const split_cfg *s, pa_idx m,
     rm->eref[f2] = rm->eref[f];
     rm->etag[f2] = rm->etag[f] & 0x0F;
   }
-  set_elem(rm, k, s->p0, s->a, m, q[0]);
-  set_elem(rm, k2, s->p0, m, s->b, q[1]);
-  attach(rm, 3 * k + 2, oB, 3 * k + s->i2);
-  attach(rm, 3 * k2 + 1, oA, 3 * k + s->i1);
+  rm_set_elem(rm, k, s->p0, s->a, m, q[0]);
+  rm_set_elem(rm, k2, s->p0, m, s->b, q[1]);
+  rm_attach(rm, 3 * k + 2, oB, 3 * k + s->i2);
+  rm_attach(rm, 3 * k2 + 1, oA, 3 * k + s->i1);
   rm->adj[3 * k + 1] = 3 * k2 + 2;
   rm->adj[3 * k2 + 2] = 3 * k + 1;
   if (f >= 0) {
-    set_elem(rm, f, s->p1, s->b, m, q[2]);
-    set_elem(rm, f2, s->p1, m, s->a, q[3]);
-    attach(rm, 3 * f + 2, fA, 3 * f + s->j2);
-    attach(rm, 3 * f2 + 1, fB, 3 * f + s->j1);
+    rm_set_elem(rm, f, s->p1, s->b, m, q[2]);
+    rm_set_elem(rm, f2, s->p1, m, s->a, q[3]);
+    rm_attach(rm, 3 * f + 2, fA, 3 * f + s->j2);
+    rm_attach(rm, 3 * f2 + 1, fB, 3 * f + s->j1);
     rm->adj[3 * f + 1] = 3 * f2 + 2;
     rm->adj[3 * f2 + 2] = 3 * f + 1;
   }
@@ -188,9 +188,9 @@ static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
   int best = -1, in = 1;
   double lb = thr;
   for (int i = 0; i < 3; i++) {
-    double l = edge_len(rm, v[RM_NX3(i)], v[RM_PV3(i)]);
+    double l = rm_edge_len(rm, v[RM_NX3(i)], v[RM_PV3(i)]);
     in &= l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
-    if (l > lb && edge_free(rm, 3 * k + i)) {
+    if (l > lb && rm_edge_free(rm, 3 * k + i)) {
       lb = l;
       best = i;
     }
@@ -216,7 +216,7 @@ pa_status pa__rm_split_pass_2d(pa__rmesh *rm, double thr, long *n) {
     if (i < 0) continue;
     /* Longest-edge propagation: split only if the edge is also the longest
      * free edge of the neighbour (else the neighbour goes first). */
-    pa_idx s = other_side(rm, 3 * k + i);
+    pa_idx s = rm_other_side(rm, 3 * k + i);
     if (s >= 0) {
       pa_idx f = s / 3;
       if (rm->etag[f] & RM_E_TOUCHED) continue;

@@ -40,7 +40,7 @@ static void rec_normal(const rm3d *m, pa_idx r, double *n) {
 static int outer_face(const rm3d *m, pa_idx k, int f, pa_idx *fv, double *n) {
   if (!((m->tflag[k] >> f) & 1) || m->adj[4 * (size_t)k + f] >= 0) return 0;
   const pa_idx *v = m->tv + 4 * (size_t)k;
-  for (int j = 0; j < 3; j++) fv[j] = v[rm3d_face[f][j]];
+  for (int j = 0; j < 3; j++) fv[j] = v[pa__rm3d_face[f][j]];
   rm3d_tri_cross(m->x + 3 * (size_t)fv[0], m->x + 3 * (size_t)fv[1],
                  m->x + 3 * (size_t)fv[2], n);
   return 1;

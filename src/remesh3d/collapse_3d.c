@@ -173,8 +173,8 @@ static pa_status surface_kept(const rm3d *m, pa_idx p, pa_idx q,
     const pa_idx *v = m->tv + 4 * (size_t)t;
     for (int f = 0; f < 4; f++) {
       if (f == ip || !((fl >> f) & 1)) continue;
-      pa_idx key[3] = {v[rm3d_face[f][0]], v[rm3d_face[f][1]],
-                       v[rm3d_face[f][2]]};
+      pa_idx key[3] = {v[pa__rm3d_face[f][0]], v[pa__rm3d_face[f][1]],
+                       v[pa__rm3d_face[f][2]]};
       pa_idx r = pa__rm3d_table_find(&m->tri, key);
       if (r < 0)
         return pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,

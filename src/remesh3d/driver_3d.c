@@ -59,7 +59,7 @@
 
 static void lengths6(const rm3d *m, const pa_idx *v, double *L) {
   for (int e = 0; e < 6; e++)
-    L[e] = rm3d_len(m, v[rm3d_edge[e][0]], v[rm3d_edge[e][1]]);
+    L[e] = rm3d_len(m, v[pa__rm3d_edge[e][0]], v[pa__rm3d_edge[e][1]]);
 }
 
 /* Order of the 6 edges by length, decreasing (dir > 0) or increasing. */
@@ -106,8 +106,8 @@ pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count) {
       }
       order6(L, 1, ord);
       for (int i = 0; i < 6 && L[ord[i]] > thr; i++) {
-        pa_idx a = m->tv[4 * (size_t)k + rm3d_edge[ord[i]][0]];
-        pa_idx b = m->tv[4 * (size_t)k + rm3d_edge[ord[i]][1]];
+        pa_idx a = m->tv[4 * (size_t)k + pa__rm3d_edge[ord[i]][0]];
+        pa_idx b = m->tv[4 * (size_t)k + pa__rm3d_edge[ord[i]][1]];
         int done, nsh = 0, info;
         /* Spread: an edge whose halves would be shorter than 0.8 waits for
          * the next pass when a split of this pass touched an end. */
@@ -199,8 +199,8 @@ pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, double guard,
     }
     order6(L, -1, ord);
     for (int i = 0; i < 6 && L[ord[i]] < thr; i++) {
-      pa_idx a = m->tv[4 * (size_t)k + rm3d_edge[ord[i]][0]];
-      pa_idx b = m->tv[4 * (size_t)k + rm3d_edge[ord[i]][1]];
+      pa_idx a = m->tv[4 * (size_t)k + pa__rm3d_edge[ord[i]][0]];
+      pa_idx b = m->tv[4 * (size_t)k + pa__rm3d_edge[ord[i]][1]];
       int done = 0;
       for (int dir = 0; dir < 2 && !done; dir++) {
         pa_idx p = dir ? b : a, q = dir ? a : b;
@@ -237,8 +237,8 @@ pa_status pa__rm3d_swap_pass(rm3d *m, double qthr, double gain, long *count) {
       continue;
     int done = 0;
     for (int e = 0; e < 6 && !done; e++) {
-      pa_idx a = m->tv[4 * (size_t)k + rm3d_edge[e][0]];
-      pa_idx b = m->tv[4 * (size_t)k + rm3d_edge[e][1]];
+      pa_idx a = m->tv[4 * (size_t)k + pa__rm3d_edge[e][0]];
+      pa_idx b = m->tv[4 * (size_t)k + pa__rm3d_edge[e][1]];
       PA_CALL(pa__rm3d_swap_edge(m, k, a, b, gain, &done));
     }
     for (int f = 0; f < 4 && !done; f++)
@@ -285,8 +285,8 @@ pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count) {
     lengths6(m, v, L);
     for (int e = 0; e < 6; e++)
       if (!(L[e] >= PA_METRIC_LEN_LO_EXACT && L[e] < PA_METRIC_LEN_HI_EXACT)) {
-        m->vtag[v[rm3d_edge[e][0]]] |= RM3D_V_TODO;
-        m->vtag[v[rm3d_edge[e][1]]] |= RM3D_V_TODO;
+        m->vtag[v[pa__rm3d_edge[e][0]]] |= RM3D_V_TODO;
+        m->vtag[v[pa__rm3d_edge[e][1]]] |= RM3D_V_TODO;
         clean = 0;
       }
     if (clean) m->tflag[k] |= RM3D_T_CLEAN;
@@ -346,8 +346,8 @@ static void measure(const rm3d *m, double *inrange, double *qworst,
       double L[6];
       lengths6(m, v, L);
       for (int e = 0; e < 6; e++) {
-        int b = (m->vtag[v[rm3d_edge[e][0]]] & m->vtag[v[rm3d_edge[e][1]]] &
-                 RM3D_V_BDRY) != 0;
+        int b = (m->vtag[v[pa__rm3d_edge[e][0]]] &
+                 m->vtag[v[pa__rm3d_edge[e][1]]] & RM3D_V_BDRY) != 0;
         c[b][L[e] < PA_METRIC_LEN_LO_EXACT   ? 0
              : L[e] < PA_METRIC_LEN_HI_EXACT ? 1
                                              : 2]++;
@@ -409,7 +409,7 @@ static double lattice_crowd(rm3d *m, double *longer) {
       if (!(L[e] > PA_METRIC_LEN_HI_EXACT && L[e] < RM3D_LSPREAD)) continue;
       int bin = (int)((L[e] / PA_METRIC_LEN_HI_EXACT - 1.0) * 100.0);
       if (bin >= RM3D_NCROWD) continue;
-      pa_idx a = v[rm3d_edge[e][0]], b = v[rm3d_edge[e][1]];
+      pa_idx a = v[pa__rm3d_edge[e][0]], b = v[pa__rm3d_edge[e][1]];
       const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b;
       double x[3], mp[6];
       for (int i = 0; i < 3; i++) x[i] = 0.5 * (xa[i] + xb[i]);
@@ -467,8 +467,8 @@ static double max_length(const rm3d *m) {
     for (int e = 0; e < 6; e++) {
       /* between two locked vertices (a frozen skin, mostly): skipped, it
        * would keep the bands from reaching their end */
-      if ((m->vtag[v[rm3d_edge[e][0]]] & RM3D_V_LOCK) &&
-          (m->vtag[v[rm3d_edge[e][1]]] & RM3D_V_LOCK))
+      if ((m->vtag[v[pa__rm3d_edge[e][0]]] & RM3D_V_LOCK) &&
+          (m->vtag[v[pa__rm3d_edge[e][1]]] & RM3D_V_LOCK))
         continue;
       if (L[e] > lmax) lmax = L[e];
     }

@@ -18,13 +18,14 @@
  */
 #include "remesh3d/remesh3d.h"
 
-const int rm3d_edge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-const int rm3d_compl[4][4][2] = {
+const int pa__rm3d_edge[6][2] = {{0, 1}, {0, 2}, {0, 3},
+                                 {1, 2}, {1, 3}, {2, 3}};
+const int pa__rm3d_compl[4][4][2] = {
     {{-1, -1}, {2, 3}, {3, 1}, {1, 2}},
     {{3, 2}, {-1, -1}, {0, 3}, {2, 0}},
     {{1, 3}, {3, 0}, {-1, -1}, {0, 1}},
     {{2, 1}, {0, 2}, {1, 0}, {-1, -1}}};
-const int rm3d_face[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+const int pa__rm3d_face[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
 /* ---- keyed tables ------------------------------------------------------ */
 
@@ -262,8 +263,9 @@ static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
   PA_ALLOC(fill, (size_t)nv);
   for (pa_idx k = 0; k < ne; k++)
     for (int i = 0; i < 4; i++) {
-      pa_idx f[3] = {m->tv[4 * k + rm3d_face[i][0]], m->tv[4 * k + rm3d_face[i][1]],
-                     m->tv[4 * k + rm3d_face[i][2]]};
+      pa_idx f[3] = {m->tv[4 * k + pa__rm3d_face[i][0]],
+                     m->tv[4 * k + pa__rm3d_face[i][1]],
+                     m->tv[4 * k + pa__rm3d_face[i][2]]};
       pa__sort_small(f, 3);
       start[f[0] + 1]++;
       m->adj[4 * k + i] = -1;
@@ -272,8 +274,9 @@ static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
   memcpy(fill, start, nv * sizeof *fill);
   for (pa_idx k = 0; k < ne; k++)
     for (int i = 0; i < 4; i++) {
-      pa_idx f[3] = {m->tv[4 * k + rm3d_face[i][0]], m->tv[4 * k + rm3d_face[i][1]],
-                     m->tv[4 * k + rm3d_face[i][2]]};
+      pa_idx f[3] = {m->tv[4 * k + pa__rm3d_face[i][0]],
+                     m->tv[4 * k + pa__rm3d_face[i][1]],
+                     m->tv[4 * k + pa__rm3d_face[i][2]]};
       pa__sort_small(f, 3);
       face[fill[f[0]]++] = 4 * k + i;
     }
@@ -284,17 +287,17 @@ static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
       if (m->adj[fs] != -1) continue;
       pa_idx ks = fs >> 2;
       int is = fs & 3;
-      pa_idx a[3] = {m->tv[4 * ks + rm3d_face[is][0]],
-                     m->tv[4 * ks + rm3d_face[is][1]],
-                     m->tv[4 * ks + rm3d_face[is][2]]};
+      pa_idx a[3] = {m->tv[4 * ks + pa__rm3d_face[is][0]],
+                     m->tv[4 * ks + pa__rm3d_face[is][1]],
+                     m->tv[4 * ks + pa__rm3d_face[is][2]]};
       pa__sort_small(a, 3);
       for (pa_idx t = s + 1; t < start[v + 1]; t++) {
         pa_idx ft = face[t];
         pa_idx kt = ft >> 2;
         int it = ft & 3;
-        pa_idx b[3] = {m->tv[4 * kt + rm3d_face[it][0]],
-                       m->tv[4 * kt + rm3d_face[it][1]],
-                       m->tv[4 * kt + rm3d_face[it][2]]};
+        pa_idx b[3] = {m->tv[4 * kt + pa__rm3d_face[it][0]],
+                       m->tv[4 * kt + pa__rm3d_face[it][1]],
+                       m->tv[4 * kt + pa__rm3d_face[it][2]]};
         pa__sort_small(b, 3);
         if (a[1] != b[1] || a[2] != b[2]) continue;
         PA_CHECK(m->adj[ft] == -1, PA_ERR_MESH,
@@ -317,9 +320,9 @@ static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
     for (pa_idx s = start[a[0]]; s < start[a[0] + 1]; s++) {
       pa_idx k = face[s] >> 2;
       int i = face[s] & 3;
-      pa_idx c[3] = {m->tv[4 * k + rm3d_face[i][0]],
-                     m->tv[4 * k + rm3d_face[i][1]],
-                     m->tv[4 * k + rm3d_face[i][2]]};
+      pa_idx c[3] = {m->tv[4 * k + pa__rm3d_face[i][0]],
+                     m->tv[4 * k + pa__rm3d_face[i][1]],
+                     m->tv[4 * k + pa__rm3d_face[i][2]]};
       pa__sort_small(c, 3);
       if (c[1] == a[1] && c[2] == a[2]) {
         m->tflag[k] |= (uint8_t)(1u << i);
@@ -338,8 +341,9 @@ static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
   for (pa_idx k = 0; k < ne; k++)
     for (int i = 0; i < 4; i++) {
       if (m->adj[4 * k + i] != -1 || (m->tflag[k] & (1u << i))) continue;
-      pa_idx f[3] = {m->tv[4 * k + rm3d_face[i][0]], m->tv[4 * k + rm3d_face[i][1]],
-                     m->tv[4 * k + rm3d_face[i][2]]};
+      pa_idx f[3] = {m->tv[4 * k + pa__rm3d_face[i][0]],
+                     m->tv[4 * k + pa__rm3d_face[i][1]],
+                     m->tv[4 * k + pa__rm3d_face[i][2]]};
       PA_CALL(pa__rm3d_table_add(&m->tri, f, 0, 0, NULL));
       m->tflag[k] |= (uint8_t)(1u << i);
       for (int j = 0; j < 3; j++) m->vtag[f[j]] |= RM3D_V_BDRY;
@@ -629,7 +633,7 @@ pa_status pa__rm3d_check(rm3d *m) {
              "rm3d: tet %d left marked", (int)k);
     if (m->tflag[k] & RM3D_T_CLEAN) /* a change did not clear the mark */
       for (int e = 0; e < 6; e++) {
-        double l = rm3d_len(m, v[rm3d_edge[e][0]], v[rm3d_edge[e][1]]);
+        double l = rm3d_len(m, v[pa__rm3d_edge[e][0]], v[pa__rm3d_edge[e][1]]);
         PA_CHECK(l >= PA_METRIC_LEN_LO_EXACT && l <= PA_METRIC_LEN_HI_EXACT,
                  PA_ERR_INTERNAL,
                  "rm3d: tet %d is marked clean, its edge %d has length %g",
@@ -637,7 +641,8 @@ pa_status pa__rm3d_check(rm3d *m) {
       }
     for (int i = 0; i < 4; i++) {
       pa_idx a = m->adj[4 * (size_t)k + i];
-      pa_idx f[3] = {v[rm3d_face[i][0]], v[rm3d_face[i][1]], v[rm3d_face[i][2]]};
+      pa_idx f[3] = {v[pa__rm3d_face[i][0]], v[pa__rm3d_face[i][1]],
+                     v[pa__rm3d_face[i][2]]};
       pa__sort_small(f, 3);
       int tagged = (m->tflag[k] >> i) & 1;
       if (tagged)
@@ -659,7 +664,8 @@ pa_status pa__rm3d_check(rm3d *m) {
       PA_CHECK(m->adj[4 * (size_t)l + j] == 4 * k + i, PA_ERR_INTERNAL,
                "rm3d: adjacency of tet %d face %d not symmetric", (int)k, i);
       const pa_idx *w = m->tv + 4 * (size_t)l;
-      pa_idx g[3] = {w[rm3d_face[j][0]], w[rm3d_face[j][1]], w[rm3d_face[j][2]]};
+      pa_idx g[3] = {w[pa__rm3d_face[j][0]], w[pa__rm3d_face[j][1]],
+                     w[pa__rm3d_face[j][2]]};
       pa__sort_small(g, 3);
       PA_CHECK(f[0] == g[0] && f[1] == g[1] && f[2] == g[2], PA_ERR_INTERNAL,
                "rm3d: tet %d face %d and its neighbour differ", (int)k, i);
@@ -898,7 +904,7 @@ pa_status pa__rm3d_skin_relax(rm3d *m, pa_idx *nrelaxed) {
     if (!(m->tflag[k] & RM3D_T_FROZEN)) continue;
     const pa_idx *v = m->tv + 4 * (size_t)k;
     for (int e = 0; e < 6; e++) {
-      pa_idx a = v[rm3d_edge[e][0]], b = v[rm3d_edge[e][1]];
+      pa_idx a = v[pa__rm3d_edge[e][0]], b = v[pa__rm3d_edge[e][1]];
       double l = rm3d_len(m, a, b);
       acc[a] += l;
       acc[b] += l;

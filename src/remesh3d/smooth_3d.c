@@ -93,9 +93,9 @@ int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
     for (int f = 0; f < 4; f++) {
       if (!((fl >> f) & 1)) continue;
       double nn[3];
-      if (!(rm3d_tri_normal(m->x + 3 * (size_t)v[rm3d_face[f][0]],
-                            m->x + 3 * (size_t)v[rm3d_face[f][1]],
-                            m->x + 3 * (size_t)v[rm3d_face[f][2]], nn) > 0))
+      if (!(rm3d_tri_normal(m->x + 3 * (size_t)v[pa__rm3d_face[f][0]],
+                            m->x + 3 * (size_t)v[pa__rm3d_face[f][1]],
+                            m->x + 3 * (size_t)v[pa__rm3d_face[f][2]], nn) > 0))
         return 0;
       if (!found) {
         memcpy(dir, nn, sizeof nn);
@@ -272,7 +272,7 @@ static int curved_patch(const rm3d *m, const pa_idx *ball, int n, pa_idx *tri,
     for (int f = 0; f < 4; f++) {
       if (!((fl >> f) & 1)) continue;
       if (ntri == 32) return 0;
-      for (int j = 0; j < 3; j++) tri[3 * ntri + j] = v[rm3d_face[f][j]];
+      for (int j = 0; j < 3; j++) tri[3 * ntri + j] = v[pa__rm3d_face[f][j]];
       ntri++;
     }
   }
@@ -325,9 +325,9 @@ static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
     if (m->tref[t] != ref0 || (m->tflag[t] & RM3D_T_FROZEN)) return 0;
     if (m->q[t] < qold) qold = m->q[t];
     const pa_idx *v = m->tv + 4 * (size_t)t;
-    const double *f0 = m->x + 3 * (size_t)v[rm3d_face[ip][0]];
-    const double *f1 = m->x + 3 * (size_t)v[rm3d_face[ip][1]];
-    const double *f2 = m->x + 3 * (size_t)v[rm3d_face[ip][2]];
+    const double *f0 = m->x + 3 * (size_t)v[pa__rm3d_face[ip][0]];
+    const double *f1 = m->x + 3 * (size_t)v[pa__rm3d_face[ip][1]];
+    const double *f2 = m->x + 3 * (size_t)v[pa__rm3d_face[ip][2]];
     /* Outward normal of the face points away from p. */
     double nn[3];
     rm3d_tri_cross(f0, f1, f2, nn);
