@@ -72,32 +72,11 @@ pa_status pa_dmesh_stats(pa_dmesh *dm, pa_stats *stats) {
                              stats);
 }
 
-pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
-                              int check, pa_stats *stats) {
-  pa_status st = PA_SUCCESS;
-  pa__stats_acc acc;
-  pa_stats *s = &acc.s;
-  uint8_t *shared = NULL;
-  size_t *pos = NULL;
-  pa_idx *other = NULL;
-  int *dest = NULL;
-  pa__recs S, R;
-  pa__recs_init(&S, PA_EDGE, 2, 1);
-  pa__recs_init(&R, PA_EDGE, 2, 1);
-  pa__stats_acc_init(&acc);
-  PA_CHECK(dm && stats, PA_ERR_ARG, "pa_dmesh_stats: NULL argument");
-  pa__agree_reset();
-  pa_mesh *m = dm->mesh;
-  int d = dm->dim, nve = d + 1;
-  pa_idx ne = dm->nown[PA_ELEMENT], nv = dm->nloc[PA_VERTEX];
-  const pa_gid *vg = dm->gid[PA_VERTEX];
-  s->dim = d;
-  s->has_metric = nc > 0;
-  s->nvert = dm->nglob[PA_VERTEX];
-  s->nelem = dm->nglob[PA_ELEMENT];
-  s->nbdry = dm->nglob[PA_BOUNDARY];
-
-  /* elements */
+/* Count the ne owned elements of m (dimension d) in metric met (nc
+ * components). */
+static void add_elements(pa__stats_acc *acc, const pa_mesh *m, int d,
+                         pa_idx ne, int nc, const double *met) {
+  int nve = d + 1;
   for (pa_idx e = 0; e < ne; e++) {
     const pa_idx *v = m->elem + (size_t)nve * e;
     const double *x[4], *mm[4];
@@ -105,56 +84,101 @@ pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
       x[k] = m->coord + (size_t)d * v[k];
       mm[k] = nc ? met + (size_t)nc * v[k] : NULL;
     }
-    pa__stats_add_elem(&acc, pa__simplex_volume(d, x),
+    pa__stats_add_elem(acc, pa__simplex_volume(d, x),
                        pa__quality(d, nc, x, mm));
   }
+}
 
-  /* vertices with copies elsewhere: ghosts, and owned ones with ghosts */
-  {
-    pa_dmesh_iter iv;
-    pa_idx v;
-    PA_CALLOC(shared, nv);
-    for (pa_idx i = 0; i < nv; i++) shared[i] = 1;
-    PA_CALL(pa_dmesh_iter_init(dm, PA_VERTEX, PA_INTERIOR, &iv));
-    while (pa_dmesh_iter_next(&iv, &v)) shared[v] = 0;
-  }
+/* shared[v] = 1 on the vertices with copies elsewhere: ghosts, and owned
+ * ones with ghosts (nv entries, allocated here). */
+static pa_status mark_shared(pa_dmesh *dm, pa_idx nv, uint8_t **sharedp) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh_iter iv;
+  pa_idx v;
+  PA_CALLOC(*sharedp, nv);
+  uint8_t *shared = *sharedp;
+  for (pa_idx i = 0; i < nv; i++) shared[i] = 1;
+  PA_CALL(pa_dmesh_iter_init(dm, PA_VERTEX, PA_INTERIOR, &iv));
+  while (pa_dmesh_iter_next(&iv, &v)) shared[v] = 0;
+cleanup:
+  return st;
+}
 
-  /* unique local edges, each filed under its endpoint of smaller global id
-   * (pa__edges_csr), then counted here or sent */
-  {
-    size_t ns = 0;
-    PA_CALL(pa__edges_csr(m->elem, ne, nve, nv, vg, &pos, &other));
-    PA_ALLOC(dest, pos[nv] ? pos[nv] : 1);
-    for (pa_idx a = 0; a < nv; a++)
-      for (size_t k = pos[a]; k < pos[a + 1]; k++) {
-        pa_idx b = other[k];
-        double len = pa__edge_length(d, nc, m->coord + (size_t)d * a,
-                                     m->coord + (size_t)d * b,
-                                     nc ? met + (size_t)nc * a : NULL,
-                                     nc ? met + (size_t)nc * b : NULL);
-        if (!shared[a] || !shared[b]) {
-          pa__stats_add_edge(&acc, len);
-          continue;
-        }
-        pa_gid ab[2] = {vg[a], vg[b]};
-        uint64_t h = pair_hash(ab[0], ab[1]);
-        PA_CALL(pa__recs_add(&S, (pa_gid)h, ab, 0, 0, 0, &len, NULL, 0));
-        dest[ns++] = (int)(h % (uint64_t)dm->size);
+/* The unique local edges, each filed under its endpoint of smaller global
+ * id (pa__edges_csr): counted here when an endpoint is not shared, else
+ * added to S with its destination rank in *destp (allocated here). */
+static pa_status file_edges(pa_dmesh *dm, pa_idx ne, int nc,
+                            const double *met, const uint8_t *shared,
+                            pa__stats_acc *acc, pa__recs *S, int **destp) {
+  pa_status st = PA_SUCCESS;
+  size_t *pos = NULL;
+  pa_idx *other = NULL;
+  pa_mesh *m = dm->mesh;
+  int d = dm->dim, nve = d + 1;
+  pa_idx nv = dm->nloc[PA_VERTEX];
+  const pa_gid *vg = dm->gid[PA_VERTEX];
+  size_t ns = 0;
+  PA_CALL(pa__edges_csr(m->elem, ne, nve, nv, vg, &pos, &other));
+  PA_ALLOC(*destp, pos[nv] ? pos[nv] : 1);
+  int *dest = *destp;
+  for (pa_idx a = 0; a < nv; a++)
+    for (size_t k = pos[a]; k < pos[a + 1]; k++) {
+      pa_idx b = other[k];
+      double len = pa__edge_length(d, nc, m->coord + (size_t)d * a,
+                                   m->coord + (size_t)d * b,
+                                   nc ? met + (size_t)nc * a : NULL,
+                                   nc ? met + (size_t)nc * b : NULL);
+      if (!shared[a] || !shared[b]) {
+        pa__stats_add_edge(acc, len);
+        continue;
       }
-    pa__free(pos);
-    pa__free(other);
-    pos = NULL;
-    other = NULL;
-  }
-  PA_CALL(pa__recs_migrate(dm->comm, &S, dest, &R));
-  /* R is sorted by hash: equal pairs are in the same run of equal hashes */
-  for (size_t i = 0; i < R.n; i++) {
+      pa_gid ab[2] = {vg[a], vg[b]};
+      uint64_t h = pair_hash(ab[0], ab[1]);
+      PA_CALL(pa__recs_add(S, (pa_gid)h, ab, 0, 0, 0, &len, NULL, 0));
+      dest[ns++] = (int)(h % (uint64_t)dm->size);
+    }
+cleanup:
+  pa__free(pos);
+  pa__free(other);
+  return st;
+}
+
+/* Count each distinct edge of R once. R is sorted by hash: equal pairs are
+ * in the same run of equal hashes. */
+static void add_received_edges(pa__stats_acc *acc, const pa__recs *R) {
+  for (size_t i = 0; i < R->n; i++) {
     int dup = 0;
-    for (size_t j = i; j > 0 && R.gid[j - 1] == R.gid[i] && !dup; j--)
-      dup = R.vgid[2 * (j - 1)] == R.vgid[2 * i] &&
-            R.vgid[2 * (j - 1) + 1] == R.vgid[2 * i + 1];
-    if (!dup) pa__stats_add_edge(&acc, R.dbl[i]);
+    for (size_t j = i; j > 0 && R->gid[j - 1] == R->gid[i] && !dup; j--)
+      dup = R->vgid[2 * (j - 1)] == R->vgid[2 * i] &&
+            R->vgid[2 * (j - 1) + 1] == R->vgid[2 * i + 1];
+    if (!dup) pa__stats_add_edge(acc, R->dbl[i]);
   }
+}
+
+pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
+                              int check, pa_stats *stats) {
+  pa_status st = PA_SUCCESS;
+  pa__stats_acc acc;
+  pa_stats *s = &acc.s;
+  uint8_t *shared = NULL;
+  int *dest = NULL;
+  pa__recs S, R;
+  pa__recs_init(&S, PA_EDGE, 2, 1);
+  pa__recs_init(&R, PA_EDGE, 2, 1);
+  pa__stats_acc_init(&acc);
+  PA_CHECK(dm && stats, PA_ERR_ARG, "pa_dmesh_stats: NULL argument");
+  pa__agree_reset();
+  pa_idx ne = dm->nown[PA_ELEMENT];
+  s->dim = dm->dim;
+  s->has_metric = nc > 0;
+  s->nvert = dm->nglob[PA_VERTEX];
+  s->nelem = dm->nglob[PA_ELEMENT];
+  s->nbdry = dm->nglob[PA_BOUNDARY];
+  add_elements(&acc, dm->mesh, dm->dim, ne, nc, met);
+  PA_CALL(mark_shared(dm, dm->nloc[PA_VERTEX], &shared));
+  PA_CALL(file_edges(dm, ne, nc, met, shared, &acc, &S, &dest));
+  PA_CALL(pa__recs_migrate(dm->comm, &S, dest, &R));
+  add_received_edges(&acc, &R);
   pa__stats_acc_sums(&acc);
   PA_CALL(combine(dm->comm, &acc));
   {
@@ -167,8 +191,6 @@ pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
 cleanup:
   if (dm) st = pa__agree_end(dm->comm, st);
   pa__free(shared);
-  pa__free(pos);
-  pa__free(other);
   pa__free(dest);
   pa__recs_free(&S);
   pa__recs_free(&R);

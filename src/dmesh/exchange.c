@@ -176,21 +176,13 @@ size_t pa__sf_memory(const pa__sf *sf) {
          pa__alloc_size(sf->leafoff) + pa__alloc_size(sf->leafidx);
 }
 
-pa_status pa__sf_build(MPI_Comm comm, pa_idx n, const pa_gid *gid,
-                       const int *owner, pa__sf *sf) {
+/* The leaves of a star forest: the ghosts (owner[i] != rank) grouped by
+ * owner rank, sorted by gid within a rank, into *orderp (*nleafp of them);
+ * cnt[r] (size zeroed entries) becomes the number of ghosts rank r owns. */
+static pa_status order_leaves(pa_idx n, const pa_gid *gid, const int *owner,
+                              int rank, int size, size_t *cnt,
+                              pa_idx **orderp, pa_idx *nleafp) {
   pa_status st = PA_SUCCESS;
-  int rank, size;
-  size_t *cnt = NULL, *rcnt = NULL;
-  pa_idx *order = NULL, *next = NULL;
-  pa_gid *sendg = NULL;
-  void *recv = NULL;
-  pa__gidmap map = {0};
-  memset(sf, 0, sizeof *sf);
-  sf->comm = comm;
-  PA_CALL_MPI(MPI_Comm_rank(comm, &rank));
-  PA_CALL_MPI(MPI_Comm_size(comm, &size));
-  PA_CALLOC(cnt, size);
-  /* Leaves: ghosts grouped by owner rank, sorted by gid within a rank. */
   pa_idx nleaf = 0;
   for (pa_idx i = 0; i < n; i++)
     if (owner[i] != rank) {
@@ -199,27 +191,36 @@ pa_status pa__sf_build(MPI_Comm comm, pa_idx n, const pa_gid *gid,
       cnt[owner[i]]++;
       nleaf++;
     }
-  PA_ALLOC(order, nleaf);
-  {
-    pa_idx k = 0;
-    for (pa_idx i = 0; i < n; i++)
-      if (owner[i] != rank) order[k++] = i;
-    PA_CALL(pa__sort_by_gid(order, (size_t)nleaf, gid));
-    /* stable counting sort by owner keeps gid order within an owner */
-    pa_idx *tmp;
-    PA_ALLOC(tmp, nleaf);
-    size_t *pos;
-    pos = pa__calloc((size_t)size + 1, sizeof *pos);
-    if (!pos) {
-      pa__free(tmp);
-      PA_FAIL(PA_ERR_MEMORY, "out of memory");
-    }
-    for (int r = 0; r < size; r++) pos[r + 1] = pos[r] + cnt[r];
-    for (pa_idx j = 0; j < nleaf; j++) tmp[pos[owner[order[j]]]++] = order[j];
-    memcpy(order, tmp, (size_t)nleaf * sizeof *order);
+  *nleafp = nleaf;
+  PA_ALLOC(*orderp, nleaf);
+  pa_idx *order = *orderp;
+  pa_idx k = 0;
+  for (pa_idx i = 0; i < n; i++)
+    if (owner[i] != rank) order[k++] = i;
+  PA_CALL(pa__sort_by_gid(order, (size_t)nleaf, gid));
+  /* stable counting sort by owner keeps gid order within an owner */
+  pa_idx *tmp;
+  PA_ALLOC(tmp, nleaf);
+  size_t *pos;
+  pos = pa__calloc((size_t)size + 1, sizeof *pos);
+  if (!pos) {
     pa__free(tmp);
-    pa__free(pos);
+    PA_FAIL(PA_ERR_MEMORY, "out of memory");
   }
+  for (int r = 0; r < size; r++) pos[r + 1] = pos[r] + cnt[r];
+  for (pa_idx j = 0; j < nleaf; j++) tmp[pos[owner[order[j]]]++] = order[j];
+  memcpy(order, tmp, (size_t)nleaf * sizeof *order);
+  pa__free(tmp);
+  pa__free(pos);
+cleanup:
+  return st;
+}
+
+/* Fill the leaf side of sf: a range of order (nleaf ghosts, as
+ * order_leaves leaves them) per rank with cnt[r] > 0. */
+static pa_status set_leaves(pa__sf *sf, int size, const size_t *cnt,
+                            const pa_idx *order, pa_idx nleaf) {
+  pa_status st = PA_SUCCESS;
   int nlr = 0;
   for (int r = 0; r < size; r++) nlr += cnt[r] > 0;
   PA_ALLOC(sf->leafrank, nlr);
@@ -234,32 +235,35 @@ pa_status pa__sf_build(MPI_Comm comm, pa_idx n, const pa_gid *gid,
       k++;
     }
   memcpy(sf->leafidx, order, (size_t)nleaf * sizeof *order);
-  PA_ALLOC(sendg, nleaf);
-  for (pa_idx j = 0; j < nleaf; j++) sendg[j] = gid[order[j]];
-  for (int r = 0; r < size; r++) cnt[r] *= sizeof(pa_gid);
-  for (pa_idx i = 0; i < n; i++)
-    PA_CHECK(owner[i] != rank || gid[i] >= 0, PA_ERR_ARG,
-             "negative global id %lld", (long long)gid[i]);
-  PA_CALL(pa__xchg_sparse(comm, cnt, sendg, &rcnt, &recv));
+cleanup:
+  return st;
+}
+
+/* Allocate the root side of sf for the requests received: rcnt[r] bytes
+ * of gids from rank r, *nrootp gids in all. */
+static pa_status alloc_roots(pa__sf *sf, int size, const size_t *rcnt,
+                             size_t *nrootp) {
+  pa_status st = PA_SUCCESS;
   int nrr = 0;
   size_t nroot = 0;
   for (int r = 0; r < size; r++) {
     nrr += rcnt[r] > 0;
     nroot += rcnt[r] / sizeof(pa_gid);
   }
+  *nrootp = nroot;
   PA_ALLOC(sf->rootrank, nrr);
   PA_ALLOC(sf->rootoff, nrr + 1);
   PA_ALLOC(sf->rootidx, nroot);
   sf->nrootrank = nrr;
   sf->rootoff[0] = 0;
-  /* Resolve the requests. When the owned entities come first, in strictly
-   * increasing gid order (what every build leaves), each request is a
-   * binary search among them. Otherwise (after pa_dmesh_reorder): a map of
-   * the requested gids (chained through next when several ranks ask for
-   * one gid), then one pass over the owned entities; the requests are the
-   * ghosts of the neighbours, far fewer than the owned entities, so the map
-   * stays in cache, where a map of every owned gid would not. The first
-   * owned entity of a gid wins. */
+cleanup:
+  return st;
+}
+
+/* Whether the owned entities come first, in strictly increasing gid order;
+ * *nownp: how many owned entities lead. */
+static int owned_first_sorted(pa_idx n, const pa_gid *gid, const int *owner,
+                              int rank, pa_idx *nownp) {
   pa_idx nown = 0;
   int sorted = 1;
   while (nown < n && owner[nown] == rank) {
@@ -267,55 +271,120 @@ pa_status pa__sf_build(MPI_Comm comm, pa_idx n, const pa_gid *gid,
     nown++;
   }
   for (pa_idx i = nown; sorted && i < n; i++) sorted = owner[i] != rank;
-  if (sorted) {
-    const pa_gid *rg = recv;
-    for (size_t j = 0; j < nroot; j++) {
-      pa_idx lo = 0, hi = nown;
-      while (lo < hi) {
-        pa_idx mid = lo + (hi - lo) / 2;
-        if (gid[mid] < rg[j]) lo = mid + 1;
-        else hi = mid;
-      }
-      sf->rootidx[j] = lo < nown && gid[lo] == rg[j] ? lo : -1;
+  *nownp = nown;
+  return sorted;
+}
+
+/* Resolve each requested gid rg[j] by a binary search among the nown owned
+ * entities that lead, in increasing gid order; -1 where none has it. */
+static void resolve_sorted(pa__sf *sf, const pa_gid *gid, pa_idx nown,
+                           const pa_gid *rg, size_t nroot) {
+  for (size_t j = 0; j < nroot; j++) {
+    pa_idx lo = 0, hi = nown;
+    while (lo < hi) {
+      pa_idx mid = lo + (hi - lo) / 2;
+      if (gid[mid] < rg[j]) lo = mid + 1;
+      else hi = mid;
     }
-  } else {
-    const pa_gid *rg = recv;
-    PA_ALLOC(next, nroot);
-    PA_CALL(pa__gidmap_init(&map, nroot));
-    for (size_t j = 0; j < nroot; j++) {
-      int found;
-      pa_idx first;
-      sf->rootidx[j] = -1;
-      next[j] = -1;
-      if (rg[j] < 0) continue; /* never owned: reported below */
-      PA_CALL(pa__gidmap_put(&map, rg[j], (pa_idx)j, &found, &first));
-      if (found) { /* insert j second in the chain of its gid */
-        next[j] = next[first];
-        next[first] = (pa_idx)j;
-      }
-    }
-    for (pa_idx i = 0; i < n && nroot; i++) {
-      if (owner[i] != rank) continue;
-      pa_idx j = pa__gidmap_get(&map, gid[i]);
-      if (j < 0 || sf->rootidx[j] >= 0) continue;
-      for (; j >= 0; j = next[j]) sf->rootidx[j] = i;
+    sf->rootidx[j] = lo < nown && gid[lo] == rg[j] ? lo : -1;
+  }
+}
+
+/* Resolve each requested gid rg[j] through a map of the requested gids
+ * (chained through next when several ranks ask for one gid), then one pass
+ * over the owned entities; the first owned entity of a gid wins, -1 where
+ * none has it. */
+static pa_status resolve_mapped(pa__sf *sf, pa_idx n, const pa_gid *gid,
+                                const int *owner, int rank, const pa_gid *rg,
+                                size_t nroot) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *next = NULL;
+  pa__gidmap map = {0};
+  PA_ALLOC(next, nroot);
+  PA_CALL(pa__gidmap_init(&map, nroot));
+  for (size_t j = 0; j < nroot; j++) {
+    int found;
+    pa_idx first;
+    sf->rootidx[j] = -1;
+    next[j] = -1;
+    if (rg[j] < 0) continue; /* never owned: reported by set_roots */
+    PA_CALL(pa__gidmap_put(&map, rg[j], (pa_idx)j, &found, &first));
+    if (found) { /* insert j second in the chain of its gid */
+      next[j] = next[first];
+      next[first] = (pa_idx)j;
     }
   }
-  {
-    const pa_gid *rg = recv;
-    size_t j = 0;
-    for (int r = 0, k = 0; r < size; r++) {
-      if (!rcnt[r]) continue;
-      size_t m = rcnt[r] / sizeof(pa_gid);
-      sf->rootrank[k] = r;
-      sf->rootoff[k + 1] = sf->rootoff[k] + (pa_idx)m;
-      for (size_t q = 0; q < m; q++, j++)
-        PA_CHECK(sf->rootidx[j] >= 0, PA_ERR_MESH,
-                 "rank %d holds a ghost of gid %lld that its owner %d does not "
-                 "own", r, (long long)rg[j], rank);
-      k++;
-    }
+  for (pa_idx i = 0; i < n && nroot; i++) {
+    if (owner[i] != rank) continue;
+    pa_idx j = pa__gidmap_get(&map, gid[i]);
+    if (j < 0 || sf->rootidx[j] >= 0) continue;
+    for (; j >= 0; j = next[j]) sf->rootidx[j] = i;
   }
+cleanup:
+  pa__free(next);
+  pa__gidmap_free(&map);
+  return st;
+}
+
+/* Fill the root ranges of sf, one per rank that sent requests, and fail
+ * where a request found no owned entity. */
+static pa_status set_roots(pa__sf *sf, int rank, int size, const size_t *rcnt,
+                           const pa_gid *rg) {
+  pa_status st = PA_SUCCESS;
+  size_t j = 0;
+  for (int r = 0, k = 0; r < size; r++) {
+    if (!rcnt[r]) continue;
+    size_t m = rcnt[r] / sizeof(pa_gid);
+    sf->rootrank[k] = r;
+    sf->rootoff[k + 1] = sf->rootoff[k] + (pa_idx)m;
+    for (size_t q = 0; q < m; q++, j++)
+      PA_CHECK(sf->rootidx[j] >= 0, PA_ERR_MESH,
+               "rank %d holds a ghost of gid %lld that its owner %d does not "
+               "own", r, (long long)rg[j], rank);
+    k++;
+  }
+cleanup:
+  return st;
+}
+
+pa_status pa__sf_build(MPI_Comm comm, pa_idx n, const pa_gid *gid,
+                       const int *owner, pa__sf *sf) {
+  pa_status st = PA_SUCCESS;
+  int rank, size;
+  size_t *cnt = NULL, *rcnt = NULL;
+  pa_idx *order = NULL;
+  pa_gid *sendg = NULL;
+  void *recv = NULL;
+  memset(sf, 0, sizeof *sf);
+  sf->comm = comm;
+  PA_CALL_MPI(MPI_Comm_rank(comm, &rank));
+  PA_CALL_MPI(MPI_Comm_size(comm, &size));
+  PA_CALLOC(cnt, size);
+  pa_idx nleaf = 0;
+  PA_CALL(order_leaves(n, gid, owner, rank, size, cnt, &order, &nleaf));
+  PA_CALL(set_leaves(sf, size, cnt, order, nleaf));
+  /* Each leaf asks its owner for the gid. */
+  PA_ALLOC(sendg, nleaf);
+  for (pa_idx j = 0; j < nleaf; j++) sendg[j] = gid[order[j]];
+  for (int r = 0; r < size; r++) cnt[r] *= sizeof(pa_gid);
+  for (pa_idx i = 0; i < n; i++)
+    PA_CHECK(owner[i] != rank || gid[i] >= 0, PA_ERR_ARG,
+             "negative global id %lld", (long long)gid[i]);
+  PA_CALL(pa__xchg_sparse(comm, cnt, sendg, &rcnt, &recv));
+  size_t nroot = 0;
+  PA_CALL(alloc_roots(sf, size, rcnt, &nroot));
+  /* Resolve the requests. When the owned entities come first, in strictly
+   * increasing gid order (what every build leaves), each request is a
+   * binary search among them. Otherwise (after pa_dmesh_reorder): a map of
+   * the requested gids; the requests are the ghosts of the neighbours, far
+   * fewer than the owned entities, so the map stays in cache, where a map
+   * of every owned gid would not. */
+  pa_idx nown = 0;
+  if (owned_first_sorted(n, gid, owner, rank, &nown))
+    resolve_sorted(sf, gid, nown, recv, nroot);
+  else
+    PA_CALL(resolve_mapped(sf, n, gid, owner, rank, recv, nroot));
+  PA_CALL(set_roots(sf, rank, size, rcnt, recv));
 cleanup:
   st = pa__agree_end(comm, st);
   if (st) pa__sf_free(sf);
@@ -324,8 +393,6 @@ cleanup:
   pa__free(order);
   pa__free(sendg);
   pa__free(recv);
-  pa__free(next);
-  pa__gidmap_free(&map);
   return st;
 }
 

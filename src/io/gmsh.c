@@ -1735,6 +1735,179 @@ cleanup:
   return st;
 }
 
+/* The groups of m in Gmsh dimension order: 2D lines, triangles; 3D lines,
+ * triangles, tetrahedra. */
+static pa_status make_groups(const pa_mesh *m, group *grp, int *ngrp) {
+  pa_status st = PA_SUCCESS;
+  int n = 0;
+  if (m->dim == 2) {
+    PA_CALL(group_make(&grp[n++], 1, 1, 2, m->nb, m->bdry, m->bref));
+    PA_CALL(group_make(&grp[n++], 2, 2, 3, m->ne, m->elem, m->eref));
+  } else {
+    PA_CALL(group_make(&grp[n++], 1, 1, 2, m->ned, m->edge, m->edref));
+    PA_CALL(group_make(&grp[n++], 2, 2, 3, m->nb, m->bdry, m->bref));
+    PA_CALL(group_make(&grp[n++], 3, 4, 4, m->ne, m->elem, m->eref));
+  }
+cleanup:
+  *ngrp = n;
+  return st;
+}
+
+/* $MeshFormat: version 4.1, ASCII or binary with the endianness probe. */
+static void write_format(writer *b, int binary) {
+  wr_text(b, binary ? "$MeshFormat\n4.1 1 8\n" : "$MeshFormat\n4.1 0 8\n");
+  if (binary) {
+    int32_t one = 1;
+    wr_bytes(b, &one, 4);
+    wr_text(b, "\n");
+  }
+  wr_text(b, "$EndMeshFormat\n");
+}
+
+/* $PhysicalNames, when m has any (ASCII in binary files too). */
+static void write_physical_names(writer *b, const pa_mesh *m) {
+  if (!m->nname) return;
+  char line[40];
+  snprintf(line, sizeof line, "$PhysicalNames\n%d\n", m->nname);
+  wr_text(b, line);
+  for (int k = 0; k < m->nname; k++) {
+    snprintf(line, sizeof line, "%d %d \"", m->names[k].dim,
+             (int)m->names[k].tag);
+    wr_text(b, line);
+    wr_text(b, m->names[k].name);
+    wr_text(b, "\"\n");
+  }
+  wr_text(b, "$EndPhysicalNames\n");
+}
+
+/* $Entities: a point per corner, an entity per reference of each group,
+ * and with extra one more top-dimension entity (tag 1) boxing all nodes. */
+static void write_entities(writer *b, const pa_mesh *m, const group *grp,
+                           int ngrp, const pa_idx *corner, pa_idx ncorner,
+                           int extra) {
+  wr_text(b, "$Entities\n");
+  uint64_t count[4] = {(uint64_t)ncorner, 0, 0, 0};
+  for (int g = 0; g < ngrp; g++)
+    count[grp[g].gdim] += (uint64_t)grp[g].nent;
+  count[m->dim] += (uint64_t)extra;
+  for (int d = 0; d < 4; d++)
+    wr_u64(b, count[d]);
+  wr_eol(b);
+  for (pa_idx k = 0; k < ncorner; k++) {
+    wr_int(b, (int32_t)k + 1);
+    for (int j = 0; j < 3; j++)
+      wr_f64(b, coord(m, corner[k], j));
+    wr_u64(b, 1);
+    wr_int(b, m->vref[corner[k]]);
+    wr_eol(b);
+  }
+  for (int g = 0; g < ngrp; g++) {
+    double bb[6];
+    for (int k = 0; k < grp[g].nent; k++) {
+      entity_bbox(m, &grp[g], k, bb);
+      write_entity(b, grp[g].etag[k], bb, 1, grp[g].eref[k]);
+    }
+  }
+  if (extra) {
+    double bb[6] = {INFINITY,  INFINITY,  INFINITY,
+                    -INFINITY, -INFINITY, -INFINITY};
+    for (pa_idx i = 0; i < m->nv; i++)
+      for (int j = 0; j < 3; j++) {
+        bb[j] = fmin(bb[j], coord(m, i, j));
+        bb[3 + j] = fmax(bb[3 + j], coord(m, i, j));
+      }
+    write_entity(b, 1, bb, 0, 0);
+  }
+  wr_end(b, "$EndEntities\n");
+}
+
+/* $Nodes: one block, tags 1..nv, on entity node_etag. */
+static void write_nodes(writer *b, const pa_mesh *m, int32_t node_etag,
+                        int binary) {
+  int dim = m->dim;
+  wr_text(b, "$Nodes\n");
+  wr_u64(b, m->nv ? 1 : 0);
+  wr_u64(b, (uint64_t)m->nv);
+  wr_u64(b, m->nv ? 1 : 0);
+  wr_u64(b, (uint64_t)m->nv);
+  wr_eol(b);
+  if (m->nv) {
+    wr_int(b, dim);
+    wr_int(b, node_etag);
+    wr_int(b, 0);
+    wr_u64(b, (uint64_t)m->nv);
+    wr_eol(b);
+    for (pa_idx i = 0; i < m->nv; i++) {
+      wr_u64(b, (uint64_t)i + 1);
+      wr_eol(b);
+    }
+    if (binary && dim == 3) {
+      wr_bytes(b, m->coord, 3 * sizeof(double) * (size_t)m->nv);
+    } else {
+      for (pa_idx i = 0; i < m->nv; i++) {
+        for (int j = 0; j < 3; j++)
+          wr_f64(b, coord(m, i, j));
+        wr_eol(b);
+      }
+    }
+  }
+  wr_end(b, "$EndNodes\n");
+}
+
+/* $Elements: corner points, then each group by entity; tags 1, 2, ... */
+static void write_elements(writer *b, const group *grp, int ngrp,
+                           const pa_idx *corner, pa_idx ncorner) {
+  uint64_t nblock = (uint64_t)ncorner, ncell = (uint64_t)ncorner;
+  for (int g = 0; g < ngrp; g++) {
+    nblock += (uint64_t)grp[g].nent;
+    ncell += (uint64_t)grp[g].n;
+  }
+  wr_text(b, "$Elements\n");
+  wr_u64(b, nblock);
+  wr_u64(b, ncell);
+  wr_u64(b, ncell ? 1 : 0);
+  wr_u64(b, ncell);
+  wr_eol(b);
+  uint64_t etag = 1;
+  for (pa_idx k = 0; k < ncorner; k++) {
+    wr_int(b, 0);
+    wr_int(b, (int32_t)k + 1);
+    wr_int(b, 15);
+    wr_u64(b, 1);
+    wr_eol(b);
+    wr_u64(b, etag++);
+    wr_u64(b, (uint64_t)corner[k] + 1);
+    wr_eol(b);
+  }
+  for (int g = 0; g < ngrp; g++) {
+    const group *gp = &grp[g];
+    for (int k = 0; k < gp->nent; k++) {
+      wr_int(b, gp->gdim);
+      wr_int(b, gp->etag[k]);
+      wr_int(b, gp->type);
+      wr_u64(b, (uint64_t)(gp->start[k + 1] - gp->start[k]));
+      wr_eol(b);
+      for (pa_idx s = gp->start[k]; s < gp->start[k + 1]; s++) {
+        const pa_idx *cv = gp->v + (size_t)gp->nn * gp->order[s];
+        wr_u64(b, etag++);
+        for (int a = 0; a < gp->nn; a++)
+          wr_u64(b, (uint64_t)cv[a] + 1);
+        wr_eol(b);
+      }
+    }
+  }
+  wr_end(b, "$EndElements\n");
+}
+
+/* $NodeData: the metric (a 2D tensor gets zz = 1, as Mmg writes it, so that
+ * it is positive definite in 3D too), then the fields. */
+static void write_views(writer *b, const pa_mesh *m) {
+  if (m->met_ncomp) write_view(b, m, "metric", m->met_ncomp, m->met, 1.0);
+  for (int k = 0; k < m->nfield; k++)
+    write_view(b, m, m->field[k].name, m->field[k].ncomp, m->field[k].val,
+               0.0);
+}
+
 pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary) {
   pa_status st = PA_SUCCESS;
   pa__outfile out = {0};
@@ -1745,19 +1918,8 @@ pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary) {
   pa_idx ncorner = 0;
   PA_CHECK(mesh && path, PA_ERR_ARG, "pa__gmsh_write: NULL argument");
   const pa_mesh *m = mesh;
-  int dim = m->dim;
   PA_CALL(check_view_names(m, path));
-
-  /* Groups in Gmsh dimension order: 2D lines, triangles; 3D lines,
-   * triangles, tetrahedra. */
-  if (dim == 2) {
-    PA_CALL(group_make(&grp[ngrp++], 1, 1, 2, m->nb, m->bdry, m->bref));
-    PA_CALL(group_make(&grp[ngrp++], 2, 2, 3, m->ne, m->elem, m->eref));
-  } else {
-    PA_CALL(group_make(&grp[ngrp++], 1, 1, 2, m->ned, m->edge, m->edref));
-    PA_CALL(group_make(&grp[ngrp++], 2, 2, 3, m->nb, m->bdry, m->bref));
-    PA_CALL(group_make(&grp[ngrp++], 3, 4, 4, m->ne, m->elem, m->eref));
-  }
+  PA_CALL(make_groups(m, grp, &ngrp));
   const group *top = &grp[ngrp - 1];
   PA_ALLOC(corner, m->nv);
   for (pa_idx i = 0; i < m->nv; i++)
@@ -1773,143 +1935,12 @@ pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary) {
   b.cap = (size_t)1 << 16;
   b.bol = 1;
   PA_ALLOC(b.buf, b.cap);
-
-  wr_text(&b, binary ? "$MeshFormat\n4.1 1 8\n" : "$MeshFormat\n4.1 0 8\n");
-  if (binary) {
-    int32_t one = 1;
-    wr_bytes(&b, &one, 4);
-    wr_text(&b, "\n");
-  }
-  wr_text(&b, "$EndMeshFormat\n");
-
-  /* $PhysicalNames (ASCII in binary files too) */
-  if (m->nname) {
-    char line[40];
-    snprintf(line, sizeof line, "$PhysicalNames\n%d\n", m->nname);
-    wr_text(&b, line);
-    for (int k = 0; k < m->nname; k++) {
-      snprintf(line, sizeof line, "%d %d \"", m->names[k].dim,
-               (int)m->names[k].tag);
-      wr_text(&b, line);
-      wr_text(&b, m->names[k].name);
-      wr_text(&b, "\"\n");
-    }
-    wr_text(&b, "$EndPhysicalNames\n");
-  }
-
-  /* $Entities */
-  wr_text(&b, "$Entities\n");
-  uint64_t count[4] = {(uint64_t)ncorner, 0, 0, 0};
-  for (int g = 0; g < ngrp; g++)
-    count[grp[g].gdim] += (uint64_t)grp[g].nent;
-  count[dim] += (uint64_t)extra;
-  for (int d = 0; d < 4; d++)
-    wr_u64(&b, count[d]);
-  wr_eol(&b);
-  for (pa_idx k = 0; k < ncorner; k++) {
-    wr_int(&b, (int32_t)k + 1);
-    for (int j = 0; j < 3; j++)
-      wr_f64(&b, coord(m, corner[k], j));
-    wr_u64(&b, 1);
-    wr_int(&b, m->vref[corner[k]]);
-    wr_eol(&b);
-  }
-  for (int g = 0; g < ngrp; g++) {
-    double bb[6];
-    for (int k = 0; k < grp[g].nent; k++) {
-      entity_bbox(m, &grp[g], k, bb);
-      write_entity(&b, grp[g].etag[k], bb, 1, grp[g].eref[k]);
-    }
-  }
-  if (extra) {
-    double bb[6] = {INFINITY,  INFINITY,  INFINITY,
-                    -INFINITY, -INFINITY, -INFINITY};
-    for (pa_idx i = 0; i < m->nv; i++)
-      for (int j = 0; j < 3; j++) {
-        bb[j] = fmin(bb[j], coord(m, i, j));
-        bb[3 + j] = fmax(bb[3 + j], coord(m, i, j));
-      }
-    write_entity(&b, 1, bb, 0, 0);
-  }
-  wr_end(&b, "$EndEntities\n");
-
-  /* $Nodes: one block, tags 1..nv */
-  wr_text(&b, "$Nodes\n");
-  wr_u64(&b, m->nv ? 1 : 0);
-  wr_u64(&b, (uint64_t)m->nv);
-  wr_u64(&b, m->nv ? 1 : 0);
-  wr_u64(&b, (uint64_t)m->nv);
-  wr_eol(&b);
-  if (m->nv) {
-    wr_int(&b, dim);
-    wr_int(&b, node_etag);
-    wr_int(&b, 0);
-    wr_u64(&b, (uint64_t)m->nv);
-    wr_eol(&b);
-    for (pa_idx i = 0; i < m->nv; i++) {
-      wr_u64(&b, (uint64_t)i + 1);
-      wr_eol(&b);
-    }
-    if (binary && dim == 3) {
-      wr_bytes(&b, m->coord, 3 * sizeof(double) * (size_t)m->nv);
-    } else {
-      for (pa_idx i = 0; i < m->nv; i++) {
-        for (int j = 0; j < 3; j++)
-          wr_f64(&b, coord(m, i, j));
-        wr_eol(&b);
-      }
-    }
-  }
-  wr_end(&b, "$EndNodes\n");
-
-  /* $Elements: corner points, then each group by entity */
-  uint64_t nblock = (uint64_t)ncorner, ncell = (uint64_t)ncorner;
-  for (int g = 0; g < ngrp; g++) {
-    nblock += (uint64_t)grp[g].nent;
-    ncell += (uint64_t)grp[g].n;
-  }
-  wr_text(&b, "$Elements\n");
-  wr_u64(&b, nblock);
-  wr_u64(&b, ncell);
-  wr_u64(&b, ncell ? 1 : 0);
-  wr_u64(&b, ncell);
-  wr_eol(&b);
-  uint64_t etag = 1;
-  for (pa_idx k = 0; k < ncorner; k++) {
-    wr_int(&b, 0);
-    wr_int(&b, (int32_t)k + 1);
-    wr_int(&b, 15);
-    wr_u64(&b, 1);
-    wr_eol(&b);
-    wr_u64(&b, etag++);
-    wr_u64(&b, (uint64_t)corner[k] + 1);
-    wr_eol(&b);
-  }
-  for (int g = 0; g < ngrp; g++) {
-    const group *gp = &grp[g];
-    for (int k = 0; k < gp->nent; k++) {
-      wr_int(&b, gp->gdim);
-      wr_int(&b, gp->etag[k]);
-      wr_int(&b, gp->type);
-      wr_u64(&b, (uint64_t)(gp->start[k + 1] - gp->start[k]));
-      wr_eol(&b);
-      for (pa_idx s = gp->start[k]; s < gp->start[k + 1]; s++) {
-        const pa_idx *cv = gp->v + (size_t)gp->nn * gp->order[s];
-        wr_u64(&b, etag++);
-        for (int a = 0; a < gp->nn; a++)
-          wr_u64(&b, (uint64_t)cv[a] + 1);
-        wr_eol(&b);
-      }
-    }
-  }
-  wr_end(&b, "$EndElements\n");
-
-  /* $NodeData: the metric (a 2D tensor gets zz = 1, as Mmg writes it, so
-   * that it is positive definite in 3D too), then the fields */
-  if (m->met_ncomp) write_view(&b, m, "metric", m->met_ncomp, m->met, 1.0);
-  for (int k = 0; k < m->nfield; k++)
-    write_view(&b, m, m->field[k].name, m->field[k].ncomp, m->field[k].val,
-               0.0);
+  write_format(&b, binary);
+  write_physical_names(&b, m);
+  write_entities(&b, m, grp, ngrp, corner, ncorner, extra);
+  write_nodes(&b, m, node_etag, binary);
+  write_elements(&b, grp, ngrp, corner, ncorner);
+  write_views(&b, m);
   wr_flush(&b);
   PA_CHECK(!b.err, PA_ERR_IO, "%s: write error: %s", path, strerror(errno));
   PA_CALL(pa__out_commit(&out));

@@ -135,43 +135,53 @@ static void edge_range(const pa_mesh *m, pa_idx e, double *lo, double *hi) {
     }
 }
 
-pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics,
-                        const pa__vtu_extra *x) {
-  pa_status st = PA_SUCCESS;
-  pa__outfile out = {0};
-  int64_t *i64 = NULL;
-  double *f64 = NULL;
-  uint8_t *u8 = NULL;
-  enum {
-    A_MET,
-    A_SIZE,
-    A_VREF,
-    A_REF,
-    A_ENT,
-    A_QUAL,
-    A_LMIN,
-    A_LMAX,
-    A_PTS,
-    A_CONN,
-    A_OFFS,
-    A_TYPES,
-    A_VGID,
-    A_VGHOST,
-    A_RANK,
-    A_CGID,
-    A_FIELD
-  };
+/* The appended arrays, by the index of each in vtu_layout.arr; the user
+ * fields follow A_FIELD. */
+enum {
+  A_MET,
+  A_SIZE,
+  A_VREF,
+  A_REF,
+  A_ENT,
+  A_QUAL,
+  A_LMIN,
+  A_LMAX,
+  A_PTS,
+  A_CONN,
+  A_OFFS,
+  A_TYPES,
+  A_VGID,
+  A_VGHOST,
+  A_RANK,
+  A_CGID,
+  A_FIELD
+};
+
+/* The file's arrays and the order of their blocks: order[0, npoint) the
+ * point data, the next ncelld the cell data, then points and cells. */
+typedef struct vtu_layout {
   vtu_array arr[A_FIELD + PA_MESH_MAX_FIELDS];
-  PA_CHECK(mesh && path, PA_ERR_ARG, "pa__vtu_write: NULL argument");
-  pa_mesh *m = mesh;
-  int dim = m->dim, nn = dim + 1, nc = m->met_ncomp;
+  int order[A_FIELD + PA_MESH_MAX_FIELDS];
+  int no, npoint, ncelld;
+  uint64_t nv, ne, nb, nd, ncell; /* nd: feature edges, 0 in 2D */
+  int diag;
+} vtu_layout;
+
+/* Declare every array of mesh m (x: a rank file's extras, or NULL) and give
+ * each its offset in the appended section. */
+static void layout_arrays(const pa_mesh *m, int diag, const pa__vtu_extra *x,
+                          vtu_layout *lay) {
+  vtu_array *arr = lay->arr;
+  int *order = lay->order;
+  int dim = m->dim, nn = dim + 1;
   uint64_t nv = (uint64_t)m->nv, ne = (uint64_t)m->ne;
   uint64_t nb = (uint64_t)m->nb, nd = dim == 3 ? (uint64_t)m->ned : 0;
   uint64_t ncell = ne + nb + nd;
   uint64_t nconn = ne * (uint64_t)nn + nb * (uint64_t)dim + nd * 2;
-  int diag = diagnostics != 0;
+  lay->nv = nv, lay->ne = ne, lay->nb = nb, lay->nd = nd, lay->ncell = ncell;
+  lay->diag = diag;
 
-  memset(arr, 0, sizeof arr);
+  memset(arr, 0, sizeof lay->arr);
   arr[A_MET] = (vtu_array){"metric", "Float64", 9, NULL, 72 * nv, 0};
   arr[A_SIZE] = (vtu_array){"size", "Float64", 9, NULL, 72 * nv, 0};
   arr[A_VREF] = (vtu_array){"ref", "Int32", 1, NULL, 4 * nv, 0};
@@ -196,35 +206,39 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics,
                                    8 * nv * (uint64_t)m->field[k].ncomp,
                                    0};
   /* Appended order: point data, cell data, points, cells. */
-  int order[A_FIELD + PA_MESH_MAX_FIELDS], no = 0, npoint, ncelld;
-  if (nc) order[no++] = A_MET, order[no++] = A_SIZE;
+  int no = 0;
+  if (m->met_ncomp) order[no++] = A_MET, order[no++] = A_SIZE;
   for (int k = 0; k < m->nfield; k++) order[no++] = A_FIELD + k;
   order[no++] = A_VREF;
   if (x && x->vgid) order[no++] = A_VGID;
   if (x && x->vghost) order[no++] = A_VGHOST;
-  npoint = no;
+  lay->npoint = no;
   order[no++] = A_REF;
   order[no++] = A_ENT;
   order[no++] = A_QUAL;
   if (diag) order[no++] = A_LMIN, order[no++] = A_LMAX;
   if (x) order[no++] = A_RANK;
   if (x && x->cgid) order[no++] = A_CGID;
-  ncelld = no - npoint;
+  lay->ncelld = no - lay->npoint;
   order[no++] = A_PTS;
   order[no++] = A_CONN;
   order[no++] = A_OFFS;
   order[no++] = A_TYPES;
+  lay->no = no;
   uint64_t off = 0;
   for (int i = 0; i < no; i++) {
     arr[order[i]].offset = off;
     off += 8 + arr[order[i]].nbytes;
   }
+}
 
-  PA_ALLOC(i64, VTU_CHUNK * 4);
-  PA_ALLOC(f64, VTU_CHUNK * 9);
-  PA_ALLOC(u8, VTU_CHUNK);
-  PA_CALL(pa__out_open(&out, path));
-  FILE *fp = out.fp;
+/* The XML part: every DataArray with its offset, up to the opening of the
+ * appended data. */
+static void write_header(FILE *fp, const pa_mesh *m, const pa__vtu_extra *x,
+                         const vtu_layout *lay) {
+  const vtu_array *arr = lay->arr;
+  const int *order = lay->order;
+  int npoint = lay->npoint, ncelld = lay->ncelld;
   const uint16_t probe = 1;
   int little = *(const uint8_t *)&probe == 1;
   fprintf(fp,
@@ -233,9 +247,10 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics,
           "byte_order=\"%s\" header_type=\"UInt64\">\n"
           "  <UnstructuredGrid>\n"
           "    <Piece NumberOfPoints=\"%llu\" NumberOfCells=\"%llu\">\n",
-          little ? "LittleEndian" : "BigEndian", (unsigned long long)nv,
-          (unsigned long long)ncell);
-  fprintf(fp, "      <PointData%s%s>\n", nc ? " Tensors=\"size\"" : "",
+          little ? "LittleEndian" : "BigEndian", (unsigned long long)lay->nv,
+          (unsigned long long)lay->ncell);
+  fprintf(fp, "      <PointData%s%s>\n",
+          m->met_ncomp ? " Tensors=\"size\"" : "",
           x && x->vgid ? " GlobalIds=\"gid\"" : "");
   for (int i = 0; i < npoint; i++) put_array(fp, &arr[order[i]]);
   fputs("      </PointData>\n      <CellData Scalars=\"quality\">\n", fp);
@@ -249,8 +264,16 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics,
   fputs("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n"
         "  <AppendedData encoding=\"raw\">\n   _",
         fp);
+}
 
-  /* Blocks in the order of the offsets computed above. */
+/* The point data blocks: metric and size tensors, user fields, references,
+ * then a rank file's gid and vtkGhostType (f64: 9 VTU_CHUNK doubles). */
+static void write_point_data(FILE *fp, const pa_mesh *m,
+                             const pa__vtu_extra *x, const vtu_layout *lay,
+                             double *f64) {
+  const vtu_array *arr = lay->arr;
+  int dim = m->dim, nc = m->met_ncomp;
+  uint64_t nv = lay->nv;
   for (int sq = 0; sq < 2 && nc; sq++) {
     fwrite(&arr[sq ? A_SIZE : A_MET].nbytes, 8, 1, fp);
     for (uint64_t v0 = 0; v0 < nv; v0 += VTU_CHUNK) {
@@ -265,20 +288,16 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics,
   put_block(fp, m->vref, arr[A_VREF].nbytes);
   if (x && x->vgid) put_block(fp, x->vgid, arr[A_VGID].nbytes);
   if (x && x->vghost) put_block(fp, x->vghost, arr[A_VGHOST].nbytes);
-  fwrite(&arr[A_REF].nbytes, 8, 1, fp);
-  if (ne) fwrite(m->eref, 4, (size_t)ne, fp);
-  if (nb) fwrite(m->bref, 4, (size_t)nb, fp);
-  if (nd) fwrite(m->edref, 4, (size_t)nd, fp);
-  fwrite(&arr[A_ENT].nbytes, 8, 1, fp);
-  for (int kind = 0; kind < 3; kind++) {
-    uint64_t n = kind == 0 ? ne : kind == 1 ? nb : nd;
-    memset(u8, kind, VTU_CHUNK);
-    for (uint64_t c = 0; c < n; c += VTU_CHUNK)
-      fwrite(u8, 1, (size_t)(n - c < VTU_CHUNK ? n - c : VTU_CHUNK), fp);
-  }
-  /* quality, then the diagnostics: element values, NaN on the rest */
-  for (int a = 0; a < (diag ? 3 : 1); a++) {
-    fwrite(&arr[A_QUAL].nbytes, 8, 1, fp);
+}
+
+/* The blocks "quality", then with diagnostics "edge_min" and "edge_max":
+ * element values, NaN on the boundary entities and edges. */
+static void write_quality(FILE *fp, pa_mesh *m, const vtu_layout *lay,
+                          double *f64) {
+  int nc = m->met_ncomp;
+  uint64_t ne = lay->ne, nb = lay->nb, nd = lay->nd;
+  for (int a = 0; a < (lay->diag ? 3 : 1); a++) {
+    fwrite(&lay->arr[A_QUAL].nbytes, 8, 1, fp);
     for (uint64_t e0 = 0; e0 < ne; e0 += VTU_CHUNK) {
       size_t n = (size_t)(ne - e0 < VTU_CHUNK ? ne - e0 : VTU_CHUNK);
       for (size_t e = 0; e < n; e++) {
@@ -297,6 +316,26 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics,
       fwrite(f64, sizeof *f64,
              (size_t)(nb + nd - c < VTU_CHUNK ? nb + nd - c : VTU_CHUNK), fp);
   }
+}
+
+/* The cell data blocks: references, entity kinds, quality (and
+ * diagnostics), then a rank file's rank and gid (u8: VTU_CHUNK bytes). */
+static void write_cell_data(FILE *fp, pa_mesh *m, const pa__vtu_extra *x,
+                            const vtu_layout *lay, double *f64, uint8_t *u8) {
+  const vtu_array *arr = lay->arr;
+  uint64_t ne = lay->ne, nb = lay->nb, nd = lay->nd, ncell = lay->ncell;
+  fwrite(&arr[A_REF].nbytes, 8, 1, fp);
+  if (ne) fwrite(m->eref, 4, (size_t)ne, fp);
+  if (nb) fwrite(m->bref, 4, (size_t)nb, fp);
+  if (nd) fwrite(m->edref, 4, (size_t)nd, fp);
+  fwrite(&arr[A_ENT].nbytes, 8, 1, fp);
+  for (int kind = 0; kind < 3; kind++) {
+    uint64_t n = kind == 0 ? ne : kind == 1 ? nb : nd;
+    memset(u8, kind, VTU_CHUNK);
+    for (uint64_t c = 0; c < n; c += VTU_CHUNK)
+      fwrite(u8, 1, (size_t)(n - c < VTU_CHUNK ? n - c : VTU_CHUNK), fp);
+  }
+  write_quality(fp, m, lay, f64);
   if (x) {
     fwrite(&arr[A_RANK].nbytes, 8, 1, fp);
     int32_t rk[VTU_CHUNK];
@@ -305,52 +344,85 @@ pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics,
       fwrite(rk, 4, (size_t)(ncell - c < VTU_CHUNK ? ncell - c : VTU_CHUNK), fp);
   }
   if (x && x->cgid) put_block(fp, x->cgid, arr[A_CGID].nbytes);
-  if (dim == 3) {
-    put_block(fp, m->coord, arr[A_PTS].nbytes);
-  } else {
-    fwrite(&arr[A_PTS].nbytes, 8, 1, fp);
-    for (uint64_t v0 = 0; v0 < nv; v0 += VTU_CHUNK) {
-      size_t n = (size_t)(nv - v0 < VTU_CHUNK ? nv - v0 : VTU_CHUNK);
-      for (size_t v = 0; v < n; v++) {
-        f64[3 * v] = m->coord[2 * (v0 + v)];
-        f64[3 * v + 1] = m->coord[2 * (v0 + v) + 1];
-        f64[3 * v + 2] = 0.0;
-      }
-      fwrite(f64, sizeof *f64, 3 * n, fp);
-    }
+}
+
+/* The points block, 3 coordinates each (z = 0 in 2D). */
+static void write_points(FILE *fp, const pa_mesh *m, const vtu_layout *lay,
+                         double *f64) {
+  uint64_t nv = lay->nv;
+  if (m->dim == 3) {
+    put_block(fp, m->coord, lay->arr[A_PTS].nbytes);
+    return;
   }
-  /* connectivity, offsets and types of the three kinds of cells */
-  {
-    const pa_idx *src[3] = {m->elem, m->bdry, m->edge};
-    int width[3] = {nn, dim, 2};
-    uint8_t type[3] = {dim == 2 ? 5 : 10, dim == 2 ? 3 : 5, 3};
-    uint64_t count[3] = {ne, nb, nd}, end = 0;
-    fwrite(&arr[A_CONN].nbytes, 8, 1, fp);
-    for (int kind = 0; kind < 3; kind++)
-      for (uint64_t c0 = 0; c0 < count[kind]; c0 += VTU_CHUNK) {
-        size_t n = (size_t)(count[kind] - c0 < VTU_CHUNK ? count[kind] - c0
-                                                         : VTU_CHUNK);
-        size_t w = (size_t)width[kind];
-        for (size_t k = 0; k < n * w; k++) i64[k] = src[kind][w * c0 + k];
-        fwrite(i64, sizeof *i64, n * w, fp);
-      }
-    fwrite(&arr[A_OFFS].nbytes, 8, 1, fp);
-    for (int kind = 0; kind < 3; kind++)
-      for (uint64_t c0 = 0; c0 < count[kind]; c0 += VTU_CHUNK) {
-        size_t n = (size_t)(count[kind] - c0 < VTU_CHUNK ? count[kind] - c0
-                                                         : VTU_CHUNK);
-        for (size_t c = 0; c < n; c++) i64[c] = (int64_t)(end += width[kind]);
-        fwrite(i64, sizeof *i64, n, fp);
-      }
-    fwrite(&arr[A_TYPES].nbytes, 8, 1, fp);
-    for (int kind = 0; kind < 3; kind++) {
-      memset(u8, type[kind], VTU_CHUNK);
-      for (uint64_t c = 0; c < count[kind]; c += VTU_CHUNK)
-        fwrite(u8, 1, (size_t)(count[kind] - c < VTU_CHUNK ? count[kind] - c
-                                                           : VTU_CHUNK), fp);
+  fwrite(&lay->arr[A_PTS].nbytes, 8, 1, fp);
+  for (uint64_t v0 = 0; v0 < nv; v0 += VTU_CHUNK) {
+    size_t n = (size_t)(nv - v0 < VTU_CHUNK ? nv - v0 : VTU_CHUNK);
+    for (size_t v = 0; v < n; v++) {
+      f64[3 * v] = m->coord[2 * (v0 + v)];
+      f64[3 * v + 1] = m->coord[2 * (v0 + v) + 1];
+      f64[3 * v + 2] = 0.0;
     }
+    fwrite(f64, sizeof *f64, 3 * n, fp);
   }
-  fputs("\n  </AppendedData>\n</VTKFile>\n", fp);
+}
+
+/* Connectivity, offsets and types of the three kinds of cells (i64: 4
+ * VTU_CHUNK integers, u8: VTU_CHUNK bytes). */
+static void write_cells(FILE *fp, const pa_mesh *m, const vtu_layout *lay,
+                        int64_t *i64, uint8_t *u8) {
+  const vtu_array *arr = lay->arr;
+  int dim = m->dim, nn = dim + 1;
+  const pa_idx *src[3] = {m->elem, m->bdry, m->edge};
+  int width[3] = {nn, dim, 2};
+  uint8_t type[3] = {dim == 2 ? 5 : 10, dim == 2 ? 3 : 5, 3};
+  uint64_t count[3] = {lay->ne, lay->nb, lay->nd}, end = 0;
+  fwrite(&arr[A_CONN].nbytes, 8, 1, fp);
+  for (int kind = 0; kind < 3; kind++)
+    for (uint64_t c0 = 0; c0 < count[kind]; c0 += VTU_CHUNK) {
+      size_t n = (size_t)(count[kind] - c0 < VTU_CHUNK ? count[kind] - c0
+                                                       : VTU_CHUNK);
+      size_t w = (size_t)width[kind];
+      for (size_t k = 0; k < n * w; k++) i64[k] = src[kind][w * c0 + k];
+      fwrite(i64, sizeof *i64, n * w, fp);
+    }
+  fwrite(&arr[A_OFFS].nbytes, 8, 1, fp);
+  for (int kind = 0; kind < 3; kind++)
+    for (uint64_t c0 = 0; c0 < count[kind]; c0 += VTU_CHUNK) {
+      size_t n = (size_t)(count[kind] - c0 < VTU_CHUNK ? count[kind] - c0
+                                                       : VTU_CHUNK);
+      for (size_t c = 0; c < n; c++) i64[c] = (int64_t)(end += width[kind]);
+      fwrite(i64, sizeof *i64, n, fp);
+    }
+  fwrite(&arr[A_TYPES].nbytes, 8, 1, fp);
+  for (int kind = 0; kind < 3; kind++) {
+    memset(u8, type[kind], VTU_CHUNK);
+    for (uint64_t c = 0; c < count[kind]; c += VTU_CHUNK)
+      fwrite(u8, 1, (size_t)(count[kind] - c < VTU_CHUNK ? count[kind] - c
+                                                         : VTU_CHUNK), fp);
+  }
+}
+
+pa_status pa__vtu_write(pa_mesh *mesh, const char *path, int diagnostics,
+                        const pa__vtu_extra *x) {
+  pa_status st = PA_SUCCESS;
+  pa__outfile out = {0};
+  int64_t *i64 = NULL;
+  double *f64 = NULL;
+  uint8_t *u8 = NULL;
+  vtu_layout lay;
+  PA_CHECK(mesh && path, PA_ERR_ARG, "pa__vtu_write: NULL argument");
+  layout_arrays(mesh, diagnostics != 0, x, &lay);
+  PA_ALLOC(i64, VTU_CHUNK * 4);
+  PA_ALLOC(f64, VTU_CHUNK * 9);
+  PA_ALLOC(u8, VTU_CHUNK);
+  PA_CALL(pa__out_open(&out, path));
+  /* The appended blocks follow in the order of the offsets. */
+  write_header(out.fp, mesh, x, &lay);
+  write_point_data(out.fp, mesh, x, &lay, f64);
+  write_cell_data(out.fp, mesh, x, &lay, f64, u8);
+  write_points(out.fp, mesh, &lay, f64);
+  write_cells(out.fp, mesh, &lay, i64, u8);
+  fputs("\n  </AppendedData>\n</VTKFile>\n", out.fp);
   PA_CALL(pa__out_commit(&out));
 cleanup:
   if (st) pa__out_abort(&out);

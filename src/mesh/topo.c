@@ -630,33 +630,38 @@ cleanup:
   return st;
 }
 
-pa_status pa__mesh_check(pa_mesh *m, int input) {
+/* Every coordinate finite. */
+static pa_status check_coords(const pa_mesh *m) {
   pa_status st = PA_SUCCESS;
-  uint8_t *used = NULL;
-  pa_idx *adja = NULL, *bstart = NULL, *ball = NULL, *bh = NULL;
-  char buf[96];
-  PA_CHECK(m, PA_ERR_ARG, "pa_mesh_check: NULL mesh");
-  const int d = m->dim, nf = d + 1;
-  const pa_idx nv = m->nv, ne = m->ne;
-
-  /* Indices in range, no repeated vertex. */
-  PA_CALL(check_cells(m->elem, ne, nf, nv, "element"));
-  PA_CALL(check_cells(m->bdry, m->nb, d, nv, "boundary entity"));
-  PA_CALL(check_cells(m->edge, m->ned, 2, nv, "feature edge"));
-
-  for (pa_idx v = 0; v < nv; v++)
+  const int d = m->dim;
+  for (pa_idx v = 0; v < m->nv; v++)
     for (int k = 0; k < d; k++)
       PA_CHECK(isfinite(m->coord[(size_t)d * v + k]), PA_ERR_MESH,
                "vertex %d has a non-finite coordinate (%g)", (int)v + 1,
                m->coord[(size_t)d * v + k]);
+cleanup:
+  return st;
+}
 
-  PA_CALLOC(used, (size_t)nv);
-  for (size_t k = 0; k < (size_t)nf * ne; k++) used[m->elem[k]] = 1;
-  for (pa_idx v = 0; v < nv; v++)
+/* Every vertex in some element. */
+static pa_status check_used(const pa_mesh *m) {
+  pa_status st = PA_SUCCESS;
+  uint8_t *used = NULL;
+  const int nf = m->dim + 1;
+  PA_CALLOC(used, (size_t)m->nv);
+  for (size_t k = 0; k < (size_t)nf * m->ne; k++) used[m->elem[k]] = 1;
+  for (pa_idx v = 0; v < m->nv; v++)
     PA_CHECK(used[v], PA_ERR_MESH, "vertex %d is in no element", (int)v + 1);
+cleanup:
+  pa__free(used);
+  return st;
+}
 
-  /* Orientation, with the exact predicate. */
-  for (pa_idx e = 0; e < ne; e++) {
+/* Orientation, with the exact predicate. */
+static pa_status check_orientation(const pa_mesh *m) {
+  pa_status st = PA_SUCCESS;
+  const int d = m->dim, nf = d + 1;
+  for (pa_idx e = 0; e < m->ne; e++) {
     const double *x[4];
     const pa_idx *v = m->elem + (size_t)nf * e;
     for (int k = 0; k < nf; k++) x[k] = m->coord + (size_t)d * v[k];
@@ -664,9 +669,17 @@ pa_status pa__mesh_check(pa_mesh *m, int input) {
              "element %d is inverted or flat (volume %.3g)", (int)e + 1,
              pa__simplex_volume(d, x));
   }
+cleanup:
+  return st;
+}
 
-  /* Conformity (in adja_compute) and symmetric adjacency. Caches are
-   * recomputed, not trusted: a stale cache is reported. */
+/* Conformity (in adja_compute) and symmetric adjacency. The cache is
+ * recomputed, not trusted: a stale cache is reported. */
+static pa_status check_adjacency(pa_mesh *m) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *adja = NULL;
+  const int nf = m->dim + 1;
+  const pa_idx ne = m->ne;
   PA_CALL(adja_compute(m, &adja));
   PA_CALL(adopt_cache(&m->adja, &adja, (size_t)nf * ne, "adjacency"));
   for (size_t c = 0; c < (size_t)nf * ne; c++) {
@@ -679,8 +692,18 @@ pa_status pa__mesh_check(pa_mesh *m, int input) {
              (int)(c % nf) + 1, (int)(c / nf) + 1, (int)(a % nf) + 1,
              (int)(a / nf) + 1);
   }
+cleanup:
+  pa__free(adja);
+  return st;
+}
 
-  /* Every face without neighbour is listed as a boundary entity. */
+/* Every face without neighbour is listed as a boundary entity (the
+ * boundary table is built, or recomputed and compared with the cache). */
+static pa_status check_boundary_faces(pa_mesh *m) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *bh = NULL;
+  char buf[96];
+  const int d = m->dim, nf = d + 1;
   if (!m->bhash) {
     PA_CALL(bhash_build(m));
   } else {
@@ -691,7 +714,7 @@ pa_status pa__mesh_check(pa_mesh *m, int input) {
              "without pa__mesh_invalidate)");
     PA_CALL(adopt_cache(&m->bhash, &bh, cap, "boundary table"));
   }
-  for (size_t c = 0; c < (size_t)nf * ne; c++) {
+  for (size_t c = 0; c < (size_t)nf * m->ne; c++) {
     if (m->adja[c] >= 0) continue;
     pa_idx f[3];
     pa__elem_face(m, (pa_idx)(c / nf), (int)(c % nf), f);
@@ -700,13 +723,23 @@ pa_status pa__mesh_check(pa_mesh *m, int input) {
              "boundary entity",
              fmt_verts(buf, sizeof buf, f, d), (int)(c / nf) + 1);
   }
+cleanup:
+  pa__free(bh);
+  return st;
+}
 
-  /* Every boundary entity is a face of some element, and listed once. */
+/* Every boundary entity is a face of some element, and listed once (the
+ * balls are built, or recomputed and compared with the cache). */
+static pa_status check_boundary_entities(pa_mesh *m) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *bstart = NULL, *ball = NULL;
+  char buf[96];
+  const int d = m->dim, nf = d + 1;
   PA_CALL(balls_compute(m, &bstart, &ball));
   if (m->ball_start && m->ball) {
-    PA_CALL(adopt_cache(&m->ball_start, &bstart, (size_t)nv + 1,
+    PA_CALL(adopt_cache(&m->ball_start, &bstart, (size_t)m->nv + 1,
                         "ball index"));
-    PA_CALL(adopt_cache(&m->ball, &ball, (size_t)nf * ne, "balls"));
+    PA_CALL(adopt_cache(&m->ball, &ball, (size_t)nf * m->ne, "balls"));
   } else {
     pa__free(m->ball_start);
     pa__free(m->ball);
@@ -737,16 +770,31 @@ pa_status pa__mesh_check(pa_mesh *m, int input) {
              "boundary entity %d (%s) is not a face of any element", (int)b + 1,
              fmt_verts(buf, sizeof buf, bv, d));
   }
+cleanup:
+  pa__free(bstart);
+  pa__free(ball);
+  return st;
+}
 
+pa_status pa__mesh_check(pa_mesh *m, int input) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(m, PA_ERR_ARG, "pa_mesh_check: NULL mesh");
+  const int d = m->dim, nf = d + 1;
+  const pa_idx nv = m->nv, ne = m->ne;
+  /* Indices in range, no repeated vertex. */
+  PA_CALL(check_cells(m->elem, ne, nf, nv, "element"));
+  PA_CALL(check_cells(m->bdry, m->nb, d, nv, "boundary entity"));
+  PA_CALL(check_cells(m->edge, m->ned, 2, nv, "feature edge"));
+  PA_CALL(check_coords(m));
+  PA_CALL(check_used(m));
+  PA_CALL(check_orientation(m));
+  PA_CALL(check_adjacency(m));
+  PA_CALL(check_boundary_faces(m));
+  PA_CALL(check_boundary_entities(m));
   if (input) {
     PA_CALL(check_manifold_vertices(m));
     PA_CALL(check_coincident(m));
   }
 cleanup:
-  pa__free(used);
-  pa__free(adja);
-  pa__free(bstart);
-  pa__free(ball);
-  pa__free(bh);
   return st;
 }

@@ -33,18 +33,35 @@ static int deterministic_context(SCOTCH_Context *ctx) {
   return 0;
 }
 
-pa_status pa__partition_dgraph(MPI_Comm comm, pa_idx n, const pa_idx *xadj,
-                               const int64_t *adj, const double *weights,
-                               int nparts, double kbal, int *part) {
-  pa_status st = PA_SUCCESS;
-  SCOTCH_Num *vert = NULL, *edge = NULL, *velo = NULL, *parttab = NULL;
+/* The Scotch objects of one partitioning, and which are initialised. */
+typedef struct scotch_run {
+  SCOTCH_Num *vert, *edge, *velo, *parttab;
   SCOTCH_Dgraph graph, bound;
   SCOTCH_Strat strat;
   SCOTCH_Context ctx;
-  int graph_init = 0, strat_init = 0, ctx_init = 0, bound_init = 0;
+  int graph_init, strat_init, ctx_init, bound_init;
+} scotch_run;
+
+static void scotch_run_free(scotch_run *s) {
+  if (s->bound_init) SCOTCH_dgraphExit(&s->bound);
+  if (s->ctx_init) SCOTCH_contextExit(&s->ctx);
+  if (s->strat_init) SCOTCH_stratExit(&s->strat);
+  if (s->graph_init) SCOTCH_dgraphExit(&s->graph);
+  pa__free(s->vert);
+  pa__free(s->edge);
+  pa__free(s->velo);
+  pa__free(s->parttab);
+}
+
+/* Check the arguments and copy the graph into Scotch's integers, with the
+ * weights scaled to integers; the result is not agreed on (the caller
+ * does). */
+static pa_status copy_graph(MPI_Comm comm, pa_idx n, const pa_idx *xadj,
+                            const int64_t *adj, const double *weights,
+                            int nparts, scotch_run *s) {
+  pa_status st = PA_SUCCESS;
   int64_t nglob = n, wmax_ok = 1;
   double wmax = 0;
-
   if (weights)
     for (pa_idx i = 0; i < n; i++) {
       if (!(weights[i] > 0) || !isfinite(weights[i])) wmax_ok = 0;
@@ -58,100 +75,123 @@ pa_status pa__partition_dgraph(MPI_Comm comm, pa_idx n, const pa_idx *xadj,
            (long long)nglob);
   PA_CHECK(nparts >= 1, PA_ERR_ARG, "nparts must be >= 1, got %d", nparts);
   PA_CHECK(wmax_ok, PA_ERR_ARG, "element weights must be finite and > 0");
-  PA_ALLOC(vert, n + 1);
-  PA_ALLOC(edge, xadj[n]);
-  PA_ALLOC(parttab, n);
-  for (pa_idx i = 0; i <= n; i++) vert[i] = xadj[i];
-  for (pa_idx j = 0; j < xadj[n]; j++) edge[j] = (SCOTCH_Num)adj[j];
+  PA_ALLOC(s->vert, n + 1);
+  PA_ALLOC(s->edge, xadj[n]);
+  PA_ALLOC(s->parttab, n);
+  for (pa_idx i = 0; i <= n; i++) s->vert[i] = xadj[i];
+  for (pa_idx j = 0; j < xadj[n]; j++) s->edge[j] = (SCOTCH_Num)adj[j];
   if (weights) {
     double scale = (double)(1 << 30) / (double)(nglob ? nglob : 1);
     if (scale > 1e6) scale = 1e6;
-    PA_ALLOC(velo, n);
+    PA_ALLOC(s->velo, n);
     for (pa_idx i = 0; i < n; i++) {
       double w = weights[i] / wmax * scale;
-      velo[i] = w < 1 ? 1 : (SCOTCH_Num)w;
+      s->velo[i] = w < 1 ? 1 : (SCOTCH_Num)w;
     }
   }
 cleanup:
+  return st;
+}
+
+/* Build (and in debug builds check) Scotch's distributed graph; collective,
+ * agreed. */
+static pa_status build_graph(MPI_Comm comm, scotch_run *s, pa_idx n,
+                             const pa_idx *xadj) {
+  pa_status st = PA_SUCCESS;
+  if (SCOTCH_dgraphInit(&s->graph, comm) != 0)
+    st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
+                   "SCOTCH_dgraphInit failed");
+  else
+    s->graph_init = 1;
+  st = pa__agree(comm, st);
+  if (st) return st;
+  if (SCOTCH_dgraphBuild(&s->graph, 0, n, n, s->vert, NULL, s->velo, NULL,
+                         xadj[n], xadj[n], s->edge, NULL, NULL) != 0)
+    st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
+                   "SCOTCH_dgraphBuild failed on a graph of %d local vertices",
+                   (int)n);
+  st = pa__agree(comm, st);
+  if (st) return st;
+#ifndef NDEBUG
+  if (SCOTCH_dgraphCheck(&s->graph) != 0)
+    st = pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
+                   "SCOTCH_dgraphCheck: the dual graph is inconsistent");
+  st = pa__agree(comm, st);
+#endif
+  return st;
+}
+
+/* The partitioning strategy; collective, agreed. Scotch's default: no
+ * strategy of SCOTCH_stratDgraphMapBuild (SPEED / QUALITY / BALANCE) is
+ * faster on 2+ ranks, and BALANCE buys little balance with more edge cut
+ * (figures: docs/design/DMESH.md, bench/bench_scotch.c). kbal > 0 asks for
+ * that imbalance. */
+static pa_status make_strategy(MPI_Comm comm, scotch_run *s, int nparts,
+                               double kbal) {
+  pa_status st = PA_SUCCESS;
+  SCOTCH_stratInit(&s->strat);
+  s->strat_init = 1;
+  if (kbal > 0) {
+    int size;
+    MPI_Comm_size(comm, &size);
+    if (SCOTCH_stratDgraphMapBuild(&s->strat, SCOTCH_STRATDEFAULT, size,
+                                   nparts, kbal) != 0)
+      st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
+                     "SCOTCH_stratDgraphMapBuild failed");
+    st = pa__agree(comm, st);
+  }
+  return st;
+}
+
+/* Bind the graph to a deterministic context; collective, agreed. The same
+ * graph always gets the same partition: Scotch's random state persists
+ * across calls in a process (reset it), and its threads
+ * (SCOTCH_PTHREAD_NUMBER, all cores by default) race unless the context
+ * bound to the graph asks for deterministic behaviour (without it, three
+ * np=4 runs of the gmsh rod gave three different meshes). */
+static pa_status bind_deterministic(MPI_Comm comm, scotch_run *s) {
+  pa_status st = PA_SUCCESS;
+  SCOTCH_randomReset();
+  if (deterministic_context(&s->ctx) != 0)
+    st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
+                   "SCOTCH_contextInit failed");
+  else
+    s->ctx_init = 1;
+  if (!st && SCOTCH_dgraphInit(&s->bound, comm) != 0)
+    st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
+                   "SCOTCH_dgraphInit failed");
+  else if (!st)
+    s->bound_init = 1;
+  if (!st && SCOTCH_contextBindDgraph(&s->ctx, &s->graph, &s->bound) != 0)
+    st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
+                   "SCOTCH_contextBindDgraph failed");
+  return pa__agree(comm, st);
+}
+
+pa_status pa__partition_dgraph(MPI_Comm comm, pa_idx n, const pa_idx *xadj,
+                               const int64_t *adj, const double *weights,
+                               int nparts, double kbal, int *part) {
+  pa_status st = PA_SUCCESS;
+  scotch_run s;
+  memset(&s, 0, sizeof s);
+  st = copy_graph(comm, n, xadj, adj, weights, nparts, &s);
   st = pa__agree(comm, st);
   if (st) goto done;
   if (nparts == 1) {
     for (pa_idx i = 0; i < n; i++) part[i] = 0;
     goto done;
   }
-  if (SCOTCH_dgraphInit(&graph, comm) != 0)
-    st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
-                   "SCOTCH_dgraphInit failed");
-  else
-    graph_init = 1;
-  st = pa__agree(comm, st);
-  if (st) goto done;
-  if (SCOTCH_dgraphBuild(&graph, 0, n, n, vert, NULL, velo, NULL, xadj[n],
-                         xadj[n], edge, NULL, NULL) != 0)
-    st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
-                   "SCOTCH_dgraphBuild failed on a graph of %d local vertices",
-                   (int)n);
-  st = pa__agree(comm, st);
-  if (st) goto done;
-#ifndef NDEBUG
-  if (SCOTCH_dgraphCheck(&graph) != 0)
-    st = pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
-                   "SCOTCH_dgraphCheck: the dual graph is inconsistent");
-  st = pa__agree(comm, st);
-  if (st) goto done;
-#endif
-  /* Scotch's default strategy: measured against SCOTCH_stratDgraphMapBuild
-   * with SCOTCH_STRATSPEED / QUALITY / BALANCE (bench/bench_scotch.c, see
-   * docs/design/DMESH.md), none is faster on 2+ ranks; BALANCE costs 15-20 % more
-   * edge cut; SPEED halves the time only on one rank. */
-  SCOTCH_stratInit(&strat);
-  strat_init = 1;
-  if (kbal > 0) {
-    int size;
-    MPI_Comm_size(comm, &size);
-    if (SCOTCH_stratDgraphMapBuild(&strat, SCOTCH_STRATDEFAULT, size, nparts,
-                                   kbal) != 0)
-      st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
-                     "SCOTCH_stratDgraphMapBuild failed");
-    st = pa__agree(comm, st);
-    if (st) goto done;
-  }
-  /* The same graph always gets the same partition: Scotch's random state
-   * persists across calls in a process (reset it), and its threads
-   * (SCOTCH_PTHREAD_NUMBER, all cores by default) race unless the
-   * context bound to the graph asks for deterministic behaviour (without
-   * it, three np=4 runs of the gmsh rod gave three different meshes). */
-  SCOTCH_randomReset();
-  if (deterministic_context(&ctx) != 0)
-    st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
-                   "SCOTCH_contextInit failed");
-  else
-    ctx_init = 1;
-  if (!st && SCOTCH_dgraphInit(&bound, comm) != 0)
-    st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
-                   "SCOTCH_dgraphInit failed");
-  else if (!st)
-    bound_init = 1;
-  if (!st && SCOTCH_contextBindDgraph(&ctx, &graph, &bound) != 0)
-    st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
-                   "SCOTCH_contextBindDgraph failed");
-  st = pa__agree(comm, st);
-  if (st) goto done;
-  if (SCOTCH_dgraphPart(&bound, nparts, &strat, parttab) != 0)
+  if ((st = build_graph(comm, &s, n, xadj))) goto done;
+  if ((st = make_strategy(comm, &s, nparts, kbal))) goto done;
+  if ((st = bind_deterministic(comm, &s))) goto done;
+  if (SCOTCH_dgraphPart(&s.bound, nparts, &s.strat, s.parttab) != 0)
     st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
                    "SCOTCH_dgraphPart failed (%d parts)", nparts);
   st = pa__agree(comm, st);
   if (st) goto done;
-  for (pa_idx i = 0; i < n; i++) part[i] = (int)parttab[i];
+  for (pa_idx i = 0; i < n; i++) part[i] = (int)s.parttab[i];
 done:
-  if (bound_init) SCOTCH_dgraphExit(&bound);
-  if (ctx_init) SCOTCH_contextExit(&ctx);
-  if (strat_init) SCOTCH_stratExit(&strat);
-  if (graph_init) SCOTCH_dgraphExit(&graph);
-  pa__free(vert);
-  pa__free(edge);
-  pa__free(velo);
-  pa__free(parttab);
+  scotch_run_free(&s);
   return st;
 }
 
@@ -245,8 +285,8 @@ pa_status pa__order_graph(pa_idx n, const pa_idx *xadj, const pa_idx *adj,
   strat_init = 1;
   /* Gibbs-Poole-Stockmeyer: a bandwidth-reducing ordering in linear time,
    * what locality needs; Scotch's default nested dissection (for sparse
-   * factorisation) took 20x longer than the whole Hilbert reordering for a
-   * similar locality (docs/design/DMESH.md) */
+   * factorisation) is far slower for a similar locality (figures:
+   * docs/design/DMESH.md) */
   PA_CHECK(SCOTCH_stratGraphOrder(&strat, "g") == 0, PA_ERR_PARTITION,
            "SCOTCH_stratGraphOrder failed");
   SCOTCH_randomReset(); /* reproducible, as the partitions */

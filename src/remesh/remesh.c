@@ -20,11 +20,10 @@
 
 #include <stdio.h>
 
-/* leb.c before the 3D passes: bisect edges longer than this. Sensitive:
- * box3d 10 -> hsiz 0.019 gives 841 k tets in 3.9 s at 2.0 and 2.5, but
- * 1.18 M in 7.4 s at 3.0 and 1.33 M in 12 s at 1.6 or 1.41 (bisected
- * Kuhn-type tets are 30 % smaller than regular ones of the same longest
- * edge, so the last factor of 2 is better left to the band splits). */
+/* leb.c before the 3D passes: bisect edges longer than this. Bisected
+ * tets are smaller than regular ones of the same longest edge, so the last
+ * factor of 2 is left to the band splits; a higher or lower value gives
+ * more tets in more time (figures: docs/BENCHMARKS.md, "The 3D remesher"). */
 #define LEB_PRE 2.0
 
 void pa_remesh_opts_default(pa_remesh_opts *o) {

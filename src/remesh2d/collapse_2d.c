@@ -94,14 +94,14 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
   pa_idx o = rm->adj[te];
   /* a feature vertex slides only along its feature */
   if ((tp & RM_V_FEAT) && o >= 0) return 0;
-  if (!edge_free(rm, te)) return 0;
+  if (!rm_edge_free(rm, te)) return 0;
 
   pa_idx el[RM_BALL_MAX];
   int loc[RM_BALL_MAX], closed;
-  int n = ball_2d(rm, k, ip, el, loc, &closed);
+  int n = rm_ball_2d(rm, k, ip, el, loc, &closed);
   if (n < 0 || n < (closed ? 3 : 2)) return 0;
 
-  pa_idx s = other_side(rm, te);
+  pa_idx s = rm_other_side(rm, te);
   pa_idx f = s >= 0 ? s / 3 : -1;
   double qold = 1, qnew = 1;
   for (int t = 0; t < n; t++) {
@@ -115,11 +115,12 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
     int l = loc[t];
     pa_idx a = v[RM_NX3(l)], b = v[RM_PV3(l)];
     if (a == q || b == q) return 0; /* q seen twice: not a simple ball */
-    double qq = elem_qual(rm, q, a, b);
+    double qq = rm_elem_qual(rm, q, a, b);
     if (qq < RM_QFLOOR || qq < qrel * qold) return 0;
     if (qq < qnew) qnew = qq;
     /* ping-pong guard: no new edge longer than lguard */
-    if (edge_len(rm, q, a) > rm->lguard || edge_len(rm, q, b) > rm->lguard)
+    if (rm_edge_len(rm, q, a) > rm->lguard ||
+        rm_edge_len(rm, q, b) > rm->lguard)
       return 0;
   }
 
@@ -149,11 +150,11 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
   for (int t = 0; t < n; t++) {
     pa_idx e = el[t];
     if (e == k || e == f) continue;
-    elem_changed(rm, e);
+    rm_elem_changed(rm, e);
     rm->ev[3 * e + loc[t]] = q;
-    elem_changed(rm, e);
+    rm_elem_changed(rm, e);
     const pa_idx *v = rm->ev + 3 * (size_t)e;
-    rm->q[e] = (float)elem_qual(rm, v[0], v[1], v[2]);
+    rm->q[e] = (float)rm_elem_qual(rm, v[0], v[1], v[2]);
     rm->etag[e] |= RM_E_TOUCHED;
   }
   /* link o1 <-> o2 (at most one of them is a feature record) */
@@ -165,14 +166,14 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
       rm->adj[x1] = x2;
       rm->adj[x2] = x1;
     } else if (x1 < 0) {
-      attach(rm, x2, x1, c1);
+      rm_attach(rm, x2, x1, c1);
     } else {
-      attach(rm, x1, x2, c2);
+      rm_attach(rm, x1, x2, c2);
     }
   }
   if (r2 >= 0) merge_records(rm, p, q, r1, r2);
-  elem_changed(rm, k); /* the third vertices' balls lose k and f */
-  if (f >= 0) elem_changed(rm, f);
+  rm_elem_changed(rm, k); /* the third vertices' balls lose k and f */
+  if (f >= 0) rm_elem_changed(rm, f);
   pa__rm_kill_elem(rm, k);
   if (f >= 0) pa__rm_kill_elem(rm, f);
   pa__rm_kill_vertex(rm, p);
@@ -190,7 +191,7 @@ static int remove_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   if (rm->vtag[p] & (RM_V_FROZEN | RM_V_CORNER)) return 0;
   pa_idx el[RM_BALL_MAX];
   int loc[RM_BALL_MAX], closed;
-  int n = ball_2d(rm, k, ip, el, loc, &closed);
+  int n = rm_ball_2d(rm, k, ip, el, loc, &closed);
   if (n < 0) return 0;
   /* candidate edges (element, face) from p, by increasing length */
   pa_idx ce[RM_BALL_MAX * 2], cr[RM_BALL_MAX * 2];
@@ -202,7 +203,7 @@ static int remove_vertex(pa__rmesh *rm, pa_idx k, int ip) {
     for (int side = 0; side < 2; side++) {
       int face = side ? RM_NX3(l) : RM_PV3(l);
       pa_idx r = rm->ev[3 * e + (side ? RM_PV3(l) : RM_NX3(l))];
-      double len = edge_len(rm, p, r);
+      double len = rm_edge_len(rm, p, r);
       if (len >= PA_METRIC_LEN_HI) continue;
       int dup = 0;
       for (int c = 0; c < nc; c++) dup |= cr[c] == r;
@@ -242,7 +243,7 @@ pa_status pa__rm_collapse_pass_2d(pa__rmesh *rm, double thr, long *n) {
     int best = -1, inr = 1;
     double lb = thr;
     for (int i = 0; i < 3; i++) {
-      double l = edge_len(rm, v[RM_NX3(i)], v[RM_PV3(i)]);
+      double l = rm_edge_len(rm, v[RM_NX3(i)], v[RM_PV3(i)]);
       inr &= l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
       if (l < lb) {
         lb = l;
@@ -251,7 +252,7 @@ pa_status pa__rm_collapse_pass_2d(pa__rmesh *rm, double thr, long *n) {
     }
     if (inr) rm->etag[k] |= RM_E_INRANGE;
     if (best < 0) continue;
-    pa_idx s = other_side(rm, 3 * k + best);
+    pa_idx s = rm_other_side(rm, 3 * k + best);
     if (s >= 0 && (rm->etag[s / 3] & RM_E_TOUCHED)) continue;
     if (pa__rm_collapse_edge_2d(rm, k, best, RM_NX3(best), 0.3) ||
         pa__rm_collapse_edge_2d(rm, k, best, RM_PV3(best), 0.3) ||

@@ -47,26 +47,26 @@
  * hsiz 0.002: 17); the bound only ends the runs that never settle. */
 #define RM_ROUNDS_MAX 80
 /* Splits + collapses at or below this share of the elements: the rounds
- * have settled (the first version's choice, not tuned since). */
+ * have settled (a small share; not tuned). */
 #define RM_ROUNDS_SETTLED 2e-4
 /* A count at or below this share of the elements is a ping-pong whatever
- * its balance: a few operations undoing each other (the first version's
- * whole stall rule, kept beside the balance test). */
+ * its balance: a few operations undoing each other (a stall rule of its
+ * own, beside the balance test). */
 #define RM_ROUNDS_TINY 5e-3
 
 /* The optimisation rounds' relaxed collapses take edges below this, a little
  * above 1/sqrt(2): a split of an edge just above sqrt(2) leaves two halves
  * just above 1/sqrt(2), which these collapses merge into an edge the next
  * split cuts at a better place. The mesh keeps the same share in range
- * with 4-11 % fewer triangles (UGAWG 2D, 5 passes: polar-2 1 881 -> 1 741
- * triangles, Mmg 1 716; bench_remesh2d shell 81 205 -> 74 520); 0.72 cost
- * 1.5 points in range on polar-1, 0.75 four. */
+ * with fewer triangles; a higher value loses edges in range (figures:
+ * docs/BENCHMARKS.md, "The 2D remesher"). */
 #define RM_LSHORT_OPT 0.715
 
 /* Sweeps of length moves after the optimisation rounds' quality moves and
  * at the end (driver_3d.c: RM3D_LENGTH_SWEEPS). Not in the refinement
- * rounds: there they keep short edges the collapses would remove, 4-8 %
- * more triangles on the UGAWG fields for the same share in range. */
+ * rounds: there they keep short edges the collapses would remove, more
+ * triangles for the same share in range (figures: docs/BENCHMARKS.md, "The
+ * 2D remesher"). */
 #define RM_LENGTH_SWEEPS 2
 
 static void report_pass(pa__rmesh *rm, const char *what, int pass, long n) {

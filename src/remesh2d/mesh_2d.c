@@ -499,15 +499,13 @@ static pa_status regather(void **p, size_t cap, size_t sz, const pa_idx *old,
   return PA_SUCCESS;
 }
 
-pa_status pa__rm_reorder(pa__rmesh *rm) {
+/* posv[v]: the new slot of vertex v, the live vertices along the Morton
+ * curve of their bounding box, then the dead slots (dropped); key: nvlive
+ * records of scratch. */
+static pa_status vertex_positions(const pa__rmesh *rm, pa__key64 *key,
+                                  pa_idx *posv) {
   pa_status st = PA_SUCCESS;
-  pa__key64 *key = NULL;
-  pa_idx *posv = NULL, *pose = NULL, *cnt = NULL, *inv = NULL;
-  const int nvpe = rm->nvpe;
-  const pa_idx nv = rm->nv, ne = rm->ne, n = rm->nvlive;
-  PA_CHECK(rm->dim == 2, PA_ERR_INTERNAL, "remesher reorder: 2D only");
-  /* live vertices along the Morton curve of their bounding box, then the
-   * dead slots (dropped) */
+  const pa_idx nv = rm->nv, n = rm->nvlive;
   double lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX};
   for (pa_idx v = 0; v < nv; v++)
     if (!(rm->vtag[v] & RM_V_DEAD))
@@ -517,8 +515,6 @@ pa_status pa__rm_reorder(pa__rmesh *rm) {
       }
   double ext = fmax(hi[0] - lo[0], hi[1] - lo[1]);
   double sc = ext > 0 ? 4294967295.0 / ext : 0;
-  PA_ALLOC(key, (size_t)n + 1);
-  PA_ALLOC(posv, (size_t)nv + 1);
   pa_idx k = 0, dead = n;
   for (pa_idx v = 0; v < nv; v++) {
     if (rm->vtag[v] & RM_V_DEAD) {
@@ -533,13 +529,19 @@ pa_status pa__rm_reorder(pa__rmesh *rm) {
   PA_CHECK(k == n, PA_ERR_INTERNAL, "remesher: live vertex count is off");
   qsort(key, (size_t)n, sizeof *key, pa__key64_cmp);
   for (pa_idx i = 0; i < n; i++) posv[key[i].idx] = i;
-  pa__free(key);
-  key = NULL;
+cleanup:
+  return st;
+}
 
-  /* live elements by their smallest new vertex (stable counting sort), then
-   * the dead slots; element contents renumbered before they move */
-  PA_ALLOC(pose, (size_t)ne + 1);
-  PA_CALLOC(cnt, (size_t)n + 1);
+/* pose[e]: the new slot of element e, the live elements by their smallest
+ * new vertex (stable counting sort; cnt: nvlive + 1 zeroed counters), then
+ * the dead slots. The elements' vertices are renumbered by posv here,
+ * before they move. */
+static pa_status elem_positions(pa__rmesh *rm, const pa_idx *posv,
+                                pa_idx *pose, pa_idx *cnt) {
+  pa_status st = PA_SUCCESS;
+  const int nvpe = rm->nvpe;
+  const pa_idx ne = rm->ne, n = rm->nvlive;
   for (pa_idx e = 0; e < ne; e++) {
     if (rm->etag[e] & RM_E_DEAD) continue;
     pa_idx *v = rm->ev + (size_t)nvpe * e, m = n;
@@ -553,17 +555,26 @@ pa_status pa__rm_reorder(pa__rmesh *rm) {
   for (pa_idx i = 0; i < n; i++) cnt[i + 1] += cnt[i];
   PA_CHECK(cnt[n] == rm->nelive, PA_ERR_INTERNAL,
            "remesher: live element count is off");
-  dead = rm->nelive;
+  pa_idx dead = rm->nelive;
   for (pa_idx e = 0; e < ne; e++)
     pose[e] = rm->etag[e] & RM_E_DEAD ? dead++ : cnt[pose[e]]++;
-  for (pa_idx e = 0; e < ne; e++) {
+cleanup:
+  return st;
+}
+
+/* Renumber the adjacency and the feature records (which keep their slots)
+ * to the new vertex and element slots. */
+static void renumber_links(pa__rmesh *rm, const pa_idx *posv,
+                           const pa_idx *pose) {
+  const int nvpe = rm->nvpe;
+  for (pa_idx e = 0; e < rm->ne; e++) {
     if (rm->etag[e] & RM_E_DEAD) continue;
     for (int i = 0; i < nvpe; i++) {
       pa_idx a = rm->adj[(size_t)nvpe * e + i];
       if (a >= 0) rm->adj[(size_t)nvpe * e + i] = nvpe * pose[a / nvpe] + a % nvpe;
     }
   }
-  for (pa_idx b = 0; b < rm->nb; b++) { /* feature records keep their slots */
+  for (pa_idx b = 0; b < rm->nb; b++) {
     if (rm->btag[b] & RM_B_DEAD) continue;
     for (int s = 0; s < 2; s++) {
       rm->bv[2 * b + s] = posv[rm->bv[2 * b + s]];
@@ -571,25 +582,28 @@ pa_status pa__rm_reorder(pa__rmesh *rm) {
       if (c >= 0) rm->bside[2 * b + s] = nvpe * pose[c / nvpe] + c % nvpe;
     }
   }
+}
 
-  /* move the records: out of place, one array at a time (the reads are
-   * independent, so the memory system overlaps them; following the
-   * permutation's cycles in place was 4 times slower), the peak growing by
-   * one array */
-  pa__free(cnt);
-  cnt = NULL;
-  PA_ALLOC(inv, (size_t)(nv > ne ? nv : ne) + 1);
-  for (pa_idx e = 0; e < ne; e++) inv[pose[e]] = e;
-  pa__free(pose);
-  pose = NULL;
+/* Move the element records to their new slots: inv[i], the old slot of
+ * new slot i. */
+static pa_status regather_elems(pa__rmesh *rm, const pa_idx *inv) {
+  pa_status st = PA_SUCCESS;
+  const int nvpe = rm->nvpe;
+  const pa_idx ne = rm->ne;
   PA_CALL(regather((void **)&rm->ev, rm->cape, nvpe * sizeof(pa_idx), inv, ne));
   PA_CALL(regather((void **)&rm->adj, rm->cape, nvpe * sizeof(pa_idx), inv, ne));
   PA_CALL(regather((void **)&rm->q, rm->cape, sizeof *rm->q, inv, ne));
   PA_CALL(regather((void **)&rm->eref, rm->cape, sizeof *rm->eref, inv, ne));
   PA_CALL(regather((void **)&rm->etag, rm->cape, sizeof *rm->etag, inv, ne));
-  for (pa_idx v = 0; v < nv; v++) inv[posv[v]] = v;
-  pa__free(posv);
-  posv = NULL;
+cleanup:
+  return st;
+}
+
+/* Move the vertex records to their new slots: inv[i], the old slot of new
+ * slot i. */
+static pa_status regather_vertices(pa__rmesh *rm, const pa_idx *inv) {
+  pa_status st = PA_SUCCESS;
+  const pa_idx nv = rm->nv;
   PA_CALL(regather((void **)&rm->x, rm->capv, 2 * sizeof(double), inv, nv));
   PA_CALL(regather((void **)&rm->met, rm->capv, rm->mcomp * sizeof(double), inv, nv));
   PA_CALL(regather((void **)&rm->met0, rm->capv, rm->mcomp * sizeof(double), inv, nv));
@@ -597,6 +611,40 @@ pa_status pa__rm_reorder(pa__rmesh *rm) {
   PA_CALL(regather((void **)&rm->vref, rm->capv, sizeof *rm->vref, inv, nv));
   PA_CALL(regather((void **)&rm->vflag, rm->capv, sizeof *rm->vflag, inv, nv));
   PA_CALL(regather((void **)&rm->vtag, rm->capv, sizeof *rm->vtag, inv, nv));
+cleanup:
+  return st;
+}
+
+pa_status pa__rm_reorder(pa__rmesh *rm) {
+  pa_status st = PA_SUCCESS;
+  pa__key64 *key = NULL;
+  pa_idx *posv = NULL, *pose = NULL, *cnt = NULL, *inv = NULL;
+  const pa_idx nv = rm->nv, ne = rm->ne, n = rm->nvlive;
+  PA_CHECK(rm->dim == 2, PA_ERR_INTERNAL, "remesher reorder: 2D only");
+  PA_ALLOC(key, (size_t)n + 1);
+  PA_ALLOC(posv, (size_t)nv + 1);
+  PA_CALL(vertex_positions(rm, key, posv));
+  pa__free(key);
+  key = NULL;
+  PA_ALLOC(pose, (size_t)ne + 1);
+  PA_CALLOC(cnt, (size_t)n + 1);
+  PA_CALL(elem_positions(rm, posv, pose, cnt));
+  renumber_links(rm, posv, pose);
+  /* Move the records out of place, one array at a time: the reads are
+   * independent, so the memory system overlaps them, where following the
+   * permutation's cycles in place is slower (figures: docs/BENCHMARKS.md,
+   * "The 2D remesher"); the peak grows by one array. */
+  pa__free(cnt);
+  cnt = NULL;
+  PA_ALLOC(inv, (size_t)(nv > ne ? nv : ne) + 1);
+  for (pa_idx e = 0; e < ne; e++) inv[pose[e]] = e;
+  pa__free(pose);
+  pose = NULL;
+  PA_CALL(regather_elems(rm, inv));
+  for (pa_idx v = 0; v < nv; v++) inv[posv[v]] = v;
+  pa__free(posv);
+  posv = NULL;
+  PA_CALL(regather_vertices(rm, inv));
   rm->nv = n; /* the dead slots, now last, are dropped */
   rm->vfree = -1;
   rm->ne = rm->nelive;
@@ -618,89 +666,123 @@ cleanup:
     (p) = NULL;                                                              \
   } while (0)
 
-pa_status pa__rm_writeback(pa__rmesh *rm, pa_mesh *mesh) {
+/* The arrays pa__rm_writeback builds for the mesh, with their counts. */
+typedef struct out_arrays {
+  double *coord, *met, *fval[PA_MESH_MAX_FIELDS];
+  int32_t *vref, *eref, *bref;
+  uint8_t *vflag, *eflag, *bflag;
+  pa_idx *elem, *bdry;
+  pa_idx nv, ne, nb;
+} out_arrays;
+
+static void out_free(out_arrays *o) {
+  pa__free(o->coord);
+  pa__free(o->met);
+  for (int k = 0; k < PA_MESH_MAX_FIELDS; k++) pa__free(o->fval[k]);
+  pa__free(o->vref);
+  pa__free(o->vflag);
+  pa__free(o->elem);
+  pa__free(o->eref);
+  pa__free(o->eflag);
+  pa__free(o->bdry);
+  pa__free(o->bref);
+  pa__free(o->bflag);
+}
+
+/* The live vertices' arrays, at their new indices map[v], freeing the
+ * working ones as they are copied. */
+static pa_status copy_vertices(pa__rmesh *rm, const pa_idx *map,
+                               out_arrays *o) {
   pa_status st = PA_SUCCESS;
-  int d = rm->dim, nvpe = rm->nvpe, mc = rm->mcomp;
-  pa_idx *map = NULL;
-  double *coord = NULL, *met = NULL, *fval[PA_MESH_MAX_FIELDS] = {0};
-  int32_t *vref = NULL, *eref = NULL, *bref = NULL;
-  uint8_t *vflag = NULL, *eflag = NULL, *bflag = NULL;
-  pa_idx *elem = NULL, *bdry = NULL;
-  pa_idx nvl = 0, nel = 0, nbl = 0;
-
-  PA_ALLOC(map, rm->nv);
-  for (pa_idx v = 0; v < rm->nv; v++)
-    map[v] = (rm->vtag[v] & RM_V_DEAD) ? -1 : nvl++;
-
-  /* vertex arrays, freeing the working ones as they are copied */
-  PA_ALLOC(coord, (size_t)d * nvl);
+  int d = rm->dim, mc = rm->mcomp;
+  pa_idx nvl = o->nv;
+  PA_ALLOC(o->coord, (size_t)d * nvl);
   for (pa_idx v = 0; v < rm->nv; v++)
     if (map[v] >= 0)
-      memcpy(coord + (size_t)d * map[v], rm->x + (size_t)d * v, d * sizeof(double));
+      memcpy(o->coord + (size_t)d * map[v], rm->x + (size_t)d * v,
+             d * sizeof(double));
   FREE_NULL(rm->x);
   /* the target metric goes back, not the working one relaxed at skins */
   const double *mtarget = rm->met0 ? rm->met0 : rm->met;
-  PA_ALLOC(met, (size_t)mc * nvl);
+  PA_ALLOC(o->met, (size_t)mc * nvl);
   for (pa_idx v = 0; v < rm->nv; v++)
     if (map[v] >= 0)
-      memcpy(met + (size_t)mc * map[v], mtarget + (size_t)mc * v,
+      memcpy(o->met + (size_t)mc * map[v], mtarget + (size_t)mc * v,
              mc * sizeof(double));
   FREE_NULL(rm->met);
   FREE_NULL(rm->met0);
   int off = 0;
   for (int k = 0; k < rm->nfield; k++) {
     int nc = rm->fncomp[k];
-    PA_ALLOC(fval[k], (size_t)nc * nvl);
+    PA_ALLOC(o->fval[k], (size_t)nc * nvl);
     for (pa_idx v = 0; v < rm->nv; v++)
       if (map[v] >= 0)
         for (int c = 0; c < nc; c++)
-          fval[k][(size_t)nc * map[v] + c] = rm->fld[(size_t)rm->fcomp * v + off + c];
+          o->fval[k][(size_t)nc * map[v] + c] =
+              rm->fld[(size_t)rm->fcomp * v + off + c];
     off += nc;
   }
   FREE_NULL(rm->fld);
-  PA_ALLOC(vref, nvl);
-  PA_ALLOC(vflag, nvl);
+  PA_ALLOC(o->vref, nvl);
+  PA_ALLOC(o->vflag, nvl);
   for (pa_idx v = 0; v < rm->nv; v++)
     if (map[v] >= 0) {
-      vref[map[v]] = rm->vref[v];
-      vflag[map[v]] = rm->vflag[v];
+      o->vref[map[v]] = rm->vref[v];
+      o->vflag[map[v]] = rm->vflag[v];
     }
   FREE_NULL(rm->vref);
   FREE_NULL(rm->vflag);
   FREE_NULL(rm->vtag);
+cleanup:
+  return st;
+}
 
-  /* elements */
+/* The live elements, freeing the working ones. */
+static pa_status copy_elements(pa__rmesh *rm, const pa_idx *map,
+                               out_arrays *o) {
+  pa_status st = PA_SUCCESS;
+  int nvpe = rm->nvpe;
   FREE_NULL(rm->adj);
   FREE_NULL(rm->q);
-  PA_ALLOC(elem, (size_t)nvpe * rm->nelive);
-  PA_ALLOC(eref, rm->nelive);
-  PA_ALLOC(eflag, rm->nelive);
+  PA_ALLOC(o->elem, (size_t)nvpe * rm->nelive);
+  PA_ALLOC(o->eref, rm->nelive);
+  PA_ALLOC(o->eflag, rm->nelive);
   for (pa_idx k = 0; k < rm->ne; k++) {
     if (rm->etag[k] & RM_E_DEAD) continue;
     for (int i = 0; i < nvpe; i++)
-      elem[(size_t)nvpe * nel + i] = map[rm->ev[(size_t)nvpe * k + i]];
-    eref[nel] = rm->eref[k];
-    eflag[nel] = rm->etag[k] & 0x0F;
-    nel++;
+      o->elem[(size_t)nvpe * o->ne + i] = map[rm->ev[(size_t)nvpe * k + i]];
+    o->eref[o->ne] = rm->eref[k];
+    o->eflag[o->ne] = rm->etag[k] & 0x0F;
+    o->ne++;
   }
   FREE_NULL(rm->ev);
   FREE_NULL(rm->eref);
   FREE_NULL(rm->etag);
+cleanup:
+  return st;
+}
 
-  /* boundary entities (2D: listed feature edges) */
-  PA_ALLOC(bdry, (size_t)d * rm->nblive);
-  PA_ALLOC(bref, rm->nblive);
-  PA_ALLOC(bflag, rm->nblive);
+/* The live boundary entities (2D: listed feature edges). */
+static pa_status copy_boundary(const pa__rmesh *rm, const pa_idx *map,
+                               out_arrays *o) {
+  pa_status st = PA_SUCCESS;
+  PA_ALLOC(o->bdry, (size_t)rm->dim * rm->nblive);
+  PA_ALLOC(o->bref, rm->nblive);
+  PA_ALLOC(o->bflag, rm->nblive);
   for (pa_idx b = 0; b < rm->nb; b++) {
     if ((rm->btag[b] & RM_B_DEAD) || !(rm->btag[b] & RM_B_LISTED)) continue;
-    bdry[2 * (size_t)nbl] = map[rm->bv[2 * (size_t)b]];
-    bdry[2 * (size_t)nbl + 1] = map[rm->bv[2 * (size_t)b + 1]];
-    bref[nbl] = rm->bref[b];
-    bflag[nbl] = rm->btag[b] & 0x0F;
-    nbl++;
+    o->bdry[2 * (size_t)o->nb] = map[rm->bv[2 * (size_t)b]];
+    o->bdry[2 * (size_t)o->nb + 1] = map[rm->bv[2 * (size_t)b + 1]];
+    o->bref[o->nb] = rm->bref[b];
+    o->bflag[o->nb] = rm->btag[b] & 0x0F;
+    o->nb++;
   }
+cleanup:
+  return st;
+}
 
-  /* Everything is built: install into the mesh. */
+/* Replace the arrays of mesh with those of o, which keeps none. */
+static void install(const pa__rmesh *rm, pa_mesh *mesh, out_arrays *o) {
   pa__mesh_invalidate(mesh);
   pa__free(mesh->coord);
   pa__free(mesh->vref);
@@ -712,45 +794,49 @@ pa_status pa__rm_writeback(pa__rmesh *rm, pa_mesh *mesh) {
   pa__free(mesh->bdry);
   pa__free(mesh->bref);
   pa__free(mesh->bflag);
-  mesh->coord = coord;
-  mesh->vref = vref;
-  mesh->vflag = vflag;
-  mesh->met = met;
-  mesh->met_ncomp = mc;
+  mesh->coord = o->coord;
+  mesh->vref = o->vref;
+  mesh->vflag = o->vflag;
+  mesh->met = o->met;
+  mesh->met_ncomp = rm->mcomp;
   for (int k = 0; k < rm->nfield; k++) {
     pa__free(mesh->field[k].val);
-    mesh->field[k].val = fval[k];
-    fval[k] = NULL;
+    mesh->field[k].val = o->fval[k];
+    o->fval[k] = NULL;
   }
-  mesh->nv = nvl;
-  mesh->capv = (size_t)nvl;
-  mesh->elem = elem;
-  mesh->eref = eref;
-  mesh->eflag = eflag;
-  mesh->ne = nel;
+  mesh->nv = o->nv;
+  mesh->capv = (size_t)o->nv;
+  mesh->elem = o->elem;
+  mesh->eref = o->eref;
+  mesh->eflag = o->eflag;
+  mesh->ne = o->ne;
   mesh->cape = (size_t)rm->nelive;
-  mesh->bdry = bdry;
-  mesh->bref = bref;
-  mesh->bflag = bflag;
-  mesh->nb = nbl;
+  mesh->bdry = o->bdry;
+  mesh->bref = o->bref;
+  mesh->bflag = o->bflag;
+  mesh->nb = o->nb;
   mesh->capb = (size_t)rm->nblive;
-  coord = met = NULL;
-  vref = eref = bref = NULL;
-  vflag = eflag = bflag = NULL;
-  elem = bdry = NULL;
+  o->coord = o->met = NULL;
+  o->vref = o->eref = o->bref = NULL;
+  o->vflag = o->eflag = o->bflag = NULL;
+  o->elem = o->bdry = NULL;
+}
+
+pa_status pa__rm_writeback(pa__rmesh *rm, pa_mesh *mesh) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *map = NULL;
+  out_arrays o = {0};
+  PA_ALLOC(map, rm->nv);
+  for (pa_idx v = 0; v < rm->nv; v++)
+    map[v] = (rm->vtag[v] & RM_V_DEAD) ? -1 : o.nv++;
+  PA_CALL(copy_vertices(rm, map, &o));
+  PA_CALL(copy_elements(rm, map, &o));
+  PA_CALL(copy_boundary(rm, map, &o));
+  /* Everything is built: install into the mesh. */
+  install(rm, mesh, &o);
 cleanup:
   pa__free(map);
-  pa__free(coord);
-  pa__free(met);
-  for (int k = 0; k < PA_MESH_MAX_FIELDS; k++) pa__free(fval[k]);
-  pa__free(vref);
-  pa__free(vflag);
-  pa__free(elem);
-  pa__free(eref);
-  pa__free(eflag);
-  pa__free(bdry);
-  pa__free(bref);
-  pa__free(bflag);
+  out_free(&o);
   return st;
 }
 

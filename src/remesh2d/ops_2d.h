@@ -31,20 +31,20 @@
 #define RM_NX3(i) ((i) == 2 ? 0 : (i) + 1)
 #define RM_PV3(i) ((i) == 0 ? 2 : (i) - 1)
 
-static inline double elem_qual(const pa__rmesh *rm, pa_idx a, pa_idx b,
-                               pa_idx c) {
+static inline double rm_elem_qual(const pa__rmesh *rm, pa_idx a, pa_idx b,
+                                  pa_idx c) {
   int mc = rm->mcomp;
   return pa__qual2(mc, RM_X(a), RM_X(b), RM_X(c), RM_M(a), RM_M(b), RM_M(c));
 }
 
-static inline double edge_len(const pa__rmesh *rm, pa_idx a, pa_idx b) {
+static inline double rm_edge_len(const pa__rmesh *rm, pa_idx a, pa_idx b) {
   int mc = rm->mcomp;
   return pa__len2(mc, RM_X(a), RM_X(b), RM_M(a), RM_M(b));
 }
 
 /* Face on the other side of face `code` (through a feature record if need
  * be), or -1 on the domain boundary. */
-static inline pa_idx other_side(const pa__rmesh *rm, pa_idx code) {
+static inline pa_idx rm_other_side(const pa__rmesh *rm, pa_idx code) {
   pa_idx o = rm->adj[code];
   if (o >= 0) return o;
   pa_idx b = -o - 1;
@@ -53,16 +53,17 @@ static inline pa_idx other_side(const pa__rmesh *rm, pa_idx code) {
 
 /* Edge (face code) can be split, collapsed or swapped: no frozen element on
  * either side, no frozen feature record. */
-static inline int edge_free(const pa__rmesh *rm, pa_idx code) {
+static inline int rm_edge_free(const pa__rmesh *rm, pa_idx code) {
   if (rm->etag[code / 3] & RM_E_FROZEN) return 0;
   pa_idx o = rm->adj[code];
   if (o < 0 && (rm->btag[-o - 1] & RM_B_FROZEN)) return 0;
-  pa_idx s = other_side(rm, code);
+  pa_idx s = rm_other_side(rm, code);
   return s < 0 || !(rm->etag[s / 3] & RM_E_FROZEN);
 }
 
 /* Attach new face `code` to outer value o, which was attached to `oldcode`. */
-static inline void attach(pa__rmesh *rm, pa_idx code, pa_idx o, pa_idx oldcode) {
+static inline void rm_attach(pa__rmesh *rm, pa_idx code, pa_idx o,
+                             pa_idx oldcode) {
   rm->adj[code] = o;
   if (o >= 0) {
     rm->adj[o] = code;
@@ -79,7 +80,7 @@ static inline void attach(pa__rmesh *rm, pa_idx code, pa_idx o, pa_idx oldcode) 
  * Call with k's current vertices and, on a rewrite, before its adjacency is
  * updated (the old neighbours are the ones to tell; a new neighbour of a
  * rewritten element is an old neighbour of the rewritten group). */
-static inline void elem_changed(pa__rmesh *rm, pa_idx k) {
+static inline void rm_elem_changed(pa__rmesh *rm, pa_idx k) {
   const pa_idx *v = rm->ev + 3 * (size_t)k;
   const pa_idx *a = rm->adj + 3 * (size_t)k;
   rm->etag[k] &= (uint8_t)~(RM_E_INRANGE | RM_E_NOSWAP);
@@ -94,11 +95,11 @@ static inline void elem_changed(pa__rmesh *rm, pa_idx k) {
 }
 
 /* Write element k (an existing or a new slot). The caller has called
- * elem_changed on every existing element it rewrites, before the rewrite;
+ * rm_elem_changed on every existing element it rewrites, before the rewrite;
  * the vertices of the new elements are then those old ones plus new vertices
  * (no cached flags), and new slots start with no cached flags either. */
-static inline void set_elem(pa__rmesh *rm, pa_idx k, pa_idx a, pa_idx b,
-                            pa_idx c, double q) {
+static inline void rm_set_elem(pa__rmesh *rm, pa_idx k, pa_idx a, pa_idx b,
+                               pa_idx c, double q) {
   rm->ev[3 * k] = a;
   rm->ev[3 * k + 1] = b;
   rm->ev[3 * k + 2] = c;
@@ -112,8 +113,8 @@ static inline void set_elem(pa__rmesh *rm, pa_idx k, pa_idx a, pa_idx b,
  * Fills el[] and loc[] (local index of p) and returns the count, or -1 if the
  * ball exceeds RM_BALL_MAX. *closed is 1 for an interior vertex.
  */
-static inline int ball_2d(const pa__rmesh *rm, pa_idx k, int ip, pa_idx *el,
-                          int *loc, int *closed) {
+static inline int rm_ball_2d(const pa__rmesh *rm, pa_idx k, int ip, pa_idx *el,
+                             int *loc, int *closed) {
   int n = 0;
   el[n] = k;
   loc[n++] = ip;
@@ -121,7 +122,7 @@ static inline int ball_2d(const pa__rmesh *rm, pa_idx k, int ip, pa_idx *el,
   int l = ip;
   *closed = 0;
   for (;;) {
-    pa_idx s = other_side(rm, 3 * c + RM_NX3(l));
+    pa_idx s = rm_other_side(rm, 3 * c + RM_NX3(l));
     if (s < 0) break;
     c = s / 3;
     l = RM_NX3(s % 3);
@@ -137,7 +138,7 @@ static inline int ball_2d(const pa__rmesh *rm, pa_idx k, int ip, pa_idx *el,
   c = k;
   l = ip;
   for (;;) {
-    pa_idx s = other_side(rm, 3 * c + RM_PV3(l));
+    pa_idx s = rm_other_side(rm, 3 * c + RM_PV3(l));
     if (s < 0) break;
     c = s / 3;
     l = RM_PV3(s % 3);

@@ -86,8 +86,8 @@ enum {
 #define RM_LGAIN 0.97
 /* The length the 2D length moves aim at: a little above 1, where an edge
  * is in range with room on both sides, so the mesh keeps fewer vertices
- * (UGAWG polar-2 2D: 1 881 triangles against 1 901 when aiming at 1, both
- * 99.9 % in range; Mmg makes 1 716 at 94.6 %). */
+ * for the same share in range (figures: docs/BENCHMARKS.md, "The 2D
+ * remesher"). */
 #define RM_LTARGET 1.2
 
 typedef struct pa__rmesh {

@@ -39,8 +39,8 @@ static void apply_move(pa__rmesh *rm, pa_idx p, const pa_idx *el,
   xp[1] = np[1];
   for (int s = 0; s < n; s++) {
     const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-    rm->q[el[s]] = (float)elem_qual(rm, v[0], v[1], v[2]);
-    elem_changed(rm, el[s]); /* p's neighbours see a new ball */
+    rm->q[el[s]] = (float)rm_elem_qual(rm, v[0], v[1], v[2]);
+    rm_elem_changed(rm, el[s]); /* p's neighbours see a new ball */
   }
   rm->nmove++;
 }
@@ -52,7 +52,7 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   pa_idx p = rm->ev[3 * k + ip];
   pa_idx el[RM_BALL_MAX];
   int loc[RM_BALL_MAX], closed;
-  int n = ball_2d(rm, k, ip, el, loc, &closed);
+  int n = rm_ball_2d(rm, k, ip, el, loc, &closed);
   if (n < 3 || !closed) return 0;
   double t[3];
   rm_tensor2(mc, RM_M(p), t);
@@ -92,7 +92,7 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
     int ok = 1;
     for (int s = 0; s < n && ok; s++) {
       const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-      qn[s] = elem_qual(rm, v[0], v[1], v[2]);
+      qn[s] = rm_elem_qual(rm, v[0], v[1], v[2]);
       if (qn[s] < RM_QFLOOR || qn[s] < qold) ok = 0;
       if (qn[s] < qmin) qmin = qn[s];
       qm += qn[s];
@@ -105,7 +105,8 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
       xp[0] = x0;
       xp[1] = y0;
       for (int s = 0; s < n; s++) {
-        double l = edge_len(rm, p, rm->ev[3 * (size_t)el[s] + RM_NX3(loc[s])]);
+        double l =
+            rm_edge_len(rm, p, rm->ev[3 * (size_t)el[s] + RM_NX3(loc[s])]);
         inr[s] = l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
       }
       xp[0] = np[0];
@@ -114,7 +115,7 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
     }
     for (int s = 0; s < n && ok; s++) {
       if (!inr[s]) continue;
-      double l = edge_len(rm, p, rm->ev[3 * (size_t)el[s] + RM_NX3(loc[s])]);
+      double l = rm_edge_len(rm, p, rm->ev[3 * (size_t)el[s] + RM_NX3(loc[s])]);
       ok = l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
     }
     if (!ok) continue;
@@ -143,7 +144,7 @@ long pa__rm_smooth_pass_2d(pa__rmesh *rm) {
        * not make p eligible again from another start element */
       rm->vtag[p] |= RM_V_DONE;
       /* the answer depends only on p's ball: a rejected p stays settled
-       * until an operator or a move changes that ball (elem_changed) */
+       * until an operator or a move changes that ball (rm_elem_changed) */
       if (tp & RM_V_SETTLED) continue;
       if (move_vertex(rm, k, i)) cnt++;
       else rm->vtag[p] |= RM_V_SETTLED;
@@ -179,7 +180,7 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   pa_idx p = rm->ev[3 * k + ip];
   pa_idx el[RM_BALL_MAX], nb[RM_BALL_MAX];
   int loc[RM_BALL_MAX], closed;
-  int n = ball_2d(rm, k, ip, el, loc, &closed);
+  int n = rm_ball_2d(rm, k, ip, el, loc, &closed);
   if (n < 3 || !closed) return 0;
   double qold = 1;
   for (int s = 0; s < n; s++) {
@@ -240,7 +241,7 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
     int ok = 1;
     for (int s = 0; s < n && ok; s++) {
       const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-      double q = elem_qual(rm, v[0], v[1], v[2]);
+      double q = rm_elem_qual(rm, v[0], v[1], v[2]);
       if (!(q >= qfloor) || q < RM_QFLOOR) ok = 0;
     }
     xp[0] = x0;

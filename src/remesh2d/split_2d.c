@@ -7,35 +7,48 @@
  */
 #include "remesh2d/ops_2d.h"
 
-/*
- * Split face i of element k at its midpoint (on a feature: the midpoint of
- * the reconstructed curve). Returns 1 if done, 0 if rejected; *st on memory
- * failure (then nothing changed).
- */
-static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
-  pa_idx te = 3 * k + i;
-  int i1 = RM_NX3(i), i2 = RM_PV3(i);
-  pa_idx p0 = rm->ev[3 * k + i], a = rm->ev[3 * k + i1], b = rm->ev[3 * k + i2];
-  pa_idx o = rm->adj[te];
-  pa_idx feat = o < 0 ? -o - 1 : -1;
-  pa_idx fcode = o >= 0 ? o : other_side(rm, te);
-  pa_idx f = -1, p1 = -1;
-  int j = 0, j1 = 0, j2 = 0;
-  if (fcode >= 0) {
-    f = fcode / 3;
-    j = fcode % 3;
-    j1 = RM_NX3(j);
-    j2 = RM_PV3(j);
-    p1 = rm->ev[3 * f + j];
-  }
-  *st = pa__rm_reserve(rm, 1, 2, 1);
-  if (*st) return 0;
+/* An edge to split: face i of element k (vertex p0 opposite, ends a and b),
+ * the element f across it (face j, vertex p1 opposite) or -1, and the
+ * feature record feat on it or -1. */
+typedef struct split_cfg {
+  pa_idx k, f, feat, p0, a, b, p1;
+  int i, i1, i2, j, j1, j2;
+} split_cfg;
 
-  pa_idx m;
+/* The configuration of face i of element k. */
+static void edge_config(const pa__rmesh *rm, pa_idx k, int i, split_cfg *s) {
+  pa_idx te = 3 * k + i;
+  pa_idx o = rm->adj[te];
+  pa_idx fcode = o >= 0 ? o : rm_other_side(rm, te);
+  s->k = k;
+  s->i = i;
+  s->i1 = RM_NX3(i);
+  s->i2 = RM_PV3(i);
+  s->p0 = rm->ev[3 * k + i];
+  s->a = rm->ev[3 * k + s->i1];
+  s->b = rm->ev[3 * k + s->i2];
+  s->feat = o < 0 ? -o - 1 : -1;
+  s->f = -1;
+  s->p1 = -1;
+  s->j = s->j1 = s->j2 = 0;
+  if (fcode >= 0) {
+    s->f = fcode / 3;
+    s->j = fcode % 3;
+    s->j1 = RM_NX3(s->j);
+    s->j2 = RM_PV3(s->j);
+    s->p1 = rm->ev[3 * s->f + s->j];
+  }
+}
+
+/* The new vertex at the midpoint of the edge (on a feature, of the
+ * reconstructed curve, with its tangent in tm), its fields interpolated;
+ * room reserved by the caller. */
+static pa_idx new_midpoint(pa__rmesh *rm, const split_cfg *s, double *tm) {
+  pa_idx m, a = s->a, b = s->b;
   pa__rm_new_vertex(rm, &m); /* cannot fail after the reserve */
-  double *xm = rm->x + 2 * (size_t)m, tm[2] = {0, 0};
-  if (feat >= 0) {
-    pa__rm_curve_point_2d(rm, feat, 0.5, xm, tm);
+  double *xm = rm->x + 2 * (size_t)m;
+  if (s->feat >= 0) {
+    pa__rm_curve_point_2d(rm, s->feat, 0.5, xm, tm);
   } else {
     xm[0] = 0.5 * (RM_X(a)[0] + RM_X(b)[0]);
     xm[1] = 0.5 * (RM_X(a)[1] + RM_X(b)[1]);
@@ -43,27 +56,39 @@ static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
   pa_idx src[2] = {a, b};
   double w[2] = {0.5, 0.5};
   pa__rm_interp(rm, m, 2, src, w);
+  return m;
+}
 
-  double q1 = elem_qual(rm, p0, a, m), q2 = elem_qual(rm, p0, m, b);
-  double q3 = 1, q4 = 1;
-  if (f >= 0) {
-    q3 = elem_qual(rm, p1, b, m);
-    q4 = elem_qual(rm, p1, m, a);
+/* The qualities q of the four halves (1 where there is no f), and whether
+ * all are at least RM_QFLOOR. */
+static int halves_ok(pa__rmesh *rm, const split_cfg *s, pa_idx m, double *q) {
+  q[0] = rm_elem_qual(rm, s->p0, s->a, m);
+  q[1] = rm_elem_qual(rm, s->p0, m, s->b);
+  q[2] = 1;
+  q[3] = 1;
+  if (s->f >= 0) {
+    q[2] = rm_elem_qual(rm, s->p1, s->b, m);
+    q[3] = rm_elem_qual(rm, s->p1, m, s->a);
   }
-  if (q1 < RM_QFLOOR || q2 < RM_QFLOOR || q3 < RM_QFLOOR || q4 < RM_QFLOOR) {
-    pa__rm_kill_vertex(rm, m);
-    return 0;
-  }
+  return !(q[0] < RM_QFLOOR || q[1] < RM_QFLOOR || q[2] < RM_QFLOOR ||
+           q[3] < RM_QFLOOR);
+}
 
-  pa_idx oA = rm->adj[3 * k + i1], oB = rm->adj[3 * k + i2];
+/* Cut k, and f if any, in two at m: T1 = k (p0 a m), T2 = *k2 (p0 m b),
+ * T3 = f (p1 b m), T4 = *f2 (p1 m a), with the adjacency of all but the
+ * faces on the split edge (faces 0). */
+static void cut_elements(pa__rmesh *rm, const split_cfg *s, pa_idx m,
+                         const double *q, pa_idx *k2p, pa_idx *f2p) {
+  pa_idx k = s->k, f = s->f;
+  pa_idx oA = rm->adj[3 * k + s->i1], oB = rm->adj[3 * k + s->i2];
   pa_idx fA = -1, fB = -1;
   if (f >= 0) {
-    fB = rm->adj[3 * f + j1];
-    fA = rm->adj[3 * f + j2];
+    fB = rm->adj[3 * f + s->j1];
+    fA = rm->adj[3 * f + s->j2];
   }
-  pa_idx k2, f2 = -1, nb2 = -1;
-  elem_changed(rm, k);
-  if (f >= 0) elem_changed(rm, f);
+  pa_idx k2, f2 = -1;
+  rm_elem_changed(rm, k);
+  if (f >= 0) rm_elem_changed(rm, f);
   pa__rm_new_elem(rm, &k2);
   rm->eref[k2] = rm->eref[k];
   rm->etag[k2] = rm->etag[k] & 0x0F;
@@ -72,55 +97,83 @@ static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
     rm->eref[f2] = rm->eref[f];
     rm->etag[f2] = rm->etag[f] & 0x0F;
   }
-  /* T1 = k (p0 a m), T2 = k2 (p0 m b), T3 = f (p1 b m), T4 = f2 (p1 m a) */
-  set_elem(rm, k, p0, a, m, q1);
-  set_elem(rm, k2, p0, m, b, q2);
-  attach(rm, 3 * k + 2, oB, 3 * k + i2);
-  attach(rm, 3 * k2 + 1, oA, 3 * k + i1);
+  rm_set_elem(rm, k, s->p0, s->a, m, q[0]);
+  rm_set_elem(rm, k2, s->p0, m, s->b, q[1]);
+  rm_attach(rm, 3 * k + 2, oB, 3 * k + s->i2);
+  rm_attach(rm, 3 * k2 + 1, oA, 3 * k + s->i1);
   rm->adj[3 * k + 1] = 3 * k2 + 2;
   rm->adj[3 * k2 + 2] = 3 * k + 1;
   if (f >= 0) {
-    set_elem(rm, f, p1, b, m, q3);
-    set_elem(rm, f2, p1, m, a, q4);
-    attach(rm, 3 * f + 2, fA, 3 * f + j2);
-    attach(rm, 3 * f2 + 1, fB, 3 * f + j1);
+    rm_set_elem(rm, f, s->p1, s->b, m, q[2]);
+    rm_set_elem(rm, f2, s->p1, m, s->a, q[3]);
+    rm_attach(rm, 3 * f + 2, fA, 3 * f + s->j2);
+    rm_attach(rm, 3 * f2 + 1, fB, 3 * f + s->j1);
     rm->adj[3 * f + 1] = 3 * f2 + 2;
     rm->adj[3 * f2 + 2] = 3 * f + 1;
   }
-  if (feat < 0) {
+  *k2p = k2;
+  *f2p = f2;
+}
+
+/* Split the feature record (u, w) on the edge into (u, m) and a new (m, w),
+ * each held by the halves on its side; m becomes a feature vertex. */
+static void split_feature(pa__rmesh *rm, const split_cfg *s, pa_idx m,
+                          const double *tm, pa_idx k2, pa_idx f2) {
+  pa_idx k = s->k, f = s->f, feat = s->feat, nb2;
+  pa__rm_new_feat(rm, &nb2);
+  pa_idx u = rm->bv[2 * feat], wv = rm->bv[2 * feat + 1];
+  rm->bv[2 * nb2] = m;
+  rm->bv[2 * nb2 + 1] = wv;
+  rm->bv[2 * feat + 1] = m;
+  rm->bref[nb2] = rm->bref[feat];
+  rm->btag[nb2] = rm->btag[feat];
+  rm->btan[4 * nb2] = tm[0];
+  rm->btan[4 * nb2 + 1] = tm[1];
+  rm->btan[4 * nb2 + 2] = rm->btan[4 * feat + 2];
+  rm->btan[4 * nb2 + 3] = rm->btan[4 * feat + 3];
+  rm->btan[4 * feat + 2] = tm[0];
+  rm->btan[4 * feat + 3] = tm[1];
+  /* half (a, m) is held by T1 face 0 and T4 face 0 */
+  pa_idx ram = u == s->a ? feat : nb2, rmb = u == s->a ? nb2 : feat;
+  rm->adj[3 * k] = -ram - 1;
+  rm->adj[3 * k2] = -rmb - 1;
+  rm->bside[2 * ram] = 3 * k;
+  rm->bside[2 * ram + 1] = f >= 0 ? 3 * f2 : -1;
+  rm->bside[2 * rmb] = 3 * k2;
+  rm->bside[2 * rmb + 1] = f >= 0 ? 3 * f : -1;
+  if (f >= 0) {
+    rm->adj[3 * f2] = -ram - 1;
+    rm->adj[3 * f] = -rmb - 1;
+  }
+  rm->vtag[m] |= RM_V_FEAT;
+  rm->vref[m] = rm->bref[feat];
+}
+
+/*
+ * Split face i of element k at its midpoint (on a feature: the midpoint of
+ * the reconstructed curve). Returns 1 if done, 0 if rejected; *st on memory
+ * failure (then nothing changed).
+ */
+static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
+  split_cfg s;
+  edge_config(rm, k, i, &s);
+  *st = pa__rm_reserve(rm, 1, 2, 1);
+  if (*st) return 0;
+  double tm[2] = {0, 0}, q[4];
+  pa_idx m = new_midpoint(rm, &s, tm);
+  if (!halves_ok(rm, &s, m, q)) {
+    pa__rm_kill_vertex(rm, m);
+    return 0;
+  }
+  pa_idx k2, f2;
+  cut_elements(rm, &s, m, q, &k2, &f2);
+  if (s.feat < 0) { /* an interior edge: join the halves across it */
     rm->adj[3 * k] = 3 * f2;
     rm->adj[3 * f2] = 3 * k;
-    rm->adj[3 * k2] = 3 * f;
-    rm->adj[3 * f] = 3 * k2;
+    rm->adj[3 * k2] = 3 * s.f;
+    rm->adj[3 * s.f] = 3 * k2;
   } else {
-    /* record (u, w) -> (u, m) + new (m, w); sides by which half they hold */
-    pa__rm_new_feat(rm, &nb2);
-    pa_idx u = rm->bv[2 * feat], wv = rm->bv[2 * feat + 1];
-    rm->bv[2 * nb2] = m;
-    rm->bv[2 * nb2 + 1] = wv;
-    rm->bv[2 * feat + 1] = m;
-    rm->bref[nb2] = rm->bref[feat];
-    rm->btag[nb2] = rm->btag[feat];
-    rm->btan[4 * nb2] = tm[0];
-    rm->btan[4 * nb2 + 1] = tm[1];
-    rm->btan[4 * nb2 + 2] = rm->btan[4 * feat + 2];
-    rm->btan[4 * nb2 + 3] = rm->btan[4 * feat + 3];
-    rm->btan[4 * feat + 2] = tm[0];
-    rm->btan[4 * feat + 3] = tm[1];
-    /* half (a, m) is held by T1 face 0 and T4 face 0 */
-    pa_idx ram = u == a ? feat : nb2, rmb = u == a ? nb2 : feat;
-    rm->adj[3 * k] = -ram - 1;
-    rm->adj[3 * k2] = -rmb - 1;
-    rm->bside[2 * ram] = 3 * k;
-    rm->bside[2 * ram + 1] = f >= 0 ? 3 * f2 : -1;
-    rm->bside[2 * rmb] = 3 * k2;
-    rm->bside[2 * rmb + 1] = f >= 0 ? 3 * f : -1;
-    if (f >= 0) {
-      rm->adj[3 * f2] = -ram - 1;
-      rm->adj[3 * f] = -rmb - 1;
-    }
-    rm->vtag[m] |= RM_V_FEAT;
-    rm->vref[m] = rm->bref[feat];
+    split_feature(rm, &s, m, tm, k2, f2);
   }
   rm->nsplit++;
   return 1;
@@ -135,9 +188,9 @@ static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
   int best = -1, in = 1;
   double lb = thr;
   for (int i = 0; i < 3; i++) {
-    double l = edge_len(rm, v[RM_NX3(i)], v[RM_PV3(i)]);
+    double l = rm_edge_len(rm, v[RM_NX3(i)], v[RM_PV3(i)]);
     in &= l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
-    if (l > lb && edge_free(rm, 3 * k + i)) {
+    if (l > lb && rm_edge_free(rm, 3 * k + i)) {
       lb = l;
       best = i;
     }
@@ -163,7 +216,7 @@ pa_status pa__rm_split_pass_2d(pa__rmesh *rm, double thr, long *n) {
     if (i < 0) continue;
     /* Longest-edge propagation: split only if the edge is also the longest
      * free edge of the neighbour (else the neighbour goes first). */
-    pa_idx s = other_side(rm, 3 * k + i);
+    pa_idx s = rm_other_side(rm, 3 * k + i);
     if (s >= 0) {
       pa_idx f = s / 3;
       if (rm->etag[f] & RM_E_TOUCHED) continue;

@@ -19,21 +19,21 @@ static int swap_edge(pa__rmesh *rm, pa_idx k, int i, double gain) {
   pa_idx p0 = rm->ev[3 * k + i], a = rm->ev[3 * k + i1], b = rm->ev[3 * k + i2];
   pa_idx p1 = rm->ev[3 * f + j];
   double qo = rm->q[k] < rm->q[f] ? rm->q[k] : rm->q[f];
-  double q1 = elem_qual(rm, p0, a, p1);
+  double q1 = rm_elem_qual(rm, p0, a, p1);
   if (q1 < RM_QFLOOR || q1 <= gain * qo) return 0;
-  double q2 = elem_qual(rm, p1, b, p0);
+  double q2 = rm_elem_qual(rm, p1, b, p0);
   if (q2 < RM_QFLOOR || q2 <= gain * qo) return 0;
   pa_idx oA = rm->adj[3 * k + i1], oB = rm->adj[3 * k + i2];
   pa_idx fB = rm->adj[3 * f + j1], fA = rm->adj[3 * f + j2];
   /* T1 = k (p0 a p1), T2 = f (p1 b p0) */
-  elem_changed(rm, k);
-  elem_changed(rm, f);
-  set_elem(rm, k, p0, a, p1, q1);
-  set_elem(rm, f, p1, b, p0, q2);
-  attach(rm, 3 * k, fB, 3 * f + j1);
-  attach(rm, 3 * k + 2, oB, 3 * k + i2);
-  attach(rm, 3 * f, oA, 3 * k + i1);
-  attach(rm, 3 * f + 2, fA, 3 * f + j2);
+  rm_elem_changed(rm, k);
+  rm_elem_changed(rm, f);
+  rm_set_elem(rm, k, p0, a, p1, q1);
+  rm_set_elem(rm, f, p1, b, p0, q2);
+  rm_attach(rm, 3 * k, fB, 3 * f + j1);
+  rm_attach(rm, 3 * k + 2, oB, 3 * k + i2);
+  rm_attach(rm, 3 * f, oA, 3 * k + i1);
+  rm_attach(rm, 3 * f + 2, fA, 3 * f + j2);
   rm->adj[3 * k + 1] = 3 * f + 1;
   rm->adj[3 * f + 1] = 3 * k + 1;
   rm->nswap++;
@@ -78,7 +78,7 @@ long pa__rm_sliver_pass_2d(pa__rmesh *rm, double qbad) {
       int best = 0;
       double lb = 1e300;
       for (int i = 0; i < 3; i++) {
-        double l = edge_len(rm, v[RM_NX3(i)], v[RM_PV3(i)]);
+        double l = rm_edge_len(rm, v[RM_NX3(i)], v[RM_PV3(i)]);
         if (l < lb) {
           lb = l;
           best = i;

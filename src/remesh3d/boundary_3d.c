@@ -40,7 +40,7 @@ static void rec_normal(const rm3d *m, pa_idx r, double *n) {
 static int outer_face(const rm3d *m, pa_idx k, int f, pa_idx *fv, double *n) {
   if (!((m->tflag[k] >> f) & 1) || m->adj[4 * (size_t)k + f] >= 0) return 0;
   const pa_idx *v = m->tv + 4 * (size_t)k;
-  for (int j = 0; j < 3; j++) fv[j] = v[rm3d_face[f][j]];
+  for (int j = 0; j < 3; j++) fv[j] = v[pa__rm3d_face[f][j]];
   rm3d_tri_cross(m->x + 3 * (size_t)fv[0], m->x + 3 * (size_t)fv[1],
                  m->x + 3 * (size_t)fv[2], n);
   return 1;
@@ -153,10 +153,11 @@ static void mark_corners(rm3d *m, int use_angle, uint8_t *nfeat,
 /* Normals of boundary vertices off features, from their outward free
  * faces. A vertex whose feature edges all border a frozen triangle (the
  * skin of a piece of the parallel loop meeting the boundary: nborder[x] ==
- * nfeat[x]) gets one too: without it every split towards it took the
- * chord's midpoint, so the input's facets stayed flat along every skin on a
- * curved boundary, their vertices planar in the next iteration, and the
- * junctions with the curved refinement around made needles and folds. A
+ * nfeat[x]) gets one too: without it every split towards it would take the
+ * chord's midpoint, so the input's facets would stay flat along every skin
+ * on a curved boundary, their vertices planar in the next iteration, and
+ * the junctions with the curved refinement around would make needles and
+ * folds. A
  * vertex is curved (RM3D_V_CURVED) when one of its faces deviates from its
  * normal; m->nrm is kept only if one is. */
 static pa_status curved_normals(rm3d *m, const uint8_t *nborder,

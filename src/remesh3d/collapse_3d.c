@@ -173,8 +173,8 @@ static pa_status surface_kept(const rm3d *m, pa_idx p, pa_idx q,
     const pa_idx *v = m->tv + 4 * (size_t)t;
     for (int f = 0; f < 4; f++) {
       if (f == ip || !((fl >> f) & 1)) continue;
-      pa_idx key[3] = {v[rm3d_face[f][0]], v[rm3d_face[f][1]],
-                       v[rm3d_face[f][2]]};
+      pa_idx key[3] = {v[pa__rm3d_face[f][0]], v[pa__rm3d_face[f][1]],
+                       v[pa__rm3d_face[f][2]]};
       pa_idx r = pa__rm3d_table_find(&m->tri, key);
       if (r < 0)
         return pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
@@ -304,56 +304,39 @@ cleanup:
   return st;
 }
 
-/* Midpoint collapse: q first moves to the middle of (p,q) -- only where it
- * stays on its entity: an interior q (then p is interior too), a q of a
- * planar patch with p in that plane, a q of a straight ridge with p on that
- * line --, its ball checked like a collapse (quality, length guard); then
- * p collapses onto it with every check of pa__rm3d_collapse. When that
- * collapse is refused, q goes back (coordinates, metric, cached qualities
- * bit for bit). */
-pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
-                                int *done) {
-  pa_status st = PA_SUCCESS;
-  pa_idx bq[RM3D_MAXBALL];
-  float oq[RM3D_MAXBALL], nq[RM3D_MAXBALL];
-  *done = 0;
+/* Whether q, of ball bq[0..nb), stays on its entity at the middle of
+ * (p,q): an interior q (then p is interior too), a q of a planar patch with
+ * p in that plane, a q of a straight ridge with p on that line. */
+static int mid_on_entity(rm3d *m, pa_idx p, pa_idx q, const pa_idx *bq,
+                         int nb) {
   uint8_t tp = m->vtag[p], tq = m->vtag[q];
-  if ((tp | tq) & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) return st;
-  int nb = pa__rm3d_ball(m, q, bq, RM3D_MAXBALL);
-  if (nb < 0) return st;
-  int mc = m->mc;
-  double *xq = m->x + 3 * (size_t)q;
+  const double *xq = m->x + 3 * (size_t)q;
   const double *xp = m->x + 3 * (size_t)p;
-  if (tq & RM3D_V_BDRY) {
-    if (!m->surf || !(tp & RM3D_V_BDRY) || ((tp ^ tq) & RM3D_V_FEAT)) return st;
-    double dir[3];
-    int kind = pa__rm3d_bdry_freedom(m, q, bq, nb, dir);
-    if (kind != ((tq & RM3D_V_FEAT) ? 1 : 2)) return st;
-    double e[3] = {xp[0] - xq[0], xp[1] - xq[1], xp[2] - xq[2]};
-    double le = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-    if (kind == 2) {
-      if (fabs(e[0] * dir[0] + e[1] * dir[1] + e[2] * dir[2]) > 1e-12 * le)
-        return st;
-    } else {
-      double c[3] = {e[1] * dir[2] - e[2] * dir[1],
-                     e[2] * dir[0] - e[0] * dir[2],
-                     e[0] * dir[1] - e[1] * dir[0]};
-      if (sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) > 1e-12 * le)
-        return st;
-    }
-  } else if (tp & RM3D_V_BDRY) {
-    return st;
-  }
-  double xm[3], mm[6], xo[3], mo[6], mo0[6];
-  for (int i = 0; i < 3; i++) xm[i] = 0.5 * (xp[i] + xq[i]);
-  pa__rm3d_mid_metric(m, p, q, mm);
-  /* q's ball with q at the midpoint (tets holding p are checked by the
-   * collapse). */
+  if (!(tq & RM3D_V_BDRY)) return !(tp & RM3D_V_BDRY);
+  if (!m->surf || !(tp & RM3D_V_BDRY) || ((tp ^ tq) & RM3D_V_FEAT)) return 0;
+  double dir[3];
+  int kind = pa__rm3d_bdry_freedom(m, q, bq, nb, dir);
+  if (kind != ((tq & RM3D_V_FEAT) ? 1 : 2)) return 0;
+  double e[3] = {xp[0] - xq[0], xp[1] - xq[1], xp[2] - xq[2]};
+  double le = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+  if (kind == 2)
+    return !(fabs(e[0] * dir[0] + e[1] * dir[1] + e[2] * dir[2]) > 1e-12 * le);
+  double c[3] = {e[1] * dir[2] - e[2] * dir[1], e[2] * dir[0] - e[0] * dir[2],
+                 e[0] * dir[1] - e[1] * dir[0]};
+  return !(sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) > 1e-12 * le);
+}
+
+/* The qualities of q's ball bq[0..nb) with q at xm (metric mm): oq the old
+ * ones, nq the new (-1 on the tets holding p, which the collapse checks).
+ * 0 if a tet is frozen or the ball's quality would drop too far. */
+static int mid_qualities(const rm3d *m, pa_idx p, const pa_idx *bq, int nb,
+                         const double *xm, const double *mm, float *oq,
+                         float *nq) {
   double qold = 1e30, qnew = 1e30;
   for (int i = 0; i < nb; i++) {
     pa_idx t = bq[i] >> 2;
     int iq = bq[i] & 3;
-    if (m->tflag[t] & RM3D_T_FROZEN) return st;
+    if (m->tflag[t] & RM3D_T_FROZEN) return 0;
     const pa_idx *v = m->tv + 4 * (size_t)t;
     oq[i] = m->q[t];
     if (m->q[t] < qold) qold = m->q[t];
@@ -362,12 +345,19 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
       continue;
     }
     double qq = rm3d_qual_moved(m, t, iq, xm, mm);
-    if (qq < RM3D_QABS) return st;
+    if (qq < RM3D_QABS) return 0;
     if (qq < qnew) qnew = qq;
     nq[i] = (float)qq;
   }
-  if (qnew < 0.3 * qold || !rm3d_q_ok(qnew, qold)) return st;
-  int ok = 1;
+  return !(qnew < 0.3 * qold || !rm3d_q_ok(qnew, qold));
+}
+
+/* Whether every edge from xm (metric mm) to the vertices of the tets of
+ * bq[0..nb) that q keeps (nq >= 0) is at most lguard long. */
+static int mid_lengths_ok(rm3d *m, pa_idx q, const pa_idx *bq, int nb,
+                          const double *xm, const double *mm, const float *nq,
+                          double lguard) {
+  int mc = m->mc, ok = 1;
   for (int i = 0; i < nb && ok; i++) {
     if (nq[i] < 0) continue;
     const pa_idx *v = m->tv + 4 * (size_t)(bq[i] >> 2);
@@ -386,11 +376,23 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
     const pa_idx *v = m->tv + 4 * (size_t)(bq[i] >> 2);
     for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~RM3D_V_MARK;
   }
-  if (!ok) return st;
-  /* Move q, try the collapse, move back if refused. */
+  return ok;
+}
+
+/* Move q to xm (metric mm, its ball's qualities nq), try the collapse of p
+ * onto it, and move q back (coordinates, metric, cached qualities oq bit
+ * for bit) if refused; if done, q's fields become the mean of p's and q's. */
+static pa_status collapse_at_mid(rm3d *m, pa_idx p, pa_idx q,
+                                 const pa_idx *bq, int nb, const double *xm,
+                                 const double *mm, const float *oq,
+                                 const float *nq, double lguard, int *done) {
+  pa_status st = PA_SUCCESS;
+  int mc = m->mc;
+  double *xq = m->x + 3 * (size_t)q;
+  double xo[3], mo[6], mo0[6];
   memcpy(xo, xq, sizeof xo);
   memcpy(mo, m->met + (size_t)mc * q, (size_t)mc * sizeof(double));
-  memcpy(xq, xm, sizeof xm);
+  memcpy(xq, xm, 3 * sizeof *xm);
   memcpy(m->met + (size_t)mc * q, mm, (size_t)mc * sizeof(double));
   if (m->met0) {
     memcpy(mo0, m->met0 + (size_t)mc * q, (size_t)mc * sizeof(double));
@@ -415,6 +417,33 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
       for (int j = 0; j < c; j++) fq[j] = 0.5 * (fq[j] + fp[j]);
     }
   }
+cleanup:
+  return st;
+}
+
+/* Midpoint collapse: q first moves to the middle of (p,q) -- only where it
+ * stays on its entity (mid_on_entity) --, its ball checked like a collapse
+ * (quality, length guard); then p collapses onto it with every check of
+ * pa__rm3d_collapse. When that collapse is refused, q goes back
+ * (coordinates, metric, cached qualities bit for bit). */
+pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
+                                int *done) {
+  pa_status st = PA_SUCCESS;
+  pa_idx bq[RM3D_MAXBALL];
+  float oq[RM3D_MAXBALL], nq[RM3D_MAXBALL];
+  *done = 0;
+  uint8_t tp = m->vtag[p], tq = m->vtag[q];
+  if ((tp | tq) & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) return st;
+  int nb = pa__rm3d_ball(m, q, bq, RM3D_MAXBALL);
+  if (nb < 0) return st;
+  if (!mid_on_entity(m, p, q, bq, nb)) return st;
+  const double *xp = m->x + 3 * (size_t)p, *xq = m->x + 3 * (size_t)q;
+  double xm[3], mm[6];
+  for (int i = 0; i < 3; i++) xm[i] = 0.5 * (xp[i] + xq[i]);
+  pa__rm3d_mid_metric(m, p, q, mm);
+  if (!mid_qualities(m, p, bq, nb, xm, mm, oq, nq)) return st;
+  if (!mid_lengths_ok(m, q, bq, nb, xm, mm, nq, lguard)) return st;
+  PA_CALL(collapse_at_mid(m, p, q, bq, nb, xm, mm, oq, nq, lguard, done));
 cleanup:
   return st;
 }

@@ -47,19 +47,19 @@
 /* The first rounds change little while swaps and moves unlock the collapses
  * the refinement bands refused: at least this many rounds. */
 #define RM3D_ROUNDS_MIN 3
-/* Splits + collapses at or below this share of the live tets: settled.
- * 0.1 % made the anisotropic cases ping-pong for 20 rounds at ~0.3 % each
- * for a few tenths of a percent in range (docs/design/REMESHER3D.md). */
+/* Splits + collapses at or below this share of the live tets: settled. A
+ * lower share lets the anisotropic cases ping-pong to RM3D_ROUNDS_MAX for
+ * little (figures: docs/BENCHMARKS.md, "The 3D remesher"). */
 #define RM3D_ROUNDS_SETTLED 5e-3
 /* Sweeps of length moves after each optimisation round's quality moves (which
- * disregard lengths) and at the end. UGAWG polar-1 (bench/ugawg.sh, 3D box,
- * 5 passes): 97.3 % of edges in range with 1 sweep, 98.0 % with 2, 98.1 %
- * with 3 (at 10 % more time). */
+ * disregard lengths) and at the end: a second sweep still raises the share
+ * in range, a third hardly does (figures: docs/BENCHMARKS.md, "The 3D
+ * remesher"). */
 #define RM3D_LENGTH_SWEEPS 2
 
 static void lengths6(const rm3d *m, const pa_idx *v, double *L) {
   for (int e = 0; e < 6; e++)
-    L[e] = rm3d_len(m, v[rm3d_edge[e][0]], v[rm3d_edge[e][1]]);
+    L[e] = rm3d_len(m, v[pa__rm3d_edge[e][0]], v[pa__rm3d_edge[e][1]]);
 }
 
 /* Order of the 6 edges by length, decreasing (dir > 0) or increasing. */
@@ -106,8 +106,8 @@ pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count) {
       }
       order6(L, 1, ord);
       for (int i = 0; i < 6 && L[ord[i]] > thr; i++) {
-        pa_idx a = m->tv[4 * (size_t)k + rm3d_edge[ord[i]][0]];
-        pa_idx b = m->tv[4 * (size_t)k + rm3d_edge[ord[i]][1]];
+        pa_idx a = m->tv[4 * (size_t)k + pa__rm3d_edge[ord[i]][0]];
+        pa_idx b = m->tv[4 * (size_t)k + pa__rm3d_edge[ord[i]][1]];
         int done, nsh = 0, info;
         /* Spread: an edge whose halves would be shorter than 0.8 waits for
          * the next pass when a split of this pass touched an end. */
@@ -199,8 +199,8 @@ pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, double guard,
     }
     order6(L, -1, ord);
     for (int i = 0; i < 6 && L[ord[i]] < thr; i++) {
-      pa_idx a = m->tv[4 * (size_t)k + rm3d_edge[ord[i]][0]];
-      pa_idx b = m->tv[4 * (size_t)k + rm3d_edge[ord[i]][1]];
+      pa_idx a = m->tv[4 * (size_t)k + pa__rm3d_edge[ord[i]][0]];
+      pa_idx b = m->tv[4 * (size_t)k + pa__rm3d_edge[ord[i]][1]];
       int done = 0;
       for (int dir = 0; dir < 2 && !done; dir++) {
         pa_idx p = dir ? b : a, q = dir ? a : b;
@@ -237,8 +237,8 @@ pa_status pa__rm3d_swap_pass(rm3d *m, double qthr, double gain, long *count) {
       continue;
     int done = 0;
     for (int e = 0; e < 6 && !done; e++) {
-      pa_idx a = m->tv[4 * (size_t)k + rm3d_edge[e][0]];
-      pa_idx b = m->tv[4 * (size_t)k + rm3d_edge[e][1]];
+      pa_idx a = m->tv[4 * (size_t)k + pa__rm3d_edge[e][0]];
+      pa_idx b = m->tv[4 * (size_t)k + pa__rm3d_edge[e][1]];
       PA_CALL(pa__rm3d_swap_edge(m, k, a, b, gain, &done));
     }
     for (int f = 0; f < 4 && !done; f++)
@@ -285,8 +285,8 @@ pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count) {
     lengths6(m, v, L);
     for (int e = 0; e < 6; e++)
       if (!(L[e] >= PA_METRIC_LEN_LO_EXACT && L[e] < PA_METRIC_LEN_HI_EXACT)) {
-        m->vtag[v[rm3d_edge[e][0]]] |= RM3D_V_TODO;
-        m->vtag[v[rm3d_edge[e][1]]] |= RM3D_V_TODO;
+        m->vtag[v[pa__rm3d_edge[e][0]]] |= RM3D_V_TODO;
+        m->vtag[v[pa__rm3d_edge[e][1]]] |= RM3D_V_TODO;
         clean = 0;
       }
     if (clean) m->tflag[k] |= RM3D_T_CLEAN;
@@ -346,8 +346,8 @@ static void measure(const rm3d *m, double *inrange, double *qworst,
       double L[6];
       lengths6(m, v, L);
       for (int e = 0; e < 6; e++) {
-        int b = (m->vtag[v[rm3d_edge[e][0]]] & m->vtag[v[rm3d_edge[e][1]]] &
-                 RM3D_V_BDRY) != 0;
+        int b = (m->vtag[v[pa__rm3d_edge[e][0]]] &
+                 m->vtag[v[pa__rm3d_edge[e][1]]] & RM3D_V_BDRY) != 0;
         c[b][L[e] < PA_METRIC_LEN_LO_EXACT   ? 0
              : L[e] < PA_METRIC_LEN_HI_EXACT ? 1
                                              : 2]++;
@@ -381,8 +381,8 @@ static void measure(const rm3d *m, double *inrange, double *qworst,
  * length each. When the class about to be split lies just above sqrt 2 and
  * its midpoints are at least 1/sqrt 2 from the other vertices of its tets,
  * splitting it refines a lattice that has nothing to collapse: the next
- * lattice has all its edges in range and twice the tets (box3d 10 ->
- * hsiz 0.0175: 1.97 M tets where 0.018 gives 0.99 M). Breaking the lattice
+ * lattice has all its edges in range and twice the tets (figures:
+ * docs/BENCHMARKS.md, "Lattice crowds"). Breaking the lattice
  * first (a small random move of the ends of those edges, then the splits
  * spread over the rounds) lets the passes build an unstructured mesh of the
  * usual density instead. Unstructured inputs have no such crowd: their
@@ -409,7 +409,7 @@ static double lattice_crowd(rm3d *m, double *longer) {
       if (!(L[e] > PA_METRIC_LEN_HI_EXACT && L[e] < RM3D_LSPREAD)) continue;
       int bin = (int)((L[e] / PA_METRIC_LEN_HI_EXACT - 1.0) * 100.0);
       if (bin >= RM3D_NCROWD) continue;
-      pa_idx a = v[rm3d_edge[e][0]], b = v[rm3d_edge[e][1]];
+      pa_idx a = v[pa__rm3d_edge[e][0]], b = v[pa__rm3d_edge[e][1]];
       const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b;
       double x[3], mp[6];
       for (int i = 0; i < 3; i++) x[i] = 0.5 * (xa[i] + xb[i]);
@@ -467,8 +467,8 @@ static double max_length(const rm3d *m) {
     for (int e = 0; e < 6; e++) {
       /* between two locked vertices (a frozen skin, mostly): skipped, it
        * would keep the bands from reaching their end */
-      if ((m->vtag[v[rm3d_edge[e][0]]] & RM3D_V_LOCK) &&
-          (m->vtag[v[rm3d_edge[e][1]]] & RM3D_V_LOCK))
+      if ((m->vtag[v[pa__rm3d_edge[e][0]]] & RM3D_V_LOCK) &&
+          (m->vtag[v[pa__rm3d_edge[e][1]]] & RM3D_V_LOCK))
         continue;
       if (L[e] > lmax) lmax = L[e];
     }
@@ -518,7 +518,8 @@ static pa_status prepare(rm3d *m, const pa_remesh_opts *opts) {
             (int)nrel);
   /* the estimate is the metric volume over a regular tet's, about 1.3 x
    * the final count of a uniform refinement: 0.95 of it is room enough
-   * (the arrays grow by 1.25 if not), 1.25 cost 9 B/tet at the peak */
+   * (the arrays grow by 1.25 if not), and more raises the memory peak
+   * (figures: docs/BENCHMARKS.md, "The 3D remesher") */
   double est = estimate_ntets(m) * 0.95;
   if (est > m->ne && est < 1.5e9) {
     size_t ne = (size_t)est;
@@ -529,12 +530,12 @@ cleanup:
 }
 
 /* Before the last band: a lattice crowd (see lattice_crowd) at the top of
- * the lengths is broken. box3d 10 -> hsiz 0.0175..0.016 has 15-20 % of its
- * tet-edges in one bin and under 6 % longer; the other sizes measured have
- * under 1.2 % in any bin, or 16-49 % longer edges (the crowd is not the
- * last class split: 0.028, 0.03, 0.015, where a trial of the cure gave no
- * fewer tets and took 15-50 % longer). Jiggle the ends of its edges by 0.1
- * and spread the splits from now on (m->spread). */
+ * the lengths is broken. A crowd is more than 5 % of the tet-edges in one
+ * bin with under 10 % longer: the trapped lattices have far more in a bin,
+ * the other meshes far less or many longer edges (the crowd is then not the
+ * last class split, and the cure does not pay; figures: docs/BENCHMARKS.md,
+ * "The 3D remesher"). Jiggle the ends of its edges by 0.1 and spread the
+ * splits from now on (m->spread). */
 static void break_lattice_crowd(rm3d *m) {
   double longer, crowd = lattice_crowd(m, &longer);
   long nj = 0;
@@ -568,8 +569,8 @@ static pa_status refine_bands(rm3d *m, const pa_remesh_opts *opts,
      * PA_METRIC_LEN_HI_EXACT */
     double thr = max_length(m) / 1.5;
     if (thr > prev / 1.5) thr = prev / 1.5;
-    /* a band just above the last one would cost a sweep for little: 1.45
-     * then 1.41 took 0.13 s of a 2.2 s piece (box3d 10 -> 0.019) */
+    /* a band just above the last one would cost a sweep for little
+     * (figures: docs/BENCHMARKS.md, "The 3D remesher") */
     if (thr < 1.1 * PA_METRIC_LEN_HI_EXACT) thr = PA_METRIC_LEN_HI_EXACT;
     prev = thr;
     long ns = 0, nc = 0;
@@ -610,7 +611,7 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
   pa__rounds rounds;
   /* Balanced splits and collapses are a ping-pong only with frozen
    * entities: the anisotropic shell balances them too, and stopping it
-   * early cost 0.2 % in range. */
+   * early loses edges in range (docs/BENCHMARKS.md, "The 3D remesher"). */
   pa__rounds_start(&rounds, RM3D_ROUNDS_MIN, RM3D_ROUNDS_SETTLED, 0,
                    has_frozen(m));
   for (int it = 0; it < RM3D_ROUNDS_MAX; it++, (*npass)++) {

@@ -18,13 +18,14 @@
  */
 #include "remesh3d/remesh3d.h"
 
-const int rm3d_edge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-const int rm3d_compl[4][4][2] = {
+const int pa__rm3d_edge[6][2] = {{0, 1}, {0, 2}, {0, 3},
+                                 {1, 2}, {1, 3}, {2, 3}};
+const int pa__rm3d_compl[4][4][2] = {
     {{-1, -1}, {2, 3}, {3, 1}, {1, 2}},
     {{3, 2}, {-1, -1}, {0, 3}, {2, 0}},
     {{1, 3}, {3, 0}, {-1, -1}, {0, 1}},
     {{2, 1}, {0, 2}, {1, 0}, {-1, -1}}};
-const int rm3d_face[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+const int pa__rm3d_face[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
 /* ---- keyed tables ------------------------------------------------------ */
 
@@ -262,8 +263,9 @@ static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
   PA_ALLOC(fill, (size_t)nv);
   for (pa_idx k = 0; k < ne; k++)
     for (int i = 0; i < 4; i++) {
-      pa_idx f[3] = {m->tv[4 * k + rm3d_face[i][0]], m->tv[4 * k + rm3d_face[i][1]],
-                     m->tv[4 * k + rm3d_face[i][2]]};
+      pa_idx f[3] = {m->tv[4 * k + pa__rm3d_face[i][0]],
+                     m->tv[4 * k + pa__rm3d_face[i][1]],
+                     m->tv[4 * k + pa__rm3d_face[i][2]]};
       pa__sort_small(f, 3);
       start[f[0] + 1]++;
       m->adj[4 * k + i] = -1;
@@ -272,8 +274,9 @@ static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
   memcpy(fill, start, nv * sizeof *fill);
   for (pa_idx k = 0; k < ne; k++)
     for (int i = 0; i < 4; i++) {
-      pa_idx f[3] = {m->tv[4 * k + rm3d_face[i][0]], m->tv[4 * k + rm3d_face[i][1]],
-                     m->tv[4 * k + rm3d_face[i][2]]};
+      pa_idx f[3] = {m->tv[4 * k + pa__rm3d_face[i][0]],
+                     m->tv[4 * k + pa__rm3d_face[i][1]],
+                     m->tv[4 * k + pa__rm3d_face[i][2]]};
       pa__sort_small(f, 3);
       face[fill[f[0]]++] = 4 * k + i;
     }
@@ -284,17 +287,17 @@ static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
       if (m->adj[fs] != -1) continue;
       pa_idx ks = fs >> 2;
       int is = fs & 3;
-      pa_idx a[3] = {m->tv[4 * ks + rm3d_face[is][0]],
-                     m->tv[4 * ks + rm3d_face[is][1]],
-                     m->tv[4 * ks + rm3d_face[is][2]]};
+      pa_idx a[3] = {m->tv[4 * ks + pa__rm3d_face[is][0]],
+                     m->tv[4 * ks + pa__rm3d_face[is][1]],
+                     m->tv[4 * ks + pa__rm3d_face[is][2]]};
       pa__sort_small(a, 3);
       for (pa_idx t = s + 1; t < start[v + 1]; t++) {
         pa_idx ft = face[t];
         pa_idx kt = ft >> 2;
         int it = ft & 3;
-        pa_idx b[3] = {m->tv[4 * kt + rm3d_face[it][0]],
-                       m->tv[4 * kt + rm3d_face[it][1]],
-                       m->tv[4 * kt + rm3d_face[it][2]]};
+        pa_idx b[3] = {m->tv[4 * kt + pa__rm3d_face[it][0]],
+                       m->tv[4 * kt + pa__rm3d_face[it][1]],
+                       m->tv[4 * kt + pa__rm3d_face[it][2]]};
         pa__sort_small(b, 3);
         if (a[1] != b[1] || a[2] != b[2]) continue;
         PA_CHECK(m->adj[ft] == -1, PA_ERR_MESH,
@@ -317,9 +320,9 @@ static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
     for (pa_idx s = start[a[0]]; s < start[a[0] + 1]; s++) {
       pa_idx k = face[s] >> 2;
       int i = face[s] & 3;
-      pa_idx c[3] = {m->tv[4 * k + rm3d_face[i][0]],
-                     m->tv[4 * k + rm3d_face[i][1]],
-                     m->tv[4 * k + rm3d_face[i][2]]};
+      pa_idx c[3] = {m->tv[4 * k + pa__rm3d_face[i][0]],
+                     m->tv[4 * k + pa__rm3d_face[i][1]],
+                     m->tv[4 * k + pa__rm3d_face[i][2]]};
       pa__sort_small(c, 3);
       if (c[1] == a[1] && c[2] == a[2]) {
         m->tflag[k] |= (uint8_t)(1u << i);
@@ -338,8 +341,9 @@ static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
   for (pa_idx k = 0; k < ne; k++)
     for (int i = 0; i < 4; i++) {
       if (m->adj[4 * k + i] != -1 || (m->tflag[k] & (1u << i))) continue;
-      pa_idx f[3] = {m->tv[4 * k + rm3d_face[i][0]], m->tv[4 * k + rm3d_face[i][1]],
-                     m->tv[4 * k + rm3d_face[i][2]]};
+      pa_idx f[3] = {m->tv[4 * k + pa__rm3d_face[i][0]],
+                     m->tv[4 * k + pa__rm3d_face[i][1]],
+                     m->tv[4 * k + pa__rm3d_face[i][2]]};
       PA_CALL(pa__rm3d_table_add(&m->tri, f, 0, 0, NULL));
       m->tflag[k] |= (uint8_t)(1u << i);
       for (int j = 0; j < 3; j++) m->vtag[f[j]] |= RM3D_V_BDRY;
@@ -629,7 +633,7 @@ pa_status pa__rm3d_check(rm3d *m) {
              "rm3d: tet %d left marked", (int)k);
     if (m->tflag[k] & RM3D_T_CLEAN) /* a change did not clear the mark */
       for (int e = 0; e < 6; e++) {
-        double l = rm3d_len(m, v[rm3d_edge[e][0]], v[rm3d_edge[e][1]]);
+        double l = rm3d_len(m, v[pa__rm3d_edge[e][0]], v[pa__rm3d_edge[e][1]]);
         PA_CHECK(l >= PA_METRIC_LEN_LO_EXACT && l <= PA_METRIC_LEN_HI_EXACT,
                  PA_ERR_INTERNAL,
                  "rm3d: tet %d is marked clean, its edge %d has length %g",
@@ -637,7 +641,8 @@ pa_status pa__rm3d_check(rm3d *m) {
       }
     for (int i = 0; i < 4; i++) {
       pa_idx a = m->adj[4 * (size_t)k + i];
-      pa_idx f[3] = {v[rm3d_face[i][0]], v[rm3d_face[i][1]], v[rm3d_face[i][2]]};
+      pa_idx f[3] = {v[pa__rm3d_face[i][0]], v[pa__rm3d_face[i][1]],
+                     v[pa__rm3d_face[i][2]]};
       pa__sort_small(f, 3);
       int tagged = (m->tflag[k] >> i) & 1;
       if (tagged)
@@ -659,7 +664,8 @@ pa_status pa__rm3d_check(rm3d *m) {
       PA_CHECK(m->adj[4 * (size_t)l + j] == 4 * k + i, PA_ERR_INTERNAL,
                "rm3d: adjacency of tet %d face %d not symmetric", (int)k, i);
       const pa_idx *w = m->tv + 4 * (size_t)l;
-      pa_idx g[3] = {w[rm3d_face[j][0]], w[rm3d_face[j][1]], w[rm3d_face[j][2]]};
+      pa_idx g[3] = {w[pa__rm3d_face[j][0]], w[pa__rm3d_face[j][1]],
+                     w[pa__rm3d_face[j][2]]};
       pa__sort_small(g, 3);
       PA_CHECK(f[0] == g[0] && f[1] == g[1] && f[2] == g[2], PA_ERR_INTERNAL,
                "rm3d: tet %d face %d and its neighbour differ", (int)k, i);
@@ -718,20 +724,10 @@ static void permute(void *base, size_t sz, const pa_idx *pos, pa_idx n,
   }
 }
 
-pa_status pa__rm3d_reorder(rm3d *m) {
-  pa_status st = PA_SUCCESS;
-  pa__key64 *key = NULL;
-  pa_idx *pos = NULL, *start = NULL;
-  uint8_t *done = NULL;
-  for (int k = 0; k < m->nfield; k++)
-    if (m->fcomp[k] > 8) return pa__rm3d_compact(m, 1); /* no reordering */
-  PA_CALL(pa__rm3d_compact(m, 0)); /* q is rebuilt at the end */
-  pa_idx nv = m->nv, ne = m->ne;
-  size_t nmax = (size_t)(nv > ne ? nv : ne);
-  PA_ALLOC(key, (size_t)nv + 1);
-  PA_ALLOC(pos, (size_t)nv + 1);
-  PA_ALLOC(done, nmax);
-  /* Vertices along the Morton curve of the bounding box. */
+/* pos[i]: the new slot of vertex i, along the Morton curve of the bounding
+ * box (key: nv records of scratch). */
+static void vertex_positions(const rm3d *m, pa__key64 *key, pa_idx *pos) {
+  pa_idx nv = m->nv;
   double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
   for (pa_idx i = 0; i < nv; i++)
     for (int j = 0; j < 3; j++) {
@@ -752,6 +748,12 @@ pa_status pa__rm3d_reorder(rm3d *m) {
   }
   qsort(key, (size_t)nv, sizeof *key, pa__key64_cmp);
   for (pa_idx i = 0; i < nv; i++) pos[key[i].idx] = i;
+}
+
+/* Move the vertex records to slots pos, and renumber the tets and the
+ * entity tables (rehashed) to them. */
+static void move_vertices(rm3d *m, const pa_idx *pos, uint8_t *done) {
+  pa_idx nv = m->nv;
   permute(m->x, 3 * sizeof(double), pos, nv, done);
   permute(m->met, (size_t)m->mc * sizeof(double), pos, nv, done);
   if (m->met0) permute(m->met0, (size_t)m->mc * sizeof(double), pos, nv, done);
@@ -761,7 +763,7 @@ pa_status pa__rm3d_reorder(rm3d *m) {
   permute(m->vtag, 1, pos, nv, done);
   for (int k = 0; k < m->nfield; k++)
     permute(m->fval[k], (size_t)m->fcomp[k] * sizeof(double), pos, nv, done);
-  for (size_t i = 0; i < 4 * (size_t)ne; i++) m->tv[i] = pos[m->tv[i]];
+  for (size_t i = 0; i < 4 * (size_t)m->ne; i++) m->tv[i] = pos[m->tv[i]];
   rm3d_table *tabs[2] = {&m->tri, &m->edg};
   for (int t = 0; t < 2; t++) {
     rm3d_table *tb = tabs[t];
@@ -777,13 +779,12 @@ pa_status pa__rm3d_reorder(rm3d *m) {
       tb->nfull++;
     }
   }
-  /* Tets by their smallest vertex: a stable counting sort. */
-  pa__free(key);
-  key = NULL;
-  pa__free(pos);
-  pos = NULL;
-  PA_CALLOC(start, (size_t)nv + 1);
-  PA_ALLOC(pos, (size_t)ne + 1);
+}
+
+/* pos[k]: the new slot of tet k, by its smallest vertex (a stable counting
+ * sort; start: nv + 1 zeroed counters). */
+static void tet_positions(const rm3d *m, pa_idx *start, pa_idx *pos) {
+  pa_idx nv = m->nv, ne = m->ne;
   for (pa_idx k = 0; k < ne; k++) {
     const pa_idx *v = m->tv + 4 * (size_t)k;
     pa_idx a = v[0] < v[1] ? v[0] : v[1], b = v[2] < v[3] ? v[2] : v[3];
@@ -795,8 +796,12 @@ pa_status pa__rm3d_reorder(rm3d *m) {
     pa_idx a = v[0] < v[1] ? v[0] : v[1], b = v[2] < v[3] ? v[2] : v[3];
     pos[k] = start[a < b ? a : b]++;
   }
-  pa__free(start);
-  start = NULL;
+}
+
+/* Move the tet records to slots pos, renumbering the adjacency, and point
+ * each vertex to a tet holding it. */
+static void move_tets(rm3d *m, const pa_idx *pos, uint8_t *done) {
+  pa_idx ne = m->ne;
   for (size_t i = 0; i < 4 * (size_t)ne; i++) {
     pa_idx a = m->adj[i];
     if (a >= 0) m->adj[i] = 4 * pos[a >> 2] + (a & 3);
@@ -808,8 +813,33 @@ pa_status pa__rm3d_reorder(rm3d *m) {
   permute(m->tref, sizeof(int32_t), pos, ne, done);
   for (pa_idx k = 0; k < ne; k++)
     for (int i = 0; i < 4; i++) m->vtet[m->tv[4 * (size_t)k + i]] = k;
+}
+
+pa_status pa__rm3d_reorder(rm3d *m) {
+  pa_status st = PA_SUCCESS;
+  pa__key64 *key = NULL;
+  pa_idx *pos = NULL, *start = NULL;
+  uint8_t *done = NULL;
+  for (int k = 0; k < m->nfield; k++)
+    if (m->fcomp[k] > 8) return pa__rm3d_compact(m, 1); /* no reordering */
+  PA_CALL(pa__rm3d_compact(m, 0)); /* q is rebuilt at the end */
+  pa_idx nv = m->nv, ne = m->ne;
+  size_t nmax = (size_t)(nv > ne ? nv : ne);
+  PA_ALLOC(key, (size_t)nv + 1);
+  PA_ALLOC(pos, (size_t)nv + 1);
+  PA_ALLOC(done, nmax);
+  vertex_positions(m, key, pos);
+  move_vertices(m, pos, done);
   pa__free(key);
   key = NULL;
+  pa__free(pos);
+  pos = NULL;
+  PA_CALLOC(start, (size_t)nv + 1);
+  PA_ALLOC(pos, (size_t)ne + 1);
+  tet_positions(m, start, pos);
+  pa__free(start);
+  start = NULL;
+  move_tets(m, pos, done);
   pa__free(pos);
   pos = NULL;
   pa__free(done);
@@ -874,7 +904,7 @@ pa_status pa__rm3d_skin_relax(rm3d *m, pa_idx *nrelaxed) {
     if (!(m->tflag[k] & RM3D_T_FROZEN)) continue;
     const pa_idx *v = m->tv + 4 * (size_t)k;
     for (int e = 0; e < 6; e++) {
-      pa_idx a = v[rm3d_edge[e][0]], b = v[rm3d_edge[e][1]];
+      pa_idx a = v[pa__rm3d_edge[e][0]], b = v[pa__rm3d_edge[e][1]];
       double l = rm3d_len(m, a, b);
       acc[a] += l;
       acc[b] += l;

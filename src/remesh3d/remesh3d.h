@@ -113,10 +113,10 @@ typedef struct rm3d {
 /* Local edges of a tetrahedron and, for an ordered pair (i,j) of local
  * vertices, the other two (k,l) such that (i,j,k,l) is an even permutation:
  * then (v_i, v_j, v_k, v_l) is positively oriented. */
-extern const int rm3d_edge[6][2];
-extern const int rm3d_compl[4][4][2];
+extern const int pa__rm3d_edge[6][2];
+extern const int pa__rm3d_compl[4][4][2];
 /* Face i as in mesh.h: local vertices in outward order. */
-extern const int rm3d_face[4][3];
+extern const int pa__rm3d_face[4][3];
 
 #define RM3D_LRELAX 1.2 /* mean frozen edge length at a relaxed vertex */
 #define RM3D_LSPREAD 1.6 /* split halves shorter than 0.8: see m->spread */

@@ -93,9 +93,9 @@ int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
     for (int f = 0; f < 4; f++) {
       if (!((fl >> f) & 1)) continue;
       double nn[3];
-      if (!(rm3d_tri_normal(m->x + 3 * (size_t)v[rm3d_face[f][0]],
-                            m->x + 3 * (size_t)v[rm3d_face[f][1]],
-                            m->x + 3 * (size_t)v[rm3d_face[f][2]], nn) > 0))
+      if (!(rm3d_tri_normal(m->x + 3 * (size_t)v[pa__rm3d_face[f][0]],
+                            m->x + 3 * (size_t)v[pa__rm3d_face[f][1]],
+                            m->x + 3 * (size_t)v[pa__rm3d_face[f][2]], nn) > 0))
         return 0;
       if (!found) {
         memcpy(dir, nn, sizeof nn);
@@ -243,67 +243,81 @@ static void apply_move(rm3d *m, pa_idx p, const pa_idx *ball, int n,
   m->nmove++;
 }
 
-int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
-  if (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) return 0;
-  if ((m->vtag[p] & RM3D_V_BDRY) && !m->surf) return 0;
-  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
-  if (n < 0) return 0;
-  int kind = 0;
-  double dir[3];
-  pa_idx tri[3 * 32];
+/* Restrict a displacement c to the freedom of a boundary vertex: in_plane
+ * removes its component along the normal dir, on_line keeps only its
+ * component along the ridge direction dir. */
+static void restrict_move(double *c, const double *dir, int in_plane,
+                          int on_line) {
+  if (in_plane) {
+    double d = c[0] * dir[0] + c[1] * dir[1] + c[2] * dir[2];
+    for (int j = 0; j < 3; j++) c[j] -= d * dir[j];
+  } else if (on_line) {
+    double d = c[0] * dir[0] + c[1] * dir[1] + c[2] * dir[2];
+    for (int j = 0; j < 3; j++) c[j] = d * dir[j];
+  }
+}
+
+/* The boundary triangles of the ball[0..n) of a vertex on a curved patch
+ * (vertex triples; 0 if more than 32), and in *hausdp the least Hausdorff
+ * distance of their references. */
+static int curved_patch(const rm3d *m, const pa_idx *ball, int n, pa_idx *tri,
+                        int *ntrip, double *hausdp) {
   int ntri = 0;
   double hausd = m->hausd;
-  if ((m->vtag[p] & (RM3D_V_BDRY | RM3D_V_CURVED | RM3D_V_FEAT)) ==
-          (RM3D_V_BDRY | RM3D_V_CURVED) &&
-      m->surf && m->nrm) {
-    /* Curved patch: move in the tangent plane, then onto the PN surface. */
-    kind = 3;
-    memcpy(dir, m->nrm + 3 * (size_t)p, sizeof dir);
-    for (int i = 0; i < n; i++) {
-      pa_idx t = ball[i] >> 2;
-      int ip = ball[i] & 3;
-      uint8_t fl = m->tflag[t] & RM3D_T_FACES & (uint8_t)~(1u << ip);
-      const pa_idx *v = m->tv + 4 * (size_t)t;
-      for (int f = 0; f < 4; f++) {
-        if (!((fl >> f) & 1)) continue;
-        if (ntri == 32) return 0;
-        for (int j = 0; j < 3; j++) tri[3 * ntri + j] = v[rm3d_face[f][j]];
-        ntri++;
-      }
+  for (int i = 0; i < n; i++) {
+    pa_idx t = ball[i] >> 2;
+    int ip = ball[i] & 3;
+    uint8_t fl = m->tflag[t] & RM3D_T_FACES & (uint8_t)~(1u << ip);
+    const pa_idx *v = m->tv + 4 * (size_t)t;
+    for (int f = 0; f < 4; f++) {
+      if (!((fl >> f) & 1)) continue;
+      if (ntri == 32) return 0;
+      for (int j = 0; j < 3; j++) tri[3 * ntri + j] = v[pa__rm3d_face[f][j]];
+      ntri++;
     }
-    /* the least Hausdorff distance of the patch's references */
-    for (int t = 0; t < ntri && m->opts && m->opts->nlocal > 0; t++) {
-      pa_idx r = pa__rm3d_table_find(&m->tri, tri + 3 * t);
-      double h = r >= 0 ? rm3d_tri_hausd(m, r) : m->hausd;
-      if (t == 0 || h < hausd) hausd = h;
-    }
-  } else if (m->vtag[p] & RM3D_V_BDRY) {
-    kind = pa__rm3d_bdry_freedom(m, p, ball, n, dir);
-    if (!kind) return 0;
   }
-  int mc = m->mc;
-  double *xp = m->x + 3 * (size_t)p;
-  double qold = 1e30, c[3] = {0, 0, 0};
-  /* Inverse metric at p (the ideal apex over a face with normal n sits at
-   * height sqrt(2/3) along M^-1 n / sqrt(n^T M^-1 n): the regular tet of unit
-   * edges in the metric). */
-  double mi[6];
-  const double *mp = m->met + (size_t)mc * p;
+  for (int t = 0; t < ntri && m->opts && m->opts->nlocal > 0; t++) {
+    pa_idx r = pa__rm3d_table_find(&m->tri, tri + 3 * t);
+    double h = r >= 0 ? rm3d_tri_hausd(m, r) : m->hausd;
+    if (t == 0 || h < hausd) hausd = h;
+  }
+  *ntrip = ntri;
+  *hausdp = hausd;
+  return 1;
+}
+
+/* The inverse mi (xx xy yy xz yz zz) of the metric mp of mc components; 0
+ * if a tensor is not positive definite. */
+static int metric_inverse(int mc, const double *mp, double *mi) {
   if (mc == 1) {
     for (int j = 0; j < 6; j++) mi[j] = 0;
     mi[0] = mi[2] = mi[5] = mp[0] * mp[0];
-  } else {
-    double a = mp[0], b = mp[1], cc = mp[2], d = mp[3], e = mp[4], f = mp[5];
-    double det = a * (cc * f - e * e) - b * (b * f - e * d) +
-                 d * (b * e - cc * d);
-    if (!(det > 0)) return 0;
-    mi[0] = (cc * f - e * e) / det;
-    mi[1] = (d * e - b * f) / det;
-    mi[2] = (a * f - d * d) / det;
-    mi[3] = (b * e - cc * d) / det;
-    mi[4] = (b * d - a * e) / det;
-    mi[5] = (a * cc - b * b) / det;
+    return 1;
   }
+  double a = mp[0], b = mp[1], cc = mp[2], d = mp[3], e = mp[4], f = mp[5];
+  double det = a * (cc * f - e * e) - b * (b * f - e * d) +
+               d * (b * e - cc * d);
+  if (!(det > 0)) return 0;
+  mi[0] = (cc * f - e * e) / det;
+  mi[1] = (d * e - b * f) / det;
+  mi[2] = (a * f - d * d) / det;
+  mi[3] = (b * e - cc * d) / det;
+  mi[4] = (b * d - a * e) / det;
+  mi[5] = (a * cc - b * b) / det;
+  return 1;
+}
+
+/* The shift c from p to the mean of the ideal apexes over the faces of its
+ * ball[0..n) opposite p, mi the inverse metric at p (the ideal apex over a
+ * face with normal n sits at height sqrt(2/3) along M^-1 n /
+ * sqrt(n^T M^-1 n): the regular tet of unit edges in the metric); *qoldp
+ * the ball's worst quality. 0 if the ball spans two references or holds a
+ * frozen element. */
+static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
+                       const double *mi, double *qoldp, double *c) {
+  const double *xp = m->x + 3 * (size_t)p;
+  double qold = 1e30;
+  c[0] = c[1] = c[2] = 0;
   int32_t ref0 = m->tref[ball[0] >> 2];
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
@@ -311,9 +325,9 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
     if (m->tref[t] != ref0 || (m->tflag[t] & RM3D_T_FROZEN)) return 0;
     if (m->q[t] < qold) qold = m->q[t];
     const pa_idx *v = m->tv + 4 * (size_t)t;
-    const double *f0 = m->x + 3 * (size_t)v[rm3d_face[ip][0]];
-    const double *f1 = m->x + 3 * (size_t)v[rm3d_face[ip][1]];
-    const double *f2 = m->x + 3 * (size_t)v[rm3d_face[ip][2]];
+    const double *f0 = m->x + 3 * (size_t)v[pa__rm3d_face[ip][0]];
+    const double *f1 = m->x + 3 * (size_t)v[pa__rm3d_face[ip][1]];
+    const double *f2 = m->x + 3 * (size_t)v[pa__rm3d_face[ip][2]];
     /* Outward normal of the face points away from p. */
     double nn[3];
     rm3d_tri_cross(f0, f1, f2, nn);
@@ -326,13 +340,18 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
       c[j] += (f0[j] + f1[j] + f2[j]) / 3.0 - h * dn[j];
   }
   for (int j = 0; j < 3; j++) c[j] = c[j] / n - xp[j];
-  if (kind == 2 || kind == 3) { /* remove the normal component */
-    double d = c[0] * dir[0] + c[1] * dir[1] + c[2] * dir[2];
-    for (int j = 0; j < 3; j++) c[j] -= d * dir[j];
-  } else if (kind == 1) { /* keep the tangential component */
-    double d = c[0] * dir[0] + c[1] * dir[1] + c[2] * dir[2];
-    for (int j = 0; j < 3; j++) c[j] = d * dir[j];
-  }
+  *qoldp = qold;
+  return 1;
+}
+
+/* Move p by c, else by half or a quarter of it, to the first position
+ * that raises the ball's worst quality qold (and on a curved patch, kind 3,
+ * projects onto the surface of tri[0..ntri) and keeps its normals). */
+static int try_smooth(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
+                      const pa_idx *tri, int ntri, double hausd,
+                      const double *c, double qold) {
+  const double *xp = m->x + 3 * (size_t)p;
+  const double *mp = m->met + (size_t)m->mc * p;
   double np[3], step = 1.0;
   float nq[RM3D_MAXBALL];
   for (int tr = 0; tr < 3; tr++, step *= 0.5) {
@@ -358,6 +377,36 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
     return 1;
   }
   return 0;
+}
+
+int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
+  if (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) return 0;
+  if ((m->vtag[p] & RM3D_V_BDRY) && !m->surf) return 0;
+  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
+  if (n < 0) return 0;
+  int kind = 0;
+  double dir[3] = {0, 0, 0};
+  pa_idx tri[3 * 32];
+  int ntri = 0;
+  double hausd = m->hausd;
+  if ((m->vtag[p] & (RM3D_V_BDRY | RM3D_V_CURVED | RM3D_V_FEAT)) ==
+          (RM3D_V_BDRY | RM3D_V_CURVED) &&
+      m->surf && m->nrm) {
+    /* Curved patch: move in the tangent plane, then onto the PN surface. */
+    kind = 3;
+    memcpy(dir, m->nrm + 3 * (size_t)p, sizeof dir);
+    if (!curved_patch(m, ball, n, tri, &ntri, &hausd)) return 0;
+  } else if (m->vtag[p] & RM3D_V_BDRY) {
+    kind = pa__rm3d_bdry_freedom(m, p, ball, n, dir);
+    if (!kind) return 0;
+  }
+  double mi[6], qold, c[3];
+  if (!metric_inverse(m->mc, m->met + (size_t)m->mc * p, mi)) return 0;
+  if (!ideal_shift(m, p, ball, n, mi, &qold, c)) return 0;
+  /* on the boundary: remove the normal component, or keep the tangential
+   * one along a ridge */
+  restrict_move(c, dir, kind == 2 || kind == 3, kind == 1);
+  return try_smooth(m, p, ball, n, kind, tri, ntri, hausd, c, qold);
 }
 
 /* Splitmix64 finaliser: the jiggle's directions. */
@@ -444,21 +493,22 @@ static int solve3(const double *a, const double *b, double *x) {
   return isfinite(x[0]) && isfinite(x[1]) && isfinite(x[2]);
 }
 
-int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
-  if (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD | RM3D_V_CURVED))
-    return 0;
-  if ((m->vtag[p] & RM3D_V_BDRY) && !m->surf) return 0;
-  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
-  if (n < 0) return 0;
-  int kind = 0;
-  double dir[3];
-  if (m->vtag[p] & RM3D_V_BDRY) {
-    kind = pa__rm3d_bdry_freedom(m, p, ball, n, dir);
-    if (!kind) return 0;
-  }
-  /* the neighbours, each once; the ball's worst quality */
+/* What a length relocation of p compares with: its neighbours, each once,
+ * the number of edges at p out of range and their sum of ln^2 L, and the
+ * ball's worst quality. */
+typedef struct len_ctx {
   pa_idx nb[RM3D_LNB];
-  int nn = 0, mc = m->mc;
+  int nn, out0;
+  double s0, qold;
+} len_ctx;
+
+/* The neighbours of p in its ball[0..n), each once, and the ball's worst
+ * quality; 0 if the ball spans two references, holds a frozen element or
+ * has more than RM3D_LNB neighbours. */
+static int ball_neighbours(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
+                           len_ctx *lc) {
+  pa_idx *nb = lc->nb;
+  int nn = 0;
   double qold = 1e30;
   int32_t ref0 = m->tref[ball[0] >> 2];
   for (int i = 0; i < n; i++) {
@@ -475,13 +525,20 @@ int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
       nb[nn++] = x;
     }
   }
-  double *xp = m->x + 3 * (size_t)p;
+  lc->nn = nn;
+  lc->qold = qold;
+  return 1;
+}
+
+/* Gauss-Newton step d on r_i = ln L_i over the edges from p to nb[0..nn):
+ * d ln L_i / dx = -M e / (e^T M e), e = x_i - x, M the mean of the two end
+ * metrics; Levenberg damping relative to the system's scale. 0 if an edge
+ * is degenerate or the system singular. */
+static int gauss_newton_step(const rm3d *m, pa_idx p, const pa_idx *nb,
+                             int nn, double *d) {
+  int mc = m->mc;
+  const double *xp = m->x + 3 * (size_t)p;
   const double *mp = m->met + (size_t)mc * p;
-  double s0;
-  int out0 = len_score(m, xp, mp, nb, nn, &s0);
-  if (out0 == 0) return 0;
-  /* Gauss-Newton step on r_i = ln L_i: d ln L_i / dx = -M e / (e^T M e),
-   * e = x_i - x, M the mean of the two end metrics. */
   double jj[6] = {0, 0, 0, 0, 0, 0}, jr[3] = {0, 0, 0};
   for (int i = 0; i < nn; i++) {
     const double *xi = m->x + 3 * (size_t)nb[i];
@@ -510,23 +567,22 @@ int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
     jj[5] += g[2] * g[2];
     for (int j = 0; j < 3; j++) jr[j] -= g[j] * r;
   }
-  /* Levenberg damping, relative to the system's scale */
   double lam = 1e-3 * (jj[0] + jj[2] + jj[5]);
   jj[0] += lam;
   jj[2] += lam;
   jj[5] += lam;
-  double d[3];
-  if (!solve3(jj, jr, d)) return 0;
-  if (kind == 2) { /* in the plane */
-    double s = d[0] * dir[0] + d[1] * dir[1] + d[2] * dir[2];
-    for (int j = 0; j < 3; j++) d[j] -= s * dir[j];
-  } else if (kind == 1) { /* along the ridge */
-    double s = d[0] * dir[0] + d[1] * dir[1] + d[2] * dir[2];
-    for (int j = 0; j < 3; j++) d[j] = s * dir[j];
-  }
-  /* second candidate: along the edge furthest out of range, by the
-   * fraction that brings it to unit length (at most half) */
-  double d2[3] = {0, 0, 0}, worst = 0;
+  return solve3(jj, jr, d);
+}
+
+/* The second candidate d2: along the edge from p to nb[0..nn) furthest out
+ * of range, by the fraction that brings it to unit length (at most half). */
+static void worst_edge_step(const rm3d *m, pa_idx p, const pa_idx *nb, int nn,
+                            double *d2) {
+  int mc = m->mc;
+  const double *xp = m->x + 3 * (size_t)p;
+  const double *mp = m->met + (size_t)mc * p;
+  double worst = 0;
+  d2[0] = d2[1] = d2[2] = 0;
   for (int i = 0; i < nn; i++) {
     const double *xi = m->x + 3 * (size_t)nb[i];
     double l = pa__len3(mc, xp, xi, mp, m->met + (size_t)mc * nb[i]);
@@ -538,14 +594,17 @@ int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
     if (f < -0.5) f = -0.5;
     for (int j = 0; j < 3; j++) d2[j] = f * (xi[j] - xp[j]);
   }
-  if (kind == 2) {
-    double s = d2[0] * dir[0] + d2[1] * dir[1] + d2[2] * dir[2];
-    for (int j = 0; j < 3; j++) d2[j] -= s * dir[j];
-  } else if (kind == 1) {
-    double s = d2[0] * dir[0] + d2[1] * dir[1] + d2[2] * dir[2];
-    for (int j = 0; j < 3; j++) d2[j] = s * dir[j];
-  }
-  double qfloor = fmin(qold, RM3D_QLEN), np[3], step = 1.0;
+}
+
+/* Move p by d, then by d2, each at steps 1, 1/2, 1/4, 1/8, to the first
+ * position with fewer edges out of range (or as many and a sum of ln^2 L
+ * less by RM3D_LGAIN) that keeps the ball's quality. */
+static int try_length_moves(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
+                            const double *dir, const len_ctx *lc,
+                            const double *d, const double *d2) {
+  const double *xp = m->x + 3 * (size_t)p;
+  const double *mp = m->met + (size_t)m->mc * p;
+  double qfloor = fmin(lc->qold, RM3D_QLEN), np[3], step = 1.0;
   float nq[RM3D_MAXBALL];
   for (int tr = 0; tr < 8; tr++, step *= 0.5) {
     if (tr == 4) step = 1.0;
@@ -555,8 +614,9 @@ int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
       for (int j = 0; j < 3; j++)
         if (fabs(dir[j]) == 1.0) np[j] = xp[j];
     double s1;
-    int out1 = len_score(m, np, mp, nb, nn, &s1);
-    if (!(out1 < out0 || (out1 == out0 && s1 < RM3D_LGAIN * s0))) continue;
+    int out1 = len_score(m, np, mp, lc->nb, lc->nn, &s1);
+    if (!(out1 < lc->out0 || (out1 == lc->out0 && s1 < RM3D_LGAIN * lc->s0)))
+      continue;
     int ok = 1;
     for (int i = 0; i < n && ok; i++) {
       double q = rm3d_qual_moved(m, ball[i] >> 2, ball[i] & 3, np, mp);
@@ -568,4 +628,31 @@ int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
     return 1;
   }
   return 0;
+}
+
+int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
+  if (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD | RM3D_V_CURVED))
+    return 0;
+  if ((m->vtag[p] & RM3D_V_BDRY) && !m->surf) return 0;
+  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
+  if (n < 0) return 0;
+  int kind = 0;
+  double dir[3] = {0, 0, 0};
+  if (m->vtag[p] & RM3D_V_BDRY) {
+    kind = pa__rm3d_bdry_freedom(m, p, ball, n, dir);
+    if (!kind) return 0;
+  }
+  len_ctx lc;
+  if (!ball_neighbours(m, p, ball, n, &lc)) return 0;
+  lc.out0 = len_score(m, m->x + 3 * (size_t)p, m->met + (size_t)m->mc * p,
+                      lc.nb, lc.nn, &lc.s0);
+  if (lc.out0 == 0) return 0;
+  /* two candidates, each kept in the plane (kind 2) or along the ridge
+   * (kind 1) of a boundary vertex */
+  double d[3], d2[3];
+  if (!gauss_newton_step(m, p, lc.nb, lc.nn, d)) return 0;
+  restrict_move(d, dir, kind == 2, kind == 1);
+  worst_edge_step(m, p, lc.nb, lc.nn, d2);
+  restrict_move(d2, dir, kind == 2, kind == 1);
+  return try_length_moves(m, p, ball, n, kind, dir, &lc, d, d2);
 }

@@ -204,13 +204,13 @@ static pa_status find_bdry_records(const rm3d *m, split_plan *s, int *ok) {
     if (i < s->n) { /* forward face of tets[i]: (a, b, ring[i+1]) */
       t = s->tets[i];
       const pa_idx *v = m->tv + 4 * (size_t)t;
-      f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][0];
+      f = pa__rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][0];
       r = s->ring[i + 1];
     } else { /* start face of an open shell: (a, b, ring[0]) */
       if (s->info & RM3D_SH_CLOSED) break;
       t = s->tets[0];
       const pa_idx *v = m->tv + 4 * (size_t)t;
-      f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][1];
+      f = pa__rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][1];
       r = s->ring[0];
     }
     if (!((m->tflag[t] >> f) & 1)) continue;
@@ -279,7 +279,7 @@ static void cut_shell(rm3d *m, const split_plan *s, pa_idx pm) {
     pa_idx t = s->tets[i], nt = base + i;
     pa_idx *v = m->tv + 4 * (size_t)t, *w = m->tv + 4 * (size_t)nt;
     int ia = rm3d_loc(v, a), ib = rm3d_loc(v, b);
-    int ic = rm3d_compl[ia][ib][0], id = rm3d_compl[ia][ib][1];
+    int ic = pa__rm3d_compl[ia][ib][0], id = pa__rm3d_compl[ia][ib][1];
     memcpy(w, v, 4 * sizeof *w);
     w[ia] = pm;
     v[ib] = pm;

@@ -189,14 +189,14 @@ static pa_status remove_cap(rm3d *m, pa_idx a, pa_idx b, pa_idx t,
   double n1[3], n2[3], nt1[3], nt2[3];
   const double *x[4];
   for (int j = 0; j < 4; j++) x[j] = m->x + 3 * (size_t)v[j];
-  rm3d_tri_normal(x[rm3d_face[ld][0]], x[rm3d_face[ld][1]],
-                  x[rm3d_face[ld][2]], n1);
-  rm3d_tri_normal(x[rm3d_face[lc][0]], x[rm3d_face[lc][1]],
-                  x[rm3d_face[lc][2]], n2);
-  if (!(rm3d_tri_normal(x[rm3d_face[lb][0]], x[rm3d_face[lb][2]],
-                        x[rm3d_face[lb][1]], nt1) > 0) ||
-      !(rm3d_tri_normal(x[rm3d_face[la][0]], x[rm3d_face[la][2]],
-                        x[rm3d_face[la][1]], nt2) > 0))
+  rm3d_tri_normal(x[pa__rm3d_face[ld][0]], x[pa__rm3d_face[ld][1]],
+                  x[pa__rm3d_face[ld][2]], n1);
+  rm3d_tri_normal(x[pa__rm3d_face[lc][0]], x[pa__rm3d_face[lc][1]],
+                  x[pa__rm3d_face[lc][2]], n2);
+  if (!(rm3d_tri_normal(x[pa__rm3d_face[lb][0]], x[pa__rm3d_face[lb][2]],
+                        x[pa__rm3d_face[lb][1]], nt1) > 0) ||
+      !(rm3d_tri_normal(x[pa__rm3d_face[la][0]], x[pa__rm3d_face[la][2]],
+                        x[pa__rm3d_face[la][1]], nt2) > 0))
     return st;
   /* the old pair within RM3D_NORMAL_COS, or a kink the new pair smooths */
   double dold = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2];
@@ -269,7 +269,7 @@ static pa_status swap_bdry(rm3d *m, pa_idx a, pa_idx b, const pa_idx *tets,
    * end faces are. */
   for (int i = 0; i + 1 < n; i++) {
     const pa_idx *v = m->tv + 4 * (size_t)tets[i];
-    int f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][0];
+    int f = pa__rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][0];
     if ((m->tflag[tets[i]] >> f) & 1) return st;
   }
   pa_idx r1, r2;
@@ -282,15 +282,15 @@ static pa_status swap_bdry(rm3d *m, pa_idx a, pa_idx b, const pa_idx *tets,
   double n1[3], n2[3];
   {
     const pa_idx *v = m->tv + 4 * (size_t)tets[0];
-    int f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][1];
-    rm3d_tri_normal(m->x + 3 * (size_t)v[rm3d_face[f][0]],
-                    m->x + 3 * (size_t)v[rm3d_face[f][1]],
-                    m->x + 3 * (size_t)v[rm3d_face[f][2]], n1);
+    int f = pa__rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][1];
+    rm3d_tri_normal(m->x + 3 * (size_t)v[pa__rm3d_face[f][0]],
+                    m->x + 3 * (size_t)v[pa__rm3d_face[f][1]],
+                    m->x + 3 * (size_t)v[pa__rm3d_face[f][2]], n1);
     v = m->tv + 4 * (size_t)tets[n - 1];
-    f = rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][0];
-    rm3d_tri_normal(m->x + 3 * (size_t)v[rm3d_face[f][0]],
-                    m->x + 3 * (size_t)v[rm3d_face[f][1]],
-                    m->x + 3 * (size_t)v[rm3d_face[f][2]], n2);
+    f = pa__rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][0];
+    rm3d_tri_normal(m->x + 3 * (size_t)v[pa__rm3d_face[f][0]],
+                    m->x + 3 * (size_t)v[pa__rm3d_face[f][1]],
+                    m->x + 3 * (size_t)v[pa__rm3d_face[f][2]], n2);
   }
   double nt1[3], nt2[3];
   if (!(rm3d_tri_normal(xa, xc, xd, nt1) > 0) ||
@@ -393,8 +393,8 @@ pa_status pa__rm3d_swap_face(rm3d *m, pa_idx k, int f, double gain,
   if (m->tref[k] != m->tref[l]) return st;
   const pa_idx *vk = m->tv + 4 * (size_t)k;
   pa_idx d = vk[f], e = m->tv[4 * (size_t)l + (o & 3)];
-  pa_idx fv[3] = {vk[rm3d_face[f][0]], vk[rm3d_face[f][1]],
-                  vk[rm3d_face[f][2]]};
+  pa_idx fv[3] = {vk[pa__rm3d_face[f][0]], vk[pa__rm3d_face[f][1]],
+                  vk[pa__rm3d_face[f][2]]};
   double qold = m->q[k] < m->q[l] ? m->q[k] : m->q[l];
   double target = gain * qold;
   pa_idx nv4[12];

@@ -17,7 +17,7 @@ int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
   for (;;) {
     const pa_idx *v = m->tv + 4 * (size_t)t;
     int ia = rm3d_loc(v, a), ib = rm3d_loc(v, b);
-    int id = rm3d_compl[ia][ib][1];
+    int id = pa__rm3d_compl[ia][ib][1];
     pa_idx nb = m->adj[4 * (size_t)t + id];
     if (nb < 0) {
       start = t;
@@ -37,7 +37,7 @@ int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
     if (n >= max) return -1;
     const pa_idx *v = m->tv + 4 * (size_t)t;
     int ia = rm3d_loc(v, a), ib = rm3d_loc(v, b);
-    int ic = rm3d_compl[ia][ib][0], id = rm3d_compl[ia][ib][1];
+    int ic = pa__rm3d_compl[ia][ib][0], id = pa__rm3d_compl[ia][ib][1];
     tets[n] = t;
     ring[n] = v[ic];
     n++;
@@ -94,9 +94,9 @@ typedef struct face_key {
 } face_key;
 
 static void face_sorted(const pa_idx *v, int f, pa_idx *k) {
-  k[0] = v[rm3d_face[f][0]];
-  k[1] = v[rm3d_face[f][1]];
-  k[2] = v[rm3d_face[f][2]];
+  k[0] = v[pa__rm3d_face[f][0]];
+  k[1] = v[pa__rm3d_face[f][1]];
+  k[2] = v[pa__rm3d_face[f][2]];
   pa__sort_small(k, 3);
 }
 
