@@ -1173,37 +1173,13 @@ cleanup:
   return st;
 }
 
-/* A piece's input once its outputs are examined (output_reuse,
- * output_dest): the rest of the reintegration reads its vertices only
- * (coordinates, references); the cells, metric and fields go before the
- * records of the rebuild are made. */
-static void input_trim(pa_mesh *in) {
-  pa__mesh_invalidate(in);
-  pa__free(in->elem);
-  pa__free(in->eref);
-  pa__free(in->eflag);
-  pa__free(in->bdry);
-  pa__free(in->bref);
-  pa__free(in->bflag);
-  pa__free(in->edge);
-  pa__free(in->edref);
-  pa__free(in->edflag);
-  pa__free(in->met);
-  for (int k = 0; k < in->nfield; k++) pa__free(in->field[k].val);
-  in->elem = in->bdry = in->edge = NULL;
-  in->eref = in->bref = in->edref = NULL;
-  in->eflag = in->bflag = in->edflag = NULL;
-  in->met = NULL;
-  in->ne = in->nb = in->ned = 0;
-  in->cape = in->capb = in->caped = 0;
-  in->met_ncomp = in->nfield = 0;
-}
 
 /* Step 3: the largest id in use here (base), and per output the entities
  * that keep their id, the boundary entities and edges it gives and the
  * rank of each element (output_dest): the count of fresh ids this rank
- * needs of each kind (cnt). Then the inputs are trimmed (input_trim), so
- * that the records of step 4 do not stack on what they no longer need. */
+ * needs of each kind (cnt). Then the inputs keep only their vertices
+ * (coordinates, references: all the rest of the reintegration reads), so
+ * that the records of step 4 do not stack on their cells. */
 static pa_status count_fresh(pa__iter *it, reint *r) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
@@ -1226,7 +1202,7 @@ static pa_status count_fresh(pa__iter *it, reint *r) {
     PA_CALL(output_emit(pc->out, pc->reuse[PA_BOUNDARY], pc->reuse[PA_EDGE],
                         &r->bemit[q], &r->demit[q], r->cnt));
     PA_CALL(output_dest(it, pc, &pc->dest));
-    input_trim(pc->in);
+    pa__mesh_drop_cells(pc->in); /* only its vertices are read from now */
   }
 cleanup:
   return st;

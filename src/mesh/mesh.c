@@ -38,12 +38,8 @@ void pa__mesh_invalidate(pa_mesh *mesh) {
   mesh->bhash_cap = 0;
 }
 
-void pa_mesh_destroy(pa_mesh *mesh) {
-  if (!mesh) return;
+void pa__mesh_drop_cells(pa_mesh *mesh) {
   pa__mesh_invalidate(mesh);
-  pa__free(mesh->coord);
-  pa__free(mesh->vref);
-  pa__free(mesh->vflag);
   pa__free(mesh->elem);
   pa__free(mesh->eref);
   pa__free(mesh->eflag);
@@ -55,6 +51,21 @@ void pa_mesh_destroy(pa_mesh *mesh) {
   pa__free(mesh->edflag);
   pa__free(mesh->met);
   for (int k = 0; k < mesh->nfield; k++) pa__free(mesh->field[k].val);
+  mesh->elem = mesh->bdry = mesh->edge = NULL;
+  mesh->eref = mesh->bref = mesh->edref = NULL;
+  mesh->eflag = mesh->bflag = mesh->edflag = NULL;
+  mesh->met = NULL;
+  mesh->ne = mesh->nb = mesh->ned = 0;
+  mesh->cape = mesh->capb = mesh->caped = 0;
+  mesh->met_ncomp = mesh->nfield = 0;
+}
+
+void pa_mesh_destroy(pa_mesh *mesh) {
+  if (!mesh) return;
+  pa__mesh_drop_cells(mesh);
+  pa__free(mesh->coord);
+  pa__free(mesh->vref);
+  pa__free(mesh->vflag);
   pa__mesh_free_names(mesh);
   pa__free(mesh);
 }

@@ -92,6 +92,10 @@ pa_status pa__mesh_copy_names(pa_mesh *dst, const pa_mesh *src);
 
 /* Free derived structures after a topological change. */
 void pa__mesh_invalidate(pa_mesh *mesh);
+/* Free the elements, boundary entities, edges, metric and fields (and the
+ * derived structures), keeping the vertices and the names: what is left
+ * is a mesh of nv vertices and no cells. */
+void pa__mesh_drop_cells(pa_mesh *mesh);
 /* pa_mesh_check but for the metric values, which the metric component
  * checks (pa__mesh_check_metric, metric/metric.h); input 0 leaves out what
  * only a user's input must meet (manifold vertices, no two vertices at one
