@@ -12,7 +12,9 @@
  *     (lattice_crowd: a structured input about to be refined into the next
  *     lattice, twice the tets) is broken by jiggling the ends of its edges,
  *     and from then on the splits of edges shorter than RM3D_LSPREAD are
- *     spread (one per neighbourhood and pass);
+ *     spread (one per neighbourhood and pass). A large working mesh is
+ *     renumbered for locality between bands (RM3D_REORDER_MIN), and every
+ *     mesh after them;
  *  2. at least 3 and at most 20 rounds of split (> sqrt 2), collapse
  *     (< 1/sqrt 2, no new edge longer than sqrt 2: p onto q, q onto p, both
  *     onto the midpoint, either onto another neighbour, else the edge
@@ -554,6 +556,16 @@ static void break_lattice_crowd(rm3d *m) {
             nj);
 }
 
+/* The bands renumber the working mesh for locality (pa__rm3d_reorder)
+ * before a band once it has grown RM3D_REORDER_GROWTH times since it was
+ * last ordered and holds at least RM3D_REORDER_MIN live tets: splits append
+ * their tets at the end, so after a few bands a large mesh's neighbourhoods
+ * are spread over its whole memory and every ball and shell walk misses the
+ * cache. Below the bound the mesh fits in the caches that matter and the
+ * order is left as it is (figures: docs/BENCHMARKS.md, "The 3D remesher"). */
+#define RM3D_REORDER_GROWTH 4
+#define RM3D_REORDER_MIN 1000000
+
 /* Schedule step 1, the refinement bands. Far too coarse input: split
  * longest edges first, in bands of lengths decreasing by a constant factor,
  * so that tets are bisected roughly in the order of a global longest-edge
@@ -563,7 +575,13 @@ static pa_status refine_bands(rm3d *m, const pa_remesh_opts *opts,
                               int *step) {
   pa_status st = PA_SUCCESS;
   double prev = HUGE_VAL;
+  pa_idx ne_ordered = m->ne;
   for (int it = 0; it < 40; it++) {
+    if (m->ne - m->ndead_t >= RM3D_REORDER_MIN &&
+        m->ne - m->ndead_t > RM3D_REORDER_GROWTH * ne_ordered) {
+      PA_CALL(pa__rm3d_reorder(m));
+      ne_ordered = m->ne;
+    }
     /* decreasing even when the longest edge cannot be split (frozen, or
      * refused next to a frozen skin): the bands must reach
      * PA_METRIC_LEN_HI_EXACT */
