@@ -102,16 +102,22 @@ cleanup:
 static int ball_qualities(const rm3d *m, pa_idx q, const pa_idx *ball, int n,
                           float *nq) {
   int32_t ref0 = m->tref[ball[0] >> 2];
-  double qold = 1e30, qnew = 1e30;
+  double qold = 1e30;
   int nd = 0;
+  for (int i = 0; i < n; i++) {
+    pa_idx t = ball[i] >> 2;
+    if (m->tref[t] != ref0) return 0;
+    if (m->q[t] < qold) qold = m->q[t];
+  }
+  /* the lowest new quality accepted against qold (rm3d_q_ok, and at least
+   * 0.3 qold): one tet below it refuses the collapse */
+  double qmin = fmax(0.3 * qold, rm3d_q_min(qold));
   const double *xq = m->x + 3 * (size_t)q;
   const double *mq = m->met + (size_t)m->mc * q;
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
     int ip = ball[i] & 3;
-    if (m->tref[t] != ref0) return 0;
     const pa_idx *v = m->tv + 4 * (size_t)t;
-    if (m->q[t] < qold) qold = m->q[t];
     int iq = rm3d_loc(v, q);
     if (iq >= 0) {
       /* Deleted: both faces (p,x,y) and (q,x,y) on a surface is a cap. */
@@ -121,12 +127,10 @@ static int ball_qualities(const rm3d *m, pa_idx q, const pa_idx *ball, int n,
       continue;
     }
     double qq = rm3d_qual_moved(m, t, ip, xq, mq);
-    if (qq < RM3D_QABS) return 0;
-    if (qq < qnew) qnew = qq;
+    if (!(qq >= qmin)) return 0;
     nq[i] = (float)qq;
   }
-  if (nd == 0 || nd == n) return 0;
-  return !(qnew < 0.3 * qold || !rm3d_q_ok(qnew, qold));
+  return nd != 0 && nd != n;
 }
 
 /* Length guard: 1 when no new edge (q, x) is longer than lguard. */
@@ -275,8 +279,21 @@ static int ridge_kept(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball, int n,
 
 pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
                             int *done) {
-  pa_status st = PA_SUCCESS;
   pa_idx ball[RM3D_MAXBALL];
+  *done = 0;
+  uint8_t tp = m->vtag[p];
+  if (tp & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) return PA_SUCCESS;
+  if ((tp & RM3D_V_BDRY) && (!m->surf || !(m->vtag[q] & RM3D_V_BDRY)))
+    return PA_SUCCESS;
+  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
+  if (n < 0) return PA_SUCCESS;
+  return pa__rm3d_collapse_ball(m, p, q, ball, n, lguard, done);
+}
+
+pa_status pa__rm3d_collapse_ball(rm3d *m, pa_idx p, pa_idx q,
+                                 const pa_idx *ball, int n, double lguard,
+                                 int *done) {
+  pa_status st = PA_SUCCESS;
   float nq[RM3D_MAXBALL];
   pa_idx trec[R3_COL_MAXTRI];
   pa_idx erec[4];
@@ -286,8 +303,6 @@ pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
   if (tp & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) return st;
   int surfp = (tp & RM3D_V_BDRY) != 0;
   if (surfp && (!m->surf || !(m->vtag[q] & RM3D_V_BDRY))) return st;
-  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
-  if (n < 0) return st;
   if (!ball_qualities(m, q, ball, n, nq)) return st;
   if (!new_edges_short(m, p, q, ball, n, nq, lguard)) return st;
   if (surfp) {

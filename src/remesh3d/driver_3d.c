@@ -178,7 +178,7 @@ static pa_status collapse_other(rm3d *m, pa_idx a, pa_idx b, double guard,
       for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~RM3D_V_MARK;
     }
     for (int i = 0; i < k && !*done; i++)
-      PA_CALL(pa__rm3d_collapse(m, p, nb[i], guard, done));
+      PA_CALL(pa__rm3d_collapse_ball(m, p, nb[i], ball, n, guard, done));
   }
 cleanup:
   return st;
@@ -299,10 +299,10 @@ pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count) {
     for (pa_idx p = 0; p < m->nv; p++) {
       if (!(m->vtag[p] & RM3D_V_TODO)) continue;
       m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
-      if (!pa__rm3d_length_vertex(m, p, ball)) continue;
+      int n = pa__rm3d_length_vertex(m, p, ball);
+      if (!n) continue;
       moved++;
       if (!again) continue;
-      int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
       for (int i = 0; i < n; i++)
         for (int j = 0; j < 4; j++) again[m->tv[4 * (size_t)(ball[i] >> 2) + j]] = 1;
     }

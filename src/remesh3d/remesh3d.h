@@ -58,6 +58,7 @@ enum {
   RM3D_V_TODO = 128   /* pass scratch: vertex to visit / not tried yet */
 };
 
+
 /* Boundary triangles (nk = 3) or feature edges (nk = 2): records in an array
  * (kept in creation order, dead ones flagged) with an open-addressing hash
  * on the sorted vertex tuple. */
@@ -130,8 +131,6 @@ extern const int pa__rm3d_face[4][3];
  * aligned: a fold, whose slivers no later operation removes. */
 #define RM3D_NORMAL_COS 0.98
 
-/* May an operator create an element of quality q where the worst element it
- * replaces had quality qref? */
 /* The Hausdorff distance bounding surface triangle record r: its
  * reference's local parameter (pa_local_param) or m->hausd. */
 static inline double rm3d_tri_hausd(const rm3d *m, pa_idx r) {
@@ -140,8 +139,13 @@ static inline double rm3d_tri_hausd(const rm3d *m, pa_idx r) {
              : m->hausd;
 }
 
+/* The lowest quality an operator may create where the worst element it
+ * replaces had quality qref, and whether q is acceptable there. */
+static inline double rm3d_q_min(double qref) {
+  return fmax(RM3D_QABS, fmin(RM3D_QFLOOR, 0.5 * qref));
+}
 static inline int rm3d_q_ok(double q, double qref) {
-  return q >= RM3D_QABS && (q >= RM3D_QFLOOR || q >= 0.5 * qref);
+  return q >= rm3d_q_min(qref);
 }
 /* A length move may lower the ball's worst quality down to this (never
  * below the old worst if that is lower): the lengths are the target, a
@@ -276,6 +280,10 @@ pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
 /* Collapse the edge (p,q): p removed, q kept. *done = 1 when collapsed. */
 pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
                             int *done);
+/* The same with p's ball given (ball[0..n), as pa__rm3d_ball gives it). */
+pa_status pa__rm3d_collapse_ball(rm3d *m, pa_idx p, pa_idx q,
+                                 const pa_idx *ball, int n, double lguard,
+                                 int *done);
 /* Contract the edge (p,q) to its midpoint: q moves there (only where it
  * stays on its entity: interior, plane, straight ridge), then p collapses
  * onto it with every check of pa__rm3d_collapse; q moves back otherwise. */
@@ -315,7 +323,8 @@ void pa__rm3d_mid_metric(const rm3d *m, pa_idx a, pa_idx b, double *mp);
  * Gauss-Newton step on sum ln^2 L_i over its edges, halved up to three
  * times, kept when fewer of its edges are out of range (or as many, with
  * the sum down by RM3D_LGAIN) and the ball's worst quality stays at least
- * min(its old worst, RM3D_QLEN). 1 when moved. */
+ * min(its old worst, RM3D_QLEN). When moved, the size of p's ball, left
+ * in ball; 0 otherwise. */
 int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball);
 /* Relocate vertex p to raise the worst quality of its ball. */
 int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball);

@@ -461,21 +461,29 @@ int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball) {
 
 /* ---- relocation for lengths -------------------------------------------- */
 
-/* Edges at p: out of [PA_METRIC_LEN_LO_EXACT, PA_METRIC_LEN_HI_EXACT) and the
- * sum of ln^2 L, with p at y (metric mp) and its neighbours nb[0..nn). */
-static int len_score(const rm3d *m, const double *y, const double *mp,
-                     const pa_idx *nb, int nn, double *sum) {
+/* Lengths l[0..nn) of the edges from p at y (metric mp) to its neighbours
+ * nb[0..nn); returns how many are out of [PA_METRIC_LEN_LO_EXACT,
+ * PA_METRIC_LEN_HI_EXACT). */
+static int len_out(const rm3d *m, const double *y, const double *mp,
+                   const pa_idx *nb, int nn, double *l) {
   int out = 0, mc = m->mc;
+  for (int i = 0; i < nn; i++) {
+    l[i] = pa__len3(mc, y, m->x + 3 * (size_t)nb[i], mp,
+                    m->met + (size_t)mc * nb[i]);
+    out += !(l[i] >= PA_METRIC_LEN_LO_EXACT && l[i] < PA_METRIC_LEN_HI_EXACT);
+  }
+  return out;
+}
+
+/* Sum of ln^2 l[i] over i < nn; with lg, also the logarithms. */
+static double len_sum(const double *l, int nn, double *lg) {
   double s = 0;
   for (int i = 0; i < nn; i++) {
-    double l = pa__len3(mc, y, m->x + 3 * (size_t)nb[i], mp,
-                        m->met + (size_t)mc * nb[i]);
-    out += !(l >= PA_METRIC_LEN_LO_EXACT && l < PA_METRIC_LEN_HI_EXACT);
-    double g = log(l);
+    double g = log(l[i]);
+    if (lg) lg[i] = g;
     s += g * g;
   }
-  *sum = s;
-  return out;
+  return s;
 }
 
 /* Solve the symmetric 3x3 system a x = b (a: xx xy yy xz yz zz); 0 if
@@ -498,44 +506,50 @@ static int solve3(const double *a, const double *b, double *x) {
  * ball's worst quality. */
 typedef struct len_ctx {
   pa_idx nb[RM3D_LNB];
+  double l0[RM3D_LNB], lg0[RM3D_LNB]; /* lengths from p and their logs */
   int nn, out0;
   double s0, qold;
 } len_ctx;
 
-/* The neighbours of p in its ball[0..n), each once, and the ball's worst
- * quality; 0 if the ball spans two references, holds a frozen element or
- * has more than RM3D_LNB neighbours. */
-static int ball_neighbours(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
+/* The neighbours of p in its ball[0..n), each once (in the order the ball
+ * meets them), and the ball's worst quality; 0 if the ball spans two
+ * references, holds a frozen element or has more than RM3D_LNB
+ * neighbours. */
+static int ball_neighbours(rm3d *m, pa_idx p, const pa_idx *ball, int n,
                            len_ctx *lc) {
   pa_idx *nb = lc->nb;
-  int nn = 0;
+  int nn = 0, ok = 1;
   double qold = 1e30;
   int32_t ref0 = m->tref[ball[0] >> 2];
-  for (int i = 0; i < n; i++) {
+  for (int i = 0; i < n && ok; i++) {
     pa_idx t = ball[i] >> 2;
-    if (m->tref[t] != ref0 || (m->tflag[t] & RM3D_T_FROZEN)) return 0;
+    if (m->tref[t] != ref0 || (m->tflag[t] & RM3D_T_FROZEN)) ok = 0;
     if (m->q[t] < qold) qold = m->q[t];
     const pa_idx *v = m->tv + 4 * (size_t)t;
-    for (int j = 0; j < 4; j++) {
+    for (int j = 0; j < 4 && ok; j++) {
       pa_idx x = v[j];
-      int k = 0;
-      while (k < nn && nb[k] != x) k++;
-      if (x == p || k < nn) continue;
-      if (nn == RM3D_LNB) return 0;
-      nb[nn++] = x;
+      if (x == p || (m->vtag[x] & RM3D_V_MARK)) continue;
+      if (nn == RM3D_LNB) ok = 0;
+      else {
+        m->vtag[x] |= RM3D_V_MARK;
+        nb[nn++] = x;
+      }
     }
   }
+  for (int i = 0; i < nn; i++) m->vtag[nb[i]] &= (uint8_t)~RM3D_V_MARK;
   lc->nn = nn;
   lc->qold = qold;
-  return 1;
+  return ok;
 }
 
 /* Gauss-Newton step d on r_i = ln L_i over the edges from p to nb[0..nn):
  * d ln L_i / dx = -M e / (e^T M e), e = x_i - x, M the mean of the two end
  * metrics; Levenberg damping relative to the system's scale. 0 if an edge
  * is degenerate or the system singular. */
-static int gauss_newton_step(const rm3d *m, pa_idx p, const pa_idx *nb,
-                             int nn, double *d) {
+static int gauss_newton_step(const rm3d *m, pa_idx p, const len_ctx *lc,
+                             double *d) {
+  const pa_idx *nb = lc->nb;
+  int nn = lc->nn;
   int mc = m->mc;
   const double *xp = m->x + 3 * (size_t)p;
   const double *mp = m->met + (size_t)mc * p;
@@ -558,7 +572,7 @@ static int gauss_newton_step(const rm3d *m, pa_idx p, const pa_idx *nb,
       if (!(s > 0)) return 0;
       for (int j = 0; j < 3; j++) g[j] = -me[j] / s;
     }
-    double r = log(pa__len3(mc, xp, xi, mp, mi));
+    double r = lc->lg0[i];
     jj[0] += g[0] * g[0];
     jj[1] += g[0] * g[1];
     jj[2] += g[1] * g[1];
@@ -576,17 +590,15 @@ static int gauss_newton_step(const rm3d *m, pa_idx p, const pa_idx *nb,
 
 /* The second candidate d2: along the edge from p to nb[0..nn) furthest out
  * of range, by the fraction that brings it to unit length (at most half). */
-static void worst_edge_step(const rm3d *m, pa_idx p, const pa_idx *nb, int nn,
+static void worst_edge_step(const rm3d *m, pa_idx p, const len_ctx *lc,
                             double *d2) {
-  int mc = m->mc;
   const double *xp = m->x + 3 * (size_t)p;
-  const double *mp = m->met + (size_t)mc * p;
   double worst = 0;
   d2[0] = d2[1] = d2[2] = 0;
-  for (int i = 0; i < nn; i++) {
-    const double *xi = m->x + 3 * (size_t)nb[i];
-    double l = pa__len3(mc, xp, xi, mp, m->met + (size_t)mc * nb[i]);
-    double g = fabs(log(l));
+  for (int i = 0; i < lc->nn; i++) {
+    const double *xi = m->x + 3 * (size_t)lc->nb[i];
+    double l = lc->l0[i];
+    double g = fabs(lc->lg0[i]);
     if (g <= worst) continue;
     worst = g;
     double f = l > 1 ? 1 - 1 / l : l - 1; /* < 0: away from x_i */
@@ -613,9 +625,11 @@ static int try_length_moves(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
     if (kind == 2) /* an axis plane keeps its coordinate bit for bit */
       for (int j = 0; j < 3; j++)
         if (fabs(dir[j]) == 1.0) np[j] = xp[j];
-    double s1;
-    int out1 = len_score(m, np, mp, lc->nb, lc->nn, &s1);
-    if (!(out1 < lc->out0 || (out1 == lc->out0 && s1 < RM3D_LGAIN * lc->s0)))
+    double l1[RM3D_LNB];
+    int out1 = len_out(m, np, mp, lc->nb, lc->nn, l1);
+    if (out1 > lc->out0 ||
+        (out1 == lc->out0 &&
+         !(len_sum(l1, lc->nn, NULL) < RM3D_LGAIN * lc->s0)))
       continue;
     int ok = 1;
     for (int i = 0; i < n && ok; i++) {
@@ -625,7 +639,7 @@ static int try_length_moves(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
     }
     if (!ok) continue;
     apply_move(m, p, ball, n, np, nq);
-    return 1;
+    return n;
   }
   return 0;
 }
@@ -644,15 +658,16 @@ int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
   }
   len_ctx lc;
   if (!ball_neighbours(m, p, ball, n, &lc)) return 0;
-  lc.out0 = len_score(m, m->x + 3 * (size_t)p, m->met + (size_t)m->mc * p,
-                      lc.nb, lc.nn, &lc.s0);
+  lc.out0 = len_out(m, m->x + 3 * (size_t)p, m->met + (size_t)m->mc * p,
+                    lc.nb, lc.nn, lc.l0);
   if (lc.out0 == 0) return 0;
+  lc.s0 = len_sum(lc.l0, lc.nn, lc.lg0);
   /* two candidates, each kept in the plane (kind 2) or along the ridge
    * (kind 1) of a boundary vertex */
   double d[3], d2[3];
-  if (!gauss_newton_step(m, p, lc.nb, lc.nn, d)) return 0;
+  if (!gauss_newton_step(m, p, &lc, d)) return 0;
   restrict_move(d, dir, kind == 2, kind == 1);
-  worst_edge_step(m, p, lc.nb, lc.nn, d2);
+  worst_edge_step(m, p, &lc, d2);
   restrict_move(d2, dir, kind == 2, kind == 1);
   return try_length_moves(m, p, ball, n, kind, dir, &lc, d, d2);
 }

@@ -27,6 +27,54 @@
 #define R3_SWAP_MAXRING 7
 #define R3_SWAP_MAXPOLY (R3_SWAP_MAXRING + 1)
 
+/* The qualities of the two tets over the ring triangles (i < j < l) of
+ * ring_dp, each computed when first needed. */
+typedef struct ring_q {
+  const rm3d *m;
+  pa_idx a, b;
+  const pa_idx *ring;
+  double target;
+  float tq[R3_SWAP_MAXPOLY][R3_SWAP_MAXPOLY][R3_SWAP_MAXPOLY];
+  uint8_t known[R3_SWAP_MAXPOLY][R3_SWAP_MAXPOLY]; /* bit l: tq[i][j][l] */
+} ring_q;
+
+static float ring_tri(ring_q *r, int i, int j, int l) {
+  if (r->known[i][j] & (1u << l)) return r->tq[i][j][l];
+  const rm3d *m = r->m;
+  int mc = m->mc;
+  const pa_idx *ring = r->ring;
+  const double *xi = m->x + 3 * (size_t)ring[i];
+  const double *xj = m->x + 3 * (size_t)ring[j];
+  const double *xl = m->x + 3 * (size_t)ring[l];
+  const double *mi = m->met + (size_t)mc * ring[i];
+  const double *mj = m->met + (size_t)mc * ring[j];
+  const double *ml = m->met + (size_t)mc * ring[l];
+  double q1 = pa__qual3(mc, xi, xj, xl, m->x + 3 * (size_t)r->b, mi, mj, ml,
+                        m->met + (size_t)mc * r->b);
+  double q2 = q1 > r->target
+                  ? pa__qual3(mc, xi, xl, xj, m->x + 3 * (size_t)r->a, mi, ml,
+                              mj, m->met + (size_t)mc * r->a)
+                  : q1;
+  r->known[i][j] |= (uint8_t)(1u << l);
+  return r->tq[i][j][l] = (float)(q1 < q2 ? q1 : q2);
+}
+
+/* 0 when some side (i, i+1) of the polygon ring[0..nr), or its base
+ * (0, nr-1), lies on no triangle better than the target: every
+ * triangulation holds one such triangle then, and the swap fails. */
+static int ring_feasible(ring_q *r, int nr) {
+  for (int s = 0; s < nr; s++) {
+    int i = s < nr - 1 ? s : 0, j = s < nr - 1 ? s + 1 : nr - 1, ok = 0;
+    for (int l = 0; l < nr && !ok; l++) {
+      if (l == i || l == j) continue;
+      int t0 = l < i ? l : i, t2 = l > j ? l : j, t1 = i + j + l - t0 - t2;
+      ok = ring_tri(r, t0, t1, t2) > r->target;
+    }
+    if (!ok) return 0;
+  }
+  return 1;
+}
+
 /* Best triangulation of the polygon ring[0..nr) (base edge ring[0] ring[nr-1])
  * for the edge (a,b): each triangle (i,l,j) gives the tets (r_i, r_l, r_j, b)
  * and (r_i, r_j, r_l, a). Maximises the worst quality by dynamic programming
@@ -34,27 +82,16 @@
  * target) and the new tets in nv4[0..4 * *nnew). */
 static double ring_dp(const rm3d *m, pa_idx a, pa_idx b, const pa_idx *ring,
                       int nr, double target, pa_idx *nv4, int *nnew) {
-  float tq[R3_SWAP_MAXPOLY][R3_SWAP_MAXPOLY][R3_SWAP_MAXPOLY];
+  ring_q r;
+  r.m = m;
+  r.a = a;
+  r.b = b;
+  r.ring = ring;
+  r.target = target;
+  memset(r.known, 0, sizeof r.known);
   float best[R3_SWAP_MAXPOLY][R3_SWAP_MAXPOLY];
   signed char arg[R3_SWAP_MAXPOLY][R3_SWAP_MAXPOLY];
-  int mc = m->mc;
-  const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b;
-  const double *ma = m->met + (size_t)mc * a, *mb = m->met + (size_t)mc * b;
-  /* Quality of the two tets over each ring triangle (i < j < l). */
-  for (int i = 0; i < nr; i++)
-    for (int j = i + 1; j < nr; j++)
-      for (int l = j + 1; l < nr; l++) {
-        const double *xi = m->x + 3 * (size_t)ring[i];
-        const double *xj = m->x + 3 * (size_t)ring[j];
-        const double *xl = m->x + 3 * (size_t)ring[l];
-        const double *mi = m->met + (size_t)mc * ring[i];
-        const double *mj = m->met + (size_t)mc * ring[j];
-        const double *ml = m->met + (size_t)mc * ring[l];
-        double q1 = pa__qual3(mc, xi, xj, xl, xb, mi, mj, ml, mb);
-        double q2 =
-            q1 > target ? pa__qual3(mc, xi, xl, xj, xa, mi, ml, mj, ma) : q1;
-        tq[i][j][l] = (float)(q1 < q2 ? q1 : q2);
-      }
+  if (!ring_feasible(&r, nr)) return -1;
   /* best[i][j]: best worst quality triangulating ring[i..j] (j - i >= 2). */
   for (int len = 2; len < nr; len++)
     for (int i = 0; i + len < nr; i++) {
@@ -62,9 +99,13 @@ static double ring_dp(const rm3d *m, pa_idx a, pa_idx b, const pa_idx *ring,
       float bq = -1;
       signed char bk = -1;
       for (int l = i + 1; l < j; l++) {
-        float v = tq[i][l][j];
+        /* the sub-polygons bound v: no better than bq, no need of tq */
+        float v = 2;
         if (l - i >= 2 && best[i][l] < v) v = best[i][l];
         if (j - l >= 2 && best[l][j] < v) v = best[l][j];
+        if (!(v > bq)) continue;
+        float t = ring_tri(&r, i, l, j);
+        if (t < v) v = t;
         if (v > bq) {
           bq = v;
           bk = (signed char)l;
