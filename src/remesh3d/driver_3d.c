@@ -17,19 +17,22 @@
  *     mesh after them;
  *  2. at least 3 and at most 20 rounds of split (> sqrt 2), collapse
  *     (< 1/sqrt 2, no new edge longer than sqrt 2: p onto q, q onto p, both
- *     onto the midpoint, either onto another neighbour, else the edge
- *     removed by a swap), swaps around
- *     tets of quality < 0.3 (interior edge removal, 2-3, boundary edge swap)
- *     and smoothing of the vertices of tets below 0.75, until a round
+ *     onto the midpoint, either onto one of its two nearest other
+ *     neighbours, else the edge removed by a swap), swaps around tets of
+ *     quality < 0.3 (interior edge removal, 2-3, boundary edge swap),
+ *     smoothing of the vertices of tets below 0.75 and a sweep of length
+ *     moves (the ends of the edges out of range), until a round
  *     changes fewer than 0.5 % of the tets (with frozen entities also when
  *     balanced splits and collapses stall: three rounds without a 5 % drop;
  *     the rule shared with 2D, remesh/schedule.h);
  *     the working metric is relaxed at frozen vertices beforehand
  *     (pa__rm3d_skin_relax);
  *  3. three rounds of swaps (quality < 0.7: this lifts the mean quality by
- *     about 0.03) and smoothing, the first two preceded by a collapse pass
- *     (the swaps and moves unlock short edges the rounds left), and a final
- *     pass against slivers (< 0.1).
+ *     about 0.03), smoothing (below 0.75) and two sweeps of length moves
+ *     (the smoothing disregards lengths), the first two preceded by a
+ *     collapse pass (the swaps and moves unlock short edges the rounds
+ *     left), a final pass against slivers (< 0.1) and two last sweeps of
+ *     length moves.
  * Every pass visits tets and vertices in index order, and every operator is
  * deterministic, so the output is identical from run to run.
  *
@@ -58,6 +61,10 @@
  * in range, a third hardly does (figures: docs/BENCHMARKS.md, "The 3D
  * remesher"). */
 #define RM3D_LENGTH_SWEEPS 2
+/* Neighbours collapse_other tries per end: the third and later ones
+ * succeed rarely, and all of them cost as much as the rest of the
+ * collapse pass (figures: docs/BENCHMARKS.md, "The 3D remesher"). */
+#define RM3D_OTHER_TRIES 2
 
 static void lengths6(const rm3d *m, const pa_idx *v, double *L) {
   for (int e = 0; e < 6; e++)
@@ -142,13 +149,14 @@ cleanup:
 /* Each vertex is tried for removal at most once per pass (RM3D_V_TODO), so a
  * collapse that fails is not retried from every tet of the vertex. */
 /* Fallback for a short edge (a,b) neither end of which collapses onto the
- * other: remove a or b onto another neighbour, shortest edges first (only
- * edges shorter than 1, so the vertex goes where it is crowded). */
+ * other: remove a or b onto another neighbour, the RM3D_OTHER_TRIES
+ * shortest edges first (only edges shorter than 1, so the vertex goes where
+ * it is crowded). */
 static pa_status collapse_other(rm3d *m, pa_idx a, pa_idx b, double guard,
                                 int *done) {
   pa_status st = PA_SUCCESS;
-  pa_idx ball[RM3D_MAXBALL], nb[64];
-  double ln[64];
+  pa_idx ball[RM3D_MAXBALL], nb[RM3D_OTHER_TRIES];
+  double ln[RM3D_OTHER_TRIES];
   for (int s = 0; s < 2 && !*done; s++) {
     pa_idx p = s ? b : a, o = s ? a : b;
     if (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER)) continue;
@@ -162,8 +170,8 @@ static pa_status collapse_other(rm3d *m, pa_idx a, pa_idx b, double guard,
         if (x == p || x == o || (m->vtag[x] & RM3D_V_MARK)) continue;
         m->vtag[x] |= RM3D_V_MARK;
         double l = rm3d_len(m, p, x);
-        if (l >= 1.0 || k >= 64) continue;
-        int at = k++;
+        if (l >= 1.0 || (k == RM3D_OTHER_TRIES && !(l < ln[k - 1]))) continue;
+        int at = k < RM3D_OTHER_TRIES ? k++ : k - 1;
         while (at > 0 && ln[at - 1] > l) {
           ln[at] = ln[at - 1];
           nb[at] = nb[at - 1];
