@@ -17,8 +17,13 @@
 # [0.7071, 1.4142), worst and mean quality). The line gives the medians and
 # padapt's elements per second over Mmg's. For `small`, PAIRS pairs of
 # `padapt adapt` at 1 then 2 processes, and the median efficiency
-# T1 / (2 T2). Wall clock: meaningful on a quiet machine only (the load is
-# printed first).
+# T1 / (2 T2) twice: on the wall clock of the whole command, and on the
+# command's own time (`padapt -v 1` prints it: from the end of MPI_Init to
+# the outputs written, on rank 0), which leaves out the start and end of
+# MPI -- about 0.4 s on one process (a singleton still starts Open MPI's
+# runtime) and 0.5 s with mpiexec -n 2, as much as half of the small job's
+# work, the same whatever padapt does. Wall clock: meaningful on a quiet
+# machine only (the load is printed first).
 set -u
 BUILD=${1:?BUILD_DIR}
 WORK=${2:?WORK_DIR}
@@ -42,11 +47,13 @@ judge() {
   /usr/bin/python3 -c "import json; j = json.load(open('judge.json'));
 print(j['elements'], round(100 * j['edge_in_range'], 2), round(j['quality_worst'], 3), round(j['quality_mean'], 3))"
 }
-# wall seconds and peak RSS (MB) of a command, then its output judged
+# wall seconds and peak RSS (MB) of a command (its stderr in $LOG if set)
 timed() {
-  /usr/bin/time -f "%e %M" -o t.txt "$@" > /dev/null 2>&1
+  /usr/bin/time -f "%e %M" -o t.txt "$@" > /dev/null 2> "${LOG:-/dev/null}"
   awk '{printf "%s %.0f", $1, $2 / 1024}' t.txt
 }
+# the command's own seconds of a `padapt -v 1` run, from its stderr in $1
+own() { sed -n 's/^padapt: MPI start .* s, command \([0-9.]*\) s,.*/\1/p' "$1"; }
 
 side_by_side() {
   local name=$1 in=$2 h=$3 mmg=$4
@@ -88,13 +95,15 @@ for c in $CASES; do
       "$PADAPT" generate box3d 10 small.mesh > /dev/null
       : > e.txt
       for i in $(seq "$PAIRS"); do
-        t1=$(timed "$PADAPT" adapt small.mesh -hsiz 0.05 -out s1.mesh -nosol -v -1 | cut -d' ' -f1)
-        t2=$(timed mpiexec -n 2 "$PADAPT" adapt small.mesh -hsiz 0.05 -out s2.mesh -nosol -v -1 | cut -d' ' -f1)
-        echo "$t1 $t2" | awk '{print $1 / (2 * $2), $1, $2}' >> e.txt
+        t1=$(LOG=l1.txt timed "$PADAPT" -v 1 adapt small.mesh -hsiz 0.05 -out s1.mesh -nosol -v -1 | cut -d' ' -f1)
+        t2=$(LOG=l2.txt timed mpiexec -n 2 "$PADAPT" -v 1 adapt small.mesh -hsiz 0.05 -out s2.mesh -nosol -v -1 | cut -d' ' -f1)
+        echo "$t1 $t2 $(own l1.txt) $(own l2.txt)" |
+          awk '{print $1 / (2 * $2), $1, $2, $3 / (2 * $4), $3, $4}' >> e.txt
       done
       echo "small  box3d 10 -> 0.05, $(judge s1.mesh 0.05 | cut -d' ' -f1) / $(judge s2.mesh 0.05 | cut -d' ' -f1) elements:" \
-           "median efficiency T1/(2 T2) $(cut -d' ' -f1 e.txt | median)" \
-           "(T1 T2 pairs: $(awk '{printf "%s/%s ", $2, $3}' e.txt))" ;;
+           "median efficiency T1/(2 T2) $(cut -d' ' -f1 e.txt | median) wall," \
+           "$(cut -d' ' -f4 e.txt | median) on the command's own time" \
+           "(T1/T2 pairs, wall: $(awk '{printf "%s/%s ", $2, $3}' e.txt); own: $(awk '{printf "%s/%s ", $5, $6}' e.txt | sed 's/ $//'))" ;;
     *) echo "unknown case $c" ;;
   esac
 done

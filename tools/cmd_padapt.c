@@ -392,12 +392,17 @@ static int report(const pa_cli *cli, const pa_cli_adapt_args *args,
 
 /* The mesh: a distributed set (which carries its metric and fields), or
  * gathered into *g on rank 0 with the input's physical names and written
- * with its metric (unless -nosol) and its fields. Collective. */
+ * with its metric (unless -nosol) and its fields; *tgather: the seconds of
+ * the gather. Collective. */
 static pa_status write_mesh(const pa_cli *cli, const pa_cli_adapt_args *args,
-                            pa_dmesh *dm, const pa_mesh *names, pa_mesh **g) {
+                            pa_dmesh *dm, const pa_mesh *names, pa_mesh **g,
+                            double *tgather) {
   const char *out = args->out;
+  double t0 = pa_wtime();
+  *tgather = 0;
   if (args->distributed) return pa_dmesh_write(dm, out);
   pa_status st = pa_dmesh_gather(dm, 0, g);
+  *tgather = pa_wtime() - t0;
   if (st != PA_SUCCESS || cli->rank != 0) return st;
   char *path = NULL;
   if (names) st = copy_names(*g, names);
@@ -441,16 +446,19 @@ static void gather_peaks(const pa_cli *cli, uint64_t **mem, uint64_t **rss) {
 
 /* Every output of every rank in one transaction, all of them or none: the
  * mesh (write_mesh), then on rank 0 the -json report, with the peak memory
- * of every rank, writing included, and the -svg picture. Collective;
- * returns 0, or 1 after printing the error. */
+ * of every rank, writing included, and the -svg picture; *tgather: the
+ * seconds of the gather. Collective; returns 0, or 1 after printing the
+ * error. */
 static int write_outputs(const pa_cli *cli, const pa_cli_adapt_args *args,
                          pa_dmesh *dm, const pa_mesh *names,
-                         const pa_stats *before, const pa_adapt_report *rep) {
+                         const pa_stats *before, const pa_adapt_report *rep,
+                         double *tgather) {
   pa_mesh *g = NULL;
   uint64_t *mem = NULL, *rss = NULL;
   pa_output *tx = NULL;
   pa_status st = pa_output_begin(&tx);
-  if (st == PA_SUCCESS) st = write_mesh(cli, args, dm, names, &g);
+  *tgather = 0;
+  if (st == PA_SUCCESS) st = write_mesh(cli, args, dm, names, &g, tgather);
   gather_peaks(cli, &mem, &rss);
   if (st == PA_SUCCESS && args->json && cli->rank == 0) {
     char *extra = mem && rss ? json_extra(cli, rep, before, mem, rss,
@@ -481,7 +489,7 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   pa_mesh *names = NULL;
   pa_stats before;
   pa_adapt_report rep;
-  double tstep[5] = {0}; /* read, stats, adapt, stats, write */
+  double tstep[5] = {0}, tgather = 0; /* read, stats, adapt, stats, write */
   double t0 = pa_wtime();
   memset(&rep, 0, sizeof rep);
   int rc = adapt(cli, args, set, &dm, &names, &before, &rep, tstep, &t0);
@@ -491,12 +499,14 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   }
   if (!rc) {
     tstep[3] = lap(&t0);
-    rc = write_outputs(cli, args, dm, names, &before, &rep);
+    rc = write_outputs(cli, args, dm, names, &before, &rep, &tgather);
   }
-  if (!rc && cli->verbosity >= 2 && cli->rank == 0)
+  if (!rc && cli->verbosity >= 2 && cli->rank == 0) {
+    tstep[4] = lap(&t0);
     fprintf(stderr, "padapt: rank 0: read and distribute %.3f s, stats %.3f s, "
-                    "adapt %.3f s, stats %.3f s, gather and write %.3f s\n",
-            tstep[0], tstep[1], tstep[2], tstep[3], lap(&t0));
+                    "adapt %.3f s, stats %.3f s, gather %.3f s, write %.3f s\n",
+            tstep[0], tstep[1], tstep[2], tstep[3], tgather, tstep[4] - tgather);
+  }
   pa_mesh_destroy(names);
   pa_dmesh_destroy(dm);
   return rc;

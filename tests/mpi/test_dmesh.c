@@ -157,16 +157,8 @@ static void check_reduce(pa_dmesh *dm) {
   CHECK_OK(pa_dmesh_value_remove(dm, mx));
 }
 
-/* The gathered mesh equals the input (numbered by global id = input index). */
-static void check_gather(pa_dmesh *dm, pa_mesh *in) {
-  pa_mesh *g = NULL;
-  CHECK_OK(pa_dmesh_gather(dm, 0, &g));
-  if (rank != 0) {
-    CHECK(g == NULL);
-    return;
-  }
-  CHECK(g != NULL);
-  if (!g) return;
+/* g has in's vertices, elements and boundary entities, in order. */
+static void check_same(pa_mesh *g, pa_mesh *in) {
   int d = pa_mesh_dim(in);
   CHECK(pa_mesh_nvert(g) == pa_mesh_nvert(in));
   CHECK(pa_mesh_nelem(g) == pa_mesh_nelem(in));
@@ -184,7 +176,31 @@ static void check_gather(pa_dmesh *dm, pa_mesh *in) {
     CHECK(!memcmp(pa_mesh_bdry_refs(g), pa_mesh_bdry_refs(in),
                   sizeof(int32_t) * pa_mesh_nbdry(in)));
   }
-  pa_mesh_destroy(g);
+}
+
+/* The mesh gathered on every rank in turn equals the input (numbered by
+ * global id = input index; the box generated again where the root is not
+ * rank 0, which holds the input): the root's own records join the others
+ * unpacked, first, and the assembly orders them. */
+static void check_gather(pa_dmesh *dm, pa_mesh *in0) {
+  for (int root = 0; root < size; root++) {
+    pa_mesh *g = NULL, *in = in0, *again = NULL;
+    CHECK_OK(pa_dmesh_gather(dm, root, &g));
+    if (rank != root) {
+      CHECK(g == NULL);
+      continue;
+    }
+    CHECK(g != NULL);
+    if (!g) continue;
+    if (root != 0) {
+      int n = pa_mesh_dim(g) == 2 ? 12 : 5; /* as test_distribute */
+      CHECK_OK(pa_mesh_generate_box(pa_mesh_dim(g), n, &again));
+      in = again;
+    }
+    if (in) check_same(g, in);
+    pa_mesh_destroy(again);
+    pa_mesh_destroy(g);
+  }
 }
 
 static void test_distribute(void) {
