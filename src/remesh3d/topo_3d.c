@@ -60,15 +60,18 @@ int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
   return n;
 }
 
+/* Breadth first through the faces holding p. A tet's local index of p is
+ * found when the tet is taken from the queue, and its records are
+ * prefetched when it is queued: the walk is bound by memory latency. */
 int pa__rm3d_ball(rm3d *m, pa_idx p, pa_idx *ball, int max) {
   pa_idx k = m->vtet[p];
   int n = 0, head = 0, over = 0;
-  ball[n++] = 4 * k + rm3d_loc(m->tv + 4 * (size_t)k, p);
+  ball[n++] = 4 * k;
   m->tflag[k] |= RM3D_T_MARK;
   while (head < n && !over) {
     pa_idx t = ball[head] >> 2;
-    int ip = ball[head] & 3;
-    head++;
+    int ip = rm3d_loc(m->tv + 4 * (size_t)t, p);
+    ball[head++] = 4 * t + ip;
     for (int i = 0; i < 4; i++) {
       if (i == ip) continue;
       pa_idx nb = m->adj[4 * (size_t)t + i];
@@ -79,8 +82,10 @@ int pa__rm3d_ball(rm3d *m, pa_idx p, pa_idx *ball, int max) {
         over = 1;
         break;
       }
+      __builtin_prefetch(m->tv + 4 * (size_t)u);
+      __builtin_prefetch(m->adj + 4 * (size_t)u);
       m->tflag[u] |= RM3D_T_MARK;
-      ball[n++] = 4 * u + rm3d_loc(m->tv + 4 * (size_t)u, p);
+      ball[n++] = 4 * u;
     }
   }
   for (int i = 0; i < n; i++) m->tflag[ball[i] >> 2] &= (uint8_t)~RM3D_T_MARK;
