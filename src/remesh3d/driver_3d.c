@@ -22,7 +22,7 @@
  *     quality < 0.3 (interior edge removal, 2-3, boundary edge swap),
  *     smoothing of the vertices of tets below 0.75 and a sweep of length
  *     moves (the ends of the edges out of range), until a round
- *     changes fewer than 0.5 % of the tets (with frozen entities also when
+ *     changes fewer than 1 % of the tets (with frozen entities also when
  *     balanced splits and collapses stall: three rounds without a 5 % drop;
  *     the rule shared with 2D, remesh/schedule.h);
  *     the working metric is relaxed at frozen vertices beforehand
@@ -54,8 +54,9 @@
 #define RM3D_ROUNDS_MIN 3
 /* Splits + collapses at or below this share of the live tets: settled. A
  * lower share lets the anisotropic cases ping-pong to RM3D_ROUNDS_MAX for
- * little (figures: docs/BENCHMARKS.md, "The 3D remesher"). */
-#define RM3D_ROUNDS_SETTLED 5e-3
+ * little, and the optimisation's collapses take what a last round would
+ * (figures: docs/BENCHMARKS.md, "The 3D remesher"). */
+#define RM3D_ROUNDS_SETTLED 1e-2
 /* Sweeps of length moves after each optimisation round's quality moves (which
  * disregard lengths) and at the end: a second sweep still raises the share
  * in range, a third hardly does (figures: docs/BENCHMARKS.md, "The 3D
