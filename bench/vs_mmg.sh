@@ -57,6 +57,7 @@ own() { sed -n 's/^padapt: MPI start .* s, command \([0-9.]*\) s,.*/\1/p' "$1"; 
 
 side_by_side() {
   local name=$1 in=$2 h=$3 mmg=$4
+  shift 4 # the rest: options of Mmg for this input
   local p m
   : > p.txt
   : > m.txt
@@ -64,7 +65,7 @@ side_by_side() {
     echo "$(timed "$PADAPT" adapt "$in" -hsiz "$h" -out p.mesh -nosol -v -1) $(judge p.mesh "$h")" >> p.txt
     if command -v "$mmg" > /dev/null; then
       rm -f m.mesh m.sol
-      echo "$(timed "$mmg" "$in" -hsiz "$h" -out m.mesh -v -1) $(judge m.mesh "$h")" >> m.txt
+      echo "$(timed "$mmg" "$in" -hsiz "$h" -out m.mesh -v -1 "$@") $(judge m.mesh "$h")" >> m.txt
     fi
   done
   row() { # file -> "median_time rss elements inrange worst mean"
@@ -90,7 +91,9 @@ for c in $CASES; do
     kuhn) "$PADAPT" generate box3d 10 kuhn.mesh > /dev/null
           side_by_side kuhn kuhn.mesh 0.03 mmg3d ;;
     rod) side_by_side rod "$ROOT/tests/data/rod3d.mesh" 0.03 mmg3d ;;
-    plate) side_by_side plate "$ROOT/tests/data/plate2d.mesh" 0.002 mmg2d ;;
+    # the plate is written with Dimension 3 (gmsh): mmg2d reads it so with
+    # -3dMedit 3 and writes a 2D mesh
+    plate) side_by_side plate "$ROOT/tests/data/plate2d.mesh" 0.002 mmg2d -3dMedit 3 ;;
     small)
       "$PADAPT" generate box3d 10 small.mesh > /dev/null
       : > e.txt
