@@ -373,9 +373,23 @@ cleanup:
   return st;
 }
 
+/* *same = 1 when every piece on every rank came back unchanged: the
+ * reintegration would rebuild the mesh as it is. Collective. */
+static pa_status pieces_unchanged(const pa__iter *it, int *same) {
+  pa_status st = PA_SUCCESS;
+  *same = 1;
+  for (int q = 0; q < it->npiece_local; q++)
+    if (it->pieces[q].in->ne > 0 && !it->pieces[q].unchanged) *same = 0;
+  PA_CALL(pa__allreduce(it->dm->comm, same, 1, MPI_INT, MPI_MIN));
+cleanup:
+  return st;
+}
+
 /* One iteration: tag, then (unless the loop ends there) pieces, extract,
- * remesh and reintegrate; its figures go to L->rep and the progress
- * callback. *end: the loop ended at the tag (L->rep says how). Collective. */
+ * remesh and reintegrate (not when every piece came back unchanged: the
+ * next tag finds the same elements, and the loop ends as without progress);
+ * its figures go to L->rep and the progress callback. *end: the loop ended
+ * at the tag (L->rep says how). Collective. */
 static pa_status iterate(pa_dmesh *dm, const pa_adapt_opts *opts,
                          pa_dmesh_value *done, pa__loop *L, int *end) {
   pa_status st = PA_SUCCESS;
@@ -384,7 +398,7 @@ static pa_status iterate(pa_dmesh *dm, const pa_adapt_opts *opts,
   /* per step: t[0..4] seconds, t[5..9] peak bytes, t[10] bytes held at
    * the end (the maximum over the ranks of each) */
   double t[11], busy, ta = pa_wtime();
-  int nfail = 0;
+  int nfail = 0, same = 0;
   pa__memory_window_begin();
   iter_init(&it, dm, opts, L->iter + 1);
   memset(&ir, 0, sizeof ir);
@@ -402,7 +416,12 @@ static pa_status iterate(pa_dmesh *dm, const pa_adapt_opts *opts,
   busy = pa_wtime() - ta;
   PA_CALL(pa__agree(dm->comm, st)); /* the ranks wait for the slowest */
   step_done(t, 3, &ta);
-  PA_CALL(pa__adapt_reintegrate(&it, done));
+  PA_CALL(pieces_unchanged(&it, &same));
+  if (same)
+    pa__info(1, "padapt: iteration %d: every piece came back unchanged, "
+                "no rebuild\n", it.iter);
+  else
+    PA_CALL(pa__adapt_reintegrate(&it, done));
   step_done(t, 4, &ta);
   t[10] = (double)pa_memory_current();
   PA_CALL(record_iteration(&it, L, t, busy, nfail, &ir));

@@ -102,6 +102,8 @@ typedef struct pa__piece {
   int *vrank;          /* in->nv: a rank that sent an element containing it
                           (the smallest) */
   pa_idx nsplit;       /* vertices added on the skin (bisect.c) */
+  int unchanged;       /* the built-in remesher changed nothing (its counts
+                          are 0) and no skin vertex was added */
   pa_gid *ifgid;       /* in->nv (with skin refinement): global id agreed
                           for each vertex added by bisect.c, else unused */
   uint8_t *ifgive;     /* in->nv: 1 if this piece gives that vertex */

@@ -246,6 +246,7 @@ pa_status pa__adapt_remesh(pa__iter *it, int *nfail) {
   *nfail = 0;
   for (int q = 0; q < it->npiece_local; q++) {
     pa__piece *pc = &it->pieces[q];
+    pc->unchanged = 0;
     if (pc->in->ne == 0) continue; /* Scotch may leave a part empty */
     double t0 = pa_wtime(), t1, t2;
     PA_CALL(pa_mesh_copy(pc->in, &out));
@@ -267,6 +268,10 @@ pa_status pa__adapt_remesh(pa__iter *it, int *nfail) {
              pc->id, (int)pc->in->ne, ok ? (int)out->ne : -1, (int)pc->nsplit,
              t1 - t0, t2 - t1, ok ? "" : ", rolled back");
     if (ok) {
+      pc->unchanged = r == pa_remesher_builtin() && pc->nsplit == 0 &&
+                      pc->rep.nsplit + pc->rep.ncollapse + pc->rep.nswap +
+                              pc->rep.nmove == 0 &&
+                      out->ne == pc->in->ne && out->nv == pc->in->nv;
       pc->out = out;
       out = NULL;
     } else {
