@@ -277,14 +277,19 @@ static int ridge_kept(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball, int n,
   return !(d2 > h * h);
 }
 
+/* May p move onto q at all: p free, and a boundary p only onto a boundary
+ * q in surface mode. */
+static int collapse_allowed(const rm3d *m, pa_idx p, pa_idx q) {
+  uint8_t tp = m->vtag[p];
+  if (tp & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) return 0;
+  return !(tp & RM3D_V_BDRY) || (m->surf && (m->vtag[q] & RM3D_V_BDRY));
+}
+
 pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
                             int *done) {
   pa_idx ball[RM3D_MAXBALL];
   *done = 0;
-  uint8_t tp = m->vtag[p];
-  if (tp & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) return PA_SUCCESS;
-  if ((tp & RM3D_V_BDRY) && (!m->surf || !(m->vtag[q] & RM3D_V_BDRY)))
-    return PA_SUCCESS;
+  if (!collapse_allowed(m, p, q)) return PA_SUCCESS;
   int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
   if (n < 0) return PA_SUCCESS;
   return pa__rm3d_collapse_ball(m, p, q, ball, n, lguard, done);
@@ -299,10 +304,9 @@ pa_status pa__rm3d_collapse_ball(rm3d *m, pa_idx p, pa_idx q,
   pa_idx erec[4];
   int ntri = 0, nerec = 0;
   *done = 0;
+  if (!collapse_allowed(m, p, q)) return st;
   uint8_t tp = m->vtag[p];
-  if (tp & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) return st;
   int surfp = (tp & RM3D_V_BDRY) != 0;
-  if (surfp && (!m->surf || !(m->vtag[q] & RM3D_V_BDRY))) return st;
   if (!ball_qualities(m, q, ball, n, nq)) return st;
   if (!new_edges_short(m, p, q, ball, n, nq, lguard)) return st;
   if (surfp) {

@@ -58,7 +58,6 @@ enum {
   RM3D_V_TODO = 128   /* pass scratch: vertex to visit / not tried yet */
 };
 
-
 /* Boundary triangles (nk = 3) or feature edges (nk = 2): records in an array
  * (kept in creation order, dead ones flagged) with an open-addressing hash
  * on the sorted vertex tuple. */
