@@ -332,8 +332,38 @@ static int dispatch(pa_cli *cli, int argc, char **argv) {
   return 1;
 }
 
+/* Open MPI's start-up defaults, set before MPI_Init. A process that no
+ * launcher started (no mpiexec or srun: no OMPI_COMM_WORLD_SIZE, PMIX_RANK
+ * or PMI_RANK) is a singleton: it runs isolated (no runtime daemon forked
+ * for it) with the ob1 messaging layer. Ranks that mpiexec placed on one
+ * node get ob1 too. Left alone, Open MPI probes every messaging component
+ * and a singleton forks a daemon: 0.40 s of start and 0.05 s of end per
+ * command on the development VM, against 0.05 s and 0.006 s. A setting in
+ * the environment wins over these defaults. Returns what was set, for
+ * -v 2. */
+static const char *mpi_start_defaults(void) {
+  const char *ws = getenv("OMPI_COMM_WORLD_SIZE");
+  const char *ls = getenv("OMPI_COMM_WORLD_LOCAL_SIZE");
+  const char *pml = getenv("OMPI_MCA_pml");
+  if (!ws && !getenv("PMIX_RANK") && !getenv("PMI_RANK")) {
+    int iso = !getenv("OMPI_MCA_ess_singleton_isolated");
+    setenv("OMPI_MCA_ess_singleton_isolated", "1", 0);
+    setenv("OMPI_MCA_pml", "ob1", 0);
+    return iso && !pml ? "one process: isolated singleton, pml ob1"
+           : iso       ? "one process: isolated singleton, the user's pml"
+           : !pml      ? "one process: the user's singleton setting, pml ob1"
+                       : "one process: the user's settings";
+  }
+  if (ws && ls && !strcmp(ws, ls)) {
+    setenv("OMPI_MCA_pml", "ob1", 0);
+    return pml ? "ranks on one node: the user's pml" : "ranks on one node: pml ob1";
+  }
+  return "ranks on several nodes: Open MPI's defaults";
+}
+
 int main(int argc, char **argv) {
   int provided = 0;
+  const char *mpi_defaults = mpi_start_defaults();
   double tstart = pa_wtime();
   sigset_t term, old;
   sigemptyset(&term);
@@ -371,5 +401,7 @@ int main(int argc, char **argv) {
   if (cli.verbosity >= 1 && cli.rank == 0)
     fprintf(stderr, "padapt: MPI start %.3f s, command %.3f s, MPI end %.3f s\n",
             tinit - tstart, tcmd - tinit, pa_wtime() - tcmd);
+  if (cli.verbosity >= 2 && cli.rank == 0)
+    fprintf(stderr, "padapt: MPI start-up: %s\n", mpi_defaults);
   return all;
 }
