@@ -865,7 +865,7 @@ typedef struct pa_progress {
 } pa_progress;
 
 /** Elements sampled by a remesher pass to measure pa_progress.done. */
-#define PA_PROGRESS_SAMPLE 20000
+#define PA_PROGRESS_SAMPLE 4000
 
 /** A progress callback; ctx is the caller's. It must not call padapt. */
 typedef void (*pa_progress_fn)(const pa_progress *p, void *ctx);
