@@ -874,9 +874,8 @@ cleanup:
   return st;
 }
 
-/* The records R packed into one buffer b (R freed as they are packed), and
- * A made ready to receive records of the same kinds. */
-static pa_status pack_records(pa__recs *R, pa__recs *A, pa__buf *b) {
+/* The records R packed into one buffer b (R freed as they are packed). */
+static pa_status pack_records(pa__recs *R, pa__buf *b) {
   pa_status st = PA_SUCCESS;
   size_t bytes = 0;
   for (int k = 0; k < PA_DMESH_NKIND; k++)
@@ -884,63 +883,119 @@ static pa_status pack_records(pa__recs *R, pa__recs *A, pa__buf *b) {
   PA_CALL(pa__buf_reserve(b, bytes));
   for (int k = 0; k < PA_DMESH_NKIND; k++) {
     b->n += pa__recs_put(&R[k], NULL, R[k].n, b->p + b->n);
-    int kind = R[k].kind, nv = R[k].nv, nd = R[k].ndbl;
     pa__recs_free(&R[k]);
-    pa__recs_init(&A[k], kind, nv, nd);
   }
 cleanup:
   return st;
 }
 
-/* On the root, its own records R moved into A (R left empty), with room
- * for every rank's: the root's block is never packed nor copied (a
- * block's fresh pages cost more than its copy: 2.8 MB, 700 page faults). */
-static pa_status keep_records(const pa_dmesh *dm, pa__recs *R, pa__recs *A) {
-  pa_status st = PA_SUCCESS;
-  for (int k = 0; k < PA_DMESH_NKIND; k++) {
-    A[k] = R[k];
-    pa__recs_init(&R[k], A[k].kind, A[k].nv, A[k].ndbl);
-    PA_CALL(pa__recs_reserve(&A[k], (size_t)dm->nglob[k], 0));
-  }
-cleanup:
-  return st;
-}
-
-/* Every other rank's buffer b to the root, one rank at a time; the root
- * appends them to A (which holds its own records) in rank order. Each step
- * is agreed before it starts, the first on st (the status so far); the
- * status of the last one is the caller's to agree. */
+/* Every other rank's buffer b to the root, one rank at a time, kept there
+ * as received in buf[r] (n[r] bytes). Each step is agreed before it
+ * starts, the first on st (the status so far); the status of the last one
+ * is the caller's to agree. */
 static pa_status blocks_to_root(pa_dmesh *dm, int root, const pa__buf *b,
-                                pa__recs *A, pa_status st) {
-  void *rbuf = NULL;
+                                void **buf, size_t *n, pa_status st) {
   for (int r = 0; r < dm->size; r++) {
     PA_CALL(pa__agree(dm->comm, st));
-    if (r == root) {
-      continue;
-    } else if (dm->rank == r) {
-      st = pa__xchg_send(dm->comm, root, b->p, b->n);
-    } else if (dm->rank == root) {
-      size_t n;
-      st = pa__xchg_recv(dm->comm, r, &rbuf, &n);
-      if (!st) st = unpack_block(rbuf, n, A);
-      pa__free(rbuf);
-      rbuf = NULL;
-    }
+    if (r == root) continue;
+    if (dm->rank == r) st = pa__xchg_send(dm->comm, root, b->p, b->n);
+    else if (dm->rank == root) st = pa__xchg_recv(dm->comm, r, &buf[r], &n[r]);
   }
 cleanup:
-  pa__free(rbuf);
   return st;
 }
 
-/* On the root: the mesh of the gathered records A, every kind by
- * increasing global id (whatever their order in A), element vertices found
- * by global id. */
-static pa_status assemble_by_gid(int d, const pa__layout *lay, pa__recs *A,
-                                 pa_mesh **mp) {
+/* The records of one kind from one rank, where they lie: the root's own
+ * records, or a block of a buffer received from another rank (read in
+ * place: neither copied nor merged, whose fresh pages cost more than the
+ * copy). */
+typedef struct gview {
+  size_t n;
+  int nv, ndbl; /* vertex ids and doubles per record */
+  const pa_gid *gid, *vgid;
+  const double *dbl;
+  const int32_t *ref;
+  const uint8_t *flag;
+} gview;
+
+/* On the root: V[k * size + r], the records of kind k from rank r, from
+ * the root's own records R and the buffers buf[r] (n[r] bytes) of the
+ * others. */
+static pa_status map_views(const pa_dmesh *dm, int root, const pa__recs *R,
+                           void *const *buf, const size_t *n, gview *V) {
+  pa_status st = PA_SUCCESS;
+  int size = dm->size;
+  for (int r = 0; r < size; r++) {
+    size_t pos = 0;
+    for (int k = 0; k < PA_DMESH_NKIND; k++) {
+      gview *v = &V[k * size + r];
+      if (r == root) {
+        *v = (gview){R[k].n,   R[k].nv,  R[k].ndbl, R[k].gid,
+                     R[k].vgid, R[k].dbl, R[k].ref,  R[k].flag};
+        continue;
+      }
+      pa__recblock b;
+      const unsigned char *p = buf[r];
+      PA_CHECK(pos + 16 <= n[r], PA_ERR_INTERNAL,
+               "gather: block of %zu bytes from rank %d is short", n[r], r);
+      pa__recblock_map(p + pos, R[k].nv, R[k].ndbl, &b);
+      pos += b.bytes;
+      PA_CHECK(pos <= n[r], PA_ERR_INTERNAL,
+               "gather: block of %zu bytes from rank %d is short", n[r], r);
+      *v = (gview){b.n,    R[k].nv, R[k].ndbl, b.gid,
+                   b.vgid, b.dbl,   b.ref,     b.flag};
+    }
+    PA_CHECK(r == root || pos == n[r], PA_ERR_INTERNAL,
+             "gather: block of %zu bytes from rank %d, %zu read", n[r], r, pos);
+  }
+cleanup:
+  return st;
+}
+
+/* The global ids of the records of kind k of every rank end to end in key
+ * (V[k * size + r]: rank r's from off[r]) and their order of increasing
+ * global id in ord. */
+static pa_status order_kind(const gview *V, int size, pa_gid *key,
+                            size_t *off, pa_idx *ord) {
+  pa_status st = PA_SUCCESS;
+  off[0] = 0;
+  for (int r = 0; r < size; r++) {
+    memcpy(key + off[r], V[r].gid, V[r].n * sizeof *key);
+    off[r + 1] = off[r] + V[r].n;
+  }
+  for (size_t i = 0; i < off[size]; i++) ord[i] = (pa_idx)i;
+  PA_CALL(pa__sort_by_gid(ord, off[size], key));
+cleanup:
+  return st;
+}
+
+/* The rank whose records hold position g of the records end to end (off:
+ * see order_kind). */
+static int rank_of(const size_t *off, int size, size_t g) {
+  int lo = 0, hi = size - 1;
+  while (lo < hi) {
+    int mid = (lo + hi + 1) / 2;
+    if (off[mid] <= g) lo = mid;
+    else hi = mid - 1;
+  }
+  return lo;
+}
+
+/* On the root: the mesh of the gathered records V (see map_views), every
+ * kind by increasing global id (whatever the ranks' order), element
+ * vertices found by global id. */
+static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
+                                 const gview *V, pa_mesh **mp) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = NULL;
   pa__gidindex vmap = {0};
   pa_idx *ord = NULL;
+  pa_gid *key = NULL;
+  size_t *off = NULL, nk[PA_DMESH_NKIND] = {0}, nmax = 0;
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
+    for (int r = 0; r < size; r++) nk[k] += V[k * size + r].n;
+    nmax = nk[k] > nmax ? nk[k] : nmax;
+  }
   PA_CALL(pa_mesh_create(d, &m));
   m->met_ncomp = lay->met_ncomp;
   m->nfield = lay->nfield;
@@ -948,18 +1003,21 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, pa__recs *A,
     snprintf(m->field[f].name, PA_MESH_FIELD_NAME_LEN, "%s", lay->fieldname[f]);
     m->field[f].ncomp = lay->fieldncomp[f];
   }
-  PA_CALL(pa_mesh_reserve(m, (pa_idx)A[0].n, (pa_idx)A[1].n, (pa_idx)A[2].n,
-                          (pa_idx)A[3].n));
-  size_t nmax = 0;
-  for (int k = 0; k < PA_DMESH_NKIND; k++) nmax = A[k].n > nmax ? A[k].n : nmax;
-  PA_ALLOC(ord, nmax);
-  PA_CALL(pa__gidindex_init_keys(&vmap, A[PA_VERTEX].gid, A[PA_VERTEX].n));
+  PA_CALL(pa_mesh_reserve(m, (pa_idx)nk[PA_VERTEX], (pa_idx)nk[PA_ELEMENT],
+                          (pa_idx)nk[PA_BOUNDARY], (pa_idx)nk[PA_EDGE]));
+  PA_ALLOC(ord, nmax ? nmax : 1);
+  PA_ALLOC(key, nmax ? nmax : 1);
+  PA_ALLOC(off, (size_t)size + 1);
   for (int k = 0; k < PA_DMESH_NKIND; k++) {
-    pa__recs *Q = &A[k];
-    for (size_t i = 0; i < Q->n; i++) ord[i] = (pa_idx)i;
-    PA_CALL(pa__sort_by_gid(ord, Q->n, Q->gid));
-    for (size_t j = 0; j < Q->n; j++) {
-      size_t i = (size_t)ord[j];
+    const gview *Vk = V + (size_t)k * size;
+    PA_CALL(order_kind(Vk, size, key, off, ord));
+    if (k == PA_VERTEX)
+      PA_CALL(pa__gidindex_init_keys(&vmap, key, nk[PA_VERTEX]));
+    for (size_t j = 0; j < nk[k]; j++) {
+      size_t g = (size_t)ord[j];
+      int r = rank_of(off, size, g);
+      const gview *Q = &Vk[r];
+      size_t i = g - off[r];
       if (k == PA_VERTEX) {
         const double *x = Q->dbl + (size_t)Q->ndbl * i;
         memcpy(m->coord + (size_t)d * j, x, d * sizeof(double));
@@ -981,41 +1039,46 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, pa__recs *A,
                  (long long)Q->gid[i]);
         continue;
       }
+      int nv = Q->nv;
       pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
       int32_t *ref = k == PA_ELEMENT ? m->eref : k == PA_BOUNDARY ? m->bref : m->edref;
       uint8_t *flag = k == PA_ELEMENT ? m->eflag : k == PA_BOUNDARY ? m->bflag : m->edflag;
-      for (int q = 0; q < Q->nv; q++) {
-        pa_idx v = pa__gidindex_get(&vmap, Q->vgid[(size_t)Q->nv * i + q]);
+      for (int q = 0; q < nv; q++) {
+        pa_idx v = pa__gidindex_get(&vmap, Q->vgid[(size_t)nv * i + q]);
         PA_CHECK(v >= 0, PA_ERR_MESH, "gather: vertex %lld is owned by no rank",
-                 (long long)Q->vgid[(size_t)Q->nv * i + q]);
-        conn[(size_t)Q->nv * j + q] = v;
+                 (long long)Q->vgid[(size_t)nv * i + q]);
+        conn[(size_t)nv * j + q] = v;
       }
       ref[j] = Q->ref[i];
       flag[j] = Q->flag[i];
     }
   }
-  m->nv = (pa_idx)A[PA_VERTEX].n;
-  m->ne = (pa_idx)A[PA_ELEMENT].n;
-  m->nb = (pa_idx)A[PA_BOUNDARY].n;
-  m->ned = (pa_idx)A[PA_EDGE].n;
+  m->nv = (pa_idx)nk[PA_VERTEX];
+  m->ne = (pa_idx)nk[PA_ELEMENT];
+  m->nb = (pa_idx)nk[PA_BOUNDARY];
+  m->ned = (pa_idx)nk[PA_EDGE];
   *mp = m;
   m = NULL;
 cleanup:
   pa_mesh_destroy(m);
   pa__gidindex_free(&vmap);
   pa__free(ord);
+  pa__free(key);
+  pa__free(off);
   return st;
 }
 
 pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
   pa_status st = PA_SUCCESS;
-  pa__recs R[PA_DMESH_NKIND], A[PA_DMESH_NKIND];
+  pa__recs R[PA_DMESH_NKIND];
   pa__buf b = {0};
   pa__layout lay;
+  void **buf = NULL;
+  size_t *nbuf = NULL;
+  gview *V = NULL;
   int vals[PA_MESH_MAX_FIELDS], nvals = 0;
   double t0 = pa_wtime(), t1, t2;
   memset(R, 0, sizeof R);
-  memset(A, 0, sizeof A);
   PA_CHECK(dm && meshp, PA_ERR_ARG, "pa_dmesh_gather: NULL argument");
   pa__agree_reset();
   *meshp = NULL;
@@ -1023,14 +1086,22 @@ pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
            root);
   gather_layout(dm, &lay, vals, &nvals);
   st = gather_records(dm, &lay, vals, nvals, R);
-  if (!st)
-    st = dm->rank == root ? keep_records(dm, R, A) : pack_records(R, A, &b);
+  if (!st && dm->rank == root) {
+    buf = pa__calloc((size_t)dm->size, sizeof *buf);
+    nbuf = pa__calloc((size_t)dm->size, sizeof *nbuf);
+    V = pa__malloc((size_t)dm->size * PA_DMESH_NKIND * sizeof *V);
+    if (!buf || !nbuf || !V)
+      st = pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+  } else if (!st) {
+    st = pack_records(R, &b);
+  }
   t1 = pa_wtime();
-  st = blocks_to_root(dm, root, &b, A, st);
+  st = blocks_to_root(dm, root, &b, buf, nbuf, st);
   t2 = pa_wtime();
   pa__buf_free(&b);
   if (st || dm->rank != root) goto cleanup;
-  PA_CALL(assemble_by_gid(dm->dim, &lay, A, meshp));
+  PA_CALL(map_views(dm, root, R, buf, nbuf, V));
+  PA_CALL(assemble_by_gid(dm->dim, &lay, dm->size, V, meshp));
   pa__info(2, "padapt: rank %d: gather: records %.3f s, to the root %.3f s, "
               "assembly %.3f s\n", dm->rank, t1 - t0, t2 - t1, pa_wtime() - t2);
 cleanup:
@@ -1039,10 +1110,11 @@ cleanup:
     pa_mesh_destroy(*meshp);
     *meshp = NULL;
   }
-  for (int k = 0; k < PA_DMESH_NKIND; k++) {
-    pa__recs_free(&R[k]);
-    pa__recs_free(&A[k]);
-  }
+  for (int k = 0; k < PA_DMESH_NKIND; k++) pa__recs_free(&R[k]);
+  for (int r = 0; buf && r < dm->size; r++) pa__free(buf[r]);
+  pa__free(buf);
+  pa__free(nbuf);
+  pa__free(V);
   pa__buf_free(&b);
   return st;
 }
