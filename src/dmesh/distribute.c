@@ -874,41 +874,47 @@ cleanup:
   return st;
 }
 
-/* The records R packed into one buffer b (R freed as they are packed). */
-static pa_status pack_records(pa__recs *R, pa__buf *b) {
-  pa_status st = PA_SUCCESS;
-  size_t bytes = 0;
-  for (int k = 0; k < PA_DMESH_NKIND; k++)
-    bytes += pa__recblock_bytes(R[k].nv, R[k].ndbl, R[k].n, 0);
-  PA_CALL(pa__buf_reserve(b, bytes));
-  for (int k = 0; k < PA_DMESH_NKIND; k++) {
-    b->n += pa__recs_put(&R[k], NULL, R[k].n, b->p + b->n);
-    pa__recs_free(&R[k]);
+/* The arrays of a kind's records that go to the root, in this order. */
+enum { G_GID, G_VGID, G_DBL, G_REF, G_FLAG, G_NARRAY };
+
+/* Array a of records R: its address and bytes. */
+static const void *record_array(const pa__recs *R, int a, size_t *bytes) {
+  size_t n = R->n;
+  switch (a) {
+  case G_GID: *bytes = n * sizeof *R->gid; return R->gid;
+  case G_VGID: *bytes = n * (size_t)R->nv * sizeof *R->vgid; return R->vgid;
+  case G_DBL: *bytes = n * (size_t)R->ndbl * sizeof *R->dbl; return R->dbl;
+  case G_REF: *bytes = n * sizeof *R->ref; return R->ref;
+  default: *bytes = n * sizeof *R->flag; return R->flag;
   }
-cleanup:
-  return st;
 }
 
-/* Every other rank's buffer b to the root, one rank at a time, kept there
- * as received in buf[r] (n[r] bytes). Each step is agreed before it
- * starts, the first on st (the status so far); the status of the last one
- * is the caller's to agree. */
-static pa_status blocks_to_root(pa_dmesh *dm, int root, const pa__buf *b,
-                                void **buf, size_t *n, pa_status st) {
+/* Every other rank's records R to the root, one rank at a time, array by
+ * array from where they lie (no packing: a packed copy's fresh pages cost
+ * more than the copy), kept on the root as received: array a of kind k
+ * from rank r in buf[(r * PA_DMESH_NKIND + k) * G_NARRAY + a] (n[...]
+ * bytes). Each step is agreed before it starts, the first on st (the
+ * status so far); the status of the last one is the caller's to agree. */
+static pa_status records_to_root(pa_dmesh *dm, int root, const pa__recs *R,
+                                 void **buf, size_t *n, pa_status st) {
   for (int r = 0; r < dm->size; r++) {
     PA_CALL(pa__agree(dm->comm, st));
-    if (r == root) continue;
-    if (dm->rank == r) st = pa__xchg_send(dm->comm, root, b->p, b->n);
-    else if (dm->rank == root) st = pa__xchg_recv(dm->comm, r, &buf[r], &n[r]);
+    if (r == root || (dm->rank != r && dm->rank != root)) continue;
+    for (int k = 0; k < PA_DMESH_NKIND && !st; k++)
+      for (int a = 0; a < G_NARRAY && !st; a++) {
+        size_t i = ((size_t)r * PA_DMESH_NKIND + k) * G_NARRAY + a, bytes;
+        const void *p = record_array(&R[k], a, &bytes);
+        st = dm->rank == r ? pa__xchg_send(dm->comm, root, p, bytes)
+                           : pa__xchg_recv(dm->comm, r, &buf[i], &n[i]);
+      }
   }
 cleanup:
   return st;
 }
 
 /* The records of one kind from one rank, where they lie: the root's own
- * records, or a block of a buffer received from another rank (read in
- * place: neither copied nor merged, whose fresh pages cost more than the
- * copy). */
+ * records, or the arrays received from another rank (read in place:
+ * neither copied nor merged, whose fresh pages cost more than the copy). */
 typedef struct gview {
   size_t n;
   int nv, ndbl; /* vertex ids and doubles per record */
@@ -919,14 +925,13 @@ typedef struct gview {
 } gview;
 
 /* On the root: V[k * size + r], the records of kind k from rank r, from
- * the root's own records R and the buffers buf[r] (n[r] bytes) of the
- * others. */
+ * the root's own records R and the arrays buf, n of the others (see
+ * records_to_root), whose sizes are checked. */
 static pa_status map_views(const pa_dmesh *dm, int root, const pa__recs *R,
                            void *const *buf, const size_t *n, gview *V) {
   pa_status st = PA_SUCCESS;
   int size = dm->size;
-  for (int r = 0; r < size; r++) {
-    size_t pos = 0;
+  for (int r = 0; r < size; r++)
     for (int k = 0; k < PA_DMESH_NKIND; k++) {
       gview *v = &V[k * size + r];
       if (r == root) {
@@ -934,20 +939,20 @@ static pa_status map_views(const pa_dmesh *dm, int root, const pa__recs *R,
                      R[k].vgid, R[k].dbl, R[k].ref,  R[k].flag};
         continue;
       }
-      pa__recblock b;
-      const unsigned char *p = buf[r];
-      PA_CHECK(pos + 16 <= n[r], PA_ERR_INTERNAL,
-               "gather: block of %zu bytes from rank %d is short", n[r], r);
-      pa__recblock_map(p + pos, R[k].nv, R[k].ndbl, &b);
-      pos += b.bytes;
-      PA_CHECK(pos <= n[r], PA_ERR_INTERNAL,
-               "gather: block of %zu bytes from rank %d is short", n[r], r);
-      *v = (gview){b.n,    R[k].nv, R[k].ndbl, b.gid,
-                   b.vgid, b.dbl,   b.ref,     b.flag};
+      void *const *b = buf + ((size_t)r * PA_DMESH_NKIND + k) * G_NARRAY;
+      const size_t *nb = n + ((size_t)r * PA_DMESH_NKIND + k) * G_NARRAY;
+      pa__recs shape = R[k]; /* the root's nv and ndbl, the sender's count */
+      shape.n = nb[G_GID] / sizeof(pa_gid);
+      for (int a = 0; a < G_NARRAY; a++) {
+        size_t bytes;
+        record_array(&shape, a, &bytes);
+        PA_CHECK(nb[a] == bytes, PA_ERR_INTERNAL,
+                 "gather: %zu bytes of array %d of kind %d from rank %d, "
+                 "%zu expected", nb[a], a, k, r, bytes);
+      }
+      *v = (gview){shape.n,   R[k].nv,    R[k].ndbl,  b[G_GID],
+                   b[G_VGID], b[G_DBL], b[G_REF], b[G_FLAG]};
     }
-    PA_CHECK(r == root || pos == n[r], PA_ERR_INTERNAL,
-             "gather: block of %zu bytes from rank %d, %zu read", n[r], r, pos);
-  }
 cleanup:
   return st;
 }
@@ -1071,10 +1076,9 @@ cleanup:
 pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
   pa_status st = PA_SUCCESS;
   pa__recs R[PA_DMESH_NKIND];
-  pa__buf b = {0};
   pa__layout lay;
   void **buf = NULL;
-  size_t *nbuf = NULL;
+  size_t *nbuf = NULL, nb = 0;
   gview *V = NULL;
   int vals[PA_MESH_MAX_FIELDS], nvals = 0;
   double t0 = pa_wtime(), t1, t2;
@@ -1087,18 +1091,16 @@ pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
   gather_layout(dm, &lay, vals, &nvals);
   st = gather_records(dm, &lay, vals, nvals, R);
   if (!st && dm->rank == root) {
-    buf = pa__calloc((size_t)dm->size, sizeof *buf);
-    nbuf = pa__calloc((size_t)dm->size, sizeof *nbuf);
+    nb = (size_t)dm->size * PA_DMESH_NKIND * G_NARRAY;
+    buf = pa__calloc(nb, sizeof *buf);
+    nbuf = pa__calloc(nb, sizeof *nbuf);
     V = pa__malloc((size_t)dm->size * PA_DMESH_NKIND * sizeof *V);
     if (!buf || !nbuf || !V)
       st = pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
-  } else if (!st) {
-    st = pack_records(R, &b);
   }
   t1 = pa_wtime();
-  st = blocks_to_root(dm, root, &b, buf, nbuf, st);
+  st = records_to_root(dm, root, R, buf, nbuf, st);
   t2 = pa_wtime();
-  pa__buf_free(&b);
   if (st || dm->rank != root) goto cleanup;
   PA_CALL(map_views(dm, root, R, buf, nbuf, V));
   PA_CALL(assemble_by_gid(dm->dim, &lay, dm->size, V, meshp));
@@ -1111,10 +1113,9 @@ cleanup:
     *meshp = NULL;
   }
   for (int k = 0; k < PA_DMESH_NKIND; k++) pa__recs_free(&R[k]);
-  for (int r = 0; buf && r < dm->size; r++) pa__free(buf[r]);
+  for (size_t i = 0; buf && i < nb; i++) pa__free(buf[i]);
   pa__free(buf);
   pa__free(nbuf);
   pa__free(V);
-  pa__buf_free(&b);
   return st;
 }
