@@ -912,9 +912,11 @@ cleanup:
   return st;
 }
 
-/* The records of one kind from one rank, where they lie: the root's own
- * records, or the arrays received from another rank (read in place:
- * neither copied nor merged, whose fresh pages cost more than the copy). */
+/* The records of one kind from one rank, where they lie (neither copied
+ * nor merged: their fresh pages cost more than the copy): the arrays
+ * received from another rank, or the root's own mesh, whose owned entities
+ * come first (conn, vg: its connectivity and vertex global ids; m, dm,
+ * vals, nvals: its vertex doubles, as gather_records appends them). */
 typedef struct gview {
   size_t n;
   int nv, ndbl; /* vertex ids and doubles per record */
@@ -922,26 +924,82 @@ typedef struct gview {
   const double *dbl;
   const int32_t *ref;
   const uint8_t *flag;
+  const pa_idx *conn;
+  const pa_gid *vg;
+  const pa_dmesh *dm;
+  const int *vals;
+  int nvals;
 } gview;
 
-/* On the root: V[k * size + r], the records of kind k from rank r, from
- * the root's own records R and the arrays buf, n of the others (see
+/* Vertex ids and doubles per record of kind k (the layout lay). */
+static void kind_shape(int d, const pa__layout *lay, int k, int *nv,
+                       int *ndbl) {
+  *nv = k == PA_VERTEX ? 0 : pa__kind_nv(d, k);
+  *ndbl = k == PA_VERTEX ? pa__layout_ndbl(lay) : 0;
+}
+
+/* The view of the root's own entities of kind k. */
+static gview own_view(const pa_dmesh *dm, const pa__layout *lay, int k,
+                      const int *vals, int nvals) {
+  const pa_mesh *m = dm->mesh;
+  gview v;
+  memset(&v, 0, sizeof v);
+  kind_shape(dm->dim, lay, k, &v.nv, &v.ndbl);
+  v.n = (size_t)dm->nown[k];
+  v.gid = dm->gid[k];
+  v.ref = k == PA_VERTEX ? m->vref : k == PA_ELEMENT ? m->eref
+          : k == PA_BOUNDARY ? m->bref : m->edref;
+  v.flag = k == PA_VERTEX ? m->vflag : k == PA_ELEMENT ? m->eflag
+           : k == PA_BOUNDARY ? m->bflag : m->edflag;
+  v.conn = k == PA_VERTEX ? NULL : k == PA_ELEMENT ? m->elem
+           : k == PA_BOUNDARY ? m->bdry : m->edge;
+  v.vg = dm->gid[PA_VERTEX];
+  v.dm = dm;
+  v.vals = vals;
+  v.nvals = nvals;
+  return v;
+}
+
+/* The doubles of vertex record i of Q into x (Q->ndbl of them). */
+static void view_doubles(const gview *Q, size_t i, double *x) {
+  if (!Q->dm) {
+    memcpy(x, Q->dbl + (size_t)Q->ndbl * i, (size_t)Q->ndbl * sizeof *x);
+    return;
+  }
+  int o = pa__vertex_doubles(Q->dm->mesh, (pa_idx)i, Q->dm->mesh->nfield, x);
+  for (int q = 0; q < Q->nvals; q++) {
+    const pa_dmesh_value *v = Q->dm->value[Q->vals[q]];
+    memcpy(x + o, v->data + v->unit * i, v->unit);
+    o += v->ncomp;
+  }
+}
+
+/* The global id of vertex q of record i of Q (not a vertex record). */
+static pa_gid view_vgid(const gview *Q, size_t i, int q) {
+  size_t j = (size_t)Q->nv * i + (size_t)q;
+  return Q->conn ? Q->vg[Q->conn[j]] : Q->vgid[j];
+}
+
+/* On the root: V[k * size + r], the records of kind k from rank r: the
+ * root's own (own_view) and the arrays buf, n of the others (see
  * records_to_root), whose sizes are checked. */
-static pa_status map_views(const pa_dmesh *dm, int root, const pa__recs *R,
-                           void *const *buf, const size_t *n, gview *V) {
+static pa_status map_views(const pa_dmesh *dm, int root, const pa__layout *lay,
+                           const int *vals, int nvals, void *const *buf,
+                           const size_t *n, gview *V) {
   pa_status st = PA_SUCCESS;
   int size = dm->size;
   for (int r = 0; r < size; r++)
     for (int k = 0; k < PA_DMESH_NKIND; k++) {
       gview *v = &V[k * size + r];
       if (r == root) {
-        *v = (gview){R[k].n,   R[k].nv,  R[k].ndbl, R[k].gid,
-                     R[k].vgid, R[k].dbl, R[k].ref,  R[k].flag};
+        *v = own_view(dm, lay, k, vals, nvals);
         continue;
       }
       void *const *b = buf + ((size_t)r * PA_DMESH_NKIND + k) * G_NARRAY;
       const size_t *nb = n + ((size_t)r * PA_DMESH_NKIND + k) * G_NARRAY;
-      pa__recs shape = R[k]; /* the root's nv and ndbl, the sender's count */
+      pa__recs shape; /* the records' sizes: the sender's count */
+      memset(&shape, 0, sizeof shape);
+      kind_shape(dm->dim, lay, k, &shape.nv, &shape.ndbl);
       shape.n = nb[G_GID] / sizeof(pa_gid);
       for (int a = 0; a < G_NARRAY; a++) {
         size_t bytes;
@@ -950,8 +1008,15 @@ static pa_status map_views(const pa_dmesh *dm, int root, const pa__recs *R,
                  "gather: %zu bytes of array %d of kind %d from rank %d, "
                  "%zu expected", nb[a], a, k, r, bytes);
       }
-      *v = (gview){shape.n,   R[k].nv,    R[k].ndbl,  b[G_GID],
-                   b[G_VGID], b[G_DBL], b[G_REF], b[G_FLAG]};
+      memset(v, 0, sizeof *v);
+      v->n = shape.n;
+      v->nv = shape.nv;
+      v->ndbl = shape.ndbl;
+      v->gid = b[G_GID];
+      v->vgid = b[G_VGID];
+      v->dbl = b[G_DBL];
+      v->ref = b[G_REF];
+      v->flag = b[G_FLAG];
     }
 cleanup:
   return st;
@@ -996,6 +1061,7 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
   pa__gidindex vmap = {0};
   pa_idx *ord = NULL;
   pa_gid *key = NULL;
+  double *xbuf = NULL;
   size_t *off = NULL, nk[PA_DMESH_NKIND] = {0}, nmax = 0;
   for (int k = 0; k < PA_DMESH_NKIND; k++) {
     for (int r = 0; r < size; r++) nk[k] += V[k * size + r].n;
@@ -1013,6 +1079,7 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
   PA_ALLOC(ord, nmax ? nmax : 1);
   PA_ALLOC(key, nmax ? nmax : 1);
   PA_ALLOC(off, (size_t)size + 1);
+  PA_ALLOC(xbuf, (size_t)V[PA_VERTEX * size].ndbl + 1);
   for (int k = 0; k < PA_DMESH_NKIND; k++) {
     const gview *Vk = V + (size_t)k * size;
     PA_CALL(order_kind(Vk, size, key, off, ord));
@@ -1024,7 +1091,8 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
       const gview *Q = &Vk[r];
       size_t i = g - off[r];
       if (k == PA_VERTEX) {
-        const double *x = Q->dbl + (size_t)Q->ndbl * i;
+        const double *x = xbuf;
+        view_doubles(Q, i, xbuf);
         memcpy(m->coord + (size_t)d * j, x, d * sizeof(double));
         x += d;
         if (m->met_ncomp) {
@@ -1049,9 +1117,10 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
       int32_t *ref = k == PA_ELEMENT ? m->eref : k == PA_BOUNDARY ? m->bref : m->edref;
       uint8_t *flag = k == PA_ELEMENT ? m->eflag : k == PA_BOUNDARY ? m->bflag : m->edflag;
       for (int q = 0; q < nv; q++) {
-        pa_idx v = pa__gidindex_get(&vmap, Q->vgid[(size_t)nv * i + q]);
+        pa_gid g = view_vgid(Q, i, q);
+        pa_idx v = pa__gidindex_get(&vmap, g);
         PA_CHECK(v >= 0, PA_ERR_MESH, "gather: vertex %lld is owned by no rank",
-                 (long long)Q->vgid[(size_t)nv * i + q]);
+                 (long long)g);
         conn[(size_t)nv * j + q] = v;
       }
       ref[j] = Q->ref[i];
@@ -1069,6 +1138,7 @@ cleanup:
   pa__gidindex_free(&vmap);
   pa__free(ord);
   pa__free(key);
+  pa__free(xbuf);
   pa__free(off);
   return st;
 }
@@ -1089,7 +1159,7 @@ pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
   PA_CHECK(root >= 0 && root < dm->size, PA_ERR_ARG, "root %d out of range",
            root);
   gather_layout(dm, &lay, vals, &nvals);
-  st = gather_records(dm, &lay, vals, nvals, R);
+  if (dm->rank != root) st = gather_records(dm, &lay, vals, nvals, R);
   if (!st && dm->rank == root) {
     nb = (size_t)dm->size * PA_DMESH_NKIND * G_NARRAY;
     buf = pa__calloc(nb, sizeof *buf);
@@ -1102,7 +1172,7 @@ pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
   st = records_to_root(dm, root, R, buf, nbuf, st);
   t2 = pa_wtime();
   if (st || dm->rank != root) goto cleanup;
-  PA_CALL(map_views(dm, root, R, buf, nbuf, V));
+  PA_CALL(map_views(dm, root, &lay, vals, nvals, buf, nbuf, V));
   PA_CALL(assemble_by_gid(dm->dim, &lay, dm->size, V, meshp));
   pa__info(2, "padapt: rank %d: gather: records %.3f s, to the root %.3f s, "
               "assembly %.3f s\n", dm->rank, t1 - t0, t2 - t1, pa_wtime() - t2);
