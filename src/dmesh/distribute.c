@@ -915,8 +915,9 @@ cleanup:
 /* The records of one kind from one rank, where they lie (neither copied
  * nor merged: their fresh pages cost more than the copy): the arrays
  * received from another rank, or the root's own mesh, whose owned entities
- * come first (conn, vg: its connectivity and vertex global ids; m, dm,
- * vals, nvals: its vertex doubles, as gather_records appends them). */
+ * come first (conn, vg: its connectivity and vertex global ids; dm, vals,
+ * nvals: its mesh and the values whose doubles gather_records would append
+ * to its vertices'). */
 typedef struct gview {
   size_t n;
   int nv, ndbl; /* vertex ids and doubles per record */
