@@ -3,9 +3,7 @@
  *
  * The last error message is thread-local, so threads (MPI_THREAD_MULTIPLE)
  * never see each other's errors. The allocator prefixes every block with a
- * 16-byte header holding the size asked for and the block's capacity;
- * counters are C11 atomics and count the sizes asked for. Freed large blocks
- * are kept in a small bounded cache for the next allocations they fit.
+ * 16-byte header holding its size; counters are C11 atomics.
  */
 #include "core/core.h"
 
@@ -101,98 +99,13 @@ static void count_add(size_t n) {
     ;
 }
 
-/* Freed blocks of at least CACHE_MIN_BYTES are kept, up to CACHE_SLOTS
- * blocks and CACHE_MAX_BYTES in all, and handed out again to the next
- * allocations they fit (the smallest that does): a fresh page costs a page
- * fault on first touch (20-35 us on a virtual machine), and malloc gives
- * large freed blocks back to the system, so without the cache every phase
- * of a small adaptation touches fresh pages again (box3d 10 -> 0.05 on 2
- * ranks: 640 fewer faults on rank 0). The bound keeps the resident memory
- * it holds small beside a large run's; no cache under AddressSanitizer,
- * whose freed blocks must stay poisoned. */
-#define CACHE_MIN_BYTES ((size_t)64 << 10)
-#define CACHE_MAX_BYTES ((size_t)32 << 20)
-#define CACHE_SLOTS 32
-#if defined(__SANITIZE_ADDRESS__)
-#define CACHE_ON 0
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define CACHE_ON 0
-#endif
-#endif
-#ifndef CACHE_ON
-#define CACHE_ON 1
-#endif
-
-static struct {
-  atomic_flag lock;
-  char *blk[CACHE_SLOTS]; /* block bases, NULL when the slot is free */
-  size_t cap[CACHE_SLOTS];
-  size_t bytes;
-} cache = {ATOMIC_FLAG_INIT, {0}, {0}, 0};
-
-static void cache_lock(void) {
-  while (atomic_flag_test_and_set_explicit(&cache.lock, memory_order_acquire))
-    ;
-}
-static void cache_unlock(void) {
-  atomic_flag_clear_explicit(&cache.lock, memory_order_release);
-}
-
-/* A cached block of at least n bytes (the smallest), removed from the
- * cache, its capacity in *cap; NULL if none. */
-static char *cache_take(size_t n, size_t *cap) {
-  char *b = NULL;
-  if (!CACHE_ON || n < CACHE_MIN_BYTES) return NULL;
-  cache_lock();
-  int best = -1;
-  for (int k = 0; k < CACHE_SLOTS; k++)
-    if (cache.blk[k] && cache.cap[k] >= n &&
-        (best < 0 || cache.cap[k] < cache.cap[best]))
-      best = k;
-  if (best >= 0) {
-    b = cache.blk[best];
-    *cap = cache.cap[best];
-    cache.blk[best] = NULL;
-    cache.bytes -= *cap;
-  }
-  cache_unlock();
-  return b;
-}
-
-/* Keep block b of capacity cap in the cache; 1 if kept. */
-static int cache_put(char *b, size_t cap) {
-  int kept = 0;
-  if (!CACHE_ON || cap < CACHE_MIN_BYTES || cap > CACHE_MAX_BYTES) return 0;
-  cache_lock();
-  int slot = -1;
-  for (int k = 0; k < CACHE_SLOTS && slot < 0; k++)
-    if (!cache.blk[k]) slot = k;
-  if (slot >= 0 && cache.bytes + cap <= CACHE_MAX_BYTES) {
-    cache.blk[slot] = b;
-    cache.cap[slot] = cap;
-    cache.bytes += cap;
-    kept = 1;
-  }
-  cache_unlock();
-  return kept;
-}
-
-/* The header: the size asked for, then the capacity of the block. */
-static void *finish_block(char *p, size_t size, size_t cap) {
-  memcpy(p, &size, sizeof size);
-  memcpy(p + sizeof size, &cap, sizeof cap);
-  count_add(size);
-  return p + HDR_BYTES;
-}
-
 void *pa__malloc(size_t size) {
   if (should_fail()) return NULL;
-  size_t cap = size + HDR_BYTES;
-  char *p = cache_take(cap, &cap);
-  if (!p) p = malloc(cap);
+  char *p = malloc(size + HDR_BYTES);
   if (!p) return NULL;
-  return finish_block(p, size, cap);
+  memcpy(p, &size, sizeof size);
+  count_add(size);
+  return p + HDR_BYTES;
 }
 
 void *pa__calloc(size_t nmemb, size_t size) {
@@ -207,35 +120,23 @@ void *pa__realloc(void *ptr, size_t size) {
   if (!ptr) return pa__malloc(size);
   if (should_fail()) return NULL;
   char *base = (char *)ptr - HDR_BYTES;
-  size_t old, cap, need = size + HDR_BYTES;
+  size_t old;
   memcpy(&old, base, sizeof old);
-  memcpy(&cap, base + sizeof old, sizeof cap);
+  char *p = realloc(base, size + HDR_BYTES);
+  if (!p) return NULL;
+  memcpy(p, &size, sizeof size);
   atomic_fetch_sub(&mem_cur, old);
-  if (need <= cap && need >= cap / 2) return finish_block(base, size, cap);
-  size_t ncap = need;
-  char *p = need > cap ? cache_take(need, &ncap) : NULL;
-  if (p) {
-    memcpy(p + HDR_BYTES, ptr, old);
-    if (!cache_put(base, cap)) free(base);
-  } else {
-    p = realloc(base, need);
-    if (!p) {
-      atomic_fetch_add(&mem_cur, old);
-      return NULL;
-    }
-    ncap = need;
-  }
-  return finish_block(p, size, ncap);
+  count_add(size);
+  return p + HDR_BYTES;
 }
 
 void pa__free(void *ptr) {
   if (!ptr) return;
   char *base = (char *)ptr - HDR_BYTES;
-  size_t old, cap;
+  size_t old;
   memcpy(&old, base, sizeof old);
-  memcpy(&cap, base + sizeof old, sizeof cap);
   atomic_fetch_sub(&mem_cur, old);
-  if (!cache_put(base, cap)) free(base);
+  free(base);
 }
 
 size_t pa__alloc_size(const void *ptr) {

@@ -15,41 +15,6 @@ static void test_allocator(void) {
   CHECK(pa_memory_current() == before);
 }
 
-/* Large blocks freed and allocated again (the allocator keeps some for
- * reuse): contents survive growing and shrinking, and the counts stay
- * those of the sizes asked for. */
-static void test_allocator_reuse(void) {
-  size_t before = pa_memory_current(), big = (size_t)1 << 20;
-  for (int round = 0; round < 3; round++) {
-    unsigned char *a = pa__malloc(big), *b = pa__malloc(big / 2);
-    CHECK(a && b);
-    if (!a || !b) return;
-    CHECK(pa_memory_current() == before + big + big / 2);
-    for (size_t i = 0; i < big; i++) a[i] = (unsigned char)(i * 7 + round);
-    pa__free(b); /* kept: the next growth may take it */
-    a = pa__realloc(a, 3 * big);
-    CHECK(a != NULL);
-    if (!a) return;
-    CHECK(pa_memory_current() == before + 3 * big);
-    size_t bad = 0;
-    for (size_t i = 0; i < big; i++) bad += a[i] != (unsigned char)(i * 7 + round);
-    a = pa__realloc(a, 100);
-    CHECK(a != NULL);
-    if (!a) return;
-    for (size_t i = 0; i < 100; i++) bad += a[i] != (unsigned char)(i * 7 + round);
-    CHECK(bad == 0);
-    CHECK(pa_memory_current() == before + 100);
-    CHECK(pa__alloc_size(a) == 100);
-    unsigned char *c = pa__calloc(big, 1);
-    CHECK(c != NULL);
-    for (size_t i = 0; c && i < big; i++) bad += c[i] != 0;
-    CHECK(bad == 0);
-    pa__free(c);
-    pa__free(a);
-    CHECK(pa_memory_current() == before);
-  }
-}
-
 /* pa__sort_by_gid against a stable insertion sort: keys spanning little
  * more than their number (sorted by counting), with repeats, and keys
  * spread wide (radix sort). */
@@ -140,5 +105,4 @@ static void test_mesh_storage(void) {
   free(h);
 }
 
-TEST_MAIN(test_allocator, test_allocator_reuse, test_sort_by_gid, test_fail_hook,
-          test_mesh_storage)
+TEST_MAIN(test_allocator, test_sort_by_gid, test_fail_hook, test_mesh_storage)
