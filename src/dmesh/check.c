@@ -73,6 +73,45 @@ static int claim_cmp(const void *x, const void *y) {
   return (a->rank_cand > b->rank_cand) - (a->rank_cand < b->rank_cand);
 }
 
+/* Claims spanning at most CLAIM_SPAN_PER_CLAIM global ids per claim are
+ * sorted by counting (a rendezvous rank receives a block of consecutive
+ * global ids): fewer instructions than qsort, and no scratch from malloc. */
+#define CLAIM_SPAN_PER_CLAIM 3
+
+/* Sort the claims it[0..n) by (gid, rank_cand) into *sorted (it itself, or
+ * a new array that replaces it; the caller frees both). The claims arrive
+ * by sending rank and a rank claims a gid once, so a stable sort by gid
+ * orders each gid's claims by rank_cand. */
+static pa_status sort_claims(claim *it, size_t n, claim **sorted) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *cnt = NULL;
+  claim *out = NULL;
+  *sorted = it;
+  if (!n) return PA_SUCCESS;
+  pa_gid lo = it[0].gid, hi = it[0].gid;
+  for (size_t i = 1; i < n; i++) {
+    lo = it[i].gid < lo ? it[i].gid : lo;
+    hi = it[i].gid > hi ? it[i].gid : hi;
+  }
+  size_t span = (size_t)(hi - lo) + 1;
+  if ((uint64_t)(hi - lo) >= (uint64_t)CLAIM_SPAN_PER_CLAIM * n ||
+      (uint64_t)CLAIM_SPAN_PER_CLAIM * n >= (uint64_t)INT32_MAX) {
+    qsort(it, n, sizeof *it, claim_cmp);
+    return PA_SUCCESS;
+  }
+  PA_CALLOC(cnt, span + 1);
+  PA_ALLOC(out, n);
+  for (size_t i = 0; i < n; i++) cnt[it[i].gid - lo + 1]++;
+  for (size_t b = 0; b < span; b++) cnt[b + 1] += cnt[b];
+  for (size_t i = 0; i < n; i++) out[cnt[it[i].gid - lo]++] = it[i];
+  *sorted = out;
+  out = NULL;
+cleanup:
+  pa__free(cnt);
+  pa__free(out);
+  return st;
+}
+
 /* Rendezvous check: every rank sends a claim for each local entity to the
  * rank of its block of global ids; there, the owner must be unique among
  * the claims, owned by exactly one rank, and the lowest candidate. Memory:
@@ -83,7 +122,7 @@ static pa_status check_rule(pa_dmesh *dm, int kind, const uint8_t *cand) {
   pa_idx n = dm->nloc[kind];
   pa_gid maxg = -1, block;
   size_t *cnt = NULL, *pos = NULL, *rcnt = NULL;
-  claim *item = NULL;
+  claim *item = NULL, *it = NULL;
   void *recv = NULL;
   for (pa_idx i = 0; i < n; i++)
     if (dm->gid[kind][i] > maxg) maxg = dm->gid[kind][i];
@@ -111,8 +150,7 @@ static pa_status check_rule(pa_dmesh *dm, int kind, const uint8_t *cand) {
   item = NULL;
   size_t nr = 0;
   for (int r = 0; r < size; r++) nr += rcnt[r] / sizeof(claim);
-  claim *it = recv;
-  if (nr) qsort(it, nr, sizeof *it, claim_cmp);
+  PA_CALL(sort_claims(recv, nr, &it));
   for (size_t a = 0; a < nr;) {
     size_t b = a;
     pa_gid g = it[a].gid, own = it[a].owner, mincand = size;
@@ -140,6 +178,7 @@ cleanup:
   pa__free(pos);
   pa__free(rcnt);
   pa__free(item);
+  if (it != recv) pa__free(it);
   pa__free(recv);
   return st;
 }

@@ -874,73 +874,200 @@ cleanup:
   return st;
 }
 
-/* The records R packed into one buffer b (R freed as they are packed), and
- * A made ready to receive records of the same kinds. */
-static pa_status pack_records(pa__recs *R, pa__recs *A, pa__buf *b) {
-  pa_status st = PA_SUCCESS;
-  size_t bytes = 0;
-  for (int k = 0; k < PA_DMESH_NKIND; k++)
-    bytes += pa__recblock_bytes(R[k].nv, R[k].ndbl, R[k].n, 0);
-  PA_CALL(pa__buf_reserve(b, bytes));
-  for (int k = 0; k < PA_DMESH_NKIND; k++) {
-    b->n += pa__recs_put(&R[k], NULL, R[k].n, b->p + b->n);
-    int kind = R[k].kind, nv = R[k].nv, nd = R[k].ndbl;
-    pa__recs_free(&R[k]);
-    pa__recs_init(&A[k], kind, nv, nd);
+/* The arrays of a kind's records that go to the root, in this order. */
+enum { G_GID, G_VGID, G_DBL, G_REF, G_FLAG, G_NARRAY };
+
+/* Array a of records R: its address and bytes. */
+static const void *record_array(const pa__recs *R, int a, size_t *bytes) {
+  size_t n = R->n;
+  switch (a) {
+  case G_GID: *bytes = n * sizeof *R->gid; return R->gid;
+  case G_VGID: *bytes = n * (size_t)R->nv * sizeof *R->vgid; return R->vgid;
+  case G_DBL: *bytes = n * (size_t)R->ndbl * sizeof *R->dbl; return R->dbl;
+  case G_REF: *bytes = n * sizeof *R->ref; return R->ref;
+  default: *bytes = n * sizeof *R->flag; return R->flag;
   }
-cleanup:
-  return st;
 }
 
-/* On the root, its own records R moved into A (R left empty), with room
- * for every rank's: the root's block is never packed nor copied (a
- * block's fresh pages cost more than its copy: 2.8 MB, 700 page faults). */
-static pa_status keep_records(const pa_dmesh *dm, pa__recs *R, pa__recs *A) {
-  pa_status st = PA_SUCCESS;
-  for (int k = 0; k < PA_DMESH_NKIND; k++) {
-    A[k] = R[k];
-    pa__recs_init(&R[k], A[k].kind, A[k].nv, A[k].ndbl);
-    PA_CALL(pa__recs_reserve(&A[k], (size_t)dm->nglob[k], 0));
-  }
-cleanup:
-  return st;
-}
-
-/* Every other rank's buffer b to the root, one rank at a time; the root
- * appends them to A (which holds its own records) in rank order. Each step
- * is agreed before it starts, the first on st (the status so far); the
- * status of the last one is the caller's to agree. */
-static pa_status blocks_to_root(pa_dmesh *dm, int root, const pa__buf *b,
-                                pa__recs *A, pa_status st) {
-  void *rbuf = NULL;
+/* Every other rank's records R to the root, one rank at a time, array by
+ * array from where they lie (no packing: a packed copy's fresh pages cost
+ * more than the copy), kept on the root as received: array a of kind k
+ * from rank r in buf[(r * PA_DMESH_NKIND + k) * G_NARRAY + a] (n[...]
+ * bytes). Each step is agreed before it starts, the first on st (the
+ * status so far); the status of the last one is the caller's to agree. */
+static pa_status records_to_root(pa_dmesh *dm, int root, const pa__recs *R,
+                                 void **buf, size_t *n, pa_status st) {
   for (int r = 0; r < dm->size; r++) {
     PA_CALL(pa__agree(dm->comm, st));
-    if (r == root) {
-      continue;
-    } else if (dm->rank == r) {
-      st = pa__xchg_send(dm->comm, root, b->p, b->n);
-    } else if (dm->rank == root) {
-      size_t n;
-      st = pa__xchg_recv(dm->comm, r, &rbuf, &n);
-      if (!st) st = unpack_block(rbuf, n, A);
-      pa__free(rbuf);
-      rbuf = NULL;
-    }
+    if (r == root || (dm->rank != r && dm->rank != root)) continue;
+    for (int k = 0; k < PA_DMESH_NKIND && !st; k++)
+      for (int a = 0; a < G_NARRAY && !st; a++) {
+        size_t i = ((size_t)r * PA_DMESH_NKIND + k) * G_NARRAY + a, bytes;
+        const void *p = record_array(&R[k], a, &bytes);
+        st = dm->rank == r ? pa__xchg_send(dm->comm, root, p, bytes)
+                           : pa__xchg_recv(dm->comm, r, &buf[i], &n[i]);
+      }
   }
 cleanup:
-  pa__free(rbuf);
   return st;
 }
 
-/* On the root: the mesh of the gathered records A, every kind by
- * increasing global id (whatever their order in A), element vertices found
- * by global id. */
-static pa_status assemble_by_gid(int d, const pa__layout *lay, pa__recs *A,
-                                 pa_mesh **mp) {
+/* The records of one kind from one rank, where they lie (neither copied
+ * nor merged: their fresh pages cost more than the copy): the arrays
+ * received from another rank, or the root's own mesh, whose owned entities
+ * come first (conn, vg: its connectivity and vertex global ids; dm, vals,
+ * nvals: its mesh and the values whose doubles gather_records would append
+ * to its vertices'). */
+typedef struct gview {
+  size_t n;
+  int nv, ndbl; /* vertex ids and doubles per record */
+  const pa_gid *gid, *vgid;
+  const double *dbl;
+  const int32_t *ref;
+  const uint8_t *flag;
+  const pa_idx *conn;
+  const pa_gid *vg;
+  const pa_dmesh *dm;
+  const int *vals;
+  int nvals;
+} gview;
+
+/* Vertex ids and doubles per record of kind k (the layout lay). */
+static void kind_shape(int d, const pa__layout *lay, int k, int *nv,
+                       int *ndbl) {
+  *nv = k == PA_VERTEX ? 0 : pa__kind_nv(d, k);
+  *ndbl = k == PA_VERTEX ? pa__layout_ndbl(lay) : 0;
+}
+
+/* The view of the root's own entities of kind k. */
+static gview own_view(const pa_dmesh *dm, const pa__layout *lay, int k,
+                      const int *vals, int nvals) {
+  const pa_mesh *m = dm->mesh;
+  gview v;
+  memset(&v, 0, sizeof v);
+  kind_shape(dm->dim, lay, k, &v.nv, &v.ndbl);
+  v.n = (size_t)dm->nown[k];
+  v.gid = dm->gid[k];
+  v.ref = k == PA_VERTEX ? m->vref : k == PA_ELEMENT ? m->eref
+          : k == PA_BOUNDARY ? m->bref : m->edref;
+  v.flag = k == PA_VERTEX ? m->vflag : k == PA_ELEMENT ? m->eflag
+           : k == PA_BOUNDARY ? m->bflag : m->edflag;
+  v.conn = k == PA_VERTEX ? NULL : k == PA_ELEMENT ? m->elem
+           : k == PA_BOUNDARY ? m->bdry : m->edge;
+  v.vg = dm->gid[PA_VERTEX];
+  v.dm = dm;
+  v.vals = vals;
+  v.nvals = nvals;
+  return v;
+}
+
+/* The doubles of vertex record i of Q into x (Q->ndbl of them). */
+static void view_doubles(const gview *Q, size_t i, double *x) {
+  if (!Q->dm) {
+    memcpy(x, Q->dbl + (size_t)Q->ndbl * i, (size_t)Q->ndbl * sizeof *x);
+    return;
+  }
+  int o = pa__vertex_doubles(Q->dm->mesh, (pa_idx)i, Q->dm->mesh->nfield, x);
+  for (int q = 0; q < Q->nvals; q++) {
+    const pa_dmesh_value *v = Q->dm->value[Q->vals[q]];
+    memcpy(x + o, v->data + v->unit * i, v->unit);
+    o += v->ncomp;
+  }
+}
+
+/* The global id of vertex q of record i of Q (not a vertex record). */
+static pa_gid view_vgid(const gview *Q, size_t i, int q) {
+  size_t j = (size_t)Q->nv * i + (size_t)q;
+  return Q->conn ? Q->vg[Q->conn[j]] : Q->vgid[j];
+}
+
+/* On the root: V[k * size + r], the records of kind k from rank r: the
+ * root's own (own_view) and the arrays buf, n of the others (see
+ * records_to_root), whose sizes are checked. */
+static pa_status map_views(const pa_dmesh *dm, int root, const pa__layout *lay,
+                           const int *vals, int nvals, void *const *buf,
+                           const size_t *n, gview *V) {
+  pa_status st = PA_SUCCESS;
+  int size = dm->size;
+  for (int r = 0; r < size; r++)
+    for (int k = 0; k < PA_DMESH_NKIND; k++) {
+      gview *v = &V[k * size + r];
+      if (r == root) {
+        *v = own_view(dm, lay, k, vals, nvals);
+        continue;
+      }
+      void *const *b = buf + ((size_t)r * PA_DMESH_NKIND + k) * G_NARRAY;
+      const size_t *nb = n + ((size_t)r * PA_DMESH_NKIND + k) * G_NARRAY;
+      pa__recs shape; /* the records' sizes: the sender's count */
+      memset(&shape, 0, sizeof shape);
+      kind_shape(dm->dim, lay, k, &shape.nv, &shape.ndbl);
+      shape.n = nb[G_GID] / sizeof(pa_gid);
+      for (int a = 0; a < G_NARRAY; a++) {
+        size_t bytes;
+        record_array(&shape, a, &bytes);
+        PA_CHECK(nb[a] == bytes, PA_ERR_INTERNAL,
+                 "gather: %zu bytes of array %d of kind %d from rank %d, "
+                 "%zu expected", nb[a], a, k, r, bytes);
+      }
+      memset(v, 0, sizeof *v);
+      v->n = shape.n;
+      v->nv = shape.nv;
+      v->ndbl = shape.ndbl;
+      v->gid = b[G_GID];
+      v->vgid = b[G_VGID];
+      v->dbl = b[G_DBL];
+      v->ref = b[G_REF];
+      v->flag = b[G_FLAG];
+    }
+cleanup:
+  return st;
+}
+
+/* The global ids of the records of kind k of every rank end to end in key
+ * (V[k * size + r]: rank r's from off[r]) and their order of increasing
+ * global id in ord. */
+static pa_status order_kind(const gview *V, int size, pa_gid *key,
+                            size_t *off, pa_idx *ord) {
+  pa_status st = PA_SUCCESS;
+  off[0] = 0;
+  for (int r = 0; r < size; r++) {
+    memcpy(key + off[r], V[r].gid, V[r].n * sizeof *key);
+    off[r + 1] = off[r] + V[r].n;
+  }
+  for (size_t i = 0; i < off[size]; i++) ord[i] = (pa_idx)i;
+  PA_CALL(pa__sort_by_gid(ord, off[size], key));
+cleanup:
+  return st;
+}
+
+/* The rank whose records hold position g of the records end to end (off:
+ * see order_kind). */
+static int rank_of(const size_t *off, int size, size_t g) {
+  int lo = 0, hi = size - 1;
+  while (lo < hi) {
+    int mid = (lo + hi + 1) / 2;
+    if (off[mid] <= g) lo = mid;
+    else hi = mid - 1;
+  }
+  return lo;
+}
+
+/* On the root: the mesh of the gathered records V (see map_views), every
+ * kind by increasing global id (whatever the ranks' order), element
+ * vertices found by global id. */
+static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
+                                 const gview *V, pa_mesh **mp) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = NULL;
   pa__gidindex vmap = {0};
   pa_idx *ord = NULL;
+  pa_gid *key = NULL;
+  double *xbuf = NULL;
+  size_t *off = NULL, nk[PA_DMESH_NKIND] = {0}, nmax = 0;
+  for (int k = 0; k < PA_DMESH_NKIND; k++) {
+    for (int r = 0; r < size; r++) nk[k] += V[k * size + r].n;
+    nmax = nk[k] > nmax ? nk[k] : nmax;
+  }
   PA_CALL(pa_mesh_create(d, &m));
   m->met_ncomp = lay->met_ncomp;
   m->nfield = lay->nfield;
@@ -948,20 +1075,25 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, pa__recs *A,
     snprintf(m->field[f].name, PA_MESH_FIELD_NAME_LEN, "%s", lay->fieldname[f]);
     m->field[f].ncomp = lay->fieldncomp[f];
   }
-  PA_CALL(pa_mesh_reserve(m, (pa_idx)A[0].n, (pa_idx)A[1].n, (pa_idx)A[2].n,
-                          (pa_idx)A[3].n));
-  size_t nmax = 0;
-  for (int k = 0; k < PA_DMESH_NKIND; k++) nmax = A[k].n > nmax ? A[k].n : nmax;
-  PA_ALLOC(ord, nmax);
-  PA_CALL(pa__gidindex_init_keys(&vmap, A[PA_VERTEX].gid, A[PA_VERTEX].n));
+  PA_CALL(pa_mesh_reserve(m, (pa_idx)nk[PA_VERTEX], (pa_idx)nk[PA_ELEMENT],
+                          (pa_idx)nk[PA_BOUNDARY], (pa_idx)nk[PA_EDGE]));
+  PA_ALLOC(ord, nmax ? nmax : 1);
+  PA_ALLOC(key, nmax ? nmax : 1);
+  PA_ALLOC(off, (size_t)size + 1);
+  PA_ALLOC(xbuf, (size_t)V[PA_VERTEX * size].ndbl + 1);
   for (int k = 0; k < PA_DMESH_NKIND; k++) {
-    pa__recs *Q = &A[k];
-    for (size_t i = 0; i < Q->n; i++) ord[i] = (pa_idx)i;
-    PA_CALL(pa__sort_by_gid(ord, Q->n, Q->gid));
-    for (size_t j = 0; j < Q->n; j++) {
-      size_t i = (size_t)ord[j];
+    const gview *Vk = V + (size_t)k * size;
+    PA_CALL(order_kind(Vk, size, key, off, ord));
+    if (k == PA_VERTEX)
+      PA_CALL(pa__gidindex_init_keys(&vmap, key, nk[PA_VERTEX]));
+    for (size_t j = 0; j < nk[k]; j++) {
+      size_t g = (size_t)ord[j];
+      int r = rank_of(off, size, g);
+      const gview *Q = &Vk[r];
+      size_t i = g - off[r];
       if (k == PA_VERTEX) {
-        const double *x = Q->dbl + (size_t)Q->ndbl * i;
+        const double *x = xbuf;
+        view_doubles(Q, i, xbuf);
         memcpy(m->coord + (size_t)d * j, x, d * sizeof(double));
         x += d;
         if (m->met_ncomp) {
@@ -981,56 +1113,68 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, pa__recs *A,
                  (long long)Q->gid[i]);
         continue;
       }
+      int nv = Q->nv;
       pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
       int32_t *ref = k == PA_ELEMENT ? m->eref : k == PA_BOUNDARY ? m->bref : m->edref;
       uint8_t *flag = k == PA_ELEMENT ? m->eflag : k == PA_BOUNDARY ? m->bflag : m->edflag;
-      for (int q = 0; q < Q->nv; q++) {
-        pa_idx v = pa__gidindex_get(&vmap, Q->vgid[(size_t)Q->nv * i + q]);
+      for (int q = 0; q < nv; q++) {
+        pa_gid g = view_vgid(Q, i, q);
+        pa_idx v = pa__gidindex_get(&vmap, g);
         PA_CHECK(v >= 0, PA_ERR_MESH, "gather: vertex %lld is owned by no rank",
-                 (long long)Q->vgid[(size_t)Q->nv * i + q]);
-        conn[(size_t)Q->nv * j + q] = v;
+                 (long long)g);
+        conn[(size_t)nv * j + q] = v;
       }
       ref[j] = Q->ref[i];
       flag[j] = Q->flag[i];
     }
   }
-  m->nv = (pa_idx)A[PA_VERTEX].n;
-  m->ne = (pa_idx)A[PA_ELEMENT].n;
-  m->nb = (pa_idx)A[PA_BOUNDARY].n;
-  m->ned = (pa_idx)A[PA_EDGE].n;
+  m->nv = (pa_idx)nk[PA_VERTEX];
+  m->ne = (pa_idx)nk[PA_ELEMENT];
+  m->nb = (pa_idx)nk[PA_BOUNDARY];
+  m->ned = (pa_idx)nk[PA_EDGE];
   *mp = m;
   m = NULL;
 cleanup:
   pa_mesh_destroy(m);
   pa__gidindex_free(&vmap);
   pa__free(ord);
+  pa__free(key);
+  pa__free(xbuf);
+  pa__free(off);
   return st;
 }
 
 pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
   pa_status st = PA_SUCCESS;
-  pa__recs R[PA_DMESH_NKIND], A[PA_DMESH_NKIND];
-  pa__buf b = {0};
+  pa__recs R[PA_DMESH_NKIND];
   pa__layout lay;
+  void **buf = NULL;
+  size_t *nbuf = NULL, nb = 0;
+  gview *V = NULL;
   int vals[PA_MESH_MAX_FIELDS], nvals = 0;
   double t0 = pa_wtime(), t1, t2;
   memset(R, 0, sizeof R);
-  memset(A, 0, sizeof A);
   PA_CHECK(dm && meshp, PA_ERR_ARG, "pa_dmesh_gather: NULL argument");
   pa__agree_reset();
   *meshp = NULL;
   PA_CHECK(root >= 0 && root < dm->size, PA_ERR_ARG, "root %d out of range",
            root);
   gather_layout(dm, &lay, vals, &nvals);
-  st = gather_records(dm, &lay, vals, nvals, R);
-  if (!st)
-    st = dm->rank == root ? keep_records(dm, R, A) : pack_records(R, A, &b);
+  if (dm->rank != root) st = gather_records(dm, &lay, vals, nvals, R);
+  if (!st && dm->rank == root) {
+    nb = (size_t)dm->size * PA_DMESH_NKIND * G_NARRAY;
+    buf = pa__calloc(nb, sizeof *buf);
+    nbuf = pa__calloc(nb, sizeof *nbuf);
+    V = pa__malloc((size_t)dm->size * PA_DMESH_NKIND * sizeof *V);
+    if (!buf || !nbuf || !V)
+      st = pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+  }
   t1 = pa_wtime();
-  st = blocks_to_root(dm, root, &b, A, st);
+  st = records_to_root(dm, root, R, buf, nbuf, st);
   t2 = pa_wtime();
-  pa__buf_free(&b);
   if (st || dm->rank != root) goto cleanup;
-  PA_CALL(assemble_by_gid(dm->dim, &lay, A, meshp));
+  PA_CALL(map_views(dm, root, &lay, vals, nvals, buf, nbuf, V));
+  PA_CALL(assemble_by_gid(dm->dim, &lay, dm->size, V, meshp));
   pa__info(2, "padapt: rank %d: gather: records %.3f s, to the root %.3f s, "
               "assembly %.3f s\n", dm->rank, t1 - t0, t2 - t1, pa_wtime() - t2);
 cleanup:
@@ -1039,10 +1183,10 @@ cleanup:
     pa_mesh_destroy(*meshp);
     *meshp = NULL;
   }
-  for (int k = 0; k < PA_DMESH_NKIND; k++) {
-    pa__recs_free(&R[k]);
-    pa__recs_free(&A[k]);
-  }
-  pa__buf_free(&b);
+  for (int k = 0; k < PA_DMESH_NKIND; k++) pa__recs_free(&R[k]);
+  for (size_t i = 0; buf && i < nb; i++) pa__free(buf[i]);
+  pa__free(buf);
+  pa__free(nbuf);
+  pa__free(V);
   return st;
 }

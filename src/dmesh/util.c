@@ -190,12 +190,46 @@ size_t pa__gid_sort_unique(pa_gid *a, size_t n) {
   return m;
 }
 
+/* Keys spanning at most COUNT_SPAN_PER_KEY times their number are sorted
+ * by counting (one count per key value, 4 bytes each): the global ids of a
+ * gathered mesh span little more than their count, and the counts and the
+ * sorted copy touch 8-20 bytes per key where the radix sort's pairs and
+ * their copy touch 32 (fresh pages cost more than the sort itself). */
+#define COUNT_SPAN_PER_KEY 3
+
+/* Stable counting sort of idx by key over [lo, lo + span); the caller
+ * checked span <= COUNT_SPAN_PER_KEY * n < 2^31. */
+static pa_status counting_sort(pa_idx *idx, size_t n, const pa_gid *key,
+                               pa_gid lo, size_t span) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *cnt = NULL, *out = NULL;
+  PA_CALLOC(cnt, span + 1);
+  PA_ALLOC(out, n);
+  for (size_t i = 0; i < n; i++) cnt[key[idx[i]] - lo + 1]++;
+  for (size_t b = 0; b < span; b++) cnt[b + 1] += cnt[b];
+  for (size_t i = 0; i < n; i++) out[cnt[key[idx[i]] - lo]++] = idx[i];
+  memcpy(idx, out, n * sizeof *idx);
+cleanup:
+  pa__free(cnt);
+  pa__free(out);
+  return st;
+}
+
 pa_status pa__sort_by_gid(pa_idx *idx, size_t n, const pa_gid *key) {
   pa_status st = PA_SUCCESS;
   kv *p = NULL;
   size_t s = 1;
   while (s < n && key[idx[s - 1]] <= key[idx[s]]) s++;
   if (s >= n) return PA_SUCCESS; /* already in order */
+  pa_gid lo = key[idx[0]], hi = lo;
+  for (size_t i = 1; i < n; i++) {
+    pa_gid k = key[idx[i]];
+    lo = k < lo ? k : lo;
+    hi = k > hi ? k : hi;
+  }
+  if ((uint64_t)(hi - lo) < (uint64_t)COUNT_SPAN_PER_KEY * n &&
+      (uint64_t)COUNT_SPAN_PER_KEY * n < (uint64_t)INT32_MAX)
+    return counting_sort(idx, n, key, lo, (size_t)(hi - lo) + 1);
   PA_ALLOC(p, n);
   for (size_t i = 0; i < n; i++) {
     p[i].k = (uint64_t)key[idx[i]];

@@ -203,6 +203,43 @@ static void check_gather(pa_dmesh *dm, pa_mesh *in0) {
   }
 }
 
+/* A vertex value of doubles gathered as a mesh field, at every root: each
+ * gathered vertex carries the value its owner computed from its
+ * coordinates (the root's own vertices and the others' take different
+ * paths to the gathered mesh). */
+static void check_gather_value(pa_dmesh *dm) {
+  int dim = pa_dmesh_dim(dm);
+  pa_dmesh_value *x = NULL;
+  CHECK_OK(pa_dmesh_value_add(dm, PA_VERTEX, "f2", MPI_DOUBLE, 2, -1, &x));
+  if (!x) return;
+  pa_idx n, nown;
+  double *d = pa_dmesh_value_data(x, &n, &nown);
+  const double *c = pa_mesh_coords(pa_dmesh_mesh(dm));
+  for (pa_idx i = 0; i < n; i++) {
+    d[2 * i] = c[dim * i] + 2 * c[dim * i + 1];
+    d[2 * i + 1] = 1 - c[dim * i + dim - 1];
+  }
+  for (int root = 0; root < size; root++) {
+    pa_mesh *g = NULL;
+    CHECK_OK(pa_dmesh_gather(dm, root, &g));
+    if (rank != root || !g) continue;
+    int k = pa_mesh_nfield(g) - 1, ncomp = 0;
+    const char *name = NULL;
+    double *val = NULL;
+    CHECK(k >= 0);
+    CHECK_OK(pa_mesh_field(g, k < 0 ? 0 : k, &name, &ncomp, &val));
+    CHECK(name && !strcmp(name, "f2") && ncomp == 2 && val);
+    const double *gc = pa_mesh_coords(g);
+    int bad = 0;
+    for (pa_idx v = 0; val && v < pa_mesh_nvert(g); v++)
+      bad += val[2 * v] != gc[dim * v] + 2 * gc[dim * v + 1] ||
+             val[2 * v + 1] != 1 - gc[dim * v + dim - 1];
+    CHECK(bad == 0);
+    pa_mesh_destroy(g);
+  }
+  CHECK_OK(pa_dmesh_value_remove(dm, x));
+}
+
 static void test_distribute(void) {
   for (int dim = 2; dim <= 3; dim++) {
     int n = dim == 2 ? 12 : 5;
@@ -221,6 +258,7 @@ static void test_distribute(void) {
       check_halo(dm);
       check_reduce(dm);
       check_gather(dm, in);
+      check_gather_value(dm);
       /* layers: every ghost of layer k has a vertex of layer k-1 */
       const uint8_t *lay = pa_dmesh_elem_layers(dm);
       int maxl = 0;

@@ -1,6 +1,7 @@
 /* test_core.c -- counting allocator, failure hook, error messages, mesh storage. */
 #include "testutil.h"
 #include "core/core.h"
+#include "dmesh/util.h"
 
 static void test_allocator(void) {
   size_t before = pa_memory_current();
@@ -12,6 +13,43 @@ static void test_allocator(void) {
   CHECK(pa_memory_current() == before + 4000);
   pa__free(p);
   CHECK(pa_memory_current() == before);
+}
+
+/* pa__sort_by_gid against a stable insertion sort: keys spanning little
+ * more than their number (sorted by counting), with repeats, and keys
+ * spread wide (radix sort). */
+static void test_sort_by_gid(void) {
+  size_t n = 5000;
+  pa_gid *key = malloc(n * sizeof *key);
+  pa_idx *idx = malloc(n * sizeof *idx), *ref = malloc(n * sizeof *ref);
+  CHECK(key && idx && ref);
+  if (!key || !idx || !ref) goto done;
+  for (int kind = 0; kind < 3; kind++) {
+    for (size_t i = 0; i < n; i++) {
+      double r = pa_test_rand();
+      key[i] = kind == 0   ? 1000 + (pa_gid)(r * 2 * (double)n)
+               : kind == 1 ? (pa_gid)(r * 50) - 20
+                           : (pa_gid)(r * 1e15);
+      idx[i] = ref[i] = (pa_idx)(n - 1 - i);
+    }
+    for (size_t i = 1; i < n; i++) {
+      pa_idx x = ref[i];
+      size_t j = i;
+      while (j > 0 && key[ref[j - 1]] > key[x]) {
+        ref[j] = ref[j - 1];
+        j--;
+      }
+      ref[j] = x;
+    }
+    CHECK_OK(pa__sort_by_gid(idx, n, key));
+    size_t bad = 0;
+    for (size_t i = 0; i < n; i++) bad += idx[i] != ref[i];
+    CHECK(bad == 0);
+  }
+done:
+  free(key);
+  free(idx);
+  free(ref);
 }
 
 static void test_fail_hook(void) {
@@ -67,4 +105,4 @@ static void test_mesh_storage(void) {
   free(h);
 }
 
-TEST_MAIN(test_allocator, test_fail_hook, test_mesh_storage)
+TEST_MAIN(test_allocator, test_sort_by_gid, test_fail_hook, test_mesh_storage)
