@@ -118,6 +118,11 @@ Set both to 1 to let Open MPI run as root (containers).
 .TP
 .B OMPI_MCA_rmaps_base_oversubscribe
 Set to 1 to run more ranks than cores with Open MPI.
+.TP
+.B OMPI_MCA_pml, OMPI_MCA_ess_singleton_isolated
+Open MPI's messaging layer and singleton mode. Unset, \fBpadapt\fR started
+without \fBmpiexec\fR runs as an isolated singleton with ob1, and ranks on one
+node use ob1; ranks on several nodes keep Open MPI's choice.
 .SH EXAMPLES
 .nf
 padapt generate box3d 10 cube.mesh
