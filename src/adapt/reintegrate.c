@@ -36,6 +36,16 @@
  * rank's elements will contain (fresh ones of outputs that stay here, kept ones
  * far from every piece and rank interface) go to the rebuild as private
  * (pa__dmesh_build_priv).
+ *
+ * Splice: when the elements to rebuild are few (SPLICE_MAX_SHARE), with
+ * overlap 0 and the numbering a build leaves, the same records are made
+ * only for the part of the mesh that changes -- the outputs, the staying
+ * elements with a vertex that a labelled element contains on some rank
+ * (touched), the touched entities that stay and the other vertices of
+ * those elements -- and the part, built on its own, is spliced into dm
+ * (pa__dmesh_splice): every element around a touched entity is in the
+ * part, so its owners and ghosts are right, and every other entity stays
+ * as it is. Same result as the rebuild, array by array.
  */
 #include "adapt/adapt.h"
 
@@ -1379,6 +1389,7 @@ static pa_status patch_records(pa__iter *it, reint *r) {
   const pa__sf *sf = &dm->sf[PA_VERTEX];
   pa__dmesh_layout(dm, &r->lay);
   output_counts(it, add);
+  /* the kept flags narrowed to the part */
   for (pa_idx v = 0; v < dm->nown[PA_VERTEX]; v++)
     r->kv[v] = (uint8_t)((r->kv[v] && r->vtouch[v]) || r->ugive[v]);
   for (pa_idx b = 0; b < dm->nown[PA_BOUNDARY]; b++)
@@ -1413,6 +1424,7 @@ static pa_status splice_part(pa__iter *it, reint *r) {
   PA_CALL(pa__dmesh_build_priv(part, &r->lay, 0, &r->R[PA_ELEMENT],
                                &r->R[PA_VERTEX], &r->R[PA_BOUNDARY],
                                &r->R[PA_EDGE], &r->Rp));
+  /* the marks turn into what stays of dm */
   for (pa_idx v = 0; v < dm->nloc[PA_VERTEX]; v++) r->vtouch[v] = !r->vtouch[v];
   for (pa_idx e = 0; e < dm->nown[PA_ELEMENT]; e++)
     r->collar[e] = (uint8_t)(r->keep[e] && !r->collar[e]);
@@ -1467,7 +1479,7 @@ static pa_status outputs_to_records(pa__iter *it, reint *r,
     pa__free(r->demit[q]);
     r->bemit[q] = r->demit[q] = NULL;
   }
-  for (int k = 0; !r->splice && k < PA_DMESH_NKIND; k++)
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     if (r->R[k].n) {
       const size_t *po = r->R[k].poff;
       size_t fixed = pa__recs_wire(&r->R[k], 0) - (po ? po[1] - po[0] : 0);

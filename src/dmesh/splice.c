@@ -134,27 +134,34 @@ cleanup:
   return st;
 }
 
-/* *arr (items of unit bytes, reallocated to o->nloc): new item j is old
- * item src[j] when src[j] >= 0, else item -1 - src[j] of pa (the part's
- * array of the same layout). */
-static pa_status remap(void *arrp, size_t unit, const korder *o,
-                       const void *pa) {
+/* *out: o->nloc items of unit bytes, item j old[src[j]] when src[j] >= 0,
+ * else item -1 - src[j] of pa (the part's array of the same layout). */
+static pa_status remapped(const void *old, size_t unit, const korder *o,
+                          const void *pa, void **out) {
   pa_status st = PA_SUCCESS;
-  unsigned char **arr = arrp, *nw = NULL;
-  const unsigned char *old = *arr, *pp = pa;
-  if (!unit) return PA_SUCCESS;
+  unsigned char *nw = NULL;
+  const unsigned char *po = old, *pp = pa;
   PA_ALLOC(nw, (size_t)o->nloc * unit);
   for (pa_idx j = 0; j < o->nloc; j++) {
     pa_idx s = o->src[j];
     const unsigned char *p =
-        s >= 0 ? old + unit * (size_t)s : pp + unit * (size_t)(-1 - s);
+        s >= 0 ? po + unit * (size_t)s : pp + unit * (size_t)(-1 - s);
     memcpy(nw + unit * (size_t)j, p, unit);
   }
-  pa__free(*arr);
-  *arr = nw;
+  *out = nw;
 cleanup:
   return st;
 }
+
+/* Replace the array arr by its remapped copy (in a function with a
+ * cleanup label). */
+#define REMAP(arr, unit, o, pa)                                              \
+  do {                                                                       \
+    void *nw_ = NULL;                                                        \
+    PA_CALL(remapped((arr), (unit), (o), (pa), &nw_));                       \
+    pa__free(arr);                                                           \
+    (arr) = nw_;                                                             \
+  } while (0)
 
 /* *conn (nv vertices each, reallocated): the vertices renumbered (vo: the
  * vertex order), a staying entity's from dm's numbering, a part entity's
@@ -188,13 +195,13 @@ static pa_status splice_vertices(pa_mesh *m, const korder *o,
   int d = m->dim, nm = m->met_ncomp;
   PA_CHECK(pm->met_ncomp == nm && pm->nfield == m->nfield, PA_ERR_INTERNAL,
            "splice: the part has another metric or other fields");
-  PA_CALL(remap(&m->coord, d * sizeof(double), o, pm->coord));
-  PA_CALL(remap(&m->vref, sizeof(int32_t), o, pm->vref));
-  PA_CALL(remap(&m->vflag, 1, o, pm->vflag));
-  if (nm) PA_CALL(remap(&m->met, nm * sizeof(double), o, pm->met));
+  REMAP(m->coord, d * sizeof(double), o, pm->coord);
+  REMAP(m->vref, sizeof(int32_t), o, pm->vref);
+  REMAP(m->vflag, 1, o, pm->vflag);
+  if (nm) REMAP(m->met, nm * sizeof(double), o, pm->met);
   for (int f = 0; f < m->nfield; f++)
-    PA_CALL(remap(&m->field[f].val, m->field[f].ncomp * sizeof(double), o,
-                  pm->field[f].val));
+    REMAP(m->field[f].val, m->field[f].ncomp * sizeof(double), o,
+          pm->field[f].val);
   m->nv = o->nloc;
   m->capv = (size_t)o->nloc;
 cleanup:
@@ -225,8 +232,8 @@ static pa_status splice_cells(pa_mesh *m, int kind, const korder *o,
                          : kind == PA_BOUNDARY ? pm->bflag
                                                : pm->edflag;
   PA_CALL(remap_conn(conn, nv, o, pconn, vo));
-  PA_CALL(remap(ref, sizeof(int32_t), o, pref));
-  PA_CALL(remap(flag, 1, o, pflag));
+  REMAP(*ref, sizeof(int32_t), o, pref);
+  REMAP(*flag, 1, o, pflag);
   if (kind == PA_ELEMENT) {
     m->ne = o->nloc;
     m->cape = (size_t)o->nloc;
@@ -245,8 +252,8 @@ cleanup:
 static pa_status splice_ids(pa_dmesh *dm, int kind, const korder *o,
                             const pa_dmesh *part) {
   pa_status st = PA_SUCCESS;
-  PA_CALL(remap(&dm->gid[kind], sizeof(pa_gid), o, part->gid[kind]));
-  PA_CALL(remap(&dm->owner[kind], sizeof(int), o, part->owner[kind]));
+  REMAP(dm->gid[kind], sizeof(pa_gid), o, part->gid[kind]);
+  REMAP(dm->owner[kind], sizeof(int), o, part->owner[kind]);
   dm->nown[kind] = o->nown;
   dm->nloc[kind] = o->nloc;
 cleanup:
