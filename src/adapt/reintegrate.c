@@ -1233,6 +1233,12 @@ cleanup:
   return st;
 }
 
+/* The elements of every local output (added to *n). */
+static void output_counts_elements(const pa__iter *it, pa_gid *n) {
+  for (int q = 0; q < it->npiece_local; q++)
+    if (it->pieces[q].out) *n += it->pieces[q].out->ne;
+}
+
 /* The entities of every local output, per kind (room for their
  * records). */
 static void output_counts(const pa__iter *it, size_t *add) {
@@ -1317,8 +1323,7 @@ static pa_status touch_marks(pa__iter *it, reint *r, int *incollar,
     for (int k = 0; r->collar[e] && k < it->nve; k++) incollar[ev[k]] = 1;
     *npatch += r->collar[e];
   }
-  for (int q = 0; q < it->npiece_local; q++)
-    if (it->pieces[q].out) *npatch += it->pieces[q].out->ne;
+  output_counts_elements(it, npatch);
   for (int t = 0; t < 2; t++) {
     int kind = t ? PA_EDGE : PA_BOUNDARY, nvk = pa__kind_nv(it->dim, kind);
     const pa_idx *conn = t ? m->edge : m->bdry;
@@ -1360,19 +1365,24 @@ static pa_status choose_splice(pa__iter *it, reint *r) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
   int sw = reintegrate_switch();
-  int ok = sw >= 0 && dm->overlap == 0 && pa__dmesh_canonical(dm);
-  pa_gid cnt[2] = {0, dm->nown[PA_ELEMENT]};
-  PA_CALL(pa__allreduce(dm->comm, &ok, 1, MPI_INT, MPI_MIN));
+  /* ok, then the elements of the outputs (a lower bound of the part's,
+   * which saves the marks when already too many) and before */
+  pa_gid cnt[3] = {sw >= 0 && dm->overlap == 0 && pa__dmesh_canonical(dm), 0,
+                   dm->nown[PA_ELEMENT]};
+  output_counts_elements(it, &cnt[1]);
+  PA_CALL(pa__allreduce(dm->comm, cnt, 3, MPI_INT64_T, MPI_SUM));
+  int ok = cnt[0] == it->size &&
+           (sw > 0 || (double)cnt[1] <= SPLICE_MAX_SHARE * (double)cnt[2]);
   if (ok) {
-    PA_CALL(patch_marks(it, r, &cnt[0]));
-    PA_CALL(pa__allreduce(dm->comm, cnt, 2, MPI_INT64_T, MPI_SUM));
-    ok = sw > 0 || (double)cnt[0] <= SPLICE_MAX_SHARE * (double)cnt[1];
+    PA_CALL(patch_marks(it, r, &cnt[1]));
+    PA_CALL(pa__allreduce(dm->comm, &cnt[1], 1, MPI_INT64_T, MPI_SUM));
+    ok = sw > 0 || (double)cnt[1] <= SPLICE_MAX_SHARE * (double)cnt[2];
   }
   r->splice = ok;
-  if (it->rank == 0 && cnt[0] > 0)
-    pa__info(2, "padapt: reintegrate: %s (a part of %lld elements, %lld "
-                "before)\n", ok ? "splice" : "rebuild", (long long)cnt[0],
-             (long long)cnt[1]);
+  if (it->rank == 0 && cnt[0] == it->size)
+    pa__info(2, "padapt: reintegrate: %s (a part of %s%lld elements, %lld "
+                "before)\n", ok ? "splice" : "rebuild", r->collar ? "" : "over ",
+             (long long)cnt[1], (long long)cnt[2]);
 cleanup:
   return st;
 }

@@ -316,10 +316,10 @@ pa_status pa__dmesh_splice(pa_dmesh *dm,
   korder o[PA_DMESH_NKIND];
   pa_mesh *m = dm->mesh;
   memset(o, 0, sizeof o);
-  PA_CHECK(dm->overlap == 0 && part->overlap == 0 && pa__dmesh_canonical(dm) &&
-               pa__dmesh_canonical(part) && part->nvalue == dm->nvalue,
-           PA_ERR_INTERNAL, "splice: ghost layers, a reordered mesh or other "
-           "values");
+  PA_CHECK(dm->overlap == 0 && part->overlap == 0 &&
+               part->nvalue == dm->nvalue,
+           PA_ERR_INTERNAL, "splice: ghost layers or other values");
+  PA_ASSERT(pa__dmesh_canonical(dm) && pa__dmesh_canonical(part));
   pa__dmesh_invalidate(dm);
   pa__mesh_invalidate(m);
   /* the new order of every kind, then the arrays kind by kind (vertices
