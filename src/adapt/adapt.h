@@ -248,8 +248,10 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
  * local pieces rolled back. */
 pa_status pa__adapt_remesh(pa__iter *it, int *nfail);
 
-/* Step 5. Collective: rebuild dm from the staying entities and the outputs.
- * done: the element value marking produced elements (set to 1 on them). */
+/* Step 5. Collective: rebuild dm from the staying entities and the outputs
+ * (or, when little changes, splice in a part rebuilt from the outputs and
+ * what touches them: the same result). done: the element value marking
+ * produced elements (set to 1 on them). */
 pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done);
 
 /* Bytes of the payload of a new entity of a kind and reference: zero for

@@ -36,6 +36,16 @@
  * rank's elements will contain (fresh ones of outputs that stay here, kept ones
  * far from every piece and rank interface) go to the rebuild as private
  * (pa__dmesh_build_priv).
+ *
+ * Splice: when the elements to rebuild are few (SPLICE_MAX_SHARE), with
+ * overlap 0 and the numbering a build leaves, the same records are made
+ * only for the part of the mesh that changes -- the outputs, the staying
+ * elements with a vertex that a labelled element contains on some rank
+ * (touched), the touched entities that stay and the other vertices of
+ * those elements -- and the part, built on its own, is spliced into dm
+ * (pa__dmesh_splice): every element around a touched entity is in the
+ * part, so its owners and ghosts are right, and every other entity stays
+ * as it is. Same result as the rebuild, array by array.
  */
 #include "adapt/adapt.h"
 
@@ -1125,7 +1135,9 @@ cleanup:
  * piece, the boundary entities and edges its output gives (bemit, demit);
  * the records of the rebuild (R; Rp: the private vertices) and their
  * layout; per kind, the largest id in use (base), the fresh ids this rank
- * needs (cnt) and its first one (off); a payload buffer. */
+ * needs (cnt) and its first one (off); a payload buffer; whether the mesh
+ * is spliced rather than rebuilt (splice) and then what changes
+ * (patch_marks). */
 typedef struct reint {
   uint8_t *keep, *kv, *kb, *kd, *vpriv;
   uint8_t **bemit, **demit;
@@ -1133,6 +1145,8 @@ typedef struct reint {
   pa__layout lay;
   pa_gid base[PA_DMESH_NKIND], cnt[PA_DMESH_NKIND], off[PA_DMESH_NKIND];
   unsigned char *pay;
+  uint8_t *vtouch, *collar, *ugive, *btouch, *dtouch;
+  int splice;
 } reint;
 
 /* Free the flags and the payload buffer (before the rebuild, which they
@@ -1144,7 +1158,13 @@ static void reint_free_flags(reint *r) {
   pa__free(r->kb);
   pa__free(r->kd);
   pa__free(r->pay);
+  pa__free(r->vtouch);
+  pa__free(r->collar);
+  pa__free(r->ugive);
+  pa__free(r->btouch);
+  pa__free(r->dtouch);
   r->keep = r->vpriv = r->kv = r->kb = r->kd = NULL;
+  r->vtouch = r->collar = r->ugive = r->btouch = r->dtouch = NULL;
   r->pay = NULL;
 }
 
@@ -1213,19 +1233,16 @@ cleanup:
   return st;
 }
 
-/* Step 4: the records of the staying owned entities, straight from the
- * local arrays, with room for every output record (no regrowth); the kept
- * vertices that can be private go to Rp. */
-static pa_status staying_records(pa__iter *it, reint *r) {
-  pa_status st = PA_SUCCESS;
-  pa_dmesh *dm = it->dm;
-  size_t add[PA_DMESH_NKIND] = {0, 0, 0, 0};
-  const uint8_t *kk[PA_DMESH_NKIND];
-  pa__dmesh_layout(dm, &r->lay);
-  kk[PA_VERTEX] = r->kv;
-  kk[PA_ELEMENT] = r->keep;
-  kk[PA_BOUNDARY] = r->kb;
-  kk[PA_EDGE] = r->kd;
+/* The elements of every local output (added to *n). */
+static void output_counts_elements(const pa__iter *it, pa_gid *n) {
+  for (int q = 0; q < it->npiece_local; q++)
+    if (it->pieces[q].out) *n += it->pieces[q].out->ne;
+}
+
+/* The entities of every local output, per kind (room for their
+ * records). */
+static void output_counts(const pa__iter *it, size_t *add) {
+  for (int k = 0; k < PA_DMESH_NKIND; k++) add[k] = 0;
   for (int q = 0; q < it->npiece_local; q++) {
     const pa_mesh *o = it->pieces[q].out;
     if (!o) continue;
@@ -1234,11 +1251,202 @@ static pa_status staying_records(pa__iter *it, reint *r) {
     add[PA_BOUNDARY] += (size_t)o->nb;
     add[PA_EDGE] += (size_t)o->ned;
   }
+}
+
+/* Step 4 (rebuild): the records of the staying owned entities, straight
+ * from the local arrays, with room for every output record (no regrowth);
+ * the kept vertices that can be private go to Rp. */
+static pa_status staying_records(pa__iter *it, reint *r) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  size_t add[PA_DMESH_NKIND];
+  const uint8_t *kk[PA_DMESH_NKIND];
+  pa__dmesh_layout(dm, &r->lay);
+  kk[PA_VERTEX] = r->kv;
+  kk[PA_ELEMENT] = r->keep;
+  kk[PA_BOUNDARY] = r->kb;
+  kk[PA_EDGE] = r->kd;
+  output_counts(it, add);
   PA_CALL(private_kept(it, r->kv, &r->vpriv));
   PA_CALL(pa__dmesh_kept_recs(dm, kk, add, &r->R[PA_ELEMENT], &r->R[PA_VERTEX],
                               &r->R[PA_BOUNDARY], &r->R[PA_EDGE], r->vpriv,
                               &r->Rp));
 cleanup:
+  return st;
+}
+
+/* The debug switch of the reintegration, read here only: the environment
+ * variable PADAPT_REINTEGRATE=rebuild forces the rebuild from records,
+ * =splice the splice wherever it applies, whatever the share of the mesh
+ * that changes (tests compare the two on the same runs). Returns -1, 1 or
+ * 0 (unset). */
+static int reintegrate_switch(void) {
+  const char *e = getenv("PADAPT_REINTEGRATE");
+  if (e && !strcmp(e, "rebuild")) return -1;
+  if (e && !strcmp(e, "splice")) return 1;
+  return 0;
+}
+
+/* The splice is chosen when the elements rebuilt (the outputs and the
+ * collar) are at most this share of all the elements: its part build then
+ * holds fewer records than the whole rebuild would, while the old mesh
+ * stays (the peak stays below the rebuild's), and the copy of the kept
+ * arrays costs less than their records. */
+#define SPLICE_MAX_SHARE 0.25
+
+/* Step 4 (splice): what changes (see splice.c): the vertices in a
+ * labelled element on any rank (vtouch, every local one: it->vlab), the
+ * staying owned elements with such a vertex (collar), the local boundary
+ * entities and edges with such a vertex (btouch, dtouch), and the owned
+ * vertices not touched that a collar element contains on some rank
+ * (ugive: MAX reduction). *npatch: the elements the part will hold here
+ * (the collar and the elements of the local outputs). touch_marks makes
+ * the local marks, and incollar[v] for the local vertices (1: in a collar
+ * element here). */
+static pa_status touch_marks(pa__iter *it, reint *r, int *incollar,
+                             pa_gid *npatch) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  const pa_mesh *m = dm->mesh;
+  pa_idx nv = dm->nloc[PA_VERTEX];
+  PA_ALLOC(r->vtouch, nv);
+  for (pa_idx v = 0; v < nv; v++) {
+    r->vtouch[v] = it->vlab[4 * v] != PA_ADAPT_NOLABEL;
+    incollar[v] = 0;
+  }
+  PA_CALLOC(r->collar, it->ne);
+  *npatch = 0;
+  for (pa_idx e = 0; e < it->ne; e++) {
+    const pa_idx *ev = m->elem + (size_t)it->nve * e;
+    for (int k = 0; r->keep[e] && k < it->nve; k++)
+      r->collar[e] |= r->vtouch[ev[k]];
+    for (int k = 0; r->collar[e] && k < it->nve; k++) incollar[ev[k]] = 1;
+    *npatch += r->collar[e];
+  }
+  output_counts_elements(it, npatch);
+  for (int t = 0; t < 2; t++) {
+    int kind = t ? PA_EDGE : PA_BOUNDARY, nvk = pa__kind_nv(it->dim, kind);
+    const pa_idx *conn = t ? m->edge : m->bdry;
+    uint8_t **out = t ? &r->dtouch : &r->btouch;
+    PA_CALLOC(*out, dm->nloc[kind]);
+    for (pa_idx b = 0; b < dm->nloc[kind]; b++)
+      for (int k = 0; k < nvk; k++)
+        (*out)[b] |= r->vtouch[conn[(size_t)nvk * b + k]];
+  }
+cleanup:
+  return st;
+}
+
+static pa_status patch_marks(pa__iter *it, reint *r, pa_gid *npatch) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  pa_dmesh_value *val = NULL;
+  PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.adapt.collar", MPI_INT, 1, -1,
+                             &val));
+  st = touch_marks(it, r, pa_dmesh_value_data(val, NULL, NULL), npatch);
+  PA_CALL(pa__agree(dm->comm, st));
+  PA_CALL(pa_dmesh_reduce(dm, val, MPI_MAX));
+  {
+    const int *x = pa_dmesh_value_data(val, NULL, NULL);
+    PA_ALLOC(r->ugive, dm->nown[PA_VERTEX]);
+    for (pa_idx v = 0; v < dm->nown[PA_VERTEX]; v++)
+      r->ugive[v] = (uint8_t)(!r->vtouch[v] && x[v]);
+  }
+cleanup:
+  st = pa__dmesh_value_drop(dm, val, pa__agree_end(dm->comm, st));
+  return st;
+}
+
+/* Whether the mesh is spliced (pa__dmesh_splice) rather than rebuilt,
+ * agreed over the ranks: with no ghost elements and the numbering a build
+ * leaves, when the elements rebuilt are at most SPLICE_MAX_SHARE of all
+ * (or the switch says so); the patch marks are made then. */
+static pa_status choose_splice(pa__iter *it, reint *r) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  int sw = reintegrate_switch();
+  /* ok, then the elements of the outputs (a lower bound of the part's,
+   * which saves the marks when already too many) and before */
+  pa_gid cnt[3] = {sw >= 0 && dm->overlap == 0 && pa__dmesh_canonical(dm), 0,
+                   dm->nown[PA_ELEMENT]};
+  output_counts_elements(it, &cnt[1]);
+  PA_CALL(pa__allreduce(dm->comm, cnt, 3, MPI_INT64_T, MPI_SUM));
+  int ok = cnt[0] == it->size &&
+           (sw > 0 || (double)cnt[1] <= SPLICE_MAX_SHARE * (double)cnt[2]);
+  if (ok) {
+    PA_CALL(patch_marks(it, r, &cnt[1]));
+    PA_CALL(pa__allreduce(dm->comm, &cnt[1], 1, MPI_INT64_T, MPI_SUM));
+    ok = sw > 0 || (double)cnt[1] <= SPLICE_MAX_SHARE * (double)cnt[2];
+  }
+  r->splice = ok;
+  if (it->rank == 0 && cnt[0] == it->size)
+    pa__info(2, "padapt: reintegrate: %s (a part of %s%lld elements, %lld "
+                "before)\n", ok ? "splice" : "rebuild", r->collar ? "" : "over ",
+             (long long)cnt[1], (long long)cnt[2]);
+cleanup:
+  return st;
+}
+
+/* Step 4 (splice): the records of the part: the collar elements, the
+ * touched vertices, boundary entities and edges that stay and the vertices
+ * of the collar that are not touched (ugive; private when no other rank
+ * has them), with room for every output record. */
+static pa_status patch_records(pa__iter *it, reint *r) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  size_t add[PA_DMESH_NKIND];
+  const uint8_t *kk[PA_DMESH_NKIND];
+  const pa__sf *sf = &dm->sf[PA_VERTEX];
+  pa__dmesh_layout(dm, &r->lay);
+  output_counts(it, add);
+  /* the kept flags narrowed to the part */
+  for (pa_idx v = 0; v < dm->nown[PA_VERTEX]; v++)
+    r->kv[v] = (uint8_t)((r->kv[v] && r->vtouch[v]) || r->ugive[v]);
+  for (pa_idx b = 0; b < dm->nown[PA_BOUNDARY]; b++)
+    r->kb[b] = (uint8_t)(r->kb[b] && r->btouch[b]);
+  for (pa_idx b = 0; b < dm->nown[PA_EDGE]; b++)
+    r->kd[b] = (uint8_t)(r->kd[b] && r->dtouch[b]);
+  PA_ALLOC(r->vpriv, dm->nown[PA_VERTEX]);
+  memcpy(r->vpriv, r->ugive, dm->nown[PA_VERTEX]);
+  for (pa_idx q = 0; sf->rootoff && q < sf->rootoff[sf->nrootrank]; q++)
+    r->vpriv[sf->rootidx[q]] = 0; /* copies on other ranks */
+  kk[PA_VERTEX] = r->kv;
+  kk[PA_ELEMENT] = r->collar;
+  kk[PA_BOUNDARY] = r->kb;
+  kk[PA_EDGE] = r->kd;
+  PA_CALL(pa__dmesh_kept_recs(dm, kk, add, &r->R[PA_ELEMENT], &r->R[PA_VERTEX],
+                              &r->R[PA_BOUNDARY], &r->R[PA_EDGE], r->vpriv,
+                              &r->Rp));
+cleanup:
+  return st;
+}
+
+/* Step 7 (splice): the part built from the records, then spliced in: what
+ * stays of dm is the vertices, boundary entities and edges not touched and
+ * the staying elements out of the collar. */
+static pa_status splice_part(pa__iter *it, reint *r) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm, *part = NULL;
+  const uint8_t *keep[PA_DMESH_NKIND];
+  PA_CALL(pa__dmesh_create(dm->comm, dm->dim, &part));
+  st = pa__dmesh_values_like(part, dm);
+  PA_CALL(pa__agree(dm->comm, st));
+  PA_CALL(pa__dmesh_build_priv(part, &r->lay, 0, &r->R[PA_ELEMENT],
+                               &r->R[PA_VERTEX], &r->R[PA_BOUNDARY],
+                               &r->R[PA_EDGE], &r->Rp));
+  /* the marks turn into what stays of dm */
+  for (pa_idx v = 0; v < dm->nloc[PA_VERTEX]; v++) r->vtouch[v] = !r->vtouch[v];
+  for (pa_idx e = 0; e < dm->nown[PA_ELEMENT]; e++)
+    r->collar[e] = (uint8_t)(r->keep[e] && !r->collar[e]);
+  for (pa_idx b = 0; b < dm->nloc[PA_BOUNDARY]; b++) r->btouch[b] = !r->btouch[b];
+  for (pa_idx b = 0; b < dm->nloc[PA_EDGE]; b++) r->dtouch[b] = !r->dtouch[b];
+  keep[PA_VERTEX] = r->vtouch;
+  keep[PA_ELEMENT] = r->collar;
+  keep[PA_BOUNDARY] = r->btouch;
+  keep[PA_EDGE] = r->dtouch;
+  PA_CALL(pa__dmesh_splice(dm, keep, part));
+cleanup:
+  pa_dmesh_destroy(part);
   return st;
 }
 
@@ -1302,20 +1510,27 @@ pa_status pa__adapt_reintegrate(pa__iter *it, pa_dmesh_value *done) {
   PA_CALL(staying_elements(it, &r));
   PA_CALL(kept_entities(it, &r));
   PA_CALL(count_fresh(it, &r));
-  PA_CALL(staying_records(it, &r));
   PA_CALL(fresh_ids(it, &r));
+  PA_CALL(choose_splice(it, &r));
+  PA_CALL(r.splice ? patch_records(it, &r) : staying_records(it, &r));
   PA_CALL(outputs_to_records(it, &r, done));
-  /* 7. rebuild: what the records replace goes first */
   PA_CALL(pa__agree(dm->comm, st));
   pa__iter_release_elements(it);
-  reint_free_flags(&r);
-  pa__dmesh_clear(dm);
-  t1 = pa_wtime();
-  PA_CALL(pa__dmesh_build_priv(dm, &r.lay, dm->overlap, &r.R[PA_ELEMENT],
-                               &r.R[PA_VERTEX], &r.R[PA_BOUNDARY],
-                               &r.R[PA_EDGE], &r.Rp));
-  pa__info(2, "padapt: rank %d: reintegrate: records %.3f s, build %.3f s\n",
-           it->rank, t1 - t0, pa_wtime() - t1);
+  if (r.splice) {
+    /* 7. splice: a part rebuilt from the records, put in place */
+    t1 = pa_wtime();
+    PA_CALL(splice_part(it, &r));
+  } else {
+    /* 7. rebuild: what the records replace goes first */
+    reint_free_flags(&r);
+    pa__dmesh_clear(dm);
+    t1 = pa_wtime();
+    PA_CALL(pa__dmesh_build_priv(dm, &r.lay, dm->overlap, &r.R[PA_ELEMENT],
+                                 &r.R[PA_VERTEX], &r.R[PA_BOUNDARY],
+                                 &r.R[PA_EDGE], &r.Rp));
+  }
+  pa__info(2, "padapt: rank %d: reintegrate: records %.3f s, %s %.3f s\n",
+           it->rank, t1 - t0, r.splice ? "splice" : "build", pa_wtime() - t1);
 cleanup:
   st = pa__agree_end(dm->comm, st);
   for (int k = 0; k < PA_DMESH_NKIND; k++) pa__recs_free(&r.R[k]);

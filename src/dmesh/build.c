@@ -1529,9 +1529,7 @@ cleanup:
   return st;
 }
 
-/* The neighbour ranks: those at the other end of any star forest, in
- * increasing order. */
-static pa_status neighbour_ranks(pa_dmesh *dm) {
+pa_status pa__dmesh_neighbours(pa_dmesh *dm) {
   pa_status st = PA_SUCCESS;
   uint8_t *mark = NULL;
   int nn = 0;
@@ -1590,7 +1588,7 @@ pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
   for (int k = 0; k < PA_DMESH_NKIND; k++)
     PA_CALL(pa__sf_build(dm->comm, dm->nloc[k], dm->gid[k], dm->owner[k],
                          &dm->sf[k]));
-  PA_CALL(neighbour_ranks(dm));
+  PA_CALL(pa__dmesh_neighbours(dm));
   for (int k = 0; k < dm->nvalue; k++)
     PA_CALL(pa__value_setup(dm, dm->value[k]));
   pa__info(2, "padapt: dmesh build: migrate %.3f s, directory+ghosts %.3f s, "

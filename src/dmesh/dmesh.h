@@ -248,6 +248,10 @@ pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
                                pa__recs *bdry, pa__recs *edges,
                                pa__recs *priv);
 
+/* Local: dm->neigh, dm->nneigh: the ranks at the other end of any star
+ * forest, in increasing order (dm->neigh must be free). */
+pa_status pa__dmesh_neighbours(pa_dmesh *dm);
+
 /* Collective: fail with PA_ERR_FORMAT naming the first global id given
  * twice over the ranks (what: "element", ...). */
 pa_status pa__gids_unique(MPI_Comm comm, size_t n, const pa_gid *gid,
@@ -358,5 +362,28 @@ pa_status pa__dmesh_kept_recs(pa_dmesh *dm,
                               const size_t extra[PA_DMESH_NKIND], pa__recs *E,
                               pa__recs *V, pa__recs *B, pa__recs *D,
                               const uint8_t *vpriv, pa__recs *P);
+
+/* ---- in-place change (splice.c) ---- */
+
+/* Local: 1 if dm has the local numbering a build leaves (each kind owned
+ * first, then ghosts, each part in increasing global id order; no ghost
+ * element layer), which pa__dmesh_splice needs. */
+int pa__dmesh_canonical(const pa_dmesh *dm);
+
+/* Collective: change dm in place: the local entities with keep[kind][i]
+ * (over the nloc local ones) stay, the others go, and the entities of part
+ * (a distributed mesh on the same ranks, as pa__dmesh_build leaves it, with
+ * the values of dm: pa__dmesh_values_like) join, but for the part's copies
+ * of vertices dm keeps. Needs overlap 0 and pa__dmesh_canonical on both.
+ * The caller guarantees what splice.c states; the result is what
+ * pa__dmesh_build gives from the records of the kept entities and the
+ * part's. part is left as it was. */
+pa_status pa__dmesh_splice(pa_dmesh *dm,
+                           const uint8_t *const keep[PA_DMESH_NKIND],
+                           const pa_dmesh *part);
+/* Local: define in dm (no distribution yet) the values of like (same
+ * names, kinds, types, components, filters; types borrowed: like must
+ * outlive dm). */
+pa_status pa__dmesh_values_like(pa_dmesh *dm, const pa_dmesh *like);
 
 #endif /* PA_DMESH_H */
