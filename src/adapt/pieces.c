@@ -177,8 +177,9 @@ cleanup:
 /* Step 1: the number of pieces (the same on every rank: from global
  * figures). A piece must be worth an iteration: at least min_piece_work,
  * and at least min_piece_ratio of the mean number of elements per rank
- * (each iteration rebuilds the whole distributed mesh, so splitting a
- * small tagged set costs more iterations than it saves). */
+ * (each iteration passes over the whole local mesh, in its tag, pieces
+ * and reintegration, and the skins between pieces of a small tagged set
+ * are tagged again: splitting it costs more iterations than it saves). */
 static void count_pieces(pa__iter *it, int npieces_max, double wsum) {
   const pa_adapt_opts *o = it->opts;
   double np = npieces_max;
