@@ -73,13 +73,10 @@ static int claim_cmp(const void *x, const void *y) {
   return (a->rank_cand > b->rank_cand) - (a->rank_cand < b->rank_cand);
 }
 
-/* Claims spanning at most CLAIM_SPAN_PER_CLAIM global ids per claim are
- * sorted by counting (a rendezvous rank receives a block of consecutive
- * global ids): fewer instructions than qsort, and no scratch from malloc. */
-#define CLAIM_SPAN_PER_CLAIM 3
-
-/* Sort the claims it[0..n) by (gid, rank_cand) into *sorted (it itself, or
- * a new array that replaces it; the caller frees both). The claims arrive
+/* Sort the claims it[0..n) by (gid, rank_cand) into *sorted (it itself,
+ * or a new array that replaces it; the caller frees both): by counting
+ * when their ids allow it (a rendezvous rank receives a block of
+ * consecutive ids: pa__gid_span_countable), else by qsort. The claims arrive
  * by sending rank and a rank claims a gid once, so a stable sort by gid
  * orders each gid's claims by rank_cand. */
 static pa_status sort_claims(claim *it, size_t n, claim **sorted) {
@@ -94,8 +91,7 @@ static pa_status sort_claims(claim *it, size_t n, claim **sorted) {
     hi = it[i].gid > hi ? it[i].gid : hi;
   }
   size_t span = (size_t)(hi - lo) + 1;
-  if ((uint64_t)(hi - lo) >= (uint64_t)CLAIM_SPAN_PER_CLAIM * n ||
-      (uint64_t)CLAIM_SPAN_PER_CLAIM * n >= (uint64_t)INT32_MAX) {
+  if (!pa__gid_span_countable(lo, hi, n)) {
     qsort(it, n, sizeof *it, claim_cmp);
     return PA_SUCCESS;
   }

@@ -190,15 +190,19 @@ size_t pa__gid_sort_unique(pa_gid *a, size_t n) {
   return m;
 }
 
-/* Keys spanning at most COUNT_SPAN_PER_KEY times their number are sorted
- * by counting (one count per key value, 4 bytes each): the global ids of a
- * gathered mesh span little more than their count, and the counts and the
- * sorted copy touch 8-20 bytes per key where the radix sort's pairs and
- * their copy touch 32 (fresh pages cost more than the sort itself). */
+/* The global ids of a gathered mesh span little more than their count:
+ * sorted by counting (one count per id value, 4 bytes each), the counts
+ * and the sorted copy touch 8-20 bytes per key where the radix sort's
+ * pairs and their copy touch 32 (fresh pages cost more than the sort). */
 #define COUNT_SPAN_PER_KEY 3
 
+int pa__gid_span_countable(pa_gid lo, pa_gid hi, size_t n) {
+  return (uint64_t)(hi - lo) < (uint64_t)COUNT_SPAN_PER_KEY * n &&
+         (uint64_t)COUNT_SPAN_PER_KEY * n < (uint64_t)INT32_MAX;
+}
+
 /* Stable counting sort of idx by key over [lo, lo + span); the caller
- * checked span <= COUNT_SPAN_PER_KEY * n < 2^31. */
+ * checked pa__gid_span_countable. */
 static pa_status counting_sort(pa_idx *idx, size_t n, const pa_gid *key,
                                pa_gid lo, size_t span) {
   pa_status st = PA_SUCCESS;
@@ -227,8 +231,7 @@ pa_status pa__sort_by_gid(pa_idx *idx, size_t n, const pa_gid *key) {
     lo = k < lo ? k : lo;
     hi = k > hi ? k : hi;
   }
-  if ((uint64_t)(hi - lo) < (uint64_t)COUNT_SPAN_PER_KEY * n &&
-      (uint64_t)COUNT_SPAN_PER_KEY * n < (uint64_t)INT32_MAX)
+  if (pa__gid_span_countable(lo, hi, n))
     return counting_sort(idx, n, key, lo, (size_t)(hi - lo) + 1);
   PA_ALLOC(p, n);
   for (size_t i = 0; i < n; i++) {

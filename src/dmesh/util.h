@@ -125,5 +125,9 @@ static inline void pa__get(const unsigned char *p, size_t *pos, void *x,
 size_t pa__gid_sort_unique(pa_gid *a, size_t n);
 /* Sort idx[0..n) so that key[idx[i]] is ascending (stable). */
 pa_status pa__sort_by_gid(pa_idx *idx, size_t n, const pa_gid *key);
+/* 1 if n global ids in [lo, hi] span little enough (at most 3 values per
+ * id, and a count array below 2^31) for a counting sort to pay: its counts
+ * touch fewer fresh pages than a comparison or radix sort. */
+int pa__gid_span_countable(pa_gid lo, pa_gid hi, size_t n);
 
 #endif /* PA_DMESH_UTIL_H */
