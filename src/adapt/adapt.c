@@ -268,7 +268,8 @@ static pa_status tag_step(pa__iter *it, pa_dmesh_value *done, pa__loop *L,
   const pa_adapt_opts *opts = it->opts;
   pa_adapt_report *rep = &L->rep;
   int iter = it->iter;
-  PA_CALL(pa__adapt_tag(it, done, iter == 1));
+  PA_CALL(pa__adapt_tag(it, done, !L->tagged));
+  L->tagged = 1;
   t[0] = pa_wtime() - t0;
   t[5] = (double)pa__memory_window_peak();
   report_progress(it->dm, opts, iter, it->ntagged, L);

@@ -73,6 +73,14 @@
 #define PA_ADAPT_DONE_NEAR_SKIN 2
 #define PA_ADAPT_DONE_ON_SKIN 3
 #define PA_ADAPT_DONE_FREE 4
+/* The values above sit in the low bits of the done value (PA_ADAPT_DONE_KIND);
+ * the high bit PA_ADAPT_DONE_PASSED marks an element that passed the last tag
+ * and has not changed since: the tag skips it. Only the remesh of a piece
+ * changes an element (the skin edges bisect.c refines lie in no staying
+ * element), and reintegrate.c gives every element of a piece a fresh value,
+ * without the bit. */
+#define PA_ADAPT_DONE_KIND 0x7f
+#define PA_ADAPT_DONE_PASSED 0x80
 /* Name of the element value marking elements produced in this run. */
 #define PA_ADAPT_DONE_VALUE "pa.adapt.done"
 /* Reference of the artificial boundary entities of a piece's outer surface. */
@@ -182,6 +190,8 @@ typedef struct pa__loop {
   /* for the progress callback, set by each call (not checkpointed) */
   double t0;           /* when this call started */
   double expected;     /* the metric's estimate of the final element count */
+  int tagged;          /* 1 once this call has tagged: the done values'
+                          PA_ADAPT_DONE_PASSED bits are this call's */
 } pa__loop;
 
 /* Collective: write the checkpoint of the loop after L->iter iterations in
@@ -222,8 +232,11 @@ void pa__adapt_metric_ctx(pa_dmesh *dm, pa__metric_ctx *c);
 
 /* Step 1. Collective: tag the owned elements (it->tag), count them
  * (it->ntagged, global) and estimate their work (it->work). done: the
- * element value marking elements produced in this run (never tagged). */
-pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int first);
+ * element value marking elements produced in this run; the elements that
+ * pass get its PA_ADAPT_DONE_PASSED bit, and those that have it are skipped
+ * unless fresh (the first tag of a call: the bits of a checkpoint are not
+ * trusted). */
+pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int fresh);
 /* *missed (all ranks): the tagged elements clearly off (an edge of 2.5 or
  * more, a quality below 0.05; tag.c). Collective; after pa__adapt_tag. */
 pa_status pa__adapt_count_missed(pa__iter *it, pa_gid *missed);

@@ -16,7 +16,10 @@
  * function of the element's own data, so it is the same whatever the
  * distribution. The work is computed only for the tagged elements (-1 for
  * the others); extract.c computes it for the untagged skin elements it
- * needs.
+ * needs. An element that passed the last tag and has not changed since
+ * (PA_ADAPT_DONE_PASSED, adapt.h) is not measured again: after the first
+ * iteration a tag costs what the last remesh changed (debug builds measure
+ * it all the same and check that it still passes).
  */
 #include "adapt/adapt.h"
 
@@ -131,14 +134,27 @@ static int bad_edge(const pa_mesh *m, pa_idx e, double lo, double hi) {
   return 0;
 }
 
-pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int first) {
+/* 1 if element e, of done value kind dn (without PA_ADAPT_DONE_PASSED), is
+ * to be remeshed. */
+static int tagged(const pa_mesh *m, const pa_adapt_opts *o, pa_idx e,
+                  uint8_t dn) {
+  int t = !dn && (m->eflag[e] & PA_FLAG_USER) != 0;
+  if (!t && !o->user_tags_only) {
+    double lo, hi, qmin;
+    criteria(dn, o->qual_threshold, &lo, &hi, &qmin);
+    t = bad_edge(m, e, lo, hi);
+    if (!t && qmin > 0) t = elem_quality(m, e) < qmin;
+  }
+  return t;
+}
+
+pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int fresh) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
   const pa_mesh *m = dm->mesh;
   const pa_adapt_opts *o = it->opts;
-  const uint8_t *dn = pa_dmesh_value_data(done, NULL, NULL);
+  uint8_t *dn = pa_dmesh_value_data(done, NULL, NULL);
   double x[2] = {0, 0};
-  (void)first;
   it->ne = dm->nown[PA_ELEMENT];
   PA_CALLOC(it->tag, it->ne);
   PA_ALLOC(it->work, it->ne);
@@ -147,14 +163,19 @@ pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int first) {
      * piece's skin (extract.c computes it then) */
     it->work[e] = -1;
     if (m->eflag[e] & PA_FLAG_REQUIRED) continue;
-    if (dn[e] && o->user_tags_only) continue;
-    int t = !dn[e] && (m->eflag[e] & PA_FLAG_USER) != 0;
-    if (!t && !o->user_tags_only) {
-      double lo, hi, qmin;
-      criteria(dn[e], o->qual_threshold, &lo, &hi, &qmin);
-      t = bad_edge(m, e, lo, hi);
-      if (!t && qmin > 0) t = elem_quality(m, e) < qmin;
+    uint8_t kind = dn[e] & PA_ADAPT_DONE_KIND;
+    if (kind && o->user_tags_only) continue;
+    if (!fresh && (dn[e] & PA_ADAPT_DONE_PASSED)) {
+#ifndef NDEBUG
+      PA_CHECK(!tagged(m, o, e, kind), PA_ERR_INTERNAL,
+               "tag: element %lld passed the last tag, has not changed "
+               "since, and fails it now",
+               (long long)dm->gid[PA_ELEMENT][e]);
+#endif
+      continue;
     }
+    int t = tagged(m, o, e, kind);
+    dn[e] = t ? kind : kind | PA_ADAPT_DONE_PASSED;
     it->tag[e] = (uint8_t)t;
     if (t) it->work[e] = pa__elem_work(m, e);
     x[0] += t;
