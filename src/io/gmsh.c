@@ -1530,8 +1530,8 @@ static void wr_f64(writer *b, double x) {
   wr_sep(b);
   /* The shorter form when it reads back exactly, else 17 digits: exact. */
   char *p = b->buf + b->len;
-  int n = snprintf(p, 32, "%.15g", x);
-  if (strtod(p, NULL) != x) n = snprintf(p, 32, "%.17g", x);
+  int n = pa__fmt_g(p, x, 15);
+  if (strtod(p, NULL) != x) n = pa__fmt_g(p, x, 17);
   b->len += (size_t)n;
 }
 

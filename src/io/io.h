@@ -62,6 +62,10 @@ pa_status pa__file_fnv1a64(const char *path, int64_t *bytes, uint64_t *hash);
 /* Lower-case extension of path including the dot (".mesh"), "" if none. */
 const char *pa__path_ext(const char *path, char *buf, size_t len);
 
+/* x in the form of printf's "%.*g" with precision prec into s (room for 32
+ * chars), the same bytes as snprintf; its length. fmt.c. */
+int pa__fmt_g(char *s, double x, int prec);
+
 /* Format readers/writers, dispatched by pa_mesh_read/pa_mesh_write. */
 pa_status pa__medit_read(const char *path, pa_mesh **mesh);
 pa_status pa__medit_write(pa_mesh *mesh, const char *path, int binary,

@@ -61,8 +61,12 @@ static pa_mesh *random_mesh(int dim, pa_idx nv, pa_idx ne, pa_idx nb,
       x[k] = pa_test_rand_range(-1e3, 1e3);
     if (i == 0) x[0] = 0.1; /* not exact in binary */
     if (i == 1) x[dim - 1] = -0.0;
-    CHECK_OK(
-        pa_mesh_add_vertex(m, x, (int32_t)(pa_test_rand() * 20) - 5, NULL));
+    /* references of every length and sign, both ends of int32 included */
+    int32_t ref = (int32_t)((pa_test_rand() - 0.5) * 4e9) /
+                  (int32_t)(1 + pa_test_rand() * 1e6);
+    if (i == 2) ref = INT32_MIN;
+    if (i == 3) ref = INT32_MAX;
+    CHECK_OK(pa_mesh_add_vertex(m, x, ref, NULL));
   }
   pa_idx v[4];
   for (pa_idx e = 0; e < ne; e++) {

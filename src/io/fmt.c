@@ -1,0 +1,165 @@
+/*
+ * fmt.c -- pa__fmt_g: a double in printf's "%.*g" form, the same bytes as
+ * snprintf, about ten times faster for the values a mesh holds.
+ *
+ * |x| = m 2^e exactly (m < 2^53). With E the decimal exponent of x's first
+ * digit and p = prec - 1 - E, the prec significant digits are the integer
+ * N = round(m 5^p 2^(e+p)), rounded half to even as glibc does in the
+ * default rounding mode: for 0 <= p <= 27, m 5^p < 2^116 holds in 128 bits
+ * and the power of two is a shift whose remainder decides the rounding
+ * exactly. That covers |x| from about 1e-11 to 1e17 at 17 digits; other
+ * values, zeros, infinities and NaN go to snprintf.
+ */
+#include "io/io.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+/* 5^27 < 2^63: the largest power of 5 that keeps m 5^p within 128 bits */
+#define FMT_P_MAX 27
+
+static const uint64_t pow10_u64[18] = {1ULL,
+                                       10ULL,
+                                       100ULL,
+                                       1000ULL,
+                                       10000ULL,
+                                       100000ULL,
+                                       1000000ULL,
+                                       10000000ULL,
+                                       100000000ULL,
+                                       1000000000ULL,
+                                       10000000000ULL,
+                                       100000000000ULL,
+                                       1000000000000ULL,
+                                       10000000000000ULL,
+                                       100000000000000ULL,
+                                       1000000000000000ULL,
+                                       10000000000000000ULL,
+                                       100000000000000000ULL};
+
+static const uint64_t pow5_u64[FMT_P_MAX + 1] = {
+    1ULL,
+    5ULL,
+    25ULL,
+    125ULL,
+    625ULL,
+    3125ULL,
+    15625ULL,
+    78125ULL,
+    390625ULL,
+    1953125ULL,
+    9765625ULL,
+    48828125ULL,
+    244140625ULL,
+    1220703125ULL,
+    6103515625ULL,
+    30517578125ULL,
+    152587890625ULL,
+    762939453125ULL,
+    3814697265625ULL,
+    19073486328125ULL,
+    95367431640625ULL,
+    476837158203125ULL,
+    2384185791015625ULL,
+    11920928955078125ULL,
+    59604644775390625ULL,
+    298023223876953125ULL,
+    1490116119384765625ULL,
+    7450580596923828125ULL};
+
+__extension__ typedef unsigned __int128 fmt_u128;
+
+/* N = round(m 5^p 2^sh) half to even into *n; 0 if it does not fit. */
+static int scaled(uint64_t m, int p, int sh, uint64_t *n) {
+  fmt_u128 v = (fmt_u128)m * pow5_u64[p];
+  if (sh >= 0) {
+    if (sh > 60 || (v >> (64 - sh)) != 0) return 0;
+    *n = (uint64_t)(v << sh);
+    return 1;
+  }
+  int r = -sh;
+  if (r > 120) return 0;
+  fmt_u128 q = v >> r, rem = v - (q << r), half = (fmt_u128)1 << (r - 1);
+  if (rem > half || (rem == half && (q & 1))) q++;
+  if (q >> 63) return 0;
+  *n = (uint64_t)q;
+  return 1;
+}
+
+/* The prec digits of n (zero-padded on the left) into d. */
+static void digits(uint64_t n, int prec, char *d) {
+  for (int i = prec - 1; i >= 0; i--) {
+    d[i] = (char)('0' + n % 10);
+    n /= 10;
+  }
+}
+
+int pa__fmt_g(char *s, double x, int prec) {
+  if (prec < 1 || prec > 17 || !isfinite(x) || x == 0)
+    return snprintf(s, 32, "%.*g", prec, x);
+  int e2;
+  double f = frexp(fabs(x), &e2); /* |x| = f 2^e2, f in [0.5, 1) */
+  uint64_t m = (uint64_t)ldexp(f, 53);
+  int e = e2 - 53;
+  int E = (int)floor(log10(fabs(x)));
+  uint64_t n = 0;
+  for (int tries = 0;; tries++) {
+    int p = prec - 1 - E;
+    if (tries > 2 || p < 0 || p > FMT_P_MAX || !scaled(m, p, e + p, &n))
+      return snprintf(s, 32, "%.*g", prec, x);
+    if (n >= pow10_u64[prec])
+      E++; /* log10 was low, or the rounding carried to 10^prec */
+    else if (n < pow10_u64[prec - 1])
+      E--;
+    else
+      break;
+  }
+  /* 10^(prec-1) may be x rounded up at the scale of a log10 one too high:
+   * one digit more of scale keeps prec digits when x is below 10^E */
+  if (n == pow10_u64[prec - 1]) {
+    uint64_t lower;
+    if (prec - E > FMT_P_MAX || !scaled(m, prec - E, e + prec - E, &lower))
+      return snprintf(s, 32, "%.*g", prec, x);
+    if (lower < pow10_u64[prec]) {
+      n = lower;
+      E--;
+    }
+  }
+  char d[17];
+  digits(n, prec, d);
+  int nd = prec; /* %g drops the trailing zeros of the fraction */
+  while (nd > 1 && d[nd - 1] == '0') nd--;
+  char *o = s;
+  if (x < 0) *o++ = '-';
+  if (E < -4 || E >= prec) { /* d.ddde+XX */
+    *o++ = d[0];
+    if (nd > 1) {
+      *o++ = '.';
+      memcpy(o, d + 1, (size_t)nd - 1);
+      o += nd - 1;
+    }
+    *o++ = 'e';
+    *o++ = E < 0 ? '-' : '+';
+    int a = E < 0 ? -E : E;
+    if (a >= 100) *o++ = (char)('0' + a / 100);
+    *o++ = (char)('0' + a / 10 % 10);
+    *o++ = (char)('0' + a % 10);
+  } else if (E >= 0) { /* ddd.ddd */
+    int ni = E + 1;
+    for (int i = 0; i < ni; i++) *o++ = i < nd ? d[i] : '0';
+    if (nd > ni) {
+      *o++ = '.';
+      memcpy(o, d + ni, (size_t)(nd - ni));
+      o += nd - ni;
+    }
+  } else { /* 0.000ddd */
+    *o++ = '0';
+    *o++ = '.';
+    for (int i = 0; i < -E - 1; i++) *o++ = '0';
+    memcpy(o, d, (size_t)nd);
+    o += nd;
+  }
+  *o = '\0';
+  return (int)(o - s);
+}
