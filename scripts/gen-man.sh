@@ -123,6 +123,11 @@ Set to 1 to run more ranks than cores with Open MPI.
 Open MPI's messaging layer and singleton mode. Unset, \fBpadapt\fR started
 without \fBmpiexec\fR runs as an isolated singleton with ob1, and ranks on one
 node use ob1; ranks on several nodes keep Open MPI's choice.
+.TP
+.B OMPI_MCA_orte_tmpdir_base
+Where Open MPI keeps its session directory. Unset, an isolated singleton
+makes its own under \fB$TMPDIR\fR (or /tmp), so that singletons started
+together do not share one, and removes it at the end.
 .SH EXAMPLES
 .nf
 padapt generate box3d 10 cube.mesh
