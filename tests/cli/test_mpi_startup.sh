@@ -39,8 +39,10 @@ for round in 1 2; do
   wait
   [ -s "round$round.txt" ] && nfail=$((nfail + 1)) && head -5 "round$round.txt"
 done
-[ "$nfail" -eq 0 ] && ok "80 concurrent singletons start"   || bad "concurrent singletons failed in $nfail of 2 rounds"
-[ -z "$(ls -A tmp)" ] && ok "no session directory left"   || { bad "session directories left"; ls -A tmp | head -3; }
+[ "$nfail" -eq 0 ] && ok "80 concurrent singletons start" \
+  || bad "concurrent singletons failed in $nfail of 2 rounds"
+[ -z "$(ls -A tmp)" ] && ok "no session directory left" \
+  || { bad "session directories left"; ls -A tmp | head -3; }
 
 OMPI_MCA_pml=no_such_pml "$MPIEXEC" -n 2 "$PADAPT" generate box3d 2 d.mesh > log4.txt 2>&1 \
   && bad "two ranks: the user's pml was overridden" \
