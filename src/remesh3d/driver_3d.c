@@ -302,6 +302,8 @@ pa_status pa__rm3d_swap_pass(rm3d *m, double qthr, double gain, long *count) {
   pa_status st = PA_SUCCESS;
   long c = 0;
   pa_idx ne0 = m->ne;
+  PA_CALLOC(m->swapfail, (size_t)ne0 + 1);
+  m->nswapfail = ne0;
   for (pa_idx k = 0; k < ne0; k++) {
     if ((m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN)) || m->q[k] >= qthr)
       continue;
@@ -316,6 +318,9 @@ pa_status pa__rm3d_swap_pass(rm3d *m, double qthr, double gain, long *count) {
     c += done;
   }
 cleanup:
+  pa__free(m->swapfail);
+  m->swapfail = NULL;
+  m->nswapfail = 0;
   *count = c;
   return st;
 }

@@ -105,6 +105,11 @@ typedef struct rm3d {
   double hausd, ridge_cos;
   int verbosity;
   const pa_remesh_opts *opts; /* the caller's (local parameters) */
+  /* During a swap pass (else NULL): bit e of swapfail[t], t < nswapfail,
+   * says that the removal of local edge e of t failed in this pass on a
+   * closed shell none of whose tets changed since (pa__rm3d_swap_edge). */
+  uint8_t *swapfail;
+  pa_idx nswapfail;
   /* counters */
   long nsplit, ncollapse, nswap, nmove;
   pa_idx ndead_t, ndead_v;

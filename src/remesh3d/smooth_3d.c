@@ -217,11 +217,15 @@ static int surface_kept(const rm3d *m, const pa_idx *tri, int ntri, pa_idx p,
 }
 
 /* Move p to np (its ball[0..n) of qualities nq when isotropic): the fields
- * (and an anisotropic metric) are re-interpolated in the old ball first. */
+ * (and an anisotropic metric) are re-interpolated in the old ball first.
+ * The tets of the ball lose their RM3D_T_CLEAN mark unless p_in_range says
+ * that every edge at p is in range at np with p's metric: the other edges
+ * of a tet did not change (nor did p's metric, unless re-interpolated). */
 static void apply_move(rm3d *m, pa_idx p, const pa_idx *ball, int n,
-                       const double *np, const float *nq) {
+                       const double *np, const float *nq, int p_in_range) {
   int mc = m->mc;
   if (m->nfield || mc == 6) {
+    p_in_range = 0;
     for (int i = 0; i < n; i++) {
       const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
       double w[4];
@@ -238,7 +242,7 @@ static void apply_move(rm3d *m, pa_idx p, const pa_idx *ball, int n,
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
     m->q[t] = mc == 6 ? (float)rm3d_qual_v(m, m->tv + 4 * (size_t)t) : nq[i];
-    m->tflag[t] &= (uint8_t)~RM3D_T_CLEAN;
+    if (!p_in_range) m->tflag[t] &= (uint8_t)~RM3D_T_CLEAN;
   }
   m->nmove++;
 }
@@ -396,7 +400,7 @@ static int try_smooth(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
     if (moved_qualities(m, ball, n, np, mp, qold, 1, &first, nq) >= 0)
       continue;
     if (kind == 3) memcpy(m->nrm + 3 * (size_t)p, nnew, sizeof nnew);
-    apply_move(m, p, ball, n, np, nq);
+    apply_move(m, p, ball, n, np, nq, 0);
     return 1;
   }
   return 0;
@@ -479,7 +483,7 @@ int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball) {
     if (!(q >= 0.5 * qold) || q < RM3D_QFLOOR) return 0;
     nq[i] = (float)q;
   }
-  apply_move(m, p, ball, n, np, nq);
+  apply_move(m, p, ball, n, np, nq, 0);
   return 1;
 }
 
@@ -664,7 +668,8 @@ static int try_length_moves(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
       continue;
     if (moved_qualities(m, ball, n, np, mp, qfloor, 0, &first, nq) >= 0)
       continue;
-    apply_move(m, p, ball, n, np, nq);
+    /* out1 = 0: every edge at p in [LO, HI) */
+    apply_move(m, p, ball, n, np, nq, out1 == 0);
     return n;
   }
   return 0;
