@@ -277,19 +277,11 @@ static int ridge_kept(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball, int n,
   return !(d2 > h * h);
 }
 
-/* May p move onto q at all: p free, and a boundary p only onto a boundary
- * q in surface mode. */
-static int collapse_allowed(const rm3d *m, pa_idx p, pa_idx q) {
-  uint8_t tp = m->vtag[p];
-  if (tp & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) return 0;
-  return !(tp & RM3D_V_BDRY) || (m->surf && (m->vtag[q] & RM3D_V_BDRY));
-}
-
 pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
                             int *done) {
   pa_idx ball[RM3D_MAXBALL];
   *done = 0;
-  if (!collapse_allowed(m, p, q)) return PA_SUCCESS;
+  if (!rm3d_collapse_allowed(m, p, q)) return PA_SUCCESS;
   int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
   if (n < 0) return PA_SUCCESS;
   return pa__rm3d_collapse_ball(m, p, q, ball, n, lguard, done);
@@ -304,7 +296,7 @@ pa_status pa__rm3d_collapse_ball(rm3d *m, pa_idx p, pa_idx q,
   pa_idx erec[4];
   int ntri = 0, nerec = 0;
   *done = 0;
-  if (!collapse_allowed(m, p, q)) return st;
+  if (!rm3d_collapse_allowed(m, p, q)) return st;
   uint8_t tp = m->vtag[p];
   int surfp = (tp & RM3D_V_BDRY) != 0;
   if (!ball_qualities(m, q, ball, n, nq)) return st;
@@ -399,12 +391,14 @@ static int mid_lengths_ok(rm3d *m, pa_idx q, const pa_idx *bq, int nb,
 }
 
 /* Move q to xm (metric mm, its ball's qualities nq), try the collapse of p
- * onto it, and move q back (coordinates, metric, cached qualities oq bit
- * for bit) if refused; if done, q's fields become the mean of p's and q's. */
+ * (ball bp[0..np)) onto it, and move q back (coordinates, metric, cached
+ * qualities oq bit for bit) if refused; if done, q's fields become the mean
+ * of p's and q's. */
 static pa_status collapse_at_mid(rm3d *m, pa_idx p, pa_idx q,
-                                 const pa_idx *bq, int nb, const double *xm,
-                                 const double *mm, const float *oq,
-                                 const float *nq, double lguard, int *done) {
+                                 const pa_idx *bp, int np, const pa_idx *bq,
+                                 int nb, const double *xm, const double *mm,
+                                 const float *oq, const float *nq,
+                                 double lguard, int *done) {
   pa_status st = PA_SUCCESS;
   int mc = m->mc;
   double *xq = m->x + 3 * (size_t)q;
@@ -421,7 +415,9 @@ static pa_status collapse_at_mid(rm3d *m, pa_idx p, pa_idx q,
     m->tflag[bq[i] >> 2] &= (uint8_t)~RM3D_T_CLEAN;
     if (nq[i] >= 0) m->q[bq[i] >> 2] = nq[i];
   }
-  PA_CALL(pa__rm3d_collapse(m, p, q, lguard, done));
+  *done = 0;
+  if (np >= 0)
+    PA_CALL(pa__rm3d_collapse_ball(m, p, q, bp, np, lguard, done));
   if (!*done) {
     memcpy(xq, xo, sizeof xo);
     memcpy(m->met + (size_t)mc * q, mo, (size_t)mc * sizeof(double));
@@ -445,15 +441,14 @@ cleanup:
  * (quality, length guard); then p collapses onto it with every check of
  * pa__rm3d_collapse. When that collapse is refused, q goes back
  * (coordinates, metric, cached qualities bit for bit). */
-pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
-                                int *done) {
+pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q,
+                                const pa_idx *bp, int np, const pa_idx *bq,
+                                int nb, double lguard, int *done) {
   pa_status st = PA_SUCCESS;
-  pa_idx bq[RM3D_MAXBALL];
   float oq[RM3D_MAXBALL], nq[RM3D_MAXBALL];
   *done = 0;
   uint8_t tp = m->vtag[p], tq = m->vtag[q];
   if ((tp | tq) & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) return st;
-  int nb = pa__rm3d_ball(m, q, bq, RM3D_MAXBALL);
   if (nb < 0) return st;
   if (!mid_on_entity(m, p, q, bq, nb)) return st;
   const double *xp = m->x + 3 * (size_t)p, *xq = m->x + 3 * (size_t)q;
@@ -462,7 +457,8 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
   pa__rm3d_mid_metric(m, p, q, mm);
   if (!mid_qualities(m, p, bq, nb, xm, mm, oq, nq)) return st;
   if (!mid_lengths_ok(m, q, bq, nb, xm, mm, nq, lguard)) return st;
-  PA_CALL(collapse_at_mid(m, p, q, bq, nb, xm, mm, oq, nq, lguard, done));
+  PA_CALL(collapse_at_mid(m, p, q, bp, np, bq, nb, xm, mm, oq, nq, lguard,
+                          done));
 cleanup:
   return st;
 }

@@ -67,9 +67,27 @@
  * collapse pass (figures: docs/BENCHMARKS.md, "The 3D remesher"). */
 #define RM3D_OTHER_TRIES 2
 
+/* The six edge lengths of the tet with vertices v, as rm3d_len gives them
+ * (with sizes, each vertex's 1/h is taken once, not once per edge: the
+ * same operations on the same values, so the same bits). */
 static void lengths6(const rm3d *m, const pa_idx *v, double *L) {
-  for (int e = 0; e < 6; e++)
-    L[e] = rm3d_len(m, v[pa__rm3d_edge[e][0]], v[pa__rm3d_edge[e][1]]);
+  if (m->mc != 1) {
+    for (int e = 0; e < 6; e++)
+      L[e] = rm3d_len(m, v[pa__rm3d_edge[e][0]], v[pa__rm3d_edge[e][1]]);
+    return;
+  }
+  const double *x[4];
+  double inv[4];
+  for (int j = 0; j < 4; j++) {
+    x[j] = m->x + 3 * (size_t)v[j];
+    inv[j] = 1.0 / m->met[v[j]];
+  }
+  for (int e = 0; e < 6; e++) {
+    int i = pa__rm3d_edge[e][0], j = pa__rm3d_edge[e][1];
+    double d[3] = {x[j][0] - x[i][0], x[j][1] - x[i][1], x[j][2] - x[i][2]};
+    double n = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    L[e] = n * pa__log_mean(inv[i], inv[j]);
+  }
 }
 
 /* Order of the 6 edges by length, decreasing (dir > 0) or increasing. */
@@ -147,21 +165,49 @@ cleanup:
   return st;
 }
 
+/* The balls of the two ends of the short edge a collapse pass works on,
+ * each walked when first needed: the tries on one edge (either end onto the
+ * other, the midpoint, other neighbours) change nothing until one
+ * succeeds, so they can share them. */
+typedef struct ball_memo {
+  pa_idx v[2];
+  int n[2]; /* -1: too large */
+  int have[2];
+  pa_idx ball[2][RM3D_MAXBALL];
+} ball_memo;
+
+static void memo_start(ball_memo *bm, pa_idx a, pa_idx b) {
+  bm->v[0] = a;
+  bm->v[1] = b;
+  bm->have[0] = bm->have[1] = 0;
+}
+
+/* The ball of end s (0: a, 1: b) into *ball; its count, -1 if too large. */
+static int memo_ball(rm3d *m, ball_memo *bm, int s, const pa_idx **ball) {
+  if (!bm->have[s]) {
+    bm->n[s] = pa__rm3d_ball(m, bm->v[s], bm->ball[s], RM3D_MAXBALL);
+    bm->have[s] = 1;
+  }
+  *ball = bm->ball[s];
+  return bm->n[s];
+}
+
 /* Each vertex is tried for removal at most once per pass (RM3D_V_TODO), so a
  * collapse that fails is not retried from every tet of the vertex. */
 /* Fallback for a short edge (a,b) neither end of which collapses onto the
  * other: remove a or b onto another neighbour, the RM3D_OTHER_TRIES
  * shortest edges first (only edges shorter than 1, so the vertex goes where
  * it is crowded). */
-static pa_status collapse_other(rm3d *m, pa_idx a, pa_idx b, double guard,
+static pa_status collapse_other(rm3d *m, ball_memo *bm, double guard,
                                 int *done) {
   pa_status st = PA_SUCCESS;
-  pa_idx ball[RM3D_MAXBALL], nb[RM3D_OTHER_TRIES];
+  pa_idx nb[RM3D_OTHER_TRIES];
   double ln[RM3D_OTHER_TRIES];
   for (int s = 0; s < 2 && !*done; s++) {
-    pa_idx p = s ? b : a, o = s ? a : b;
+    pa_idx p = bm->v[s], o = bm->v[1 - s];
     if (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER)) continue;
-    int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
+    const pa_idx *ball;
+    int n = memo_ball(m, bm, s, &ball);
     if (n < 0) continue;
     int k = 0;
     for (int i = 0; i < n; i++) {
@@ -198,6 +244,8 @@ pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, double guard,
   pa_status st = PA_SUCCESS;
   long c = 0;
   uint8_t skip = thr <= PA_METRIC_LEN_LO_EXACT ? RM3D_T_CLEAN : 0;
+  ball_memo *bm = NULL;
+  PA_CALLOC(bm, 1);
   for (pa_idx i = 0; i < m->nv; i++) m->vtag[i] |= RM3D_V_TODO;
   for (pa_idx k = 0; k < m->ne; k++) {
     if (m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN | skip)) continue;
@@ -213,15 +261,25 @@ pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, double guard,
       pa_idx a = m->tv[4 * (size_t)k + pa__rm3d_edge[ord[i]][0]];
       pa_idx b = m->tv[4 * (size_t)k + pa__rm3d_edge[ord[i]][1]];
       int done = 0;
+      memo_start(bm, a, b);
       for (int dir = 0; dir < 2 && !done; dir++) {
         pa_idx p = dir ? b : a, q = dir ? a : b;
         if (!(m->vtag[p] & RM3D_V_TODO)) continue;
-        PA_CALL(pa__rm3d_collapse(m, p, q, guard, &done));
+        const pa_idx *bp, *bq;
+        if (rm3d_collapse_allowed(m, p, q)) {
+          int np = memo_ball(m, bm, dir, &bp);
+          if (np >= 0)
+            PA_CALL(pa__rm3d_collapse_ball(m, p, q, bp, np, guard, &done));
+        }
         /* Both ends refused: meet in the middle (new edges about half the
          * short edge shorter than from either end). */
-        if (!done && dir == 1 && (m->vtag[b] & RM3D_V_TODO))
-          PA_CALL(pa__rm3d_collapse_mid(m, a, b, guard, &done));
-        if (!done && dir == 1) PA_CALL(collapse_other(m, a, b, guard, &done));
+        if (!done && dir == 1 && (m->vtag[b] & RM3D_V_TODO) &&
+            !((m->vtag[a] | m->vtag[b]) &
+              (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD))) {
+          int na = memo_ball(m, bm, 0, &bp), nb = memo_ball(m, bm, 1, &bq);
+          PA_CALL(pa__rm3d_collapse_mid(m, a, b, bp, na, bq, nb, guard, &done));
+        }
+        if (!done && dir == 1) PA_CALL(collapse_other(m, bm, guard, &done));
         /* Last resort: remove the edge by a swap (its ring stays). */
         if (!done && dir == 1 && m->swap)
           PA_CALL(pa__rm3d_swap_edge(m, k, a, b, 0.3, &done));
@@ -234,6 +292,7 @@ pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, double guard,
     }
   }
 cleanup:
+  pa__free(bm);
   for (pa_idx i = 0; i < m->nv; i++) m->vtag[i] &= (uint8_t)~RM3D_V_TODO;
   *count = c;
   return st;
@@ -243,6 +302,8 @@ pa_status pa__rm3d_swap_pass(rm3d *m, double qthr, double gain, long *count) {
   pa_status st = PA_SUCCESS;
   long c = 0;
   pa_idx ne0 = m->ne;
+  PA_CALLOC(m->swapfail, (size_t)ne0 + 1);
+  m->nswapfail = ne0;
   for (pa_idx k = 0; k < ne0; k++) {
     if ((m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN)) || m->q[k] >= qthr)
       continue;
@@ -257,6 +318,9 @@ pa_status pa__rm3d_swap_pass(rm3d *m, double qthr, double gain, long *count) {
     c += done;
   }
 cleanup:
+  pa__free(m->swapfail);
+  m->swapfail = NULL;
+  m->nswapfail = 0;
   *count = c;
   return st;
 }

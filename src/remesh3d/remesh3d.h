@@ -105,6 +105,11 @@ typedef struct rm3d {
   double hausd, ridge_cos;
   int verbosity;
   const pa_remesh_opts *opts; /* the caller's (local parameters) */
+  /* During a swap pass (else NULL): bit e of swapfail[t], t < nswapfail,
+   * says that the removal of local edge e of t failed in this pass on a
+   * closed shell none of whose tets changed since (pa__rm3d_swap_edge). */
+  uint8_t *swapfail;
+  pa_idx nswapfail;
   /* counters */
   long nsplit, ncollapse, nswap, nmove;
   pa_idx ndead_t, ndead_v;
@@ -196,17 +201,18 @@ static inline double rm3d_tri_normal(const double *a, const double *b,
 }
 
 /* Quality of tet t with its local vertex ip moved to x, with metric met
- * (the operators' trial of a move, a collapse or a midpoint). */
+ * (the operators' trial of a move, a collapse or a midpoint). With sizes
+ * the quality is Euclidean (pa__qual3) and the metrics are not gathered. */
 static inline double rm3d_qual_moved(const rm3d *m, pa_idx t, int ip,
                                      const double *x, const double *met) {
   const pa_idx *v = m->tv + 4 * (size_t)t;
-  const double *px[4], *pm[4];
-  for (int j = 0; j < 4; j++) {
-    px[j] = m->x + 3 * (size_t)v[j];
-    pm[j] = m->met + (size_t)m->mc * v[j];
-  }
+  const double *px[4], *pm[4] = {NULL, NULL, NULL, NULL};
+  for (int j = 0; j < 4; j++) px[j] = m->x + 3 * (size_t)v[j];
   px[ip] = x;
-  pm[ip] = met;
+  if (m->mc > 1) {
+    for (int j = 0; j < 4; j++) pm[j] = m->met + (size_t)m->mc * v[j];
+    pm[ip] = met;
+  }
   return pa__qual3(m->mc, px[0], px[1], px[2], px[3], pm[0], pm[1], pm[2],
                    pm[3]);
 }
@@ -285,9 +291,19 @@ pa_status pa__rm3d_collapse_ball(rm3d *m, pa_idx p, pa_idx q,
                                  int *done);
 /* Contract the edge (p,q) to its midpoint: q moves there (only where it
  * stays on its entity: interior, plane, straight ridge), then p collapses
- * onto it with every check of pa__rm3d_collapse; q moves back otherwise. */
-pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q, double lguard,
-                                int *done);
+ * onto it with every check of pa__rm3d_collapse; q moves back otherwise.
+ * The balls of p and q are given (bp[0..np), bq[0..nb), as pa__rm3d_ball
+ * gives them; a count of -1, a ball too large, refuses). */
+pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q,
+                                const pa_idx *bp, int np, const pa_idx *bq,
+                                int nb, double lguard, int *done);
+/* May p move onto q at all: p free, and a boundary p only onto a boundary
+ * q in surface mode. */
+static inline int rm3d_collapse_allowed(const rm3d *m, pa_idx p, pa_idx q) {
+  uint8_t tp = m->vtag[p];
+  if (tp & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) return 0;
+  return !(tp & RM3D_V_BDRY) || (m->surf && (m->vtag[q] & RM3D_V_BDRY));
+}
 /* Replace tets old[0..nold) by nnew tets (vertex quadruples, positive),
  * matching faces to rebuild adjacency; new tets take reference ref and PA
  * flags pf. Face tags follow the cavity's outer faces. nbswap > 0 for a

@@ -217,11 +217,15 @@ static int surface_kept(const rm3d *m, const pa_idx *tri, int ntri, pa_idx p,
 }
 
 /* Move p to np (its ball[0..n) of qualities nq when isotropic): the fields
- * (and an anisotropic metric) are re-interpolated in the old ball first. */
+ * (and an anisotropic metric) are re-interpolated in the old ball first.
+ * The tets of the ball lose their RM3D_T_CLEAN mark unless p_in_range says
+ * that every edge at p is in range at np with p's metric: the other edges
+ * of a tet did not change (nor did p's metric, unless re-interpolated). */
 static void apply_move(rm3d *m, pa_idx p, const pa_idx *ball, int n,
-                       const double *np, const float *nq) {
+                       const double *np, const float *nq, int p_in_range) {
   int mc = m->mc;
   if (m->nfield || mc == 6) {
+    p_in_range = 0;
     for (int i = 0; i < n; i++) {
       const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
       double w[4];
@@ -238,7 +242,7 @@ static void apply_move(rm3d *m, pa_idx p, const pa_idx *ball, int n,
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
     m->q[t] = mc == 6 ? (float)rm3d_qual_v(m, m->tv + 4 * (size_t)t) : nq[i];
-    m->tflag[t] &= (uint8_t)~RM3D_T_CLEAN;
+    if (!p_in_range) m->tflag[t] &= (uint8_t)~RM3D_T_CLEAN;
   }
   m->nmove++;
 }
@@ -314,16 +318,21 @@ static int metric_inverse(int mc, const double *mp, double *mi) {
  * the ball's worst quality. 0 if the ball spans two references or holds a
  * frozen element. */
 static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
-                       const double *mi, double *qoldp, double *c) {
+                       const double *mi, double *qoldp, int *iworst,
+                       double *c) {
   const double *xp = m->x + 3 * (size_t)p;
   double qold = 1e30;
+  int iw = 0;
   c[0] = c[1] = c[2] = 0;
   int32_t ref0 = m->tref[ball[0] >> 2];
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
     int ip = ball[i] & 3;
     if (m->tref[t] != ref0 || (m->tflag[t] & RM3D_T_FROZEN)) return 0;
-    if (m->q[t] < qold) qold = m->q[t];
+    if (m->q[t] < qold) {
+      qold = m->q[t];
+      iw = i;
+    }
     const pa_idx *v = m->tv + 4 * (size_t)t;
     const double *f0 = m->x + 3 * (size_t)v[pa__rm3d_face[ip][0]];
     const double *f1 = m->x + 3 * (size_t)v[pa__rm3d_face[ip][1]];
@@ -341,7 +350,32 @@ static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
   }
   for (int j = 0; j < 3; j++) c[j] = c[j] / n - xp[j];
   *qoldp = qold;
+  *iworst = iw;
   return 1;
+}
+
+/* The qualities nq[0..n) of p's ball[0..n) with p at np (metric mp), each
+ * of which must be above qlo (at or above it when !strict) and at least
+ * RM3D_QABS. Returns -1 when all are, else the index of a tet that is not
+ * (nq then partly filled). The tet *first is tried first and then the
+ * failing one is kept there: a move's trials at shorter steps, and the
+ * ball's worst tet, fail on the same tets, so most refusals take one
+ * quality instead of a ball's worth. Which tets fail does not depend on
+ * the order, so neither does the outcome. */
+static int moved_qualities(const rm3d *m, const pa_idx *ball, int n,
+                           const double *np, const double *mp, double qlo,
+                           int strict, int *first, float *nq) {
+  int f = *first;
+  for (int k = 0; k < n; k++) {
+    int i = k == 0 ? f : k == f ? 0 : k;
+    double q = rm3d_qual_moved(m, ball[i] >> 2, ball[i] & 3, np, mp);
+    nq[i] = (float)q;
+    if (!(strict ? q > qlo : q >= qlo) || q < RM3D_QABS) {
+      *first = i;
+      return i;
+    }
+  }
+  return -1;
 }
 
 /* Move p by c, else by half or a quarter of it, to the first position
@@ -349,7 +383,7 @@ static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
  * projects onto the surface of tri[0..ntri) and keeps its normals). */
 static int try_smooth(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
                       const pa_idx *tri, int ntri, double hausd,
-                      const double *c, double qold) {
+                      const double *c, double qold, int first) {
   const double *xp = m->x + 3 * (size_t)p;
   const double *mp = m->met + (size_t)m->mc * p;
   double np[3], step = 1.0;
@@ -363,17 +397,10 @@ static int try_smooth(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
       if (!curved_point(m, tri, ntri, hausd, y, np, nnew)) continue;
       if (!surface_kept(m, tri, ntri, p, np)) continue;
     }
-    int ok = 1;
-    for (int i = 0; i < n && ok; i++) {
-      pa_idx t = ball[i] >> 2;
-      int ip = ball[i] & 3;
-      double q = rm3d_qual_moved(m, t, ip, np, mp);
-      if (!(q > qold) || q < RM3D_QABS) ok = 0;
-      nq[i] = (float)q;
-    }
-    if (!ok) continue;
+    if (moved_qualities(m, ball, n, np, mp, qold, 1, &first, nq) >= 0)
+      continue;
     if (kind == 3) memcpy(m->nrm + 3 * (size_t)p, nnew, sizeof nnew);
-    apply_move(m, p, ball, n, np, nq);
+    apply_move(m, p, ball, n, np, nq, 0);
     return 1;
   }
   return 0;
@@ -401,12 +428,13 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
     if (!kind) return 0;
   }
   double mi[6], qold, c[3];
+  int iworst;
   if (!metric_inverse(m->mc, m->met + (size_t)m->mc * p, mi)) return 0;
-  if (!ideal_shift(m, p, ball, n, mi, &qold, c)) return 0;
+  if (!ideal_shift(m, p, ball, n, mi, &qold, &iworst, c)) return 0;
   /* on the boundary: remove the normal component, or keep the tangential
    * one along a ridge */
   restrict_move(c, dir, kind == 2 || kind == 3, kind == 1);
-  return try_smooth(m, p, ball, n, kind, tri, ntri, hausd, c, qold);
+  return try_smooth(m, p, ball, n, kind, tri, ntri, hausd, c, qold, iworst);
 }
 
 /* Splitmix64 finaliser: the jiggle's directions. */
@@ -455,7 +483,7 @@ int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball) {
     if (!(q >= 0.5 * qold) || q < RM3D_QFLOOR) return 0;
     nq[i] = (float)q;
   }
-  apply_move(m, p, ball, n, np, nq);
+  apply_move(m, p, ball, n, np, nq, 0);
   return 1;
 }
 
@@ -463,11 +491,12 @@ int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball) {
 
 /* Lengths l[0..nn) of the edges from p at y (metric mp) to its neighbours
  * nb[0..nn); returns how many are out of [PA_METRIC_LEN_LO_EXACT,
- * PA_METRIC_LEN_HI_EXACT). */
+ * PA_METRIC_LEN_HI_EXACT), or stops at limit + 1 of them (l then partly
+ * filled). */
 static int len_out(const rm3d *m, const double *y, const double *mp,
-                   const pa_idx *nb, int nn, double *l) {
+                   const pa_idx *nb, int nn, int limit, double *l) {
   int out = 0, mc = m->mc;
-  for (int i = 0; i < nn; i++) {
+  for (int i = 0; i < nn && out <= limit; i++) {
     l[i] = pa__len3(mc, y, m->x + 3 * (size_t)nb[i], mp,
                     m->met + (size_t)mc * nb[i]);
     out += !(l[i] >= PA_METRIC_LEN_LO_EXACT && l[i] < PA_METRIC_LEN_HI_EXACT);
@@ -508,6 +537,7 @@ typedef struct len_ctx {
   pa_idx nb[RM3D_LNB];
   double l0[RM3D_LNB], lg0[RM3D_LNB]; /* lengths from p and their logs */
   int nn, out0;
+  int iworst; /* the ball's worst tet */
   double s0, qold;
 } len_ctx;
 
@@ -518,13 +548,16 @@ typedef struct len_ctx {
 static int ball_neighbours(rm3d *m, pa_idx p, const pa_idx *ball, int n,
                            len_ctx *lc) {
   pa_idx *nb = lc->nb;
-  int nn = 0, ok = 1;
+  int nn = 0, ok = 1, iw = 0;
   double qold = 1e30;
   int32_t ref0 = m->tref[ball[0] >> 2];
   for (int i = 0; i < n && ok; i++) {
     pa_idx t = ball[i] >> 2;
     if (m->tref[t] != ref0 || (m->tflag[t] & RM3D_T_FROZEN)) ok = 0;
-    if (m->q[t] < qold) qold = m->q[t];
+    if (m->q[t] < qold) {
+      qold = m->q[t];
+      iw = i;
+    }
     const pa_idx *v = m->tv + 4 * (size_t)t;
     for (int j = 0; j < 4 && ok; j++) {
       pa_idx x = v[j];
@@ -539,6 +572,7 @@ static int ball_neighbours(rm3d *m, pa_idx p, const pa_idx *ball, int n,
   for (int i = 0; i < nn; i++) m->vtag[nb[i]] &= (uint8_t)~RM3D_V_MARK;
   lc->nn = nn;
   lc->qold = qold;
+  lc->iworst = iw;
   return ok;
 }
 
@@ -618,6 +652,7 @@ static int try_length_moves(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
   const double *mp = m->met + (size_t)m->mc * p;
   double qfloor = fmin(lc->qold, RM3D_QLEN), np[3], step = 1.0;
   float nq[RM3D_MAXBALL];
+  int first = lc->iworst;
   for (int tr = 0; tr < 8; tr++, step *= 0.5) {
     if (tr == 4) step = 1.0;
     const double *dd = tr < 4 ? d : d2;
@@ -626,19 +661,15 @@ static int try_length_moves(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
       for (int j = 0; j < 3; j++)
         if (fabs(dir[j]) == 1.0) np[j] = xp[j];
     double l1[RM3D_LNB];
-    int out1 = len_out(m, np, mp, lc->nb, lc->nn, l1);
+    int out1 = len_out(m, np, mp, lc->nb, lc->nn, lc->out0, l1);
     if (out1 > lc->out0 ||
         (out1 == lc->out0 &&
          !(len_sum(l1, lc->nn, NULL) < RM3D_LGAIN * lc->s0)))
       continue;
-    int ok = 1;
-    for (int i = 0; i < n && ok; i++) {
-      double q = rm3d_qual_moved(m, ball[i] >> 2, ball[i] & 3, np, mp);
-      if (!(q >= qfloor) || q < RM3D_QABS) ok = 0;
-      nq[i] = (float)q;
-    }
-    if (!ok) continue;
-    apply_move(m, p, ball, n, np, nq);
+    if (moved_qualities(m, ball, n, np, mp, qfloor, 0, &first, nq) >= 0)
+      continue;
+    /* out1 = 0: every edge at p in [LO, HI) */
+    apply_move(m, p, ball, n, np, nq, out1 == 0);
     return n;
   }
   return 0;
@@ -659,7 +690,7 @@ int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
   len_ctx lc;
   if (!ball_neighbours(m, p, ball, n, &lc)) return 0;
   lc.out0 = len_out(m, m->x + 3 * (size_t)p, m->met + (size_t)m->mc * p,
-                    lc.nb, lc.nn, lc.l0);
+                    lc.nb, lc.nn, lc.nn, lc.l0);
   if (lc.out0 == 0) return 0;
   lc.s0 = len_sum(lc.l0, lc.nn, lc.lg0);
   /* two candidates, each kept in the plane (kind 2) or along the ridge

@@ -282,6 +282,9 @@ static pa_status remove_cap(rm3d *m, pa_idx a, pa_idx b, pa_idx t,
   pa_idx keep[4] = {a, b, c, d};
   for (int j = 0; j < 4; j++)
     if (m->vtet[keep[j]] == t) m->vtet[keep[j]] = j == 1 ? o2 >> 2 : o1 >> 2;
+  pa_idx changed[3] = {t, o1 >> 2, o2 >> 2};
+  for (int j = 0; j < 3; j++)
+    if (changed[j] < m->nswapfail) m->swapfail[changed[j]] = 0;
   m->tflag[t] = RM3D_T_DEAD;
   m->ndead_t++;
   m->nswap++;
@@ -384,6 +387,31 @@ cleanup:
   return st;
 }
 
+/* Local edge index (pa__rm3d_edge) of the local vertex pair (i, j). */
+static const signed char edge_of[4][4] = {
+    {-1, 0, 1, 2}, {0, -1, 3, 4}, {1, 3, -1, 5}, {2, 4, 5, -1}};
+
+/* The swap pass's memory of failed edge removals (m->swapfail): 1 when
+ * every tet of the closed shell tets[0..n) of (a,b) has the bit of (a,b)
+ * (mark = 0), or sets that bit on each (mark = 1). A tet keeps the bit
+ * until it changes, so when every tet of the shell has it the shell is the
+ * one that failed, unchanged (a tet changed or added since would lack it),
+ * and nothing else the removal reads changes during a swap pass. */
+static int shell_failed(rm3d *m, pa_idx a, pa_idx b, const pa_idx *tets, int n,
+                        int mark) {
+  for (int i = 0; i < n; i++) {
+    pa_idx t = tets[i];
+    if (t >= m->nswapfail) return 0;
+    const pa_idx *v = m->tv + 4 * (size_t)t;
+    uint8_t bit = (uint8_t)(1u << edge_of[rm3d_loc(v, a)][rm3d_loc(v, b)]);
+    if (mark)
+      m->swapfail[t] |= bit;
+    else if (!(m->swapfail[t] & bit))
+      return 0;
+  }
+  return 1;
+}
+
 pa_status pa__rm3d_swap_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
                              double gain, int *done) {
   pa_status st = PA_SUCCESS;
@@ -401,8 +429,13 @@ pa_status pa__rm3d_swap_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
     return gain < 1.0 ? st
                       : swap_bdry(m, a, b, tets, ring, n, qold, gain, done);
   if (n < 3 || (info & RM3D_SH_BDRY)) return st;
+  int memo = m->swapfail != NULL;
+  if (memo && shell_failed(m, a, b, tets, n, 0)) return st;
   double bw = ring_dp(m, a, b, ring, n, gain * qold, nv4, &nnew);
-  if (bw < 0) return st;
+  if (bw < 0) {
+    if (memo) shell_failed(m, a, b, tets, n, 1);
+    return st;
+  }
   if (gain < 1.0) {
     /* Removal of a short edge: the quality floor, and no new edge longer
      * than sqrt 2. */

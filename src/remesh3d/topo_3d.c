@@ -194,6 +194,7 @@ pa_status pa__rm3d_replace(rm3d *m, const pa_idx *old, int nold,
   for (int i = 0; i < nnew; i++) {
     pa_idx t = idx[i];
     const pa_idx *v = m->tv + 4 * (size_t)t;
+    if (t < m->nswapfail) m->swapfail[t] = 0;
     for (int j = 0; j < 4; j++) m->vtet[v[j]] = t;
     m->q[t] = (float)rm3d_qual_v(m, v);
     m->tflag[t] &= (uint8_t)~RM3D_T_CLEAN;
