@@ -13,6 +13,8 @@
 # Environment: NP (default 2), TIMEOUT (default 60), GROWTH (default 1.5),
 # FAIL_RANK (default: every rank).
 set -u
+# the piece loop itself at every size (padapt adapt -serial-below)
+export PADAPT_SERIAL_BELOW=${PADAPT_SERIAL_BELOW:-0}
 BUILD=${1:-build}
 WORK=${2:-/tmp/padapt-alloc-faults}
 PADAPT=${PADAPT:-$(cd "$BUILD/bin" && pwd)/padapt}

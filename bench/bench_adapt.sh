@@ -34,6 +34,8 @@
 # at P > 1 the parallel driver (pa_dmesh_adapt). 3D is skipped with a message
 # when the built-in remesher does not handle tetrahedra yet.
 set -u
+# the piece loop itself at every size (padapt adapt -serial-below)
+export PADAPT_SERIAL_BELOW=${PADAPT_SERIAL_BELOW:-0}
 BUILD=${1:-build}
 WORK=${2:-/tmp/padapt-bench-adapt}
 PADAPT=${PADAPT:-$BUILD/bin/padapt}

@@ -20,6 +20,8 @@
 # Environment: PROCS (default "1 2 3 4"; 1 runs the sequential remesher,
 # P > 1 `mpiexec -n P padapt adapt`). Figures from each run's JSON report.
 set -u
+# the piece loop itself at every size (padapt adapt -serial-below)
+export PADAPT_SERIAL_BELOW=${PADAPT_SERIAL_BELOW:-0}
 BUILD=${1:?BUILD_DIR}
 WORK=${2:?WORK_DIR}
 MESH=${3:?MESH}

@@ -19,6 +19,8 @@
 # 2000 4000 8000 16000 32000 64000"), ITERS (4), NP (1; > 1 runs the metric and the
 # adaptation under mpiexec -n NP).
 set -u
+# the piece loop itself at every size (padapt adapt -serial-below)
+export PADAPT_SERIAL_BELOW=${PADAPT_SERIAL_BELOW:-0}
 BUILD=${1:-build}
 WORK=${2:-/tmp/padapt-seed-loop}
 PADAPT=$(cd "$BUILD/bin" 2>/dev/null && pwd)/padapt

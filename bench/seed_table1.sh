@@ -34,6 +34,8 @@
 #   it is above 0 on a machine that other jobs share).
 # Every file of a run stays in WORK_DIR/h<H>-np<P>/.
 set -u
+# the piece loop itself at every size (padapt adapt -serial-below)
+export PADAPT_SERIAL_BELOW=${PADAPT_SERIAL_BELOW:-0}
 BUILD=${1:-build}
 WORK=${2:-/tmp/padapt-seed-table1}
 PADAPT=${PADAPT:-$BUILD/bin/padapt}

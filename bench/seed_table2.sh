@@ -26,6 +26,8 @@
 # ellipsoid alone, how far the zero set of the distance interpolated on the
 # final mesh lies from the surface. gmsh must be on PATH.
 set -u
+# the piece loop itself at every size (padapt adapt -serial-below)
+export PADAPT_SERIAL_BELOW=${PADAPT_SERIAL_BELOW:-0}
 BUILD=${1:-build}
 WORK=${2:-/tmp/padapt-seed-table2}
 PADAPT=${PADAPT:-$BUILD/bin/padapt}

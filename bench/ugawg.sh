@@ -30,6 +30,8 @@
 # summed wall time (process start, I/O and mpiexec included).
 # Every file of a run stays in WORK_DIR/<tool>-<case>-<dim>d-<start>-np<P>/.
 set -u
+# the piece loop itself at every size (padapt adapt -serial-below)
+export PADAPT_SERIAL_BELOW=${PADAPT_SERIAL_BELOW:-0}
 BUILD=${1:-build}
 WORK=${2:-/tmp/padapt-ugawg}
 PADAPT=${PADAPT:-$BUILD/bin/padapt}

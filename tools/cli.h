@@ -63,6 +63,7 @@ typedef struct pa_cli_adapt_args {
   double mem_mb;   /* -mem MB (0: none) */
   int max_iter;    /* -max-iter N (0: default) */
   int pieces;      /* -pieces K (0: default) */
+  double serial_below; /* -serial-below N (-1: the default of the dimension) */
   int check;       /* -check: check every piece and the result */
   int optim;       /* -optim: the metric is the input mesh's own sizes */
   const char *params; /* -f FILE, or IN.padapt when it exists */
@@ -74,9 +75,13 @@ typedef struct pa_cli_adapt_args {
   char out_default[4096], met_default[4096], params_default[4096];
 } pa_cli_adapt_args;
 
+/* pa_cli_adapt_parallel's answer when the job is too small to share out
+ * (-serial-below): the caller adapts it on rank 0 alone. */
+#define PA_CLI_SERIAL 2
 /* The parallel `padapt adapt` (pa_dmesh_adapt), called by pa_cli_adapt on more
  * than one rank or for -distributed-output/-mem, with the parsed arguments.
- * Collective; the exit status is the same on every rank. */
+ * Collective; the exit status is the same on every rank, or PA_CLI_SERIAL
+ * on every rank. */
 int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args);
 /* Write the -svg picture of `padapt adapt` (args->svg): the histograms
  * before and after, side by side. Not collective. */

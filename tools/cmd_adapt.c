@@ -146,6 +146,13 @@ static const pa_cli_opt adapt_opts[] = {
      .label = "-best-effort",
      .help = "write the (valid) mesh even if the loop stalled; without\n"
              "it a stalled loop is an error and nothing is written"},
+    {.names = "-serial-below", .kind = PA_CLI_NUM, .at = A(serial_below),
+     .want = "a number >= 0", .lo = 0, .hi = 1e15, .label = "-serial-below N",
+     .help = "rank 0 adapts alone, as one process would, when the input\n"
+             "and the metric's estimate of the output both have fewer\n"
+             "than N elements: sharing out so small a job costs more\n"
+             "than it saves (default 30000 in 3D, 150000 in 2D; 0:\n"
+             "always share out)"},
     {.names = "-pieces", .kind = PA_CLI_INT, .at = A(pieces),
      .want = "an integer in [1, 1000]", .lo = 1, .hi = 1000,
      .label = "-pieces K", .help = "pieces per process (default 1)"},
@@ -252,6 +259,10 @@ static void find_params(const pa_cli *cli, pa_cli_adapt_args *a) {
 static int parse_args(const pa_cli *cli, int argc, char **argv,
                       pa_cli_adapt_args *a) {
   memset(a, 0, sizeof *a);
+  /* -serial-below's default: the dimension's, or PADAPT_SERIAL_BELOW (the
+   * test suite sets 0, so that its small meshes go through the piece loop) */
+  const char *sb = getenv("PADAPT_SERIAL_BELOW");
+  a->serial_below = sb && sb[0] ? atof(sb) : -1;
   pa_remesh_opts_default(&a->remesh);
   a->remesh.verbosity = cli->verbosity;
   int rc = pa_cli_parse(cli, &adapt_spec, argc, argv, a);
@@ -481,7 +492,9 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
    * bound or a checkpoint, the parallel piece loop (tools/cmd_padapt.c) does
    * the work. */
   if (cli->size > 1 || args.distributed || args.mem_mb > 0 ||
-      args.checkpoint || args.restart)
-    return pa_cli_adapt_parallel(cli, &args);
+      args.checkpoint || args.restart) {
+    int rc = pa_cli_adapt_parallel(cli, &args);
+    if (rc != PA_CLI_SERIAL) return rc;
+  }
   return adapt_sequential(cli, &args);
 }
