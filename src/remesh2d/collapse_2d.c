@@ -236,7 +236,7 @@ pa_status pa__rm_collapse_pass_2d(pa__rmesh *rm, double thr, long *n) {
   for (pa_idx k = 0; k < rm->ne; k++) {
     uint8_t t = rm->etag[k];
     if (t & (RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN)) continue;
-    if ((t & RM_E_INRANGE) && thr <= PA_METRIC_LEN_LO)
+    if ((t & RM_E_INRANGE) && thr <= RM_LSHORT_OPT)
       continue; /* nothing below thr */
     const pa_idx *v = rm->ev + 3 * (size_t)k;
     /* shortest edge first */
@@ -244,7 +244,7 @@ pa_status pa__rm_collapse_pass_2d(pa__rmesh *rm, double thr, long *n) {
     double lb = thr;
     for (int i = 0; i < 3; i++) {
       double l = rm_edge_len(rm, v[RM_NX3(i)], v[RM_PV3(i)]);
-      inr &= l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
+      inr &= rm_len_settled(l);
       if (l < lb) {
         lb = l;
         best = i;

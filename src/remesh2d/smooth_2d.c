@@ -258,14 +258,16 @@ long pa__rm_length_pass_2d(pa__rmesh *rm) {
   long cnt = 0;
   for (pa_idx v = 0; v < rm->nv; v++) rm->vtag[v] &= ~RM_V_DONE;
   for (pa_idx k = 0; k < rm->ne; k++) {
-    if (rm->etag[k] & (RM_E_DEAD | RM_E_FROZEN)) continue;
+    if (rm->etag[k] & (RM_E_DEAD | RM_E_FROZEN | RM_E_INRANGE)) continue;
     const pa_idx *v = rm->ev + 3 * (size_t)k;
-    int bad = 0;
+    int bad = 0, settled = 1;
     for (int i = 0; i < 3 && !bad; i++) {
       double l = pa__len2(mc, RM_X(v[RM_NX3(i)]), RM_X(v[RM_PV3(i)]),
                           RM_M(v[RM_NX3(i)]), RM_M(v[RM_PV3(i)]));
       bad = !(l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI);
+      settled &= rm_len_settled(l);
     }
+    if (settled) rm->etag[k] |= RM_E_INRANGE;
     if (!bad) continue;
     for (int i = 0; i < 3; i++) {
       pa_idx p = v[i];

@@ -180,8 +180,7 @@ static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
 }
 
 /* Longest free edge of element k above thr: face index or -1, length in *len;
- * *inr (may be NULL) = all three edges in [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI].
- */
+ * *inr (may be NULL) = all three edges settled (rm_len_settled). */
 static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
                         int *inr) {
   const pa_idx *v = rm->ev + 3 * (size_t)k;
@@ -189,7 +188,7 @@ static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
   double lb = thr;
   for (int i = 0; i < 3; i++) {
     double l = rm_edge_len(rm, v[RM_NX3(i)], v[RM_PV3(i)]);
-    in &= l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
+    in &= rm_len_settled(l);
     if (l > lb && rm_edge_free(rm, 3 * k + i)) {
       lb = l;
       best = i;
