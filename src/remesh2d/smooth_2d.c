@@ -133,7 +133,7 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
 
 long pa__rm_smooth_pass_2d(pa__rmesh *rm) {
   long cnt = 0;
-  for (pa_idx v = 0; v < rm->nv; v++) rm->vtag[v] &= ~RM_V_DONE;
+  rm_vtag_clear(rm, RM_V_DONE);
   for (pa_idx k = 0; k < rm->ne; k++) {
     if (rm->etag[k] & (RM_E_DEAD | RM_E_FROZEN)) continue;
     for (int i = 0; i < 3; i++) {
@@ -256,9 +256,10 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
 long pa__rm_length_pass_2d(pa__rmesh *rm) {
   int mc = rm->mcomp;
   long cnt = 0;
-  for (pa_idx v = 0; v < rm->nv; v++) rm->vtag[v] &= ~RM_V_DONE;
-  for (pa_idx k = 0; k < rm->ne; k++) {
-    if (rm->etag[k] & (RM_E_DEAD | RM_E_FROZEN | RM_E_INRANGE)) continue;
+  rm_vtag_clear(rm, RM_V_DONE);
+  const uint8_t skip = RM_E_DEAD | RM_E_FROZEN | RM_E_INRANGE;
+  for (pa_idx k = rm_next_elem(rm, 0, skip); k < rm->ne;
+       k = rm_next_elem(rm, k + 1, skip)) {
     const pa_idx *v = rm->ev + 3 * (size_t)k;
     int bad = 0, settled = 1;
     for (int i = 0; i < 3 && !bad; i++) {

@@ -202,12 +202,12 @@ static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
 pa_status pa__rm_split_pass_2d(pa__rmesh *rm, double thr, long *n) {
   pa_status st = PA_SUCCESS;
   long cnt = 0;
-  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RM_E_TOUCHED;
-  for (pa_idx k = 0; k < rm->ne; k++) {
-    uint8_t t = rm->etag[k];
-    if (t & (RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN)) continue;
-    if ((t & RM_E_INRANGE) && thr >= PA_METRIC_LEN_HI)
-      continue; /* nothing above thr */
+  rm_etag_clear(rm, RM_E_TOUCHED);
+  /* an element in range has nothing above thr */
+  const uint8_t skip = RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN |
+                       (thr >= PA_METRIC_LEN_HI ? RM_E_INRANGE : 0);
+  for (pa_idx k = rm_next_elem(rm, 0, skip); k < rm->ne;
+       k = rm_next_elem(rm, k + 1, skip)) {
     double l;
     int inr;
     int i = longest_free(rm, k, thr, &l, &inr);

@@ -42,7 +42,7 @@ static int swap_edge(pa__rmesh *rm, pa_idx k, int i, double gain) {
 
 long pa__rm_swap_pass_2d(pa__rmesh *rm, double qmax) {
   long cnt = 0;
-  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RM_E_TOUCHED;
+  rm_etag_clear(rm, RM_E_TOUCHED);
   for (pa_idx k = 0; k < rm->ne; k++) {
     uint8_t t = rm->etag[k];
     if (t & (RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN)) continue;
@@ -65,7 +65,7 @@ long pa__rm_swap_pass_2d(pa__rmesh *rm, double qmax) {
 
 long pa__rm_sliver_pass_2d(pa__rmesh *rm, double qbad) {
   long cnt = 0;
-  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RM_E_TOUCHED;
+  rm_etag_clear(rm, RM_E_TOUCHED);
   for (pa_idx k = 0; k < rm->ne; k++) {
     uint8_t t = rm->etag[k];
     if (t & (RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN)) continue;
