@@ -45,13 +45,15 @@ static inline double pa__sqlen2(int mc, const double *m, double x, double y) {
  *
  * With sizes, la = n / ha and lb = n / hb for the Euclidean length n, and
  * the mean is homogeneous, so L = n * logmean(1/ha, 1/hb): one square root
- * instead of two. mc 0: the Euclidean length. */
+ * instead of two. Equal sizes (a uniform size field) skip the mean, which
+ * is then 0.5 * (1/h + 1/h) = 1/h to the bit. mc 0: the Euclidean length. */
 static inline double pa__len2(int mc, const double *a, const double *b,
                               const double *ma, const double *mb) {
   double x = b[0] - a[0], y = b[1] - a[1];
   if (mc <= 1) {
     double n = sqrt(x * x + y * y);
     if (mc == 0) return n;
+    if (ma[0] == mb[0]) return n * (1.0 / ma[0]);
     return n * pa__log_mean(1.0 / ma[0], 1.0 / mb[0]);
   }
   double la = sqrt(pa__sqlen2(mc, ma, x, y));

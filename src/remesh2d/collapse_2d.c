@@ -232,19 +232,19 @@ static int remove_vertex(pa__rmesh *rm, pa_idx k, int ip) {
 
 pa_status pa__rm_collapse_pass_2d(pa__rmesh *rm, double thr, long *n) {
   long cnt = 0;
-  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RM_E_TOUCHED;
-  for (pa_idx k = 0; k < rm->ne; k++) {
-    uint8_t t = rm->etag[k];
-    if (t & (RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN)) continue;
-    if ((t & RM_E_INRANGE) && thr <= PA_METRIC_LEN_LO)
-      continue; /* nothing below thr */
+  rm_etag_clear(rm, RM_E_TOUCHED);
+  /* an element in range has nothing below thr */
+  const uint8_t skip = RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN |
+                       (thr <= RM_LSHORT_OPT ? RM_E_INRANGE : 0);
+  for (pa_idx k = rm_next_elem(rm, 0, skip); k < rm->ne;
+       k = rm_next_elem(rm, k + 1, skip)) {
     const pa_idx *v = rm->ev + 3 * (size_t)k;
     /* shortest edge first */
     int best = -1, inr = 1;
     double lb = thr;
     for (int i = 0; i < 3; i++) {
       double l = rm_edge_len(rm, v[RM_NX3(i)], v[RM_PV3(i)]);
-      inr &= l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
+      inr &= rm_len_settled(l);
       if (l < lb) {
         lb = l;
         best = i;

@@ -54,14 +54,6 @@
  * own, beside the balance test). */
 #define RM_ROUNDS_TINY 5e-3
 
-/* The optimisation rounds' relaxed collapses take edges below this, a little
- * above 1/sqrt(2): a split of an edge just above sqrt(2) leaves two halves
- * just above 1/sqrt(2), which these collapses merge into an edge the next
- * split cuts at a better place. The mesh keeps the same share in range
- * with fewer triangles; a higher value loses edges in range (figures:
- * docs/BENCHMARKS.md, "The 2D remesher"). */
-#define RM_LSHORT_OPT 0.715
-
 /* Sweeps of length moves after the optimisation rounds' quality moves and
  * at the end (driver_3d.c: RM3D_LENGTH_SWEEPS). Not in the refinement
  * rounds: there they keep short edges the collapses would remove, more

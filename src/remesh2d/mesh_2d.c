@@ -870,8 +870,7 @@ pa_status pa__rm_check(const pa__rmesh *rm) {
         pa_idx p = v[i], q = v[i == 2 ? 0 : i + 1];
         double l = pa__len2(mc, rm->x + 2 * (size_t)p, rm->x + 2 * (size_t)q,
                             rm->met + (size_t)mc * p, rm->met + (size_t)mc * q);
-        PA_CHECK(l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI,
-                 PA_ERR_INTERNAL,
+        PA_CHECK(rm_len_settled(l), PA_ERR_INTERNAL,
                  "remesher: element %d is marked in range, edge %d has "
                  "length %g",
                  (int)k, i, l);

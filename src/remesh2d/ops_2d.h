@@ -74,6 +74,52 @@ static inline void rm_attach(pa__rmesh *rm, pa_idx code, pa_idx o,
   }
 }
 
+/* Clear tag bits on every element (vertex) slot, at the start of a pass.
+ * The array and the count are read once: through a uint8_t * a store may
+ * alias any field of rm, which the loop would otherwise reload at each slot,
+ * and it would not vectorise. */
+static inline void rm_etag_clear(pa__rmesh *rm, uint8_t bits) {
+  uint8_t *t = rm->etag;
+  const pa_idx n = rm->ne;
+  for (pa_idx k = 0; k < n; k++) t[k] &= (uint8_t)~bits;
+}
+static inline void rm_vtag_clear(pa__rmesh *rm, uint8_t bits) {
+  uint8_t *t = rm->vtag;
+  const pa_idx n = rm->nv;
+  for (pa_idx v = 0; v < n; v++) t[v] &= (uint8_t)~bits;
+}
+
+/* The first element slot from k on whose tag has none of the bits `skip`,
+ * or rm->ne: the scan of a pass, eight tags at a time through the runs it
+ * skips (most of the mesh once it has settled). The tags are read as the
+ * pass reaches them, so it visits the same elements as a slot-by-slot
+ * loop. */
+static inline pa_idx rm_next_elem(const pa__rmesh *rm, pa_idx k, uint8_t skip) {
+  const uint8_t *t = rm->etag;
+  const pa_idx n = rm->ne;
+  const uint64_t ones = 0x0101010101010101ULL, low7 = 0x7F7F7F7F7F7F7F7FULL,
+                 high = 0x8080808080808080ULL;
+  const uint64_t m = ones * skip;
+  while (k + 8 <= n) {
+    uint64_t w;
+    memcpy(&w, t + k, sizeof w);
+    w &= m;
+    /* the high bit of each byte, set when the byte is zero: a tag with
+     * none of the bits */
+    uint64_t zero = ~(((w & low7) + low7) | w) & high;
+    if (zero) {
+#if defined(__GNUC__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+      return k + (pa_idx)(__builtin_ctzll(zero) >> 3);
+#else
+      break;
+#endif
+    }
+    k += 8;
+  }
+  while (k < n && (t[k] & skip)) k++;
+  return k;
+}
+
 /* Element k is rewritten or about to be killed, or one of its vertices
  * moved: drop the caches that depend on it (RM_E_INRANGE of k, RM_E_NOSWAP of
  * k and its neighbours, RM_V_SETTLED of its vertices, whose balls change).

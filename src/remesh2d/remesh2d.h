@@ -59,9 +59,10 @@ enum {
    * rejected, and neither it nor a neighbour changed since: skipped by swap
    * passes. Cleared with RM_E_INRANGE, on the element and its neighbours. */
   RM_E_NOSWAP = 64,
-  /* The three edges lie in [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI] with the
-   * current coordinates and metric, so split and collapse passes at those
-   * thresholds have nothing to do here. Cleared with RM_V_SETTLED (an element
+  /* The three edges lie in [RM_LSHORT_OPT, PA_METRIC_LEN_HI] (rm_len_settled)
+   * with the current coordinates and metric, so split passes at
+   * PA_METRIC_LEN_HI, collapse passes at RM_LSHORT_OPT or below and length
+   * moves have nothing to do here. Cleared with RM_V_SETTLED (an element
    * rewritten, or one of its vertices moved); new elements start without. */
   RM_E_INRANGE = 128
 };
@@ -89,6 +90,14 @@ enum {
  * for the same share in range (figures: docs/BENCHMARKS.md, "The 2D
  * remesher"). */
 #define RM_LTARGET 1.2
+
+/* The optimisation rounds' relaxed collapses take edges below this, a little
+ * above 1/sqrt(2): a split of an edge just above sqrt(2) leaves two halves
+ * just above 1/sqrt(2), which these collapses merge into an edge the next
+ * split cuts at a better place. The mesh keeps the same share in range
+ * with fewer triangles; a higher value loses edges in range (figures:
+ * docs/BENCHMARKS.md, "The 2D remesher"). */
+#define RM_LSHORT_OPT 0.715
 
 typedef struct pa__rmesh {
   int dim;   /* 2 */
@@ -226,6 +235,15 @@ static inline void rm_tensor2(int mc, const double *m, double *t) {
   } else {
     t[0] = m[0]; t[1] = m[1]; t[2] = m[2];
   }
+}
+
+/* An edge length no split, collapse or length-move pass acts on: the band
+ * of RM_E_INRANGE. Its lower end is the highest collapse threshold
+ * (RM_LSHORT_OPT), above PA_METRIC_LEN_LO, so that one mark serves every
+ * pass; the elements it leaves unmarked (an edge in [PA_METRIC_LEN_LO,
+ * RM_LSHORT_OPT)) are few. */
+static inline int rm_len_settled(double l) {
+  return l >= RM_LSHORT_OPT && l <= PA_METRIC_LEN_HI;
 }
 
 /* Lengths and qualities are metric/metric2d.h's kernels (pa__len2,

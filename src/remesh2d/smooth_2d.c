@@ -45,6 +45,27 @@ static void apply_move(pa__rmesh *rm, pa_idx p, const pa_idx *el,
   rm->nmove++;
 }
 
+/* The triangles of a ball for the trial qualities of a move under a size
+ * metric (where the quality is the Euclidean one, pa__qual2): vertex j of
+ * triangle s at (x[j][s], y[j][s]), in the element's order, p's entry
+ * rewritten at each trial. One loop then evaluates the whole ball with the
+ * kernel's arithmetic, and vectorises. */
+typedef struct ball_xy {
+  double x[3][RM_BALL_MAX], y[3][RM_BALL_MAX];
+} ball_xy;
+
+static void ball_xy_qual(const ball_xy *b, int n, double *q) {
+  for (int s = 0; s < n; s++) {
+    double e1x = b->x[1][s] - b->x[0][s], e1y = b->y[1][s] - b->y[0][s];
+    double e2x = b->x[2][s] - b->x[0][s], e2y = b->y[2][s] - b->y[0][s];
+    double e3x = b->x[2][s] - b->x[1][s], e3y = b->y[2][s] - b->y[1][s];
+    double area = 0.5 * (e1x * e2y - e1y * e2x);
+    double sum = e1x * e1x + e1y * e1y + e2x * e2x + e2y * e2y + e3x * e3x +
+                 e3y * e3y;
+    q[s] = PA_METRIC_QUAL_NORM_2D * area / sum;
+  }
+}
+
 /* Move interior vertex p = v[ip] of element k towards the mean of the ideal
  * apexes of its ball (equilateral in the metric of p). Returns 1 if moved. */
 static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
@@ -60,10 +81,18 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   if (!(det > 0)) return 0;
   double sd = 1.0 / sqrt(det);
   double cx = 0, cy = 0, qold = 1, qmean = 0;
+  ball_xy bxy;
   for (int s = 0; s < n; s++) {
     const pa_idx *v = rm->ev + 3 * (size_t)el[s];
     if (rm->etag[el[s]] & RM_E_FROZEN) return 0;
-    const double *a = RM_X(v[RM_NX3(loc[s])]), *b = RM_X(v[RM_PV3(loc[s])]);
+    int l1 = RM_NX3(loc[s]), l2 = RM_PV3(loc[s]);
+    const double *a = RM_X(v[l1]), *b = RM_X(v[l2]);
+    if (mc <= 1) {
+      bxy.x[l1][s] = a[0];
+      bxy.y[l1][s] = a[1];
+      bxy.x[l2][s] = b[0];
+      bxy.y[l2][s] = b[1];
+    }
     double dx = b[0] - a[0], dy = b[1] - a[1];
     /* metric rotation by +90 degrees: adj(M) R d / sqrt(det M) */
     double rx = -dy, ry = dx;
@@ -90,9 +119,18 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
     xp[1] = y0 + om * (cy - y0);
     double qmin = 1, qm = 0;
     int ok = 1;
+    if (mc <= 1) {
+      for (int s = 0; s < n; s++) {
+        bxy.x[loc[s]][s] = xp[0];
+        bxy.y[loc[s]][s] = xp[1];
+      }
+      ball_xy_qual(&bxy, n, qn);
+    }
     for (int s = 0; s < n && ok; s++) {
-      const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-      qn[s] = rm_elem_qual(rm, v[0], v[1], v[2]);
+      if (mc > 1) {
+        const pa_idx *v = rm->ev + 3 * (size_t)el[s];
+        qn[s] = rm_elem_qual(rm, v[0], v[1], v[2]);
+      }
       if (qn[s] < RM_QFLOOR || qn[s] < qold) ok = 0;
       if (qn[s] < qmin) qmin = qn[s];
       qm += qn[s];
@@ -133,7 +171,7 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
 
 long pa__rm_smooth_pass_2d(pa__rmesh *rm) {
   long cnt = 0;
-  for (pa_idx v = 0; v < rm->nv; v++) rm->vtag[v] &= ~RM_V_DONE;
+  rm_vtag_clear(rm, RM_V_DONE);
   for (pa_idx k = 0; k < rm->ne; k++) {
     if (rm->etag[k] & (RM_E_DEAD | RM_E_FROZEN)) continue;
     for (int i = 0; i < 3; i++) {
@@ -256,16 +294,19 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
 long pa__rm_length_pass_2d(pa__rmesh *rm) {
   int mc = rm->mcomp;
   long cnt = 0;
-  for (pa_idx v = 0; v < rm->nv; v++) rm->vtag[v] &= ~RM_V_DONE;
-  for (pa_idx k = 0; k < rm->ne; k++) {
-    if (rm->etag[k] & (RM_E_DEAD | RM_E_FROZEN)) continue;
+  rm_vtag_clear(rm, RM_V_DONE);
+  const uint8_t skip = RM_E_DEAD | RM_E_FROZEN | RM_E_INRANGE;
+  for (pa_idx k = rm_next_elem(rm, 0, skip); k < rm->ne;
+       k = rm_next_elem(rm, k + 1, skip)) {
     const pa_idx *v = rm->ev + 3 * (size_t)k;
-    int bad = 0;
+    int bad = 0, settled = 1;
     for (int i = 0; i < 3 && !bad; i++) {
       double l = pa__len2(mc, RM_X(v[RM_NX3(i)]), RM_X(v[RM_PV3(i)]),
                           RM_M(v[RM_NX3(i)]), RM_M(v[RM_PV3(i)]));
       bad = !(l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI);
+      settled &= rm_len_settled(l);
     }
+    if (settled) rm->etag[k] |= RM_E_INRANGE;
     if (!bad) continue;
     for (int i = 0; i < 3; i++) {
       pa_idx p = v[i];

@@ -180,8 +180,7 @@ static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
 }
 
 /* Longest free edge of element k above thr: face index or -1, length in *len;
- * *inr (may be NULL) = all three edges in [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI].
- */
+ * *inr (may be NULL) = all three edges settled (rm_len_settled). */
 static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
                         int *inr) {
   const pa_idx *v = rm->ev + 3 * (size_t)k;
@@ -189,7 +188,7 @@ static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
   double lb = thr;
   for (int i = 0; i < 3; i++) {
     double l = rm_edge_len(rm, v[RM_NX3(i)], v[RM_PV3(i)]);
-    in &= l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
+    in &= rm_len_settled(l);
     if (l > lb && rm_edge_free(rm, 3 * k + i)) {
       lb = l;
       best = i;
@@ -203,12 +202,12 @@ static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
 pa_status pa__rm_split_pass_2d(pa__rmesh *rm, double thr, long *n) {
   pa_status st = PA_SUCCESS;
   long cnt = 0;
-  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RM_E_TOUCHED;
-  for (pa_idx k = 0; k < rm->ne; k++) {
-    uint8_t t = rm->etag[k];
-    if (t & (RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN)) continue;
-    if ((t & RM_E_INRANGE) && thr >= PA_METRIC_LEN_HI)
-      continue; /* nothing above thr */
+  rm_etag_clear(rm, RM_E_TOUCHED);
+  /* an element in range has nothing above thr */
+  const uint8_t skip = RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN |
+                       (thr >= PA_METRIC_LEN_HI ? RM_E_INRANGE : 0);
+  for (pa_idx k = rm_next_elem(rm, 0, skip); k < rm->ne;
+       k = rm_next_elem(rm, k + 1, skip)) {
     double l;
     int inr;
     int i = longest_free(rm, k, thr, &l, &inr);

@@ -40,13 +40,24 @@ static int swap_edge(pa__rmesh *rm, pa_idx k, int i, double gain) {
   return 1;
 }
 
+/* The first element slot from k on, or rm->ne, with quality below qmax and
+ * none of the tag bits `skip`: the scan of the swap passes, reading the
+ * arrays once (see rm_etag_clear). */
+static pa_idx next_below(const pa__rmesh *rm, pa_idx k, uint8_t skip,
+                         double qmax) {
+  const uint8_t *t = rm->etag;
+  const float *q = rm->q;
+  const pa_idx n = rm->ne;
+  while (k < n && ((t[k] & skip) || q[k] >= qmax)) k++;
+  return k;
+}
+
 long pa__rm_swap_pass_2d(pa__rmesh *rm, double qmax) {
   long cnt = 0;
-  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RM_E_TOUCHED;
-  for (pa_idx k = 0; k < rm->ne; k++) {
-    uint8_t t = rm->etag[k];
-    if (t & (RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN)) continue;
-    if (rm->q[k] >= qmax || (t & RM_E_NOSWAP)) continue;
+  rm_etag_clear(rm, RM_E_TOUCHED);
+  const uint8_t skip = RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN | RM_E_NOSWAP;
+  for (pa_idx k = next_below(rm, 0, skip, qmax); k < rm->ne;
+       k = next_below(rm, k + 1, skip, qmax)) {
     int done = 0, all = 1;
     for (int i = 0; i < 3 && !done; i++) {
       pa_idx o = rm->adj[3 * k + i];
@@ -65,7 +76,7 @@ long pa__rm_swap_pass_2d(pa__rmesh *rm, double qmax) {
 
 long pa__rm_sliver_pass_2d(pa__rmesh *rm, double qbad) {
   long cnt = 0;
-  for (pa_idx k = 0; k < rm->ne; k++) rm->etag[k] &= ~RM_E_TOUCHED;
+  rm_etag_clear(rm, RM_E_TOUCHED);
   for (pa_idx k = 0; k < rm->ne; k++) {
     uint8_t t = rm->etag[k];
     if (t & (RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN)) continue;
