@@ -490,7 +490,8 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
   if (check_outputs(cli, &args)) return 1;
   /* On several ranks, or when asked for a distributed output, a memory
    * bound or a checkpoint, the parallel piece loop (tools/cmd_padapt.c) does
-   * the work. */
+   * the work, unless it finds the job too small to share out
+   * (-serial-below): then rank 0 adapts it as one process would. */
   if (cli->size > 1 || args.distributed || args.mem_mb > 0 ||
       args.checkpoint || args.restart) {
     int rc = pa_cli_adapt_parallel(cli, &args);

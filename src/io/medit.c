@@ -1069,19 +1069,18 @@ pa_status pa__gmfw_rec(pa__gmfw *w, const double *rv, const int64_t *iv) {
     }
     return PA_SUCCESS;
   }
-  int nval = w->nreal + w->nint;
-  for (int j = 0; j < nval; j++) {
+  int nval = w->nreal + w->nint, j = 0;
+  while (j < nval) {
     if (w->len + GMFW_SLACK > GMFW_BUF) PA_CALL(wflush(w));
     /* the numbers that fit, formatted into a local cursor (the buffer's
      * chars may alias *w, which would be reloaded at every char) */
     char *s0 = w->buf + w->len, *s = s0;
     size_t room = (GMFW_BUF - w->len) / GMFW_SLACK;
-    for (int end = j + (int)(room < (size_t)(nval - j) ? room : (size_t)(nval - j));
-         j < end; j++) {
+    int end = room < (size_t)(nval - j) ? j + (int)room : nval;
+    for (; j < end; j++) {
       s += j < w->nreal ? fmt_real(s, rv[j]) : fmt_int(s, iv[j - w->nreal]);
       *s++ = j + 1 < nval ? ' ' : '\n';
     }
-    j--;
     w->len += (size_t)(s - s0);
     w->off += s - s0;
   }

@@ -77,18 +77,28 @@ static inline double pa__len2(int mc, const double *a, const double *b,
  * With sizes (mc 1) the mean M = s I scales the area and every l^2 by s
  * alike: the quality is the Euclidean one and the sizes are not read; so
  * with mc 0. */
+/* pa__qual2 with sizes (the Euclidean quality) of the triangle (ax, ay),
+ * (bx, by), (cx, cy), from scalars: a loop over many triangles then
+ * vectorises (smooth_2d.c). */
+static inline double pa__qual2_xy(double ax, double ay, double bx, double by,
+                                  double cx, double cy) {
+  double e1x = bx - ax, e1y = by - ay;
+  double e2x = cx - ax, e2y = cy - ay;
+  double e3x = cx - bx, e3y = cy - by;
+  double area = 0.5 * (e1x * e2y - e1y * e2x);
+  double s = e1x * e1x + e1y * e1y + e2x * e2x + e2y * e2y + e3x * e3x +
+             e3y * e3y;
+  return PA_METRIC_QUAL_NORM_2D * area / s;
+}
+
 static inline double pa__qual2(int mc, const double *a, const double *b,
                                const double *c, const double *ma,
                                const double *mb, const double *mcv) {
+  if (mc <= 1) return pa__qual2_xy(a[0], a[1], b[0], b[1], c[0], c[1]);
   double e1x = b[0] - a[0], e1y = b[1] - a[1];
   double e2x = c[0] - a[0], e2y = c[1] - a[1];
   double e3x = c[0] - b[0], e3y = c[1] - b[1];
   double area = 0.5 * (e1x * e2y - e1y * e2x);
-  if (mc <= 1) {
-    double s = e1x * e1x + e1y * e1y + e2x * e2x + e2y * e2y + e3x * e3x +
-               e3y * e3y;
-    return PA_METRIC_QUAL_NORM_2D * area / s;
-  }
   double m0 = (ma[0] + mb[0] + mcv[0]) * (1.0 / 3.0);
   double m1 = (ma[1] + mb[1] + mcv[1]) * (1.0 / 3.0);
   double m2 = (ma[2] + mb[2] + mcv[2]) * (1.0 / 3.0);

@@ -40,14 +40,20 @@ static inline double pa__sqlen3(int mc, const double *m, const double *e) {
  * geometrically along the edge (pa__len2 says why). With sizes
  * L = n * logmean(1/ha, 1/hb), n the Euclidean length: one square root.
  * The statistics and the 3D remesher measure with this one kernel. */
+/* pa__len3 with sizes, given the inverse sizes ia = 1/ha and ib = 1/hb: for
+ * a caller that takes each vertex's inverse once for several edges, with
+ * the same bits. */
+static inline double pa__len3_inv(const double *a, const double *b, double ia,
+                                  double ib) {
+  double e[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  return sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) * pa__log_mean(ia, ib);
+}
+
 static inline double pa__len3(int mc, const double *a, const double *b,
                               const double *ma, const double *mb) {
+  if (mc == 1) return pa__len3_inv(a, b, 1.0 / ma[0], 1.0 / mb[0]);
   double e[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-  if (mc <= 1) {
-    double n = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-    if (mc == 0) return n;
-    return n * pa__log_mean(1.0 / ma[0], 1.0 / mb[0]);
-  }
+  if (mc == 0) return sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
   return pa__log_mean(sqrt(pa__sqlen3_tensor(ma, e)),
                       sqrt(pa__sqlen3_tensor(mb, e)));
 }

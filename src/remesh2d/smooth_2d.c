@@ -49,21 +49,15 @@ static void apply_move(pa__rmesh *rm, pa_idx p, const pa_idx *el,
  * metric (where the quality is the Euclidean one, pa__qual2): vertex j of
  * triangle s at (x[j][s], y[j][s]), in the element's order, p's entry
  * rewritten at each trial. One loop then evaluates the whole ball with the
- * kernel's arithmetic, and vectorises. */
+ * kernel (pa__qual2_xy), and vectorises. */
 typedef struct ball_xy {
   double x[3][RM_BALL_MAX], y[3][RM_BALL_MAX];
 } ball_xy;
 
 static void ball_xy_qual(const ball_xy *b, int n, double *q) {
-  for (int s = 0; s < n; s++) {
-    double e1x = b->x[1][s] - b->x[0][s], e1y = b->y[1][s] - b->y[0][s];
-    double e2x = b->x[2][s] - b->x[0][s], e2y = b->y[2][s] - b->y[0][s];
-    double e3x = b->x[2][s] - b->x[1][s], e3y = b->y[2][s] - b->y[1][s];
-    double area = 0.5 * (e1x * e2y - e1y * e2x);
-    double sum = e1x * e1x + e1y * e1y + e2x * e2x + e2y * e2y + e3x * e3x +
-                 e3y * e3y;
-    q[s] = PA_METRIC_QUAL_NORM_2D * area / sum;
-  }
+  for (int s = 0; s < n; s++)
+    q[s] = pa__qual2_xy(b->x[0][s], b->y[0][s], b->x[1][s], b->y[1][s],
+                        b->x[2][s], b->y[2][s]);
 }
 
 /* Move interior vertex p = v[ip] of element k towards the mean of the ideal

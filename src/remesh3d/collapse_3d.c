@@ -277,16 +277,6 @@ static int ridge_kept(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball, int n,
   return !(d2 > h * h);
 }
 
-pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
-                            int *done) {
-  pa_idx ball[RM3D_MAXBALL];
-  *done = 0;
-  if (!rm3d_collapse_allowed(m, p, q)) return PA_SUCCESS;
-  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
-  if (n < 0) return PA_SUCCESS;
-  return pa__rm3d_collapse_ball(m, p, q, ball, n, lguard, done);
-}
-
 pa_status pa__rm3d_collapse_ball(rm3d *m, pa_idx p, pa_idx q,
                                  const pa_idx *ball, int n, double lguard,
                                  int *done) {
@@ -439,7 +429,7 @@ cleanup:
 /* Midpoint collapse: q first moves to the middle of (p,q) -- only where it
  * stays on its entity (mid_on_entity) --, its ball checked like a collapse
  * (quality, length guard); then p collapses onto it with every check of
- * pa__rm3d_collapse. When that collapse is refused, q goes back
+ * pa__rm3d_collapse_ball. When that collapse is refused, q goes back
  * (coordinates, metric, cached qualities bit for bit). */
 pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q,
                                 const pa_idx *bp, int np, const pa_idx *bq,

@@ -84,9 +84,7 @@ static void lengths6(const rm3d *m, const pa_idx *v, double *L) {
   }
   for (int e = 0; e < 6; e++) {
     int i = pa__rm3d_edge[e][0], j = pa__rm3d_edge[e][1];
-    double d[3] = {x[j][0] - x[i][0], x[j][1] - x[i][1], x[j][2] - x[i][2]};
-    double n = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-    L[e] = n * pa__log_mean(inv[i], inv[j]);
+    L[e] = pa__len3_inv(x[i], x[j], inv[i], inv[j]);
   }
 }
 

@@ -282,16 +282,15 @@ int pa__rm3d_ball(rm3d *m, pa_idx p, pa_idx *ball, int max);
  * *done = 1 when split. */
 pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
                               int *done);
-/* Collapse the edge (p,q): p removed, q kept. *done = 1 when collapsed. */
-pa_status pa__rm3d_collapse(rm3d *m, pa_idx p, pa_idx q, double lguard,
-                            int *done);
-/* The same with p's ball given (ball[0..n), as pa__rm3d_ball gives it). */
+/* Collapse the edge (p,q): p removed, q kept, p's ball given (ball[0..n),
+ * as pa__rm3d_ball gives it). *done = 1 when collapsed. */
 pa_status pa__rm3d_collapse_ball(rm3d *m, pa_idx p, pa_idx q,
                                  const pa_idx *ball, int n, double lguard,
                                  int *done);
 /* Contract the edge (p,q) to its midpoint: q moves there (only where it
  * stays on its entity: interior, plane, straight ridge), then p collapses
- * onto it with every check of pa__rm3d_collapse; q moves back otherwise.
+ * onto it with every check of pa__rm3d_collapse_ball; q moves back
+ * otherwise.
  * The balls of p and q are given (bp[0..np), bq[0..nb), as pa__rm3d_ball
  * gives them; a count of -1, a ball too large, refuses). */
 pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q,
