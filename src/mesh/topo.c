@@ -88,24 +88,65 @@ typedef struct face_rec {
   pa_idx code;
 } face_rec;
 
-static int face_rec_cmp(const void *a, const void *b) {
-  uint64_t x = ((const face_rec *)a)->key, y = ((const face_rec *)b)->key;
-  return (x > y) - (x < y);
+/* Records in order of (key, code): codes are distinct, so the order is
+ * total, and equal keys keep the increasing codes their bucket gives them. */
+static inline int face_rec_less(face_rec a, face_rec b) {
+  return a.key < b.key || (a.key == b.key && a.code < b.code);
 }
 
-static void face_rec_sort(face_rec *r, pa_idx n) {
-  if (n > 32) {
-    qsort(r, (size_t)n, sizeof *r, face_rec_cmp);
-    return;
-  }
+static void face_rec_insertion(face_rec *r, pa_idx n) {
   for (pa_idx i = 1; i < n; i++) {
     face_rec x = r[i];
     pa_idx j = i - 1;
-    while (j >= 0 && r[j].key > x.key) {
+    while (j >= 0 && face_rec_less(x, r[j])) {
       r[j + 1] = r[j];
       j--;
     }
     r[j + 1] = x;
+  }
+}
+
+/* Quicksort (median of three, the smaller side first so the stack stays
+ * below 2 log2 n) down to runs of 16, which insertion sort finishes. A
+ * bucket holds a few dozen faces, rarely a few hundred. */
+static void face_rec_sort(face_rec *r, pa_idx n) {
+  pa_idx lo_stack[64], hi_stack[64];
+  int top = 0;
+  pa_idx lo = 0, hi = n;
+  for (;;) {
+    while (hi - lo > 16) {
+      face_rec *a = r + lo, *b = r + lo + (hi - lo) / 2, *c = r + hi - 1, t;
+      if (face_rec_less(*b, *a)) { t = *a; *a = *b; *b = t; }
+      if (face_rec_less(*c, *b)) { t = *b; *b = *c; *c = t; }
+      if (face_rec_less(*b, *a)) { t = *a; *a = *b; *b = t; }
+      face_rec piv = *b;
+      pa_idx i = lo, j = hi - 1;
+      for (;;) {
+        while (face_rec_less(r[i], piv)) i++;
+        while (face_rec_less(piv, r[j])) j--;
+        if (i >= j) break;
+        t = r[i];
+        r[i] = r[j];
+        r[j] = t;
+        i++;
+        j--;
+      }
+      /* [lo, j] <= piv <= [j+1, hi) */
+      if (j + 1 - lo < hi - (j + 1)) {
+        lo_stack[top] = j + 1;
+        hi_stack[top++] = hi;
+        hi = j + 1;
+      } else {
+        lo_stack[top] = lo;
+        hi_stack[top++] = j + 1;
+        lo = j + 1;
+      }
+    }
+    face_rec_insertion(r + lo, hi - lo);
+    if (!top) break;
+    top--;
+    lo = lo_stack[top];
+    hi = hi_stack[top];
   }
 }
 
