@@ -22,8 +22,11 @@
 # the outputs written, on rank 0), which leaves out the start and end of
 # MPI -- about 0.4 s on one process (a singleton still starts Open MPI's
 # runtime) and 0.5 s with mpiexec -n 2, as much as half of the small job's
-# work, the same whatever padapt does. Wall clock: meaningful on a quiet
-# machine only (the load is printed first).
+# work, the same whatever padapt does. Then the speed of each core: the
+# same sequential job pinned to core 0 and to core 1 (taskset), and the cap
+# that puts on the efficiency (a virtual machine's cores can differ: on the
+# 2-core VM of docs/BENCHMARKS.md by up to 1.5x, changing over minutes).
+# Wall clock: meaningful on a quiet machine only (the load is printed first).
 set -u
 BUILD=${1:?BUILD_DIR}
 WORK=${2:?WORK_DIR}
@@ -96,17 +99,32 @@ for c in $CASES; do
     plate) side_by_side plate "$ROOT/tests/data/plate2d.mesh" 0.002 mmg2d -3dMedit 3 ;;
     small)
       "$PADAPT" generate box3d 10 small.mesh > /dev/null
-      : > e.txt
+      : > e.txt; rm -f cpu0.txt cpu1.txt
       for i in $(seq "$PAIRS"); do
         t1=$(LOG=l1.txt timed "$PADAPT" -v 1 adapt small.mesh -hsiz 0.05 -out s1.mesh -nosol -v -1 | cut -d' ' -f1)
         t2=$(LOG=l2.txt timed mpiexec -n 2 "$PADAPT" -v 1 adapt small.mesh -hsiz 0.05 -out s2.mesh -nosol -v -1 | cut -d' ' -f1)
         echo "$t1 $t2 $(own l1.txt) $(own l2.txt)" |
           awk '{print $1 / (2 * $2), $1, $2, $3 / (2 * $4), $3, $4}' >> e.txt
+        if command -v taskset > /dev/null; then
+          for cpu in 0 1; do
+            LOG=l1.txt timed taskset -c $cpu "$PADAPT" -v 1 adapt small.mesh -hsiz 0.05 -out s1.mesh -nosol -v -1 > /dev/null
+            own l1.txt >> "cpu$cpu.txt"
+          done
+        fi
       done
       echo "small  box3d 10 -> 0.05, $(judge s1.mesh 0.05 | cut -d' ' -f1) / $(judge s2.mesh 0.05 | cut -d' ' -f1) elements:" \
            "median efficiency T1/(2 T2) $(cut -d' ' -f1 e.txt | median) wall," \
            "$(cut -d' ' -f4 e.txt | median) on the command's own time" \
-           "(T1/T2 pairs, wall: $(awk '{printf "%s/%s ", $2, $3}' e.txt); own: $(awk '{printf "%s/%s ", $5, $6}' e.txt | sed 's/ $//'))" ;;
+           "(T1/T2 pairs, wall: $(awk '{printf "%s/%s ", $2, $3}' e.txt); own: $(awk '{printf "%s/%s ", $5, $6}' e.txt | sed 's/ $//'))"
+      if [ -s cpu0.txt ] && [ -s cpu1.txt ]; then
+        # mpiexec -n 2 binds rank r to core r: with the job cut in two
+        # equal halves, T2 >= max(a, b) / 2, so T1 / (2 T2) <= T1 / max(a, b)
+        a=$(median < cpu0.txt) b=$(median < cpu1.txt)
+        t1=$(cut -d' ' -f5 e.txt | median)
+        echo "small  the two cores: T1 pinned to core 0 / core 1 (own, median) $a / $b s;" \
+             "equal halves cap the efficiency at T1 / max = $(awk -v t="$t1" -v a="$a" -v b="$b" 'BEGIN { printf "%.3f", t / (a > b ? a : b) }')"
+      fi
+      rm -f cpu0.txt cpu1.txt ;;
     *) echo "unknown case $c" ;;
   esac
 done
