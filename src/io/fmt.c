@@ -7,8 +7,9 @@
  * N = round(m 5^p 2^(e+p)), rounded half to even as glibc does in the
  * default rounding mode: for 0 <= p <= 27, m 5^p < 2^116 holds in 128 bits
  * and the power of two is a shift whose remainder decides the rounding
- * exactly. That covers |x| from about 1e-11 to 1e17 at 17 digits; other
- * values, zeros, infinities and NaN go to snprintf.
+ * exactly. That covers |x| from about 1e-11 to 1e17 at 17 digits; zeros
+ * are "0" and "-0"; other values, subnormals, infinities and NaN go to
+ * snprintf. pa__fmt_int: an integer in decimal, two digits per division.
  */
 #include "io/io.h"
 
@@ -19,7 +20,8 @@
 /* 5^27 < 2^63: the largest power of 5 that keeps m 5^p within 128 bits */
 #define FMT_P_MAX 27
 
-static const uint64_t pow10_u64[18] = {1ULL,
+/* 10^k for k < 20: every uint64_t has at most 20 digits */
+static const uint64_t pow10_u64[20] = {1ULL,
                                        10ULL,
                                        100ULL,
                                        1000ULL,
@@ -36,7 +38,9 @@ static const uint64_t pow10_u64[18] = {1ULL,
                                        100000000000000ULL,
                                        1000000000000000ULL,
                                        10000000000000000ULL,
-                                       100000000000000000ULL};
+                                       100000000000000000ULL,
+                                       1000000000000000000ULL,
+                                       10000000000000000000ULL};
 
 static const uint64_t pow5_u64[FMT_P_MAX + 1] = {
     1ULL,
@@ -87,35 +91,80 @@ static int scaled(uint64_t m, int p, int sh, uint64_t *n) {
   return 1;
 }
 
-/* The prec digits of n (zero-padded on the left) into d. */
-static void digits(uint64_t n, int prec, char *d) {
-  for (int i = prec - 1; i >= 0; i--) {
-    d[i] = (char)('0' + n % 10);
-    n /= 10;
+/* The two digits of each of 0-99. */
+static const char digit_pairs[201] = "00010203040506070809"
+                                     "10111213141516171819"
+                                     "20212223242526272829"
+                                     "30313233343536373839"
+                                     "40414243444546474849"
+                                     "50515253545556575859"
+                                     "60616263646566676869"
+                                     "70717273747576777879"
+                                     "80818283848586878889"
+                                     "90919293949596979899";
+
+/* The n decimal digits of u (zero-padded on the left) ending at end. */
+static void digits_before(uint64_t u, int n, char *end) {
+  for (; n >= 2; n -= 2) {
+    uint64_t q = u / 100;
+    end -= 2;
+    memcpy(end, digit_pairs + 2 * (u - 100 * q), 2);
+    u = q;
   }
+  if (n) end[-1] = (char)('0' + u % 10);
+}
+
+int pa__fmt_int(char *s, int64_t v) {
+  uint64_t u = v < 0 ? (uint64_t)0 - (uint64_t)v : (uint64_t)v;
+  int neg = v < 0;
+  /* the digits of u from its bit length b: floor(b log10 2) is the number
+   * of digits or one less (1233 / 4096 ~ log10 2) */
+  int t = (64 - __builtin_clzll(u | 1)) * 1233 >> 12;
+  int n = t + (u >= pow10_u64[t]);
+  n += n == 0;
+  char *end = s + neg + n;
+  while (u >= 100) {
+    uint64_t q = u / 100;
+    end -= 2;
+    memcpy(end, digit_pairs + 2 * (u - 100 * q), 2);
+    u = q;
+  }
+  if (u >= 10) memcpy(end - 2, digit_pairs + 2 * u, 2);
+  else end[-1] = (char)('0' + u);
+  if (neg) *s = '-';
+  return neg + n;
 }
 
 int pa__fmt_g(char *s, double x, int prec) {
-  if (prec < 1 || prec > 17 || !isfinite(x) || x == 0)
+  if (x == 0 && prec >= 1 && prec <= 17) { /* "%g" prints 0 and -0 bare */
+    s[0] = '-';
+    s[signbit(x) != 0] = '0';
+    s[(signbit(x) != 0) + 1] = '\0';
+    return (signbit(x) != 0) + 1;
+  }
+  if (prec < 1 || prec > 17 || !isnormal(x))
     return snprintf(s, 32, "%.*g", prec, x);
-  int e2;
-  double f = frexp(fabs(x), &e2); /* |x| = f 2^e2, f in [0.5, 1) */
-  uint64_t m = (uint64_t)ldexp(f, 53);
-  int e = e2 - 53;
-  int E = (int)floor(log10(fabs(x)));
+  uint64_t bits;
+  memcpy(&bits, &x, sizeof bits);
+  /* |x| = m 2^e, m in [2^52, 2^53) */
+  uint64_t m = (bits & 0xFFFFFFFFFFFFFull) | 1ull << 52;
+  int e = (int)(bits >> 52 & 0x7FF) - 1075;
+  /* |x| in [2^(e+52), 2^(e+53)): floor((e + 52) log10 2) is E or E - 1,
+   * and the loop below takes the one step up */
+  int E = (int)floor((e + 52) * 0.30102999566398120);
   uint64_t n = 0;
   for (int tries = 0;; tries++) {
     int p = prec - 1 - E;
     if (tries > 2 || p < 0 || p > FMT_P_MAX || !scaled(m, p, e + p, &n))
       return snprintf(s, 32, "%.*g", prec, x);
     if (n >= pow10_u64[prec])
-      E++; /* log10 was low, or the rounding carried to 10^prec */
+      E++; /* E was low, or the rounding carried to 10^prec */
     else if (n < pow10_u64[prec - 1])
       E--;
     else
       break;
   }
-  /* 10^(prec-1) may be x rounded up at the scale of a log10 one too high:
+  /* 10^(prec-1) may be x rounded up at the scale of an E one too high:
    * one digit more of scale keeps prec digits when x is below 10^E */
   if (n == pow10_u64[prec - 1]) {
     uint64_t lower;
@@ -127,7 +176,7 @@ int pa__fmt_g(char *s, double x, int prec) {
     }
   }
   char d[17];
-  digits(n, prec, d);
+  digits_before(n, prec, d + prec);
   int nd = prec; /* %g drops the trailing zeros of the fraction */
   while (nd > 1 && d[nd - 1] == '0') nd--;
   char *o = s;

@@ -3,7 +3,8 @@
  * "%.*g" for every kind of double: random bit patterns (every exponent),
  * mesh-like coordinates, short decimals and exact ties (the half-to-even
  * rounding), powers of 2 and 10 and their neighbours, subnormals, zeros,
- * infinities, NaN, at every precision from 1 to 17.
+ * infinities, NaN, at every precision from 1 to 17; pa__fmt_int those of
+ * "%lld" for every digit count and sign.
  */
 #include "testutil.h"
 #include "io/io.h"
@@ -87,4 +88,41 @@ static void test_fmt_g(void) {
   if (nfail) fprintf(stderr, "fmt: %ld differences from snprintf\n", nfail);
 }
 
-TEST_MAIN(test_fmt_g)
+static void same_int(int64_t v) {
+  char a[32], b[32];
+  int na = pa__fmt_int(a, v);
+  int nb = snprintf(b, sizeof b, "%lld", (long long)v);
+  if (na != nb || memcmp(a, b, (size_t)nb) != 0) {
+    if (nfail++ < 10)
+      fprintf(stderr, "fmt: %s as '%.*s'\n", b, na > 0 && na < 32 ? na : 0, a);
+  }
+}
+
+static void test_fmt_int(void) {
+  nfail = 0;
+  pa_test_seed(20261128);
+  same_int(0);
+  same_int(INT64_MAX);
+  same_int(INT64_MIN);
+  /* every power of 10 and of 2 and their neighbours, both signs */
+  for (int k = 0; k < 63; k++)
+    for (int64_t d = -1; d <= 1; d++) {
+      int64_t p2 = ((int64_t)1 << k) + d, p10 = 1;
+      for (int j = 0; j < k % 19; j++) p10 *= 10;
+      same_int(p2);
+      same_int(-p2);
+      same_int(p10 + d);
+      same_int(-(p10 + d));
+    }
+  for (int64_t v = -100000; v <= 100000; v++) same_int(v);
+  for (int i = 0; i < 200000; i++) {
+    uint64_t u = 0;
+    for (int k = 0; k < 4; k++)
+      u = (u << 16) ^ (uint64_t)(pa_test_rand() * 65536.0);
+    same_int((int64_t)(u >> (i % 64)));
+    same_int(-(int64_t)(u >> (i % 64 + 1)));
+  }
+  CHECK(nfail == 0);
+}
+
+TEST_MAIN(test_fmt_g, test_fmt_int)
