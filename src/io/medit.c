@@ -1020,7 +1020,7 @@ static int fmt15_verdict(const char *s, double x) {
   int k = 16 - e10;
   double scale = k >= 0 && k <= 22 ? pow10_exact[k] : pow(10.0, k);
   return diff - 0.5 > half_ulp(x) * scale * (1 + 1e-9) ? FMT15_INEXACT
-                                                        : FMT15_UNKNOWN;
+                                                       : FMT15_UNKNOWN;
 }
 
 /* Shortest of %.15g / %.17g that reads back exactly (pa__fmt_g: printf's
