@@ -9,12 +9,15 @@
  * and the power of two is a shift whose remainder decides the rounding
  * exactly. That covers |x| from about 1e-11 to 1e17 at 17 digits; zeros
  * are "0" and "-0"; other values, subnormals, infinities and NaN go to
- * snprintf. pa__fmt_int: an integer in decimal, two digits per division.
+ * snprintf. pa__fmt_shortest: the shorter of %.15g and %.17g that reads
+ * back exactly, mostly decided from the 17 digits alone (decided_17).
+ * pa__fmt_int: an integer in decimal, two digits per division.
  */
 #include "io/io.h"
 
 #include <math.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* 5^27 < 2^63: the largest power of 5 that keeps m 5^p within 128 bits */
@@ -135,15 +138,10 @@ int pa__fmt_int(char *s, int64_t v) {
   return neg + n;
 }
 
-int pa__fmt_g(char *s, double x, int prec) {
-  if (x == 0 && prec >= 1 && prec <= 17) { /* "%g" prints 0 and -0 bare */
-    s[0] = '-';
-    s[signbit(x) != 0] = '0';
-    s[(signbit(x) != 0) + 1] = '\0';
-    return (signbit(x) != 0) + 1;
-  }
-  if (prec < 1 || prec > 17 || !isnormal(x))
-    return snprintf(s, 32, "%.*g", prec, x);
+/* The prec significant digits d[0..prec) of the normal double x rounded
+ * half to even, and the decimal exponent *E of the first; 0 when x is out
+ * of the range of the 128-bit arithmetic (the caller asks snprintf). */
+static int fast_digits(double x, int prec, char *d, int *Ep) {
   uint64_t bits;
   memcpy(&bits, &x, sizeof bits);
   /* |x| = m 2^e, m in [2^52, 2^53) */
@@ -156,7 +154,7 @@ int pa__fmt_g(char *s, double x, int prec) {
   for (int tries = 0;; tries++) {
     int p = prec - 1 - E;
     if (tries > 2 || p < 0 || p > FMT_P_MAX || !scaled(m, p, e + p, &n))
-      return snprintf(s, 32, "%.*g", prec, x);
+      return 0;
     if (n >= pow10_u64[prec])
       E++; /* E was low, or the rounding carried to 10^prec */
     else if (n < pow10_u64[prec - 1])
@@ -169,14 +167,20 @@ int pa__fmt_g(char *s, double x, int prec) {
   if (n == pow10_u64[prec - 1]) {
     uint64_t lower;
     if (prec - E > FMT_P_MAX || !scaled(m, prec - E, e + prec - E, &lower))
-      return snprintf(s, 32, "%.*g", prec, x);
+      return 0;
     if (lower < pow10_u64[prec]) {
       n = lower;
       E--;
     }
   }
-  char d[17];
   digits_before(n, prec, d + prec);
+  *Ep = E;
+  return 1;
+}
+
+/* The "%.*g" form of the digits d[0..prec) of x (first digit at decimal
+ * exponent E) into s; its length. */
+static int layout(char *s, double x, const char *d, int prec, int E) {
   int nd = prec; /* %g drops the trailing zeros of the fraction */
   while (nd > 1 && d[nd - 1] == '0') nd--;
   char *o = s;
@@ -211,4 +215,65 @@ int pa__fmt_g(char *s, double x, int prec) {
   }
   *o = '\0';
   return (int)(o - s);
+}
+
+int pa__fmt_g(char *s, double x, int prec) {
+  char d[17];
+  int E;
+  if (x == 0 && prec >= 1 && prec <= 17) { /* "%g" prints 0 and -0 bare */
+    s[0] = '-';
+    s[signbit(x) != 0] = '0';
+    s[(signbit(x) != 0) + 1] = '\0';
+    return (signbit(x) != 0) + 1;
+  }
+  if (prec < 1 || prec > 17 || !isnormal(x) || !fast_digits(x, prec, d, &E))
+    return snprintf(s, 32, "%.*g", prec, x);
+  return layout(s, x, d, prec, E);
+}
+
+/* 10^k for 0 <= k <= 22, all exact doubles */
+static const double pow10_exact[23] = {
+    1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
+    1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+
+/* Half an ulp of the normal double x: 2^(ilogb(x) - 53). */
+static double half_ulp(double x) {
+  uint64_t b;
+  memcpy(&b, &x, sizeof b);
+  int ex = (int)(b >> 52 & 0x7FF); /* biased: ilogb(x) = ex - 1023 */
+  if (ex <= 53) return ldexp(1.0, ex - 1023 - 53);
+  b = (uint64_t)(ex - 53) << 52;
+  double h;
+  memcpy(&h, &b, sizeof h);
+  return h;
+}
+
+/* Whether %.15g of the normal double x is known from d, its 17 digits
+ * (correctly rounded; first at decimal exponent E), without printing it:
+ * - digits 16-17 are 00 (15 digits or fewer): x rounded to 15 digits is
+ *   d's value, so below an exponent of 15 (where %.15g would switch to the
+ *   d.ddde+XX form) %.15g prints the %.17g bytes;
+ * - else, unless they are 50, %.15g's digits are d's rounded to 15, at
+ *   diff units of the 17th digit from d, and x lies within half a unit of
+ *   d: that form reads back only if diff - 1/2 units is within half an ulp
+ *   of x, and when it is not %.17g is the answer.
+ * 1 when %.17g is the answer, 0 when undecided. */
+static int decided_17(const char *d, int E, double x) {
+  int t = 10 * (d[15] - '0') + (d[16] - '0');
+  if (t == 0) return E < 15;
+  if (t == 50) return 0;
+  double diff = t < 50 ? t : 100 - t; /* in units of the 17th digit */
+  int k = 16 - E;
+  double scale = k >= 0 && k <= 22 ? pow10_exact[k] : pow(10.0, k);
+  return diff - 0.5 > half_ulp(x) * scale * (1 + 1e-9);
+}
+
+int pa__fmt_shortest(char *s, double x) {
+  char d[17];
+  int E;
+  if (isnormal(x) && fast_digits(x, 17, d, &E) && decided_17(d, E, x))
+    return layout(s, x, d, 17, E);
+  int n = pa__fmt_g(s, x, 15);
+  if (strtod(s, NULL) != x && !isnan(x)) n = pa__fmt_g(s, x, 17);
+  return n;
 }

@@ -965,76 +965,6 @@ cleanup:
   return st;
 }
 
-/* 10^k for 0 <= k <= 22, all exact doubles */
-static const double pow10_exact[23] = {
-    1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
-    1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-
-/* Half an ulp of the normal double x: 2^(ilogb(x) - 53). */
-static double half_ulp(double x) {
-  uint64_t b;
-  memcpy(&b, &x, sizeof b);
-  int ex = (int)(b >> 52 & 0x7FF); /* biased: ilogb(x) = ex - 1023 */
-  if (ex <= 53) return ldexp(1.0, ex - 1023 - 53);
-  b = (uint64_t)(ex - 53) << 52;
-  double h;
-  memcpy(&h, &b, sizeof h);
-  return h;
-}
-
-/* What %.15g gives for the normal double x, decided from s, its %.17g
- * form, alone. s is x correctly rounded to 17 significant digits.
- * - Digits 16-17 of s are 00 (it has 15 digits or fewer): x rounded to 15
- *   digits is s's value, so below an exponent of 15 (where %.15g would
- *   switch to the d.ddde+XX form) %.15g prints s itself: FMT15_SAME.
- * - Else, unless they are 50, %.15g's digits are s's rounded to 15, at
- *   diff units of the 17th digit from s, and x lies within half a unit of
- *   s: that form reads back only if diff - 1/2 units is within half an ulp
- *   of x; FMT15_INEXACT when it is not.
- * - FMT15_UNKNOWN otherwise (the caller prints and reads %.15g). */
-enum { FMT15_UNKNOWN, FMT15_INEXACT, FMT15_SAME };
-static int fmt15_verdict(const char *s, double x) {
-  int dig[17] = {0}, nd = 0, point = 0, seen = 0, lead = 0, nint = 0;
-  const char *p = s + (*s == '-');
-  for (; *p && *p != 'e'; p++) {
-    if (*p == '.') {
-      point = 1;
-      continue;
-    }
-    int c = *p - '0';
-    if (!seen && c == 0) { /* a zero before the first significant digit */
-      lead += point;
-      continue;
-    }
-    seen = 1;
-    if (nd < 17) dig[nd++] = c;
-    nint += !point;
-  }
-  /* the decimal exponent of the first significant digit */
-  int e10 = *p == 'e' ? atoi(p + 1) : nint > 0 ? nint - 1 : -lead - 1;
-  if (!seen || e10 < -290 || e10 > 290) return FMT15_UNKNOWN;
-  int t = 10 * dig[15] + dig[16];
-  if (t == 0) return e10 < 15 ? FMT15_SAME : FMT15_UNKNOWN;
-  if (t == 50) return FMT15_UNKNOWN;
-  double diff = t < 50 ? t : 100 - t; /* in units of the 17th digit */
-  int k = 16 - e10;
-  double scale = k >= 0 && k <= 22 ? pow10_exact[k] : pow(10.0, k);
-  return diff - 0.5 > half_ulp(x) * scale * (1 + 1e-9) ? FMT15_INEXACT
-                                                       : FMT15_UNKNOWN;
-}
-
-/* Shortest of %.15g / %.17g that reads back exactly (pa__fmt_g: printf's
- * bytes). Most coordinates a remesher computes need 17 digits, and most
- * others have few, which fmt15_verdict sees in the %.17g form: one
- * conversion instead of two and a strtod. */
-static int fmt_real(char *s, double x) {
-  int n = pa__fmt_g(s, x, 17);
-  if (isnormal(x) && fmt15_verdict(s, x) != FMT15_UNKNOWN) return n;
-  n = pa__fmt_g(s, x, 15);
-  if (strtod(s, NULL) != x && !isnan(x)) n = pa__fmt_g(s, x, 17);
-  return n;
-}
-
 pa_status pa__gmfw_rec(pa__gmfw *w, const double *rv, const int64_t *iv) {
   pa_status st = PA_SUCCESS;
   if (w->binary) {
@@ -1070,7 +1000,8 @@ pa_status pa__gmfw_rec(pa__gmfw *w, const double *rv, const int64_t *iv) {
     size_t room = (GMFW_BUF - w->len) / GMFW_SLACK;
     int end = room < (size_t)(nval - j) ? j + (int)room : nval;
     for (; j < end; j++) {
-      s += j < w->nreal ? fmt_real(s, rv[j]) : pa__fmt_int(s, iv[j - w->nreal]);
+      s += j < w->nreal ? pa__fmt_shortest(s, rv[j])
+                          : pa__fmt_int(s, iv[j - w->nreal]);
       *s++ = j + 1 < nval ? ' ' : '\n';
     }
     w->len += (size_t)(s - s0);
