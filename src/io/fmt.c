@@ -106,15 +106,16 @@ static const char digit_pairs[201] = "00010203040506070809"
                                      "80818283848586878889"
                                      "90919293949596979899";
 
-/* The n decimal digits of u (zero-padded on the left) ending at end. */
-static void digits_before(uint64_t u, int n, char *end) {
-  for (; n >= 2; n -= 2) {
+/* The decimal digits of u ending at end (the caller counted them). */
+static void digits_before(uint64_t u, char *end) {
+  while (u >= 100) {
     uint64_t q = u / 100;
     end -= 2;
     memcpy(end, digit_pairs + 2 * (u - 100 * q), 2);
     u = q;
   }
-  if (n) end[-1] = (char)('0' + u % 10);
+  if (u >= 10) memcpy(end - 2, digit_pairs + 2 * u, 2);
+  else end[-1] = (char)('0' + u);
 }
 
 int pa__fmt_int(char *s, int64_t v) {
@@ -125,16 +126,8 @@ int pa__fmt_int(char *s, int64_t v) {
   int t = (64 - __builtin_clzll(u | 1)) * 1233 >> 12;
   int n = t + (u >= pow10_u64[t]);
   n += n == 0;
-  char *end = s + neg + n;
-  while (u >= 100) {
-    uint64_t q = u / 100;
-    end -= 2;
-    memcpy(end, digit_pairs + 2 * (u - 100 * q), 2);
-    u = q;
-  }
-  if (u >= 10) memcpy(end - 2, digit_pairs + 2 * u, 2);
-  else end[-1] = (char)('0' + u);
   if (neg) *s = '-';
+  digits_before(u, s + neg + n);
   return neg + n;
 }
 
@@ -173,7 +166,7 @@ static int fast_digits(double x, int prec, char *d, int *Ep) {
       E--;
     }
   }
-  digits_before(n, prec, d + prec);
+  digits_before(n, d + prec); /* 10^(prec-1) <= n < 10^prec */
   *Ep = E;
   return 1;
 }
