@@ -289,93 +289,94 @@ typedef struct fitem {
   pa_idx face;  /* local face number e*nf+i */
 } fitem;
 
-static int fitem_cmp(const void *x, const void *y) {
-  const fitem *a = x, *b = y;
-  return a->key < b->key ? -1 : a->key > b->key;
-}
+/* Faces are bucketed by their smallest local vertex (counting sort); in a
+ * bucket (a few dozen faces), faces are chained by their second vertex, and
+ * equal faces are found along the chains: linear work, memory access
+ * following the mesh order. Both passes over the faces sort each element's
+ * vertices once and read its faces off the sorted list. */
 
-/* Faces are bucketed by their smallest local vertex (counting sort) and each
- * bucket (a few dozen faces) is sorted by the other vertices, so that equal
- * faces are adjacent: linear work, memory access following the mesh order. */
-/* Smallest vertex and key (other vertices, b << 32 | c) of local face fe. */
-static pa_idx face_min_key(int dim, const pa_idx *lv, size_t fe, uint64_t *key) {
-  int nf = dim + 1, i = (int)(fe % (size_t)nf), k = 0;
-  const pa_idx *ev = lv + fe / (size_t)nf * (size_t)nf;
-  pa_idx v[3] = {0, 0, 0};
-  for (int j = 0; j < nf; j++)
-    if (j != i) v[k++] = ev[j];
-  for (int x = 1; x < dim; x++) /* sort the dim vertices */
-    for (int y = x; y > 0 && v[y - 1] > v[y]; y--) {
-      pa_idx t = v[y];
-      v[y] = v[y - 1];
-      v[y - 1] = t;
+/* The nf vertices ev of an element in increasing order into sv, and the
+ * position in ev of each (pos). */
+static void elem_sorted(const pa_idx *ev, int nf, pa_idx *sv, int *pos) {
+  for (int j = 0; j < nf; j++) {
+    pa_idx x = ev[j];
+    int q = j;
+    for (; q > 0 && sv[q - 1] > x; q--) {
+      sv[q] = sv[q - 1];
+      pos[q] = pos[q - 1];
     }
-  *key = dim == 3 ? (uint64_t)v[1] << 32 | (uint64_t)v[2] : (uint64_t)v[1];
-  return v[0];
+    sv[q] = x;
+    pos[q] = j;
+  }
 }
 
-/* Smallest vertex of local face fe alone (the second pass over the faces
- * needs no key). */
-static pa_idx face_min(int dim, const pa_idx *lv, size_t fe) {
-  int nf = dim + 1, i = (int)(fe % (size_t)nf);
-  const pa_idx *ev = lv + fe / (size_t)nf * (size_t)nf;
-  pa_idx m = -1;
-  for (int j = 0; j < nf; j++)
-    if (j != i && (m < 0 || ev[j] < m)) m = ev[j];
-  return m;
-}
+/* The positions in the sorted vertices of the face opposite sorted vertex
+ * p (face_of[dim - 2][p]): smallest first. */
+static const int face_of[2][4][3] = {
+    {{1, 2}, {0, 2}, {0, 1}}, {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}}};
 
 pa_status pa__match_faces(int dim, pa_idx n, const pa_idx *lv, pa_idx nv,
                           const pa_gid *vgid, pa_gid *mate) {
   pa_status st = PA_SUCCESS;
   int nf = dim + 1;
   size_t nface = (size_t)n * nf, maxb = 0;
-  pa_idx *fstart = NULL, *bucket = NULL;
+  pa_idx *fstart = NULL, *bucket = NULL, *head = NULL, *next = NULL;
   fitem *it = NULL;
-  uint64_t key;
-  /* memory: mate (the output, holding each face's key meanwhile), the
-   * buckets (4 bytes per face) and one bucket of scratch */
+  pa_idx sv[4];
+  int pos[4];
+  const int(*fo)[3] = face_of[dim - 2];
+  /* memory: mate (the output, holding each face's key meanwhile: its
+   * vertices after the smallest, b << 32 | c), the buckets (4 bytes per
+   * face), the chain heads (4 bytes per vertex) and one bucket of keys and
+   * chains */
   PA_CALLOC(fstart, (size_t)nv + 1);
   PA_ALLOC(bucket, nface);
-  for (size_t fe = 0; fe < nface; fe++) {
-    fstart[face_min_key(dim, lv, fe, &key) + 1]++;
-    mate[fe] = (pa_gid)key;
+  for (size_t e = 0; e < (size_t)n; e++) {
+    elem_sorted(lv + e * nf, nf, sv, pos);
+    for (int p = 0; p < nf; p++) {
+      const int *f = fo[p];
+      fstart[sv[f[0]] + 1]++;
+      mate[e * nf + (size_t)pos[p]] =
+          dim == 3 ? (pa_gid)((uint64_t)sv[f[1]] << 32 | (uint64_t)sv[f[2]])
+                   : (pa_gid)sv[f[1]];
+    }
   }
   for (pa_idx x = 0; x < nv; x++) {
     if ((size_t)fstart[x + 1] > maxb) maxb = (size_t)fstart[x + 1];
     fstart[x + 1] += fstart[x];
   }
-  for (size_t fe = 0; fe < nface; fe++)
-    bucket[fstart[face_min(dim, lv, fe)]++] = (pa_idx)fe;
+  for (size_t e = 0; e < (size_t)n; e++) {
+    const pa_idx *ev = lv + e * nf;
+    elem_sorted(ev, nf, sv, pos);
+    /* the smallest vertex of a face: the element's, unless opposite it */
+    for (int i = 0; i < nf; i++)
+      bucket[fstart[ev[i] == sv[0] ? sv[1] : sv[0]]++] = (pa_idx)(e * nf + i);
+  }
   for (pa_idx x = nv; x > 0; x--) fstart[x] = fstart[x - 1];
   fstart[0] = 0;
-  PA_ALLOC(it, maxb);
+  PA_ALLOC(it, maxb + 1);
+  PA_ALLOC(next, maxb + 1);
+  PA_ALLOC(head, (size_t)nv + 1);
+  for (pa_idx x = 0; x <= nv; x++) head[x] = -1;
   for (pa_idx x = 0; x < nv; x++) {
-    size_t m = (size_t)(fstart[x + 1] - fstart[x]);
+    pa_idx m = fstart[x + 1] - fstart[x];
     fitem *b = it;
-    for (size_t p = 0; p < m; p++) {
-      pa_idx fe = bucket[fstart[x] + (pa_idx)p];
+    for (pa_idx p = 0; p < m; p++) {
+      pa_idx fe = bucket[fstart[x] + p];
       b[p].key = (uint64_t)mate[fe];
       b[p].face = fe;
       mate[fe] = -1;
     }
-    if (m > 48) {
-      qsort(b, m, sizeof *b, fitem_cmp);
-    } else {
-      for (size_t p = 1; p < m; p++) {
-        fitem t = b[p];
-        size_t q = p;
-        while (q > 0 && b[q - 1].key > t.key) {
-          b[q] = b[q - 1];
-          q--;
-        }
-        b[q] = t;
-      }
-    }
-    for (size_t p = 0; p + 1 < m; p++)
-      if (b[p].key == b[p + 1].key) {
+    /* each face meets the earlier faces of its chain (same second vertex):
+     * an equal one unmatched is its mate, an equal one matched a third */
+    for (pa_idx p = 0; p < m; p++) {
+      pa_idx second = (pa_idx)(dim == 3 ? b[p].key >> 32 : b[p].key);
+      next[p] = head[second];
+      head[second] = p;
+      for (pa_idx q = next[p]; q >= 0; q = next[q]) {
+        if (b[q].key != b[p].key) continue;
         size_t fe = (size_t)b[p].face;
-        if (p + 2 < m && b[p + 2].key == b[p].key) {
+        if (mate[b[q].face] >= 0) {
           size_t e0 = fe / nf * nf, i = fe % nf;
           size_t v0 = e0 + (i == 0), v1 = e0 + (i <= 1) + 1;
           PA_FAIL(PA_ERR_MESH,
@@ -384,15 +385,20 @@ pa_status pa__match_faces(int dim, pa_idx n, const pa_idx *lv, pa_idx nv,
                   (long long)(vgid ? vgid[v0] : lv[v0]),
                   (long long)(vgid ? vgid[v1] : lv[v1]), dim > 2 ? " ..." : "");
         }
-        mate[fe] = b[p + 1].face;
-        mate[b[p + 1].face] = (pa_gid)fe;
-        p++;
+        mate[fe] = b[q].face;
+        mate[b[q].face] = (pa_gid)fe;
+        break;
       }
+    }
+    for (pa_idx p = 0; p < m; p++)
+      head[dim == 3 ? b[p].key >> 32 : b[p].key] = -1;
   }
 cleanup:
   pa__free(fstart);
   pa__free(bucket);
   pa__free(it);
+  pa__free(head);
+  pa__free(next);
   return st;
 }
 

@@ -1528,11 +1528,7 @@ static void wr_f64(writer *b, double x) {
   }
   wr_room(b, 40);
   wr_sep(b);
-  /* The shorter form when it reads back exactly, else 17 digits: exact. */
-  char *p = b->buf + b->len;
-  int n = pa__fmt_g(p, x, 15);
-  if (strtod(p, NULL) != x) n = pa__fmt_g(p, x, 17);
-  b->len += (size_t)n;
+  b->len += (size_t)pa__fmt_shortest(b->buf + b->len, x);
 }
 
 static void wr_eol(writer *b) {

@@ -65,6 +65,12 @@ const char *pa__path_ext(const char *path, char *buf, size_t len);
 /* x in the form of printf's "%.*g" with precision prec into s (room for 32
  * chars), the same bytes as snprintf; its length. fmt.c. */
 int pa__fmt_g(char *s, double x, int prec);
+/* The shorter of x's "%.15g" and "%.17g" forms that reads back exactly
+ * (strtod) into s (room for 32 chars); its length. fmt.c. */
+int pa__fmt_shortest(char *s, double x);
+/* v in decimal ("%lld") into s (room for 21 chars, not terminated); its
+ * length. fmt.c. */
+int pa__fmt_int(char *s, int64_t v);
 
 /* Format readers/writers, dispatched by pa_mesh_read/pa_mesh_write. */
 pa_status pa__medit_read(const char *path, pa_mesh **mesh);

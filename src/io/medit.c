@@ -965,84 +965,6 @@ cleanup:
   return st;
 }
 
-/* Whether no 15-digit decimal reads back as the normal double x, decided
- * from s, its %.17g form, alone. s is x correctly rounded to 17 significant
- * digits, so unless its digits 16-17 are 00 or 50, %.15g's digits are s's
- * rounded to 15, at diff units of the 17th digit from s, and x lies within
- * half a unit of s: that form reads back only if diff - 1/2 units is within
- * half an ulp of x. 0: undecided (the caller prints and reads %.15g). */
-static int needs_17_digits(const char *s, double x) {
-  int dig[17] = {0}, nd = 0, point = 0, seen = 0, lead = 0, nint = 0;
-  const char *p = s + (*s == '-');
-  for (; *p && *p != 'e'; p++) {
-    if (*p == '.') {
-      point = 1;
-      continue;
-    }
-    int c = *p - '0';
-    if (!seen && c == 0) { /* a zero before the first significant digit */
-      lead += point;
-      continue;
-    }
-    seen = 1;
-    if (nd < 17) dig[nd++] = c;
-    nint += !point;
-  }
-  /* the decimal exponent of the first significant digit */
-  int e10 = *p == 'e' ? atoi(p + 1) : nint > 0 ? nint - 1 : -lead - 1;
-  if (!seen || e10 < -290 || e10 > 290) return 0;
-  int t = 10 * dig[15] + dig[16];
-  if (t == 0 || t == 50) return 0;
-  double diff = t < 50 ? t : 100 - t; /* in units of the 17th digit */
-  double halfulp = ldexp(1.0, ilogb(x) - 53) * pow(10.0, 16 - e10);
-  return diff - 0.5 > halfulp * (1 + 1e-9);
-}
-
-/* Shortest of %.15g / %.17g that reads back exactly (pa__fmt_g: printf's
- * bytes). Most coordinates a remesher computes need 17 digits, which
- * needs_17_digits sees in the %.17g form: one conversion instead of two and
- * a strtod. */
-static int fmt_real(char *s, double x) {
-  int n = pa__fmt_g(s, x, 17);
-  if (isnormal(x) && needs_17_digits(s, x)) return n;
-  n = pa__fmt_g(s, x, 15);
-  if (strtod(s, NULL) != x && !isnan(x)) n = pa__fmt_g(s, x, 17);
-  return n;
-}
-
-/* The decimal form of v, two digits per division (the integers are most of
- * a text mesh: four or five per element). */
-static int fmt_int(char *s, int64_t v) {
-  static const char pairs[201] = "00010203040506070809"
-                                 "10111213141516171819"
-                                 "20212223242526272829"
-                                 "30313233343536373839"
-                                 "40414243444546474849"
-                                 "50515253545556575859"
-                                 "60616263646566676869"
-                                 "70717273747576777879"
-                                 "80818283848586878889"
-                                 "90919293949596979899";
-  char tmp[24], *p = tmp + sizeof tmp;
-  uint64_t u = v < 0 ? (uint64_t)0 - (uint64_t)v : (uint64_t)v;
-  while (u >= 100) {
-    unsigned r = (unsigned)(u % 100);
-    u /= 100;
-    p -= 2;
-    memcpy(p, pairs + 2 * r, 2);
-  }
-  if (u >= 10) {
-    p -= 2;
-    memcpy(p, pairs + 2 * u, 2);
-  } else {
-    *--p = (char)('0' + u);
-  }
-  if (v < 0) *--p = '-';
-  int n = (int)(tmp + sizeof tmp - p);
-  memcpy(s, p, (size_t)n);
-  return n;
-}
-
 pa_status pa__gmfw_rec(pa__gmfw *w, const double *rv, const int64_t *iv) {
   pa_status st = PA_SUCCESS;
   if (w->binary) {
@@ -1078,7 +1000,8 @@ pa_status pa__gmfw_rec(pa__gmfw *w, const double *rv, const int64_t *iv) {
     size_t room = (GMFW_BUF - w->len) / GMFW_SLACK;
     int end = room < (size_t)(nval - j) ? j + (int)room : nval;
     for (; j < end; j++) {
-      s += j < w->nreal ? fmt_real(s, rv[j]) : fmt_int(s, iv[j - w->nreal]);
+      s += j < w->nreal ? pa__fmt_shortest(s, rv[j])
+                          : pa__fmt_int(s, iv[j - w->nreal]);
       *s++ = j + 1 < nval ? ' ' : '\n';
     }
     w->len += (size_t)(s - s0);

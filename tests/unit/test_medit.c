@@ -828,6 +828,93 @@ static void test_failing_allocations(void) {
   pa_mesh_destroy(m);
 }
 
+/* The text form of a real: the shorter of %.15g and %.17g that reads back
+ * exactly, by snprintf and strtod (the oracle of the writer's fast path). */
+static void shortest_real(char *s, size_t n, double x) {
+  snprintf(s, n, "%.15g", x);
+  if (strtod(s, NULL) != x && !isnan(x)) snprintf(s, n, "%.17g", x);
+}
+
+/* A coordinate of every kind the writer tells apart: computed ones (17
+ * digits), short decimals, exact binary ties, zeros of both signs, powers
+ * of 10 and their neighbours, exponents 15 and 16 (where %.15g and %.17g
+ * switch forms at different digits), and random scales. */
+static double text_real(int i) {
+  double u = pa_test_rand();
+  switch (i % 10) {
+  case 0: return pa_test_rand_range(-1, 1);
+  case 1: return round(u * 1000) / 1000 - 0.5;
+  case 2: return (int)(u * 4096 - 2048) / 64.0;
+  case 3: return i % 20 == 3 ? 0.0 : -0.0;
+  case 4: return pow(10, (int)(u * 40) - 20);
+  case 5: return nextafter(pow(10, (int)(u * 40) - 20), i % 20 == 5 ? 0 : 1e300);
+  case 6: return (1 + round(u * 1e6)) * 1e10 * (i % 20 == 6 ? 1 : -1);
+  case 7: return pa_test_rand_range(1e15, 1e17);
+  case 8: return round(pa_test_rand_range(1e14, 1e17));
+  default: return pa_test_rand_range(-1, 1) * pow(10, (int)(u * 60) - 30);
+  }
+}
+
+/* The text writer's numbers, token by token, against snprintf: the
+ * vertices' coordinates (shortest_real) and references, the elements'
+ * vertex numbers and references ("%lld"). */
+static void test_text_numbers(void) {
+  pa_mesh *m = NULL;
+  const pa_idx nv = 20000;
+  pa_test_seed(20261127);
+  CHECK_OK(pa_mesh_create(3, &m));
+  if (!m) return;
+  CHECK_OK(pa_mesh_reserve(m, nv, nv / 4, 0, 0));
+  for (pa_idx i = 0; i < nv; i++) {
+    double x[3];
+    for (int k = 0; k < 3; k++) x[k] = text_real(3 * (int)i + k);
+    int32_t ref = (int32_t)((pa_test_rand() - 0.5) * 4.2e9);
+    CHECK_OK(pa_mesh_add_vertex(m, x, ref, NULL));
+  }
+  for (pa_idx e = 0; e < nv / 4; e++) {
+    pa_idx v[4] = {4 * e, 4 * e + 1, 4 * e + 2, 4 * e + 3};
+    CHECK_OK(pa_mesh_add_elem(m, v, (int32_t)(e * 7919 % 200001) - 100000,
+                              NULL));
+  }
+  CHECK_OK(pa_mesh_write(m, "numbers.mesh", NULL));
+  FILE *f = fopen("numbers.mesh", "r");
+  CHECK(f != NULL);
+  char tok[64], want[64];
+  long bad = 0;
+  while (f && fscanf(f, "%63s", tok) == 1 && strcmp(tok, "Vertices")) {}
+  CHECK(f && fscanf(f, "%63s", tok) == 1 && atol(tok) == nv);
+  const double *c = pa_mesh_coords(m);
+  const int32_t *vr = pa_mesh_vert_refs(m);
+  for (pa_idx i = 0; f && i < nv; i++)
+    for (int k = 0; k <= 3; k++) {
+      if (k < 3) shortest_real(want, sizeof want, c[3 * (size_t)i + k]);
+      else snprintf(want, sizeof want, "%d", (int)vr[i]);
+      if (fscanf(f, "%63s", tok) != 1 || strcmp(tok, want)) {
+        if (bad++ < 5)
+          fprintf(stderr, "  vertex %d: '%s', snprintf '%s'\n", (int)i, tok,
+                  want);
+      }
+    }
+  while (f && fscanf(f, "%63s", tok) == 1 && strcmp(tok, "Tetrahedra")) {}
+  CHECK(f && fscanf(f, "%63s", tok) == 1 && atol(tok) == nv / 4);
+  const pa_idx *ev = pa_mesh_elems(m);
+  const int32_t *er = pa_mesh_elem_refs(m);
+  for (pa_idx e = 0; f && e < nv / 4; e++)
+    for (int k = 0; k <= 4; k++) {
+      snprintf(want, sizeof want, "%lld",
+               k < 4 ? (long long)ev[4 * (size_t)e + k] + 1 : (long long)er[e]);
+      if (fscanf(f, "%63s", tok) != 1 || strcmp(tok, want)) {
+        if (bad++ < 5)
+          fprintf(stderr, "  element %d: '%s', snprintf '%s'\n", (int)e, tok,
+                  want);
+      }
+    }
+  CHECK(bad == 0);
+  if (f) fclose(f);
+  remove("numbers.mesh");
+  pa_mesh_destroy(m);
+}
+
 /* A generated mesh (when the generator is there) through every format. */
 static void test_generated(void) {
   pa_mesh *m = NULL;
@@ -857,4 +944,5 @@ static void test_generated(void) {
 
 TEST_MAIN(test_round_trips, test_hand_written, test_binary_swapped,
           test_sol_round_trips, test_metric_bridge, test_errors, test_corpus,
-          test_failing_writes, test_failing_allocations, test_generated)
+          test_failing_writes, test_failing_allocations, test_text_numbers,
+          test_generated)
