@@ -39,6 +39,7 @@ typedef struct scotch_run {
   SCOTCH_Dgraph graph, bound;
   SCOTCH_Strat strat;
   SCOTCH_Context ctx;
+  int64_t nglob; /* vertices over all ranks */
   int graph_init, strat_init, ctx_init, bound_init;
 } scotch_run;
 
@@ -75,6 +76,7 @@ static pa_status copy_graph(MPI_Comm comm, pa_idx n, const pa_idx *xadj,
            (long long)nglob);
   PA_CHECK(nparts >= 1, PA_ERR_ARG, "nparts must be >= 1, got %d", nparts);
   PA_CHECK(wmax_ok, PA_ERR_ARG, "element weights must be finite and > 0");
+  s->nglob = nglob;
   PA_ALLOC(s->vert, n + 1);
   PA_ALLOC(s->edge, xadj[n]);
   PA_ALLOC(s->parttab, n);
@@ -121,21 +123,27 @@ static pa_status build_graph(MPI_Comm comm, scotch_run *s, pa_idx n,
   return st;
 }
 
-/* The partitioning strategy; collective, agreed. Scotch's default: no
- * strategy of SCOTCH_stratDgraphMapBuild (SPEED / QUALITY / BALANCE) is
- * faster on 2+ ranks, and BALANCE buys little balance with more edge cut
- * (figures: docs/design/DMESH.md, bench/bench_scotch.c). kbal > 0 asks for
- * that imbalance. */
+/* The partitioning strategy; collective, agreed. On large graphs Scotch's
+ * default: no strategy of SCOTCH_stratDgraphMapBuild (SPEED / QUALITY /
+ * BALANCE) is faster on 2+ ranks, and BALANCE buys little balance with more
+ * edge cut (figures: docs/design/DMESH.md, bench/bench_scotch.c). Up to
+ * PA_PARTITION_SPEED_MAX vertices, SPEED: half the instructions on a
+ * 6 000-vertex graph, the same adapted meshes' quality (figures:
+ * docs/BENCHMARKS.md, "Small jobs on two ranks"). kbal > 0 asks for that
+ * imbalance, else Scotch's default one. */
 static pa_status make_strategy(MPI_Comm comm, scotch_run *s, int nparts,
                                double kbal) {
   pa_status st = PA_SUCCESS;
   SCOTCH_stratInit(&s->strat);
   s->strat_init = 1;
-  if (kbal > 0) {
+  int speed = s->nglob <= PA_PARTITION_SPEED_MAX;
+  if (kbal > 0 || speed) {
     int size;
     MPI_Comm_size(comm, &size);
-    if (SCOTCH_stratDgraphMapBuild(&s->strat, SCOTCH_STRATDEFAULT, size,
-                                   nparts, kbal) != 0)
+    if (SCOTCH_stratDgraphMapBuild(&s->strat,
+                                   speed ? SCOTCH_STRATSPEED : SCOTCH_STRATDEFAULT,
+                                   size, nparts,
+                                   kbal > 0 ? kbal : PA_PARTITION_KBAL) != 0)
       st = pa__error(PA_ERR_PARTITION, __FILE__, __LINE__,
                      "SCOTCH_stratDgraphMapBuild failed");
     st = pa__agree(comm, st);

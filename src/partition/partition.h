@@ -10,13 +10,19 @@
 
 #include <mpi.h>
 
+/* Graphs of at most this many vertices (over all ranks) are partitioned
+ * with Scotch's SPEED strategy, larger ones with its default strategy. */
+#define PA_PARTITION_SPEED_MAX 50000
+/* The load imbalance Scotch tolerates by default. */
+#define PA_PARTITION_KBAL 0.05
+
 /* Collective: partition a distributed graph into nparts parts with
- * PT-Scotch (SCOTCH_dgraphPart, default strategy). Rank r holds n vertices
+ * PT-Scotch (SCOTCH_dgraphPart; the SPEED strategy up to
+ * PA_PARTITION_SPEED_MAX vertices, else the default one). Rank r holds n vertices
  * numbered offset(r) + i globally (offsets: exclusive scan of n); the
  * neighbours of local vertex i are adj[xadj[i] .. xadj[i+1]-1] (global
  * numbers, symmetric graph, no self loop). weights: per vertex (> 0) or NULL.
- * kbal > 0: the load imbalance tolerated (a strategy built by
- * SCOTCH_stratDgraphMapBuild), else Scotch's default strategy.
+ * kbal > 0: the load imbalance tolerated, else PA_PARTITION_KBAL.
  * part[i] receives the part of local vertex i in [0, nparts). Fails with
  * PA_ERR_PARTITION if Scotch does, PA_ERR_ARG if the graph has 2^31 vertices
  * or more (SCOTCH_Num is 32-bit). */
