@@ -618,14 +618,15 @@ cleanup:
  * the cure costs more than it saves (figures: docs/BENCHMARKS.md, "The 3D
  * remesher"). Jiggle the ends of the crowd's edges by 0.1 and spread the
  * splits from now on (m->spread). */
+/* crowds of 30-32 % gain, one of 12.6 % loses (docs/BENCHMARKS.md) */
 #define RM3D_CROWD_WIDE 0.25
 static void break_lattice_crowd(rm3d *m) {
   double longer, crowd = lattice_crowd(m, &longer);
   long nj = 0;
   pa_idx ball[RM3D_MAXBALL];
-  m->spread = crowd > 0.05 && longer < 0.1   ? RM3D_SPREAD_TIGHT
-              : crowd > RM3D_CROWD_WIDE ? RM3D_SPREAD_WIDE
-                                        : 0;
+  m->spread = crowd > 0.05 && longer < 0.1 ? RM3D_SPREAD_TIGHT
+              : crowd > RM3D_CROWD_WIDE    ? RM3D_SPREAD_WIDE
+                                           : 0;
   for (pa_idx p = 0; p < m->nv; p++) {
     if (!(m->vtag[p] & RM3D_V_TODO)) continue;
     m->vtag[p] &= (uint8_t)~RM3D_V_TODO;

@@ -126,12 +126,13 @@ extern const int pa__rm3d_face[4][3];
 #define RM3D_LRELAX 1.2 /* mean frozen edge length at a relaxed vertex */
 /* The two ways the split passes at sqrt 2 spread their splits (m->spread).
  * Tight: an edge shorter than RM3D_LSPREAD (halves under 0.8) waits for
- * the next pass when a split of this pass touched one of its ends or its
- * ring (the crowd is the last class split: every split's neighbourhood is
- * left alone). Wide: an edge shorter than RM3D_LSPREAD_WIDE (halves under
- * 1) waits when splits of this pass touched both its ends (longer classes
- * are still split with it: each pass refines the lattice by a share of its
- * vertices, and the moves of the rounds relax it in between). */
+ * the next pass when one of its ends is an end or a ring vertex of a split
+ * of this pass (the crowd is the last class split: every split's
+ * neighbourhood is left alone). Wide: an edge shorter than
+ * RM3D_LSPREAD_WIDE (halves under 1) waits when splits of this pass touched
+ * both its ends (longer classes are still split with it: each pass refines
+ * the lattice by a share of its vertices, and the moves of the rounds relax
+ * it in between). */
 enum { RM3D_SPREAD_TIGHT = 1, RM3D_SPREAD_WIDE = 2 };
 #define RM3D_LSPREAD 1.6
 #define RM3D_LSPREAD_WIDE 2.0
