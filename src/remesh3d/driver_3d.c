@@ -11,8 +11,9 @@
  *     is split again. Before the last band (thr = sqrt 2), a lattice crowd
  *     (lattice_crowd: a structured input about to be refined into the next
  *     lattice, twice the tets) is broken by jiggling the ends of its edges,
- *     and from then on the splits of edges shorter than RM3D_LSPREAD are
- *     spread (one per neighbourhood and pass). A large working mesh is
+ *     and from then on the splits of short edges are spread (tight: one per
+ *     neighbourhood and pass; wide: an edge waits when both its ends were
+ *     touched; RM3D_SPREAD_TIGHT, RM3D_SPREAD_WIDE). A large working mesh is
  *     renumbered for locality between bands (RM3D_REORDER_MIN), and every
  *     mesh after them;
  *  2. at least 3 and at most 20 rounds of split (> sqrt 2), collapse
@@ -118,7 +119,9 @@ pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count) {
   pa_status st = PA_SUCCESS;
   long c = 0;
   uint8_t skip = thr >= PA_METRIC_LEN_HI_EXACT ? RM3D_T_CLEAN : 0;
-  int spread = m->spread && thr <= PA_METRIC_LEN_HI_EXACT;
+  int spread = thr <= PA_METRIC_LEN_HI_EXACT ? m->spread : 0;
+  int wide = spread == RM3D_SPREAD_WIDE;
+  double lspread = wide ? RM3D_LSPREAD_WIDE : RM3D_LSPREAD;
   pa_idx sht[RM3D_MAXSHELL], shr[RM3D_MAXSHELL + 1];
   for (pa_idx k = 0; k < m->ne; k++) {
     for (int guard = 0; guard < 64; guard++) {
@@ -135,11 +138,14 @@ pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count) {
         pa_idx a = m->tv[4 * (size_t)k + pa__rm3d_edge[ord[i]][0]];
         pa_idx b = m->tv[4 * (size_t)k + pa__rm3d_edge[ord[i]][1]];
         int done, nsh = 0, info;
-        /* Spread: an edge whose halves would be shorter than 0.8 waits for
-         * the next pass when a split of this pass touched an end. */
-        if (spread && L[ord[i]] < RM3D_LSPREAD) {
-          if ((m->vtag[a] | m->vtag[b]) & RM3D_V_TODO) continue;
-          nsh = pa__rm3d_shell(m, k, a, b, sht, shr, RM3D_MAXSHELL, &info);
+        /* Spread (see RM3D_SPREAD_TIGHT, RM3D_SPREAD_WIDE): a short
+         * enough edge waits for the next pass when splits of this pass
+         * touched one end (tight) or both (wide). */
+        if (spread && L[ord[i]] < lspread) {
+          uint8_t ta = m->vtag[a] & RM3D_V_TODO, tb = m->vtag[b] & RM3D_V_TODO;
+          if (wide ? ta && tb : ta || tb) continue;
+          if (!wide)
+            nsh = pa__rm3d_shell(m, k, a, b, sht, shr, RM3D_MAXSHELL, &info);
         }
         PA_CALL(pa__rm3d_split_edge(m, k, a, b, &done));
         if (done) {
@@ -603,17 +609,24 @@ cleanup:
 }
 
 /* Before the last band: a lattice crowd (see lattice_crowd) at the top of
- * the lengths is broken. A crowd is more than 5 % of the tet-edges in one
- * bin with under 10 % longer: the trapped lattices have far more in a bin,
- * the other meshes far less or many longer edges (the crowd is then not the
- * last class split, and the cure does not pay; figures: docs/BENCHMARKS.md,
- * "The 3D remesher"). Jiggle the ends of its edges by 0.1 and spread the
+ * the lengths is broken. A tight crowd is more than 5 % of the tet-edges in
+ * one bin with under 10 % longer: the trapped lattices have far more in a
+ * bin, the unstructured meshes far less. A wide crowd is more than
+ * RM3D_CROWD_WIDE in one bin with longer edges beside it: splitting them
+ * all makes a lattice about twice as dense as the target, which the rounds
+ * then collapse. Smaller crowds with longer edges are left alone: there
+ * the cure costs more than it saves (figures: docs/BENCHMARKS.md, "The 3D
+ * remesher"). Jiggle the ends of the crowd's edges by 0.1 and spread the
  * splits from now on (m->spread). */
+/* crowds of 30-32 % gain, one of 12.6 % loses (docs/BENCHMARKS.md) */
+#define RM3D_CROWD_WIDE 0.25
 static void break_lattice_crowd(rm3d *m) {
   double longer, crowd = lattice_crowd(m, &longer);
   long nj = 0;
   pa_idx ball[RM3D_MAXBALL];
-  m->spread = crowd > 0.05 && longer < 0.1;
+  m->spread = crowd > 0.05 && longer < 0.1 ? RM3D_SPREAD_TIGHT
+              : crowd > RM3D_CROWD_WIDE    ? RM3D_SPREAD_WIDE
+                                           : 0;
   for (pa_idx p = 0; p < m->nv; p++) {
     if (!(m->vtag[p] & RM3D_V_TODO)) continue;
     m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
@@ -623,7 +636,10 @@ static void break_lattice_crowd(rm3d *m) {
     fprintf(stderr,
             "  rm3d lattice crowd: %.1f %% of the edges in one bin, "
             "%.1f %% longer%s, %ld vertices jiggled\n",
-            100 * crowd, 100 * longer, m->spread ? " (splits spread)" : "",
+            100 * crowd, 100 * longer,
+            m->spread == RM3D_SPREAD_TIGHT  ? " (splits spread)"
+            : m->spread == RM3D_SPREAD_WIDE ? " (splits spread wide)"
+                                            : "",
             nj);
 }
 

@@ -99,8 +99,8 @@ typedef struct rm3d {
   int surf;  /* remesh the boundary surface */
   int swap;  /* swaps allowed (not -noswap) */
   /* A lattice crowd was found before the last refinement band (see
-   * driver_3d.c): the split passes at sqrt 2 spread the splits of edges
-   * shorter than RM3D_LSPREAD. */
+   * driver_3d.c): the split passes at sqrt 2 spread their splits, as
+   * RM3D_SPREAD_TIGHT or RM3D_SPREAD_WIDE says (0: they do not). */
   int spread;
   double hausd, ridge_cos;
   int verbosity;
@@ -124,7 +124,18 @@ extern const int pa__rm3d_compl[4][4][2];
 extern const int pa__rm3d_face[4][3];
 
 #define RM3D_LRELAX 1.2 /* mean frozen edge length at a relaxed vertex */
-#define RM3D_LSPREAD 1.6 /* split halves shorter than 0.8: see m->spread */
+/* The two ways the split passes at sqrt 2 spread their splits (m->spread).
+ * Tight: an edge shorter than RM3D_LSPREAD (halves under 0.8) waits for
+ * the next pass when one of its ends is an end or a ring vertex of a split
+ * of this pass (the crowd is the last class split: every split's
+ * neighbourhood is left alone). Wide: an edge shorter than
+ * RM3D_LSPREAD_WIDE (halves under 1) waits when splits of this pass touched
+ * both its ends (longer classes are still split with it: each pass refines
+ * the lattice by a share of its vertices, and the moves of the rounds relax
+ * it in between). */
+enum { RM3D_SPREAD_TIGHT = 1, RM3D_SPREAD_WIDE = 2 };
+#define RM3D_LSPREAD 1.6
+#define RM3D_LSPREAD_WIDE 2.0
 #define RM3D_QFLOOR 1e-3 /* operators create no worse element... */
 #define RM3D_QABS 1e-9   /* ...unless replacing worse ones, and never this */
 /* Least cosine between a boundary triangle's normal before and after an
