@@ -24,6 +24,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 
 static const char *usage_text =
     "usage: padapt [-v N] COMMAND [ARGS]\n"
@@ -390,6 +393,27 @@ static const char *mpi_start_defaults(void) {
   return "ranks on several nodes: Open MPI's defaults";
 }
 
+/* On several processes, glibc keeps freed blocks of up to 32 MiB for reuse
+ * (M_MMAP_THRESHOLD: the most its own sliding threshold reaches; memory
+ * above twice that at the top of the heap goes back to the kernel) instead
+ * of mapping fresh pages for each. The parallel loop's steps allocate and
+ * free their arrays every iteration, and each first touch of a fresh page
+ * costs a fault: on the development VM the 1-second cube job's rank 0 spent
+ * 0.035 s of its 0.47 s on them, with the same peak RSS on the rod
+ * (docs/BENCHMARKS.md, "Small jobs on two ranks"). A sequential run frees
+ * little and gains nothing. The user's glibc malloc tunables win. */
+static void keep_freed_memory(void) {
+#ifdef __GLIBC__
+  const char *t = getenv("GLIBC_TUNABLES");
+  if ((t && (strstr(t, "glibc.malloc.mmap_threshold") ||
+             strstr(t, "glibc.malloc.trim_threshold"))) ||
+      getenv("MALLOC_MMAP_THRESHOLD_") || getenv("MALLOC_TRIM_THRESHOLD_"))
+    return;
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 64 << 20);
+#endif
+}
+
 int main(int argc, char **argv) {
   int provided = 0;
   const char *mpi_defaults = mpi_start_defaults();
@@ -411,6 +435,7 @@ int main(int argc, char **argv) {
   pa_cli cli = {MPI_COMM_WORLD, 0, 1, 0};
   MPI_Comm_rank(cli.comm, &cli.rank);
   MPI_Comm_size(cli.comm, &cli.size);
+  if (cli.size > 1) keep_freed_memory();
   {
     /* test hook: fail the k-th allocation of padapt's allocator, on every
      * rank or on rank PADAPT_TEST_FAIL_RANK only (fault injection,
