@@ -57,6 +57,7 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
   o.skin_ref = PA_ADAPT_SKIN_REF;
   o.skin_ok = inner;
   o.skin_lmax = PA_ADAPT_LEB_SKIN;
+  o.vmin = 0;
   PA_CALL(pa__leb_refine(m, &o, &parent, &onskin));
   if (m->nv > nv0) {
     pa_gid *g = pa__realloc(pc->vgid, (size_t)m->nv * sizeof *g);

@@ -14,6 +14,9 @@ typedef struct pa__leb_opts {
                              bit 0, may be split (1: any marked partner, 2:
                              a partner marked 1 only) */
   double skin_lmax;       /* split such skin edges longer than this */
+  double vmin;            /* > 0: an inner edge is not split when an element
+                             around it holds less than this metric volume
+                             (pa__elem_complexity) */
 } pa__leb_opts;
 
 /* Refine m in place (see leb.c). New vertices are appended; *parent (if not
