@@ -25,14 +25,6 @@
  * factor of 2 is left to the band splits; a higher or lower value gives
  * more tets in more time (figures: docs/BENCHMARKS.md, "The 3D remesher"). */
 #define LEB_PRE 2.0
-/* ... but not an element holding less metric volume than this many unit
- * tets: its halves would hold less than half of one, more elements than
- * the metric asks for (leb.c). Where the metric is isotropic the bisection
- * stops at LEB_PRE with 2-8 unit volumes per tet, so only flat or strongly
- * anisotropic elements meet it (box3d 10 in layer:0.1: 126 k -> 26 k tets
- * before the passes, the same output quality; figures:
- * docs/BENCHMARKS.md, "The 3D remesher"). */
-#define LEB_VMIN 1.0
 
 void pa_remesh_opts_default(pa_remesh_opts *o) {
   memset(o, 0, sizeof *o);
@@ -53,7 +45,7 @@ static pa_status remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
   double t0 = pa_wtime();
   memset(&lo, 0, sizeof lo);
   lo.lmax = LEB_PRE;
-  lo.vmin = LEB_VMIN * pa__unit_simplex_volume(3);
+  lo.vmin = PA_LEB_VMIN * pa__unit_simplex_volume(3);
   if (opts->no_insert) return pa__remesh3d(mesh, opts, report);
   PA_CALL(pa_mesh_copy(mesh, &w));
   PA_CALL(pa__leb_refine(w, &lo, NULL, NULL));
