@@ -211,15 +211,6 @@ cleanup:
   return st;
 }
 
-size_t pa__value_paylen(const pa_dmesh *dm, int kind, int32_t ref) {
-  size_t n = 0;
-  for (int k = 0; k < dm->nvalue; k++) {
-    const pa_dmesh_value *v = dm->value[k];
-    if ((int)v->kind == kind && (v->ref < 0 || v->ref == ref)) n += v->unit;
-  }
-  return n;
-}
-
 pa_status pa_dmesh_value_add(pa_dmesh *dm, pa_entity kind, const char *name,
                              MPI_Datatype type, int ncomp, int32_t ref,
                              pa_dmesh_value **value) {
