@@ -262,10 +262,6 @@ void pa__dmesh_clear(pa_dmesh *dm);
 void pa__dmesh_invalidate(pa_dmesh *dm);
 /* Layout of the local mesh's metric and fields. */
 void pa__dmesh_layout(pa_dmesh *dm, pa__layout *lay);
-/* Records of the owned entities of dm (with value payloads). */
-pa_status pa__dmesh_owned_recs(pa_dmesh *dm, const int *dest, pa__recs *elems,
-                               pa__recs *verts, pa__recs *bdry,
-                               pa__recs *edges);
 /* Local: add the definition of a value of a predefined MPI type to a
  * pa_dmesh without distribution (no data: the next build allocates it and
  * fills it from the record payloads). Fails with PA_ERR_FORMAT on a bad or
@@ -335,7 +331,13 @@ pa_status pa__output_end(MPI_Comm comm, pa_output *tx, pa_status st);
 pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
                               int check, pa_stats *stats);
 
-/* ---- incremental rebuilds (incremental.c) ---- */
+/* ---- the records a rebuild starts from (incremental.c) ---- */
+
+/* Records of the owned entities of dm (with value payloads; the elements'
+ * aux dest[e], or this rank with dest NULL). */
+pa_status pa__dmesh_owned_recs(pa_dmesh *dm, const int *dest, pa__recs *elems,
+                               pa__recs *verts, pa__recs *bdry,
+                               pa__recs *edges);
 
 /* Local: the bytes of the values of local entity e of a kind (those whose
  * reference filter it passes, in the order of dm->value) into buf; returns
