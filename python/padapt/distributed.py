@@ -22,8 +22,8 @@ from mpi4py import MPI
 
 from . import _lib
 from ._lib import lib, check
-from .mesh import Mesh, as_metric, as_field
-from .adapt import Report, stats_dict, fidelity_dict, describe, remesh_options
+from .mesh import Mesh, as_metric, as_field, stats_dict
+from .adapt import Report, fidelity_dict, describe, remesh_options
 from .metric import _RECOVERY_NAME
 
 __all__ = ["DistributedMesh", "Value", "KINDS"]
