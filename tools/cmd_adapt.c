@@ -21,7 +21,6 @@
  * with the same arguments.
  */
 #include "cli.h"
-#include "svg.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -330,16 +329,6 @@ static int check_outputs(const pa_cli *cli, const pa_cli_adapt_args *a) {
   free(sol);
   free(fields);
   return bad;
-}
-
-pa_status pa_cli_adapt_svg(const pa_cli_adapt_args *a, const pa_stats *before,
-                           const pa_stats *after) {
-  pa_stats two[2] = {*before, *after};
-  const char *names[2] = {"before", "after"};
-  char title[1200];
-  snprintf(title, sizeof title, "%s -> %s%s%s", a->in, a->out,
-           a->met ? ", in the metric " : "", a->met ? a->met : "");
-  return pa_cli_svg_histograms(a->svg, title, two, 2, names);
 }
 
 /* Everything the sequential run reads beside the mesh: the metric, the local
