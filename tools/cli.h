@@ -1,7 +1,7 @@
 /*
  * cli.h -- shared declarations of the padapt command-line tool. Each command
  * lives in its own file (tools/cmd_*.c; generate, stats and convert in
- * padapt.c with main) and returns the process exit status; the helpers they
+ * main.c with main) and returns the process exit status; the helpers they
  * share are in cli_util.c, the option tables' parser and -h printer in
  * cli_opts.c. The CLI uses the public API only (padapt.h) and is the only
  * code of padapt allowed to exit().

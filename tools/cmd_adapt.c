@@ -17,8 +17,8 @@
  * their paths stay as they were.
  *
  * On several MPI ranks (or with -distributed-output, -mem, -checkpoint or
- * -restart) the parallel piece loop of tools/cmd_padapt.c does the work,
- * with the same arguments.
+ * -restart) the parallel piece loop of tools/cmd_adapt_parallel.c does the
+ * work, with the same arguments.
  */
 #include "cli.h"
 
@@ -488,7 +488,7 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
   if (prc) return prc > 0 ? 1 : 0;
   if (check_outputs(cli, &args)) return 1;
   /* On several ranks, or when asked for a distributed output, a memory
-   * bound or a checkpoint, the parallel piece loop (tools/cmd_padapt.c) does
+   * bound or a checkpoint, the parallel piece loop (tools/cmd_adapt_parallel.c) does
    * the work, unless it finds the job too small to share out
    * (-serial-below): then rank 0 adapts it as one process would. */
   if (cli->size > 1 || args.distributed || args.mem_mb > 0 ||

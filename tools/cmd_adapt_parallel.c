@@ -1,5 +1,5 @@
 /*
- * cmd_padapt.c -- the parallel `padapt adapt`:
+ * cmd_adapt_parallel.c -- the parallel `padapt adapt`:
  *
  *   mpiexec -n P padapt adapt IN [-met SOL | -hsiz H] -out OUT
  *       [-distributed-output] [-field F.sol] [-mem MB] [-json REPORT.json]
