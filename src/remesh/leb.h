@@ -14,7 +14,21 @@ typedef struct pa__leb_opts {
                              bit 0, may be split (1: any marked partner, 2:
                              a partner marked 1 only) */
   double skin_lmax;       /* split such skin edges longer than this */
+  double vmin;            /* > 0: an inner edge is not split when an element
+                             around it holds less than this metric volume
+                             (pa__elem_complexity) */
 } pa__leb_opts;
+
+/* The vmin of a pre-refinement (the built-in 3D remesher's, and inside a
+ * piece of the parallel loop, adapt/bisect.c), in unit tets: an element
+ * holding less than one unit tet of metric volume is not bisected, its
+ * halves would hold less than half of one, more elements than the metric
+ * asks for. Where the metric is isotropic the bisection stops at length 2
+ * with 2-8 unit volumes per tet, so only flat or strongly anisotropic
+ * elements meet it (box3d 10 in layer:0.1: 126 k -> 26 k tets before the
+ * passes, the same output quality; figures: docs/BENCHMARKS.md, "The 3D
+ * remesher"). */
+#define PA_LEB_VMIN 1.0
 
 /* Refine m in place (see leb.c). New vertices are appended; *parent (if not
  * NULL) receives the two ends of the edge each was added on, *onskin (if

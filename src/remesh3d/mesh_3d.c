@@ -382,6 +382,7 @@ pa_status pa__rm3d_build(rm3d *m, pa_mesh *mesh, const pa_remesh_opts *opts) {
   m->opts = opts;
   m->ridge_cos = cos((opts->angle > 0 ? opts->angle : 45.0) * M_PI / 180.0);
   m->verbosity = opts->verbosity;
+  m->qabs = RM3D_QABS;
   pa_idx nv = mesh->nv, ne = mesh->ne;
   PA_CALL(pa__rm3d_reserve(m, (size_t)nv, (size_t)ne));
   m->nv = nv;
@@ -429,6 +430,8 @@ pa_status pa__rm3d_build(rm3d *m, pa_mesh *mesh, const pa_remesh_opts *opts) {
       if (m->tflag[k] & RM3D_T_FROZEN) m->vtag[v[j]] |= RM3D_V_LOCK;
     }
     m->q[k] = (float)rm3d_qual_v(m, v);
+    if (!(m->tflag[k] & RM3D_T_FROZEN) && RM3D_QABS_INPUT * m->q[k] < m->qabs)
+      m->qabs = RM3D_QABS_INPUT * m->q[k];
   }
   for (pa_idx i = 0; i < nv; i++)
     PA_CHECK(m->vtet[i] >= 0, PA_ERR_MESH,
