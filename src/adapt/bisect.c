@@ -49,18 +49,51 @@
 
 #include <math.h>
 
+/* What on_boundary reads: the piece's vertices' global ids and their
+ * Bloom masks (4 doubles per vertex, the fourth). */
+typedef struct bloom {
+  const pa_gid *vgid;
+  const double *surf;
+} bloom;
+
+/* leb.c's o->on_boundary: 1 if each of a and b is in the other's mask of
+ * boundary neighbours (a Bloom filter: never 0 for a boundary edge). */
+static int on_boundary(void *ctx, pa_idx a, pa_idx b) {
+  const bloom *f = ctx;
+  uint64_t ma = (uint64_t)f->surf[4 * (size_t)a + 3],
+           mb = (uint64_t)f->surf[4 * (size_t)b + 3];
+  return (ma & pa__adapt_bloom_bit(f->vgid[b])) &&
+         (mb & pa__adapt_bloom_bit(f->vgid[a]));
+}
+
 pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
-                                int inside) {
+                                int inside, const double *surf) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = pc->in;
   pa_idx nv0 = m->nv, *parent = NULL;
-  uint8_t *onskin = NULL;
+  uint8_t *onskin = NULL, *mark = NULL;
+  double *nrm = NULL;
+  bloom f = {pc->vgid, surf};
   pa__leb_opts o;
+  memset(&o, 0, sizeof o);
   o.lmax = inside ? PA_ADAPT_LEB_INNER : HUGE_VAL;
   o.skin_ref = PA_ADAPT_SKIN_REF;
   o.skin_ok = inner;
   o.skin_lmax = PA_ADAPT_LEB_SKIN;
   o.vmin = inside ? PA_LEB_VMIN * pa__unit_simplex_volume(m->dim) : 0;
+  o.curve_bad = &pc->curve_bad;
+  if (surf) {
+    PA_ALLOC(nrm, (size_t)3 * nv0);
+    for (pa_idx v = 0; v < nv0; v++)
+      memcpy(nrm + 3 * (size_t)v, surf + 4 * (size_t)v, 3 * sizeof *nrm);
+    o.normal = nrm;
+    o.on_boundary = on_boundary;
+    o.ctx = &f;
+  } else if (m->dim == 3) { /* no curves: the surface vertices are labelled */
+    PA_ALLOC(mark, nv0);
+    for (pa_idx v = 0; v < nv0; v++) mark[v] = inner[v] == 3 ? 2 : inner[v];
+    o.skin_ok = mark;
+  }
   PA_CALL(pa__leb_refine(m, &o, &parent, &onskin));
   if (m->nv > nv0) {
     pa_gid *g = pa__realloc(pc->vgid, (size_t)m->nv * sizeof *g);
@@ -76,8 +109,9 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
     PA_CHECK(r, PA_ERR_MEMORY, "out of memory refining a piece's skin");
     pc->vrank = r;
     for (pa_idx v = nv0; v < m->nv; v++) {
-      int s = onskin[v - nv0];
+      int s = onskin[v - nv0] != 0;
       pa_idx a = parent[2 * (v - nv0)], b = parent[2 * (v - nv0) + 1];
+      pc->ncurved += onskin[v - nv0] == 2;
       pc->vgid[v] = s ? PA_ADAPT_TEMP_GID + v : -1;
       pc->skin[v] = (uint8_t)s;
       /* hot if an end is: elements produced near it may be tagged again */
@@ -89,5 +123,7 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
 cleanup:
   pa__free(parent);
   pa__free(onskin);
+  pa__free(mark);
+  pa__free(nrm);
   return st;
 }

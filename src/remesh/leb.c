@@ -27,6 +27,30 @@
  *    coordinates and marks: the result depends only on the face's vertices
  *    (a face with one or two splittable edges is cut by the bisections of
  *    those edges, in their own order).
+ *  - A skin edge between two vertices marked 3 (a smooth curved boundary:
+ *    labelled, with a normal) is split whatever the two are, by where it
+ *    lies. Inside the domain (o->on_boundary says no: a chord) at its
+ *    midpoint, the new vertex marked as an inner one descended from a
+ *    labelled end. On the boundary (every piece around such an edge has it
+ *    on its skin, but only those at its ends hold a boundary face of it,
+ *    so o->on_boundary decides from both ends' data, bit for bit the same
+ *    everywhere) only if o->normal gives the ends' normals and the edge
+ *    lies within PA_LEB_SMOOTH_DEG of both tangent planes: at the
+ *    midpoint of the cubic Hermite curve of the ends, x = (a + b) / 2 +
+ *    ((e.nb) nb - (e.na) na) / 8 with e = b - a (exact on a plane, about
+ *    h^4 / R^3 off a circle of radius R where the chord's midpoint is
+ *    h^2 / 8R off), ends in canonical order; the new vertex is marked 3 with
+ *    the normalised sum of the ends' normals, and the edges it makes with
+ *    the ends are on the boundary too (o->on_boundary is asked only about
+ *    input edges: the points of one input edge's curve know it). Such a
+ *    point may leave an element of the shell without a positive volume (a
+ *    thin element on the concave side): counted in *o->curve_bad, which the
+ *    caller must treat as a failure of the whole refinement, since the
+ *    other pieces, which see other elements, cannot know. Termination: the
+ *    vertices marked 3 pair with inner vertices as labelled ones do (never
+ *    with one descended from a labelled vertex), a chord's midpoint is such
+ *    a descendant, and a curve's points pair with each other only along
+ *    that curve, whose pieces shrink.
  *  - Any other edge on a boundary entity or feature edge, or on a frozen
  *    element, is never split (the surface is the remesher's business).
  *  - Any other edge is split while longer than o->lmax, when no element
@@ -125,16 +149,32 @@ typedef struct qedge {
   pa_idx a, b; /* canonical order: a before b by coordinates */
 } qedge;
 
+/* Marks of s->inner: inner (skin edges may be split there), labelled
+ * (only towards an inner vertex), added on the skin, never with a labelled
+ * partner (descended from one), on a smooth curved boundary (labelled, and
+ * towards another such vertex as the file comment says). */
+#define M_INNER 1
+#define M_LABELLED 2
+#define M_ADDED 4
+#define M_NOLAB 8
+#define M_SURF 16
+
 typedef struct bis {
   pa_mesh *m;
   const pa__leb_opts *o;
   int d;
-  size_t nball; /* entries of eball.l, bball.l, inner */
+  pa_idx nv0; /* input vertices */
+  size_t nball; /* entries of eball.l, bball.l, inner, nrm, curve */
   balls eball, bball;
-  uint8_t *inner; /* per vertex: bit 0 inner (skin edges may be split
-                     there), bit 1 labelled (only towards an inner vertex),
-                     bit 2 added on the skin, bit 3 never with a labelled
-                     partner */
+  uint8_t *inner; /* per vertex: M_* marks */
+  double *nrm;    /* with o->normal, d per vertex: the normal of a vertex
+                     marked M_SURF */
+  pa_idx *curve;  /* with o->normal, per vertex: the input edge (an index
+                     into ends) on whose curve a vertex added on the
+                     boundary lies, -1 for the others */
+  pa_idx *ends;   /* 2 per such input edge */
+  size_t nends, capends;
+  pa_idx curve_bad;
   qedge *heap;
   size_t nheap, capheap;
   uint64_t *feat; /* feature edges as sorted (lo << 32 | hi) pairs */
@@ -258,6 +298,15 @@ static pa_status grow_balls(bis *s, size_t nv) {
   uint8_t *in = pa__realloc(s->inner, n);
   PA_CHECK(in, PA_ERR_MEMORY, "out of memory in longest-edge bisection");
   s->inner = in;
+  if (s->o->normal) {
+    double *x = pa__realloc(s->nrm, n * (size_t)s->d * sizeof *x);
+    PA_CHECK(x, PA_ERR_MEMORY, "out of memory in longest-edge bisection");
+    s->nrm = x;
+    pa_idx *c = pa__realloc(s->curve, n * sizeof *c);
+    PA_CHECK(c, PA_ERR_MEMORY, "out of memory in longest-edge bisection");
+    s->curve = c;
+    for (size_t v = s->nball; v < n; v++) c[v] = -1;
+  }
   memset(s->eball.l + s->nball, 0, (n - s->nball) * sizeof *e);
   memset(s->bball.l + s->nball, 0, (n - s->nball) * sizeof *b);
   memset(s->inner + s->nball, 0, n - s->nball);
@@ -382,10 +431,13 @@ static pa_status start(bis *s) {
   pa_mesh *m = s->m;
   const pa__leb_opts *o = s->o;
   pa_idx nv0 = m->nv, *seen = NULL;
+  s->nv0 = nv0;
   PA_CALL(grow_balls(s, (size_t)nv0));
   if (o->skin_ok)
     for (pa_idx v = 0; v < nv0; v++)
-      s->inner[v] = o->skin_ok[v] & 3;
+      s->inner[v] = o->skin_ok[v] == 3 ? M_LABELLED | M_SURF : o->skin_ok[v] & 3;
+  if (o->normal)
+    memcpy(s->nrm, o->normal, (size_t)nv0 * (size_t)s->d * sizeof *s->nrm);
   if (m->ned) {
     PA_ALLOC(s->feat, m->ned);
     for (pa_idx r = 0; r < m->ned; r++)
@@ -417,18 +469,101 @@ cleanup:
   return st;
 }
 
-/* The vertex *mid at the midpoint of e, from the ends in canonical order,
- * with their metric and fields interpolated, and its skin mark: a vertex
- * added on the skin is inner; descended from a labelled vertex, it never
- * pairs with one (see the file comment). */
-static pa_status add_midpoint(bis *s, const qedge *e, int skin, pa_idx *mid) {
+/* 1 if the edge uv between two vertices marked M_SURF lies on the
+ * boundary (see the file comment): two input vertices as o->on_boundary
+ * says; else both on one input edge's curve (a point of it and one of its
+ * ends, or two of its points). */
+static int on_boundary(const bis *s, pa_idx u, pa_idx v) {
+  pa_idx cu = s->curve ? s->curve[u] : -1, cv = s->curve ? s->curve[v] : -1;
+  if (cu < 0 && cv < 0)
+    return s->o->on_boundary && s->o->on_boundary(s->o->ctx, u, v);
+  if (cu >= 0 && cv >= 0) return cu == cv;
+  pa_idx c = cu >= 0 ? cu : cv, w = cu >= 0 ? v : u;
+  return s->ends[2 * c] == w || s->ends[2 * c + 1] == w;
+}
+
+/* 1 if the edge e = ab lies within PA_LEB_SMOOTH_DEG of the tangent planes
+ * of both ends. */
+static int tangent(const bis *s, const qedge *e) {
+  const double *xa = s->m->coord + (size_t)s->d * e->a,
+               *xb = s->m->coord + (size_t)s->d * e->b;
+  const double *na = s->nrm + (size_t)s->d * e->a,
+               *nb = s->nrm + (size_t)s->d * e->b;
+  double ea = 0, eb = 0, ee = 0, sn = sin(PA_LEB_SMOOTH_DEG * M_PI / 180);
+  for (int k = 0; k < s->d; k++) {
+    double c = xb[k] - xa[k];
+    ea += c * na[k];
+    eb += c * nb[k];
+    ee += c * c;
+  }
+  return ea * ea <= sn * sn * ee && eb * eb <= sn * sn * ee;
+}
+
+/* How the skin edge e between two vertices marked M_SURF is split: 0 at its
+ * midpoint (a chord), 1 on the curve, -1 not at all. bnd: a boundary
+ * entity of the mesh (not of the skin) holds it. */
+static int surface_split(bis *s, const qedge *e, int bnd) {
+  if (!on_boundary(s, e->a, e->b)) {
+    /* cannot be (on_boundary has no false negative): a failure, and no
+     * split, which the other pieces would not know of */
+    if (bnd) s->curve_bad++;
+    return bnd ? -1 : 0;
+  }
+  return s->nrm && tangent(s, e) ? 1 : -1;
+}
+
+/* The point of the cubic Hermite curve of the ends of e (canonical order)
+ * with their normals halfway, into x; the normalised sum of the normals
+ * into n (see the file comment). */
+static void curve_point(const bis *s, const qedge *e, double *x, double *n) {
+  int d = s->d;
+  const double *xa = s->m->coord + (size_t)d * e->a,
+               *xb = s->m->coord + (size_t)d * e->b;
+  const double *na = s->nrm + (size_t)d * e->a, *nb = s->nrm + (size_t)d * e->b;
+  double ea = 0, eb = 0, nn = 0;
+  for (int k = 0; k < d; k++) {
+    ea += (xb[k] - xa[k]) * na[k];
+    eb += (xb[k] - xa[k]) * nb[k];
+  }
+  for (int k = 0; k < d; k++) {
+    x[k] = 0.5 * xa[k] + 0.5 * xb[k] + (eb * nb[k] - ea * na[k]) / 8;
+    n[k] = na[k] + nb[k];
+    nn += n[k] * n[k];
+  }
+  nn = sqrt(nn);
+  for (int k = 0; k < d; k++) n[k] /= nn;
+}
+
+/* 1 if an element around vertex v has no positive volume (exactly). */
+static int flat_around(const bis *s, pa_idx v) {
+  const pa_mesh *m = s->m;
+  const ilist *l = &s->eball.l[v];
+  for (int q = 0; q < l->n; q++) {
+    const pa_idx *ev = m->elem + (size_t)(s->d + 1) * s->eball.pool[l->off + (size_t)q];
+    const double *x[4];
+    for (int j = 0; j <= s->d; j++) x[j] = m->coord + (size_t)s->d * ev[j];
+    if (!(pa__orient(s->d, x) > 0)) return 1;
+  }
+  return 0;
+}
+
+/* The vertex *mid at the midpoint of e (on its curve when curve = 1), from
+ * the ends in canonical order, with their metric and fields interpolated,
+ * and its skin mark: a vertex added on the skin is inner, on a curve
+ * M_SURF; descended from a labelled vertex, an inner one never pairs with
+ * a labelled vertex (see the file comment). */
+static pa_status add_midpoint(bis *s, const qedge *e, int skin, int curve,
+                              pa_idx *mid) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = s->m;
-  double x[3];
+  double x[3], n[3];
   const double *xa = m->coord + (size_t)s->d * e->a,
                *xb = m->coord + (size_t)s->d * e->b;
-  for (int k = 0; k < s->d; k++)
-    x[k] = 0.5 * xa[k] + 0.5 * xb[k];
+  if (curve)
+    curve_point(s, e, x, n);
+  else
+    for (int k = 0; k < s->d; k++)
+      x[k] = 0.5 * xa[k] + 0.5 * xb[k];
   PA_CALL(pa_mesh_add_vertex(m, x, 0, mid));
   PA_CALL(grow_balls(s, (size_t)m->nv));
   if (m->met_ncomp) {
@@ -446,10 +581,21 @@ static pa_status add_midpoint(bis *s, const qedge *e, int skin, pa_idx *mid) {
     pa__field_interp(s->d, nc, pa__field_is_metric(s->d, m->field[f].name, nc),
                      2, yy, w, y + (size_t)nc * *mid);
   }
-  s->inner[*mid] =
-      skin ? (uint8_t)(1 | 4 |
-                       ((s->inner[e->a] | s->inner[e->b]) & (2 | 8) ? 8 : 0))
-           : 0;
+  if (curve) {
+    s->inner[*mid] = M_LABELLED | M_SURF | M_ADDED;
+    memcpy(s->nrm + (size_t)s->d * *mid, n, (size_t)s->d * sizeof *n);
+    pa_idx c = s->curve[e->a] >= 0 ? s->curve[e->a] : s->curve[e->b];
+    if (c < 0) { /* a new input edge */
+      PA_GROW(s->ends, s->capends, 2 * s->nends + 2);
+      s->ends[2 * s->nends] = e->a;
+      s->ends[2 * s->nends + 1] = e->b;
+      c = (pa_idx)s->nends++;
+    }
+    s->curve[*mid] = c;
+  } else {
+    int lab = (s->inner[e->a] | s->inner[e->b]) & (M_LABELLED | M_NOLAB);
+    s->inner[*mid] = skin ? (uint8_t)(M_INNER | M_ADDED | (lab ? M_NOLAB : 0)) : 0;
+  }
 cleanup:
   return st;
 }
@@ -501,17 +647,24 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
     }
     bnd |= is_feature(&s, e.a, e.b);
     PA_GROW(s.tmp, s.captmp, (size_t)nel * (size_t)(s.d - 1)); /* far */
+    int curve = 0;
     if (skin) {
       int ia = s.inner[e.a], ib = s.inner[e.b];
       if (!(ia & 3) || !(ib & 3) || !(e.len > o->skin_lmax)) continue;
-      if ((ia & 2) ? !(ib & 1) || (ib & 8) : (ib & 2) && (ia & 8)) continue;
+      if ((ia & M_SURF) && (ib & M_SURF)) {
+        curve = surface_split(&s, &e, bnd);
+        if (curve < 0) continue;
+      } else if ((ia & M_LABELLED) ? !(ib & M_INNER) || (ib & M_NOLAB)
+                                   : (ib & M_LABELLED) && (ia & M_NOLAB)) {
+        continue;
+      }
     } else if (bnd || !(e.len > o->lmax) ||
                longer_around(&s, &e, s.el, nel, s.tmp) ||
                (o->vmin > 0 && m->met_ncomp && small_around(&s, s.el, nel))) {
       continue;
     }
     pa_idx mid;
-    PA_CALL(add_midpoint(&s, &e, skin, &mid));
+    PA_CALL(add_midpoint(&s, &e, skin, curve, &mid));
     PA_GROW(parent, capp, 2 * (np + 1));
     parent[2 * np] = e.a;
     parent[2 * np + 1] = e.b;
@@ -521,14 +674,20 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
     if (bsw) PA_CALL(order_as_list(&s, &s.bball, e.a, s.fc, nfc));
     PA_CALL(split_cells(&s, 0, e.a, e.b, mid, s.el, nel));
     PA_CALL(split_cells(&s, 1, e.a, e.b, mid, s.fc, nfc));
+    /* a split at the midpoint keeps every volume positive: only those on
+     * the curve need a look, at the elements they make */
+    if (curve && flat_around(&s, mid)) s.curve_bad++;
     PA_CALL(push(&s, e.a, mid));
     PA_CALL(push(&s, mid, e.b));
   }
   if (onskinp && m->nv > nv0) {
     PA_ALLOC(*onskinp, (size_t)(m->nv - nv0));
     for (pa_idx v = nv0; v < m->nv; v++)
-      (*onskinp)[v - nv0] = (s.inner[v] & 4) != 0;
+      (*onskinp)[v - nv0] = !(s.inner[v] & M_ADDED) ? 0
+                            : (s.inner[v] & M_SURF) ? 2
+                                                    : 1;
   }
+  if (o->curve_bad) *o->curve_bad = s.curve_bad;
   if (parentp) {
     *parentp = parent;
     parent = NULL;
@@ -542,6 +701,9 @@ cleanup:
   pa__free(s.fc);
   pa__free(s.tmp);
   pa__free(s.inner);
+  pa__free(s.nrm);
+  pa__free(s.curve);
+  pa__free(s.ends);
   pa__free(s.heap);
   pa__free(s.feat);
   pa__free(parent);
