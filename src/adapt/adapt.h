@@ -57,8 +57,11 @@
  * neighbours (pieces.c) to the pieces (extract.c), removed before the
  * remesher sees them (bisect.c). */
 #define PA_ADAPT_SURFACE_FIELD "pa.adapt.surface"
-/* Bits of that mask: a double holds an integer below 2^53 exactly. */
+/* Bits of that mask: a double holds an integer below 2^53 exactly. The
+ * next bit marks a vertex on a feature edge or a required boundary entity
+ * (whose boundary edges stay whole). */
 #define PA_ADAPT_BLOOM_BITS 52
+#define PA_ADAPT_HARD_BIT ((uint64_t)1 << PA_ADAPT_BLOOM_BITS)
 /* Temporary ids of the vertices bisect.c adds to a piece (above every
  * global id; exact as a double) */
 #define PA_ADAPT_TEMP_GID ((pa_gid)1 << 52)
@@ -179,10 +182,10 @@ typedef struct pa__iter {
                           PA_ADAPT_SURFACE_TRANSIT (only pieces around, on a
                           smooth curved boundary), PA_ADAPT_LABELLED_TRANSIT
                           (only pieces around, neither) or 0 */
-  double *vsurf;       /* 3D, when a vertex of some rank is on a smooth
-                          curved boundary, else NULL: nloc x 4, the unit
-                          outward normal of such vertices and the Bloom mask
-                          of their boundary neighbours (pieces.c) */
+  double *vsurf;       /* 3D (else NULL): nloc x 4, the unit outward normal
+                          of the vertices on a smooth curved boundary (0 for
+                          the others) and the Bloom mask of every vertex's
+                          boundary neighbours (pieces.c) */
   int nocurve;         /* the extraction found a split onto a curve that
                           left an element without a positive volume: the
                           pieces were made again without (extract.c) */
@@ -282,10 +285,11 @@ pa_status pa__adapt_extract(pa__iter *it);
 /* Refine the skin faces pc shares with other pieces (bisect.c); inner[v]:
  * 1 the vertex is inner, 2 labelled, 3 on a smooth curved boundary (see
  * pieces.c); inside: bisect the edges inside the piece too; surf (3D): 4
- * per input vertex, it->vsurf's, or NULL: no split onto a curve (the
- * vertices marked 3 are then labelled ones). */
+ * per input vertex, it->vsurf's, or NULL (no two labelled vertices are
+ * then known to make a chord); curves: skin edges may be split onto a
+ * curve (else the vertices marked 3 are labelled ones). */
 pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
-                                int inside, const double *surf);
+                                int inside, const double *surf, int curves);
 
 /* Step 4. Local: remesh the local pieces; failures are recorded, not
  * returned (only hard internal errors are). *nfail receives the number of

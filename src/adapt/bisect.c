@@ -66,8 +66,17 @@ static int on_boundary(void *ctx, pa_idx a, pa_idx b) {
          (mb & pa__adapt_bloom_bit(f->vgid[a]));
 }
 
+/* o->on_boundary without masks: any two labelled vertices may lie on a
+ * boundary edge. */
+static int maybe_on_boundary(void *ctx, pa_idx a, pa_idx b) {
+  (void)ctx;
+  (void)a;
+  (void)b;
+  return 1;
+}
+
 pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
-                                int inside, const double *surf) {
+                                int inside, const double *surf, int curves) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = pc->in;
   pa_idx nv0 = m->nv, *parent = NULL;
@@ -83,15 +92,23 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
   o.vmin = inside ? PA_LEB_VMIN * pa__unit_simplex_volume(m->dim) : 0;
   o.curve_bad = &pc->curve_bad;
   if (surf) {
+    o.on_boundary = on_boundary;
+    o.ctx = &f;
+  } else if (m->dim == 3) {
+    o.on_boundary = maybe_on_boundary;
+  }
+  if (surf && curves) {
     PA_ALLOC(nrm, (size_t)3 * nv0);
     for (pa_idx v = 0; v < nv0; v++)
       memcpy(nrm + 3 * (size_t)v, surf + 4 * (size_t)v, 3 * sizeof *nrm);
     o.normal = nrm;
-    o.on_boundary = on_boundary;
-    o.ctx = &f;
-  } else if (m->dim == 3) { /* no curves: the surface vertices are labelled */
+  }
+  if (m->dim == 3) { /* the labelled vertices whose boundary edges stay */
     PA_ALLOC(mark, nv0);
-    for (pa_idx v = 0; v < nv0; v++) mark[v] = inner[v] == 3 ? 2 : inner[v];
+    for (pa_idx v = 0; v < nv0; v++) {
+      int hard = !surf || ((uint64_t)surf[4 * (size_t)v + 3] & PA_ADAPT_HARD_BIT);
+      mark[v] = inner[v] >= 2 && hard ? 4 : inner[v];
+    }
     o.skin_ok = mark;
   }
   PA_CALL(pa__leb_refine(m, &o, &parent, &onskin));

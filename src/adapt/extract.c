@@ -420,10 +420,8 @@ static pa_status piece_skin(pbuild *b) {
    * piece's fields */
   for (int k = 0; k < m->nfield; k++)
     if (!strcmp(m->field[k].name, PA_ADAPT_SURFACE_FIELD)) {
-      if (!b->it->nocurve) {
-        PA_ALLOC(surf, (size_t)4 * m->nv);
-        memcpy(surf, m->field[k].val, (size_t)4 * m->nv * sizeof *surf);
-      }
+      PA_ALLOC(surf, (size_t)4 * m->nv);
+      memcpy(surf, m->field[k].val, (size_t)4 * m->nv * sizeof *surf);
       PA_CALL(pa_mesh_remove_field(m, k));
       break;
     }
@@ -431,7 +429,8 @@ static pa_status piece_skin(pbuild *b) {
     /* the built-in 2D remesher repairs fans of triangles itself */
     const pa_remesher *r = b->it->opts->remesher;
     int builtin2d = m->dim == 2 && (!r || r == pa_remesher_builtin());
-    PA_CALL(pa__piece_refine_skin(b->pc, b->inner, !builtin2d, surf));
+    PA_CALL(pa__piece_refine_skin(b->pc, b->inner, !builtin2d, surf,
+                                  !b->it->nocurve));
   }
 cleanup:
   pa__free(surf);
@@ -580,7 +579,12 @@ static pa_status check_curves(pa__iter *it, const pa__recs *R) {
   }
   double x[2] = {bad, ncurved};
   PA_CALL(pa__allreduce(it->dm->comm, x, 2, MPI_DOUBLE, MPI_SUM));
-  if (x[0] == 0) goto cleanup;
+  if (x[0] == 0) {
+    if (it->rank == 0 && x[1] > 0)
+      pa__info(2, "padapt: iteration %d: %.0f skin vertices placed on curved "
+                  "boundaries\n", it->iter, x[1]);
+    goto cleanup;
+  }
   if (it->rank == 0)
     pa__info(1, "padapt: iteration %d: %.0f elements without a positive "
                 "volume next to %.0f skin vertices placed on curved "

@@ -201,10 +201,10 @@ static int face_normal(const pa_mesh *m, pa_idx e, const pa_idx *f, double *n) {
  * oriented by an element containing it and counted by that element's
  * owner, lie within PA_LEB_SMOOTH_DEG of each other (judged on the box of
  * their components, whose diagonal bounds their distances: an internal
- * face, seen from both sides, fails), over every rank. In 3D, when such a
- * vertex exists on some rank, it->vsurf receives per local vertex its unit
- * normal (the normalised area-weighted sum) and the Bloom mask of its
- * boundary neighbours' global ids (edges of boundary entities), reduced
+ * face, seen from both sides, fails), over every rank. In 3D, it->vsurf
+ * receives per local vertex the unit normal of such a vertex (the
+ * normalised area-weighted sum; 0 for the others) and the Bloom mask of
+ * its boundary neighbours' global ids (edges of boundary entities), reduced
  * over the ranks, the same bits on every copy. */
 static pa_status surface_vertices(pa__iter *it, uint8_t *smooth) {
   pa_status st = PA_SUCCESS;
@@ -213,7 +213,7 @@ static pa_status surface_vertices(pa__iter *it, uint8_t *smooth) {
   int d = dm->dim, w = SV_N(d);
   pa_idx nv = dm->nloc[PA_VERTEX];
   pa_dmesh_value *val = NULL;
-  double nsmooth = 0, spread = 2 * sin(PA_LEB_SMOOTH_DEG * M_PI / 360);
+  double spread = 2 * sin(PA_LEB_SMOOTH_DEG * M_PI / 360);
   if (!it->bstart) PA_CALL(pa__owned_balls(dm, &it->bstart, &it->belem));
   PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.adapt.surface", MPI_DOUBLE, w,
                              -1, &val));
@@ -261,10 +261,8 @@ static pa_status surface_vertices(pa__iter *it, uint8_t *smooth) {
     }
     smooth[v] = (uint8_t)(y[SV_MIN(d)] != HUGE_VAL && dd <= spread * spread &&
                           ss > 0);
-    nsmooth += smooth[v] && v < dm->nown[PA_VERTEX];
   }
-  PA_CALL(pa__allreduce(dm->comm, &nsmooth, 1, MPI_DOUBLE, MPI_SUM));
-  if (d == 3 && nsmooth > 0) {
+  if (d == 3) {
     PA_ALLOC(it->vsurf, (size_t)4 * nv);
     for (pa_idx v = 0; v < nv; v++) {
       const double *y = x + (size_t)w * v;
@@ -459,6 +457,7 @@ static pa_status inner_vertices(pa__iter *it, pa_dmesh_value *val) {
                                 : ok && smooth[v]    ? PA_ADAPT_SURFACE_TRANSIT
                                 : labelled           ? PA_ADAPT_LABELLED_TRANSIT
                                                      : 0);
+      if (it->vsurf && d[2 * v]) it->vsurf[4 * (size_t)v + 3] += (double)PA_ADAPT_HARD_BIT;
     }
   }
 cleanup:
