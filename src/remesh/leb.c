@@ -561,28 +561,46 @@ static int skin_split(bis *s, const qedge *e, int ia, int ib, int bnd,
 
 /* The point halfway along the boundary edge e (ends in canonical order)
  * into x (see the file comment): on the cubic Hermite curve of the ends'
- * normals, on the parabola of the one normal there is, or the midpoint;
- * the normalised sum of the normals into n. Returns the number of
- * normals. */
+ * normals, an end without one taking the other's mirrored in the plane
+ * that bisects e (as on a circle), or the midpoint when neither has one;
+ * the normalised sum of the two normals into n. Returns the number of
+ * normals the ends have. */
 static int curve_point(const bis *s, const qedge *e, double *x, double *n) {
   int d = s->d;
   const double *xa = s->m->coord + (size_t)d * e->a,
                *xb = s->m->coord + (size_t)d * e->b;
   const double *na = vnormal(s, e->a), *nb = vnormal(s, e->b);
-  double ea = 0, eb = 0, nn = 0, w = na && nb ? 0.125 : 0.25;
+  double ma[3], mb[3], ev[3], ee = 0, ea = 0, eb = 0, nn = 0;
+  int got = (na != NULL) + (nb != NULL);
   for (int k = 0; k < d; k++) {
-    ea += na ? (xb[k] - xa[k]) * na[k] : 0;
-    eb += nb ? (xb[k] - xa[k]) * nb[k] : 0;
+    ev[k] = xb[k] - xa[k];
+    ee += ev[k] * ev[k];
+  }
+  if (got == 1) { /* the mirror image of the one normal */
+    const double *g = na ? na : nb;
+    double *h = na ? mb : ma, c = 0;
+    for (int k = 0; k < d; k++) c += g[k] * ev[k];
+    for (int k = 0; k < d; k++) h[k] = g[k] - 2 * c * ev[k] / ee;
+    if (!na) na = ma;
+    if (!nb) nb = mb;
   }
   for (int k = 0; k < d; k++) {
-    double pa = na ? ea * na[k] : 0, pb = nb ? eb * nb[k] : 0;
-    x[k] = 0.5 * xa[k] + 0.5 * xb[k] + (pb - pa) * w;
-    n[k] = (na ? na[k] : 0) + (nb ? nb[k] : 0);
+    x[k] = 0.5 * xa[k] + 0.5 * xb[k];
+    n[k] = 0;
+  }
+  if (!got) return 0;
+  for (int k = 0; k < d; k++) {
+    ea += ev[k] * na[k];
+    eb += ev[k] * nb[k];
+  }
+  for (int k = 0; k < d; k++) {
+    x[k] += (eb * nb[k] - ea * na[k]) / 8;
+    n[k] = na[k] + nb[k];
     nn += n[k] * n[k];
   }
   nn = sqrt(nn);
   for (int k = 0; k < d && nn > 0; k++) n[k] /= nn;
-  return (na != NULL) + (nb != NULL);
+  return got;
 }
 
 /* 1 if an element around vertex v has no positive volume (exactly). */
