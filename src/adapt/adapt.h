@@ -23,10 +23,11 @@
  *  - a piece's skin is the set of faces it shares with elements of another
  *    label or of none; every vertex and edge a piece shares with the outside
  *    lies on it. The skin is frozen while the piece is remeshed, after
- *    bisect.c refined, in every piece, the skin faces whose vertices are
- *    all inner (only pieces around them): that refinement depends only on
- *    the face, so both sides of an interface agree and a piece remeshed
- *    with its skin untouched fits back exactly;
+ *    bisect.c refined, in every piece, the skin faces whose vertices only
+ *    pieces touch: that refinement depends only on the face (its vertices'
+ *    coordinates, metric, marks and normals, shipped bit for bit), so both
+ *    sides of an interface agree and a piece remeshed with its skin
+ *    untouched fits back exactly;
  *  - an element stays (same global id, same values) when it is unlabelled;
  *    all labelled elements are replaced by the output of their piece (a
  *    failed piece gives its input back, with its refined skin);

@@ -10,20 +10,36 @@
  * same faces on both sides of an interface: a face's refinement depends
  * only on its vertices (coordinates and metric, shipped bit for bit).
  *
- * Which skin edges: those whose two vertices are "inner" (pieces.c: every
+ * Which skin edges (pieces.c marks the vertices from reduced values, so
+ * every piece sees the same): those whose two vertices are "inner" (every
  * element around them is in a piece, they lie on no feature edge nor
  * required boundary entity nor curved boundary, and are no corner, ridge or
- * required vertex; from reduced vertex values, so every piece sees the
- * same), and those between an inner vertex and a "labelled" one (only
- * pieces around it, but on a ridge, a corner, a curved boundary...). Such
- * an edge lies in no staying element, and every piece containing it has it
- * on its skin. An inner-labelled edge is no feature edge (the inner end is
- * on none); if it lies on the boundary, its boundary faces contain the
- * inner end, whose faces are coplanar, so its midpoint is on the surface.
- * Without the labelled ends, every skin face touching a ridge of a box
+ * required vertex), those between an inner vertex and a "labelled" one
+ * (only pieces around it, but on a ridge, a corner, a curved boundary...),
+ * and those between two labelled vertices, inside the domain or on the
+ * boundary, unless an end is "hard" (on a feature edge or a required
+ * boundary entity). Such an edge lies in no staying element, and every
+ * piece containing it has it on its skin. An inner-labelled edge is no
+ * feature edge (the inner end is on none); if it lies on the boundary, its
+ * boundary faces contain the inner end, whose faces are coplanar, so its
+ * midpoint is on the surface. A labelled-labelled edge on the boundary is
+ * split on the cubic Hermite curve of its ends' normals (pieces.c gives
+ * one to the vertices of a smooth curved boundary, remesh/leb.c has the
+ * rules). Only the pieces at the ends of such an edge hold a boundary face
+ * of it: whether it is on the boundary comes from both ends' Bloom masks
+ * of their boundary neighbours' global ids (pieces.c), which never miss
+ * one; and when they err, the edge is a chord, split at its midpoint
+ * unless it lies within PA_LEB_SMOOTH_DEG of the tangent planes (then a
+ * point on the curve may turn an element over, caught below). Without the
+ * labelled ends, every skin face touching a ridge or a curved boundary
  * would stay as coarse as the input, and its neighbours would be remeshed
  * again in another iteration (docs/BENCHMARKS.md, "The parallel loop", has
  * the measurement).
+ *
+ * A point on a curve may leave an element of the piece without a positive
+ * volume (a thin element on the concave side); the piece counts them
+ * (pc->curve_bad) and extract.c makes every piece again without curves
+ * when one is found on any rank.
  *
  * With inside, edges inside the piece longer than PA_ADAPT_LEB_INNER are
  * bisected too, in the same longest-first order (except in elements holding

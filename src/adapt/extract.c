@@ -14,8 +14,9 @@
  * Gathering: each rank sends, for every labelled owned element, the element
  * (aux = piece), and for every (piece, entity) pair the vertices (with
  * coordinates, metric, fields, and transit flag bits: skin, hot, inner for
- * that piece), boundary entities and edges of the piece's elements it
- * holds. pa__recs_migrate
+ * that piece; in 3D the normals and masks of it->vsurf as a temporary field,
+ * PA_ADAPT_SURFACE_FIELD), boundary entities and edges of the piece's
+ * elements it holds. pa__recs_migrate
  * moves them; the receiver drops duplicates (an entity held by several
  * ranks) and assembles each of its pieces, numbered by increasing global id,
  * so the piece does not depend on how its fragments were spread.
@@ -25,7 +26,11 @@
  * by their coordinates); the faces of its outer surface that are not
  * boundary entities become boundary entities of reference PA_ADAPT_SKIN_REF
  * flagged PA_FLAG_REQUIRED (its skin, frozen), which bisect.c then refines
- * where the piece meets another one.
+ * where the piece meets another one. If a skin split onto a curve left an
+ * element without a positive volume in a piece on any rank, every rank
+ * assembles its pieces again from the same records without such splits
+ * (one allreduce): the pieces around that skin cannot decide alone, each
+ * sees its own side.
  */
 #include "adapt/adapt.h"
 

@@ -24,12 +24,18 @@
  *     piece touches it (extract.c). A vertex is inner (it->vinner =
  *     PA_ADAPT_INNER_TRANSIT) when only labelled elements touch it and it lies
  *     on no feature edge, required boundary entity or curved boundary and
- *     is no corner, ridge or required vertex; the other vertices that only
- *     labelled elements touch (on a ridge, a curved boundary, ...) are
- *     PA_ADAPT_LABELLED_TRANSIT. bisect.c splits a skin edge between two inner
- *     vertices, or between an inner and a labelled one: such an edge is
- *     interior, or lies in the plane of the inner end's boundary faces, so
- *     its midpoint is exact.
+ *     is no corner, ridge or required vertex; a surface vertex
+ *     (PA_ADAPT_SURFACE_TRANSIT) when the same holds but for a curved
+ *     boundary, smooth there: the outward normals of its boundary faces lie
+ *     within PA_LEB_SMOOTH_DEG of each other; the other vertices that only
+ *     labelled elements touch (on a ridge, a sharp curved boundary, ...)
+ *     are PA_ADAPT_LABELLED_TRANSIT. In 3D every local vertex gets, in
+ *     it->vsurf, the normal of a surface vertex (the normalised sum of its
+ *     faces' outward normals, each face counted once, by the owner of the
+ *     element holding it) and a Bloom mask of the global ids of its
+ *     boundary neighbours, the hard bit set on a feature edge or a required
+ *     boundary entity; extract.c ships them, bisect.c splits the skin edges
+ *     by them (see there).
  * Only vertex values with reduce/halo cross the ranks here: no point-to-point
  * code, and the result does not depend on timing.
  */
@@ -423,7 +429,9 @@ cleanup:
 /* Step 4b: the inner vertices (bisect.c): only pieces around, on no
  * feature edge nor required boundary entity nor curved boundary (reduced
  * over the ranks: every piece sees the same), and no corner, ridge or
- * required vertex; it->vinner as described at the top of the file. */
+ * required vertex; the surface vertices, the same on a smooth curved
+ * boundary; it->vinner and it->vsurf as described at the top of the
+ * file. */
 static pa_status inner_vertices(pa__iter *it, pa_dmesh_value *val) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
