@@ -41,6 +41,13 @@
  * (pc->curve_bad) and extract.c makes every piece again without curves
  * when one is found on any rank.
  *
+ * In 2D (no masks, surf NULL) every labelled vertex is hard: a skin edge
+ * there is interior, and nothing is gained, while the 2D remesher, fenced
+ * by skin edges refined down to a curved boundary's vertices, left whole
+ * the boundary edge between two of them (plate2d.mesh -hsiz 0.0012 at 4
+ * ranks: a boundary edge 40 times too long, the loop stalled). In 3D
+ * without masks (a mesh holding the most fields) too.
+ *
  * With inside, edges inside the piece longer than PA_ADAPT_LEB_INNER are
  * bisected too, in the same longest-first order (except in elements holding
  * less than PA_LEB_VMIN unit elements of metric volume, as the remesher's
@@ -110,7 +117,7 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
   if (surf) {
     o.on_boundary = on_boundary;
     o.ctx = &f;
-  } else if (m->dim == 3) {
+  } else {
     o.on_boundary = maybe_on_boundary;
   }
   if (surf && curves) {
@@ -119,14 +126,14 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
       memcpy(nrm + 3 * (size_t)v, surf + 4 * (size_t)v, 3 * sizeof *nrm);
     o.normal = nrm;
   }
-  if (m->dim == 3) { /* the labelled vertices whose boundary edges stay */
-    PA_ALLOC(mark, nv0);
-    for (pa_idx v = 0; v < nv0; v++) {
-      int hard = !surf || ((uint64_t)surf[4 * (size_t)v + 3] & PA_ADAPT_HARD_BIT);
-      mark[v] = inner[v] >= 2 && hard ? 4 : inner[v];
-    }
-    o.skin_ok = mark;
+  /* the labelled vertices whose boundary edges stay whole: all of them
+   * without masks (2D: see the file comment) */
+  PA_ALLOC(mark, nv0);
+  for (pa_idx v = 0; v < nv0; v++) {
+    int hard = !surf || ((uint64_t)surf[4 * (size_t)v + 3] & PA_ADAPT_HARD_BIT);
+    mark[v] = inner[v] >= 2 && hard ? 4 : inner[v];
   }
+  o.skin_ok = mark;
   PA_CALL(pa__leb_refine(m, &o, &parent, &onskin));
   if (m->nv > nv0) {
     pa_gid *g = pa__realloc(pc->vgid, (size_t)m->nv * sizeof *g);

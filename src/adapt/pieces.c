@@ -144,140 +144,121 @@ cleanup:
   return st;
 }
 
-/* Per local vertex, in the value surface_vertices reduces: the sum of the
- * outward normals of its boundary faces (twice their areas long), the
- * smallest component of their unit normals and of their opposites, the
- * Bloom mask of its boundary neighbours. */
-#define SV_SUM(d) 0
-#define SV_MIN(d) (d)
-#define SV_NEGMIN(d) (2 * (d))
-#define SV_MASK(d) (3 * (d))
-#define SV_N(d) (3 * (d) + 1)
+/* Per local vertex (3D), in the value surface_vertices reduces: the sum
+ * of the outward normals of its boundary faces (twice their areas long),
+ * the smallest component of their unit normals and of their opposites,
+ * the Bloom mask of its boundary neighbours. */
+#define SV_SUM 0
+#define SV_MIN 3
+#define SV_NEGMIN 6
+#define SV_MASK 9
+#define SV_N 10
 
-/* Combine two copies of the vertices of surface_vertices (ctx: the
- * dimension): sums, minima, and the union of the masks. */
+/* Combine two copies of the vertices of surface_vertices: sums, minima,
+ * and the union of the masks. */
 static void combine_surface(const void *in, void *inout, pa_idx n, void *ctx) {
-  int d = *(const int *)ctx, w = SV_N(d);
   const double *x = in;
   double *y = inout;
-  for (pa_idx v = 0; v < n; v++, x += w, y += w) {
-    for (int k = 0; k < d; k++) y[SV_SUM(d) + k] += x[SV_SUM(d) + k];
-    for (int k = d; k < 3 * d; k++) y[k] = x[k] < y[k] ? x[k] : y[k];
-    y[SV_MASK(d)] = (double)((uint64_t)x[SV_MASK(d)] | (uint64_t)y[SV_MASK(d)]);
+  (void)ctx;
+  for (pa_idx v = 0; v < n; v++, x += SV_N, y += SV_N) {
+    for (int k = SV_SUM; k < SV_MIN; k++) y[k] += x[k];
+    for (int k = SV_MIN; k < SV_MASK; k++) y[k] = x[k] < y[k] ? x[k] : y[k];
+    y[SV_MASK] = (double)((uint64_t)x[SV_MASK] | (uint64_t)y[SV_MASK]);
   }
 }
 
-/* The outward normal of boundary entity f (d vertices) as a face of
- * owned element e, twice its area long (its length in 2D) into n; 0 if
- * e does not contain f. */
+/* The outward normal of boundary triangle f as a face of owned tetrahedron
+ * e, twice its area long, into n; 0 if e does not contain f. */
 static int face_normal(const pa_mesh *m, pa_idx e, const pa_idx *f, double *n) {
-  int d = m->dim;
-  const pa_idx *ev = m->elem + (size_t)(d + 1) * e;
+  const pa_idx *ev = m->elem + 4 * (size_t)e;
   pa_idx q = -1;
   int in = 0;
-  for (int j = 0; j <= d; j++) {
-    int k = 0;
-    while (k < d && f[k] != ev[j]) k++;
-    if (k < d) in++;
-    else q = ev[j];
+  for (int j = 0; j < 4; j++) {
+    if (ev[j] == f[0] || ev[j] == f[1] || ev[j] == f[2])
+      in++;
+    else
+      q = ev[j];
   }
-  if (in != d) return 0;
-  const double *p0 = m->coord + (size_t)d * f[0], *p1 = m->coord + (size_t)d * f[1],
-               *pq = m->coord + (size_t)d * q;
-  double dot = 0;
-  if (d == 2) {
-    n[0] = p1[1] - p0[1];
-    n[1] = p0[0] - p1[0];
-  } else {
-    const double *p2 = m->coord + 3 * (size_t)f[2];
-    double u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
-    double w[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
-    n[0] = u[1] * w[2] - u[2] * w[1];
-    n[1] = u[2] * w[0] - u[0] * w[2];
-    n[2] = u[0] * w[1] - u[1] * w[0];
-  }
-  for (int k = 0; k < d; k++) dot += n[k] * (pq[k] - p0[k]);
-  if (dot > 0)
-    for (int k = 0; k < d; k++) n[k] = -n[k];
+  if (in != 3) return 0;
+  const double *p0 = m->coord + 3 * (size_t)f[0], *p1 = m->coord + 3 * (size_t)f[1],
+               *p2 = m->coord + 3 * (size_t)f[2], *pq = m->coord + 3 * (size_t)q;
+  double u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+  double w[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+  n[0] = u[1] * w[2] - u[2] * w[1];
+  n[1] = u[2] * w[0] - u[0] * w[2];
+  n[2] = u[0] * w[1] - u[1] * w[0];
+  if (n[0] * (pq[0] - p0[0]) + n[1] * (pq[1] - p0[1]) + n[2] * (pq[2] - p0[2]) > 0)
+    for (int k = 0; k < 3; k++) n[k] = -n[k];
   return 1;
 }
 
-/* The vertices on a smooth curved boundary (bisect.c, remesh/leb.c):
+/* 3D: the vertices on a smooth curved boundary (bisect.c, remesh/leb.c):
  * smooth[v] = 1 when the outward unit normals of v's boundary faces, each
  * oriented by an element containing it and counted by that element's
  * owner, lie within PA_LEB_SMOOTH_DEG of each other (judged on the box of
  * their components, whose diagonal bounds their distances: an internal
- * face, seen from both sides, fails), over every rank. In 3D, it->vsurf
- * receives per local vertex the unit normal of such a vertex (the
- * normalised area-weighted sum; 0 for the others) and the Bloom mask of
- * its boundary neighbours' global ids (edges of boundary entities), reduced
- * over the ranks, the same bits on every copy. */
+ * face, seen from both sides, fails), over every rank; it->vsurf receives
+ * per local vertex the unit normal of such a vertex (the normalised
+ * area-weighted sum; 0 for the others) and the Bloom mask of its boundary
+ * neighbours' global ids (edges of boundary entities), reduced over the
+ * ranks, the same bits on every copy. */
 static pa_status surface_vertices(pa__iter *it, uint8_t *smooth) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
   const pa_mesh *m = dm->mesh;
-  int d = dm->dim, w = SV_N(d);
   pa_idx nv = dm->nloc[PA_VERTEX];
   pa_dmesh_value *val = NULL;
   double spread = 2 * sin(PA_LEB_SMOOTH_DEG * M_PI / 360);
   if (!it->bstart) PA_CALL(pa__owned_balls(dm, &it->bstart, &it->belem));
-  PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.adapt.surface", MPI_DOUBLE, w,
-                             -1, &val));
+  PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.adapt.surface", MPI_DOUBLE,
+                             SV_N, -1, &val));
   double *x = pa_dmesh_value_data(val, NULL, NULL);
   for (pa_idx v = 0; v < nv; v++)
-    for (int k = 0; k < w; k++)
-      x[(size_t)w * v + k] = k >= SV_MIN(d) && k < SV_MASK(d) ? HUGE_VAL : 0;
+    for (int k = 0; k < SV_N; k++)
+      x[(size_t)SV_N * v + k] = k >= SV_MIN && k < SV_MASK ? HUGE_VAL : 0;
   for (pa_idx b = 0; b < m->nb; b++) {
-    const pa_idx *f = m->bdry + (size_t)d * b;
-    for (int j = 0; j < d; j++) /* the masks: every edge of b */
-      for (int i = 0; i < d; i++) {
-        double *y = x + (size_t)w * f[j] + SV_MASK(d);
+    const pa_idx *f = m->bdry + 3 * (size_t)b;
+    for (int j = 0; j < 3; j++) /* the masks: every edge of b */
+      for (int i = 0; i < 3; i++) {
+        double *y = x + (size_t)SV_N * f[j] + SV_MASK;
         if (i != j)
           *y = (double)((uint64_t)*y |
                         pa__adapt_bloom_bit(dm->gid[PA_VERTEX][f[i]]));
       }
     for (pa_idx q = it->bstart[f[0]]; q < it->bstart[f[0] + 1]; q++) {
-      double n[3], len = 0;
+      double n[3];
       if (!face_normal(m, it->belem[q], f, n)) continue;
-      for (int k = 0; k < d; k++) len += n[k] * n[k];
-      len = sqrt(len);
+      double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
       if (!(len > 0)) continue;
-      for (int j = 0; j < d; j++) {
-        double *y = x + (size_t)w * f[j];
-        for (int k = 0; k < d; k++) {
+      for (int j = 0; j < 3; j++) {
+        double *y = x + (size_t)SV_N * f[j];
+        for (int k = 0; k < 3; k++) {
           double u = n[k] / len;
-          y[SV_SUM(d) + k] += n[k];
-          if (u < y[SV_MIN(d) + k]) y[SV_MIN(d) + k] = u;
-          if (-u < y[SV_NEGMIN(d) + k]) y[SV_NEGMIN(d) + k] = -u;
+          y[SV_SUM + k] += n[k];
+          if (u < y[SV_MIN + k]) y[SV_MIN + k] = u;
+          if (-u < y[SV_NEGMIN + k]) y[SV_NEGMIN + k] = -u;
         }
       }
     }
   }
   PA_CALL(pa__agree(dm->comm, st));
-  PA_CALL(pa__dmesh_reduce_fn(dm, val, combine_surface, &d));
+  PA_CALL(pa__dmesh_reduce_fn(dm, val, combine_surface, NULL));
   PA_CALL(pa_dmesh_halo(dm, val));
+  PA_ALLOC(it->vsurf, (size_t)4 * nv);
   x = pa_dmesh_value_data(val, NULL, NULL);
   for (pa_idx v = 0; v < nv; v++) {
-    const double *y = x + (size_t)w * v;
-    double dd = 0, ss = 0;
-    for (int k = 0; k < d; k++) {
-      double r = -y[SV_NEGMIN(d) + k] - y[SV_MIN(d) + k];
+    const double *y = x + (size_t)SV_N * v;
+    double *z = it->vsurf + (size_t)4 * v, dd = 0, ss = 0;
+    for (int k = 0; k < 3; k++) {
+      double r = -y[SV_NEGMIN + k] - y[SV_MIN + k];
       dd += r * r;
-      ss += y[SV_SUM(d) + k] * y[SV_SUM(d) + k];
+      ss += y[SV_SUM + k] * y[SV_SUM + k];
     }
-    smooth[v] = (uint8_t)(y[SV_MIN(d)] != HUGE_VAL && dd <= spread * spread &&
+    ss = sqrt(ss);
+    smooth[v] = (uint8_t)(y[SV_MIN] != HUGE_VAL && dd <= spread * spread &&
                           ss > 0);
-  }
-  if (d == 3) {
-    PA_ALLOC(it->vsurf, (size_t)4 * nv);
-    for (pa_idx v = 0; v < nv; v++) {
-      const double *y = x + (size_t)w * v;
-      double *z = it->vsurf + (size_t)4 * v, ss = 0;
-      for (int k = 0; k < 3; k++) ss += y[SV_SUM(d) + k] * y[SV_SUM(d) + k];
-      ss = sqrt(ss);
-      for (int k = 0; k < 3; k++) z[k] = smooth[v] ? y[SV_SUM(d) + k] / ss : 0;
-      z[3] = y[SV_MASK(d)];
-    }
+    for (int k = 0; k < 3; k++) z[k] = smooth[v] ? y[SV_SUM + k] / ss : 0;
+    z[3] = y[SV_MASK];
   }
 cleanup:
   st = pa__dmesh_value_drop(dm, val, pa__agree_end(dm->comm, st));
@@ -453,7 +434,10 @@ static pa_status inner_vertices(pa__iter *it, pa_dmesh_value *val) {
   PA_ALLOC(it->vinner, nloc);
   PA_ALLOC(smooth, nloc);
   PA_CALL(curved_vertices(dm, it->vinner)); /* 1: curved, for now */
-  PA_CALL(surface_vertices(it, smooth));
+  if (dm->dim == 3) /* 2D: no surface vertices (bisect.c) */
+    PA_CALL(surface_vertices(it, smooth));
+  else
+    memset(smooth, 0, (size_t)nloc);
   {
     const int *d = pa_dmesh_value_data(val, NULL, NULL);
     const uint8_t *vf = dm->mesh->vflag;
