@@ -183,10 +183,11 @@ typedef struct pa__iter {
                           PA_ADAPT_SURFACE_TRANSIT (only pieces around, on a
                           smooth curved boundary), PA_ADAPT_LABELLED_TRANSIT
                           (only pieces around, neither) or 0 */
-  double *vsurf;       /* 3D (else NULL): nloc x 4, the unit outward normal
-                          of the vertices on a smooth curved boundary (0 for
-                          the others) and the Bloom mask of every vertex's
-                          boundary neighbours (pieces.c) */
+  double *vsurf;       /* 3D (else NULL), from pieces.c to the extraction
+                          (which releases it): nloc x 4, the unit outward
+                          normal of the vertices on a smooth curved boundary
+                          (0 for the others) and the Bloom mask of every
+                          vertex's boundary neighbours */
   int nocurve;         /* the extraction found a split onto a curve that
                           left an element without a positive volume: the
                           pieces were made again without (extract.c) */

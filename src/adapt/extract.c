@@ -607,15 +607,18 @@ cleanup:
 
 /* The temporary field PA_ADAPT_SURFACE_FIELD on the local mesh from
  * it->vsurf (added = 1), unless the mesh holds the most fields already
- * (then no split goes onto a curve: every rank has the same fields). */
+ * (then no split goes onto a curve: every rank has the same fields);
+ * it->vsurf is released. */
 static pa_status add_surface_field(pa__iter *it, int *added) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = it->dm->mesh;
   *added = 0;
-  if (!it->vsurf || m->nfield >= PA_MESH_MAX_FIELDS) return PA_SUCCESS;
+  if (!it->vsurf || m->nfield >= PA_MESH_MAX_FIELDS) goto cleanup;
   PA_CALL(pa_mesh_add_field(m, PA_ADAPT_SURFACE_FIELD, 4, it->vsurf));
   *added = 1;
 cleanup:
+  pa__free(it->vsurf);
+  it->vsurf = NULL;
   return st;
 }
 
