@@ -34,14 +34,15 @@ typedef struct pa__leb_opts {
 
 /* The vmin of a pre-refinement (the built-in 3D remesher's, and inside a
  * piece of the parallel loop, adapt/bisect.c), in unit tets: an element
- * holding less than one unit tet of metric volume is not bisected, its
- * halves would hold less than half of one, more elements than the metric
- * asks for. Where the metric is isotropic the bisection stops at length 2
- * with 2-8 unit volumes per tet, so only flat or strongly anisotropic
- * elements meet it (box3d 10 in layer:0.1: 126 k -> 26 k tets before the
- * passes, the same output quality; figures: docs/BENCHMARKS.md, "The 3D
- * remesher"). */
-#define PA_LEB_VMIN 1.0
+ * holding less than a quarter of a unit tet of metric volume is not
+ * bisected, its halves would hold less than an eighth of one, more
+ * elements than the metric asks for. Where the metric is isotropic the
+ * bisection stops at length 2 with 2-8 unit volumes per tet, so only flat
+ * or strongly anisotropic elements meet it. At 1 unit tet, flat input
+ * tets of the gmsh rod were left whole and its worst quality fell from
+ * 0.249 to 0.207; at 1/4 the rod is bisected as before (figures:
+ * docs/BENCHMARKS.md, "The 3D remesher"). */
+#define PA_LEB_VMIN 0.25
 
 /* Angle bound of a smooth curved boundary (adapt/pieces.c marks its
  * vertices 3 when their boundary faces' normals lie within it of each
