@@ -103,12 +103,23 @@ int pa_cli_error(const pa_cli *cli, const char *fmt, ...)
 /* Print the library's last error for status st; returns 1 (0 on success). */
 int pa_cli_fail(const pa_cli *cli, pa_status st);
 
-/* Check, on rank 0 before the work starts, that the n output paths (NULL
- * entries skipped) can be written and are all different; prints the error
- * ("CMD: ...") and returns 1 on every rank if not, 0 if they can.
- * Collective. */
-int pa_cli_check_outputs(const pa_cli *cli, const char *cmd,
-                         const char *const *paths, int n);
+/* The files a command reads and writes (NULL entries skipped), for
+ * pa_cli_check_io. */
+#define PA_CLI_IO_MAX 8
+typedef struct pa_cli_io {
+  const char *in[PA_CLI_IO_MAX];  /* files read; a distributed set: its files */
+  const char *out[PA_CLI_IO_MAX]; /* files written */
+  const char *set;     /* a distributed set written on every rank */
+  const char *ckpt;    /* -checkpoint DIR: its "checkpoint" and "iter-*" */
+  const char *restart; /* -restart DIR: every file in it is read */
+} pa_cli_io;
+/* Check, on rank 0 before the work starts (cli_paths.c), that every output
+ * can be written (pa_output_check), that no two outputs and no output and
+ * input are the same file (resolved: links and relative paths count), and
+ * that no file but the checkpoint's own is in the checkpoint directory;
+ * prints the error ("CMD: ...") and returns 1 on every rank if not, 0 if
+ * the files are fine. Collective. */
+int pa_cli_check_io(const pa_cli *cli, const char *cmd, const pa_cli_io *io);
 /* End the output transaction of a command (pa_output_end over comm:
  * MPI_COMM_SELF for outputs written by rank 0 alone). Collective over comm.
  * Test hook: with PADAPT_TEST_HOLD_OUTPUT=FILE in the environment and every

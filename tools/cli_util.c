@@ -230,24 +230,6 @@ pa_status pa_cli_write_fields(pa_mesh *mesh, const char *path) {
   return st;
 }
 
-int pa_cli_check_outputs(const pa_cli *cli, const char *cmd,
-                         const char *const *paths, int n) {
-  int bad = 0;
-  if (cli->rank == 0) {
-    for (int i = 0; i < n && !bad; i++) {
-      if (!paths[i]) continue;
-      for (int j = 0; j < i && !bad; j++)
-        if (paths[j] && !strcmp(paths[i], paths[j]))
-          bad = pa_cli_error(cli, "%s: %s is given for two outputs", cmd,
-                             paths[i]);
-      pa_status st = bad ? PA_SUCCESS : pa_output_check(paths[i]);
-      if (st) bad = pa_cli_fail(cli, st);
-    }
-  }
-  MPI_Bcast(&bad, 1, MPI_INT, 0, cli->comm);
-  return bad;
-}
-
 /* How long the test hook of pa_cli_output_end holds the outputs: long
  * enough for a test under the sanitizers to send its signal, short enough
  * that a forgotten hook only delays a run. */

@@ -85,7 +85,8 @@ int pa_cli_partition(const pa_cli *cli, int argc, char **argv) {
     if (cli->rank == 0) pa_cli_help(&partition_spec, stderr);
     return 1;
   }
-  if (pa_cli_check_outputs(cli, "partition", &out, 1)) return 1;
+  pa_cli_io io = {.in = {in}, .set = out};
+  if (pa_cli_check_io(cli, "partition", &io)) return 1;
   pa_dmesh *dm = NULL;
   pa_gid *nel = NULL;
   double imb = 0, t;

@@ -166,8 +166,8 @@ int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
   if (!in)
     return pa_cli_error(cli, "usage: padapt stats IN [-met SOL] "
                              "[-json OUT.json] [-svg OUT.svg]");
-  const char *outs[2] = {json, svg};
-  if (pa_cli_check_outputs(cli, "stats", outs, 2)) return 1;
+  pa_cli_io io = {.in = {in, met}, .out = {json, svg}};
+  if (pa_cli_check_io(cli, "stats", &io)) return 1;
   pa_mesh *mesh = NULL;
   pa_stats stats;
   int valid = 1;
@@ -270,6 +270,8 @@ int pa_cli_convert(const pa_cli *cli, int argc, char **argv) {
   if (!in || !out)
     return pa_cli_error(cli, "usage: padapt convert IN OUT [-met SOL] "
                              "[-binary] [-meshb-version V] [-diag]");
+  pa_cli_io io = {.in = {in, met}, .out = {out}};
+  if (pa_cli_check_io(cli, "convert", &io)) return 1;
   pa_mesh *mesh = NULL;
   pa_status st = pa_cli_read_mesh(cli, in, &mesh);
   if (st != PA_SUCCESS) return read_failed(cli, st);
