@@ -101,6 +101,10 @@ void pa__mesh_drop_cells(pa_mesh *mesh);
  * only a user's input must meet (manifold vertices, no two vertices at one
  * point): a piece of the parallel loop may touch itself at a vertex. */
 pa_status pa__mesh_check(pa_mesh *mesh, int input);
+/* No folded or overlapping elements around a vertex (2D) or an edge and a
+ * boundary vertex (3D) (overlap.c); needs the adjacency and the balls
+ * built. Part of pa__mesh_check for input meshes. */
+pa_status pa__mesh_check_overlap(const pa_mesh *mesh);
 
 /* Number of metric components of a full tensor in dimension dim (3 or 6). */
 static inline int pa__tensor_ncomp(int dim) { return dim == 2 ? 3 : 6; }
