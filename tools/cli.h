@@ -121,12 +121,19 @@ typedef struct pa_cli_io {
  * the files are fine. Collective. */
 int pa_cli_check_io(const pa_cli *cli, const char *cmd, const pa_cli_io *io);
 /* End the output transaction of a command (pa_output_end over comm:
- * MPI_COMM_SELF for outputs written by rank 0 alone). Collective over comm.
- * Test hook: with PADAPT_TEST_HOLD_OUTPUT=FILE in the environment and every
- * output written, rank 0 creates FILE and every rank waits 30 s before the
- * commit, so that a test can signal the command while its temporaries
- * exist. */
+ * MPI_COMM_SELF for outputs written by rank 0 alone), with a note on stderr
+ * when a signal arrived while the outputs were committed (they are
+ * complete, the command goes on to exit 0). Collective over comm. */
 pa_status pa_cli_output_end(MPI_Comm comm, pa_output *tx, pa_status st);
+/* The test hooks of the environment (never set them in production), on
+ * this rank: PADAPT_TEST_FAIL_ALLOC=k makes the k-th allocation of padapt's
+ * allocator fail (on rank PADAPT_TEST_FAIL_RANK only, if set);
+ * PADAPT_TEST_PAUSE=STEP with PADAPT_TEST_PAUSE_FLAG=FILE makes rank
+ * PADAPT_TEST_PAUSE_RANK (default 0) write its process id into FILE when
+ * its output transaction reaches STEP (pa_output_hook's steps) and wait
+ * there up to 30 s, until SIGINT or SIGTERM comes, so that a test can
+ * signal or kill it at that step. */
+void pa_cli_test_hooks(const pa_cli *cli);
 
 /* Read a mesh given on the command line: a sequential file (read by rank 0)
  * or a distributed set OUT.<r>.meshb (read by all ranks, gathered on rank 0).

@@ -8,11 +8,13 @@
 #include "cli.h"
 
 #include <math.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 #include <time.h>
+#include <unistd.h>
 
 int pa_cli_error(const pa_cli *cli, const char *fmt, ...) {
   va_list ap;
@@ -230,24 +232,66 @@ pa_status pa_cli_write_fields(pa_mesh *mesh, const char *path) {
   return st;
 }
 
-/* How long the test hook of pa_cli_output_end holds the outputs: long
- * enough for a test under the sanitizers to send its signal, short enough
- * that a forgotten hook only delays a run. */
-#define PA_CLI_HOLD_S 30
-
 pa_status pa_cli_output_end(MPI_Comm comm, pa_output *tx, pa_status st) {
-  const char *hold = getenv("PADAPT_TEST_HOLD_OUTPUT");
-  if (hold && hold[0] && st == PA_SUCCESS) {
-    int rank = 0;
-    MPI_Comm_rank(comm, &rank);
-    if (rank == 0) {
-      FILE *fp = fopen(hold, "w");
-      if (fp) fclose(fp);
-    }
-    struct timespec tenth = {0, 100000000};
-    for (int i = 0; i < 10 * PA_CLI_HOLD_S; i++) nanosleep(&tenth, NULL);
+  st = pa_output_end(comm, tx, st);
+  int sig = pa_output_held_signal();
+  if (sig)
+    fprintf(stderr, "padapt: %s arrived while the outputs were committed: "
+                    "they are complete; the command ends normally\n",
+            sig == SIGINT ? "SIGINT" : "SIGTERM");
+  return st;
+}
+
+/* How long the test hook PADAPT_TEST_PAUSE holds a process: long enough for
+ * a test under the sanitizers to act, short enough that a forgotten hook
+ * only delays a run. */
+#define PA_CLI_PAUSE_S 30
+
+/* The test hook's settings: pause at step on rank, after writing the
+ * process id into flag. */
+typedef struct pause_hook {
+  const char *step, *flag;
+  int rank;
+} pause_hook;
+
+static void pause_at(const char *step, void *ctx) {
+  const pause_hook *h = ctx;
+  if (strcmp(step, h->step)) return;
+  FILE *fp = fopen(h->flag, "w");
+  if (fp) {
+    fprintf(fp, "%ld\n", (long)getpid());
+    fclose(fp);
   }
-  return pa_output_end(comm, tx, st);
+  /* until a signal comes: at once if it acts, else (blocked while the
+   * outputs are committed) when it is pending */
+  sigset_t term, pend;
+  sigemptyset(&term);
+  sigaddset(&term, SIGINT);
+  sigaddset(&term, SIGTERM);
+  struct timespec tenth = {0, 100000000};
+  for (int i = 0; i < 10 * PA_CLI_PAUSE_S; i++) {
+    if (sigpending(&pend) == 0 &&
+        (sigismember(&pend, SIGINT) || sigismember(&pend, SIGTERM)))
+      break;
+    nanosleep(&tenth, NULL);
+  }
+}
+
+void pa_cli_test_hooks(const pa_cli *cli) {
+  static pause_hook h;
+  const char *step = getenv("PADAPT_TEST_PAUSE");
+  const char *rank = getenv("PADAPT_TEST_PAUSE_RANK");
+  h.step = step;
+  h.flag = getenv("PADAPT_TEST_PAUSE_FLAG");
+  h.rank = rank && rank[0] ? atoi(rank) : 0;
+  if (step && step[0] && h.flag && h.flag[0] && h.rank == cli->rank)
+    pa_output_set_hook(pause_at, &h);
+  /* fail the k-th allocation of padapt's allocator, on every rank or on
+   * rank PADAPT_TEST_FAIL_RANK only */
+  const char *k = getenv("PADAPT_TEST_FAIL_ALLOC");
+  const char *r = getenv("PADAPT_TEST_FAIL_RANK");
+  if (k && k[0] && (!r || !r[0] || atoi(r) == cli->rank))
+    pa_memory_fail_after(atol(k));
 }
 
 pa_status pa_cli_attach_metric(pa_mesh *mesh, const char *path) {

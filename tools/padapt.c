@@ -439,15 +439,7 @@ int main(int argc, char **argv) {
   MPI_Comm_rank(cli.comm, &cli.rank);
   MPI_Comm_size(cli.comm, &cli.size);
   if (cli.size > 1) keep_freed_memory();
-  {
-    /* test hook: fail the k-th allocation of padapt's allocator, on every
-     * rank or on rank PADAPT_TEST_FAIL_RANK only (fault injection,
-     * tests/cli/test_alloc_faults.sh) */
-    const char *k = getenv("PADAPT_TEST_FAIL_ALLOC");
-    const char *r = getenv("PADAPT_TEST_FAIL_RANK");
-    if (k && k[0] && (!r || !r[0] || atoi(r) == cli.rank))
-      pa_memory_fail_after(atol(k));
-  }
+  pa_cli_test_hooks(&cli);
   int rc = dispatch(&cli, argc, argv);
   double tcmd = pa_wtime();
   int all = rc;

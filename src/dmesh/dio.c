@@ -40,6 +40,7 @@
 #include <errno.h>
 #include <stdio.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 enum {
@@ -1513,13 +1514,62 @@ cleanup:
 
 /* ---- the collective end of output transactions ---- */
 
+/* How long a rank that has entered the last agreement of a commit, and then
+ * received SIGINT or SIGTERM, waits for the other ranks before it gives up
+ * (one of them is gone): ranks that are alive come within microseconds
+ * (the first agreement brought them all there), and Open MPI's mpiexec
+ * kills a job with SIGKILL a second after its SIGTERM. */
+#define PA_OUTPUT_GRACE_S 0.5
+/* The pause between two tests of that agreement. */
+#define PA_OUTPUT_POLL_NS 100000
+
+/* The last agreement of a commit: a barrier that every rank enters only once
+ * the first agreement completed on it, so that no rank passes it when
+ * another died before. Tested without blocking, SIGINT and SIGTERM blocked:
+ * returns 1 when every rank is in, 0 when a signal came and the others did
+ * not within PA_OUTPUT_GRACE_S. */
+static int commit_barrier(MPI_Comm comm) {
+  MPI_Request rq;
+  double since = -1;
+  if (MPI_Ibarrier(comm, &rq) != MPI_SUCCESS) return 0;
+  for (;;) {
+    int done = 0;
+    if (MPI_Test(&rq, &done, MPI_STATUS_IGNORE) != MPI_SUCCESS) return 0;
+    if (done) return 1;
+    if (pa__output_signal_pending()) {
+      if (since < 0) since = pa_wtime();
+      if (pa_wtime() - since > PA_OUTPUT_GRACE_S) return 0;
+    }
+    struct timespec pause = {0, PA_OUTPUT_POLL_NS};
+    nanosleep(&pause, NULL);
+  }
+}
+
 pa_status pa__output_end(MPI_Comm comm, pa_output *tx, pa_status st) {
+  int outer = pa__output_depth() == 1; /* a nested end only reports */
+  if (outer && st == PA_SUCCESS) pa__output_hook("written");
   st = pa__agree_end(comm, st);
   if (st) {
     pa_output_abort(tx);
     return st;
   }
-  return pa__agree(comm, pa_output_commit(tx));
+  if (!outer) return pa__agree(comm, pa_output_commit(tx));
+  pa__output_hook("voted");
+  sigset_t old;
+  pa__output_hold_begin(&old);
+  if (!commit_barrier(comm)) {
+    pa_output_abort(tx);
+    st = pa_set_error(PA_ERR_IO, "interrupted: another process did not come "
+                                 "to commit the outputs; nothing written");
+    pa__output_hold_end(&old, 0); /* the pending signal ends the process */
+    return st;
+  }
+  pa__output_hook("agreed");
+  st = pa_output_commit(tx);
+  pa__output_hook("committed");
+  st = pa__agree(comm, st);
+  pa__output_hold_end(&old, 1);
+  return st;
 }
 
 pa_status pa_output_end(MPI_Comm comm, pa_output *tx, pa_status st) {
