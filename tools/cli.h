@@ -135,10 +135,20 @@ pa_status pa_cli_output_end(MPI_Comm comm, pa_output *tx, pa_status st);
  * signal or kill it at that step. */
 void pa_cli_test_hooks(const pa_cli *cli);
 
+/* The reference of the boundary entities a mesh file does not list, as
+ * Mmg gives them. */
+#define PA_CLI_BOUNDARY_REF 0
+/* Add the boundary entities the mesh read from path does not list (every
+ * element face without a neighbour), with reference PA_CLI_BOUNDARY_REF,
+ * keeping the listed ones; a note on stderr at verbosity >= 1. Not
+ * collective. */
+pa_status pa_cli_complete_boundary(const pa_cli *cli, const char *path,
+                                   pa_mesh *mesh);
 /* Read a mesh given on the command line: a sequential file (read by rank 0)
  * or a distributed set OUT.<r>.meshb (read by all ranks, gathered on rank 0).
- * Collective. A mesh listing no boundary entity gets them all (ref 0); the
- * mesh is checked, and errors name the file. *mesh is set on rank 0 only. */
+ * Collective. The boundary entities the file does not list are added
+ * (pa_cli_complete_boundary); the mesh is checked, and errors name the
+ * file. *mesh is set on rank 0 only. */
 pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path, pa_mesh **mesh);
 
 /* Strict number parsing: the whole argument, finite. Returns 1 on success. */

@@ -33,9 +33,79 @@ int pa_cli_fail(const pa_cli *cli, pa_status st) {
   return pa_cli_error(cli, "%s", msg[0] ? msg : pa_status_string(st));
 }
 
+/* Drop the boundary entities listed twice (the first listing stays, with
+ * its reference): *ndropped of them, *nref of which had another reference. */
+static pa_status drop_duplicates(pa_mesh *mesh, pa_idx *ndropped,
+                                 pa_idx *nref) {
+  pa_status st = PA_SUCCESS;
+  const int d = pa_mesh_dim(mesh);
+  pa_idx nb = pa_mesh_nbdry(mesh), w = 0;
+  *ndropped = *nref = 0;
+  for (pa_idx b = 0; b < nb && st == PA_SUCCESS; b++) {
+    pa_idx first = b;
+    st = pa_mesh_find_bdry(mesh, pa_mesh_bdrys(mesh) + (size_t)d * b, &first);
+    if (first >= 0 && first != b) {
+      (*ndropped)++;
+      if (pa_mesh_bdry_refs(mesh)[first] != pa_mesh_bdry_refs(mesh)[b]) (*nref)++;
+    }
+  }
+  if (st != PA_SUCCESS || *ndropped == 0) return st;
+  /* compact: the lookup answers from the list as it was, so decide first */
+  uint8_t *keep = malloc((size_t)nb);
+  if (!keep) return pa_set_error(PA_ERR_MEMORY, "out of memory");
+  for (pa_idx b = 0; b < nb && st == PA_SUCCESS; b++) {
+    pa_idx first = b;
+    st = pa_mesh_find_bdry(mesh, pa_mesh_bdrys(mesh) + (size_t)d * b, &first);
+    keep[b] = first == b;
+  }
+  pa_idx *v = pa_mesh_bdrys(mesh);
+  int32_t *ref = pa_mesh_bdry_refs(mesh);
+  uint8_t *flag = pa_mesh_bdry_flags(mesh);
+  for (pa_idx b = 0; b < nb && st == PA_SUCCESS; b++) {
+    if (!keep[b]) continue;
+    memmove(v + (size_t)d * w, v + (size_t)d * b, sizeof *v * (size_t)d);
+    ref[w] = ref[b];
+    flag[w] = flag[b];
+    w++;
+  }
+  free(keep);
+  pa_mesh_invalidate(mesh);
+  if (st == PA_SUCCESS)
+    st = pa_mesh_resize(mesh, pa_mesh_nvert(mesh), pa_mesh_nelem(mesh), w,
+                        pa_mesh_nedge(mesh));
+  return st;
+}
+
+pa_status pa_cli_complete_boundary(const pa_cli *cli, const char *path,
+                                   pa_mesh *mesh) {
+  pa_idx nadded = 0, ndropped = 0, nref = 0;
+  const char *what = pa_mesh_dim(mesh) == 2 ? "edges" : "triangles";
+  pa_status st = drop_duplicates(mesh, &ndropped, &nref);
+  if (st == PA_SUCCESS && ndropped > 0 && cli->verbosity >= 1)
+    fprintf(stderr, "padapt: %s: %d boundary %s listed twice: kept the first "
+                    "listing%s\n",
+            path, (int)ndropped, what,
+            nref ? " (its reference; the second gave another)" : "");
+  pa_idx nlisted = pa_mesh_nbdry(mesh);
+  if (st == PA_SUCCESS)
+    st = pa_mesh_build_boundary(mesh, PA_CLI_BOUNDARY_REF, &nadded);
+  if (st == PA_SUCCESS && nadded > 0 && cli->verbosity >= 1) {
+    if (nlisted == 0)
+      fprintf(stderr, "padapt: %s: lists no boundary %s: added all %d "
+                      "(reference %d)\n",
+              path, what, (int)nadded, PA_CLI_BOUNDARY_REF);
+    else
+      fprintf(stderr, "padapt: %s: lists %d of its %d boundary %s: added "
+                      "the %d missing (reference %d), kept the others' "
+                      "references\n",
+              path, (int)nlisted, (int)(nlisted + nadded), what, (int)nadded,
+              PA_CLI_BOUNDARY_REF);
+  }
+  return st;
+}
+
 pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path,
                            pa_mesh **mesh) {
-  pa_idx nadded = 0;
   pa_status st;
   char msg[1100];
   *mesh = NULL;
@@ -51,12 +121,7 @@ pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path,
     st = pa_mesh_read(path, mesh);
     if (st != PA_SUCCESS) return st;
   }
-  /* A file that lists no boundary at all gets one; a file that lists some
-   * must list all (a missing one reveals a non-conforming mesh). */
-  if (pa_mesh_nbdry(*mesh) == 0) st = pa_mesh_build_boundary(*mesh, 0, &nadded);
-  if (st == PA_SUCCESS && nadded > 0 && cli->verbosity >= 1)
-    fprintf(stderr, "padapt: %s: added %d missing boundary entities (ref 0)\n",
-            path, (int)nadded);
+  st = pa_cli_complete_boundary(cli, path, *mesh);
   if (st == PA_SUCCESS) st = pa_mesh_check(*mesh);
   if (st != PA_SUCCESS) {
     /* The topology and check messages name the entity, not the file. */

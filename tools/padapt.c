@@ -59,8 +59,8 @@ static const char *usage_text =
     "Global options: -v N (verbosity: -1 errors only, 0 the reports (default),\n"
     "1-10 more detail), -h/--help, --version.\n"
     "Meshes: Medit .mesh/.meshb, Gmsh .msh (4.1, 2.2); metrics: .sol/.solb.\n"
-    "A mesh that lists no boundary entity gets them all (reference 0) on\n"
-    "reading; one that lists some must list them all.\n";
+    "The boundary entities a mesh does not list are added on reading\n"
+    "(reference 0), as Mmg does; the listed ones keep theirs.\n";
 
 /* Report a failed read on rank 0 (the other ranks return quietly). */
 static int read_failed(const pa_cli *cli, pa_status st) {
@@ -181,10 +181,8 @@ int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
   else if (cli->rank == 0)
     st = pa_mesh_read(in, &mesh);
   if (cli->rank != 0) return st ? 1 : 0;
-  if (st == PA_SUCCESS && pa_mesh_nbdry(mesh) == 0) {
-    pa_idx nadded = 0;
-    if (pa_mesh_build_boundary(mesh, 0, &nadded) != PA_SUCCESS) pa_clear_error();
-  }
+  if (st == PA_SUCCESS && pa_cli_complete_boundary(cli, in, mesh) != PA_SUCCESS)
+    pa_clear_error(); /* the check below reports it */
   if (st == PA_SUCCESS && met) st = pa_cli_attach_metric(mesh, met);
   if (st == PA_SUCCESS) st = pa_mesh_stats(mesh, &stats);
   if (st == PA_SUCCESS) {

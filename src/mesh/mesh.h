@@ -101,6 +101,11 @@ void pa__mesh_drop_cells(pa_mesh *mesh);
  * only a user's input must meet (manifold vertices, no two vertices at one
  * point): a piece of the parallel loop may touch itself at a vertex. */
 pa_status pa__mesh_check(pa_mesh *mesh, int input);
+/* The part of pa__mesh_check a rank's part of a distributed mesh must meet
+ * too (its faces on the partition's interfaces are not boundary entities):
+ * indices, coordinates, every vertex used, orientation, conformity, and
+ * neighbours on opposite sides of their faces (no element listed twice). */
+pa_status pa__mesh_check_elements(pa_mesh *mesh);
 /* No folded or overlapping elements around a vertex (2D) or an edge and a
  * boundary vertex (3D) (overlap.c); needs the adjacency and the balls
  * built. Part of pa__mesh_check for input meshes. */

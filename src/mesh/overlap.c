@@ -78,6 +78,12 @@ static void sub3(const double *a, const double *b, double *d) {
   for (int k = 0; k < 3; k++) d[k] = a[k] - b[k];
 }
 
+static void cross3(const double *a, const double *b, double *c) {
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
 static double deg(double a) { return a * (360.0 / TWO_PI); }
 
 /* The angle in [0, 2 pi) from x - a to y - a, counter-clockwise (2D) or
@@ -196,8 +202,8 @@ static pa_status fan_error(const pa_mesh *m, pa_idx a, const fan *f) {
              (int)a + 1, (int)f->b + 1);
   if (f->nbdry != 0 && f->nbdry != 2)
     return pa__error(PA_ERR_MESH, __FILE__, __LINE__,
-                     "%s has %d boundary %s around it: the mesh is not "
-                     "manifold there",
+                     "%s is non-manifold: %d boundary %s meet there, not 2 "
+                     "(elements that touch only there, or a slit)",
                      what, (int)f->nbdry, sides);
   double sum = 0;
   for (pa_idx q = m->ball_start[a]; q < m->ball_start[a + 1]; q++) {
@@ -321,10 +327,91 @@ cleanup:
   return st;
 }
 
+/* How close to a boundary face, relative to its longest edge, a boundary
+ * vertex counts as on it: far below any element's size relative to its
+ * edges, far above the rounding of a midpoint computed in floating point
+ * (a refinement's hanging vertex). */
+#define PA_HANGING_TOL 1e-9
+
+/* 1 if x lies on the boundary face f (its d vertices, x not one of them),
+ * within PA_HANGING_TOL. */
+static int on_face(const pa_mesh *m, const pa_idx *f, const double *x) {
+  const int d = m->dim;
+  const double *a = m->coord + (size_t)d * f[0], *b = m->coord + (size_t)d * f[1];
+  double u[3], w[3];
+  for (int q = 0; q < d; q++) u[q] = b[q] - a[q], w[q] = x[q] - a[q];
+  if (d == 2) {
+    double uu = u[0] * u[0] + u[1] * u[1], t = u[0] * w[0] + u[1] * w[1];
+    double cr = u[0] * w[1] - u[1] * w[0], tol = PA_HANGING_TOL;
+    return fabs(cr) <= tol * uu && t > -tol * uu && t < (1 + tol) * uu;
+  }
+  const double *c = m->coord + 3 * (size_t)f[2];
+  double v[3], n[3];
+  sub3(c, a, v);
+  cross3(u, v, n);
+  double nn = dot3(n, n), h2 = fmax(dot3(u, u), dot3(v, v));
+  if (!(nn > 0)) return 0;
+  /* |n| times the distance to the plane */
+  if (fabs(dot3(n, w)) > PA_HANGING_TOL * sqrt(h2 * nn)) return 0;
+  /* the barycentric coordinates of x's projection, times nn */
+  const double *p[3] = {a, b, c};
+  for (int q = 0; q < 3; q++) {
+    const double *s0 = p[(q + 1) % 3], *s1 = p[(q + 2) % 3];
+    double e[3], r[3], t[3];
+    sub3(s1, s0, e);
+    sub3(x, s0, r);
+    cross3(e, r, t);
+    if (dot3(t, n) < -PA_HANGING_TOL * nn) return 0;
+  }
+  return 1;
+}
+
+/* No boundary vertex lies on a boundary face it is not a vertex of, among
+ * the faces around its boundary neighbours: a hanging vertex, whose
+ * neighbour across the slit lists (or is completed with) the face it
+ * hangs on. The elements on either side of a slit meet no face of each
+ * other, so no other check sees it. */
+static pa_status check_hanging(const pa_mesh *m) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *start = NULL, *ball = NULL;
+  const int d = m->dim;
+  char buf[96];
+  PA_CALL(pa__balls(m->bdry, m->nb, d, m->nv, &start, &ball));
+  for (pa_idx f = 0; f < m->nb; f++) {
+    const pa_idx *fv = m->bdry + (size_t)d * f;
+    for (int i = 0; i < d; i++)
+      for (pa_idx k = start[fv[i]]; k < start[fv[i] + 1]; k++) {
+        const pa_idx *gv = m->bdry + (size_t)d * ball[k];
+        for (int j = 0; j < d; j++) {
+          pa_idx x = gv[j];
+          int mine = 0;
+          for (int q = 0; q < d; q++) mine |= fv[q] == x;
+          if (mine || !on_face(m, fv, m->coord + (size_t)d * x)) continue;
+          int w = 0;
+          buf[0] = '\0';
+          for (int q = 0; q < d && w >= 0 && (size_t)w < sizeof buf; q++)
+            w += snprintf(buf + w, sizeof buf - (size_t)w, q ? " %d" : "%d",
+                          (int)fv[q] + 1);
+          PA_FAIL(PA_ERR_MESH,
+                  "vertex %d lies on the boundary %s (%s) without being one "
+                  "of its vertices: a hanging vertex, the mesh is not "
+                  "conforming there (split the %s at it)",
+                  (int)x + 1, d == 2 ? "edge" : "face", buf,
+                  d == 2 ? "edge" : "face");
+        }
+      }
+  }
+cleanup:
+  pa__free(start);
+  pa__free(ball);
+  return st;
+}
+
 pa_status pa__mesh_check_overlap(const pa_mesh *m) {
   pa_status st = PA_SUCCESS;
   PA_CHECK(m->adja && m->ball_start && m->ball, PA_ERR_INTERNAL,
            "pa__mesh_check_overlap: adjacency and balls not built");
+  PA_CALL(check_hanging(m));
   PA_CALL(m->dim == 2 ? check_2d(m) : check_3d(m));
 cleanup:
   return st;

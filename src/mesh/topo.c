@@ -691,6 +691,31 @@ cleanup:
   return st;
 }
 
+/* Vertices but no element: say what the file is (a boundary or surface
+ * mesh), rather than that its first vertex is in no element. */
+static pa_status check_has_elements(const pa_mesh *m) {
+  pa_status st = PA_SUCCESS;
+  if (m->ne > 0 || m->nv == 0) return PA_SUCCESS;
+  if (m->nb == 0)
+    PA_FAIL(PA_ERR_MESH,
+            "the mesh has %d vertices but no %s: padapt adapts %s meshes",
+            (int)m->nv, m->dim == 2 ? "triangles" : "tetrahedra",
+            m->dim == 2 ? "triangle" : "tetrahedral (volume)");
+  if (m->dim == 2)
+    PA_FAIL(PA_ERR_MESH,
+            "the mesh has no triangles, only %d edges: a boundary "
+            "discretisation, not a mesh of the domain; padapt adapts "
+            "triangle meshes: mesh the domain first (e.g. with mmg2d or gmsh)",
+            (int)m->nb);
+  PA_FAIL(PA_ERR_MESH,
+          "the mesh has no tetrahedra, only %d triangles: a surface mesh; "
+          "padapt adapts volume (tetrahedral) meshes: mesh the volume "
+          "first (e.g. with tetgen or gmsh), or adapt the surface with mmgs",
+          (int)m->nb);
+cleanup:
+  return st;
+}
+
 /* Every vertex in some element. */
 static pa_status check_used(const pa_mesh *m) {
   pa_status st = PA_SUCCESS;
@@ -852,7 +877,7 @@ cleanup:
   return st;
 }
 
-pa_status pa__mesh_check(pa_mesh *m, int input) {
+pa_status pa__mesh_check_elements(pa_mesh *m) {
   pa_status st = PA_SUCCESS;
   PA_CHECK(m, PA_ERR_ARG, "pa_mesh_check: NULL mesh");
   const int d = m->dim, nf = d + 1;
@@ -862,15 +887,23 @@ pa_status pa__mesh_check(pa_mesh *m, int input) {
   PA_CALL(check_cells(m->bdry, m->nb, d, nv, "boundary entity"));
   PA_CALL(check_cells(m->edge, m->ned, 2, nv, "feature edge"));
   PA_CALL(check_coords(m));
+  PA_CALL(check_has_elements(m));
   PA_CALL(check_used(m));
   PA_CALL(check_orientation(m));
   PA_CALL(check_adjacency(m));
+cleanup:
+  return st;
+}
+
+pa_status pa__mesh_check(pa_mesh *m, int input) {
+  pa_status st = PA_SUCCESS;
+  PA_CALL(pa__mesh_check_elements(m));
   PA_CALL(check_boundary_faces(m));
   PA_CALL(check_boundary_entities(m));
   if (input) {
-    PA_CALL(check_manifold_vertices(m));
     PA_CALL(check_coincident(m));
     PA_CALL(pa__mesh_check_overlap(m));
+    PA_CALL(check_manifold_vertices(m));
   }
 cleanup:
   return st;

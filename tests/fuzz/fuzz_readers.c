@@ -383,8 +383,10 @@ int main(int argc, char **argv) {
         if (!mesh) {
           violation = 1;
         } else {
+          /* as the CLI reads a mesh: the missing boundary completed */
           pa_clear_error();
-          pa_status cst = pa_mesh_check(mesh);
+          pa_status cst = pa_mesh_build_boundary(mesh, 0, NULL);
+          if (cst == PA_SUCCESS) cst = pa_mesh_check(mesh);
           if (cst == PA_SUCCESS)
             nvalid++;
           else if (!pa_last_error()[0])

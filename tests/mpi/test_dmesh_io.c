@@ -254,6 +254,14 @@ static void test_values(void) {
   MPI_Type_free(&t2);
 }
 
+/* The same status on every rank. */
+static int same_everywhere(pa_status st) {
+  int v = (int)st, mn, mx;
+  MPI_Allreduce(&v, &mn, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  MPI_Allreduce(&v, &mx, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  return mn == mx;
+}
+
 static void test_bad_sets(void) {
   pa_mesh *in = input();
   pa_dmesh *dm = NULL, *back = NULL;
@@ -309,16 +317,34 @@ static void test_bad_sets(void) {
     CHECK(mn == mx);
   }
   pa_dmesh_destroy(dm);
+  dm = NULL;
+  /* one tetrahedron listed twice (the 3D remesher crashed on it), in a set
+   * written by hand: the read refuses it on every rank, whether the two
+   * copies are on one rank or on two */
+  pa_mesh *two = NULL;
+  if (rank == 0) {
+    double x[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    pa_idx t[2][4] = {{0, 1, 2, 3}, {1, 0, 3, 2}};
+    CHECK_OK(pa_mesh_create(3, &two));
+    for (int i = 0; i < 4; i++) CHECK_OK(pa_mesh_add_vertex(two, x[i], 0, NULL));
+    for (int i = 0; i < 2; i++) CHECK_OK(pa_mesh_add_elem(two, t[i], 1, NULL));
+  }
+  CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, two, 0, &dm));
+  pa_mesh_destroy(two);
+  if (!dm) return;
+  CHECK_OK(pa_dmesh_write(dm, "dup.meshb"));
+  pa_dmesh_destroy(dm);
+  for (int overlap = 0; overlap < 2; overlap++) {
+    st = pa_dmesh_read(MPI_COMM_WORLD, "dup.meshb", overlap, &back);
+    CHECK(st == PA_ERR_MESH);
+    CHECK(back == NULL);
+    CHECK(same_everywhere(st));
+    CHECK(strstr(pa_last_error(), "dup.meshb") != NULL);
+    CHECK(strstr(pa_last_error(), "same") != NULL);
+    pa_dmesh_destroy(back);
+  }
 }
 
-
-/* The same status on every rank. */
-static int same_everywhere(pa_status st) {
-  int v = (int)st, mn, mx;
-  MPI_Allreduce(&v, &mn, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
-  MPI_Allreduce(&v, &mx, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-  return mn == mx;
-}
 
 /* Reading path fails with a format error naming file on every rank (the
  * message of the rank that found it travels to all). */
