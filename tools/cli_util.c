@@ -362,6 +362,13 @@ void pa_cli_test_hooks(const pa_cli *cli) {
 pa_status pa_cli_attach_metric(pa_mesh *mesh, const char *path) {
   pa_sol *sol = NULL;
   pa_status st = pa_sol_read(path, &sol);
+  /* one solution, the metric: Mmg refuses several too, rather than guess */
+  if (st == PA_SUCCESS && pa_sol_nfield(sol) > 1)
+    st = pa_set_error(PA_ERR_FORMAT,
+                      "%s: holds %d solutions, not one: a metric file holds "
+                      "the metric alone (write it to a file of its own; "
+                      "-field takes files of several)",
+                      pa_sol_origin(sol), pa_sol_nfield(sol));
   if (st == PA_SUCCESS) st = pa_mesh_metric_from_sol(mesh, sol, 0);
   pa_sol_destroy(sol);
   return st;

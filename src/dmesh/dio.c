@@ -497,21 +497,63 @@ cleanup:
 
 /* ---- VTU output ---- */
 
+/* Keep, in place, the boundary entities and edges of the file mesh fm that
+ * this rank owns (in file order): the others are in another rank's ParaView
+ * file already. map[k] becomes their new file indices (-1: dropped), nfile
+ * their counts. The rank file (.meshb) was written before, whole. */
+static pa_status keep_owned(const pa_dmesh *dm, pa_mesh *fm,
+                            pa_idx *const map[PA_DMESH_NKIND],
+                            pa_idx nfile[PA_DMESH_NKIND]) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *to = NULL;
+  for (int k = PA_BOUNDARY; k <= PA_EDGE; k++) {
+    int nv = pa__kind_nv(dm->dim, k);
+    pa_idx *conn = k == PA_BOUNDARY ? fm->bdry : fm->edge, n = 0;
+    int32_t *ref = k == PA_BOUNDARY ? fm->bref : fm->edref;
+    uint8_t *flag = k == PA_BOUNDARY ? fm->bflag : fm->edflag;
+    pa__free(to);
+    to = NULL;
+    PA_ALLOC(to, nfile[k] ? (size_t)nfile[k] : 1);
+    for (pa_idx f = 0; f < nfile[k]; f++) to[f] = -1;
+    for (pa_idx i = 0; i < dm->nloc[k]; i++)
+      if (map[k][i] >= 0 && dm->owner[k][i] == dm->rank) to[map[k][i]] = 0;
+    for (pa_idx f = 0; f < nfile[k]; f++) {
+      if (to[f] < 0) continue;
+      memmove(conn + (size_t)nv * n, conn + (size_t)nv * f, sizeof *conn * nv);
+      ref[n] = ref[f];
+      flag[n] = flag[f];
+      to[f] = n++;
+    }
+    for (pa_idx i = 0; i < dm->nloc[k]; i++)
+      if (map[k][i] >= 0) map[k][i] = to[map[k][i]];
+    nfile[k] = n;
+  }
+  fm->nb = nfile[PA_BOUNDARY];
+  fm->ned = nfile[PA_EDGE];
+  pa__mesh_invalidate(fm);
+cleanup:
+  pa__free(to);
+  return st;
+}
+
 /* This rank's ParaView file: the file mesh fm with its metric and fields
  * (vd: nd values per file vertex, metric first), global ids, ghost types
- * and rank (pa__vtu_write). */
+ * and rank (pa__vtu_write); the boundary entities and edges this rank owns
+ * only (keep_owned: fm, map and nfile change), so that the set shows each
+ * once. */
 static pa_status write_vtu(const pa_dmesh *dm, pa_mesh *fm,
                            pa_idx *const map[PA_DMESH_NKIND],
-                           const pa_idx nfile[PA_DMESH_NKIND], const double *vd,
+                           pa_idx nfile[PA_DMESH_NKIND], const double *vd,
                            int nd, const char *path) {
   pa_status st = PA_SUCCESS;
   const pa_mesh *m = dm->mesh;
   pa_idx nv = nfile[PA_VERTEX];
-  size_t ncell = (size_t)nfile[PA_ELEMENT] + (size_t)nfile[PA_BOUNDARY] +
-                 (dm->dim == 3 ? (size_t)nfile[PA_EDGE] : 0);
   int64_t *vgid = NULL, *cgid = NULL;
   uint8_t *ghost = NULL;
   double *col = NULL;
+  PA_CALL(keep_owned(dm, fm, map, nfile));
+  size_t ncell = (size_t)nfile[PA_ELEMENT] + (size_t)nfile[PA_BOUNDARY] +
+                 (dm->dim == 3 ? (size_t)nfile[PA_EDGE] : 0);
   PA_ALLOC(vgid, nv);
   PA_ALLOC(ghost, nv);
   PA_ALLOC(cgid, ncell);
@@ -584,7 +626,7 @@ static pa_status write_pvtu(const char *base, int nranks, const pa_mesh *m) {
           "<PDataArray type=\"Int32\" Name=\"ref\"/>\n"
           "<PDataArray type=\"Int64\" Name=\"gid\"/>\n"
           "<PDataArray type=\"UInt8\" Name=\"vtkGhostType\"/>\n"
-          "</PPointData>\n<PCellData Scalars=\"rank\">\n"
+          "</PPointData>\n<PCellData Scalars=\"quality\">\n"
           "<PDataArray type=\"Int32\" Name=\"ref\"/>\n"
           "<PDataArray type=\"UInt8\" Name=\"entity\"/>\n"
           "<PDataArray type=\"Float64\" Name=\"quality\"/>\n"

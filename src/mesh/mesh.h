@@ -35,6 +35,10 @@ typedef struct pa__name {
 
 struct pa_mesh {
   int dim; /* 2 or 3 */
+  /* the Dimension of the file it was read from (3 for a planar mesh stored
+   * in 3D, and for Gmsh files), 0 when built in memory: which solution
+   * files fit it (pa_mesh_metric_from_sol) */
+  int file_dim;
 
   /* vertices */
   pa_idx nv;
