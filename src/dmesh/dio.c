@@ -1520,19 +1520,19 @@ cleanup:
   if (st) return st;
   MPI_Bcast(&isset, 1, MPI_INT, 0, comm);
   if (isset) {
-    st = read_set(comm, path, overlap, dmp);
-    if (st) return st;
     /* A file made or edited by hand may hold what the remeshers cannot
      * take (one element listed twice, two on the same side of a face):
      * each rank checks its part, then the faces between the parts. */
-    pa_dmesh *dm = *dmp;
-    st = pa__mesh_check_elements(dm->mesh);
-    st = pa__agree(comm, st);
-    if (st == PA_SUCCESS)
-      st = pa__faces_conform(comm, dm->dim, dm->nown[PA_ELEMENT],
-                             dm->mesh->elem, dm->mesh->nv, dm->gid[PA_VERTEX],
-                             dm->gid[PA_ELEMENT]);
-    if (st) {
+    st = read_set(comm, path, overlap, dmp);
+    if (st == PA_SUCCESS) {
+      pa_dmesh *dm = *dmp;
+      st = pa__agree(comm, pa__mesh_check_elements(dm->mesh));
+      if (st == PA_SUCCESS)
+        st = pa__faces_conform(comm, dm->dim, dm->nown[PA_ELEMENT],
+                               dm->mesh->elem, dm->mesh->nv,
+                               dm->gid[PA_VERTEX], dm->gid[PA_ELEMENT]);
+    }
+    if (st && !strstr(pa_last_error(), path)) { /* the entity, not the file */
       char msg[600];
       snprintf(msg, sizeof msg, "%s: %s", path, pa_last_error());
       st = pa_set_error(st, "%s", msg);

@@ -714,7 +714,18 @@ static pa_status graph_csr(const dgraph *g, pa_idx **xadjp, pa_gid **adjp,
   xadj[0] = 0;
   for (pa_idx e = 0; e < n; e++) {
     pa_idx c = 0;
-    for (int i = 0; i < nf; i++) c += g->nbr[(size_t)e * nf + i] >= 0;
+    const pa_gid *nb = g->nbr + (size_t)e * nf;
+    for (int i = 0; i < nf; i++) {
+      c += nb[i] >= 0;
+      /* two distinct simplices share one face at most: more is one element
+       * listed twice (the partitioner would take it for a broken graph) */
+      for (int j = 0; j < i; j++)
+        PA_CHECK(nb[i] < 0 || nb[i] != nb[j], PA_ERR_MESH,
+                 "element %lld shares %s faces with element %lld: the same "
+                 "element listed twice",
+                 (long long)(g->offset + e) + 1, "several",
+                 (long long)nb[i] + 1);
+    }
     xadj[e + 1] = xadj[e] + c;
   }
   PA_ALLOC(adj, xadj[n]);

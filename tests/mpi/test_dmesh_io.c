@@ -405,11 +405,15 @@ static void test_bad_sets(void) {
     for (int i = 0; i < 4; i++) CHECK_OK(pa_mesh_add_vertex(two, x[i], 0, NULL));
     for (int i = 0; i < 2; i++) CHECK_OK(pa_mesh_add_elem(two, t[i], 1, NULL));
   }
-  CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, two, 0, &dm));
+  /* written on one rank: the partitioner's own check (debug builds)
+   * refuses the dual graph of such a mesh */
+  if (rank == 0) {
+    CHECK_OK(pa_dmesh_distribute(MPI_COMM_SELF, 0, two, 0, &dm));
+    if (dm) CHECK_OK(pa_dmesh_write(dm, "dup.meshb"));
+    pa_dmesh_destroy(dm);
+  }
   pa_mesh_destroy(two);
-  if (!dm) return;
-  CHECK_OK(pa_dmesh_write(dm, "dup.meshb"));
-  pa_dmesh_destroy(dm);
+  MPI_Barrier(MPI_COMM_WORLD);
   for (int overlap = 0; overlap < 2; overlap++) {
     st = pa_dmesh_read(MPI_COMM_WORLD, "dup.meshb", overlap, &back);
     CHECK(st == PA_ERR_MESH);
