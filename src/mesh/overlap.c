@@ -333,35 +333,49 @@ cleanup:
  * (a refinement's hanging vertex). */
 #define PA_HANGING_TOL 1e-9
 
-/* 1 if x lies on the boundary face f (its d vertices, x not one of them),
- * within PA_HANGING_TOL. */
-static int on_face(const pa_mesh *m, const pa_idx *f, const double *x) {
+/* A boundary face f (its d vertices) as on_face tests points against it:
+ * its first vertex, edge vectors, normal and tolerances, computed once. */
+typedef struct face_geo {
+  int dim;
+  const double *p[3];
+  double u[3], n[3], uu, nn, plane_tol;
+} face_geo;
+
+static void face_geo_of(const pa_mesh *m, const pa_idx *f, face_geo *g) {
   const int d = m->dim;
-  const double *a = m->coord + (size_t)d * f[0], *b = m->coord + (size_t)d * f[1];
-  double u[3], w[3];
-  for (int q = 0; q < d; q++) u[q] = b[q] - a[q], w[q] = x[q] - a[q];
-  if (d == 2) {
-    double uu = u[0] * u[0] + u[1] * u[1], t = u[0] * w[0] + u[1] * w[1];
-    double cr = u[0] * w[1] - u[1] * w[0], tol = PA_HANGING_TOL;
-    return fabs(cr) <= tol * uu && t > -tol * uu && t < (1 + tol) * uu;
+  memset(g, 0, sizeof *g);
+  g->dim = d;
+  for (int q = 0; q < d; q++) g->p[q] = m->coord + (size_t)d * f[q];
+  for (int q = 0; q < d; q++) g->u[q] = g->p[1][q] - g->p[0][q];
+  g->uu = g->u[0] * g->u[0] + g->u[1] * g->u[1] + (d == 3 ? g->u[2] * g->u[2] : 0);
+  if (d == 2) return;
+  double v[3];
+  sub3(g->p[2], g->p[0], v);
+  cross3(g->u, v, g->n);
+  g->nn = dot3(g->n, g->n);
+  /* |n| times the distance to the plane, at most the tolerance */
+  g->plane_tol = PA_HANGING_TOL * sqrt(fmax(g->uu, dot3(v, v)) * g->nn);
+}
+
+/* 1 if x (not a vertex of the face) lies on the face g, within
+ * PA_HANGING_TOL. */
+static int on_face(const face_geo *g, const double *x) {
+  double w[3];
+  for (int q = 0; q < g->dim; q++) w[q] = x[q] - g->p[0][q];
+  if (g->dim == 2) {
+    double t = g->u[0] * w[0] + g->u[1] * w[1];
+    double cr = g->u[0] * w[1] - g->u[1] * w[0], tol = PA_HANGING_TOL;
+    return fabs(cr) <= tol * g->uu && t > -tol * g->uu && t < (1 + tol) * g->uu;
   }
-  const double *c = m->coord + 3 * (size_t)f[2];
-  double v[3], n[3];
-  sub3(c, a, v);
-  cross3(u, v, n);
-  double nn = dot3(n, n), h2 = fmax(dot3(u, u), dot3(v, v));
-  if (!(nn > 0)) return 0;
-  /* |n| times the distance to the plane */
-  if (fabs(dot3(n, w)) > PA_HANGING_TOL * sqrt(h2 * nn)) return 0;
+  if (!(g->nn > 0) || fabs(dot3(g->n, w)) > g->plane_tol) return 0;
   /* the barycentric coordinates of x's projection, times nn */
-  const double *p[3] = {a, b, c};
   for (int q = 0; q < 3; q++) {
-    const double *s0 = p[(q + 1) % 3], *s1 = p[(q + 2) % 3];
+    const double *s0 = g->p[(q + 1) % 3], *s1 = g->p[(q + 2) % 3];
     double e[3], r[3], t[3];
     sub3(s1, s0, e);
     sub3(x, s0, r);
     cross3(e, r, t);
-    if (dot3(t, n) < -PA_HANGING_TOL * nn) return 0;
+    if (dot3(t, g->n) < -PA_HANGING_TOL * g->nn) return 0;
   }
   return 1;
 }
@@ -379,6 +393,8 @@ static pa_status check_hanging(const pa_mesh *m) {
   PA_CALL(pa__balls(m->bdry, m->nb, d, m->nv, &start, &ball));
   for (pa_idx f = 0; f < m->nb; f++) {
     const pa_idx *fv = m->bdry + (size_t)d * f;
+    face_geo g;
+    face_geo_of(m, fv, &g);
     for (int i = 0; i < d; i++)
       for (pa_idx k = start[fv[i]]; k < start[fv[i] + 1]; k++) {
         const pa_idx *gv = m->bdry + (size_t)d * ball[k];
@@ -386,7 +402,7 @@ static pa_status check_hanging(const pa_mesh *m) {
           pa_idx x = gv[j];
           int mine = 0;
           for (int q = 0; q < d; q++) mine |= fv[q] == x;
-          if (mine || !on_face(m, fv, m->coord + (size_t)d * x)) continue;
+          if (mine || !on_face(&g, m->coord + (size_t)d * x)) continue;
           int w = 0;
           buf[0] = '\0';
           for (int q = 0; q < d && w >= 0 && (size_t)w < sizeof buf; q++)
