@@ -14,7 +14,8 @@
 #    SIGKILL of a rank that writes nothing leaves all outputs new or all
 #    old; SIGKILL of the writer leaves its temporaries, and during its
 #    renames the outputs renamed so far (the documented limit).
-# Process counts 1 to 4; every step and action at 2; a distributed set at 2.
+# Process counts 1 to 4; every step and action at 2; a distributed set at
+# every step and action at 2.
 set -u
 : "${PADAPT:?PADAPT must point to the padapt binary}" "${MPIEXEC:?}"
 # mpiexec passes SIGTERM on, then kills what is left with SIGKILL after
@@ -122,24 +123,58 @@ for np in 1 3 4; do
   case_gathered "$np" voted $((np - 1)) KILL
 done
 
-# A distributed set on 2 ranks: every rank renames its files. SIGTERM
-# before the commit point keeps the previous set readable; after it, both
-# ranks commit and the new set reads back.
-"$PADAPT" adapt sq.mesh -hsiz 0.2 -distributed-output -out set.meshb > /dev/null 2>&1 \
-  || bad "previous set"
-setsum() { sum set.manifest set.0.meshb set.1.meshb; }
-prev=$(setsum)
-run 2 voted 1 TERM adapt sq.mesh -hsiz 0.1 -distributed-output -out set.meshb
-if [ "$(setsum)" = "$prev" ] && [ "$(temps)" -eq 0 ] && [ $rc -ne 0 ] \
-   && "$PADAPT" stats set.meshb > /dev/null 2>&1; then
-  ok "set, np 2, TERM at voted on rank 1: previous set kept and readable"
-else bad "set, np 2, TERM at voted: status $rc"; fi
-rm -f ./*.tmp.*
-run 2 agreed 1 TERM adapt sq.mesh -hsiz 0.1 -distributed-output -out set.meshb
-if [ "$(setsum)" != "$prev" ] && [ "$(temps)" -eq 0 ] \
-   && "$PADAPT" stats set.meshb > /dev/null 2>&1; then
-  ok "set, np 2, TERM at agreed on rank 1: new set committed and readable"
-else bad "set, np 2, TERM at agreed: status $rc, $(temps) temporaries"; fi
-rm -f ./*.tmp.*
+# A distributed set on 2 ranks, every rank renaming its own files (the
+# rank files, rank 0 also the manifest and the ParaView files), at every
+# step: SIGTERM before the commit point keeps the previous set byte for byte
+# and readable, after it both ranks commit and the new set reads back;
+# SIGKILL of rank 1 before the commit point keeps the previous set, after it
+# (rank 0 commits, rank 1 may not) the set is readable as the new one or
+# refused by its manifest, never read as a mix of two writes.
+SET="set.manifest set.0.meshb set.1.meshb set.pvtu set.0.vtu set.1.vtu"
+case_set() {
+  local step=$1 action=$2 d="set, np 2, $2 at $1 on rank 1"
+  rm -f $SET
+  "$MPIEXEC" -n 2 "$PADAPT" adapt sq.mesh -hsiz 0.2 -distributed-output -out set.meshb \
+    > /dev/null 2>&1 || bad "previous set"
+  local prev prev0 prev1 prevm now nt reads
+  prev=$(sum $SET) prev0=$(sum set.0.meshb) prev1=$(sum set.1.meshb) prevm=$(sum set.manifest)
+  run 2 "$step" 1 "$action" adapt sq.mesh -hsiz 0.1 -distributed-output -out set.meshb
+  now=$(sum $SET) nt=$(temps)
+  "$PADAPT" stats set.meshb > stats.txt 2>&1 && reads=1 || reads=0
+  if [ "$rc" = -1 ]; then bad "$d: the hook never paused"
+  elif grep -q "AddressSanitizer\|runtime error" err.txt; then bad "$d: sanitizer report"
+  else
+    case "$step.$action" in
+      written.*|voted.*)
+        if [ $rc -eq 0 ]; then bad "$d: exit status 0"
+        elif [ "$now" != "$prev" ]; then bad "$d: the previous set changed"
+        elif [ $reads -ne 1 ]; then bad "$d: the previous set unreadable: $(head -c 300 stats.txt)"
+        elif [ "$action" = TERM ] && [ "$nt" -ne 0 ]; then bad "$d: $nt temporaries left"
+        elif ! interrupted; then bad "$d: no message: $(head -c 300 err.txt)"
+        else ok "$d: status $rc, previous set kept and readable"; fi ;;
+      *.TERM)
+        if [ "$now" = "$prev" ]; then bad "$d: the set was not committed"
+        elif [ "$nt" -ne 0 ]; then bad "$d: $nt temporaries left"
+        elif [ $reads -ne 1 ]; then bad "$d: the new set unreadable: $(head -c 300 stats.txt)"
+        elif ! grep -q "they are complete" err.txt; then bad "$d: no note: $(head -c 300 err.txt)"
+        else ok "$d: new set committed and readable"; fi ;;
+      *)
+        local m0=0 m1=0 mm=0
+        [ "$(sum set.0.meshb)" = "$prev0" ] || m0=1
+        [ "$(sum set.1.meshb)" = "$prev1" ] || m1=1
+        [ "$(sum set.manifest)" = "$prevm" ] || mm=1
+        if [ $reads -eq 1 ] && { [ $m0 != $m1 ] || [ $m0 != $mm ]; }; then
+          bad "$d: a mixed set was read (rank files changed: $m0 $m1, manifest $mm)"
+        elif [ $reads -eq 1 ]; then ok "$d: status $rc, the set reads back"
+        elif grep -q "manifest" stats.txt; then ok "$d: status $rc, the mixed set refused by its manifest"
+        else bad "$d: unreadable set: $(head -c 300 stats.txt)"; fi ;;
+    esac
+  fi
+  rm -f ./*.tmp.* stats.txt
+}
+for step in written voted agreed renamed committed; do
+  case_set "$step" TERM
+  case_set "$step" KILL
+done
 echo "$fails failed"
 [ $fails -eq 0 ]
