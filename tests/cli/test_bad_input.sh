@@ -10,7 +10,9 @@
 # to one of its input files (the same path, another spelling, a hard or
 # symbolic link, a file derived from OUT such as OUT.sol, a file of a
 # distributed set), or two outputs that resolve to one file, must fail before
-# any work with a message saying so, and leave every file as it was.
+# any work with a message saying so, and leave every file as it was. Last,
+# meshes with a duplicated or folded element given to `adapt` (at 1 to 4
+# processes) and `stats`: refused the same way, never a crash.
 set -u
 : "${PADAPT:?PADAPT must point to the padapt binary}"
 bad="${PADAPT_TESTDATA:?}/bad"
@@ -123,6 +125,19 @@ refused "$is_in" 2 adapt sq.mesh -hsiz 0.3 -out a.mesh -json sq.mesh
 refused "$is_in" 2 adapt set.meshb -hsiz 0.3 -distributed-output -out ./set.meshb
 refused "$same" 3 adapt sq.mesh -hsiz 0.3 -out o.mesh -json o.sol
 refused "$is_in" 4 metric hessian sq.mesh -field f.sol -target 50 ./f.sol
+
+# ---- meshes the remeshers crashed on, given to adapt and stats ----
+# `padapt adapt` of a tetrahedron listed twice segfaulted, and `padapt
+# stats` called it valid; folded elements reached the remeshers too.
+for np in 0 1 2 3 4; do
+  refused "elements 1 and 2 have the same vertices" $np adapt "$bad/check_dup3d.mesh" -hsiz 0.3 -out o.mesh
+done
+for np in 0 2; do
+  refused "elements 1 and 2 have the same vertices" $np adapt "$bad/check_dup2d.mesh" -hsiz 0.3 -out o.mesh
+  refused "elements 1 and 2 overlap" $np adapt "$bad/check_fold_face3d.mesh" -hsiz 0.3 -out o.mesh
+  refused "around vertex 1 turn 2 times" $np adapt "$bad/check_fold_vertex2d.mesh" -hsiz 0.3 -out o.mesh
+done
+refused "elements 1 and 2 have the same vertices" 0 stats "$bad/check_dup3d.mesh"
 cd ..
 echo "$((n - fails)) passed, $fails failed"
 [ $fails -eq 0 ]
