@@ -2,7 +2,7 @@
 # Meshes that list only part of their boundary entities are completed as Mmg
 # does: the missing ones added with reference 0, the listed ones keeping
 # theirs, a boundary entity listed twice kept once, a note at -v 1; then
-# adapted like any mesh, on 1 and 2 processes. The files: tests/data/
+# adapted like any mesh, on 1 to 4 processes. The files: tests/data/
 # partial2d.mesh (a plate whose file lists the edges of its hole only, the
 # shape of Mmg's naca-multiSols.mesh, whose far field is not listed) and a
 # cube that lists the triangles of its side x = 0 only.
@@ -42,11 +42,11 @@ on() { # FILE KW REF COND
   && ok "2D: the missing boundary edges added, with a note" \
   || bad "2D stats: $(head -c 300 err.txt)"
 outer='X < -1.999 || X > 2.999 || Y < -1.999 || Y > 1.999'
-for np in 0 2; do
+for np in 0 1 2 3 4; do
   if [ $np -eq 0 ]; then
     "$PADAPT" adapt "$data/partial2d.mesh" -hsiz 0.15 -out a2.mesh > /dev/null 2> err.txt
   else
-    "$MPIEXEC" -n 2 "$PADAPT" adapt "$data/partial2d.mesh" -hsiz 0.15 -out a2.mesh \
+    "$MPIEXEC" -n $np "$PADAPT" adapt "$data/partial2d.mesh" -hsiz 0.15 -out a2.mesh \
       > /dev/null 2> err.txt
   fi
   rc=$?
