@@ -138,6 +138,18 @@ for np in 0 2; do
   refused "around vertex 1 turn 2 times" $np adapt "$bad/check_fold_vertex2d.mesh" -hsiz 0.3 -out o.mesh
 done
 refused "elements 1 and 2 have the same vertices" 0 stats "$bad/check_dup3d.mesh"
+# the one exception to "no output on failure" (outputs.md): the report of
+# stats, whose verdict is that the mesh is invalid
+n=$((n + 1))
+"$PADAPT" stats "$bad/check_dup3d.mesh" -json rep.json > /dev/null 2>&1
+rc=$?
+if [ $rc -eq 1 ] && grep -q '"valid": false' rep.json; then
+  echo "ok   stats -json of an invalid mesh: status 1, the report says invalid"
+else
+  echo "FAIL stats -json of an invalid mesh: status $rc, report: $(head -c 200 rep.json 2>&1)"
+  fails=$((fails + 1))
+fi
+rm -f rep.json
 cd ..
 echo "$((n - fails)) passed, $fails failed"
 [ $fails -eq 0 ]
