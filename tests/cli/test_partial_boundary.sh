@@ -70,15 +70,22 @@ awk '$1 == "Edges" {print; getline; print $1 + 1; getline; print; dup = $0; prin
 awk '$1 == "Triangles" {print; getline; t = $1; n = 0
        for (i = 0; i < t; i++) {getline; if ($NF == 1) keep[++n] = $0}
        print n; for (i = 1; i <= n; i++) print keep[i]; next} {print}' cube.mesh > side.mesh
-"$PADAPT" -v 1 adapt side.mesh -hsiz 0.2 -out a3.mesh > /dev/null 2> err.txt
-rc=$?
-r=$(refs a3.mesh Triangles | tr '\n' ' ')
-if [ $rc -ne 0 ]; then bad "3D: exit status $rc: $(head -c 300 err.txt)"
-elif ! grep -q "lists 18 of its 108 boundary triangles" err.txt; then bad "3D: no note: $(head -c 300 err.txt)"
-elif ! printf '%s' "$r" | grep -q "^0:[0-9]* 1:[0-9]* $"; then bad "3D: boundary references $r"
-elif [ -n "$(on a3.mesh Triangles 1 'X < 1e-12')" ]; then bad "3D: a listed triangle off x = 0"
-elif [ -n "$(on a3.mesh Triangles 0 'X > 1e-12 || (Y < 1e-12 || Y > 1 - 1e-12 || Z < 1e-12 || Z > 1 - 1e-12)')" ]; then
-  bad "3D: an added triangle on x = 0"
-else ok "3D: adapted; side x = 0 keeps 1, the others 0 ($r)"; fi
+for np in 0 2; do
+  if [ $np -eq 0 ]; then
+    "$PADAPT" -v 1 adapt side.mesh -hsiz 0.2 -out a3.mesh > /dev/null 2> err.txt
+  else
+    "$MPIEXEC" -n $np "$PADAPT" -v 1 adapt side.mesh -hsiz 0.2 -out a3.mesh > /dev/null 2> err.txt
+  fi
+  rc=$?
+  r=$(refs a3.mesh Triangles | tr '\n' ' ')
+  if [ $rc -ne 0 ]; then bad "3D np $np: exit status $rc: $(head -c 300 err.txt)"
+  elif ! grep -q "lists 18 of its 108 boundary triangles" err.txt; then bad "3D np $np: no note: $(head -c 300 err.txt)"
+  elif ! printf '%s' "$r" | grep -q "^0:[0-9]* 1:[0-9]* $"; then bad "3D np $np: boundary references $r"
+  elif [ -n "$(on a3.mesh Triangles 1 'X < 1e-12')" ]; then bad "3D np $np: a listed triangle off x = 0"
+  elif [ -n "$(on a3.mesh Triangles 0 'X > 1e-12 || (Y < 1e-12 || Y > 1 - 1e-12 || Z < 1e-12 || Z > 1 - 1e-12)')" ]; then
+    bad "3D np $np: an added triangle on x = 0"
+  else ok "3D np $np: adapted; side x = 0 keeps 1, the others 0 ($r)"; fi
+  rm -f a3.mesh
+done
 echo "$fails failed"
 [ $fails -eq 0 ]
