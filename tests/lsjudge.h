@@ -1,6 +1,6 @@
 /*
  * lsjudge.h -- an independent judge of level-set cuts, shared by
- * tests/unit/test_lscut.c and tests/mpi/test_lscut.c (static functions; the
+ * tests/unit/test_lscut.c and tests/mpi/test_lscut.c (static inline; the
  * including file provides CHECK from testutil.h).
  *
  * It evaluates the P1 interpolant phi_h of the input level set (on the
@@ -25,7 +25,7 @@
 /* Share of the simplex with vertex values s[0..d] where s < 0. Ties between
  * negative values are moved apart by a relative 1e-9 (the closed form
  * needs distinct values; the share is continuous in them). */
-static double lsj_share_below(int d, const double *s0) {
+static inline double lsj_share_below(int d, const double *s0) {
   double s[4];
   int neg = 0, pos = 0;
   for (int i = 0; i <= d; i++) {
@@ -50,7 +50,7 @@ static double lsj_share_below(int d, const double *s0) {
 }
 
 /* Volume of {phi_h < 0} over the mesh (phi: one value per vertex). */
-static double lsj_volume_below(const pa_mesh *m, const double *phi) {
+static inline double lsj_volume_below(const pa_mesh *m, const double *phi) {
   int d = m->dim;
   double v = 0;
   for (pa_idx e = 0; e < m->ne; e++) {
@@ -65,7 +65,7 @@ static double lsj_volume_below(const pa_mesh *m, const double *phi) {
 /* phi_h at point x: the interpolant in the input element containing it
  * (the largest smallest barycentric coordinate over the elements); NAN if
  * x lies in none (within 1e-9). */
-static double lsj_eval(const pa_mesh *in, const double *phi, const double *x) {
+static inline double lsj_eval(const pa_mesh *in, const double *phi, const double *x) {
   int d = in->dim;
   double best = -1, val = NAN;
   for (pa_idx e = 0; e < in->ne; e++) {
@@ -111,7 +111,7 @@ typedef struct lsj_result {
 
 /* Judge out (the cut of in by phi, references rin, rex, riface) with
  * tolerance tol on phi_h. */
-static void lsj_judge(const pa_mesh *in, const double *phi, pa_mesh *out,
+static inline void lsj_judge(const pa_mesh *in, const double *phi, pa_mesh *out,
                       int32_t rin, int32_t rex, int32_t riface, double tol,
                       lsj_result *r) {
   int d = out->dim, nve = d + 1;
