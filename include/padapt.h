@@ -1042,6 +1042,10 @@ typedef struct pa_remesh_report {
   long nsplit, ncollapse, nswap, nmove;
   int npass;
   double time_s;
+  /** CPU seconds the calling thread spent in the remesher (its thread CPU
+   *  clock): the remeshing work, which does not grow with the load of the
+   *  machine as time_s does. Filled by pa_remesh. */
+  double cpu_s;
   /** Filled by pa_remesh unless opts->no_stats (not by remesher callbacks). */
   pa_fidelity fidelity;
 } pa_remesh_report;
@@ -1486,6 +1490,9 @@ typedef struct pa_adapt_iter {
   double imbalance;    /**< estimated work of the most loaded rank / mean */
   double t_tag, t_pieces, t_gather, t_remesh, t_reintegrate;
   double remesh_busy;  /**< seconds spent remeshing, summed over the ranks */
+  /** CPU seconds spent inside the remesher (pa_remesh_report.cpu_s of the
+   *  pieces), summed over the ranks: the remeshing work */
+  double remesh_cpu;
   double bytes_moved;  /**< bytes of records sent between ranks */
   /** Peak bytes of padapt memory (pa_memory_peak's count) during each step,
    *  the maximum over the ranks. */
@@ -1582,6 +1589,10 @@ typedef struct pa_adapt_report {
   double time_total;   /**< wall-clock seconds of the whole call */
   double t_tag, t_pieces, t_gather, t_remesh, t_reintegrate, t_rebalance;
   double remesh_busy;  /**< seconds spent in the remesher, summed over ranks */
+  /** CPU seconds spent inside the remesher, summed over the ranks and the
+   *  iterations: the remeshing work, comparable with the sequential
+   *  pa_remesh_report.cpu_s at any number of ranks */
+  double remesh_cpu;
   double bytes_moved;  /**< bytes of records sent between ranks, all steps */
   size_t peak_memory;  /**< max over ranks of pa_memory_peak() at the end */
   size_t peak_rss;     /**< max over ranks of pa_peak_rss() at the end */

@@ -440,11 +440,12 @@ static void report_after(const pa_cli_adapt_args *a, const pa_mesh *mesh,
   pa_cli_print_fidelity(&rep->fidelity, stdout);
   printf(" -- ADAPTATION\n"
          "    splits %ld, collapses %ld, swaps %ld, moves %ld, passes %d\n"
-         "    time %.3f s (%.0f output elements/s), peak padapt memory %.1f MB\n"
+         "    time %.3f s (%.0f output elements/s), remesher CPU %.3f s, peak "
+         "padapt memory %.1f MB\n"
          "    remesher verdict on the metric used: %s\n",
          rep->nsplit, rep->ncollapse, rep->nswap, rep->nmove, rep->npass,
          rep->time_s, rep->time_s > 0 ? pa_mesh_nelem(mesh) / rep->time_s : 0.0,
-         pa_memory_peak() / 1e6, outcome_name(rep->outcome));
+         rep->cpu_s, pa_memory_peak() / 1e6, outcome_name(rep->outcome));
   fflush(stdout);
   if (!rep->fidelity.target_met)
     fprintf(stderr, "padapt: warning: adapt: target missed (valid mesh, but "
@@ -461,13 +462,14 @@ static pa_status write_json(const pa_cli_adapt_args *a, const pa_stats *before,
   pa_cli_sbuf b = {NULL, 0, 0, 0};
   if (a->ls) pa_cli_sb_printf(&b, "%s", lsj ? lsj : "");
   pa_cli_sb_printf(&b,
-                   "\"time_s\": %.6f, \"peak_rss_bytes\": %zu, "
+                   "\"time_s\": %.6f, \"remesh_cpu_s\": %.6f, "
+                   "\"peak_rss_bytes\": %zu, "
                    "\"peak_memory_bytes\": %zu, \"remesher_outcome\": "
                    "\"%s\", \"nsplit\": %ld, \"ncollapse\": %ld, "
                    "\"nswap\": %ld, \"nmove\": %ld, \"npass\": %d, "
                    "\"elements_before\": %lld, \"vertices_before\": %lld, "
                    "%s",
-                   rep->time_s, pa_peak_rss(), pa_memory_peak(),
+                   rep->time_s, rep->cpu_s, pa_peak_rss(), pa_memory_peak(),
                    outcome_name(rep->outcome), rep->nsplit, rep->ncollapse,
                    rep->nswap, rep->nmove, rep->npass, (long long)before->nelem,
                    (long long)before->nvert, fid ? fid : "");

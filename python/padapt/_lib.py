@@ -99,7 +99,8 @@ class RemeshReport(ctypes.Structure):
     _fields_ = [("outcome", ctypes.c_int), ("nsplit", ctypes.c_long),
                 ("ncollapse", ctypes.c_long), ("nswap", ctypes.c_long),
                 ("nmove", ctypes.c_long), ("npass", ctypes.c_int),
-                ("time_s", ctypes.c_double), ("fidelity", Fidelity)]
+                ("time_s", ctypes.c_double), ("cpu_s", ctypes.c_double),
+                ("fidelity", Fidelity)]
 
 
 class HessianOpts(ctypes.Structure):
@@ -117,7 +118,7 @@ class AdaptIter(ctypes.Structure):
                 ("npieces", ctypes.c_int), ("nfailed", ctypes.c_int)] + \
                [(n, ctypes.c_double) for n in
                 ("imbalance", "t_tag", "t_pieces", "t_gather", "t_remesh",
-                 "t_reintegrate", "remesh_busy", "bytes_moved",
+                 "t_reintegrate", "remesh_busy", "remesh_cpu", "bytes_moved",
                  "mem_tag", "mem_pieces", "mem_gather", "mem_remesh",
                  "mem_reintegrate", "mem_after")]
 
@@ -145,7 +146,8 @@ class AdaptReport(ctypes.Structure):
                 ("nfailed", ctypes.c_long)] + \
                [(n, ctypes.c_double) for n in
                 ("time_total", "t_tag", "t_pieces", "t_gather", "t_remesh",
-                 "t_reintegrate", "t_rebalance", "remesh_busy", "bytes_moved")] + \
+                 "t_reintegrate", "t_rebalance", "remesh_busy", "remesh_cpu",
+                 "bytes_moved")] + \
                [("peak_memory", ctypes.c_size_t), ("peak_rss", ctypes.c_size_t),
                 ("niter_recorded", ctypes.c_int),
                 ("iters", AdaptIter * ADAPT_MAX_ITERS), ("fidelity", Fidelity)]

@@ -204,7 +204,8 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
     if not rep.fidelity.measured:  # out of memory measuring: once more
         check(lib.pa_mesh_stats(out._h, ctypes.byref(rep.fidelity.user)))
     d = stats_dict(rep.fidelity.user)
-    d.update({"time_s": rep.time_s, "peak_rss_bytes": lib.pa_peak_rss(),
+    d.update({"time_s": rep.time_s, "remesh_cpu_s": rep.cpu_s,
+              "peak_rss_bytes": lib.pa_peak_rss(),
               "peak_memory_bytes": lib.pa_memory_peak(),
               "remesher_outcome": _lib.REMESH_OUTCOMES.get(rep.outcome, "failed"),
               "nsplit": rep.nsplit, "ncollapse": rep.ncollapse, "nswap": rep.nswap,

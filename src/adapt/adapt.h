@@ -273,8 +273,8 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
 
 /* Step 4. Local: remesh the local pieces; failures are recorded, not
  * returned (only hard internal errors are). *nfail receives the number of
- * local pieces rolled back. */
-pa_status pa__adapt_remesh(pa__iter *it, int *nfail);
+ * local pieces rolled back, *cpu the CPU seconds spent in the remesher. */
+pa_status pa__adapt_remesh(pa__iter *it, int *nfail, double *cpu);
 
 /* Step 5. Collective: rebuild dm from the staying entities and the outputs
  * (or, when little changes, splice in a part rebuilt from the outputs and

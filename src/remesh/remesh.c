@@ -179,7 +179,7 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   int oldnc = 0, installed = 0, carried = 0;
   pa__name *names = NULL; /* the caller's physical names, held aside */
   int nname = 0;
-  double t0 = pa_wtime();
+  double t0 = pa_wtime(), cpu0;
   wrap.t0 = t0;
   PA_CHECK(r && r->remesh && mesh, PA_ERR_ARG, "pa_remesh: NULL argument");
   if (!opts) {
@@ -224,7 +224,10 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   nname = mesh->nname;
   mesh->names = NULL;
   mesh->nname = 0;
-  PA_CALL(r->remesh(r->ctx, mesh, opts, report));
+  cpu0 = pa__thread_cputime();
+  st = r->remesh(r->ctx, mesh, opts, report);
+  report->cpu_s = pa__thread_cputime() - cpu0;
+  if (st != PA_SUCCESS) goto cleanup;
   if (report->outcome == PA_REMESH_FAILED) goto cleanup;
   pa__free(oldmet);
   oldmet = NULL;
