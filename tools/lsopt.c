@@ -99,13 +99,13 @@ char *pa_cli_ls_json(const pa_levelset_report *r) {
                    "\"snapped\": %lld, \"removed_in\": %lld, "
                    "\"removed_out\": %lld, \"edges_cut\": %lld, "
                    "\"elements_cut\": %lld, \"interface\": %lld, "
-                   "\"dropped\": %lld, \"volume_in\": %.17g, "
-                   "\"volume_out\": %.17g}, ",
+                   "\"dropped\": %lld, \"boundary_with_interface_ref\": %lld, "
+                   "\"volume_in\": %.17g, \"volume_out\": %.17g}, ",
                    r->phi_min, r->phi_max, (long long)r->nsnapped,
                    (long long)r->nremoved_in, (long long)r->nremoved_out,
                    (long long)r->ncut, (long long)r->nelem_cut,
-                   (long long)r->niface, (long long)r->ndropped, r->vol_in,
-                   r->vol_out);
+                   (long long)r->niface, (long long)r->ndropped,
+                   (long long)r->nbdry_iface, r->vol_in, r->vol_out);
   if (b.fail) {
     free(b.p);
     return NULL;
