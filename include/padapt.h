@@ -584,8 +584,7 @@ typedef struct pa_levelset_opts {
   double rmc;
   /** Expert: the snapping share (default PA_LS_SNAP, in [0, 0.25]): a
    *  vertex whose value would put a cut point within snap times the edge
-   *  of it, or two cut points of one element within 3 snap, takes the
-   *  value V. */
+   *  of it takes the value V. */
   double snap;
 } pa_levelset_opts;
 

@@ -11,9 +11,7 @@
  *     closer than snap times its edge to an end, so every element of the
  *     cut keeps a volume of at least about snap times its parent's (the
  *     orientation of each is certain) and the interface moves by at most
- *     snap times an edge. A vertex with two cut points of one element
- *     within LS_CLUSTER snap of it snaps too (no interface edge that short
- *     for the remesher to remove). The flags are taken from the unsnapped values
+ *     snap times an edge. The flags are taken from the unsnapped values
  *     and combined over the copies of each vertex, so the result does not
  *     depend on the order of the elements nor on the ranks.
  *  2. Components (rmc). The vertices of one side linked by edges form
@@ -55,14 +53,6 @@
 #include <stdlib.h>
 
 #define NOLABEL INT64_MAX
-/* Two cut points of one element within LS_CLUSTER times the snapping share
- * of one vertex snap it too: the interface edge between them would be
- * shorter than about that share of the element's edges, a tetrahedron
- * whose quality the remesher cannot raise where the interface is rough (a
- * torus of minor radius 1.2 cells cut into box3d 10: worst quality 0.0065
- * without, 0.039 with 3, 0.042 with 5, which moves the interface by 5 % of
- * an edge: the largest distance to the torus on box3d 16 grew by 14 %). */
-#define LS_CLUSTER 3.0
 
 /* ---- options and the sequential context -------------------------------- */
 
@@ -562,34 +552,23 @@ pa_status pa__ls_prepare(const pa__ls_ctx *c, const pa_levelset_opts *o,
   rep->phi_max = range[0];
   rep->phi_min = -range[1];
   for (pa_idx v = 0; v < nv; v++) s[v] -= o->value;
-  /* snapping, from the values as given: a cut point within snap of an
-   * end, or two of them within LS_CLUSTER * snap of one vertex of an
-   * element */
+  /* snapping, from the values as given */
   PA_CALLOC(flag, nv);
-  const double cl = LS_CLUSTER;
   for (pa_idx e = 0; e < c->nelem; e++) {
     const pa_idx *ev = m->elem + (size_t)nve * e;
-    int near[4] = {0, 0, 0, 0};
     for (int i = 0; i < nve; i++)
       for (int j = i + 1; j < nve; j++) {
         pa_idx a = ev[i], b = ev[j];
         if (!(s[a] * s[b] < 0)) continue;
-        int ia = i, ib = j;
         if (vkey(c, b) < vkey(c, a)) {
           pa_idx x = a;
           a = b;
           b = x;
-          ia = j;
-          ib = i;
         }
         double t = s[a] / (s[a] - s[b]);
         if (t < o->snap) flag[a] = 1;
         if (t > 1 - o->snap) flag[b] = 1;
-        near[ia] += t < cl * o->snap;
-        near[ib] += t > 1 - cl * o->snap;
       }
-    for (int i = 0; i < nve; i++)
-      if (near[i] >= 2) flag[ev[i]] = 1;
   }
   if (c->vmax) PA_CALL(c->vmax(c->ctx, flag));
   {
