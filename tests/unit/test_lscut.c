@@ -9,7 +9,9 @@
  * 0} and within the interpolation error of the exact one; the materials
  * of a parameter table, the removal of a small component, a second cut
  * replacing the first, bad values, the linear interpolation of fields,
- * and the quality floor snapping gives.
+ * the quality floor snapping gives, and the 3D remesher's handling of the
+ * interface (coarsened and smoothed, still exactly the faces between the
+ * sides).
  */
 #include "testutil.h"
 
@@ -385,5 +387,53 @@ static void test_snap_floor(void) {
   }
 }
 
+/* The 3D remesher keeps an interface and remeshes it: a plane through
+ * the box's grid vertices (the interface made of whole faces on the zero
+ * set) coarsened, a sphere refined; the interface stays exactly the faces
+ * between the sides, its vertices collapse and move (the worst quality
+ * stays that of a mesh without interface). */
+static void remesh_interface(const char *shape, int n, double h,
+                             int max_iface_vertices, double qmin) {
+  pa_mesh *m = NULL;
+  CHECK_OK(pa_mesh_generate_box(3, n, &m));
+  double *phi = malloc(sizeof(double) * (size_t)m->nv);
+  CHECK_OK(pa_levelset_analytic(m, shape, phi));
+  pa_mesh *in = NULL;
+  CHECK_OK(pa_mesh_copy(m, &in));
+  pa_levelset_report rep;
+  CHECK_OK(pa_mesh_levelset_cut(m, phi, NULL, &rep));
+  pa_remesh_opts o;
+  pa_remesh_opts_default(&o);
+  o.hsiz = h;
+  pa_remesh_report rr;
+  CHECK_OK(pa_remesh(pa_remesher_builtin(), m, &o, &rr));
+  CHECK_OK(pa_mesh_check(m));
+  lsj_result r;
+  lsj_judge(in, phi, m, 3, 2, 10, o.hausd + 1e-9, &r);
+  CHECK(r.bad_iface == 0 && r.bad_side == 0 && r.niface > 0);
+  pa_idx nifv = 0;
+  for (pa_idx v = 0; v < m->nv; v++) nifv += m->vref[v] == 10;
+  double q = 1;
+  for (pa_idx e = 0; e < m->ne; e++) q = fmin(q, pa_mesh_elem_quality(m, e));
+  CHECK(nifv <= max_iface_vertices);
+  CHECK(q >= qmin);
+  if (nifv > max_iface_vertices || q < qmin || pa_verbosity() > 0)
+    fprintf(stderr, "  %s: %lld interface vertices, worst quality %.3f\n",
+            shape, (long long)nifv, q);
+  free(phi);
+  pa_mesh_destroy(in);
+  pa_mesh_destroy(m);
+}
+
+static void test_remesh_interface(void) {
+  /* 81 interface vertices in the input: without collapses on the
+   * interface they all stayed */
+  remesh_interface("plane:1,0,0,0.5", 8, 0.3, 40, 0.3);
+  /* without normals on the interface its vertices did not move and the
+   * tets on its poor triangles stayed below 0.3 */
+  remesh_interface("sphere:0.3:0.5,0.5,0.5", 12, 0.08, 1 << 30, 0.3);
+}
+
 TEST_MAIN(test_circle, test_annulus, test_sphere, test_torus, test_materials,
-          test_rmc, test_bad_values, test_fields, test_snap_floor)
+          test_rmc, test_bad_values, test_fields, test_snap_floor,
+          test_remesh_interface)
