@@ -5,7 +5,7 @@
 #
 #   bash bench/levelset_cut.sh BUILD_DIR WORK_DIR [CASE...]
 #
-# CASE: disc (box2d 50, a circle of radius 0.3, -hsiz 0.005), sphere (box3d
+# CASE: disc (box2d 100, a circle of radius 0.3, -hsiz 0.002), sphere (box3d
 # 16, a sphere of radius 0.3, -hsiz 0.04), torus (box3d 16, a torus of radii
 # 0.28 and 0.12, -hsiz 0.05). Default: all three. The level set is the
 # exact signed distance at the input's vertices (padapt levelset, or numpy
@@ -117,7 +117,7 @@ side_by_side() {
 
 for c in $CASES; do
   case $c in
-    disc) side_by_side disc 2 50 sphere:0.3:0.5,0.5 0.005 ;;
+    disc) side_by_side disc 2 100 sphere:0.3:0.5,0.5 0.002 ;;
     sphere) side_by_side sphere 3 16 sphere:0.3:0.5,0.5,0.5 0.04 ;;
     torus) side_by_side torus 3 16 torus 0.05 ;;
     *) echo "levelset_cut: unknown case $c" >&2; exit 1 ;;

@@ -311,44 +311,53 @@ cleanup:
 }
 
 /* The interface entities among the faces on the zero set (o->zero), found
- * at their home ranks: records appended to B (fresh ids from *next,
- * advanced), *nface their count on this rank. */
+ * at their home ranks (pa__ls_zero_faces on the candidates received, their
+ * vertices numbered by position in the records' ids): records appended to
+ * B (ids set by the caller), *nface their count on this rank. */
 static pa_status zero_faces(pa_dmesh *dm, const pa__ls_out *o, int32_t ref,
                             pa__recs *B, pa_gid *nface) {
   pa_status st = PA_SUCCESS;
   pa__recs Q, H;
+  pa__ls_cells z, f;
   int *dest = NULL, d = dm->dim;
-  rkey *hk = NULL;
   const pa_gid *vg = dm->gid[PA_VERTEX];
   pa__recs_init(&Q, PA_BOUNDARY, d, 0);
   pa__recs_init(&H, PA_BOUNDARY, d, 0);
+  memset(&z, 0, sizeof z);
+  memset(&f, 0, sizeof f);
   *nface = 0;
   PA_ALLOC(dest, o->zero.n);
-  for (pa_idx z = 0; z < o->zero.n; z++) {
-    pa_gid f[3], s[3];
-    for (int j = 0; j < d; j++) s[j] = f[j] = vg[o->zero.v[(size_t)d * z + j]];
+  for (pa_idx i = 0; i < o->zero.n; i++) {
+    pa_gid g[3], s[3];
+    for (int j = 0; j < d; j++) s[j] = g[j] = vg[o->zero.v[(size_t)d * i + j]];
     pa__gid_sort_unique(s, (size_t)d);
-    PA_CALL(pa__recs_add(&Q, 0, f, o->zero.ref[z], 0, dm->rank, NULL, NULL, 0));
-    dest[z] = home(s, d, dm->size);
+    PA_CALL(pa__recs_add(&Q, 0, g, o->zero.ref[i], 0, dm->rank, NULL, NULL, 0));
+    dest[i] = home(s, d, dm->size);
   }
   PA_CALL(pa__agree(dm->comm, st));
   PA_CALL(pa__recs_migrate(dm->comm, &Q, dest, &H));
-  PA_CALL(sorted_keys(&H, &hk));
-  for (size_t i = 0, j; i < H.n; i = j) {
-    for (j = i; j < H.n && same_key(&hk[j], &hk[i]); j++) continue;
-    if (j - i != 2) continue;
-    int32_t c0 = H.ref[hk[i].i], c1 = H.ref[hk[i + 1].i];
-    if (!(c0 && c1 && c0 + c1 == 3)) continue;
-    size_t in = c0 == 1 ? hk[i].i : hk[i + 1].i;
-    PA_CALL(pa__recs_add(B, -1, H.vgid + (size_t)d * in, ref, 0, dm->rank,
-                         NULL, NULL, 0));
-    (*nface)++;
+  z.nvc = f.nvc = d;
+  z.n = (pa_idx)H.n;
+  PA_ALLOC(z.v, (size_t)d * H.n);
+  for (size_t k = 0; k < (size_t)d * H.n; k++) z.v[k] = (pa_idx)k;
+  z.ref = H.ref;
+  PA_CALL(pa__ls_zero_faces(&z, H.vgid, ref, &f));
+  for (pa_idx i = 0; i < f.n; i++) {
+    pa_gid g[3];
+    for (int j = 0; j < d; j++) g[j] = H.vgid[f.v[(size_t)d * i + j]];
+    PA_CALL(pa__recs_add(B, -1, g, ref, 0, dm->rank, NULL, NULL, 0));
   }
+  *nface = f.n;
 cleanup:
+  z.ref = NULL; /* H's */
+  pa__free(z.v);
+  pa__free(f.v);
+  pa__free(f.ref);
+  pa__free(f.flag);
+  pa__free(f.parent);
   pa__recs_free(&Q);
   pa__recs_free(&H);
   pa__free(dest);
-  pa__free(hk);
   return pa__agree_end(dm->comm, st);
 }
 
