@@ -5,7 +5,8 @@
  *
  * It evaluates the P1 interpolant phi_h of the input level set (on the
  * input mesh) at every vertex of the output by locating the vertex in an
- * input element (brute force, barycentric coordinates), and checks:
+ * input element (a bucket grid of the elements' boxes, barycentric
+ * coordinates), and checks:
  *  - every output element lies on one side: the values of phi_h at its
  *    vertices are all <= tol (inside reference) or all >= -tol (outside);
  *  - the faces between an inside and an outside element are exactly the
@@ -62,31 +63,97 @@ static inline double lsj_volume_below(const pa_mesh *m, const double *phi) {
   return v;
 }
 
-/* phi_h at point x: the interpolant in the input element containing it
- * (the largest smallest barycentric coordinate over the elements); NAN if
- * x lies in none (within 1e-9). */
-static inline double lsj_eval(const pa_mesh *in, const double *phi, const double *x) {
+/* A bucket grid over the input's elements (their bounding boxes), to find
+ * the elements that may hold a point. */
+typedef struct lsj_grid {
+  const pa_mesh *m;
+  int g;                 /* cells per axis */
+  double lo[3], step[3];
+  pa_idx *start, *elem;  /* CSR: the elements of each cell */
+} lsj_grid;
+
+static inline int lsj_cell(const lsj_grid *G, const double *x, int k) {
+  int c = (int)floor((x[k] - G->lo[k]) / G->step[k]);
+  return c < 0 ? 0 : c >= G->g ? G->g - 1 : c;
+}
+
+static inline void lsj_grid_init(lsj_grid *G, const pa_mesh *m) {
+  int d = m->dim;
+  G->m = m;
+  G->g = (int)ceil(pow((double)m->ne / 4.0, 1.0 / d));
+  if (G->g < 1) G->g = 1;
+  double hi[3] = {-1e300, -1e300, -1e300};
+  for (int k = 0; k < 3; k++) G->lo[k] = 1e300;
+  for (pa_idx v = 0; v < m->nv; v++)
+    for (int k = 0; k < d; k++) {
+      G->lo[k] = fmin(G->lo[k], m->coord[(size_t)d * v + k]);
+      hi[k] = fmax(hi[k], m->coord[(size_t)d * v + k]);
+    }
+  for (int k = 0; k < d; k++) {
+    G->lo[k] -= 1e-9;
+    G->step[k] = (hi[k] + 1e-9 - G->lo[k]) / G->g;
+  }
+  size_t ncell = 1;
+  for (int k = 0; k < d; k++) ncell *= (size_t)G->g;
+  G->start = calloc(ncell + 1, sizeof *G->start);
+  for (int pass = 0; pass < 2; pass++) {
+    size_t *fill = pass ? calloc(ncell, sizeof *fill) : NULL;
+    for (pa_idx e = 0; e < m->ne; e++) {
+      int clo[3] = {0, 0, 0}, chi[3] = {0, 0, 0};
+      for (int k = 0; k < d; k++) {
+        double l = 1e300, h = -1e300;
+        for (int i = 0; i <= d; i++) {
+          double c = m->coord[(size_t)d * m->elem[(size_t)(d + 1) * e + i] + k];
+          l = fmin(l, c - 1e-9);
+          h = fmax(h, c + 1e-9);
+        }
+        double pl[3] = {0, 0, 0}, ph[3] = {0, 0, 0};
+        pl[k] = l;
+        ph[k] = h;
+        clo[k] = lsj_cell(G, pl, k);
+        chi[k] = lsj_cell(G, ph, k);
+      }
+      for (int i = clo[0]; i <= chi[0]; i++)
+        for (int j = clo[1]; j <= chi[1]; j++)
+          for (int l = clo[2]; l <= chi[2]; l++) {
+            size_t c = ((size_t)l * G->g + j) * G->g + i;
+            if (!pass) G->start[c + 1]++;
+            else G->elem[G->start[c] + fill[c]++] = e;
+          }
+    }
+    if (!pass) {
+      for (size_t c = 0; c < ncell; c++) G->start[c + 1] += G->start[c];
+      G->elem = malloc(sizeof *G->elem * (G->start[ncell] ? G->start[ncell] : 1));
+    }
+    free(fill);
+  }
+}
+
+static inline void lsj_grid_free(lsj_grid *G) {
+  free(G->start);
+  free(G->elem);
+}
+
+/* phi_h at point x: the interpolant in the input element holding it (the
+ * largest smallest barycentric coordinate over the candidates); NAN if x
+ * lies in none (within 1e-9). */
+static inline double lsj_eval_grid(const lsj_grid *G, const double *phi,
+                                   const double *x) {
+  const pa_mesh *in = G->m;
   int d = in->dim;
+  size_t c = 0;
+  for (int k = d - 1; k >= 0; k--) c = c * G->g + (size_t)lsj_cell(G, x, k);
   double best = -1, val = NAN;
-  for (pa_idx e = 0; e < in->ne; e++) {
+  for (pa_idx q = G->start[c]; q < G->start[c + 1]; q++) {
+    pa_idx e = G->elem[q];
     const pa_idx *ev = in->elem + (size_t)(d + 1) * e;
     const double *p[4];
-    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-    for (int i = 0; i <= d; i++) {
-      p[i] = in->coord + (size_t)d * ev[i];
-      for (int k = 0; k < d; k++) {
-        lo[k] = fmin(lo[k], p[i][k]);
-        hi[k] = fmax(hi[k], p[i][k]);
-      }
-    }
-    int out = 0;
-    for (int k = 0; k < d; k++) out |= x[k] < lo[k] - 1e-9 || x[k] > hi[k] + 1e-9;
-    if (out) continue;
+    for (int i = 0; i <= d; i++) p[i] = in->coord + (size_t)d * ev[i];
     double w[4], vol = pa__simplex_volume(d, p), wmin = 1e300;
     for (int i = 0; i <= d; i++) {
-      const double *q[4] = {p[0], p[1], p[2], d == 3 ? p[3] : NULL};
-      q[i] = x;
-      w[i] = pa__simplex_volume(d, q) / vol;
+      const double *r[4] = {p[0], p[1], p[2], d == 3 ? p[3] : NULL};
+      r[i] = x;
+      w[i] = pa__simplex_volume(d, r) / vol;
       wmin = fmin(wmin, w[i]);
     }
     if (wmin > best) {
@@ -117,10 +184,13 @@ static inline void lsj_judge(const pa_mesh *in, const double *phi, pa_mesh *out,
   int d = out->dim, nve = d + 1;
   memset(r, 0, sizeof *r);
   double *ph = malloc(sizeof(double) * (size_t)(out->nv ? out->nv : 1));
+  lsj_grid G;
+  lsj_grid_init(&G, in);
   for (pa_idx v = 0; v < out->nv; v++) {
-    ph[v] = lsj_eval(in, phi, out->coord + (size_t)d * v);
+    ph[v] = lsj_eval_grid(&G, phi, out->coord + (size_t)d * v);
     r->lost += isnan(ph[v]);
   }
+  lsj_grid_free(&G);
   for (pa_idx e = 0; e < out->ne; e++) {
     const pa_idx *ev = out->elem + (size_t)nve * e;
     double lo = 1e300, hi = -1e300;

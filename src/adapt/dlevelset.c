@@ -58,10 +58,10 @@ static pa_status vertex_combine(pa_dmesh *dm, void *x, MPI_Datatype t,
   pa_idx n;
   PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.ls.combine", t, 1, -1, &val));
   unsigned char *d = pa_dmesh_value_data(val, &n, NULL);
-  memcpy(d, x, unit * (size_t)n);
+  if (n) memcpy(d, x, unit * (size_t)n);
   PA_CALL(pa_dmesh_reduce(dm, val, op));
   PA_CALL(pa_dmesh_halo(dm, val));
-  memcpy(x, d, unit * (size_t)n);
+  if (n) memcpy(x, d, unit * (size_t)n);
 cleanup:
   return pa__dmesh_value_drop(dm, val, pa__agree_end(dm->comm, st));
 }

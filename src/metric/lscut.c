@@ -1106,6 +1106,7 @@ cleanup:
 /* Copy the cells into the arrays of a mesh kind (conn: nvc per cell). */
 static pa_status cells_to(const pa__ls_cells *c, pa_idx *conn, int32_t *ref,
                           uint8_t *flag) {
+  if (!c->n) return PA_SUCCESS;
   memcpy(conn, c->v, (size_t)c->n * (size_t)c->nvc * sizeof *conn);
   memcpy(ref, c->ref, (size_t)c->n * sizeof *ref);
   memcpy(flag, c->flag, (size_t)c->n);

@@ -220,8 +220,11 @@ static void test_materials(void) {
      * sides 5 and 6 are material 1, the old interface goes, the same one
      * comes back */
     double *phi2 = malloc(sizeof(double) * (size_t)out->nv);
+    lsj_grid G;
+    lsj_grid_init(&G, in);
     for (pa_idx v = 0; v < out->nv; v++)
-      phi2[v] = lsj_eval(in, phi, out->coord + (size_t)dim * v);
+      phi2[v] = lsj_eval_grid(&G, phi, out->coord + (size_t)dim * v);
+    lsj_grid_free(&G);
     pa_levelset_report rep2;
     CHECK_OK(pa_mesh_levelset_cut(out, phi2, &o, &rep2));
     free(phi2);
