@@ -371,6 +371,17 @@ static int kind_filters(const pa_dmesh *dm, int kind) {
   return 0;
 }
 
+/* Bytes of the values of an entity of a kind and reference ref (those
+ * whose reference filter it passes). */
+static size_t value_paylen(const pa_dmesh *dm, int kind, int32_t ref) {
+  size_t n = 0;
+  for (int k = 0; k < dm->nvalue; k++) {
+    const pa_dmesh_value *v = dm->value[k];
+    if ((int)v->kind == kind && (v->ref < 0 || v->ref == ref)) n += v->unit;
+  }
+  return n;
+}
+
 /* The payload of an output cell of a kind: its parent's values when it is
  * kept whole (parent >= 0; with its reference, when values filter by it),
  * else zeros. Returns its length in buf (room: the largest payload). */
@@ -379,7 +390,7 @@ static size_t cell_payload(const pa_dmesh *dm, int kind, pa_idx parent,
   if (parent >= 0 &&
       (!kind_filters(dm, kind) || pa__dmesh_ref(dm, kind, parent) == ref))
     return pa__entity_payload(dm, kind, parent, buf);
-  size_t n = pa__value_paylen(dm, kind, ref);
+  size_t n = value_paylen(dm, kind, ref);
   memset(buf, 0, n);
   return n;
 }
@@ -556,7 +567,7 @@ pa_status pa_dmesh_levelset_cut(pa_dmesh *dm, int field,
   if (dm->nvalue && R[PA_BOUNDARY].n) { /* zero payloads for those */
     pa__recs Z;
     unsigned char *pay = NULL;
-    size_t pl = pa__value_paylen(dm, PA_BOUNDARY, opts->ref_iface);
+    size_t pl = value_paylen(dm, PA_BOUNDARY, opts->ref_iface);
     pa__recs_init(&Z, PA_BOUNDARY, d, 0);
     if (pl) PA_CALLOC(pay, pl);
     for (size_t i = 0; i < R[PA_BOUNDARY].n && !st; i++)
