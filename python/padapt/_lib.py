@@ -92,7 +92,8 @@ class RemeshOpts(ctypes.Structure):
                 ("no_angle", "no_insert", "no_swap", "no_move", "no_surf",
                  "verbosity", "trusted", "no_stats")] + \
                [("progress", ctypes.c_void_p), ("progress_ctx", ctypes.c_void_p),
-                ("local", ctypes.c_void_p), ("nlocal", ctypes.c_int)]
+                ("local", ctypes.c_void_p), ("nlocal", ctypes.c_int),
+                ("mem_mb", ctypes.c_double)]
 
 
 class RemeshReport(ctypes.Structure):
