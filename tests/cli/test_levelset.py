@@ -7,11 +7,14 @@ input mesh) at the output's vertices, and checks: the faces between an
 inside (3) and an outside (2) element are exactly the boundary entities of
 reference 10; every element lies on its side of phi_h (within hausd, which
 the adaptation may move the interface by); every interface vertex lies on
-the zero set of phi_h within hausd; the inside volume is within the
+the zero set of phi_h within hausd; the mesh is valid and conforming
+(positive volumes filling the box, no face of more than two elements, a
+face of one on the box); the inside volume is within the
 interpolation error of the level set (measured: |phi| at the input's cut
 points, times the area) plus hausd times the area of the exact volume.
 Cases:
-  - a 2D circle (convex) and a 2D annulus (non-convex), sequentially;
+  - a 2D circle (convex) and a 2D annulus (non-convex) at 1, 2, 3, 4
+    processes;
   - a 3D sphere (convex) and a 3D torus (genus 1) at 1, 2, 3, 4 processes
     (through the piece loop: PADAPT_SERIAL_BELOW=0; 1 and 2 in the
     sanitizer build);
@@ -141,18 +144,28 @@ def judge(name, inp, phi, out, dim, tol, vol_exact, area, err_in,
     hi = np.max(ph[E[er == rin]], axis=1) if np.any(er == rin) else np.zeros(0)
     lo = np.min(ph[E[er == rout]], axis=1) if np.any(er == rout) else np.zeros(0)
     bad_side = int(np.sum(hi > tol) + np.sum(lo < -tol))
+    # valid and conforming: positive volumes filling the unit box, no face
+    # of more than two elements, every face of one element on the box
+    vols = simplex_vol(x[E], dim)
+    runs = np.diff(np.flatnonzero(np.r_[True, ~same, True]))
+    lone = f[np.r_[~same, True] & np.r_[True, ~same]]
+    cx = x[lone].mean(axis=1)
+    on_box = np.any((cx < 1e-9) | (cx > 1 - 1e-9), axis=1)
+    conform = (np.all(vols > 0) and abs(vols.sum() - 1) < 1e-9 and
+               runs.max() <= 2 and np.all(on_box))
     iv = np.unique(B[br == riface])
     off = float(np.max(np.abs(ph[iv]))) if len(iv) else 0.0
     vol_in = float(np.sum(np.abs(simplex_vol(x[E[er == rin]], dim))))
     bound = area * (1.05 * err_in + tol)
     vol_ok = abs(vol_in - vol_exact) <= bound
     good = (lost == 0 and bad_iface == 0 and bad_side == 0 and off <= tol and
-            len(iface) > 0 and vol_ok)
+            len(iface) > 0 and vol_ok and conform)
     (ok if good else fail)(
-        "%s: %d elements, %d interface entities, %d mismatched, %d elements "
+        "%s: %d elements (%s), %d interface entities, %d mismatched, %d elements "
         "off their side, interface vertices within %.2e of phi_h = 0 (tol "
         "%.2e), inside volume %.5f (exact %.5f, bound %.2e)"
-        % (name, len(E), len(iface), bad_iface, bad_side, off, tol, vol_in,
+        % (name, len(E), "valid, conforming" if conform else "NOT CONFORMING",
+           len(iface), bad_iface, bad_side, off, tol, vol_in,
            vol_exact, bound))
     return vol_in
 
@@ -214,9 +227,9 @@ def test_shapes():
     # the sanitizer build (10 times slower) runs the 3D cases on 1 and 2
     # processes; tests/mpi/test_lscut.c covers 1-4 there
     nps3 = [1, 2] if os.environ.get("PADAPT_SANITIZE") else [1, 2, 3, 4]
-    case("circle", 2, 20, circle, pi * 0.09, 2 * pi * 0.3, 0.03, [1])
+    case("circle", 2, 20, circle, pi * 0.09, 2 * pi * 0.3, 0.03, [1, 2, 3, 4])
     case("annulus", 2, 30, annulus, pi * (0.35 ** 2 - 0.2 ** 2),
-         2 * pi * 0.55, 0.02, [1, 2])
+         2 * pi * 0.55, 0.02, [1, 2, 3, 4])
     case("sphere", 3, 12, sphere, 4 * pi * 0.027 / 3, 4 * pi * 0.09, 0.08,
          nps3)
     case("torus", 3, 14, torus, 2 * pi * pi * 0.28 * 0.0144,

@@ -7,7 +7,8 @@
  *    numbering), the same report; the gathered result passes the judge of
  *    tests/lsjudge.h (sides, interface faces, zero set, volume of
  *    {phi_h < 0});
- *  - with materials, and with a planted bubble that rmc removes, the same;
+ *  - with materials, and with a planted bubble that rmc removes (2D and
+ *    3D: no inside element left there), the same;
  *  - adapted after the cut (pa_dmesh_adapt), the interface is kept: a
  *    valid, conforming mesh whose faces between the sides are exactly the
  *    interface entities, every element on its side of the input's level
@@ -40,6 +41,10 @@ static double torus(const double *x) {
 static double two_circles(const double *x) {
   return fmin(hypot(x[0] - 0.4, x[1] - 0.45) - 0.25,
               hypot(x[0] - 0.83, x[1] - 0.82) - 0.04);
+}
+static double two_spheres(const double *x) {
+  double b[3] = {x[0] - 0.83, x[1] - 0.82, x[2] - 0.8};
+  return fmin(sphere(x) + 0.05, sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]) - 0.07);
 }
 
 /* Rank 0: a box of n cells, its interior vertices jittered (seeded), with
@@ -195,12 +200,35 @@ static void test_rmc(void) {
   pa_levelset_opts o;
   pa_levelset_opts_default(&o);
   o.rmc = 1e-2;
-  pa_mesh *in = NULL;
-  pa_levelset_report rep;
-  pa_dmesh *dm = cut_both(2, 40, two_circles, 0, &o, 0, &in, &rep);
-  CHECK(rep.nremoved_in == 1 && rep.nremoved_out == 0);
-  pa_mesh_destroy(in);
-  pa_dmesh_destroy(dm);
+  for (int dim = 2; dim <= 3; dim++) {
+    pa_mesh *in = NULL, *g = NULL;
+    pa_levelset_report rep;
+    pa_dmesh *dm = cut_both(dim, dim == 2 ? 40 : 12,
+                            dim == 2 ? two_circles : two_spheres, 0, &o, 0,
+                            &in, &rep);
+    CHECK(rep.nremoved_in == 1 && rep.nremoved_out == 0);
+    /* no inside element is left near the bubble's centre */
+    CHECK_OK(pa_dmesh_gather(dm, 0, &g));
+    if (pa_test_rank == 0) {
+      const double b[3] = {0.83, 0.82, 0.8};
+      pa_idx near = 0;
+      for (pa_idx e = 0; e < g->ne; e++) {
+        if (g->eref[e] != 3) continue;
+        double d2 = 0;
+        for (int k = 0; k < dim; k++) {
+          double cx = 0;
+          for (int i = 0; i <= dim; i++)
+            cx += g->coord[(size_t)dim * g->elem[(size_t)(dim + 1) * e + i] + k];
+          d2 += pow(cx / (dim + 1) - b[k], 2);
+        }
+        near += d2 < 0.1 * 0.1;
+      }
+      CHECK(near == 0);
+    }
+    pa_mesh_destroy(g);
+    pa_mesh_destroy(in);
+    pa_dmesh_destroy(dm);
+  }
 }
 
 /* Cut, then adapt to size h on every rank; the interface survives. */
