@@ -15,13 +15,14 @@
 # For each case, PAIRS (default 3) back-to-back runs of padapt and of Mmg
 # (when on PATH or in MMG_BIN; skipped otherwise): the wall time and the
 # user CPU time of the whole command (/usr/bin/time), and the outputs
-# judged: elements, the inside volume's error against the exact volume,
-# the largest and mean distance from the interface to the exact surface
-# (sampled at the interface's vertices, edge midpoints and centroids), the
-# worst and mean quality in the uniform metric of -hsiz and the share of
-# edges in range. A line per tool with the medians, then the ratios. The
-# user CPU time is the figure to compare on a shared machine (the load is
-# printed first); wall clock only on a quiet one.
+# judged: elements, the interface's entities (reference 10), the inside
+# volume's error against the exact volume, the largest and mean distance
+# from the interface to the exact surface (sampled at the interface's
+# vertices, edge midpoints and centroids), the worst and mean quality in
+# the uniform metric of -hsiz and the share of edges in range. A line per
+# tool with the medians, then the ratios. The user CPU time is the figure
+# to compare on a shared machine (the load is printed first); wall clock
+# only on a quiet one.
 set -u
 BUILD=${1:?BUILD_DIR}
 WORK=${2:?WORK_DIR}
@@ -50,13 +51,15 @@ timed() {
   /usr/bin/time -f "%e %U" -o t.txt "$@" > /dev/null 2>&1
   cat t.txt
 }
-# "elements volume_error dist_max dist_mean qworst qmean inrange" of mesh $1
+# "elements volume_error dist_max dist_mean qworst qmean inrange interface"
+# of mesh $1
 judge() {
   /usr/bin/python3 "$JUDGE" "$1" "$2" "$3" "$4" | /usr/bin/python3 -c "
 import json, sys
 j = json.load(sys.stdin)
 print(j['elements'], '%.3e' % j['volume_error'], '%.3e' % j['dist_max'], '%.3e' % j['dist_mean'],
-      '%.3f' % j['quality_worst'], '%.3f' % j['quality_mean'], '%.4f' % j['edges_in_range'])"
+      '%.3f' % j['quality_worst'], '%.3f' % j['quality_mean'], '%.4f' % j['edges_in_range'],
+      j['interface'])"
 }
 
 write_torus_sol() { # mesh $1 -> level set $2 (the torus of the case)
@@ -98,18 +101,18 @@ side_by_side() {
       echo "$(timed "$mmg" -in in.mesh -sol phi.sol -ls -hsiz "$h" -out m.mesh -v -1) $(judge m.mesh "$jshape" "$h" "$dim")" >> m.txt
     fi
   done
-  row() { # file -> "wall user elements volerr dmax dmean qworst qmean inrange"
+  row() { # file -> "wall user elements volerr dmax dmean qworst qmean inrange iface"
     echo "$(cut -d' ' -f1 "$1" | median) $(cut -d' ' -f2 "$1" | median) $(tail -1 "$1" | cut -d' ' -f3-)"
   }
   local p m
   p=$(row p.txt)
-  printf "%-6s padapt: wall %s s, user %s s, %s elements, volume error %s, distance max %s mean %s, quality worst %s mean %s, in range %s\n" "$name" $p
+  printf "%-6s padapt: wall %s s, user %s s, %s elements, volume error %s, distance max %s mean %s, quality worst %s mean %s, in range %s, %s interface entities\n" "$name" $p
   if [ -s m.txt ]; then
     m=$(row m.txt)
-    printf "%-6s mmg:    wall %s s, user %s s, %s elements, volume error %s, distance max %s mean %s, quality worst %s mean %s, in range %s\n" "$name" $m
+    printf "%-6s mmg:    wall %s s, user %s s, %s elements, volume error %s, distance max %s mean %s, quality worst %s mean %s, in range %s, %s interface entities\n" "$name" $m
     echo "$p $m" | awk -v n="$name" '{
-      printf "%-6s Mmg / padapt: wall %.2f, user %.2f, elements %.2f, volume error %.2f, distance max %.2f mean %.2f; quality worst %.3f vs %.3f, mean %.3f vs %.3f\n",
-        n, $10 / $1, $11 / $2, $12 / $3, $13 / $4, $14 / $5, $15 / $6, $7, $16, $8, $17 }'
+      printf "%-6s Mmg / padapt: wall %.2f, user %.2f, elements %.2f, interface entities %.2f, volume error %.2f, distance max %.2f mean %.2f; quality worst %.3f vs %.3f, mean %.3f vs %.3f\n",
+        n, $11 / $1, $12 / $2, $13 / $3, $20 / $10, $14 / $4, $15 / $5, $16 / $6, $7, $17, $8, $18 }'
   else
     echo "$name mmg${dim}d_O3 not found: padapt only"
   fi
