@@ -946,8 +946,34 @@ void pa_output_abort(pa_output *tx);
  * status, is PA_SUCCESS on every rank, abort everywhere otherwise. Returns
  * the same status on every rank (the lowest failing rank's, with its
  * message: see pa_set_error).
+ * The commit is one agreed step: the ranks agree on st, then agree again
+ * (each rank only once the first agreement completed on it, so a rank
+ * killed while the others still wrote stops every commit), and only then
+ * rename. SIGINT and SIGTERM act at once (with pa_output_handle_signals:
+ * the temporaries removed) until a rank enters the second agreement; from
+ * there to the end of its renames they wait, and once every rank is in
+ * they are held (pa_output_held_signal): the outputs are committed
+ * everywhere. A rank whose second agreement does not complete within half
+ * a second of such a signal (another rank is gone) aborts and lets the
+ * signal act.
  */
 pa_status pa_output_end(MPI_Comm comm, pa_output *tx, pa_status st);
+/**
+ * The SIGINT or SIGTERM that arrived while pa_output_end committed and was
+ * held until the commit completed (0 if none); the call forgets it. Not
+ * collective. The padapt CLI prints a note and exits 0: its outputs are
+ * complete.
+ */
+int pa_output_held_signal(void);
+/** Test hook: called by pa_output_end with the step reached on this rank
+ *  ("written": its files complete, entering the first agreement; "voted":
+ *  past it; "agreed": past the second, before the renames; "renamed":
+ *  after the first rename; "committed": after the renames, before agreeing
+ *  on them). */
+typedef void (*pa_output_hook)(const char *step, void *ctx);
+/** Install hook (NULL: none) with its ctx, process-wide. Not collective;
+ *  for tests (the CLI's PADAPT_TEST_PAUSE). */
+void pa_output_set_hook(pa_output_hook hook, void *ctx);
 /**
  * Check, before a long computation, that path can be written. Not
  * collective. Returns PA_ERR_IO naming the path if it exists and is not a

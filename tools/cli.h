@@ -147,24 +147,52 @@ int pa_cli_error(const pa_cli *cli, const char *fmt, ...)
 /* Print the library's last error for status st; returns 1 (0 on success). */
 int pa_cli_fail(const pa_cli *cli, pa_status st);
 
-/* Check, on rank 0 before the work starts, that the n output paths (NULL
- * entries skipped) can be written and are all different; prints the error
- * ("CMD: ...") and returns 1 on every rank if not, 0 if they can.
- * Collective. */
-int pa_cli_check_outputs(const pa_cli *cli, const char *cmd,
-                         const char *const *paths, int n);
+/* The files a command reads and writes (NULL entries skipped), for
+ * pa_cli_check_io. */
+#define PA_CLI_IO_MAX 8
+typedef struct pa_cli_io {
+  const char *in[PA_CLI_IO_MAX];  /* files read; a distributed set: its files */
+  const char *out[PA_CLI_IO_MAX]; /* files written */
+  const char *set;     /* a distributed set written on every rank */
+  const char *ckpt;    /* -checkpoint DIR: its "checkpoint" and "iter-*" */
+  const char *restart; /* -restart DIR: every file in it is read */
+} pa_cli_io;
+/* Check, on rank 0 before the work starts (cli_paths.c), that every output
+ * can be written (pa_output_check), that no two outputs and no output and
+ * input are the same file (resolved: links and relative paths count), and
+ * that no file but the checkpoint's own is in the checkpoint directory;
+ * prints the error ("CMD: ...") and returns 1 on every rank if not, 0 if
+ * the files are fine. Collective. */
+int pa_cli_check_io(const pa_cli *cli, const char *cmd, const pa_cli_io *io);
 /* End the output transaction of a command (pa_output_end over comm:
- * MPI_COMM_SELF for outputs written by rank 0 alone). Collective over comm.
- * Test hook: with PADAPT_TEST_HOLD_OUTPUT=FILE in the environment and every
- * output written, rank 0 creates FILE and every rank waits 30 s before the
- * commit, so that a test can signal the command while its temporaries
- * exist. */
+ * MPI_COMM_SELF for outputs written by rank 0 alone), with a note on stderr
+ * when a signal arrived while the outputs were committed (they are
+ * complete, the command goes on to exit 0). Collective over comm. */
 pa_status pa_cli_output_end(MPI_Comm comm, pa_output *tx, pa_status st);
+/* The test hooks of the environment (never set them in production), on
+ * this rank: PADAPT_TEST_FAIL_ALLOC=k makes the k-th allocation of padapt's
+ * allocator fail (on rank PADAPT_TEST_FAIL_RANK only, if set);
+ * PADAPT_TEST_PAUSE=STEP with PADAPT_TEST_PAUSE_FLAG=FILE makes rank
+ * PADAPT_TEST_PAUSE_RANK (default 0) write its process id into FILE when
+ * its output transaction reaches STEP (pa_output_hook's steps) and wait
+ * there up to 30 s, until SIGINT or SIGTERM comes, so that a test can
+ * signal or kill it at that step. */
+void pa_cli_test_hooks(const pa_cli *cli);
 
+/* The reference of the boundary entities a mesh file does not list, as
+ * Mmg gives them. */
+#define PA_CLI_BOUNDARY_REF 0
+/* Add the boundary entities the mesh read from path does not list (every
+ * element face without a neighbour), with reference PA_CLI_BOUNDARY_REF,
+ * keeping the listed ones; a note on stderr at verbosity >= 1. Not
+ * collective. */
+pa_status pa_cli_complete_boundary(const pa_cli *cli, const char *path,
+                                   pa_mesh *mesh);
 /* Read a mesh given on the command line: a sequential file (read by rank 0)
  * or a distributed set OUT.<r>.meshb (read by all ranks, gathered on rank 0).
- * Collective. A mesh listing no boundary entity gets them all (ref 0); the
- * mesh is checked, and errors name the file. *mesh is set on rank 0 only. */
+ * Collective. The boundary entities the file does not list are added
+ * (pa_cli_complete_boundary); the mesh is checked, and errors name the
+ * file. *mesh is set on rank 0 only. */
 pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path, pa_mesh **mesh);
 
 /* Strict number parsing: the whole argument, finite. Returns 1 on success. */

@@ -13,7 +13,7 @@
  * after, the operation counts and the time. Exit status: 0 on success and on "target missed" (a
  * valid mesh that misses some edge lengths: a warning says so, and the JSON
  * report's "outcome" field), 1 on any error. The outputs are checked before
- * the work starts (pa_cli_check_outputs) and written in one output
+ * the work starts (pa_cli_check_io) and written in one output
  * transaction: on any error none of them is written and files already at
  * their paths stay as they were.
  *
@@ -352,26 +352,36 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
   return 0;
 }
 
-/* The outputs of `padapt adapt`, checked before the work starts. */
+/* The inputs and outputs of `padapt adapt`, checked before the work
+ * starts. */
 static int check_outputs(const pa_cli *cli, const pa_cli_adapt_args *a) {
   char *sol = NULL, *fields = NULL;
-  const char *paths[5] = {a->out, NULL, NULL, a->json, a->svg};
-  if (!a->distributed) { /* a set carries its metric and fields */
+  pa_cli_io io = {.in = {a->in, a->met, a->field, a->params},
+                  .out = {a->json, a->svg},
+                  .ckpt = a->checkpoint,
+                  .restart = a->restart};
+  if (a->distributed) { /* a set carries its metric and fields */
+    io.set = a->out;
+  } else {
+    io.out[2] = a->out;
     if (!a->nosol)
-      paths[1] = a->outsol ? a->outsol : (sol = pa_cli_replace_ext(a->out, ".sol"));
+      io.out[3] = a->outsol ? a->outsol
+                            : (sol = pa_cli_replace_ext(a->out, ".sol"));
     if (a->field)
-      paths[2] = a->outfield ? a->outfield
-                             : (fields = pa_cli_replace_ext(a->out, ".fields.sol"));
+      io.out[4] = a->outfield
+                      ? a->outfield
+                      : (fields = pa_cli_replace_ext(a->out, ".fields.sol"));
   }
-  int bad = pa_cli_check_outputs(cli, "adapt", paths, 5);
+  int bad = pa_cli_check_io(cli, "adapt", &io);
   if (!bad && a->checkpoint) {
     /* the state file in an existing directory, or the directory itself */
     struct stat sb;
     size_t n = strlen(a->checkpoint) + sizeof "/checkpoint";
     char *state = malloc(n);
     if (state) snprintf(state, n, "%s/checkpoint", a->checkpoint);
-    const char *p = stat(a->checkpoint, &sb) == 0 ? state : a->checkpoint;
-    bad = pa_cli_check_outputs(cli, "adapt -checkpoint", &p, 1);
+    pa_cli_io ck = {
+        .out = {stat(a->checkpoint, &sb) == 0 ? state : a->checkpoint}};
+    bad = pa_cli_check_io(cli, "adapt -checkpoint", &ck);
     free(state);
   }
   free(sol);
