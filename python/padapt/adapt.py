@@ -114,7 +114,8 @@ def remesh_options(opts, **kw):
 
 
 def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
-          hausd=None, fields=None, **options):
+          hausd=None, fields=None, levelset=None, levelset_options=None,
+          **options):
     """Adapt a copy of mesh to a metric with the built-in remesher.
 
     mesh     a padapt.Mesh (not modified)
@@ -129,6 +130,12 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
              (default 0.01)
     fields   {name: (nvert,) or (nvert, k)} vertex fields to interpolate
              onto the new mesh, besides those the mesh carries
+    levelset (nvert,) a level set: its zero set is cut into the mesh first
+             (Mmg's -ls: inside, phi < 0, reference 3, outside 2, the
+             interface reference 10), then kept as a boundary by the
+             adaptation; report["levelset"] says what the cut did
+    levelset_options  {name: value} of padapt.levelset.cut (value, ref_in,
+             ref_out, ref_iface, materials, rmc)
     options  hgradreq (gradation from required entities, default 2.3),
              angle (ridge detection angle in degrees, default 45),
              no_angle, no_insert, no_swap, no_move, no_surf (booleans, as
@@ -166,6 +173,10 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
     for name, val, nc in flds:
         out.add_field(name, val)
     nelem0 = mesh.nelem
+    lsrep = None
+    if levelset is not None:
+        from .levelset import cut_in_place
+        lsrep = cut_in_place(out._h, nv, levelset, **(levelset_options or {}))
 
     rep = _lib.RemeshReport()
     check(lib.pa_remesh(lib.pa_remesher_builtin(), out._h, ctypes.byref(opts), ctypes.byref(rep)))
@@ -184,5 +195,7 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
               "nmove": rep.nmove, "npass": rep.npass,
               "elements_before": nelem0, "vertices_before": nv})
     d.update(fidelity_dict(rep.fidelity))
+    if lsrep is not None:
+        d["levelset"] = lsrep
     report = Report(d, describe(rep.fidelity))
     return AdaptResult(out, out.fields, report)

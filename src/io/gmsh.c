@@ -1437,6 +1437,7 @@ pa_status pa__gmsh_read(const char *path, pa_mesh **mesh) {
   PA_CALL(read_header(&r, &w));
   PA_CALL(read_sections(&r, &w));
   PA_CALL(build_mesh(&r, &w, mesh));
+  (*mesh)->file_dim = 3; /* nodes have three coordinates */
   pa__info(2, "%s: read MSH %s %s, %d vertices, %d elements\n", path,
            w.version == 41 ? "4.1" : "2.2", r.binary ? "binary" : "ASCII",
            (int)pa_mesh_nvert(*mesh), (int)pa_mesh_nelem(*mesh));
