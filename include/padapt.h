@@ -132,9 +132,19 @@ double pa_wtime(void);
  *  - in 3D only, feature edges (2 vertices): Medit "Edges" (ridges, required
  *    edges, interior curves). In 2D, Medit Edges are the boundary entities.
  * Every entity has an integer reference and a flag byte (PA_FLAG_*).
- * A mesh may carry a metric and user vertex fields.
+ * A mesh may carry a metric and user fields on its vertices, elements and
+ * boundary entities.
  */
 typedef struct pa_mesh pa_mesh;
+
+/** Entity kinds: of a mesh's fields (on vertices, elements or boundary
+ *  entities), of a distributed mesh's entities and values. */
+typedef enum pa_entity {
+  PA_VERTEX = 0,
+  PA_ELEMENT = 1,
+  PA_BOUNDARY = 2, /**< boundary entities: edges (2D), triangles (3D) */
+  PA_EDGE = 3      /**< feature edges (3D only) */
+} pa_entity;
 
 /** Entity flags (bit mask). */
 enum {
@@ -261,6 +271,92 @@ int pa_mesh_nfield(const pa_mesh *mesh);
  *  [0, pa_mesh_nfield). */
 pa_status pa_mesh_field(pa_mesh *mesh, int k, const char **name, int *ncomp,
                         double **values);
+
+/*
+ * Fields on elements and boundary entities. Besides its vertex fields a
+ * mesh carries up to 16 element fields (ncomp values per triangle or
+ * tetrahedron: a finite-volume unknown, a density, a material id) and up to
+ * 16 boundary fields (per boundary entity: boundary-condition values). A
+ * field's kind follows from ncomp as in Medit files: 1 a scalar, dim a
+ * vector, 3 (2D) or 6 (3D) a symmetric tensor m11 m12 m22 [m13 m23 m33];
+ * another count is ncomp scalars. The vertex functions above are the case
+ * at = PA_VERTEX of those below. pa_mesh_copy copies every field; entities
+ * added by pa_mesh_resize or pa_mesh_add_* get zeros; pa_remesh carries
+ * every field onto the new mesh by its transfer mode (user guide:
+ * docs/guide/fields.md).
+ */
+
+/** How pa_remesh carries a field onto the new entities. */
+typedef enum pa_transfer {
+  /** The default of the field's entities: LINEAR for vertex fields,
+   *  CONSERVATIVE for element fields, NEAREST for boundary fields. */
+  PA_TRANSFER_DEFAULT = 0,
+  /** Vertex fields (their only mode): linear interpolation at new
+   *  vertices; kept vertices keep their values. */
+  PA_TRANSFER_LINEAR = 1,
+  /** Element fields: each new element takes the mean of the old
+   *  piecewise-constant field over the part of it the old elements cover
+   *  (old and new elements intersected). The integral is kept to round-off
+   *  where the boundary does not move, a constant stays exactly constant,
+   *  and each value is a weighted mean of the old elements it overlaps. */
+  PA_TRANSFER_CONSERVATIVE = 2,
+  /** Element fields: CONSERVATIVE, then each value is held exactly within
+   *  the values of the old elements it overlaps, and the integral that
+   *  this and a moving boundary change is given back to the elements with
+   *  room left below (above) their bound. */
+  PA_TRANSFER_BOUNDED = 3,
+  /** Element fields: the value of the old element of largest overlap (a
+   *  field of integers keeps its set of values). Boundary fields (their
+   *  only mode): the value of the old boundary entity of the same
+   *  reference nearest to the new one's centre. */
+  PA_TRANSFER_NEAREST = 4
+} pa_transfer;
+
+/** Attach to mesh (in/out) a user field called name (its first 63 bytes)
+ *  on its entities at
+ *  (PA_VERTEX, PA_ELEMENT or PA_BOUNDARY), of ncomp > 0 components per
+ *  entity: values (nvert, nelem or nbdry times ncomp) are copied; its
+ *  transfer mode is the default one. It becomes field
+ *  pa_mesh_nfield_at - 1. Not collective. Returns PA_ERR_ARG for another
+ *  kind, ncomp <= 0, 16 fields on those entities already,
+ *  or a value that is not finite (naming the entity, 1-based),
+ *  PA_ERR_MEMORY. */
+pa_status pa_mesh_add_field_at(pa_mesh *mesh, pa_entity at, const char *name,
+                               int ncomp, const double *values);
+/** Remove field k on entities at of mesh (in/out; the later ones move down
+ *  by one). Not collective. Returns PA_ERR_ARG for another kind or k out of
+ *  range. */
+pa_status pa_mesh_remove_field_at(pa_mesh *mesh, pa_entity at, int k);
+/** Returns the number of user fields on entities at of mesh (0 for another
+ *  kind). Not collective. */
+int pa_mesh_nfield_at(const pa_mesh *mesh, pa_entity at);
+/** Field k on entities at of mesh: *name, *ncomp and *values (out, each may
+ *  be NULL; the values, one block of ncomp per entity, may be changed in
+ *  place), valid until the fields or the entities change. Not collective.
+ *  Returns PA_ERR_ARG for another kind or k out of range. */
+pa_status pa_mesh_field_at(pa_mesh *mesh, pa_entity at, int k,
+                           const char **name, int *ncomp, double **values);
+/** Returns the index of the first field called name on entities at of
+ *  mesh, -1 if there is none. Not collective. */
+int pa_mesh_field_index(const pa_mesh *mesh, pa_entity at, const char *name);
+/** Set the transfer mode of field k on entities at of mesh (in/out);
+ *  PA_TRANSFER_DEFAULT sets the default one. Not collective. Returns
+ *  PA_ERR_ARG for k out of range or a mode the field's entities do not
+ *  take (see pa_transfer), the message listing those they take. */
+pa_status pa_mesh_set_field_transfer(pa_mesh *mesh, pa_entity at, int k,
+                                     pa_transfer mode);
+/** Returns the transfer mode of field k on entities at of mesh (never
+ *  PA_TRANSFER_DEFAULT), PA_TRANSFER_DEFAULT for k out of range. Not
+ *  collective. */
+pa_transfer pa_mesh_field_transfer(const pa_mesh *mesh, pa_entity at, int k);
+/** Returns the name of a transfer mode ("linear", "conservative",
+ *  "bounded", "nearest", "default"), "?" for another value. Not
+ *  collective. */
+const char *pa_transfer_name(pa_transfer mode);
+/** The transfer mode called name (as pa_transfer_name gives it; "copy" is
+ *  "nearest") into *mode (out). Not collective. Returns PA_ERR_ARG for
+ *  another name, the message listing the valid ones. */
+pa_status pa_transfer_parse(const char *name, pa_transfer *mode);
 
 /*
  * Physical names: Gmsh's names of the entities of one dimension and one
@@ -1011,14 +1107,6 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
  * per entity kind, roots = owned entities, leaves = ghost copies).
  */
 typedef struct pa_dmesh pa_dmesh;
-
-/** Entity kinds of a distributed mesh. */
-typedef enum pa_entity {
-  PA_VERTEX = 0,
-  PA_ELEMENT = 1,
-  PA_BOUNDARY = 2, /**< boundary entities: edges (2D), triangles (3D) */
-  PA_EDGE = 3      /**< feature edges (3D only) */
-} pa_entity;
 
 /**
  * Distribute a mesh held by rank root. Collective. The root sends contiguous
