@@ -1022,6 +1022,26 @@ typedef struct pa_remesh_opts {
  *  collective. */
 void pa_remesh_opts_default(pa_remesh_opts *opts);
 
+/** What carrying the element and boundary fields through a remesh did
+ *  (all zero when the mesh has none; docs/guide/fields.md). */
+typedef struct pa_transfer_report {
+  int nfield;        /**< element and boundary fields carried */
+  long nfast;        /**< new elements inside one old element (no clipping) */
+  long nclip;        /**< new elements intersected with the old ones */
+  long nout;         /**< element values outside the range of the old
+                          elements they overlap (round-off in mode
+                          CONSERVATIVE; 0 in mode BOUNDED) */
+  /** The largest change of the integral of an element field (any field,
+   *  any component) relative to the integral of its absolute value:
+   *  round-off where the boundary does not move. */
+  double defect;
+  /** Measure of the new elements not covered by the old ones, and of the
+   *  old elements not covered by the new ones, relative to the old
+   *  domain's measure: 0 but for round-off unless the boundary moved. */
+  double uncovered, lost;
+  double time_s;     /**< seconds spent */
+} pa_transfer_report;
+
 /** What a remesh did. */
 typedef struct pa_remesh_report {
   /** The remesher's verdict on the metric it worked with. */
@@ -1031,6 +1051,8 @@ typedef struct pa_remesh_report {
   double time_s;
   /** Filled by pa_remesh unless opts->no_stats (not by remesher callbacks). */
   pa_fidelity fidelity;
+  /** Filled by pa_remesh (not by remesher callbacks). */
+  pa_transfer_report transfer;
 } pa_remesh_report;
 
 /**

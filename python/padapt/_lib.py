@@ -95,11 +95,19 @@ class RemeshOpts(ctypes.Structure):
                 ("local", ctypes.c_void_p), ("nlocal", ctypes.c_int)]
 
 
+class TransferReport(ctypes.Structure):
+    _fields_ = [("nfield", ctypes.c_int), ("nfast", ctypes.c_long),
+                ("nclip", ctypes.c_long), ("nout", ctypes.c_long),
+                ("defect", ctypes.c_double), ("uncovered", ctypes.c_double),
+                ("lost", ctypes.c_double), ("time_s", ctypes.c_double)]
+
+
 class RemeshReport(ctypes.Structure):
     _fields_ = [("outcome", ctypes.c_int), ("nsplit", ctypes.c_long),
                 ("ncollapse", ctypes.c_long), ("nswap", ctypes.c_long),
                 ("nmove", ctypes.c_long), ("npass", ctypes.c_int),
-                ("time_s", ctypes.c_double), ("fidelity", Fidelity)]
+                ("time_s", ctypes.c_double), ("fidelity", Fidelity),
+                ("transfer", TransferReport)]
 
 
 class HessianOpts(ctypes.Structure):

@@ -113,8 +113,7 @@ static void test_add_and_read(void) {
 static void test_bad_arguments(void) {
   pa_mesh *m = NULL;
   CHECK_OK(pa_mesh_generate_box(2, 2, &m));
-  pa_idx ne = pa_mesh_nelem(m);
-  double *e = ramp(ne, 1);
+  double *e = ramp(pa_mesh_nvert(m) + pa_mesh_nelem(m) + pa_mesh_nbdry(m), 1);
   e[5] = NAN;
   CHECK(pa_mesh_add_field_at(m, PA_ELEMENT, "bad", 1, e) == PA_ERR_ARG);
   CHECK(has_msg("element 6 is not finite"));
