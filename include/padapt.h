@@ -744,14 +744,26 @@ void pa_fidelity_describe(const pa_fidelity *f, char *buf, size_t n);
 /* Solutions (.sol / .solb) and mesh files                                  */
 /* ------------------------------------------------------------------------ */
 
-/** Kinds of vertex fields in a solution file (Medit's codes). */
+/** Kinds of fields in a solution file (Medit's codes). */
 typedef enum pa_sol_kind {
   PA_SOL_SCALAR = 1,
   PA_SOL_VECTOR = 2,
   PA_SOL_TENSOR = 3 /**< symmetric: m11 m12 m22 [m13 m23 m33] */
 } pa_sol_kind;
 
-/** A set of fields at the vertices of a mesh (SolAtVertices). */
+/** Where the values of a solution's field are given: the Medit keyword
+ *  that holds them. A mesh of dimension 2 has its element fields at
+ *  triangles and its boundary fields at edges; of dimension 3, at
+ *  tetrahedra and at triangles. */
+typedef enum pa_sol_at {
+  PA_SOL_AT_VERTICES = 0,  /**< SolAtVertices */
+  PA_SOL_AT_EDGES = 1,     /**< SolAtEdges */
+  PA_SOL_AT_TRIANGLES = 2, /**< SolAtTriangles */
+  PA_SOL_AT_TETRAHEDRA = 3 /**< SolAtTetrahedra */
+} pa_sol_at;
+
+/** A set of fields at the vertices, edges, triangles or tetrahedra of a
+ *  mesh (SolAtVertices, SolAtEdges, SolAtTriangles, SolAtTetrahedra). */
 typedef struct pa_sol pa_sol;
 
 /** Create an empty solution of dimension dim (2 or 3) for nvert >= 0
@@ -760,8 +772,8 @@ typedef struct pa_sol pa_sol;
 pa_status pa_sol_create(int dim, pa_idx nvert, pa_sol **sol);
 /** Destroy sol (in/out; NULL allowed). Not collective. */
 void pa_sol_destroy(pa_sol *sol);
-/** Returns the dimension, the vertex count and the number of fields of
- *  sol. Not collective. */
+/** Returns the dimension, the vertex count (of its fields at vertices)
+ *  and the number of fields of sol. Not collective. */
 int pa_sol_dim(const pa_sol *sol);
 pa_idx pa_sol_nvert(const pa_sol *sol);
 int pa_sol_nfield(const pa_sol *sol);
@@ -774,33 +786,72 @@ const char *pa_sol_origin(const pa_sol *sol);
  *  from kind and dim) are copied. Not collective. Returns PA_ERR_ARG for
  *  an unknown kind, PA_ERR_MEMORY. */
 pa_status pa_sol_add_field(pa_sol *sol, pa_sol_kind kind, const double *values);
-/** Field k of sol: *kind, *ncomp (components per vertex) and *values (out,
- *  each may be NULL; nvert * ncomp values owned by sol). Not collective.
- *  Returns PA_ERR_ARG for k out of [0, pa_sol_nfield). */
+/** Field k of sol: *kind, *ncomp (components per entity) and *values (out,
+ *  each may be NULL; n * ncomp values owned by sol, n as
+ *  pa_sol_field_where gives it: nvert for a field at vertices). Not
+ *  collective. Returns PA_ERR_ARG for k out of [0, pa_sol_nfield). */
 pa_status pa_sol_field(pa_sol *sol, int k, pa_sol_kind *kind, int *ncomp,
                        double **values);
+/** Append to sol (in/out) a field of kind at n >= 0 entities of the kind
+ *  at: values (n * ncomp, ncomp from kind and dim) are copied. A field at
+ *  vertices needs n = pa_sol_nvert. Not collective. Returns PA_ERR_ARG
+ *  for an unknown kind or place, a wrong vertex count, PA_ERR_MEMORY. */
+pa_status pa_sol_add_field_at(pa_sol *sol, pa_sol_at at, pa_idx n,
+                              pa_sol_kind kind, const double *values);
+/** Where field k of sol is given: *at, *n (its entities) and *origin
+ *  (where it was read, for messages: "u.sol:12", the line of its keyword,
+ *  or "u.solb: byte 40"; NULL for a field built in memory), each may be
+ *  NULL. Not collective. Returns PA_ERR_ARG for k out of range. */
+pa_status pa_sol_field_where(const pa_sol *sol, int k, pa_sol_at *at,
+                             pa_idx *n, const char **origin);
 
 /** Read path, .sol (ASCII) or .solb (binary, versions 1-4) by extension,
- *  into *sol (out). Not collective. Returns PA_ERR_IO or PA_ERR_FORMAT
- *  naming the file and line (or byte), PA_ERR_UNSUPPORTED for another
- *  extension, PA_ERR_MEMORY. */
+ *  into *sol (out): the fields of every SolAtVertices, SolAtEdges,
+ *  SolAtTriangles and SolAtTetrahedra keyword, in file order (keywords of
+ *  one kind must agree on their count). Values are not checked (NaN
+ *  included): the mesh functions that take them do. Not collective.
+ *  Returns PA_ERR_IO or PA_ERR_FORMAT naming the file and line (or byte),
+ *  PA_ERR_UNSUPPORTED for another extension, PA_ERR_MEMORY. */
 pa_status pa_sol_read(const char *path, pa_sol **sol);
 /** Write sol to path, .sol or .solb by extension, through a temporary file
- *  (see pa_output_begin). Not collective. Returns PA_ERR_ARG for a
- *  solution without field, PA_ERR_UNSUPPORTED for another extension,
- *  PA_ERR_IO naming the path. */
+ *  (see pa_output_begin): the fields of each place under its keyword
+ *  (several types per keyword), vertices, edges, triangles, tetrahedra.
+ *  Not collective. Returns PA_ERR_ARG for a solution without field,
+ *  PA_ERR_UNSUPPORTED for another extension, PA_ERR_IO naming the path. */
 pa_status pa_sol_write(const pa_sol *sol, const char *path);
 
 /** Attach field k of sol as the metric of mesh (in/out; a scalar field:
  *  sizes, a tensor field: SPD tensors). Not collective. Returns PA_ERR_ARG
- *  for k out of range or a vector field, PA_ERR_FORMAT (naming the file)
- *  for a vertex count that is not the mesh's, PA_ERR_METRIC as
- *  pa_mesh_set_metric. */
+ *  for k out of range, a vector field or one not at vertices, PA_ERR_FORMAT
+ *  (naming the file) for a vertex count that is not the mesh's,
+ *  PA_ERR_METRIC as pa_mesh_set_metric. */
 pa_status pa_mesh_metric_from_sol(pa_mesh *mesh, const pa_sol *sol, int k);
 /** A new solution *sol (out) holding the metric of mesh and, if
- *  with_fields, its user fields. Not collective. Returns PA_ERR_ARG if
- *  there is nothing to hold, PA_ERR_MEMORY. */
+ *  with_fields, its user vertex fields. Not collective. Returns PA_ERR_ARG
+ *  if there is nothing to hold, PA_ERR_MEMORY. */
 pa_status pa_mesh_metric_to_sol(pa_mesh *mesh, int with_fields, pa_sol **sol);
+/**
+ * Attach every field of sol to mesh (in/out) as user fields: those at
+ * vertices on its vertices, at triangles (2D) or tetrahedra (3D) on its
+ * elements, at edges (2D) or triangles (3D) on its boundary entities, in
+ * the mesh's own numbering of those entities. A .sol names no field: they
+ * are called field1, field2, ... on the vertices, cell1, ... on the
+ * elements and face1, ... on the boundary entities, numbered after the
+ * fields the mesh has there. Not collective. Returns PA_ERR_FORMAT naming
+ * where a field was read (file and line) for a count that is not the
+ * mesh's or a place the mesh has no entities for (edges of a 3D mesh),
+ * PA_ERR_ARG naming the file and the entity (1-based) of a value that is
+ * not finite, or for too many fields; the mesh is then as it was.
+ * PA_ERR_MEMORY.
+ */
+pa_status pa_mesh_fields_from_sol(pa_mesh *mesh, const pa_sol *sol);
+/** A new solution *sol (out) holding the user fields of mesh, each at its
+ *  entities (vertex fields at vertices, element fields at triangles or
+ *  tetrahedra, boundary fields at edges or triangles; kind by number of
+ *  components: 1 scalar, dim vector, 3 or 6 symmetric tensor, another
+ *  count as that many scalars). Not collective. Returns PA_ERR_ARG if the
+ *  mesh has no field, PA_ERR_MEMORY. */
+pa_status pa_mesh_fields_to_sol(pa_mesh *mesh, pa_sol **sol);
 
 /** Options for writing mesh files. */
 typedef struct pa_write_opts {

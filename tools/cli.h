@@ -53,9 +53,17 @@ void pa_cli_progress_end(pa_cli_progress *pr);
 int pa_cli_read_params(const pa_cli *cli, const char *path, int dim,
                        pa_local_param **out, int *nout);
 
+/* Most -field files and -field-transfer choices of `padapt adapt`. */
+#define PA_CLI_MAX_FIELD_ARGS 32
+
 /* The arguments of `padapt adapt`, sequential and parallel alike. */
 typedef struct pa_cli_adapt_args {
-  const char *in, *out, *met, *outsol, *field, *outfield, *json;
+  const char *in, *out, *met, *outsol, *outfield, *json;
+  const char *field[PA_CLI_MAX_FIELD_ARGS];    /* -field F.sol, in order */
+  int nfield;
+  const char *transfer[PA_CLI_MAX_FIELD_ARGS]; /* -field-transfer
+                                                  [NAME=]MODE, in order */
+  int ntransfer;
   const char *svg; /* -svg: before/after histograms */
   int nosol;       /* -nosol: no output metric file */
   int distributed; /* -distributed-output */
@@ -196,11 +204,17 @@ void pa_cli_help(const pa_cli_spec *s, FILE *out);
 
 /* Attach field 0 of a .sol/.solb file as the mesh's metric. */
 pa_status pa_cli_attach_metric(pa_mesh *mesh, const char *path);
-/* Attach every field of a .sol file to the mesh as user fields field1, ...
- * (the vertex count must match: the error names the file). */
-pa_status pa_cli_attach_fields(pa_mesh *mesh, const char *path);
-/* Write the mesh's user fields as one .sol file (scalar, vector or tensor by
- * number of components). */
+/* Attach the fields of every -field file to the mesh (pa_mesh_fields_from_sol:
+ * vertex fields field1, ..., element fields cell1, ..., boundary fields
+ * face1, ...; a count that does not match names the file and line), then
+ * set the -field-transfer modes: NAME=MODE for the field NAME (an element
+ * field first, else a boundary or vertex field of that name), MODE alone
+ * for every element field. */
+pa_status pa_cli_attach_fields(pa_mesh *mesh, const pa_cli_adapt_args *a);
+/* 1 if the mesh has a user field on any kind of entity. */
+int pa_cli_has_fields(const pa_mesh *mesh);
+/* Write the mesh's user fields as one .sol file, each kind under its
+ * keyword (pa_mesh_fields_to_sol). */
 pa_status pa_cli_write_fields(pa_mesh *mesh, const char *path);
 
 /* A growable string (the JSON reports); fail is set when out of memory. */

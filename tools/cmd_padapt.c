@@ -44,8 +44,7 @@
 static int prepare_root(const pa_cli *cli, const pa_cli_adapt_args *args,
                         pa_mesh *mesh) {
   if (pa_cli_adapt_metric(cli, args, mesh)) return 0;
-  if (args->field && pa_cli_fail(cli, pa_cli_attach_fields(mesh, args->field)))
-    return 0;
+  if (pa_cli_fail(cli, pa_cli_attach_fields(mesh, args))) return 0;
   return 1;
 }
 
@@ -345,11 +344,11 @@ static int check_input(const pa_cli *cli, const pa_cli_adapt_args *args,
   *set = cli->rank == 0 && in ? pa_dmesh_is_set(in) : 0;
   MPI_Bcast(set, 1, MPI_INT, 0, cli->comm);
   if (args->restart) {
-    if (cli->rank == 0 && (in || args->met || args->field))
+    if (cli->rank == 0 && (in || args->met || args->nfield))
       fprintf(stderr, "padapt: adapt: -restart: the mesh, its metric and "
                       "fields come from the checkpoint (IN, -met and -field "
                       "are not read)\n");
-  } else if (*set && (args->met || args->field)) {
+  } else if (*set && (args->met || args->nfield)) {
     if (cli->rank == 0)
       pa_cli_error(cli, "adapt: -met and -field need a sequential input mesh, "
                         "not a distributed set");
@@ -452,7 +451,7 @@ static pa_status write_mesh(const pa_cli *cli, const pa_cli_adapt_args *args,
     free(path);
     path = NULL;
   }
-  if (st == PA_SUCCESS && pa_mesh_nfield(*g) > 0) {
+  if (st == PA_SUCCESS && pa_cli_has_fields(*g)) {
     path = pa_cli_replace_ext(out, ".fields.sol");
     st = pa_cli_write_fields(*g, args->outfield ? args->outfield : path);
   }
