@@ -1175,7 +1175,9 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
  * [0, nowned), then the ghosts, [nowned, nlocal). Every entity has a 64-bit
  * global id, unique per kind and kept by redistribution and file round trips.
  * The local mesh (owned + ghost entities, same numbering) is a pa_mesh with
- * the metric and user vertex fields of the distributed mesh.
+ * the metric and user fields (on vertices, elements, boundary entities) of
+ * the distributed mesh; they follow the entities through every change
+ * (redistribution, reordering, files, gathering, adaptation).
  * All point-to-point traffic goes through one exchange layer (a star forest
  * per entity kind, roots = owned entities, leaves = ghost copies).
  */
@@ -1642,6 +1644,12 @@ typedef struct pa_adapt_report {
   /** The result measured in the caller's metric and in the metric used
    *  (unless opts->remesh.no_stats). */
   pa_fidelity fidelity;
+  /** The element and boundary fields carried through the pieces' remeshes:
+   *  counts and times summed over the pieces and ranks; defect, uncovered
+   *  and lost the largest over the pieces, each relative to its piece (a
+   *  piece's frozen skin keeps its region: they are round-off unless it
+   *  touches a boundary that moves). */
+  pa_transfer_report transfer;
 } pa_adapt_report;
 
 /** Fill *opts (out) with the defaults: built-in remesher,
@@ -1659,7 +1667,10 @@ void pa_adapt_opts_default(pa_adapt_opts *opts);
  * entities and edges it gives back unchanged (same vertices and
  * reference); new entities get fresh global
  * ids (ids stay unique, not contiguous) and zero user values. Metric and user
- * vertex fields of the local mesh are interpolated by the remesher.
+ * vertex fields of the local mesh are interpolated by the remesher; its
+ * element and boundary fields are carried by pa_remesh on every piece, by
+ * their transfer modes (the integral of a conservative field is kept to
+ * round-off over the whole mesh where its boundary does not move).
  * Elements and boundary entities flagged PA_FLAG_REQUIRED are kept as they
  * are. A piece whose remesh fails is rolled back: its elements stay, still
  * tagged, and the mesh stays valid; if the tagged count stops decreasing the

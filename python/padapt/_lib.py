@@ -156,7 +156,8 @@ class AdaptReport(ctypes.Structure):
                  "t_reintegrate", "t_rebalance", "remesh_busy", "bytes_moved")] + \
                [("peak_memory", ctypes.c_size_t), ("peak_rss", ctypes.c_size_t),
                 ("niter_recorded", ctypes.c_int),
-                ("iters", AdaptIter * ADAPT_MAX_ITERS), ("fidelity", Fidelity)]
+                ("iters", AdaptIter * ADAPT_MAX_ITERS), ("fidelity", Fidelity),
+                ("transfer", TransferReport)]
 
 
 class DmeshIter(ctypes.Structure):

@@ -147,14 +147,7 @@ size_t pa_dmesh_memory_used(const pa_dmesh *dm) {
 void pa__dmesh_layout(pa_dmesh *dm, pa__layout *lay) {
   memset(lay, 0, sizeof *lay);
   lay->dim = dm->dim;
-  if (!dm->mesh) return;
-  lay->met_ncomp = dm->mesh->met_ncomp;
-  lay->nfield = dm->mesh->nfield;
-  for (int f = 0; f < lay->nfield; f++) {
-    snprintf(lay->fieldname[f], PA_MESH_FIELD_NAME_LEN, "%s",
-             dm->mesh->field[f].name);
-    lay->fieldncomp[f] = dm->mesh->field[f].ncomp;
-  }
+  if (dm->mesh) pa__mesh_layout(dm->mesh, lay);
 }
 
 int32_t pa__dmesh_ref(const pa_dmesh *dm, int kind, pa_idx e) {
@@ -456,7 +449,7 @@ pa_status pa_dmesh_sync_mesh(pa_dmesh *dm) {
   pa__agree_reset();
   pa_mesh *m = dm->mesh;
   int d = dm->dim;
-  sync_item arr[12 + PA_MESH_MAX_FIELDS];
+  sync_item arr[12 + 3 * PA_MESH_MAX_FIELDS];
   int na = 0;
   arr[na++] = (sync_item){PA_VERTEX, m->coord, sizeof(double) * d};
   arr[na++] = (sync_item){PA_VERTEX, m->vref, 4};
@@ -466,6 +459,12 @@ pa_status pa_dmesh_sync_mesh(pa_dmesh *dm) {
   for (int f = 0; f < m->nfield; f++)
     arr[na++] = (sync_item){PA_VERTEX, m->field[f].val,
                             sizeof(double) * m->field[f].ncomp};
+  for (int f = 0; f < m->nefield; f++)
+    arr[na++] = (sync_item){PA_ELEMENT, m->efield[f].val,
+                            sizeof(double) * m->efield[f].ncomp};
+  for (int f = 0; f < m->nbfield; f++)
+    arr[na++] = (sync_item){PA_BOUNDARY, m->bfield[f].val,
+                            sizeof(double) * m->bfield[f].ncomp};
   arr[na++] = (sync_item){PA_ELEMENT, m->eref, 4};
   arr[na++] = (sync_item){PA_ELEMENT, m->eflag, 1};
   arr[na++] = (sync_item){PA_BOUNDARY, m->bref, 4};
@@ -502,7 +501,7 @@ static pa_status owned_kind(pa_dmesh *dm, int kind, const int *dest,
   const pa_idx *conn = kind == PA_ELEMENT    ? m->elem
                        : kind == PA_BOUNDARY ? m->bdry
                                              : m->edge;
-  if (kind == PA_VERTEX) PA_ALLOC(dbl, R->ndbl);
+  if (R->ndbl) PA_ALLOC(dbl, R->ndbl);
   { /* exact sizes: no growth, no realloc copies at the peak */
     size_t paybytes = 0;
     for (int k = 0; k < dm->nvalue; k++)
@@ -514,7 +513,7 @@ static pa_status owned_kind(pa_dmesh *dm, int kind, const int *dest,
     pa_gid vg[4];
     for (int j = 0; j < nv; j++)
       vg[j] = dm->gid[PA_VERTEX][conn[(size_t)nv * e + j]];
-    if (dbl) pa__vertex_doubles(m, e, m->nfield, dbl);
+    if (dbl) pa__entity_doubles(m, kind, e, dbl);
     int32_t ref = pa__dmesh_ref(dm, kind, e);
     size_t pl = 0;
     for (int k = 0; k < dm->nvalue; k++) {
@@ -543,9 +542,9 @@ pa_status pa__dmesh_owned_recs(pa_dmesh *dm, const int *dest, pa__recs *E,
   pa__layout lay;
   size_t maxpay = 0;
   pa__dmesh_layout(dm, &lay);
-  pa__recs_init(E, PA_ELEMENT, dm->dim + 1, 0);
+  pa__recs_init(E, PA_ELEMENT, dm->dim + 1, pa__layout_kind_ndbl(&lay, PA_ELEMENT));
   pa__recs_init(V, PA_VERTEX, 0, pa__layout_ndbl(&lay));
-  pa__recs_init(B, PA_BOUNDARY, dm->dim, 0);
+  pa__recs_init(B, PA_BOUNDARY, dm->dim, pa__layout_kind_ndbl(&lay, PA_BOUNDARY));
   pa__recs_init(D, PA_EDGE, 2, 0);
   for (int k = 0; k < dm->nvalue; k++) maxpay += dm->value[k]->unit;
   PA_ALLOC(pay, maxpay);

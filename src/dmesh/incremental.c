@@ -66,7 +66,7 @@ static pa_status kept_kind(pa_dmesh *dm, int kind, const uint8_t *keep,
     T->ref[i] = pa__dmesh_ref(dm, kind, e);
     T->flag[i] = fl[e];
     T->aux[i] = dm->rank;
-    if (nd) pa__vertex_doubles(m, e, m->nfield, T->dbl + (size_t)nd * i);
+    if (nd) pa__entity_doubles(m, kind, e, T->dbl + (size_t)nd * i);
     if (T->poff)
       T->poff[i + 1] =
           T->poff[i] + pa__entity_payload(dm, kind, e, T->pay + T->poff[i]);
@@ -84,9 +84,9 @@ pa_status pa__dmesh_kept_recs(pa_dmesh *dm,
   pa__layout lay;
   pa__recs *R[PA_DMESH_NKIND];
   pa__dmesh_layout(dm, &lay);
-  pa__recs_init(E, PA_ELEMENT, dm->dim + 1, 0);
+  pa__recs_init(E, PA_ELEMENT, dm->dim + 1, pa__layout_kind_ndbl(&lay, PA_ELEMENT));
   pa__recs_init(V, PA_VERTEX, 0, pa__layout_ndbl(&lay));
-  pa__recs_init(B, PA_BOUNDARY, dm->dim, 0);
+  pa__recs_init(B, PA_BOUNDARY, dm->dim, pa__layout_kind_ndbl(&lay, PA_BOUNDARY));
   pa__recs_init(D, PA_EDGE, 2, 0);
   pa__recs_init(P, PA_VERTEX, 0, pa__layout_ndbl(&lay));
   R[PA_VERTEX] = V;
