@@ -238,6 +238,8 @@ static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
   int ok = 1;
   if (set) {
     st = pa_dmesh_read(cli->comm, in, 0, dm);
+    /* -field-transfer on the set's fields (the same on every rank) */
+    if (st == PA_SUCCESS) st = pa_cli_attach_fields(pa_dmesh_mesh(*dm), args);
     if (st) {
       fail_collective(cli, st);
       return 1;
@@ -344,10 +346,10 @@ static int check_input(const pa_cli *cli, const pa_cli_adapt_args *args,
   *set = cli->rank == 0 && in ? pa_dmesh_is_set(in) : 0;
   MPI_Bcast(set, 1, MPI_INT, 0, cli->comm);
   if (args->restart) {
-    if (cli->rank == 0 && (in || args->met || args->nfield))
+    if (cli->rank == 0 && (in || args->met || args->nfield || args->ntransfer))
       fprintf(stderr, "padapt: adapt: -restart: the mesh, its metric and "
-                      "fields come from the checkpoint (IN, -met and -field "
-                      "are not read)\n");
+                      "fields come from the checkpoint (IN, -met, -field and "
+                      "-field-transfer are not read)\n");
   } else if (*set && (args->met || args->nfield)) {
     if (cli->rank == 0)
       pa_cli_error(cli, "adapt: -met and -field need a sequential input mesh, "

@@ -174,8 +174,7 @@ cleanup:
   return st;
 }
 
-/* Zero the values of entities [i0, i1) of the fields on entities at. */
-static void zero_values(pa_mesh *m, int at, size_t i0, size_t i1) {
+void pa__mesh_zero_values(pa_mesh *m, int at, size_t i0, size_t i1) {
   int *n;
   pa__field *f = pa__mesh_fields(m, at, &n);
   for (int k = 0; k < *n && i1 > i0; k++)
@@ -255,8 +254,8 @@ pa_status pa_mesh_resize(pa_mesh *m, pa_idx nvert, pa_idx nelem, pa_idx nbdry,
              d * m->field[k].ncomp * sizeof(double));
   }
   m->nv = nvert;
-  if (nelem > m->ne) zero_values(m, PA_ELEMENT, (size_t)m->ne, (size_t)nelem);
-  if (nbdry > m->nb) zero_values(m, PA_BOUNDARY, (size_t)m->nb, (size_t)nbdry);
+  if (nelem > m->ne) pa__mesh_zero_values(m, PA_ELEMENT, (size_t)m->ne, (size_t)nelem);
+  if (nbdry > m->nb) pa__mesh_zero_values(m, PA_BOUNDARY, (size_t)m->nb, (size_t)nbdry);
   PA_CALL(resize_cells(&m->elem, &m->eref, &m->eflag, &m->cape, &m->ne, nelem,
                        m->dim + 1));
   PA_CALL(resize_cells(&m->bdry, &m->bref, &m->bflag, &m->capb, &m->nb, nbdry,
@@ -314,7 +313,7 @@ pa_status pa_mesh_add_elem(pa_mesh *m, const pa_idx *v, int32_t ref,
     PA_CALL(grow_elems(m, (size_t)m->ne + 1));
   PA_CALL(add_cell(m, &m->elem, &m->eref, &m->eflag, &m->cape, &m->ne,
                    m->dim + 1, v, ref, index));
-  zero_values(m, PA_ELEMENT, (size_t)m->ne - 1, (size_t)m->ne);
+  pa__mesh_zero_values(m, PA_ELEMENT, (size_t)m->ne - 1, (size_t)m->ne);
 cleanup:
   return st;
 }
@@ -327,7 +326,7 @@ pa_status pa_mesh_add_bdry(pa_mesh *m, const pa_idx *v, int32_t ref,
     PA_CALL(grow_bdrys(m, (size_t)m->nb + 1));
   PA_CALL(add_cell(m, &m->bdry, &m->bref, &m->bflag, &m->capb, &m->nb, m->dim,
                    v, ref, index));
-  zero_values(m, PA_BOUNDARY, (size_t)m->nb - 1, (size_t)m->nb);
+  pa__mesh_zero_values(m, PA_BOUNDARY, (size_t)m->nb - 1, (size_t)m->nb);
 cleanup:
   return st;
 }

@@ -111,6 +111,9 @@ int pa__transfer_default(int at);
 /* Entity `to` of kind at (PA_ELEMENT or PA_BOUNDARY) takes the field values
  * of entity `from` (a piece of it made by a bisection). */
 void pa__mesh_copy_values(pa_mesh *mesh, int at, pa_idx from, pa_idx to);
+/* Zero the values of entities [i0, i1) (room reserved) of the fields of
+ * mesh on entities at. */
+void pa__mesh_zero_values(pa_mesh *mesh, int at, size_t i0, size_t i1);
 /* Move the element and boundary fields of src into dst (whose own are
  * freed first), leaving src without any: the arrays are dst's now, sized
  * for src's capacities (the caller sizes them for dst's). */

@@ -20,7 +20,11 @@ In a scratch directory (CTest's), with PADAPT = the CLI:
     meshio finds the density's integral kept in padapt's .msh;
   - bad input: a count that does not match names the file and line, a NaN
     names the entity, an unknown mode lists the valid ones, an unknown
-    field lists the fields; nothing is written then.
+    field lists the fields; nothing is written then;
+  - at 2 processes (the unit cube at -hsiz 0.1, 3 iterations): the same judge,
+    and a run killed in its second iteration (PADAPT_TEST_KILL_ITER) and
+    restarted from its checkpoint writes the uninterrupted run's mesh and
+    fields, byte for byte.
 Exits 0 on success, 1 naming every mismatch otherwise.
 """
 import os
@@ -225,6 +229,34 @@ def main():
     i1 = cell_integral("mio_out.msh", 3, "rho")
     if not abs(i1 - i0) <= 1e-12 * abs(i0):
         fail("meshio's cell data: integral %.17g -> %.17g" % (i0, i1))
+
+    # in parallel: the same judge; a run killed in its second iteration
+    # and restarted from its checkpoint writes the uninterrupted run's
+    # mesh and fields
+    mpiexec = os.environ.get("MPIEXEC")
+    if mpiexec:
+        pts0, el0, rho0, _ = make_input(3, 3)
+        par = [mpiexec, "-n", "2", PADAPT, "adapt", "in3.mesh", "-hsiz", "0.1",
+               "-field", "u3.sol", "-field-transfer", "cell3=nearest", "-v", "-1"]
+        p = subprocess.run(par + ["-out", "par3.mesh"], capture_output=True,
+                           text=True, timeout=600)
+        if p.returncode:
+            fail("np=2: %s" % p.stderr.strip())
+        else:
+            judge("3D np=2", 3, pts0, el0, rho0, "par3.mesh", "par3.fields.sol")
+            env = dict(os.environ, PADAPT_TEST_KILL_ITER="2")
+            subprocess.run(par + ["-out", "ck3.mesh", "-checkpoint", "ck"], env=env,
+                           capture_output=True, timeout=600)
+            p = subprocess.run([mpiexec, "-n", "2", PADAPT, "adapt", "-restart", "ck",
+                                "-hsiz", "0.1", "-out", "ck3.mesh", "-v", "-1"],
+                               capture_output=True, text=True, timeout=600)
+            same = p.returncode == 0 and all(
+                open(a, "rb").read() == open(b, "rb").read()
+                for a, b in (("par3.mesh", "ck3.mesh"),
+                             ("par3.fields.sol", "ck3.fields.sol")))
+            if not same:
+                fail("np=2: the restarted run differs from the uninterrupted one (%s)"
+                     % p.stderr.strip())
 
     # bad input: the message names the place; nothing written
     text = open("u2.sol").read()

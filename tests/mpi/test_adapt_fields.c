@@ -134,6 +134,7 @@ static void test_adapt(void) {
     o.remesh.hsiz = dim == 2 ? 0.06 : 0.2;
     CHECK_OK(pa_dmesh_adapt(dm, &o, &rep));
     CHECK(rep.nelem_final > rep.nelem_initial);
+    CHECK(rep.nfailed == 0);
     CHECK(rep.transfer.nfield == 5 && rep.transfer.nfast + rep.transfer.nclip > 0);
     CHECK(rep.transfer.defect < 1e-13);
     CHECK_OK(pa_dmesh_check(dm));
