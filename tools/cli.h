@@ -226,6 +226,13 @@ typedef struct pa_cli_sbuf {
 void pa_cli_sb_printf(pa_cli_sbuf *b, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
 
+/* The JSON member "transfer" (what carrying the element and boundary
+ * fields did, pa_transfer_report) followed by ", "; malloc'ed, NULL when
+ * out of memory. */
+char *pa_cli_transfer_json(const pa_transfer_report *t);
+/* Its line of the report on stdout, when fields were carried. */
+void pa_cli_print_transfer(const pa_transfer_report *t);
+
 /* How the result meets the given metric (pa_fidelity): the figures in the
  * metric used, when it differs, and the outcome line, on out. */
 void pa_cli_print_fidelity(const pa_fidelity *f, FILE *out);

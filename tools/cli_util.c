@@ -186,6 +186,28 @@ char *pa_cli_fidelity_json(const pa_fidelity *f) {
   return b.p;
 }
 
+char *pa_cli_transfer_json(const pa_transfer_report *t) {
+  pa_cli_sbuf b = {NULL, 0, 0, 0};
+  pa_cli_sb_printf(&b,
+                   "\"transfer\": {\"nfield\": %d, \"nfast\": %ld, \"nclip\": %ld, "
+                   "\"nout\": %ld, \"defect\": %.6g, \"uncovered\": %.6g, "
+                   "\"lost\": %.6g, \"time_s\": %.6f}, ",
+                   t->nfield, t->nfast, t->nclip, t->nout, t->defect,
+                   t->uncovered, t->lost, t->time_s);
+  if (b.fail) {
+    free(b.p);
+    return NULL;
+  }
+  return b.p;
+}
+
+void pa_cli_print_transfer(const pa_transfer_report *t) {
+  if (!t->nfield) return;
+  printf("    fields carried %d: %ld elements inside an old one, %ld "
+         "intersected, conservation defect %.2e, %.3f s\n",
+         t->nfield, t->nfast, t->nclip, t->defect, t->time_s);
+}
+
 int pa_cli_has_fields(const pa_mesh *mesh) {
   return pa_mesh_nfield_at(mesh, PA_VERTEX) + pa_mesh_nfield_at(mesh, PA_ELEMENT) +
              pa_mesh_nfield_at(mesh, PA_BOUNDARY) > 0;

@@ -437,6 +437,7 @@ static void report_after(const pa_cli_adapt_args *a, const pa_mesh *mesh,
          rep->nsplit, rep->ncollapse, rep->nswap, rep->nmove, rep->npass,
          rep->time_s, rep->time_s > 0 ? pa_mesh_nelem(mesh) / rep->time_s : 0.0,
          pa_memory_peak() / 1e6, outcome_name(rep->outcome));
+  pa_cli_print_transfer(&rep->transfer);
   fflush(stdout);
   if (!rep->fidelity.target_met)
     fprintf(stderr, "padapt: warning: adapt: target missed (valid mesh, but "
@@ -448,6 +449,7 @@ static void report_after(const pa_cli_adapt_args *a, const pa_mesh *mesh,
 static pa_status write_json(const pa_cli_adapt_args *a, const pa_stats *before,
                             const pa_remesh_report *rep) {
   char *fid = pa_cli_fidelity_json(&rep->fidelity);
+  char *tr = pa_cli_transfer_json(&rep->transfer);
   pa_cli_sbuf b = {NULL, 0, 0, 0};
   pa_cli_sb_printf(&b,
                    "\"time_s\": %.6f, \"peak_rss_bytes\": %zu, "
@@ -455,15 +457,16 @@ static pa_status write_json(const pa_cli_adapt_args *a, const pa_stats *before,
                    "\"%s\", \"nsplit\": %ld, \"ncollapse\": %ld, "
                    "\"nswap\": %ld, \"nmove\": %ld, \"npass\": %d, "
                    "\"elements_before\": %lld, \"vertices_before\": %lld, "
-                   "%s",
+                   "%s%s",
                    rep->time_s, pa_peak_rss(), pa_memory_peak(),
                    outcome_name(rep->outcome), rep->nsplit, rep->ncollapse,
                    rep->nswap, rep->nmove, rep->npass, (long long)before->nelem,
-                   (long long)before->nvert, fid ? fid : "");
-  pa_status st = b.fail || !fid
+                   (long long)before->nvert, tr ? tr : "", fid ? fid : "");
+  pa_status st = b.fail || !fid || !tr
                      ? pa_set_error(PA_ERR_MEMORY, "out of memory")
                      : pa_stats_write_json(&rep->fidelity.user, b.p, a->json);
   free(fid);
+  free(tr);
   free(b.p);
   return st;
 }

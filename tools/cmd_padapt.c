@@ -153,6 +153,7 @@ static void print_table(const pa_cli *cli, const pa_adapt_report *r,
   printf("    remeshing busy time (all ranks) %.3f s, bytes moved %.3g, "
          "peak memory per rank %.1f MB\n",
          r->remesh_busy, r->bytes_moved, r->peak_memory / 1e6);
+  pa_cli_print_transfer(&r->transfer);
   fflush(stdout);
 }
 
@@ -205,9 +206,11 @@ static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
               it->mem_after);
   }
   char *fid = pa_cli_fidelity_json(&r->fidelity);
-  pa_cli_sb_printf(&b, "], %s", fid ? fid : "");
-  if (!fid) b.fail = 1;
+  char *tr = pa_cli_transfer_json(&r->transfer);
+  pa_cli_sb_printf(&b, "], %s%s", tr ? tr : "", fid ? fid : "");
+  if (!fid || !tr) b.fail = 1;
   free(fid);
+  free(tr);
   if (b.fail) {
     free(b.p);
     return NULL;
