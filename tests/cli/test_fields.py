@@ -15,7 +15,7 @@ In a scratch directory (CTest's), with PADAPT = the CLI:
     at every vertex (1e-12);
   - the same fields come out of -out X.msh ($ElementData) and X.vtu (cell
     data) as meshio reads them, with the same integrals; a .solb input gives
-    the .sol input's output;
+    the .sol input's output; `padapt plot -color cell1` draws the field;
   - a .msh written by meshio with cell data goes through padapt adapt and
     meshio finds the density's integral kept in padapt's .msh;
   - bad input: a count that does not match names the file and line, a NaN
@@ -257,6 +257,16 @@ def main():
             if not same:
                 fail("np=2: the restarted run differs from the uninterrupted one (%s)"
                      % p.stderr.strip())
+
+    # padapt plot -color FIELD draws an element field, its range in the legend
+    run("plot", "o2r.mesh", "o2r.svg", "-field", "o2r.fields.sol", "-color", "cell1")
+    svg = open("o2r.svg").read() if os.path.exists("o2r.svg") else ""
+    rho = read_sol("o2r.fields.sol")["SolAtTriangles"][0][:, 0]
+    if "coloured by cell1" not in svg or ">%.4g<" % rho.max() not in svg:
+        fail("plot -color cell1: no title or legend of the field")
+    p = run("plot", "o2r.mesh", "o2x.svg", "-color", "rho", expect=1)
+    if "element fields: none" not in p.stderr or os.path.exists("o2x.svg"):
+        fail("plot -color of no field: %r" % p.stderr)
 
     # bad input: the message names the place; nothing written
     text = open("u2.sol").read()
