@@ -106,8 +106,8 @@ class RemeshReport(ctypes.Structure):
     _fields_ = [("outcome", ctypes.c_int), ("nsplit", ctypes.c_long),
                 ("ncollapse", ctypes.c_long), ("nswap", ctypes.c_long),
                 ("nmove", ctypes.c_long), ("npass", ctypes.c_int),
-                ("time_s", ctypes.c_double), ("fidelity", Fidelity),
-                ("transfer", TransferReport)]
+                ("time_s", ctypes.c_double), ("cpu_s", ctypes.c_double),
+                ("fidelity", Fidelity), ("transfer", TransferReport)]
 
 
 class HessianOpts(ctypes.Structure):
@@ -125,7 +125,7 @@ class AdaptIter(ctypes.Structure):
                 ("npieces", ctypes.c_int), ("nfailed", ctypes.c_int)] + \
                [(n, ctypes.c_double) for n in
                 ("imbalance", "t_tag", "t_pieces", "t_gather", "t_remesh",
-                 "t_reintegrate", "remesh_busy", "bytes_moved",
+                 "t_reintegrate", "remesh_busy", "remesh_cpu", "bytes_moved",
                  "mem_tag", "mem_pieces", "mem_gather", "mem_remesh",
                  "mem_reintegrate", "mem_after")]
 
@@ -153,7 +153,8 @@ class AdaptReport(ctypes.Structure):
                 ("nfailed", ctypes.c_long)] + \
                [(n, ctypes.c_double) for n in
                 ("time_total", "t_tag", "t_pieces", "t_gather", "t_remesh",
-                 "t_reintegrate", "t_rebalance", "remesh_busy", "bytes_moved")] + \
+                 "t_reintegrate", "t_rebalance", "remesh_busy", "remesh_cpu",
+                 "bytes_moved")] + \
                [("peak_memory", ctypes.c_size_t), ("peak_rss", ctypes.c_size_t),
                 ("niter_recorded", ctypes.c_int),
                 ("iters", AdaptIter * ADAPT_MAX_ITERS), ("fidelity", Fidelity),
@@ -246,6 +247,21 @@ for _k in range(1, 11):
     STATUS[_k] = lib.pa_status_string(_k).decode()
 
 REMESH_OUTCOMES = {0: "success", 1: "target missed", 2: "failed"}
+
+
+def _defaults(cls, fill):
+    """The library's defaults of an options struct (fill: its *_opts_default):
+    the Python keyword arguments take them from here, so each default is
+    spelled once, in padapt.h."""
+    o = cls()
+    fill(ctypes.byref(o))
+    return o
+
+
+REMESH_DEFAULTS = _defaults(RemeshOpts, lib.pa_remesh_opts_default)
+HESSIAN_DEFAULTS = _defaults(HessianOpts, lib.pa_metric_hessian_opts_default)
+LEVELSET_DEFAULTS = _defaults(LevelsetOpts, lib.pa_metric_levelset_opts_default)
+ADAPT_DEFAULTS = _defaults(AdaptOpts, lib.pa_adapt_opts_default)
 
 
 class Error(RuntimeError):

@@ -39,14 +39,14 @@ void pa_adapt_opts_default(pa_adapt_opts *o) {
   if (!o) return;
   memset(o, 0, sizeof *o);
   pa_remesh_opts_default(&o->remesh);
-  o->qual_threshold = 0.3;
-  o->max_iter = 30;
-  o->pieces_per_rank = 1;
-  o->skin_layers = 2;
-  o->skin_layers_later = 1;
-  o->min_piece_work = 2000;
-  o->min_piece_ratio = 0.25;
-  o->rebalance_tol = 1.05;
+  o->qual_threshold = PA_DEFAULT_QUAL_THRESHOLD;
+  o->max_iter = PA_DEFAULT_MAX_ITER;
+  o->pieces_per_rank = PA_DEFAULT_PIECES_PER_RANK;
+  o->skin_layers = PA_DEFAULT_SKIN_LAYERS;
+  o->skin_layers_later = PA_DEFAULT_SKIN_LAYERS_LATER;
+  o->min_piece_work = PA_DEFAULT_MIN_PIECE_WORK;
+  o->min_piece_ratio = PA_DEFAULT_MIN_PIECE_RATIO;
+  o->rebalance_tol = PA_DEFAULT_REBALANCE_TOL;
   o->rebalance = 1;
   o->check_pieces = -1;
 }
@@ -233,11 +233,11 @@ static void report_progress(const pa_dmesh *dm, const pa_adapt_opts *o,
   o->remesh.progress(&p, o->remesh.progress_ctx);
 }
 
-/* Max over the ranks of n doubles and the sum of one more. */
+/* Max over the ranks of n doubles and the sums of two more (busy[0..2)). */
 static pa_status max_times(MPI_Comm comm, double *t, int n, double *busy) {
   pa_status st = PA_SUCCESS;
   PA_CALL(pa__allreduce(comm, t, n, MPI_DOUBLE, MPI_MAX));
-  PA_CALL(pa__allreduce(comm, busy, 1, MPI_DOUBLE, MPI_SUM));
+  PA_CALL(pa__allreduce(comm, busy, 2, MPI_DOUBLE, MPI_SUM));
 cleanup:
   return st;
 }
@@ -325,14 +325,15 @@ static void step_done(double *t, int k, double *t0) {
   pa__memory_window_begin();
 }
 
-/* The figures of the iteration into *ir and L->rep: times and memory (t,
- * busy, nfail) over the ranks, the rollbacks and bytes moved summed. */
+/* The figures of the iteration into *ir and L->rep: times and memory (t)
+ * over the ranks; the remesher's wall-clock and CPU seconds (busy[0],
+ * busy[1]), the rollbacks and bytes moved summed. */
 static pa_status record_iteration(const pa__iter *it, pa__loop *L, double *t,
-                                  double busy, int nfail, pa_adapt_iter *ir) {
+                                  double *busy, int nfail, pa_adapt_iter *ir) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
   pa_adapt_report *rep = &L->rep;
-  PA_CALL(max_times(dm->comm, t, 11, &busy));
+  PA_CALL(max_times(dm->comm, t, 11, busy));
   {
     double x[2] = {(double)nfail, it->bytes_moved};
     PA_CALL(pa__allreduce(dm->comm, x, 2, MPI_DOUBLE, MPI_SUM));
@@ -356,7 +357,8 @@ static pa_status record_iteration(const pa__iter *it, pa__loop *L, double *t,
   ir->mem_remesh = t[8];
   ir->mem_reintegrate = t[9];
   ir->mem_after = t[10];
-  ir->remesh_busy = busy;
+  ir->remesh_busy = busy[0];
+  ir->remesh_cpu = busy[1];
   L->iter = it->iter;
   rep->niter = it->iter;
   rep->npieces += ir->npieces;
@@ -366,7 +368,8 @@ static pa_status record_iteration(const pa__iter *it, pa__loop *L, double *t,
   rep->t_gather += t[2];
   rep->t_remesh += t[3];
   rep->t_reintegrate += t[4];
-  rep->remesh_busy += busy;
+  rep->remesh_busy += busy[0];
+  rep->remesh_cpu += busy[1];
   rep->bytes_moved += ir->bytes_moved;
   { /* the pieces' field transfers: sums, then the largest figures */
     pa_transfer_report *tr = &rep->transfer;
@@ -423,7 +426,7 @@ static pa_status iterate(pa_dmesh *dm, const pa_adapt_opts *opts,
   pa_adapt_iter ir;
   /* per step: t[0..4] seconds, t[5..9] peak bytes, t[10] bytes held at
    * the end (the maximum over the ranks of each) */
-  double t[11], busy, ta = pa_wtime();
+  double t[11], busy[2], ta = pa_wtime();
   int nfail = 0, same = 0;
   pa__memory_window_begin();
   iter_init(&it, dm, opts, L->iter + 1);
@@ -438,8 +441,8 @@ static pa_status iterate(pa_dmesh *dm, const pa_adapt_opts *opts,
   step_done(t, 1, &ta);
   PA_CALL(pa__adapt_extract(&it));
   step_done(t, 2, &ta);
-  st = pa__adapt_remesh(&it, &nfail);
-  busy = pa_wtime() - ta;
+  st = pa__adapt_remesh(&it, &nfail, &busy[1]);
+  busy[0] = pa_wtime() - ta;
   PA_CALL(pa__agree(dm->comm, st)); /* the ranks wait for the slowest */
   step_done(t, 3, &ta);
   PA_CALL(pieces_unchanged(&it, &same));

@@ -58,7 +58,7 @@
  * metric). 1.5, not sqrt 2: bisecting a skin face's edge of 1.47 cuts the
  * obtuse faces of a bisected Kuhn cube with a median half the shortest edge
  * (0.52), frozen until another iteration tags its elements again
- * (docs/design/ADAPT.md has the measurement). */
+ * (docs/BENCHMARKS.md, "The parallel loop", has the measurement). */
 #define PA_ADAPT_LEB_SKIN 1.5
 #define PA_ADAPT_LEB_INNER 2.0
 /* No label (pieces.c, extract.c). */
@@ -258,8 +258,8 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
 
 /* Step 4. Local: remesh the local pieces; failures are recorded, not
  * returned (only hard internal errors are). *nfail receives the number of
- * local pieces rolled back. */
-pa_status pa__adapt_remesh(pa__iter *it, int *nfail);
+ * local pieces rolled back, *cpu the CPU seconds spent in the remesher. */
+pa_status pa__adapt_remesh(pa__iter *it, int *nfail, double *cpu);
 
 /* Step 5. Collective: rebuild dm from the staying entities and the outputs
  * (or, when little changes, splice in a part rebuilt from the outputs and

@@ -88,6 +88,7 @@ static const field loop_fields[] = {LOOP('i', iter),
                                     LOOP('d', rep.t_remesh),
                                     LOOP('d', rep.t_reintegrate),
                                     LOOP('d', rep.remesh_busy),
+                                    LOOP('d', rep.remesh_cpu),
                                     LOOP('d', rep.bytes_moved),
                                     LOOP('i', rep.transfer.nfield),
                                     LOOP('l', rep.transfer.nfast),
@@ -107,7 +108,7 @@ static const field iter_fields[] = {
     ITER('i', npieces),    ITER('i', nfailed),       ITER('d', imbalance),
     ITER('d', t_tag),      ITER('d', t_pieces),      ITER('d', t_gather),
     ITER('d', t_remesh),   ITER('d', t_reintegrate), ITER('d', remesh_busy),
-    ITER('d', bytes_moved),    ITER('d', mem_tag),     ITER('d', mem_pieces),
+    ITER('d', remesh_cpu), ITER('d', bytes_moved),    ITER('d', mem_tag),     ITER('d', mem_pieces),
     ITER('d', mem_gather),     ITER('d', mem_remesh),  ITER('d', mem_reintegrate),
     ITER('d', mem_after)};
 #define NITER (int)(sizeof iter_fields / sizeof *iter_fields)

@@ -236,7 +236,7 @@ cleanup:
   return ok;
 }
 
-pa_status pa__adapt_remesh(pa__iter *it, int *nfail) {
+pa_status pa__adapt_remesh(pa__iter *it, int *nfail, double *cpu) {
   pa_status st = PA_SUCCESS;
   pa_remesh_opts ro = it->opts->remesh;
   const pa_remesher *r =
@@ -254,6 +254,7 @@ pa_status pa__adapt_remesh(pa__iter *it, int *nfail) {
   ro.no_stats = 1; /* pa_dmesh_adapt measures the whole result */
   ro.progress = NULL; /* pa_dmesh_adapt reports per iteration */
   *nfail = 0;
+  *cpu = 0;
   for (int q = 0; q < it->npiece_local; q++) {
     pa__piece *pc = &it->pieces[q];
     pc->unchanged = 0;
@@ -262,6 +263,7 @@ pa_status pa__adapt_remesh(pa__iter *it, int *nfail) {
     PA_CALL(pa_mesh_copy(pc->in, &out));
     pa_status s = pa_remesh(r, out, &ro, &pc->rep);
     t1 = pa_wtime();
+    *cpu += pc->rep.cpu_s;
     int ok = s == PA_SUCCESS && pc->rep.outcome != PA_REMESH_FAILED;
     if (!ok)
       pa__info(1, "padapt: piece %d (%d elements): the remesher failed: %s\n",

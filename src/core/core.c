@@ -224,6 +224,12 @@ double pa_wtime(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+double pa__thread_cputime(void) {
+  struct timespec ts;
+  if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts) != 0) return 0;
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
 int pa__key64_cmp(const void *a, const void *b) {
   const pa__key64 *p = a, *q = b;
   if (p->key != q->key) return p->key < q->key ? -1 : 1;

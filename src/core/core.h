@@ -187,6 +187,11 @@ static inline void pa__ksum_add(pa__ksum *k, double x) {
   k->s = t;
 }
 
+/* CPU seconds the calling thread has used (CLOCK_THREAD_CPUTIME_ID; 0 if
+ * the clock is unavailable): the work of a step, which unlike wall-clock
+ * time does not grow when more ranks than cores share the machine. */
+double pa__thread_cputime(void);
+
 /* Bytes of memory this process may still use: MemAvailable of
  * /proc/meminfo, lowered to a cgroup v2 limit; 0 if unknown. */
 size_t pa__mem_available(void);

@@ -27,7 +27,8 @@
  * Writing: one keyword per place holding every field given there, binary
  * version 2 (3 beyond 2 GiB), through a temporary file (output.c).
  */
-#include "io/io.h"
+#include "io/medit.h"
+#include "io/output.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -32,10 +32,10 @@
 
 void pa_remesh_opts_default(pa_remesh_opts *o) {
   memset(o, 0, sizeof *o);
-  o->hgrad = 1.3;
-  o->hgradreq = 2.3;
-  o->hausd = 0.01;
-  o->angle = 45;
+  o->hgrad = PA_DEFAULT_HGRAD;
+  o->hgradreq = PA_DEFAULT_HGRADREQ;
+  o->hausd = PA_DEFAULT_HAUSD;
+  o->angle = PA_DEFAULT_ANGLE;
 }
 
 /* 3D: longest-edge bisection to length LEB_PRE first (leb.c: cheaper
@@ -184,7 +184,7 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   pa__name *names = NULL; /* the caller's physical names, held aside */
   int nname = 0;
   pa_mesh *orig = NULL; /* the input, when it has element or boundary fields */
-  double t0 = pa_wtime();
+  double t0 = pa_wtime(), cpu0;
   wrap.t0 = t0;
   PA_CHECK(r && r->remesh && mesh, PA_ERR_ARG, "pa_remesh: NULL argument");
   if (!opts) {
@@ -236,7 +236,10 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   nname = mesh->nname;
   mesh->names = NULL;
   mesh->nname = 0;
-  PA_CALL(r->remesh(r->ctx, mesh, opts, report));
+  cpu0 = pa__thread_cputime();
+  st = r->remesh(r->ctx, mesh, opts, report);
+  report->cpu_s = pa__thread_cputime() - cpu0;
+  if (st != PA_SUCCESS) goto cleanup;
   if (report->outcome == PA_REMESH_FAILED) goto cleanup;
   if (orig) PA_CALL(pa__transfer_fields(orig, mesh, &report->transfer));
   pa__free(oldmet);

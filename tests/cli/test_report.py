@@ -13,7 +13,11 @@ In a scratch directory (CTest's), with PADAPT = the CLI:
   - -hmin above the smallest size: "limited_by" names hmin;
   - -hgradreq is accepted, -hgrad needs a number;
   - the UGAWG polar-2 field on box2d 40, whose sizes grow slowly enough
-    though its frame turns, is left unchanged by the gradation.
+    though its frame turns, is left unchanged by the gradation;
+  - the remeshing work: "remesh_cpu_s" (the remesher's thread CPU time) is
+    positive and no more than the remesher's wall-clock time, sequential
+    ("time_s") and at 2 processes ("remesh_busy_s", summed over the ranks,
+    also per iteration), and the text reports print it.
 Exits 0 when every check passes, 1 naming each failure.
 """
 import json
@@ -49,6 +53,22 @@ def adapt(tag, extra, np=1, field="shell:0.1", dim=2, n=20):
     return r, rep
 
 
+def check_work(tag, np, r, rep):
+    """The remeshing work figures of a report: CPU seconds within wall."""
+    cpu = rep.get("remesh_cpu_s", -1)
+    wall = rep["time_s"] if np == 1 else rep.get("remesh_busy_s", -1)
+    check(0 < cpu <= wall * 1.02 + 0.005,
+          "%s: remesher CPU %.4f s in (0, wall %.4f s]" % (tag, cpu, wall))
+    if np > 1:
+        iters = rep.get("iteration_detail", [])
+        total = sum(it.get("remesh_cpu_s", -1) for it in iters)
+        check(iters and abs(total - cpu) <= 1e-6 * max(1, cpu),
+              "%s: the iterations' CPU sums to the total (%.6f, %.6f)"
+              % (tag, total, cpu))
+    check(("remesher CPU" if np == 1 else "CPU") in r.stdout,
+          "%s: the text report prints the CPU time" % tag)
+
+
 def main():
     if not PADAPT:
         print("test_report: PADAPT is not set", file=sys.stderr)
@@ -72,6 +92,7 @@ def main():
         check("IN THE METRIC USED" in r.stdout and "limited by" in r.stdout,
               "%s: the text report gives both and the cause" % tag)
         check("target missed" in r.stderr, "%s: warning on stderr" % tag)
+        check_work(tag, np, r, rep)
 
     r, rep = adapt("nograd", ["-hgrad", "-1"])
     check(r.returncode == 0 and rep.get("outcome") == "success",

@@ -1,5 +1,5 @@
 /*
- * cmd_padapt.c -- the parallel `padapt adapt`:
+ * cmd_adapt_parallel.c -- the parallel `padapt adapt`:
  *
  *   mpiexec -n P padapt adapt IN [-met SOL | -hsiz H] -out OUT
  *       [-distributed-output] [-field F.sol] [-mem MB] [-json REPORT.json]
@@ -48,13 +48,6 @@ static int prepare_root(const pa_cli *cli, const pa_cli_adapt_args *args,
   return 1;
 }
 
-/* The default of -serial-below: below these many elements (input and
- * expected output), two processes took longer than one on the development
- * VM (own time: box3d 10 -> 0.1, 12 k tets, 0.078 against 0.072 s; the
- * plate -> 0.003, 140 k triangles, 0.317-0.374 against 0.309-0.317 s). */
-#define SERIAL_BELOW_3D 30000
-#define SERIAL_BELOW_2D 150000
-
 /* 1 when the job on rank 0's mesh (its metric prepared) is too small to
  * share out (-serial-below): its input and the metric's estimate of its
  * output both have fewer elements than the bound. */
@@ -62,8 +55,8 @@ static int too_small(const pa_cli *cli, const pa_cli_adapt_args *args,
                      pa_mesh *mesh) {
   int d = pa_mesh_dim(mesh), nc = pa_mesh_metric_ncomp(mesh);
   double bound = args->serial_below >= 0 ? args->serial_below
-                 : d == 2               ? SERIAL_BELOW_2D
-                                        : SERIAL_BELOW_3D;
+                 : d == 2               ? PA_CLI_SERIAL_BELOW_2D
+                                        : PA_CLI_SERIAL_BELOW_3D;
   double c = 0;
   if (!(pa_mesh_nelem(mesh) < bound) || nc == 0 ||
       pa_metric_complexity(mesh, nc, pa_mesh_metric(mesh), &c) != PA_SUCCESS)
@@ -150,9 +143,9 @@ static void print_table(const pa_cli *cli, const pa_adapt_report *r,
          "reintegrate %.3f rebalance %.3f s\n",
          r->t_tag, r->t_pieces, r->t_gather, r->t_remesh, r->t_reintegrate,
          r->t_rebalance);
-  printf("    remeshing busy time (all ranks) %.3f s, bytes moved %.3g, "
-         "peak memory per rank %.1f MB\n",
-         r->remesh_busy, r->bytes_moved, r->peak_memory / 1e6);
+  printf("    remeshing busy time (all ranks) %.3f s, CPU %.3f s, bytes "
+         "moved %.3g, peak memory per rank %.1f MB\n",
+         r->remesh_busy, r->remesh_cpu, r->bytes_moved, r->peak_memory / 1e6);
   pa_cli_print_transfer(&r->transfer);
   fflush(stdout);
 }
@@ -167,7 +160,8 @@ static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
                 "\"converged\": %s, \"stalled\": %s, \"pieces\": %ld, "
                 "\"pieces_rolled_back\": %ld, \"elements_before\": %lld, "
                 "\"vertices_before\": %lld, \"edge_in_range_before\": %.6f, "
-                "\"bytes_moved\": %.0f, \"remesh_busy_s\": %.6f, ",
+                "\"bytes_moved\": %.0f, \"remesh_busy_s\": %.6f, "
+                "\"remesh_cpu_s\": %.6f, ",
             cli->size, remesher, r->time_total, r->time_total * cli->size,
             r->niter, r->converged ? "true" : "false",
             r->stalled ? "true" : "false", r->npieces, r->nfailed,
@@ -175,7 +169,7 @@ static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
             before->nedge ? (double)before->edge_hist[PA_STATS_EDGE_NBIN - 1] /
                                 (double)before->nedge
                           : 0.0,
-            r->bytes_moved, r->remesh_busy);
+            r->bytes_moved, r->remesh_busy, r->remesh_cpu);
   pa_cli_sb_printf(&b, "\"steps_s\": {\"tag\": %.6f, \"pieces\": %.6f, \"gather\": "
                 "%.6f, \"remesh\": %.6f, \"reintegrate\": %.6f, \"rebalance\": "
                 "%.6f}, ",
@@ -194,14 +188,15 @@ static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
                   "\"rolled_back\": %d, \"imbalance\": %.4f, \"elements\": %lld, "
                   "\"tag_s\": %.6f, \"pieces_s\": %.6f, \"gather_s\": %.6f, "
                   "\"remesh_s\": %.6f, \"reintegrate_s\": %.6f, "
-                  "\"remesh_busy_s\": %.6f, \"bytes_moved\": %.0f, "
+                  "\"remesh_busy_s\": %.6f, \"remesh_cpu_s\": %.6f, "
+                  "\"bytes_moved\": %.0f, "
                   "\"peak_bytes\": {\"tag\": %.0f, \"pieces\": %.0f, "
                   "\"gather\": %.0f, \"remesh\": %.0f, \"reintegrate\": %.0f}, "
                   "\"bytes_after\": %.0f}",
               k ? ", " : "", it->iter, (long long)it->ntagged, it->npieces,
               it->nfailed, it->imbalance, (long long)it->nelem, it->t_tag,
               it->t_pieces, it->t_gather, it->t_remesh, it->t_reintegrate,
-              it->remesh_busy, it->bytes_moved, it->mem_tag, it->mem_pieces,
+              it->remesh_busy, it->remesh_cpu, it->bytes_moved, it->mem_tag, it->mem_pieces,
               it->mem_gather, it->mem_remesh, it->mem_reintegrate,
               it->mem_after);
   }
