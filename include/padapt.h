@@ -1132,6 +1132,8 @@ typedef struct pa_transfer_report {
    *  domain's measure: 0 but for round-off unless the boundary moved. */
   double uncovered, lost;
   double time_s;     /**< seconds spent */
+  double cpu_s;      /**< CPU seconds the calling thread spent (which the
+                          load of the machine does not inflate) */
 } pa_transfer_report;
 
 /** What a remesh did. */

@@ -193,9 +193,9 @@ char *pa_cli_transfer_json(const pa_transfer_report *t) {
   pa_cli_sb_printf(&b,
                    "\"transfer\": {\"nfield\": %d, \"nfast\": %ld, \"nclip\": %ld, "
                    "\"nout\": %ld, \"defect\": %.6g, \"uncovered\": %.6g, "
-                   "\"lost\": %.6g, \"time_s\": %.6f}, ",
+                   "\"lost\": %.6g, \"time_s\": %.6f, \"cpu_s\": %.6f}, ",
                    t->nfield, t->nfast, t->nclip, t->nout, t->defect,
-                   t->uncovered, t->lost, t->time_s);
+                   t->uncovered, t->lost, t->time_s, t->cpu_s);
   if (b.fail) {
     free(b.p);
     return NULL;

@@ -99,7 +99,8 @@ class TransferReport(ctypes.Structure):
     _fields_ = [("nfield", ctypes.c_int), ("nfast", ctypes.c_long),
                 ("nclip", ctypes.c_long), ("nout", ctypes.c_long),
                 ("defect", ctypes.c_double), ("uncovered", ctypes.c_double),
-                ("lost", ctypes.c_double), ("time_s", ctypes.c_double)]
+                ("lost", ctypes.c_double), ("time_s", ctypes.c_double),
+                ("cpu_s", ctypes.c_double)]
 
 
 class RemeshReport(ctypes.Structure):

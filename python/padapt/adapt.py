@@ -238,6 +238,6 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
     t = rep.transfer
     d["transfer"] = {"nfield": t.nfield, "nfast": t.nfast, "nclip": t.nclip, "nout": t.nout,
                      "defect": t.defect, "uncovered": t.uncovered, "lost": t.lost,
-                     "time_s": t.time_s}
+                     "time_s": t.time_s, "cpu_s": t.cpu_s}
     report = Report(d, describe(rep.fidelity))
     return AdaptResult(out, out.fields, report)

@@ -98,6 +98,7 @@ static const field loop_fields[] = {LOOP('i', iter),
                                     LOOP('d', rep.transfer.uncovered),
                                     LOOP('d', rep.transfer.lost),
                                     LOOP('d', rep.transfer.time_s),
+                                    LOOP('d', rep.transfer.cpu_s),
                                     LOOP('i', rep.niter_recorded)};
 #define NLOOP (int)(sizeof loop_fields / sizeof *loop_fields)
 

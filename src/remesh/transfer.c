@@ -895,7 +895,7 @@ pa_status pa__transfer_fields(pa_mesh *o, pa_mesh *m, pa_transfer_report *rep) {
   tctx t;
   double *val = NULL;
   pa_idx *bsrc = NULL;
-  double t0 = pa_wtime();
+  double t0 = pa_wtime(), c0 = pa__thread_cputime();
   memset(&t, 0, sizeof t);
   memset(rep, 0, sizeof *rep);
   rep->nfield = o->nefield + o->nbfield;
@@ -976,5 +976,6 @@ cleanup:
   pa__free(val);
   pa__free(bsrc);
   rep->time_s = pa_wtime() - t0;
+  rep->cpu_s = pa__thread_cputime() - c0;
   return st;
 }
