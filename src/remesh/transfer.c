@@ -67,7 +67,9 @@
 /* Steps of a walk before the bucket grid takes over (a walk between
  * neighbours of consecutive new elements takes a few). */
 #define WALK_MAX_STEPS 4096
-/* Buckets of a grid per item (elements or boundary entities). */
+/* Buckets of a grid per item (elements or boundary entities): about one
+ * item per bucket where the mesh is even (each box meets a few buckets),
+ * so a lookup tests a handful of items for a grid of the mesh's size. */
 #define GRID_PER_ITEM 1.0
 
 /* ---- bucket grid of boxes ---------------------------------------------- */
