@@ -14,6 +14,13 @@ from .mesh import Mesh, as_metric, as_field, stats_dict, _num, _ratio, transfer_
 __all__ = ["adapt", "AdaptResult", "Report", "remesh_options"]
 
 
+def transfer_dict(t):
+    """A pa_transfer_report as the "transfer" member of the -json report."""
+    return {"nfield": t.nfield, "nfast": t.nfast, "nclip": t.nclip, "nout": t.nout,
+            "defect": t.defect, "uncovered": t.uncovered, "lost": t.lost,
+            "time_s": t.time_s, "cpu_s": t.cpu_s}
+
+
 def fidelity_dict(f):
     """The fidelity members of the CLI's -json report, from a pa_fidelity."""
     if not f.measured:
@@ -235,9 +242,6 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
               "nmove": rep.nmove, "npass": rep.npass,
               "elements_before": nelem0, "vertices_before": nv})
     d.update(fidelity_dict(rep.fidelity))
-    t = rep.transfer
-    d["transfer"] = {"nfield": t.nfield, "nfast": t.nfast, "nclip": t.nclip, "nout": t.nout,
-                     "defect": t.defect, "uncovered": t.uncovered, "lost": t.lost,
-                     "time_s": t.time_s, "cpu_s": t.cpu_s}
+    d["transfer"] = transfer_dict(rep.transfer)
     report = Report(d, describe(rep.fidelity))
     return AdaptResult(out, out.fields, report)
