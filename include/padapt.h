@@ -143,9 +143,19 @@ double pa_wtime(void);
  *  - in 3D only, feature edges (2 vertices): Medit "Edges" (ridges, required
  *    edges, interior curves). In 2D, Medit Edges are the boundary entities.
  * Every entity has an integer reference and a flag byte (PA_FLAG_*).
- * A mesh may carry a metric and user vertex fields.
+ * A mesh may carry a metric and user fields on its vertices, elements and
+ * boundary entities.
  */
 typedef struct pa_mesh pa_mesh;
+
+/** Entity kinds: of a mesh's fields (on vertices, elements or boundary
+ *  entities), of a distributed mesh's entities and values. */
+typedef enum pa_entity {
+  PA_VERTEX = 0,
+  PA_ELEMENT = 1,
+  PA_BOUNDARY = 2, /**< boundary entities: edges (2D), triangles (3D) */
+  PA_EDGE = 3      /**< feature edges (3D only) */
+} pa_entity;
 
 /** Entity flags (bit mask). */
 enum {
@@ -272,6 +282,92 @@ int pa_mesh_nfield(const pa_mesh *mesh);
  *  [0, pa_mesh_nfield). */
 pa_status pa_mesh_field(pa_mesh *mesh, int k, const char **name, int *ncomp,
                         double **values);
+
+/*
+ * Fields on elements and boundary entities. Besides its vertex fields a
+ * mesh carries up to 16 element fields (ncomp values per triangle or
+ * tetrahedron: a finite-volume unknown, a density, a material id) and up to
+ * 16 boundary fields (per boundary entity: boundary-condition values). A
+ * field's kind follows from ncomp as in Medit files: 1 a scalar, dim a
+ * vector, 3 (2D) or 6 (3D) a symmetric tensor m11 m12 m22 [m13 m23 m33];
+ * another count is ncomp scalars. The vertex functions above are the case
+ * at = PA_VERTEX of those below. pa_mesh_copy copies every field; entities
+ * added by pa_mesh_resize or pa_mesh_add_* get zeros; pa_remesh carries
+ * every field onto the new mesh by its transfer mode (user guide:
+ * docs/guide/fields.md).
+ */
+
+/** How pa_remesh carries a field onto the new entities. */
+typedef enum pa_transfer {
+  /** The default of the field's entities: LINEAR for vertex fields,
+   *  CONSERVATIVE for element fields, NEAREST for boundary fields. */
+  PA_TRANSFER_DEFAULT = 0,
+  /** Vertex fields (their only mode): linear interpolation at new
+   *  vertices; kept vertices keep their values. */
+  PA_TRANSFER_LINEAR = 1,
+  /** Element fields: each new element takes the mean of the old
+   *  piecewise-constant field over the part of it the old elements cover
+   *  (old and new elements intersected). The integral is kept to round-off
+   *  where the boundary does not move, a constant stays exactly constant,
+   *  and each value is a weighted mean of the old elements it overlaps. */
+  PA_TRANSFER_CONSERVATIVE = 2,
+  /** Element fields: CONSERVATIVE, then each value is held exactly within
+   *  the values of the old elements it overlaps, and the integral that
+   *  this and a moving boundary change is given back to the elements with
+   *  room left below (above) their bound. */
+  PA_TRANSFER_BOUNDED = 3,
+  /** Element fields: the value of the old element of largest overlap (a
+   *  field of integers keeps its set of values). Boundary fields (their
+   *  only mode): the value of the old boundary entity of the same
+   *  reference nearest to the new one's centre. */
+  PA_TRANSFER_NEAREST = 4
+} pa_transfer;
+
+/** Attach to mesh (in/out) a user field called name (its first 63 bytes)
+ *  on its entities at
+ *  (PA_VERTEX, PA_ELEMENT or PA_BOUNDARY), of ncomp > 0 components per
+ *  entity: values (nvert, nelem or nbdry times ncomp) are copied; its
+ *  transfer mode is the default one. It becomes field
+ *  pa_mesh_nfield_at - 1. Not collective. Returns PA_ERR_ARG for another
+ *  kind, ncomp <= 0, 16 fields on those entities already,
+ *  or a value that is not finite (naming the entity, 1-based),
+ *  PA_ERR_MEMORY. */
+pa_status pa_mesh_add_field_at(pa_mesh *mesh, pa_entity at, const char *name,
+                               int ncomp, const double *values);
+/** Remove field k on entities at of mesh (in/out; the later ones move down
+ *  by one). Not collective. Returns PA_ERR_ARG for another kind or k out of
+ *  range. */
+pa_status pa_mesh_remove_field_at(pa_mesh *mesh, pa_entity at, int k);
+/** Returns the number of user fields on entities at of mesh (0 for another
+ *  kind). Not collective. */
+int pa_mesh_nfield_at(const pa_mesh *mesh, pa_entity at);
+/** Field k on entities at of mesh: *name, *ncomp and *values (out, each may
+ *  be NULL; the values, one block of ncomp per entity, may be changed in
+ *  place), valid until the fields or the entities change. Not collective.
+ *  Returns PA_ERR_ARG for another kind or k out of range. */
+pa_status pa_mesh_field_at(pa_mesh *mesh, pa_entity at, int k,
+                           const char **name, int *ncomp, double **values);
+/** Returns the index of the first field called name on entities at of
+ *  mesh, -1 if there is none. Not collective. */
+int pa_mesh_field_index(const pa_mesh *mesh, pa_entity at, const char *name);
+/** Set the transfer mode of field k on entities at of mesh (in/out);
+ *  PA_TRANSFER_DEFAULT sets the default one. Not collective. Returns
+ *  PA_ERR_ARG for k out of range or a mode the field's entities do not
+ *  take (see pa_transfer), the message listing those they take. */
+pa_status pa_mesh_set_field_transfer(pa_mesh *mesh, pa_entity at, int k,
+                                     pa_transfer mode);
+/** Returns the transfer mode of field k on entities at of mesh (never
+ *  PA_TRANSFER_DEFAULT), PA_TRANSFER_DEFAULT for k out of range. Not
+ *  collective. */
+pa_transfer pa_mesh_field_transfer(const pa_mesh *mesh, pa_entity at, int k);
+/** Returns the name of a transfer mode ("linear", "conservative",
+ *  "bounded", "nearest", "default"), "?" for another value. Not
+ *  collective. */
+const char *pa_transfer_name(pa_transfer mode);
+/** The transfer mode called name (as pa_transfer_name gives it; "copy" is
+ *  "nearest") into *mode (out). Not collective. Returns PA_ERR_ARG for
+ *  another name, the message listing the valid ones. */
+pa_status pa_transfer_parse(const char *name, pa_transfer *mode);
 
 /*
  * Physical names: Gmsh's names of the entities of one dimension and one
@@ -808,14 +904,26 @@ void pa_fidelity_describe(const pa_fidelity *f, char *buf, size_t n);
 /* Solutions (.sol / .solb) and mesh files                                  */
 /* ------------------------------------------------------------------------ */
 
-/** Kinds of vertex fields in a solution file (Medit's codes). */
+/** Kinds of fields in a solution file (Medit's codes). */
 typedef enum pa_sol_kind {
   PA_SOL_SCALAR = 1,
   PA_SOL_VECTOR = 2,
   PA_SOL_TENSOR = 3 /**< symmetric: m11 m12 m22 [m13 m23 m33] */
 } pa_sol_kind;
 
-/** A set of fields at the vertices of a mesh (SolAtVertices). */
+/** Where the values of a solution's field are given: the Medit keyword
+ *  that holds them. A mesh of dimension 2 has its element fields at
+ *  triangles and its boundary fields at edges; of dimension 3, at
+ *  tetrahedra and at triangles. */
+typedef enum pa_sol_at {
+  PA_SOL_AT_VERTICES = 0,  /**< SolAtVertices */
+  PA_SOL_AT_EDGES = 1,     /**< SolAtEdges */
+  PA_SOL_AT_TRIANGLES = 2, /**< SolAtTriangles */
+  PA_SOL_AT_TETRAHEDRA = 3 /**< SolAtTetrahedra */
+} pa_sol_at;
+
+/** A set of fields at the vertices, edges, triangles or tetrahedra of a
+ *  mesh (SolAtVertices, SolAtEdges, SolAtTriangles, SolAtTetrahedra). */
 typedef struct pa_sol pa_sol;
 
 /** Create an empty solution of dimension dim (2 or 3) for nvert >= 0
@@ -824,8 +932,8 @@ typedef struct pa_sol pa_sol;
 pa_status pa_sol_create(int dim, pa_idx nvert, pa_sol **sol);
 /** Destroy sol (in/out; NULL allowed). Not collective. */
 void pa_sol_destroy(pa_sol *sol);
-/** Returns the dimension, the vertex count and the number of fields of
- *  sol. Not collective. */
+/** Returns the dimension, the vertex count (of its fields at vertices)
+ *  and the number of fields of sol. Not collective. */
 int pa_sol_dim(const pa_sol *sol);
 pa_idx pa_sol_nvert(const pa_sol *sol);
 int pa_sol_nfield(const pa_sol *sol);
@@ -838,33 +946,72 @@ const char *pa_sol_origin(const pa_sol *sol);
  *  from kind and dim) are copied. Not collective. Returns PA_ERR_ARG for
  *  an unknown kind, PA_ERR_MEMORY. */
 pa_status pa_sol_add_field(pa_sol *sol, pa_sol_kind kind, const double *values);
-/** Field k of sol: *kind, *ncomp (components per vertex) and *values (out,
- *  each may be NULL; nvert * ncomp values owned by sol). Not collective.
- *  Returns PA_ERR_ARG for k out of [0, pa_sol_nfield). */
+/** Field k of sol: *kind, *ncomp (components per entity) and *values (out,
+ *  each may be NULL; n * ncomp values owned by sol, n as
+ *  pa_sol_field_where gives it: nvert for a field at vertices). Not
+ *  collective. Returns PA_ERR_ARG for k out of [0, pa_sol_nfield). */
 pa_status pa_sol_field(pa_sol *sol, int k, pa_sol_kind *kind, int *ncomp,
                        double **values);
+/** Append to sol (in/out) a field of kind at n >= 0 entities of the kind
+ *  at: values (n * ncomp, ncomp from kind and dim) are copied. A field at
+ *  vertices needs n = pa_sol_nvert. Not collective. Returns PA_ERR_ARG
+ *  for an unknown kind or place, a wrong vertex count, PA_ERR_MEMORY. */
+pa_status pa_sol_add_field_at(pa_sol *sol, pa_sol_at at, pa_idx n,
+                              pa_sol_kind kind, const double *values);
+/** Where field k of sol is given: *at, *n (its entities) and *origin
+ *  (where it was read, for messages: "u.sol:12", the line of its keyword,
+ *  or "u.solb: byte 40"; NULL for a field built in memory), each may be
+ *  NULL. Not collective. Returns PA_ERR_ARG for k out of range. */
+pa_status pa_sol_field_where(const pa_sol *sol, int k, pa_sol_at *at,
+                             pa_idx *n, const char **origin);
 
 /** Read path, .sol (ASCII) or .solb (binary, versions 1-4) by extension,
- *  into *sol (out). Not collective. Returns PA_ERR_IO or PA_ERR_FORMAT
- *  naming the file and line (or byte), PA_ERR_UNSUPPORTED for another
- *  extension, PA_ERR_MEMORY. */
+ *  into *sol (out): the fields of every SolAtVertices, SolAtEdges,
+ *  SolAtTriangles and SolAtTetrahedra keyword, in file order (keywords of
+ *  one kind must agree on their count). Values are not checked (NaN
+ *  included): the mesh functions that take them do. Not collective.
+ *  Returns PA_ERR_IO or PA_ERR_FORMAT naming the file and line (or byte),
+ *  PA_ERR_UNSUPPORTED for another extension, PA_ERR_MEMORY. */
 pa_status pa_sol_read(const char *path, pa_sol **sol);
 /** Write sol to path, .sol or .solb by extension, through a temporary file
- *  (see pa_output_begin). Not collective. Returns PA_ERR_ARG for a
- *  solution without field, PA_ERR_UNSUPPORTED for another extension,
- *  PA_ERR_IO naming the path. */
+ *  (see pa_output_begin): the fields of each place under its keyword
+ *  (several types per keyword), vertices, edges, triangles, tetrahedra.
+ *  Not collective. Returns PA_ERR_ARG for a solution without field,
+ *  PA_ERR_UNSUPPORTED for another extension, PA_ERR_IO naming the path. */
 pa_status pa_sol_write(const pa_sol *sol, const char *path);
 
 /** Attach field k of sol as the metric of mesh (in/out; a scalar field:
  *  sizes, a tensor field: SPD tensors). Not collective. Returns PA_ERR_ARG
- *  for k out of range or a vector field, PA_ERR_FORMAT (naming the file)
- *  for a vertex count that is not the mesh's, PA_ERR_METRIC as
- *  pa_mesh_set_metric. */
+ *  for k out of range, a vector field or one not at vertices, PA_ERR_FORMAT
+ *  (naming the file) for a vertex count that is not the mesh's,
+ *  PA_ERR_METRIC as pa_mesh_set_metric. */
 pa_status pa_mesh_metric_from_sol(pa_mesh *mesh, const pa_sol *sol, int k);
 /** A new solution *sol (out) holding the metric of mesh and, if
- *  with_fields, its user fields. Not collective. Returns PA_ERR_ARG if
- *  there is nothing to hold, PA_ERR_MEMORY. */
+ *  with_fields, its user vertex fields. Not collective. Returns PA_ERR_ARG
+ *  if there is nothing to hold, PA_ERR_MEMORY. */
 pa_status pa_mesh_metric_to_sol(pa_mesh *mesh, int with_fields, pa_sol **sol);
+/**
+ * Attach every field of sol to mesh (in/out) as user fields: those at
+ * vertices on its vertices, at triangles (2D) or tetrahedra (3D) on its
+ * elements, at edges (2D) or triangles (3D) on its boundary entities, in
+ * the mesh's own numbering of those entities. A .sol names no field: they
+ * are called field1, field2, ... on the vertices, cell1, ... on the
+ * elements and face1, ... on the boundary entities, numbered after the
+ * fields the mesh has there. Not collective. Returns PA_ERR_FORMAT naming
+ * where a field was read (file and line) for a count that is not the
+ * mesh's or a place the mesh has no entities for (edges of a 3D mesh),
+ * PA_ERR_ARG naming the file and the entity (1-based) of a value that is
+ * not finite, or for too many fields; the mesh is then as it was.
+ * PA_ERR_MEMORY.
+ */
+pa_status pa_mesh_fields_from_sol(pa_mesh *mesh, const pa_sol *sol);
+/** A new solution *sol (out) holding the user fields of mesh, each at its
+ *  entities (vertex fields at vertices, element fields at triangles or
+ *  tetrahedra, boundary fields at edges or triangles; kind by number of
+ *  components: 1 scalar, dim vector, 3 or 6 symmetric tensor, another
+ *  count as that many scalars). Not collective. Returns PA_ERR_ARG if the
+ *  mesh has no field, PA_ERR_MEMORY. */
+pa_status pa_mesh_fields_to_sol(pa_mesh *mesh, pa_sol **sol);
 
 /** Options for writing mesh files. */
 typedef struct pa_write_opts {
@@ -1116,6 +1263,28 @@ typedef struct pa_remesh_opts {
  *  angle PA_DEFAULT_ANGLE, the rest 0. Not collective. */
 void pa_remesh_opts_default(pa_remesh_opts *opts);
 
+/** What carrying the element and boundary fields through a remesh did
+ *  (all zero when the mesh has none; docs/guide/fields.md). */
+typedef struct pa_transfer_report {
+  int nfield;        /**< element and boundary fields carried */
+  long nfast;        /**< new elements inside one old element (no clipping) */
+  long nclip;        /**< new elements intersected with the old ones */
+  long nout;         /**< element values outside the range of the old
+                          elements they overlap (round-off in mode
+                          CONSERVATIVE; 0 in mode BOUNDED) */
+  /** The largest change of the integral of an element field (any field,
+   *  any component) relative to the integral of its absolute value:
+   *  round-off where the boundary does not move. */
+  double defect;
+  /** Measure of the new elements not covered by the old ones, and of the
+   *  old elements not covered by the new ones, relative to the old
+   *  domain's measure: 0 but for round-off unless the boundary moved. */
+  double uncovered, lost;
+  double time_s;     /**< seconds spent */
+  double cpu_s;      /**< CPU seconds the calling thread spent (which the
+                          load of the machine does not inflate) */
+} pa_transfer_report;
+
 /** What a remesh did. */
 typedef struct pa_remesh_report {
   /** The remesher's verdict on the metric it worked with. */
@@ -1129,6 +1298,8 @@ typedef struct pa_remesh_report {
   double cpu_s;
   /** Filled by pa_remesh unless opts->no_stats (not by remesher callbacks). */
   pa_fidelity fidelity;
+  /** Filled by pa_remesh (not by remesher callbacks). */
+  pa_transfer_report transfer;
 } pa_remesh_report;
 
 /**
@@ -1200,19 +1371,13 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
  * [0, nowned), then the ghosts, [nowned, nlocal). Every entity has a 64-bit
  * global id, unique per kind and kept by redistribution and file round trips.
  * The local mesh (owned + ghost entities, same numbering) is a pa_mesh with
- * the metric and user vertex fields of the distributed mesh.
+ * the metric and user fields (on vertices, elements, boundary entities) of
+ * the distributed mesh; they follow the entities through every change
+ * (redistribution, reordering, files, gathering, adaptation).
  * All point-to-point traffic goes through one exchange layer (a star forest
  * per entity kind, roots = owned entities, leaves = ghost copies).
  */
 typedef struct pa_dmesh pa_dmesh;
-
-/** Entity kinds of a distributed mesh. */
-typedef enum pa_entity {
-  PA_VERTEX = 0,
-  PA_ELEMENT = 1,
-  PA_BOUNDARY = 2, /**< boundary entities: edges (2D), triangles (3D) */
-  PA_EDGE = 3      /**< feature edges (3D only) */
-} pa_entity;
 
 /**
  * Distribute a mesh held by rank root. Collective. The root sends contiguous
@@ -1688,6 +1853,12 @@ typedef struct pa_adapt_report {
   /** The result measured in the caller's metric and in the metric used
    *  (unless opts->remesh.no_stats). */
   pa_fidelity fidelity;
+  /** The element and boundary fields carried through the pieces' remeshes:
+   *  counts and times summed over the pieces and ranks; defect, uncovered
+   *  and lost the largest over the pieces, each relative to its piece (a
+   *  piece's frozen skin keeps its region: they are round-off unless it
+   *  touches a boundary that moves). */
+  pa_transfer_report transfer;
 } pa_adapt_report;
 
 /** Fill *opts (out) with the defaults: built-in remesher,
@@ -1704,7 +1875,10 @@ void pa_adapt_opts_default(pa_adapt_opts *opts);
  * entities and edges it gives back unchanged (same vertices and
  * reference); new entities get fresh global
  * ids (ids stay unique, not contiguous) and zero user values. Metric and user
- * vertex fields of the local mesh are interpolated by the remesher.
+ * vertex fields of the local mesh are interpolated by the remesher; its
+ * element and boundary fields are carried by pa_remesh on every piece, by
+ * their transfer modes (the integral of a conservative field is kept to
+ * round-off over the whole mesh where its boundary does not move).
  * Elements and boundary entities flagged PA_FLAG_REQUIRED are kept as they
  * are. A piece whose remesh fails is rolled back: its elements stay, still
  * tagged, and the mesh stays valid; if the tagged count stops decreasing the

@@ -56,9 +56,17 @@ int pa_cli_read_params(const pa_cli *cli, const char *path, int dim,
                        pa_local_param **out, int *nout, pa_ls_material **mat,
                        int *nmat);
 
+/* Most -field files and -field-transfer choices of `padapt adapt`. */
+#define PA_CLI_MAX_FIELD_ARGS 32
+
 /* The arguments of `padapt adapt`, sequential and parallel alike. */
 typedef struct pa_cli_adapt_args {
-  const char *in, *out, *met, *outsol, *field, *outfield, *json;
+  const char *in, *out, *met, *outsol, *outfield, *json;
+  const char *field[PA_CLI_MAX_FIELD_ARGS];    /* -field F.sol, in order */
+  int nfield;
+  const char *transfer[PA_CLI_MAX_FIELD_ARGS]; /* -field-transfer
+                                                  [NAME=]MODE, in order */
+  int ntransfer;
   const char *svg; /* -svg: before/after histograms */
   int nosol;       /* -nosol: no output metric file */
   int distributed; /* -distributed-output */
@@ -149,7 +157,8 @@ int pa_cli_fail(const pa_cli *cli, pa_status st);
 
 /* The files a command reads and writes (NULL entries skipped), for
  * pa_cli_check_io. */
-#define PA_CLI_IO_MAX 8
+/* the inputs: a mesh, -met, -f, -ls and the -field files */
+#define PA_CLI_IO_MAX (4 + PA_CLI_MAX_FIELD_ARGS)
 typedef struct pa_cli_io {
   const char *in[PA_CLI_IO_MAX];  /* files read; a distributed set: its files */
   const char *out[PA_CLI_IO_MAX]; /* files written */
@@ -271,11 +280,17 @@ void pa_cli_help(const pa_cli_spec *s, FILE *out);
 
 /* Attach field 0 of a .sol/.solb file as the mesh's metric. */
 pa_status pa_cli_attach_metric(pa_mesh *mesh, const char *path);
-/* Attach every field of a .sol file to the mesh as user fields field1, ...
- * (the vertex count must match: the error names the file). */
-pa_status pa_cli_attach_fields(pa_mesh *mesh, const char *path);
-/* Write the mesh's user fields as one .sol file (scalar, vector or tensor by
- * number of components). */
+/* Attach the fields of every -field file to the mesh (pa_mesh_fields_from_sol:
+ * vertex fields field1, ..., element fields cell1, ..., boundary fields
+ * face1, ...; a count that does not match names the file and line), then
+ * set the -field-transfer modes: NAME=MODE for the field NAME (an element
+ * field first, else a boundary or vertex field of that name), MODE alone
+ * for every element field. */
+pa_status pa_cli_attach_fields(pa_mesh *mesh, const pa_cli_adapt_args *a);
+/* 1 if the mesh has a user field on any kind of entity. */
+int pa_cli_has_fields(const pa_mesh *mesh);
+/* Write the mesh's user fields as one .sol file, each kind under its
+ * keyword (pa_mesh_fields_to_sol). */
 pa_status pa_cli_write_fields(pa_mesh *mesh, const char *path);
 
 /* A growable string (the JSON reports); fail is set when out of memory. */
@@ -286,6 +301,13 @@ typedef struct pa_cli_sbuf {
 } pa_cli_sbuf;
 void pa_cli_sb_printf(pa_cli_sbuf *b, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
+
+/* The JSON member "transfer" (what carrying the element and boundary
+ * fields did, pa_transfer_report) followed by ", "; malloc'ed, NULL when
+ * out of memory. */
+char *pa_cli_transfer_json(const pa_transfer_report *t);
+/* Its line of the report on stdout, when fields were carried. */
+void pa_cli_print_transfer(const pa_transfer_report *t);
 
 /* How the result meets the given metric (pa_fidelity): the figures in the
  * metric used, when it differs, and the outcome line, on out. */

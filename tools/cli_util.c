@@ -255,45 +255,86 @@ char *pa_cli_fidelity_json(const pa_fidelity *f) {
   return b.p;
 }
 
-pa_status pa_cli_attach_fields(pa_mesh *mesh, const char *path) {
-  pa_sol *sol = NULL;
-  char msg[600];
-  pa_status st = pa_sol_read(path, &sol);
-  if (st) return st;
-  if (pa_sol_nvert(sol) != pa_mesh_nvert(mesh)) {
-    snprintf(msg, sizeof msg,
-             "%s: %d values per field, but the mesh has %d vertices",
-             pa_sol_origin(sol), (int)pa_sol_nvert(sol),
-             (int)pa_mesh_nvert(mesh));
+char *pa_cli_transfer_json(const pa_transfer_report *t) {
+  pa_cli_sbuf b = {NULL, 0, 0, 0};
+  pa_cli_sb_printf(&b,
+                   "\"transfer\": {\"nfield\": %d, \"nfast\": %ld, \"nclip\": %ld, "
+                   "\"nout\": %ld, \"defect\": %.6g, \"uncovered\": %.6g, "
+                   "\"lost\": %.6g, \"time_s\": %.6f, \"cpu_s\": %.6f}, ",
+                   t->nfield, t->nfast, t->nclip, t->nout, t->defect,
+                   t->uncovered, t->lost, t->time_s, t->cpu_s);
+  if (b.fail) {
+    free(b.p);
+    return NULL;
+  }
+  return b.p;
+}
+
+void pa_cli_print_transfer(const pa_transfer_report *t) {
+  if (!t->nfield) return;
+  printf("    fields carried %d: %ld elements inside an old one, %ld "
+         "intersected, conservation defect %.2e, %.3f s\n",
+         t->nfield, t->nfast, t->nclip, t->defect, t->time_s);
+}
+
+int pa_cli_has_fields(const pa_mesh *mesh) {
+  return pa_mesh_nfield_at(mesh, PA_VERTEX) + pa_mesh_nfield_at(mesh, PA_ELEMENT) +
+             pa_mesh_nfield_at(mesh, PA_BOUNDARY) > 0;
+}
+
+/* The names of the fields of mesh on entities at, ", "-separated, into buf. */
+static void field_names(pa_mesh *mesh, pa_entity at, char *buf, size_t n) {
+  size_t len = 0;
+  buf[0] = '\0';
+  for (int k = 0; k < pa_mesh_nfield_at(mesh, at) && len < n; k++) {
+    const char *name = "";
+    pa_mesh_field_at(mesh, at, k, &name, NULL, NULL);
+    len += (size_t)snprintf(buf + len, n - len, "%s%s", k ? ", " : "", name);
+  }
+}
+
+/* One -field-transfer choice, [NAME=]MODE, set on the mesh's fields. */
+static pa_status apply_transfer(pa_mesh *mesh, const char *spec) {
+  const char *eq = strchr(spec, '=');
+  pa_transfer mode;
+  pa_status st = pa_transfer_parse(eq ? eq + 1 : spec, &mode);
+  if (st != PA_SUCCESS || !eq) {
+    for (int k = 0; st == PA_SUCCESS && k < pa_mesh_nfield_at(mesh, PA_ELEMENT); k++)
+      st = pa_mesh_set_field_transfer(mesh, PA_ELEMENT, k, mode);
+    return st;
+  }
+  char name[256];
+  snprintf(name, sizeof name, "%.*s", (int)(eq - spec), spec);
+  static const pa_entity order[3] = {PA_ELEMENT, PA_BOUNDARY, PA_VERTEX};
+  for (int i = 0; i < 3; i++) {
+    int k = pa_mesh_field_index(mesh, order[i], name);
+    if (k >= 0) return pa_mesh_set_field_transfer(mesh, order[i], k, mode);
+  }
+  char list[3][1024];
+  for (int i = 0; i < 3; i++) field_names(mesh, order[i], list[i], sizeof list[i]);
+  return pa_set_error(PA_ERR_ARG,
+                      "-field-transfer %s: no field '%s' (element fields: %s; "
+                      "boundary fields: %s; vertex fields: %s)",
+                      spec, name, list[0][0] ? list[0] : "none",
+                      list[1][0] ? list[1] : "none", list[2][0] ? list[2] : "none");
+}
+
+pa_status pa_cli_attach_fields(pa_mesh *mesh, const pa_cli_adapt_args *a) {
+  pa_status st = PA_SUCCESS;
+  for (int f = 0; f < a->nfield && st == PA_SUCCESS; f++) {
+    pa_sol *sol = NULL;
+    st = pa_sol_read(a->field[f], &sol);
+    if (st == PA_SUCCESS) st = pa_mesh_fields_from_sol(mesh, sol);
     pa_sol_destroy(sol);
-    return pa_set_error(PA_ERR_FORMAT, "%s", msg);
   }
-  for (int k = 0; k < pa_sol_nfield(sol) && st == PA_SUCCESS; k++) {
-    pa_sol_kind kind;
-    int nc;
-    double *val;
-    char name[32];
-    st = pa_sol_field(sol, k, &kind, &nc, &val);
-    snprintf(name, sizeof name, "field%d", k + 1);
-    if (st == PA_SUCCESS) st = pa_mesh_add_field(mesh, name, nc, val);
-  }
-  pa_sol_destroy(sol);
+  for (int t = 0; t < a->ntransfer && st == PA_SUCCESS; t++)
+    st = apply_transfer(mesh, a->transfer[t]);
   return st;
 }
 
 pa_status pa_cli_write_fields(pa_mesh *mesh, const char *path) {
   pa_sol *sol = NULL;
-  int d = pa_mesh_dim(mesh);
-  pa_status st = pa_sol_create(d, pa_mesh_nvert(mesh), &sol);
-  for (int k = 0; k < pa_mesh_nfield(mesh) && st == PA_SUCCESS; k++) {
-    int nc;
-    double *val;
-    st = pa_mesh_field(mesh, k, NULL, &nc, &val);
-    pa_sol_kind kind = nc == 1   ? PA_SOL_SCALAR
-                       : nc == d ? PA_SOL_VECTOR
-                                 : PA_SOL_TENSOR;
-    if (st == PA_SUCCESS) st = pa_sol_add_field(sol, kind, val);
-  }
+  pa_status st = pa_mesh_fields_to_sol(mesh, &sol);
   if (st == PA_SUCCESS) st = pa_sol_write(sol, path);
   pa_sol_destroy(sol);
   return st;

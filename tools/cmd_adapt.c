@@ -7,8 +7,8 @@
  *
  * Outputs: the mesh OUT (format by extension), its metric in OUT's name with
  * the extension replaced by .sol (or -outsol PATH; -nosol for none), the
- * interpolated user fields (-field F.sol) in <OUT stem>.fields.sol (or
- * -outfield PATH), the JSON report (-json) and the picture of the
+ * user fields carried (vertex, element and boundary fields: -field F.sol,
+ * or the views of a Gmsh IN) in <OUT stem>.fields.sol (or -outfield PATH), the JSON report (-json) and the picture of the
  * histograms before and after (-svg). Prints `padapt stats` before and
  * after, the operation counts and the time. Exit status: 0 on success and on "target missed" (a
  * valid mesh that misses some edge lengths: a warning says so, and the JSON
@@ -68,6 +68,39 @@ static int opt_lsref(const pa_cli *cli, const pa_cli_spec *s, const char *name,
                           s->cmd, name, val[k] ? val[k] : "nothing");
     a->lsref[k] = (int)x;
   }
+  return 0;
+}
+
+static int opt_field(const pa_cli *cli, const pa_cli_spec *s, const char *name,
+                     char **val, void *args) {
+  pa_cli_adapt_args *a = args;
+  if (!val[0]) return pa_cli_error(cli, "%s: %s needs a .sol file", s->cmd, name);
+  if (a->nfield == PA_CLI_MAX_FIELD_ARGS)
+    return pa_cli_error(cli, "%s: at most %d %s", s->cmd, PA_CLI_MAX_FIELD_ARGS,
+                        name);
+  a->field[a->nfield++] = val[0];
+  return 0;
+}
+
+/* -field-transfer [NAME=]MODE: the mode is checked here, the name once the
+ * fields are read. */
+static int opt_transfer(const pa_cli *cli, const pa_cli_spec *s,
+                        const char *name, char **val, void *args) {
+  pa_cli_adapt_args *a = args;
+  pa_transfer mode;
+  if (!val[0])
+    return pa_cli_error(cli, "%s: %s needs [FIELD=]MODE", s->cmd, name);
+  const char *eq = strchr(val[0], '=');
+  if (eq == val[0])
+    return pa_cli_error(cli, "%s: %s %s: no field name before '='", s->cmd,
+                        name, val[0]);
+  if (pa_transfer_parse(eq ? eq + 1 : val[0], &mode) != PA_SUCCESS)
+    return pa_cli_error(cli, "%s: %s %s: %s", s->cmd, name, val[0],
+                        pa_last_error());
+  if (a->ntransfer == PA_CLI_MAX_FIELD_ARGS)
+    return pa_cli_error(cli, "%s: at most %d %s", s->cmd, PA_CLI_MAX_FIELD_ARGS,
+                        name);
+  a->transfer[a->ntransfer++] = val[0];
   return 0;
 }
 
@@ -150,12 +183,19 @@ static const pa_cli_opt adapt_opts[] = {
     {.names = "-optim", .kind = PA_CLI_FLAG, .at = A(optim), .label = "-optim",
      .help = "keep the sizes of the input mesh (the mean length of\n"
              "each vertex's edges), improve the quality"},
-    {.names = "-field", .kind = PA_CLI_STR, .at = A(field),
-     .want = "a .sol file", .label = "-field F.sol",
-     .help = "vertex fields to interpolate; written to\n"
-             "<OUT stem>.fields.sol (or -outfield PATH)"},
+    {.names = "-field", .kind = PA_CLI_FN, .fn = opt_field, .nval = 1,
+     .label = "-field F.sol",
+     .help = "fields to carry (repeatable): SolAtVertices (interpolated),\n"
+             "SolAtTriangles/SolAtTetrahedra (elements) and\n"
+             "SolAtEdges/SolAtTriangles (boundary); written, each kind\n"
+             "under its keyword, to <OUT stem>.fields.sol (or -outfield)"},
     {.names = "-outfield", .kind = PA_CLI_STR, .at = A(outfield),
      .want = "a .sol file"},
+    {.names = "-field-transfer", .kind = PA_CLI_FN, .fn = opt_transfer,
+     .nval = 1, .label = "-field-transfer [F=]M",
+     .help = "how element field F (cell1, ... from a .sol; every one\n"
+             "without F=) is carried: conservative (default), bounded\n"
+             "or nearest (repeatable; docs/guide/fields.md)"},
     {.names = "-json", .kind = PA_CLI_STR, .at = A(json), .want = "a file",
      .label = "-json R.json",
      .help = "write the after-statistics, time and counts as JSON"},
@@ -356,10 +396,11 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
  * starts. */
 static int check_outputs(const pa_cli *cli, const pa_cli_adapt_args *a) {
   char *sol = NULL, *fields = NULL;
-  pa_cli_io io = {.in = {a->in, a->met, a->field, a->params},
+  pa_cli_io io = {.in = {a->in, a->met, a->params, a->ls},
                   .out = {a->json, a->svg},
                   .ckpt = a->checkpoint,
                   .restart = a->restart};
+  for (int k = 0; k < a->nfield; k++) io.in[4 + k] = a->field[k];
   if (a->distributed) { /* a set carries its metric and fields */
     io.set = a->out;
   } else {
@@ -367,7 +408,7 @@ static int check_outputs(const pa_cli *cli, const pa_cli_adapt_args *a) {
     if (!a->nosol)
       io.out[3] = a->outsol ? a->outsol
                             : (sol = pa_cli_replace_ext(a->out, ".sol"));
-    if (a->field)
+    if (a->nfield || a->outfield)
       io.out[4] = a->outfield
                       ? a->outfield
                       : (fields = pa_cli_replace_ext(a->out, ".fields.sol"));
@@ -402,8 +443,7 @@ static int read_inputs(const pa_cli *cli, const pa_cli_adapt_args *a,
       return 1;
     opts->local = *local;
   }
-  if (a->field) return pa_cli_fail(cli, pa_cli_attach_fields(mesh, a->field));
-  return 0;
+  return pa_cli_fail(cli, pa_cli_attach_fields(mesh, a));
 }
 
 /* The statistics of the input in the target metric (pa_cli_adapt_metric:
@@ -454,6 +494,7 @@ static void report_after(const pa_cli_adapt_args *a, const pa_mesh *mesh,
          rep->nsplit, rep->ncollapse, rep->nswap, rep->nmove, rep->npass,
          rep->time_s, rep->time_s > 0 ? pa_mesh_nelem(mesh) / rep->time_s : 0.0,
          rep->cpu_s, pa_memory_peak() / 1e6, outcome_name(rep->outcome));
+  pa_cli_print_transfer(&rep->transfer);
   fflush(stdout);
   if (!rep->fidelity.target_met)
     fprintf(stderr, "padapt: warning: adapt: target missed (valid mesh, but "
@@ -467,6 +508,7 @@ static pa_status write_json(const pa_cli_adapt_args *a, const pa_stats *before,
                             const pa_levelset_report *ls) {
   char *fid = pa_cli_fidelity_json(&rep->fidelity);
   char *lsj = a->ls ? pa_cli_ls_json(ls) : NULL;
+  char *tr = pa_cli_transfer_json(&rep->transfer);
   pa_cli_sbuf b = {NULL, 0, 0, 0};
   if (a->ls) pa_cli_sb_printf(&b, "%s", lsj ? lsj : "");
   pa_cli_sb_printf(&b,
@@ -476,15 +518,16 @@ static pa_status write_json(const pa_cli_adapt_args *a, const pa_stats *before,
                    "\"%s\", \"nsplit\": %ld, \"ncollapse\": %ld, "
                    "\"nswap\": %ld, \"nmove\": %ld, \"npass\": %d, "
                    "\"elements_before\": %lld, \"vertices_before\": %lld, "
-                   "%s",
+                   "%s%s",
                    rep->time_s, rep->cpu_s, pa_peak_rss(), pa_memory_peak(),
                    outcome_name(rep->outcome), rep->nsplit, rep->ncollapse,
                    rep->nswap, rep->nmove, rep->npass, (long long)before->nelem,
-                   (long long)before->nvert, fid ? fid : "");
-  pa_status st = b.fail || !fid || (a->ls && !lsj)
+                   (long long)before->nvert, tr ? tr : "", fid ? fid : "");
+  pa_status st = b.fail || !fid || !tr || (a->ls && !lsj)
                      ? pa_set_error(PA_ERR_MEMORY, "out of memory")
                      : pa_stats_write_json(&rep->fidelity.user, b.p, a->json);
   free(fid);
+  free(tr);
   free(lsj);
   free(b.p);
   return st;
@@ -509,7 +552,7 @@ static int write_outputs(const pa_cli *cli, const pa_cli_adapt_args *a,
       st = pa_sol_write(sol, a->outsol ? a->outsol : solpath);
     pa_sol_destroy(sol);
   }
-  if (st == PA_SUCCESS && pa_mesh_nfield(mesh) > 0) {
+  if (st == PA_SUCCESS && pa_cli_has_fields(mesh)) {
     fieldpath = a->outfield ? NULL : pa_cli_replace_ext(a->out, ".fields.sol");
     st = pa_cli_write_fields(mesh, a->outfield ? a->outfield : fieldpath);
   }

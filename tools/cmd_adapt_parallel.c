@@ -51,8 +51,7 @@
 static int prepare_root(const pa_cli *cli, const pa_cli_adapt_args *args,
                         pa_mesh *mesh) {
   if (pa_cli_adapt_metric(cli, args, mesh)) return 0;
-  if (args->field && pa_cli_fail(cli, pa_cli_attach_fields(mesh, args->field)))
-    return 0;
+  if (pa_cli_fail(cli, pa_cli_attach_fields(mesh, args))) return 0;
   if (args->ls) {
     double *phi = NULL;
     if (pa_cli_ls_read(cli, args, mesh, &phi)) return 0;
@@ -186,6 +185,7 @@ static void print_table(const pa_cli *cli, const pa_adapt_report *r,
   printf("    remeshing busy time (all ranks) %.3f s, CPU %.3f s, bytes "
          "moved %.3g, peak memory per rank %.1f MB\n",
          r->remesh_busy, r->remesh_cpu, r->bytes_moved, r->peak_memory / 1e6);
+  pa_cli_print_transfer(&r->transfer);
   fflush(stdout);
 }
 
@@ -242,9 +242,11 @@ static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
               it->mem_after);
   }
   char *fid = pa_cli_fidelity_json(&r->fidelity);
-  pa_cli_sb_printf(&b, "], %s", fid ? fid : "");
-  if (!fid) b.fail = 1;
+  char *tr = pa_cli_transfer_json(&r->transfer);
+  pa_cli_sb_printf(&b, "], %s%s", tr ? tr : "", fid ? fid : "");
+  if (!fid || !tr) b.fail = 1;
   free(fid);
+  free(tr);
   if (b.fail) {
     free(b.p);
     return NULL;
@@ -276,6 +278,8 @@ static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
   int ok = 1;
   if (set) {
     st = pa_dmesh_read(cli->comm, in, 0, dm);
+    /* -field-transfer on the set's fields (the same on every rank) */
+    if (st == PA_SUCCESS) st = pa_cli_attach_fields(pa_dmesh_mesh(*dm), args);
     if (st) {
       fail_collective(cli, st);
       return 1;
@@ -383,11 +387,12 @@ static int check_input(const pa_cli *cli, const pa_cli_adapt_args *args,
   *set = cli->rank == 0 && in ? pa_dmesh_is_set(in) : 0;
   MPI_Bcast(set, 1, MPI_INT, 0, cli->comm);
   if (args->restart) {
-    if (cli->rank == 0 && (in || args->met || args->field || args->ls))
+    if (cli->rank == 0 &&
+        (in || args->met || args->nfield || args->ntransfer || args->ls))
       fprintf(stderr, "padapt: adapt: -restart: the mesh (cut already), its "
                       "metric and fields come from the checkpoint (IN, -met, "
-                      "-field and -ls are not read)\n");
-  } else if (*set && (args->met || args->field || args->ls)) {
+                      "-field, -field-transfer and -ls are not read)\n");
+  } else if (*set && (args->met || args->nfield || args->ls)) {
     if (cli->rank == 0)
       pa_cli_error(cli, "adapt: -met, -field and -ls need a sequential input "
                         "mesh, not a distributed set");
@@ -491,7 +496,7 @@ static pa_status write_mesh(const pa_cli *cli, const pa_cli_adapt_args *args,
     free(path);
     path = NULL;
   }
-  if (st == PA_SUCCESS && pa_mesh_nfield(*g) > 0) {
+  if (st == PA_SUCCESS && pa_cli_has_fields(*g)) {
     path = pa_cli_replace_ext(out, ".fields.sol");
     st = pa_cli_write_fields(*g, args->outfield ? args->outfield : path);
   }

@@ -377,6 +377,33 @@ static pa_status record_iteration(const pa__iter *it, pa__loop *L, double *t,
   rep->remesh_busy += busy[0];
   rep->remesh_cpu += busy[1];
   rep->bytes_moved += ir->bytes_moved;
+  { /* the pieces' field transfers: sums, then the largest figures */
+    pa_transfer_report *tr = &rep->transfer;
+    double sum[5] = {0, 0, 0, 0, 0}, mx[4] = {0, 0, 0, 0};
+    for (int q = 0; q < it->npiece_local; q++) {
+      const pa_transfer_report *p = &it->pieces[q].rep.transfer;
+      sum[0] += (double)p->nfast;
+      sum[1] += (double)p->nclip;
+      sum[2] += (double)p->nout;
+      sum[3] += p->time_s;
+      sum[4] += p->cpu_s;
+      mx[0] = fmax(mx[0], p->nfield);
+      mx[1] = fmax(mx[1], p->defect);
+      mx[2] = fmax(mx[2], p->uncovered);
+      mx[3] = fmax(mx[3], p->lost);
+    }
+    PA_CALL(pa__allreduce(dm->comm, sum, 5, MPI_DOUBLE, MPI_SUM));
+    PA_CALL(pa__allreduce(dm->comm, mx, 4, MPI_DOUBLE, MPI_MAX));
+    tr->nfast += (long)sum[0];
+    tr->nclip += (long)sum[1];
+    tr->nout += (long)sum[2];
+    tr->time_s += sum[3];
+    tr->cpu_s += sum[4];
+    tr->nfield = tr->nfield > (int)mx[0] ? tr->nfield : (int)mx[0];
+    tr->defect = fmax(tr->defect, mx[1]);
+    tr->uncovered = fmax(tr->uncovered, mx[2]);
+    tr->lost = fmax(tr->lost, mx[3]);
+  }
   if (rep->niter_recorded < PA_ADAPT_MAX_ITERS)
     rep->iters[rep->niter_recorded++] = *ir;
 cleanup:

@@ -320,6 +320,7 @@ static pa_status zero_faces(pa_dmesh *dm, const pa__ls_out *o, int32_t ref,
   pa__recs Q, H;
   pa__ls_cells z, f;
   int *dest = NULL, d = dm->dim;
+  double *zero = NULL; /* B's boundary fields: zeros on the interface */
   const pa_gid *vg = dm->gid[PA_VERTEX];
   pa__recs_init(&Q, PA_BOUNDARY, d, 0);
   pa__recs_init(&H, PA_BOUNDARY, d, 0);
@@ -342,10 +343,11 @@ static pa_status zero_faces(pa_dmesh *dm, const pa__ls_out *o, int32_t ref,
   for (size_t k = 0; k < (size_t)d * H.n; k++) z.v[k] = (pa_idx)k;
   z.ref = H.ref;
   PA_CALL(pa__ls_zero_faces(&z, H.vgid, ref, &f));
+  if (B->ndbl) PA_CALLOC(zero, B->ndbl);
   for (pa_idx i = 0; i < f.n; i++) {
     pa_gid g[3];
     for (int j = 0; j < d; j++) g[j] = H.vgid[f.v[(size_t)d * i + j]];
-    PA_CALL(pa__recs_add(B, -1, g, ref, 0, dm->rank, NULL, NULL, 0));
+    PA_CALL(pa__recs_add(B, -1, g, ref, 0, dm->rank, zero, NULL, 0));
   }
   *nface = f.n;
 cleanup:
@@ -355,6 +357,7 @@ cleanup:
   pa__free(f.ref);
   pa__free(f.flag);
   pa__free(f.parent);
+  pa__free(zero);
   pa__recs_free(&Q);
   pa__recs_free(&H);
   pa__free(dest);
@@ -404,24 +407,31 @@ static size_t max_payload(const pa_dmesh *dm, int kind) {
 }
 
 /* The records of the cells of a kind (elements, boundary entities, edges):
- * kept ones with their ids, the others with fresh ids from *next. vg: the
- * global id of each output vertex (local, then added). */
+ * kept ones with their ids, the others with fresh ids from *next, each with
+ * the element or boundary fields of the cell it comes from (kept whole or a
+ * part of it, as pa_mesh_levelset_cut; zeros for a new interface entity).
+ * vg: the global id of each output vertex (local, then added). */
 static pa_status cell_records(pa_dmesh *dm, int kind, const pa__ls_cells *c,
                               const pa_gid *vg, pa_gid *next, pa__recs *R) {
   pa_status st = PA_SUCCESS;
   unsigned char *pay = NULL;
+  double *dbl = NULL;
   size_t maxp = max_payload(dm, kind);
   pa_gid v[4];
   if (maxp) PA_ALLOC(pay, maxp);
+  if (R->ndbl) PA_ALLOC(dbl, R->ndbl);
   for (pa_idx i = 0; i < c->n; i++) {
     for (int j = 0; j < c->nvc; j++) v[j] = vg[c->v[(size_t)c->nvc * i + j]];
-    pa_idx p = c->parent[i];
+    pa_idx p = c->parent[i], o = p >= 0 ? p : p <= -2 ? -2 - p : -1;
     size_t pl = maxp ? cell_payload(dm, kind, p, c->ref[i], pay) : 0;
     pa_gid g = p >= 0 ? dm->gid[kind][p] : (*next)++;
-    PA_CALL(pa__recs_add(R, g, v, c->ref[i], c->flag[i], dm->rank, NULL, pay,
+    if (dbl && o >= 0) pa__entity_doubles(dm->mesh, kind, o, dbl);
+    else if (dbl) memset(dbl, 0, (size_t)R->ndbl * sizeof *dbl);
+    PA_CALL(pa__recs_add(R, g, v, c->ref[i], c->flag[i], dm->rank, dbl, pay,
                          pl));
   }
 cleanup:
+  pa__free(dbl);
   pa__free(pay);
   return st;
 }
@@ -543,7 +553,9 @@ pa_status pa_dmesh_levelset_cut(pa_dmesh *dm, int field,
   PA_ALLOC(agid, out.nadd);
   PA_ALLOC(give, out.nadd);
   PA_CALL(agree_added(dm, &out, agid, give, &rep.ncut));
-  pa__recs_init(&R[PA_BOUNDARY], PA_BOUNDARY, d, 0);
+  pa__dmesh_layout(dm, &lay);
+  int bdbl = pa__layout_kind_ndbl(&lay, PA_BOUNDARY);
+  pa__recs_init(&R[PA_BOUNDARY], PA_BOUNDARY, d, bdbl);
   pa_gid nzero = 0;
   PA_CALL(zero_faces(dm, &out, opts->ref_iface, &R[PA_BOUNDARY], &nzero));
   {
@@ -568,12 +580,13 @@ pa_status pa_dmesh_levelset_cut(pa_dmesh *dm, int field,
     pa__recs Z;
     unsigned char *pay = NULL;
     size_t pl = value_paylen(dm, PA_BOUNDARY, opts->ref_iface);
-    pa__recs_init(&Z, PA_BOUNDARY, d, 0);
+    pa__recs_init(&Z, PA_BOUNDARY, d, bdbl);
     if (pl) PA_CALLOC(pay, pl);
     for (size_t i = 0; i < R[PA_BOUNDARY].n && !st; i++)
       st = pa__recs_add(&Z, R[PA_BOUNDARY].gid[i],
                         R[PA_BOUNDARY].vgid + (size_t)d * i, R[PA_BOUNDARY].ref[i],
-                        0, dm->rank, NULL, pay, pl);
+                        0, dm->rank, R[PA_BOUNDARY].dbl + (size_t)bdbl * i, pay,
+                        pl);
     pa__free(pay);
     pa__recs_free(&R[PA_BOUNDARY]);
     R[PA_BOUNDARY] = Z;
@@ -583,9 +596,9 @@ pa_status pa_dmesh_levelset_cut(pa_dmesh *dm, int field,
   PA_ALLOC(vg, (size_t)nv + (size_t)out.nadd);
   memcpy(vg, dm->gid[PA_VERTEX], (size_t)nv * sizeof *vg);
   if (out.nadd) memcpy(vg + nv, agid, (size_t)out.nadd * sizeof *vg);
-  pa__dmesh_layout(dm, &lay);
   pa__recs_init(&R[PA_VERTEX], PA_VERTEX, 0, pa__layout_ndbl(&lay));
-  pa__recs_init(&R[PA_ELEMENT], PA_ELEMENT, d + 1, 0);
+  pa__recs_init(&R[PA_ELEMENT], PA_ELEMENT, d + 1,
+                pa__layout_kind_ndbl(&lay, PA_ELEMENT));
   pa__recs_init(&R[PA_EDGE], PA_EDGE, 2, 0);
   PA_CALL(vertex_records(dm, &out, opts, agid, give, &R[PA_VERTEX]));
   PA_CALL(cell_records(dm, PA_ELEMENT, &out.elem, vg, &next[PA_ELEMENT],

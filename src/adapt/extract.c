@@ -12,11 +12,12 @@
  * estimated work is balanced.
  *
  * Gathering: each rank sends, for every labelled owned element, the element
- * (aux = piece), and for every (piece, entity) pair the vertices (with
- * coordinates, metric, fields, and transit flag bits: skin, hot, inner for
- * that piece; in 3D the normals and masks of it->vsurf as a temporary field,
- * PA_ADAPT_SURFACE_FIELD), boundary entities and edges of the piece's
- * elements it holds. pa__recs_migrate
+ * (aux = piece, with its element fields), and for every (piece, entity)
+ * pair the vertices (with coordinates, metric, fields, and transit flag
+ * bits: skin, hot, inner for that piece; in 3D the normals and masks of
+ * it->vsurf as a temporary field, PA_ADAPT_SURFACE_FIELD), boundary
+ * entities (with their boundary fields) and edges of the piece's elements
+ * it holds. pa__recs_migrate
  * moves them; the receiver drops duplicates (an entity held by several
  * ranks) and assembles each of its pieces, numbered by increasing global id,
  * so the piece does not depend on how its fragments were spread.
@@ -154,7 +155,7 @@ static pa_status pair_records(pa__iter *it, int kind, const pa_idx *bstart,
   }
   n = pairs_unique(key, n);
   PA_ALLOC(*dest, n);
-  if (kind == PA_VERTEX) PA_ALLOC(dbl, R->ndbl);
+  if (R->ndbl) PA_ALLOC(dbl, R->ndbl);
   /* their user values go as payloads (vertices, boundary entities and
    * edges the remesher keeps keep them) */
   for (int k = 0; k < dm->nvalue; k++)
@@ -185,6 +186,7 @@ static pa_status pair_records(pa__iter *it, int kind, const pa_idx *bstart,
       if (kind == PA_BOUNDARY &&
           it->bside[x] == (PA_ADAPT_B_INTERIOR | PA_ADAPT_B_CUT))
         flag |= PA_ADAPT_SKIN_TRANSIT; /* on the piece's outer surface */
+      if (dbl) pa__entity_doubles(m, kind, x, dbl); /* boundary fields */
     }
     size_t pl = punit ? pa__entity_payload(dm, kind, x, pay) : 0;
     PA_CALL(pa__recs_add(R, dm->gid[kind][x], vg, ref, flag, p, dbl, pay, pl));
@@ -307,6 +309,11 @@ static pa_status piece_create(pbuild *b) {
     m->field[f].ncomp = dmm->field[f].ncomp;
   }
   PA_CALL(pa_mesh_reserve(m, nv, ne, nb, nd));
+  {
+    pa__layout lay;
+    pa__mesh_layout(dmm, &lay);
+    PA_CALL(pa__layout_cell_fields(&lay, m));
+  }
   PA_ALLOC(pc->vgid, nv);
   PA_CALLOC(pc->skin, nv);
   PA_CALLOC(pc->hot, nv);
@@ -374,6 +381,7 @@ static pa_status piece_elements(pbuild *b) {
     }
     m->eref[k] = E->ref[i];
     m->eflag[k] = E->flag[i];
+    if (E->ndbl) pa__entity_set_doubles(m, PA_ELEMENT, k, E->dbl + (size_t)E->ndbl * i);
   }
   m->ne = ne;
   pc->nv0 = m->nv;
@@ -409,6 +417,8 @@ static pa_status piece_subentities(pbuild *b) {
           b->pc->bfix[k] = 1;
           m->bflag[k] |= PA_FLAG_REQUIRED;
         }
+        if (B->ndbl)
+          pa__entity_set_doubles(m, PA_BOUNDARY, k, B->dbl + (size_t)B->ndbl * i);
       } else {
         m->edref[k] = B->ref[i];
         m->edflag[k] = B->flag[i];
@@ -515,10 +525,12 @@ static pa_status element_records(pa__iter *it, pa__recs *S, int **dest) {
   pa_dmesh *dm = it->dm;
   const pa_mesh *m = dm->mesh;
   unsigned char *epay = NULL;
+  double *dbl = NULL;
   pa_idx n = 0;
   size_t unit = sizeof(int32_t);
   for (pa_idx e = 0; e < it->ne; e++) n += it->label[e] >= 0;
   PA_ALLOC(*dest, n);
+  if (S->ndbl) PA_ALLOC(dbl, S->ndbl);
   for (int k = 0; k < dm->nvalue; k++)
     if ((int)dm->value[k]->kind == PA_ELEMENT) unit += dm->value[k]->unit;
   PA_ALLOC(epay, unit);
@@ -532,12 +544,14 @@ static pa_status element_records(pa__iter *it, pa__recs *S, int **dest) {
     memcpy(epay, &from, sizeof from);
     size_t pl = sizeof from +
                 pa__entity_payload(dm, PA_ELEMENT, e, epay + sizeof from);
+    if (dbl) pa__entity_doubles(m, PA_ELEMENT, e, dbl);
     PA_CALL(pa__recs_add(S, dm->gid[PA_ELEMENT][e], vg, m->eref[e],
-                         m->eflag[e], it->label[e], NULL, epay, pl));
+                         m->eflag[e], it->label[e], dbl, epay, pl));
     (*dest)[n++] = it->piece_rank[it->label[e]];
   }
 cleanup:
   pa__free(epay);
+  pa__free(dbl);
   return st;
 }
 
@@ -647,10 +661,8 @@ pa_status pa__adapt_extract(pa__iter *it) {
   PA_CALL(pa__agree(dm->comm, st));
   pa__dmesh_layout(dm, &lay);
   for (int k = 0; k < PA_DMESH_NKIND; k++) {
-    pa__recs_init(&S[k], k, pa__kind_nv(it->dim, k),
-                  k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
-    pa__recs_init(&R[k], k, pa__kind_nv(it->dim, k),
-                  k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
+    pa__recs_init(&S[k], k, pa__kind_nv(it->dim, k), pa__layout_kind_ndbl(&lay, k));
+    pa__recs_init(&R[k], k, pa__kind_nv(it->dim, k), pa__layout_kind_ndbl(&lay, k));
   }
   /* 1. map the pieces to ranks; 2. the records to ship */
   PA_CALL(map_to_ranks(it));

@@ -710,7 +710,18 @@ typedef struct orecs {
   const pa_dmesh_value *done;
   unsigned char *pay;
   paycache pcache;
+  double *cdbl; /* the element or boundary field values of one entity */
 } orecs;
+
+/* The element or boundary field values of output entity e of a kind into
+ * c->cdbl (NULL when the records of that kind carry none). */
+static const double *cell_doubles(orecs *c, int kind, pa_idx e) {
+  if (!c->R[kind].ndbl) return NULL;
+  int n = pa__entity_doubles(c->o, kind, e, c->cdbl);
+  PA_ASSERT(n == c->R[kind].ndbl);
+  (void)n;
+  return c->cdbl;
+}
 
 /* The output's vertices: the global id of each (vg) and the records of
  * those this rank gives: not skin vertices (a matched input vertex keeps
@@ -837,13 +848,15 @@ static pa_status output_elements(orecs *c) {
       pay[at] = dv;
       c->pcache.len = (size_t)-1; /* pay no longer holds the cached payload */
       PA_CALL(pa__recs_add(&c->R[PA_ELEMENT], pc->kgid[PA_ELEMENT][q], ev,
-                           o->eref[e], o->eflag[e], c->dest[e], NULL, pay, pl));
+                           o->eref[e], o->eflag[e], c->dest[e],
+                           cell_doubles(c, PA_ELEMENT, e), pay, pl));
       continue;
     }
     size_t pl = payload_of(&c->pcache, dm, PA_ELEMENT, o->eref[e], c->done, dv,
                            pay);
     PA_CALL(pa__recs_add(&c->R[PA_ELEMENT], c->next[PA_ELEMENT]++, ev,
-                         o->eref[e], o->eflag[e], c->dest[e], NULL, pay, pl));
+                         o->eref[e], o->eflag[e], c->dest[e],
+                         cell_doubles(c, PA_ELEMENT, e), pay, pl));
   }
 cleanup:
   return st;
@@ -873,14 +886,15 @@ static pa_status output_subentities(orecs *c, const uint8_t *bemit,
       pa_idx q = pc->reuse[kind][b];
       if (q >= 0) { /* an input entity: its id and values */
         PA_CALL(pa__recs_add(&c->R[kind], pc->kgid[kind][q], bv, ref[b], fl[b],
-                             it->rank, NULL, po ? pc->kpay[kind] + po[q] : NULL,
+                             it->rank, cell_doubles(c, kind, b),
+                             po ? pc->kpay[kind] + po[q] : NULL,
                              po ? po[q + 1] - po[q] : 0));
         continue;
       }
       size_t pl = payload_of(&c->pcache, it->dm, kind, ref[b], c->done, 0,
                              c->pay);
       PA_CALL(pa__recs_add(&c->R[kind], c->next[kind]++, bv, ref[b], fl[b],
-                           it->rank, NULL, c->pay, pl));
+                           it->rank, cell_doubles(c, kind, b), c->pay, pl));
     }
   }
 cleanup:
@@ -910,6 +924,11 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   for (pa_idx e = 0; Rp && e < c.o->ne; e++)
     if (c.dest[e] != it->rank) Rp = NULL;
   c.Rp = Rp;
+  {
+    int nd = R[PA_ELEMENT].ndbl > R[PA_BOUNDARY].ndbl ? R[PA_ELEMENT].ndbl
+                                                       : R[PA_BOUNDARY].ndbl;
+    PA_ALLOC(c.cdbl, (size_t)nd + 1);
+  }
   PA_CALL(output_vertices(&c));
   PA_CALL(near_skin_layers(&c));
   PA_CALL(output_elements(&c));
@@ -918,6 +937,7 @@ cleanup:
   pa__free(c.vg);
   pa__free(c.dist);
   pa__free(c.dsk);
+  pa__free(c.cdbl);
   return st;
 }
 

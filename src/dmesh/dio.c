@@ -17,7 +17,8 @@
  *  - padapt keywords (codes 2101-2110, unknown to other readers, which skip
  *    them through the next-keyword position): header, global ids and owner
  *    ranks of vertices / boundary entities / edges, element global ids,
- *    metric and fields, entity flags, and one keyword per user value
+ *    metric and vertex fields, the element and boundary fields (only when
+ *    there are some), entity flags, and one keyword per user value
  *    (description, then the value of every file entity holding it, in file
  *    order).
  * Every keyword starts with its code (int32) and the absolute position of the
@@ -57,6 +58,7 @@ enum {
   KW_VDBL = 2109,          /* PadaptVertexData: metric and fields */
   KW_FLAGS = 2110,         /* PadaptFlags: uint8 per V, E, B, D entity */
   KW_VALUE = 2111,         /* PadaptValue: one user value (vdesc + data) */
+  KW_CDBL = 2112,          /* PadaptCellData: element and boundary fields */
   KW_END = 54,
   FORMAT_VERSION = 1,
   MANIFEST_VERSION = 1
@@ -270,6 +272,11 @@ typedef struct dfile {
   char fieldname[PA_MESH_MAX_FIELDS][PA_MESH_FIELD_NAME_LEN];
   int32_t fieldncomp[PA_MESH_MAX_FIELDS];
   double *vdbl;
+  /* element (c = 0) and boundary (c = 1) fields, and their values */
+  int32_t ncfield[2];
+  char cfieldname[2][PA_MESH_MAX_FIELDS][PA_MESH_FIELD_NAME_LEN];
+  int32_t cfieldncomp[2][PA_MESH_MAX_FIELDS], cfieldmode[2][PA_MESH_MAX_FIELDS];
+  double *cdbl[2];
   uint8_t *flags;
   int have_header;
   int nval;
@@ -283,6 +290,8 @@ static void dfile_free(dfile *f) {
     pa__free(f->owner[k]);
   }
   pa__free(f->vdbl);
+  pa__free(f->cdbl[0]);
+  pa__free(f->cdbl[1]);
   pa__free(f->flags);
   for (int q = 0; q < f->nval; q++) pa__free(f->valdata[q]);
   pa__free(f->val);
@@ -378,6 +387,41 @@ cleanup:
   return st;
 }
 
+/* KW_CDBL: the element and boundary fields' descriptions (counts, then
+ * name, components and transfer mode of each), then the values of the file
+ * elements and of the file boundary entities. */
+static pa_status read_cdbl_kw(FILE *fp, const char *path, int64_t room,
+                              int64_t next, dfile *f) {
+  pa_status st = PA_SUCCESS;
+  void *p = NULL;
+  PA_CHECK(f->have_header && room >= 8 && fread(f->ncfield, 4, 2, fp) == 2,
+           PA_ERR_FORMAT, "%s: bad cell data keyword", path);
+  int nd[2] = {0, 0};
+  for (int c = 0; c < 2; c++) {
+    PA_CHECK(f->ncfield[c] >= 0 && f->ncfield[c] <= PA_MESH_MAX_FIELDS,
+             PA_ERR_FORMAT, "%s: bad cell data keyword", path);
+    for (int q = 0; q < f->ncfield[c]; q++) {
+      PA_CHECK(fread(f->cfieldname[c][q], PA_MESH_FIELD_NAME_LEN, 1, fp) == 1 &&
+                   fread(&f->cfieldncomp[c][q], 4, 1, fp) == 1 &&
+                   fread(&f->cfieldmode[c][q], 4, 1, fp) == 1 &&
+                   f->cfieldncomp[c][q] > 0 && f->cfieldncomp[c][q] < 1000 &&
+                   f->cfieldmode[c][q] > PA_TRANSFER_DEFAULT &&
+                   f->cfieldmode[c][q] <= PA_TRANSFER_NEAREST,
+               PA_ERR_FORMAT, "%s: bad cell field description", path);
+      f->cfieldname[c][q][PA_MESH_FIELD_NAME_LEN - 1] = '\0';
+      nd[c] += f->cfieldncomp[c][q];
+    }
+  }
+  for (int c = 0; c < 2; c++) {
+    room = (next ? next : INT64_MAX) - ftello(fp);
+    PA_CALL(read_block(fp, path, &p,
+                       sizeof(double) * nd[c] * (size_t)f->h[H_NFILE + 1 + c], room));
+    f->cdbl[c] = p;
+  }
+cleanup:
+  return st;
+}
+
 /* KW_VALUE: one user value's description, checked, then its data. */
 static pa_status read_value_kw(FILE *fp, const char *path, int64_t room,
                                int64_t next, dfile *f) {
@@ -439,6 +483,9 @@ static pa_status read_keyword(FILE *fp, const char *path, int32_t code,
     break;
   case KW_VALUE:
     PA_CALL(read_value_kw(fp, path, room, next, f));
+    break;
+  case KW_CDBL:
+    PA_CALL(read_cdbl_kw(fp, path, room, next, f));
     break;
   case KW_FLAGS: {
     size_t n = 0;
@@ -586,6 +633,22 @@ static pa_status write_vtu(const pa_dmesh *dm, pa_mesh *fm,
       PA_CALL(pa_mesh_add_field(fm, m->field[q].name, nc, col));
     off += nc;
   }
+  /* the element and boundary fields, on the file's cells */
+  for (int c = 0; c < 2; c++) {
+    int kind = PA_ELEMENT + c, *nf;
+    const pa__field *fl = pa__mesh_fields((pa_mesh *)m, kind, &nf);
+    for (int q = 0; q < *nf; q++) {
+      int nc = fl[q].ncomp;
+      pa__free(col);
+      col = NULL;
+      PA_ALLOC(col, (size_t)nc * (nfile[kind] ? nfile[kind] : 1));
+      for (pa_idx i = 0; i < dm->nloc[kind]; i++)
+        if (map[kind][i] >= 0)
+          memcpy(col + (size_t)nc * map[kind][i], fl[q].val + (size_t)nc * i,
+                 sizeof(double) * nc);
+      PA_CALL(pa_mesh_add_field_at(fm, (pa_entity)kind, fl[q].name, nc, col));
+    }
+  }
   {
     pa__vtu_extra x = {dm->rank, vgid, ghost, cgid};
     PA_CALL(pa__vtu_write(fm, path, 0, &x));
@@ -626,7 +689,18 @@ static pa_status write_pvtu(const char *base, int nranks, const pa_mesh *m) {
           "<PDataArray type=\"Int32\" Name=\"ref\"/>\n"
           "<PDataArray type=\"Int64\" Name=\"gid\"/>\n"
           "<PDataArray type=\"UInt8\" Name=\"vtkGhostType\"/>\n"
-          "</PPointData>\n<PCellData Scalars=\"quality\">\n"
+          "</PPointData>\n<PCellData Scalars=\"quality\">\n");
+  /* the cell arrays of pa__vtu_write: one per name and size */
+  for (int q = 0; q < m->nefield; q++)
+    fprintf(fp, "<PDataArray type=\"Float64\" Name=\"%s\" NumberOfComponents=\"%d\"/>\n",
+            m->efield[q].name, m->efield[q].ncomp);
+  for (int q = 0; q < m->nbfield; q++) {
+    int k = pa_mesh_field_index(m, PA_ELEMENT, m->bfield[q].name);
+    if (k >= 0 && m->efield[k].ncomp == m->bfield[q].ncomp) continue;
+    fprintf(fp, "<PDataArray type=\"Float64\" Name=\"%s\" NumberOfComponents=\"%d\"/>\n",
+            m->bfield[q].name, m->bfield[q].ncomp);
+  }
+  fprintf(fp,
           "<PDataArray type=\"Int32\" Name=\"ref\"/>\n"
           "<PDataArray type=\"UInt8\" Name=\"entity\"/>\n"
           "<PDataArray type=\"Float64\" Name=\"quality\"/>\n"
@@ -1062,6 +1136,47 @@ cleanup:
   return st;
 }
 
+/* The element and boundary fields of the file entities (KW_CDBL), when
+ * the mesh has some. */
+static pa_status write_cell_doubles(dwriter *w) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = w->dm;
+  const pa_mesh *m = dm->mesh;
+  unsigned char *desc = NULL;
+  double *val[2] = {NULL, NULL};
+  size_t nval[2] = {0, 0};
+  if (!m->nefield && !m->nbfield) return PA_SUCCESS;
+  int32_t n[2] = {m->nefield, m->nbfield};
+  size_t unit = PA_MESH_FIELD_NAME_LEN + 8, dl = 8 + unit * (size_t)(n[0] + n[1]);
+  PA_CALLOC(desc, dl);
+  memcpy(desc, n, 8);
+  unsigned char *q = desc + 8;
+  for (int c = 0; c < 2; c++) {
+    int *nf;
+    const pa__field *f = pa__mesh_fields((pa_mesh *)m, PA_ELEMENT + c, &nf);
+    int nd = 0;
+    for (int k = 0; k < *nf; k++, q += unit) {
+      int32_t x[2] = {f[k].ncomp, f[k].transfer};
+      memcpy(q, f[k].name, PA_MESH_FIELD_NAME_LEN);
+      memcpy(q + PA_MESH_FIELD_NAME_LEN, x, 8);
+      nd += f[k].ncomp;
+    }
+    int kind = PA_ELEMENT + c;
+    nval[c] = (size_t)nd * w->nfile[kind];
+    PA_ALLOC(val[c], nval[c] ? nval[c] : 1);
+    for (pa_idx i = 0; i < dm->nloc[kind]; i++)
+      if (w->map[kind][i] >= 0)
+        pa__entity_doubles(m, kind, i, val[c] + (size_t)nd * w->map[kind][i]);
+  }
+  PA_CALL(kw_write(&w->kw, KW_CDBL, desc, dl, val[0], sizeof(double) * nval[0],
+                   val[1], sizeof(double) * nval[1]));
+cleanup:
+  pa__free(desc);
+  pa__free(val[0]);
+  pa__free(val[1]);
+  return st;
+}
+
 /* The flags of every file entity, kind after kind. */
 static pa_status write_flags(dwriter *w) {
   pa_status st = PA_SUCCESS;
@@ -1158,6 +1273,7 @@ pa_status pa_dmesh_write(pa_dmesh *dm, const char *path) {
   PA_CALL(write_comms(&w));
   PA_CALL(write_ids(&w));
   PA_CALL(write_vertex_doubles(&w));
+  PA_CALL(write_cell_doubles(&w));
   PA_CALL(write_flags(&w));
   PA_CALL(write_values(&w));
   PA_CALL(kw_close(&w.kw, &w.kwout));
@@ -1234,8 +1350,16 @@ static pa_status file_records(const char *path, int f, int nwriters,
                fm->nb == h[H_NFILE + 2] && fm->ned == h[H_NFILE + 3],
            PA_ERR_FORMAT, "%s: the mesh counts differ from the padapt header",
            path);
-  PA_CHECK(df->met_ncomp == lay->met_ncomp && df->nfield == lay->nfield,
+  PA_CHECK(df->met_ncomp == lay->met_ncomp && df->nfield == lay->nfield &&
+               df->ncfield[0] == lay->ncfield[0] && df->ncfield[1] == lay->ncfield[1],
            PA_ERR_FORMAT, "%s: metric or fields differ from rank 0's file", path);
+  for (int c = 0; c < 2; c++)
+    for (int q = 0; q < lay->ncfield[c]; q++)
+      PA_CHECK(!strcmp(df->cfieldname[c][q], lay->cfieldname[c][q]) &&
+                   df->cfieldncomp[c][q] == lay->cfieldncomp[c][q] &&
+                   df->cfieldmode[c][q] == lay->cfieldmode[c][q],
+               PA_ERR_FORMAT, "%s: %s field %d differs from rank 0's file", path,
+               c ? "boundary" : "element", q + 1);
   int nd = pa__layout_ndbl(lay) - d;
   /* user values: same descriptions as rank 0's file; cur[q] walks value q's
    * data over the file entities holding it, in file order */
@@ -1277,7 +1401,9 @@ static pa_status file_records(const char *path, int f, int nwriters,
       pa_gid vg[4];
       for (int j = 0; j < nv; j++) vg[j] = df->gid[0][conn[(size_t)nv * i + j]];
       uint8_t flag = df->flags ? df->flags[foff + (size_t)i] : fl[i];
-      PA_CALL(pa__recs_add(&R[k], df->gid[k][i], vg, ref[i], flag, me, NULL,
+      int cnd = R[k].ndbl;
+      const double *cd = cnd ? df->cdbl[k - PA_ELEMENT] + (size_t)cnd * i : NULL;
+      PA_CALL(pa__recs_add(&R[k], df->gid[k][i], vg, ref[i], flag, me, cd,
                            pay, plen));
     }
     foff += (size_t)n;
@@ -1334,6 +1460,14 @@ static pa_status read_first_file(rset *s) {
   s->lay.nfield = df.nfield;
   memcpy(s->lay.fieldname, df.fieldname, sizeof s->lay.fieldname);
   memcpy(s->lay.fieldncomp, df.fieldncomp, sizeof s->lay.fieldncomp);
+  for (int c = 0; c < 2; c++) {
+    s->lay.ncfield[c] = df.ncfield[c];
+    for (int q = 0; q < df.ncfield[c]; q++) {
+      memcpy(s->lay.cfieldname[c][q], df.cfieldname[c][q], PA_MESH_FIELD_NAME_LEN);
+      s->lay.cfieldncomp[c][q] = df.cfieldncomp[c][q];
+      s->lay.cfieldmode[c][q] = df.cfieldmode[c][q];
+    }
+  }
   PA_CHECK(hdr[H_NRANKS] >= 1 && hdr[H_NRANKS] < (1 << 24) &&
                (hdr[H_DIM] == 2 || hdr[H_DIM] == 3),
            PA_ERR_FORMAT, "%s: bad header", fpath);
@@ -1398,7 +1532,7 @@ static pa_status read_my_files(rset *s) {
   memset(&df, 0, sizeof df);
   for (int k = 0; k < PA_DMESH_NKIND; k++)
     pa__recs_init(&s->R[k], k, pa__kind_nv(s->lay.dim, k),
-                  k == PA_VERTEX ? pa__layout_ndbl(&s->lay) : 0);
+                  pa__layout_kind_ndbl(&s->lay, k));
   int f0 = (int)((int64_t)s->rank * nw / s->size),
       f1 = (int)((int64_t)(s->rank + 1) * nw / s->size);
   for (int f = f0; f < f1; f++) {

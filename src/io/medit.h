@@ -36,7 +36,10 @@ enum {
   PA_IO_GMF_REQUIRED_TRIANGLES = 17,
   PA_IO_GMF_PYRAMIDS = 49,
   PA_IO_GMF_END = 54,
-  PA_IO_GMF_SOL_AT_VERTICES = 62
+  PA_IO_GMF_SOL_AT_VERTICES = 62,
+  PA_IO_GMF_SOL_AT_EDGES = 63,
+  PA_IO_GMF_SOL_AT_TRIANGLES = 64,
+  PA_IO_GMF_SOL_AT_TETRAHEDRA = 66
 };
 /* Most solution types in one SolAtVertices keyword (libMeshb's GmfMaxTyp). */
 #define PA_IO_GMF_MAX_TYPES 1000

@@ -526,6 +526,7 @@ pa_status pa_mesh_build_boundary(pa_mesh *mesh, int32_t ref, pa_idx *nadded) {
     nb++;
   }
   PA_ASSERT(nb == mesh->nb + nadd);
+  pa__mesh_zero_values(mesh, PA_BOUNDARY, (size_t)mesh->nb, (size_t)nb);
   mesh->nb = nb;
   /* Elements are unchanged, so adjacency and balls stay valid. */
   pa__free(mesh->bhash);

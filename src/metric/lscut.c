@@ -1113,6 +1113,34 @@ static pa_status cells_to(const pa__ls_cells *c, pa_idx *conn, int32_t *ref,
   return PA_SUCCESS;
 }
 
+/* The fields of mesh on its entities at onto the new cells c of nm: a cell
+ * takes the values of the one it comes from (kept whole, or a part of it:
+ * the parts cover their parent, so a density keeps its integral), a new
+ * interface entity zeros; with their transfer modes. */
+static pa_status carry_fields(const pa_mesh *mesh, pa_entity at,
+                              const pa__ls_cells *c, pa_mesh *nm) {
+  pa_status st = PA_SUCCESS;
+  const pa__field *fl = at == PA_ELEMENT ? mesh->efield : mesh->bfield;
+  int nf = at == PA_ELEMENT ? mesh->nefield : mesh->nbfield;
+  double *y = NULL;
+  for (int f = 0; f < nf; f++) {
+    int nc = fl[f].ncomp;
+    PA_ALLOC(y, (size_t)nc * (c->n ? (size_t)c->n : 1));
+    for (pa_idx i = 0; i < c->n; i++) {
+      pa_idx p = c->parent[i], o = p >= 0 ? p : p <= -2 ? -2 - p : -1;
+      for (int j = 0; j < nc; j++)
+        y[(size_t)nc * i + j] = o >= 0 ? fl[f].val[(size_t)nc * o + j] : 0;
+    }
+    PA_CALL(pa_mesh_add_field_at(nm, at, fl[f].name, nc, y));
+    PA_CALL(pa_mesh_set_field_transfer(nm, at, f, (pa_transfer)fl[f].transfer));
+    pa__free(y);
+    y = NULL;
+  }
+cleanup:
+  pa__free(y);
+  return st;
+}
+
 pa_status pa_mesh_levelset_cut(pa_mesh *mesh, const double *phi,
                                const pa_levelset_opts *opts,
                                pa_levelset_report *report) {
@@ -1185,6 +1213,8 @@ pa_status pa_mesh_levelset_cut(pa_mesh *mesh, const double *phi,
   nm->ne = out.elem.n;
   nm->nb = out.bdry.n;
   nm->ned = out.edge.n;
+  PA_CALL(carry_fields(mesh, PA_ELEMENT, &out.elem, nm));
+  PA_CALL(carry_fields(mesh, PA_BOUNDARY, &out.bdry, nm));
   /* swap: the caller's handle holds the new mesh, with its names */
   {
     int nn = nm->nname;

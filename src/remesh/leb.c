@@ -9,7 +9,9 @@
  * and boundary entity containing them; the new edges join the queue. The
  * new vertex gets the mean of the ends' fields and their interpolated
  * metric (pa__metric_interp), computed from the ends in coordinate order (so the same bits
- * wherever the same edge is split).
+ * wherever the same edge is split). The halves of a split element or
+ * boundary entity keep its element or boundary field values (exact for a
+ * piecewise-constant field: conservative and bounded).
  *
  *  - An edge of a boundary entity of reference o->skin_ref (a piece's skin)
  *    is split while longer than o->skin_lmax if o->skin_ok marks both its
@@ -380,10 +382,12 @@ static pa_status split_cells(bis *s, int faces, pa_idx a, pa_idx b, pa_idx mid,
     if (faces) {
       PA_CALL(pa_mesh_add_bdry(m, v2, m->bref[k], &k2));
       m->bflag[k2] = m->bflag[k];
+      pa__mesh_copy_values(m, PA_BOUNDARY, k, k2); /* halves keep the values */
       cv = m->bdry + (size_t)nvc * k; /* the arrays may have moved */
     } else {
       PA_CALL(pa_mesh_add_elem(m, v2, m->eref[k], &k2));
       m->eflag[k2] = m->eflag[k];
+      pa__mesh_copy_values(m, PA_ELEMENT, k, k2);
       cv = m->elem + (size_t)nvc * k;
     }
     for (int j = 0; j < nvc; j++)

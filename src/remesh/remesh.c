@@ -3,12 +3,16 @@
  * remesher (its callback sends 2D meshes to src/remesh2d/, 3D ones through
  * longest-edge bisection, leb.c, to src/remesh3d/), and the driver
  * pa_remesh() that validates the input, prepares the metric (hsiz,
- * hmin/hmax, gradation) and calls a remesher.
+ * hmin/hmax, gradation) and calls a remesher, then carries the element
+ * and boundary fields onto the result (transfer.c).
  *
  * Invariants:
  *  - pa_remesh never leaves a half-changed mesh: the prepared metric is built
  *    in a new array and installed only for the call; on an error or the
  *    FAILED outcome the original metric (and everything else) is restored;
+ *  - a remesher never sees element nor boundary fields: a mesh that has
+ *    some is copied whole first (the old mesh of the transfer, and what an
+ *    error after the remesher gives back) and remeshed without them;
  *  - frozen vertices (PA_FLAG_REQUIRED, or vertices of a frozen element or
  *    boundary entity) keep their metric value bit for bit: hsiz, clamping and
  *    gradation skip them (gradation still lets them constrain neighbours);
@@ -181,6 +185,7 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   pa__name *names = NULL; /* the caller's physical names, held aside */
   int nname = 0, bound_set = 0;
   size_t bound0 = 0, bound = 0;
+  pa_mesh *orig = NULL; /* the input, when it has element or boundary fields */
   double t0 = pa_wtime(), cpu0;
   wrap.t0 = t0;
   PA_CHECK(r && r->remesh && mesh, PA_ERR_ARG, "pa_remesh: NULL argument");
@@ -199,6 +204,13 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
     bound = (size_t)(opts->mem_mb * 1e6);
     pa_memory_set_limit(bound);
     bound_set = 1;
+  }
+  if (mesh->nefield || mesh->nbfield) {
+    PA_CALL(pa_mesh_copy(mesh, &orig));
+    for (int at = PA_ELEMENT; at <= PA_BOUNDARY; at++)
+      while (pa_mesh_nfield_at(mesh, (pa_entity)at))
+        PA_CALL(pa_mesh_remove_field_at(
+            mesh, (pa_entity)at, pa_mesh_nfield_at(mesh, (pa_entity)at) - 1));
   }
 
   int d = mesh->dim, nc = mesh->met_ncomp ? mesh->met_ncomp : 1;
@@ -246,6 +258,7 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   report->cpu_s = pa__thread_cputime() - cpu0;
   if (st != PA_SUCCESS) goto cleanup;
   if (report->outcome == PA_REMESH_FAILED) goto cleanup;
+  if (orig) PA_CALL(pa__transfer_fields(orig, mesh, &report->transfer));
   pa__free(oldmet);
   oldmet = NULL;
   installed = 0;
@@ -262,6 +275,13 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
     }
   }
 cleanup:
+  if (orig && (st != PA_SUCCESS || report->outcome == PA_REMESH_FAILED)) {
+    /* the input comes back whole (its metric and names as below) */
+    pa_mesh t = *mesh;
+    *mesh = *orig;
+    *orig = t;
+  }
+  pa_mesh_destroy(orig);
   if (names) {
     pa__mesh_free_names(mesh);
     mesh->names = names;

@@ -315,6 +315,50 @@ def test_rmc():
             % (np_, counts[0], counts[1]))
 
 
+def test_cell_fields():
+    """An element field goes through the cut and the adaptation with its
+    integral (the parts of a cut element take its value) at 1-4 processes
+    (-serial-below 0: the cut is the distributed one); a boundary field
+    comes out on every boundary entity, zeros on the new interface."""
+    run(["generate", "box2d", "12", "cf.mesh"])
+    x, E, _, B, _ = read("cf.mesh", 2)
+    write_sol("cf.phi.sol", 2, np.hypot(x[:, 0] - 0.5, x[:, 1] - 0.5) - 0.3)
+    rho = 1.0 + (np.arange(len(E)) % 3)
+    with open("cf.rho.sol", "w") as f:
+        f.write("MeshVersionFormatted 2\nDimension 2\nSolAtTriangles\n%d\n1 1\n"
+                % len(E))
+        f.writelines("%.17g\n" % v for v in rho)
+        f.write("SolAtEdges\n%d\n1 1\n" % len(B))
+        f.writelines("7\n" for _ in B)
+        f.write("End\n")
+
+    def integral(mesh, sol):
+        xx, EE, _, BB, _ = read(mesh, 2)
+        w = open(sol).read().split()
+        i = w.index("SolAtTriangles")
+        v = np.array(w[i + 4:i + 4 + int(w[i + 1])], float)
+        j = w.index("SolAtEdges")
+        b = np.array(w[j + 4:j + 4 + int(w[j + 1])], float)
+        a = simplex_vol(xx[EE], 2)
+        return float(np.dot(np.abs(a), v)), len(BB), b
+
+    before, _, _ = integral("cf.mesh", "cf.rho.sol")
+    for np_ in (1, 2, 3, 4):
+        out, fo = "cf.o%d.mesh" % np_, "cf.o%d.fields.sol" % np_
+        p = run(["adapt", "cf.mesh", "-ls", "cf.phi.sol", "-field", "cf.rho.sol",
+                 "-hsiz", "0.05", "-serial-below", "0", "-out", out, "-outfield",
+                 fo], np_)
+        if p.returncode:
+            return
+        after, nb, b = integral(out, fo)
+        (ok if abs(after - before) <= 1e-12 * abs(before) else fail)(
+            "cell fields np %d: integral %.17g, %.17g before" % (np_, after, before))
+        (ok if len(b) == nb and set(np.unique(b)) <= {0.0, 7.0} and 7.0 in b
+         else fail)("cell fields np %d: a boundary value per boundary entity, "
+                    "the old ones or zeros (%d for %d, values %s)"
+                    % (np_, len(b), nb, np.unique(b)))
+
+
 def test_options_and_bad_input():
     run(["generate", "box2d", "12", "b.mesh"])
     x, _, _, _, _ = read("b.mesh", 2)
@@ -366,6 +410,7 @@ def main():
     test_shapes()
     test_materials()
     test_rmc()
+    test_cell_fields()
     test_options_and_bad_input()
     if fails:
         print("%d failure(s)" % len(fails))

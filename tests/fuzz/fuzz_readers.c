@@ -321,8 +321,13 @@ static int walk_sol(pa_sol *sol) {
                : kind == PA_SOL_VECTOR ? dim
                : kind == PA_SOL_TENSOR ? dim * (dim + 1) / 2
                                        : -1;
-    if (ncomp != want || (nvert && !v)) return 0;
-    for (size_t i = 0; i < (size_t)nvert * (size_t)ncomp; i++)
+    pa_sol_at at;
+    pa_idx n;
+    if (pa_sol_field_where(sol, k, &at, &n, NULL) != PA_SUCCESS || n < 0 ||
+        (at == PA_SOL_AT_VERTICES && n != nvert))
+      return 0;
+    if (ncomp != want || (n && !v)) return 0;
+    for (size_t i = 0; i < (size_t)n * (size_t)ncomp; i++)
       sum += v[i];
   }
   (void)sum;

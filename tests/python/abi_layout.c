@@ -18,6 +18,7 @@ int main(void) {
   SIZE(pa_fidelity);
   SIZE(pa_write_opts);
   SIZE(pa_remesh_opts);
+  SIZE(pa_transfer_report);
   SIZE(pa_remesh_report);
   SIZE(pa_metric_hessian_opts);
   SIZE(pa_metric_levelset_opts);

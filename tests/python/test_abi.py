@@ -15,6 +15,7 @@ MIRROR = {
     "pa_fidelity": _lib.Fidelity,
     "pa_write_opts": _mesh._WriteOpts,
     "pa_remesh_opts": _lib.RemeshOpts,
+    "pa_transfer_report": _lib.TransferReport,
     "pa_remesh_report": _lib.RemeshReport,
     "pa_metric_hessian_opts": _lib.HessianOpts,
     "pa_metric_levelset_opts": _lib.LevelsetOpts,

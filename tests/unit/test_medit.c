@@ -454,8 +454,8 @@ static void test_sol_round_trips(void) {
   CHECK(pa_sol_write(s2, "x.txt") == PA_ERR_UNSUPPORTED);
   pa_sol_destroy(empty);
 
-  /* ASCII with comments, a skipped solution at elements, then two
-   * SolAtVertices keywords whose fields add up; MeshVersionFormatted 1. */
+  /* ASCII with comments, a solution at elements, then two SolAtVertices
+   * keywords whose fields add up; MeshVersionFormatted 1. */
   write_text("hand.sol", "MeshVersionFormatted 1 # float\nDimension 2\n"
                          "SolAtTriangles\n1\n1 1\n3.5\n"
                          "SolAtVertices\n3\n2 1 2 # scalar, vector\n"
@@ -464,12 +464,21 @@ static void test_sol_round_trips(void) {
                          "SolAtVertices 3 1 3\n1 0 1\n2 0 2\n3 0 3\nEnd\n");
   pa_sol *h = NULL;
   CHECK_OK(pa_sol_read("hand.sol", &h));
-  CHECK(h && pa_sol_nfield(h) == 3 && pa_sol_nvert(h) == 3);
+  CHECK(h && pa_sol_nfield(h) == 4 && pa_sol_nvert(h) == 3);
   if (h) {
-    CHECK_OK(pa_sol_field(h, 1, &kind, &nc, &val));
-    CHECK(kind == PA_SOL_VECTOR && nc == 2 && val[3] == 21.0);
+    pa_sol_at at;
+    pa_idx n;
+    const char *org;
+    CHECK_OK(pa_sol_field_where(h, 0, &at, &n, &org));
+    CHECK(at == PA_SOL_AT_TRIANGLES && n == 1 && !strcmp(org, "hand.sol:3"));
+    CHECK_OK(pa_sol_field(h, 0, &kind, &nc, &val));
+    CHECK(kind == PA_SOL_SCALAR && nc == 1 && val[0] == 3.5);
     CHECK_OK(pa_sol_field(h, 2, &kind, &nc, &val));
+    CHECK(kind == PA_SOL_VECTOR && nc == 2 && val[3] == 21.0);
+    CHECK_OK(pa_sol_field(h, 3, &kind, &nc, &val));
     CHECK(kind == PA_SOL_TENSOR && nc == 3 && val[8] == 3.0);
+    CHECK_OK(pa_sol_field_where(h, 3, &at, &n, &org));
+    CHECK(at == PA_SOL_AT_VERTICES && n == 3 && !strcmp(org, "hand.sol:14"));
   }
   pa_sol_destroy(h);
   remove("hand.sol");
