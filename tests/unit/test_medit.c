@@ -605,8 +605,10 @@ static void test_errors(void) {
   expect_mesh_error("e2.mesh", text, PA_ERR_FORMAT, "indices start at 1");
   expect_mesh_error("e3.mesh", "Dimension 2\nVertices 1\n0 nan 0\n",
                     PA_ERR_FORMAT, ":3: vertex 1: coordinate 2 is NaN");
-  expect_mesh_error("e4.mesh", "Dimension 2 Foo 3\n", PA_ERR_FORMAT,
-                    ":1: unknown keyword 'Foo'");
+  expect_mesh_error("e4.mesh", "Dimension 2\nVertices 1 0 0 0\nFoo 3\n",
+                    PA_ERR_FORMAT,
+                    ":3: vertices but no Triangles nor Tetrahedra, and "
+                    "keywords padapt does not know were skipped: Foo");
   expect_mesh_error("e5.mesh", "Vertices 1 0 0 0\n", PA_ERR_FORMAT,
                     "missing Dimension");
   expect_mesh_error("e6.mesh", "Dimension 3\nPrisms 1 1 2 3 4 5 6 0\n",
