@@ -67,7 +67,7 @@ steady() {
     echo "uniform n=$n: $r"
     uniform+=("$(echo "$r" | awk '{printf "{\"vertices\": %d, \"elements\": %d, \"error\": %s}", $2, $3, $4}')")
   done
-  ff "$edp" -n "$start" -savemesh m0.mesh -sol u0.sol > /dev/null
+  echo "start n=$start: $(ff "$edp" -n "$start" -savemesh m0.mesh -sol u0.sol | field RESULT 0)"
   local k=0 t0 out
   for c in $targets; do
     t0=$(now)
