@@ -5,7 +5,8 @@
 # Gmsh's -format mesh (2D, 3D, high order refused). Counts must match what
 # the writer reports, the note at -v 1 must name the keywords skipped, a
 # metric must build from FreeFem++'s mesh and solution, and padapt's output
-# must read back in FreeFem++. Unit side: tests/unit/test_medit_keywords.c.
+# must read back in FreeFem++. Unit side: tests/unit/test_medit.c
+# (test_freefem, test_mmg, test_unknown_binary...).
 set -u
 : "${PADAPT:?PADAPT must point to the padapt binary}"
 fails=0
