@@ -57,7 +57,9 @@
  *    a file left with vertices and no elements after skipping an unknown
  *    keyword is refused, naming it (a misspelt Triangles, say).
  */
-#include "io/io.h"
+#include "io/fmt.h"
+#include "io/medit.h"
+#include "io/output.h"
 
 #include <ctype.h>
 #include <errno.h>
