@@ -77,6 +77,8 @@ pa_status pa__medit_read(const char *path, pa_mesh **mesh);
 pa_status pa__medit_write(pa_mesh *mesh, const char *path, int binary,
                           int version);
 pa_status pa__gmsh_read(const char *path, pa_mesh **mesh);
+/* MSH 4.1 with its classification (pa_mesh_read_model). */
+pa_status pa__gmsh_read_model(const char *path, pa_mesh **mesh);
 pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary);
 
 /* The arrays a distributed set's rank file adds (src/dmesh/dio.c); NULL

@@ -33,6 +33,19 @@ typedef struct pa__name {
   char *name; /* NUL-terminated, allocated */
 } pa__name;
 
+/* A model entity of a classified mesh ($Entities of its .msh file): its
+ * physical tags, the entities of one dimension less that bound it (signed
+ * tags, as Gmsh lists them; a seam appears with both signs) and its box
+ * (a point: its coordinates, twice). */
+typedef struct pa__entity {
+  int dim;
+  int32_t tag;
+  int nphys, nbound;
+  int32_t *phys;  /* nphys physical tags */
+  int32_t *bound; /* nbound signed tags of dim - 1 entities */
+  double box[6];  /* min x y z, max x y z */
+} pa__entity;
+
 struct pa_mesh {
   int dim; /* 2 or 3 */
 
@@ -76,6 +89,14 @@ struct pa_mesh {
   int nname;
   pa__name *names;
 
+  /* classification (padapt.h, "Geometry"): the model entity of each
+   * vertex (NULL both when the mesh is not classified; capv entries, grown
+   * with the vertices), and the model's entities, sorted by (dim, tag) */
+  uint8_t *vgdim;
+  int32_t *vgtag;
+  int nent;
+  pa__entity *ents;
+
   /* derived structures, NULL when not built */
   pa_idx *adja;       /* (dim+1) * ne: (dim+1)*f + j, or -1 */
   pa_idx *ball_start; /* nv + 1 */
@@ -89,6 +110,34 @@ struct pa_mesh {
 void pa__mesh_free_names(pa_mesh *mesh);
 /* Replace the physical names of dst by copies of those of src. */
 pa_status pa__mesh_copy_names(pa_mesh *dst, const pa_mesh *src);
+
+/* ---- classification (classify.c) ---- */
+
+/* Free the model entities (the mesh then has none). */
+void pa__mesh_free_entities(pa_mesh *mesh);
+/* Replace the model entities of dst by copies of those of src. */
+pa_status pa__mesh_copy_entities(pa_mesh *dst, const pa_mesh *src);
+/* Make mesh classified: vgdim/vgtag allocated for capv vertices, every
+ * vertex (dim, 0) until set (no-op when already classified). */
+pa_status pa__mesh_enable_entities(pa_mesh *mesh);
+/* Make mesh unclassified (its model entities stay). */
+void pa__mesh_disable_entities(pa_mesh *mesh);
+/* The model entity (dim, tag) of the model's table, or NULL. */
+const pa__entity *pa__mesh_entity(const pa_mesh *mesh, int dim, int32_t tag);
+/* The vertices' entities of the classified mesh recomputed from its cells
+ * (lowest dimension first: a corner at one of the npt points pxyz (dim
+ * coordinates each, compared exactly) is that point ptag; a vertex of a
+ * feature edge (3D) of positive reference on that curve; of a boundary
+ * entity on its curve (2D) or surface (3D); else on the volume (3D) or
+ * surface (2D) of an element). Cells of reference <= 0 (a piece's skin,
+ * unclassified) are passed over. */
+void pa__mesh_derive_entities(pa_mesh *mesh, const double *pxyz,
+                              const int32_t *ptag, pa_idx npt);
+/* The points of the classified mesh (its vertices on entities of dimension
+ * 0): *n of them, coordinates in *pxyz (dim each) and tags in *ptag
+ * (allocated here, NULL when none). */
+pa_status pa__mesh_model_points(const pa_mesh *mesh, double **pxyz,
+                                int32_t **ptag, pa_idx *n);
 
 /* Free derived structures after a topological change. */
 void pa__mesh_invalidate(pa_mesh *mesh);
