@@ -14,6 +14,7 @@
  *    gradation skip them (gradation still lets them constrain neighbours);
  *    with -hsiz on a mesh without a metric every vertex gets hsiz.
  */
+#include "geom/geom.h"
 #include "metric/gradation.h"
 #include "remesh/remesh.h"
 #include "remesh/leb.h"
@@ -100,6 +101,66 @@ cleanup:
   return st;
 }
 
+/* A classified mesh's classification, held aside while a remesher replaces
+ * the mesh's contents (it knows nothing of it): the vertices' entities and
+ * the model's table, and the points (their coordinates), from which
+ * pa__mesh_derive_entities recomputes the entities of the result. */
+typedef struct held_model {
+  uint8_t *vgdim;
+  int32_t *vgtag;
+  pa__entity *ents;
+  int nent;
+  double *pxyz;
+  int32_t *ptag;
+  pa_idx npt;
+  int held;
+} held_model;
+
+static pa_status hold_model(pa_mesh *mesh, held_model *h) {
+  pa_status st = PA_SUCCESS;
+  if (!mesh->vgdim) return PA_SUCCESS;
+  PA_CALL(pa__mesh_model_points(mesh, &h->pxyz, &h->ptag, &h->npt));
+  h->vgdim = mesh->vgdim;
+  h->vgtag = mesh->vgtag;
+  h->ents = mesh->ents;
+  h->nent = mesh->nent;
+  mesh->vgdim = NULL;
+  mesh->vgtag = NULL;
+  mesh->ents = NULL;
+  mesh->nent = 0;
+  h->held = 1;
+cleanup:
+  return st;
+}
+
+/* Give the classification back: derived from the cells of the result
+ * (done), else the mesh's own (the mesh is as given). */
+static pa_status restore_model(pa_mesh *mesh, held_model *h, int done) {
+  pa_status st = PA_SUCCESS;
+  if (!h->held) return PA_SUCCESS;
+  pa__mesh_disable_entities(mesh);
+  pa__mesh_free_entities(mesh);
+  mesh->ents = h->ents;
+  mesh->nent = h->nent;
+  h->ents = NULL;
+  if (done) {
+    st = pa__mesh_enable_entities(mesh);
+    if (st == PA_SUCCESS)
+      pa__mesh_derive_entities(mesh, h->pxyz, h->ptag, h->npt);
+  } else {
+    mesh->vgdim = h->vgdim;
+    mesh->vgtag = h->vgtag;
+    h->vgdim = NULL;
+    h->vgtag = NULL;
+  }
+  pa__free(h->vgdim);
+  pa__free(h->vgtag);
+  pa__free(h->pxyz);
+  pa__free(h->ptag);
+  h->held = 0;
+  return st;
+}
+
 /* The caller's progress callback, given what the remesher does not know:
  * the expected count and the time since pa_remesh started. */
 typedef struct progress_wrap {
@@ -140,6 +201,9 @@ static pa_status check_args(const pa_remesher *r, pa_mesh *mesh,
   PA_CHECK(opts->angle >= 0 && opts->angle <= 180, PA_ERR_ARG,
            "pa_remesh: the angle must lie in [0, 180] degrees, got %g",
            opts->angle);
+  PA_CHECK(!opts->geometry || mesh->vgdim, PA_ERR_ARG,
+           "pa_remesh: a geometry needs a classified mesh (read with "
+           "pa_mesh_read_model, or pa_mesh_set_vertex_entities)");
   if (!opts->trusted) PA_CALL(pa_mesh_check(mesh));
 cleanup:
   return st;
@@ -172,7 +236,11 @@ cleanup:
 pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
                     const pa_remesh_opts *opts, pa_remesh_report *report) {
   pa_status st = PA_SUCCESS;
-  pa_remesh_opts def, relayed;
+  pa_remesh_opts def, relayed, modelled;
+  held_model held;
+  long nproj0 = 0, nfail0 = 0;
+  double tproj0 = 0;
+  memset(&held, 0, sizeof held);
   pa_remesh_report dummy;
   progress_wrap wrap = {NULL, NULL, 0, 0, 0};
   double *newmet = NULL, *oldmet = NULL;
@@ -202,6 +270,15 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
                                     "the available memory"));
     wrap.expected = c / pa__unit_simplex_volume(d);
   }
+  if (opts->geometry) {
+    /* the model's curves and points are the ridges and corners */
+    modelled = *opts;
+    modelled.no_angle = 1;
+    opts = &modelled;
+    nproj0 = opts->geometry->nproject;
+    nfail0 = opts->geometry->nfailed;
+    tproj0 = opts->geometry->seconds;
+  }
   if (opts->progress) {
     wrap.fn = opts->progress;
     wrap.initial = mesh->ne;
@@ -224,11 +301,13 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   nname = mesh->nname;
   mesh->names = NULL;
   mesh->nname = 0;
+  PA_CALL(hold_model(mesh, &held));
   cpu0 = pa__thread_cputime();
   st = r->remesh(r->ctx, mesh, opts, report);
   report->cpu_s = pa__thread_cputime() - cpu0;
   if (st != PA_SUCCESS) goto cleanup;
   if (report->outcome == PA_REMESH_FAILED) goto cleanup;
+  PA_CALL(restore_model(mesh, &held, 1));
   pa__free(oldmet);
   oldmet = NULL;
   installed = 0;
@@ -245,6 +324,14 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
     }
   }
 cleanup:
+  if (held.held && restore_model(mesh, &held, 0) != PA_SUCCESS &&
+      st == PA_SUCCESS)
+    st = PA_ERR_INTERNAL;
+  if (opts && opts->geometry && report) {
+    report->nproject = opts->geometry->nproject - nproj0;
+    report->nproject_failed = opts->geometry->nfailed - nfail0;
+    report->project_s = opts->geometry->seconds - tproj0;
+  }
   if (names) {
     pa__mesh_free_names(mesh);
     mesh->names = names;

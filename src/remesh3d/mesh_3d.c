@@ -157,6 +157,7 @@ pa_status pa__rm3d_reserve(rm3d *m, size_t nv, size_t ne) {
     GROW_TO(m->vtag, cap);
     GROW_TO(m->vtet, cap);
     if (m->nrm) GROW_TO(m->nrm, 3 * cap);
+    if (m->voff) GROW_TO(m->voff, cap);
     for (int k = 0; k < m->nfield; k++)
       GROW_TO(m->fval[k], (size_t)m->fcomp[k] * cap);
     m->capv = cap;
@@ -191,6 +192,7 @@ pa_status pa__rm3d_new_vertex(rm3d *m, const double *x, const double *met,
   m->vtag[i] = 0;
   m->vtet[i] = -1;
   if (m->nrm) memset(m->nrm + 3 * (size_t)i, 0, 3 * sizeof(double));
+  if (m->voff) m->voff[i] = 0;
   for (int k = 0; k < m->nfield; k++)
     memset(m->fval[k] + (size_t)m->fcomp[k] * i, 0,
            m->fcomp[k] * sizeof(double));
@@ -238,6 +240,7 @@ void pa__rm3d_free(rm3d *m) {
   pa__free(m->vtag);
   pa__free(m->vtet);
   pa__free(m->nrm);
+  pa__free(m->voff);
   pa__free(m->tv);
   pa__free(m->adj);
   pa__free(m->q);
@@ -399,6 +402,7 @@ pa_status pa__rm3d_build(rm3d *m, pa_mesh *mesh, const pa_remesh_opts *opts) {
   }
   memcpy(m->vref, mesh->vref, sizeof(int32_t) * (size_t)nv);
   memcpy(m->vpf, mesh->vflag, (size_t)nv);
+  if (opts->geometry) PA_CALLOC(m->voff, m->capv);
   for (pa_idx i = 0; i < nv; i++) {
     uint8_t f = mesh->vflag[i], t = 0;
     if (f & PA_FLAG_REQUIRED) t |= RM3D_V_LOCK;
@@ -529,6 +533,7 @@ pa_status pa__rm3d_compact(rm3d *m, int keep_q) {
     m->vref[j] = m->vref[i];
     m->vpf[j] = m->vpf[i];
     m->vtag[j] = m->vtag[i];
+    if (m->voff) m->voff[j] = m->voff[i];
     for (int k = 0; k < m->nfield; k++) {
       int c = m->fcomp[k];
       memmove(m->fval[k] + (size_t)c * j, m->fval[k] + (size_t)c * i,
@@ -761,6 +766,7 @@ static void move_vertices(rm3d *m, const pa_idx *pos, uint8_t *done) {
   permute(m->vref, sizeof(int32_t), pos, nv, done);
   permute(m->vpf, 1, pos, nv, done);
   permute(m->vtag, 1, pos, nv, done);
+  if (m->voff) permute(m->voff, 1, pos, nv, done);
   for (int k = 0; k < m->nfield; k++)
     permute(m->fval[k], (size_t)m->fcomp[k] * sizeof(double), pos, nv, done);
   for (size_t i = 0; i < 4 * (size_t)m->ne; i++) m->tv[i] = pos[m->tv[i]];

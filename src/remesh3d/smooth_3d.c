@@ -15,8 +15,10 @@
  * the PN surface (cubic patch from the vertex normals, the surface the
  * curved splits sample) of the boundary triangle below the target, if that
  * stays within hausd of the flat triangle and turns none of its triangles
- * by more than about 11 degrees; its normal is interpolated.
- * Locked and corner vertices never move, so frozen entities stay
+ * by more than about 11 degrees; its normal is interpolated. With a model
+ * (pa_remesh_opts.geometry) every such position goes onto the vertex's
+ * curve or surface (model_3d.c), and a move the kernel cannot project is
+ * refused. Locked and corner vertices never move, so frozen entities stay
  * untouched. The moved vertex's metric and fields are re-interpolated in the
  * old ball (metric only when anisotropic: an isotropic size field is treated
  * as attached to the vertex).
@@ -395,8 +397,9 @@ static int try_smooth(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
       double y[3];
       memcpy(y, np, sizeof y);
       if (!curved_point(m, tri, ntri, hausd, y, np, nnew)) continue;
-      if (!surface_kept(m, tri, ntri, p, np)) continue;
     }
+    if (kind && pa__rm3d_project_vertex(m, p, ball, n, np) < 0) continue;
+    if (kind == 3 && !surface_kept(m, tri, ntri, p, np)) continue;
     if (moved_qualities(m, ball, n, np, mp, qold, 1, &first, nq) >= 0)
       continue;
     if (kind == 3) memcpy(m->nrm + 3 * (size_t)p, nnew, sizeof nnew);
@@ -435,6 +438,56 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
    * one along a ridge */
   restrict_move(c, dir, kind == 2 || kind == 3, kind == 1);
   return try_smooth(m, p, ball, n, kind, tri, ntri, hausd, c, qold, iworst);
+}
+
+/* The boundary triangles of p's ball[0..n) hold p's normal within cmin
+ * with p at np (the triangles gathered as curved_patch does). */
+static int ball_surface_kept(const rm3d *m, pa_idx p, const pa_idx *ball,
+                             int n, const double *np, double cmin) {
+  pa_idx tri[3 * 32];
+  int ntri = 0;
+  double h;
+  if (!curved_patch(m, ball, n, tri, &ntri, &h)) return 0;
+  for (int i = 0; i < ntri; i++) {
+    const double *y[3], *yn[3];
+    for (int j = 0; j < 3; j++) {
+      y[j] = m->x + 3 * (size_t)tri[3 * i + j];
+      yn[j] = tri[3 * i + j] == p ? np : y[j];
+    }
+    double n0[3], n1[3];
+    if (!(rm3d_tri_normal(y[0], y[1], y[2], n0) > 0)) continue;
+    if (!(rm3d_tri_normal(yn[0], yn[1], yn[2], n1) > 0) ||
+        n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] < cmin)
+      return 0;
+  }
+  return 1;
+}
+
+int pa__rm3d_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
+  if (!m->voff || !m->voff[p] ||
+      (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)))
+    return 0;
+  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
+  if (n < 0) return 0;
+  double np[3];
+  memcpy(np, m->x + 3 * (size_t)p, sizeof np);
+  if (pa__rm3d_project_vertex(m, p, ball, n, np) <= 0) return 0;
+  double qold = 1e30;
+  for (int i = 0; i < n; i++) {
+    pa_idx t = ball[i] >> 2;
+    if (m->tflag[t] & RM3D_T_FROZEN) return 0;
+    if (m->q[t] < qold) qold = m->q[t];
+  }
+  float nq[RM3D_MAXBALL];
+  int first = 0;
+  const double *mp = m->met + (size_t)m->mc * p;
+  if (!ball_surface_kept(m, p, ball, n, np, RM3D_NORMAL_COS_MODEL) ||
+      moved_qualities(m, ball, n, np, mp, rm3d_q_min(qold), 0, &first, nq) >=
+          0)
+    return 0;
+  apply_move(m, p, ball, n, np, nq, 0);
+  m->voff[p] = 0;
+  return 1;
 }
 
 /* Splitmix64 finaliser: the jiggle's directions. */
@@ -660,6 +713,7 @@ static int try_length_moves(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
     if (kind == 2) /* an axis plane keeps its coordinate bit for bit */
       for (int j = 0; j < 3; j++)
         if (fabs(dir[j]) == 1.0) np[j] = xp[j];
+    if (kind && pa__rm3d_project_vertex(m, p, ball, n, np) < 0) continue;
     double l1[RM3D_LNB];
     int out1 = len_out(m, np, mp, lc->nb, lc->nn, lc->out0, l1);
     if (out1 > lc->out0 ||
