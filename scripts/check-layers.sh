@@ -23,9 +23,9 @@ declare -A allowed=(
   # remesh/ (that header, the shared pass schedule), never each other.
   [remesh]="core mesh metric io geom"
   [remesh2d]="core mesh metric remesh"
-  [remesh3d]="core mesh metric remesh"
+  [remesh3d]="core mesh metric remesh geom"
   [dmesh]="core mesh metric io partition"
-  [adapt]="core mesh metric io partition remesh dmesh"
+  [adapt]="core mesh metric io partition remesh dmesh geom"
 )
 bad=0
 for dir in "$src"/*/; do

@@ -18,7 +18,7 @@
 /* ---- scatter from a root ---- */
 
 typedef struct header {
-  int dim, met_ncomp, nfield, ok;
+  int dim, met_ncomp, nfield, ok, geo;
   int fieldncomp[PA_MESH_MAX_FIELDS];
   char fieldname[PA_MESH_MAX_FIELDS][PA_MESH_FIELD_NAME_LEN];
   int64_t n[PA_DMESH_NKIND]; /* vertices, elements, boundary, edges */
@@ -91,6 +91,10 @@ static pa_status pack_block(pa_mesh *m, const pa__layout *lay, int r, int P,
                m->met + (size_t)m->met_ncomp * (l + i),
                m->met_ncomp * sizeof(double));
       o += m->met_ncomp;
+      for (size_t i = 0; m->vgdim && i < c; i++)
+        B.dbl[(size_t)ndbl * i + o] =
+            pa__entity_pack(m->vgdim[l + i], m->vgtag[l + i]);
+      o += m->vgdim != NULL;
       for (int f = 0; f < m->nfield; f++) {
         int nc = m->field[f].ncomp;
         for (size_t i = 0; i < c; i++)
@@ -134,6 +138,7 @@ static pa_status bcast_header(MPI_Comm comm, int root, pa_mesh *mesh,
     PA_CALL(check_indices(mesh));
     h->dim = mesh->dim;
     h->met_ncomp = mesh->met_ncomp;
+    h->geo = mesh->vgdim != NULL;
     h->nfield = mesh->nfield;
     for (int f = 0; f < mesh->nfield; f++) {
       h->fieldncomp[f] = mesh->field[f].ncomp;
@@ -217,6 +222,7 @@ pa_status pa_dmesh_distribute(MPI_Comm comm, int root, pa_mesh *mesh,
   PA_CALL(bcast_header(comm, root, mesh, overlap, &h));
   lay.dim = h.dim;
   lay.met_ncomp = h.met_ncomp;
+  lay.geo = h.geo;
   lay.nfield = h.nfield;
   memcpy(lay.fieldncomp, h.fieldncomp, sizeof lay.fieldncomp);
   memcpy(lay.fieldname, h.fieldname, sizeof lay.fieldname);
@@ -1081,6 +1087,7 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
     snprintf(m->field[f].name, PA_MESH_FIELD_NAME_LEN, "%s", lay->fieldname[f]);
     m->field[f].ncomp = lay->fieldncomp[f];
   }
+  if (lay->geo) PA_CALL(pa__mesh_enable_entities(m));
   PA_CALL(pa_mesh_reserve(m, (pa_idx)nk[PA_VERTEX], (pa_idx)nk[PA_ELEMENT],
                           (pa_idx)nk[PA_BOUNDARY], (pa_idx)nk[PA_EDGE]));
   PA_ALLOC(ord, nmax ? nmax : 1);
@@ -1098,19 +1105,8 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
       const gview *Q = &Vk[r];
       size_t i = g - off[r];
       if (k == PA_VERTEX) {
-        const double *x = xbuf;
         view_doubles(Q, i, xbuf);
-        memcpy(m->coord + (size_t)d * j, x, d * sizeof(double));
-        x += d;
-        if (m->met_ncomp) {
-          memcpy(m->met + (size_t)m->met_ncomp * j, x, m->met_ncomp * sizeof(double));
-          x += m->met_ncomp;
-        }
-        for (int f = 0; f < m->nfield; f++) {
-          memcpy(m->field[f].val + (size_t)m->field[f].ncomp * j, x,
-                 m->field[f].ncomp * sizeof(double));
-          x += m->field[f].ncomp;
-        }
+        pa__vertex_set_doubles(m, (pa_idx)j, xbuf);
         m->vref[j] = Q->ref[i];
         m->vflag[j] = Q->flag[i];
         int found;

@@ -149,6 +149,7 @@ void pa__dmesh_layout(pa_dmesh *dm, pa__layout *lay) {
   lay->dim = dm->dim;
   if (!dm->mesh) return;
   lay->met_ncomp = dm->mesh->met_ncomp;
+  lay->geo = dm->mesh->vgdim != NULL;
   lay->nfield = dm->mesh->nfield;
   for (int f = 0; f < lay->nfield; f++) {
     snprintf(lay->fieldname[f], PA_MESH_FIELD_NAME_LEN, "%s",
@@ -456,11 +457,15 @@ pa_status pa_dmesh_sync_mesh(pa_dmesh *dm) {
   pa__agree_reset();
   pa_mesh *m = dm->mesh;
   int d = dm->dim;
-  sync_item arr[12 + PA_MESH_MAX_FIELDS];
+  sync_item arr[14 + PA_MESH_MAX_FIELDS];
   int na = 0;
   arr[na++] = (sync_item){PA_VERTEX, m->coord, sizeof(double) * d};
   arr[na++] = (sync_item){PA_VERTEX, m->vref, 4};
   arr[na++] = (sync_item){PA_VERTEX, m->vflag, 1};
+  if (m->vgdim) {
+    arr[na++] = (sync_item){PA_VERTEX, m->vgdim, 1};
+    arr[na++] = (sync_item){PA_VERTEX, m->vgtag, 4};
+  }
   if (m->met_ncomp)
     arr[na++] = (sync_item){PA_VERTEX, m->met, sizeof(double) * m->met_ncomp};
   for (int f = 0; f < m->nfield; f++)

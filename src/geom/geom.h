@@ -35,6 +35,13 @@ struct pa_geometry {
  * and counts as a failure. */
 #define PA_GEOM_MAXJUMP 1.0
 
+/* A vertex farther than this from its entity, relative to the model's size,
+ * is off the model: a point the kernel gives lies on the entity to its
+ * tolerance (OpenCASCADE's, about 1e-7 of the size; Gmsh's projections
+ * land within 1e-10), while a point left on a reconstruction lies off it by
+ * a share of an edge's sagitta, far more. */
+#define PA_GEOM_SNAP_TOL 1e-9
+
 /* Put the point x (sdim = 2 or 3 coordinates; z = 0 in 2D) on entity
  * (dim, tag), dim 1 or 2, into y (sdim values; may be x): 1 on success, 0
  * when the kernel fails, returns a non-finite point or one farther than

@@ -16,8 +16,9 @@
  *    (two surfaces in 2D), is a boundary entity.
  * The second point is why the vertices' entities need not travel through
  * the remeshers: pa_remesh recomputes them from the cells, which carry
- * their references through every operator, and from the points, which are
- * corners and never move.
+ * their references through every operator, and from the points (corners)
+ * and frozen vertices, which never move and are found again by their
+ * coordinates.
  */
 #include "mesh/mesh.h"
 
@@ -129,11 +130,11 @@ cleanup:
 
 /* ---- the vertices' entities from the cells ---- */
 
-/* Lexicographic order of points of dim coordinates (for the corners'
- * exact match against the model's points). */
+/* Lexicographic order of points of dim coordinates (the exact match of a
+ * vertex against the kept points). */
 typedef struct ptkey {
   const double *x;
-  int32_t tag;
+  pa_idx k;
   int dim;
 } ptkey;
 
@@ -152,8 +153,40 @@ static void lower(pa_mesh *m, pa_idx v, int dim, int32_t tag) {
   }
 }
 
-void pa__mesh_derive_entities(pa_mesh *m, const double *pxyz,
-                              const int32_t *ptag, pa_idx npt) {
+void pa__kept_free(pa__kept *k) {
+  pa__free(k->xyz);
+  pa__free(k->gdim);
+  pa__free(k->gtag);
+  memset(k, 0, sizeof *k);
+}
+
+pa_status pa__mesh_kept_points(const pa_mesh *m, const uint8_t *frozen,
+                               pa__kept *kept) {
+  pa_status st = PA_SUCCESS;
+  int d = m->dim;
+  pa_idx n = 0;
+  memset(kept, 0, sizeof *kept);
+  if (!m->vgdim) return PA_SUCCESS;
+  for (pa_idx v = 0; v < m->nv; v++)
+    n += m->vgdim[v] == 0 || (frozen && frozen[v] && m->vgdim[v] < d);
+  if (!n) return PA_SUCCESS;
+  PA_ALLOC(kept->xyz, (size_t)d * n);
+  PA_ALLOC(kept->gdim, n);
+  PA_ALLOC(kept->gtag, n);
+  for (pa_idx v = 0; v < m->nv; v++)
+    if (m->vgdim[v] == 0 || (frozen && frozen[v] && m->vgdim[v] < d)) {
+      pa_idx k = kept->n++;
+      memcpy(kept->xyz + (size_t)d * k, m->coord + (size_t)d * v,
+             d * sizeof *kept->xyz);
+      kept->gdim[k] = m->vgdim[v];
+      kept->gtag[k] = m->vgtag[v];
+    }
+cleanup:
+  if (st) pa__kept_free(kept);
+  return st;
+}
+
+void pa__mesh_derive_entities(pa_mesh *m, const pa__kept *kept) {
   int d = m->dim;
   memset(m->vgdim, 255, (size_t)m->nv);
   memset(m->vgtag, 0, (size_t)m->nv * sizeof *m->vgtag);
@@ -166,54 +199,25 @@ void pa__mesh_derive_entities(pa_mesh *m, const double *pxyz,
         lower(m, m->bdry[(size_t)d * b + i], d - 1, m->bref[b]);
   for (pa_idx k = 0; k < m->ned; k++)
     if (m->edref[k] > 0)
-      for (int i = 0; i < 2; i++) lower(m, m->edge[2 * (size_t)k + i], 1,
-                                        m->edref[k]);
-  if (npt > 0) {
-    ptkey *pts = pa__malloc((size_t)npt * sizeof *pts);
-    if (pts) { /* out of memory: the points stay on their curves */
-      for (pa_idx k = 0; k < npt; k++)
-        pts[k] = (ptkey){pxyz + (size_t)d * k, ptag[k], d};
-      qsort(pts, (size_t)npt, sizeof *pts, cmp_pt);
+      for (int i = 0; i < 2; i++)
+        lower(m, m->edge[2 * (size_t)k + i], 1, m->edref[k]);
+  if (kept && kept->n > 0) {
+    ptkey *pts = pa__malloc((size_t)kept->n * sizeof *pts);
+    if (pts) { /* out of memory: the cells' entities stand */
+      for (pa_idx k = 0; k < kept->n; k++)
+        pts[k] = (ptkey){kept->xyz + (size_t)d * k, k, d};
+      qsort(pts, (size_t)kept->n, sizeof *pts, cmp_pt);
       for (pa_idx v = 0; v < m->nv; v++) {
-        if (!(m->vflag[v] & PA_FLAG_CORNER)) continue;
         ptkey key = {m->coord + (size_t)d * v, 0, d};
-        ptkey *hit = bsearch(&key, pts, (size_t)npt, sizeof *pts, cmp_pt);
-        if (hit) lower(m, v, 0, hit->tag);
+        ptkey *hit =
+            bsearch(&key, pts, (size_t)kept->n, sizeof *pts, cmp_pt);
+        if (hit) lower(m, v, kept->gdim[hit->k], kept->gtag[hit->k]);
       }
       pa__free(pts);
     }
   }
   for (pa_idx v = 0; v < m->nv; v++)
     if (m->vgdim[v] == 255) m->vgdim[v] = (uint8_t)d; /* in no element */
-}
-
-pa_status pa__mesh_model_points(const pa_mesh *m, double **pxyz,
-                                int32_t **ptag, pa_idx *n) {
-  pa_status st = PA_SUCCESS;
-  pa_idx np = 0;
-  int d = m->dim;
-  *pxyz = NULL;
-  *ptag = NULL;
-  *n = 0;
-  if (!m->vgdim) return PA_SUCCESS;
-  for (pa_idx v = 0; v < m->nv; v++) np += m->vgdim[v] == 0;
-  if (!np) return PA_SUCCESS;
-  PA_ALLOC(*pxyz, (size_t)d * np);
-  PA_ALLOC(*ptag, np);
-  for (pa_idx v = 0; v < m->nv; v++)
-    if (m->vgdim[v] == 0) {
-      memcpy(*pxyz + (size_t)d * *n, m->coord + (size_t)d * v,
-             d * sizeof **pxyz);
-      (*ptag)[(*n)++] = m->vgtag[v];
-    }
-cleanup:
-  if (st) {
-    pa__free(*pxyz);
-    pa__free(*ptag);
-    *pxyz = NULL;
-    *ptag = NULL;
-  }
-  return st;
 }
 
 /* ---- completion (pa_mesh_classify) ---- */
@@ -446,9 +450,7 @@ pa_status pa_mesh_classify(pa_mesh *m) {
   pa_status st = PA_SUCCESS;
   uint8_t *gd = NULL;
   int32_t *gt = NULL;
-  double *pxyz = NULL;
-  int32_t *ptag = NULL;
-  pa_idx npt = 0;
+  pa__kept kept = {NULL, NULL, NULL, 0};
   char vs[256];
   PA_CHECK(m, PA_ERR_ARG, "pa_mesh_classify: NULL mesh");
   PA_CHECK(m->vgdim, PA_ERR_ARG,
@@ -475,14 +477,14 @@ pa_status pa_mesh_classify(pa_mesh *m) {
       m->vref[v] = m->vgtag[v];
     }
   /* the entities the cells give must agree with the vertices' */
-  PA_CALL(pa__mesh_model_points(m, &pxyz, &ptag, &npt));
+  PA_CALL(pa__mesh_kept_points(m, NULL, &kept));
   PA_ALLOC(gd, m->nv);
   PA_ALLOC(gt, m->nv);
   if (m->nv) {
     memcpy(gd, m->vgdim, (size_t)m->nv);
     memcpy(gt, m->vgtag, (size_t)m->nv * sizeof *gt);
   }
-  pa__mesh_derive_entities(m, pxyz, ptag, npt);
+  pa__mesh_derive_entities(m, &kept);
   for (pa_idx v = 0; v < m->nv; v++) {
     int dd = m->vgdim[v];
     int32_t dt = m->vgtag[v];
@@ -507,8 +509,7 @@ cleanup:
   }
   pa__free(gd);
   pa__free(gt);
-  pa__free(pxyz);
-  pa__free(ptag);
+  pa__kept_free(&kept);
   return st;
 }
 

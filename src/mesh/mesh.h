@@ -124,20 +124,29 @@ pa_status pa__mesh_enable_entities(pa_mesh *mesh);
 void pa__mesh_disable_entities(pa_mesh *mesh);
 /* The model entity (dim, tag) of the model's table, or NULL. */
 const pa__entity *pa__mesh_entity(const pa_mesh *mesh, int dim, int32_t tag);
+/* Vertices whose entity a remesh keeps: their coordinates (dim each),
+ * entity dimension and tag, n of them. */
+typedef struct pa__kept {
+  double *xyz;
+  uint8_t *gdim;
+  int32_t *gtag;
+  pa_idx n;
+} pa__kept;
+void pa__kept_free(pa__kept *k);
+/* The vertices of the classified mesh a remesh gives back where they are
+ * with their entity: its points (corners, never moved), and with frozen
+ * (NULL: none) the frozen vertices on points, curves and surfaces, whose
+ * boundary cells a piece of the parallel loop may not hold. */
+pa_status pa__mesh_kept_points(const pa_mesh *mesh, const uint8_t *frozen,
+                               pa__kept *kept);
 /* The vertices' entities of the classified mesh recomputed from its cells
- * (lowest dimension first: a corner at one of the npt points pxyz (dim
- * coordinates each, compared exactly) is that point ptag; a vertex of a
- * feature edge (3D) of positive reference on that curve; of a boundary
- * entity on its curve (2D) or surface (3D); else on the volume (3D) or
- * surface (2D) of an element). Cells of reference <= 0 (a piece's skin,
- * unclassified) are passed over. */
-void pa__mesh_derive_entities(pa_mesh *mesh, const double *pxyz,
-                              const int32_t *ptag, pa_idx npt);
-/* The points of the classified mesh (its vertices on entities of dimension
- * 0): *n of them, coordinates in *pxyz (dim each) and tags in *ptag
- * (allocated here, NULL when none). */
-pa_status pa__mesh_model_points(const pa_mesh *mesh, double **pxyz,
-                                int32_t **ptag, pa_idx *n);
+ * (lowest dimension first: a vertex at one of the kept points (compared
+ * exactly) has its entity; a vertex of a feature edge (3D) of positive
+ * reference is on that curve; of a boundary entity on its curve (2D) or
+ * surface (3D); else on the volume (3D) or surface (2D) of an element).
+ * Cells of reference <= 0 (a piece's skin, unclassified) are passed
+ * over. */
+void pa__mesh_derive_entities(pa_mesh *mesh, const pa__kept *kept);
 
 /* Free derived structures after a topological change. */
 void pa__mesh_invalidate(pa_mesh *mesh);

@@ -27,6 +27,9 @@
  *    coordinates and marks: the result depends only on the face's vertices
  *    (a face with one or two splittable edges is cut by the bisections of
  *    those edges, in their own order).
+ *    In a classified mesh, a skin edge whose ends are both on the boundary
+ *    (model entities of lower dimension) is not split: whether it lies on
+ *    the model is known only where its boundary faces are.
  *  - Any other edge on a boundary entity or feature edge, or on a frozen
  *    element, is never split (the surface is the remesher's business).
  *  - Any other edge is split while longer than o->lmax, when no element
@@ -487,6 +490,10 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
     if (skin) {
       int ia = s.inner[e.a], ib = s.inner[e.b];
       if (!(ia & 3) || !(ib & 3) || !(e.len > o->skin_lmax)) continue;
+      /* a classified mesh: a skin edge between two boundary vertices may
+       * lie on the model, which only the pieces holding its boundary faces
+       * know; it stays (both sides decide alike from the vertices) */
+      if (m->vgdim && m->vgdim[e.a] < s.d && m->vgdim[e.b] < s.d) continue;
       if ((ia & 2) ? !(ib & 1) || (ib & 8) : (ib & 2) && (ia & 8)) continue;
     } else if (bnd || !(e.len > o->lmax) ||
                longer_around(&s, &e, s.el, nel, s.tmp)) {
@@ -494,6 +501,7 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
     }
     pa_idx mid;
     PA_CALL(add_midpoint(&s, &e, skin, &mid));
+    if (m->vgdim) m->vgtag[mid] = m->eref[s.el[0]]; /* inside a volume */
     PA_GROW(parent, capp, 2 * (np + 1));
     parent[2 * np] = e.a;
     parent[2 * np + 1] = e.b;

@@ -103,23 +103,25 @@ cleanup:
 
 /* A classified mesh's classification, held aside while a remesher replaces
  * the mesh's contents (it knows nothing of it): the vertices' entities and
- * the model's table, and the points (their coordinates), from which
+ * the model's table, and the vertices that come back where they are (the
+ * points and frozen vertices, by their coordinates), from which
  * pa__mesh_derive_entities recomputes the entities of the result. */
 typedef struct held_model {
   uint8_t *vgdim;
   int32_t *vgtag;
   pa__entity *ents;
   int nent;
-  double *pxyz;
-  int32_t *ptag;
-  pa_idx npt;
+  pa__kept kept;
   int held;
 } held_model;
 
 static pa_status hold_model(pa_mesh *mesh, held_model *h) {
   pa_status st = PA_SUCCESS;
+  uint8_t *frozen = NULL;
   if (!mesh->vgdim) return PA_SUCCESS;
-  PA_CALL(pa__mesh_model_points(mesh, &h->pxyz, &h->ptag, &h->npt));
+  PA_CALLOC(frozen, mesh->nv);
+  pa__mesh_frozen_vertices(mesh, frozen);
+  PA_CALL(pa__mesh_kept_points(mesh, frozen, &h->kept));
   h->vgdim = mesh->vgdim;
   h->vgtag = mesh->vgtag;
   h->ents = mesh->ents;
@@ -130,6 +132,7 @@ static pa_status hold_model(pa_mesh *mesh, held_model *h) {
   mesh->nent = 0;
   h->held = 1;
 cleanup:
+  pa__free(frozen);
   return st;
 }
 
@@ -145,8 +148,7 @@ static pa_status restore_model(pa_mesh *mesh, held_model *h, int done) {
   h->ents = NULL;
   if (done) {
     st = pa__mesh_enable_entities(mesh);
-    if (st == PA_SUCCESS)
-      pa__mesh_derive_entities(mesh, h->pxyz, h->ptag, h->npt);
+    if (st == PA_SUCCESS) pa__mesh_derive_entities(mesh, &h->kept);
   } else {
     mesh->vgdim = h->vgdim;
     mesh->vgtag = h->vgtag;
@@ -155,8 +157,7 @@ static pa_status restore_model(pa_mesh *mesh, held_model *h, int done) {
   }
   pa__free(h->vgdim);
   pa__free(h->vgtag);
-  pa__free(h->pxyz);
-  pa__free(h->ptag);
+  pa__kept_free(&h->kept);
   h->held = 0;
   return st;
 }

@@ -594,6 +594,7 @@ static pa_status prepare(rm3d *m, const pa_remesh_opts *opts) {
   pa_status st = PA_SUCCESS;
   pa_idx nrel = 0;
   if (m->surf) PA_CALL(pa__rm3d_surface_analyze(m, !opts->no_angle));
+  if (m->voff) pa__rm3d_mark_off_model(m); /* for the snap moves */
   PA_CALL(pa__rm3d_skin_relax(m, &nrel));
   if (m->verbosity > 0 && nrel)
     fprintf(stderr, "  rm3d: metric relaxed at %d frozen vertices\n",

@@ -6,6 +6,7 @@
  * and the projection of the point onto it. The operators call these where
  * they compute the point (split_3d.c, smooth_3d.c, collapse_3d.c).
  */
+#include "geom/geom.h"
 #include "remesh3d/remesh3d.h"
 
 /* The entity of boundary vertex p, from its ball[0..n): the curve of a
@@ -61,6 +62,25 @@ int pa__rm3d_project_vertex(const rm3d *m, pa_idx p, const pa_idx *ball,
       !vertex_entity(m, p, ball, n, &dim, &tag, &scale))
     return 0;
   return pa__remesh_project(m->opts, dim, tag, 3, x, scale, x);
+}
+
+void pa__rm3d_mark_off_model(rm3d *m) {
+  pa_idx ball[RM3D_MAXBALL];
+  double tol = PA_GEOM_SNAP_TOL * m->opts->geometry->size;
+  for (pa_idx p = 0; p < m->nv; p++) {
+    if ((m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) ||
+        !(m->vtag[p] & RM3D_V_BDRY))
+      continue;
+    int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
+    double y[3];
+    const double *x = m->x + 3 * (size_t)p;
+    memcpy(y, x, sizeof y);
+    if (n < 0 || pa__rm3d_project_vertex(m, p, ball, n, y) <= 0) continue;
+    double d = sqrt((y[0] - x[0]) * (y[0] - x[0]) +
+                    (y[1] - x[1]) * (y[1] - x[1]) +
+                    (y[2] - x[2]) * (y[2] - x[2]));
+    m->voff[p] = d > tol;
+  }
 }
 
 int pa__rm3d_project_split(const rm3d *m, pa_idx erec, const pa_idx *trec,

@@ -398,10 +398,14 @@ void pa__rm3d_interp(rm3d *m, pa_idx dst, int n, const pa_idx *src,
 int pa__rm3d_project_vertex(const rm3d *m, pa_idx p, const pa_idx *ball,
                             int n, double *x);
 /* Move the boundary vertex p, off the model (voff), onto it when its ball
- * stays valid (no tet under rm3d_q_min of its old quality) and its
- * triangles within RM3D_NORMAL_COS_MODEL of their normals (smooth_3d.c).
- * 1 when moved. */
+ * stays valid (no tet under rm3d_q_min of its old quality), else part of
+ * the way (smooth_3d.c). 1 when moved. */
 int pa__rm3d_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball);
+/* Mark (voff) the free boundary vertices of the input that lie off their
+ * entity by more than PA_GEOM_SNAP_TOL of the model's size: those the
+ * snap moves of an earlier remesh could not place (a piece's frozen skin
+ * was in the way). */
+void pa__rm3d_mark_off_model(rm3d *m);
 /* The same for the point x of a split of the boundary edge (a,b): on the
  * curve of its feature edge erec (>= 0), else on the surface of its
  * boundary triangle trec[0] (ntri > 0). */

@@ -440,28 +440,12 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
   return try_smooth(m, p, ball, n, kind, tri, ntri, hausd, c, qold, iworst);
 }
 
-/* The boundary triangles of p's ball[0..n) hold p's normal within cmin
- * with p at np (the triangles gathered as curved_patch does). */
-static int ball_surface_kept(const rm3d *m, pa_idx p, const pa_idx *ball,
-                             int n, const double *np, double cmin) {
-  pa_idx tri[3 * 32];
-  int ntri = 0;
-  double h;
-  if (!curved_patch(m, ball, n, tri, &ntri, &h)) return 0;
-  for (int i = 0; i < ntri; i++) {
-    const double *y[3], *yn[3];
-    for (int j = 0; j < 3; j++) {
-      y[j] = m->x + 3 * (size_t)tri[3 * i + j];
-      yn[j] = tri[3 * i + j] == p ? np : y[j];
-    }
-    double n0[3], n1[3];
-    if (!(rm3d_tri_normal(y[0], y[1], y[2], n0) > 0)) continue;
-    if (!(rm3d_tri_normal(yn[0], yn[1], yn[2], n1) > 0) ||
-        n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] < cmin)
-      return 0;
-  }
-  return 1;
-}
+/* Steps of a snap move toward the model (pa__rm3d_snap_vertex): the whole
+ * way, then half and a quarter of it, which the next passes take on once
+ * the neighbours moved (a split's model point is refused where a tet of
+ * its shell lies flatter than the point's distance to the model: the
+ * vertex then reaches the model in a few passes instead of never). */
+#define SNAP_STEPS 3
 
 int pa__rm3d_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
   if (!m->voff || !m->voff[p] ||
@@ -469,9 +453,10 @@ int pa__rm3d_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
     return 0;
   int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
   if (n < 0) return 0;
-  double np[3];
-  memcpy(np, m->x + 3 * (size_t)p, sizeof np);
-  if (pa__rm3d_project_vertex(m, p, ball, n, np) <= 0) return 0;
+  const double *xp = m->x + 3 * (size_t)p;
+  double y[3];
+  memcpy(y, xp, sizeof y);
+  if (pa__rm3d_project_vertex(m, p, ball, n, y) <= 0) return 0;
   double qold = 1e30;
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
@@ -481,13 +466,20 @@ int pa__rm3d_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
   float nq[RM3D_MAXBALL];
   int first = 0;
   const double *mp = m->met + (size_t)m->mc * p;
-  if (!ball_surface_kept(m, p, ball, n, np, RM3D_NORMAL_COS_MODEL) ||
-      moved_qualities(m, ball, n, np, mp, rm3d_q_min(qold), 0, &first, nq) >=
-          0)
-    return 0;
-  apply_move(m, p, ball, n, np, nq, 0);
-  m->voff[p] = 0;
-  return 1;
+  /* The tets' quality is the only check: a boundary triangle that would
+   * turn over turns its tet inside out, and one that stands up is the
+   * model's own shape between points on it. */
+  for (int s = 0; s < SNAP_STEPS; s++) {
+    double w = ldexp(1.0, -s), np[3];
+    for (int j = 0; j < 3; j++) np[j] = s ? xp[j] + w * (y[j] - xp[j]) : y[j];
+    if (moved_qualities(m, ball, n, np, mp, rm3d_q_min(qold), 0, &first,
+                        nq) >= 0)
+      continue;
+    apply_move(m, p, ball, n, np, nq, 0);
+    m->voff[p] = s > 0;
+    return 1;
+  }
+  return 0;
 }
 
 /* Splitmix64 finaliser: the jiggle's directions. */
