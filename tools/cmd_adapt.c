@@ -434,14 +434,17 @@ static pa_status write_json(const pa_cli_adapt_args *a, const pa_stats *before,
                    "\"peak_memory_bytes\": %zu, \"remesher_outcome\": "
                    "\"%s\", \"nsplit\": %ld, \"ncollapse\": %ld, "
                    "\"nswap\": %ld, \"nmove\": %ld, \"npass\": %d, "
-                   "\"elements_before\": %lld, \"vertices_before\": %lld, "
-                   "\"projections\": %ld, \"projections_failed\": %ld, "
-                   "\"projection_s\": %.6f, %s",
+                   "\"elements_before\": %lld, \"vertices_before\": %lld, ",
                    rep->time_s, rep->cpu_s, pa_peak_rss(), pa_memory_peak(),
                    outcome_name(rep->outcome), rep->nsplit, rep->ncollapse,
                    rep->nswap, rep->nmove, rep->npass, (long long)before->nelem,
-                   (long long)before->nvert, rep->nproject,
-                   rep->nproject_failed, rep->project_s, fid ? fid : "");
+                   (long long)before->nvert);
+  if (a->geo)
+    pa_cli_sb_printf(&b,
+                     "\"projections\": %ld, \"projections_failed\": %ld, "
+                     "\"projection_s\": %.6f, ",
+                     rep->nproject, rep->nproject_failed, rep->project_s);
+  pa_cli_sb_printf(&b, "%s", fid ? fid : "");
   pa_status st = b.fail || !fid
                      ? pa_set_error(PA_ERR_MEMORY, "out of memory")
                      : pa_stats_write_json(&rep->fidelity.user, b.p, a->json);

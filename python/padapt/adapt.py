@@ -142,7 +142,7 @@ def remesh_options(opts, **kw):
 
 
 def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
-          hausd=None, fields=None, **options):
+          hausd=None, fields=None, geometry=None, **options):
     """Adapt a copy of mesh to a metric with the built-in remesher.
 
     mesh     a padapt.Mesh (not modified)
@@ -157,6 +157,10 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
              (default 0.01)
     fields   {name: (nvert,) or (nvert, k)} vertex fields to interpolate
              onto the new mesh, besides those the mesh carries
+    geometry a padapt.Geometry, the model of the classified mesh
+             (padapt.read(path, model=True)): new boundary vertices go onto
+             it, hausd is measured against its curvature; the report adds
+             "projections", "projections_failed" and "projection_s"
     options  hgradreq (gradation from required entities, default 2.3),
              angle (ridge detection angle in degrees, default 45),
              no_angle, no_insert, no_swap, no_move, no_surf (booleans, as
@@ -177,6 +181,11 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
     opts = _lib.RemeshOpts()
     lib.pa_remesh_opts_default(ctypes.byref(opts))
     remesh_options(opts, hsiz=hsiz, hmin=hmin, hmax=hmax, hgrad=hgrad, hausd=hausd, **options)
+    if geometry is not None:
+        from .geometry import Geometry
+        if not isinstance(geometry, Geometry):
+            raise TypeError("adapt: geometry must be a padapt.Geometry")
+        opts.geometry = geometry._h
     dim, nv = mesh.dim, mesh.nvert
     met = None if metric is None else as_metric("metric", metric, dim, nv)
     flds = [(n,) + as_field(n, v, nv) for n, v in (fields or {}).items()]
@@ -211,6 +220,10 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
               "nsplit": rep.nsplit, "ncollapse": rep.ncollapse, "nswap": rep.nswap,
               "nmove": rep.nmove, "npass": rep.npass,
               "elements_before": nelem0, "vertices_before": nv})
+    if geometry is not None:
+        d.update({"projections": rep.nproject,
+                  "projections_failed": rep.nproject_failed,
+                  "projection_s": rep.project_s})
     d.update(fidelity_dict(rep.fidelity))
     report = Report(d, describe(rep.fidelity))
     return AdaptResult(out, out.fields, report)
