@@ -292,3 +292,141 @@ def judge(path, name, ref):
             "volume_error": abs(vol - exact) / exact, "bound": bound / exact,
             "unclassified": unclassified, "nvert": len(x),
             "nelem": len(t)}
+
+
+# ---- the benchmark (bench/cad.sh) ----
+
+
+def loglog_svg(panels, out, title):
+    """Log-log plots side by side: panels is a list of (ylabel, {series
+    name: [(h, value)]}); the x axis is h."""
+    W, H, M, G = 460, 380, 64, 20
+    colors = {"-geo": "#c0392b", "without -geo": "#2c3e80"}
+    o = ['<svg xmlns="http://www.w3.org/2000/svg" width="%d" height="%d" '
+         'font-family="sans-serif" font-size="13">' % (len(panels) * W, H + 30),
+         '<rect width="100%" height="100%" fill="white"/>',
+         '<text x="%d" y="20" text-anchor="middle">%s</text>' % (len(panels) * W / 2, title)]
+    for k, (ylabel, series) in enumerate(panels):
+        ox, oy = k * W, 30
+        xs = [p[0] for s in series.values() for p in s]
+        ys = [p[1] for s in series.values() for p in s if p[1] > 0]
+        x0, x1 = math.log10(min(xs)) - 0.1, math.log10(max(xs)) + 0.1
+        y0, y1 = math.log10(min(ys)) - 0.3, math.log10(max(ys)) + 0.3
+
+        def px(v, x0=x0, x1=x1, ox=ox):
+            return ox + M + (math.log10(v) - x0) / (x1 - x0) * (W - M - G)
+
+        def py(v, y0=y0, y1=y1, oy=oy):
+            return oy + H - M - (math.log10(max(v, 10 ** y0)) - y0) / (y1 - y0) * (H - M - G)
+
+        o.append('<rect x="%d" y="%d" width="%d" height="%d" fill="none" stroke="#444"/>'
+                 % (ox + M, oy + G, W - M - G, H - M - G))
+        for e in range(int(math.floor(x0)), int(math.ceil(x1)) + 1):
+            for m_ in (1, 2, 5):
+                v = m_ * 10 ** e
+                if x0 <= math.log10(v) <= x1:
+                    o.append('<line x1="%.1f" y1="%d" x2="%.1f" y2="%d" stroke="#ddd"/>'
+                             % (px(v), oy + G, px(v), oy + H - M))
+                    o.append('<text x="%.1f" y="%d" text-anchor="middle">%g</text>'
+                             % (px(v), oy + H - M + 18, v))
+        step = max(1, int(math.ceil((y1 - y0) / 8)))
+        for e in range(int(math.floor(y0)), int(math.ceil(y1)) + 1, step):
+            if y0 <= e <= y1:
+                v = 10 ** e
+                o.append('<line x1="%d" y1="%.1f" x2="%d" y2="%.1f" stroke="#ddd"/>'
+                         % (ox + M, py(v), ox + W - G, py(v)))
+                o.append('<text x="%d" y="%.1f" text-anchor="end">1e%d</text>'
+                         % (ox + M - 6, py(v) + 4, e))
+        for i, (name, pts) in enumerate(sorted(series.items())):
+            pts = sorted(pts)
+            c = colors.get(name.split(", ")[-1], "#333")
+            dash = ' stroke-dasharray="6 4"' if name.startswith("2D") else ""
+            o.append('<polyline fill="none" stroke="%s" stroke-width="2"%s points="%s"/>'
+                     % (c, dash, " ".join("%.1f,%.1f" % (px(a), py(b)) for a, b in pts)))
+            for a, b in pts:
+                o.append('<circle cx="%.1f" cy="%.1f" r="3" fill="%s"/>' % (px(a), py(b), c))
+            o.append('<text x="%d" y="%d" fill="%s">%s</text>'
+                     % (ox + M + 8, oy + G + 16 + 16 * i, c, name))
+        o.append('<text x="%d" y="%d" text-anchor="middle">h (-hsiz)</text>'
+                 % (ox + W / 2, oy + H - 22))
+        o.append('<text x="%d" y="%d" transform="rotate(-90 %d %d)" text-anchor="middle">'
+                 '%s</text>' % (ox + 16, oy + H / 2, ox + 16, oy + H / 2, ylabel))
+    o.append("</svg>")
+    with open(out, "w") as f:
+        f.write("\n".join(o) + "\n")
+
+
+def bench(padapt, work, hs, np_=1):
+    """padapt adapt with and without -geo on both models for each h of
+    hs[name]: prints the table rows and returns {model: {geo: [rows]}}."""
+    import json
+    import resource
+    import time
+    os.makedirs(work, exist_ok=True)
+    rows = {}
+    for name in ("cylhole", "plate"):
+        step, msh = make(name, work, 0.3)
+        ref = read(msh)
+        for h in hs[name]:
+            for geo in (True, False):
+                out = os.path.join(work, "%s-%g-%s.msh" % (name, h, "geo" if geo else "plain"))
+                js = out[:-4] + ".json"
+                cmd = ([] if np_ <= 1 else ["mpiexec", "-n", str(np_)]) + \
+                    [padapt, "adapt", msh, "-hsiz", str(h), "-out", out, "-nosol",
+                     "-json", js, "-v", "-1"] + (["-geo", step] if geo else [])
+                r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+                t0 = time.time()
+                subprocess.run(cmd, check=True, capture_output=True)
+                wall = time.time() - t0
+                r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+                cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+                rep = json.load(open(js))
+                f = judge(out, name, ref)
+                row = {"model": name, "h": h, "geo": geo, "elements": f["nelem"],
+                       "dist": f["dist_max"], "verr": f["volume_error"],
+                       "bound": f["bound"], "wall": wall, "cpu": cpu,
+                       "remesh_cpu": rep.get("remesh_cpu_s", 0),
+                       "proj": rep.get("projections", 0),
+                       "proj_s": rep.get("projection_s", 0.0)}
+                rows.setdefault(name, {}).setdefault(geo, []).append(row)
+                print("%-7s h %-6g %-12s %8d elements  off the model %8.2e  "
+                      "volume error %8.2e (bound %8.2e)  process CPU %6.2f s  "
+                      "remesher CPU %6.2f s  projections %7d in %6.3f s"
+                      % (name, h, "-geo" if geo else "without -geo", f["nelem"],
+                         f["dist_max"], f["volume_error"], f["bound"], cpu,
+                         row["remesh_cpu"], row["proj"], row["proj_s"]), flush=True)
+    return rows
+
+
+def main():
+    import sys
+    if len(sys.argv) < 4 or sys.argv[1] != "bench":
+        sys.exit("usage: cad_judge.py bench PADAPT WORKDIR")
+    padapt, work = sys.argv[2], sys.argv[3]
+    hs = {"cylhole": [float(x) for x in os.environ.get(
+              "HS3", "0.1 0.07 0.05 0.035 0.025").split()],
+          "plate": [float(x) for x in os.environ.get(
+              "HS2", "0.04 0.02 0.01 0.005 0.0025").split()]}
+    rows = bench(padapt, work, hs, int(os.environ.get("NP", "1")))
+    dist, verr = {}, {}
+    for name, dim in (("cylhole", "3D"), ("plate", "2D")):
+        for geo in (True, False):
+            key = "%s, %s" % (dim, "-geo" if geo else "without -geo")
+            dist[key] = [(r["h"], r["dist"]) for r in rows[name][geo]]
+            verr[key] = [(r["h"], r["verr"]) for r in rows[name][geo]]
+    # observed orders of the volume error with -geo
+    for name in rows:
+        g = rows[name][True]
+        orders = ["%.2f" % (math.log(g[i + 1]["verr"] / g[i]["verr"]) /
+                            math.log(g[i + 1]["h"] / g[i]["h"]))
+                  for i in range(len(g) - 1)]
+        print("%s: order of the volume error in h with -geo: %s" % (name, ", ".join(orders)))
+    out = os.path.join(work, "cad.svg")
+    loglog_svg([("largest distance to the model / model size", dist),
+                ("relative volume (area) error", verr)], out,
+               "padapt adapt -geo: boundary vertices on the CAD model")
+    print("plot: " + out)
+
+
+if __name__ == "__main__":
+    main()
