@@ -303,7 +303,7 @@ def loglog_svg(panels, out, title):
     W, H, M, G = 460, 380, 64, 20
     colors = {"-geo": "#c0392b", "without -geo": "#2c3e80"}
     o = ['<svg xmlns="http://www.w3.org/2000/svg" width="%d" height="%d" '
-         'font-family="sans-serif" font-size="13">' % (len(panels) * W, H + 30),
+         'font-family="sans-serif" font-size="13">' % (len(panels) * W, H + 60),
          '<rect width="100%" height="100%" fill="white"/>',
          '<text x="%d" y="20" text-anchor="middle">%s</text>' % (len(panels) * W / 2, title)]
     for k, (ylabel, series) in enumerate(panels):
@@ -345,8 +345,12 @@ def loglog_svg(panels, out, title):
                      % (c, dash, " ".join("%.1f,%.1f" % (px(a), py(b)) for a, b in pts)))
             for a, b in pts:
                 o.append('<circle cx="%.1f" cy="%.1f" r="3" fill="%s"/>' % (px(a), py(b), c))
-            o.append('<text x="%d" y="%d" fill="%s">%s</text>'
-                     % (ox + M + 8, oy + G + 16 + 16 * i, c, name))
+            if k == 0:  # the legend, once, under the panels
+                lx = 60 + 200 * i
+                o.append('<line x1="%d" y1="%d" x2="%d" y2="%d" stroke="%s" '
+                         'stroke-width="2"%s/>' % (lx, H + 44, lx + 30, H + 44, c, dash))
+                o.append('<text x="%d" y="%d" fill="%s">%s</text>'
+                         % (lx + 36, H + 48, c, name))
         o.append('<text x="%d" y="%d" text-anchor="middle">h (-hsiz)</text>'
                  % (ox + W / 2, oy + H - 22))
         o.append('<text x="%d" y="%d" transform="rotate(-90 %d %d)" text-anchor="middle">'
