@@ -43,6 +43,14 @@
  *  - Node tags may be sparse and unordered: vertices are numbered in
  *    increasing tag order (tags 1..n give vertex tag - 1, whatever the order
  *    of the node blocks).
+ *  - Classified (pa__gmsh_read_model, MSH 4.1 with $Entities only): the
+ *    reference of a cell is its entity's tag, each vertex takes the entity
+ *    of its node block, the $Entities records (physical tags, bounding
+ *    entities, boxes) stay on the mesh, and pa_mesh_classify completes the
+ *    cells the file does not list; parametric coordinates are read over.
+ *    On write a classified mesh gets its entities back (the table's, and
+ *    any other its cells lie on), its nodes in one block per entity, its
+ *    model points as point elements on their entities.
  *
  * Reader invariants: the whole file sits in one NUL-terminated buffer and
  * every read is bounds-checked against it; every count is checked against the
