@@ -414,29 +414,6 @@ static int cmp_tagidx(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
-/* The nodes' entities in the order from[] of the renumbering. */
-static pa_status permute_entities(msh *w, const pa_idx *from) {
-  pa_status st = PA_SUCCESS;
-  uint8_t *nd = NULL;
-  int32_t *nt = NULL;
-  PA_ALLOC(nd, w->nnode);
-  PA_ALLOC(nt, w->nnode);
-  for (size_t k = 0; k < w->nnode; k++) {
-    nd[k] = w->ndim[from[k]];
-    nt[k] = w->ntag[from[k]];
-  }
-  pa__free(w->ndim);
-  pa__free(w->ntag);
-  w->ndim = nd;
-  w->ntag = nt;
-  nd = NULL;
-  nt = NULL;
-cleanup:
-  pa__free(nd);
-  pa__free(nt);
-  return st;
-}
-
 /* Build the tag -> index map once all nodes are read, and renumber the
  * vertices in increasing tag order (files often list nodes by entity, not by
  * tag; dense tags 1..n give vertex tag - 1). */
@@ -445,6 +422,8 @@ static pa_status build_node_map(reader *r, msh *w) {
   pa_idx *from = NULL; /* from[k]: file position of the node of rank k */
   double *xyz = NULL;
   uint64_t *tag = NULL;
+  uint8_t *nd = NULL; /* the nodes' entities (model mode) */
+  int32_t *nt = NULL;
   uint64_t lo = UINT64_MAX, hi = 0;
   size_t n = w->nnode;
   for (size_t i = 0; i < n; i++) {
@@ -496,10 +475,17 @@ static pa_status build_node_map(reader *r, msh *w) {
   if (!in_order) {
     PA_ALLOC(xyz, 3 * n);
     PA_ALLOC(tag, n);
-    if (w->ndim) PA_CALL(permute_entities(w, from));
+    if (w->ndim) {
+      PA_ALLOC(nd, n);
+      PA_ALLOC(nt, n);
+    }
     for (size_t k = 0; k < n; k++) {
       memcpy(xyz + 3 * k, w->xyz + 3 * (size_t)from[k], 3 * sizeof *xyz);
       tag[k] = w->tag[from[k]];
+      if (nd) {
+        nd[k] = w->ndim[from[k]];
+        nt[k] = w->ntag[from[k]];
+      }
     }
     pa__free(w->xyz);
     pa__free(w->tag);
@@ -507,11 +493,21 @@ static pa_status build_node_map(reader *r, msh *w) {
     w->tag = tag;
     xyz = NULL;
     tag = NULL;
+    if (nd) {
+      pa__free(w->ndim);
+      pa__free(w->ntag);
+      w->ndim = nd;
+      w->ntag = nt;
+      nd = NULL;
+      nt = NULL;
+    }
   }
 cleanup:
   pa__free(from);
   pa__free(xyz);
   pa__free(tag);
+  pa__free(nd);
+  pa__free(nt);
   return st;
 }
 
