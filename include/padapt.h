@@ -1116,7 +1116,9 @@ typedef struct pa_remesh_opts {
    *  vertices slide along it, ridges and corners are the model's curves
    *  and points only (no detection by angle), and hausd bounds the sizes
    *  at boundary vertices by the model's curvature (h <= sqrt(8 hausd /
-   *  kappa)) when the geometry has a curvature callback. */
+   *  kappa)) when the geometry has a curvature callback. pa_dmesh_adapt
+   *  takes one for a mesh distributed from a classified one, without
+   *  checkpoints (they do not keep the classification). */
   const pa_geometry *geometry;
 } pa_remesh_opts;
 
