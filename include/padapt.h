@@ -922,7 +922,8 @@ pa_status pa_mesh_set_vertex_entities(pa_mesh *mesh, const int *dims,
  * edge is listed and every vertex of a point is a corner. Not collective.
  * Returns PA_ERR_MESH naming the cell (1-based) and the candidate entities
  * when it cannot tell which entity a cell lies on, PA_ERR_ARG for a mesh
- * that is not classified, PA_ERR_MEMORY.
+ * that is not classified, PA_ERR_MEMORY; after a failure the vertices keep
+ * their entities, and the cells what was completed until then.
  */
 pa_status pa_mesh_classify(pa_mesh *mesh);
 /** dst (in/out) takes copies of the physical names and model entities

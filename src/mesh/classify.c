@@ -451,6 +451,7 @@ pa_status pa_mesh_classify(pa_mesh *m) {
   uint8_t *gd = NULL;
   int32_t *gt = NULL;
   pa__kept kept = {NULL, NULL, NULL, 0};
+  int saved = 0;
   char vs[256];
   PA_CHECK(m, PA_ERR_ARG, "pa_mesh_classify: NULL mesh");
   PA_CHECK(m->vgdim, PA_ERR_ARG,
@@ -484,6 +485,7 @@ pa_status pa_mesh_classify(pa_mesh *m) {
     memcpy(gd, m->vgdim, (size_t)m->nv);
     memcpy(gt, m->vgtag, (size_t)m->nv * sizeof *gt);
   }
+  saved = 1;
   pa__mesh_derive_entities(m, &kept);
   for (pa_idx v = 0; v < m->nv; v++) {
     int dd = m->vgdim[v];
@@ -503,7 +505,7 @@ pa_status pa_mesh_classify(pa_mesh *m) {
     }
   }
 cleanup:
-  if (st && gd && m && m->vgdim && m->nv) { /* the caller's entities back */
+  if (st && saved && m->nv) { /* the caller's entities back */
     memcpy(m->vgdim, gd, (size_t)m->nv);
     memcpy(m->vgtag, gt, (size_t)m->nv * sizeof *gt);
   }

@@ -362,5 +362,45 @@ static void test_errors(void) {
   pa_geometry_destroy(g);
 }
 
+/* Out of memory anywhere in a remesh on a model (3D: the classification
+ * held aside and derived again, the off-model marks): an error with the
+ * mesh as given (its classification too), or a result; no leak. */
+static void test_alloc_failures(void) {
+  model md = {3, -1, -1, 0};
+  pa_geometry *g = NULL;
+  pa_geometry_ops ops = {closest, curvature};
+  CHECK_OK(pa_geometry_create(&ops, &md, 2.0, &g));
+  pa_mesh *m = model_mesh(3, 2), *ref = NULL;
+  if (!m || !g) return;
+  CHECK_OK(pa_mesh_copy(m, &ref));
+  pa_remesh_opts o;
+  pa_remesh_opts_default(&o);
+  o.hsiz = 0.4;
+  o.geometry = g;
+  int nok = 0, nbad = 0;
+  for (long k = 1; k < 4000 && nok < 1; k += 1 + k / 40) {
+    pa_mesh *w = NULL;
+    CHECK_OK(pa_mesh_copy(ref, &w));
+    pa_memory_fail_after(k);
+    pa_status st = pa_remesh(pa_remesher_builtin(), w, &o, NULL);
+    pa_memory_fail_after(0);
+    if (st == PA_SUCCESS) {
+      int np;
+      nok++;
+      nbad += !pa_mesh_classified(w) || off_model(w, &np) > 1e-12;
+    } else {
+      nbad += st != PA_ERR_MEMORY || !pa_mesh_classified(w) ||
+              pa_mesh_nvert(w) != pa_mesh_nvert(ref) ||
+              memcmp(pa_mesh_vert_entity_tags(w), pa_mesh_vert_entity_tags(ref),
+                     sizeof(int32_t) * (size_t)pa_mesh_nvert(ref));
+    }
+    pa_mesh_destroy(w);
+  }
+  CHECK(nok == 1 && nbad == 0);
+  pa_mesh_destroy(ref);
+  pa_mesh_destroy(m);
+  pa_geometry_destroy(g);
+}
+
 TEST_MAIN(test_refine_2d, test_refine_3d, test_classification, test_fallback,
-          test_errors)
+          test_errors, test_alloc_failures)

@@ -377,6 +377,24 @@ static void test_read_classified(void) {
   CHECK(pa_mesh_read_model("badentity.msh", &m) == PA_ERR_FORMAT && !m);
   CHECK(strstr(pa_last_error(), "(2, 9)") != NULL);
   CHECK(pa_mesh_read_model("classified.mesh", &m) == PA_ERR_UNSUPPORTED);
+  /* out of memory anywhere in the classified read and write: an error, no
+   * mesh, no file, no leak */
+  int nok = 0, nbad = 0;
+  for (long k = 1; k < 120; k++) {
+    remove("classified-w.msh");
+    pa_memory_fail_after(k);
+    pa_status st = pa_mesh_read_model("classified.msh", &m);
+    if (st == PA_SUCCESS) st = pa_mesh_write(m, "classified-w.msh", NULL);
+    pa_memory_fail_after(0);
+    int exists = access("classified-w.msh", F_OK) == 0;
+    if (st == PA_SUCCESS)
+      nok += exists;
+    else if (st != PA_ERR_MEMORY || exists)
+      nbad++;
+    pa_mesh_destroy(m);
+    m = NULL;
+  }
+  CHECK(nok > 0 && nbad == 0);
 }
 
 /* MSH 2.2 ASCII: a tetrahedron, one face and one edge. */
