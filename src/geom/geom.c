@@ -103,27 +103,70 @@ int pa__geom_curvature(const pa_geometry *g, int dim, int tag, int sdim,
   return 1;
 }
 
+/* Lower the bound b (3 values: flag, hmin, hmax) of a vertex to the size
+ * sqrt(8 hausd / kappa) of curvature kappa > 0 (not below the vertex's
+ * hmin, else hmin): 1 when it lowered it. */
+static int bound_by(double kappa, double hausd, double hmin, double *bv) {
+  if (!(kappa > 0)) return 0;
+  double h = sqrt(8.0 * hausd / kappa);
+  double lo = bv[1] > 0 ? bv[1] : hmin;
+  if (lo > 0 && h < lo) h = lo;
+  if (bv[2] > 0 && bv[2] <= h) return 0;
+  bv[0] = 1;
+  bv[2] = h;
+  return 1;
+}
+
+/* The bounds of the vertices of the nc cells (k vertices each, in cell,
+ * references ref: the tags of entities of dimension edim) that lie on
+ * lower entities (the entity's boundary: its curves and points) by the
+ * curvature at the cell's centroid, which stays clear of the entity's
+ * edges, where a kernel's curvature may be singular (a cone's apex). */
+static pa_idx bound_entity_ends(const pa_geometry *g, const pa_mesh *m,
+                                int edim, int k, pa_idx nc,
+                                const pa_idx *cell, const int32_t *ref,
+                                double hausd, double hmin,
+                                const uint8_t *frozen, double *b) {
+  pa_idx n = 0;
+  int d = m->dim;
+  for (pa_idx c = 0; c < nc; c++) {
+    const pa_idx *v = cell + (size_t)k * c;
+    int lower = 0;
+    for (int i = 0; i < k; i++)
+      lower |= m->vgdim[v[i]] < edim && !(frozen && frozen[v[i]]);
+    if (!lower || ref[c] <= 0) continue;
+    double x[3] = {0, 0, 0}, kappa;
+    for (int i = 0; i < k; i++)
+      for (int j = 0; j < d; j++) x[j] += m->coord[(size_t)d * v[i] + j] / k;
+    if (!pa__geom_curvature(g, edim, ref[c], d, x, &kappa)) continue;
+    for (int i = 0; i < k; i++)
+      if (m->vgdim[v[i]] < edim && !(frozen && frozen[v[i]]))
+        n += bound_by(kappa, hausd, hmin, b + 3 * (size_t)v[i]);
+  }
+  return n;
+}
+
 pa_idx pa__geom_hausd_bounds(const pa_geometry *g, const pa_mesh *m,
                              double hausd, double hmin, const uint8_t *frozen,
                              double *b) {
   pa_idx n = 0;
+  int d = m->dim;
   if (!g->ops.curvature || !m->vgdim || !(hausd > 0)) return 0;
   for (pa_idx v = 0; v < m->nv; v++) {
     int gd = m->vgdim[v];
     double kappa;
     if ((gd != 1 && gd != 2) || (frozen && frozen[v])) continue;
-    if (!pa__geom_curvature(g, gd, m->vgtag[v], m->dim,
-                            m->coord + (size_t)m->dim * v, &kappa) ||
-        !(kappa > 0))
-      continue;
-    double h = sqrt(8.0 * hausd / kappa), *bv = b + 3 * (size_t)v;
-    double lo = bv[1] > 0 ? bv[1] : hmin;
-    if (lo > 0 && h < lo) h = lo;
-    if (bv[2] > 0 && bv[2] <= h) continue;
-    bv[0] = 1;
-    bv[2] = h;
-    n++;
+    if (pa__geom_curvature(g, gd, m->vgtag[v], d,
+                           m->coord + (size_t)d * v, &kappa))
+      n += bound_by(kappa, hausd, hmin, b + 3 * (size_t)v);
   }
+  /* the vertices on an entity's curves and points: its curvature there too
+   * (a curve's end, a surface's rim), not only their own entity's */
+  n += bound_entity_ends(g, m, d - 1, d, m->nb, m->bdry, m->bref, hausd, hmin,
+                         frozen, b);
+  if (d == 3)
+    n += bound_entity_ends(g, m, 1, 2, m->ned, m->edge, m->edref, hausd, hmin,
+                           frozen, b);
   return n;
 }
 

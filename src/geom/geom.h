@@ -55,11 +55,13 @@ int pa__geom_project(const pa_geometry *g, int dim, int tag, int sdim,
 int pa__geom_curvature(const pa_geometry *g, int dim, int tag, int sdim,
                        const double *x, double *kappa);
 
-/* The sizes at the vertices of the classified mesh m on curves and
- * surfaces bounded by the model's curvature: for each vertex v with
- * b[3v] ... (the local bounds of pa__local_bounds: lowest hmin, hmax),
- * hmax lowered to sqrt(8 hausd / kappa) (not below hmin > 0) where kappa
- * > 0; frozen[v] vertices skipped. Returns how many it lowered. */
+/* The sizes at the boundary vertices of the classified mesh m bounded by
+ * the model's curvature: for each vertex v with b[3v] ... (the local
+ * bounds of pa__local_bounds: flag, lowest hmin, hmax), hmax lowered to
+ * sqrt(8 hausd / kappa) (not below hmin > 0) where kappa > 0, kappa the
+ * curvature of v's own curve or surface at v and, for a vertex on a point
+ * or curve, of each curve or surface it bounds (at the centroid of the
+ * cells there); frozen[v] vertices skipped. Returns how many it lowered. */
 pa_idx pa__geom_hausd_bounds(const pa_geometry *g, const pa_mesh *m,
                              double hausd, double hmin, const uint8_t *frozen,
                              double *b);

@@ -132,17 +132,36 @@ cleanup:
 
 /* Lexicographic order of points of dim coordinates (the exact match of a
  * vertex against the kept points). */
+/* A point to compare (x) with the kept points of base (dim coordinates
+ * each), by their indices. */
 typedef struct ptkey {
-  const double *x;
-  pa_idx k;
+  const double *x, *base;
   int dim;
 } ptkey;
 
-static int cmp_pt(const void *a, const void *b) {
-  const ptkey *p = a, *q = b;
-  for (int k = 0; k < p->dim; k++)
-    if (p->x[k] != q->x[k]) return p->x[k] < q->x[k] ? -1 : 1;
+static int cmp_xyz(const double *p, const double *q, int dim) {
+  for (int k = 0; k < dim; k++)
+    if (p[k] != q[k]) return p[k] < q[k] ? -1 : 1;
   return 0;
+}
+
+/* bsearch's comparison of a ptkey with an index of its base */
+static int cmp_key_pt(const void *key, const void *elem) {
+  const ptkey *p = key;
+  return cmp_xyz(p->x, p->base + (size_t)p->dim * *(const pa_idx *)elem,
+                 p->dim);
+}
+
+/* A kept point to sort: its coordinates (dim), its index. */
+typedef struct ptsort {
+  const double *x;
+  pa_idx k;
+  int dim;
+} ptsort;
+
+static int cmp_ptsort(const void *a, const void *b) {
+  const ptsort *p = a, *q = b;
+  return cmp_xyz(p->x, q->x, p->dim);
 }
 
 /* Lower vertex v's entity to (dim, tag) if dim is lower. */
@@ -157,6 +176,7 @@ void pa__kept_free(pa__kept *k) {
   pa__free(k->xyz);
   pa__free(k->gdim);
   pa__free(k->gtag);
+  pa__free(k->order);
   memset(k, 0, sizeof *k);
 }
 
@@ -165,6 +185,7 @@ pa_status pa__mesh_kept_points(const pa_mesh *m, const uint8_t *frozen,
   pa_status st = PA_SUCCESS;
   int d = m->dim;
   pa_idx n = 0;
+  ptsort *pts = NULL;
   memset(kept, 0, sizeof *kept);
   if (!m->vgdim) return PA_SUCCESS;
   for (pa_idx v = 0; v < m->nv; v++)
@@ -173,6 +194,7 @@ pa_status pa__mesh_kept_points(const pa_mesh *m, const uint8_t *frozen,
   PA_ALLOC(kept->xyz, (size_t)d * n);
   PA_ALLOC(kept->gdim, n);
   PA_ALLOC(kept->gtag, n);
+  PA_ALLOC(kept->order, n);
   for (pa_idx v = 0; v < m->nv; v++)
     if (m->vgdim[v] == 0 || (frozen && frozen[v] && m->vgdim[v] < d)) {
       pa_idx k = kept->n++;
@@ -181,7 +203,14 @@ pa_status pa__mesh_kept_points(const pa_mesh *m, const uint8_t *frozen,
       kept->gdim[k] = m->vgdim[v];
       kept->gtag[k] = m->vgtag[v];
     }
+  /* sorted now, so that pa__mesh_derive_entities allocates nothing */
+  PA_ALLOC(pts, n);
+  for (pa_idx k = 0; k < n; k++)
+    pts[k] = (ptsort){kept->xyz + (size_t)d * k, k, d};
+  qsort(pts, (size_t)n, sizeof *pts, cmp_ptsort);
+  for (pa_idx k = 0; k < n; k++) kept->order[k] = pts[k].k;
 cleanup:
+  pa__free(pts);
   if (st) pa__kept_free(kept);
   return st;
 }
@@ -201,21 +230,13 @@ void pa__mesh_derive_entities(pa_mesh *m, const pa__kept *kept) {
     if (m->edref[k] > 0)
       for (int i = 0; i < 2; i++)
         lower(m, m->edge[2 * (size_t)k + i], 1, m->edref[k]);
-  if (kept && kept->n > 0) {
-    ptkey *pts = pa__malloc((size_t)kept->n * sizeof *pts);
-    if (pts) { /* out of memory: the cells' entities stand */
-      for (pa_idx k = 0; k < kept->n; k++)
-        pts[k] = (ptkey){kept->xyz + (size_t)d * k, k, d};
-      qsort(pts, (size_t)kept->n, sizeof *pts, cmp_pt);
-      for (pa_idx v = 0; v < m->nv; v++) {
-        ptkey key = {m->coord + (size_t)d * v, 0, d};
-        ptkey *hit =
-            bsearch(&key, pts, (size_t)kept->n, sizeof *pts, cmp_pt);
-        if (hit) lower(m, v, kept->gdim[hit->k], kept->gtag[hit->k]);
-      }
-      pa__free(pts);
+  if (kept && kept->n > 0)
+    for (pa_idx v = 0; v < m->nv; v++) {
+      ptkey key = {m->coord + (size_t)d * v, kept->xyz, d};
+      const pa_idx *hit = bsearch(&key, kept->order, (size_t)kept->n,
+                                  sizeof *kept->order, cmp_key_pt);
+      if (hit) lower(m, v, kept->gdim[*hit], kept->gtag[*hit]);
     }
-  }
   for (pa_idx v = 0; v < m->nv; v++)
     if (m->vgdim[v] == 255) m->vgdim[v] = (uint8_t)d; /* in no element */
 }
@@ -450,7 +471,7 @@ pa_status pa_mesh_classify(pa_mesh *m) {
   pa_status st = PA_SUCCESS;
   uint8_t *gd = NULL;
   int32_t *gt = NULL;
-  pa__kept kept = {NULL, NULL, NULL, 0};
+  pa__kept kept = {NULL, NULL, NULL, NULL, 0};
   int saved = 0;
   char vs[256];
   PA_CHECK(m, PA_ERR_ARG, "pa_mesh_classify: NULL mesh");

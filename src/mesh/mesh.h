@@ -125,11 +125,13 @@ void pa__mesh_disable_entities(pa_mesh *mesh);
 /* The model entity (dim, tag) of the model's table, or NULL. */
 const pa__entity *pa__mesh_entity(const pa_mesh *mesh, int dim, int32_t tag);
 /* Vertices whose entity a remesh keeps: their coordinates (dim each),
- * entity dimension and tag, n of them. */
+ * entity dimension and tag, n of them, and their indices in the order of
+ * their coordinates (lexicographic). */
 typedef struct pa__kept {
   double *xyz;
   uint8_t *gdim;
   int32_t *gtag;
+  pa_idx *order;
   pa_idx n;
 } pa__kept;
 void pa__kept_free(pa__kept *k);
@@ -145,7 +147,7 @@ pa_status pa__mesh_kept_points(const pa_mesh *mesh, const uint8_t *frozen,
  * reference is on that curve; of a boundary entity on its curve (2D) or
  * surface (3D); else on the volume (3D) or surface (2D) of an element).
  * Cells of reference <= 0 (a piece's skin, unclassified) are passed
- * over. */
+ * over. Allocates nothing. */
 void pa__mesh_derive_entities(pa_mesh *mesh, const pa__kept *kept);
 
 /* Free derived structures after a topological change. */

@@ -101,14 +101,15 @@ cleanup:
   return st;
 }
 
-/* A classified mesh's classification, held aside while a remesher replaces
- * the mesh's contents (it knows nothing of it): the vertices' entities and
- * the model's table, and the vertices that come back where they are (the
- * points and frozen vertices, by their coordinates), from which
- * pa__mesh_derive_entities recomputes the entities of the result. */
+/* A classified mesh's classification around a remesher, which knows
+ * nothing of it: the model's table, held aside, and the vertices that come
+ * back where they are (the points and frozen vertices, by their
+ * coordinates), from which pa__mesh_derive_entities recomputes the
+ * entities of the result. The vertices' entity arrays stay on the mesh:
+ * a remesher that replaces the vertices gives the result room for them
+ * (as the mesh's own functions do when they add vertices), so that
+ * nothing is allocated once the mesh holds the result. */
 typedef struct held_model {
-  uint8_t *vgdim;
-  int32_t *vgtag;
   pa__entity *ents;
   int nent;
   pa__kept kept;
@@ -122,12 +123,8 @@ static pa_status hold_model(pa_mesh *mesh, held_model *h) {
   PA_CALLOC(frozen, mesh->nv);
   pa__mesh_frozen_vertices(mesh, frozen);
   PA_CALL(pa__mesh_kept_points(mesh, frozen, &h->kept));
-  h->vgdim = mesh->vgdim;
-  h->vgtag = mesh->vgtag;
   h->ents = mesh->ents;
   h->nent = mesh->nent;
-  mesh->vgdim = NULL;
-  mesh->vgtag = NULL;
   mesh->ents = NULL;
   mesh->nent = 0;
   h->held = 1;
@@ -137,26 +134,20 @@ cleanup:
 }
 
 /* Give the classification back: derived from the cells of the result
- * (done), else the mesh's own (the mesh is as given). */
+ * (done), else the mesh is as given, its entities too. */
 static pa_status restore_model(pa_mesh *mesh, held_model *h, int done) {
   pa_status st = PA_SUCCESS;
   if (!h->held) return PA_SUCCESS;
-  pa__mesh_disable_entities(mesh);
   pa__mesh_free_entities(mesh);
   mesh->ents = h->ents;
   mesh->nent = h->nent;
   h->ents = NULL;
   if (done) {
-    st = pa__mesh_enable_entities(mesh);
-    if (st == PA_SUCCESS) pa__mesh_derive_entities(mesh, &h->kept);
-  } else {
-    mesh->vgdim = h->vgdim;
-    mesh->vgtag = h->vgtag;
-    h->vgdim = NULL;
-    h->vgtag = NULL;
+    PA_CHECK(mesh->vgdim, PA_ERR_INTERNAL,
+             "pa_remesh: the remesher dropped the vertices' model entities");
+    pa__mesh_derive_entities(mesh, &h->kept);
   }
-  pa__free(h->vgdim);
-  pa__free(h->vgtag);
+cleanup:
   pa__kept_free(&h->kept);
   h->held = 0;
   return st;
@@ -325,9 +316,7 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
     }
   }
 cleanup:
-  if (held.held && restore_model(mesh, &held, 0) != PA_SUCCESS &&
-      st == PA_SUCCESS)
-    st = PA_ERR_INTERNAL;
+  if (held.held) restore_model(mesh, &held, 0); /* allocates nothing */
   if (opts && opts->geometry && report) {
     report->nproject = opts->geometry->nproject - nproj0;
     report->nproject_failed = opts->geometry->nfailed - nfail0;

@@ -16,6 +16,11 @@
 #define R0 0.5
 #define R1 1.0
 
+/* Longest edge the remesher leaves, relative to the size asked for: above
+ * sqrt 2 (the band it splits above) by the margin of a graded, not
+ * uniform, size along a curve. */
+#define LEN_HI_BOUND 1.6
+
 /* The model: dim of the mesh; fail_dim/fail_tag an entity the kernel
  * refuses (the fallback test), -1 for none; calls counted. */
 typedef struct model {
@@ -362,45 +367,94 @@ static void test_errors(void) {
   pa_geometry_destroy(g);
 }
 
-/* Out of memory anywhere in a remesh on a model (3D: the classification
- * held aside and derived again, the off-model marks): an error with the
- * mesh as given (its classification too), or a result; no leak. */
-static void test_alloc_failures(void) {
-  model md = {3, -1, -1, 0};
+/* -hausd against the model's curvature: on the arcs of the annulus the
+ * edges are bounded by sqrt(8 hausd R) (to the remesher's length band),
+ * on the straight sides only by hsiz. */
+static void test_hausd(void) {
+  model md = {2, -1, -1, 0};
   pa_geometry *g = NULL;
   pa_geometry_ops ops = {closest, curvature};
   CHECK_OK(pa_geometry_create(&ops, &md, 2.0, &g));
-  pa_mesh *m = model_mesh(3, 2), *ref = NULL;
+  pa_mesh *m = model_mesh(2, 2);
   if (!m || !g) return;
-  CHECK_OK(pa_mesh_copy(m, &ref));
   pa_remesh_opts o;
   pa_remesh_opts_default(&o);
-  o.hsiz = 0.4;
+  o.hsiz = 0.2;
+  o.hausd = 5e-4;
+  o.geometry = g;
+  CHECK_OK(pa_remesh(pa_remesher_builtin(), m, &o, NULL));
+  double lmax[5] = {0, 0, 0, 0, 0};
+  const double *x = pa_mesh_coords(m);
+  for (pa_idx b = 0; b < pa_mesh_nbdry(m); b++) {
+    const pa_idx *e = pa_mesh_bdrys(m) + 2 * b;
+    int32_t r = pa_mesh_bdry_refs(m)[b];
+    double l = hypot(x[2 * e[0]] - x[2 * e[1]], x[2 * e[0] + 1] - x[2 * e[1] + 1]);
+    if (r >= 1 && r <= 4) lmax[r] = fmax(lmax[r], l);
+  }
+  printf("  hausd %g: longest edge on the inner arc %.3f (bound %.3f), outer "
+         "%.3f (%.3f), sides %.3f %.3f\n",
+         o.hausd, lmax[1], sqrt(8 * o.hausd * R0), lmax[2],
+         sqrt(8 * o.hausd * R1), lmax[3], lmax[4]);
+  CHECK(lmax[1] <= LEN_HI_BOUND * sqrt(8 * o.hausd * R0));
+  CHECK(lmax[2] <= LEN_HI_BOUND * sqrt(8 * o.hausd * R1));
+  /* the straight sides are held to the arcs' sizes only near them */
+  CHECK(lmax[3] > 2 * fmax(lmax[1], lmax[2]) &&
+        lmax[4] > 2 * fmax(lmax[1], lmax[2]));
+  pa_mesh_destroy(m);
+  pa_geometry_destroy(g);
+}
+
+/* Out of memory at each allocation in turn of a remesh on a model (the
+ * classification held aside and derived again, the off-model marks, 3D:
+ * the bisection first): an error with the mesh as given (its
+ * classification too), or a result on the model; no leak. */
+static void alloc_failures(int dim, int n, double h) {
+  model md = {dim, -1, -1, 0};
+  pa_geometry *g = NULL;
+  pa_geometry_ops ops = {closest, curvature};
+  CHECK_OK(pa_geometry_create(&ops, &md, 2.0, &g));
+  pa_mesh *ref = model_mesh(dim, n);
+  if (!ref || !g) return;
+  size_t nv = (size_t)pa_mesh_nvert(ref);
+  pa_remesh_opts o;
+  pa_remesh_opts_default(&o);
+  o.hsiz = h;
   o.geometry = g;
   int nok = 0, nbad = 0;
-  for (long k = 1; k < 4000 && nok < 1; k += 1 + k / 40) {
+  long k;
+  for (k = 1; k < 100000 && nok < 1; k++) {
     pa_mesh *w = NULL;
     CHECK_OK(pa_mesh_copy(ref, &w));
+    if (!w) break;
     pa_memory_fail_after(k);
     pa_status st = pa_remesh(pa_remesher_builtin(), w, &o, NULL);
     pa_memory_fail_after(0);
     if (st == PA_SUCCESS) {
       int np;
       nok++;
-      nbad += !pa_mesh_classified(w) || off_model(w, &np) > 1e-12;
+      nbad += !pa_mesh_classified(w) || off_model(w, &np) > 1e-12 ||
+              np != (dim == 2 ? 4 : 8);
     } else {
       nbad += st != PA_ERR_MEMORY || !pa_mesh_classified(w) ||
               pa_mesh_nvert(w) != pa_mesh_nvert(ref) ||
+              memcmp(pa_mesh_vert_entity_dims(w), pa_mesh_vert_entity_dims(ref),
+                     nv) ||
               memcmp(pa_mesh_vert_entity_tags(w), pa_mesh_vert_entity_tags(ref),
-                     sizeof(int32_t) * (size_t)pa_mesh_nvert(ref));
+                     sizeof(int32_t) * nv);
     }
     pa_mesh_destroy(w);
   }
+  printf("  %dD: out of memory at each of the first %ld allocations: %d "
+         "wrong\n", dim, k - 2, nbad);
   CHECK(nok == 1 && nbad == 0);
   pa_mesh_destroy(ref);
-  pa_mesh_destroy(m);
   pa_geometry_destroy(g);
 }
 
+static void test_alloc_failures(void) {
+  alloc_failures(2, 2, 0.3);
+  alloc_failures(3, 2, 0.4);
+}
+
 TEST_MAIN(test_refine_2d, test_refine_3d, test_classification, test_fallback,
-          test_errors, test_alloc_failures)
+          test_errors, test_hausd, test_alloc_failures)
