@@ -456,5 +456,90 @@ static void test_alloc_failures(void) {
   alloc_failures(3, 2, 0.4);
 }
 
+/* Out of memory at each allocation in turn of classifying a mesh
+ * (pa_mesh_set_vertex_entities: the entities completed and checked) and
+ * copying it: an error with the mesh unclassified as given, or the copy
+ * classified alike; no leak. */
+static void test_alloc_classify(void) {
+  pa_mesh *ref = model_mesh(3, 2), *plain = NULL;
+  if (!ref) return;
+  pa_idx nv = pa_mesh_nvert(ref);
+  int *gd = malloc(sizeof *gd * (size_t)nv);
+  int32_t *gt = malloc(sizeof *gt * (size_t)nv);
+  for (pa_idx v = 0; v < nv; v++) {
+    gd[v] = pa_mesh_vert_entity_dims(ref)[v];
+    gt[v] = pa_mesh_vert_entity_tags(ref)[v];
+  }
+  CHECK_OK(pa_mesh_copy(ref, &plain));
+  CHECK_OK(pa_mesh_set_vertex_entities(plain, NULL, NULL));
+  int nok = 0, nbad = 0;
+  long k;
+  for (k = 1; k < 10000 && nok < 1 && plain; k++) {
+    pa_mesh *w = NULL, *c = NULL;
+    CHECK_OK(pa_mesh_copy(plain, &w));
+    if (!w) break;
+    pa_memory_fail_after(k);
+    pa_status st = pa_mesh_set_vertex_entities(w, gd, gt), st2 = st;
+    if (st == PA_SUCCESS) st2 = pa_mesh_copy(w, &c);
+    pa_memory_fail_after(0);
+    if (st2 == PA_SUCCESS) {
+      nok++;
+      nbad += !pa_mesh_classified(c) || pa_mesh_nedge(c) != pa_mesh_nedge(ref) ||
+              memcmp(pa_mesh_vert_entity_tags(c), pa_mesh_vert_entity_tags(ref),
+                     sizeof(int32_t) * (size_t)nv);
+    } else {
+      nbad += st2 != PA_ERR_MEMORY || c != NULL ||
+              (st != PA_SUCCESS) == pa_mesh_classified(w);
+    }
+    pa_mesh_destroy(c);
+    pa_mesh_destroy(w);
+  }
+  printf("  classify and copy: out of memory at each of the first %ld "
+         "allocations: %d wrong\n", k - 2, nbad);
+  CHECK(nok == 1 && nbad == 0);
+  free(gd);
+  free(gt);
+  pa_mesh_destroy(plain);
+  pa_mesh_destroy(ref);
+}
+
+/* Out of memory at each allocation in turn of loading a model through
+ * Gmsh's library (its entities listed, the handle): an error and no
+ * handle, Gmsh's model released (the next load works); no leak. */
+static void test_alloc_model(void) {
+  if (!pa_geometry_available(NULL)) {
+    printf("  no Gmsh library: the model load is not swept\n");
+    return;
+  }
+  FILE *f = fopen("sweep.geo", "w");
+  CHECK(f != NULL);
+  if (!f) return;
+  fputs("SetFactory(\"OpenCASCADE\");\nRectangle(1) = {0, 0, 0, 1, 1};\n"
+        "Disk(2) = {0.5, 0.5, 0, 0.25};\n"
+        "BooleanDifference{ Surface{1}; Delete; }{ Surface{2}; Delete; }\n",
+        f);
+  fclose(f);
+  int nok = 0, nbad = 0;
+  long k;
+  for (k = 1; k < 1000 && nok < 1; k++) {
+    pa_geometry *g = NULL;
+    pa_memory_fail_after(k);
+    pa_status st = pa_geometry_read("sweep.geo", &g);
+    pa_memory_fail_after(0);
+    if (st == PA_SUCCESS) {
+      nok++;
+      nbad += !g || !(fabs(pa_geometry_size(g) - sqrt(2.0)) < 1e-6);
+    } else {
+      nbad += st != PA_ERR_MEMORY || g != NULL;
+    }
+    pa_geometry_destroy(g);
+  }
+  printf("  model load: out of memory at each of the first %ld allocations: "
+         "%d wrong\n", k - 2, nbad);
+  CHECK(nok == 1 && nbad == 0 && k > 3);
+  remove("sweep.geo");
+}
+
 TEST_MAIN(test_refine_2d, test_refine_3d, test_classification, test_fallback,
-          test_errors, test_hausd, test_alloc_failures)
+          test_errors, test_hausd, test_alloc_failures, test_alloc_classify,
+          test_alloc_model)
