@@ -104,6 +104,17 @@ size_t pa_memory_current(void);
 size_t pa_memory_peak(void);
 /** Reset the peak to the current value. Not collective. */
 void pa_memory_reset_peak(void);
+/** Bound the bytes padapt may hold in this process (pa_memory_current) to
+ *  bytes (0: no bound, the default): an allocation that would pass it
+ *  fails, and the function that asked returns PA_ERR_MEMORY with a message
+ *  saying that the bound is reached. Memory of the libraries padapt calls
+ *  (MPI, PT-Scotch) and of the C library is not counted. pa_remesh and
+ *  pa_dmesh_adapt lower the bound for their call to their options' mem_mb.
+ *  Process-wide, not collective. Returns the previous bound. */
+size_t pa_memory_set_limit(size_t bytes);
+/** Returns the bound set by pa_memory_set_limit (0: none). Not
+ *  collective. */
+size_t pa_memory_limit(void);
 /** Returns the peak resident set size of the process in bytes (from the
  *  OS), 0 if unknown. Not collective. */
 size_t pa_peak_rss(void);
@@ -1111,6 +1122,10 @@ typedef struct pa_remesh_opts {
    *  the array must live as long as the options are used. */
   const pa_local_param *local;
   int nlocal;
+  /** Memory bound in MB (<= 0: none): pa_remesh refuses a metric whose
+   *  output would not fit, and holds padapt's memory under it for the call
+   *  (pa_memory_set_limit; a lower bound already set stays) */
+  double mem_mb;
   /** The model of a classified mesh (NULL: none; it must outlive the
    *  options' use): new boundary vertices go onto their entity (the
    *  remesher's own reconstruction when the kernel fails), boundary
@@ -1612,7 +1627,9 @@ typedef struct pa_adapt_opts {
   /** Memory bound per process, in MB (<= 0: the memory available on each
    *  node, shared by its ranks): the number of pieces grows so that each
    *  piece's estimated remesher memory fits, and a metric whose whole output
-   *  would not fit is refused (PA_ERR_MEMORY). */
+   *  would not fit is refused (PA_ERR_MEMORY). A bound > 0 also holds
+   *  padapt's memory under it on every rank for the call
+   *  (pa_memory_set_limit): reaching it is an error on every rank. */
   double mem_mb;
   /** Tag elements whose quality is below this (default
    *  PA_DEFAULT_QUAL_THRESHOLD; <= 0: off). */

@@ -146,7 +146,8 @@ static const pa_cli_opt adapt_opts[] = {
     {.names = "-mem -m", .kind = PA_CLI_POS, .at = A(mem_mb), .want = POSITIVE,
      .label = "-mem MB, -m MB",
      .help = "memory bound per process (default: the available memory;\n"
-             "a metric whose output would not fit is refused)"},
+             "a metric whose output would not fit is refused, and\n"
+             "padapt's memory past MB is an error: nothing written)"},
     {.names = "-max-iter", .kind = PA_CLI_INT, .at = A(max_iter),
      .want = "an integer in [1, 1000]", .lo = 1, .hi = 1000,
      .label = "-max-iter N",
@@ -510,6 +511,9 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
   int prc = parse_args(cli, argc, argv, &args);
   if (prc) return prc > 0 ? 1 : 0;
   if (check_outputs(cli, &args)) return 1;
+  /* -mem bounds padapt's memory in every phase: reading, remeshing,
+   * gathering, writing */
+  if (args.mem_mb > 0) pa_memory_set_limit((size_t)(args.mem_mb * 1e6));
   pa_geometry *geo = NULL; /* -geo: loaded on every rank */
   if (pa_cli_read_geometry(cli, &args, &geo)) return 1;
   args.remesh.geometry = geo;

@@ -93,7 +93,7 @@ class RemeshOpts(ctypes.Structure):
                  "verbosity", "trusted", "no_stats")] + \
                [("progress", ctypes.c_void_p), ("progress_ctx", ctypes.c_void_p),
                 ("local", ctypes.c_void_p), ("nlocal", ctypes.c_int),
-                ("geometry", ctypes.c_void_p)]
+                ("mem_mb", ctypes.c_double), ("geometry", ctypes.c_void_p)]
 
 
 class RemeshReport(ctypes.Structure):

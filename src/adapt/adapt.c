@@ -539,6 +539,16 @@ static pa_status conclude(pa_dmesh *dm, pa_status st, pa_dmesh_value *done,
   return st;
 }
 
+/* opts->mem_mb as the memory bound of the call, under a lower one already
+ * set (pa_memory_set_limit): the bound to restore after the call. */
+static size_t bound_begin(const pa_adapt_opts *opts) {
+  size_t old = pa_memory_limit();
+  if (opts->mem_mb > 0 && isfinite(opts->mem_mb) &&
+      (!old || opts->mem_mb * 1e6 < (double)old))
+    pa_memory_set_limit((size_t)(opts->mem_mb * 1e6));
+  return old;
+}
+
 pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
                          pa_adapt_report *report) {
   pa_status st = PA_SUCCESS;
@@ -546,6 +556,7 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
   pa__loop L;
   pa_dmesh_value *done = NULL;
   double t0 = pa_wtime();
+  size_t bound = pa_memory_limit();
   memset(&L, 0, sizeof L);
   L.t0 = t0;
   PA_CHECK(dm, PA_ERR_ARG, "pa_dmesh_adapt: NULL dmesh");
@@ -554,12 +565,15 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
     pa_adapt_opts_default(&def);
     opts = &def;
   }
+  bound = bound_begin(opts);
   PA_CALL(check_opts(dm, opts));
   PA_CALL(begin(dm, opts, &L, &done));
   PA_CALL(run(dm, opts, done, &L, t0));
   PA_CALL(finish(dm, opts, &done, &L));
 cleanup:
-  return conclude(dm, st, done, &L, t0, report);
+  st = conclude(dm, st, done, &L, t0, report);
+  pa_memory_set_limit(bound);
+  return st;
 }
 
 pa_status pa_dmesh_adapt_resume(MPI_Comm comm, const char *dir,
@@ -571,6 +585,7 @@ pa_status pa_dmesh_adapt_resume(MPI_Comm comm, const char *dir,
   pa_dmesh *dm = NULL;
   pa_dmesh_value *done = NULL;
   double t0 = pa_wtime();
+  size_t bound = pa_memory_limit();
   memset(&L, 0, sizeof L);
   pa__agree_reset();
   if (!dir || !dmp)
@@ -581,6 +596,7 @@ pa_status pa_dmesh_adapt_resume(MPI_Comm comm, const char *dir,
     pa_adapt_opts_default(&def);
     opts = &def;
   }
+  bound = bound_begin(opts);
   PA_CALL(pa__adapt_restore(comm, dir, opts, &dm, &L));
   done = pa_dmesh_value_find(dm, PA_ADAPT_DONE_VALUE);
   PA_CALL(check_opts(dm, opts));
@@ -593,6 +609,7 @@ pa_status pa_dmesh_adapt_resume(MPI_Comm comm, const char *dir,
   PA_CALL(finish(dm, opts, &done, &L));
 cleanup:
   st = conclude(dm, st, done, &L, t0, report);
+  pa_memory_set_limit(bound);
   if (st) pa_dmesh_destroy(dm);
   else *dmp = dm;
   return st;

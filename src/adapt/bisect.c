@@ -26,8 +26,10 @@
  * the measurement).
  *
  * With inside, edges inside the piece longer than PA_ADAPT_LEB_INNER are
- * bisected too, in the same longest-first order: otherwise the elements on
- * a refined skin face are fans of slivers. The built-in 3D remesher turns
+ * bisected too, in the same longest-first order (except in elements holding
+ * less than PA_LEB_VMIN unit elements of metric volume, as the remesher's
+ * own pre-refinement): otherwise the elements on a refined skin face are
+ * fans of slivers. The built-in 3D remesher turns
  * those into more tets, more slowly (docs/design/ADAPT.md); a plain
  * bisection remesher (examples/) cannot repair them at all, nor the next
  * iteration's one a rolled-back piece, which comes back as refined here
@@ -58,6 +60,7 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
   o.skin_ref = PA_ADAPT_SKIN_REF;
   o.skin_ok = inner;
   o.skin_lmax = PA_ADAPT_LEB_SKIN;
+  o.vmin = inside ? PA_LEB_VMIN * pa__unit_simplex_volume(m->dim) : 0;
   PA_CALL(pa__leb_refine(m, &o, &parent, &onskin));
   if (m->nv > nv0) {
     pa_gid *g = pa__realloc(pc->vgid, (size_t)m->nv * sizeof *g);

@@ -264,6 +264,9 @@ pa_status pa__adapt_remesh(pa__iter *it, int *nfail, double *cpu) {
     pa_status s = pa_remesh(r, out, &ro, &pc->rep);
     t1 = pa_wtime();
     *cpu += pc->rep.cpu_s;
+    /* the memory bound is an error of the run: a piece given back would
+     * meet it again */
+    if (s == PA_ERR_MEMORY && pa__memory_bound_error()) PA_CALL(s);
     int ok = s == PA_SUCCESS && pc->rep.outcome != PA_REMESH_FAILED;
     if (!ok)
       pa__info(1, "padapt: piece %d (%d elements): the remesher failed: %s\n",

@@ -46,6 +46,7 @@ static pa_status remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
   double t0 = pa_wtime();
   memset(&lo, 0, sizeof lo);
   lo.lmax = LEB_PRE;
+  lo.vmin = PA_LEB_VMIN * pa__unit_simplex_volume(3);
   if (opts->no_insert) return pa__remesh3d(mesh, opts, report);
   PA_CALL(pa_mesh_copy(mesh, &w));
   PA_CALL(pa__leb_refine(w, &lo, NULL, NULL));
@@ -184,7 +185,7 @@ static pa_status check_args(const pa_remesher *r, pa_mesh *mesh,
   PA_CHECK(isfinite(opts->hsiz) && isfinite(opts->hmin) && isfinite(opts->hmax) &&
                isfinite(opts->hgrad) && isfinite(opts->hgradreq) &&
                isfinite(opts->hausd) &&
-               isfinite(opts->angle),
+               isfinite(opts->angle) && isfinite(opts->mem_mb),
            PA_ERR_ARG, "pa_remesh: options must be finite numbers");
   PA_CHECK(!(opts->hmin > 0 && opts->hmax > 0 && opts->hmin > opts->hmax),
            PA_ERR_ARG, "pa_remesh: hmin (%g) is larger than hmax (%g)",
@@ -238,7 +239,8 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   double *newmet = NULL, *oldmet = NULL;
   int oldnc = 0, installed = 0, carried = 0;
   pa__name *names = NULL; /* the caller's physical names, held aside */
-  int nname = 0;
+  int nname = 0, bound_set = 0;
+  size_t bound0 = 0, bound = 0;
   double t0 = pa_wtime(), cpu0;
   wrap.t0 = t0;
   PA_CHECK(r && r->remesh && mesh, PA_ERR_ARG, "pa_remesh: NULL argument");
@@ -250,6 +252,14 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   memset(report, 0, sizeof *report);
   report->outcome = PA_REMESH_FAILED;
   PA_CALL(check_args(r, mesh, opts));
+  /* opts->mem_mb bounds the memory for the call, under any bound set */
+  bound0 = pa_memory_limit();
+  bound = bound0;
+  if (opts->mem_mb > 0 && (!bound || opts->mem_mb * 1e6 < (double)bound)) {
+    bound = (size_t)(opts->mem_mb * 1e6);
+    pa_memory_set_limit(bound);
+    bound_set = 1;
+  }
 
   int d = mesh->dim, nc = mesh->met_ncomp ? mesh->met_ncomp : 1;
   unsigned changed = 0;
@@ -257,9 +267,16 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   if (!opts->trusted || opts->progress) {
     double c = 0;
     PA_CALL(pa_metric_complexity(mesh, nc, newmet, &c));
-    if (!opts->trusted) /* the parallel driver checks for its pieces */
-      PA_CALL(pa__check_output_size(d, c, 1, 0, (double)pa__mem_available(),
-                                    "the available memory"));
+    if (!opts->trusted) { /* the parallel driver checks for its pieces */
+      char what[64] = "the available memory";
+      double budget = (double)pa__mem_available();
+      if (bound) {
+        budget = (double)bound;
+        snprintf(what, sizeof what, "the memory bound of %.1f MB",
+                 (double)bound / 1e6);
+      }
+      PA_CALL(pa__check_output_size(d, c, 1, 0, budget, what));
+    }
     wrap.expected = c / pa__unit_simplex_volume(d);
   }
   if (opts->geometry) {
@@ -335,6 +352,7 @@ cleanup:
   if (carried && drop_user_metric(mesh) != PA_SUCCESS && st == PA_SUCCESS)
     st = PA_ERR_INTERNAL;
   pa__free(newmet);
+  if (bound_set) pa_memory_set_limit(bound0);
   if (st != PA_SUCCESS) report->outcome = PA_REMESH_FAILED;
   if (!(report->time_s > 0)) report->time_s = pa_wtime() - t0;
   return st;

@@ -111,7 +111,7 @@ static int ball_qualities(const rm3d *m, pa_idx q, const pa_idx *ball, int n,
   }
   /* the lowest new quality accepted against qold (rm3d_q_ok, and at least
    * 0.3 qold): one tet below it refuses the collapse */
-  double qmin = fmax(0.3 * qold, rm3d_q_min(qold));
+  double qmin = fmax(0.3 * qold, rm3d_q_min(m, qold));
   const double *xq = m->x + 3 * (size_t)q;
   const double *mq = m->met + (size_t)m->mc * q;
   for (int i = 0; i < n; i++) {
@@ -346,11 +346,11 @@ static int mid_qualities(const rm3d *m, pa_idx p, const pa_idx *bq, int nb,
       continue;
     }
     double qq = rm3d_qual_moved(m, t, iq, xm, mm);
-    if (qq < RM3D_QABS) return 0;
+    if (qq < m->qabs) return 0;
     if (qq < qnew) qnew = qq;
     nq[i] = (float)qq;
   }
-  return !(qnew < 0.3 * qold || !rm3d_q_ok(qnew, qold));
+  return !(qnew < 0.3 * qold || !rm3d_q_ok(m, qnew, qold));
 }
 
 /* Whether every edge from xm (metric mm) to the vertices of the tets of

@@ -725,12 +725,14 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
                    has_frozen(m));
   for (int it = 0; it < RM3D_ROUNDS_MAX; it++, (*npass)++) {
     long ns = 0, nc = 0, nw = 0, nm = 0;
+    long nc0 = m->ncollapse;
     double t1 = pa_wtime();
     PA_CALL(pa__rm3d_split_pass(m, PA_METRIC_LEN_HI_EXACT, &ns));
     double t2 = pa_wtime();
     PA_CALL(pa__rm3d_collapse_pass(m, PA_METRIC_LEN_LO_EXACT,
                                    PA_METRIC_LEN_HI_EXACT, &nc));
     double t3 = pa_wtime();
+    long nvc = m->ncollapse - nc0; /* the others removed an edge by a swap */
     if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(m, 0.3, 1.02, &nw));
     double t4 = pa_wtime();
     if (!opts->no_move) {
@@ -743,12 +745,12 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
     if (m->ndead_t > m->ne / 8) PA_CALL(pa__rm3d_compact(m, 1));
     if (m->verbosity > 0)
       fprintf(stderr,
-              "  rm3d round %d: %ld splits (%.2fs) %ld collapses (%.2fs) "
-              "%ld swaps (%.2fs) %ld moves (%.2fs), %d tets\n",
-              it, ns, t2 - t1, nc, t3 - t2, nw, t4 - t3, nm, t5 - t4,
+              "  rm3d round %d: %ld splits (%.2fs) %ld collapses (%ld by "
+              "swaps, %.2fs) %ld swaps (%.2fs) %ld moves (%.2fs), %d tets\n",
+              it, ns, t2 - t1, nc, nc - nvc, t3 - t2, nw, t4 - t3, nm, t5 - t4,
               (int)(m->ne - m->ndead_t));
     progress(opts, ++*step, m);
-    if (pa__rounds_stop(&rounds, ns, nc, m->ne - m->ndead_t)) break;
+    if (pa__rounds_stop(&rounds, ns, nvc, m->ne - m->ndead_t)) break;
   }
 cleanup:
   return st;

@@ -358,7 +358,7 @@ static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
 
 /* The qualities nq[0..n) of p's ball[0..n) with p at np (metric mp), each
  * of which must be above qlo (at or above it when !strict) and at least
- * RM3D_QABS. Returns -1 when all are, else the index of a tet that is not
+ * m->qabs. Returns -1 when all are, else the index of a tet that is not
  * (nq then partly filled). The tet *first is tried first and then the
  * failing one is kept there: a move's trials at shorter steps, and the
  * ball's worst tet, fail on the same tets, so most refusals take one
@@ -372,7 +372,7 @@ static int moved_qualities(const rm3d *m, const pa_idx *ball, int n,
     int i = k == 0 ? f : k == f ? 0 : k;
     double q = rm3d_qual_moved(m, ball[i] >> 2, ball[i] & 3, np, mp);
     nq[i] = (float)q;
-    if (!(strict ? q > qlo : q >= qlo) || q < RM3D_QABS) {
+    if (!(strict ? q > qlo : q >= qlo) || q < m->qabs) {
       *first = i;
       return i;
     }
@@ -472,7 +472,7 @@ int pa__rm3d_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
   for (int s = 0; s < SNAP_STEPS; s++) {
     double w = ldexp(1.0, -s), np[3];
     for (int j = 0; j < 3; j++) np[j] = s ? xp[j] + w * (y[j] - xp[j]) : y[j];
-    if (moved_qualities(m, ball, n, np, mp, rm3d_q_min(qold), 0, &first,
+    if (moved_qualities(m, ball, n, np, mp, rm3d_q_min(m, qold), 0, &first,
                         nq) >= 0)
       continue;
     apply_move(m, p, ball, n, np, nq, 0);

@@ -176,7 +176,7 @@ static void plain(int dim) {
   CHECK_OK(pa_mesh_copy(m, &m0));
   edge_figures f0 = measure_edges(m0, LMAX);
   CHECK(f0.unblocked > 0); /* the input needs refining */
-  pa__leb_opts o = {LMAX, 0, NULL, 0};
+  pa__leb_opts o = {LMAX, 0, NULL, 0, 0};
   pa_idx *parent = NULL;
   uint8_t *onskin = NULL;
   CHECK_OK(pa__leb_refine(m, &o, &parent, &onskin));
@@ -226,7 +226,7 @@ static void frozen(int dim) {
       nfrozen++;
     }
   CHECK_OK(pa_mesh_copy(m, &m0));
-  pa__leb_opts o = {LMAX, 0, NULL, 0};
+  pa__leb_opts o = {LMAX, 0, NULL, 0, 0};
   CHECK_OK(pa__leb_refine(m, &o, NULL, NULL));
   CHECK_OK(pa_mesh_check(m));
   CHECK_NEAR(pa_mesh_volume(m), pa_mesh_volume(m0), 1e-12);
@@ -381,7 +381,7 @@ static void refine_half(pa_mesh *m) {
   uint8_t *ok = malloc((size_t)nv0), *onskin = NULL;
   for (pa_idx v = 0; v < nv0; v++)
     ok[v] = (uint8_t)(skin_inner(m, v) ? 1 : labelled && on_cut(m, v) ? 2 : 0);
-  pa__leb_opts o = {LMAX, SKIN_REF, ok, SKIN_LMAX};
+  pa__leb_opts o = {LMAX, SKIN_REF, ok, SKIN_LMAX, 0};
   CHECK_OK(pa__leb_refine(m, &o, &parent, &onskin));
   CHECK_OK(pa_mesh_check(m));
   CHECK_NEAR(pa_mesh_volume(m), vol0, 1e-12);
@@ -456,7 +456,7 @@ static void test_alloc_failure(void) {
     pa_mesh *m = box(2, 4, 0.05);
     pa_idx *parent = NULL;
     uint8_t *onskin = NULL;
-    pa__leb_opts o = {LMAX, 0, NULL, 0};
+    pa__leb_opts o = {LMAX, 0, NULL, 0, 0};
     pa_memory_fail_after(n);
     pa_status st = pa__leb_refine(m, &o, &parent, &onskin);
     pa_memory_fail_after(0);
