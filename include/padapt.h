@@ -583,6 +583,114 @@ pa_status pa_metric_from_levelset(pa_mesh *mesh, const double *phi,
                                   const pa_metric_levelset_opts *opts,
                                   double *met);
 
+/* Level-set discretisation (Mmg's -ls): the zero set of a level set cut
+ * into the mesh as an interface between two references. User guide:
+ * docs/guide/levelset.md. */
+
+/** Mmg's default references of the level-set cut: the elements where phi
+ *  < value, the others, and the interface (Mmg's MG_MINUS, MG_PLUS and
+ *  -isoref). */
+#define PA_LS_REF_IN 3
+#define PA_LS_REF_OUT 2
+#define PA_LS_REF_IFACE 10
+/** Default of pa_levelset_opts.snap: a cut point closer than this share of
+ *  its edge to one end moves onto it (the value there becomes the
+ *  iso-value). A cut point at a share t makes elements of quality about t
+ *  times their parent's; at 0.01 the interface moves by at most 1 % of an
+ *  edge, less than the interpolation error of a level set sampled at ten
+ *  vertices per radius of curvature (h^2 / 8R = 1.25 % of h). */
+#define PA_LS_SNAP 0.01
+/** Default of pa_levelset_opts.rmc when removal is asked without a volume
+ *  (Mmg's -rmc without value): 1e-5 of the mesh volume. */
+#define PA_LS_RMC 1e-5
+
+/** One material of the multi-material mode (Mmg's LSReferences): the
+ *  elements of reference ref are split by the level set into ref_in (phi <
+ *  value) and ref_out (the others); with split 0 they keep ref, are cut
+ *  where the level set crosses them only so that the mesh stays
+ *  conforming, and no interface is made inside them. */
+typedef struct pa_ls_material {
+  int32_t ref;
+  int split;
+  int32_t ref_in, ref_out;
+} pa_ls_material;
+
+/** Options of the level-set cut (pa_levelset_opts_default). */
+typedef struct pa_levelset_opts {
+  double value;      /**< the iso-value V (default 0) */
+  int32_t ref_in;    /**< elements where phi < V (default PA_LS_REF_IN) */
+  int32_t ref_out;   /**< the other elements (default PA_LS_REF_OUT) */
+  int32_t ref_iface; /**< the interface's boundary entities and vertices
+                          (default PA_LS_REF_IFACE) */
+  /** Multi-material table (NULL, 0: every element is split into ref_in and
+   *  ref_out). Every element reference must be one of its ref, or of the
+   *  ref_in and ref_out of a split material (a mesh cut before: its
+   *  elements count as that material). The array must live as long as the
+   *  options are used. */
+  const pa_ls_material *mat;
+  int nmat;
+  /** > 0: a connected region of one side (its vertices on that side,
+   *  linked by edges) whose volume is below rmc times the mesh volume
+   *  changes side before the cut (Mmg's -rmc; PA_LS_RMC is Mmg's value);
+   *  the outside's first, then the inside's. Default 0: none. */
+  double rmc;
+  /** Expert: the snapping share (default PA_LS_SNAP, in [0, 0.25]): a
+   *  vertex whose value would put a cut point within snap times the edge
+   *  of it takes the value V. */
+  double snap;
+} pa_levelset_opts;
+
+/** Fill *opts (out) with the defaults: value 0, references 3, 2 and 10, no
+ *  materials, no removal, snap PA_LS_SNAP. Not collective. */
+void pa_levelset_opts_default(pa_levelset_opts *opts);
+
+/** What a level-set cut did (the same on every rank for the distributed
+ *  one). */
+typedef struct pa_levelset_report {
+  double phi_min, phi_max; /**< range of the level set (before snapping) */
+  pa_gid nsnapped;   /**< vertices that took the value V (snapping) */
+  pa_gid nremoved_out, nremoved_in; /**< components that changed side (rmc) */
+  pa_gid ncut;       /**< edges cut (vertices added) */
+  pa_gid nelem_cut;  /**< elements split */
+  pa_gid niface;     /**< boundary entities of the interface; 0 when the
+                          level set does not cross the mesh */
+  pa_gid ndropped;   /**< entities of reference ref_iface inside the domain
+                          that were removed before the cut (the interface
+                          of an earlier cut) */
+  pa_gid nbdry_iface; /**< entities of reference ref_iface on the domain
+                           boundary, kept: the output does not tell them
+                           from the interface */
+  double vol_in, vol_out; /**< volume of the elements of either side */
+} pa_levelset_report;
+
+/**
+ * Cut the zero set of phi - opts->value into mesh (in/out; Mmg's -ls):
+ * phi holds one value per vertex (P1). Values that would put a cut point
+ * within opts->snap of an edge's end become the iso-value there; with
+ * opts->rmc, small components change side; every edge where phi - V
+ * changes sign is split at the zero of its linear interpolant (metric and
+ * fields interpolated there), every element it crosses is split into
+ * elements of either side (faces shared by two elements are split the same
+ * way on both: quadrilaterals are cut by their diagonal from the vertex of
+ * smallest key, original vertices by index, added ones after them by the
+ * indices of their edge), and so are the boundary entities and feature
+ * edges it crosses (keeping their reference and flags). Elements get
+ * ref_in (phi < V) or ref_out (or their material's references); the faces
+ * between the two sides become boundary entities of reference ref_iface
+ * (oriented from the inside out), their vertices take that reference, and
+ * other vertices of that reference take 0. Entities of reference ref_iface
+ * inside the domain (an earlier cut's interface) are removed first. Every
+ * vertex of the interface has phi = V exactly in the P1 interpolation of
+ * the (snapped) level set. The physical names stay. *report (out, may be
+ * NULL): what was done. Not collective. On error the mesh is as given.
+ * Returns PA_ERR_ARG for options out of range, a phi value that is not
+ * finite (naming the vertex, 1-based), an element reference the material
+ * table does not list (naming the element); PA_ERR_MEMORY.
+ */
+pa_status pa_mesh_levelset_cut(pa_mesh *mesh, const double *phi,
+                               const pa_levelset_opts *opts,
+                               pa_levelset_report *report);
+
 /** Returns the length of the edge ab (dim coordinates each) in the metric
  *  (ncomp components at each end: ma at a, mb at b; ncomp 0: Euclidean,
  *  ma and mb unused), by the geometric formula of Mmg. Not collective. */
@@ -989,8 +1097,34 @@ void pa_output_abort(pa_output *tx);
  * status, is PA_SUCCESS on every rank, abort everywhere otherwise. Returns
  * the same status on every rank (the lowest failing rank's, with its
  * message: see pa_set_error).
+ * The commit is one agreed step: the ranks agree on st, then agree again
+ * (each rank only once the first agreement completed on it, so a rank
+ * killed while the others still wrote stops every commit), and only then
+ * rename. SIGINT and SIGTERM act at once (with pa_output_handle_signals:
+ * the temporaries removed) until a rank enters the second agreement; from
+ * there to the end of its renames they wait, and once every rank is in
+ * they are held (pa_output_held_signal): the outputs are committed
+ * everywhere. A rank whose second agreement does not complete within half
+ * a second of such a signal (another rank is gone) aborts and lets the
+ * signal act.
  */
 pa_status pa_output_end(MPI_Comm comm, pa_output *tx, pa_status st);
+/**
+ * The SIGINT or SIGTERM that arrived while pa_output_end committed and was
+ * held until the commit completed (0 if none); the call forgets it. Not
+ * collective. The padapt CLI prints a note and exits 0: its outputs are
+ * complete.
+ */
+int pa_output_held_signal(void);
+/** Test hook: called by pa_output_end with the step reached on this rank
+ *  ("written": its files complete, entering the first agreement; "voted":
+ *  past it; "agreed": past the second, before the renames; "renamed":
+ *  after the first rename; "committed": after the renames, before agreeing
+ *  on them). */
+typedef void (*pa_output_hook)(const char *step, void *ctx);
+/** Install hook (NULL: none) with its ctx, process-wide. Not collective;
+ *  for tests (the CLI's PADAPT_TEST_PAUSE). */
+void pa_output_set_hook(pa_output_hook hook, void *ctx);
 /**
  * Check, before a long computation, that path can be written. Not
  * collective. Returns PA_ERR_IO naming the path if it exists and is not a
@@ -1802,6 +1936,24 @@ pa_status pa_dmesh_metric_from_hessian(pa_dmesh *dm, int field, int comp,
 pa_status pa_dmesh_metric_from_levelset(pa_dmesh *dm, int field,
                                         const pa_metric_levelset_opts *opts);
 pa_status pa_dmesh_metric_complexity(pa_dmesh *dm, double *complexity);
+
+/**
+ * pa_mesh_levelset_cut on a distributed mesh dm (in/out, any overlap): the
+ * level set is vertex field `field` of the local mesh (a scalar; after the
+ * cut it is V at the added vertices). Each rank cuts its owned elements;
+ * the copies of an edge cut on several ranks make one vertex (one global id
+ * agreed by the edge's end ids), so the result is the sequential cut of the
+ * same mesh, whatever the number of ranks: the same vertices, elements and
+ * references. Kept entities keep their global ids and values, new ones get
+ * fresh ids and zero values; then the distributed mesh is rebuilt with its
+ * overlap. *report (out, may be NULL) is the same on every rank.
+ * Collective. Returns the same status on every rank: PA_ERR_ARG as the
+ * sequential one, or for a field that is not a scalar field of the mesh;
+ * PA_ERR_MEMORY, PA_ERR_MPI; the mesh is then not usable (destroy it).
+ */
+pa_status pa_dmesh_levelset_cut(pa_dmesh *dm, int field,
+                                const pa_levelset_opts *opts,
+                                pa_levelset_report *report);
 
 /**
  * The statistics of dm (in/out only for its cached structures) into *stats

@@ -1,6 +1,7 @@
 /*
  * cmd_adapt.c -- `padapt adapt`: sequential adaptation of a mesh to a metric
- * with the built-in remesher (Mmg-compatible options).
+ * with the built-in remesher (Mmg-compatible options), after cutting a
+ * level set into it with -ls (tools/lsopt.c).
  *
  *   padapt adapt IN [-met SOL | -sol SOL | -hsiz H] -out OUT [options]
  *
@@ -12,7 +13,7 @@
  * after, the operation counts and the time. Exit status: 0 on success and on "target missed" (a
  * valid mesh that misses some edge lengths: a warning says so, and the JSON
  * report's "outcome" field), 1 on any error. The outputs are checked before
- * the work starts (pa_cli_check_outputs) and written in one output
+ * the work starts (pa_cli_check_io) and written in one output
  * transaction: on any error none of them is written and files already at
  * their paths stay as they were.
  *
@@ -53,6 +54,20 @@ static int opt_verbosity(const pa_cli *cli, const pa_cli_spec *s,
                         s->cmd, name, val[0] ? val[0] : "nothing");
   a->remesh.verbosity = (int)x;
   pa_cli_set_verbosity((int)x);
+  return 0;
+}
+
+static int opt_lsref(const pa_cli *cli, const pa_cli_spec *s, const char *name,
+                     char **val, void *args) {
+  pa_cli_adapt_args *a = args;
+  for (int k = 0; k < 2; k++) {
+    double x;
+    if (!pa_cli_parse_num(val[k], &x) || x != floor(x) || fabs(x) > 2147483647)
+      return pa_cli_error(cli, "%s: %s needs two references (integers), got "
+                               "'%s'",
+                          s->cmd, name, val[k] ? val[k] : "nothing");
+    a->lsref[k] = (int)x;
+  }
   return 0;
 }
 
@@ -117,6 +132,27 @@ static const pa_cli_opt adapt_opts[] = {
      .help = "local parameters per reference (Mmg's format: REF\n"
              "Triangles|Tetrahedra|Edges HMIN HMAX HAUSD; default\n"
              "IN.padapt when it exists)"},
+    {.names = "-ls", .kind = PA_CLI_STR, .at = A(ls), .want = "a .sol file",
+     .label = "-ls PHI.sol",
+     .help = "cut the zero set of the level set PHI (one value per\n"
+             "vertex of IN) into IN first, then adapt, keeping it:\n"
+             "inside (phi < V) reference 3, outside 2, interface 10\n"
+             "(Mmg's -ls; materials: LSReferences in the -f file)"},
+    {.names = "-lsval", .kind = PA_CLI_NUM, .at = A(lsval),
+     .want = "a number", .lo = -INFINITY, .hi = INFINITY,
+     .label = "-lsval V", .help = "the iso-value V of -ls (default 0)"},
+    {.names = "-lsref", .kind = PA_CLI_FN, .fn = opt_lsref, .nval = 2,
+     .label = "-lsref IN OUT",
+     .help = "references of the inside and the outside (default 3 2)"},
+    {.names = "-isoref", .kind = PA_CLI_INT, .at = A(isoref),
+     .want = "an integer reference", .lo = -2147483647.0, .hi = 2147483647.0,
+     .label = "-isoref R",
+     .help = "reference of the interface and its vertices (default 10)"},
+    {.names = "-rmc", .kind = PA_CLI_OPTNUM, .at = A(rmc),
+     .want = "a volume share in (0, 1)", .lo = 1e-300, .hi = 0.999999,
+     .dflt = PA_LS_RMC, .label = "-rmc [VOL]",
+     .help = "with -ls: a component of either side whose volume is\n"
+             "below VOL times the mesh's changes side (default 1e-5)"},
     {.names = "-optim", .kind = PA_CLI_FLAG, .at = A(optim), .label = "-optim",
      .help = "keep the sizes of the input mesh (the mean length of\n"
              "each vertex's edges), improve the quality"},
@@ -279,8 +315,19 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
   a->serial_below = sb && sb[0] ? atof(sb) : -1;
   pa_remesh_opts_default(&a->remesh);
   a->remesh.verbosity = cli->verbosity;
+  a->lsref[0] = PA_LS_REF_IN;
+  a->lsref[1] = PA_LS_REF_OUT;
+  a->isoref = PA_LS_REF_IFACE;
   int rc = pa_cli_parse(cli, &adapt_spec, argc, argv, a);
   if (rc) return rc;
+  if (!a->ls && (a->lsval != 0 || a->rmc > 0 || a->isoref != PA_LS_REF_IFACE ||
+                 a->lsref[0] != PA_LS_REF_IN || a->lsref[1] != PA_LS_REF_OUT))
+    return pa_cli_error(cli, "adapt: -lsval, -lsref, -isoref and -rmc go "
+                             "with -ls PHI.sol");
+  if (a->ls && a->lsref[0] == a->lsref[1])
+    return pa_cli_error(cli, "adapt: -lsref: the inside and the outside need "
+                             "two references, got %d twice",
+                        a->lsref[0]);
   if (!a->in && !a->restart) {
     pa_cli_error(cli, "adapt: no input mesh");
     if (cli->rank == 0) pa_cli_help(&adapt_spec, stderr);
@@ -304,6 +351,9 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
                         a->svg);
   if (a->met && a->remesh.hsiz > 0)
     return pa_cli_error(cli, "adapt: give either -met/-sol or -hsiz, not both");
+  if (a->geo && a->ls)
+    return pa_cli_error(cli, "adapt: -geo and -ls: the cut's interface lies "
+                             "on no entity of the model");
   if (a->geo && (a->restart || a->checkpoint || a->distributed))
     return pa_cli_error(cli, "adapt: -geo and %s: a distributed set does not "
                              "keep the model's entities",
@@ -317,26 +367,36 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
   return 0;
 }
 
-/* The outputs of `padapt adapt`, checked before the work starts. */
+/* The inputs and outputs of `padapt adapt`, checked before the work
+ * starts. */
 static int check_outputs(const pa_cli *cli, const pa_cli_adapt_args *a) {
   char *sol = NULL, *fields = NULL;
-  const char *paths[5] = {a->out, NULL, NULL, a->json, a->svg};
-  if (!a->distributed) { /* a set carries its metric and fields */
+  pa_cli_io io = {.in = {a->in, a->met, a->field, a->params},
+                  .out = {a->json, a->svg},
+                  .ckpt = a->checkpoint,
+                  .restart = a->restart};
+  if (a->distributed) { /* a set carries its metric and fields */
+    io.set = a->out;
+  } else {
+    io.out[2] = a->out;
     if (!a->nosol)
-      paths[1] = a->outsol ? a->outsol : (sol = pa_cli_replace_ext(a->out, ".sol"));
+      io.out[3] = a->outsol ? a->outsol
+                            : (sol = pa_cli_replace_ext(a->out, ".sol"));
     if (a->field)
-      paths[2] = a->outfield ? a->outfield
-                             : (fields = pa_cli_replace_ext(a->out, ".fields.sol"));
+      io.out[4] = a->outfield
+                      ? a->outfield
+                      : (fields = pa_cli_replace_ext(a->out, ".fields.sol"));
   }
-  int bad = pa_cli_check_outputs(cli, "adapt", paths, 5);
+  int bad = pa_cli_check_io(cli, "adapt", &io);
   if (!bad && a->checkpoint) {
     /* the state file in an existing directory, or the directory itself */
     struct stat sb;
     size_t n = strlen(a->checkpoint) + sizeof "/checkpoint";
     char *state = malloc(n);
     if (state) snprintf(state, n, "%s/checkpoint", a->checkpoint);
-    const char *p = stat(a->checkpoint, &sb) == 0 ? state : a->checkpoint;
-    bad = pa_cli_check_outputs(cli, "adapt -checkpoint", &p, 1);
+    pa_cli_io ck = {
+        .out = {stat(a->checkpoint, &sb) == 0 ? state : a->checkpoint}};
+    bad = pa_cli_check_io(cli, "adapt -checkpoint", &ck);
     free(state);
   }
   free(sol);
@@ -345,15 +405,15 @@ static int check_outputs(const pa_cli *cli, const pa_cli_adapt_args *a) {
 }
 
 /* Everything the sequential run reads beside the mesh: the metric, the local
- * parameters (into opts; *local owns them) and the -field fields. Returns 0,
- * or 1 after printing the error. */
+ * parameters (into opts; *local owns them) and the -field fields (the level
+ * set of -ls is read by the cut). Returns 0, or 1 after printing the error. */
 static int read_inputs(const pa_cli *cli, const pa_cli_adapt_args *a,
                        pa_mesh *mesh, pa_remesh_opts *opts,
                        pa_local_param **local) {
   if (pa_cli_adapt_metric(cli, a, mesh)) return 1;
   if (a->params) {
     if (pa_cli_read_params(cli, a->params, pa_mesh_dim(mesh), local,
-                           &opts->nlocal))
+                           &opts->nlocal, NULL, NULL))
       return 1;
     opts->local = *local;
   }
@@ -423,9 +483,12 @@ static void report_after(const pa_cli_adapt_args *a, const pa_mesh *mesh,
 /* The -json report: the after-statistics with the time, memory and counts of
  * the run and the figures before. */
 static pa_status write_json(const pa_cli_adapt_args *a, const pa_stats *before,
-                            const pa_remesh_report *rep) {
+                            const pa_remesh_report *rep,
+                            const pa_levelset_report *ls) {
   char *fid = pa_cli_fidelity_json(&rep->fidelity);
+  char *lsj = a->ls ? pa_cli_ls_json(ls) : NULL;
   pa_cli_sbuf b = {NULL, 0, 0, 0};
+  if (a->ls) pa_cli_sb_printf(&b, "%s", lsj ? lsj : "");
   pa_cli_sb_printf(&b,
                    "\"time_s\": %.6f, \"remesh_cpu_s\": %.6f, "
                    "\"peak_rss_bytes\": %zu, "
@@ -443,10 +506,11 @@ static pa_status write_json(const pa_cli_adapt_args *a, const pa_stats *before,
                      "\"projection_s\": %.6f, ",
                      rep->nproject, rep->nproject_failed, rep->project_s);
   pa_cli_sb_printf(&b, "%s", fid ? fid : "");
-  pa_status st = b.fail || !fid
+  pa_status st = b.fail || !fid || (a->ls && !lsj)
                      ? pa_set_error(PA_ERR_MEMORY, "out of memory")
                      : pa_stats_write_json(&rep->fidelity.user, b.p, a->json);
   free(fid);
+  free(lsj);
   free(b.p);
   return st;
 }
@@ -456,7 +520,8 @@ static pa_status write_json(const pa_cli_adapt_args *a, const pa_stats *before,
  * Returns 0, or 1 after printing the error. */
 static int write_outputs(const pa_cli *cli, const pa_cli_adapt_args *a,
                          pa_mesh *mesh, const pa_stats *before,
-                         const pa_remesh_report *rep) {
+                         const pa_remesh_report *rep,
+                         const pa_levelset_report *ls) {
   char *solpath = NULL, *fieldpath = NULL;
   pa_output *tx = NULL;
   pa_status st = pa_output_begin(&tx);
@@ -473,7 +538,7 @@ static int write_outputs(const pa_cli *cli, const pa_cli_adapt_args *a,
     fieldpath = a->outfield ? NULL : pa_cli_replace_ext(a->out, ".fields.sol");
     st = pa_cli_write_fields(mesh, a->outfield ? a->outfield : fieldpath);
   }
-  if (st == PA_SUCCESS && a->json) st = write_json(a, before, rep);
+  if (st == PA_SUCCESS && a->json) st = write_json(a, before, rep, ls);
   if (st == PA_SUCCESS && a->svg)
     st = pa_cli_adapt_svg(a, before, &rep->fidelity.user);
   st = pa_cli_output_end(MPI_COMM_SELF, tx, st);
@@ -492,15 +557,17 @@ static int adapt_sequential(const pa_cli *cli, const pa_cli_adapt_args *a) {
   pa_remesh_opts opts = a->remesh;
   pa_stats before;
   pa_remesh_report rep;
+  pa_levelset_report ls;
   pa_status st = pa_cli_read_adapt_mesh(cli, a, a->remesh.geometry,
                                         &mesh); /* collective */
   if (cli->rank != 0) return st ? 1 : 0;
   int rc = pa_cli_fail(cli, st);
   if (!rc) rc = read_inputs(cli, a, mesh, &opts, &local);
+  if (!rc && a->ls) rc = pa_cli_ls_cut(cli, a, mesh, &ls);
   if (!rc) rc = report_before(cli, a, mesh, &before);
   if (!rc) rc = run_remesher(cli, mesh, &opts, &rep);
   if (!rc) report_after(a, mesh, &rep);
-  if (!rc) rc = write_outputs(cli, a, mesh, &before, &rep);
+  if (!rc) rc = write_outputs(cli, a, mesh, &before, &rep, &ls);
   free(local);
   pa_mesh_destroy(mesh);
   return rc;

@@ -780,7 +780,8 @@ int pa_cli_plot(const pa_cli *cli, int argc, char **argv) {
   int prc = parse_args(cli, argc, argv, &a);
   if (prc) return prc > 0 ? 1 : 0;
   const char *out = a.out;
-  if (pa_cli_check_outputs(cli, "plot", &out, 1)) return 1;
+  pa_cli_io io = {.in = {a.in, a.met}, .out = {out}};
+  if (pa_cli_check_io(cli, "plot", &io)) return 1;
   pa_mesh *mesh = NULL;
   pa_status st = pa_cli_read_mesh(cli, a.in, &mesh); /* collective */
   if (cli->rank != 0) return st ? 1 : 0;

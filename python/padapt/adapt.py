@@ -114,7 +114,8 @@ def remesh_options(opts, **kw):
 
 
 def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
-          hausd=None, fields=None, geometry=None, **options):
+          hausd=None, fields=None, levelset=None, levelset_options=None,
+          geometry=None, **options):
     """Adapt a copy of mesh to a metric with the built-in remesher.
 
     mesh     a padapt.Mesh (not modified)
@@ -129,6 +130,12 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
              (default 0.01)
     fields   {name: (nvert,) or (nvert, k)} vertex fields to interpolate
              onto the new mesh, besides those the mesh carries
+    levelset (nvert,) a level set: its zero set is cut into the mesh first
+             (Mmg's -ls: inside, phi < 0, reference 3, outside 2, the
+             interface reference 10), then kept as a boundary by the
+             adaptation; report["levelset"] says what the cut did
+    levelset_options  {name: value} of padapt.levelset.cut (value, ref_in,
+             ref_out, ref_iface, materials, rmc)
     geometry a padapt.Geometry, the model of the classified mesh
              (padapt.read(path, model=True)): new boundary vertices go onto
              it, hausd is measured against its curvature; the report adds
@@ -157,6 +164,9 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
         from .geometry import Geometry
         if not isinstance(geometry, Geometry):
             raise TypeError("adapt: geometry must be a padapt.Geometry")
+        if levelset is not None:
+            raise ValueError("adapt: a level-set cut and a CAD model (geometry=) "
+                             "do not go together: the cut's interface is on no model entity")
         opts.geometry = geometry._h
     dim, nv = mesh.dim, mesh.nvert
     met = None if metric is None else as_metric("metric", metric, dim, nv)
@@ -175,6 +185,10 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
     for name, val, nc in flds:
         out.add_field(name, val)
     nelem0 = mesh.nelem
+    lsrep = None
+    if levelset is not None:
+        from .levelset import cut_in_place
+        lsrep = cut_in_place(out._h, nv, levelset, **(levelset_options or {}))
 
     rep = _lib.RemeshReport()
     check(lib.pa_remesh(lib.pa_remesher_builtin(), out._h, ctypes.byref(opts), ctypes.byref(rep)))
@@ -197,5 +211,7 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
                   "projections_failed": rep.nproject_failed,
                   "projection_s": rep.project_s})
     d.update(fidelity_dict(rep.fidelity))
+    if lsrep is not None:
+        d["levelset"] = lsrep
     report = Report(d, describe(rep.fidelity))
     return AdaptResult(out, out.fields, report)

@@ -616,17 +616,16 @@ class Mesh(object):
 
 def read(path, model=False):
     """Read a mesh, format by extension: .mesh/.meshb (Medit), .msh (Gmsh 4.1
-    ASCII or binary, 2.2 ASCII). A file that lists no boundary gets one
-    (reference 0), as the command line does. model=True reads a Gmsh MSH
-    4.1 file with its classification (references are entity tags, vertices
-    know their entities: mesh.classified, for adapt(..., geometry=...)).
-    Raises padapt.Error naming the file and line of a fault,
-    FileNotFoundError if path does not exist."""
+    ASCII or binary, 2.2 ASCII). The boundary entities the file does not
+    list are added (reference 0), as the command line does. model=True
+    reads a Gmsh MSH 4.1 file with its classification (references are
+    entity tags, vertices know their entities: mesh.classified, for
+    adapt(..., geometry=...)). Raises padapt.Error naming the file and
+    line of a fault, FileNotFoundError if path does not exist."""
     if not os.path.exists(path):
         raise FileNotFoundError(2, "No such file", str(path))
     h = ctypes.c_void_p()
     check((lib.pa_mesh_read_model if model else lib.pa_mesh_read)(os.fsencode(path), ctypes.byref(h)))
     mesh = Mesh._wrap(h)
-    if mesh.nbdry == 0:
-        check(lib.pa_mesh_build_boundary(h, 0, None))
+    check(lib.pa_mesh_build_boundary(h, 0, None))
     return mesh

@@ -63,7 +63,9 @@ void pa__piece_release(pa__piece *pc) {
   pa__free(pc->ifgid);
   pa__free(pc->ifgive);
   pa__free(pc->dest);
+  pa__free(pc->bfix);
   pc->dest = NULL;
+  pc->bfix = NULL;
   pc->vgid = pc->ifgid = NULL;
   pc->skin = pc->hot = pc->ifgive = NULL;
   pc->vrank = NULL;
@@ -86,6 +88,7 @@ void pa__iter_release_elements(pa__iter *it) {
   pa__free(it->label);
   pa__free(it->vlab);
   pa__free(it->vinner);
+  pa__free(it->bside);
   pa__free(it->bstart);
   pa__free(it->belem);
   it->tag = NULL;
@@ -93,6 +96,7 @@ void pa__iter_release_elements(pa__iter *it) {
   it->label = NULL;
   it->vlab = NULL;
   it->vinner = NULL;
+  it->bside = NULL;
   it->bstart = it->belem = NULL;
 }
 

@@ -83,6 +83,13 @@
 #define PA_ADAPT_DONE_PASSED 0x80
 /* Name of the element value marking elements produced in this run. */
 #define PA_ADAPT_DONE_VALUE "pa.adapt.done"
+/* Bits of it->bside (pieces.c). A boundary entity with both lies inside
+ * the domain on the outer surface of a piece: the piece gets it frozen
+ * (extract.c), since the element on its other side stays or goes to
+ * another piece, and its vertices are not inner (no bisection of its
+ * edges). */
+#define PA_ADAPT_B_INTERIOR 1
+#define PA_ADAPT_B_CUT 2
 /* Reference of the artificial boundary entities of a piece's outer surface. */
 #define PA_ADAPT_SKIN_REF (-2000000001)
 /* Estimated bytes of remesher memory per unit of work (one output element). */
@@ -109,6 +116,10 @@ typedef struct pa__piece {
                           piece touches */
   int *vrank;          /* in->nv: a rank that sent an element containing it
                           (the smallest) */
+  uint8_t *bfix;       /* n0[PA_BOUNDARY]: the input boundary entity lies
+                          inside the domain on the piece's outer surface
+                          (it->bside), frozen in the piece; its old owner
+                          gives it back, not the piece */
   pa_idx nsplit;       /* vertices added on the skin (bisect.c) */
   int unchanged;       /* the built-in remesher changed nothing (its counts
                           are 0) and no skin vertex was added */
@@ -157,6 +168,10 @@ typedef struct pa__iter {
   uint8_t *vinner;     /* nloc: PA_ADAPT_INNER_TRANSIT (inner vertex),
                           PA_ADAPT_LABELLED_TRANSIT (only pieces around, not
                           inner) or 0 */
+  uint8_t *bside;      /* nloc boundary entities: PA_ADAPT_B_INTERIOR (two
+                          elements hold it: an interface inside the
+                          domain), PA_ADAPT_B_CUT (elements of two labels,
+                          or a labelled and an unlabelled one, hold it) */
   int *vlab;           /* 4 x nloc: smallest and largest label of the
                           elements around each local vertex (PA_ADAPT_NOLABEL
                           for unlabelled ones), then of the tagged ones

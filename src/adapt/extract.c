@@ -20,6 +20,11 @@
  * ranks) and assembles each of its pieces, numbered by increasing global id,
  * so the piece does not depend on how its fragments were spread.
  *
+ * A boundary entity inside the domain on the outer surface of a piece (an
+ * interface between two references, which the element on its other side,
+ * staying or in another piece, shares: it->bside) comes flagged
+ * PA_ADAPT_SKIN_TRANSIT and is frozen in the piece (pc->bfix), as its skin.
+ *
  * The piece keeps the global id of each of its vertices (pc->vgid; the
  * remesher never sees them: reintegrate.c matches the output's vertices
  * by their coordinates); the faces of its outer surface that are not
@@ -172,6 +177,9 @@ static pa_status pair_records(pa__iter *it, int kind, const pa_idx *bstart,
         vg[j] = dm->gid[PA_VERTEX][conn[(size_t)nv * x + j]];
       ref = kind == PA_BOUNDARY ? m->bref[x] : m->edref[x];
       flag = kind == PA_BOUNDARY ? m->bflag[x] : m->edflag[x];
+      if (kind == PA_BOUNDARY &&
+          it->bside[x] == (PA_ADAPT_B_INTERIOR | PA_ADAPT_B_CUT))
+        flag |= PA_ADAPT_SKIN_TRANSIT; /* on the piece's outer surface */
     }
     size_t pl = punit ? pa__entity_payload(dm, kind, x, pay) : 0;
     PA_CALL(pa__recs_add(R, dm->gid[kind][x], vg, ref, flag, p, dbl, pay, pl));
@@ -392,7 +400,12 @@ static pa_status piece_subentities(pbuild *b) {
       }
       if (kind == PA_BOUNDARY) {
         m->bref[k] = B->ref[i];
-        m->bflag[k] = B->flag[i];
+        m->bflag[k] = B->flag[i] & (uint8_t)~PA_ADAPT_SKIN_TRANSIT;
+        if (B->flag[i] & PA_ADAPT_SKIN_TRANSIT) {
+          if (!b->pc->bfix) PA_CALLOC(b->pc->bfix, n);
+          b->pc->bfix[k] = 1;
+          m->bflag[k] |= PA_FLAG_REQUIRED;
+        }
       } else {
         m->edref[k] = B->ref[i];
         m->edflag[k] = B->flag[i];

@@ -23,14 +23,20 @@
  *     A skin vertex is hot for piece p when a tagged element of another
  *     piece touches it (extract.c). A vertex is inner (it->vinner =
  *     PA_ADAPT_INNER_TRANSIT) when only labelled elements touch it and it lies
- *     on no feature edge, required boundary entity or curved boundary and
+ *     on no feature edge, required boundary entity, boundary entity inside
+ *     the domain (an interface between two references, it->bside) or
+ *     curved boundary and
  *     is no corner, ridge or required vertex; the other vertices that only
  *     labelled elements touch (on a ridge, a curved boundary, ...) are
  *     PA_ADAPT_LABELLED_TRANSIT. bisect.c splits a skin edge between two inner
  *     vertices, or between an inner and a labelled one: such an edge is
  *     interior, or lies in the plane of the inner end's boundary faces, so
  *     its midpoint is exact.
- * Only vertex values with reduce/halo cross the ranks here: no point-to-point
+ *  5. Per local boundary entity (it->bside), whether two elements hold it
+ *     (it lies inside the domain) and whether they have two labels: such
+ *     an entity on a piece's outer surface is frozen in that piece
+ *     (extract.c), as its skin is.
+ * Only vertex and boundary values with reduce/halo cross the ranks here: no point-to-point
  * code, and the result does not depend on timing.
  */
 #include "adapt/adapt.h"
@@ -279,8 +285,65 @@ cleanup:
   return st;
 }
 
-/* Step 4b: the inner vertices (bisect.c): only pieces around, on no
- * feature edge nor required boundary entity nor curved boundary (reduced
+/* Step 4b: it->bside, which boundary entities lie inside the domain
+ * (held by two elements) and which are held by elements of two labels (a
+ * labelled and an unlabelled one included): per entity, the smallest and
+ * largest global id and label of the owned elements holding it, reduced
+ * (MIN) over the ranks and sent back to the ghosts. */
+static pa_status boundary_sides(pa__iter *it) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  const pa_mesh *m = dm->mesh;
+  pa_dmesh_value *val = NULL;
+  pa_idx nb = dm->nloc[PA_BOUNDARY];
+  int d = it->dim;
+  if (!it->bstart) PA_CALL(pa__owned_balls(dm, &it->bstart, &it->belem));
+  PA_CALL(pa_dmesh_value_add(dm, PA_BOUNDARY, "pa.adapt.bside", MPI_INT64_T,
+                             4, -1, &val));
+  {
+    int64_t *x = pa_dmesh_value_data(val, NULL, NULL);
+    for (pa_idx b = 0; b < nb; b++) {
+      int64_t *y = x + 4 * (size_t)b;
+      y[0] = y[1] = y[2] = y[3] = INT64_MAX;
+      const pa_idx *f = m->bdry + (size_t)d * b;
+      for (pa_idx q = it->bstart[f[0]]; q < it->bstart[f[0] + 1]; q++) {
+        pa_idx e = it->belem[q];
+        const pa_idx *ev = m->elem + (size_t)it->nve * e;
+        int all = 1;
+        for (int i = 1; i < d && all; i++) {
+          int in = 0;
+          for (int j = 0; j < it->nve; j++) in |= ev[j] == f[i];
+          all = in;
+        }
+        if (!all) continue;
+        int64_t g = dm->gid[PA_ELEMENT][e];
+        int64_t l = it->label[e] < 0 ? NOLABEL : it->label[e];
+        if (g < y[0]) y[0] = g;
+        if (-g < y[1]) y[1] = -g;
+        if (l < y[2]) y[2] = l;
+        if (-l < y[3]) y[3] = -l;
+      }
+    }
+  }
+  PA_CALL(pa__agree(dm->comm, st));
+  PA_CALL(pa_dmesh_reduce(dm, val, MPI_MIN));
+  PA_CALL(pa_dmesh_halo(dm, val));
+  PA_ALLOC(it->bside, nb);
+  {
+    const int64_t *x = pa_dmesh_value_data(val, NULL, NULL);
+    for (pa_idx b = 0; b < nb; b++) {
+      const int64_t *y = x + 4 * (size_t)b;
+      it->bside[b] = (uint8_t)((y[0] != -y[1] ? PA_ADAPT_B_INTERIOR : 0) |
+                               (y[2] != -y[3] ? PA_ADAPT_B_CUT : 0));
+    }
+  }
+cleanup:
+  return pa__dmesh_value_drop(dm, val, pa__agree_end(dm->comm, st));
+}
+
+/* Step 4c: the inner vertices (bisect.c): only pieces around, on no
+ * feature edge nor required boundary entity nor interior boundary entity
+ * (it->bside) nor curved boundary (reduced
  * over the ranks: every piece sees the same), and no corner, ridge or
  * required vertex; it->vinner as described at the top of the file. */
 static pa_status inner_vertices(pa__iter *it, pa_dmesh_value *val) {
@@ -292,7 +355,8 @@ static pa_status inner_vertices(pa__iter *it, pa_dmesh_value *val) {
     const pa_mesh *m = dm->mesh;
     for (pa_idx v = 0; v < nloc; v++) d[2 * v] = d[2 * v + 1] = 0;
     for (pa_idx b = 0; b < m->nb; b++)
-      if (m->bflag[b] & PA_FLAG_REQUIRED)
+      if ((m->bflag[b] & PA_FLAG_REQUIRED) ||
+          (it->bside[b] & PA_ADAPT_B_INTERIOR))
         for (int k = 0; k < it->dim; k++) d[2 * m->bdry[(size_t)it->dim * b + k]] = 1;
     for (pa_idx b = 0; b < m->ned; b++)
       for (int k = 0; k < 2; k++) d[2 * m->edge[2 * (size_t)b + k]] = 1;
@@ -333,6 +397,7 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
   added = 1;
   PA_CALL(grow_labels(it, val));
   PA_CALL(label_ranges(it, val));
+  PA_CALL(boundary_sides(it));
   PA_CALL(inner_vertices(it, val));
 cleanup:
   st = pa__dmesh_value_drop(dm, added ? val : NULL,

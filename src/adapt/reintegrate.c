@@ -29,7 +29,9 @@
  * vertices as an input element keeps its id and other values,
  * output_reuse; the others get fresh ids and zeros); and the boundary
  * entities and edges that do not lie on the skin (this drops the artificial
- * skin faces; an unchanged one keeps its id and values, as elements). Fresh
+ * skin faces and the entities inside the domain frozen on a piece's outer
+ * surface, pc->bfix, which their owner keeps; an unchanged one keeps its
+ * id and values, as elements). Fresh
  * ids are the global maximum + 1 + an exclusive scan of the per-rank counts,
  * pieces in increasing order on each rank, then the added skin vertices:
  * deterministic for a given input and number of ranks. The vertices only this
@@ -479,23 +481,30 @@ cleanup:
   return st;
 }
 
+/* 1 if boundary entity b of an output lies on the skin: an artificial skin
+ * face, or an input entity frozen on the piece's outer surface (bfix). */
+static int on_skin(const pa_mesh *out, const pa_idx *breuse,
+                   const uint8_t *bfix, pa_idx b) {
+  return out->bref[b] == PA_ADAPT_SKIN_REF ||
+         (bfix && breuse[b] >= 0 && bfix[breuse[b]]);
+}
+
 /* Which boundary entities / edges of an output to give (not on the skin);
  * counts of those needing fresh ids (breuse, dreuse < 0) in
  * cnt[PA_BOUNDARY], cnt[PA_EDGE]. */
 static pa_status output_emit(const pa_mesh *out, const pa_idx *breuse,
-                             const pa_idx *dreuse, uint8_t **bemit,
-                             uint8_t **demit, pa_gid *cnt) {
+                             const pa_idx *dreuse, const uint8_t *bfix,
+                             uint8_t **bemit, uint8_t **demit, pa_gid *cnt) {
   pa_status st = PA_SUCCESS;
   tset fs = {0, NULL}, es = {0, NULL};
   int d = out->dim;
   pa_idx nskin = 0;
-  for (pa_idx b = 0; b < out->nb; b++)
-    nskin += out->bref[b] == PA_ADAPT_SKIN_REF;
+  for (pa_idx b = 0; b < out->nb; b++) nskin += on_skin(out, breuse, bfix, b);
   PA_CALL(tset_init(&fs, (size_t)nskin));
   PA_CALL(tset_init(&es, (size_t)nskin * 3));
-  /* the artificial skin faces and their edges */
+  /* the skin faces and their edges */
   for (pa_idx b = 0; b < out->nb; b++) {
-    if (out->bref[b] != PA_ADAPT_SKIN_REF) continue;
+    if (!on_skin(out, breuse, bfix, b)) continue;
     const pa_idx *v = out->bdry + (size_t)d * b;
     pa_idx k[3];
     tkey(v, d, k);
@@ -1230,7 +1239,7 @@ static pa_status count_fresh(pa__iter *it, reint *r) {
     for (pa_idx e = 0; e < pc->out->ne; e++)
       r->cnt[PA_ELEMENT] += pc->reuse[PA_ELEMENT][e] < 0;
     PA_CALL(output_emit(pc->out, pc->reuse[PA_BOUNDARY], pc->reuse[PA_EDGE],
-                        &r->bemit[q], &r->demit[q], r->cnt));
+                        pc->bfix, &r->bemit[q], &r->demit[q], r->cnt));
     PA_CALL(output_dest(it, pc, &pc->dest));
     pa__mesh_drop_cells(pc->in); /* only its vertices are read from now */
   }

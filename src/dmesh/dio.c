@@ -40,6 +40,7 @@
 #include <errno.h>
 #include <stdio.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 enum {
@@ -496,21 +497,63 @@ cleanup:
 
 /* ---- VTU output ---- */
 
+/* Keep, in place, the boundary entities and edges of the file mesh fm that
+ * this rank owns (in file order): the others are in another rank's ParaView
+ * file already. map[k] becomes their new file indices (-1: dropped), nfile
+ * their counts. The rank file (.meshb) was written before, whole. */
+static pa_status keep_owned(const pa_dmesh *dm, pa_mesh *fm,
+                            pa_idx *const map[PA_DMESH_NKIND],
+                            pa_idx nfile[PA_DMESH_NKIND]) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *to = NULL;
+  for (int k = PA_BOUNDARY; k <= PA_EDGE; k++) {
+    int nv = pa__kind_nv(dm->dim, k);
+    pa_idx *conn = k == PA_BOUNDARY ? fm->bdry : fm->edge, n = 0;
+    int32_t *ref = k == PA_BOUNDARY ? fm->bref : fm->edref;
+    uint8_t *flag = k == PA_BOUNDARY ? fm->bflag : fm->edflag;
+    pa__free(to);
+    to = NULL;
+    PA_ALLOC(to, nfile[k] ? (size_t)nfile[k] : 1);
+    for (pa_idx f = 0; f < nfile[k]; f++) to[f] = -1;
+    for (pa_idx i = 0; i < dm->nloc[k]; i++)
+      if (map[k][i] >= 0 && dm->owner[k][i] == dm->rank) to[map[k][i]] = 0;
+    for (pa_idx f = 0; f < nfile[k]; f++) {
+      if (to[f] < 0) continue;
+      memmove(conn + (size_t)nv * n, conn + (size_t)nv * f, sizeof *conn * nv);
+      ref[n] = ref[f];
+      flag[n] = flag[f];
+      to[f] = n++;
+    }
+    for (pa_idx i = 0; i < dm->nloc[k]; i++)
+      if (map[k][i] >= 0) map[k][i] = to[map[k][i]];
+    nfile[k] = n;
+  }
+  fm->nb = nfile[PA_BOUNDARY];
+  fm->ned = nfile[PA_EDGE];
+  pa__mesh_invalidate(fm);
+cleanup:
+  pa__free(to);
+  return st;
+}
+
 /* This rank's ParaView file: the file mesh fm with its metric and fields
  * (vd: nd values per file vertex, metric first), global ids, ghost types
- * and rank (pa__vtu_write). */
+ * and rank (pa__vtu_write); the boundary entities and edges this rank owns
+ * only (keep_owned: fm, map and nfile change), so that the set shows each
+ * once. */
 static pa_status write_vtu(const pa_dmesh *dm, pa_mesh *fm,
                            pa_idx *const map[PA_DMESH_NKIND],
-                           const pa_idx nfile[PA_DMESH_NKIND], const double *vd,
+                           pa_idx nfile[PA_DMESH_NKIND], const double *vd,
                            int nd, const char *path) {
   pa_status st = PA_SUCCESS;
   const pa_mesh *m = dm->mesh;
   pa_idx nv = nfile[PA_VERTEX];
-  size_t ncell = (size_t)nfile[PA_ELEMENT] + (size_t)nfile[PA_BOUNDARY] +
-                 (dm->dim == 3 ? (size_t)nfile[PA_EDGE] : 0);
   int64_t *vgid = NULL, *cgid = NULL;
   uint8_t *ghost = NULL;
   double *col = NULL;
+  PA_CALL(keep_owned(dm, fm, map, nfile));
+  size_t ncell = (size_t)nfile[PA_ELEMENT] + (size_t)nfile[PA_BOUNDARY] +
+                 (dm->dim == 3 ? (size_t)nfile[PA_EDGE] : 0);
   PA_ALLOC(vgid, nv);
   PA_ALLOC(ghost, nv);
   PA_ALLOC(cgid, ncell);
@@ -583,7 +626,7 @@ static pa_status write_pvtu(const char *base, int nranks, const pa_mesh *m) {
           "<PDataArray type=\"Int32\" Name=\"ref\"/>\n"
           "<PDataArray type=\"Int64\" Name=\"gid\"/>\n"
           "<PDataArray type=\"UInt8\" Name=\"vtkGhostType\"/>\n"
-          "</PPointData>\n<PCellData Scalars=\"rank\">\n"
+          "</PPointData>\n<PCellData Scalars=\"quality\">\n"
           "<PDataArray type=\"Int32\" Name=\"ref\"/>\n"
           "<PDataArray type=\"UInt8\" Name=\"entity\"/>\n"
           "<PDataArray type=\"Float64\" Name=\"quality\"/>\n"
@@ -1476,7 +1519,30 @@ cleanup:
   st = pa__agree(comm, st);
   if (st) return st;
   MPI_Bcast(&isset, 1, MPI_INT, 0, comm);
-  if (isset) return read_set(comm, path, overlap, dmp);
+  if (isset) {
+    /* A file made or edited by hand may hold what the remeshers cannot
+     * take (one element listed twice, two on the same side of a face):
+     * each rank checks its part, then the faces between the parts. */
+    st = read_set(comm, path, overlap, dmp);
+    if (st == PA_SUCCESS) {
+      pa_dmesh *dm = *dmp;
+      st = pa__agree(comm, pa__mesh_check_elements(dm->mesh));
+      if (st == PA_SUCCESS)
+        st = pa__faces_conform(comm, dm->dim, dm->nown[PA_ELEMENT],
+                               dm->mesh->elem, dm->mesh->nv,
+                               dm->gid[PA_VERTEX], dm->gid[PA_ELEMENT]);
+    }
+    if (st && !strstr(pa_last_error(), path)) { /* the entity, not the file */
+      char msg[600];
+      snprintf(msg, sizeof msg, "%s: %s", path, pa_last_error());
+      st = pa_set_error(st, "%s", msg);
+    }
+    if (st) {
+      pa_dmesh_destroy(*dmp);
+      *dmp = NULL;
+    }
+    return st;
+  }
   if (rank == 0) st = pa_mesh_read(path, &m);
   st = pa__agree(comm, st);
   if (!st) st = pa_dmesh_distribute(comm, 0, m, overlap, dmp);
@@ -1513,13 +1579,62 @@ cleanup:
 
 /* ---- the collective end of output transactions ---- */
 
+/* How long a rank that has entered the last agreement of a commit, and then
+ * received SIGINT or SIGTERM, waits for the other ranks before it gives up
+ * (one of them is gone): ranks that are alive come within microseconds
+ * (the first agreement brought them all there), and Open MPI's mpiexec
+ * kills a job with SIGKILL a second after its SIGTERM. */
+#define PA_OUTPUT_GRACE_S 0.5
+/* The pause between two tests of that agreement. */
+#define PA_OUTPUT_POLL_NS 100000
+
+/* The last agreement of a commit: a barrier that every rank enters only once
+ * the first agreement completed on it, so that no rank passes it when
+ * another died before. Tested without blocking, SIGINT and SIGTERM blocked:
+ * returns 1 when every rank is in, 0 when a signal came and the others did
+ * not within PA_OUTPUT_GRACE_S. */
+static int commit_barrier(MPI_Comm comm) {
+  MPI_Request rq;
+  double since = -1;
+  if (MPI_Ibarrier(comm, &rq) != MPI_SUCCESS) return 0;
+  for (;;) {
+    int done = 0;
+    if (MPI_Test(&rq, &done, MPI_STATUS_IGNORE) != MPI_SUCCESS) return 0;
+    if (done) return 1;
+    if (pa__output_signal_pending()) {
+      if (since < 0) since = pa_wtime();
+      if (pa_wtime() - since > PA_OUTPUT_GRACE_S) return 0;
+    }
+    struct timespec pause = {0, PA_OUTPUT_POLL_NS};
+    nanosleep(&pause, NULL);
+  }
+}
+
 pa_status pa__output_end(MPI_Comm comm, pa_output *tx, pa_status st) {
+  int outer = pa__output_depth() == 1; /* a nested end only reports */
+  if (outer && st == PA_SUCCESS) pa__output_hook("written");
   st = pa__agree_end(comm, st);
   if (st) {
     pa_output_abort(tx);
     return st;
   }
-  return pa__agree(comm, pa_output_commit(tx));
+  if (!outer) return pa__agree(comm, pa_output_commit(tx));
+  pa__output_hook("voted");
+  sigset_t old;
+  pa__output_hold_begin(&old);
+  if (!commit_barrier(comm)) {
+    pa_output_abort(tx);
+    st = pa_set_error(PA_ERR_IO, "interrupted: another process did not come "
+                                 "to commit the outputs; nothing written");
+    pa__output_hold_end(&old, 0); /* the pending signal ends the process */
+    return st;
+  }
+  pa__output_hook("agreed");
+  st = pa_output_commit(tx);
+  pa__output_hook("committed");
+  st = pa__agree(comm, st);
+  pa__output_hold_end(&old, 1);
+  return st;
 }
 
 pa_status pa_output_end(MPI_Comm comm, pa_output *tx, pa_status st) {

@@ -480,6 +480,26 @@ static int face_key_rank(const pa_idx *lv, const pa_gid *vglob, int nf,
   return (int)(face_hash(key, nf - 1) % (uint64_t)size);
 }
 
+/* The parity of face i (opposite local vertex i % nf of its element, in its
+ * outward order) against the order of its vertices' global ids: two
+ * positive elements on opposite sides of a face see it with opposite
+ * parities, two on the same side (an element listed twice, or folded onto
+ * its neighbour) with the same. */
+static int face_parity(const pa_idx *lv, const pa_gid *vglob, int nf,
+                       size_t i) {
+  static const int out[2][4][3] = {
+      {{1, 2, -1}, {2, 0, -1}, {0, 1, -1}, {-1, -1, -1}},
+      {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}};
+  const pa_idx *ev = lv + i / (size_t)nf * (size_t)nf;
+  const int *o = out[nf - 3][i % (size_t)nf];
+  pa_gid g[3];
+  int inv = 0;
+  for (int k = 0; k < nf - 1; k++) g[k] = vglob[ev[o[k]]];
+  for (int a = 0; a < nf - 1; a++)
+    for (int b = a + 1; b < nf - 1; b++) inv += g[a] > g[b];
+  return inv & 1;
+}
+
 pa_status pa__faces_conform(MPI_Comm comm, int dim, pa_idx n,
                             const pa_idx *lv, pa_idx nv, const pa_gid *vglob,
                             const pa_gid *egid) {
@@ -498,6 +518,15 @@ pa_status pa__faces_conform(MPI_Comm comm, int dim, pa_idx n,
   st = mate && cnt && pos
            ? pa__match_faces(dim, n, lv, nv, NULL, mate)
            : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+  for (size_t i = 0; i < nface && st == PA_SUCCESS; i++)
+    if (mate[i] > (pa_gid)i &&
+        face_parity(lv, vglob, nf, i) == face_parity(lv, vglob, nf, (size_t)mate[i]))
+      st = pa__error(PA_ERR_MESH, __FILE__, __LINE__,
+                     "elements %lld and %lld (global numbers) lie on the "
+                     "same side of their common face: one element listed "
+                     "twice, or a folded mesh",
+                     (long long)egid[i / (size_t)nf] + 1,
+                     (long long)egid[(size_t)mate[i] / (size_t)nf] + 1);
   if (st == PA_SUCCESS) {
     pa_gid key[3];
     for (size_t i = 0; i < nface; i++)
@@ -512,7 +541,8 @@ pa_status pa__faces_conform(MPI_Comm comm, int dim, pa_idx n,
     pa_gid key[3];
     face *f = sendf + pos[face_key_rank(lv, vglob, nf, i, size, key)]++;
     memcpy(f->key, key, sizeof key);
-    f->who = egid[i / (size_t)nf];
+    /* the element and, in the lowest bit, the face's parity */
+    f->who = 2 * egid[i / (size_t)nf] + face_parity(lv, vglob, nf, i);
   }
   pa__free(mate);
   mate = NULL;
@@ -524,6 +554,17 @@ pa_status pa__faces_conform(MPI_Comm comm, int dim, pa_idx n,
   rmate = pa__malloc((nr ? nr : 1) * sizeof *rmate);
   st = rmate ? match_faces(recv, nr, dim, rmate)
              : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+  for (size_t i = 0; i < nr && st == PA_SUCCESS; i++) {
+    const face *fr = recv;
+    pa_gid j = rmate[i];
+    if (j > (pa_gid)i && !((fr[i].who ^ fr[j].who) & 1))
+      st = pa__error(PA_ERR_MESH, __FILE__, __LINE__,
+                     "elements %lld and %lld (global numbers) lie on the "
+                     "same side of their common face: one element listed "
+                     "twice, or a folded mesh",
+                     (long long)(fr[i].who >> 1) + 1,
+                     (long long)(fr[j].who >> 1) + 1);
+  }
 cleanup:
   pa__free(mate);
   pa__free(rmate);
@@ -679,7 +720,18 @@ static pa_status graph_csr(const dgraph *g, pa_idx **xadjp, pa_gid **adjp,
   xadj[0] = 0;
   for (pa_idx e = 0; e < n; e++) {
     pa_idx c = 0;
-    for (int i = 0; i < nf; i++) c += g->nbr[(size_t)e * nf + i] >= 0;
+    const pa_gid *nb = g->nbr + (size_t)e * nf;
+    for (int i = 0; i < nf; i++) {
+      c += nb[i] >= 0;
+      /* two distinct simplices share one face at most: more is one element
+       * listed twice (the partitioner would take it for a broken graph) */
+      for (int j = 0; j < i; j++)
+        PA_CHECK(nb[i] < 0 || nb[i] != nb[j], PA_ERR_MESH,
+                 "element %lld shares %s faces with element %lld: the same "
+                 "element listed twice",
+                 (long long)(g->offset + e) + 1, "several",
+                 (long long)nb[i] + 1);
+    }
     xadj[e + 1] = xadj[e] + c;
   }
   PA_ALLOC(adj, xadj[n]);

@@ -303,7 +303,8 @@ pa_status pa__dual_graph(MPI_Comm comm, int dim, pa_idx n, const pa_gid *vgid,
 
 /* Collective: every face of the n elements lv (dim+1 local vertex numbers in
  * [0, nv) each; vglob the global id of each local vertex, egid of each
- * element) is in at most one other of the elements given on all the ranks.
+ * element) is in at most one other of the elements given on all the ranks,
+ * on the other side of it.
  * Faces are matched locally, and the unmatched ones at the rank hash % size.
  * The memory it takes: 8 bytes per local face and the unmatched faces.
  * Fails with PA_ERR_MESH, naming the face, on every rank. */

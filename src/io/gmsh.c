@@ -1579,6 +1579,7 @@ static pa_status gmsh_read(const char *path, int model, pa_mesh **mesh) {
            "entity each node lies on (write it with Gmsh from its model)",
            path);
   PA_CALL(build_mesh(&r, &w, mesh));
+  (*mesh)->file_dim = 3; /* nodes have three coordinates */
   pa__info(2, "%s: read MSH %s %s, %d vertices, %d elements\n", path,
            w.version == 41 ? "4.1" : "2.2", r.binary ? "binary" : "ASCII",
            (int)pa_mesh_nvert(*mesh), (int)pa_mesh_nelem(*mesh));

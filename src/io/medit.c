@@ -1370,6 +1370,7 @@ pa_status pa__medit_read(const char *path, pa_mesh **mesh) {
       if (r.coord[3 * (size_t)i + 2] != 0.0) dim = 3;
   }
   PA_CALL(build_mesh(&r, dim, mesh));
+  (*mesh)->file_dim = r.fdim;
 cleanup:
   raw_free(&r);
   pa__gmf_close(g);

@@ -16,8 +16,11 @@
  * elements, Time, Iterations...) are skipped. Values are read as they are:
  * whether they make a valid metric is checked by pa_mesh_metric_from_sol
  * (pa_mesh_set_metric), which names the vertex at fault. The vertex counts
- * must agree; a scalar field fits a mesh of any dimension, and 3D tensors fit
- * a 2D mesh (a planar mesh stored in 3D) when they do not couple z with x, y.
+ * must agree, and the dimensions (as Mmg): a solution of another Dimension
+ * than the mesh's is refused, but for a 3D solution of a 2D mesh read from
+ * a file of 3D coordinates (a planar mesh stored in 3D, Medit or Gmsh; or
+ * a mesh built in memory), whose tensors fit when they do not couple z with
+ * x, y.
  * Writing: one SolAtVertices keyword holding every field, binary version 2
  * (3 beyond 2 GiB), through a temporary file (output.c).
  */
@@ -307,6 +310,14 @@ pa_status pa_mesh_metric_from_sol(pa_mesh *mesh, const pa_sol *sol, int k) {
            src, k + 1);
   const double *values = f->val;
   int ncomp = f->ncomp;
+  PA_CHECK(sol->dim == mesh->dim ||
+               (sol->dim == 3 && mesh->dim == 2 && mesh->file_dim != 2),
+           bad,
+           "%s: a solution of Dimension %d for a %dD mesh (%s): give the "
+           "solution of this mesh",
+           src, sol->dim, mesh->dim,
+           mesh->file_dim == 2 ? "its file has Dimension 2"
+                               : "a 2D solution cannot hold a 3D metric");
   if (f->kind == PA_SOL_TENSOR && sol->dim != mesh->dim) {
     /* A planar mesh stored in 3D comes with 3D tensors: keep their xy block
      * when it is decoupled from z. */

@@ -430,6 +430,7 @@ pa_status pa_mesh_copy(const pa_mesh *src, pa_mesh **dst) {
   pa_mesh *m = NULL;
   PA_CHECK(src && dst, PA_ERR_ARG, "pa_mesh_copy: NULL argument");
   PA_CALL(pa_mesh_create(src->dim, &m));
+  m->file_dim = src->file_dim;
   m->met_ncomp = src->met_ncomp;
   m->nfield = src->nfield;
   for (int k = 0; k < src->nfield; k++) {

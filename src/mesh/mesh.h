@@ -48,6 +48,10 @@ typedef struct pa__entity {
 
 struct pa_mesh {
   int dim; /* 2 or 3 */
+  /* the Dimension of the file it was read from (3 for a planar mesh stored
+   * in 3D, and for Gmsh files), 0 when built in memory: which solution
+   * files fit it (pa_mesh_metric_from_sol) */
+  int file_dim;
 
   /* vertices */
   pa_idx nv;
@@ -161,6 +165,15 @@ void pa__mesh_drop_cells(pa_mesh *mesh);
  * only a user's input must meet (manifold vertices, no two vertices at one
  * point): a piece of the parallel loop may touch itself at a vertex. */
 pa_status pa__mesh_check(pa_mesh *mesh, int input);
+/* The part of pa__mesh_check a rank's part of a distributed mesh must meet
+ * too (its faces on the partition's interfaces are not boundary entities):
+ * indices, coordinates, every vertex used, orientation, conformity, and
+ * neighbours on opposite sides of their faces (no element listed twice). */
+pa_status pa__mesh_check_elements(pa_mesh *mesh);
+/* No folded or overlapping elements around a vertex (2D) or an edge and a
+ * boundary vertex (3D) (overlap.c); needs the adjacency and the balls
+ * built. Part of pa__mesh_check for input meshes. */
+pa_status pa__mesh_check_overlap(const pa_mesh *mesh);
 
 /* Number of metric components of a full tensor in dimension dim (3 or 6). */
 static inline int pa__tensor_ncomp(int dim) { return dim == 2 ? 3 : 6; }

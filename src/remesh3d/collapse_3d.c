@@ -4,7 +4,8 @@
  *
  * Checked before applied: p is free (not locked, not a corner, not on a
  * frozen entity -- so no edge of a frozen tet is touched); the ball has one
- * reference; every modified tet keeps quality >= max(RM3D_QFLOOR, qratio *
+ * reference, or the faces between its references are all boundary
+ * triangles (an interface: p lies on it and moves along it); every modified tet keeps quality >= max(RM3D_QFLOOR, qratio *
  * old worst of the ball); no new edge longer than lguard. A boundary p (only
  * in surface mode) moves onto q along a boundary edge: a ridge vertex along
  * its ridge only (exactly two feature edges), its triangles keep their
@@ -96,19 +97,21 @@ cleanup:
 
 /* The qualities nq[i] of the tets of p's ball (ball[0..n)) with p moved to
  * q, -1 for the tets holding (p,q), which disappear. 1 when the ball has
- * one reference, no deleted tet is a cap (two boundary faces glued), some
- * but not all tets disappear, and the new worst quality is acceptable
- * against the old one. */
+ * one reference (or several with the faces between them listed,
+ * rm3d_refs_listed: p then lies on that surface), no deleted tet is a cap (two
+ * boundary faces glued), some but not all tets disappear, and the new
+ * worst quality is acceptable against the old one. */
 static int ball_qualities(const rm3d *m, pa_idx q, const pa_idx *ball, int n,
                           float *nq) {
   int32_t ref0 = m->tref[ball[0] >> 2];
   double qold = 1e30;
-  int nd = 0;
+  int nd = 0, mixed = 0;
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
-    if (m->tref[t] != ref0) return 0;
+    mixed |= m->tref[t] != ref0;
     if (m->q[t] < qold) qold = m->q[t];
   }
+  if (mixed && !rm3d_refs_listed(m, ball, n)) return 0;
   /* the lowest new quality accepted against qold (rm3d_q_ok, and at least
    * 0.3 qold): one tet below it refuses the collapse */
   double qmin = fmax(0.3 * qold, rm3d_q_min(m, qold));

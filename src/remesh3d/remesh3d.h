@@ -199,6 +199,25 @@ static inline int rm3d_loc(const pa_idx *v, pa_idx x) {
   return v[0] == x ? 0 : v[1] == x ? 1 : v[2] == x ? 2 : v[3] == x ? 3 : -1;
 }
 
+/* 1 when every face between two tets of different references among the
+ * tets of ball[0..n) and their neighbours is a boundary triangle: the
+ * surface between the references (an interface, e.g. a level set cut into
+ * the mesh) is listed, so a collapse that keeps the listed triangles (the
+ * glued faces of the deleted tets inherit their tags) or a move along that
+ * surface keeps every reference where it was. A ball whose references
+ * change across an unlisted face is neither collapsed nor smoothed. */
+static inline int rm3d_refs_listed(const rm3d *m, const pa_idx *ball, int n) {
+  for (int i = 0; i < n; i++) {
+    pa_idx t = ball[i] >> 2;
+    for (int j = 0; j < 4; j++) {
+      pa_idx o = m->adj[4 * (size_t)t + j];
+      if (o >= 0 && m->tref[o >> 2] != m->tref[t] && !((m->tflag[t] >> j) & 1))
+        return 0;
+    }
+  }
+  return 1;
+}
+
 /* Lengths and qualities are metric/metric3d.h's kernels: the statistics
  * measure with the same lengths, and the band the passes aim at is
  * PA_METRIC_LEN_LO_EXACT..PA_METRIC_LEN_HI_EXACT. */

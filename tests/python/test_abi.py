@@ -7,6 +7,7 @@ import subprocess
 import unittest
 
 from padapt import _lib
+from padapt import levelset as _levelset
 from padapt import mesh as _mesh
 
 MIRROR = {
@@ -21,6 +22,9 @@ MIRROR = {
     "pa_adapt_iter": _lib.AdaptIter,
     "pa_adapt_opts": _lib.AdaptOpts,
     "pa_adapt_report": _lib.AdaptReport,
+    "pa_ls_material": _levelset.Material,
+    "pa_levelset_opts": _levelset.CutOpts,
+    "pa_levelset_report": _levelset.CutReport,
 }
 
 

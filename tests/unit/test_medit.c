@@ -688,6 +688,13 @@ static void test_corpus(void) {
       pa_sol *s = NULL;
       pa_mesh *on = !strncmp(line, "sol_3d_", 7) ? b3 : b2;
       st = pa_sol_read(path, &s);
+      if (st == PA_SUCCESS && pa_sol_nfield(s) > 1) {
+        /* several solutions: the library takes the one asked for, the CLI
+         * refuses them as a metric (tests/cli/test_bad_input.sh) */
+        CHECK(strstr(frag, "solutions") != NULL);
+        pa_sol_destroy(s);
+        continue;
+      }
       if (st == PA_SUCCESS) st = pa_mesh_metric_from_sol(on, s, 0);
       pa_sol_destroy(s);
       CHECK(pa_mesh_metric_ncomp(on) == 0); /* a failure changes nothing */

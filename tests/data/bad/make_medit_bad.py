@@ -372,7 +372,17 @@ rows = rows[:4] + [[1, 0, 1, 0, 0, -1]] + rows[5:]
 put("sol_3d_nonspd.sol", sol_text(3, nv3, [3], rows), "vertex 5")
 
 rows = [[1, 0, 1]] * nv3
-put("sol_3d_dim2.sol", sol_text(2, nv3, [3], rows), "2D tensor")
+put("sol_3d_dim2.sol", sol_text(2, nv3, [3], rows), "a solution of Dimension 2 for a 3D mesh")
+
+# sizes of another Dimension than the mesh's (Mmg: "BAD SOL DIMENSION")
+put("sol_3d_dim2_size.sol", sol_text(2, nv3, [1], [[0.2]] * nv3),
+    "a solution of Dimension 2 for a 3D mesh")
+put("sol_dim3_size.sol", sol_text(3, nv, [1], iso),
+    "a solution of Dimension 3 for a 2D mesh (its file has Dimension 2)")
+
+# two solutions given as the metric (Mmg: "SEVERAL SOLUTIONS FOUND")
+put("sol_two_fields.sol", sol_text(2, nv, [1, 1], [[0.2, 0.3]] * nv),
+    "holds 2 solutions, not one")
 
 
 def solb(ver, dim, n, types, rows, count=None, cut=None):
