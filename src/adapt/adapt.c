@@ -88,6 +88,7 @@ void pa__iter_release_elements(pa__iter *it) {
   pa__free(it->label);
   pa__free(it->vlab);
   pa__free(it->vinner);
+  pa__free(it->vsurf);
   pa__free(it->bside);
   pa__free(it->bstart);
   pa__free(it->belem);
@@ -96,6 +97,7 @@ void pa__iter_release_elements(pa__iter *it) {
   it->label = NULL;
   it->vlab = NULL;
   it->vinner = NULL;
+  it->vsurf = NULL;
   it->bside = NULL;
   it->bstart = it->belem = NULL;
 }

@@ -14,8 +14,9 @@
  * Gathering: each rank sends, for every labelled owned element, the element
  * (aux = piece), and for every (piece, entity) pair the vertices (with
  * coordinates, metric, fields, and transit flag bits: skin, hot, inner for
- * that piece), boundary entities and edges of the piece's elements it
- * holds. pa__recs_migrate
+ * that piece; in 3D the normals and masks of it->vsurf as a temporary field,
+ * PA_ADAPT_SURFACE_FIELD), boundary entities and edges of the piece's
+ * elements it holds. pa__recs_migrate
  * moves them; the receiver drops duplicates (an entity held by several
  * ranks) and assembles each of its pieces, numbered by increasing global id,
  * so the piece does not depend on how its fragments were spread.
@@ -30,7 +31,11 @@
  * by their coordinates); the faces of its outer surface that are not
  * boundary entities become boundary entities of reference PA_ADAPT_SKIN_REF
  * flagged PA_FLAG_REQUIRED (its skin, frozen), which bisect.c then refines
- * where the piece meets another one.
+ * where the piece meets another one. If a skin split onto a curve left an
+ * element without a positive volume in a piece on any rank, every rank
+ * assembles its pieces again from the same records without such splits
+ * (one allreduce): the pieces around that skin cannot decide alone, each
+ * sees its own side.
  */
 #include "adapt/adapt.h"
 
@@ -331,9 +336,8 @@ static pa_status piece_vertices(pbuild *b) {
     pc->vrank[k] = INT_MAX;
     pc->skin[k] = (V->flag[i] & PA_ADAPT_SKIN_TRANSIT) != 0;
     pc->hot[k] = (V->flag[i] & PA_ADAPT_HOT_TRANSIT) != 0;
-    b->inner[k] = (V->flag[i] & PA_ADAPT_INNER_TRANSIT)      ? 1
-                  : (V->flag[i] & PA_ADAPT_LABELLED_TRANSIT) ? 2
-                                                             : 0;
+    b->inner[k] = (uint8_t)(((V->flag[i] & PA_ADAPT_INNER_TRANSIT) ? 1 : 0) |
+                            ((V->flag[i] & PA_ADAPT_LABELLED_TRANSIT) ? 2 : 0));
     m->vflag[k] &=
         (uint8_t) ~(PA_ADAPT_SKIN_TRANSIT | PA_ADAPT_HOT_TRANSIT |
                     PA_ADAPT_INNER_TRANSIT | PA_ADAPT_LABELLED_TRANSIT);
@@ -426,17 +430,29 @@ static pa_status piece_skin(pbuild *b) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = b->m;
   pa_idx nb0 = m->nb;
+  double *surf = NULL;
   PA_CALL(pa_mesh_build_boundary(m, PA_ADAPT_SKIN_REF, NULL));
   for (pa_idx k = nb0; k < m->nb; k++) m->bflag[k] |= PA_FLAG_REQUIRED;
   b->pc->in = m;
   b->m = NULL;
+  /* the normals of the vertices on curved boundaries (pieces.c) leave the
+   * piece's fields */
+  for (int k = 0; k < m->nfield; k++)
+    if (!strcmp(m->field[k].name, PA_ADAPT_SURFACE_FIELD)) {
+      PA_ALLOC(surf, (size_t)4 * m->nv);
+      memcpy(surf, m->field[k].val, (size_t)4 * m->nv * sizeof *surf);
+      PA_CALL(pa_mesh_remove_field(m, k));
+      break;
+    }
   {
     /* the built-in 2D remesher repairs fans of triangles itself */
     const pa_remesher *r = b->it->opts->remesher;
     int builtin2d = m->dim == 2 && (!r || r == pa_remesher_builtin());
-    PA_CALL(pa__piece_refine_skin(b->pc, b->inner, !builtin2d));
+    PA_CALL(pa__piece_refine_skin(b->pc, b->inner, !builtin2d, surf,
+                                  !b->it->nocurve));
   }
 cleanup:
+  pa__free(surf);
   return st;
 }
 
@@ -569,12 +585,67 @@ cleanup:
   return st;
 }
 
+/* Step 5, with it->vsurf: if a split onto a curve left an element without a
+ * positive volume in some piece (the pieces around it cannot know: each
+ * sees its own side), the pieces are assembled again without such splits,
+ * from the same records. Collective. */
+static pa_status check_curves(pa__iter *it, const pa__recs *R) {
+  pa_status st = PA_SUCCESS;
+  double bad = 0, ncurved = 0;
+  for (int q = 0; q < it->npiece_local; q++) {
+    bad += it->pieces[q].curve_bad;
+    ncurved += it->pieces[q].ncurved;
+  }
+  double x[2] = {bad, ncurved};
+  PA_CALL(pa__allreduce(it->dm->comm, x, 2, MPI_DOUBLE, MPI_SUM));
+  if (x[0] == 0) {
+    if (it->rank == 0 && x[1] > 0)
+      pa__info(2, "padapt: iteration %d: %.0f skin vertices placed on curved "
+                  "boundaries\n", it->iter, x[1]);
+    goto cleanup;
+  }
+  if (it->rank == 0)
+    pa__info(1, "padapt: iteration %d: %.0f elements without a positive "
+                "volume next to %.0f skin vertices placed on curved "
+                "boundaries: pieces made again with chords\n",
+             it->iter, x[0], x[1]);
+  for (int q = 0; q < it->npiece_local; q++) pa__piece_release(&it->pieces[q]);
+  pa__free(it->pieces);
+  it->pieces = NULL;
+  it->npiece_local = 0;
+  it->nocurve = 1;
+  st = assemble_local_pieces(it, R);
+cleanup:
+  return st;
+}
+
+/* The temporary field PA_ADAPT_SURFACE_FIELD on the local mesh from
+ * it->vsurf (added = 1), unless the mesh holds the most fields already
+ * (then no split goes onto a curve: every rank has the same fields);
+ * it->vsurf is released. */
+static pa_status add_surface_field(pa__iter *it, int *added) {
+  pa_status st = PA_SUCCESS;
+  pa_mesh *m = it->dm->mesh;
+  *added = 0;
+  if (!it->vsurf || m->nfield >= PA_MESH_MAX_FIELDS) goto cleanup;
+  PA_CALL(pa_mesh_add_field(m, PA_ADAPT_SURFACE_FIELD, 4, it->vsurf));
+  *added = 1;
+cleanup:
+  pa__free(it->vsurf);
+  it->vsurf = NULL;
+  return st;
+}
+
 pa_status pa__adapt_extract(pa__iter *it) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
   pa__recs S[PA_DMESH_NKIND], R[PA_DMESH_NKIND];
-  int *dest[PA_DMESH_NKIND] = {NULL, NULL, NULL, NULL};
+  int *dest[PA_DMESH_NKIND] = {NULL, NULL, NULL, NULL}, surf = 0;
   pa__layout lay;
+  memset(S, 0, sizeof S);
+  memset(R, 0, sizeof R);
+  st = add_surface_field(it, &surf);
+  PA_CALL(pa__agree(dm->comm, st));
   pa__dmesh_layout(dm, &lay);
   for (int k = 0; k < PA_DMESH_NKIND; k++) {
     pa__recs_init(&S[k], k, pa__kind_nv(it->dim, k),
@@ -594,9 +665,15 @@ pa_status pa__adapt_extract(pa__iter *it) {
     pa__free(dest[k]);
     dest[k] = NULL;
   }
-  /* 4. assemble the local pieces */
-  PA_CALL(assemble_local_pieces(it, R));
+  /* 4. assemble the local pieces; 5. check their curves */
+  st = assemble_local_pieces(it, R);
+  PA_CALL(pa__agree(dm->comm, st));
+  if (surf) PA_CALL(check_curves(it, R));
 cleanup:
+  if (surf) {
+    pa_status s2 = pa_mesh_remove_field(dm->mesh, dm->mesh->nfield - 1);
+    if (!st) st = s2;
+  }
   st = pa__agree_end(dm->comm, st);
   for (int k = 0; k < PA_DMESH_NKIND; k++) {
     pa__recs_free(&S[k]);

@@ -136,13 +136,14 @@ static int ball_qualities(const rm3d *m, pa_idx q, const pa_idx *ball, int n,
   return nd != 0 && nd != n;
 }
 
-/* Length guard: 1 when no new edge (q, x) is longer than lguard. */
+/* Length guard: 1 when no new edge (q, x) is longer than lguard (the tets
+ * holding q disappear: their vertices are not renamed). */
 static int new_edges_short(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball,
-                           int n, const float *nq, double lguard) {
+                           int n, double lguard) {
   int ok = 1;
   for (int i = 0; i < n && ok; i++) {
-    if (nq[i] < 0) continue;
     const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
+    if (rm3d_loc(v, q) >= 0) continue;
     for (int j = 0; j < 4; j++) {
       pa_idx x = v[j];
       if (x == p || (m->vtag[x] & RM3D_V_MARK)) continue;
@@ -292,8 +293,12 @@ pa_status pa__rm3d_collapse_ball(rm3d *m, pa_idx p, pa_idx q,
   if (!rm3d_collapse_allowed(m, p, q)) return st;
   uint8_t tp = m->vtag[p];
   int surfp = (tp & RM3D_V_BDRY) != 0;
+  /* the length guard first: it refuses most of the collapses tried (84 %
+   * on the Kuhn cube, 77 % on the rod), for a length per neighbour
+   * instead of a quality per tet; both must pass, so the order changes no
+   * outcome */
+  if (!new_edges_short(m, p, q, ball, n, lguard)) return st;
   if (!ball_qualities(m, q, ball, n, nq)) return st;
-  if (!new_edges_short(m, p, q, ball, n, nq, lguard)) return st;
   if (surfp) {
     int ok;
     PA_CALL(surface_kept(m, p, q, ball, n, trec, &ntri, &ok));
@@ -357,14 +362,14 @@ static int mid_qualities(const rm3d *m, pa_idx p, const pa_idx *bq, int nb,
 }
 
 /* Whether every edge from xm (metric mm) to the vertices of the tets of
- * bq[0..nb) that q keeps (nq >= 0) is at most lguard long. */
-static int mid_lengths_ok(rm3d *m, pa_idx q, const pa_idx *bq, int nb,
-                          const double *xm, const double *mm, const float *nq,
+ * bq[0..nb) that q keeps (those without p) is at most lguard long. */
+static int mid_lengths_ok(rm3d *m, pa_idx p, pa_idx q, const pa_idx *bq,
+                          int nb, const double *xm, const double *mm,
                           double lguard) {
   int mc = m->mc, ok = 1;
   for (int i = 0; i < nb && ok; i++) {
-    if (nq[i] < 0) continue;
     const pa_idx *v = m->tv + 4 * (size_t)(bq[i] >> 2);
+    if (rm3d_loc(v, p) >= 0) continue;
     for (int j = 0; j < 4; j++) {
       pa_idx x = v[j];
       if (x == q || (m->vtag[x] & RM3D_V_MARK)) continue;
@@ -449,8 +454,8 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q,
   for (int i = 0; i < 3; i++) xm[i] = 0.5 * (xp[i] + xq[i]);
   if (pa__rm3d_project_vertex(m, q, bq, nb, xm) < 0) return st; /* model */
   pa__rm3d_mid_metric(m, p, q, mm);
+  if (!mid_lengths_ok(m, p, q, bq, nb, xm, mm, lguard)) return st;
   if (!mid_qualities(m, p, bq, nb, xm, mm, oq, nq)) return st;
-  if (!mid_lengths_ok(m, q, bq, nb, xm, mm, nq, lguard)) return st;
   PA_CALL(collapse_at_mid(m, p, q, bp, np, bq, nb, xm, mm, oq, nq, lguard,
                           done));
 cleanup:
