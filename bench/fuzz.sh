@@ -11,7 +11,8 @@
 #
 # BUILD_DIR (default build-asan) should be a sanitizer build
 # (-DPADAPT_SANITIZE=ON): a Release build only finds crashes, not silent
-# overreads or leaks. READERs default to medit-mesh medit-sol gmsh.
+# overreads or leaks. READERs default to medit-mesh medit-sol gmsh
+# gmsh-model.
 # Environment: ITER (iterations per reader, default 200000), SEED (default
 # 1), CHUNK (iterations per process, default 10000), CRASHDIR (default
 # /tmp/fuzz-crashes), FUZZ_WORK (scratch, default /tmp/padapt-fuzz).
@@ -25,7 +26,7 @@ here=$(cd "$(dirname "$0")" && pwd)
 build=$(cd "${1:-$here/../build-asan}" && pwd) || exit 2
 shift $(($# > 0 ? 1 : 0))
 readers=("$@")
-[ ${#readers[@]} -eq 0 ] && readers=(medit-mesh medit-sol gmsh)
+[ ${#readers[@]} -eq 0 ] && readers=(medit-mesh medit-sol gmsh gmsh-model)
 iter=${ITER:-200000}
 seed=${SEED:-1}
 chunk=${CHUNK:-10000}

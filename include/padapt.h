@@ -1048,6 +1048,157 @@ pa_status pa_mesh_write(pa_mesh *mesh, const char *path,
                         const pa_write_opts *opts);
 
 /* ------------------------------------------------------------------------ */
+/* Geometry: the CAD model a mesh discretizes (user guide: geometry.md)     */
+/* ------------------------------------------------------------------------ */
+
+/*
+ * A classified mesh knows which entity of a model (a point, a curve, a
+ * surface or a volume, of dimension 0 to 3, and its tag) each of its
+ * vertices and cells discretizes, as Gmsh's MSH 4.1 files record it:
+ *  - the reference of every element, boundary entity and feature edge is
+ *    the tag of its entity (positive): elements on volumes (3D) or surfaces
+ *    (2D), boundary entities on surfaces (3D) or curves (2D), feature edges
+ *    on curves (3D);
+ *  - every curve is listed, as feature edges in 3D and boundary edges in
+ *    2D (between two surfaces too);
+ *  - every vertex has its entity (pa_mesh_vert_entity_dims, _tags), and the
+ *    vertices of model points are corners (PA_FLAG_CORNER).
+ * pa_mesh_read_model reads one; pa_mesh_set_vertex_entities and
+ * pa_mesh_classify make one of a mesh built otherwise. With a geometry in
+ * pa_remesh_opts, the remeshers put every new boundary vertex on its entity
+ * and slide boundary vertices along it; pa_remesh and pa_dmesh_adapt keep
+ * the classification up to date, and the .msh writer writes it back.
+ */
+
+/** A model the remeshers project onto: Gmsh's (pa_geometry_read) or the
+ *  caller's own kernel (pa_geometry_create). */
+typedef struct pa_geometry pa_geometry;
+
+/** A geometry kernel, as callbacks on the caller's context. Each returns 0
+ *  on success and anything else on failure (an unknown entity, a
+ *  projection that did not converge). Coordinates are 3D (z = 0 for a 2D
+ *  mesh). padapt calls them from one thread at a time. */
+typedef struct pa_geometry_ops {
+  /** Required: in y (3 values) the point of entity (dim, tag), dim 0 to 2,
+   *  closest to x (3 values). */
+  int (*closest)(void *ctx, int dim, int tag, const double *x, double *y);
+  /** Optional (NULL: -hausd keeps the remeshers' own estimate): in *kappa
+   *  the largest absolute curvature (1/length) of curve or surface (dim 1
+   *  or 2, tag) at its point y (3 values). */
+  int (*curvature)(void *ctx, int dim, int tag, const double *y,
+                   double *kappa);
+} pa_geometry_ops;
+
+/** A geometry over the caller's kernel ops (copied) and its context ctx
+ *  (kept; it must outlive the geometry), for a model whose bounding box
+ *  has diagonal size > 0 (the scale of the distance tests), into *geom
+ *  (out; free with pa_geometry_destroy). Not collective. Returns
+ *  PA_ERR_ARG for a NULL closest or a size that is not positive and
+ *  finite, PA_ERR_MEMORY. */
+pa_status pa_geometry_create(const pa_geometry_ops *ops, void *ctx,
+                             double size, pa_geometry **geom);
+/**
+ * Load the model at path (.geo, .step/.stp, .brep, .iges/.igs) through
+ * Gmsh's library (OpenCASCADE inside) into *geom (out). Gmsh holds one
+ * model per process: a second pa_geometry_read fails while the first lives.
+ * Not collective (each process of a parallel run loads its own). Returns
+ * PA_ERR_UNSUPPORTED when padapt was built without Gmsh's library or
+ * cannot load it (pa_geometry_available), PA_ERR_IO naming the file when
+ * Gmsh cannot read it or it holds no curve nor surface, PA_ERR_MEMORY.
+ */
+pa_status pa_geometry_read(const char *path, pa_geometry **geom);
+/** Destroy geom (NULL allowed; Gmsh's model is unloaded). Not collective. */
+void pa_geometry_destroy(pa_geometry *geom);
+/** Returns 1 when pa_geometry_read can load models (padapt was built with
+ *  Gmsh's library and it loads), else 0 with the reason in *why (out, may
+ *  be NULL; a static string). Not collective. */
+int pa_geometry_available(const char **why);
+/** Returns the diagonal of the bounding box of geom's model. Not
+ *  collective. */
+double pa_geometry_size(const pa_geometry *geom);
+/** The point y (out, 3 values) of entity (dim, tag) of geom closest to x
+ *  (3 values). Not collective. Returns PA_ERR_ARG for a dim out of [0, 2],
+ *  or naming the entity when the kernel fails (an unknown entity, no
+ *  convergence). */
+pa_status pa_geometry_closest(const pa_geometry *geom, int dim, int tag,
+                              const double *x, double *y);
+
+/** What pa_geometry_check measured: the distance of the vertices of the
+ *  points, curves and surfaces of a mesh to their entities. */
+typedef struct pa_geometry_report {
+  pa_idx nvert;       /**< vertices on points, curves and surfaces */
+  double dist_max;    /**< the largest distance of one to its entity */
+  double dist_mean;   /**< the mean distance */
+  pa_idx worst;       /**< the vertex at dist_max (-1: none) */
+  int worst_dim;      /**< its entity */
+  int worst_tag;
+  double seconds;     /**< time spent in the kernel's projections */
+} pa_geometry_report;
+
+/**
+ * Measure how far the vertices of the classified mesh (in/out only for its
+ * cached structures) on points, curves and surfaces lie from their entity
+ * of geom, into *rep (out, may be NULL), and check it: each entity must
+ * exist in geom and each vertex lie within tol times pa_geometry_size
+ * (tol < 0: no bound). Not collective. Returns PA_ERR_ARG for a mesh that
+ * is not classified, PA_ERR_MESH naming the vertex (1-based) and the
+ * entity that is missing from geom or too far from it.
+ */
+pa_status pa_geometry_check(const pa_geometry *geom, pa_mesh *mesh,
+                            double tol, pa_geometry_report *rep);
+
+/**
+ * Read a Gmsh MSH 4.1 file (ASCII or binary) keeping its classification
+ * (see above) into *mesh (out): the references are entity tags, the
+ * vertices get the entities of their node blocks, and the entities'
+ * physical tags and boundaries ($Entities) stay on the mesh for
+ * pa_mesh_write, which writes them back. Boundary entities and curves the
+ * file does not list are added (pa_mesh_classify). Not collective. Returns
+ * what pa_mesh_read returns, and PA_ERR_FORMAT naming the file for a file
+ * without $Entities (a MSH 2.2 file, or one written without its model) and
+ * for a cell or node whose entity it cannot tell.
+ */
+pa_status pa_mesh_read_model(const char *path, pa_mesh **mesh);
+/** Returns 1 when mesh is classified (its vertices have entities), else 0.
+ *  Not collective. */
+int pa_mesh_classified(const pa_mesh *mesh);
+/** The entities of the vertices of mesh: dims[v] (0 to 3) and tags[v],
+ *  arrays of nvert values owned by the mesh, NULL when it is not
+ *  classified. Not collective. */
+const uint8_t *pa_mesh_vert_entity_dims(const pa_mesh *mesh);
+const int32_t *pa_mesh_vert_entity_tags(const pa_mesh *mesh);
+/**
+ * Make mesh (in/out) classified: the vertices take the entities dims[v]
+ * (0 to dim) and tags[v] (> 0), copied, and pa_mesh_classify completes the
+ * cells (the caller sets the references of the cells it lists to entity
+ * tags; any that is not positive is found). dims NULL removes the
+ * classification. Not collective. Returns PA_ERR_ARG for a dimension or
+ * tag out of range, pa_mesh_classify's errors (then the mesh is not
+ * classified), PA_ERR_MEMORY.
+ */
+pa_status pa_mesh_set_vertex_entities(pa_mesh *mesh, const int *dims,
+                                      const int32_t *tags);
+/**
+ * Complete the classification of mesh (in/out) from its vertices': the
+ * boundary faces (and, in 3D, the faces between elements of two volumes)
+ * that are not listed become boundary entities, each cell whose reference
+ * is not positive takes the entity of its vertices (the one of its
+ * dimension among them, else the only one whose boundary, as the mesh's
+ * model entities record it, holds all its vertices' entities), every curve
+ * edge is listed and every vertex of a point is a corner. Not collective.
+ * Returns PA_ERR_MESH naming the cell (1-based) and the candidate entities
+ * when it cannot tell which entity a cell lies on, PA_ERR_ARG for a mesh
+ * that is not classified, PA_ERR_MEMORY; after a failure the vertices keep
+ * their entities, and the cells what was completed until then.
+ */
+pa_status pa_mesh_classify(pa_mesh *mesh);
+/** dst (in/out) takes copies of the physical names and model entities
+ *  (their physical tags and boundaries) of src: what a gathered mesh needs
+ *  to be written as its input was (a distributed mesh carries neither).
+ *  Not collective. Returns PA_ERR_MEMORY. */
+pa_status pa_mesh_copy_model(pa_mesh *dst, const pa_mesh *src);
+
+/* ------------------------------------------------------------------------ */
 /* Output transactions: several output files, all or nothing                */
 /* ------------------------------------------------------------------------ */
 
@@ -1256,6 +1407,16 @@ typedef struct pa_remesh_opts {
    *  output would not fit, and holds padapt's memory under it for the call
    *  (pa_memory_set_limit; a lower bound already set stays) */
   double mem_mb;
+  /** The model of a classified mesh (NULL: none; it must outlive the
+   *  options' use): new boundary vertices go onto their entity (the
+   *  remesher's own reconstruction when the kernel fails), boundary
+   *  vertices slide along it, ridges and corners are the model's curves
+   *  and points only (no detection by angle), and hausd bounds the sizes
+   *  at boundary vertices by the model's curvature (h <= sqrt(8 hausd /
+   *  kappa)) when the geometry has a curvature callback. pa_dmesh_adapt
+   *  takes one for a mesh distributed from a classified one, without
+   *  checkpoints (they do not keep the classification). */
+  const pa_geometry *geometry;
 } pa_remesh_opts;
 
 /** Fill *opts (out) with the defaults: no hmin/hmax/hsiz, hgrad
@@ -1300,6 +1461,11 @@ typedef struct pa_remesh_report {
   pa_fidelity fidelity;
   /** Filled by pa_remesh (not by remesher callbacks). */
   pa_transfer_report transfer;
+  /** With opts->geometry: the new or moved boundary points put on the
+   *  model, those left on the remesher's reconstruction because the kernel
+   *  failed, and the seconds spent in the kernel. */
+  long nproject, nproject_failed;
+  double project_s;
 } pa_remesh_report;
 
 /**

@@ -15,17 +15,20 @@ src=$root/src
 declare -A allowed=(
   [core]=""
   [mesh]="core"
-  [metric]="core mesh"
+  # geom/ is the only code that calls Gmsh's library (gmshc.h, checked
+  # below), as partition/ is the only one that calls PT-Scotch.
+  [geom]="core mesh"
+  [metric]="core mesh geom"
   [io]="core mesh metric"
   [partition]="core"
   # The remesher driver (remesh/) calls the 2D and 3D remeshers through the
   # entries declared in remesh/remesh.h, which they define; they include
   # remesh/ (that header, the shared pass schedule), never each other.
-  [remesh]="core mesh metric"
+  [remesh]="core mesh metric geom"
   [remesh2d]="core mesh metric remesh"
-  [remesh3d]="core mesh metric remesh"
+  [remesh3d]="core mesh metric remesh geom"
   [dmesh]="core mesh metric io partition"
-  [adapt]="core mesh metric io partition remesh dmesh"
+  [adapt]="core mesh metric io partition remesh dmesh geom"
 )
 bad=0
 for dir in "$src"/*/; do
@@ -64,5 +67,11 @@ while IFS=: read -r file line text; do
        "(only padapt.h and tools/*.h): $text"
   bad=1
 done < <(grep -Hn '^[[:space:]]*#[[:space:]]*include[[:space:]]*<[a-z0-9_]*/' "$root"/tools/*.[ch] 2>/dev/null)
+# Gmsh's C API: src/geom/ only
+while IFS=: read -r file line text; do
+  case $file in "$src"/geom/*) continue ;; esac
+  echo "check-layers: ${file#"$root"/}:$line: only src/geom/ calls Gmsh: $text"
+  bad=1
+done < <(grep -rHn '^[[:space:]]*#[[:space:]]*include[[:space:]]*[<"]gmshc\?\.h' "$src" "$root"/tools 2>/dev/null)
 [ $bad -eq 0 ] && echo "check-layers: every include goes down the layers"
 exit $bad

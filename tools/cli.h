@@ -80,6 +80,7 @@ typedef struct pa_cli_adapt_args {
   const char *params; /* -f FILE, or IN.padapt when it exists */
   const char *checkpoint; /* -checkpoint DIR: a checkpoint per iteration */
   const char *restart;    /* -restart DIR: resume from DIR's checkpoint */
+  const char *geo;        /* -geo MODEL: the CAD model of IN */
   /* the level-set cut (tools/lsopt.c) */
   const char *ls;  /* -ls PHI.sol: cut its zero set into IN first */
   double lsval;    /* -lsval V: the iso-value */
@@ -203,6 +204,23 @@ pa_status pa_cli_complete_boundary(const pa_cli *cli, const char *path,
  * (pa_cli_complete_boundary); the mesh is checked, and errors name the
  * file. *mesh is set on rank 0 only. */
 pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path, pa_mesh **mesh);
+/* The input of `padapt adapt`: pa_cli_read_mesh, or with -geo the .msh
+ * file read with its classification (pa_mesh_read_model) and checked
+ * against the model geo (pa_geometry_check, PA_CLI_GEO_TOL). Collective;
+ * *mesh set on rank 0 only. */
+pa_status pa_cli_read_adapt_mesh(const pa_cli *cli,
+                                 const pa_cli_adapt_args *args,
+                                 const pa_geometry *geo, pa_mesh **mesh);
+/* How far (relative to the model's size) a vertex of an input mesh may lie
+ * from its model entity: Gmsh puts its nodes on the model to its kernel's
+ * tolerance (1e-7 of the size); a mesh farther than this was made from
+ * another model. */
+#define PA_CLI_GEO_TOL 1e-3
+/* -geo MODEL of `padapt adapt`: the model read on every rank into *geo
+ * (NULL without -geo). Collective; returns 0, or 1 on every rank after
+ * rank 0 printed the error. */
+int pa_cli_read_geometry(const pa_cli *cli, const pa_cli_adapt_args *args,
+                         pa_geometry **geo);
 
 /* Strict number parsing: the whole argument, finite. Returns 1 on success. */
 int pa_cli_parse_num(const char *s, double *v);

@@ -106,7 +106,9 @@ pa_status pa_cli_complete_boundary(const pa_cli *cli, const char *path,
   return st;
 }
 
-pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path,
+/* pa_cli_read_mesh, with model: a .msh file with its classification
+ * (a distributed set has none). */
+static pa_status read_mesh(const pa_cli *cli, const char *path, int model,
                            pa_mesh **mesh) {
   pa_status st;
   char msg[1100];
@@ -115,12 +117,20 @@ pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path,
    * sequential file is read by rank 0 alone. */
   int is_set = cli->rank == 0 ? pa_dmesh_is_set(path) : 0;
   MPI_Bcast(&is_set, 1, MPI_INT, 0, cli->comm);
+  if (is_set && model)
+    return cli->rank == 0
+               ? pa_set_error(PA_ERR_UNSUPPORTED,
+                              "%s: a distributed set does not say which "
+                              "model entity each vertex lies on: -geo needs "
+                              "a Gmsh .msh input",
+                              path)
+               : PA_SUCCESS;
   if (is_set) {
     st = pa_dmesh_read_gathered(cli->comm, 0, path, mesh);
     if (cli->rank != 0 || st != PA_SUCCESS) return st;
   } else {
     if (cli->rank != 0) return PA_SUCCESS;
-    st = pa_mesh_read(path, mesh);
+    st = model ? pa_mesh_read_model(path, mesh) : pa_mesh_read(path, mesh);
     if (st != PA_SUCCESS) return st;
   }
   st = pa_cli_complete_boundary(cli, path, *mesh);
@@ -133,6 +143,54 @@ pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path,
     st = pa_set_error(st, "%s", msg);
   }
   return st;
+}
+
+pa_status pa_cli_read_mesh(const pa_cli *cli, const char *path,
+                           pa_mesh **mesh) {
+  return read_mesh(cli, path, 0, mesh);
+}
+
+pa_status pa_cli_read_adapt_mesh(const pa_cli *cli,
+                                 const pa_cli_adapt_args *args,
+                                 const pa_geometry *geo, pa_mesh **mesh) {
+  char msg[1100];
+  pa_status st = read_mesh(cli, args->in, geo != NULL, mesh);
+  if (st != PA_SUCCESS || !geo || cli->rank != 0) return st;
+  pa_geometry_report rep;
+  st = pa_geometry_check(geo, *mesh, PA_CLI_GEO_TOL, &rep);
+  if (st == PA_SUCCESS) {
+    if (cli->verbosity >= 1)
+      fprintf(stderr, "padapt: %s on %s: %ld vertices on points, curves "
+                      "and surfaces, at most %.3g from them\n",
+              args->in, args->geo, (long)rep.nvert, rep.dist_max);
+    return PA_SUCCESS;
+  }
+  snprintf(msg, sizeof msg, "%s and %s: %s", args->in, args->geo,
+           pa_last_error());
+  pa_mesh_destroy(*mesh);
+  *mesh = NULL;
+  return pa_set_error(st, "%s", msg);
+}
+
+int pa_cli_read_geometry(const pa_cli *cli, const pa_cli_adapt_args *args,
+                         pa_geometry **geo) {
+  *geo = NULL;
+  if (!args->geo) return 0;
+  pa_status st = pa_geometry_read(args->geo, geo);
+  int bad = st != PA_SUCCESS, any = bad;
+  MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, cli->comm);
+  if (!any) return 0;
+  /* the same file on every rank: rank 0 says why (or the first that failed
+   * says it when rank 0 did not) */
+  int first = bad ? cli->rank : cli->size, who = first;
+  MPI_Allreduce(&first, &who, 1, MPI_INT, MPI_MIN, cli->comm);
+  if (cli->rank == who) {
+    pa_cli_fail(cli, st);
+    pa_cli_error(cli, "adapt: no output written");
+  }
+  pa_geometry_destroy(*geo);
+  *geo = NULL;
+  return 1;
 }
 
 void pa_cli_set_verbosity(int level) {

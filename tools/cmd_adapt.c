@@ -154,6 +154,12 @@ static const pa_cli_opt adapt_opts[] = {
     {.names = "-nomove", .kind = PA_CLI_FLAG, .at = A(remesh.no_move)},
     {.names = "-nosurf", .kind = PA_CLI_FLAG, .at = A(remesh.no_surf),
      .label = "-nosurf", .help = "leave the boundary unchanged (3D)"},
+    {.names = "-geo", .kind = PA_CLI_STR, .at = A(geo),
+     .want = "a model file", .label = "-geo MODEL",
+     .help = "the CAD model IN was meshed from (.geo .step .stp .brep\n"
+             ".iges .igs, through Gmsh's library; IN a Gmsh .msh): new\n"
+             "boundary vertices go onto it, -hausd is measured against\n"
+             "its curvature, OUT keeps its entities"},
     {.names = "-f", .kind = PA_CLI_STR, .at = A(params),
      .want = "a parameter file", .label = "-f FILE",
      .help = "local parameters per reference (Mmg's format: REF\n"
@@ -385,6 +391,15 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
                         a->svg);
   if (a->met && a->remesh.hsiz > 0)
     return pa_cli_error(cli, "adapt: give either -met/-sol or -hsiz, not both");
+  if (a->geo && a->ls)
+    return pa_cli_error(cli, "adapt: -geo and -ls: the cut's interface lies "
+                             "on no entity of the model");
+  if (a->geo && (a->restart || a->checkpoint || a->distributed))
+    return pa_cli_error(cli, "adapt: -geo and %s: a distributed set does not "
+                             "keep the model's entities",
+                        a->restart      ? "-restart"
+                        : a->checkpoint ? "-checkpoint"
+                                        : "-distributed-output");
   if (a->remesh.hmin > 0 && a->remesh.hmax > 0 &&
       a->remesh.hmin > a->remesh.hmax)
     return pa_cli_error(cli, "adapt: -hmin (%g) is larger than -hmax (%g)",
@@ -495,6 +510,11 @@ static void report_after(const pa_cli_adapt_args *a, const pa_mesh *mesh,
          rep->time_s, rep->time_s > 0 ? pa_mesh_nelem(mesh) / rep->time_s : 0.0,
          rep->cpu_s, pa_memory_peak() / 1e6, outcome_name(rep->outcome));
   pa_cli_print_transfer(&rep->transfer);
+  if (a->geo)
+    printf("    model %s: %ld boundary points put on it (%ld left on the "
+           "reconstruction), %.3f s in its kernel\n",
+           a->geo, rep->nproject - rep->nproject_failed, rep->nproject_failed,
+           rep->project_s);
   fflush(stdout);
   if (!rep->fidelity.target_met)
     fprintf(stderr, "padapt: warning: adapt: target missed (valid mesh, but "
@@ -517,12 +537,17 @@ static pa_status write_json(const pa_cli_adapt_args *a, const pa_stats *before,
                    "\"peak_memory_bytes\": %zu, \"remesher_outcome\": "
                    "\"%s\", \"nsplit\": %ld, \"ncollapse\": %ld, "
                    "\"nswap\": %ld, \"nmove\": %ld, \"npass\": %d, "
-                   "\"elements_before\": %lld, \"vertices_before\": %lld, "
-                   "%s%s",
+                   "\"elements_before\": %lld, \"vertices_before\": %lld, ",
                    rep->time_s, rep->cpu_s, pa_peak_rss(), pa_memory_peak(),
                    outcome_name(rep->outcome), rep->nsplit, rep->ncollapse,
                    rep->nswap, rep->nmove, rep->npass, (long long)before->nelem,
-                   (long long)before->nvert, tr ? tr : "", fid ? fid : "");
+                   (long long)before->nvert);
+  if (a->geo)
+    pa_cli_sb_printf(&b,
+                     "\"projections\": %ld, \"projections_failed\": %ld, "
+                     "\"projection_s\": %.6f, ",
+                     rep->nproject, rep->nproject_failed, rep->project_s);
+  pa_cli_sb_printf(&b, "%s%s", tr ? tr : "", fid ? fid : "");
   pa_status st = b.fail || !fid || !tr || (a->ls && !lsj)
                      ? pa_set_error(PA_ERR_MEMORY, "out of memory")
                      : pa_stats_write_json(&rep->fidelity.user, b.p, a->json);
@@ -576,7 +601,8 @@ static int adapt_sequential(const pa_cli *cli, const pa_cli_adapt_args *a) {
   pa_stats before;
   pa_remesh_report rep;
   pa_levelset_report ls;
-  pa_status st = pa_cli_read_mesh(cli, a->in, &mesh); /* collective */
+  pa_status st = pa_cli_read_adapt_mesh(cli, a, a->remesh.geometry,
+                                        &mesh); /* collective */
   if (cli->rank != 0) return st ? 1 : 0;
   int rc = pa_cli_fail(cli, st);
   if (!rc) rc = read_inputs(cli, a, mesh, &opts, &local);
@@ -598,14 +624,18 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
   /* -mem bounds padapt's memory in every phase: reading, remeshing,
    * gathering, writing */
   if (args.mem_mb > 0) pa_memory_set_limit((size_t)(args.mem_mb * 1e6));
+  pa_geometry *geo = NULL; /* -geo: loaded on every rank */
+  if (pa_cli_read_geometry(cli, &args, &geo)) return 1;
+  args.remesh.geometry = geo;
   /* On several ranks, or when asked for a distributed output, a memory
    * bound or a checkpoint, the parallel piece loop (tools/cmd_adapt_parallel.c) does
    * the work, unless it finds the job too small to share out
    * (-serial-below): then rank 0 adapts it as one process would. */
+  int rc = PA_CLI_SERIAL;
   if (cli->size > 1 || args.distributed || args.mem_mb > 0 ||
-      args.checkpoint || args.restart) {
-    int rc = pa_cli_adapt_parallel(cli, &args);
-    if (rc != PA_CLI_SERIAL) return rc;
-  }
-  return adapt_sequential(cli, &args);
+      args.checkpoint || args.restart)
+    rc = pa_cli_adapt_parallel(cli, &args);
+  if (rc == PA_CLI_SERIAL) rc = adapt_sequential(cli, &args);
+  pa_geometry_destroy(geo);
+  return rc;
 }

@@ -111,20 +111,6 @@ static int too_small(const pa_cli *cli, const pa_cli_adapt_args *args,
   return 1;
 }
 
-/* Give dst copies of the physical names of src (the distributed mesh does
- * not carry them: rank 0 keeps the input's and puts them on the gathered
- * output). */
-static pa_status copy_names(pa_mesh *dst, const pa_mesh *src) {
-  pa_status st = PA_SUCCESS;
-  for (int k = 0; k < pa_mesh_nnames(src) && st == PA_SUCCESS; k++) {
-    int dim;
-    int32_t tag;
-    const char *name;
-    st = pa_mesh_name(src, k, &dim, &tag, &name);
-    if (st == PA_SUCCESS) st = pa_mesh_add_name(dst, dim, tag, name);
-  }
-  return st;
-}
 
 /* The progress callback's context. kill_iter: test hook, see progress. */
 typedef struct progress_ctx {
@@ -285,16 +271,17 @@ static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
       return 1;
     }
   } else {
-    st = pa_cli_read_mesh(cli, in, &mesh); /* collective */
+    st = pa_cli_read_adapt_mesh(cli, args, args->remesh.geometry,
+                                &mesh); /* collective */
     if (cli->rank == 0) {
       if (st) pa_cli_fail(cli, st);
       ok = st == PA_SUCCESS && prepare_root(cli, args, mesh);
       if (ok && !args->distributed && !args->mem_mb && !args->checkpoint &&
           too_small(cli, args, mesh))
         ok = PA_CLI_SERIAL;
-      if (ok == 1 && pa_mesh_nnames(mesh) > 0) {
+      if (ok == 1 && (pa_mesh_nnames(mesh) > 0 || pa_mesh_classified(mesh))) {
         st = pa_mesh_create(pa_mesh_dim(mesh), names);
-        if (st == PA_SUCCESS) st = copy_names(*names, mesh);
+        if (st == PA_SUCCESS) st = pa_mesh_copy_model(*names, mesh);
         if (st) ok = !pa_cli_fail(cli, st);
       }
     }
@@ -484,7 +471,7 @@ static pa_status write_mesh(const pa_cli *cli, const pa_cli_adapt_args *args,
   *tgather = pa_wtime() - t0;
   if (st != PA_SUCCESS || cli->rank != 0) return st;
   char *path = NULL;
-  if (names) st = copy_names(*g, names);
+  if (names) st = pa_mesh_copy_model(*g, names);
   if (st == PA_SUCCESS) st = pa_mesh_write(*g, out, NULL);
   if (st == PA_SUCCESS && !args->nosol) {
     pa_sol *sol = NULL;

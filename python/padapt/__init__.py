@@ -17,11 +17,13 @@ See docs/guide/python.md.
 from ._lib import Error, LIBPATH as _LIBPATH, lib as _clib
 from .mesh import Mesh, read, FLAG_CORNER, FLAG_RIDGE, FLAG_REQUIRED, FLAG_USER
 from .adapt import adapt, AdaptResult, Report
+from .geometry import Geometry
 from . import metric
 from . import levelset
 
 __version__ = _clib.pa_version().decode()  # the library's (padapt.h)
 __all__ = ["Error", "Mesh", "read", "adapt", "AdaptResult", "Report", "metric", "levelset",
+           "Geometry",
            "DistributedMesh", "FLAG_CORNER", "FLAG_RIDGE", "FLAG_REQUIRED",
            "FLAG_USER", "library_path", "memory_current", "memory_peak"]
 

@@ -93,7 +93,7 @@ class RemeshOpts(ctypes.Structure):
                  "verbosity", "trusted", "no_stats")] + \
                [("progress", ctypes.c_void_p), ("progress_ctx", ctypes.c_void_p),
                 ("local", ctypes.c_void_p), ("nlocal", ctypes.c_int),
-                ("mem_mb", ctypes.c_double)]
+                ("mem_mb", ctypes.c_double), ("geometry", ctypes.c_void_p)]
 
 
 class TransferReport(ctypes.Structure):
@@ -109,7 +109,27 @@ class RemeshReport(ctypes.Structure):
                 ("ncollapse", ctypes.c_long), ("nswap", ctypes.c_long),
                 ("nmove", ctypes.c_long), ("npass", ctypes.c_int),
                 ("time_s", ctypes.c_double), ("cpu_s", ctypes.c_double),
-                ("fidelity", Fidelity), ("transfer", TransferReport)]
+                ("fidelity", Fidelity), ("transfer", TransferReport),
+                ("nproject", ctypes.c_long), ("nproject_failed", ctypes.c_long),
+                ("project_s", ctypes.c_double)]
+
+
+# pa_geometry_ops: the caller's kernel (padapt.Geometry wraps Python callables)
+GEOM_CLOSEST = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_int, ctypes.c_int,
+                                ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_double))
+GEOM_CURVATURE = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_int, ctypes.c_int,
+                                  ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_double))
+
+
+class GeometryOps(ctypes.Structure):
+    _fields_ = [("closest", GEOM_CLOSEST), ("curvature", GEOM_CURVATURE)]
+
+
+class GeometryReport(ctypes.Structure):
+    _fields_ = [("nvert", c_idx), ("dist_max", ctypes.c_double),
+                ("dist_mean", ctypes.c_double), ("worst", c_idx),
+                ("worst_dim", ctypes.c_int), ("worst_tag", ctypes.c_int),
+                ("seconds", ctypes.c_double)]
 
 
 class HessianOpts(ctypes.Structure):
@@ -237,6 +257,16 @@ for _n, _r, _a in [
         ("pa_stats_target_met", I, [ctypes.POINTER(Stats)]),
         ("pa_fidelity_describe", None, [ctypes.POINTER(Fidelity), ctypes.c_char_p, ctypes.c_size_t]),
         ("pa_mesh_read", S, [cstr, PP]), ("pa_mesh_write", S, [P, cstr, P]),
+        ("pa_mesh_read_model", S, [cstr, PP]), ("pa_mesh_classified", I, [P]),
+        ("pa_mesh_vert_entity_dims", P, [P]), ("pa_mesh_vert_entity_tags", P, [P]),
+        ("pa_mesh_set_vertex_entities", S, [P, P, P]), ("pa_mesh_classify", S, [P]),
+        ("pa_mesh_copy_model", S, [P, P]),
+        ("pa_geometry_create", S, [ctypes.POINTER(GeometryOps), P, D, PP]),
+        ("pa_geometry_read", S, [cstr, PP]), ("pa_geometry_destroy", None, [P]),
+        ("pa_geometry_available", I, [ctypes.POINTER(cstr)]),
+        ("pa_geometry_size", D, [P]),
+        ("pa_geometry_closest", S, [P, I, I, dbl, dbl]),
+        ("pa_geometry_check", S, [P, P, D, ctypes.POINTER(GeometryReport)]),
         ("pa_remesh_opts_default", None, [ctypes.POINTER(RemeshOpts)]),
         ("pa_remesher_builtin", P, []),
         ("pa_remesh", S, [P, P, ctypes.POINTER(RemeshOpts), ctypes.POINTER(RemeshReport)]),

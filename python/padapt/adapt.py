@@ -133,7 +133,8 @@ def remesh_options(opts, **kw):
 
 def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
           hausd=None, fields=None, cell_fields=None, boundary_fields=None,
-          transfer=None, levelset=None, levelset_options=None, **options):
+          transfer=None, levelset=None, levelset_options=None, geometry=None,
+          **options):
     """Adapt a copy of mesh to a metric with the built-in remesher.
 
     mesh     a padapt.Mesh (not modified)
@@ -164,6 +165,10 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
              the same reference nearest to it
     transfer {name: mode} transfer modes of element fields (the mesh's or
              cell_fields'), or one mode for all of them
+    geometry a padapt.Geometry, the model of the classified mesh
+             (padapt.read(path, model=True)): new boundary vertices go onto
+             it, hausd is measured against its curvature; the report adds
+             "projections", "projections_failed" and "projection_s"
     options  hgradreq (gradation from required entities, default 2.3),
              angle (ridge detection angle in degrees, default 45),
              no_angle, no_insert, no_swap, no_move, no_surf (booleans, as
@@ -187,6 +192,14 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
     opts = _lib.RemeshOpts()
     lib.pa_remesh_opts_default(ctypes.byref(opts))
     remesh_options(opts, hsiz=hsiz, hmin=hmin, hmax=hmax, hgrad=hgrad, hausd=hausd, **options)
+    if geometry is not None:
+        from .geometry import Geometry
+        if not isinstance(geometry, Geometry):
+            raise TypeError("adapt: geometry must be a padapt.Geometry")
+        if levelset is not None:
+            raise ValueError("adapt: a level-set cut and a CAD model (geometry=) "
+                             "do not go together: the cut's interface is on no model entity")
+        opts.geometry = geometry._h
     dim, nv = mesh.dim, mesh.nvert
     met = None if metric is None else as_metric("metric", metric, dim, nv)
     flds = [(n,) + as_field(n, v, nv) for n, v in (fields or {}).items()]
@@ -251,6 +264,10 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
               "nsplit": rep.nsplit, "ncollapse": rep.ncollapse, "nswap": rep.nswap,
               "nmove": rep.nmove, "npass": rep.npass,
               "elements_before": nelem0, "vertices_before": nv})
+    if geometry is not None:
+        d.update({"projections": rep.nproject,
+                  "projections_failed": rep.nproject_failed,
+                  "projection_s": rep.project_s})
     d.update(fidelity_dict(rep.fidelity))
     if lsrep is not None:
         d["levelset"] = lsrep

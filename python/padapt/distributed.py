@@ -525,12 +525,14 @@ class DistributedMesh(object):
     # --------------------------------------------------------------- adapt
     def adapt(self, *, hsiz=None, hmin=None, hmax=None, hgrad=None, hausd=None,
               max_iter=None, pieces_per_rank=None, mem_mb=None, check_pieces=None,
-              rebalance=None, **options):
+              rebalance=None, geometry=None, **options):
         """Adapt in place to the metric (set_metric, metric_from_hessian,
         ...) or to hsiz, by the parallel piece loop of pa_dmesh_adapt; vertex
         fields are interpolated. Options as padapt.adapt, plus max_iter,
         pieces_per_rank, mem_mb (memory bound per rank), check_pieces
-        (True/False), rebalance (True/False). Returns a Report with the
+        (True/False), rebalance (True/False), geometry (a padapt.Geometry
+        loaded on every rank, for a mesh distributed from a classified
+        one). Returns a Report with the
         members of `mpiexec padapt adapt -json` (the same on every rank).
         Collective; invalidates views. The GIL is released meanwhile."""
         def args():
@@ -544,6 +546,11 @@ class DistributedMesh(object):
                     setattr(o, k, int(v))
             if mem_mb is not None:
                 o.mem_mb = float(mem_mb)
+            if geometry is not None:
+                from .geometry import Geometry
+                if not isinstance(geometry, Geometry):
+                    raise TypeError("adapt: geometry must be a padapt.Geometry")
+                o.remesh.geometry = geometry._h
             if hsiz is not None and o.remesh.hsiz <= 0:
                 raise ValueError("hsiz: expected a positive size, got %r" % (hsiz,))
             if o.remesh.hsiz <= 0 and lib.pa_mesh_metric_ncomp(self.local_mesh._h) == 0:

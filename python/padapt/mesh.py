@@ -546,6 +546,40 @@ class Mesh(object):
         for d, t, n in items:
             check(lib.pa_mesh_add_name(self._h, d, t, n.encode()))
 
+    # ------------------------------------------------------- classification
+    @property
+    def classified(self):
+        """True when the vertices know their model entities (see
+        docs/guide/geometry.md): read(path, model=True), or
+        set_vertex_entities."""
+        return bool(lib.pa_mesh_classified(self._h))
+
+    @property
+    def vertex_entities(self):
+        """(dims, tags): the model entity of each vertex, (nvert,) uint8 (0
+        point, 1 curve, 2 surface, 3 volume) and int32 read-only views;
+        None when the mesh is not classified."""
+        if not self.classified:
+            return None
+        n = self.nvert
+        return (self._raw(lib.pa_mesh_vert_entity_dims, (n,), np.uint8, False),
+                self._raw(lib.pa_mesh_vert_entity_tags, (n,), np.int32, False))
+
+    def set_vertex_entities(self, dims, tags):
+        """Classify the mesh: vertex v lies on model entity (dims[v], tags[v])
+        (tags > 0 below the mesh's dimension); the references of the cells
+        must be entity tags, and those not positive are found (boundary
+        faces and curve edges the mesh does not list are added:
+        pa_mesh_classify). dims None unclassifies it. Raises padapt.Error
+        naming a cell whose entity cannot be told."""
+        if dims is None:
+            check(lib.pa_mesh_set_vertex_entities(self._h, None, None))
+            return
+        n = self.nvert
+        d = np.ascontiguousarray(dims, dtype=np.intc).reshape(n)
+        t = np.ascontiguousarray(tags, dtype=np.int32).reshape(n)
+        check(lib.pa_mesh_set_vertex_entities(self._h, d.ctypes.data, t.ctypes.data))
+
     # ------------------------------------------------------------- checks
     def check(self):
         """Check the mesh (indices, orientation, conformity, boundary listed,
@@ -726,16 +760,18 @@ class Mesh(object):
         return mesh
 
 
-def read(path):
+def read(path, model=False):
     """Read a mesh, format by extension: .mesh/.meshb (Medit), .msh (Gmsh 4.1
     ASCII or binary, 2.2 ASCII). The boundary entities the file does not
-    list are added (reference 0), as the command line does. Raises
-    padapt.Error naming the file and line of a fault, FileNotFoundError if
-    path does not exist."""
+    list are added (reference 0), as the command line does. model=True
+    reads a Gmsh MSH 4.1 file with its classification (references are
+    entity tags, vertices know their entities: mesh.classified, for
+    adapt(..., geometry=...)). Raises padapt.Error naming the file and
+    line of a fault, FileNotFoundError if path does not exist."""
     if not os.path.exists(path):
         raise FileNotFoundError(2, "No such file", str(path))
     h = ctypes.c_void_p()
-    check(lib.pa_mesh_read(os.fsencode(path), ctypes.byref(h)))
+    check((lib.pa_mesh_read_model if model else lib.pa_mesh_read)(os.fsencode(path), ctypes.byref(h)))
     mesh = Mesh._wrap(h)
     check(lib.pa_mesh_build_boundary(h, 0, None))
     return mesh

@@ -193,6 +193,12 @@ static pa_status check_opts(pa_dmesh *dm, const pa_adapt_opts *o) {
   PA_CHECK(!o->checkpoint_dir || !pa__output_depth(), PA_ERR_ARG,
            "pa_dmesh_adapt: checkpoints are written outside an output "
            "transaction, and one is open (pa_output_begin)");
+  PA_CHECK(!ro->geometry || dm->mesh->vgdim, PA_ERR_ARG,
+           "pa_dmesh_adapt: a geometry needs a mesh distributed from a "
+           "classified one (pa_mesh_read_model)");
+  PA_CHECK(!ro->geometry || !o->checkpoint_dir, PA_ERR_UNSUPPORTED,
+           "pa_dmesh_adapt: checkpoints do not keep the classification a "
+           "geometry needs");
 cleanup:
   return st;
 }

@@ -303,6 +303,7 @@ static pa_status piece_create(pbuild *b) {
   pa_mesh *m = b->m;
   m->met_ncomp = dmm->met_ncomp;
   m->nfield = dmm->nfield;
+  if (dmm->vgdim) PA_CALL(pa__mesh_enable_entities(m));
   for (int f = 0; f < dmm->nfield; f++) {
     snprintf(m->field[f].name, PA_MESH_FIELD_NAME_LEN, "%s",
              dmm->field[f].name);

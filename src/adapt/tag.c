@@ -8,7 +8,8 @@
  * length in the metric lies outside the band [PA_METRIC_LEN_LO,
  * PA_METRIC_LEN_HI) (metric/metric.h) or a quality below
  * opts->qual_threshold; an element produced in this run, with the looser
- * criteria below, by how much its piece's frozen skin constrained it. So
+ * criteria below, by how much its piece's frozen skin constrained it, and
+ * with a model when a vertex of it lies off the model (off_model). So
  * the loop ends (nothing tagged) only when every element of the final mesh
  * passes its criterion. Work ~ expected output elements + 1: the element's
  * volume in the metric over the volume of the unit regular simplex, plus one
@@ -22,6 +23,7 @@
  * it all the same and check that it still passes).
  */
 #include "adapt/adapt.h"
+#include "geom/geom.h"
 
 #include <math.h>
 
@@ -134,10 +136,38 @@ static int bad_edge(const pa_mesh *m, pa_idx e, double lo, double hi) {
   return 0;
 }
 
+/* With a model (opts->remesh.geometry), 1 if a vertex of element e lies on
+ * a curve or surface but off it by more than PA_GEOM_SNAP_TOL of the
+ * model's size: a point the remesher of a piece left on its reconstruction
+ * (the model's was refused, and the piece's skin kept the snap moves from
+ * it), which only another remesh puts on the model. off[v] caches the
+ * answer per local vertex (0 not known, 1 on, 2 off). */
+static int off_model(const pa_mesh *m, const pa_geometry *g, pa_idx e,
+                     uint8_t *off) {
+  int d = m->dim;
+  const pa_idx *v = m->elem + (size_t)(d + 1) * e;
+  for (int k = 0; k <= d; k++) {
+    pa_idx x = v[k];
+    if (!off[x]) {
+      const double *p = m->coord + (size_t)d * x;
+      double y[3] = {p[0], p[1], d == 3 ? p[2] : 0}, s2 = 0;
+      off[x] = 1;
+      if (m->vgdim[x] > 0 && m->vgdim[x] < d &&
+          pa__geom_project(g, m->vgdim[x], m->vgtag[x], d, p, INFINITY, y)) {
+        for (int j = 0; j < d; j++) s2 += (y[j] - p[j]) * (y[j] - p[j]);
+        if (sqrt(s2) > PA_GEOM_SNAP_TOL * g->size) off[x] = 2;
+      }
+    }
+    if (off[x] == 2) return 1;
+  }
+  return 0;
+}
+
 /* 1 if element e, of done value kind dn (without PA_ADAPT_DONE_PASSED), is
- * to be remeshed. */
+ * to be remeshed; off: off_model's cache (NULL without a model), which an
+ * element produced in this run always fills. */
 static int tagged(const pa_mesh *m, const pa_adapt_opts *o, pa_idx e,
-                  uint8_t dn) {
+                  uint8_t dn, uint8_t *off) {
   int t = !dn && (m->eflag[e] & PA_FLAG_USER) != 0;
   if (!t && !o->user_tags_only) {
     double lo, hi, qmin;
@@ -145,7 +175,42 @@ static int tagged(const pa_mesh *m, const pa_adapt_opts *o, pa_idx e,
     t = bad_edge(m, e, lo, hi);
     if (!t && qmin > 0) t = elem_quality(m, e) < qmin;
   }
+  if (dn && off) t |= off_model(m, o->remesh.geometry, e, off);
   return t;
+}
+
+/* With a model: the owned elements within two rings of a vertex off it
+ * (off[v] == 2) are tagged too, whatever they passed: a piece that holds
+ * them holds the vertex free (not on its skin) with free neighbours, which
+ * the remesher moves to make room for the vertex's point on the model. */
+static pa_status tag_off_model(pa__iter *it, uint8_t *dn, uint8_t *off) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  const pa_mesh *m = dm->mesh;
+  int d = m->dim;
+  uint8_t *ring = NULL;
+  pa_idx nv = dm->nloc[PA_VERTEX];
+  PA_ALLOC(ring, nv);
+  memcpy(ring, off, (size_t)nv);
+  for (int r = 0; r < 2; r++) {
+    uint8_t mark = (uint8_t)(3 + r); /* the new ring's vertices */
+    for (pa_idx e = 0; e < it->ne; e++) {
+      const pa_idx *v = m->elem + (size_t)(d + 1) * e;
+      int near = 0;
+      for (int k = 0; k <= d && !near; k++)
+        near = ring[v[k]] == 2 || (ring[v[k]] >= 3 && ring[v[k]] < mark);
+      if (!near) continue;
+      for (int k = 0; k <= d; k++)
+        if (ring[v[k]] < 2) ring[v[k]] = mark;
+      if (it->tag[e] || (m->eflag[e] & PA_FLAG_REQUIRED)) continue;
+      it->tag[e] = 1;
+      dn[e] &= (uint8_t)~PA_ADAPT_DONE_PASSED;
+      it->work[e] = pa__elem_work(m, e);
+    }
+  }
+cleanup:
+  pa__free(ring);
+  return st;
 }
 
 pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int fresh) {
@@ -154,8 +219,10 @@ pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int fresh) {
   const pa_mesh *m = dm->mesh;
   const pa_adapt_opts *o = it->opts;
   uint8_t *dn = pa_dmesh_value_data(done, NULL, NULL);
+  uint8_t *off = NULL;
   double x[2] = {0, 0};
   it->ne = dm->nown[PA_ELEMENT];
+  if (o->remesh.geometry && m->vgdim) PA_CALLOC(off, dm->nloc[PA_VERTEX]);
   PA_CALLOC(it->tag, it->ne);
   PA_ALLOC(it->work, it->ne);
   for (pa_idx e = 0; e < it->ne; e++) {
@@ -167,21 +234,25 @@ pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int fresh) {
     if (kind && o->user_tags_only) continue;
     if (!fresh && (dn[e] & PA_ADAPT_DONE_PASSED)) {
 #ifndef NDEBUG
-      PA_CHECK(!tagged(m, o, e, kind), PA_ERR_INTERNAL,
+      PA_CHECK(!tagged(m, o, e, kind, off), PA_ERR_INTERNAL,
                "tag: element %lld passed the last tag, has not changed "
                "since, and fails it now",
                (long long)dm->gid[PA_ELEMENT][e]);
 #endif
       continue;
     }
-    int t = tagged(m, o, e, kind);
+    int t = tagged(m, o, e, kind, off);
     dn[e] = t ? kind : kind | PA_ADAPT_DONE_PASSED;
     it->tag[e] = (uint8_t)t;
     if (t) it->work[e] = pa__elem_work(m, e);
-    x[0] += t;
-    x[1] += t ? it->work[e] : 0;
+  }
+  if (off) PA_CALL(tag_off_model(it, dn, off));
+  for (pa_idx e = 0; e < it->ne; e++) {
+    x[0] += it->tag[e];
+    x[1] += it->tag[e] ? it->work[e] : 0;
   }
 cleanup:
+  pa__free(off);
   st = pa__agree(dm->comm, st);
   if (st == PA_SUCCESS) {
     st = pa__allreduce(dm->comm, x, 2, MPI_DOUBLE, MPI_SUM);

@@ -1130,6 +1130,7 @@ static pa_status fill_vertices(bstate *s, const pa__layout *lay, assembly *a) {
     snprintf(m->field[f].name, sizeof m->field[f].name, "%s", lay->fieldname[f]);
     m->field[f].ncomp = lay->fieldncomp[f];
   }
+  if (lay->geo) PA_CALL(pa__mesh_enable_entities(m));
   PA_CALL(pa_mesh_reserve(m, (pa_idx)s->LV.n, (pa_idx)s->L.n, 0, 0));
   PA_CALL(pa__layout_cell_fields(lay, m));
   for (size_t k = 0; k < s->LV.n; k++) {
@@ -1371,7 +1372,7 @@ cleanup:
 }
 
 int pa__layout_ndbl(const pa__layout *l) {
-  int n = l->dim + l->met_ncomp;
+  int n = l->dim + l->met_ncomp + (l->geo != 0);
   for (int f = 0; f < l->nfield; f++) n += l->fieldncomp[f];
   return n;
 }
@@ -1388,6 +1389,7 @@ void pa__mesh_layout(const pa_mesh *m, pa__layout *lay) {
   memset(lay, 0, sizeof *lay);
   lay->dim = m->dim;
   lay->met_ncomp = m->met_ncomp;
+  lay->geo = m->vgdim != NULL;
   lay->nfield = m->nfield;
   for (int f = 0; f < m->nfield; f++) {
     snprintf(lay->fieldname[f], PA_MESH_FIELD_NAME_LEN, "%s", m->field[f].name);
@@ -1457,6 +1459,7 @@ int pa__vertex_doubles(const pa_mesh *m, pa_idx v, int nfield, double *out) {
   int d = m->dim, n = 0, nm = m->met_ncomp;
   for (int k = 0; k < d; k++) out[n++] = m->coord[(size_t)d * v + k];
   for (int k = 0; k < nm; k++) out[n++] = m->met[(size_t)nm * v + k];
+  if (m->vgdim) out[n++] = pa__entity_pack(m->vgdim[v], m->vgtag[v]);
   for (int f = 0; f < nfield; f++) {
     int nc = m->field[f].ncomp;
     for (int k = 0; k < nc; k++) out[n++] = m->field[f].val[(size_t)nc * v + k];
@@ -1470,6 +1473,7 @@ void pa__vertex_set_doubles(pa_mesh *m, pa_idx v, const double *in) {
   in += d;
   if (nm) memcpy(m->met + (size_t)nm * v, in, nm * sizeof *in);
   in += nm;
+  if (m->vgdim) pa__entity_unpack(*in++, &m->vgdim[v], &m->vgtag[v]);
   for (int f = 0; f < m->nfield; f++) {
     int nc = m->field[f].ncomp;
     memcpy(m->field[f].val + (size_t)nc * v, in, nc * sizeof *in);

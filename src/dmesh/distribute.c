@@ -90,6 +90,10 @@ static pa_status pack_block(pa_mesh *m, const pa__layout *lay, int r, int P,
                m->met + (size_t)m->met_ncomp * (l + i),
                m->met_ncomp * sizeof(double));
       o += m->met_ncomp;
+      for (size_t i = 0; m->vgdim && i < c; i++)
+        B.dbl[(size_t)ndbl * i + o] =
+            pa__entity_pack(m->vgdim[l + i], m->vgtag[l + i]);
+      o += m->vgdim != NULL;
       for (int f = 0; f < m->nfield; f++) {
         int nc = m->field[f].ncomp;
         for (size_t i = 0; i < c; i++)
@@ -1124,6 +1128,7 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
     snprintf(m->field[f].name, PA_MESH_FIELD_NAME_LEN, "%s", lay->fieldname[f]);
     m->field[f].ncomp = lay->fieldncomp[f];
   }
+  if (lay->geo) PA_CALL(pa__mesh_enable_entities(m));
   PA_CALL(pa_mesh_reserve(m, (pa_idx)nk[PA_VERTEX], (pa_idx)nk[PA_ELEMENT],
                           (pa_idx)nk[PA_BOUNDARY], (pa_idx)nk[PA_EDGE]));
   PA_CALL(pa__layout_cell_fields(lay, m));
@@ -1147,19 +1152,8 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
       const gview *Q = &Vk[r];
       size_t i = g - off[r];
       if (k == PA_VERTEX) {
-        const double *x = xbuf;
         view_doubles(Q, k, i, xbuf);
-        memcpy(m->coord + (size_t)d * j, x, d * sizeof(double));
-        x += d;
-        if (m->met_ncomp) {
-          memcpy(m->met + (size_t)m->met_ncomp * j, x, m->met_ncomp * sizeof(double));
-          x += m->met_ncomp;
-        }
-        for (int f = 0; f < m->nfield; f++) {
-          memcpy(m->field[f].val + (size_t)m->field[f].ncomp * j, x,
-                 m->field[f].ncomp * sizeof(double));
-          x += m->field[f].ncomp;
-        }
+        pa__vertex_set_doubles(m, (pa_idx)j, xbuf);
         m->vref[j] = Q->ref[i];
         m->vflag[j] = Q->flag[i];
         int found;

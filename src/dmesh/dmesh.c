@@ -440,11 +440,15 @@ pa_status pa_dmesh_sync_mesh(pa_dmesh *dm) {
   pa__agree_reset();
   pa_mesh *m = dm->mesh;
   int d = dm->dim;
-  sync_item arr[12 + 3 * PA_MESH_MAX_FIELDS];
+  sync_item arr[14 + 3 * PA_MESH_MAX_FIELDS];
   int na = 0;
   arr[na++] = (sync_item){PA_VERTEX, m->coord, sizeof(double) * d};
   arr[na++] = (sync_item){PA_VERTEX, m->vref, 4};
   arr[na++] = (sync_item){PA_VERTEX, m->vflag, 1};
+  if (m->vgdim) {
+    arr[na++] = (sync_item){PA_VERTEX, m->vgdim, 1};
+    arr[na++] = (sync_item){PA_VERTEX, m->vgtag, 4};
+  }
   if (m->met_ncomp)
     arr[na++] = (sync_item){PA_VERTEX, m->met, sizeof(double) * m->met_ncomp};
   for (int f = 0; f < m->nfield; f++)

@@ -200,6 +200,7 @@ pa_status pa__recs_sort(pa__recs *r);
 typedef struct pa__layout {
   int dim;
   int met_ncomp;
+  int geo; /* 1: the vertices' model entities (a classified mesh) */
   int nfield;
   char fieldname[PA_MESH_MAX_FIELDS][PA_MESH_FIELD_NAME_LEN];
   int fieldncomp[PA_MESH_MAX_FIELDS];
@@ -208,7 +209,17 @@ typedef struct pa__layout {
   int cfieldncomp[2][PA_MESH_MAX_FIELDS];
   int cfieldmode[2][PA_MESH_MAX_FIELDS];
 } pa__layout;
-/* Doubles per vertex record: dim + metric + fields. */
+/* A vertex's model entity in one double of its record: dim * 2^32 + tag
+ * (as unsigned 32 bits), exact below 2^53. */
+static inline double pa__entity_pack(int dim, int32_t tag) {
+  return (double)dim * 4294967296.0 + (double)(uint32_t)tag;
+}
+static inline void pa__entity_unpack(double x, uint8_t *dim, int32_t *tag) {
+  double d = floor(x / 4294967296.0);
+  *dim = (uint8_t)d;
+  *tag = (int32_t)(uint32_t)(x - d * 4294967296.0);
+}
+/* Doubles per vertex record: dim + metric + entity + fields. */
 int pa__layout_ndbl(const pa__layout *l);
 /* Doubles per record of a kind: the vertex doubles, the components of the
  * element or of the boundary fields, 0 for edges. */
@@ -218,11 +229,12 @@ void pa__mesh_layout(const pa_mesh *m, pa__layout *lay);
 /* Give m (without element nor boundary fields) those of lay, named and
  * moded, with room for m's capacities (values not set). */
 pa_status pa__layout_cell_fields(const pa__layout *l, pa_mesh *m);
-/* The doubles of the record of vertex v of m: coordinates, metric, then the
- * first nfield fields (in that order, the layout's); returns the count. */
+/* The doubles of the record of vertex v of m: coordinates, metric, its
+ * model entity (a classified m: dim * 2^32 + tag, exact), then the first
+ * nfield fields (in that order, the layout's); returns the count. */
 int pa__vertex_doubles(const pa_mesh *m, pa_idx v, int nfield, double *out);
 /* The inverse for all of m's fields: vertex v of m takes the doubles of a
- * record (coordinates, metric, fields). */
+ * record (coordinates, metric, entity when m is classified, fields). */
 void pa__vertex_set_doubles(pa_mesh *m, pa_idx v, const double *in);
 /* The doubles of the record of entity e of a kind of m (vertices: as
  * pa__vertex_doubles with all fields; elements and boundary entities:

@@ -398,6 +398,7 @@ static pa_status permuted_mesh(pa_dmesh *dm, reorder *r) {
   pa_mesh *nm = r->nm;
   nm->met_ncomp = m->met_ncomp;
   nm->nfield = m->nfield;
+  if (m->vgdim) PA_CALL(pa__mesh_enable_entities(nm));
   for (int f = 0; f < m->nfield; f++) {
     memcpy(nm->field[f].name, m->field[f].name, sizeof nm->field[f].name);
     nm->field[f].ncomp = m->field[f].ncomp;
@@ -413,6 +414,10 @@ static pa_status permuted_mesh(pa_dmesh *dm, reorder *r) {
     memcpy(nm->coord + (size_t)d * i, m->coord + (size_t)d * o, d * sizeof(double));
     nm->vref[i] = m->vref[o];
     nm->vflag[i] = m->vflag[o];
+    if (m->vgdim) {
+      nm->vgdim[i] = m->vgdim[o];
+      nm->vgtag[i] = m->vgtag[o];
+    }
     if (m->met_ncomp)
       memcpy(nm->met + (size_t)m->met_ncomp * i, m->met + (size_t)m->met_ncomp * o,
              m->met_ncomp * sizeof(double));

@@ -187,8 +187,8 @@ cleanup:
   return st;
 }
 
-/* The vertices of the local mesh: coordinates, references, flags, metric
- * and fields. */
+/* The vertices of the local mesh: coordinates, references, flags, model
+ * entities, metric and fields. */
 static pa_status splice_vertices(pa_mesh *m, const korder *o,
                                  const pa_mesh *pm) {
   pa_status st = PA_SUCCESS;
@@ -198,6 +198,12 @@ static pa_status splice_vertices(pa_mesh *m, const korder *o,
   REMAP(m->coord, d * sizeof(double), o, pm->coord);
   REMAP(m->vref, sizeof(int32_t), o, pm->vref);
   REMAP(m->vflag, 1, o, pm->vflag);
+  PA_CHECK(!m->vgdim == !pm->vgdim, PA_ERR_INTERNAL,
+           "splice: the part is classified and the mesh not, or the reverse");
+  if (m->vgdim) {
+    REMAP(m->vgdim, 1, o, pm->vgdim);
+    REMAP(m->vgtag, sizeof(int32_t), o, pm->vgtag);
+  }
   if (nm) REMAP(m->met, nm * sizeof(double), o, pm->met);
   for (int f = 0; f < m->nfield; f++)
     REMAP(m->field[f].val, m->field[f].ncomp * sizeof(double), o,

@@ -53,6 +53,14 @@
  *  - Node tags may be sparse and unordered: vertices are numbered in
  *    increasing tag order (tags 1..n give vertex tag - 1, whatever the order
  *    of the node blocks).
+ *  - Classified (pa__gmsh_read_model, MSH 4.1 with $Entities only): the
+ *    reference of a cell is its entity's tag, each vertex takes the entity
+ *    of its node block, the $Entities records (physical tags, bounding
+ *    entities, boxes) stay on the mesh, and pa_mesh_classify completes the
+ *    cells the file does not list; parametric coordinates are read over.
+ *    On write a classified mesh gets its entities back (the table's, and
+ *    any other its cells lie on), its nodes in one block per entity, its
+ *    model points as point elements on their entities.
  *
  * Reader invariants: the whole file sits in one NUL-terminated buffer and
  * every read is bounds-checked against it; every count is checked against the
@@ -366,9 +374,15 @@ typedef struct eview {
 
 typedef struct msh {
   int version; /* 41 or 22 */
+  int model;   /* keep the classification (pa__gmsh_read_model) */
   size_t nnode;
   double *xyz;   /* 3 * nnode */
   uint64_t *tag; /* nnode */
+  /* model: the entity of each node's block (nnode each) */
+  uint8_t *ndim;
+  int32_t *ntag;
+  pa__entity *ents; /* model: the entities of $Entities, sorted */
+  int nents;
   /* node tag -> index: dense table over [tagmin, tagmin + ndense) or a sorted
    * table searched by bisection when tags are too sparse */
   uint64_t tagmin;
@@ -398,6 +412,13 @@ static void msh_free(msh *w) {
   }
   pa__free(w->xyz);
   pa__free(w->tag);
+  pa__free(w->ndim);
+  pa__free(w->ntag);
+  for (int k = 0; k < w->nents; k++) {
+    pa__free(w->ents[k].phys);
+    pa__free(w->ents[k].bound);
+  }
+  pa__free(w->ents);
   pa__free(w->dense);
   pa__free(w->sorted);
   for (int d = 0; d < 4; d++) {
@@ -442,6 +463,8 @@ static pa_status build_node_map(reader *r, msh *w) {
   pa_idx *from = NULL; /* from[k]: file position of the node of rank k */
   double *xyz = NULL;
   uint64_t *tag = NULL;
+  uint8_t *nd = NULL; /* the nodes' entities (model mode) */
+  int32_t *nt = NULL;
   uint64_t lo = UINT64_MAX, hi = 0;
   size_t n = w->nnode;
   for (size_t i = 0; i < n; i++) {
@@ -493,9 +516,17 @@ static pa_status build_node_map(reader *r, msh *w) {
   if (!in_order) {
     PA_ALLOC(xyz, 3 * n);
     PA_ALLOC(tag, n);
+    if (w->ndim) {
+      PA_ALLOC(nd, n);
+      PA_ALLOC(nt, n);
+    }
     for (size_t k = 0; k < n; k++) {
       memcpy(xyz + 3 * k, w->xyz + 3 * (size_t)from[k], 3 * sizeof *xyz);
       tag[k] = w->tag[from[k]];
+      if (nd) {
+        nd[k] = w->ndim[from[k]];
+        nt[k] = w->ntag[from[k]];
+      }
     }
     pa__free(w->xyz);
     pa__free(w->tag);
@@ -503,11 +534,21 @@ static pa_status build_node_map(reader *r, msh *w) {
     w->tag = tag;
     xyz = NULL;
     tag = NULL;
+    if (nd) {
+      pa__free(w->ndim);
+      pa__free(w->ntag);
+      w->ndim = nd;
+      w->ntag = nt;
+      nd = NULL;
+      nt = NULL;
+    }
   }
 cleanup:
   pa__free(from);
   pa__free(xyz);
   pa__free(tag);
+  pa__free(nd);
+  pa__free(nt);
   return st;
 }
 
@@ -589,7 +630,7 @@ static int cmp_entity(const void *a, const void *b) {
 /* Reference of the elements of entity (dim, tag): its first physical tag,
  * else the entity tag. */
 static int32_t entity_ref(const msh *w, int dim, int32_t tag) {
-  if (!w->has_entities || dim < 0 || dim > 3) return tag;
+  if (w->model || !w->has_entities || dim < 0 || dim > 3) return tag;
   const entity *e = w->ent[dim];
   size_t lo = 0, hi = w->nent[dim];
   while (lo < hi) {
@@ -674,7 +715,14 @@ cleanup:
   return st;
 }
 
-/* $Entities (MSH 4.1): the reference of each entity. */
+static int cmp_model_entity(const void *a, const void *b) {
+  const pa__entity *x = a, *y = b;
+  if (x->dim != y->dim) return (x->dim > y->dim) - (x->dim < y->dim);
+  return (x->tag > y->tag) - (x->tag < y->tag);
+}
+
+/* $Entities (MSH 4.1): the reference of each entity; with w->model, every
+ * entity whole (physical tags, boundary, box) into w->ents. */
 static pa_status read_entities(reader *r, msh *w) {
   pa_status st = PA_SUCCESS;
   uint64_t count[4], total = 0;
@@ -687,33 +735,59 @@ static pa_status read_entities(reader *r, msh *w) {
     total += count[d];
   }
   PA_CALL(rd_fits(r, total, 10, 36, "$Entities header"));
+  if (w->model) PA_CALLOC(w->ents, total);
   for (int d = 0; d < 4; d++) {
     PA_ALLOC(w->ent[d], count[d]);
     w->nent[d] = (size_t)count[d];
     for (uint64_t k = 0; k < count[d]; k++) {
       int32_t tag, phys = 0, dummy;
-      uint64_t nphys, nbound;
-      double bb;
+      uint64_t nphys, nbound = 0;
+      double bb[6];
+      pa__entity *me = w->model ? &w->ents[w->nents++] : NULL;
       PA_CALL(get_int(r, &tag, "an entity tag"));
       for (int i = 0; i < (d == 0 ? 3 : 6); i++)
-        PA_CALL(get_f64(r, &bb, "an entity bounding box"));
+        PA_CALL(get_f64(r, &bb[i], "an entity bounding box"));
       PA_CALL(get_size(r, &nphys, "a number of physical tags"));
       PA_CALL(rd_fits(r, nphys, 2, 4, "physical tag list"));
-      for (uint64_t i = 0; i < nphys; i++)
+      if (me) PA_ALLOC(me->phys, nphys);
+      for (uint64_t i = 0; i < nphys; i++) {
         PA_CALL(get_int(r, i ? &dummy : &phys, "a physical tag"));
+        if (me) me->phys[i] = i ? dummy : phys;
+      }
       if (d > 0) {
         PA_CALL(get_size(r, &nbound, "a number of bounding entities"));
         PA_CALL(rd_fits(r, nbound, 2, 4, "bounding entity list"));
-        if (r->binary)
+        if (me) PA_ALLOC(me->bound, nbound);
+        if (r->binary && !me)
           r->pos += 4 * (size_t)nbound;
         else
-          for (uint64_t i = 0; i < nbound; i++)
+          for (uint64_t i = 0; i < nbound; i++) {
             PA_CALL(get_int(r, &dummy, "a bounding entity tag"));
+            if (me) me->bound[i] = dummy;
+          }
       }
       w->ent[d][k].tag = tag;
       w->ent[d][k].ref = nphys ? phys : tag;
+      if (me) {
+        if (tag <= 0)
+          RD_FAIL(r, PA_ERR_FORMAT,
+                  "model entity (%d, %d): entity tags are positive", d,
+                  (int)tag);
+        me->dim = d;
+        me->tag = tag;
+        me->nphys = (int)nphys;
+        me->nbound = (int)nbound;
+        for (int i = 0; i < 6; i++) me->box[i] = bb[d == 0 ? i % 3 : i];
+      }
     }
     qsort(w->ent[d], w->nent[d], sizeof *w->ent[d], cmp_entity);
+  }
+  if (w->model) {
+    qsort(w->ents, (size_t)w->nents, sizeof *w->ents, cmp_model_entity);
+    for (int k = 1; k < w->nents; k++)
+      if (!cmp_model_entity(&w->ents[k - 1], &w->ents[k]))
+        RD_FAIL(r, PA_ERR_FORMAT, "$Entities lists entity (%d, %d) twice",
+                w->ents[k].dim, (int)w->ents[k].tag);
   }
   w->has_entities = 1;
   PA_CALL(rd_expect(r, "$EndEntities"));
@@ -742,6 +816,15 @@ static pa_status check_coord(reader *r, double x) {
   return rd_error(r, PA_ERR_FORMAT, "node coordinate is not finite (%g)", x);
 }
 
+/* The entity (dim, tag) of $Entities (model mode), or NULL. */
+static const pa__entity *model_entity(const msh *w, int dim, int32_t tag) {
+  pa__entity key;
+  key.dim = dim;
+  key.tag = tag;
+  return bsearch(&key, w->ents, (size_t)w->nents, sizeof *w->ents,
+                 cmp_model_entity);
+}
+
 /* $Nodes of MSH 4.1. */
 static pa_status read_nodes41(reader *r, msh *w) {
   pa_status st = PA_SUCCESS;
@@ -753,6 +836,15 @@ static pa_status read_nodes41(reader *r, msh *w) {
   PA_CALL(get_size(r, &tmin, "the minimum node tag"));
   PA_CALL(get_size(r, &tmax, "the maximum node tag"));
   PA_CALL(alloc_nodes(r, w, nnode, 8, 32));
+  if (w->model) {
+    if (!w->has_entities)
+      RD_FAIL(r, PA_ERR_FORMAT,
+              "no $Entities section before $Nodes: the file does not say "
+              "which model entity each node lies on (write it with Gmsh "
+              "from its model)");
+    PA_ALLOC(w->ndim, nnode);
+    PA_ALLOC(w->ntag, nnode);
+  }
   PA_CALL(rd_fits(r, nblock, 8, 20, "$Nodes header's block count"));
   for (uint64_t b = 0; b < nblock; b++) {
     int32_t edim, etag, param;
@@ -769,7 +861,18 @@ static pa_status read_nodes41(reader *r, msh *w) {
       RD_FAIL(r, PA_ERR_FORMAT,
               "node blocks hold more nodes than the %llu of the $Nodes header",
               (unsigned long long)nnode);
-    int ncoord = 3 + (param ? edim : 0); /* parametric u, v, w discarded */
+    if (w->model) {
+      if (!model_entity(w, edim, etag))
+        RD_FAIL(r, PA_ERR_FORMAT,
+                "a node block lies on model entity (%d, %d), which $Entities "
+                "does not list",
+                (int)edim, (int)etag);
+      memset(w->ndim + done, edim, (size_t)n);
+      for (uint64_t i = 0; i < n; i++) w->ntag[done + i] = etag;
+    }
+    /* parametric coordinates (u, v, w) are read over: padapt projects onto
+     * the model (docs/guide/geometry.md) */
+    int ncoord = 3 + (param ? edim : 0);
     PA_CALL(rd_fits(r, n, 2 + 2 * (size_t)ncoord, 8 + 8 * (size_t)ncoord,
                     "node block"));
     if (r->binary) {
@@ -902,6 +1005,11 @@ static pa_status read_elements41(reader *r, msh *w) {
               "element blocks hold more elements than the %llu of the "
               "$Elements header",
               (unsigned long long)nelem);
+    if (w->model && !model_entity(w, edim, etag))
+      RD_FAIL(r, PA_ERR_FORMAT,
+              "an element block lies on model entity (%d, %d), which "
+              "$Entities does not list",
+              (int)edim, (int)etag);
     PA_CALL(read_elem_block(r, w, kind, n, entity_ref(w, edim, etag)));
     done += n;
   }
@@ -1557,6 +1665,29 @@ cleanup:
   return st;
 }
 
+/* Model mode: the mesh takes the nodes' entities and the model's table,
+ * and pa_mesh_classify completes its cells (errors name the file). */
+static pa_status classify(reader *r, msh *w, pa_mesh *m) {
+  pa_status st = PA_SUCCESS;
+  PA_CALL(pa__mesh_enable_entities(m));
+  for (size_t i = 0; i < w->nnode; i++) {
+    m->vgdim[i] = w->ndim[i];
+    m->vgtag[i] = w->ntag[i];
+  }
+  m->ents = w->ents;
+  m->nent = w->nents;
+  w->ents = NULL;
+  w->nents = 0;
+  st = pa_mesh_classify(m);
+  if (st != PA_SUCCESS) {
+    char msg[1024];
+    snprintf(msg, sizeof msg, "%s", pa_last_error());
+    st = pa__error(st, __FILE__, __LINE__, "%s: %s", r->path, msg);
+  }
+cleanup:
+  return st;
+}
+
 /* Build the mesh from what was read; the buffers move into it. */
 static pa_status build_mesh(reader *r, msh *w, pa_mesh **out) {
   pa_status st = PA_SUCCESS;
@@ -1610,6 +1741,7 @@ static pa_status build_mesh(reader *r, msh *w, pa_mesh **out) {
   w->nname = 0;
   PA_CALL(attach_views(r, w, m));
   PA_CALL(attach_cell_views(r, w, m));
+  if (w->model) PA_CALL(classify(r, w, m));
   *out = m;
   m = NULL;
 cleanup:
@@ -1641,7 +1773,8 @@ cleanup:
   return st;
 }
 
-pa_status pa__gmsh_read(const char *path, pa_mesh **mesh) {
+/* Read path into *mesh; model: keep its classification. */
+static pa_status gmsh_read(const char *path, int model, pa_mesh **mesh) {
   pa_status st = PA_SUCCESS;
   reader r = {0};
   msh w = {0};
@@ -1649,9 +1782,18 @@ pa_status pa__gmsh_read(const char *path, pa_mesh **mesh) {
   *mesh = NULL;
   r.path = path;
   r.line = r.tokline = 1;
+  w.model = model;
   PA_CALL(load_file(&r));
   PA_CALL(read_header(&r, &w));
+  PA_CHECK(!model || w.version == 41, PA_ERR_FORMAT,
+           "%s: a MSH 2.2 file does not say which model entity each node "
+           "lies on: write it as MSH 4.1 with Gmsh from its model",
+           path);
   PA_CALL(read_sections(&r, &w));
+  PA_CHECK(!model || w.has_entities, PA_ERR_FORMAT,
+           "%s: no $Entities section: the file does not say which model "
+           "entity each node lies on (write it with Gmsh from its model)",
+           path);
   PA_CALL(build_mesh(&r, &w, mesh));
   (*mesh)->file_dim = 3; /* nodes have three coordinates */
   pa__info(2, "%s: read MSH %s %s, %d vertices, %d elements\n", path,
@@ -1661,6 +1803,14 @@ cleanup:
   msh_free(&w);
   pa__free(r.buf);
   return st;
+}
+
+pa_status pa__gmsh_read(const char *path, pa_mesh **mesh) {
+  return gmsh_read(path, 0, mesh);
+}
+
+pa_status pa__gmsh_read_model(const char *path, pa_mesh **mesh) {
+  return gmsh_read(path, 1, mesh);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -2078,9 +2228,11 @@ static void write_nodes(writer *b, const pa_mesh *m, int32_t node_etag,
   wr_end(b, "$EndNodes\n");
 }
 
-/* $Elements: corner points, then each group by entity; tags 1, 2, ... */
+/* $Elements: corner points (on point entity ptag[k], or k + 1 when ptag
+ * is NULL), then each group by entity; tags 1, 2, ... */
 static void write_elements(writer *b, const group *grp, int ngrp,
-                           const pa_idx *corner, pa_idx ncorner) {
+                           const pa_idx *corner, pa_idx ncorner,
+                           const int32_t *ptag) {
   uint64_t nblock = (uint64_t)ncorner, ncell = (uint64_t)ncorner;
   for (int g = 0; g < ngrp; g++) {
     nblock += (uint64_t)grp[g].nent;
@@ -2095,7 +2247,7 @@ static void write_elements(writer *b, const group *grp, int ngrp,
   uint64_t etag = 1;
   for (pa_idx k = 0; k < ncorner; k++) {
     wr_int(b, 0);
-    wr_int(b, (int32_t)k + 1);
+    wr_int(b, ptag ? ptag[k] : (int32_t)k + 1);
     wr_int(b, 15);
     wr_u64(b, 1);
     wr_eol(b);
@@ -2121,6 +2273,198 @@ static void write_elements(writer *b, const group *grp, int ngrp,
     }
   }
   wr_end(b, "$EndElements\n");
+}
+
+/* ---- a classified mesh: its model's entities and the nodes on them ---- */
+
+/* An entity written: (dim, tag), its record in the mesh's table (NULL when
+ * the table lacks it) and its box; its nodes are order[start..end) of the
+ * node blocks. */
+typedef struct ment {
+  int dim;
+  int32_t tag;
+  const pa__entity *t;
+  double box[6];
+  pa_idx start, end;
+} ment;
+
+static int cmp_ment(const void *a, const void *b) {
+  const ment *x = a, *y = b;
+  if (x->dim != y->dim) return (x->dim > y->dim) - (x->dim < y->dim);
+  return (x->tag > y->tag) - (x->tag < y->tag);
+}
+
+static int ment_find(const ment *e, int n, int dim, int32_t tag) {
+  ment key;
+  key.dim = dim;
+  key.tag = tag;
+  const ment *f = bsearch(&key, e, (size_t)n, sizeof *e, cmp_ment);
+  return f ? (int)(f - e) : -1;
+}
+
+/* The entity a vertex's node block goes on: its own, or (a vertex in no
+ * element, tag 0) the first entity of the mesh's dimension. */
+static void node_entity(const pa_mesh *m, const ment *e, int n, pa_idx v,
+                        int *dim, int32_t *tag) {
+  *dim = m->vgdim[v];
+  *tag = m->vgtag[v];
+  if (*tag > 0) return;
+  *dim = m->dim;
+  *tag = 1;
+  for (int k = 0; k < n; k++)
+    if (e[k].dim == m->dim) {
+      *tag = e[k].tag;
+      return;
+    }
+}
+
+/* The entities of a classified mesh: its table's, and any other its cells
+ * and vertices lie on; *order: the vertices grouped by entity (node
+ * blocks). */
+static pa_status model_entities(const pa_mesh *m, const group *grp, int ngrp,
+                                ment **pe, int *pn, pa_idx **porder) {
+  pa_status st = PA_SUCCESS;
+  ment *e = NULL;
+  pa_idx *order = NULL, *cnt = NULL;
+  size_t cap = 0;
+  int n = 0;
+  for (int k = 0; k < m->nent; k++) {
+    PA_GROW(e, cap, (size_t)n + 1);
+    e[n++] = (ment){m->ents[k].dim, m->ents[k].tag, &m->ents[k], {0}, 0, 0};
+  }
+  for (int g = 0; g < ngrp; g++)
+    for (int k = 0; k < grp[g].nent; k++) {
+      PA_GROW(e, cap, (size_t)n + 1);
+      e[n++] = (ment){grp[g].gdim, grp[g].etag[k], NULL, {0}, 0, 0};
+    }
+  for (pa_idx v = 0; v < m->nv; v++)
+    if (m->vgtag[v] > 0) {
+      PA_GROW(e, cap, (size_t)n + 1);
+      e[n++] = (ment){m->vgdim[v], m->vgtag[v], NULL, {0}, 0, 0};
+    }
+  if (m->nv && !n) { /* no cell: the nodes go on (dim, 1) */
+    PA_GROW(e, cap, 1);
+    e[n++] = (ment){m->dim, 1, NULL, {0}, 0, 0};
+  }
+  qsort(e, (size_t)n, sizeof *e, cmp_ment);
+  int u = 0; /* unique, keeping the table's record */
+  for (int k = 0; k < n; k++) {
+    if (u && !cmp_ment(&e[u - 1], &e[k])) {
+      if (!e[u - 1].t) e[u - 1].t = e[k].t;
+      continue;
+    }
+    e[u++] = e[k];
+  }
+  n = u;
+  /* boxes: the table's, else the nodes' on the entity and the cells' */
+  for (int k = 0; k < n; k++) {
+    for (int j = 0; j < 3; j++) {
+      e[k].box[j] = INFINITY;
+      e[k].box[3 + j] = -INFINITY;
+    }
+    if (e[k].t) memcpy(e[k].box, e[k].t->box, sizeof e[k].box);
+  }
+  PA_CALLOC(cnt, n + 1);
+  PA_ALLOC(order, m->nv);
+  for (pa_idx v = 0; v < m->nv; v++) {
+    int dim;
+    int32_t tag;
+    node_entity(m, e, n, v, &dim, &tag);
+    int k = ment_find(e, n, dim, tag);
+    cnt[k + 1]++;
+    if (e[k].t) continue;
+    for (int j = 0; j < 3; j++) {
+      e[k].box[j] = fmin(e[k].box[j], coord(m, v, j));
+      e[k].box[3 + j] = fmax(e[k].box[3 + j], coord(m, v, j));
+    }
+  }
+  for (int g = 0; g < ngrp; g++)
+    for (int c = 0; c < grp[g].nent; c++) {
+      int k = ment_find(e, n, grp[g].gdim, grp[g].etag[c]);
+      if (e[k].t) continue;
+      double bb[6];
+      entity_bbox(m, &grp[g], c, bb);
+      for (int j = 0; j < 3; j++) {
+        e[k].box[j] = fmin(e[k].box[j], bb[j]);
+        e[k].box[3 + j] = fmax(e[k].box[3 + j], bb[3 + j]);
+      }
+    }
+  for (int k = 0; k < n; k++) {
+    cnt[k + 1] += cnt[k];
+    e[k].start = e[k].end = cnt[k];
+    if (!(e[k].box[0] <= e[k].box[3])) /* nothing on it */
+      memset(e[k].box, 0, sizeof e[k].box);
+  }
+  for (pa_idx v = 0; v < m->nv; v++) {
+    int dim;
+    int32_t tag;
+    node_entity(m, e, n, v, &dim, &tag);
+    int k = ment_find(e, n, dim, tag);
+    order[e[k].end++] = v;
+  }
+  *pe = e;
+  *pn = n;
+  *porder = order;
+  e = NULL;
+  order = NULL;
+cleanup:
+  pa__free(e);
+  pa__free(order);
+  pa__free(cnt);
+  return st;
+}
+
+/* $Entities of a classified mesh: each entity with its table's physical
+ * tags and boundary. */
+static void write_model_entities(writer *b, const ment *e, int n) {
+  uint64_t count[4] = {0, 0, 0, 0};
+  for (int k = 0; k < n; k++) count[e[k].dim]++;
+  wr_text(b, "$Entities\n");
+  for (int d = 0; d < 4; d++) wr_u64(b, count[d]);
+  wr_eol(b);
+  for (int k = 0; k < n; k++) {
+    const pa__entity *t = e[k].t;
+    wr_int(b, e[k].tag);
+    for (int j = 0; j < (e[k].dim ? 6 : 3); j++) wr_f64(b, e[k].box[j]);
+    wr_u64(b, t ? (uint64_t)t->nphys : 0);
+    for (int j = 0; t && j < t->nphys; j++) wr_int(b, t->phys[j]);
+    if (e[k].dim) {
+      wr_u64(b, t ? (uint64_t)t->nbound : 0);
+      for (int j = 0; t && j < t->nbound; j++) wr_int(b, t->bound[j]);
+    }
+    wr_eol(b);
+  }
+  wr_end(b, "$EndEntities\n");
+}
+
+/* $Nodes of a classified mesh: a block per entity, node tags 1..nv. */
+static void write_model_nodes(writer *b, const pa_mesh *m, const ment *e,
+                              int n, const pa_idx *order) {
+  uint64_t nblock = 0;
+  for (int k = 0; k < n; k++) nblock += e[k].end > e[k].start;
+  wr_text(b, "$Nodes\n");
+  wr_u64(b, nblock);
+  wr_u64(b, (uint64_t)m->nv);
+  wr_u64(b, m->nv ? 1 : 0);
+  wr_u64(b, (uint64_t)m->nv);
+  wr_eol(b);
+  for (int k = 0; k < n; k++) {
+    if (e[k].end == e[k].start) continue;
+    wr_int(b, e[k].dim);
+    wr_int(b, e[k].tag);
+    wr_int(b, 0);
+    wr_u64(b, (uint64_t)(e[k].end - e[k].start));
+    wr_eol(b);
+    for (pa_idx s = e[k].start; s < e[k].end; s++) {
+      wr_u64(b, (uint64_t)order[s] + 1);
+      wr_eol(b);
+    }
+    for (pa_idx s = e[k].start; s < e[k].end; s++) {
+      for (int j = 0; j < 3; j++) wr_f64(b, coord(m, order[s], j));
+      wr_eol(b);
+    }
+  }
+  wr_end(b, "$EndNodes\n");
 }
 
 /* $NodeData: the metric (a 2D tensor gets zz = 1, as Mmg writes it, so that
@@ -2238,8 +2582,11 @@ pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary) {
   writer b = {0};
   group grp[3] = {{0}};
   int ngrp = 0;
-  pa_idx *corner = NULL;
+  pa_idx *corner = NULL, *order = NULL;
+  int32_t *ptag = NULL;
   pa_idx ncorner = 0;
+  ment *me = NULL;
+  int nme = 0;
   PA_CHECK(mesh && path, PA_ERR_ARG, "pa__gmsh_write: NULL argument");
   const pa_mesh *m = mesh;
   PA_CALL(check_view_names(m, path));
@@ -2247,8 +2594,18 @@ pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary) {
   PA_CALL(make_groups(m, grp, &ngrp));
   const group *top = &grp[ngrp - 1];
   PA_ALLOC(corner, m->nv);
-  for (pa_idx i = 0; i < m->nv; i++)
-    if (m->vflag[i] & PA_FLAG_CORNER) corner[ncorner++] = i;
+  if (m->vgdim) { /* classified: the points of the model, on their entity */
+    PA_ALLOC(ptag, m->nv);
+    for (pa_idx i = 0; i < m->nv; i++)
+      if (m->vgdim[i] == 0) {
+        ptag[ncorner] = m->vgtag[i];
+        corner[ncorner++] = i;
+      }
+    PA_CALL(model_entities(m, grp, ngrp, &me, &nme, &order));
+  } else {
+    for (pa_idx i = 0; i < m->nv; i++)
+      if (m->vflag[i] & PA_FLAG_CORNER) corner[ncorner++] = i;
+  }
   /* All nodes go in one block, on the first top-dimension entity; when the
    * mesh has no element, on an extra entity of tag 1 without physical tag. */
   int extra = top->nent == 0 && m->nv > 0;
@@ -2262,9 +2619,14 @@ pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary) {
   PA_ALLOC(b.buf, b.cap);
   write_format(&b, binary);
   write_physical_names(&b, m);
-  write_entities(&b, m, grp, ngrp, corner, ncorner, extra);
-  write_nodes(&b, m, node_etag, binary);
-  write_elements(&b, grp, ngrp, corner, ncorner);
+  if (m->vgdim) {
+    write_model_entities(&b, me, nme);
+    write_model_nodes(&b, m, me, nme, order);
+  } else {
+    write_entities(&b, m, grp, ngrp, corner, ncorner, extra);
+    write_nodes(&b, m, node_etag, binary);
+  }
+  write_elements(&b, grp, ngrp, corner, ncorner, ptag);
   write_views(&b, m);
   write_cell_views(&b, mesh, grp, ngrp, ncorner);
   wr_flush(&b);
@@ -2274,6 +2636,9 @@ cleanup:
   if (st) pa__out_abort(&out);
   pa__free(b.buf);
   pa__free(corner);
+  pa__free(ptag);
+  pa__free(order);
+  pa__free(me);
   for (int g = 0; g < 3; g++)
     group_free(&grp[g]);
   return st;

@@ -7,6 +7,8 @@
 #include "mesh/mesh.h"
 
 pa_status pa__gmsh_read(const char *path, pa_mesh **mesh);
+/* MSH 4.1 with its classification (pa_mesh_read_model). */
+pa_status pa__gmsh_read_model(const char *path, pa_mesh **mesh);
 pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary);
 
 #endif /* PA_IO_GMSH_H */

@@ -25,6 +25,21 @@ cleanup:
   return st;
 }
 
+pa_status pa_mesh_read_model(const char *path, pa_mesh **mesh) {
+  pa_status st = PA_SUCCESS;
+  char ext[16];
+  PA_CHECK(path && mesh, PA_ERR_ARG, "pa_mesh_read_model: NULL argument");
+  *mesh = NULL;
+  pa__path_ext(path, ext, sizeof ext);
+  PA_CHECK(!strcmp(ext, ".msh"), PA_ERR_UNSUPPORTED,
+           "%s: only Gmsh .msh files say which model entity each vertex "
+           "lies on",
+           path);
+  PA_CALL(pa__gmsh_read_model(path, mesh));
+cleanup:
+  return st;
+}
+
 pa_status pa_mesh_write(pa_mesh *mesh, const char *path,
                         const pa_write_opts *opts) {
   pa_status st = PA_SUCCESS;

@@ -4,11 +4,11 @@
  * which validates them), user fields and physical names, and memory
  * accounting.
  *
- * Vertex-attached arrays (coord, vref, vflag, met, field values) always share
- * the capacity capv; every growth goes through pa__mesh_grow_vertices().
- * Element fields share cape with the element arrays and boundary fields
- * capb with the boundary arrays: grow_cells and pa__mesh_fields_realloc
- * keep them in step.
+ * Vertex-attached arrays (coord, vref, vflag, the entities vgdim and vgtag,
+ * met, field values) always share the capacity capv; every growth goes
+ * through pa__mesh_grow_vertices(). Element fields share cape with the
+ * element arrays and boundary fields capb with the boundary arrays:
+ * grow_cells and pa__mesh_fields_realloc keep them in step.
  */
 #include "mesh/mesh.h"
 
@@ -76,6 +76,8 @@ void pa_mesh_destroy(pa_mesh *mesh) {
   pa__free(mesh->vref);
   pa__free(mesh->vflag);
   pa__mesh_free_names(mesh);
+  pa__mesh_disable_entities(mesh);
+  pa__mesh_free_entities(mesh);
   pa__free(mesh);
 }
 
@@ -98,6 +100,10 @@ pa_status pa__mesh_grow_vertices(pa_mesh *m, size_t n) {
   PA_CALL(grow_array((void **)&m->coord, cap * m->dim, sizeof(double)));
   PA_CALL(grow_array((void **)&m->vref, cap, sizeof(int32_t)));
   PA_CALL(grow_array((void **)&m->vflag, cap, sizeof(uint8_t)));
+  if (m->vgdim) {
+    PA_CALL(grow_array((void **)&m->vgdim, cap, sizeof(uint8_t)));
+    PA_CALL(grow_array((void **)&m->vgtag, cap, sizeof(int32_t)));
+  }
   if (m->met_ncomp)
     PA_CALL(grow_array((void **)&m->met, cap * m->met_ncomp, sizeof(double)));
   for (int k = 0; k < m->nfield; k++)
@@ -246,6 +252,10 @@ pa_status pa_mesh_resize(pa_mesh *m, pa_idx nvert, pa_idx nelem, pa_idx nbdry,
     memset(m->coord + (size_t)m->dim * i, 0, d * m->dim * sizeof(double));
     memset(m->vref + i, 0, d * sizeof(int32_t));
     memset(m->vflag + i, 0, d);
+    if (m->vgdim) {
+      memset(m->vgdim + i, m->dim, d);
+      memset(m->vgtag + i, 0, d * sizeof(int32_t));
+    }
     if (m->met_ncomp)
       memset(m->met + (size_t)m->met_ncomp * i, 0,
              d * m->met_ncomp * sizeof(double));
@@ -277,6 +287,10 @@ pa_status pa_mesh_add_vertex(pa_mesh *m, const double *x, int32_t ref,
   memcpy(m->coord + (size_t)m->dim * i, x, m->dim * sizeof(double));
   m->vref[i] = ref;
   m->vflag[i] = 0;
+  if (m->vgdim) {
+    m->vgdim[i] = (uint8_t)m->dim;
+    m->vgtag[i] = 0;
+  }
   if (m->met_ncomp)
     memset(m->met + (size_t)m->met_ncomp * i, 0, m->met_ncomp * sizeof(double));
   for (int k = 0; k < m->nfield; k++)
@@ -645,6 +659,7 @@ pa_status pa_mesh_copy(const pa_mesh *src, pa_mesh **dst) {
       df[k].val = NULL;
     }
   }
+  if (src->vgdim) PA_CALL(pa__mesh_enable_entities(m));
   PA_CALL(pa_mesh_reserve(m, src->nv, src->ne, src->nb, src->ned));
   int d = src->dim;
   m->nv = src->nv;
@@ -660,6 +675,10 @@ pa_status pa_mesh_copy(const pa_mesh *src, pa_mesh **dst) {
   COPY_ARRAY(m->coord, src->coord, (size_t)d * src->nv);
   COPY_ARRAY(m->vref, src->vref, (size_t)src->nv);
   COPY_ARRAY(m->vflag, src->vflag, (size_t)src->nv);
+  if (src->vgdim) {
+    COPY_ARRAY(m->vgdim, src->vgdim, (size_t)src->nv);
+    COPY_ARRAY(m->vgtag, src->vgtag, (size_t)src->nv);
+  }
   COPY_ARRAY(m->elem, src->elem, (size_t)(d + 1) * src->ne);
   COPY_ARRAY(m->eref, src->eref, (size_t)src->ne);
   COPY_ARRAY(m->eflag, src->eflag, (size_t)src->ne);
@@ -682,6 +701,7 @@ pa_status pa_mesh_copy(const pa_mesh *src, pa_mesh **dst) {
                (size_t)src->bfield[k].ncomp * src->nb);
 #undef COPY_ARRAY
   PA_CALL(pa__mesh_copy_names(m, src));
+  PA_CALL(pa__mesh_copy_entities(m, src));
   *dst = m;
   m = NULL;
 cleanup:
@@ -695,7 +715,7 @@ size_t pa_mesh_memory_used(const pa_mesh *m) {
   const void *blocks[] = {m->coord, m->vref,  m->vflag, m->elem,  m->eref,
                           m->eflag, m->bdry,  m->bref,  m->bflag, m->edge,
                           m->edref, m->edflag, m->met,  m->adja,  m->ball_start,
-                          m->ball,  m->bhash};
+                          m->ball,  m->bhash, m->vgdim, m->vgtag, m->ents};
   for (size_t i = 0; i < sizeof blocks / sizeof *blocks; i++)
     n += pa__alloc_size(blocks[i]);
   for (int k = 0; k < m->nfield; k++) n += pa__alloc_size(m->field[k].val);
@@ -704,6 +724,8 @@ size_t pa_mesh_memory_used(const pa_mesh *m) {
   n += pa__alloc_size(m->names);
   for (int k = 0; k < m->nname; k++)
     n += pa__alloc_size(m->names[k].name);
+  for (int k = 0; k < m->nent; k++)
+    n += pa__alloc_size(m->ents[k].phys) + pa__alloc_size(m->ents[k].bound);
   return n;
 }
 

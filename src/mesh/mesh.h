@@ -41,6 +41,19 @@ typedef struct pa__name {
   char *name; /* NUL-terminated, allocated */
 } pa__name;
 
+/* A model entity of a classified mesh ($Entities of its .msh file): its
+ * physical tags, the entities of one dimension less that bound it (signed
+ * tags, as Gmsh lists them; a seam appears with both signs) and its box
+ * (a point: its coordinates, twice). */
+typedef struct pa__entity {
+  int dim;
+  int32_t tag;
+  int nphys, nbound;
+  int32_t *phys;  /* nphys physical tags */
+  int32_t *bound; /* nbound signed tags of dim - 1 entities */
+  double box[6];  /* min x y z, max x y z */
+} pa__entity;
+
 struct pa_mesh {
   int dim; /* 2 or 3 */
   /* the Dimension of the file it was read from (3 for a planar mesh stored
@@ -92,6 +105,14 @@ struct pa_mesh {
   int nname;
   pa__name *names;
 
+  /* classification (padapt.h, "Geometry"): the model entity of each
+   * vertex (NULL both when the mesh is not classified; capv entries, grown
+   * with the vertices), and the model's entities, sorted by (dim, tag) */
+  uint8_t *vgdim;
+  int32_t *vgtag;
+  int nent;
+  pa__entity *ents;
+
   /* derived structures, NULL when not built */
   pa_idx *adja;       /* (dim+1) * ne: (dim+1)*f + j, or -1 */
   pa_idx *ball_start; /* nv + 1 */
@@ -125,6 +146,45 @@ void pa__mesh_move_cell_fields(pa_mesh *dst, pa_mesh *src);
 /* Reallocate the element (at PA_ELEMENT) or boundary fields of mesh to
  * room for cap entities (contents kept up to the smaller size). */
 pa_status pa__mesh_fields_realloc(pa_mesh *mesh, int at, size_t cap);
+
+/* ---- classification (classify.c) ---- */
+
+/* Free the model entities (the mesh then has none). */
+void pa__mesh_free_entities(pa_mesh *mesh);
+/* Replace the model entities of dst by copies of those of src. */
+pa_status pa__mesh_copy_entities(pa_mesh *dst, const pa_mesh *src);
+/* Make mesh classified: vgdim/vgtag allocated for capv vertices, every
+ * vertex (dim, 0) until set (no-op when already classified). */
+pa_status pa__mesh_enable_entities(pa_mesh *mesh);
+/* Make mesh unclassified (its model entities stay). */
+void pa__mesh_disable_entities(pa_mesh *mesh);
+/* The model entity (dim, tag) of the model's table, or NULL. */
+const pa__entity *pa__mesh_entity(const pa_mesh *mesh, int dim, int32_t tag);
+/* Vertices whose entity a remesh keeps: their coordinates (dim each),
+ * entity dimension and tag, n of them, and their indices in the order of
+ * their coordinates (lexicographic). */
+typedef struct pa__kept {
+  double *xyz;
+  uint8_t *gdim;
+  int32_t *gtag;
+  pa_idx *order;
+  pa_idx n;
+} pa__kept;
+void pa__kept_free(pa__kept *k);
+/* The vertices of the classified mesh a remesh gives back where they are
+ * with their entity: its points (corners, never moved), and with frozen
+ * (NULL: none) the frozen vertices on points, curves and surfaces, whose
+ * boundary cells a piece of the parallel loop may not hold. */
+pa_status pa__mesh_kept_points(const pa_mesh *mesh, const uint8_t *frozen,
+                               pa__kept *kept);
+/* The vertices' entities of the classified mesh recomputed from its cells
+ * (lowest dimension first: a vertex at one of the kept points (compared
+ * exactly) has its entity; a vertex of a feature edge (3D) of positive
+ * reference is on that curve; of a boundary entity on its curve (2D) or
+ * surface (3D); else on the volume (3D) or surface (2D) of an element).
+ * Cells of reference <= 0 (a piece's skin, unclassified) are passed
+ * over. Allocates nothing. */
+void pa__mesh_derive_entities(pa_mesh *mesh, const pa__kept *kept);
 
 /* Free derived structures after a topological change. */
 void pa__mesh_invalidate(pa_mesh *mesh);

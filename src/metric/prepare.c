@@ -21,6 +21,7 @@
  *  - in the distributed context, a rank that fails a local step meets the
  *    others at the next agreement (c->agree) before any collective step.
  */
+#include "geom/geom.h"
 #include "metric/gradation.h"
 
 /* ---- the sequential context ---- */
@@ -95,6 +96,9 @@ pa_status pa__metric_prepare(const pa__metric_ctx *c, int nc, double *met,
   uint8_t *frozen = NULL;
   double *b = NULL;
   int d = m->dim, local = o->local && o->nlocal > 0, graded = 0;
+  /* the model's curvature bounds the sizes at boundary vertices (hausd) */
+  int model = o->geometry && o->geometry->ops.curvature && m->vgdim &&
+              o->hausd > 0;
   *changed = 0;
   *carried = 0;
   PA_CALL(c->frozen(c->ctx, &frozen));
@@ -106,7 +110,7 @@ pa_status pa__metric_prepare(const pa__metric_ctx *c, int nc, double *met,
     st = pa_mesh_add_field(m, PA_METRIC_USER, nc, met);
     *carried = st == PA_SUCCESS;
   }
-  if (st == PA_SUCCESS && local) {
+  if (st == PA_SUCCESS && (local || model)) {
     b = pa__malloc(3 * sizeof *b * (size_t)(m->nv ? m->nv : 1));
     if (!b)
       st = pa__error(PA_ERR_MEMORY, __FILE__, __LINE__,
@@ -114,8 +118,10 @@ pa_status pa__metric_prepare(const pa__metric_ctx *c, int nc, double *met,
                      (long)m->nv);
   }
   PA_CALL(c->agree(c->ctx, st));
-  if (local) {
+  if (local || model) {
     pa__local_bounds(m, o, b);
+    if (model)
+      pa__geom_hausd_bounds(o->geometry, m, o->hausd, o->hmin, frozen, b);
     PA_CALL(c->merge_bounds(c->ctx, b));
     *changed = pa__metric_clamp_bounds(d, nc, m->nv, met, frozen, b);
   } else {

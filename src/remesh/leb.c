@@ -65,6 +65,9 @@
  *    thin element on the concave side): counted in *o->curve_bad, which
  *    the caller must treat as a failure of the whole refinement, since the
  *    other pieces, which see other elements, cannot know.
+ *    In a classified mesh, a skin edge whose ends are both on the boundary
+ *    (model entities of lower dimension) is not split: whether it lies on
+ *    the model is known only where its boundary faces are.
  *  - Any other edge on a boundary entity or feature edge, or on a frozen
  *    element, is never split (the surface is the remesher's business).
  *  - Any other edge is split while longer than o->lmax, when no element
@@ -731,6 +734,10 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
       if (!(ia & 3) || !(ib & 3) || !(e.len > o->skin_lmax)) continue;
       if (s.depth[e.a] >= SKIN_MAX_DEPTH || s.depth[e.b] >= SKIN_MAX_DEPTH)
         continue;
+      /* a classified mesh: a skin edge between two boundary vertices may
+       * lie on the model, which only the pieces holding its boundary faces
+       * know; it stays (both sides decide alike from the vertices) */
+      if (m->vgdim && m->vgdim[e.a] < s.d && m->vgdim[e.b] < s.d) continue;
       curve = skin_split(&s, &e, ia, ib, bnd, feat);
       if (curve < 0) continue;
     } else if (bnd || !(e.len > o->lmax) ||
@@ -741,6 +748,7 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
     pa_idx mid;
     int moved;
     PA_CALL(add_midpoint(&s, &e, skin, curve, &mid, &moved));
+    if (m->vgdim) m->vgtag[mid] = m->eref[s.el[0]]; /* inside a volume */
     PA_GROW(parent, capp, 2 * (np + 1));
     parent[2 * np] = e.a;
     parent[2 * np + 1] = e.b;

@@ -18,6 +18,7 @@
  *    gradation skip them (gradation still lets them constrain neighbours);
  *    with -hsiz on a mesh without a metric every vertex gets hsiz.
  */
+#include "geom/geom.h"
 #include "metric/gradation.h"
 #include "remesh/remesh.h"
 #include "remesh/leb.h"
@@ -105,6 +106,58 @@ cleanup:
   return st;
 }
 
+/* A classified mesh's classification around a remesher, which knows
+ * nothing of it: the model's table, held aside, and the vertices that come
+ * back where they are (the points and frozen vertices, by their
+ * coordinates), from which pa__mesh_derive_entities recomputes the
+ * entities of the result. The vertices' entity arrays stay on the mesh:
+ * a remesher that replaces the vertices gives the result room for them
+ * (as the mesh's own functions do when they add vertices), so that
+ * nothing is allocated once the mesh holds the result. */
+typedef struct held_model {
+  pa__entity *ents;
+  int nent;
+  pa__kept kept;
+  int held;
+} held_model;
+
+static pa_status hold_model(pa_mesh *mesh, held_model *h) {
+  pa_status st = PA_SUCCESS;
+  uint8_t *frozen = NULL;
+  if (!mesh->vgdim) return PA_SUCCESS;
+  PA_CALLOC(frozen, mesh->nv);
+  pa__mesh_frozen_vertices(mesh, frozen);
+  PA_CALL(pa__mesh_kept_points(mesh, frozen, &h->kept));
+  h->ents = mesh->ents;
+  h->nent = mesh->nent;
+  mesh->ents = NULL;
+  mesh->nent = 0;
+  h->held = 1;
+cleanup:
+  pa__free(frozen);
+  return st;
+}
+
+/* Give the classification back: derived from the cells of the result
+ * (done), else the mesh is as given, its entities too. */
+static pa_status restore_model(pa_mesh *mesh, held_model *h, int done) {
+  pa_status st = PA_SUCCESS;
+  if (!h->held) return PA_SUCCESS;
+  pa__mesh_free_entities(mesh);
+  mesh->ents = h->ents;
+  mesh->nent = h->nent;
+  h->ents = NULL;
+  if (done) {
+    PA_CHECK(mesh->vgdim, PA_ERR_INTERNAL,
+             "pa_remesh: the remesher dropped the vertices' model entities");
+    pa__mesh_derive_entities(mesh, &h->kept);
+  }
+cleanup:
+  pa__kept_free(&h->kept);
+  h->held = 0;
+  return st;
+}
+
 /* The caller's progress callback, given what the remesher does not know:
  * the expected count and the time since pa_remesh started. */
 typedef struct progress_wrap {
@@ -145,6 +198,9 @@ static pa_status check_args(const pa_remesher *r, pa_mesh *mesh,
   PA_CHECK(opts->angle >= 0 && opts->angle <= 180, PA_ERR_ARG,
            "pa_remesh: the angle must lie in [0, 180] degrees, got %g",
            opts->angle);
+  PA_CHECK(!opts->geometry || mesh->vgdim, PA_ERR_ARG,
+           "pa_remesh: a geometry needs a classified mesh (read with "
+           "pa_mesh_read_model, or pa_mesh_set_vertex_entities)");
   if (!opts->trusted) PA_CALL(pa_mesh_check(mesh));
 cleanup:
   return st;
@@ -177,7 +233,11 @@ cleanup:
 pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
                     const pa_remesh_opts *opts, pa_remesh_report *report) {
   pa_status st = PA_SUCCESS;
-  pa_remesh_opts def, relayed;
+  pa_remesh_opts def, relayed, modelled;
+  held_model held;
+  long nproj0 = 0, nfail0 = 0;
+  double tproj0 = 0;
+  memset(&held, 0, sizeof held);
   pa_remesh_report dummy;
   progress_wrap wrap = {NULL, NULL, 0, 0, 0};
   double *newmet = NULL, *oldmet = NULL;
@@ -231,6 +291,15 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
     }
     wrap.expected = c / pa__unit_simplex_volume(d);
   }
+  if (opts->geometry) {
+    /* the model's curves and points are the ridges and corners */
+    modelled = *opts;
+    modelled.no_angle = 1;
+    opts = &modelled;
+    nproj0 = opts->geometry->nproject;
+    nfail0 = opts->geometry->nfailed;
+    tproj0 = opts->geometry->seconds;
+  }
   if (opts->progress) {
     wrap.fn = opts->progress;
     wrap.initial = mesh->ne;
@@ -253,11 +322,13 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   nname = mesh->nname;
   mesh->names = NULL;
   mesh->nname = 0;
+  PA_CALL(hold_model(mesh, &held));
   cpu0 = pa__thread_cputime();
   st = r->remesh(r->ctx, mesh, opts, report);
   report->cpu_s = pa__thread_cputime() - cpu0;
   if (st != PA_SUCCESS) goto cleanup;
   if (report->outcome == PA_REMESH_FAILED) goto cleanup;
+  PA_CALL(restore_model(mesh, &held, 1));
   if (orig) PA_CALL(pa__transfer_fields(orig, mesh, &report->transfer));
   pa__free(oldmet);
   oldmet = NULL;
@@ -275,6 +346,12 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
     }
   }
 cleanup:
+  if (held.held) restore_model(mesh, &held, 0); /* allocates nothing */
+  if (opts && opts->geometry && report) {
+    report->nproject = opts->geometry->nproject - nproj0;
+    report->nproject_failed = opts->geometry->nfailed - nfail0;
+    report->project_s = opts->geometry->seconds - tproj0;
+  }
   if (orig && (st != PA_SUCCESS || report->outcome == PA_REMESH_FAILED)) {
     /* the input comes back whole (its metric and names as below) */
     pa_mesh t = *mesh;

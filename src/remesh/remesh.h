@@ -37,4 +37,21 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
  */
 pa_status pa__transfer_fields(pa_mesh *o, pa_mesh *m, pa_transfer_report *rep);
 
+/*
+ * The model's point for a new or moved boundary point x (sdim = 2 or 3
+ * coordinates) of a cell on entity (dim, tag) (a curve 1 or a surface 2,
+ * the cell's reference), built on a feature of length scale (the edge
+ * split, the neighbourhood of the vertex moved), into y (may be x):
+ * 1 when y is on the model, 0 when there is no model to follow (no
+ * opts->geometry, a cell of reference <= 0: y untouched), -1 when the
+ * kernel failed or jumped farther than PA_GEOM_MAXJUMP * scale (y
+ * untouched). Not collective (model.c).
+ */
+int pa__remesh_project(const pa_remesh_opts *o, int dim, int32_t tag,
+                       int sdim, const double *x, double scale, double *y);
+/* 1 when opts->geometry bounds the sizes by its curvature (the metric
+ * preparation does, pa__geom_hausd_bounds): the remeshers' own estimates
+ * of the curvature from the facets then stand aside. */
+int pa__remesh_model_curvature(const pa_remesh_opts *o);
+
 #endif /* PA_REMESH_H */

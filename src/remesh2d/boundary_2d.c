@@ -272,7 +272,9 @@ pa_status pa__rm_features_2d_init(pa__rmesh *rm, pa_mesh *mesh,
   PA_CALL(count_ends(rm, &fe));
   mark_corners(rm, &fe);
   set_tangents(rm, &fe);
-  if (hausdorff_bound(rm, &fe) && rm->opts->hgrad > 1)
+  /* a model's curvature bounds the sizes already (pa__metric_prepare) */
+  if (!pa__remesh_model_curvature(rm->opts) && hausdorff_bound(rm, &fe) &&
+      rm->opts->hgrad > 1)
     PA_CALL(grade_hausdorff_bound(rm));
   int mc = rm->mcomp;
   for (pa_idx k = 0; k < rm->ne; k++) { /* element qualities */

@@ -672,6 +672,10 @@ typedef struct out_arrays {
   int32_t *vref, *eref, *bref;
   uint8_t *vflag, *eflag, *bflag;
   pa_idx *elem, *bdry;
+  /* the vertices' model entities, when the mesh is classified: their room
+   * only, which pa_remesh fills from the cells (remesh.c) */
+  uint8_t *vgdim;
+  int32_t *vgtag;
   pa_idx nv, ne, nb;
 } out_arrays;
 
@@ -687,6 +691,8 @@ static void out_free(out_arrays *o) {
   pa__free(o->bdry);
   pa__free(o->bref);
   pa__free(o->bflag);
+  pa__free(o->vgdim);
+  pa__free(o->vgtag);
 }
 
 /* The live vertices' arrays, at their new indices map[v], freeing the
@@ -794,6 +800,14 @@ static void install(const pa__rmesh *rm, pa_mesh *mesh, out_arrays *o) {
   pa__free(mesh->bdry);
   pa__free(mesh->bref);
   pa__free(mesh->bflag);
+  if (o->vgdim) {
+    pa__free(mesh->vgdim);
+    pa__free(mesh->vgtag);
+    mesh->vgdim = o->vgdim;
+    mesh->vgtag = o->vgtag;
+    o->vgdim = NULL;
+    o->vgtag = NULL;
+  }
   mesh->coord = o->coord;
   mesh->vref = o->vref;
   mesh->vflag = o->vflag;
@@ -832,6 +846,11 @@ pa_status pa__rm_writeback(pa__rmesh *rm, pa_mesh *mesh) {
   PA_CALL(copy_vertices(rm, map, &o));
   PA_CALL(copy_elements(rm, map, &o));
   PA_CALL(copy_boundary(rm, map, &o));
+  if (mesh->vgdim) {
+    PA_ALLOC(o.vgdim, o.nv ? o.nv : 1);
+    PA_CALLOC(o.vgtag, o.nv ? o.nv : 1);
+    memset(o.vgdim, mesh->dim, (size_t)(o.nv ? o.nv : 1));
+  }
   /* Everything is built: install into the mesh. */
   install(rm, mesh, &o);
 cleanup:

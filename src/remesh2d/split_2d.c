@@ -1,7 +1,8 @@
 /*
  * split_2d.c -- edge split of the 2D remesher and its pass: the new vertex at
  * the midpoint of the edge, or of the reconstructed curve on a feature
- * (boundary_2d.c), the one or two elements on the edge cut in two. The pass
+ * (boundary_2d.c) or, with a model (pa_remesh_opts.geometry), the curve's
+ * point closest to it, the one or two elements on the edge cut in two. The pass
  * splits the longest free edge of each element above the threshold, with
  * longest-edge propagation. Shared contract of the operators: ops_2d.h.
  */
@@ -49,6 +50,9 @@ static pa_idx new_midpoint(pa__rmesh *rm, const split_cfg *s, double *tm) {
   double *xm = rm->x + 2 * (size_t)m;
   if (s->feat >= 0) {
     pa__rm_curve_point_2d(rm, s->feat, 0.5, xm, tm);
+    /* on a model's curve: its point (else the reconstruction's) */
+    double ch = hypot(RM_X(b)[0] - RM_X(a)[0], RM_X(b)[1] - RM_X(a)[1]);
+    pa__remesh_project(rm->opts, 1, rm->bref[s->feat], 2, xm, ch, xm);
   } else {
     xm[0] = 0.5 * (RM_X(a)[0] + RM_X(b)[0]);
     xm[1] = 0.5 * (RM_X(a)[1] + RM_X(b)[1]);

@@ -452,6 +452,7 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q,
   const double *xp = m->x + 3 * (size_t)p, *xq = m->x + 3 * (size_t)q;
   double xm[3], mm[6];
   for (int i = 0; i < 3; i++) xm[i] = 0.5 * (xp[i] + xq[i]);
+  if (pa__rm3d_project_vertex(m, q, bq, nb, xm) < 0) return st; /* model */
   pa__rm3d_mid_metric(m, p, q, mm);
   if (!mid_lengths_ok(m, p, q, bq, nb, xm, mm, lguard)) return st;
   if (!mid_qualities(m, p, bq, nb, xm, mm, oq, nq)) return st;

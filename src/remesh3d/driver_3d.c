@@ -333,6 +333,9 @@ pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, long *count) {
   pa_status st = PA_SUCCESS;
   pa_idx ball[RM3D_MAXBALL];
   long c = 0;
+  /* first the vertices off the model onto it (pa__rm3d_snap_vertex) */
+  for (pa_idx p = 0; m->voff && p < m->nv; p++)
+    c += pa__rm3d_snap_vertex(m, p, ball);
   for (pa_idx k = 0; k < m->ne; k++) {
     if ((m->tflag[k] & RM3D_T_DEAD) || m->q[k] >= qthr) continue;
     for (int j = 0; j < 4; j++)
@@ -632,6 +635,7 @@ static pa_status prepare(rm3d *m, const pa_remesh_opts *opts) {
   pa_status st = PA_SUCCESS;
   pa_idx nrel = 0;
   if (m->surf) PA_CALL(pa__rm3d_surface_analyze(m, !opts->no_angle));
+  if (m->voff) pa__rm3d_mark_off_model(m); /* for the snap moves */
   PA_CALL(pa__rm3d_skin_relax(m, &nrel));
   if (m->verbosity > 0 && nrel)
     fprintf(stderr, "  rm3d: metric relaxed at %d frozen vertices\n",

@@ -157,6 +157,7 @@ pa_status pa__rm3d_reserve(rm3d *m, size_t nv, size_t ne) {
     GROW_TO(m->vtag, cap);
     GROW_TO(m->vtet, cap);
     if (m->nrm) GROW_TO(m->nrm, 3 * cap);
+    if (m->voff) GROW_TO(m->voff, cap);
     for (int k = 0; k < m->nfield; k++)
       GROW_TO(m->fval[k], (size_t)m->fcomp[k] * cap);
     m->capv = cap;
@@ -191,6 +192,7 @@ pa_status pa__rm3d_new_vertex(rm3d *m, const double *x, const double *met,
   m->vtag[i] = 0;
   m->vtet[i] = -1;
   if (m->nrm) memset(m->nrm + 3 * (size_t)i, 0, 3 * sizeof(double));
+  if (m->voff) m->voff[i] = 0;
   for (int k = 0; k < m->nfield; k++)
     memset(m->fval[k] + (size_t)m->fcomp[k] * i, 0,
            m->fcomp[k] * sizeof(double));
@@ -238,6 +240,7 @@ void pa__rm3d_free(rm3d *m) {
   pa__free(m->vtag);
   pa__free(m->vtet);
   pa__free(m->nrm);
+  pa__free(m->voff);
   pa__free(m->tv);
   pa__free(m->adj);
   pa__free(m->q);
@@ -400,6 +403,7 @@ pa_status pa__rm3d_build(rm3d *m, pa_mesh *mesh, const pa_remesh_opts *opts) {
   }
   memcpy(m->vref, mesh->vref, sizeof(int32_t) * (size_t)nv);
   memcpy(m->vpf, mesh->vflag, (size_t)nv);
+  if (opts->geometry) PA_CALLOC(m->voff, m->capv);
   for (pa_idx i = 0; i < nv; i++) {
     uint8_t f = mesh->vflag[i], t = 0;
     if (f & PA_FLAG_REQUIRED) t |= RM3D_V_LOCK;
@@ -532,6 +536,7 @@ pa_status pa__rm3d_compact(rm3d *m, int keep_q) {
     m->vref[j] = m->vref[i];
     m->vpf[j] = m->vpf[i];
     m->vtag[j] = m->vtag[i];
+    if (m->voff) m->voff[j] = m->voff[i];
     for (int k = 0; k < m->nfield; k++) {
       int c = m->fcomp[k];
       memmove(m->fval[k] + (size_t)c * j, m->fval[k] + (size_t)c * i,
@@ -577,6 +582,9 @@ pa_status pa__rm3d_write(rm3d *m, pa_mesh *mesh) {
     out->field[k].ncomp = mesh->field[k].ncomp;
   }
   PA_CALL(pa_mesh_reserve(out, m->nv, m->ne, nb, ned));
+  /* a classified mesh: room for its entities, which pa_remesh fills from
+   * the cells (remesh.c) */
+  if (mesh->vgdim) PA_CALL(pa__mesh_enable_entities(out));
   out->nv = m->nv;
   out->ne = m->ne;
   memcpy(out->coord, m->x, 3 * sizeof(double) * (size_t)m->nv);
@@ -800,6 +808,7 @@ static void move_vertices(rm3d *m, const pa_idx *pos, uint8_t *done) {
   perm_add(&pa, m->vref, sizeof(int32_t));
   perm_add(&pa, m->vpf, 1);
   perm_add(&pa, m->vtag, 1);
+  if (m->voff) perm_add(&pa, m->voff, 1);
   for (int k = 0; k < m->nfield; k++)
     perm_add(&pa, m->fval[k], (size_t)m->fcomp[k] * sizeof(double));
   permute(&pa, pos, nv, done);

@@ -90,6 +90,10 @@ typedef struct rm3d {
   uint8_t *tflag, *tpf;
   int32_t *tref;
   double *nrm; /* 3 * capv: unit normal of curved surface vertices */
+  /* capv or NULL (no model): 1 for a boundary vertex off the model, left
+   * on the reconstruction because the model's point of its split was
+   * refused; the snap moves (pa__rm3d_snap_vertex) retry it */
+  uint8_t *voff;
   int nfield;
   int fcomp[PA_MESH_MAX_FIELDS];
   uint8_t fmetric[PA_MESH_MAX_FIELDS]; /* field holds a metric (metric.h) */
@@ -156,6 +160,12 @@ enum { RM3D_SPREAD_TIGHT = 1, RM3D_SPREAD_WIDE = 2 };
  * triangle stands up across a curved patch whose vertices are nearly
  * aligned: a fold, whose slivers no later operation removes. */
 #define RM3D_NORMAL_COS 0.98
+/* The same bound for a split whose point is the model's
+ * (pa_remesh_opts.geometry; about 60 degrees): the halves then turn by the
+ * true surface's curvature over the edge (a chord of a quarter circle
+ * turns them by about 20 degrees), not by a reconstruction's error, and
+ * the tets' quality still refuses an inverted one. */
+#define RM3D_NORMAL_COS_MODEL 0.5
 
 /* The Hausdorff distance bounding surface triangle record r: its
  * reference's local parameter (pa_local_param) or m->hausd. */
@@ -407,5 +417,29 @@ pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count);
  * vertices src[0..n) (pa__metric_interp for the metric). */
 void pa__rm3d_interp(rm3d *m, pa_idx dst, int n, const pa_idx *src,
                      const double *w);
+
+/* ---- model_3d.c: onto the model (pa_remesh_opts.geometry) ------------- */
+
+/* Put x, a new position of boundary vertex p (its ball[0..n)), on p's
+ * entity (the curve of its feature edges, else the surface of its boundary
+ * triangles): pa__remesh_project's 1 (x on the model), 0 (no model, or p
+ * is no boundary vertex: x untouched) or -1 (the kernel failed: refuse the
+ * move). */
+int pa__rm3d_project_vertex(const rm3d *m, pa_idx p, const pa_idx *ball,
+                            int n, double *x);
+/* Move the boundary vertex p, off the model (voff), onto it when its ball
+ * stays valid (no tet under rm3d_q_min of its old quality), else part of
+ * the way (smooth_3d.c). 1 when moved. */
+int pa__rm3d_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball);
+/* Mark (voff) the free boundary vertices of the input that lie off their
+ * entity by more than PA_GEOM_SNAP_TOL of the model's size: those the
+ * snap moves of an earlier remesh could not place (a piece's frozen skin
+ * was in the way). */
+void pa__rm3d_mark_off_model(rm3d *m);
+/* The same for the point x of a split of the boundary edge (a,b): on the
+ * curve of its feature edge erec (>= 0), else on the surface of its
+ * boundary triangle trec[0] (ntri > 0). */
+int pa__rm3d_project_split(const rm3d *m, pa_idx erec, const pa_idx *trec,
+                           int ntri, pa_idx a, pa_idx b, double *x);
 
 #endif /* PA_REMESH3D_H */

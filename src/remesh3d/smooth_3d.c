@@ -15,8 +15,10 @@
  * the PN surface (cubic patch from the vertex normals, the surface the
  * curved splits sample) of the boundary triangle below the target, if that
  * stays within hausd of the flat triangle and turns none of its triangles
- * by more than about 11 degrees; its normal is interpolated.
- * Locked and corner vertices never move, so frozen entities stay
+ * by more than about 11 degrees; its normal is interpolated. With a model
+ * (pa_remesh_opts.geometry) every such position goes onto the vertex's
+ * curve or surface (model_3d.c), and a move the kernel cannot project is
+ * refused. Locked and corner vertices never move, so frozen entities stay
  * untouched. The moved vertex's metric and fields are re-interpolated in the
  * old ball (metric only when anisotropic: an isotropic size field is treated
  * as attached to the vertex).
@@ -398,8 +400,9 @@ static int try_smooth(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
       double y[3];
       memcpy(y, np, sizeof y);
       if (!curved_point(m, tri, ntri, hausd, y, np, nnew)) continue;
-      if (!surface_kept(m, tri, ntri, p, np)) continue;
     }
+    if (kind && pa__rm3d_project_vertex(m, p, ball, n, np) < 0) continue;
+    if (kind == 3 && !surface_kept(m, tri, ntri, p, np)) continue;
     if (moved_qualities(m, ball, n, np, mp, qold, 1, &first, nq) >= 0)
       continue;
     if (kind == 3) memcpy(m->nrm + 3 * (size_t)p, nnew, sizeof nnew);
@@ -438,6 +441,48 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
    * one along a ridge */
   restrict_move(c, dir, kind == 2 || kind == 3, kind == 1);
   return try_smooth(m, p, ball, n, kind, tri, ntri, hausd, c, qold, iworst);
+}
+
+/* Steps of a snap move toward the model (pa__rm3d_snap_vertex): the whole
+ * way, then half and a quarter of it, which the next passes take on once
+ * the neighbours moved (a split's model point is refused where a tet of
+ * its shell lies flatter than the point's distance to the model: the
+ * vertex then reaches the model in a few passes instead of never). */
+#define SNAP_STEPS 3
+
+int pa__rm3d_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
+  if (!m->voff || !m->voff[p] ||
+      (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)))
+    return 0;
+  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
+  if (n < 0) return 0;
+  const double *xp = m->x + 3 * (size_t)p;
+  double y[3];
+  memcpy(y, xp, sizeof y);
+  if (pa__rm3d_project_vertex(m, p, ball, n, y) <= 0) return 0;
+  double qold = 1e30;
+  for (int i = 0; i < n; i++) {
+    pa_idx t = ball[i] >> 2;
+    if (m->tflag[t] & RM3D_T_FROZEN) return 0;
+    if (m->q[t] < qold) qold = m->q[t];
+  }
+  float nq[RM3D_MAXBALL];
+  int first = 0;
+  const double *mp = m->met + (size_t)m->mc * p;
+  /* The tets' quality is the only check: a boundary triangle that would
+   * turn over turns its tet inside out, and one that stands up is the
+   * model's own shape between points on it. */
+  for (int s = 0; s < SNAP_STEPS; s++) {
+    double w = ldexp(1.0, -s), np[3];
+    for (int j = 0; j < 3; j++) np[j] = s ? xp[j] + w * (y[j] - xp[j]) : y[j];
+    if (moved_qualities(m, ball, n, np, mp, rm3d_q_min(m, qold), 0, &first,
+                        nq) >= 0)
+      continue;
+    apply_move(m, p, ball, n, np, nq, 0);
+    m->voff[p] = s > 0;
+    return 1;
+  }
+  return 0;
 }
 
 /* Splitmix64 finaliser: the jiggle's directions. */
@@ -666,6 +711,7 @@ static int try_length_moves(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
     if (kind == 2) /* an axis plane keeps its coordinate bit for bit */
       for (int j = 0; j < 3; j++)
         if (fabs(dir[j]) == 1.0) np[j] = xp[j];
+    if (kind && pa__rm3d_project_vertex(m, p, ball, n, np) < 0) continue;
     double l1[RM3D_LNB];
     int out1 = len_out(m, np, mp, lc->nb, lc->nn, lc->out0, l1);
     if (out1 > lc->out0 ||

@@ -9,8 +9,12 @@
  * midpoint, or for an edge of a curved surface patch the midpoint of the
  * cubic curve given by the end normals (exact on planes, so planar patches
  * stay planar); for a ridge edge, the midpoint of the cubic given by the
- * ridge tangents at both ends (exact midpoint on straight ridges).
- * Boundary triangles and feature edges holding (a,b) are split too, keeping
+ * ridge tangents at both ends (exact midpoint on straight ridges). With a
+ * model (pa_remesh_opts.geometry), the point of the edge's curve or surface
+ * closest to that one is tried first (model_3d.c), its halves within
+ * RM3D_NORMAL_COS_MODEL of the triangles' normals; when it fails, the
+ * points below are, and the new vertex is marked off the model (voff) for
+ * the snap moves. Boundary triangles and feature edges holding (a,b) are split too, keeping
  * references and flags; each half of a boundary triangle stays within
  * RM3D_NORMAL_COS of its normal. When that point fails, points closer to
  * the chord are tried (CURVE_BACKOFF).
@@ -155,9 +159,10 @@ static int shell_qualities(const rm3d *m, const pa_idx *tets, int n, pa_idx a,
 }
 
 /* 1 if the halves of each of the ntri boundary triangles trec of edge
- * (a,b), split at p, are valid and within RM3D_NORMAL_COS of its normal. */
+ * (a,b), split at p, are valid and within cmin (a cosine) of its normal. */
 static int split_surface_kept(const rm3d *m, const pa_idx *trec, int ntri,
-                              pa_idx a, pa_idx b, const double *p) {
+                              pa_idx a, pa_idx b, const double *p,
+                              double cmin) {
   for (int i = 0; i < ntri; i++) {
     const pa_idx *v = m->tri.v + 3 * (size_t)trec[i];
     const double *y[3], *ya[3], *yb[3];
@@ -171,8 +176,8 @@ static int split_surface_kept(const rm3d *m, const pa_idx *trec, int ntri,
     if (!(rm3d_tri_normal(ya[0], ya[1], ya[2], na) > 0) ||
         !(rm3d_tri_normal(yb[0], yb[1], yb[2], nb) > 0))
       return 0;
-    if (n0[0] * na[0] + n0[1] * na[1] + n0[2] * na[2] < RM3D_NORMAL_COS ||
-        n0[0] * nb[0] + n0[1] * nb[1] + n0[2] * nb[2] < RM3D_NORMAL_COS)
+    if (n0[0] * na[0] + n0[1] * na[1] + n0[2] * na[2] < cmin ||
+        n0[0] * nb[0] + n0[1] * nb[1] + n0[2] * nb[2] < cmin)
       return 0;
   }
   return 1;
@@ -189,6 +194,7 @@ typedef struct split_plan {
   pa_idx trec[RM3D_MAXSHELL + 1];
   pa_idx erec; /* the feature edge (a,b), or -1 */
   double p[3], mp[6];                         /* the new vertex, its metric */
+  int offmodel; /* with a model, p is not on it (its point was refused) */
   float q1[RM3D_MAXSHELL], q2[RM3D_MAXSHELL]; /* qualities of the halves */
 } split_plan;
 
@@ -245,6 +251,13 @@ static int place_vertex(rm3d *m, split_plan *s) {
     ridge_mid(m, a, b, p0);
   else
     memcpy(p0, c, sizeof c);
+  /* with a model, its point first (pmod), then the points above (off it:
+   * the vertex is marked for the snap moves) */
+  double pmod[3];
+  memcpy(pmod, p0, sizeof pmod);
+  int on_model = s->bdry && pa__rm3d_project_split(m, s->erec, s->trec,
+                                                   s->ntri, a, b, pmod) > 0;
+  s->offmodel = 0;
   pa__rm3d_mid_metric(m, a, b, s->mp);
   /* A far too long edge is split whenever the result is valid: keeping it
    * would be worse than a poor tet the later passes improve. The point on
@@ -256,12 +269,21 @@ static int place_vertex(rm3d *m, split_plan *s) {
    * quality only for a far too long edge). */
   int relax = rm3d_len(m, a, b) > 2.0 * PA_METRIC_LEN_HI_EXACT;
   int ok = 0;
+  if (on_model) {
+    memcpy(s->p, pmod, sizeof pmod);
+    ok = split_surface_kept(m, s->trec, s->ntri, a, b, s->p,
+                            RM3D_NORMAL_COS_MODEL) &&
+         shell_qualities(m, s->tets, s->n, a, b, s->p, s->mp, relax, s->q1,
+                         s->q2);
+    s->offmodel = !ok;
+  }
   for (int f = 0; f < CURVE_BACKOFF && !ok; f++) {
     double w = f == CURVE_BACKOFF - 1 ? 0 : ldexp(1.0, -f);
     if (f && !memcmp(p0, c, sizeof c)) break;
     for (int i = 0; i < 3; i++)
       s->p[i] = f ? c[i] + w * (p0[i] - c[i]) : p0[i];
-    if (!split_surface_kept(m, s->trec, s->ntri, a, b, s->p)) continue;
+    if (!split_surface_kept(m, s->trec, s->ntri, a, b, s->p, RM3D_NORMAL_COS))
+      continue;
     ok = shell_qualities(m, s->tets, s->n, a, b, s->p, s->mp, relax, s->q1,
                          s->q2);
     if (!ok && !relax) break;
@@ -390,6 +412,7 @@ pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
     pa__rm3d_met0_mid(m, pm, a, b); /* the target, when relaxed */
   }
   if (m->vref[a] == m->vref[b]) m->vref[pm] = m->vref[a];
+  if (m->voff) m->voff[pm] = (uint8_t)s.offmodel;
   cut_shell(m, &s, pm);
   if (s.bdry) PA_CALL(split_bdry_records(m, &s, pm));
   m->nsplit++;

@@ -5,7 +5,8 @@
  *   fuzz_readers READER CORPUS_DIR ITERATIONS SEED
  *
  * READER is medit-mesh (.mesh/.meshb through pa_mesh_read), medit-sol
- * (.sol/.solb through pa_sol_read) or gmsh (.msh through pa_mesh_read); there
+ * (.sol/.solb through pa_sol_read), gmsh (.msh through pa_mesh_read) or
+ * gmsh-model (.msh with its classification, pa_mesh_read_model); there
  * is no .vtu reader. Each iteration takes a seed file of CORPUS_DIR (files
  * with another extension are ignored), applies 1 to 4 random mutations and
  * reads the result. The reader must either succeed, and then the result is
@@ -246,7 +247,8 @@ static int ext_accepted(const char *reader, const char *ext) {
     return !strcmp(ext, ".mesh") || !strcmp(ext, ".meshb");
   if (!strcmp(reader, "medit-sol"))
     return !strcmp(ext, ".sol") || !strcmp(ext, ".solb");
-  if (!strcmp(reader, "gmsh")) return !strcmp(ext, ".msh");
+  if (!strcmp(reader, "gmsh") || !strcmp(reader, "gmsh-model"))
+    return !strcmp(ext, ".msh");
   return 0;
 }
 
@@ -368,7 +370,7 @@ static int remesh_valid(pa_mesh *mesh) {
 
 int main(int argc, char **argv) {
   if (argc != 5) {
-    fprintf(stderr, "usage: fuzz_readers medit-mesh|medit-sol|gmsh CORPUS_DIR "
+    fprintf(stderr, "usage: fuzz_readers medit-mesh|medit-sol|gmsh|gmsh-model CORPUS_DIR "
                     "ITERATIONS SEED\n");
     return 2;
   }
@@ -427,7 +429,8 @@ int main(int argc, char **argv) {
       pa_sol_destroy(sol);
     } else {
       pa_mesh *mesh = NULL;
-      st = pa_mesh_read(path, &mesh);
+      st = strcmp(reader, "gmsh-model") ? pa_mesh_read(path, &mesh)
+                                         : pa_mesh_read_model(path, &mesh);
       if (st == PA_SUCCESS) {
         if (!mesh) {
           violation = 1;

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # test_layers_planted.sh -- scripts/check-layers.sh fails on a bad include
-# planted in a copy of the sources: an upward include in src/, an internal
-# header or a path outside tools/ in the CLI; and passes on the copy as it
-# is.
+# planted in a copy of the sources: an upward include in src/, Gmsh's
+# header outside src/geom/, an internal header or a path outside tools/ in
+# the CLI; and passes on the copy as it is.
 #
 #   bash tests/lint/test_layers_planted.sh SOURCE_DIR
 set -u
@@ -33,5 +33,7 @@ plant tools/cli_util.c '#include "core/core.h"' "the CLI including an internal h
 plant tools/svg.c '#include "../src/io/io.h"' "the CLI including a path outside tools/"
 plant tools/params.c '#include <io/io.h>' "the CLI including an internal header as <...>"
 plant tools/cli.h '#include "nosuch.h"' "the CLI including a header not in tools/"
+plant src/io/gmsh.c '#include <gmshc.h>' "Gmsh's API called outside src/geom/"
+plant src/geom/geom.c '#include "remesh/remesh.h"' "geom including remesh"
 [ $fail -eq 0 ] && echo "test_layers_planted: every planted include caught"
 exit $fail

@@ -288,6 +288,115 @@ static void test_read_handwritten41(void) {
   pa_mesh_destroy(m);
 }
 
+/* A classified MSH 4.1 file as Gmsh writes one with physical groups on the
+ * surface only: a square of 4 model points, 4 curves (lines listed for
+ * curves 1 and 2 only) and a surface, node tags out of order.
+ * pa_mesh_read_model keeps the entities, lists the missing curve edges,
+ * and the writer gives the classification back; a file without $Entities,
+ * and MSH 2.2, are refused. */
+static const char *CLASSIFIED =
+    "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
+    "$PhysicalNames\n1\n2 7 \"plate\"\n$EndPhysicalNames\n"
+    "$Entities\n4 4 1 0\n"
+    "1 0 0 0 0\n2 1 0 0 0\n3 1 1 0 0\n4 0 1 0 0\n"
+    "1 0 0 0 1 0 0 0 2 1 -2\n2 1 0 0 1 1 0 0 2 2 -3\n"
+    "3 0 1 0 1 1 0 0 2 3 -4\n4 0 0 0 0 1 0 0 2 4 -1\n"
+    "1 0 0 0 1 1 0 1 7 4 1 2 3 4\n"
+    "$EndEntities\n"
+    "$Nodes\n5 5 5 40\n"
+    "0 1 0 1\n40\n0 0 0\n0 2 0 1\n30\n1 0 0\n"
+    "0 3 0 1\n20\n1 1 0\n0 4 0 1\n10\n0 1 0\n"
+    "2 1 0 1\n5\n0.5 0.5 0\n"
+    "$EndNodes\n"
+    "$Elements\n3 6 1 6\n"
+    "1 1 1 1\n1 40 30\n1 2 1 1\n2 30 20\n"
+    "2 1 2 4\n3 40 30 5\n4 30 20 5\n5 20 10 5\n6 10 40 5\n"
+    "$EndElements\n";
+
+static void test_read_classified(void) {
+  write_text("classified.msh", CLASSIFIED);
+  pa_mesh *m = NULL, *back = NULL, *plain = NULL;
+  CHECK_OK(pa_mesh_read_model("classified.msh", &m));
+  if (!m) return;
+  CHECK(pa_mesh_classified(m));
+  /* vertices in tag order: 5 (the surface's), 10 (P4), 20 (P3), 30 (P2),
+   * 40 (P1) */
+  static const uint8_t want_dim[5] = {2, 0, 0, 0, 0};
+  static const int32_t want_tag[5] = {1, 4, 3, 2, 1};
+  CHECK(!memcmp(pa_mesh_vert_entity_dims(m), want_dim, 5));
+  CHECK(!memcmp(pa_mesh_vert_entity_tags(m), want_tag, sizeof want_tag));
+  for (pa_idx v = 1; v < 5; v++)
+    CHECK((pa_mesh_vert_flags(m)[v] & PA_FLAG_CORNER) &&
+          pa_mesh_vert_refs(m)[v] == want_tag[v]);
+  CHECK(pa_mesh_nbdry(m) == 4); /* curves 3 and 4 added */
+  int seen = 0;
+  for (pa_idx b = 0; b < pa_mesh_nbdry(m); b++) {
+    const pa_idx *e = pa_mesh_bdrys(m) + 2 * b;
+    int32_t r = pa_mesh_bdry_refs(m)[b];
+    /* curve c joins points c and c % 4 + 1: vertices 5 - c, 5 - c % 4 - 1 */
+    pa_idx a = 5 - r, c = 5 - (r % 4 + 1);
+    CHECK((e[0] == a && e[1] == c) || (e[0] == c && e[1] == a));
+    seen |= 1 << r;
+  }
+  CHECK(seen == 0x1e);
+  for (pa_idx k = 0; k < 4; k++) CHECK(pa_mesh_elem_refs(m)[k] == 1);
+  CHECK_OK(pa_mesh_check(m));
+  /* written back: the same classification; the physical tag again */
+  CHECK_OK(pa_mesh_write(m, "classified-out.msh", NULL));
+  CHECK_OK(pa_mesh_read_model("classified-out.msh", &back));
+  if (back) {
+    CHECK(pa_mesh_nvert(back) == 5 && pa_mesh_nbdry(back) == 4);
+    CHECK(!memcmp(pa_mesh_vert_entity_dims(back), want_dim, 5));
+    CHECK(!memcmp(pa_mesh_vert_entity_tags(back), want_tag, sizeof want_tag));
+    CHECK(pa_mesh_nnames(back) == 1);
+  }
+  CHECK_OK(pa_mesh_read("classified-out.msh", &plain));
+  if (plain) {
+    CHECK(!pa_mesh_classified(plain));
+    CHECK(pa_mesh_elem_refs(plain)[0] == 7);
+  }
+  pa_mesh_destroy(back);
+  pa_mesh_destroy(plain);
+  pa_mesh_destroy(m);
+  /* no $Entities: nothing says where a node lies */
+  const char *ent = strstr(CLASSIFIED, "$Entities");
+  const char *end = strstr(CLASSIFIED, "$Nodes");
+  char buf[2048];
+  snprintf(buf, sizeof buf, "%.*s%s", (int)(ent - CLASSIFIED), CLASSIFIED,
+           end);
+  write_text("noentities.msh", buf);
+  m = NULL;
+  CHECK(pa_mesh_read_model("noentities.msh", &m) == PA_ERR_FORMAT && !m);
+  CHECK(strstr(pa_last_error(), "noentities.msh") &&
+        strstr(pa_last_error(), "$Entities"));
+  /* a node block on an entity $Entities lacks */
+  snprintf(buf, sizeof buf, "%s", CLASSIFIED);
+  char *blk = strstr(buf, "2 1 0 1\n5\n");
+  if (blk) blk[2] = '9';
+  write_text("badentity.msh", buf);
+  CHECK(pa_mesh_read_model("badentity.msh", &m) == PA_ERR_FORMAT && !m);
+  CHECK(strstr(pa_last_error(), "(2, 9)") != NULL);
+  CHECK(pa_mesh_read_model("classified.mesh", &m) == PA_ERR_UNSUPPORTED);
+  /* out of memory anywhere in the classified read and write: an error, no
+   * mesh, no file, no leak */
+  int nok = 0, nbad = 0;
+  for (long k = 1; k < 120; k++) {
+    remove("classified-w.msh");
+    pa_memory_fail_after(k);
+    pa_status st = pa_mesh_read_model("classified.msh", &m);
+    if (st == PA_SUCCESS) st = pa_mesh_write(m, "classified-w.msh", NULL);
+    pa_memory_fail_after(0);
+    int exists = access("classified-w.msh", F_OK) == 0;
+    if (st == PA_SUCCESS)
+      nok += exists;
+    else if (st != PA_ERR_MEMORY || exists)
+      nbad++;
+    pa_mesh_destroy(m);
+    m = NULL;
+  }
+  CHECK(nok > 0 && nbad == 0);
+}
+
 /* MSH 2.2 ASCII: a tetrahedron, one face and one edge. */
 /* Very sparse tags (sorted map) listed out of order. */
 static void test_read_sparse_tags(void) {
@@ -321,6 +430,11 @@ static void test_read_handwritten22(void) {
              "4 15 2 0 1 13\n"
              "$EndElements\n");
   pa_mesh *m = NULL;
+  {
+    pa_mesh *c = NULL; /* no classification in MSH 2.2 */
+    CHECK(pa_mesh_read_model("hand22.msh", &c) == PA_ERR_FORMAT && !c);
+    CHECK(strstr(pa_last_error(), "MSH 2.2") != NULL);
+  }
   CHECK_OK(pa_mesh_read("hand22.msh", &m));
   if (!m) return;
   CHECK(pa_mesh_dim(m) == 3 && pa_mesh_nvert(m) == 4);
@@ -927,7 +1041,7 @@ static void test_larger(void) {
 }
 
 TEST_MAIN(test_roundtrip_2d, test_roundtrip_3d, test_roundtrip_refs,
-          test_read_handwritten41, test_read_sparse_tags,
+          test_read_handwritten41, test_read_classified, test_read_sparse_tags,
           test_read_handwritten22, test_errors, test_truncated, test_corrupted,
           test_alloc_failures, test_bad_corpus, test_roundtrip_data,
           test_names_api, test_data_errors, test_data_truncated, test_larger)
