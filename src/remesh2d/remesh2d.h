@@ -74,12 +74,20 @@ enum {
   RM_B_LISTED = 32 /* came from (and goes back to) the mesh's boundary list */
 };
 
-/* Quality floor: no operator creates an element below it. */
 /* Face without neighbour while the working mesh is being built (afterwards
  * every such face holds a feature record). */
 #define RM_NOADJ INT32_MIN
 
+/* Quality floor: no operator creates an element below it, or below half
+ * the worst of the elements it replaces when those are already under
+ * twice the floor (rm_qfloor, ops_2d.h). */
 #define RM_QFLOOR 1e-4
+/* Below RM_QFLOOR the metric quality no longer vouches for the orientation
+ * (with anisotropy r it can exceed the Euclidean one r times), so a new
+ * element must also have a Euclidean quality of at least this: its
+ * computed area is then far above the rounding error of the cross product
+ * (a few 1e-16 of the product of its edges). */
+#define RM_QFLOOR_EUCL 1e-10
 /* A length move may lower the ball's worst quality down to this (never
  * below its old worst if lower), and one that leaves as many edges out of
  * range must cut their sum of ln^2 L by 3 % (as in 3D, remesh3d.h). */

@@ -125,7 +125,14 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
         const pa_idx *v = rm->ev + 3 * (size_t)el[s];
         qn[s] = rm_elem_qual(rm, v[0], v[1], v[2]);
       }
-      if (qn[s] < RM_QFLOOR || qn[s] < qold) ok = 0;
+      /* >= qold passes the floor (rm_qfloor); below RM_QFLOOR the
+       * Euclidean shape is checked too */
+      if (qn[s] < qold) {
+        ok = 0;
+      } else if (qold < RM_QFLOOR) {
+        const pa_idx *v = rm->ev + 3 * (size_t)el[s];
+        ok = rm_qual_ok(rm, qn[s], rm_qfloor(qold), v[0], v[1], v[2]);
+      }
       if (qn[s] < qmin) qmin = qn[s];
       qm += qn[s];
     }
@@ -274,7 +281,9 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
     for (int s = 0; s < n && ok; s++) {
       const pa_idx *v = rm->ev + 3 * (size_t)el[s];
       double q = rm_elem_qual(rm, v[0], v[1], v[2]);
-      if (!(q >= qfloor) || q < RM_QFLOOR) ok = 0;
+      if (!(q >= qfloor) ||
+          !rm_qual_ok(rm, q, rm_qfloor(qold), v[0], v[1], v[2]))
+        ok = 0;
     }
     xp[0] = x0;
     xp[1] = y0;
