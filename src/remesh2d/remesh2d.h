@@ -99,6 +99,15 @@ enum {
  * remesher"). */
 #define RM_LTARGET 1.2
 
+/* The polish relocation (pa__rm_smooth_pass_2d with qfree > 0): balls of
+ * worst quality under qfree may take the edges at the moved vertex out of
+ * the band, within these bounds. */
+#define RM_LFREE_LO 0.65
+#define RM_LFREE_HI 1.5
+/* A feature vertex moves along its curve by at most this share of the
+ * record it moves along. */
+#define RM_FEAT_STEP 0.45
+
 /* The optimisation rounds' relaxed collapses take edges below this, a little
  * above 1/sqrt(2): a split of an edge just above sqrt(2) leaves two halves
  * just above 1/sqrt(2), which these collapses merge into an edge the next
@@ -226,7 +235,12 @@ void pa__rm_curve_point_2d(const pa__rmesh *rm, pa_idx b, double s, double *p,
 pa_status pa__rm_split_pass_2d(pa__rmesh *rm, double thr, long *n);
 pa_status pa__rm_collapse_pass_2d(pa__rmesh *rm, double thr, long *n);
 long pa__rm_swap_pass_2d(pa__rmesh *rm, double qmax);
-long pa__rm_smooth_pass_2d(pa__rmesh *rm);
+/* The relocation pass: quality moves of the interior vertices, and with
+ * feat of the feature vertices along their curves; balls of worst quality
+ * under qfree may stretch their lengths to [RM_LFREE_LO, RM_LFREE_HI]
+ * (smooth_2d.c). A vertex rejected under one (qfree, feat) is marked
+ * settled: the driver clears RM_V_SETTLED when it changes them. */
+long pa__rm_smooth_pass_2d(pa__rmesh *rm, double qfree, int feat);
 long pa__rm_length_pass_2d(pa__rmesh *rm);
 long pa__rm_sliver_pass_2d(pa__rmesh *rm, double qbad);
 
