@@ -290,9 +290,14 @@ cleanup:
 static pa_status polish(pa__rmesh *rm, int *pass) {
   pa_status st = PA_SUCCESS;
   const pa_remesh_opts *o = rm->opts;
-  /* the relocations decide under other rules than the earlier ones: their
-   * verdicts (RM_V_SETTLED) no longer hold */
-  rm_vtag_clear(rm, RM_V_SETTLED);
+  /* the relocations decide under other rules than the earlier ones where
+   * a ball has an element under RM_QFREE: those verdicts (RM_V_SETTLED) no
+   * longer hold (feature vertices were never tried, so never settled) */
+  for (pa_idx k = 0; k < rm->ne; k++) {
+    if ((rm->etag[k] & RM_E_DEAD) || rm->q[k] >= RM_QFREE) continue;
+    for (int i = 0; i < 3; i++)
+      rm->vtag[rm->ev[3 * k + i]] &= (uint8_t)~RM_V_SETTLED;
+  }
   for (int it = 0; it < RM_POLISH_ROUNDS; it++) {
     long nw = 0, nm = 0, nb;
     if (!o->no_swap) nw = pa__rm_swap_pass_2d(rm, 0.9);
