@@ -1,89 +1,148 @@
 #!/usr/bin/python3
-"""time_model.py -- a model of the parallel adaptation's time at larger
-process counts, from the measured per-step figures of one run.
+"""time_model.py -- a scaling model of the parallel adaptation, fitted on
+measured runs and checked against the runs it was not fitted on.
 
-    /usr/bin/python3 bench/time_model.py REPORT.json [--out N] [--procs P...]
-                     [--bandwidth GBs] [--latency us]
+    /usr/bin/python3 bench/time_model.py DIR [--n N] [--procs P ...]
+                     [--per-rank N] [--bandwidth GBs] [--latency us]
 
-REPORT.json is the -json report of `mpiexec -n p padapt adapt` (for instance
-one rung of bench/scale.sh). For each iteration the report gives the wall
-time of each step (max over the ranks), the remeshing busy time summed over
-the ranks, the bytes moved between ranks and the elements.
+DIR holds the -json reports that bench/efficiency.sh writes:
+  work-np1.json, work-np{2,4,8}.json  one job (the rod to 0.8 M tets) at
+      np 1, 2, 4 and 8 -- the remeshing work, "remesh_cpu_s", is CPU time
+      summed over the ranks, so it is measured right even with more ranks
+      than cores;
+  time-rod-np1.json, time-rod-np2.json  the same job at np 1 and 2 on a
+      quiet machine (wall clock of each step).
 
-The model, per iteration i of the measured run at p ranks:
-  remesh(P)  = busy_i / min(P, k_i(P)) * balance_i
-               k_i(P) = the pieces at P ranks: the measured pieces_i * P / p,
-               at most tagged_i * N / N_measured / 2000 (the smallest work
-               worth a piece, min_piece_work); balance_i = wall /
-               (busy_i / min(p, pieces_i)), the measured max/mean busy time
-               of the ranks that had a piece
-  local(P)   = (tag + pieces + gather + reintegrate)_i * p / P
-                                             (work per element, shared out)
-  comm(P)    = bytes_i * p / P / bandwidth   (each rank's share of the bytes,
-                                              sent at the given bandwidth)
-               + log2(P) * latency * 30      (about 30 collectives per
-                                              iteration, each log2 P steps)
-Everything scales with the output size N / N_measured (the remeshing work is
-about linear in the output elements), so the model answers: how long would
-this adaptation take, scaled to N output elements, on P processes?
+The model, for N output elements on P processes (one per core):
 
-It is a model, not a measurement: it assumes the same pieces per rank, the
-same balance and iterations, and a network with the given bandwidth and
-latency. Its purpose is to place the measured per-process costs next to the
-seed paper's run: 27 M -> 609 M tetrahedra on 240 processes in 35 minutes
-(Lachat, Dobrzynski, Pellegrini, PaMPA + MMG3D).
+  work      W(P, N) = w N (1 + a (P^(1/3) - 1) (N0 / N)^(1/3))
+            w = the sequential remeshing work per output element (np=1);
+            the second term is the work redone around the pieces' frozen
+            skins: P pieces of N / P elements have P^(1/3) N^(2/3) skin
+            elements in all, none for one piece; a is fitted on np=2 only,
+            and the model's W at np 4 and 8 is printed beside the measured.
+  remesh    T_r = w N / P x b + (W(P, N) - w N) / min(P, k)
+            the first iteration's pieces carry the sequential work shared
+            out, with the measured balance b (the slowest piece over the
+            mean, np=2); the redone work runs in the later iterations' k
+            pieces, k = its work in output elements over min_piece_work
+            (2 000), at most P.
+  steps     T_s = s N / P: tag, pieces, gather and reintegration, measured
+            per element per rank at np=2 (all are loops over the local
+            mesh, records, or a whole-mesh rebuild).
+  comm      bytes moved per element (np=2, scaled like the skin for the
+            later iterations) x N / P at the given bandwidth per process,
+            plus 30 collectives per iteration of log2 P steps each.
+  io        the measured np=1 time outside the remesher per element,
+            divided by P (distributed input and output).
+
+Validation printed: W at np 4 and 8 (fitted on np=2 only) and T at np=2
+(built from the np=1 run and the work fit) against the measured; the
+assumptions are those above: the same iterations and balance at every P,
+pieces as cubes, a network of the given bandwidth and latency.
 """
 import argparse
 import json
 import math
+import os
+
+MIN_PIECE_WORK = 2000  # pa_adapt_opts.min_piece_work's default
+
+
+def load(d, name):
+    p = os.path.join(d, name)
+    return json.load(open(p)) if os.path.exists(p) else None
 
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("report")
-    ap.add_argument("--out", type=float, default=609e6,
-                    help="output elements to scale to (default: the paper's 609 M)")
-    ap.add_argument("--procs", type=int, nargs="*", default=[2, 8, 16, 64, 240])
-    ap.add_argument("--bandwidth", type=float, default=5.0,
-                    help="GB/s per process (default 5)")
-    ap.add_argument("--latency", type=float, default=5.0,
-                    help="microseconds per message step (default 5)")
+    ap.add_argument("dir")
+    ap.add_argument("--n", type=float, default=101247746,
+                    help="output elements for the strong-scaling table (the 100 M rod)")
+    ap.add_argument("--per-rank", type=float, default=2e6,
+                    help="output elements per process for the weak-scaling table")
+    ap.add_argument("--procs", type=int, nargs="*", default=[16, 32, 64, 128, 256])
+    ap.add_argument("--bandwidth", type=float, default=5.0, help="GB/s per process")
+    ap.add_argument("--latency", type=float, default=5.0, help="microseconds per step")
     a = ap.parse_args()
-    r = json.load(open(a.report))
-    p = r["processes"]
-    n = r["elements"]
-    scale = a.out / n
-    its = r["iteration_detail"]
-    print(f"# measured: {n:,} elements on {p} processes in {r['time_s']:.1f} s "
-          f"({len(its)} iterations); scaled to {a.out:,.0f} elements (x{scale:.1f})")
-    for it in its:
-        busy = it["remesh_busy_s"]
-        bal = it["remesh_s"] / (busy / min(p, it["pieces"])) if busy > 0 else 1.0
-        other = sum(it[k] for k in ("tag_s", "pieces_s", "gather_s", "reintegrate_s"))
-        print(f"#   iter {it['iter']}: {it['pieces']} pieces, remesh busy {busy:.2f} s "
-              f"(balance max/mean "
-              f"{bal:.2f}), other steps {other:.2f} s, {it['bytes_moved'] / 1e6:.1f} MB moved")
-    print(f"# network model: {a.bandwidth} GB/s per process, {a.latency} us per step")
-    print(f"{'P':>5} {'remesh s':>10} {'local s':>9} {'comm s':>8} {'total s':>9} "
-          f"{'total min':>9} {'elements/s/process':>19}")
-    for P in a.procs:
-        tr = tl = tc = 0.0
-        for it in its:
-            busy = it["remesh_busy_s"] * scale
-            busy_ranks = min(p, it["pieces"])
-            bal = (it["remesh_s"] / (it["remesh_busy_s"] / busy_ranks)
-                   if it["remesh_busy_s"] > 0 else 1.0)
-            pieces = min(it["pieces"] * P / p, max(1.0, it["tagged"] * scale / 2000))
-            tr += busy / min(P, pieces) * bal
-            other = sum(it[k] for k in ("tag_s", "pieces_s", "gather_s", "reintegrate_s"))
-            tl += other * scale * p / P
-            tc += it["bytes_moved"] * scale / P / (a.bandwidth * 1e9)
-            tc += math.log2(max(P, 2)) * a.latency * 1e-6 * 30
-        tot = tr + tl + tc
-        print(f"{P:>5} {tr:>10.1f} {tl:>9.1f} {tc:>8.2f} {tot:>9.1f} {tot / 60:>9.1f} "
-              f"{a.out / tot / P:>19,.0f}")
-    print("# the seed paper: 609 M tetrahedra on 240 processes in 35 min "
-          f"= {609e6 / (35 * 60) / 240:,.0f} elements/s/process")
+
+    seq = load(a.dir, "work-np1.json")
+    par = {p: load(a.dir, "work-np%d.json" % p) for p in (2, 4, 8)}
+    if not seq or not par[2]:
+        raise SystemExit("time_model: %s needs work-np1.json and work-np2.json "
+                         "(bench/efficiency.sh work)" % a.dir)
+    n0 = seq["elements"]
+    w = seq["remesh_cpu_s"] / n0
+
+    def extra(p):  # redone work over sequential work, skin term of P pieces
+        return (p ** (1 / 3) - 1)
+
+    alpha = (par[2]["remesh_cpu_s"] / seq["remesh_cpu_s"] - 1) / extra(2)
+
+    def work(p, n):
+        return w * n * (1 + alpha * extra(p) * (n0 / n) ** (1 / 3))
+
+    print("# work: %d elements, sequential remeshing %.3f us per element; "
+          "fitted on np=2: a = %.4f" % (n0, 1e6 * w, alpha))
+    for p in (2, 4, 8):
+        r = par[p]
+        if r:
+            print("#   np=%d: measured %.2f s (%.3f x np=1, %d iterations), model %.2f s (%.3f x)"
+                  % (p, r["remesh_cpu_s"], r["remesh_cpu_s"] / seq["remesh_cpu_s"],
+                     r["iterations"], work(p, n0), work(p, n0) / seq["remesh_cpu_s"]))
+
+    t1, t2 = load(a.dir, "time-rod-np1.json"), load(a.dir, "time-rod-np2.json")
+    r2 = t2 or par[2]
+    it1 = r2["iteration_detail"][0]
+    # balance of the first iteration: its wall time over the mean busy time
+    bal = it1["remesh_s"] / (it1["remesh_busy_s"] / min(2, it1["pieces"]))
+    steps = sum(r2["steps_s"][k] for k in ("tag", "pieces", "gather", "reintegrate"))
+    s = steps * 2 / r2["elements"]  # seconds per element per rank
+    later = r2["iteration_detail"][1:]
+    bpe1 = it1["bytes_moved"] / r2["elements"]
+    bpe2 = sum(i["bytes_moved"] for i in later) / r2["elements"]
+    io = 0.0
+    if t1:
+        io = max(0.0, t1["time_s"] - t1["remesh_cpu_s"]) / n0
+    print("# np=2 figures%s: first-iteration balance %.3f, steps %.3f us per element"
+          " per rank, %.1f + %.1f bytes moved per element; io %.3f us per element"
+          % ("" if t2 else " (from the work run: not quiet)", bal, 1e6 * s, bpe1, bpe2,
+             1e6 * io))
+
+    def skin(p, n):  # the skin elements of P pieces of N, over np=2's at n0
+        return extra(p) / extra(2) * (n / n0) ** (2 / 3)
+
+    def model(p, n):
+        redone = work(p, n) - w * n
+        k = min(p, max(1.0, redone / w / MIN_PIECE_WORK))
+        tr = w * n / p * bal + redone / k
+        ts = s * n / p
+        tc = (bpe1 * n + bpe2 * n0 * skin(p, n)) / p / (a.bandwidth * 1e9) \
+            + (1 + len(later)) * 30 * math.log2(max(p, 2)) * a.latency * 1e-6
+        tio = io * n / p
+        return tr, ts, tc, tio
+
+    if t1 and t2:
+        tr, ts, tc, tio = model(2, n0)
+        pred = tr + ts + tc + tio
+        print("#   np=2 time: measured %.2f s (np=1 %.2f s, efficiency %.3f), model %.2f s"
+              " (efficiency %.3f)" % (t2["time_s"], t1["time_s"],
+                                      t1["time_s"] / (2 * t2["time_s"]), pred,
+                                      t1["time_s"] / (2 * pred)))
+    print("# network: %.1f GB/s per process, %.1f us per step" % (a.bandwidth, a.latency))
+    for title, sizes in (("strong: %.0f elements" % a.n, [(p, a.n) for p in a.procs]),
+                         ("weak: %.0f elements per process" % a.per_rank,
+                          [(p, a.per_rank * p) for p in a.procs])):
+        print("# " + title)
+        print("%5s %14s %9s %9s %8s %8s %9s %10s %12s" % (
+            "P", "elements", "work x", "remesh s", "steps s", "comm s", "io s", "total s",
+            "efficiency"))
+        for p, n in sizes:
+            tr, ts, tc, tio = model(p, n)
+            tot = tr + ts + tc + tio
+            ideal = w * n / p + io * n / p
+            print("%5d %14.0f %9.3f %9.1f %8.1f %8.2f %9.1f %10.1f %12.3f" % (
+                p, n, work(p, n) / (w * n), tr, ts, tc, tio, tot, ideal / tot))
 
 
 if __name__ == "__main__":

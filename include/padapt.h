@@ -440,18 +440,58 @@ pa_status pa_mesh_recover(pa_mesh *mesh, const double *u, int stride,
 pa_status pa_metric_complexity(pa_mesh *mesh, int ncomp, const double *met,
                                double *complexity);
 
+/* Option defaults: the default of each numeric option, spelled once. The
+ * *_opts_default functions set them, the CLI's -h prints them, and the
+ * Python package reads them through the *_opts_default functions. */
+/** Gradation (pa_remesh_opts.hgrad and the metric toolbox's hgrad): Mmg's
+ *  -hgrad, a size ratio of 1.3 per unit edge. */
+#define PA_DEFAULT_HGRAD 1.3
+/** Gradation from required entities (pa_remesh_opts.hgradreq): Mmg's
+ *  -hgradreq. */
+#define PA_DEFAULT_HGRADREQ 2.3
+/** Distance of the new boundary to the reconstructed one
+ *  (pa_remesh_opts.hausd): Mmg's -hausd. */
+#define PA_DEFAULT_HAUSD 0.01
+/** Ridge and corner detection angle in degrees (pa_remesh_opts.angle):
+ *  Mmg's -ar. */
+#define PA_DEFAULT_ANGLE 45
+/** Norm of the interpolation error the Hessian metric controls
+ *  (pa_metric_hessian_opts.p): L2, the usual choice of Loseille and
+ *  Alauzet's multiscale metric. */
+#define PA_DEFAULT_LP 2
+/** The parallel loop (pa_adapt_opts): quality below which an element is
+ *  tagged (the 3D remesher's rounds work on the tets below it too), */
+#define PA_DEFAULT_QUAL_THRESHOLD 0.3
+/** iterations at most (converged runs take 2-4), */
+#define PA_DEFAULT_MAX_ITER 30
+/** pieces per process (more pieces per rank cost an iteration on large
+ *  structured meshes; docs/BENCHMARKS.md, "The parallel loop"), */
+#define PA_DEFAULT_PIECES_PER_RANK 1
+/** vertex layers around the tagged elements, in the first iteration and
+ *  in the later ones (docs/design/ADAPT.md), */
+#define PA_DEFAULT_SKIN_LAYERS 2
+#define PA_DEFAULT_SKIN_LAYERS_LATER 1
+/** smallest work and smallest share of the mean elements per rank worth a
+ *  piece of its own (every iteration passes over the whole mesh), */
+#define PA_DEFAULT_MIN_PIECE_WORK 2000
+#define PA_DEFAULT_MIN_PIECE_RATIO 0.25
+/** and the imbalance the final rebalance leaves alone. */
+#define PA_DEFAULT_REBALANCE_TOL 1.05
+
 /** Options of pa_metric_from_hessian (pa_metric_hessian_opts_default). */
 typedef struct pa_metric_hessian_opts {
-  double p;       /**< Lp norm of the interpolation error (default 2;
-                       <= 0: L-infinity) */
+  double p;       /**< Lp norm of the interpolation error (default
+                       PA_DEFAULT_LP; <= 0: L-infinity) */
   double target;  /**< complexity to reach (> 0), or ... */
   double err;     /**< ... the Lp interpolation error to reach (> 0) */
   double hmin, hmax; /**< size bounds (<= 0: none) */
-  double hgrad;   /**< gradation of the result (<= 1: none; default 1.3) */
+  double hgrad;   /**< gradation of the result (<= 1: none; default
+                       PA_DEFAULT_HGRAD) */
   pa_recovery recovery; /**< default PA_RECOVER_LSQ */
 } pa_metric_hessian_opts;
-/** Fill *opts (out) with the defaults: p 2, no target nor error, no bounds,
- *  hgrad 1.3, PA_RECOVER_LSQ. Not collective. */
+/** Fill *opts (out) with the defaults: p PA_DEFAULT_LP, no target nor
+ *  error, no bounds, hgrad PA_DEFAULT_HGRAD, PA_RECOVER_LSQ. Not
+ *  collective. */
 void pa_metric_hessian_opts_default(pa_metric_hessian_opts *opts);
 
 /**
@@ -509,10 +549,11 @@ typedef struct pa_metric_levelset_opts {
   double hmin, hmax; /**< size bounds (hmin: the normal size at the surface) */
   double band;       /**< half-width of the anisotropic band around the zero
                           set (<= 0: 5 hmax) */
-  double hgrad;      /**< gradation away from the interface (default 1.3) */
+  double hgrad;      /**< gradation away from the interface (default
+                          PA_DEFAULT_HGRAD) */
 } pa_metric_levelset_opts;
-/** Fill *opts (out) with the defaults: hgrad 1.3, the rest 0 (eps, hmin
- *  and hmax must then be set). Not collective. */
+/** Fill *opts (out) with the defaults: hgrad PA_DEFAULT_HGRAD, the rest 0
+ *  (eps, hmin and hmax must then be set). Not collective. */
 void pa_metric_levelset_opts_default(pa_metric_levelset_opts *opts);
 
 /**
@@ -921,9 +962,9 @@ typedef struct pa_remesh_opts {
   int nlocal;
 } pa_remesh_opts;
 
-/** Fill *opts (out) with the defaults: no hmin/hmax/hsiz, hgrad 1.3,
- *  hgradreq 2.3 (Mmg's), hausd 0.01, angle 45, the rest 0. Not
- *  collective. */
+/** Fill *opts (out) with the defaults: no hmin/hmax/hsiz, hgrad
+ *  PA_DEFAULT_HGRAD, hgradreq PA_DEFAULT_HGRADREQ, hausd PA_DEFAULT_HAUSD,
+ *  angle PA_DEFAULT_ANGLE, the rest 0. Not collective. */
 void pa_remesh_opts_default(pa_remesh_opts *opts);
 
 /** What a remesh did. */
@@ -1407,34 +1448,38 @@ typedef struct pa_adapt_opts {
    *  piece's estimated remesher memory fits, and a metric whose whole output
    *  would not fit is refused (PA_ERR_MEMORY). */
   double mem_mb;
-  /** Tag elements whose quality is below this (default 0.3; <= 0: off). */
+  /** Tag elements whose quality is below this (default
+   *  PA_DEFAULT_QUAL_THRESHOLD; <= 0: off). */
   double qual_threshold;
   /** 1: tag only the elements flagged PA_FLAG_USER (default 0: also the
    *  elements with an edge outside [0.7071, 1.4142) or a poor quality). */
   int user_tags_only;
-  /** Maximum number of iterations (default 30). */
+  /** Maximum number of iterations (default PA_DEFAULT_MAX_ITER). */
   int max_iter;
-  /** Pieces per process (default 1). */
+  /** Pieces per process (default PA_DEFAULT_PIECES_PER_RANK). */
   int pieces_per_rank;
   /** Expert. Vertex layers of untagged elements added around the tagged
-   *  ones (default 2, at least 1). */
+   *  ones (default PA_DEFAULT_SKIN_LAYERS, at least 1). */
   int skin_layers;
-  /** Expert. The same from the second iteration on (default 1, at least 1): its
+  /** Expert. The same from the second iteration on (default
+   *  PA_DEFAULT_SKIN_LAYERS_LATER, at least 1): its
    *  tagged elements lie next to the last skins, and each layer multiplies
    *  a piece's size by about 10 in 3D; a poor element forced by the closer
    *  frozen faces is tagged again (docs/design/ADAPT.md, Convergence). */
   int skin_layers_later;
   /** Expert. Smallest estimated work (about output elements) worth a piece
    *  of its own: fewer pieces are made when the tagged work is small
-   *  (default 2000; tests lower it to get many pieces on small meshes). */
+   *  (default PA_DEFAULT_MIN_PIECE_WORK; tests lower it to get many pieces
+   *  on small meshes). */
   double min_piece_work;
   /** Expert. Smallest piece as a fraction of the mean number of elements
-   *  per rank (default 0.25): an iteration rebuilds the whole distributed
-   *  mesh, so a small tagged set is remeshed in fewer, larger pieces (0:
-   *  off). */
+   *  per rank (default PA_DEFAULT_MIN_PIECE_RATIO): an iteration passes
+   *  over the whole distributed mesh, so a small tagged set is remeshed in
+   *  fewer, larger pieces (0: off). */
   double min_piece_ratio;
   /** Expert. Skip the final rebalance when the owned elements per rank are
-   *  within this ratio of the mean (default 1.05; >= 1). */
+   *  within this ratio of the mean (default PA_DEFAULT_REBALANCE_TOL;
+   *  >= 1). */
   double rebalance_tol;
   /** Rebalance after the loop (pa_dmesh_rebalance: only the excess moves;
    *  default 1). */
@@ -1495,10 +1540,9 @@ typedef struct pa_adapt_report {
 } pa_adapt_report;
 
 /** Fill *opts (out) with the defaults: built-in remesher,
- *  pa_remesh_opts_default, no memory bound, quality threshold 0.3, 30
- *  iterations, 1 piece per rank, 2 skin layers (1 from the second
- *  iteration), min_piece_work 2000, min_piece_ratio 0.25, rebalance
- *  (tolerance 1.05) and piece checks on (NULL: nothing). Not collective. */
+ *  pa_remesh_opts_default, no memory bound, the PA_DEFAULT_* of the
+ *  parallel loop, rebalance on, pieces checked with a plug-in remesher only
+ *  (NULL: nothing). Not collective. */
 void pa_adapt_opts_default(pa_adapt_opts *opts);
 
 /**

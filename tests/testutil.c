@@ -9,13 +9,35 @@ int pa_test_failures;
 int pa_test_checks;
 static unsigned long long pa_rng = 88172645463325252ull;
 
+/* The name of test i in names, TEST_MAIN's list "test_a, test_b, ...", into
+ * buf (at most n bytes). */
+static const char *test_name(const char *names, int i, char *buf, size_t n) {
+  const char *p = names;
+  for (int k = 0; k < i && p; k++) {
+    p = strchr(p, ',');
+    if (p) p++;
+  }
+  if (!p) return "?";
+  p += strspn(p, " \t\n");
+  size_t len = strcspn(p, ", \t\n");
+  snprintf(buf, n, "%.*s", (int)(len < n ? len : n - 1), p);
+  return buf;
+}
+
 int pa_test_run(const char *name, const pa_test_fn *tests, const char **names,
                 int n) {
+  char tn[128];
   for (int i = 0; i < n; i++) {
-    int before = pa_test_failures;
+    int before = pa_test_failures, checks = pa_test_checks;
     tests[i]();
+    if (pa_test_checks == checks) { /* a test that checks nothing passes nothing */
+      fprintf(stderr, "%s: %s made no check\n", name,
+              test_name(*names, i, tn, sizeof tn));
+      pa_test_failures++;
+    }
     if (pa_test_failures != before)
-      fprintf(stderr, "%s: test %d of (%s) failed\n", name, i + 1, *names);
+      fprintf(stderr, "%s: test %d (%s) failed\n", name, i + 1,
+              test_name(*names, i, tn, sizeof tn));
   }
   size_t leaked = pa_memory_current();
   if (leaked) {
@@ -52,13 +74,24 @@ int pa_test_run_mpi(int argc, char **argv, const char *name,
   MPI_Comm_size(MPI_COMM_WORLD, &pa_test_size);
   if (getenv("PA_TEST_VERBOSE")) pa_set_verbosity(atoi(getenv("PA_TEST_VERBOSE")));
   size_t mem0 = pa_memory_current();
+  char tn[128];
   for (int i = 0; i < n; i++) {
-    int before = pa_test_failures;
+    int before = pa_test_failures, checks = pa_test_checks;
     double t0 = MPI_Wtime();
     tests[i]();
+    /* a test may check on some ranks only (the root of a gather), but on
+     * one at least */
+    int made = pa_test_checks - checks;
+    MPI_Allreduce(MPI_IN_PLACE, &made, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+    if (made == 0) {
+      if (pa_test_rank == 0)
+        fprintf(stderr, "%s: %s made no check\n", name,
+                test_name(names, i, tn, sizeof tn));
+      pa_test_failures++;
+    }
     if (pa_test_failures != before)
-      fprintf(stderr, "%s: rank %d: test %d of (%s) failed\n", name,
-              pa_test_rank, i + 1, names);
+      fprintf(stderr, "%s: rank %d: test %d (%s) failed\n", name,
+              pa_test_rank, i + 1, test_name(names, i, tn, sizeof tn));
     if (pa_test_rank == 0)
       printf("%s: test %d done in %.2f s\n", name, i + 1, MPI_Wtime() - t0);
   }

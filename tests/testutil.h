@@ -1,7 +1,9 @@
 /*
  * testutil.h -- a minimal test harness: CHECK records a failure and goes on,
  * TEST_MAIN runs the listed test functions and returns non-zero if any check
- * failed. Also small helpers shared by tests (seeded random numbers).
+ * failed or if a test function made no check at all (on any rank, for
+ * TEST_MPI_MAIN): a test that checks nothing cannot fail, so it is refused.
+ * Also small helpers shared by tests (seeded random numbers).
  */
 #ifndef PA_TESTUTIL_H
 #define PA_TESTUTIL_H

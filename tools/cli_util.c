@@ -2,10 +2,12 @@
  * cli_util.c -- the helpers the commands of the CLI share (cli.h): messages
  * and exit statuses, reading a mesh given on the command line, numbers and
  * paths of arguments, the metric `padapt adapt` adapts to, the report of how
- * a result meets the metric, vertex fields in .sol files, and the output
- * checks and transactions.
+ * a result meets the metric, vertex fields in .sol files, the output
+ * checks and transactions, and the -svg picture of `padapt adapt`, sequential
+ * or parallel.
  */
 #include "cli.h"
+#include "svg.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -306,4 +308,14 @@ int pa_cli_adapt_metric(const pa_cli *cli, const pa_cli_adapt_args *a,
     free(h);
   }
   return pa_cli_fail(cli, st);
+}
+
+pa_status pa_cli_adapt_svg(const pa_cli_adapt_args *a, const pa_stats *before,
+                           const pa_stats *after) {
+  pa_stats two[2] = {*before, *after};
+  const char *names[2] = {"before", "after"};
+  char title[1200];
+  snprintf(title, sizeof title, "%s -> %s%s%s", a->in, a->out,
+           a->met ? ", in the metric " : "", a->met ? a->met : "");
+  return pa_cli_svg_histograms(a->svg, title, two, 2, names);
 }

@@ -17,11 +17,10 @@
  * their paths stay as they were.
  *
  * On several MPI ranks (or with -distributed-output, -mem, -checkpoint or
- * -restart) the parallel piece loop of tools/cmd_padapt.c does the work,
- * with the same arguments.
+ * -restart) the parallel piece loop of tools/cmd_adapt_parallel.c does the
+ * work, with the same arguments.
  */
 #include "cli.h"
-#include "svg.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -84,18 +83,21 @@ static const pa_cli_opt adapt_opts[] = {
      .want = "a number (> 1; -1 or any value <= 1 disables)",
      .lo = -INFINITY, .hi = INFINITY, .label = "-hgrad G",
      .help = "gradation: size ratio bound along a unit edge\n"
-             "(default 1.3; -1 disables)"},
+             "(default " PA_CLI_TEXT(PA_DEFAULT_HGRAD) "; -1 disables)"},
     {.names = "-hgradreq", .kind = PA_CLI_NUM, .at = A(remesh.hgradreq),
      .want = "a number (> 1; -1 or any value <= 1 disables)",
      .lo = -INFINITY, .hi = INFINITY, .label = "-hgradreq G",
-     .help = "gradation from required entities (default 2.3;\n"
+     .help = "gradation from required entities (default "
+             PA_CLI_TEXT(PA_DEFAULT_HGRADREQ) ";\n"
              "-1: they constrain nothing)"},
     {.names = "-hausd", .kind = PA_CLI_POS, .at = A(remesh.hausd),
      .want = POSITIVE, .label = "-hausd D",
-     .help = "max boundary deviation from the curve (default 0.01)"},
+     .help = "max boundary deviation from the curve (default "
+             PA_CLI_TEXT(PA_DEFAULT_HAUSD) ")"},
     {.names = "-ar", .kind = PA_CLI_NUM, .at = A(remesh.angle),
      .want = "an angle in [0, 180] degrees", .lo = 0, .hi = 180,
-     .label = "-ar A", .help = "corner detection angle in degrees (default 45)"},
+     .label = "-ar A", .help = "corner detection angle in degrees (default "
+                               PA_CLI_TEXT(PA_DEFAULT_ANGLE) ")"},
     {.names = "-nr", .kind = PA_CLI_FLAG, .at = A(remesh.no_angle),
      .label = "-nr", .help = "no corner detection by angle"},
     {.names = "-noinsert", .kind = PA_CLI_FLAG, .at = A(remesh.no_insert),
@@ -141,7 +143,9 @@ static const pa_cli_opt adapt_opts[] = {
              "a metric whose output would not fit is refused)"},
     {.names = "-max-iter", .kind = PA_CLI_INT, .at = A(max_iter),
      .want = "an integer in [1, 1000]", .lo = 1, .hi = 1000,
-     .label = "-max-iter N", .help = "at most N iterations (default 30)"},
+     .label = "-max-iter N",
+     .help = "at most N iterations (default " PA_CLI_TEXT(PA_DEFAULT_MAX_ITER)
+             ")"},
     {.names = "-best-effort", .kind = PA_CLI_FLAG, .at = A(best_effort),
      .label = "-best-effort",
      .help = "write the (valid) mesh even if the loop stalled; without\n"
@@ -151,11 +155,14 @@ static const pa_cli_opt adapt_opts[] = {
      .help = "rank 0 adapts alone, as one process would, when the input\n"
              "and the metric's estimate of the output both have fewer\n"
              "than N elements: sharing out so small a job costs more\n"
-             "than it saves (default 30000 in 3D, 150000 in 2D; 0:\n"
+             "than it saves (default " PA_CLI_TEXT(PA_CLI_SERIAL_BELOW_3D)
+             " in 3D, " PA_CLI_TEXT(PA_CLI_SERIAL_BELOW_2D) " in 2D; 0:\n"
              "always share out)"},
     {.names = "-pieces", .kind = PA_CLI_INT, .at = A(pieces),
      .want = "an integer in [1, 1000]", .lo = 1, .hi = 1000,
-     .label = "-pieces K", .help = "pieces per process (default 1)"},
+     .label = "-pieces K",
+     .help = "pieces per process (default "
+             PA_CLI_TEXT(PA_DEFAULT_PIECES_PER_RANK) ")"},
     {.names = "-check", .kind = PA_CLI_FLAG, .at = A(check), .label = "-check",
      .help = "check every remeshed piece and the distributed result\n"
              "(always done with a plug-in remesher)"},
@@ -324,16 +331,6 @@ static int check_outputs(const pa_cli *cli, const pa_cli_adapt_args *a) {
   return bad;
 }
 
-pa_status pa_cli_adapt_svg(const pa_cli_adapt_args *a, const pa_stats *before,
-                           const pa_stats *after) {
-  pa_stats two[2] = {*before, *after};
-  const char *names[2] = {"before", "after"};
-  char title[1200];
-  snprintf(title, sizeof title, "%s -> %s%s%s", a->in, a->out,
-           a->met ? ", in the metric " : "", a->met ? a->met : "");
-  return pa_cli_svg_histograms(a->svg, title, two, 2, names);
-}
-
 /* Everything the sequential run reads beside the mesh: the metric, the local
  * parameters (into opts; *local owns them) and the -field fields. Returns 0,
  * or 1 after printing the error. */
@@ -491,7 +488,7 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
   if (prc) return prc > 0 ? 1 : 0;
   if (check_outputs(cli, &args)) return 1;
   /* On several ranks, or when asked for a distributed output, a memory
-   * bound or a checkpoint, the parallel piece loop (tools/cmd_padapt.c) does
+   * bound or a checkpoint, the parallel piece loop (tools/cmd_adapt_parallel.c) does
    * the work, unless it finds the job too small to share out
    * (-serial-below): then rank 0 adapts it as one process would. */
   if (cli->size > 1 || args.distributed || args.mem_mb > 0 ||

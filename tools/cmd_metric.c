@@ -28,15 +28,19 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* The parsed options of a metric subcommand. */
+/* The parsed arguments of a metric subcommand. The options go straight
+ * into the library's options structs, filled first by their
+ * *_opts_default: every default is the library's. */
 typedef struct metric_args {
   const char *cmd; /* "metric OP", for the messages */
   const char *in, *field, *ls, *files[3], *out;
   const char *pos[6]; /* the positional arguments */
   int npos, nfile;
   int comp; /* -comp K, 1-based (0: a scalar field) */
-  double target, err, p, hmin, hmax, hgrad, hgradreq, eps, band;
-  int recovery;
+  pa_metric_hessian_opts hess;  /* hessian */
+  pa_metric_levelset_opts lset; /* levelset */
+  pa_remesh_opts remesh;        /* clamp: hmin, hmax; grade: hgrad, hgradreq */
+  double target;                /* scale */
 } metric_args;
 
 #define M(f) offsetof(metric_args, f)
@@ -48,44 +52,83 @@ static int opt_recovery(const pa_cli *cli, const pa_cli_spec *s,
   if (!val[0] || (strcmp(val[0], "lsq") && strcmp(val[0], "l2")))
     return pa_cli_error(cli, "%s: %s needs lsq or l2, got '%s'", s->cmd, name,
                         val[0] ? val[0] : "nothing");
-  a->recovery = !strcmp(val[0], "l2") ? PA_RECOVER_L2 : PA_RECOVER_LSQ;
+  a->hess.recovery = !strcmp(val[0], "l2") ? PA_RECOVER_L2 : PA_RECOVER_LSQ;
   return 0;
 }
 
-/* The options of the subcommands (the synopsis of -h lists them), then the
- * help of the subcommands. */
-static const pa_cli_opt metric_opts[] = {
+/* The help of the subcommands, at the end of every table (the synopsis of
+ * -h lists the options). */
+#define METRIC_HELP                                                          \
+  {.kind = PA_CLI_HELP, .label = "hessian",                                  \
+   .help = "the Lp-optimal metric of field U (component K of a vector\n"     \
+           "field), scaled to the complexity N (about N/2 vertices in\n"     \
+           "2D) or to the interpolation error E; p = "                       \
+           PA_CLI_TEXT(PA_DEFAULT_LP) " by default, 0\n"                     \
+           "for L-infinity; hgrad " PA_CLI_TEXT(PA_DEFAULT_HGRAD)            \
+           " by default (-1: none)"},                                        \
+      {.kind = PA_CLI_HELP, .label = "levelset",                             \
+       .help = "the metric capturing the zero set of PHI within E:\n"        \
+               "size hmin across it, sqrt(8 E / curvature) along it"},       \
+      {.kind = PA_CLI_HELP, .label = "complexity",                           \
+       .help = "prints the integral of sqrt(det M) and the number of\n"      \
+               "unit elements it asks for"},                                 \
+  {                                                                          \
+    .kind = PA_CLI_END                                                       \
+  }
+
+#define OPT_POS(name, field)                                                 \
+  {.names = name, .kind = PA_CLI_POS, .at = M(field), .want = POSITIVE}
+#define OPT_NUM(name, field)                                                 \
+  {.names = name, .kind = PA_CLI_NUM, .at = M(field), .want = "a number",    \
+   .lo = -INFINITY, .hi = INFINITY}
+#define OPT_COMP                                                             \
+  {.names = "-comp", .kind = PA_CLI_INT, .at = M(comp),                      \
+   .want = "a component number >= 1", .lo = 1, .hi = 1e9}
+
+/* The options of each subcommand. */
+static const pa_cli_opt hessian_opts[] = {
     {.names = "-field", .kind = PA_CLI_STR, .at = M(field),
      .want = "a .sol file"},
-    {.names = "-ls", .kind = PA_CLI_STR, .at = M(ls), .want = "a .sol file"},
+    OPT_COMP,
     {.names = "-recovery", .kind = PA_CLI_FN, .fn = opt_recovery, .nval = 1},
-    {.names = "-comp", .kind = PA_CLI_INT, .at = M(comp),
-     .want = "a component number >= 1", .lo = 1, .hi = 1e9},
-    {.names = "-target", .kind = PA_CLI_POS, .at = M(target), .want = POSITIVE},
-    {.names = "-err", .kind = PA_CLI_POS, .at = M(err), .want = POSITIVE},
-    {.names = "-p", .kind = PA_CLI_NUM, .at = M(p), .want = "a number",
-     .lo = -INFINITY, .hi = INFINITY},
-    {.names = "-hmin", .kind = PA_CLI_POS, .at = M(hmin), .want = POSITIVE},
-    {.names = "-hmax", .kind = PA_CLI_POS, .at = M(hmax), .want = POSITIVE},
-    {.names = "-hgrad", .kind = PA_CLI_NUM, .at = M(hgrad), .want = "a number",
-     .lo = -INFINITY, .hi = INFINITY},
-    {.names = "-hgradreq", .kind = PA_CLI_NUM, .at = M(hgradreq),
-     .want = "a number", .lo = -INFINITY, .hi = INFINITY},
-    {.names = "-eps", .kind = PA_CLI_POS, .at = M(eps), .want = POSITIVE},
-    {.names = "-band", .kind = PA_CLI_NUM, .at = M(band), .want = "a number",
-     .lo = -INFINITY, .hi = INFINITY},
-    {.kind = PA_CLI_HELP, .label = "hessian",
-     .help = "the Lp-optimal metric of field U (component K of a vector\n"
-             "field), scaled to the complexity N (about N/2 vertices in\n"
-             "2D) or to the interpolation error E; p = 2 by default, 0\n"
-             "for L-infinity; hgrad 1.3 by default (-1: none)"},
-    {.kind = PA_CLI_HELP, .label = "levelset",
-     .help = "the metric capturing the zero set of PHI within E:\n"
-             "size hmin across it, sqrt(8 E / curvature) along it"},
-    {.kind = PA_CLI_HELP, .label = "complexity",
-     .help = "prints the integral of sqrt(det M) and the number of\n"
-             "unit elements it asks for"},
-    {.kind = PA_CLI_END}};
+    OPT_POS("-target", hess.target),
+    OPT_POS("-err", hess.err),
+    OPT_NUM("-p", hess.p),
+    OPT_POS("-hmin", hess.hmin),
+    OPT_POS("-hmax", hess.hmax),
+    OPT_NUM("-hgrad", hess.hgrad),
+    METRIC_HELP};
+static const pa_cli_opt levelset_opts[] = {
+    {.names = "-ls", .kind = PA_CLI_STR, .at = M(ls), .want = "a .sol file"},
+    OPT_COMP,
+    OPT_POS("-eps", lset.eps),
+    OPT_POS("-hmin", lset.hmin),
+    OPT_POS("-hmax", lset.hmax),
+    OPT_NUM("-band", lset.band),
+    OPT_NUM("-hgrad", lset.hgrad),
+    METRIC_HELP};
+static const pa_cli_opt scale_opts[] = {OPT_POS("-target", target),
+                                        METRIC_HELP};
+static const pa_cli_opt clamp_opts[] = {OPT_POS("-hmin", remesh.hmin),
+                                        OPT_POS("-hmax", remesh.hmax),
+                                        METRIC_HELP};
+static const pa_cli_opt grade_opts[] = {OPT_NUM("-hgrad", remesh.hgrad),
+                                        OPT_NUM("-hgradreq", remesh.hgradreq),
+                                        METRIC_HELP};
+static const pa_cli_opt no_opts[] = {METRIC_HELP};
+
+/* The subcommands: positional .sol files before OUT, whether OUT comes,
+ * the options. */
+typedef struct metric_op {
+  const char *name;
+  int nfiles, out;
+  const pa_cli_opt *opt;
+} metric_op;
+static const metric_op metric_ops[] = {
+    {"hessian", 0, 1, hessian_opts}, {"levelset", 0, 1, levelset_opts},
+    {"intersect", 2, 1, no_opts},    {"scale", 1, 1, scale_opts},
+    {"clamp", 1, 1, clamp_opts},     {"grade", 1, 1, grade_opts},
+    {"complexity", 1, 0, no_opts}};
 
 static int metric_positional(const pa_cli *cli, const char *arg,
                              void *args) {
@@ -112,26 +155,26 @@ static const pa_cli_spec metric_spec = {
         "OUT.sol\n"
         "       padapt metric complexity IN M.sol\n",
     .width = 10,
-    .opt = metric_opts,
+    .opt = no_opts,
     .positional = metric_positional};
 
-/* Parse argv[1..] of a subcommand (argv[0] its name) into a; nfiles: how many
- * positional .sol files before OUT. Returns 0, 1 after an error, -1 after
- * the help. */
-static int parse(const pa_cli *cli, int argc, char **argv, int nfiles,
-                 int has_out, metric_args *a) {
+/* Parse argv[1..] of subcommand op (argv[0] its name) into a. Returns 0, 1
+ * after an error, -1 after the help. */
+static int parse(const pa_cli *cli, int argc, char **argv, const metric_op *op,
+                 metric_args *a) {
   memset(a, 0, sizeof *a);
-  a->p = 2;
-  a->hgrad = 1.3;
-  a->hgradreq = 2.3;
+  pa_metric_hessian_opts_default(&a->hess);
+  pa_metric_levelset_opts_default(&a->lset);
+  pa_remesh_opts_default(&a->remesh);
   char cmd[64];
   snprintf(cmd, sizeof cmd, "metric %s", argv[0]);
   pa_cli_spec spec = metric_spec;
   spec.cmd = a->cmd = cmd;
   spec.help_cmd = "metric";
+  spec.opt = op->opt;
   int rc = pa_cli_parse(cli, &spec, argc, argv, a);
   if (rc) return rc;
-  int npos = a->npos;
+  int npos = a->npos, nfiles = op->nfiles, has_out = op->out;
   if (npos != 1 + nfiles + has_out) {
     pa_cli_error(cli, "%s: expected %d file arguments, got %d", cmd,
                  1 + nfiles + has_out, npos);
@@ -143,9 +186,15 @@ static int parse(const pa_cli *cli, int argc, char **argv, int nfiles,
     a->files[k] = a->pos[1 + k];
   a->nfile = nfiles;
   a->out = has_out ? a->pos[npos - 1] : NULL;
-  if (a->hmin > 0 && a->hmax > 0 && a->hmin > a->hmax)
+  double hmin = op->opt == hessian_opts    ? a->hess.hmin
+                : op->opt == levelset_opts ? a->lset.hmin
+                                           : a->remesh.hmin;
+  double hmax = op->opt == hessian_opts    ? a->hess.hmax
+                : op->opt == levelset_opts ? a->lset.hmax
+                                           : a->remesh.hmax;
+  if (hmin > 0 && hmax > 0 && hmin > hmax)
     return pa_cli_error(cli, "%s: -hmin (%g) is larger than -hmax (%g)", cmd,
-                        a->hmin, a->hmax);
+                        hmin, hmax);
   return 0;
 }
 
@@ -273,11 +322,11 @@ static pa_status run_ops(const pa_cli *cli, const char *op, pa_mesh *mesh,
     if (st == PA_SUCCESS)
       st = write_metric(mesh, nc, pa_mesh_metric(mesh), a->out);
   } else if (!strcmp(op, "clamp")) {
-    st = pa_mesh_metric_clamp(mesh, a->hmin, a->hmax);
+    st = pa_mesh_metric_clamp(mesh, a->remesh.hmin, a->remesh.hmax);
     if (st == PA_SUCCESS)
       st = write_metric(mesh, nc, pa_mesh_metric(mesh), a->out);
   } else if (!strcmp(op, "grade")) {
-    st = pa_mesh_metric_grade(mesh, a->hgrad, a->hgradreq);
+    st = pa_mesh_metric_grade(mesh, a->remesh.hgrad, a->remesh.hgradreq);
     if (st == PA_SUCCESS)
       st = write_metric(mesh, nc, pa_mesh_metric(mesh), a->out);
   } else { /* complexity */
@@ -298,27 +347,11 @@ static pa_status run_field(const char *op, pa_mesh *mesh,
   double *u = NULL, *met = malloc(sizeof(double) * nt * (nv ? nv : 1));
   if (!met) return pa_set_error(PA_ERR_MEMORY, "out of memory");
   if (!strcmp(op, "hessian")) {
-    pa_metric_hessian_opts o;
-    pa_metric_hessian_opts_default(&o);
-    o.p = a->p;
-    o.target = a->target;
-    o.err = a->err;
-    o.hmin = a->hmin;
-    o.hmax = a->hmax;
-    o.hgrad = a->hgrad;
-    o.recovery = (pa_recovery)a->recovery;
     st = read_scalar(a->field, nv, a->comp, &u);
-    if (st == PA_SUCCESS) st = pa_metric_from_hessian(mesh, u, 1, &o, met);
+    if (st == PA_SUCCESS) st = pa_metric_from_hessian(mesh, u, 1, &a->hess, met);
   } else {
-    pa_metric_levelset_opts o;
-    pa_metric_levelset_opts_default(&o);
-    o.eps = a->eps;
-    o.hmin = a->hmin;
-    o.hmax = a->hmax;
-    o.band = a->band;
-    o.hgrad = a->hgrad;
     st = read_scalar(a->ls, nv, a->comp, &u);
-    if (st == PA_SUCCESS) st = pa_metric_from_levelset(mesh, u, &o, met);
+    if (st == PA_SUCCESS) st = pa_metric_from_levelset(mesh, u, &a->lset, met);
   }
   if (st == PA_SUCCESS) st = write_metric(mesh, nt, met, a->out);
   if (st == PA_SUCCESS) {
@@ -356,25 +389,9 @@ static pa_status run_field_dist(const pa_cli *cli, const char *op,
   pa_mesh *lm = pa_dmesh_mesh(dm);
   int field = pa_mesh_nfield(lm) - 1; /* the one added last */
   if (!strcmp(op, "hessian")) {
-    pa_metric_hessian_opts o;
-    pa_metric_hessian_opts_default(&o);
-    o.p = a->p;
-    o.target = a->target;
-    o.err = a->err;
-    o.hmin = a->hmin;
-    o.hmax = a->hmax;
-    o.hgrad = a->hgrad;
-    o.recovery = (pa_recovery)a->recovery;
-    st = pa_dmesh_metric_from_hessian(dm, field, 0, &o);
+    st = pa_dmesh_metric_from_hessian(dm, field, 0, &a->hess);
   } else {
-    pa_metric_levelset_opts o;
-    pa_metric_levelset_opts_default(&o);
-    o.eps = a->eps;
-    o.hmin = a->hmin;
-    o.hmax = a->hmax;
-    o.band = a->band;
-    o.hgrad = a->hgrad;
-    st = pa_dmesh_metric_from_levelset(dm, field, &o);
+    st = pa_dmesh_metric_from_levelset(dm, field, &a->lset);
   }
   if (st == PA_SUCCESS) st = pa_dmesh_metric_complexity(dm, &c);
   if (st == PA_SUCCESS) st = pa_dmesh_gather(dm, 0, &g);
@@ -408,14 +425,8 @@ int pa_cli_metric(const pa_cli *cli, int argc, char **argv) {
     if (cli->rank == 0) pa_cli_help(&metric_spec, stdout);
     return 0;
   }
-  static const struct {
-    const char *name;
-    int nfiles, out;
-  } ops[] = {{"hessian", 0, 1},   {"levelset", 0, 1}, {"intersect", 2, 1},
-             {"scale", 1, 1},     {"clamp", 1, 1},    {"grade", 1, 1},
-             {"complexity", 1, 0}};
-  int k = 0, nops = sizeof ops / sizeof *ops;
-  while (k < nops && strcmp(op, ops[k].name))
+  int k = 0, nops = sizeof metric_ops / sizeof *metric_ops;
+  while (k < nops && strcmp(op, metric_ops[k].name))
     k++;
   if (k == nops) { /* a built-in analytic field */
     if (argc != 4)
@@ -433,13 +444,14 @@ int pa_cli_metric(const pa_cli *cli, int argc, char **argv) {
     return pa_cli_fail(cli, st);
   }
   metric_args a;
-  int prc = parse(cli, argc - 1, argv + 1, ops[k].nfiles, ops[k].out, &a);
+  int prc = parse(cli, argc - 1, argv + 1, &metric_ops[k], &a);
   if (prc) return prc > 0 ? 1 : 0;
-  if (!strcmp(op, "hessian") && (!a.field || (a.target > 0) == (a.err > 0)))
+  if (!strcmp(op, "hessian") &&
+      (!a.field || (a.hess.target > 0) == (a.hess.err > 0)))
     return pa_cli_error(cli, "metric hessian: give -field U.sol and either "
                              "-target N or -err E");
   if (!strcmp(op, "levelset") &&
-      (!a.ls || !(a.eps > 0) || !(a.hmin > 0) || !(a.hmax > 0)))
+      (!a.ls || !(a.lset.eps > 0) || !(a.lset.hmin > 0) || !(a.lset.hmax > 0)))
     return pa_cli_error(cli, "metric levelset: give -ls PHI.sol, -eps E, "
                              "-hmin H and -hmax H");
   if (!strcmp(op, "scale") && !(a.target > 0))

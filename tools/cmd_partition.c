@@ -27,6 +27,8 @@ typedef struct partition_args {
 } partition_args;
 
 #define P(f) offsetof(partition_args, f)
+/* One ghost layer: the halo of a stencil of face or vertex neighbours. */
+#define OVERLAP_DEFAULT 1
 
 static const pa_cli_opt partition_opts[] = {
     {.kind = PA_CLI_HELP, .label = "IN",
@@ -37,7 +39,8 @@ static const pa_cli_opt partition_opts[] = {
              "OUT.<rank>.vtu + OUT.pvtu for ParaView"},
     {.names = "-overlap", .kind = PA_CLI_INT, .at = P(overlap),
      .want = "an integer in [0, 8]", .lo = 0, .hi = 8, .label = "-overlap K",
-     .help = "ghost element layers kept in memory (default 1)"},
+     .help = "ghost element layers kept in memory (default "
+             PA_CLI_TEXT(OVERLAP_DEFAULT) ")"},
     {.names = "-check", .kind = PA_CLI_FLAG, .at = P(check), .label = "-check",
      .help = "check the distributed mesh (collective)"},
     {.kind = PA_CLI_END}};
@@ -76,7 +79,7 @@ static void report(const pa_cli *cli, const char *step, double t) {
 }
 
 int pa_cli_partition(const pa_cli *cli, int argc, char **argv) {
-  partition_args args = {NULL, NULL, 1, 0};
+  partition_args args = {NULL, NULL, OVERLAP_DEFAULT, 0};
   int prc = pa_cli_parse(cli, &partition_spec, argc, argv, &args);
   if (prc) return prc > 0 ? 1 : 0;
   const char *in = args.in, *out = args.out;

@@ -159,17 +159,17 @@ void pa_cli_svg_raw(pa_cli_svg *svg, const char *fmt, ...) {
   va_end(ap);
 }
 
-/* The quality ramp: dark red (flat) through yellow to dark blue (regular),
- * so that the few poor elements of an adapted mesh stand out among the
- * many good ones. */
+/* The colour stops of the quality ramp: dark red (flat) through yellow to
+ * dark blue (regular), so that the few poor elements of an adapted mesh
+ * stand out among the many good ones. */
 static const struct {
   double q;
   int r, g, b;
-} ramp[] = {{0.0, 0xa5, 0x00, 0x26},
-            {0.25, 0xf4, 0x6d, 0x43},
-            {0.5, 0xfe, 0xe0, 0x90},
-            {0.75, 0x74, 0xad, 0xd1},
-            {1.0, 0x31, 0x36, 0x95}};
+} stops[] = {{0.0, 0xa5, 0x00, 0x26},
+             {0.25, 0xf4, 0x6d, 0x43},
+             {0.5, 0xfe, 0xe0, 0x90},
+             {0.75, 0x74, 0xad, 0xd1},
+             {1.0, 0x31, 0x36, 0x95}};
 
 void pa_cli_svg_quality_colour(double q, char buf[8]) {
   if (isnan(q)) {
@@ -178,13 +178,13 @@ void pa_cli_svg_quality_colour(double q, char buf[8]) {
   }
   if (q < 0) q = 0;
   if (q > 1) q = 1;
-  int k = 0, nk = (int)(sizeof ramp / sizeof *ramp);
-  while (k < nk - 2 && q > ramp[k + 1].q)
+  int k = 0, nk = (int)(sizeof stops / sizeof *stops);
+  while (k < nk - 2 && q > stops[k + 1].q)
     k++;
-  double t = (q - ramp[k].q) / (ramp[k + 1].q - ramp[k].q);
-  int r = (int)lround(ramp[k].r + t * (ramp[k + 1].r - ramp[k].r));
-  int g = (int)lround(ramp[k].g + t * (ramp[k + 1].g - ramp[k].g));
-  int b = (int)lround(ramp[k].b + t * (ramp[k + 1].b - ramp[k].b));
+  double t = (q - stops[k].q) / (stops[k + 1].q - stops[k].q);
+  int r = (int)lround(stops[k].r + t * (stops[k + 1].r - stops[k].r));
+  int g = (int)lround(stops[k].g + t * (stops[k + 1].g - stops[k].g));
+  int b = (int)lround(stops[k].b + t * (stops[k + 1].b - stops[k].b));
   snprintf(buf, 8, "#%02x%02x%02x", r & 255, g & 255, b & 255);
 }
 

@@ -234,6 +234,21 @@ for _k in range(1, 11):
 REMESH_OUTCOMES = {0: "success", 1: "target missed", 2: "failed"}
 
 
+def _defaults(cls, fill):
+    """The library's defaults of an options struct (fill: its *_opts_default):
+    the Python keyword arguments take them from here, so each default is
+    spelled once, in padapt.h."""
+    o = cls()
+    fill(ctypes.byref(o))
+    return o
+
+
+REMESH_DEFAULTS = _defaults(RemeshOpts, lib.pa_remesh_opts_default)
+HESSIAN_DEFAULTS = _defaults(HessianOpts, lib.pa_metric_hessian_opts_default)
+LEVELSET_DEFAULTS = _defaults(LevelsetOpts, lib.pa_metric_levelset_opts_default)
+ADAPT_DEFAULTS = _defaults(AdaptOpts, lib.pa_adapt_opts_default)
+
+
 class Error(RuntimeError):
     """A padapt library call failed.
 

@@ -9,37 +9,9 @@ import numpy as np
 
 from . import _lib
 from ._lib import lib, check, Error
-from .mesh import Mesh, as_metric, as_field
+from .mesh import Mesh, as_metric, as_field, stats_dict, _num, _ratio
 
 __all__ = ["adapt", "AdaptResult", "Report", "remesh_options"]
-
-
-def _num(x):
-    return x if math.isfinite(x) else None
-
-
-def _ratio(n, total):
-    return n / total if total > 0 else 0.0
-
-
-def stats_dict(s):
-    """The members of pa_stats_write_json, from a pa_stats."""
-    return {
-        "padapt_version": _lib.lib.pa_version().decode(),
-        "dim": s.dim, "vertices": s.nvert, "elements": s.nelem, "boundary": s.nbdry,
-        "volume": _num(s.volume), "inverted": s.ninverted, "valid": bool(s.valid),
-        "has_metric": bool(s.has_metric), "edges": s.nedge,
-        "edge_min": _num(s.edge_min), "edge_max": _num(s.edge_max),
-        "edge_mean": _num(s.edge_sum / s.nedge if s.nedge > 0 else 0.0),
-        "edge_in_range": _ratio(s.edge_hist[_lib.STATS_EDGE_NBIN - 1], s.nedge),
-        "edge_hist": list(s.edge_hist),
-        "quality_worst": _num(s.qual_min),
-        "quality_mean": _num(s.qual_sum / s.nelem if s.nelem > 0 else 0.0),
-        "quality_best": _num(s.qual_max),
-        "quality_above_0.5": _ratio(s.qual_above_05, s.nelem),
-        "quality_above_0.12": _ratio(s.qual_above_012, s.nelem),
-        "quality_hist": list(s.qual_hist),
-    }
 
 
 def fidelity_dict(f):

@@ -22,8 +22,9 @@ from mpi4py import MPI
 
 from . import _lib
 from ._lib import lib, check
-from .mesh import Mesh, as_metric, as_field
-from .adapt import Report, stats_dict, fidelity_dict, describe, remesh_options
+from .mesh import Mesh, as_metric, as_field, stats_dict
+from .adapt import Report, fidelity_dict, describe, remesh_options
+from .metric import _RECOVERY_NAME
 
 __all__ = ["DistributedMesh", "Value", "KINDS"]
 
@@ -439,7 +440,7 @@ class DistributedMesh(object):
         self._changed()
         check(lib.pa_dmesh_redistribute(self._live(), p, w))
 
-    def rebalance(self, tol=1.05):
+    def rebalance(self, tol=_lib.ADAPT_DEFAULTS.rebalance_tol):
         """Even out the owned elements when a rank holds more than tol times
         the mean. Returns the number of elements moved (-1 after a full
         repartition). Collective; invalidates views."""
@@ -489,8 +490,10 @@ class DistributedMesh(object):
             raise KeyError("no vertex field %r (fields: %s)" % (name, ", ".join(names) or "none"))
         return names.index(name)
 
-    def metric_from_hessian(self, field, comp=0, *, target=None, err=None, p=2, hmin=None,
-                            hmax=None, hgrad=1.3, recovery="lsq"):
+    def metric_from_hessian(self, field, comp=0, *, target=None, err=None,
+                            p=_lib.HESSIAN_DEFAULTS.p, hmin=None, hmax=None,
+                            hgrad=_lib.HESSIAN_DEFAULTS.hgrad,
+                            recovery=_RECOVERY_NAME[_lib.HESSIAN_DEFAULTS.recovery]):
         """Set the metric to the Hessian metric of component comp of vertex
         field `field` (see padapt.metric.hessian); needs overlap >= 2.
         Collective."""
@@ -500,7 +503,8 @@ class DistributedMesh(object):
         check(lib.pa_dmesh_metric_from_hessian(self._live(), self._field_index(field), int(comp),
                                                ctypes.byref(o)))
 
-    def metric_from_levelset(self, field, *, eps, hmin, hmax, band=None, hgrad=1.3):
+    def metric_from_levelset(self, field, *, eps, hmin, hmax, band=None,
+                             hgrad=_lib.LEVELSET_DEFAULTS.hgrad):
         """Set the metric to the level-set metric of the scalar vertex field
         `field` (see padapt.metric.levelset); needs overlap >= 2. Collective."""
         from .metric import _opt

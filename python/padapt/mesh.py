@@ -10,6 +10,7 @@ fields are returned as copies, because setting them replaces their storage.
 Building a Mesh from arrays copies each array once into the library.
 """
 import ctypes
+import math
 import os
 
 import numpy as np
@@ -33,6 +34,37 @@ class _WriteOpts(ctypes.Structure):
 
 
 lib.pa_mesh_write.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.POINTER(_WriteOpts)]
+
+
+# ------------------------------------------------------------ statistics
+
+def _num(x):
+    return x if math.isfinite(x) else None
+
+
+def _ratio(n, total):
+    return n / total if total > 0 else 0.0
+
+
+def stats_dict(s):
+    """The members of pa_stats_write_json, from a pa_stats."""
+    return {
+        "padapt_version": _lib.lib.pa_version().decode(),
+        "dim": s.dim, "vertices": s.nvert, "elements": s.nelem, "boundary": s.nbdry,
+        "volume": _num(s.volume), "inverted": s.ninverted, "valid": bool(s.valid),
+        "has_metric": bool(s.has_metric), "edges": s.nedge,
+        "edge_min": _num(s.edge_min), "edge_max": _num(s.edge_max),
+        "edge_mean": _num(s.edge_sum / s.nedge if s.nedge > 0 else 0.0),
+        "edge_in_range": _ratio(s.edge_hist[_lib.STATS_EDGE_NBIN - 1], s.nedge),
+        "edge_hist": list(s.edge_hist),
+        "quality_worst": _num(s.qual_min),
+        "quality_mean": _num(s.qual_sum / s.nelem if s.nelem > 0 else 0.0),
+        "quality_best": _num(s.qual_max),
+        "quality_above_0.5": _ratio(s.qual_above_05, s.nelem),
+        "quality_above_0.12": _ratio(s.qual_above_012, s.nelem),
+        "quality_hist": list(s.qual_hist),
+    }
+
 
 
 # ------------------------------------------------------------ input checks
@@ -423,7 +455,6 @@ class Mesh(object):
     def stats(self):
         """Statistics as `padapt stats -json` writes them (a dict): counts,
         volume, validity, edge lengths and qualities in the metric."""
-        from .adapt import stats_dict
         s = _lib.Stats()
         lib.pa_mesh_invalidate(self._h)
         check(lib.pa_mesh_stats(self._h, ctypes.byref(s)))

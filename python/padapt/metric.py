@@ -20,6 +20,8 @@ __all__ = ["hessian", "recover", "levelset", "signed_distance", "analytic",
            "scale_complexity"]
 
 _RECOVERY = {"lsq": 0, "l2": 1}
+_RECOVERY_NAME = {v: k for k, v in _RECOVERY.items()}
+_HESS = _lib.HESSIAN_DEFAULTS
 
 
 def _mesh(mesh):
@@ -96,8 +98,8 @@ def _hessian_opts(who, target, err, p, hmin, hmax, hgrad, recovery):
     return o
 
 
-def hessian(mesh, u, *, target=None, err=None, p=2, hmin=None, hmax=None, hgrad=1.3,
-            recovery="lsq"):
+def hessian(mesh, u, *, target=None, err=None, p=_HESS.p, hmin=None, hmax=None,
+            hgrad=_HESS.hgrad, recovery=_RECOVERY_NAME[_HESS.recovery]):
     """The Lp-optimal metric of the scalar vertex field u (Loseille and
     Alauzet's multiscale metric M = D det|H|^(-1/(2p+d)) |H|), scaled to the
     complexity target (about 2.3 target triangles, 8.5 target tetrahedra)
@@ -124,7 +126,8 @@ def signed_distance(mesh, spec):
     return phi
 
 
-def levelset(mesh, phi, *, eps, hmin, hmax, band=None, hgrad=1.3):
+def levelset(mesh, phi, *, eps, hmin, hmax, band=None,
+             hgrad=_lib.LEVELSET_DEFAULTS.hgrad):
     """The metric capturing the zero set of the level set phi (nvert,) to
     within the distance eps: size hmin across the zero set growing to hmax
     at the edge of the band (half-width band, default 5 hmax), the chord
@@ -189,7 +192,8 @@ def intersect(a, b, *, dim=None):
     return out
 
 
-def grade(mesh, metric, hgrad=1.3, hgradreq=2.3):
+def grade(mesh, metric, hgrad=_lib.REMESH_DEFAULTS.hgrad,
+          hgradreq=_lib.REMESH_DEFAULTS.hgradreq):
     """The metric graded on mesh: sizes grow by at most hgrad per unit
     length (hgradreq from required vertices, which keep their metric; <= 1:
     no bound)."""

@@ -39,14 +39,14 @@ void pa_adapt_opts_default(pa_adapt_opts *o) {
   if (!o) return;
   memset(o, 0, sizeof *o);
   pa_remesh_opts_default(&o->remesh);
-  o->qual_threshold = 0.3;
-  o->max_iter = 30;
-  o->pieces_per_rank = 1;
-  o->skin_layers = 2;
-  o->skin_layers_later = 1;
-  o->min_piece_work = 2000;
-  o->min_piece_ratio = 0.25;
-  o->rebalance_tol = 1.05;
+  o->qual_threshold = PA_DEFAULT_QUAL_THRESHOLD;
+  o->max_iter = PA_DEFAULT_MAX_ITER;
+  o->pieces_per_rank = PA_DEFAULT_PIECES_PER_RANK;
+  o->skin_layers = PA_DEFAULT_SKIN_LAYERS;
+  o->skin_layers_later = PA_DEFAULT_SKIN_LAYERS_LATER;
+  o->min_piece_work = PA_DEFAULT_MIN_PIECE_WORK;
+  o->min_piece_ratio = PA_DEFAULT_MIN_PIECE_RATIO;
+  o->rebalance_tol = PA_DEFAULT_REBALANCE_TOL;
   o->rebalance = 1;
   o->check_pieces = -1;
 }

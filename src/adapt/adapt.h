@@ -58,7 +58,7 @@
  * metric). 1.5, not sqrt 2: bisecting a skin face's edge of 1.47 cuts the
  * obtuse faces of a bisected Kuhn cube with a median half the shortest edge
  * (0.52), frozen until another iteration tags its elements again
- * (docs/design/ADAPT.md has the measurement). */
+ * (docs/BENCHMARKS.md, "The parallel loop", has the measurement). */
 #define PA_ADAPT_LEB_SKIN 1.5
 #define PA_ADAPT_LEB_INNER 2.0
 /* No label (pieces.c, extract.c). */

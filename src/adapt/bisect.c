@@ -22,7 +22,8 @@
  * inner end, whose faces are coplanar, so its midpoint is on the surface.
  * Without the labelled ends, every skin face touching a ridge of a box
  * would stay as coarse as the input, and its neighbours would be remeshed
- * again in another iteration (docs/design/ADAPT.md has the measurement).
+ * again in another iteration (docs/BENCHMARKS.md, "The parallel loop", has
+ * the measurement).
  *
  * With inside, edges inside the piece longer than PA_ADAPT_LEB_INNER are
  * bisected too, in the same longest-first order: otherwise the elements on

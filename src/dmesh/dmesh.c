@@ -211,15 +211,6 @@ cleanup:
   return st;
 }
 
-size_t pa__value_paylen(const pa_dmesh *dm, int kind, int32_t ref) {
-  size_t n = 0;
-  for (int k = 0; k < dm->nvalue; k++) {
-    const pa_dmesh_value *v = dm->value[k];
-    if ((int)v->kind == kind && (v->ref < 0 || v->ref == ref)) n += v->unit;
-  }
-  return n;
-}
-
 pa_status pa_dmesh_value_add(pa_dmesh *dm, pa_entity kind, const char *name,
                              MPI_Datatype type, int ncomp, int32_t ref,
                              pa_dmesh_value **value) {
@@ -488,78 +479,5 @@ pa_status pa_dmesh_sync_mesh(pa_dmesh *dm) {
   }
 cleanup:
   if (dm) st = pa__agree_end(dm->comm, st);
-  return st;
-}
-
-/* ---- records of the owned entities ---- */
-
-static pa_status owned_kind(pa_dmesh *dm, int kind, const int *dest,
-                            pa__recs *R, unsigned char *pay) {
-  pa_status st = PA_SUCCESS;
-  pa_mesh *m = dm->mesh;
-  int d = dm->dim, nv = pa__kind_nv(d, kind);
-  double *dbl = NULL;
-  const pa_idx *conn = kind == PA_ELEMENT    ? m->elem
-                       : kind == PA_BOUNDARY ? m->bdry
-                                             : m->edge;
-  if (kind == PA_VERTEX) PA_ALLOC(dbl, R->ndbl);
-  { /* exact sizes: no growth, no realloc copies at the peak */
-    size_t paybytes = 0;
-    for (int k = 0; k < dm->nvalue; k++)
-      if ((int)dm->value[k]->kind == kind)
-        paybytes += (size_t)dm->value[k]->nslotown * dm->value[k]->unit;
-    PA_CALL(pa__recs_reserve(R, (size_t)dm->nown[kind], paybytes));
-  }
-  for (pa_idx e = 0; e < dm->nown[kind]; e++) {
-    pa_gid vg[4];
-    for (int j = 0; j < nv; j++)
-      vg[j] = dm->gid[PA_VERTEX][conn[(size_t)nv * e + j]];
-    if (dbl) pa__vertex_doubles(m, e, m->nfield, dbl);
-    int32_t ref = pa__dmesh_ref(dm, kind, e);
-    size_t pl = 0;
-    for (int k = 0; k < dm->nvalue; k++) {
-      pa_dmesh_value *v = dm->value[k];
-      if ((int)v->kind != kind || (v->ref >= 0 && v->ref != ref)) continue;
-      pa_idx slot = v->slot ? v->slot[e] : e;
-      memcpy(pay + pl, v->data + v->unit * (size_t)slot, v->unit);
-      pl += v->unit;
-    }
-    uint8_t flag = kind == PA_VERTEX    ? m->vflag[e]
-                   : kind == PA_ELEMENT ? m->eflag[e]
-                   : kind == PA_BOUNDARY ? m->bflag[e]
-                                         : m->edflag[e];
-    PA_CALL(pa__recs_add(R, dm->gid[kind][e], vg, ref, flag,
-                         dest ? dest[e] : dm->rank, dbl, pay, pl));
-  }
-cleanup:
-  pa__free(dbl);
-  return st;
-}
-
-pa_status pa__dmesh_owned_recs(pa_dmesh *dm, const int *dest, pa__recs *E,
-                               pa__recs *V, pa__recs *B, pa__recs *D) {
-  pa_status st = PA_SUCCESS;
-  unsigned char *pay = NULL;
-  pa__layout lay;
-  size_t maxpay = 0;
-  pa__dmesh_layout(dm, &lay);
-  pa__recs_init(E, PA_ELEMENT, dm->dim + 1, 0);
-  pa__recs_init(V, PA_VERTEX, 0, pa__layout_ndbl(&lay));
-  pa__recs_init(B, PA_BOUNDARY, dm->dim, 0);
-  pa__recs_init(D, PA_EDGE, 2, 0);
-  for (int k = 0; k < dm->nvalue; k++) maxpay += dm->value[k]->unit;
-  PA_ALLOC(pay, maxpay);
-  PA_CALL(owned_kind(dm, PA_ELEMENT, dest, E, pay));
-  PA_CALL(owned_kind(dm, PA_VERTEX, NULL, V, pay));
-  PA_CALL(owned_kind(dm, PA_BOUNDARY, NULL, B, pay));
-  PA_CALL(owned_kind(dm, PA_EDGE, NULL, D, pay));
-cleanup:
-  pa__free(pay);
-  if (st) {
-    pa__recs_free(E);
-    pa__recs_free(V);
-    pa__recs_free(B);
-    pa__recs_free(D);
-  }
   return st;
 }

@@ -148,12 +148,8 @@ static inline pa_status pa__recs_add(pa__recs *r, pa_gid gid,
  * array. */
 pa_status pa__recs_append(pa__recs *r, const pa__recs *in, size_t k0,
                           size_t n);
-/* Bytes of record i on the wire. */
+/* Bytes of record i in transit (the traffic counted as bytes moved). */
 size_t pa__recs_wire(const pa__recs *r, size_t i);
-/* Append record i to a buffer (reserve pa__recs_wire bytes first). */
-void pa__recs_pack(const pa__recs *r, size_t i, pa__buf *b);
-/* Unpack one record at *pos of p into r and advance *pos. */
-pa_status pa__recs_unpack(pa__recs *r, const unsigned char *p, size_t *pos);
 /* Collective: send record i to rank dest[i] (the records' aux if dest NULL);
  * *out receives (initialised by the call) the records sent to this rank,
  * sorted by gid. */
@@ -266,12 +262,6 @@ void pa__dmesh_clear(pa_dmesh *dm);
 void pa__dmesh_invalidate(pa_dmesh *dm);
 /* Layout of the local mesh's metric and fields. */
 void pa__dmesh_layout(pa_dmesh *dm, pa__layout *lay);
-/* Records of the owned entities of dm (with value payloads). */
-pa_status pa__dmesh_owned_recs(pa_dmesh *dm, const int *dest, pa__recs *elems,
-                               pa__recs *verts, pa__recs *bdry,
-                               pa__recs *edges);
-/* Bytes of the payload of entity i of kind (sum of matching values). */
-size_t pa__value_paylen(const pa_dmesh *dm, int kind, int32_t ref);
 /* Local: add the definition of a value of a predefined MPI type to a
  * pa_dmesh without distribution (no data: the next build allocates it and
  * fills it from the record payloads). Fails with PA_ERR_FORMAT on a bad or
@@ -341,7 +331,13 @@ pa_status pa__output_end(MPI_Comm comm, pa_output *tx, pa_status st);
 pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
                               int check, pa_stats *stats);
 
-/* ---- incremental rebuilds (incremental.c) ---- */
+/* ---- the records a rebuild starts from (incremental.c) ---- */
+
+/* Records of the owned entities of dm (with value payloads; the elements'
+ * aux dest[e], or this rank with dest NULL). */
+pa_status pa__dmesh_owned_recs(pa_dmesh *dm, const int *dest, pa__recs *elems,
+                               pa__recs *verts, pa__recs *bdry,
+                               pa__recs *edges);
 
 /* Local: the bytes of the values of local entity e of a kind (those whose
  * reference filter it passes, in the order of dm->value) into buf; returns

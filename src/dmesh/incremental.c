@@ -1,8 +1,9 @@
 /*
- * incremental.c -- services for rebuilding a distributed mesh that changed
- * only in part (the parallel adaptation loop): records of the owned
- * entities that stay, written straight from the arrays of the local mesh
- * into exactly reserved record sets.
+ * incremental.c -- the records a rebuild starts from, written straight
+ * from the arrays of the local mesh into exactly reserved record sets: of
+ * every owned entity (pa__dmesh_owned_recs, a redistribution), and of the
+ * owned entities that stay when a distributed mesh changed only in part
+ * (pa__dmesh_kept_recs, the parallel adaptation loop).
  */
 #include "dmesh/dmesh.h"
 
@@ -103,6 +104,72 @@ cleanup:
     pa__recs_free(B);
     pa__recs_free(D);
     pa__recs_free(P);
+  }
+  return st;
+}
+
+/* ---- records of the owned entities ---- */
+
+static pa_status owned_kind(pa_dmesh *dm, int kind, const int *dest,
+                            pa__recs *R, unsigned char *pay) {
+  pa_status st = PA_SUCCESS;
+  pa_mesh *m = dm->mesh;
+  int d = dm->dim, nv = pa__kind_nv(d, kind);
+  double *dbl = NULL;
+  const pa_idx *conn = kind == PA_ELEMENT    ? m->elem
+                       : kind == PA_BOUNDARY ? m->bdry
+                                             : m->edge;
+  if (kind == PA_VERTEX) PA_ALLOC(dbl, R->ndbl);
+  { /* exact sizes: no growth, no realloc copies at the peak */
+    size_t paybytes = 0;
+    for (int k = 0; k < dm->nvalue; k++)
+      if ((int)dm->value[k]->kind == kind)
+        paybytes += (size_t)dm->value[k]->nslotown * dm->value[k]->unit;
+    PA_CALL(pa__recs_reserve(R, (size_t)dm->nown[kind], paybytes));
+  }
+  for (pa_idx e = 0; e < dm->nown[kind]; e++) {
+    pa_gid vg[4];
+    for (int j = 0; j < nv; j++)
+      vg[j] = dm->gid[PA_VERTEX][conn[(size_t)nv * e + j]];
+    if (dbl) pa__vertex_doubles(m, e, m->nfield, dbl);
+    int32_t ref = pa__dmesh_ref(dm, kind, e);
+    size_t pl = pa__entity_payload(dm, kind, e, pay);
+    uint8_t flag = kind == PA_VERTEX    ? m->vflag[e]
+                   : kind == PA_ELEMENT ? m->eflag[e]
+                   : kind == PA_BOUNDARY ? m->bflag[e]
+                                         : m->edflag[e];
+    PA_CALL(pa__recs_add(R, dm->gid[kind][e], vg, ref, flag,
+                         dest ? dest[e] : dm->rank, dbl, pay, pl));
+  }
+cleanup:
+  pa__free(dbl);
+  return st;
+}
+
+pa_status pa__dmesh_owned_recs(pa_dmesh *dm, const int *dest, pa__recs *E,
+                               pa__recs *V, pa__recs *B, pa__recs *D) {
+  pa_status st = PA_SUCCESS;
+  unsigned char *pay = NULL;
+  pa__layout lay;
+  size_t maxpay = 0;
+  pa__dmesh_layout(dm, &lay);
+  pa__recs_init(E, PA_ELEMENT, dm->dim + 1, 0);
+  pa__recs_init(V, PA_VERTEX, 0, pa__layout_ndbl(&lay));
+  pa__recs_init(B, PA_BOUNDARY, dm->dim, 0);
+  pa__recs_init(D, PA_EDGE, 2, 0);
+  for (int k = 0; k < dm->nvalue; k++) maxpay += dm->value[k]->unit;
+  PA_ALLOC(pay, maxpay);
+  PA_CALL(owned_kind(dm, PA_ELEMENT, dest, E, pay));
+  PA_CALL(owned_kind(dm, PA_VERTEX, NULL, V, pay));
+  PA_CALL(owned_kind(dm, PA_BOUNDARY, NULL, B, pay));
+  PA_CALL(owned_kind(dm, PA_EDGE, NULL, D, pay));
+cleanup:
+  pa__free(pay);
+  if (st) {
+    pa__recs_free(E);
+    pa__recs_free(V);
+    pa__recs_free(B);
+    pa__recs_free(D);
   }
   return st;
 }

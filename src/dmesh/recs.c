@@ -121,52 +121,6 @@ size_t pa__recs_wire(const pa__recs *r, size_t i) {
          paylen_of(r, i);
 }
 
-void pa__recs_pack(const pa__recs *r, size_t i, pa__buf *b) {
-  uint32_t pl = (uint32_t)paylen_of(r, i);
-  pa__buf_put(b, &r->gid[i], 8);
-  pa__buf_put(b, r->vgid + (size_t)r->nv * i, 8 * (size_t)r->nv);
-  pa__buf_put(b, &r->ref[i], 4);
-  pa__buf_put(b, &r->flag[i], 1);
-  pa__buf_put(b, &r->aux[i], 4);
-  pa__buf_put(b, r->dbl + (size_t)r->ndbl * i, 8 * (size_t)r->ndbl);
-  pa__buf_put(b, &pl, 4);
-  if (pl) pa__buf_put(b, r->pay + r->poff[i], pl);
-}
-
-pa_status pa__recs_unpack(pa__recs *r, const unsigned char *p, size_t *pos) {
-  pa_status st = PA_SUCCESS;
-  pa_gid gid, vg[4];
-  int32_t ref;
-  uint8_t flag;
-  int aux;
-  double dbl[3 + 6 + 64];
-  uint32_t pl;
-  const double *dp = dbl;
-  PA_CHECK(r->nv <= 4, PA_ERR_INTERNAL, "record with %d vertices", r->nv);
-  pa__get(p, pos, &gid, 8);
-  pa__get(p, pos, vg, 8 * (size_t)r->nv);
-  pa__get(p, pos, &ref, 4);
-  pa__get(p, pos, &flag, 1);
-  pa__get(p, pos, &aux, 4);
-  if ((size_t)r->ndbl <= sizeof dbl / sizeof *dbl)
-    pa__get(p, pos, dbl, 8 * (size_t)r->ndbl);
-  else { /* many fields: copy through an aligned heap buffer */
-    double *big;
-    PA_ALLOC(big, r->ndbl);
-    pa__get(p, pos, big, 8 * (size_t)r->ndbl);
-    pa__get(p, pos, &pl, 4);
-    st = pa__recs_add(r, gid, vg, ref, flag, aux, big, p + *pos, pl);
-    pa__free(big);
-    *pos += pl;
-    return st;
-  }
-  pa__get(p, pos, &pl, 4);
-  PA_CALL(pa__recs_add(r, gid, vg, ref, flag, aux, dp, p + *pos, pl));
-  *pos += pl;
-cleanup:
-  return st;
-}
-
 size_t pa__recblock_bytes(int nv, int ndbl, size_t n, size_t paybytes) {
   size_t b = 16 + n * (8 + 8 * (size_t)nv + 8 * (size_t)ndbl + 4 + 4 + 1) +
              (paybytes ? 4 * n + paybytes : 0);

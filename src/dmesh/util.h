@@ -104,23 +104,11 @@ typedef struct pa__buf {
 } pa__buf;
 
 pa_status pa__buf_reserve(pa__buf *b, size_t extra);
-/* Append n bytes (buffer must have room: call pa__buf_reserve first). */
-static inline void pa__buf_put(pa__buf *b, const void *x, size_t n) {
-  memcpy(b->p + b->n, x, n);
-  b->n += n;
-}
 static inline void pa__buf_free(pa__buf *b) {
   pa__free(b->p);
   b->p = NULL;
   b->n = b->cap = 0;
 }
-/* Read n bytes at *pos of a received buffer and advance. */
-static inline void pa__get(const unsigned char *p, size_t *pos, void *x,
-                           size_t n) {
-  memcpy(x, p + *pos, n);
-  *pos += n;
-}
-
 /* Sort gids ascending and remove duplicates; returns the new count. */
 size_t pa__gid_sort_unique(pa_gid *a, size_t n);
 /* Sort idx[0..n) so that key[idx[i]] is ascending (stable). */

@@ -13,9 +13,10 @@
  * back exactly, mostly decided from the 17 digits alone (decided_17).
  * pa__fmt_int: an integer in decimal, two digits per division.
  */
-#include "io/io.h"
+#include "io/fmt.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>

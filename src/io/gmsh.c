@@ -55,7 +55,9 @@
  * ignored, with everything after them, once the mesh is read; other unknown
  * sections are skipped up to their $End line.
  */
-#include "io/io.h"
+#include "io/fmt.h"
+#include "io/gmsh.h"
+#include "io/output.h"
 #include "metric/metric.h"
 
 #include <errno.h>

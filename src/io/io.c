@@ -1,22 +1,11 @@
 /*
  * io.c -- format dispatch by file extension (the output files themselves:
- * output.c).
+ * output.c). Only this file of src/io/ calls the others' readers and
+ * writers; none calls it.
  */
 #include "io/io.h"
 
-#include <ctype.h>
 #include <stdio.h>
-
-const char *pa__path_ext(const char *path, char *buf, size_t len) {
-  const char *dot = strrchr(path, '.');
-  const char *slash = strrchr(path, '/');
-  buf[0] = '\0';
-  if (!dot || (slash && dot < slash)) return buf;
-  size_t i = 0;
-  for (; dot[i] && i + 1 < len; i++) buf[i] = (char)tolower((unsigned char)dot[i]);
-  buf[i] = '\0';
-  return buf;
-}
 
 pa_status pa_mesh_read(const char *path, pa_mesh **mesh) {
   pa_status st = PA_SUCCESS;

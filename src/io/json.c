@@ -2,7 +2,7 @@
  * json.c -- the statistics of a mesh as a JSON report (pa_stats_write_json),
  * written through an output file (output.c): all or nothing.
  */
-#include "io/io.h"
+#include "io/output.h"
 #include "metric/metric.h"
 
 #include <math.h>

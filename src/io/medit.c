@@ -50,7 +50,9 @@
  *    are skipped by their documented layout; quadrilaterals, prisms,
  *    hexahedra and pyramids are PA_ERR_UNSUPPORTED (simplex meshes only).
  */
-#include "io/io.h"
+#include "io/fmt.h"
+#include "io/medit.h"
+#include "io/output.h"
 
 #include <ctype.h>
 #include <errno.h>

@@ -27,8 +27,9 @@
  *  - an existing output path that is not a regular file (a directory, a
  *    symbolic link, a device, a FIFO) is never written nor removed.
  */
-#include "io/io.h"
+#include "io/output.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <signal.h>
@@ -514,4 +515,15 @@ cleanup:
   if (fp) fclose(fp);
   pa__free(buf);
   return st;
+}
+
+const char *pa__path_ext(const char *path, char *buf, size_t len) {
+  const char *dot = strrchr(path, '.');
+  const char *slash = strrchr(path, '/');
+  buf[0] = '\0';
+  if (!dot || (slash && dot < slash)) return buf;
+  size_t i = 0;
+  for (; dot[i] && i + 1 < len; i++) buf[i] = (char)tolower((unsigned char)dot[i]);
+  buf[i] = '\0';
+  return buf;
 }

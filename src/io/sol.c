@@ -21,7 +21,8 @@
  * Writing: one SolAtVertices keyword holding every field, binary version 2
  * (3 beyond 2 GiB), through a temporary file (output.c).
  */
-#include "io/io.h"
+#include "io/medit.h"
+#include "io/output.h"
 
 typedef struct sol_field {
   pa_sol_kind kind;

@@ -28,7 +28,8 @@
  * The appended section ends with a newline before </AppendedData>. The file
  * is written through a temporary file (output.c), so a failure leaves none.
  */
-#include "io/io.h"
+#include "io/output.h"
+#include "io/vtu.h"
 
 #include "metric/metric.h"
 

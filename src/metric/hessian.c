@@ -35,8 +35,8 @@
 
 void pa_metric_hessian_opts_default(pa_metric_hessian_opts *o) {
   memset(o, 0, sizeof *o);
-  o->p = 2;
-  o->hgrad = 1.3;
+  o->p = PA_DEFAULT_LP;
+  o->hgrad = PA_DEFAULT_HGRAD;
   o->recovery = PA_RECOVER_LSQ;
 }
 

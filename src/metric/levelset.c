@@ -355,7 +355,7 @@ cleanup:
 
 void pa_metric_levelset_opts_default(pa_metric_levelset_opts *o) {
   memset(o, 0, sizeof *o);
-  o->hgrad = 1.3;
+  o->hgrad = PA_DEFAULT_HGRAD;
 }
 
 /* Chord size of a curvature kappa, clamped to [hmin, hmax] (hmin if kappa

@@ -1,6 +1,6 @@
 /*
  * metric.c -- Riemannian metric algebra: validity, symmetric eigen-
- * decomposition, log/exp, interpolation (linear in size), intersection,
+ * decomposition, interpolation (linear in size), intersection,
  * clamping, and the dimension-generic entries of the length and quality
  * kernels (metric2d.h, metric3d.h).
  *
@@ -17,7 +17,7 @@
  * pa__edge_length and pa__quality (m may then be NULL).
  *
  * Outputs may alias inputs (out == m[i] in pa__metric_interp, out == m1 or
- * m2 in pa__metric_intersect, logm == m in pa__metric_log, ...): every
+ * m2 in pa__metric_intersect, ...): every
  * kernel reads all its inputs before writing its output.
  *
  * Eigen-decomposition: closed form in 2D (eigenvalue of larger magnitude
@@ -123,38 +123,6 @@ double pa__sym_det(int dim, const double *m) {
   double a11 = m[0], a12 = m[1], a22 = m[2], a13 = m[3], a23 = m[4], a33 = m[5];
   return a11 * (a22 * a33 - a23 * a23) - a12 * (a12 * a33 - a23 * a13) +
          a13 * (a12 * a23 - a22 * a13);
-}
-
-int pa__sym_inverse(int dim, const double *m, double *inv) {
-  if (dim == 2) {
-    double det = det2_accurate(m[0], m[1], m[2]);
-    if (det == 0.0 || !isfinite(det)) return 0;
-    double r = 1.0 / det;
-    double i0 = m[2] * r, i1 = -m[1] * r, i2 = m[0] * r;
-    if (!isfinite(i0) || !isfinite(i1) || !isfinite(i2)) return 0;
-    inv[0] = i0;
-    inv[1] = i1;
-    inv[2] = i2;
-    return 1;
-  }
-  double a11 = m[0], a12 = m[1], a22 = m[2], a13 = m[3], a23 = m[4], a33 = m[5];
-  double c[6];
-  c[0] = a22 * a33 - a23 * a23;
-  c[1] = a13 * a23 - a12 * a33;
-  c[2] = a11 * a33 - a13 * a13;
-  c[3] = a12 * a23 - a13 * a22;
-  c[4] = a12 * a13 - a11 * a23;
-  c[5] = a11 * a22 - a12 * a12;
-  double det = a11 * c[0] + a12 * c[1] + a13 * c[3];
-  if (det == 0.0 || !isfinite(det)) return 0;
-  double r = 1.0 / det;
-  for (int k = 0; k < 6; k++) {
-    c[k] *= r;
-    if (!isfinite(c[k])) return 0;
-  }
-  for (int k = 0; k < 6; k++)
-    inv[k] = c[k];
-  return 1;
 }
 
 /* ------------------------------------------------------------------------ */
@@ -299,18 +267,6 @@ static void sym_apply(int dim, const double *m, double *out,
   for (int i = 0; i < dim; i++)
     lambda[i] = f(lambda[i]);
   pa__sym_from_eigen(dim, lambda, vec, out);
-}
-
-/* log of an eigenvalue that should be positive; rounding may have pushed a
- * tiny one to zero or below, so it is floored at DBL_MIN. */
-static double safe_log(double x) { return log(x > DBL_MIN ? x : DBL_MIN); }
-
-void pa__metric_log(int dim, const double *m, double *logm) {
-  sym_apply(dim, m, logm, safe_log);
-}
-
-void pa__metric_exp(int dim, const double *logm, double *m) {
-  sym_apply(dim, logm, m, exp);
 }
 
 /* Size tensor H = M^-1/2 and back (M = H^-2); an eigenvalue that rounding

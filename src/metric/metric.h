@@ -74,12 +74,6 @@ void pa__sym_eigen(int dim, const double *m, double *lambda, double *vec);
 void pa__sym_from_eigen(int dim, const double *lambda, const double *vec,
                         double *m);
 double pa__sym_det(int dim, const double *m);
-/* Inverse of an SPD tensor; returns 0 if singular. */
-int pa__sym_inverse(int dim, const double *m, double *inv);
-
-/* Matrix log/exp of SPD tensors (full tensors). */
-void pa__metric_log(int dim, const double *m, double *logm);
-void pa__metric_exp(int dim, const double *logm, double *m);
 
 /* Interpolation of n metrics with weights w (sum to 1) at a new vertex,
  * linear in size: M = (sum w_i M_i^-1/2)^-2, h = sum w_i h_i (Mmg's

@@ -126,7 +126,8 @@ static pa_status build_graph(MPI_Comm comm, scotch_run *s, pa_idx n,
 /* The partitioning strategy; collective, agreed. On large graphs Scotch's
  * default: no strategy of SCOTCH_stratDgraphMapBuild (SPEED / QUALITY /
  * BALANCE) is faster on 2+ ranks, and BALANCE buys little balance with more
- * edge cut (figures: docs/design/DMESH.md, bench/bench_scotch.c). Up to
+ * edge cut (figures: docs/BENCHMARKS.md, "The distributed mesh",
+ * bench/bench_scotch.c). Up to
  * PA_PARTITION_SPEED_MAX vertices, SPEED: half the instructions on a
  * 6 000-vertex graph, the same adapted meshes' quality (figures:
  * docs/BENCHMARKS.md, "Small jobs on two ranks"). kbal > 0 asks for that
@@ -294,7 +295,7 @@ pa_status pa__order_graph(pa_idx n, const pa_idx *xadj, const pa_idx *adj,
   /* Gibbs-Poole-Stockmeyer: a bandwidth-reducing ordering in linear time,
    * what locality needs; Scotch's default nested dissection (for sparse
    * factorisation) is far slower for a similar locality (figures:
-   * docs/design/DMESH.md) */
+   * docs/BENCHMARKS.md, "The distributed mesh") */
   PA_CHECK(SCOTCH_stratGraphOrder(&strat, "g") == 0, PA_ERR_PARTITION,
            "SCOTCH_stratGraphOrder failed");
   SCOTCH_randomReset(); /* reproducible, as the partitions */

@@ -28,10 +28,10 @@
 
 void pa_remesh_opts_default(pa_remesh_opts *o) {
   memset(o, 0, sizeof *o);
-  o->hgrad = 1.3;
-  o->hgradreq = 2.3;
-  o->hausd = 0.01;
-  o->angle = 45;
+  o->hgrad = PA_DEFAULT_HGRAD;
+  o->hgradreq = PA_DEFAULT_HGRADREQ;
+  o->hausd = PA_DEFAULT_HAUSD;
+  o->angle = PA_DEFAULT_ANGLE;
 }
 
 /* 3D: longest-edge bisection to length LEB_PRE first (leb.c: cheaper

@@ -2,7 +2,7 @@
 # Checkpoint and restart of the parallel `padapt adapt` (-checkpoint DIR,
 # -restart DIR): a run killed during iteration K (rank 0 raises SIGKILL
 # after iteration K's remeshing, before its checkpoint: test hook
-# PADAPT_TEST_KILL_ITER, tools/cmd_padapt.c) and restarted from DIR writes
+# PADAPT_TEST_KILL_ITER, tools/cmd_adapt_parallel.c) and restarted from DIR writes
 # exactly the mesh and metric of an uninterrupted run (cmp), at 4 and at 2
 # processes. Leftovers of an interrupted checkpoint write (a partial next
 # set, temporaries) do not disturb the restart and are removed by its next

@@ -321,6 +321,15 @@ def bad_input():
               fail=True)
     check("nspd.sol" in out and not os.path.exists("bad.sol"),
           "scale: a non-SPD metric is refused, naming the file")
+    # an option of another subcommand (each reads its own options only)
+    out = run("metric", "scale", "box.mesh", "h1.sol", "-target", 100, "-hgrad", 2,
+              "bad.sol", fail=True)
+    check("unknown option '-hgrad'" in out and not os.path.exists("bad.sol"),
+          "scale: -hgrad, an option of grade, is refused")
+    out = run("metric", "clamp", "box.mesh", "h1.sol", "-hmin", 0.2, "-hmax", 0.1,
+              "bad.sol", fail=True)
+    check("larger than -hmax" in out and not os.path.exists("bad.sol"),
+          "clamp: -hmin above -hmax is refused")
 
 
 hessian_2d()

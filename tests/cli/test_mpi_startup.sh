@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Open MPI's start-up defaults (tools/padapt.c, mpi_start_defaults): a
+# Open MPI's start-up defaults (tools/main.c, mpi_start_defaults): a
 # process started without a launcher runs as an isolated singleton with
 # the ob1 messaging layer, ranks on one node get ob1, and a setting in the
 # environment wins over both (a component that does not exist makes

@@ -29,7 +29,7 @@ plant() { # FILE LINE-TO-ADD WHAT
   fi
 }
 plant src/mesh/mesh.c '#include "metric/metric.h"' "mesh including metric"
-plant tools/padapt.c '#include "core/core.h"' "the CLI including an internal header"
+plant tools/cli_util.c '#include "core/core.h"' "the CLI including an internal header"
 plant tools/svg.c '#include "../src/io/io.h"' "the CLI including a path outside tools/"
 plant tools/params.c '#include <io/io.h>' "the CLI including an internal header as <...>"
 plant tools/cli.h '#include "nosuch.h"' "the CLI including a header not in tools/"

@@ -1,5 +1,5 @@
 /*
- * padapt.c -- entry point of the padapt command-line tool: MPI start-up,
+ * main.c -- entry point of the padapt command-line tool: MPI start-up,
  * global options, command dispatch, and the basic sequential commands
  * (generate, stats, convert). Heavier commands live in cmd_*.c, the helpers
  * they share in cli_util.c; each command reads its arguments by its option

@@ -1,5 +1,5 @@
 /*
- * cmd_padapt.c -- the parallel `padapt adapt`:
+ * cmd_adapt_parallel.c -- the parallel `padapt adapt`:
  *
  *   mpiexec -n P padapt adapt IN [-met SOL | -hsiz H] -out OUT
  *       [-distributed-output] [-field F.sol] [-mem MB] [-json REPORT.json]
@@ -49,13 +49,6 @@ static int prepare_root(const pa_cli *cli, const pa_cli_adapt_args *args,
   return 1;
 }
 
-/* The default of -serial-below: below these many elements (input and
- * expected output), two processes took longer than one on the development
- * VM (own time: box3d 10 -> 0.1, 12 k tets, 0.078 against 0.072 s; the
- * plate -> 0.003, 140 k triangles, 0.317-0.374 against 0.309-0.317 s). */
-#define SERIAL_BELOW_3D 30000
-#define SERIAL_BELOW_2D 150000
-
 /* 1 when the job on rank 0's mesh (its metric prepared) is too small to
  * share out (-serial-below): its input and the metric's estimate of its
  * output both have fewer elements than the bound. */
@@ -63,8 +56,8 @@ static int too_small(const pa_cli *cli, const pa_cli_adapt_args *args,
                      pa_mesh *mesh) {
   int d = pa_mesh_dim(mesh), nc = pa_mesh_metric_ncomp(mesh);
   double bound = args->serial_below >= 0 ? args->serial_below
-                 : d == 2               ? SERIAL_BELOW_2D
-                                        : SERIAL_BELOW_3D;
+                 : d == 2               ? PA_CLI_SERIAL_BELOW_2D
+                                        : PA_CLI_SERIAL_BELOW_3D;
   double c = 0;
   if (!(pa_mesh_nelem(mesh) < bound) || nc == 0 ||
       pa_metric_complexity(mesh, nc, pa_mesh_metric(mesh), &c) != PA_SUCCESS)

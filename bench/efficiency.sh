@@ -1,0 +1,115 @@
+#!/usr/bin/env bash
+# efficiency.sh -- the parallel loop's efficiency and work (issue: the seed
+# paper's open problem, "a better distribution of the remeshing workload").
+#
+#   bash bench/efficiency.sh BUILD_DIR WORK_DIR [PART...]
+#
+# PART (default: time work weak):
+#   time  PAIRS (default 3) interleaved pairs of `padapt adapt` at 1 then 2
+#         processes on three jobs: the gmsh rod (tests/data/rod3d.mesh ->
+#         -hsiz 0.03, ~0.8 M tets, ~7 s), the gmsh plate (2D,
+#         tests/data/plate2d.mesh -> -hsiz 0.0012, ~1.2 M triangles) and the
+#         1-second Kuhn cube (box3d 10 -> 0.05). Per job the median wall time
+#         of the whole command at np=1 and np=2 and the median efficiency
+#         T1 / (2 T2) over the pairs. Wall clock: meaningful on a quiet
+#         machine only (the load is printed first).
+#   work  the remeshing work -- the remesher's CPU time summed over the
+#         ranks, "remesh_cpu_s" of the -json report -- on the rod at np 1, 2,
+#         4 and 8 (oversubscribed: CPU time does not grow with the number of
+#         ranks per core), its ratio to the sequential work, the iterations
+#         and the work of each.
+#   weak  the rod refined to N = np x 2 M tets at np 1, 2, 4, 8
+#         (-distributed-output, deleted after each run): remeshing work per
+#         output tet (microseconds), its ratio to np=1's, the iterations.
+# Every -json report is kept in WORK_DIR (time-*, work-np*, weak-np*.json):
+# bench/time_model.py reads them.
+set -u
+BUILD=${1:?BUILD_DIR}
+WORK=${2:?WORK_DIR}
+shift 2
+PARTS=${*:-time work weak}
+PAIRS=${PAIRS:-3}
+PADAPT=$(cd "$BUILD" && pwd)/bin/padapt
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+export OMPI_MCA_rmaps_base_oversubscribe=1 SCOTCH_PTHREAD_NUMBER=1
+mkdir -p "$WORK"
+cd "$WORK" || exit 1
+echo "# efficiency: $(date -u +%Y-%m-%dT%H:%M:%SZ), repo $(git -C "$ROOT" rev-parse --short HEAD)"
+echo "# host: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'); load $(cut -d' ' -f1-3 /proc/loadavg)"
+
+median() { sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
+# wall seconds of a command (stdout and stderr dropped)
+wall() {
+  /usr/bin/time -f "%e" -o t.txt "$@" > /dev/null 2>&1
+  cat t.txt
+}
+# the value of key $2 in the JSON report $1
+jget() { /usr/bin/python3 -c "import json, sys; print(json.load(open(sys.argv[1])).get(sys.argv[2], '-'))" "$1" "$2"; }
+
+time_pairs() { # name mesh hsiz
+  local name=$1 in=$2 h=$3
+  : > "e-$name.txt"
+  for i in $(seq "$PAIRS"); do
+    t1=$(wall "$PADAPT" adapt "$in" -hsiz "$h" -out o1.meshb -nosol -json "time-$name-np1.json")
+    t2=$(wall mpiexec -n 2 "$PADAPT" adapt "$in" -hsiz "$h" -out o2.meshb -nosol -json "time-$name-np2.json")
+    echo "$t1 $t2" | awk '{print $1 / (2 * $2), $1, $2}' >> "e-$name.txt"
+  done
+  printf "time  %-6s %s elements: T1 %s s, T2 %s s (medians), efficiency T1/(2 T2) %s (pairs: %s)\n" \
+    "$name" "$(jget "time-$name-np1.json" elements)" \
+    "$(cut -d' ' -f2 "e-$name.txt" | median)" "$(cut -d' ' -f3 "e-$name.txt" | median)" \
+    "$(cut -d' ' -f1 "e-$name.txt" | median)" \
+    "$(awk '{printf "%s/%s ", $2, $3}' "e-$name.txt" | sed 's/ $//')"
+}
+
+# one line per iteration of a parallel report: tagged, pieces, work
+iters() {
+  /usr/bin/python3 -c "import json, sys
+r = json.load(open(sys.argv[1]))
+print(', '.join('%d: %d tagged, %d pieces, %.2f s' % (i['iter'], i['tagged'], i['pieces'], i['remesh_cpu_s'])
+                for i in r['iteration_detail']))" "$1"
+}
+
+for part in $PARTS; do
+  case $part in
+    time)
+      "$PADAPT" generate box3d 10 kuhn.mesh > /dev/null
+      time_pairs rod "$ROOT/tests/data/rod3d.mesh" 0.03
+      time_pairs plate "$ROOT/tests/data/plate2d.mesh" 0.0012
+      time_pairs cube kuhn.mesh 0.05 ;;
+    work)
+      "$PADAPT" adapt "$ROOT/tests/data/rod3d.mesh" -hsiz 0.03 -out o1.meshb -nosol -json work-np1.json > /dev/null 2>&1
+      w1=$(jget work-np1.json remesh_cpu_s)
+      printf "work  rod np=1: %s elements, remesher CPU %.2f s\n" "$(jget work-np1.json elements)" "$w1"
+      for np in 2 4 8; do
+        mpiexec -n "$np" "$PADAPT" adapt "$ROOT/tests/data/rod3d.mesh" -hsiz 0.03 -out o2.meshb -nosol \
+          -json "work-np$np.json" > /dev/null 2>&1
+        w=$(jget "work-np$np.json" remesh_cpu_s)
+        printf "work  rod np=%d: %s elements, remesher CPU %.2f s, %.3f x np=1, %s iterations (%s)\n" \
+          "$np" "$(jget "work-np$np.json" elements)" "$w" "$(echo "$w $w1" | awk '{print $1 / $2}')" \
+          "$(jget "work-np$np.json" iterations)" "$(iters "work-np$np.json")"
+      done ;;
+    weak)
+      # N ~ 0.817 M x (0.03 / h)^3 on the rod
+      w1=
+      for np in 1 2 4 8; do
+        h=$(awk -v n="$np" 'BEGIN { printf "%.5f", 0.03 * (0.817 / (2 * n)) ^ (1 / 3) }')
+        rm -rf weak && mkdir weak
+        if [ "$np" = 1 ]; then
+          "$PADAPT" adapt "$ROOT/tests/data/rod3d.mesh" -hsiz "$h" -out weak/o.meshb -nosol \
+            -json "weak-np$np.json" > /dev/null 2>&1
+        else
+          mpiexec -n "$np" "$PADAPT" adapt "$ROOT/tests/data/rod3d.mesh" -hsiz "$h" -out weak/o.meshb \
+            -distributed-output -nosol -json "weak-np$np.json" > /dev/null 2>&1
+        fi
+        rm -rf weak
+        n=$(jget "weak-np$np.json" elements)
+        w=$(jget "weak-np$np.json" remesh_cpu_s)
+        us=$(echo "$w $n" | awk '{printf "%.3f", 1e6 * $1 / $2}')
+        [ -z "$w1" ] && w1=$us
+        printf "weak  np=%d -hsiz %s: %s elements, remesher CPU %.2f s, %s us per tet, %.3f x np=1, %s iterations\n" \
+          "$np" "$h" "$n" "$w" "$us" "$(echo "$us $w1" | awk '{print $1 / $2}')" "$(jget "weak-np$np.json" iterations)"
+      done ;;
+    *) echo "unknown part $part" ;;
+  esac
+done
