@@ -355,20 +355,26 @@ long pa__rm_smooth_pass_2d(pa__rmesh *rm, double qfree, int feat) {
   return cnt;
 }
 
-/* Edges at p out of [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI] and their sum of ln^2
- * (L / RM_LTARGET), with p at y (metric mp) and its neighbours nb[0..nn). */
-static int len_score_2d(const pa__rmesh *rm, const double *y, const double *mp,
-                        const pa_idx *nb, int nn, double *sum) {
+/* The lengths l of the edges from p at y (metric mp) to nb[0..nn), and how
+ * many are out of [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI]. */
+static int len_out_2d(const pa__rmesh *rm, const double *y, const double *mp,
+                      const pa_idx *nb, int nn, double *l) {
   int mc = rm->mcomp, out = 0;
+  for (int i = 0; i < nn; i++) {
+    l[i] = pa__len2(mc, y, RM_X(nb[i]), mp, RM_M(nb[i]));
+    out += !(l[i] >= PA_METRIC_LEN_LO && l[i] <= PA_METRIC_LEN_HI);
+  }
+  return out;
+}
+
+/* The sum of ln^2 (l / RM_LTARGET) over l[0..nn). */
+static double len_sum_2d(const double *l, int nn) {
   double s = 0;
   for (int i = 0; i < nn; i++) {
-    double l = pa__len2(mc, y, RM_X(nb[i]), mp, RM_M(nb[i]));
-    out += !(l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI);
-    double g = log(l / RM_LTARGET);
+    double g = log(l[i] / RM_LTARGET);
     s += g * g;
   }
-  *sum = s;
-  return out;
+  return s;
 }
 
 /* Move interior vertex p = v[ip] of element k to bring its edges into range:
@@ -392,8 +398,8 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   }
   double *xp = rm->x + 2 * (size_t)p;
   const double *mp = RM_M(p);
-  double s0;
-  int out0 = len_score_2d(rm, xp, mp, nb, n, &s0);
+  double l0[RM_BALL_MAX], l1[RM_BALL_MAX], s0 = 0;
+  int out0 = len_out_2d(rm, xp, mp, nb, n, l0);
   if (out0 == 0) return 0;
   double jj[3] = {0, 0, 0}, jr[2] = {0, 0}, d2[2] = {0, 0}, worst = 0;
   double tp[3];
@@ -409,7 +415,8 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
     double q = me[0] * e[0] + me[1] * e[1];
     if (!(q > 0)) return 0;
     double g[2] = {-me[0] / q, -me[1] / q};
-    double l = pa__len2(mc, xp, xi, mp, RM_M(nb[s])), r = log(l / RM_LTARGET);
+    double l = l0[s], r = log(l / RM_LTARGET);
+    s0 += r * r;
     jj[0] += g[0] * g[0];
     jj[1] += g[0] * g[1];
     jj[2] += g[1] * g[1];
@@ -435,9 +442,11 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   for (int tr = 0; tr < 8; tr++, step *= 0.5) {
     if (tr == 4) step = 1.0;
     const double *dd = tr < 4 ? d : d2;
-    double np[2] = {x0 + step * dd[0], y0 + step * dd[1]}, s1;
-    int out1 = len_score_2d(rm, np, mp, nb, n, &s1);
-    if (!(out1 < out0 || (out1 == out0 && s1 < RM_LGAIN * s0))) continue;
+    double np[2] = {x0 + step * dd[0], y0 + step * dd[1]};
+    int out1 = len_out_2d(rm, np, mp, nb, n, l1);
+    if (!(out1 < out0 ||
+          (out1 == out0 && len_sum_2d(l1, n) < RM_LGAIN * s0)))
+      continue;
     xp[0] = np[0];
     xp[1] = np[1];
     int ok = 1;
