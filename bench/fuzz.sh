@@ -3,7 +3,8 @@
 # tests/fuzz/fuzz_readers.c mutates the seed files of tests/fuzz/corpus/READER
 # (bit flips, special bytes, inserted and deleted runs and lines, truncation,
 # numbers replaced by extreme values) and requires every input to be read
-# (then checked) or refused with a message; `make check` runs 1000 iterations
+# (then checked, and a valid mesh remeshed without a crash) or refused with
+# a message; `make check` runs 1000 iterations
 # per reader (ctest -L fuzz), this script ITER per reader (default 200000).
 #
 #   bench/fuzz.sh [BUILD_DIR] [READER...]
@@ -39,7 +40,7 @@ export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$here/../tests/lsan.supp:print_
 status=0
 for reader in "${readers[@]}"; do
   corpus="$(cd "$here/../tests/fuzz/corpus" && pwd)/$reader"
-  runs=0 ok=0 errs=0 failed=0 t0=$SECONDS
+  runs=0 ok=0 remeshed=0 errs=0 failed=0 t0=$SECONDS
   for ((k = 0; runs < iter; k++)); do
     n=$((iter - runs < chunk ? iter - runs : chunk))
     s=$((seed * 1000 + k))
@@ -60,12 +61,12 @@ for reader in "${readers[@]}"; do
       grep -m 3 -E "ERROR|runtime error|violation|leaked" "$dir/log" | sed 's/^/  /'
     else
       set -- $line
-      ok=$((ok + $5)) errs=$((errs + $9))
+      ok=$((ok + $5)) remeshed=$((remeshed + ${9})) errs=$((errs + ${11}))
       rm -rf "$dir"
     fi
     runs=$((runs + n))
   done
-  echo "$reader: $runs runs, $ok read, $errs refused, $failed failed chunks," \
+  echo "$reader: $runs runs, $ok read ($remeshed remeshed), $errs refused, $failed failed chunks," \
     "$((SECONDS - t0)) s"
 done
 exit $status

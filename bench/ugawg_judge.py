@@ -118,20 +118,25 @@ def complexity(field, dim):
     return c2 / H if dim == 3 else c2
 
 
-def read_mesh(path, dim):
+def meshio_read(path):
+    """meshio.read without its notes on stderr ("doesn't know keyword" for
+    Mmg's Ridges etc.)."""
     import meshio
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        # meshio prints "doesn't know keyword" notes for Mmg's Ridges etc.
         saved = os.dup(2)
         with open(os.devnull, "w") as null:
             os.dup2(null.fileno(), 2)
             try:
-                mesh = meshio.read(path)
+                return meshio.read(path)
             finally:
                 os.dup2(saved, 2)
                 os.close(saved)
+
+
+def read_mesh(path, dim):
+    mesh = meshio_read(path)
     x = np.asarray(mesh.points, dtype=float)[:, :dim]
     kind = "tetra" if dim == 3 else "triangle"
     cells = np.concatenate([c.data for c in mesh.cells if c.type == kind])

@@ -104,6 +104,17 @@ size_t pa_memory_current(void);
 size_t pa_memory_peak(void);
 /** Reset the peak to the current value. Not collective. */
 void pa_memory_reset_peak(void);
+/** Bound the bytes padapt may hold in this process (pa_memory_current) to
+ *  bytes (0: no bound, the default): an allocation that would pass it
+ *  fails, and the function that asked returns PA_ERR_MEMORY with a message
+ *  saying that the bound is reached. Memory of the libraries padapt calls
+ *  (MPI, PT-Scotch) and of the C library is not counted. pa_remesh and
+ *  pa_dmesh_adapt lower the bound for their call to their options' mem_mb.
+ *  Process-wide, not collective. Returns the previous bound. */
+size_t pa_memory_set_limit(size_t bytes);
+/** Returns the bound set by pa_memory_set_limit (0: none). Not
+ *  collective. */
+size_t pa_memory_limit(void);
 /** Returns the peak resident set size of the process in bytes (from the
  *  OS), 0 if unknown. Not collective. */
 size_t pa_peak_rss(void);
@@ -132,9 +143,19 @@ double pa_wtime(void);
  *  - in 3D only, feature edges (2 vertices): Medit "Edges" (ridges, required
  *    edges, interior curves). In 2D, Medit Edges are the boundary entities.
  * Every entity has an integer reference and a flag byte (PA_FLAG_*).
- * A mesh may carry a metric and user vertex fields.
+ * A mesh may carry a metric and user fields on its vertices, elements and
+ * boundary entities.
  */
 typedef struct pa_mesh pa_mesh;
+
+/** Entity kinds: of a mesh's fields (on vertices, elements or boundary
+ *  entities), of a distributed mesh's entities and values. */
+typedef enum pa_entity {
+  PA_VERTEX = 0,
+  PA_ELEMENT = 1,
+  PA_BOUNDARY = 2, /**< boundary entities: edges (2D), triangles (3D) */
+  PA_EDGE = 3      /**< feature edges (3D only) */
+} pa_entity;
 
 /** Entity flags (bit mask). */
 enum {
@@ -261,6 +282,92 @@ int pa_mesh_nfield(const pa_mesh *mesh);
  *  [0, pa_mesh_nfield). */
 pa_status pa_mesh_field(pa_mesh *mesh, int k, const char **name, int *ncomp,
                         double **values);
+
+/*
+ * Fields on elements and boundary entities. Besides its vertex fields a
+ * mesh carries up to 16 element fields (ncomp values per triangle or
+ * tetrahedron: a finite-volume unknown, a density, a material id) and up to
+ * 16 boundary fields (per boundary entity: boundary-condition values). A
+ * field's kind follows from ncomp as in Medit files: 1 a scalar, dim a
+ * vector, 3 (2D) or 6 (3D) a symmetric tensor m11 m12 m22 [m13 m23 m33];
+ * another count is ncomp scalars. The vertex functions above are the case
+ * at = PA_VERTEX of those below. pa_mesh_copy copies every field; entities
+ * added by pa_mesh_resize or pa_mesh_add_* get zeros; pa_remesh carries
+ * every field onto the new mesh by its transfer mode (user guide:
+ * docs/guide/fields.md).
+ */
+
+/** How pa_remesh carries a field onto the new entities. */
+typedef enum pa_transfer {
+  /** The default of the field's entities: LINEAR for vertex fields,
+   *  CONSERVATIVE for element fields, NEAREST for boundary fields. */
+  PA_TRANSFER_DEFAULT = 0,
+  /** Vertex fields (their only mode): linear interpolation at new
+   *  vertices; kept vertices keep their values. */
+  PA_TRANSFER_LINEAR = 1,
+  /** Element fields: each new element takes the mean of the old
+   *  piecewise-constant field over the part of it the old elements cover
+   *  (old and new elements intersected). The integral is kept to round-off
+   *  where the boundary does not move, a constant stays exactly constant,
+   *  and each value is a weighted mean of the old elements it overlaps. */
+  PA_TRANSFER_CONSERVATIVE = 2,
+  /** Element fields: CONSERVATIVE, then each value is held exactly within
+   *  the values of the old elements it overlaps, and the integral that
+   *  this and a moving boundary change is given back to the elements with
+   *  room left below (above) their bound. */
+  PA_TRANSFER_BOUNDED = 3,
+  /** Element fields: the value of the old element of largest overlap (a
+   *  field of integers keeps its set of values). Boundary fields (their
+   *  only mode): the value of the old boundary entity of the same
+   *  reference nearest to the new one's centre. */
+  PA_TRANSFER_NEAREST = 4
+} pa_transfer;
+
+/** Attach to mesh (in/out) a user field called name (its first 63 bytes)
+ *  on its entities at
+ *  (PA_VERTEX, PA_ELEMENT or PA_BOUNDARY), of ncomp > 0 components per
+ *  entity: values (nvert, nelem or nbdry times ncomp) are copied; its
+ *  transfer mode is the default one. It becomes field
+ *  pa_mesh_nfield_at - 1. Not collective. Returns PA_ERR_ARG for another
+ *  kind, ncomp <= 0, 16 fields on those entities already,
+ *  or a value that is not finite (naming the entity, 1-based),
+ *  PA_ERR_MEMORY. */
+pa_status pa_mesh_add_field_at(pa_mesh *mesh, pa_entity at, const char *name,
+                               int ncomp, const double *values);
+/** Remove field k on entities at of mesh (in/out; the later ones move down
+ *  by one). Not collective. Returns PA_ERR_ARG for another kind or k out of
+ *  range. */
+pa_status pa_mesh_remove_field_at(pa_mesh *mesh, pa_entity at, int k);
+/** Returns the number of user fields on entities at of mesh (0 for another
+ *  kind). Not collective. */
+int pa_mesh_nfield_at(const pa_mesh *mesh, pa_entity at);
+/** Field k on entities at of mesh: *name, *ncomp and *values (out, each may
+ *  be NULL; the values, one block of ncomp per entity, may be changed in
+ *  place), valid until the fields or the entities change. Not collective.
+ *  Returns PA_ERR_ARG for another kind or k out of range. */
+pa_status pa_mesh_field_at(pa_mesh *mesh, pa_entity at, int k,
+                           const char **name, int *ncomp, double **values);
+/** Returns the index of the first field called name on entities at of
+ *  mesh, -1 if there is none. Not collective. */
+int pa_mesh_field_index(const pa_mesh *mesh, pa_entity at, const char *name);
+/** Set the transfer mode of field k on entities at of mesh (in/out);
+ *  PA_TRANSFER_DEFAULT sets the default one. Not collective. Returns
+ *  PA_ERR_ARG for k out of range or a mode the field's entities do not
+ *  take (see pa_transfer), the message listing those they take. */
+pa_status pa_mesh_set_field_transfer(pa_mesh *mesh, pa_entity at, int k,
+                                     pa_transfer mode);
+/** Returns the transfer mode of field k on entities at of mesh (never
+ *  PA_TRANSFER_DEFAULT), PA_TRANSFER_DEFAULT for k out of range. Not
+ *  collective. */
+pa_transfer pa_mesh_field_transfer(const pa_mesh *mesh, pa_entity at, int k);
+/** Returns the name of a transfer mode ("linear", "conservative",
+ *  "bounded", "nearest", "default"), "?" for another value. Not
+ *  collective. */
+const char *pa_transfer_name(pa_transfer mode);
+/** The transfer mode called name (as pa_transfer_name gives it; "copy" is
+ *  "nearest") into *mode (out). Not collective. Returns PA_ERR_ARG for
+ *  another name, the message listing the valid ones. */
+pa_status pa_transfer_parse(const char *name, pa_transfer *mode);
 
 /*
  * Physical names: Gmsh's names of the entities of one dimension and one
@@ -572,6 +679,114 @@ pa_status pa_metric_from_levelset(pa_mesh *mesh, const double *phi,
                                   const pa_metric_levelset_opts *opts,
                                   double *met);
 
+/* Level-set discretisation (Mmg's -ls): the zero set of a level set cut
+ * into the mesh as an interface between two references. User guide:
+ * docs/guide/levelset.md. */
+
+/** Mmg's default references of the level-set cut: the elements where phi
+ *  < value, the others, and the interface (Mmg's MG_MINUS, MG_PLUS and
+ *  -isoref). */
+#define PA_LS_REF_IN 3
+#define PA_LS_REF_OUT 2
+#define PA_LS_REF_IFACE 10
+/** Default of pa_levelset_opts.snap: a cut point closer than this share of
+ *  its edge to one end moves onto it (the value there becomes the
+ *  iso-value). A cut point at a share t makes elements of quality about t
+ *  times their parent's; at 0.01 the interface moves by at most 1 % of an
+ *  edge, less than the interpolation error of a level set sampled at ten
+ *  vertices per radius of curvature (h^2 / 8R = 1.25 % of h). */
+#define PA_LS_SNAP 0.01
+/** Default of pa_levelset_opts.rmc when removal is asked without a volume
+ *  (Mmg's -rmc without value): 1e-5 of the mesh volume. */
+#define PA_LS_RMC 1e-5
+
+/** One material of the multi-material mode (Mmg's LSReferences): the
+ *  elements of reference ref are split by the level set into ref_in (phi <
+ *  value) and ref_out (the others); with split 0 they keep ref, are cut
+ *  where the level set crosses them only so that the mesh stays
+ *  conforming, and no interface is made inside them. */
+typedef struct pa_ls_material {
+  int32_t ref;
+  int split;
+  int32_t ref_in, ref_out;
+} pa_ls_material;
+
+/** Options of the level-set cut (pa_levelset_opts_default). */
+typedef struct pa_levelset_opts {
+  double value;      /**< the iso-value V (default 0) */
+  int32_t ref_in;    /**< elements where phi < V (default PA_LS_REF_IN) */
+  int32_t ref_out;   /**< the other elements (default PA_LS_REF_OUT) */
+  int32_t ref_iface; /**< the interface's boundary entities and vertices
+                          (default PA_LS_REF_IFACE) */
+  /** Multi-material table (NULL, 0: every element is split into ref_in and
+   *  ref_out). Every element reference must be one of its ref, or of the
+   *  ref_in and ref_out of a split material (a mesh cut before: its
+   *  elements count as that material). The array must live as long as the
+   *  options are used. */
+  const pa_ls_material *mat;
+  int nmat;
+  /** > 0: a connected region of one side (its vertices on that side,
+   *  linked by edges) whose volume is below rmc times the mesh volume
+   *  changes side before the cut (Mmg's -rmc; PA_LS_RMC is Mmg's value);
+   *  the outside's first, then the inside's. Default 0: none. */
+  double rmc;
+  /** Expert: the snapping share (default PA_LS_SNAP, in [0, 0.25]): a
+   *  vertex whose value would put a cut point within snap times the edge
+   *  of it takes the value V. */
+  double snap;
+} pa_levelset_opts;
+
+/** Fill *opts (out) with the defaults: value 0, references 3, 2 and 10, no
+ *  materials, no removal, snap PA_LS_SNAP. Not collective. */
+void pa_levelset_opts_default(pa_levelset_opts *opts);
+
+/** What a level-set cut did (the same on every rank for the distributed
+ *  one). */
+typedef struct pa_levelset_report {
+  double phi_min, phi_max; /**< range of the level set (before snapping) */
+  pa_gid nsnapped;   /**< vertices that took the value V (snapping) */
+  pa_gid nremoved_out, nremoved_in; /**< components that changed side (rmc) */
+  pa_gid ncut;       /**< edges cut (vertices added) */
+  pa_gid nelem_cut;  /**< elements split */
+  pa_gid niface;     /**< boundary entities of the interface; 0 when the
+                          level set does not cross the mesh */
+  pa_gid ndropped;   /**< entities of reference ref_iface inside the domain
+                          that were removed before the cut (the interface
+                          of an earlier cut) */
+  pa_gid nbdry_iface; /**< entities of reference ref_iface on the domain
+                           boundary, kept: the output does not tell them
+                           from the interface */
+  double vol_in, vol_out; /**< volume of the elements of either side */
+} pa_levelset_report;
+
+/**
+ * Cut the zero set of phi - opts->value into mesh (in/out; Mmg's -ls):
+ * phi holds one value per vertex (P1). Values that would put a cut point
+ * within opts->snap of an edge's end become the iso-value there; with
+ * opts->rmc, small components change side; every edge where phi - V
+ * changes sign is split at the zero of its linear interpolant (metric and
+ * fields interpolated there), every element it crosses is split into
+ * elements of either side (faces shared by two elements are split the same
+ * way on both: quadrilaterals are cut by their diagonal from the vertex of
+ * smallest key, original vertices by index, added ones after them by the
+ * indices of their edge), and so are the boundary entities and feature
+ * edges it crosses (keeping their reference and flags). Elements get
+ * ref_in (phi < V) or ref_out (or their material's references); the faces
+ * between the two sides become boundary entities of reference ref_iface
+ * (oriented from the inside out), their vertices take that reference, and
+ * other vertices of that reference take 0. Entities of reference ref_iface
+ * inside the domain (an earlier cut's interface) are removed first. Every
+ * vertex of the interface has phi = V exactly in the P1 interpolation of
+ * the (snapped) level set. The physical names stay. *report (out, may be
+ * NULL): what was done. Not collective. On error the mesh is as given.
+ * Returns PA_ERR_ARG for options out of range, a phi value that is not
+ * finite (naming the vertex, 1-based), an element reference the material
+ * table does not list (naming the element); PA_ERR_MEMORY.
+ */
+pa_status pa_mesh_levelset_cut(pa_mesh *mesh, const double *phi,
+                               const pa_levelset_opts *opts,
+                               pa_levelset_report *report);
+
 /** Returns the length of the edge ab (dim coordinates each) in the metric
  *  (ncomp components at each end: ma at a, mb at b; ncomp 0: Euclidean,
  *  ma and mb unused), by the geometric formula of Mmg. Not collective. */
@@ -689,14 +904,26 @@ void pa_fidelity_describe(const pa_fidelity *f, char *buf, size_t n);
 /* Solutions (.sol / .solb) and mesh files                                  */
 /* ------------------------------------------------------------------------ */
 
-/** Kinds of vertex fields in a solution file (Medit's codes). */
+/** Kinds of fields in a solution file (Medit's codes). */
 typedef enum pa_sol_kind {
   PA_SOL_SCALAR = 1,
   PA_SOL_VECTOR = 2,
   PA_SOL_TENSOR = 3 /**< symmetric: m11 m12 m22 [m13 m23 m33] */
 } pa_sol_kind;
 
-/** A set of fields at the vertices of a mesh (SolAtVertices). */
+/** Where the values of a solution's field are given: the Medit keyword
+ *  that holds them. A mesh of dimension 2 has its element fields at
+ *  triangles and its boundary fields at edges; of dimension 3, at
+ *  tetrahedra and at triangles. */
+typedef enum pa_sol_at {
+  PA_SOL_AT_VERTICES = 0,  /**< SolAtVertices */
+  PA_SOL_AT_EDGES = 1,     /**< SolAtEdges */
+  PA_SOL_AT_TRIANGLES = 2, /**< SolAtTriangles */
+  PA_SOL_AT_TETRAHEDRA = 3 /**< SolAtTetrahedra */
+} pa_sol_at;
+
+/** A set of fields at the vertices, edges, triangles or tetrahedra of a
+ *  mesh (SolAtVertices, SolAtEdges, SolAtTriangles, SolAtTetrahedra). */
 typedef struct pa_sol pa_sol;
 
 /** Create an empty solution of dimension dim (2 or 3) for nvert >= 0
@@ -705,8 +932,8 @@ typedef struct pa_sol pa_sol;
 pa_status pa_sol_create(int dim, pa_idx nvert, pa_sol **sol);
 /** Destroy sol (in/out; NULL allowed). Not collective. */
 void pa_sol_destroy(pa_sol *sol);
-/** Returns the dimension, the vertex count and the number of fields of
- *  sol. Not collective. */
+/** Returns the dimension, the vertex count (of its fields at vertices)
+ *  and the number of fields of sol. Not collective. */
 int pa_sol_dim(const pa_sol *sol);
 pa_idx pa_sol_nvert(const pa_sol *sol);
 int pa_sol_nfield(const pa_sol *sol);
@@ -719,33 +946,72 @@ const char *pa_sol_origin(const pa_sol *sol);
  *  from kind and dim) are copied. Not collective. Returns PA_ERR_ARG for
  *  an unknown kind, PA_ERR_MEMORY. */
 pa_status pa_sol_add_field(pa_sol *sol, pa_sol_kind kind, const double *values);
-/** Field k of sol: *kind, *ncomp (components per vertex) and *values (out,
- *  each may be NULL; nvert * ncomp values owned by sol). Not collective.
- *  Returns PA_ERR_ARG for k out of [0, pa_sol_nfield). */
+/** Field k of sol: *kind, *ncomp (components per entity) and *values (out,
+ *  each may be NULL; n * ncomp values owned by sol, n as
+ *  pa_sol_field_where gives it: nvert for a field at vertices). Not
+ *  collective. Returns PA_ERR_ARG for k out of [0, pa_sol_nfield). */
 pa_status pa_sol_field(pa_sol *sol, int k, pa_sol_kind *kind, int *ncomp,
                        double **values);
+/** Append to sol (in/out) a field of kind at n >= 0 entities of the kind
+ *  at: values (n * ncomp, ncomp from kind and dim) are copied. A field at
+ *  vertices needs n = pa_sol_nvert. Not collective. Returns PA_ERR_ARG
+ *  for an unknown kind or place, a wrong vertex count, PA_ERR_MEMORY. */
+pa_status pa_sol_add_field_at(pa_sol *sol, pa_sol_at at, pa_idx n,
+                              pa_sol_kind kind, const double *values);
+/** Where field k of sol is given: *at, *n (its entities) and *origin
+ *  (where it was read, for messages: "u.sol:12", the line of its keyword,
+ *  or "u.solb: byte 40"; NULL for a field built in memory), each may be
+ *  NULL. Not collective. Returns PA_ERR_ARG for k out of range. */
+pa_status pa_sol_field_where(const pa_sol *sol, int k, pa_sol_at *at,
+                             pa_idx *n, const char **origin);
 
 /** Read path, .sol (ASCII) or .solb (binary, versions 1-4) by extension,
- *  into *sol (out). Not collective. Returns PA_ERR_IO or PA_ERR_FORMAT
- *  naming the file and line (or byte), PA_ERR_UNSUPPORTED for another
- *  extension, PA_ERR_MEMORY. */
+ *  into *sol (out): the fields of every SolAtVertices, SolAtEdges,
+ *  SolAtTriangles and SolAtTetrahedra keyword, in file order (keywords of
+ *  one kind must agree on their count). Values are not checked (NaN
+ *  included): the mesh functions that take them do. Not collective.
+ *  Returns PA_ERR_IO or PA_ERR_FORMAT naming the file and line (or byte),
+ *  PA_ERR_UNSUPPORTED for another extension, PA_ERR_MEMORY. */
 pa_status pa_sol_read(const char *path, pa_sol **sol);
 /** Write sol to path, .sol or .solb by extension, through a temporary file
- *  (see pa_output_begin). Not collective. Returns PA_ERR_ARG for a
- *  solution without field, PA_ERR_UNSUPPORTED for another extension,
- *  PA_ERR_IO naming the path. */
+ *  (see pa_output_begin): the fields of each place under its keyword
+ *  (several types per keyword), vertices, edges, triangles, tetrahedra.
+ *  Not collective. Returns PA_ERR_ARG for a solution without field,
+ *  PA_ERR_UNSUPPORTED for another extension, PA_ERR_IO naming the path. */
 pa_status pa_sol_write(const pa_sol *sol, const char *path);
 
 /** Attach field k of sol as the metric of mesh (in/out; a scalar field:
  *  sizes, a tensor field: SPD tensors). Not collective. Returns PA_ERR_ARG
- *  for k out of range or a vector field, PA_ERR_FORMAT (naming the file)
- *  for a vertex count that is not the mesh's, PA_ERR_METRIC as
- *  pa_mesh_set_metric. */
+ *  for k out of range, a vector field or one not at vertices, PA_ERR_FORMAT
+ *  (naming the file) for a vertex count that is not the mesh's,
+ *  PA_ERR_METRIC as pa_mesh_set_metric. */
 pa_status pa_mesh_metric_from_sol(pa_mesh *mesh, const pa_sol *sol, int k);
 /** A new solution *sol (out) holding the metric of mesh and, if
- *  with_fields, its user fields. Not collective. Returns PA_ERR_ARG if
- *  there is nothing to hold, PA_ERR_MEMORY. */
+ *  with_fields, its user vertex fields. Not collective. Returns PA_ERR_ARG
+ *  if there is nothing to hold, PA_ERR_MEMORY. */
 pa_status pa_mesh_metric_to_sol(pa_mesh *mesh, int with_fields, pa_sol **sol);
+/**
+ * Attach every field of sol to mesh (in/out) as user fields: those at
+ * vertices on its vertices, at triangles (2D) or tetrahedra (3D) on its
+ * elements, at edges (2D) or triangles (3D) on its boundary entities, in
+ * the mesh's own numbering of those entities. A .sol names no field: they
+ * are called field1, field2, ... on the vertices, cell1, ... on the
+ * elements and face1, ... on the boundary entities, numbered after the
+ * fields the mesh has there. Not collective. Returns PA_ERR_FORMAT naming
+ * where a field was read (file and line) for a count that is not the
+ * mesh's or a place the mesh has no entities for (edges of a 3D mesh),
+ * PA_ERR_ARG naming the file and the entity (1-based) of a value that is
+ * not finite, or for too many fields; the mesh is then as it was.
+ * PA_ERR_MEMORY.
+ */
+pa_status pa_mesh_fields_from_sol(pa_mesh *mesh, const pa_sol *sol);
+/** A new solution *sol (out) holding the user fields of mesh, each at its
+ *  entities (vertex fields at vertices, element fields at triangles or
+ *  tetrahedra, boundary fields at edges or triangles; kind by number of
+ *  components: 1 scalar, dim vector, 3 or 6 symmetric tensor, another
+ *  count as that many scalars). Not collective. Returns PA_ERR_ARG if the
+ *  mesh has no field, PA_ERR_MEMORY. */
+pa_status pa_mesh_fields_to_sol(pa_mesh *mesh, pa_sol **sol);
 
 /** Options for writing mesh files. */
 typedef struct pa_write_opts {
@@ -827,8 +1093,34 @@ void pa_output_abort(pa_output *tx);
  * status, is PA_SUCCESS on every rank, abort everywhere otherwise. Returns
  * the same status on every rank (the lowest failing rank's, with its
  * message: see pa_set_error).
+ * The commit is one agreed step: the ranks agree on st, then agree again
+ * (each rank only once the first agreement completed on it, so a rank
+ * killed while the others still wrote stops every commit), and only then
+ * rename. SIGINT and SIGTERM act at once (with pa_output_handle_signals:
+ * the temporaries removed) until a rank enters the second agreement; from
+ * there to the end of its renames they wait, and once every rank is in
+ * they are held (pa_output_held_signal): the outputs are committed
+ * everywhere. A rank whose second agreement does not complete within half
+ * a second of such a signal (another rank is gone) aborts and lets the
+ * signal act.
  */
 pa_status pa_output_end(MPI_Comm comm, pa_output *tx, pa_status st);
+/**
+ * The SIGINT or SIGTERM that arrived while pa_output_end committed and was
+ * held until the commit completed (0 if none); the call forgets it. Not
+ * collective. The padapt CLI prints a note and exits 0: its outputs are
+ * complete.
+ */
+int pa_output_held_signal(void);
+/** Test hook: called by pa_output_end with the step reached on this rank
+ *  ("written": its files complete, entering the first agreement; "voted":
+ *  past it; "agreed": past the second, before the renames; "renamed":
+ *  after the first rename; "committed": after the renames, before agreeing
+ *  on them). */
+typedef void (*pa_output_hook)(const char *step, void *ctx);
+/** Install hook (NULL: none) with its ctx, process-wide. Not collective;
+ *  for tests (the CLI's PADAPT_TEST_PAUSE). */
+void pa_output_set_hook(pa_output_hook hook, void *ctx);
 /**
  * Check, before a long computation, that path can be written. Not
  * collective. Returns PA_ERR_IO naming the path if it exists and is not a
@@ -960,12 +1252,38 @@ typedef struct pa_remesh_opts {
    *  the array must live as long as the options are used. */
   const pa_local_param *local;
   int nlocal;
+  /** Memory bound in MB (<= 0: none): pa_remesh refuses a metric whose
+   *  output would not fit, and holds padapt's memory under it for the call
+   *  (pa_memory_set_limit; a lower bound already set stays) */
+  double mem_mb;
 } pa_remesh_opts;
 
 /** Fill *opts (out) with the defaults: no hmin/hmax/hsiz, hgrad
  *  PA_DEFAULT_HGRAD, hgradreq PA_DEFAULT_HGRADREQ, hausd PA_DEFAULT_HAUSD,
  *  angle PA_DEFAULT_ANGLE, the rest 0. Not collective. */
 void pa_remesh_opts_default(pa_remesh_opts *opts);
+
+/** What carrying the element and boundary fields through a remesh did
+ *  (all zero when the mesh has none; docs/guide/fields.md). */
+typedef struct pa_transfer_report {
+  int nfield;        /**< element and boundary fields carried */
+  long nfast;        /**< new elements inside one old element (no clipping) */
+  long nclip;        /**< new elements intersected with the old ones */
+  long nout;         /**< element values outside the range of the old
+                          elements they overlap (round-off in mode
+                          CONSERVATIVE; 0 in mode BOUNDED) */
+  /** The largest change of the integral of an element field (any field,
+   *  any component) relative to the integral of its absolute value:
+   *  round-off where the boundary does not move. */
+  double defect;
+  /** Measure of the new elements not covered by the old ones, and of the
+   *  old elements not covered by the new ones, relative to the old
+   *  domain's measure: 0 but for round-off unless the boundary moved. */
+  double uncovered, lost;
+  double time_s;     /**< seconds spent */
+  double cpu_s;      /**< CPU seconds the calling thread spent (which the
+                          load of the machine does not inflate) */
+} pa_transfer_report;
 
 /** What a remesh did. */
 typedef struct pa_remesh_report {
@@ -980,6 +1298,8 @@ typedef struct pa_remesh_report {
   double cpu_s;
   /** Filled by pa_remesh unless opts->no_stats (not by remesher callbacks). */
   pa_fidelity fidelity;
+  /** Filled by pa_remesh (not by remesher callbacks). */
+  pa_transfer_report transfer;
 } pa_remesh_report;
 
 /**
@@ -1051,19 +1371,13 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
  * [0, nowned), then the ghosts, [nowned, nlocal). Every entity has a 64-bit
  * global id, unique per kind and kept by redistribution and file round trips.
  * The local mesh (owned + ghost entities, same numbering) is a pa_mesh with
- * the metric and user vertex fields of the distributed mesh.
+ * the metric and user fields (on vertices, elements, boundary entities) of
+ * the distributed mesh; they follow the entities through every change
+ * (redistribution, reordering, files, gathering, adaptation).
  * All point-to-point traffic goes through one exchange layer (a star forest
  * per entity kind, roots = owned entities, leaves = ghost copies).
  */
 typedef struct pa_dmesh pa_dmesh;
-
-/** Entity kinds of a distributed mesh. */
-typedef enum pa_entity {
-  PA_VERTEX = 0,
-  PA_ELEMENT = 1,
-  PA_BOUNDARY = 2, /**< boundary entities: edges (2D), triangles (3D) */
-  PA_EDGE = 3      /**< feature edges (3D only) */
-} pa_entity;
 
 /**
  * Distribute a mesh held by rank root. Collective. The root sends contiguous
@@ -1446,7 +1760,9 @@ typedef struct pa_adapt_opts {
   /** Memory bound per process, in MB (<= 0: the memory available on each
    *  node, shared by its ranks): the number of pieces grows so that each
    *  piece's estimated remesher memory fits, and a metric whose whole output
-   *  would not fit is refused (PA_ERR_MEMORY). */
+   *  would not fit is refused (PA_ERR_MEMORY). A bound > 0 also holds
+   *  padapt's memory under it on every rank for the call
+   *  (pa_memory_set_limit): reaching it is an error on every rank. */
   double mem_mb;
   /** Tag elements whose quality is below this (default
    *  PA_DEFAULT_QUAL_THRESHOLD; <= 0: off). */
@@ -1537,6 +1853,12 @@ typedef struct pa_adapt_report {
   /** The result measured in the caller's metric and in the metric used
    *  (unless opts->remesh.no_stats). */
   pa_fidelity fidelity;
+  /** The element and boundary fields carried through the pieces' remeshes:
+   *  counts and times summed over the pieces and ranks; defect, uncovered
+   *  and lost the largest over the pieces, each relative to its piece (a
+   *  piece's frozen skin keeps its region: they are round-off unless it
+   *  touches a boundary that moves). */
+  pa_transfer_report transfer;
 } pa_adapt_report;
 
 /** Fill *opts (out) with the defaults: built-in remesher,
@@ -1553,7 +1875,10 @@ void pa_adapt_opts_default(pa_adapt_opts *opts);
  * entities and edges it gives back unchanged (same vertices and
  * reference); new entities get fresh global
  * ids (ids stay unique, not contiguous) and zero user values. Metric and user
- * vertex fields of the local mesh are interpolated by the remesher.
+ * vertex fields of the local mesh are interpolated by the remesher; its
+ * element and boundary fields are carried by pa_remesh on every piece, by
+ * their transfer modes (the integral of a conservative field is kept to
+ * round-off over the whole mesh where its boundary does not move).
  * Elements and boundary entities flagged PA_FLAG_REQUIRED are kept as they
  * are. A piece whose remesh fails is rolled back: its elements stay, still
  * tagged, and the mesh stays valid; if the tagged count stops decreasing the
@@ -1619,6 +1944,24 @@ pa_status pa_dmesh_metric_from_hessian(pa_dmesh *dm, int field, int comp,
 pa_status pa_dmesh_metric_from_levelset(pa_dmesh *dm, int field,
                                         const pa_metric_levelset_opts *opts);
 pa_status pa_dmesh_metric_complexity(pa_dmesh *dm, double *complexity);
+
+/**
+ * pa_mesh_levelset_cut on a distributed mesh dm (in/out, any overlap): the
+ * level set is vertex field `field` of the local mesh (a scalar; after the
+ * cut it is V at the added vertices). Each rank cuts its owned elements;
+ * the copies of an edge cut on several ranks make one vertex (one global id
+ * agreed by the edge's end ids), so the result is the sequential cut of the
+ * same mesh, whatever the number of ranks: the same vertices, elements and
+ * references. Kept entities keep their global ids and values, new ones get
+ * fresh ids and zero values; then the distributed mesh is rebuilt with its
+ * overlap. *report (out, may be NULL) is the same on every rank.
+ * Collective. Returns the same status on every rank: PA_ERR_ARG as the
+ * sequential one, or for a field that is not a scalar field of the mesh;
+ * PA_ERR_MEMORY, PA_ERR_MPI; the mesh is then not usable (destroy it).
+ */
+pa_status pa_dmesh_levelset_cut(pa_dmesh *dm, int field,
+                                const pa_levelset_opts *opts,
+                                pa_levelset_report *report);
 
 /**
  * The statistics of dm (in/out only for its cached structures) into *stats

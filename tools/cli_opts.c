@@ -4,6 +4,9 @@
  * value goes and its line of -h; pa_cli_parse reads argv by it and
  * pa_cli_help prints the -h text from it, so the two cannot disagree.
  *
+ * An optional number (PA_CLI_OPTNUM) takes the next argument only when it
+ * is a number, else its default.
+ *
  * Messages: "CMD: OPT needs WANT, got 'VALUE'" for a value that is not what
  * the option takes (VALUE "nothing" when argv ran out), "CMD: OPT needs
  * WANT" for a missing string, "CMD: unknown option 'OPT' (see padapt CMD
@@ -58,6 +61,14 @@ static int take(const pa_cli *cli, const pa_cli_spec *s, const pa_cli_opt *o,
   case PA_CLI_NUM:
     if (!pa_cli_parse_num(val, &x) || x < o->lo || x > o->hi)
       return need(cli, s, name, o->want, val);
+    *(double *)at = x;
+    break;
+  case PA_CLI_OPTNUM:
+    if (!pa_cli_parse_num(val, &x)) { /* no value: the default */
+      *(double *)at = o->dflt;
+      return 0;
+    }
+    if (x < o->lo || x > o->hi) return need(cli, s, name, o->want, val);
     *(double *)at = x;
     break;
   case PA_CLI_INT:

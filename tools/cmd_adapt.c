@@ -1,18 +1,19 @@
 /*
  * cmd_adapt.c -- `padapt adapt`: sequential adaptation of a mesh to a metric
- * with the built-in remesher (Mmg-compatible options).
+ * with the built-in remesher (Mmg-compatible options), after cutting a
+ * level set into it with -ls (tools/lsopt.c).
  *
  *   padapt adapt IN [-met SOL | -sol SOL | -hsiz H] -out OUT [options]
  *
  * Outputs: the mesh OUT (format by extension), its metric in OUT's name with
  * the extension replaced by .sol (or -outsol PATH; -nosol for none), the
- * interpolated user fields (-field F.sol) in <OUT stem>.fields.sol (or
- * -outfield PATH), the JSON report (-json) and the picture of the
+ * user fields carried (vertex, element and boundary fields: -field F.sol,
+ * or the views of a Gmsh IN) in <OUT stem>.fields.sol (or -outfield PATH), the JSON report (-json) and the picture of the
  * histograms before and after (-svg). Prints `padapt stats` before and
  * after, the operation counts and the time. Exit status: 0 on success and on "target missed" (a
  * valid mesh that misses some edge lengths: a warning says so, and the JSON
  * report's "outcome" field), 1 on any error. The outputs are checked before
- * the work starts (pa_cli_check_outputs) and written in one output
+ * the work starts (pa_cli_check_io) and written in one output
  * transaction: on any error none of them is written and files already at
  * their paths stay as they were.
  *
@@ -53,6 +54,53 @@ static int opt_verbosity(const pa_cli *cli, const pa_cli_spec *s,
                         s->cmd, name, val[0] ? val[0] : "nothing");
   a->remesh.verbosity = (int)x;
   pa_cli_set_verbosity((int)x);
+  return 0;
+}
+
+static int opt_lsref(const pa_cli *cli, const pa_cli_spec *s, const char *name,
+                     char **val, void *args) {
+  pa_cli_adapt_args *a = args;
+  for (int k = 0; k < 2; k++) {
+    double x;
+    if (!pa_cli_parse_num(val[k], &x) || x != floor(x) || fabs(x) > 2147483647)
+      return pa_cli_error(cli, "%s: %s needs two references (integers), got "
+                               "'%s'",
+                          s->cmd, name, val[k] ? val[k] : "nothing");
+    a->lsref[k] = (int)x;
+  }
+  return 0;
+}
+
+static int opt_field(const pa_cli *cli, const pa_cli_spec *s, const char *name,
+                     char **val, void *args) {
+  pa_cli_adapt_args *a = args;
+  if (!val[0]) return pa_cli_error(cli, "%s: %s needs a .sol file", s->cmd, name);
+  if (a->nfield == PA_CLI_MAX_FIELD_ARGS)
+    return pa_cli_error(cli, "%s: at most %d %s", s->cmd, PA_CLI_MAX_FIELD_ARGS,
+                        name);
+  a->field[a->nfield++] = val[0];
+  return 0;
+}
+
+/* -field-transfer [NAME=]MODE: the mode is checked here, the name once the
+ * fields are read. */
+static int opt_transfer(const pa_cli *cli, const pa_cli_spec *s,
+                        const char *name, char **val, void *args) {
+  pa_cli_adapt_args *a = args;
+  pa_transfer mode;
+  if (!val[0])
+    return pa_cli_error(cli, "%s: %s needs [FIELD=]MODE", s->cmd, name);
+  const char *eq = strchr(val[0], '=');
+  if (eq == val[0])
+    return pa_cli_error(cli, "%s: %s %s: no field name before '='", s->cmd,
+                        name, val[0]);
+  if (pa_transfer_parse(eq ? eq + 1 : val[0], &mode) != PA_SUCCESS)
+    return pa_cli_error(cli, "%s: %s %s: %s", s->cmd, name, val[0],
+                        pa_last_error());
+  if (a->ntransfer == PA_CLI_MAX_FIELD_ARGS)
+    return pa_cli_error(cli, "%s: at most %d %s", s->cmd, PA_CLI_MAX_FIELD_ARGS,
+                        name);
+  a->transfer[a->ntransfer++] = val[0];
   return 0;
 }
 
@@ -111,15 +159,43 @@ static const pa_cli_opt adapt_opts[] = {
      .help = "local parameters per reference (Mmg's format: REF\n"
              "Triangles|Tetrahedra|Edges HMIN HMAX HAUSD; default\n"
              "IN.padapt when it exists)"},
+    {.names = "-ls", .kind = PA_CLI_STR, .at = A(ls), .want = "a .sol file",
+     .label = "-ls PHI.sol",
+     .help = "cut the zero set of the level set PHI (one value per\n"
+             "vertex of IN) into IN first, then adapt, keeping it:\n"
+             "inside (phi < V) reference 3, outside 2, interface 10\n"
+             "(Mmg's -ls; materials: LSReferences in the -f file)"},
+    {.names = "-lsval", .kind = PA_CLI_NUM, .at = A(lsval),
+     .want = "a number", .lo = -INFINITY, .hi = INFINITY,
+     .label = "-lsval V", .help = "the iso-value V of -ls (default 0)"},
+    {.names = "-lsref", .kind = PA_CLI_FN, .fn = opt_lsref, .nval = 2,
+     .label = "-lsref IN OUT",
+     .help = "references of the inside and the outside (default 3 2)"},
+    {.names = "-isoref", .kind = PA_CLI_INT, .at = A(isoref),
+     .want = "an integer reference", .lo = -2147483647.0, .hi = 2147483647.0,
+     .label = "-isoref R",
+     .help = "reference of the interface and its vertices (default 10)"},
+    {.names = "-rmc", .kind = PA_CLI_OPTNUM, .at = A(rmc),
+     .want = "a volume share in (0, 1)", .lo = 1e-300, .hi = 0.999999,
+     .dflt = PA_LS_RMC, .label = "-rmc [VOL]",
+     .help = "with -ls: a component of either side whose volume is\n"
+             "below VOL times the mesh's changes side (default 1e-5)"},
     {.names = "-optim", .kind = PA_CLI_FLAG, .at = A(optim), .label = "-optim",
      .help = "keep the sizes of the input mesh (the mean length of\n"
              "each vertex's edges), improve the quality"},
-    {.names = "-field", .kind = PA_CLI_STR, .at = A(field),
-     .want = "a .sol file", .label = "-field F.sol",
-     .help = "vertex fields to interpolate; written to\n"
-             "<OUT stem>.fields.sol (or -outfield PATH)"},
+    {.names = "-field", .kind = PA_CLI_FN, .fn = opt_field, .nval = 1,
+     .label = "-field F.sol",
+     .help = "fields to carry (repeatable): SolAtVertices (interpolated),\n"
+             "SolAtTriangles/SolAtTetrahedra (elements) and\n"
+             "SolAtEdges/SolAtTriangles (boundary); written, each kind\n"
+             "under its keyword, to <OUT stem>.fields.sol (or -outfield)"},
     {.names = "-outfield", .kind = PA_CLI_STR, .at = A(outfield),
      .want = "a .sol file"},
+    {.names = "-field-transfer", .kind = PA_CLI_FN, .fn = opt_transfer,
+     .nval = 1, .label = "-field-transfer [F=]M",
+     .help = "how element field F (cell1, ... from a .sol; every one\n"
+             "without F=) is carried: conservative (default), bounded\n"
+             "or nearest (repeatable; docs/guide/fields.md)"},
     {.names = "-json", .kind = PA_CLI_STR, .at = A(json), .want = "a file",
      .label = "-json R.json",
      .help = "write the after-statistics, time and counts as JSON"},
@@ -140,7 +216,8 @@ static const pa_cli_opt adapt_opts[] = {
     {.names = "-mem -m", .kind = PA_CLI_POS, .at = A(mem_mb), .want = POSITIVE,
      .label = "-mem MB, -m MB",
      .help = "memory bound per process (default: the available memory;\n"
-             "a metric whose output would not fit is refused)"},
+             "a metric whose output would not fit is refused, and\n"
+             "padapt's memory past MB is an error: nothing written)"},
     {.names = "-max-iter", .kind = PA_CLI_INT, .at = A(max_iter),
      .want = "an integer in [1, 1000]", .lo = 1, .hi = 1000,
      .label = "-max-iter N",
@@ -272,8 +349,19 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
   a->serial_below = sb && sb[0] ? atof(sb) : -1;
   pa_remesh_opts_default(&a->remesh);
   a->remesh.verbosity = cli->verbosity;
+  a->lsref[0] = PA_LS_REF_IN;
+  a->lsref[1] = PA_LS_REF_OUT;
+  a->isoref = PA_LS_REF_IFACE;
   int rc = pa_cli_parse(cli, &adapt_spec, argc, argv, a);
   if (rc) return rc;
+  if (!a->ls && (a->lsval != 0 || a->rmc > 0 || a->isoref != PA_LS_REF_IFACE ||
+                 a->lsref[0] != PA_LS_REF_IN || a->lsref[1] != PA_LS_REF_OUT))
+    return pa_cli_error(cli, "adapt: -lsval, -lsref, -isoref and -rmc go "
+                             "with -ls PHI.sol");
+  if (a->ls && a->lsref[0] == a->lsref[1])
+    return pa_cli_error(cli, "adapt: -lsref: the inside and the outside need "
+                             "two references, got %d twice",
+                        a->lsref[0]);
   if (!a->in && !a->restart) {
     pa_cli_error(cli, "adapt: no input mesh");
     if (cli->rank == 0) pa_cli_help(&adapt_spec, stderr);
@@ -304,26 +392,37 @@ static int parse_args(const pa_cli *cli, int argc, char **argv,
   return 0;
 }
 
-/* The outputs of `padapt adapt`, checked before the work starts. */
+/* The inputs and outputs of `padapt adapt`, checked before the work
+ * starts. */
 static int check_outputs(const pa_cli *cli, const pa_cli_adapt_args *a) {
   char *sol = NULL, *fields = NULL;
-  const char *paths[5] = {a->out, NULL, NULL, a->json, a->svg};
-  if (!a->distributed) { /* a set carries its metric and fields */
+  pa_cli_io io = {.in = {a->in, a->met, a->params, a->ls},
+                  .out = {a->json, a->svg},
+                  .ckpt = a->checkpoint,
+                  .restart = a->restart};
+  for (int k = 0; k < a->nfield; k++) io.in[4 + k] = a->field[k];
+  if (a->distributed) { /* a set carries its metric and fields */
+    io.set = a->out;
+  } else {
+    io.out[2] = a->out;
     if (!a->nosol)
-      paths[1] = a->outsol ? a->outsol : (sol = pa_cli_replace_ext(a->out, ".sol"));
-    if (a->field)
-      paths[2] = a->outfield ? a->outfield
-                             : (fields = pa_cli_replace_ext(a->out, ".fields.sol"));
+      io.out[3] = a->outsol ? a->outsol
+                            : (sol = pa_cli_replace_ext(a->out, ".sol"));
+    if (a->nfield || a->outfield)
+      io.out[4] = a->outfield
+                      ? a->outfield
+                      : (fields = pa_cli_replace_ext(a->out, ".fields.sol"));
   }
-  int bad = pa_cli_check_outputs(cli, "adapt", paths, 5);
+  int bad = pa_cli_check_io(cli, "adapt", &io);
   if (!bad && a->checkpoint) {
     /* the state file in an existing directory, or the directory itself */
     struct stat sb;
     size_t n = strlen(a->checkpoint) + sizeof "/checkpoint";
     char *state = malloc(n);
     if (state) snprintf(state, n, "%s/checkpoint", a->checkpoint);
-    const char *p = stat(a->checkpoint, &sb) == 0 ? state : a->checkpoint;
-    bad = pa_cli_check_outputs(cli, "adapt -checkpoint", &p, 1);
+    pa_cli_io ck = {
+        .out = {stat(a->checkpoint, &sb) == 0 ? state : a->checkpoint}};
+    bad = pa_cli_check_io(cli, "adapt -checkpoint", &ck);
     free(state);
   }
   free(sol);
@@ -332,20 +431,19 @@ static int check_outputs(const pa_cli *cli, const pa_cli_adapt_args *a) {
 }
 
 /* Everything the sequential run reads beside the mesh: the metric, the local
- * parameters (into opts; *local owns them) and the -field fields. Returns 0,
- * or 1 after printing the error. */
+ * parameters (into opts; *local owns them) and the -field fields (the level
+ * set of -ls is read by the cut). Returns 0, or 1 after printing the error. */
 static int read_inputs(const pa_cli *cli, const pa_cli_adapt_args *a,
                        pa_mesh *mesh, pa_remesh_opts *opts,
                        pa_local_param **local) {
   if (pa_cli_adapt_metric(cli, a, mesh)) return 1;
   if (a->params) {
     if (pa_cli_read_params(cli, a->params, pa_mesh_dim(mesh), local,
-                           &opts->nlocal))
+                           &opts->nlocal, NULL, NULL))
       return 1;
     opts->local = *local;
   }
-  if (a->field) return pa_cli_fail(cli, pa_cli_attach_fields(mesh, a->field));
-  return 0;
+  return pa_cli_fail(cli, pa_cli_attach_fields(mesh, a));
 }
 
 /* The statistics of the input in the target metric (pa_cli_adapt_metric:
@@ -396,6 +494,7 @@ static void report_after(const pa_cli_adapt_args *a, const pa_mesh *mesh,
          rep->nsplit, rep->ncollapse, rep->nswap, rep->nmove, rep->npass,
          rep->time_s, rep->time_s > 0 ? pa_mesh_nelem(mesh) / rep->time_s : 0.0,
          rep->cpu_s, pa_memory_peak() / 1e6, outcome_name(rep->outcome));
+  pa_cli_print_transfer(&rep->transfer);
   fflush(stdout);
   if (!rep->fidelity.target_met)
     fprintf(stderr, "padapt: warning: adapt: target missed (valid mesh, but "
@@ -405,9 +504,13 @@ static void report_after(const pa_cli_adapt_args *a, const pa_mesh *mesh,
 /* The -json report: the after-statistics with the time, memory and counts of
  * the run and the figures before. */
 static pa_status write_json(const pa_cli_adapt_args *a, const pa_stats *before,
-                            const pa_remesh_report *rep) {
+                            const pa_remesh_report *rep,
+                            const pa_levelset_report *ls) {
   char *fid = pa_cli_fidelity_json(&rep->fidelity);
+  char *lsj = a->ls ? pa_cli_ls_json(ls) : NULL;
+  char *tr = pa_cli_transfer_json(&rep->transfer);
   pa_cli_sbuf b = {NULL, 0, 0, 0};
+  if (a->ls) pa_cli_sb_printf(&b, "%s", lsj ? lsj : "");
   pa_cli_sb_printf(&b,
                    "\"time_s\": %.6f, \"remesh_cpu_s\": %.6f, "
                    "\"peak_rss_bytes\": %zu, "
@@ -415,15 +518,17 @@ static pa_status write_json(const pa_cli_adapt_args *a, const pa_stats *before,
                    "\"%s\", \"nsplit\": %ld, \"ncollapse\": %ld, "
                    "\"nswap\": %ld, \"nmove\": %ld, \"npass\": %d, "
                    "\"elements_before\": %lld, \"vertices_before\": %lld, "
-                   "%s",
+                   "%s%s",
                    rep->time_s, rep->cpu_s, pa_peak_rss(), pa_memory_peak(),
                    outcome_name(rep->outcome), rep->nsplit, rep->ncollapse,
                    rep->nswap, rep->nmove, rep->npass, (long long)before->nelem,
-                   (long long)before->nvert, fid ? fid : "");
-  pa_status st = b.fail || !fid
+                   (long long)before->nvert, tr ? tr : "", fid ? fid : "");
+  pa_status st = b.fail || !fid || !tr || (a->ls && !lsj)
                      ? pa_set_error(PA_ERR_MEMORY, "out of memory")
                      : pa_stats_write_json(&rep->fidelity.user, b.p, a->json);
   free(fid);
+  free(tr);
+  free(lsj);
   free(b.p);
   return st;
 }
@@ -433,7 +538,8 @@ static pa_status write_json(const pa_cli_adapt_args *a, const pa_stats *before,
  * Returns 0, or 1 after printing the error. */
 static int write_outputs(const pa_cli *cli, const pa_cli_adapt_args *a,
                          pa_mesh *mesh, const pa_stats *before,
-                         const pa_remesh_report *rep) {
+                         const pa_remesh_report *rep,
+                         const pa_levelset_report *ls) {
   char *solpath = NULL, *fieldpath = NULL;
   pa_output *tx = NULL;
   pa_status st = pa_output_begin(&tx);
@@ -446,11 +552,11 @@ static int write_outputs(const pa_cli *cli, const pa_cli_adapt_args *a,
       st = pa_sol_write(sol, a->outsol ? a->outsol : solpath);
     pa_sol_destroy(sol);
   }
-  if (st == PA_SUCCESS && pa_mesh_nfield(mesh) > 0) {
+  if (st == PA_SUCCESS && pa_cli_has_fields(mesh)) {
     fieldpath = a->outfield ? NULL : pa_cli_replace_ext(a->out, ".fields.sol");
     st = pa_cli_write_fields(mesh, a->outfield ? a->outfield : fieldpath);
   }
-  if (st == PA_SUCCESS && a->json) st = write_json(a, before, rep);
+  if (st == PA_SUCCESS && a->json) st = write_json(a, before, rep, ls);
   if (st == PA_SUCCESS && a->svg)
     st = pa_cli_adapt_svg(a, before, &rep->fidelity.user);
   st = pa_cli_output_end(MPI_COMM_SELF, tx, st);
@@ -469,14 +575,16 @@ static int adapt_sequential(const pa_cli *cli, const pa_cli_adapt_args *a) {
   pa_remesh_opts opts = a->remesh;
   pa_stats before;
   pa_remesh_report rep;
+  pa_levelset_report ls;
   pa_status st = pa_cli_read_mesh(cli, a->in, &mesh); /* collective */
   if (cli->rank != 0) return st ? 1 : 0;
   int rc = pa_cli_fail(cli, st);
   if (!rc) rc = read_inputs(cli, a, mesh, &opts, &local);
+  if (!rc && a->ls) rc = pa_cli_ls_cut(cli, a, mesh, &ls);
   if (!rc) rc = report_before(cli, a, mesh, &before);
   if (!rc) rc = run_remesher(cli, mesh, &opts, &rep);
   if (!rc) report_after(a, mesh, &rep);
-  if (!rc) rc = write_outputs(cli, a, mesh, &before, &rep);
+  if (!rc) rc = write_outputs(cli, a, mesh, &before, &rep, &ls);
   free(local);
   pa_mesh_destroy(mesh);
   return rc;
@@ -487,6 +595,9 @@ int pa_cli_adapt(const pa_cli *cli, int argc, char **argv) {
   int prc = parse_args(cli, argc, argv, &args);
   if (prc) return prc > 0 ? 1 : 0;
   if (check_outputs(cli, &args)) return 1;
+  /* -mem bounds padapt's memory in every phase: reading, remeshing,
+   * gathering, writing */
+  if (args.mem_mb > 0) pa_memory_set_limit((size_t)(args.mem_mb * 1e6));
   /* On several ranks, or when asked for a distributed output, a memory
    * bound or a checkpoint, the parallel piece loop (tools/cmd_adapt_parallel.c) does
    * the work, unless it finds the job too small to share out

@@ -9,7 +9,9 @@
  *
  * Reads IN (a sequential mesh on rank 0 with its metric and fields, then
  * distributed; or a distributed set written by pa_dmesh_write, read by all
- * ranks), runs
+ * ranks), cuts the level set of -ls into the distributed mesh
+ * (pa_dmesh_levelset_cut: the level set travels as the vertex field
+ * "levelset", removed after the cut), runs
  * pa_dmesh_adapt, prints one progress line per iteration and the final
  * report in the form of Table 1 of the seed paper (Lachat, Dobrzynski,
  * Pellegrini) on rank 0, and writes OUT gathered on rank 0 (with OUT.sol and
@@ -39,13 +41,49 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Rank 0, after pa_cli_read_mesh: the metric (pa_cli_adapt_metric) and the
- * fields. Prints its own errors; returns 1 on success. */
+/* The name of the vertex field that carries the level set of -ls from rank
+ * 0's mesh to the distributed mesh's cut (removed after it). */
+#define LS_FIELD "levelset"
+
+/* Rank 0, after pa_cli_read_mesh: the metric (pa_cli_adapt_metric), the
+ * fields and the level set of -ls (the last field). Prints its own errors;
+ * returns 1 on success. */
 static int prepare_root(const pa_cli *cli, const pa_cli_adapt_args *args,
                         pa_mesh *mesh) {
   if (pa_cli_adapt_metric(cli, args, mesh)) return 0;
-  if (args->field && pa_cli_fail(cli, pa_cli_attach_fields(mesh, args->field)))
-    return 0;
+  if (pa_cli_fail(cli, pa_cli_attach_fields(mesh, args))) return 0;
+  if (args->ls) {
+    double *phi = NULL;
+    if (pa_cli_ls_read(cli, args, mesh, &phi)) return 0;
+    pa_status st = pa_mesh_add_field(mesh, LS_FIELD, 1, phi);
+    free(phi);
+    if (pa_cli_fail(cli, st)) return 0;
+  }
+  return 1;
+}
+
+/* -ls: cut the level set (the last vertex field) into the distributed mesh,
+ * remove that field and report on rank 0 (*ls: the report). Collective;
+ * returns 0, or 1 after printing the error. */
+static int cut_levelset(const pa_cli *cli, const pa_cli_adapt_args *args,
+                        pa_dmesh *dm, pa_levelset_report *ls) {
+  pa_levelset_opts o;
+  pa_ls_material *mat = NULL;
+  int bad = pa_cli_ls_opts(cli, args, pa_dmesh_dim(dm), &o, &mat), any = bad;
+  MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, cli->comm);
+  if (any) {
+    free(mat);
+    return 1;
+  }
+  pa_mesh *m = pa_dmesh_mesh(dm);
+  int k = pa_mesh_nfield(m) - 1;
+  pa_status st = pa_dmesh_levelset_cut(dm, k, &o, ls);
+  if (st == PA_SUCCESS) st = pa_mesh_remove_field(pa_dmesh_mesh(dm), k);
+  if (st == PA_SUCCESS && cli->rank == 0) pa_cli_ls_report(args, &o, ls);
+  free(mat);
+  if (st == PA_SUCCESS) return 0;
+  if (cli->rank == 0)
+    pa_cli_error(cli, "adapt: -ls %s: %s", args->ls, pa_last_error());
   return 1;
 }
 
@@ -147,14 +185,17 @@ static void print_table(const pa_cli *cli, const pa_adapt_report *r,
   printf("    remeshing busy time (all ranks) %.3f s, CPU %.3f s, bytes "
          "moved %.3g, peak memory per rank %.1f MB\n",
          r->remesh_busy, r->remesh_cpu, r->bytes_moved, r->peak_memory / 1e6);
+  pa_cli_print_transfer(&r->transfer);
   fflush(stdout);
 }
 
 /* The JSON members added to the output statistics. */
 static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
                         const pa_stats *before, const uint64_t *mem,
-                        const uint64_t *rss, const char *remesher) {
+                        const uint64_t *rss, const char *remesher,
+                        const char *lsjson) {
   pa_cli_sbuf b = {NULL, 0, 0, 0};
+  if (lsjson) pa_cli_sb_printf(&b, "%s", lsjson);
   pa_cli_sb_printf(&b, "\"processes\": %d, \"remesher\": \"%s\", \"time_s\": %.6f, "
                 "\"time_x_processes_s\": %.6f, \"iterations\": %d, "
                 "\"converged\": %s, \"stalled\": %s, \"pieces\": %ld, "
@@ -201,9 +242,11 @@ static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
               it->mem_after);
   }
   char *fid = pa_cli_fidelity_json(&r->fidelity);
-  pa_cli_sb_printf(&b, "], %s", fid ? fid : "");
-  if (!fid) b.fail = 1;
+  char *tr = pa_cli_transfer_json(&r->transfer);
+  pa_cli_sb_printf(&b, "], %s%s", tr ? tr : "", fid ? fid : "");
+  if (!fid || !tr) b.fail = 1;
   free(fid);
+  free(tr);
   if (b.fail) {
     free(b.p);
     return NULL;
@@ -227,13 +270,16 @@ static double lap(double *t0) {
 static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
                           int set, const pa_adapt_opts *opts, pa_dmesh **dm,
                           pa_mesh **names, pa_stats *before,
-                          pa_adapt_report *rep, double *tstep, double *t0) {
+                          pa_levelset_report *ls, pa_adapt_report *rep,
+                          double *tstep, double *t0) {
   const char *in = args->in;
   pa_mesh *mesh = NULL;
   pa_status st;
   int ok = 1;
   if (set) {
     st = pa_dmesh_read(cli->comm, in, 0, dm);
+    /* -field-transfer on the set's fields (the same on every rank) */
+    if (st == PA_SUCCESS) st = pa_cli_attach_fields(pa_dmesh_mesh(*dm), args);
     if (st) {
       fail_collective(cli, st);
       return 1;
@@ -262,6 +308,7 @@ static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
       return 1;
     }
   }
+  if (args->ls && cut_levelset(cli, args, *dm, ls)) return 1;
   if (pa_mesh_metric_ncomp(pa_dmesh_mesh(*dm)) == 0 && opts->remesh.hsiz <= 0) {
     if (cli->rank == 0) pa_cli_error(cli, "adapt: no metric: give -hsiz H");
     return 1;
@@ -290,7 +337,7 @@ static int read_and_adapt(const pa_cli *cli, const pa_cli_adapt_args *args,
   pa_local_param *local = NULL;
   if (args->params) {
     int bad = pa_cli_read_params(cli, args->params, pa_dmesh_dim(*dm), &local,
-                                 &o.remesh.nlocal), any = bad;
+                                 &o.remesh.nlocal, NULL, NULL), any = bad;
     MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, cli->comm);
     if (any) {
       free(local);
@@ -340,14 +387,15 @@ static int check_input(const pa_cli *cli, const pa_cli_adapt_args *args,
   *set = cli->rank == 0 && in ? pa_dmesh_is_set(in) : 0;
   MPI_Bcast(set, 1, MPI_INT, 0, cli->comm);
   if (args->restart) {
-    if (cli->rank == 0 && (in || args->met || args->field))
-      fprintf(stderr, "padapt: adapt: -restart: the mesh, its metric and "
-                      "fields come from the checkpoint (IN, -met and -field "
-                      "are not read)\n");
-  } else if (*set && (args->met || args->field)) {
+    if (cli->rank == 0 &&
+        (in || args->met || args->nfield || args->ntransfer || args->ls))
+      fprintf(stderr, "padapt: adapt: -restart: the mesh (cut already), its "
+                      "metric and fields come from the checkpoint (IN, -met, "
+                      "-field, -field-transfer and -ls are not read)\n");
+  } else if (*set && (args->met || args->nfield || args->ls)) {
     if (cli->rank == 0)
-      pa_cli_error(cli, "adapt: -met and -field need a sequential input mesh, "
-                        "not a distributed set");
+      pa_cli_error(cli, "adapt: -met, -field and -ls need a sequential input "
+                        "mesh, not a distributed set");
     return 1;
   }
   return 0;
@@ -370,7 +418,8 @@ static void loop_opts(const pa_cli_adapt_args *args, pa_adapt_opts *opts) {
  * the error. */
 static int adapt(const pa_cli *cli, const pa_cli_adapt_args *args, int set,
                  pa_dmesh **dm, pa_mesh **names, pa_stats *before,
-                 pa_adapt_report *rep, double *tstep, double *t0) {
+                 pa_levelset_report *ls, pa_adapt_report *rep, double *tstep,
+                 double *t0) {
   pa_adapt_opts opts;
   loop_opts(args, &opts);
   const char *kill_iter = getenv("PADAPT_TEST_KILL_ITER");
@@ -384,7 +433,7 @@ static int adapt(const pa_cli *cli, const pa_cli_adapt_args *args, int set,
   int adapted = args->restart
                     ? resume(cli, args, &opts, dm, before, rep)
                     : read_and_adapt(cli, args, set, &opts, dm, names, before,
-                                     rep, tstep, t0);
+                                     ls, rep, tstep, t0);
   pa_cli_progress_end(&live);
   return adapted;
 }
@@ -447,7 +496,7 @@ static pa_status write_mesh(const pa_cli *cli, const pa_cli_adapt_args *args,
     free(path);
     path = NULL;
   }
-  if (st == PA_SUCCESS && pa_mesh_nfield(*g) > 0) {
+  if (st == PA_SUCCESS && pa_cli_has_fields(*g)) {
     path = pa_cli_replace_ext(out, ".fields.sol");
     st = pa_cli_write_fields(*g, args->outfield ? args->outfield : path);
   }
@@ -481,8 +530,8 @@ static void gather_peaks(const pa_cli *cli, uint64_t **mem, uint64_t **rss) {
  * error. */
 static int write_outputs(const pa_cli *cli, const pa_cli_adapt_args *args,
                          pa_dmesh *dm, const pa_mesh *names,
-                         const pa_stats *before, const pa_adapt_report *rep,
-                         double *tgather) {
+                         const pa_stats *before, const pa_levelset_report *ls,
+                         const pa_adapt_report *rep, double *tgather) {
   pa_mesh *g = NULL;
   uint64_t *mem = NULL, *rss = NULL;
   pa_output *tx = NULL;
@@ -491,9 +540,12 @@ static int write_outputs(const pa_cli *cli, const pa_cli_adapt_args *args,
   if (st == PA_SUCCESS) st = write_mesh(cli, args, dm, names, &g, tgather);
   gather_peaks(cli, &mem, &rss);
   if (st == PA_SUCCESS && args->json && cli->rank == 0) {
-    char *extra = mem && rss ? json_extra(cli, rep, before, mem, rss,
-                                          pa_remesher_builtin()->name)
-                             : NULL;
+    char *lsj = args->ls && !args->restart ? pa_cli_ls_json(ls) : NULL;
+    char *extra = mem && rss && (lsj || !args->ls || args->restart)
+                      ? json_extra(cli, rep, before, mem, rss,
+                                   pa_remesher_builtin()->name, lsj)
+                      : NULL;
+    free(lsj);
     st = extra ? pa_stats_write_json(&rep->fidelity.user, extra, args->json)
                : pa_set_error(PA_ERR_MEMORY, "out of memory");
     free(extra);
@@ -519,17 +571,19 @@ int pa_cli_adapt_parallel(const pa_cli *cli, const pa_cli_adapt_args *args) {
   pa_mesh *names = NULL;
   pa_stats before;
   pa_adapt_report rep;
+  pa_levelset_report ls;
   double tstep[5] = {0}, tgather = 0; /* read, stats, adapt, stats, write */
   double t0 = pa_wtime();
   memset(&rep, 0, sizeof rep);
-  int rc = adapt(cli, args, set, &dm, &names, &before, &rep, tstep, &t0);
+  memset(&ls, 0, sizeof ls);
+  int rc = adapt(cli, args, set, &dm, &names, &before, &ls, &rep, tstep, &t0);
   if (!rc) {
     tstep[2] = lap(&t0);
     rc = report(cli, args, &rep);
   }
   if (!rc) {
     tstep[3] = lap(&t0);
-    rc = write_outputs(cli, args, dm, names, &before, &rep, &tgather);
+    rc = write_outputs(cli, args, dm, names, &before, &ls, &rep, &tgather);
   }
   if (!rc && cli->verbosity >= 2 && cli->rank == 0) {
     tstep[4] = lap(&t0);

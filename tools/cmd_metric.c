@@ -186,6 +186,9 @@ static int parse(const pa_cli *cli, int argc, char **argv, const metric_op *op,
     a->files[k] = a->pos[1 + k];
   a->nfile = nfiles;
   a->out = has_out ? a->pos[npos - 1] : NULL;
+  pa_cli_io io = {.in = {a->in, a->files[0], a->files[1], a->field, a->ls},
+                  .out = {a->out}};
+  if (pa_cli_check_io(cli, cmd, &io)) return 1;
   double hmin = op->opt == hessian_opts    ? a->hess.hmin
                 : op->opt == levelset_opts ? a->lset.hmin
                                            : a->remesh.hmin;
@@ -432,6 +435,8 @@ int pa_cli_metric(const pa_cli *cli, int argc, char **argv) {
     if (argc != 4)
       return pa_cli_error(cli, "usage: padapt metric NAME[:h] IN OUT.sol "
                                "(or a subcommand: padapt metric -h)");
+    pa_cli_io io = {.in = {argv[2]}, .out = {argv[3]}};
+    if (pa_cli_check_io(cli, "metric", &io)) return 1;
     pa_mesh *mesh = NULL;
     pa_sol *sol = NULL;
     pa_status st = pa_cli_read_mesh(cli, argv[2], &mesh);
@@ -490,6 +495,8 @@ int pa_cli_levelset(const pa_cli *cli, int argc, char **argv) {
     return 0;
   }
   if (argc != 4) return pa_cli_error(cli, "%s", levelset_usage);
+  pa_cli_io io = {.in = {argv[2]}, .out = {argv[3]}};
+  if (pa_cli_check_io(cli, "levelset", &io)) return 1;
   pa_mesh *mesh = NULL;
   pa_sol *sol = NULL;
   double *phi = NULL;

@@ -88,14 +88,33 @@ int pa_cli_partition(const pa_cli *cli, int argc, char **argv) {
     if (cli->rank == 0) pa_cli_help(&partition_spec, stderr);
     return 1;
   }
-  if (pa_cli_check_outputs(cli, "partition", &out, 1)) return 1;
+  pa_cli_io io = {.in = {in}, .set = out};
+  if (pa_cli_check_io(cli, "partition", &io)) return 1;
   pa_dmesh *dm = NULL;
   pa_gid *nel = NULL;
   double imb = 0, t;
   pa_gid cut = 0;
   int rc = 0;
   t = pa_wtime();
-  pa_status st = pa_dmesh_read(cli->comm, in, overlap, &dm);
+  /* a sequential file as every command reads one (boundary completed,
+   * checked) and then distributed; a set by every rank */
+  int is_set = cli->rank == 0 ? pa_dmesh_is_set(in) : 0;
+  MPI_Bcast(&is_set, 1, MPI_INT, 0, cli->comm);
+  pa_status st;
+  if (is_set) {
+    st = pa_dmesh_read(cli->comm, in, overlap, &dm);
+  } else {
+    pa_mesh *mesh = NULL;
+    st = pa_cli_read_mesh(cli, in, &mesh); /* collective */
+    int bad = st != PA_SUCCESS;
+    MPI_Bcast(&bad, 1, MPI_INT, 0, cli->comm);
+    if (bad) {
+      pa_mesh_destroy(mesh);
+      return cli->rank == 0 ? pa_cli_fail(cli, st) : 1;
+    }
+    st = pa_dmesh_distribute(cli->comm, 0, mesh, overlap, &dm);
+    pa_mesh_destroy(mesh);
+  }
   report(cli, "distribute", pa_wtime() - t);
   if (st) return pa_cli_fail(cli, st);
   if (check) {

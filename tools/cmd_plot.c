@@ -2,13 +2,15 @@
  * cmd_plot.c -- `padapt plot`: an SVG picture of a 2D mesh, or of the cut of
  * a 3D mesh by a plane.
  *
- *   padapt plot IN OUT.svg [-met SOL] [-color quality|ref]
+ *   padapt plot IN OUT.svg [-met SOL] [-field F.sol] [-color quality|ref|FIELD]
  *       [-window XMIN YMIN XMAX YMAX] [-cut x=V|y=V|z=V | -plane A B C D]
  *       [-width PX]
  *
  * Each element (2D) or each intersection polygon of a tetrahedron with the
  * plane (3D) is filled by its quality (in the metric of -met, else
- * Euclidean; a colour ramp with its legend) or by its reference; the
+ * Euclidean; a colour ramp with its legend), by its reference, or by the
+ * value of an element field (IN's, or one of -field's: its first component,
+ * on the ramp from the field's smallest to its largest value); the
  * boundary (boundary edges in 2D, the cut of the boundary triangles in 3D)
  * is drawn thicker. In 3D the picture is in the plane's own axes: (x, y) for
  * a cut z = V, (y, z) for x = V, (x, z) for y = V, and for -plane the
@@ -19,7 +21,7 @@
  * (culled); one smaller than PLOT_SUBPIXEL_PX (2) pixels in both directions
  * on screen is not drawn alone but merged into a square cell of
  * PLOT_CELL_PX (2) pixels, drawn once with the worst quality (or the
- * smallest reference) of the elements merged into it; the cells of one
+ * smallest reference or field value) of the elements merged into it; the cells of one
  * colour form one SVG path, a run of them along a row one rectangle
  * (about 16 bytes). So the elements drawn are at least 2 pixels across,
  * and a million triangles at 800 pixels give a file of at most about
@@ -73,6 +75,10 @@ typedef struct plot {
    * in pixels */
   double win[4]; /* xmin ymin xmax ymax */
   double scale, x0, y0, pw, ph;
+  /* -color FIELD: its values (fnc per element) and their range */
+  const double *fval;
+  int fnc;
+  double flo, fhi;
 } plot;
 
 static double dot3(const double *a, const double *b) {
@@ -246,7 +252,8 @@ static int cmp_ref(const void *a, const void *b) {
 
 /* The arguments of `padapt plot`. */
 typedef struct plot_args {
-  const char *in, *out, *met;
+  const char *in, *out, *met, *fieldsol;
+  const char *color; /* an element field's name, or NULL */
   int by_ref, has_window, has_plane;
   double win[4], plane[4];
   double width;
@@ -260,11 +267,13 @@ static int opt_color(const pa_cli *cli, const pa_cli_spec *s,
                      const char *name, char **val, void *args) {
   plot_args *a = args;
   const char *c = val[0] ? val[0] : "nothing";
+  if (!val[0])
+    return pa_cli_error(cli, "%s: %s needs quality, ref or an element field's "
+                             "name", s->cmd, name);
   if (!strcmp(c, "ref"))
     a->by_ref = 1;
   else if (strcmp(c, "quality"))
-    return pa_cli_error(cli, "%s: %s needs quality or ref, got '%s'", s->cmd,
-                        name, c);
+    a->color = c; /* an element field, checked once the mesh is read */
   return 0;
 }
 
@@ -316,7 +325,11 @@ static const pa_cli_opt plot_opts[] = {
      .help = "quality in this metric (default: Euclidean)"},
     {.names = "-color -colour", .kind = PA_CLI_FN, .fn = opt_color, .nval = 1,
      .label = "-color C",
-     .help = "fill by element quality (default) or reference"},
+     .help = "fill by element quality (default), reference, or the\n"
+             "element field of this name (its first component)"},
+    {.names = "-field", .kind = PA_CLI_STR, .at = PL(fieldsol),
+     .want = "a .sol file", .label = "-field F.sol",
+     .help = "element fields to colour by (cell1, cell2, ...)"},
     {.names = "-window", .kind = PA_CLI_FN, .fn = opt_window, .nval = 4,
      .label = "-window ...",
      .help = "zoom: draw only what lies in this rectangle (in 3D, in\n"
@@ -345,7 +358,8 @@ static int plot_positional(const pa_cli *cli, const char *arg, void *args) {
 
 static const pa_cli_spec plot_spec = {
     .cmd = "plot",
-    .usage = "usage: padapt plot IN OUT.svg [-met SOL] [-color quality|ref]\n"
+    .usage = "usage: padapt plot IN OUT.svg [-met SOL] [-field F.sol]\n"
+             "                   [-color quality|ref|FIELD]\n"
              "                   [-window XMIN YMIN XMAX YMAX] [-cut "
              "x=V|y=V|z=V |\n"
              "                   -plane A B C D] [-width PX]\n",
@@ -373,6 +387,25 @@ static int parse_args(const pa_cli *cli, int argc, char **argv, plot_args *a) {
                         "inkscape",
                         a->out);
   return 0;
+}
+
+/* What element e is coloured by: its reference, its field's value or its
+ * quality. */
+static double elem_value(const plot *p, const plot_args *a, pa_idx e) {
+  if (a->by_ref) return (double)pa_mesh_elem_refs(p->mesh)[e];
+  if (p->fval) return p->fval[(size_t)p->fnc * e];
+  return pa_mesh_elem_quality(p->mesh, e);
+}
+
+/* The colour of value v (elem_value's) into col. */
+static void value_colour(const plot *p, const plot_args *a, double v, char *col) {
+  if (a->by_ref)
+    pa_cli_svg_ref_colour((int32_t)v, col);
+  else if (p->fval)
+    pa_cli_svg_quality_colour(p->fhi > p->flo ? (v - p->flo) / (p->fhi - p->flo) : 0.5,
+                              col);
+  else
+    pa_cli_svg_quality_colour(v, col);
 }
 
 /* A merge cell drawn: its colour (0xrrggbb) and its index in the grid. */
@@ -430,9 +463,7 @@ static pa_status grid_create(plot_grid *g, const plot *p) {
  * of g under their centres, counting them and the cells in c. */
 static void merge_cells(const plot *p, const plot_args *a, plot_counts *c,
                         plot_grid *g) {
-  pa_mesh *mesh = p->mesh;
-  pa_idx ne = pa_mesh_nelem(mesh);
-  int32_t *eref = pa_mesh_elem_refs(mesh);
+  pa_idx ne = pa_mesh_nelem(p->mesh);
   double xy[8], box[4];
   for (pa_idx e = 0; e < ne; e++) {
     if (!screen_polygon(p, e, xy, box)) continue;
@@ -444,7 +475,7 @@ static void merge_cells(const plot *p, const plot_args *a, plot_counts *c,
     /* an element straddling the window's side goes to the cell inside */
     i = i < 0 ? 0 : i >= g->gw ? g->gw - 1 : i;
     j = j < 0 ? 0 : j >= g->gh ? g->gh - 1 : j;
-    double val = a->by_ref ? (double)eref[e] : pa_mesh_elem_quality(mesh, e);
+    double val = elem_value(p, a, e);
     double *cv = &g->val[(size_t)j * g->gw + i];
     if (isnan(*cv)) c->ncells++;
     if (isnan(*cv) || val < *cv) *cv = val;
@@ -488,10 +519,7 @@ static void draw_cells(pa_cli_svg *svg, const plot *p, const plot_args *a,
   pa_cli_svg_raw(svg, "<g clip-path=\"url(#window)\" class=\"cells\">\n");
   for (size_t k = 0; k < (size_t)gw * (size_t)g->gh; k++) {
     if (isnan(g->val[k])) continue;
-    if (a->by_ref)
-      pa_cli_svg_ref_colour((int32_t)g->val[k], col);
-    else
-      pa_cli_svg_quality_colour(g->val[k], col);
+    value_colour(p, a, g->val[k], col);
     bycol[nc].rgb = (uint32_t)strtoul(col + 1, NULL, 16);
     bycol[nc++].k = (uint32_t)k;
   }
@@ -518,9 +546,7 @@ static void draw_cells(pa_cli_svg *svg, const plot *p, const plot_args *a,
 
 /* The elements in the window not merged into cells, one polygon each. */
 static void draw_elements(pa_cli_svg *svg, const plot *p, const plot_args *a) {
-  pa_mesh *mesh = p->mesh;
-  pa_idx ne = pa_mesh_nelem(mesh);
-  int32_t *eref = pa_mesh_elem_refs(mesh);
+  pa_idx ne = pa_mesh_nelem(p->mesh);
   double xy[8], box[4];
   char col[8];
   pa_cli_svg_raw(svg, "<g clip-path=\"url(#window)\" class=\"elements\" "
@@ -531,10 +557,7 @@ static void draw_elements(pa_cli_svg *svg, const plot *p, const plot_args *a) {
     if (!n) continue;
     double sx = box[2] - box[0], sy = box[3] - box[1];
     if (sx < PLOT_SUBPIXEL_PX && sy < PLOT_SUBPIXEL_PX) continue;
-    if (a->by_ref)
-      pa_cli_svg_ref_colour(eref[e], col);
-    else
-      pa_cli_svg_quality_colour(pa_mesh_elem_quality(mesh, e), col);
+    value_colour(p, a, elem_value(p, a, e), col);
     /* small ones: stroked with their own colour, so that no seam shows */
     pa_cli_svg_polygon(svg, n, xy, col,
                        fmax(sx, sy) < PLOT_EDGE_PX ? col : NULL);
@@ -584,6 +607,20 @@ static void draw_legend(pa_cli_svg *svg, const plot *p, const plot_args *a,
   }
   const int nstep = 50;
   const double bh = 240;
+  if (p->fval) { /* the field's ramp, its largest value on top */
+    pa_cli_svg_text(svg, lx, ly + 12, "start", 13, "%s", a->color);
+    for (int k = 0; k < nstep; k++) {
+      pa_cli_svg_quality_colour(1.0 - (k + 0.5) / nstep, col);
+      pa_cli_svg_rect(svg, lx, ly + 24 + bh * k / nstep, 18,
+                      bh / nstep + (k < nstep - 1 ? 1 : 0), col, "legend");
+    }
+    for (int k = 0; k <= 5; k++)
+      pa_cli_svg_text(svg, lx + 24, ly + 28 + bh * k / 5, "start", 11, "%.4g",
+                      p->fhi - (p->fhi - p->flo) * k / 5.0);
+    pa_cli_svg_text(svg, lx, ly + 24 + bh + 22, "start", 11,
+                    p->fnc > 1 ? "first component" : "element field");
+    return;
+  }
   pa_cli_svg_text(svg, lx, ly + 12, "start", 13, "quality");
   for (int k = 0; k < nstep; k++) {
     double q = 1.0 - (k + 0.5) / nstep;
@@ -661,6 +698,37 @@ static int setup(const pa_cli *cli, const plot_args *a, pa_mesh *mesh,
   if (a->met) {
     pa_status st = pa_cli_attach_metric(mesh, a->met);
     if (st) return pa_cli_fail(cli, st);
+  }
+  if (a->fieldsol) {
+    pa_sol *sol = NULL;
+    pa_status st = pa_sol_read(a->fieldsol, &sol);
+    if (st == PA_SUCCESS) st = pa_mesh_fields_from_sol(mesh, sol);
+    pa_sol_destroy(sol);
+    if (st) return pa_cli_fail(cli, st);
+  }
+  if (a->color) {
+    int k = pa_mesh_field_index(mesh, PA_ELEMENT, a->color);
+    double *val;
+    if (k < 0) {
+      char list[1024] = "";
+      size_t len = 0;
+      for (int j = 0; j < pa_mesh_nfield_at(mesh, PA_ELEMENT) && len < sizeof list; j++) {
+        const char *name = "";
+        pa_mesh_field_at(mesh, PA_ELEMENT, j, &name, NULL, NULL);
+        len += (size_t)snprintf(list + len, sizeof list - len, "%s%s", j ? ", " : "", name);
+      }
+      return pa_cli_error(cli, "plot: -color %s: not quality, ref nor an element "
+                               "field of %s (element fields: %s)",
+                          a->color, a->in, list[0] ? list : "none");
+    }
+    pa_mesh_field_at(mesh, PA_ELEMENT, k, NULL, &p->fnc, &val);
+    p->fval = val;
+    p->flo = INFINITY;
+    p->fhi = -INFINITY;
+    for (pa_idx e = 0; e < pa_mesh_nelem(mesh); e++) {
+      p->flo = fmin(p->flo, val[(size_t)p->fnc * e]);
+      p->fhi = fmax(p->fhi, val[(size_t)p->fnc * e]);
+    }
   }
   if (p->dim == 2 && a->has_plane)
     return pa_cli_error(cli, "plot: -cut and -plane need a 3D mesh; %s is 2D",
@@ -758,7 +826,7 @@ static int write_picture(const pa_cli *cli, const plot_args *a, const plot *p,
                          plot_counts *c) {
   char title[1200];
   long long ne = (long long)pa_mesh_nelem(p->mesh);
-  const char *colour = a->by_ref ? "reference" : "quality";
+  const char *colour = a->by_ref ? "reference" : a->color ? a->color : "quality";
   if (p->dim == 2)
     snprintf(title, sizeof title, "%s: %lld triangles, coloured by %s", a->in,
              ne, colour);
@@ -780,7 +848,8 @@ int pa_cli_plot(const pa_cli *cli, int argc, char **argv) {
   int prc = parse_args(cli, argc, argv, &a);
   if (prc) return prc > 0 ? 1 : 0;
   const char *out = a.out;
-  if (pa_cli_check_outputs(cli, "plot", &out, 1)) return 1;
+  pa_cli_io io = {.in = {a.in, a.met}, .out = {out}};
+  if (pa_cli_check_io(cli, "plot", &io)) return 1;
   pa_mesh *mesh = NULL;
   pa_status st = pa_cli_read_mesh(cli, a.in, &mesh); /* collective */
   if (cli->rank != 0) return st ? 1 : 0;

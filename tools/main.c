@@ -59,8 +59,8 @@ static const char *usage_text =
     "Global options: -v N (verbosity: -1 errors only, 0 the reports (default),\n"
     "1-10 more detail), -h/--help, --version.\n"
     "Meshes: Medit .mesh/.meshb, Gmsh .msh (4.1, 2.2); metrics: .sol/.solb.\n"
-    "A mesh that lists no boundary entity gets them all (reference 0) on\n"
-    "reading; one that lists some must list them all.\n";
+    "The boundary entities a mesh does not list are added on reading\n"
+    "(reference 0), as Mmg does; the listed ones keep theirs.\n";
 
 /* Report a failed read on rank 0 (the other ranks return quietly). */
 static int read_failed(const pa_cli *cli, pa_status st) {
@@ -166,8 +166,8 @@ int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
   if (!in)
     return pa_cli_error(cli, "usage: padapt stats IN [-met SOL] "
                              "[-json OUT.json] [-svg OUT.svg]");
-  const char *outs[2] = {json, svg};
-  if (pa_cli_check_outputs(cli, "stats", outs, 2)) return 1;
+  pa_cli_io io = {.in = {in, met}, .out = {json, svg}};
+  if (pa_cli_check_io(cli, "stats", &io)) return 1;
   pa_mesh *mesh = NULL;
   pa_stats stats;
   int valid = 1;
@@ -181,10 +181,8 @@ int pa_cli_stats(const pa_cli *cli, int argc, char **argv) {
   else if (cli->rank == 0)
     st = pa_mesh_read(in, &mesh);
   if (cli->rank != 0) return st ? 1 : 0;
-  if (st == PA_SUCCESS && pa_mesh_nbdry(mesh) == 0) {
-    pa_idx nadded = 0;
-    if (pa_mesh_build_boundary(mesh, 0, &nadded) != PA_SUCCESS) pa_clear_error();
-  }
+  if (st == PA_SUCCESS && pa_cli_complete_boundary(cli, in, mesh) != PA_SUCCESS)
+    pa_clear_error(); /* the check below reports it */
   if (st == PA_SUCCESS && met) st = pa_cli_attach_metric(mesh, met);
   if (st == PA_SUCCESS) st = pa_mesh_stats(mesh, &stats);
   if (st == PA_SUCCESS) {
@@ -270,6 +268,8 @@ int pa_cli_convert(const pa_cli *cli, int argc, char **argv) {
   if (!in || !out)
     return pa_cli_error(cli, "usage: padapt convert IN OUT [-met SOL] "
                              "[-binary] [-meshb-version V] [-diag]");
+  pa_cli_io io = {.in = {in, met}, .out = {out}};
+  if (pa_cli_check_io(cli, "convert", &io)) return 1;
   pa_mesh *mesh = NULL;
   pa_status st = pa_cli_read_mesh(cli, in, &mesh);
   if (st != PA_SUCCESS) return read_failed(cli, st);
@@ -437,15 +437,7 @@ int main(int argc, char **argv) {
   MPI_Comm_rank(cli.comm, &cli.rank);
   MPI_Comm_size(cli.comm, &cli.size);
   if (cli.size > 1) keep_freed_memory();
-  {
-    /* test hook: fail the k-th allocation of padapt's allocator, on every
-     * rank or on rank PADAPT_TEST_FAIL_RANK only (fault injection,
-     * tests/cli/test_alloc_faults.sh) */
-    const char *k = getenv("PADAPT_TEST_FAIL_ALLOC");
-    const char *r = getenv("PADAPT_TEST_FAIL_RANK");
-    if (k && k[0] && (!r || !r[0] || atoi(r) == cli.rank))
-      pa_memory_fail_after(atol(k));
-  }
+  pa_cli_test_hooks(&cli);
   int rc = dispatch(&cli, argc, argv);
   double tcmd = pa_wtime();
   int all = rc;

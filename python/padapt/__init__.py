@@ -8,7 +8,8 @@ extension). Sequential:
     new.write("out.mesh")
 
 Metric toolbox: padapt.metric (hessian, levelset, signed_distance,
-intersect, grade, clamp, complexity, ...). Distributed, under mpiexec with
+intersect, grade, clamp, complexity, ...). A level set cut into the mesh
+(Mmg's -ls): padapt.levelset.cut, or padapt.adapt(..., levelset=phi). Distributed, under mpiexec with
 mpi4py: padapt.DistributedMesh. Errors of the library raise padapt.Error
 carrying its message; bad arrays raise ValueError before any library call.
 See docs/guide/python.md.
@@ -17,9 +18,10 @@ from ._lib import Error, LIBPATH as _LIBPATH, lib as _clib
 from .mesh import Mesh, read, FLAG_CORNER, FLAG_RIDGE, FLAG_REQUIRED, FLAG_USER
 from .adapt import adapt, AdaptResult, Report
 from . import metric
+from . import levelset
 
 __version__ = _clib.pa_version().decode()  # the library's (padapt.h)
-__all__ = ["Error", "Mesh", "read", "adapt", "AdaptResult", "Report", "metric",
+__all__ = ["Error", "Mesh", "read", "adapt", "AdaptResult", "Report", "metric", "levelset",
            "DistributedMesh", "FLAG_CORNER", "FLAG_RIDGE", "FLAG_REQUIRED",
            "FLAG_USER", "library_path", "memory_current", "memory_peak"]
 

@@ -92,7 +92,16 @@ class RemeshOpts(ctypes.Structure):
                 ("no_angle", "no_insert", "no_swap", "no_move", "no_surf",
                  "verbosity", "trusted", "no_stats")] + \
                [("progress", ctypes.c_void_p), ("progress_ctx", ctypes.c_void_p),
-                ("local", ctypes.c_void_p), ("nlocal", ctypes.c_int)]
+                ("local", ctypes.c_void_p), ("nlocal", ctypes.c_int),
+                ("mem_mb", ctypes.c_double)]
+
+
+class TransferReport(ctypes.Structure):
+    _fields_ = [("nfield", ctypes.c_int), ("nfast", ctypes.c_long),
+                ("nclip", ctypes.c_long), ("nout", ctypes.c_long),
+                ("defect", ctypes.c_double), ("uncovered", ctypes.c_double),
+                ("lost", ctypes.c_double), ("time_s", ctypes.c_double),
+                ("cpu_s", ctypes.c_double)]
 
 
 class RemeshReport(ctypes.Structure):
@@ -100,7 +109,7 @@ class RemeshReport(ctypes.Structure):
                 ("ncollapse", ctypes.c_long), ("nswap", ctypes.c_long),
                 ("nmove", ctypes.c_long), ("npass", ctypes.c_int),
                 ("time_s", ctypes.c_double), ("cpu_s", ctypes.c_double),
-                ("fidelity", Fidelity)]
+                ("fidelity", Fidelity), ("transfer", TransferReport)]
 
 
 class HessianOpts(ctypes.Structure):
@@ -150,7 +159,8 @@ class AdaptReport(ctypes.Structure):
                  "bytes_moved")] + \
                [("peak_memory", ctypes.c_size_t), ("peak_rss", ctypes.c_size_t),
                 ("niter_recorded", ctypes.c_int),
-                ("iters", AdaptIter * ADAPT_MAX_ITERS), ("fidelity", Fidelity)]
+                ("iters", AdaptIter * ADAPT_MAX_ITERS), ("fidelity", Fidelity),
+                ("transfer", TransferReport)]
 
 
 class DmeshIter(ctypes.Structure):
@@ -196,6 +206,13 @@ for _n, _r, _a in [
         ("pa_mesh_add_field", S, [P, cstr, I, dbl]), ("pa_mesh_remove_field", S, [P, I]),
         ("pa_mesh_nfield", I, [P]),
         ("pa_mesh_field", S, [P, I, ctypes.POINTER(cstr), ctypes.POINTER(I), ctypes.POINTER(dbl)]),
+        ("pa_mesh_add_field_at", S, [P, I, cstr, I, dbl]),
+        ("pa_mesh_remove_field_at", S, [P, I, I]), ("pa_mesh_nfield_at", I, [P, I]),
+        ("pa_mesh_field_at", S, [P, I, I, ctypes.POINTER(cstr), ctypes.POINTER(I),
+                                 ctypes.POINTER(dbl)]),
+        ("pa_mesh_set_field_transfer", S, [P, I, I, I]),
+        ("pa_mesh_field_transfer", I, [P, I, I]),
+        ("pa_transfer_parse", S, [cstr, ctypes.POINTER(I)]), ("pa_transfer_name", cstr, [I]),
         ("pa_mesh_nnames", I, [P]),
         ("pa_mesh_name", S, [P, I, ctypes.POINTER(I), ctypes.POINTER(ctypes.c_int32), ctypes.POINTER(cstr)]),
         ("pa_mesh_add_name", S, [P, I, ctypes.c_int32, cstr]),

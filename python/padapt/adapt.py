@@ -9,9 +9,16 @@ import numpy as np
 
 from . import _lib
 from ._lib import lib, check, Error
-from .mesh import Mesh, as_metric, as_field, stats_dict, _num, _ratio
+from .mesh import Mesh, as_metric, as_field, stats_dict, _num, _ratio, transfer_code, ELEMENT
 
 __all__ = ["adapt", "AdaptResult", "Report", "remesh_options"]
+
+
+def transfer_dict(t):
+    """A pa_transfer_report as the "transfer" member of the -json report."""
+    return {"nfield": t.nfield, "nfast": t.nfast, "nclip": t.nclip, "nout": t.nout,
+            "defect": t.defect, "uncovered": t.uncovered, "lost": t.lost,
+            "time_s": t.time_s, "cpu_s": t.cpu_s}
 
 
 def fidelity_dict(f):
@@ -82,9 +89,20 @@ class Report(collections.abc.Mapping):
         return "<padapt.Report %s>" % self.description
 
 
-AdaptResult = collections.namedtuple("AdaptResult", "mesh fields report")
-AdaptResult.__doc__ = """What adapt() returns: the adapted Mesh, the
-interpolated vertex fields {name: array} and the Report."""
+class AdaptResult(collections.namedtuple("AdaptResult", "mesh fields report")):
+    """What adapt() returns: the adapted Mesh, the interpolated vertex
+    fields {name: array} and the Report; cell_fields and boundary_fields
+    are the mesh's element and boundary fields as carried ({name:
+    array})."""
+    __slots__ = ()
+
+    @property
+    def cell_fields(self):
+        return self.mesh.cell_fields
+
+    @property
+    def boundary_fields(self):
+        return self.mesh.boundary_fields
 
 # Options of adapt() and DistributedMesh.adapt() that map onto pa_remesh_opts.
 _REMESH_KEYS = ("hmin", "hmax", "hsiz", "hgrad", "hgradreq", "hausd", "angle",
@@ -114,7 +132,8 @@ def remesh_options(opts, **kw):
 
 
 def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
-          hausd=None, fields=None, **options):
+          hausd=None, fields=None, cell_fields=None, boundary_fields=None,
+          transfer=None, levelset=None, levelset_options=None, **options):
     """Adapt a copy of mesh to a metric with the built-in remesher.
 
     mesh     a padapt.Mesh (not modified)
@@ -129,6 +148,22 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
              (default 0.01)
     fields   {name: (nvert,) or (nvert, k)} vertex fields to interpolate
              onto the new mesh, besides those the mesh carries
+    levelset (nvert,) a level set: its zero set is cut into the mesh first
+             (Mmg's -ls: inside, phi < 0, reference 3, outside 2, the
+             interface reference 10), then kept as a boundary by the
+             adaptation; report["levelset"] says what the cut did
+    levelset_options  {name: value} of padapt.levelset.cut (value, ref_in,
+             ref_out, ref_iface, materials, rmc)
+    cell_fields  {name: (nelem,) or (nelem, k), or (array, mode)} element
+             fields to carry, besides the mesh's: by their transfer mode,
+             "conservative" (default: the integral kept), "bounded" (also
+             within the values each new element overlaps) or "nearest"
+             (integer data keeps its values); docs/guide/fields.md
+    boundary_fields  {name: (nbdry,) or (nbdry, k)} boundary fields to
+             carry: a new boundary entity takes the values of the old one of
+             the same reference nearest to it
+    transfer {name: mode} transfer modes of element fields (the mesh's or
+             cell_fields'), or one mode for all of them
     options  hgradreq (gradation from required entities, default 2.3),
              angle (ridge detection angle in degrees, default 45),
              no_angle, no_insert, no_swap, no_move, no_surf (booleans, as
@@ -136,8 +171,11 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
              verbosity
 
     Returns AdaptResult(mesh, fields, report): the new Mesh (carrying the
-    metric the remesher used, interpolated, and the fields), the fields as
-    {name: array}, and a Report. A result that misses the target is still
+    metric the remesher used, interpolated, and every field), the vertex
+    fields as {name: array} (result.cell_fields, result.boundary_fields:
+    the element and boundary fields), and a Report (report["transfer"]:
+    what carrying the element fields did, its conservation
+    defect included). A result that misses the target is still
     returned (report.target_met is False, report.description says what
     limited it). Raises ValueError on bad arrays or options before any
     library call, padapt.Error when the library refuses the mesh or the
@@ -152,6 +190,18 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
     dim, nv = mesh.dim, mesh.nvert
     met = None if metric is None else as_metric("metric", metric, dim, nv)
     flds = [(n,) + as_field(n, v, nv) for n, v in (fields or {}).items()]
+    cflds = []
+    for n, v in (cell_fields or {}).items():
+        mode = None
+        if isinstance(v, tuple):
+            v, mode = v
+        cflds.append((n, as_field(n, v, mesh.nelem)[0],
+                      None if mode is None else transfer_code(n, mode)))
+    bflds = [(n, as_field(n, v, mesh.nbdry)[0]) for n, v in (boundary_fields or {}).items()]
+    if isinstance(transfer, str):
+        tmodes = {None: transfer_code("transfer", transfer)}
+    else:
+        tmodes = {n: transfer_code(n, m) for n, m in (transfer or {}).items()}
     if hsiz is not None and opts.hsiz <= 0:
         raise ValueError("hsiz: expected a positive size, got %r" % (hsiz,))
     if met is None and opts.hsiz <= 0 and lib.pa_mesh_metric_ncomp(mesh._h) == 0:
@@ -165,7 +215,25 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
         check(lib.pa_mesh_set_metric(out._h, 1, _lib.ptr(h)))
     for name, val, nc in flds:
         out.add_field(name, val)
+    for name, val, code in cflds:
+        out.add_cell_field(name, val)
+        if code is not None:
+            tmodes.setdefault(name, code)
+    for name, val in bflds:
+        out.add_boundary_field(name, val)
+    names = list(out.cell_fields)
+    for name, code in tmodes.items():
+        ks = range(len(names)) if name is None else [names.index(name)] if name in names else []
+        if not ks and name is not None:
+            raise ValueError("transfer: no element field %r (element fields: %s)"
+                             % (name, ", ".join(names) or "none"))
+        for k in ks:
+            check(lib.pa_mesh_set_field_transfer(out._h, ELEMENT, k, code))
     nelem0 = mesh.nelem
+    lsrep = None
+    if levelset is not None:
+        from .levelset import cut_in_place
+        lsrep = cut_in_place(out._h, nv, levelset, **(levelset_options or {}))
 
     rep = _lib.RemeshReport()
     check(lib.pa_remesh(lib.pa_remesher_builtin(), out._h, ctypes.byref(opts), ctypes.byref(rep)))
@@ -184,5 +252,8 @@ def adapt(mesh, metric=None, *, hsiz=None, hmin=None, hmax=None, hgrad=None,
               "nmove": rep.nmove, "npass": rep.npass,
               "elements_before": nelem0, "vertices_before": nv})
     d.update(fidelity_dict(rep.fidelity))
+    if lsrep is not None:
+        d["levelset"] = lsrep
+    d["transfer"] = transfer_dict(rep.transfer)
     report = Report(d, describe(rep.fidelity))
     return AdaptResult(out, out.fields, report)

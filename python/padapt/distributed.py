@@ -23,7 +23,7 @@ from mpi4py import MPI
 from . import _lib
 from ._lib import lib, check
 from .mesh import Mesh, as_metric, as_field, stats_dict
-from .adapt import Report, fidelity_dict, describe, remesh_options
+from .adapt import Report, fidelity_dict, transfer_dict, describe, remesh_options
 from .metric import _RECOVERY_NAME
 
 __all__ = ["DistributedMesh", "Value", "KINDS"]
@@ -587,6 +587,7 @@ class DistributedMesh(object):
                  "bytes_after": it.mem_after}
                 for it in r.iters[:r.niter_recorded]],
         })
+        d["transfer"] = transfer_dict(r.transfer)
         d.update(fidelity_dict(r.fidelity))
         return Report(d, describe(r.fidelity))
 

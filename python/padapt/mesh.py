@@ -176,13 +176,35 @@ def as_metric(name, m, dim, nvert):
 
 
 def as_field(name, values, nvert):
-    """A vertex field (nvert,) or (nvert, k), checked, float64, and k."""
+    """A vertex (or element, boundary) field (n,) or (n, k), checked,
+    float64, and k."""
     v = _array(name, values)
     if v.ndim not in (1, 2) or v.shape[0] != nvert or (v.ndim == 2 and v.shape[1] < 1):
         raise ValueError("field %r: expected shape (%d,) or (%d, k), got %s"
                          % (name, nvert, nvert, v.shape))
     v = as_float("field %r" % name, v, None)
     return v, (1 if v.ndim == 1 else v.shape[1])
+
+
+# Entities of fields (pa_entity) and the transfer modes (pa_transfer).
+VERTEX, ELEMENT, BOUNDARY = 0, 1, 2
+TRANSFERS = ("conservative", "bounded", "nearest")
+
+
+def transfer_code(name, mode):
+    """The pa_transfer code of a transfer mode name (ValueError listing the
+    valid ones otherwise)."""
+    code = ctypes.c_int()
+    if not isinstance(mode, str) or lib.pa_transfer_parse(mode.encode(), ctypes.byref(code)):
+        lib.pa_clear_error()
+        raise ValueError("%s: unknown transfer mode %r (valid: %s)"
+                         % (name, mode, ", ".join(TRANSFERS)))
+    return code.value
+
+
+def _check_name(name):
+    if not isinstance(name, str) or not name or len(name.encode()) >= 64:
+        raise ValueError("field names must be non-empty strings of under 64 bytes: %r" % (name,))
 
 
 # ------------------------------------------------------------------ Mesh
@@ -193,7 +215,8 @@ class Mesh(object):
     Mesh(points, cells, boundary=None, *, edges=None, point_refs=None,
          cell_refs=None, boundary_refs=None, edge_refs=None,
          required_points=None, required_cells=None, required_boundary=None,
-         required_edges=None, metric=None, fields=None)
+         required_edges=None, metric=None, fields=None,
+         cell_fields=None, boundary_fields=None)
 
     points    (n, dim) coordinates; dim = points.shape[1] (2 or 3)
     cells     (m, dim+1) vertex indices, 0-based, positively oriented
@@ -208,6 +231,12 @@ class Mesh(object):
               m11 m12 m22 [m13 m23 m33]
     fields    {name: (n,) or (n, k) array}: vertex fields interpolated by
               adapt() onto the new mesh
+    cell_fields      {name: (m,) or (m, k) array, or (array, mode)}: element
+              fields, carried by adapt() by their transfer mode
+              ("conservative" by default, "bounded", "nearest")
+    boundary_fields  {name: (b,) or (b, k) array}: boundary fields, each new
+              boundary entity taking the values of the old one (same
+              reference) nearest to it
 
     Arrays are checked (shape, dtype, finite values, indices in range)
     before anything reaches the library, raising ValueError; the mesh
@@ -218,7 +247,8 @@ class Mesh(object):
     def __init__(self, points, cells, boundary=None, *, edges=None, point_refs=None,
                  cell_refs=None, boundary_refs=None, edge_refs=None,
                  required_points=None, required_cells=None, required_boundary=None,
-                 required_edges=None, metric=None, fields=None):
+                 required_edges=None, metric=None, fields=None, cell_fields=None,
+                 boundary_fields=None):
         p = _array("points", points)
         if p.ndim != 2 or p.shape[1] not in (2, 3):
             raise ValueError("points: expected shape (n, 2) or (n, 3), got %s" % (p.shape,))
@@ -278,6 +308,13 @@ class Mesh(object):
             check(lib.pa_mesh_set_metric(h, met[1], _lib.ptr(met[0])))
         for name, val, nc in flds:
             check(lib.pa_mesh_add_field(h, name.encode(), nc, _lib.ptr(val)))
+        for name, val in (cell_fields or {}).items():
+            mode = None
+            if isinstance(val, tuple):
+                val, mode = val
+            self.add_cell_field(name, val, transfer=mode)
+        for name, val in (boundary_fields or {}).items():
+            self.add_boundary_field(name, val)
 
     @classmethod
     def _wrap(cls, handle, owner=None):
@@ -413,6 +450,81 @@ class Mesh(object):
             raise KeyError(name)
         check(lib.pa_mesh_remove_field(self._h, names.index(name)))
 
+    def _fields_at(self, at, n):
+        out = {}
+        for k in range(lib.pa_mesh_nfield_at(self._h, at)):
+            name, nc, val = ctypes.c_char_p(), ctypes.c_int(), _lib.c_dbl_p()
+            check(lib.pa_mesh_field_at(self._h, at, k, ctypes.byref(name), ctypes.byref(nc),
+                                       ctypes.byref(val)))
+            a = _lib.view(self, ctypes.cast(val, ctypes.c_void_p).value, (n, nc.value),
+                          np.float64).copy()
+            out[name.value.decode()] = a[:, 0] if nc.value == 1 else a
+        return out
+
+    def _add_at(self, at, n, name, values, transfer=None):
+        _check_name(name)
+        v, nc = as_field(name, values, n)
+        code = None if transfer is None else transfer_code(name, transfer)
+        names = list(self._fields_at(at, n))
+        if name in names:
+            check(lib.pa_mesh_remove_field_at(self._h, at, names.index(name)))
+        check(lib.pa_mesh_add_field_at(self._h, at, name.encode(), nc, _lib.ptr(v)))
+        if code is not None:
+            k = lib.pa_mesh_nfield_at(self._h, at) - 1
+            st = lib.pa_mesh_set_field_transfer(self._h, at, k, code)
+            if st:
+                msg = lib.pa_last_error().decode(errors="replace")
+                lib.pa_clear_error()
+                check(lib.pa_mesh_remove_field_at(self._h, at, k))
+                raise ValueError(msg)
+
+    @property
+    def cell_fields(self):
+        """{name: array} copies of the element fields ((nelem,) for one
+        component)."""
+        return self._fields_at(ELEMENT, self.nelem)
+
+    @property
+    def boundary_fields(self):
+        """{name: array} copies of the boundary fields ((nbdry,) for one
+        component)."""
+        return self._fields_at(BOUNDARY, self.nbdry)
+
+    @property
+    def transfers(self):
+        """{name: mode} of the element fields: how adapt() carries each
+        ("conservative", "bounded" or "nearest"; see docs/guide/fields.md)."""
+        return {n: lib.pa_transfer_name(lib.pa_mesh_field_transfer(self._h, ELEMENT, k)).decode()
+                for k, n in enumerate(self.cell_fields)}
+
+    def add_cell_field(self, name, values, transfer=None):
+        """Attach an element field (nelem,) or (nelem, k), copied, carried by
+        adapt() by its transfer mode: "conservative" (the default: the
+        integral kept), "bounded" (conservative and within the values it
+        overlaps) or "nearest" (integer data keeps its values). Replaces a
+        field of the same name."""
+        self._add_at(ELEMENT, self.nelem, name, values, transfer)
+
+    def add_boundary_field(self, name, values):
+        """Attach a boundary field (nbdry,) or (nbdry, k), copied; adapt()
+        gives each new boundary entity the values of the old one of the same
+        reference nearest to it. Replaces a field of the same name."""
+        self._add_at(BOUNDARY, self.nbdry, name, values)
+
+    def remove_cell_field(self, name):
+        """Remove the element field called name (KeyError if none)."""
+        names = list(self.cell_fields)
+        if name not in names:
+            raise KeyError(name)
+        check(lib.pa_mesh_remove_field_at(self._h, ELEMENT, names.index(name)))
+
+    def remove_boundary_field(self, name):
+        """Remove the boundary field called name (KeyError if none)."""
+        names = list(self.boundary_fields)
+        if name not in names:
+            raise KeyError(name)
+        check(lib.pa_mesh_remove_field_at(self._h, BOUNDARY, names.index(name)))
+
     @property
     def names(self):
         """The physical names (Gmsh $PhysicalNames) as a list of (dim, tag,
@@ -465,7 +577,7 @@ class Mesh(object):
         return lib.pa_mesh_memory_used(self._h)
 
     def copy(self):
-        """A deep copy (metric and fields included)."""
+        """A deep copy (metric and every field included)."""
         h = ctypes.c_void_p()
         check(lib.pa_mesh_copy(self._h, ctypes.byref(h)))
         return Mesh._wrap(h)
@@ -473,8 +585,9 @@ class Mesh(object):
     # ----------------------------------------------------------------- I/O
     def write(self, path, binary=False, version=0):
         """Write the mesh, format by extension: .mesh/.meshb (Medit; version
-        1-4 for .meshb), .msh (Gmsh 4.1, binary=True for binary), .vtu (with
-        the metric and fields as point data). All or nothing: written to a
+        1-4 for .meshb), .msh (Gmsh 4.1, binary=True for binary; element and
+        boundary fields as $ElementData), .vtu (with the metric and vertex
+        fields as point data, element and boundary fields as cell data). All or nothing: written to a
         temporary file then renamed."""
         o = _WriteOpts(1 if binary else 0, int(version))
         check(lib.pa_mesh_write(self._h, os.fsencode(path), ctypes.byref(o)))
@@ -509,9 +622,16 @@ class Mesh(object):
         if self.metric is not None:
             point_data["metric"] = self.metric
         point_data.update(self.fields)
+        cell_data = {"medit:ref": [r for _, _, r in blocks]}
+        # element and boundary fields: NaN on the blocks they are not on
+        per_block = [self.cell_fields, self.boundary_fields if self.nbdry else {}, {}]
+        for name in dict.fromkeys(list(per_block[0]) + list(per_block[1])):
+            shape = next(f[name].shape[1:] for f in per_block if name in f)
+            cell_data[name] = [pb[name] if name in pb and pb[name].shape[1:] == shape
+                               else np.full((len(c),) + shape, np.nan)
+                               for pb, (_, c, _) in zip(per_block, blocks)]
         return meshio.Mesh(self.points.copy(), [(t, c) for t, c, _ in blocks],
-                           point_data=point_data,
-                           cell_data={"medit:ref": [r for _, _, r in blocks]},
+                           point_data=point_data, cell_data=cell_data,
                            field_data={n: np.array([t, d]) for d, t, n in self.names})
 
     @classmethod
@@ -524,8 +644,12 @@ class Mesh(object):
         References from cell data "medit:ref", else "gmsh:physical"; vertex
         references from point data "medit:ref". Point data "metric" becomes
         the metric, other real point data with one value (or row) per vertex
-        become fields. field_data entries [tag, dim] become the physical
-        names. Other cell types are ignored."""
+        become fields. Real cell data other than the references becomes an
+        element field where it has a finite value on every element, and a
+        boundary field where it has one on every listed boundary entity (NaN
+        marks the blocks a field is not on, as to_meshio writes them).
+        field_data entries [tag, dim] become the physical names. Other cell
+        types are ignored."""
         types = [b.type for b in m.cells]
         if dim is None:
             dim = 3 if "tetra" in types else 2
@@ -554,6 +678,17 @@ class Mesh(object):
             return (np.concatenate([np.asarray(m.cells[i].data) for i in idx]),
                     np.concatenate([refs_of(i) for i in idx]).astype(np.int64))
 
+        def gather_data(t, key):
+            """Cell data key on the blocks of type t, end to end; None if
+            it is not real and finite on all of them."""
+            idx = [i for i, b in enumerate(m.cells) if b.type == t]
+            parts = [np.asarray(m.cell_data[key][i]) for i in idx]
+            if not parts or any(p.dtype.kind not in "fiu" or p.ndim not in (1, 2)
+                                for p in parts) or len({p.shape[1:] for p in parts}) != 1:
+                return None
+            v = np.concatenate(parts).astype(np.float64)
+            return v if np.all(np.isfinite(v)) else None
+
         ctype, btype = ("tetra", "triangle") if dim == 3 else ("triangle", "line")
         cells, crefs = gather(ctype)
         if cells is None:
@@ -569,10 +704,21 @@ class Mesh(object):
             elif k not in ("medit:ref", "gmsh:dim_tags") and v.dtype.kind in "fiu" \
                     and v.ndim in (1, 2) and v.shape[0] == len(pts):
                 fields[k] = v
+        cfields, bfields = {}, {}
+        for k in m.cell_data:
+            if k in ("medit:ref", "gmsh:physical", "gmsh:geometrical", "cell_tags"):
+                continue
+            v = gather_data(ctype, k)
+            if v is not None:
+                cfields[k] = v
+            v = gather_data(btype, k) if bdry is not None else None
+            if v is not None:
+                bfields[k] = v
         mesh = cls(pts, cells, bdry, edges=edges,
                    point_refs=None if vref is None else np.asarray(vref).astype(np.int64),
                    cell_refs=crefs, boundary_refs=brefs, edge_refs=erefs,
-                   metric=metric, fields=fields)
+                   metric=metric, fields=fields, cell_fields=cfields,
+                   boundary_fields=bfields)
         if bdry is not None:  # complete a partial list (physical groups on some sides)
             check(lib.pa_mesh_build_boundary(mesh._h, 0, None))
         mesh.names = [(int(v[1]), int(v[0]), k) for k, v in (m.field_data or {}).items()
@@ -582,14 +728,14 @@ class Mesh(object):
 
 def read(path):
     """Read a mesh, format by extension: .mesh/.meshb (Medit), .msh (Gmsh 4.1
-    ASCII or binary, 2.2 ASCII). A file that lists no boundary gets one
-    (reference 0), as the command line does. Raises padapt.Error naming the
-    file and line of a fault, FileNotFoundError if path does not exist."""
+    ASCII or binary, 2.2 ASCII). The boundary entities the file does not
+    list are added (reference 0), as the command line does. Raises
+    padapt.Error naming the file and line of a fault, FileNotFoundError if
+    path does not exist."""
     if not os.path.exists(path):
         raise FileNotFoundError(2, "No such file", str(path))
     h = ctypes.c_void_p()
     check(lib.pa_mesh_read(os.fsencode(path), ctypes.byref(h)))
     mesh = Mesh._wrap(h)
-    if mesh.nbdry == 0:
-        check(lib.pa_mesh_build_boundary(h, 0, None))
+    check(lib.pa_mesh_build_boundary(h, 0, None))
     return mesh

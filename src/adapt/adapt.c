@@ -63,7 +63,9 @@ void pa__piece_release(pa__piece *pc) {
   pa__free(pc->ifgid);
   pa__free(pc->ifgive);
   pa__free(pc->dest);
+  pa__free(pc->bfix);
   pc->dest = NULL;
+  pc->bfix = NULL;
   pc->vgid = pc->ifgid = NULL;
   pc->skin = pc->hot = pc->ifgive = NULL;
   pc->vrank = NULL;
@@ -86,6 +88,8 @@ void pa__iter_release_elements(pa__iter *it) {
   pa__free(it->label);
   pa__free(it->vlab);
   pa__free(it->vinner);
+  pa__free(it->vsurf);
+  pa__free(it->bside);
   pa__free(it->bstart);
   pa__free(it->belem);
   it->tag = NULL;
@@ -93,6 +97,8 @@ void pa__iter_release_elements(pa__iter *it) {
   it->label = NULL;
   it->vlab = NULL;
   it->vinner = NULL;
+  it->vsurf = NULL;
+  it->bside = NULL;
   it->bstart = it->belem = NULL;
 }
 
@@ -371,6 +377,33 @@ static pa_status record_iteration(const pa__iter *it, pa__loop *L, double *t,
   rep->remesh_busy += busy[0];
   rep->remesh_cpu += busy[1];
   rep->bytes_moved += ir->bytes_moved;
+  { /* the pieces' field transfers: sums, then the largest figures */
+    pa_transfer_report *tr = &rep->transfer;
+    double sum[5] = {0, 0, 0, 0, 0}, mx[4] = {0, 0, 0, 0};
+    for (int q = 0; q < it->npiece_local; q++) {
+      const pa_transfer_report *p = &it->pieces[q].rep.transfer;
+      sum[0] += (double)p->nfast;
+      sum[1] += (double)p->nclip;
+      sum[2] += (double)p->nout;
+      sum[3] += p->time_s;
+      sum[4] += p->cpu_s;
+      mx[0] = fmax(mx[0], p->nfield);
+      mx[1] = fmax(mx[1], p->defect);
+      mx[2] = fmax(mx[2], p->uncovered);
+      mx[3] = fmax(mx[3], p->lost);
+    }
+    PA_CALL(pa__allreduce(dm->comm, sum, 5, MPI_DOUBLE, MPI_SUM));
+    PA_CALL(pa__allreduce(dm->comm, mx, 4, MPI_DOUBLE, MPI_MAX));
+    tr->nfast += (long)sum[0];
+    tr->nclip += (long)sum[1];
+    tr->nout += (long)sum[2];
+    tr->time_s += sum[3];
+    tr->cpu_s += sum[4];
+    tr->nfield = tr->nfield > (int)mx[0] ? tr->nfield : (int)mx[0];
+    tr->defect = fmax(tr->defect, mx[1]);
+    tr->uncovered = fmax(tr->uncovered, mx[2]);
+    tr->lost = fmax(tr->lost, mx[3]);
+  }
   if (rep->niter_recorded < PA_ADAPT_MAX_ITERS)
     rep->iters[rep->niter_recorded++] = *ir;
 cleanup:
@@ -533,6 +566,16 @@ static pa_status conclude(pa_dmesh *dm, pa_status st, pa_dmesh_value *done,
   return st;
 }
 
+/* opts->mem_mb as the memory bound of the call, under a lower one already
+ * set (pa_memory_set_limit): the bound to restore after the call. */
+static size_t bound_begin(const pa_adapt_opts *opts) {
+  size_t old = pa_memory_limit();
+  if (opts->mem_mb > 0 && isfinite(opts->mem_mb) &&
+      (!old || opts->mem_mb * 1e6 < (double)old))
+    pa_memory_set_limit((size_t)(opts->mem_mb * 1e6));
+  return old;
+}
+
 pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
                          pa_adapt_report *report) {
   pa_status st = PA_SUCCESS;
@@ -540,6 +583,7 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
   pa__loop L;
   pa_dmesh_value *done = NULL;
   double t0 = pa_wtime();
+  size_t bound = pa_memory_limit();
   memset(&L, 0, sizeof L);
   L.t0 = t0;
   PA_CHECK(dm, PA_ERR_ARG, "pa_dmesh_adapt: NULL dmesh");
@@ -548,12 +592,15 @@ pa_status pa_dmesh_adapt(pa_dmesh *dm, const pa_adapt_opts *opts,
     pa_adapt_opts_default(&def);
     opts = &def;
   }
+  bound = bound_begin(opts);
   PA_CALL(check_opts(dm, opts));
   PA_CALL(begin(dm, opts, &L, &done));
   PA_CALL(run(dm, opts, done, &L, t0));
   PA_CALL(finish(dm, opts, &done, &L));
 cleanup:
-  return conclude(dm, st, done, &L, t0, report);
+  st = conclude(dm, st, done, &L, t0, report);
+  pa_memory_set_limit(bound);
+  return st;
 }
 
 pa_status pa_dmesh_adapt_resume(MPI_Comm comm, const char *dir,
@@ -565,6 +612,7 @@ pa_status pa_dmesh_adapt_resume(MPI_Comm comm, const char *dir,
   pa_dmesh *dm = NULL;
   pa_dmesh_value *done = NULL;
   double t0 = pa_wtime();
+  size_t bound = pa_memory_limit();
   memset(&L, 0, sizeof L);
   pa__agree_reset();
   if (!dir || !dmp)
@@ -575,6 +623,7 @@ pa_status pa_dmesh_adapt_resume(MPI_Comm comm, const char *dir,
     pa_adapt_opts_default(&def);
     opts = &def;
   }
+  bound = bound_begin(opts);
   PA_CALL(pa__adapt_restore(comm, dir, opts, &dm, &L));
   done = pa_dmesh_value_find(dm, PA_ADAPT_DONE_VALUE);
   PA_CALL(check_opts(dm, opts));
@@ -587,6 +636,7 @@ pa_status pa_dmesh_adapt_resume(MPI_Comm comm, const char *dir,
   PA_CALL(finish(dm, opts, &done, &L));
 cleanup:
   st = conclude(dm, st, done, &L, t0, report);
+  pa_memory_set_limit(bound);
   if (st) pa_dmesh_destroy(dm);
   else *dmp = dm;
   return st;

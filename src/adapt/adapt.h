@@ -23,10 +23,11 @@
  *  - a piece's skin is the set of faces it shares with elements of another
  *    label or of none; every vertex and edge a piece shares with the outside
  *    lies on it. The skin is frozen while the piece is remeshed, after
- *    bisect.c refined, in every piece, the skin faces whose vertices are
- *    all inner (only pieces around them): that refinement depends only on
- *    the face, so both sides of an interface agree and a piece remeshed
- *    with its skin untouched fits back exactly;
+ *    bisect.c refined, in every piece, the skin faces whose vertices only
+ *    pieces touch: that refinement depends only on the face (its vertices'
+ *    coordinates, metric, marks and normals, shipped bit for bit), so both
+ *    sides of an interface agree and a piece remeshed with its skin
+ *    untouched fits back exactly;
  *  - an element stays (same global id, same values) when it is unlabelled;
  *    all labelled elements are replaced by the output of their piece (a
  *    failed piece gives its input back, with its refined skin);
@@ -47,9 +48,21 @@
 #define PA_ADAPT_SKIN_TRANSIT 0x80
 #define PA_ADAPT_HOT_TRANSIT 0x40
 /* ... skin edges may be refined there (inner, see pieces.c); only pieces
- * around, but not inner: skin edges towards an inner vertex may be refined */
+ * around, but not inner: skin edges towards an inner vertex may be refined;
+ * both: labelled, on a smooth curved boundary (pieces.c) */
 #define PA_ADAPT_INNER_TRANSIT 0x20
 #define PA_ADAPT_LABELLED_TRANSIT 0x10
+#define PA_ADAPT_SURFACE_TRANSIT (PA_ADAPT_INNER_TRANSIT | PA_ADAPT_LABELLED_TRANSIT)
+/* The temporary vertex field that carries, in 3D, the normal of each
+ * vertex on a smooth curved boundary and the Bloom mask of its boundary
+ * neighbours (pieces.c) to the pieces (extract.c), removed before the
+ * remesher sees them (bisect.c). */
+#define PA_ADAPT_SURFACE_FIELD "pa.adapt.surface"
+/* Bits of that mask: a double holds an integer below 2^53 exactly. The
+ * next bit marks a vertex on a feature edge or a required boundary entity
+ * (whose boundary edges stay whole). */
+#define PA_ADAPT_BLOOM_BITS 52
+#define PA_ADAPT_HARD_BIT ((uint64_t)1 << PA_ADAPT_BLOOM_BITS)
 /* Temporary ids of the vertices bisect.c adds to a piece (above every
  * global id; exact as a double) */
 #define PA_ADAPT_TEMP_GID ((pa_gid)1 << 52)
@@ -83,10 +96,27 @@
 #define PA_ADAPT_DONE_PASSED 0x80
 /* Name of the element value marking elements produced in this run. */
 #define PA_ADAPT_DONE_VALUE "pa.adapt.done"
+/* Bits of it->bside (pieces.c). A boundary entity with both lies inside
+ * the domain on the outer surface of a piece: the piece gets it frozen
+ * (extract.c), since the element on its other side stays or goes to
+ * another piece, and its vertices are not inner (no bisection of its
+ * edges). */
+#define PA_ADAPT_B_INTERIOR 1
+#define PA_ADAPT_B_CUT 2
 /* Reference of the artificial boundary entities of a piece's outer surface. */
 #define PA_ADAPT_SKIN_REF (-2000000001)
 /* Estimated bytes of remesher memory per unit of work (one output element). */
 #define PA_ADAPT_BYTES_PER_WORK 1000.0
+
+/* The bit of vertex global id g in a Bloom mask (a mix of its bits, so
+ * that neighbours' consecutive ids spread). */
+static inline uint64_t pa__adapt_bloom_bit(pa_gid g) {
+  uint64_t x = (uint64_t)g + 0x9e3779b97f4a7c15u;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9u;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebu;
+  x ^= x >> 31;
+  return (uint64_t)1 << (x % PA_ADAPT_BLOOM_BITS);
+}
 
 /* 1 if pieces and the result are checked (opts->check_pieces: -1 means
  * with a plug-in remesher only). */
@@ -109,7 +139,13 @@ typedef struct pa__piece {
                           piece touches */
   int *vrank;          /* in->nv: a rank that sent an element containing it
                           (the smallest) */
+  uint8_t *bfix;       /* n0[PA_BOUNDARY]: the input boundary entity lies
+                          inside the domain on the piece's outer surface
+                          (it->bside), frozen in the piece; its old owner
+                          gives it back, not the piece */
   pa_idx nsplit;       /* vertices added on the skin (bisect.c) */
+  pa_idx ncurved;      /* of which on a curved boundary, off the chord */
+  pa_idx curve_bad;    /* elements those left without a positive volume */
   int unchanged;       /* the built-in remesher changed nothing (its counts
                           are 0) and no skin vertex was added */
   pa_gid *ifgid;       /* in->nv (with skin refinement): global id agreed
@@ -155,8 +191,21 @@ typedef struct pa__iter {
   double bytes_moved;  /* record bytes this rank sent to other ranks */
   double imbalance;    /* estimated work: max over ranks / mean */
   uint8_t *vinner;     /* nloc: PA_ADAPT_INNER_TRANSIT (inner vertex),
-                          PA_ADAPT_LABELLED_TRANSIT (only pieces around, not
-                          inner) or 0 */
+                          PA_ADAPT_SURFACE_TRANSIT (only pieces around, on a
+                          smooth curved boundary), PA_ADAPT_LABELLED_TRANSIT
+                          (only pieces around, neither) or 0 */
+  double *vsurf;       /* 3D (else NULL), from pieces.c to the extraction
+                          (which releases it): nloc x 4, the unit outward
+                          normal of the vertices on a smooth curved boundary
+                          (0 for the others) and the Bloom mask of every
+                          vertex's boundary neighbours */
+  int nocurve;         /* the extraction found a split onto a curve that
+                          left an element without a positive volume: the
+                          pieces were made again without (extract.c) */
+  uint8_t *bside;      /* nloc boundary entities: PA_ADAPT_B_INTERIOR (two
+                          elements hold it: an interface inside the
+                          domain), PA_ADAPT_B_CUT (elements of two labels,
+                          or a labelled and an unlabelled one, hold it) */
   int *vlab;           /* 4 x nloc: smallest and largest label of the
                           elements around each local vertex (PA_ADAPT_NOLABEL
                           for unlabelled ones), then of the tagged ones
@@ -251,10 +300,13 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max);
 pa_status pa__adapt_extract(pa__iter *it);
 
 /* Refine the skin faces pc shares with other pieces (bisect.c); inner[v]:
- * the vertex is inner (see pieces.c); inside: bisect the edges inside the
- * piece too. */
+ * 1 the vertex is inner, 2 labelled, 3 on a smooth curved boundary (see
+ * pieces.c); inside: bisect the edges inside the piece too; surf (3D): 4
+ * per input vertex, it->vsurf's, or NULL (no two labelled vertices are
+ * then known to make a chord); curves: skin edges may be split onto a
+ * curve (else the vertices marked 3 are labelled ones). */
 pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
-                                int inside);
+                                int inside, const double *surf, int curves);
 
 /* Step 4. Local: remesh the local pieces; failures are recorded, not
  * returned (only hard internal errors are). *nfail receives the number of

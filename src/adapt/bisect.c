@@ -10,24 +10,49 @@
  * same faces on both sides of an interface: a face's refinement depends
  * only on its vertices (coordinates and metric, shipped bit for bit).
  *
- * Which skin edges: those whose two vertices are "inner" (pieces.c: every
+ * Which skin edges (pieces.c marks the vertices from reduced values, so
+ * every piece sees the same): those whose two vertices are "inner" (every
  * element around them is in a piece, they lie on no feature edge nor
  * required boundary entity nor curved boundary, and are no corner, ridge or
- * required vertex; from reduced vertex values, so every piece sees the
- * same), and those between an inner vertex and a "labelled" one (only
- * pieces around it, but on a ridge, a corner, a curved boundary...). Such
- * an edge lies in no staying element, and every piece containing it has it
- * on its skin. An inner-labelled edge is no feature edge (the inner end is
- * on none); if it lies on the boundary, its boundary faces contain the
- * inner end, whose faces are coplanar, so its midpoint is on the surface.
- * Without the labelled ends, every skin face touching a ridge of a box
+ * required vertex), those between an inner vertex and a "labelled" one
+ * (only pieces around it, but on a ridge, a corner, a curved boundary...),
+ * and those between two labelled vertices, inside the domain or on the
+ * boundary, unless an end is "hard" (on a feature edge or a required
+ * boundary entity). Such an edge lies in no staying element, and every
+ * piece containing it has it on its skin. An inner-labelled edge is no
+ * feature edge (the inner end is on none); if it lies on the boundary, its
+ * boundary faces contain the inner end, whose faces are coplanar, so its
+ * midpoint is on the surface. A labelled-labelled edge on the boundary is
+ * split on the cubic Hermite curve of its ends' normals (pieces.c gives
+ * one to the vertices of a smooth curved boundary, remesh/leb.c has the
+ * rules). Only the pieces at the ends of such an edge hold a boundary face
+ * of it: whether it is on the boundary comes from both ends' Bloom masks
+ * of their boundary neighbours' global ids (pieces.c), which never miss
+ * one; and when they err, the edge is a chord, split at its midpoint
+ * unless it lies within PA_LEB_SMOOTH_DEG of the tangent planes (then a
+ * point on the curve may turn an element over, caught below). Without the
+ * labelled ends, every skin face touching a ridge or a curved boundary
  * would stay as coarse as the input, and its neighbours would be remeshed
  * again in another iteration (docs/BENCHMARKS.md, "The parallel loop", has
  * the measurement).
  *
+ * A point on a curve may leave an element of the piece without a positive
+ * volume (a thin element on the concave side); the piece counts them
+ * (pc->curve_bad) and extract.c makes every piece again without curves
+ * when one is found on any rank.
+ *
+ * In 2D (no masks, surf NULL) every labelled vertex is hard: a skin edge
+ * there is interior, and nothing is gained, while the 2D remesher, fenced
+ * by skin edges refined down to a curved boundary's vertices, left whole
+ * the boundary edge between two of them (plate2d.mesh -hsiz 0.0012 at 4
+ * ranks: a boundary edge 40 times too long, the loop stalled). In 3D
+ * without masks (a mesh holding the most fields) too.
+ *
  * With inside, edges inside the piece longer than PA_ADAPT_LEB_INNER are
- * bisected too, in the same longest-first order: otherwise the elements on
- * a refined skin face are fans of slivers. The built-in 3D remesher turns
+ * bisected too, in the same longest-first order (except in elements holding
+ * less than PA_LEB_VMIN unit elements of metric volume, as the remesher's
+ * own pre-refinement): otherwise the elements on a refined skin face are
+ * fans of slivers. The built-in 3D remesher turns
  * those into more tets, more slowly (docs/design/ADAPT.md); a plain
  * bisection remesher (examples/) cannot repair them at all, nor the next
  * iteration's one a rolled-back piece, which comes back as refined here
@@ -47,17 +72,68 @@
 
 #include <math.h>
 
+/* What on_boundary reads: the piece's vertices' global ids and their
+ * Bloom masks (4 doubles per vertex, the fourth). */
+typedef struct bloom {
+  const pa_gid *vgid;
+  const double *surf;
+} bloom;
+
+/* leb.c's o->on_boundary: 1 if each of a and b is in the other's mask of
+ * boundary neighbours (a Bloom filter: never 0 for a boundary edge). */
+static int on_boundary(void *ctx, pa_idx a, pa_idx b) {
+  const bloom *f = ctx;
+  uint64_t ma = (uint64_t)f->surf[4 * (size_t)a + 3],
+           mb = (uint64_t)f->surf[4 * (size_t)b + 3];
+  return (ma & pa__adapt_bloom_bit(f->vgid[b])) &&
+         (mb & pa__adapt_bloom_bit(f->vgid[a]));
+}
+
+/* o->on_boundary without masks: any two labelled vertices may lie on a
+ * boundary edge. */
+static int maybe_on_boundary(void *ctx, pa_idx a, pa_idx b) {
+  (void)ctx;
+  (void)a;
+  (void)b;
+  return 1;
+}
+
 pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
-                                int inside) {
+                                int inside, const double *surf, int curves) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = pc->in;
   pa_idx nv0 = m->nv, *parent = NULL;
-  uint8_t *onskin = NULL;
+  uint8_t *onskin = NULL, *mark = NULL;
+  double *nrm = NULL;
+  bloom f = {pc->vgid, surf};
   pa__leb_opts o;
+  memset(&o, 0, sizeof o);
   o.lmax = inside ? PA_ADAPT_LEB_INNER : HUGE_VAL;
   o.skin_ref = PA_ADAPT_SKIN_REF;
   o.skin_ok = inner;
   o.skin_lmax = PA_ADAPT_LEB_SKIN;
+  o.vmin = inside ? PA_LEB_VMIN * pa__unit_simplex_volume(m->dim) : 0;
+  o.curve_bad = &pc->curve_bad;
+  if (surf) {
+    o.on_boundary = on_boundary;
+    o.ctx = &f;
+  } else {
+    o.on_boundary = maybe_on_boundary;
+  }
+  if (surf && curves) {
+    PA_ALLOC(nrm, (size_t)3 * nv0);
+    for (pa_idx v = 0; v < nv0; v++)
+      memcpy(nrm + 3 * (size_t)v, surf + 4 * (size_t)v, 3 * sizeof *nrm);
+    o.normal = nrm;
+  }
+  /* the labelled vertices whose boundary edges stay whole: all of them
+   * without masks (2D: see the file comment) */
+  PA_ALLOC(mark, nv0);
+  for (pa_idx v = 0; v < nv0; v++) {
+    int hard = !surf || ((uint64_t)surf[4 * (size_t)v + 3] & PA_ADAPT_HARD_BIT);
+    mark[v] = inner[v] >= 2 && hard ? 4 : inner[v];
+  }
+  o.skin_ok = mark;
   PA_CALL(pa__leb_refine(m, &o, &parent, &onskin));
   if (m->nv > nv0) {
     pa_gid *g = pa__realloc(pc->vgid, (size_t)m->nv * sizeof *g);
@@ -73,8 +149,9 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
     PA_CHECK(r, PA_ERR_MEMORY, "out of memory refining a piece's skin");
     pc->vrank = r;
     for (pa_idx v = nv0; v < m->nv; v++) {
-      int s = onskin[v - nv0];
+      int s = onskin[v - nv0] != 0;
       pa_idx a = parent[2 * (v - nv0)], b = parent[2 * (v - nv0) + 1];
+      pc->ncurved += onskin[v - nv0] == 2;
       pc->vgid[v] = s ? PA_ADAPT_TEMP_GID + v : -1;
       pc->skin[v] = (uint8_t)s;
       /* hot if an end is: elements produced near it may be tagged again */
@@ -86,5 +163,7 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
 cleanup:
   pa__free(parent);
   pa__free(onskin);
+  pa__free(mark);
+  pa__free(nrm);
   return st;
 }

@@ -90,6 +90,15 @@ static const field loop_fields[] = {LOOP('i', iter),
                                     LOOP('d', rep.remesh_busy),
                                     LOOP('d', rep.remesh_cpu),
                                     LOOP('d', rep.bytes_moved),
+                                    LOOP('i', rep.transfer.nfield),
+                                    LOOP('l', rep.transfer.nfast),
+                                    LOOP('l', rep.transfer.nclip),
+                                    LOOP('l', rep.transfer.nout),
+                                    LOOP('d', rep.transfer.defect),
+                                    LOOP('d', rep.transfer.uncovered),
+                                    LOOP('d', rep.transfer.lost),
+                                    LOOP('d', rep.transfer.time_s),
+                                    LOOP('d', rep.transfer.cpu_s),
                                     LOOP('i', rep.niter_recorded)};
 #define NLOOP (int)(sizeof loop_fields / sizeof *loop_fields)
 

@@ -12,20 +12,31 @@
  * estimated work is balanced.
  *
  * Gathering: each rank sends, for every labelled owned element, the element
- * (aux = piece), and for every (piece, entity) pair the vertices (with
- * coordinates, metric, fields, and transit flag bits: skin, hot, inner for
- * that piece), boundary entities and edges of the piece's elements it
- * holds. pa__recs_migrate
+ * (aux = piece, with its element fields), and for every (piece, entity)
+ * pair the vertices (with coordinates, metric, fields, and transit flag
+ * bits: skin, hot, inner for that piece; in 3D the normals and masks of
+ * it->vsurf as a temporary field, PA_ADAPT_SURFACE_FIELD), boundary
+ * entities (with their boundary fields) and edges of the piece's elements
+ * it holds. pa__recs_migrate
  * moves them; the receiver drops duplicates (an entity held by several
  * ranks) and assembles each of its pieces, numbered by increasing global id,
  * so the piece does not depend on how its fragments were spread.
+ *
+ * A boundary entity inside the domain on the outer surface of a piece (an
+ * interface between two references, which the element on its other side,
+ * staying or in another piece, shares: it->bside) comes flagged
+ * PA_ADAPT_SKIN_TRANSIT and is frozen in the piece (pc->bfix), as its skin.
  *
  * The piece keeps the global id of each of its vertices (pc->vgid; the
  * remesher never sees them: reintegrate.c matches the output's vertices
  * by their coordinates); the faces of its outer surface that are not
  * boundary entities become boundary entities of reference PA_ADAPT_SKIN_REF
  * flagged PA_FLAG_REQUIRED (its skin, frozen), which bisect.c then refines
- * where the piece meets another one.
+ * where the piece meets another one. If a skin split onto a curve left an
+ * element without a positive volume in a piece on any rank, every rank
+ * assembles its pieces again from the same records without such splits
+ * (one allreduce): the pieces around that skin cannot decide alone, each
+ * sees its own side.
  */
 #include "adapt/adapt.h"
 
@@ -144,7 +155,7 @@ static pa_status pair_records(pa__iter *it, int kind, const pa_idx *bstart,
   }
   n = pairs_unique(key, n);
   PA_ALLOC(*dest, n);
-  if (kind == PA_VERTEX) PA_ALLOC(dbl, R->ndbl);
+  if (R->ndbl) PA_ALLOC(dbl, R->ndbl);
   /* their user values go as payloads (vertices, boundary entities and
    * edges the remesher keeps keep them) */
   for (int k = 0; k < dm->nvalue; k++)
@@ -172,6 +183,10 @@ static pa_status pair_records(pa__iter *it, int kind, const pa_idx *bstart,
         vg[j] = dm->gid[PA_VERTEX][conn[(size_t)nv * x + j]];
       ref = kind == PA_BOUNDARY ? m->bref[x] : m->edref[x];
       flag = kind == PA_BOUNDARY ? m->bflag[x] : m->edflag[x];
+      if (kind == PA_BOUNDARY &&
+          it->bside[x] == (PA_ADAPT_B_INTERIOR | PA_ADAPT_B_CUT))
+        flag |= PA_ADAPT_SKIN_TRANSIT; /* on the piece's outer surface */
+      if (dbl) pa__entity_doubles(m, kind, x, dbl); /* boundary fields */
     }
     size_t pl = punit ? pa__entity_payload(dm, kind, x, pay) : 0;
     PA_CALL(pa__recs_add(R, dm->gid[kind][x], vg, ref, flag, p, dbl, pay, pl));
@@ -294,6 +309,11 @@ static pa_status piece_create(pbuild *b) {
     m->field[f].ncomp = dmm->field[f].ncomp;
   }
   PA_CALL(pa_mesh_reserve(m, nv, ne, nb, nd));
+  {
+    pa__layout lay;
+    pa__mesh_layout(dmm, &lay);
+    PA_CALL(pa__layout_cell_fields(&lay, m));
+  }
   PA_ALLOC(pc->vgid, nv);
   PA_CALLOC(pc->skin, nv);
   PA_CALLOC(pc->hot, nv);
@@ -322,9 +342,8 @@ static pa_status piece_vertices(pbuild *b) {
     pc->vrank[k] = INT_MAX;
     pc->skin[k] = (V->flag[i] & PA_ADAPT_SKIN_TRANSIT) != 0;
     pc->hot[k] = (V->flag[i] & PA_ADAPT_HOT_TRANSIT) != 0;
-    b->inner[k] = (V->flag[i] & PA_ADAPT_INNER_TRANSIT)      ? 1
-                  : (V->flag[i] & PA_ADAPT_LABELLED_TRANSIT) ? 2
-                                                             : 0;
+    b->inner[k] = (uint8_t)(((V->flag[i] & PA_ADAPT_INNER_TRANSIT) ? 1 : 0) |
+                            ((V->flag[i] & PA_ADAPT_LABELLED_TRANSIT) ? 2 : 0));
     m->vflag[k] &=
         (uint8_t) ~(PA_ADAPT_SKIN_TRANSIT | PA_ADAPT_HOT_TRANSIT |
                     PA_ADAPT_INNER_TRANSIT | PA_ADAPT_LABELLED_TRANSIT);
@@ -362,6 +381,7 @@ static pa_status piece_elements(pbuild *b) {
     }
     m->eref[k] = E->ref[i];
     m->eflag[k] = E->flag[i];
+    if (E->ndbl) pa__entity_set_doubles(m, PA_ELEMENT, k, E->dbl + (size_t)E->ndbl * i);
   }
   m->ne = ne;
   pc->nv0 = m->nv;
@@ -391,7 +411,14 @@ static pa_status piece_subentities(pbuild *b) {
       }
       if (kind == PA_BOUNDARY) {
         m->bref[k] = B->ref[i];
-        m->bflag[k] = B->flag[i];
+        m->bflag[k] = B->flag[i] & (uint8_t)~PA_ADAPT_SKIN_TRANSIT;
+        if (B->flag[i] & PA_ADAPT_SKIN_TRANSIT) {
+          if (!b->pc->bfix) PA_CALLOC(b->pc->bfix, n);
+          b->pc->bfix[k] = 1;
+          m->bflag[k] |= PA_FLAG_REQUIRED;
+        }
+        if (B->ndbl)
+          pa__entity_set_doubles(m, PA_BOUNDARY, k, B->dbl + (size_t)B->ndbl * i);
       } else {
         m->edref[k] = B->ref[i];
         m->edflag[k] = B->flag[i];
@@ -412,17 +439,29 @@ static pa_status piece_skin(pbuild *b) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = b->m;
   pa_idx nb0 = m->nb;
+  double *surf = NULL;
   PA_CALL(pa_mesh_build_boundary(m, PA_ADAPT_SKIN_REF, NULL));
   for (pa_idx k = nb0; k < m->nb; k++) m->bflag[k] |= PA_FLAG_REQUIRED;
   b->pc->in = m;
   b->m = NULL;
+  /* the normals of the vertices on curved boundaries (pieces.c) leave the
+   * piece's fields */
+  for (int k = 0; k < m->nfield; k++)
+    if (!strcmp(m->field[k].name, PA_ADAPT_SURFACE_FIELD)) {
+      PA_ALLOC(surf, (size_t)4 * m->nv);
+      memcpy(surf, m->field[k].val, (size_t)4 * m->nv * sizeof *surf);
+      PA_CALL(pa_mesh_remove_field(m, k));
+      break;
+    }
   {
     /* the built-in 2D remesher repairs fans of triangles itself */
     const pa_remesher *r = b->it->opts->remesher;
     int builtin2d = m->dim == 2 && (!r || r == pa_remesher_builtin());
-    PA_CALL(pa__piece_refine_skin(b->pc, b->inner, !builtin2d));
+    PA_CALL(pa__piece_refine_skin(b->pc, b->inner, !builtin2d, surf,
+                                  !b->it->nocurve));
   }
 cleanup:
+  pa__free(surf);
   return st;
 }
 
@@ -486,10 +525,12 @@ static pa_status element_records(pa__iter *it, pa__recs *S, int **dest) {
   pa_dmesh *dm = it->dm;
   const pa_mesh *m = dm->mesh;
   unsigned char *epay = NULL;
+  double *dbl = NULL;
   pa_idx n = 0;
   size_t unit = sizeof(int32_t);
   for (pa_idx e = 0; e < it->ne; e++) n += it->label[e] >= 0;
   PA_ALLOC(*dest, n);
+  if (S->ndbl) PA_ALLOC(dbl, S->ndbl);
   for (int k = 0; k < dm->nvalue; k++)
     if ((int)dm->value[k]->kind == PA_ELEMENT) unit += dm->value[k]->unit;
   PA_ALLOC(epay, unit);
@@ -503,12 +544,14 @@ static pa_status element_records(pa__iter *it, pa__recs *S, int **dest) {
     memcpy(epay, &from, sizeof from);
     size_t pl = sizeof from +
                 pa__entity_payload(dm, PA_ELEMENT, e, epay + sizeof from);
+    if (dbl) pa__entity_doubles(m, PA_ELEMENT, e, dbl);
     PA_CALL(pa__recs_add(S, dm->gid[PA_ELEMENT][e], vg, m->eref[e],
-                         m->eflag[e], it->label[e], NULL, epay, pl));
+                         m->eflag[e], it->label[e], dbl, epay, pl));
     (*dest)[n++] = it->piece_rank[it->label[e]];
   }
 cleanup:
   pa__free(epay);
+  pa__free(dbl);
   return st;
 }
 
@@ -555,18 +598,71 @@ cleanup:
   return st;
 }
 
+/* Step 5, with it->vsurf: if a split onto a curve left an element without a
+ * positive volume in some piece (the pieces around it cannot know: each
+ * sees its own side), the pieces are assembled again without such splits,
+ * from the same records. Collective. */
+static pa_status check_curves(pa__iter *it, const pa__recs *R) {
+  pa_status st = PA_SUCCESS;
+  double bad = 0, ncurved = 0;
+  for (int q = 0; q < it->npiece_local; q++) {
+    bad += it->pieces[q].curve_bad;
+    ncurved += it->pieces[q].ncurved;
+  }
+  double x[2] = {bad, ncurved};
+  PA_CALL(pa__allreduce(it->dm->comm, x, 2, MPI_DOUBLE, MPI_SUM));
+  if (x[0] == 0) {
+    if (it->rank == 0 && x[1] > 0)
+      pa__info(2, "padapt: iteration %d: %.0f skin vertices placed on curved "
+                  "boundaries\n", it->iter, x[1]);
+    goto cleanup;
+  }
+  if (it->rank == 0)
+    pa__info(1, "padapt: iteration %d: %.0f elements without a positive "
+                "volume next to %.0f skin vertices placed on curved "
+                "boundaries: pieces made again with chords\n",
+             it->iter, x[0], x[1]);
+  for (int q = 0; q < it->npiece_local; q++) pa__piece_release(&it->pieces[q]);
+  pa__free(it->pieces);
+  it->pieces = NULL;
+  it->npiece_local = 0;
+  it->nocurve = 1;
+  st = assemble_local_pieces(it, R);
+cleanup:
+  return st;
+}
+
+/* The temporary field PA_ADAPT_SURFACE_FIELD on the local mesh from
+ * it->vsurf (added = 1), unless the mesh holds the most fields already
+ * (then no split goes onto a curve: every rank has the same fields);
+ * it->vsurf is released. */
+static pa_status add_surface_field(pa__iter *it, int *added) {
+  pa_status st = PA_SUCCESS;
+  pa_mesh *m = it->dm->mesh;
+  *added = 0;
+  if (!it->vsurf || m->nfield >= PA_MESH_MAX_FIELDS) goto cleanup;
+  PA_CALL(pa_mesh_add_field(m, PA_ADAPT_SURFACE_FIELD, 4, it->vsurf));
+  *added = 1;
+cleanup:
+  pa__free(it->vsurf);
+  it->vsurf = NULL;
+  return st;
+}
+
 pa_status pa__adapt_extract(pa__iter *it) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
   pa__recs S[PA_DMESH_NKIND], R[PA_DMESH_NKIND];
-  int *dest[PA_DMESH_NKIND] = {NULL, NULL, NULL, NULL};
+  int *dest[PA_DMESH_NKIND] = {NULL, NULL, NULL, NULL}, surf = 0;
   pa__layout lay;
+  memset(S, 0, sizeof S);
+  memset(R, 0, sizeof R);
+  st = add_surface_field(it, &surf);
+  PA_CALL(pa__agree(dm->comm, st));
   pa__dmesh_layout(dm, &lay);
   for (int k = 0; k < PA_DMESH_NKIND; k++) {
-    pa__recs_init(&S[k], k, pa__kind_nv(it->dim, k),
-                  k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
-    pa__recs_init(&R[k], k, pa__kind_nv(it->dim, k),
-                  k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
+    pa__recs_init(&S[k], k, pa__kind_nv(it->dim, k), pa__layout_kind_ndbl(&lay, k));
+    pa__recs_init(&R[k], k, pa__kind_nv(it->dim, k), pa__layout_kind_ndbl(&lay, k));
   }
   /* 1. map the pieces to ranks; 2. the records to ship */
   PA_CALL(map_to_ranks(it));
@@ -580,9 +676,15 @@ pa_status pa__adapt_extract(pa__iter *it) {
     pa__free(dest[k]);
     dest[k] = NULL;
   }
-  /* 4. assemble the local pieces */
-  PA_CALL(assemble_local_pieces(it, R));
+  /* 4. assemble the local pieces; 5. check their curves */
+  st = assemble_local_pieces(it, R);
+  PA_CALL(pa__agree(dm->comm, st));
+  if (surf) PA_CALL(check_curves(it, R));
 cleanup:
+  if (surf) {
+    pa_status s2 = pa_mesh_remove_field(dm->mesh, dm->mesh->nfield - 1);
+    if (!st) st = s2;
+  }
   st = pa__agree_end(dm->comm, st);
   for (int k = 0; k < PA_DMESH_NKIND; k++) {
     pa__recs_free(&S[k]);

@@ -23,18 +23,31 @@
  *     A skin vertex is hot for piece p when a tagged element of another
  *     piece touches it (extract.c). A vertex is inner (it->vinner =
  *     PA_ADAPT_INNER_TRANSIT) when only labelled elements touch it and it lies
- *     on no feature edge, required boundary entity or curved boundary and
- *     is no corner, ridge or required vertex; the other vertices that only
- *     labelled elements touch (on a ridge, a curved boundary, ...) are
- *     PA_ADAPT_LABELLED_TRANSIT. bisect.c splits a skin edge between two inner
- *     vertices, or between an inner and a labelled one: such an edge is
- *     interior, or lies in the plane of the inner end's boundary faces, so
- *     its midpoint is exact.
- * Only vertex values with reduce/halo cross the ranks here: no point-to-point
+ *     on no feature edge, required boundary entity, boundary entity inside
+ *     the domain (an interface between two references, it->bside) or
+ *     curved boundary and is no corner, ridge or required vertex; a surface
+ *     vertex (PA_ADAPT_SURFACE_TRANSIT) when the same holds but for a curved
+ *     boundary, smooth there: the outward normals of its boundary faces lie
+ *     within PA_LEB_SMOOTH_DEG of each other; the other vertices that only
+ *     labelled elements touch (on a ridge, a sharp curved boundary, ...)
+ *     are PA_ADAPT_LABELLED_TRANSIT. In 3D every local vertex gets, in
+ *     it->vsurf, the normal of a surface vertex (the normalised sum of its
+ *     faces' outward normals, each face counted once, by the owner of the
+ *     element holding it) and a Bloom mask of the global ids of its
+ *     boundary neighbours, the hard bit set on a feature edge or a required
+ *     boundary entity; extract.c ships them, bisect.c splits the skin edges
+ *     by them (see there).
+ *  5. Per local boundary entity (it->bside), whether two elements hold it
+ *     (it lies inside the domain) and whether they have two labels: such
+ *     an entity on a piece's outer surface is frozen in that piece
+ *     (extract.c), as its skin is.
+ * Only vertex and boundary values with reduce/halo cross the ranks here: no
+ * point-to-point
  * code, and the result does not depend on timing.
  */
 #include "adapt/adapt.h"
 #include "partition/partition.h"
+#include "remesh/leb.h"
 
 #include <limits.h>
 #include <math.h>
@@ -131,6 +144,127 @@ static pa_status curved_vertices(pa_dmesh *dm, uint8_t *curved) {
         c |= y[k] != HUGE_VAL && -y[d + k] - y[k] > 1e-9;
       curved[v] = (uint8_t)c;
     }
+  }
+cleanup:
+  st = pa__dmesh_value_drop(dm, val, pa__agree_end(dm->comm, st));
+  return st;
+}
+
+/* Per local vertex (3D), in the value surface_vertices reduces: the sum
+ * of the outward normals of its boundary faces (twice their areas long),
+ * the smallest component of their unit normals and of their opposites,
+ * the Bloom mask of its boundary neighbours. */
+#define SV_SUM 0
+#define SV_MIN 3
+#define SV_NEGMIN 6
+#define SV_MASK 9
+#define SV_N 10
+
+/* Combine two copies of the vertices of surface_vertices: sums, minima,
+ * and the union of the masks. */
+static void combine_surface(const void *in, void *inout, pa_idx n, void *ctx) {
+  const double *x = in;
+  double *y = inout;
+  (void)ctx;
+  for (pa_idx v = 0; v < n; v++, x += SV_N, y += SV_N) {
+    for (int k = SV_SUM; k < SV_MIN; k++) y[k] += x[k];
+    for (int k = SV_MIN; k < SV_MASK; k++) y[k] = x[k] < y[k] ? x[k] : y[k];
+    y[SV_MASK] = (double)((uint64_t)x[SV_MASK] | (uint64_t)y[SV_MASK]);
+  }
+}
+
+/* The outward normal of boundary triangle f as a face of owned tetrahedron
+ * e, twice its area long, into n; 0 if e does not contain f. */
+static int face_normal(const pa_mesh *m, pa_idx e, const pa_idx *f, double *n) {
+  const pa_idx *ev = m->elem + 4 * (size_t)e;
+  pa_idx q = -1;
+  int in = 0;
+  for (int j = 0; j < 4; j++) {
+    if (ev[j] == f[0] || ev[j] == f[1] || ev[j] == f[2])
+      in++;
+    else
+      q = ev[j];
+  }
+  if (in != 3) return 0;
+  const double *p0 = m->coord + 3 * (size_t)f[0], *p1 = m->coord + 3 * (size_t)f[1],
+               *p2 = m->coord + 3 * (size_t)f[2], *pq = m->coord + 3 * (size_t)q;
+  double u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+  double w[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+  n[0] = u[1] * w[2] - u[2] * w[1];
+  n[1] = u[2] * w[0] - u[0] * w[2];
+  n[2] = u[0] * w[1] - u[1] * w[0];
+  if (n[0] * (pq[0] - p0[0]) + n[1] * (pq[1] - p0[1]) + n[2] * (pq[2] - p0[2]) > 0)
+    for (int k = 0; k < 3; k++) n[k] = -n[k];
+  return 1;
+}
+
+/* 3D: the vertices on a smooth curved boundary (bisect.c, remesh/leb.c):
+ * smooth[v] = 1 when the outward unit normals of v's boundary faces, each
+ * oriented by an element containing it and counted by that element's
+ * owner, lie within PA_LEB_SMOOTH_DEG of each other (judged on the box of
+ * their components, whose diagonal bounds their distances: an internal
+ * face, seen from both sides, fails), over every rank; it->vsurf receives
+ * per local vertex the unit normal of such a vertex (the normalised
+ * area-weighted sum; 0 for the others) and the Bloom mask of its boundary
+ * neighbours' global ids (edges of boundary entities), reduced over the
+ * ranks, the same bits on every copy. */
+static pa_status surface_vertices(pa__iter *it, uint8_t *smooth) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  const pa_mesh *m = dm->mesh;
+  pa_idx nv = dm->nloc[PA_VERTEX];
+  pa_dmesh_value *val = NULL;
+  double spread = 2 * sin(PA_LEB_SMOOTH_DEG * M_PI / 360);
+  if (!it->bstart) PA_CALL(pa__owned_balls(dm, &it->bstart, &it->belem));
+  PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.adapt.surface", MPI_DOUBLE,
+                             SV_N, -1, &val));
+  double *x = pa_dmesh_value_data(val, NULL, NULL);
+  for (pa_idx v = 0; v < nv; v++)
+    for (int k = 0; k < SV_N; k++)
+      x[(size_t)SV_N * v + k] = k >= SV_MIN && k < SV_MASK ? HUGE_VAL : 0;
+  for (pa_idx b = 0; b < m->nb; b++) {
+    const pa_idx *f = m->bdry + 3 * (size_t)b;
+    for (int j = 0; j < 3; j++) /* the masks: every edge of b */
+      for (int i = 0; i < 3; i++) {
+        double *y = x + (size_t)SV_N * f[j] + SV_MASK;
+        if (i != j)
+          *y = (double)((uint64_t)*y |
+                        pa__adapt_bloom_bit(dm->gid[PA_VERTEX][f[i]]));
+      }
+    for (pa_idx q = it->bstart[f[0]]; q < it->bstart[f[0] + 1]; q++) {
+      double n[3];
+      if (!face_normal(m, it->belem[q], f, n)) continue;
+      double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      if (!(len > 0)) continue;
+      for (int j = 0; j < 3; j++) {
+        double *y = x + (size_t)SV_N * f[j];
+        for (int k = 0; k < 3; k++) {
+          double u = n[k] / len;
+          y[SV_SUM + k] += n[k];
+          if (u < y[SV_MIN + k]) y[SV_MIN + k] = u;
+          if (-u < y[SV_NEGMIN + k]) y[SV_NEGMIN + k] = -u;
+        }
+      }
+    }
+  }
+  PA_CALL(pa__agree(dm->comm, st));
+  PA_CALL(pa__dmesh_reduce_fn(dm, val, combine_surface, NULL));
+  PA_CALL(pa_dmesh_halo(dm, val));
+  PA_ALLOC(it->vsurf, (size_t)4 * nv);
+  x = pa_dmesh_value_data(val, NULL, NULL);
+  for (pa_idx v = 0; v < nv; v++) {
+    const double *y = x + (size_t)SV_N * v;
+    double *z = it->vsurf + (size_t)4 * v, dd = 0, ss = 0;
+    for (int k = 0; k < 3; k++) {
+      double r = -y[SV_NEGMIN + k] - y[SV_MIN + k];
+      dd += r * r;
+      ss += y[SV_SUM + k] * y[SV_SUM + k];
+    }
+    ss = sqrt(ss);
+    smooth[v] = (uint8_t)(y[SV_MIN] != HUGE_VAL && dd <= spread * spread &&
+                          ss > 0);
+    for (int k = 0; k < 3; k++) z[k] = smooth[v] ? y[SV_SUM + k] / ss : 0;
+    z[3] = y[SV_MASK];
   }
 cleanup:
   st = pa__dmesh_value_drop(dm, val, pa__agree_end(dm->comm, st));
@@ -279,20 +413,80 @@ cleanup:
   return st;
 }
 
-/* Step 4b: the inner vertices (bisect.c): only pieces around, on no
- * feature edge nor required boundary entity nor curved boundary (reduced
- * over the ranks: every piece sees the same), and no corner, ridge or
- * required vertex; it->vinner as described at the top of the file. */
+/* Step 4b: it->bside, which boundary entities lie inside the domain
+ * (held by two elements) and which are held by elements of two labels (a
+ * labelled and an unlabelled one included): per entity, the smallest and
+ * largest global id and label of the owned elements holding it, reduced
+ * (MIN) over the ranks and sent back to the ghosts. */
+static pa_status boundary_sides(pa__iter *it) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  const pa_mesh *m = dm->mesh;
+  pa_dmesh_value *val = NULL;
+  pa_idx nb = dm->nloc[PA_BOUNDARY];
+  int d = it->dim;
+  if (!it->bstart) PA_CALL(pa__owned_balls(dm, &it->bstart, &it->belem));
+  PA_CALL(pa_dmesh_value_add(dm, PA_BOUNDARY, "pa.adapt.bside", MPI_INT64_T,
+                             4, -1, &val));
+  {
+    int64_t *x = pa_dmesh_value_data(val, NULL, NULL);
+    for (pa_idx b = 0; b < nb; b++) {
+      int64_t *y = x + 4 * (size_t)b;
+      y[0] = y[1] = y[2] = y[3] = INT64_MAX;
+      const pa_idx *f = m->bdry + (size_t)d * b;
+      for (pa_idx q = it->bstart[f[0]]; q < it->bstart[f[0] + 1]; q++) {
+        pa_idx e = it->belem[q];
+        const pa_idx *ev = m->elem + (size_t)it->nve * e;
+        int all = 1;
+        for (int i = 1; i < d && all; i++) {
+          int in = 0;
+          for (int j = 0; j < it->nve; j++) in |= ev[j] == f[i];
+          all = in;
+        }
+        if (!all) continue;
+        int64_t g = dm->gid[PA_ELEMENT][e];
+        int64_t l = it->label[e] < 0 ? NOLABEL : it->label[e];
+        if (g < y[0]) y[0] = g;
+        if (-g < y[1]) y[1] = -g;
+        if (l < y[2]) y[2] = l;
+        if (-l < y[3]) y[3] = -l;
+      }
+    }
+  }
+  PA_CALL(pa__agree(dm->comm, st));
+  PA_CALL(pa_dmesh_reduce(dm, val, MPI_MIN));
+  PA_CALL(pa_dmesh_halo(dm, val));
+  PA_ALLOC(it->bside, nb);
+  {
+    const int64_t *x = pa_dmesh_value_data(val, NULL, NULL);
+    for (pa_idx b = 0; b < nb; b++) {
+      const int64_t *y = x + 4 * (size_t)b;
+      it->bside[b] = (uint8_t)((y[0] != -y[1] ? PA_ADAPT_B_INTERIOR : 0) |
+                               (y[2] != -y[3] ? PA_ADAPT_B_CUT : 0));
+    }
+  }
+cleanup:
+  return pa__dmesh_value_drop(dm, val, pa__agree_end(dm->comm, st));
+}
+
+/* Step 4c: the inner vertices (bisect.c): only pieces around, on no
+ * feature edge nor required boundary entity nor interior boundary entity
+ * (it->bside) nor curved boundary (reduced over the ranks: every piece sees
+ * the same), and no corner, ridge or required vertex; the surface vertices, the same on a smooth curved
+ * boundary; it->vinner and it->vsurf as described at the top of the
+ * file. */
 static pa_status inner_vertices(pa__iter *it, pa_dmesh_value *val) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
   pa_idx nloc = dm->nloc[PA_VERTEX];
+  uint8_t *smooth = NULL;
   {
     int *d = pa_dmesh_value_data(val, NULL, NULL);
     const pa_mesh *m = dm->mesh;
     for (pa_idx v = 0; v < nloc; v++) d[2 * v] = d[2 * v + 1] = 0;
     for (pa_idx b = 0; b < m->nb; b++)
-      if (m->bflag[b] & PA_FLAG_REQUIRED)
+      if ((m->bflag[b] & PA_FLAG_REQUIRED) ||
+          (it->bside[b] & PA_ADAPT_B_INTERIOR))
         for (int k = 0; k < it->dim; k++) d[2 * m->bdry[(size_t)it->dim * b + k]] = 1;
     for (pa_idx b = 0; b < m->ned; b++)
       for (int k = 0; k < 2; k++) d[2 * m->edge[2 * (size_t)b + k]] = 1;
@@ -301,20 +495,28 @@ static pa_status inner_vertices(pa__iter *it, pa_dmesh_value *val) {
   PA_CALL(pa_dmesh_reduce(dm, val, MPI_MAX));
   PA_CALL(pa_dmesh_halo(dm, val));
   PA_ALLOC(it->vinner, nloc);
+  PA_ALLOC(smooth, nloc);
   PA_CALL(curved_vertices(dm, it->vinner)); /* 1: curved, for now */
+  if (dm->dim == 3) /* 2D: no surface vertices (bisect.c) */
+    PA_CALL(surface_vertices(it, smooth));
+  else
+    memset(smooth, 0, (size_t)nloc);
   {
     const int *d = pa_dmesh_value_data(val, NULL, NULL);
     const uint8_t *vf = dm->mesh->vflag;
     for (pa_idx v = 0; v < nloc; v++) {
       int labelled = it->vlab[4 * v + 1] != NOLABEL;
-      int inner = labelled && !d[2 * v] && !it->vinner[v] &&
-                  !(vf[v] & (PA_FLAG_CORNER | PA_FLAG_RIDGE | PA_FLAG_REQUIRED));
-      it->vinner[v] = (uint8_t)(inner      ? PA_ADAPT_INNER_TRANSIT
-                                : labelled ? PA_ADAPT_LABELLED_TRANSIT
-                                           : 0);
+      int ok = labelled && !d[2 * v] &&
+               !(vf[v] & (PA_FLAG_CORNER | PA_FLAG_RIDGE | PA_FLAG_REQUIRED));
+      it->vinner[v] = (uint8_t)(ok && !it->vinner[v] ? PA_ADAPT_INNER_TRANSIT
+                                : ok && smooth[v]    ? PA_ADAPT_SURFACE_TRANSIT
+                                : labelled           ? PA_ADAPT_LABELLED_TRANSIT
+                                                     : 0);
+      if (it->vsurf && d[2 * v]) it->vsurf[4 * (size_t)v + 3] += (double)PA_ADAPT_HARD_BIT;
     }
   }
 cleanup:
+  pa__free(smooth);
   return st;
 }
 
@@ -333,6 +535,7 @@ pa_status pa__adapt_pieces(pa__iter *it, int npieces_max) {
   added = 1;
   PA_CALL(grow_labels(it, val));
   PA_CALL(label_ranges(it, val));
+  PA_CALL(boundary_sides(it));
   PA_CALL(inner_vertices(it, val));
 cleanup:
   st = pa__dmesh_value_drop(dm, added ? val : NULL,

@@ -29,7 +29,9 @@
  * vertices as an input element keeps its id and other values,
  * output_reuse; the others get fresh ids and zeros); and the boundary
  * entities and edges that do not lie on the skin (this drops the artificial
- * skin faces; an unchanged one keeps its id and values, as elements). Fresh
+ * skin faces and the entities inside the domain frozen on a piece's outer
+ * surface, pc->bfix, which their owner keeps; an unchanged one keeps its
+ * id and values, as elements). Fresh
  * ids are the global maximum + 1 + an exclusive scan of the per-rank counts,
  * pieces in increasing order on each rank, then the added skin vertices:
  * deterministic for a given input and number of ranks. The vertices only this
@@ -264,6 +266,9 @@ pa_status pa__adapt_remesh(pa__iter *it, int *nfail, double *cpu) {
     pa_status s = pa_remesh(r, out, &ro, &pc->rep);
     t1 = pa_wtime();
     *cpu += pc->rep.cpu_s;
+    /* the memory bound is an error of the run: a piece given back would
+     * meet it again */
+    if (s == PA_ERR_MEMORY && pa__memory_bound_error()) PA_CALL(s);
     int ok = s == PA_SUCCESS && pc->rep.outcome != PA_REMESH_FAILED;
     if (!ok)
       pa__info(1, "padapt: piece %d (%d elements): the remesher failed: %s\n",
@@ -476,23 +481,30 @@ cleanup:
   return st;
 }
 
+/* 1 if boundary entity b of an output lies on the skin: an artificial skin
+ * face, or an input entity frozen on the piece's outer surface (bfix). */
+static int on_skin(const pa_mesh *out, const pa_idx *breuse,
+                   const uint8_t *bfix, pa_idx b) {
+  return out->bref[b] == PA_ADAPT_SKIN_REF ||
+         (bfix && breuse[b] >= 0 && bfix[breuse[b]]);
+}
+
 /* Which boundary entities / edges of an output to give (not on the skin);
  * counts of those needing fresh ids (breuse, dreuse < 0) in
  * cnt[PA_BOUNDARY], cnt[PA_EDGE]. */
 static pa_status output_emit(const pa_mesh *out, const pa_idx *breuse,
-                             const pa_idx *dreuse, uint8_t **bemit,
-                             uint8_t **demit, pa_gid *cnt) {
+                             const pa_idx *dreuse, const uint8_t *bfix,
+                             uint8_t **bemit, uint8_t **demit, pa_gid *cnt) {
   pa_status st = PA_SUCCESS;
   tset fs = {0, NULL}, es = {0, NULL};
   int d = out->dim;
   pa_idx nskin = 0;
-  for (pa_idx b = 0; b < out->nb; b++)
-    nskin += out->bref[b] == PA_ADAPT_SKIN_REF;
+  for (pa_idx b = 0; b < out->nb; b++) nskin += on_skin(out, breuse, bfix, b);
   PA_CALL(tset_init(&fs, (size_t)nskin));
   PA_CALL(tset_init(&es, (size_t)nskin * 3));
-  /* the artificial skin faces and their edges */
+  /* the skin faces and their edges */
   for (pa_idx b = 0; b < out->nb; b++) {
-    if (out->bref[b] != PA_ADAPT_SKIN_REF) continue;
+    if (!on_skin(out, breuse, bfix, b)) continue;
     const pa_idx *v = out->bdry + (size_t)d * b;
     pa_idx k[3];
     tkey(v, d, k);
@@ -698,7 +710,18 @@ typedef struct orecs {
   const pa_dmesh_value *done;
   unsigned char *pay;
   paycache pcache;
+  double *cdbl; /* the element or boundary field values of one entity */
 } orecs;
+
+/* The element or boundary field values of output entity e of a kind into
+ * c->cdbl (NULL when the records of that kind carry none). */
+static const double *cell_doubles(orecs *c, int kind, pa_idx e) {
+  if (!c->R[kind].ndbl) return NULL;
+  int n = pa__entity_doubles(c->o, kind, e, c->cdbl);
+  PA_ASSERT(n == c->R[kind].ndbl);
+  (void)n;
+  return c->cdbl;
+}
 
 /* The output's vertices: the global id of each (vg) and the records of
  * those this rank gives: not skin vertices (a matched input vertex keeps
@@ -825,13 +848,15 @@ static pa_status output_elements(orecs *c) {
       pay[at] = dv;
       c->pcache.len = (size_t)-1; /* pay no longer holds the cached payload */
       PA_CALL(pa__recs_add(&c->R[PA_ELEMENT], pc->kgid[PA_ELEMENT][q], ev,
-                           o->eref[e], o->eflag[e], c->dest[e], NULL, pay, pl));
+                           o->eref[e], o->eflag[e], c->dest[e],
+                           cell_doubles(c, PA_ELEMENT, e), pay, pl));
       continue;
     }
     size_t pl = payload_of(&c->pcache, dm, PA_ELEMENT, o->eref[e], c->done, dv,
                            pay);
     PA_CALL(pa__recs_add(&c->R[PA_ELEMENT], c->next[PA_ELEMENT]++, ev,
-                         o->eref[e], o->eflag[e], c->dest[e], NULL, pay, pl));
+                         o->eref[e], o->eflag[e], c->dest[e],
+                         cell_doubles(c, PA_ELEMENT, e), pay, pl));
   }
 cleanup:
   return st;
@@ -861,14 +886,15 @@ static pa_status output_subentities(orecs *c, const uint8_t *bemit,
       pa_idx q = pc->reuse[kind][b];
       if (q >= 0) { /* an input entity: its id and values */
         PA_CALL(pa__recs_add(&c->R[kind], pc->kgid[kind][q], bv, ref[b], fl[b],
-                             it->rank, NULL, po ? pc->kpay[kind] + po[q] : NULL,
+                             it->rank, cell_doubles(c, kind, b),
+                             po ? pc->kpay[kind] + po[q] : NULL,
                              po ? po[q + 1] - po[q] : 0));
         continue;
       }
       size_t pl = payload_of(&c->pcache, it->dm, kind, ref[b], c->done, 0,
                              c->pay);
       PA_CALL(pa__recs_add(&c->R[kind], c->next[kind]++, bv, ref[b], fl[b],
-                           it->rank, NULL, c->pay, pl));
+                           it->rank, cell_doubles(c, kind, b), c->pay, pl));
     }
   }
 cleanup:
@@ -898,6 +924,11 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   for (pa_idx e = 0; Rp && e < c.o->ne; e++)
     if (c.dest[e] != it->rank) Rp = NULL;
   c.Rp = Rp;
+  {
+    int nd = R[PA_ELEMENT].ndbl > R[PA_BOUNDARY].ndbl ? R[PA_ELEMENT].ndbl
+                                                       : R[PA_BOUNDARY].ndbl;
+    PA_ALLOC(c.cdbl, (size_t)nd + 1);
+  }
   PA_CALL(output_vertices(&c));
   PA_CALL(near_skin_layers(&c));
   PA_CALL(output_elements(&c));
@@ -906,6 +937,7 @@ cleanup:
   pa__free(c.vg);
   pa__free(c.dist);
   pa__free(c.dsk);
+  pa__free(c.cdbl);
   return st;
 }
 
@@ -1227,7 +1259,7 @@ static pa_status count_fresh(pa__iter *it, reint *r) {
     for (pa_idx e = 0; e < pc->out->ne; e++)
       r->cnt[PA_ELEMENT] += pc->reuse[PA_ELEMENT][e] < 0;
     PA_CALL(output_emit(pc->out, pc->reuse[PA_BOUNDARY], pc->reuse[PA_EDGE],
-                        &r->bemit[q], &r->demit[q], r->cnt));
+                        pc->bfix, &r->bemit[q], &r->demit[q], r->cnt));
     PA_CALL(output_dest(it, pc, &pc->dest));
     pa__mesh_drop_cells(pc->in); /* only its vertices are read from now */
   }

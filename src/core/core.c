@@ -19,6 +19,11 @@ static atomic_size_t mem_cur;
 static atomic_size_t mem_peak;
 static atomic_size_t mem_window; /* peak since pa__memory_window_begin */
 static atomic_long fail_countdown;
+static atomic_size_t mem_limit; /* pa_memory_set_limit; 0: none */
+/* The last allocation the bound refused in this thread: the bytes held and
+ * the bytes asked for more (0: none since the last pa_clear_error). */
+static _Thread_local size_t bound_held, bound_asked;
+static _Thread_local int bound_error; /* the last error is the bound's */
 static int verbose;
 
 const char *pa_status_string(pa_status status) {
@@ -40,7 +45,11 @@ const char *pa_status_string(pa_status status) {
 
 const char *pa_last_error(void) { return last_msg; }
 
-void pa_clear_error(void) { last_msg[0] = '\0'; }
+void pa_clear_error(void) {
+  last_msg[0] = '\0';
+  bound_asked = 0;
+  bound_error = 0;
+}
 
 pa_status pa_set_error(pa_status status, const char *fmt, ...) {
   va_list ap;
@@ -53,8 +62,19 @@ pa_status pa_set_error(pa_status status, const char *fmt, ...) {
 pa_status pa__error(pa_status code, const char *file, int line,
                     const char *fmt, ...) {
   va_list ap;
+  int n = 0;
+  /* an allocation the bound refused: say so first */
+  if (code == PA_ERR_MEMORY && bound_asked)
+    n = snprintf(last_msg, sizeof last_msg,
+                 "the memory bound of %.1f MB is reached (padapt holds "
+                 "%.1f MB and asked for %.1f MB more): ",
+                 (double)atomic_load(&mem_limit) / 1e6, (double)bound_held / 1e6,
+                 (double)bound_asked / 1e6);
+  if (n < 0 || (size_t)n >= sizeof last_msg) n = 0;
+  bound_error = code == PA_ERR_MEMORY && bound_asked;
+  bound_asked = 0;
   va_start(ap, fmt);
-  vsnprintf(last_msg, sizeof last_msg, fmt, ap);
+  vsnprintf(last_msg + n, sizeof last_msg - (size_t)n, fmt, ap);
   va_end(ap);
   if (verbose >= 3)
     fprintf(stderr, "padapt: error raised at %s:%d: %s\n", file, line,
@@ -89,6 +109,18 @@ static int should_fail(void) {
   return 0;
 }
 
+/* 1 if adding n bytes to those held would pass the bound (and note it for
+ * the error message). */
+static int over_bound(size_t n) {
+  size_t lim = atomic_load(&mem_limit);
+  if (!lim) return 0;
+  size_t cur = atomic_load(&mem_cur);
+  if (n <= lim && cur <= lim - n) return 0;
+  bound_held = cur;
+  bound_asked = n;
+  return 1;
+}
+
 static void count_add(size_t n) {
   size_t cur = atomic_fetch_add(&mem_cur, n) + n;
   size_t peak = atomic_load(&mem_peak);
@@ -100,9 +132,10 @@ static void count_add(size_t n) {
 }
 
 void *pa__malloc(size_t size) {
-  if (should_fail()) return NULL;
+  if (should_fail() || over_bound(size)) return NULL;
   char *p = malloc(size + HDR_BYTES);
   if (!p) return NULL;
+  if (bound_asked) bound_asked = 0; /* a refusal the caller got over */
   memcpy(p, &size, sizeof size);
   count_add(size);
   return p + HDR_BYTES;
@@ -122,6 +155,7 @@ void *pa__realloc(void *ptr, size_t size) {
   char *base = (char *)ptr - HDR_BYTES;
   size_t old;
   memcpy(&old, base, sizeof old);
+  if (size > old && over_bound(size - old)) return NULL;
   char *p = realloc(base, size + HDR_BYTES);
   if (!p) return NULL;
   memcpy(p, &size, sizeof size);
@@ -155,6 +189,11 @@ void pa__memory_window_begin(void) {
   atomic_store(&mem_window, atomic_load(&mem_cur));
 }
 size_t pa__memory_window_peak(void) { return atomic_load(&mem_window); }
+size_t pa_memory_set_limit(size_t bytes) {
+  return atomic_exchange(&mem_limit, bytes);
+}
+size_t pa_memory_limit(void) { return atomic_load(&mem_limit); }
+int pa__memory_bound_error(void) { return bound_error; }
 void pa_memory_fail_after(long n) {
   atomic_store(&fail_countdown, n > 0 ? n : 0);
 }

@@ -203,6 +203,11 @@ size_t pa__mem_available(void);
 void pa__memory_window_begin(void);
 size_t pa__memory_window_peak(void);
 
+/* 1 if the last error raised in this thread (pa__error) is an allocation
+ * the memory bound refused (pa_memory_set_limit): a hard error, which
+ * rolling back and trying again would only meet again. */
+int pa__memory_bound_error(void);
+
 /* ---- agreement of collective routines (agree.c) ---- */
 
 /* Collective: combine the local status st of every rank. Returns PA_SUCCESS if

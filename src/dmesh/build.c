@@ -545,7 +545,7 @@ static pa_status add_local_elem(bstate *s, const pa__recs *R, size_t i,
   PA_CALL(pa__gidmap_put(&s->emap, R->gid[i], (pa_idx)s->L.n, &found, NULL));
   if (found) return PA_SUCCESS;
   PA_CALL(pa__recs_add(&s->L, R->gid[i], R->vgid + (size_t)R->nv * i, R->ref[i],
-                       R->flag[i], owner, NULL,
+                       R->flag[i], owner, R->dbl + (size_t)R->ndbl * i,
                        R->poff ? R->pay + R->poff[i] : NULL,
                        R->poff ? R->poff[i + 1] - R->poff[i] : 0));
   PA_GROW(s->layer, s->caplayer, s->L.n);
@@ -672,7 +672,7 @@ static pa_status send_layer_elements(bstate *s, pa_idx nown,
   for (int r = 0; r < s->size; r++) pstart[r + 1] += pstart[r];
   for (int r = 0; r < s->size; r++) {
     size_t c = pstart[r + 1] - pstart[r];
-    ecnt[r] = c ? pa__recblock_bytes(s->nve, 0, c,
+    ecnt[r] = c ? pa__recblock_bytes(s->nve, s->L.ndbl, c,
                                      pa__recs_paybytes(&s->L, sel + pstart[r], c))
                 : 0;
     bytes += ecnt[r];
@@ -703,7 +703,7 @@ static pa_status receive_layer(bstate *s, int l, const size_t *bcnt,
   for (int r = 0; r < s->size; r++) tot += bcnt[r];
   while (q < tot) {
     pa__recblock bk;
-    pa__recblock_map((unsigned char *)erecv + q, s->nve, 0, &bk);
+    pa__recblock_map((unsigned char *)erecv + q, s->nve, s->L.ndbl, &bk);
     nrec += bk.n;
     npay += bk.paybytes;
     q += bk.bytes;
@@ -740,7 +740,7 @@ static pa_status build_layers(bstate *s, int overlap, pa_idx nown) {
   pa__gidmap queried = {0};
   pa_idx *vq = NULL;
   pa__recs tmp;
-  pa__recs_init(&tmp, PA_ELEMENT, s->nve, 0);
+  pa__recs_init(&tmp, PA_ELEMENT, s->nve, s->L.ndbl);
   if (overlap <= 0) goto cleanup;
   PA_CALL(pa__gidmap_init(&queried, 16));
   for (int l = 1; l <= overlap; l++) {
@@ -905,7 +905,7 @@ static pa_status send_answers(bstate *s, fetch *f, size_t **bcnt,
     size_t nv = vs[r + 1] - vs[r], nb = bs[r + 1] - bs[r], nd = ds[r + 1] - ds[r];
     if (!nv) continue;
     cnt[r] = pa__recblock_bytes(0, s->V.ndbl, nv, pa__recs_paybytes(&s->V, f->vi + vs[r], nv)) +
-             pa__recblock_bytes(s->B.nv, 0, nb, pa__recs_paybytes(&s->B, f->bi + bs[r], nb)) +
+             pa__recblock_bytes(s->B.nv, s->B.ndbl, nb, pa__recs_paybytes(&s->B, f->bi + bs[r], nb)) +
              pa__recblock_bytes(2, 0, nd, pa__recs_paybytes(&s->D, f->di + ds[r], nd));
     bytes += cnt[r];
   }
@@ -1131,6 +1131,7 @@ static pa_status fill_vertices(bstate *s, const pa__layout *lay, assembly *a) {
     m->field[f].ncomp = lay->fieldncomp[f];
   }
   PA_CALL(pa_mesh_reserve(m, (pa_idx)s->LV.n, (pa_idx)s->L.n, 0, 0));
+  PA_CALL(pa__layout_cell_fields(lay, m));
   for (size_t k = 0; k < s->LV.n; k++) {
     size_t i = (size_t)a->ord[PA_VERTEX][k];
     pa__vertex_set_doubles(m, (pa_idx)k, s->LV.dbl + (size_t)s->LV.ndbl * i);
@@ -1165,6 +1166,8 @@ static pa_status fill_elements(pa_dmesh *dm, bstate *s, assembly *a) {
     }
     m->eref[k] = s->L.ref[i];
     m->eflag[k] = s->L.flag[i];
+    if (s->L.ndbl)
+      pa__entity_set_doubles(m, PA_ELEMENT, (pa_idx)k, s->L.dbl + (size_t)s->L.ndbl * i);
   }
   m->ne = (pa_idx)s->L.n;
   pa__free(s->uslot);
@@ -1224,6 +1227,9 @@ static pa_status own_subentities(pa_dmesh *dm, bstate *s, assembly *a,
              nv * sizeof(pa_gid));
       R->ref[k] = R->ref[i];
       R->flag[k] = R->flag[i];
+      if (R->ndbl)
+        memmove(R->dbl + (size_t)R->ndbl * k, R->dbl + (size_t)R->ndbl * i,
+                (size_t)R->ndbl * sizeof *R->dbl);
       if (R->poff) { /* payload offsets: move the slice pointers */
         size_t len = R->poff[i + 1] - R->poff[i];
         memmove(R->pay + R->poff[k], R->pay + R->poff[i], len);
@@ -1292,6 +1298,9 @@ static pa_status fill_subentities(pa_dmesh *dm, bstate *s, assembly *a) {
           pa__gidindex_get(&a->lv, s->LB.vgid[(size_t)d * i + j]);
     m->bref[k] = s->LB.ref[i];
     m->bflag[k] = s->LB.flag[i];
+    if (s->LB.ndbl)
+      pa__entity_set_doubles(m, PA_BOUNDARY, (pa_idx)k,
+                             s->LB.dbl + (size_t)s->LB.ndbl * i);
   }
   m->nb = (pa_idx)s->LB.n;
   for (size_t k = 0; k < s->LD.n; k++) {
@@ -1367,6 +1376,82 @@ int pa__layout_ndbl(const pa__layout *l) {
   return n;
 }
 
+int pa__layout_kind_ndbl(const pa__layout *l, int kind) {
+  if (kind == PA_VERTEX) return pa__layout_ndbl(l);
+  if (kind == PA_EDGE) return 0;
+  int c = kind == PA_ELEMENT ? 0 : 1, n = 0;
+  for (int f = 0; f < l->ncfield[c]; f++) n += l->cfieldncomp[c][f];
+  return n;
+}
+
+void pa__mesh_layout(const pa_mesh *m, pa__layout *lay) {
+  memset(lay, 0, sizeof *lay);
+  lay->dim = m->dim;
+  lay->met_ncomp = m->met_ncomp;
+  lay->nfield = m->nfield;
+  for (int f = 0; f < m->nfield; f++) {
+    snprintf(lay->fieldname[f], PA_MESH_FIELD_NAME_LEN, "%s", m->field[f].name);
+    lay->fieldncomp[f] = m->field[f].ncomp;
+  }
+  for (int c = 0; c < 2; c++) {
+    int *n;
+    const pa__field *fl = pa__mesh_fields((pa_mesh *)m, PA_ELEMENT + c, &n);
+    lay->ncfield[c] = *n;
+    for (int f = 0; f < *n; f++) {
+      snprintf(lay->cfieldname[c][f], PA_MESH_FIELD_NAME_LEN, "%s", fl[f].name);
+      lay->cfieldncomp[c][f] = fl[f].ncomp;
+      lay->cfieldmode[c][f] = fl[f].transfer;
+    }
+  }
+}
+
+pa_status pa__layout_cell_fields(const pa__layout *l, pa_mesh *m) {
+  pa_status st = PA_SUCCESS;
+  for (int c = 0; c < 2; c++) {
+    int *n;
+    pa__field *fl = pa__mesh_fields(m, PA_ELEMENT + c, &n);
+    size_t cap = c == 0 ? m->cape : m->capb;
+    PA_ASSERT(*n == 0);
+    for (int f = 0; f < l->ncfield[c]; f++) {
+      pa__field *x = &fl[f];
+      memset(x, 0, sizeof *x);
+      snprintf(x->name, sizeof x->name, "%s", l->cfieldname[c][f]);
+      x->ncomp = l->cfieldncomp[c][f];
+      x->transfer = l->cfieldmode[c][f];
+      PA_ALLOC(x->val, (cap ? cap : 1) * (size_t)x->ncomp);
+      (*n)++;
+    }
+  }
+cleanup:
+  return st;
+}
+
+int pa__entity_doubles(const pa_mesh *m, int kind, pa_idx e, double *out) {
+  if (kind == PA_VERTEX) return pa__vertex_doubles(m, e, m->nfield, out);
+  if (kind == PA_EDGE) return 0;
+  int *nf, n = 0;
+  const pa__field *f = pa__mesh_fields((pa_mesh *)m, kind, &nf);
+  for (int k = 0; k < *nf; k++) {
+    int nc = f[k].ncomp;
+    for (int c = 0; c < nc; c++) out[n++] = f[k].val[(size_t)nc * e + c];
+  }
+  return n;
+}
+
+void pa__entity_set_doubles(pa_mesh *m, int kind, pa_idx e, const double *in) {
+  if (kind == PA_VERTEX) {
+    pa__vertex_set_doubles(m, e, in);
+    return;
+  }
+  if (kind == PA_EDGE) return;
+  int *nf;
+  pa__field *f = pa__mesh_fields(m, kind, &nf);
+  for (int k = 0; k < *nf; k++) {
+    int nc = f[k].ncomp;
+    for (int c = 0; c < nc; c++) f[k].val[(size_t)nc * e + c] = *in++;
+  }
+}
+
 /* (plain loops: a few doubles each, once per vertex of every transfer) */
 int pa__vertex_doubles(const pa_mesh *m, pa_idx v, int nfield, double *out) {
   int d = m->dim, n = 0, nm = m->met_ncomp;
@@ -1399,21 +1484,23 @@ pa_status pa__dmesh_build(pa_dmesh *dm, const pa__layout *lay, int overlap,
                               NULL);
 }
 
-/* The build state of dm's communicator, its record sets empty with ndbl
- * doubles per vertex. */
-static void bstate_init(bstate *s, const pa_dmesh *dm, int ndbl) {
+/* The build state of dm's communicator, its record sets empty with the
+ * doubles of lay. */
+static void bstate_init(bstate *s, const pa_dmesh *dm, const pa__layout *lay) {
+  int nvd = pa__layout_ndbl(lay), ned = pa__layout_kind_ndbl(lay, PA_ELEMENT);
+  int nbd = pa__layout_kind_ndbl(lay, PA_BOUNDARY);
   memset(s, 0, sizeof *s);
   s->comm = dm->comm;
   s->rank = dm->rank;
   s->size = dm->size;
   s->dim = dm->dim;
   s->nve = dm->dim + 1;
-  pa__recs_init(&s->L, PA_ELEMENT, s->nve, 0);
-  pa__recs_init(&s->LV, PA_VERTEX, 0, ndbl);
-  pa__recs_init(&s->LB, PA_BOUNDARY, s->dim, 0);
+  pa__recs_init(&s->L, PA_ELEMENT, s->nve, ned);
+  pa__recs_init(&s->LV, PA_VERTEX, 0, nvd);
+  pa__recs_init(&s->LB, PA_BOUNDARY, s->dim, nbd);
   pa__recs_init(&s->LD, PA_EDGE, 2, 0);
-  pa__recs_init(&s->V, PA_VERTEX, 0, ndbl);
-  pa__recs_init(&s->B, PA_BOUNDARY, s->dim, 0);
+  pa__recs_init(&s->V, PA_VERTEX, 0, nvd);
+  pa__recs_init(&s->B, PA_BOUNDARY, s->dim, nbd);
   pa__recs_init(&s->D, PA_EDGE, 2, 0);
 }
 
@@ -1433,7 +1520,8 @@ static pa_status count_input(bstate *s, int overlap, const pa__recs *elems,
   cnt_in[PA_BOUNDARY] = (pa_gid)bdry->n;
   cnt_in[PA_EDGE] = (pa_gid)edges->n;
   PA_CHECK(verts->ndbl == ndbl && elems->nv == s->nve && bdry->nv == s->dim &&
-               edges->nv == 2,
+               edges->nv == 2 && elems->ndbl == s->L.ndbl &&
+               bdry->ndbl == s->B.ndbl && edges->ndbl == 0,
            PA_ERR_INTERNAL, "record layout mismatch");
   PA_CHECK(overlap >= 0 && overlap <= 8, PA_ERR_ARG,
            "overlap must be in [0, 8], got %d", overlap);
@@ -1558,7 +1646,7 @@ pa_status pa__dmesh_build_priv(pa_dmesh *dm, const pa__layout *lay,
   pa_gid cnt_in[PA_DMESH_NKIND];
   double t0 = pa_wtime();
   int ndbl = pa__layout_ndbl(lay);
-  bstate_init(&s, dm, ndbl);
+  bstate_init(&s, dm, lay);
   dm->overlap = overlap;
   /* input totals and the directory of vertex gids */
   PA_CALL(count_input(&s, overlap, elems, verts, bdry, edges, priv, ndbl,

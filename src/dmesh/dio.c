@@ -17,7 +17,8 @@
  *  - padapt keywords (codes 2101-2110, unknown to other readers, which skip
  *    them through the next-keyword position): header, global ids and owner
  *    ranks of vertices / boundary entities / edges, element global ids,
- *    metric and fields, entity flags, and one keyword per user value
+ *    metric and vertex fields, the element and boundary fields (only when
+ *    there are some), entity flags, and one keyword per user value
  *    (description, then the value of every file entity holding it, in file
  *    order).
  * Every keyword starts with its code (int32) and the absolute position of the
@@ -40,6 +41,7 @@
 #include <errno.h>
 #include <stdio.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 enum {
@@ -56,6 +58,7 @@ enum {
   KW_VDBL = 2109,          /* PadaptVertexData: metric and fields */
   KW_FLAGS = 2110,         /* PadaptFlags: uint8 per V, E, B, D entity */
   KW_VALUE = 2111,         /* PadaptValue: one user value (vdesc + data) */
+  KW_CDBL = 2112,          /* PadaptCellData: element and boundary fields */
   KW_END = 54,
   FORMAT_VERSION = 1,
   MANIFEST_VERSION = 1
@@ -269,6 +272,11 @@ typedef struct dfile {
   char fieldname[PA_MESH_MAX_FIELDS][PA_MESH_FIELD_NAME_LEN];
   int32_t fieldncomp[PA_MESH_MAX_FIELDS];
   double *vdbl;
+  /* element (c = 0) and boundary (c = 1) fields, and their values */
+  int32_t ncfield[2];
+  char cfieldname[2][PA_MESH_MAX_FIELDS][PA_MESH_FIELD_NAME_LEN];
+  int32_t cfieldncomp[2][PA_MESH_MAX_FIELDS], cfieldmode[2][PA_MESH_MAX_FIELDS];
+  double *cdbl[2];
   uint8_t *flags;
   int have_header;
   int nval;
@@ -282,6 +290,8 @@ static void dfile_free(dfile *f) {
     pa__free(f->owner[k]);
   }
   pa__free(f->vdbl);
+  pa__free(f->cdbl[0]);
+  pa__free(f->cdbl[1]);
   pa__free(f->flags);
   for (int q = 0; q < f->nval; q++) pa__free(f->valdata[q]);
   pa__free(f->val);
@@ -377,6 +387,41 @@ cleanup:
   return st;
 }
 
+/* KW_CDBL: the element and boundary fields' descriptions (counts, then
+ * name, components and transfer mode of each), then the values of the file
+ * elements and of the file boundary entities. */
+static pa_status read_cdbl_kw(FILE *fp, const char *path, int64_t room,
+                              int64_t next, dfile *f) {
+  pa_status st = PA_SUCCESS;
+  void *p = NULL;
+  PA_CHECK(f->have_header && room >= 8 && fread(f->ncfield, 4, 2, fp) == 2,
+           PA_ERR_FORMAT, "%s: bad cell data keyword", path);
+  int nd[2] = {0, 0};
+  for (int c = 0; c < 2; c++) {
+    PA_CHECK(f->ncfield[c] >= 0 && f->ncfield[c] <= PA_MESH_MAX_FIELDS,
+             PA_ERR_FORMAT, "%s: bad cell data keyword", path);
+    for (int q = 0; q < f->ncfield[c]; q++) {
+      PA_CHECK(fread(f->cfieldname[c][q], PA_MESH_FIELD_NAME_LEN, 1, fp) == 1 &&
+                   fread(&f->cfieldncomp[c][q], 4, 1, fp) == 1 &&
+                   fread(&f->cfieldmode[c][q], 4, 1, fp) == 1 &&
+                   f->cfieldncomp[c][q] > 0 && f->cfieldncomp[c][q] < 1000 &&
+                   f->cfieldmode[c][q] > PA_TRANSFER_DEFAULT &&
+                   f->cfieldmode[c][q] <= PA_TRANSFER_NEAREST,
+               PA_ERR_FORMAT, "%s: bad cell field description", path);
+      f->cfieldname[c][q][PA_MESH_FIELD_NAME_LEN - 1] = '\0';
+      nd[c] += f->cfieldncomp[c][q];
+    }
+  }
+  for (int c = 0; c < 2; c++) {
+    room = (next ? next : INT64_MAX) - ftello(fp);
+    PA_CALL(read_block(fp, path, &p,
+                       sizeof(double) * nd[c] * (size_t)f->h[H_NFILE + 1 + c], room));
+    f->cdbl[c] = p;
+  }
+cleanup:
+  return st;
+}
+
 /* KW_VALUE: one user value's description, checked, then its data. */
 static pa_status read_value_kw(FILE *fp, const char *path, int64_t room,
                                int64_t next, dfile *f) {
@@ -439,6 +484,9 @@ static pa_status read_keyword(FILE *fp, const char *path, int32_t code,
   case KW_VALUE:
     PA_CALL(read_value_kw(fp, path, room, next, f));
     break;
+  case KW_CDBL:
+    PA_CALL(read_cdbl_kw(fp, path, room, next, f));
+    break;
   case KW_FLAGS: {
     size_t n = 0;
     for (int k = 0; k < PA_DMESH_NKIND; k++) n += (size_t)H[H_NFILE + k];
@@ -496,21 +544,63 @@ cleanup:
 
 /* ---- VTU output ---- */
 
+/* Keep, in place, the boundary entities and edges of the file mesh fm that
+ * this rank owns (in file order): the others are in another rank's ParaView
+ * file already. map[k] becomes their new file indices (-1: dropped), nfile
+ * their counts. The rank file (.meshb) was written before, whole. */
+static pa_status keep_owned(const pa_dmesh *dm, pa_mesh *fm,
+                            pa_idx *const map[PA_DMESH_NKIND],
+                            pa_idx nfile[PA_DMESH_NKIND]) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *to = NULL;
+  for (int k = PA_BOUNDARY; k <= PA_EDGE; k++) {
+    int nv = pa__kind_nv(dm->dim, k);
+    pa_idx *conn = k == PA_BOUNDARY ? fm->bdry : fm->edge, n = 0;
+    int32_t *ref = k == PA_BOUNDARY ? fm->bref : fm->edref;
+    uint8_t *flag = k == PA_BOUNDARY ? fm->bflag : fm->edflag;
+    pa__free(to);
+    to = NULL;
+    PA_ALLOC(to, nfile[k] ? (size_t)nfile[k] : 1);
+    for (pa_idx f = 0; f < nfile[k]; f++) to[f] = -1;
+    for (pa_idx i = 0; i < dm->nloc[k]; i++)
+      if (map[k][i] >= 0 && dm->owner[k][i] == dm->rank) to[map[k][i]] = 0;
+    for (pa_idx f = 0; f < nfile[k]; f++) {
+      if (to[f] < 0) continue;
+      memmove(conn + (size_t)nv * n, conn + (size_t)nv * f, sizeof *conn * nv);
+      ref[n] = ref[f];
+      flag[n] = flag[f];
+      to[f] = n++;
+    }
+    for (pa_idx i = 0; i < dm->nloc[k]; i++)
+      if (map[k][i] >= 0) map[k][i] = to[map[k][i]];
+    nfile[k] = n;
+  }
+  fm->nb = nfile[PA_BOUNDARY];
+  fm->ned = nfile[PA_EDGE];
+  pa__mesh_invalidate(fm);
+cleanup:
+  pa__free(to);
+  return st;
+}
+
 /* This rank's ParaView file: the file mesh fm with its metric and fields
  * (vd: nd values per file vertex, metric first), global ids, ghost types
- * and rank (pa__vtu_write). */
+ * and rank (pa__vtu_write); the boundary entities and edges this rank owns
+ * only (keep_owned: fm, map and nfile change), so that the set shows each
+ * once. */
 static pa_status write_vtu(const pa_dmesh *dm, pa_mesh *fm,
                            pa_idx *const map[PA_DMESH_NKIND],
-                           const pa_idx nfile[PA_DMESH_NKIND], const double *vd,
+                           pa_idx nfile[PA_DMESH_NKIND], const double *vd,
                            int nd, const char *path) {
   pa_status st = PA_SUCCESS;
   const pa_mesh *m = dm->mesh;
   pa_idx nv = nfile[PA_VERTEX];
-  size_t ncell = (size_t)nfile[PA_ELEMENT] + (size_t)nfile[PA_BOUNDARY] +
-                 (dm->dim == 3 ? (size_t)nfile[PA_EDGE] : 0);
   int64_t *vgid = NULL, *cgid = NULL;
   uint8_t *ghost = NULL;
   double *col = NULL;
+  PA_CALL(keep_owned(dm, fm, map, nfile));
+  size_t ncell = (size_t)nfile[PA_ELEMENT] + (size_t)nfile[PA_BOUNDARY] +
+                 (dm->dim == 3 ? (size_t)nfile[PA_EDGE] : 0);
   PA_ALLOC(vgid, nv);
   PA_ALLOC(ghost, nv);
   PA_ALLOC(cgid, ncell);
@@ -542,6 +632,22 @@ static pa_status write_vtu(const pa_dmesh *dm, pa_mesh *fm,
     else
       PA_CALL(pa_mesh_add_field(fm, m->field[q].name, nc, col));
     off += nc;
+  }
+  /* the element and boundary fields, on the file's cells */
+  for (int c = 0; c < 2; c++) {
+    int kind = PA_ELEMENT + c, *nf;
+    const pa__field *fl = pa__mesh_fields((pa_mesh *)m, kind, &nf);
+    for (int q = 0; q < *nf; q++) {
+      int nc = fl[q].ncomp;
+      pa__free(col);
+      col = NULL;
+      PA_ALLOC(col, (size_t)nc * (nfile[kind] ? nfile[kind] : 1));
+      for (pa_idx i = 0; i < dm->nloc[kind]; i++)
+        if (map[kind][i] >= 0)
+          memcpy(col + (size_t)nc * map[kind][i], fl[q].val + (size_t)nc * i,
+                 sizeof(double) * nc);
+      PA_CALL(pa_mesh_add_field_at(fm, (pa_entity)kind, fl[q].name, nc, col));
+    }
   }
   {
     pa__vtu_extra x = {dm->rank, vgid, ghost, cgid};
@@ -583,7 +689,18 @@ static pa_status write_pvtu(const char *base, int nranks, const pa_mesh *m) {
           "<PDataArray type=\"Int32\" Name=\"ref\"/>\n"
           "<PDataArray type=\"Int64\" Name=\"gid\"/>\n"
           "<PDataArray type=\"UInt8\" Name=\"vtkGhostType\"/>\n"
-          "</PPointData>\n<PCellData Scalars=\"rank\">\n"
+          "</PPointData>\n<PCellData Scalars=\"quality\">\n");
+  /* the cell arrays of pa__vtu_write: one per name and size */
+  for (int q = 0; q < m->nefield; q++)
+    fprintf(fp, "<PDataArray type=\"Float64\" Name=\"%s\" NumberOfComponents=\"%d\"/>\n",
+            m->efield[q].name, m->efield[q].ncomp);
+  for (int q = 0; q < m->nbfield; q++) {
+    int k = pa_mesh_field_index(m, PA_ELEMENT, m->bfield[q].name);
+    if (k >= 0 && m->efield[k].ncomp == m->bfield[q].ncomp) continue;
+    fprintf(fp, "<PDataArray type=\"Float64\" Name=\"%s\" NumberOfComponents=\"%d\"/>\n",
+            m->bfield[q].name, m->bfield[q].ncomp);
+  }
+  fprintf(fp,
           "<PDataArray type=\"Int32\" Name=\"ref\"/>\n"
           "<PDataArray type=\"UInt8\" Name=\"entity\"/>\n"
           "<PDataArray type=\"Float64\" Name=\"quality\"/>\n"
@@ -1019,6 +1136,47 @@ cleanup:
   return st;
 }
 
+/* The element and boundary fields of the file entities (KW_CDBL), when
+ * the mesh has some. */
+static pa_status write_cell_doubles(dwriter *w) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = w->dm;
+  const pa_mesh *m = dm->mesh;
+  unsigned char *desc = NULL;
+  double *val[2] = {NULL, NULL};
+  size_t nval[2] = {0, 0};
+  if (!m->nefield && !m->nbfield) return PA_SUCCESS;
+  int32_t n[2] = {m->nefield, m->nbfield};
+  size_t unit = PA_MESH_FIELD_NAME_LEN + 8, dl = 8 + unit * (size_t)(n[0] + n[1]);
+  PA_CALLOC(desc, dl);
+  memcpy(desc, n, 8);
+  unsigned char *q = desc + 8;
+  for (int c = 0; c < 2; c++) {
+    int *nf;
+    const pa__field *f = pa__mesh_fields((pa_mesh *)m, PA_ELEMENT + c, &nf);
+    int nd = 0;
+    for (int k = 0; k < *nf; k++, q += unit) {
+      int32_t x[2] = {f[k].ncomp, f[k].transfer};
+      memcpy(q, f[k].name, PA_MESH_FIELD_NAME_LEN);
+      memcpy(q + PA_MESH_FIELD_NAME_LEN, x, 8);
+      nd += f[k].ncomp;
+    }
+    int kind = PA_ELEMENT + c;
+    nval[c] = (size_t)nd * w->nfile[kind];
+    PA_ALLOC(val[c], nval[c] ? nval[c] : 1);
+    for (pa_idx i = 0; i < dm->nloc[kind]; i++)
+      if (w->map[kind][i] >= 0)
+        pa__entity_doubles(m, kind, i, val[c] + (size_t)nd * w->map[kind][i]);
+  }
+  PA_CALL(kw_write(&w->kw, KW_CDBL, desc, dl, val[0], sizeof(double) * nval[0],
+                   val[1], sizeof(double) * nval[1]));
+cleanup:
+  pa__free(desc);
+  pa__free(val[0]);
+  pa__free(val[1]);
+  return st;
+}
+
 /* The flags of every file entity, kind after kind. */
 static pa_status write_flags(dwriter *w) {
   pa_status st = PA_SUCCESS;
@@ -1115,6 +1273,7 @@ pa_status pa_dmesh_write(pa_dmesh *dm, const char *path) {
   PA_CALL(write_comms(&w));
   PA_CALL(write_ids(&w));
   PA_CALL(write_vertex_doubles(&w));
+  PA_CALL(write_cell_doubles(&w));
   PA_CALL(write_flags(&w));
   PA_CALL(write_values(&w));
   PA_CALL(kw_close(&w.kw, &w.kwout));
@@ -1191,8 +1350,16 @@ static pa_status file_records(const char *path, int f, int nwriters,
                fm->nb == h[H_NFILE + 2] && fm->ned == h[H_NFILE + 3],
            PA_ERR_FORMAT, "%s: the mesh counts differ from the padapt header",
            path);
-  PA_CHECK(df->met_ncomp == lay->met_ncomp && df->nfield == lay->nfield,
+  PA_CHECK(df->met_ncomp == lay->met_ncomp && df->nfield == lay->nfield &&
+               df->ncfield[0] == lay->ncfield[0] && df->ncfield[1] == lay->ncfield[1],
            PA_ERR_FORMAT, "%s: metric or fields differ from rank 0's file", path);
+  for (int c = 0; c < 2; c++)
+    for (int q = 0; q < lay->ncfield[c]; q++)
+      PA_CHECK(!strcmp(df->cfieldname[c][q], lay->cfieldname[c][q]) &&
+                   df->cfieldncomp[c][q] == lay->cfieldncomp[c][q] &&
+                   df->cfieldmode[c][q] == lay->cfieldmode[c][q],
+               PA_ERR_FORMAT, "%s: %s field %d differs from rank 0's file", path,
+               c ? "boundary" : "element", q + 1);
   int nd = pa__layout_ndbl(lay) - d;
   /* user values: same descriptions as rank 0's file; cur[q] walks value q's
    * data over the file entities holding it, in file order */
@@ -1234,7 +1401,9 @@ static pa_status file_records(const char *path, int f, int nwriters,
       pa_gid vg[4];
       for (int j = 0; j < nv; j++) vg[j] = df->gid[0][conn[(size_t)nv * i + j]];
       uint8_t flag = df->flags ? df->flags[foff + (size_t)i] : fl[i];
-      PA_CALL(pa__recs_add(&R[k], df->gid[k][i], vg, ref[i], flag, me, NULL,
+      int cnd = R[k].ndbl;
+      const double *cd = cnd ? df->cdbl[k - PA_ELEMENT] + (size_t)cnd * i : NULL;
+      PA_CALL(pa__recs_add(&R[k], df->gid[k][i], vg, ref[i], flag, me, cd,
                            pay, plen));
     }
     foff += (size_t)n;
@@ -1291,6 +1460,14 @@ static pa_status read_first_file(rset *s) {
   s->lay.nfield = df.nfield;
   memcpy(s->lay.fieldname, df.fieldname, sizeof s->lay.fieldname);
   memcpy(s->lay.fieldncomp, df.fieldncomp, sizeof s->lay.fieldncomp);
+  for (int c = 0; c < 2; c++) {
+    s->lay.ncfield[c] = df.ncfield[c];
+    for (int q = 0; q < df.ncfield[c]; q++) {
+      memcpy(s->lay.cfieldname[c][q], df.cfieldname[c][q], PA_MESH_FIELD_NAME_LEN);
+      s->lay.cfieldncomp[c][q] = df.cfieldncomp[c][q];
+      s->lay.cfieldmode[c][q] = df.cfieldmode[c][q];
+    }
+  }
   PA_CHECK(hdr[H_NRANKS] >= 1 && hdr[H_NRANKS] < (1 << 24) &&
                (hdr[H_DIM] == 2 || hdr[H_DIM] == 3),
            PA_ERR_FORMAT, "%s: bad header", fpath);
@@ -1355,7 +1532,7 @@ static pa_status read_my_files(rset *s) {
   memset(&df, 0, sizeof df);
   for (int k = 0; k < PA_DMESH_NKIND; k++)
     pa__recs_init(&s->R[k], k, pa__kind_nv(s->lay.dim, k),
-                  k == PA_VERTEX ? pa__layout_ndbl(&s->lay) : 0);
+                  pa__layout_kind_ndbl(&s->lay, k));
   int f0 = (int)((int64_t)s->rank * nw / s->size),
       f1 = (int)((int64_t)(s->rank + 1) * nw / s->size);
   for (int f = f0; f < f1; f++) {
@@ -1476,7 +1653,30 @@ cleanup:
   st = pa__agree(comm, st);
   if (st) return st;
   MPI_Bcast(&isset, 1, MPI_INT, 0, comm);
-  if (isset) return read_set(comm, path, overlap, dmp);
+  if (isset) {
+    /* A file made or edited by hand may hold what the remeshers cannot
+     * take (one element listed twice, two on the same side of a face):
+     * each rank checks its part, then the faces between the parts. */
+    st = read_set(comm, path, overlap, dmp);
+    if (st == PA_SUCCESS) {
+      pa_dmesh *dm = *dmp;
+      st = pa__agree(comm, pa__mesh_check_elements(dm->mesh));
+      if (st == PA_SUCCESS)
+        st = pa__faces_conform(comm, dm->dim, dm->nown[PA_ELEMENT],
+                               dm->mesh->elem, dm->mesh->nv,
+                               dm->gid[PA_VERTEX], dm->gid[PA_ELEMENT]);
+    }
+    if (st && !strstr(pa_last_error(), path)) { /* the entity, not the file */
+      char msg[600];
+      snprintf(msg, sizeof msg, "%s: %s", path, pa_last_error());
+      st = pa_set_error(st, "%s", msg);
+    }
+    if (st) {
+      pa_dmesh_destroy(*dmp);
+      *dmp = NULL;
+    }
+    return st;
+  }
   if (rank == 0) st = pa_mesh_read(path, &m);
   st = pa__agree(comm, st);
   if (!st) st = pa_dmesh_distribute(comm, 0, m, overlap, dmp);
@@ -1513,13 +1713,62 @@ cleanup:
 
 /* ---- the collective end of output transactions ---- */
 
+/* How long a rank that has entered the last agreement of a commit, and then
+ * received SIGINT or SIGTERM, waits for the other ranks before it gives up
+ * (one of them is gone): ranks that are alive come within microseconds
+ * (the first agreement brought them all there), and Open MPI's mpiexec
+ * kills a job with SIGKILL a second after its SIGTERM. */
+#define PA_OUTPUT_GRACE_S 0.5
+/* The pause between two tests of that agreement. */
+#define PA_OUTPUT_POLL_NS 100000
+
+/* The last agreement of a commit: a barrier that every rank enters only once
+ * the first agreement completed on it, so that no rank passes it when
+ * another died before. Tested without blocking, SIGINT and SIGTERM blocked:
+ * returns 1 when every rank is in, 0 when a signal came and the others did
+ * not within PA_OUTPUT_GRACE_S. */
+static int commit_barrier(MPI_Comm comm) {
+  MPI_Request rq;
+  double since = -1;
+  if (MPI_Ibarrier(comm, &rq) != MPI_SUCCESS) return 0;
+  for (;;) {
+    int done = 0;
+    if (MPI_Test(&rq, &done, MPI_STATUS_IGNORE) != MPI_SUCCESS) return 0;
+    if (done) return 1;
+    if (pa__output_signal_pending()) {
+      if (since < 0) since = pa_wtime();
+      if (pa_wtime() - since > PA_OUTPUT_GRACE_S) return 0;
+    }
+    struct timespec pause = {0, PA_OUTPUT_POLL_NS};
+    nanosleep(&pause, NULL);
+  }
+}
+
 pa_status pa__output_end(MPI_Comm comm, pa_output *tx, pa_status st) {
+  int outer = pa__output_depth() == 1; /* a nested end only reports */
+  if (outer && st == PA_SUCCESS) pa__output_hook("written");
   st = pa__agree_end(comm, st);
   if (st) {
     pa_output_abort(tx);
     return st;
   }
-  return pa__agree(comm, pa_output_commit(tx));
+  if (!outer) return pa__agree(comm, pa_output_commit(tx));
+  pa__output_hook("voted");
+  sigset_t old;
+  pa__output_hold_begin(&old);
+  if (!commit_barrier(comm)) {
+    pa_output_abort(tx);
+    st = pa_set_error(PA_ERR_IO, "interrupted: another process did not come "
+                                 "to commit the outputs; nothing written");
+    pa__output_hold_end(&old, 0); /* the pending signal ends the process */
+    return st;
+  }
+  pa__output_hook("agreed");
+  st = pa_output_commit(tx);
+  pa__output_hook("committed");
+  st = pa__agree(comm, st);
+  pa__output_hold_end(&old, 1);
+  return st;
 }
 
 pa_status pa_output_end(MPI_Comm comm, pa_output *tx, pa_status st) {

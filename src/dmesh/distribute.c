@@ -18,9 +18,7 @@
 /* ---- scatter from a root ---- */
 
 typedef struct header {
-  int dim, met_ncomp, nfield, ok;
-  int fieldncomp[PA_MESH_MAX_FIELDS];
-  char fieldname[PA_MESH_MAX_FIELDS][PA_MESH_FIELD_NAME_LEN];
+  pa__layout lay;            /* dimension, metric and fields */
   int64_t n[PA_DMESH_NKIND]; /* vertices, elements, boundary, edges */
 } header;
 
@@ -57,7 +55,7 @@ static pa_status pack_block(pa_mesh *m, const pa__layout *lay, int r, int P,
   for (int k = 0; k < PA_DMESH_NKIND; k++) {
     lo[k] = n[k] * r / P;
     cnt[k] = n[k] * (r + 1) / P - lo[k];
-    bytes += pa__recblock_bytes(pa__kind_nv(d, k), k == PA_VERTEX ? ndbl : 0,
+    bytes += pa__recblock_bytes(pa__kind_nv(d, k), pa__layout_kind_ndbl(lay, k),
                                 (size_t)cnt[k], 0);
   }
   b->n = 0;
@@ -66,7 +64,8 @@ static pa_status pack_block(pa_mesh *m, const pa__layout *lay, int r, int P,
     int nv = pa__kind_nv(d, k);
     size_t c = (size_t)cnt[k], l = (size_t)lo[k];
     pa__recblock B;
-    pa__recblock_init(b->p + b->n, nv, k == PA_VERTEX ? ndbl : 0, c, 0, &B);
+    int nd = pa__layout_kind_ndbl(lay, k);
+    pa__recblock_init(b->p + b->n, nv, nd, c, 0, &B);
     const pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
     const int32_t *ref = k == PA_VERTEX ? m->vref : k == PA_ELEMENT ? m->eref
                          : k == PA_BOUNDARY ? m->bref : m->edref;
@@ -98,6 +97,9 @@ static pa_status pack_block(pa_mesh *m, const pa__layout *lay, int r, int P,
                  m->field[f].val + (size_t)nc * (l + i), nc * sizeof(double));
         o += nc;
       }
+    } else if (nd) { /* element or boundary field values */
+      for (size_t i = 0; i < c; i++)
+        pa__entity_doubles(m, k, (pa_idx)(l + i), B.dbl + (size_t)nd * i);
     }
     b->n += B.bytes;
   }
@@ -132,14 +134,7 @@ static pa_status bcast_header(MPI_Comm comm, int root, pa_mesh *mesh,
   if (rank == root) {
     PA_CHECK(mesh, PA_ERR_ARG, "pa_dmesh_distribute: NULL mesh on the root");
     PA_CALL(check_indices(mesh));
-    h->dim = mesh->dim;
-    h->met_ncomp = mesh->met_ncomp;
-    h->nfield = mesh->nfield;
-    for (int f = 0; f < mesh->nfield; f++) {
-      h->fieldncomp[f] = mesh->field[f].ncomp;
-      snprintf(h->fieldname[f], PA_MESH_FIELD_NAME_LEN, "%s",
-               mesh->field[f].name);
-    }
+    pa__mesh_layout(mesh, &h->lay);
     h->n[PA_VERTEX] = mesh->nv;
     h->n[PA_ELEMENT] = mesh->ne;
     h->n[PA_BOUNDARY] = mesh->nb;
@@ -215,15 +210,10 @@ pa_status pa_dmesh_distribute(MPI_Comm comm, int root, pa_mesh *mesh,
   PA_CHECK(dmp, PA_ERR_ARG, "pa_dmesh_distribute: NULL output pointer");
   *dmp = NULL;
   PA_CALL(bcast_header(comm, root, mesh, overlap, &h));
-  lay.dim = h.dim;
-  lay.met_ncomp = h.met_ncomp;
-  lay.nfield = h.nfield;
-  memcpy(lay.fieldncomp, h.fieldncomp, sizeof lay.fieldncomp);
-  memcpy(lay.fieldname, h.fieldname, sizeof lay.fieldname);
-  PA_CALL(pa__dmesh_create(comm, h.dim, &dm));
+  lay = h.lay;
+  PA_CALL(pa__dmesh_create(comm, lay.dim, &dm));
   for (int k = 0; k < PA_DMESH_NKIND; k++)
-    pa__recs_init(&R[k], k, pa__kind_nv(h.dim, k),
-                  k == PA_VERTEX ? pa__layout_ndbl(&lay) : 0);
+    pa__recs_init(&R[k], k, pa__kind_nv(lay.dim, k), pa__layout_kind_ndbl(&lay, k));
   /* scatter from the root, partition the blocks, then migrate */
   PA_CALL(scatter_blocks(dm, root, mesh, &lay, R));
   t1 = pa_wtime();
@@ -474,6 +464,26 @@ static int face_key_rank(const pa_idx *lv, const pa_gid *vglob, int nf,
   return (int)(face_hash(key, nf - 1) % (uint64_t)size);
 }
 
+/* The parity of face i (opposite local vertex i % nf of its element, in its
+ * outward order) against the order of its vertices' global ids: two
+ * positive elements on opposite sides of a face see it with opposite
+ * parities, two on the same side (an element listed twice, or folded onto
+ * its neighbour) with the same. */
+static int face_parity(const pa_idx *lv, const pa_gid *vglob, int nf,
+                       size_t i) {
+  static const int out[2][4][3] = {
+      {{1, 2, -1}, {2, 0, -1}, {0, 1, -1}, {-1, -1, -1}},
+      {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}};
+  const pa_idx *ev = lv + i / (size_t)nf * (size_t)nf;
+  const int *o = out[nf - 3][i % (size_t)nf];
+  pa_gid g[3];
+  int inv = 0;
+  for (int k = 0; k < nf - 1; k++) g[k] = vglob[ev[o[k]]];
+  for (int a = 0; a < nf - 1; a++)
+    for (int b = a + 1; b < nf - 1; b++) inv += g[a] > g[b];
+  return inv & 1;
+}
+
 pa_status pa__faces_conform(MPI_Comm comm, int dim, pa_idx n,
                             const pa_idx *lv, pa_idx nv, const pa_gid *vglob,
                             const pa_gid *egid) {
@@ -492,6 +502,15 @@ pa_status pa__faces_conform(MPI_Comm comm, int dim, pa_idx n,
   st = mate && cnt && pos
            ? pa__match_faces(dim, n, lv, nv, NULL, mate)
            : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+  for (size_t i = 0; i < nface && st == PA_SUCCESS; i++)
+    if (mate[i] > (pa_gid)i &&
+        face_parity(lv, vglob, nf, i) == face_parity(lv, vglob, nf, (size_t)mate[i]))
+      st = pa__error(PA_ERR_MESH, __FILE__, __LINE__,
+                     "elements %lld and %lld (global numbers) lie on the "
+                     "same side of their common face: one element listed "
+                     "twice, or a folded mesh",
+                     (long long)egid[i / (size_t)nf] + 1,
+                     (long long)egid[(size_t)mate[i] / (size_t)nf] + 1);
   if (st == PA_SUCCESS) {
     pa_gid key[3];
     for (size_t i = 0; i < nface; i++)
@@ -506,7 +525,8 @@ pa_status pa__faces_conform(MPI_Comm comm, int dim, pa_idx n,
     pa_gid key[3];
     face *f = sendf + pos[face_key_rank(lv, vglob, nf, i, size, key)]++;
     memcpy(f->key, key, sizeof key);
-    f->who = egid[i / (size_t)nf];
+    /* the element and, in the lowest bit, the face's parity */
+    f->who = 2 * egid[i / (size_t)nf] + face_parity(lv, vglob, nf, i);
   }
   pa__free(mate);
   mate = NULL;
@@ -518,6 +538,17 @@ pa_status pa__faces_conform(MPI_Comm comm, int dim, pa_idx n,
   rmate = pa__malloc((nr ? nr : 1) * sizeof *rmate);
   st = rmate ? match_faces(recv, nr, dim, rmate)
              : pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+  for (size_t i = 0; i < nr && st == PA_SUCCESS; i++) {
+    const face *fr = recv;
+    pa_gid j = rmate[i];
+    if (j > (pa_gid)i && !((fr[i].who ^ fr[j].who) & 1))
+      st = pa__error(PA_ERR_MESH, __FILE__, __LINE__,
+                     "elements %lld and %lld (global numbers) lie on the "
+                     "same side of their common face: one element listed "
+                     "twice, or a folded mesh",
+                     (long long)(fr[i].who >> 1) + 1,
+                     (long long)(fr[j].who >> 1) + 1);
+  }
 cleanup:
   pa__free(mate);
   pa__free(rmate);
@@ -673,7 +704,18 @@ static pa_status graph_csr(const dgraph *g, pa_idx **xadjp, pa_gid **adjp,
   xadj[0] = 0;
   for (pa_idx e = 0; e < n; e++) {
     pa_idx c = 0;
-    for (int i = 0; i < nf; i++) c += g->nbr[(size_t)e * nf + i] >= 0;
+    const pa_gid *nb = g->nbr + (size_t)e * nf;
+    for (int i = 0; i < nf; i++) {
+      c += nb[i] >= 0;
+      /* two distinct simplices share one face at most: more is one element
+       * listed twice (the partitioner would take it for a broken graph) */
+      for (int j = 0; j < i; j++)
+        PA_CHECK(nb[i] < 0 || nb[i] != nb[j], PA_ERR_MESH,
+                 "element %lld shares %s faces with element %lld: the same "
+                 "element listed twice",
+                 (long long)(g->offset + e) + 1, "several",
+                 (long long)nb[i] + 1);
+    }
     xadj[e + 1] = xadj[e] + c;
   }
   PA_ALLOC(adj, xadj[n]);
@@ -942,7 +984,7 @@ typedef struct gview {
 static void kind_shape(int d, const pa__layout *lay, int k, int *nv,
                        int *ndbl) {
   *nv = k == PA_VERTEX ? 0 : pa__kind_nv(d, k);
-  *ndbl = k == PA_VERTEX ? pa__layout_ndbl(lay) : 0;
+  *ndbl = pa__layout_kind_ndbl(lay, k);
 }
 
 /* The view of the root's own entities of kind k. */
@@ -967,13 +1009,14 @@ static gview own_view(const pa_dmesh *dm, const pa__layout *lay, int k,
   return v;
 }
 
-/* The doubles of vertex record i of Q into x (Q->ndbl of them). */
-static void view_doubles(const gview *Q, size_t i, double *x) {
+/* The doubles of record i of kind k of Q into x (Q->ndbl of them). */
+static void view_doubles(const gview *Q, int k, size_t i, double *x) {
   if (!Q->dm) {
     memcpy(x, Q->dbl + (size_t)Q->ndbl * i, (size_t)Q->ndbl * sizeof *x);
     return;
   }
-  int o = pa__vertex_doubles(Q->dm->mesh, (pa_idx)i, Q->dm->mesh->nfield, x);
+  int o = pa__entity_doubles(Q->dm->mesh, k, (pa_idx)i, x);
+  if (k != PA_VERTEX) return;
   for (int q = 0; q < Q->nvals; q++) {
     const pa_dmesh_value *v = Q->dm->value[Q->vals[q]];
     memcpy(x + o, v->data + v->unit * i, v->unit);
@@ -1083,10 +1126,16 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
   }
   PA_CALL(pa_mesh_reserve(m, (pa_idx)nk[PA_VERTEX], (pa_idx)nk[PA_ELEMENT],
                           (pa_idx)nk[PA_BOUNDARY], (pa_idx)nk[PA_EDGE]));
+  PA_CALL(pa__layout_cell_fields(lay, m));
   PA_ALLOC(ord, nmax ? nmax : 1);
   PA_ALLOC(key, nmax ? nmax : 1);
   PA_ALLOC(off, (size_t)size + 1);
-  PA_ALLOC(xbuf, (size_t)V[PA_VERTEX * size].ndbl + 1);
+  {
+    int nd = 1;
+    for (int k = 0; k < PA_DMESH_NKIND; k++)
+      if (V[k * size].ndbl >= nd) nd = V[k * size].ndbl + 1;
+    PA_ALLOC(xbuf, (size_t)nd);
+  }
   for (int k = 0; k < PA_DMESH_NKIND; k++) {
     const gview *Vk = V + (size_t)k * size;
     PA_CALL(order_kind(Vk, size, key, off, ord));
@@ -1099,7 +1148,7 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
       size_t i = g - off[r];
       if (k == PA_VERTEX) {
         const double *x = xbuf;
-        view_doubles(Q, i, xbuf);
+        view_doubles(Q, k, i, xbuf);
         memcpy(m->coord + (size_t)d * j, x, d * sizeof(double));
         x += d;
         if (m->met_ncomp) {
@@ -1132,6 +1181,10 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
       }
       ref[j] = Q->ref[i];
       flag[j] = Q->flag[i];
+      if (Q->ndbl) {
+        view_doubles(Q, k, i, xbuf);
+        pa__entity_set_doubles(m, k, (pa_idx)j, xbuf);
+      }
     }
   }
   m->nv = (pa_idx)nk[PA_VERTEX];

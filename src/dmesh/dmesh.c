@@ -147,14 +147,7 @@ size_t pa_dmesh_memory_used(const pa_dmesh *dm) {
 void pa__dmesh_layout(pa_dmesh *dm, pa__layout *lay) {
   memset(lay, 0, sizeof *lay);
   lay->dim = dm->dim;
-  if (!dm->mesh) return;
-  lay->met_ncomp = dm->mesh->met_ncomp;
-  lay->nfield = dm->mesh->nfield;
-  for (int f = 0; f < lay->nfield; f++) {
-    snprintf(lay->fieldname[f], PA_MESH_FIELD_NAME_LEN, "%s",
-             dm->mesh->field[f].name);
-    lay->fieldncomp[f] = dm->mesh->field[f].ncomp;
-  }
+  if (dm->mesh) pa__mesh_layout(dm->mesh, lay);
 }
 
 int32_t pa__dmesh_ref(const pa_dmesh *dm, int kind, pa_idx e) {
@@ -447,7 +440,7 @@ pa_status pa_dmesh_sync_mesh(pa_dmesh *dm) {
   pa__agree_reset();
   pa_mesh *m = dm->mesh;
   int d = dm->dim;
-  sync_item arr[12 + PA_MESH_MAX_FIELDS];
+  sync_item arr[12 + 3 * PA_MESH_MAX_FIELDS];
   int na = 0;
   arr[na++] = (sync_item){PA_VERTEX, m->coord, sizeof(double) * d};
   arr[na++] = (sync_item){PA_VERTEX, m->vref, 4};
@@ -457,6 +450,12 @@ pa_status pa_dmesh_sync_mesh(pa_dmesh *dm) {
   for (int f = 0; f < m->nfield; f++)
     arr[na++] = (sync_item){PA_VERTEX, m->field[f].val,
                             sizeof(double) * m->field[f].ncomp};
+  for (int f = 0; f < m->nefield; f++)
+    arr[na++] = (sync_item){PA_ELEMENT, m->efield[f].val,
+                            sizeof(double) * m->efield[f].ncomp};
+  for (int f = 0; f < m->nbfield; f++)
+    arr[na++] = (sync_item){PA_BOUNDARY, m->bfield[f].val,
+                            sizeof(double) * m->bfield[f].ncomp};
   arr[na++] = (sync_item){PA_ELEMENT, m->eref, 4};
   arr[na++] = (sync_item){PA_ELEMENT, m->eflag, 1};
   arr[na++] = (sync_item){PA_BOUNDARY, m->bref, 4};

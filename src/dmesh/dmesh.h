@@ -194,22 +194,42 @@ pa_status pa__recs_reserve(pa__recs *r, size_t n, size_t paybytes);
 /* Sort records by gid (stable; nothing done if already sorted). */
 pa_status pa__recs_sort(pa__recs *r);
 
-/* Description of the values and fields carried by a build. */
+/* Description of the values and fields carried by a build: the metric and
+ * vertex fields, and the element (c = 0) and boundary (c = 1) fields with
+ * their transfer modes. */
 typedef struct pa__layout {
   int dim;
   int met_ncomp;
   int nfield;
   char fieldname[PA_MESH_MAX_FIELDS][PA_MESH_FIELD_NAME_LEN];
   int fieldncomp[PA_MESH_MAX_FIELDS];
+  int ncfield[2];
+  char cfieldname[2][PA_MESH_MAX_FIELDS][PA_MESH_FIELD_NAME_LEN];
+  int cfieldncomp[2][PA_MESH_MAX_FIELDS];
+  int cfieldmode[2][PA_MESH_MAX_FIELDS];
 } pa__layout;
 /* Doubles per vertex record: dim + metric + fields. */
 int pa__layout_ndbl(const pa__layout *l);
+/* Doubles per record of a kind: the vertex doubles, the components of the
+ * element or of the boundary fields, 0 for edges. */
+int pa__layout_kind_ndbl(const pa__layout *l, int kind);
+/* The layout of mesh m's metric and fields (dim from m). */
+void pa__mesh_layout(const pa_mesh *m, pa__layout *lay);
+/* Give m (without element nor boundary fields) those of lay, named and
+ * moded, with room for m's capacities (values not set). */
+pa_status pa__layout_cell_fields(const pa__layout *l, pa_mesh *m);
 /* The doubles of the record of vertex v of m: coordinates, metric, then the
  * first nfield fields (in that order, the layout's); returns the count. */
 int pa__vertex_doubles(const pa_mesh *m, pa_idx v, int nfield, double *out);
 /* The inverse for all of m's fields: vertex v of m takes the doubles of a
  * record (coordinates, metric, fields). */
 void pa__vertex_set_doubles(pa_mesh *m, pa_idx v, const double *in);
+/* The doubles of the record of entity e of a kind of m (vertices: as
+ * pa__vertex_doubles with all fields; elements and boundary entities:
+ * their fields' values in field order; edges: none); returns the count.
+ * pa__entity_set_doubles is the inverse. */
+int pa__entity_doubles(const pa_mesh *m, int kind, pa_idx e, double *out);
+void pa__entity_set_doubles(pa_mesh *m, int kind, pa_idx e, const double *in);
 
 /* Collective: remove value val (if not NULL) at the end of a collective
  * function; returns st, or the removal's status if st is PA_SUCCESS. */
@@ -291,7 +311,8 @@ pa_status pa__dual_graph(MPI_Comm comm, int dim, pa_idx n, const pa_gid *vgid,
 
 /* Collective: every face of the n elements lv (dim+1 local vertex numbers in
  * [0, nv) each; vglob the global id of each local vertex, egid of each
- * element) is in at most one other of the elements given on all the ranks.
+ * element) is in at most one other of the elements given on all the ranks,
+ * on the other side of it.
  * Faces are matched locally, and the unmatched ones at the rank hash % size.
  * The memory it takes: 8 bytes per local face and the unmatched faces.
  * Fails with PA_ERR_MESH, naming the face, on every rank. */

@@ -67,7 +67,7 @@ static pa_status kept_kind(pa_dmesh *dm, int kind, const uint8_t *keep,
     T->ref[i] = pa__dmesh_ref(dm, kind, e);
     T->flag[i] = fl[e];
     T->aux[i] = dm->rank;
-    if (nd) pa__vertex_doubles(m, e, m->nfield, T->dbl + (size_t)nd * i);
+    if (nd) pa__entity_doubles(m, kind, e, T->dbl + (size_t)nd * i);
     if (T->poff)
       T->poff[i + 1] =
           T->poff[i] + pa__entity_payload(dm, kind, e, T->pay + T->poff[i]);
@@ -85,9 +85,9 @@ pa_status pa__dmesh_kept_recs(pa_dmesh *dm,
   pa__layout lay;
   pa__recs *R[PA_DMESH_NKIND];
   pa__dmesh_layout(dm, &lay);
-  pa__recs_init(E, PA_ELEMENT, dm->dim + 1, 0);
+  pa__recs_init(E, PA_ELEMENT, dm->dim + 1, pa__layout_kind_ndbl(&lay, PA_ELEMENT));
   pa__recs_init(V, PA_VERTEX, 0, pa__layout_ndbl(&lay));
-  pa__recs_init(B, PA_BOUNDARY, dm->dim, 0);
+  pa__recs_init(B, PA_BOUNDARY, dm->dim, pa__layout_kind_ndbl(&lay, PA_BOUNDARY));
   pa__recs_init(D, PA_EDGE, 2, 0);
   pa__recs_init(P, PA_VERTEX, 0, pa__layout_ndbl(&lay));
   R[PA_VERTEX] = V;
@@ -119,7 +119,7 @@ static pa_status owned_kind(pa_dmesh *dm, int kind, const int *dest,
   const pa_idx *conn = kind == PA_ELEMENT    ? m->elem
                        : kind == PA_BOUNDARY ? m->bdry
                                              : m->edge;
-  if (kind == PA_VERTEX) PA_ALLOC(dbl, R->ndbl);
+  if (R->ndbl) PA_ALLOC(dbl, R->ndbl);
   { /* exact sizes: no growth, no realloc copies at the peak */
     size_t paybytes = 0;
     for (int k = 0; k < dm->nvalue; k++)
@@ -131,7 +131,7 @@ static pa_status owned_kind(pa_dmesh *dm, int kind, const int *dest,
     pa_gid vg[4];
     for (int j = 0; j < nv; j++)
       vg[j] = dm->gid[PA_VERTEX][conn[(size_t)nv * e + j]];
-    if (dbl) pa__vertex_doubles(m, e, m->nfield, dbl);
+    if (dbl) pa__entity_doubles(m, kind, e, dbl);
     int32_t ref = pa__dmesh_ref(dm, kind, e);
     size_t pl = pa__entity_payload(dm, kind, e, pay);
     uint8_t flag = kind == PA_VERTEX    ? m->vflag[e]
@@ -153,9 +153,9 @@ pa_status pa__dmesh_owned_recs(pa_dmesh *dm, const int *dest, pa__recs *E,
   pa__layout lay;
   size_t maxpay = 0;
   pa__dmesh_layout(dm, &lay);
-  pa__recs_init(E, PA_ELEMENT, dm->dim + 1, 0);
+  pa__recs_init(E, PA_ELEMENT, dm->dim + 1, pa__layout_kind_ndbl(&lay, PA_ELEMENT));
   pa__recs_init(V, PA_VERTEX, 0, pa__layout_ndbl(&lay));
-  pa__recs_init(B, PA_BOUNDARY, dm->dim, 0);
+  pa__recs_init(B, PA_BOUNDARY, dm->dim, pa__layout_kind_ndbl(&lay, PA_BOUNDARY));
   pa__recs_init(D, PA_EDGE, 2, 0);
   for (int k = 0; k < dm->nvalue; k++) maxpay += dm->value[k]->unit;
   PA_ALLOC(pay, maxpay);

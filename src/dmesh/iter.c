@@ -403,6 +403,11 @@ static pa_status permuted_mesh(pa_dmesh *dm, reorder *r) {
     nm->field[f].ncomp = m->field[f].ncomp;
   }
   PA_CALL(pa_mesh_reserve(nm, m->nv, m->ne, m->nb, m->ned));
+  {
+    pa__layout lay;
+    pa__mesh_layout(m, &lay);
+    PA_CALL(pa__layout_cell_fields(&lay, nm));
+  }
   for (pa_idx i = 0; i < m->nv; i++) {
     pa_idx o = pv[i];
     memcpy(nm->coord + (size_t)d * i, m->coord + (size_t)d * o, d * sizeof(double));
@@ -421,12 +426,22 @@ static pa_status permuted_mesh(pa_dmesh *dm, reorder *r) {
       nm->elem[(size_t)(d + 1) * i + j] = ivn[m->elem[(size_t)(d + 1) * pe[i] + j]];
     nm->eref[i] = m->eref[pe[i]];
     nm->eflag[i] = m->eflag[pe[i]];
+    for (int f = 0; f < m->nefield; f++) {
+      size_t nc = (size_t)m->efield[f].ncomp;
+      memcpy(nm->efield[f].val + nc * i, m->efield[f].val + nc * pe[i],
+             nc * sizeof(double));
+    }
   }
   for (pa_idx i = 0; i < m->nb; i++) {
     for (int j = 0; j < d; j++)
       nm->bdry[(size_t)d * i + j] = ivn[m->bdry[(size_t)d * pb[i] + j]];
     nm->bref[i] = m->bref[pb[i]];
     nm->bflag[i] = m->bflag[pb[i]];
+    for (int f = 0; f < m->nbfield; f++) {
+      size_t nc = (size_t)m->bfield[f].ncomp;
+      memcpy(nm->bfield[f].val + nc * i, m->bfield[f].val + nc * pb[i],
+             nc * sizeof(double));
+    }
   }
   for (pa_idx i = 0; i < m->ned; i++) {
     for (int j = 0; j < 2; j++) nm->edge[2 * i + j] = ivn[m->edge[2 * pd[i] + j]];

@@ -208,7 +208,8 @@ cleanup:
   return st;
 }
 
-/* The cells of one kind (elements, boundary entities, edges). */
+/* The cells of one kind (elements, boundary entities, edges), with their
+ * fields. */
 static pa_status splice_cells(pa_mesh *m, int kind, const korder *o,
                               const pa_mesh *pm, const korder *vo) {
   pa_status st = PA_SUCCESS;
@@ -234,6 +235,17 @@ static pa_status splice_cells(pa_mesh *m, int kind, const korder *o,
   PA_CALL(remap_conn(conn, nv, o, pconn, vo));
   REMAP(*ref, sizeof(int32_t), o, pref);
   REMAP(*flag, 1, o, pflag);
+  if (kind != PA_EDGE) { /* element or boundary fields */
+    int *n, *pn;
+    pa__field *f = pa__mesh_fields(m, kind, &n);
+    const pa__field *pf = pa__mesh_fields((pa_mesh *)pm, kind, &pn);
+    PA_CHECK(*n == *pn, PA_ERR_INTERNAL, "splice: the part has other fields");
+    for (int k = 0; k < *n; k++) {
+      PA_CHECK(f[k].ncomp == pf[k].ncomp, PA_ERR_INTERNAL,
+               "splice: the part has other fields");
+      REMAP(f[k].val, f[k].ncomp * sizeof(double), o, pf[k].val);
+    }
+  }
   if (kind == PA_ELEMENT) {
     m->ne = o->nloc;
     m->cape = (size_t)o->nloc;

@@ -39,6 +39,16 @@
  *    a vector (dim components) as 3, a symmetric tensor (3 in 2D, 6 in 3D)
  *    as 9 (zz = 0 in 2D), other counts as they are. Binary files write the
  *    node tags of views as 4-byte ints, as Gmsh and meshio do.
+ *  - $ElementData views (one time step): a view holding a value at every
+ *    element is an element field of its name, one holding a value at every
+ *    boundary entity a boundary field (both, for a view on both); values
+ *    at corners and feature edges are not read; 3-component vectors in 2D
+ *    with z = 0 and symmetric 9-component tensors shrink as for $NodeData.
+ *    On write: one view per name of the element and boundary fields, over
+ *    every cell of the file in tag order with 0 on the cells the view's
+ *    fields are not on (Gmsh and meshio read such views), and a fifth
+ *    integer tag (1 elements, 2 boundary entities, 3 both) saying which
+ *    cells carry it, which the reader follows when present.
  *  - Flags other than corners are not stored.
  *  - Node tags may be sparse and unordered: vertices are numbered in
  *    increasing tag order (tags 1..n give vertex tag - 1, whatever the order
@@ -49,8 +59,8 @@
  * bytes left in the file before anything is allocated for it. Errors are
  * "FILE:LINE: message" in ASCII files and "FILE: byte OFFSET: message" in
  * binary ones. Binary files must have data size 8 and the endianness of the
- * machine reading them. In binary files $ElementData and $ElementNodeData
- * are skipped record by record; the sections whose binary layout we do not
+ * machine reading them. In binary files $ElementNodeData is skipped record
+ * by record; the sections whose binary layout we do not
  * parse ($Periodic, $GhostElements...) are refused before $Elements and
  * ignored, with everything after them, once the mesh is read; other unknown
  * sections are skipped up to their $End line.
@@ -302,7 +312,8 @@ static pa_status rd_eol(reader *r) {
 typedef struct cellbuf {
   pa_idx *v;
   int32_t *ref;
-  size_t n, capv, capr;
+  uint64_t *tag; /* element tags, for $ElementData */
+  size_t n, capv, capr, capt;
 } cellbuf;
 
 typedef struct entity {
@@ -330,6 +341,29 @@ typedef struct view {
 /* Most views read: the fields and the metric. */
 #define MSH_MAX_VIEWS (PA_MESH_MAX_FIELDS + 1)
 
+/* The fifth integer tag padapt writes on an $ElementData view: the cells
+ * whose values it carries (bits). A view without it (Gmsh's, meshio's) is
+ * read on every kind of cell it covers whole. */
+#define GMSH_VIEW_ELEMENTS 1
+#define GMSH_VIEW_BOUNDARY 2
+
+/* An $ElementData view being read: values by element tag, matched with
+ * the cells once the mesh is built. */
+typedef struct eview {
+  char name[PA_MESH_FIELD_NAME_LEN];
+  int ncomp;
+  int32_t step;
+  int mark;      /* fifth integer tag, -1 when absent */
+  uint64_t *tag; /* n */
+  double *val;   /* n * ncomp */
+  size_t n, capt, capv;
+  long line; /* where its first section starts, for messages */
+  size_t pos;
+} eview;
+
+/* Most $ElementData views read: an element and a boundary field each. */
+#define MSH_MAX_EVIEWS (2 * PA_MESH_MAX_FIELDS)
+
 typedef struct msh {
   int version; /* 41 or 22 */
   size_t nnode;
@@ -350,6 +384,8 @@ typedef struct msh {
   size_t nname;
   view views[MSH_MAX_VIEWS];
   int nview;
+  eview eviews[MSH_MAX_EVIEWS];
+  int neview;
 } msh;
 
 static void msh_free(msh *w) {
@@ -368,6 +404,11 @@ static void msh_free(msh *w) {
     pa__free(w->ent[d]);
     pa__free(w->cell[d].v);
     pa__free(w->cell[d].ref);
+    pa__free(w->cell[d].tag);
+  }
+  for (int k = 0; k < w->neview; k++) {
+    pa__free(w->eviews[k].tag);
+    pa__free(w->eviews[k].val);
   }
 }
 
@@ -479,6 +520,7 @@ static pa_status cell_reserve(reader *r, cellbuf *c, int kind, size_t need) {
             INT32_MAX);
   PA_GROW(c->v, c->capv, need * (size_t)(kind + 1));
   PA_GROW(c->ref, c->capr, need);
+  PA_GROW(c->tag, c->capt, need);
 cleanup:
   return st;
 }
@@ -822,6 +864,7 @@ static pa_status read_elem_block(reader *r, msh *w, int kind, uint64_t n,
       }
     }
     c->ref[c->n + i] = ref;
+    c->tag[c->n + i] = etag;
   }
   if (r->binary) r->pos += 8 * (size_t)(1 + nn) * n;
   c->n += n;
@@ -904,6 +947,7 @@ static pa_status read_elements22(reader *r, msh *w) {
       if (idx < 0) PA_CALL(unknown_node(r, etag, t));
       c->v[(size_t)(kind + 1) * c->n + k] = idx;
     }
+    c->tag[c->n] = etag;
     c->ref[c->n++] = (int32_t)(phys != 0 ? phys : elem);
   }
   w->have_elems = 1;
@@ -917,7 +961,8 @@ cleanup:
  * at name/namelen, the time step, the number of components and of records.
  * In binary files the data starts after the line of the last integer tag. */
 static pa_status read_data_header(reader *r, size_t *name, size_t *namelen,
-                                  int32_t *step, int32_t *ncomp, uint64_t *n) {
+                                  int32_t *step, int32_t *ncomp, uint64_t *n,
+                                  int *mark) {
   pa_status st = PA_SUCCESS;
   uint64_t nstr, nreal, nint;
   double x;
@@ -948,8 +993,11 @@ static pa_status read_data_header(reader *r, size_t *name, size_t *namelen,
   PA_CALL(rd_i64(r, 0, INT32_MAX, &t[0], "a time step index"));
   PA_CALL(rd_i64(r, 1, 9, &t[1], "a number of components (1 to 9)"));
   PA_CALL(rd_i64(r, 0, INT64_MAX, &t[2], "a number of values"));
-  for (uint64_t k = 3; k < nint; k++)
+  *mark = -1;
+  for (uint64_t k = 3; k < nint; k++) {
     PA_CALL(rd_i64(r, INT32_MIN, INT32_MAX, &extra, "an integer tag"));
+    if (k == 4) *mark = (int)extra;
+  }
   if (r->binary) {
     while (r->pos < r->len && (r->buf[r->pos] == ' ' || r->buf[r->pos] == '\t'))
       r->pos++;
@@ -1012,7 +1060,8 @@ static pa_status read_node_data(reader *r, msh *w) {
   rd_mark(r);
   long line = r->tokline;
   size_t pos = r->tokpos;
-  PA_CALL(read_data_header(r, &a, &l, &step, &nc, &n));
+  int mark;
+  PA_CALL(read_data_header(r, &a, &l, &step, &nc, &n, &mark));
   if (l == 0 || l >= sizeof name || memchr(r->buf + a, '\0', l) ||
       memchr(r->buf + a, '\r', l)) {
     r->tokline = line;
@@ -1063,15 +1112,86 @@ cleanup:
   return st;
 }
 
-/* A binary $ElementData or $ElementNodeData section: skipped record by
- * record (elements carry no data in padapt). */
+/* $ElementData: one view (or part of one) of values at the cells, kept by
+ * element tag until the mesh is built (attach_cell_views). */
+static pa_status read_element_data(reader *r, msh *w) {
+  pa_status st = PA_SUCCESS;
+  size_t a = 0, l = 0;
+  int32_t step, nc;
+  uint64_t n;
+  int mark;
+  eview *v = NULL;
+  rd_mark(r);
+  long line = r->tokline;
+  size_t pos = r->tokpos;
+  PA_CALL(read_data_header(r, &a, &l, &step, &nc, &n, &mark));
+  r->tokline = line;
+  r->tokpos = pos;
+  if (l == 0 || l >= sizeof v->name || memchr(r->buf + a, '\0', l) ||
+      memchr(r->buf + a, '\r', l))
+    RD_FAIL(r, PA_ERR_FORMAT,
+            "a view name has 1 to %d bytes, none of them NUL or CR",
+            (int)sizeof v->name - 1);
+  for (int k = 0; k < w->neview; k++)
+    if (strlen(w->eviews[k].name) == l && !memcmp(w->eviews[k].name, r->buf + a, l))
+      v = &w->eviews[k];
+  if (v && (v->step != step || v->ncomp != nc))
+    RD_FAIL(r, PA_ERR_UNSUPPORTED,
+            "element view \"%s\": a section of another time step or number "
+            "of components; padapt reads views of one time step",
+            v->name);
+  if (!v) {
+    if (w->neview == MSH_MAX_EVIEWS)
+      RD_FAIL(r, PA_ERR_UNSUPPORTED, "more than %d element data views",
+              MSH_MAX_EVIEWS);
+    v = &w->eviews[w->neview++];
+    memset(v, 0, sizeof *v);
+    memcpy(v->name, r->buf + a, l);
+    v->name[l] = '\0';
+    v->ncomp = nc;
+    v->step = step;
+    v->mark = mark;
+    v->line = line;
+    v->pos = pos;
+  }
+  PA_CALL(rd_fits(r, n, 2 + 2 * (size_t)nc, 4 + 8 * (size_t)nc,
+                  "$ElementData header"));
+  PA_GROW(v->tag, v->capt, v->n + n);
+  PA_GROW(v->val, v->capv, (v->n + n) * (size_t)nc);
+  for (uint64_t i = 0; i < n; i++) {
+    uint64_t tag;
+    double *x = v->val + (v->n + i) * (size_t)nc;
+    if (r->binary) {
+      int32_t t32;
+      PA_CALL(rd_bytes(r, &t32, 4, "an element tag"));
+      tag = t32 < 0 ? 0 : (uint64_t)t32;
+      for (int k = 0; k < nc; k++) PA_CALL(rd_bytes(r, &x[k], 8, "an element value"));
+    } else {
+      PA_CALL(rd_u64(r, &tag, "an element tag"));
+      for (int k = 0; k < nc; k++) PA_CALL(rd_f64(r, &x[k], "an element value"));
+    }
+    for (int k = 0; k < nc; k++)
+      if (!isfinite(x[k]))
+        RD_FAIL(r, PA_ERR_FORMAT,
+                "view \"%s\": the value of element %llu is not finite",
+                v->name, (unsigned long long)tag);
+    v->tag[v->n + i] = tag;
+  }
+  v->n += n;
+  PA_CALL(rd_expect(r, "$EndElementData"));
+cleanup:
+  return st;
+}
+
+/* A binary $ElementNodeData section: skipped record by record (values at
+ * the nodes of each element are not read). */
 static pa_status skip_binary_data(reader *r, const char *name) {
   pa_status st = PA_SUCCESS;
   size_t a, l;
   int32_t step, nc;
   uint64_t n;
-  int pernode = !strcmp(name, "ElementNodeData");
-  PA_CALL(read_data_header(r, &a, &l, &step, &nc, &n));
+  int pernode = !strcmp(name, "ElementNodeData"), mark;
+  PA_CALL(read_data_header(r, &a, &l, &step, &nc, &n, &mark));
   PA_CALL(rd_fits(r, n, 1, 4 + (pernode ? 4 : 8 * (size_t)nc), name));
   for (uint64_t i = 0; i < n; i++) {
     int32_t hdr[2] = {0, 1};
@@ -1194,8 +1314,9 @@ static pa_status read_sections(reader *r, msh *w) {
       PA_CALL(w->version == 41 ? read_elements41(r, w) : read_elements22(r, w));
     else if (!strcmp(name, "NodeData"))
       PA_CALL(read_node_data(r, w));
-    else if (r->binary &&
-             (!strcmp(name, "ElementData") || !strcmp(name, "ElementNodeData")))
+    else if (!strcmp(name, "ElementData"))
+      PA_CALL(read_element_data(r, w));
+    else if (r->binary && !strcmp(name, "ElementNodeData"))
       PA_CALL(skip_binary_data(r, name));
     else if (r->binary && binary_layout_section(name)) {
       if (w->have_nodes && w->have_elems) {
@@ -1342,6 +1463,100 @@ cleanup:
   return st;
 }
 
+/* The element views become element fields (on a view holding a value at
+ * every element) and boundary fields (at every boundary entity), as far
+ * as a padapt view's mark allows; values at other cells (corners, feature
+ * edges) are not read. Vectors of 3 components in 2D with z = 0 keep x
+ * and y; symmetric 3 x 3 tensors become 3 or 6 values. */
+static pa_status attach_cell_views(reader *r, msh *w, pa_mesh *m) {
+  pa_status st = PA_SUCCESS;
+  int d = m->dim, tn = pa__tensor_ncomp(d);
+  tagidx *map[2] = {NULL, NULL};
+  size_t nmap[2] = {(size_t)m->ne, (size_t)m->nb};
+  double *val[2] = {NULL, NULL}, *tmp = NULL;
+  uint8_t *seen[2] = {NULL, NULL};
+  if (!w->neview) return PA_SUCCESS;
+  for (int k = 0; k < 2; k++) {
+    const cellbuf *c = &w->cell[d - k];
+    PA_ALLOC(map[k], nmap[k] ? nmap[k] : 1);
+    for (size_t i = 0; i < nmap[k]; i++) map[k][i].tag = c->tag[i], map[k][i].idx = (pa_idx)i;
+    qsort(map[k], nmap[k], sizeof *map[k], cmp_tagidx);
+  }
+  for (int e = 0; e < w->neview; e++) {
+    eview *v = &w->eviews[e];
+    int nc = v->ncomp;
+    r->tokline = v->line;
+    r->tokpos = v->pos;
+    for (int k = 0; k < 2; k++) {
+      PA_CALLOC(val[k], (nmap[k] ? nmap[k] : 1) * (size_t)nc);
+      PA_CALLOC(seen[k], nmap[k] ? nmap[k] : 1);
+    }
+    for (size_t i = 0; i < v->n; i++) {
+      tagidx key = {v->tag[i], 0};
+      for (int k = 0; k < 2; k++) {
+        const tagidx *f = bsearch(&key, map[k], nmap[k], sizeof key, cmp_tagidx);
+        if (!f) continue;
+        if (seen[k][f->idx])
+          RD_FAIL(r, PA_ERR_FORMAT, "view \"%s\": element %llu has two values",
+                  v->name, (unsigned long long)v->tag[i]);
+        seen[k][f->idx] = 1;
+        memcpy(val[k] + (size_t)nc * f->idx, v->val + (size_t)nc * i,
+               (size_t)nc * sizeof(double));
+      }
+    }
+    for (int k = 0; k < 2; k++) {
+      int bit = k == 0 ? GMSH_VIEW_ELEMENTS : GMSH_VIEW_BOUNDARY;
+      size_t miss = 0, n = nmap[k];
+      while (miss < n && seen[k][miss]) miss++;
+      if (!n || (v->mark >= 0 && !(v->mark & bit))) continue;
+      if (miss < n) {
+        if (v->mark >= 0)
+          RD_FAIL(r, PA_ERR_FORMAT, "view \"%s\" has no value at %s %llu",
+                  v->name, k ? "boundary entity" : "element",
+                  (unsigned long long)w->cell[d - k].tag[miss]);
+        pa__info(1, "%s: view \"%s\" not read on the %s: no value at "
+                    "element %llu\n",
+                 r->path, v->name, k ? "boundary entities" : "elements",
+                 (unsigned long long)w->cell[d - k].tag[miss]);
+        continue;
+      }
+      int mc = nc;
+      const double *x = val[k];
+      PA_ALLOC(tmp, n * (size_t)(nc > tn ? nc : tn));
+      if (nc == 9) {
+        size_t i = 0;
+        while (i < n && sym_tensor(d, val[k] + 9 * i, tmp + (size_t)tn * i)) i++;
+        if (i == n) mc = tn, x = tmp;
+      } else if (nc == 3 && d == 2) {
+        size_t i = 0;
+        while (i < n && val[k][3 * i + 2] == 0.0) {
+          tmp[2 * i] = val[k][3 * i];
+          tmp[2 * i + 1] = val[k][3 * i + 1];
+          i++;
+        }
+        if (i == n) mc = 2, x = tmp;
+      }
+      PA_CALL(pa_mesh_add_field_at(m, k ? PA_BOUNDARY : PA_ELEMENT, v->name, mc, x));
+      pa__free(tmp);
+      tmp = NULL;
+    }
+    for (int k = 0; k < 2; k++) {
+      pa__free(val[k]);
+      pa__free(seen[k]);
+      val[k] = NULL;
+      seen[k] = NULL;
+    }
+  }
+cleanup:
+  for (int k = 0; k < 2; k++) {
+    pa__free(map[k]);
+    pa__free(val[k]);
+    pa__free(seen[k]);
+  }
+  pa__free(tmp);
+  return st;
+}
+
 /* Build the mesh from what was read; the buffers move into it. */
 static pa_status build_mesh(reader *r, msh *w, pa_mesh **out) {
   pa_status st = PA_SUCCESS;
@@ -1394,6 +1609,7 @@ static pa_status build_mesh(reader *r, msh *w, pa_mesh **out) {
   w->names = NULL;
   w->nname = 0;
   PA_CALL(attach_views(r, w, m));
+  PA_CALL(attach_cell_views(r, w, m));
   *out = m;
   m = NULL;
 cleanup:
@@ -1437,6 +1653,7 @@ pa_status pa__gmsh_read(const char *path, pa_mesh **mesh) {
   PA_CALL(read_header(&r, &w));
   PA_CALL(read_sections(&r, &w));
   PA_CALL(build_mesh(&r, &w, mesh));
+  (*mesh)->file_dim = 3; /* nodes have three coordinates */
   pa__info(2, "%s: read MSH %s %s, %d vertices, %d elements\n", path,
            w.version == 41 ? "4.1" : "2.2", r.binary ? "binary" : "ASCII",
            (int)pa_mesh_nvert(*mesh), (int)pa_mesh_nelem(*mesh));
@@ -1669,6 +1886,15 @@ static int view_ncomp(int dim, int nc) {
   if (nc == dim) return 3;
   if (nc == pa__tensor_ncomp(dim)) return 9;
   return nc;
+}
+
+/* The tag of a view's record: 4 bytes in binary files, as Gmsh and meshio
+ * write (and read) them. */
+static void wr_view_tag(writer *b, uint64_t tag) {
+  if (b->binary)
+    wr_int(b, (int32_t)tag);
+  else
+    wr_u64(b, tag);
 }
 
 /* One $NodeData view of the vertex array val (nc values per vertex) named
@@ -1906,6 +2132,106 @@ static void write_views(writer *b, const pa_mesh *m) {
                0.0);
 }
 
+/* The field called name on the entities at of m (NULL if none). */
+static const pa__field *field_named(pa_mesh *m, int at, const char *name) {
+  int k = pa_mesh_field_index(m, (pa_entity)at, name);
+  return k >= 0 ? &pa__mesh_fields(m, at, NULL)[k] : NULL;
+}
+
+/* Check that the element and boundary fields of m can be written as views:
+ * a quotable name, at most 9 components, and an element and a boundary
+ * field of one name (one view) of one shape. */
+static pa_status check_cell_view_names(pa_mesh *m, const char *path) {
+  pa_status st = PA_SUCCESS;
+  for (int at = PA_ELEMENT; at <= PA_BOUNDARY; at++) {
+    int *n;
+    const pa__field *f = pa__mesh_fields(m, at, &n);
+    for (int k = 0; k < *n; k++) {
+      PA_CHECK(f[k].name[0] && !strpbrk(f[k].name, "\"\n\r"),
+               PA_ERR_UNSUPPORTED,
+               "%s: %s field %d's name '%s' is empty or holds a quote or line "
+               "break, which a Gmsh string tag cannot hold",
+               path, at == PA_ELEMENT ? "element" : "boundary", k + 1, f[k].name);
+      PA_CHECK(f[k].ncomp <= 9, PA_ERR_UNSUPPORTED,
+               "%s: field \"%s\" has %d components; a Gmsh view has at most 9",
+               path, f[k].name, f[k].ncomp);
+      const pa__field *o = field_named(m, PA_ELEMENT + PA_BOUNDARY - at, f[k].name);
+      PA_CHECK(!o || view_ncomp(m->dim, o->ncomp) == view_ncomp(m->dim, f[k].ncomp),
+               PA_ERR_UNSUPPORTED,
+               "%s: the element and boundary fields \"%s\" (one Gmsh view) "
+               "have different numbers of components",
+               path, f[k].name);
+    }
+  }
+cleanup:
+  return st;
+}
+
+/* One view value: nc values at x as vc components (see write_view). */
+static void write_value(writer *b, int d, int nc, int vc, const double *x) {
+  double t[9] = {0};
+  if (x && vc == 3 && nc == d) {
+    for (int k = 0; k < d; k++) t[k] = x[k];
+  } else if (x && vc == 9 && nc == pa__tensor_ncomp(d)) {
+    t[0] = x[0];
+    t[1] = t[3] = x[1];
+    t[4] = x[2];
+    if (d == 3) {
+      t[2] = t[6] = x[3];
+      t[5] = t[7] = x[4];
+      t[8] = x[5];
+    }
+  } else if (x) {
+    memcpy(t, x, (size_t)nc * sizeof *t);
+  }
+  for (int k = 0; k < vc; k++) wr_f64(b, t[k]);
+  wr_eol(b);
+}
+
+/* $ElementData: a view per name of the element and boundary fields, over
+ * every cell of the file in tag order (corners, then the groups as
+ * write_elements numbers them), 0 on the cells the view's fields are not
+ * on: Gmsh and meshio read such views. A fifth integer tag says which
+ * cells carry the values (GMSH_VIEW_ELEMENTS, GMSH_VIEW_BOUNDARY). */
+static void write_cell_views(writer *b, pa_mesh *m, const group *grp, int ngrp,
+                             pa_idx ncorner) {
+  int d = m->dim;
+  uint64_t ncell = (uint64_t)ncorner;
+  for (int g = 0; g < ngrp; g++) ncell += (uint64_t)grp[g].n;
+  for (int at = PA_ELEMENT; at <= PA_BOUNDARY; at++) {
+    int *n;
+    const pa__field *f = pa__mesh_fields(m, at, &n);
+    for (int k = 0; k < *n; k++) {
+      const pa__field *fe = field_named(m, PA_ELEMENT, f[k].name);
+      const pa__field *fb = field_named(m, PA_BOUNDARY, f[k].name);
+      if (at == PA_BOUNDARY && fe) continue; /* written with the element one */
+      if ((at == PA_ELEMENT && fe != &f[k]) || (at == PA_BOUNDARY && fb != &f[k]))
+        continue; /* a second field of one name: the first one's view */
+      int nc = f[k].ncomp, vc = view_ncomp(d, nc);
+      char head[PA_MESH_FIELD_NAME_LEN + 96];
+      snprintf(head, sizeof head,
+               "$ElementData\n1\n\"%s\"\n1\n0\n5\n0\n%d\n%llu\n0\n%d\n",
+               f[k].name, vc, (unsigned long long)ncell,
+               (fe ? GMSH_VIEW_ELEMENTS : 0) | (fb ? GMSH_VIEW_BOUNDARY : 0));
+      wr_text(b, head);
+      uint64_t tag = 1;
+      for (pa_idx c = 0; c < ncorner; c++) {
+        wr_view_tag(b, tag++);
+        write_value(b, d, nc, vc, NULL);
+      }
+      for (int g = 0; g < ngrp; g++) {
+        const pa__field *src = grp[g].gdim == d ? fe : grp[g].gdim == d - 1 ? fb : NULL;
+        for (pa_idx s = 0; s < grp[g].n; s++) {
+          wr_view_tag(b, tag++);
+          write_value(b, d, nc, vc,
+                      src ? src->val + (size_t)src->ncomp * grp[g].order[s] : NULL);
+        }
+      }
+      wr_end(b, "$EndElementData\n");
+    }
+  }
+}
+
 pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary) {
   pa_status st = PA_SUCCESS;
   pa__outfile out = {0};
@@ -1917,6 +2243,7 @@ pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary) {
   PA_CHECK(mesh && path, PA_ERR_ARG, "pa__gmsh_write: NULL argument");
   const pa_mesh *m = mesh;
   PA_CALL(check_view_names(m, path));
+  PA_CALL(check_cell_view_names(mesh, path));
   PA_CALL(make_groups(m, grp, &ngrp));
   const group *top = &grp[ngrp - 1];
   PA_ALLOC(corner, m->nv);
@@ -1939,6 +2266,7 @@ pa_status pa__gmsh_write(pa_mesh *mesh, const char *path, int binary) {
   write_nodes(&b, m, node_etag, binary);
   write_elements(&b, grp, ngrp, corner, ncorner);
   write_views(&b, m);
+  write_cell_views(&b, mesh, grp, ngrp, ncorner);
   wr_flush(&b);
   PA_CHECK(!b.err, PA_ERR_IO, "%s: write error: %s", path, strerror(errno));
   PA_CALL(pa__out_commit(&out));

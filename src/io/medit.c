@@ -48,7 +48,14 @@
  *    the message then names the line of the referring section's keyword.
  *  - harmless keywords (normals, tangents, geometry links, Mmg's Parallel*)
  *    are skipped by their documented layout; quadrilaterals, prisms,
- *    hexahedra and pyramids are PA_ERR_UNSUPPORTED (simplex meshes only).
+ *    hexahedra, pyramids and the high-order elements Gmsh writes
+ *    (TrianglesP2...) are PA_ERR_UNSUPPORTED (straight-sided simplex meshes
+ *    only). Keywords of no layout known here (FreeFem++'s SubDomainFromMesh,
+ *    VertexOnGeometricEdge...) are skipped as libMeshb and Mmg skip them: in
+ *    ASCII up to the next word that is not a number, in binary to their
+ *    next-keyword position. A note at verbosity 1 names what was skipped;
+ *    a file left with vertices and no elements after skipping an unknown
+ *    keyword is refused, naming it (a misspelt Triangles, say).
  */
 #include "io/fmt.h"
 #include "io/medit.h"
@@ -65,6 +72,9 @@
                                     */
 #define GMFW_BUF ((size_t)1 << 20) /* writer buffer */
 #define GMFW_SLACK 64              /* room kept for one formatted number */
+/* Room for the names of the skipped keywords a note lists: a dozen names,
+ * more than the files of FreeFem++, Gmsh and Mmg hold. */
+#define GMF_SKIPPED_ROOM 256
 
 /* ------------------------------------------------------------------------ */
 /* Keyword table                                                            */
@@ -102,6 +112,11 @@ static const gmf_kwd gmf_kwds[] = {
     {"NormalAtTriangleVertices", 21, 1, "iii"},
     {"NormalAtQuadrilateralVertices", 22, 1, "iiii"},
     {"AngleOfCornerBound", 23, 0, "r"},
+    {"TrianglesP2", 24, 1, "iiiiiii"},
+    {"EdgesP2", 25, 1, "iiii"},
+    {"QuadrilateralsQ2", 27, 1, "iiiiiiiiii"},
+    {"TetrahedraP2", 30, 1, "iiiiiiiiiii"},
+    {"HexahedraQ2", 33, 1, "iiiiiiiiiiiiiiiiiiiiiiiiiiii"},
     {"VerticesOnGeometricVertices", 40, 1, "ii"},
     {"VerticesOnGeometricEdges", 41, 1, "iirr"},
     {"VerticesOnGeometricTriangles", 42, 1, "iirrr"},
@@ -137,6 +152,18 @@ static const gmf_kwd gmf_kwds[] = {
     {"ParallelTetrahedra", 1007, 1, "i"},
 };
 #define GMF_NKWD ((int)(sizeof gmf_kwds / sizeof *gmf_kwds))
+
+/* Elements padapt does not support (not simplices, or high-order): their
+ * records are their vertices and a reference. */
+static const int gmf_cells[] = {PA_IO_GMF_QUADRILATERALS,
+                                PA_IO_GMF_PRISMS,
+                                PA_IO_GMF_HEXAHEDRA,
+                                PA_IO_GMF_PYRAMIDS,
+                                24 /* TrianglesP2 */,
+                                25 /* EdgesP2 */,
+                                27 /* QuadrilateralsQ2 */,
+                                30 /* TetrahedraP2 */,
+                                33 /* HexahedraQ2 */};
 
 static const gmf_kwd *kwd_by_code(int code) {
   for (int i = 0; i < GMF_NKWD; i++)
@@ -197,6 +224,12 @@ struct pa__gmf {
   size_t reclinecap;
   int64_t recoff;
   size_t recsize;
+  /* keywords skipped so far, for the note at the end of the file */
+  char skipped[GMF_SKIPPED_ROOM]; /* "Identifier, SubDomainFromMesh" */
+  int skipmore;                   /* more names than the room holds */
+  int64_t unknown;                /* location of the first one not in
+                                     gmf_kwds, -1 if none */
+  int noted;
 };
 
 int pa__gmf_dim(const pa__gmf *g) { return g->dim; }
@@ -229,6 +262,52 @@ void pa__gmf_where(const pa__gmf *g, int64_t loc, char *buf, size_t n) {
     snprintf(buf, n, "%s: byte %lld", g->path, (long long)loc);
   else
     snprintf(buf, n, "%s:%lld", g->path, (long long)loc);
+}
+
+/* Add a keyword to the list of those skipped, once. */
+static void note_skip(pa__gmf *g, const char *name, size_t n, int unknown) {
+  size_t len = strlen(g->skipped);
+  if (unknown && g->unknown < 0) g->unknown = g->kwdloc;
+  for (const char *p = g->skipped; *p;) {
+    size_t l = strcspn(p, ",");
+    if (l == n && !memcmp(p, name, n)) return;
+    p += l;
+    p += *p ? 2 : 0;
+  }
+  if (len + n + 3 > sizeof g->skipped) {
+    g->skipmore = 1;
+    return;
+  }
+  if (len) {
+    memcpy(g->skipped + len, ", ", 2);
+    len += 2;
+  }
+  memcpy(g->skipped + len, name, n);
+  g->skipped[len + n] = '\0';
+}
+
+static void note_skip_code(pa__gmf *g, int code) {
+  const gmf_kwd *k = kwd_by_code(code);
+  char buf[32];
+  if (k) {
+    note_skip(g, k->name, strlen(k->name), 0);
+    return;
+  }
+  int n = snprintf(buf, sizeof buf, "code %d", code);
+  note_skip(g, buf, (size_t)n, 1);
+}
+
+/* At the end of the file: the note naming the keywords skipped. */
+static void note_end(pa__gmf *g) {
+  if (!g->skipped[0] || g->noted) return;
+  g->noted = 1;
+  pa__info(1, "padapt: %s: skipped the keywords padapt does not use: %s%s\n",
+           g->path, g->skipped, g->skipmore ? " and more" : "");
+}
+
+const char *pa__gmf_skipped(const pa__gmf *g, int64_t *unknown) {
+  if (unknown) *unknown = g->unknown;
+  return g->skipped;
 }
 
 /* Name of the current keyword for messages. */
@@ -411,6 +490,18 @@ cleanup:
   return st;
 }
 
+/* The first bytes of a file are those of ASCII Medit: printable text
+ * starting, after white space, with a keyword. */
+static int looks_ascii(const unsigned char *h, size_t n) {
+  size_t i = 0;
+  while (i < n && is_space((char)h[i]))
+    i++;
+  if (i == n || !isalpha(h[i])) return 0;
+  for (; i < n; i++)
+    if (!is_space((char)h[i]) && (h[i] < 32 || h[i] > 126)) return 0;
+  return 1;
+}
+
 pa_status pa__gmf_open(const char *path, int binary, pa__gmf **out) {
   pa_status st = PA_SUCCESS;
   pa__gmf *g = NULL;
@@ -421,6 +512,7 @@ pa_status pa__gmf_open(const char *path, int binary, pa__gmf **out) {
   g->binary = binary;
   g->ver = 2;
   g->line = g->tokline = 1;
+  g->unknown = -1;
   g->fp = fopen(path, "rb");
   PA_CHECK(g->fp, PA_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
   PA_CHECK(fstat(fileno(g->fp), &sb) == 0, PA_ERR_IO, "%s: cannot stat: %s",
@@ -432,20 +524,28 @@ pa_status pa__gmf_open(const char *path, int binary, pa__gmf **out) {
     PA_CALL(bin_read(g, h, 8));
     uint32_t code;
     memcpy(&code, h, 4);
-    if (code == 1)
-      g->swap = 0;
-    else if (code == 0x01000000u)
-      g->swap = 1;
-    else
+    if (code == 1 || code == 0x01000000u) {
+      g->swap = code != 1;
+      int32_t ver = (int32_t)rd32(h + 4, g->swap);
+      if (ver < 1 || ver > 4)
+        PA_IO_GMF_FAIL(g, 4, "unsupported binary Medit version %d (1 to 4)",
+                       (int)ver);
+      g->ver = ver;
+    } else if (looks_ascii(h, sizeof h)) {
+      /* FreeFem++'s 2D savemesh writes ASCII whatever the extension. */
+      pa__info(1,
+               "padapt: %s: an ASCII Medit file under a binary name, read "
+               "as ASCII\n",
+               path);
+      PA_CALL(bin_seek(g, 0));
+      g->binary = 0;
+    } else {
       PA_IO_GMF_FAIL(g, 0,
                      "not a binary Medit file: the code word is %u, expected 1",
                      (unsigned)code);
-    int32_t ver = (int32_t)rd32(h + 4, g->swap);
-    if (ver < 1 || ver > 4)
-      PA_IO_GMF_FAIL(g, 4, "unsupported binary Medit version %d (1 to 4)",
-                     (int)ver);
-    g->ver = ver;
-  } else {
+    }
+  }
+  if (!g->binary) {
     PA_ALLOC(g->buf, GMF_WINDOW + 1);
     g->buf[0] = '\0';
   }
@@ -541,27 +641,57 @@ cleanup:
   return st;
 }
 
+/* ASCII: the rest of a string that opened with token t ("several words"
+ * in double quotes spread over tokens). */
+static pa_status skip_quoted(pa__gmf *g, const char *t, size_t len) {
+  pa_status st = PA_SUCCESS;
+  if (t[0] != '"' || (len >= 2 && t[len - 1] == '"')) return PA_SUCCESS;
+  do {
+    PA_CALL(next_token(g, &t, &len));
+  } while (t && t[len - 1] != '"');
+  if (!t)
+    PA_IO_GMF_FAIL(g, g->line, "unexpected end of file in a string of %s",
+                   cur_name(g));
+cleanup:
+  return st;
+}
+
+/* A keyword name that is not in gmf_kwds is skipped with what follows it up
+ * to the next word that is not a number (the next keyword), as libMeshb and
+ * Mmg do: its layout is unknown, but records are numbers and strings. */
 static pa_status next_ascii(pa__gmf *g, int *code) {
   pa_status st = PA_SUCCESS;
   const char *t;
   size_t n;
   char buf[48];
+  int skipping = 0; /* inside the data of an unknown keyword */
   for (;;) {
     int64_t v;
+    double x;
     PA_CALL(next_token(g, &t, &n));
     if (!t) {
       g->kwd = PA_IO_GMF_END;
       break;
     }
+    if (!isalpha((unsigned char)t[0]) || parse_real(t, n, &x)) {
+      if (!skipping)
+        PA_IO_GMF_FAIL(g, g->tokline,
+                       "expected a keyword, found '%s' (a count smaller than "
+                       "the data?)",
+                       tokstr(t, n, buf));
+      PA_CALL(skip_quoted(g, t, n));
+      continue;
+    }
     g->kwdloc = g->tokline;
-    if (!isalpha((unsigned char)t[0]))
-      PA_IO_GMF_FAIL(g, g->tokline,
-                     "expected a keyword, found '%s' (a count smaller than the "
-                     "data?)",
-                     tokstr(t, n, buf));
     const gmf_kwd *k = kwd_by_name(t, n);
-    if (!k)
-      PA_IO_GMF_FAIL(g, g->tokline, "unknown keyword '%s'", tokstr(t, n, buf));
+    if (!k) {
+      tokstr(t, n, buf);
+      note_skip(g, buf, strlen(buf), 1);
+      g->kwd = 0;
+      skipping = 1;
+      continue;
+    }
+    skipping = 0;
     g->kwd = k->code;
     if (k->code == 1) {
       PA_CALL(tok_int(g, "the MeshVersionFormatted number", &v));
@@ -591,7 +721,15 @@ cleanup:
 
 pa_status pa__gmf_next(pa__gmf *g, int *code) {
   *code = PA_IO_GMF_END;
-  return g->binary ? next_binary(g, code) : next_ascii(g, code);
+  pa_status st = g->binary ? next_binary(g, code) : next_ascii(g, code);
+  if (st == PA_SUCCESS && *code == PA_IO_GMF_END) note_end(g);
+  return st;
+}
+
+int pa__gmf_unsupported_cell(int code) {
+  for (size_t i = 0; i < sizeof gmf_cells / sizeof *gmf_cells; i++)
+    if (gmf_cells[i] == code) return (int)strlen(kwd_by_code(code)->rec);
+  return 0;
 }
 
 pa_status pa__gmf_check_room(pa__gmf *g, pa_idx n, int nreal, int nint) {
@@ -782,6 +920,7 @@ pa_status pa__gmf_skip(pa__gmf *g) {
   pa_status st = PA_SUCCESS;
   const gmf_kwd *k;
   pa_idx n = 1;
+  note_skip_code(g, g->kwd);
   if (g->binary) return pa__gmf_done(g);
   k = kwd_by_code(g->kwd);
   PA_CHECK(k, PA_ERR_INTERNAL, "pa__gmf_skip: no current keyword");
@@ -790,13 +929,8 @@ pa_status pa__gmf_skip(pa__gmf *g) {
     const char *t;
     size_t len;
     PA_CALL(next_token(g, &t, &len));
-    if (t && t[0] == '"' && (len < 2 || t[len - 1] != '"')) {
-      do {
-        PA_CALL(next_token(g, &t, &len));
-      } while (t && t[len - 1] != '"');
-    }
     if (!t) PA_IO_GMF_FAIL(g, g->line, "unexpected end of file in %s", k->name);
-    return PA_SUCCESS;
+    return skip_quoted(g, t, len);
   }
   if (k->rec[0] == 'L') {
     PA_CALL(pa__gmf_count(g, 0, 1, &n));
@@ -1316,7 +1450,7 @@ pa_status pa__medit_read(const char *path, pa_mesh **mesh) {
   pa__path_ext(path, ext, sizeof ext);
   PA_CALL(pa__gmf_open(path, !strcmp(ext, ".meshb"), &g));
   for (;;) {
-    int code, s = -1;
+    int code, s = -1, ni;
     pa_idx n;
     PA_CALL(pa__gmf_next(g, &code));
     if (code == PA_IO_GMF_END) break;
@@ -1333,27 +1467,20 @@ pa_status pa__medit_read(const char *path, pa_mesh **mesh) {
                        "Dimension 2");
       PA_CALL(read_section(g, &r, s));
       break;
-    case PA_IO_GMF_QUADRILATERALS:
-    case PA_IO_GMF_PRISMS:
-    case PA_IO_GMF_HEXAHEDRA:
-    case PA_IO_GMF_PYRAMIDS: {
-      int nv = code == PA_IO_GMF_QUADRILATERALS ? 4
-               : code == PA_IO_GMF_PRISMS       ? 6
-               : code == PA_IO_GMF_HEXAHEDRA    ? 8
-                                             : 5;
-      PA_CALL(pa__gmf_count(g, 0, nv + 1, &n));
-      if (n)
-        PA_CALL(pa__gmf_error(g, pa__gmf_kwd_loc(g), PA_ERR_UNSUPPORTED,
-                              "%s are not supported (simplex meshes only)",
-                              pa__gmf_kwd_name(code)));
-      PA_CALL(pa__gmf_done(g));
-      break;
-    }
     default:
-      if (s >= 0)
+      if (s >= 0) {
         PA_CALL(read_section(g, &r, s));
-      else
+      } else if ((ni = pa__gmf_unsupported_cell(code))) {
+        PA_CALL(pa__gmf_count(g, 0, ni, &n));
+        if (n)
+          PA_CALL(pa__gmf_error(g, pa__gmf_kwd_loc(g), PA_ERR_UNSUPPORTED,
+                                "%s are not supported (straight-sided simplex "
+                                "meshes only)",
+                                pa__gmf_kwd_name(code)));
+        PA_CALL(pa__gmf_done(g));
+      } else {
         PA_CALL(pa__gmf_skip(g));
+      }
     }
   }
   if (!pa__gmf_dim(g))
@@ -1362,6 +1489,14 @@ pa_status pa__medit_read(const char *path, pa_mesh **mesh) {
                    "mesh file?)");
   if (!r.vpresent) r.fdim = pa__gmf_dim(g);
   PA_CALL(check_deferred(g, &r));
+  int64_t unknown;
+  const char *skipped = pa__gmf_skipped(g, &unknown);
+  if (unknown >= 0 && r.nv && !r.sec[S_TRI].n && !r.sec[S_TET].n)
+    PA_IO_GMF_FAIL(g, unknown,
+                   "vertices but no Triangles nor Tetrahedra, and keywords "
+                   "padapt does not know were skipped: %s (misspelt, or "
+                   "elements padapt does not support?)",
+                   skipped);
 
   int dim = r.fdim;
   if (dim == 3 && r.sec[S_TET].n == 0 && r.sec[S_TRI].n > 0) {
@@ -1370,6 +1505,7 @@ pa_status pa__medit_read(const char *path, pa_mesh **mesh) {
       if (r.coord[3 * (size_t)i + 2] != 0.0) dim = 3;
   }
   PA_CALL(build_mesh(&r, dim, mesh));
+  (*mesh)->file_dim = r.fdim;
 cleanup:
   raw_free(&r);
   pa__gmf_close(g);

@@ -36,7 +36,10 @@ enum {
   PA_IO_GMF_REQUIRED_TRIANGLES = 17,
   PA_IO_GMF_PYRAMIDS = 49,
   PA_IO_GMF_END = 54,
-  PA_IO_GMF_SOL_AT_VERTICES = 62
+  PA_IO_GMF_SOL_AT_VERTICES = 62,
+  PA_IO_GMF_SOL_AT_EDGES = 63,
+  PA_IO_GMF_SOL_AT_TRIANGLES = 64,
+  PA_IO_GMF_SOL_AT_TETRAHEDRA = 66
 };
 /* Most solution types in one SolAtVertices keyword (libMeshb's GmfMaxTyp). */
 #define PA_IO_GMF_MAX_TYPES 1000
@@ -52,10 +55,21 @@ void pa__gmf_close(pa__gmf *gmf); /* NULL allowed */
 int pa__gmf_dim(const pa__gmf *gmf);
 /* Next data keyword: its code, PA_IO_GMF_END at End or at the end of an ASCII
  * file. MeshVersionFormatted and Dimension are consumed here. An unknown
- * ASCII keyword is an error; unknown binary codes are returned (skip them). */
+ * ASCII keyword is skipped with its data (the numbers and quoted strings up
+ * to the next word); unknown binary codes are returned (skip them). At the
+ * end, a note at verbosity 1 names the keywords skipped. */
 pa_status pa__gmf_next(pa__gmf *gmf, int *code);
 /* Skip the data of the current keyword. */
 pa_status pa__gmf_skip(pa__gmf *gmf);
+/* The keywords skipped so far, for messages ("Identifier, SubDomainFromMesh";
+ * "" if none); *unknown (if not NULL) is the location of the first one that
+ * is not in the keyword table of medit.c (an unknown ASCII name or binary
+ * code), -1 if none. */
+const char *pa__gmf_skipped(const pa__gmf *gmf, int64_t *unknown);
+/* For the keyword of an element kind padapt does not support (quadrilaterals,
+ * prisms, hexahedra, pyramids, high-order elements): the integers of one of
+ * its records (vertices and reference); 0 for any other keyword. */
+int pa__gmf_unsupported_cell(int code);
 /* After reading a keyword's data: move to the next keyword. */
 pa_status pa__gmf_done(pa__gmf *gmf);
 /* Read the record count of the current keyword and check that n records of

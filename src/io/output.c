@@ -20,7 +20,11 @@
  *    when no file of the transaction failed (a failed or aborted file marks
  *    its transaction failed; committing it then removes everything);
  *  - SIGINT and SIGTERM are blocked in the committing thread during the
- *    renames, so those signals never stop a commit half-way;
+ *    renames, so those signals never stop a commit half-way; the collective
+ *    end (pa__output_end, src/dmesh/dio.c) blocks them from its last
+ *    agreement on and holds what arrived meanwhile (pa__output_hold_end,
+ *    pa_output_held_signal): once every rank agreed to commit, every rank
+ *    commits;
  *  - every temporary that may exist is listed in `temps` (listed before it
  *    is created, unlisted once renamed or removed): the handler of
  *    pa_output_handle_signals unlinks them with async-signal-safe calls only;
@@ -77,15 +81,74 @@ static void temp_unlist(int slot) {
 }
 
 /* Runs with SA_RESETHAND: the default action is back when it raises the
- * signal again, which then ends the process as it would have without us. */
+ * signal again, which then ends the process as it would have without us.
+ * The note says what became of the outputs (write(2): async-signal-safe). */
 static void on_signal(int sig) {
   int saved = errno;
   for (int i = 0; i < MAX_TEMPS; i++) {
     char *p = atomic_load(&temps[i]);
     if (p) unlink(p);
   }
+  static const char note[] =
+      "padapt: interrupted by a signal: the files being written were removed, "
+      "the outputs at their paths are as they were\n";
+  ssize_t w = write(STDERR_FILENO, note, sizeof note - 1);
+  (void)w;
   errno = saved;
   raise(sig);
+}
+
+/* ---- the collective end's signals and test hook ---- */
+
+static volatile sig_atomic_t held_signal;
+static pa_output_hook out_hook;
+static void *out_hook_ctx;
+
+static void term_set(sigset_t *set) {
+  sigemptyset(set);
+  sigaddset(set, SIGINT);
+  sigaddset(set, SIGTERM);
+}
+
+void pa__output_hold_begin(sigset_t *old) {
+  sigset_t block;
+  term_set(&block);
+  pthread_sigmask(SIG_BLOCK, &block, old);
+}
+
+int pa__output_signal_pending(void) {
+  sigset_t pend;
+  if (sigpending(&pend) != 0) return 0;
+  return sigismember(&pend, SIGINT) ? SIGINT
+         : sigismember(&pend, SIGTERM) ? SIGTERM
+                                       : 0;
+}
+
+void pa__output_hold_end(const sigset_t *old, int hold) {
+  if (hold) { /* take the signals that arrived: the outputs are committed */
+    sigset_t set;
+    term_set(&set);
+    const struct timespec now = {0, 0};
+    int sig;
+    while ((sig = sigtimedwait(&set, NULL, &now)) > 0)
+      if (!held_signal) held_signal = sig;
+  }
+  pthread_sigmask(SIG_SETMASK, old, NULL);
+}
+
+int pa_output_held_signal(void) {
+  int sig = held_signal;
+  held_signal = 0;
+  return sig;
+}
+
+void pa_output_set_hook(pa_output_hook hook, void *ctx) {
+  out_hook = hook;
+  out_hook_ctx = ctx;
+}
+
+void pa__output_hook(const char *step) {
+  if (out_hook) out_hook(step, out_hook_ctx);
 }
 
 pa_status pa_output_handle_signals(void) {
@@ -216,7 +279,7 @@ static pa_status commit_entries(out_entry *e, int n) {
         e[i].slot = -1;
         pa__free(e[i].tmppath);
         e[i].tmppath = NULL;
-        nrenamed++;
+        if (nrenamed++ == 0) pa__output_hook("renamed");
       } else {
         st = pa__error(PA_ERR_IO, __FILE__, __LINE__,
                        "%s: cannot rename the completed temporary onto it: "

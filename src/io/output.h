@@ -12,6 +12,7 @@
 
 #include "mesh/mesh.h"
 
+#include <signal.h>
 #include <stdio.h>
 
 /* A file being written. Zero-initialised, pa__out_abort does nothing. */
@@ -43,6 +44,17 @@ pa_status pa__out_remove(const char *path);
 const char *pa__out_tmppath(const char *path);
 /* Open begins of the calling thread's output transaction (0: none). */
 int pa__output_depth(void);
+/* The signals of the collective end of a transaction (pa__output_end):
+ * block SIGINT and SIGTERM in the calling thread (*old: the mask before);
+ * whether one of them is pending (its number, 0 if none); restore *old,
+ * with hold 1 first taking the pending ones, which pa_output_held_signal
+ * then reports (the outputs were committed: the signal came too late to
+ * stop them), with hold 0 letting them act. */
+void pa__output_hold_begin(sigset_t *old);
+int pa__output_signal_pending(void);
+void pa__output_hold_end(const sigset_t *old, int hold);
+/* Call the test hook of pa_output_set_hook, if any, at step. */
+void pa__output_hook(const char *step);
 
 /* FNV-1a 64 of n bytes, continuing from h (start with PA_IO_FNV1A64_INIT). */
 #define PA_IO_FNV1A64_INIT 0xcbf29ce484222325ull

@@ -1,33 +1,47 @@
 /*
- * sol.c -- solutions at vertices (pa_sol), their files (.sol ASCII, .solb
- * binary: keyword SolAtVertices, read and written through the keyword file
- * layer of medit.c) and the bridge to the mesh metric.
+ * sol.c -- solutions (pa_sol): fields at the vertices, edges, triangles or
+ * tetrahedra of a mesh, their files (.sol ASCII, .solb binary: keywords
+ * SolAtVertices, SolAtEdges, SolAtTriangles, SolAtTetrahedra, read and
+ * written through the keyword file layer of medit.c) and the bridges to
+ * the mesh: its metric, and its user fields on vertices, elements and
+ * boundary entities.
  *
  * Invariants of a pa_sol:
- *  - nfield fields, field k holding nvert * ncomp doubles (vertex-major) with
- *    ncomp = 1 (scalar), dim (vector) or 3 / 6 (symmetric tensor, stored
- *    m11 m12 m22 [m13 m23 m33] exactly as in the file: Medit's order);
- *  - path is the file the solution was read from (NULL when built in memory);
- *    later errors about the solution (wrong vertex count, invalid metric)
- *    name it.
+ *  - nfield fields, field k at n entities of its place (n = nvert at
+ *    vertices), holding n * ncomp doubles (entity-major) with ncomp = 1
+ *    (scalar), dim (vector) or 3 / 6 (symmetric tensor, stored m11 m12 m22
+ *    [m13 m23 m33] exactly as in the file: Medit's order);
+ *  - path is the file the solution was read from (NULL when built in
+ *    memory), and each field read from a file knows the line (or byte) of
+ *    its keyword: later errors about the solution (a wrong count, an
+ *    invalid metric, a value that is not finite) name them.
  *
- * Reading: every SolAtVertices keyword of the file contributes its fields in
- * order (all must have the same vertex count); other keywords (solutions at
- * elements, Time, Iterations...) are skipped. Values are read as they are:
- * whether they make a valid metric is checked by pa_mesh_metric_from_sol
- * (pa_mesh_set_metric), which names the vertex at fault. The vertex counts
- * must agree; a scalar field fits a mesh of any dimension, and 3D tensors fit
- * a 2D mesh (a planar mesh stored in 3D) when they do not couple z with x, y.
- * Writing: one SolAtVertices keyword holding every field, binary version 2
- * (3 beyond 2 GiB), through a temporary file (output.c).
+ * Reading: every solution keyword of the file contributes its fields in
+ * order; keywords of one place must agree on their count; other keywords
+ * (Time, Iterations...) are skipped. Values are read as they are: whether
+ * they make a valid metric is checked by pa_mesh_metric_from_sol
+ * (pa_mesh_set_metric), whether they are finite by the mesh's field
+ * functions, which name the entity at fault. The dimensions must agree (as
+ * Mmg): a solution of another Dimension than the mesh's is refused, but for
+ * a 3D solution of a 2D mesh read from a file of 3D coordinates (a planar
+ * mesh stored in 3D, Medit or Gmsh; or a mesh built in memory), whose
+ * tensors fit when they do not couple z with x, y.
+ * Writing: one keyword per place holding every field given there, binary
+ * version 2 (3 beyond 2 GiB), through a temporary file (output.c).
  */
 #include "io/medit.h"
 #include "io/output.h"
 
+#include <math.h>
+#include <stdio.h>
+
 typedef struct sol_field {
   pa_sol_kind kind;
   int ncomp;
-  double *val; /* nvert * ncomp */
+  int at;       /* pa_sol_at */
+  pa_idx n;     /* entities */
+  char *origin; /* where its keyword was read ("u.sol:12"), or NULL */
+  double *val;  /* n * ncomp */
 } sol_field;
 
 struct pa_sol {
@@ -39,6 +53,14 @@ struct pa_sol {
   char *path;   /* file read from, NULL if built in memory */
   char *origin; /* where its vertex count was read ("u.sol:3"), or NULL */
 };
+
+#define SOL_NAT 4
+/* The keyword of each place, and its entities for messages. */
+static const int at_code[SOL_NAT] = {
+    PA_IO_GMF_SOL_AT_VERTICES, PA_IO_GMF_SOL_AT_EDGES,
+    PA_IO_GMF_SOL_AT_TRIANGLES, PA_IO_GMF_SOL_AT_TETRAHEDRA};
+static const char *const at_word[SOL_NAT] = {"vertices", "edges", "triangles",
+                                             "tetrahedra"};
 
 /* Components of a field of this kind, 0 if the kind is invalid. */
 static int kind_ncomp(int dim, int kind) {
@@ -52,6 +74,15 @@ static int kind_ncomp(int dim, int kind) {
   default:
     return 0;
   }
+}
+
+/* A copy of s by the counting allocator (NULL for NULL or out of memory). */
+static char *dup_string(const char *s) {
+  if (!s) return NULL;
+  size_t n = strlen(s) + 1;
+  char *c = pa__malloc(n);
+  if (c) memcpy(c, s, n);
+  return c;
 }
 
 pa_status pa_sol_create(int dim, pa_idx nvert, pa_sol **sol) {
@@ -73,8 +104,10 @@ cleanup:
 
 void pa_sol_destroy(pa_sol *sol) {
   if (!sol) return;
-  for (int k = 0; k < sol->nfield; k++)
+  for (int k = 0; k < sol->nfield; k++) {
     pa__free(sol->field[k].val);
+    pa__free(sol->field[k].origin);
+  }
   pa__free(sol->field);
   pa__free(sol->path);
   pa__free(sol->origin);
@@ -89,40 +122,63 @@ int pa_sol_dim(const pa_sol *sol) { return sol->dim; }
 pa_idx pa_sol_nvert(const pa_sol *sol) { return sol->nvert; }
 int pa_sol_nfield(const pa_sol *sol) { return sol->nfield; }
 
-/* Append a field with uninitialised values; its index in *index. */
-static pa_status add_empty(pa_sol *s, pa_sol_kind kind, int *index) {
+/* Append a field with uninitialised values at n entities of place at; its
+ * index in *index. */
+static pa_status add_empty(pa_sol *s, int at, pa_idx n, pa_sol_kind kind,
+                           const char *origin, int *index) {
   pa_status st = PA_SUCCESS;
   double *val = NULL;
+  char *org = NULL;
   int nc = kind_ncomp(s->dim, kind);
   PA_CHECK(nc, PA_ERR_ARG,
            "invalid solution kind %d (1 scalar, 2 vector, 3 "
            "symmetric tensor)",
            (int)kind);
   PA_GROW(s->field, s->capfield, (size_t)s->nfield + 1);
-  PA_ALLOC(val, (size_t)s->nvert * nc);
-  s->field[s->nfield].kind = kind;
-  s->field[s->nfield].ncomp = nc;
-  s->field[s->nfield].val = val;
+  PA_ALLOC(val, (size_t)(n ? n : 1) * nc);
+  if (origin) {
+    org = dup_string(origin);
+    PA_CHECK(org, PA_ERR_MEMORY, "out of memory");
+  }
+  sol_field *f = &s->field[s->nfield];
+  f->kind = kind;
+  f->ncomp = nc;
+  f->at = at;
+  f->n = n;
+  f->origin = org;
+  f->val = val;
   val = NULL;
+  org = NULL;
   *index = s->nfield++;
 cleanup:
   pa__free(val);
+  pa__free(org);
+  return st;
+}
+
+pa_status pa_sol_add_field_at(pa_sol *sol, pa_sol_at at, pa_idx n,
+                              pa_sol_kind kind, const double *values) {
+  pa_status st = PA_SUCCESS;
+  int k = 0;
+  PA_CHECK(sol, PA_ERR_ARG, "pa_sol_add_field: NULL solution");
+  PA_CHECK((int)at >= 0 && (int)at < SOL_NAT, PA_ERR_ARG,
+           "pa_sol_add_field: unknown place %d", (int)at);
+  PA_CHECK(n >= 0 && (at != PA_SOL_AT_VERTICES || n == sol->nvert), PA_ERR_ARG,
+           "pa_sol_add_field: %d values for a solution at %d vertices", (int)n,
+           (int)sol->nvert);
+  PA_CHECK(values || n == 0, PA_ERR_ARG, "pa_sol_add_field: NULL values");
+  PA_CALL(add_empty(sol, at, n, kind, NULL, &k));
+  if (n)
+    memcpy(sol->field[k].val, values,
+           (size_t)n * sol->field[k].ncomp * sizeof(double));
+cleanup:
   return st;
 }
 
 pa_status pa_sol_add_field(pa_sol *sol, pa_sol_kind kind,
                            const double *values) {
-  pa_status st = PA_SUCCESS;
-  int k = 0;
-  PA_CHECK(sol, PA_ERR_ARG, "pa_sol_add_field: NULL solution");
-  PA_CHECK(values || sol->nvert == 0, PA_ERR_ARG,
-           "pa_sol_add_field: NULL values");
-  PA_CALL(add_empty(sol, kind, &k));
-  if (sol->nvert)
-    memcpy(sol->field[k].val, values,
-           (size_t)sol->nvert * sol->field[k].ncomp * sizeof(double));
-cleanup:
-  return st;
+  return pa_sol_add_field_at(sol, PA_SOL_AT_VERTICES, sol ? sol->nvert : 0,
+                             kind, values);
 }
 
 pa_status pa_sol_field(pa_sol *sol, int k, pa_sol_kind *kind, int *ncomp,
@@ -137,54 +193,72 @@ cleanup:
   return st;
 }
 
-/* Read the SolAtVertices keyword g is on; creates *sp on the first one. */
-static pa_status read_sol_at_vertices(pa__gmf *g, pa_sol **sp) {
+pa_status pa_sol_field_where(const pa_sol *sol, int k, pa_sol_at *at,
+                             pa_idx *n, const char **origin) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(sol && k >= 0 && k < sol->nfield, PA_ERR_ARG,
+           "pa_sol_field_where: no field %d", k);
+  if (at) *at = (pa_sol_at)sol->field[k].at;
+  if (n) *n = sol->field[k].n;
+  if (origin) *origin = sol->field[k].origin;
+cleanup:
+  return st;
+}
+
+/* Read the solution keyword of place at that g is on; creates *sp on the
+ * first one. count[at] is the count of the first keyword of that place
+ * (-1 before). */
+static pa_status read_sol_keyword(pa__gmf *g, int at, pa_sol **sp,
+                                  pa_idx *count) {
   pa_status st = PA_SUCCESS;
   int *type = NULL, ntype = 0, size = 0, first;
   pa_idx n;
   const double *rv;
   int64_t loc = pa__gmf_kwd_loc(g);
+  const char *kname = pa__gmf_kwd_name(at_code[at]);
+  char where[600];
   int dim;
   PA_CALL(pa__gmf_count(g, 1, 0, &n)); /* fails if there is no Dimension */
   dim = pa__gmf_dim(g);
   PA_CALL(pa__gmf_word(g, &ntype));
   if (ntype < 1 || ntype > PA_IO_GMF_MAX_TYPES)
-    PA_IO_GMF_FAIL(g, pa__gmf_loc(g),
-                   "SolAtVertices: %d solution types (1 to "
-                   "%d)",
+    PA_IO_GMF_FAIL(g, pa__gmf_loc(g), "%s: %d solution types (1 to %d)", kname,
                    ntype, PA_IO_GMF_MAX_TYPES);
   PA_ALLOC(type, ntype);
   for (int i = 0; i < ntype; i++) {
     PA_CALL(pa__gmf_word(g, &type[i]));
     if (type[i] == 4)
       PA_CALL(pa__gmf_error(g, pa__gmf_loc(g), PA_ERR_UNSUPPORTED,
-                            "SolAtVertices: full (non-symmetric) matrix "
-                            "solutions (type 4) are not supported"));
+                            "%s: full (non-symmetric) matrix solutions (type "
+                            "4) are not supported",
+                            kname));
     if (type[i] < 1 || type[i] > 3)
       PA_IO_GMF_FAIL(g, pa__gmf_loc(g),
-                     "SolAtVertices: solution type %d (1 "
-                     "scalar, 2 vector, 3 symmetric tensor)",
-                     type[i]);
+                     "%s: solution type %d (1 scalar, 2 vector, 3 symmetric "
+                     "tensor)",
+                     kname, type[i]);
     size += kind_ncomp(dim, type[i]);
   }
   PA_CALL(pa__gmf_check_room(g, n, size, 0));
-  if (!*sp) {
-    char where[600];
-    size_t len;
-    PA_CALL(pa_sol_create(dim, n, sp));
-    pa__gmf_where(g, loc, where, sizeof where);
-    len = strlen(where);
-    PA_ALLOC((*sp)->origin, len + 1);
-    memcpy((*sp)->origin, where, len + 1);
-  }
-  else if ((*sp)->nvert != n)
-    PA_IO_GMF_FAIL(g, loc, "SolAtVertices with %d vertices after one with %d",
-                   (int)n, (int)(*sp)->nvert);
+  pa__gmf_where(g, loc, where, sizeof where);
+  if (!*sp) PA_CALL(pa_sol_create(dim, 0, sp));
   pa_sol *s = *sp;
+  if (count[at] >= 0 && count[at] != n)
+    PA_IO_GMF_FAIL(g, loc, "%s with %d %s after one with %d", kname, (int)n,
+                   at_word[at], (int)count[at]);
+  if (count[at] < 0) {
+    count[at] = n;
+    if (at == PA_SOL_AT_VERTICES) {
+      s->nvert = n;
+      pa__free(s->origin);
+      s->origin = dup_string(where);
+      PA_CHECK(s->origin, PA_ERR_MEMORY, "out of memory");
+    }
+  }
   first = s->nfield;
   for (int i = 0; i < ntype; i++) {
     int k;
-    PA_CALL(add_empty(s, (pa_sol_kind)type[i], &k));
+    PA_CALL(add_empty(s, at, n, (pa_sol_kind)type[i], where, &k));
   }
   size_t chunk = pa__gmf_chunk(size, 0), m;
   for (size_t done = 0; done < (size_t)n; done += m) {
@@ -209,6 +283,7 @@ pa_status pa_sol_read(const char *path, pa_sol **sol) {
   pa_status st = PA_SUCCESS;
   pa__gmf *g = NULL;
   pa_sol *s = NULL;
+  pa_idx count[SOL_NAT] = {-1, -1, -1, -1};
   char ext[16];
   PA_CHECK(path && sol, PA_ERR_ARG, "pa_sol_read: NULL argument");
   *sol = NULL;
@@ -218,11 +293,13 @@ pa_status pa_sol_read(const char *path, pa_sol **sol) {
            path, ext);
   PA_CALL(pa__gmf_open(path, !strcmp(ext, ".solb"), &g));
   for (;;) {
-    int code;
+    int code, at = -1;
     PA_CALL(pa__gmf_next(g, &code));
     if (code == PA_IO_GMF_END) break;
-    if (code == PA_IO_GMF_SOL_AT_VERTICES)
-      PA_CALL(read_sol_at_vertices(g, &s));
+    for (int k = 0; k < SOL_NAT; k++)
+      if (code == at_code[k]) at = k;
+    if (at >= 0)
+      PA_CALL(read_sol_keyword(g, at, &s, count));
     else
       PA_CALL(pa__gmf_skip(g));
   }
@@ -230,10 +307,12 @@ pa_status pa_sol_read(const char *path, pa_sol **sol) {
     PA_IO_GMF_FAIL(g, pa__gmf_loc(g),
                    "missing Dimension keyword (not a Medit "
                    "solution file?)");
-  if (!s) PA_IO_GMF_FAIL(g, pa__gmf_loc(g), "no SolAtVertices keyword");
-  size_t len = strlen(path);
-  PA_ALLOC(s->path, len + 1);
-  memcpy(s->path, path, len + 1);
+  if (!s)
+    PA_IO_GMF_FAIL(g, pa__gmf_loc(g),
+                   "no SolAtVertices, SolAtEdges, SolAtTriangles nor "
+                   "SolAtTetrahedra keyword");
+  s->path = dup_string(path);
+  PA_CHECK(s->path, PA_ERR_MEMORY, "out of memory");
   *sol = s;
   s = NULL;
 cleanup:
@@ -245,7 +324,7 @@ cleanup:
 pa_status pa_sol_write(const pa_sol *sol, const char *path) {
   pa_status st = PA_SUCCESS;
   pa__gmfw *w = NULL;
-  int *type = NULL, size = 0;
+  int *type = NULL, *idx = NULL;
   double *rec = NULL;
   char ext[16];
   PA_CHECK(sol && path, PA_ERR_ARG, "pa_sol_write: NULL argument");
@@ -254,27 +333,43 @@ pa_status pa_sol_write(const pa_sol *sol, const char *path) {
            "%s: unknown solution file extension '%s' (expected .sol or .solb)",
            path, ext);
   PA_CHECK(sol->nfield > 0, PA_ERR_ARG, "%s: the solution has no field", path);
-  PA_CHECK(sol->nfield <= PA_IO_GMF_MAX_TYPES, PA_ERR_ARG,
-           "%s: at most %d fields per file", path, PA_IO_GMF_MAX_TYPES);
   PA_ALLOC(type, sol->nfield);
+  PA_ALLOC(idx, sol->nfield);
+  int64_t bytes = 0, maxsize = 1;
   for (int k = 0; k < sol->nfield; k++) {
-    type[k] = (int)sol->field[k].kind;
-    size += sol->field[k].ncomp;
+    bytes += (int64_t)sol->field[k].n * sol->field[k].ncomp * 8;
+    maxsize += sol->field[k].ncomp;
   }
-  PA_ALLOC(rec, size);
+  PA_ALLOC(rec, (size_t)maxsize);
   int binary = !strcmp(ext, ".solb");
-  int version = pa__gmf_default_version((int64_t)sol->nvert * size * 8);
-  PA_CALL(pa__gmfw_open(path, binary, version, sol->dim, &w));
-  PA_CALL(pa__gmfw_kwd(w, PA_IO_GMF_SOL_AT_VERTICES, sol->nvert, size, 0,
-                       sol->nfield, type));
-  for (pa_idx i = 0; i < sol->nvert; i++) {
-    double *p = rec;
-    for (int k = 0; k < sol->nfield; k++) {
-      int nc = sol->field[k].ncomp;
-      memcpy(p, sol->field[k].val + (size_t)i * nc, nc * sizeof(double));
-      p += nc;
+  PA_CALL(pa__gmfw_open(path, binary, pa__gmf_default_version(bytes), sol->dim,
+                        &w));
+  for (int at = 0; at < SOL_NAT; at++) {
+    int nt = 0, size = 0;
+    pa_idx n = 0;
+    for (int k = 0; k < sol->nfield; k++)
+      if (sol->field[k].at == at) {
+        PA_CHECK(nt == 0 || sol->field[k].n == n, PA_ERR_ARG,
+                 "%s: fields at %s with %d and %d values", path, at_word[at],
+                 (int)n, (int)sol->field[k].n);
+        n = sol->field[k].n;
+        idx[nt] = k;
+        type[nt++] = (int)sol->field[k].kind;
+        size += sol->field[k].ncomp;
+      }
+    if (!nt) continue;
+    PA_CHECK(nt <= PA_IO_GMF_MAX_TYPES, PA_ERR_ARG,
+             "%s: at most %d fields per place", path, PA_IO_GMF_MAX_TYPES);
+    PA_CALL(pa__gmfw_kwd(w, at_code[at], n, size, 0, nt, type));
+    for (pa_idx i = 0; i < n; i++) {
+      double *p = rec;
+      for (int j = 0; j < nt; j++) {
+        const sol_field *f = &sol->field[idx[j]];
+        memcpy(p, f->val + (size_t)i * f->ncomp, f->ncomp * sizeof(double));
+        p += f->ncomp;
+      }
+      PA_CALL(pa__gmfw_rec(w, rec, NULL));
     }
-    PA_CALL(pa__gmfw_rec(w, rec, NULL));
   }
   pa__gmfw *done = w;
   w = NULL;
@@ -282,6 +377,7 @@ pa_status pa_sol_write(const pa_sol *sol, const char *path) {
 cleanup:
   pa__gmfw_abort(w);
   pa__free(type);
+  pa__free(idx);
   pa__free(rec);
   return st;
 }
@@ -298,6 +394,9 @@ pa_status pa_mesh_metric_from_sol(pa_mesh *mesh, const pa_sol *sol, int k) {
   PA_CHECK(k >= 0 && k < sol->nfield, PA_ERR_ARG,
            "%s: no field %d (the solution has %d)", src, k, sol->nfield);
   const sol_field *f = &sol->field[k];
+  PA_CHECK(f->at == PA_SOL_AT_VERTICES, PA_ERR_ARG,
+           "%s: field %d is given at %s, not at vertices: not a metric",
+           f->origin ? f->origin : src, k + 1, at_word[f->at]);
   PA_CHECK(sol->nvert == mesh->nv, bad,
            "%s: %d vertices in the solution but %d in the mesh",
            sol->origin ? sol->origin : src, (int)sol->nvert, (int)mesh->nv);
@@ -307,6 +406,14 @@ pa_status pa_mesh_metric_from_sol(pa_mesh *mesh, const pa_sol *sol, int k) {
            src, k + 1);
   const double *values = f->val;
   int ncomp = f->ncomp;
+  PA_CHECK(sol->dim == mesh->dim ||
+               (sol->dim == 3 && mesh->dim == 2 && mesh->file_dim != 2),
+           bad,
+           "%s: a solution of Dimension %d for a %dD mesh (%s): give the "
+           "solution of this mesh",
+           src, sol->dim, mesh->dim,
+           mesh->file_dim == 2 ? "its file has Dimension 2"
+                               : "a 2D solution cannot hold a 3D metric");
   if (f->kind == PA_SOL_TENSOR && sol->dim != mesh->dim) {
     /* A planar mesh stored in 3D comes with 3D tensors: keep their xy block
      * when it is decoupled from z. */
@@ -359,5 +466,117 @@ pa_status pa_mesh_metric_to_sol(pa_mesh *mesh, int with_fields, pa_sol **sol) {
   s = NULL;
 cleanup:
   pa_sol_destroy(s);
+  return st;
+}
+
+/* The kind of a field of nc components in dimension dim, 0 for none. */
+static pa_sol_kind kind_of(int dim, int nc) {
+  return nc == 1                           ? PA_SOL_SCALAR
+         : nc == dim                       ? PA_SOL_VECTOR
+         : nc == pa__tensor_ncomp(dim)     ? PA_SOL_TENSOR
+                                           : (pa_sol_kind)0;
+}
+
+pa_status pa_mesh_fields_to_sol(pa_mesh *mesh, pa_sol **sol) {
+  pa_status st = PA_SUCCESS;
+  pa_sol *s = NULL;
+  double *tmp = NULL;
+  PA_CHECK(mesh && sol, PA_ERR_ARG, "pa_mesh_fields_to_sol: NULL argument");
+  *sol = NULL;
+  int d = mesh->dim;
+  PA_CHECK(mesh->nfield + mesh->nefield + mesh->nbfield > 0, PA_ERR_ARG,
+           "pa_mesh_fields_to_sol: the mesh has no field");
+  PA_CALL(pa_sol_create(d, mesh->nv, &s));
+  for (int at = PA_VERTEX; at <= PA_BOUNDARY; at++) {
+    int *nf;
+    const pa__field *f = pa__mesh_fields(mesh, at, &nf);
+    pa_idx n = at == PA_VERTEX ? mesh->nv : at == PA_ELEMENT ? mesh->ne : mesh->nb;
+    pa_sol_at where = at == PA_VERTEX    ? PA_SOL_AT_VERTICES
+                      : at == PA_ELEMENT ? (d == 2 ? PA_SOL_AT_TRIANGLES
+                                                   : PA_SOL_AT_TETRAHEDRA)
+                                         : (d == 2 ? PA_SOL_AT_EDGES
+                                                   : PA_SOL_AT_TRIANGLES);
+    for (int k = 0; k < *nf; k++) {
+      int nc = f[k].ncomp;
+      pa_sol_kind kind = kind_of(d, nc);
+      if (kind) {
+        PA_CALL(pa_sol_add_field_at(s, where, n, kind, f[k].val));
+        continue;
+      }
+      /* another count: that many scalars */
+      PA_ALLOC(tmp, (size_t)(n ? n : 1));
+      for (int c = 0; c < nc; c++) {
+        for (pa_idx i = 0; i < n; i++) tmp[i] = f[k].val[(size_t)nc * i + c];
+        PA_CALL(pa_sol_add_field_at(s, where, n, PA_SOL_SCALAR, tmp));
+      }
+      pa__free(tmp);
+      tmp = NULL;
+    }
+  }
+  *sol = s;
+  s = NULL;
+cleanup:
+  pa__free(tmp);
+  pa_sol_destroy(s);
+  return st;
+}
+
+pa_status pa_mesh_fields_from_sol(pa_mesh *mesh, const pa_sol *sol) {
+  static const char *const prefix[3] = {"field", "cell", "face"};
+  pa_status st = PA_SUCCESS;
+  int added[3] = {0, 0, 0};
+  char msg[1024];
+  PA_CHECK(mesh && sol, PA_ERR_ARG, "pa_mesh_fields_from_sol: NULL argument");
+  int d = mesh->dim;
+  const char *src = sol->path ? sol->path : "solution";
+  /* every field's place and count first: nothing is added on a mismatch */
+  for (int k = 0; k < sol->nfield; k++) {
+    const sol_field *f = &sol->field[k];
+    const char *org = f->origin ? f->origin : src;
+    int at = f->at == PA_SOL_AT_VERTICES ? PA_VERTEX
+             : f->at == PA_SOL_AT_EDGES ? (d == 2 ? PA_BOUNDARY : -1)
+             : f->at == PA_SOL_AT_TRIANGLES ? (d == 2 ? PA_ELEMENT : PA_BOUNDARY)
+                                            : (d == 3 ? PA_ELEMENT : -1);
+    PA_CHECK(at >= 0, PA_ERR_FORMAT,
+             "%s: values at %s do not fit a %dD mesh (%s)", org,
+             at_word[f->at], d,
+             d == 2 ? "its elements are triangles"
+                    : "values at feature edges are not read");
+    pa_idx n = at == PA_VERTEX ? mesh->nv : at == PA_ELEMENT ? mesh->ne : mesh->nb;
+    PA_CHECK(f->n == n, PA_ERR_FORMAT,
+             "%s: %d values per field at %s, but the mesh has %d %s", org,
+             (int)f->n, at_word[f->at], (int)n,
+             at == PA_VERTEX    ? "vertices"
+             : at == PA_ELEMENT ? (d == 2 ? "triangles" : "tetrahedra")
+                                : (d == 2 ? "boundary edges" : "boundary triangles"));
+    PA_CHECK(f->kind == PA_SOL_SCALAR || sol->dim == d, PA_ERR_FORMAT,
+             "%s: a %s field of a %dD solution on a %dD mesh", org,
+             f->kind == PA_SOL_VECTOR ? "vector" : "tensor", sol->dim, d);
+  }
+  for (int k = 0; k < sol->nfield; k++) {
+    const sol_field *f = &sol->field[k];
+    int at = f->at == PA_SOL_AT_VERTICES ? PA_VERTEX
+             : (f->at == PA_SOL_AT_TRIANGLES && d == 2) ||
+                     f->at == PA_SOL_AT_TETRAHEDRA
+                 ? PA_ELEMENT
+                 : PA_BOUNDARY;
+    char name[PA_MESH_FIELD_NAME_LEN];
+    snprintf(name, sizeof name, "%s%d", prefix[at],
+             pa_mesh_nfield_at(mesh, (pa_entity)at) + 1);
+    st = pa_mesh_add_field_at(mesh, (pa_entity)at, name, f->ncomp, f->val);
+    if (st != PA_SUCCESS) {
+      snprintf(msg, sizeof msg, "%s", pa_last_error());
+      st = pa__error(st, __FILE__, __LINE__, "%s: %s",
+                     f->origin ? f->origin : src, msg);
+      goto cleanup;
+    }
+    added[at]++;
+  }
+cleanup:
+  if (st != PA_SUCCESS && mesh)
+    for (int at = 0; at < 3; at++)
+      while (added[at]--)
+        pa_mesh_remove_field_at(mesh, (pa_entity)at,
+                                pa_mesh_nfield_at(mesh, (pa_entity)at) - 1);
   return st;
 }

@@ -16,7 +16,10 @@
  *    its axes are the sizes asked for along its principal directions; every
  *    user field under its own name and component count; "ref" (Int32) the
  *    vertex references.
- *  - CellData: "ref" (Int32) the references of every cell; "entity" (UInt8)
+ *  - CellData: every element and boundary field under its own name and
+ *    component count (Float64; NaN on the cells it is not on; an element
+ *    and a boundary field of one name and size share one array); "ref"
+ *    (Int32) the references of every cell; "entity" (UInt8)
  *    0 element, 1 boundary entity, 2 feature edge (ParaView's Threshold
  *    selects one kind); "quality" (Float64, pa_mesh_elem_quality; NaN on
  *    boundary entities and edges); with opts->diagnostics, "edge_min" and
@@ -161,8 +164,12 @@ enum {
 /* The file's arrays and the order of their blocks: order[0, npoint) the
  * point data, the next ncelld the cell data, then points and cells. */
 typedef struct vtu_layout {
-  vtu_array arr[A_FIELD + PA_MESH_MAX_FIELDS];
-  int order[A_FIELD + PA_MESH_MAX_FIELDS];
+  vtu_array arr[A_FIELD + 3 * PA_MESH_MAX_FIELDS];
+  int order[A_FIELD + 3 * PA_MESH_MAX_FIELDS];
+  /* cell array j (A_FIELD + PA_MESH_MAX_FIELDS + j): its element field
+   * and boundary field (-1 for none) */
+  int cfield[2 * PA_MESH_MAX_FIELDS][2];
+  int ncfield;
   int no, npoint, ncelld;
   uint64_t nv, ne, nb, nd, ncell; /* nd: feature edges, 0 in 2D */
   int diag;
@@ -206,6 +213,32 @@ static void layout_arrays(const pa_mesh *m, int diag, const pa__vtu_extra *x,
                                    NULL,
                                    8 * nv * (uint64_t)m->field[k].ncomp,
                                    0};
+  /* element and boundary fields: one array per name and size */
+  lay->ncfield = 0;
+  for (int k = 0; k < m->nefield; k++) {
+    int j = lay->ncfield++;
+    lay->cfield[j][0] = k;
+    lay->cfield[j][1] = -1;
+    for (int b = 0; b < m->nbfield && lay->cfield[j][1] < 0; b++)
+      if (!strcmp(m->bfield[b].name, m->efield[k].name) &&
+          m->bfield[b].ncomp == m->efield[k].ncomp)
+        lay->cfield[j][1] = b;
+  }
+  for (int b = 0; b < m->nbfield; b++) {
+    int taken = 0;
+    for (int j = 0; j < lay->ncfield; j++) taken |= lay->cfield[j][1] == b;
+    if (taken) continue;
+    int j = lay->ncfield++;
+    lay->cfield[j][0] = -1;
+    lay->cfield[j][1] = b;
+  }
+  for (int j = 0; j < lay->ncfield; j++) {
+    const pa__field *f = lay->cfield[j][0] >= 0 ? &m->efield[lay->cfield[j][0]]
+                                                : &m->bfield[lay->cfield[j][1]];
+    arr[A_FIELD + PA_MESH_MAX_FIELDS + j] =
+        (vtu_array){f->name, "Float64", f->ncomp, NULL,
+                    8 * ncell * (uint64_t)f->ncomp, 0};
+  }
   /* Appended order: point data, cell data, points, cells. */
   int no = 0;
   if (m->met_ncomp) order[no++] = A_MET, order[no++] = A_SIZE;
@@ -214,6 +247,7 @@ static void layout_arrays(const pa_mesh *m, int diag, const pa__vtu_extra *x,
   if (x && x->vgid) order[no++] = A_VGID;
   if (x && x->vghost) order[no++] = A_VGHOST;
   lay->npoint = no;
+  for (int j = 0; j < lay->ncfield; j++) order[no++] = A_FIELD + PA_MESH_MAX_FIELDS + j;
   order[no++] = A_REF;
   order[no++] = A_ENT;
   order[no++] = A_QUAL;
@@ -319,12 +353,35 @@ static void write_quality(FILE *fp, pa_mesh *m, const vtu_layout *lay,
   }
 }
 
-/* The cell data blocks: references, entity kinds, quality (and
- * diagnostics), then a rank file's rank and gid (u8: VTU_CHUNK bytes). */
+/* The values of field f (NULL: NaN) on n cells, as a part of a block
+ * (f64: 9 VTU_CHUNK doubles). */
+static void put_cell_values(FILE *fp, const pa__field *f, int nc, uint64_t n,
+                            double *f64) {
+  if (f) {
+    if (n) fwrite(f->val, sizeof(double) * (size_t)nc, (size_t)n, fp);
+    return;
+  }
+  for (size_t k = 0; k < 9 * VTU_CHUNK; k++) f64[k] = NAN;
+  uint64_t per = 9 * VTU_CHUNK / (uint64_t)nc;
+  for (uint64_t c = 0; c < n; c += per)
+    fwrite(f64, sizeof(double) * (size_t)nc, (size_t)(n - c < per ? n - c : per), fp);
+}
+
+/* The cell data blocks: element and boundary fields, references, entity
+ * kinds, quality (and diagnostics), then a rank file's rank and gid (u8:
+ * VTU_CHUNK bytes). */
 static void write_cell_data(FILE *fp, pa_mesh *m, const pa__vtu_extra *x,
                             const vtu_layout *lay, double *f64, uint8_t *u8) {
   const vtu_array *arr = lay->arr;
   uint64_t ne = lay->ne, nb = lay->nb, nd = lay->nd, ncell = lay->ncell;
+  for (int j = 0; j < lay->ncfield; j++) {
+    const vtu_array *a = &arr[A_FIELD + PA_MESH_MAX_FIELDS + j];
+    int ke = lay->cfield[j][0], kb = lay->cfield[j][1];
+    fwrite(&a->nbytes, 8, 1, fp);
+    put_cell_values(fp, ke >= 0 ? &m->efield[ke] : NULL, a->ncomp, ne, f64);
+    put_cell_values(fp, kb >= 0 ? &m->bfield[kb] : NULL, a->ncomp, nb, f64);
+    put_cell_values(fp, NULL, a->ncomp, nd, f64);
+  }
   fwrite(&arr[A_REF].nbytes, 8, 1, fp);
   if (ne) fwrite(m->eref, 4, (size_t)ne, fp);
   if (nb) fwrite(m->bref, 4, (size_t)nb, fp);

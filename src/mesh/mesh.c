@@ -6,6 +6,9 @@
  *
  * Vertex-attached arrays (coord, vref, vflag, met, field values) always share
  * the capacity capv; every growth goes through pa__mesh_grow_vertices().
+ * Element fields share cape with the element arrays and boundary fields
+ * capb with the boundary arrays: grow_cells and pa__mesh_fields_realloc
+ * keep them in step.
  */
 #include "mesh/mesh.h"
 
@@ -51,6 +54,12 @@ void pa__mesh_drop_cells(pa_mesh *mesh) {
   pa__free(mesh->edflag);
   pa__free(mesh->met);
   for (int k = 0; k < mesh->nfield; k++) pa__free(mesh->field[k].val);
+  for (int k = 0; k < mesh->nefield; k++) pa__free(mesh->efield[k].val);
+  for (int k = 0; k < mesh->nbfield; k++) pa__free(mesh->bfield[k].val);
+  memset(mesh->field, 0, sizeof mesh->field);
+  memset(mesh->efield, 0, sizeof mesh->efield);
+  memset(mesh->bfield, 0, sizeof mesh->bfield);
+  mesh->nefield = mesh->nbfield = 0;
   mesh->elem = mesh->bdry = mesh->edge = NULL;
   mesh->eref = mesh->bref = mesh->edref = NULL;
   mesh->eflag = mesh->bflag = mesh->edflag = NULL;
@@ -114,16 +123,93 @@ cleanup:
   return st;
 }
 
+pa__field *pa__mesh_fields(pa_mesh *m, int at, int **count) {
+  switch (at) {
+  case PA_VERTEX:
+    if (count) *count = &m->nfield;
+    return m->field;
+  case PA_ELEMENT:
+    if (count) *count = &m->nefield;
+    return m->efield;
+  case PA_BOUNDARY:
+    if (count) *count = &m->nbfield;
+    return m->bfield;
+  default:
+    return NULL;
+  }
+}
+
+int pa__transfer_default(int at) {
+  return at == PA_VERTEX    ? PA_TRANSFER_LINEAR
+         : at == PA_ELEMENT ? PA_TRANSFER_CONSERVATIVE
+                            : PA_TRANSFER_NEAREST;
+}
+
+pa_status pa__mesh_fields_realloc(pa_mesh *m, int at, size_t cap) {
+  pa_status st = PA_SUCCESS;
+  int *n;
+  pa__field *f = pa__mesh_fields(m, at, &n);
+  for (int k = 0; k < *n; k++)
+    PA_CALL(grow_array((void **)&f[k].val, cap * f[k].ncomp, sizeof(double)));
+cleanup:
+  return st;
+}
+
+/* The element (boundary) arrays and fields grown to n entities. */
+static pa_status grow_elems(pa_mesh *m, size_t n) {
+  pa_status st = PA_SUCCESS;
+  size_t cap = m->cape;
+  PA_CALL(grow_cells(&m->elem, &m->eref, &m->eflag, &m->cape, n, m->dim + 1));
+  if (m->cape != cap) PA_CALL(pa__mesh_fields_realloc(m, PA_ELEMENT, m->cape));
+cleanup:
+  return st;
+}
+
+static pa_status grow_bdrys(pa_mesh *m, size_t n) {
+  pa_status st = PA_SUCCESS;
+  size_t cap = m->capb;
+  PA_CALL(grow_cells(&m->bdry, &m->bref, &m->bflag, &m->capb, n, m->dim));
+  if (m->capb != cap) PA_CALL(pa__mesh_fields_realloc(m, PA_BOUNDARY, m->capb));
+cleanup:
+  return st;
+}
+
+void pa__mesh_zero_values(pa_mesh *m, int at, size_t i0, size_t i1) {
+  int *n;
+  pa__field *f = pa__mesh_fields(m, at, &n);
+  for (int k = 0; k < *n && i1 > i0; k++)
+    memset(f[k].val + i0 * f[k].ncomp, 0, (i1 - i0) * f[k].ncomp * sizeof(double));
+}
+
+void pa__mesh_copy_values(pa_mesh *m, int at, pa_idx from, pa_idx to) {
+  int *n;
+  pa__field *f = pa__mesh_fields(m, at, &n);
+  for (int k = 0; k < *n; k++) {
+    size_t nc = (size_t)f[k].ncomp;
+    memcpy(f[k].val + nc * to, f[k].val + nc * from, nc * sizeof(double));
+  }
+}
+
+void pa__mesh_move_cell_fields(pa_mesh *dst, pa_mesh *src) {
+  for (int k = 0; k < dst->nefield; k++) pa__free(dst->efield[k].val);
+  for (int k = 0; k < dst->nbfield; k++) pa__free(dst->bfield[k].val);
+  memcpy(dst->efield, src->efield, sizeof dst->efield);
+  memcpy(dst->bfield, src->bfield, sizeof dst->bfield);
+  dst->nefield = src->nefield;
+  dst->nbfield = src->nbfield;
+  memset(src->efield, 0, sizeof src->efield);
+  memset(src->bfield, 0, sizeof src->bfield);
+  src->nefield = src->nbfield = 0;
+}
+
 pa_status pa_mesh_reserve(pa_mesh *m, pa_idx nvert, pa_idx nelem, pa_idx nbdry,
                           pa_idx nedge) {
   pa_status st = PA_SUCCESS;
   PA_CHECK(m && nvert >= 0 && nelem >= 0 && nbdry >= 0 && nedge >= 0,
            PA_ERR_ARG, "pa_mesh_reserve: invalid arguments");
   PA_CALL(pa__mesh_grow_vertices(m, (size_t)nvert));
-  PA_CALL(grow_cells(&m->elem, &m->eref, &m->eflag, &m->cape, (size_t)nelem,
-                     m->dim + 1));
-  PA_CALL(grow_cells(&m->bdry, &m->bref, &m->bflag, &m->capb, (size_t)nbdry,
-                     m->dim));
+  PA_CALL(grow_elems(m, (size_t)nelem));
+  PA_CALL(grow_bdrys(m, (size_t)nbdry));
   PA_CALL(grow_cells(&m->edge, &m->edref, &m->edflag, &m->caped,
                      (size_t)nedge, 2));
 cleanup:
@@ -168,6 +254,8 @@ pa_status pa_mesh_resize(pa_mesh *m, pa_idx nvert, pa_idx nelem, pa_idx nbdry,
              d * m->field[k].ncomp * sizeof(double));
   }
   m->nv = nvert;
+  if (nelem > m->ne) pa__mesh_zero_values(m, PA_ELEMENT, (size_t)m->ne, (size_t)nelem);
+  if (nbdry > m->nb) pa__mesh_zero_values(m, PA_BOUNDARY, (size_t)m->nb, (size_t)nbdry);
   PA_CALL(resize_cells(&m->elem, &m->eref, &m->eflag, &m->cape, &m->ne, nelem,
                        m->dim + 1));
   PA_CALL(resize_cells(&m->bdry, &m->bref, &m->bflag, &m->capb, &m->nb, nbdry,
@@ -219,16 +307,28 @@ cleanup:
 
 pa_status pa_mesh_add_elem(pa_mesh *m, const pa_idx *v, int32_t ref,
                            pa_idx *index) {
-  if (!m) return pa__error(PA_ERR_ARG, __FILE__, __LINE__, "NULL mesh");
-  return add_cell(m, &m->elem, &m->eref, &m->eflag, &m->cape, &m->ne,
-                  m->dim + 1, v, ref, index);
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(m, PA_ERR_ARG, "NULL mesh");
+  if ((size_t)m->ne + 1 > m->cape && m->ne < INT32_MAX)
+    PA_CALL(grow_elems(m, (size_t)m->ne + 1));
+  PA_CALL(add_cell(m, &m->elem, &m->eref, &m->eflag, &m->cape, &m->ne,
+                   m->dim + 1, v, ref, index));
+  pa__mesh_zero_values(m, PA_ELEMENT, (size_t)m->ne - 1, (size_t)m->ne);
+cleanup:
+  return st;
 }
 
 pa_status pa_mesh_add_bdry(pa_mesh *m, const pa_idx *v, int32_t ref,
                            pa_idx *index) {
-  if (!m) return pa__error(PA_ERR_ARG, __FILE__, __LINE__, "NULL mesh");
-  return add_cell(m, &m->bdry, &m->bref, &m->bflag, &m->capb, &m->nb, m->dim,
-                  v, ref, index);
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(m, PA_ERR_ARG, "NULL mesh");
+  if ((size_t)m->nb + 1 > m->capb && m->nb < INT32_MAX)
+    PA_CALL(grow_bdrys(m, (size_t)m->nb + 1));
+  PA_CALL(add_cell(m, &m->bdry, &m->bref, &m->bflag, &m->capb, &m->nb, m->dim,
+                   v, ref, index));
+  pa__mesh_zero_values(m, PA_BOUNDARY, (size_t)m->nb - 1, (size_t)m->nb);
+cleanup:
+  return st;
 }
 
 pa_status pa_mesh_add_edge(pa_mesh *m, const pa_idx *v, int32_t ref,
@@ -262,35 +362,76 @@ int pa_mesh_metric_ncomp(const pa_mesh *m) { return m->met_ncomp; }
 double *pa_mesh_metric(pa_mesh *m) { return m->met_ncomp ? m->met : NULL; }
 int pa_mesh_nfield(const pa_mesh *m) { return m->nfield; }
 
-pa_status pa_mesh_field(pa_mesh *m, int k, const char **name, int *ncomp,
-                        double **values) {
+/* Entities of kind at in m. */
+static pa_idx entity_count(const pa_mesh *m, int at) {
+  return at == PA_VERTEX ? m->nv : at == PA_ELEMENT ? m->ne : m->nb;
+}
+
+/* Room for entities of kind at in m. */
+static size_t entity_cap(const pa_mesh *m, int at) {
+  return at == PA_VERTEX ? m->capv : at == PA_ELEMENT ? m->cape : m->capb;
+}
+
+static const char *const entity_word[] = {"vertex", "element",
+                                          "boundary entity"};
+
+int pa_mesh_nfield_at(const pa_mesh *m, pa_entity at) {
+  int *n;
+  if (!m || !pa__mesh_fields((pa_mesh *)m, at, &n)) return 0;
+  return *n;
+}
+
+pa_status pa_mesh_field_at(pa_mesh *m, pa_entity at, int k, const char **name,
+                           int *ncomp, double **values) {
   pa_status st = PA_SUCCESS;
-  PA_CHECK(m && k >= 0 && k < m->nfield, PA_ERR_ARG,
-           "pa_mesh_field: no field %d", k);
-  if (name) *name = m->field[k].name;
-  if (ncomp) *ncomp = m->field[k].ncomp;
-  if (values) *values = m->field[k].val;
+  int *n = NULL;
+  pa__field *f = m ? pa__mesh_fields(m, at, &n) : NULL;
+  PA_CHECK(f && k >= 0 && k < *n, PA_ERR_ARG, "pa_mesh_field: no field %d", k);
+  if (name) *name = f[k].name;
+  if (ncomp) *ncomp = f[k].ncomp;
+  if (values) *values = f[k].val;
 cleanup:
   return st;
 }
 
-pa_status pa_mesh_add_field(pa_mesh *m, const char *name, int ncomp,
-                            const double *values) {
+pa_status pa_mesh_field(pa_mesh *m, int k, const char **name, int *ncomp,
+                        double **values) {
+  return pa_mesh_field_at(m, PA_VERTEX, k, name, ncomp, values);
+}
+
+int pa_mesh_field_index(const pa_mesh *m, pa_entity at, const char *name) {
+  int *n;
+  const pa__field *f = m && name ? pa__mesh_fields((pa_mesh *)m, at, &n) : NULL;
+  for (int k = 0; f && k < *n; k++)
+    if (!strncmp(f[k].name, name, PA_MESH_FIELD_NAME_LEN - 1)) return k;
+  return -1;
+}
+
+pa_status pa_mesh_add_field_at(pa_mesh *m, pa_entity at, const char *name,
+                               int ncomp, const double *values) {
   pa_status st = PA_SUCCESS;
   double *val = NULL;
+  int *n = NULL;
+  pa__field *fl = m ? pa__mesh_fields(m, at, &n) : NULL;
   PA_CHECK(m && name && ncomp > 0, PA_ERR_ARG, "pa_mesh_add_field: bad arguments");
-  PA_CHECK(m->nfield < PA_MESH_MAX_FIELDS, PA_ERR_ARG,
-           "a mesh holds at most %d fields", PA_MESH_MAX_FIELDS);
-  PA_CHECK(values || m->nv == 0, PA_ERR_ARG, "pa_mesh_add_field: NULL values");
-  for (size_t i = 0; i < (size_t)m->nv * ncomp; i++)
+  PA_CHECK(fl, PA_ERR_ARG,
+           "pa_mesh_add_field: fields live on vertices, elements or boundary "
+           "entities (kind %d)", (int)at);
+  PA_CHECK(*n < PA_MESH_MAX_FIELDS, PA_ERR_ARG,
+           "a mesh holds at most %d fields per kind of entity",
+           PA_MESH_MAX_FIELDS);
+  size_t ne = (size_t)entity_count(m, at), cap = entity_cap(m, at);
+  PA_CHECK(values || ne == 0, PA_ERR_ARG, "pa_mesh_add_field: NULL values");
+  for (size_t i = 0; i < ne * ncomp; i++)
     PA_CHECK(isfinite(values[i]), PA_ERR_ARG,
-             "field '%s': value at vertex %zu is not finite", name,
+             "field '%s': value at %s %zu is not finite", name, entity_word[at],
              i / ncomp + 1);
-  PA_ALLOC(val, (m->capv ? m->capv : 1) * ncomp);
-  if (m->nv) memcpy(val, values, (size_t)m->nv * ncomp * sizeof(double));
-  pa__field *f = &m->field[m->nfield++];
+  PA_ALLOC(val, (cap > ne ? cap : ne ? ne : 1) * ncomp);
+  if (ne) memcpy(val, values, ne * ncomp * sizeof(double));
+  pa__field *f = &fl[(*n)++];
   snprintf(f->name, sizeof f->name, "%s", name);
   f->ncomp = ncomp;
+  f->transfer = pa__transfer_default(at);
   f->val = val;
   val = NULL;
 cleanup:
@@ -298,14 +439,91 @@ cleanup:
   return st;
 }
 
-pa_status pa_mesh_remove_field(pa_mesh *m, int k) {
+pa_status pa_mesh_add_field(pa_mesh *m, const char *name, int ncomp,
+                            const double *values) {
+  return pa_mesh_add_field_at(m, PA_VERTEX, name, ncomp, values);
+}
+
+pa_status pa_mesh_remove_field_at(pa_mesh *m, pa_entity at, int k) {
   pa_status st = PA_SUCCESS;
-  PA_CHECK(m && k >= 0 && k < m->nfield, PA_ERR_ARG,
+  int *n = NULL;
+  pa__field *f = m ? pa__mesh_fields(m, at, &n) : NULL;
+  PA_CHECK(f && k >= 0 && k < *n, PA_ERR_ARG,
            "pa_mesh_remove_field: no field %d", k);
-  pa__free(m->field[k].val);
-  for (int f = k; f + 1 < m->nfield; f++) m->field[f] = m->field[f + 1];
-  m->nfield--;
-  memset(&m->field[m->nfield], 0, sizeof m->field[0]);
+  pa__free(f[k].val);
+  for (int j = k; j + 1 < *n; j++) f[j] = f[j + 1];
+  (*n)--;
+  memset(&f[*n], 0, sizeof f[0]);
+cleanup:
+  return st;
+}
+
+pa_status pa_mesh_remove_field(pa_mesh *m, int k) {
+  return pa_mesh_remove_field_at(m, PA_VERTEX, k);
+}
+
+/* The modes each kind of entity takes, and their list for messages. */
+static int transfer_ok(int at, int mode) {
+  if (at == PA_VERTEX) return mode == PA_TRANSFER_LINEAR;
+  if (at == PA_BOUNDARY) return mode == PA_TRANSFER_NEAREST;
+  return mode == PA_TRANSFER_CONSERVATIVE || mode == PA_TRANSFER_BOUNDED ||
+         mode == PA_TRANSFER_NEAREST;
+}
+static const char *const transfer_list[] = {
+    "linear (the default and only mode of vertex fields)",
+    "conservative (the default), bounded or nearest",
+    "nearest (the default and only mode of boundary fields)"};
+
+pa_status pa_mesh_set_field_transfer(pa_mesh *m, pa_entity at, int k,
+                                     pa_transfer mode) {
+  pa_status st = PA_SUCCESS;
+  int *n = NULL;
+  pa__field *f = m ? pa__mesh_fields(m, at, &n) : NULL;
+  PA_CHECK(f && k >= 0 && k < *n, PA_ERR_ARG,
+           "pa_mesh_set_field_transfer: no field %d", k);
+  if (mode == PA_TRANSFER_DEFAULT) mode = (pa_transfer)pa__transfer_default(at);
+  PA_CHECK(transfer_ok(at, mode), PA_ERR_ARG,
+           "field '%s': transfer mode '%s' does not apply to a field on %s; "
+           "valid: %s", f[k].name, pa_transfer_name(mode),
+           at == PA_VERTEX ? "vertices" : at == PA_ELEMENT ? "elements"
+                                                           : "boundary entities",
+           transfer_list[at]);
+  f[k].transfer = (int)mode;
+cleanup:
+  return st;
+}
+
+pa_transfer pa_mesh_field_transfer(const pa_mesh *m, pa_entity at, int k) {
+  int *n;
+  const pa__field *f = m ? pa__mesh_fields((pa_mesh *)m, at, &n) : NULL;
+  if (!f || k < 0 || k >= *n) return PA_TRANSFER_DEFAULT;
+  return (pa_transfer)f[k].transfer;
+}
+
+static const char *const transfer_names[] = {"default", "linear", "conservative",
+                                             "bounded", "nearest"};
+
+const char *pa_transfer_name(pa_transfer mode) {
+  return (int)mode >= 0 && (int)mode <= PA_TRANSFER_NEAREST
+             ? transfer_names[mode]
+             : "?";
+}
+
+pa_status pa_transfer_parse(const char *name, pa_transfer *mode) {
+  pa_status st = PA_SUCCESS;
+  PA_CHECK(name && mode, PA_ERR_ARG, "pa_transfer_parse: NULL argument");
+  for (int k = 0; k <= PA_TRANSFER_NEAREST; k++)
+    if (!strcmp(name, transfer_names[k])) {
+      *mode = (pa_transfer)k;
+      return PA_SUCCESS;
+    }
+  if (!strcmp(name, "copy")) {
+    *mode = PA_TRANSFER_NEAREST;
+    return PA_SUCCESS;
+  }
+  PA_FAIL(PA_ERR_ARG,
+          "unknown transfer mode '%s' (valid: linear, conservative, bounded, "
+          "nearest or copy, default)", name);
 cleanup:
   return st;
 }
@@ -415,11 +633,17 @@ pa_status pa_mesh_copy(const pa_mesh *src, pa_mesh **dst) {
   pa_mesh *m = NULL;
   PA_CHECK(src && dst, PA_ERR_ARG, "pa_mesh_copy: NULL argument");
   PA_CALL(pa_mesh_create(src->dim, &m));
+  m->file_dim = src->file_dim;
   m->met_ncomp = src->met_ncomp;
-  m->nfield = src->nfield;
-  for (int k = 0; k < src->nfield; k++) {
-    snprintf(m->field[k].name, sizeof m->field[k].name, "%s", src->field[k].name);
-    m->field[k].ncomp = src->field[k].ncomp;
+  for (int at = PA_VERTEX; at <= PA_BOUNDARY; at++) {
+    int *sn, *dn;
+    const pa__field *sf = pa__mesh_fields((pa_mesh *)src, at, &sn);
+    pa__field *df = pa__mesh_fields(m, at, &dn);
+    *dn = *sn;
+    for (int k = 0; k < *sn; k++) {
+      df[k] = sf[k];
+      df[k].val = NULL;
+    }
   }
   PA_CALL(pa_mesh_reserve(m, src->nv, src->ne, src->nb, src->ned));
   int d = src->dim;
@@ -450,6 +674,12 @@ pa_status pa_mesh_copy(const pa_mesh *src, pa_mesh **dst) {
   for (int k = 0; k < src->nfield; k++)
     COPY_ARRAY(m->field[k].val, src->field[k].val,
                (size_t)src->field[k].ncomp * src->nv);
+  for (int k = 0; k < src->nefield; k++)
+    COPY_ARRAY(m->efield[k].val, src->efield[k].val,
+               (size_t)src->efield[k].ncomp * src->ne);
+  for (int k = 0; k < src->nbfield; k++)
+    COPY_ARRAY(m->bfield[k].val, src->bfield[k].val,
+               (size_t)src->bfield[k].ncomp * src->nb);
 #undef COPY_ARRAY
   PA_CALL(pa__mesh_copy_names(m, src));
   *dst = m;
@@ -469,6 +699,8 @@ size_t pa_mesh_memory_used(const pa_mesh *m) {
   for (size_t i = 0; i < sizeof blocks / sizeof *blocks; i++)
     n += pa__alloc_size(blocks[i]);
   for (int k = 0; k < m->nfield; k++) n += pa__alloc_size(m->field[k].val);
+  for (int k = 0; k < m->nefield; k++) n += pa__alloc_size(m->efield[k].val);
+  for (int k = 0; k < m->nbfield; k++) n += pa__alloc_size(m->bfield[k].val);
   n += pa__alloc_size(m->names);
   for (int k = 0; k < m->nname; k++)
     n += pa__alloc_size(m->names[k].name);

@@ -7,22 +7,30 @@
  *  - derived structures (adja, ball_start/ball) are either NULL or valid for
  *    the current elements: anything that changes elements or vertices must call
  *    pa__mesh_invalidate();
- *  - the metric and fields have one value block per vertex (grown with the
- *    vertices, contents of new vertices set by whoever adds them).
+ *  - the metric and vertex fields have one value block per vertex (grown
+ *    with the vertices, contents of new vertices set by whoever adds them);
+ *    element fields one per element, with room for cape elements, and
+ *    boundary fields one per boundary entity, room for capb: every growth
+ *    of the elements or boundary entities grows their fields, and code
+ *    that installs element or boundary arrays of its own (a reader, a
+ *    remesher's write-back) does so on a mesh without such fields
+ *    (pa_remesh holds them aside while the remesher runs).
  */
 #ifndef PA_MESH_H
 #define PA_MESH_H
 
 #include "core/core.h"
 
-/* Most user vertex fields of a mesh, and the longest name of one. */
+/* Most user fields of a mesh on one kind of entity, and the longest name
+ * of one. */
 #define PA_MESH_MAX_FIELDS 16
 #define PA_MESH_FIELD_NAME_LEN 64
 
 typedef struct pa__field {
   char name[PA_MESH_FIELD_NAME_LEN];
   int ncomp;
-  double *val; /* capv * ncomp */
+  int transfer; /* pa_transfer, never PA_TRANSFER_DEFAULT */
+  double *val;  /* (capv, cape or capb) * ncomp */
 } pa__field;
 
 /* A physical name (Gmsh $PhysicalNames): the name of the entities of
@@ -35,6 +43,10 @@ typedef struct pa__name {
 
 struct pa_mesh {
   int dim; /* 2 or 3 */
+  /* the Dimension of the file it was read from (3 for a planar mesh stored
+   * in 3D, and for Gmsh files), 0 when built in memory: which solution
+   * files fit it (pa_mesh_metric_from_sol) */
+  int file_dim;
 
   /* vertices */
   pa_idx nv;
@@ -68,9 +80,13 @@ struct pa_mesh {
   int met_ncomp;
   double *met;     /* met_ncomp * capv */
 
-  /* user vertex fields */
+  /* user fields: on vertices, on elements, on boundary entities */
   int nfield;
   pa__field field[PA_MESH_MAX_FIELDS];
+  int nefield;
+  pa__field efield[PA_MESH_MAX_FIELDS];
+  int nbfield;
+  pa__field bfield[PA_MESH_MAX_FIELDS];
 
   /* physical names, sorted by (dim, tag), each (dim, tag) once */
   int nname;
@@ -90,6 +106,26 @@ void pa__mesh_free_names(pa_mesh *mesh);
 /* Replace the physical names of dst by copies of those of src. */
 pa_status pa__mesh_copy_names(pa_mesh *dst, const pa_mesh *src);
 
+/* The fields of mesh on entities at (PA_VERTEX, PA_ELEMENT or
+ * PA_BOUNDARY; NULL for another kind) and, in *count, where their number
+ * is kept. */
+pa__field *pa__mesh_fields(pa_mesh *mesh, int at, int **count);
+/* The mode a field on entities at gets for PA_TRANSFER_DEFAULT. */
+int pa__transfer_default(int at);
+/* Entity `to` of kind at (PA_ELEMENT or PA_BOUNDARY) takes the field values
+ * of entity `from` (a piece of it made by a bisection). */
+void pa__mesh_copy_values(pa_mesh *mesh, int at, pa_idx from, pa_idx to);
+/* Zero the values of entities [i0, i1) (room reserved) of the fields of
+ * mesh on entities at. */
+void pa__mesh_zero_values(pa_mesh *mesh, int at, size_t i0, size_t i1);
+/* Move the element and boundary fields of src into dst (whose own are
+ * freed first), leaving src without any: the arrays are dst's now, sized
+ * for src's capacities (the caller sizes them for dst's). */
+void pa__mesh_move_cell_fields(pa_mesh *dst, pa_mesh *src);
+/* Reallocate the element (at PA_ELEMENT) or boundary fields of mesh to
+ * room for cap entities (contents kept up to the smaller size). */
+pa_status pa__mesh_fields_realloc(pa_mesh *mesh, int at, size_t cap);
+
 /* Free derived structures after a topological change. */
 void pa__mesh_invalidate(pa_mesh *mesh);
 /* Free the elements, boundary entities, edges, metric and fields (and the
@@ -101,6 +137,15 @@ void pa__mesh_drop_cells(pa_mesh *mesh);
  * only a user's input must meet (manifold vertices, no two vertices at one
  * point): a piece of the parallel loop may touch itself at a vertex. */
 pa_status pa__mesh_check(pa_mesh *mesh, int input);
+/* The part of pa__mesh_check a rank's part of a distributed mesh must meet
+ * too (its faces on the partition's interfaces are not boundary entities):
+ * indices, coordinates, every vertex used, orientation, conformity, and
+ * neighbours on opposite sides of their faces (no element listed twice). */
+pa_status pa__mesh_check_elements(pa_mesh *mesh);
+/* No folded or overlapping elements around a vertex (2D) or an edge and a
+ * boundary vertex (3D) (overlap.c); needs the adjacency and the balls
+ * built. Part of pa__mesh_check for input meshes. */
+pa_status pa__mesh_check_overlap(const pa_mesh *mesh);
 
 /* Number of metric components of a full tensor in dimension dim (3 or 6). */
 static inline int pa__tensor_ncomp(int dim) { return dim == 2 ? 3 : 6; }

@@ -264,6 +264,13 @@ adja_compute_dim(const pa_mesh *m, const int dim, pa_idx **out) {
       } else {
         char face[64];
         uint64_t key = rec[k].key;
+        /* two of them with the same opposite vertex: one element twice */
+        for (pa_idx a = k; a < k1; a++)
+          for (pa_idx b = a + 1; b < k1; b++)
+            PA_CHECK(m->elem[rec[a].code] != m->elem[rec[b].code], PA_ERR_MESH,
+                     "elements %d and %d have the same vertices (a "
+                     "duplicated element): remove one",
+                     (int)(rec[a].code / nf) + 1, (int)(rec[b].code / nf) + 1);
         if (dim == 2)
           snprintf(face, sizeof face, "%d %d", (int)v + 1, (int)key + 1);
         else
@@ -519,6 +526,7 @@ pa_status pa_mesh_build_boundary(pa_mesh *mesh, int32_t ref, pa_idx *nadded) {
     nb++;
   }
   PA_ASSERT(nb == mesh->nb + nadd);
+  pa__mesh_zero_values(mesh, PA_BOUNDARY, (size_t)mesh->nb, (size_t)nb);
   mesh->nb = nb;
   /* Elements are unchanged, so adjacency and balls stay valid. */
   pa__free(mesh->bhash);
@@ -684,6 +692,31 @@ cleanup:
   return st;
 }
 
+/* Vertices but no element: say what the file is (a boundary or surface
+ * mesh), rather than that its first vertex is in no element. */
+static pa_status check_has_elements(const pa_mesh *m) {
+  pa_status st = PA_SUCCESS;
+  if (m->ne > 0 || m->nv == 0) return PA_SUCCESS;
+  if (m->nb == 0)
+    PA_FAIL(PA_ERR_MESH,
+            "the mesh has %d vertices but no %s: padapt adapts %s meshes",
+            (int)m->nv, m->dim == 2 ? "triangles" : "tetrahedra",
+            m->dim == 2 ? "triangle" : "tetrahedral (volume)");
+  if (m->dim == 2)
+    PA_FAIL(PA_ERR_MESH,
+            "the mesh has no triangles, only %d edges: a boundary "
+            "discretisation, not a mesh of the domain; padapt adapts "
+            "triangle meshes: mesh the domain first (e.g. with mmg2d or gmsh)",
+            (int)m->nb);
+  PA_FAIL(PA_ERR_MESH,
+          "the mesh has no tetrahedra, only %d triangles: a surface mesh; "
+          "padapt adapts volume (tetrahedral) meshes: mesh the volume "
+          "first (e.g. with tetgen or gmsh), or adapt the surface with mmgs",
+          (int)m->nb);
+cleanup:
+  return st;
+}
+
 /* Every vertex in some element. */
 static pa_status check_used(const pa_mesh *m) {
   pa_status st = PA_SUCCESS;
@@ -714,7 +747,21 @@ cleanup:
   return st;
 }
 
-/* Conformity (in adja_compute) and symmetric adjacency. The cache is
+/* 1 if face i of element e and face j of element f (the same vertices) are
+ * seen from opposite sides, as two positive elements sharing a face are:
+ * their outward orders are reverse permutations of each other. */
+static int opposite_sides(const pa_mesh *m, pa_idx e, int i, pa_idx f, int j) {
+  pa_idx a[3], b[3];
+  pa__elem_face(m, e, i, a);
+  pa__elem_face(m, f, j, b);
+  if (m->dim == 2) return a[0] == b[1];
+  int p = b[0] == a[0] ? 0 : b[1] == a[0] ? 1 : 2;
+  return b[(p + 1) % 3] == a[2];
+}
+
+/* Conformity (in adja_compute), symmetric adjacency, and neighbours on
+ * opposite sides of their common face: two positive elements on the same
+ * side of it overlap (or are one element listed twice). The cache is
  * recomputed, not trusted: a stale cache is reported. */
 static pa_status check_adjacency(pa_mesh *m) {
   pa_status st = PA_SUCCESS;
@@ -732,6 +779,20 @@ static pa_status check_adjacency(pa_mesh *m) {
              "face %d of element %d",
              (int)(c % nf) + 1, (int)(c / nf) + 1, (int)(a % nf) + 1,
              (int)(a / nf) + 1);
+    if (a < 0 || a < (pa_idx)c) continue;
+    pa_idx e = (pa_idx)(c / nf), f = a / nf;
+    if (opposite_sides(m, e, (int)(c % nf), f, a % nf)) continue;
+    PA_CHECK(m->elem[c] != m->elem[a], PA_ERR_MESH,
+             "elements %d and %d have the same vertices (a duplicated "
+             "element): remove one",
+             (int)e + 1, (int)f + 1);
+    pa_idx fv[3];
+    char buf[96];
+    pa__elem_face(m, e, (int)(c % nf), fv);
+    PA_FAIL(PA_ERR_MESH,
+            "elements %d and %d overlap: both lie on the same side of their "
+            "common face (%s) (a folded mesh)",
+            (int)e + 1, (int)f + 1, fmt_verts(buf, sizeof buf, fv, m->dim));
   }
 cleanup:
   pa__free(adja);
@@ -817,7 +878,7 @@ cleanup:
   return st;
 }
 
-pa_status pa__mesh_check(pa_mesh *m, int input) {
+pa_status pa__mesh_check_elements(pa_mesh *m) {
   pa_status st = PA_SUCCESS;
   PA_CHECK(m, PA_ERR_ARG, "pa_mesh_check: NULL mesh");
   const int d = m->dim, nf = d + 1;
@@ -827,14 +888,23 @@ pa_status pa__mesh_check(pa_mesh *m, int input) {
   PA_CALL(check_cells(m->bdry, m->nb, d, nv, "boundary entity"));
   PA_CALL(check_cells(m->edge, m->ned, 2, nv, "feature edge"));
   PA_CALL(check_coords(m));
+  PA_CALL(check_has_elements(m));
   PA_CALL(check_used(m));
   PA_CALL(check_orientation(m));
   PA_CALL(check_adjacency(m));
+cleanup:
+  return st;
+}
+
+pa_status pa__mesh_check(pa_mesh *m, int input) {
+  pa_status st = PA_SUCCESS;
+  PA_CALL(pa__mesh_check_elements(m));
   PA_CALL(check_boundary_faces(m));
   PA_CALL(check_boundary_entities(m));
   if (input) {
-    PA_CALL(check_manifold_vertices(m));
     PA_CALL(check_coincident(m));
+    PA_CALL(pa__mesh_check_overlap(m));
+    PA_CALL(check_manifold_vertices(m));
   }
 cleanup:
   return st;

@@ -9,30 +9,76 @@
  * and boundary entity containing them; the new edges join the queue. The
  * new vertex gets the mean of the ends' fields and their interpolated
  * metric (pa__metric_interp), computed from the ends in coordinate order (so the same bits
- * wherever the same edge is split).
+ * wherever the same edge is split). The halves of a split element or
+ * boundary entity keep its element or boundary field values (exact for a
+ * piecewise-constant field: conservative and bounded).
  *
  *  - An edge of a boundary entity of reference o->skin_ref (a piece's skin)
  *    is split while longer than o->skin_lmax if o->skin_ok marks both its
- *    ends, one of them with bit 0 (1: inner, any marked partner; 2:
- *    labelled, an inner partner only). A vertex added on such an edge is
- *    inner, but never pairs with a labelled vertex if an end was labelled
- *    or so descended: otherwise a skin face whose longest edge joins two
- *    labelled vertices (a ridge) would have its other edges bisected
- *    towards it without end, the apex sliding to the ridge (a denormal
- *    away after 1075 steps, on box3d 3). With the longest edge first,
+ *    ends (1: inner; 2: labelled; 3: labelled, on a smooth curved
+ *    boundary, a surface vertex), by these rules:
+ *     . inner-inner, and inner-labelled: at the midpoint (an inner-labelled
+ *       edge is interior or lies in the plane of the inner end's boundary
+ *       faces). The new vertex is inner; if an end was labelled or so
+ *       descended, it pairs with no labelled vertex but surface ones.
+ *       Otherwise
+ *       a skin face whose longest edge cannot be split (two labelled
+ *       vertices on the boundary: a ridge) would have its other edges
+ *       bisected towards it without end, the apex sliding to the ridge (a
+ *       denormal away after 1075 steps, on box3d 3).
+ *     . labelled-labelled: on a feature edge, never; inside the domain (a
+ *       chord: o->on_boundary says no) at its midpoint, the new vertex
+ *       inner and descended from a labelled one; on the boundary (every
+ *       piece around such an edge has it on its skin, but only those at
+ *       its ends hold a boundary face of it, so o->on_boundary decides
+ *       from both ends' data, the same bits in every piece) only between
+ *       two surface vertices, and only when o->normal gives their normals:
+ *       at the midpoint of the cubic Hermite curve of the ends,
+ *       x = (a + b) / 2 + ((e.nb) nb - (e.na) na) / 8 with e = b - a
+ *       (exact on a plane, about h^4 / R^3 off a circle of radius R where
+ *       the chord's midpoint is h^2 / 8R off), ends in canonical order.
+ *       The new vertex is a surface vertex whose normal is the normalised
+ *       sum of the ends', and the edges it makes with the ends, and with
+ *       the other points of the input edge's curve, are on the boundary
+ *       (o->on_boundary is asked only about input edges). o->on_boundary
+ *       may err towards the boundary (a Bloom filter): two input surface
+ *       vertices whose edge is not within PA_LEB_SMOOTH_DEG of both
+ *       tangent planes, as every boundary edge between them is, are a
+ *       chord.
+ *    Termination: an edge never split joins two labelled vertices on the
+ *    boundary (not two surface ones when curves are on), or a labelled
+ *    vertex other than a surface one and an inner one descended from a
+ *    labelled vertex. The vertices added on the faces around it so
+ *    descend, and pair with one of its ends at most (the surface or the
+ *    inner one): the apexes of those faces move towards that end, their
+ *    edges to it halving.
+ *    SKIN_MAX_DEPTH bounds the splits in a row all the same. With the
+ *    longest edge first,
  *    the edge split is the longest of every skin face whose edges can all be
  *    split, so each such face is refined as by recursive longest-edge
  *    bisection of that face alone. In every case, whether a skin edge is
- *    split, and in which order, depends only on its length, its ends'
- *    coordinates and marks: the result depends only on the face's vertices
- *    (a face with one or two splittable edges is cut by the bisections of
- *    those edges, in their own order).
+ *    split, where, and in which order, depends only on its length, its
+ *    ends' coordinates, marks and normals: the result depends only on the
+ *    face's vertices (a face with one or two splittable edges is cut by
+ *    the bisections of those edges, in their own order). A point on a
+ *    curve may leave an element of the shell without a positive volume (a
+ *    thin element on the concave side): counted in *o->curve_bad, which
+ *    the caller must treat as a failure of the whole refinement, since the
+ *    other pieces, which see other elements, cannot know.
  *  - Any other edge on a boundary entity or feature edge, or on a frozen
  *    element, is never split (the surface is the remesher's business).
  *  - Any other edge is split while longer than o->lmax, when no element
  *    around it has a longer edge: an element is bisected by its longest
  *    edge; otherwise elements on an unsplittable long edge would be
- *    bisected towards it without end.
+ *    bisected towards it without end. With o->vmin > 0, not when an element
+ *    around it holds less metric volume than o->vmin: bisection halves an
+ *    element's volume whichever edge it cuts, so it would make more
+ *    elements there than the metric asks for. That happens where the mesh
+ *    is finer than the metric in some direction and coarser in another (a
+ *    strongly anisotropic metric on a mesh not aligned with it): each cut
+ *    shortens the long direction and keeps the excess of the fine one, and
+ *    the count grows with their product (box3d 6 in sizes 10, 10, 1e-4,
+ *    where 850 elements are asked for: 45 M elements, 12 GB).
  * Bisection of a valid mesh stays valid and conforming: each element is cut
  * by a plane through an edge's midpoint and the opposite vertices.
  */
@@ -117,16 +163,39 @@ typedef struct qedge {
   pa_idx a, b; /* canonical order: a before b by coordinates */
 } qedge;
 
+/* Marks of s->inner (see the file comment): inner, labelled, added on
+ * the skin, descended from a labelled vertex (an inner vertex), with a
+ * normal (a labelled vertex on a smooth curved boundary), on a feature
+ * edge or a required boundary entity (a labelled vertex). */
+#define M_INNER 1
+#define M_LABELLED 2
+#define M_ADDED 4
+#define M_NOLAB 8
+#define M_SURF 16
+#define M_HARD 32
+/* Skin splits in a row down from an input edge: far more than a
+ * refinement needs (2^40 times shorter), so only a fault of the rules
+ * (a face sliding towards an edge it cannot split) gets there; it stops
+ * the sliding, the same way in every piece. */
+#define SKIN_MAX_DEPTH 40
+
 typedef struct bis {
   pa_mesh *m;
   const pa__leb_opts *o;
   int d;
-  size_t nball; /* entries of eball.l, bball.l, inner */
+  pa_idx nv0; /* input vertices */
+  size_t nball; /* entries of eball.l, bball.l, inner, depth, nrm, curve */
   balls eball, bball;
-  uint8_t *inner; /* per vertex: bit 0 inner (skin edges may be split
-                     there), bit 1 labelled (only towards an inner vertex),
-                     bit 2 added on the skin, bit 3 never with a labelled
-                     partner */
+  uint8_t *inner; /* per vertex: M_* marks */
+  uint8_t *depth; /* per vertex: skin splits from the input down to it */
+  double *nrm;    /* with o->normal, d per vertex: the normal of a vertex
+                     marked M_SURF */
+  pa_idx *curve;  /* with o->on_boundary, per vertex: the input edge (an
+                     index into ends) on whose curve a vertex added on the
+                     boundary lies, -1 for the others */
+  pa_idx *ends;   /* 2 per such input edge */
+  size_t nends, capends;
+  pa_idx curve_bad;
   qedge *heap;
   size_t nheap, capheap;
   uint64_t *feat; /* feature edges as sorted (lo << 32 | hi) pairs */
@@ -250,6 +319,21 @@ static pa_status grow_balls(bis *s, size_t nv) {
   uint8_t *in = pa__realloc(s->inner, n);
   PA_CHECK(in, PA_ERR_MEMORY, "out of memory in longest-edge bisection");
   s->inner = in;
+  uint8_t *dp = pa__realloc(s->depth, n);
+  PA_CHECK(dp, PA_ERR_MEMORY, "out of memory in longest-edge bisection");
+  s->depth = dp;
+  memset(s->depth + s->nball, 0, n - s->nball);
+  if (s->o->normal) {
+    double *x = pa__realloc(s->nrm, n * (size_t)s->d * sizeof *x);
+    PA_CHECK(x, PA_ERR_MEMORY, "out of memory in longest-edge bisection");
+    s->nrm = x;
+  }
+  if (s->o->on_boundary) {
+    pa_idx *c = pa__realloc(s->curve, n * sizeof *c);
+    PA_CHECK(c, PA_ERR_MEMORY, "out of memory in longest-edge bisection");
+    s->curve = c;
+    for (size_t v = s->nball; v < n; v++) c[v] = -1;
+  }
   memset(s->eball.l + s->nball, 0, (n - s->nball) * sizeof *e);
   memset(s->bball.l + s->nball, 0, (n - s->nball) * sizeof *b);
   memset(s->inner + s->nball, 0, n - s->nball);
@@ -298,10 +382,12 @@ static pa_status split_cells(bis *s, int faces, pa_idx a, pa_idx b, pa_idx mid,
     if (faces) {
       PA_CALL(pa_mesh_add_bdry(m, v2, m->bref[k], &k2));
       m->bflag[k2] = m->bflag[k];
+      pa__mesh_copy_values(m, PA_BOUNDARY, k, k2); /* halves keep the values */
       cv = m->bdry + (size_t)nvc * k; /* the arrays may have moved */
     } else {
       PA_CALL(pa_mesh_add_elem(m, v2, m->eref[k], &k2));
       m->eflag[k2] = m->eflag[k];
+      pa__mesh_copy_values(m, PA_ELEMENT, k, k2);
       cv = m->elem + (size_t)nvc * k;
     }
     for (int j = 0; j < nvc; j++)
@@ -357,6 +443,15 @@ static int longer_around(const bis *s, const qedge *e, const pa_idx *el,
   return 0;
 }
 
+/* 1 if one of the nel elements el holds less metric volume than o->vmin. */
+static int small_around(const bis *s, const pa_idx *el, int nel) {
+  const pa_mesh *m = s->m;
+  for (int q = 0; q < nel; q++)
+    if (pa__elem_complexity(m, m->met_ncomp, m->met, el[q]) < s->o->vmin)
+      return 1;
+  return 0;
+}
+
 /* The state of a refinement of s->m (s->m, s->o, s->d set): the skin marks,
  * the sorted feature edges, the vertex balls of the elements and of the
  * boundary entities, and every edge queued once. */
@@ -365,10 +460,16 @@ static pa_status start(bis *s) {
   pa_mesh *m = s->m;
   const pa__leb_opts *o = s->o;
   pa_idx nv0 = m->nv, *seen = NULL;
+  s->nv0 = nv0;
   PA_CALL(grow_balls(s, (size_t)nv0));
   if (o->skin_ok)
     for (pa_idx v = 0; v < nv0; v++)
-      s->inner[v] = o->skin_ok[v] & 3;
+      s->inner[v] = o->skin_ok[v] == 4   ? M_LABELLED | M_HARD
+                    : o->skin_ok[v] != 3 ? o->skin_ok[v] & 3
+                    : o->normal          ? M_LABELLED | M_SURF
+                                         : M_LABELLED;
+  if (o->normal)
+    memcpy(s->nrm, o->normal, (size_t)nv0 * (size_t)s->d * sizeof *s->nrm);
   if (m->ned) {
     PA_ALLOC(s->feat, m->ned);
     for (pa_idx r = 0; r < m->ned; r++)
@@ -400,18 +501,143 @@ cleanup:
   return st;
 }
 
-/* The vertex *mid at the midpoint of e, from the ends in canonical order,
- * with their metric and fields interpolated, and its skin mark: a vertex
- * added on the skin is inner; descended from a labelled vertex, it never
- * pairs with one (see the file comment). */
-static pa_status add_midpoint(bis *s, const qedge *e, int skin, pa_idx *mid) {
+/* 1 if the edge uv between two labelled vertices lies on the boundary
+ * (see the file comment): two input vertices as o->on_boundary says; else
+ * both on one input edge's curve (a point of it and one of its ends, or
+ * two of its points). */
+static int on_boundary(const bis *s, pa_idx u, pa_idx v) {
+  pa_idx cu = s->curve ? s->curve[u] : -1, cv = s->curve ? s->curve[v] : -1;
+  if (cu < 0 && cv < 0)
+    return s->o->on_boundary && s->o->on_boundary(s->o->ctx, u, v);
+  if (cu >= 0 && cv >= 0) return cu == cv;
+  pa_idx c = cu >= 0 ? cu : cv, w = cu >= 0 ? v : u;
+  return s->ends[2 * c] == w || s->ends[2 * c + 1] == w;
+}
+
+/* The normal of vertex v (with o->normal, of a vertex marked M_SURF), or
+ * NULL. */
+static const double *vnormal(const bis *s, pa_idx v) {
+  return (s->inner[v] & M_SURF) ? s->nrm + (size_t)s->d * v : NULL;
+}
+
+/* 1 if the edge e = ab lies within PA_LEB_SMOOTH_DEG of the tangent planes
+ * of those of its ends that have a normal. */
+static int tangent(const bis *s, const qedge *e) {
+  const double *xa = s->m->coord + (size_t)s->d * e->a,
+               *xb = s->m->coord + (size_t)s->d * e->b;
+  const double *na = vnormal(s, e->a), *nb = vnormal(s, e->b);
+  double ea = 0, eb = 0, ee = 0, sn = sin(PA_LEB_SMOOTH_DEG * M_PI / 180);
+  for (int k = 0; k < s->d; k++) {
+    double c = xb[k] - xa[k];
+    ea += na ? c * na[k] : 0;
+    eb += nb ? c * nb[k] : 0;
+    ee += c * c;
+  }
+  return ea * ea <= sn * sn * ee && eb * eb <= sn * sn * ee;
+}
+
+/* How the skin edge e, whose ends are marked ia and ib (M_INNER or
+ * M_LABELLED each), is split (see the file comment): 0 at its midpoint, 1
+ * on its curve, -1 not at all. bnd: a boundary entity of the mesh (not of
+ * the skin) or a feature edge holds it; feat: a feature edge. */
+static int skin_split(bis *s, const qedge *e, int ia, int ib, int bnd,
+                      int feat) {
+  int la = ia & M_LABELLED, lb = ib & M_LABELLED;
+  if (!la && !lb) return 0;
+  if (!la || !lb) { /* an inner end, descended from a labelled vertex or not */
+    int in = la ? ib : ia, lab = la ? ia : ib;
+    return (in & M_NOLAB) && (lab & M_HARD) ? -1 : 0;
+  }
+  if (feat) return -1;
+  if (!on_boundary(s, e->a, e->b)) {
+    /* a chord; with bnd, cannot be (on_boundary has no false negative): a
+     * failure, and no split, which the other pieces would not know of */
+    if (bnd) s->curve_bad++;
+    return bnd ? -1 : 0;
+  }
+  if ((ia | ib) & M_HARD) return -1;
+  /* two input vertices whose masks meet: a chord, unless the edge lies
+   * within PA_LEB_SMOOTH_DEG of the tangent planes of those with a normal,
+   * as every boundary edge of theirs does */
+  if (s->curve[e->a] < 0 && s->curve[e->b] < 0 && !tangent(s, e)) return 0;
+  return 1;
+}
+
+/* The point halfway along the boundary edge e (ends in canonical order)
+ * into x (see the file comment): on the cubic Hermite curve of the ends'
+ * normals, an end without one taking the other's mirrored in the plane
+ * that bisects e (as on a circle), or the midpoint when neither has one;
+ * the normalised sum of the two normals into n. Returns the number of
+ * normals the ends have. */
+static int curve_point(const bis *s, const qedge *e, double *x, double *n) {
+  int d = s->d;
+  const double *xa = s->m->coord + (size_t)d * e->a,
+               *xb = s->m->coord + (size_t)d * e->b;
+  const double *na = vnormal(s, e->a), *nb = vnormal(s, e->b);
+  double ma[3], mb[3], ev[3], ee = 0, ea = 0, eb = 0, nn = 0;
+  int got = (na != NULL) + (nb != NULL);
+  for (int k = 0; k < d; k++) {
+    ev[k] = xb[k] - xa[k];
+    ee += ev[k] * ev[k];
+  }
+  if (got == 1) { /* the mirror image of the one normal */
+    const double *g = na ? na : nb;
+    double *h = na ? mb : ma, c = 0;
+    for (int k = 0; k < d; k++) c += g[k] * ev[k];
+    for (int k = 0; k < d; k++) h[k] = g[k] - 2 * c * ev[k] / ee;
+    if (!na) na = ma;
+    if (!nb) nb = mb;
+  }
+  for (int k = 0; k < d; k++) {
+    x[k] = 0.5 * xa[k] + 0.5 * xb[k];
+    n[k] = 0;
+  }
+  if (!got) return 0;
+  for (int k = 0; k < d; k++) {
+    ea += ev[k] * na[k];
+    eb += ev[k] * nb[k];
+  }
+  for (int k = 0; k < d; k++) {
+    x[k] += (eb * nb[k] - ea * na[k]) / 8;
+    n[k] = na[k] + nb[k];
+    nn += n[k] * n[k];
+  }
+  nn = sqrt(nn);
+  for (int k = 0; k < d && nn > 0; k++) n[k] /= nn;
+  return got;
+}
+
+/* 1 if an element around vertex v has no positive volume (exactly). */
+static int flat_around(const bis *s, pa_idx v) {
+  const pa_mesh *m = s->m;
+  const ilist *l = &s->eball.l[v];
+  for (int q = 0; q < l->n; q++) {
+    const pa_idx *ev = m->elem + (size_t)(s->d + 1) * s->eball.pool[l->off + (size_t)q];
+    const double *x[4];
+    for (int j = 0; j <= s->d; j++) x[j] = m->coord + (size_t)s->d * ev[j];
+    if (!(pa__orient(s->d, x) > 0)) return 1;
+  }
+  return 0;
+}
+
+/* The vertex *mid at the midpoint of e (on its curve when curve = 1), from
+ * the ends in canonical order, with their metric and fields interpolated,
+ * and its skin mark: a vertex added on the skin is inner, on a curve
+ * M_SURF; descended from a labelled vertex, an inner one never pairs with
+ * a labelled vertex (see the file comment). */
+static pa_status add_midpoint(bis *s, const qedge *e, int skin, int curve,
+                              pa_idx *mid, int *moved) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = s->m;
-  double x[3];
+  double x[3], n[3];
   const double *xa = m->coord + (size_t)s->d * e->a,
                *xb = m->coord + (size_t)s->d * e->b;
-  for (int k = 0; k < s->d; k++)
-    x[k] = 0.5 * xa[k] + 0.5 * xb[k];
+  *moved = 0;
+  if (curve)
+    *moved = curve_point(s, e, x, n);
+  else
+    for (int k = 0; k < s->d; k++)
+      x[k] = 0.5 * xa[k] + 0.5 * xb[k];
   PA_CALL(pa_mesh_add_vertex(m, x, 0, mid));
   PA_CALL(grow_balls(s, (size_t)m->nv));
   if (m->met_ncomp) {
@@ -429,10 +655,25 @@ static pa_status add_midpoint(bis *s, const qedge *e, int skin, pa_idx *mid) {
     pa__field_interp(s->d, nc, pa__field_is_metric(s->d, m->field[f].name, nc),
                      2, yy, w, y + (size_t)nc * *mid);
   }
-  s->inner[*mid] =
-      skin ? (uint8_t)(1 | 4 |
-                       ((s->inner[e->a] | s->inner[e->b]) & (2 | 8) ? 8 : 0))
-           : 0;
+  if (curve) {
+    s->inner[*mid] = (uint8_t)(M_LABELLED | M_ADDED | (*moved ? M_SURF : 0));
+    if (*moved) memcpy(s->nrm + (size_t)s->d * *mid, n, (size_t)s->d * sizeof *n);
+    pa_idx c = s->curve[e->a] >= 0 ? s->curve[e->a] : s->curve[e->b];
+    if (c < 0) { /* a new input edge */
+      PA_GROW(s->ends, s->capends, 2 * s->nends + 2);
+      s->ends[2 * s->nends] = e->a;
+      s->ends[2 * s->nends + 1] = e->b;
+      c = (pa_idx)s->nends++;
+    }
+    s->curve[*mid] = c;
+  } else {
+    int lab = (s->inner[e->a] | s->inner[e->b]) & (M_LABELLED | M_NOLAB);
+    s->inner[*mid] = skin ? (uint8_t)(M_INNER | M_ADDED | (lab ? M_NOLAB : 0)) : 0;
+  }
+  if (skin) {
+    int da = s->depth[e->a], db = s->depth[e->b];
+    s->depth[*mid] = (uint8_t)((da > db ? da : db) + 1);
+  }
 cleanup:
   return st;
 }
@@ -482,18 +723,24 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
       else
         bnd = 1;
     }
-    bnd |= is_feature(&s, e.a, e.b);
+    int feat = is_feature(&s, e.a, e.b), curve = 0;
+    bnd |= feat;
     PA_GROW(s.tmp, s.captmp, (size_t)nel * (size_t)(s.d - 1)); /* far */
     if (skin) {
       int ia = s.inner[e.a], ib = s.inner[e.b];
       if (!(ia & 3) || !(ib & 3) || !(e.len > o->skin_lmax)) continue;
-      if ((ia & 2) ? !(ib & 1) || (ib & 8) : (ib & 2) && (ia & 8)) continue;
+      if (s.depth[e.a] >= SKIN_MAX_DEPTH || s.depth[e.b] >= SKIN_MAX_DEPTH)
+        continue;
+      curve = skin_split(&s, &e, ia, ib, bnd, feat);
+      if (curve < 0) continue;
     } else if (bnd || !(e.len > o->lmax) ||
-               longer_around(&s, &e, s.el, nel, s.tmp)) {
+               longer_around(&s, &e, s.el, nel, s.tmp) ||
+               (o->vmin > 0 && m->met_ncomp && small_around(&s, s.el, nel))) {
       continue;
     }
     pa_idx mid;
-    PA_CALL(add_midpoint(&s, &e, skin, &mid));
+    int moved;
+    PA_CALL(add_midpoint(&s, &e, skin, curve, &mid, &moved));
     PA_GROW(parent, capp, 2 * (np + 1));
     parent[2 * np] = e.a;
     parent[2 * np + 1] = e.b;
@@ -503,14 +750,21 @@ pa_status pa__leb_refine(pa_mesh *m, const pa__leb_opts *o, pa_idx **parentp,
     if (bsw) PA_CALL(order_as_list(&s, &s.bball, e.a, s.fc, nfc));
     PA_CALL(split_cells(&s, 0, e.a, e.b, mid, s.el, nel));
     PA_CALL(split_cells(&s, 1, e.a, e.b, mid, s.fc, nfc));
+    /* a split at the midpoint keeps every volume positive: only those on
+     * the curve need a look, at the elements they make */
+    if (moved && flat_around(&s, mid)) s.curve_bad++;
     PA_CALL(push(&s, e.a, mid));
     PA_CALL(push(&s, mid, e.b));
   }
   if (onskinp && m->nv > nv0) {
     PA_ALLOC(*onskinp, (size_t)(m->nv - nv0));
     for (pa_idx v = nv0; v < m->nv; v++)
-      (*onskinp)[v - nv0] = (s.inner[v] & 4) != 0;
+      (*onskinp)[v - nv0] = !(s.inner[v] & M_ADDED) ? 0
+                            : (s.inner[v] & M_SURF) ? 2
+                                                    : 1;
   }
+  if (o->curve_bad) *o->curve_bad = s.curve_bad;
+
   if (parentp) {
     *parentp = parent;
     parent = NULL;
@@ -524,6 +778,10 @@ cleanup:
   pa__free(s.fc);
   pa__free(s.tmp);
   pa__free(s.inner);
+  pa__free(s.depth);
+  pa__free(s.nrm);
+  pa__free(s.curve);
+  pa__free(s.ends);
   pa__free(s.heap);
   pa__free(s.feat);
   pa__free(parent);

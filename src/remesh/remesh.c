@@ -3,12 +3,16 @@
  * remesher (its callback sends 2D meshes to src/remesh2d/, 3D ones through
  * longest-edge bisection, leb.c, to src/remesh3d/), and the driver
  * pa_remesh() that validates the input, prepares the metric (hsiz,
- * hmin/hmax, gradation) and calls a remesher.
+ * hmin/hmax, gradation) and calls a remesher, then carries the element
+ * and boundary fields onto the result (transfer.c).
  *
  * Invariants:
  *  - pa_remesh never leaves a half-changed mesh: the prepared metric is built
  *    in a new array and installed only for the call; on an error or the
  *    FAILED outcome the original metric (and everything else) is restored;
+ *  - a remesher never sees element nor boundary fields: a mesh that has
+ *    some is copied whole first (the old mesh of the transfer, and what an
+ *    error after the remesher gives back) and remeshed without them;
  *  - frozen vertices (PA_FLAG_REQUIRED, or vertices of a frozen element or
  *    boundary entity) keep their metric value bit for bit: hsiz, clamping and
  *    gradation skip them (gradation still lets them constrain neighbours);
@@ -45,6 +49,7 @@ static pa_status remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
   double t0 = pa_wtime();
   memset(&lo, 0, sizeof lo);
   lo.lmax = LEB_PRE;
+  lo.vmin = PA_LEB_VMIN * pa__unit_simplex_volume(3);
   if (opts->no_insert) return pa__remesh3d(mesh, opts, report);
   PA_CALL(pa_mesh_copy(mesh, &w));
   PA_CALL(pa__leb_refine(w, &lo, NULL, NULL));
@@ -131,7 +136,7 @@ static pa_status check_args(const pa_remesher *r, pa_mesh *mesh,
   PA_CHECK(isfinite(opts->hsiz) && isfinite(opts->hmin) && isfinite(opts->hmax) &&
                isfinite(opts->hgrad) && isfinite(opts->hgradreq) &&
                isfinite(opts->hausd) &&
-               isfinite(opts->angle),
+               isfinite(opts->angle) && isfinite(opts->mem_mb),
            PA_ERR_ARG, "pa_remesh: options must be finite numbers");
   PA_CHECK(!(opts->hmin > 0 && opts->hmax > 0 && opts->hmin > opts->hmax),
            PA_ERR_ARG, "pa_remesh: hmin (%g) is larger than hmax (%g)",
@@ -178,7 +183,9 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   double *newmet = NULL, *oldmet = NULL;
   int oldnc = 0, installed = 0, carried = 0;
   pa__name *names = NULL; /* the caller's physical names, held aside */
-  int nname = 0;
+  int nname = 0, bound_set = 0;
+  size_t bound0 = 0, bound = 0;
+  pa_mesh *orig = NULL; /* the input, when it has element or boundary fields */
   double t0 = pa_wtime(), cpu0;
   wrap.t0 = t0;
   PA_CHECK(r && r->remesh && mesh, PA_ERR_ARG, "pa_remesh: NULL argument");
@@ -190,6 +197,21 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   memset(report, 0, sizeof *report);
   report->outcome = PA_REMESH_FAILED;
   PA_CALL(check_args(r, mesh, opts));
+  /* opts->mem_mb bounds the memory for the call, under any bound set */
+  bound0 = pa_memory_limit();
+  bound = bound0;
+  if (opts->mem_mb > 0 && (!bound || opts->mem_mb * 1e6 < (double)bound)) {
+    bound = (size_t)(opts->mem_mb * 1e6);
+    pa_memory_set_limit(bound);
+    bound_set = 1;
+  }
+  if (mesh->nefield || mesh->nbfield) {
+    PA_CALL(pa_mesh_copy(mesh, &orig));
+    for (int at = PA_ELEMENT; at <= PA_BOUNDARY; at++)
+      while (pa_mesh_nfield_at(mesh, (pa_entity)at))
+        PA_CALL(pa_mesh_remove_field_at(
+            mesh, (pa_entity)at, pa_mesh_nfield_at(mesh, (pa_entity)at) - 1));
+  }
 
   int d = mesh->dim, nc = mesh->met_ncomp ? mesh->met_ncomp : 1;
   unsigned changed = 0;
@@ -197,9 +219,16 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   if (!opts->trusted || opts->progress) {
     double c = 0;
     PA_CALL(pa_metric_complexity(mesh, nc, newmet, &c));
-    if (!opts->trusted) /* the parallel driver checks for its pieces */
-      PA_CALL(pa__check_output_size(d, c, 1, 0, (double)pa__mem_available(),
-                                    "the available memory"));
+    if (!opts->trusted) { /* the parallel driver checks for its pieces */
+      char what[64] = "the available memory";
+      double budget = (double)pa__mem_available();
+      if (bound) {
+        budget = (double)bound;
+        snprintf(what, sizeof what, "the memory bound of %.1f MB",
+                 (double)bound / 1e6);
+      }
+      PA_CALL(pa__check_output_size(d, c, 1, 0, budget, what));
+    }
     wrap.expected = c / pa__unit_simplex_volume(d);
   }
   if (opts->progress) {
@@ -229,6 +258,7 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   report->cpu_s = pa__thread_cputime() - cpu0;
   if (st != PA_SUCCESS) goto cleanup;
   if (report->outcome == PA_REMESH_FAILED) goto cleanup;
+  if (orig) PA_CALL(pa__transfer_fields(orig, mesh, &report->transfer));
   pa__free(oldmet);
   oldmet = NULL;
   installed = 0;
@@ -245,6 +275,13 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
     }
   }
 cleanup:
+  if (orig && (st != PA_SUCCESS || report->outcome == PA_REMESH_FAILED)) {
+    /* the input comes back whole (its metric and names as below) */
+    pa_mesh t = *mesh;
+    *mesh = *orig;
+    *orig = t;
+  }
+  pa_mesh_destroy(orig);
   if (names) {
     pa__mesh_free_names(mesh);
     mesh->names = names;
@@ -258,6 +295,7 @@ cleanup:
   if (carried && drop_user_metric(mesh) != PA_SUCCESS && st == PA_SUCCESS)
     st = PA_ERR_INTERNAL;
   pa__free(newmet);
+  if (bound_set) pa_memory_set_limit(bound0);
   if (st != PA_SUCCESS) report->outcome = PA_REMESH_FAILED;
   if (!(report->time_s > 0)) report->time_s = pa_wtime() - t0;
   return st;

@@ -28,4 +28,13 @@ pa_status pa__remesh2d(pa_mesh *mesh, const pa_remesh_opts *opts,
 pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
                        pa_remesh_report *report);
 
+/*
+ * The element and boundary fields of the old mesh o (the remesher's input,
+ * with those fields) carried onto the new mesh m (the output, without them;
+ * transfer.c): each field is added to m with the values its transfer mode
+ * gives (pa_transfer), and *rep says what it took. o is in/out only for its
+ * cached adjacency. On failure m gets none of them. Not collective.
+ */
+pa_status pa__transfer_fields(pa_mesh *o, pa_mesh *m, pa_transfer_report *rep);
+
 #endif /* PA_REMESH_H */

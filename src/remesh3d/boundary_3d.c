@@ -12,7 +12,12 @@
  * are not all equal, which lets splits place new points on a smooth (cubic)
  * reconstruction; planar patches have no curved vertex and stay planar. So
  * does a vertex whose feature edges all separate a free triangle from a
- * frozen one (where a piece's frozen skin meets the boundary).
+ * frozen one (where a piece's frozen skin meets the boundary). The triangles
+ * of an interface inside the domain (two tets hold them) count with the
+ * orientation of their records, where those agree (the two records of each
+ * edge run it in opposite directions; a level-set cut orients them all
+ * from the inside out): its vertices then get normals too, and the
+ * interface is refined on the same smooth reconstruction.
  */
 #include "remesh3d/remesh3d.h"
 
@@ -35,12 +40,23 @@ static void rec_normal(const rm3d *m, pa_idx r, double *n) {
                  m->x + 3 * (size_t)v[2], n);
 }
 
-/* 1 if face f of tet k lies on the outer surface; then fv receives its
+/* 1 if face f of tet k is a boundary triangle taken once: on the outer
+ * surface, oriented out of k; inside the domain (an interface between two
+ * references), from the tet of smaller index, oriented as its record (the
+ * records of an interface are oriented alike where twisted[] marks none
+ * of its vertices: pa__rm3d_surface_analyze checks it). fv receives its
  * vertices and n its normal (twice its area long). */
 static int outer_face(const rm3d *m, pa_idx k, int f, pa_idx *fv, double *n) {
-  if (!((m->tflag[k] >> f) & 1) || m->adj[4 * (size_t)k + f] >= 0) return 0;
+  if (!((m->tflag[k] >> f) & 1)) return 0;
+  pa_idx o = m->adj[4 * (size_t)k + f];
+  if (o >= 0 && (o >> 2) < k) return 0;
   const pa_idx *v = m->tv + 4 * (size_t)k;
   for (int j = 0; j < 3; j++) fv[j] = v[pa__rm3d_face[f][j]];
+  if (o >= 0) {
+    pa_idx r = pa__rm3d_table_find(&m->tri, fv);
+    if (r < 0) return 0;
+    memcpy(fv, m->tri.v + 3 * (size_t)r, 3 * sizeof *fv);
+  }
   rm3d_tri_cross(m->x + 3 * (size_t)fv[0], m->x + 3 * (size_t)fv[1],
                  m->x + 3 * (size_t)fv[2], n);
   return 1;
@@ -77,12 +93,15 @@ static size_t sorted_edges(const rm3d *m, bedge *be) {
  * sorted boundary edges be[0..nbe); nborder[x] counts the feature edges at
  * x between a frozen and a free triangle. */
 static pa_status add_feature_edges(rm3d *m, int use_angle, const bedge *be,
-                                   size_t nbe, uint8_t *nborder) {
+                                   size_t nbe, uint8_t *nborder,
+                                   uint8_t *twisted) {
   pa_status st = PA_SUCCESS;
   for (size_t i = 0; i < nbe;) {
     size_t j = i + 1;
     while (j < nbe && be[j].a == be[i].a && be[j].b == be[i].b) j++;
     int feat = 0;
+    if (j - i == 2 && be[i].dir == be[i + 1].dir) /* records turned apart */
+      twisted[be[i].a] = twisted[be[i].b] = 1;
     if (j - i != 2) {
       feat = 1;
     } else if (m->tri.ref[be[i].rec] != m->tri.ref[be[i + 1].rec]) {
@@ -161,7 +180,7 @@ static void mark_corners(rm3d *m, int use_angle, uint8_t *nfeat,
  * vertex is curved (RM3D_V_CURVED) when one of its faces deviates from its
  * normal; m->nrm is kept only if one is. */
 static pa_status curved_normals(rm3d *m, const uint8_t *nborder,
-                                const uint8_t *nfeat) {
+                                const uint8_t *nfeat, const uint8_t *twisted) {
   pa_status st = PA_SUCCESS;
   PA_CALLOC(m->nrm, 3 * m->capv);
   for (pa_idx k = 0; k < m->ne; k++) {
@@ -174,7 +193,10 @@ static pa_status curved_normals(rm3d *m, const uint8_t *nborder,
         for (int c2 = 0; c2 < 3; c2++) m->nrm[3 * (size_t)fv[j] + c2] += n[c2];
     }
   }
-  for (pa_idx x = 0; x < m->nv; x++) rm3d_unit(m->nrm + 3 * (size_t)x);
+  for (pa_idx x = 0; x < m->nv; x++) {
+    if (twisted[x]) memset(m->nrm + 3 * (size_t)x, 0, 3 * sizeof(double));
+    rm3d_unit(m->nrm + 3 * (size_t)x);
+  }
   int ncurved = 0;
   for (pa_idx k = 0; k < m->ne; k++) {
     if (!(m->tflag[k] & RM3D_T_FACES)) continue;
@@ -185,7 +207,7 @@ static pa_status curved_normals(rm3d *m, const uint8_t *nborder,
       rm3d_unit(n);
       for (int j = 0; j < 3; j++) {
         pa_idx x = fv[j];
-        if (m->vtag[x] & RM3D_V_CURVED) continue;
+        if ((m->vtag[x] & RM3D_V_CURVED) || twisted[x]) continue;
         if ((m->vtag[x] & RM3D_V_FEAT) && nborder[x] != nfeat[x]) continue;
         const double *nx = m->nrm + 3 * (size_t)x;
         if (n[0] * nx[0] + n[1] * nx[1] + n[2] * nx[2] < 1.0 - 1e-10) {
@@ -206,18 +228,20 @@ cleanup:
 pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
   pa_status st = PA_SUCCESS;
   bedge *be = NULL;
-  uint8_t *nfeat = NULL, *nborder = NULL;
+  uint8_t *nfeat = NULL, *nborder = NULL, *twisted = NULL;
   pa_idx *other = NULL;
   PA_ALLOC(be, 3 * (size_t)m->tri.n + 1);
   size_t nbe = sorted_edges(m, be);
   PA_CALLOC(nborder, (size_t)m->nv);
-  PA_CALL(add_feature_edges(m, use_angle, be, nbe, nborder));
+  PA_CALLOC(twisted, (size_t)m->nv);
+  PA_CALL(add_feature_edges(m, use_angle, be, nbe, nborder, twisted));
   PA_CALLOC(nfeat, (size_t)m->nv);
   PA_ALLOC(other, 2 * (size_t)m->nv);
   mark_corners(m, use_angle, nfeat, other);
-  PA_CALL(curved_normals(m, nborder, nfeat));
+  PA_CALL(curved_normals(m, nborder, nfeat, twisted));
 cleanup:
   pa__free(be);
+  pa__free(twisted);
   pa__free(nborder);
   pa__free(nfeat);
   pa__free(other);

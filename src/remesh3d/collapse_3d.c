@@ -4,7 +4,8 @@
  *
  * Checked before applied: p is free (not locked, not a corner, not on a
  * frozen entity -- so no edge of a frozen tet is touched); the ball has one
- * reference; every modified tet keeps quality >= max(RM3D_QFLOOR, qratio *
+ * reference, or the faces between its references are all boundary
+ * triangles (an interface: p lies on it and moves along it); every modified tet keeps quality >= max(RM3D_QFLOOR, qratio *
  * old worst of the ball); no new edge longer than lguard. A boundary p (only
  * in surface mode) moves onto q along a boundary edge: a ridge vertex along
  * its ridge only (exactly two feature edges), its triangles keep their
@@ -96,22 +97,24 @@ cleanup:
 
 /* The qualities nq[i] of the tets of p's ball (ball[0..n)) with p moved to
  * q, -1 for the tets holding (p,q), which disappear. 1 when the ball has
- * one reference, no deleted tet is a cap (two boundary faces glued), some
- * but not all tets disappear, and the new worst quality is acceptable
- * against the old one. */
+ * one reference (or several with the faces between them listed,
+ * rm3d_refs_listed: p then lies on that surface), no deleted tet is a cap (two
+ * boundary faces glued), some but not all tets disappear, and the new
+ * worst quality is acceptable against the old one. */
 static int ball_qualities(const rm3d *m, pa_idx q, const pa_idx *ball, int n,
                           float *nq) {
   int32_t ref0 = m->tref[ball[0] >> 2];
   double qold = 1e30;
-  int nd = 0;
+  int nd = 0, mixed = 0;
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
-    if (m->tref[t] != ref0) return 0;
+    mixed |= m->tref[t] != ref0;
     if (m->q[t] < qold) qold = m->q[t];
   }
+  if (mixed && !rm3d_refs_listed(m, ball, n)) return 0;
   /* the lowest new quality accepted against qold (rm3d_q_ok, and at least
    * 0.3 qold): one tet below it refuses the collapse */
-  double qmin = fmax(0.3 * qold, rm3d_q_min(qold));
+  double qmin = fmax(0.3 * qold, rm3d_q_min(m, qold));
   const double *xq = m->x + 3 * (size_t)q;
   const double *mq = m->met + (size_t)m->mc * q;
   for (int i = 0; i < n; i++) {
@@ -133,13 +136,14 @@ static int ball_qualities(const rm3d *m, pa_idx q, const pa_idx *ball, int n,
   return nd != 0 && nd != n;
 }
 
-/* Length guard: 1 when no new edge (q, x) is longer than lguard. */
+/* Length guard: 1 when no new edge (q, x) is longer than lguard (the tets
+ * holding q disappear: their vertices are not renamed). */
 static int new_edges_short(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball,
-                           int n, const float *nq, double lguard) {
+                           int n, double lguard) {
   int ok = 1;
   for (int i = 0; i < n && ok; i++) {
-    if (nq[i] < 0) continue;
     const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
+    if (rm3d_loc(v, q) >= 0) continue;
     for (int j = 0; j < 4; j++) {
       pa_idx x = v[j];
       if (x == p || (m->vtag[x] & RM3D_V_MARK)) continue;
@@ -289,8 +293,12 @@ pa_status pa__rm3d_collapse_ball(rm3d *m, pa_idx p, pa_idx q,
   if (!rm3d_collapse_allowed(m, p, q)) return st;
   uint8_t tp = m->vtag[p];
   int surfp = (tp & RM3D_V_BDRY) != 0;
+  /* the length guard first: it refuses most of the collapses tried (84 %
+   * on the Kuhn cube, 77 % on the rod), for a length per neighbour
+   * instead of a quality per tet; both must pass, so the order changes no
+   * outcome */
+  if (!new_edges_short(m, p, q, ball, n, lguard)) return st;
   if (!ball_qualities(m, q, ball, n, nq)) return st;
-  if (!new_edges_short(m, p, q, ball, n, nq, lguard)) return st;
   if (surfp) {
     int ok;
     PA_CALL(surface_kept(m, p, q, ball, n, trec, &ntri, &ok));
@@ -346,22 +354,22 @@ static int mid_qualities(const rm3d *m, pa_idx p, const pa_idx *bq, int nb,
       continue;
     }
     double qq = rm3d_qual_moved(m, t, iq, xm, mm);
-    if (qq < RM3D_QABS) return 0;
+    if (qq < m->qabs) return 0;
     if (qq < qnew) qnew = qq;
     nq[i] = (float)qq;
   }
-  return !(qnew < 0.3 * qold || !rm3d_q_ok(qnew, qold));
+  return !(qnew < 0.3 * qold || !rm3d_q_ok(m, qnew, qold));
 }
 
 /* Whether every edge from xm (metric mm) to the vertices of the tets of
- * bq[0..nb) that q keeps (nq >= 0) is at most lguard long. */
-static int mid_lengths_ok(rm3d *m, pa_idx q, const pa_idx *bq, int nb,
-                          const double *xm, const double *mm, const float *nq,
+ * bq[0..nb) that q keeps (those without p) is at most lguard long. */
+static int mid_lengths_ok(rm3d *m, pa_idx p, pa_idx q, const pa_idx *bq,
+                          int nb, const double *xm, const double *mm,
                           double lguard) {
   int mc = m->mc, ok = 1;
   for (int i = 0; i < nb && ok; i++) {
-    if (nq[i] < 0) continue;
     const pa_idx *v = m->tv + 4 * (size_t)(bq[i] >> 2);
+    if (rm3d_loc(v, p) >= 0) continue;
     for (int j = 0; j < 4; j++) {
       pa_idx x = v[j];
       if (x == q || (m->vtag[x] & RM3D_V_MARK)) continue;
@@ -445,8 +453,8 @@ pa_status pa__rm3d_collapse_mid(rm3d *m, pa_idx p, pa_idx q,
   double xm[3], mm[6];
   for (int i = 0; i < 3; i++) xm[i] = 0.5 * (xp[i] + xq[i]);
   pa__rm3d_mid_metric(m, p, q, mm);
+  if (!mid_lengths_ok(m, p, q, bq, nb, xm, mm, lguard)) return st;
   if (!mid_qualities(m, p, bq, nb, xm, mm, oq, nq)) return st;
-  if (!mid_lengths_ok(m, q, bq, nb, xm, mm, nq, lguard)) return st;
   PA_CALL(collapse_at_mid(m, p, q, bp, np, bq, nb, xm, mm, oq, nq, lguard,
                           done));
 cleanup:

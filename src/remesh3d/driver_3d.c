@@ -350,11 +350,46 @@ pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, long *count) {
 /* Relocate the ends of the edges out of range (pa__rm3d_length_vertex),
  * then sweeps-1 more times those around a vertex that moved: a vertex whose
  * ball did not change gives the same answer again, so this is the same as
- * repeating the whole sweep. */
+ * repeating the whole sweep. Of those, a later sweep visits only the ones
+ * that may have an edge out of range (LEN_OUT), which are the only ones
+ * that can move: most of the vertices around a move have every edge in
+ * range. A vertex may have one when its last visit left it (refused, or
+ * moved with one out), or when a move of a neighbour measured their edge
+ * out of range; a move in this sweep also puts its neighbour on the list
+ * when that neighbour comes later in the sweep. */
+#define LEN_BALL 1u /* in the ball of a vertex that moved in this sweep */
+#define LEN_OUT 2u  /* may have an edge out of range */
+#define LEN_CAND 4u /* in the ball of a vertex that moved in the last sweep */
+
+/* After p moved (its ball[0..n)): its ball's vertices LEN_BALL, and both
+ * ends of each of its edges out of range LEN_OUT (a candidate of this sweep
+ * not visited yet becomes RM3D_V_TODO). */
+static void len_mark(rm3d *m, pa_idx p, const pa_idx *ball, int n,
+                     uint8_t *ls) {
+  for (int i = 0; i < n; i++) {
+    const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
+    for (int j = 0; j < 4; j++) {
+      pa_idx x = v[j];
+      ls[x] |= LEN_BALL;
+      if (x == p || (m->vtag[x] & RM3D_V_MARK)) continue;
+      m->vtag[x] |= RM3D_V_MARK;
+      double l = rm3d_len(m, p, x);
+      if (l >= PA_METRIC_LEN_LO_EXACT && l < PA_METRIC_LEN_HI_EXACT) continue;
+      ls[x] |= LEN_OUT;
+      ls[p] |= LEN_OUT;
+      if ((ls[x] & LEN_CAND) && x > p) m->vtag[x] |= RM3D_V_TODO;
+    }
+  }
+  for (int i = 0; i < n; i++) {
+    const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
+    for (int j = 0; j < 4; j++) m->vtag[v[j]] &= (uint8_t)~RM3D_V_MARK;
+  }
+}
+
 pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count) {
   pa_status st = PA_SUCCESS;
   pa_idx ball[RM3D_MAXBALL];
-  uint8_t *again = NULL;
+  uint8_t *ls = NULL; /* LEN_* */
   long c = 0;
   for (pa_idx k = 0; k < m->ne; k++) {
     if (m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN | RM3D_T_CLEAN)) continue;
@@ -370,30 +405,36 @@ pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count) {
       }
     if (clean) m->tflag[k] |= RM3D_T_CLEAN;
   }
-  if (sweeps > 1) PA_CALLOC(again, (size_t)m->nv);
+  if (sweeps > 1) PA_CALLOC(ls, (size_t)m->nv);
   for (int s = 0; s < sweeps; s++) {
     long moved = 0;
     for (pa_idx p = 0; p < m->nv; p++) {
       if (!(m->vtag[p] & RM3D_V_TODO)) continue;
       m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
       int n = pa__rm3d_length_vertex(m, p, ball);
-      if (!n) continue;
+      if (!ls) {
+        moved += n != 0;
+        continue;
+      }
+      if (!n) {
+        ls[p] |= LEN_OUT;
+        continue;
+      }
       moved++;
-      if (!again) continue;
-      for (int i = 0; i < n; i++)
-        for (int j = 0; j < 4; j++) again[m->tv[4 * (size_t)(ball[i] >> 2) + j]] = 1;
+      len_mark(m, p, ball, n, ls);
     }
     c += moved;
-    if (!moved || !again) break;
-    for (pa_idx p = 0; p < m->nv; p++)
-      if (again[p]) {
-        again[p] = 0;
-        if (!(m->vtag[p] & RM3D_V_DEAD)) m->vtag[p] |= RM3D_V_TODO;
-      }
+    if (!moved || !ls || s + 1 == sweeps) break;
+    for (pa_idx p = 0; p < m->nv; p++) {
+      uint8_t b = ls[p];
+      ls[p] = (uint8_t)((b & LEN_OUT) | ((b & LEN_BALL) ? LEN_CAND : 0));
+      if (!(b & LEN_BALL) || (m->vtag[p] & RM3D_V_DEAD)) continue;
+      if (b & LEN_OUT) m->vtag[p] |= RM3D_V_TODO;
+    }
   }
   *count = c;
 cleanup:
-  pa__free(again);
+  pa__free(ls);
   return st;
 }
 
@@ -721,12 +762,14 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
                    has_frozen(m));
   for (int it = 0; it < RM3D_ROUNDS_MAX; it++, (*npass)++) {
     long ns = 0, nc = 0, nw = 0, nm = 0;
+    long nc0 = m->ncollapse;
     double t1 = pa_wtime();
     PA_CALL(pa__rm3d_split_pass(m, PA_METRIC_LEN_HI_EXACT, &ns));
     double t2 = pa_wtime();
     PA_CALL(pa__rm3d_collapse_pass(m, PA_METRIC_LEN_LO_EXACT,
                                    PA_METRIC_LEN_HI_EXACT, &nc));
     double t3 = pa_wtime();
+    long nvc = m->ncollapse - nc0; /* the others removed an edge by a swap */
     if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(m, 0.3, 1.02, &nw));
     double t4 = pa_wtime();
     if (!opts->no_move) {
@@ -739,12 +782,12 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
     if (m->ndead_t > m->ne / 8) PA_CALL(pa__rm3d_compact(m, 1));
     if (m->verbosity > 0)
       fprintf(stderr,
-              "  rm3d round %d: %ld splits (%.2fs) %ld collapses (%.2fs) "
-              "%ld swaps (%.2fs) %ld moves (%.2fs), %d tets\n",
-              it, ns, t2 - t1, nc, t3 - t2, nw, t4 - t3, nm, t5 - t4,
+              "  rm3d round %d: %ld splits (%.2fs) %ld collapses (%ld by "
+              "swaps, %.2fs) %ld swaps (%.2fs) %ld moves (%.2fs), %d tets\n",
+              it, ns, t2 - t1, nc, nc - nvc, t3 - t2, nw, t4 - t3, nm, t5 - t4,
               (int)(m->ne - m->ndead_t));
     progress(opts, ++*step, m);
-    if (pa__rounds_stop(&rounds, ns, nc, m->ne - m->ndead_t)) break;
+    if (pa__rounds_stop(&rounds, ns, nvc, m->ne - m->ndead_t)) break;
   }
 cleanup:
   return st;

@@ -382,6 +382,7 @@ pa_status pa__rm3d_build(rm3d *m, pa_mesh *mesh, const pa_remesh_opts *opts) {
   m->opts = opts;
   m->ridge_cos = cos((opts->angle > 0 ? opts->angle : 45.0) * M_PI / 180.0);
   m->verbosity = opts->verbosity;
+  m->qabs = RM3D_QABS;
   pa_idx nv = mesh->nv, ne = mesh->ne;
   PA_CALL(pa__rm3d_reserve(m, (size_t)nv, (size_t)ne));
   m->nv = nv;
@@ -429,6 +430,8 @@ pa_status pa__rm3d_build(rm3d *m, pa_mesh *mesh, const pa_remesh_opts *opts) {
       if (m->tflag[k] & RM3D_T_FROZEN) m->vtag[v[j]] |= RM3D_V_LOCK;
     }
     m->q[k] = (float)rm3d_qual_v(m, v);
+    if (!(m->tflag[k] & RM3D_T_FROZEN) && RM3D_QABS_INPUT * m->q[k] < m->qabs)
+      m->qabs = RM3D_QABS_INPUT * m->q[k];
   }
   for (pa_idx i = 0; i < nv; i++)
     PA_CHECK(m->vtet[i] >= 0, PA_ERR_MESH,
@@ -696,29 +699,64 @@ static uint64_t spread3(uint64_t x) {
   return x;
 }
 
-/* Apply the permutation "old slot i goes to slot pos[i]" to n records of
- * size sz <= 64 in place, following cycles; done[] is n bytes of scratch
- * (in place: the reordering does not raise the memory peak). */
-static void permute(void *base, size_t sz, const pa_idx *pos, pa_idx n,
+/* Arrays of records that one permutation moves together (permute). */
+#define RM3D_PERM_MAX (8 + PA_MESH_MAX_FIELDS)
+typedef struct perm_arrays {
+  int n;
+  char *base[RM3D_PERM_MAX];
+  size_t sz[RM3D_PERM_MAX]; /* record sizes, each <= 64 bytes */
+} perm_arrays;
+
+static void perm_add(perm_arrays *pa, void *base, size_t sz) {
+  PA_ASSERT(pa->n < RM3D_PERM_MAX && sz <= 64);
+  pa->base[pa->n] = base;
+  pa->sz[pa->n++] = sz;
+}
+
+/* Copy a record of sz bytes: the sizes of permute's arrays inline (a call
+ * to memcpy per record was half the reordering's time). */
+static inline void copy_rec(char *dst, const char *src, size_t sz) {
+  switch (sz) {
+  case 1: *dst = *src; break;
+  case 4: memcpy(dst, src, 4); break;
+  case 8: memcpy(dst, src, 8); break;
+  case 16: memcpy(dst, src, 16); break;
+  case 24: memcpy(dst, src, 24); break;
+  case 48: memcpy(dst, src, 48); break;
+  default: memcpy(dst, src, sz);
+  }
+}
+
+/* Apply the permutation "old slot i goes to slot pos[i]" to the n records
+ * of every array of pa in place, following each cycle once for all of
+ * them; done[] is n bytes of scratch (in place: the reordering does not
+ * raise the memory peak). A cycle's steps wait on each other (the next slot
+ * is read from pos), so one walk moving every array's records, whose loads
+ * overlap, takes a fraction of a walk per array (rod -> 0.03: 0.31 -> 0.12
+ * s CPU for the reordering). */
+static void permute(const perm_arrays *pa, const pa_idx *pos, pa_idx n,
                     uint8_t *done) {
-  char tmp[64], tmp2[64];
-  char *a = base;
-  PA_ASSERT(sz <= sizeof tmp);
+  char tmp[RM3D_PERM_MAX][64], tmp2[64];
   memset(done, 0, (size_t)n);
   for (pa_idx s = 0; s < n; s++) {
     if (done[s]) continue;
-    memcpy(tmp, a + sz * s, sz);
+    for (int k = 0; k < pa->n; k++)
+      copy_rec(tmp[k], pa->base[k] + pa->sz[k] * s, pa->sz[k]);
     pa_idx i = s;
     for (;;) {
       pa_idx j = pos[i];
       done[i] = 1;
       if (j == s) {
-        memcpy(a + sz * s, tmp, sz);
+        for (int k = 0; k < pa->n; k++)
+          copy_rec(pa->base[k] + pa->sz[k] * s, tmp[k], pa->sz[k]);
         break;
       }
-      memcpy(tmp2, a + sz * j, sz);
-      memcpy(a + sz * j, tmp, sz);
-      memcpy(tmp, tmp2, sz);
+      for (int k = 0; k < pa->n; k++) {
+        char *r = pa->base[k] + pa->sz[k] * j;
+        copy_rec(tmp2, r, pa->sz[k]);
+        copy_rec(r, tmp[k], pa->sz[k]);
+        copy_rec(tmp[k], tmp2, pa->sz[k]);
+      }
       i = j;
     }
   }
@@ -754,15 +792,17 @@ static void vertex_positions(const rm3d *m, pa__key64 *key, pa_idx *pos) {
  * entity tables (rehashed) to them. */
 static void move_vertices(rm3d *m, const pa_idx *pos, uint8_t *done) {
   pa_idx nv = m->nv;
-  permute(m->x, 3 * sizeof(double), pos, nv, done);
-  permute(m->met, (size_t)m->mc * sizeof(double), pos, nv, done);
-  if (m->met0) permute(m->met0, (size_t)m->mc * sizeof(double), pos, nv, done);
-  if (m->nrm) permute(m->nrm, 3 * sizeof(double), pos, nv, done);
-  permute(m->vref, sizeof(int32_t), pos, nv, done);
-  permute(m->vpf, 1, pos, nv, done);
-  permute(m->vtag, 1, pos, nv, done);
+  perm_arrays pa = {0};
+  perm_add(&pa, m->x, 3 * sizeof(double));
+  perm_add(&pa, m->met, (size_t)m->mc * sizeof(double));
+  if (m->met0) perm_add(&pa, m->met0, (size_t)m->mc * sizeof(double));
+  if (m->nrm) perm_add(&pa, m->nrm, 3 * sizeof(double));
+  perm_add(&pa, m->vref, sizeof(int32_t));
+  perm_add(&pa, m->vpf, 1);
+  perm_add(&pa, m->vtag, 1);
   for (int k = 0; k < m->nfield; k++)
-    permute(m->fval[k], (size_t)m->fcomp[k] * sizeof(double), pos, nv, done);
+    perm_add(&pa, m->fval[k], (size_t)m->fcomp[k] * sizeof(double));
+  permute(&pa, pos, nv, done);
   for (size_t i = 0; i < 4 * (size_t)m->ne; i++) m->tv[i] = pos[m->tv[i]];
   rm3d_table *tabs[2] = {&m->tri, &m->edg};
   for (int t = 0; t < 2; t++) {
@@ -806,11 +846,13 @@ static void move_tets(rm3d *m, const pa_idx *pos, uint8_t *done) {
     pa_idx a = m->adj[i];
     if (a >= 0) m->adj[i] = 4 * pos[a >> 2] + (a & 3);
   }
-  permute(m->tv, 4 * sizeof(pa_idx), pos, ne, done);
-  permute(m->adj, 4 * sizeof(pa_idx), pos, ne, done);
-  permute(m->tflag, 1, pos, ne, done);
-  permute(m->tpf, 1, pos, ne, done);
-  permute(m->tref, sizeof(int32_t), pos, ne, done);
+  perm_arrays pa = {0};
+  perm_add(&pa, m->tv, 4 * sizeof(pa_idx));
+  perm_add(&pa, m->adj, 4 * sizeof(pa_idx));
+  perm_add(&pa, m->tflag, 1);
+  perm_add(&pa, m->tpf, 1);
+  perm_add(&pa, m->tref, sizeof(int32_t));
+  permute(&pa, pos, ne, done);
   for (pa_idx k = 0; k < ne; k++)
     for (int i = 0; i < 4; i++) m->vtet[m->tv[4 * (size_t)k + i]] = k;
 }

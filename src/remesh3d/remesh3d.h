@@ -110,6 +110,9 @@ typedef struct rm3d {
    * closed shell none of whose tets changed since (pa__rm3d_swap_edge). */
   uint8_t *swapfail;
   pa_idx nswapfail;
+  /* The quality no operator goes below (rm3d_q_min): RM3D_QABS, or less
+   * when the input's worst free tet is already poorer (set by build). */
+  double qabs;
   /* counters */
   long nsplit, ncollapse, nswap, nmove;
   pa_idx ndead_t, ndead_v;
@@ -138,6 +141,14 @@ enum { RM3D_SPREAD_TIGHT = 1, RM3D_SPREAD_WIDE = 2 };
 #define RM3D_LSPREAD_WIDE 2.0
 #define RM3D_QFLOOR 1e-3 /* operators create no worse element... */
 #define RM3D_QABS 1e-9   /* ...unless replacing worse ones, and never this */
+/* ...nor this share of the input's worst free tet, when that is poorer than
+ * RM3D_QABS (m->qabs). A strongly anisotropic metric measures valid,
+ * well-shaped tets of a mesh not aligned with it far below RM3D_QABS (box3d
+ * 6 in sizes 10, 10, 1e-4: 2.6e-10, a size ratio r = 1e5 lowers the metric
+ * quality of a Euclidean-regular tet to about r^-2); the operators must work
+ * there, and 1e-3 of the input's worst keeps the tets they make about as far
+ * from flat as the input's in Euclidean terms. */
+#define RM3D_QABS_INPUT 1e-3
 /* Least cosine between a boundary triangle's normal before and after an
  * operation (about 11 degrees): a collapse's renamed triangles, a boundary
  * swap's new ones against the old pair's mean, a split's halves, a move's
@@ -156,11 +167,11 @@ static inline double rm3d_tri_hausd(const rm3d *m, pa_idx r) {
 
 /* The lowest quality an operator may create where the worst element it
  * replaces had quality qref, and whether q is acceptable there. */
-static inline double rm3d_q_min(double qref) {
-  return fmax(RM3D_QABS, fmin(RM3D_QFLOOR, 0.5 * qref));
+static inline double rm3d_q_min(const rm3d *m, double qref) {
+  return fmax(m->qabs, fmin(RM3D_QFLOOR, 0.5 * qref));
 }
-static inline int rm3d_q_ok(double q, double qref) {
-  return q >= rm3d_q_min(qref);
+static inline int rm3d_q_ok(const rm3d *m, double q, double qref) {
+  return q >= rm3d_q_min(m, qref);
 }
 /* A length move may lower the ball's worst quality down to this (never
  * below the old worst if that is lower): the lengths are the target, a
@@ -176,6 +187,25 @@ static inline int rm3d_q_ok(double q, double qref) {
 /* Local index of vertex x in tet vertices v, -1 if absent. */
 static inline int rm3d_loc(const pa_idx *v, pa_idx x) {
   return v[0] == x ? 0 : v[1] == x ? 1 : v[2] == x ? 2 : v[3] == x ? 3 : -1;
+}
+
+/* 1 when every face between two tets of different references among the
+ * tets of ball[0..n) and their neighbours is a boundary triangle: the
+ * surface between the references (an interface, e.g. a level set cut into
+ * the mesh) is listed, so a collapse that keeps the listed triangles (the
+ * glued faces of the deleted tets inherit their tags) or a move along that
+ * surface keeps every reference where it was. A ball whose references
+ * change across an unlisted face is neither collapsed nor smoothed. */
+static inline int rm3d_refs_listed(const rm3d *m, const pa_idx *ball, int n) {
+  for (int i = 0; i < n; i++) {
+    pa_idx t = ball[i] >> 2;
+    for (int j = 0; j < 4; j++) {
+      pa_idx o = m->adj[4 * (size_t)t + j];
+      if (o >= 0 && m->tref[o >> 2] != m->tref[t] && !((m->tflag[t] >> j) & 1))
+        return 0;
+    }
+  }
+  return 1;
 }
 
 /* Lengths and qualities are metric/metric3d.h's kernels: the statistics

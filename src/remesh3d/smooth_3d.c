@@ -100,8 +100,8 @@ int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
       if (!found) {
         memcpy(dir, nn, sizeof nn);
         found = 1;
-      } else if (nn[0] * dir[0] + nn[1] * dir[1] + nn[2] * dir[2] <
-                 1.0 - 1e-12) {
+      } else if (fabs(nn[0] * dir[0] + nn[1] * dir[1] + nn[2] * dir[2]) <
+                 1.0 - 1e-12) { /* both sides of an interface: opposite */
         return 0;
       }
     }
@@ -315,8 +315,8 @@ static int metric_inverse(int mc, const double *mp, double *mi) {
  * ball[0..n) opposite p, mi the inverse metric at p (the ideal apex over a
  * face with normal n sits at height sqrt(2/3) along M^-1 n /
  * sqrt(n^T M^-1 n): the regular tet of unit edges in the metric); *qoldp
- * the ball's worst quality. 0 if the ball spans two references or holds a
- * frozen element. */
+ * the ball's worst quality. 0 if the ball spans two references across an
+ * unlisted face (rm3d_refs_listed) or holds a frozen element. */
 static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
                        const double *mi, double *qoldp, int *iworst,
                        double *c) {
@@ -325,10 +325,13 @@ static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
   int iw = 0;
   c[0] = c[1] = c[2] = 0;
   int32_t ref0 = m->tref[ball[0] >> 2];
+  int mixed = 0;
+  for (int i = 0; i < n; i++) mixed |= m->tref[ball[i] >> 2] != ref0;
+  if (mixed && !rm3d_refs_listed(m, ball, n)) return 0;
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
     int ip = ball[i] & 3;
-    if (m->tref[t] != ref0 || (m->tflag[t] & RM3D_T_FROZEN)) return 0;
+    if (m->tflag[t] & RM3D_T_FROZEN) return 0;
     if (m->q[t] < qold) {
       qold = m->q[t];
       iw = i;
@@ -356,7 +359,7 @@ static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
 
 /* The qualities nq[0..n) of p's ball[0..n) with p at np (metric mp), each
  * of which must be above qlo (at or above it when !strict) and at least
- * RM3D_QABS. Returns -1 when all are, else the index of a tet that is not
+ * m->qabs. Returns -1 when all are, else the index of a tet that is not
  * (nq then partly filled). The tet *first is tried first and then the
  * failing one is kept there: a move's trials at shorter steps, and the
  * ball's worst tet, fail on the same tets, so most refusals take one
@@ -370,7 +373,7 @@ static int moved_qualities(const rm3d *m, const pa_idx *ball, int n,
     int i = k == 0 ? f : k == f ? 0 : k;
     double q = rm3d_qual_moved(m, ball[i] >> 2, ball[i] & 3, np, mp);
     nq[i] = (float)q;
-    if (!(strict ? q > qlo : q >= qlo) || q < RM3D_QABS) {
+    if (!(strict ? q > qlo : q >= qlo) || q < m->qabs) {
       *first = i;
       return i;
     }
@@ -543,17 +546,20 @@ typedef struct len_ctx {
 
 /* The neighbours of p in its ball[0..n), each once (in the order the ball
  * meets them), and the ball's worst quality; 0 if the ball spans two
- * references, holds a frozen element or has more than RM3D_LNB
- * neighbours. */
+ * references across an unlisted face (rm3d_refs_listed), holds a frozen
+ * element or has more than RM3D_LNB neighbours. */
 static int ball_neighbours(rm3d *m, pa_idx p, const pa_idx *ball, int n,
                            len_ctx *lc) {
   pa_idx *nb = lc->nb;
   int nn = 0, ok = 1, iw = 0;
   double qold = 1e30;
   int32_t ref0 = m->tref[ball[0] >> 2];
+  int mixed = 0;
+  for (int i = 0; i < n; i++) mixed |= m->tref[ball[i] >> 2] != ref0;
+  if (mixed && !rm3d_refs_listed(m, ball, n)) ok = 0;
   for (int i = 0; i < n && ok; i++) {
     pa_idx t = ball[i] >> 2;
-    if (m->tref[t] != ref0 || (m->tflag[t] & RM3D_T_FROZEN)) ok = 0;
+    if (m->tflag[t] & RM3D_T_FROZEN) ok = 0;
     if (m->q[t] < qold) {
       qold = m->q[t];
       iw = i;

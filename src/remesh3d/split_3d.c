@@ -145,8 +145,8 @@ static int shell_qualities(const rm3d *m, const pa_idx *tets, int n, pa_idx a,
     double qb =
         pa__qual3(mc, px[0], px[1], px[2], px[3], pm[0], pm[1], pm[2], pm[3]);
     double qp = m->q[tets[i]];
-    if (relax ? (qa < RM3D_QABS || qb < RM3D_QABS)
-              : (!rm3d_q_ok(qa, qp) || !rm3d_q_ok(qb, qp)))
+    if (relax ? (qa < m->qabs || qb < m->qabs)
+              : (!rm3d_q_ok(m, qa, qp) || !rm3d_q_ok(m, qb, qp)))
       return 0;
     q1[i] = (float)qa;
     q2[i] = (float)qb;

@@ -115,7 +115,7 @@ static double ring_dp(const rm3d *m, pa_idx a, pa_idx b, const pa_idx *ring,
       arg[i][j] = bk;
     }
   double bw = best[0][nr - 1];
-  if (!(bw > target) || bw < RM3D_QABS) return -1;
+  if (!(bw > target) || bw < m->qabs) return -1;
   int n = 0;
   int stack[2 * R3_SWAP_MAXPOLY], sp = 0;
   stack[sp++] = 0;
@@ -439,7 +439,7 @@ pa_status pa__rm3d_swap_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
   if (gain < 1.0) {
     /* Removal of a short edge: the quality floor, and no new edge longer
      * than sqrt 2. */
-    if (!rm3d_q_ok(bw, qold)) return st;
+    if (!rm3d_q_ok(m, bw, qold)) return st;
     for (int i = 0; i < nnew; i++) {
       const pa_idx *t = nv4 + 4 * i;
       for (int e = 0; e < 3; e++) {
@@ -479,7 +479,7 @@ pa_status pa__rm3d_swap_face(rm3d *m, pa_idx k, int f, double gain,
     t[2] = d;
     t[3] = e;
     double q = rm3d_qual_v(m, t);
-    if (!(q > target) || q < RM3D_QABS) return st;
+    if (!(q > target) || q < m->qabs) return st;
   }
   pa_idx old[2] = {k, l};
   PA_CALL(pa__rm3d_replace(m, old, 2, nv4, 3, m->tref[k], m->tpf[k], 0));

@@ -77,11 +77,11 @@ rmdir set.1.vtu
 # not have run its handler by then (a SIGKILL leaves temporaries behind).
 export OMPI_MCA_odls_base_sigkill_timeout=20
 rm -f hold.flag
-PADAPT_TEST_HOLD_OUTPUT=hold.flag "$MPIEXEC" -n 2 "$PADAPT" partition cube.mesh \
-  -out set.meshb > out.txt 2>&1 &
+PADAPT_TEST_PAUSE=written PADAPT_TEST_PAUSE_FLAG=hold.flag "$MPIEXEC" -n 2 \
+  "$PADAPT" partition cube.mesh -out set.meshb > out.txt 2>&1 &
 pid=$!
-for _ in $(seq 600); do [ -e hold.flag ] && break; sleep 0.1; done
-sleep 0.5 # rank 1 holds too
+for _ in $(seq 600); do [ -s hold.flag ] && break; sleep 0.1; done
+sleep 0.5 # rank 1 has written its files too
 ntmp=$(ls ./*.tmp.* 2> /dev/null | wc -l)
 kill -TERM $pid
 wait $pid

@@ -139,9 +139,9 @@ def hessian_2d():
         seed_field.write_sol("u.sol", 2, seed_field.u_of(x))
         run("metric", "hessian", mesh, "-field", "u.sol", "-target", target,
             "-hmin", 1e-4, "-hmax", 0.3, "h.sol")
-        run("adapt", mesh, "-met", "h.sol", "-out", "ad.mesh", "-nosol")
-        mesh = "ad.mesh"
-    l2a, linfa, nva, _ = seed_field.errors(2, "ad.mesh")
+        run("adapt", mesh, "-met", "h.sol", "-out", "ad%d.mesh" % p, "-nosol")
+        mesh = "ad%d.mesh" % p
+    l2a, linfa, nva, _ = seed_field.errors(2, mesh)
     n = max(2, int(round(math.sqrt(nva / 1.0)))) - 1
     run("generate", "box2d", n, "uni.mesh")
     l2u, linfu, nvu, _ = seed_field.errors(2, "uni.mesh")
@@ -236,8 +236,8 @@ def levelset_2d():
         run("levelset", "sphere:%g:%g,%g" % (r0, cx, cy), mesh, "phi.sol")
         run("metric", "levelset", mesh, "-ls", "phi.sol", "-eps", eps, "-hmin", hmin,
             "-hmax", 0.1, "lsm.sol")
-        run("adapt", mesh, "-met", "lsm.sol", "-out", "lsa.mesh", "-nosol")
-        mesh = "lsa.mesh"
+        run("adapt", mesh, "-met", "lsm.sol", "-out", "lsa%d.mesh" % p, "-nosol")
+        mesh = "lsa%d.mesh" % p
     # the zero set of the linear interpolant of the exact distance, triangle by
     # triangle, against the circle: its crossing points and the midpoints of
     # its segments

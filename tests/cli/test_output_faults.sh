@@ -93,16 +93,16 @@ else
 fi
 
 # A signal while every temporary exists, just before the renames: the test
-# hook PADAPT_TEST_HOLD_OUTPUT makes the CLI create hold.flag then wait.
+# hook PADAPT_TEST_PAUSE makes the CLI create hold.flag then wait.
 # Background jobs of a script ignore SIGINT: the python wrapper restores
 # its default action, as in an interactive shell.
 for sig in TERM INT; do
   rm -f hold.flag
-  PADAPT_TEST_HOLD_OUTPUT=hold.flag /usr/bin/python3 -c \
+  PADAPT_TEST_PAUSE=written PADAPT_TEST_PAUSE_FLAG=hold.flag /usr/bin/python3 -c \
     'import os, signal, sys; signal.signal(signal.SIGINT, signal.SIG_DFL); os.execv(sys.argv[1], sys.argv[1:])' \
     "$PADAPT" adapt sq.mesh -hsiz 0.05 -out out.mesh -json out.json > /dev/null 2> err.txt &
   pid=$!
-  for _ in $(seq 600); do [ -e hold.flag ] && break; sleep 0.1; done
+  for _ in $(seq 600); do [ -s hold.flag ] && break; sleep 0.1; done
   ntmp=$(ls ./*.tmp.* 2> /dev/null | wc -l)
   kill -$sig $pid
   wait $pid

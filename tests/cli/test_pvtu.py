@@ -11,7 +11,11 @@ A 3-process adaptation written with -distributed-output; then:
     as many as the set's vertices (padapt stats), and every ghost point's
     gid is owned by another piece; the elements add up to the set's count
     and their gids are distinct;
-  - "metric" and "size" are 3 x 3 tensors with S M S = I.
+  - "metric" and "size" are 3 x 3 tensors with S M S = I;
+  - the active cell scalars are "quality" (as the README says), and every
+    boundary triangle and feature edge is in one piece only: as many as
+    the manifest counts, with distinct gids (the edges on the interfaces
+    between ranks were in both pieces).
 """
 import json
 import os
@@ -64,6 +68,15 @@ for kind in ("PPointData", "PCellData"):
         declared[(kind[1:], a.get("Name"))] = (a.get("type"),
                                                a.get("NumberOfComponents", "1"))
 
+if grid.find("PCellData").get("Scalars") != "quality":
+    fail("set.pvtu: active cell scalars '%s', not 'quality'" %
+         grid.find("PCellData").get("Scalars"))
+with open("set.manifest") as f:
+    glob = [l.split() for l in f if l.startswith("global ")][0]
+nglob = {"triangle": int(glob[glob.index("boundary") + 1]),
+         "line": int(glob[glob.index("edges") + 1])}
+cell_gids = {"triangle": [], "line": []}
+
 owned, elem_gids, nelem = [], [], 0
 ghost_gids = []
 for r in range(NP):
@@ -92,6 +105,8 @@ for r in range(NP):
         if c.type == "tetra":
             elem_gids += g.tolist()
             nelem += len(c.data)
+        else:
+            cell_gids[c.type] += g.tolist()
     met = m.point_data["metric"].reshape(-1, 3, 3)
     size = m.point_data["size"].reshape(-1, 3, 3)
     if not np.allclose(size @ met @ size, np.eye(3)[None], atol=1e-9):
@@ -105,6 +120,10 @@ if not set(ghost_gids) <= set(owned):
 if nelem != stats["elements"] or len(set(elem_gids)) != nelem:
     fail("elements: %d (%d distinct gids), the set has %d" %
          (nelem, len(set(elem_gids)), stats["elements"]))
+for t, g in cell_gids.items():
+    if len(g) != nglob[t] or len(set(g)) != len(g):
+        fail("%s cells: %d in the pieces (%d distinct gids), the set has %d" %
+             (t, len(g), len(set(g)), nglob[t]))
 print("%d pieces, %d owned points, %d elements" % (NP, len(owned), nelem))
 if fails:
     sys.exit("%d check(s) failed" % len(fails))

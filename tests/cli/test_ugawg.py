@@ -54,8 +54,10 @@ def case(field, dim, n, passes, floor, elmax):
     run("generate", "box%dd" % dim, str(n), mesh)
     for p in range(passes):
         run("metric", "ugawg-" + field, mesh, tag + ".sol")
-        run("adapt", mesh, "-met", tag + ".sol", "-out", mesh, "-nosol",
+        out = "%s-%d.mesh" % (tag, p)  # never the input: padapt refuses that
+        run("adapt", mesh, "-met", tag + ".sol", "-out", out, "-nosol",
             "-json", tag + ".json")
+        mesh = out
     x, cells = judge.read_mesh(mesh, dim)
     share, nedge = judge.edge_in_range(field, dim, x, cells)
     c = judge.complexity(field, dim)

@@ -10,12 +10,16 @@
  * with another extension are ignored), applies 1 to 4 random mutations and
  * reads the result. The reader must either succeed, and then the result is
  * walked (pa_mesh_check on a mesh, any status; every value of every field of
- * a solution), or fail with a non-empty message and no object returned.
+ * a solution), or fail with a non-empty message and no object returned. A
+ * mesh that passes the check (its missing boundary completed, as the CLI
+ * does) is then remeshed (pa_remesh, a uniform size of a fraction of its
+ * bounding box, under a memory bound): the remesher must never crash on
+ * what the check accepts, and must return a valid mesh or a clean error.
  * Anything else is counted as a violation and makes the exit status 1; a
  * memory error aborts the run under the sanitizers. The last line printed
  * counts the runs, the inputs read (of which valid: a mesh that passes
- * pa_mesh_check, a solution consistent with itself), the inputs refused,
- * the violations and the bytes left allocated by padapt.
+ * pa_mesh_check, a solution consistent with itself; of which remeshed), the
+ * inputs refused, the violations and the bytes left allocated by padapt.
  *
  * Invariants: the run depends only on SEED and on the corpus (files are taken
  * in name order), so a failure is replayed by the same command line. Before
@@ -27,6 +31,7 @@
 #include "padapt.h"
 
 #include <dirent.h>
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -40,6 +45,13 @@
 #define FUZZ_MAX_RUN 64
 /* Most mutations applied to one input. */
 #define FUZZ_MAX_MUTATIONS 4
+/* The size a valid mesh is remeshed to: its bounding box's diagonal over
+ * this, a few hundred elements at most, so that a remesh costs what a read
+ * does. */
+#define FUZZ_REMESH_DIV 6.0
+/* Memory bound of that remesh in MB: far above what such a mesh needs,
+ * low enough that a runaway remesh is stopped (and reported) quickly. */
+#define FUZZ_REMESH_MB 256.0
 
 typedef struct fuzz_buf {
   unsigned char *data;
@@ -309,12 +321,49 @@ static int walk_sol(pa_sol *sol) {
                : kind == PA_SOL_VECTOR ? dim
                : kind == PA_SOL_TENSOR ? dim * (dim + 1) / 2
                                        : -1;
-    if (ncomp != want || (nvert && !v)) return 0;
-    for (size_t i = 0; i < (size_t)nvert * (size_t)ncomp; i++)
+    pa_sol_at at;
+    pa_idx n;
+    if (pa_sol_field_where(sol, k, &at, &n, NULL) != PA_SUCCESS || n < 0 ||
+        (at == PA_SOL_AT_VERTICES && n != nvert))
+      return 0;
+    if (ncomp != want || (n && !v)) return 0;
+    for (size_t i = 0; i < (size_t)n * (size_t)ncomp; i++)
       sum += v[i];
   }
   (void)sum;
   return 1;
+}
+
+/* Remesh a mesh that passed pa_mesh_check to a uniform size (see
+ * FUZZ_REMESH_DIV): 1 when remeshed, 0 when the size is not a number (a
+ * bounding box out of range: nothing to ask), -1 when the contract broke
+ * (an internal error, an error without a message, or a result that fails
+ * the check). */
+static int remesh_valid(pa_mesh *mesh) {
+  int dim = pa_mesh_dim(mesh);
+  pa_idx nv = pa_mesh_nvert(mesh);
+  const double *x = pa_mesh_coords(mesh);
+  double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0}, d2 = 0;
+  for (pa_idx i = 0; i < nv; i++)
+    for (int c = 0; c < dim; c++) {
+      double v = x[(size_t)dim * i + c];
+      if (i == 0 || v < lo[c]) lo[c] = v;
+      if (i == 0 || v > hi[c]) hi[c] = v;
+    }
+  for (int c = 0; c < dim; c++)
+    d2 += (hi[c] - lo[c]) * (hi[c] - lo[c]);
+  double h = sqrt(d2) / FUZZ_REMESH_DIV;
+  if (!(h > 0) || !isfinite(h) || !isnormal(h)) return 0;
+  pa_remesh_opts opts;
+  pa_remesh_opts_default(&opts);
+  opts.hsiz = h;
+  opts.mem_mb = FUZZ_REMESH_MB;
+  opts.verbosity = -1;
+  pa_remesh_report rep;
+  pa_clear_error();
+  pa_status st = pa_remesh(pa_remesher_builtin(), mesh, &opts, &rep);
+  if (st != PA_SUCCESS) return st == PA_ERR_INTERNAL || !pa_last_error()[0] ? -1 : 1;
+  return pa_mesh_check(mesh) == PA_SUCCESS ? 1 : -1;
 }
 
 int main(int argc, char **argv) {
@@ -344,7 +393,7 @@ int main(int argc, char **argv) {
 
   fuzz_buf b = {NULL, 0, 0};
   char path[32] = "", prev[32] = "";
-  long nok = 0, nerr = 0, nvalid = 0, nbad = 0;
+  long nok = 0, nerr = 0, nvalid = 0, nremeshed = 0, nbad = 0;
   for (long it = 0; it < niter; it++) {
     const fuzz_seed *s = &seeds[rng_below((size_t)nseed)];
     b.len = 0;
@@ -383,12 +432,18 @@ int main(int argc, char **argv) {
         if (!mesh) {
           violation = 1;
         } else {
+          /* as the CLI reads a mesh: the missing boundary completed */
           pa_clear_error();
-          pa_status cst = pa_mesh_check(mesh);
-          if (cst == PA_SUCCESS)
+          pa_status cst = pa_mesh_build_boundary(mesh, 0, NULL);
+          if (cst == PA_SUCCESS) cst = pa_mesh_check(mesh);
+          if (cst == PA_SUCCESS) {
             nvalid++;
-          else if (!pa_last_error()[0])
+            int r = remesh_valid(mesh);
+            if (r < 0) violation = 1;
+            nremeshed += r > 0;
+          } else if (!pa_last_error()[0]) {
             violation = 1;
+          }
         }
       } else if (mesh) {
         violation = 1;
@@ -415,9 +470,9 @@ int main(int argc, char **argv) {
   if (prev[0]) remove(prev);
 
   size_t leaked = pa_memory_current();
-  printf("fuzz_readers %s: %ld runs, %ld read (%ld valid), %ld errors, "
-         "%ld violations, %zu bytes leaked\n",
-         reader, niter, nok, nvalid, nerr, nbad, leaked);
+  printf("fuzz_readers %s: %ld runs, %ld read (%ld valid, %ld remeshed), "
+         "%ld errors, %ld violations, %zu bytes leaked\n",
+         reader, niter, nok, nvalid, nremeshed, nerr, nbad, leaked);
   for (int i = 0; i < nseed; i++) {
     free(seeds[i].name);
     free(seeds[i].data);

@@ -12,7 +12,9 @@
  * later) are labelled, a vertex is inner only when labelled elements alone
  * touch it (and always
  * then, for a vertex inside the box), never on a curved boundary (a box
- * whose top is bent). Runs at any number of ranks.
+ * whose top is bent), where it is a surface vertex exactly when labelled
+ * elements alone touch it off the top's rim (in 3D; 2D has none). Runs at
+ * any number of ranks.
  */
 #include "testutil.h"
 #include "adapt/adapt.h"
@@ -74,7 +76,7 @@ static int layers_of(const pa__iter *it) {
 static void check_labels(pa__iter *it) {
   pa_dmesh *dm = it->dm;
   pa_mesh *m = pa_dmesh_mesh(dm);
-  int nve = it->nve, w = 3 + nve, wv = 9;
+  int nve = it->nve, w = 3 + nve, wv = 10;
   pa_idx nloc = pa_dmesh_nlocal(dm, PA_VERTEX);
   long long *mine = malloc(sizeof(long long) * (size_t)w * (it->ne + 1));
   long long *vmine = malloc(sizeof(long long) * (size_t)wv * (nloc + 1));
@@ -100,6 +102,7 @@ static void check_labels(pa__iter *it) {
     for (int k = 0; k < 4; k++) r[1 + k] = it->vlab[4 * v + k];
     r[5] = it->vinner[v] == PA_ADAPT_INNER_TRANSIT;
     r[8] = it->vinner[v] == PA_ADAPT_LABELLED_TRANSIT;
+    r[9] = it->vinner[v] == PA_ADAPT_SURFACE_TRANSIT;
     r[6] = nb;
     r[7] = on_curved_top(x + (size_t)it->dim * v, it->dim);
   }
@@ -121,7 +124,7 @@ static void check_labels(pa__iter *it) {
       hi[v] = thi[v] = -PA_ADAPT_NOLABEL;
     }
     int bad_cover = 0, bad_grow = 0, bad_req = 0, bad_range = 0, bad_inner = 0;
-    int ninner = 0, ncurved = 0, nlabelled = 0;
+    int ninner = 0, ncurved = 0, nlabelled = 0, nsurface = 0;
     for (int e = 0; e < ne; e++) {
       const long long *r = all + (size_t)w * e;
       long long l = r[0] < 0 ? PA_ADAPT_NOLABEL : r[0];
@@ -174,9 +177,12 @@ static void check_labels(pa__iter *it) {
       int labelled = hi[v] != PA_ADAPT_NOLABEL;
       bad_inner += r[5] && (!labelled || r[7]);
       bad_inner += !r[5] && labelled && r[6] == 0 && !r[7];
+      /* on the smooth part of the bent top (off its rim), in 3D */
+      bad_inner += r[9] != (it->dim == 3 && labelled && r[7] && r[6] == 0);
       /* labelled only, not inner: skin edges towards an inner vertex only */
-      bad_inner += r[8] != (labelled && !r[5]);
+      bad_inner += r[8] != (labelled && !r[5] && !r[9]);
       nlabelled += r[8] != 0;
+      nsurface += r[9] != 0;
       ncurved += r[7] != 0;
       ninner += r[5] != 0;
     }
@@ -188,7 +194,7 @@ static void check_labels(pa__iter *it) {
     CHECK(bad_inner == 0);
     CHECK(ninner > 0);
     if (!sparse) CHECK(nlabelled > 0); /* sparse tags may miss the sides */
-    if (warp) CHECK(ncurved > 0);
+    if (warp) CHECK(ncurved > 0 && (nsurface > 0) == (it->dim == 3));
     int ntag = 0, nlab = 0;
     for (int e = 0; e < ne; e++) {
       ntag += all[(size_t)w * e + 1] != 0;
@@ -196,8 +202,8 @@ static void check_labels(pa__iter *it) {
     }
     printf("  %d pieces, %d skin layers: %d elements (%d tagged, %d "
            "labelled), %d vertex copies, %d inner, %d labelled only, %d on a "
-           "curved boundary\n", it->npieces, layers_of(it), ne, ntag, nlab,
-           nvr, ninner, nlabelled, ncurved);
+           "curved boundary (%d surface)\n", it->npieces, layers_of(it), ne,
+           ntag, nlab, nvr, ninner, nlabelled, ncurved, nsurface);
     free(lo);
     free(hi);
     free(tlo);

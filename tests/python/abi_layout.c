@@ -18,6 +18,7 @@ int main(void) {
   SIZE(pa_fidelity);
   SIZE(pa_write_opts);
   SIZE(pa_remesh_opts);
+  SIZE(pa_transfer_report);
   SIZE(pa_remesh_report);
   SIZE(pa_metric_hessian_opts);
   SIZE(pa_metric_levelset_opts);
@@ -25,6 +26,12 @@ int main(void) {
   SIZE(pa_adapt_iter);
   SIZE(pa_adapt_opts);
   SIZE(pa_adapt_report);
+  SIZE(pa_ls_material);
+  SIZE(pa_levelset_opts);
+  SIZE(pa_levelset_report);
+  OFF(pa_levelset_opts, mat);
+  OFF(pa_levelset_opts, snap);
+  OFF(pa_levelset_report, vol_out);
   OFF(pa_write_opts, diagnostics);
   OFF(pa_remesh_opts, hausd);
   OFF(pa_remesh_opts, no_stats);

@@ -7,6 +7,7 @@ import subprocess
 import unittest
 
 from padapt import _lib
+from padapt import levelset as _levelset
 from padapt import mesh as _mesh
 
 MIRROR = {
@@ -14,6 +15,7 @@ MIRROR = {
     "pa_fidelity": _lib.Fidelity,
     "pa_write_opts": _mesh._WriteOpts,
     "pa_remesh_opts": _lib.RemeshOpts,
+    "pa_transfer_report": _lib.TransferReport,
     "pa_remesh_report": _lib.RemeshReport,
     "pa_metric_hessian_opts": _lib.HessianOpts,
     "pa_metric_levelset_opts": _lib.LevelsetOpts,
@@ -21,6 +23,9 @@ MIRROR = {
     "pa_adapt_iter": _lib.AdaptIter,
     "pa_adapt_opts": _lib.AdaptOpts,
     "pa_adapt_report": _lib.AdaptReport,
+    "pa_ls_material": _levelset.Material,
+    "pa_levelset_opts": _levelset.CutOpts,
+    "pa_levelset_report": _levelset.CutReport,
 }
 
 

@@ -230,6 +230,26 @@ class AdaptBadInput(unittest.TestCase):
         self.assertEqual(cm.exception.status, "invalid mesh")
         self.assertIn("element 1", str(cm.exception))
 
+    def test_duplicated_and_folded_refused(self):
+        """A tetrahedron listed twice crashed the 3D remesher (and the
+        interpreter with it); folded elements reached it too."""
+        tet = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+        cases = [
+            (tet, [[0, 1, 2, 3], [0, 1, 2, 3]], "elements 1 and 2 have the same vertices"),
+            (np.vstack([tet, [[0.2, 0.2, 0.3]]]), [[0, 1, 2, 3], [0, 1, 2, 4]],
+             "elements 1 and 2 overlap"),
+        ]
+        a = 2 * np.pi * 2 * np.arange(7) / 7  # seven triangles turning twice
+        fan = np.vstack([[0, 0], np.c_[np.cos(a), np.sin(a)]])
+        cases.append((fan, [[0, 1 + k, 1 + (k + 1) % 7] for k in range(7)],
+                      "around vertex 1 turn 2 times"))
+        for pts, cells, msg in cases:
+            with self.subTest(msg=msg):
+                with self.assertRaises(padapt.Error) as cm:
+                    padapt.adapt(padapt.Mesh(pts, np.array(cells)), hsiz=0.3)
+                self.assertEqual(cm.exception.status, "invalid mesh")
+                self.assertIn(msg, str(cm.exception))
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)

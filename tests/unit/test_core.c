@@ -69,6 +69,36 @@ static void test_fail_hook(void) {
   pa_memory_fail_after(0);
 }
 
+/* pa_memory_set_limit: an allocation past the bound fails, and the error
+ * of the call that made it says the bound is reached. */
+static void test_memory_bound(void) {
+  size_t cur = pa_memory_current();
+  CHECK(pa_memory_set_limit(cur + 1000) == 0);
+  CHECK(pa_memory_limit() == cur + 1000);
+  void *a = pa__malloc(600);
+  CHECK(a != NULL);
+  CHECK(pa__malloc(600) == NULL);
+  CHECK(pa__realloc(a, 1200) == NULL); /* a kept as it was */
+  void *b = pa__realloc(a, 900);
+  CHECK(b != NULL);
+  pa__free(b);
+  CHECK(pa_memory_set_limit(0) == cur + 1000);
+  pa_mesh *m = NULL;
+  pa_idx v;
+  double x[2] = {0, 0};
+  CHECK_OK(pa_mesh_create(2, &m));
+  pa_memory_set_limit(pa_memory_current() + 1000);
+  pa_status st = PA_SUCCESS;
+  for (int i = 0; i < 1000 && st == PA_SUCCESS; i++)
+    st = pa_mesh_add_vertex(m, x, 0, &v);
+  CHECK(st == PA_ERR_MEMORY);
+  CHECK(strstr(pa_last_error(), "memory bound") != NULL);
+  pa_mesh_destroy(m);
+  pa_memory_set_limit(0);
+  CHECK(pa_memory_current() == cur);
+  pa_clear_error();
+}
+
 static void test_mesh_storage(void) {
   pa_mesh *m = NULL;
   CHECK(pa_mesh_create(4, &m) == PA_ERR_ARG);
@@ -105,4 +135,5 @@ static void test_mesh_storage(void) {
   free(h);
 }
 
-TEST_MAIN(test_allocator, test_sort_by_gid, test_fail_hook, test_mesh_storage)
+TEST_MAIN(test_allocator, test_sort_by_gid, test_fail_hook, test_memory_bound,
+          test_mesh_storage)

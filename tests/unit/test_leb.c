@@ -9,7 +9,14 @@
  *  - skins: the two halves of a box, refined separately, end with the same
  *    skin vertices (coordinates and metric, bit for bit) and skin faces, no
  *    splittable skin edge longer than skin_lmax, and onskin marking exactly
- *    the new vertices on the skin;
+ *    the new vertices on the skin; with the vertices of the cut on the
+ *    box's boundary labelled: hard ones (their boundary edges stay whole,
+ *    and the faces leaning on them terminate), soft ones (their boundary
+ *    edges split at the midpoint); with the box's top bent into a curve,
+ *    the cut's vertices on it given the normals of the curve: the skin
+ *    edges on it split onto it (five times closer than the chord's
+ *    midpoint), and with the normals of a curve much deeper than the mesh
+ *    (a thin slab), the elements the points turn over counted;
  *  - a failed allocation leaks nothing.
  */
 #include "testutil.h"
@@ -132,8 +139,10 @@ static double centroid_x(const pa_mesh *m, pa_idx e) {
 }
 
 /* New vertices (index >= nv0) that are not the exact midpoint of two earlier
- * vertices named by parent, or whose fields are not the parents' mean. */
-static int bad_midpoints(const pa_mesh *m, pa_idx nv0, const pa_idx *parent) {
+ * vertices named by parent (when placed on a curve, onskin 2: only the
+ * parents are checked), or whose fields are not the parents' mean. */
+static int bad_midpoints(const pa_mesh *m, pa_idx nv0, const pa_idx *parent,
+                         const uint8_t *onskin) {
   int bad = 0, d = m->dim;
   for (pa_idx v = nv0; v < m->nv; v++) {
     pa_idx a = parent[2 * (v - nv0)], b = parent[2 * (v - nv0) + 1];
@@ -141,6 +150,7 @@ static int bad_midpoints(const pa_mesh *m, pa_idx nv0, const pa_idx *parent) {
       bad++;
       continue;
     }
+    if (onskin && onskin[v - nv0] == 2) continue;
     const double *x = m->coord + (size_t)d * v;
     const double *xa = m->coord + (size_t)d * a, *xb = m->coord + (size_t)d * b;
     int ok = 1;
@@ -176,7 +186,7 @@ static void plain(int dim) {
   CHECK_OK(pa_mesh_copy(m, &m0));
   edge_figures f0 = measure_edges(m0, LMAX);
   CHECK(f0.unblocked > 0); /* the input needs refining */
-  pa__leb_opts o = {LMAX, 0, NULL, 0};
+  pa__leb_opts o = {.lmax = LMAX};
   pa_idx *parent = NULL;
   uint8_t *onskin = NULL;
   CHECK_OK(pa__leb_refine(m, &o, &parent, &onskin));
@@ -188,7 +198,7 @@ static void plain(int dim) {
   CHECK(!memcmp(m->bdry, m0->bdry, sizeof(pa_idx) * dim * m0->nb));
   CHECK(!memcmp(m->bref, m0->bref, sizeof(int32_t) * m0->nb));
   CHECK(!memcmp(m->coord, m0->coord, sizeof(double) * dim * m0->nv));
-  CHECK(parent && bad_midpoints(m, m0->nv, parent) == 0);
+  CHECK(parent && bad_midpoints(m, m0->nv, parent, NULL) == 0);
   CHECK_OK(pa_mesh_field(m, 0, NULL, NULL, &y));
   for (pa_idx v = 0; v < m->nv; v++) {
     double exact[2];
@@ -226,7 +236,7 @@ static void frozen(int dim) {
       nfrozen++;
     }
   CHECK_OK(pa_mesh_copy(m, &m0));
-  pa__leb_opts o = {LMAX, 0, NULL, 0};
+  pa__leb_opts o = {.lmax = LMAX};
   CHECK_OK(pa__leb_refine(m, &o, NULL, NULL));
   CHECK_OK(pa_mesh_check(m));
   CHECK_NEAR(pa_mesh_volume(m), pa_mesh_volume(m0), 1e-12);
@@ -366,9 +376,48 @@ static pa_mesh *half(const pa_mesh *box, int side) {
 /* Refine one half with its skin, and check it on its own: valid, same
  * volume, the box's boundary entities untouched, exact midpoints, onskin set
  * exactly on the cut, no splittable skin edge longer than SKIN_LMAX. */
-/* labelled: the vertices of the cut on the box's boundary are marked 2
- * (labelled: bisected only towards an inner vertex), else 0. */
+/* labelled: the vertices of the cut on the box's boundary are marked 4
+ * (hard: their boundary edges stay whole) with LAB_HARD, 2 (labelled) with
+ * LAB_SOFT, 2 and 3 (with the normal of the curve) on a bent top with
+ * LAB_CURVE (the top a cylinder of radius 1 along x through the top
+ * edges, top()), the same for a slab 100 times thinner with LAB_THIN (the
+ * normals of the unthinned top); else 0. */
+enum { LAB_NONE, LAB_HARD, LAB_SOFT, LAB_CURVE, LAB_THIN };
 static int labelled;
+#define THIN 0.01
+/* the height of the cylinder's axis */
+#define AXIS (1 - sqrt(0.75))
+
+static double top(double y) { return AXIS + sqrt(1 - (y - 0.5) * (y - 0.5)); }
+
+/* Vertex v of the bent box (LAB_CURVE, LAB_THIN) on its top. */
+static int on_top(const pa_mesh *m, pa_idx v) {
+  const double *x = m->coord + 3 * (size_t)v;
+  double f = labelled == LAB_THIN    ? THIN * top(x[1])
+             : labelled == LAB_CURVE ? top(x[1])
+                                     : 1;
+  return fabs(x[2] - f) < 1e-12;
+}
+
+/* The box bent (and made thin) as labelled says. */
+static void bend(pa_mesh *m) {
+  if (m->dim != 3 || labelled < LAB_CURVE) return;
+  for (pa_idx v = 0; v < m->nv; v++) {
+    double *x = m->coord + 3 * (size_t)v;
+    x[2] *= top(x[1]) * (labelled == LAB_THIN ? THIN : 1);
+  }
+}
+
+/* leb.c's o->on_boundary for vertices of the cut on the box's boundary:
+ * with LAB_HARD any two (it may err that way), else exactly: both on one
+ * face of the (bent) box. */
+static int cut_on_boundary(void *ctx, pa_idx a, pa_idx b) {
+  const pa_mesh *m = ctx;
+  const double *x = m->coord + 3 * (size_t)a, *y = m->coord + 3 * (size_t)b;
+  if (labelled == LAB_HARD) return 1;
+  return (x[1] == 0 && y[1] == 0) || (x[1] == 1 && y[1] == 1) ||
+         (x[2] == 0 && y[2] == 0) || (on_top(m, a) && on_top(m, b));
+}
 
 static void refine_half(pa_mesh *m) {
   int d = m->dim;
@@ -379,27 +428,79 @@ static void refine_half(pa_mesh *m) {
   memcpy(bdry0, m->bdry, sizeof *bdry0 * d * nbox);
   double vol0 = pa_mesh_volume(m);
   uint8_t *ok = malloc((size_t)nv0), *onskin = NULL;
-  for (pa_idx v = 0; v < nv0; v++)
-    ok[v] = (uint8_t)(skin_inner(m, v) ? 1 : labelled && on_cut(m, v) ? 2 : 0);
-  pa__leb_opts o = {LMAX, SKIN_REF, ok, SKIN_LMAX};
+  double *nrm = calloc((size_t)d * nv0, sizeof *nrm), *mid = NULL;
+  int curved = labelled >= LAB_CURVE && d == 3;
+  for (pa_idx v = 0; v < nv0; v++) {
+    int inner = skin_inner(m, v) && !(curved && on_top(m, v));
+    ok[v] = (uint8_t)(inner ? 1 : labelled && on_cut(m, v) ? 2 : 0);
+    if (ok[v] == 2 && labelled == LAB_HARD) ok[v] = 4;
+    if (ok[v] == 2 && curved && on_top(m, v) && m->coord[3 * (size_t)v + 1] > 0 &&
+        m->coord[3 * (size_t)v + 1] < 1) {
+      /* the normal of the cylinder, also for the thin slab */
+      double *n = nrm + 3 * (size_t)v, y = m->coord[3 * (size_t)v + 1];
+      n[1] = y - 0.5;
+      n[2] = top(y) - AXIS;
+      ok[v] = 3;
+    }
+  }
+  pa_idx curve_bad = 0;
+  pa__leb_opts o = {.lmax = LMAX, .skin_ref = SKIN_REF, .skin_ok = ok,
+                    .skin_lmax = SKIN_LMAX, .curve_bad = &curve_bad};
+  if (labelled && d == 3) {
+    o.on_boundary = cut_on_boundary;
+    o.ctx = m;
+  }
+  if (curved) o.normal = nrm;
   CHECK_OK(pa__leb_refine(m, &o, &parent, &onskin));
+  if (labelled == LAB_THIN) {
+    /* the points on the deep curve cross the slab */
+    CHECK(curve_bad > 0);
+    printf("skin on a thin slab: %d elements turned over\n", (int)curve_bad);
+    goto done;
+  }
+  CHECK(curve_bad == 0);
   CHECK_OK(pa_mesh_check(m));
-  CHECK_NEAR(pa_mesh_volume(m), vol0, 1e-12);
-  CHECK(!memcmp(m->bdry, bdry0, sizeof *bdry0 * d * nbox));
-  int nbad = 0;
-  for (pa_idx f = nbox; f < m->nb; f++)
-    nbad += m->bref[f] != SKIN_REF;
-  CHECK(nbad == 0);
+  /* the points on the curve add volume */
+  if (!curved) CHECK_NEAR(pa_mesh_volume(m), vol0, 1e-12);
+  /* the box's faces on the cut's border are split with its edges */
+  if (!labelled || labelled == LAB_HARD || d == 2) {
+    CHECK(!memcmp(m->bdry, bdry0, sizeof *bdry0 * d * nbox));
+    int nbad = 0;
+    for (pa_idx f = nbox; f < m->nb; f++)
+      nbad += m->bref[f] != SKIN_REF;
+    CHECK(nbad == 0);
+  }
   CHECK(m->nv > nv0 && parent && onskin);
-  CHECK(parent && bad_midpoints(m, nv0, parent) == 0);
-  int wrong = 0, nchecked = 0, nlong = 0, nlab = 0;
+  CHECK(parent && bad_midpoints(m, nv0, parent, onskin) == 0);
+  int wrong = 0, nchecked = 0, nlong = 0, nlab = 0, nbord = 0, ncurve = 0,
+      nfar = 0;
+  mid = malloc(sizeof *mid * 3 * (size_t)(m->nv + 1));
   for (pa_idx v = nv0; v < m->nv && onskin; v++) {
-    wrong += onskin[v - nv0] != on_cut(m, v);
-    /* split next to a labelled vertex: one end inner, the other not */
+    wrong += (onskin[v - nv0] != 0) != on_cut(m, v);
     pa_idx a = parent[2 * (v - nv0)], b = parent[2 * (v - nv0) + 1];
-    if (a < nv0 && b < nv0) nlab += ok[a] + ok[b] == 3;
+    /* split next to a labelled vertex: one end inner, the other not */
+    if (a < nv0 && b < nv0) nlab += (ok[a] == 1) != (ok[b] == 1) && ok[a] && ok[b];
+    /* a border edge of the cut split: both ends labelled */
+    if (a < nv0 && b < nv0) nbord += ok[a] >= 2 && ok[b] >= 2;
+    if (onskin[v - nv0] == 2) {
+      /* on the curve: much closer to it than the chord's midpoint */
+      const double *x = m->coord + 3 * (size_t)v;
+      const double *xa = m->coord + 3 * (size_t)a, *xb = m->coord + 3 * (size_t)b;
+      double c[3];
+      for (int k = 0; k < 3; k++) c[k] = 0.5 * xa[k] + 0.5 * xb[k];
+      double chord = fabs(c[2] - top(c[1]));
+      ncurve++;
+      nfar += chord > 1e-12 && !(fabs(x[2] - top(x[1])) < 0.2 * chord);
+    }
   }
   CHECK(labelled ? nlab > 0 : nlab == 0);
+  /* hard border edges stay whole, the others are split (in 3D, where the
+   * cut's border lies on the box's faces) */
+  if (d == 3) CHECK(labelled == LAB_HARD || !labelled ? nbord == 0 : nbord > 0);
+  CHECK(curved ? ncurve > 0 && nfar == 0 : ncurve == 0);
+  if (curved)
+    printf("skin on a bent top: %d vertices on the curve, %d far from it\n",
+           ncurve, nfar);
   for (pa_idx f = nbox; f < m->nb; f++) {
     const pa_idx *v = m->bdry + (size_t)d * f;
     for (int i = 0; i < (d == 2 ? 1 : 3); i++) {
@@ -413,8 +514,11 @@ static void refine_half(pa_mesh *m) {
   CHECK(nchecked > 0 && nlong == 0);
   printf("skin %dD half: %d -> %d vertices, %d -> %d skin faces\n", d, (int)nv0,
          (int)m->nv, (int)(nb0 - nbox), (int)(m->nb - nbox));
+done:
   free(bdry0);
   free(ok);
+  free(nrm);
+  free(mid);
   pa__free(parent);
   pa__free(onskin);
 }
@@ -428,6 +532,7 @@ static void skin(int dim, int n, const char *spec) {
   CHECK_OK(pa_metric_analytic(b, spec));
   for (pa_idx v = 0; v < b->nv; v++)
     b->met[v] *= 0.5 + b->coord[(size_t)dim * v];
+  bend(b);
   int n0, ncut[2], nface[2];
   tuple *cut[2], *face[2];
   free(cut_vertices(b, &n0));
@@ -436,7 +541,7 @@ static void skin(int dim, int n, const char *spec) {
     refine_half(p[s]);
     cut[s] = cut_vertices(p[s], &ncut[s]);
     face[s] = skin_faces(p[s], &nface[s]);
-    CHECK(ncut[s] > 2 * n0);
+    if (labelled != LAB_THIN) CHECK(ncut[s] > 2 * n0);
   }
   CHECK(same_tuples(cut[0], ncut[0], cut[1], ncut[1]));
   CHECK(same_tuples(face[0], nface[0], face[1], nface[1]));
@@ -456,7 +561,7 @@ static void test_alloc_failure(void) {
     pa_mesh *m = box(2, 4, 0.05);
     pa_idx *parent = NULL;
     uint8_t *onskin = NULL;
-    pa__leb_opts o = {LMAX, 0, NULL, 0};
+    pa__leb_opts o = {.lmax = LMAX};
     pa_memory_fail_after(n);
     pa_status st = pa__leb_refine(m, &o, &parent, &onskin);
     pa_memory_fail_after(0);
@@ -482,17 +587,28 @@ static void test_skin_3d(void) { skin(3, 6, "iso-shell:0.1"); }
  * terminate (an apex sliding to that edge without end was a bug) and agree
  * on both sides. */
 static void test_skin_labelled_2d(void) {
-  labelled = 1;
+  labelled = LAB_SOFT;
   skin(2, 8, "iso-shell:0.1");
-  labelled = 0;
+  labelled = LAB_NONE;
 }
 static void test_skin_labelled_3d(void) {
-  labelled = 1;
-  skin(3, 2, "uniform:0.15");
-  skin(3, 6, "iso-shell:0.1");
-  labelled = 0;
+  for (labelled = LAB_HARD; labelled <= LAB_SOFT; labelled++) {
+    skin(3, 2, "uniform:0.15");
+    skin(3, 6, "iso-shell:0.1");
+  }
+  labelled = LAB_NONE;
+}
+/* The top bent, the cut's vertices on it with the normals of the curve:
+ * the skin edges on it split onto it; on a thin slab with the normals of
+ * the deep curve, the elements the points turn over are counted. */
+static void test_skin_curved_3d(void) {
+  labelled = LAB_CURVE;
+  skin(3, 6, "uniform:0.05");
+  labelled = LAB_THIN;
+  skin(3, 4, "uniform:0.1");
+  labelled = LAB_NONE;
 }
 
 TEST_MAIN(test_plain_2d, test_plain_3d, test_frozen_2d, test_frozen_3d,
           test_skin_2d, test_skin_3d, test_skin_labelled_2d,
-          test_skin_labelled_3d, test_alloc_failure)
+          test_skin_labelled_3d, test_skin_curved_3d, test_alloc_failure)

@@ -630,16 +630,20 @@ static void test_check_hand_meshes(void) {
   CHECK(has_msg("elements 1, 2, 3"));
   pa_mesh_destroy(m);
 
-  /* 3D: three tetrahedra on face (1 2 3). */
-  CHECK_OK(pa_mesh_create(3, &m));
-  double r[5][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.2, 0.2, 1},
-                    {0.2, 0.2, -1}};
-  pa_idx tt[3][4] = {{0, 1, 2, 3}, {0, 2, 1, 4}, {1, 0, 2, 3}};
-  for (int i = 0; i < 5; i++) CHECK_OK(pa_mesh_add_vertex(m, r[i], 0, NULL));
-  for (int i = 0; i < 3; i++) CHECK_OK(pa_mesh_add_elem(m, tt[i], 1, NULL));
-  CHECK(pa_mesh_build_adjacency(m, &adja) == PA_ERR_MESH);
-  CHECK(has_msg("face (1 2 3) is shared by more than two elements"));
-  pa_mesh_destroy(m);
+  /* 3D: three tetrahedra on face (1 2 3); then the third one is the first
+   * listed again (its vertices in another order). */
+  for (int dup = 0; dup < 2; dup++) {
+    CHECK_OK(pa_mesh_create(3, &m));
+    double r[6][3] = {{0, 0, 0},     {1, 0, 0},      {0, 1, 0},
+                      {0.2, 0.2, 1}, {0.2, 0.2, -1}, {0.1, 0.3, 2}};
+    pa_idx tt[3][4] = {{0, 1, 2, 3}, {0, 2, 1, 4}, {1, 0, 2, dup ? 3 : 5}};
+    for (int i = 0; i < 6; i++) CHECK_OK(pa_mesh_add_vertex(m, r[i], 0, NULL));
+    for (int i = 0; i < 3; i++) CHECK_OK(pa_mesh_add_elem(m, tt[i], 1, NULL));
+    CHECK(pa_mesh_build_adjacency(m, &adja) == PA_ERR_MESH);
+    CHECK(has_msg(dup ? "elements 1 and 3 have the same vertices"
+                      : "face (1 2 3) is shared by more than two elements"));
+    pa_mesh_destroy(m);
+  }
 
   /* Metric values are checked (when pa__metric_valid rejects NaN). */
   CHECK_OK(pa_mesh_generate_box(2, 2, &m));

@@ -677,9 +677,67 @@ static void test_alloc_failure(void) {
   pa_mesh_destroy(c);
 }
 
+/* box3d 6 in sizes 100, 100, 1e-3 (1e5:1; the issue's 10, 10, 1e-4 scaled
+ * down to seconds): the built-in remesher (pa_remesh, so the longest-edge
+ * pre-refinement runs) resolves the small size, as far as a domain 100
+ * times narrower than the large sizes allows (a column of tets, about 6 per
+ * layer of 1e-3), in a few MB: the pre-refinement made 4.5 M tets (540 MB)
+ * of it, and the 1e-4 case 12 GB. With opts.mem_mb under what it needs,
+ * pa_remesh fails with the bound's message, leaves the mesh as given and
+ * restores the bound. */
+static pa_mesh *aniso_box(void) {
+  pa_mesh *m = NULL;
+  CHECK_OK(pa_mesh_generate_box(3, 6, &m));
+  if (!m) return NULL;
+  double *t = calloc(6 * (size_t)m->nv, sizeof *t);
+  for (pa_idx i = 0; i < m->nv; i++) {
+    t[6 * i] = t[6 * i + 2] = 1.0 / (100.0 * 100.0);
+    t[6 * i + 5] = 1.0 / (1e-3 * 1e-3);
+  }
+  CHECK_OK(pa_mesh_set_metric(m, 6, t));
+  free(t);
+  return m;
+}
+
+static void test_aniso_memory(void) {
+  pa_mesh *m = aniso_box(), *c = NULL;
+  if (!m) return;
+  pa_remesh_opts o;
+  opts_for(&o);
+  pa_remesh_report r;
+  size_t cur = pa_memory_current();
+  pa_memory_reset_peak();
+  CHECK_OK(pa_remesh(pa_remesher_builtin(), m, &o, &r));
+  double peak = (double)(pa_memory_peak() - cur);
+  pa_stats s;
+  CHECK_OK(pa_mesh_stats(m, &s));
+  printf("aniso 1e5:1: %d tets, peak %.1f MB, longest edge %.2f, %.1f%% in "
+         "range\n", (int)m->ne, peak / 1e6, s.edge_max,
+         100.0 * s.edge_hist[PA_STATS_EDGE_NBIN - 1] / s.nedge);
+  CHECK(r.outcome != PA_REMESH_FAILED);
+  CHECK(s.valid);
+  CHECK(peak < 32e6);
+  CHECK(s.edge_max < 2.0); /* the 1e-3 size resolved along z */
+  CHECK(m->ne > 3000 && m->ne < 20000); /* about 6 per layer */
+  pa_mesh_destroy(m);
+
+  m = aniso_box();
+  CHECK_OK(pa_mesh_copy(m, &c));
+  o.mem_mb = 1.0;
+  CHECK(pa_remesh(pa_remesher_builtin(), m, &o, &r) == PA_ERR_MEMORY);
+  CHECK(strstr(pa_last_error(), "memory bound of 1.0 MB is reached") != NULL);
+  CHECK(pa_memory_limit() == 0);
+  CHECK(m->ne == c->ne && m->nv == c->nv);
+  CHECK(!memcmp(m->elem, c->elem, sizeof(pa_idx) * 4 * c->ne));
+  CHECK(!memcmp(m->met, c->met, sizeof(double) * 6 * c->nv));
+  pa_clear_error();
+  pa_mesh_destroy(m);
+  pa_mesh_destroy(c);
+}
+
 TEST_MAIN(test_identity, test_refine_cube, test_nosurf, test_coarsen,
           test_frozen_random, test_frozen_skin, test_frozen_skin_refine,
           test_deterministic,
           test_fields, test_field_interp, test_sphere, test_targets,
           test_lattice_crowd, test_curved_ridge, test_piece_folds,
-          test_piece_cap, test_alloc_failure)
+          test_piece_cap, test_alloc_failure, test_aniso_memory)

@@ -187,8 +187,12 @@ put("medit_nonnumeric.mesh", "\n".join(t), ":%d:" % (vline + 3))
 t = edit(L2, tline + 2, ["1 2 3.5 1"])
 put("medit_real_index.mesh", "\n".join(t), "expected an integer in Triangles")
 
-t = edit(L2, eline, ["Hexagons", "1", "1 2 3 4 5 6 0", "", "Edges"])
-put("medit_unknown_keyword.mesh", "\n".join(t), "unknown keyword 'Hexagons'")
+# A keyword padapt does not know is skipped with its data; a misspelt
+# Triangles leaves vertices and no element, refused naming the keyword.
+t = edit(L2, tline, ["Triangle"])
+put("medit_unknown_keyword.mesh", "\n".join(t),
+    ":%d: vertices but no Triangles nor Tetrahedra, and keywords padapt does "
+    "not know were skipped: Triangle" % tline)
 
 t = [l for l in L2 if not l.startswith("Dimension")]
 put("medit_no_dimension.mesh", "\n".join(t), "missing Dimension")
@@ -372,7 +376,17 @@ rows = rows[:4] + [[1, 0, 1, 0, 0, -1]] + rows[5:]
 put("sol_3d_nonspd.sol", sol_text(3, nv3, [3], rows), "vertex 5")
 
 rows = [[1, 0, 1]] * nv3
-put("sol_3d_dim2.sol", sol_text(2, nv3, [3], rows), "2D tensor")
+put("sol_3d_dim2.sol", sol_text(2, nv3, [3], rows), "a solution of Dimension 2 for a 3D mesh")
+
+# sizes of another Dimension than the mesh's (Mmg: "BAD SOL DIMENSION")
+put("sol_3d_dim2_size.sol", sol_text(2, nv3, [1], [[0.2]] * nv3),
+    "a solution of Dimension 2 for a 3D mesh")
+put("sol_dim3_size.sol", sol_text(3, nv, [1], iso),
+    "a solution of Dimension 3 for a 2D mesh (its file has Dimension 2)")
+
+# two solutions given as the metric (Mmg: "SEVERAL SOLUTIONS FOUND")
+put("sol_two_fields.sol", sol_text(2, nv, [1, 1], [[0.2, 0.3]] * nv),
+    "holds 2 solutions, not one")
 
 
 def solb(ver, dim, n, types, rows, count=None, cut=None):
