@@ -422,7 +422,7 @@ static pa_status cell_records(pa_dmesh *dm, int kind, const pa__ls_cells *c,
   if (R->ndbl) PA_ALLOC(dbl, R->ndbl);
   for (pa_idx i = 0; i < c->n; i++) {
     for (int j = 0; j < c->nvc; j++) v[j] = vg[c->v[(size_t)c->nvc * i + j]];
-    pa_idx p = c->parent[i], o = p >= 0 ? p : p <= -2 ? -2 - p : -1;
+    pa_idx p = c->parent[i], o = pa__ls_origin(p);
     size_t pl = maxp ? cell_payload(dm, kind, p, c->ref[i], pay) : 0;
     pa_gid g = p >= 0 ? dm->gid[kind][p] : (*next)++;
     if (dbl && o >= 0) pa__entity_doubles(dm->mesh, kind, o, dbl);

@@ -1120,14 +1120,14 @@ static pa_status cells_to(const pa__ls_cells *c, pa_idx *conn, int32_t *ref,
 static pa_status carry_fields(const pa_mesh *mesh, pa_entity at,
                               const pa__ls_cells *c, pa_mesh *nm) {
   pa_status st = PA_SUCCESS;
-  const pa__field *fl = at == PA_ELEMENT ? mesh->efield : mesh->bfield;
-  int nf = at == PA_ELEMENT ? mesh->nefield : mesh->nbfield;
+  int *nf;
+  const pa__field *fl = pa__mesh_fields((pa_mesh *)mesh, at, &nf);
   double *y = NULL;
-  for (int f = 0; f < nf; f++) {
+  for (int f = 0; f < *nf; f++) {
     int nc = fl[f].ncomp;
     PA_ALLOC(y, (size_t)nc * (c->n ? (size_t)c->n : 1));
     for (pa_idx i = 0; i < c->n; i++) {
-      pa_idx p = c->parent[i], o = p >= 0 ? p : p <= -2 ? -2 - p : -1;
+      pa_idx o = pa__ls_origin(c->parent[i]);
       for (int j = 0; j < nc; j++)
         y[(size_t)nc * i + j] = o >= 0 ? fl[f].val[(size_t)nc * o + j] : 0;
     }

@@ -64,8 +64,8 @@ pa_status pa__ls_materials(const pa__ls_ctx *c, const pa_levelset_opts *o,
 
 /* Cells of the cut: dim + 1 (elements), dim (boundary entities) or 2
  * (edges) vertices each, as local vertex indices or nv + k for added
- * vertex k; reference, flags, and the parent entity (-1: an interface
- * entity). */
+ * vertex k; reference, flags, and the parent: e for entity e kept whole,
+ * -2 - e for a part of entity e, -1 for a new interface entity. */
 typedef struct pa__ls_cells {
   int nvc;
   pa_idx n;
@@ -75,6 +75,12 @@ typedef struct pa__ls_cells {
   uint8_t *flag;
   pa_idx *parent;
 } pa__ls_cells;
+
+/* The entity a cell of parent p comes from, whole or in part; -1 for a new
+ * interface entity. */
+static inline pa_idx pa__ls_origin(pa_idx p) {
+  return p >= 0 ? p : p <= -2 ? -2 - p : -1;
+}
 
 /* Bits of the sides a vertex touches (pa__ls_out.touch): an element of the
  * inside, of the outside, of a split material. */
