@@ -107,6 +107,7 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
   for (int t = 0; t < n; t++) {
     if (rm->q[el[t]] < qold) qold = rm->q[el[t]];
   }
+  const double fl = rm_qfloor(qold);
   for (int t = 0; t < n; t++) {
     pa_idx e = el[t];
     if (e == k || e == f) continue;
@@ -116,7 +117,7 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
     pa_idx a = v[RM_NX3(l)], b = v[RM_PV3(l)];
     if (a == q || b == q) return 0; /* q seen twice: not a simple ball */
     double qq = rm_elem_qual(rm, q, a, b);
-    if (qq < RM_QFLOOR || qq < qrel * qold) return 0;
+    if (qq < qrel * qold || !rm_qual_ok(rm, qq, fl, q, a, b)) return 0;
     if (qq < qnew) qnew = qq;
     /* ping-pong guard: no new edge longer than lguard */
     if (rm_edge_len(rm, q, a) > rm->lguard ||

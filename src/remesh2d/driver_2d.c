@@ -9,16 +9,20 @@
  *     than 0.02 % of the elements, or until three stalled rounds (splits
  *     and collapses balanced, or under 0.5 % of the elements, and their
  *     count did not fall by 5 %: the rule shared with 3D, remesh/schedule.h):
- *     split edges longer than 1.4142 (longest-edge propagation), collapse
- *     edges shorter than 0.7071 (no new edge longer than 1.4142), swap
- *     around elements of quality < 0.6, and relocate once the splits are
- *     few;
- *  2. up to eight optimisation rounds: swap (quality < 0.9), relocate, length
- *     moves, split, collapse (edges < RM_LSHORT_OPT) with a relaxed guard
- *     (new edges up to 1.7 + 0.05 round, cut by the next split), then splits
- *     until none is left and a strict collapse pass;
+ *     split edges longer than RM_LSPLIT_REFINE (longest-edge propagation),
+ *     collapse edges shorter than 0.7071 (no new edge longer than 1.4142),
+ *     swap around elements of quality < 0.6, and relocate once the splits
+ *     are few;
+ *  2. eight optimisation rounds (more while they split and collapse over 1 %
+ *     of the elements): swap (quality < 0.9), relocate, length moves, split
+ *     (edges longer than 1.4142), collapse (edges < RM_LSHORT_OPT) with a
+ *     relaxed guard (new edges up to 1.7 + 0.05 round, cut by the next
+ *     split), then splits until none is left and a strict collapse pass;
  *  3. worst-element pass (quality < 0.45), then (if it changed anything) two
- *     more relocation rounds.
+ *     more relocation rounds, and the last length moves;
+ *  4. polish rounds: swap, relocation of every free vertex (feature vertices
+ *     along their curves) where balls of quality < RM_QFREE may stretch
+ *     their lengths a little, worst-element pass.
  * The working mesh is checked after each pass in debug builds and once at the
  * end always; a failed check gives the FAILED outcome (the caller then keeps
  * the mesh as given).
@@ -28,7 +32,7 @@
  * 2, or the worst modifiable element has quality < 0.05.
  */
 #include "remesh/schedule.h"
-#include "remesh2d/remesh2d.h"
+#include "remesh2d/ops_2d.h"
 
 /* The working mesh checked after a pass, in debug builds only. In release
  * builds it is dead code that still refers to the cleanup label, so a phase
@@ -53,6 +57,27 @@
  * its balance: a few operations undoing each other (a stall rule of its
  * own, beside the balance test). */
 #define RM_ROUNDS_TINY 5e-3
+
+/* The refinement rounds split edges longer than this, the later rounds
+ * those longer than PA_METRIC_LEN_HI. Bisection halves lengths, so where
+ * it stops depends on how the input's lengths fall against the size: an
+ * input whose edges end at 1.45 after the last full round gives halves of
+ * 0.73 everywhere, about 1.9 times the triangles the size asks for, a
+ * lattice that is in range and that no later operation undoes (the plate
+ * of bench/vs_mmg.sh at -hsiz 0.002: 1.21 times the ideal count). Edges
+ * between PA_METRIC_LEN_HI and this are left to the optimisation rounds,
+ * which split them after swaps and moves have mixed the lattice's lengths
+ * (plate: 0.96 times; figures: docs/BENCHMARKS.md, "The 2D remesher"). */
+#define RM_LSPLIT_REFINE 1.7
+
+/* The optimisation rounds: this many, and more while their splits and
+ * collapses change more than RM_OPT_BUSY of the elements (and the stopping
+ * rule of the refinement rounds does not see them stall). On the plate and
+ * the UGAWG fields the eighth round changes under 2 %; an input far from
+ * its metric (1e6:1 needles) still has most of its work to do there, its
+ * collapses blocked in the refinement rounds. */
+#define RM_OPT_ROUNDS 8
+#define RM_OPT_BUSY 0.05
 
 /* Sweeps of length moves after the optimisation rounds' quality moves and
  * at the end (driver_3d.c: RM3D_LENGTH_SWEEPS). Not in the refinement
@@ -136,7 +161,7 @@ static pa_status refine_rounds(pa__rmesh *rm, int *pass) {
   pa__rounds_start(&rounds, 1, RM_ROUNDS_SETTLED, RM_ROUNDS_TINY, 1);
   for (int it = 0; it < RM_ROUNDS_MAX; it++) {
     long ns = 0, nc = 0, nw = 0, nm = 0;
-    PA_CALL(pa__rm_split_pass_2d(rm, PA_METRIC_LEN_HI, &ns));
+    PA_CALL(pa__rm_split_pass_2d(rm, RM_LSPLIT_REFINE, &ns));
     DEBUG_CHECK(rm);
     report_pass(rm, "split", *pass, ns);
     PA_CALL(maybe_reorder(rm, *pass, &reordered));
@@ -150,7 +175,7 @@ static pa_status refine_rounds(pa__rmesh *rm, int *pass) {
     }
     /* once the sizes are nearly reached, relocation helps collapses */
     if (!o->no_move && ns < 0.01 * rm->nelive) {
-      nm = pa__rm_smooth_pass_2d(rm);
+      nm = pa__rm_smooth_pass_2d(rm, 0, 0);
       DEBUG_CHECK(rm);
       report_pass(rm, "move", *pass, nm);
     }
@@ -171,21 +196,23 @@ cleanup:
 static pa_status optimise(pa__rmesh *rm, int *pass) {
   pa_status st = PA_SUCCESS;
   const pa_remesh_opts *o = rm->opts;
-  for (int it = 0; it < 8; it++) {
+  pa__rounds rounds;
+  pa__rounds_start(&rounds, 1, RM_ROUNDS_SETTLED, RM_ROUNDS_TINY, 1);
+  for (int it = 0; it < RM_ROUNDS_MAX; it++) {
     long nw = 0, nm = 0, ns = 0, nc = 0;
     if (!o->no_swap) {
       nw = pa__rm_swap_pass_2d(rm, 0.9);
       DEBUG_CHECK(rm);
     }
     if (!o->no_move) {
-      nm = pa__rm_smooth_pass_2d(rm);
+      nm = pa__rm_smooth_pass_2d(rm, 0, 0);
       for (int k = 0; k < RM_LENGTH_SWEEPS; k++) nm += pa__rm_length_pass_2d(rm);
       DEBUG_CHECK(rm);
     }
     if (!o->no_insert) {
       PA_CALL(pa__rm_split_pass_2d(rm, PA_METRIC_LEN_HI, &ns));
       DEBUG_CHECK(rm);
-      rm->lguard = 1.7 + 0.05 * it;
+      rm->lguard = 1.7 + 0.05 * (it < RM_OPT_ROUNDS ? it : RM_OPT_ROUNDS - 1);
       PA_CALL(pa__rm_collapse_pass_2d(rm, RM_LSHORT_OPT, &nc));
       DEBUG_CHECK(rm);
       rm->lguard = PA_METRIC_LEN_HI;
@@ -194,6 +221,10 @@ static pa_status optimise(pa__rmesh *rm, int *pass) {
     (*pass)++;
     progress(rm, *pass);
     if (ns + nc == 0 && nw + nm <= 1e-3 * rm->nelive) break;
+    int stalled = pa__rounds_stop(&rounds, ns, nc, rm->nelive);
+    if (it + 1 >= RM_OPT_ROUNDS &&
+        (ns + nc <= RM_OPT_BUSY * rm->nelive || stalled))
+      break;
   }
   if (!o->no_insert) { /* cut what the relaxed collapses left long */
     long ns = 0, nc = 0, n1 = 0;
@@ -225,7 +256,7 @@ static pa_status repair_worst(pa__rmesh *rm, int *pass) {
   (*pass)++;
   if (!o->no_move && nb > 0) { /* only if the pass changed something */
     for (int it = 0; it < 2; it++) {
-      long nm = pa__rm_smooth_pass_2d(rm);
+      long nm = pa__rm_smooth_pass_2d(rm, 0, 0);
       DEBUG_CHECK(rm);
       report_pass(rm, "move", *pass, nm);
       (*pass)++;
@@ -239,6 +270,47 @@ static pa_status repair_worst(pa__rmesh *rm, int *pass) {
     (*pass)++;
     if (!nl) break;
   }
+cleanup:
+  return st;
+}
+
+/* The polish rounds (schedule step 4): swaps, relocations of every free
+ * vertex (feature vertices along their curves; balls of worst quality
+ * under RM_QFREE may stretch their lengths to [RM_LFREE_LO, RM_LFREE_HI]),
+ * the pass on the worst elements; at most RM_POLISH_ROUNDS, until a round
+ * changes nothing. The length moves leave some elements near their
+ * quality floor (RM_QLEN), and the optimisation rounds' last splits leave
+ * valence-4 vertices at obtuse angles, which these rounds relax (plate
+ * -hsiz 0.002: worst quality 0.50 -> 0.69). */
+#define RM_POLISH_ROUNDS 4
+/* Balls of worst quality under this may trade lengths for quality in the
+ * polish (the elements below it are the ones worth it: on the plate they
+ * are a few hundred out of 300 000). */
+#define RM_QFREE 0.7
+static pa_status polish(pa__rmesh *rm, int *pass) {
+  pa_status st = PA_SUCCESS;
+  const pa_remesh_opts *o = rm->opts;
+  /* the relocations decide under other rules than the earlier ones where
+   * a ball has an element under RM_QFREE: those verdicts (RM_V_SETTLED) no
+   * longer hold (feature vertices were never tried, so never settled) */
+  for (pa_idx k = 0; k < rm->ne; k++) {
+    if ((rm->etag[k] & RM_E_DEAD) || rm->q[k] >= RM_QFREE) continue;
+    for (int i = 0; i < 3; i++)
+      rm->vtag[rm->ev[3 * k + i]] &= (uint8_t)~RM_V_SETTLED;
+  }
+  for (int it = 0; it < RM_POLISH_ROUNDS; it++) {
+    long nw = 0, nm = 0, nb;
+    if (!o->no_swap) nw = pa__rm_swap_pass_2d(rm, 0.9);
+    DEBUG_CHECK(rm);
+    if (!o->no_move) nm = pa__rm_smooth_pass_2d(rm, RM_QFREE, 1);
+    DEBUG_CHECK(rm);
+    nb = pa__rm_sliver_pass_2d(rm, 0.45);
+    DEBUG_CHECK(rm);
+    report_pass(rm, "polish", *pass, nw + nm + nb);
+    (*pass)++;
+    if (nw + nm + nb == 0) break;
+  }
+  report_figures(rm, "after polish");
 cleanup:
   return st;
 }
@@ -279,6 +351,7 @@ pa_status pa__remesh2d(pa_mesh *mesh, const pa_remesh_opts *opts,
   if (!opts->no_insert) PA_CALL(refine_rounds(rm, &pass));
   PA_CALL(optimise(rm, &pass));
   PA_CALL(repair_worst(rm, &pass));
+  PA_CALL(polish(rm, &pass));
   conclude(rm, pass, report);
   if (report->outcome != PA_REMESH_FAILED) PA_CALL(pa__rm_writeback(rm, mesh));
 cleanup:

@@ -4,13 +4,15 @@
  * records, the cache invalidation of a rewritten element, vertex balls.
  *
  * Every operator evaluates its result before changing anything ("sim then
- * apply"): each new element must have quality >= RM_QFLOOR (so its orientation
- * is certain), plus the operator's own acceptance rule. The frozen contract is
- * enforced by the operators: an element tagged RM_E_FROZEN is never rewritten
- * nor deleted, so none of its edges is split, swapped or collapsed (a collapse
- * removes a vertex, and vertices of frozen elements are RM_V_FROZEN); frozen
- * and corner vertices never move nor disappear; feature edges are never
- * swapped.
+ * apply"): each new element must have quality >= RM_QFLOOR (so its
+ * orientation is certain; where the elements it replaces are already
+ * worse, at least half their worst and a certain Euclidean orientation:
+ * rm_qfloor, rm_qual_ok), plus the operator's own acceptance rule. The
+ * frozen contract is enforced by the operators: an element tagged
+ * RM_E_FROZEN is never rewritten nor deleted, so none of its edges is
+ * split, swapped or collapsed (a collapse removes a vertex, and vertices of
+ * frozen elements are RM_V_FROZEN); frozen and corner vertices never move
+ * nor disappear; feature edges are never swapped.
  *
  * Local numbering: in element k = (v0, v1, v2), counter-clockwise, face i is
  * the edge from v[i+1] to v[i+2] (indices mod 3), opposite v[i]. Across a
@@ -35,6 +37,29 @@ static inline double rm_elem_qual(const pa__rmesh *rm, pa_idx a, pa_idx b,
                                   pa_idx c) {
   int mc = rm->mcomp;
   return pa__qual2(mc, RM_X(a), RM_X(b), RM_X(c), RM_M(a), RM_M(b), RM_M(c));
+}
+
+/* The quality floor of the new elements of an operation that replaces
+ * elements of worst quality qold: RM_QFLOOR, or half of qold when that is
+ * lower (the two meet at qold = 2 RM_QFLOOR). An input far from its metric
+ * (an isotropic mesh under a 1e6:1 metric has quality about 1e-6) can then
+ * be adapted: the first splits of its needles halve their quality before
+ * the later ones raise it. */
+static inline double rm_qfloor(double qold) {
+  return qold < 2 * RM_QFLOOR ? 0.5 * qold : RM_QFLOOR;
+}
+
+/* New element (a, b, c) of quality q is acceptable against floor (from
+ * rm_qfloor): q >= floor, and below RM_QFLOOR also a Euclidean quality of
+ * at least RM_QFLOOR_EUCL, so its orientation is certain. Under a size
+ * metric the two qualities are the same. */
+static inline int rm_qual_ok(const pa__rmesh *rm, double q, double floor,
+                             pa_idx a, pa_idx b, pa_idx c) {
+  if (!(q >= floor)) return 0;
+  if (floor >= RM_QFLOOR || rm->mcomp <= 1) return 1;
+  const double *xa = RM_X(a), *xb = RM_X(b), *xc = RM_X(c);
+  return pa__qual2_xy(xa[0], xa[1], xb[0], xb[1], xc[0], xc[1]) >=
+         RM_QFLOOR_EUCL;
 }
 
 static inline double rm_edge_len(const pa__rmesh *rm, pa_idx a, pa_idx b) {

@@ -74,12 +74,20 @@ enum {
   RM_B_LISTED = 32 /* came from (and goes back to) the mesh's boundary list */
 };
 
-/* Quality floor: no operator creates an element below it. */
 /* Face without neighbour while the working mesh is being built (afterwards
  * every such face holds a feature record). */
 #define RM_NOADJ INT32_MIN
 
+/* Quality floor: no operator creates an element below it, or below half
+ * the worst of the elements it replaces when those are already under
+ * twice the floor (rm_qfloor, ops_2d.h). */
 #define RM_QFLOOR 1e-4
+/* Below RM_QFLOOR the metric quality no longer vouches for the orientation
+ * (with anisotropy r it can exceed the Euclidean one r times), so a new
+ * element must also have a Euclidean quality of at least this: its
+ * computed area is then far above the rounding error of the cross product
+ * (a few 1e-16 of the product of its edges). */
+#define RM_QFLOOR_EUCL 1e-10
 /* A length move may lower the ball's worst quality down to this (never
  * below its old worst if lower), and one that leaves as many edges out of
  * range must cut their sum of ln^2 L by 3 % (as in 3D, remesh3d.h). */
@@ -90,6 +98,15 @@ enum {
  * for the same share in range (figures: docs/BENCHMARKS.md, "The 2D
  * remesher"). */
 #define RM_LTARGET 1.2
+
+/* The polish relocation (pa__rm_smooth_pass_2d with qfree > 0): balls of
+ * worst quality under qfree may take the edges at the moved vertex out of
+ * the band, within these bounds. */
+#define RM_LFREE_LO 0.65
+#define RM_LFREE_HI 1.5
+/* A feature vertex moves along its curve by at most this share of the
+ * record it moves along. */
+#define RM_FEAT_STEP 0.45
 
 /* The optimisation rounds' relaxed collapses take edges below this, a little
  * above 1/sqrt(2): a split of an edge just above sqrt(2) leaves two halves
@@ -218,7 +235,12 @@ void pa__rm_curve_point_2d(const pa__rmesh *rm, pa_idx b, double s, double *p,
 pa_status pa__rm_split_pass_2d(pa__rmesh *rm, double thr, long *n);
 pa_status pa__rm_collapse_pass_2d(pa__rmesh *rm, double thr, long *n);
 long pa__rm_swap_pass_2d(pa__rmesh *rm, double qmax);
-long pa__rm_smooth_pass_2d(pa__rmesh *rm);
+/* The relocation pass: quality moves of the interior vertices, and with
+ * feat of the feature vertices along their curves; balls of worst quality
+ * under qfree may stretch their lengths to [RM_LFREE_LO, RM_LFREE_HI]
+ * (smooth_2d.c). A vertex rejected under one (qfree, feat) is marked
+ * settled: the driver clears RM_V_SETTLED when it changes them. */
+long pa__rm_smooth_pass_2d(pa__rmesh *rm, double qfree, int feat);
 long pa__rm_length_pass_2d(pa__rmesh *rm);
 long pa__rm_sliver_pass_2d(pa__rmesh *rm, double qbad);
 

@@ -60,9 +60,54 @@ static void ball_xy_qual(const ball_xy *b, int n, double *q) {
                         b->x[2][s], b->y[2][s]);
 }
 
+/* Add to c the apex of the triangle on edge (a, b), to its left, that is
+ * equilateral in the metric t (3 components, sd = 1 / sqrt(det t)): the
+ * midpoint plus sqrt(3)/2 times the edge rotated by +90 degrees in the
+ * metric, adj(t) R (b - a) / sqrt(det t). */
+static void add_ideal_apex(const double *t, double sd, const double *a,
+                           const double *b, double *c) {
+  double rx = a[1] - b[1], ry = b[0] - a[0];
+  double yx = (t[2] * rx - t[1] * ry) * sd, yy = (-t[1] * rx + t[0] * ry) * sd;
+  c[0] += 0.5 * (a[0] + b[0]) + 0.8660254037844386 * yx;
+  c[1] += 0.5 * (a[1] + b[1]) + 0.8660254037844386 * yy;
+}
+
+/* Whether a move of p keeps its edges in the band: every edge to nb[0..nn)
+ * in [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI] at the old position stays in it
+ * at the current one, and none out of it goes further out (the old
+ * lengths lold are measured on the first call: *have). Balls whose worst
+ * quality qold is under qfree are held to the wider band [RM_LFREE_LO,
+ * RM_LFREE_HI] instead (their elements matter more than those lengths). */
+static int keeps_band(pa__rmesh *rm, pa_idx p, const pa_idx *nb, int nn,
+                      const double *old, double *lold, int *have, double qold,
+                      double qfree) {
+  double *xp = rm->x + 2 * (size_t)p;
+  if (!*have) {
+    double np[2] = {xp[0], xp[1]};
+    xp[0] = old[0];
+    xp[1] = old[1];
+    for (int s = 0; s < nn; s++) lold[s] = rm_edge_len(rm, p, nb[s]);
+    xp[0] = np[0];
+    xp[1] = np[1];
+    *have = 1;
+  }
+  double lo = PA_METRIC_LEN_LO, hi = PA_METRIC_LEN_HI;
+  if (qold < qfree) {
+    lo = RM_LFREE_LO;
+    hi = RM_LFREE_HI;
+  }
+  for (int s = 0; s < nn; s++) {
+    double l = rm_edge_len(rm, p, nb[s]);
+    if (!(l >= fmin(lo, lold[s]) && l <= fmax(hi, lold[s]))) return 0;
+  }
+  return 1;
+}
+
 /* Move interior vertex p = v[ip] of element k towards the mean of the ideal
- * apexes of its ball (equilateral in the metric of p). Returns 1 if moved. */
-static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
+ * apexes of its ball (equilateral in the metric of p). Balls of worst
+ * quality under qfree may stretch their lengths (keeps_band). Returns 1 if
+ * moved. */
+static int move_vertex(pa__rmesh *rm, pa_idx k, int ip, double qfree) {
   int mc = rm->mcomp;
   pa_idx p = rm->ev[3 * k + ip];
   pa_idx el[RM_BALL_MAX];
@@ -74,7 +119,8 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   double det = t[0] * t[2] - t[1] * t[1];
   if (!(det > 0)) return 0;
   double sd = 1.0 / sqrt(det);
-  double cx = 0, cy = 0, qold = 1, qmean = 0;
+  double c[2] = {0, 0}, qold = 1, qmean = 0;
+  pa_idx nb[RM_BALL_MAX];
   ball_xy bxy;
   for (int s = 0; s < n; s++) {
     const pa_idx *v = rm->ev + 3 * (size_t)el[s];
@@ -87,25 +133,20 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
       bxy.x[l2][s] = b[0];
       bxy.y[l2][s] = b[1];
     }
-    double dx = b[0] - a[0], dy = b[1] - a[1];
-    /* metric rotation by +90 degrees: adj(M) R d / sqrt(det M) */
-    double rx = -dy, ry = dx;
-    double yx = (t[2] * rx - t[1] * ry) * sd, yy = (-t[1] * rx + t[0] * ry) * sd;
-    cx += 0.5 * (a[0] + b[0]) + 0.8660254037844386 * yx;
-    cy += 0.5 * (a[1] + b[1]) + 0.8660254037844386 * yy;
+    add_ideal_apex(t, sd, a, b, c);
+    nb[s] = v[l1];
     double q = rm->q[el[s]];
     if (q < qold) qold = q;
     qmean += q;
   }
   qmean /= n;
-  cx /= n;
-  cy /= n;
+  double cx = c[0] / n, cy = c[1] / n;
   /* edge lengths in range before the move must stay in range (computed
    * when a candidate first passes the quality test) */
-  uint8_t inr[RM_BALL_MAX];
+  double lold[RM_BALL_MAX];
   int have_inr = 0;
   double *xp = rm->x + 2 * (size_t)p;
-  double x0 = xp[0], y0 = xp[1];
+  const double x0 = xp[0], y0 = xp[1], old[2] = {x0, y0};
   double qn[RM_BALL_MAX];
   double om = 1.0;
   for (int tr = 0; tr < 3; tr++, om *= 0.5) {
@@ -125,32 +166,21 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
         const pa_idx *v = rm->ev + 3 * (size_t)el[s];
         qn[s] = rm_elem_qual(rm, v[0], v[1], v[2]);
       }
-      if (qn[s] < RM_QFLOOR || qn[s] < qold) ok = 0;
+      /* >= qold passes the floor (rm_qfloor); below RM_QFLOOR the
+       * Euclidean shape is checked too */
+      if (qn[s] < qold) {
+        ok = 0;
+      } else if (qold < RM_QFLOOR) {
+        const pa_idx *v = rm->ev + 3 * (size_t)el[s];
+        ok = rm_qual_ok(rm, qn[s], rm_qfloor(qold), v[0], v[1], v[2]);
+      }
       if (qn[s] < qmin) qmin = qn[s];
       qm += qn[s];
     }
     if (!ok) continue;
     qm /= n;
     if (!(qmin > MOVE_GAIN_MIN * qold || qm > MOVE_GAIN_MEAN * qmean)) continue;
-    if (!have_inr) {
-      double np[2] = {xp[0], xp[1]};
-      xp[0] = x0;
-      xp[1] = y0;
-      for (int s = 0; s < n; s++) {
-        double l =
-            rm_edge_len(rm, p, rm->ev[3 * (size_t)el[s] + RM_NX3(loc[s])]);
-        inr[s] = l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
-      }
-      xp[0] = np[0];
-      xp[1] = np[1];
-      have_inr = 1;
-    }
-    for (int s = 0; s < n && ok; s++) {
-      if (!inr[s]) continue;
-      double l = rm_edge_len(rm, p, rm->ev[3 * (size_t)el[s] + RM_NX3(loc[s])]);
-      ok = l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI;
-    }
-    if (!ok) continue;
+    if (!keeps_band(rm, p, nb, n, old, lold, &have_inr, qold, qfree)) continue;
     /* accepted */
     double np[2] = {xp[0], xp[1]};
     xp[0] = x0;
@@ -163,42 +193,191 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   return 0;
 }
 
-long pa__rm_smooth_pass_2d(pa__rmesh *rm) {
+/* The tangent of record b at its end v, oriented away from v. */
+static void tangent_from(const pa__rmesh *rm, pa_idx b, pa_idx v, double *t) {
+  int e = rm->bv[2 * b] == v ? 0 : 1;
+  double sg = e == 0 ? 1 : -1; /* stored along bv[2b] -> bv[2b+1] */
+  t[0] = sg * rm->btan[4 * b + 2 * e];
+  t[1] = sg * rm->btan[4 * b + 2 * e + 1];
+}
+
+/* Whether record r = (y, p) of feature vertex p, stretched to (y, np) with
+ * tangent g at np (oriented from y to np), stays within hausd of the
+ * curve it replaces: p within hausd of the new chord, the sagitta of the
+ * new Hermite arc within hausd, the arc not folded (as the feature
+ * collapses, collapse_2d.c). */
+static int stretch_kept(const pa__rmesh *rm, pa_idx r, pa_idx p,
+                        const double *np, const double *g, double hausd) {
+  pa_idx y = rm->bv[2 * r] == p ? rm->bv[2 * r + 1] : rm->bv[2 * r];
+  const double *xy = RM_X(y), *xp = RM_X(p);
+  double dx = np[0] - xy[0], dy = np[1] - xy[1];
+  double l2 = dx * dx + dy * dy;
+  if (!(l2 > 0)) return 0;
+  double t = ((xp[0] - xy[0]) * dx + (xp[1] - xy[1]) * dy) / l2;
+  t = t < 0 ? 0 : t > 1 ? 1 : t;
+  double ex = xy[0] + t * dx - xp[0], ey = xy[1] + t * dy - xp[1];
+  if (ex * ex + ey * ey > hausd * hausd) return 0;
+  double ty[2];
+  tangent_from(rm, r, y, ty);
+  double sx = 0.125 * (ty[0] - g[0]), sy = 0.125 * (ty[1] - g[1]);
+  if ((sx * sx + sy * sy) * l2 > hausd * hausd) return 0;
+  return ty[0] * dx + ty[1] * dy > 0 && g[0] * dx + g[1] * dy > 0;
+}
+
+/* Move feature vertex p = v[ip] of element k along its curve (the
+ * reconstructed arc of one of its two records) by the tangential part of
+ * the step to the mean of the ideal apexes of its ball, halved up to twice;
+ * kept under the rules of the interior moves (move_vertex), with the
+ * record it leaves behind within hausd of the curve (stretch_kept). The
+ * metric and fields are interpolated along the record; straight features
+ * stay straight. Returns 1 if moved. */
+static int move_feature(pa__rmesh *rm, pa_idx k, int ip, double qfree) {
+  int mc = rm->mcomp;
+  pa_idx p = rm->ev[3 * k + ip];
+  pa_idx el[RM_BALL_MAX], nb[2 * RM_BALL_MAX], rec[2];
+  int loc[RM_BALL_MAX], closed, nr = 0, nn = 0;
+  int n = rm_ball_2d(rm, k, ip, el, loc, &closed);
+  if (n < 1) return 0;
+  double t[3];
+  rm_tensor2(mc, RM_M(p), t);
+  double det = t[0] * t[2] - t[1] * t[1];
+  if (!(det > 0)) return 0;
+  double sd = 1.0 / sqrt(det), c[2] = {0, 0}, qold = 1, qmean = 0;
+  for (int s = 0; s < n; s++) {
+    if (rm->etag[el[s]] & RM_E_FROZEN) return 0;
+    const pa_idx *v = rm->ev + 3 * (size_t)el[s];
+    int l1 = RM_NX3(loc[s]), l2 = RM_PV3(loc[s]);
+    add_ideal_apex(t, sd, RM_X(v[l1]), RM_X(v[l2]), c);
+    double q = rm->q[el[s]];
+    if (q < qold) qold = q;
+    qmean += q;
+    for (int side = 0; side < 2; side++) { /* the faces at p */
+      pa_idx o = rm->adj[3 * el[s] + (side ? l1 : l2)], w = v[side ? l2 : l1];
+      int dup = 0;
+      for (int j = 0; j < nn; j++) dup |= nb[j] == w;
+      if (!dup) nb[nn++] = w;
+      if (o >= 0) continue;
+      pa_idx b = -o - 1;
+      if ((nr == 0 || rec[0] != b) && nr < 2) rec[nr++] = b;
+      else if (nr == 2 && rec[0] != b && rec[1] != b) return 0;
+    }
+  }
+  if (nr != 2) return 0;
+  qmean /= n;
+  double *xp = rm->x + 2 * (size_t)p;
+  const double old[2] = {xp[0], xp[1]};
+  double tp[2]; /* along the curve, from rec[0] to rec[1] */
+  tangent_from(rm, rec[1], p, tp);
+  double d = (c[0] / n - old[0]) * tp[0] + (c[1] / n - old[1]) * tp[1];
+  /* towards rec[1]'s other end z (d > 0) or rec[0]'s (d < 0) */
+  pa_idx rr = d > 0 ? rec[1] : rec[0], ro = d > 0 ? rec[0] : rec[1];
+  pa_idx z = rm->bv[2 * rr] == p ? rm->bv[2 * rr + 1] : rm->bv[2 * rr];
+  double lz = hypot(RM_X(z)[0] - old[0], RM_X(z)[1] - old[1]);
+  double s0 = fabs(d) / lz;
+  if (!(s0 > 1e-6)) return 0;
+  if (s0 > RM_FEAT_STEP) s0 = RM_FEAT_STEP;
+  double hausd = fmin(pa__local_hausd(rm->opts, rm->bref[rr], rm->hausd),
+                      pa__local_hausd(rm->opts, rm->bref[ro], rm->hausd));
+  double lold[2 * RM_BALL_MAX];
+  int have_inr = 0;
+  for (int tr = 0; tr < 3; tr++, s0 *= 0.5) {
+    int from0 = rm->bv[2 * rr] == p;
+    double np[2], tn[2], g[2];
+    pa__rm_curve_point_2d(rm, rr, from0 ? s0 : 1 - s0, np, tn);
+    /* on a model's curve: its point (no move when the kernel fails) */
+    if (pa__remesh_project(rm->opts, 1, rm->bref[rr], 2, np, s0 * lz, np) < 0)
+      continue;
+    g[0] = from0 ? tn[0] : -tn[0]; /* along p -> z */
+    g[1] = from0 ? tn[1] : -tn[1];
+    if (!stretch_kept(rm, ro, p, np, g, hausd)) continue;
+    xp[0] = np[0];
+    xp[1] = np[1];
+    double qmin = 1, qm = 0;
+    int ok = 1;
+    for (int s = 0; s < n && ok; s++) {
+      const pa_idx *v = rm->ev + 3 * (size_t)el[s];
+      double q = rm_elem_qual(rm, v[0], v[1], v[2]);
+      ok = q >= qold && rm_qual_ok(rm, q, rm_qfloor(qold), v[0], v[1], v[2]);
+      qmin = fmin(qmin, q);
+      qm += q;
+    }
+    ok = ok && (qmin > MOVE_GAIN_MIN * qold || qm / n > MOVE_GAIN_MEAN * qmean);
+    ok = ok && keeps_band(rm, p, nb, nn, old, lold, &have_inr, qold, qfree);
+    xp[0] = old[0];
+    xp[1] = old[1];
+    if (!ok) continue;
+    /* apply: metric and fields along the record, then the position, the
+     * tangents at p, the qualities */
+    pa_idx src[2] = {p, z};
+    double w[2] = {1 - s0, s0};
+    pa__rm_interp(rm, p, 2, src, w);
+    xp[0] = np[0];
+    xp[1] = np[1];
+    for (int j = 0; j < 2; j++) {
+      pa_idx b = rec[j];
+      int e = rm->bv[2 * b] == p ? 0 : 1;
+      /* g runs p -> z; the record's own orientation is bv[2b] -> bv[2b+1] */
+      double sg = ((b == rr) == (e == 0)) ? 1 : -1;
+      rm->btan[4 * b + 2 * e] = sg * g[0];
+      rm->btan[4 * b + 2 * e + 1] = sg * g[1];
+    }
+    for (int s = 0; s < n; s++) {
+      const pa_idx *v = rm->ev + 3 * (size_t)el[s];
+      rm->q[el[s]] = (float)rm_elem_qual(rm, v[0], v[1], v[2]);
+      rm_elem_changed(rm, el[s]);
+    }
+    rm->nmove++;
+    return 1;
+  }
+  return 0;
+}
+
+long pa__rm_smooth_pass_2d(pa__rmesh *rm, double qfree, int feat) {
   long cnt = 0;
   rm_vtag_clear(rm, RM_V_DONE);
+  const uint8_t skip = RM_V_DONE | RM_V_FROZEN | RM_V_CORNER |
+                       (feat ? 0 : RM_V_FEAT);
   for (pa_idx k = 0; k < rm->ne; k++) {
     if (rm->etag[k] & (RM_E_DEAD | RM_E_FROZEN)) continue;
     for (int i = 0; i < 3; i++) {
       pa_idx p = rm->ev[3 * k + i];
       uint8_t tp = rm->vtag[p];
-      if (tp & (RM_V_DONE | RM_V_FROZEN | RM_V_CORNER | RM_V_FEAT)) continue;
+      if (tp & skip) continue;
       /* DONE even when skipped: a neighbour's move later in this pass must
        * not make p eligible again from another start element */
       rm->vtag[p] |= RM_V_DONE;
       /* the answer depends only on p's ball: a rejected p stays settled
        * until an operator or a move changes that ball (rm_elem_changed) */
       if (tp & RM_V_SETTLED) continue;
-      if (move_vertex(rm, k, i)) cnt++;
+      int moved = tp & RM_V_FEAT ? move_feature(rm, k, i, qfree)
+                                 : move_vertex(rm, k, i, qfree);
+      if (moved) cnt++;
       else rm->vtag[p] |= RM_V_SETTLED;
     }
   }
   return cnt;
 }
 
-/* Edges at p out of [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI] and their sum of ln^2
- * (L / RM_LTARGET), with p at y (metric mp) and its neighbours nb[0..nn). */
-static int len_score_2d(const pa__rmesh *rm, const double *y, const double *mp,
-                        const pa_idx *nb, int nn, double *sum) {
+/* The lengths l of the edges from p at y (metric mp) to nb[0..nn), and how
+ * many are out of [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI]. */
+static int len_out_2d(const pa__rmesh *rm, const double *y, const double *mp,
+                      const pa_idx *nb, int nn, double *l) {
   int mc = rm->mcomp, out = 0;
+  for (int i = 0; i < nn; i++) {
+    l[i] = pa__len2(mc, y, RM_X(nb[i]), mp, RM_M(nb[i]));
+    out += !(l[i] >= PA_METRIC_LEN_LO && l[i] <= PA_METRIC_LEN_HI);
+  }
+  return out;
+}
+
+/* The sum of ln^2 (l / RM_LTARGET) over l[0..nn). */
+static double len_sum_2d(const double *l, int nn) {
   double s = 0;
   for (int i = 0; i < nn; i++) {
-    double l = pa__len2(mc, y, RM_X(nb[i]), mp, RM_M(nb[i]));
-    out += !(l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI);
-    double g = log(l / RM_LTARGET);
+    double g = log(l[i] / RM_LTARGET);
     s += g * g;
   }
-  *sum = s;
-  return out;
+  return s;
 }
 
 /* Move interior vertex p = v[ip] of element k to bring its edges into range:
@@ -222,8 +401,8 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   }
   double *xp = rm->x + 2 * (size_t)p;
   const double *mp = RM_M(p);
-  double s0;
-  int out0 = len_score_2d(rm, xp, mp, nb, n, &s0);
+  double l0[RM_BALL_MAX], l1[RM_BALL_MAX], s0 = 0;
+  int out0 = len_out_2d(rm, xp, mp, nb, n, l0);
   if (out0 == 0) return 0;
   double jj[3] = {0, 0, 0}, jr[2] = {0, 0}, d2[2] = {0, 0}, worst = 0;
   double tp[3];
@@ -239,7 +418,8 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
     double q = me[0] * e[0] + me[1] * e[1];
     if (!(q > 0)) return 0;
     double g[2] = {-me[0] / q, -me[1] / q};
-    double l = pa__len2(mc, xp, xi, mp, RM_M(nb[s])), r = log(l / RM_LTARGET);
+    double l = l0[s], r = log(l / RM_LTARGET);
+    s0 += r * r;
     jj[0] += g[0] * g[0];
     jj[1] += g[0] * g[1];
     jj[2] += g[1] * g[1];
@@ -265,16 +445,20 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   for (int tr = 0; tr < 8; tr++, step *= 0.5) {
     if (tr == 4) step = 1.0;
     const double *dd = tr < 4 ? d : d2;
-    double np[2] = {x0 + step * dd[0], y0 + step * dd[1]}, s1;
-    int out1 = len_score_2d(rm, np, mp, nb, n, &s1);
-    if (!(out1 < out0 || (out1 == out0 && s1 < RM_LGAIN * s0))) continue;
+    double np[2] = {x0 + step * dd[0], y0 + step * dd[1]};
+    int out1 = len_out_2d(rm, np, mp, nb, n, l1);
+    if (!(out1 < out0 ||
+          (out1 == out0 && len_sum_2d(l1, n) < RM_LGAIN * s0)))
+      continue;
     xp[0] = np[0];
     xp[1] = np[1];
     int ok = 1;
     for (int s = 0; s < n && ok; s++) {
       const pa_idx *v = rm->ev + 3 * (size_t)el[s];
       double q = rm_elem_qual(rm, v[0], v[1], v[2]);
-      if (!(q >= qfloor) || q < RM_QFLOOR) ok = 0;
+      if (!(q >= qfloor) ||
+          !rm_qual_ok(rm, q, rm_qfloor(qold), v[0], v[1], v[2]))
+        ok = 0;
     }
     xp[0] = x0;
     xp[1] = y0;

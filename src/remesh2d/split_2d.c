@@ -64,18 +64,23 @@ static pa_idx new_midpoint(pa__rmesh *rm, const split_cfg *s, double *tm) {
 }
 
 /* The qualities q of the four halves (1 where there is no f), and whether
- * all are at least RM_QFLOOR. */
+ * all pass the quality floor (rm_qfloor of the worst of k and f). */
 static int halves_ok(pa__rmesh *rm, const split_cfg *s, pa_idx m, double *q) {
+  double qold = rm->q[s->k];
+  if (s->f >= 0 && rm->q[s->f] < qold) qold = rm->q[s->f];
+  double fl = rm_qfloor(qold);
   q[0] = rm_elem_qual(rm, s->p0, s->a, m);
   q[1] = rm_elem_qual(rm, s->p0, m, s->b);
   q[2] = 1;
   q[3] = 1;
-  if (s->f >= 0) {
-    q[2] = rm_elem_qual(rm, s->p1, s->b, m);
-    q[3] = rm_elem_qual(rm, s->p1, m, s->a);
-  }
-  return !(q[0] < RM_QFLOOR || q[1] < RM_QFLOOR || q[2] < RM_QFLOOR ||
-           q[3] < RM_QFLOOR);
+  if (!rm_qual_ok(rm, q[0], fl, s->p0, s->a, m) ||
+      !rm_qual_ok(rm, q[1], fl, s->p0, m, s->b))
+    return 0;
+  if (s->f < 0) return 1;
+  q[2] = rm_elem_qual(rm, s->p1, s->b, m);
+  q[3] = rm_elem_qual(rm, s->p1, m, s->a);
+  return rm_qual_ok(rm, q[2], fl, s->p1, s->b, m) &&
+         rm_qual_ok(rm, q[3], fl, s->p1, m, s->a);
 }
 
 /* Cut k, and f if any, in two at m: T1 = k (p0 a m), T2 = *k2 (p0 m b),

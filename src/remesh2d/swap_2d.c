@@ -19,10 +19,11 @@ static int swap_edge(pa__rmesh *rm, pa_idx k, int i, double gain) {
   pa_idx p0 = rm->ev[3 * k + i], a = rm->ev[3 * k + i1], b = rm->ev[3 * k + i2];
   pa_idx p1 = rm->ev[3 * f + j];
   double qo = rm->q[k] < rm->q[f] ? rm->q[k] : rm->q[f];
+  const double fl = rm_qfloor(qo);
   double q1 = rm_elem_qual(rm, p0, a, p1);
-  if (q1 < RM_QFLOOR || q1 <= gain * qo) return 0;
+  if (q1 <= gain * qo || !rm_qual_ok(rm, q1, fl, p0, a, p1)) return 0;
   double q2 = rm_elem_qual(rm, p1, b, p0);
-  if (q2 < RM_QFLOOR || q2 <= gain * qo) return 0;
+  if (q2 <= gain * qo || !rm_qual_ok(rm, q2, fl, p1, b, p0)) return 0;
   pa_idx oA = rm->adj[3 * k + i1], oB = rm->adj[3 * k + i2];
   pa_idx fB = rm->adj[3 * f + j1], fA = rm->adj[3 * f + j2];
   /* T1 = k (p0 a p1), T2 = f (p1 b p0) */
