@@ -79,9 +79,9 @@
  * 95 away) one split per chain and pass, so untouched the pieces of
  * plate2d.mesh -hsiz 0.0005 at 2 ranks ran 40 passes, missed their target
  * and left 18 k elements to another iteration; at 2 its own refinement is
- * lost (twice the remesher CPU time). 24: 49 elements left, remesher CPU
- * 7.5 s (8 s at 12, 7.8 s at 16, 7.6 s at 32 with 174 left; 14.7 s at 8).
- * docs/BENCHMARKS.md, "The parallel loop". */
+ * lost (1.8 times the remesher CPU time). 24: 49 elements left, CPU
+ * 7.5 s (8 s at 12, 7.8 s at 16, 7.6 s at 32 with 174 left; 14.7 s at 8;
+ * with the 2D remesher before da8e63a). */
 #define PA_ADAPT_LEB_INNER_2D 24.0
 /* No label (pieces.c, extract.c). */
 #define PA_ADAPT_NOLABEL 2147483647
