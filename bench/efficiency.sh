@@ -6,18 +6,22 @@
 #
 # PART (default: time work weak):
 #   time  PAIRS (default 3) interleaved pairs of `padapt adapt` at 1 then 2
-#         processes on three jobs: the gmsh rod (tests/data/rod3d.mesh ->
-#         -hsiz 0.03, ~0.8 M tets, ~7 s), the gmsh plate (2D,
-#         tests/data/plate2d.mesh -> -hsiz 0.0012, ~1.2 M triangles) and the
-#         1-second Kuhn cube (box3d 10 -> 0.05). Per job the median wall time
-#         of the whole command at np=1 and np=2 and the median efficiency
-#         T1 / (2 T2) over the pairs. Wall clock: meaningful on a quiet
-#         machine only (the load is printed first).
+#         processes on four jobs: the gmsh rod (tests/data/rod3d.mesh ->
+#         -hsiz 0.03, ~0.8 M tets, ~7 s), the gmsh plate of similar duration
+#         (2D, tests/data/plate2d.mesh -> -hsiz 0.0005, ~6 M triangles), the
+#         1-second plate (-hsiz 0.0012, ~1.2 M triangles) and the 1-second
+#         Kuhn cube (box3d 10 -> 0.05). Per job the medians at np=1 and
+#         np=2 of the whole command's wall time and of the command's own
+#         time ("time_s" of the -json report: without Open MPI's start and
+#         end, ~0.45 s), and the median efficiencies T1 / (2 T2) of both
+#         over the pairs. Wall clock: meaningful on a quiet machine only (the
+#         load is printed first).
 #   work  the remeshing work -- the remesher's CPU time summed over the
-#         ranks, "remesh_cpu_s" of the -json report -- on the rod at np 1, 2,
-#         4 and 8 (oversubscribed: CPU time does not grow with the number of
-#         ranks per core), its ratio to the sequential work, the iterations
-#         and the work of each.
+#         ranks, "remesh_cpu_s" of the -json report -- on the rod and on the
+#         6 M-triangle plate at np 1, 2, 4 and 8 (oversubscribed: CPU time
+#         does not grow with the number of ranks per core), its ratio to the
+#         sequential work, the iterations and the work of each, elements and
+#         worst quality.
 #   weak  the rod refined to N = np x 2 M tets at np 1, 2, 4, 8
 #         (-distributed-output, deleted after each run): remeshing work per
 #         output tet (microseconds), its ratio to np=1's, the iterations.
@@ -53,12 +57,16 @@ time_pairs() { # name mesh hsiz
   for i in $(seq "$PAIRS"); do
     t1=$(wall "$PADAPT" adapt "$in" -hsiz "$h" -out o1.meshb -nosol -json "time-$name-np1.json")
     t2=$(wall mpiexec -n 2 "$PADAPT" adapt "$in" -hsiz "$h" -out o2.meshb -nosol -json "time-$name-np2.json")
-    echo "$t1 $t2" | awk '{print $1 / (2 * $2), $1, $2}' >> "e-$name.txt"
+    s1=$(jget "time-$name-np1.json" time_s)
+    s2=$(jget "time-$name-np2.json" time_s)
+    echo "$t1 $t2 $s1 $s2" | awk '{print $1 / (2 * $2), $1, $2, $3 / (2 * $4), $3, $4}' >> "e-$name.txt"
   done
-  printf "time  %-6s %s elements: T1 %s s, T2 %s s (medians), efficiency T1/(2 T2) %s (pairs: %s)\n" \
+  printf "time  %-7s %s elements: whole command T1 %s s, T2 %s s, efficiency %s; own time_s T1 %s s, T2 %s s, efficiency %s (medians; pairs T1/T2: %s)\n" \
     "$name" "$(jget "time-$name-np1.json" elements)" \
     "$(cut -d' ' -f2 "e-$name.txt" | median)" "$(cut -d' ' -f3 "e-$name.txt" | median)" \
     "$(cut -d' ' -f1 "e-$name.txt" | median)" \
+    "$(cut -d' ' -f5 "e-$name.txt" | median)" "$(cut -d' ' -f6 "e-$name.txt" | median)" \
+    "$(cut -d' ' -f4 "e-$name.txt" | median)" \
     "$(awk '{printf "%s/%s ", $2, $3}' "e-$name.txt" | sed 's/ $//')"
 }
 
@@ -70,25 +78,36 @@ print(', '.join('%d: %d tagged, %d pieces, %.2f s' % (i['iter'], i['tagged'], i[
                 for i in r['iteration_detail']))" "$1"
 }
 
+# the work at np 1, 2, 4, 8 of one job: name mesh hsiz prefix of the
+# reports (PREFIX-npN.json)
+work_nps() {
+  local name=$1 in=$2 h=$3 pre=$4
+  "$PADAPT" adapt "$in" -hsiz "$h" -out o1.meshb -nosol -json "$pre-np1.json" > /dev/null 2>&1
+  w1=$(jget "$pre-np1.json" remesh_cpu_s)
+  printf "work  %-5s np=1: %s elements, worst quality %.3f, remesher CPU %.2f s\n" "$name" \
+    "$(jget "$pre-np1.json" elements)" "$(jget "$pre-np1.json" quality_worst)" "$w1"
+  for np in 2 4 8; do
+    mpiexec -n "$np" "$PADAPT" adapt "$in" -hsiz "$h" -out o2.meshb -nosol \
+      -json "$pre-np$np.json" > /dev/null 2>&1
+    w=$(jget "$pre-np$np.json" remesh_cpu_s)
+    printf "work  %-5s np=%d: %s elements, worst quality %.3f, remesher CPU %.2f s, %.3f x np=1, %s iterations (%s)\n" \
+      "$name" "$np" "$(jget "$pre-np$np.json" elements)" "$(jget "$pre-np$np.json" quality_worst)" "$w" \
+      "$(echo "$w $w1" | awk '{print $1 / $2}')" \
+      "$(jget "$pre-np$np.json" iterations)" "$(iters "$pre-np$np.json")"
+  done
+}
+
 for part in $PARTS; do
   case $part in
     time)
       "$PADAPT" generate box3d 10 kuhn.mesh > /dev/null
       time_pairs rod "$ROOT/tests/data/rod3d.mesh" 0.03
-      time_pairs plate "$ROOT/tests/data/plate2d.mesh" 0.0012
+      time_pairs plate "$ROOT/tests/data/plate2d.mesh" 0.0005
+      time_pairs plate1s "$ROOT/tests/data/plate2d.mesh" 0.0012
       time_pairs cube kuhn.mesh 0.05 ;;
     work)
-      "$PADAPT" adapt "$ROOT/tests/data/rod3d.mesh" -hsiz 0.03 -out o1.meshb -nosol -json work-np1.json > /dev/null 2>&1
-      w1=$(jget work-np1.json remesh_cpu_s)
-      printf "work  rod np=1: %s elements, remesher CPU %.2f s\n" "$(jget work-np1.json elements)" "$w1"
-      for np in 2 4 8; do
-        mpiexec -n "$np" "$PADAPT" adapt "$ROOT/tests/data/rod3d.mesh" -hsiz 0.03 -out o2.meshb -nosol \
-          -json "work-np$np.json" > /dev/null 2>&1
-        w=$(jget "work-np$np.json" remesh_cpu_s)
-        printf "work  rod np=%d: %s elements, remesher CPU %.2f s, %.3f x np=1, %s iterations (%s)\n" \
-          "$np" "$(jget "work-np$np.json" elements)" "$w" "$(echo "$w $w1" | awk '{print $1 / $2}')" \
-          "$(jget "work-np$np.json" iterations)" "$(iters "work-np$np.json")"
-      done ;;
+      work_nps rod "$ROOT/tests/data/rod3d.mesh" 0.03 work
+      work_nps plate "$ROOT/tests/data/plate2d.mesh" 0.0005 work-plate ;;
     weak)
       # N ~ 0.817 M x (0.03 / h)^3 on the rod
       w1=

@@ -74,6 +74,15 @@
  * (docs/BENCHMARKS.md, "The parallel loop", has the measurement). */
 #define PA_ADAPT_LEB_SKIN 1.5
 #define PA_ADAPT_LEB_INNER 2.0
+/* ... and, for the built-in 2D remesher, while longer than this: it
+ * resolves a fan of needles (a skin refined to 1.5 facing an input vertex
+ * 95 away) one split per chain and pass, so untouched the pieces of
+ * plate2d.mesh -hsiz 0.0005 at 2 ranks ran 40 passes, missed their target
+ * and left 18 k elements to another iteration; at 2 its own refinement is
+ * lost (1.8 times the remesher CPU time). 24: 49 elements left, CPU
+ * 7.5 s (8 s at 12, 7.8 s at 16, 7.6 s at 32 with 174 left; 14.7 s at 8;
+ * with the 2D remesher before da8e63a). */
+#define PA_ADAPT_LEB_INNER_2D 24.0
 /* No label (pieces.c, extract.c). */
 #define PA_ADAPT_NOLABEL 2147483647
 /* Values of the "done" element value (tag.c gives the criteria each is
@@ -301,12 +310,14 @@ pa_status pa__adapt_extract(pa__iter *it);
 
 /* Refine the skin faces pc shares with other pieces (bisect.c); inner[v]:
  * 1 the vertex is inner, 2 labelled, 3 on a smooth curved boundary (see
- * pieces.c); inside: bisect the edges inside the piece too; surf (3D): 4
+ * pieces.c); edges inside the piece are bisected while longer than
+ * inner_lmax (HUGE_VAL: none); surf (3D): 4
  * per input vertex, it->vsurf's, or NULL (no two labelled vertices are
  * then known to make a chord); curves: skin edges may be split onto a
  * curve (else the vertices marked 3 are labelled ones). */
 pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
-                                int inside, const double *surf, int curves);
+                                double inner_lmax, const double *surf,
+                                int curves);
 
 /* Step 4. Local: remesh the local pieces; failures are recorded, not
  * returned (only hard internal errors are). *nfail receives the number of

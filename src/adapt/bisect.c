@@ -42,24 +42,28 @@
  * when one is found on any rank.
  *
  * In 2D (no masks, surf NULL) every labelled vertex is hard: a skin edge
- * there is interior, and nothing is gained, while the 2D remesher, fenced
- * by skin edges refined down to a curved boundary's vertices, left whole
- * the boundary edge between two of them (plate2d.mesh -hsiz 0.0012 at 4
- * ranks: a boundary edge 40 times too long, the loop stalled). In 3D
- * without masks (a mesh holding the most fields) too.
+ * there is interior, a labelled-labelled one (a chord) stays whole, but a
+ * skin edge between a hard vertex and an inner one descended from labelled
+ * ones is split (leb.c: a skin face is that edge, nothing slides); left
+ * whole, the edges ending on the boundary stayed 41-50 long in the metric
+ * beside a skin refined to 1.5 (plate2d.mesh -hsiz 0.0005 at 2 ranks), and
+ * the pieces missed their target. The 2D remesher then splits the curved
+ * boundary edge at such an end nearer its chord if needed
+ * (remesh2d/split_2d.c). In 3D without masks (a mesh holding the most
+ * fields) every labelled vertex is hard too.
  *
- * With inside, edges inside the piece longer than PA_ADAPT_LEB_INNER are
- * bisected too, in the same longest-first order (except in elements holding
- * less than PA_LEB_VMIN unit elements of metric volume, as the remesher's
- * own pre-refinement): otherwise the elements on a refined skin face are
- * fans of slivers. The built-in 3D remesher turns
- * those into more tets, more slowly (docs/design/ADAPT.md); a plain
- * bisection remesher (examples/) cannot repair them at all, nor the next
- * iteration's one a rolled-back piece, which comes back as refined here
- * (test_adapt_props: a threshold of 3 or more leaves fans). The built-in 2D
- * remesher repairs fans of triangles itself, faster than the bisection
- * (docs/BENCHMARKS.md, "The parallel loop"): extract.c passes inside = 0
- * for it.
+ * Edges inside the piece longer than inner_lmax are bisected too, in the
+ * same longest-first order (except in elements holding less than
+ * PA_LEB_VMIN unit elements of metric volume, as the remesher's own
+ * pre-refinement): otherwise the elements on a refined skin face are fans
+ * of slivers. The built-in 3D remesher turns those into more tets, more
+ * slowly (docs/design/ADAPT.md); a plain bisection remesher (examples/)
+ * cannot repair them at all, nor the next iteration's one a rolled-back
+ * piece, which comes back as refined here (test_adapt_props: a threshold
+ * of 3 or more leaves fans): extract.c passes PA_ADAPT_LEB_INNER. The
+ * built-in 2D remesher refines the inside itself, faster than the
+ * bisection, but resolves a long fan one split per pass: it gets
+ * PA_ADAPT_LEB_INNER_2D (adapt.h has the measurement).
  *
  * New skin vertices get temporary ids (PA_ADAPT_TEMP_GID + index), and are
  * matched after the remesh by their coordinates like the others;
@@ -99,7 +103,8 @@ static int maybe_on_boundary(void *ctx, pa_idx a, pa_idx b) {
 }
 
 pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
-                                int inside, const double *surf, int curves) {
+                                double inner_lmax, const double *surf,
+                                int curves) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = pc->in;
   pa_idx nv0 = m->nv, *parent = NULL;
@@ -108,11 +113,11 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
   bloom f = {pc->vgid, surf};
   pa__leb_opts o;
   memset(&o, 0, sizeof o);
-  o.lmax = inside ? PA_ADAPT_LEB_INNER : HUGE_VAL;
+  o.lmax = inner_lmax;
   o.skin_ref = PA_ADAPT_SKIN_REF;
   o.skin_ok = inner;
   o.skin_lmax = PA_ADAPT_LEB_SKIN;
-  o.vmin = inside ? PA_LEB_VMIN * pa__unit_simplex_volume(m->dim) : 0;
+  o.vmin = PA_LEB_VMIN * pa__unit_simplex_volume(m->dim);
   o.curve_bad = &pc->curve_bad;
   if (surf) {
     o.on_boundary = on_boundary;

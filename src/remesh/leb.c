@@ -20,12 +20,13 @@
  *     . inner-inner, and inner-labelled: at the midpoint (an inner-labelled
  *       edge is interior or lies in the plane of the inner end's boundary
  *       faces). The new vertex is inner; if an end was labelled or so
- *       descended, it pairs with no labelled vertex but surface ones.
+ *       descended, in 3D it pairs with no hard labelled vertex.
  *       Otherwise
  *       a skin face whose longest edge cannot be split (two labelled
  *       vertices on the boundary: a ridge) would have its other edges
  *       bisected towards it without end, the apex sliding to the ridge (a
- *       denormal away after 1075 steps, on box3d 3).
+ *       denormal away after 1075 steps, on box3d 3). In 2D a skin face is
+ *       that edge: nothing slides, and it pairs with any.
  *     . labelled-labelled: on a feature edge, never; inside the domain (a
  *       chord: o->on_boundary says no) at its midpoint, the new vertex
  *       inner and descended from a labelled one; on the boundary (every
@@ -549,7 +550,7 @@ static int skin_split(bis *s, const qedge *e, int ia, int ib, int bnd,
   if (!la && !lb) return 0;
   if (!la || !lb) { /* an inner end, descended from a labelled vertex or not */
     int in = la ? ib : ia, lab = la ? ia : ib;
-    return (in & M_NOLAB) && (lab & M_HARD) ? -1 : 0;
+    return s->d == 3 && (in & M_NOLAB) && (lab & M_HARD) ? -1 : 0;
   }
   if (feat) return -1;
   if (!on_boundary(s, e->a, e->b)) {

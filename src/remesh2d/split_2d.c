@@ -158,10 +158,35 @@ static void split_feature(pa__rmesh *rm, const split_cfg *s, pa_idx m,
   rm->vref[m] = rm->bref[feat];
 }
 
+/* A long curved feature edge under a thin element (next to a frozen
+ * vertex: a piece's skin refined down to the boundary, in the parallel
+ * loop): the curve's midpoint, off the chord by the sagitta, may turn a
+ * half over, and nothing moves the frozen vertex away, so the edge stayed
+ * as long as it was (plate2d.mesh -hsiz 0.0005 at 2 ranks: a boundary
+ * edge of length 95 beside a skin refined to 0.8 on the hole). Then m
+ * comes back towards the chord's midpoint, which turns no half over:
+ * halfway, then onto it; the halves are split on their own curves later.
+ * Returns 1 with m placed and q set when a position passes. */
+static int split_toward_chord(pa__rmesh *rm, const split_cfg *s, pa_idx m,
+                              double *q) {
+  if (s->feat < 0) return 0;
+  double *xm = rm->x + 2 * (size_t)m;
+  double c[2] = {0.5 * (RM_X(s->a)[0] + RM_X(s->b)[0]),
+                 0.5 * (RM_X(s->a)[1] + RM_X(s->b)[1])};
+  double d[2] = {xm[0] - c[0], xm[1] - c[1]};
+  for (double w = 0.5; w >= 0; w -= 0.5) {
+    xm[0] = c[0] + w * d[0];
+    xm[1] = c[1] + w * d[1];
+    if (halves_ok(rm, s, m, q)) return 1;
+  }
+  return 0;
+}
+
 /*
  * Split face i of element k at its midpoint (on a feature: the midpoint of
- * the reconstructed curve). Returns 1 if done, 0 if rejected; *st on memory
- * failure (then nothing changed).
+ * the reconstructed curve, or nearer the chord: split_toward_chord).
+ * Returns 1 if done, 0 if rejected; *st on memory failure (then nothing
+ * changed).
  */
 static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
   split_cfg s;
@@ -170,7 +195,7 @@ static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
   if (*st) return 0;
   double tm[2] = {0, 0}, q[4];
   pa_idx m = new_midpoint(rm, &s, tm);
-  if (!halves_ok(rm, &s, m, q)) {
+  if (!halves_ok(rm, &s, m, q) && !split_toward_chord(rm, &s, m, q)) {
     pa__rm_kill_vertex(rm, m);
     return 0;
   }

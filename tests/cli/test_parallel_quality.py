@@ -194,7 +194,8 @@ def stall(mesh, h, extra):
 def main():
     plate = os.path.join(DATA, "plate2d.mesh")
     rod = os.path.join(DATA, "rod3d.mesh")
-    stall(plate, 0.006, ["-hausd", "0.0005"])
+    # without insertions: one iteration at 2 ranks meets the metric
+    stall(plate, 0.006, ["-hausd", "0.0005", "-noinsert"])
     if SANITIZE:
         case("plate", plate, 0.006, [2], ["-hausd", "0.0005"])
     else:

@@ -15,8 +15,10 @@ fails=0
 ok()  { echo "ok   $1"; }
 bad() { echo "FAIL $1"; fails=$((fails + 1)); }
 
-# The plate: its pieces leave work for a second iteration at 2 to 4
-# processes (a generated square's do not), so the splice is exercised.
+# The plate: one iteration meets its metric at 2 to 4 processes, so only
+# the forced splice (of the whole first iteration) is exercised in 2D; the
+# cube's pieces leave work for a second iteration, which the default run
+# splices.
 cp "$PADAPT_TESTDATA/plate2d.mesh" plate.mesh || bad "copy the 2D input"
 "$PADAPT" generate box3d 10 cube.mesh > /dev/null || bad "generate 3D"
 
@@ -51,7 +53,7 @@ for np in 1 2 3 4; do
     done
     [ $same = 1 ] && ok "$name: identical files, default, rebuild and splice" \
       || bad "$name: the files differ"
-    if [ "$np" -gt 1 ]; then
+    if [ "$np" -gt 1 ] && [ "$1" = 3D ]; then
       grep -q "reintegrate: splice" default/log \
         && ok "$name: the default run spliced" \
         || bad "$name: the default run never spliced"

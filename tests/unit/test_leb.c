@@ -512,6 +512,18 @@ static void refine_half(pa_mesh *m) {
   }
   CHECK(wrong == 0);
   CHECK(nchecked > 0 && nlong == 0);
+  if (d == 2 && labelled == LAB_HARD) {
+    /* a 2D skin face is its edge: split down to a hard end too */
+    int nhard = 0, nhlong = 0;
+    for (pa_idx f = nbox; f < m->nb; f++) {
+      pa_idx x = m->bdry[2 * (size_t)f], y = m->bdry[2 * (size_t)f + 1];
+      int hx = x < nv0 && ok[x] == 4, hy = y < nv0 && ok[y] == 4;
+      if (hx == hy) continue;
+      nhard++;
+      nhlong += elen(m, x, y) > SKIN_LMAX;
+    }
+    CHECK(nhard > 0 && nhlong == 0);
+  }
   printf("skin %dD half: %d -> %d vertices, %d -> %d skin faces\n", d, (int)nv0,
          (int)m->nv, (int)(nb0 - nbox), (int)(m->nb - nbox));
 done:
@@ -591,6 +603,13 @@ static void test_skin_labelled_2d(void) {
   skin(2, 8, "iso-shell:0.1");
   labelled = LAB_NONE;
 }
+/* Hard vertices on the border of a 2D cut: the skin edges ending there are
+ * split down to them (a 2D skin face slides nowhere), both halves alike. */
+static void test_skin_hard_2d(void) {
+  labelled = LAB_HARD;
+  skin(2, 2, "uniform:0.05");
+  labelled = LAB_NONE;
+}
 static void test_skin_labelled_3d(void) {
   for (labelled = LAB_HARD; labelled <= LAB_SOFT; labelled++) {
     skin(3, 2, "uniform:0.15");
@@ -611,4 +630,4 @@ static void test_skin_curved_3d(void) {
 
 TEST_MAIN(test_plain_2d, test_plain_3d, test_frozen_2d, test_frozen_3d,
           test_skin_2d, test_skin_3d, test_skin_labelled_2d,
-          test_skin_labelled_3d, test_skin_curved_3d, test_alloc_failure)
+          test_skin_hard_2d, test_skin_labelled_3d, test_skin_curved_3d, test_alloc_failure)
