@@ -2006,6 +2006,9 @@ typedef struct pa_adapt_report {
   long nfailed;        /**< pieces rolled back, all iterations */
   double time_total;   /**< wall-clock seconds of the whole call */
   double t_tag, t_pieces, t_gather, t_remesh, t_reintegrate, t_rebalance;
+  /** wall-clock seconds measuring the result (fidelity), part of
+   *  time_total; pa_remesh_report.time_s leaves its measurement out */
+  double t_measure;
   double remesh_busy;  /**< seconds spent in the remesher, summed over ranks */
   /** CPU seconds spent inside the remesher, summed over the ranks and the
    *  iterations: the remeshing work, comparable with the sequential

@@ -165,9 +165,9 @@ static void print_table(const pa_cli *cli, const pa_adapt_report *r,
   printf("    iterations %d (%s), pieces %ld, rolled back %ld\n", r->niter,
          r->converged ? "converged" : "stalled", r->npieces, r->nfailed);
   printf("    steps: tag %.3f pieces %.3f gather %.3f remesh %.3f "
-         "reintegrate %.3f rebalance %.3f s\n",
+         "reintegrate %.3f rebalance %.3f measure %.3f s\n",
          r->t_tag, r->t_pieces, r->t_gather, r->t_remesh, r->t_reintegrate,
-         r->t_rebalance);
+         r->t_rebalance, r->t_measure);
   printf("    remeshing busy time (all ranks) %.3f s, CPU %.3f s, bytes "
          "moved %.3g, peak memory per rank %.1f MB\n",
          r->remesh_busy, r->remesh_cpu, r->bytes_moved, r->peak_memory / 1e6);
@@ -199,9 +199,9 @@ static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
             r->bytes_moved, r->remesh_busy, r->remesh_cpu);
   pa_cli_sb_printf(&b, "\"steps_s\": {\"tag\": %.6f, \"pieces\": %.6f, \"gather\": "
                 "%.6f, \"remesh\": %.6f, \"reintegrate\": %.6f, \"rebalance\": "
-                "%.6f}, ",
+                "%.6f, \"measure\": %.6f}, ",
             r->t_tag, r->t_pieces, r->t_gather, r->t_remesh, r->t_reintegrate,
-            r->t_rebalance);
+            r->t_rebalance, r->t_measure);
   pa_cli_sb_printf(&b, "\"peak_memory_bytes_per_rank\": [");
   for (int k = 0; k < cli->size; k++)
     pa_cli_sb_printf(&b, "%s%llu", k ? ", " : "", (unsigned long long)mem[k]);

@@ -175,7 +175,7 @@ class AdaptReport(ctypes.Structure):
                 ("nfailed", ctypes.c_long)] + \
                [(n, ctypes.c_double) for n in
                 ("time_total", "t_tag", "t_pieces", "t_gather", "t_remesh",
-                 "t_reintegrate", "t_rebalance", "remesh_busy", "remesh_cpu",
+                 "t_reintegrate", "t_rebalance", "t_measure", "remesh_busy", "remesh_cpu",
                  "bytes_moved")] + \
                [("peak_memory", ctypes.c_size_t), ("peak_rss", ctypes.c_size_t),
                 ("niter_recorded", ctypes.c_int),

@@ -578,7 +578,7 @@ class DistributedMesh(object):
             "remesh_busy_s": r.remesh_busy, "remesh_cpu_s": r.remesh_cpu,
             "steps_s": {"tag": r.t_tag, "pieces": r.t_pieces, "gather": r.t_gather,
                         "remesh": r.t_remesh, "reintegrate": r.t_reintegrate,
-                        "rebalance": r.t_rebalance},
+                        "rebalance": r.t_rebalance, "measure": r.t_measure},
             "peak_memory_bytes_per_rank": [m for m, _ in allm],
             "peak_rss_bytes_per_rank": [s for _, s in allm],
             "iteration_detail": [

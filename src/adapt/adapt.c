@@ -538,8 +538,10 @@ static pa_status finish(pa_dmesh *dm, const pa_adapt_opts *opts,
   pa__memory_window_begin();
   ta = pa_wtime();
   if (!opts->remesh.no_stats) PA_CALL(measure(dm, L->changed, &rep->fidelity));
+  rep->t_measure = pa_wtime() - ta;
   pa__info(2, "padapt: rank %d: statistics %.3f s, peak %.1f MB\n", dm->rank,
-           pa_wtime() - ta, pa__memory_window_peak() / 1e6);
+           rep->t_measure, pa__memory_window_peak() / 1e6);
+  PA_CALL(pa__allreduce(dm->comm, &rep->t_measure, 1, MPI_DOUBLE, MPI_MAX));
   rep->fidelity.measured = !opts->remesh.no_stats;
 cleanup:
   return st;

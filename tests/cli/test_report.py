@@ -17,7 +17,8 @@ In a scratch directory (CTest's), with PADAPT = the CLI:
   - the remeshing work: "remesh_cpu_s" (the remesher's thread CPU time) is
     positive and no more than the remesher's wall-clock time, sequential
     ("time_s") and at 2 processes ("remesh_busy_s", summed over the ranks,
-    also per iteration), and the text reports print it.
+    also per iteration), and the text reports print it; at 2 processes the
+    measurement of the result ("steps_s" "measure") is part of "time_s".
 Exits 0 when every check passes, 1 naming each failure.
 """
 import json
@@ -60,6 +61,10 @@ def check_work(tag, np, r, rep):
     check(0 < cpu <= wall * 1.02 + 0.005,
           "%s: remesher CPU %.4f s in (0, wall %.4f s]" % (tag, cpu, wall))
     if np > 1:
+        meas = rep.get("steps_s", {}).get("measure", -1)
+        check(0 < meas < rep["time_s"],
+              "%s: measuring the result took %.4f s of %.4f s"
+              % (tag, meas, rep["time_s"]))
         iters = rep.get("iteration_detail", [])
         total = sum(it.get("remesh_cpu_s", -1) for it in iters)
         check(iters and abs(total - cpu) <= 1e-6 * max(1, cpu),
