@@ -1407,6 +1407,12 @@ void pa__mesh_layout(const pa_mesh *m, pa__layout *lay) {
   }
 }
 
+void pa__dmesh_layout(pa_dmesh *dm, pa__layout *lay) {
+  memset(lay, 0, sizeof *lay);
+  lay->dim = dm->dim;
+  if (dm->mesh) pa__mesh_layout(dm->mesh, lay);
+}
+
 pa_status pa__layout_cell_fields(const pa__layout *l, pa_mesh *m) {
   pa_status st = PA_SUCCESS;
   for (int c = 0; c < 2; c++) {

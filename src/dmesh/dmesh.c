@@ -144,12 +144,6 @@ size_t pa_dmesh_memory_used(const pa_dmesh *dm) {
   return n;
 }
 
-void pa__dmesh_layout(pa_dmesh *dm, pa__layout *lay) {
-  memset(lay, 0, sizeof *lay);
-  lay->dim = dm->dim;
-  if (dm->mesh) pa__mesh_layout(dm->mesh, lay);
-}
-
 int32_t pa__dmesh_ref(const pa_dmesh *dm, int kind, pa_idx e) {
   const pa_mesh *m = dm->mesh;
   switch (kind) {
