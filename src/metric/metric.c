@@ -55,14 +55,6 @@ static inline int is_diagonal(int dim, const double *m) {
   return m[1] == 0.0 && m[3] == 0.0 && m[4] == 0.0;
 }
 
-/* a*c - b*b with one rounding error at most (Kahan's fma trick). */
-static inline double det2_accurate(double a, double b, double c) {
-  double w = b * b;
-  double e = fma(-b, b, w); /* w - b*b exactly, i.e. minus the rounding error */
-  double f = fma(a, c, -w);
-  return f + e;
-}
-
 /* ------------------------------------------------------------------------ */
 /* Validity, expansion, determinant, inverse                               */
 /* ------------------------------------------------------------------------ */
@@ -118,13 +110,6 @@ void pa__metric_tensor(int dim, int ncomp, const double *m, double *t) {
   if (dim == 3) t[5] = s;
 }
 
-double pa__sym_det(int dim, const double *m) {
-  if (dim == 2) return det2_accurate(m[0], m[1], m[2]);
-  double a11 = m[0], a12 = m[1], a22 = m[2], a13 = m[3], a23 = m[4], a33 = m[5];
-  return a11 * (a22 * a33 - a23 * a23) - a12 * (a12 * a33 - a23 * a13) +
-         a13 * (a12 * a23 - a22 * a13);
-}
-
 /* ------------------------------------------------------------------------ */
 /* Eigen-decomposition                                                      */
 /* ------------------------------------------------------------------------ */
@@ -138,11 +123,11 @@ static void eigen2(const double *m, double *lambda, double *vec) {
    * comes from the determinant, accurate even when l2 << l1. */
   if (mean >= 0.0) {
     l1 = mean + r;
-    l2 = l1 != 0.0 ? det2_accurate(a, b, c) / l1 : 0.0;
+    l2 = l1 != 0.0 ? pa__det2_accurate(a, b, c) / l1 : 0.0;
     if (l2 > l1) l2 = l1; /* equal up to rounding */
   } else {
     l2 = mean - r;
-    l1 = det2_accurate(a, b, c) / l2;
+    l1 = pa__det2_accurate(a, b, c) / l2;
     if (l1 < l2) l1 = l2;
   }
   double x, y;

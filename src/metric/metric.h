@@ -19,6 +19,7 @@
 #define PA_METRIC_H
 
 #include "mesh/mesh.h"
+#include "metric/sym.h"
 
 #include <math.h>
 
@@ -36,18 +37,6 @@
 #define PA_METRIC_LEN_LO_EXACT 0.7071067811865476
 #define PA_METRIC_LEN_HI_EXACT 1.4142135623730951
 
-/* The normalisations of the quality (Mmg's), which make it 1 on the
- * regular simplex:
- *  - 2D, 4 sqrt(3): Q = 4 sqrt(3) A_M / sum l_M^2 (the equilateral triangle
- *    of unit edges has A = sqrt(3)/4 and sum l^2 = 3);
- *  - 3D, 72 sqrt(3): Q = 72 sqrt(3) V_M / (sum l_M^2)^(3/2) (the regular
- *    tetrahedron of unit edges has V = sqrt(2)/12 and sum l^2 = 6);
- *  - 3D from the triple product det = 6 V, 12 sqrt(3) = 72 sqrt(3) / 6:
- *    Q = 12 sqrt(3) det_M / (sum l_M^2)^(3/2).
- * Each is the double nearest its exact value. */
-#define PA_METRIC_QUAL_NORM_2D 6.928203230275509
-#define PA_METRIC_QUAL_NORM_3D 124.70765814495915
-#define PA_METRIC_QUAL_NORM_3D_DET 20.784609690826528
 
 /* Index of entry (i,j) of a symmetric tensor stored m11 m12 m22 m13 m23 m33. */
 static inline int pa__sym_index(int i, int j) {
@@ -73,7 +62,6 @@ void pa__sym_eigen(int dim, const double *m, double *lambda, double *vec);
 /* Rebuild a symmetric tensor from eigenpairs. */
 void pa__sym_from_eigen(int dim, const double *lambda, const double *vec,
                         double *m);
-double pa__sym_det(int dim, const double *m);
 
 /* Interpolation of n metrics with weights w (sum to 1) at a new vertex,
  * linear in size: M = (sum w_i M_i^-1/2)^-2, h = sum w_i h_i (Mmg's
@@ -138,21 +126,6 @@ double pa__local_hausd(const pa_remesh_opts *o, int ref, double def);
  * pa__sqlen2 or pa__sqlen3. */
 double pa__metric_sqlen(int dim, int ncomp, const double *m, const double *e);
 
-/* Logarithmic mean of two metric lengths: (la - lb) / ln(la / lb), the
- * arithmetic mean when they differ by less than 1e-3 relatively (also when
- * both are zero or one is not finite, where the log form is undefined).
- * Mmg's edge length from the two end lengths; the remeshers use it too, so
- * that their decisions and the statistics see the same lengths. */
-static inline double pa__log_mean(double la, double lb) {
-  if (la < lb) { /* symmetric to the last bit: L(a,b) == L(b,a) */
-    double t = la;
-    la = lb;
-    lb = t;
-  }
-  double d = la - lb;
-  if (!(d >= 1e-3 * la) || !(lb > 0.0)) return 0.5 * (la + lb);
-  return d / log(la / lb);
-}
 
 /* Edge length between points a and b with end metrics ma, mb: the kernel
  * of the dimension (pa__len2, metric2d.h; pa__len3, metric3d.h). */

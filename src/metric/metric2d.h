@@ -18,7 +18,7 @@
 #ifndef PA_METRIC2D_H
 #define PA_METRIC2D_H
 
-#include "metric/metric.h"
+#include "metric/sym.h"
 
 #include <math.h>
 

@@ -15,7 +15,7 @@
 #ifndef PA_METRIC3D_H
 #define PA_METRIC3D_H
 
-#include "metric/metric.h"
+#include "metric/sym.h"
 
 #include <math.h>
 
