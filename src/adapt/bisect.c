@@ -63,7 +63,7 @@
  * of 3 or more leaves fans): extract.c passes PA_ADAPT_LEB_INNER. The
  * built-in 2D remesher refines the inside itself, faster than the
  * bisection, but resolves a long fan one split per pass: it gets
- * PA_ADAPT_LEB_INNER_2D (adapt.h has the measurement).
+ * PA_ADAPT_LEB_INNER_2D (piece.h has the measurement).
  *
  * New skin vertices get temporary ids (PA_ADAPT_TEMP_GID + index), and are
  * matched after the remesh by their coordinates like the others;
@@ -71,7 +71,7 @@
  * id by their coordinates. New inner vertices get no id (-1): they are new
  * vertices like those the remesher adds.
  */
-#include "adapt/adapt.h"
+#include "adapt/piece.h"
 #include "remesh/leb.h"
 
 #include <math.h>

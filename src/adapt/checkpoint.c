@@ -40,7 +40,7 @@
  *   option NAME VALUE          every option of opt_fields, then the remesher
  *   end
  */
-#include "adapt/adapt.h"
+#include "adapt/piece.h"
 #include "io/io.h"
 
 #include <dirent.h>

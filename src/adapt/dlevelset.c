@@ -29,7 +29,7 @@
  * All point-to-point traffic goes through pa__recs_migrate (the exchange
  * layer).
  */
-#include "adapt/adapt.h"
+#include "adapt/piece.h"
 #include "metric/lscut.h"
 
 #include <stdlib.h>

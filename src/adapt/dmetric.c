@@ -19,7 +19,7 @@
  * does (its sweeps and the copies' intersections run in another order);
  * without it, so does the whole metric.
  */
-#include "adapt/adapt.h"
+#include "adapt/piece.h"
 #include "metric/gradation.h"
 
 #include <math.h>

@@ -38,7 +38,7 @@
  * (one allreduce): the pieces around that skin cannot decide alone, each
  * sees its own side.
  */
-#include "adapt/adapt.h"
+#include "adapt/piece.h"
 
 #include <limits.h>
 #include <math.h>

@@ -17,7 +17,7 @@
  * tensors it depends on the order of the intersections, like the sequential
  * gradation itself.
  */
-#include "adapt/adapt.h"
+#include "adapt/piece.h"
 #include "metric/gradation.h"
 
 #define MAX_ROUNDS 200

@@ -45,7 +45,7 @@
  * point-to-point
  * code, and the result does not depend on timing.
  */
-#include "adapt/adapt.h"
+#include "adapt/piece.h"
 #include "partition/partition.h"
 #include "remesh/leb.h"
 

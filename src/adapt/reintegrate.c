@@ -14,7 +14,7 @@
  * skin refined by bisect.c, which its neighbours share), its elements not
  * marked done.
  *
- * Rebuild (see adapt.h for the invariants): staying elements are the
+ * Rebuild (see piece.h for the invariants): staying elements are the
  * unlabelled ones. An owned vertex, boundary entity or edge is kept by its
  * owner when some staying element contains it, or elements of two labels do
  * (it lies on a skin between two pieces; MAX reductions of per-entity values
@@ -49,7 +49,7 @@
  * part, so its owners and ghosts are right, and every other entity stays
  * as it is. Same result as the rebuild, array by array.
  */
-#include "adapt/adapt.h"
+#include "adapt/piece.h"
 
 #include <limits.h>
 #include <math.h>

@@ -18,11 +18,11 @@
  * distribution. The work is computed only for the tagged elements (-1 for
  * the others); extract.c computes it for the untagged skin elements it
  * needs. An element that passed the last tag and has not changed since
- * (PA_ADAPT_DONE_PASSED, adapt.h) is not measured again: after the first
+ * (PA_ADAPT_DONE_PASSED, piece.h) is not measured again: after the first
  * iteration a tag costs what the last remesh changed (debug builds measure
  * it all the same and check that it still passes).
  */
-#include "adapt/adapt.h"
+#include "adapt/piece.h"
 #include "geom/geom.h"
 
 #include <math.h>

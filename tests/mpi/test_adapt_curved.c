@@ -1,6 +1,6 @@
 /*
  * test_adapt_curved.c -- skins on curved boundaries (internal API,
- * src/adapt/adapt.h; adapt/bisect.c, remesh/leb.c): a tube (the inner and
+ * src/adapt/piece.h; adapt/bisect.c, remesh/leb.c): a tube (the inner and
  * outer walls curved, 16 facets around) made on rank 0 from a structured
  * grid, cut into pieces whose skins cross both walls.
  *  - the skin edges on the walls are split, identically in the two pieces
@@ -17,7 +17,7 @@
  * Runs at any number of ranks (two pieces per rank).
  */
 #include "testutil.h"
-#include "adapt/adapt.h"
+#include "adapt/piece.h"
 
 #include <math.h>
 #include <mpi.h>

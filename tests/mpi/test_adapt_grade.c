@@ -10,7 +10,7 @@
  * gathered result: it changes no vertex).
  */
 #include "testutil.h"
-#include "adapt/adapt.h"
+#include "adapt/piece.h"
 #include "metric/gradation.h"
 
 #include <mpi.h>

@@ -1,6 +1,6 @@
 /*
  * test_adapt_pieces.c -- steps 1-2 of the parallel adaptation (internal
- * API, src/adapt/adapt.h): tagging and pieces. The labels of every owned
+ * API, src/adapt/piece.h): tagging and pieces. The labels of every owned
  * element, and the label ranges and inner marks of every local vertex, are
  * gathered on pa_test_rank 0 and checked by brute force against the
  * invariants: pieces are disjoint and cover the tagged elements, every
@@ -17,7 +17,7 @@
  * any number of ranks.
  */
 #include "testutil.h"
-#include "adapt/adapt.h"
+#include "adapt/piece.h"
 
 #include <math.h>
 #include <mpi.h>

@@ -9,7 +9,7 @@
  *  - the distributed complexity equals the sequential one;
  *  - a mesh without overlap 2 is refused with a clear error.
  */
-#include "adapt/adapt.h"
+#include "adapt/piece.h"
 #include "testutil.h"
 
 #include <mpi.h>

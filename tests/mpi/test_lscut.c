@@ -16,7 +16,7 @@
  *    distance, the inside volume within that distance times the interface
  *    area of the cut's.
  */
-#include "adapt/adapt.h"
+#include "adapt/piece.h"
 #include "lsjudge.h"
 #include "testutil.h"
 

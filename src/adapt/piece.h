@@ -1,7 +1,7 @@
 /*
- * adapt.h -- private header of the parallel adaptation driver
- * (pa_dmesh_adapt): the state of one iteration of the piece algorithm and
- * the steps that share it.
+ * piece.h -- private header of the parallel adaptation (pa_dmesh_adapt):
+ * the state of one iteration of the piece algorithm, its marks and labels,
+ * and the steps that share it.
  *
  *   tag.c         step 1: tag owned elements, estimate their remeshing work
  *   pieces.c      step 2: partition the tagged elements into pieces, grow the
@@ -14,6 +14,7 @@
  *                 rebuild the distributed mesh with the new entities
  *   grade.c       metric gradation of the whole mesh, before the loop
  *   adapt.c       the loop, options, report, the final rebalance
+ *   piece.c       the release of an iteration's and a piece's arrays
  *   checkpoint.c  checkpoints of the loop and the resume from one
  *
  * Invariants of an iteration (see docs/design/ADAPT.md for the argument):
@@ -37,8 +38,8 @@
  *    smallest id among those sharing it, otherwise by the rank that
  *    remeshed its piece.
  */
-#ifndef PA_ADAPT_H
-#define PA_ADAPT_H
+#ifndef PA_ADAPT_PIECE_H
+#define PA_ADAPT_PIECE_H
 
 #include "dmesh/dmesh.h"
 #include "metric/metric.h"
@@ -337,4 +338,4 @@ size_t pa__new_payload(const pa_dmesh *dm, int kind, int32_t ref,
                        const pa_dmesh_value *done, uint8_t doneval,
                        unsigned char *buf);
 
-#endif /* PA_ADAPT_H */
+#endif /* PA_ADAPT_PIECE_H */
