@@ -1,13 +1,13 @@
 /*
- * remesh.h -- private header of the remesher driver (remesh.c): the
- * built-in remesher's entries, one per dimension, which the driver calls
- * and the remeshers define.
+ * remesh.h -- private header of the code the remeshers share and of the
+ * remesher driver (src/remesher/remesher.c): the built-in remesher's
+ * entries, one per dimension, which the driver calls and the remeshers
+ * define; the field transfer; the projection onto the CAD model.
  *
  * Layering (scripts/check-layers.sh): src/remesh2d/ and src/remesh3d/
  * include the headers of this folder (this one for their entry, schedule.h
  * for the pass schedule they share), never the reverse, and neither
- * includes the other. The driver reaches the two remeshers only through the
- * declarations below; the linker joins them.
+ * includes the other; src/remesher/ sits above the three.
  */
 #ifndef PA_REMESH_H
 #define PA_REMESH_H

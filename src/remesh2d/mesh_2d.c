@@ -673,7 +673,7 @@ typedef struct out_arrays {
   uint8_t *vflag, *eflag, *bflag;
   pa_idx *elem, *bdry;
   /* the vertices' model entities, when the mesh is classified: their room
-   * only, which pa_remesh fills from the cells (remesh.c) */
+   * only, which pa_remesh fills from the cells (remesher.c) */
   uint8_t *vgdim;
   int32_t *vgtag;
   pa_idx nv, ne, nb;

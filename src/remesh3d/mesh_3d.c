@@ -583,7 +583,7 @@ pa_status pa__rm3d_write(rm3d *m, pa_mesh *mesh) {
   }
   PA_CALL(pa_mesh_reserve(out, m->nv, m->ne, nb, ned));
   /* a classified mesh: room for its entities, which pa_remesh fills from
-   * the cells (remesh.c) */
+   * the cells (remesher.c) */
   if (mesh->vgdim) PA_CALL(pa__mesh_enable_entities(out));
   out->nv = m->nv;
   out->ne = m->ne;
