@@ -15,7 +15,7 @@
  * of the incoming and outgoing edges, l0, l1 their lengths; exact for a circle
  * through the three points to second order). At a corner each record uses its
  * own chord direction. Straight runs give tangents equal to the chord, and then
- * the curve is the chord exactly (see pa__rm_curve_point_2d), so straight
+ * the curve is the chord exactly (see pa__rm2d_curve_point), so straight
  * boundaries stay straight.
  *
  * Corners: input PA_FLAG_CORNER, a vertex with other than two feature edges,
@@ -25,11 +25,11 @@
 #include "remesh2d/remesh2d.h"
 
 /* Element face code holding edge (a, c) found in the ball of a, or -1. */
-static pa_idx find_face(const pa__rmesh *rm, const pa_idx *bstart,
+static pa_idx find_face(const rm2d *rm, const pa_idx *bstart,
                         const pa_idx *ball, pa_idx a, pa_idx c) {
   for (pa_idx s = bstart[a]; s < bstart[a + 1]; s++) {
     pa_idx k = ball[s];
-    const pa_idx *v = rm->ev + 3 * (size_t)k;
+    const pa_idx *v = rm->tv + 3 * (size_t)k;
     for (int i = 0; i < 3; i++) {
       pa_idx e0 = v[(i + 1) % 3], e1 = v[(i + 2) % 3];
       if ((e0 == a && e1 == c) || (e0 == c && e1 == a)) return 3 * k + i;
@@ -38,14 +38,14 @@ static pa_idx find_face(const pa__rmesh *rm, const pa_idx *bstart,
   return -1;
 }
 
-static pa_status add_record(pa__rmesh *rm, pa_idx a, pa_idx c, int32_t ref,
+static pa_status add_record(rm2d *rm, pa_idx a, pa_idx c, int32_t ref,
                             uint8_t tag, pa_idx code) {
   pa_status st = PA_SUCCESS;
   pa_idx b, o = rm->adj[code];
-  PA_CHECK(o >= 0 || o == RM_NOADJ, PA_ERR_MESH,
+  PA_CHECK(o >= 0 || o == RM2D_NOADJ, PA_ERR_MESH,
            "remesher: boundary edge (%d %d) is listed twice", (int)a + 1,
            (int)c + 1);
-  PA_CALL(pa__rm_new_feat(rm, &b));
+  PA_CALL(pa__rm2d_new_feat(rm, &b));
   rm->bv[2 * b] = a;
   rm->bv[2 * b + 1] = c;
   rm->bref[b] = ref;
@@ -54,11 +54,11 @@ static pa_status add_record(pa__rmesh *rm, pa_idx a, pa_idx c, int32_t ref,
   rm->bside[2 * b + 1] = o >= 0 ? o : -1;
   rm->adj[code] = -b - 1;
   if (o >= 0) rm->adj[o] = -b - 1;
-  rm->vtag[a] |= RM_V_FEAT;
-  rm->vtag[c] |= RM_V_FEAT;
-  if (tag & RM_B_FROZEN) {
-    rm->vtag[a] |= RM_V_FROZEN;
-    rm->vtag[c] |= RM_V_FROZEN;
+  rm->vtag[a] |= RM2D_V_FEAT;
+  rm->vtag[c] |= RM2D_V_FEAT;
+  if (tag & RM2D_B_FROZEN) {
+    rm->vtag[a] |= RM2D_V_FROZEN;
+    rm->vtag[c] |= RM2D_V_FROZEN;
   }
 cleanup:
   return st;
@@ -85,8 +85,8 @@ static void tensor_floor(double *m, double lam) {
 
 /* The feature records: the boundary list's, then the unlisted boundary
  * edges (listed on output) and the interfaces between element references. */
-static pa_status add_records(pa__rmesh *rm, pa_mesh *mesh,
-                             const pa_idx *bstart, const pa_idx *ball) {
+static pa_status add_records(rm2d *rm, pa_mesh *mesh, const pa_idx *bstart,
+                             const pa_idx *ball) {
   pa_status st = PA_SUCCESS;
   pa_idx nv = rm->nv;
   for (pa_idx b = 0; b < mesh->nb; b++) {
@@ -98,16 +98,16 @@ static pa_status add_records(pa__rmesh *rm, pa_mesh *mesh,
              "remesher: boundary edge %d (%d %d) is not an element edge",
              (int)b + 1, (int)a + 1, (int)c + 1);
     PA_CALL(add_record(rm, a, c, mesh->bref[b],
-                       (mesh->bflag[b] & 0x0F) | RM_B_LISTED, code));
+                       (mesh->bflag[b] & 0x0F) | RM2D_B_LISTED, code));
   }
   pa_idx ne = rm->ne;
   for (pa_idx k = 0; k < ne; k++)
     for (int i = 0; i < 3; i++) {
       pa_idx code = 3 * k + i, ob = rm->adj[code];
-      pa_idx a = rm->ev[3 * k + (i + 1) % 3], c = rm->ev[3 * k + (i + 2) % 3];
-      if (ob == RM_NOADJ)
-        PA_CALL(add_record(rm, a, c, 0, RM_B_LISTED, code));
-      else if (ob > code && rm->eref[ob / 3] != rm->eref[k])
+      pa_idx a = rm->tv[3 * k + (i + 1) % 3], c = rm->tv[3 * k + (i + 2) % 3];
+      if (ob == RM2D_NOADJ)
+        PA_CALL(add_record(rm, a, c, 0, RM2D_B_LISTED, code));
+      else if (ob > code && rm->tref[ob / 3] != rm->tref[k])
         PA_CALL(add_record(rm, a, c, 0, 0, code));
     }
 cleanup:
@@ -122,11 +122,11 @@ typedef struct feat_ends {
 } feat_ends;
 
 /* The other end of record b, from its end v. */
-static pa_idx other_end(const pa__rmesh *rm, pa_idx b, pa_idx v) {
+static pa_idx other_end(const rm2d *rm, pa_idx b, pa_idx v) {
   return rm->bv[2 * b] == v ? rm->bv[2 * b + 1] : rm->bv[2 * b];
 }
 
-static pa_status count_ends(const pa__rmesh *rm, feat_ends *fe) {
+static pa_status count_ends(const rm2d *rm, feat_ends *fe) {
   pa_status st = PA_SUCCESS;
   pa_idx nv = rm->nv;
   PA_CALLOC(fe->cnt, nv);
@@ -143,18 +143,19 @@ cleanup:
   return st;
 }
 
-/* Corners (RM_V_CORNER): other than two feature edges, two of different
+/* Corners (RM2D_V_CORNER): other than two feature edges, two of different
  * references, or (unless -nr) a turn larger than -ar degrees. */
-static void mark_corners(pa__rmesh *rm, const feat_ends *fe) {
+static void mark_corners(rm2d *rm, const feat_ends *fe) {
   const pa_remesh_opts *o = rm->opts;
   double cosar = cos((o->angle > 0 ? o->angle : 45.0) * M_PI / 180.0);
   for (pa_idx v = 0; v < rm->nv; v++) {
     if (!fe->cnt[v]) continue;
     if (fe->cnt[v] != 2) {
-      rm->vtag[v] |= RM_V_CORNER;
+      rm->vtag[v] |= RM2D_V_CORNER;
       continue;
     }
-    if (rm->bref[fe->r0[v]] != rm->bref[fe->r1[v]]) rm->vtag[v] |= RM_V_CORNER;
+    if (rm->bref[fe->r0[v]] != rm->bref[fe->r1[v]])
+      rm->vtag[v] |= RM2D_V_CORNER;
     if (o->no_angle) continue;
     pa_idx u = other_end(rm, fe->r0[v], v), w = other_end(rm, fe->r1[v], v);
     const double *xu = rm->x + 2 * (size_t)u, *xv = rm->x + 2 * (size_t)v,
@@ -163,13 +164,13 @@ static void mark_corners(pa__rmesh *rm, const feat_ends *fe) {
     double e1x = xw[0] - xv[0], e1y = xw[1] - xv[1];
     double c = (e0x * e1x + e0y * e1y) /
                (sqrt(e0x * e0x + e0y * e0y) * sqrt(e1x * e1x + e1y * e1y));
-    if (c < cosar) rm->vtag[v] |= RM_V_CORNER;
+    if (c < cosar) rm->vtag[v] |= RM2D_V_CORNER;
   }
 }
 
 /* The unit tangents at both ends of every record (see the opening
  * comment): the chord's at a corner, l1 e0 + l0 e1 elsewhere. */
-static void set_tangents(pa__rmesh *rm, const feat_ends *fe) {
+static void set_tangents(rm2d *rm, const feat_ends *fe) {
   for (pa_idx b = 0; b < rm->nb; b++)
     for (int e = 0; e < 2; e++) {
       pa_idx v = rm->bv[2 * b + e];
@@ -179,7 +180,7 @@ static void set_tangents(pa__rmesh *rm, const feat_ends *fe) {
                   rm->x[2 * (size_t)rm->bv[2 * b] + 1];
       double dl = sqrt(dx * dx + dy * dy);
       double tx = dx / dl, ty = dy / dl;
-      if (!(rm->vtag[v] & RM_V_CORNER)) {
+      if (!(rm->vtag[v] & RM2D_V_CORNER)) {
         pa_idx u = other_end(rm, fe->r0[v], v), w = other_end(rm, fe->r1[v], v);
         const double *xu = rm->x + 2 * (size_t)u, *xw = rm->x + 2 * (size_t)w;
         double e0x = xv[0] - xu[0], e0y = xv[1] - xu[1];
@@ -207,11 +208,11 @@ static void set_tangents(pa__rmesh *rm, const feat_ends *fe) {
  * over the mean edge length), a chord of length h deviates from the curve
  * by about h^2 kappa / 8, so the size is limited to sqrt(8 hausd / kappa).
  * Returns 1 if it lowered a size. */
-static int hausdorff_bound(pa__rmesh *rm, const feat_ends *fe) {
+static int hausdorff_bound(rm2d *rm, const feat_ends *fe) {
   const pa_remesh_opts *o = rm->opts;
   int limited = 0;
   for (pa_idx v = 0; v < rm->nv; v++) {
-    if (fe->cnt[v] != 2 || (rm->vtag[v] & (RM_V_CORNER | RM_V_FROZEN)))
+    if (fe->cnt[v] != 2 || (rm->vtag[v] & (RM2D_V_CORNER | RM2D_V_FROZEN)))
       continue;
     pa_idx u = other_end(rm, fe->r0[v], v), w = other_end(rm, fe->r1[v], v);
     const double *xu = rm->x + 2 * (size_t)u, *xv = rm->x + 2 * (size_t)v,
@@ -226,8 +227,8 @@ static int hausdorff_bound(pa__rmesh *rm, const feat_ends *fe) {
     double hw = pa__local_hausd(o, rm->bref[fe->r1[v]], rm->hausd);
     double hb = sqrt(8.0 * (hv < hw ? hv : hw) / kappa);
     if (o->hmin > 0 && hb < o->hmin) hb = o->hmin;
-    double *m = rm->met + (size_t)rm->mcomp * v;
-    if (rm->mcomp == 1) {
+    double *m = rm->met + (size_t)rm->mc * v;
+    if (rm->mc == 1) {
       if (m[0] > hb) {
         m[0] = hb;
         limited = 1;
@@ -250,22 +251,23 @@ static int hausdorff_bound(pa__rmesh *rm, const feat_ends *fe) {
  * -hsiz 0.05 -hausd 0.0002: 685 triangles instead of 962).
  * The parallel loop's pieces get no rates (graded once over the whole
  * mesh), so it does not run there. */
-static pa_status grade_hausdorff_bound(pa__rmesh *rm) {
+static pa_status grade_hausdorff_bound(rm2d *rm) {
   pa_status st = PA_SUCCESS;
   const pa_remesh_opts *o = rm->opts;
   uint8_t *frz = NULL;
   pa_idx nv = rm->nv;
   PA_ALLOC(frz, nv);
-  for (pa_idx v = 0; v < nv; v++) frz[v] = (rm->vtag[v] & RM_V_FROZEN) != 0;
-  PA_CALL(pa__metric_gradation(2, rm->mcomp, nv, rm->x, rm->met, rm->ne,
-                               rm->ev, frz, o->hgrad, o->hgradreq, NULL));
+  for (pa_idx v = 0; v < nv; v++)
+    frz[v] = (rm->vtag[v] & RM2D_V_FROZEN) != 0;
+  PA_CALL(pa__metric_gradation(2, rm->mc, nv, rm->x, rm->met, rm->ne, rm->tv,
+                               frz, o->hgrad, o->hgradreq, NULL));
 cleanup:
   pa__free(frz);
   return st;
 }
 
-pa_status pa__rm_features_2d_init(pa__rmesh *rm, pa_mesh *mesh,
-                                  const pa_idx *bstart, const pa_idx *ball) {
+pa_status pa__rm2d_feature_analyze(rm2d *rm, pa_mesh *mesh,
+                                   const pa_idx *bstart, const pa_idx *ball) {
   pa_status st = PA_SUCCESS;
   feat_ends fe = {NULL, NULL, NULL};
   PA_CALL(add_records(rm, mesh, bstart, ball));
@@ -276,9 +278,9 @@ pa_status pa__rm_features_2d_init(pa__rmesh *rm, pa_mesh *mesh,
   if (!pa__remesh_model_curvature(rm->opts) && hausdorff_bound(rm, &fe) &&
       rm->opts->hgrad > 1)
     PA_CALL(grade_hausdorff_bound(rm));
-  int mc = rm->mcomp;
+  int mc = rm->mc;
   for (pa_idx k = 0; k < rm->ne; k++) { /* element qualities */
-    const pa_idx *v = rm->ev + 3 * (size_t)k;
+    const pa_idx *v = rm->tv + 3 * (size_t)k;
     rm->q[k] = (float)pa__qual2(
         mc, rm->x + 2 * (size_t)v[0], rm->x + 2 * (size_t)v[1],
         rm->x + 2 * (size_t)v[2], rm->met + (size_t)mc * v[0],
@@ -291,8 +293,8 @@ cleanup:
   return st;
 }
 
-void pa__rm_curve_point_2d(const pa__rmesh *rm, pa_idx b, double s, double *p,
-                           double *t) {
+void pa__rm2d_curve_point(const rm2d *rm, pa_idx b, double s, double *p,
+                          double *t) {
   const double *a = rm->x + 2 * (size_t)rm->bv[2 * b];
   const double *c = rm->x + 2 * (size_t)rm->bv[2 * b + 1];
   const double *ta = rm->btan + 4 * (size_t)b, *tc = ta + 2;

@@ -24,14 +24,14 @@ static double dist_point_segment(const double *p, const double *a,
  * merge with r2 into a record (u, q) within hausd of the curve: p within
  * hausd of the chord uq, the sagitta of the merged Hermite arc within
  * hausd, and the arc not folded. 1 when it does. */
-static int feature_kept(const pa__rmesh *rm, pa_idx p, pa_idx q, pa_idx r2,
+static int feature_kept(const rm2d *rm, pa_idx p, pa_idx q, pa_idx r2,
                         const pa_idx *el, const int *loc, int n, pa_idx *r1p) {
   pa_idx r1 = -1;
   for (int t = 0; t < n && r1 < 0; t++) {
     pa_idx e = el[t];
     int l = loc[t];
     for (int side = 0; side < 2; side++) {
-      pa_idx c = 3 * e + (side ? RM_NX3(l) : RM_PV3(l));
+      pa_idx c = 3 * e + (side ? RM2D_NX3(l) : RM2D_PV3(l));
       pa_idx oc = rm->adj[c];
       if (oc < 0 && -oc - 1 != r2) {
         r1 = -oc - 1;
@@ -43,11 +43,11 @@ static int feature_kept(const pa__rmesh *rm, pa_idx p, pa_idx q, pa_idx r2,
   if (r1 < 0) return 0;
   pa_idx u = rm->bv[2 * r1] == p ? rm->bv[2 * r1 + 1] : rm->bv[2 * r1];
   if (u == q) return 0;
-  const double *xu = RM_X(u), *xq = RM_X(q);
+  const double *xu = RM2D_X(u), *xq = RM2D_X(q);
   double ha = pa__local_hausd(rm->opts, rm->bref[r1], rm->hausd);
   double hb = pa__local_hausd(rm->opts, rm->bref[r2], rm->hausd);
   double hausd = ha < hb ? ha : hb;
-  if (dist_point_segment(RM_X(p), xu, xq) > hausd) return 0;
+  if (dist_point_segment(RM2D_X(p), xu, xq) > hausd) return 0;
   /* sagitta of the merged arc: tangent at u from r1, at q from r2 */
   double tu[2], tq[2];
   int ue = rm->bv[2 * r1] == u ? 0 : 1, qe = rm->bv[2 * r2] == q ? 0 : 1;
@@ -69,8 +69,7 @@ static int feature_kept(const pa__rmesh *rm, pa_idx p, pa_idx q, pa_idx r2,
 
 /* The records of a feature collapse merged: r1 = (u, p) becomes (u, q) and
  * takes r2's tangent at q; r2 = (p, q) dies. */
-static void merge_records(pa__rmesh *rm, pa_idx p, pa_idx q, pa_idx r1,
-                          pa_idx r2) {
+static void merge_records(rm2d *rm, pa_idx p, pa_idx q, pa_idx r1, pa_idx r2) {
   int qe = rm->bv[2 * r2] == q ? 0 : 1;
   double arr = qe == 1 ? 1 : -1; /* r2's tangent arriving at q */
   double tqx = arr * rm->btan[4 * r2 + 2 * qe],
@@ -80,48 +79,47 @@ static void merge_records(pa__rmesh *rm, pa_idx p, pa_idx q, pa_idx r1,
   rm->bv[2 * r1 + pe] = q;
   rm->btan[4 * r1 + 2 * pe] = sgn * tqx;
   rm->btan[4 * r1 + 2 * pe + 1] = sgn * tqy;
-  pa__rm_kill_feat(rm, r2);
+  pa__rm2d_kill_feat(rm, r2);
 }
 
-int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
-                            double qrel) {
+int pa__rm2d_collapse_edge(rm2d *rm, pa_idx k, int fi, int ip, double qrel) {
   pa_idx te = 3 * k + fi;
-  pa_idx p = rm->ev[3 * k + ip];
+  pa_idx p = rm->tv[3 * k + ip];
   int iq = 3 - fi - ip;
-  pa_idx q = rm->ev[3 * k + iq];
+  pa_idx q = rm->tv[3 * k + iq];
   uint8_t tp = rm->vtag[p];
-  if (tp & (RM_V_FROZEN | RM_V_CORNER)) return 0;
+  if (tp & (RM2D_V_FROZEN | RM2D_V_CORNER)) return 0;
   pa_idx o = rm->adj[te];
   /* a feature vertex slides only along its feature */
-  if ((tp & RM_V_FEAT) && o >= 0) return 0;
-  if (!rm_edge_free(rm, te)) return 0;
+  if ((tp & RM2D_V_FEAT) && o >= 0) return 0;
+  if (!rm2d_edge_free(rm, te)) return 0;
 
-  pa_idx el[RM_BALL_MAX];
-  int loc[RM_BALL_MAX], closed;
-  int n = rm_ball_2d(rm, k, ip, el, loc, &closed);
+  pa_idx el[RM2D_BALL_MAX];
+  int loc[RM2D_BALL_MAX], closed;
+  int n = rm2d_ball(rm, k, ip, el, loc, &closed);
   if (n < 0 || n < (closed ? 3 : 2)) return 0;
 
-  pa_idx s = rm_other_side(rm, te);
+  pa_idx s = rm2d_other_side(rm, te);
   pa_idx f = s >= 0 ? s / 3 : -1;
   double qold = 1, qnew = 1;
   for (int t = 0; t < n; t++) {
     if (rm->q[el[t]] < qold) qold = rm->q[el[t]];
   }
-  const double fl = rm_qfloor(qold);
+  const double fl = rm2d_qfloor(qold);
   for (int t = 0; t < n; t++) {
     pa_idx e = el[t];
     if (e == k || e == f) continue;
-    if (rm->etag[e] & RM_E_FROZEN) return 0;
-    const pa_idx *v = rm->ev + 3 * (size_t)e;
+    if (rm->tflag[e] & RM2D_E_FROZEN) return 0;
+    const pa_idx *v = rm->tv + 3 * (size_t)e;
     int l = loc[t];
-    pa_idx a = v[RM_NX3(l)], b = v[RM_PV3(l)];
+    pa_idx a = v[RM2D_NX3(l)], b = v[RM2D_PV3(l)];
     if (a == q || b == q) return 0; /* q seen twice: not a simple ball */
-    double qq = rm_elem_qual(rm, q, a, b);
-    if (qq < qrel * qold || !rm_qual_ok(rm, qq, fl, q, a, b)) return 0;
+    double qq = rm2d_elem_qual(rm, q, a, b);
+    if (qq < qrel * qold || !rm2d_qual_ok(rm, qq, fl, q, a, b)) return 0;
     if (qq < qnew) qnew = qq;
     /* ping-pong guard: no new edge longer than lguard */
-    if (rm_edge_len(rm, q, a) > rm->lguard ||
-        rm_edge_len(rm, q, b) > rm->lguard)
+    if (rm2d_edge_len(rm, q, a) > rm->lguard ||
+        rm2d_edge_len(rm, q, b) > rm->lguard)
       return 0;
   }
 
@@ -132,8 +130,8 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
   int jf = 0, jp = 0, jq = 0;
   if (f >= 0) {
     jf = s % 3;
-    const pa_idx *vf = rm->ev + 3 * (size_t)f;
-    jp = vf[RM_NX3(jf)] == p ? RM_NX3(jf) : RM_PV3(jf);
+    const pa_idx *vf = rm->tv + 3 * (size_t)f;
+    jp = vf[RM2D_NX3(jf)] == p ? RM2D_NX3(jf) : RM2D_PV3(jf);
     jq = 3 - jf - jp;
     o1f = rm->adj[3 * f + jp];
     o2f = rm->adj[3 * f + jq];
@@ -142,7 +140,7 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
 
   /* feature collapse: the merged record must stay within hausd of the curve */
   pa_idx r2 = -1, r1 = -1;
-  if (tp & RM_V_FEAT) {
+  if (tp & RM2D_V_FEAT) {
     r2 = -o - 1;
     if (!feature_kept(rm, p, q, r2, el, loc, n, &r1)) return 0;
   }
@@ -151,12 +149,12 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
   for (int t = 0; t < n; t++) {
     pa_idx e = el[t];
     if (e == k || e == f) continue;
-    rm_elem_changed(rm, e);
-    rm->ev[3 * e + loc[t]] = q;
-    rm_elem_changed(rm, e);
-    const pa_idx *v = rm->ev + 3 * (size_t)e;
-    rm->q[e] = (float)rm_elem_qual(rm, v[0], v[1], v[2]);
-    rm->etag[e] |= RM_E_TOUCHED;
+    rm2d_elem_changed(rm, e);
+    rm->tv[3 * e + loc[t]] = q;
+    rm2d_elem_changed(rm, e);
+    const pa_idx *v = rm->tv + 3 * (size_t)e;
+    rm->q[e] = (float)rm2d_elem_qual(rm, v[0], v[1], v[2]);
+    rm->tflag[e] |= RM2D_E_TOUCHED;
   }
   /* link o1 <-> o2 (at most one of them is a feature record) */
   pa_idx pairs[2][4] = {{o1k, 3 * k + ip, o2k, 3 * k + iq},
@@ -167,17 +165,17 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
       rm->adj[x1] = x2;
       rm->adj[x2] = x1;
     } else if (x1 < 0) {
-      rm_attach(rm, x2, x1, c1);
+      rm2d_attach(rm, x2, x1, c1);
     } else {
-      rm_attach(rm, x1, x2, c2);
+      rm2d_attach(rm, x1, x2, c2);
     }
   }
   if (r2 >= 0) merge_records(rm, p, q, r1, r2);
-  rm_elem_changed(rm, k); /* the third vertices' balls lose k and f */
-  if (f >= 0) rm_elem_changed(rm, f);
-  pa__rm_kill_elem(rm, k);
-  if (f >= 0) pa__rm_kill_elem(rm, f);
-  pa__rm_kill_vertex(rm, p);
+  rm2d_elem_changed(rm, k); /* the third vertices' balls lose k and f */
+  if (f >= 0) rm2d_elem_changed(rm, f);
+  pa__rm2d_kill_elem(rm, k);
+  if (f >= 0) pa__rm2d_kill_elem(rm, f);
+  pa__rm2d_kill_vertex(rm, p);
   rm->ncollapse++;
   return 1;
 }
@@ -187,24 +185,24 @@ int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
  * end p = v[ip] of element k by collapsing p onto another neighbour, the
  * shortest edges first. Returns 1 if done.
  */
-static int remove_vertex(pa__rmesh *rm, pa_idx k, int ip) {
-  pa_idx p = rm->ev[3 * k + ip];
-  if (rm->vtag[p] & (RM_V_FROZEN | RM_V_CORNER)) return 0;
-  pa_idx el[RM_BALL_MAX];
-  int loc[RM_BALL_MAX], closed;
-  int n = rm_ball_2d(rm, k, ip, el, loc, &closed);
+static int remove_vertex(rm2d *rm, pa_idx k, int ip) {
+  pa_idx p = rm->tv[3 * k + ip];
+  if (rm->vtag[p] & (RM2D_V_FROZEN | RM2D_V_CORNER)) return 0;
+  pa_idx el[RM2D_BALL_MAX];
+  int loc[RM2D_BALL_MAX], closed;
+  int n = rm2d_ball(rm, k, ip, el, loc, &closed);
   if (n < 0) return 0;
   /* candidate edges (element, face) from p, by increasing length */
-  pa_idx ce[RM_BALL_MAX * 2], cr[RM_BALL_MAX * 2];
-  int cf[RM_BALL_MAX * 2], nc = 0;
-  double cl[RM_BALL_MAX * 2];
+  pa_idx ce[RM2D_BALL_MAX * 2], cr[RM2D_BALL_MAX * 2];
+  int cf[RM2D_BALL_MAX * 2], nc = 0;
+  double cl[RM2D_BALL_MAX * 2];
   for (int t = 0; t < n; t++) {
     pa_idx e = el[t];
     int l = loc[t];
     for (int side = 0; side < 2; side++) {
-      int face = side ? RM_NX3(l) : RM_PV3(l);
-      pa_idx r = rm->ev[3 * e + (side ? RM_PV3(l) : RM_NX3(l))];
-      double len = rm_edge_len(rm, p, r);
+      int face = side ? RM2D_NX3(l) : RM2D_PV3(l);
+      pa_idx r = rm->tv[3 * e + (side ? RM2D_PV3(l) : RM2D_NX3(l))];
+      double len = rm2d_edge_len(rm, p, r);
       if (len >= PA_METRIC_LEN_HI) continue;
       int dup = 0;
       for (int c = 0; c < nc; c++) dup |= cr[c] == r;
@@ -224,41 +222,41 @@ static int remove_vertex(pa__rmesh *rm, pa_idx k, int ip) {
     }
   }
   for (int c = 0; c < nc; c++) {
-    const pa_idx *v = rm->ev + 3 * (size_t)ce[c];
+    const pa_idx *v = rm->tv + 3 * (size_t)ce[c];
     int lp = v[0] == p ? 0 : v[1] == p ? 1 : 2;
-    if (pa__rm_collapse_edge_2d(rm, ce[c], cf[c], lp, 0.3)) return 1;
+    if (pa__rm2d_collapse_edge(rm, ce[c], cf[c], lp, 0.3)) return 1;
   }
   return 0;
 }
 
-pa_status pa__rm_collapse_pass_2d(pa__rmesh *rm, double thr, long *n) {
+pa_status pa__rm2d_collapse_pass(rm2d *rm, double thr, long *n) {
   long cnt = 0;
-  rm_etag_clear(rm, RM_E_TOUCHED);
+  rm2d_tflag_clear(rm, RM2D_E_TOUCHED);
   /* an element in range has nothing below thr */
-  const uint8_t skip = RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN |
-                       (thr <= RM_LSHORT_OPT ? RM_E_INRANGE : 0);
-  for (pa_idx k = rm_next_elem(rm, 0, skip); k < rm->ne;
-       k = rm_next_elem(rm, k + 1, skip)) {
-    const pa_idx *v = rm->ev + 3 * (size_t)k;
+  const uint8_t skip = RM2D_E_DEAD | RM2D_E_TOUCHED | RM2D_E_FROZEN |
+                       (thr <= RM2D_LSHORT_OPT ? RM2D_E_INRANGE : 0);
+  for (pa_idx k = rm2d_next_elem(rm, 0, skip); k < rm->ne;
+       k = rm2d_next_elem(rm, k + 1, skip)) {
+    const pa_idx *v = rm->tv + 3 * (size_t)k;
     /* shortest edge first */
     int best = -1, inr = 1;
     double lb = thr;
     for (int i = 0; i < 3; i++) {
-      double l = rm_edge_len(rm, v[RM_NX3(i)], v[RM_PV3(i)]);
-      inr &= rm_len_settled(l);
+      double l = rm2d_edge_len(rm, v[RM2D_NX3(i)], v[RM2D_PV3(i)]);
+      inr &= rm2d_len_settled(l);
       if (l < lb) {
         lb = l;
         best = i;
       }
     }
-    if (inr) rm->etag[k] |= RM_E_INRANGE;
+    if (inr) rm->tflag[k] |= RM2D_E_INRANGE;
     if (best < 0) continue;
-    pa_idx s = rm_other_side(rm, 3 * k + best);
-    if (s >= 0 && (rm->etag[s / 3] & RM_E_TOUCHED)) continue;
-    if (pa__rm_collapse_edge_2d(rm, k, best, RM_NX3(best), 0.3) ||
-        pa__rm_collapse_edge_2d(rm, k, best, RM_PV3(best), 0.3) ||
-        remove_vertex(rm, k, RM_NX3(best)) ||
-        remove_vertex(rm, k, RM_PV3(best)))
+    pa_idx s = rm2d_other_side(rm, 3 * k + best);
+    if (s >= 0 && (rm->tflag[s / 3] & RM2D_E_TOUCHED)) continue;
+    if (pa__rm2d_collapse_edge(rm, k, best, RM2D_NX3(best), 0.3) ||
+        pa__rm2d_collapse_edge(rm, k, best, RM2D_PV3(best), 0.3) ||
+        remove_vertex(rm, k, RM2D_NX3(best)) ||
+        remove_vertex(rm, k, RM2D_PV3(best)))
       cnt++;
   }
   *n = cnt;

@@ -9,19 +9,19 @@
  *     than 0.02 % of the elements, or until three stalled rounds (splits
  *     and collapses balanced, or under 0.5 % of the elements, and their
  *     count did not fall by 5 %: the rule shared with 3D, remesh/schedule.h):
- *     split edges longer than RM_LSPLIT_REFINE (longest-edge propagation),
+ *     split edges longer than RM2D_LSPLIT_REFINE (longest-edge propagation),
  *     collapse edges shorter than 0.7071 (no new edge longer than 1.4142),
  *     swap around elements of quality < 0.6, and relocate once the splits
  *     are few;
  *  2. eight optimisation rounds (more while they split and collapse over 1 %
  *     of the elements): swap (quality < 0.9), relocate, length moves, split
- *     (edges longer than 1.4142), collapse (edges < RM_LSHORT_OPT) with a
+ *     (edges longer than 1.4142), collapse (edges < RM2D_LSHORT_OPT) with a
  *     relaxed guard (new edges up to 1.7 + 0.05 round, cut by the next
  *     split), then splits until none is left and a strict collapse pass;
  *  3. worst-element pass (quality < 0.45), then (if it changed anything) two
  *     more relocation rounds, and the last length moves;
  *  4. polish rounds: swap, relocation of every free vertex (feature vertices
- *     along their curves) where balls of quality < RM_QFREE may stretch
+ *     along their curves) where balls of quality < RM2D_QFREE may stretch
  *     their lengths a little, worst-element pass.
  * The working mesh is checked after each pass in debug builds and once at the
  * end always; a failed check gives the FAILED outcome (the caller then keeps
@@ -38,25 +38,25 @@
  * builds it is dead code that still refers to the cleanup label, so a phase
  * that can fail only by this check keeps a used label. */
 #ifdef NDEBUG
-#define DEBUG_CHECK(rm)                                                      \
-  do {                                                                       \
-    if (0) PA_CALL(pa__rm_check(rm));                                        \
+#define DEBUG_CHECK(rm)                                                        \
+  do {                                                                         \
+    if (0) PA_CALL(pa__rm2d_check(rm));                                        \
   } while (0)
 #else
-#define DEBUG_CHECK(rm) PA_CALL(pa__rm_check(rm))
+#define DEBUG_CHECK(rm) PA_CALL(pa__rm2d_check(rm))
 #endif
 
 /* The refinement rounds (their stopping rule: remesh/schedule.h). Each
  * splits an element at most once, so a coarse input takes many (box2d 2 ->
  * hsiz 0.002: 17); the bound only ends the runs that never settle. */
-#define RM_ROUNDS_MAX 80
+#define RM2D_ROUNDS_MAX 80
 /* Splits + collapses at or below this share of the elements: the rounds
  * have settled (a small share; not tuned). */
-#define RM_ROUNDS_SETTLED 2e-4
+#define RM2D_ROUNDS_SETTLED 2e-4
 /* A count at or below this share of the elements is a ping-pong whatever
  * its balance: a few operations undoing each other (a stall rule of its
  * own, beside the balance test). */
-#define RM_ROUNDS_TINY 5e-3
+#define RM2D_ROUNDS_TINY 5e-3
 
 /* The refinement rounds split edges longer than this, the later rounds
  * those longer than PA_METRIC_LEN_HI. Bisection halves lengths, so where
@@ -68,25 +68,25 @@
  * between PA_METRIC_LEN_HI and this are left to the optimisation rounds,
  * which split them after swaps and moves have mixed the lattice's lengths
  * (plate: 0.96 times; figures: docs/BENCHMARKS.md, "The 2D remesher"). */
-#define RM_LSPLIT_REFINE 1.7
+#define RM2D_LSPLIT_REFINE 1.7
 
 /* The optimisation rounds: this many, and more while their splits and
- * collapses change more than RM_OPT_BUSY of the elements (and the stopping
+ * collapses change more than RM2D_OPT_BUSY of the elements (and the stopping
  * rule of the refinement rounds does not see them stall). On the plate and
  * the UGAWG fields the eighth round changes under 2 %; an input far from
  * its metric (1e6:1 needles) still has most of its work to do there, its
  * collapses blocked in the refinement rounds. */
-#define RM_OPT_ROUNDS 8
-#define RM_OPT_BUSY 0.05
+#define RM2D_OPT_ROUNDS 8
+#define RM2D_OPT_BUSY 0.05
 
 /* Sweeps of length moves after the optimisation rounds' quality moves and
  * at the end (driver_3d.c: RM3D_LENGTH_SWEEPS). Not in the refinement
  * rounds: there they keep short edges the collapses would remove, more
  * triangles for the same share in range (figures: docs/BENCHMARKS.md, "The
  * 2D remesher"). */
-#define RM_LENGTH_SWEEPS 2
+#define RM2D_LENGTH_SWEEPS 2
 
-static void report_pass(pa__rmesh *rm, const char *what, int pass, long n) {
+static void report_pass(rm2d *rm, const char *what, int pass, long n) {
   if (pa_verbosity() < 2) return;
   double now = pa_wtime();
   pa__info(2, "remesh: pass %d %-9s %8ld ops, %d elements, %d vertices, %.3f s\n",
@@ -99,16 +99,16 @@ static void report_pass(pa__rmesh *rm, const char *what, int pass, long n) {
  * with the share of edges in range measured on a sample of about
  * PA_PROGRESS_SAMPLE elements (every k-th), so that reporting costs little
  * whatever the mesh size. */
-static void progress(const pa__rmesh *rm, int pass) {
+static void progress(const rm2d *rm, int pass) {
   const pa_remesh_opts *o = rm->opts;
   if (!o->progress) return;
   pa_idx stride = rm->ne / PA_PROGRESS_SAMPLE + 1;
   long nin = 0, n = 0;
-  int mc = rm->mcomp;
+  int mc = rm->mc;
   for (pa_idx k = 0; k < rm->ne; k += stride) {
-    if (rm->etag[k] & (RM_E_DEAD | RM_E_FROZEN)) continue;
+    if (rm->tflag[k] & (RM2D_E_DEAD | RM2D_E_FROZEN)) continue;
     for (int i = 0; i < 3; i++) {
-      pa_idx a = rm->ev[3 * k + i], c = rm->ev[3 * k + (i + 1) % 3];
+      pa_idx a = rm->tv[3 * k + i], c = rm->tv[3 * k + (i + 1) % 3];
       double l = pa__len2(mc, rm->x + 2 * (size_t)a, rm->x + 2 * (size_t)c,
                           rm->met + (size_t)mc * a, rm->met + (size_t)mc * c);
       nin += l >= PA_METRIC_LEN_LO && l < PA_METRIC_LEN_HI;
@@ -120,11 +120,11 @@ static void progress(const pa__rmesh *rm, int pass) {
   o->progress(&p, o->progress_ctx);
 }
 
-static void report_figures(const pa__rmesh *rm, const char *when) {
+static void report_figures(const rm2d *rm, const char *when) {
   if (pa_verbosity() < 2) return;
 
-  pa__rm_figures f;
-  pa__rm_figures_2d(rm, &f);
+  rm2d_figures f;
+  pa__rm2d_figures(rm, &f);
   pa__info(2,
            "remesh: %s: %ld/%ld edges in range (%ld long, %ld short), length "
            "[%.3g, %.3g], quality min %.3g mean %.3g\n",
@@ -132,27 +132,27 @@ static void report_figures(const pa__rmesh *rm, const char *when) {
            f.qmean);
 }
 
-/* Renumber the working mesh for locality (pa__rm_reorder) once it has grown
+/* Renumber the working mesh for locality (pa__rm2d_reorder) once it has grown
  * by the factor growth since the last renumbering (or since the start), from
- * RM_REORDER_MIN live elements on: the new entities of splits sit at the end
+ * RM2D_REORDER_MIN live elements on: the new entities of splits sit at the end
  * of the arrays, and the passes are memory-bound. The refinement rounds
  * renumber at each doubling (O(n log n) in all); the optimisation rounds,
  * which sweep the whole mesh some 20 times, start on a mesh renumbered
- * since it grew by RM_REORDER_OPT when it has RM_REORDER_OPT_MIN elements
+ * since it grew by RM2D_REORDER_OPT when it has RM2D_REORDER_OPT_MIN elements
  * or more: the plate -> 0.0005 (3.7 M triangles when the rounds start, 1.5
  * times the last renumbering) takes 9.2 instead of 10.5 s of remesher CPU;
  * at 0.23 and 0.94 M (the same growth) the renumbering costs what it saves
  * (0.45 -> 0.46 s, 2.17 -> 2.12 s): below a few million triangles the
  * working set stays in the caches of this machine. */
-#define RM_REORDER_MIN 50000
-#define RM_REORDER_REFINE 2.0
-#define RM_REORDER_OPT 1.25
-#define RM_REORDER_OPT_MIN 2000000
-static pa_status maybe_reorder(pa__rmesh *rm, int pass, pa_idx from,
-                               double growth, pa_idx *last) {
+#define RM2D_REORDER_MIN 50000
+#define RM2D_REORDER_REFINE 2.0
+#define RM2D_REORDER_OPT 1.25
+#define RM2D_REORDER_OPT_MIN 2000000
+static pa_status maybe_reorder(rm2d *rm, int pass, pa_idx from, double growth,
+                               pa_idx *last) {
   pa_status st = PA_SUCCESS;
   if (rm->nelive < from || rm->nelive < growth * *last) return PA_SUCCESS;
-  PA_CALL(pa__rm_reorder(rm));
+  PA_CALL(pa__rm2d_reorder(rm));
   DEBUG_CHECK(rm);
   *last = rm->nelive;
   report_pass(rm, "reorder", pass, rm->nelive);
@@ -164,29 +164,29 @@ cleanup:
  * until the stopping rule (remesh/schedule.h) says they settled or
  * stalled; the working mesh is renumbered for locality as it grows. *pass
  * counts the passes. */
-static pa_status refine_rounds(pa__rmesh *rm, int *pass, pa_idx *reordered) {
+static pa_status refine_rounds(rm2d *rm, int *pass, pa_idx *reordered) {
   pa_status st = PA_SUCCESS;
   const pa_remesh_opts *o = rm->opts;
   pa__rounds rounds;
-  pa__rounds_start(&rounds, 1, RM_ROUNDS_SETTLED, RM_ROUNDS_TINY, 1);
-  for (int it = 0; it < RM_ROUNDS_MAX; it++) {
+  pa__rounds_start(&rounds, 1, RM2D_ROUNDS_SETTLED, RM2D_ROUNDS_TINY, 1);
+  for (int it = 0; it < RM2D_ROUNDS_MAX; it++) {
     long ns = 0, nc = 0, nw = 0, nm = 0;
-    PA_CALL(pa__rm_split_pass_2d(rm, RM_LSPLIT_REFINE, &ns));
+    PA_CALL(pa__rm2d_split_pass(rm, RM2D_LSPLIT_REFINE, &ns));
     DEBUG_CHECK(rm);
     report_pass(rm, "split", *pass, ns);
-    PA_CALL(maybe_reorder(rm, *pass, RM_REORDER_MIN, RM_REORDER_REFINE,
+    PA_CALL(maybe_reorder(rm, *pass, RM2D_REORDER_MIN, RM2D_REORDER_REFINE,
                           reordered));
-    PA_CALL(pa__rm_collapse_pass_2d(rm, PA_METRIC_LEN_LO, &nc));
+    PA_CALL(pa__rm2d_collapse_pass(rm, PA_METRIC_LEN_LO, &nc));
     DEBUG_CHECK(rm);
     report_pass(rm, "collapse", *pass, nc);
     if (!o->no_swap) {
-      nw = pa__rm_swap_pass_2d(rm, 0.6);
+      nw = pa__rm2d_swap_pass(rm, 0.6);
       DEBUG_CHECK(rm);
       report_pass(rm, "swap", *pass, nw);
     }
     /* once the sizes are nearly reached, relocation helps collapses */
     if (!o->no_move && ns < 0.01 * rm->nelive) {
-      nm = pa__rm_smooth_pass_2d(rm, 0, 0);
+      nm = pa__rm2d_smooth_pass(rm, 0, 0);
       DEBUG_CHECK(rm);
       report_pass(rm, "move", *pass, nm);
     }
@@ -204,29 +204,31 @@ cleanup:
  * (a collapse may create an edge up to lguard, which the split that
  * follows cuts in two edges in range): edges in a tight configuration can
  * then go. *pass counts the passes. */
-static pa_status optimise(pa__rmesh *rm, int *pass, pa_idx *reordered) {
+static pa_status optimise(rm2d *rm, int *pass, pa_idx *reordered) {
   pa_status st = PA_SUCCESS;
   const pa_remesh_opts *o = rm->opts;
   pa__rounds rounds;
-  PA_CALL(maybe_reorder(rm, *pass, RM_REORDER_OPT_MIN, RM_REORDER_OPT,
+  PA_CALL(maybe_reorder(rm, *pass, RM2D_REORDER_OPT_MIN, RM2D_REORDER_OPT,
                         reordered));
-  pa__rounds_start(&rounds, 1, RM_ROUNDS_SETTLED, RM_ROUNDS_TINY, 1);
-  for (int it = 0; it < RM_ROUNDS_MAX; it++) {
+  pa__rounds_start(&rounds, 1, RM2D_ROUNDS_SETTLED, RM2D_ROUNDS_TINY, 1);
+  for (int it = 0; it < RM2D_ROUNDS_MAX; it++) {
     long nw = 0, nm = 0, ns = 0, nc = 0;
     if (!o->no_swap) {
-      nw = pa__rm_swap_pass_2d(rm, 0.9);
+      nw = pa__rm2d_swap_pass(rm, 0.9);
       DEBUG_CHECK(rm);
     }
     if (!o->no_move) {
-      nm = pa__rm_smooth_pass_2d(rm, 0, 0);
-      for (int k = 0; k < RM_LENGTH_SWEEPS; k++) nm += pa__rm_length_pass_2d(rm);
+      nm = pa__rm2d_smooth_pass(rm, 0, 0);
+      for (int k = 0; k < RM2D_LENGTH_SWEEPS; k++)
+        nm += pa__rm2d_length_pass(rm);
       DEBUG_CHECK(rm);
     }
     if (!o->no_insert) {
-      PA_CALL(pa__rm_split_pass_2d(rm, PA_METRIC_LEN_HI, &ns));
+      PA_CALL(pa__rm2d_split_pass(rm, PA_METRIC_LEN_HI, &ns));
       DEBUG_CHECK(rm);
-      rm->lguard = 1.7 + 0.05 * (it < RM_OPT_ROUNDS ? it : RM_OPT_ROUNDS - 1);
-      PA_CALL(pa__rm_collapse_pass_2d(rm, RM_LSHORT_OPT, &nc));
+      rm->lguard =
+          1.7 + 0.05 * (it < RM2D_OPT_ROUNDS ? it : RM2D_OPT_ROUNDS - 1);
+      PA_CALL(pa__rm2d_collapse_pass(rm, RM2D_LSHORT_OPT, &nc));
       DEBUG_CHECK(rm);
       rm->lguard = PA_METRIC_LEN_HI;
     }
@@ -235,19 +237,19 @@ static pa_status optimise(pa__rmesh *rm, int *pass, pa_idx *reordered) {
     progress(rm, *pass);
     if (ns + nc == 0 && nw + nm <= 1e-3 * rm->nelive) break;
     int stalled = pa__rounds_stop(&rounds, ns, nc, rm->nelive);
-    if (it + 1 >= RM_OPT_ROUNDS &&
-        (ns + nc <= RM_OPT_BUSY * rm->nelive || stalled))
+    if (it + 1 >= RM2D_OPT_ROUNDS &&
+        (ns + nc <= RM2D_OPT_BUSY * rm->nelive || stalled))
       break;
   }
   if (!o->no_insert) { /* cut what the relaxed collapses left long */
     long ns = 0, nc = 0, n1 = 0;
     for (int it = 0; it < 6; it++) {
-      PA_CALL(pa__rm_split_pass_2d(rm, PA_METRIC_LEN_HI, &n1));
+      PA_CALL(pa__rm2d_split_pass(rm, PA_METRIC_LEN_HI, &n1));
       DEBUG_CHECK(rm);
       ns += n1;
       if (!n1) break;
     }
-    PA_CALL(pa__rm_collapse_pass_2d(rm, PA_METRIC_LEN_LO, &nc));
+    PA_CALL(pa__rm2d_collapse_pass(rm, PA_METRIC_LEN_LO, &nc));
     DEBUG_CHECK(rm);
     report_pass(rm, "final", *pass, ns + nc);
     (*pass)++;
@@ -260,24 +262,24 @@ cleanup:
 /* Schedule step 3, the worst elements: the pass on them, two relocation
  * passes if it changed anything, and the last length moves (the quality
  * moves disregard lengths). *pass counts the passes. */
-static pa_status repair_worst(pa__rmesh *rm, int *pass) {
+static pa_status repair_worst(rm2d *rm, int *pass) {
   pa_status st = PA_SUCCESS;
   const pa_remesh_opts *o = rm->opts;
-  long nb = pa__rm_sliver_pass_2d(rm, 0.45);
+  long nb = pa__rm2d_sliver_pass(rm, 0.45);
   DEBUG_CHECK(rm);
   report_pass(rm, "worst", *pass, nb);
   (*pass)++;
   if (!o->no_move && nb > 0) { /* only if the pass changed something */
     for (int it = 0; it < 2; it++) {
-      long nm = pa__rm_smooth_pass_2d(rm, 0, 0);
+      long nm = pa__rm2d_smooth_pass(rm, 0, 0);
       DEBUG_CHECK(rm);
       report_pass(rm, "move", *pass, nm);
       (*pass)++;
       if (!nm) break;
     }
   }
-  for (int it = 0; it < RM_LENGTH_SWEEPS && !o->no_move; it++) {
-    long nl = pa__rm_length_pass_2d(rm);
+  for (int it = 0; it < RM2D_LENGTH_SWEEPS && !o->no_move; it++) {
+    long nl = pa__rm2d_length_pass(rm);
     DEBUG_CHECK(rm);
     report_pass(rm, "length", *pass, nl);
     (*pass)++;
@@ -289,35 +291,35 @@ cleanup:
 
 /* The polish rounds (schedule step 4): swaps, relocations of every free
  * vertex (feature vertices along their curves; balls of worst quality
- * under RM_QFREE may stretch their lengths to [RM_LFREE_LO, RM_LFREE_HI]),
- * the pass on the worst elements; at most RM_POLISH_ROUNDS, until a round
- * changes nothing. The length moves leave some elements near their
- * quality floor (RM_QLEN), and the optimisation rounds' last splits leave
- * valence-4 vertices at obtuse angles, which these rounds relax (plate
+ * under RM2D_QFREE may stretch their lengths to [RM2D_LFREE_LO,
+ * RM2D_LFREE_HI]), the pass on the worst elements; at most RM2D_POLISH_ROUNDS,
+ * until a round changes nothing. The length moves leave some elements near
+ * their quality floor (RM2D_QLEN), and the optimisation rounds' last splits
+ * leave valence-4 vertices at obtuse angles, which these rounds relax (plate
  * -hsiz 0.002: worst quality 0.50 -> 0.69). */
-#define RM_POLISH_ROUNDS 4
+#define RM2D_POLISH_ROUNDS 4
 /* Balls of worst quality under this may trade lengths for quality in the
  * polish (the elements below it are the ones worth it: on the plate they
  * are a few hundred out of 300 000). */
-#define RM_QFREE 0.7
-static pa_status polish(pa__rmesh *rm, int *pass) {
+#define RM2D_QFREE 0.7
+static pa_status polish(rm2d *rm, int *pass) {
   pa_status st = PA_SUCCESS;
   const pa_remesh_opts *o = rm->opts;
   /* the relocations decide under other rules than the earlier ones where
-   * a ball has an element under RM_QFREE: those verdicts (RM_V_SETTLED) no
+   * a ball has an element under RM2D_QFREE: those verdicts (RM2D_V_SETTLED) no
    * longer hold (feature vertices were never tried, so never settled) */
   for (pa_idx k = 0; k < rm->ne; k++) {
-    if ((rm->etag[k] & RM_E_DEAD) || rm->q[k] >= RM_QFREE) continue;
+    if ((rm->tflag[k] & RM2D_E_DEAD) || rm->q[k] >= RM2D_QFREE) continue;
     for (int i = 0; i < 3; i++)
-      rm->vtag[rm->ev[3 * k + i]] &= (uint8_t)~RM_V_SETTLED;
+      rm->vtag[rm->tv[3 * k + i]] &= (uint8_t)~RM2D_V_SETTLED;
   }
-  for (int it = 0; it < RM_POLISH_ROUNDS; it++) {
+  for (int it = 0; it < RM2D_POLISH_ROUNDS; it++) {
     long nw = 0, nm = 0, nb;
-    if (!o->no_swap) nw = pa__rm_swap_pass_2d(rm, 0.9);
+    if (!o->no_swap) nw = pa__rm2d_swap_pass(rm, 0.9);
     DEBUG_CHECK(rm);
-    if (!o->no_move) nm = pa__rm_smooth_pass_2d(rm, RM_QFREE, 1);
+    if (!o->no_move) nm = pa__rm2d_smooth_pass(rm, RM2D_QFREE, 1);
     DEBUG_CHECK(rm);
-    nb = pa__rm_sliver_pass_2d(rm, 0.45);
+    nb = pa__rm2d_sliver_pass(rm, 0.45);
     DEBUG_CHECK(rm);
     report_pass(rm, "polish", *pass, nw + nm + nb);
     (*pass)++;
@@ -330,20 +332,19 @@ cleanup:
 
 /* The counts in the report and the verdict (see the opening comment):
  * FAILED when the final check of the working mesh fails. */
-static void conclude(const pa__rmesh *rm, int npass,
-                     pa_remesh_report *report) {
+static void conclude(const rm2d *rm, int npass, pa_remesh_report *report) {
   report->nsplit = rm->nsplit;
   report->ncollapse = rm->ncollapse;
   report->nswap = rm->nswap;
   report->nmove = rm->nmove;
   report->npass = npass;
-  if (pa__rm_check(rm) != PA_SUCCESS) {
+  if (pa__rm2d_check(rm) != PA_SUCCESS) {
     pa__info(1, "remesh: %s\n", pa_last_error());
     report->outcome = PA_REMESH_FAILED;
     return;
   }
-  pa__rm_figures f;
-  pa__rm_figures_2d(rm, &f);
+  rm2d_figures f;
+  pa__rm2d_figures(rm, &f);
   int missed = f.nedge > 0 && ((double)f.nin < 0.9 * (double)f.nedge ||
                                f.lmax > 2.0 || f.qmin < 0.05);
   report->outcome = missed ? PA_REMESH_TARGET_MISSED : PA_REMESH_SUCCESS;
@@ -357,10 +358,10 @@ static void conclude(const pa__rmesh *rm, int npass,
 pa_status pa__remesh2d(pa_mesh *mesh, const pa_remesh_opts *opts,
                        pa_remesh_report *report) {
   pa_status st = PA_SUCCESS;
-  pa__rmesh *rm = NULL;
+  rm2d *rm = NULL;
   int pass = 0;
   pa_idx reordered; /* live elements at the last renumbering */
-  PA_CALL(pa__rm_create(mesh, opts, &rm));
+  PA_CALL(pa__rm2d_build(mesh, opts, &rm));
   rm->lguard = PA_METRIC_LEN_HI;
   reordered = rm->nelive;
   if (!opts->no_insert) PA_CALL(refine_rounds(rm, &pass, &reordered));
@@ -368,8 +369,8 @@ pa_status pa__remesh2d(pa_mesh *mesh, const pa_remesh_opts *opts,
   PA_CALL(repair_worst(rm, &pass));
   PA_CALL(polish(rm, &pass));
   conclude(rm, pass, report);
-  if (report->outcome != PA_REMESH_FAILED) PA_CALL(pa__rm_writeback(rm, mesh));
+  if (report->outcome != PA_REMESH_FAILED) PA_CALL(pa__rm2d_write(rm, mesh));
 cleanup:
-  pa__rm_destroy(rm);
+  pa__rm2d_free(rm);
   return st;
 }

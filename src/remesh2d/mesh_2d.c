@@ -1,11 +1,11 @@
 /*
- * mesh_2d.c -- the 2D remesher's compact working mesh (struct pa__rmesh,
+ * mesh_2d.c -- the 2D remesher's compact working mesh (struct rm2d,
  * see remesh2d.h): construction from a pa_mesh, slot management with free
  * lists, vertex interpolation, the frozen-skin relaxation of the working
  * metric, locality renumbering, invariant check and the compact write-back.
  *
- * Invariants: see remesh2d.h. In addition, write-back renumbers live entities in
- * slot order, so the output depends only on the sequence of operations (the
+ * Invariants: see remesh2d.h. In addition, write-back renumbers live entities
+ * in slot order, so the output depends only on the sequence of operations (the
  * remesher is deterministic), and it never touches the pa_mesh until every new
  * array has been built: a failure leaves the mesh as it was given.
  */
@@ -25,7 +25,7 @@ static pa_status grow(void **p, size_t n, size_t sz) {
   return PA_SUCCESS;
 }
 
-static pa_status grow_vertices(pa__rmesh *rm, size_t need) {
+static pa_status grow_vertices(rm2d *rm, size_t need) {
   pa_status st = PA_SUCCESS;
   if (need <= rm->capv) return PA_SUCCESS;
   size_t cap = rm->capv + rm->capv / 2 + 64;
@@ -33,37 +33,36 @@ static pa_status grow_vertices(pa__rmesh *rm, size_t need) {
   PA_CHECK(cap <= INT32_MAX, PA_ERR_ARG, "remesher: too many vertices (%zu)",
            cap);
   PA_CALL(grow((void **)&rm->x, cap * rm->dim, sizeof(double)));
-  PA_CALL(grow((void **)&rm->met, cap * rm->mcomp, sizeof(double)));
-  if (rm->met0)
-    PA_CALL(grow((void **)&rm->met0, cap * rm->mcomp, sizeof(double)));
+  PA_CALL(grow((void **)&rm->met, cap * rm->mc, sizeof(double)));
+  if (rm->met0) PA_CALL(grow((void **)&rm->met0, cap * rm->mc, sizeof(double)));
   if (rm->fcomp)
     PA_CALL(grow((void **)&rm->fld, cap * rm->fcomp, sizeof(double)));
   PA_CALL(grow((void **)&rm->vref, cap, sizeof(int32_t)));
-  PA_CALL(grow((void **)&rm->vflag, cap, 1));
+  PA_CALL(grow((void **)&rm->vpf, cap, 1));
   PA_CALL(grow((void **)&rm->vtag, cap, 1));
   rm->capv = cap;
 cleanup:
   return st;
 }
 
-static pa_status grow_elems(pa__rmesh *rm, size_t need) {
+static pa_status grow_elems(rm2d *rm, size_t need) {
   pa_status st = PA_SUCCESS;
   if (need <= rm->cape) return PA_SUCCESS;
   size_t cap = rm->cape + rm->cape / 2 + 64;
   if (cap < need) cap = need;
   PA_CHECK(cap * rm->nvpe <= INT32_MAX, PA_ERR_ARG,
            "remesher: too many elements (%zu)", cap);
-  PA_CALL(grow((void **)&rm->ev, cap * rm->nvpe, sizeof(pa_idx)));
+  PA_CALL(grow((void **)&rm->tv, cap * rm->nvpe, sizeof(pa_idx)));
   PA_CALL(grow((void **)&rm->adj, cap * rm->nvpe, sizeof(pa_idx)));
   PA_CALL(grow((void **)&rm->q, cap, sizeof(float)));
-  PA_CALL(grow((void **)&rm->eref, cap, sizeof(int32_t)));
-  PA_CALL(grow((void **)&rm->etag, cap, 1));
+  PA_CALL(grow((void **)&rm->tref, cap, sizeof(int32_t)));
+  PA_CALL(grow((void **)&rm->tflag, cap, 1));
   rm->cape = cap;
 cleanup:
   return st;
 }
 
-static pa_status grow_feats(pa__rmesh *rm, size_t need) {
+static pa_status grow_feats(rm2d *rm, size_t need) {
   pa_status st = PA_SUCCESS;
   if (need <= rm->capb) return PA_SUCCESS;
   size_t cap = rm->capb + rm->capb / 2 + 64;
@@ -80,8 +79,8 @@ cleanup:
   return st;
 }
 
-pa_status pa__rm_reserve(pa__rmesh *rm, pa_idx nvmore, pa_idx nemore,
-                         pa_idx nbmore) {
+pa_status pa__rm2d_reserve(rm2d *rm, pa_idx nvmore, pa_idx nemore,
+                           pa_idx nbmore) {
   pa_status st = PA_SUCCESS;
   PA_CALL(grow_vertices(rm, (size_t)rm->nv + nvmore));
   PA_CALL(grow_elems(rm, (size_t)rm->ne + nemore));
@@ -92,7 +91,7 @@ cleanup:
 
 /* ---- slots ---- */
 
-pa_status pa__rm_new_vertex(pa__rmesh *rm, pa_idx *v) {
+pa_status pa__rm2d_new_vertex(rm2d *rm, pa_idx *v) {
   pa_status st = PA_SUCCESS;
   pa_idx i;
   if (rm->vfree >= 0) {
@@ -103,7 +102,7 @@ pa_status pa__rm_new_vertex(pa__rmesh *rm, pa_idx *v) {
     i = rm->nv++;
   }
   rm->vref[i] = 0;
-  rm->vflag[i] = 0;
+  rm->vpf[i] = 0;
   rm->vtag[i] = 0;
   rm->nvlive++;
   *v = i;
@@ -111,25 +110,25 @@ cleanup:
   return st;
 }
 
-pa_status pa__rm_new_elem(pa__rmesh *rm, pa_idx *k) {
+pa_status pa__rm2d_new_elem(rm2d *rm, pa_idx *k) {
   pa_status st = PA_SUCCESS;
   pa_idx i;
   if (rm->efree >= 0) {
     i = rm->efree;
-    rm->efree = rm->ev[(size_t)rm->nvpe * i];
+    rm->efree = rm->tv[(size_t)rm->nvpe * i];
   } else {
     PA_CALL(grow_elems(rm, (size_t)rm->ne + 1));
     i = rm->ne++;
   }
-  rm->etag[i] = 0;
-  rm->eref[i] = 0;
+  rm->tflag[i] = 0;
+  rm->tref[i] = 0;
   rm->nelive++;
   *k = i;
 cleanup:
   return st;
 }
 
-pa_status pa__rm_new_feat(pa__rmesh *rm, pa_idx *b) {
+pa_status pa__rm2d_new_feat(rm2d *rm, pa_idx *b) {
   pa_status st = PA_SUCCESS;
   pa_idx i;
   if (rm->bfree >= 0) {
@@ -148,22 +147,22 @@ cleanup:
   return st;
 }
 
-void pa__rm_kill_vertex(pa__rmesh *rm, pa_idx v) {
-  rm->vtag[v] = RM_V_DEAD;
+void pa__rm2d_kill_vertex(rm2d *rm, pa_idx v) {
+  rm->vtag[v] = RM2D_V_DEAD;
   rm->vref[v] = rm->vfree;
   rm->vfree = v;
   rm->nvlive--;
 }
 
-void pa__rm_kill_elem(pa__rmesh *rm, pa_idx k) {
-  rm->etag[k] = RM_E_DEAD;
-  rm->ev[(size_t)rm->nvpe * k] = rm->efree;
+void pa__rm2d_kill_elem(rm2d *rm, pa_idx k) {
+  rm->tflag[k] = RM2D_E_DEAD;
+  rm->tv[(size_t)rm->nvpe * k] = rm->efree;
   rm->efree = k;
   rm->nelive--;
 }
 
-void pa__rm_kill_feat(pa__rmesh *rm, pa_idx b) {
-  rm->btag[b] = RM_B_DEAD;
+void pa__rm2d_kill_feat(rm2d *rm, pa_idx b) {
+  rm->btag[b] = RM2D_B_DEAD;
   rm->bv[2 * (size_t)b] = rm->bfree;
   rm->bfree = b;
   rm->nblive--;
@@ -173,9 +172,9 @@ void pa__rm_kill_feat(pa__rmesh *rm, pa_idx b) {
 
 /* Interpolation of the metric array met (rm->met or rm->met0): the metric
  * kernel's. */
-static void interp_metric(const pa__rmesh *rm, double *met, pa_idx v, int n,
+static void interp_metric(const rm2d *rm, double *met, pa_idx v, int n,
                           const pa_idx *src, const double *w) {
-  int mc = rm->mcomp;
+  int mc = rm->mc;
   const double *ms[8] = {NULL};
   double out[6];
   for (int i = 0; i < n && i < 8; i++) ms[i] = met + (size_t)mc * src[i];
@@ -183,8 +182,8 @@ static void interp_metric(const pa__rmesh *rm, double *met, pa_idx v, int n,
   memcpy(met + (size_t)mc * v, out, sizeof(double) * mc); /* v may be a src */
 }
 
-void pa__rm_interp(pa__rmesh *rm, pa_idx v, int n, const pa_idx *src,
-                   const double *w) {
+void pa__rm2d_interp(rm2d *rm, pa_idx v, int n, const pa_idx *src,
+                     const double *w) {
   interp_metric(rm, rm->met, v, n, src, w);
   if (rm->met0) interp_metric(rm, rm->met0, v, n, src, w);
   int fc = rm->fcomp, off = 0;
@@ -215,7 +214,7 @@ static double expected_elems(pa_mesh *mesh) {
                          (b[1] - a[1]) * (c[0] - a[0]));
     double t[3] = {0, 0, 0}, ti[3];
     for (int i = 0; i < 3; i++) {
-      rm_tensor2(mc, mesh->met + (size_t)mc * v[i], ti);
+      rm2d_tensor2(mc, mesh->met + (size_t)mc * v[i], ti);
       for (int j = 0; j < 3; j++) t[j] += ti[j] / 3;
     }
     double det = t[0] * t[2] - t[1] * t[1];
@@ -248,23 +247,25 @@ static double expected_elems(pa_mesh *mesh) {
  * later pass (the next iteration of the parallel loop) sees the elements
  * near the old skin as still to adapt. met0 stays NULL when nothing changed.
  */
-static pa_status skin_relax_2d(pa__rmesh *rm) {
+static pa_status skin_relax_2d(rm2d *rm) {
   pa_status st = PA_SUCCESS;
-  int mc = rm->mcomp;
+  int mc = rm->mc;
   double *acc = NULL;
   int32_t *cnt = NULL;
   pa_idx nv = rm->nv;
   int any = 0;
-  for (pa_idx k = 0; k < rm->ne && !any; k++) any = rm->etag[k] & RM_E_FROZEN;
-  for (pa_idx b = 0; b < rm->nb && !any; b++) any = rm->btag[b] & RM_B_FROZEN;
+  for (pa_idx k = 0; k < rm->ne && !any; k++)
+    any = rm->tflag[k] & RM2D_E_FROZEN;
+  for (pa_idx b = 0; b < rm->nb && !any; b++)
+    any = rm->btag[b] & RM2D_B_FROZEN;
   if (!any) return PA_SUCCESS;
   PA_CALLOC(acc, nv);
   PA_CALLOC(cnt, nv);
   /* mean length of the frozen edges at each vertex (edges shared by two
    * frozen elements count twice: a weighting, not a fault) */
   for (pa_idx k = 0; k < rm->ne; k++) {
-    if (!(rm->etag[k] & RM_E_FROZEN)) continue;
-    const pa_idx *v = rm->ev + 3 * (size_t)k;
+    if (!(rm->tflag[k] & RM2D_E_FROZEN)) continue;
+    const pa_idx *v = rm->tv + 3 * (size_t)k;
     for (int i = 0; i < 3; i++) {
       pa_idx a = v[i], c = v[i == 2 ? 0 : i + 1];
       double l = pa__len2(mc, rm->x + 2 * (size_t)a, rm->x + 2 * (size_t)c,
@@ -276,7 +277,7 @@ static pa_status skin_relax_2d(pa__rmesh *rm) {
     }
   }
   for (pa_idx b = 0; b < rm->nb; b++) {
-    if ((rm->btag[b] & RM_B_DEAD) || !(rm->btag[b] & RM_B_FROZEN)) continue;
+    if ((rm->btag[b] & RM2D_B_DEAD) || !(rm->btag[b] & RM2D_B_FROZEN)) continue;
     pa_idx a = rm->bv[2 * b], c = rm->bv[2 * b + 1];
     double l = pa__len2(mc, rm->x + 2 * (size_t)a, rm->x + 2 * (size_t)c,
                         rm->met + (size_t)mc * a, rm->met + (size_t)mc * c);
@@ -309,7 +310,7 @@ static pa_status skin_relax_2d(pa__rmesh *rm) {
   }
   if (rm->met0)
     for (pa_idx k = 0; k < rm->ne; k++) {
-      const pa_idx *v = rm->ev + 3 * (size_t)k;
+      const pa_idx *v = rm->tv + 3 * (size_t)k;
       rm->q[k] = (float)pa__qual2(
           mc, rm->x + 2 * (size_t)v[0], rm->x + 2 * (size_t)v[1],
           rm->x + 2 * (size_t)v[2], rm->met + (size_t)mc * v[0],
@@ -322,25 +323,25 @@ cleanup:
 }
 
 /* Face adjacency of the working mesh's elements, by scanning the ball
- * (bstart, ball: CSR) of each face's first vertex; RM_NOADJ where no
+ * (bstart, ball: CSR) of each face's first vertex; RM2D_NOADJ where no
  * element is on the other side. */
-static pa_status build_adjacency(pa__rmesh *rm, const pa_idx *bstart,
+static pa_status build_adjacency(rm2d *rm, const pa_idx *bstart,
                                  const pa_idx *ball) {
   pa_status st = PA_SUCCESS;
   int nvpe = rm->nvpe;
   for (pa_idx k = 0; k < rm->ne; k++) {
-    const pa_idx *vk = rm->ev + (size_t)nvpe * k;
+    const pa_idx *vk = rm->tv + (size_t)nvpe * k;
     for (int i = 0; i < nvpe; i++) {
       pa_idx face[3];
       int nf = 0;
       for (int j = 0; j < nvpe; j++)
         if (j != i) face[nf++] = vk[j];
-      pa_idx nb = RM_NOADJ;
+      pa_idx nb = RM2D_NOADJ;
       int cnt = 0;
       for (pa_idx s = bstart[face[0]]; s < bstart[face[0] + 1]; s++) {
         pa_idx f = ball[s];
         if (f == k) continue;
-        const pa_idx *vf = rm->ev + (size_t)nvpe * f;
+        const pa_idx *vf = rm->tv + (size_t)nvpe * f;
         int found = 0, jo = -1;
         for (int j = 0; j < nvpe; j++) {
           int in = 0;
@@ -363,10 +364,10 @@ cleanup:
   return st;
 }
 
-pa_status pa__rm_create(pa_mesh *mesh, const pa_remesh_opts *opts,
-                        pa__rmesh **out) {
+pa_status pa__rm2d_build(pa_mesh *mesh, const pa_remesh_opts *opts,
+                         rm2d **out) {
   pa_status st = PA_SUCCESS;
-  pa__rmesh *rm = NULL;
+  rm2d *rm = NULL;
   pa_idx *bstart = NULL, *ball = NULL;
   int d = mesh->dim, nvpe = d + 1;
   *out = NULL;
@@ -376,7 +377,7 @@ pa_status pa__rm_create(pa_mesh *mesh, const pa_remesh_opts *opts,
   PA_CALLOC(rm, 1);
   rm->dim = d;
   rm->nvpe = nvpe;
-  rm->mcomp = mesh->met_ncomp;
+  rm->mc = mesh->met_ncomp;
   rm->opts = opts;
   rm->hausd = opts->hausd > 0 ? opts->hausd : 0.01;
   rm->vfree = rm->efree = rm->bfree = -1;
@@ -401,13 +402,13 @@ pa_status pa__rm_create(pa_mesh *mesh, const pa_remesh_opts *opts,
   /* vertices */
   pa_idx nv = mesh->nv, ne = mesh->ne;
   memcpy(rm->x, mesh->coord, sizeof(double) * d * nv);
-  memcpy(rm->met, mesh->met, sizeof(double) * rm->mcomp * nv);
+  memcpy(rm->met, mesh->met, sizeof(double) * rm->mc * nv);
   memcpy(rm->vref, mesh->vref, sizeof(int32_t) * nv);
-  memcpy(rm->vflag, mesh->vflag, nv);
+  memcpy(rm->vpf, mesh->vflag, nv);
   for (pa_idx v = 0; v < nv; v++) {
     uint8_t f = mesh->vflag[v];
-    rm->vtag[v] = (f & PA_FLAG_REQUIRED ? RM_V_FROZEN : 0) |
-                  (f & PA_FLAG_CORNER ? RM_V_CORNER : 0);
+    rm->vtag[v] = (f & PA_FLAG_REQUIRED ? RM2D_V_FROZEN : 0) |
+                  (f & PA_FLAG_CORNER ? RM2D_V_CORNER : 0);
   }
   if (rm->fcomp) {
     int off = 0;
@@ -423,45 +424,45 @@ pa_status pa__rm_create(pa_mesh *mesh, const pa_remesh_opts *opts,
   rm->nv = rm->nvlive = nv;
 
   /* elements; vertices of frozen elements are frozen */
-  memcpy(rm->ev, mesh->elem, sizeof(pa_idx) * nvpe * ne);
-  memcpy(rm->eref, mesh->eref, sizeof(int32_t) * ne);
+  memcpy(rm->tv, mesh->elem, sizeof(pa_idx) * nvpe * ne);
+  memcpy(rm->tref, mesh->eref, sizeof(int32_t) * ne);
   for (pa_idx k = 0; k < ne; k++) {
-    rm->etag[k] = mesh->eflag[k] & 0x0F;
+    rm->tflag[k] = mesh->eflag[k] & 0x0F;
     if (mesh->eflag[k] & PA_FLAG_REQUIRED)
       for (int i = 0; i < nvpe; i++)
-        rm->vtag[rm->ev[(size_t)nvpe * k + i]] |= RM_V_FROZEN;
+        rm->vtag[rm->tv[(size_t)nvpe * k + i]] |= RM2D_V_FROZEN;
   }
   rm->ne = rm->nelive = ne;
 
   /* Vertex balls (CSR), then face adjacency. */
-  PA_CALL(pa__balls(rm->ev, ne, nvpe, nv, &bstart, &ball));
+  PA_CALL(pa__balls(rm->tv, ne, nvpe, nv, &bstart, &ball));
   PA_CALL(build_adjacency(rm, bstart, ball));
 
-  PA_CALL(pa__rm_features_2d_init(rm, mesh, bstart, ball));
+  PA_CALL(pa__rm2d_feature_analyze(rm, mesh, bstart, ball));
   PA_CALL(skin_relax_2d(rm));
   *out = rm;
   rm = NULL;
 cleanup:
   pa__free(bstart);
   pa__free(ball);
-  pa__rm_destroy(rm);
+  pa__rm2d_free(rm);
   return st;
 }
 
-void pa__rm_destroy(pa__rmesh *rm) {
+void pa__rm2d_free(rm2d *rm) {
   if (!rm) return;
   pa__free(rm->x);
   pa__free(rm->met);
   pa__free(rm->met0);
   pa__free(rm->fld);
   pa__free(rm->vref);
-  pa__free(rm->vflag);
+  pa__free(rm->vpf);
   pa__free(rm->vtag);
-  pa__free(rm->ev);
+  pa__free(rm->tv);
   pa__free(rm->adj);
   pa__free(rm->q);
-  pa__free(rm->eref);
-  pa__free(rm->etag);
+  pa__free(rm->tref);
+  pa__free(rm->tflag);
   pa__free(rm->bv);
   pa__free(rm->bside);
   pa__free(rm->btan);
@@ -502,13 +503,13 @@ static pa_status regather(void **p, size_t cap, size_t sz, const pa_idx *old,
 /* posv[v]: the new slot of vertex v, the live vertices along the Morton
  * curve of their bounding box, then the dead slots (dropped); key: nvlive
  * records of scratch. */
-static pa_status vertex_positions(const pa__rmesh *rm, pa__key64 *key,
+static pa_status vertex_positions(const rm2d *rm, pa__key64 *key,
                                   pa_idx *posv) {
   pa_status st = PA_SUCCESS;
   const pa_idx nv = rm->nv, n = rm->nvlive;
   double lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX};
   for (pa_idx v = 0; v < nv; v++)
-    if (!(rm->vtag[v] & RM_V_DEAD))
+    if (!(rm->vtag[v] & RM2D_V_DEAD))
       for (int j = 0; j < 2; j++) {
         lo[j] = fmin(lo[j], rm->x[2 * (size_t)v + j]);
         hi[j] = fmax(hi[j], rm->x[2 * (size_t)v + j]);
@@ -517,7 +518,7 @@ static pa_status vertex_positions(const pa__rmesh *rm, pa__key64 *key,
   double sc = ext > 0 ? 4294967295.0 / ext : 0;
   pa_idx k = 0, dead = n;
   for (pa_idx v = 0; v < nv; v++) {
-    if (rm->vtag[v] & RM_V_DEAD) {
+    if (rm->vtag[v] & RM2D_V_DEAD) {
       posv[v] = dead++;
       continue;
     }
@@ -537,14 +538,14 @@ cleanup:
  * new vertex (stable counting sort; cnt: nvlive + 1 zeroed counters), then
  * the dead slots. The elements' vertices are renumbered by posv here,
  * before they move. */
-static pa_status elem_positions(pa__rmesh *rm, const pa_idx *posv,
-                                pa_idx *pose, pa_idx *cnt) {
+static pa_status elem_positions(rm2d *rm, const pa_idx *posv, pa_idx *pose,
+                                pa_idx *cnt) {
   pa_status st = PA_SUCCESS;
   const int nvpe = rm->nvpe;
   const pa_idx ne = rm->ne, n = rm->nvlive;
   for (pa_idx e = 0; e < ne; e++) {
-    if (rm->etag[e] & RM_E_DEAD) continue;
-    pa_idx *v = rm->ev + (size_t)nvpe * e, m = n;
+    if (rm->tflag[e] & RM2D_E_DEAD) continue;
+    pa_idx *v = rm->tv + (size_t)nvpe * e, m = n;
     for (int i = 0; i < nvpe; i++) {
       v[i] = posv[v[i]];
       if (v[i] < m) m = v[i];
@@ -557,25 +558,24 @@ static pa_status elem_positions(pa__rmesh *rm, const pa_idx *posv,
            "remesher: live element count is off");
   pa_idx dead = rm->nelive;
   for (pa_idx e = 0; e < ne; e++)
-    pose[e] = rm->etag[e] & RM_E_DEAD ? dead++ : cnt[pose[e]]++;
+    pose[e] = rm->tflag[e] & RM2D_E_DEAD ? dead++ : cnt[pose[e]]++;
 cleanup:
   return st;
 }
 
 /* Renumber the adjacency and the feature records (which keep their slots)
  * to the new vertex and element slots. */
-static void renumber_links(pa__rmesh *rm, const pa_idx *posv,
-                           const pa_idx *pose) {
+static void renumber_links(rm2d *rm, const pa_idx *posv, const pa_idx *pose) {
   const int nvpe = rm->nvpe;
   for (pa_idx e = 0; e < rm->ne; e++) {
-    if (rm->etag[e] & RM_E_DEAD) continue;
+    if (rm->tflag[e] & RM2D_E_DEAD) continue;
     for (int i = 0; i < nvpe; i++) {
       pa_idx a = rm->adj[(size_t)nvpe * e + i];
       if (a >= 0) rm->adj[(size_t)nvpe * e + i] = nvpe * pose[a / nvpe] + a % nvpe;
     }
   }
   for (pa_idx b = 0; b < rm->nb; b++) {
-    if (rm->btag[b] & RM_B_DEAD) continue;
+    if (rm->btag[b] & RM2D_B_DEAD) continue;
     for (int s = 0; s < 2; s++) {
       rm->bv[2 * b + s] = posv[rm->bv[2 * b + s]];
       pa_idx c = rm->bside[2 * b + s];
@@ -586,36 +586,38 @@ static void renumber_links(pa__rmesh *rm, const pa_idx *posv,
 
 /* Move the element records to their new slots: inv[i], the old slot of
  * new slot i. */
-static pa_status regather_elems(pa__rmesh *rm, const pa_idx *inv) {
+static pa_status regather_elems(rm2d *rm, const pa_idx *inv) {
   pa_status st = PA_SUCCESS;
   const int nvpe = rm->nvpe;
   const pa_idx ne = rm->ne;
-  PA_CALL(regather((void **)&rm->ev, rm->cape, nvpe * sizeof(pa_idx), inv, ne));
+  PA_CALL(regather((void **)&rm->tv, rm->cape, nvpe * sizeof(pa_idx), inv, ne));
   PA_CALL(regather((void **)&rm->adj, rm->cape, nvpe * sizeof(pa_idx), inv, ne));
   PA_CALL(regather((void **)&rm->q, rm->cape, sizeof *rm->q, inv, ne));
-  PA_CALL(regather((void **)&rm->eref, rm->cape, sizeof *rm->eref, inv, ne));
-  PA_CALL(regather((void **)&rm->etag, rm->cape, sizeof *rm->etag, inv, ne));
+  PA_CALL(regather((void **)&rm->tref, rm->cape, sizeof *rm->tref, inv, ne));
+  PA_CALL(regather((void **)&rm->tflag, rm->cape, sizeof *rm->tflag, inv, ne));
 cleanup:
   return st;
 }
 
 /* Move the vertex records to their new slots: inv[i], the old slot of new
  * slot i. */
-static pa_status regather_vertices(pa__rmesh *rm, const pa_idx *inv) {
+static pa_status regather_vertices(rm2d *rm, const pa_idx *inv) {
   pa_status st = PA_SUCCESS;
   const pa_idx nv = rm->nv;
   PA_CALL(regather((void **)&rm->x, rm->capv, 2 * sizeof(double), inv, nv));
-  PA_CALL(regather((void **)&rm->met, rm->capv, rm->mcomp * sizeof(double), inv, nv));
-  PA_CALL(regather((void **)&rm->met0, rm->capv, rm->mcomp * sizeof(double), inv, nv));
+  PA_CALL(
+      regather((void **)&rm->met, rm->capv, rm->mc * sizeof(double), inv, nv));
+  PA_CALL(
+      regather((void **)&rm->met0, rm->capv, rm->mc * sizeof(double), inv, nv));
   PA_CALL(regather((void **)&rm->fld, rm->capv, rm->fcomp * sizeof(double), inv, nv));
   PA_CALL(regather((void **)&rm->vref, rm->capv, sizeof *rm->vref, inv, nv));
-  PA_CALL(regather((void **)&rm->vflag, rm->capv, sizeof *rm->vflag, inv, nv));
+  PA_CALL(regather((void **)&rm->vpf, rm->capv, sizeof *rm->vpf, inv, nv));
   PA_CALL(regather((void **)&rm->vtag, rm->capv, sizeof *rm->vtag, inv, nv));
 cleanup:
   return st;
 }
 
-pa_status pa__rm_reorder(pa__rmesh *rm) {
+pa_status pa__rm2d_reorder(rm2d *rm) {
   pa_status st = PA_SUCCESS;
   pa__key64 *key = NULL;
   pa_idx *posv = NULL, *pose = NULL, *cnt = NULL, *inv = NULL;
@@ -666,7 +668,7 @@ cleanup:
     (p) = NULL;                                                              \
   } while (0)
 
-/* The arrays pa__rm_writeback builds for the mesh, with their counts. */
+/* The arrays pa__rm2d_write builds for the mesh, with their counts. */
 typedef struct out_arrays {
   double *coord, *met, *fval[PA_MESH_MAX_FIELDS];
   int32_t *vref, *eref, *bref;
@@ -697,10 +699,9 @@ static void out_free(out_arrays *o) {
 
 /* The live vertices' arrays, at their new indices map[v], freeing the
  * working ones as they are copied. */
-static pa_status copy_vertices(pa__rmesh *rm, const pa_idx *map,
-                               out_arrays *o) {
+static pa_status copy_vertices(rm2d *rm, const pa_idx *map, out_arrays *o) {
   pa_status st = PA_SUCCESS;
-  int d = rm->dim, mc = rm->mcomp;
+  int d = rm->dim, mc = rm->mc;
   pa_idx nvl = o->nv;
   PA_ALLOC(o->coord, (size_t)d * nvl);
   for (pa_idx v = 0; v < rm->nv; v++)
@@ -734,18 +735,17 @@ static pa_status copy_vertices(pa__rmesh *rm, const pa_idx *map,
   for (pa_idx v = 0; v < rm->nv; v++)
     if (map[v] >= 0) {
       o->vref[map[v]] = rm->vref[v];
-      o->vflag[map[v]] = rm->vflag[v];
+      o->vflag[map[v]] = rm->vpf[v];
     }
   FREE_NULL(rm->vref);
-  FREE_NULL(rm->vflag);
+  FREE_NULL(rm->vpf);
   FREE_NULL(rm->vtag);
 cleanup:
   return st;
 }
 
 /* The live elements, freeing the working ones. */
-static pa_status copy_elements(pa__rmesh *rm, const pa_idx *map,
-                               out_arrays *o) {
+static pa_status copy_elements(rm2d *rm, const pa_idx *map, out_arrays *o) {
   pa_status st = PA_SUCCESS;
   int nvpe = rm->nvpe;
   FREE_NULL(rm->adj);
@@ -754,29 +754,29 @@ static pa_status copy_elements(pa__rmesh *rm, const pa_idx *map,
   PA_ALLOC(o->eref, rm->nelive);
   PA_ALLOC(o->eflag, rm->nelive);
   for (pa_idx k = 0; k < rm->ne; k++) {
-    if (rm->etag[k] & RM_E_DEAD) continue;
+    if (rm->tflag[k] & RM2D_E_DEAD) continue;
     for (int i = 0; i < nvpe; i++)
-      o->elem[(size_t)nvpe * o->ne + i] = map[rm->ev[(size_t)nvpe * k + i]];
-    o->eref[o->ne] = rm->eref[k];
-    o->eflag[o->ne] = rm->etag[k] & 0x0F;
+      o->elem[(size_t)nvpe * o->ne + i] = map[rm->tv[(size_t)nvpe * k + i]];
+    o->eref[o->ne] = rm->tref[k];
+    o->eflag[o->ne] = rm->tflag[k] & 0x0F;
     o->ne++;
   }
-  FREE_NULL(rm->ev);
-  FREE_NULL(rm->eref);
-  FREE_NULL(rm->etag);
+  FREE_NULL(rm->tv);
+  FREE_NULL(rm->tref);
+  FREE_NULL(rm->tflag);
 cleanup:
   return st;
 }
 
 /* The live boundary entities (2D: listed feature edges). */
-static pa_status copy_boundary(const pa__rmesh *rm, const pa_idx *map,
+static pa_status copy_boundary(const rm2d *rm, const pa_idx *map,
                                out_arrays *o) {
   pa_status st = PA_SUCCESS;
   PA_ALLOC(o->bdry, (size_t)rm->dim * rm->nblive);
   PA_ALLOC(o->bref, rm->nblive);
   PA_ALLOC(o->bflag, rm->nblive);
   for (pa_idx b = 0; b < rm->nb; b++) {
-    if ((rm->btag[b] & RM_B_DEAD) || !(rm->btag[b] & RM_B_LISTED)) continue;
+    if ((rm->btag[b] & RM2D_B_DEAD) || !(rm->btag[b] & RM2D_B_LISTED)) continue;
     o->bdry[2 * (size_t)o->nb] = map[rm->bv[2 * (size_t)b]];
     o->bdry[2 * (size_t)o->nb + 1] = map[rm->bv[2 * (size_t)b + 1]];
     o->bref[o->nb] = rm->bref[b];
@@ -788,7 +788,7 @@ cleanup:
 }
 
 /* Replace the arrays of mesh with those of o, which keeps none. */
-static void install(const pa__rmesh *rm, pa_mesh *mesh, out_arrays *o) {
+static void install(const rm2d *rm, pa_mesh *mesh, out_arrays *o) {
   pa__mesh_invalidate(mesh);
   pa__free(mesh->coord);
   pa__free(mesh->vref);
@@ -812,7 +812,7 @@ static void install(const pa__rmesh *rm, pa_mesh *mesh, out_arrays *o) {
   mesh->vref = o->vref;
   mesh->vflag = o->vflag;
   mesh->met = o->met;
-  mesh->met_ncomp = rm->mcomp;
+  mesh->met_ncomp = rm->mc;
   for (int k = 0; k < rm->nfield; k++) {
     pa__free(mesh->field[k].val);
     mesh->field[k].val = o->fval[k];
@@ -836,13 +836,13 @@ static void install(const pa__rmesh *rm, pa_mesh *mesh, out_arrays *o) {
   o->elem = o->bdry = NULL;
 }
 
-pa_status pa__rm_writeback(pa__rmesh *rm, pa_mesh *mesh) {
+pa_status pa__rm2d_write(rm2d *rm, pa_mesh *mesh) {
   pa_status st = PA_SUCCESS;
   pa_idx *map = NULL;
   out_arrays o = {0};
   PA_ALLOC(map, rm->nv);
   for (pa_idx v = 0; v < rm->nv; v++)
-    map[v] = (rm->vtag[v] & RM_V_DEAD) ? -1 : o.nv++;
+    map[v] = (rm->vtag[v] & RM2D_V_DEAD) ? -1 : o.nv++;
   PA_CALL(copy_vertices(rm, map, &o));
   PA_CALL(copy_elements(rm, map, &o));
   PA_CALL(copy_boundary(rm, map, &o));
@@ -861,17 +861,17 @@ cleanup:
 
 /* ---- check ---- */
 
-pa_status pa__rm_check(const pa__rmesh *rm) {
+pa_status pa__rm2d_check(const rm2d *rm) {
   pa_status st = PA_SUCCESS;
   int nvpe = rm->nvpe;
   pa_idx nlive = 0;
   PA_CHECK(rm->dim == 2, PA_ERR_INTERNAL, "remesher check: 2D only");
   for (pa_idx k = 0; k < rm->ne; k++) {
-    if (rm->etag[k] & RM_E_DEAD) continue;
+    if (rm->tflag[k] & RM2D_E_DEAD) continue;
     nlive++;
-    const pa_idx *v = rm->ev + (size_t)nvpe * k;
+    const pa_idx *v = rm->tv + (size_t)nvpe * k;
     for (int i = 0; i < nvpe; i++)
-      PA_CHECK(v[i] >= 0 && v[i] < rm->nv && !(rm->vtag[v[i]] & RM_V_DEAD),
+      PA_CHECK(v[i] >= 0 && v[i] < rm->nv && !(rm->vtag[v[i]] & RM2D_V_DEAD),
                PA_ERR_INTERNAL, "remesher: element %d has a dead vertex",
                (int)k);
     const double *a = rm->x + 2 * (size_t)v[0], *b = rm->x + 2 * (size_t)v[1],
@@ -883,13 +883,13 @@ pa_status pa__rm_check(const pa__rmesh *rm) {
     /* the in-range mark is a cache: a stale one costs operations, never
      * validity, so only debug builds check it (it is most of this check's
      * time: three metric lengths per element) */
-    if (rm->etag[k] & RM_E_INRANGE) { /* the cache is still true */
-      int mc = rm->mcomp;
+    if (rm->tflag[k] & RM2D_E_INRANGE) { /* the cache is still true */
+      int mc = rm->mc;
       for (int i = 0; i < 3; i++) {
         pa_idx p = v[i], q = v[i == 2 ? 0 : i + 1];
         double l = pa__len2(mc, rm->x + 2 * (size_t)p, rm->x + 2 * (size_t)q,
                             rm->met + (size_t)mc * p, rm->met + (size_t)mc * q);
-        PA_CHECK(rm_len_settled(l), PA_ERR_INTERNAL,
+        PA_CHECK(rm2d_len_settled(l), PA_ERR_INTERNAL,
                  "remesher: element %d is marked in range, edge %d has "
                  "length %g",
                  (int)k, i, l);
@@ -902,16 +902,20 @@ pa_status pa__rm_check(const pa__rmesh *rm) {
       if (o >= 0) {
         pa_idx f = o / 3;
         int j = o % 3;
-        PA_CHECK(!(rm->etag[f] & RM_E_DEAD) && rm->adj[o] == code,
-                 PA_ERR_INTERNAL, "remesher: adjacency of element %d face %d "
-                 "is not symmetric", (int)k, i);
-        PA_CHECK(rm->ev[3 * f + (j + 1) % 3] == e1 &&
-                     rm->ev[3 * f + (j + 2) % 3] == e0,
-                 PA_ERR_INTERNAL, "remesher: element %d face %d does not match "
-                 "its neighbour", (int)k, i);
+        PA_CHECK(!(rm->tflag[f] & RM2D_E_DEAD) && rm->adj[o] == code,
+                 PA_ERR_INTERNAL,
+                 "remesher: adjacency of element %d face %d "
+                 "is not symmetric",
+                 (int)k, i);
+        PA_CHECK(rm->tv[3 * f + (j + 1) % 3] == e1 &&
+                     rm->tv[3 * f + (j + 2) % 3] == e0,
+                 PA_ERR_INTERNAL,
+                 "remesher: element %d face %d does not match "
+                 "its neighbour",
+                 (int)k, i);
       } else {
         pa_idx bi = -o - 1;
-        PA_CHECK(bi < rm->nb && !(rm->btag[bi] & RM_B_DEAD), PA_ERR_INTERNAL,
+        PA_CHECK(bi < rm->nb && !(rm->btag[bi] & RM2D_B_DEAD), PA_ERR_INTERNAL,
                  "remesher: element %d face %d points to a dead feature",
                  (int)k, i);
         PA_CHECK(rm->bside[2 * bi] == code || rm->bside[2 * bi + 1] == code,
@@ -927,15 +931,15 @@ pa_status pa__rm_check(const pa__rmesh *rm) {
   PA_CHECK(nlive == rm->nelive, PA_ERR_INTERNAL,
            "remesher: live element count is off");
   for (pa_idx b = 0; b < rm->nb; b++) {
-    if (rm->btag[b] & RM_B_DEAD) continue;
+    if (rm->btag[b] & RM2D_B_DEAD) continue;
     PA_CHECK(rm->bside[2 * b] >= 0, PA_ERR_INTERNAL,
              "remesher: feature %d has no element", (int)b);
     for (int s = 0; s < 2; s++) {
       pa_idx code = rm->bside[2 * b + s];
       if (code < 0) continue;
-      PA_CHECK(!(rm->etag[code / 3] & RM_E_DEAD) && rm->adj[code] == -b - 1,
-               PA_ERR_INTERNAL, "remesher: feature %d side %d is stale",
-               (int)b, s);
+      PA_CHECK(!(rm->tflag[code / 3] & RM2D_E_DEAD) && rm->adj[code] == -b - 1,
+               PA_ERR_INTERNAL, "remesher: feature %d side %d is stale", (int)b,
+               s);
     }
   }
 cleanup:
@@ -944,17 +948,17 @@ cleanup:
 
 /* ---- figures ---- */
 
-void pa__rm_figures_2d(const pa__rmesh *rm, pa__rm_figures *f) {
+void pa__rm2d_figures(const rm2d *rm, rm2d_figures *f) {
   memset(f, 0, sizeof *f);
   f->lmin = DBL_MAX;
   f->qmin = DBL_MAX;
-  int mc = rm->mcomp;
+  int mc = rm->mc;
   long nq = 0;
   double qs = 0;
   for (pa_idx k = 0; k < rm->ne; k++) {
-    uint8_t t = rm->etag[k];
-    if (t & RM_E_DEAD) continue;
-    if (!(t & RM_E_FROZEN)) {
+    uint8_t t = rm->tflag[k];
+    if (t & RM2D_E_DEAD) continue;
+    if (!(t & RM2D_E_FROZEN)) {
       double q = rm->q[k];
       if (q < f->qmin) f->qmin = q;
       qs += q;
@@ -962,19 +966,19 @@ void pa__rm_figures_2d(const pa__rmesh *rm, pa__rm_figures *f) {
     }
     for (int i = 0; i < 3; i++) {
       pa_idx code = 3 * k + i, o = rm->adj[code];
-      int frozen = t & RM_E_FROZEN;
+      int frozen = t & RM2D_E_FROZEN;
       if (o >= 0) {
         if (o < code) continue; /* count each edge once */
-        frozen |= rm->etag[o / 3] & RM_E_FROZEN;
+        frozen |= rm->tflag[o / 3] & RM2D_E_FROZEN;
       } else {
         pa_idx b = -o - 1;
         if (rm->bside[2 * b] != code) continue;
-        frozen |= rm->btag[b] & RM_B_FROZEN;
+        frozen |= rm->btag[b] & RM2D_B_FROZEN;
         pa_idx s = rm->bside[2 * b + 1];
-        if (s >= 0) frozen |= rm->etag[s / 3] & RM_E_FROZEN;
+        if (s >= 0) frozen |= rm->tflag[s / 3] & RM2D_E_FROZEN;
       }
       if (frozen) continue;
-      pa_idx a = rm->ev[3 * k + (i + 1) % 3], c = rm->ev[3 * k + (i + 2) % 3];
+      pa_idx a = rm->tv[3 * k + (i + 1) % 3], c = rm->tv[3 * k + (i + 2) % 3];
       double l = pa__len2(mc, rm->x + 2 * (size_t)a, rm->x + 2 * (size_t)c,
                           rm->met + (size_t)mc * a, rm->met + (size_t)mc * c);
       f->nedge++;

@@ -4,14 +4,14 @@
  * records, the cache invalidation of a rewritten element, vertex balls.
  *
  * Every operator evaluates its result before changing anything ("sim then
- * apply"): each new element must have quality >= RM_QFLOOR (so its
+ * apply"): each new element must have quality >= RM2D_QFLOOR (so its
  * orientation is certain; where the elements it replaces are already
  * worse, at least half their worst and a certain Euclidean orientation:
- * rm_qfloor, rm_qual_ok), plus the operator's own acceptance rule. The
+ * rm2d_qfloor, rm2d_qual_ok), plus the operator's own acceptance rule. The
  * frozen contract is enforced by the operators: an element tagged
- * RM_E_FROZEN is never rewritten nor deleted, so none of its edges is
+ * RM2D_E_FROZEN is never rewritten nor deleted, so none of its edges is
  * split, swapped or collapsed (a collapse removes a vertex, and vertices of
- * frozen elements are RM_V_FROZEN); frozen and corner vertices never move
+ * frozen elements are RM2D_V_FROZEN); frozen and corner vertices never move
  * nor disappear; feature edges are never swapped.
  *
  * Local numbering: in element k = (v0, v1, v2), counter-clockwise, face i is
@@ -19,7 +19,7 @@
  * shared edge the neighbour runs it the other way.
  *
  * Passes visit elements in slot order and skip elements already touched in
- * the same pass (RM_E_TOUCHED), so each neighbourhood changes at most once
+ * the same pass (RM2D_E_TOUCHED), so each neighbourhood changes at most once
  * per pass and the result is deterministic.
  */
 #ifndef PA_OPS_2D_H
@@ -27,49 +27,50 @@
 
 #include "remesh2d/remesh2d.h"
 
-#define RM_BALL_MAX 128
-#define RM_X(v) (rm->x + 2 * (size_t)(v))
-#define RM_M(v) (rm->met + (size_t)mc * (v))
-#define RM_NX3(i) ((i) == 2 ? 0 : (i) + 1)
-#define RM_PV3(i) ((i) == 0 ? 2 : (i) - 1)
+#define RM2D_BALL_MAX 128
+#define RM2D_X(v) (rm->x + 2 * (size_t)(v))
+#define RM2D_M(v) (rm->met + (size_t)mc * (v))
+#define RM2D_NX3(i) ((i) == 2 ? 0 : (i) + 1)
+#define RM2D_PV3(i) ((i) == 0 ? 2 : (i)-1)
 
-static inline double rm_elem_qual(const pa__rmesh *rm, pa_idx a, pa_idx b,
-                                  pa_idx c) {
-  int mc = rm->mcomp;
-  return pa__qual2(mc, RM_X(a), RM_X(b), RM_X(c), RM_M(a), RM_M(b), RM_M(c));
+static inline double rm2d_elem_qual(const rm2d *rm, pa_idx a, pa_idx b,
+                                    pa_idx c) {
+  int mc = rm->mc;
+  return pa__qual2(mc, RM2D_X(a), RM2D_X(b), RM2D_X(c), RM2D_M(a), RM2D_M(b),
+                   RM2D_M(c));
 }
 
 /* The quality floor of the new elements of an operation that replaces
- * elements of worst quality qold: RM_QFLOOR, or half of qold when that is
- * lower (the two meet at qold = 2 RM_QFLOOR). An input far from its metric
+ * elements of worst quality qold: RM2D_QFLOOR, or half of qold when that is
+ * lower (the two meet at qold = 2 RM2D_QFLOOR). An input far from its metric
  * (an isotropic mesh under a 1e6:1 metric has quality about 1e-6) can then
  * be adapted: the first splits of its needles halve their quality before
  * the later ones raise it. */
-static inline double rm_qfloor(double qold) {
-  return qold < 2 * RM_QFLOOR ? 0.5 * qold : RM_QFLOOR;
+static inline double rm2d_qfloor(double qold) {
+  return qold < 2 * RM2D_QFLOOR ? 0.5 * qold : RM2D_QFLOOR;
 }
 
 /* New element (a, b, c) of quality q is acceptable against floor (from
- * rm_qfloor): q >= floor, and below RM_QFLOOR also a Euclidean quality of
- * at least RM_QFLOOR_EUCL, so its orientation is certain. Under a size
+ * rm2d_qfloor): q >= floor, and below RM2D_QFLOOR also a Euclidean quality of
+ * at least RM2D_QFLOOR_EUCL, so its orientation is certain. Under a size
  * metric the two qualities are the same. */
-static inline int rm_qual_ok(const pa__rmesh *rm, double q, double floor,
-                             pa_idx a, pa_idx b, pa_idx c) {
+static inline int rm2d_qual_ok(const rm2d *rm, double q, double floor, pa_idx a,
+                               pa_idx b, pa_idx c) {
   if (!(q >= floor)) return 0;
-  if (floor >= RM_QFLOOR || rm->mcomp <= 1) return 1;
-  const double *xa = RM_X(a), *xb = RM_X(b), *xc = RM_X(c);
+  if (floor >= RM2D_QFLOOR || rm->mc <= 1) return 1;
+  const double *xa = RM2D_X(a), *xb = RM2D_X(b), *xc = RM2D_X(c);
   return pa__qual2_xy(xa[0], xa[1], xb[0], xb[1], xc[0], xc[1]) >=
-         RM_QFLOOR_EUCL;
+         RM2D_QFLOOR_EUCL;
 }
 
-static inline double rm_edge_len(const pa__rmesh *rm, pa_idx a, pa_idx b) {
-  int mc = rm->mcomp;
-  return pa__len2(mc, RM_X(a), RM_X(b), RM_M(a), RM_M(b));
+static inline double rm2d_edge_len(const rm2d *rm, pa_idx a, pa_idx b) {
+  int mc = rm->mc;
+  return pa__len2(mc, RM2D_X(a), RM2D_X(b), RM2D_M(a), RM2D_M(b));
 }
 
 /* Face on the other side of face `code` (through a feature record if need
  * be), or -1 on the domain boundary. */
-static inline pa_idx rm_other_side(const pa__rmesh *rm, pa_idx code) {
+static inline pa_idx rm2d_other_side(const rm2d *rm, pa_idx code) {
   pa_idx o = rm->adj[code];
   if (o >= 0) return o;
   pa_idx b = -o - 1;
@@ -78,17 +79,17 @@ static inline pa_idx rm_other_side(const pa__rmesh *rm, pa_idx code) {
 
 /* Edge (face code) can be split, collapsed or swapped: no frozen element on
  * either side, no frozen feature record. */
-static inline int rm_edge_free(const pa__rmesh *rm, pa_idx code) {
-  if (rm->etag[code / 3] & RM_E_FROZEN) return 0;
+static inline int rm2d_edge_free(const rm2d *rm, pa_idx code) {
+  if (rm->tflag[code / 3] & RM2D_E_FROZEN) return 0;
   pa_idx o = rm->adj[code];
-  if (o < 0 && (rm->btag[-o - 1] & RM_B_FROZEN)) return 0;
-  pa_idx s = rm_other_side(rm, code);
-  return s < 0 || !(rm->etag[s / 3] & RM_E_FROZEN);
+  if (o < 0 && (rm->btag[-o - 1] & RM2D_B_FROZEN)) return 0;
+  pa_idx s = rm2d_other_side(rm, code);
+  return s < 0 || !(rm->tflag[s / 3] & RM2D_E_FROZEN);
 }
 
 /* Attach new face `code` to outer value o, which was attached to `oldcode`. */
-static inline void rm_attach(pa__rmesh *rm, pa_idx code, pa_idx o,
-                             pa_idx oldcode) {
+static inline void rm2d_attach(rm2d *rm, pa_idx code, pa_idx o,
+                               pa_idx oldcode) {
   rm->adj[code] = o;
   if (o >= 0) {
     rm->adj[o] = code;
@@ -103,12 +104,12 @@ static inline void rm_attach(pa__rmesh *rm, pa_idx code, pa_idx o,
  * The array and the count are read once: through a uint8_t * a store may
  * alias any field of rm, which the loop would otherwise reload at each slot,
  * and it would not vectorise. */
-static inline void rm_etag_clear(pa__rmesh *rm, uint8_t bits) {
-  uint8_t *t = rm->etag;
+static inline void rm2d_tflag_clear(rm2d *rm, uint8_t bits) {
+  uint8_t *t = rm->tflag;
   const pa_idx n = rm->ne;
   for (pa_idx k = 0; k < n; k++) t[k] &= (uint8_t)~bits;
 }
-static inline void rm_vtag_clear(pa__rmesh *rm, uint8_t bits) {
+static inline void rm2d_vtag_clear(rm2d *rm, uint8_t bits) {
   uint8_t *t = rm->vtag;
   const pa_idx n = rm->nv;
   for (pa_idx v = 0; v < n; v++) t[v] &= (uint8_t)~bits;
@@ -119,8 +120,8 @@ static inline void rm_vtag_clear(pa__rmesh *rm, uint8_t bits) {
  * skips (most of the mesh once it has settled). The tags are read as the
  * pass reaches them, so it visits the same elements as a slot-by-slot
  * loop. */
-static inline pa_idx rm_next_elem(const pa__rmesh *rm, pa_idx k, uint8_t skip) {
-  const uint8_t *t = rm->etag;
+static inline pa_idx rm2d_next_elem(const rm2d *rm, pa_idx k, uint8_t skip) {
+  const uint8_t *t = rm->tflag;
   const pa_idx n = rm->ne;
   const uint64_t ones = 0x0101010101010101ULL, low7 = 0x7F7F7F7F7F7F7F7FULL,
                  high = 0x8080808080808080ULL;
@@ -146,46 +147,46 @@ static inline pa_idx rm_next_elem(const pa__rmesh *rm, pa_idx k, uint8_t skip) {
 }
 
 /* Element k is rewritten or about to be killed, or one of its vertices
- * moved: drop the caches that depend on it (RM_E_INRANGE of k, RM_E_NOSWAP of
- * k and its neighbours, RM_V_SETTLED of its vertices, whose balls change).
+ * moved: drop the caches that depend on it (RM2D_E_INRANGE of k, RM2D_E_NOSWAP
+ * of k and its neighbours, RM2D_V_SETTLED of its vertices, whose balls change).
  * Call with k's current vertices and, on a rewrite, before its adjacency is
  * updated (the old neighbours are the ones to tell; a new neighbour of a
  * rewritten element is an old neighbour of the rewritten group). */
-static inline void rm_elem_changed(pa__rmesh *rm, pa_idx k) {
-  const pa_idx *v = rm->ev + 3 * (size_t)k;
+static inline void rm2d_elem_changed(rm2d *rm, pa_idx k) {
+  const pa_idx *v = rm->tv + 3 * (size_t)k;
   const pa_idx *a = rm->adj + 3 * (size_t)k;
-  rm->etag[k] &= (uint8_t)~(RM_E_INRANGE | RM_E_NOSWAP);
+  rm->tflag[k] &= (uint8_t) ~(RM2D_E_INRANGE | RM2D_E_NOSWAP);
   /* neighbours: their swaps across k see a new k (swaps never cross a
    * feature record, so only direct neighbours matter) */
-  if (a[0] >= 0) rm->etag[a[0] / 3] &= (uint8_t)~RM_E_NOSWAP;
-  if (a[1] >= 0) rm->etag[a[1] / 3] &= (uint8_t)~RM_E_NOSWAP;
-  if (a[2] >= 0) rm->etag[a[2] / 3] &= (uint8_t)~RM_E_NOSWAP;
-  rm->vtag[v[0]] &= (uint8_t)~RM_V_SETTLED;
-  rm->vtag[v[1]] &= (uint8_t)~RM_V_SETTLED;
-  rm->vtag[v[2]] &= (uint8_t)~RM_V_SETTLED;
+  if (a[0] >= 0) rm->tflag[a[0] / 3] &= (uint8_t)~RM2D_E_NOSWAP;
+  if (a[1] >= 0) rm->tflag[a[1] / 3] &= (uint8_t)~RM2D_E_NOSWAP;
+  if (a[2] >= 0) rm->tflag[a[2] / 3] &= (uint8_t)~RM2D_E_NOSWAP;
+  rm->vtag[v[0]] &= (uint8_t)~RM2D_V_SETTLED;
+  rm->vtag[v[1]] &= (uint8_t)~RM2D_V_SETTLED;
+  rm->vtag[v[2]] &= (uint8_t)~RM2D_V_SETTLED;
 }
 
 /* Write element k (an existing or a new slot). The caller has called
- * rm_elem_changed on every existing element it rewrites, before the rewrite;
+ * rm2d_elem_changed on every existing element it rewrites, before the rewrite;
  * the vertices of the new elements are then those old ones plus new vertices
  * (no cached flags), and new slots start with no cached flags either. */
-static inline void rm_set_elem(pa__rmesh *rm, pa_idx k, pa_idx a, pa_idx b,
-                               pa_idx c, double q) {
-  rm->ev[3 * k] = a;
-  rm->ev[3 * k + 1] = b;
-  rm->ev[3 * k + 2] = c;
+static inline void rm2d_set_elem(rm2d *rm, pa_idx k, pa_idx a, pa_idx b,
+                                 pa_idx c, double q) {
+  rm->tv[3 * k] = a;
+  rm->tv[3 * k + 1] = b;
+  rm->tv[3 * k + 2] = c;
   rm->q[k] = (float)q;
-  rm->etag[k] |= RM_E_TOUCHED;
+  rm->tflag[k] |= RM2D_E_TOUCHED;
 }
 
 /*
  * Elements around vertex p starting from element k (local index ip): counter-
  * clockwise until back to k or the domain boundary, then clockwise from k.
  * Fills el[] and loc[] (local index of p) and returns the count, or -1 if the
- * ball exceeds RM_BALL_MAX. *closed is 1 for an interior vertex.
+ * ball exceeds RM2D_BALL_MAX. *closed is 1 for an interior vertex.
  */
-static inline int rm_ball_2d(const pa__rmesh *rm, pa_idx k, int ip, pa_idx *el,
-                             int *loc, int *closed) {
+static inline int rm2d_ball(const rm2d *rm, pa_idx k, int ip, pa_idx *el,
+                            int *loc, int *closed) {
   int n = 0;
   el[n] = k;
   loc[n++] = ip;
@@ -193,15 +194,15 @@ static inline int rm_ball_2d(const pa__rmesh *rm, pa_idx k, int ip, pa_idx *el,
   int l = ip;
   *closed = 0;
   for (;;) {
-    pa_idx s = rm_other_side(rm, 3 * c + RM_NX3(l));
+    pa_idx s = rm2d_other_side(rm, 3 * c + RM2D_NX3(l));
     if (s < 0) break;
     c = s / 3;
-    l = RM_NX3(s % 3);
+    l = RM2D_NX3(s % 3);
     if (c == k) {
       *closed = 1;
       return n;
     }
-    if (n >= RM_BALL_MAX) return -1;
+    if (n >= RM2D_BALL_MAX) return -1;
     el[n] = c;
     loc[n++] = l;
   }
@@ -209,11 +210,11 @@ static inline int rm_ball_2d(const pa__rmesh *rm, pa_idx k, int ip, pa_idx *el,
   c = k;
   l = ip;
   for (;;) {
-    pa_idx s = rm_other_side(rm, 3 * c + RM_PV3(l));
+    pa_idx s = rm2d_other_side(rm, 3 * c + RM2D_PV3(l));
     if (s < 0) break;
     c = s / 3;
-    l = RM_PV3(s % 3);
-    if (n >= RM_BALL_MAX) return -1;
+    l = RM2D_PV3(s % 3);
+    if (n >= RM2D_BALL_MAX) return -1;
     el[n] = c;
     loc[n++] = l;
   }
@@ -223,7 +224,6 @@ static inline int rm_ball_2d(const pa__rmesh *rm, pa_idx k, int ip, pa_idx *el,
 /* Collapse vertex p = v[ip] of element k onto q, the other end of face fi of
  * k (fi != ip), if every new element has quality >= qrel times the ball's old
  * worst (collapse_2d.c). Returns 1 if done, 0 if rejected. */
-int pa__rm_collapse_edge_2d(pa__rmesh *rm, pa_idx k, int fi, int ip,
-                            double qrel);
+int pa__rm2d_collapse_edge(rm2d *rm, pa_idx k, int fi, int ip, double qrel);
 
 #endif /* PA_OPS_2D_H */

@@ -16,14 +16,14 @@
 /* Move interior vertex p (its closed ball el[0..n), local indices loc) to
  * np: metric and fields interpolated from the old triangle holding np
  * (barycentric; linear fields stay exact), qualities updated. */
-static void apply_move(pa__rmesh *rm, pa_idx p, const pa_idx *el,
-                       const int *loc, int n, const double *np) {
+static void apply_move(rm2d *rm, pa_idx p, const pa_idx *el, const int *loc,
+                       int n, const double *np) {
   double *xp = rm->x + 2 * (size_t)p;
   double x0 = xp[0], y0 = xp[1];
   for (int s = 0; s < n; s++) {
-    const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-    pa_idx va = v[RM_NX3(loc[s])], vb = v[RM_PV3(loc[s])];
-    const double *a = RM_X(va), *b = RM_X(vb);
+    const pa_idx *v = rm->tv + 3 * (size_t)el[s];
+    pa_idx va = v[RM2D_NX3(loc[s])], vb = v[RM2D_PV3(loc[s])];
+    const double *a = RM2D_X(va), *b = RM2D_X(vb);
     double area = (a[0] - x0) * (b[1] - y0) - (a[1] - y0) * (b[0] - x0);
     double wa = ((np[0] - x0) * (b[1] - y0) - (np[1] - y0) * (b[0] - x0)) / area;
     double wb = ((a[0] - x0) * (np[1] - y0) - (a[1] - y0) * (np[0] - x0)) / area;
@@ -31,16 +31,16 @@ static void apply_move(pa__rmesh *rm, pa_idx p, const pa_idx *el,
     if (wa >= -1e-12 && wb >= -1e-12 && wp >= -1e-12) {
       pa_idx src[3] = {p, va, vb};
       double w[3] = {wp, wa, wb};
-      pa__rm_interp(rm, p, 3, src, w);
+      pa__rm2d_interp(rm, p, 3, src, w);
       break;
     }
   }
   xp[0] = np[0];
   xp[1] = np[1];
   for (int s = 0; s < n; s++) {
-    const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-    rm->q[el[s]] = (float)rm_elem_qual(rm, v[0], v[1], v[2]);
-    rm_elem_changed(rm, el[s]); /* p's neighbours see a new ball */
+    const pa_idx *v = rm->tv + 3 * (size_t)el[s];
+    rm->q[el[s]] = (float)rm2d_elem_qual(rm, v[0], v[1], v[2]);
+    rm2d_elem_changed(rm, el[s]); /* p's neighbours see a new ball */
   }
   rm->nmove++;
 }
@@ -51,7 +51,7 @@ static void apply_move(pa__rmesh *rm, pa_idx p, const pa_idx *el,
  * rewritten at each trial. One loop then evaluates the whole ball with the
  * kernel (pa__qual2_xy), and vectorises. */
 typedef struct ball_xy {
-  double x[3][RM_BALL_MAX], y[3][RM_BALL_MAX];
+  double x[3][RM2D_BALL_MAX], y[3][RM2D_BALL_MAX];
 } ball_xy;
 
 static void ball_xy_qual(const ball_xy *b, int n, double *q) {
@@ -76,9 +76,9 @@ static void add_ideal_apex(const double *t, double sd, const double *a,
  * in [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI] at the old position stays in it
  * at the current one, and none out of it goes further out (the old
  * lengths lold are measured on the first call: *have). Balls whose worst
- * quality qold is under qfree are held to the wider band [RM_LFREE_LO,
- * RM_LFREE_HI] instead (their elements matter more than those lengths). */
-static int keeps_band(pa__rmesh *rm, pa_idx p, const pa_idx *nb, int nn,
+ * quality qold is under qfree are held to the wider band [RM2D_LFREE_LO,
+ * RM2D_LFREE_HI] instead (their elements matter more than those lengths). */
+static int keeps_band(rm2d *rm, pa_idx p, const pa_idx *nb, int nn,
                       const double *old, double *lold, int *have, double qold,
                       double qfree) {
   double *xp = rm->x + 2 * (size_t)p;
@@ -86,18 +86,19 @@ static int keeps_band(pa__rmesh *rm, pa_idx p, const pa_idx *nb, int nn,
     double np[2] = {xp[0], xp[1]};
     xp[0] = old[0];
     xp[1] = old[1];
-    for (int s = 0; s < nn; s++) lold[s] = rm_edge_len(rm, p, nb[s]);
+    for (int s = 0; s < nn; s++)
+      lold[s] = rm2d_edge_len(rm, p, nb[s]);
     xp[0] = np[0];
     xp[1] = np[1];
     *have = 1;
   }
   double lo = PA_METRIC_LEN_LO, hi = PA_METRIC_LEN_HI;
   if (qold < qfree) {
-    lo = RM_LFREE_LO;
-    hi = RM_LFREE_HI;
+    lo = RM2D_LFREE_LO;
+    hi = RM2D_LFREE_HI;
   }
   for (int s = 0; s < nn; s++) {
-    double l = rm_edge_len(rm, p, nb[s]);
+    double l = rm2d_edge_len(rm, p, nb[s]);
     if (!(l >= fmin(lo, lold[s]) && l <= fmax(hi, lold[s]))) return 0;
   }
   return 1;
@@ -107,26 +108,26 @@ static int keeps_band(pa__rmesh *rm, pa_idx p, const pa_idx *nb, int nn,
  * apexes of its ball (equilateral in the metric of p). Balls of worst
  * quality under qfree may stretch their lengths (keeps_band). Returns 1 if
  * moved. */
-static int move_vertex(pa__rmesh *rm, pa_idx k, int ip, double qfree) {
-  int mc = rm->mcomp;
-  pa_idx p = rm->ev[3 * k + ip];
-  pa_idx el[RM_BALL_MAX];
-  int loc[RM_BALL_MAX], closed;
-  int n = rm_ball_2d(rm, k, ip, el, loc, &closed);
+static int move_vertex(rm2d *rm, pa_idx k, int ip, double qfree) {
+  int mc = rm->mc;
+  pa_idx p = rm->tv[3 * k + ip];
+  pa_idx el[RM2D_BALL_MAX];
+  int loc[RM2D_BALL_MAX], closed;
+  int n = rm2d_ball(rm, k, ip, el, loc, &closed);
   if (n < 3 || !closed) return 0;
   double t[3];
-  rm_tensor2(mc, RM_M(p), t);
+  rm2d_tensor2(mc, RM2D_M(p), t);
   double det = t[0] * t[2] - t[1] * t[1];
   if (!(det > 0)) return 0;
   double sd = 1.0 / sqrt(det);
   double c[2] = {0, 0}, qold = 1, qmean = 0;
-  pa_idx nb[RM_BALL_MAX];
+  pa_idx nb[RM2D_BALL_MAX];
   ball_xy bxy;
   for (int s = 0; s < n; s++) {
-    const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-    if (rm->etag[el[s]] & RM_E_FROZEN) return 0;
-    int l1 = RM_NX3(loc[s]), l2 = RM_PV3(loc[s]);
-    const double *a = RM_X(v[l1]), *b = RM_X(v[l2]);
+    const pa_idx *v = rm->tv + 3 * (size_t)el[s];
+    if (rm->tflag[el[s]] & RM2D_E_FROZEN) return 0;
+    int l1 = RM2D_NX3(loc[s]), l2 = RM2D_PV3(loc[s]);
+    const double *a = RM2D_X(v[l1]), *b = RM2D_X(v[l2]);
     if (mc <= 1) {
       bxy.x[l1][s] = a[0];
       bxy.y[l1][s] = a[1];
@@ -143,11 +144,11 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip, double qfree) {
   double cx = c[0] / n, cy = c[1] / n;
   /* edge lengths in range before the move must stay in range (computed
    * when a candidate first passes the quality test) */
-  double lold[RM_BALL_MAX];
+  double lold[RM2D_BALL_MAX];
   int have_inr = 0;
   double *xp = rm->x + 2 * (size_t)p;
   const double x0 = xp[0], y0 = xp[1], old[2] = {x0, y0};
-  double qn[RM_BALL_MAX];
+  double qn[RM2D_BALL_MAX];
   double om = 1.0;
   for (int tr = 0; tr < 3; tr++, om *= 0.5) {
     xp[0] = x0 + om * (cx - x0);
@@ -163,16 +164,16 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip, double qfree) {
     }
     for (int s = 0; s < n && ok; s++) {
       if (mc > 1) {
-        const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-        qn[s] = rm_elem_qual(rm, v[0], v[1], v[2]);
+        const pa_idx *v = rm->tv + 3 * (size_t)el[s];
+        qn[s] = rm2d_elem_qual(rm, v[0], v[1], v[2]);
       }
-      /* >= qold passes the floor (rm_qfloor); below RM_QFLOOR the
+      /* >= qold passes the floor (rm2d_qfloor); below RM2D_QFLOOR the
        * Euclidean shape is checked too */
       if (qn[s] < qold) {
         ok = 0;
-      } else if (qold < RM_QFLOOR) {
-        const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-        ok = rm_qual_ok(rm, qn[s], rm_qfloor(qold), v[0], v[1], v[2]);
+      } else if (qold < RM2D_QFLOOR) {
+        const pa_idx *v = rm->tv + 3 * (size_t)el[s];
+        ok = rm2d_qual_ok(rm, qn[s], rm2d_qfloor(qold), v[0], v[1], v[2]);
       }
       if (qn[s] < qmin) qmin = qn[s];
       qm += qn[s];
@@ -194,7 +195,7 @@ static int move_vertex(pa__rmesh *rm, pa_idx k, int ip, double qfree) {
 }
 
 /* The tangent of record b at its end v, oriented away from v. */
-static void tangent_from(const pa__rmesh *rm, pa_idx b, pa_idx v, double *t) {
+static void tangent_from(const rm2d *rm, pa_idx b, pa_idx v, double *t) {
   int e = rm->bv[2 * b] == v ? 0 : 1;
   double sg = e == 0 ? 1 : -1; /* stored along bv[2b] -> bv[2b+1] */
   t[0] = sg * rm->btan[4 * b + 2 * e];
@@ -206,10 +207,10 @@ static void tangent_from(const pa__rmesh *rm, pa_idx b, pa_idx v, double *t) {
  * curve it replaces: p within hausd of the new chord, the sagitta of the
  * new Hermite arc within hausd, the arc not folded (as the feature
  * collapses, collapse_2d.c). */
-static int stretch_kept(const pa__rmesh *rm, pa_idx r, pa_idx p,
-                        const double *np, const double *g, double hausd) {
+static int stretch_kept(const rm2d *rm, pa_idx r, pa_idx p, const double *np,
+                        const double *g, double hausd) {
   pa_idx y = rm->bv[2 * r] == p ? rm->bv[2 * r + 1] : rm->bv[2 * r];
-  const double *xy = RM_X(y), *xp = RM_X(p);
+  const double *xy = RM2D_X(y), *xp = RM2D_X(p);
   double dx = np[0] - xy[0], dy = np[1] - xy[1];
   double l2 = dx * dx + dy * dy;
   if (!(l2 > 0)) return 0;
@@ -231,23 +232,23 @@ static int stretch_kept(const pa__rmesh *rm, pa_idx r, pa_idx p,
  * record it leaves behind within hausd of the curve (stretch_kept). The
  * metric and fields are interpolated along the record; straight features
  * stay straight. Returns 1 if moved. */
-static int move_feature(pa__rmesh *rm, pa_idx k, int ip, double qfree) {
-  int mc = rm->mcomp;
-  pa_idx p = rm->ev[3 * k + ip];
-  pa_idx el[RM_BALL_MAX], nb[2 * RM_BALL_MAX], rec[2];
-  int loc[RM_BALL_MAX], closed, nr = 0, nn = 0;
-  int n = rm_ball_2d(rm, k, ip, el, loc, &closed);
+static int move_feature(rm2d *rm, pa_idx k, int ip, double qfree) {
+  int mc = rm->mc;
+  pa_idx p = rm->tv[3 * k + ip];
+  pa_idx el[RM2D_BALL_MAX], nb[2 * RM2D_BALL_MAX], rec[2];
+  int loc[RM2D_BALL_MAX], closed, nr = 0, nn = 0;
+  int n = rm2d_ball(rm, k, ip, el, loc, &closed);
   if (n < 1) return 0;
   double t[3];
-  rm_tensor2(mc, RM_M(p), t);
+  rm2d_tensor2(mc, RM2D_M(p), t);
   double det = t[0] * t[2] - t[1] * t[1];
   if (!(det > 0)) return 0;
   double sd = 1.0 / sqrt(det), c[2] = {0, 0}, qold = 1, qmean = 0;
   for (int s = 0; s < n; s++) {
-    if (rm->etag[el[s]] & RM_E_FROZEN) return 0;
-    const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-    int l1 = RM_NX3(loc[s]), l2 = RM_PV3(loc[s]);
-    add_ideal_apex(t, sd, RM_X(v[l1]), RM_X(v[l2]), c);
+    if (rm->tflag[el[s]] & RM2D_E_FROZEN) return 0;
+    const pa_idx *v = rm->tv + 3 * (size_t)el[s];
+    int l1 = RM2D_NX3(loc[s]), l2 = RM2D_PV3(loc[s]);
+    add_ideal_apex(t, sd, RM2D_X(v[l1]), RM2D_X(v[l2]), c);
     double q = rm->q[el[s]];
     if (q < qold) qold = q;
     qmean += q;
@@ -272,18 +273,18 @@ static int move_feature(pa__rmesh *rm, pa_idx k, int ip, double qfree) {
   /* towards rec[1]'s other end z (d > 0) or rec[0]'s (d < 0) */
   pa_idx rr = d > 0 ? rec[1] : rec[0], ro = d > 0 ? rec[0] : rec[1];
   pa_idx z = rm->bv[2 * rr] == p ? rm->bv[2 * rr + 1] : rm->bv[2 * rr];
-  double lz = hypot(RM_X(z)[0] - old[0], RM_X(z)[1] - old[1]);
+  double lz = hypot(RM2D_X(z)[0] - old[0], RM2D_X(z)[1] - old[1]);
   double s0 = fabs(d) / lz;
   if (!(s0 > 1e-6)) return 0;
-  if (s0 > RM_FEAT_STEP) s0 = RM_FEAT_STEP;
+  if (s0 > RM2D_FEAT_STEP) s0 = RM2D_FEAT_STEP;
   double hausd = fmin(pa__local_hausd(rm->opts, rm->bref[rr], rm->hausd),
                       pa__local_hausd(rm->opts, rm->bref[ro], rm->hausd));
-  double lold[2 * RM_BALL_MAX];
+  double lold[2 * RM2D_BALL_MAX];
   int have_inr = 0;
   for (int tr = 0; tr < 3; tr++, s0 *= 0.5) {
     int from0 = rm->bv[2 * rr] == p;
     double np[2], tn[2], g[2];
-    pa__rm_curve_point_2d(rm, rr, from0 ? s0 : 1 - s0, np, tn);
+    pa__rm2d_curve_point(rm, rr, from0 ? s0 : 1 - s0, np, tn);
     /* on a model's curve: its point (no move when the kernel fails) */
     if (pa__remesh_project(rm->opts, 1, rm->bref[rr], 2, np, s0 * lz, np) < 0)
       continue;
@@ -295,9 +296,10 @@ static int move_feature(pa__rmesh *rm, pa_idx k, int ip, double qfree) {
     double qmin = 1, qm = 0;
     int ok = 1;
     for (int s = 0; s < n && ok; s++) {
-      const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-      double q = rm_elem_qual(rm, v[0], v[1], v[2]);
-      ok = q >= qold && rm_qual_ok(rm, q, rm_qfloor(qold), v[0], v[1], v[2]);
+      const pa_idx *v = rm->tv + 3 * (size_t)el[s];
+      double q = rm2d_elem_qual(rm, v[0], v[1], v[2]);
+      ok =
+          q >= qold && rm2d_qual_ok(rm, q, rm2d_qfloor(qold), v[0], v[1], v[2]);
       qmin = fmin(qmin, q);
       qm += q;
     }
@@ -310,7 +312,7 @@ static int move_feature(pa__rmesh *rm, pa_idx k, int ip, double qfree) {
      * tangents at p, the qualities */
     pa_idx src[2] = {p, z};
     double w[2] = {1 - s0, s0};
-    pa__rm_interp(rm, p, 2, src, w);
+    pa__rm2d_interp(rm, p, 2, src, w);
     xp[0] = np[0];
     xp[1] = np[1];
     for (int j = 0; j < 2; j++) {
@@ -322,9 +324,9 @@ static int move_feature(pa__rmesh *rm, pa_idx k, int ip, double qfree) {
       rm->btan[4 * b + 2 * e + 1] = sg * g[1];
     }
     for (int s = 0; s < n; s++) {
-      const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-      rm->q[el[s]] = (float)rm_elem_qual(rm, v[0], v[1], v[2]);
-      rm_elem_changed(rm, el[s]);
+      const pa_idx *v = rm->tv + 3 * (size_t)el[s];
+      rm->q[el[s]] = (float)rm2d_elem_qual(rm, v[0], v[1], v[2]);
+      rm2d_elem_changed(rm, el[s]);
     }
     rm->nmove++;
     return 1;
@@ -332,27 +334,28 @@ static int move_feature(pa__rmesh *rm, pa_idx k, int ip, double qfree) {
   return 0;
 }
 
-long pa__rm_smooth_pass_2d(pa__rmesh *rm, double qfree, int feat) {
+long pa__rm2d_smooth_pass(rm2d *rm, double qfree, int feat) {
   long cnt = 0;
-  rm_vtag_clear(rm, RM_V_DONE);
-  const uint8_t skip = RM_V_DONE | RM_V_FROZEN | RM_V_CORNER |
-                       (feat ? 0 : RM_V_FEAT);
+  rm2d_vtag_clear(rm, RM2D_V_DONE);
+  const uint8_t skip =
+      RM2D_V_DONE | RM2D_V_FROZEN | RM2D_V_CORNER | (feat ? 0 : RM2D_V_FEAT);
   for (pa_idx k = 0; k < rm->ne; k++) {
-    if (rm->etag[k] & (RM_E_DEAD | RM_E_FROZEN)) continue;
+    if (rm->tflag[k] & (RM2D_E_DEAD | RM2D_E_FROZEN)) continue;
     for (int i = 0; i < 3; i++) {
-      pa_idx p = rm->ev[3 * k + i];
+      pa_idx p = rm->tv[3 * k + i];
       uint8_t tp = rm->vtag[p];
       if (tp & skip) continue;
       /* DONE even when skipped: a neighbour's move later in this pass must
        * not make p eligible again from another start element */
-      rm->vtag[p] |= RM_V_DONE;
+      rm->vtag[p] |= RM2D_V_DONE;
       /* the answer depends only on p's ball: a rejected p stays settled
-       * until an operator or a move changes that ball (rm_elem_changed) */
-      if (tp & RM_V_SETTLED) continue;
-      int moved = tp & RM_V_FEAT ? move_feature(rm, k, i, qfree)
-                                 : move_vertex(rm, k, i, qfree);
+       * until an operator or a move changes that ball (rm2d_elem_changed) */
+      if (tp & RM2D_V_SETTLED) continue;
+      int moved = tp & RM2D_V_FEAT ? move_feature(rm, k, i, qfree)
+                                   : move_vertex(rm, k, i, qfree);
       if (moved) cnt++;
-      else rm->vtag[p] |= RM_V_SETTLED;
+      else
+        rm->vtag[p] |= RM2D_V_SETTLED;
     }
   }
   return cnt;
@@ -360,57 +363,57 @@ long pa__rm_smooth_pass_2d(pa__rmesh *rm, double qfree, int feat) {
 
 /* The lengths l of the edges from p at y (metric mp) to nb[0..nn), and how
  * many are out of [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI]. */
-static int len_out_2d(const pa__rmesh *rm, const double *y, const double *mp,
+static int len_out_2d(const rm2d *rm, const double *y, const double *mp,
                       const pa_idx *nb, int nn, double *l) {
-  int mc = rm->mcomp, out = 0;
+  int mc = rm->mc, out = 0;
   for (int i = 0; i < nn; i++) {
-    l[i] = pa__len2(mc, y, RM_X(nb[i]), mp, RM_M(nb[i]));
+    l[i] = pa__len2(mc, y, RM2D_X(nb[i]), mp, RM2D_M(nb[i]));
     out += !(l[i] >= PA_METRIC_LEN_LO && l[i] <= PA_METRIC_LEN_HI);
   }
   return out;
 }
 
-/* The sum of ln^2 (l / RM_LTARGET) over l[0..nn). */
+/* The sum of ln^2 (l / RM2D_LTARGET) over l[0..nn). */
 static double len_sum_2d(const double *l, int nn) {
   double s = 0;
   for (int i = 0; i < nn; i++) {
-    double g = log(l[i] / RM_LTARGET);
+    double g = log(l[i] / RM2D_LTARGET);
     s += g * g;
   }
   return s;
 }
 
 /* Move interior vertex p = v[ip] of element k to bring its edges into range:
- * a Gauss-Newton step on sum ln^2 (L / RM_LTARGET) (halved up to three
+ * a Gauss-Newton step on sum ln^2 (L / RM2D_LTARGET) (halved up to three
  * times), or along its
  * edge furthest out of range; kept when fewer edges are out of range (or as
- * many with the sum RM_LGAIN lower) and the ball's worst quality stays at
- * least min(old worst, RM_QLEN). As 3D (smooth_3d.c). 1 if moved. */
-static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
-  int mc = rm->mcomp;
-  pa_idx p = rm->ev[3 * k + ip];
-  pa_idx el[RM_BALL_MAX], nb[RM_BALL_MAX];
-  int loc[RM_BALL_MAX], closed;
-  int n = rm_ball_2d(rm, k, ip, el, loc, &closed);
+ * many with the sum RM2D_LGAIN lower) and the ball's worst quality stays at
+ * least min(old worst, RM2D_QLEN). As 3D (smooth_3d.c). 1 if moved. */
+static int length_vertex(rm2d *rm, pa_idx k, int ip) {
+  int mc = rm->mc;
+  pa_idx p = rm->tv[3 * k + ip];
+  pa_idx el[RM2D_BALL_MAX], nb[RM2D_BALL_MAX];
+  int loc[RM2D_BALL_MAX], closed;
+  int n = rm2d_ball(rm, k, ip, el, loc, &closed);
   if (n < 3 || !closed) return 0;
   double qold = 1;
   for (int s = 0; s < n; s++) {
-    if (rm->etag[el[s]] & RM_E_FROZEN) return 0;
+    if (rm->tflag[el[s]] & RM2D_E_FROZEN) return 0;
     if (rm->q[el[s]] < qold) qold = rm->q[el[s]];
-    nb[s] = rm->ev[3 * (size_t)el[s] + RM_NX3(loc[s])];
+    nb[s] = rm->tv[3 * (size_t)el[s] + RM2D_NX3(loc[s])];
   }
   double *xp = rm->x + 2 * (size_t)p;
-  const double *mp = RM_M(p);
-  double l0[RM_BALL_MAX], l1[RM_BALL_MAX], s0 = 0;
+  const double *mp = RM2D_M(p);
+  double l0[RM2D_BALL_MAX], l1[RM2D_BALL_MAX], s0 = 0;
   int out0 = len_out_2d(rm, xp, mp, nb, n, l0);
   if (out0 == 0) return 0;
   double jj[3] = {0, 0, 0}, jr[2] = {0, 0}, d2[2] = {0, 0}, worst = 0;
   double tp[3];
-  rm_tensor2(mc, mp, tp);
+  rm2d_tensor2(mc, mp, tp);
   for (int s = 0; s < n; s++) {
-    const double *xi = RM_X(nb[s]);
+    const double *xi = RM2D_X(nb[s]);
     double ti[3];
-    rm_tensor2(mc, RM_M(nb[s]), ti);
+    rm2d_tensor2(mc, RM2D_M(nb[s]), ti);
     double a[3] = {0.5 * (tp[0] + ti[0]), 0.5 * (tp[1] + ti[1]),
                    0.5 * (tp[2] + ti[2])};
     double e[2] = {xi[0] - xp[0], xi[1] - xp[1]};
@@ -418,7 +421,7 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
     double q = me[0] * e[0] + me[1] * e[1];
     if (!(q > 0)) return 0;
     double g[2] = {-me[0] / q, -me[1] / q};
-    double l = l0[s], r = log(l / RM_LTARGET);
+    double l = l0[s], r = log(l / RM2D_LTARGET);
     s0 += r * r;
     jj[0] += g[0] * g[0];
     jj[1] += g[0] * g[1];
@@ -441,23 +444,22 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   if (!(det > 0)) return 0;
   double d[2] = {(jj[2] * jr[0] - jj[1] * jr[1]) / det,
                  (jj[0] * jr[1] - jj[1] * jr[0]) / det};
-  double x0 = xp[0], y0 = xp[1], step = 1.0, qfloor = fmin(qold, RM_QLEN);
+  double x0 = xp[0], y0 = xp[1], step = 1.0, qfloor = fmin(qold, RM2D_QLEN);
   for (int tr = 0; tr < 8; tr++, step *= 0.5) {
     if (tr == 4) step = 1.0;
     const double *dd = tr < 4 ? d : d2;
     double np[2] = {x0 + step * dd[0], y0 + step * dd[1]};
     int out1 = len_out_2d(rm, np, mp, nb, n, l1);
-    if (!(out1 < out0 ||
-          (out1 == out0 && len_sum_2d(l1, n) < RM_LGAIN * s0)))
+    if (!(out1 < out0 || (out1 == out0 && len_sum_2d(l1, n) < RM2D_LGAIN * s0)))
       continue;
     xp[0] = np[0];
     xp[1] = np[1];
     int ok = 1;
     for (int s = 0; s < n && ok; s++) {
-      const pa_idx *v = rm->ev + 3 * (size_t)el[s];
-      double q = rm_elem_qual(rm, v[0], v[1], v[2]);
+      const pa_idx *v = rm->tv + 3 * (size_t)el[s];
+      double q = rm2d_elem_qual(rm, v[0], v[1], v[2]);
       if (!(q >= qfloor) ||
-          !rm_qual_ok(rm, q, rm_qfloor(qold), v[0], v[1], v[2]))
+          !rm2d_qual_ok(rm, q, rm2d_qfloor(qold), v[0], v[1], v[2]))
         ok = 0;
     }
     xp[0] = x0;
@@ -469,28 +471,29 @@ static int length_vertex(pa__rmesh *rm, pa_idx k, int ip) {
   return 0;
 }
 
-long pa__rm_length_pass_2d(pa__rmesh *rm) {
-  int mc = rm->mcomp;
+long pa__rm2d_length_pass(rm2d *rm) {
+  int mc = rm->mc;
   long cnt = 0;
-  rm_vtag_clear(rm, RM_V_DONE);
-  const uint8_t skip = RM_E_DEAD | RM_E_FROZEN | RM_E_INRANGE;
-  for (pa_idx k = rm_next_elem(rm, 0, skip); k < rm->ne;
-       k = rm_next_elem(rm, k + 1, skip)) {
-    const pa_idx *v = rm->ev + 3 * (size_t)k;
+  rm2d_vtag_clear(rm, RM2D_V_DONE);
+  const uint8_t skip = RM2D_E_DEAD | RM2D_E_FROZEN | RM2D_E_INRANGE;
+  for (pa_idx k = rm2d_next_elem(rm, 0, skip); k < rm->ne;
+       k = rm2d_next_elem(rm, k + 1, skip)) {
+    const pa_idx *v = rm->tv + 3 * (size_t)k;
     int bad = 0, settled = 1;
     for (int i = 0; i < 3 && !bad; i++) {
-      double l = pa__len2(mc, RM_X(v[RM_NX3(i)]), RM_X(v[RM_PV3(i)]),
-                          RM_M(v[RM_NX3(i)]), RM_M(v[RM_PV3(i)]));
+      double l = pa__len2(mc, RM2D_X(v[RM2D_NX3(i)]), RM2D_X(v[RM2D_PV3(i)]),
+                          RM2D_M(v[RM2D_NX3(i)]), RM2D_M(v[RM2D_PV3(i)]));
       bad = !(l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI);
-      settled &= rm_len_settled(l);
+      settled &= rm2d_len_settled(l);
     }
-    if (settled) rm->etag[k] |= RM_E_INRANGE;
+    if (settled) rm->tflag[k] |= RM2D_E_INRANGE;
     if (!bad) continue;
     for (int i = 0; i < 3; i++) {
       pa_idx p = v[i];
       uint8_t tp = rm->vtag[p];
-      if (tp & (RM_V_DONE | RM_V_FROZEN | RM_V_CORNER | RM_V_FEAT)) continue;
-      rm->vtag[p] |= RM_V_DONE;
+      if (tp & (RM2D_V_DONE | RM2D_V_FROZEN | RM2D_V_CORNER | RM2D_V_FEAT))
+        continue;
+      rm->vtag[p] |= RM2D_V_DONE;
       cnt += length_vertex(rm, k, i);
     }
   }

@@ -17,17 +17,17 @@ typedef struct split_cfg {
 } split_cfg;
 
 /* The configuration of face i of element k. */
-static void edge_config(const pa__rmesh *rm, pa_idx k, int i, split_cfg *s) {
+static void edge_config(const rm2d *rm, pa_idx k, int i, split_cfg *s) {
   pa_idx te = 3 * k + i;
   pa_idx o = rm->adj[te];
-  pa_idx fcode = o >= 0 ? o : rm_other_side(rm, te);
+  pa_idx fcode = o >= 0 ? o : rm2d_other_side(rm, te);
   s->k = k;
   s->i = i;
-  s->i1 = RM_NX3(i);
-  s->i2 = RM_PV3(i);
-  s->p0 = rm->ev[3 * k + i];
-  s->a = rm->ev[3 * k + s->i1];
-  s->b = rm->ev[3 * k + s->i2];
+  s->i1 = RM2D_NX3(i);
+  s->i2 = RM2D_PV3(i);
+  s->p0 = rm->tv[3 * k + i];
+  s->a = rm->tv[3 * k + s->i1];
+  s->b = rm->tv[3 * k + s->i2];
   s->feat = o < 0 ? -o - 1 : -1;
   s->f = -1;
   s->p1 = -1;
@@ -35,58 +35,58 @@ static void edge_config(const pa__rmesh *rm, pa_idx k, int i, split_cfg *s) {
   if (fcode >= 0) {
     s->f = fcode / 3;
     s->j = fcode % 3;
-    s->j1 = RM_NX3(s->j);
-    s->j2 = RM_PV3(s->j);
-    s->p1 = rm->ev[3 * s->f + s->j];
+    s->j1 = RM2D_NX3(s->j);
+    s->j2 = RM2D_PV3(s->j);
+    s->p1 = rm->tv[3 * s->f + s->j];
   }
 }
 
 /* The new vertex at the midpoint of the edge (on a feature, of the
  * reconstructed curve, with its tangent in tm), its fields interpolated;
  * room reserved by the caller. */
-static pa_idx new_midpoint(pa__rmesh *rm, const split_cfg *s, double *tm) {
+static pa_idx new_midpoint(rm2d *rm, const split_cfg *s, double *tm) {
   pa_idx m, a = s->a, b = s->b;
-  pa__rm_new_vertex(rm, &m); /* cannot fail after the reserve */
+  pa__rm2d_new_vertex(rm, &m); /* cannot fail after the reserve */
   double *xm = rm->x + 2 * (size_t)m;
   if (s->feat >= 0) {
-    pa__rm_curve_point_2d(rm, s->feat, 0.5, xm, tm);
+    pa__rm2d_curve_point(rm, s->feat, 0.5, xm, tm);
     /* on a model's curve: its point (else the reconstruction's) */
-    double ch = hypot(RM_X(b)[0] - RM_X(a)[0], RM_X(b)[1] - RM_X(a)[1]);
+    double ch = hypot(RM2D_X(b)[0] - RM2D_X(a)[0], RM2D_X(b)[1] - RM2D_X(a)[1]);
     pa__remesh_project(rm->opts, 1, rm->bref[s->feat], 2, xm, ch, xm);
   } else {
-    xm[0] = 0.5 * (RM_X(a)[0] + RM_X(b)[0]);
-    xm[1] = 0.5 * (RM_X(a)[1] + RM_X(b)[1]);
+    xm[0] = 0.5 * (RM2D_X(a)[0] + RM2D_X(b)[0]);
+    xm[1] = 0.5 * (RM2D_X(a)[1] + RM2D_X(b)[1]);
   }
   pa_idx src[2] = {a, b};
   double w[2] = {0.5, 0.5};
-  pa__rm_interp(rm, m, 2, src, w);
+  pa__rm2d_interp(rm, m, 2, src, w);
   return m;
 }
 
 /* The qualities q of the four halves (1 where there is no f), and whether
- * all pass the quality floor (rm_qfloor of the worst of k and f). */
-static int halves_ok(pa__rmesh *rm, const split_cfg *s, pa_idx m, double *q) {
+ * all pass the quality floor (rm2d_qfloor of the worst of k and f). */
+static int halves_ok(rm2d *rm, const split_cfg *s, pa_idx m, double *q) {
   double qold = rm->q[s->k];
   if (s->f >= 0 && rm->q[s->f] < qold) qold = rm->q[s->f];
-  double fl = rm_qfloor(qold);
-  q[0] = rm_elem_qual(rm, s->p0, s->a, m);
-  q[1] = rm_elem_qual(rm, s->p0, m, s->b);
+  double fl = rm2d_qfloor(qold);
+  q[0] = rm2d_elem_qual(rm, s->p0, s->a, m);
+  q[1] = rm2d_elem_qual(rm, s->p0, m, s->b);
   q[2] = 1;
   q[3] = 1;
-  if (!rm_qual_ok(rm, q[0], fl, s->p0, s->a, m) ||
-      !rm_qual_ok(rm, q[1], fl, s->p0, m, s->b))
+  if (!rm2d_qual_ok(rm, q[0], fl, s->p0, s->a, m) ||
+      !rm2d_qual_ok(rm, q[1], fl, s->p0, m, s->b))
     return 0;
   if (s->f < 0) return 1;
-  q[2] = rm_elem_qual(rm, s->p1, s->b, m);
-  q[3] = rm_elem_qual(rm, s->p1, m, s->a);
-  return rm_qual_ok(rm, q[2], fl, s->p1, s->b, m) &&
-         rm_qual_ok(rm, q[3], fl, s->p1, m, s->a);
+  q[2] = rm2d_elem_qual(rm, s->p1, s->b, m);
+  q[3] = rm2d_elem_qual(rm, s->p1, m, s->a);
+  return rm2d_qual_ok(rm, q[2], fl, s->p1, s->b, m) &&
+         rm2d_qual_ok(rm, q[3], fl, s->p1, m, s->a);
 }
 
 /* Cut k, and f if any, in two at m: T1 = k (p0 a m), T2 = *k2 (p0 m b),
  * T3 = f (p1 b m), T4 = *f2 (p1 m a), with the adjacency of all but the
  * faces on the split edge (faces 0). */
-static void cut_elements(pa__rmesh *rm, const split_cfg *s, pa_idx m,
+static void cut_elements(rm2d *rm, const split_cfg *s, pa_idx m,
                          const double *q, pa_idx *k2p, pa_idx *f2p) {
   pa_idx k = s->k, f = s->f;
   pa_idx oA = rm->adj[3 * k + s->i1], oB = rm->adj[3 * k + s->i2];
@@ -96,27 +96,27 @@ static void cut_elements(pa__rmesh *rm, const split_cfg *s, pa_idx m,
     fA = rm->adj[3 * f + s->j2];
   }
   pa_idx k2, f2 = -1;
-  rm_elem_changed(rm, k);
-  if (f >= 0) rm_elem_changed(rm, f);
-  pa__rm_new_elem(rm, &k2);
-  rm->eref[k2] = rm->eref[k];
-  rm->etag[k2] = rm->etag[k] & 0x0F;
+  rm2d_elem_changed(rm, k);
+  if (f >= 0) rm2d_elem_changed(rm, f);
+  pa__rm2d_new_elem(rm, &k2);
+  rm->tref[k2] = rm->tref[k];
+  rm->tflag[k2] = rm->tflag[k] & 0x0F;
   if (f >= 0) {
-    pa__rm_new_elem(rm, &f2);
-    rm->eref[f2] = rm->eref[f];
-    rm->etag[f2] = rm->etag[f] & 0x0F;
+    pa__rm2d_new_elem(rm, &f2);
+    rm->tref[f2] = rm->tref[f];
+    rm->tflag[f2] = rm->tflag[f] & 0x0F;
   }
-  rm_set_elem(rm, k, s->p0, s->a, m, q[0]);
-  rm_set_elem(rm, k2, s->p0, m, s->b, q[1]);
-  rm_attach(rm, 3 * k + 2, oB, 3 * k + s->i2);
-  rm_attach(rm, 3 * k2 + 1, oA, 3 * k + s->i1);
+  rm2d_set_elem(rm, k, s->p0, s->a, m, q[0]);
+  rm2d_set_elem(rm, k2, s->p0, m, s->b, q[1]);
+  rm2d_attach(rm, 3 * k + 2, oB, 3 * k + s->i2);
+  rm2d_attach(rm, 3 * k2 + 1, oA, 3 * k + s->i1);
   rm->adj[3 * k + 1] = 3 * k2 + 2;
   rm->adj[3 * k2 + 2] = 3 * k + 1;
   if (f >= 0) {
-    rm_set_elem(rm, f, s->p1, s->b, m, q[2]);
-    rm_set_elem(rm, f2, s->p1, m, s->a, q[3]);
-    rm_attach(rm, 3 * f + 2, fA, 3 * f + s->j2);
-    rm_attach(rm, 3 * f2 + 1, fB, 3 * f + s->j1);
+    rm2d_set_elem(rm, f, s->p1, s->b, m, q[2]);
+    rm2d_set_elem(rm, f2, s->p1, m, s->a, q[3]);
+    rm2d_attach(rm, 3 * f + 2, fA, 3 * f + s->j2);
+    rm2d_attach(rm, 3 * f2 + 1, fB, 3 * f + s->j1);
     rm->adj[3 * f + 1] = 3 * f2 + 2;
     rm->adj[3 * f2 + 2] = 3 * f + 1;
   }
@@ -126,10 +126,10 @@ static void cut_elements(pa__rmesh *rm, const split_cfg *s, pa_idx m,
 
 /* Split the feature record (u, w) on the edge into (u, m) and a new (m, w),
  * each held by the halves on its side; m becomes a feature vertex. */
-static void split_feature(pa__rmesh *rm, const split_cfg *s, pa_idx m,
+static void split_feature(rm2d *rm, const split_cfg *s, pa_idx m,
                           const double *tm, pa_idx k2, pa_idx f2) {
   pa_idx k = s->k, f = s->f, feat = s->feat, nb2;
-  pa__rm_new_feat(rm, &nb2);
+  pa__rm2d_new_feat(rm, &nb2);
   pa_idx u = rm->bv[2 * feat], wv = rm->bv[2 * feat + 1];
   rm->bv[2 * nb2] = m;
   rm->bv[2 * nb2 + 1] = wv;
@@ -154,7 +154,7 @@ static void split_feature(pa__rmesh *rm, const split_cfg *s, pa_idx m,
     rm->adj[3 * f2] = -ram - 1;
     rm->adj[3 * f] = -rmb - 1;
   }
-  rm->vtag[m] |= RM_V_FEAT;
+  rm->vtag[m] |= RM2D_V_FEAT;
   rm->vref[m] = rm->bref[feat];
 }
 
@@ -167,12 +167,12 @@ static void split_feature(pa__rmesh *rm, const split_cfg *s, pa_idx m,
  * comes back towards the chord's midpoint, which turns no half over:
  * halfway, then onto it; the halves are split on their own curves later.
  * Returns 1 with m placed and q set when a position passes. */
-static int split_toward_chord(pa__rmesh *rm, const split_cfg *s, pa_idx m,
+static int split_toward_chord(rm2d *rm, const split_cfg *s, pa_idx m,
                               double *q) {
   if (s->feat < 0) return 0;
   double *xm = rm->x + 2 * (size_t)m;
-  double c[2] = {0.5 * (RM_X(s->a)[0] + RM_X(s->b)[0]),
-                 0.5 * (RM_X(s->a)[1] + RM_X(s->b)[1])};
+  double c[2] = {0.5 * (RM2D_X(s->a)[0] + RM2D_X(s->b)[0]),
+                 0.5 * (RM2D_X(s->a)[1] + RM2D_X(s->b)[1])};
   double d[2] = {xm[0] - c[0], xm[1] - c[1]};
   for (double w = 0.5; w >= 0; w -= 0.5) {
     xm[0] = c[0] + w * d[0];
@@ -188,15 +188,15 @@ static int split_toward_chord(pa__rmesh *rm, const split_cfg *s, pa_idx m,
  * Returns 1 if done, 0 if rejected; *st on memory failure (then nothing
  * changed).
  */
-static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
+static int split_edge(rm2d *rm, pa_idx k, int i, pa_status *st) {
   split_cfg s;
   edge_config(rm, k, i, &s);
-  *st = pa__rm_reserve(rm, 1, 2, 1);
+  *st = pa__rm2d_reserve(rm, 1, 2, 1);
   if (*st) return 0;
   double tm[2] = {0, 0}, q[4];
   pa_idx m = new_midpoint(rm, &s, tm);
   if (!halves_ok(rm, &s, m, q) && !split_toward_chord(rm, &s, m, q)) {
-    pa__rm_kill_vertex(rm, m);
+    pa__rm2d_kill_vertex(rm, m);
     return 0;
   }
   pa_idx k2, f2;
@@ -214,16 +214,16 @@ static int split_edge(pa__rmesh *rm, pa_idx k, int i, pa_status *st) {
 }
 
 /* Longest free edge of element k above thr: face index or -1, length in *len;
- * *inr (may be NULL) = all three edges settled (rm_len_settled). */
-static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
+ * *inr (may be NULL) = all three edges settled (rm2d_len_settled). */
+static int longest_free(const rm2d *rm, pa_idx k, double thr, double *len,
                         int *inr) {
-  const pa_idx *v = rm->ev + 3 * (size_t)k;
+  const pa_idx *v = rm->tv + 3 * (size_t)k;
   int best = -1, in = 1;
   double lb = thr;
   for (int i = 0; i < 3; i++) {
-    double l = rm_edge_len(rm, v[RM_NX3(i)], v[RM_PV3(i)]);
-    in &= rm_len_settled(l);
-    if (l > lb && rm_edge_free(rm, 3 * k + i)) {
+    double l = rm2d_edge_len(rm, v[RM2D_NX3(i)], v[RM2D_PV3(i)]);
+    in &= rm2d_len_settled(l);
+    if (l > lb && rm2d_edge_free(rm, 3 * k + i)) {
       lb = l;
       best = i;
     }
@@ -233,26 +233,26 @@ static int longest_free(const pa__rmesh *rm, pa_idx k, double thr, double *len,
   return best;
 }
 
-pa_status pa__rm_split_pass_2d(pa__rmesh *rm, double thr, long *n) {
+pa_status pa__rm2d_split_pass(rm2d *rm, double thr, long *n) {
   pa_status st = PA_SUCCESS;
   long cnt = 0;
-  rm_etag_clear(rm, RM_E_TOUCHED);
+  rm2d_tflag_clear(rm, RM2D_E_TOUCHED);
   /* an element in range has nothing above thr */
-  const uint8_t skip = RM_E_DEAD | RM_E_TOUCHED | RM_E_FROZEN |
-                       (thr >= PA_METRIC_LEN_HI ? RM_E_INRANGE : 0);
-  for (pa_idx k = rm_next_elem(rm, 0, skip); k < rm->ne;
-       k = rm_next_elem(rm, k + 1, skip)) {
+  const uint8_t skip = RM2D_E_DEAD | RM2D_E_TOUCHED | RM2D_E_FROZEN |
+                       (thr >= PA_METRIC_LEN_HI ? RM2D_E_INRANGE : 0);
+  for (pa_idx k = rm2d_next_elem(rm, 0, skip); k < rm->ne;
+       k = rm2d_next_elem(rm, k + 1, skip)) {
     double l;
     int inr;
     int i = longest_free(rm, k, thr, &l, &inr);
-    if (inr) rm->etag[k] |= RM_E_INRANGE;
+    if (inr) rm->tflag[k] |= RM2D_E_INRANGE;
     if (i < 0) continue;
     /* Longest-edge propagation: split only if the edge is also the longest
      * free edge of the neighbour (else the neighbour goes first). */
-    pa_idx s = rm_other_side(rm, 3 * k + i);
+    pa_idx s = rm2d_other_side(rm, 3 * k + i);
     if (s >= 0) {
       pa_idx f = s / 3;
-      if (rm->etag[f] & RM_E_TOUCHED) continue;
+      if (rm->tflag[f] & RM2D_E_TOUCHED) continue;
       double lf;
       int jf = longest_free(rm, f, l * (1 + 1e-12), &lf, NULL);
       if (jf >= 0 && jf != s % 3) continue;

@@ -879,7 +879,7 @@ static void test_frozen_pingpong(void) {
 
 /*
  * A refinement past 50 000 triangles (800 -> about 140 000): the working
- * mesh is renumbered for locality (mesh_2d.c, pa__rm_reorder) at least once,
+ * mesh is renumbered for locality (mesh_2d.c, pa__rm2d_reorder) at least once,
  * with a linear field and the square's boundary to carry through. Debug
  * builds check every invariant right after it (driver_2d.c). The result must be
  * as good as without it, exact on the field, and deterministic.
