@@ -49,6 +49,22 @@ pa_status pa__transfer_fields(pa_mesh *o, pa_mesh *m, pa_transfer_report *rep);
  */
 int pa__remesh_project(const pa_remesh_opts *o, int dim, int32_t tag,
                        int sdim, const double *x, double scale, double *y);
+/* The working metric relaxed at a frozen skin (skin.c): the band of mean
+ * frozen-edge lengths left alone, [lo, hi], and the mean a vertex above it
+ * is brought to (hi itself, or a remesher's lower target); below it, lo. */
+typedef struct pa__skin_relax {
+  double lo, hi, to_hi;
+} pa__skin_relax;
+/* Scale met (mc components at nv vertices, capv the capacity) at every
+ * vertex whose mean frozen-edge length sum[v] / cnt[v] (cnt 0: no frozen
+ * edge) is out of [r->lo, r->hi]; *met0 (NULL on entry) becomes a copy of
+ * the target metric the first time. *nrelaxed: vertices scaled. Not
+ * collective. */
+pa_status pa__remesh_skin_relax(const pa__skin_relax *r, int mc, pa_idx nv,
+                                size_t capv, double *met, double **met0,
+                                const double *sum, const int32_t *cnt,
+                                pa_idx *nrelaxed);
+
 /* 1 when opts->geometry bounds the sizes by its curvature (the metric
  * preparation does, pa__geom_hausd_bounds): the remeshers' own estimates
  * of the curvature from the facets then stand aside. */

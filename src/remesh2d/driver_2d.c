@@ -361,7 +361,9 @@ pa_status pa__remesh2d(pa_mesh *mesh, const pa_remesh_opts *opts,
   rm2d *rm = NULL;
   int pass = 0;
   pa_idx reordered; /* live elements at the last renumbering */
+  pa_idx nrelaxed;  /* frozen vertices whose working metric was relaxed */
   PA_CALL(pa__rm2d_build(mesh, opts, &rm));
+  PA_CALL(pa__rm2d_skin_relax(rm, &nrelaxed));
   rm->lguard = PA_METRIC_LEN_HI;
   reordered = rm->nelive;
   if (!opts->no_insert) PA_CALL(refine_rounds(rm, &pass, &reordered));

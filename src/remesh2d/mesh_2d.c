@@ -247,13 +247,14 @@ static double expected_elems(pa_mesh *mesh) {
  * later pass (the next iteration of the parallel loop) sees the elements
  * near the old skin as still to adapt. met0 stays NULL when nothing changed.
  */
-static pa_status skin_relax_2d(rm2d *rm) {
+pa_status pa__rm2d_skin_relax(rm2d *rm, pa_idx *nrelaxed) {
   pa_status st = PA_SUCCESS;
   int mc = rm->mc;
   double *acc = NULL;
   int32_t *cnt = NULL;
   pa_idx nv = rm->nv;
   int any = 0;
+  *nrelaxed = 0;
   for (pa_idx k = 0; k < rm->ne && !any; k++)
     any = rm->tflag[k] & RM2D_E_FROZEN;
   for (pa_idx b = 0; b < rm->nb && !any; b++)
@@ -286,28 +287,10 @@ static pa_status skin_relax_2d(rm2d *rm) {
     cnt[a]++;
     cnt[c]++;
   }
-  /* every lambda is computed from the target metric before any change */
-  for (pa_idx v = 0; v < nv; v++) {
-    if (!cnt[v]) continue;
-    double lam = acc[v] / cnt[v];
-    if (!(lam > PA_METRIC_LEN_HI || lam < PA_METRIC_LEN_LO) || !(lam > 0) ||
-        !isfinite(lam))
-      continue;
-    if (!rm->met0) {
-      PA_ALLOC(rm->met0, rm->capv * mc);
-      memcpy(rm->met0, rm->met, sizeof(double) * mc * (size_t)nv);
-    }
-    /* the least change that brings the mean into range: to the bound */
-    double f = lam > PA_METRIC_LEN_HI ? lam / PA_METRIC_LEN_HI
-                                      : lam / PA_METRIC_LEN_LO;
-    double *m = rm->met + (size_t)mc * v;
-    if (mc == 1) {
-      m[0] *= f;
-    } else {
-      double s = 1.0 / (f * f);
-      for (int c = 0; c < mc; c++) m[c] *= s;
-    }
-  }
+  const pa__skin_relax r = {PA_METRIC_LEN_LO, PA_METRIC_LEN_HI,
+                             PA_METRIC_LEN_HI};
+  PA_CALL(pa__remesh_skin_relax(&r, mc, nv, rm->capv, rm->met, &rm->met0, acc,
+                                cnt, nrelaxed));
   if (rm->met0)
     for (pa_idx k = 0; k < rm->ne; k++) {
       const pa_idx *v = rm->tv + 3 * (size_t)k;
@@ -439,7 +422,6 @@ pa_status pa__rm2d_build(pa_mesh *mesh, const pa_remesh_opts *opts,
   PA_CALL(build_adjacency(rm, bstart, ball));
 
   PA_CALL(pa__rm2d_feature_analyze(rm, mesh, bstart, ball));
-  PA_CALL(skin_relax_2d(rm));
   *out = rm;
   rm = NULL;
 cleanup:

@@ -176,6 +176,9 @@ typedef struct rm2d {
  * boundary entities are frozen. Capacities are reserved for about `expect`
  * elements. */
 pa_status pa__rm2d_build(pa_mesh *mesh, const pa_remesh_opts *opts, rm2d **rm);
+/* Relax the working metric at frozen vertices whose frozen edges are on
+ * average far from unit length (target kept in met0); *nrelaxed vertices. */
+pa_status pa__rm2d_skin_relax(rm2d *rm, pa_idx *nrelaxed);
 void pa__rm2d_free(rm2d *rm);
 /* New vertex / element / feature slot (from the free list or appended). */
 pa_status pa__rm2d_new_vertex(rm2d *rm, pa_idx *v);

@@ -918,7 +918,7 @@ cleanup:
  * and splits and collapses undo each other there round after round (the
  * 2D remesher had the same disease, docs/design/REMESHER.md).
  *
- * The working metric is relaxed at the skin (the 2D cure, skin_relax_2d): a
+ * The working metric is relaxed at the skin (as pa__rm2d_skin_relax; the scaling: remesh/skin.c): a
  * frozen vertex whose frozen edges have a mean length lambda outside
  * [1/sqrt 2, sqrt 2] gets its metric scaled so that this mean becomes
  * RM3D_LRELAX = 1.2 (or 1/sqrt 2 for a fine skin); the size then varies
@@ -988,27 +988,10 @@ pa_status pa__rm3d_skin_relax(rm3d *m, pa_idx *nrelaxed) {
     cnt[a]++;
     cnt[b]++;
   }
-  for (pa_idx v = 0; v < nv; v++) {
-    if (!cnt[v]) continue;
-    double lam = acc[v] / cnt[v];
-    if (!(lam > PA_METRIC_LEN_HI_EXACT || lam < PA_METRIC_LEN_LO_EXACT) ||
-        !(lam > 0) || !isfinite(lam))
-      continue;
-    if (!m->met0) {
-      PA_ALLOC(m->met0, m->capv * (size_t)mc);
-      memcpy(m->met0, m->met, sizeof(double) * (size_t)mc * nv);
-    }
-    double f = lam > PA_METRIC_LEN_HI_EXACT ? lam / RM3D_LRELAX
-                                            : lam / PA_METRIC_LEN_LO_EXACT;
-    double *mt = m->met + (size_t)mc * v;
-    if (mc == 1) {
-      mt[0] *= f;
-    } else {
-      double s = 1.0 / (f * f);
-      for (int c = 0; c < mc; c++) mt[c] *= s;
-    }
-    nr++;
-  }
+  const pa__skin_relax r = {PA_METRIC_LEN_LO_EXACT, PA_METRIC_LEN_HI_EXACT,
+                             RM3D_LRELAX};
+  PA_CALL(pa__remesh_skin_relax(&r, mc, nv, m->capv, m->met, &m->met0, acc,
+                                cnt, &nr));
   if (m->met0 && mc == 6) /* isotropic qualities do not see a size change */
     for (pa_idx k = 0; k < m->ne; k++)
       m->q[k] = (float)rm3d_qual_v(m, m->tv + 4 * (size_t)k);
