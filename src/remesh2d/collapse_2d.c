@@ -1,10 +1,11 @@
 /*
- * collapse_2d.c -- edge collapse of the 2D remesher and its pass: a vertex
+ * collapse_2d.c -- edge collapse of the 2D remesher: a vertex
  * merged into a neighbour, the elements on the edge removed. A feature
  * vertex slides only along its feature, and the merged record must stay
  * within hausd of the curve (chord and Hermite sagitta). When neither end
  * of a short edge can go along it, an end is collapsed onto another
- * neighbour (remove_vertex). Shared contract of the operators: ops_2d.h.
+ * neighbour (pa__rm2d_remove_vertex). Its pass is in driver_2d.c. Shared
+ * contract of the operators: ops_2d.h.
  */
 #include "remesh2d/ops_2d.h"
 
@@ -185,7 +186,7 @@ int pa__rm2d_collapse_edge(rm2d *rm, pa_idx k, int fi, int ip, double qrel) {
  * end p = v[ip] of element k by collapsing p onto another neighbour, the
  * shortest edges first. Returns 1 if done.
  */
-static int remove_vertex(rm2d *rm, pa_idx k, int ip) {
+int pa__rm2d_remove_vertex(rm2d *rm, pa_idx k, int ip) {
   pa_idx p = rm->tv[3 * k + ip];
   if (rm->vtag[p] & (RM2D_V_FROZEN | RM2D_V_CORNER)) return 0;
   pa_idx el[RM2D_BALL_MAX];
@@ -227,38 +228,4 @@ static int remove_vertex(rm2d *rm, pa_idx k, int ip) {
     if (pa__rm2d_collapse_edge(rm, ce[c], cf[c], lp, 0.3)) return 1;
   }
   return 0;
-}
-
-pa_status pa__rm2d_collapse_pass(rm2d *rm, double thr, long *n) {
-  long cnt = 0;
-  rm2d_tflag_clear(rm, RM2D_E_TOUCHED);
-  /* an element in range has nothing below thr */
-  const uint8_t skip = RM2D_E_DEAD | RM2D_E_TOUCHED | RM2D_E_FROZEN |
-                       (thr <= RM2D_LSHORT_OPT ? RM2D_E_INRANGE : 0);
-  for (pa_idx k = rm2d_next_elem(rm, 0, skip); k < rm->ne;
-       k = rm2d_next_elem(rm, k + 1, skip)) {
-    const pa_idx *v = rm->tv + 3 * (size_t)k;
-    /* shortest edge first */
-    int best = -1, inr = 1;
-    double lb = thr;
-    for (int i = 0; i < 3; i++) {
-      double l = rm2d_edge_len(rm, v[RM2D_NX3(i)], v[RM2D_PV3(i)]);
-      inr &= rm2d_len_settled(l);
-      if (l < lb) {
-        lb = l;
-        best = i;
-      }
-    }
-    if (inr) rm->tflag[k] |= RM2D_E_INRANGE;
-    if (best < 0) continue;
-    pa_idx s = rm2d_other_side(rm, 3 * k + best);
-    if (s >= 0 && (rm->tflag[s / 3] & RM2D_E_TOUCHED)) continue;
-    if (pa__rm2d_collapse_edge(rm, k, best, RM2D_NX3(best), 0.3) ||
-        pa__rm2d_collapse_edge(rm, k, best, RM2D_PV3(best), 0.3) ||
-        remove_vertex(rm, k, RM2D_NX3(best)) ||
-        remove_vertex(rm, k, RM2D_PV3(best)))
-      cnt++;
-  }
-  *n = cnt;
-  return PA_SUCCESS;
 }

@@ -1,6 +1,8 @@
 /*
  * driver_2d.c -- the 2D remesher's entry pa__remesh2d() (working mesh
- * built, pass loop, written back) and its pass loop: alternate split /
+ * built, pass loop, written back), its passes (each visits the elements in
+ * slot order and calls one operator of split_2d.c, collapse_2d.c,
+ * swap_2d.c or smooth_2d.c) and its pass loop: alternate split /
  * collapse / swap passes until the edge lengths settle, then swap and
  * relocation passes, a pass on the worst elements, and the verdict.
  *
@@ -130,6 +132,223 @@ static void report_figures(const rm2d *rm, const char *when) {
            "[%.3g, %.3g], quality min %.3g mean %.3g\n",
            when, f.nin, f.nedge, f.nlong, f.nshort, f.lmin, f.lmax, f.qmin,
            f.qmean);
+}
+
+/* ---- the passes: each visits the elements in slot order and calls one
+ * operator (split_2d.c, collapse_2d.c, swap_2d.c, smooth_2d.c) ---- */
+
+/* Longest free edge of element k above thr: face index or -1, length in *len;
+ * *inr (may be NULL) = all three edges settled (rm2d_len_settled). */
+static int longest_free(const rm2d *rm, pa_idx k, double thr, double *len,
+                        int *inr) {
+  const pa_idx *v = rm->tv + 3 * (size_t)k;
+  int best = -1, in = 1;
+  double lb = thr;
+  for (int i = 0; i < 3; i++) {
+    double l = rm2d_edge_len(rm, v[RM2D_NX3(i)], v[RM2D_PV3(i)]);
+    in &= rm2d_len_settled(l);
+    if (l > lb && rm2d_edge_free(rm, 3 * k + i)) {
+      lb = l;
+      best = i;
+    }
+  }
+  *len = lb;
+  if (inr) *inr = in;
+  return best;
+}
+
+pa_status pa__rm2d_split_pass(rm2d *rm, double thr, long *n) {
+  pa_status st = PA_SUCCESS;
+  long cnt = 0;
+  rm2d_tflag_clear(rm, RM2D_E_TOUCHED);
+  /* an element in range has nothing above thr */
+  const uint8_t skip = RM2D_E_DEAD | RM2D_E_TOUCHED | RM2D_E_FROZEN |
+                       (thr >= PA_METRIC_LEN_HI ? RM2D_E_INRANGE : 0);
+  for (pa_idx k = rm2d_next_elem(rm, 0, skip); k < rm->ne;
+       k = rm2d_next_elem(rm, k + 1, skip)) {
+    double l;
+    int inr;
+    int i = longest_free(rm, k, thr, &l, &inr);
+    if (inr) rm->tflag[k] |= RM2D_E_INRANGE;
+    if (i < 0) continue;
+    /* Longest-edge propagation: split only if the edge is also the longest
+     * free edge of the neighbour (else the neighbour goes first). */
+    pa_idx s = rm2d_other_side(rm, 3 * k + i);
+    if (s >= 0) {
+      pa_idx f = s / 3;
+      if (rm->tflag[f] & RM2D_E_TOUCHED) continue;
+      double lf;
+      int jf = longest_free(rm, f, l * (1 + 1e-12), &lf, NULL);
+      if (jf >= 0 && jf != s % 3) continue;
+    }
+    cnt += pa__rm2d_split_edge(rm, k, i, &st);
+    if (st) goto cleanup;
+  }
+cleanup:
+  *n = cnt;
+  return st;
+}
+
+pa_status pa__rm2d_collapse_pass(rm2d *rm, double thr, long *n) {
+  long cnt = 0;
+  rm2d_tflag_clear(rm, RM2D_E_TOUCHED);
+  /* an element in range has nothing below thr */
+  const uint8_t skip = RM2D_E_DEAD | RM2D_E_TOUCHED | RM2D_E_FROZEN |
+                       (thr <= RM2D_LSHORT_OPT ? RM2D_E_INRANGE : 0);
+  for (pa_idx k = rm2d_next_elem(rm, 0, skip); k < rm->ne;
+       k = rm2d_next_elem(rm, k + 1, skip)) {
+    const pa_idx *v = rm->tv + 3 * (size_t)k;
+    /* shortest edge first */
+    int best = -1, inr = 1;
+    double lb = thr;
+    for (int i = 0; i < 3; i++) {
+      double l = rm2d_edge_len(rm, v[RM2D_NX3(i)], v[RM2D_PV3(i)]);
+      inr &= rm2d_len_settled(l);
+      if (l < lb) {
+        lb = l;
+        best = i;
+      }
+    }
+    if (inr) rm->tflag[k] |= RM2D_E_INRANGE;
+    if (best < 0) continue;
+    pa_idx s = rm2d_other_side(rm, 3 * k + best);
+    if (s >= 0 && (rm->tflag[s / 3] & RM2D_E_TOUCHED)) continue;
+    if (pa__rm2d_collapse_edge(rm, k, best, RM2D_NX3(best), 0.3) ||
+        pa__rm2d_collapse_edge(rm, k, best, RM2D_PV3(best), 0.3) ||
+        pa__rm2d_remove_vertex(rm, k, RM2D_NX3(best)) ||
+        pa__rm2d_remove_vertex(rm, k, RM2D_PV3(best)))
+      cnt++;
+  }
+  *n = cnt;
+  return PA_SUCCESS;
+}
+
+/* The first element slot from k on, or rm->ne, with quality below qmax and
+ * none of the tag bits `skip`: the scan of the swap passes, reading the
+ * arrays once (see rm2d_tflag_clear). */
+static pa_idx next_below(const rm2d *rm, pa_idx k, uint8_t skip, double qmax) {
+  const uint8_t *t = rm->tflag;
+  const float *q = rm->q;
+  const pa_idx n = rm->ne;
+  while (k < n && ((t[k] & skip) || q[k] >= qmax))
+    k++;
+  return k;
+}
+
+long pa__rm2d_swap_pass(rm2d *rm, double qmax) {
+  long cnt = 0;
+  rm2d_tflag_clear(rm, RM2D_E_TOUCHED);
+  const uint8_t skip =
+      RM2D_E_DEAD | RM2D_E_TOUCHED | RM2D_E_FROZEN | RM2D_E_NOSWAP;
+  for (pa_idx k = next_below(rm, 0, skip, qmax); k < rm->ne;
+       k = next_below(rm, k + 1, skip, qmax)) {
+    int done = 0, all = 1;
+    for (int i = 0; i < 3 && !done; i++) {
+      pa_idx o = rm->adj[3 * k + i];
+      if (o < 0) continue;
+      if (rm->tflag[o / 3] & RM2D_E_TOUCHED) {
+        all = 0; /* not tried: no verdict for this face */
+        continue;
+      }
+      done = pa__rm2d_swap_edge(rm, k, i, 1.02);
+    }
+    cnt += done;
+    if (!done && all) rm->tflag[k] |= RM2D_E_NOSWAP;
+  }
+  return cnt;
+}
+
+long pa__rm2d_sliver_pass(rm2d *rm, double qbad) {
+  long cnt = 0;
+  rm2d_tflag_clear(rm, RM2D_E_TOUCHED);
+  for (pa_idx k = 0; k < rm->ne; k++) {
+    uint8_t t = rm->tflag[k];
+    if (t & (RM2D_E_DEAD | RM2D_E_TOUCHED | RM2D_E_FROZEN)) continue;
+    if (rm->q[k] >= qbad) continue;
+    int done = 0;
+    for (int i = 0; i < 3 && !done; i++)
+      done = pa__rm2d_swap_edge(rm, k, i, 1.0);
+    if (!done && !rm->opts->no_insert) {
+      /* collapse the shortest edge if the ball gets better */
+      const pa_idx *v = rm->tv + 3 * (size_t)k;
+      int best = 0;
+      double lb = 1e300;
+      for (int i = 0; i < 3; i++) {
+        double l = rm2d_edge_len(rm, v[RM2D_NX3(i)], v[RM2D_PV3(i)]);
+        if (l < lb) {
+          lb = l;
+          best = i;
+        }
+      }
+      if (lb < PA_METRIC_LEN_HI) {
+        double g = rm->lguard;
+        rm->lguard = PA_METRIC_LEN_HI * 1.2;
+        done =
+            pa__rm2d_collapse_edge(rm, k, best, RM2D_NX3(best), 1.0 + 1e-9) ||
+            pa__rm2d_collapse_edge(rm, k, best, RM2D_PV3(best), 1.0 + 1e-9);
+        rm->lguard = g;
+      }
+    }
+    cnt += done;
+  }
+  return cnt;
+}
+
+long pa__rm2d_smooth_pass(rm2d *rm, double qfree, int feat) {
+  long cnt = 0;
+  rm2d_vtag_clear(rm, RM2D_V_DONE);
+  const uint8_t skip =
+      RM2D_V_DONE | RM2D_V_FROZEN | RM2D_V_CORNER | (feat ? 0 : RM2D_V_FEAT);
+  for (pa_idx k = 0; k < rm->ne; k++) {
+    if (rm->tflag[k] & (RM2D_E_DEAD | RM2D_E_FROZEN)) continue;
+    for (int i = 0; i < 3; i++) {
+      pa_idx p = rm->tv[3 * k + i];
+      uint8_t tp = rm->vtag[p];
+      if (tp & skip) continue;
+      /* DONE even when skipped: a neighbour's move later in this pass must
+       * not make p eligible again from another start element */
+      rm->vtag[p] |= RM2D_V_DONE;
+      /* the answer depends only on p's ball: a rejected p stays settled
+       * until an operator or a move changes that ball (rm2d_elem_changed) */
+      if (tp & RM2D_V_SETTLED) continue;
+      int moved = tp & RM2D_V_FEAT ? pa__rm2d_smooth_feature(rm, k, i, qfree)
+                                   : pa__rm2d_smooth_vertex(rm, k, i, qfree);
+      if (moved)
+        cnt++;
+      else
+        rm->vtag[p] |= RM2D_V_SETTLED;
+    }
+  }
+  return cnt;
+}
+
+long pa__rm2d_length_pass(rm2d *rm) {
+  int mc = rm->mc;
+  long cnt = 0;
+  rm2d_vtag_clear(rm, RM2D_V_DONE);
+  const uint8_t skip = RM2D_E_DEAD | RM2D_E_FROZEN | RM2D_E_INRANGE;
+  for (pa_idx k = rm2d_next_elem(rm, 0, skip); k < rm->ne;
+       k = rm2d_next_elem(rm, k + 1, skip)) {
+    const pa_idx *v = rm->tv + 3 * (size_t)k;
+    int bad = 0, settled = 1;
+    for (int i = 0; i < 3 && !bad; i++) {
+      double l = pa__len2(mc, RM2D_X(v[RM2D_NX3(i)]), RM2D_X(v[RM2D_PV3(i)]),
+                          RM2D_M(v[RM2D_NX3(i)]), RM2D_M(v[RM2D_PV3(i)]));
+      bad = !(l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI);
+      settled &= rm2d_len_settled(l);
+    }
+    if (settled) rm->tflag[k] |= RM2D_E_INRANGE;
+    if (!bad) continue;
+    for (int i = 0; i < 3; i++) {
+      pa_idx p = v[i];
+      uint8_t tp = rm->vtag[p];
+      if (tp & (RM2D_V_DONE | RM2D_V_FROZEN | RM2D_V_CORNER | RM2D_V_FEAT))
+        continue;
+      rm->vtag[p] |= RM2D_V_DONE;
+      cnt += pa__rm2d_length_vertex(rm, k, i);
+    }
+  }
+  return cnt;
 }
 
 /* Renumber the working mesh for locality (pa__rm2d_reorder) once it has grown

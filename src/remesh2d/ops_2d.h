@@ -1,7 +1,8 @@
 /*
  * ops_2d.h -- what the 2D operator files (split_2d.c, collapse_2d.c,
- * swap_2d.c, smooth_2d.c) share: local numbering, the walk across feature
- * records, the cache invalidation of a rewritten element, vertex balls.
+ * swap_2d.c, smooth_2d.c) and the passes that call them (driver_2d.c)
+ * share: the operators' entries (below), local numbering, the walk across
+ * feature records, the cache invalidation of a rewritten element, vertex balls.
  *
  * Every operator evaluates its result before changing anything ("sim then
  * apply"): each new element must have quality >= RM2D_QFLOOR (so its
@@ -225,5 +226,22 @@ static inline int rm2d_ball(const rm2d *rm, pa_idx k, int ip, pa_idx *el,
  * k (fi != ip), if every new element has quality >= qrel times the ball's old
  * worst (collapse_2d.c). Returns 1 if done, 0 if rejected. */
 int pa__rm2d_collapse_edge(rm2d *rm, pa_idx k, int fi, int ip, double qrel);
+/* The operators the passes (driver_2d.c) call on element k; each returns
+ * 1 if done, 0 if rejected (nothing changed).
+ *  - split_2d.c: split face i of k at its midpoint (on a feature: on the
+ *    reconstructed curve, or nearer the chord); *st on memory failure;
+ *  - collapse_2d.c: remove vertex v[ip] of k by collapsing it onto another
+ *    neighbour, the shortest edges first (when its own edge cannot go);
+ *  - swap_2d.c: swap face i of k if the pair's worst quality rises by gain;
+ *  - smooth_2d.c: move interior vertex v[ip] towards the ideal apexes of
+ *    its ball (balls of worst quality under qfree may stretch their
+ *    lengths), feature vertex v[ip] along its curve, and interior vertex
+ *    v[ip] to bring its edges into range (the length moves). */
+int pa__rm2d_split_edge(rm2d *rm, pa_idx k, int i, pa_status *st);
+int pa__rm2d_remove_vertex(rm2d *rm, pa_idx k, int ip);
+int pa__rm2d_swap_edge(rm2d *rm, pa_idx k, int i, double gain);
+int pa__rm2d_smooth_vertex(rm2d *rm, pa_idx k, int ip, double qfree);
+int pa__rm2d_smooth_feature(rm2d *rm, pa_idx k, int ip, double qfree);
+int pa__rm2d_length_vertex(rm2d *rm, pa_idx k, int ip);
 
 #endif /* PA_OPS_2D_H */

@@ -4,9 +4,9 @@
  * remesh/remesh.h: the compact working mesh (struct rm2d), its tags,
  * the inline metric kernels of the inner loops, and the interfaces between
  * its files: the working mesh (mesh_2d.c), the feature lines
- * (boundary_2d.c), the operators and their passes (split_2d.c,
- * collapse_2d.c, swap_2d.c, smooth_2d.c, with ops_2d.h) and the pass loop
- * (driver_2d.c).
+ * (boundary_2d.c), the operators (split_2d.c, collapse_2d.c, swap_2d.c,
+ * smooth_2d.c, with ops_2d.h) and their passes and schedule (driver_2d.c),
+ * as the 3D remesher's files.
  *
  * Working mesh invariants (checked by pa__rm2d_check):
  *  - structure of arrays, 0-based, 32-bit indices; a dead entity keeps its slot
@@ -231,16 +231,15 @@ pa_status pa__rm2d_feature_analyze(rm2d *rm, pa_mesh *mesh,
  * bv[2b] to bv[2b+1]), and its unit tangent oriented the same way. */
 void pa__rm2d_curve_point(const rm2d *rm, pa_idx b, double s, double *p,
                           double *t);
-/* Passes (split_2d.c, collapse_2d.c, swap_2d.c with the worst-element pass,
- * smooth_2d.c with the length moves): each gives the number of operations
- * done. */
+/* Passes (driver_2d.c, over the operators of split_2d.c, collapse_2d.c,
+ * swap_2d.c and smooth_2d.c): each gives the number of operations done. */
 pa_status pa__rm2d_split_pass(rm2d *rm, double thr, long *n);
 pa_status pa__rm2d_collapse_pass(rm2d *rm, double thr, long *n);
 long pa__rm2d_swap_pass(rm2d *rm, double qmax);
 /* The relocation pass: quality moves of the interior vertices, and with
  * feat of the feature vertices along their curves; balls of worst quality
  * under qfree may stretch their lengths to [RM2D_LFREE_LO, RM2D_LFREE_HI]
- * (smooth_2d.c). A vertex rejected under one (qfree, feat) is marked
+ * (driver_2d.c). A vertex rejected under one (qfree, feat) is marked
  * settled: the driver clears RM2D_V_SETTLED when it changes them. */
 long pa__rm2d_smooth_pass(rm2d *rm, double qfree, int feat);
 long pa__rm2d_length_pass(rm2d *rm);

@@ -2,9 +2,9 @@
  * smooth_2d.c -- vertex relocation in the 2D remesher: quality moves (an
  * interior vertex towards the mean of the ideal apexes of its ball) and
  * length moves (a Gauss-Newton step on the lengths of its edges, as in 3D:
- * smooth_3d.c), with their passes. Only free interior vertices move (not
- * frozen, corner or feature ones); the metric and fields of a moved vertex
- * are interpolated in its old ball. Shared contract of the operators:
+ * smooth_3d.c); their passes are in driver_2d.c. Only free interior vertices
+ * move (not frozen, corner or feature ones); the metric and fields of a moved
+ * vertex are interpolated in its old ball. Shared contract of the operators:
  * ops_2d.h.
  */
 #include "remesh2d/ops_2d.h"
@@ -108,7 +108,7 @@ static int keeps_band(rm2d *rm, pa_idx p, const pa_idx *nb, int nn,
  * apexes of its ball (equilateral in the metric of p). Balls of worst
  * quality under qfree may stretch their lengths (keeps_band). Returns 1 if
  * moved. */
-static int move_vertex(rm2d *rm, pa_idx k, int ip, double qfree) {
+int pa__rm2d_smooth_vertex(rm2d *rm, pa_idx k, int ip, double qfree) {
   int mc = rm->mc;
   pa_idx p = rm->tv[3 * k + ip];
   pa_idx el[RM2D_BALL_MAX];
@@ -228,11 +228,11 @@ static int stretch_kept(const rm2d *rm, pa_idx r, pa_idx p, const double *np,
 /* Move feature vertex p = v[ip] of element k along its curve (the
  * reconstructed arc of one of its two records) by the tangential part of
  * the step to the mean of the ideal apexes of its ball, halved up to twice;
- * kept under the rules of the interior moves (move_vertex), with the
+ * kept under the rules of the interior moves (pa__rm2d_smooth_vertex), with the
  * record it leaves behind within hausd of the curve (stretch_kept). The
  * metric and fields are interpolated along the record; straight features
  * stay straight. Returns 1 if moved. */
-static int move_feature(rm2d *rm, pa_idx k, int ip, double qfree) {
+int pa__rm2d_smooth_feature(rm2d *rm, pa_idx k, int ip, double qfree) {
   int mc = rm->mc;
   pa_idx p = rm->tv[3 * k + ip];
   pa_idx el[RM2D_BALL_MAX], nb[2 * RM2D_BALL_MAX], rec[2];
@@ -334,33 +334,6 @@ static int move_feature(rm2d *rm, pa_idx k, int ip, double qfree) {
   return 0;
 }
 
-long pa__rm2d_smooth_pass(rm2d *rm, double qfree, int feat) {
-  long cnt = 0;
-  rm2d_vtag_clear(rm, RM2D_V_DONE);
-  const uint8_t skip =
-      RM2D_V_DONE | RM2D_V_FROZEN | RM2D_V_CORNER | (feat ? 0 : RM2D_V_FEAT);
-  for (pa_idx k = 0; k < rm->ne; k++) {
-    if (rm->tflag[k] & (RM2D_E_DEAD | RM2D_E_FROZEN)) continue;
-    for (int i = 0; i < 3; i++) {
-      pa_idx p = rm->tv[3 * k + i];
-      uint8_t tp = rm->vtag[p];
-      if (tp & skip) continue;
-      /* DONE even when skipped: a neighbour's move later in this pass must
-       * not make p eligible again from another start element */
-      rm->vtag[p] |= RM2D_V_DONE;
-      /* the answer depends only on p's ball: a rejected p stays settled
-       * until an operator or a move changes that ball (rm2d_elem_changed) */
-      if (tp & RM2D_V_SETTLED) continue;
-      int moved = tp & RM2D_V_FEAT ? move_feature(rm, k, i, qfree)
-                                   : move_vertex(rm, k, i, qfree);
-      if (moved) cnt++;
-      else
-        rm->vtag[p] |= RM2D_V_SETTLED;
-    }
-  }
-  return cnt;
-}
-
 /* The lengths l of the edges from p at y (metric mp) to nb[0..nn), and how
  * many are out of [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI]. */
 static int len_out_2d(const rm2d *rm, const double *y, const double *mp,
@@ -389,7 +362,7 @@ static double len_sum_2d(const double *l, int nn) {
  * edge furthest out of range; kept when fewer edges are out of range (or as
  * many with the sum RM2D_LGAIN lower) and the ball's worst quality stays at
  * least min(old worst, RM2D_QLEN). As 3D (smooth_3d.c). 1 if moved. */
-static int length_vertex(rm2d *rm, pa_idx k, int ip) {
+int pa__rm2d_length_vertex(rm2d *rm, pa_idx k, int ip) {
   int mc = rm->mc;
   pa_idx p = rm->tv[3 * k + ip];
   pa_idx el[RM2D_BALL_MAX], nb[RM2D_BALL_MAX];
@@ -469,33 +442,4 @@ static int length_vertex(rm2d *rm, pa_idx k, int ip) {
     return 1;
   }
   return 0;
-}
-
-long pa__rm2d_length_pass(rm2d *rm) {
-  int mc = rm->mc;
-  long cnt = 0;
-  rm2d_vtag_clear(rm, RM2D_V_DONE);
-  const uint8_t skip = RM2D_E_DEAD | RM2D_E_FROZEN | RM2D_E_INRANGE;
-  for (pa_idx k = rm2d_next_elem(rm, 0, skip); k < rm->ne;
-       k = rm2d_next_elem(rm, k + 1, skip)) {
-    const pa_idx *v = rm->tv + 3 * (size_t)k;
-    int bad = 0, settled = 1;
-    for (int i = 0; i < 3 && !bad; i++) {
-      double l = pa__len2(mc, RM2D_X(v[RM2D_NX3(i)]), RM2D_X(v[RM2D_PV3(i)]),
-                          RM2D_M(v[RM2D_NX3(i)]), RM2D_M(v[RM2D_PV3(i)]));
-      bad = !(l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI);
-      settled &= rm2d_len_settled(l);
-    }
-    if (settled) rm->tflag[k] |= RM2D_E_INRANGE;
-    if (!bad) continue;
-    for (int i = 0; i < 3; i++) {
-      pa_idx p = v[i];
-      uint8_t tp = rm->vtag[p];
-      if (tp & (RM2D_V_DONE | RM2D_V_FROZEN | RM2D_V_CORNER | RM2D_V_FEAT))
-        continue;
-      rm->vtag[p] |= RM2D_V_DONE;
-      cnt += length_vertex(rm, k, i);
-    }
-  }
-  return cnt;
 }

@@ -1,10 +1,9 @@
 /*
- * split_2d.c -- edge split of the 2D remesher and its pass: the new vertex at
+ * split_2d.c -- edge split of the 2D remesher: the new vertex at
  * the midpoint of the edge, or of the reconstructed curve on a feature
  * (boundary_2d.c) or, with a model (pa_remesh_opts.geometry), the curve's
- * point closest to it, the one or two elements on the edge cut in two. The pass
- * splits the longest free edge of each element above the threshold, with
- * longest-edge propagation. Shared contract of the operators: ops_2d.h.
+ * point closest to it, the one or two elements on the edge cut in two. Its
+ * pass is in driver_2d.c. Shared contract of the operators: ops_2d.h.
  */
 #include "remesh2d/ops_2d.h"
 
@@ -188,7 +187,7 @@ static int split_toward_chord(rm2d *rm, const split_cfg *s, pa_idx m,
  * Returns 1 if done, 0 if rejected; *st on memory failure (then nothing
  * changed).
  */
-static int split_edge(rm2d *rm, pa_idx k, int i, pa_status *st) {
+int pa__rm2d_split_edge(rm2d *rm, pa_idx k, int i, pa_status *st) {
   split_cfg s;
   edge_config(rm, k, i, &s);
   *st = pa__rm2d_reserve(rm, 1, 2, 1);
@@ -211,56 +210,4 @@ static int split_edge(rm2d *rm, pa_idx k, int i, pa_status *st) {
   }
   rm->nsplit++;
   return 1;
-}
-
-/* Longest free edge of element k above thr: face index or -1, length in *len;
- * *inr (may be NULL) = all three edges settled (rm2d_len_settled). */
-static int longest_free(const rm2d *rm, pa_idx k, double thr, double *len,
-                        int *inr) {
-  const pa_idx *v = rm->tv + 3 * (size_t)k;
-  int best = -1, in = 1;
-  double lb = thr;
-  for (int i = 0; i < 3; i++) {
-    double l = rm2d_edge_len(rm, v[RM2D_NX3(i)], v[RM2D_PV3(i)]);
-    in &= rm2d_len_settled(l);
-    if (l > lb && rm2d_edge_free(rm, 3 * k + i)) {
-      lb = l;
-      best = i;
-    }
-  }
-  *len = lb;
-  if (inr) *inr = in;
-  return best;
-}
-
-pa_status pa__rm2d_split_pass(rm2d *rm, double thr, long *n) {
-  pa_status st = PA_SUCCESS;
-  long cnt = 0;
-  rm2d_tflag_clear(rm, RM2D_E_TOUCHED);
-  /* an element in range has nothing above thr */
-  const uint8_t skip = RM2D_E_DEAD | RM2D_E_TOUCHED | RM2D_E_FROZEN |
-                       (thr >= PA_METRIC_LEN_HI ? RM2D_E_INRANGE : 0);
-  for (pa_idx k = rm2d_next_elem(rm, 0, skip); k < rm->ne;
-       k = rm2d_next_elem(rm, k + 1, skip)) {
-    double l;
-    int inr;
-    int i = longest_free(rm, k, thr, &l, &inr);
-    if (inr) rm->tflag[k] |= RM2D_E_INRANGE;
-    if (i < 0) continue;
-    /* Longest-edge propagation: split only if the edge is also the longest
-     * free edge of the neighbour (else the neighbour goes first). */
-    pa_idx s = rm2d_other_side(rm, 3 * k + i);
-    if (s >= 0) {
-      pa_idx f = s / 3;
-      if (rm->tflag[f] & RM2D_E_TOUCHED) continue;
-      double lf;
-      int jf = longest_free(rm, f, l * (1 + 1e-12), &lf, NULL);
-      if (jf >= 0 && jf != s % 3) continue;
-    }
-    cnt += split_edge(rm, k, i, &st);
-    if (st) goto cleanup;
-  }
-cleanup:
-  *n = cnt;
-  return st;
 }

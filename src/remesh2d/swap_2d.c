@@ -1,15 +1,14 @@
 /*
  * swap_2d.c -- edge swap of the 2D remesher (the diagonal of the pair of
- * elements on an edge turned, when the pair's worst quality rises), its
- * pass, and the pass on the worst elements (swap, else collapse of the
- * shortest edge when the ball's worst quality rises). Feature edges are
- * never swapped. Shared contract of the operators: ops_2d.h.
+ * elements on an edge turned, when the pair's worst quality rises). Feature
+ * edges are never swapped. Its passes (and the pass on the worst elements)
+ * are in driver_2d.c. Shared contract of the operators: ops_2d.h.
  */
 #include "remesh2d/ops_2d.h"
 
 /* Swap face i of k if it raises the worst quality of the pair by the factor
  * gain. Returns 1 if done. */
-static int swap_edge(rm2d *rm, pa_idx k, int i, double gain) {
+int pa__rm2d_swap_edge(rm2d *rm, pa_idx k, int i, double gain) {
   pa_idx o = rm->adj[3 * k + i];
   if (o < 0) return 0;
   pa_idx f = o / 3;
@@ -39,73 +38,4 @@ static int swap_edge(rm2d *rm, pa_idx k, int i, double gain) {
   rm->adj[3 * f + 1] = 3 * k + 1;
   rm->nswap++;
   return 1;
-}
-
-/* The first element slot from k on, or rm->ne, with quality below qmax and
- * none of the tag bits `skip`: the scan of the swap passes, reading the
- * arrays once (see rm2d_tflag_clear). */
-static pa_idx next_below(const rm2d *rm, pa_idx k, uint8_t skip, double qmax) {
-  const uint8_t *t = rm->tflag;
-  const float *q = rm->q;
-  const pa_idx n = rm->ne;
-  while (k < n && ((t[k] & skip) || q[k] >= qmax)) k++;
-  return k;
-}
-
-long pa__rm2d_swap_pass(rm2d *rm, double qmax) {
-  long cnt = 0;
-  rm2d_tflag_clear(rm, RM2D_E_TOUCHED);
-  const uint8_t skip =
-      RM2D_E_DEAD | RM2D_E_TOUCHED | RM2D_E_FROZEN | RM2D_E_NOSWAP;
-  for (pa_idx k = next_below(rm, 0, skip, qmax); k < rm->ne;
-       k = next_below(rm, k + 1, skip, qmax)) {
-    int done = 0, all = 1;
-    for (int i = 0; i < 3 && !done; i++) {
-      pa_idx o = rm->adj[3 * k + i];
-      if (o < 0) continue;
-      if (rm->tflag[o / 3] & RM2D_E_TOUCHED) {
-        all = 0; /* not tried: no verdict for this face */
-        continue;
-      }
-      done = swap_edge(rm, k, i, 1.02);
-    }
-    cnt += done;
-    if (!done && all) rm->tflag[k] |= RM2D_E_NOSWAP;
-  }
-  return cnt;
-}
-
-long pa__rm2d_sliver_pass(rm2d *rm, double qbad) {
-  long cnt = 0;
-  rm2d_tflag_clear(rm, RM2D_E_TOUCHED);
-  for (pa_idx k = 0; k < rm->ne; k++) {
-    uint8_t t = rm->tflag[k];
-    if (t & (RM2D_E_DEAD | RM2D_E_TOUCHED | RM2D_E_FROZEN)) continue;
-    if (rm->q[k] >= qbad) continue;
-    int done = 0;
-    for (int i = 0; i < 3 && !done; i++) done = swap_edge(rm, k, i, 1.0);
-    if (!done && !rm->opts->no_insert) {
-      /* collapse the shortest edge if the ball gets better */
-      const pa_idx *v = rm->tv + 3 * (size_t)k;
-      int best = 0;
-      double lb = 1e300;
-      for (int i = 0; i < 3; i++) {
-        double l = rm2d_edge_len(rm, v[RM2D_NX3(i)], v[RM2D_PV3(i)]);
-        if (l < lb) {
-          lb = l;
-          best = i;
-        }
-      }
-      if (lb < PA_METRIC_LEN_HI) {
-        double g = rm->lguard;
-        rm->lguard = PA_METRIC_LEN_HI * 1.2;
-        done =
-            pa__rm2d_collapse_edge(rm, k, best, RM2D_NX3(best), 1.0 + 1e-9) ||
-            pa__rm2d_collapse_edge(rm, k, best, RM2D_PV3(best), 1.0 + 1e-9);
-        rm->lguard = g;
-      }
-    }
-    cnt += done;
-  }
-  return cnt;
 }
