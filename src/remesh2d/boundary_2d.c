@@ -266,10 +266,11 @@ cleanup:
   return st;
 }
 
-pa_status pa__rm2d_feature_analyze(rm2d *rm, pa_mesh *mesh,
-                                   const pa_idx *bstart, const pa_idx *ball) {
+pa_status pa__rm2d_feature_analyze(rm2d *rm, pa_mesh *mesh) {
   pa_status st = PA_SUCCESS;
   feat_ends fe = {NULL, NULL, NULL};
+  pa_idx *bstart = NULL, *ball = NULL;
+  PA_CALL(pa__balls(rm->tv, rm->ne, 3, rm->nv, &bstart, &ball));
   PA_CALL(add_records(rm, mesh, bstart, ball));
   PA_CALL(count_ends(rm, &fe));
   mark_corners(rm, &fe);
@@ -287,6 +288,8 @@ pa_status pa__rm2d_feature_analyze(rm2d *rm, pa_mesh *mesh,
         rm->met + (size_t)mc * v[1], rm->met + (size_t)mc * v[2]);
   }
 cleanup:
+  pa__free(bstart);
+  pa__free(ball);
   pa__free(fe.r0);
   pa__free(fe.r1);
   pa__free(fe.cnt);

@@ -582,6 +582,7 @@ pa_status pa__remesh2d(pa_mesh *mesh, const pa_remesh_opts *opts,
   pa_idx reordered; /* live elements at the last renumbering */
   pa_idx nrelaxed;  /* frozen vertices whose working metric was relaxed */
   PA_CALL(pa__rm2d_build(mesh, opts, &rm));
+  PA_CALL(pa__rm2d_feature_analyze(rm, mesh));
   PA_CALL(pa__rm2d_skin_relax(rm, &nrelaxed));
   rm->lguard = PA_METRIC_LEN_HI;
   reordered = rm->nelive;

@@ -420,8 +420,6 @@ pa_status pa__rm2d_build(pa_mesh *mesh, const pa_remesh_opts *opts,
   /* Vertex balls (CSR), then face adjacency. */
   PA_CALL(pa__balls(rm->tv, ne, nvpe, nv, &bstart, &ball));
   PA_CALL(build_adjacency(rm, bstart, ball));
-
-  PA_CALL(pa__rm2d_feature_analyze(rm, mesh, bstart, ball));
   *out = rm;
   rm = NULL;
 cleanup:

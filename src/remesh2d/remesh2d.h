@@ -171,10 +171,10 @@ typedef struct rm2d {
 
 /* ---- working mesh (mesh_2d.c) ---- */
 
-/* Build the working mesh from a (checked) sequential mesh with a metric.
- * Frozen flags are propagated: vertices of frozen elements and of frozen
- * boundary entities are frozen. Capacities are reserved for about `expect`
- * elements. */
+/* Build the working mesh from a (checked) sequential mesh with a metric:
+ * vertices, elements (the vertices of frozen ones frozen), adjacency; the
+ * features come next (pa__rm2d_feature_analyze). Capacities are reserved
+ * for about the elements the metric asks for. */
 pa_status pa__rm2d_build(pa_mesh *mesh, const pa_remesh_opts *opts, rm2d **rm);
 /* Relax the working metric at frozen vertices whose frozen edges are on
  * average far from unit length (target kept in met0); *nrelaxed vertices. */
@@ -219,14 +219,13 @@ void pa__rm2d_figures(const rm2d *rm, rm2d_figures *f);
 
 /* ---- features (boundary_2d.c) and operator passes ---- */
 
-/* Feature analysis, called by pa__rm2d_build with the input vertex balls (CSR):
+/* Feature analysis of the working mesh just built from mesh (the driver
+ * calls it after pa__rm2d_build, as the 3D driver its surface analysis):
  * records from the boundary list, from unlisted boundary edges and from
- * element-reference interfaces; frozen records freeze their vertices; corners;
- * tangents; the Hausdorff size bound on curved features (then spread by
- * the gradation);
- * element qualities. */
-pa_status pa__rm2d_feature_analyze(rm2d *rm, pa_mesh *mesh,
-                                   const pa_idx *bstart, const pa_idx *ball);
+ * element-reference interfaces; frozen records freeze their vertices;
+ * corners; tangents; the Hausdorff size bound on curved features (then
+ * spread by the gradation); element qualities. */
+pa_status pa__rm2d_feature_analyze(rm2d *rm, pa_mesh *mesh);
 /* Point at parameter s in [0,1] on the reconstructed curve of record b (from
  * bv[2b] to bv[2b+1]), and its unit tangent oriented the same way. */
 void pa__rm2d_curve_point(const rm2d *rm, pa_idx b, double s, double *p,
