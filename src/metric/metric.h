@@ -167,9 +167,15 @@ void pa__stats_add_edge(pa__stats_acc *a, double len);
 /* Write the compensated sums into a->s (volume, edge_sum, qual_sum). */
 void pa__stats_acc_sums(pa__stats_acc *a);
 
+/* The validity check pa__mesh_stats_met runs: none (stats->valid is then
+ * 1), pa_mesh_check's, or that of the built-in remesher's output:
+ * pa__mesh_check without the input-only parts (overlaps, coincident
+ * vertices, manifold vertices), which its local operators, each keeping
+ * its cavity star-shaped and positive, cannot create from a valid input. */
+enum { PA_STATS_CHECK_NONE, PA_STATS_CHECK_FULL, PA_STATS_CHECK_OUTPUT };
 /* pa_mesh_stats measured in the metric met (nv values of nc components; nc
- * 0: identity) instead of the mesh's own (stats.c); check 0 skips the
- * validity check (stats->valid is then 1). */
+ * 0: identity) instead of the mesh's own (stats.c), with the check given
+ * (PA_STATS_CHECK_*). */
 pa_status pa__mesh_stats_met(pa_mesh *mesh, int nc, const double *met,
                              int check, pa_stats *stats);
 

@@ -89,7 +89,8 @@ pa_status pa_mesh_stats(pa_mesh *mesh, pa_stats *stats) {
   if (!mesh)
     return pa__error(PA_ERR_ARG, __FILE__, __LINE__,
                      "pa_mesh_stats: NULL argument");
-  return pa__mesh_stats_met(mesh, mesh->met_ncomp, mesh->met, 1, stats);
+  return pa__mesh_stats_met(mesh, mesh->met_ncomp, mesh->met,
+                            PA_STATS_CHECK_FULL, stats);
 }
 
 pa_status pa__mesh_stats_met(pa_mesh *mesh, int nc, const double *met,
@@ -145,7 +146,12 @@ pa_status pa__mesh_stats_met(pa_mesh *mesh, int nc, const double *met,
   other = NULL;
 
   /* Validity last: it may build adjacency, so our arrays are gone by now. */
-  pa_status chk = check ? pa_mesh_check(mesh) : PA_SUCCESS;
+  pa_status chk = PA_SUCCESS;
+  if (check == PA_STATS_CHECK_FULL) chk = pa_mesh_check(mesh);
+  if (check == PA_STATS_CHECK_OUTPUT) {
+    chk = pa__mesh_check(mesh, 0);
+    if (chk == PA_SUCCESS) chk = pa__mesh_check_metric(mesh);
+  }
   if (chk == PA_ERR_MEMORY) PA_CALL(chk);
   s->valid = chk == PA_SUCCESS;
   if (!s->valid) {

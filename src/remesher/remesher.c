@@ -92,15 +92,20 @@ static pa_status drop_user_metric(pa_mesh *mesh) {
 }
 
 /* The output in the metric used and in the caller's (the carried copy, or
- * the metric used when nothing changed it). */
-static pa_status measure(pa_mesh *mesh, int carried, pa_fidelity *f) {
+ * the metric used when nothing changed it), checked as the output of the
+ * built-in remesher or, from a plug-in, as an input (PA_STATS_CHECK_*). */
+static pa_status measure(const pa_remesher *r, pa_mesh *mesh, int carried,
+                         pa_fidelity *f) {
   pa_status st = PA_SUCCESS;
   int k = carried ? pa__user_metric_field(mesh) : -1;
-  PA_CALL(pa_mesh_stats(mesh, &f->used));
+  int check = r == pa_remesher_builtin() ? PA_STATS_CHECK_OUTPUT
+                                         : PA_STATS_CHECK_FULL;
+  PA_CALL(pa__mesh_stats_met(mesh, mesh->met_ncomp, mesh->met, check,
+                             &f->used));
   f->user = f->used;
   if (k >= 0) {
     PA_CALL(pa__mesh_stats_met(mesh, mesh->field[k].ncomp, mesh->field[k].val,
-                               0, &f->user));
+                               PA_STATS_CHECK_NONE, &f->user));
     f->user.valid = f->used.valid;
   }
   f->target_met = pa_stats_target_met(&f->user);
@@ -339,7 +344,7 @@ pa_status pa_remesh(const pa_remesher *r, pa_mesh *mesh,
   if (!opts->no_stats) {
     /* the mesh is the result now: a failure to measure it is no error */
     pa_fidelity *f = &report->fidelity;
-    if (measure(mesh, carried, f) == PA_SUCCESS) {
+    if (measure(r, mesh, carried, f) == PA_SUCCESS) {
       f->measured = 1;
       f->changed = changed;
     } else {

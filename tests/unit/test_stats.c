@@ -398,6 +398,31 @@ static void test_stats_errors(void) {
   pa_mesh_destroy(m);
 }
 
+/* The check levels of pa__mesh_stats_met: a folded mesh (a vertex the
+ * elements around turn twice) is valid to the output check of the built-in
+ * remesher, which leaves the input-only parts out, and not to the full
+ * one. */
+static void test_stats_check_levels(void) {
+  const char *dir = getenv("PADAPT_TESTDATA");
+  char path[1024];
+  pa_mesh *m = NULL;
+  pa_stats s;
+  CHECK(dir != NULL);
+  if (!dir) return;
+  snprintf(path, sizeof path, "%s/bad/check_fold_vertex2d.mesh", dir);
+  CHECK_OK(pa_mesh_read(path, &m));
+  if (!m) return;
+  pa_idx nb = 0;
+  CHECK_OK(pa_mesh_build_boundary(m, 1, &nb)); /* as the CLI completes it */
+  CHECK_OK(pa__mesh_stats_met(m, 0, NULL, PA_STATS_CHECK_FULL, &s));
+  CHECK(!s.valid);
+  CHECK_OK(pa__mesh_stats_met(m, 0, NULL, PA_STATS_CHECK_OUTPUT, &s));
+  CHECK(s.valid);
+  CHECK_OK(pa__mesh_stats_met(m, 0, NULL, PA_STATS_CHECK_NONE, &s));
+  CHECK(s.valid);
+  pa_mesh_destroy(m);
+}
+
 static char *slurp(const char *path) {
   FILE *f = fopen(path, "rb");
   if (!f) return NULL;
@@ -630,4 +655,5 @@ static void test_bins(void) {
 }
 
 TEST_MAIN(test_stats_2d, test_stats_3d, test_stats_big, test_stats_errors,
+          test_stats_check_levels,
           test_report_json, test_analytic, test_bins)
