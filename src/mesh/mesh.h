@@ -147,7 +147,7 @@ void pa__mesh_move_cell_fields(pa_mesh *dst, pa_mesh *src);
  * room for cap entities (contents kept up to the smaller size). */
 pa_status pa__mesh_fields_realloc(pa_mesh *mesh, int at, size_t cap);
 
-/* ---- classification (classify.c) ---- */
+/* ---- classification: storage (mesh.c), lookup (classify.c) ---- */
 
 /* Free the model entities (the mesh then has none). */
 void pa__mesh_free_entities(pa_mesh *mesh);
