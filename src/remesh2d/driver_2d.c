@@ -355,18 +355,19 @@ long pa__rm2d_length_pass(rm2d *rm) {
  * by the factor growth since the last renumbering (or since the start), from
  * RM2D_REORDER_MIN live elements on: the new entities of splits sit at the end
  * of the arrays, and the passes are memory-bound. The refinement rounds
- * renumber at each doubling (O(n log n) in all); the optimisation rounds,
- * which sweep the whole mesh some 20 times, start on a mesh renumbered
- * since it grew by RM2D_REORDER_OPT when it has RM2D_REORDER_OPT_MIN elements
- * or more: the plate -> 0.0005 (3.7 M triangles when the rounds start, 1.5
- * times the last renumbering) takes 9.2 instead of 10.5 s of remesher CPU;
- * at 0.23 and 0.94 M (the same growth) the renumbering costs what it saves
- * (0.45 -> 0.46 s, 2.17 -> 2.12 s): below a few million triangles the
- * working set stays in the caches of this machine. */
+ * renumber at each doubling (O(n log n) in all); each optimisation round,
+ * a dozen sweeps over the whole mesh, starts on a mesh renumbered since it
+ * grew by RM2D_REORDER_OPT, from RM2D_REORDER_OPT_MIN elements on: the
+ * plate -> 0.0005 takes 9.1 instead of 10.5 s of remesher CPU
+ * sequentially (3.7 M triangles when the rounds start, 1.5 times the last
+ * renumbering), 9.8 instead of 11.1 s at 2 ranks (pieces of 1.9 M growing
+ * to 2.4 M in the rounds); at 0.23 and 0.94 M the renumbering costs what it
+ * saves (0.45 -> 0.46 s, 2.17 -> 2.12 s): there the working set stays in
+ * the caches of this machine. */
 #define RM2D_REORDER_MIN 50000
 #define RM2D_REORDER_REFINE 2.0
 #define RM2D_REORDER_OPT 1.25
-#define RM2D_REORDER_OPT_MIN 2000000
+#define RM2D_REORDER_OPT_MIN 1500000
 static pa_status maybe_reorder(rm2d *rm, int pass, pa_idx from, double growth,
                                pa_idx *last) {
   pa_status st = PA_SUCCESS;
@@ -427,10 +428,10 @@ static pa_status optimise(rm2d *rm, int *pass, pa_idx *reordered) {
   pa_status st = PA_SUCCESS;
   const pa_remesh_opts *o = rm->opts;
   pa__rounds rounds;
-  PA_CALL(maybe_reorder(rm, *pass, RM2D_REORDER_OPT_MIN, RM2D_REORDER_OPT,
-                        reordered));
   pa__rounds_start(&rounds, 1, RM2D_ROUNDS_SETTLED, RM2D_ROUNDS_TINY, 1);
   for (int it = 0; it < RM2D_ROUNDS_MAX; it++) {
+    PA_CALL(maybe_reorder(rm, *pass, RM2D_REORDER_OPT_MIN, RM2D_REORDER_OPT,
+                          reordered));
     long nw = 0, nm = 0, ns = 0, nc = 0;
     if (!o->no_swap) {
       nw = pa__rm2d_swap_pass(rm, 0.9);
