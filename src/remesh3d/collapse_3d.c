@@ -314,14 +314,22 @@ cleanup:
 }
 
 /* Whether q, of ball bq[0..nb), stays on its entity at the middle of
- * (p,q): an interior q (then p is interior too), a q of a planar patch with
- * p in that plane, a q of a straight ridge with p on that line. */
+ * (p,q): an interior q of one reference (then p is interior too; a q on an
+ * unlisted face between references would leave it, moving that interface),
+ * a q of a planar patch with p in that plane, a q of a straight ridge with
+ * p on that line. */
 static int mid_on_entity(rm3d *m, pa_idx p, pa_idx q, const pa_idx *bq,
                          int nb) {
   uint8_t tp = m->vtag[p], tq = m->vtag[q];
   const double *xq = m->x + 3 * (size_t)q;
   const double *xp = m->x + 3 * (size_t)p;
-  if (!(tq & RM3D_V_BDRY)) return !(tp & RM3D_V_BDRY);
+  if (!(tq & RM3D_V_BDRY)) {
+    int32_t ref0 = m->tref[bq[0] >> 2];
+    for (int i = 1; i < nb; i++)
+      if (m->tref[bq[i] >> 2] != ref0 && !rm3d_refs_listed(m, bq, nb))
+        return 0;
+    return !(tp & RM3D_V_BDRY);
+  }
   if (!m->surf || !(tp & RM3D_V_BDRY) || ((tp ^ tq) & RM3D_V_FEAT)) return 0;
   double dir[3];
   int kind = pa__rm3d_bdry_freedom(m, q, bq, nb, dir);
