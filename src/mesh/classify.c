@@ -1,7 +1,7 @@
 /*
  * classify.c -- the classification of a mesh on a model (padapt.h,
- * "Geometry"): the vertices' entities and the model's entity table,
- * their storage, the completion of a classified mesh's cells from its
+ * "Geometry"): the vertices' entities and the model's entity table
+ * (stored by mesh.c), the completion of a classified mesh's cells from its
  * vertices (pa_mesh_classify) and the vertices' entities recomputed from
  * the cells after a remesh (pa__mesh_derive_entities).
  *
@@ -23,76 +23,6 @@
 #include "mesh/mesh.h"
 
 #include <stdio.h>
-
-/* ---- storage ---- */
-
-void pa__mesh_free_entities(pa_mesh *m) {
-  for (int k = 0; k < m->nent; k++) {
-    pa__free(m->ents[k].phys);
-    pa__free(m->ents[k].bound);
-  }
-  pa__free(m->ents);
-  m->ents = NULL;
-  m->nent = 0;
-}
-
-pa_status pa__mesh_copy_entities(pa_mesh *dst, const pa_mesh *src) {
-  pa_status st = PA_SUCCESS;
-  pa__entity *e = NULL;
-  int n = 0;
-  if (src->nent) {
-    PA_CALLOC(e, src->nent);
-    for (; n < src->nent; n++) {
-      const pa__entity *s = &src->ents[n];
-      e[n] = *s;
-      e[n].phys = e[n].bound = NULL;
-      PA_ALLOC(e[n].phys, s->nphys);
-      PA_ALLOC(e[n].bound, s->nbound);
-      if (s->nphys) memcpy(e[n].phys, s->phys, s->nphys * sizeof *s->phys);
-      if (s->nbound)
-        memcpy(e[n].bound, s->bound, s->nbound * sizeof *s->bound);
-    }
-  }
-  pa__mesh_free_entities(dst);
-  dst->ents = e;
-  dst->nent = n;
-  e = NULL;
-cleanup:
-  if (e) {
-    for (int k = 0; k <= n && k < src->nent; k++) {
-      pa__free(e[k].phys);
-      pa__free(e[k].bound);
-    }
-    pa__free(e);
-  }
-  return st;
-}
-
-pa_status pa__mesh_enable_entities(pa_mesh *m) {
-  pa_status st = PA_SUCCESS;
-  uint8_t *gd = NULL;
-  int32_t *gt = NULL;
-  if (m->vgdim) return PA_SUCCESS;
-  size_t cap = m->capv > 0 ? m->capv : 1;
-  PA_ALLOC(gd, cap);
-  PA_CALLOC(gt, cap);
-  memset(gd, m->dim, cap);
-  m->vgdim = gd;
-  m->vgtag = gt;
-  gd = NULL;
-  gt = NULL;
-cleanup:
-  pa__free(gd);
-  pa__free(gt);
-  return st;
-}
-
-void pa__mesh_disable_entities(pa_mesh *m) {
-  pa__free(m->vgdim);
-  pa__free(m->vgtag);
-  m->vgdim = NULL;
-  m->vgtag = NULL;
-}
 
 const pa__entity *pa__mesh_entity(const pa_mesh *m, int dim, int32_t tag) {
   int lo = 0, hi = m->nent;

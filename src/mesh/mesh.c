@@ -1,8 +1,9 @@
 /*
  * mesh.c -- creation, growth, copy and raw access of struct pa_mesh, its
  * metric storage (the values enter through pa_mesh_set_metric, metric/ops.c,
- * which validates them), user fields and physical names, and memory
- * accounting.
+ * which validates them), user fields and physical names, the storage of the
+ * classification (the entity table and the vertices' entities, filled by
+ * classify.c), and memory accounting.
  *
  * Vertex-attached arrays (coord, vref, vflag, the entities vgdim and vgtag,
  * met, field values) always share the capacity capv; every growth goes
@@ -67,6 +68,76 @@ void pa__mesh_drop_cells(pa_mesh *mesh) {
   mesh->ne = mesh->nb = mesh->ned = 0;
   mesh->cape = mesh->capb = mesh->caped = 0;
   mesh->met_ncomp = mesh->nfield = 0;
+}
+
+/* ---- storage of the classification (filled by classify.c) ---- */
+
+void pa__mesh_free_entities(pa_mesh *m) {
+  for (int k = 0; k < m->nent; k++) {
+    pa__free(m->ents[k].phys);
+    pa__free(m->ents[k].bound);
+  }
+  pa__free(m->ents);
+  m->ents = NULL;
+  m->nent = 0;
+}
+
+pa_status pa__mesh_copy_entities(pa_mesh *dst, const pa_mesh *src) {
+  pa_status st = PA_SUCCESS;
+  pa__entity *e = NULL;
+  int n = 0;
+  if (src->nent) {
+    PA_CALLOC(e, src->nent);
+    for (; n < src->nent; n++) {
+      const pa__entity *s = &src->ents[n];
+      e[n] = *s;
+      e[n].phys = e[n].bound = NULL;
+      PA_ALLOC(e[n].phys, s->nphys);
+      PA_ALLOC(e[n].bound, s->nbound);
+      if (s->nphys) memcpy(e[n].phys, s->phys, s->nphys * sizeof *s->phys);
+      if (s->nbound)
+        memcpy(e[n].bound, s->bound, s->nbound * sizeof *s->bound);
+    }
+  }
+  pa__mesh_free_entities(dst);
+  dst->ents = e;
+  dst->nent = n;
+  e = NULL;
+cleanup:
+  if (e) {
+    for (int k = 0; k <= n && k < src->nent; k++) {
+      pa__free(e[k].phys);
+      pa__free(e[k].bound);
+    }
+    pa__free(e);
+  }
+  return st;
+}
+
+pa_status pa__mesh_enable_entities(pa_mesh *m) {
+  pa_status st = PA_SUCCESS;
+  uint8_t *gd = NULL;
+  int32_t *gt = NULL;
+  if (m->vgdim) return PA_SUCCESS;
+  size_t cap = m->capv > 0 ? m->capv : 1;
+  PA_ALLOC(gd, cap);
+  PA_CALLOC(gt, cap);
+  memset(gd, m->dim, cap);
+  m->vgdim = gd;
+  m->vgtag = gt;
+  gd = NULL;
+  gt = NULL;
+cleanup:
+  pa__free(gd);
+  pa__free(gt);
+  return st;
+}
+
+void pa__mesh_disable_entities(pa_mesh *m) {
+  pa__free(m->vgdim);
+  pa__free(m->vgtag);
+  m->vgdim = NULL;
+  m->vgtag = NULL;
 }
 
 void pa_mesh_destroy(pa_mesh *mesh) {

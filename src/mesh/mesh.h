@@ -147,7 +147,7 @@ void pa__mesh_move_cell_fields(pa_mesh *dst, pa_mesh *src);
  * room for cap entities (contents kept up to the smaller size). */
 pa_status pa__mesh_fields_realloc(pa_mesh *mesh, int at, size_t cap);
 
-/* ---- classification (classify.c) ---- */
+/* ---- classification: storage (mesh.c), lookup (classify.c) ---- */
 
 /* Free the model entities (the mesh then has none). */
 void pa__mesh_free_entities(pa_mesh *mesh);
@@ -192,10 +192,24 @@ void pa__mesh_invalidate(pa_mesh *mesh);
  * derived structures), keeping the vertices and the names: what is left
  * is a mesh of nv vertices and no cells. */
 void pa__mesh_drop_cells(pa_mesh *mesh);
-/* pa_mesh_check but for the metric values, which the metric component
- * checks (pa__mesh_check_metric, metric/metric.h); input 0 leaves out what
- * only a user's input must meet (manifold vertices, no two vertices at one
- * point): a piece of the parallel loop may touch itself at a vertex. */
+/* The derived structures computed afresh, not cached (topo.c), for the
+ * checker (check.c) to compare with the caches: the adjacency, the balls
+ * and the boundary table (*pcap its capacity). */
+pa_status pa__mesh_adja_compute(const pa_mesh *mesh, pa_idx **out);
+pa_status pa__mesh_balls_compute(const pa_mesh *mesh, pa_idx **pstart,
+                                 pa_idx **pball);
+pa_status pa__mesh_bhash_compute(const pa_mesh *mesh, pa_idx **out,
+                                 size_t *pcap);
+/* Build the boundary table if it is not cached (topo.c). */
+pa_status pa__mesh_bhash_build(pa_mesh *mesh);
+/* Index of the listed boundary entity with vertices v (any order), or -1,
+ * from the boundary table (built). */
+pa_idx pa__mesh_bhash_find(const pa_mesh *mesh, const pa_idx *v);
+/* The checker (check.c): pa_mesh_check but for the metric values, which the
+ * metric component checks (pa__mesh_check_metric, metric/metric.h); input 0
+ * leaves out what only a user's input must meet (manifold vertices, no two
+ * vertices at one point): a piece of the parallel loop may touch itself at a
+ * vertex. */
 pa_status pa__mesh_check(pa_mesh *mesh, int input);
 /* The part of pa__mesh_check a rank's part of a distributed mesh must meet
  * too (its faces on the partition's interfaces are not boundary entities):

@@ -3,7 +3,7 @@
  * its vertices (2D) and edges (3D): no folded or overlapping elements
  * (pa__mesh_check_overlap, part of pa_mesh_check on input meshes).
  *
- * Why this criterion. The other checks (topo.c) make every element positive
+ * Why this criterion. The other checks (check.c) make every element positive
  * and pair every interior face between two elements on opposite sides of it,
  * so the mesh can only fold where elements meet around a lower-dimensional
  * entity: a vertex in 2D, an edge (and then a vertex) in 3D. Around such an

@@ -48,7 +48,7 @@ static inline int pa__sym_index(int i, int j) {
  * tensor (metric.c). */
 int pa__metric_valid(int dim, int ncomp, const double *m);
 /* PA_ERR_METRIC naming the first vertex whose metric value is not valid
- * (ops.c); the part of pa_mesh_check that pa__mesh_check (mesh/topo.c)
+ * (ops.c); the part of pa_mesh_check that pa__mesh_check (mesh/check.c)
  * leaves to this component. */
 pa_status pa__mesh_check_metric(const pa_mesh *mesh);
 
