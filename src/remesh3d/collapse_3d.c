@@ -324,10 +324,10 @@ static int mid_on_entity(rm3d *m, pa_idx p, pa_idx q, const pa_idx *bq,
   const double *xq = m->x + 3 * (size_t)q;
   const double *xp = m->x + 3 * (size_t)p;
   if (!(tq & RM3D_V_BDRY)) {
-    int32_t ref0 = m->tref[bq[0] >> 2];
-    for (int i = 1; i < nb; i++)
-      if (m->tref[bq[i] >> 2] != ref0 && !rm3d_refs_listed(m, bq, nb))
-        return 0;
+    int mixed = 0;
+    for (int i = 1; i < nb && !mixed; i++)
+      mixed = m->tref[bq[i] >> 2] != m->tref[bq[0] >> 2];
+    if (mixed && !rm3d_refs_listed(m, bq, nb)) return 0;
     return !(tp & RM3D_V_BDRY);
   }
   if (!m->surf || !(tp & RM3D_V_BDRY) || ((tp ^ tq) & RM3D_V_FEAT)) return 0;

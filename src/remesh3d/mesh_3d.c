@@ -918,9 +918,10 @@ cleanup:
  * and splits and collapses undo each other there round after round (the
  * 2D remesher had the same disease, docs/design/REMESHER.md).
  *
- * The working metric is relaxed at the skin (as pa__rm2d_skin_relax; the scaling: remesh/skin.c): a
- * frozen vertex whose frozen edges have a mean length lambda outside
- * [1/sqrt 2, sqrt 2] gets its metric scaled so that this mean becomes
+ * The working metric is relaxed at the skin (as in 2D, pa__rm2d_skin_relax;
+ * the scaling is remesh/skin.c's, pa__remesh_skin_relax): a frozen vertex
+ * whose frozen edges have a mean length lambda outside [1/sqrt 2, sqrt 2]
+ * gets its metric scaled so that this mean becomes
  * RM3D_LRELAX = 1.2 (or 1/sqrt 2 for a fine skin); the size then varies
  * linearly to the target over the first input ring (interpolation at the
  * splits). 1.2 rather than the 2D's sqrt 2: the free apex over a frozen

@@ -2,11 +2,10 @@
  * remesher.c -- the remesher plug-in interface: default options, the
  * built-in remesher (its callback sends 2D meshes to src/remesh2d/, 3D ones
  * through longest-edge bisection, remesh/leb.c, to src/remesh3d/), and the
- * driver
- * pa_remesh() that validates the input, prepares the metric (hsiz,
- * hmin/hmax, gradation) and calls a remesher, then carries the element
- * and boundary fields onto the result (remesh/transfer.c). It sits above
- * the two remeshers and the code they share (src/remesh/).
+ * driver pa_remesh() that validates the input, prepares the metric (hsiz,
+ * hmin/hmax, gradation) and calls a remesher, then carries the element and
+ * boundary fields onto the result (remesh/transfer.c). It sits above the
+ * two remeshers and the code they share (src/remesh/).
  *
  * Invariants:
  *  - pa_remesh never leaves a half-changed mesh: the prepared metric is built
