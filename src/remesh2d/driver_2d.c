@@ -137,6 +137,22 @@ static void report_figures(const rm2d *rm, const char *when) {
 /* ---- the passes: each visits the elements in slot order and calls one
  * operator (split_2d.c, collapse_2d.c, swap_2d.c, smooth_2d.c) ---- */
 
+/* Longest-edge propagation splits an edge only when it is also the longest
+ * free edge of the element across. In a fan of needles (a frozen skin
+ * bisected to 1.5 facing an input vertex 24 or more away: the pieces of the
+ * parallel loop, adapt/bisect.c) consecutive spokes differ by less than
+ * the base, so only the longest spoke of a fan qualifies, and a fan of n
+ * needles takes n passes. Where either element is a needle (quality below
+ * RM2D_NEEDLE_Q: its base under a sixth of its spokes), the edge may be
+ * up to RM2D_NEEDLE_TOL shorter than the longest across; the halves of a
+ * needle cut on either spoke are alike. plate2d.mesh -hsiz 0.0005 at 2
+ * ranks: the pieces' refinement rounds 21 and 28 -> 19 and 20 (21
+ * sequentially), both meet their target (one missed it with edges of 10.4
+ * left), the second iteration tags 10 elements instead of 6274; 5 % or
+ * 20 % do the same; the sequential run is unchanged (it has no needles). */
+#define RM2D_NEEDLE_Q 0.3
+#define RM2D_NEEDLE_TOL 0.1
+
 /* Longest free edge of element k above thr: face index or -1, length in *len;
  * *inr (may be NULL) = all three edges settled (rm2d_len_settled). */
 static int longest_free(const rm2d *rm, pa_idx k, double thr, double *len,
@@ -178,7 +194,10 @@ pa_status pa__rm2d_split_pass(rm2d *rm, double thr, long *n) {
       pa_idx f = s / 3;
       if (rm->tflag[f] & RM2D_E_TOUCHED) continue;
       double lf;
-      int jf = longest_free(rm, f, l * (1 + 1e-12), &lf, NULL);
+      double tol = rm->q[k] < RM2D_NEEDLE_Q || rm->q[f] < RM2D_NEEDLE_Q
+                       ? RM2D_NEEDLE_TOL
+                       : 1e-12;
+      int jf = longest_free(rm, f, l * (1 + tol), &lf, NULL);
       if (jf >= 0 && jf != s % 3) continue;
     }
     cnt += pa__rm2d_split_edge(rm, k, i, &st);
