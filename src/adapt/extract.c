@@ -459,9 +459,8 @@ static pa_status piece_skin(pbuild *b) {
      * fans (PA_ADAPT_LEB_INNER_2D) */
     const pa_remesher *r = b->it->opts->remesher;
     int builtin2d = m->dim == 2 && (!r || r == pa_remesher_builtin());
-    const char *dbg_l = getenv("PADAPT_LEB_L2D");
     PA_CALL(pa__piece_refine_skin(
-        b->pc, b->inner, builtin2d ? (dbg_l ? atof(dbg_l) : PA_ADAPT_LEB_INNER_2D) : PA_ADAPT_LEB_INNER,
+        b->pc, b->inner, builtin2d ? PA_ADAPT_LEB_INNER_2D : PA_ADAPT_LEB_INNER,
         surf, !b->it->nocurve));
   }
 cleanup:
