@@ -12,7 +12,8 @@
  * by a remesh, which tag.c tags again only with looser criteria (by how much
  * their piece's frozen skin constrained them). The loop stops when a tag pass
  * over the whole mesh finds nothing (converged: every element of the final mesh
- * meets its criterion), or when it stalls: each iteration in which the
+ * meets its criterion) or a tail that a sequential remesh would leave
+ * (TAIL_SHARE, converged too), or when it stalls: each iteration in which the
  * estimated work of the tagged elements did not fall 1 % below the least seen
  * so far halves the number of pieces of the next one (other borders, and fewer
  * of them; one piece has no inner border), and an iteration with one piece that
@@ -209,8 +210,17 @@ static void iter_init(pa__iter *it, pa_dmesh *dm, const pa_adapt_opts *opts,
   it->iter = iter;
 }
 
+/* A tail of tagged elements at most this share of the mesh, none of which
+ * the sequential remesher's verdict calls missed (pa__adapt_count_missed
+ * strict), ends the loop as converged: they miss only the loop's tighter
+ * bounds for remeshed elements (tag.c), and another iteration passes over
+ * the whole mesh (tag, pieces, splice: 0.45 s of a 6.3 s run on the
+ * 4.85 M-triangle plate at 2 ranks, for 2 triangles). */
+#define TAIL_SHARE 1e-4
+
 /* The tag pass (t[0], t[5]: its time since t0 and peak memory), and
- * whether the loop ends with it (*end, L->rep says how): nothing tagged
+ * whether the loop ends with it (*end, L->rep says how): nothing tagged,
+ * or a tail of TAIL_SHARE that a sequential remesh would leave
  * (converged), or the iterations spent or no progress (converged all the
  * same if nothing still tagged is clearly off, else stalled). Progress:
  * the tagged work 1 % below the least seen so far (work that goes up and
@@ -233,6 +243,18 @@ static pa_status tag_step(pa__iter *it, pa_dmesh_value *done, pa__loop *L,
     *end = 1;
     goto cleanup;
   }
+  if (it->ntagged <= TAIL_SHARE * (double)it->dm->nglob[PA_ELEMENT]) {
+    pa_gid missed = 0;
+    PA_CALL(pa__adapt_count_missed(it, 1, &missed));
+    if (missed == 0) {
+      pa__info(1, "padapt: the loop ends with %lld elements tagged, none "
+                  "that a sequential remesh would leave: converged\n",
+               (long long)it->ntagged);
+      rep->converged = 1;
+      *end = 1;
+      goto cleanup;
+    }
+  }
   L->nostep =
       L->least >= 0 && it->tagwork >= 0.99 * L->least ? L->nostep + 1 : 0;
   if (iter > opts->max_iter ||
@@ -241,7 +263,7 @@ static pa_status tag_step(pa__iter *it, pa_dmesh_value *done, pa__loop *L,
     /* the loop ends: converged all the same if nothing still tagged is
      * clearly off */
     pa_gid missed = 0;
-    PA_CALL(pa__adapt_count_missed(it, &missed));
+    PA_CALL(pa__adapt_count_missed(it, 0, &missed));
     rep->converged = missed == 0;
     rep->stalled = missed > 0;
     pa__info(1, "padapt: the loop ends with %lld elements tagged, %lld "

@@ -301,8 +301,10 @@ void pa__adapt_metric_ctx(pa_dmesh *dm, pa__metric_ctx *c);
  * trusted). */
 pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int fresh);
 /* *missed (all ranks): the tagged elements clearly off (an edge of 2.5 or
- * more, a quality below 0.05; tag.c). Collective; after pa__adapt_tag. */
-pa_status pa__adapt_count_missed(pa__iter *it, pa_gid *missed);
+ * more, a quality below 0.05; tag.c), or with strict, those the sequential
+ * remesher's verdict calls missed (an edge of 2 or more, a quality below
+ * 0.05). Collective; after pa__adapt_tag. */
+pa_status pa__adapt_count_missed(pa__iter *it, int strict, pa_gid *missed);
 
 /* Step 2. Collective: pieces, labels, vertex label ranges and inner marks
  * (it->vlab, it->vinner). npieces_max is

@@ -269,12 +269,12 @@ cleanup:
   return st;
 }
 
-pa_status pa__adapt_count_missed(pa__iter *it, pa_gid *missed) {
+pa_status pa__adapt_count_missed(pa__iter *it, int strict, pa_gid *missed) {
   pa_status st = PA_SUCCESS;
   const pa_mesh *m = it->dm->mesh;
   double lo, hi, qmin, n = 0;
   criteria(PA_ADAPT_DONE_FREE, it->opts->qual_threshold, &lo, &hi, &qmin);
-  hi = LEN_CLEARLY_OFF;
+  if (!strict) hi = LEN_CLEARLY_OFF;
   for (pa_idx e = 0; e < it->ne; e++) {
     if (!it->tag[e]) continue;
     int bad = bad_edge(m, e, lo, hi);

@@ -2,12 +2,14 @@
  * test_adapt.c -- the parallel adaptation driver (pa_dmesh_adapt) with the
  * example bisection remesher and the built-in remesher: valid conforming
  * output (collective check, and again after gathering), volume kept,
- * convergence, and the statistics of pa_dmesh_stats equal to those of the
- * gathered mesh. Runs at any number of ranks.
+ * convergence (and a tail of tagged elements ending it), and the
+ * statistics of pa_dmesh_stats equal to those of the gathered mesh. Runs
+ * at any number of ranks.
  */
 #include "testutil.h"
 #include "bisect_remesher.h"
 
+#include <math.h>
 #include <mpi.h>
 
 
@@ -114,4 +116,48 @@ static void test_builtin(void) {
   pa_dmesh_destroy(dm);
 }
 
-TEST_MPI_MAIN(test_bisect_uniform, test_bisect_3d, test_builtin)
+/* box2d n at size 1.05 / n (every edge in range, nothing tagged) with its
+ * vertex at (0.5, 0.5) moved by f cells in x, distributed. */
+static pa_dmesh *make_moved(int n, double f) {
+  pa_mesh *m = NULL;
+  pa_dmesh *dm = NULL;
+  if (pa_test_rank == 0) {
+    CHECK_OK(pa_mesh_generate_box(2, n, &m));
+    double *x = pa_mesh_coords(m);
+    for (pa_idx v = 0; v < pa_mesh_nvert(m); v++)
+      if (fabs(x[2 * v] - 0.5) < 0.1 / n && fabs(x[2 * v + 1] - 0.5) < 0.1 / n)
+        x[2 * v] += f / n;
+  }
+  CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, m, 0, &dm));
+  pa_mesh_destroy(m);
+  return dm;
+}
+
+/* A tail of tagged elements (a few in 180 000) that a sequential remesh
+ * would leave as they are (a short edge, a long one under 2, no quality
+ * under 0.05) ends the loop as converged before any piece; one with a
+ * quality under 0.05 is remeshed. */
+static void test_tail(void) {
+  for (int bad = 0; bad < 2; bad++) {
+    pa_dmesh *dm = make_moved(300, bad ? 0.97 : 0.6);
+    pa_adapt_opts o;
+    pa_adapt_report rep;
+    pa_adapt_opts_default(&o);
+    o.remesh.hsiz = 1.05 / 300;
+    CHECK_OK(pa_dmesh_adapt(dm, &o, &rep));
+    CHECK(rep.converged);
+    if (bad) {
+      CHECK(rep.npieces >= 1);
+    } else {
+      CHECK(rep.npieces == 0);
+      CHECK(rep.ntagged_left > 0 && rep.ntagged_left <= 18);
+    }
+    if (pa_test_rank == 0)
+      printf("tail (%s): %lld tagged left, %d iterations, %ld pieces\n",
+             bad ? "a sliver" : "edges out of range",
+             (long long)rep.ntagged_left, rep.niter, rep.npieces);
+    pa_dmesh_destroy(dm);
+  }
+}
+
+TEST_MPI_MAIN(test_bisect_uniform, test_bisect_3d, test_builtin, test_tail)
