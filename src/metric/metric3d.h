@@ -74,10 +74,35 @@ static inline double pa__len3(int mc, const double *a, const double *b,
  * magnify it) or whose mean tensor is not positive. With sizes (mc 1, or
  * the identity, mc 0) the mean M = s I scales V^2 and l^6 alike: the
  * quality is Euclidean and the sizes are not read. */
+/* pa__qual3 with sizes or the identity (mc <= 1): Euclidean, no metric
+ * read. Its own function so the remeshers' isotropic inner loops (moves,
+ * swaps) need not gather metrics nor pass them; the same operations, so
+ * the same bits as pa__qual3. */
+static inline double pa__qual3_iso(const double *p0, const double *p1,
+                                   const double *p2, const double *p3) {
+  double a[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+  double b[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+  double c[3] = {p3[0] - p0[0], p3[1] - p0[1], p3[2] - p0[2]};
+  double det = a[0] * (b[1] * c[2] - b[2] * c[1]) -
+               a[1] * (b[0] * c[2] - b[2] * c[0]) +
+               a[2] * (b[0] * c[1] - b[1] * c[0]);
+  if (det <= 0.0) return det < 0.0 ? -1.0 : 0.0;
+  double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  double e[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  double f[3] = {c[0] - b[0], c[1] - b[1], c[2] - b[2]};
+  double s = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + b[0] * b[0] +
+             b[1] * b[1] + b[2] * b[2] + c[0] * c[0] + c[1] * c[1] +
+             c[2] * c[2] + d[0] * d[0] + d[1] * d[1] + d[2] * d[2] +
+             e[0] * e[0] + e[1] * e[1] + e[2] * e[2] + f[0] * f[0] +
+             f[1] * f[1] + f[2] * f[2];
+  return PA_METRIC_QUAL_NORM_3D_DET * det / (s * sqrt(s));
+}
+
 static inline double pa__qual3(int mc, const double *p0, const double *p1,
                                const double *p2, const double *p3,
                                const double *m0, const double *m1,
                                const double *m2, const double *m3) {
+  if (mc <= 1) return pa__qual3_iso(p0, p1, p2, p3);
   double a[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
   double b[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
   double c[3] = {p3[0] - p0[0], p3[1] - p0[1], p3[2] - p0[2]};
@@ -89,13 +114,6 @@ static inline double pa__qual3(int mc, const double *p0, const double *p1,
   double e[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
   double f[3] = {c[0] - b[0], c[1] - b[1], c[2] - b[2]};
   double s;
-  if (mc <= 1) {
-    s = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + b[0] * b[0] + b[1] * b[1] +
-        b[2] * b[2] + c[0] * c[0] + c[1] * c[1] + c[2] * c[2] + d[0] * d[0] +
-        d[1] * d[1] + d[2] * d[2] + e[0] * e[0] + e[1] * e[1] + e[2] * e[2] +
-        f[0] * f[0] + f[1] * f[1] + f[2] * f[2];
-    return PA_METRIC_QUAL_NORM_3D_DET * det / (s * sqrt(s));
-  }
   double se = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + b[0] * b[0] +
               b[1] * b[1] + b[2] * b[2] + c[0] * c[0] + c[1] * c[1] +
               c[2] * c[2];

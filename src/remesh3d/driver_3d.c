@@ -77,16 +77,18 @@ static void lengths6(const rm3d *m, const pa_idx *v, double *L) {
       L[e] = rm3d_len(m, v[pa__rm3d_edge[e][0]], v[pa__rm3d_edge[e][1]]);
     return;
   }
-  const double *x[4];
-  double inv[4];
-  for (int j = 0; j < 4; j++) {
-    x[j] = m->x + 3 * (size_t)v[j];
-    inv[j] = 1.0 / m->met[v[j]];
-  }
-  for (int e = 0; e < 6; e++) {
-    int i = pa__rm3d_edge[e][0], j = pa__rm3d_edge[e][1];
-    L[e] = pa__len3_inv(x[i], x[j], inv[i], inv[j]);
-  }
+  /* unrolled in pa__rm3d_edge's order: the passes call this for every
+   * tet they visit */
+  const double *x0 = m->x + 3 * (size_t)v[0], *x1 = m->x + 3 * (size_t)v[1],
+               *x2 = m->x + 3 * (size_t)v[2], *x3 = m->x + 3 * (size_t)v[3];
+  double i0 = 1.0 / m->met[v[0]], i1 = 1.0 / m->met[v[1]],
+         i2 = 1.0 / m->met[v[2]], i3 = 1.0 / m->met[v[3]];
+  L[0] = pa__len3_inv(x0, x1, i0, i1);
+  L[1] = pa__len3_inv(x0, x2, i0, i2);
+  L[2] = pa__len3_inv(x0, x3, i0, i3);
+  L[3] = pa__len3_inv(x1, x2, i1, i2);
+  L[4] = pa__len3_inv(x1, x3, i1, i3);
+  L[5] = pa__len3_inv(x2, x3, i2, i3);
 }
 
 /* Order of the 6 edges by length, decreasing (dir > 0) or increasing. */
@@ -329,10 +331,29 @@ cleanup:
   return st;
 }
 
+/* Room in m->vfail for every vertex; the new entries say nothing was
+ * refused. */
+static pa_status vfail_fit(rm3d *m) {
+  pa_status st = PA_SUCCESS;
+  if (m->nv <= m->nvfail) return st;
+  size_t n = m->capv > (size_t)m->nv ? m->capv : (size_t)m->nv;
+  uint8_t *f = pa__realloc(m->vfail, n);
+  PA_CHECK(f, PA_ERR_MEMORY, "out of memory allocating %zu bytes", n);
+  memset(f + m->nvfail, 0, n - (size_t)m->nvfail);
+  m->vfail = f;
+  m->nvfail = (pa_idx)n;
+cleanup:
+  return st;
+}
+
+/* The move passes skip a vertex whose last try of the same kind was
+ * refused while its ball has not changed since (m->vfail): the try would
+ * be refused again, so the output is the same as without the skip. */
 pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, long *count) {
   pa_status st = PA_SUCCESS;
   pa_idx ball[RM3D_MAXBALL];
   long c = 0;
+  PA_CALL(vfail_fit(m));
   /* first the vertices off the model onto it (pa__rm3d_snap_vertex) */
   for (pa_idx p = 0; m->voff && p < m->nv; p++)
     c += pa__rm3d_snap_vertex(m, p, ball);
@@ -344,8 +365,12 @@ pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, long *count) {
   for (pa_idx p = 0; p < m->nv; p++) {
     if (!(m->vtag[p] & RM3D_V_TODO)) continue;
     m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
-    c += pa__rm3d_smooth_vertex(m, p, ball);
+    if (m->vfail[p] & RM3D_VF_SMOOTH) continue;
+    int moved = pa__rm3d_smooth_vertex(m, p, ball);
+    if (!moved) m->vfail[p] |= RM3D_VF_SMOOTH;
+    c += moved;
   }
+cleanup:
   *count = c;
   return st;
 }
@@ -394,6 +419,7 @@ pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count) {
   pa_idx ball[RM3D_MAXBALL];
   uint8_t *ls = NULL; /* LEN_* */
   long c = 0;
+  PA_CALL(vfail_fit(m));
   for (pa_idx k = 0; k < m->ne; k++) {
     if (m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN | RM3D_T_CLEAN)) continue;
     const pa_idx *v = m->tv + 4 * (size_t)k;
@@ -414,7 +440,10 @@ pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count) {
     for (pa_idx p = 0; p < m->nv; p++) {
       if (!(m->vtag[p] & RM3D_V_TODO)) continue;
       m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
-      int n = pa__rm3d_length_vertex(m, p, ball);
+      int n = m->vfail[p] & RM3D_VF_LENGTH
+                  ? 0
+                  : pa__rm3d_length_vertex(m, p, ball);
+      if (!n) m->vfail[p] |= RM3D_VF_LENGTH;
       if (!ls) {
         moved += n != 0;
         continue;

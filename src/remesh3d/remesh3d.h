@@ -114,6 +114,12 @@ typedef struct rm3d {
    * closed shell none of whose tets changed since (pa__rm3d_swap_edge). */
   uint8_t *swapfail;
   pa_idx nswapfail;
+  /* Bits RM3D_VF_* of vfail[p] (p < nvfail; NULL before the first move
+   * pass): the last smoothing or length move of p was refused and no tet
+   * of its ball changed since, so the same try would be refused again
+   * (rm3d_touch clears them; a compaction forgets them all). */
+  uint8_t *vfail;
+  pa_idx nvfail;
   /* The quality no operator goes below (rm3d_q_min): RM3D_QABS, or less
    * when the input's worst free tet is already poorer (set by build). */
   double qabs;
@@ -194,6 +200,21 @@ static inline int rm3d_q_ok(const rm3d *m, double q, double qref) {
 #define RM3D_MAXSHELL 64
 #define RM3D_MAXBALL 512
 
+enum {
+  RM3D_VF_SMOOTH = 1, /* pa__rm3d_smooth_vertex refused */
+  RM3D_VF_LENGTH = 2  /* pa__rm3d_length_vertex refused */
+};
+
+/* Tet t changed (its vertices, their positions or metrics, its faces'
+ * tags or neighbours): its vertices' refused moves may succeed now. Every
+ * operator calls it where it sets the tet's cached quality. */
+static inline void rm3d_touch(rm3d *m, pa_idx t) {
+  if (!m->nvfail) return;
+  const pa_idx *v = m->tv + 4 * (size_t)t;
+  for (int j = 0; j < 4; j++)
+    if (v[j] < m->nvfail) m->vfail[v[j]] = 0;
+}
+
 /* Local index of vertex x in tet vertices v, -1 if absent. */
 static inline int rm3d_loc(const pa_idx *v, pa_idx x) {
   return v[0] == x ? 0 : v[1] == x ? 1 : v[2] == x ? 2 : v[3] == x ? 3 : -1;
@@ -257,13 +278,12 @@ static inline double rm3d_tri_normal(const double *a, const double *b,
 static inline double rm3d_qual_moved(const rm3d *m, pa_idx t, int ip,
                                      const double *x, const double *met) {
   const pa_idx *v = m->tv + 4 * (size_t)t;
-  const double *px[4], *pm[4] = {NULL, NULL, NULL, NULL};
+  const double *px[4], *pm[4];
   for (int j = 0; j < 4; j++) px[j] = m->x + 3 * (size_t)v[j];
   px[ip] = x;
-  if (m->mc > 1) {
-    for (int j = 0; j < 4; j++) pm[j] = m->met + (size_t)m->mc * v[j];
-    pm[ip] = met;
-  }
+  if (m->mc <= 1) return pa__qual3_iso(px[0], px[1], px[2], px[3]);
+  for (int j = 0; j < 4; j++) pm[j] = m->met + (size_t)m->mc * v[j];
+  pm[ip] = met;
   return pa__qual3(m->mc, px[0], px[1], px[2], px[3], pm[0], pm[1], pm[2],
                    pm[3]);
 }
@@ -272,6 +292,9 @@ static inline double rm3d_qual_moved(const rm3d *m, pa_idx t, int ip,
 static inline double rm3d_qual_v(const rm3d *m, const pa_idx *v) {
   const double *x = m->x, *mt = m->met;
   int mc = m->mc;
+  if (mc <= 1)
+    return pa__qual3_iso(x + 3 * (size_t)v[0], x + 3 * (size_t)v[1],
+                         x + 3 * (size_t)v[2], x + 3 * (size_t)v[3]);
   return pa__qual3(mc, x + 3 * (size_t)v[0], x + 3 * (size_t)v[1],
                    x + 3 * (size_t)v[2], x + 3 * (size_t)v[3],
                    mt + (size_t)mc * v[0], mt + (size_t)mc * v[1],

@@ -244,6 +244,7 @@ static void apply_move(rm3d *m, pa_idx p, const pa_idx *ball, int n,
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
     m->q[t] = mc == 6 ? (float)rm3d_qual_v(m, m->tv + 4 * (size_t)t) : nq[i];
+    rm3d_touch(m, t);
     if (!p_in_range) m->tflag[t] &= (uint8_t)~RM3D_T_CLEAN;
   }
   m->nmove++;

@@ -9,30 +9,14 @@
  */
 #include "remesh3d/remesh3d.h"
 
+/* Forward from k: around a closed shell once. An open one is completed
+ * by a walk backward from k, whose tets go in front (the shell then starts
+ * at its boundary face). */
 int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
                    pa_idx *ring, int max, int *info) {
-  int inf = 0, steps = 0;
-  pa_idx t = k, start = k;
-  /* Walk backwards to the start of an open shell (or around a closed one). */
-  for (;;) {
-    const pa_idx *v = m->tv + 4 * (size_t)t;
-    int ia = rm3d_loc(v, a), ib = rm3d_loc(v, b);
-    int id = pa__rm3d_compl[ia][ib][1];
-    pa_idx nb = m->adj[4 * (size_t)t + id];
-    if (nb < 0) {
-      start = t;
-      break;
-    }
-    t = nb >> 2;
-    if (t == k) {
-      inf |= RM3D_SH_CLOSED;
-      break;
-    }
-    if (++steps > max) return -1;
-  }
-  int n = 0;
-  int32_t ref0 = m->tref[start];
-  t = start;
+  int inf = 0, n = 0;
+  int32_t ref0 = m->tref[k];
+  pa_idx t = k;
   for (;;) {
     if (n >= max) return -1;
     const pa_idx *v = m->tv + 4 * (size_t)t;
@@ -51,10 +35,42 @@ int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
       break;
     }
     t = nb >> 2;
-    if (t == start) {
+    if (t == k) {
       ring[n] = ring[0];
-      break;
+      *info = inf | RM3D_SH_CLOSED;
+      return n;
     }
+  }
+  /* Open: count the tets behind k, make room, then fill them in. */
+  int nback = 0;
+  for (t = k;;) {
+    const pa_idx *v = m->tv + 4 * (size_t)t;
+    int id = pa__rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][1];
+    pa_idx nb = m->adj[4 * (size_t)t + id];
+    if (nb < 0) break;
+    t = nb >> 2;
+    if (n + ++nback > max) return -1;
+  }
+  if (nback) {
+    memmove(tets + nback, tets, (size_t)n * sizeof *tets);
+    memmove(ring + nback, ring, (size_t)(n + 1) * sizeof *ring);
+    int i = nback;
+    for (t = k; i > 0;) {
+      const pa_idx *v = m->tv + 4 * (size_t)t;
+      int id = pa__rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][1];
+      t = m->adj[4 * (size_t)t + id] >> 2;
+      v = m->tv + 4 * (size_t)t;
+      int ia = rm3d_loc(v, a), ib = rm3d_loc(v, b);
+      int ic = pa__rm3d_compl[ia][ib][0];
+      id = pa__rm3d_compl[ia][ib][1];
+      tets[--i] = t;
+      ring[i] = v[ic];
+      uint8_t fl = m->tflag[t];
+      if (fl & ((1u << ic) | (1u << id))) inf |= RM3D_SH_BDRY;
+      if (fl & RM3D_T_FROZEN) inf |= RM3D_SH_FROZEN;
+      if (m->tref[t] != ref0) inf |= RM3D_SH_REFS;
+    }
+    n += nback;
   }
   *info = inf;
   return n;
@@ -197,6 +213,7 @@ pa_status pa__rm3d_replace(rm3d *m, const pa_idx *old, int nold,
     if (t < m->nswapfail) m->swapfail[t] = 0;
     for (int j = 0; j < 4; j++) m->vtet[v[j]] = t;
     m->q[t] = (float)rm3d_qual_v(m, v);
+    rm3d_touch(m, t);
     m->tflag[t] &= (uint8_t)~RM3D_T_CLEAN;
   }
 cleanup:
