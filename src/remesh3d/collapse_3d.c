@@ -48,8 +48,6 @@ static pa_status collapse_apply(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball,
       m->adj[o2] = o1;
       if (tag) m->tflag[o2 >> 2] |= (uint8_t)(1u << (o2 & 3));
     }
-    if (o1 >= 0) rm3d_touch(m, o1 >> 2); /* a face tag or neighbour */
-    if (o2 >= 0) rm3d_touch(m, o2 >> 2);
     pa_idx keep = o1 >= 0 ? (o1 >> 2) : (o2 >> 2);
     for (int j = 0; j < 4; j++)
       if (j != ip && j != iq) m->vtet[v[j]] = keep;
@@ -61,7 +59,6 @@ static pa_status collapse_apply(rm3d *m, pa_idx p, pa_idx q, const pa_idx *ball,
     pa_idx t = ball[i] >> 2;
     m->tv[4 * (size_t)t + (ball[i] & 3)] = q;
     m->q[t] = nq[i];
-    rm3d_touch(m, t);
     m->tflag[t] &= (uint8_t)~RM3D_T_CLEAN;
     m->vtet[q] = t;
   }
@@ -422,7 +419,6 @@ static pa_status collapse_at_mid(rm3d *m, pa_idx p, pa_idx q,
   }
   for (int i = 0; i < nb; i++) { /* q moves: its ball changes */
     m->tflag[bq[i] >> 2] &= (uint8_t)~RM3D_T_CLEAN;
-    rm3d_touch(m, bq[i] >> 2);
     if (nq[i] >= 0) m->q[bq[i] >> 2] = nq[i];
   }
   *done = 0;

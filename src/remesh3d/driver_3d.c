@@ -331,32 +331,15 @@ cleanup:
   return st;
 }
 
-/* Room in m->vfail for every vertex; the new entries say nothing was
- * refused. */
-static pa_status vfail_fit(rm3d *m) {
+pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, rm3d_balls *b,
+                               long *count) {
   pa_status st = PA_SUCCESS;
-  if (m->nv <= m->nvfail) return st;
-  size_t n = m->capv > (size_t)m->nv ? m->capv : (size_t)m->nv;
-  uint8_t *f = pa__realloc(m->vfail, n);
-  PA_CHECK(f, PA_ERR_MEMORY, "out of memory allocating %zu bytes", n);
-  memset(f + m->nvfail, 0, n - (size_t)m->nvfail);
-  m->vfail = f;
-  m->nvfail = (pa_idx)n;
-cleanup:
-  return st;
-}
-
-/* The move passes skip a vertex whose last try of the same kind was
- * refused while its ball has not changed since (m->vfail): the try would
- * be refused again, so the output is the same as without the skip. */
-pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, long *count) {
-  pa_status st = PA_SUCCESS;
-  pa_idx ball[RM3D_MAXBALL];
+  pa_idx sball[RM3D_MAXBALL];
   long c = 0;
-  PA_CALL(vfail_fit(m));
   /* first the vertices off the model onto it (pa__rm3d_snap_vertex) */
   for (pa_idx p = 0; m->voff && p < m->nv; p++)
-    c += pa__rm3d_snap_vertex(m, p, ball);
+    c += pa__rm3d_snap_vertex(m, p, sball);
+  if (!b->start) PA_CALL(pa__rm3d_balls_build(m, b));
   for (pa_idx k = 0; k < m->ne; k++) {
     if ((m->tflag[k] & RM3D_T_DEAD) || m->q[k] >= qthr) continue;
     for (int j = 0; j < 4; j++)
@@ -365,10 +348,9 @@ pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, long *count) {
   for (pa_idx p = 0; p < m->nv; p++) {
     if (!(m->vtag[p] & RM3D_V_TODO)) continue;
     m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
-    if (m->vfail[p] & RM3D_VF_SMOOTH) continue;
-    int moved = pa__rm3d_smooth_vertex(m, p, ball);
-    if (!moved) m->vfail[p] |= RM3D_VF_SMOOTH;
-    c += moved;
+    const pa_idx *ball;
+    int n = rm3d_balls_get(b, p, &ball);
+    c += pa__rm3d_smooth_vertex(m, p, ball, n);
   }
 cleanup:
   *count = c;
@@ -414,12 +396,12 @@ static void len_mark(rm3d *m, pa_idx p, const pa_idx *ball, int n,
   }
 }
 
-pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count) {
+pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, rm3d_balls *b,
+                               long *count) {
   pa_status st = PA_SUCCESS;
-  pa_idx ball[RM3D_MAXBALL];
   uint8_t *ls = NULL; /* LEN_* */
   long c = 0;
-  PA_CALL(vfail_fit(m));
+  if (!b->start) PA_CALL(pa__rm3d_balls_build(m, b));
   for (pa_idx k = 0; k < m->ne; k++) {
     if (m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN | RM3D_T_CLEAN)) continue;
     const pa_idx *v = m->tv + 4 * (size_t)k;
@@ -440,10 +422,9 @@ pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count) {
     for (pa_idx p = 0; p < m->nv; p++) {
       if (!(m->vtag[p] & RM3D_V_TODO)) continue;
       m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
-      int n = m->vfail[p] & RM3D_VF_LENGTH
-                  ? 0
-                  : pa__rm3d_length_vertex(m, p, ball);
-      if (!n) m->vfail[p] |= RM3D_VF_LENGTH;
+      const pa_idx *ball;
+      int nb = rm3d_balls_get(b, p, &ball);
+      int n = pa__rm3d_length_vertex(m, p, ball, nb);
       if (!ls) {
         moved += n != 0;
         continue;
@@ -458,10 +439,10 @@ pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count) {
     c += moved;
     if (!moved || !ls || s + 1 == sweeps) break;
     for (pa_idx p = 0; p < m->nv; p++) {
-      uint8_t b = ls[p];
-      ls[p] = (uint8_t)((b & LEN_OUT) | ((b & LEN_BALL) ? LEN_CAND : 0));
-      if (!(b & LEN_BALL) || (m->vtag[p] & RM3D_V_DEAD)) continue;
-      if (b & LEN_OUT) m->vtag[p] |= RM3D_V_TODO;
+      uint8_t l = ls[p];
+      ls[p] = (uint8_t)((l & LEN_OUT) | ((l & LEN_BALL) ? LEN_CAND : 0));
+      if (!(l & LEN_BALL) || (m->vtag[p] & RM3D_V_DEAD)) continue;
+      if (l & LEN_OUT) m->vtag[p] |= RM3D_V_TODO;
     }
   }
   *count = c;
@@ -788,6 +769,7 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
                                int *step, int *npass) {
   pa_status st = PA_SUCCESS;
   pa__rounds rounds;
+  rm3d_balls balls = {NULL, NULL};
   /* Balanced splits and collapses are a ping-pong only with frozen
    * entities: the anisotropic shell balances them too, and stopping it
    * early loses edges in range (docs/BENCHMARKS.md, "The 3D remesher"). */
@@ -807,8 +789,9 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
     double t4 = pa_wtime();
     if (!opts->no_move) {
       long nl = 0;
-      PA_CALL(pa__rm3d_smooth_pass(m, RM3D_QSMOOTH, &nm));
-      PA_CALL(pa__rm3d_length_pass(m, 1, &nl));
+      PA_CALL(pa__rm3d_smooth_pass(m, RM3D_QSMOOTH, &balls, &nm));
+      PA_CALL(pa__rm3d_length_pass(m, 1, &balls, &nl));
+      pa__rm3d_balls_free(&balls);
       nm += nl;
     }
     double t5 = pa_wtime();
@@ -823,6 +806,7 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
     if (pa__rounds_stop(&rounds, ns, nvc, m->ne - m->ndead_t)) break;
   }
 cleanup:
+  pa__rm3d_balls_free(&balls);
   return st;
 }
 
@@ -831,6 +815,7 @@ cleanup:
  * passes. */
 static pa_status optimise(rm3d *m, const pa_remesh_opts *opts, int *npass) {
   pa_status st = PA_SUCCESS;
+  rm3d_balls balls = {NULL, NULL};
   for (int it = 0; it < 3; it++, (*npass)++) {
     long nc = 0, nw = 0, nm = 0;
     /* The swaps (Q < 0.7) and moves of this phase unlock short edges the
@@ -843,8 +828,9 @@ static pa_status optimise(rm3d *m, const pa_remesh_opts *opts, int *npass) {
     if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(m, 0.7, 1.01, &nw));
     if (!opts->no_move) {
       long nl = 0;
-      PA_CALL(pa__rm3d_smooth_pass(m, RM3D_QSMOOTH, &nm));
-      PA_CALL(pa__rm3d_length_pass(m, RM3D_LENGTH_SWEEPS, &nl));
+      PA_CALL(pa__rm3d_smooth_pass(m, RM3D_QSMOOTH, &balls, &nm));
+      PA_CALL(pa__rm3d_length_pass(m, RM3D_LENGTH_SWEEPS, &balls, &nl));
+      pa__rm3d_balls_free(&balls);
       nm += nl;
     }
     if (m->verbosity > 0)
@@ -861,10 +847,11 @@ static pa_status optimise(rm3d *m, const pa_remesh_opts *opts, int *npass) {
    * keep the worst quality at min(its old value, RM3D_QLEN)). */
   if (!opts->no_move) {
     long nl = 0;
-    PA_CALL(pa__rm3d_length_pass(m, RM3D_LENGTH_SWEEPS, &nl));
+    PA_CALL(pa__rm3d_length_pass(m, RM3D_LENGTH_SWEEPS, &balls, &nl));
     if (m->verbosity > 0) fprintf(stderr, "  rm3d length moves: %ld\n", nl);
   }
 cleanup:
+  pa__rm3d_balls_free(&balls);
   return st;
 }
 

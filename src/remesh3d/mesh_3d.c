@@ -241,7 +241,6 @@ void pa__rm3d_free(rm3d *m) {
   pa__free(m->vtet);
   pa__free(m->nrm);
   pa__free(m->voff);
-  pa__free(m->vfail);
   pa__free(m->tv);
   pa__free(m->adj);
   pa__free(m->q);
@@ -465,9 +464,6 @@ cleanup:
 pa_status pa__rm3d_compact(rm3d *m, int keep_q) {
   pa_status st = PA_SUCCESS;
   pa_idx *newt = NULL;
-  pa__free(m->vfail); /* indexed by the old numbers (the reordering too) */
-  m->vfail = NULL;
-  m->nvfail = 0;
   if (m->ndead_t == 0 && m->ndead_v == 0 && (keep_q || !m->q)) return st;
   /* The quality cache is rebuilt afterwards: free it first so that the
    * renumbering scratch does not raise the memory peak. */

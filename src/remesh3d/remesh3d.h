@@ -114,12 +114,6 @@ typedef struct rm3d {
    * closed shell none of whose tets changed since (pa__rm3d_swap_edge). */
   uint8_t *swapfail;
   pa_idx nswapfail;
-  /* Bits RM3D_VF_* of vfail[p] (p < nvfail; NULL before the first move
-   * pass): the last smoothing or length move of p was refused and no tet
-   * of its ball changed since, so the same try would be refused again
-   * (rm3d_touch clears them; a compaction forgets them all). */
-  uint8_t *vfail;
-  pa_idx nvfail;
   /* The quality no operator goes below (rm3d_q_min): RM3D_QABS, or less
    * when the input's worst free tet is already poorer (set by build). */
   double qabs;
@@ -199,21 +193,6 @@ static inline int rm3d_q_ok(const rm3d *m, double q, double qref) {
 #define RM3D_LNB 128 /* neighbours of a vertex a length move handles */
 #define RM3D_MAXSHELL 64
 #define RM3D_MAXBALL 512
-
-enum {
-  RM3D_VF_SMOOTH = 1, /* pa__rm3d_smooth_vertex refused */
-  RM3D_VF_LENGTH = 2  /* pa__rm3d_length_vertex refused */
-};
-
-/* Tet t changed (its vertices, their positions or metrics, its faces'
- * tags or neighbours): its vertices' refused moves may succeed now. Every
- * operator calls it where it sets the tet's cached quality. */
-static inline void rm3d_touch(rm3d *m, pa_idx t) {
-  if (!m->nvfail) return;
-  const pa_idx *v = m->tv + 4 * (size_t)t;
-  for (int j = 0; j < 4; j++)
-    if (v[j] < m->nvfail) m->vfail[v[j]] = 0;
-}
 
 /* Local index of vertex x in tet vertices v, -1 if absent. */
 static inline int rm3d_loc(const pa_idx *v, pa_idx x) {
@@ -351,6 +330,24 @@ int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
 /* Ball of vertex p (from vtet[p]): entries 4*t + local index of p. Returns
  * the count, or -1 when larger than max. */
 int pa__rm3d_ball(rm3d *m, pa_idx p, pa_idx *ball, int max);
+/* Every vertex's ball at once, for the move passes, which change no tet's
+ * vertices and would otherwise walk a ball per vertex they try:
+ * ent[start[p]..start[p+1]) holds 4*t + the local index of p for each live
+ * tet t holding p, in the order of t. Valid until a tet changes its
+ * vertices (a split, collapse or swap). */
+typedef struct rm3d_balls {
+  pa_idx *start, *ent; /* NULL: not built */
+} rm3d_balls;
+pa_status pa__rm3d_balls_build(const rm3d *m, rm3d_balls *b);
+void pa__rm3d_balls_free(rm3d_balls *b);
+/* The ball of p in *ball; its count, -1 if larger than RM3D_MAXBALL or
+ * empty (a dead vertex), as pa__rm3d_ball counts. */
+static inline int rm3d_balls_get(const rm3d_balls *b, pa_idx p,
+                                 const pa_idx **ball) {
+  pa_idx s = b->start[p], n = b->start[p + 1] - s;
+  *ball = b->ent + s;
+  return n > 0 && n <= RM3D_MAXBALL ? (int)n : -1;
+}
 
 /* Split the edge (a,b) of tet k at its midpoint if allowed and acceptable.
  * *done = 1 when split. */
@@ -407,15 +404,17 @@ int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
 /* The metric at the midpoint of edge ab (geometric mean of the sizes, or
  * the interpolated tensor), as the split uses it (split_3d.c). */
 void pa__rm3d_mid_metric(const rm3d *m, pa_idx a, pa_idx b, double *mp);
-/* Relocate vertex p to bring the lengths of its edges into range: a
- * Gauss-Newton step on sum ln^2 L_i over its edges, halved up to three
- * times, kept when fewer of its edges are out of range (or as many, with
- * the sum down by RM3D_LGAIN) and the ball's worst quality stays at least
- * min(its old worst, RM3D_QLEN). When moved, the size of p's ball, left
- * in ball; 0 otherwise. */
-int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball);
-/* Relocate vertex p to raise the worst quality of its ball. */
-int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball);
+/* Relocate vertex p (its ball[0..n) as pa__rm3d_ball gives it, in any
+ * order; n = -1, a ball too large, refuses) to bring the lengths of its
+ * edges into range: a Gauss-Newton step on sum ln^2 L_i over its edges,
+ * halved up to three times, kept when fewer of its edges are out of range
+ * (or as many, with the sum down by RM3D_LGAIN) and the ball's worst
+ * quality stays at least min(its old worst, RM3D_QLEN). n when moved, 0
+ * otherwise. */
+int pa__rm3d_length_vertex(rm3d *m, pa_idx p, const pa_idx *ball, int n);
+/* Relocate vertex p (its ball[0..n), as above) to raise the worst quality
+ * of its ball. 1 when moved. */
+int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, const pa_idx *ball, int n);
 /* Move the free interior vertex p by delta (metric length) in a direction
  * drawn from the bits of its coordinates, if no tet of its ball falls under
  * half the ball's worst quality (nor under RM3D_QFLOOR). 1 when moved. */
@@ -433,8 +432,13 @@ pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count);
 pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, double guard,
                                  long *count);
 pa_status pa__rm3d_swap_pass(rm3d *m, double qthr, double gain, long *count);
-pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, long *count);
-pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count);
+/* The move passes take the balls b of every vertex (rm3d_balls), built by
+ * the first that finds them unbuilt: a smoothing pass and the length
+ * pass after it share them. The caller frees them. */
+pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, rm3d_balls *b,
+                               long *count);
+pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, rm3d_balls *b,
+                               long *count);
 
 /* Interpolation of a new vertex's metric and fields as a weighted mean of
  * vertices src[0..n) (pa__metric_interp for the metric). */

@@ -244,7 +244,6 @@ static void apply_move(rm3d *m, pa_idx p, const pa_idx *ball, int n,
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
     m->q[t] = mc == 6 ? (float)rm3d_qual_v(m, m->tv + 4 * (size_t)t) : nq[i];
-    rm3d_touch(m, t);
     if (!p_in_range) m->tflag[t] &= (uint8_t)~RM3D_T_CLEAN;
   }
   m->nmove++;
@@ -387,7 +386,7 @@ static int moved_qualities(const rm3d *m, const pa_idx *ball, int n,
 /* Move p by c, else by half or a quarter of it, to the first position
  * that raises the ball's worst quality qold (and on a curved patch, kind 3,
  * projects onto the surface of tri[0..ntri) and keeps its normals). */
-static int try_smooth(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
+static int try_smooth(rm3d *m, pa_idx p, const pa_idx *ball, int n, int kind,
                       const pa_idx *tri, int ntri, double hausd,
                       const double *c, double qold, int first) {
   const double *xp = m->x + 3 * (size_t)p;
@@ -413,10 +412,9 @@ static int try_smooth(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
   return 0;
 }
 
-int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
+int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, const pa_idx *ball, int n) {
   if (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) return 0;
   if ((m->vtag[p] & RM3D_V_BDRY) && !m->surf) return 0;
-  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
   if (n < 0) return 0;
   int kind = 0;
   double dir[3] = {0, 0, 0};
@@ -697,7 +695,8 @@ static void worst_edge_step(const rm3d *m, pa_idx p, const len_ctx *lc,
 /* Move p by d, then by d2, each at steps 1, 1/2, 1/4, 1/8, to the first
  * position with fewer edges out of range (or as many and a sum of ln^2 L
  * less by RM3D_LGAIN) that keeps the ball's quality. */
-static int try_length_moves(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
+static int try_length_moves(rm3d *m, pa_idx p, const pa_idx *ball, int n,
+                            int kind,
                             const double *dir, const len_ctx *lc,
                             const double *d, const double *d2) {
   const double *xp = m->x + 3 * (size_t)p;
@@ -728,11 +727,10 @@ static int try_length_moves(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
   return 0;
 }
 
-int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
+int pa__rm3d_length_vertex(rm3d *m, pa_idx p, const pa_idx *ball, int n) {
   if (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD | RM3D_V_CURVED))
     return 0;
   if ((m->vtag[p] & RM3D_V_BDRY) && !m->surf) return 0;
-  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
   if (n < 0) return 0;
   int kind = 0;
   double dir[3] = {0, 0, 0};

@@ -321,8 +321,6 @@ static void cut_shell(rm3d *m, const split_plan *s, pa_idx pm) {
     m->tref[nt] = m->tref[t];
     m->q[t] = s->q1[i];
     m->q[nt] = s->q2[i];
-    rm3d_touch(m, t);
-    rm3d_touch(m, nt);
   }
   m->vtet[b] = base;
   m->vtet[pm] = s->tets[0];

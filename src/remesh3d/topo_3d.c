@@ -108,6 +108,37 @@ int pa__rm3d_ball(rm3d *m, pa_idx p, pa_idx *ball, int max) {
   return over ? -1 : n;
 }
 
+pa_status pa__rm3d_balls_build(const rm3d *m, rm3d_balls *b) {
+  pa_status st = PA_SUCCESS;
+  pa_idx nv = m->nv;
+  b->start = b->ent = NULL;
+  PA_CALLOC(b->start, (size_t)nv + 2);
+  pa_idx *c = b->start + 1; /* c[p + 1] counts, then c[p] fills p */
+  size_t nent = 0;
+  for (pa_idx k = 0; k < m->ne; k++) {
+    if (m->tflag[k] & RM3D_T_DEAD) continue;
+    const pa_idx *v = m->tv + 4 * (size_t)k;
+    for (int j = 0; j < 4; j++) c[v[j] + 1]++;
+    nent += 4;
+  }
+  for (pa_idx p = 0; p < nv; p++) c[p + 1] += c[p];
+  PA_ALLOC(b->ent, nent);
+  for (pa_idx k = 0; k < m->ne; k++) {
+    if (m->tflag[k] & RM3D_T_DEAD) continue;
+    const pa_idx *v = m->tv + 4 * (size_t)k;
+    for (int j = 0; j < 4; j++) b->ent[c[v[j]]++] = 4 * k + j;
+  }
+cleanup:
+  if (st) pa__rm3d_balls_free(b);
+  return st;
+}
+
+void pa__rm3d_balls_free(rm3d_balls *b) {
+  pa__free(b->start);
+  pa__free(b->ent);
+  b->start = b->ent = NULL;
+}
+
 typedef struct face_key {
   pa_idx k[3];
   pa_idx slot; /* outer neighbour slot (ext) or new tet slot (pending) */
@@ -213,7 +244,6 @@ pa_status pa__rm3d_replace(rm3d *m, const pa_idx *old, int nold,
     if (t < m->nswapfail) m->swapfail[t] = 0;
     for (int j = 0; j < 4; j++) m->vtet[v[j]] = t;
     m->q[t] = (float)rm3d_qual_v(m, v);
-    rm3d_touch(m, t);
     m->tflag[t] &= (uint8_t)~RM3D_T_CLEAN;
   }
 cleanup:
