@@ -328,12 +328,11 @@ static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
   c[0] = c[1] = c[2] = 0;
   int32_t ref0 = m->tref[ball[0] >> 2];
   int mixed = 0;
-  for (int i = 0; i < n; i++) mixed |= m->tref[ball[i] >> 2] != ref0;
-  if (mixed && !rm3d_refs_listed(m, ball, n)) return 0;
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
     int ip = ball[i] & 3;
     if (m->tflag[t] & RM3D_T_FROZEN) return 0;
+    mixed |= m->tref[t] != ref0;
     if (m->q[t] < qold) {
       qold = m->q[t];
       iw = i;
@@ -353,6 +352,7 @@ static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
     for (int j = 0; j < 3; j++)
       c[j] += (f0[j] + f1[j] + f2[j]) / 3.0 - h * dn[j];
   }
+  if (mixed && !rm3d_refs_listed(m, ball, n)) return 0;
   for (int j = 0; j < 3; j++) c[j] = c[j] / n - xp[j];
   *qoldp = qold;
   *iworst = iw;
@@ -541,11 +541,15 @@ int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball) {
  * PA_METRIC_LEN_HI_EXACT), or stops at limit + 1 of them (l then partly
  * filled). */
 static int len_out(const rm3d *m, const double *y, const double *mp,
-                   const pa_idx *nb, int nn, int limit, double *l) {
+                   const pa_idx *nb, const double *inb, int nn, int limit,
+                   double *l) {
   int out = 0, mc = m->mc;
+  double ip = mc == 1 ? 1.0 / mp[0] : 0;
   for (int i = 0; i < nn && out <= limit; i++) {
-    l[i] = pa__len3(mc, y, m->x + 3 * (size_t)nb[i], mp,
-                    m->met + (size_t)mc * nb[i]);
+    /* with sizes pa__len3 is pa__len3_inv of the inverses, taken once */
+    l[i] = mc == 1 ? pa__len3_inv(y, m->x + 3 * (size_t)nb[i], ip, inb[i])
+                   : pa__len3(mc, y, m->x + 3 * (size_t)nb[i], mp,
+                              m->met + (size_t)mc * nb[i]);
     out += !(l[i] >= PA_METRIC_LEN_LO_EXACT && l[i] < PA_METRIC_LEN_HI_EXACT);
   }
   return out;
@@ -582,6 +586,7 @@ static int solve3(const double *a, const double *b, double *x) {
  * ball's worst quality. */
 typedef struct len_ctx {
   pa_idx nb[RM3D_LNB];
+  double inb[RM3D_LNB]; /* with sizes: 1 / the size of nb[i] */
   double l0[RM3D_LNB], lg0[RM3D_LNB]; /* lengths from p and their logs */
   int nn, out0;
   int iworst; /* the ball's worst tet */
@@ -599,11 +604,10 @@ static int ball_neighbours(rm3d *m, pa_idx p, const pa_idx *ball, int n,
   double qold = 1e30;
   int32_t ref0 = m->tref[ball[0] >> 2];
   int mixed = 0;
-  for (int i = 0; i < n; i++) mixed |= m->tref[ball[i] >> 2] != ref0;
-  if (mixed && !rm3d_refs_listed(m, ball, n)) ok = 0;
   for (int i = 0; i < n && ok; i++) {
     pa_idx t = ball[i] >> 2;
     if (m->tflag[t] & RM3D_T_FROZEN) ok = 0;
+    mixed |= m->tref[t] != ref0;
     if (m->q[t] < qold) {
       qold = m->q[t];
       iw = i;
@@ -620,6 +624,9 @@ static int ball_neighbours(rm3d *m, pa_idx p, const pa_idx *ball, int n,
     }
   }
   for (int i = 0; i < nn; i++) m->vtag[nb[i]] &= (uint8_t)~RM3D_V_MARK;
+  if (ok && mixed && !rm3d_refs_listed(m, ball, n)) ok = 0;
+  if (m->mc == 1)
+    for (int i = 0; i < nn; i++) lc->inb[i] = 1.0 / m->met[nb[i]];
   lc->nn = nn;
   lc->qold = qold;
   lc->iworst = iw;
@@ -713,7 +720,7 @@ static int try_length_moves(rm3d *m, pa_idx p, const pa_idx *ball, int n,
         if (fabs(dir[j]) == 1.0) np[j] = xp[j];
     if (kind && pa__rm3d_project_vertex(m, p, ball, n, np) < 0) continue;
     double l1[RM3D_LNB];
-    int out1 = len_out(m, np, mp, lc->nb, lc->nn, lc->out0, l1);
+    int out1 = len_out(m, np, mp, lc->nb, lc->inb, lc->nn, lc->out0, l1);
     if (out1 > lc->out0 ||
         (out1 == lc->out0 &&
          !(len_sum(l1, lc->nn, NULL) < RM3D_LGAIN * lc->s0)))
@@ -741,7 +748,7 @@ int pa__rm3d_length_vertex(rm3d *m, pa_idx p, const pa_idx *ball, int n) {
   len_ctx lc;
   if (!ball_neighbours(m, p, ball, n, &lc)) return 0;
   lc.out0 = len_out(m, m->x + 3 * (size_t)p, m->met + (size_t)m->mc * p,
-                    lc.nb, lc.nn, lc.nn, lc.l0);
+                    lc.nb, lc.inb, lc.nn, lc.nn, lc.l0);
   if (lc.out0 == 0) return 0;
   lc.s0 = len_sum(lc.l0, lc.nn, lc.lg0);
   /* two candidates, each kept in the plane (kind 2) or along the ridge
