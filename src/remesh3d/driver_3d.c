@@ -147,7 +147,8 @@ pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count) {
           uint8_t ta = m->vtag[a] & RM3D_V_TODO, tb = m->vtag[b] & RM3D_V_TODO;
           if (wide ? ta && tb : ta || tb) continue;
           if (!wide)
-            nsh = pa__rm3d_shell(m, k, a, b, sht, shr, RM3D_MAXSHELL, &info);
+            nsh = pa__rm3d_shell(m, k, a, b, sht, shr, NULL, RM3D_MAXSHELL,
+                                 &info);
         }
         PA_CALL(pa__rm3d_split_edge(m, k, a, b, &done));
         if (done) {

@@ -316,7 +316,8 @@ void pa__rm3d_table_remove(rm3d_table *t, pa_idx i);
 
 /* Shell of the edge (a,b) of tet k: tets[0..n) in rotation order and ring
  * vertices such that tets[i] = (a, b, ring[i], ring[i+1]) is positive
- * (ring[n] = ring[0] when closed). Returns n, or -1 when longer than max.
+ * (ring[n] = ring[0] when closed); unless NULL, edge[i] the local index
+ * (pa__rm3d_edge) of ab in tets[i]. Returns n, or -1 when longer than max.
  * *info: bit 0 closed, bit 1 a face containing ab is a boundary triangle,
  * bit 2 a frozen tet, bit 3 tets of different references. */
 enum {
@@ -326,7 +327,7 @@ enum {
   RM3D_SH_REFS = 8
 };
 int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
-                   pa_idx *ring, int max, int *info);
+                   pa_idx *ring, signed char *edge, int max, int *info);
 /* Ball of vertex p (from vtet[p]): entries 4*t + local index of p. Returns
  * the count, or -1 when larger than max. */
 int pa__rm3d_ball(rm3d *m, pa_idx p, pa_idx *ball, int max);

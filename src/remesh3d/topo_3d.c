@@ -9,11 +9,15 @@
  */
 #include "remesh3d/remesh3d.h"
 
+/* Local edge index (pa__rm3d_edge) of the local vertex pair (i, j). */
+static const signed char edge_of[4][4] = {
+    {-1, 0, 1, 2}, {0, -1, 3, 4}, {1, 3, -1, 5}, {2, 4, 5, -1}};
+
 /* Forward from k: around a closed shell once. An open one is completed
  * by a walk backward from k, whose tets go in front (the shell then starts
  * at its boundary face). */
 int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
-                   pa_idx *ring, int max, int *info) {
+                   pa_idx *ring, signed char *edge, int max, int *info) {
   int inf = 0, n = 0;
   int32_t ref0 = m->tref[k];
   pa_idx t = k;
@@ -24,6 +28,7 @@ int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
     int ic = pa__rm3d_compl[ia][ib][0], id = pa__rm3d_compl[ia][ib][1];
     tets[n] = t;
     ring[n] = v[ic];
+    if (edge) edge[n] = edge_of[ia][ib];
     n++;
     uint8_t fl = m->tflag[t];
     if (fl & ((1u << ic) | (1u << id))) inf |= RM3D_SH_BDRY;
@@ -54,6 +59,7 @@ int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
   if (nback) {
     memmove(tets + nback, tets, (size_t)n * sizeof *tets);
     memmove(ring + nback, ring, (size_t)(n + 1) * sizeof *ring);
+    if (edge) memmove(edge + nback, edge, (size_t)n * sizeof *edge);
     int i = nback;
     for (t = k; i > 0;) {
       const pa_idx *v = m->tv + 4 * (size_t)t;
@@ -65,6 +71,7 @@ int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
       id = pa__rm3d_compl[ia][ib][1];
       tets[--i] = t;
       ring[i] = v[ic];
+      if (edge) edge[i] = edge_of[ia][ib];
       uint8_t fl = m->tflag[t];
       if (fl & ((1u << ic) | (1u << id))) inf |= RM3D_SH_BDRY;
       if (fl & RM3D_T_FROZEN) inf |= RM3D_SH_FROZEN;
