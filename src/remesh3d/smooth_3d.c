@@ -327,7 +327,7 @@ static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
   int iw = 0;
   c[0] = c[1] = c[2] = 0;
   int32_t ref0 = m->tref[ball[0] >> 2];
-  int mixed = 0;
+  int mixed = 0, iso = m->mc <= 1;
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
     int ip = ball[i] & 3;
@@ -344,9 +344,16 @@ static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
     /* Outward normal of the face points away from p. */
     double nn[3];
     rm3d_tri_cross(f0, f1, f2, nn);
-    double dn[3] = {mi[0] * nn[0] + mi[1] * nn[1] + mi[3] * nn[2],
-                    mi[1] * nn[0] + mi[2] * nn[1] + mi[4] * nn[2],
-                    mi[3] * nn[0] + mi[4] * nn[1] + mi[5] * nn[2]};
+    double dn[3];
+    if (iso) { /* mi = h^2 I: the same products without the zero terms */
+      dn[0] = mi[0] * nn[0];
+      dn[1] = mi[0] * nn[1];
+      dn[2] = mi[0] * nn[2];
+    } else {
+      dn[0] = mi[0] * nn[0] + mi[1] * nn[1] + mi[3] * nn[2];
+      dn[1] = mi[1] * nn[0] + mi[2] * nn[1] + mi[4] * nn[2];
+      dn[2] = mi[3] * nn[0] + mi[4] * nn[1] + mi[5] * nn[2];
+    }
     double s2 = dn[0] * nn[0] + dn[1] * nn[1] + dn[2] * nn[2];
     double h = s2 > 0 ? 0.816496580927726 / sqrt(s2) : 0;
     for (int j = 0; j < 3; j++)
