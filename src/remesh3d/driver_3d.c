@@ -104,6 +104,13 @@ static void order6(const double *L, int dir, int *ord) {
   }
 }
 
+/* 1 if one of the six lengths is above thr (dir > 0) or below it. */
+static int any6(const double *L, double thr, int dir) {
+  int any = 0;
+  for (int e = 0; e < 6; e++) any |= dir > 0 ? L[e] > thr : L[e] < thr;
+  return any;
+}
+
 /* 1 if the six lengths are in [PA_METRIC_LEN_LO_EXACT, PA_METRIC_LEN_HI_EXACT].
  */
 static int in_range6(const double *L) {
@@ -135,6 +142,7 @@ pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count) {
         m->tflag[k] |= RM3D_T_CLEAN;
         if (skip) break;
       }
+      if (!any6(L, thr, 1)) break; /* nothing to split: no order needed */
       order6(L, 1, ord);
       for (int i = 0; i < 6 && L[ord[i]] > thr; i++) {
         pa_idx a = m->tv[4 * (size_t)k + pa__rm3d_edge[ord[i]][0]];
@@ -263,6 +271,7 @@ pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, double guard,
       m->tflag[k] |= RM3D_T_CLEAN;
       if (skip) continue;
     }
+    if (!any6(L, thr, -1)) continue; /* nothing to collapse */
     order6(L, -1, ord);
     for (int i = 0; i < 6 && L[ord[i]] < thr; i++) {
       pa_idx a = m->tv[4 * (size_t)k + pa__rm3d_edge[ord[i]][0]];
