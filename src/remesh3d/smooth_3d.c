@@ -573,6 +573,19 @@ static double len_sum(const double *l, int nn, double *lg) {
   return s;
 }
 
+/* 1 if len_sum(l, nn) < bound; stops at the first partial sum at or
+ * above it (the terms are not negative, so the partial sums never
+ * decrease: the same answer, fewer logarithms). */
+static int len_sum_below(const double *l, int nn, double bound) {
+  double s = 0;
+  for (int i = 0; i < nn; i++) {
+    double g = log(l[i]);
+    s += g * g;
+    if (s >= bound) return 0;
+  }
+  return s < bound;
+}
+
 /* Solve the symmetric 3x3 system a x = b (a: xx xy yy xz yz zz); 0 if
  * singular. */
 static int solve3(const double *a, const double *b, double *x) {
@@ -729,8 +742,7 @@ static int try_length_moves(rm3d *m, pa_idx p, const pa_idx *ball, int n,
     double l1[RM3D_LNB];
     int out1 = len_out(m, np, mp, lc->nb, lc->inb, lc->nn, lc->out0, l1);
     if (out1 > lc->out0 ||
-        (out1 == lc->out0 &&
-         !(len_sum(l1, lc->nn, NULL) < RM3D_LGAIN * lc->s0)))
+        (out1 == lc->out0 && !len_sum_below(l1, lc->nn, RM3D_LGAIN * lc->s0)))
       continue;
     if (moved_qualities(m, ball, n, np, mp, qfloor, 0, &first, nq) >= 0)
       continue;
