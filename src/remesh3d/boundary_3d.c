@@ -89,9 +89,37 @@ static size_t sorted_edges(const rm3d *m, bedge *be) {
   return nbe;
 }
 
+/* Whether the boundary edge of records e[0..n) (one edge's run of the
+ * sorted boundary edges) is a feature: not two records, two of different
+ * references, or (use_angle) a turn above -ar. With written, only the
+ * records written back count (an edge of unlisted interfaces alone is no
+ * feature of the output). */
+static int edge_feature(const rm3d *m, int use_angle, const bedge *e,
+                        size_t n, int written) {
+  const bedge *r[2] = {NULL, NULL};
+  size_t k = 0;
+  for (size_t i = 0; i < n; i++) {
+    if (written && (m->tri.flag[e[i].rec] & RM3D_REC_UNLISTED)) continue;
+    if (k < 2) r[k] = e + i;
+    k++;
+  }
+  if (k != 2) return k > 0 || !written;
+  if (m->tri.ref[r[0]->rec] != m->tri.ref[r[1]->rec]) return 1;
+  if (!use_angle) return 0;
+  double n1[3], n2[3];
+  rec_normal(m, r[0]->rec, n1);
+  rec_normal(m, r[1]->rec, n2);
+  rm3d_unit(n1);
+  rm3d_unit(n2);
+  double d = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2];
+  if (r[0]->dir == r[1]->dir) d = -d; /* inconsistent orientations */
+  return d < m->ridge_cos;
+}
+
 /* Feature edges (see the opening comment) added to the edge table from the
- * sorted boundary edges be[0..nbe); nborder[x] counts the feature edges at
- * x between a frozen and a free triangle. */
+ * sorted boundary edges be[0..nbe), RM3D_REC_UNLISTED when no feature of
+ * the written records; nborder[x] counts the feature edges at x between a
+ * frozen and a free triangle. */
 static pa_status add_feature_edges(rm3d *m, int use_angle, const bedge *be,
                                    size_t nbe, uint8_t *nborder,
                                    uint8_t *twisted) {
@@ -99,23 +127,9 @@ static pa_status add_feature_edges(rm3d *m, int use_angle, const bedge *be,
   for (size_t i = 0; i < nbe;) {
     size_t j = i + 1;
     while (j < nbe && be[j].a == be[i].a && be[j].b == be[i].b) j++;
-    int feat = 0;
     if (j - i == 2 && be[i].dir == be[i + 1].dir) /* records turned apart */
       twisted[be[i].a] = twisted[be[i].b] = 1;
-    if (j - i != 2) {
-      feat = 1;
-    } else if (m->tri.ref[be[i].rec] != m->tri.ref[be[i + 1].rec]) {
-      feat = 1;
-    } else if (use_angle) {
-      double n1[3], n2[3];
-      rec_normal(m, be[i].rec, n1);
-      rec_normal(m, be[i + 1].rec, n2);
-      rm3d_unit(n1);
-      rm3d_unit(n2);
-      double d = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2];
-      if (be[i].dir == be[i + 1].dir) d = -d; /* inconsistent orientations */
-      if (d < m->ridge_cos) feat = 1;
-    }
+    int feat = edge_feature(m, use_angle, be + i, j - i, 0);
     if (feat && j - i == 2 &&
         ((m->tri.flag[be[i].rec] ^ m->tri.flag[be[i + 1].rec]) &
          PA_FLAG_REQUIRED))
@@ -123,10 +137,13 @@ static pa_status add_feature_edges(rm3d *m, int use_angle, const bedge *be,
         pa_idx x = s2 ? be[i].b : be[i].a;
         if (nborder[x] < 255) nborder[x]++;
       }
-    if (feat) {
-      pa_idx ev[2] = {be[i].a, be[i].b};
-      if (pa__rm3d_table_find(&m->edg, ev) < 0)
-        PA_CALL(pa__rm3d_table_add(&m->edg, ev, 0, PA_FLAG_RIDGE, NULL));
+    pa_idx ev[2] = {be[i].a, be[i].b};
+    if (feat && pa__rm3d_table_find(&m->edg, ev) < 0) {
+      uint8_t hidden = edge_feature(m, use_angle, be + i, j - i, 1)
+                           ? 0
+                           : RM3D_REC_UNLISTED;
+      PA_CALL(pa__rm3d_table_add(&m->edg, ev, 0, PA_FLAG_RIDGE | hidden,
+                                 NULL));
     }
     i = j;
   }
@@ -134,39 +151,56 @@ cleanup:
   return st;
 }
 
-/* Corners: feature degree other than 0 or 2, or a sharp turn. nfeat[x]
- * receives the feature degree of x (at most 255), other[2x..2x+1] the other
- * ends of its first two feature edges. */
-static void mark_corners(rm3d *m, int use_angle, uint8_t *nfeat,
+/* The feature degree nfeat[x] of every vertex (at most 255) and the other
+ * ends other[2x..2x+1] of its first two feature edges; written: of the
+ * feature edges written back only. */
+static void feature_ends(rm3d *m, int written, uint8_t *nfeat,
                          pa_idx *other) {
   for (pa_idx r = 0; r < m->edg.n; r++) {
-    if (m->edg.flag[r] & RM3D_REC_DEAD) continue;
+    uint8_t skip = RM3D_REC_DEAD | (written ? RM3D_REC_UNLISTED : 0);
+    if (m->edg.flag[r] & skip) continue;
     const pa_idx *ev = m->edg.v + 2 * (size_t)r;
     for (int s = 0; s < 2; s++) {
       pa_idx x = ev[s];
       if (nfeat[x] < 2) other[2 * (size_t)x + nfeat[x]] = ev[1 - s];
       if (nfeat[x] < 255) nfeat[x]++;
-      m->vtag[x] |= RM3D_V_FEAT;
     }
   }
+}
+
+/* Whether x is a corner for feature_ends' nfeat and other: a feature
+ * degree other than 0 or 2, or (use_angle) a sharp turn. */
+static int is_corner(const rm3d *m, int use_angle, pa_idx x,
+                     const uint8_t *nfeat, const pa_idx *other) {
+  if (!nfeat[x]) return 0;
+  if (nfeat[x] != 2) return 1;
+  if (!use_angle) return 0;
+  const double *p = m->x + 3 * (size_t)x;
+  const double *a = m->x + 3 * (size_t)other[2 * (size_t)x];
+  const double *b = m->x + 3 * (size_t)other[2 * (size_t)x + 1];
+  double u[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
+  double w[3] = {b[0] - p[0], b[1] - p[1], b[2] - p[2]};
+  rm3d_unit(u);
+  rm3d_unit(w);
+  return u[0] * w[0] + u[1] * w[1] + u[2] * w[2] < m->ridge_cos;
+}
+
+/* Corners (RM3D_V_CORNER, locked) of all feature edges; nfeat receives
+ * the feature degrees. A corner of the feature edges written back is
+ * written back too (PA_FLAG_CORNER); wdeg and other are scratch. */
+static void mark_corners(rm3d *m, int use_angle, uint8_t *nfeat,
+                         uint8_t *wdeg, pa_idx *other) {
+  feature_ends(m, 0, nfeat, other);
   for (pa_idx x = 0; x < m->nv; x++) {
-    if (!nfeat[x]) continue;
-    int corner = nfeat[x] != 2;
-    if (!corner && use_angle) {
-      const double *p = m->x + 3 * (size_t)x;
-      const double *a = m->x + 3 * (size_t)other[2 * (size_t)x];
-      const double *b = m->x + 3 * (size_t)other[2 * (size_t)x + 1];
-      double u[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
-      double w[3] = {b[0] - p[0], b[1] - p[1], b[2] - p[2]};
-      rm3d_unit(u);
-      rm3d_unit(w);
-      if (u[0] * w[0] + u[1] * w[1] + u[2] * w[2] < m->ridge_cos) corner = 1;
-    }
-    if (corner) {
+    if (nfeat[x]) m->vtag[x] |= RM3D_V_FEAT;
+    if (is_corner(m, use_angle, x, nfeat, other))
       m->vtag[x] |= RM3D_V_CORNER | RM3D_V_LOCK;
-      if (!(m->vpf[x] & PA_FLAG_REQUIRED)) m->vpf[x] |= PA_FLAG_CORNER;
-    }
   }
+  feature_ends(m, 1, wdeg, other);
+  for (pa_idx x = 0; x < m->nv; x++)
+    if ((m->vtag[x] & RM3D_V_CORNER) && !(m->vpf[x] & PA_FLAG_REQUIRED) &&
+        is_corner(m, use_angle, x, wdeg, other))
+      m->vpf[x] |= PA_FLAG_CORNER;
 }
 
 /* Normals of boundary vertices off features, from their outward free
@@ -228,7 +262,7 @@ cleanup:
 pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
   pa_status st = PA_SUCCESS;
   bedge *be = NULL;
-  uint8_t *nfeat = NULL, *nborder = NULL, *twisted = NULL;
+  uint8_t *nfeat = NULL, *nborder = NULL, *twisted = NULL, *wdeg = NULL;
   pa_idx *other = NULL;
   PA_ALLOC(be, 3 * (size_t)m->tri.n + 1);
   size_t nbe = sorted_edges(m, be);
@@ -237,7 +271,8 @@ pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {
   PA_CALL(add_feature_edges(m, use_angle, be, nbe, nborder, twisted));
   PA_CALLOC(nfeat, (size_t)m->nv);
   PA_ALLOC(other, 2 * (size_t)m->nv);
-  mark_corners(m, use_angle, nfeat, other);
+  PA_CALLOC(wdeg, (size_t)m->nv);
+  mark_corners(m, use_angle, nfeat, wdeg, other);
   PA_CALL(curved_normals(m, nborder, nfeat, twisted));
 cleanup:
   pa__free(be);
@@ -245,5 +280,6 @@ cleanup:
   pa__free(nborder);
   pa__free(nfeat);
   pa__free(other);
+  pa__free(wdeg);
   return st;
 }

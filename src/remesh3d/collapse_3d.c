@@ -96,22 +96,19 @@ cleanup:
 }
 
 /* The qualities nq[i] of the tets of p's ball (ball[0..n)) with p moved to
- * q, -1 for the tets holding (p,q), which disappear. 1 when the ball has
- * one reference (or several with the faces between them listed,
- * rm3d_refs_listed: p then lies on that surface), no deleted tet is a cap (two
- * boundary faces glued), some but not all tets disappear, and the new
- * worst quality is acceptable against the old one. */
+ * q, -1 for the tets holding (p,q), which disappear. 1 when no deleted
+ * tet is a cap (two boundary faces glued), some but not all tets disappear,
+ * and the new worst quality is acceptable against the old one. (A ball of
+ * several references has p on the triangles between them, which the
+ * surface collapse keeps.) */
 static int ball_qualities(const rm3d *m, pa_idx q, const pa_idx *ball, int n,
                           float *nq) {
-  int32_t ref0 = m->tref[ball[0] >> 2];
   double qold = 1e30;
-  int nd = 0, mixed = 0;
+  int nd = 0;
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
-    mixed |= m->tref[t] != ref0;
     if (m->q[t] < qold) qold = m->q[t];
   }
-  if (mixed && !rm3d_refs_listed(m, ball, n)) return 0;
   /* the lowest new quality accepted against qold (rm3d_q_ok, and at least
    * 0.3 qold): one tet below it refuses the collapse */
   double qmin = fmax(0.3 * qold, rm3d_q_min(m, qold));
@@ -314,22 +311,14 @@ cleanup:
 }
 
 /* Whether q, of ball bq[0..nb), stays on its entity at the middle of
- * (p,q): an interior q of one reference (then p is interior too; a q on an
- * unlisted face between references would leave it, moving that interface),
- * a q of a planar patch with p in that plane, a q of a straight ridge with
- * p on that line. */
+ * (p,q): an interior q (then p is interior too), a q of a planar patch
+ * with p in that plane, a q of a straight ridge with p on that line. */
 static int mid_on_entity(rm3d *m, pa_idx p, pa_idx q, const pa_idx *bq,
                          int nb) {
   uint8_t tp = m->vtag[p], tq = m->vtag[q];
   const double *xq = m->x + 3 * (size_t)q;
   const double *xp = m->x + 3 * (size_t)p;
-  if (!(tq & RM3D_V_BDRY)) {
-    int mixed = 0;
-    for (int i = 1; i < nb && !mixed; i++)
-      mixed = m->tref[bq[i] >> 2] != m->tref[bq[0] >> 2];
-    if (mixed && !rm3d_refs_listed(m, bq, nb)) return 0;
-    return !(tp & RM3D_V_BDRY);
-  }
+  if (!(tq & RM3D_V_BDRY)) return !(tp & RM3D_V_BDRY);
   if (!m->surf || !(tp & RM3D_V_BDRY) || ((tp ^ tq) & RM3D_V_FEAT)) return 0;
   double dir[3];
   int kind = pa__rm3d_bdry_freedom(m, q, bq, nb, dir);

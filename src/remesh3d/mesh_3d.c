@@ -8,7 +8,8 @@
  *    faces it pairs carry the same three vertices; face bit i of tflag is set
  *    exactly when face i is a boundary triangle (a live record of tri), on
  *    both sides of an interior boundary triangle; every face with no
- *    neighbour is a boundary triangle;
+ *    neighbour, and every face between tets of different references, is a
+ *    boundary triangle;
  *  - vtet[v] is a live tet holding v for every live vertex v;
  *  - vertices of frozen tets, frozen triangles, required edges and required
  *    vertices carry RM3D_V_LOCK; vertices of boundary triangles RM3D_V_BDRY.
@@ -351,6 +352,23 @@ static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
       m->tflag[k] |= (uint8_t)(1u << i);
       for (int j = 0; j < 3; j++) m->vtag[f[j]] |= RM3D_V_BDRY;
     }
+  /* Faces between references that the input did not list: records it
+   * does not get back (RM3D_REC_UNLISTED), so that every interface is a
+   * surface of the remesher. */
+  for (pa_idx k = 0; k < ne; k++)
+    for (int i = 0; i < 4; i++) {
+      pa_idx o = m->adj[4 * k + i];
+      if (o < 4 * k + i || m->tref[o >> 2] == m->tref[k] ||
+          (m->tflag[k] & (1u << i)))
+        continue;
+      pa_idx f[3] = {m->tv[4 * k + pa__rm3d_face[i][0]],
+                     m->tv[4 * k + pa__rm3d_face[i][1]],
+                     m->tv[4 * k + pa__rm3d_face[i][2]]};
+      PA_CALL(pa__rm3d_table_add(&m->tri, f, 0, RM3D_REC_UNLISTED, NULL));
+      m->tflag[k] |= (uint8_t)(1u << i);
+      m->tflag[o >> 2] |= (uint8_t)(1u << (o & 3));
+      for (int j = 0; j < 3; j++) m->vtag[f[j]] |= RM3D_V_BDRY;
+    }
 cleanup:
   pa__free(start);
   pa__free(face);
@@ -570,9 +588,10 @@ pa_status pa__rm3d_write(rm3d *m, pa_mesh *mesh) {
   m->adj = NULL;
   PA_CALL(pa__rm3d_compact(m, 0));
   pa_idx nb = 0, ned = 0;
-  for (pa_idx r = 0; r < m->tri.n; r++) nb += !(m->tri.flag[r] & RM3D_REC_DEAD);
+  for (pa_idx r = 0; r < m->tri.n; r++)
+    nb += !(m->tri.flag[r] & (RM3D_REC_DEAD | RM3D_REC_UNLISTED));
   for (pa_idx r = 0; r < m->edg.n; r++)
-    ned += !(m->edg.flag[r] & RM3D_REC_DEAD);
+    ned += !(m->edg.flag[r] & (RM3D_REC_DEAD | RM3D_REC_UNLISTED));
   PA_CALL(pa_mesh_create(3, &out));
   out->met_ncomp = mesh->met_ncomp ? mesh->met_ncomp : 0;
   if (out->met_ncomp && out->met_ncomp != m->mc) out->met_ncomp = m->mc;
@@ -600,7 +619,7 @@ pa_status pa__rm3d_write(rm3d *m, pa_mesh *mesh) {
   memcpy(out->eref, m->tref, sizeof(int32_t) * (size_t)m->ne);
   memcpy(out->eflag, m->tpf, (size_t)m->ne);
   for (pa_idx r = 0; r < m->tri.n; r++) {
-    if (m->tri.flag[r] & RM3D_REC_DEAD) continue;
+    if (m->tri.flag[r] & (RM3D_REC_DEAD | RM3D_REC_UNLISTED)) continue;
     memcpy(out->bdry + 3 * (size_t)out->nb, m->tri.v + 3 * (size_t)r,
            3 * sizeof(pa_idx));
     out->bref[out->nb] = m->tri.ref[r];
@@ -608,7 +627,7 @@ pa_status pa__rm3d_write(rm3d *m, pa_mesh *mesh) {
     out->nb++;
   }
   for (pa_idx r = 0; r < m->edg.n; r++) {
-    if (m->edg.flag[r] & RM3D_REC_DEAD) continue;
+    if (m->edg.flag[r] & (RM3D_REC_DEAD | RM3D_REC_UNLISTED)) continue;
     memcpy(out->edge + 2 * (size_t)out->ned, m->edg.v + 2 * (size_t)r,
            2 * sizeof(pa_idx));
     out->edref[out->ned] = m->edg.ref[r];
@@ -672,6 +691,10 @@ pa_status pa__rm3d_check(rm3d *m) {
       int j = a & 3;
       PA_CHECK(l < m->ne && !(m->tflag[l] & RM3D_T_DEAD), PA_ERR_INTERNAL,
                "rm3d: tet %d face %d points at a dead tet", (int)k, i);
+      PA_CHECK(tagged || m->tref[l] == m->tref[k], PA_ERR_INTERNAL,
+               "rm3d: tet %d face %d lies between references %d and %d "
+               "and is no triangle", (int)k, i, (int)m->tref[k],
+               (int)m->tref[l]);
       PA_CHECK(m->adj[4 * (size_t)l + j] == 4 * k + i, PA_ERR_INTERNAL,
                "rm3d: adjacency of tet %d face %d not symmetric", (int)k, i);
       const pa_idx *w = m->tv + 4 * (size_t)l;

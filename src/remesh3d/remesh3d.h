@@ -67,12 +67,18 @@ typedef struct rm3d_table {
   size_t cap;
   pa_idx *v;    /* nk * cap, the entity's own vertex order */
   int32_t *ref;
-  uint8_t *flag; /* PA_FLAG_* of the entity; 0x80 marks a dead record */
+  uint8_t *flag; /* PA_FLAG_* of the entity, RM3D_REC_* */
   pa_idx *slot;  /* hash slots: record index, -1 empty, -2 deleted */
   size_t nslot;  /* power of two */
   size_t nfull;  /* slots not empty (live + deleted) */
 } rm3d_table;
 #define RM3D_REC_DEAD 0x80
+/* A face between two element references that the input did not list:
+ * remeshed as a surface like a listed interface (so every reference keeps
+ * its volume and the operators may work on both sides of it), never written
+ * back (the caller's mesh did not hold it); so are the feature edges of
+ * such faces only (boundary_3d.c). */
+#define RM3D_REC_UNLISTED 0x40
 
 typedef struct rm3d {
   int mc; /* metric components: 1 (size) or 6 (tensor) */
@@ -197,25 +203,6 @@ static inline int rm3d_q_ok(const rm3d *m, double q, double qref) {
 /* Local index of vertex x in tet vertices v, -1 if absent. */
 static inline int rm3d_loc(const pa_idx *v, pa_idx x) {
   return v[0] == x ? 0 : v[1] == x ? 1 : v[2] == x ? 2 : v[3] == x ? 3 : -1;
-}
-
-/* 1 when every face between two tets of different references among the
- * tets of ball[0..n) and their neighbours is a boundary triangle: the
- * surface between the references (an interface, e.g. a level set cut into
- * the mesh) is listed, so a collapse that keeps the listed triangles (the
- * glued faces of the deleted tets inherit their tags) or a move along that
- * surface keeps every reference where it was. A ball whose references
- * change across an unlisted face is neither collapsed nor smoothed. */
-static inline int rm3d_refs_listed(const rm3d *m, const pa_idx *ball, int n) {
-  for (int i = 0; i < n; i++) {
-    pa_idx t = ball[i] >> 2;
-    for (int j = 0; j < 4; j++) {
-      pa_idx o = m->adj[4 * (size_t)t + j];
-      if (o >= 0 && m->tref[o >> 2] != m->tref[t] && !((m->tflag[t] >> j) & 1))
-        return 0;
-    }
-  }
-  return 1;
 }
 
 /* Lengths and qualities are metric/metric3d.h's kernels: the statistics

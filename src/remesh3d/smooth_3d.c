@@ -317,8 +317,7 @@ static int metric_inverse(int mc, const double *mp, double *mi) {
  * ball[0..n) opposite p, mi the inverse metric at p (the ideal apex over a
  * face with normal n sits at height sqrt(2/3) along M^-1 n /
  * sqrt(n^T M^-1 n): the regular tet of unit edges in the metric); *qoldp
- * the ball's worst quality. 0 if the ball spans two references across an
- * unlisted face (rm3d_refs_listed) or holds a frozen element. */
+ * the ball's worst quality. 0 if the ball holds a frozen element. */
 static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
                        const double *mi, double *qoldp, int *iworst,
                        double *c) {
@@ -326,13 +325,11 @@ static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
   double qold = 1e30;
   int iw = 0;
   c[0] = c[1] = c[2] = 0;
-  int32_t ref0 = m->tref[ball[0] >> 2];
-  int mixed = 0, iso = m->mc <= 1;
+  int iso = m->mc <= 1;
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
     int ip = ball[i] & 3;
     if (m->tflag[t] & RM3D_T_FROZEN) return 0;
-    mixed |= m->tref[t] != ref0;
     if (m->q[t] < qold) {
       qold = m->q[t];
       iw = i;
@@ -359,7 +356,6 @@ static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
     for (int j = 0; j < 3; j++)
       c[j] += (f0[j] + f1[j] + f2[j]) / 3.0 - h * dn[j];
   }
-  if (mixed && !rm3d_refs_listed(m, ball, n)) return 0;
   for (int j = 0; j < 3; j++) c[j] = c[j] / n - xp[j];
   *qoldp = qold;
   *iworst = iw;
@@ -506,10 +502,9 @@ int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball) {
   int mc = m->mc;
   double *xp = m->x + 3 * (size_t)p, qold = 1e30;
   const double *mp = m->met + (size_t)mc * p;
-  int32_t ref0 = m->tref[ball[0] >> 2];
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
-    if (m->tref[t] != ref0 || (m->tflag[t] & RM3D_T_FROZEN)) return 0;
+    if (m->tflag[t] & RM3D_T_FROZEN) return 0;
     if (m->q[t] < qold) qold = m->q[t];
   }
   /* A direction uniform in the cube [-1,1]^3 (normalised), drawn from the
@@ -614,20 +609,16 @@ typedef struct len_ctx {
 } len_ctx;
 
 /* The neighbours of p in its ball[0..n), each once (in the order the ball
- * meets them), and the ball's worst quality; 0 if the ball spans two
- * references across an unlisted face (rm3d_refs_listed), holds a frozen
+ * meets them), and the ball's worst quality; 0 if the ball holds a frozen
  * element or has more than RM3D_LNB neighbours. */
 static int ball_neighbours(rm3d *m, pa_idx p, const pa_idx *ball, int n,
                            len_ctx *lc) {
   pa_idx *nb = lc->nb;
   int nn = 0, ok = 1, iw = 0;
   double qold = 1e30;
-  int32_t ref0 = m->tref[ball[0] >> 2];
-  int mixed = 0;
   for (int i = 0; i < n && ok; i++) {
     pa_idx t = ball[i] >> 2;
     if (m->tflag[t] & RM3D_T_FROZEN) ok = 0;
-    mixed |= m->tref[t] != ref0;
     if (m->q[t] < qold) {
       qold = m->q[t];
       iw = i;
@@ -644,7 +635,6 @@ static int ball_neighbours(rm3d *m, pa_idx p, const pa_idx *ball, int n,
     }
   }
   for (int i = 0; i < nn; i++) m->vtag[nb[i]] &= (uint8_t)~RM3D_V_MARK;
-  if (ok && mixed && !rm3d_refs_listed(m, ball, n)) ok = 0;
   if (m->mc == 1)
     for (int i = 0; i < nn; i++) lc->inb[i] = 1.0 / m->met[nb[i]];
   lc->nn = nn;

@@ -240,10 +240,11 @@ def test_shapes():
 def test_materials():
     """LSReferences: 1 (x < 0.5) split into 5 and 6, 4 kept. In 3D once
     with the faces between 1 and 4 listed as boundary triangles (reference
-    7) and once unlisted: the 3D remesher keeps an unlisted face between
-    references in place (docs/guide/levelset.md), so the plane x = 0.5,
-    exact on the input, stays exact: the volume of 5 and 6 is 0.5 to
-    rounding."""
+    7) and once unlisted: the 3D remesher remeshes the faces between
+    references as surfaces, listed or not (docs/guide/levelset.md), so the
+    plane x = 0.5, exact on the input, stays exact (the volume of 5 and 6 is
+    0.5 to rounding), no sliver stays where the cut crosses it, and unlisted
+    faces stay unlisted in the output."""
     with open("mat.txt", "w") as f:
         f.write("LSReferences\n2\n1 5 6\n4 nosplit\n")
     nps3 = [1, 2] if os.environ.get("PADAPT_SANITIZE") else [1, 2, 3, 4]
@@ -272,15 +273,23 @@ def test_materials():
         write_sol(name + ".phi.sol", dim, sd(m.points[:, :dim]))
         for np_ in nps:
             out = "%s.o%d.mesh" % (name, np_)
-            # unlisted: where the cut crosses the face between 1 and 4, its
-            # slivers stay (docs/guide/levelset.md, Limits) and the parallel
-            # loop stops with them tagged; -best-effort writes the valid mesh
-            extra = [] if listed or dim == 2 else ["-best-effort"]
             if run(["adapt", name + ".mesh", "-ls", name + ".phi.sol", "-f",
-                    "mat.txt", "-hsiz", str(h), "-out", out] + extra,
-                   np_).returncode:
+                    "mat.txt", "-hsiz", str(h), "-out", out, "-json",
+                    name + ".json"], np_).returncode:
                 continue
+            # unlisted or not, the faces between references are remeshed as
+            # surfaces: no sliver (below 0.05, what the parallel loop calls
+            # clearly bad) stays where the cut crosses them
+            wq = json.load(open(name + ".json"))["quality_worst"]
+            (ok if wq > 0.05 else fail)("%s np %d: worst quality %.3f"
+                                        % (name, np_, wq))
             x_out, E, er, B, br = read(out, dim)
+            if dim == 3 and not listed:
+                c = x_out[B[br != 10]].mean(axis=1)
+                inner = int(np.sum(np.all((c > 1e-9) & (c < 1 - 1e-9), axis=1)))
+                (ok if inner == 0 else fail)(
+                    "%s np %d: %d boundary triangles inside the box besides "
+                    "the interface" % (name, np_, inner))
             counts = {r: int(np.sum(er == r)) for r in np.unique(er)}
             good = set(counts) == {4, 5, 6}
             (ok if good else fail)("%s np %d: element references %s"
