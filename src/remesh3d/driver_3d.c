@@ -358,8 +358,13 @@ pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, rm3d_balls *b,
   for (pa_idx p = 0; p < m->nv; p++) {
     if (!(m->vtag[p] & RM3D_V_TODO)) continue;
     m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
-    const pa_idx *ball;
-    int n = rm3d_balls_get(b, p, &ball);
+    /* A vertex of a curved patch walks its ball: its move goes onto the
+     * first triangle around it that holds the target (curved_point), so
+     * the order of the walk stays its order. */
+    const pa_idx *ball = sball;
+    int n = m->vtag[p] & RM3D_V_CURVED
+                ? pa__rm3d_ball(m, p, sball, RM3D_MAXBALL)
+                : rm3d_balls_get(b, p, &ball);
     c += pa__rm3d_smooth_vertex(m, p, ball, n);
   }
 cleanup:
