@@ -25,9 +25,15 @@
 #         does not grow with the number of ranks per core), its ratio to the
 #         sequential work, the iterations and the work of each, elements and
 #         worst quality.
-#   weak  the rod refined to N = np x 2 M tets at np 1, 2, 4, 8
-#         (-distributed-output, deleted after each run): remeshing work per
-#         output tet (microseconds), its ratio to np=1's, the iterations.
+#   weak  the rod refined to N = np x 2 M tets at np 1 and WEAK_NPS
+#         (default 2 4 8; -distributed-output, deleted after each run):
+#         remeshing work per output tet (microseconds), its ratio to np=1's
+#         and to the sequential run of the same N (the sequential cost per
+#         tet moves with N), and what sharing the cores adds: np copies of
+#         the np=1 job run at once, their CPU per tet over that of one run
+#         alone (the np ranks of an oversubscribed run share the cores and
+#         caches the same way), and the ratio to the same-size sequential
+#         run divided by that factor; the iterations.
 # Every -json report is kept in WORK_DIR (time-*, work-np*, weak-np*.json):
 # bench/time_model.py reads them.
 set -u
@@ -74,6 +80,10 @@ print(r['time_s'] - r['steps_s']['measure'])" "time-$name-np2.json")
     "$(awk '{printf "%s/%s ", $2, $3}' "e-$name.txt" | sed 's/ $//')"
 }
 
+# remesher CPU microseconds per output element of the -json report $1
+us_per_tet() { /usr/bin/python3 -c "import json, sys; r = json.load(open(sys.argv[1]))
+print('%.3f' % (1e6 * r['remesh_cpu_s'] / r['elements']))" "$1"; }
+
 # one line per iteration of a parallel report: tagged, pieces, work
 iters() {
   /usr/bin/python3 -c "import json, sys
@@ -118,24 +128,36 @@ for part in $PARTS; do
       work_nps plate "$ROOT/tests/data/plate2d.mesh" 0.0005 work-plate ;;
     weak)
       # N ~ 0.817 M x (0.03 / h)^3 on the rod
-      w1=
-      for np in 1 2 4 8; do
+      h1=$(awk 'BEGIN { printf "%.5f", 0.03 * (0.817 / 2) ^ (1 / 3) }')
+      "$PADAPT" adapt "$ROOT/tests/data/rod3d.mesh" -hsiz "$h1" -out o1.meshb -nosol \
+        -json weak-np1.json > /dev/null 2>&1
+      us1=$(us_per_tet weak-np1.json)
+      printf "weak  np=1 -hsiz %s: %s elements, remesher CPU %.2f s, %s us per tet\n" \
+        "$h1" "$(jget weak-np1.json elements)" "$(jget weak-np1.json remesh_cpu_s)" "$us1"
+      for np in ${WEAK_NPS:-2 4 8}; do
         h=$(awk -v n="$np" 'BEGIN { printf "%.5f", 0.03 * (0.817 / (2 * n)) ^ (1 / 3) }')
         rm -rf weak && mkdir weak
-        if [ "$np" = 1 ]; then
-          "$PADAPT" adapt "$ROOT/tests/data/rod3d.mesh" -hsiz "$h" -out weak/o.meshb -nosol \
-            -json "weak-np$np.json" > /dev/null 2>&1
-        else
-          mpiexec -n "$np" "$PADAPT" adapt "$ROOT/tests/data/rod3d.mesh" -hsiz "$h" -out weak/o.meshb \
-            -distributed-output -nosol -json "weak-np$np.json" > /dev/null 2>&1
-        fi
+        mpiexec -n "$np" "$PADAPT" adapt "$ROOT/tests/data/rod3d.mesh" -hsiz "$h" -out weak/o.meshb \
+          -distributed-output -nosol -json "weak-np$np.json" > /dev/null 2>&1
         rm -rf weak
-        n=$(jget "weak-np$np.json" elements)
-        w=$(jget "weak-np$np.json" remesh_cpu_s)
-        us=$(echo "$w $n" | awk '{printf "%.3f", 1e6 * $1 / $2}')
-        [ -z "$w1" ] && w1=$us
-        printf "weak  np=%d -hsiz %s: %s elements, remesher CPU %.2f s, %s us per tet, %.3f x np=1, %s iterations\n" \
-          "$np" "$h" "$n" "$w" "$us" "$(echo "$us $w1" | awk '{print $1 / $2}')" "$(jget "weak-np$np.json" iterations)"
+        "$PADAPT" adapt "$ROOT/tests/data/rod3d.mesh" -hsiz "$h" -out o1.meshb -nosol \
+          -json "weak-seq$np.json" > /dev/null 2>&1
+        # np copies of the np=1 job at once: what sharing the cores and
+        # caches alone adds to the CPU time of a rank
+        for i in $(seq "$np"); do
+          "$PADAPT" adapt "$ROOT/tests/data/rod3d.mesh" -hsiz "$h1" -out "c$i.meshb" -nosol \
+            -json "weak-copy$np-$i.json" > /dev/null 2>&1 &
+        done
+        wait
+        rm -f c*.meshb
+        us=$(us_per_tet "weak-np$np.json")
+        usq=$(us_per_tet "weak-seq$np.json")
+        cf=$(for i in $(seq "$np"); do us_per_tet "weak-copy$np-$i.json"; done |
+             awk -v a="$us1" '{s += $1} END {printf "%.3f", s / NR / a}')
+        printf "weak  np=%d -hsiz %s: %s elements, remesher CPU %.2f s, %s us per tet, %.3f x np=1, %.3f x the sequential run of the same size (%s us per tet); %d copies of np=1 at once: %.3f x its CPU per tet, so %.3f x the sequential run over that; %s iterations\n" \
+          "$np" "$h" "$(jget "weak-np$np.json" elements)" "$(jget "weak-np$np.json" remesh_cpu_s)" "$us" \
+          "$(echo "$us $us1" | awk '{print $1 / $2}')" "$(echo "$us $usq" | awk '{print $1 / $2}')" "$usq" \
+          "$np" "$cf" "$(echo "$us $usq $cf" | awk '{print $1 / ($2 * $3)}')" "$(jget "weak-np$np.json" iterations)"
       done ;;
     *) echo "unknown part $part" ;;
   esac

@@ -85,16 +85,20 @@ cleanup:
 }
 
 /* The result in the metric used and in the caller's (report->fidelity),
- * then the carried copy of the caller's metric removed. Collective. */
+ * then the carried copy of the caller's metric removed. Its validity is
+ * pa__dmesh_check_output's, as a sequential remesh checks the built-in
+ * remesher's output (finish ran pa_dmesh_check before when the result is
+ * checked). Collective. */
 static pa_status measure(pa_dmesh *dm, unsigned changed, pa_fidelity *f) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = dm->mesh;
   int k = pa__user_metric_field(m);
-  PA_CALL(pa_dmesh_stats(dm, &f->used));
+  PA_CALL(pa__dmesh_stats_met(dm, m->met_ncomp, m->met, PA_STATS_CHECK_OUTPUT,
+                              &f->used));
   f->user = f->used;
   if (k >= 0) {
-    PA_CALL(pa__dmesh_stats_met(dm, m->field[k].ncomp, m->field[k].val, 0,
-                                &f->user));
+    PA_CALL(pa__dmesh_stats_met(dm, m->field[k].ncomp, m->field[k].val,
+                                PA_STATS_CHECK_NONE, &f->user));
     f->user.valid = f->used.valid;
     PA_CALL(pa_mesh_remove_field(m, k));
   }

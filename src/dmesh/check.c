@@ -345,6 +345,16 @@ cleanup:
   return st;
 }
 
+pa_status pa__dmesh_check_output(pa_dmesh *dm) {
+  pa_status st = PA_SUCCESS;
+  pa__agree_reset();
+  PA_CALL(check_local(dm));
+  PA_CALL(pa__agree(dm->comm, st));
+  PA_CALL(check_global_counts(dm));
+cleanup:
+  return pa__agree_end(dm->comm, st);
+}
+
 pa_status pa_dmesh_check(pa_dmesh *dm) {
   pa_status st = PA_SUCCESS;
   PA_CHECK(dm && dm->mesh, PA_ERR_ARG, "pa_dmesh_check: NULL dmesh");

@@ -356,11 +356,19 @@ pa_status pa__dmesh_partition(MPI_Comm comm, int dim, pa_idx n,
  * every rank succeeded, aborts everywhere otherwise. */
 pa_status pa__output_end(MPI_Comm comm, pa_output *tx, pa_status st);
 
+/* The part of pa_dmesh_check a result of the adaptation loop with the
+ * built-in remesher gets (check.c): counts, ownership ranges and the
+ * orientation of every owned element. The ghosts, the ownership and the
+ * conformity across ranks, which pa_dmesh_check adds, are invariants of
+ * the rebuild (tests/mpi check them after every adaptation). Collective. */
+pa_status pa__dmesh_check_output(pa_dmesh *dm);
+
 /* ---- statistics (dstats.c) ---- */
 
 /* pa_dmesh_stats measured in the metric met (local vertex values of nc
- * components) instead of the mesh's own; check 0 skips the validity check
- * (stats->valid is then 1). Collective. */
+ * components) instead of the mesh's own, with the validity check given
+ * (PA_STATS_CHECK_*: none, stats->valid is then 1; pa_dmesh_check's; or
+ * pa__dmesh_check_output's). Collective. */
 pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
                               int check, pa_stats *stats);
 

@@ -68,8 +68,8 @@ pa_status pa_dmesh_stats(pa_dmesh *dm, pa_stats *stats) {
   if (!dm)
     return pa__error(PA_ERR_ARG, __FILE__, __LINE__,
                      "pa_dmesh_stats: NULL argument");
-  return pa__dmesh_stats_met(dm, dm->mesh->met_ncomp, dm->mesh->met, 1,
-                             stats);
+  return pa__dmesh_stats_met(dm, dm->mesh->met_ncomp, dm->mesh->met,
+                             PA_STATS_CHECK_FULL, stats);
 }
 
 /* Count the ne owned elements of m (dimension d) in metric met (nc
@@ -182,7 +182,9 @@ pa_status pa__dmesh_stats_met(pa_dmesh *dm, int nc, const double *met,
   pa__stats_acc_sums(&acc);
   PA_CALL(combine(dm->comm, &acc));
   {
-    pa_status c = check ? pa_dmesh_check(dm) : PA_SUCCESS;
+    pa_status c = check == PA_STATS_CHECK_FULL     ? pa_dmesh_check(dm)
+                  : check == PA_STATS_CHECK_OUTPUT ? pa__dmesh_check_output(dm)
+                                                   : PA_SUCCESS;
     if (c == PA_ERR_MEMORY) PA_CALL(c);
     s->valid = c == PA_SUCCESS;
     if (!s->valid) pa_clear_error();

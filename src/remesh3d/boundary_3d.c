@@ -7,7 +7,9 @@
  * boundary triangles, when its two triangles have different references, or
  * (unless -nr) when their normals make an angle above -ar. A vertex with a
  * number of feature edges other than 0 or 2, or whose two feature edges turn
- * by more than -ar, is a corner (locked). Boundary vertices off features get
+ * by more than -ar, is a corner (locked). A feature edge or corner that the
+ * written triangles alone would not make (one of unlisted interfaces,
+ * RM3D_REC_UNLISTED) is not written back. Boundary vertices off features get
  * the mean normal of their free triangles and RM3D_V_CURVED when these normals
  * are not all equal, which lets splits place new points on a smooth (cubic)
  * reconstruction; planar patches have no curved vertex and stay planar. So

@@ -2,11 +2,14 @@
  * test_dmesh.c -- distributed mesh: distribution from a root, ghosts, halo
  * exchange (sync and async) of global ids and multi-component fields,
  * reductions, iterators, gather, checksum independence of the number of
- * ranks, reordering, redistribution round trips, bad input and MPI errors.
+ * ranks, reordering, redistribution round trips, bad input, the checks
+ * (whole and of an adaptation's result) and MPI errors.
  * Runs at any number of ranks.
  */
 #include "testutil.h"
+#include "dmesh/dmesh.h"
 #include "dmesh/exchange.h"
+#include "metric/metric.h"
 
 #include <mpi.h>
 
@@ -623,6 +626,34 @@ static void test_check_detects(void) {
   }
 }
 
+/* The check of an adaptation's result (pa__dmesh_check_output, the
+ * validity its measurement reports) finds an inverted owned element, on
+ * every rank, as pa_dmesh_check does. */
+static void test_check_output(void) {
+  pa_mesh *in = box_on_root(3, 4);
+  pa_dmesh *dm = NULL;
+  CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, in, 1, &dm));
+  pa_mesh_destroy(in);
+  CHECK_OK(pa__dmesh_check_output(dm));
+  pa_stats s;
+  pa_mesh *m = pa_dmesh_mesh(dm);
+  CHECK_OK(pa__dmesh_stats_met(dm, 0, NULL, PA_STATS_CHECK_OUTPUT, &s));
+  CHECK(s.valid);
+  if (rank == 0 && pa_dmesh_nowned(dm, PA_ELEMENT) > 0) {
+    pa_idx *ev = pa_mesh_elems(m), t = ev[0];
+    ev[0] = ev[1];
+    ev[1] = t;
+  }
+  CHECK(pa__dmesh_check_output(dm) == PA_ERR_MESH);
+  CHECK(strstr(pa_last_error(), "inverted") != NULL);
+  pa_clear_error();
+  CHECK_OK(pa__dmesh_stats_met(dm, 0, NULL, PA_STATS_CHECK_OUTPUT, &s));
+  CHECK(!s.valid);
+  CHECK(pa_dmesh_check(dm) == PA_ERR_MESH);
+  pa_clear_error();
+  pa_dmesh_destroy(dm);
+}
+
 /* A failed MPI call on a communicator that returns errors: PA_ERR_MPI
  * naming the call, the same on every rank for a call every rank makes. */
 static void test_mpi_errors(void) {
@@ -649,7 +680,8 @@ int main(int argc, char **argv) {
   size_t mem0 = pa_memory_current();
   pa_test_fn tests[] = {test_distribute, test_redistribute, test_rebalance,
                         test_weighted_balance, test_adjacency, test_bad_input,
-                        test_check_detects, test_mpi_errors};
+                        test_check_detects, test_check_output,
+                        test_mpi_errors};
   const char *names[] = {"distribute", "redistribute", "rebalance",
                          "weighted_balance", "adjacency", "bad_input",
                          "check_detects", "mpi_errors"};
