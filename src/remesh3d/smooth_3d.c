@@ -53,27 +53,34 @@ static int bary(const double *p0, const double *p1, const double *p2,
   return 1;
 }
 
+/* The other ends r[0], r[1] of the two feature edges at the ridge vertex
+ * p (its ball[0..n)): 1 when p has exactly two, neither required. */
+static int ridge_ends(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
+                      pa_idx *r) {
+  int nr = 0;
+  for (int i = 0; i < n && nr <= 2; i++) {
+    const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
+    for (int j = 0; j < 4 && nr <= 2; j++) {
+      pa_idx x = v[j];
+      if (x == p || !(m->vtag[x] & RM3D_V_FEAT)) continue;
+      if (nr > 0 && (x == r[0] || (nr > 1 && x == r[1]))) continue;
+      pa_idx key[2] = {p, x};
+      pa_idx e = pa__rm3d_table_find(&m->edg, key);
+      if (e < 0) continue;
+      if (m->edg.flag[e] & PA_FLAG_REQUIRED) return 0;
+      if (nr < 2) r[nr] = x;
+      nr++;
+    }
+  }
+  return nr == 2;
+}
+
 int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
                           double *dir) {
   if (!m->surf || (m->vtag[p] & (RM3D_V_CURVED))) return 0;
   if (m->vtag[p] & RM3D_V_FEAT) {
     pa_idx r[2];
-    int nr = 0;
-    for (int i = 0; i < n && nr <= 2; i++) {
-      const pa_idx *v = m->tv + 4 * (size_t)(ball[i] >> 2);
-      for (int j = 0; j < 4 && nr <= 2; j++) {
-        pa_idx x = v[j];
-        if (x == p || !(m->vtag[x] & RM3D_V_FEAT)) continue;
-        if (nr > 0 && (x == r[0] || (nr > 1 && x == r[1]))) continue;
-        pa_idx key[2] = {p, x};
-        pa_idx e = pa__rm3d_table_find(&m->edg, key);
-        if (e < 0) continue;
-        if (m->edg.flag[e] & PA_FLAG_REQUIRED) return 0;
-        if (nr < 2) r[nr] = x;
-        nr++;
-      }
-    }
-    if (nr != 2) return 0;
+    if (!ridge_ends(m, p, ball, n, r)) return 0;
     const double *xp = m->x + 3 * (size_t)p, *a = m->x + 3 * (size_t)r[0],
                  *b = m->x + 3 * (size_t)r[1];
     double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
@@ -743,6 +750,103 @@ static int try_length_moves(rm3d *m, pa_idx p, const pa_idx *ball, int n,
   return 0;
 }
 
+/* Bisection steps of the balanced point on a ridge's circle (the angle
+ * to 1e-12 of its range). */
+#define ARC_BISECT 40
+
+/* A vertex p of a curved ridge between its feature neighbours r[0] and
+ * r[1] moves on the circle through the three, to where its two ridge edges
+ * have the same length in the metric (where the collapse of a short ridge
+ * edge is refused because the neighbour edge would grow past sqrt 2, this
+ * evens the two out), else half or a quarter of the way. A position is
+ * taken as the other length moves take theirs (fewer edges out of range,
+ * or as many and a sum of ln^2 L less by RM3D_LGAIN, the ball's quality
+ * kept), within hausd of the old ridge, every boundary triangle at p
+ * turning by less than RM3D_NORMAL_COS, and on the model if there is one. */
+static int ridge_arc_move(rm3d *m, pa_idx p, const pa_idx *ball, int n,
+                          const pa_idx *r, const len_ctx *lc) {
+  const double *xp = m->x + 3 * (size_t)p, *xa = m->x + 3 * (size_t)r[0],
+               *xb = m->x + 3 * (size_t)r[1];
+  const double *mp = m->met + (size_t)m->mc * p;
+  const double *ma = m->met + (size_t)m->mc * r[0];
+  const double *mb = m->met + (size_t)m->mc * r[1];
+  double u[3] = {xa[0] - xp[0], xa[1] - xp[1], xa[2] - xp[2]};
+  double w[3] = {xb[0] - xp[0], xb[1] - xp[1], xb[2] - xp[2]};
+  double z[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                 u[0] * w[1] - u[1] * w[0]};
+  double zz = z[0] * z[0] + z[1] * z[1] + z[2] * z[2];
+  double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+  double ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+  if (!(zz > 1e-24 * uu * ww)) return 0; /* straight: bdry_freedom's */
+  /* the circle: centre c = p + (uu w - ww u) x z / (2 zz), p at angle 0 */
+  double g[3] = {uu * w[0] - ww * u[0], uu * w[1] - ww * u[1],
+                 uu * w[2] - ww * u[2]};
+  double c[3], e1[3], e2[3];
+  c[0] = xp[0] + (g[1] * z[2] - g[2] * z[1]) / (2 * zz);
+  c[1] = xp[1] + (g[2] * z[0] - g[0] * z[2]) / (2 * zz);
+  c[2] = xp[2] + (g[0] * z[1] - g[1] * z[0]) / (2 * zz);
+  for (int j = 0; j < 3; j++) e1[j] = xp[j] - c[j];
+  double rad = rm3d_unit(e1);
+  rm3d_unit(z);
+  e2[0] = z[1] * e1[2] - z[2] * e1[1];
+  e2[1] = z[2] * e1[0] - z[0] * e1[2];
+  e2[2] = z[0] * e1[1] - z[1] * e1[0];
+  double ang[2];
+  for (int s = 0; s < 2; s++) {
+    const double *y = s ? xb : xa;
+    double d[3] = {y[0] - c[0], y[1] - c[1], y[2] - c[2]};
+    ang[s] = atan2(d[0] * e2[0] + d[1] * e2[1] + d[2] * e2[2],
+                   d[0] * e1[0] + d[1] * e1[1] + d[2] * e1[2]);
+  }
+  if (!(ang[0] * ang[1] < 0)) return 0; /* p not between a and b */
+  /* the balanced angle: len(a, P) - len(P, b) changes sign between a and b */
+  double lo = ang[0], hi = ang[1], np[3];
+  for (int it = 0; it < ARC_BISECT; it++) {
+    double t = 0.5 * (lo + hi);
+    for (int j = 0; j < 3; j++)
+      np[j] = c[j] + rad * (cos(t) * e1[j] + sin(t) * e2[j]);
+    double f = pa__len3(m->mc, xa, np, ma, mp) - pa__len3(m->mc, np, xb, mp, mb);
+    if (f < 0) lo = t;
+    else hi = t;
+  }
+  double target = 0.5 * (lo + hi), hausd, qfloor = fmin(lc->qold, RM3D_QLEN);
+  pa_idx tri[3 * 32];
+  int ntri, first = lc->iworst;
+  if (!curved_patch(m, ball, n, tri, &ntri, &hausd)) return 0;
+  float nq[RM3D_MAXBALL];
+  for (int tr = 0; tr < 3; tr++) {
+    double t = target / (double)(1 << tr);
+    for (int j = 0; j < 3; j++)
+      np[j] = c[j] + rad * (cos(t) * e1[j] + sin(t) * e2[j]);
+    if (pa__rm3d_project_vertex(m, p, ball, n, np) < 0) continue;
+    /* within hausd of the old ridge a-p-b */
+    double dmin = 1e300;
+    for (int s = 0; s < 2; s++) {
+      const double *y = s ? xb : xa;
+      double e[3] = {y[0] - xp[0], y[1] - xp[1], y[2] - xp[2]};
+      double q[3] = {np[0] - xp[0], np[1] - xp[1], np[2] - xp[2]};
+      double ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+      double k = (q[0] * e[0] + q[1] * e[1] + q[2] * e[2]) / ee;
+      k = k < 0 ? 0 : k > 1 ? 1 : k;
+      double d2 = 0;
+      for (int j = 0; j < 3; j++) d2 += (q[j] - k * e[j]) * (q[j] - k * e[j]);
+      if (d2 < dmin) dmin = d2;
+    }
+    if (dmin > hausd * hausd) continue;
+    if (!surface_kept(m, tri, ntri, p, np)) continue;
+    double l1[RM3D_LNB];
+    int out1 = len_out(m, np, mp, lc->nb, lc->inb, lc->nn, lc->out0, l1);
+    if (out1 > lc->out0 ||
+        (out1 == lc->out0 && !len_sum_below(l1, lc->nn, RM3D_LGAIN * lc->s0)))
+      continue;
+    if (moved_qualities(m, ball, n, np, mp, qfloor, 0, &first, nq) >= 0)
+      continue;
+    apply_move(m, p, ball, n, np, nq, out1 == 0);
+    return n;
+  }
+  return 0;
+}
+
 int pa__rm3d_length_vertex(rm3d *m, pa_idx p, const pa_idx *ball, int n) {
   if (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD | RM3D_V_CURVED))
     return 0;
@@ -750,9 +854,13 @@ int pa__rm3d_length_vertex(rm3d *m, pa_idx p, const pa_idx *ball, int n) {
   if (n < 0) return 0;
   int kind = 0;
   double dir[3] = {0, 0, 0};
+  pa_idx r[2] = {-1, -1};
   if (m->vtag[p] & RM3D_V_BDRY) {
     kind = pa__rm3d_bdry_freedom(m, p, ball, n, dir);
-    if (!kind) return 0;
+    /* a curved ridge: ridge_arc_move */
+    if (!kind && !((m->vtag[p] & RM3D_V_FEAT) && m->surf &&
+                   ridge_ends(m, p, ball, n, r)))
+      return 0;
   }
   len_ctx lc;
   if (!ball_neighbours(m, p, ball, n, &lc)) return 0;
@@ -760,6 +868,7 @@ int pa__rm3d_length_vertex(rm3d *m, pa_idx p, const pa_idx *ball, int n) {
                     lc.nb, lc.inb, lc.nn, lc.nn, lc.l0);
   if (lc.out0 == 0) return 0;
   lc.s0 = len_sum(lc.l0, lc.nn, lc.lg0);
+  if (r[0] >= 0) return ridge_arc_move(m, p, ball, n, r, &lc);
   /* two candidates, each kept in the plane (kind 2) or along the ridge
    * (kind 1) of a boundary vertex */
   double d[3], d2[3];

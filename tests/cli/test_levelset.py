@@ -271,6 +271,7 @@ def test_materials():
                 [m.cell_data["medit:ref"][b], np.full(len(between), 7)])
         meshio.write(name + ".mesh", m, file_format="medit")
         write_sol(name + ".phi.sol", dim, sd(m.points[:, :dim]))
+        wq1 = 0.0
         for np_ in nps:
             out = "%s.o%d.mesh" % (name, np_)
             if run(["adapt", name + ".mesh", "-ls", name + ".phi.sol", "-f",
@@ -279,10 +280,16 @@ def test_materials():
                 continue
             # unlisted or not, the faces between references are remeshed as
             # surfaces: no sliver (below 0.05, what the parallel loop calls
-            # clearly bad) stays where the cut crosses them
+            # clearly bad) stays where the cut crosses them, and in parallel
+            # the worst element is at least half as good as sequentially
+            # (where the plane meets the sphere, a short edge of the curved
+            # ridge between them is evened out by moving along it)
             wq = json.load(open(name + ".json"))["quality_worst"]
-            (ok if wq > 0.05 else fail)("%s np %d: worst quality %.3f"
-                                        % (name, np_, wq))
+            if np_ == 1:
+                wq1 = wq
+            good = wq > 0.05 and (np_ == 1 or wq >= 0.5 * wq1)
+            (ok if good else fail)("%s np %d: worst quality %.3f (np 1: %.3f)"
+                                   % (name, np_, wq, wq1))
             x_out, E, er, B, br = read(out, dim)
             if dim == 3 and not listed:
                 c = x_out[B[br != 10]].mean(axis=1)
