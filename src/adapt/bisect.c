@@ -62,8 +62,10 @@
  * piece, which comes back as refined here (test_adapt_props: a threshold
  * of 3 or more leaves fans): extract.c passes PA_ADAPT_LEB_INNER. The
  * built-in 2D remesher refines the inside itself, faster than the
- * bisection, but resolves a long fan one split per pass: it gets
- * PA_ADAPT_LEB_INNER_2D (piece.h has the measurement).
+ * bisection, in as many passes as its boundary band needs, but the fans
+ * of needles of a refined skin are better cut short: it gets
+ * PA_ADAPT_LEB_INNER_2D, in the elements touching the skin only (piece.h
+ * has the measurements).
  *
  * New skin vertices get temporary ids (PA_ADAPT_TEMP_GID + index), and are
  * matched after the remesh by their coordinates like the others;
@@ -103,12 +105,12 @@ static int maybe_on_boundary(void *ctx, pa_idx a, pa_idx b) {
 }
 
 pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
-                                double inner_lmax, const double *surf,
-                                int curves) {
+                                double inner_lmax, int near_skin,
+                                const double *surf, int curves) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = pc->in;
   pa_idx nv0 = m->nv, *parent = NULL;
-  uint8_t *onskin = NULL, *mark = NULL;
+  uint8_t *onskin = NULL, *mark = NULL, *eflag0 = NULL;
   double *nrm = NULL;
   bloom f = {pc->vgid, surf};
   pa__leb_opts o;
@@ -139,7 +141,23 @@ pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
     mark[v] = inner[v] >= 2 && hard ? 4 : inner[v];
   }
   o.skin_ok = mark;
-  PA_CALL(pa__leb_refine(m, &o, &parent, &onskin));
+  /* near_skin: the elements away from the skin are frozen meanwhile
+   * (leb.c splits no edge of a frozen element; the halves of a split one
+   * keep its flags) */
+  pa_idx ne0 = m->ne;
+  if (near_skin) {
+    PA_ALLOC(eflag0, ne0);
+    memcpy(eflag0, m->eflag, (size_t)ne0);
+    for (pa_idx e = 0; e < ne0; e++) {
+      const pa_idx *v = m->elem + (size_t)(m->dim + 1) * e;
+      int sk = 0;
+      for (int k = 0; k <= m->dim; k++) sk |= pc->skin[v[k]];
+      if (!sk) m->eflag[e] |= PA_FLAG_REQUIRED;
+    }
+  }
+  st = pa__leb_refine(m, &o, &parent, &onskin);
+  if (near_skin) memcpy(m->eflag, eflag0, (size_t)ne0);
+  PA_CALL(st);
   if (m->nv > nv0) {
     pa_gid *g = pa__realloc(pc->vgid, (size_t)m->nv * sizeof *g);
     PA_CHECK(g, PA_ERR_MEMORY, "out of memory refining a piece's skin");
@@ -169,6 +187,7 @@ cleanup:
   pa__free(parent);
   pa__free(onskin);
   pa__free(mark);
+  pa__free(eflag0);
   pa__free(nrm);
   return st;
 }

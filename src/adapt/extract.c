@@ -456,12 +456,12 @@ static pa_status piece_skin(pbuild *b) {
     }
   {
     /* the built-in 2D remesher refines the inside itself, but for long
-     * fans (PA_ADAPT_LEB_INNER_2D) */
+     * fans on the skin (PA_ADAPT_LEB_INNER_2D) */
     const pa_remesher *r = b->it->opts->remesher;
     int builtin2d = m->dim == 2 && (!r || r == pa_remesher_builtin());
     PA_CALL(pa__piece_refine_skin(
         b->pc, b->inner, builtin2d ? PA_ADAPT_LEB_INNER_2D : PA_ADAPT_LEB_INNER,
-        surf, !b->it->nocurve));
+        builtin2d, surf, !b->it->nocurve));
   }
 cleanup:
   pa__free(surf);

@@ -75,14 +75,18 @@
  * (docs/BENCHMARKS.md, "The parallel loop", has the measurement). */
 #define PA_ADAPT_LEB_SKIN 1.5
 #define PA_ADAPT_LEB_INNER 2.0
-/* ... and, for the built-in 2D remesher, while longer than this: it
- * resolves a fan of needles (a skin refined to 1.5 facing an input vertex
- * 95 away) one split per chain and pass, so untouched the pieces of
- * plate2d.mesh -hsiz 0.0005 at 2 ranks ran 40 passes, missed their target
- * and left 18 k elements to another iteration; at 2 its own refinement is
- * lost (1.8 times the remesher CPU time). 24: 49 elements left, CPU
- * 7.5 s (8 s at 12, 7.8 s at 16, 7.6 s at 32 with 174 left; 14.7 s at 8;
- * with the 2D remesher before da8e63a). */
+/* ... and, for the built-in 2D remesher, while longer than this, only in
+ * the input elements with a vertex on the skin. Its refinement takes all
+ * the elements of a piece to the size in about as many passes as the
+ * sequential one: the elements on the piece's boundary, which bisection
+ * leaves alone, set the count. Elsewhere bisection only puts elements
+ * ahead, to sit at full size through those passes (plate2d.mesh -hsiz
+ * 0.0005 at 2 ranks, every element bisected: 40.6 M element visits of the
+ * refinement rounds against 31.0 M sequentially; near the skin only: 34.3
+ * M, 4 % less remesher CPU time). Near the skin it keeps the fans of
+ * needles a skin refined to 1.5 makes on the input vertex across short
+ * (at 95, none bisected: 20 % more remesher CPU time, the fans' remains
+ * slowing the optimisation). */
 #define PA_ADAPT_LEB_INNER_2D 24.0
 /* No label (pieces.c, extract.c). */
 #define PA_ADAPT_NOLABEL 2147483647
@@ -312,13 +316,14 @@ pa_status pa__adapt_extract(pa__iter *it);
 /* Refine the skin faces pc shares with other pieces (bisect.c); inner[v]:
  * 1 the vertex is inner, 2 labelled, 3 on a smooth curved boundary (see
  * pieces.c); edges inside the piece are bisected while longer than
- * inner_lmax (HUGE_VAL: none); surf (3D): 4
+ * inner_lmax (HUGE_VAL: none), with near_skin only in the input elements
+ * with a vertex on the skin; surf (3D): 4
  * per input vertex, it->vsurf's, or NULL (no two labelled vertices are
  * then known to make a chord); curves: skin edges may be split onto a
  * curve (else the vertices marked 3 are labelled ones). */
 pa_status pa__piece_refine_skin(pa__piece *pc, const uint8_t *inner,
-                                double inner_lmax, const double *surf,
-                                int curves);
+                                double inner_lmax, int near_skin,
+                                const double *surf, int curves);
 
 /* Step 4. Local: remesh the local pieces; failures are recorded, not
  * returned (only hard internal errors are). *nfail receives the number of

@@ -281,9 +281,10 @@ pa_status pa__adapt_remesh(pa__iter *it, int *nfail, double *cpu) {
     }
     t2 = pa_wtime();
     pa__info(2, "padapt: rank %d: piece %d: %d -> %d elements (%d skin "
-                "vertices added), remesh %.3f s, check %.3f s%s\n", it->rank,
-             pc->id, (int)pc->in->ne, ok ? (int)out->ne : -1, (int)pc->nsplit,
-             t1 - t0, t2 - t1, ok ? "" : ", rolled back");
+                "vertices added), remesh %.3f s (CPU %.3f s), check %.3f s%s\n",
+             it->rank, pc->id, (int)pc->in->ne, ok ? (int)out->ne : -1,
+             (int)pc->nsplit, t1 - t0, pc->rep.cpu_s, t2 - t1,
+             ok ? "" : ", rolled back");
     if (ok) {
       pc->unchanged = r == pa_remesher_builtin() && pc->nsplit == 0 &&
                       pc->rep.nsplit + pc->rep.ncollapse + pc->rep.nswap +

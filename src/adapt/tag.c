@@ -38,14 +38,18 @@
  *   edges just outside the range are as many as the sequential remesher
  *   leaves anywhere (2-3 % with an anisotropic metric): with the strict
  *   range every iteration's borders would be the next one's work.
- * - elsewhere in a piece among several (PA_ADAPT_DONE,
- *   PA_ADAPT_DONE_NEAR_SKIN): an edge outside [0.5, 1.5). The remesher
- *   relaxes its working metric at frozen skin vertices whose edges are far
- *   from the target (remesh2d/mesh_2d.c, remesh3d/mesh_3d.c) over the first
- *   ring of input elements, which may be many output layers wide: those
- *   elements come back coarser than the target, away from any hot vertex,
- *   and only another iteration refines them (an upper bound of 2 leaves
- *   edges of 1.5 to 3.5 there).
+ * - near a hot skin (PA_ADAPT_DONE_NEAR_SKIN): an edge outside [0.5,
+ *   1.5); elsewhere in a piece among several (PA_ADAPT_DONE): outside
+ *   [0.5, 1.6). The remesher relaxes its working metric at frozen skin
+ *   vertices whose edges are far from the target (remesh2d/mesh_2d.c,
+ *   remesh3d/mesh_3d.c) over the first ring of input elements, which may
+ *   be many output layers wide: those elements come back coarser than the
+ *   target, away from any hot vertex, and only another iteration refines
+ *   them (an upper bound of 2 leaves edges of 1.5 to 3.5 there). Away from
+ *   a hot skin the bound is a little above the longest edges the
+ *   sequential remesher leaves (1.55 in 2D): with 1.5, plate2d.mesh -hsiz
+ *   0.0005 at 2 ranks ran a second iteration over its 4.85 M triangles for
+ *   10 of them, whose longest edges were 1.505-1.555.
  * - made by a single piece away from its skin (PA_ADAPT_DONE_FREE): only
  *   what the remesher itself calls missed (an edge of 2 or more, a quality
  *   below QUAL_CLEARLY_BAD; remesh2d/driver_2d.c): another pass would
@@ -59,6 +63,7 @@
 #define LEN_LO_SKIN 0.65
 #define LEN_LO_DONE 0.5
 #define LEN_HI_DONE 1.5
+#define LEN_HI_PIECE 1.6
 #define LEN_HI_FREE 2.0
 #define QUAL_CLEARLY_BAD 0.05
 /* When the loop ends without converging, what is still tagged makes it a
@@ -80,7 +85,9 @@ static void criteria(uint8_t dn, double qual_threshold, double *lo,
   *lo = dn == PA_ADAPT_DONE_ON_SKIN ? LEN_LO_SKIN
         : dn == PA_ADAPT_DONE_FREE  ? 0
                                     : LEN_LO_DONE;
-  *hi = dn == PA_ADAPT_DONE_FREE ? LEN_HI_FREE : LEN_HI_DONE;
+  *hi = dn == PA_ADAPT_DONE_FREE ? LEN_HI_FREE
+        : dn == PA_ADAPT_DONE     ? LEN_HI_PIECE
+                                  : LEN_HI_DONE;
   if (dn == PA_ADAPT_DONE || dn == PA_ADAPT_DONE_FREE)
     *qmin = fmin(QUAL_CLEARLY_BAD, qual_threshold);
 }

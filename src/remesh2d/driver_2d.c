@@ -137,6 +137,25 @@ static void report_figures(const rm2d *rm, const char *when) {
 /* ---- the passes: each visits the elements in slot order and calls one
  * operator (split_2d.c, collapse_2d.c, swap_2d.c, smooth_2d.c) ---- */
 
+/* Longest-edge propagation splits an edge only when it is also the longest
+ * free edge of the element across. In a fan of needles (a frozen skin
+ * bisected to 1.5 facing an input vertex up to 24 away: the pieces of the
+ * parallel loop, adapt/bisect.c) consecutive spokes differ by less than
+ * the base, so only the longest spoke of a fan qualifies, and a fan of n
+ * needles takes n passes. In a mesh with frozen entities, where either
+ * element is a needle (quality below RM2D_NEEDLE_Q: its base under a sixth
+ * of its spokes), the edge may be up to RM2D_NEEDLE_TOL shorter than the
+ * longest across; the halves of a needle cut on either spoke are alike.
+ * plate2d.mesh -hsiz 0.0005 at 2 ranks: the pieces' refinement rounds 21
+ * and 28 -> 19 and 20 (21 sequentially), both meet their target (one
+ * missed it with edges of 10.4 left), the second iteration tags 10
+ * elements instead of 6274; 5 % or 20 % do the same. Not without frozen
+ * entities: there needles are an anisotropic input's (the "shell" field
+ * of test_remesh2d on a 40 x 40 box: 98.25 -> 97.59 % of the edges in
+ * range). */
+#define RM2D_NEEDLE_Q 0.3
+#define RM2D_NEEDLE_TOL 0.1
+
 /* Longest free edge of element k above thr: face index or -1, length in *len;
  * *inr (may be NULL) = all three edges settled (rm2d_len_settled). */
 static int longest_free(const rm2d *rm, pa_idx k, double thr, double *len,
@@ -178,7 +197,11 @@ pa_status pa__rm2d_split_pass(rm2d *rm, double thr, long *n) {
       pa_idx f = s / 3;
       if (rm->tflag[f] & RM2D_E_TOUCHED) continue;
       double lf;
-      int jf = longest_free(rm, f, l * (1 + 1e-12), &lf, NULL);
+      double tol = rm->frozen && (rm->q[k] < RM2D_NEEDLE_Q ||
+                                  rm->q[f] < RM2D_NEEDLE_Q)
+                       ? RM2D_NEEDLE_TOL
+                       : 1e-12;
+      int jf = longest_free(rm, f, l * (1 + tol), &lf, NULL);
       if (jf >= 0 && jf != s % 3) continue;
     }
     cnt += pa__rm2d_split_edge(rm, k, i, &st);
@@ -585,6 +608,11 @@ pa_status pa__remesh2d(pa_mesh *mesh, const pa_remesh_opts *opts,
   PA_CALL(pa__rm2d_build(mesh, opts, &rm));
   PA_CALL(pa__rm2d_feature_analyze(rm, mesh));
   PA_CALL(pa__rm2d_skin_relax(rm, &nrelaxed));
+  rm->frozen = 0;
+  for (pa_idx k = 0; k < rm->ne && !rm->frozen; k++)
+    rm->frozen = (rm->tflag[k] & RM2D_E_FROZEN) != 0;
+  for (pa_idx b = 0; b < rm->nb && !rm->frozen; b++)
+    rm->frozen = (rm->btag[b] & RM2D_B_FROZEN) != 0;
   rm->lguard = PA_METRIC_LEN_HI;
   reordered = rm->nelive;
   if (!opts->no_insert) PA_CALL(refine_rounds(rm, &pass, &reordered));

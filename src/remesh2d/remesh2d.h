@@ -165,6 +165,7 @@ typedef struct rm2d {
   const pa_remesh_opts *opts;
   double hausd;
   double lguard; /* no operation creates an edge longer than this */
+  int frozen;    /* the mesh has a frozen element or feature record */
   long nsplit, ncollapse, nswap, nmove;
   double tlast; /* time of the last verbose pass report */
 } rm2d;

@@ -684,7 +684,7 @@ int main(int argc, char **argv) {
                         test_mpi_errors};
   const char *names[] = {"distribute", "redistribute", "rebalance",
                          "weighted_balance", "adjacency", "bad_input",
-                         "check_detects", "mpi_errors"};
+                         "check_detects", "check_output", "mpi_errors"};
   for (size_t t = 0; t < sizeof tests / sizeof *tests; t++) {
     int before = pa_test_failures;
     double t0 = MPI_Wtime();

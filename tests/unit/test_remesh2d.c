@@ -752,6 +752,80 @@ static int frozen_kept(pa_mesh *in, pa_mesh *out) {
 }
 
 /*
+ * A fan of needles on a frozen side cut to the size (a piece of the
+ * parallel loop whose skin adapt/bisect.c refined, facing an input vertex
+ * far away): the left side of the unit square in n frozen edges of length
+ * 1.2 in the metric, each the base of a needle to the middle of the right
+ * side, about 80 away. The spokes of consecutive needles differ by less
+ * than the base: with strict longest-edge propagation only the longest
+ * spoke of the fan split per pass (remesh2d/driver_2d.c, RM2D_NEEDLE_TOL):
+ * 47 passes, 35 with the needle rule (17 for the unfrozen square). Counts,
+ * not times.
+ */
+static void test_frozen_fan(void) {
+  const int n = 64;
+  const double h = 1.0 / (1.2 * n);
+  pa_mesh *m = NULL, *in = NULL;
+  CHECK_OK(pa_mesh_create(2, &m));
+  for (int i = 0; i <= n; i++) {
+    double p[2] = {0, (double)i / n};
+    CHECK_OK(pa_mesh_add_vertex(m, p, 0, NULL));
+  }
+  double c[3][2] = {{1, 0}, {1, 0.5}, {1, 1}};
+  for (int i = 0; i < 3; i++) CHECK_OK(pa_mesh_add_vertex(m, c[i], 0, NULL));
+  pa_idx r0 = n + 1, apex = n + 2, r1 = n + 3;
+  for (pa_idx i = 0; i < n; i++) {
+    pa_idx t[3] = {i + 1, i, apex};
+    CHECK_OK(pa_mesh_add_elem(m, t, 1, NULL));
+  }
+  pa_idx lo[3] = {0, r0, apex}, hi[3] = {n, apex, r1};
+  CHECK_OK(pa_mesh_add_elem(m, lo, 1, NULL));
+  CHECK_OK(pa_mesh_add_elem(m, hi, 1, NULL));
+  for (pa_idx i = 0; i < n; i++) {
+    pa_idx b[2] = {i + 1, i};
+    CHECK_OK(pa_mesh_add_bdry(m, b, 1, NULL));
+  }
+  pa_idx nb = 0;
+  CHECK_OK(pa_mesh_build_boundary(m, 2, &nb));
+  CHECK(nb == 4);
+  uint8_t *bf = pa_mesh_bdry_flags(m);
+  for (pa_idx i = 0; i < n; i++) bf[i] |= PA_FLAG_REQUIRED;
+  CHECK_OK(pa_mesh_check(m));
+  CHECK_OK(pa_mesh_copy(m, &in));
+  pa_remesh_opts o;
+  pa_remesh_report r, r0rep;
+  pa_remesh_opts_default(&o);
+  o.hsiz = h;
+  pa_mesh *free0 = square(2, 0.0);
+  CHECK_OK(adapt(free0, &o, &r0rep));
+  pa_mesh_destroy(free0);
+  CHECK_OK(adapt(m, &o, &r));
+  figures f = measure(m);
+  fprintf(stderr, "frozen fan: %d elements, worst Q %.3f, in range %.4f, "
+          "%d passes (%d unfrozen), outcome %d\n", (int)pa_mesh_nelem(m),
+          f.qmin, f.in_range, r.npass, r0rep.npass, (int)r.outcome);
+  CHECK(r.outcome == PA_REMESH_SUCCESS);
+  CHECK(f.valid);
+  CHECK_NEAR(f.area, 1.0, 1e-12);
+  CHECK(f.qmin >= 0.4);
+  CHECK(f.in_range >= 0.98);
+  CHECK(r.npass <= 40);
+  /* the frozen side comes back whole */
+  const double *xo = pa_mesh_coords(m);
+  const pa_idx *bo = pa_mesh_bdrys(m);
+  const uint8_t *bfo = pa_mesh_bdry_flags(m);
+  int nfz = 0, onside = 1;
+  for (pa_idx i = 0; i < pa_mesh_nbdry(m); i++) {
+    if (!(bfo[i] & PA_FLAG_REQUIRED)) continue;
+    nfz++;
+    onside &= xo[2 * bo[2 * i]] == 0 && xo[2 * bo[2 * i + 1]] == 0;
+  }
+  CHECK(nfz == n && onside);
+  pa_mesh_destroy(in);
+  pa_mesh_destroy(m);
+}
+
+/*
  * A frozen ring of coarse triangles around a region refined 8 times finer
  * (a piece of the parallel loop). Before the skin relaxation the triangles
  * next to the ring were bisected towards the quality floor (worst Q 1e-4)
@@ -1007,4 +1081,5 @@ TEST_MAIN(test_uniform, test_fields, test_coarsen, test_frozen, test_disk,
           test_interior_curve, test_corners_by_angle, test_second_adaptation,
           test_determinism, test_outcomes, test_errors, test_linear_field,
           test_gradation, test_frozen_skin_refine, test_frozen_pingpong,
+          test_frozen_fan,
           test_reorder, test_strong_aniso)
