@@ -74,31 +74,58 @@ static inline double pa__len3(int mc, const double *a, const double *b,
  * magnify it) or whose mean tensor is not positive. With sizes (mc 1, or
  * the identity, mc 0) the mean M = s I scales V^2 and l^6 alike: the
  * quality is Euclidean and the sizes are not read. */
+/* pa__qual3 with sizes or the identity (mc <= 1): Euclidean, no metric
+ * read. Its own function so the remeshers' isotropic inner loops (moves,
+ * swaps) need not gather metrics nor pass them; the same operations, so
+ * the same bits as pa__qual3. */
+/* The edge vectors E of the tetrahedron p0..p3 (p1 - p0, p2 - p0, p3 - p0,
+ * then the differences of those: p2 - p1, p3 - p1, p3 - p2) and the triple
+ * product of the first three, 6 V: the common start of the qualities. */
+static inline double pa__tet_edges3(const double *p0, const double *p1,
+                                    const double *p2, const double *p3,
+                                    double (*E)[3]) {
+  for (int i = 0; i < 3; i++) {
+    E[0][i] = p1[i] - p0[i];
+    E[1][i] = p2[i] - p0[i];
+    E[2][i] = p3[i] - p0[i];
+  }
+  const double *a = E[0], *b = E[1], *c = E[2];
+  double det = a[0] * (b[1] * c[2] - b[2] * c[1]) -
+               a[1] * (b[0] * c[2] - b[2] * c[0]) +
+               a[2] * (b[0] * c[1] - b[1] * c[0]);
+  for (int i = 0; i < 3; i++) {
+    E[3][i] = b[i] - a[i];
+    E[4][i] = c[i] - a[i];
+    E[5][i] = c[i] - b[i];
+  }
+  return det;
+}
+
+/* pa__qual3 with sizes or the identity (mc <= 1): Euclidean, no metric
+ * read. Its own function so the remeshers' isotropic inner loops (moves,
+ * swaps) need not gather metrics nor pass them. */
+static inline double pa__qual3_iso(const double *p0, const double *p1,
+                                   const double *p2, const double *p3) {
+  double E[6][3];
+  double det = pa__tet_edges3(p0, p1, p2, p3, E);
+  if (det <= 0.0) return det < 0.0 ? -1.0 : 0.0;
+  double s = 0.0; /* term by term: the order of pa__qual3's sum */
+  for (int k = 0; k < 6; k++)
+    for (int i = 0; i < 3; i++) s += E[k][i] * E[k][i];
+  return PA_METRIC_QUAL_NORM_3D_DET * det / (s * sqrt(s));
+}
+
 static inline double pa__qual3(int mc, const double *p0, const double *p1,
                                const double *p2, const double *p3,
                                const double *m0, const double *m1,
                                const double *m2, const double *m3) {
-  double a[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
-  double b[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
-  double c[3] = {p3[0] - p0[0], p3[1] - p0[1], p3[2] - p0[2]};
-  double det = a[0] * (b[1] * c[2] - b[2] * c[1]) -
-               a[1] * (b[0] * c[2] - b[2] * c[0]) +
-               a[2] * (b[0] * c[1] - b[1] * c[0]);
+  if (mc <= 1) return pa__qual3_iso(p0, p1, p2, p3);
+  double E[6][3];
+  double det = pa__tet_edges3(p0, p1, p2, p3, E);
   if (det <= 0.0) return det < 0.0 ? -1.0 : 0.0;
-  double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-  double e[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-  double f[3] = {c[0] - b[0], c[1] - b[1], c[2] - b[2]};
-  double s;
-  if (mc <= 1) {
-    s = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + b[0] * b[0] + b[1] * b[1] +
-        b[2] * b[2] + c[0] * c[0] + c[1] * c[1] + c[2] * c[2] + d[0] * d[0] +
-        d[1] * d[1] + d[2] * d[2] + e[0] * e[0] + e[1] * e[1] + e[2] * e[2] +
-        f[0] * f[0] + f[1] * f[1] + f[2] * f[2];
-    return PA_METRIC_QUAL_NORM_3D_DET * det / (s * sqrt(s));
-  }
-  double se = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + b[0] * b[0] +
-              b[1] * b[1] + b[2] * b[2] + c[0] * c[0] + c[1] * c[1] +
-              c[2] * c[2];
+  double se = 0.0;
+  for (int k = 0; k < 3; k++)
+    for (int i = 0; i < 3; i++) se += E[k][i] * E[k][i];
   if (det < 1e-11 * se * sqrt(se)) return 0.0;
   double M[6];
   for (int i = 0; i < 6; i++) M[i] = 0.25 * (m0[i] + m1[i] + m2[i] + m3[i]);
@@ -106,9 +133,8 @@ static inline double pa__qual3(int mc, const double *p0, const double *p1,
               M[1] * (M[1] * M[5] - M[4] * M[3]) +
               M[3] * (M[1] * M[4] - M[2] * M[3]);
   if (dm <= 0.0) return 0.0;
-  s = pa__sqlen3_tensor(M, a) + pa__sqlen3_tensor(M, b) +
-      pa__sqlen3_tensor(M, c) + pa__sqlen3_tensor(M, d) +
-      pa__sqlen3_tensor(M, e) + pa__sqlen3_tensor(M, f);
+  double s = 0.0;
+  for (int k = 0; k < 6; k++) s += pa__sqlen3_tensor(M, E[k]);
   return PA_METRIC_QUAL_NORM_3D_DET * det * sqrt(dm) / (s * sqrt(s));
 }
 

@@ -45,6 +45,9 @@ static inline double pa__sym_det(int dim, const double *m) {
  * Mmg's edge length from the two end lengths; the remeshers use it too, so
  * that their decisions and the statistics see the same lengths. */
 static inline double pa__log_mean(double la, double lb) {
+  /* Equal ends (a uniform size: every edge of an -hsiz run) first, the
+   * cheapest case: 0.5 (la + la) is la, to the bit, below overflow. */
+  if (la == lb) return la;
   if (la < lb) { /* symmetric to the last bit: L(a,b) == L(b,a) */
     double t = la;
     la = lb;

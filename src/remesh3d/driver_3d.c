@@ -77,16 +77,18 @@ static void lengths6(const rm3d *m, const pa_idx *v, double *L) {
       L[e] = rm3d_len(m, v[pa__rm3d_edge[e][0]], v[pa__rm3d_edge[e][1]]);
     return;
   }
-  const double *x[4];
-  double inv[4];
-  for (int j = 0; j < 4; j++) {
-    x[j] = m->x + 3 * (size_t)v[j];
-    inv[j] = 1.0 / m->met[v[j]];
-  }
-  for (int e = 0; e < 6; e++) {
-    int i = pa__rm3d_edge[e][0], j = pa__rm3d_edge[e][1];
-    L[e] = pa__len3_inv(x[i], x[j], inv[i], inv[j]);
-  }
+  /* unrolled in pa__rm3d_edge's order: the passes call this for every
+   * tet they visit */
+  const double *x0 = m->x + 3 * (size_t)v[0], *x1 = m->x + 3 * (size_t)v[1],
+               *x2 = m->x + 3 * (size_t)v[2], *x3 = m->x + 3 * (size_t)v[3];
+  double i0 = 1.0 / m->met[v[0]], i1 = 1.0 / m->met[v[1]],
+         i2 = 1.0 / m->met[v[2]], i3 = 1.0 / m->met[v[3]];
+  L[0] = pa__len3_inv(x0, x1, i0, i1);
+  L[1] = pa__len3_inv(x0, x2, i0, i2);
+  L[2] = pa__len3_inv(x0, x3, i0, i3);
+  L[3] = pa__len3_inv(x1, x2, i1, i2);
+  L[4] = pa__len3_inv(x1, x3, i1, i3);
+  L[5] = pa__len3_inv(x2, x3, i2, i3);
 }
 
 /* Order of the 6 edges by length, decreasing (dir > 0) or increasing. */
@@ -100,6 +102,13 @@ static void order6(const double *L, int dir, int *ord) {
     }
     ord[j + 1] = x;
   }
+}
+
+/* 1 if one of the six lengths is above thr (dir > 0) or below it. */
+static int any6(const double *L, double thr, int dir) {
+  int any = 0;
+  for (int e = 0; e < 6; e++) any |= dir > 0 ? L[e] > thr : L[e] < thr;
+  return any;
 }
 
 /* 1 if the six lengths are in [PA_METRIC_LEN_LO_EXACT, PA_METRIC_LEN_HI_EXACT].
@@ -133,6 +142,7 @@ pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count) {
         m->tflag[k] |= RM3D_T_CLEAN;
         if (skip) break;
       }
+      if (!any6(L, thr, 1)) break; /* nothing to split: no order needed */
       order6(L, 1, ord);
       for (int i = 0; i < 6 && L[ord[i]] > thr; i++) {
         pa_idx a = m->tv[4 * (size_t)k + pa__rm3d_edge[ord[i]][0]];
@@ -145,7 +155,8 @@ pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count) {
           uint8_t ta = m->vtag[a] & RM3D_V_TODO, tb = m->vtag[b] & RM3D_V_TODO;
           if (wide ? ta && tb : ta || tb) continue;
           if (!wide)
-            nsh = pa__rm3d_shell(m, k, a, b, sht, shr, RM3D_MAXSHELL, &info);
+            nsh = pa__rm3d_shell(m, k, a, b, sht, shr, NULL, RM3D_MAXSHELL,
+                                 &info);
         }
         PA_CALL(pa__rm3d_split_edge(m, k, a, b, &done));
         if (done) {
@@ -260,6 +271,7 @@ pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, double guard,
       m->tflag[k] |= RM3D_T_CLEAN;
       if (skip) continue;
     }
+    if (!any6(L, thr, -1)) continue; /* nothing to collapse */
     order6(L, -1, ord);
     for (int i = 0; i < 6 && L[ord[i]] < thr; i++) {
       pa_idx a = m->tv[4 * (size_t)k + pa__rm3d_edge[ord[i]][0]];
@@ -329,13 +341,15 @@ cleanup:
   return st;
 }
 
-pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, long *count) {
+pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, rm3d_balls *b,
+                               long *count) {
   pa_status st = PA_SUCCESS;
-  pa_idx ball[RM3D_MAXBALL];
+  pa_idx sball[RM3D_MAXBALL];
   long c = 0;
   /* first the vertices off the model onto it (pa__rm3d_snap_vertex) */
   for (pa_idx p = 0; m->voff && p < m->nv; p++)
-    c += pa__rm3d_snap_vertex(m, p, ball);
+    c += pa__rm3d_snap_vertex(m, p, sball);
+  if (!b->start) PA_CALL(pa__rm3d_balls_build(m, b));
   for (pa_idx k = 0; k < m->ne; k++) {
     if ((m->tflag[k] & RM3D_T_DEAD) || m->q[k] >= qthr) continue;
     for (int j = 0; j < 4; j++)
@@ -344,8 +358,16 @@ pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, long *count) {
   for (pa_idx p = 0; p < m->nv; p++) {
     if (!(m->vtag[p] & RM3D_V_TODO)) continue;
     m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
-    c += pa__rm3d_smooth_vertex(m, p, ball);
+    /* A vertex of a curved patch walks its ball: its move goes onto the
+     * first triangle around it that holds the target (curved_point), so
+     * the order of the walk stays its order. */
+    const pa_idx *ball = sball;
+    int n = m->vtag[p] & RM3D_V_CURVED
+                ? pa__rm3d_ball(m, p, sball, RM3D_MAXBALL)
+                : rm3d_balls_get(b, p, &ball);
+    c += pa__rm3d_smooth_vertex(m, p, ball, n);
   }
+cleanup:
   *count = c;
   return st;
 }
@@ -389,11 +411,12 @@ static void len_mark(rm3d *m, pa_idx p, const pa_idx *ball, int n,
   }
 }
 
-pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count) {
+pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, rm3d_balls *b,
+                               long *count) {
   pa_status st = PA_SUCCESS;
-  pa_idx ball[RM3D_MAXBALL];
   uint8_t *ls = NULL; /* LEN_* */
   long c = 0;
+  if (!b->start) PA_CALL(pa__rm3d_balls_build(m, b));
   for (pa_idx k = 0; k < m->ne; k++) {
     if (m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN | RM3D_T_CLEAN)) continue;
     const pa_idx *v = m->tv + 4 * (size_t)k;
@@ -414,7 +437,9 @@ pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count) {
     for (pa_idx p = 0; p < m->nv; p++) {
       if (!(m->vtag[p] & RM3D_V_TODO)) continue;
       m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
-      int n = pa__rm3d_length_vertex(m, p, ball);
+      const pa_idx *ball;
+      int nb = rm3d_balls_get(b, p, &ball);
+      int n = pa__rm3d_length_vertex(m, p, ball, nb);
       if (!ls) {
         moved += n != 0;
         continue;
@@ -429,10 +454,10 @@ pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count) {
     c += moved;
     if (!moved || !ls || s + 1 == sweeps) break;
     for (pa_idx p = 0; p < m->nv; p++) {
-      uint8_t b = ls[p];
-      ls[p] = (uint8_t)((b & LEN_OUT) | ((b & LEN_BALL) ? LEN_CAND : 0));
-      if (!(b & LEN_BALL) || (m->vtag[p] & RM3D_V_DEAD)) continue;
-      if (b & LEN_OUT) m->vtag[p] |= RM3D_V_TODO;
+      uint8_t l = ls[p];
+      ls[p] = (uint8_t)((l & LEN_OUT) | ((l & LEN_BALL) ? LEN_CAND : 0));
+      if (!(l & LEN_BALL) || (m->vtag[p] & RM3D_V_DEAD)) continue;
+      if (l & LEN_OUT) m->vtag[p] |= RM3D_V_TODO;
     }
   }
   *count = c;
@@ -759,6 +784,7 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
                                int *step, int *npass) {
   pa_status st = PA_SUCCESS;
   pa__rounds rounds;
+  rm3d_balls balls = {NULL, NULL};
   /* Balanced splits and collapses are a ping-pong only with frozen
    * entities: the anisotropic shell balances them too, and stopping it
    * early loses edges in range (docs/BENCHMARKS.md, "The 3D remesher"). */
@@ -778,8 +804,9 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
     double t4 = pa_wtime();
     if (!opts->no_move) {
       long nl = 0;
-      PA_CALL(pa__rm3d_smooth_pass(m, RM3D_QSMOOTH, &nm));
-      PA_CALL(pa__rm3d_length_pass(m, 1, &nl));
+      PA_CALL(pa__rm3d_smooth_pass(m, RM3D_QSMOOTH, &balls, &nm));
+      PA_CALL(pa__rm3d_length_pass(m, 1, &balls, &nl));
+      pa__rm3d_balls_free(&balls);
       nm += nl;
     }
     double t5 = pa_wtime();
@@ -794,6 +821,7 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
     if (pa__rounds_stop(&rounds, ns, nvc, m->ne - m->ndead_t)) break;
   }
 cleanup:
+  pa__rm3d_balls_free(&balls);
   return st;
 }
 
@@ -802,6 +830,7 @@ cleanup:
  * passes. */
 static pa_status optimise(rm3d *m, const pa_remesh_opts *opts, int *npass) {
   pa_status st = PA_SUCCESS;
+  rm3d_balls balls = {NULL, NULL};
   for (int it = 0; it < 3; it++, (*npass)++) {
     long nc = 0, nw = 0, nm = 0;
     /* The swaps (Q < 0.7) and moves of this phase unlock short edges the
@@ -814,8 +843,9 @@ static pa_status optimise(rm3d *m, const pa_remesh_opts *opts, int *npass) {
     if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(m, 0.7, 1.01, &nw));
     if (!opts->no_move) {
       long nl = 0;
-      PA_CALL(pa__rm3d_smooth_pass(m, RM3D_QSMOOTH, &nm));
-      PA_CALL(pa__rm3d_length_pass(m, RM3D_LENGTH_SWEEPS, &nl));
+      PA_CALL(pa__rm3d_smooth_pass(m, RM3D_QSMOOTH, &balls, &nm));
+      PA_CALL(pa__rm3d_length_pass(m, RM3D_LENGTH_SWEEPS, &balls, &nl));
+      pa__rm3d_balls_free(&balls);
       nm += nl;
     }
     if (m->verbosity > 0)
@@ -832,10 +862,11 @@ static pa_status optimise(rm3d *m, const pa_remesh_opts *opts, int *npass) {
    * keep the worst quality at min(its old value, RM3D_QLEN)). */
   if (!opts->no_move) {
     long nl = 0;
-    PA_CALL(pa__rm3d_length_pass(m, RM3D_LENGTH_SWEEPS, &nl));
+    PA_CALL(pa__rm3d_length_pass(m, RM3D_LENGTH_SWEEPS, &balls, &nl));
     if (m->verbosity > 0) fprintf(stderr, "  rm3d length moves: %ld\n", nl);
   }
 cleanup:
+  pa__rm3d_balls_free(&balls);
   return st;
 }
 

@@ -244,13 +244,12 @@ static inline double rm3d_tri_normal(const double *a, const double *b,
 static inline double rm3d_qual_moved(const rm3d *m, pa_idx t, int ip,
                                      const double *x, const double *met) {
   const pa_idx *v = m->tv + 4 * (size_t)t;
-  const double *px[4], *pm[4] = {NULL, NULL, NULL, NULL};
+  const double *px[4], *pm[4];
   for (int j = 0; j < 4; j++) px[j] = m->x + 3 * (size_t)v[j];
   px[ip] = x;
-  if (m->mc > 1) {
-    for (int j = 0; j < 4; j++) pm[j] = m->met + (size_t)m->mc * v[j];
-    pm[ip] = met;
-  }
+  if (m->mc <= 1) return pa__qual3_iso(px[0], px[1], px[2], px[3]);
+  for (int j = 0; j < 4; j++) pm[j] = m->met + (size_t)m->mc * v[j];
+  pm[ip] = met;
   return pa__qual3(m->mc, px[0], px[1], px[2], px[3], pm[0], pm[1], pm[2],
                    pm[3]);
 }
@@ -259,6 +258,9 @@ static inline double rm3d_qual_moved(const rm3d *m, pa_idx t, int ip,
 static inline double rm3d_qual_v(const rm3d *m, const pa_idx *v) {
   const double *x = m->x, *mt = m->met;
   int mc = m->mc;
+  if (mc <= 1)
+    return pa__qual3_iso(x + 3 * (size_t)v[0], x + 3 * (size_t)v[1],
+                         x + 3 * (size_t)v[2], x + 3 * (size_t)v[3]);
   return pa__qual3(mc, x + 3 * (size_t)v[0], x + 3 * (size_t)v[1],
                    x + 3 * (size_t)v[2], x + 3 * (size_t)v[3],
                    mt + (size_t)mc * v[0], mt + (size_t)mc * v[1],
@@ -301,7 +303,8 @@ void pa__rm3d_table_remove(rm3d_table *t, pa_idx i);
 
 /* Shell of the edge (a,b) of tet k: tets[0..n) in rotation order and ring
  * vertices such that tets[i] = (a, b, ring[i], ring[i+1]) is positive
- * (ring[n] = ring[0] when closed). Returns n, or -1 when longer than max.
+ * (ring[n] = ring[0] when closed); unless NULL, edge[i] the local index
+ * (pa__rm3d_edge) of ab in tets[i]. Returns n, or -1 when longer than max.
  * *info: bit 0 closed, bit 1 a face containing ab is a boundary triangle,
  * bit 2 a frozen tet, bit 3 tets of different references. */
 enum {
@@ -311,10 +314,28 @@ enum {
   RM3D_SH_REFS = 8
 };
 int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
-                   pa_idx *ring, int max, int *info);
+                   pa_idx *ring, signed char *edge, int max, int *info);
 /* Ball of vertex p (from vtet[p]): entries 4*t + local index of p. Returns
  * the count, or -1 when larger than max. */
 int pa__rm3d_ball(rm3d *m, pa_idx p, pa_idx *ball, int max);
+/* Every vertex's ball at once, for the move passes, which change no tet's
+ * vertices and would otherwise walk a ball per vertex they try:
+ * ent[start[p]..start[p+1]) holds 4*t + the local index of p for each live
+ * tet t holding p, in the order of t. Valid until a tet changes its
+ * vertices (a split, collapse or swap). */
+typedef struct rm3d_balls {
+  pa_idx *start, *ent; /* NULL: not built */
+} rm3d_balls;
+pa_status pa__rm3d_balls_build(const rm3d *m, rm3d_balls *b);
+void pa__rm3d_balls_free(rm3d_balls *b);
+/* The ball of p in *ball; its count, -1 if larger than RM3D_MAXBALL or
+ * empty (a dead vertex), as pa__rm3d_ball counts. */
+static inline int rm3d_balls_get(const rm3d_balls *b, pa_idx p,
+                                 const pa_idx **ball) {
+  pa_idx s = b->start[p], n = b->start[p + 1] - s;
+  *ball = b->ent + s;
+  return n > 0 && n <= RM3D_MAXBALL ? (int)n : -1;
+}
 
 /* Split the edge (a,b) of tet k at its midpoint if allowed and acceptable.
  * *done = 1 when split. */
@@ -371,15 +392,17 @@ int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
 /* The metric at the midpoint of edge ab (geometric mean of the sizes, or
  * the interpolated tensor), as the split uses it (split_3d.c). */
 void pa__rm3d_mid_metric(const rm3d *m, pa_idx a, pa_idx b, double *mp);
-/* Relocate vertex p to bring the lengths of its edges into range: a
- * Gauss-Newton step on sum ln^2 L_i over its edges, halved up to three
- * times, kept when fewer of its edges are out of range (or as many, with
- * the sum down by RM3D_LGAIN) and the ball's worst quality stays at least
- * min(its old worst, RM3D_QLEN). When moved, the size of p's ball, left
- * in ball; 0 otherwise. */
-int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball);
-/* Relocate vertex p to raise the worst quality of its ball. */
-int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball);
+/* Relocate vertex p (its ball[0..n) as pa__rm3d_ball gives it, in any
+ * order; n = -1, a ball too large, refuses) to bring the lengths of its
+ * edges into range: a Gauss-Newton step on sum ln^2 L_i over its edges,
+ * halved up to three times, kept when fewer of its edges are out of range
+ * (or as many, with the sum down by RM3D_LGAIN) and the ball's worst
+ * quality stays at least min(its old worst, RM3D_QLEN). n when moved, 0
+ * otherwise. */
+int pa__rm3d_length_vertex(rm3d *m, pa_idx p, const pa_idx *ball, int n);
+/* Relocate vertex p (its ball[0..n), as above) to raise the worst quality
+ * of its ball. 1 when moved. */
+int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, const pa_idx *ball, int n);
 /* Move the free interior vertex p by delta (metric length) in a direction
  * drawn from the bits of its coordinates, if no tet of its ball falls under
  * half the ball's worst quality (nor under RM3D_QFLOOR). 1 when moved. */
@@ -397,8 +420,13 @@ pa_status pa__rm3d_split_pass(rm3d *m, double thr, long *count);
 pa_status pa__rm3d_collapse_pass(rm3d *m, double thr, double guard,
                                  long *count);
 pa_status pa__rm3d_swap_pass(rm3d *m, double qthr, double gain, long *count);
-pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, long *count);
-pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, long *count);
+/* The move passes take the balls b of every vertex (rm3d_balls), built by
+ * the first that finds them unbuilt: a smoothing pass and the length
+ * pass after it share them. The caller frees them. */
+pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, rm3d_balls *b,
+                               long *count);
+pa_status pa__rm3d_length_pass(rm3d *m, int sweeps, rm3d_balls *b,
+                               long *count);
 
 /* Interpolation of a new vertex's metric and fields as a weighted mean of
  * vertices src[0..n) (pa__metric_interp for the metric). */

@@ -332,6 +332,7 @@ static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
   double qold = 1e30;
   int iw = 0;
   c[0] = c[1] = c[2] = 0;
+  int iso = m->mc <= 1;
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
     int ip = ball[i] & 3;
@@ -347,9 +348,16 @@ static int ideal_shift(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
     /* Outward normal of the face points away from p. */
     double nn[3];
     rm3d_tri_cross(f0, f1, f2, nn);
-    double dn[3] = {mi[0] * nn[0] + mi[1] * nn[1] + mi[3] * nn[2],
-                    mi[1] * nn[0] + mi[2] * nn[1] + mi[4] * nn[2],
-                    mi[3] * nn[0] + mi[4] * nn[1] + mi[5] * nn[2]};
+    double dn[3];
+    if (iso) { /* mi = h^2 I: the same products without the zero terms */
+      dn[0] = mi[0] * nn[0];
+      dn[1] = mi[0] * nn[1];
+      dn[2] = mi[0] * nn[2];
+    } else {
+      dn[0] = mi[0] * nn[0] + mi[1] * nn[1] + mi[3] * nn[2];
+      dn[1] = mi[1] * nn[0] + mi[2] * nn[1] + mi[4] * nn[2];
+      dn[2] = mi[3] * nn[0] + mi[4] * nn[1] + mi[5] * nn[2];
+    }
     double s2 = dn[0] * nn[0] + dn[1] * nn[1] + dn[2] * nn[2];
     double h = s2 > 0 ? 0.816496580927726 / sqrt(s2) : 0;
     for (int j = 0; j < 3; j++)
@@ -388,7 +396,7 @@ static int moved_qualities(const rm3d *m, const pa_idx *ball, int n,
 /* Move p by c, else by half or a quarter of it, to the first position
  * that raises the ball's worst quality qold (and on a curved patch, kind 3,
  * projects onto the surface of tri[0..ntri) and keeps its normals). */
-static int try_smooth(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
+static int try_smooth(rm3d *m, pa_idx p, const pa_idx *ball, int n, int kind,
                       const pa_idx *tri, int ntri, double hausd,
                       const double *c, double qold, int first) {
   const double *xp = m->x + 3 * (size_t)p;
@@ -414,10 +422,9 @@ static int try_smooth(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
   return 0;
 }
 
-int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
+int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, const pa_idx *ball, int n) {
   if (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)) return 0;
   if ((m->vtag[p] & RM3D_V_BDRY) && !m->surf) return 0;
-  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
   if (n < 0) return 0;
   int kind = 0;
   double dir[3] = {0, 0, 0};
@@ -543,11 +550,15 @@ int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball) {
  * PA_METRIC_LEN_HI_EXACT), or stops at limit + 1 of them (l then partly
  * filled). */
 static int len_out(const rm3d *m, const double *y, const double *mp,
-                   const pa_idx *nb, int nn, int limit, double *l) {
+                   const pa_idx *nb, const double *inb, int nn, int limit,
+                   double *l) {
   int out = 0, mc = m->mc;
+  double ip = mc == 1 ? 1.0 / mp[0] : 0;
   for (int i = 0; i < nn && out <= limit; i++) {
-    l[i] = pa__len3(mc, y, m->x + 3 * (size_t)nb[i], mp,
-                    m->met + (size_t)mc * nb[i]);
+    /* with sizes pa__len3 is pa__len3_inv of the inverses, taken once */
+    l[i] = mc == 1 ? pa__len3_inv(y, m->x + 3 * (size_t)nb[i], ip, inb[i])
+                   : pa__len3(mc, y, m->x + 3 * (size_t)nb[i], mp,
+                              m->met + (size_t)mc * nb[i]);
     out += !(l[i] >= PA_METRIC_LEN_LO_EXACT && l[i] < PA_METRIC_LEN_HI_EXACT);
   }
   return out;
@@ -562,6 +573,19 @@ static double len_sum(const double *l, int nn, double *lg) {
     s += g * g;
   }
   return s;
+}
+
+/* 1 if len_sum(l, nn) < bound; stops at the first partial sum at or
+ * above it (the terms are not negative, so the partial sums never
+ * decrease: the same answer, fewer logarithms). */
+static int len_sum_below(const double *l, int nn, double bound) {
+  double s = 0;
+  for (int i = 0; i < nn; i++) {
+    double g = log(l[i]);
+    s += g * g;
+    if (s >= bound) return 0;
+  }
+  return s < bound;
 }
 
 /* Solve the symmetric 3x3 system a x = b (a: xx xy yy xz yz zz); 0 if
@@ -584,6 +608,7 @@ static int solve3(const double *a, const double *b, double *x) {
  * ball's worst quality. */
 typedef struct len_ctx {
   pa_idx nb[RM3D_LNB];
+  double inb[RM3D_LNB]; /* with sizes: 1 / the size of nb[i] */
   double l0[RM3D_LNB], lg0[RM3D_LNB]; /* lengths from p and their logs */
   int nn, out0;
   int iworst; /* the ball's worst tet */
@@ -617,6 +642,8 @@ static int ball_neighbours(rm3d *m, pa_idx p, const pa_idx *ball, int n,
     }
   }
   for (int i = 0; i < nn; i++) m->vtag[nb[i]] &= (uint8_t)~RM3D_V_MARK;
+  if (m->mc == 1)
+    for (int i = 0; i < nn; i++) lc->inb[i] = 1.0 / m->met[nb[i]];
   lc->nn = nn;
   lc->qold = qold;
   lc->iworst = iw;
@@ -692,7 +719,8 @@ static void worst_edge_step(const rm3d *m, pa_idx p, const len_ctx *lc,
 /* Move p by d, then by d2, each at steps 1, 1/2, 1/4, 1/8, to the first
  * position with fewer edges out of range (or as many and a sum of ln^2 L
  * less by RM3D_LGAIN) that keeps the ball's quality. */
-static int try_length_moves(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
+static int try_length_moves(rm3d *m, pa_idx p, const pa_idx *ball, int n,
+                            int kind,
                             const double *dir, const len_ctx *lc,
                             const double *d, const double *d2) {
   const double *xp = m->x + 3 * (size_t)p;
@@ -709,10 +737,9 @@ static int try_length_moves(rm3d *m, pa_idx p, pa_idx *ball, int n, int kind,
         if (fabs(dir[j]) == 1.0) np[j] = xp[j];
     if (kind && pa__rm3d_project_vertex(m, p, ball, n, np) < 0) continue;
     double l1[RM3D_LNB];
-    int out1 = len_out(m, np, mp, lc->nb, lc->nn, lc->out0, l1);
+    int out1 = len_out(m, np, mp, lc->nb, lc->inb, lc->nn, lc->out0, l1);
     if (out1 > lc->out0 ||
-        (out1 == lc->out0 &&
-         !(len_sum(l1, lc->nn, NULL) < RM3D_LGAIN * lc->s0)))
+        (out1 == lc->out0 && !len_sum_below(l1, lc->nn, RM3D_LGAIN * lc->s0)))
       continue;
     if (moved_qualities(m, ball, n, np, mp, qfloor, 0, &first, nq) >= 0)
       continue;
@@ -808,10 +835,9 @@ static int ridge_arc_move(rm3d *m, pa_idx p, const pa_idx *ball, int n,
     if (dmin > hausd * hausd) continue;
     if (!surface_kept(m, tri, ntri, p, np)) continue;
     double l1[RM3D_LNB];
-    int out1 = len_out(m, np, mp, lc->nb, lc->nn, lc->out0, l1);
+    int out1 = len_out(m, np, mp, lc->nb, lc->inb, lc->nn, lc->out0, l1);
     if (out1 > lc->out0 ||
-        (out1 == lc->out0 &&
-         !(len_sum(l1, lc->nn, NULL) < RM3D_LGAIN * lc->s0)))
+        (out1 == lc->out0 && !len_sum_below(l1, lc->nn, RM3D_LGAIN * lc->s0)))
       continue;
     if (moved_qualities(m, ball, n, np, mp, qfloor, 0, &first, nq) >= 0)
       continue;
@@ -821,11 +847,10 @@ static int ridge_arc_move(rm3d *m, pa_idx p, const pa_idx *ball, int n,
   return 0;
 }
 
-int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
+int pa__rm3d_length_vertex(rm3d *m, pa_idx p, const pa_idx *ball, int n) {
   if (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD | RM3D_V_CURVED))
     return 0;
   if ((m->vtag[p] & RM3D_V_BDRY) && !m->surf) return 0;
-  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
   if (n < 0) return 0;
   int kind = 0;
   double dir[3] = {0, 0, 0};
@@ -840,7 +865,7 @@ int pa__rm3d_length_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
   len_ctx lc;
   if (!ball_neighbours(m, p, ball, n, &lc)) return 0;
   lc.out0 = len_out(m, m->x + 3 * (size_t)p, m->met + (size_t)m->mc * p,
-                    lc.nb, lc.nn, lc.nn, lc.l0);
+                    lc.nb, lc.inb, lc.nn, lc.nn, lc.l0);
   if (lc.out0 == 0) return 0;
   lc.s0 = len_sum(lc.l0, lc.nn, lc.lg0);
   if (r[0] >= 0) return ridge_arc_move(m, p, ball, n, r, &lc);

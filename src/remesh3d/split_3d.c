@@ -390,7 +390,8 @@ pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
   s.b = b;
   s.ntri = 0;
   s.erec = -1;
-  s.n = pa__rm3d_shell(m, k, a, b, s.tets, s.ring, RM3D_MAXSHELL, &s.info);
+  s.n = pa__rm3d_shell(m, k, a, b, s.tets, s.ring, NULL, RM3D_MAXSHELL,
+                       &s.info);
   if (s.n < 0 || (s.info & RM3D_SH_FROZEN)) return st;
   s.bdry = (s.info & RM3D_SH_BDRY) != 0;
   if (s.bdry) {

@@ -49,12 +49,17 @@ static float ring_tri(ring_q *r, int i, int j, int l) {
   const double *mi = m->met + (size_t)mc * ring[i];
   const double *mj = m->met + (size_t)mc * ring[j];
   const double *ml = m->met + (size_t)mc * ring[l];
-  double q1 = pa__qual3(mc, xi, xj, xl, m->x + 3 * (size_t)r->b, mi, mj, ml,
-                        m->met + (size_t)mc * r->b);
-  double q2 = q1 > r->target
-                  ? pa__qual3(mc, xi, xl, xj, m->x + 3 * (size_t)r->a, mi, ml,
-                              mj, m->met + (size_t)mc * r->a)
-                  : q1;
+  const double *xa = m->x + 3 * (size_t)r->a, *xb = m->x + 3 * (size_t)r->b;
+  double q1, q2;
+  if (mc <= 1) { /* the same bits as pa__qual3, no metric passed */
+    q1 = pa__qual3_iso(xi, xj, xl, xb);
+    q2 = q1 > r->target ? pa__qual3_iso(xi, xl, xj, xa) : q1;
+  } else {
+    q1 = pa__qual3(mc, xi, xj, xl, xb, mi, mj, ml, m->met + (size_t)mc * r->b);
+    q2 = q1 > r->target ? pa__qual3(mc, xi, xl, xj, xa, mi, ml, mj,
+                                    m->met + (size_t)mc * r->a)
+                        : q1;
+  }
   r->known[i][j] |= (uint8_t)(1u << l);
   return r->tq[i][j][l] = (float)(q1 < q2 ? q1 : q2);
 }
@@ -222,7 +227,8 @@ static pa_status remove_cap(rm3d *m, pa_idx a, pa_idx b, pa_idx t,
   {
     pa_idx tets[R3_SWAP_MAXRING + 1], ring[R3_SWAP_MAXRING + 2];
     int info;
-    int n = pa__rm3d_shell(m, t, c, d, tets, ring, R3_SWAP_MAXRING + 1, &info);
+    int n = pa__rm3d_shell(m, t, c, d, tets, ring, NULL, R3_SWAP_MAXRING + 1,
+                           &info);
     if (n < 0 || !(info & RM3D_SH_CLOSED) || (info & RM3D_SH_BDRY)) return st;
   }
   /* Outward normals: old faces (a,b,c), (a,b,d) of t; new faces seen from
@@ -387,23 +393,19 @@ cleanup:
   return st;
 }
 
-/* Local edge index (pa__rm3d_edge) of the local vertex pair (i, j). */
-static const signed char edge_of[4][4] = {
-    {-1, 0, 1, 2}, {0, -1, 3, 4}, {1, 3, -1, 5}, {2, 4, 5, -1}};
-
 /* The swap pass's memory of failed edge removals (m->swapfail): 1 when
- * every tet of the closed shell tets[0..n) of (a,b) has the bit of (a,b)
- * (mark = 0), or sets that bit on each (mark = 1). A tet keeps the bit
+ * every tet of the closed shell tets[0..n) of an edge has the bit of the
+ * edge (its local index edge[i] in tets[i]; mark = 0), or sets that bit
+ * on each (mark = 1). A tet keeps the bit
  * until it changes, so when every tet of the shell has it the shell is the
  * one that failed, unchanged (a tet changed or added since would lack it),
  * and nothing else the removal reads changes during a swap pass. */
-static int shell_failed(rm3d *m, pa_idx a, pa_idx b, const pa_idx *tets, int n,
-                        int mark) {
+static int shell_failed(rm3d *m, const pa_idx *tets, const signed char *edge,
+                        int n, int mark) {
   for (int i = 0; i < n; i++) {
     pa_idx t = tets[i];
     if (t >= m->nswapfail) return 0;
-    const pa_idx *v = m->tv + 4 * (size_t)t;
-    uint8_t bit = (uint8_t)(1u << edge_of[rm3d_loc(v, a)][rm3d_loc(v, b)]);
+    uint8_t bit = (uint8_t)(1u << edge[i]);
     if (mark)
       m->swapfail[t] |= bit;
     else if (!(m->swapfail[t] & bit))
@@ -416,11 +418,12 @@ pa_status pa__rm3d_swap_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
                              double gain, int *done) {
   pa_status st = PA_SUCCESS;
   pa_idx tets[R3_SWAP_MAXRING], ring[R3_SWAP_MAXRING + 1];
+  signed char edge[R3_SWAP_MAXRING];
   pa_idx nv4[4 * 2 * (R3_SWAP_MAXPOLY - 2)];
   int nnew = 0;
   *done = 0;
   int info;
-  int n = pa__rm3d_shell(m, k, a, b, tets, ring, R3_SWAP_MAXRING, &info);
+  int n = pa__rm3d_shell(m, k, a, b, tets, ring, edge, R3_SWAP_MAXRING, &info);
   if (n < 1 || (info & (RM3D_SH_FROZEN | RM3D_SH_REFS))) return st;
   double qold = 1e30;
   for (int i = 0; i < n; i++)
@@ -430,10 +433,10 @@ pa_status pa__rm3d_swap_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
                       : swap_bdry(m, a, b, tets, ring, n, qold, gain, done);
   if (n < 3 || (info & RM3D_SH_BDRY)) return st;
   int memo = m->swapfail != NULL;
-  if (memo && shell_failed(m, a, b, tets, n, 0)) return st;
+  if (memo && shell_failed(m, tets, edge, n, 0)) return st;
   double bw = ring_dp(m, a, b, ring, n, gain * qold, nv4, &nnew);
   if (bw < 0) {
-    if (memo) shell_failed(m, a, b, tets, n, 1);
+    if (memo) shell_failed(m, tets, edge, n, 1);
     return st;
   }
   if (gain < 1.0) {

@@ -9,30 +9,18 @@
  */
 #include "remesh3d/remesh3d.h"
 
+/* Local edge index (pa__rm3d_edge) of the local vertex pair (i, j). */
+static const signed char edge_of[4][4] = {
+    {-1, 0, 1, 2}, {0, -1, 3, 4}, {1, 3, -1, 5}, {2, 4, 5, -1}};
+
+/* Forward from k: around a closed shell once. An open one is completed
+ * by a walk backward from k, whose tets go in front (the shell then starts
+ * at its boundary face). */
 int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
-                   pa_idx *ring, int max, int *info) {
-  int inf = 0, steps = 0;
-  pa_idx t = k, start = k;
-  /* Walk backwards to the start of an open shell (or around a closed one). */
-  for (;;) {
-    const pa_idx *v = m->tv + 4 * (size_t)t;
-    int ia = rm3d_loc(v, a), ib = rm3d_loc(v, b);
-    int id = pa__rm3d_compl[ia][ib][1];
-    pa_idx nb = m->adj[4 * (size_t)t + id];
-    if (nb < 0) {
-      start = t;
-      break;
-    }
-    t = nb >> 2;
-    if (t == k) {
-      inf |= RM3D_SH_CLOSED;
-      break;
-    }
-    if (++steps > max) return -1;
-  }
-  int n = 0;
-  int32_t ref0 = m->tref[start];
-  t = start;
+                   pa_idx *ring, signed char *edge, int max, int *info) {
+  int inf = 0, n = 0;
+  int32_t ref0 = m->tref[k];
+  pa_idx t = k;
   for (;;) {
     if (n >= max) return -1;
     const pa_idx *v = m->tv + 4 * (size_t)t;
@@ -40,6 +28,7 @@ int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
     int ic = pa__rm3d_compl[ia][ib][0], id = pa__rm3d_compl[ia][ib][1];
     tets[n] = t;
     ring[n] = v[ic];
+    if (edge) edge[n] = edge_of[ia][ib];
     n++;
     uint8_t fl = m->tflag[t];
     if (fl & ((1u << ic) | (1u << id))) inf |= RM3D_SH_BDRY;
@@ -51,10 +40,44 @@ int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
       break;
     }
     t = nb >> 2;
-    if (t == start) {
+    if (t == k) {
       ring[n] = ring[0];
-      break;
+      *info = inf | RM3D_SH_CLOSED;
+      return n;
     }
+  }
+  /* Open: count the tets behind k, make room, then fill them in. */
+  int nback = 0;
+  for (t = k;;) {
+    const pa_idx *v = m->tv + 4 * (size_t)t;
+    int id = pa__rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][1];
+    pa_idx nb = m->adj[4 * (size_t)t + id];
+    if (nb < 0) break;
+    t = nb >> 2;
+    if (n + ++nback > max) return -1;
+  }
+  if (nback) {
+    memmove(tets + nback, tets, (size_t)n * sizeof *tets);
+    memmove(ring + nback, ring, (size_t)(n + 1) * sizeof *ring);
+    if (edge) memmove(edge + nback, edge, (size_t)n * sizeof *edge);
+    int i = nback;
+    for (t = k; i > 0;) {
+      const pa_idx *v = m->tv + 4 * (size_t)t;
+      int id = pa__rm3d_compl[rm3d_loc(v, a)][rm3d_loc(v, b)][1];
+      t = m->adj[4 * (size_t)t + id] >> 2;
+      v = m->tv + 4 * (size_t)t;
+      int ia = rm3d_loc(v, a), ib = rm3d_loc(v, b);
+      int ic = pa__rm3d_compl[ia][ib][0];
+      id = pa__rm3d_compl[ia][ib][1];
+      tets[--i] = t;
+      ring[i] = v[ic];
+      if (edge) edge[i] = edge_of[ia][ib];
+      uint8_t fl = m->tflag[t];
+      if (fl & ((1u << ic) | (1u << id))) inf |= RM3D_SH_BDRY;
+      if (fl & RM3D_T_FROZEN) inf |= RM3D_SH_FROZEN;
+      if (m->tref[t] != ref0) inf |= RM3D_SH_REFS;
+    }
+    n += nback;
   }
   *info = inf;
   return n;
@@ -90,6 +113,37 @@ int pa__rm3d_ball(rm3d *m, pa_idx p, pa_idx *ball, int max) {
   }
   for (int i = 0; i < n; i++) m->tflag[ball[i] >> 2] &= (uint8_t)~RM3D_T_MARK;
   return over ? -1 : n;
+}
+
+pa_status pa__rm3d_balls_build(const rm3d *m, rm3d_balls *b) {
+  pa_status st = PA_SUCCESS;
+  pa_idx nv = m->nv;
+  b->start = b->ent = NULL;
+  PA_CALLOC(b->start, (size_t)nv + 2);
+  pa_idx *c = b->start + 1; /* c[p + 1] counts, then c[p] fills p */
+  size_t nent = 0;
+  for (pa_idx k = 0; k < m->ne; k++) {
+    if (m->tflag[k] & RM3D_T_DEAD) continue;
+    const pa_idx *v = m->tv + 4 * (size_t)k;
+    for (int j = 0; j < 4; j++) c[v[j] + 1]++;
+    nent += 4;
+  }
+  for (pa_idx p = 0; p < nv; p++) c[p + 1] += c[p];
+  PA_ALLOC(b->ent, nent);
+  for (pa_idx k = 0; k < m->ne; k++) {
+    if (m->tflag[k] & RM3D_T_DEAD) continue;
+    const pa_idx *v = m->tv + 4 * (size_t)k;
+    for (int j = 0; j < 4; j++) b->ent[c[v[j]]++] = 4 * k + j;
+  }
+cleanup:
+  if (st) pa__rm3d_balls_free(b);
+  return st;
+}
+
+void pa__rm3d_balls_free(rm3d_balls *b) {
+  pa__free(b->start);
+  pa__free(b->ent);
+  b->start = b->ent = NULL;
 }
 
 typedef struct face_key {
