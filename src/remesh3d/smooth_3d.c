@@ -716,17 +716,34 @@ static void worst_edge_step(const rm3d *m, pa_idx p, const len_ctx *lc,
   }
 }
 
+/* Move p to np when a length move may go there: fewer edges at p out of
+ * range (or as many and a sum of ln^2 L less by RM3D_LGAIN), and no tet of
+ * the ball below qfloor (*first: see moved_qualities). n if moved, else 0. */
+static int length_accept(rm3d *m, pa_idx p, const pa_idx *ball, int n,
+                         const len_ctx *lc, const double *np, double qfloor,
+                         int *first) {
+  const double *mp = m->met + (size_t)m->mc * p;
+  float nq[RM3D_MAXBALL];
+  double l1[RM3D_LNB];
+  int out1 = len_out(m, np, mp, lc->nb, lc->inb, lc->nn, lc->out0, l1);
+  if (out1 > lc->out0 ||
+      (out1 == lc->out0 && !len_sum_below(l1, lc->nn, RM3D_LGAIN * lc->s0)))
+    return 0;
+  if (moved_qualities(m, ball, n, np, mp, qfloor, 0, first, nq) >= 0)
+    return 0;
+  /* out1 = 0: every edge at p in [LO, HI) */
+  apply_move(m, p, ball, n, np, nq, out1 == 0);
+  return n;
+}
+
 /* Move p by d, then by d2, each at steps 1, 1/2, 1/4, 1/8, to the first
- * position with fewer edges out of range (or as many and a sum of ln^2 L
- * less by RM3D_LGAIN) that keeps the ball's quality. */
+ * position length_accept takes. */
 static int try_length_moves(rm3d *m, pa_idx p, const pa_idx *ball, int n,
                             int kind,
                             const double *dir, const len_ctx *lc,
                             const double *d, const double *d2) {
   const double *xp = m->x + 3 * (size_t)p;
-  const double *mp = m->met + (size_t)m->mc * p;
   double qfloor = fmin(lc->qold, RM3D_QLEN), np[3], step = 1.0;
-  float nq[RM3D_MAXBALL];
   int first = lc->iworst;
   for (int tr = 0; tr < 8; tr++, step *= 0.5) {
     if (tr == 4) step = 1.0;
@@ -736,16 +753,7 @@ static int try_length_moves(rm3d *m, pa_idx p, const pa_idx *ball, int n,
       for (int j = 0; j < 3; j++)
         if (fabs(dir[j]) == 1.0) np[j] = xp[j];
     if (kind && pa__rm3d_project_vertex(m, p, ball, n, np) < 0) continue;
-    double l1[RM3D_LNB];
-    int out1 = len_out(m, np, mp, lc->nb, lc->inb, lc->nn, lc->out0, l1);
-    if (out1 > lc->out0 ||
-        (out1 == lc->out0 && !len_sum_below(l1, lc->nn, RM3D_LGAIN * lc->s0)))
-      continue;
-    if (moved_qualities(m, ball, n, np, mp, qfloor, 0, &first, nq) >= 0)
-      continue;
-    /* out1 = 0: every edge at p in [LO, HI) */
-    apply_move(m, p, ball, n, np, nq, out1 == 0);
-    return n;
+    if (length_accept(m, p, ball, n, lc, np, qfloor, &first)) return n;
   }
   return 0;
 }
@@ -813,7 +821,6 @@ static int ridge_arc_move(rm3d *m, pa_idx p, const pa_idx *ball, int n,
   pa_idx tri[3 * 32];
   int ntri, first = lc->iworst;
   if (!curved_patch(m, ball, n, tri, &ntri, &hausd)) return 0;
-  float nq[RM3D_MAXBALL];
   for (int tr = 0; tr < 3; tr++) {
     double t = target / (double)(1 << tr);
     for (int j = 0; j < 3; j++)
@@ -834,15 +841,7 @@ static int ridge_arc_move(rm3d *m, pa_idx p, const pa_idx *ball, int n,
     }
     if (dmin > hausd * hausd) continue;
     if (!surface_kept(m, tri, ntri, p, np)) continue;
-    double l1[RM3D_LNB];
-    int out1 = len_out(m, np, mp, lc->nb, lc->inb, lc->nn, lc->out0, l1);
-    if (out1 > lc->out0 ||
-        (out1 == lc->out0 && !len_sum_below(l1, lc->nn, RM3D_LGAIN * lc->s0)))
-      continue;
-    if (moved_qualities(m, ball, n, np, mp, qfloor, 0, &first, nq) >= 0)
-      continue;
-    apply_move(m, p, ball, n, np, nq, out1 == 0);
-    return n;
+    if (length_accept(m, p, ball, n, lc, np, qfloor, &first)) return n;
   }
   return 0;
 }
