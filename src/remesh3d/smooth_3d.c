@@ -75,22 +75,28 @@ static int ridge_ends(const rm3d *m, pa_idx p, const pa_idx *ball, int n,
   return nr == 2;
 }
 
+/* 1 when the ridge r[0]-p-r[1] is straight (p on the line to 1e-12), its
+ * unit direction then in dir. */
+static int ridge_straight(const rm3d *m, pa_idx p, const pa_idx *r,
+                          double *dir) {
+  const double *xp = m->x + 3 * (size_t)p, *a = m->x + 3 * (size_t)r[0],
+               *b = m->x + 3 * (size_t)r[1];
+  double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  double w[3] = {xp[0] - a[0], xp[1] - a[1], xp[2] - a[2]};
+  double cr[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                  u[0] * w[1] - u[1] * w[0]};
+  double lu = rm3d_unit(u);
+  if (!(lu > 0) || rm3d_unit(cr) > 1e-12 * lu * lu) return 0;
+  memcpy(dir, u, sizeof u);
+  return 1;
+}
+
 int pa__rm3d_bdry_freedom(rm3d *m, pa_idx p, const pa_idx *ball, int n,
                           double *dir) {
   if (!m->surf || (m->vtag[p] & (RM3D_V_CURVED))) return 0;
   if (m->vtag[p] & RM3D_V_FEAT) {
     pa_idx r[2];
-    if (!ridge_ends(m, p, ball, n, r)) return 0;
-    const double *xp = m->x + 3 * (size_t)p, *a = m->x + 3 * (size_t)r[0],
-                 *b = m->x + 3 * (size_t)r[1];
-    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    double w[3] = {xp[0] - a[0], xp[1] - a[1], xp[2] - a[2]};
-    double cr[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                    u[0] * w[1] - u[1] * w[0]};
-    double lu = rm3d_unit(u);
-    if (!(lu > 0) || rm3d_unit(cr) > 1e-12 * lu * lu) return 0;
-    memcpy(dir, u, sizeof u);
-    return 1;
+    return ridge_ends(m, p, ball, n, r) && ridge_straight(m, p, r, dir);
   }
   int found = 0;
   for (int i = 0; i < n; i++) {
@@ -851,15 +857,17 @@ int pa__rm3d_length_vertex(rm3d *m, pa_idx p, const pa_idx *ball, int n) {
     return 0;
   if ((m->vtag[p] & RM3D_V_BDRY) && !m->surf) return 0;
   if (n < 0) return 0;
-  int kind = 0;
+  int kind = 0, arc = 0;
   double dir[3] = {0, 0, 0};
-  pa_idx r[2] = {-1, -1};
-  if (m->vtag[p] & RM3D_V_BDRY) {
+  pa_idx r[2];
+  if (m->vtag[p] & RM3D_V_FEAT) {
+    /* along a straight ridge, or on a curved one's circle (ridge_arc_move) */
+    if (!ridge_ends(m, p, ball, n, r)) return 0;
+    kind = ridge_straight(m, p, r, dir);
+    arc = !kind;
+  } else if (m->vtag[p] & RM3D_V_BDRY) {
     kind = pa__rm3d_bdry_freedom(m, p, ball, n, dir);
-    /* a curved ridge: ridge_arc_move */
-    if (!kind && !((m->vtag[p] & RM3D_V_FEAT) && m->surf &&
-                   ridge_ends(m, p, ball, n, r)))
-      return 0;
+    if (!kind) return 0;
   }
   len_ctx lc;
   if (!ball_neighbours(m, p, ball, n, &lc)) return 0;
@@ -867,7 +875,7 @@ int pa__rm3d_length_vertex(rm3d *m, pa_idx p, const pa_idx *ball, int n) {
                     lc.nb, lc.inb, lc.nn, lc.nn, lc.l0);
   if (lc.out0 == 0) return 0;
   lc.s0 = len_sum(lc.l0, lc.nn, lc.lg0);
-  if (r[0] >= 0) return ridge_arc_move(m, p, ball, n, r, &lc);
+  if (arc) return ridge_arc_move(m, p, ball, n, r, &lc);
   /* two candidates, each kept in the plane (kind 2) or along the ridge
    * (kind 1) of a boundary vertex */
   double d[3], d2[3];
