@@ -99,7 +99,8 @@ static int keeps_band(rm2d *rm, pa_idx p, const pa_idx *nb, int nn,
   }
   for (int s = 0; s < nn; s++) {
     double l = rm2d_edge_len(rm, p, nb[s]);
-    if (!(l >= fmin(lo, lold[s]) && l <= fmax(hi, lold[s]))) return 0;
+    /* l in [min(lo, lold), max(hi, lold)] (no NaN among lo, hi, lold) */
+    if (!((l >= lo || l >= lold[s]) && (l <= hi || l <= lold[s]))) return 0;
   }
   return 1;
 }
@@ -334,26 +335,66 @@ int pa__rm2d_smooth_feature(rm2d *rm, pa_idx k, int ip, double qfree) {
   return 0;
 }
 
-/* The lengths l of the edges from p at y (metric mp) to nb[0..nn), and how
- * many are out of [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI]. */
-static int len_out_2d(const rm2d *rm, const double *y, const double *mp,
-                      const pa_idx *nb, int nn, double *l) {
-  int mc = rm->mc, out = 0;
+/* The edges from a vertex p to its neighbours nb[0..nn), gathered once for
+ * the trial positions of a length move: the neighbours' coordinates, and
+ * with sizes (mc <= 1) the factor that turns a Euclidean length into the
+ * metric one, which does not depend on p's position (pa__len2: n / h, or n
+ * times the logarithmic mean of 1 / ha and 1 / hb; the same operations, so
+ * the same bits). */
+typedef struct len_ball {
+  int nn, mc;
+  const double *mp;
+  double x[RM2D_BALL_MAX], y[RM2D_BALL_MAX], f[RM2D_BALL_MAX];
+  const double *m[RM2D_BALL_MAX];
+} len_ball;
+
+static void len_ball_init(const rm2d *rm, const double *mp, const pa_idx *nb,
+                          int nn, len_ball *lb) {
+  int mc = rm->mc;
+  lb->nn = nn;
+  lb->mc = mc;
+  lb->mp = mp;
   for (int i = 0; i < nn; i++) {
-    l[i] = pa__len2(mc, y, RM2D_X(nb[i]), mp, RM2D_M(nb[i]));
+    const double *xi = RM2D_X(nb[i]), *mi = RM2D_M(nb[i]);
+    lb->x[i] = xi[0];
+    lb->y[i] = xi[1];
+    lb->m[i] = mi;
+    if (mc == 0) lb->f[i] = 1.0;
+    else if (mc == 1)
+      lb->f[i] = mp[0] == mi[0] ? 1.0 / mp[0]
+                                : pa__log_mean(1.0 / mp[0], 1.0 / mi[0]);
+  }
+}
+
+/* The lengths l of the edges of lb from p at y, and how many are out of
+ * [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI]; the count stops (l then partial)
+ * once it passes outmax. */
+static int len_out_2d(const len_ball *lb, const double *y, double *l,
+                      int outmax) {
+  int out = 0;
+  for (int i = 0; i < lb->nn && out <= outmax; i++) {
+    double dx = lb->x[i] - y[0], dy = lb->y[i] - y[1];
+    if (lb->mc <= 1) {
+      l[i] = sqrt(dx * dx + dy * dy) * lb->f[i];
+    } else {
+      double b[2] = {lb->x[i], lb->y[i]};
+      l[i] = pa__len2(lb->mc, y, b, lb->mp, lb->m[i]);
+    }
     out += !(l[i] >= PA_METRIC_LEN_LO && l[i] <= PA_METRIC_LEN_HI);
   }
   return out;
 }
 
-/* The sum of ln^2 (l / RM2D_LTARGET) over l[0..nn). */
-static double len_sum_2d(const double *l, int nn) {
+/* Whether the sum of ln^2 (l / RM2D_LTARGET) over l[0..nn) is below bound:
+ * the terms are not negative, so a partial sum at or above it decides. */
+static int len_sum_below(const double *l, int nn, double bound) {
   double s = 0;
   for (int i = 0; i < nn; i++) {
     double g = log(l[i] / RM2D_LTARGET);
     s += g * g;
+    if (!(s < bound)) return 0;
   }
-  return s;
+  return s < bound;
 }
 
 /* Move interior vertex p = v[ip] of element k to bring its edges into range:
@@ -378,7 +419,9 @@ int pa__rm2d_length_vertex(rm2d *rm, pa_idx k, int ip) {
   double *xp = rm->x + 2 * (size_t)p;
   const double *mp = RM2D_M(p);
   double l0[RM2D_BALL_MAX], l1[RM2D_BALL_MAX], s0 = 0;
-  int out0 = len_out_2d(rm, xp, mp, nb, n, l0);
+  len_ball lb;
+  len_ball_init(rm, mp, nb, n, &lb);
+  int out0 = len_out_2d(&lb, xp, l0, n);
   if (out0 == 0) return 0;
   double jj[3] = {0, 0, 0}, jr[2] = {0, 0}, d2[2] = {0, 0}, worst = 0;
   double tp[3];
@@ -417,13 +460,13 @@ int pa__rm2d_length_vertex(rm2d *rm, pa_idx k, int ip) {
   if (!(det > 0)) return 0;
   double d[2] = {(jj[2] * jr[0] - jj[1] * jr[1]) / det,
                  (jj[0] * jr[1] - jj[1] * jr[0]) / det};
-  double x0 = xp[0], y0 = xp[1], step = 1.0, qfloor = fmin(qold, RM2D_QLEN);
+  double x0 = xp[0], y0 = xp[1], step = 1.0, qfloor = qold < RM2D_QLEN ? qold : RM2D_QLEN;
   for (int tr = 0; tr < 8; tr++, step *= 0.5) {
     if (tr == 4) step = 1.0;
     const double *dd = tr < 4 ? d : d2;
     double np[2] = {x0 + step * dd[0], y0 + step * dd[1]};
-    int out1 = len_out_2d(rm, np, mp, nb, n, l1);
-    if (!(out1 < out0 || (out1 == out0 && len_sum_2d(l1, n) < RM2D_LGAIN * s0)))
+    int out1 = len_out_2d(&lb, np, l1, out0);
+    if (!(out1 < out0 || (out1 == out0 && len_sum_below(l1, n, RM2D_LGAIN * s0))))
       continue;
     xp[0] = np[0];
     xp[1] = np[1];
