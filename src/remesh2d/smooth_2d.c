@@ -15,9 +15,11 @@
 
 /* Move interior vertex p (its closed ball el[0..n), local indices loc) to
  * np: metric and fields interpolated from the old triangle holding np
- * (barycentric; linear fields stay exact), qualities updated. */
+ * (barycentric; linear fields stay exact), qualities updated: qn[0..n) when
+ * given (the trial's, which with sizes do not depend on the metric), else
+ * computed. */
 static void apply_move(rm2d *rm, pa_idx p, const pa_idx *el, const int *loc,
-                       int n, const double *np) {
+                       int n, const double *np, const double *qn) {
   double *xp = rm->x + 2 * (size_t)p;
   double x0 = xp[0], y0 = xp[1];
   for (int s = 0; s < n; s++) {
@@ -39,7 +41,7 @@ static void apply_move(rm2d *rm, pa_idx p, const pa_idx *el, const int *loc,
   xp[1] = np[1];
   for (int s = 0; s < n; s++) {
     const pa_idx *v = rm->tv + 3 * (size_t)el[s];
-    rm->q[el[s]] = (float)rm2d_elem_qual(rm, v[0], v[1], v[2]);
+    rm->q[el[s]] = (float)(qn ? qn[s] : rm2d_elem_qual(rm, v[0], v[1], v[2]));
     rm2d_elem_changed(rm, el[s]); /* p's neighbours see a new ball */
   }
   rm->nmove++;
@@ -187,7 +189,7 @@ int pa__rm2d_smooth_vertex(rm2d *rm, pa_idx k, int ip, double qfree) {
     double np[2] = {xp[0], xp[1]};
     xp[0] = x0;
     xp[1] = y0;
-    apply_move(rm, p, el, loc, n, np);
+    apply_move(rm, p, el, loc, n, np, mc <= 1 ? qn : NULL);
     return 1;
   }
   xp[0] = x0;
@@ -471,9 +473,10 @@ int pa__rm2d_length_vertex(rm2d *rm, pa_idx k, int ip) {
     xp[0] = np[0];
     xp[1] = np[1];
     int ok = 1;
+    double qn[RM2D_BALL_MAX];
     for (int s = 0; s < n && ok; s++) {
       const pa_idx *v = rm->tv + 3 * (size_t)el[s];
-      double q = rm2d_elem_qual(rm, v[0], v[1], v[2]);
+      double q = qn[s] = rm2d_elem_qual(rm, v[0], v[1], v[2]);
       if (!(q >= qfloor) ||
           !rm2d_qual_ok(rm, q, rm2d_qfloor(qold), v[0], v[1], v[2]))
         ok = 0;
@@ -481,7 +484,7 @@ int pa__rm2d_length_vertex(rm2d *rm, pa_idx k, int ip) {
     xp[0] = x0;
     xp[1] = y0;
     if (!ok) continue;
-    apply_move(rm, p, el, loc, n, np);
+    apply_move(rm, p, el, loc, n, np, mc <= 1 ? qn : NULL);
     return 1;
   }
   return 0;
