@@ -369,7 +369,12 @@ long pa__rm2d_length_pass(rm2d *rm) {
       if (tp & (RM2D_V_DONE | RM2D_V_FROZEN | RM2D_V_CORNER | RM2D_V_FEAT))
         continue;
       rm->vtag[p] |= RM2D_V_DONE;
-      cnt += pa__rm2d_length_vertex(rm, k, i);
+      /* rejected before, and its ball has not changed since */
+      if (tp & RM2D_V_LSETTLED) continue;
+      if (pa__rm2d_length_vertex(rm, k, i))
+        cnt++;
+      else
+        rm->vtag[p] |= RM2D_V_LSETTLED;
     }
   }
   return cnt;

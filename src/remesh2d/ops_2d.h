@@ -149,7 +149,8 @@ static inline pa_idx rm2d_next_elem(const rm2d *rm, pa_idx k, uint8_t skip) {
 
 /* Element k is rewritten or about to be killed, or one of its vertices
  * moved: drop the caches that depend on it (RM2D_E_INRANGE of k, RM2D_E_NOSWAP
- * of k and its neighbours, RM2D_V_SETTLED of its vertices, whose balls change).
+ * of k and its neighbours, RM2D_V_SETTLED and RM2D_V_LSETTLED of its
+ * vertices, whose balls change).
  * Call with k's current vertices and, on a rewrite, before its adjacency is
  * updated (the old neighbours are the ones to tell; a new neighbour of a
  * rewritten element is an old neighbour of the rewritten group). */
@@ -162,9 +163,10 @@ static inline void rm2d_elem_changed(rm2d *rm, pa_idx k) {
   if (a[0] >= 0) rm->tflag[a[0] / 3] &= (uint8_t)~RM2D_E_NOSWAP;
   if (a[1] >= 0) rm->tflag[a[1] / 3] &= (uint8_t)~RM2D_E_NOSWAP;
   if (a[2] >= 0) rm->tflag[a[2] / 3] &= (uint8_t)~RM2D_E_NOSWAP;
-  rm->vtag[v[0]] &= (uint8_t)~RM2D_V_SETTLED;
-  rm->vtag[v[1]] &= (uint8_t)~RM2D_V_SETTLED;
-  rm->vtag[v[2]] &= (uint8_t)~RM2D_V_SETTLED;
+  const uint8_t vs = (uint8_t)~(RM2D_V_SETTLED | RM2D_V_LSETTLED);
+  rm->vtag[v[0]] &= vs;
+  rm->vtag[v[1]] &= vs;
+  rm->vtag[v[2]] &= vs;
 }
 
 /* Write element k (an existing or a new slot). The caller has called

@@ -19,7 +19,8 @@
  *  - q[k] is the element quality (Mmg's normalisation) with the current
  *    coordinates and metric;
  *  - tag bits RM2D_E_TOUCHED / RM2D_V_MARK are scratch, cleared by each pass
- *    that uses them; RM2D_E_INRANGE / RM2D_E_NOSWAP / RM2D_V_SETTLED are caches
+ *    that uses them; RM2D_E_INRANGE / RM2D_E_NOSWAP / RM2D_V_SETTLED /
+ *    RM2D_V_LSETTLED are caches
  *    that skip work a pass would find useless, cleared by any change that
  *    could invalidate them (so the passes decide exactly as without them);
  *  - a frozen element (PA_FLAG_REQUIRED in its flags) is never rewritten; its
@@ -47,7 +48,10 @@ enum {
    * would give the same answer, so relocation passes skip it. Cleared by
    * every operator on the vertices of each element it rewrites or kills,
    * and by a move on the vertices of the moved vertex's ball. */
-  RM2D_V_SETTLED = 64
+  RM2D_V_SETTLED = 64,
+  /* The same for a length move (pa__rm2d_length_vertex, whose verdict
+   * depends on the ball alone): cleared with RM2D_V_SETTLED. */
+  RM2D_V_LSETTLED = 128
 };
 
 /* Element tags share the byte with the input flags (PA_FLAG_*, low nibble). */

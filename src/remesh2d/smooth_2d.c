@@ -421,6 +421,22 @@ int pa__rm2d_length_vertex(rm2d *rm, pa_idx k, int ip) {
   int loc[RM2D_BALL_MAX], closed;
   int n = rm2d_ball(rm, k, ip, el, loc, &closed);
   if (n < 3 || !closed) return 0;
+  /* the ball from its first slot, whichever element the pass came from:
+   * the sums below, and so the verdict, then depend on the ball alone
+   * (RM2D_V_LSETTLED) */
+  int s0min = 0;
+  for (int s = 1; s < n; s++)
+    if (el[s] < el[s0min]) s0min = s;
+  if (s0min > 0) {
+    pa_idx et[RM2D_BALL_MAX];
+    int lt[RM2D_BALL_MAX];
+    for (int s = 0; s < n; s++) {
+      et[s] = el[(s + s0min) % n];
+      lt[s] = loc[(s + s0min) % n];
+    }
+    memcpy(el, et, (size_t)n * sizeof *el);
+    memcpy(loc, lt, (size_t)n * sizeof *loc);
+  }
   double qold = 1;
   for (int s = 0; s < n; s++) {
     if (rm->tflag[el[s]] & RM2D_E_FROZEN) return 0;
