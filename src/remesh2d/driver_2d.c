@@ -322,15 +322,20 @@ long pa__rm2d_smooth_pass(rm2d *rm, double qfree, int feat) {
   rm2d_vtag_clear(rm, RM2D_V_DONE);
   const uint8_t skip =
       RM2D_V_DONE | RM2D_V_FROZEN | RM2D_V_CORNER | (feat ? 0 : RM2D_V_FEAT);
-  for (pa_idx k = 0; k < rm->ne; k++) {
-    if (rm->tflag[k] & (RM2D_E_DEAD | RM2D_E_FROZEN)) continue;
+  /* moves change no slot nor array: read them once (a store through a
+   * uint8_t * could alias them, and they would be read again at each step) */
+  const pa_idx ne = rm->ne, *tv = rm->tv;
+  const uint8_t *tflag = rm->tflag;
+  uint8_t *vtag = rm->vtag;
+  for (pa_idx k = 0; k < ne; k++) {
+    if (tflag[k] & (RM2D_E_DEAD | RM2D_E_FROZEN)) continue;
     for (int i = 0; i < 3; i++) {
-      pa_idx p = rm->tv[3 * k + i];
-      uint8_t tp = rm->vtag[p];
+      pa_idx p = tv[3 * k + i];
+      uint8_t tp = vtag[p];
       if (tp & skip) continue;
       /* DONE even when skipped: a neighbour's move later in this pass must
        * not make p eligible again from another start element */
-      rm->vtag[p] |= RM2D_V_DONE;
+      vtag[p] |= RM2D_V_DONE;
       /* the answer depends only on p's ball: a rejected p stays settled
        * until an operator or a move changes that ball (rm2d_elem_changed) */
       if (tp & RM2D_V_SETTLED) continue;
