@@ -269,10 +269,15 @@ long pa__rm2d_swap_pass(rm2d *rm, double qmax) {
     for (int i = 0; i < 3 && !done; i++) {
       pa_idx o = rm->adj[3 * k + i];
       if (o < 0) continue;
-      if (rm->tflag[o / 3] & RM2D_E_TOUCHED) {
+      uint8_t tf = rm->tflag[o / 3];
+      if (tf & RM2D_E_TOUCHED) {
         all = 0; /* not tried: no verdict for this face */
         continue;
       }
+      /* the neighbour's verdict covers this face: the swap of a pair
+       * evaluates the same two triangles, in the same vertex order, from
+       * either side */
+      if (tf & RM2D_E_NOSWAP) continue;
       done = pa__rm2d_swap_edge(rm, k, i, 1.02);
     }
     cnt += done;
