@@ -80,6 +80,46 @@ static void add_ideal_apex(const double *t, double sd, const double *a,
   c[1] += 0.5 * (a[1] + b[1]) + 0.8660254037844386 * yy;
 }
 
+/* The edges from a vertex p to its neighbours nb[0..nn), gathered once for
+ * the trial positions of a move: the neighbours' coordinates, and
+ * with sizes (mc <= 1) the factor that turns a Euclidean length into the
+ * metric one, which does not depend on p's position (pa__len2: n / h, or n
+ * times the logarithmic mean of 1 / ha and 1 / hb; the same operations, so
+ * the same bits). */
+typedef struct len_ball {
+  int nn, mc;
+  const double *mp;
+  /* a feature vertex has up to one neighbour more than elements */
+  double x[2 * RM2D_BALL_MAX], y[2 * RM2D_BALL_MAX], f[2 * RM2D_BALL_MAX];
+  const double *m[2 * RM2D_BALL_MAX];
+} len_ball;
+
+static void len_ball_init(const rm2d *rm, const double *mp, const pa_idx *nb,
+                          int nn, len_ball *lb) {
+  int mc = rm->mc;
+  lb->nn = nn;
+  lb->mc = mc;
+  lb->mp = mp;
+  for (int i = 0; i < nn; i++) {
+    const double *xi = RM2D_X(nb[i]), *mi = RM2D_M(nb[i]);
+    lb->x[i] = xi[0];
+    lb->y[i] = xi[1];
+    lb->m[i] = mi;
+    if (mc == 0) lb->f[i] = 1.0;
+    else if (mc == 1)
+      lb->f[i] = mp[0] == mi[0] ? 1.0 / mp[0]
+                                : pa__log_mean(1.0 / mp[0], 1.0 / mi[0]);
+  }
+}
+
+/* The length of edge i of lb from p at y. */
+static inline double len_one(const len_ball *lb, const double *y, int i) {
+  double dx = lb->x[i] - y[0], dy = lb->y[i] - y[1];
+  if (lb->mc <= 1) return sqrt(dx * dx + dy * dy) * lb->f[i];
+  double b[2] = {lb->x[i], lb->y[i]};
+  return pa__len2(lb->mc, y, b, lb->mp, lb->m[i]);
+}
+
 /* Whether a move of p keeps its edges in the band: every edge to nb[0..nn)
  * in [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI] at the old position stays in it
  * at the current one, and none out of it goes further out (the old
@@ -87,17 +127,14 @@ static void add_ideal_apex(const double *t, double sd, const double *a,
  * quality qold is under qfree are held to the wider band [RM2D_LFREE_LO,
  * RM2D_LFREE_HI] instead (their elements matter more than those lengths). */
 static int keeps_band(rm2d *rm, pa_idx p, const pa_idx *nb, int nn,
-                      const double *old, double *lold, int *have, double qold,
-                      double qfree) {
-  double *xp = rm->x + 2 * (size_t)p;
+                      const double *old, len_ball *lb, double *lold, int *have,
+                      double qold, double qfree) {
+  const double *xp = rm->x + 2 * (size_t)p;
   if (!*have) {
-    double np[2] = {xp[0], xp[1]};
-    xp[0] = old[0];
-    xp[1] = old[1];
+    int mc = rm->mc;
+    len_ball_init(rm, RM2D_M(p), nb, nn, lb);
     for (int s = 0; s < nn; s++)
-      lold[s] = rm2d_edge_len(rm, p, nb[s]);
-    xp[0] = np[0];
-    xp[1] = np[1];
+      lold[s] = len_one(lb, old, s);
     *have = 1;
   }
   double lo = PA_METRIC_LEN_LO, hi = PA_METRIC_LEN_HI;
@@ -106,7 +143,7 @@ static int keeps_band(rm2d *rm, pa_idx p, const pa_idx *nb, int nn,
     hi = RM2D_LFREE_HI;
   }
   for (int s = 0; s < nn; s++) {
-    double l = rm2d_edge_len(rm, p, nb[s]);
+    double l = len_one(lb, xp, s);
     /* l in [min(lo, lold), max(hi, lold)] (no NaN among lo, hi, lold) */
     if (!((l >= lo || l >= lold[s]) && (l <= hi || l <= lold[s]))) return 0;
   }
@@ -159,6 +196,7 @@ int pa__rm2d_smooth_vertex(rm2d *rm, pa_idx k, int ip, double qfree) {
   /* edge lengths in range before the move must stay in range (computed
    * when a candidate first passes the quality test) */
   double lold[RM2D_BALL_MAX];
+  len_ball lb;
   int have_inr = 0;
   double qn[RM2D_BALL_MAX];
   double om = 1.0;
@@ -193,7 +231,8 @@ int pa__rm2d_smooth_vertex(rm2d *rm, pa_idx k, int ip, double qfree) {
     if (!ok) continue;
     qm /= n;
     if (!(qmin > MOVE_GAIN_MIN * qold || qm > MOVE_GAIN_MEAN * qmean)) continue;
-    if (!keeps_band(rm, p, nb, n, old, lold, &have_inr, qold, qfree)) continue;
+    if (!keeps_band(rm, p, nb, n, old, &lb, lold, &have_inr, qold, qfree))
+      continue;
     /* accepted */
     double np[2] = {xp[0], xp[1]};
     xp[0] = x0;
@@ -292,6 +331,7 @@ int pa__rm2d_smooth_feature(rm2d *rm, pa_idx k, int ip, double qfree) {
   double hausd = fmin(pa__local_hausd(rm->opts, rm->bref[rr], rm->hausd),
                       pa__local_hausd(rm->opts, rm->bref[ro], rm->hausd));
   double lold[2 * RM2D_BALL_MAX];
+  len_ball lb;
   int have_inr = 0;
   for (int tr = 0; tr < 3; tr++, s0 *= 0.5) {
     int from0 = rm->bv[2 * rr] == p;
@@ -316,7 +356,8 @@ int pa__rm2d_smooth_feature(rm2d *rm, pa_idx k, int ip, double qfree) {
       qm += q;
     }
     ok = ok && (qmin > MOVE_GAIN_MIN * qold || qm / n > MOVE_GAIN_MEAN * qmean);
-    ok = ok && keeps_band(rm, p, nb, nn, old, lold, &have_inr, qold, qfree);
+    ok = ok &&
+         keeps_band(rm, p, nb, nn, old, &lb, lold, &have_inr, qold, qfree);
     xp[0] = old[0];
     xp[1] = old[1];
     if (!ok) continue;
@@ -344,37 +385,6 @@ int pa__rm2d_smooth_feature(rm2d *rm, pa_idx k, int ip, double qfree) {
     return 1;
   }
   return 0;
-}
-
-/* The edges from a vertex p to its neighbours nb[0..nn), gathered once for
- * the trial positions of a length move: the neighbours' coordinates, and
- * with sizes (mc <= 1) the factor that turns a Euclidean length into the
- * metric one, which does not depend on p's position (pa__len2: n / h, or n
- * times the logarithmic mean of 1 / ha and 1 / hb; the same operations, so
- * the same bits). */
-typedef struct len_ball {
-  int nn, mc;
-  const double *mp;
-  double x[RM2D_BALL_MAX], y[RM2D_BALL_MAX], f[RM2D_BALL_MAX];
-  const double *m[RM2D_BALL_MAX];
-} len_ball;
-
-static void len_ball_init(const rm2d *rm, const double *mp, const pa_idx *nb,
-                          int nn, len_ball *lb) {
-  int mc = rm->mc;
-  lb->nn = nn;
-  lb->mc = mc;
-  lb->mp = mp;
-  for (int i = 0; i < nn; i++) {
-    const double *xi = RM2D_X(nb[i]), *mi = RM2D_M(nb[i]);
-    lb->x[i] = xi[0];
-    lb->y[i] = xi[1];
-    lb->m[i] = mi;
-    if (mc == 0) lb->f[i] = 1.0;
-    else if (mc == 1)
-      lb->f[i] = mp[0] == mi[0] ? 1.0 / mp[0]
-                                : pa__log_mean(1.0 / mp[0], 1.0 / mi[0]);
-  }
 }
 
 /* The lengths l of the edges of lb from p at y, and how many are out of
