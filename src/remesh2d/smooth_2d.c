@@ -23,11 +23,18 @@
  * np: metric and fields interpolated from the old triangle holding np
  * (barycentric; linear fields stay exact), qualities updated: qn[0..n) when
  * given (the trial's, which with sizes do not depend on the metric), else
- * computed. */
+ * computed. ln[0..n), when given, are the lengths from np to the
+ * neighbours v[RM2D_NX3(loc[s])] in p's metric before the move: where the
+ * interpolation leaves that metric as it was, they are the new lengths, and
+ * an element in range (RM2D_E_INRANGE) whose two edges at p stay in the
+ * band keeps its mark (its third edge has not moved). */
 static void apply_move(rm2d *rm, pa_idx p, const pa_idx *el, const int *loc,
-                       int n, const double *np, const double *qn) {
+                       int n, const double *np, const double *qn,
+                       const double *ln) {
+  int mc = rm->mc;
   double *xp = rm->x + 2 * (size_t)p;
-  double x0 = xp[0], y0 = xp[1];
+  double x0 = xp[0], y0 = xp[1], m0[3];
+  memcpy(m0, RM2D_M(p), sizeof(double) * (size_t)mc);
   for (int s = 0; s < n; s++) {
     const pa_idx *v = rm->tv + 3 * (size_t)el[s];
     pa_idx va = v[RM2D_NX3(loc[s])], vb = v[RM2D_PV3(loc[s])];
@@ -45,10 +52,15 @@ static void apply_move(rm2d *rm, pa_idx p, const pa_idx *el, const int *loc,
   }
   xp[0] = np[0];
   xp[1] = np[1];
+  int keep = ln && !memcmp(m0, RM2D_M(p), sizeof(double) * (size_t)mc);
   for (int s = 0; s < n; s++) {
     const pa_idx *v = rm->tv + 3 * (size_t)el[s];
+    int inr = keep && (rm->tflag[el[s]] & RM2D_E_INRANGE) &&
+              rm2d_len_settled(rm, ln[s]) &&
+              rm2d_len_settled(rm, ln[s + 1 < n ? s + 1 : 0]);
     rm->q[el[s]] = (float)(qn ? qn[s] : rm2d_elem_qual(rm, v[0], v[1], v[2]));
     rm2d_elem_changed(rm, el[s]); /* p's neighbours see a new ball */
+    if (inr) rm->tflag[el[s]] |= RM2D_E_INRANGE;
   }
   rm->nmove++;
 }
@@ -123,12 +135,13 @@ static inline double len_one(const len_ball *lb, const double *y, int i) {
 /* Whether a move of p keeps its edges in the band: every edge to nb[0..nn)
  * in [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI] at the old position stays in it
  * at the current one, and none out of it goes further out (the old
- * lengths lold are measured on the first call: *have). Balls whose worst
+ * lengths lold are measured on the first call: *have; the current ones go
+ * to lnew, all of them when the test passes). Balls whose worst
  * quality qold is under qfree are held to the wider band [RM2D_LFREE_LO,
  * RM2D_LFREE_HI] instead (their elements matter more than those lengths). */
 static int keeps_band(rm2d *rm, pa_idx p, const pa_idx *nb, int nn,
                       const double *old, len_ball *lb, double *lold, int *have,
-                      double qold, double qfree) {
+                      double qold, double qfree, double *lnew) {
   const double *xp = rm->x + 2 * (size_t)p;
   if (!*have) {
     int mc = rm->mc;
@@ -143,7 +156,7 @@ static int keeps_band(rm2d *rm, pa_idx p, const pa_idx *nb, int nn,
     hi = RM2D_LFREE_HI;
   }
   for (int s = 0; s < nn; s++) {
-    double l = len_one(lb, xp, s);
+    double l = lnew[s] = len_one(lb, xp, s);
     /* l in [min(lo, lold), max(hi, lold)] (no NaN among lo, hi, lold) */
     if (!((l >= lo || l >= lold[s]) && (l <= hi || l <= lold[s]))) return 0;
   }
@@ -231,13 +244,15 @@ int pa__rm2d_smooth_vertex(rm2d *rm, pa_idx k, int ip, double qfree) {
     if (!ok) continue;
     qm /= n;
     if (!(qmin > MOVE_GAIN_MIN * qold || qm > MOVE_GAIN_MEAN * qmean)) continue;
-    if (!keeps_band(rm, p, nb, n, old, &lb, lold, &have_inr, qold, qfree))
+    double lnew[RM2D_BALL_MAX];
+    if (!keeps_band(rm, p, nb, n, old, &lb, lold, &have_inr, qold, qfree,
+                    lnew))
       continue;
     /* accepted */
     double np[2] = {xp[0], xp[1]};
     xp[0] = x0;
     xp[1] = y0;
-    apply_move(rm, p, el, loc, n, np, mc <= 1 ? qn : NULL);
+    apply_move(rm, p, el, loc, n, np, mc <= 1 ? qn : NULL, lnew);
     return 1;
   }
   xp[0] = x0;
@@ -356,8 +371,9 @@ int pa__rm2d_smooth_feature(rm2d *rm, pa_idx k, int ip, double qfree) {
       qm += q;
     }
     ok = ok && (qmin > MOVE_GAIN_MIN * qold || qm / n > MOVE_GAIN_MEAN * qmean);
-    ok = ok &&
-         keeps_band(rm, p, nb, nn, old, &lb, lold, &have_inr, qold, qfree);
+    double lnew[2 * RM2D_BALL_MAX];
+    ok = ok && keeps_band(rm, p, nb, nn, old, &lb, lold, &have_inr, qold,
+                          qfree, lnew);
     xp[0] = old[0];
     xp[1] = old[1];
     if (!ok) continue;
@@ -529,7 +545,7 @@ int pa__rm2d_length_vertex(rm2d *rm, pa_idx k, int ip) {
     xp[0] = x0;
     xp[1] = y0;
     if (!ok) continue;
-    apply_move(rm, p, el, loc, n, np, mc <= 1 ? qn : NULL);
+    apply_move(rm, p, el, loc, n, np, mc <= 1 ? qn : NULL, l1);
     return 1;
   }
   return 0;
