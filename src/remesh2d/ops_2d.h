@@ -187,39 +187,65 @@ static inline void rm2d_set_elem(rm2d *rm, pa_idx k, pa_idx a, pa_idx b,
  * clockwise until back to k or the domain boundary, then clockwise from k.
  * Fills el[] and loc[] (local index of p) and returns the count, or -1 if the
  * ball exceeds RM2D_BALL_MAX. *closed is 1 for an interior vertex.
+ *
+ * Each step waits for the neighbour it reads (the walks are latency-bound),
+ * so the two directions advance together, two independent chains: a
+ * closed ball ends where they meet, its clockwise part then read back.
  */
 static inline int rm2d_ball(const rm2d *rm, pa_idx k, int ip, pa_idx *el,
                             int *loc, int *closed) {
-  int n = 0;
-  el[n] = k;
-  loc[n++] = ip;
-  pa_idx c = k;
-  int l = ip;
+  pa_idx cw[RM2D_BALL_MAX];
+  int lcw[RM2D_BALL_MAX];
+  int na = 0, nc = 0, enda = 0, endc = 0;
+  pa_idx a = k, c = k; /* the last element of each chain */
+  int la = ip, lc = ip;
+  el[0] = k;
+  loc[0] = ip;
   *closed = 0;
-  for (;;) {
-    pa_idx s = rm2d_other_side(rm, 3 * c + RM2D_NX3(l));
-    if (s < 0) break;
-    c = s / 3;
-    l = RM2D_NX3(s % 3);
-    if (c == k) {
-      *closed = 1;
-      return n;
+  while (!enda || !endc) {
+    if (!enda) { /* counter-clockwise */
+      pa_idx s = rm2d_other_side(rm, 3 * a + RM2D_NX3(la));
+      if (s < 0) {
+        enda = 1;
+      } else if (s / 3 == c) { /* met the other chain (or k): closed */
+        *closed = 1;
+        break;
+      } else {
+        if (1 + na + nc >= RM2D_BALL_MAX) return -1;
+        a = s / 3;
+        la = RM2D_NX3(s % 3);
+        na++;
+        el[na] = a;
+        loc[na] = la;
+      }
     }
-    if (n >= RM2D_BALL_MAX) return -1;
-    el[n] = c;
-    loc[n++] = l;
+    if (!endc) { /* clockwise */
+      pa_idx s = rm2d_other_side(rm, 3 * c + RM2D_PV3(lc));
+      if (s < 0) {
+        endc = 1;
+      } else if (s / 3 == a) {
+        *closed = 1;
+        break;
+      } else {
+        if (1 + na + nc >= RM2D_BALL_MAX) return -1;
+        c = s / 3;
+        lc = RM2D_PV3(s % 3);
+        cw[nc] = c;
+        lcw[nc++] = lc;
+      }
+    }
   }
-  /* clockwise from k: the order is then [k, ccw..., cw...] */
-  c = k;
-  l = ip;
-  for (;;) {
-    pa_idx s = rm2d_other_side(rm, 3 * c + RM2D_PV3(l));
-    if (s < 0) break;
-    c = s / 3;
-    l = RM2D_PV3(s % 3);
-    if (n >= RM2D_BALL_MAX) return -1;
-    el[n] = c;
-    loc[n++] = l;
+  int n = 1 + na;
+  if (*closed) { /* the clockwise chain, read back, closes the turn */
+    for (int j = nc - 1; j >= 0; j--) {
+      el[n] = cw[j];
+      loc[n++] = lcw[j];
+    }
+  } else {
+    for (int j = 0; j < nc; j++) {
+      el[n] = cw[j];
+      loc[n++] = lcw[j];
+    }
   }
   return n;
 }
