@@ -52,7 +52,9 @@ static void apply_move(rm2d *rm, pa_idx p, const pa_idx *el, const int *loc,
   }
   xp[0] = np[0];
   xp[1] = np[1];
-  int keep = ln && !memcmp(m0, RM2D_M(p), sizeof(double) * (size_t)mc);
+  int keep = ln != NULL;
+  for (int c = 0; c < mc; c++) /* (a call to memcmp here costs more) */
+    keep &= m0[c] == RM2D_M(p)[c];
   for (int s = 0; s < n; s++) {
     const pa_idx *v = rm->tv + 3 * (size_t)el[s];
     int inr = keep && (rm->tflag[el[s]] & RM2D_E_INRANGE) &&
