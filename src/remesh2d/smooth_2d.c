@@ -23,19 +23,23 @@
  * np: metric and fields interpolated from the old triangle holding np
  * (barycentric; linear fields stay exact), qualities updated: qn[0..n) when
  * given (the trial's, which with sizes do not depend on the metric), else
- * computed. ln[0..n), when given, are the lengths from np to the
+ * computed. same: p and its neighbours carry the same metric, which the
+ * interpolation then gives back (pa__metric_interp), so without fields nor
+ * a target metric apart there is nothing to interpolate. ln[0..n), when
+ * given, are the lengths from np to the
  * neighbours v[RM2D_NX3(loc[s])] in p's metric before the move: where the
  * interpolation leaves that metric as it was, they are the new lengths, and
  * an element in range (RM2D_E_INRANGE) whose two edges at p stay in the
  * band keeps its mark (its third edge has not moved). */
 static void apply_move(rm2d *rm, pa_idx p, const pa_idx *el, const int *loc,
-                       int n, const double *np, const double *qn,
+                       int n, const double *np, const double *qn, int same,
                        const double *ln) {
   int mc = rm->mc;
   double *xp = rm->x + 2 * (size_t)p;
   double x0 = xp[0], y0 = xp[1], m0[3];
   memcpy(m0, RM2D_M(p), sizeof(double) * (size_t)mc);
-  for (int s = 0; s < n; s++) {
+  int ns = same && !rm->met0 && !rm->nfield ? 0 : n;
+  for (int s = 0; s < ns; s++) {
     const pa_idx *v = rm->tv + 3 * (size_t)el[s];
     pa_idx va = v[RM2D_NX3(loc[s])], vb = v[RM2D_PV3(loc[s])];
     const double *a = RM2D_X(va), *b = RM2D_X(vb);
@@ -102,6 +106,7 @@ static void add_ideal_apex(const double *t, double sd, const double *a,
  * the same bits). */
 typedef struct len_ball {
   int nn, mc;
+  int same; /* every neighbour's metric is p's */
   const double *mp;
   /* a feature vertex has up to one neighbour more than elements */
   double x[2 * RM2D_BALL_MAX], y[2 * RM2D_BALL_MAX], f[2 * RM2D_BALL_MAX];
@@ -114,11 +119,14 @@ static void len_ball_init(const rm2d *rm, const double *mp, const pa_idx *nb,
   lb->nn = nn;
   lb->mc = mc;
   lb->mp = mp;
+  lb->same = 1;
   for (int i = 0; i < nn; i++) {
     const double *xi = RM2D_X(nb[i]), *mi = RM2D_M(nb[i]);
     lb->x[i] = xi[0];
     lb->y[i] = xi[1];
     lb->m[i] = mi;
+    for (int c = 0; c < mc; c++)
+      lb->same &= mi[c] == mp[c];
     if (mc == 0) lb->f[i] = 1.0;
     else if (mc == 1)
       lb->f[i] = mp[0] == mi[0] ? 1.0 / mp[0]
@@ -254,7 +262,7 @@ int pa__rm2d_smooth_vertex(rm2d *rm, pa_idx k, int ip, double qfree) {
     double np[2] = {xp[0], xp[1]};
     xp[0] = x0;
     xp[1] = y0;
-    apply_move(rm, p, el, loc, n, np, mc <= 1 ? qn : NULL, lnew);
+    apply_move(rm, p, el, loc, n, np, mc <= 1 ? qn : NULL, lb.same, lnew);
     return 1;
   }
   xp[0] = x0;
@@ -547,7 +555,7 @@ int pa__rm2d_length_vertex(rm2d *rm, pa_idx k, int ip) {
     xp[0] = x0;
     xp[1] = y0;
     if (!ok) continue;
-    apply_move(rm, p, el, loc, n, np, mc <= 1 ? qn : NULL, l1);
+    apply_move(rm, p, el, loc, n, np, mc <= 1 ? qn : NULL, lb.same, l1);
     return 1;
   }
   return 0;
