@@ -223,19 +223,38 @@ int pa__rm2d_smooth_vertex(rm2d *rm, pa_idx k, int ip, double qfree) {
   int have_inr = 0;
   double qn[RM2D_BALL_MAX];
   double om = 1.0;
+  /* p's entries in bxy (sizes), rewritten at each trial */
+  double *px[RM2D_BALL_MAX], *py[RM2D_BALL_MAX];
+  if (mc <= 1)
+    for (int s = 0; s < n; s++) {
+      px[s] = &bxy.x[loc[s]][s];
+      py[s] = &bxy.y[loc[s]][s];
+    }
   for (int tr = 0; tr < 3; tr++, om *= 0.5) {
-    xp[0] = x0 + om * (cx - x0);
-    xp[1] = y0 + om * (cy - y0);
+    const double tx = x0 + om * (cx - x0), ty = y0 + om * (cy - y0);
+    xp[0] = tx;
+    xp[1] = ty;
     double qmin = 1, qm = 0;
     int ok = 1;
     if (mc <= 1) {
       for (int s = 0; s < n; s++) {
-        bxy.x[loc[s]][s] = xp[0];
-        bxy.y[loc[s]][s] = xp[1];
+        *px[s] = tx;
+        *py[s] = ty;
       }
       ball_xy_qual(&bxy, n, qn);
+      if (qold >= RM2D_QFLOOR) { /* the floor is qold itself */
+        for (int s = 0; s < n; s++) {
+          if (qn[s] < qold) {
+            ok = 0;
+            break;
+          }
+          if (qn[s] < qmin) qmin = qn[s];
+          qm += qn[s];
+        }
+      }
     }
-    for (int s = 0; s < n && ok; s++) {
+    /* (done above with sizes when the floor is qold) */
+    for (int s = mc <= 1 && qold >= RM2D_QFLOOR ? n : 0; s < n && ok; s++) {
       if (mc > 1) {
         const pa_idx *v = rm->tv + 3 * (size_t)el[s];
         qn[s] = rm2d_elem_qual(rm, v[0], v[1], v[2]);
