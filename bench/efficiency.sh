@@ -28,7 +28,9 @@
 #         refill each other's caches): np copies of the sequential job of
 #         a rank's size (N / np elements: -hsiz x np^(1/dim)) run at once,
 #         their CPU per element over that of one such run alone, and the
-#         work ratio over that factor, the algorithmic work.
+#         work ratio over that factor; and the remesher's operation counts
+#         (splits, collapses, swaps, moves) over np=1's, which the machine
+#         does not change.
 #   weak  the rod refined to N = np x 2 M tets at np 1 and WEAK_NPS
 #         (default 2 4 8; -distributed-output, deleted after each run):
 #         remeshing work per output tet (microseconds), its ratio to np=1's
@@ -96,6 +98,11 @@ print(', '.join('%d: %d tagged, %d pieces, %.2f s' % (i['iter'], i['tagged'], i[
                 for i in r['iteration_detail']))" "$1"
 }
 
+# the remesher's operation counts of the -json report $1 over those of $2
+ops_ratio() { /usr/bin/python3 -c "import json, sys
+a, b = (json.load(open(f)) for f in sys.argv[1:3])
+print(', '.join('%s %.3f' % (k[1:], a[k] / max(b[k], 1)) for k in ('nsplit', 'ncollapse', 'nswap', 'nmove')))" "$1" "$2"; }
+
 # what np copies at once add to the CPU per element of one run alone:
 # mesh hsiz np prefix of the reports (PREFIX-alone.json, PREFIX-I.json)
 copies_factor() {
@@ -126,10 +133,11 @@ work_nps() {
     w=$(jget "$pre-np$np.json" remesh_cpu_s)
     hq=$(awk -v h="$h" -v n="$np" -v d="$dim" 'BEGIN { printf "%.6f", h * n ^ (1 / d) }')
     cf=$(copies_factor "$in" "$hq" "$np" "$pre-copy$np")
-    printf "work  %-5s np=%d: %s elements, worst quality %.3f, remesher CPU %.2f s, %.3f x np=1; %d copies of -hsiz %s at once: %.3f x its CPU per element, so %.3f x np=1 over that; %s iterations (%s)\n" \
+    printf "work  %-5s np=%d: %s elements, worst quality %.3f, remesher CPU %.2f s, %.3f x np=1; %d copies of -hsiz %s at once: %.3f x its CPU per element, so %.3f x np=1 over that; operations x np=1: %s; %s iterations (%s)\n" \
       "$name" "$np" "$(jget "$pre-np$np.json" elements)" "$(jget "$pre-np$np.json" quality_worst)" "$w" \
       "$(echo "$w $w1" | awk '{print $1 / $2}')" "$np" "$hq" "$cf" \
       "$(echo "$w $w1 $cf" | awk '{print $1 / ($2 * $3)}')" \
+      "$(ops_ratio "$pre-np$np.json" "$pre-np1.json")" \
       "$(jget "$pre-np$np.json" iterations)" "$(iters "$pre-np$np.json")"
   done
 }
