@@ -39,7 +39,8 @@
 #         the np=1 job run at once, their CPU per tet over that of one run
 #         alone (the np ranks of an oversubscribed run share the cores and
 #         caches the same way), and the ratio to the same-size sequential
-#         run divided by that factor; the iterations.
+#         run divided by that factor; the operation counts over the
+#         same-size sequential run's; the iterations.
 # Every -json report is kept in WORK_DIR (time-*, work-np*, weak-np*.json):
 # bench/time_model.py reads them.
 set -u
@@ -185,10 +186,11 @@ for part in $PARTS; do
         usq=$(us_per_elem "weak-seq$np.json")
         cf=$(for i in $(seq "$np"); do us_per_elem "weak-copy$np-$i.json"; done |
              awk -v a="$us1" '{s += $1} END {printf "%.3f", s / NR / a}')
-        printf "weak  np=%d -hsiz %s: %s elements, remesher CPU %.2f s, %s us per tet, %.3f x np=1, %.3f x the sequential run of the same size (%s us per tet); %d copies of np=1 at once: %.3f x its CPU per tet, so %.3f x the sequential run over that; %s iterations\n" \
+        printf "weak  np=%d -hsiz %s: %s elements, remesher CPU %.2f s, %s us per tet, %.3f x np=1, %.3f x the sequential run of the same size (%s us per tet); %d copies of np=1 at once: %.3f x its CPU per tet, so %.3f x the sequential run over that; operations x the sequential run: %s; %s iterations\n" \
           "$np" "$h" "$(jget "weak-np$np.json" elements)" "$(jget "weak-np$np.json" remesh_cpu_s)" "$us" \
           "$(echo "$us $us1" | awk '{print $1 / $2}')" "$(echo "$us $usq" | awk '{print $1 / $2}')" "$usq" \
-          "$np" "$cf" "$(echo "$us $usq $cf" | awk '{print $1 / ($2 * $3)}')" "$(jget "weak-np$np.json" iterations)"
+          "$np" "$cf" "$(echo "$us $usq $cf" | awk '{print $1 / ($2 * $3)}')" \
+          "$(ops_ratio "weak-np$np.json" "weak-seq$np.json")" "$(jget "weak-np$np.json" iterations)"
       done ;;
     *) echo "unknown part $part" ;;
   esac
