@@ -400,13 +400,14 @@ long pa__rm2d_length_pass(rm2d *rm) {
  * plate -> 0.0005 takes 9.1 instead of 10.5 s of remesher CPU
  * sequentially (3.7 M triangles when the rounds start, 1.5 times the last
  * renumbering), 9.8 instead of 11.1 s at 2 ranks (pieces of 1.9 M growing
- * to 2.4 M in the rounds); at 0.23 and 0.94 M the renumbering costs what it
- * saves (0.45 -> 0.46 s, 2.17 -> 2.12 s): there the working set stays in
- * the caches of this machine. */
+ * to 2.4 M in the rounds). Alone on this machine a mesh of 0.23-0.94 M
+ * gains little (0.45 -> 0.46 s, 2.17 -> 2.12 s), but ranks that share
+ * caches do: 1.2 M triangles 2.54 -> 2.17 s with 4 such jobs at once, the
+ * plate's pieces at 4 ranks 11.4 -> 9.4 s of remesher CPU (2026-11-29). */
 #define RM2D_REORDER_MIN 50000
 #define RM2D_REORDER_REFINE 2.0
 #define RM2D_REORDER_OPT 1.25
-#define RM2D_REORDER_OPT_MIN 1500000
+#define RM2D_REORDER_OPT_MIN 300000
 static pa_status maybe_reorder(rm2d *rm, int pass, pa_idx from, double growth,
                                pa_idx *last) {
   pa_status st = PA_SUCCESS;
