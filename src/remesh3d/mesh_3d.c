@@ -478,10 +478,13 @@ pa_status pa__rm3d_compact(rm3d *m, int keep_q) {
   pa_status st = PA_SUCCESS;
   pa_idx *newt = NULL;
   if (m->ndead_t == 0 && m->ndead_v == 0 && (keep_q || !m->q)) return st;
-  /* The quality cache is rebuilt afterwards: free it first so that the
+  /* The quality cache moves with its tets when kept (the passes' own
+   * values, which are rm3d_qual_v's); else it goes first, so that the
    * renumbering scratch does not raise the memory peak. */
-  pa__free(m->q);
-  m->q = NULL;
+  if (!keep_q) {
+    pa__free(m->q);
+    m->q = NULL;
+  }
   PA_ALLOC(newt, (size_t)m->ne + 1);
   /* Tetrahedra: new index = rank among live ones; adjacency remapped. The
    * vertex array vtet is reused as scratch only after tets are done. */
@@ -499,6 +502,7 @@ pa_status pa__rm3d_compact(rm3d *m, int keep_q) {
       m->tv[4 * (size_t)j + i] = m->tv[4 * (size_t)k + i];
     }
     m->tflag[j] = m->tflag[k];
+    if (keep_q) m->q[j] = m->q[k];
     m->tpf[j] = m->tpf[k];
     m->tref[j] = m->tref[k];
   }
@@ -562,11 +566,6 @@ pa_status pa__rm3d_compact(rm3d *m, int keep_q) {
   m->ndead_t = m->ndead_v = 0;
   pa__free(newt);
   newt = NULL;
-  if (keep_q) {
-    PA_ALLOC(m->q, m->cape);
-    for (pa_idx k = 0; k < ne; k++)
-      m->q[k] = (float)rm3d_qual_v(m, m->tv + 4 * (size_t)k);
-  }
 cleanup:
   pa__free(newt);
   return st;
