@@ -63,6 +63,15 @@
  * in range, a third hardly does (figures: docs/BENCHMARKS.md, "The 3D
  * remesher"). */
 #define RM3D_LENGTH_SWEEPS 2
+/* Sweeps after the optimisation rounds but the last: the next round's
+ * collapses, swaps and quality moves change the lengths again, and its
+ * sweeps take up what a second one would do. */
+#define RM3D_LENGTH_SWEEPS_EARLY 1
+/* The rounds swap around the tets below this quality (gain 1.02). At 0.3
+ * the optimisation's first swap pass still found a swap for one tet in ten
+ * (Kuhn cube); swapped while the rounds split and collapse, they leave
+ * fewer tets, more edges in range and less work to the later passes. */
+#define RM3D_QSWAP_ROUNDS 0.5
 /* Neighbours collapse_other tries per end: the third and later ones
  * succeed rarely, and all of them cost as much as the rest of the
  * collapse pass (figures: docs/BENCHMARKS.md, "The 3D remesher"). */
@@ -800,7 +809,8 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
                                    PA_METRIC_LEN_HI_EXACT, &nc));
     double t3 = pa_wtime();
     long nvc = m->ncollapse - nc0; /* the others removed an edge by a swap */
-    if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(m, 0.3, 1.02, &nw));
+    if (!opts->no_swap)
+      PA_CALL(pa__rm3d_swap_pass(m, RM3D_QSWAP_ROUNDS, 1.02, &nw));
     double t4 = pa_wtime();
     if (!opts->no_move) {
       long nl = 0;
@@ -844,7 +854,9 @@ static pa_status optimise(rm3d *m, const pa_remesh_opts *opts, int *npass) {
     if (!opts->no_move) {
       long nl = 0;
       PA_CALL(pa__rm3d_smooth_pass(m, RM3D_QSMOOTH, &balls, &nm));
-      PA_CALL(pa__rm3d_length_pass(m, RM3D_LENGTH_SWEEPS, &balls, &nl));
+      PA_CALL(pa__rm3d_length_pass(
+          m, it < 2 ? RM3D_LENGTH_SWEEPS_EARLY : RM3D_LENGTH_SWEEPS, &balls,
+          &nl));
       pa__rm3d_balls_free(&balls);
       nm += nl;
     }
