@@ -80,7 +80,8 @@
 /* The six edge lengths of the tet with vertices v, as rm3d_len gives them
  * (with sizes, each vertex's 1/h is taken once, not once per edge: the
  * same operations on the same values, so the same bits). */
-static void lengths6(const rm3d *m, const pa_idx *v, double *L) {
+static inline __attribute__((always_inline)) void
+lengths6(const rm3d *m, const pa_idx *v, double *L) {
   if (m->mc != 1) {
     for (int e = 0; e < 6; e++)
       L[e] = rm3d_len(m, v[pa__rm3d_edge[e][0]], v[pa__rm3d_edge[e][1]]);

@@ -15,20 +15,16 @@ static const signed char edge_of[4][4] = {
 
 /* Forward from k: around a closed shell once. An open one is completed
  * by a walk backward from k, whose tets go in front (the shell then starts
- * at its boundary face). Crossing the face (a, b, d) of a tet (a, b, c, d)
- * (positive) reaches the tet (a, b, d, w), positive too, with w at the
- * slot the adjacency names: only d is looked for there, a and b being the
- * other two slots in the order pa__rm3d_compl gives. */
+ * at its boundary face). */
 int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
                    pa_idx *ring, signed char *edge, int max, int *info) {
   int inf = 0, n = 0;
   int32_t ref0 = m->tref[k];
   pa_idx t = k;
-  int ia = rm3d_loc(m->tv + 4 * (size_t)k, a);
-  int ib = rm3d_loc(m->tv + 4 * (size_t)k, b);
   for (;;) {
     if (n >= max) return -1;
     const pa_idx *v = m->tv + 4 * (size_t)t;
+    int ia = rm3d_loc(v, a), ib = rm3d_loc(v, b);
     int ic = pa__rm3d_compl[ia][ib][0], id = pa__rm3d_compl[ia][ib][1];
     tets[n] = t;
     ring[n] = v[ic];
@@ -49,12 +45,6 @@ int pa__rm3d_shell(const rm3d *m, pa_idx k, pa_idx a, pa_idx b, pa_idx *tets,
       *info = inf | RM3D_SH_CLOSED;
       return n;
     }
-    pa_idx d = v[id];
-    int jw = nb & 3, jd = (jw + 1) & 3;
-    const pa_idx *w = m->tv + 4 * (size_t)t;
-    while (w[jd] != d) jd = (jd + 1) & 3;
-    ia = pa__rm3d_compl[jd][jw][0];
-    ib = pa__rm3d_compl[jd][jw][1];
   }
   /* Open: count the tets behind k, make room, then fill them in. */
   int nback = 0;
