@@ -72,6 +72,11 @@
  * (Kuhn cube); swapped while the rounds split and collapse, they leave
  * fewer tets, more edges in range and less work to the later passes. */
 #define RM3D_QSWAP_ROUNDS 0.5
+/* Compact the working mesh between rounds once more than 1/this of its
+ * tet slots are dead: a compaction renumbers every tet and vertex (0.4 %
+ * of a Kuhn-cube run each); at 8 the rounds compacted three times, at 4
+ * once, with the same memory peak (the output's). */
+#define RM3D_COMPACT_DEAD 4
 /* Neighbours collapse_other tries per end: the third and later ones
  * succeed rarely, and all of them cost as much as the rest of the
  * collapse pass (figures: docs/BENCHMARKS.md, "The 3D remesher"). */
@@ -763,7 +768,7 @@ static pa_status refine_bands(rm3d *m, const pa_remesh_opts *opts,
     if (thr == PA_METRIC_LEN_HI_EXACT) break_lattice_crowd(m);
     PA_CALL(pa__rm3d_split_pass(m, thr, &ns));
     PA_CALL(pa__rm3d_collapse_pass(m, PA_METRIC_LEN_LO_EXACT, thr, &nc));
-    if (m->ndead_t > m->ne / 8) PA_CALL(pa__rm3d_compact(m, 1));
+    if (m->ndead_t > m->ne / RM3D_COMPACT_DEAD) PA_CALL(pa__rm3d_compact(m, 1));
     if (m->verbosity > 0)
       fprintf(stderr,
               "  rm3d band %.2f: %ld splits %ld collapses (%.2fs), %d tets "
@@ -821,7 +826,7 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
       nm += nl;
     }
     double t5 = pa_wtime();
-    if (m->ndead_t > m->ne / 8) PA_CALL(pa__rm3d_compact(m, 1));
+    if (m->ndead_t > m->ne / RM3D_COMPACT_DEAD) PA_CALL(pa__rm3d_compact(m, 1));
     if (m->verbosity > 0)
       fprintf(stderr,
               "  rm3d round %d: %ld splits (%.2fs) %ld collapses (%ld by "
