@@ -70,8 +70,12 @@
 /* The rounds swap around the tets below this quality (gain 1.02). At 0.3
  * the optimisation's first swap pass still found a swap for one tet in ten
  * (Kuhn cube); swapped while the rounds split and collapse, they leave
- * fewer tets, more edges in range and less work to the later passes. */
+ * fewer tets, more edges in range and less work to the later passes. With
+ * frozen entities (the parallel loop's pieces) 0.3: at 0.4-0.6 the loop
+ * stalled with tagged elements on tests/cli/test_geo.py's cylinder at 2
+ * processes. */
 #define RM3D_QSWAP_ROUNDS 0.5
+#define RM3D_QSWAP_ROUNDS_FROZEN 0.3
 /* Compact the working mesh between rounds once more than 1/this of its
  * tet slots are dead: a compaction renumbers every tet and vertex (0.4 %
  * of a Kuhn-cube run each); at 8 the rounds compacted three times, at 4
@@ -803,8 +807,9 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
   /* Balanced splits and collapses are a ping-pong only with frozen
    * entities: the anisotropic shell balances them too, and stopping it
    * early loses edges in range (docs/BENCHMARKS.md, "The 3D remesher"). */
-  pa__rounds_start(&rounds, RM3D_ROUNDS_MIN, RM3D_ROUNDS_SETTLED, 0,
-                   has_frozen(m));
+  int frozen = has_frozen(m);
+  double qswap = frozen ? RM3D_QSWAP_ROUNDS_FROZEN : RM3D_QSWAP_ROUNDS;
+  pa__rounds_start(&rounds, RM3D_ROUNDS_MIN, RM3D_ROUNDS_SETTLED, 0, frozen);
   for (int it = 0; it < RM3D_ROUNDS_MAX; it++, (*npass)++) {
     long ns = 0, nc = 0, nw = 0, nm = 0;
     long nc0 = m->ncollapse;
@@ -816,7 +821,7 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
     double t3 = pa_wtime();
     long nvc = m->ncollapse - nc0; /* the others removed an edge by a swap */
     if (!opts->no_swap)
-      PA_CALL(pa__rm3d_swap_pass(m, RM3D_QSWAP_ROUNDS, 1.02, &nw));
+      PA_CALL(pa__rm3d_swap_pass(m, qswap, 1.02, &nw));
     double t4 = pa_wtime();
     if (!opts->no_move) {
       long nl = 0;
