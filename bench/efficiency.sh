@@ -21,10 +21,16 @@
 #         load is printed first).
 #   work  the remeshing work -- the remesher's CPU time summed over the
 #         ranks, "remesh_cpu_s" of the -json report -- on the rod and on the
-#         6 M-triangle plate at np 1, 2, 4 and 8 (oversubscribed: CPU time
-#         does not grow with the number of ranks per core), its ratio to the
-#         sequential work, the iterations and the work of each, elements and
-#         worst quality.
+#         6 M-triangle plate at np 1, 2, 4 and 8 (oversubscribed), its ratio
+#         to the sequential work, the iterations and the work of each,
+#         elements and worst quality; then what sharing the cores adds to
+#         the CPU time of a rank (np ranks on 2 cores switch in turn and
+#         refill each other's caches): np copies of the sequential job of
+#         a rank's size (N / np elements: -hsiz x np^(1/dim)) run at once,
+#         their CPU per element over that of one such run alone, and the
+#         work ratio over that factor; and the remesher's operation counts
+#         (splits, collapses, swaps, moves) over np=1's, which the machine
+#         does not change.
 #   weak  the rod refined to N = np x 2 M tets at np 1 and WEAK_NPS
 #         (default 2 4 8; -distributed-output, deleted after each run):
 #         remeshing work per output tet (microseconds), its ratio to np=1's
@@ -33,7 +39,8 @@
 #         the np=1 job run at once, their CPU per tet over that of one run
 #         alone (the np ranks of an oversubscribed run share the cores and
 #         caches the same way), and the ratio to the same-size sequential
-#         run divided by that factor; the iterations.
+#         run divided by that factor; the operation counts over the
+#         same-size sequential run's; the iterations.
 # Every -json report is kept in WORK_DIR (time-*, work-np*, weak-np*.json):
 # bench/time_model.py reads them.
 set -u
@@ -81,7 +88,7 @@ print(r['time_s'] - r['steps_s']['measure'])" "time-$name-np2.json")
 }
 
 # remesher CPU microseconds per output element of the -json report $1
-us_per_tet() { /usr/bin/python3 -c "import json, sys; r = json.load(open(sys.argv[1]))
+us_per_elem() { /usr/bin/python3 -c "import json, sys; r = json.load(open(sys.argv[1]))
 print('%.3f' % (1e6 * r['remesh_cpu_s'] / r['elements']))" "$1"; }
 
 # one line per iteration of a parallel report: tagged, pieces, work
@@ -92,10 +99,31 @@ print(', '.join('%d: %d tagged, %d pieces, %.2f s' % (i['iter'], i['tagged'], i[
                 for i in r['iteration_detail']))" "$1"
 }
 
-# the work at np 1, 2, 4, 8 of one job: name mesh hsiz prefix of the
-# reports (PREFIX-npN.json)
+# the remesher's operation counts of the -json report $1 over those of $2
+ops_ratio() { /usr/bin/python3 -c "import json, sys
+a, b = (json.load(open(f)) for f in sys.argv[1:3])
+print(', '.join('%s %.3f' % (k[1:], a[k] / max(b[k], 1)) for k in ('nsplit', 'ncollapse', 'nswap', 'nmove')))" "$1" "$2"; }
+
+# what np copies at once add to the CPU per element of one run alone:
+# mesh hsiz np prefix of the reports (PREFIX-alone.json, PREFIX-I.json)
+copies_factor() {
+  local in=$1 h=$2 np=$3 pre=$4
+  "$PADAPT" adapt "$in" -hsiz "$h" -out c0.meshb -nosol -json "$pre-alone.json" > /dev/null 2>&1
+  for i in $(seq "$np"); do
+    "$PADAPT" adapt "$in" -hsiz "$h" -out "c$i.meshb" -nosol -json "$pre-$i.json" > /dev/null 2>&1 &
+  done
+  wait
+  rm -f c*.meshb
+  local a
+  a=$(us_per_elem "$pre-alone.json")
+  for i in $(seq "$np"); do us_per_elem "$pre-$i.json"; done |
+    awk -v a="$a" '{s += $1} END {printf "%.3f", s / NR / a}'
+}
+
+# the work at np 1, 2, 4, 8 of one job: name mesh hsiz dimension prefix of
+# the reports (PREFIX-npN.json, PREFIX-copyN-*.json)
 work_nps() {
-  local name=$1 in=$2 h=$3 pre=$4
+  local name=$1 in=$2 h=$3 dim=$4 pre=$5
   "$PADAPT" adapt "$in" -hsiz "$h" -out o1.meshb -nosol -json "$pre-np1.json" > /dev/null 2>&1
   w1=$(jget "$pre-np1.json" remesh_cpu_s)
   printf "work  %-5s np=1: %s elements, worst quality %.3f, remesher CPU %.2f s\n" "$name" \
@@ -104,9 +132,13 @@ work_nps() {
     mpiexec -n "$np" "$PADAPT" adapt "$in" -hsiz "$h" -out o2.meshb -nosol \
       -json "$pre-np$np.json" > /dev/null 2>&1
     w=$(jget "$pre-np$np.json" remesh_cpu_s)
-    printf "work  %-5s np=%d: %s elements, worst quality %.3f, remesher CPU %.2f s, %.3f x np=1, %s iterations (%s)\n" \
+    hq=$(awk -v h="$h" -v n="$np" -v d="$dim" 'BEGIN { printf "%.6f", h * n ^ (1 / d) }')
+    cf=$(copies_factor "$in" "$hq" "$np" "$pre-copy$np")
+    printf "work  %-5s np=%d: %s elements, worst quality %.3f, remesher CPU %.2f s, %.3f x np=1; %d copies of -hsiz %s at once: %.3f x its CPU per element, so %.3f x np=1 over that; operations x np=1: %s; %s iterations (%s)\n" \
       "$name" "$np" "$(jget "$pre-np$np.json" elements)" "$(jget "$pre-np$np.json" quality_worst)" "$w" \
-      "$(echo "$w $w1" | awk '{print $1 / $2}')" \
+      "$(echo "$w $w1" | awk '{print $1 / $2}')" "$np" "$hq" "$cf" \
+      "$(echo "$w $w1 $cf" | awk '{print $1 / ($2 * $3)}')" \
+      "$(ops_ratio "$pre-np$np.json" "$pre-np1.json")" \
       "$(jget "$pre-np$np.json" iterations)" "$(iters "$pre-np$np.json")"
   done
 }
@@ -124,14 +156,14 @@ for part in $PARTS; do
         esac
       done ;;
     work)
-      work_nps rod "$ROOT/tests/data/rod3d.mesh" 0.03 work
-      work_nps plate "$ROOT/tests/data/plate2d.mesh" 0.0005 work-plate ;;
+      work_nps rod "$ROOT/tests/data/rod3d.mesh" 0.03 3 work
+      work_nps plate "$ROOT/tests/data/plate2d.mesh" 0.0005 2 work-plate ;;
     weak)
       # N ~ 0.817 M x (0.03 / h)^3 on the rod
       h1=$(awk 'BEGIN { printf "%.5f", 0.03 * (0.817 / 2) ^ (1 / 3) }')
       "$PADAPT" adapt "$ROOT/tests/data/rod3d.mesh" -hsiz "$h1" -out o1.meshb -nosol \
         -json weak-np1.json > /dev/null 2>&1
-      us1=$(us_per_tet weak-np1.json)
+      us1=$(us_per_elem weak-np1.json)
       printf "weak  np=1 -hsiz %s: %s elements, remesher CPU %.2f s, %s us per tet\n" \
         "$h1" "$(jget weak-np1.json elements)" "$(jget weak-np1.json remesh_cpu_s)" "$us1"
       for np in ${WEAK_NPS:-2 4 8}; do
@@ -150,14 +182,15 @@ for part in $PARTS; do
         done
         wait
         rm -f c*.meshb
-        us=$(us_per_tet "weak-np$np.json")
-        usq=$(us_per_tet "weak-seq$np.json")
-        cf=$(for i in $(seq "$np"); do us_per_tet "weak-copy$np-$i.json"; done |
+        us=$(us_per_elem "weak-np$np.json")
+        usq=$(us_per_elem "weak-seq$np.json")
+        cf=$(for i in $(seq "$np"); do us_per_elem "weak-copy$np-$i.json"; done |
              awk -v a="$us1" '{s += $1} END {printf "%.3f", s / NR / a}')
-        printf "weak  np=%d -hsiz %s: %s elements, remesher CPU %.2f s, %s us per tet, %.3f x np=1, %.3f x the sequential run of the same size (%s us per tet); %d copies of np=1 at once: %.3f x its CPU per tet, so %.3f x the sequential run over that; %s iterations\n" \
+        printf "weak  np=%d -hsiz %s: %s elements, remesher CPU %.2f s, %s us per tet, %.3f x np=1, %.3f x the sequential run of the same size (%s us per tet); %d copies of np=1 at once: %.3f x its CPU per tet, so %.3f x the sequential run over that; operations x the sequential run: %s; %s iterations\n" \
           "$np" "$h" "$(jget "weak-np$np.json" elements)" "$(jget "weak-np$np.json" remesh_cpu_s)" "$us" \
           "$(echo "$us $us1" | awk '{print $1 / $2}')" "$(echo "$us $usq" | awk '{print $1 / $2}')" "$usq" \
-          "$np" "$cf" "$(echo "$us $usq $cf" | awk '{print $1 / ($2 * $3)}')" "$(jget "weak-np$np.json" iterations)"
+          "$np" "$cf" "$(echo "$us $usq $cf" | awk '{print $1 / ($2 * $3)}')" \
+          "$(ops_ratio "weak-np$np.json" "weak-seq$np.json")" "$(jget "weak-np$np.json" iterations)"
       done ;;
     *) echo "unknown part $part" ;;
   esac

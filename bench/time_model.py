@@ -9,8 +9,9 @@ DIR holds the -json reports that bench/efficiency.sh writes:
   weak-np{1,2,4,8}.json  (optional) the rod refined to np x 2 M tets;
   work-np1.json, work-np{2,4,8}.json  one job (the rod to 0.8 M tets) at
       np 1, 2, 4 and 8 -- the remeshing work, "remesh_cpu_s", is CPU time
-      summed over the ranks, so it is measured right even with more ranks
-      than cores;
+      summed over the ranks; work-copyP-{alone,1..P}.json (optional): the
+      sequential job of a rank's size alone and P copies at once, whose
+      ratio is what sharing the cores adds to the CPU time (printed);
   time-rod-np1.json, time-rod-np2.json  the same job at np 1 and 2 on a
       quiet machine (wall clock of each step).
 
@@ -82,6 +83,14 @@ def main():
     # the CPU times, and a = 0 (no work redone) is what it measures
     alpha = max(0.0, (par[2]["remesh_cpu_s"] / seq["remesh_cpu_s"] - 1) / extra(2))
 
+    def over_copies(p, ratio):  # the ratio over what sharing the cores adds
+        alone = load(a.dir, "work-copy%d-alone.json" % p)
+        copies = [load(a.dir, "work-copy%d-%d.json" % (p, i)) for i in range(1, p + 1)]
+        if not alone or not all(copies):
+            return ""
+        cf = sum(c["remesh_cpu_s"] for c in copies) / p / alone["remesh_cpu_s"]
+        return "; %d copies at once: %.3f, %.3f x over that" % (p, cf, ratio / cf)
+
     def work(p, n):
         return w * n * (1 + alpha * extra(p) * (n0 / n) ** (1 / 3))
 
@@ -90,9 +99,10 @@ def main():
     for p in (2, 4, 8):
         r = par[p]
         if r:
-            print("#   np=%d: measured %.2f s (%.3f x np=1, %d iterations), model %.2f s (%.3f x)"
+            print("#   np=%d: measured %.2f s (%.3f x np=1, %d iterations%s), model %.2f s (%.3f x)"
                   % (p, r["remesh_cpu_s"], r["remesh_cpu_s"] / seq["remesh_cpu_s"],
-                     r["iterations"], work(p, n0), work(p, n0) / seq["remesh_cpu_s"]))
+                     r["iterations"], over_copies(p, r["remesh_cpu_s"] / seq["remesh_cpu_s"]),
+                     work(p, n0), work(p, n0) / seq["remesh_cpu_s"]))
 
     weak = {p: load(a.dir, "weak-np%d.json" % p) for p in (1, 2, 4, 8)}
     if weak[1]:

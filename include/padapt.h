@@ -1905,6 +1905,10 @@ typedef struct pa_adapt_iter {
   /** CPU seconds spent inside the remesher (pa_remesh_report.cpu_s of the
    *  pieces), summed over the ranks: the remeshing work */
   double remesh_cpu;
+  /** The pieces' remesher operations (pa_remesh_report's counts), summed
+   *  over the ranks: the remeshing work in counts the machine does not
+   *  change */
+  long nsplit, ncollapse, nswap, nmove;
   double bytes_moved;  /**< bytes of records sent between ranks */
   /** Peak bytes of padapt memory (pa_memory_peak's count) during each step,
    *  the maximum over the ranks. */
@@ -2014,6 +2018,9 @@ typedef struct pa_adapt_report {
    *  iterations: the remeshing work, comparable with the sequential
    *  pa_remesh_report.cpu_s at any number of ranks */
   double remesh_cpu;
+  /** The remesher's operations summed over the ranks and the iterations,
+   *  comparable with the sequential pa_remesh_report's counts */
+  long nsplit, ncollapse, nswap, nmove;
   double bytes_moved;  /**< bytes of records sent between ranks, all steps */
   size_t peak_memory;  /**< max over ranks of pa_memory_peak() at the end */
   size_t peak_rss;     /**< max over ranks of pa_peak_rss() at the end */

@@ -171,6 +171,8 @@ static void print_table(const pa_cli *cli, const pa_adapt_report *r,
   printf("    remeshing busy time (all ranks) %.3f s, CPU %.3f s, bytes "
          "moved %.3g, peak memory per rank %.1f MB\n",
          r->remesh_busy, r->remesh_cpu, r->bytes_moved, r->peak_memory / 1e6);
+  printf("    remesher operations: %ld splits, %ld collapses, %ld swaps, %ld "
+         "moves\n", r->nsplit, r->ncollapse, r->nswap, r->nmove);
   pa_cli_print_transfer(&r->transfer);
   fflush(stdout);
 }
@@ -188,7 +190,8 @@ static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
                 "\"pieces_rolled_back\": %ld, \"elements_before\": %lld, "
                 "\"vertices_before\": %lld, \"edge_in_range_before\": %.6f, "
                 "\"bytes_moved\": %.0f, \"remesh_busy_s\": %.6f, "
-                "\"remesh_cpu_s\": %.6f, ",
+                "\"remesh_cpu_s\": %.6f, \"nsplit\": %ld, \"ncollapse\": %ld, "
+                "\"nswap\": %ld, \"nmove\": %ld, ",
             cli->size, remesher, r->time_total, r->time_total * cli->size,
             r->niter, r->converged ? "true" : "false",
             r->stalled ? "true" : "false", r->npieces, r->nfailed,
@@ -196,7 +199,8 @@ static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
             before->nedge ? (double)before->edge_hist[PA_STATS_EDGE_NBIN - 1] /
                                 (double)before->nedge
                           : 0.0,
-            r->bytes_moved, r->remesh_busy, r->remesh_cpu);
+            r->bytes_moved, r->remesh_busy, r->remesh_cpu, r->nsplit,
+            r->ncollapse, r->nswap, r->nmove);
   pa_cli_sb_printf(&b, "\"steps_s\": {\"tag\": %.6f, \"pieces\": %.6f, \"gather\": "
                 "%.6f, \"remesh\": %.6f, \"reintegrate\": %.6f, \"rebalance\": "
                 "%.6f, \"measure\": %.6f}, ",
@@ -216,14 +220,16 @@ static char *json_extra(const pa_cli *cli, const pa_adapt_report *r,
                   "\"tag_s\": %.6f, \"pieces_s\": %.6f, \"gather_s\": %.6f, "
                   "\"remesh_s\": %.6f, \"reintegrate_s\": %.6f, "
                   "\"remesh_busy_s\": %.6f, \"remesh_cpu_s\": %.6f, "
-                  "\"bytes_moved\": %.0f, "
+                  "\"nsplit\": %ld, \"ncollapse\": %ld, \"nswap\": %ld, "
+                  "\"nmove\": %ld, \"bytes_moved\": %.0f, "
                   "\"peak_bytes\": {\"tag\": %.0f, \"pieces\": %.0f, "
                   "\"gather\": %.0f, \"remesh\": %.0f, \"reintegrate\": %.0f}, "
                   "\"bytes_after\": %.0f}",
               k ? ", " : "", it->iter, (long long)it->ntagged, it->npieces,
               it->nfailed, it->imbalance, (long long)it->nelem, it->t_tag,
               it->t_pieces, it->t_gather, it->t_remesh, it->t_reintegrate,
-              it->remesh_busy, it->remesh_cpu, it->bytes_moved, it->mem_tag, it->mem_pieces,
+              it->remesh_busy, it->remesh_cpu, it->nsplit, it->ncollapse,
+              it->nswap, it->nmove, it->bytes_moved, it->mem_tag, it->mem_pieces,
               it->mem_gather, it->mem_remesh, it->mem_reintegrate,
               it->mem_after);
   }

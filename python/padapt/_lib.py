@@ -147,8 +147,10 @@ class AdaptIter(ctypes.Structure):
                 ("npieces", ctypes.c_int), ("nfailed", ctypes.c_int)] + \
                [(n, ctypes.c_double) for n in
                 ("imbalance", "t_tag", "t_pieces", "t_gather", "t_remesh",
-                 "t_reintegrate", "remesh_busy", "remesh_cpu", "bytes_moved",
-                 "mem_tag", "mem_pieces", "mem_gather", "mem_remesh",
+                 "t_reintegrate", "remesh_busy", "remesh_cpu")] + \
+               [(n, ctypes.c_long) for n in ("nsplit", "ncollapse", "nswap", "nmove")] + \
+               [(n, ctypes.c_double) for n in
+                ("bytes_moved", "mem_tag", "mem_pieces", "mem_gather", "mem_remesh",
                  "mem_reintegrate", "mem_after")]
 
 
@@ -175,8 +177,9 @@ class AdaptReport(ctypes.Structure):
                 ("nfailed", ctypes.c_long)] + \
                [(n, ctypes.c_double) for n in
                 ("time_total", "t_tag", "t_pieces", "t_gather", "t_remesh",
-                 "t_reintegrate", "t_rebalance", "t_measure", "remesh_busy", "remesh_cpu",
-                 "bytes_moved")] + \
+                 "t_reintegrate", "t_rebalance", "t_measure", "remesh_busy", "remesh_cpu")] + \
+               [(n, ctypes.c_long) for n in ("nsplit", "ncollapse", "nswap", "nmove")] + \
+               [("bytes_moved", ctypes.c_double)] + \
                [("peak_memory", ctypes.c_size_t), ("peak_rss", ctypes.c_size_t),
                 ("niter_recorded", ctypes.c_int),
                 ("iters", AdaptIter * ADAPT_MAX_ITERS), ("fidelity", Fidelity),

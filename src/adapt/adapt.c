@@ -303,7 +303,7 @@ static void step_done(double *t, int k, double *t0) {
 
 /* The figures of the iteration into *ir and L->rep: times and memory (t)
  * over the ranks; the remesher's wall-clock and CPU seconds (busy[0],
- * busy[1]), the rollbacks and bytes moved summed. */
+ * busy[1]), the rollbacks, bytes moved and remesher operations summed. */
 static pa_status record_iteration(const pa__iter *it, pa__loop *L, double *t,
                                   double *busy, int nfail, pa_adapt_iter *ir) {
   pa_status st = PA_SUCCESS;
@@ -311,11 +311,22 @@ static pa_status record_iteration(const pa__iter *it, pa__loop *L, double *t,
   pa_adapt_report *rep = &L->rep;
   PA_CALL(max_times(dm->comm, t, 11, busy));
   {
-    double x[2] = {(double)nfail, it->bytes_moved};
-    PA_CALL(pa__allreduce(dm->comm, x, 2, MPI_DOUBLE, MPI_SUM));
+    double x[6] = {(double)nfail, it->bytes_moved, 0, 0, 0, 0};
+    for (int q = 0; q < it->npiece_local; q++) {
+      const pa_remesh_report *p = &it->pieces[q].rep;
+      x[2] += (double)p->nsplit;
+      x[3] += (double)p->ncollapse;
+      x[4] += (double)p->nswap;
+      x[5] += (double)p->nmove;
+    }
+    PA_CALL(pa__allreduce(dm->comm, x, 6, MPI_DOUBLE, MPI_SUM));
     ir->nfailed = (int)x[0];
     L->lastfailed = ir->nfailed > 0;
     ir->bytes_moved = x[1];
+    ir->nsplit = (long)x[2];
+    ir->ncollapse = (long)x[3];
+    ir->nswap = (long)x[4];
+    ir->nmove = (long)x[5];
   }
   ir->iter = it->iter;
   ir->ntagged = it->ntagged;
@@ -346,6 +357,10 @@ static pa_status record_iteration(const pa__iter *it, pa__loop *L, double *t,
   rep->t_reintegrate += t[4];
   rep->remesh_busy += busy[0];
   rep->remesh_cpu += busy[1];
+  rep->nsplit += ir->nsplit;
+  rep->ncollapse += ir->ncollapse;
+  rep->nswap += ir->nswap;
+  rep->nmove += ir->nmove;
   rep->bytes_moved += ir->bytes_moved;
   { /* the pieces' field transfers: sums, then the largest figures */
     pa_transfer_report *tr = &rep->transfer;

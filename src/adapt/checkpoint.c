@@ -89,6 +89,10 @@ static const field loop_fields[] = {LOOP('i', iter),
                                     LOOP('d', rep.t_reintegrate),
                                     LOOP('d', rep.remesh_busy),
                                     LOOP('d', rep.remesh_cpu),
+                                    LOOP('l', rep.nsplit),
+                                    LOOP('l', rep.ncollapse),
+                                    LOOP('l', rep.nswap),
+                                    LOOP('l', rep.nmove),
                                     LOOP('d', rep.bytes_moved),
                                     LOOP('i', rep.transfer.nfield),
                                     LOOP('l', rep.transfer.nfast),
@@ -111,7 +115,8 @@ static const field iter_fields[] = {
     ITER('d', t_remesh),   ITER('d', t_reintegrate), ITER('d', remesh_busy),
     ITER('d', remesh_cpu), ITER('d', bytes_moved),    ITER('d', mem_tag),     ITER('d', mem_pieces),
     ITER('d', mem_gather),     ITER('d', mem_remesh),  ITER('d', mem_reintegrate),
-    ITER('d', mem_after)};
+    ITER('d', mem_after),      ITER('l', nsplit),      ITER('l', ncollapse),
+    ITER('l', nswap),          ITER('l', nmove)};
 #define NITER (int)(sizeof iter_fields / sizeof *iter_fields)
 
 /* The options that can change the result (not the callbacks, the

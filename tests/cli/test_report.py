@@ -18,7 +18,9 @@ In a scratch directory (CTest's), with PADAPT = the CLI:
     positive and no more than the remesher's wall-clock time, sequential
     ("time_s") and at 2 processes ("remesh_busy_s", summed over the ranks,
     also per iteration), and the text reports print it; at 2 processes the
-    measurement of the result ("steps_s" "measure") is part of "time_s".
+    measurement of the result ("steps_s" "measure") is part of "time_s",
+    and the remesher's operations ("nsplit", "ncollapse", "nswap",
+    "nmove") are the sums of the iterations' and printed.
 Exits 0 when every check passes, 1 naming each failure.
 """
 import json
@@ -70,6 +72,14 @@ def check_work(tag, np, r, rep):
         check(iters and abs(total - cpu) <= 1e-6 * max(1, cpu),
               "%s: the iterations' CPU sums to the total (%.6f, %.6f)"
               % (tag, total, cpu))
+        for op in ("nsplit", "ncollapse", "nswap", "nmove"):
+            n = rep.get(op, -1)
+            parts = sum(it.get(op, -1) for it in iters)
+            check(n >= 0 and parts == n,
+                  "%s: %s %d, the iterations' sum %d" % (tag, op, n, parts))
+        check(rep.get("nsplit", 0) > 0, "%s: the pieces split edges" % tag)
+        check("remesher operations" in r.stdout,
+              "%s: the text report prints the operations" % tag)
     check(("remesher CPU" if np == 1 else "CPU") in r.stdout,
           "%s: the text report prints the CPU time" % tag)
 
