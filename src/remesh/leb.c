@@ -447,12 +447,33 @@ static int longer_around(const bis *s, const qedge *e, const pa_idx *el,
   return 0;
 }
 
+/* A size field's metric volume of element e, as pa__elem_complexity
+ * gives it up to rounding (h^-dim as a product rather than pow, which
+ * costs most of it): where it is not within LEB_VMIN_SURE of the bound,
+ * its side of the bound is the exact value's. */
+#define LEB_VMIN_SURE 1e-9
+static double size_volume(const pa_mesh *m, pa_idx e) {
+  int d = m->dim, nve = d + 1;
+  const pa_idx *v = m->elem + (size_t)nve * e;
+  const double *x[4];
+  double s = 0;
+  for (int k = 0; k < nve; k++) {
+    double h = m->met[v[k]];
+    x[k] = m->coord + (size_t)d * v[k];
+    s += 1.0 / (d == 3 ? h * h * h : h * h);
+  }
+  return fabs(pa__simplex_volume(d, x)) * s / nve;
+}
+
 /* 1 if one of the nel elements el holds less metric volume than o->vmin. */
 static int small_around(const bis *s, const pa_idx *el, int nel) {
   const pa_mesh *m = s->m;
-  for (int q = 0; q < nel; q++)
-    if (pa__elem_complexity(m, m->met_ncomp, m->met, el[q]) < s->o->vmin)
-      return 1;
+  double vmin = s->o->vmin;
+  for (int q = 0; q < nel; q++) {
+    if (m->met_ncomp == 1 && size_volume(m, el[q]) > vmin * (1 + LEB_VMIN_SURE))
+      continue;
+    if (pa__elem_complexity(m, m->met_ncomp, m->met, el[q]) < vmin) return 1;
+  }
   return 0;
 }
 

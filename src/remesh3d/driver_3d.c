@@ -63,6 +63,24 @@
  * in range, a third hardly does (figures: docs/BENCHMARKS.md, "The 3D
  * remesher"). */
 #define RM3D_LENGTH_SWEEPS 2
+/* Sweeps after the optimisation rounds but the last: the next round's
+ * collapses, swaps and quality moves change the lengths again, and its
+ * sweeps take up what a second one would do. */
+#define RM3D_LENGTH_SWEEPS_EARLY 1
+/* The rounds swap around the tets below this quality (gain 1.02). At 0.3
+ * the optimisation's first swap pass still found a swap for one tet in ten
+ * (Kuhn cube); swapped while the rounds split and collapse, they leave
+ * fewer tets, more edges in range and less work to the later passes. With
+ * frozen entities (the parallel loop's pieces) 0.3: at 0.4-0.6 the loop
+ * stalled with tagged elements on tests/cli/test_geo.py's cylinder at 2
+ * processes. */
+#define RM3D_QSWAP_ROUNDS 0.5
+#define RM3D_QSWAP_ROUNDS_FROZEN 0.3
+/* Compact the working mesh between rounds once more than 1/this of its
+ * tet slots are dead: a compaction renumbers every tet and vertex (0.4 %
+ * of a Kuhn-cube run each); at 8 the rounds compacted three times, at 4
+ * once, with the same memory peak (the output's). */
+#define RM3D_COMPACT_DEAD 4
 /* Neighbours collapse_other tries per end: the third and later ones
  * succeed rarely, and all of them cost as much as the rest of the
  * collapse pass (figures: docs/BENCHMARKS.md, "The 3D remesher"). */
@@ -71,7 +89,8 @@
 /* The six edge lengths of the tet with vertices v, as rm3d_len gives them
  * (with sizes, each vertex's 1/h is taken once, not once per edge: the
  * same operations on the same values, so the same bits). */
-static void lengths6(const rm3d *m, const pa_idx *v, double *L) {
+static inline __attribute__((always_inline)) void
+lengths6(const rm3d *m, const pa_idx *v, double *L) {
   if (m->mc != 1) {
     for (int e = 0; e < 6; e++)
       L[e] = rm3d_len(m, v[pa__rm3d_edge[e][0]], v[pa__rm3d_edge[e][1]]);
@@ -753,7 +772,7 @@ static pa_status refine_bands(rm3d *m, const pa_remesh_opts *opts,
     if (thr == PA_METRIC_LEN_HI_EXACT) break_lattice_crowd(m);
     PA_CALL(pa__rm3d_split_pass(m, thr, &ns));
     PA_CALL(pa__rm3d_collapse_pass(m, PA_METRIC_LEN_LO_EXACT, thr, &nc));
-    if (m->ndead_t > m->ne / 8) PA_CALL(pa__rm3d_compact(m, 1));
+    if (m->ndead_t > m->ne / RM3D_COMPACT_DEAD) PA_CALL(pa__rm3d_compact(m, 1));
     if (m->verbosity > 0)
       fprintf(stderr,
               "  rm3d band %.2f: %ld splits %ld collapses (%.2fs), %d tets "
@@ -788,8 +807,9 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
   /* Balanced splits and collapses are a ping-pong only with frozen
    * entities: the anisotropic shell balances them too, and stopping it
    * early loses edges in range (docs/BENCHMARKS.md, "The 3D remesher"). */
-  pa__rounds_start(&rounds, RM3D_ROUNDS_MIN, RM3D_ROUNDS_SETTLED, 0,
-                   has_frozen(m));
+  int frozen = has_frozen(m);
+  double qswap = frozen ? RM3D_QSWAP_ROUNDS_FROZEN : RM3D_QSWAP_ROUNDS;
+  pa__rounds_start(&rounds, RM3D_ROUNDS_MIN, RM3D_ROUNDS_SETTLED, 0, frozen);
   for (int it = 0; it < RM3D_ROUNDS_MAX; it++, (*npass)++) {
     long ns = 0, nc = 0, nw = 0, nm = 0;
     long nc0 = m->ncollapse;
@@ -800,7 +820,8 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
                                    PA_METRIC_LEN_HI_EXACT, &nc));
     double t3 = pa_wtime();
     long nvc = m->ncollapse - nc0; /* the others removed an edge by a swap */
-    if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(m, 0.3, 1.02, &nw));
+    if (!opts->no_swap)
+      PA_CALL(pa__rm3d_swap_pass(m, qswap, 1.02, &nw));
     double t4 = pa_wtime();
     if (!opts->no_move) {
       long nl = 0;
@@ -810,7 +831,7 @@ static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
       nm += nl;
     }
     double t5 = pa_wtime();
-    if (m->ndead_t > m->ne / 8) PA_CALL(pa__rm3d_compact(m, 1));
+    if (m->ndead_t > m->ne / RM3D_COMPACT_DEAD) PA_CALL(pa__rm3d_compact(m, 1));
     if (m->verbosity > 0)
       fprintf(stderr,
               "  rm3d round %d: %ld splits (%.2fs) %ld collapses (%ld by "
@@ -844,7 +865,9 @@ static pa_status optimise(rm3d *m, const pa_remesh_opts *opts, int *npass) {
     if (!opts->no_move) {
       long nl = 0;
       PA_CALL(pa__rm3d_smooth_pass(m, RM3D_QSMOOTH, &balls, &nm));
-      PA_CALL(pa__rm3d_length_pass(m, RM3D_LENGTH_SWEEPS, &balls, &nl));
+      PA_CALL(pa__rm3d_length_pass(
+          m, it < 2 ? RM3D_LENGTH_SWEEPS_EARLY : RM3D_LENGTH_SWEEPS, &balls,
+          &nl));
       pa__rm3d_balls_free(&balls);
       nm += nl;
     }

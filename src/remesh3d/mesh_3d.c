@@ -256,21 +256,30 @@ void pa__rm3d_free(rm3d *m) {
 
 /* ---- build ------------------------------------------------------------- */
 
+/* The sorted vertices f[0..2] of face i of tet k. */
+static void face_of(const rm3d *m, pa_idx k, int i, pa_idx *f) {
+  f[0] = m->tv[4 * (size_t)k + pa__rm3d_face[i][0]];
+  f[1] = m->tv[4 * (size_t)k + pa__rm3d_face[i][1]];
+  f[2] = m->tv[4 * (size_t)k + pa__rm3d_face[i][2]];
+  pa__sort_small(f, 3);
+}
+
 /* Pair tet faces (and locate boundary triangles) by bucketing each face on
- * its smallest vertex: O(n) time, 4 ints per tet of temporary memory. */
+ * its smallest vertex, the other two packed in one key per face: O(n)
+ * time, 12 bytes per face of temporary memory. */
 static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
   pa_status st = PA_SUCCESS;
   pa_idx *start = NULL, *face = NULL, *fill = NULL;
+  uint64_t *key = NULL; /* face[s]'s two largest vertices */
   pa_idx nv = m->nv, ne = m->ne;
   PA_CALLOC(start, (size_t)nv + 1);
   PA_ALLOC(face, 4 * (size_t)ne);
+  PA_ALLOC(key, 4 * (size_t)ne);
   PA_ALLOC(fill, (size_t)nv);
   for (pa_idx k = 0; k < ne; k++)
     for (int i = 0; i < 4; i++) {
-      pa_idx f[3] = {m->tv[4 * k + pa__rm3d_face[i][0]],
-                     m->tv[4 * k + pa__rm3d_face[i][1]],
-                     m->tv[4 * k + pa__rm3d_face[i][2]]};
-      pa__sort_small(f, 3);
+      pa_idx f[3];
+      face_of(m, k, i, f);
       start[f[0] + 1]++;
       m->adj[4 * k + i] = -1;
     }
@@ -278,35 +287,24 @@ static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
   memcpy(fill, start, nv * sizeof *fill);
   for (pa_idx k = 0; k < ne; k++)
     for (int i = 0; i < 4; i++) {
-      pa_idx f[3] = {m->tv[4 * k + pa__rm3d_face[i][0]],
-                     m->tv[4 * k + pa__rm3d_face[i][1]],
-                     m->tv[4 * k + pa__rm3d_face[i][2]]};
-      pa__sort_small(f, 3);
-      face[fill[f[0]]++] = 4 * k + i;
+      pa_idx f[3];
+      face_of(m, k, i, f);
+      pa_idx s = fill[f[0]]++;
+      face[s] = 4 * k + i;
+      key[s] = (uint64_t)(uint32_t)f[1] << 32 | (uint32_t)f[2];
     }
   /* Match faces within each bucket. */
   for (pa_idx v = 0; v < nv; v++) {
     for (pa_idx s = start[v]; s < start[v + 1]; s++) {
       pa_idx fs = face[s];
       if (m->adj[fs] != -1) continue;
-      pa_idx ks = fs >> 2;
-      int is = fs & 3;
-      pa_idx a[3] = {m->tv[4 * ks + pa__rm3d_face[is][0]],
-                     m->tv[4 * ks + pa__rm3d_face[is][1]],
-                     m->tv[4 * ks + pa__rm3d_face[is][2]]};
-      pa__sort_small(a, 3);
       for (pa_idx t = s + 1; t < start[v + 1]; t++) {
+        if (key[t] != key[s]) continue;
         pa_idx ft = face[t];
-        pa_idx kt = ft >> 2;
-        int it = ft & 3;
-        pa_idx b[3] = {m->tv[4 * kt + pa__rm3d_face[it][0]],
-                       m->tv[4 * kt + pa__rm3d_face[it][1]],
-                       m->tv[4 * kt + pa__rm3d_face[it][2]]};
-        pa__sort_small(b, 3);
-        if (a[1] != b[1] || a[2] != b[2]) continue;
         PA_CHECK(m->adj[ft] == -1, PA_ERR_MESH,
                  "face (%d %d %d) is shared by more than two tetrahedra",
-                 (int)a[0] + 1, (int)a[1] + 1, (int)a[2] + 1);
+                 (int)v + 1, (int)(key[s] >> 32) + 1,
+                 (int)(key[s] & 0xffffffffu) + 1);
         m->adj[fs] = ft;
         m->adj[ft] = fs;
       }
@@ -321,17 +319,11 @@ static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
              PA_ERR_MESH, "boundary triangle %d: invalid vertices", (int)b + 1);
     if (pa__rm3d_table_find(&m->tri, tb) >= 0) continue; /* duplicate */
     int found = 0;
+    uint64_t ka = (uint64_t)(uint32_t)a[1] << 32 | (uint32_t)a[2];
     for (pa_idx s = start[a[0]]; s < start[a[0] + 1]; s++) {
-      pa_idx k = face[s] >> 2;
-      int i = face[s] & 3;
-      pa_idx c[3] = {m->tv[4 * k + pa__rm3d_face[i][0]],
-                     m->tv[4 * k + pa__rm3d_face[i][1]],
-                     m->tv[4 * k + pa__rm3d_face[i][2]]};
-      pa__sort_small(c, 3);
-      if (c[1] == a[1] && c[2] == a[2]) {
-        m->tflag[k] |= (uint8_t)(1u << i);
-        found = 1;
-      }
+      if (key[s] != ka) continue;
+      m->tflag[face[s] >> 2] |= (uint8_t)(1u << (face[s] & 3));
+      found = 1;
     }
     PA_CHECK(found, PA_ERR_MESH,
              "boundary triangle %d is not a face of any tetrahedron",
@@ -341,6 +333,8 @@ static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
     uint8_t lock = (mesh->bflag[b] & PA_FLAG_REQUIRED) ? RM3D_V_LOCK : 0;
     for (int j = 0; j < 3; j++) m->vtag[tb[j]] |= (uint8_t)(RM3D_V_BDRY | lock);
   }
+  pa__free(key);
+  key = NULL;
   /* Faces without neighbour that the input did not list: add them. */
   for (pa_idx k = 0; k < ne; k++)
     for (int i = 0; i < 4; i++) {
@@ -372,6 +366,7 @@ static pa_status build_adjacency(rm3d *m, pa_mesh *mesh) {
 cleanup:
   pa__free(start);
   pa__free(face);
+  pa__free(key);
   pa__free(fill);
   return st;
 }
@@ -483,10 +478,13 @@ pa_status pa__rm3d_compact(rm3d *m, int keep_q) {
   pa_status st = PA_SUCCESS;
   pa_idx *newt = NULL;
   if (m->ndead_t == 0 && m->ndead_v == 0 && (keep_q || !m->q)) return st;
-  /* The quality cache is rebuilt afterwards: free it first so that the
+  /* The quality cache moves with its tets when kept (the passes' own
+   * values, which are rm3d_qual_v's); else it goes first, so that the
    * renumbering scratch does not raise the memory peak. */
-  pa__free(m->q);
-  m->q = NULL;
+  if (!keep_q) {
+    pa__free(m->q);
+    m->q = NULL;
+  }
   PA_ALLOC(newt, (size_t)m->ne + 1);
   /* Tetrahedra: new index = rank among live ones; adjacency remapped. The
    * vertex array vtet is reused as scratch only after tets are done. */
@@ -504,6 +502,7 @@ pa_status pa__rm3d_compact(rm3d *m, int keep_q) {
       m->tv[4 * (size_t)j + i] = m->tv[4 * (size_t)k + i];
     }
     m->tflag[j] = m->tflag[k];
+    if (keep_q) m->q[j] = m->q[k];
     m->tpf[j] = m->tpf[k];
     m->tref[j] = m->tref[k];
   }
@@ -567,11 +566,6 @@ pa_status pa__rm3d_compact(rm3d *m, int keep_q) {
   m->ndead_t = m->ndead_v = 0;
   pa__free(newt);
   newt = NULL;
-  if (keep_q) {
-    PA_ALLOC(m->q, m->cape);
-    for (pa_idx k = 0; k < ne; k++)
-      m->q[k] = (float)rm3d_qual_v(m, m->tv + 4 * (size_t)k);
-  }
 cleanup:
   pa__free(newt);
   return st;
