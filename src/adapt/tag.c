@@ -24,7 +24,8 @@
  */
 #include "adapt/piece.h"
 #include "geom/geom.h"
-#include "metric/sym.h"
+#include "metric/metric2d.h"
+#include "metric/metric3d.h"
 
 #include <math.h>
 
@@ -190,13 +191,50 @@ static inline int fails_iso(const pa_mesh *m, pa_idx e, const int d, double lo,
   return q < qmin;
 }
 
+/* fails() with tensors (met_ncomp 3 in 2D, 6 in 3D), for d dimensions:
+ * each edge vector formed once, each edge's length the logarithmic mean of
+ * its end lengths as pa__len2 / pa__len3 take it, the quality by
+ * pa__qual2_stat / pa__qual3_stat inline: the same bits. */
+static inline int fails_aniso(const pa_mesh *m, pa_idx e, const int d,
+                              double lo, double hi, double qmin) {
+  const int n = d + 1, nc = m->met_ncomp;
+  const pa_idx *v = m->elem + (size_t)n * e;
+  const double *x[4], *mt[4];
+  for (int i = 0; i < n; i++) {
+    x[i] = m->coord + (size_t)d * v[i];
+    mt[i] = m->met + (size_t)nc * v[i];
+  }
+  for (int i = 0; i < n; i++)
+    for (int j = i + 1; j < n; j++) {
+      double l;
+      if (d == 2) {
+        double ex = x[j][0] - x[i][0], ey = x[j][1] - x[i][1];
+        l = pa__log_mean(sqrt(pa__sqlen2(nc, mt[i], ex, ey)),
+                         sqrt(pa__sqlen2(nc, mt[j], ex, ey)));
+      } else {
+        double ev[3] = {x[j][0] - x[i][0], x[j][1] - x[i][1],
+                        x[j][2] - x[i][2]};
+        l = pa__log_mean(sqrt(pa__sqlen3_tensor(mt[i], ev)),
+                         sqrt(pa__sqlen3_tensor(mt[j], ev)));
+      }
+      if (!(l >= lo && l < hi)) return 1;
+    }
+  if (!(qmin > 0)) return 0;
+  return (d == 2 ? pa__qual2_stat(nc, x, mt) : pa__qual3_stat(nc, x, mt)) <
+         qmin;
+}
+
 /* 1 if element e has an edge outside [lo, hi) in the metric or (qmin > 0)
  * a quality below qmin. */
 static int fails(const pa_mesh *m, pa_idx e, double lo, double hi,
                  double qmin) {
-  if (m->met_ncomp <= 1)
-    return m->dim == 2 ? fails_iso(m, e, 2, lo, hi, qmin)
-                       : fails_iso(m, e, 3, lo, hi, qmin);
+  int d = m->dim, nc = m->met_ncomp;
+  if (nc <= 1)
+    return d == 2 ? fails_iso(m, e, 2, lo, hi, qmin)
+                  : fails_iso(m, e, 3, lo, hi, qmin);
+  if (nc == pa__tensor_ncomp(d))
+    return d == 2 ? fails_aniso(m, e, 2, lo, hi, qmin)
+                  : fails_aniso(m, e, 3, lo, hi, qmin);
   if (bad_edge(m, e, lo, hi)) return 1;
   return qmin > 0 && elem_quality(m, e) < qmin;
 }
