@@ -798,9 +798,9 @@ cleanup:
 }
 
 /* The elements within NEAR_SKIN vertex layers of a hot skin vertex (dist);
- * BAD_NEAR_SKIN: the layers from any skin vertex (dsk), in the same
- * sweeps, and only if an element near the skin is poor, counted further
- * for the worst quality of the band beyond (qband). */
+ * BAD_NEAR_SKIN: the layers from any skin vertex (dsk), through the same
+ * vertex balls, and only if an element near the skin is poor, counted
+ * further for the worst quality of the band beyond (qband). */
 static pa_status near_skin_layers(orecs *c) {
   pa_status st = PA_SUCCESS;
   const pa__piece *pc = c->pc;
