@@ -481,8 +481,10 @@ static int run_remesher(const pa_cli *cli, pa_mesh *mesh, pa_remesh_opts *opts,
                         pa_remesh_report *rep) {
   pa_cli_progress live;
   pa_cli_progress_init(&live, opts->verbosity >= 0);
-  opts->progress = pa_cli_progress_cb;
-  opts->progress_ctx = &live;
+  if (live.enabled) { /* the remesher samples its mesh for each call */
+    opts->progress = pa_cli_progress_cb;
+    opts->progress_ctx = &live;
+  }
   pa_status st = pa_remesh(pa_remesher_builtin(), mesh, opts, rep);
   pa_cli_progress_end(&live);
   if (st != PA_SUCCESS) return pa_cli_fail(cli, st);

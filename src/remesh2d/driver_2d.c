@@ -165,7 +165,7 @@ static int longest_free(const rm2d *rm, pa_idx k, double thr, double *len,
   double lb = thr;
   for (int i = 0; i < 3; i++) {
     double l = rm2d_edge_len(rm, v[RM2D_NX3(i)], v[RM2D_PV3(i)]);
-    in &= rm2d_len_settled(l);
+    in &= rm2d_len_settled(rm, l);
     if (l > lb && rm2d_edge_free(rm, 3 * k + i)) {
       lb = l;
       best = i;
@@ -182,7 +182,7 @@ pa_status pa__rm2d_split_pass(rm2d *rm, double thr, long *n) {
   rm2d_tflag_clear(rm, RM2D_E_TOUCHED);
   /* an element in range has nothing above thr */
   const uint8_t skip = RM2D_E_DEAD | RM2D_E_TOUCHED | RM2D_E_FROZEN |
-                       (thr >= PA_METRIC_LEN_HI ? RM2D_E_INRANGE : 0);
+                       (thr >= rm->lset_hi ? RM2D_E_INRANGE : 0);
   for (pa_idx k = rm2d_next_elem(rm, 0, skip); k < rm->ne;
        k = rm2d_next_elem(rm, k + 1, skip)) {
     double l;
@@ -226,7 +226,7 @@ pa_status pa__rm2d_collapse_pass(rm2d *rm, double thr, long *n) {
     double lb = thr;
     for (int i = 0; i < 3; i++) {
       double l = rm2d_edge_len(rm, v[RM2D_NX3(i)], v[RM2D_PV3(i)]);
-      inr &= rm2d_len_settled(l);
+      inr &= rm2d_len_settled(rm, l);
       if (l < lb) {
         lb = l;
         best = i;
@@ -269,10 +269,15 @@ long pa__rm2d_swap_pass(rm2d *rm, double qmax) {
     for (int i = 0; i < 3 && !done; i++) {
       pa_idx o = rm->adj[3 * k + i];
       if (o < 0) continue;
-      if (rm->tflag[o / 3] & RM2D_E_TOUCHED) {
+      uint8_t tf = rm->tflag[o / 3];
+      if (tf & RM2D_E_TOUCHED) {
         all = 0; /* not tried: no verdict for this face */
         continue;
       }
+      /* the neighbour's verdict covers this face: the swap of a pair
+       * evaluates the same two triangles, in the same vertex order, from
+       * either side */
+      if (tf & RM2D_E_NOSWAP) continue;
       done = pa__rm2d_swap_edge(rm, k, i, 1.02);
     }
     cnt += done;
@@ -322,15 +327,20 @@ long pa__rm2d_smooth_pass(rm2d *rm, double qfree, int feat) {
   rm2d_vtag_clear(rm, RM2D_V_DONE);
   const uint8_t skip =
       RM2D_V_DONE | RM2D_V_FROZEN | RM2D_V_CORNER | (feat ? 0 : RM2D_V_FEAT);
-  for (pa_idx k = 0; k < rm->ne; k++) {
-    if (rm->tflag[k] & (RM2D_E_DEAD | RM2D_E_FROZEN)) continue;
+  /* moves change no slot nor array: read them once (a store through a
+   * uint8_t * could alias them, and they would be read again at each step) */
+  const pa_idx ne = rm->ne, *tv = rm->tv;
+  const uint8_t *tflag = rm->tflag;
+  uint8_t *vtag = rm->vtag;
+  for (pa_idx k = 0; k < ne; k++) {
+    if (tflag[k] & (RM2D_E_DEAD | RM2D_E_FROZEN)) continue;
     for (int i = 0; i < 3; i++) {
-      pa_idx p = rm->tv[3 * k + i];
-      uint8_t tp = rm->vtag[p];
+      pa_idx p = tv[3 * k + i];
+      uint8_t tp = vtag[p];
       if (tp & skip) continue;
       /* DONE even when skipped: a neighbour's move later in this pass must
        * not make p eligible again from another start element */
-      rm->vtag[p] |= RM2D_V_DONE;
+      vtag[p] |= RM2D_V_DONE;
       /* the answer depends only on p's ball: a rejected p stays settled
        * until an operator or a move changes that ball (rm2d_elem_changed) */
       if (tp & RM2D_V_SETTLED) continue;
@@ -346,6 +356,7 @@ long pa__rm2d_smooth_pass(rm2d *rm, double qfree, int feat) {
 }
 
 long pa__rm2d_length_pass(rm2d *rm) {
+  PA_ASSERT(rm->lset_hi == PA_METRIC_LEN_HI); /* in range: nothing to do */
   int mc = rm->mc;
   long cnt = 0;
   rm2d_vtag_clear(rm, RM2D_V_DONE);
@@ -358,7 +369,7 @@ long pa__rm2d_length_pass(rm2d *rm) {
       double l = pa__len2(mc, RM2D_X(v[RM2D_NX3(i)]), RM2D_X(v[RM2D_PV3(i)]),
                           RM2D_M(v[RM2D_NX3(i)]), RM2D_M(v[RM2D_PV3(i)]));
       bad = !(l >= PA_METRIC_LEN_LO && l <= PA_METRIC_LEN_HI);
-      settled &= rm2d_len_settled(l);
+      settled &= rm2d_len_settled(rm, l);
     }
     if (settled) rm->tflag[k] |= RM2D_E_INRANGE;
     if (!bad) continue;
@@ -368,7 +379,12 @@ long pa__rm2d_length_pass(rm2d *rm) {
       if (tp & (RM2D_V_DONE | RM2D_V_FROZEN | RM2D_V_CORNER | RM2D_V_FEAT))
         continue;
       rm->vtag[p] |= RM2D_V_DONE;
-      cnt += pa__rm2d_length_vertex(rm, k, i);
+      /* rejected before, and its ball has not changed since */
+      if (tp & RM2D_V_LSETTLED) continue;
+      if (pa__rm2d_length_vertex(rm, k, i))
+        cnt++;
+      else
+        rm->vtag[p] |= RM2D_V_LSETTLED;
     }
   }
   return cnt;
@@ -384,13 +400,14 @@ long pa__rm2d_length_pass(rm2d *rm) {
  * plate -> 0.0005 takes 9.1 instead of 10.5 s of remesher CPU
  * sequentially (3.7 M triangles when the rounds start, 1.5 times the last
  * renumbering), 9.8 instead of 11.1 s at 2 ranks (pieces of 1.9 M growing
- * to 2.4 M in the rounds); at 0.23 and 0.94 M the renumbering costs what it
- * saves (0.45 -> 0.46 s, 2.17 -> 2.12 s): there the working set stays in
- * the caches of this machine. */
+ * to 2.4 M in the rounds). Alone on this machine a mesh of 0.23-0.94 M
+ * gains little (0.45 -> 0.46 s, 2.17 -> 2.12 s), but ranks that share
+ * caches do: 1.2 M triangles 2.54 -> 2.17 s with 4 such jobs at once, the
+ * plate's pieces at 4 ranks 11.4 -> 9.4 s of remesher CPU (2026-11-29). */
 #define RM2D_REORDER_MIN 50000
 #define RM2D_REORDER_REFINE 2.0
 #define RM2D_REORDER_OPT 1.25
-#define RM2D_REORDER_OPT_MIN 1500000
+#define RM2D_REORDER_OPT_MIN 300000
 static pa_status maybe_reorder(rm2d *rm, int pass, pa_idx from, double growth,
                                pa_idx *last) {
   pa_status st = PA_SUCCESS;
@@ -412,6 +429,8 @@ static pa_status refine_rounds(rm2d *rm, int *pass, pa_idx *reordered) {
   const pa_remesh_opts *o = rm->opts;
   pa__rounds rounds;
   pa__rounds_start(&rounds, 1, RM2D_ROUNDS_SETTLED, RM2D_ROUNDS_TINY, 1);
+  /* the in-range marks of these rounds: edges up to their split threshold */
+  rm->lset_hi = RM2D_LSPLIT_REFINE;
   for (int it = 0; it < RM2D_ROUNDS_MAX; it++) {
     long ns = 0, nc = 0, nw = 0, nm = 0;
     PA_CALL(pa__rm2d_split_pass(rm, RM2D_LSPLIT_REFINE, &ns));
@@ -439,6 +458,8 @@ static pa_status refine_rounds(rm2d *rm, int *pass, pa_idx *reordered) {
   }
   report_figures(rm, "after refinement");
 cleanup:
+  rm->lset_hi = PA_METRIC_LEN_HI; /* the band narrows: no mark holds */
+  rm2d_tflag_clear(rm, RM2D_E_INRANGE);
   return st;
 }
 
@@ -614,6 +635,7 @@ pa_status pa__remesh2d(pa_mesh *mesh, const pa_remesh_opts *opts,
   for (pa_idx b = 0; b < rm->nb && !rm->frozen; b++)
     rm->frozen = (rm->btag[b] & RM2D_B_FROZEN) != 0;
   rm->lguard = PA_METRIC_LEN_HI;
+  rm->lset_hi = PA_METRIC_LEN_HI;
   reordered = rm->nelive;
   if (!opts->no_insert) PA_CALL(refine_rounds(rm, &pass, &reordered));
   PA_CALL(optimise(rm, &pass, &reordered));

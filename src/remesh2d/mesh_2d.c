@@ -363,6 +363,8 @@ pa_status pa__rm2d_build(pa_mesh *mesh, const pa_remesh_opts *opts,
   rm->mc = mesh->met_ncomp;
   rm->opts = opts;
   rm->hausd = opts->hausd > 0 ? opts->hausd : 0.01;
+  rm->lguard = PA_METRIC_LEN_HI;
+  rm->lset_hi = PA_METRIC_LEN_HI;
   rm->vfree = rm->efree = rm->bfree = -1;
   rm->nfield = mesh->nfield;
   for (int k = 0; k < mesh->nfield; k++) {
@@ -869,7 +871,7 @@ pa_status pa__rm2d_check(const rm2d *rm) {
         pa_idx p = v[i], q = v[i == 2 ? 0 : i + 1];
         double l = pa__len2(mc, rm->x + 2 * (size_t)p, rm->x + 2 * (size_t)q,
                             rm->met + (size_t)mc * p, rm->met + (size_t)mc * q);
-        PA_CHECK(rm2d_len_settled(l), PA_ERR_INTERNAL,
+        PA_CHECK(rm2d_len_settled(rm, l), PA_ERR_INTERNAL,
                  "remesher: element %d is marked in range, edge %d has "
                  "length %g",
                  (int)k, i, l);

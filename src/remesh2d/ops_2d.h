@@ -149,7 +149,8 @@ static inline pa_idx rm2d_next_elem(const rm2d *rm, pa_idx k, uint8_t skip) {
 
 /* Element k is rewritten or about to be killed, or one of its vertices
  * moved: drop the caches that depend on it (RM2D_E_INRANGE of k, RM2D_E_NOSWAP
- * of k and its neighbours, RM2D_V_SETTLED of its vertices, whose balls change).
+ * of k and its neighbours, RM2D_V_SETTLED and RM2D_V_LSETTLED of its
+ * vertices, whose balls change).
  * Call with k's current vertices and, on a rewrite, before its adjacency is
  * updated (the old neighbours are the ones to tell; a new neighbour of a
  * rewritten element is an old neighbour of the rewritten group). */
@@ -162,9 +163,10 @@ static inline void rm2d_elem_changed(rm2d *rm, pa_idx k) {
   if (a[0] >= 0) rm->tflag[a[0] / 3] &= (uint8_t)~RM2D_E_NOSWAP;
   if (a[1] >= 0) rm->tflag[a[1] / 3] &= (uint8_t)~RM2D_E_NOSWAP;
   if (a[2] >= 0) rm->tflag[a[2] / 3] &= (uint8_t)~RM2D_E_NOSWAP;
-  rm->vtag[v[0]] &= (uint8_t)~RM2D_V_SETTLED;
-  rm->vtag[v[1]] &= (uint8_t)~RM2D_V_SETTLED;
-  rm->vtag[v[2]] &= (uint8_t)~RM2D_V_SETTLED;
+  const uint8_t vs = (uint8_t)~(RM2D_V_SETTLED | RM2D_V_LSETTLED);
+  rm->vtag[v[0]] &= vs;
+  rm->vtag[v[1]] &= vs;
+  rm->vtag[v[2]] &= vs;
 }
 
 /* Write element k (an existing or a new slot). The caller has called
@@ -185,39 +187,65 @@ static inline void rm2d_set_elem(rm2d *rm, pa_idx k, pa_idx a, pa_idx b,
  * clockwise until back to k or the domain boundary, then clockwise from k.
  * Fills el[] and loc[] (local index of p) and returns the count, or -1 if the
  * ball exceeds RM2D_BALL_MAX. *closed is 1 for an interior vertex.
+ *
+ * Each step waits for the neighbour it reads (the walks are latency-bound),
+ * so the two directions advance together, two independent chains: a
+ * closed ball ends where they meet, its clockwise part then read back.
  */
 static inline int rm2d_ball(const rm2d *rm, pa_idx k, int ip, pa_idx *el,
                             int *loc, int *closed) {
-  int n = 0;
-  el[n] = k;
-  loc[n++] = ip;
-  pa_idx c = k;
-  int l = ip;
+  pa_idx cw[RM2D_BALL_MAX];
+  int lcw[RM2D_BALL_MAX];
+  int na = 0, nc = 0, enda = 0, endc = 0;
+  pa_idx a = k, c = k; /* the last element of each chain */
+  int la = ip, lc = ip;
+  el[0] = k;
+  loc[0] = ip;
   *closed = 0;
-  for (;;) {
-    pa_idx s = rm2d_other_side(rm, 3 * c + RM2D_NX3(l));
-    if (s < 0) break;
-    c = s / 3;
-    l = RM2D_NX3(s % 3);
-    if (c == k) {
-      *closed = 1;
-      return n;
+  while (!enda || !endc) {
+    if (!enda) { /* counter-clockwise */
+      pa_idx s = rm2d_other_side(rm, 3 * a + RM2D_NX3(la));
+      if (s < 0) {
+        enda = 1;
+      } else if (s / 3 == c) { /* met the other chain (or k): closed */
+        *closed = 1;
+        break;
+      } else {
+        if (1 + na + nc >= RM2D_BALL_MAX) return -1;
+        a = s / 3;
+        la = RM2D_NX3(s % 3);
+        na++;
+        el[na] = a;
+        loc[na] = la;
+      }
     }
-    if (n >= RM2D_BALL_MAX) return -1;
-    el[n] = c;
-    loc[n++] = l;
+    if (!endc) { /* clockwise */
+      pa_idx s = rm2d_other_side(rm, 3 * c + RM2D_PV3(lc));
+      if (s < 0) {
+        endc = 1;
+      } else if (s / 3 == a) {
+        *closed = 1;
+        break;
+      } else {
+        if (1 + na + nc >= RM2D_BALL_MAX) return -1;
+        c = s / 3;
+        lc = RM2D_PV3(s % 3);
+        cw[nc] = c;
+        lcw[nc++] = lc;
+      }
+    }
   }
-  /* clockwise from k: the order is then [k, ccw..., cw...] */
-  c = k;
-  l = ip;
-  for (;;) {
-    pa_idx s = rm2d_other_side(rm, 3 * c + RM2D_PV3(l));
-    if (s < 0) break;
-    c = s / 3;
-    l = RM2D_PV3(s % 3);
-    if (n >= RM2D_BALL_MAX) return -1;
-    el[n] = c;
-    loc[n++] = l;
+  int n = 1 + na;
+  if (*closed) { /* the clockwise chain, read back, closes the turn */
+    for (int j = nc - 1; j >= 0; j--) {
+      el[n] = cw[j];
+      loc[n++] = lcw[j];
+    }
+  } else {
+    for (int j = 0; j < nc; j++) {
+      el[n] = cw[j];
+      loc[n++] = lcw[j];
+    }
   }
   return n;
 }

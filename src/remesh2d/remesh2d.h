@@ -19,7 +19,8 @@
  *  - q[k] is the element quality (Mmg's normalisation) with the current
  *    coordinates and metric;
  *  - tag bits RM2D_E_TOUCHED / RM2D_V_MARK are scratch, cleared by each pass
- *    that uses them; RM2D_E_INRANGE / RM2D_E_NOSWAP / RM2D_V_SETTLED are caches
+ *    that uses them; RM2D_E_INRANGE / RM2D_E_NOSWAP / RM2D_V_SETTLED /
+ *    RM2D_V_LSETTLED are caches
  *    that skip work a pass would find useless, cleared by any change that
  *    could invalidate them (so the passes decide exactly as without them);
  *  - a frozen element (PA_FLAG_REQUIRED in its flags) is never rewritten; its
@@ -47,7 +48,10 @@ enum {
    * would give the same answer, so relocation passes skip it. Cleared by
    * every operator on the vertices of each element it rewrites or kills,
    * and by a move on the vertices of the moved vertex's ball. */
-  RM2D_V_SETTLED = 64
+  RM2D_V_SETTLED = 64,
+  /* The same for a length move (pa__rm2d_length_vertex, whose verdict
+   * depends on the ball alone): cleared with RM2D_V_SETTLED. */
+  RM2D_V_LSETTLED = 128
 };
 
 /* Element tags share the byte with the input flags (PA_FLAG_*, low nibble). */
@@ -59,9 +63,9 @@ enum {
    * rejected, and neither it nor a neighbour changed since: skipped by swap
    * passes. Cleared with RM2D_E_INRANGE, on the element and its neighbours. */
   RM2D_E_NOSWAP = 64,
-  /* The three edges lie in [RM2D_LSHORT_OPT, PA_METRIC_LEN_HI]
+  /* The three edges lie in [RM2D_LSHORT_OPT, rm2d.lset_hi]
    * (rm2d_len_settled) with the current coordinates and metric, so split passes
-   * at PA_METRIC_LEN_HI, collapse passes at RM2D_LSHORT_OPT or below and length
+   * at lset_hi or above, collapse passes at RM2D_LSHORT_OPT or below and length
    * moves have nothing to do here. Cleared with RM2D_V_SETTLED (an element
    * rewritten, or one of its vertices moved); new elements start without. */
   RM2D_E_INRANGE = 128
@@ -165,6 +169,7 @@ typedef struct rm2d {
   const pa_remesh_opts *opts;
   double hausd;
   double lguard; /* no operation creates an edge longer than this */
+  double lset_hi; /* upper end of the RM2D_E_INRANGE band (rm2d_len_settled) */
   int frozen;    /* the mesh has a frozen element or feature record */
   long nsplit, ncollapse, nswap, nmove;
   double tlast; /* time of the last verbose pass report */
@@ -264,9 +269,13 @@ static inline void rm2d_tensor2(int mc, const double *m, double *t) {
  * of RM2D_E_INRANGE. Its lower end is the highest collapse threshold
  * (RM2D_LSHORT_OPT), above PA_METRIC_LEN_LO, so that one mark serves every
  * pass; the elements it leaves unmarked (an edge in [PA_METRIC_LEN_LO,
- * RM2D_LSHORT_OPT)) are few. */
-static inline int rm2d_len_settled(double l) {
-  return l >= RM2D_LSHORT_OPT && l <= PA_METRIC_LEN_HI;
+ * RM2D_LSHORT_OPT)) are few. Its upper end rm->lset_hi is the lowest split
+ * threshold of the phase: PA_METRIC_LEN_HI, and in the refinement rounds
+ * (which split above RM2D_LSPLIT_REFINE and make no length moves) that
+ * threshold, so that their lattice of edges up to it is marked too (the
+ * driver clears every mark when the band narrows). */
+static inline int rm2d_len_settled(const rm2d *rm, double l) {
+  return l >= RM2D_LSHORT_OPT && l <= rm->lset_hi;
 }
 
 /* Lengths and qualities are metric/metric2d.h's kernels (pa__len2,

@@ -12,15 +12,34 @@
 /* A move is kept when it raises the ball's worst or mean quality by 1 %. */
 #define MOVE_GAIN_MIN 1.01
 #define MOVE_GAIN_MEAN 1.01
+/* A quality move whose target lies within this metric length of the vertex
+ * is no move: it changes the qualities of a ball no worse than RM2D_QFLOOR
+ * by far less than the gain asks, so the trials would all be rejected. The
+ * symmetric vertices of a bisected lattice sit exactly on their target (on
+ * the plate of bench/vs_mmg.sh, 150 000 of the 730 000 tries). */
+#define MOVE_NULL 1e-12
 
 /* Move interior vertex p (its closed ball el[0..n), local indices loc) to
  * np: metric and fields interpolated from the old triangle holding np
- * (barycentric; linear fields stay exact), qualities updated. */
+ * (barycentric; linear fields stay exact), qualities updated: qn[0..n) when
+ * given (the trial's, which with sizes do not depend on the metric), else
+ * computed. same: p and its neighbours carry the same metric, which the
+ * interpolation then gives back (pa__metric_interp), so without fields nor
+ * a target metric apart there is nothing to interpolate. ln[0..n), when
+ * given, are the lengths from np to the
+ * neighbours v[RM2D_NX3(loc[s])] in p's metric before the move: where the
+ * interpolation leaves that metric as it was, they are the new lengths, and
+ * an element in range (RM2D_E_INRANGE) whose two edges at p stay in the
+ * band keeps its mark (its third edge has not moved). */
 static void apply_move(rm2d *rm, pa_idx p, const pa_idx *el, const int *loc,
-                       int n, const double *np) {
+                       int n, const double *np, const double *qn, int same,
+                       const double *ln) {
+  int mc = rm->mc;
   double *xp = rm->x + 2 * (size_t)p;
-  double x0 = xp[0], y0 = xp[1];
-  for (int s = 0; s < n; s++) {
+  double x0 = xp[0], y0 = xp[1], m0[3];
+  memcpy(m0, RM2D_M(p), sizeof(double) * (size_t)mc);
+  int ns = same && !rm->met0 && !rm->nfield ? 0 : n;
+  for (int s = 0; s < ns; s++) {
     const pa_idx *v = rm->tv + 3 * (size_t)el[s];
     pa_idx va = v[RM2D_NX3(loc[s])], vb = v[RM2D_PV3(loc[s])];
     const double *a = RM2D_X(va), *b = RM2D_X(vb);
@@ -37,10 +56,17 @@ static void apply_move(rm2d *rm, pa_idx p, const pa_idx *el, const int *loc,
   }
   xp[0] = np[0];
   xp[1] = np[1];
+  int keep = ln != NULL;
+  for (int c = 0; c < mc; c++) /* (a call to memcmp here costs more) */
+    keep &= m0[c] == RM2D_M(p)[c];
   for (int s = 0; s < n; s++) {
     const pa_idx *v = rm->tv + 3 * (size_t)el[s];
-    rm->q[el[s]] = (float)rm2d_elem_qual(rm, v[0], v[1], v[2]);
+    int inr = keep && (rm->tflag[el[s]] & RM2D_E_INRANGE) &&
+              rm2d_len_settled(rm, ln[s]) &&
+              rm2d_len_settled(rm, ln[s + 1 < n ? s + 1 : 0]);
+    rm->q[el[s]] = (float)(qn ? qn[s] : rm2d_elem_qual(rm, v[0], v[1], v[2]));
     rm2d_elem_changed(rm, el[s]); /* p's neighbours see a new ball */
+    if (inr) rm->tflag[el[s]] |= RM2D_E_INRANGE;
   }
   rm->nmove++;
 }
@@ -72,24 +98,66 @@ static void add_ideal_apex(const double *t, double sd, const double *a,
   c[1] += 0.5 * (a[1] + b[1]) + 0.8660254037844386 * yy;
 }
 
+/* The edges from a vertex p to its neighbours nb[0..nn), gathered once for
+ * the trial positions of a move: the neighbours' coordinates, and
+ * with sizes (mc <= 1) the factor that turns a Euclidean length into the
+ * metric one, which does not depend on p's position (pa__len2: n / h, or n
+ * times the logarithmic mean of 1 / ha and 1 / hb; the same operations, so
+ * the same bits). */
+typedef struct len_ball {
+  int nn, mc;
+  int same; /* every neighbour's metric is p's */
+  const double *mp;
+  /* a feature vertex has up to one neighbour more than elements */
+  double x[2 * RM2D_BALL_MAX], y[2 * RM2D_BALL_MAX], f[2 * RM2D_BALL_MAX];
+  const double *m[2 * RM2D_BALL_MAX];
+} len_ball;
+
+static void len_ball_init(const rm2d *rm, const double *mp, const pa_idx *nb,
+                          int nn, len_ball *lb) {
+  int mc = rm->mc;
+  lb->nn = nn;
+  lb->mc = mc;
+  lb->mp = mp;
+  lb->same = 1;
+  for (int i = 0; i < nn; i++) {
+    const double *xi = RM2D_X(nb[i]), *mi = RM2D_M(nb[i]);
+    lb->x[i] = xi[0];
+    lb->y[i] = xi[1];
+    lb->m[i] = mi;
+    for (int c = 0; c < mc; c++)
+      lb->same &= mi[c] == mp[c];
+    if (mc == 0) lb->f[i] = 1.0;
+    else if (mc == 1)
+      lb->f[i] = mp[0] == mi[0] ? 1.0 / mp[0]
+                                : pa__log_mean(1.0 / mp[0], 1.0 / mi[0]);
+  }
+}
+
+/* The length of edge i of lb from p at y. */
+static inline double len_one(const len_ball *lb, const double *y, int i) {
+  double dx = lb->x[i] - y[0], dy = lb->y[i] - y[1];
+  if (lb->mc <= 1) return sqrt(dx * dx + dy * dy) * lb->f[i];
+  double b[2] = {lb->x[i], lb->y[i]};
+  return pa__len2(lb->mc, y, b, lb->mp, lb->m[i]);
+}
+
 /* Whether a move of p keeps its edges in the band: every edge to nb[0..nn)
  * in [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI] at the old position stays in it
  * at the current one, and none out of it goes further out (the old
- * lengths lold are measured on the first call: *have). Balls whose worst
+ * lengths lold are measured on the first call: *have; the current ones go
+ * to lnew, all of them when the test passes). Balls whose worst
  * quality qold is under qfree are held to the wider band [RM2D_LFREE_LO,
  * RM2D_LFREE_HI] instead (their elements matter more than those lengths). */
 static int keeps_band(rm2d *rm, pa_idx p, const pa_idx *nb, int nn,
-                      const double *old, double *lold, int *have, double qold,
-                      double qfree) {
-  double *xp = rm->x + 2 * (size_t)p;
+                      const double *old, len_ball *lb, double *lold, int *have,
+                      double qold, double qfree, double *lnew) {
+  const double *xp = rm->x + 2 * (size_t)p;
   if (!*have) {
-    double np[2] = {xp[0], xp[1]};
-    xp[0] = old[0];
-    xp[1] = old[1];
+    int mc = rm->mc;
+    len_ball_init(rm, RM2D_M(p), nb, nn, lb);
     for (int s = 0; s < nn; s++)
-      lold[s] = rm2d_edge_len(rm, p, nb[s]);
-    xp[0] = np[0];
-    xp[1] = np[1];
+      lold[s] = len_one(lb, old, s);
     *have = 1;
   }
   double lo = PA_METRIC_LEN_LO, hi = PA_METRIC_LEN_HI;
@@ -98,8 +166,9 @@ static int keeps_band(rm2d *rm, pa_idx p, const pa_idx *nb, int nn,
     hi = RM2D_LFREE_HI;
   }
   for (int s = 0; s < nn; s++) {
-    double l = rm2d_edge_len(rm, p, nb[s]);
-    if (!(l >= fmin(lo, lold[s]) && l <= fmax(hi, lold[s]))) return 0;
+    double l = lnew[s] = len_one(lb, xp, s);
+    /* l in [min(lo, lold), max(hi, lold)] (no NaN among lo, hi, lold) */
+    if (!((l >= lo || l >= lold[s]) && (l <= hi || l <= lold[s]))) return 0;
   }
   return 1;
 }
@@ -142,27 +211,50 @@ int pa__rm2d_smooth_vertex(rm2d *rm, pa_idx k, int ip, double qfree) {
   }
   qmean /= n;
   double cx = c[0] / n, cy = c[1] / n;
+  double *xp = rm->x + 2 * (size_t)p;
+  const double x0 = xp[0], y0 = xp[1], old[2] = {x0, y0};
+  if (qold >= RM2D_QFLOOR &&
+      pa__sqlen2(3, t, cx - x0, cy - y0) < MOVE_NULL * MOVE_NULL)
+    return 0;
   /* edge lengths in range before the move must stay in range (computed
    * when a candidate first passes the quality test) */
   double lold[RM2D_BALL_MAX];
+  len_ball lb;
   int have_inr = 0;
-  double *xp = rm->x + 2 * (size_t)p;
-  const double x0 = xp[0], y0 = xp[1], old[2] = {x0, y0};
   double qn[RM2D_BALL_MAX];
   double om = 1.0;
+  /* p's entries in bxy (sizes), rewritten at each trial */
+  double *px[RM2D_BALL_MAX], *py[RM2D_BALL_MAX];
+  if (mc <= 1)
+    for (int s = 0; s < n; s++) {
+      px[s] = &bxy.x[loc[s]][s];
+      py[s] = &bxy.y[loc[s]][s];
+    }
   for (int tr = 0; tr < 3; tr++, om *= 0.5) {
-    xp[0] = x0 + om * (cx - x0);
-    xp[1] = y0 + om * (cy - y0);
+    const double tx = x0 + om * (cx - x0), ty = y0 + om * (cy - y0);
+    xp[0] = tx;
+    xp[1] = ty;
     double qmin = 1, qm = 0;
     int ok = 1;
     if (mc <= 1) {
       for (int s = 0; s < n; s++) {
-        bxy.x[loc[s]][s] = xp[0];
-        bxy.y[loc[s]][s] = xp[1];
+        *px[s] = tx;
+        *py[s] = ty;
       }
       ball_xy_qual(&bxy, n, qn);
+      if (qold >= RM2D_QFLOOR) { /* the floor is qold itself */
+        for (int s = 0; s < n; s++) {
+          if (qn[s] < qold) {
+            ok = 0;
+            break;
+          }
+          if (qn[s] < qmin) qmin = qn[s];
+          qm += qn[s];
+        }
+      }
     }
-    for (int s = 0; s < n && ok; s++) {
+    /* (done above with sizes when the floor is qold) */
+    for (int s = mc <= 1 && qold >= RM2D_QFLOOR ? n : 0; s < n && ok; s++) {
       if (mc > 1) {
         const pa_idx *v = rm->tv + 3 * (size_t)el[s];
         qn[s] = rm2d_elem_qual(rm, v[0], v[1], v[2]);
@@ -181,12 +273,15 @@ int pa__rm2d_smooth_vertex(rm2d *rm, pa_idx k, int ip, double qfree) {
     if (!ok) continue;
     qm /= n;
     if (!(qmin > MOVE_GAIN_MIN * qold || qm > MOVE_GAIN_MEAN * qmean)) continue;
-    if (!keeps_band(rm, p, nb, n, old, lold, &have_inr, qold, qfree)) continue;
+    double lnew[RM2D_BALL_MAX];
+    if (!keeps_band(rm, p, nb, n, old, &lb, lold, &have_inr, qold, qfree,
+                    lnew))
+      continue;
     /* accepted */
     double np[2] = {xp[0], xp[1]};
     xp[0] = x0;
     xp[1] = y0;
-    apply_move(rm, p, el, loc, n, np);
+    apply_move(rm, p, el, loc, n, np, mc <= 1 ? qn : NULL, lb.same, lnew);
     return 1;
   }
   xp[0] = x0;
@@ -280,6 +375,7 @@ int pa__rm2d_smooth_feature(rm2d *rm, pa_idx k, int ip, double qfree) {
   double hausd = fmin(pa__local_hausd(rm->opts, rm->bref[rr], rm->hausd),
                       pa__local_hausd(rm->opts, rm->bref[ro], rm->hausd));
   double lold[2 * RM2D_BALL_MAX];
+  len_ball lb;
   int have_inr = 0;
   for (int tr = 0; tr < 3; tr++, s0 *= 0.5) {
     int from0 = rm->bv[2 * rr] == p;
@@ -304,7 +400,9 @@ int pa__rm2d_smooth_feature(rm2d *rm, pa_idx k, int ip, double qfree) {
       qm += q;
     }
     ok = ok && (qmin > MOVE_GAIN_MIN * qold || qm / n > MOVE_GAIN_MEAN * qmean);
-    ok = ok && keeps_band(rm, p, nb, nn, old, lold, &have_inr, qold, qfree);
+    double lnew[2 * RM2D_BALL_MAX];
+    ok = ok && keeps_band(rm, p, nb, nn, old, &lb, lold, &have_inr, qold,
+                          qfree, lnew);
     xp[0] = old[0];
     xp[1] = old[1];
     if (!ok) continue;
@@ -334,26 +432,45 @@ int pa__rm2d_smooth_feature(rm2d *rm, pa_idx k, int ip, double qfree) {
   return 0;
 }
 
-/* The lengths l of the edges from p at y (metric mp) to nb[0..nn), and how
- * many are out of [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI]. */
-static int len_out_2d(const rm2d *rm, const double *y, const double *mp,
-                      const pa_idx *nb, int nn, double *l) {
-  int mc = rm->mc, out = 0;
-  for (int i = 0; i < nn; i++) {
-    l[i] = pa__len2(mc, y, RM2D_X(nb[i]), mp, RM2D_M(nb[i]));
+/* The lengths l of the edges of lb from p at y, and how many are out of
+ * [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI]; the count stops (l then partial)
+ * once it passes outmax. */
+static int len_out_2d(const len_ball *lb, const double *y, double *l,
+                      int outmax) {
+  int out = 0;
+  for (int i = 0; i < lb->nn && out <= outmax; i++) {
+    double dx = lb->x[i] - y[0], dy = lb->y[i] - y[1];
+    if (lb->mc <= 1) {
+      l[i] = sqrt(dx * dx + dy * dy) * lb->f[i];
+    } else {
+      double b[2] = {lb->x[i], lb->y[i]};
+      l[i] = pa__len2(lb->mc, y, b, lb->mp, lb->m[i]);
+    }
     out += !(l[i] >= PA_METRIC_LEN_LO && l[i] <= PA_METRIC_LEN_HI);
   }
   return out;
 }
 
-/* The sum of ln^2 (l / RM2D_LTARGET) over l[0..nn). */
-static double len_sum_2d(const double *l, int nn) {
+/* Whether the sum of ln^2 (l / RM2D_LTARGET) over l[0..nn) is below bound.
+ * |ln x| >= |2 (x - 1) / (x + 1)| for every x > 0 (within 2.5 % over the
+ * band), so a sum of those squares above the bound, by more than any
+ * rounding, decides without a logarithm (three trials in four on the
+ * plate); else the terms, which are not negative, stop at a partial sum
+ * at or above it. */
+static int len_sum_below(const double *l, int nn, double bound) {
+  double lo = 0;
+  for (int i = 0; i < nn; i++) {
+    double x = l[i] / RM2D_LTARGET, u = 2 * (x - 1) / (x + 1);
+    lo += u * u;
+  }
+  if (lo >= bound * (1 + 1e-12)) return 0;
   double s = 0;
   for (int i = 0; i < nn; i++) {
     double g = log(l[i] / RM2D_LTARGET);
     s += g * g;
+    if (!(s < bound)) return 0;
   }
-  return s;
+  return s < bound;
 }
 
 /* Move interior vertex p = v[ip] of element k to bring its edges into range:
@@ -369,6 +486,22 @@ int pa__rm2d_length_vertex(rm2d *rm, pa_idx k, int ip) {
   int loc[RM2D_BALL_MAX], closed;
   int n = rm2d_ball(rm, k, ip, el, loc, &closed);
   if (n < 3 || !closed) return 0;
+  /* the ball from its first slot, whichever element the pass came from:
+   * the sums below, and so the verdict, then depend on the ball alone
+   * (RM2D_V_LSETTLED) */
+  int s0min = 0;
+  for (int s = 1; s < n; s++)
+    if (el[s] < el[s0min]) s0min = s;
+  if (s0min > 0) {
+    pa_idx et[RM2D_BALL_MAX];
+    int lt[RM2D_BALL_MAX];
+    for (int s = 0; s < n; s++) {
+      et[s] = el[(s + s0min) % n];
+      lt[s] = loc[(s + s0min) % n];
+    }
+    memcpy(el, et, (size_t)n * sizeof *el);
+    memcpy(loc, lt, (size_t)n * sizeof *loc);
+  }
   double qold = 1;
   for (int s = 0; s < n; s++) {
     if (rm->tflag[el[s]] & RM2D_E_FROZEN) return 0;
@@ -378,7 +511,9 @@ int pa__rm2d_length_vertex(rm2d *rm, pa_idx k, int ip) {
   double *xp = rm->x + 2 * (size_t)p;
   const double *mp = RM2D_M(p);
   double l0[RM2D_BALL_MAX], l1[RM2D_BALL_MAX], s0 = 0;
-  int out0 = len_out_2d(rm, xp, mp, nb, n, l0);
+  len_ball lb;
+  len_ball_init(rm, mp, nb, n, &lb);
+  int out0 = len_out_2d(&lb, xp, l0, n);
   if (out0 == 0) return 0;
   double jj[3] = {0, 0, 0}, jr[2] = {0, 0}, d2[2] = {0, 0}, worst = 0;
   double tp[3];
@@ -417,20 +552,21 @@ int pa__rm2d_length_vertex(rm2d *rm, pa_idx k, int ip) {
   if (!(det > 0)) return 0;
   double d[2] = {(jj[2] * jr[0] - jj[1] * jr[1]) / det,
                  (jj[0] * jr[1] - jj[1] * jr[0]) / det};
-  double x0 = xp[0], y0 = xp[1], step = 1.0, qfloor = fmin(qold, RM2D_QLEN);
+  double x0 = xp[0], y0 = xp[1], step = 1.0, qfloor = qold < RM2D_QLEN ? qold : RM2D_QLEN;
   for (int tr = 0; tr < 8; tr++, step *= 0.5) {
     if (tr == 4) step = 1.0;
     const double *dd = tr < 4 ? d : d2;
     double np[2] = {x0 + step * dd[0], y0 + step * dd[1]};
-    int out1 = len_out_2d(rm, np, mp, nb, n, l1);
-    if (!(out1 < out0 || (out1 == out0 && len_sum_2d(l1, n) < RM2D_LGAIN * s0)))
+    int out1 = len_out_2d(&lb, np, l1, out0);
+    if (!(out1 < out0 || (out1 == out0 && len_sum_below(l1, n, RM2D_LGAIN * s0))))
       continue;
     xp[0] = np[0];
     xp[1] = np[1];
     int ok = 1;
+    double qn[RM2D_BALL_MAX];
     for (int s = 0; s < n && ok; s++) {
       const pa_idx *v = rm->tv + 3 * (size_t)el[s];
-      double q = rm2d_elem_qual(rm, v[0], v[1], v[2]);
+      double q = qn[s] = rm2d_elem_qual(rm, v[0], v[1], v[2]);
       if (!(q >= qfloor) ||
           !rm2d_qual_ok(rm, q, rm2d_qfloor(qold), v[0], v[1], v[2]))
         ok = 0;
@@ -438,7 +574,7 @@ int pa__rm2d_length_vertex(rm2d *rm, pa_idx k, int ip) {
     xp[0] = x0;
     xp[1] = y0;
     if (!ok) continue;
-    apply_move(rm, p, el, loc, n, np);
+    apply_move(rm, p, el, loc, n, np, mc <= 1 ? qn : NULL, lb.same, l1);
     return 1;
   }
   return 0;
