@@ -763,9 +763,12 @@ static pa_status refine_bands(rm3d *m, const pa_remesh_opts *opts,
      * PA_METRIC_LEN_HI_EXACT */
     double thr = max_length(m) / 1.5;
     if (thr > prev / 1.5) thr = prev / 1.5;
-    /* a band just above the last one would cost a sweep for little
-     * (figures: docs/BENCHMARKS.md, "The 3D remesher") */
-    if (thr < 1.1 * PA_METRIC_LEN_HI_EXACT) thr = PA_METRIC_LEN_HI_EXACT;
+    /* A band just above sqrt 2 costs a sweep; taking it as sqrt 2 instead
+     * (below 1.1 sqrt 2) made a last band of ratio up to 1.65, which
+     * over-splits: pieces of the rod at 4 ranks (7.8 M tets) split 700 k
+     * edges and collapsed 420 k again in it, 6 % more remesher CPU in all
+     * (helper work3, 2026-11-29). */
+    if (thr < PA_METRIC_LEN_HI_EXACT) thr = PA_METRIC_LEN_HI_EXACT;
     prev = thr;
     long ns = 0, nc = 0;
     double t1 = pa_wtime();
