@@ -119,104 +119,23 @@ double pa__elem_work(const pa_mesh *m, pa_idx e) {
   return (isfinite(w) ? w : 0) + 1.0;
 }
 
-/* Quality of element e in the metric. */
-static double elem_quality(const pa_mesh *m, pa_idx e) {
-  int d = m->dim;
-  const pa_idx *v = m->elem + (size_t)(d + 1) * e;
-  const double *x[4], *mm[4];
-  for (int k = 0; k <= d; k++) {
-    x[k] = m->coord + (size_t)d * v[k];
-    mm[k] = m->met + (size_t)m->met_ncomp * v[k];
-  }
-  return pa__quality(d, m->met_ncomp, x, mm);
-}
-
-/* 1 if an edge of element e is outside [lo, hi) in the metric. */
-static int bad_edge(const pa_mesh *m, pa_idx e, double lo, double hi) {
-  int d = m->dim, nc = m->met_ncomp;
-  const pa_idx *v = m->elem + (size_t)(d + 1) * e;
-  for (int i = 0; i <= d; i++)
-    for (int j = i + 1; j <= d; j++) {
-      double l = pa__edge_length(
-          d, nc, m->coord + (size_t)d * v[i], m->coord + (size_t)d * v[j],
-          m->met + (size_t)nc * v[i], m->met + (size_t)nc * v[j]);
-      if (!(l >= lo && l < hi)) return 1;
-    }
-  return 0;
-}
-
-/* fails() with sizes or the identity (met_ncomp <= 1), the metric of every
- * -hsiz run, for d (a constant once inlined) dimensions: each edge vector
- * formed once for the lengths and the quality, each vertex's inverse size
- * taken once. The operations of pa__len2 / pa__len3 and pa__qual2_stat /
- * pa__qual3_stat (metric/metric2d.h, metric3d.h) in their order, so the
- * same bits: an edge's length is |e| logmean(1/ha, 1/hb), the quality
- * Euclidean (the sizes are not read). */
-static inline int fails_iso(const pa_mesh *m, pa_idx e, const int d, double lo,
-                            double hi, double qmin) {
-  const int n = d + 1;
-  const pa_idx *v = m->elem + (size_t)n * e;
-  const double *x[4];
-  double ih[4], E[6][3], s = 0.0;
-  int k = 0;
-  for (int i = 0; i < n; i++) {
-    x[i] = m->coord + (size_t)d * v[i];
-    ih[i] = m->met_ncomp ? 1.0 / m->met[v[i]] : 1.0;
-  }
-  for (int i = 0; i < n; i++)
-    for (int j = i + 1; j < n; j++, k++) {
-      double n2 = 0.0;
-      for (int c = 0; c < d; c++) {
-        E[k][c] = x[j][c] - x[i][c];
-        n2 = c ? n2 + E[k][c] * E[k][c] : E[k][c] * E[k][c];
-      }
-      double l = sqrt(n2) * pa__log_mean(ih[i], ih[j]);
-      if (!(l >= lo && l < hi)) return 1;
-      s += n2;
-    }
-  if (!(qmin > 0)) return 0;
-  if (!(s > 0.0)) return 1; /* quality 0 */
-  double q;
-  if (d == 2) {
-    double area = 0.5 * (E[0][0] * E[1][1] - E[0][1] * E[1][0]);
-    q = PA_METRIC_QUAL_NORM_2D * area / s;
-  } else {
-    const double *u = E[0], *w = E[1], *z = E[2];
-    double vol = (u[0] * (w[1] * z[2] - w[2] * z[1]) +
-                  u[1] * (w[2] * z[0] - w[0] * z[2]) +
-                  u[2] * (w[0] * z[1] - w[1] * z[0])) /
-                 6.0;
-    q = PA_METRIC_QUAL_NORM_3D * vol / (s * sqrt(s));
-  }
-  return q < qmin;
-}
-
-/* fails() with tensors (met_ncomp 3 in 2D, 6 in 3D), for d dimensions:
- * each edge vector formed once, each edge's length the logarithmic mean of
- * its end lengths as pa__len2 / pa__len3 take it, the quality by
- * pa__qual2_stat / pa__qual3_stat inline: the same bits. */
-static inline int fails_aniso(const pa_mesh *m, pa_idx e, const int d,
-                              double lo, double hi, double qmin) {
+/* 1 if element e has an edge outside [lo, hi) in the metric or (qmin > 0)
+ * a quality below qmin, by the kernels of metric/metric2d.h and
+ * metric3d.h inline, d a constant once inlined: the generic
+ * pa__edge_length and pa__quality cost a call and a dispatch per edge. */
+static inline int fails_dim(const pa_mesh *m, pa_idx e, const int d,
+                            double lo, double hi, double qmin) {
   const int n = d + 1, nc = m->met_ncomp;
   const pa_idx *v = m->elem + (size_t)n * e;
   const double *x[4], *mt[4];
   for (int i = 0; i < n; i++) {
     x[i] = m->coord + (size_t)d * v[i];
-    mt[i] = m->met + (size_t)nc * v[i];
+    mt[i] = nc ? m->met + (size_t)nc * v[i] : NULL;
   }
   for (int i = 0; i < n; i++)
     for (int j = i + 1; j < n; j++) {
-      double l;
-      if (d == 2) {
-        double ex = x[j][0] - x[i][0], ey = x[j][1] - x[i][1];
-        l = pa__log_mean(sqrt(pa__sqlen2(nc, mt[i], ex, ey)),
-                         sqrt(pa__sqlen2(nc, mt[j], ex, ey)));
-      } else {
-        double ev[3] = {x[j][0] - x[i][0], x[j][1] - x[i][1],
-                        x[j][2] - x[i][2]};
-        l = pa__log_mean(sqrt(pa__sqlen3_tensor(mt[i], ev)),
-                         sqrt(pa__sqlen3_tensor(mt[j], ev)));
-      }
+      double l = d == 2 ? pa__len2(nc, x[i], x[j], mt[i], mt[j])
+                        : pa__len3(nc, x[i], x[j], mt[i], mt[j]);
       if (!(l >= lo && l < hi)) return 1;
     }
   if (!(qmin > 0)) return 0;
@@ -224,19 +143,10 @@ static inline int fails_aniso(const pa_mesh *m, pa_idx e, const int d,
          qmin;
 }
 
-/* 1 if element e has an edge outside [lo, hi) in the metric or (qmin > 0)
- * a quality below qmin. */
 static int fails(const pa_mesh *m, pa_idx e, double lo, double hi,
                  double qmin) {
-  int d = m->dim, nc = m->met_ncomp;
-  if (nc <= 1)
-    return d == 2 ? fails_iso(m, e, 2, lo, hi, qmin)
-                  : fails_iso(m, e, 3, lo, hi, qmin);
-  if (nc == pa__tensor_ncomp(d))
-    return d == 2 ? fails_aniso(m, e, 2, lo, hi, qmin)
-                  : fails_aniso(m, e, 3, lo, hi, qmin);
-  if (bad_edge(m, e, lo, hi)) return 1;
-  return qmin > 0 && elem_quality(m, e) < qmin;
+  return m->dim == 2 ? fails_dim(m, e, 2, lo, hi, qmin)
+                     : fails_dim(m, e, 3, lo, hi, qmin);
 }
 
 /* With a model (opts->remesh.geometry), 1 if a vertex of element e lies on
@@ -267,26 +177,16 @@ static int off_model(const pa_mesh *m, const pa_geometry *g, pa_idx e,
   return 0;
 }
 
-/* criteria() of each done value kind 0..NKIND-1: lo, hi, qmin. */
-#define NKIND (PA_ADAPT_DONE_FREE + 1)
-static void criteria_table(double qual_threshold, double (*cr)[3]) {
-  for (int k = 0; k < NKIND; k++)
-    criteria((uint8_t)k, qual_threshold, &cr[k][0], &cr[k][1], &cr[k][2]);
-}
-
 /* 1 if element e, of done value kind dn (without PA_ADAPT_DONE_PASSED), is
- * to be remeshed; cr: criteria_table's; off: off_model's cache (NULL
- * without a model), which an element produced in this run always fills. */
+ * to be remeshed; off: off_model's cache (NULL without a model), which an
+ * element produced in this run always fills. */
 static int tagged(const pa_mesh *m, const pa_adapt_opts *o, pa_idx e,
-                  uint8_t dn, double (*cr)[3], uint8_t *off) {
+                  uint8_t dn, uint8_t *off) {
   int t = !dn && (m->eflag[e] & PA_FLAG_USER) != 0;
   if (!t && !o->user_tags_only) {
-    double c[3];
-    if (dn < NKIND)
-      memcpy(c, cr[dn], sizeof c);
-    else
-      criteria(dn, o->qual_threshold, &c[0], &c[1], &c[2]);
-    t = fails(m, e, c[0], c[1], c[2]);
+    double lo, hi, qmin;
+    criteria(dn, o->qual_threshold, &lo, &hi, &qmin);
+    t = fails(m, e, lo, hi, qmin);
   }
   if (dn && off) t |= off_model(m, o->remesh.geometry, e, off);
   return t;
@@ -333,8 +233,7 @@ pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int fresh) {
   const pa_adapt_opts *o = it->opts;
   uint8_t *dn = pa_dmesh_value_data(done, NULL, NULL);
   uint8_t *off = NULL;
-  double x[2] = {0, 0}, cr[NKIND][3];
-  criteria_table(o->qual_threshold, cr);
+  double x[2] = {0, 0};
   it->ne = dm->nown[PA_ELEMENT];
   if (o->remesh.geometry && m->vgdim) PA_CALLOC(off, dm->nloc[PA_VERTEX]);
   PA_CALLOC(it->tag, it->ne);
@@ -348,14 +247,14 @@ pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int fresh) {
     if (kind && o->user_tags_only) continue;
     if (!fresh && (dn[e] & PA_ADAPT_DONE_PASSED)) {
 #ifndef NDEBUG
-      PA_CHECK(!tagged(m, o, e, kind, cr, off), PA_ERR_INTERNAL,
+      PA_CHECK(!tagged(m, o, e, kind, off), PA_ERR_INTERNAL,
                "tag: element %lld passed the last tag, has not changed "
                "since, and fails it now",
                (long long)dm->gid[PA_ELEMENT][e]);
 #endif
       continue;
     }
-    int t = tagged(m, o, e, kind, cr, off);
+    int t = tagged(m, o, e, kind, off);
     dn[e] = t ? kind : kind | PA_ADAPT_DONE_PASSED;
     it->tag[e] = (uint8_t)t;
     if (t) it->work[e] = pa__elem_work(m, e);

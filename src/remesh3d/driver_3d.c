@@ -802,17 +802,16 @@ static int has_frozen(const rm3d *m) {
 
 /* Schedule step 2, the rounds at the final thresholds: split, collapse,
  * swap, move, until the stopping rule (remesh/schedule.h) says they
- * settled or stalled. *step counts the progress reports, *npass the
- * rounds (all but the one that stops them). */
+ * settled or stalled. frozen: has_frozen(m). *step counts the progress
+ * reports, *npass the rounds (all but the one that stops them). */
 static pa_status refine_rounds(rm3d *m, const pa_remesh_opts *opts,
-                               int *step, int *npass) {
+                               int frozen, int *step, int *npass) {
   pa_status st = PA_SUCCESS;
   pa__rounds rounds;
   rm3d_balls balls = {NULL, NULL};
   /* Balanced splits and collapses are a ping-pong only with frozen
    * entities: the anisotropic shell balances them too, and stopping it
    * early loses edges in range (docs/BENCHMARKS.md, "The 3D remesher"). */
-  int frozen = has_frozen(m);
   double qswap = frozen ? RM3D_QSWAP_ROUNDS_FROZEN : RM3D_QSWAP_ROUNDS;
   pa__rounds_start(&rounds, RM3D_ROUNDS_MIN, RM3D_ROUNDS_SETTLED, 0, frozen);
   for (int it = 0; it < RM3D_ROUNDS_MAX; it++, (*npass)++) {
@@ -852,12 +851,13 @@ cleanup:
 }
 
 /* Schedule step 3, the optimisation: three rounds of swaps and moves, a
- * pass against slivers, and the last length moves. *npass counts the
- * passes. */
-static pa_status optimise(rm3d *m, const pa_remesh_opts *opts, int *npass) {
+ * pass against slivers, and the last length moves. frozen: has_frozen(m).
+ * *npass counts the passes. */
+static pa_status optimise(rm3d *m, const pa_remesh_opts *opts, int frozen,
+                          int *npass) {
   pa_status st = PA_SUCCESS;
   rm3d_balls balls = {NULL, NULL};
-  int early = has_frozen(m) ? RM3D_LENGTH_SWEEPS : RM3D_LENGTH_SWEEPS_EARLY;
+  int early = frozen ? RM3D_LENGTH_SWEEPS : RM3D_LENGTH_SWEEPS_EARLY;
   for (int it = 0; it < 3; it++, (*npass)++) {
     long nc = 0, nw = 0, nm = 0;
     /* The swaps (Q < 0.7) and moves of this phase unlock short edges the
@@ -928,7 +928,7 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
                        pa_remesh_report *report) {
   pa_status st = PA_SUCCESS;
   rm3d m;
-  int built = 0, npass = 0, step = 0;
+  int built = 0, npass = 0, step = 0, frozen;
   double t0 = pa_wtime();
   PA_CHECK(mesh && opts && report, PA_ERR_ARG, "pa__remesh3d: NULL argument");
   memset(report, 0, sizeof *report);
@@ -936,12 +936,13 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
   PA_CALL(pa__rm3d_build(&m, mesh, opts));
   built = 1;
   PA_CALL(prepare(&m, opts));
+  frozen = has_frozen(&m);
   if (!opts->no_insert) {
     PA_CALL(refine_bands(&m, opts, &step));
     PA_CALL(pa__rm3d_reorder(&m));
-    PA_CALL(refine_rounds(&m, opts, &step, &npass));
+    PA_CALL(refine_rounds(&m, opts, frozen, &step, &npass));
   }
-  PA_CALL(optimise(&m, opts, &npass));
+  PA_CALL(optimise(&m, opts, frozen, &npass));
   PA_CALL(conclude(&m, mesh, npass, report));
 cleanup:
   if (built) pa__rm3d_free(&m);
