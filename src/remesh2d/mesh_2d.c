@@ -510,7 +510,7 @@ static pa_status vertex_positions(const rm2d *rm, pa__key64 *key,
     key[k++].idx = v;
   }
   PA_CHECK(k == n, PA_ERR_INTERNAL, "remesher: live vertex count is off");
-  qsort(key, (size_t)n, sizeof *key, pa__key64_cmp);
+  PA_CALL(pa__remesh_sort_keys(key, (size_t)n));
   for (pa_idx i = 0; i < n; i++) posv[key[i].idx] = i;
 cleanup:
   return st;
