@@ -70,9 +70,4 @@ pa_status pa__remesh_skin_relax(const pa__skin_relax *r, int mc, pa_idx nv,
  * of the curvature from the facets then stand aside. */
 int pa__remesh_model_curvature(const pa_remesh_opts *o);
 
-/* Sort the n spatial keys a[] in place (order.c): by key, records of equal
- * keys in their given order, so records given by increasing index come out
- * as qsort with pa__key64_cmp puts them. Not collective. */
-pa_status pa__remesh_sort_keys(pa__key64 *a, size_t n);
-
 #endif /* PA_REMESH_H */

@@ -535,7 +535,7 @@ static pa_status vertex_positions(const rm2d *rm, pa__key64 *key,
     key[k++].idx = v;
   }
   PA_CHECK(k == n, PA_ERR_INTERNAL, "remesher: live vertex count is off");
-  PA_CALL(pa__remesh_sort_keys(key, (size_t)n));
+  PA_CALL(pa__key64_sort(key, (size_t)n));
   for (pa_idx i = 0; i < n; i++) posv[key[i].idx] = i;
 cleanup:
   return st;

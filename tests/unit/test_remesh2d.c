@@ -3,13 +3,11 @@
  * (pa_remesh): validity, quality targets on the built-in fields, coarsening,
  * the frozen-skin contract on random patches, area and boundary conservation,
  * curved boundaries within hausd, interior curves, idempotence, determinism,
- * the three outcomes, field interpolation and metric gradation; the sort
- * of the spatial keys of its renumbering (remesh/order.c) against qsort.
+ * the three outcomes, field interpolation and metric gradation.
  */
 #include "testutil.h"
 
 #include "metric/gradation.h"
-#include "remesh/remesh.h"
 
 /* ---- helpers ---- */
 
@@ -1079,39 +1077,9 @@ static void test_strong_aniso(void) {
   pa_mesh_destroy(m);
 }
 
-/* pa__remesh_sort_keys gives qsort's order (pa__key64_cmp) on records
- * given by increasing index: small and large counts, keys with many ties,
- * keys whose high digits are all equal, full 64-bit keys, all keys equal. */
-static void test_sort_keys(void) {
-  const size_t ns[] = {0, 1, 5, 63, 64, 65, 1000, 20000};
-  const uint64_t ranges[] = {7, 1u << 20, 0, 1};
-  pa_test_seed(38);
-  for (size_t a = 0; a < sizeof ns / sizeof *ns; a++)
-    for (size_t b = 0; b < sizeof ranges / sizeof *ranges; b++) {
-      size_t n = ns[a];
-      pa__key64 *k = malloc(sizeof *k * (n + 1)), *q = malloc(sizeof *q * (n + 1));
-      for (size_t i = 0; i < n; i++) {
-        uint64_t r = (uint64_t)(pa_test_rand() * 4294967296.0) << 32 |
-                     (uint64_t)(pa_test_rand() * 4294967296.0);
-        k[i].key = ranges[b] ? r % ranges[b] : r; /* 0: the full range */
-        k[i].idx = (pa_idx)i;
-      }
-      memcpy(q, k, sizeof *k * n);
-      qsort(q, n, sizeof *q, pa__key64_cmp);
-      CHECK_OK(pa__remesh_sort_keys(k, n));
-      int same = 1;
-      for (size_t i = 0; i < n; i++)
-        same &= k[i].key == q[i].key && k[i].idx == q[i].idx;
-      if (!same) fprintf(stderr, "sort_keys: n %zu range %zu differs\n", n, b);
-      CHECK(same);
-      free(k);
-      free(q);
-    }
-}
-
 TEST_MAIN(test_uniform, test_fields, test_coarsen, test_frozen, test_disk,
           test_interior_curve, test_corners_by_angle, test_second_adaptation,
           test_determinism, test_outcomes, test_errors, test_linear_field,
           test_gradation, test_frozen_skin_refine, test_frozen_pingpong,
           test_frozen_fan,
-          test_reorder, test_strong_aniso, test_sort_keys)
+          test_reorder, test_strong_aniso)
