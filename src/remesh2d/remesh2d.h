@@ -42,7 +42,7 @@ enum {
   RM2D_V_FEAT = 4,   /* lies on a feature line (boundary or interior curve) */
   RM2D_V_DEAD = 8,
   /* The removal of this vertex by the collapse passes
-   * (pa__rm2d_remove_vertex: onto any neighbour, quality ratio 0.3, no new
+   * (pa__rm2d_remove_vertex: onto any neighbour, RM2D_QREL_COLLAPSE, no new
    * edge longer than rm2d.cguard) was tried and rejected, and its ball has
    * not changed since: cleared with RM2D_V_SETTLED, and on every vertex
    * when a collapse pass allows longer edges than rm2d.cguard. */
