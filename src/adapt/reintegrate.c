@@ -335,53 +335,29 @@ cleanup:
  * not above the worst quality of the band beyond (shapes the remesher
  * leaves anyway; a piece with no such band marks nothing). */
 
-/* The vertex balls of an output (pa__balls) and a vertex queue, built on
- * first use for the layers of one output. */
-typedef struct vballs {
-  pa_idx *start, *ball, *queue;
-} vballs;
-
-static void vballs_free(vballs *b) {
-  pa__free(b->start);
-  pa__free(b->ball);
-  pa__free(b->queue);
-  memset(b, 0, sizeof *b);
-}
-
 /* For each of the nd arrays dist[0..nd): dist[a][v] = min(nl, vertex
  * layers from the vertices where it is 0; the others start at nl), over the
- * elements of o: a breadth-first search through the vertex balls b (built
- * here if not yet), so the cost past the balls is the layers' own (the
- * skin and nl layers around it), not nl sweeps over the output. */
-static pa_status vertex_layers(const pa_mesh *o, int nl, int nd,
-                               uint8_t *const *dist, vballs *b) {
-  pa_status st = PA_SUCCESS;
+ * elements of o: layer k is made by one sweep over the elements, which
+ * gives k to every vertex above k of an element whose nearest vertex is at
+ * k - 1 (an element with a vertex nearer than that has no vertex beyond
+ * k - 1). nl - 1 sweeps, all arrays in each: for the NEAR_SKIN layers one
+ * pass over the output, cheaper than the vertex balls a breadth-first
+ * search would need. */
+static void vertex_layers(const pa_mesh *o, int nl, int nd,
+                          uint8_t *const *dist) {
   int nve = o->dim + 1;
-  if (!b->start) {
-    PA_CALL(pa__balls(o->elem, o->ne, nve, o->nv, &b->start, &b->ball));
-    PA_ALLOC(b->queue, o->nv ? (size_t)o->nv : 1);
-  }
-  for (int a = 0; a < nd; a++) {
-    uint8_t *x = dist[a];
-    pa_idx *q = b->queue, nq = 0;
-    for (pa_idx v = 0; v < o->nv; v++)
-      if (x[v] == 0) q[nq++] = v;
-    for (pa_idx h = 0; h < nq; h++) {
-      pa_idx u = q[h];
-      int next = x[u] + 1;
-      if (next >= nl) continue; /* a vertex at nl keeps its start value */
-      for (pa_idx i = b->start[u]; i < b->start[u + 1]; i++) {
-        const pa_idx *v = o->elem + (size_t)nve * b->ball[i];
-        for (int k = 0; k < nve; k++)
-          if (x[v[k]] > next) {
-            x[v[k]] = (uint8_t)next;
-            q[nq++] = v[k];
-          }
+  for (int k = 1; k < nl; k++)
+    for (pa_idx e = 0; e < o->ne; e++) {
+      const pa_idx *v = o->elem + (size_t)nve * e;
+      for (int a = 0; a < nd; a++) {
+        uint8_t *x = dist[a];
+        int mn = x[v[0]];
+        for (int i = 1; i < nve; i++) mn = x[v[i]] < mn ? x[v[i]] : mn;
+        if (mn != k - 1) continue;
+        for (int i = 0; i < nve; i++)
+          if (x[v[i]] > k) x[v[i]] = (uint8_t)k;
       }
     }
-  }
-cleanup:
-  return st;
 }
 
 /* Smallest of dist over the vertices of element e of o. */
@@ -395,16 +371,16 @@ static int elem_layer(const pa_mesh *o, const uint8_t *dist, pa_idx e) {
 /* dist[a] over the output of pc for each of the nd marks mark[a] (pc->hot,
  * pc->skin): 0 at the output vertices matching a marked input vertex, else
  * the vertex layers from them, at most nl. */
-static pa_status layers_from(const pa__piece *pc, int nd,
-                             const uint8_t *const *mark, int nl,
-                             uint8_t *const *dist, vballs *b) {
+static void layers_from(const pa__piece *pc, int nd,
+                        const uint8_t *const *mark, int nl,
+                        uint8_t *const *dist) {
   const pa_mesh *o = pc->out;
   for (int a = 0; a < nd; a++)
     for (pa_idx j = 0; j < o->nv; j++) {
       pa_idx i = pc->match[j];
       dist[a][j] = (uint8_t)(i >= 0 && mark[a][i] ? 0 : nl);
     }
-  return vertex_layers(o, nl, nd, dist, b);
+  vertex_layers(o, nl, nd, dist);
 }
 
 size_t pa__new_payload(const pa_dmesh *dm, int kind, int32_t ref,
@@ -798,9 +774,9 @@ cleanup:
 }
 
 /* The elements within NEAR_SKIN vertex layers of a hot skin vertex (dist);
- * BAD_NEAR_SKIN: the layers from any skin vertex (dsk), through the same
- * vertex balls, and only if an element near the skin is poor, counted
- * further for the worst quality of the band beyond (qband). */
+ * BAD_NEAR_SKIN: the layers from any skin vertex (dsk), in the same
+ * sweeps, and only if an element near the skin is poor, counted further
+ * for the worst quality of the band beyond (qband). */
 static pa_status near_skin_layers(orecs *c) {
   pa_status st = PA_SUCCESS;
   const pa__piece *pc = c->pc;
@@ -809,14 +785,13 @@ static pa_status near_skin_layers(orecs *c) {
                         (pc->rep.nswap == 0 && pc->rep.nmove == 0)
                     ? 0
                     : c->it->opts->qual_threshold;
-  vballs b = {NULL, NULL, NULL};
   c->qband = 0;
   PA_ALLOC(c->dist, o->nv);
   if (qthr > 0) PA_ALLOC(c->dsk, o->nv);
   {
     const uint8_t *mk[2] = {pc->hot, pc->skin};
     uint8_t *const ds[2] = {c->dist, c->dsk};
-    PA_CALL(layers_from(pc, qthr > 0 ? 2 : 1, mk, NEAR_SKIN, ds, &b));
+    layers_from(pc, qthr > 0 ? 2 : 1, mk, NEAR_SKIN, ds);
   }
   if (qthr > 0) {
     int poor = 0;
@@ -826,7 +801,7 @@ static pa_status near_skin_layers(orecs *c) {
     if (poor) {
       const uint8_t *mk[1] = {pc->skin};
       uint8_t *const ds[1] = {c->dsk};
-      PA_CALL(layers_from(pc, 1, mk, 2 * NEAR_SKIN, ds, &b));
+      layers_from(pc, 1, mk, 2 * NEAR_SKIN, ds);
       c->qband = qthr;
       for (pa_idx e = 0; e < o->ne; e++) {
         int l = elem_layer(o, c->dsk, e);
@@ -836,7 +811,6 @@ static pa_status near_skin_layers(orecs *c) {
     }
   }
 cleanup:
-  vballs_free(&b);
   return st;
 }
 
