@@ -336,35 +336,43 @@ cleanup:
  * leaves anyway; a piece with no such band marks nothing). */
 
 /* For each of the nd arrays dist[0..nd): dist[a][v] = min(nl, vertex
- * layers from the vertices where it is 0; the others start at nl), over the
- * elements of o: layer k is made by one sweep over the elements, which
- * gives k to every vertex above k of an element whose nearest vertex is at
- * k - 1 (an element with a vertex nearer than that has no vertex beyond
- * k - 1). nl - 1 sweeps, all arrays in each: for the NEAR_SKIN layers one
- * pass over the output, cheaper than the vertex balls a breadth-first
+ * layers from the vertices where it is 0), over the elements of o, given
+ * the layers below k0 (the other vertices at nl): layer k is made by one
+ * sweep over the elements, which gives k to every vertex above k of an
+ * element whose nearest vertex is at k - 1 (an element with a vertex
+ * nearer than that has no vertex beyond k - 1). For the NEAR_SKIN layers
+ * one pass over the output, cheaper than the vertex balls a breadth-first
  * search would need. */
-static void vertex_layers(const pa_mesh *o, int nl, int nd,
-                          uint8_t *const *dist) {
-  int nve = o->dim + 1;
-  for (int k = 1; k < nl; k++)
-    for (pa_idx e = 0; e < o->ne; e++) {
-      const pa_idx *v = o->elem + (size_t)nve * e;
-      for (int a = 0; a < nd; a++) {
-        uint8_t *x = dist[a];
-        int mn = x[v[0]];
-        for (int i = 1; i < nve; i++) mn = x[v[i]] < mn ? x[v[i]] : mn;
-        if (mn != k - 1) continue;
-        for (int i = 0; i < nve; i++)
-          if (x[v[i]] > k) x[v[i]] = (uint8_t)k;
-      }
+static inline void layer_sweep(const pa_mesh *o, int k, int nd,
+                               uint8_t *const *dist, const int nve) {
+  for (pa_idx e = 0; e < o->ne; e++) {
+    const pa_idx *v = o->elem + (size_t)nve * e;
+    for (int a = 0; a < nd; a++) {
+      uint8_t *x = dist[a];
+      int mn = x[v[0]];
+      for (int i = 1; i < nve; i++) mn = x[v[i]] < mn ? x[v[i]] : mn;
+      if (mn != k - 1) continue;
+      for (int i = 0; i < nve; i++)
+        if (x[v[i]] > k) x[v[i]] = (uint8_t)k;
     }
+  }
+}
+
+static void vertex_layers(const pa_mesh *o, int k0, int nl, int nd,
+                          uint8_t *const *dist) {
+  for (int k = k0; k < nl; k++) {
+    if (o->dim == 2) layer_sweep(o, k, nd, dist, 3);
+    else layer_sweep(o, k, nd, dist, 4);
+  }
 }
 
 /* Smallest of dist over the vertices of element e of o. */
-static int elem_layer(const pa_mesh *o, const uint8_t *dist, pa_idx e) {
+static inline int elem_layer(const pa_mesh *o, const uint8_t *dist,
+                             pa_idx e) {
   const pa_idx *v = o->elem + (size_t)(o->dim + 1) * e;
-  int mn = dist[v[0]];
-  for (int k = 1; k <= o->dim; k++) mn = dist[v[k]] < mn ? dist[v[k]] : mn;
+  int mn = dist[v[0]] < dist[v[1]] ? dist[v[0]] : dist[v[1]];
+  mn = dist[v[2]] < mn ? dist[v[2]] : mn;
+  if (o->dim == 3) mn = dist[v[3]] < mn ? dist[v[3]] : mn;
   return mn;
 }
 
@@ -380,7 +388,7 @@ static void layers_from(const pa__piece *pc, int nd,
       pa_idx i = pc->match[j];
       dist[a][j] = (uint8_t)(i >= 0 && mark[a][i] ? 0 : nl);
     }
-  vertex_layers(o, nl, nd, dist);
+  vertex_layers(o, 1, nl, nd, dist);
 }
 
 size_t pa__new_payload(const pa_dmesh *dm, int kind, int32_t ref,
@@ -799,9 +807,11 @@ static pa_status near_skin_layers(orecs *c) {
       poor = elem_layer(o, c->dsk, e) < NEAR_SKIN &&
              pa_mesh_elem_quality(pc->out, e) < qthr;
     if (poor) {
-      const uint8_t *mk[1] = {pc->skin};
+      /* the layers below NEAR_SKIN are made: the others go on from there */
       uint8_t *const ds[1] = {c->dsk};
-      layers_from(pc, 1, mk, 2 * NEAR_SKIN, ds);
+      for (pa_idx j = 0; j < o->nv; j++)
+        if (c->dsk[j] == NEAR_SKIN) c->dsk[j] = 2 * NEAR_SKIN;
+      vertex_layers(o, NEAR_SKIN, 2 * NEAR_SKIN, 1, ds);
       c->qband = qthr;
       for (pa_idx e = 0; e < o->ne; e++) {
         int l = elem_layer(o, c->dsk, e);

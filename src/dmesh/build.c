@@ -1460,33 +1460,6 @@ void pa__entity_set_doubles(pa_mesh *m, int kind, pa_idx e, const double *in) {
   }
 }
 
-/* (plain loops: a few doubles each, once per vertex of every transfer) */
-int pa__vertex_doubles(const pa_mesh *m, pa_idx v, int nfield, double *out) {
-  int d = m->dim, n = 0, nm = m->met_ncomp;
-  for (int k = 0; k < d; k++) out[n++] = m->coord[(size_t)d * v + k];
-  for (int k = 0; k < nm; k++) out[n++] = m->met[(size_t)nm * v + k];
-  if (m->vgdim) out[n++] = pa__entity_pack(m->vgdim[v], m->vgtag[v]);
-  for (int f = 0; f < nfield; f++) {
-    int nc = m->field[f].ncomp;
-    for (int k = 0; k < nc; k++) out[n++] = m->field[f].val[(size_t)nc * v + k];
-  }
-  return n;
-}
-
-void pa__vertex_set_doubles(pa_mesh *m, pa_idx v, const double *in) {
-  int d = m->dim, nm = m->met_ncomp;
-  memcpy(m->coord + (size_t)d * v, in, d * sizeof *in);
-  in += d;
-  if (nm) memcpy(m->met + (size_t)nm * v, in, nm * sizeof *in);
-  in += nm;
-  if (m->vgdim) pa__entity_unpack(*in++, &m->vgdim[v], &m->vgtag[v]);
-  for (int f = 0; f < m->nfield; f++) {
-    int nc = m->field[f].ncomp;
-    memcpy(m->field[f].val + (size_t)nc * v, in, nc * sizeof *in);
-    in += nc;
-  }
-}
-
 pa_status pa__dmesh_build(pa_dmesh *dm, const pa__layout *lay, int overlap,
                           pa__recs *elems, pa__recs *verts, pa__recs *bdry,
                           pa__recs *edges) {
