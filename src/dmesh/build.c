@@ -1146,6 +1146,28 @@ cleanup:
   return st;
 }
 
+/* The vertices of the local elements (see fill_elements), nve a constant
+ * once inlined; returns 1 if one was not fetched. */
+static inline int elem_vertices(const pa_dmesh *dm, const bstate *s,
+                                const assembly *a, const int nve) {
+  const pa_idx *ord = a->ord[PA_ELEMENT], *ulv = s->ulv;
+  size_t nown = (size_t)dm->nown[PA_ELEMENT];
+  pa_idx *elem = a->m->elem, bad = 0;
+  for (size_t k = 0; k < s->L.n; k++) {
+    size_t i = (size_t)ord[k];
+    pa_idx *dst = elem + (size_t)nve * k;
+    if (i < nown) {
+      const pa_idx *us = s->uslot + (size_t)nve * i;
+      for (int j = 0; j < nve; j++) dst[j] = ulv[us[j]];
+    } else {
+      for (int j = 0; j < nve; j++)
+        dst[j] = pa__gidindex_get(&a->lv, s->L.vgid[(size_t)nve * i + j]);
+    }
+    for (int j = 0; j < nve; j++) bad |= dst[j] < 0;
+  }
+  return bad != 0;
+}
+
 /* Step 7b: the local mesh's elements. Owned elements (records [0, nown)):
  * vertex slot -> u -> LV record -> local vertex, two array reads; ghost
  * elements through the index lv. */
@@ -1155,16 +1177,10 @@ static pa_status fill_elements(pa_dmesh *dm, bstate *s, assembly *a) {
   pa_mesh *m = a->m;
   for (size_t u = 0; u < s->nu; u++)
     if (s->ulv[u] >= 0) s->ulv[u] = a->lvof[s->ulv[u]];
+  PA_CHECK(!(d == 2 ? elem_vertices(dm, s, a, 3) : elem_vertices(dm, s, a, 4)),
+           PA_ERR_INTERNAL, "element vertex not fetched");
   for (size_t k = 0; k < s->L.n; k++) {
     size_t i = (size_t)a->ord[PA_ELEMENT][k];
-    for (int j = 0; j <= d; j++) {
-      size_t p = (size_t)(d + 1) * i + j;
-      pa_idx v = i < (size_t)dm->nown[PA_ELEMENT]
-                     ? s->ulv[s->uslot[p]]
-                     : pa__gidindex_get(&a->lv, s->L.vgid[p]);
-      PA_CHECK(v >= 0, PA_ERR_INTERNAL, "element vertex not fetched");
-      m->elem[(size_t)(d + 1) * k + j] = v;
-    }
     m->eref[k] = s->L.ref[i];
     m->eflag[k] = s->L.flag[i];
     if (s->L.ndbl)

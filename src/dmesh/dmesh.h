@@ -236,13 +236,18 @@ pa_status pa__layout_cell_fields(const pa__layout *l, pa_mesh *m);
  * transfer and rebuild (a call per vertex cost more than the copy). */
 static inline int pa__vertex_doubles(const pa_mesh *m, pa_idx v, int nfield,
                                      double *out) {
-  int d = m->dim, n = 0, nm = m->met_ncomp;
-  for (int k = 0; k < d; k++) out[n++] = m->coord[(size_t)d * v + k];
-  for (int k = 0; k < nm; k++) out[n++] = m->met[(size_t)nm * v + k];
+  int d = m->dim, nm = m->met_ncomp, n = d + nm;
+  const double *c = m->coord + (size_t)d * v;
+  for (int k = 0; k < d; k++) out[k] = c[k];
+  if (nm) {
+    const double *t = m->met + (size_t)nm * v;
+    for (int k = 0; k < nm; k++) out[d + k] = t[k];
+  }
   if (m->vgdim) out[n++] = pa__entity_pack(m->vgdim[v], m->vgtag[v]);
   for (int f = 0; f < nfield; f++) {
     int nc = m->field[f].ncomp;
-    for (int k = 0; k < nc; k++) out[n++] = m->field[f].val[(size_t)nc * v + k];
+    const double *x = m->field[f].val + (size_t)nc * v;
+    for (int k = 0; k < nc; k++) out[n++] = x[k];
   }
   return n;
 }
@@ -251,12 +256,20 @@ static inline int pa__vertex_doubles(const pa_mesh *m, pa_idx v, int nfield,
 static inline void pa__vertex_set_doubles(pa_mesh *m, pa_idx v,
                                           const double *in) {
   int d = m->dim, nm = m->met_ncomp;
-  for (int k = 0; k < d; k++) m->coord[(size_t)d * v + k] = *in++;
-  for (int k = 0; k < nm; k++) m->met[(size_t)nm * v + k] = *in++;
+  double *c = m->coord + (size_t)d * v;
+  for (int k = 0; k < d; k++) c[k] = in[k];
+  in += d;
+  if (nm) {
+    double *t = m->met + (size_t)nm * v;
+    for (int k = 0; k < nm; k++) t[k] = in[k];
+    in += nm;
+  }
   if (m->vgdim) pa__entity_unpack(*in++, &m->vgdim[v], &m->vgtag[v]);
   for (int f = 0; f < m->nfield; f++) {
     int nc = m->field[f].ncomp;
-    for (int k = 0; k < nc; k++) m->field[f].val[(size_t)nc * v + k] = *in++;
+    double *x = m->field[f].val + (size_t)nc * v;
+    for (int k = 0; k < nc; k++) x[k] = in[k];
+    in += nc;
   }
 }
 /* The doubles of the record of entity e of a kind of m (vertices: as
