@@ -824,6 +824,30 @@ cleanup:
   return st;
 }
 
+/* The "done" value of output element e (see the file comment) from dv0
+ * (PA_ADAPT_DONE, 0 for a rolled-back piece), and the global ids of its
+ * vertices into ev; nve a constant once inlined. */
+static inline uint8_t elem_done(const orecs *c, pa_idx e, uint8_t dv0,
+                                const int nve, pa_gid *ev) {
+  const pa_idx *v = c->o->elem + (size_t)nve * e;
+  uint8_t dv = dv0;
+  int nhot = 0, near = 0;
+  for (int k = 0; k < nve; k++) {
+    ev[k] = c->vg[v[k]];
+    near |= c->dist[v[k]] < NEAR_SKIN;
+    nhot += c->dist[v[k]] == 0;
+  }
+  if (dv && near) dv = PA_ADAPT_DONE_NEAR_SKIN;
+  if (dv && nhot >= 2) dv = PA_ADAPT_DONE_ON_SKIN;
+  if (dv == PA_ADAPT_DONE && c->qband > 0 &&
+      elem_layer(c->o, c->dsk, e) < NEAR_SKIN &&
+      pa_mesh_elem_quality(c->pc->out, e) < c->qband) {
+    dv = PA_ADAPT_DONE_NEAR_SKIN; /* see BAD_NEAR_SKIN */
+  }
+  if (dv == PA_ADAPT_DONE && c->it->npieces == 1) dv = PA_ADAPT_DONE_FREE;
+  return dv;
+}
+
 /* The output's elements, each with its "done" value (see the file
  * comment); one that is an input element keeps its id and values, with
  * done updated, the others get fresh ids and zeros. */
@@ -835,23 +859,12 @@ static pa_status output_elements(orecs *c) {
   const pa_mesh *o = c->o;
   unsigned char *pay = c->pay;
   int d = o->dim;
+  uint8_t dv0 = it->piece_failed[pc->id] ? 0 : PA_ADAPT_DONE;
+  int cells = c->R[PA_ELEMENT].ndbl > 0;
   for (pa_idx e = 0; e < o->ne; e++) {
     pa_gid ev[4];
-    uint8_t dv = it->piece_failed[pc->id] ? 0 : PA_ADAPT_DONE;
-    int nhot = 0;
-    for (int k = 0; k <= d; k++) {
-      pa_idx j = o->elem[(size_t)(d + 1) * e + k];
-      ev[k] = c->vg[j];
-      if (c->dist[j] < NEAR_SKIN && dv) dv = PA_ADAPT_DONE_NEAR_SKIN;
-      nhot += c->dist[j] == 0;
-    }
-    if (dv && nhot >= 2) dv = PA_ADAPT_DONE_ON_SKIN;
-    if (dv == PA_ADAPT_DONE && c->qband > 0 &&
-        elem_layer(o, c->dsk, e) < NEAR_SKIN &&
-        pa_mesh_elem_quality(pc->out, e) < c->qband) {
-      dv = PA_ADAPT_DONE_NEAR_SKIN; /* see BAD_NEAR_SKIN */
-    }
-    if (dv == PA_ADAPT_DONE && it->npieces == 1) dv = PA_ADAPT_DONE_FREE;
+    uint8_t dv = d == 2 ? elem_done(c, e, dv0, 3, ev)
+                        : elem_done(c, e, dv0, 4, ev);
     pa_idx q = pc->reuse[PA_ELEMENT][e];
     if (q >= 0) { /* an input element: its id and values, done updated */
       const size_t *po = pc->kpoff[PA_ELEMENT];
@@ -864,14 +877,16 @@ static pa_status output_elements(orecs *c) {
       c->pcache.len = (size_t)-1; /* pay no longer holds the cached payload */
       PA_CALL(pa__recs_add(&c->R[PA_ELEMENT], pc->kgid[PA_ELEMENT][q], ev,
                            o->eref[e], o->eflag[e], c->dest[e],
-                           cell_doubles(c, PA_ELEMENT, e), pay, pl));
+                           cells ? cell_doubles(c, PA_ELEMENT, e) : NULL, pay,
+                           pl));
       continue;
     }
     size_t pl = payload_of(&c->pcache, dm, PA_ELEMENT, o->eref[e], c->done, dv,
                            pay);
     PA_CALL(pa__recs_add(&c->R[PA_ELEMENT], c->next[PA_ELEMENT]++, ev,
                          o->eref[e], o->eflag[e], c->dest[e],
-                         cell_doubles(c, PA_ELEMENT, e), pay, pl));
+                         cells ? cell_doubles(c, PA_ELEMENT, e) : NULL, pay,
+                         pl));
   }
 cleanup:
   return st;
