@@ -827,15 +827,16 @@ cleanup:
 /* The "done" value of output element e (see the file comment) from dv0
  * (PA_ADAPT_DONE, 0 for a rolled-back piece), and the global ids of its
  * vertices into ev; nve a constant once inlined. */
-static inline uint8_t elem_done(const orecs *c, pa_idx e, uint8_t dv0,
+static inline uint8_t elem_done(const orecs *c, const pa_gid *vg,
+                                const uint8_t *dist, pa_idx e, uint8_t dv0,
                                 const int nve, pa_gid *ev) {
   const pa_idx *v = c->o->elem + (size_t)nve * e;
   uint8_t dv = dv0;
   int nhot = 0, near = 0;
   for (int k = 0; k < nve; k++) {
-    ev[k] = c->vg[v[k]];
-    near |= c->dist[v[k]] < NEAR_SKIN;
-    nhot += c->dist[v[k]] == 0;
+    ev[k] = vg[v[k]];
+    near |= dist[v[k]] < NEAR_SKIN;
+    nhot += dist[v[k]] == 0;
   }
   if (dv && near) dv = PA_ADAPT_DONE_NEAR_SKIN;
   if (dv && nhot >= 2) dv = PA_ADAPT_DONE_ON_SKIN;
@@ -861,11 +862,18 @@ static pa_status output_elements(orecs *c) {
   int d = o->dim;
   uint8_t dv0 = it->piece_failed[pc->id] ? 0 : PA_ADAPT_DONE;
   int cells = c->R[PA_ELEMENT].ndbl > 0;
+  /* (in locals: the compiler cannot tell that the records' stores leave
+   * them alone) */
+  const pa_gid *vg = c->vg;
+  const uint8_t *dist = c->dist;
+  const pa_idx *reuse = pc->reuse[PA_ELEMENT];
+  const int *dest = c->dest;
+  pa__recs *R = &c->R[PA_ELEMENT];
   for (pa_idx e = 0; e < o->ne; e++) {
     pa_gid ev[4];
-    uint8_t dv = d == 2 ? elem_done(c, e, dv0, 3, ev)
-                        : elem_done(c, e, dv0, 4, ev);
-    pa_idx q = pc->reuse[PA_ELEMENT][e];
+    uint8_t dv = d == 2 ? elem_done(c, vg, dist, e, dv0, 3, ev)
+                        : elem_done(c, vg, dist, e, dv0, 4, ev);
+    pa_idx q = reuse[e];
     if (q >= 0) { /* an input element: its id and values, done updated */
       const size_t *po = pc->kpoff[PA_ELEMENT];
       size_t pl = po[q + 1] - po[q];
@@ -875,18 +883,17 @@ static pa_status output_elements(orecs *c) {
       memcpy(pay, pc->kpay[PA_ELEMENT] + po[q], pl);
       pay[at] = dv;
       c->pcache.len = (size_t)-1; /* pay no longer holds the cached payload */
-      PA_CALL(pa__recs_add(&c->R[PA_ELEMENT], pc->kgid[PA_ELEMENT][q], ev,
-                           o->eref[e], o->eflag[e], c->dest[e],
+      PA_CALL(pa__recs_add(R, pc->kgid[PA_ELEMENT][q], ev, o->eref[e],
+                           o->eflag[e], dest[e],
                            cells ? cell_doubles(c, PA_ELEMENT, e) : NULL, pay,
                            pl));
       continue;
     }
     size_t pl = payload_of(&c->pcache, dm, PA_ELEMENT, o->eref[e], c->done, dv,
                            pay);
-    PA_CALL(pa__recs_add(&c->R[PA_ELEMENT], c->next[PA_ELEMENT]++, ev,
-                         o->eref[e], o->eflag[e], c->dest[e],
-                         cells ? cell_doubles(c, PA_ELEMENT, e) : NULL, pay,
-                         pl));
+    PA_CALL(pa__recs_add(R, c->next[PA_ELEMENT]++, ev, o->eref[e], o->eflag[e],
+                         dest[e], cells ? cell_doubles(c, PA_ELEMENT, e) : NULL,
+                         pay, pl));
   }
 cleanup:
   return st;
