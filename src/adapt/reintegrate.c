@@ -335,76 +335,60 @@ cleanup:
  * not above the worst quality of the band beyond (shapes the remesher
  * leaves anyway; a piece with no such band marks nothing). */
 
-/* The vertex balls of an output (pa__balls) and a vertex queue, built on
- * first use for the layers of one output. */
-typedef struct vballs {
-  pa_idx *start, *ball, *queue;
-} vballs;
-
-static void vballs_free(vballs *b) {
-  pa__free(b->start);
-  pa__free(b->ball);
-  pa__free(b->queue);
-  memset(b, 0, sizeof *b);
-}
-
 /* For each of the nd arrays dist[0..nd): dist[a][v] = min(nl, vertex
- * layers from the vertices where it is 0; the others start at nl), over the
- * elements of o: a breadth-first search through the vertex balls b (built
- * here if not yet), so the cost past the balls is the layers' own (the
- * skin and nl layers around it), not nl sweeps over the output. */
-static pa_status vertex_layers(const pa_mesh *o, int nl, int nd,
-                               uint8_t *const *dist, vballs *b) {
-  pa_status st = PA_SUCCESS;
-  int nve = o->dim + 1;
-  if (!b->start) {
-    PA_CALL(pa__balls(o->elem, o->ne, nve, o->nv, &b->start, &b->ball));
-    PA_ALLOC(b->queue, o->nv ? (size_t)o->nv : 1);
-  }
-  for (int a = 0; a < nd; a++) {
-    uint8_t *x = dist[a];
-    pa_idx *q = b->queue, nq = 0;
-    for (pa_idx v = 0; v < o->nv; v++)
-      if (x[v] == 0) q[nq++] = v;
-    for (pa_idx h = 0; h < nq; h++) {
-      pa_idx u = q[h];
-      int next = x[u] + 1;
-      if (next >= nl) continue; /* a vertex at nl keeps its start value */
-      for (pa_idx i = b->start[u]; i < b->start[u + 1]; i++) {
-        const pa_idx *v = o->elem + (size_t)nve * b->ball[i];
-        for (int k = 0; k < nve; k++)
-          if (x[v[k]] > next) {
-            x[v[k]] = (uint8_t)next;
-            q[nq++] = v[k];
-          }
-      }
+ * layers from the vertices where it is 0), over the elements of o, given
+ * the layers below k0 (the other vertices at nl): layer k is made by one
+ * sweep over the elements, which gives k to every vertex above k of an
+ * element whose nearest vertex is at k - 1 (an element with a vertex
+ * nearer than that has no vertex beyond k - 1). For the NEAR_SKIN layers
+ * one pass over the output, cheaper than the vertex balls a breadth-first
+ * search would need. */
+static inline void layer_sweep(const pa_mesh *o, int k, int nd,
+                               uint8_t *const *dist, const int nve) {
+  for (pa_idx e = 0; e < o->ne; e++) {
+    const pa_idx *v = o->elem + (size_t)nve * e;
+    for (int a = 0; a < nd; a++) {
+      uint8_t *x = dist[a];
+      int mn = x[v[0]];
+      for (int i = 1; i < nve; i++) mn = x[v[i]] < mn ? x[v[i]] : mn;
+      if (mn != k - 1) continue;
+      for (int i = 0; i < nve; i++)
+        if (x[v[i]] > k) x[v[i]] = (uint8_t)k;
     }
   }
-cleanup:
-  return st;
+}
+
+static void vertex_layers(const pa_mesh *o, int k0, int nl, int nd,
+                          uint8_t *const *dist) {
+  for (int k = k0; k < nl; k++) {
+    if (o->dim == 2) layer_sweep(o, k, nd, dist, 3);
+    else layer_sweep(o, k, nd, dist, 4);
+  }
 }
 
 /* Smallest of dist over the vertices of element e of o. */
-static int elem_layer(const pa_mesh *o, const uint8_t *dist, pa_idx e) {
+static inline int elem_layer(const pa_mesh *o, const uint8_t *dist,
+                             pa_idx e) {
   const pa_idx *v = o->elem + (size_t)(o->dim + 1) * e;
-  int mn = dist[v[0]];
-  for (int k = 1; k <= o->dim; k++) mn = dist[v[k]] < mn ? dist[v[k]] : mn;
+  int mn = dist[v[0]] < dist[v[1]] ? dist[v[0]] : dist[v[1]];
+  mn = dist[v[2]] < mn ? dist[v[2]] : mn;
+  if (o->dim == 3) mn = dist[v[3]] < mn ? dist[v[3]] : mn;
   return mn;
 }
 
 /* dist[a] over the output of pc for each of the nd marks mark[a] (pc->hot,
  * pc->skin): 0 at the output vertices matching a marked input vertex, else
  * the vertex layers from them, at most nl. */
-static pa_status layers_from(const pa__piece *pc, int nd,
-                             const uint8_t *const *mark, int nl,
-                             uint8_t *const *dist, vballs *b) {
+static void layers_from(const pa__piece *pc, int nd,
+                        const uint8_t *const *mark, int nl,
+                        uint8_t *const *dist) {
   const pa_mesh *o = pc->out;
   for (int a = 0; a < nd; a++)
     for (pa_idx j = 0; j < o->nv; j++) {
       pa_idx i = pc->match[j];
       dist[a][j] = (uint8_t)(i >= 0 && mark[a][i] ? 0 : nl);
     }
-  return vertex_layers(o, nl, nd, dist, b);
+  vertex_layers(o, 1, nl, nd, dist);
 }
 
 size_t pa__new_payload(const pa_dmesh *dm, int kind, int32_t ref,
@@ -798,9 +782,9 @@ cleanup:
 }
 
 /* The elements within NEAR_SKIN vertex layers of a hot skin vertex (dist);
- * BAD_NEAR_SKIN: the layers from any skin vertex (dsk), through the same
- * vertex balls, and only if an element near the skin is poor, counted
- * further for the worst quality of the band beyond (qband). */
+ * BAD_NEAR_SKIN: the layers from any skin vertex (dsk), in the same
+ * sweeps, and only if an element near the skin is poor, counted further
+ * for the worst quality of the band beyond (qband). */
 static pa_status near_skin_layers(orecs *c) {
   pa_status st = PA_SUCCESS;
   const pa__piece *pc = c->pc;
@@ -809,14 +793,13 @@ static pa_status near_skin_layers(orecs *c) {
                         (pc->rep.nswap == 0 && pc->rep.nmove == 0)
                     ? 0
                     : c->it->opts->qual_threshold;
-  vballs b = {NULL, NULL, NULL};
   c->qband = 0;
   PA_ALLOC(c->dist, o->nv);
   if (qthr > 0) PA_ALLOC(c->dsk, o->nv);
   {
     const uint8_t *mk[2] = {pc->hot, pc->skin};
     uint8_t *const ds[2] = {c->dist, c->dsk};
-    PA_CALL(layers_from(pc, qthr > 0 ? 2 : 1, mk, NEAR_SKIN, ds, &b));
+    layers_from(pc, qthr > 0 ? 2 : 1, mk, NEAR_SKIN, ds);
   }
   if (qthr > 0) {
     int poor = 0;
@@ -824,9 +807,11 @@ static pa_status near_skin_layers(orecs *c) {
       poor = elem_layer(o, c->dsk, e) < NEAR_SKIN &&
              pa_mesh_elem_quality(pc->out, e) < qthr;
     if (poor) {
-      const uint8_t *mk[1] = {pc->skin};
+      /* the layers below NEAR_SKIN are made: the others go on from there */
       uint8_t *const ds[1] = {c->dsk};
-      PA_CALL(layers_from(pc, 1, mk, 2 * NEAR_SKIN, ds, &b));
+      for (pa_idx j = 0; j < o->nv; j++)
+        if (c->dsk[j] == NEAR_SKIN) c->dsk[j] = 2 * NEAR_SKIN;
+      vertex_layers(o, NEAR_SKIN, 2 * NEAR_SKIN, 1, ds);
       c->qband = qthr;
       for (pa_idx e = 0; e < o->ne; e++) {
         int l = elem_layer(o, c->dsk, e);
@@ -836,8 +821,32 @@ static pa_status near_skin_layers(orecs *c) {
     }
   }
 cleanup:
-  vballs_free(&b);
   return st;
+}
+
+/* The "done" value of output element e (see the file comment) from dv0
+ * (PA_ADAPT_DONE, 0 for a rolled-back piece), and the global ids of its
+ * vertices into ev; nve a constant once inlined. */
+static inline uint8_t elem_done(const orecs *c, const pa_gid *vg,
+                                const uint8_t *dist, pa_idx e, uint8_t dv0,
+                                const int nve, pa_gid *ev) {
+  const pa_idx *v = c->o->elem + (size_t)nve * e;
+  uint8_t dv = dv0;
+  int nhot = 0, near = 0;
+  for (int k = 0; k < nve; k++) {
+    ev[k] = vg[v[k]];
+    near |= dist[v[k]] < NEAR_SKIN;
+    nhot += dist[v[k]] == 0;
+  }
+  if (dv && near) dv = PA_ADAPT_DONE_NEAR_SKIN;
+  if (dv && nhot >= 2) dv = PA_ADAPT_DONE_ON_SKIN;
+  if (dv == PA_ADAPT_DONE && c->qband > 0 &&
+      elem_layer(c->o, c->dsk, e) < NEAR_SKIN &&
+      pa_mesh_elem_quality(c->pc->out, e) < c->qband) {
+    dv = PA_ADAPT_DONE_NEAR_SKIN; /* see BAD_NEAR_SKIN */
+  }
+  if (dv == PA_ADAPT_DONE && c->it->npieces == 1) dv = PA_ADAPT_DONE_FREE;
+  return dv;
 }
 
 /* The output's elements, each with its "done" value (see the file
@@ -851,24 +860,20 @@ static pa_status output_elements(orecs *c) {
   const pa_mesh *o = c->o;
   unsigned char *pay = c->pay;
   int d = o->dim;
+  uint8_t dv0 = it->piece_failed[pc->id] ? 0 : PA_ADAPT_DONE;
+  int cells = c->R[PA_ELEMENT].ndbl > 0;
+  /* (in locals: the compiler cannot tell that the records' stores leave
+   * them alone) */
+  const pa_gid *vg = c->vg;
+  const uint8_t *dist = c->dist;
+  const pa_idx *reuse = pc->reuse[PA_ELEMENT];
+  const int *dest = c->dest;
+  pa__recs *R = &c->R[PA_ELEMENT];
   for (pa_idx e = 0; e < o->ne; e++) {
     pa_gid ev[4];
-    uint8_t dv = it->piece_failed[pc->id] ? 0 : PA_ADAPT_DONE;
-    int nhot = 0;
-    for (int k = 0; k <= d; k++) {
-      pa_idx j = o->elem[(size_t)(d + 1) * e + k];
-      ev[k] = c->vg[j];
-      if (c->dist[j] < NEAR_SKIN && dv) dv = PA_ADAPT_DONE_NEAR_SKIN;
-      nhot += c->dist[j] == 0;
-    }
-    if (dv && nhot >= 2) dv = PA_ADAPT_DONE_ON_SKIN;
-    if (dv == PA_ADAPT_DONE && c->qband > 0 &&
-        elem_layer(o, c->dsk, e) < NEAR_SKIN &&
-        pa_mesh_elem_quality(pc->out, e) < c->qband) {
-      dv = PA_ADAPT_DONE_NEAR_SKIN; /* see BAD_NEAR_SKIN */
-    }
-    if (dv == PA_ADAPT_DONE && it->npieces == 1) dv = PA_ADAPT_DONE_FREE;
-    pa_idx q = pc->reuse[PA_ELEMENT][e];
+    uint8_t dv = d == 2 ? elem_done(c, vg, dist, e, dv0, 3, ev)
+                        : elem_done(c, vg, dist, e, dv0, 4, ev);
+    pa_idx q = reuse[e];
     if (q >= 0) { /* an input element: its id and values, done updated */
       const size_t *po = pc->kpoff[PA_ELEMENT];
       size_t pl = po[q + 1] - po[q];
@@ -878,16 +883,17 @@ static pa_status output_elements(orecs *c) {
       memcpy(pay, pc->kpay[PA_ELEMENT] + po[q], pl);
       pay[at] = dv;
       c->pcache.len = (size_t)-1; /* pay no longer holds the cached payload */
-      PA_CALL(pa__recs_add(&c->R[PA_ELEMENT], pc->kgid[PA_ELEMENT][q], ev,
-                           o->eref[e], o->eflag[e], c->dest[e],
-                           cell_doubles(c, PA_ELEMENT, e), pay, pl));
+      PA_CALL(pa__recs_add(R, pc->kgid[PA_ELEMENT][q], ev, o->eref[e],
+                           o->eflag[e], dest[e],
+                           cells ? cell_doubles(c, PA_ELEMENT, e) : NULL, pay,
+                           pl));
       continue;
     }
     size_t pl = payload_of(&c->pcache, dm, PA_ELEMENT, o->eref[e], c->done, dv,
                            pay);
-    PA_CALL(pa__recs_add(&c->R[PA_ELEMENT], c->next[PA_ELEMENT]++, ev,
-                         o->eref[e], o->eflag[e], c->dest[e],
-                         cell_doubles(c, PA_ELEMENT, e), pay, pl));
+    PA_CALL(pa__recs_add(R, c->next[PA_ELEMENT]++, ev, o->eref[e], o->eflag[e],
+                         dest[e], cells ? cell_doubles(c, PA_ELEMENT, e) : NULL,
+                         pay, pl));
   }
 cleanup:
   return st;

@@ -149,6 +149,56 @@ static int fails(const pa_mesh *m, pa_idx e, double lo, double hi,
                      : fails_dim(m, e, 3, lo, hi, qmin);
 }
 
+/* fails_dim with sizes (met_ncomp 1, every -hsiz run): the same
+ * operations, so the same lengths and quality to the bit, with less
+ * around them: each vertex's inverse size once (pa__len2 and pa__len3 take
+ * 1/h at both ends of each edge), the squared Euclidean edge lengths once
+ * for the lengths and the quality (pa__qual2_stat and pa__qual3_stat with
+ * sizes are Euclidean and sum them in the same order), no dispatch on the
+ * metric. Debug builds check each answer against fails_dim. */
+static inline int fails_sizes_dim(const pa_mesh *m, pa_idx e, const int d,
+                                  double lo, double hi, double qmin) {
+  const int n = d + 1;
+  const pa_idx *v = m->elem + (size_t)n * e;
+  const double *x[4];
+  double iv[4], s2[6], s = 0.0;
+  for (int i = 0; i < n; i++) {
+    x[i] = m->coord + (size_t)d * v[i];
+    iv[i] = 1.0 / m->met[v[i]];
+  }
+  for (int i = 0, k = 0; i < n; i++)
+    for (int j = i + 1; j < n; j++, k++) {
+      double dx = x[j][0] - x[i][0], dy = x[j][1] - x[i][1];
+      double dz = d == 3 ? x[j][2] - x[i][2] : 0.0;
+      s2[k] = d == 2 ? dx * dx + dy * dy : dx * dx + dy * dy + dz * dz;
+      double l = sqrt(s2[k]) *
+                 (iv[i] == iv[j] ? iv[i] : pa__log_mean(iv[i], iv[j]));
+      if (!(l >= lo && l < hi)) return 1;
+    }
+  if (!(qmin > 0)) return 0;
+  for (int k = 0; k < n * d / 2; k++) s += s2[k];
+  if (!(s > 0.0)) return 0.0 < qmin;
+  if (d == 2) {
+    double ux = x[1][0] - x[0][0], uy = x[1][1] - x[0][1];
+    double vx = x[2][0] - x[0][0], vy = x[2][1] - x[0][1];
+    double area = 0.5 * (ux * vy - uy * vx);
+    return PA_METRIC_QUAL_NORM_2D * area * 1.0 / s < qmin;
+  }
+  return PA_METRIC_QUAL_NORM_3D * pa__simplex_volume(3, x) * 1.0 /
+             (s * sqrt(s)) <
+         qmin;
+}
+
+/* fails, by fails_sizes_dim when the metric is sizes. */
+static int fails_fast(const pa_mesh *m, pa_idx e, double lo, double hi,
+                      double qmin) {
+  if (m->met_ncomp != 1) return fails(m, e, lo, hi, qmin);
+  int t = m->dim == 2 ? fails_sizes_dim(m, e, 2, lo, hi, qmin)
+                      : fails_sizes_dim(m, e, 3, lo, hi, qmin);
+  PA_ASSERT(t == fails(m, e, lo, hi, qmin));
+  return t;
+}
+
 /* With a model (opts->remesh.geometry), 1 if a vertex of element e lies on
  * a curve or surface but off it by more than PA_GEOM_SNAP_TOL of the
  * model's size: a point the remesher of a piece left on its reconstruction
@@ -188,6 +238,29 @@ static int tagged(const pa_mesh *m, const pa_adapt_opts *o, pa_idx e,
     criteria(dn, o->qual_threshold, &lo, &hi, &qmin);
     t = fails(m, e, lo, hi, qmin);
   }
+  if (dn && off) t |= off_model(m, o->remesh.geometry, e, off);
+  return t;
+}
+
+/* The criteria of each done value kind, made once per tag pass rather
+ * than once per element. */
+typedef struct crit {
+  double lo[PA_ADAPT_DONE_FREE + 1], hi[PA_ADAPT_DONE_FREE + 1],
+      qmin[PA_ADAPT_DONE_FREE + 1];
+} crit;
+
+static void crit_init(crit *c, double qual_threshold) {
+  for (int k = 0; k <= PA_ADAPT_DONE_FREE; k++)
+    criteria((uint8_t)k, qual_threshold, &c->lo[k], &c->hi[k], &c->qmin[k]);
+}
+
+/* tagged, through the table c and fails_fast. */
+static int tagged_fast(const pa_mesh *m, const pa_adapt_opts *o,
+                       const crit *c, pa_idx e, uint8_t dn, uint8_t *off) {
+  if (dn > PA_ADAPT_DONE_FREE) return tagged(m, o, e, dn, off);
+  int t = !dn && (m->eflag[e] & PA_FLAG_USER) != 0;
+  if (!t && !o->user_tags_only)
+    t = fails_fast(m, e, c->lo[dn], c->hi[dn], c->qmin[dn]);
   if (dn && off) t |= off_model(m, o->remesh.geometry, e, off);
   return t;
 }
@@ -234,6 +307,8 @@ pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int fresh) {
   uint8_t *dn = pa_dmesh_value_data(done, NULL, NULL);
   uint8_t *off = NULL;
   double x[2] = {0, 0};
+  crit c;
+  crit_init(&c, o->qual_threshold);
   it->ne = dm->nown[PA_ELEMENT];
   if (o->remesh.geometry && m->vgdim) PA_CALLOC(off, dm->nloc[PA_VERTEX]);
   PA_CALLOC(it->tag, it->ne);
@@ -254,7 +329,7 @@ pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int fresh) {
 #endif
       continue;
     }
-    int t = tagged(m, o, e, kind, off);
+    int t = tagged_fast(m, o, &c, e, kind, off);
     dn[e] = t ? kind : kind | PA_ADAPT_DONE_PASSED;
     it->tag[e] = (uint8_t)t;
     if (t) it->work[e] = pa__elem_work(m, e);

@@ -1146,6 +1146,28 @@ cleanup:
   return st;
 }
 
+/* The vertices of the local elements (see fill_elements), nve a constant
+ * once inlined; returns 1 if one was not fetched. */
+static inline int elem_vertices(const pa_dmesh *dm, const bstate *s,
+                                const assembly *a, const int nve) {
+  const pa_idx *ord = a->ord[PA_ELEMENT], *ulv = s->ulv;
+  size_t nown = (size_t)dm->nown[PA_ELEMENT];
+  pa_idx *elem = a->m->elem, bad = 0;
+  for (size_t k = 0; k < s->L.n; k++) {
+    size_t i = (size_t)ord[k];
+    pa_idx *dst = elem + (size_t)nve * k;
+    if (i < nown) {
+      const pa_idx *us = s->uslot + (size_t)nve * i;
+      for (int j = 0; j < nve; j++) dst[j] = ulv[us[j]];
+    } else {
+      for (int j = 0; j < nve; j++)
+        dst[j] = pa__gidindex_get(&a->lv, s->L.vgid[(size_t)nve * i + j]);
+    }
+    for (int j = 0; j < nve; j++) bad |= dst[j] < 0;
+  }
+  return bad != 0;
+}
+
 /* Step 7b: the local mesh's elements. Owned elements (records [0, nown)):
  * vertex slot -> u -> LV record -> local vertex, two array reads; ghost
  * elements through the index lv. */
@@ -1155,16 +1177,10 @@ static pa_status fill_elements(pa_dmesh *dm, bstate *s, assembly *a) {
   pa_mesh *m = a->m;
   for (size_t u = 0; u < s->nu; u++)
     if (s->ulv[u] >= 0) s->ulv[u] = a->lvof[s->ulv[u]];
+  PA_CHECK(!(d == 2 ? elem_vertices(dm, s, a, 3) : elem_vertices(dm, s, a, 4)),
+           PA_ERR_INTERNAL, "element vertex not fetched");
   for (size_t k = 0; k < s->L.n; k++) {
     size_t i = (size_t)a->ord[PA_ELEMENT][k];
-    for (int j = 0; j <= d; j++) {
-      size_t p = (size_t)(d + 1) * i + j;
-      pa_idx v = i < (size_t)dm->nown[PA_ELEMENT]
-                     ? s->ulv[s->uslot[p]]
-                     : pa__gidindex_get(&a->lv, s->L.vgid[p]);
-      PA_CHECK(v >= 0, PA_ERR_INTERNAL, "element vertex not fetched");
-      m->elem[(size_t)(d + 1) * k + j] = v;
-    }
     m->eref[k] = s->L.ref[i];
     m->eflag[k] = s->L.flag[i];
     if (s->L.ndbl)
@@ -1259,6 +1275,36 @@ cleanup:
   return st;
 }
 
+/* The local elements around each vertex marked in need, ascending (CSR
+ * vstart/vel over all vertices, as pa__balls_of): one pass over the
+ * element slots collects the slots of the marked vertices (the first
+ * vertices of the boundary entities and edges, few), which are then filed
+ * by vertex; pa__balls_of passes over every slot twice. */
+static pa_status marked_balls(const pa_mesh *m, const uint8_t *need,
+                              pa_idx **vstart, pa_idx **vel) {
+  pa_status st = PA_SUCCESS;
+  int nve = m->dim + 1;
+  size_t ns = (size_t)nve * m->ne, n = 0, cap = 0;
+  pa_idx *slot = NULL;
+  for (size_t k = 0; k < ns; k++)
+    if (need[m->elem[k]]) {
+      PA_GROW(slot, cap, n + 1);
+      slot[n++] = (pa_idx)k;
+    }
+  PA_CALLOC(*vstart, (size_t)m->nv + 1);
+  PA_ALLOC(*vel, n ? n : 1);
+  pa_idx *start = *vstart;
+  for (size_t q = 0; q < n; q++) start[m->elem[slot[q]] + 1]++;
+  for (pa_idx v = 0; v < m->nv; v++) start[v + 1] += start[v];
+  for (size_t q = 0; q < n; q++)
+    (*vel)[start[m->elem[slot[q]]]++] = (pa_idx)((size_t)slot[q] / (size_t)nve);
+  for (pa_idx v = m->nv; v > 0; v--) start[v] = start[v - 1];
+  start[0] = 0;
+cleanup:
+  pa__free(slot);
+  return st;
+}
+
 /* Step 8: own the boundary entities and edges, number them (owned first)
  * and put them in the local mesh. */
 static pa_status fill_subentities(pa_dmesh *dm, bstate *s, assembly *a) {
@@ -1277,8 +1323,7 @@ static pa_status fill_subentities(pa_dmesh *dm, bstate *s, assembly *a) {
       pa_idx v = pa__gidindex_get(&a->lv, SB[t]->vgid[(size_t)SB[t]->nv * i]);
       if (v >= 0) need[v] = 1;
     }
-  PA_CALL(pa__balls_of(m->elem, m->ne, m->dim + 1, m->nv, need, &vstart,
-                       &vel));
+  PA_CALL(marked_balls(m, need, &vstart, &vel));
   pa__free(need);
   need = NULL;
   for (int t = 0; t < 2; t++)
@@ -1457,33 +1502,6 @@ void pa__entity_set_doubles(pa_mesh *m, int kind, pa_idx e, const double *in) {
   for (int k = 0; k < *nf; k++) {
     int nc = f[k].ncomp;
     for (int c = 0; c < nc; c++) f[k].val[(size_t)nc * e + c] = *in++;
-  }
-}
-
-/* (plain loops: a few doubles each, once per vertex of every transfer) */
-int pa__vertex_doubles(const pa_mesh *m, pa_idx v, int nfield, double *out) {
-  int d = m->dim, n = 0, nm = m->met_ncomp;
-  for (int k = 0; k < d; k++) out[n++] = m->coord[(size_t)d * v + k];
-  for (int k = 0; k < nm; k++) out[n++] = m->met[(size_t)nm * v + k];
-  if (m->vgdim) out[n++] = pa__entity_pack(m->vgdim[v], m->vgtag[v]);
-  for (int f = 0; f < nfield; f++) {
-    int nc = m->field[f].ncomp;
-    for (int k = 0; k < nc; k++) out[n++] = m->field[f].val[(size_t)nc * v + k];
-  }
-  return n;
-}
-
-void pa__vertex_set_doubles(pa_mesh *m, pa_idx v, const double *in) {
-  int d = m->dim, nm = m->met_ncomp;
-  memcpy(m->coord + (size_t)d * v, in, d * sizeof *in);
-  in += d;
-  if (nm) memcpy(m->met + (size_t)nm * v, in, nm * sizeof *in);
-  in += nm;
-  if (m->vgdim) pa__entity_unpack(*in++, &m->vgdim[v], &m->vgtag[v]);
-  for (int f = 0; f < m->nfield; f++) {
-    int nc = m->field[f].ncomp;
-    memcpy(m->field[f].val + (size_t)nc * v, in, nc * sizeof *in);
-    in += nc;
   }
 }
 

@@ -19,9 +19,9 @@ static const char *kind_name(int k) {
 }
 
 /* Signed volume (3D) / area (2D) of local element e, computed here so that
- * the check does not depend on the sequential mesh code. */
-static double elem_volume(const pa_mesh *m, pa_idx e) {
-  int d = m->dim;
+ * the check does not depend on the sequential mesh code; d a constant once
+ * inlined (the loops unroll). */
+static inline double elem_volume_dim(const pa_mesh *m, pa_idx e, const int d) {
   const pa_idx *v = m->elem + (size_t)(d + 1) * e;
   const double *a = m->coord + (size_t)d * v[0];
   double u[3][3];
@@ -31,6 +31,10 @@ static double elem_volume(const pa_mesh *m, pa_idx e) {
   return (u[0][0] * (u[1][1] * u[2][2] - u[1][2] * u[2][1]) -
           u[0][1] * (u[1][0] * u[2][2] - u[1][2] * u[2][0]) +
           u[0][2] * (u[1][0] * u[2][1] - u[1][1] * u[2][0])) / 6.0;
+}
+
+static double elem_volume(const pa_mesh *m, pa_idx e) {
+  return m->dim == 2 ? elem_volume_dim(m, e, 2) : elem_volume_dim(m, e, 3);
 }
 
 /* Broadcast owners' blocks over sf into a copy of a; compare ghosts. Returns
@@ -183,6 +187,31 @@ cleanup:
  * owners in range, layers (0 for owned elements only, at most the
  * overlap), element vertices in range, owned elements positively
  * oriented. */
+/* The local elements' layers, vertex numbers and (owned ones) volumes, d a
+ * constant once inlined. */
+static inline pa_status check_elements(const pa_dmesh *dm, const int d) {
+  pa_status st = PA_SUCCESS;
+  const pa_mesh *m = dm->mesh;
+  for (pa_idx e = 0; e < m->ne; e++) {
+    const pa_idx *v = m->elem + (size_t)(d + 1) * e;
+    PA_CHECK((dm->layer[e] == 0) == (e < dm->nown[PA_ELEMENT]) &&
+                 dm->layer[e] <= dm->overlap,
+             PA_ERR_MESH, "rank %d: element %lld has layer %d", dm->rank,
+             (long long)dm->gid[PA_ELEMENT][e], dm->layer[e]);
+    int out = 0;
+    for (int j = 0; j <= d; j++) out |= v[j] < 0 || v[j] >= m->nv;
+    PA_CHECK(!out, PA_ERR_MESH, "rank %d: element %d has a vertex out of range",
+             dm->rank, (int)e);
+    if (e >= dm->nown[PA_ELEMENT]) continue;
+    double vol = elem_volume_dim(m, e, d);
+    PA_CHECK(vol > 0, PA_ERR_MESH,
+             "element %lld (rank %d) is inverted or flat (volume %g)",
+             (long long)dm->gid[PA_ELEMENT][e], dm->rank, vol);
+  }
+cleanup:
+  return st;
+}
+
 static pa_status check_local(pa_dmesh *dm) {
   pa_status st = PA_SUCCESS;
   const pa_mesh *m = dm->mesh;
@@ -201,21 +230,7 @@ static pa_status check_local(pa_dmesh *dm) {
                "rank %d: %s %lld has owner %d out of range", dm->rank,
                kind_name(k), (long long)dm->gid[k][i], dm->owner[k][i]);
     }
-  for (pa_idx e = 0; e < m->ne; e++) {
-    PA_CHECK((dm->layer[e] == 0) == (e < dm->nown[PA_ELEMENT]) &&
-                 dm->layer[e] <= dm->overlap,
-             PA_ERR_MESH, "rank %d: element %lld has layer %d", dm->rank,
-             (long long)dm->gid[PA_ELEMENT][e], dm->layer[e]);
-    for (int j = 0; j <= d; j++)
-      PA_CHECK(m->elem[(size_t)(d + 1) * e + j] >= 0 &&
-                   m->elem[(size_t)(d + 1) * e + j] < m->nv,
-               PA_ERR_MESH, "rank %d: element %d has a vertex out of range",
-               dm->rank, (int)e);
-    if (e < dm->nown[PA_ELEMENT])
-      PA_CHECK(elem_volume(m, e) > 0, PA_ERR_MESH,
-               "element %lld (rank %d) is inverted or flat (volume %g)",
-               (long long)dm->gid[PA_ELEMENT][e], dm->rank, elem_volume(m, e));
-  }
+  PA_CALL(d == 2 ? check_elements(dm, 2) : check_elements(dm, 3));
 cleanup:
   return st;
 }

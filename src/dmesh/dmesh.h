@@ -232,10 +232,46 @@ pa_status pa__layout_cell_fields(const pa__layout *l, pa_mesh *m);
 /* The doubles of the record of vertex v of m: coordinates, metric, its
  * model entity (a classified m: dim * 2^32 + tag, exact), then the first
  * nfield fields (in that order, the layout's); returns the count. */
-int pa__vertex_doubles(const pa_mesh *m, pa_idx v, int nfield, double *out);
+/* Inline, plain loops: a few doubles each, once per vertex of every
+ * transfer and rebuild (a call per vertex cost more than the copy). */
+static inline int pa__vertex_doubles(const pa_mesh *m, pa_idx v, int nfield,
+                                     double *out) {
+  int d = m->dim, nm = m->met_ncomp, n = d + nm;
+  const double *c = m->coord + (size_t)d * v;
+  for (int k = 0; k < d; k++) out[k] = c[k];
+  if (nm) {
+    const double *t = m->met + (size_t)nm * v;
+    for (int k = 0; k < nm; k++) out[d + k] = t[k];
+  }
+  if (m->vgdim) out[n++] = pa__entity_pack(m->vgdim[v], m->vgtag[v]);
+  for (int f = 0; f < nfield; f++) {
+    int nc = m->field[f].ncomp;
+    const double *x = m->field[f].val + (size_t)nc * v;
+    for (int k = 0; k < nc; k++) out[n++] = x[k];
+  }
+  return n;
+}
 /* The inverse for all of m's fields: vertex v of m takes the doubles of a
  * record (coordinates, metric, entity when m is classified, fields). */
-void pa__vertex_set_doubles(pa_mesh *m, pa_idx v, const double *in);
+static inline void pa__vertex_set_doubles(pa_mesh *m, pa_idx v,
+                                          const double *in) {
+  int d = m->dim, nm = m->met_ncomp;
+  double *c = m->coord + (size_t)d * v;
+  for (int k = 0; k < d; k++) c[k] = in[k];
+  in += d;
+  if (nm) {
+    double *t = m->met + (size_t)nm * v;
+    for (int k = 0; k < nm; k++) t[k] = in[k];
+    in += nm;
+  }
+  if (m->vgdim) pa__entity_unpack(*in++, &m->vgdim[v], &m->vgtag[v]);
+  for (int f = 0; f < m->nfield; f++) {
+    int nc = m->field[f].ncomp;
+    double *x = m->field[f].val + (size_t)nc * v;
+    for (int k = 0; k < nc; k++) x[k] = in[k];
+    in += nc;
+  }
+}
 /* The doubles of the record of entity e of a kind of m (vertices: as
  * pa__vertex_doubles with all fields; elements and boundary entities:
  * their fields' values in field order; edges: none); returns the count.

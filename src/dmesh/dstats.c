@@ -17,6 +17,8 @@
  */
 #include "dmesh/dmesh.h"
 #include "metric/metric.h"
+#include "metric/metric2d.h"
+#include "metric/metric3d.h"
 
 #include <math.h>
 
@@ -72,21 +74,30 @@ pa_status pa_dmesh_stats(pa_dmesh *dm, pa_stats *stats) {
                              PA_STATS_CHECK_FULL, stats);
 }
 
-/* Count the ne owned elements of m (dimension d) in metric met (nc
- * components). */
-static void add_elements(pa__stats_acc *acc, const pa_mesh *m, int d,
-                         pa_idx ne, int nc, const double *met) {
-  int nve = d + 1;
+/* Count the ne owned elements of m (dimension d, a constant once inlined:
+ * the kernels pa__quality and pa__edge_length dispatch to, inline) in
+ * metric met (nc components). */
+static inline void add_elements_dim(pa__stats_acc *acc, const pa_mesh *m,
+                                    const int d, pa_idx ne, int nc,
+                                    const double *met) {
+  const int nve = d + 1;
   for (pa_idx e = 0; e < ne; e++) {
     const pa_idx *v = m->elem + (size_t)nve * e;
-    const double *x[4], *mm[4];
+    const double *x[4], *mm[4] = {NULL, NULL, NULL, NULL};
     for (int k = 0; k < nve; k++) {
       x[k] = m->coord + (size_t)d * v[k];
-      mm[k] = nc ? met + (size_t)nc * v[k] : NULL;
+      if (nc) mm[k] = met + (size_t)nc * v[k];
     }
     pa__stats_add_elem(acc, pa__simplex_volume(d, x),
-                       pa__quality(d, nc, x, mm));
+                       d == 2 ? pa__qual2_stat(nc, x, mm)
+                              : pa__qual3_stat(nc, x, mm));
   }
+}
+
+static void add_elements(pa__stats_acc *acc, const pa_mesh *m, int d,
+                         pa_idx ne, int nc, const double *met) {
+  if (d == 2) add_elements_dim(acc, m, 2, ne, nc, met);
+  else add_elements_dim(acc, m, 3, ne, nc, met);
 }
 
 /* shared[v] = 1 on the vertices with copies elsewhere: ghosts, and owned
@@ -124,10 +135,11 @@ static pa_status file_edges(pa_dmesh *dm, pa_idx ne, int nc,
   for (pa_idx a = 0; a < nv; a++)
     for (size_t k = pos[a]; k < pos[a + 1]; k++) {
       pa_idx b = other[k];
-      double len = pa__edge_length(d, nc, m->coord + (size_t)d * a,
-                                   m->coord + (size_t)d * b,
-                                   nc ? met + (size_t)nc * a : NULL,
-                                   nc ? met + (size_t)nc * b : NULL);
+      const double *xa = m->coord + (size_t)d * a, *xb = m->coord + (size_t)d * b;
+      const double *ma = nc ? met + (size_t)nc * a : NULL;
+      const double *mb = nc ? met + (size_t)nc * b : NULL;
+      double len = d == 2 ? pa__len2(nc, xa, xb, ma, mb)
+                          : pa__len3(nc, xa, xb, ma, mb);
       if (!shared[a] || !shared[b]) {
         pa__stats_add_edge(acc, len);
         continue;

@@ -183,8 +183,11 @@ static pa_status order_leaves(pa_idx n, const pa_gid *gid, const int *owner,
                               int rank, int size, size_t *cnt,
                               pa_idx **orderp, pa_idx *nleafp) {
   pa_status st = PA_SUCCESS;
-  pa_idx nleaf = 0;
-  for (pa_idx i = 0; i < n; i++)
+  pa_idx nleaf = 0, i0 = 0;
+  /* (the owned entities usually come first: the leaves are searched for
+   * only past them) */
+  while (i0 < n && owner[i0] == rank) i0++;
+  for (pa_idx i = i0; i < n; i++)
     if (owner[i] != rank) {
       PA_CHECK(owner[i] >= 0 && owner[i] < size, PA_ERR_INTERNAL,
                "entity %d has owner %d out of range", (int)i, owner[i]);
@@ -195,7 +198,7 @@ static pa_status order_leaves(pa_idx n, const pa_gid *gid, const int *owner,
   PA_ALLOC(*orderp, nleaf);
   pa_idx *order = *orderp;
   pa_idx k = 0;
-  for (pa_idx i = 0; i < n; i++)
+  for (pa_idx i = i0; i < n; i++)
     if (owner[i] != rank) order[k++] = i;
   PA_CALL(pa__sort_by_gid(order, (size_t)nleaf, gid));
   /* stable counting sort by owner keeps gid order within an owner */
@@ -367,7 +370,11 @@ pa_status pa__sf_build(MPI_Comm comm, pa_idx n, const pa_gid *gid,
   PA_ALLOC(sendg, nleaf);
   for (pa_idx j = 0; j < nleaf; j++) sendg[j] = gid[order[j]];
   for (int r = 0; r < size; r++) cnt[r] *= sizeof(pa_gid);
-  for (pa_idx i = 0; i < n; i++)
+  /* owned first with gids strictly increasing: only the first can be
+   * negative */
+  pa_idx nown = 0;
+  int sorted = owned_first_sorted(n, gid, owner, rank, &nown);
+  for (pa_idx i = 0; i < (sorted ? (nown > 0) : n); i++)
     PA_CHECK(owner[i] != rank || gid[i] >= 0, PA_ERR_ARG,
              "negative global id %lld", (long long)gid[i]);
   PA_CALL(pa__xchg_sparse(comm, cnt, sendg, &rcnt, &recv));
@@ -379,8 +386,7 @@ pa_status pa__sf_build(MPI_Comm comm, pa_idx n, const pa_gid *gid,
    * the requested gids; the requests are the ghosts of the neighbours, far
    * fewer than the owned entities, so the map stays in cache, where a map
    * of every owned gid would not. */
-  pa_idx nown = 0;
-  if (owned_first_sorted(n, gid, owner, rank, &nown))
+  if (sorted)
     resolve_sorted(sf, gid, nown, recv, nroot);
   else
     PA_CALL(resolve_mapped(sf, n, gid, owner, rank, recv, nroot));
