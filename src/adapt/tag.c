@@ -227,37 +227,22 @@ static int off_model(const pa_mesh *m, const pa_geometry *g, pa_idx e,
   return 0;
 }
 
-/* 1 if element e, of done value kind dn (without PA_ADAPT_DONE_PASSED), is
- * to be remeshed; off: off_model's cache (NULL without a model), which an
- * element produced in this run always fills. */
-static int tagged(const pa_mesh *m, const pa_adapt_opts *o, pa_idx e,
-                  uint8_t dn, uint8_t *off) {
-  int t = !dn && (m->eflag[e] & PA_FLAG_USER) != 0;
-  if (!t && !o->user_tags_only) {
-    double lo, hi, qmin;
-    criteria(dn, o->qual_threshold, &lo, &hi, &qmin);
-    t = fails(m, e, lo, hi, qmin);
-  }
-  if (dn && off) t |= off_model(m, o->remesh.geometry, e, off);
-  return t;
-}
-
-/* The criteria of each done value kind, made once per tag pass rather
- * than once per element. */
+/* The criteria of each done value kind, made once per tag pass. */
 typedef struct crit {
-  double lo[PA_ADAPT_DONE_FREE + 1], hi[PA_ADAPT_DONE_FREE + 1],
-      qmin[PA_ADAPT_DONE_FREE + 1];
+  double lo[PA_ADAPT_DONE_KIND + 1], hi[PA_ADAPT_DONE_KIND + 1],
+      qmin[PA_ADAPT_DONE_KIND + 1];
 } crit;
 
 static void crit_init(crit *c, double qual_threshold) {
-  for (int k = 0; k <= PA_ADAPT_DONE_FREE; k++)
+  for (int k = 0; k <= PA_ADAPT_DONE_KIND; k++)
     criteria((uint8_t)k, qual_threshold, &c->lo[k], &c->hi[k], &c->qmin[k]);
 }
 
-/* tagged, through the table c and fails_fast. */
-static int tagged_fast(const pa_mesh *m, const pa_adapt_opts *o,
-                       const crit *c, pa_idx e, uint8_t dn, uint8_t *off) {
-  if (dn > PA_ADAPT_DONE_FREE) return tagged(m, o, e, dn, off);
+/* 1 if element e, of done value kind dn (without PA_ADAPT_DONE_PASSED), is
+ * to be remeshed, by the criteria c; off: off_model's cache (NULL without
+ * a model), which an element produced in this run always fills. */
+static int tagged(const pa_mesh *m, const pa_adapt_opts *o, const crit *c,
+                  pa_idx e, uint8_t dn, uint8_t *off) {
   int t = !dn && (m->eflag[e] & PA_FLAG_USER) != 0;
   if (!t && !o->user_tags_only)
     t = fails_fast(m, e, c->lo[dn], c->hi[dn], c->qmin[dn]);
@@ -322,14 +307,14 @@ pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int fresh) {
     if (kind && o->user_tags_only) continue;
     if (!fresh && (dn[e] & PA_ADAPT_DONE_PASSED)) {
 #ifndef NDEBUG
-      PA_CHECK(!tagged(m, o, e, kind, off), PA_ERR_INTERNAL,
+      PA_CHECK(!tagged(m, o, &c, e, kind, off), PA_ERR_INTERNAL,
                "tag: element %lld passed the last tag, has not changed "
                "since, and fails it now",
                (long long)dm->gid[PA_ELEMENT][e]);
 #endif
       continue;
     }
-    int t = tagged_fast(m, o, &c, e, kind, off);
+    int t = tagged(m, o, &c, e, kind, off);
     dn[e] = t ? kind : kind | PA_ADAPT_DONE_PASSED;
     it->tag[e] = (uint8_t)t;
     if (t) it->work[e] = pa__elem_work(m, e);
