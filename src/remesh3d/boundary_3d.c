@@ -23,6 +23,19 @@
  */
 #include "remesh3d/remesh3d.h"
 
+/* Unknowns of the quadric fit of fit_one: the slopes, the three curvature
+ * terms and an offset (the cut points lie off the surface by the level
+ * set's interpolation error, so the fit need not pass through x). */
+#define FIT_NPAR 6
+/* At most this many points per fit (two rings hold 20 to 40). */
+#define FIT_MAXPTS 64
+/* A pivot below this share of the largest diagonal entry: a degenerate
+ * fit (points nearly on a line), the mean normal is kept. */
+#define FIT_PIVOT_MIN 1e-9
+/* A fitted normal turned by more than ~25 degrees from the mean normal is
+ * not trusted (a fold or a sheet of too few points). */
+#define FIT_MAX_TURN 0.9
+
 typedef struct bedge {
   pa_idx a, b;   /* a < b */
   pa_idx rec;    /* triangle record */
@@ -205,6 +218,144 @@ static void mark_corners(rm3d *m, int use_angle, uint8_t *nfeat,
       m->vpf[x] |= PA_FLAG_CORNER;
 }
 
+/* Solve the n x n system a x = b (row-major, destroyed) by Gaussian
+ * elimination with partial pivoting; 0 when a pivot falls below
+ * FIT_PIVOT_MIN times the largest diagonal entry (a degenerate fit). */
+static int solve_small(double *a, double *b, int n) {
+  double dmax = 0;
+  for (int i = 0; i < n; i++) dmax = fmax(dmax, fabs(a[i * n + i]));
+  if (!(dmax > 0)) return 0;
+  for (int c = 0; c < n; c++) {
+    int p = c;
+    for (int r = c + 1; r < n; r++)
+      if (fabs(a[r * n + c]) > fabs(a[p * n + c])) p = r;
+    if (!(fabs(a[p * n + c]) > FIT_PIVOT_MIN * dmax)) return 0;
+    if (p != c) {
+      for (int j = 0; j < n; j++) {
+        double t = a[c * n + j];
+        a[c * n + j] = a[p * n + j];
+        a[p * n + j] = t;
+      }
+      double t = b[c];
+      b[c] = b[p];
+      b[p] = t;
+    }
+    for (int r = c + 1; r < n; r++) {
+      double f = a[r * n + c] / a[c * n + c];
+      for (int j = c; j < n; j++) a[r * n + j] -= f * a[c * n + j];
+      b[r] -= f * b[c];
+    }
+  }
+  for (int c = n - 1; c >= 0; c--) {
+    double s = b[c];
+    for (int j = c + 1; j < n; j++) s -= a[c * n + j] * b[j];
+    b[c] = s / a[c * n + c];
+  }
+  return 1;
+}
+
+/* The normal at x of the quadric height field w = a u^2 + b uv + c v^2 +
+ * d u + e v (+ f) fitted by least squares to the points pts[0..np) in the
+ * frame of x's normal n (replaced by the fit's when it is well posed and
+ * within FIT_MAX_TURN of n). */
+static void fit_one(const double *x, const double *pts, int np, double *n) {
+  double t1[3], t2[3];
+  int ax = fabs(n[0]) < fabs(n[1]) ? (fabs(n[0]) < fabs(n[2]) ? 0 : 2)
+                                   : (fabs(n[1]) < fabs(n[2]) ? 1 : 2);
+  double e[3] = {0, 0, 0};
+  e[ax] = 1;
+  t1[0] = e[1] * n[2] - e[2] * n[1];
+  t1[1] = e[2] * n[0] - e[0] * n[2];
+  t1[2] = e[0] * n[1] - e[1] * n[0];
+  rm3d_unit(t1);
+  t2[0] = n[1] * t1[2] - n[2] * t1[1];
+  t2[1] = n[2] * t1[0] - n[0] * t1[2];
+  t2[2] = n[0] * t1[1] - n[1] * t1[0];
+  double scale = 0;
+  for (int i = 0; i < np; i++) {
+    const double *p = pts + 3 * i;
+    scale += (p[0] - x[0]) * (p[0] - x[0]) + (p[1] - x[1]) * (p[1] - x[1]) +
+             (p[2] - x[2]) * (p[2] - x[2]);
+  }
+  if (np < FIT_NPAR + 1 || !(scale > 0)) return;
+  scale = 1.0 / sqrt(scale / np);
+  double ata[FIT_NPAR * FIT_NPAR] = {0}, atb[FIT_NPAR] = {0};
+  for (int i = 0; i < np; i++) {
+    const double *p = pts + 3 * i;
+    double d[3] = {(p[0] - x[0]) * scale, (p[1] - x[1]) * scale,
+                   (p[2] - x[2]) * scale};
+    double u = d[0] * t1[0] + d[1] * t1[1] + d[2] * t1[2];
+    double v = d[0] * t2[0] + d[1] * t2[1] + d[2] * t2[2];
+    double w = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+    double row[6] = {u, v, u * u, u * v, v * v, 1};
+    for (int r = 0; r < FIT_NPAR; r++) {
+      atb[r] += row[r] * w;
+      for (int c = 0; c < FIT_NPAR; c++) ata[r * FIT_NPAR + c] += row[r] * row[c];
+    }
+  }
+  if (!solve_small(ata, atb, FIT_NPAR)) return;
+  double nf[3];
+  for (int j = 0; j < 3; j++) nf[j] = n[j] - atb[0] * t1[j] - atb[1] * t2[j];
+  rm3d_unit(nf);
+  if (nf[0] * n[0] + nf[1] * n[1] + nf[2] * n[2] < FIT_MAX_TURN) return;
+  memcpy(n, nf, sizeof nf);
+}
+
+/* Normals of the smooth boundary vertices (off features, not twisted)
+ * refined by fit_one over the vertices of their free boundary triangles
+ * and of those of their neighbours off features (two rings). */
+static pa_status fit_normals(rm3d *m, const uint8_t *twisted) {
+  pa_status st = PA_SUCCESS;
+  pa_idx *start = NULL, *list = NULL, *seen = NULL;
+  double *pts = NULL;
+  PA_CALLOC(start, (size_t)m->nv + 1);
+  for (pa_idx r = 0; r < m->tri.n; r++) {
+    if (m->tri.flag[r] & (RM3D_REC_DEAD | PA_FLAG_REQUIRED)) continue;
+    for (int j = 0; j < 3; j++) start[m->tri.v[3 * (size_t)r + j] + 1]++;
+  }
+  for (pa_idx x = 0; x < m->nv; x++) start[x + 1] += start[x];
+  PA_ALLOC(list, (size_t)start[m->nv] + 1);
+  for (pa_idx r = 0; r < m->tri.n; r++) {
+    if (m->tri.flag[r] & (RM3D_REC_DEAD | PA_FLAG_REQUIRED)) continue;
+    for (int j = 0; j < 3; j++) list[start[m->tri.v[3 * (size_t)r + j]]++] = r;
+  }
+  for (pa_idx x = m->nv; x > 0; x--) start[x] = start[x - 1];
+  start[0] = 0;
+  PA_ALLOC(seen, (size_t)m->nv);
+  for (pa_idx x = 0; x < m->nv; x++) seen[x] = -1;
+  PA_ALLOC(pts, 3 * FIT_MAXPTS);
+  for (pa_idx x = 0; x < m->nv; x++) {
+    if (twisted[x] || (m->vtag[x] & (RM3D_V_FEAT | RM3D_V_DEAD)) ||
+        start[x] == start[x + 1])
+      continue;
+    pa_idx ring[FIT_MAXPTS];
+    int nr = 0;
+    seen[x] = x;
+    ring[nr++] = x;
+    for (int i = 0, n1 = 1; i < n1; i++) {
+      pa_idx c = ring[i];
+      if (i && (m->vtag[c] & RM3D_V_FEAT)) continue;
+      for (pa_idx k = start[c]; k < start[c + 1]; k++)
+        for (int j = 0; j < 3; j++) {
+          pa_idx y = m->tri.v[3 * (size_t)list[k] + j];
+          if (seen[y] == x || nr == FIT_MAXPTS) continue;
+          seen[y] = x;
+          ring[nr++] = y;
+        }
+      if (i == 0) n1 = nr; /* the first ring's vertices, then stop */
+    }
+    for (int i = 0; i < nr; i++)
+      memcpy(pts + 3 * i, m->x + 3 * (size_t)ring[i], 3 * sizeof(double));
+    fit_one(m->x + 3 * (size_t)x, pts, nr, m->nrm + 3 * (size_t)x);
+  }
+cleanup:
+  pa__free(start);
+  pa__free(list);
+  pa__free(seen);
+  pa__free(pts);
+  return st;
+}
+
 /* Normals of boundary vertices off features, from their outward free
  * faces. A vertex whose feature edges all border a frozen triangle (the
  * skin of a piece of the parallel loop meeting the boundary: nborder[x] ==
@@ -233,6 +384,7 @@ static pa_status curved_normals(rm3d *m, const uint8_t *nborder,
     if (twisted[x]) memset(m->nrm + 3 * (size_t)x, 0, 3 * sizeof(double));
     rm3d_unit(m->nrm + 3 * (size_t)x);
   }
+  PA_CALL(fit_normals(m, twisted));
   int ncurved = 0;
   for (pa_idx k = 0; k < m->ne; k++) {
     if (!(m->tflag[k] & RM3D_T_FACES)) continue;
