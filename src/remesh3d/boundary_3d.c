@@ -22,11 +22,13 @@
  * interface is refined on the same smooth reconstruction.
  */
 #include "remesh3d/remesh3d.h"
+#include <stdio.h>
+#include <stdlib.h>
 
 /* Unknowns of the quadric fit of fit_one: the slopes, the three curvature
  * terms and an offset (the cut points lie off the surface by the level
  * set's interpolation error, so the fit need not pass through x). */
-#define FIT_NPAR 6
+#define FIT_NPAR 5
 /* At most this many points per fit (two rings hold 20 to 40). */
 #define FIT_MAXPTS 64
 /* A pivot below this share of the largest diagonal entry: a degenerate
@@ -34,7 +36,7 @@
 #define FIT_PIVOT_MIN 1e-9
 /* A fitted normal turned by more than ~25 degrees from the mean normal is
  * not trusted (a fold or a sheet of too few points). */
-#define FIT_MAX_TURN 0.9
+#define FIT_MAX_TURN 0.7
 
 typedef struct bedge {
   pa_idx a, b;   /* a < b */
@@ -346,7 +348,10 @@ static pa_status fit_normals(rm3d *m, const uint8_t *twisted) {
     }
     for (int i = 0; i < nr; i++)
       memcpy(pts + 3 * i, m->x + 3 * (size_t)ring[i], 3 * sizeof(double));
+    double n0[3]; memcpy(n0, m->nrm + 3 * (size_t)x, sizeof n0);
     fit_one(m->x + 3 * (size_t)x, pts, nr, m->nrm + 3 * (size_t)x);
+    if (getenv("LSDBG")) { const double *nn = m->nrm + 3 * (size_t)x, *xx = m->x + 3 * (size_t)x;
+      fprintf(stderr, "FIT %d %.9g %.9g %.9g %d %.9g %.9g %.9g %.9g %.9g %.9g\n", (int)x, xx[0], xx[1], xx[2], nr, n0[0],n0[1],n0[2],nn[0],nn[1],nn[2]); }
   }
 cleanup:
   pa__free(start);
