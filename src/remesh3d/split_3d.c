@@ -20,6 +20,8 @@
  * the chord are tried (CURVE_BACKOFF).
  */
 #include "remesh3d/remesh3d.h"
+#include <stdio.h>
+#include <stdlib.h>
 
 /* Points tried on a curved or ridge edge: the curve's midpoint, then 1/2
  * and 1/4 of its offset from the chord, then the chord's midpoint (valid
@@ -38,6 +40,14 @@ static void curved_mid(const double *a, const double *b, const double *na,
     double b2 = b[i] - (e[i] + wb * nb[i]) / 3.0;
     p[i] = (a[i] + 3.0 * b1 + 3.0 * b2 + b[i]) / 8.0;
   }
+}
+
+/* The normal of the new vertex of a curved edge (a,b): the mean of the
+ * end normals (0 when they cancel). */
+static void mid_normal(const rm3d *m, pa_idx a, pa_idx b, double *np) {
+  const double *na = m->nrm + 3 * (size_t)a, *nb = m->nrm + 3 * (size_t)b;
+  for (int i = 0; i < 3; i++) np[i] = na[i] + nb[i];
+  rm3d_unit(np);
 }
 
 /* Unit tangent of the ridge through v, oriented away from its feature
@@ -158,26 +168,59 @@ static int shell_qualities(const rm3d *m, const pa_idx *tets, int n, pa_idx a,
   return 1;
 }
 
+/* The unit normal of the curved surface at the boundary triangle of
+ * vertices v (-1 standing for the new vertex, of normal np): the sum of
+ * their normals, oriented along the triangle's parent normal n0, in n; 0
+ * when a vertex has none (off a curved patch). */
+static int surface_normal(const rm3d *m, const pa_idx *v, const double *np,
+                          const double *n0, double *n) {
+  n[0] = n[1] = n[2] = 0;
+  for (int j = 0; j < 3; j++) {
+    if (v[j] >= 0 && !(m->vtag[v[j]] & RM3D_V_CURVED)) return 0;
+    const double *nj = v[j] < 0 ? np : m->nrm + 3 * (size_t)v[j];
+    for (int c = 0; c < 3; c++) n[c] += nj[c];
+  }
+  double d = n[0] * n0[0] + n[1] * n0[1] + n[2] * n0[2];
+  if (!(rm3d_unit(n) > 0) || d == 0) return 0;
+  if (d < 0) /* the record runs against the normals (an outer surface) */
+    for (int c = 0; c < 3; c++) n[c] = -n[c];
+  return 1;
+}
+
 /* 1 if the halves of each of the ntri boundary triangles trec of edge
- * (a,b), split at p, are valid and within cmin (a cosine) of its normal. */
+ * (a,b), split at p, are valid and within cmin (a cosine) of its normal,
+ * or (np, p on a curved patch with that normal) within cmin of the normal
+ * of the surface at their vertices: on a coarse curved patch the halves
+ * of a point on the curve turn away from their flat parent towards the
+ * surface (a fold turns them away from both). */
 static int split_surface_kept(const rm3d *m, const pa_idx *trec, int ntri,
                               pa_idx a, pa_idx b, const double *p,
-                              double cmin) {
+                              double cmin, const double *np) {
   for (int i = 0; i < ntri; i++) {
     const pa_idx *v = m->tri.v + 3 * (size_t)trec[i];
     const double *y[3], *ya[3], *yb[3];
+    pa_idx va[3], vb[3];
     for (int j = 0; j < 3; j++) {
       y[j] = m->x + 3 * (size_t)v[j];
       ya[j] = v[j] == b ? p : y[j];
       yb[j] = v[j] == a ? p : y[j];
+      va[j] = v[j] == b ? -1 : v[j];
+      vb[j] = v[j] == a ? -1 : v[j];
     }
-    double n0[3], na[3], nb[3];
+    double n0[3], na[3], nb[3], ns[3];
     if (!(rm3d_tri_normal(y[0], y[1], y[2], n0) > 0)) continue;
     if (!(rm3d_tri_normal(ya[0], ya[1], ya[2], na) > 0) ||
         !(rm3d_tri_normal(yb[0], yb[1], yb[2], nb) > 0))
       return 0;
-    if (n0[0] * na[0] + n0[1] * na[1] + n0[2] * na[2] < cmin ||
-        n0[0] * nb[0] + n0[1] * nb[1] + n0[2] * nb[2] < cmin)
+    if (getenv("LSDBG") && np) { double t1[3], t2[3]; int h1 = surface_normal(m, va, np, n0, t1), h2 = surface_normal(m, vb, np, n0, t2);
+      fprintf(stderr, "HALF %.3f %.3f | %d %.3f %.3f | %d %.3f %.3f\n", n0[0]*na[0]+n0[1]*na[1]+n0[2]*na[2], n0[0]*nb[0]+n0[1]*nb[1]+n0[2]*nb[2], h1, t1[0]*na[0]+t1[1]*na[1]+t1[2]*na[2], t1[0]*n0[0]+t1[1]*n0[1]+t1[2]*n0[2], h2, t2[0]*nb[0]+t2[1]*nb[1]+t2[2]*nb[2], t2[0]*n0[0]+t2[1]*n0[1]+t2[2]*n0[2]); }
+    if (!(n0[0] * na[0] + n0[1] * na[1] + n0[2] * na[2] >= cmin ||
+          (np && surface_normal(m, va, np, n0, ns) &&
+           ns[0] * na[0] + ns[1] * na[1] + ns[2] * na[2] >= cmin)))
+      return 0;
+    if (!(n0[0] * nb[0] + n0[1] * nb[1] + n0[2] * nb[2] >= cmin ||
+          (np && surface_normal(m, vb, np, n0, ns) &&
+           ns[0] * nb[0] + ns[1] * nb[1] + ns[2] * nb[2] >= cmin)))
       return 0;
   }
   return 1;
@@ -244,10 +287,13 @@ static int place_vertex(rm3d *m, split_plan *s) {
   const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b;
   double c[3], p0[3];
   for (int i = 0; i < 3; i++) c[i] = 0.5 * (xa[i] + xb[i]);
-  if (s->bdry && s->erec < 0 && m->nrm && (m->vtag[a] & RM3D_V_CURVED) &&
-      (m->vtag[b] & RM3D_V_CURVED))
+  int curved = s->bdry && s->erec < 0 && m->nrm &&
+               (m->vtag[a] & RM3D_V_CURVED) && (m->vtag[b] & RM3D_V_CURVED);
+  double nmid[3];
+  if (curved) {
     curved_mid(xa, xb, m->nrm + 3 * (size_t)a, m->nrm + 3 * (size_t)b, p0);
-  else if (s->erec >= 0)
+    mid_normal(m, a, b, nmid);
+  } else if (s->erec >= 0)
     ridge_mid(m, a, b, p0);
   else
     memcpy(p0, c, sizeof c);
@@ -272,7 +318,7 @@ static int place_vertex(rm3d *m, split_plan *s) {
   if (on_model) {
     memcpy(s->p, pmod, sizeof pmod);
     ok = split_surface_kept(m, s->trec, s->ntri, a, b, s->p,
-                            RM3D_NORMAL_COS_MODEL) &&
+                            RM3D_NORMAL_COS_MODEL, NULL) &&
          shell_qualities(m, s->tets, s->n, a, b, s->p, s->mp, relax, s->q1,
                          s->q2);
     s->offmodel = !ok;
@@ -282,11 +328,16 @@ static int place_vertex(rm3d *m, split_plan *s) {
     if (f && !memcmp(p0, c, sizeof c)) break;
     for (int i = 0; i < 3; i++)
       s->p[i] = f ? c[i] + w * (p0[i] - c[i]) : p0[i];
-    if (!split_surface_kept(m, s->trec, s->ntri, a, b, s->p, RM3D_NORMAL_COS))
+    if (!split_surface_kept(m, s->trec, s->ntri, a, b, s->p, RM3D_NORMAL_COS,
+                            curved ? nmid : NULL)) {
+      if (getenv("LSDBG") && s->bdry && f == 0 && (m->vtag[a] & RM3D_V_CURVED)) fprintf(stderr, "FAILSURF relax %d\n", relax);
       continue;
+    }
     ok = shell_qualities(m, s->tets, s->n, a, b, s->p, s->mp, relax, s->q1,
                          s->q2);
+    if (!ok && getenv("LSDBG") && s->bdry && f == 0 && (m->vtag[a] & RM3D_V_CURVED)) fprintf(stderr, "FAILQ relax %d\n", relax);
     if (!ok && !relax) break;
+    if (ok && getenv("LSDBG") && s->bdry) fprintf(stderr, "SPLIT f=%d %.5f %.5f %.5f curved %d %d erec %d\n", f, s->p[0], s->p[1], s->p[2], !!(m->vtag[a] & RM3D_V_CURVED), !!(m->vtag[b] & RM3D_V_CURVED), (int)s->erec);
   }
   return ok;
 }
@@ -335,15 +386,7 @@ static pa_status split_bdry_records(rm3d *m, const split_plan *s, pa_idx pm) {
   m->vtag[pm] |= RM3D_V_BDRY;
   if ((m->vtag[a] & RM3D_V_CURVED) && (m->vtag[b] & RM3D_V_CURVED) && m->nrm &&
       s->erec < 0) {
-    double *np = m->nrm + 3 * (size_t)pm;
-    const double *na = m->nrm + 3 * (size_t)a, *nb = m->nrm + 3 * (size_t)b;
-    double w = 0;
-    for (int i = 0; i < 3; i++) {
-      np[i] = na[i] + nb[i];
-      w += np[i] * np[i];
-    }
-    w = w > 0 ? 1.0 / sqrt(w) : 0;
-    for (int i = 0; i < 3; i++) np[i] *= w;
+    mid_normal(m, a, b, m->nrm + 3 * (size_t)pm);
     m->vtag[pm] |= RM3D_V_CURVED;
   }
   for (int i = 0; i < s->ntri; i++) {
