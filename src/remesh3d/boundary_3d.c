@@ -22,8 +22,6 @@
  * interface is refined on the same smooth reconstruction.
  */
 #include "remesh3d/remesh3d.h"
-#include <stdio.h>
-#include <stdlib.h>
 
 /* Unknowns of the quadric fit of fit_one: the slopes, the three curvature
  * terms and an offset (the cut points lie off the surface by the level
@@ -348,10 +346,7 @@ static pa_status fit_normals(rm3d *m, const uint8_t *twisted) {
     }
     for (int i = 0; i < nr; i++)
       memcpy(pts + 3 * i, m->x + 3 * (size_t)ring[i], 3 * sizeof(double));
-    double n0[3]; memcpy(n0, m->nrm + 3 * (size_t)x, sizeof n0);
     fit_one(m->x + 3 * (size_t)x, pts, nr, m->nrm + 3 * (size_t)x);
-    if (getenv("LSDBG")) { const double *nn = m->nrm + 3 * (size_t)x, *xx = m->x + 3 * (size_t)x;
-      fprintf(stderr, "FIT %d %.9g %.9g %.9g %d %.9g %.9g %.9g %.9g %.9g %.9g\n", (int)x, xx[0], xx[1], xx[2], nr, n0[0],n0[1],n0[2],nn[0],nn[1],nn[2]); }
   }
 cleanup:
   pa__free(start);
@@ -413,9 +408,35 @@ static pa_status curved_normals(rm3d *m, const uint8_t *nborder,
   if (!ncurved) {
     pa__free(m->nrm);
     m->nrm = NULL;
+  } else {
+    PA_CALLOC(m->vcur, 3 * m->capv);
   }
 cleanup:
   return st;
+}
+
+int pa__rm3d_surface_normal(const rm3d *m, const pa_idx *v, const double *np,
+                            const double *n0, double *n) {
+  n[0] = n[1] = n[2] = 0;
+  for (int j = 0; j < 3; j++) {
+    if (v[j] >= 0 && !(m->vtag[v[j]] & RM3D_V_CURVED)) return 0;
+    const double *nj = v[j] < 0 ? np : m->nrm + 3 * (size_t)v[j];
+    for (int c = 0; c < 3; c++) n[c] += nj[c];
+  }
+  double d = n[0] * n0[0] + n[1] * n0[1] + n[2] * n0[2];
+  if (!(rm3d_unit(n) > 0) || d == 0) return 0;
+  if (d < 0) /* the record runs against the normals (an outer surface) */
+    for (int c = 0; c < 3; c++) n[c] = -n[c];
+  return 1;
+}
+
+int pa__rm3d_turn_ok(const rm3d *m, const pa_idx *v, const double *np,
+                     const double *n0, const double *n1) {
+  double ns[3];
+  if (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] >= RM3D_NORMAL_COS)
+    return 1;
+  return m->nrm && pa__rm3d_surface_normal(m, v, np, n0, ns) &&
+         ns[0] * n1[0] + ns[1] * n1[1] + ns[2] * n1[2] >= RM3D_NORMAL_COS;
 }
 
 pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {

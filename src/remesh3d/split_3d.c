@@ -20,8 +20,6 @@
  * the chord are tried (CURVE_BACKOFF).
  */
 #include "remesh3d/remesh3d.h"
-#include <stdio.h>
-#include <stdlib.h>
 
 /* Points tried on a curved or ridge edge: the curve's midpoint, then 1/2
  * and 1/4 of its offset from the chord, then the chord's midpoint (valid
@@ -168,31 +166,10 @@ static int shell_qualities(const rm3d *m, const pa_idx *tets, int n, pa_idx a,
   return 1;
 }
 
-/* The unit normal of the curved surface at the boundary triangle of
- * vertices v (-1 standing for the new vertex, of normal np): the sum of
- * their normals, oriented along the triangle's parent normal n0, in n; 0
- * when a vertex has none (off a curved patch). */
-static int surface_normal(const rm3d *m, const pa_idx *v, const double *np,
-                          const double *n0, double *n) {
-  n[0] = n[1] = n[2] = 0;
-  for (int j = 0; j < 3; j++) {
-    if (v[j] >= 0 && !(m->vtag[v[j]] & RM3D_V_CURVED)) return 0;
-    const double *nj = v[j] < 0 ? np : m->nrm + 3 * (size_t)v[j];
-    for (int c = 0; c < 3; c++) n[c] += nj[c];
-  }
-  double d = n[0] * n0[0] + n[1] * n0[1] + n[2] * n0[2];
-  if (!(rm3d_unit(n) > 0) || d == 0) return 0;
-  if (d < 0) /* the record runs against the normals (an outer surface) */
-    for (int c = 0; c < 3; c++) n[c] = -n[c];
-  return 1;
-}
-
 /* 1 if the halves of each of the ntri boundary triangles trec of edge
  * (a,b), split at p, are valid and within cmin (a cosine) of its normal,
- * or (np, p on a curved patch with that normal) within cmin of the normal
- * of the surface at their vertices: on a coarse curved patch the halves
- * of a point on the curve turn away from their flat parent towards the
- * surface (a fold turns them away from both). */
+ * or (np: p on a curved patch with that normal, cmin RM3D_NORMAL_COS)
+ * follow the surface (pa__rm3d_turn_ok). */
 static int split_surface_kept(const rm3d *m, const pa_idx *trec, int ntri,
                               pa_idx a, pa_idx b, const double *p,
                               double cmin, const double *np) {
@@ -207,20 +184,15 @@ static int split_surface_kept(const rm3d *m, const pa_idx *trec, int ntri,
       va[j] = v[j] == b ? -1 : v[j];
       vb[j] = v[j] == a ? -1 : v[j];
     }
-    double n0[3], na[3], nb[3], ns[3];
+    double n0[3], na[3], nb[3];
     if (!(rm3d_tri_normal(y[0], y[1], y[2], n0) > 0)) continue;
     if (!(rm3d_tri_normal(ya[0], ya[1], ya[2], na) > 0) ||
         !(rm3d_tri_normal(yb[0], yb[1], yb[2], nb) > 0))
       return 0;
-    if (getenv("LSDBG") && np) { double t1[3], t2[3]; int h1 = surface_normal(m, va, np, n0, t1), h2 = surface_normal(m, vb, np, n0, t2);
-      fprintf(stderr, "HALF %.3f %.3f | %d %.3f %.3f | %d %.3f %.3f\n", n0[0]*na[0]+n0[1]*na[1]+n0[2]*na[2], n0[0]*nb[0]+n0[1]*nb[1]+n0[2]*nb[2], h1, t1[0]*na[0]+t1[1]*na[1]+t1[2]*na[2], t1[0]*n0[0]+t1[1]*n0[1]+t1[2]*n0[2], h2, t2[0]*nb[0]+t2[1]*nb[1]+t2[2]*nb[2], t2[0]*n0[0]+t2[1]*n0[1]+t2[2]*n0[2]); }
-    if (!(n0[0] * na[0] + n0[1] * na[1] + n0[2] * na[2] >= cmin ||
-          (np && surface_normal(m, va, np, n0, ns) &&
-           ns[0] * na[0] + ns[1] * na[1] + ns[2] * na[2] >= cmin)))
-      return 0;
-    if (!(n0[0] * nb[0] + n0[1] * nb[1] + n0[2] * nb[2] >= cmin ||
-          (np && surface_normal(m, vb, np, n0, ns) &&
-           ns[0] * nb[0] + ns[1] * nb[1] + ns[2] * nb[2] >= cmin)))
+    if (np ? !pa__rm3d_turn_ok(m, va, np, n0, na) ||
+                 !pa__rm3d_turn_ok(m, vb, np, n0, nb)
+           : n0[0] * na[0] + n0[1] * na[1] + n0[2] * na[2] < cmin ||
+                 n0[0] * nb[0] + n0[1] * nb[1] + n0[2] * nb[2] < cmin)
       return 0;
   }
   return 1;
@@ -238,6 +210,7 @@ typedef struct split_plan {
   pa_idx erec; /* the feature edge (a,b), or -1 */
   double p[3], mp[6];                         /* the new vertex, its metric */
   int offmodel; /* with a model, p is not on it (its point was refused) */
+  double dcur[3]; /* from p to the point of the curve (0: p on it) */
   float q1[RM3D_MAXSHELL], q2[RM3D_MAXSHELL]; /* qualities of the halves */
 } split_plan;
 
@@ -329,16 +302,14 @@ static int place_vertex(rm3d *m, split_plan *s) {
     for (int i = 0; i < 3; i++)
       s->p[i] = f ? c[i] + w * (p0[i] - c[i]) : p0[i];
     if (!split_surface_kept(m, s->trec, s->ntri, a, b, s->p, RM3D_NORMAL_COS,
-                            curved ? nmid : NULL)) {
-      if (getenv("LSDBG") && s->bdry && f == 0 && (m->vtag[a] & RM3D_V_CURVED)) fprintf(stderr, "FAILSURF relax %d\n", relax);
+                            curved ? nmid : NULL))
       continue;
-    }
     ok = shell_qualities(m, s->tets, s->n, a, b, s->p, s->mp, relax, s->q1,
                          s->q2);
-    if (!ok && getenv("LSDBG") && s->bdry && f == 0 && (m->vtag[a] & RM3D_V_CURVED)) fprintf(stderr, "FAILQ relax %d\n", relax);
     if (!ok && !relax) break;
-    if (ok && getenv("LSDBG") && s->bdry) fprintf(stderr, "SPLIT f=%d %.5f %.5f %.5f curved %d %d erec %d\n", f, s->p[0], s->p[1], s->p[2], !!(m->vtag[a] & RM3D_V_CURVED), !!(m->vtag[b] & RM3D_V_CURVED), (int)s->erec);
   }
+  /* the rest of the way to the curve, for the curve snaps */
+  for (int i = 0; i < 3; i++) s->dcur[i] = curved && ok ? p0[i] - s->p[i] : 0;
   return ok;
 }
 
@@ -457,6 +428,7 @@ pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
   }
   if (m->vref[a] == m->vref[b]) m->vref[pm] = m->vref[a];
   if (m->voff) m->voff[pm] = (uint8_t)s.offmodel;
+  if (m->vcur) memcpy(m->vcur + 3 * (size_t)pm, s.dcur, sizeof s.dcur);
   cut_shell(m, &s, pm);
   if (s.bdry) PA_CALL(split_bdry_records(m, &s, pm));
   m->nsplit++;
