@@ -408,7 +408,7 @@ static pa_status curved_normals(rm3d *m, const uint8_t *nborder,
   if (!ncurved) {
     pa__free(m->nrm);
     m->nrm = NULL;
-  } else {
+  } else if (!m->voff) { /* with a model, its snaps place the points */
     PA_CALLOC(m->vcur, 3 * m->capv);
   }
 cleanup:

@@ -308,8 +308,14 @@ static int place_vertex(rm3d *m, split_plan *s) {
                          s->q2);
     if (!ok && !relax) break;
   }
-  /* the rest of the way to the curve, for the curve snaps */
-  for (int i = 0; i < 3; i++) s->dcur[i] = curved && ok ? p0[i] - s->p[i] : 0;
+  /* the rest of the way to the curve, for the curve snaps, when the curve
+   * stays within hausd of the chord (the collapses' bound on the surface's
+   * distance to itself) */
+  double hmin = m->hausd, off2 = 0;
+  for (int i = 0; i < s->ntri; i++) hmin = fmin(hmin, rm3d_tri_hausd(m, s->trec[i]));
+  for (int i = 0; i < 3; i++) off2 += (p0[i] - c[i]) * (p0[i] - c[i]);
+  int snap = curved && ok && off2 <= hmin * hmin;
+  for (int i = 0; i < 3; i++) s->dcur[i] = snap ? p0[i] - s->p[i] : 0;
   return ok;
 }
 
