@@ -35,6 +35,11 @@
 /* A fitted normal turned by more than ~25 degrees from the mean normal is
  * not trusted (a fold or a sheet of too few points). */
 #define FIT_MAX_TURN 0.7
+/* A vertex with a neighbour closer than this share of its farthest one
+ * (one of a cluster of cut points around a vertex near the zero set)
+ * keeps its mean normal: its fit mixes the cluster's cut errors, of the
+ * order of its edges, and the cluster's slivers then resist removal. */
+#define FIT_CLUSTER 0.1
 
 typedef struct bedge {
   pa_idx a, b;   /* a < b */
@@ -301,6 +306,21 @@ static void fit_one(const double *x, const double *pts, int np, double *n) {
   memcpy(n, nf, sizeof nf);
 }
 
+/* 1 when ring[0] has a first-ring neighbour (ring[1..n1)) closer than
+ * FIT_CLUSTER times its farthest one: one of a cluster of cut points. */
+static int cluster_vertex(const rm3d *m, const pa_idx *ring, int n1) {
+  const double *x = m->x + 3 * (size_t)ring[0];
+  double dmin = 1e300, dmax = 0;
+  for (int i = 1; i < n1; i++) {
+    const double *y = m->x + 3 * (size_t)ring[i];
+    double d = (y[0] - x[0]) * (y[0] - x[0]) + (y[1] - x[1]) * (y[1] - x[1]) +
+               (y[2] - x[2]) * (y[2] - x[2]);
+    dmin = fmin(dmin, d);
+    dmax = fmax(dmax, d);
+  }
+  return dmin < FIT_CLUSTER * FIT_CLUSTER * dmax;
+}
+
 /* Normals of the smooth boundary vertices (off features, not twisted)
  * refined by fit_one over the vertices of their free boundary triangles
  * and of those of their neighbours off features (two rings). */
@@ -332,7 +352,8 @@ static pa_status fit_normals(rm3d *m, const uint8_t *twisted) {
     int nr = 0;
     seen[x] = x;
     ring[nr++] = x;
-    for (int i = 0, n1 = 1; i < n1; i++) {
+    int n1 = 1;
+    for (int i = 0; i < n1; i++) {
       pa_idx c = ring[i];
       if (i && (m->vtag[c] & RM3D_V_FEAT)) continue;
       for (pa_idx k = start[c]; k < start[c + 1]; k++)
@@ -344,6 +365,7 @@ static pa_status fit_normals(rm3d *m, const uint8_t *twisted) {
         }
       if (i == 0) n1 = nr; /* the first ring's vertices, then stop */
     }
+    if (cluster_vertex(m, ring, n1)) continue;
     for (int i = 0; i < nr; i++)
       memcpy(pts + 3 * i, m->x + 3 * (size_t)ring[i], 3 * sizeof(double));
     fit_one(m->x + 3 * (size_t)x, pts, nr, m->nrm + 3 * (size_t)x);

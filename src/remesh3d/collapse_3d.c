@@ -169,13 +169,6 @@ static pa_status surface_kept(const rm3d *m, pa_idx p, pa_idx q,
   uint8_t tp = m->vtag[p];
   int onsurf = 0;
   const double *xp = m->x + 3 * (size_t)p;
-  /* p's normal on a curved patch: a renamed triangle that was tilted by
-   * more than RM3D_NORMAL_COS from it may turn further when it comes
-   * within RM3D_NORMAL_COS of it (the tiny triangles of a cluster of cut
-   * points turn by more than that whichever collapse removes them) */
-  const double *np = m->nrm && (tp & RM3D_V_CURVED) && !(tp & RM3D_V_FEAT)
-                         ? m->nrm + 3 * (size_t)p
-                         : NULL;
   *ok = 0;
   for (int i = 0; i < n; i++) {
     pa_idx t = ball[i] >> 2;
@@ -221,10 +214,7 @@ static pa_status surface_kept(const rm3d *m, pa_idx p, pa_idx q,
     double n0[3], n1[3];
     rm3d_tri_normal(yo[0], yo[1], yo[2], n0);
     if (rm3d_tri_normal(y[0], y[1], y[2], n1) <= 0) return PA_SUCCESS;
-    if (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] < RM3D_NORMAL_COS &&
-        !(np && n0[0] * np[0] + n0[1] * np[1] + n0[2] * np[2] <
-                    RM3D_NORMAL_COS &&
-          n1[0] * np[0] + n1[1] * np[1] + n1[2] * np[2] >= RM3D_NORMAL_COS))
+    if (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] < RM3D_NORMAL_COS)
       return PA_SUCCESS;
     double d = fabs((xp[0] - y[0][0]) * n1[0] + (xp[1] - y[0][1]) * n1[1] +
                     (xp[2] - y[0][2]) * n1[2]);
