@@ -326,6 +326,7 @@ static int cluster_vertex(const rm3d *m, const pa_idx *ring, int n1) {
  * and of those of their neighbours off features (two rings). */
 static pa_status fit_normals(rm3d *m, const uint8_t *twisted) {
   pa_status st = PA_SUCCESS;
+  if (m->voff) return st; /* with a model, its points */
   pa_idx *start = NULL, *list = NULL, *seen = NULL;
   double *pts = NULL;
   PA_CALLOC(start, (size_t)m->nv + 1);

@@ -252,6 +252,20 @@ static pa_status find_bdry_records(const rm3d *m, split_plan *s, int *ok) {
   return PA_SUCCESS;
 }
 
+/* The point p of a curved edge brought within hausd (the least of the
+ * edge's triangles) of the chord's midpoint c: the surface stays within
+ * hausd of the one it refines (coarse patches whose normals turn fast
+ * would otherwise bulge by a large share of their edges). */
+static void hausd_clamp(const rm3d *m, const split_plan *s, const double *c,
+                        double *p) {
+  double h = m->hausd, d2 = 0;
+  for (int i = 0; i < s->ntri; i++) h = fmin(h, rm3d_tri_hausd(m, s->trec[i]));
+  for (int i = 0; i < 3; i++) d2 += (p[i] - c[i]) * (p[i] - c[i]);
+  if (!(d2 > h * h)) return;
+  double w = h / sqrt(d2);
+  for (int i = 0; i < 3; i++) p[i] = c[i] + w * (p[i] - c[i]);
+}
+
 /* The new vertex s->p and its metric s->mp, and the qualities of the
  * halves: the point on the curve (see the opening comment), else points
  * closer to the chord. 1 when a point passes every check. */
@@ -266,6 +280,7 @@ static int place_vertex(rm3d *m, split_plan *s) {
   if (curved) {
     curved_mid(xa, xb, m->nrm + 3 * (size_t)a, m->nrm + 3 * (size_t)b, p0);
     mid_normal(m, a, b, nmid);
+    hausd_clamp(m, s, c, p0);
   } else if (s->erec >= 0)
     ridge_mid(m, a, b, p0);
   else
@@ -302,20 +317,14 @@ static int place_vertex(rm3d *m, split_plan *s) {
     for (int i = 0; i < 3; i++)
       s->p[i] = f ? c[i] + w * (p0[i] - c[i]) : p0[i];
     if (!split_surface_kept(m, s->trec, s->ntri, a, b, s->p, RM3D_NORMAL_COS,
-                            curved ? nmid : NULL))
+                            curved && !m->voff ? nmid : NULL))
       continue;
     ok = shell_qualities(m, s->tets, s->n, a, b, s->p, s->mp, relax, s->q1,
                          s->q2);
     if (!ok && !relax) break;
   }
-  /* the rest of the way to the curve, for the curve snaps, when the curve
-   * stays within hausd of the chord (the collapses' bound on the surface's
-   * distance to itself) */
-  double hmin = m->hausd, off2 = 0;
-  for (int i = 0; i < s->ntri; i++) hmin = fmin(hmin, rm3d_tri_hausd(m, s->trec[i]));
-  for (int i = 0; i < 3; i++) off2 += (p0[i] - c[i]) * (p0[i] - c[i]);
-  int snap = curved && ok && off2 <= hmin * hmin;
-  for (int i = 0; i < 3; i++) s->dcur[i] = snap ? p0[i] - s->p[i] : 0;
+  /* the rest of the way to the curve, for the curve snaps */
+  for (int i = 0; i < 3; i++) s->dcur[i] = curved && ok ? p0[i] - s->p[i] : 0;
   return ok;
 }
 
