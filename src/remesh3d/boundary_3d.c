@@ -10,9 +10,10 @@
  * by more than -ar, is a corner (locked). A feature edge or corner that the
  * written triangles alone would not make (one of unlisted interfaces,
  * RM3D_REC_UNLISTED) is not written back. Boundary vertices off features get
- * the mean normal of their free triangles and RM3D_V_CURVED when these normals
- * are not all equal, which lets splits place new points on a smooth (cubic)
- * reconstruction; planar patches have no curved vertex and stay planar. So
+ * the mean normal of their free triangles, refined by a quadric fit of the
+ * neighbouring vertices (fit_normals), and RM3D_V_CURVED when the triangles'
+ * normals are not all equal, which lets splits place new points on a smooth
+ * (cubic) reconstruction; planar patches have no curved vertex and stay planar. So
  * does a vertex whose feature edges all separate a free triangle from a
  * frozen one (where a piece's frozen skin meets the boundary). The triangles
  * of an interface inside the domain (two tets hold them) count with the
@@ -23,17 +24,19 @@
  */
 #include "remesh3d/remesh3d.h"
 
-/* Unknowns of the quadric fit of fit_one: the slopes, the three curvature
- * terms and an offset (the cut points lie off the surface by the level
- * set's interpolation error, so the fit need not pass through x). */
+/* Unknowns of the quadric fit of fit_one: the two slopes and the three
+ * curvature terms, the quadric passing through x (the sixth term of its
+ * row, an offset, gives the same accuracy on bench/levelset_cut.sh). */
 #define FIT_NPAR 5
 /* At most this many points per fit (two rings hold 20 to 40). */
 #define FIT_MAXPTS 64
 /* A pivot below this share of the largest diagonal entry: a degenerate
  * fit (points nearly on a line), the mean normal is kept. */
 #define FIT_PIVOT_MIN 1e-9
-/* A fitted normal turned by more than ~25 degrees from the mean normal is
- * not trusted (a fold or a sheet of too few points). */
+/* A fitted normal turned by more than ~45 degrees from the mean normal is
+ * not trusted (a fold or a sheet of too few points); the mean is up to 25
+ * degrees off the exact normal on the benchmark torus, so a tighter bound
+ * refuses good fits. */
 #define FIT_MAX_TURN 0.7
 /* A vertex with a neighbour closer than this share of its farthest one
  * (one of a cluster of cut points around a vertex near the zero set)
