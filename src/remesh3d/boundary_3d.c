@@ -441,12 +441,15 @@ cleanup:
   return st;
 }
 
-int pa__rm3d_surface_normal(const rm3d *m, const pa_idx *v, const double *np,
-                            const double *n0, double *n) {
+/* The unit normal of the curved surface at the boundary triangle of
+ * vertices v: the sum of their normals, oriented along n0 (the triangle's
+ * normal), in n; 0 when a vertex has none (off a curved patch). */
+static int surface_normal(const rm3d *m, const pa_idx *v, const double *n0,
+                          double *n) {
   n[0] = n[1] = n[2] = 0;
   for (int j = 0; j < 3; j++) {
-    if (v[j] >= 0 && !(m->vtag[v[j]] & RM3D_V_CURVED)) return 0;
-    const double *nj = v[j] < 0 ? np : m->nrm + 3 * (size_t)v[j];
+    if (!(m->vtag[v[j]] & RM3D_V_CURVED)) return 0;
+    const double *nj = m->nrm + 3 * (size_t)v[j];
     for (int c = 0; c < 3; c++) n[c] += nj[c];
   }
   double d = n[0] * n0[0] + n[1] * n0[1] + n[2] * n0[2];
@@ -456,12 +459,12 @@ int pa__rm3d_surface_normal(const rm3d *m, const pa_idx *v, const double *np,
   return 1;
 }
 
-int pa__rm3d_turn_ok(const rm3d *m, const pa_idx *v, const double *np,
-                     const double *n0, const double *n1) {
+int pa__rm3d_turn_ok(const rm3d *m, const pa_idx *v, const double *n0,
+                     const double *n1) {
   double ns[3];
   if (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] >= RM3D_NORMAL_COS)
     return 1;
-  return m->nrm && pa__rm3d_surface_normal(m, v, np, n0, ns) &&
+  return m->nrm && surface_normal(m, v, n0, ns) &&
          ns[0] * n1[0] + ns[1] * n1[1] + ns[2] * n1[2] >= RM3D_NORMAL_COS;
 }
 

@@ -453,23 +453,17 @@ int pa__rm3d_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball);
 /* Move the curved-patch vertex p by its offset vcur[p] (or half or a
  * quarter of it, keeping the rest) when its ball stays valid (no tet under
  * rm3d_q_min of its old quality) and its boundary triangles keep their
- * normal or follow the surface's (pa__rm3d_surface_normal) (smooth_3d.c).
- * 1 when moved. */
+ * normal or follow the surface's (pa__rm3d_turn_ok) (smooth_3d.c). 1 when
+ * moved. */
 int pa__rm3d_curve_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball);
-/* The unit normal of the curved surface at the boundary triangle of
- * vertices v (-1 standing for a vertex of normal np): the sum of their
- * normals, oriented along n0 (the triangle's normal), in n; 0 when a vertex
- * has none (off a curved patch) (boundary_3d.c). */
-int pa__rm3d_surface_normal(const rm3d *m, const pa_idx *v, const double *np,
-                            const double *n0, double *n);
-/* 1 if the boundary triangle of unit normal n1, which had the normal n0,
- * stays within RM3D_NORMAL_COS of n0 or (on a curved patch) of the
- * surface's normal at its vertices v (-1: a vertex of normal np):
- * on a coarse curved patch a point put on the surface turns the triangles
- * away from their flat parent towards the surface; a fold turns them away
- * from both (boundary_3d.c). */
-int pa__rm3d_turn_ok(const rm3d *m, const pa_idx *v, const double *np,
-                     const double *n0, const double *n1);
+/* 1 if the boundary triangle of vertices v and unit normal n1, which had
+ * the normal n0, stays within RM3D_NORMAL_COS of n0 or of the surface's
+ * normal at its vertices (the sum of their normals; all on a curved
+ * patch): a vertex moved onto the curve turns its coarse triangles away
+ * from their flat selves towards the surface, a fold turns them away from
+ * both (boundary_3d.c). */
+int pa__rm3d_turn_ok(const rm3d *m, const pa_idx *v, const double *n0,
+                     const double *n1);
 /* Mark (voff) the free boundary vertices of the input that lie off their
  * entity by more than PA_GEOM_SNAP_TOL of the model's size: those the
  * snap moves of an earlier remesh could not place (a piece's frozen skin

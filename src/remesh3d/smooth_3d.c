@@ -516,7 +516,7 @@ static int curve_surface_kept(const rm3d *m, const pa_idx *tri, int ntri,
     double n0[3], n1[3];
     if (!(rm3d_tri_normal(y[0], y[1], y[2], n0) > 0)) continue;
     if (!(rm3d_tri_normal(yn[0], yn[1], yn[2], n1) > 0)) return 0;
-    if (!pa__rm3d_turn_ok(m, v, NULL, n0, n1)) return 0;
+    if (!pa__rm3d_turn_ok(m, v, n0, n1)) return 0;
   }
   return 1;
 }

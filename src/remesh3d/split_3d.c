@@ -167,32 +167,25 @@ static int shell_qualities(const rm3d *m, const pa_idx *tets, int n, pa_idx a,
 }
 
 /* 1 if the halves of each of the ntri boundary triangles trec of edge
- * (a,b), split at p, are valid and within cmin (a cosine) of its normal,
- * or (np: p on a curved patch with that normal, cmin RM3D_NORMAL_COS)
- * follow the surface (pa__rm3d_turn_ok). */
+ * (a,b), split at p, are valid and within cmin (a cosine) of its normal. */
 static int split_surface_kept(const rm3d *m, const pa_idx *trec, int ntri,
                               pa_idx a, pa_idx b, const double *p,
-                              double cmin, const double *np) {
+                              double cmin) {
   for (int i = 0; i < ntri; i++) {
     const pa_idx *v = m->tri.v + 3 * (size_t)trec[i];
     const double *y[3], *ya[3], *yb[3];
-    pa_idx va[3], vb[3];
     for (int j = 0; j < 3; j++) {
       y[j] = m->x + 3 * (size_t)v[j];
       ya[j] = v[j] == b ? p : y[j];
       yb[j] = v[j] == a ? p : y[j];
-      va[j] = v[j] == b ? -1 : v[j];
-      vb[j] = v[j] == a ? -1 : v[j];
     }
     double n0[3], na[3], nb[3];
     if (!(rm3d_tri_normal(y[0], y[1], y[2], n0) > 0)) continue;
     if (!(rm3d_tri_normal(ya[0], ya[1], ya[2], na) > 0) ||
         !(rm3d_tri_normal(yb[0], yb[1], yb[2], nb) > 0))
       return 0;
-    if (np ? !pa__rm3d_turn_ok(m, va, np, n0, na) ||
-                 !pa__rm3d_turn_ok(m, vb, np, n0, nb)
-           : n0[0] * na[0] + n0[1] * na[1] + n0[2] * na[2] < cmin ||
-                 n0[0] * nb[0] + n0[1] * nb[1] + n0[2] * nb[2] < cmin)
+    if (n0[0] * na[0] + n0[1] * na[1] + n0[2] * na[2] < cmin ||
+        n0[0] * nb[0] + n0[1] * nb[1] + n0[2] * nb[2] < cmin)
       return 0;
   }
   return 1;
@@ -276,10 +269,8 @@ static int place_vertex(rm3d *m, split_plan *s) {
   for (int i = 0; i < 3; i++) c[i] = 0.5 * (xa[i] + xb[i]);
   int curved = s->bdry && s->erec < 0 && m->nrm &&
                (m->vtag[a] & RM3D_V_CURVED) && (m->vtag[b] & RM3D_V_CURVED);
-  double nmid[3];
   if (curved) {
     curved_mid(xa, xb, m->nrm + 3 * (size_t)a, m->nrm + 3 * (size_t)b, p0);
-    mid_normal(m, a, b, nmid);
     hausd_clamp(m, s, c, p0);
   } else if (s->erec >= 0)
     ridge_mid(m, a, b, p0);
@@ -306,7 +297,7 @@ static int place_vertex(rm3d *m, split_plan *s) {
   if (on_model) {
     memcpy(s->p, pmod, sizeof pmod);
     ok = split_surface_kept(m, s->trec, s->ntri, a, b, s->p,
-                            RM3D_NORMAL_COS_MODEL, NULL) &&
+                            RM3D_NORMAL_COS_MODEL) &&
          shell_qualities(m, s->tets, s->n, a, b, s->p, s->mp, relax, s->q1,
                          s->q2);
     s->offmodel = !ok;
@@ -316,8 +307,7 @@ static int place_vertex(rm3d *m, split_plan *s) {
     if (f && !memcmp(p0, c, sizeof c)) break;
     for (int i = 0; i < 3; i++)
       s->p[i] = f ? c[i] + w * (p0[i] - c[i]) : p0[i];
-    if (!split_surface_kept(m, s->trec, s->ntri, a, b, s->p, RM3D_NORMAL_COS,
-                            curved && !m->voff ? nmid : NULL))
+    if (!split_surface_kept(m, s->trec, s->ntri, a, b, s->p, RM3D_NORMAL_COS))
       continue;
     ok = shell_qualities(m, s->tets, s->n, a, b, s->p, s->mp, relax, s->q1,
                          s->q2);
