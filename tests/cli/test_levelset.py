@@ -195,8 +195,8 @@ def cut_error(inp, phi, exact_sd, dim, stat=np.max):
 # points' mean distance to the exact surface: the vertices the adaptation
 # adds between the cut points go onto the smooth reconstruction through
 # them (vertex normals fitted to the neighbouring cut points), about as
-# close as the cut points themselves: 1.03-1.13 times on the sphere below at
-# 1-4 processes, under 1 on the torus; 1.24-1.31 times on the sphere with
+# close as the cut points themselves: 1.03-1.10 times on the sphere below at
+# 1-4 processes, 0.96-1.01 on the torus; 1.24-1.31 and 1.15-1.18 times with
 # the mean of the faces' normals.
 IFACE_MEAN_FACTOR = 1.2
 
