@@ -30,9 +30,6 @@
 #define FIT_NPAR 5
 /* At most this many points per fit (two rings hold 20 to 40). */
 #define FIT_MAXPTS 64
-/* A pivot below this share of the largest diagonal entry: a degenerate
- * fit (points nearly on a line), the mean normal is kept. */
-#define FIT_PIVOT_MIN 1e-9
 /* A fitted normal turned by more than ~45 degrees from the mean normal is
  * not trusted (a fold or a sheet of too few points); the mean is up to 25
  * degrees off the exact normal on the benchmark torus, so a tighter bound
@@ -226,46 +223,10 @@ static void mark_corners(rm3d *m, int use_angle, uint8_t *nfeat,
       m->vpf[x] |= PA_FLAG_CORNER;
 }
 
-/* Solve the n x n system a x = b (row-major, destroyed) by Gaussian
- * elimination with partial pivoting; 0 when a pivot falls below
- * FIT_PIVOT_MIN times the largest diagonal entry (a degenerate fit). */
-static int solve_small(double *a, double *b, int n) {
-  double dmax = 0;
-  for (int i = 0; i < n; i++) dmax = fmax(dmax, fabs(a[i * n + i]));
-  if (!(dmax > 0)) return 0;
-  for (int c = 0; c < n; c++) {
-    int p = c;
-    for (int r = c + 1; r < n; r++)
-      if (fabs(a[r * n + c]) > fabs(a[p * n + c])) p = r;
-    if (!(fabs(a[p * n + c]) > FIT_PIVOT_MIN * dmax)) return 0;
-    if (p != c) {
-      for (int j = 0; j < n; j++) {
-        double t = a[c * n + j];
-        a[c * n + j] = a[p * n + j];
-        a[p * n + j] = t;
-      }
-      double t = b[c];
-      b[c] = b[p];
-      b[p] = t;
-    }
-    for (int r = c + 1; r < n; r++) {
-      double f = a[r * n + c] / a[c * n + c];
-      for (int j = c; j < n; j++) a[r * n + j] -= f * a[c * n + j];
-      b[r] -= f * b[c];
-    }
-  }
-  for (int c = n - 1; c >= 0; c--) {
-    double s = b[c];
-    for (int j = c + 1; j < n; j++) s -= a[c * n + j] * b[j];
-    b[c] = s / a[c * n + c];
-  }
-  return 1;
-}
-
 /* The normal at x of the quadric height field w = a u^2 + b uv + c v^2 +
  * d u + e v (+ f) fitted by least squares to the points pts[0..np) in the
- * frame of x's normal n (replaced by the fit's when it is well posed and
- * within FIT_MAX_TURN of n). */
+ * frame of x's normal n (replaced by the fit's when it is well posed, its
+ * normal equations positive definite, and within FIT_MAX_TURN of n). */
 static void fit_one(const double *x, const double *pts, int np, double *n) {
   double t1[3], t2[3];
   int ax = fabs(n[0]) < fabs(n[1]) ? (fabs(n[0]) < fabs(n[2]) ? 0 : 2)
@@ -301,7 +262,7 @@ static void fit_one(const double *x, const double *pts, int np, double *n) {
       for (int c = 0; c < FIT_NPAR; c++) ata[r * FIT_NPAR + c] += row[r] * row[c];
     }
   }
-  if (!solve_small(ata, atb, FIT_NPAR)) return;
+  if (!pa__cholesky_solve(FIT_NPAR, ata, atb)) return;
   double nf[3];
   for (int j = 0; j < 3; j++) nf[j] = n[j] - atb[0] * t1[j] - atb[1] * t2[j];
   rm3d_unit(nf);
