@@ -1945,7 +1945,8 @@ typedef struct pa_adapt_opts {
   /** Pieces per process (default PA_DEFAULT_PIECES_PER_RANK). */
   int pieces_per_rank;
   /** Expert. Vertex layers of untagged elements added around the tagged
-   *  ones (default PA_DEFAULT_SKIN_LAYERS, at least 1). */
+   *  ones (default PA_DEFAULT_SKIN_LAYERS, at least 1); up to 12 more
+   *  while the pieces average fewer than min_piece_work elements. */
   int skin_layers;
   /** Expert. The same from the second iteration on (default
    *  PA_DEFAULT_SKIN_LAYERS_LATER, at least 1): its

@@ -51,6 +51,7 @@ static long long *gather_rows(const long long *mine, int nrow, int w, int *n) {
  * skins must not be bisected there. */
 static int warp;
 static int sparse = 0; /* a few user-tagged elements (run_iter) */
+static double small_work; /* min_piece_work if > 0 (else 1) */
 
 static double bump(double x) { return 1.0 + 0.05 * sin(3.141592653589793 * x); }
 
@@ -154,7 +155,18 @@ static void check_labels(pa__iter *it) {
     {
       char *lab = calloc((size_t)ne + 1, 1), *vm = calloc((size_t)nv + 1, 1);
       for (int e = 0; e < ne; e++) lab[e] = all[(size_t)w * e + 1] != 0;
-      for (int l = 0; l < layers_of(it); l++) {
+      /* the layers, then more while the pieces average fewer than
+       * min_piece_work elements and a layer adds some (at most 12) */
+      double want = (double)it->npieces * it->opts->min_piece_work;
+      int last = -1, nextra = 0;
+      for (int l = 0;; l++) {
+        if (l >= layers_of(it)) {
+          int cnt = 0;
+          for (int e = 0; e < ne; e++) cnt += lab[e];
+          if (nextra == 12 || cnt >= want || cnt == last) break;
+          last = cnt;
+          nextra++;
+        }
         memset(vm, 0, (size_t)nv);
         for (int e = 0; e < ne; e++)
           if (lab[e])
@@ -167,6 +179,7 @@ static void check_labels(pa__iter *it) {
         for (int e = 0; e < ne; e++) lab[e] = lab[e] != 0;
       }
       for (int e = 0; e < ne; e++) bad_layers += lab[e] != (all[(size_t)w * e] >= 0);
+      if (nextra) printf("  %d layers more around small pieces\n", nextra);
       free(lab);
       free(vm);
     }
@@ -239,7 +252,7 @@ static void start_iter(prun *r, int dim, int n, const char *metric,
   }
   CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, r->m, 0, &r->dm));
   pa_adapt_opts_default(&r->o);
-  r->o.min_piece_work = 1;
+  r->o.min_piece_work = small_work > 0 ? small_work : 1;
   r->o.min_piece_ratio = 0;
   if (iter > 1) {
     r->o.skin_layers = 3; /* not these */
@@ -319,6 +332,19 @@ static void test_pieces_layers(void) {
   sparse = 0;
 }
 
+/* Small pieces grow wider: a few user tags in a box whose metric fits,
+ * min_piece_work above what the nominal layers reach, so that more layers
+ * are grown (up to the whole box on the 2D one). */
+static void test_pieces_small(void) {
+  sparse = 1;
+  small_work = 600;
+  run_iter(2, 16, "uniform:0.07", 1, 1, 1);
+  run_iter(2, 16, "uniform:0.07", 1, 2, 2);
+  run_iter(3, 5, "uniform:0.25", 1, 1, 1);
+  small_work = 0;
+  sparse = 0;
+}
+
 static void test_pieces_curved(void) {
   warp = 1;
   run(2, 16, "uniform:0.02", 2 * pa_test_size, 1);
@@ -375,4 +401,4 @@ static void test_pieces_weighted(void) {
 }
 
 TEST_MPI_MAIN(test_pieces_2d, test_pieces_3d, test_pieces_layers,
-              test_pieces_curved, test_pieces_weighted)
+              test_pieces_small, test_pieces_curved, test_pieces_weighted)
