@@ -40,14 +40,6 @@ static void curved_mid(const double *a, const double *b, const double *na,
   }
 }
 
-/* The normal of the new vertex of a curved edge (a,b): the mean of the
- * end normals (0 when they cancel). */
-static void mid_normal(const rm3d *m, pa_idx a, pa_idx b, double *np) {
-  const double *na = m->nrm + 3 * (size_t)a, *nb = m->nrm + 3 * (size_t)b;
-  for (int i = 0; i < 3; i++) np[i] = na[i] + nb[i];
-  rm3d_unit(np);
-}
-
 /* Unit tangent of the ridge through v, oriented away from its feature
  * neighbour r other than w (so towards w's side): the tangent at v of the
  * circle through r, v, w. 0 when v has not exactly two feature edges. */
@@ -245,20 +237,6 @@ static pa_status find_bdry_records(const rm3d *m, split_plan *s, int *ok) {
   return PA_SUCCESS;
 }
 
-/* The point p of a curved edge brought within hausd (the least of the
- * edge's triangles) of the chord's midpoint c: the surface stays within
- * hausd of the one it refines (coarse patches whose normals turn fast
- * would otherwise bulge by a large share of their edges). */
-static void hausd_clamp(const rm3d *m, const split_plan *s, const double *c,
-                        double *p) {
-  double h = m->hausd, d2 = 0;
-  for (int i = 0; i < s->ntri; i++) h = fmin(h, rm3d_tri_hausd(m, s->trec[i]));
-  for (int i = 0; i < 3; i++) d2 += (p[i] - c[i]) * (p[i] - c[i]);
-  if (!(d2 > h * h)) return;
-  double w = h / sqrt(d2);
-  for (int i = 0; i < 3; i++) p[i] = c[i] + w * (p[i] - c[i]);
-}
-
 /* The new vertex s->p and its metric s->mp, and the qualities of the
  * halves: the point on the curve (see the opening comment), else points
  * closer to the chord. 1 when a point passes every check. */
@@ -269,10 +247,9 @@ static int place_vertex(rm3d *m, split_plan *s) {
   for (int i = 0; i < 3; i++) c[i] = 0.5 * (xa[i] + xb[i]);
   int curved = s->bdry && s->erec < 0 && m->nrm &&
                (m->vtag[a] & RM3D_V_CURVED) && (m->vtag[b] & RM3D_V_CURVED);
-  if (curved) {
+  if (curved)
     curved_mid(xa, xb, m->nrm + 3 * (size_t)a, m->nrm + 3 * (size_t)b, p0);
-    hausd_clamp(m, s, c, p0);
-  } else if (s->erec >= 0)
+  else if (s->erec >= 0)
     ridge_mid(m, a, b, p0);
   else
     memcpy(p0, c, sizeof c);
@@ -362,7 +339,15 @@ static pa_status split_bdry_records(rm3d *m, const split_plan *s, pa_idx pm) {
   m->vtag[pm] |= RM3D_V_BDRY;
   if ((m->vtag[a] & RM3D_V_CURVED) && (m->vtag[b] & RM3D_V_CURVED) && m->nrm &&
       s->erec < 0) {
-    mid_normal(m, a, b, m->nrm + 3 * (size_t)pm);
+    double *np = m->nrm + 3 * (size_t)pm;
+    const double *na = m->nrm + 3 * (size_t)a, *nb = m->nrm + 3 * (size_t)b;
+    double w = 0;
+    for (int i = 0; i < 3; i++) {
+      np[i] = na[i] + nb[i];
+      w += np[i] * np[i];
+    }
+    w = w > 0 ? 1.0 / sqrt(w) : 0;
+    for (int i = 0; i < 3; i++) np[i] *= w;
     m->vtag[pm] |= RM3D_V_CURVED;
   }
   for (int i = 0; i < s->ntri; i++) {
