@@ -155,6 +155,10 @@ typedef struct pa__key64 {
   pa_idx idx;
 } pa__key64;
 int pa__key64_cmp(const void *a, const void *b);
+/* Sort the n records a[] in place by key, records of equal keys in their
+ * given order (keysort.c): given by increasing index, they come out as qsort
+ * with pa__key64_cmp puts them. PA_ERR_MEMORY. Not collective. */
+pa_status pa__key64_sort(pa__key64 *a, size_t n);
 
 /* 64-bit mix of a value (splitmix64 finaliser). */
 static inline uint64_t pa__mix64(uint64_t x) {

@@ -225,7 +225,8 @@ int pa__rm2d_remove_vertex(rm2d *rm, pa_idx k, int ip) {
   for (int c = 0; c < nc; c++) {
     const pa_idx *v = rm->tv + 3 * (size_t)ce[c];
     int lp = v[0] == p ? 0 : v[1] == p ? 1 : 2;
-    if (pa__rm2d_collapse_edge(rm, ce[c], cf[c], lp, 0.3)) return 1;
+    if (pa__rm2d_collapse_edge(rm, ce[c], cf[c], lp, RM2D_QREL_COLLAPSE))
+      return 1;
   }
   return 0;
 }

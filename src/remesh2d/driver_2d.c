@@ -215,6 +215,9 @@ cleanup:
 pa_status pa__rm2d_collapse_pass(rm2d *rm, double thr, long *n) {
   long cnt = 0;
   rm2d_tflag_clear(rm, RM2D_E_TOUCHED);
+  /* a removal refused under a guard is refused under any lower one */
+  if (rm->lguard > rm->cguard) rm2d_vtag_clear(rm, RM2D_V_CSETTLED);
+  rm->cguard = rm->lguard;
   /* an element in range has nothing below thr */
   const uint8_t skip = RM2D_E_DEAD | RM2D_E_TOUCHED | RM2D_E_FROZEN |
                        (thr <= RM2D_LSHORT_OPT ? RM2D_E_INRANGE : 0);
@@ -236,11 +239,22 @@ pa_status pa__rm2d_collapse_pass(rm2d *rm, double thr, long *n) {
     if (best < 0) continue;
     pa_idx s = rm2d_other_side(rm, 3 * k + best);
     if (s >= 0 && (rm->tflag[s / 3] & RM2D_E_TOUCHED)) continue;
-    if (pa__rm2d_collapse_edge(rm, k, best, RM2D_NX3(best), 0.3) ||
-        pa__rm2d_collapse_edge(rm, k, best, RM2D_PV3(best), 0.3) ||
-        pa__rm2d_remove_vertex(rm, k, RM2D_NX3(best)) ||
-        pa__rm2d_remove_vertex(rm, k, RM2D_PV3(best)))
+    /* an end whose removal was refused and whose ball has not changed
+     * since is not tried again: its collapse along the edge is one of the
+     * removals it was refused */
+    const int i1 = RM2D_NX3(best), i2 = RM2D_PV3(best);
+    const pa_idx p1 = v[i1], p2 = v[i2];
+    const int t1 = !(rm->vtag[p1] & RM2D_V_CSETTLED),
+              t2 = !(rm->vtag[p2] & RM2D_V_CSETTLED);
+    if ((t1 && pa__rm2d_collapse_edge(rm, k, best, i1, RM2D_QREL_COLLAPSE)) ||
+        (t2 && pa__rm2d_collapse_edge(rm, k, best, i2, RM2D_QREL_COLLAPSE)) ||
+        (t1 && pa__rm2d_remove_vertex(rm, k, i1)) ||
+        (t2 && pa__rm2d_remove_vertex(rm, k, i2))) {
       cnt++;
+    } else {
+      if (t1) rm->vtag[p1] |= RM2D_V_CSETTLED;
+      if (t2) rm->vtag[p2] |= RM2D_V_CSETTLED;
+    }
   }
   *n = cnt;
   return PA_SUCCESS;

@@ -466,6 +466,30 @@ static uint64_t spread2(uint64_t x) {
   return x;
 }
 
+/* Copy records old[0..n) of a to q, sz bytes each: the record sizes of the
+ * working mesh (1 to 24 bytes) get a copy of constant size, which the
+ * compiler inlines, where a size known only at run time costs a call of
+ * memcpy per record. */
+#define GATHER_CASE(S)                                                         \
+  case S:                                                                      \
+    for (pa_idx i = 0; i < n; i++)                                             \
+      memcpy(q + (size_t)(S) * i, a + (size_t)(S) * old[i], S);               \
+    break
+static void gather(unsigned char *q, const unsigned char *a, size_t sz,
+                   const pa_idx *old, pa_idx n) {
+  switch (sz) {
+    GATHER_CASE(1);
+    GATHER_CASE(4);
+    GATHER_CASE(8);
+    GATHER_CASE(12);
+    GATHER_CASE(16);
+    GATHER_CASE(24);
+  default:
+    for (pa_idx i = 0; i < n; i++) memcpy(q + sz * i, a + sz * old[i], sz);
+  }
+}
+#undef GATHER_CASE
+
 /* Replace the array *p (cap records of sz bytes; NULL: nothing) by its
  * records old[0..n) in that order. */
 static pa_status regather(void **p, size_t cap, size_t sz, const pa_idx *old,
@@ -476,7 +500,7 @@ static pa_status regather(void **p, size_t cap, size_t sz, const pa_idx *old,
     return pa__error(PA_ERR_MEMORY, __FILE__, __LINE__,
                      "remesher: out of memory reordering");
   const unsigned char *a = *p;
-  for (pa_idx i = 0; i < n; i++) memcpy(q + sz * i, a + sz * old[i], sz);
+  gather(q, a, sz, old, n);
   pa__free(*p);
   *p = q;
   return PA_SUCCESS;
@@ -493,8 +517,9 @@ static pa_status vertex_positions(const rm2d *rm, pa__key64 *key,
   for (pa_idx v = 0; v < nv; v++)
     if (!(rm->vtag[v] & RM2D_V_DEAD))
       for (int j = 0; j < 2; j++) {
-        lo[j] = fmin(lo[j], rm->x[2 * (size_t)v + j]);
-        hi[j] = fmax(hi[j], rm->x[2 * (size_t)v + j]);
+        const double c = rm->x[2 * (size_t)v + j]; /* finite */
+        if (c < lo[j]) lo[j] = c;
+        if (c > hi[j]) hi[j] = c;
       }
   double ext = fmax(hi[0] - lo[0], hi[1] - lo[1]);
   double sc = ext > 0 ? 4294967295.0 / ext : 0;
@@ -510,7 +535,7 @@ static pa_status vertex_positions(const rm2d *rm, pa__key64 *key,
     key[k++].idx = v;
   }
   PA_CHECK(k == n, PA_ERR_INTERNAL, "remesher: live vertex count is off");
-  qsort(key, (size_t)n, sizeof *key, pa__key64_cmp);
+  PA_CALL(pa__key64_sort(key, (size_t)n));
   for (pa_idx i = 0; i < n; i++) posv[key[i].idx] = i;
 cleanup:
   return st;
@@ -548,7 +573,7 @@ cleanup:
 /* Renumber the adjacency and the feature records (which keep their slots)
  * to the new vertex and element slots. */
 static void renumber_links(rm2d *rm, const pa_idx *posv, const pa_idx *pose) {
-  const int nvpe = rm->nvpe;
+  const int nvpe = 3; /* triangles (pa__rm2d_reorder): no division at run time */
   for (pa_idx e = 0; e < rm->ne; e++) {
     if (rm->tflag[e] & RM2D_E_DEAD) continue;
     for (int i = 0; i < nvpe; i++) {

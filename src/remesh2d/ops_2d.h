@@ -149,8 +149,8 @@ static inline pa_idx rm2d_next_elem(const rm2d *rm, pa_idx k, uint8_t skip) {
 
 /* Element k is rewritten or about to be killed, or one of its vertices
  * moved: drop the caches that depend on it (RM2D_E_INRANGE of k, RM2D_E_NOSWAP
- * of k and its neighbours, RM2D_V_SETTLED and RM2D_V_LSETTLED of its
- * vertices, whose balls change).
+ * of k and its neighbours, RM2D_V_SETTLED, RM2D_V_LSETTLED and
+ * RM2D_V_CSETTLED of its vertices, whose balls change).
  * Call with k's current vertices and, on a rewrite, before its adjacency is
  * updated (the old neighbours are the ones to tell; a new neighbour of a
  * rewritten element is an old neighbour of the rewritten group). */
@@ -163,7 +163,8 @@ static inline void rm2d_elem_changed(rm2d *rm, pa_idx k) {
   if (a[0] >= 0) rm->tflag[a[0] / 3] &= (uint8_t)~RM2D_E_NOSWAP;
   if (a[1] >= 0) rm->tflag[a[1] / 3] &= (uint8_t)~RM2D_E_NOSWAP;
   if (a[2] >= 0) rm->tflag[a[2] / 3] &= (uint8_t)~RM2D_E_NOSWAP;
-  const uint8_t vs = (uint8_t)~(RM2D_V_SETTLED | RM2D_V_LSETTLED);
+  const uint8_t vs =
+      (uint8_t)~(RM2D_V_SETTLED | RM2D_V_LSETTLED | RM2D_V_CSETTLED);
   rm->vtag[v[0]] &= vs;
   rm->vtag[v[1]] &= vs;
   rm->vtag[v[2]] &= vs;
@@ -249,6 +250,11 @@ static inline int rm2d_ball(const rm2d *rm, pa_idx k, int ip, pa_idx *el,
   }
   return n;
 }
+
+/* The collapses of the collapse passes may lower the ball's worst quality
+ * to this share of it: removing short edges comes first there, and the
+ * swaps and relocations that follow restore the quality (not tuned). */
+#define RM2D_QREL_COLLAPSE 0.3
 
 /* Collapse vertex p = v[ip] of element k onto q, the other end of face fi of
  * k (fi != ip), if every new element has quality >= qrel times the ball's old

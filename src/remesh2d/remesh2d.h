@@ -18,9 +18,9 @@
  *    through the record (bside);
  *  - q[k] is the element quality (Mmg's normalisation) with the current
  *    coordinates and metric;
- *  - tag bits RM2D_E_TOUCHED / RM2D_V_MARK are scratch, cleared by each pass
+ *  - tag bits RM2D_E_TOUCHED / RM2D_V_DONE are scratch, cleared by each pass
  *    that uses them; RM2D_E_INRANGE / RM2D_E_NOSWAP / RM2D_V_SETTLED /
- *    RM2D_V_LSETTLED are caches
+ *    RM2D_V_LSETTLED / RM2D_V_CSETTLED are caches
  *    that skip work a pass would find useless, cleared by any change that
  *    could invalidate them (so the passes decide exactly as without them);
  *  - a frozen element (PA_FLAG_REQUIRED in its flags) is never rewritten; its
@@ -41,7 +41,12 @@ enum {
   RM2D_V_CORNER = 2, /* never moved, never removed */
   RM2D_V_FEAT = 4,   /* lies on a feature line (boundary or interior curve) */
   RM2D_V_DEAD = 8,
-  RM2D_V_MARK = 16, /* scratch */
+  /* The removal of this vertex by the collapse passes
+   * (pa__rm2d_remove_vertex: onto any neighbour, RM2D_QREL_COLLAPSE, no new
+   * edge longer than rm2d.cguard) was tried and rejected, and its ball has
+   * not changed since: cleared with RM2D_V_SETTLED, and on every vertex
+   * when a collapse pass allows longer edges than rm2d.cguard. */
+  RM2D_V_CSETTLED = 16,
   RM2D_V_DONE = 32, /* scratch */
   /* A relocation of this vertex was tried and rejected, and no element of
    * its ball changed since (nor any vertex of them moved): trying again
@@ -170,6 +175,7 @@ typedef struct rm2d {
   double hausd;
   double lguard; /* no operation creates an edge longer than this */
   double lset_hi; /* upper end of the RM2D_E_INRANGE band (rm2d_len_settled) */
+  double cguard;  /* RM2D_V_CSETTLED holds for collapse guards up to this */
   int frozen;    /* the mesh has a frozen element or feature record */
   long nsplit, ncollapse, nswap, nmove;
   double tlast; /* time of the last verbose pass report */

@@ -24,13 +24,31 @@
  * (barycentric; linear fields stay exact), qualities updated: qn[0..n) when
  * given (the trial's, which with sizes do not depend on the metric), else
  * computed. same: p and its neighbours carry the same metric, which the
- * interpolation then gives back (pa__metric_interp), so without fields nor
- * a target metric apart there is nothing to interpolate. ln[0..n), when
+ * interpolation then gives back (pa__metric_interp), so without fields, and
+ * with the same target metric too where it is kept apart (rm2d.met0: a
+ * piece of the parallel loop, whose working metric is relaxed at its skin;
+ * same_target), there is nothing to interpolate. ln[0..n), when
  * given, are the lengths from np to the
  * neighbours v[RM2D_NX3(loc[s])] in p's metric before the move: where the
  * interpolation leaves that metric as it was, they are the new lengths, and
  * an element in range (RM2D_E_INRANGE) whose two edges at p stay in the
  * band keeps its mark (its third edge has not moved). */
+/* p and the vertices of its ball el[0..n) (local indices loc) carry the same
+ * target metric rm->met0. */
+static int same_target(const rm2d *rm, pa_idx p, const pa_idx *el,
+                       const int *loc, int n) {
+  const int mc = rm->mc;
+  const double *m0 = rm->met0 + (size_t)mc * p;
+  for (int s = 0; s < n; s++) {
+    const pa_idx *v = rm->tv + 3 * (size_t)el[s];
+    const double *ma = rm->met0 + (size_t)mc * v[RM2D_NX3(loc[s])];
+    const double *mb = rm->met0 + (size_t)mc * v[RM2D_PV3(loc[s])];
+    for (int c = 0; c < mc; c++)
+      if (ma[c] != m0[c] || mb[c] != m0[c]) return 0;
+  }
+  return 1;
+}
+
 static void apply_move(rm2d *rm, pa_idx p, const pa_idx *el, const int *loc,
                        int n, const double *np, const double *qn, int same,
                        const double *ln) {
@@ -38,7 +56,10 @@ static void apply_move(rm2d *rm, pa_idx p, const pa_idx *el, const int *loc,
   double *xp = rm->x + 2 * (size_t)p;
   double x0 = xp[0], y0 = xp[1], m0[3];
   memcpy(m0, RM2D_M(p), sizeof(double) * (size_t)mc);
-  int ns = same && !rm->met0 && !rm->nfield ? 0 : n;
+  int ns = same && !rm->nfield &&
+                   (!rm->met0 || same_target(rm, p, el, loc, n))
+               ? 0
+               : n;
   for (int s = 0; s < ns; s++) {
     const pa_idx *v = rm->tv + 3 * (size_t)el[s];
     pa_idx va = v[RM2D_NX3(loc[s])], vb = v[RM2D_PV3(loc[s])];

@@ -1,4 +1,5 @@
-/* test_core.c -- counting allocator, failure hook, error messages, mesh storage. */
+/* test_core.c -- counting allocator, failure hook, error messages, mesh storage,
+ * the sort of (key, index) records. */
 #include "testutil.h"
 #include "core/core.h"
 #include "dmesh/util.h"
@@ -135,5 +136,35 @@ static void test_mesh_storage(void) {
   free(h);
 }
 
+/* pa__key64_sort gives qsort's order (pa__key64_cmp) on records
+ * given by increasing index: small and large counts, keys with many ties,
+ * keys whose high digits are all equal, full 64-bit keys, all keys equal. */
+static void test_sort_keys(void) {
+  const size_t ns[] = {0, 1, 5, 63, 64, 65, 1000, 20000};
+  const uint64_t ranges[] = {7, 1u << 20, 0, 1};
+  pa_test_seed(38);
+  for (size_t a = 0; a < sizeof ns / sizeof *ns; a++)
+    for (size_t b = 0; b < sizeof ranges / sizeof *ranges; b++) {
+      size_t n = ns[a];
+      pa__key64 *k = malloc(sizeof *k * (n + 1)), *q = malloc(sizeof *q * (n + 1));
+      for (size_t i = 0; i < n; i++) {
+        uint64_t r = (uint64_t)(pa_test_rand() * 4294967296.0) << 32 |
+                     (uint64_t)(pa_test_rand() * 4294967296.0);
+        k[i].key = ranges[b] ? r % ranges[b] : r; /* 0: the full range */
+        k[i].idx = (pa_idx)i;
+      }
+      memcpy(q, k, sizeof *k * n);
+      qsort(q, n, sizeof *q, pa__key64_cmp);
+      CHECK_OK(pa__key64_sort(k, n));
+      int same = 1;
+      for (size_t i = 0; i < n; i++)
+        same &= k[i].key == q[i].key && k[i].idx == q[i].idx;
+      if (!same) fprintf(stderr, "sort_keys: n %zu range %zu differs\n", n, b);
+      CHECK(same);
+      free(k);
+      free(q);
+    }
+}
+
 TEST_MAIN(test_allocator, test_sort_by_gid, test_fail_hook, test_memory_bound,
-          test_mesh_storage)
+          test_mesh_storage, test_sort_keys)
