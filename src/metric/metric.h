@@ -62,6 +62,12 @@ void pa__sym_eigen(int dim, const double *m, double *lambda, double *vec);
 /* Rebuild a symmetric tensor from eigenpairs. */
 void pa__sym_from_eigen(int dim, const double *lambda, const double *vec,
                         double *m);
+/* Solve the SPD system a x = b of size n in place (a row-major, overwritten
+ * by its Cholesky factor; b by x); 0 if a is not positive definite to
+ * working precision (a pivot under 1e-12 of the largest diagonal entry)
+ * (recovery.c: the least-squares fits of the recoveries and of the
+ * remeshers' surface normals). */
+int pa__cholesky_solve(int n, double *a, double *b);
 
 /* Interpolation of n metrics with weights w (sum to 1) at a new vertex,
  * linear in size: M = (sum w_i M_i^-1/2)^-2, h = sum w_i h_i (Mmg's

@@ -36,9 +36,7 @@
 #define RECOVER_MIN_RATIO 1.5
 #define RECOVER_MAXNB 512
 
-/* Solve the SPD system a x = b of size n (a row-major, overwritten by its
- * Cholesky factor); 0 if not positive definite to working precision. */
-static int cholesky_solve(int n, double *a, double *b) {
+int pa__cholesky_solve(int n, double *a, double *b) {
   double dmax = 0;
   for (int i = 0; i < n; i++)
     dmax = fmax(dmax, a[n * i + i]);
@@ -126,7 +124,7 @@ static int lsq_fit(const pa_mesh *m, const double *u, int stride, pa_idx p,
         a[nu * i + k] += w * r[i] * r[k];
     }
   }
-  if (!cholesky_solve(nu, a, b)) return 0;
+  if (!pa__cholesky_solve(nu, a, b)) return 0;
   for (int k = 0; k < d; k++)
     g[k] = b[k] / scale;
   for (int k = 0; k < pa__tensor_ncomp(d); k++)

@@ -10,9 +10,10 @@
  * by more than -ar, is a corner (locked). A feature edge or corner that the
  * written triangles alone would not make (one of unlisted interfaces,
  * RM3D_REC_UNLISTED) is not written back. Boundary vertices off features get
- * the mean normal of their free triangles and RM3D_V_CURVED when these normals
- * are not all equal, which lets splits place new points on a smooth (cubic)
- * reconstruction; planar patches have no curved vertex and stay planar. So
+ * the mean normal of their free triangles, refined by a quadric fit of the
+ * neighbouring vertices (fit_normals), and RM3D_V_CURVED when the triangles'
+ * normals are not all equal, which lets splits place new points on a smooth
+ * (cubic) reconstruction; planar patches have no curved vertex and stay planar. So
  * does a vertex whose feature edges all separate a free triangle from a
  * frozen one (where a piece's frozen skin meets the boundary). The triangles
  * of an interface inside the domain (two tets hold them) count with the
@@ -22,6 +23,23 @@
  * interface is refined on the same smooth reconstruction.
  */
 #include "remesh3d/remesh3d.h"
+
+/* Unknowns of the quadric fit of fit_one: the two slopes and the three
+ * curvature terms, the quadric passing through x (the sixth term of its
+ * row, an offset, gives the same accuracy on bench/levelset_cut.sh). */
+#define FIT_NPAR 5
+/* At most this many points per fit (two rings hold 20 to 40). */
+#define FIT_MAXPTS 64
+/* A fitted normal turned by more than ~45 degrees from the mean normal is
+ * not trusted (a fold or a sheet of too few points); the mean is up to 25
+ * degrees off the exact normal on the benchmark torus, so a tighter bound
+ * refuses good fits. */
+#define FIT_MAX_TURN 0.7
+/* A vertex with a neighbour closer than this share of its farthest one
+ * (one of a cluster of cut points around a vertex near the zero set)
+ * keeps its mean normal: its fit mixes the cluster's cut errors, of the
+ * order of its edges, and the cluster's slivers then resist removal. */
+#define FIT_CLUSTER 0.1
 
 typedef struct bedge {
   pa_idx a, b;   /* a < b */
@@ -205,6 +223,126 @@ static void mark_corners(rm3d *m, int use_angle, uint8_t *nfeat,
       m->vpf[x] |= PA_FLAG_CORNER;
 }
 
+/* The normal at x of the quadric height field w = a u^2 + b uv + c v^2 +
+ * d u + e v (+ f) fitted by least squares to the points pts[0..np) in the
+ * frame of x's normal n (replaced by the fit's when it is well posed, its
+ * normal equations positive definite, and within FIT_MAX_TURN of n). */
+static void fit_one(const double *x, const double *pts, int np, double *n) {
+  double t1[3], t2[3];
+  int ax = fabs(n[0]) < fabs(n[1]) ? (fabs(n[0]) < fabs(n[2]) ? 0 : 2)
+                                   : (fabs(n[1]) < fabs(n[2]) ? 1 : 2);
+  double e[3] = {0, 0, 0};
+  e[ax] = 1;
+  t1[0] = e[1] * n[2] - e[2] * n[1];
+  t1[1] = e[2] * n[0] - e[0] * n[2];
+  t1[2] = e[0] * n[1] - e[1] * n[0];
+  rm3d_unit(t1);
+  t2[0] = n[1] * t1[2] - n[2] * t1[1];
+  t2[1] = n[2] * t1[0] - n[0] * t1[2];
+  t2[2] = n[0] * t1[1] - n[1] * t1[0];
+  double scale = 0;
+  for (int i = 0; i < np; i++) {
+    const double *p = pts + 3 * i;
+    scale += (p[0] - x[0]) * (p[0] - x[0]) + (p[1] - x[1]) * (p[1] - x[1]) +
+             (p[2] - x[2]) * (p[2] - x[2]);
+  }
+  if (np < FIT_NPAR + 1 || !(scale > 0)) return;
+  scale = 1.0 / sqrt(scale / np);
+  double ata[FIT_NPAR * FIT_NPAR] = {0}, atb[FIT_NPAR] = {0};
+  for (int i = 0; i < np; i++) {
+    const double *p = pts + 3 * i;
+    double d[3] = {(p[0] - x[0]) * scale, (p[1] - x[1]) * scale,
+                   (p[2] - x[2]) * scale};
+    double u = d[0] * t1[0] + d[1] * t1[1] + d[2] * t1[2];
+    double v = d[0] * t2[0] + d[1] * t2[1] + d[2] * t2[2];
+    double w = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+    double row[6] = {u, v, u * u, u * v, v * v, 1};
+    for (int r = 0; r < FIT_NPAR; r++) {
+      atb[r] += row[r] * w;
+      for (int c = 0; c < FIT_NPAR; c++) ata[r * FIT_NPAR + c] += row[r] * row[c];
+    }
+  }
+  if (!pa__cholesky_solve(FIT_NPAR, ata, atb)) return;
+  double nf[3];
+  for (int j = 0; j < 3; j++) nf[j] = n[j] - atb[0] * t1[j] - atb[1] * t2[j];
+  rm3d_unit(nf);
+  if (nf[0] * n[0] + nf[1] * n[1] + nf[2] * n[2] < FIT_MAX_TURN) return;
+  memcpy(n, nf, sizeof nf);
+}
+
+/* 1 when ring[0] has a first-ring neighbour (ring[1..n1)) closer than
+ * FIT_CLUSTER times its farthest one: one of a cluster of cut points. */
+static int cluster_vertex(const rm3d *m, const pa_idx *ring, int n1) {
+  const double *x = m->x + 3 * (size_t)ring[0];
+  double dmin = 1e300, dmax = 0;
+  for (int i = 1; i < n1; i++) {
+    const double *y = m->x + 3 * (size_t)ring[i];
+    double d = (y[0] - x[0]) * (y[0] - x[0]) + (y[1] - x[1]) * (y[1] - x[1]) +
+               (y[2] - x[2]) * (y[2] - x[2]);
+    dmin = fmin(dmin, d);
+    dmax = fmax(dmax, d);
+  }
+  return dmin < FIT_CLUSTER * FIT_CLUSTER * dmax;
+}
+
+/* Normals of the smooth boundary vertices (off features, not twisted)
+ * refined by fit_one over the vertices of their free boundary triangles
+ * and of those of their neighbours off features (two rings). */
+static pa_status fit_normals(rm3d *m, const uint8_t *twisted) {
+  pa_status st = PA_SUCCESS;
+  if (m->voff) return st; /* with a model, its points */
+  pa_idx *start = NULL, *list = NULL, *seen = NULL;
+  double *pts = NULL;
+  PA_CALLOC(start, (size_t)m->nv + 1);
+  for (pa_idx r = 0; r < m->tri.n; r++) {
+    if (m->tri.flag[r] & (RM3D_REC_DEAD | PA_FLAG_REQUIRED)) continue;
+    for (int j = 0; j < 3; j++) start[m->tri.v[3 * (size_t)r + j] + 1]++;
+  }
+  for (pa_idx x = 0; x < m->nv; x++) start[x + 1] += start[x];
+  PA_ALLOC(list, (size_t)start[m->nv] + 1);
+  for (pa_idx r = 0; r < m->tri.n; r++) {
+    if (m->tri.flag[r] & (RM3D_REC_DEAD | PA_FLAG_REQUIRED)) continue;
+    for (int j = 0; j < 3; j++) list[start[m->tri.v[3 * (size_t)r + j]]++] = r;
+  }
+  for (pa_idx x = m->nv; x > 0; x--) start[x] = start[x - 1];
+  start[0] = 0;
+  PA_ALLOC(seen, (size_t)m->nv);
+  for (pa_idx x = 0; x < m->nv; x++) seen[x] = -1;
+  PA_ALLOC(pts, 3 * FIT_MAXPTS);
+  for (pa_idx x = 0; x < m->nv; x++) {
+    if (twisted[x] || (m->vtag[x] & (RM3D_V_FEAT | RM3D_V_DEAD)) ||
+        start[x] == start[x + 1])
+      continue;
+    pa_idx ring[FIT_MAXPTS];
+    int nr = 0;
+    seen[x] = x;
+    ring[nr++] = x;
+    int n1 = 1;
+    for (int i = 0; i < n1; i++) {
+      pa_idx c = ring[i];
+      if (i && (m->vtag[c] & RM3D_V_FEAT)) continue;
+      for (pa_idx k = start[c]; k < start[c + 1]; k++)
+        for (int j = 0; j < 3; j++) {
+          pa_idx y = m->tri.v[3 * (size_t)list[k] + j];
+          if (seen[y] == x || nr == FIT_MAXPTS) continue;
+          seen[y] = x;
+          ring[nr++] = y;
+        }
+      if (i == 0) n1 = nr; /* the first ring's vertices, then stop */
+    }
+    if (cluster_vertex(m, ring, n1)) continue;
+    for (int i = 0; i < nr; i++)
+      memcpy(pts + 3 * i, m->x + 3 * (size_t)ring[i], 3 * sizeof(double));
+    fit_one(m->x + 3 * (size_t)x, pts, nr, m->nrm + 3 * (size_t)x);
+  }
+cleanup:
+  pa__free(start);
+  pa__free(list);
+  pa__free(seen);
+  pa__free(pts);
+  return st;
+}
+
 /* Normals of boundary vertices off features, from their outward free
  * faces. A vertex whose feature edges all border a frozen triangle (the
  * skin of a piece of the parallel loop meeting the boundary: nborder[x] ==
@@ -233,6 +371,7 @@ static pa_status curved_normals(rm3d *m, const uint8_t *nborder,
     if (twisted[x]) memset(m->nrm + 3 * (size_t)x, 0, 3 * sizeof(double));
     rm3d_unit(m->nrm + 3 * (size_t)x);
   }
+  PA_CALL(fit_normals(m, twisted));
   int ncurved = 0;
   for (pa_idx k = 0; k < m->ne; k++) {
     if (!(m->tflag[k] & RM3D_T_FACES)) continue;
@@ -256,9 +395,38 @@ static pa_status curved_normals(rm3d *m, const uint8_t *nborder,
   if (!ncurved) {
     pa__free(m->nrm);
     m->nrm = NULL;
+  } else if (!m->voff) { /* with a model, its snaps place the points */
+    PA_CALLOC(m->vcur, 3 * m->capv);
   }
 cleanup:
   return st;
+}
+
+/* The unit normal of the curved surface at the boundary triangle of
+ * vertices v: the sum of their normals, oriented along n0 (the triangle's
+ * normal), in n; 0 when a vertex has none (off a curved patch). */
+static int surface_normal(const rm3d *m, const pa_idx *v, const double *n0,
+                          double *n) {
+  n[0] = n[1] = n[2] = 0;
+  for (int j = 0; j < 3; j++) {
+    if (!(m->vtag[v[j]] & RM3D_V_CURVED)) return 0;
+    const double *nj = m->nrm + 3 * (size_t)v[j];
+    for (int c = 0; c < 3; c++) n[c] += nj[c];
+  }
+  double d = n[0] * n0[0] + n[1] * n0[1] + n[2] * n0[2];
+  if (!(rm3d_unit(n) > 0) || d == 0) return 0;
+  if (d < 0) /* the record runs against the normals (an outer surface) */
+    for (int c = 0; c < 3; c++) n[c] = -n[c];
+  return 1;
+}
+
+int pa__rm3d_turn_ok(const rm3d *m, const pa_idx *v, const double *n0,
+                     const double *n1) {
+  double ns[3];
+  if (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] >= RM3D_NORMAL_COS)
+    return 1;
+  return m->nrm && surface_normal(m, v, n0, ns) &&
+         ns[0] * n1[0] + ns[1] * n1[1] + ns[2] * n1[2] >= RM3D_NORMAL_COS;
 }
 
 pa_status pa__rm3d_surface_analyze(rm3d *m, int use_angle) {

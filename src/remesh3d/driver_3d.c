@@ -370,6 +370,9 @@ pa_status pa__rm3d_smooth_pass(rm3d *m, double qthr, rm3d_balls *b,
   /* first the vertices off the model onto it (pa__rm3d_snap_vertex) */
   for (pa_idx p = 0; m->voff && p < m->nv; p++)
     c += pa__rm3d_snap_vertex(m, p, sball);
+  /* and the vertices a split put off their curve onto it */
+  for (pa_idx p = 0; m->vcur && p < m->nv; p++)
+    c += pa__rm3d_curve_snap_vertex(m, p, sball);
   if (!b->start) PA_CALL(pa__rm3d_balls_build(m, b));
   for (pa_idx k = 0; k < m->ne; k++) {
     if ((m->tflag[k] & RM3D_T_DEAD) || m->q[k] >= qthr) continue;

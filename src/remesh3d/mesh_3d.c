@@ -158,6 +158,7 @@ pa_status pa__rm3d_reserve(rm3d *m, size_t nv, size_t ne) {
     GROW_TO(m->vtag, cap);
     GROW_TO(m->vtet, cap);
     if (m->nrm) GROW_TO(m->nrm, 3 * cap);
+    if (m->vcur) GROW_TO(m->vcur, 3 * cap);
     if (m->voff) GROW_TO(m->voff, cap);
     for (int k = 0; k < m->nfield; k++)
       GROW_TO(m->fval[k], (size_t)m->fcomp[k] * cap);
@@ -193,6 +194,7 @@ pa_status pa__rm3d_new_vertex(rm3d *m, const double *x, const double *met,
   m->vtag[i] = 0;
   m->vtet[i] = -1;
   if (m->nrm) memset(m->nrm + 3 * (size_t)i, 0, 3 * sizeof(double));
+  if (m->vcur) memset(m->vcur + 3 * (size_t)i, 0, 3 * sizeof(double));
   if (m->voff) m->voff[i] = 0;
   for (int k = 0; k < m->nfield; k++)
     memset(m->fval[k] + (size_t)m->fcomp[k] * i, 0,
@@ -241,6 +243,7 @@ void pa__rm3d_free(rm3d *m) {
   pa__free(m->vtag);
   pa__free(m->vtet);
   pa__free(m->nrm);
+  pa__free(m->vcur);
   pa__free(m->voff);
   pa__free(m->tv);
   pa__free(m->adj);
@@ -550,6 +553,9 @@ pa_status pa__rm3d_compact(rm3d *m, int keep_q) {
     if (m->nrm)
       memmove(m->nrm + 3 * (size_t)j, m->nrm + 3 * (size_t)i,
               3 * sizeof(double));
+    if (m->vcur)
+      memmove(m->vcur + 3 * (size_t)j, m->vcur + 3 * (size_t)i,
+              3 * sizeof(double));
     m->vref[j] = m->vref[i];
     m->vpf[j] = m->vpf[i];
     m->vtag[j] = m->vtag[i];
@@ -822,6 +828,7 @@ static void move_vertices(rm3d *m, const pa_idx *pos, uint8_t *done) {
   perm_add(&pa, m->met, (size_t)m->mc * sizeof(double));
   if (m->met0) perm_add(&pa, m->met0, (size_t)m->mc * sizeof(double));
   if (m->nrm) perm_add(&pa, m->nrm, 3 * sizeof(double));
+  if (m->vcur) perm_add(&pa, m->vcur, 3 * sizeof(double));
   perm_add(&pa, m->vref, sizeof(int32_t));
   perm_add(&pa, m->vpf, 1);
   perm_add(&pa, m->vtag, 1);

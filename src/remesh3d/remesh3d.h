@@ -96,6 +96,10 @@ typedef struct rm3d {
   uint8_t *tflag, *tpf;
   int32_t *tref;
   double *nrm; /* 3 * capv: unit normal of curved surface vertices */
+  /* 3 * capv (with nrm): a curved-patch vertex's offset to the point of
+   * its curve, where its split put it closer to the chord (0 when on it);
+   * the curve snaps (pa__rm3d_curve_snap_vertex) take it on */
+  double *vcur;
   /* capv or NULL (no model): 1 for a boundary vertex off the model, left
    * on the reconstruction because the model's point of its split was
    * refused; the snap moves (pa__rm3d_snap_vertex) retry it */
@@ -446,6 +450,20 @@ int pa__rm3d_project_vertex(const rm3d *m, pa_idx p, const pa_idx *ball,
  * stays valid (no tet under rm3d_q_min of its old quality), else part of
  * the way (smooth_3d.c). 1 when moved. */
 int pa__rm3d_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball);
+/* Move the curved-patch vertex p by its offset vcur[p] (or half or a
+ * quarter of it, keeping the rest) when its ball stays valid (no tet under
+ * rm3d_q_min of its old quality) and its boundary triangles keep their
+ * normal or follow the surface's (pa__rm3d_turn_ok) (smooth_3d.c). 1 when
+ * moved. */
+int pa__rm3d_curve_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball);
+/* 1 if the boundary triangle of vertices v and unit normal n1, which had
+ * the normal n0, stays within RM3D_NORMAL_COS of n0 or of the surface's
+ * normal at its vertices (the sum of their normals; all on a curved
+ * patch): a vertex moved onto the curve turns its coarse triangles away
+ * from their flat selves towards the surface, a fold turns them away from
+ * both (boundary_3d.c). */
+int pa__rm3d_turn_ok(const rm3d *m, const pa_idx *v, const double *n0,
+                     const double *n1);
 /* Mark (voff) the free boundary vertices of the input that lie off their
  * entity by more than PA_GEOM_SNAP_TOL of the model's size: those the
  * snap moves of an earlier remesh could not place (a piece's frozen skin

@@ -500,6 +500,64 @@ int pa__rm3d_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
   return 0;
 }
 
+/* 1 if moving the curved-patch vertex p to np keeps each of the ntri
+ * boundary triangles tri (vertex triples holding p, p of normal np_n)
+ * valid and turning as pa__rm3d_turn_ok allows. */
+static int curve_surface_kept(const rm3d *m, const pa_idx *tri, int ntri,
+                              pa_idx p, const double *np) {
+  for (int i = 0; i < ntri; i++) {
+    const double *y[3], *yn[3];
+    pa_idx v[3];
+    for (int j = 0; j < 3; j++) {
+      v[j] = tri[3 * i + j];
+      y[j] = m->x + 3 * (size_t)v[j];
+      yn[j] = v[j] == p ? np : y[j];
+    }
+    double n0[3], n1[3];
+    if (!(rm3d_tri_normal(y[0], y[1], y[2], n0) > 0)) continue;
+    if (!(rm3d_tri_normal(yn[0], yn[1], yn[2], n1) > 0)) return 0;
+    if (!pa__rm3d_turn_ok(m, v, n0, n1)) return 0;
+  }
+  return 1;
+}
+
+int pa__rm3d_curve_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
+  if (!m->vcur || (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD |
+                                 RM3D_V_FEAT)) ||
+      !(m->vtag[p] & RM3D_V_CURVED))
+    return 0;
+  double *d = m->vcur + 3 * (size_t)p;
+  if (d[0] == 0 && d[1] == 0 && d[2] == 0) return 0;
+  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
+  if (n < 0) return 0;
+  pa_idx tri[3 * 32];
+  int ntri;
+  double hausd;
+  if (!curved_patch(m, ball, n, tri, &ntri, &hausd)) return 0;
+  double qold = 1e30;
+  for (int i = 0; i < n; i++) {
+    pa_idx t = ball[i] >> 2;
+    if (m->tflag[t] & RM3D_T_FROZEN) return 0;
+    if (m->q[t] < qold) qold = m->q[t];
+  }
+  const double *xp = m->x + 3 * (size_t)p;
+  const double *mp = m->met + (size_t)m->mc * p;
+  float nq[RM3D_MAXBALL];
+  int first = 0;
+  for (int s = 0; s < SNAP_STEPS; s++) {
+    double w = ldexp(1.0, -s), np[3];
+    for (int j = 0; j < 3; j++) np[j] = xp[j] + w * d[j];
+    if (!curve_surface_kept(m, tri, ntri, p, np)) continue;
+    if (moved_qualities(m, ball, n, np, mp, rm3d_q_min(m, qold), 0, &first,
+                        nq) >= 0)
+      continue;
+    apply_move(m, p, ball, n, np, nq, 0);
+    for (int j = 0; j < 3; j++) d[j] -= w * d[j];
+    return 1;
+  }
+  return 0;
+}
+
 /* Splitmix64 finaliser: the jiggle's directions. */
 static uint64_t mix64(uint64_t h) {
   h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;

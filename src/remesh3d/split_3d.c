@@ -195,6 +195,7 @@ typedef struct split_plan {
   pa_idx erec; /* the feature edge (a,b), or -1 */
   double p[3], mp[6];                         /* the new vertex, its metric */
   int offmodel; /* with a model, p is not on it (its point was refused) */
+  double dcur[3]; /* from p to the point of the curve (0: p on it) */
   float q1[RM3D_MAXSHELL], q2[RM3D_MAXSHELL]; /* qualities of the halves */
 } split_plan;
 
@@ -244,8 +245,9 @@ static int place_vertex(rm3d *m, split_plan *s) {
   const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b;
   double c[3], p0[3];
   for (int i = 0; i < 3; i++) c[i] = 0.5 * (xa[i] + xb[i]);
-  if (s->bdry && s->erec < 0 && m->nrm && (m->vtag[a] & RM3D_V_CURVED) &&
-      (m->vtag[b] & RM3D_V_CURVED))
+  int curved = s->bdry && s->erec < 0 && m->nrm &&
+               (m->vtag[a] & RM3D_V_CURVED) && (m->vtag[b] & RM3D_V_CURVED);
+  if (curved)
     curved_mid(xa, xb, m->nrm + 3 * (size_t)a, m->nrm + 3 * (size_t)b, p0);
   else if (s->erec >= 0)
     ridge_mid(m, a, b, p0);
@@ -288,6 +290,8 @@ static int place_vertex(rm3d *m, split_plan *s) {
                          s->q2);
     if (!ok && !relax) break;
   }
+  /* the rest of the way to the curve, for the curve snaps */
+  for (int i = 0; i < 3; i++) s->dcur[i] = curved && ok ? p0[i] - s->p[i] : 0;
   return ok;
 }
 
@@ -414,6 +418,7 @@ pa_status pa__rm3d_split_edge(rm3d *m, pa_idx k, pa_idx a, pa_idx b,
   }
   if (m->vref[a] == m->vref[b]) m->vref[pm] = m->vref[a];
   if (m->voff) m->voff[pm] = (uint8_t)s.offmodel;
+  if (m->vcur) memcpy(m->vcur + 3 * (size_t)pm, s.dcur, sizeof s.dcur);
   cut_shell(m, &s, pm);
   if (s.bdry) PA_CALL(split_bdry_records(m, &s, pm));
   m->nsplit++;

@@ -5,9 +5,12 @@ adaptation with the interface kept), judged with numpy and meshio only.
 The judge evaluates the P1 interpolant phi_h of the input level set (on the
 input mesh) at the output's vertices, and checks: the faces between an
 inside (3) and an outside (2) element are exactly the boundary entities of
-reference 10; every element lies on its side of phi_h (within hausd, which
-the adaptation may move the interface by); every interface vertex lies on
-the zero set of phi_h within hausd; the mesh is valid and conforming
+reference 10; every element lies on its side of phi_h and every interface
+vertex on the zero set of phi_h, within hausd (which the adaptation may
+move the interface by) plus the level set's interpolation error at the
+zero set (the curved reconstruction of the interface follows the smooth
+surface through the cut points, which lies that far off the zero set of
+phi_h); the mesh is valid and conforming
 (positive volumes filling the box, no face of more than two elements, a
 face of one on the box); the inside volume is within the
 interpolation error of the level set (measured: |phi| at the input's cut
@@ -15,8 +18,9 @@ points, times the area) plus hausd times the area of the exact volume.
 Cases:
   - a 2D circle (convex) and a 2D annulus (non-convex) at 1, 2, 3, 4
     processes;
-  - a 3D sphere (convex) and a 3D torus (genus 1) at 1, 2, 3, 4 processes
-    (through the piece loop: PADAPT_SERIAL_BELOW=0; 1 and 2 in the
+  - a 3D sphere (convex) and a 3D torus (genus 1) at 1, 2, 3, 4 processes,
+    their interface vertices on average about as close to the exact surface
+    as the cut points (IFACE_MEAN_FACTOR) (through the piece loop: PADAPT_SERIAL_BELOW=0; 1 and 2 in the
     sanitizer build);
   - the materials of the LSReferences section of a -f file (references 1
     split into 5 and 6, 4 kept; in 3D with the faces between 1 and 4 listed
@@ -144,7 +148,8 @@ def judge(name, inp, phi, out, dim, tol, vol_exact, area, err_in,
     lost = int(np.isnan(ph).sum())
     hi = np.max(ph[E[er == rin]], axis=1) if np.any(er == rin) else np.zeros(0)
     lo = np.min(ph[E[er == rout]], axis=1) if np.any(er == rout) else np.zeros(0)
-    bad_side = int(np.sum(hi > tol) + np.sum(lo < -tol))
+    tol_ls = tol + err_in  # hausd, plus phi_h's own error at the zero set
+    bad_side = int(np.sum(hi > tol_ls) + np.sum(lo < -tol_ls))
     # valid and conforming: positive volumes filling the unit box, no face
     # of more than two elements, every face of one element on the box
     vols = simplex_vol(x[E], dim)
@@ -159,21 +164,22 @@ def judge(name, inp, phi, out, dim, tol, vol_exact, area, err_in,
     vol_in = float(np.sum(np.abs(simplex_vol(x[E[er == rin]], dim))))
     bound = area * (1.05 * err_in + tol)
     vol_ok = abs(vol_in - vol_exact) <= bound
-    good = (lost == 0 and bad_iface == 0 and bad_side == 0 and off <= tol and
+    good = (lost == 0 and bad_iface == 0 and bad_side == 0 and off <= tol_ls and
             len(iface) > 0 and vol_ok and conform)
     (ok if good else fail)(
         "%s: %d elements (%s), %d interface entities, %d mismatched, %d elements "
         "off their side, interface vertices within %.2e of phi_h = 0 (tol "
         "%.2e), inside volume %.5f (exact %.5f, bound %.2e)"
         % (name, len(E), "valid, conforming" if conform else "NOT CONFORMING",
-           len(iface), bad_iface, bad_side, off, tol, vol_in,
+           len(iface), bad_iface, bad_side, off, tol_ls, vol_in,
            vol_exact, bound))
     return vol_in
 
 
-def cut_error(inp, phi, exact_sd, dim):
-    """The interpolation error of the level set at the zero set: max |phi|
-    at the linear zeros of the input's edges that change sign."""
+def cut_error(inp, phi, exact_sd, dim, stat=np.max):
+    """The interpolation error of the level set at the zero set: max (or
+    stat) |phi| at the linear zeros of the input's edges that change
+    sign."""
     x, E, _, _, _ = read(inp, dim)
     k = dim + 1
     e = np.unique(np.sort(np.concatenate([E[:, [i, j]] for i in range(k)
@@ -182,7 +188,28 @@ def cut_error(inp, phi, exact_sd, dim):
     c = s0 * s1 < 0
     t = s0[c] / (s0[c] - s1[c])
     p = x[e[c, 0]] + t[:, None] * (x[e[c, 1]] - x[e[c, 0]])
-    return float(np.max(np.abs(exact_sd(p))))
+    return float(stat(np.abs(exact_sd(p))))
+
+
+# In 3D the interface vertices lie on average within this factor of the cut
+# points' mean distance to the exact surface: the vertices the adaptation
+# adds between the cut points go onto the smooth reconstruction through
+# them (vertex normals fitted to the neighbouring cut points), about as
+# close as the cut points themselves: 1.03-1.10 times on the sphere below at
+# 1-4 processes, 0.96-1.01 on the torus; 1.24-1.31 and 1.15-1.18 times with
+# the mean of the faces' normals.
+IFACE_MEAN_FACTOR = 1.2
+
+
+def iface_accuracy(name, out, sd, err_mean):
+    """The mean distance of the interface vertices of out to the exact
+    surface against IFACE_MEAN_FACTOR times the cut points' (err_mean)."""
+    x, _, _, B, br = read(out, 3)
+    d = float(np.mean(np.abs(sd(x[np.unique(B[br == 10])]))))
+    (ok if d <= IFACE_MEAN_FACTOR * err_mean else fail)(
+        "%s: interface vertices at %.3e on average from the exact surface, "
+        "the cut points at %.3e (bound %.2f times)"
+        % (name, d, err_mean, IFACE_MEAN_FACTOR))
 
 
 def case(name, dim, n, sd, vol_exact, area, h, nps, extra=()):
@@ -192,6 +219,7 @@ def case(name, dim, n, sd, vol_exact, area, h, nps, extra=()):
     phi = sd(x)
     write_sol("%s.phi.sol" % name, dim, phi)
     err = cut_error(inp, phi, sd, dim)
+    err_mean = cut_error(inp, phi, sd, dim, np.mean)
     for np_ in nps:
         out = "%s.o%d.mesh" % (name, np_)
         p = run(["adapt", inp, "-ls", "%s.phi.sol" % name, "-hsiz", str(h),
@@ -200,6 +228,8 @@ def case(name, dim, n, sd, vol_exact, area, h, nps, extra=()):
             continue
         judge("%s np %d" % (name, np_), inp, phi, out, dim, 0.01 + 1e-9,
               vol_exact, area, err)
+        if dim == 3:
+            iface_accuracy("%s np %d" % (name, np_), out, sd, err_mean)
         rep = json.load(open("%s.json" % name))
         ls = rep.get("levelset", {})
         (ok if ls.get("interface", 0) > 0 and ls.get("edges_cut", 0) > 0 else fail)(
