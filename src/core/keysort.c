@@ -1,9 +1,10 @@
 /*
  * keysort.c -- the sort of (64-bit key, index) records (pa__key64): an LSD
  * radix sort, stable, so records given by increasing index come out in
- * pa__key64_cmp's order. The renumbering of the 2D remesher's working mesh
- * sorts the Morton keys of its live vertices each time it runs: about ten
- * times fewer instructions than qsort on a few hundred thousand keys.
+ * pa__key64_cmp's order: the Morton keys of the 2D remesher's renumbering
+ * (about ten times fewer instructions than qsort on a few hundred thousand
+ * keys) and the distributed mesh's sorts by global id (dmesh/util.c); a
+ * digit all keys share costs no pass.
  */
 #include "core/core.h"
 

@@ -103,57 +103,9 @@ cleanup:
   return st;
 }
 
-/* Stable LSD radix sort of n (key, idx) pairs on the key bits needed. */
-typedef struct kv {
-  uint64_t k;
-  pa_idx i;
-} kv;
-
-static pa_status radix_sort(kv *a, size_t n) {
-  pa_status st = PA_SUCCESS;
-  kv *tmp = NULL;
-  uint64_t maxk = 0;
-  for (size_t i = 0; i < n; i++)
-    if (a[i].k > maxk) maxk = a[i].k;
-  if (n < 64) { /* insertion sort */
-    for (size_t i = 1; i < n; i++) {
-      kv x = a[i];
-      size_t j = i;
-      while (j > 0 && a[j - 1].k > x.k) {
-        a[j] = a[j - 1];
-        j--;
-      }
-      a[j] = x;
-    }
-    return PA_SUCCESS;
-  }
-  PA_ALLOC(tmp, n);
-  kv *src = a, *dst = tmp;
-  /* as few passes as digits of at most 11 bits allow (a 20-bit key: two
-   * passes of 10 bits, not three of 8), the counts staying in L1 */
-  int bits = 0;
-  while (bits < 64 && (maxk >> bits)) bits++;
-  int passes = (bits + 10) / 11, width = passes ? (bits + passes - 1) / passes : 1;
-  uint64_t mask = ((uint64_t)1 << width) - 1;
-  for (int shift = 0; shift < 64 && (maxk >> shift); shift += width) {
-    size_t cnt[(1 << 11) + 1] = {0};
-    for (size_t i = 0; i < n; i++) cnt[((src[i].k >> shift) & mask) + 1]++;
-    for (uint64_t b = 0; b < mask + 1; b++) cnt[b + 1] += cnt[b];
-    for (size_t i = 0; i < n; i++) dst[cnt[(src[i].k >> shift) & mask]++] = src[i];
-    kv *t = src;
-    src = dst;
-    dst = t;
-  }
-  if (src != a) memcpy(a, src, n * sizeof *a);
-cleanup:
-  pa__free(tmp);
-  return st;
-}
-
 size_t pa__gid_sort_unique(pa_gid *a, size_t n) {
-  /* Fallback to qsort-free insertion for tiny inputs is inside radix_sort;
-   * here we sort the gids directly through (key, 0) pairs when possible. */
-  kv *p = pa__malloc((n ? n : 1) * sizeof *p);
+  /* through (key, 0) pairs and pa__key64_sort (a stable radix sort) */
+  pa__key64 *p = pa__malloc((n ? n : 1) * sizeof *p);
   if (!p) { /* out of memory: degrade to a heap sort, still correct */
     for (size_t i = n / 2; i-- > 0;) {
       size_t r = i;
@@ -179,9 +131,9 @@ size_t pa__gid_sort_unique(pa_gid *a, size_t n) {
       }
     }
   } else {
-    for (size_t i = 0; i < n; i++) p[i].k = (uint64_t)a[i], p[i].i = 0;
-    if (radix_sort(p, n) == PA_SUCCESS)
-      for (size_t i = 0; i < n; i++) a[i] = (pa_gid)p[i].k;
+    for (size_t i = 0; i < n; i++) p[i].key = (uint64_t)a[i], p[i].idx = 0;
+    if (pa__key64_sort(p, n) == PA_SUCCESS)
+      for (size_t i = 0; i < n; i++) a[i] = (pa_gid)p[i].key;
     pa__free(p);
   }
   size_t m = 0;
@@ -221,7 +173,7 @@ cleanup:
 
 pa_status pa__sort_by_gid(pa_idx *idx, size_t n, const pa_gid *key) {
   pa_status st = PA_SUCCESS;
-  kv *p = NULL;
+  pa__key64 *p = NULL;
   size_t s = 1;
   while (s < n && key[idx[s - 1]] <= key[idx[s]]) s++;
   if (s >= n) return PA_SUCCESS; /* already in order */
@@ -235,11 +187,11 @@ pa_status pa__sort_by_gid(pa_idx *idx, size_t n, const pa_gid *key) {
     return counting_sort(idx, n, key, lo, (size_t)(hi - lo) + 1);
   PA_ALLOC(p, n);
   for (size_t i = 0; i < n; i++) {
-    p[i].k = (uint64_t)key[idx[i]];
-    p[i].i = idx[i];
+    p[i].key = (uint64_t)key[idx[i]];
+    p[i].idx = idx[i];
   }
-  PA_CALL(radix_sort(p, n));
-  for (size_t i = 0; i < n; i++) idx[i] = p[i].i;
+  PA_CALL(pa__key64_sort(p, n));
+  for (size_t i = 0; i < n; i++) idx[i] = p[i].idx;
 cleanup:
   pa__free(p);
   return st;
