@@ -149,43 +149,32 @@ static int fails(const pa_mesh *m, pa_idx e, double lo, double hi,
                      : fails_dim(m, e, 3, lo, hi, qmin);
 }
 
-/* fails_dim with sizes (met_ncomp 1, every -hsiz run): the same
- * operations, so the same lengths and quality to the bit, with less
- * around them: each vertex's inverse size once (pa__len2 and pa__len3 take
- * 1/h at both ends of each edge), the squared Euclidean edge lengths once
- * for the lengths and the quality (pa__qual2_stat and pa__qual3_stat with
- * sizes are Euclidean and sum them in the same order), no dispatch on the
- * metric. Debug builds check each answer against fails_dim. */
+/* fails_dim with sizes (met_ncomp 1, every -hsiz run), by the same
+ * kernels with each vertex's inverse size taken once and the squared edge
+ * lengths shared by the lengths (pa__len3_inv's form) and the quality
+ * (pa__qual*_stat_euclid): the same values to the bit. Debug builds check
+ * each answer against fails_dim. */
 static inline int fails_sizes_dim(const pa_mesh *m, pa_idx e, const int d,
                                   double lo, double hi, double qmin) {
   const int n = d + 1;
   const pa_idx *v = m->elem + (size_t)n * e;
   const double *x[4];
-  double iv[4], s2[6], s = 0.0;
+  double iv[4], s = 0.0;
   for (int i = 0; i < n; i++) {
     x[i] = m->coord + (size_t)d * v[i];
     iv[i] = 1.0 / m->met[v[i]];
   }
-  for (int i = 0, k = 0; i < n; i++)
-    for (int j = i + 1; j < n; j++, k++) {
-      double dx = x[j][0] - x[i][0], dy = x[j][1] - x[i][1];
-      double dz = d == 3 ? x[j][2] - x[i][2] : 0.0;
-      s2[k] = d == 2 ? dx * dx + dy * dy : dx * dx + dy * dy + dz * dz;
-      double l = sqrt(s2[k]) *
-                 (iv[i] == iv[j] ? iv[i] : pa__log_mean(iv[i], iv[j]));
+  for (int i = 0; i < n; i++)
+    for (int j = i + 1; j < n; j++) {
+      double s2 = 0.0;
+      for (int c = 0; c < d; c++)
+        s2 += (x[j][c] - x[i][c]) * (x[j][c] - x[i][c]);
+      s += s2;
+      double l = sqrt(s2) * pa__log_mean(iv[i], iv[j]);
       if (!(l >= lo && l < hi)) return 1;
     }
   if (!(qmin > 0)) return 0;
-  for (int k = 0; k < n * d / 2; k++) s += s2[k];
-  if (!(s > 0.0)) return 0.0 < qmin;
-  if (d == 2) {
-    double ux = x[1][0] - x[0][0], uy = x[1][1] - x[0][1];
-    double vx = x[2][0] - x[0][0], vy = x[2][1] - x[0][1];
-    double area = 0.5 * (ux * vy - uy * vx);
-    return PA_METRIC_QUAL_NORM_2D * area * 1.0 / s < qmin;
-  }
-  return PA_METRIC_QUAL_NORM_3D * pa__simplex_volume(3, x) * 1.0 /
-             (s * sqrt(s)) <
+  return (d == 2 ? pa__qual2_stat_euclid(x, s) : pa__qual3_stat_euclid(x, s)) <
          qmin;
 }
 

@@ -122,6 +122,14 @@ static inline double pa__qual2(int mc, const double *a, const double *b,
  * one takes the mesh's own, pa__simplex_volume, so Q < 0 exactly for the
  * elements the checker counts as inverted): they differ by rounding only,
  * never in sign. */
+/* pa__qual2_stat without a tensor: the Euclidean quality of the triangle
+ * x from s, the sum of its squared edge lengths in pa__qual2_stat's order
+ * (a caller that has them sums them itself: tag.c). */
+static inline double pa__qual2_stat_euclid(const double *const *x, double s) {
+  if (!(s > 0.0)) return 0.0;
+  return PA_METRIC_QUAL_NORM_2D * pa__simplex_volume(2, x) / s;
+}
+
 static inline double pa__qual2_stat(int mc, const double *const *x,
                                     const double *const *m) {
   int tensor = mc > 1;
@@ -134,14 +142,14 @@ static inline double pa__qual2_stat(int mc, const double *const *x,
       mb[k] /= 3;
   }
   int mcm = tensor ? mc : 0;
-  double area = pa__simplex_volume(2, x);
   double s = 0.0;
   for (int i = 0; i < 2; i++)
     for (int j = i + 1; j <= 2; j++)
       s += pa__sqlen2(mcm, mb, x[j][0] - x[i][0], x[j][1] - x[i][1]);
+  if (!tensor) return pa__qual2_stat_euclid(x, s);
   if (!(s > 0.0)) return 0.0;
-  double sd = tensor ? sqrt(fmax(pa__sym_det(2, mb), 0.0)) : 1.0;
-  return PA_METRIC_QUAL_NORM_2D * area * sd / s;
+  double sd = sqrt(fmax(pa__sym_det(2, mb), 0.0));
+  return PA_METRIC_QUAL_NORM_2D * pa__simplex_volume(2, x) * sd / s;
 }
 
 #endif /* PA_METRIC2D_H */

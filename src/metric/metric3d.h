@@ -151,6 +151,15 @@ static inline double pa__qual3(int mc, const double *p0, const double *p1,
  * opposite x[0] as x[j] - x[i] where pa__qual3 subtracts the edge vectors from
  * x[0], and sums l^2 over the edges in a loop. Each one's figures are in use.
  */
+/* pa__qual3_stat without a tensor: the Euclidean quality of the
+ * tetrahedron x from s, the sum of its squared edge lengths in
+ * pa__qual3_stat's order (a caller that has them sums them itself:
+ * tag.c). */
+static inline double pa__qual3_stat_euclid(const double *const *x, double s) {
+  if (!(s > 0.0)) return 0.0;
+  return PA_METRIC_QUAL_NORM_3D * pa__simplex_volume(3, x) / (s * sqrt(s));
+}
+
 static inline double pa__qual3_stat(int mc, const double *const *x,
                                     const double *const *m) {
   int tensor = mc > 1;
@@ -163,16 +172,17 @@ static inline double pa__qual3_stat(int mc, const double *const *x,
       mb[k] /= 4;
   }
   int mcm = tensor ? mc : 0;
-  double vol = pa__simplex_volume(3, x);
   double s = 0.0;
   for (int i = 0; i < 3; i++)
     for (int j = i + 1; j <= 3; j++) {
       double e[3] = {x[j][0] - x[i][0], x[j][1] - x[i][1], x[j][2] - x[i][2]};
       s += pa__sqlen3(mcm, mb, e);
     }
+  if (!tensor) return pa__qual3_stat_euclid(x, s);
   if (!(s > 0.0)) return 0.0;
-  double sd = tensor ? sqrt(fmax(pa__sym_det(3, mb), 0.0)) : 1.0;
-  return PA_METRIC_QUAL_NORM_3D * vol * sd / (s * sqrt(s));
+  double sd = sqrt(fmax(pa__sym_det(3, mb), 0.0));
+  return PA_METRIC_QUAL_NORM_3D * pa__simplex_volume(3, x) * sd /
+         (s * sqrt(s));
 }
 
 #endif /* PA_METRIC3D_H */
