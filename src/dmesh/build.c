@@ -1275,36 +1275,6 @@ cleanup:
   return st;
 }
 
-/* The local elements around each vertex marked in need, ascending (CSR
- * vstart/vel over all vertices, as pa__balls_of): one pass over the
- * element slots collects the slots of the marked vertices (the first
- * vertices of the boundary entities and edges, few), which are then filed
- * by vertex; pa__balls_of passes over every slot twice. */
-static pa_status marked_balls(const pa_mesh *m, const uint8_t *need,
-                              pa_idx **vstart, pa_idx **vel) {
-  pa_status st = PA_SUCCESS;
-  int nve = m->dim + 1;
-  size_t ns = (size_t)nve * m->ne, n = 0, cap = 0;
-  pa_idx *slot = NULL;
-  for (size_t k = 0; k < ns; k++)
-    if (need[m->elem[k]]) {
-      PA_GROW(slot, cap, n + 1);
-      slot[n++] = (pa_idx)k;
-    }
-  PA_CALLOC(*vstart, (size_t)m->nv + 1);
-  PA_ALLOC(*vel, n ? n : 1);
-  pa_idx *start = *vstart;
-  for (size_t q = 0; q < n; q++) start[m->elem[slot[q]] + 1]++;
-  for (pa_idx v = 0; v < m->nv; v++) start[v + 1] += start[v];
-  for (size_t q = 0; q < n; q++)
-    (*vel)[start[m->elem[slot[q]]]++] = (pa_idx)((size_t)slot[q] / (size_t)nve);
-  for (pa_idx v = m->nv; v > 0; v--) start[v] = start[v - 1];
-  start[0] = 0;
-cleanup:
-  pa__free(slot);
-  return st;
-}
-
 /* Step 8: own the boundary entities and edges, number them (owned first)
  * and put them in the local mesh. */
 static pa_status fill_subentities(pa_dmesh *dm, bstate *s, assembly *a) {
@@ -1323,7 +1293,8 @@ static pa_status fill_subentities(pa_dmesh *dm, bstate *s, assembly *a) {
       pa_idx v = pa__gidindex_get(&a->lv, SB[t]->vgid[(size_t)SB[t]->nv * i]);
       if (v >= 0) need[v] = 1;
     }
-  PA_CALL(marked_balls(m, need, &vstart, &vel));
+  PA_CALL(pa__balls_of(m->elem, m->ne, m->dim + 1, m->nv, need, &vstart,
+                       &vel));
   pa__free(need);
   need = NULL;
   for (int t = 0; t < 2; t++)

@@ -255,7 +255,8 @@ pa_status pa__mesh_grow_vertices(pa_mesh *mesh, size_t n);
 /* Vertex balls as a CSR: the elements (ne of nve vertices in elem, indices
  * below nv) around vertex v are (*ball)[(*start)[v] .. (*start)[v+1]), in
  * increasing order. Both arrays are allocated here. pa__balls_of: only the
- * balls of the vertices with need[v] (the others empty; need NULL: all). */
+ * balls of the vertices with need[v] (the others empty; need NULL: all),
+ * from one pass that collects their slots (few, in the dmesh build). */
 pa_status pa__balls_of(const pa_idx *elem, pa_idx ne, int nve, pa_idx nv,
                        const uint8_t *need, pa_idx **pstart, pa_idx **pball);
 pa_status pa__balls(const pa_idx *elem, pa_idx ne, int nve, pa_idx nv,

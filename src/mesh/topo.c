@@ -314,16 +314,25 @@ cleanup:
 pa_status pa__balls_of(const pa_idx *elem, pa_idx ne, int nve, pa_idx nv,
                        const uint8_t *need, pa_idx **pstart, pa_idx **pball) {
   pa_status st = PA_SUCCESS;
-  pa_idx *start = NULL, *ball = NULL;
-  size_t n = (size_t)nve * ne;
+  pa_idx *start = NULL, *ball = NULL, *slot = NULL;
+  size_t n = (size_t)nve * ne, ns = n, cap = 0;
   *pstart = *pball = NULL;
+  if (need) { /* the slots of the marked vertices, in one pass: few */
+    ns = 0;
+    for (size_t k = 0; k < n; k++)
+      if (need[elem[k]]) {
+        PA_GROW(slot, cap, ns + 1);
+        slot[ns++] = (pa_idx)k;
+      }
+  }
+#define SLOT(q) (slot ? (size_t)slot[q] : (q))
   PA_CALLOC(start, (size_t)nv + 1);
-  for (size_t k = 0; k < n; k++)
-    if (!need || need[elem[k]]) start[elem[k] + 1]++;
+  for (size_t q = 0; q < ns; q++) start[elem[SLOT(q)] + 1]++;
   for (pa_idx v = 0; v < nv; v++) start[v + 1] += start[v];
   PA_ALLOC(ball, start[nv] ? (size_t)start[nv] : 1);
-  for (size_t k = 0; k < n; k++)
-    if (!need || need[elem[k]]) ball[start[elem[k]]++] = (pa_idx)(k / (size_t)nve);
+  for (size_t q = 0; q < ns; q++)
+    ball[start[elem[SLOT(q)]]++] = (pa_idx)(SLOT(q) / (size_t)nve);
+#undef SLOT
   for (pa_idx v = nv; v > 0; v--) start[v] = start[v - 1];
   start[0] = 0;
   *pstart = start;
@@ -332,6 +341,7 @@ pa_status pa__balls_of(const pa_idx *elem, pa_idx ne, int nve, pa_idx nv,
 cleanup:
   pa__free(start);
   pa__free(ball);
+  pa__free(slot);
   return st;
 }
 
