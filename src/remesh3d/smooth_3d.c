@@ -465,44 +465,9 @@ int pa__rm3d_smooth_vertex(rm3d *m, pa_idx p, const pa_idx *ball, int n) {
  * vertex then reaches the model in a few passes instead of never). */
 #define SNAP_STEPS 3
 
-int pa__rm3d_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
-  if (!m->voff || !m->voff[p] ||
-      (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)))
-    return 0;
-  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
-  if (n < 0) return 0;
-  const double *xp = m->x + 3 * (size_t)p;
-  double y[3];
-  memcpy(y, xp, sizeof y);
-  if (pa__rm3d_project_vertex(m, p, ball, n, y) <= 0) return 0;
-  double qold = 1e30;
-  for (int i = 0; i < n; i++) {
-    pa_idx t = ball[i] >> 2;
-    if (m->tflag[t] & RM3D_T_FROZEN) return 0;
-    if (m->q[t] < qold) qold = m->q[t];
-  }
-  float nq[RM3D_MAXBALL];
-  int first = 0;
-  const double *mp = m->met + (size_t)m->mc * p;
-  /* The tets' quality is the only check: a boundary triangle that would
-   * turn over turns its tet inside out, and one that stands up is the
-   * model's own shape between points on it. */
-  for (int s = 0; s < SNAP_STEPS; s++) {
-    double w = ldexp(1.0, -s), np[3];
-    for (int j = 0; j < 3; j++) np[j] = s ? xp[j] + w * (y[j] - xp[j]) : y[j];
-    if (moved_qualities(m, ball, n, np, mp, rm3d_q_min(m, qold), 0, &first,
-                        nq) >= 0)
-      continue;
-    apply_move(m, p, ball, n, np, nq, 0);
-    m->voff[p] = s > 0;
-    return 1;
-  }
-  return 0;
-}
-
 /* 1 if moving the curved-patch vertex p to np keeps each of the ntri
- * boundary triangles tri (vertex triples holding p, p of normal np_n)
- * valid and turning as pa__rm3d_turn_ok allows. */
+ * boundary triangles tri (vertex triples holding p) valid and turning as
+ * pa__rm3d_turn_ok allows. */
 static int curve_surface_kept(const rm3d *m, const pa_idx *tri, int ntri,
                               pa_idx p, const double *np) {
   for (int i = 0; i < ntri; i++) {
@@ -521,6 +486,56 @@ static int curve_surface_kept(const rm3d *m, const pa_idx *tri, int ntri,
   return 1;
 }
 
+/* The snap moves of p (its ball ball[0..n)) by the offset d: the whole
+ * way (to y0 exactly when given), then half and a quarter of it
+ * (SNAP_STEPS), the first whose tets keep rm3d_q_min of the ball's worst
+ * and, with tri (ntri boundary triangles), whose surface is kept
+ * (curve_surface_kept). Returns the step taken + 1, or 0 (also with a
+ * frozen tet in the ball). */
+static int snap_steps(rm3d *m, pa_idx p, pa_idx *ball, int n, const double *d,
+                      const double *y0, const pa_idx *tri, int ntri) {
+  double qold = 1e30;
+  for (int i = 0; i < n; i++) {
+    pa_idx t = ball[i] >> 2;
+    if (m->tflag[t] & RM3D_T_FROZEN) return 0;
+    if (m->q[t] < qold) qold = m->q[t];
+  }
+  const double *xp = m->x + 3 * (size_t)p;
+  const double *mp = m->met + (size_t)m->mc * p;
+  float nq[RM3D_MAXBALL];
+  int first = 0;
+  for (int s = 0; s < SNAP_STEPS; s++) {
+    double w = ldexp(1.0, -s), np[3];
+    for (int j = 0; j < 3; j++) np[j] = !s && y0 ? y0[j] : xp[j] + w * d[j];
+    if (tri && !curve_surface_kept(m, tri, ntri, p, np)) continue;
+    if (moved_qualities(m, ball, n, np, mp, rm3d_q_min(m, qold), 0, &first,
+                        nq) >= 0)
+      continue;
+    apply_move(m, p, ball, n, np, nq, 0);
+    return s + 1;
+  }
+  return 0;
+}
+
+int pa__rm3d_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
+  if (!m->voff || !m->voff[p] ||
+      (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD)))
+    return 0;
+  int n = pa__rm3d_ball(m, p, ball, RM3D_MAXBALL);
+  if (n < 0) return 0;
+  const double *xp = m->x + 3 * (size_t)p;
+  double y[3], d[3];
+  memcpy(y, xp, sizeof y);
+  if (pa__rm3d_project_vertex(m, p, ball, n, y) <= 0) return 0;
+  for (int j = 0; j < 3; j++) d[j] = y[j] - xp[j];
+  /* The tets' quality is the only check: a boundary triangle that would
+   * turn over turns its tet inside out, and one that stands up is the
+   * model's own shape between points on it. */
+  int r = snap_steps(m, p, ball, n, d, y, NULL, 0);
+  if (r) m->voff[p] = r > 1;
+  return r > 0;
+}
+
 int pa__rm3d_curve_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
   if (!m->vcur || (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD |
                                  RM3D_V_FEAT)) ||
@@ -534,28 +549,11 @@ int pa__rm3d_curve_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
   int ntri;
   double hausd;
   if (!curved_patch(m, ball, n, tri, &ntri, &hausd)) return 0;
-  double qold = 1e30;
-  for (int i = 0; i < n; i++) {
-    pa_idx t = ball[i] >> 2;
-    if (m->tflag[t] & RM3D_T_FROZEN) return 0;
-    if (m->q[t] < qold) qold = m->q[t];
-  }
-  const double *xp = m->x + 3 * (size_t)p;
-  const double *mp = m->met + (size_t)m->mc * p;
-  float nq[RM3D_MAXBALL];
-  int first = 0;
-  for (int s = 0; s < SNAP_STEPS; s++) {
-    double w = ldexp(1.0, -s), np[3];
-    for (int j = 0; j < 3; j++) np[j] = xp[j] + w * d[j];
-    if (!curve_surface_kept(m, tri, ntri, p, np)) continue;
-    if (moved_qualities(m, ball, n, np, mp, rm3d_q_min(m, qold), 0, &first,
-                        nq) >= 0)
-      continue;
-    apply_move(m, p, ball, n, np, nq, 0);
-    for (int j = 0; j < 3; j++) d[j] -= w * d[j];
-    return 1;
-  }
-  return 0;
+  int r = snap_steps(m, p, ball, n, d, NULL, tri, ntri);
+  if (!r) return 0;
+  double w = ldexp(1.0, -(r - 1));
+  for (int j = 0; j < 3; j++) d[j] -= w * d[j];
+  return 1;
 }
 
 /* Splitmix64 finaliser: the jiggle's directions. */
