@@ -849,53 +849,88 @@ static inline uint8_t elem_done(const orecs *c, const pa_gid *vg,
   return dv;
 }
 
+/* The "done" values of the output's elements (dv) and the global ids of
+ * their vertices, written straight into the element records from slot i0
+ * on; nve a constant once inlined. */
+static inline void elems_done(const orecs *c, uint8_t dv0, size_t i0,
+                              uint8_t *dv, const int nve) {
+  const pa_mesh *o = c->o;
+  const pa_gid *vg = c->vg;
+  const uint8_t *dist = c->dist;
+  pa_gid *rv = c->R[PA_ELEMENT].vgid + (size_t)nve * i0;
+  for (pa_idx e = 0; e < o->ne; e++)
+    dv[e] = elem_done(c, vg, dist, e, dv0, nve, rv + (size_t)nve * e);
+}
+
 /* The output's elements, each with its "done" value (see the file
  * comment); one that is an input element keeps its id and values, with
- * done updated, the others get fresh ids and zeros. */
+ * done updated, the others get fresh ids and zeros. The records were
+ * reserved for every output element (staying_records, patch_records), so
+ * they are written array by array, in output order. */
 static pa_status output_elements(orecs *c) {
   pa_status st = PA_SUCCESS;
   pa__iter *it = c->it;
   pa_dmesh *dm = it->dm;
   const pa__piece *pc = c->pc;
   const pa_mesh *o = c->o;
-  unsigned char *pay = c->pay;
-  int d = o->dim;
-  uint8_t dv0 = it->piece_failed[pc->id] ? 0 : PA_ADAPT_DONE;
-  int cells = c->R[PA_ELEMENT].ndbl > 0;
-  /* (in locals: the compiler cannot tell that the records' stores leave
-   * them alone) */
-  const pa_gid *vg = c->vg;
-  const uint8_t *dist = c->dist;
+  pa_idx ne = o->ne;
+  int nve = o->dim + 1;
+  uint8_t dv0 = it->piece_failed[pc->id] ? 0 : PA_ADAPT_DONE, *dv = NULL;
   const pa_idx *reuse = pc->reuse[PA_ELEMENT];
-  const int *dest = c->dest;
   pa__recs *R = &c->R[PA_ELEMENT];
-  for (pa_idx e = 0; e < o->ne; e++) {
-    pa_gid ev[4];
-    uint8_t dv = d == 2 ? elem_done(c, vg, dist, e, dv0, 3, ev)
-                        : elem_done(c, vg, dist, e, dv0, 4, ev);
-    pa_idx q = reuse[e];
-    if (q >= 0) { /* an input element: its id and values, done updated */
-      const size_t *po = pc->kpoff[PA_ELEMENT];
-      size_t pl = po[q + 1] - po[q];
-      size_t at = done_offset(dm, o->eref[e], c->done);
-      PA_CHECK(at != (size_t)-1 && at < pl, PA_ERR_INTERNAL,
-               "element payload without its done value");
-      memcpy(pay, pc->kpay[PA_ELEMENT] + po[q], pl);
-      pay[at] = dv;
-      c->pcache.len = (size_t)-1; /* pay no longer holds the cached payload */
-      PA_CALL(pa__recs_add(R, pc->kgid[PA_ELEMENT][q], ev, o->eref[e],
-                           o->eflag[e], dest[e],
-                           cells ? cell_doubles(c, PA_ELEMENT, e) : NULL, pay,
-                           pl));
-      continue;
+  size_t maxpay = 0, i0 = R->n;
+  unsigned char *tmpl = NULL; /* a fresh element's payload, done 0 */
+  for (int k = 0; k < dm->nvalue; k++)
+    if (dm->value[k]->kind == PA_ELEMENT) maxpay += dm->value[k]->unit;
+  PA_CALL(pa__recs_reserve(R, i0 + (size_t)ne,
+                           (R->poff ? R->poff[i0] : 0) + (size_t)ne * maxpay));
+  PA_ALLOC(dv, ne ? ne : 1);
+  PA_ALLOC(tmpl, maxpay + 1);
+  if (nve == 3) elems_done(c, dv0, i0, dv, 3);
+  else elems_done(c, dv0, i0, dv, 4);
+  memcpy(R->ref + i0, o->eref, (size_t)ne * sizeof *R->ref);
+  memcpy(R->flag + i0, o->eflag, (size_t)ne * sizeof *R->flag);
+  memcpy(R->aux + i0, c->dest, (size_t)ne * sizeof *R->aux);
+  for (pa_idx e = 0; R->ndbl && e < ne; e++)
+    pa__entity_doubles(o, PA_ELEMENT, e, R->dbl + (size_t)R->ndbl * (i0 + e));
+  {
+    int32_t tref = 0;
+    size_t tlen = (size_t)-1, tat = (size_t)-1; /* tlen -1: tmpl empty */
+    for (pa_idx e = 0; e < ne; e++) {
+      size_t i = i0 + (size_t)e, pl, at;
+      const unsigned char *src;
+      pa_idx q = reuse[e];
+      if (q >= 0) { /* an input element: its id and values, done updated */
+        const size_t *po = pc->kpoff[PA_ELEMENT];
+        R->gid[i] = pc->kgid[PA_ELEMENT][q];
+        src = pc->kpay[PA_ELEMENT] + po[q];
+        pl = po[q + 1] - po[q];
+        at = done_offset(dm, o->eref[e], c->done);
+        PA_CHECK(at != (size_t)-1 && at < pl, PA_ERR_INTERNAL,
+                 "element payload without its done value");
+      } else {
+        R->gid[i] = c->next[PA_ELEMENT]++;
+        if (tlen == (size_t)-1 || tref != o->eref[e]) {
+          tref = o->eref[e];
+          tlen = pa__new_payload(dm, PA_ELEMENT, tref, c->done, 0, tmpl);
+          tat = done_offset(dm, tref, c->done);
+        }
+        src = tmpl;
+        pl = tlen;
+        at = tat;
+      }
+      if (!R->poff) continue;
+      unsigned char *p = R->pay + R->poff[i];
+      if (pl == 1) p[0] = src[0];
+      else memcpy(p, src, pl);
+      if (at != (size_t)-1) p[at] = dv[e];
+      R->poff[i + 1] = R->poff[i] + pl;
     }
-    size_t pl = payload_of(&c->pcache, dm, PA_ELEMENT, o->eref[e], c->done, dv,
-                           pay);
-    PA_CALL(pa__recs_add(R, c->next[PA_ELEMENT]++, ev, o->eref[e], o->eflag[e],
-                         dest[e], cells ? cell_doubles(c, PA_ELEMENT, e) : NULL,
-                         pay, pl));
   }
+  R->n = i0 + (size_t)ne;
 cleanup:
+  pa__free(dv);
+  pa__free(tmpl);
   return st;
 }
 
