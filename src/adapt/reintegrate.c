@@ -343,7 +343,7 @@ cleanup:
  * nearer than that has no vertex beyond k - 1). For the NEAR_SKIN layers
  * one pass over the output, cheaper than the vertex balls a breadth-first
  * search would need. */
-static inline void layer_sweep(const pa_mesh *o, int k, int nd,
+static inline void layer_sweep(const pa_mesh *o, int k, const int nd,
                                uint8_t *const *dist, const int nve) {
   for (pa_idx e = 0; e < o->ne; e++) {
     const pa_idx *v = o->elem + (size_t)nve * e;
@@ -360,9 +360,12 @@ static inline void layer_sweep(const pa_mesh *o, int k, int nd,
 
 static void vertex_layers(const pa_mesh *o, int k0, int nl, int nd,
                           uint8_t *const *dist) {
+  /* (nd and nve constants in each call: the loops unrolled) */
   for (int k = k0; k < nl; k++) {
-    if (o->dim == 2) layer_sweep(o, k, nd, dist, 3);
-    else layer_sweep(o, k, nd, dist, 4);
+    if (o->dim == 2 && nd == 1) layer_sweep(o, k, 1, dist, 3);
+    else if (o->dim == 2) layer_sweep(o, k, 2, dist, 3);
+    else if (nd == 1) layer_sweep(o, k, 1, dist, 4);
+    else layer_sweep(o, k, 2, dist, 4);
   }
 }
 
@@ -745,9 +748,20 @@ static pa_status output_vertices(orecs *c) {
   pa__iter *it = c->it;
   const pa__piece *pc = c->pc;
   const pa_mesh *o = c->o;
-  double *dbl = NULL;
+  const size_t *vo = pc->kpoff[PA_VERTEX];
+  size_t maxpay = 0;
+  for (int k = 0; k < it->dm->nvalue; k++)
+    if (it->dm->value[k]->kind == PA_VERTEX) maxpay += it->dm->value[k]->unit;
   PA_ALLOC(c->vg, o->nv);
-  PA_ALLOC(dbl, c->R[PA_VERTEX].ndbl);
+  /* room for every vertex in both sets: the records are written straight
+   * into their arrays */
+  for (int t = 0; t < 2; t++) {
+    pa__recs *T = t ? c->Rp : &c->R[PA_VERTEX];
+    if (T)
+      PA_CALL(pa__recs_reserve(T, T->n + (size_t)o->nv,
+                               (T->poff ? T->poff[T->n] : 0) +
+                                   (size_t)o->nv * maxpay));
+  }
   for (pa_idx j = 0; j < o->nv; j++) {
     pa_idx i = pc->match[j];
     if (i >= 0 && pc->skin[i] && pc->vgid[i] >= PA_ADAPT_TEMP_GID) {
@@ -759,25 +773,35 @@ static pa_status output_vertices(orecs *c) {
     } else {
       c->vg[j] = i >= 0 ? pc->vgid[i] : c->next[PA_VERTEX]++;
     }
-    pa__vertex_doubles(o, j, o->nfield, dbl);
+    pa__recs *T = i < 0 && c->Rp ? c->Rp : &c->R[PA_VERTEX];
+    size_t r = T->n;
+    T->gid[r] = c->vg[j];
+    T->ref[r] = o->vref[j];
+    T->flag[r] = o->vflag[j];
+    T->aux[r] = it->rank;
+    int nd = pa__vertex_doubles(o, j, o->nfield, T->dbl + (size_t)T->ndbl * r);
+    PA_ASSERT(nd == T->ndbl);
+    (void)nd;
     /* a vertex the remesher kept keeps its user values (gathered with it),
      * a new one gets zeros */
-    const unsigned char *vp = c->pay;
+    const unsigned char *vp;
     size_t pl;
-    const size_t *vo = pc->kpoff[PA_VERTEX];
     if (vo && i >= 0 && i < pc->n0[PA_VERTEX] &&
         o->vref[j] == pc->in->vref[i]) {
       vp = pc->kpay[PA_VERTEX] + vo[i];
       pl = vo[i + 1] - vo[i];
     } else {
+      vp = c->pay;
       pl = payload_of(&c->pcache, it->dm, PA_VERTEX, o->vref[j], c->done, 0,
                       c->pay);
     }
-    PA_CALL(pa__recs_add(i < 0 && c->Rp ? c->Rp : &c->R[PA_VERTEX], c->vg[j],
-                         NULL, o->vref[j], o->vflag[j], it->rank, dbl, vp, pl));
+    if (T->poff) {
+      memcpy(T->pay + T->poff[r], vp, pl);
+      T->poff[r + 1] = T->poff[r] + pl;
+    }
+    T->n = r + 1;
   }
 cleanup:
-  pa__free(dbl);
   return st;
 }
 
