@@ -1021,8 +1021,17 @@ cleanup:
 static pa_status number_local(const pa__recs *R, const uint8_t *layer,
                               int rank, pa_idx *out, pa_idx *nown) {
   pa_status st = PA_SUCCESS;
-  size_t c[258] = {0};
+  size_t c[258] = {0}, i0 = 0;
 #define GROUP(i) (layer ? layer[i] : (R->aux[i] == rank ? 0 : 1))
+  /* (the leading owned records in gid order keep their places: all of
+   * them when only owned elements arrive) */
+  while (i0 < R->n && GROUP(i0) == 0 && (!i0 || R->gid[i0] >= R->gid[i0 - 1]))
+    i0++;
+  if (i0 == R->n) {
+    for (size_t i = 0; i < R->n; i++) out[i] = (pa_idx)i;
+    *nown = (pa_idx)R->n;
+    return PA_SUCCESS;
+  }
   for (size_t i = 0; i < R->n; i++) c[GROUP(i) + 2]++;
   for (int b = 0; b < 256; b++) c[b + 2] += c[b + 1];
   *nown = (pa_idx)c[2];
@@ -1062,7 +1071,8 @@ static void unpack_payloads(pa_dmesh *dm, int kind, const pa__recs *R,
         const unsigned char *p = R->pay + R->poff[ord[e]] + off;
         pa_idx slot = v->slot ? v->slot[e] : e;
         unsigned char *q = v->data + v->unit * (size_t)slot;
-        for (size_t b = 0; b < v->unit; b++) q[b] = p[b];
+        if (v->unit == 1) q[0] = p[0]; /* (the adaptation's done values) */
+        else memcpy(q, p, v->unit);
       }
       off += v->unit;
     }
