@@ -1015,11 +1015,13 @@ cleanup:
 }
 
 /* Order of local entities: owned (aux == rank) first, each group by gid (and
- * elements by layer). out[k] = record index of local entity k. A stable
+ * elements by layer). out[k] = record index of local entity k; *ident: 1
+ * if that is the identity. A stable
  * counting pass by group, then a sort by gid of each group, skipped when it
  * is already in order (the owned elements and the vertices arrive sorted). */
 static pa_status number_local(const pa__recs *R, const uint8_t *layer,
-                              int rank, pa_idx *out, pa_idx *nown) {
+                              int rank, pa_idx *out, pa_idx *nown,
+                              uint8_t *ident) {
   pa_status st = PA_SUCCESS;
   size_t c[258] = {0}, i0 = 0;
 #define GROUP(i) (layer ? layer[i] : (R->aux[i] == rank ? 0 : 1))
@@ -1027,7 +1029,8 @@ static pa_status number_local(const pa__recs *R, const uint8_t *layer,
    * them when only owned elements arrive) */
   while (i0 < R->n && GROUP(i0) == 0 && (!i0 || R->gid[i0] >= R->gid[i0 - 1]))
     i0++;
-  if (i0 == R->n) {
+  *ident = i0 == R->n;
+  if (*ident) {
     for (size_t i = 0; i < R->n; i++) out[i] = (pa_idx)i;
     *nown = (pa_idx)R->n;
     return PA_SUCCESS;
@@ -1095,9 +1098,11 @@ static void unpack_payloads(pa_dmesh *dm, int kind, const pa__recs *R,
 /* What the phases of assemble share: the local order of the records of
  * each kind (ord[kind][k] = record of local entity k), the local vertex of
  * each vertex record (lvof) and of each vertex global id (lv), and the local
- * mesh being filled. */
+ * mesh being filled. With the identity (ident) the records' arrays of ids,
+ * owners and layers become dm's. */
 typedef struct assembly {
   pa_idx *ord[PA_DMESH_NKIND];
+  uint8_t ident[PA_DMESH_NKIND]; /* ord[kind] is the identity */
   pa_idx *lvof;
   pa__gidindex lv;
   pa_mesh *m;
@@ -1110,7 +1115,7 @@ static pa_status number_vertices_elements(pa_dmesh *dm, bstate *s,
   pa_status st = PA_SUCCESS;
   PA_ALLOC(a->ord[PA_VERTEX], s->LV.n);
   PA_CALL(number_local(&s->LV, NULL, s->rank, a->ord[PA_VERTEX],
-                       &dm->nown[PA_VERTEX]));
+                       &dm->nown[PA_VERTEX], &a->ident[PA_VERTEX]));
   dm->nloc[PA_VERTEX] = (pa_idx)s->LV.n;
   PA_CALL(pa__gidindex_init_keys(&a->lv, s->LV.gid, s->LV.n));
   PA_ALLOC(a->lvof, s->LV.n);
@@ -1121,7 +1126,7 @@ static pa_status number_vertices_elements(pa_dmesh *dm, bstate *s,
   }
   PA_ALLOC(a->ord[PA_ELEMENT], s->L.n);
   PA_CALL(number_local(&s->L, s->layer, s->rank, a->ord[PA_ELEMENT],
-                       &dm->nown[PA_ELEMENT]));
+                       &dm->nown[PA_ELEMENT], &a->ident[PA_ELEMENT]));
   dm->nloc[PA_ELEMENT] = (pa_idx)s->L.n;
 cleanup:
   return st;
@@ -1189,10 +1194,18 @@ static pa_status fill_elements(pa_dmesh *dm, bstate *s, assembly *a) {
     if (s->ulv[u] >= 0) s->ulv[u] = a->lvof[s->ulv[u]];
   PA_CHECK(!(d == 2 ? elem_vertices(dm, s, a, 3) : elem_vertices(dm, s, a, 4)),
            PA_ERR_INTERNAL, "element vertex not fetched");
+  if (a->ident[PA_ELEMENT] && s->L.n) {
+    memcpy(m->eref, s->L.ref, s->L.n * sizeof *m->eref);
+    memcpy(m->eflag, s->L.flag, s->L.n * sizeof *m->eflag);
+  }
   for (size_t k = 0; k < s->L.n; k++) {
     size_t i = (size_t)a->ord[PA_ELEMENT][k];
-    m->eref[k] = s->L.ref[i];
-    m->eflag[k] = s->L.flag[i];
+    if (!a->ident[PA_ELEMENT]) {
+      m->eref[k] = s->L.ref[i];
+      m->eflag[k] = s->L.flag[i];
+    } else if (!s->L.ndbl) {
+      break;
+    }
     if (s->L.ndbl)
       pa__entity_set_doubles(m, PA_ELEMENT, (pa_idx)k, s->L.dbl + (size_t)s->L.ndbl * i);
   }
@@ -1311,11 +1324,11 @@ static pa_status fill_subentities(pa_dmesh *dm, bstate *s, assembly *a) {
     PA_CALL(own_subentities(dm, s, a, SB[t], vstart, vel));
   PA_ALLOC(a->ord[PA_BOUNDARY], s->LB.n);
   PA_CALL(number_local(&s->LB, NULL, s->rank, a->ord[PA_BOUNDARY],
-                       &dm->nown[PA_BOUNDARY]));
+                       &dm->nown[PA_BOUNDARY], &a->ident[PA_BOUNDARY]));
   dm->nloc[PA_BOUNDARY] = (pa_idx)s->LB.n;
   PA_ALLOC(a->ord[PA_EDGE], s->LD.n);
   PA_CALL(number_local(&s->LD, NULL, s->rank, a->ord[PA_EDGE],
-                       &dm->nown[PA_EDGE]));
+                       &dm->nown[PA_EDGE], &a->ident[PA_EDGE]));
   dm->nloc[PA_EDGE] = (pa_idx)s->LD.n;
   PA_CALL(pa_mesh_reserve(m, 0, 0, (pa_idx)s->LB.n, (pa_idx)s->LD.n));
   for (size_t k = 0; k < s->LB.n; k++) {
@@ -1350,10 +1363,17 @@ cleanup:
  * payloads). */
 static pa_status fill_dmesh(pa_dmesh *dm, bstate *s, assembly *a) {
   pa_status st = PA_SUCCESS;
-  const pa__recs *R[PA_DMESH_NKIND] = {&s->LV, &s->L, &s->LB, &s->LD};
+  pa__recs *R[PA_DMESH_NKIND] = {&s->LV, &s->L, &s->LB, &s->LD};
   int any = 0;
   for (int kind = 0; kind < PA_DMESH_NKIND; kind++) {
     pa_idx n = dm->nloc[kind];
+    if (a->ident[kind] && n) { /* the records' arrays, as they are */
+      dm->gid[kind] = R[kind]->gid;
+      dm->owner[kind] = R[kind]->aux;
+      R[kind]->gid = NULL;
+      R[kind]->aux = NULL;
+      continue;
+    }
     PA_ALLOC(dm->gid[kind], n);
     PA_ALLOC(dm->owner[kind], n);
     for (pa_idx k = 0; k < n; k++) {
@@ -1361,9 +1381,15 @@ static pa_status fill_dmesh(pa_dmesh *dm, bstate *s, assembly *a) {
       dm->owner[kind][k] = R[kind]->aux[a->ord[kind][k]];
     }
   }
-  PA_ALLOC(dm->layer, dm->nloc[PA_ELEMENT]);
-  for (pa_idx k = 0; k < dm->nloc[PA_ELEMENT]; k++)
-    dm->layer[k] = s->layer[a->ord[PA_ELEMENT][k]];
+  if (a->ident[PA_ELEMENT] && dm->nloc[PA_ELEMENT]) {
+    dm->layer = s->layer;
+    s->layer = NULL;
+    s->caplayer = 0;
+  } else {
+    PA_ALLOC(dm->layer, dm->nloc[PA_ELEMENT]);
+    for (pa_idx k = 0; k < dm->nloc[PA_ELEMENT]; k++)
+      dm->layer[k] = s->layer[a->ord[PA_ELEMENT][k]];
+  }
   dm->mesh = a->m;
   a->m = NULL;
   for (int kind = 0; kind < PA_DMESH_NKIND; kind++)
