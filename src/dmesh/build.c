@@ -231,6 +231,7 @@ typedef struct bstate {
   /* private vertices (pa__dmesh_build_priv): records kept here, sorted by
    * gid, out of the directory; upriv[u]: vertex u is one of them */
   pa__recs *P;
+  size_t npriv;             /* P's records (P is emptied when they join LV) */
   uint8_t *upriv;
 } bstate;
 
@@ -786,18 +787,87 @@ cleanup:
   return st;
 }
 
+/* Merge LV into P from the back, in place (P grown to hold both: the
+ * records are moved by runs, and P's pages, already touched, are reused
+ * instead of a fresh copy of both); both sorted by gid, without payloads. */
+static pa_status merge_into_private(bstate *s) {
+  pa_status st = PA_SUCCESS;
+  pa__recs *P = s->P, *V = &s->LV;
+  size_t nd = (size_t)P->ndbl, i = V->n, j = P->n, k = V->n + P->n;
+  PA_CALL(pa__recs_reserve(P, k, 0));
+  while (i > 0) {
+    /* the run of P above V's last record, then the run of V above P's
+     * last (binary searches: the runs are long) */
+    size_t lo = 0, hi = j;
+    while (lo < hi) {
+      size_t mid = lo + (hi - lo) / 2;
+      if (P->gid[mid] > V->gid[i - 1]) hi = mid;
+      else lo = mid + 1;
+    }
+    size_t n = j - lo, src = lo;
+    PA_CHECK(lo == 0 || P->gid[lo - 1] != V->gid[i - 1], PA_ERR_INTERNAL,
+             "private vertex %lld is also in the directory",
+             (long long)V->gid[i - 1]);
+    if (n) {
+      k -= n;
+      memmove(P->gid + k, P->gid + src, n * sizeof *P->gid);
+      memmove(P->ref + k, P->ref + src, n * sizeof *P->ref);
+      memmove(P->flag + k, P->flag + src, n * sizeof *P->flag);
+      memmove(P->aux + k, P->aux + src, n * sizeof *P->aux);
+      if (nd) memmove(P->dbl + nd * k, P->dbl + nd * src, nd * n * sizeof *P->dbl);
+      j = lo;
+    }
+    lo = 0;
+    hi = i;
+    while (lo < hi) {
+      size_t mid = lo + (hi - lo) / 2;
+      if (j == 0 || V->gid[mid] > P->gid[j - 1]) hi = mid;
+      else lo = mid + 1;
+    }
+    n = i - lo;
+    size_t from = lo;
+    k -= n;
+    memcpy(P->gid + k, V->gid + from, n * sizeof *P->gid);
+    memcpy(P->ref + k, V->ref + from, n * sizeof *P->ref);
+    memcpy(P->flag + k, V->flag + from, n * sizeof *P->flag);
+    memcpy(P->aux + k, V->aux + from, n * sizeof *P->aux);
+    if (nd) memcpy(P->dbl + nd * k, V->dbl + nd * from, nd * n * sizeof *P->dbl);
+    i = lo;
+  }
+  PA_ASSERT(k == j);
+  P->n += V->n;
+  pa__recs_free(V);
+  *V = *P;
+  pa__recs_init(P, PA_VERTEX, 0, V->ndbl);
+cleanup:
+  return st;
+}
+
 /* The private vertices join LV (owned here; both sorted by gid, merged),
  * and the boundary entities and edges whose smallest vertex is private,
- * which stayed here out of the directory, join LB and LD. */
+ * which stayed here out of the directory, join LB and LD. Without
+ * payloads the merge takes P's arrays (merge_into_private), which are then
+ * LV's. */
 static pa_status add_private(bstate *s) {
   pa_status st = PA_SUCCESS;
   pa__recs *P = s->P;
   pa__recs M;
   pa__recs_init(&M, PA_VERTEX, 0, s->LV.ndbl);
+  for (int t = 0; t < 2; t++) {
+    const pa__recs *R = t ? &s->D : &s->B;
+    pa__recs *L = t ? &s->LD : &s->LB;
+    for (size_t i = 0; i < R->n; i++) /* (their owner: assemble) */
+      if (is_private(s, min_vgid(R, i))) PA_CALL(pa__recs_append(L, R, i, 1));
+  }
+  for (size_t j = 0; j < P->n; j++) P->aux[j] = s->rank;
+  s->npriv = P->n;
+  if (!P->poff && !s->LV.poff && P->ndbl == s->LV.ndbl) {
+    PA_CALL(merge_into_private(s));
+    goto cleanup;
+  }
   size_t pb = (s->LV.poff ? s->LV.poff[s->LV.n] : 0) +
               (P->poff ? P->poff[P->n] : 0);
   PA_CALL(pa__recs_reserve(&M, s->LV.n + P->n, pb));
-  for (size_t j = 0; j < P->n; j++) P->aux[j] = s->rank;
   /* merged by runs, copied array by array */
   for (size_t i = 0, j = 0; i < s->LV.n || j < P->n;) {
     PA_CHECK(i >= s->LV.n || j >= P->n || s->LV.gid[i] != P->gid[j],
@@ -815,12 +885,6 @@ static pa_status add_private(bstate *s) {
   pa__recs_free(&s->LV);
   s->LV = M;
   memset(&M, 0, sizeof M);
-  for (int t = 0; t < 2; t++) {
-    const pa__recs *R = t ? &s->D : &s->B;
-    pa__recs *L = t ? &s->LD : &s->LB;
-    for (size_t i = 0; i < R->n; i++) /* (their owner: assemble) */
-      if (is_private(s, min_vgid(R, i))) PA_CALL(pa__recs_append(L, R, i, 1));
-  }
 cleanup:
   pa__recs_free(&M);
   return st;
@@ -965,9 +1029,9 @@ static pa_status owned_vertex_records(bstate *s) {
     s->ulv[u] = i < s->LV.n && s->LV.gid[i] == s->ukey[u] ? (pa_idx)i : -1;
     npriv += s->upriv && s->upriv[u];
   }
-  PA_CHECK(!s->P || npriv == s->P->n, PA_ERR_INTERNAL,
+  PA_CHECK(!s->P || npriv == s->npriv, PA_ERR_INTERNAL,
            "%zu private vertices are in no owned element",
-           s->P ? s->P->n - npriv : 0);
+           s->P ? s->npriv - npriv : 0);
 cleanup:
   return st;
 }
