@@ -648,7 +648,7 @@ static size_t done_offset(const pa_dmesh *dm, int32_t ref,
  * input vertex (breadth-first over the output, from the matched vertices
  * in index order), every element the rank of its vertex nearest to them
  * (ties: the smaller rank). Otherwise everything stays on this rank (the
- * pieces were balanced by work). */
+ * pieces were balanced by work): *destp stays NULL. */
 static pa_status output_dest(const pa__iter *it, const pa__piece *pc,
                              int **destp) {
   pa_status st = PA_SUCCESS;
@@ -656,9 +656,10 @@ static pa_status output_dest(const pa__iter *it, const pa__piece *pc,
   int nve = o->dim + 1;
   int *dest = NULL, *vr = NULL, *dist = NULL;
   pa_idx *start = NULL, *ball = NULL, *queue = NULL;
-  PA_ALLOC(dest, o->ne ? o->ne : 1);
-  for (pa_idx e = 0; e < o->ne; e++) dest[e] = it->rank;
+  *destp = NULL;
   if (it->npieces < it->size && o->nv > 0) {
+    PA_ALLOC(dest, o->ne ? o->ne : 1);
+    for (pa_idx e = 0; e < o->ne; e++) dest[e] = it->rank;
     PA_ALLOC(vr, o->nv);
     PA_ALLOC(dist, o->nv);
     PA_ALLOC(queue, o->nv);
@@ -914,7 +915,9 @@ static pa_status output_elements(orecs *c) {
   else elems_done(c, dv0, i0, dv, 4);
   memcpy(R->ref + i0, o->eref, (size_t)ne * sizeof *R->ref);
   memcpy(R->flag + i0, o->eflag, (size_t)ne * sizeof *R->flag);
-  memcpy(R->aux + i0, c->dest, (size_t)ne * sizeof *R->aux);
+  if (c->dest) memcpy(R->aux + i0, c->dest, (size_t)ne * sizeof *R->aux);
+  else
+    for (pa_idx e = 0; e < ne; e++) R->aux[i0 + (size_t)e] = it->rank;
   for (pa_idx e = 0; R->ndbl && e < ne; e++)
     pa__entity_doubles(o, PA_ELEMENT, e, R->dbl + (size_t)R->ndbl * (i0 + e));
   {
@@ -1017,7 +1020,7 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   c.pay = pay;
   c.pcache.len = (size_t)-1;
   c.dest = pc->dest;
-  for (pa_idx e = 0; Rp && e < c.o->ne; e++)
+  for (pa_idx e = 0; Rp && c.dest && e < c.o->ne; e++)
     if (c.dest[e] != it->rank) Rp = NULL;
   c.Rp = Rp;
   {

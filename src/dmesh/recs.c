@@ -68,6 +68,17 @@ cleanup:
   return st;
 }
 
+/* The payload offsets of r, created when its first payload comes: the
+ * records so far have none (zeros up to n; the offsets beyond are written
+ * as records are added, so the rest is left as it is). */
+static pa_status poff_create(pa__recs *r) {
+  pa_status st = PA_SUCCESS;
+  PA_ALLOC(r->poff, r->cap + 1);
+  for (size_t i = 0; i <= r->n; i++) r->poff[i] = 0;
+cleanup:
+  return st;
+}
+
 static pa_status recs_grow(pa__recs *r, size_t need) {
   return recs_grow_to(r, need, 0);
 }
@@ -76,7 +87,7 @@ pa_status pa__recs_room(pa__recs *r, size_t paylen) {
   pa_status st = PA_SUCCESS;
   PA_CALL(recs_grow(r, r->n + 1));
   if (paylen && !r->poff) {
-    PA_CALLOC(r->poff, r->cap + 1);
+    PA_CALL(poff_create(r));
   }
   if (r->poff) PA_GROW(r->pay, r->paycap, r->poff[r->n] + paylen);
 cleanup:
@@ -91,7 +102,7 @@ pa_status pa__recs_append(pa__recs *r, const pa__recs *in, size_t k0,
   PA_ASSERT(in->nv == r->nv && in->ndbl == r->ndbl);
   if (!n) return PA_SUCCESS;
   PA_CALL(recs_grow(r, i0 + n));
-  if (pay && !r->poff) PA_CALLOC(r->poff, r->cap + 1);
+  if (pay && !r->poff) PA_CALL(poff_create(r));
   memcpy(r->gid + i0, in->gid + k0, n * sizeof *r->gid);
   if (nv)
     memcpy(r->vgid + nv * i0, in->vgid + nv * k0, nv * n * sizeof *r->vgid);
@@ -213,7 +224,7 @@ pa_status pa__recs_reserve(pa__recs *r, size_t n, size_t paybytes) {
   pa_status st = PA_SUCCESS;
   PA_CALL(recs_grow_to(r, n, 1));
   if (paybytes && !r->poff) {
-    PA_CALLOC(r->poff, r->cap + 1);
+    PA_CALL(poff_create(r));
   }
   if (r->poff && paybytes > r->paycap) {
     void *p = pa__realloc(r->pay, paybytes);
@@ -241,7 +252,7 @@ pa_status pa__recs_get(pa__recs *r, const unsigned char *p, size_t *pos) {
   }
   /* grown by a factor: callers that know the total reserve it first */
   PA_CALL(recs_grow(r, n0 + n));
-  if (b.paybytes && !r->poff) PA_CALLOC(r->poff, r->cap + 1);
+  if (b.paybytes && !r->poff) PA_CALL(poff_create(r));
   if (r->poff) PA_GROW(r->pay, r->paycap, pay0 + b.paybytes);
   memcpy(r->gid + n0, b.gid, n * sizeof(pa_gid));
   memcpy(r->vgid + (size_t)nv * n0, b.vgid, (size_t)nv * n * sizeof(pa_gid));
