@@ -1119,7 +1119,7 @@ cleanup:
  * payload is the same (checked) and the values are filled one after the
  * other. */
 static void unpack_payloads(pa_dmesh *dm, int kind, const pa__recs *R,
-                            const pa_idx *ord, pa_idx n) {
+                            const pa_idx *ord, int ident, pa_idx n) {
   if (!R->poff) return;
   int anyref = 0;
   size_t off = 0, tot = 0;
@@ -1134,6 +1134,12 @@ static void unpack_payloads(pa_dmesh *dm, int kind, const pa__recs *R,
     for (int k = 0; k < dm->nvalue; k++) {
       pa_dmesh_value *v = dm->value[k];
       if ((int)v->kind != kind) continue;
+      if (ident && v->unit == tot && !v->slot && n) {
+        /* the only value of its kind, records in local order: the
+         * payloads are its data, one after the other */
+        memcpy(v->data, R->pay + R->poff[0], (size_t)n * tot);
+        continue;
+      }
       for (pa_idx e = 0; e < n; e++) {
         const unsigned char *p = R->pay + R->poff[ord[e]] + off;
         pa_idx slot = v->slot ? v->slot[e] : e;
@@ -1462,7 +1468,8 @@ static pa_status fill_dmesh(pa_dmesh *dm, bstate *s, assembly *a) {
     /* slots from the references (local); sfs are built later */
     for (int k = 0; k < dm->nvalue; k++) PA_CALL(pa__value_alloc(dm, dm->value[k]));
     for (int kind = 0; kind < PA_DMESH_NKIND; kind++)
-      unpack_payloads(dm, kind, R[kind], a->ord[kind], dm->nloc[kind]);
+      unpack_payloads(dm, kind, R[kind], a->ord[kind], a->ident[kind],
+                      dm->nloc[kind]);
   }
 cleanup:
   return st;
