@@ -920,7 +920,25 @@ static pa_status output_elements(orecs *c) {
     for (pa_idx e = 0; e < ne; e++) R->aux[i0 + (size_t)e] = it->rank;
   for (pa_idx e = 0; R->ndbl && e < ne; e++)
     pa__entity_doubles(o, PA_ELEMENT, e, R->dbl + (size_t)R->ndbl * (i0 + e));
-  {
+  /* the usual output: no input element given back, one reference, and
+   * the done value alone in the payload: ids, offsets and payloads in
+   * bulk (the payloads are the done values) */
+  int bulk = R->poff != NULL && ne > 0;
+  for (pa_idx e = 0; bulk && e < ne; e++)
+    bulk = reuse[e] < 0 && o->eref[e] == o->eref[0];
+  if (bulk)
+    bulk = pa__new_payload(dm, PA_ELEMENT, o->eref[0], c->done, 0, tmpl) == 1 &&
+           done_offset(dm, o->eref[0], c->done) == 0;
+  if (bulk) {
+    pa_gid g0 = c->next[PA_ELEMENT];
+    size_t p0 = R->poff[i0];
+    for (pa_idx e = 0; e < ne; e++) {
+      R->gid[i0 + (size_t)e] = g0 + e;
+      R->poff[i0 + (size_t)e + 1] = p0 + (size_t)e + 1;
+    }
+    memcpy(R->pay + p0, dv, (size_t)ne);
+    c->next[PA_ELEMENT] += ne;
+  } else {
     int32_t tref = 0;
     size_t tlen = (size_t)-1, tat = (size_t)-1; /* tlen -1: tmpl empty */
     for (pa_idx e = 0; e < ne; e++) {
