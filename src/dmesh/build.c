@@ -371,7 +371,8 @@ cleanup:
  * layers to build), the owned elements around each (CSR ustart/uelem).
  * When the gids of the slots are dense (uix is an array over their range:
  * the usual case), marking the range and one scan of it number the
- * vertices in ascending gid order, with no sort; otherwise they are
+ * vertices in ascending gid order, with no sort, and without csr uslot
+ * stays NULL (assemble reads uix, as cheap as uslot); otherwise they are
  * numbered by hashing and only the nu unique gids are sorted (not the
  * (dim+1) nown element slots). */
 static pa_status owned_csr(bstate *s, pa_idx nown, int csr) {
@@ -380,7 +381,6 @@ static pa_status owned_csr(bstate *s, pa_idx nown, int csr) {
   pa_idx *slotu = NULL, *ord = NULL, *rankof = NULL;
   pa_gid *key = NULL, lo = INT64_MAX, hi = -1;
   const pa_gid *vg = s->L.vgid;
-  PA_ALLOC(slotu, np);
   for (size_t p = 0; p < np; p++) {
     if (vg[p] < lo) lo = vg[p];
     if (vg[p] > hi) hi = vg[p];
@@ -402,8 +402,12 @@ static pa_status owned_csr(bstate *s, pa_idx nown, int csr) {
         s->ukey[k] = g;
         u[g - lo] = (pa_idx)k++;
       }
-    for (size_t p = 0; p < np; p++) slotu[p] = u[vg[p] - lo];
+    if (csr) {
+      PA_ALLOC(slotu, np);
+      for (size_t p = 0; p < np; p++) slotu[p] = u[vg[p] - lo];
+    }
   } else {
+    PA_ALLOC(slotu, np);
     for (size_t p = 0; p < np; p++) {
       int found;
       pa_idx old;
@@ -1241,9 +1245,12 @@ static inline int elem_vertices(const pa_dmesh *dm, const bstate *s,
   for (size_t k = 0; k < s->L.n; k++) {
     size_t i = (size_t)ord[k];
     pa_idx *dst = elem + (size_t)nve * k;
-    if (i < nown) {
+    if (i < nown && s->uslot) {
       const pa_idx *us = s->uslot + (size_t)nve * i;
       for (int j = 0; j < nve; j++) dst[j] = ulv[us[j]];
+    } else if (i < nown) { /* uix dense (owned_csr) */
+      const pa_gid *vg = s->L.vgid + (size_t)nve * i;
+      for (int j = 0; j < nve; j++) dst[j] = ulv[s->uix.dense[vg[j] - s->uix.lo]];
     } else {
       for (int j = 0; j < nve; j++)
         dst[j] = pa__gidindex_get(&a->lv, s->L.vgid[(size_t)nve * i + j]);
@@ -1254,8 +1261,8 @@ static inline int elem_vertices(const pa_dmesh *dm, const bstate *s,
 }
 
 /* Step 7b: the local mesh's elements. Owned elements (records [0, nown)):
- * vertex slot -> u -> LV record -> local vertex, two array reads; ghost
- * elements through the index lv. */
+ * vertex slot (or gid, through uix dense) -> u -> LV record -> local
+ * vertex, two array reads; ghost elements through the index lv. */
 static pa_status fill_elements(pa_dmesh *dm, bstate *s, assembly *a) {
   pa_status st = PA_SUCCESS;
   int d = s->dim;
@@ -1283,6 +1290,7 @@ static pa_status fill_elements(pa_dmesh *dm, bstate *s, assembly *a) {
   pa__free(s->uslot);
   pa__free(s->ulv);
   s->uslot = s->ulv = NULL;
+  pa__gidindex_free(&s->uix);
   pa__free(s->L.vgid); /* in the mesh now */
   s->L.vgid = NULL;
 cleanup:
@@ -1671,7 +1679,8 @@ cleanup:
 
 /* After the fetch: free the directory, the touch lists and messages and
  * the index of the owned elements' vertices; keep the local records and
- * what assemble reads (uslot, ulv and their count nu). */
+ * what assemble reads (uslot, or uix without it, ulv and their count
+ * nu). */
 static void drop_directory(bstate *s) {
   bstate keep = *s;
   memset(&keep.V, 0, sizeof keep.V);
@@ -1687,7 +1696,8 @@ static void drop_directory(bstate *s) {
   memset(&keep.emap, 0, sizeof keep.emap);
   keep.ukey = NULL; /* keep.nu stays: the count of keep.ulv */
   keep.ustart = keep.uelem = NULL;
-  memset(&keep.uix, 0, sizeof keep.uix);
+  if (keep.uslot) memset(&keep.uix, 0, sizeof keep.uix);
+  else memset(&s->uix, 0, sizeof s->uix);
   s->uslot = s->ulv = NULL;
   /* free what keep no longer references */
   memset(&s->L, 0, sizeof s->L);
