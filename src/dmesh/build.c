@@ -791,51 +791,50 @@ cleanup:
   return st;
 }
 
+/* The first of the n gids g (ascending) above x (n if none). */
+static size_t first_above(const pa_gid *g, size_t n, pa_gid x) {
+  size_t lo = 0, hi = n;
+  while (lo < hi) {
+    size_t mid = lo + (hi - lo) / 2;
+    if (g[mid] > x) hi = mid;
+    else lo = mid + 1;
+  }
+  return lo;
+}
+
+/* Records [from, from + n) of src to [k, k + n) of dst (the same layout,
+ * without vertex ids or payloads; the ranges may overlap). */
+static void move_run(pa__recs *dst, size_t k, const pa__recs *src,
+                     size_t from, size_t n) {
+  size_t nd = (size_t)dst->ndbl;
+  memmove(dst->gid + k, src->gid + from, n * sizeof *dst->gid);
+  memmove(dst->ref + k, src->ref + from, n * sizeof *dst->ref);
+  memmove(dst->flag + k, src->flag + from, n * sizeof *dst->flag);
+  memmove(dst->aux + k, src->aux + from, n * sizeof *dst->aux);
+  if (nd) memmove(dst->dbl + nd * k, src->dbl + nd * from, nd * n * sizeof *dst->dbl);
+}
+
 /* Merge LV into P from the back, in place (P grown to hold both: the
  * records are moved by runs, and P's pages, already touched, are reused
  * instead of a fresh copy of both); both sorted by gid, without payloads. */
 static pa_status merge_into_private(bstate *s) {
   pa_status st = PA_SUCCESS;
   pa__recs *P = s->P, *V = &s->LV;
-  size_t nd = (size_t)P->ndbl, i = V->n, j = P->n, k = V->n + P->n;
+  size_t i = V->n, j = P->n, k = V->n + P->n;
   PA_CALL(pa__recs_reserve(P, k, 0));
   while (i > 0) {
     /* the run of P above V's last record, then the run of V above P's
      * last (binary searches: the runs are long) */
-    size_t lo = 0, hi = j;
-    while (lo < hi) {
-      size_t mid = lo + (hi - lo) / 2;
-      if (P->gid[mid] > V->gid[i - 1]) hi = mid;
-      else lo = mid + 1;
-    }
-    size_t n = j - lo, src = lo;
+    size_t lo = first_above(P->gid, j, V->gid[i - 1]);
     PA_CHECK(lo == 0 || P->gid[lo - 1] != V->gid[i - 1], PA_ERR_INTERNAL,
              "private vertex %lld is also in the directory",
              (long long)V->gid[i - 1]);
-    if (n) {
-      k -= n;
-      memmove(P->gid + k, P->gid + src, n * sizeof *P->gid);
-      memmove(P->ref + k, P->ref + src, n * sizeof *P->ref);
-      memmove(P->flag + k, P->flag + src, n * sizeof *P->flag);
-      memmove(P->aux + k, P->aux + src, n * sizeof *P->aux);
-      if (nd) memmove(P->dbl + nd * k, P->dbl + nd * src, nd * n * sizeof *P->dbl);
-      j = lo;
-    }
-    lo = 0;
-    hi = i;
-    while (lo < hi) {
-      size_t mid = lo + (hi - lo) / 2;
-      if (j == 0 || V->gid[mid] > P->gid[j - 1]) hi = mid;
-      else lo = mid + 1;
-    }
-    n = i - lo;
-    size_t from = lo;
-    k -= n;
-    memcpy(P->gid + k, V->gid + from, n * sizeof *P->gid);
-    memcpy(P->ref + k, V->ref + from, n * sizeof *P->ref);
-    memcpy(P->flag + k, V->flag + from, n * sizeof *P->flag);
-    memcpy(P->aux + k, V->aux + from, n * sizeof *P->aux);
-    if (nd) memcpy(P->dbl + nd * k, V->dbl + nd * from, nd * n * sizeof *P->dbl);
+    k -= j - lo;
+    move_run(P, k, P, lo, j - lo);
+    j = lo;
+    lo = j ? first_above(V->gid, i, P->gid[j - 1]) : 0;
+    k -= i - lo;
+    move_run(P, k, V, lo, i - lo);
     i = lo;
   }
   PA_ASSERT(k == j);
