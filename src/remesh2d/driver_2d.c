@@ -336,8 +336,28 @@ long pa__rm2d_sliver_pass(rm2d *rm, double qbad) {
   return cnt;
 }
 
+/* The curve snaps (pa__rm2d_curve_snap_vertex) of the vertices with a step
+ * left onto their curve, each tried once. */
+static long curve_snap_pass(rm2d *rm) {
+  long cnt = 0;
+  rm2d_vtag_clear(rm, RM2D_V_DONE);
+  for (pa_idx k = 0; k < rm->ne; k++) {
+    if (rm->tflag[k] & (RM2D_E_DEAD | RM2D_E_FROZEN)) continue;
+    for (int i = 0; i < 3; i++) {
+      pa_idx p = rm->tv[3 * k + i];
+      const double *d = rm->vcur + 2 * (size_t)p;
+      if ((rm->vtag[p] & RM2D_V_DONE) || (d[0] == 0 && d[1] == 0)) continue;
+      rm->vtag[p] |= RM2D_V_DONE;
+      cnt += pa__rm2d_curve_snap_vertex(rm, k, i);
+    }
+  }
+  return cnt;
+}
+
 long pa__rm2d_smooth_pass(rm2d *rm, double qfree, int feat) {
   long cnt = 0;
+  /* first the vertices a fit or a split left off their curve onto it */
+  if (rm->vcur) cnt += curve_snap_pass(rm);
   rm2d_vtag_clear(rm, RM2D_V_DONE);
   const uint8_t skip =
       RM2D_V_DONE | RM2D_V_FROZEN | RM2D_V_CORNER | (feat ? 0 : RM2D_V_FEAT);

@@ -453,6 +453,48 @@ int pa__rm2d_smooth_feature(rm2d *rm, pa_idx k, int ip, double qfree) {
   return 0;
 }
 
+/* Steps of a curve snap: the whole way, then half and a quarter of it
+ * (as 3D's SNAP_STEPS, smooth_3d.c). */
+#define SNAP_STEPS 3
+
+int pa__rm2d_curve_snap_vertex(rm2d *rm, pa_idx k, int ip) {
+  pa_idx p = rm->tv[3 * k + ip];
+  double *d = rm->vcur + 2 * (size_t)p;
+  if (d[0] == 0 && d[1] == 0) return 0;
+  if (rm->vtag[p] & (RM2D_V_FROZEN | RM2D_V_CORNER)) return 0;
+  pa_idx el[RM2D_BALL_MAX];
+  int loc[RM2D_BALL_MAX], closed;
+  int n = rm2d_ball(rm, k, ip, el, loc, &closed);
+  if (n < 1) return 0;
+  double qold = 1;
+  for (int s = 0; s < n; s++) {
+    if (rm->tflag[el[s]] & RM2D_E_FROZEN) return 0;
+    if (rm->q[el[s]] < qold) qold = rm->q[el[s]];
+  }
+  double qfloor = qold < RM2D_QLEN ? qold : RM2D_QLEN;
+  double *xp = rm->x + 2 * (size_t)p;
+  const double x0 = xp[0], y0 = xp[1];
+  for (int tr = 0; tr < SNAP_STEPS; tr++) {
+    double w = ldexp(1.0, -tr), np[2] = {x0 + w * d[0], y0 + w * d[1]};
+    xp[0] = np[0];
+    xp[1] = np[1];
+    int ok = 1;
+    for (int s = 0; s < n && ok; s++) {
+      const pa_idx *v = rm->tv + 3 * (size_t)el[s];
+      double q = rm2d_elem_qual(rm, v[0], v[1], v[2]);
+      ok = q >= qfloor && rm2d_qual_ok(rm, q, rm2d_qfloor(qold), v[0], v[1], v[2]);
+    }
+    xp[0] = x0;
+    xp[1] = y0;
+    if (!ok) continue;
+    apply_move(rm, p, el, loc, n, np, NULL, 0, NULL);
+    d[0] -= w * d[0];
+    d[1] -= w * d[1];
+    return 1;
+  }
+  return 0;
+}
+
 /* The lengths l of the edges of lb from p at y, and how many are out of
  * [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI]; the count stops (l then partial)
  * once it passes outmax. */
