@@ -642,3 +642,58 @@ int pa__rm2d_length_vertex(rm2d *rm, pa_idx k, int ip) {
   }
   return 0;
 }
+
+/* Splitmix64 finaliser: the jiggle's directions (as smooth_3d.c). */
+static uint64_t mix64(uint64_t h) {
+  h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
+  h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
+  return h ^ (h >> 31);
+}
+
+int pa__rm2d_jiggle_vertex(rm2d *rm, pa_idx k, int ip, double delta) {
+  int mc = rm->mc;
+  pa_idx p = rm->tv[3 * k + ip];
+  if (rm->vtag[p] & (RM2D_V_FROZEN | RM2D_V_CORNER | RM2D_V_FEAT)) return 0;
+  pa_idx el[RM2D_BALL_MAX];
+  int loc[RM2D_BALL_MAX], closed;
+  int n = rm2d_ball(rm, k, ip, el, loc, &closed);
+  if (n < 3 || !closed) return 0;
+  double qold = 1;
+  for (int s = 0; s < n; s++) {
+    if (rm->tflag[el[s]] & RM2D_E_FROZEN) return 0;
+    if (rm->q[el[s]] < qold) qold = rm->q[el[s]];
+  }
+  double *xp = rm->x + 2 * (size_t)p;
+  /* a direction uniform in the square [-1,1]^2 (normalised), drawn from the
+   * coordinates' bits: the same on every run and for any numbering */
+  uint64_t h = 0x2545f4914f6cdd1dull;
+  for (int j = 0; j < 2; j++) {
+    uint64_t u;
+    memcpy(&u, xp + j, sizeof u);
+    h = mix64(h ^ u);
+  }
+  double d[2];
+  for (int j = 0; j < 2; j++) {
+    h = mix64(h + 0x9e3779b97f4a7c15ull);
+    d[j] = (double)(h >> 11) * (2.0 / 9007199254740992.0) - 1.0;
+  }
+  double t[3]; /* length delta in the metric of p */
+  rm2d_tensor2(mc, RM2D_M(p), t);
+  double lm = sqrt(pa__sqlen2(3, t, d[0], d[1]));
+  if (!(lm > 0)) return 0;
+  const double x0 = xp[0], y0 = xp[1];
+  double np[2] = {x0 + delta * d[0] / lm, y0 + delta * d[1] / lm};
+  xp[0] = np[0];
+  xp[1] = np[1];
+  int ok = 1;
+  for (int s = 0; s < n && ok; s++) {
+    const pa_idx *v = rm->tv + 3 * (size_t)el[s];
+    double q = rm2d_elem_qual(rm, v[0], v[1], v[2]);
+    ok = q >= 0.5 * qold && rm2d_qual_ok(rm, q, rm2d_qfloor(qold), v[0], v[1], v[2]);
+  }
+  xp[0] = x0;
+  xp[1] = y0;
+  if (!ok) return 0;
+  apply_move(rm, p, el, loc, n, np, NULL, 0, NULL);
+  return 1;
+}
