@@ -273,6 +273,7 @@ static int interior_record(const rm2d *rm, pa_idx b) {
  * as they are. */
 static pa_status fit_tangents(rm2d *rm, const feat_ends *fe) {
   pa_status st = PA_SUCCESS;
+  long nfit = 0, nstep = 0, nfar = 0;
   for (pa_idx v = 0; v < rm->nv; v++) {
     if (fe->cnt[v] != 2 || (rm->vtag[v] & (RM2D_V_CORNER | RM2D_V_FROZEN)))
       continue;
@@ -303,6 +304,7 @@ static pa_status fit_tangents(rm2d *rm, const feat_ends *fe) {
     t[0] /= tl;
     t[1] /= tl;
     if (!fit_one(xv, pts, np, t, off)) continue;
+    nfit++;
     for (int side = 0; side < 2; side++) { /* along each record's own run */
       double *bt = rm->btan + 4 * (size_t)r[side] +
                    (rm->bv[2 * r[side]] == v ? 0 : 2);
@@ -310,11 +312,18 @@ static pa_status fit_tangents(rm2d *rm, const feat_ends *fe) {
       bt[0] = sg * t[0];
       bt[1] = sg * t[1];
     }
-    if (hypot(off[0], off[1]) > FIT_SNAP_MAX * fmin(l0, l1)) continue;
+    if (hypot(off[0], off[1]) > FIT_SNAP_MAX * fmin(l0, l1)) {
+      nfar++;
+      continue;
+    }
+    nstep++;
     if (!rm->vcur) PA_CALLOC(rm->vcur, 2 * rm->capv);
     rm->vcur[2 * (size_t)v] = off[0];
     rm->vcur[2 * (size_t)v + 1] = off[1];
   }
+  if (nfit)
+    pa__info(2, "remesh: %ld interior-curve vertices fitted, %ld with a step "
+                "onto the fit, %ld too far\n", nfit, nstep, nfar);
 cleanup:
   return st;
 }
