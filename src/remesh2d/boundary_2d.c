@@ -16,7 +16,10 @@
  * through the three points to second order). At a corner each record uses its
  * own chord direction. Straight runs give tangents equal to the chord, and then
  * the curve is the chord exactly (see pa__rm2d_curve_point), so straight
- * boundaries stay straight.
+ * boundaries stay straight. On interior curves (a level-set cut) the
+ * tangents and each vertex's step onto the curve come from a least-squares
+ * fit over two rings along the curve (fit_tangents); the smoothing passes
+ * make the steps (pa__rm2d_curve_snap_vertex, smooth_2d.c).
  *
  * Corners: input PA_FLAG_CORNER, a vertex with other than two feature edges,
  * two feature edges of different references, or (unless -nr) a turning angle

@@ -14,7 +14,8 @@
  *     split edges longer than RM2D_LSPLIT_REFINE (longest-edge propagation),
  *     collapse edges shorter than 0.7071 (no new edge longer than 1.4142),
  *     swap around elements of quality < 0.6, and relocate once the splits
- *     are few;
+ *     are few; then a lattice crowd (a bisected structured input) is
+ *     jiggled (break_lattice);
  *  2. eight optimisation rounds (more while they split and collapse over 1 %
  *     of the elements): swap (quality < 0.9), relocate, length moves, split
  *     (edges longer than 1.4142), collapse (edges < RM2D_LSHORT_OPT) with a
@@ -715,7 +716,7 @@ pa_status pa__remesh2d(pa_mesh *mesh, const pa_remesh_opts *opts,
   rm->lset_hi = PA_METRIC_LEN_HI;
   reordered = rm->nelive;
   if (!opts->no_insert) PA_CALL(refine_rounds(rm, &pass, &reordered));
-  if (!opts->no_move) {
+  if (!opts->no_move && !opts->no_swap) { /* the swaps relax what it breaks */
     long nj = break_lattice(rm);
     DEBUG_CHECK(rm);
     report_pass(rm, "jiggle", pass, nj);

@@ -2,9 +2,10 @@
  * smooth_2d.c -- vertex relocation in the 2D remesher: quality moves (an
  * interior vertex towards the mean of the ideal apexes of its ball) and
  * length moves (a Gauss-Newton step on the lengths of its edges, as in 3D:
- * smooth_3d.c); their passes are in driver_2d.c. Only free interior vertices
- * move (not frozen, corner or feature ones); the metric and fields of a moved
- * vertex are interpolated in its old ball. Shared contract of the operators:
+ * smooth_3d.c), feature moves along their curve, curve snaps (a vertex onto
+ * its fitted curve) and the jiggle of a lattice crowd; their passes are in
+ * driver_2d.c. Frozen and corner vertices never move; the metric and fields
+ * of a moved vertex are interpolated in its old ball. Shared contract of the operators:
  * ops_2d.h.
  */
 #include "remesh2d/ops_2d.h"
