@@ -454,6 +454,37 @@ int pa__rm2d_smooth_feature(rm2d *rm, pa_idx k, int ip, double qfree) {
   return 0;
 }
 
+/* The worst quality of the ball el[0..n), or -1 when it holds a frozen
+ * element. */
+static double ball_worst(const rm2d *rm, const pa_idx *el, int n) {
+  double qold = 1;
+  for (int s = 0; s < n; s++) {
+    if (rm->tflag[el[s]] & RM2D_E_FROZEN) return -1;
+    if (rm->q[el[s]] < qold) qold = rm->q[el[s]];
+  }
+  return qold;
+}
+
+/* Whether every element of the ball el[0..n) of p, with p at np, has
+ * quality at least qmin and passes the floor of the ball's old worst qold
+ * (rm2d_qual_ok); p is left where it was. */
+static int ball_keeps(rm2d *rm, pa_idx p, const pa_idx *el, int n,
+                      const double *np, double qmin, double qold) {
+  double *xp = rm->x + 2 * (size_t)p;
+  const double x0 = xp[0], y0 = xp[1];
+  xp[0] = np[0];
+  xp[1] = np[1];
+  int ok = 1;
+  for (int s = 0; s < n && ok; s++) {
+    const pa_idx *v = rm->tv + 3 * (size_t)el[s];
+    double q = rm2d_elem_qual(rm, v[0], v[1], v[2]);
+    ok = q >= qmin && rm2d_qual_ok(rm, q, rm2d_qfloor(qold), v[0], v[1], v[2]);
+  }
+  xp[0] = x0;
+  xp[1] = y0;
+  return ok;
+}
+
 /* Steps of a curve snap: the whole way, then half and a quarter of it
  * (as 3D's SNAP_STEPS, smooth_3d.c). */
 #define SNAP_STEPS 3
@@ -467,27 +498,13 @@ int pa__rm2d_curve_snap_vertex(rm2d *rm, pa_idx k, int ip) {
   int loc[RM2D_BALL_MAX], closed;
   int n = rm2d_ball(rm, k, ip, el, loc, &closed);
   if (n < 1) return 0;
-  double qold = 1;
-  for (int s = 0; s < n; s++) {
-    if (rm->tflag[el[s]] & RM2D_E_FROZEN) return 0;
-    if (rm->q[el[s]] < qold) qold = rm->q[el[s]];
-  }
+  double qold = ball_worst(rm, el, n);
+  if (qold < 0) return 0;
   double qfloor = qold < RM2D_QLEN ? qold : RM2D_QLEN;
-  double *xp = rm->x + 2 * (size_t)p;
-  const double x0 = xp[0], y0 = xp[1];
+  const double *xp = rm->x + 2 * (size_t)p;
   for (int tr = 0; tr < SNAP_STEPS; tr++) {
-    double w = ldexp(1.0, -tr), np[2] = {x0 + w * d[0], y0 + w * d[1]};
-    xp[0] = np[0];
-    xp[1] = np[1];
-    int ok = 1;
-    for (int s = 0; s < n && ok; s++) {
-      const pa_idx *v = rm->tv + 3 * (size_t)el[s];
-      double q = rm2d_elem_qual(rm, v[0], v[1], v[2]);
-      ok = q >= qfloor && rm2d_qual_ok(rm, q, rm2d_qfloor(qold), v[0], v[1], v[2]);
-    }
-    xp[0] = x0;
-    xp[1] = y0;
-    if (!ok) continue;
+    double w = ldexp(1.0, -tr), np[2] = {xp[0] + w * d[0], xp[1] + w * d[1]};
+    if (!ball_keeps(rm, p, el, n, np, qfloor, qold)) continue;
     apply_move(rm, p, el, loc, n, np, NULL, 0, NULL);
     d[0] -= w * d[0];
     d[1] -= w * d[1];
@@ -659,12 +676,9 @@ int pa__rm2d_jiggle_vertex(rm2d *rm, pa_idx k, int ip, double delta) {
   int loc[RM2D_BALL_MAX], closed;
   int n = rm2d_ball(rm, k, ip, el, loc, &closed);
   if (n < 3 || !closed) return 0;
-  double qold = 1;
-  for (int s = 0; s < n; s++) {
-    if (rm->tflag[el[s]] & RM2D_E_FROZEN) return 0;
-    if (rm->q[el[s]] < qold) qold = rm->q[el[s]];
-  }
-  double *xp = rm->x + 2 * (size_t)p;
+  double qold = ball_worst(rm, el, n);
+  if (qold < 0) return 0;
+  const double *xp = rm->x + 2 * (size_t)p;
   /* a direction uniform in the square [-1,1]^2 (normalised), drawn from the
    * coordinates' bits: the same on every run and for any numbering */
   uint64_t h = 0x2545f4914f6cdd1dull;
@@ -682,19 +696,8 @@ int pa__rm2d_jiggle_vertex(rm2d *rm, pa_idx k, int ip, double delta) {
   rm2d_tensor2(mc, RM2D_M(p), t);
   double lm = sqrt(pa__sqlen2(3, t, d[0], d[1]));
   if (!(lm > 0)) return 0;
-  const double x0 = xp[0], y0 = xp[1];
-  double np[2] = {x0 + delta * d[0] / lm, y0 + delta * d[1] / lm};
-  xp[0] = np[0];
-  xp[1] = np[1];
-  int ok = 1;
-  for (int s = 0; s < n && ok; s++) {
-    const pa_idx *v = rm->tv + 3 * (size_t)el[s];
-    double q = rm2d_elem_qual(rm, v[0], v[1], v[2]);
-    ok = q >= 0.5 * qold && rm2d_qual_ok(rm, q, rm2d_qfloor(qold), v[0], v[1], v[2]);
-  }
-  xp[0] = x0;
-  xp[1] = y0;
-  if (!ok) return 0;
+  double np[2] = {xp[0] + delta * d[0] / lm, xp[1] + delta * d[1] / lm};
+  if (!ball_keeps(rm, p, el, n, np, 0.5 * qold, qold)) return 0;
   apply_move(rm, p, el, loc, n, np, NULL, 0, NULL);
   return 1;
 }
