@@ -245,7 +245,8 @@ static int fit_one(const double *x, const double *pts, int np, double *t,
     double row[FIT_NPAR] = {1, u, u * u};
     for (int r = 0; r < FIT_NPAR; r++) {
       atb[r] += row[r] * w;
-      for (int c = 0; c < FIT_NPAR; c++) ata[r * FIT_NPAR + c] += row[r] * row[c];
+      for (int c = 0; c < FIT_NPAR; c++)
+        ata[r * FIT_NPAR + c] += row[r] * row[c];
     }
   }
   if (!pa__cholesky_solve(FIT_NPAR, ata, atb)) return 0;

@@ -5,8 +5,8 @@
  * smooth_3d.c), feature moves along their curve, curve snaps (a vertex onto
  * its fitted curve) and the jiggle of a lattice crowd; their passes are in
  * driver_2d.c. Frozen and corner vertices never move; the metric and fields
- * of a moved vertex are interpolated in its old ball. Shared contract of the operators:
- * ops_2d.h.
+ * of a moved vertex are interpolated in its old ball. Shared contract of the
+ * operators: ops_2d.h.
  */
 #include "remesh2d/ops_2d.h"
 
