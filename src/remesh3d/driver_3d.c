@@ -569,11 +569,15 @@ static void measure(const rm3d *m, double *inrange, double *qworst,
  * holding it) that fall into one bin of width sqrt 2 / 100 of (sqrt 2,
  * RM3D_LSPREAD), counting an edge when its midpoint is at least 1/sqrt 2
  * from the other two vertices of the tet; *longer is the fraction of
- * tet-edges of RM3D_LSPREAD or more. The ends of the edges counted are
- * marked RM3D_V_TODO (the caller clears them). */
+ * tet-edges of RM3D_LSPREAD or more, *far the largest fraction in one bin
+ * of the same width anywhere in (sqrt 2, 2). The ends of the edges counted
+ * in (sqrt 2, RM3D_LSPREAD) are marked RM3D_V_TODO (the caller clears
+ * them). */
 #define RM3D_NCROWD 14 /* bins up to RM3D_LSPREAD / sqrt 2 = 1.13 */
-static double lattice_crowd(rm3d *m, double *longer) {
-  long hist[RM3D_NCROWD] = {0}, nall = 0, nlong = 0;
+#define RM3D_NCROWD_FAR 42 /* bins up to 2 / sqrt 2 */
+static double lattice_crowd(rm3d *m, double *longer, double *far_top) {
+  long hist[RM3D_NCROWD] = {0}, hfar[RM3D_NCROWD_FAR] = {0}, nall = 0,
+       nlong = 0;
   int mc = m->mc;
   for (pa_idx k = 0; k < m->ne; k++) {
     if (m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN)) continue;
@@ -583,9 +587,10 @@ static double lattice_crowd(rm3d *m, double *longer) {
     nall += 6;
     for (int e = 0; e < 6; e++) {
       nlong += L[e] >= RM3D_LSPREAD;
-      if (!(L[e] > PA_METRIC_LEN_HI_EXACT && L[e] < RM3D_LSPREAD)) continue;
+      if (!(L[e] > PA_METRIC_LEN_HI_EXACT && L[e] < 2.0)) continue;
       int bin = (int)((L[e] / PA_METRIC_LEN_HI_EXACT - 1.0) * 100.0);
-      if (bin >= RM3D_NCROWD) continue;
+      if (bin >= RM3D_NCROWD_FAR) continue;
+      int near = L[e] < RM3D_LSPREAD && bin < RM3D_NCROWD;
       pa_idx a = v[pa__rm3d_edge[e][0]], b = v[pa__rm3d_edge[e][1]];
       const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b;
       double x[3], mp[6];
@@ -600,15 +605,20 @@ static double lattice_crowd(rm3d *m, double *longer) {
           far = 0;
       }
       if (!far) continue;
+      hfar[bin]++;
+      if (!near) continue;
       hist[bin]++;
       m->vtag[a] |= RM3D_V_TODO;
       m->vtag[b] |= RM3D_V_TODO;
     }
   }
-  long top = 0;
-  for (int i = 0; i < RM3D_NCROWD; i++)
-    if (hist[i] > top) top = hist[i];
+  long top = 0, ftop = 0;
+  for (int i = 0; i < RM3D_NCROWD_FAR; i++) {
+    if (i < RM3D_NCROWD && hist[i] > top) top = hist[i];
+    if (hfar[i] > ftop) ftop = hfar[i];
+  }
   *longer = nall ? (double)nlong / nall : 0.0;
+  *far_top = nall ? (double)ftop / nall : 0.0;
   return nall ? (double)top / nall : 0.0;
 }
 
@@ -719,19 +729,22 @@ cleanup:
  * splits from now on (m->spread). */
 /* crowds of 30-32 % gain, one of 12.6 % loses (docs/BENCHMARKS.md) */
 #define RM3D_CROWD_WIDE 0.25
-/* A wide crowd's lattice is first made body-centred: the edges within
- * this factor of the longest (a cube lattice's body diagonals) are split,
- * then the swaps remove the crowd's edges (the face diagonals, between two
- * new centres) instead of splitting them: box3d 16 -> 0.06 mean quality
- * 0.828 -> 0.893, box3d 16 -> 0.03 0.813 -> 0.913 (docs/BENCHMARKS.md,
- * "Lattice crowds"). */
+/* A wide crowd's lattice (more than RM3D_CROWD_WIDE in one bin, anywhere
+ * in (sqrt 2, 2), and not a tight crowd) is first made body-centred: the
+ * edges within this factor of the longest (a cube lattice's body
+ * diagonals) are split, then the swaps remove the crowd's edges (the face
+ * diagonals, between two new centres) instead of splitting them. box3d 16
+ * -> 0.06: mean quality 0.828 -> 0.893; -> 0.03: 0.813 -> 0.913; -> 0.055
+ * (face diagonals at 1.61, beyond the spread's bins): 98 304 tets -> 52 240
+ * (docs/BENCHMARKS.md, "Lattice crowds"). */
 #define RM3D_CROWD_TOP 1.1
 static pa_status break_lattice_crowd(rm3d *m) {
   pa_status st = PA_SUCCESS;
-  double longer, crowd = lattice_crowd(m, &longer);
+  double longer, far, crowd = lattice_crowd(m, &longer, &far);
   long nj = 0, ns = 0, nw = 0;
   pa_idx ball[RM3D_MAXBALL];
-  if (!(crowd > 0.05 && longer < 0.1) && crowd > RM3D_CROWD_WIDE) {
+  if (!(crowd > 0.05 && longer < 0.1) &&
+      (crowd > RM3D_CROWD_WIDE || far > RM3D_CROWD_WIDE)) {
     double top = max_length(m) / RM3D_CROWD_TOP;
     for (pa_idx p = 0; p < m->nv; p++) m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
     if (top > PA_METRIC_LEN_HI_EXACT)
@@ -742,7 +755,7 @@ static pa_status break_lattice_crowd(rm3d *m) {
               "  rm3d lattice crowd: %.1f %% of the edges in one bin, %.1f "
               "%% longer; body-centred: %ld splits, %ld swaps\n",
               100 * crowd, 100 * longer, ns, nw);
-    crowd = lattice_crowd(m, &longer);
+    crowd = lattice_crowd(m, &longer, &far);
   }
   m->spread = crowd > 0.05 && longer < 0.1 ? RM3D_SPREAD_TIGHT
               : crowd > RM3D_CROWD_WIDE    ? RM3D_SPREAD_WIDE
