@@ -10,8 +10,9 @@
  *     isotropically, and the collapses remove the tangential excess before it
  *     is split again. Before the last band (thr = sqrt 2), a lattice crowd
  *     (lattice_crowd: a structured input about to be refined into the next
- *     lattice, twice the tets) is broken by jiggling the ends of its edges,
- *     and from then on the splits of short edges are spread (tight: one per
+ *     lattice, twice the tets) is broken: a wide one is first made
+ *     body-centred (its longest class split, then swaps: RM3D_CROWD_TOP);
+ *     the ends of the crowd's edges are jiggled, and from then on the splits of short edges are spread (tight: one per
  *     neighbourhood and pass; wide: an edge waits when both its ends were
  *     touched; RM3D_SPREAD_TIGHT, RM3D_SPREAD_WIDE). A large working mesh is
  *     renumbered for locality between bands (RM3D_REORDER_MIN), and every
