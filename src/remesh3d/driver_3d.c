@@ -12,9 +12,10 @@
  *     (lattice_crowd: a structured input about to be refined into the next
  *     lattice, twice the tets) is broken: a wide one is first made
  *     body-centred (its longest class split, then swaps: RM3D_CROWD_TOP);
- *     the ends of the crowd's edges are jiggled, and from then on the splits of short edges are spread (tight: one per
- *     neighbourhood and pass; wide: an edge waits when both its ends were
- *     touched; RM3D_SPREAD_TIGHT, RM3D_SPREAD_WIDE). A large working mesh is
+ *     the ends of the crowd's edges are jiggled, and from then on the
+ *     splits of short edges are spread (tight: one per neighbourhood and
+ *     pass; wide: an edge waits when both its ends were touched;
+ *     RM3D_SPREAD_TIGHT, RM3D_SPREAD_WIDE). A large working mesh is
  *     renumbered for locality between bands (RM3D_REORDER_MIN), and every
  *     mesh after them;
  *  2. at least 3 and at most 20 rounds of split (> sqrt 2), collapse
@@ -31,9 +32,9 @@
  *     (pa__rm3d_skin_relax);
  *  3. the shake (shake_lattice), for a lattice only (a crowd of lengths
  *     and a poor mean quality, or a tight crowd broken at the last band):
- *     every free interior vertex jiggled, then four rounds of collapses
+ *     every free interior vertex jiggled, then 4 to 8 rounds of collapses
  *     (< 0.85, guard 1.35), swaps, smoothing and length moves, each after
- *     a smaller jiggle;
+ *     a smaller jiggle, until a round removes under 2 % of the tets;
  *  4. three rounds of swaps (quality < 0.7: this lifts the mean quality by
  *     about 0.03), smoothing (below 0.75) and two sweeps of length moves
  *     (the smoothing disregards lengths), the first two preceded by a
@@ -571,9 +572,9 @@ static void measure(const rm3d *m, double *inrange, double *qworst,
  * RM3D_LSPREAD), counting an edge when its midpoint is at least 1/sqrt 2
  * from the other two vertices of the tet; *longer is the fraction of
  * tet-edges of RM3D_LSPREAD or more, *far the largest fraction in one bin
- * of the same width anywhere in (sqrt 2, 2). The ends of the edges counted
- * in (sqrt 2, RM3D_LSPREAD) are marked RM3D_V_TODO (the caller clears
- * them). */
+ * of the same width anywhere in (sqrt 2, 2), counting every edge. The
+ * ends of the edges counted in (sqrt 2, RM3D_LSPREAD) are marked
+ * RM3D_V_TODO (the caller clears them). */
 #define RM3D_NCROWD 14 /* bins up to RM3D_LSPREAD / sqrt 2 = 1.13 */
 #define RM3D_NCROWD_FAR 42 /* bins up to 2 / sqrt 2 */
 static double lattice_crowd(rm3d *m, double *longer, double *far_top) {
@@ -591,7 +592,8 @@ static double lattice_crowd(rm3d *m, double *longer, double *far_top) {
       if (!(L[e] > PA_METRIC_LEN_HI_EXACT && L[e] < 2.0)) continue;
       int bin = (int)((L[e] / PA_METRIC_LEN_HI_EXACT - 1.0) * 100.0);
       if (bin >= RM3D_NCROWD_FAR) continue;
-      int near = L[e] < RM3D_LSPREAD && bin < RM3D_NCROWD;
+      hfar[bin]++;
+      if (!(L[e] < RM3D_LSPREAD && bin < RM3D_NCROWD)) continue;
       pa_idx a = v[pa__rm3d_edge[e][0]], b = v[pa__rm3d_edge[e][1]];
       const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b;
       double x[3], mp[6];
@@ -606,8 +608,6 @@ static double lattice_crowd(rm3d *m, double *longer, double *far_top) {
           far = 0;
       }
       if (!far) continue;
-      hfar[bin]++;
-      if (!near) continue;
       hist[bin]++;
       m->vtag[a] |= RM3D_V_TODO;
       m->vtag[b] |= RM3D_V_TODO;
@@ -842,7 +842,7 @@ cleanup:
  * tet-edges in one 1 % bin of lengths, mean quality under
  * RM3D_SHAKE_QMEAN: the Kuhn-type tets of a cube lattice refined by whole
  * levels) or were one at the last band (a tight crowd, m->spread) are
- * shaken; the rest come out as before. Figures: docs/BENCHMARKS.md,
+ * shaken; the rest skip it. Figures: docs/BENCHMARKS.md,
  * "Lattice crowds". */
 /* after the rounds, a lattice holds 30-69 % of its tet-edges in one bin,
  * an unstructured mesh about 2 % */
@@ -851,9 +851,15 @@ cleanup:
  * the intermediate bisection levels about 0.9, better than Mmg's outputs:
  * those are left alone */
 #define RM3D_SHAKE_QMEAN 0.8
-/* rounds of the shake: box3d 16 -> 0.055 (a lattice 1.9 times the ideal
- * count) ends 1.41x Mmg's count after 3, 1.11x after 4, 1.08x after 6 */
+/* rounds of the shake: at least RM3D_SHAKE_ROUNDS, then until a round
+ * removes less than RM3D_SHAKE_SETTLED of the tets, at most
+ * RM3D_SHAKE_ROUNDS_MAX. Each round removes a few % of a lattice twice too
+ * dense: box3d 16 -> 0.0325 ends 1.08x Mmg's count after 4 rounds, 1.02x
+ * after 8; the level-set sphere settles after 4 (docs/BENCHMARKS.md,
+ * "Lattice crowds") */
 #define RM3D_SHAKE_ROUNDS 4
+#define RM3D_SHAKE_ROUNDS_MAX 8
+#define RM3D_SHAKE_SETTLED 0.02
 /* jiggle lengths (metric) of the first round and of the later ones: the
  * level-set sphere's mean quality 0.812 with one jiggle of 0.2, 0.835
  * with 0.15 more in every later round */
@@ -896,10 +902,11 @@ static double length_crowd(const rm3d *m, double *qmean) {
 }
 
 /* Schedule step 3, the shake (see RM3D_SHAKE_CROWD): every free interior
- * vertex jiggled (pa__rm3d_jiggle_vertex), then RM3D_SHAKE_ROUNDS rounds of
- * collapses (< RM3D_SHAKE_SHORT, guard RM3D_SHAKE_GUARD), swaps (Q < 0.7),
- * smoothing and a sweep of length moves, each round after the first
- * starting with a smaller jiggle. *npass counts the rounds. */
+ * vertex jiggled (pa__rm3d_jiggle_vertex), then rounds of collapses
+ * (< RM3D_SHAKE_SHORT, guard RM3D_SHAKE_GUARD), swaps (Q < 0.7), smoothing
+ * and a sweep of length moves, each round after the first starting with a
+ * smaller jiggle, RM3D_SHAKE_ROUNDS and more while they remove tets
+ * (RM3D_SHAKE_SETTLED). *npass counts the rounds. */
 static pa_status shake_lattice(rm3d *m, const pa_remesh_opts *opts,
                                int *npass) {
   pa_status st = PA_SUCCESS;
@@ -914,8 +921,9 @@ static pa_status shake_lattice(rm3d *m, const pa_remesh_opts *opts,
             100 * crowd, qmean);
   if (!tight && !(crowd > RM3D_SHAKE_CROWD && qmean < RM3D_SHAKE_QMEAN))
     return st;
-  for (int it = 0; it < RM3D_SHAKE_ROUNDS; it++, (*npass)++) {
+  for (int it = 0; it < RM3D_SHAKE_ROUNDS_MAX; it++, (*npass)++) {
     long nj = 0, nc = 0, nw = 0, nm = 0, nl = 0;
+    double live0 = (double)(m->ne - m->ndead_t);
     double d = it ? RM3D_SHAKE_NEXT : RM3D_SHAKE_FIRST;
     for (pa_idx p = 0; p < m->nv; p++)
       nj += pa__rm3d_jiggle_vertex(m, p, d, ball);
@@ -933,6 +941,9 @@ static pa_status shake_lattice(rm3d *m, const pa_remesh_opts *opts,
               "  rm3d shake %d: %ld jiggled, %ld collapses %ld swaps %ld "
               "moves, %d tets\n",
               it, nj, nc, nw, nm + nl, (int)(m->ne - m->ndead_t));
+    if (it + 1 >= RM3D_SHAKE_ROUNDS &&
+        (double)(m->ne - m->ndead_t) > (1 - RM3D_SHAKE_SETTLED) * live0)
+      break;
   }
 cleanup:
   pa__rm3d_balls_free(&balls);
