@@ -16,13 +16,31 @@
  * through the three points to second order). At a corner each record uses its
  * own chord direction. Straight runs give tangents equal to the chord, and then
  * the curve is the chord exactly (see pa__rm2d_curve_point), so straight
- * boundaries stay straight.
+ * boundaries stay straight. On interior curves (a level-set cut) the
+ * tangents and each vertex's step onto the curve come from a least-squares
+ * fit over two rings along the curve (fit_tangents); the smoothing passes
+ * make the steps (pa__rm2d_curve_snap_vertex, smooth_2d.c).
  *
  * Corners: input PA_FLAG_CORNER, a vertex with other than two feature edges,
  * two feature edges of different references, or (unless -nr) a turning angle
  * larger than -ar degrees.
  */
 #include "remesh2d/remesh2d.h"
+
+/* Unknowns of the quadratic fit of fit_one: the offset, the slope and the
+ * curvature term (the offset is the vertex's step onto the fitted curve). */
+#define FIT_NPAR 3
+/* Two rings along the curve: the vertex and two neighbours on each side. */
+#define FIT_MAXPTS 5
+/* A fitted tangent turned by more than ~45 degrees from the chord of the
+ * first ring is not trusted (as 3D's FIT_MAX_TURN, boundary_3d.c). */
+#define FIT_MAX_TURN 0.7
+/* A fitted offset longer than this share of the vertex's shorter curve edge
+ * is no interpolation error but a fit across a kink or a cluster of cut
+ * points (a level set's zero close to an input vertex): the vertex keeps its
+ * place. The interpolation errors of bench/levelset_cut.sh's disc are under
+ * 0.02 of the edges. */
+#define FIT_SNAP_MAX 0.1
 
 /* Element face code holding edge (a, c) found in the ball of a, or -1. */
 static pa_idx find_face(const rm2d *rm, const pa_idx *bstart,
@@ -204,6 +222,116 @@ static void set_tangents(rm2d *rm, const feat_ends *fe) {
     }
 }
 
+/* The quadratic height field w = c + a u + b u^2 fitted by least squares to
+ * the points pts[0..np) in the frame of x's unit tangent t (u along t, w
+ * along its normal n = (-t1, t0)). When it is well posed (normal equations
+ * positive definite) and turns the tangent by less than FIT_MAX_TURN: 1,
+ * with t replaced by the fit's (t + a n, normalised) and off = c n, the
+ * step from x onto the fitted curve. */
+static int fit_one(const double *x, const double *pts, int np, double *t,
+                   double *off) {
+  double n[2] = {-t[1], t[0]}, scale = 0;
+  for (int i = 0; i < np; i++) {
+    const double *p = pts + 2 * i;
+    scale += (p[0] - x[0]) * (p[0] - x[0]) + (p[1] - x[1]) * (p[1] - x[1]);
+  }
+  if (np < FIT_NPAR + 1 || !(scale > 0)) return 0;
+  scale = 1.0 / sqrt(scale / np);
+  double ata[FIT_NPAR * FIT_NPAR] = {0}, atb[FIT_NPAR] = {0};
+  for (int i = 0; i < np; i++) {
+    const double *p = pts + 2 * i;
+    double d[2] = {(p[0] - x[0]) * scale, (p[1] - x[1]) * scale};
+    double u = d[0] * t[0] + d[1] * t[1], w = d[0] * n[0] + d[1] * n[1];
+    double row[FIT_NPAR] = {1, u, u * u};
+    for (int r = 0; r < FIT_NPAR; r++) {
+      atb[r] += row[r] * w;
+      for (int c = 0; c < FIT_NPAR; c++)
+        ata[r * FIT_NPAR + c] += row[r] * row[c];
+    }
+  }
+  if (!pa__cholesky_solve(FIT_NPAR, ata, atb)) return 0;
+  double tf[2] = {t[0] + atb[1] * n[0], t[1] + atb[1] * n[1]};
+  double l = sqrt(tf[0] * tf[0] + tf[1] * tf[1]);
+  if (!(l > 0) || (tf[0] * t[0] + tf[1] * t[1]) / l < FIT_MAX_TURN) return 0;
+  t[0] = tf[0] / l;
+  t[1] = tf[1] / l;
+  off[0] = atb[0] / scale * n[0];
+  off[1] = atb[0] / scale * n[1];
+  return 1;
+}
+
+/* Whether record b lies inside the domain (an element on each side). */
+static int interior_record(const rm2d *rm, pa_idx b) {
+  return rm->bside[2 * b + 1] >= 0;
+}
+
+/* The vertices of interior curves carry the interpolation error of what
+ * put them there (a level set's zero set cut into the mesh: bench/
+ * levelset_cut.sh's disc has its cut points up to 0.03 of the size inside
+ * the circle, and the chords' tangents turn with that noise). At a
+ * regular vertex of an interior curve, not frozen, fit_one over the
+ * vertex and the next two along the curve on each side (up to a corner)
+ * gives the tangents of its records and its step onto the fitted curve
+ * (rm2d.vcur, allocated here when a step is kept; FIT_SNAP_MAX). The
+ * domain's boundary and curves between frozen input are the input's, kept
+ * as they are. */
+static pa_status fit_tangents(rm2d *rm, const feat_ends *fe) {
+  pa_status st = PA_SUCCESS;
+  long nfit = 0, nstep = 0, nfar = 0;
+  for (pa_idx v = 0; v < rm->nv; v++) {
+    if (fe->cnt[v] != 2 || (rm->vtag[v] & (RM2D_V_CORNER | RM2D_V_FROZEN)))
+      continue;
+    pa_idx r[2] = {fe->r0[v], fe->r1[v]};
+    if (!interior_record(rm, r[0]) || !interior_record(rm, r[1])) continue;
+    double pts[2 * FIT_MAXPTS];
+    int np = 0;
+    const double *xv = rm->x + 2 * (size_t)v;
+    memcpy(pts, xv, 2 * sizeof(double));
+    np++;
+    pa_idx nb1[2];
+    for (int side = 0; side < 2; side++) {
+      pa_idx u = nb1[side] = other_end(rm, r[side], v);
+      memcpy(pts + 2 * np++, rm->x + 2 * (size_t)u, 2 * sizeof(double));
+      if (fe->cnt[u] != 2 || (rm->vtag[u] & RM2D_V_CORNER)) continue;
+      pa_idx ru = fe->r0[u] == r[side] ? fe->r1[u] : fe->r0[u];
+      pa_idx u2 = other_end(rm, ru, u);
+      if (u2 != v && u2 != nb1[0])
+        memcpy(pts + 2 * np++, rm->x + 2 * (size_t)u2, 2 * sizeof(double));
+    }
+    const double *x0 = rm->x + 2 * (size_t)nb1[0],
+                 *x1 = rm->x + 2 * (size_t)nb1[1];
+    double t[2] = {x1[0] - x0[0], x1[1] - x0[1]}, off[2];
+    double tl = sqrt(t[0] * t[0] + t[1] * t[1]);
+    double l0 = hypot(x0[0] - xv[0], x0[1] - xv[1]),
+           l1 = hypot(x1[0] - xv[0], x1[1] - xv[1]);
+    if (!(tl > 0)) continue;
+    t[0] /= tl;
+    t[1] /= tl;
+    if (!fit_one(xv, pts, np, t, off)) continue;
+    nfit++;
+    for (int side = 0; side < 2; side++) { /* along each record's own run */
+      double *bt = rm->btan + 4 * (size_t)r[side] +
+                   (rm->bv[2 * r[side]] == v ? 0 : 2);
+      double sg = bt[0] * t[0] + bt[1] * t[1] < 0 ? -1 : 1;
+      bt[0] = sg * t[0];
+      bt[1] = sg * t[1];
+    }
+    if (hypot(off[0], off[1]) > FIT_SNAP_MAX * fmin(l0, l1)) {
+      nfar++;
+      continue;
+    }
+    nstep++;
+    if (!rm->vcur) PA_CALLOC(rm->vcur, 2 * rm->capv);
+    rm->vcur[2 * (size_t)v] = off[0];
+    rm->vcur[2 * (size_t)v + 1] = off[1];
+  }
+  if (nfit)
+    pa__info(2, "remesh: %ld interior-curve vertices fitted, %ld with a step "
+                "onto the fit, %ld too far\n", nfit, nstep, nfar);
+cleanup:
+  return st;
+}
+
 /* Hausdorff bound: at a regular vertex of curvature kappa (turning angle
  * over the mean edge length), a chord of length h deviates from the curve
  * by about h^2 kappa / 8, so the size is limited to sqrt(8 hausd / kappa).
@@ -275,6 +403,7 @@ pa_status pa__rm2d_feature_analyze(rm2d *rm, pa_mesh *mesh) {
   PA_CALL(count_ends(rm, &fe));
   mark_corners(rm, &fe);
   set_tangents(rm, &fe);
+  PA_CALL(fit_tangents(rm, &fe));
   /* a model's curvature bounds the sizes already (pa__metric_prepare) */
   if (!pa__remesh_model_curvature(rm->opts) && hausdorff_bound(rm, &fe) &&
       rm->opts->hgrad > 1)

@@ -14,7 +14,8 @@
  *     split edges longer than RM2D_LSPLIT_REFINE (longest-edge propagation),
  *     collapse edges shorter than 0.7071 (no new edge longer than 1.4142),
  *     swap around elements of quality < 0.6, and relocate once the splits
- *     are few;
+ *     are few; then a lattice crowd (a bisected structured input) is
+ *     jiggled (break_lattice);
  *  2. eight optimisation rounds (more while they split and collapse over 1 %
  *     of the elements): swap (quality < 0.9), relocate, length moves, split
  *     (edges longer than 1.4142), collapse (edges < RM2D_LSHORT_OPT) with a
@@ -336,8 +337,28 @@ long pa__rm2d_sliver_pass(rm2d *rm, double qbad) {
   return cnt;
 }
 
+/* The curve snaps (pa__rm2d_curve_snap_vertex) of the vertices with a step
+ * left onto their curve, each tried once. */
+static long curve_snap_pass(rm2d *rm) {
+  long cnt = 0;
+  rm2d_vtag_clear(rm, RM2D_V_DONE);
+  for (pa_idx k = 0; k < rm->ne; k++) {
+    if (rm->tflag[k] & (RM2D_E_DEAD | RM2D_E_FROZEN)) continue;
+    for (int i = 0; i < 3; i++) {
+      pa_idx p = rm->tv[3 * k + i];
+      const double *d = rm->vcur + 2 * (size_t)p;
+      if ((rm->vtag[p] & RM2D_V_DONE) || (d[0] == 0 && d[1] == 0)) continue;
+      rm->vtag[p] |= RM2D_V_DONE;
+      cnt += pa__rm2d_curve_snap_vertex(rm, k, i);
+    }
+  }
+  return cnt;
+}
+
 long pa__rm2d_smooth_pass(rm2d *rm, double qfree, int feat) {
   long cnt = 0;
+  /* first the vertices a fit or a split left off their curve onto it */
+  if (rm->vcur) cnt += curve_snap_pass(rm);
   rm2d_vtag_clear(rm, RM2D_V_DONE);
   const uint8_t skip =
       RM2D_V_DONE | RM2D_V_FROZEN | RM2D_V_CORNER | (feat ? 0 : RM2D_V_FEAT);
@@ -475,6 +496,53 @@ cleanup:
   rm->lset_hi = PA_METRIC_LEN_HI; /* the band narrows: no mark holds */
   rm2d_tflag_clear(rm, RM2D_E_INRANGE);
   return st;
+}
+
+/* Lattice crowds. A structured input (box2d: squares of two right
+ * triangles) refined by longest-edge bisection stays a lattice of right
+ * isosceles triangles (quality 0.866), which no swap (the other diagonal
+ * of a square gives the same pair) and no move (every vertex sits at the
+ * mean of its ideal apexes) improves: bench/levelset_cut.sh's disc left
+ * 98 % of its triangles in [0.85, 0.9), mean quality 0.868 (Mmg 0.878).
+ * After the refinement rounds, when more than RM2D_CROWD_SHARE of the free
+ * triangles have their quality in one bin of width RM2D_CROWD_BIN, every
+ * free interior vertex moves once by RM2D_JIGGLE (pa__rm2d_jiggle_vertex);
+ * the optimisation rounds then swap and relax the broken lattice into an
+ * unstructured mesh (disc: mean quality 0.963, figures in
+ * docs/BENCHMARKS.md). Unstructured meshes spread their qualities over
+ * many bins: the fullest holds 11 % of the plate's triangles at that point
+ * (23 % at -hsiz 0.003 -hausd 0.0005), 8-16 % on bench/bench_remesh2d.sh's
+ * anisotropic and coarsening cases (-v 2 prints it). */
+#define RM2D_CROWD_BIN 0.01
+#define RM2D_CROWD_SHARE 0.5
+/* The jiggle's metric length: 0.1 breaks the disc's lattice less (mean
+ * quality 0.952), 0.25 as much as larger steps, which the ball's quality
+ * refuses more often. */
+#define RM2D_JIGGLE 0.25
+static long break_lattice(rm2d *rm) {
+  long bins[101] = {0}, nfree = 0, big = 0, nj = 0;
+  for (pa_idx k = 0; k < rm->ne; k++) {
+    if (rm->tflag[k] & (RM2D_E_DEAD | RM2D_E_FROZEN)) continue;
+    int b = (int)(rm->q[k] / RM2D_CROWD_BIN);
+    bins[b < 0 ? 0 : b > 100 ? 100 : b]++;
+    nfree++;
+  }
+  for (int b = 0; b <= 100; b++)
+    if (bins[b] > big) big = bins[b];
+  pa__info(2, "remesh: %.1f %% of the free triangles in the fullest quality "
+              "bin\n", nfree ? 100.0 * (double)big / (double)nfree : 0.0);
+  if (!(big > RM2D_CROWD_SHARE * nfree)) return 0;
+  rm2d_vtag_clear(rm, RM2D_V_DONE);
+  for (pa_idx k = 0; k < rm->ne; k++) {
+    if (rm->tflag[k] & (RM2D_E_DEAD | RM2D_E_FROZEN)) continue;
+    for (int i = 0; i < 3; i++) {
+      pa_idx p = rm->tv[3 * k + i];
+      if (rm->vtag[p] & RM2D_V_DONE) continue;
+      rm->vtag[p] |= RM2D_V_DONE;
+      nj += pa__rm2d_jiggle_vertex(rm, k, i, RM2D_JIGGLE);
+    }
+  }
+  return nj;
 }
 
 /* Schedule step 2, the optimisation rounds, then splits until none is left
@@ -652,6 +720,11 @@ pa_status pa__remesh2d(pa_mesh *mesh, const pa_remesh_opts *opts,
   rm->lset_hi = PA_METRIC_LEN_HI;
   reordered = rm->nelive;
   if (!opts->no_insert) PA_CALL(refine_rounds(rm, &pass, &reordered));
+  if (!opts->no_move && !opts->no_swap) { /* the swaps relax what it breaks */
+    long nj = break_lattice(rm);
+    DEBUG_CHECK(rm);
+    report_pass(rm, "jiggle", pass, nj);
+  }
   PA_CALL(optimise(rm, &pass, &reordered));
   PA_CALL(repair_worst(rm, &pass));
   PA_CALL(polish(rm, &pass));

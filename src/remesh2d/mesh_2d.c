@@ -35,6 +35,7 @@ static pa_status grow_vertices(rm2d *rm, size_t need) {
   PA_CALL(grow((void **)&rm->x, cap * rm->dim, sizeof(double)));
   PA_CALL(grow((void **)&rm->met, cap * rm->mc, sizeof(double)));
   if (rm->met0) PA_CALL(grow((void **)&rm->met0, cap * rm->mc, sizeof(double)));
+  if (rm->vcur) PA_CALL(grow((void **)&rm->vcur, cap * 2, sizeof(double)));
   if (rm->fcomp)
     PA_CALL(grow((void **)&rm->fld, cap * rm->fcomp, sizeof(double)));
   PA_CALL(grow((void **)&rm->vref, cap, sizeof(int32_t)));
@@ -104,6 +105,7 @@ pa_status pa__rm2d_new_vertex(rm2d *rm, pa_idx *v) {
   rm->vref[i] = 0;
   rm->vpf[i] = 0;
   rm->vtag[i] = 0;
+  if (rm->vcur) rm->vcur[2 * (size_t)i] = rm->vcur[2 * (size_t)i + 1] = 0;
   rm->nvlive++;
   *v = i;
 cleanup:
@@ -436,6 +438,7 @@ void pa__rm2d_free(rm2d *rm) {
   pa__free(rm->x);
   pa__free(rm->met);
   pa__free(rm->met0);
+  pa__free(rm->vcur);
   pa__free(rm->fld);
   pa__free(rm->vref);
   pa__free(rm->vpf);
@@ -617,6 +620,7 @@ static pa_status regather_vertices(rm2d *rm, const pa_idx *inv) {
   PA_CALL(
       regather((void **)&rm->met0, rm->capv, rm->mc * sizeof(double), inv, nv));
   PA_CALL(regather((void **)&rm->fld, rm->capv, rm->fcomp * sizeof(double), inv, nv));
+  PA_CALL(regather((void **)&rm->vcur, rm->capv, 2 * sizeof(double), inv, nv));
   PA_CALL(regather((void **)&rm->vref, rm->capv, sizeof *rm->vref, inv, nv));
   PA_CALL(regather((void **)&rm->vpf, rm->capv, sizeof *rm->vpf, inv, nv));
   PA_CALL(regather((void **)&rm->vtag, rm->capv, sizeof *rm->vtag, inv, nv));

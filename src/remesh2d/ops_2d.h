@@ -277,5 +277,16 @@ int pa__rm2d_swap_edge(rm2d *rm, pa_idx k, int i, double gain);
 int pa__rm2d_smooth_vertex(rm2d *rm, pa_idx k, int ip, double qfree);
 int pa__rm2d_smooth_feature(rm2d *rm, pa_idx k, int ip, double qfree);
 int pa__rm2d_length_vertex(rm2d *rm, pa_idx k, int ip);
+/* Move vertex v[ip] by its step onto its curve (rm2d.vcur), or half or a
+ * quarter of it, when its ball's worst quality stays at least min(old
+ * worst, RM2D_QLEN); the step left shrinks by what was made. Metric and
+ * fields interpolated in the old ball. 1 if moved. As 3D's
+ * pa__rm3d_curve_snap_vertex (smooth_3d.c). */
+int pa__rm2d_curve_snap_vertex(rm2d *rm, pa_idx k, int ip);
+/* Move free interior vertex v[ip] by delta (metric length of p) in a
+ * direction drawn from its coordinates' bits, when every element of its
+ * ball keeps half the ball's old worst quality. 1 if moved. As 3D's
+ * pa__rm3d_jiggle_vertex (smooth_3d.c). */
+int pa__rm2d_jiggle_vertex(rm2d *rm, pa_idx k, int ip, double delta);
 
 #endif /* PA_OPS_2D_H */

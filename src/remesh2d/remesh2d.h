@@ -142,6 +142,11 @@ typedef struct rm2d {
   double *met0;     /* mc * capv or NULL: the target metric, written back,
                        when the working one was relaxed at frozen skins
                        (mesh_2d.c); interpolated alongside met */
+  double *vcur;     /* 2 * capv or NULL: the step from a vertex of an interior
+                       curve to its curve point still to make (the fitted
+                       curve's, boundary_2d.c, or the rest of a split that
+                       fell back toward the chord, split_2d.c); the curve
+                       snaps (pa__rm2d_curve_snap_vertex) take it on */
   double *fld;      /* fcomp * capv (NULL without fields) */
   int32_t *vref;    /* free list link for dead vertices */
   uint8_t *vpf;     /* input PA_FLAG_* */

@@ -2,10 +2,11 @@
  * smooth_2d.c -- vertex relocation in the 2D remesher: quality moves (an
  * interior vertex towards the mean of the ideal apexes of its ball) and
  * length moves (a Gauss-Newton step on the lengths of its edges, as in 3D:
- * smooth_3d.c); their passes are in driver_2d.c. Only free interior vertices
- * move (not frozen, corner or feature ones); the metric and fields of a moved
- * vertex are interpolated in its old ball. Shared contract of the operators:
- * ops_2d.h.
+ * smooth_3d.c), feature moves along their curve, curve snaps (a vertex onto
+ * its fitted curve) and the jiggle of a lattice crowd; their passes are in
+ * driver_2d.c. Frozen and corner vertices never move; the metric and fields
+ * of a moved vertex are interpolated in its old ball. Shared contract of the
+ * operators: ops_2d.h.
  */
 #include "remesh2d/ops_2d.h"
 
@@ -453,6 +454,65 @@ int pa__rm2d_smooth_feature(rm2d *rm, pa_idx k, int ip, double qfree) {
   return 0;
 }
 
+/* The worst quality of the ball el[0..n), or -1 when it holds a frozen
+ * element. */
+static double ball_worst(const rm2d *rm, const pa_idx *el, int n) {
+  double qold = 1;
+  for (int s = 0; s < n; s++) {
+    if (rm->tflag[el[s]] & RM2D_E_FROZEN) return -1;
+    if (rm->q[el[s]] < qold) qold = rm->q[el[s]];
+  }
+  return qold;
+}
+
+/* Whether every element of the ball el[0..n) of p, with p at np, has
+ * quality at least qmin and passes the floor of the ball's old worst qold
+ * (rm2d_qual_ok); p is left where it was. */
+static int ball_keeps(rm2d *rm, pa_idx p, const pa_idx *el, int n,
+                      const double *np, double qmin, double qold) {
+  double *xp = rm->x + 2 * (size_t)p;
+  const double x0 = xp[0], y0 = xp[1];
+  xp[0] = np[0];
+  xp[1] = np[1];
+  int ok = 1;
+  for (int s = 0; s < n && ok; s++) {
+    const pa_idx *v = rm->tv + 3 * (size_t)el[s];
+    double q = rm2d_elem_qual(rm, v[0], v[1], v[2]);
+    ok = q >= qmin && rm2d_qual_ok(rm, q, rm2d_qfloor(qold), v[0], v[1], v[2]);
+  }
+  xp[0] = x0;
+  xp[1] = y0;
+  return ok;
+}
+
+/* Steps of a curve snap: the whole way, then half and a quarter of it
+ * (as 3D's SNAP_STEPS, smooth_3d.c). */
+#define SNAP_STEPS 3
+
+int pa__rm2d_curve_snap_vertex(rm2d *rm, pa_idx k, int ip) {
+  pa_idx p = rm->tv[3 * k + ip];
+  double *d = rm->vcur + 2 * (size_t)p;
+  if (d[0] == 0 && d[1] == 0) return 0;
+  if (rm->vtag[p] & (RM2D_V_FROZEN | RM2D_V_CORNER)) return 0;
+  pa_idx el[RM2D_BALL_MAX];
+  int loc[RM2D_BALL_MAX], closed;
+  int n = rm2d_ball(rm, k, ip, el, loc, &closed);
+  if (n < 1) return 0;
+  double qold = ball_worst(rm, el, n);
+  if (qold < 0) return 0;
+  double qfloor = qold < RM2D_QLEN ? qold : RM2D_QLEN;
+  const double *xp = rm->x + 2 * (size_t)p;
+  for (int tr = 0; tr < SNAP_STEPS; tr++) {
+    double w = ldexp(1.0, -tr), np[2] = {xp[0] + w * d[0], xp[1] + w * d[1]};
+    if (!ball_keeps(rm, p, el, n, np, qfloor, qold)) continue;
+    apply_move(rm, p, el, loc, n, np, NULL, 0, NULL);
+    d[0] -= w * d[0];
+    d[1] -= w * d[1];
+    return 1;
+  }
+  return 0;
+}
+
 /* The lengths l of the edges of lb from p at y, and how many are out of
  * [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI]; the count stops (l then partial)
  * once it passes outmax. */
@@ -599,4 +659,45 @@ int pa__rm2d_length_vertex(rm2d *rm, pa_idx k, int ip) {
     return 1;
   }
   return 0;
+}
+
+/* Splitmix64 finaliser: the jiggle's directions (as smooth_3d.c). */
+static uint64_t mix64(uint64_t h) {
+  h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
+  h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
+  return h ^ (h >> 31);
+}
+
+int pa__rm2d_jiggle_vertex(rm2d *rm, pa_idx k, int ip, double delta) {
+  int mc = rm->mc;
+  pa_idx p = rm->tv[3 * k + ip];
+  if (rm->vtag[p] & (RM2D_V_FROZEN | RM2D_V_CORNER | RM2D_V_FEAT)) return 0;
+  pa_idx el[RM2D_BALL_MAX];
+  int loc[RM2D_BALL_MAX], closed;
+  int n = rm2d_ball(rm, k, ip, el, loc, &closed);
+  if (n < 3 || !closed) return 0;
+  double qold = ball_worst(rm, el, n);
+  if (qold < 0) return 0;
+  const double *xp = rm->x + 2 * (size_t)p;
+  /* a direction uniform in the square [-1,1]^2 (normalised), drawn from the
+   * coordinates' bits: the same on every run and for any numbering */
+  uint64_t h = 0x2545f4914f6cdd1dull;
+  for (int j = 0; j < 2; j++) {
+    uint64_t u;
+    memcpy(&u, xp + j, sizeof u);
+    h = mix64(h ^ u);
+  }
+  double d[2];
+  for (int j = 0; j < 2; j++) {
+    h = mix64(h + 0x9e3779b97f4a7c15ull);
+    d[j] = (double)(h >> 11) * (2.0 / 9007199254740992.0) - 1.0;
+  }
+  double t[3]; /* length delta in the metric of p */
+  rm2d_tensor2(mc, RM2D_M(p), t);
+  double lm = sqrt(pa__sqlen2(3, t, d[0], d[1]));
+  if (!(lm > 0)) return 0;
+  double np[2] = {xp[0] + delta * d[0] / lm, xp[1] + delta * d[1] / lm};
+  if (!ball_keeps(rm, p, el, n, np, 0.5 * qold, qold)) return 0;
+  apply_move(rm, p, el, loc, n, np, NULL, 0, NULL);
+  return 1;
 }

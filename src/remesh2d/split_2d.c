@@ -181,6 +181,20 @@ static int split_toward_chord(rm2d *rm, const split_cfg *s, pa_idx m,
   return 0;
 }
 
+/* The step still to make from the new vertex m of a split of feature edge
+ * (a, b) onto the curve (rm2d.vcur): the mean of the ends' (the curve
+ * through them once they have made theirs passes about so much further
+ * out at its midpoint), plus what a fall back toward the chord
+ * (split_toward_chord) left of the way to the curve point xc. */
+static void curve_rest(rm2d *rm, const split_cfg *s, pa_idx m,
+                       const double *xc) {
+  const double *da = rm->vcur + 2 * (size_t)s->a,
+               *db = rm->vcur + 2 * (size_t)s->b;
+  double *dm = rm->vcur + 2 * (size_t)m;
+  for (int j = 0; j < 2; j++)
+    dm[j] = 0.5 * (da[j] + db[j]) + (xc[j] - RM2D_X(m)[j]);
+}
+
 /*
  * Split face i of element k at its midpoint (on a feature: the midpoint of
  * the reconstructed curve, or nearer the chord: split_toward_chord).
@@ -194,10 +208,12 @@ int pa__rm2d_split_edge(rm2d *rm, pa_idx k, int i, pa_status *st) {
   if (*st) return 0;
   double tm[2] = {0, 0}, q[4];
   pa_idx m = new_midpoint(rm, &s, tm);
+  double xc[2] = {RM2D_X(m)[0], RM2D_X(m)[1]}; /* the curve's point */
   if (!halves_ok(rm, &s, m, q) && !split_toward_chord(rm, &s, m, q)) {
     pa__rm2d_kill_vertex(rm, m);
     return 0;
   }
+  if (rm->vcur && s.feat >= 0) curve_rest(rm, &s, m, xc);
   pa_idx k2, f2;
   cut_elements(rm, &s, m, q, &k2, &f2);
   if (s.feat < 0) { /* an interior edge: join the halves across it */

@@ -1077,9 +1077,37 @@ static void test_strong_aniso(void) {
   pa_mesh_destroy(m);
 }
 
+/* A structured square refined by bisection is a lattice of right isosceles
+ * triangles (quality 0.866), which no swap or move improves: the lattice
+ * crowd is jiggled after the refinement rounds (driver_2d.c,
+ * break_lattice) and relaxed into a mesh of mean quality above 0.93 (0.866
+ * without). */
+static void test_lattice(void) {
+  pa_mesh *m = square(10, 0.0);
+  pa_remesh_opts o;
+  pa_remesh_report r;
+  pa_remesh_opts_default(&o);
+  o.hsiz = 0.01;
+  CHECK_OK(adapt(m, &o, &r));
+  figures f = measure(m);
+  pa_stats s;
+  CHECK_OK(pa_mesh_stats(m, &s));
+  double qmean = s.qual_sum / (double)s.nelem;
+  if (qmean < 0.93)
+    fprintf(stderr, "lattice: mean quality %.4f, in range %.4f\n", qmean,
+            f.in_range);
+  CHECK(r.outcome == PA_REMESH_SUCCESS);
+  CHECK(f.valid);
+  CHECK_NEAR(f.area, 1.0, 1e-12);
+  CHECK(f.in_range >= 0.98);
+  CHECK(f.qmin >= 0.5);
+  CHECK(qmean >= 0.93);
+  pa_mesh_destroy(m);
+}
+
 TEST_MAIN(test_uniform, test_fields, test_coarsen, test_frozen, test_disk,
           test_interior_curve, test_corners_by_angle, test_second_adaptation,
           test_determinism, test_outcomes, test_errors, test_linear_field,
           test_gradation, test_frozen_skin_refine, test_frozen_pingpong,
           test_frozen_fan,
-          test_reorder, test_strong_aniso)
+          test_reorder, test_strong_aniso, test_lattice)
