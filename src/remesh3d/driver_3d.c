@@ -906,7 +906,8 @@ static double length_crowd(const rm3d *m, double *qmean) {
  * (< RM3D_SHAKE_SHORT, guard RM3D_SHAKE_GUARD), swaps (Q < 0.7), smoothing
  * and a sweep of length moves, each round after the first starting with a
  * smaller jiggle, RM3D_SHAKE_ROUNDS and more while they remove tets
- * (RM3D_SHAKE_SETTLED). *npass counts the rounds. */
+ * (RM3D_SHAKE_SETTLED); with -nomove neither jiggles nor moves. *npass
+ * counts the rounds. */
 static pa_status shake_lattice(rm3d *m, const pa_remesh_opts *opts,
                                int *npass) {
   pa_status st = PA_SUCCESS;
@@ -925,7 +926,7 @@ static pa_status shake_lattice(rm3d *m, const pa_remesh_opts *opts,
     long nj = 0, nc = 0, nw = 0, nm = 0, nl = 0;
     double live0 = (double)(m->ne - m->ndead_t);
     double d = it ? RM3D_SHAKE_NEXT : RM3D_SHAKE_FIRST;
-    for (pa_idx p = 0; p < m->nv; p++)
+    for (pa_idx p = 0; !opts->no_move && p < m->nv; p++)
       nj += pa__rm3d_jiggle_vertex(m, p, d, ball);
     PA_CALL(pa__rm3d_collapse_pass(m, RM3D_SHAKE_SHORT, RM3D_SHAKE_GUARD,
                                    &nc));
