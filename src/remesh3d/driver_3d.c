@@ -10,10 +10,12 @@
  *     isotropically, and the collapses remove the tangential excess before it
  *     is split again. Before the last band (thr = sqrt 2), a lattice crowd
  *     (lattice_crowd: a structured input about to be refined into the next
- *     lattice, twice the tets) is broken by jiggling the ends of its edges,
- *     and from then on the splits of short edges are spread (tight: one per
- *     neighbourhood and pass; wide: an edge waits when both its ends were
- *     touched; RM3D_SPREAD_TIGHT, RM3D_SPREAD_WIDE). A large working mesh is
+ *     lattice, twice the tets) is broken: a wide one is first made
+ *     body-centred (its longest class split, then swaps: RM3D_CROWD_TOP);
+ *     the ends of the crowd's edges are jiggled, and from then on the
+ *     splits of short edges are spread (tight: one per neighbourhood and
+ *     pass; wide: an edge waits when both its ends were touched;
+ *     RM3D_SPREAD_TIGHT, RM3D_SPREAD_WIDE). A large working mesh is
  *     renumbered for locality between bands (RM3D_REORDER_MIN), and every
  *     mesh after them;
  *  2. at least 3 and at most 20 rounds of split (> sqrt 2), collapse
@@ -28,7 +30,12 @@
  *     the rule shared with 2D, remesh/schedule.h);
  *     the working metric is relaxed at frozen vertices beforehand
  *     (pa__rm3d_skin_relax);
- *  3. three rounds of swaps (quality < 0.7: this lifts the mean quality by
+ *  3. the shake (shake_lattice), for a lattice only (a crowd of lengths
+ *     and a poor mean quality, or a tight crowd broken at the last band):
+ *     every free interior vertex jiggled, then 4 to 8 rounds of collapses
+ *     (< 0.85, guard 1.35), swaps, smoothing and length moves, each after
+ *     a smaller jiggle, until a round removes under 2 % of the tets;
+ *  4. three rounds of swaps (quality < 0.7: this lifts the mean quality by
  *     about 0.03), smoothing (below 0.75) and two sweeps of length moves
  *     (the smoothing disregards lengths), the first two preceded by a
  *     collapse pass (the swaps and moves unlock short edges the rounds
@@ -564,11 +571,15 @@ static void measure(const rm3d *m, double *inrange, double *qworst,
  * holding it) that fall into one bin of width sqrt 2 / 100 of (sqrt 2,
  * RM3D_LSPREAD), counting an edge when its midpoint is at least 1/sqrt 2
  * from the other two vertices of the tet; *longer is the fraction of
- * tet-edges of RM3D_LSPREAD or more. The ends of the edges counted are
- * marked RM3D_V_TODO (the caller clears them). */
+ * tet-edges of RM3D_LSPREAD or more, *far the largest fraction in one bin
+ * of the same width anywhere in (sqrt 2, 2), counting every edge. The
+ * ends of the edges counted in (sqrt 2, RM3D_LSPREAD) are marked
+ * RM3D_V_TODO (the caller clears them). */
 #define RM3D_NCROWD 14 /* bins up to RM3D_LSPREAD / sqrt 2 = 1.13 */
-static double lattice_crowd(rm3d *m, double *longer) {
-  long hist[RM3D_NCROWD] = {0}, nall = 0, nlong = 0;
+#define RM3D_NCROWD_FAR 42 /* bins up to 2 / sqrt 2 */
+static double lattice_crowd(rm3d *m, double *longer, double *far_top) {
+  long hist[RM3D_NCROWD] = {0}, hfar[RM3D_NCROWD_FAR] = {0}, nall = 0,
+       nlong = 0;
   int mc = m->mc;
   for (pa_idx k = 0; k < m->ne; k++) {
     if (m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN)) continue;
@@ -578,9 +589,11 @@ static double lattice_crowd(rm3d *m, double *longer) {
     nall += 6;
     for (int e = 0; e < 6; e++) {
       nlong += L[e] >= RM3D_LSPREAD;
-      if (!(L[e] > PA_METRIC_LEN_HI_EXACT && L[e] < RM3D_LSPREAD)) continue;
+      if (!(L[e] > PA_METRIC_LEN_HI_EXACT && L[e] < 2.0)) continue;
       int bin = (int)((L[e] / PA_METRIC_LEN_HI_EXACT - 1.0) * 100.0);
-      if (bin >= RM3D_NCROWD) continue;
+      if (bin >= RM3D_NCROWD_FAR) continue;
+      hfar[bin]++;
+      if (!(L[e] < RM3D_LSPREAD && bin < RM3D_NCROWD)) continue;
       pa_idx a = v[pa__rm3d_edge[e][0]], b = v[pa__rm3d_edge[e][1]];
       const double *xa = m->x + 3 * (size_t)a, *xb = m->x + 3 * (size_t)b;
       double x[3], mp[6];
@@ -600,10 +613,13 @@ static double lattice_crowd(rm3d *m, double *longer) {
       m->vtag[b] |= RM3D_V_TODO;
     }
   }
-  long top = 0;
-  for (int i = 0; i < RM3D_NCROWD; i++)
-    if (hist[i] > top) top = hist[i];
+  long top = 0, ftop = 0;
+  for (int i = 0; i < RM3D_NCROWD_FAR; i++) {
+    if (i < RM3D_NCROWD && hist[i] > top) top = hist[i];
+    if (hfar[i] > ftop) ftop = hfar[i];
+  }
   *longer = nall ? (double)nlong / nall : 0.0;
+  *far_top = nall ? (double)ftop / nall : 0.0;
   return nall ? (double)top / nall : 0.0;
 }
 
@@ -714,10 +730,34 @@ cleanup:
  * splits from now on (m->spread). */
 /* crowds of 30-32 % gain, one of 12.6 % loses (docs/BENCHMARKS.md) */
 #define RM3D_CROWD_WIDE 0.25
-static void break_lattice_crowd(rm3d *m) {
-  double longer, crowd = lattice_crowd(m, &longer);
-  long nj = 0;
+/* A wide crowd's lattice (more than RM3D_CROWD_WIDE in one bin, anywhere
+ * in (sqrt 2, 2), and not a tight crowd) is first made body-centred: the
+ * edges within this factor of the longest (a cube lattice's body
+ * diagonals) are split, then the swaps remove the crowd's edges (the face
+ * diagonals, between two new centres) instead of splitting them. box3d 16
+ * -> 0.06: mean quality 0.828 -> 0.893; -> 0.03: 0.813 -> 0.913; -> 0.055
+ * (face diagonals at 1.61, beyond the spread's bins): 98 304 tets -> 52 240
+ * (docs/BENCHMARKS.md, "Lattice crowds"). */
+#define RM3D_CROWD_TOP 1.1
+static pa_status break_lattice_crowd(rm3d *m) {
+  pa_status st = PA_SUCCESS;
+  double longer, far, crowd = lattice_crowd(m, &longer, &far);
+  long nj = 0, ns = 0, nw = 0;
   pa_idx ball[RM3D_MAXBALL];
+  if (!(crowd > 0.05 && longer < 0.1) &&
+      (crowd > RM3D_CROWD_WIDE || far > RM3D_CROWD_WIDE)) {
+    double top = max_length(m) / RM3D_CROWD_TOP;
+    for (pa_idx p = 0; p < m->nv; p++) m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
+    if (top > PA_METRIC_LEN_HI_EXACT)
+      PA_CALL(pa__rm3d_split_pass(m, top, &ns));
+    if (m->swap) PA_CALL(pa__rm3d_swap_pass(m, 0.7, 1.02, &nw));
+    if (m->verbosity > 0)
+      fprintf(stderr,
+              "  rm3d lattice crowd: %.1f %% of the edges in one bin, %.1f "
+              "%% longer; body-centred: %ld splits, %ld swaps\n",
+              100 * crowd, 100 * longer, ns, nw);
+    crowd = lattice_crowd(m, &longer, &far);
+  }
   m->spread = crowd > 0.05 && longer < 0.1 ? RM3D_SPREAD_TIGHT
               : crowd > RM3D_CROWD_WIDE    ? RM3D_SPREAD_WIDE
                                            : 0;
@@ -735,6 +775,8 @@ static void break_lattice_crowd(rm3d *m) {
             : m->spread == RM3D_SPREAD_WIDE ? " (splits spread wide)"
                                             : "",
             nj);
+cleanup:
+  return st;
 }
 
 /* The bands renumber the working mesh for locality (pa__rm3d_reorder)
@@ -777,7 +819,7 @@ static pa_status refine_bands(rm3d *m, const pa_remesh_opts *opts,
     prev = thr;
     long ns = 0, nc = 0;
     double t1 = pa_wtime();
-    if (thr == PA_METRIC_LEN_HI_EXACT) break_lattice_crowd(m);
+    if (thr == PA_METRIC_LEN_HI_EXACT) PA_CALL(break_lattice_crowd(m));
     PA_CALL(pa__rm3d_split_pass(m, thr, &ns));
     PA_CALL(pa__rm3d_collapse_pass(m, PA_METRIC_LEN_LO_EXACT, thr, &nc));
     if (m->ndead_t > m->ne / RM3D_COMPACT_DEAD) PA_CALL(pa__rm3d_compact(m, 1));
@@ -791,6 +833,121 @@ static pa_status refine_bands(rm3d *m, const pa_remesh_opts *opts,
     if (thr == PA_METRIC_LEN_HI_EXACT) break;
   }
 cleanup:
+  return st;
+}
+
+/* The shake (schedule step 3): a lattice the rounds left, whose symmetric
+ * vertices no swap or move can improve, is shaken and optimised again.
+ * Only meshes that are lattices now (more than RM3D_SHAKE_CROWD of the
+ * tet-edges in one 1 % bin of lengths, mean quality under
+ * RM3D_SHAKE_QMEAN: the Kuhn-type tets of a cube lattice refined by whole
+ * levels) or were one at the last band (a tight crowd, m->spread) are
+ * shaken; the rest skip it. Figures: docs/BENCHMARKS.md,
+ * "Lattice crowds". */
+/* after the rounds, a lattice holds 30-69 % of its tet-edges in one bin,
+ * an unstructured mesh about 2 % */
+#define RM3D_SHAKE_CROWD 0.1
+/* Kuhn-type lattices have a mean quality of about 0.66; the lattices of
+ * the intermediate bisection levels about 0.9, better than Mmg's outputs:
+ * those are left alone */
+#define RM3D_SHAKE_QMEAN 0.8
+/* rounds of the shake: at least RM3D_SHAKE_ROUNDS, then until a round
+ * removes less than RM3D_SHAKE_SETTLED of the tets, at most
+ * RM3D_SHAKE_ROUNDS_MAX. Each round removes a few % of a lattice twice too
+ * dense: box3d 16 -> 0.0325 ends 1.08x Mmg's count after 4 rounds, 1.02x
+ * after 8; the level-set sphere settles after 4 (docs/BENCHMARKS.md,
+ * "Lattice crowds") */
+#define RM3D_SHAKE_ROUNDS 4
+#define RM3D_SHAKE_ROUNDS_MAX 8
+#define RM3D_SHAKE_SETTLED 0.02
+/* jiggle lengths (metric) of the first round and of the later ones: the
+ * level-set sphere's mean quality 0.812 with one jiggle of 0.2, 0.835
+ * with 0.15 more in every later round */
+#define RM3D_SHAKE_FIRST 0.2
+#define RM3D_SHAKE_NEXT 0.15
+/* the shake collapses edges shorter than this, creating none longer than
+ * RM3D_SHAKE_GUARD: a lattice refined to edges of 0.78 and 1.1 keeps twice
+ * the ideal count with the rounds' 1/sqrt 2 and sqrt 2 */
+#define RM3D_SHAKE_SHORT 0.85
+#define RM3D_SHAKE_GUARD 1.35
+
+/* length_crowd looks at every k-th tet, about this many: a share of 10 %
+ * against 2 % needs no more */
+#define RM3D_SHAKE_SAMPLE 20000
+
+/* The largest share of the free tet-edges in one bin of width 1 % of the
+ * length (logarithmic bins over [0.5, 2)), and the mean quality of the
+ * free tets, on a sample of about RM3D_SHAKE_SAMPLE tets (every k-th). */
+static double length_crowd(const rm3d *m, double *qmean) {
+  enum { NBIN = 139 }; /* ln(2 / 0.5) / 0.01 */
+  long hist[NBIN] = {0}, nall = 0, top = 0, nt = 0;
+  double qs = 0;
+  pa_idx stride = m->ne / RM3D_SHAKE_SAMPLE + 1;
+  for (pa_idx k = 0; k < m->ne; k += stride) {
+    if (m->tflag[k] & (RM3D_T_DEAD | RM3D_T_FROZEN)) continue;
+    double L[6];
+    lengths6(m, m->tv + 4 * (size_t)k, L);
+    for (int e = 0; e < 6; e++) {
+      double b = log(L[e] / 0.5) / 0.01;
+      if (b >= 0 && b < NBIN) hist[(int)b]++;
+    }
+    nall += 6;
+    qs += m->q[k];
+    nt++;
+  }
+  for (int i = 0; i < NBIN; i++)
+    if (hist[i] > top) top = hist[i];
+  *qmean = nt ? qs / nt : 1.0;
+  return nall ? (double)top / nall : 0.0;
+}
+
+/* Schedule step 3, the shake (see RM3D_SHAKE_CROWD): every free interior
+ * vertex jiggled (pa__rm3d_jiggle_vertex), then rounds of collapses
+ * (< RM3D_SHAKE_SHORT, guard RM3D_SHAKE_GUARD), swaps (Q < 0.7), smoothing
+ * and a sweep of length moves, each round after the first starting with a
+ * smaller jiggle, RM3D_SHAKE_ROUNDS and more while they remove tets
+ * (RM3D_SHAKE_SETTLED); with -nomove neither jiggles nor moves. *npass
+ * counts the rounds. */
+static pa_status shake_lattice(rm3d *m, const pa_remesh_opts *opts,
+                               int *npass) {
+  pa_status st = PA_SUCCESS;
+  rm3d_balls balls = {NULL, NULL};
+  pa_idx ball[RM3D_MAXBALL];
+  double qmean, crowd = length_crowd(m, &qmean);
+  int tight = m->spread == RM3D_SPREAD_TIGHT;
+  if (m->verbosity > 1)
+    fprintf(stderr,
+            "  rm3d lattice after the rounds: %.1f %% of the edges in one "
+            "bin, mean Q %.3f\n",
+            100 * crowd, qmean);
+  if (!tight && !(crowd > RM3D_SHAKE_CROWD && qmean < RM3D_SHAKE_QMEAN))
+    return st;
+  for (int it = 0; it < RM3D_SHAKE_ROUNDS_MAX; it++, (*npass)++) {
+    long nj = 0, nc = 0, nw = 0, nm = 0, nl = 0;
+    double live0 = (double)(m->ne - m->ndead_t);
+    double d = it ? RM3D_SHAKE_NEXT : RM3D_SHAKE_FIRST;
+    for (pa_idx p = 0; !opts->no_move && p < m->nv; p++)
+      nj += pa__rm3d_jiggle_vertex(m, p, d, ball);
+    PA_CALL(pa__rm3d_collapse_pass(m, RM3D_SHAKE_SHORT, RM3D_SHAKE_GUARD,
+                                   &nc));
+    if (!opts->no_swap) PA_CALL(pa__rm3d_swap_pass(m, 0.7, 1.01, &nw));
+    if (!opts->no_move) {
+      PA_CALL(pa__rm3d_smooth_pass(m, RM3D_QSMOOTH, &balls, &nm));
+      PA_CALL(pa__rm3d_length_pass(m, 1, &balls, &nl));
+      pa__rm3d_balls_free(&balls);
+    }
+    if (m->ndead_t > m->ne / RM3D_COMPACT_DEAD) PA_CALL(pa__rm3d_compact(m, 1));
+    if (m->verbosity > 0)
+      fprintf(stderr,
+              "  rm3d shake %d: %ld jiggled, %ld collapses %ld swaps %ld "
+              "moves, %d tets\n",
+              it, nj, nc, nw, nm + nl, (int)(m->ne - m->ndead_t));
+    if (it + 1 >= RM3D_SHAKE_ROUNDS &&
+        (double)(m->ne - m->ndead_t) > (1 - RM3D_SHAKE_SETTLED) * live0)
+      break;
+  }
+cleanup:
+  pa__rm3d_balls_free(&balls);
   return st;
 }
 
@@ -944,6 +1101,7 @@ pa_status pa__remesh3d(pa_mesh *mesh, const pa_remesh_opts *opts,
     PA_CALL(refine_bands(&m, opts, &step));
     PA_CALL(pa__rm3d_reorder(&m));
     PA_CALL(refine_rounds(&m, opts, frozen, &step, &npass));
+    PA_CALL(shake_lattice(&m, opts, &npass));
   }
   PA_CALL(optimise(&m, opts, frozen, &npass));
   PA_CALL(conclude(&m, mesh, npass, report));

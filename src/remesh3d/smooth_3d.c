@@ -26,7 +26,8 @@
  * The jiggle (pa__rm3d_jiggle_vertex) moves a free interior vertex by a
  * fixed metric length in a direction drawn from its coordinates' bits,
  * accepting a loss of quality down to half the ball's worst: the driver
- * uses it once, to break a lattice the passes would only refine further.
+ * uses it to break lattices, the one the last band would only refine
+ * further and the one the rounds leave (the shake).
  */
 #include "remesh3d/remesh3d.h"
 
