@@ -179,7 +179,8 @@ typedef struct pa__piece {
                           input one it is (same vertices, none added by
                           bisect.c, same reference: it keeps its id and
                           values), or -1 */
-  int *dest;           /* out->ne: the rank each output element goes to */
+  int *dest;           /* out->ne: the rank each output element goes to
+                        * (NULL: this rank, all of them) */
   pa_remesh_report rep;
 } pa__piece;
 

@@ -343,7 +343,7 @@ cleanup:
  * nearer than that has no vertex beyond k - 1). For the NEAR_SKIN layers
  * one pass over the output, cheaper than the vertex balls a breadth-first
  * search would need. */
-static inline void layer_sweep(const pa_mesh *o, int k, int nd,
+static inline void layer_sweep(const pa_mesh *o, int k, const int nd,
                                uint8_t *const *dist, const int nve) {
   for (pa_idx e = 0; e < o->ne; e++) {
     const pa_idx *v = o->elem + (size_t)nve * e;
@@ -360,9 +360,12 @@ static inline void layer_sweep(const pa_mesh *o, int k, int nd,
 
 static void vertex_layers(const pa_mesh *o, int k0, int nl, int nd,
                           uint8_t *const *dist) {
+  /* (nd and nve constants in each call: the loops unrolled) */
   for (int k = k0; k < nl; k++) {
-    if (o->dim == 2) layer_sweep(o, k, nd, dist, 3);
-    else layer_sweep(o, k, nd, dist, 4);
+    if (o->dim == 2 && nd == 1) layer_sweep(o, k, 1, dist, 3);
+    else if (o->dim == 2) layer_sweep(o, k, 2, dist, 3);
+    else if (nd == 1) layer_sweep(o, k, 1, dist, 4);
+    else layer_sweep(o, k, 2, dist, 4);
   }
 }
 
@@ -645,7 +648,7 @@ static size_t done_offset(const pa_dmesh *dm, int32_t ref,
  * input vertex (breadth-first over the output, from the matched vertices
  * in index order), every element the rank of its vertex nearest to them
  * (ties: the smaller rank). Otherwise everything stays on this rank (the
- * pieces were balanced by work). */
+ * pieces were balanced by work): *destp stays NULL. */
 static pa_status output_dest(const pa__iter *it, const pa__piece *pc,
                              int **destp) {
   pa_status st = PA_SUCCESS;
@@ -653,9 +656,10 @@ static pa_status output_dest(const pa__iter *it, const pa__piece *pc,
   int nve = o->dim + 1;
   int *dest = NULL, *vr = NULL, *dist = NULL;
   pa_idx *start = NULL, *ball = NULL, *queue = NULL;
-  PA_ALLOC(dest, o->ne ? o->ne : 1);
-  for (pa_idx e = 0; e < o->ne; e++) dest[e] = it->rank;
+  *destp = NULL;
   if (it->npieces < it->size && o->nv > 0) {
+    PA_ALLOC(dest, o->ne ? o->ne : 1);
+    for (pa_idx e = 0; e < o->ne; e++) dest[e] = it->rank;
     PA_ALLOC(vr, o->nv);
     PA_ALLOC(dist, o->nv);
     PA_ALLOC(queue, o->nv);
@@ -745,9 +749,20 @@ static pa_status output_vertices(orecs *c) {
   pa__iter *it = c->it;
   const pa__piece *pc = c->pc;
   const pa_mesh *o = c->o;
-  double *dbl = NULL;
+  const size_t *vo = pc->kpoff[PA_VERTEX];
+  size_t maxpay = 0;
+  for (int k = 0; k < it->dm->nvalue; k++)
+    if (it->dm->value[k]->kind == PA_VERTEX) maxpay += it->dm->value[k]->unit;
   PA_ALLOC(c->vg, o->nv);
-  PA_ALLOC(dbl, c->R[PA_VERTEX].ndbl);
+  /* room for every vertex in both sets: the records are written straight
+   * into their arrays */
+  for (int t = 0; t < 2; t++) {
+    pa__recs *T = t ? c->Rp : &c->R[PA_VERTEX];
+    if (T)
+      PA_CALL(pa__recs_reserve(T, T->n + (size_t)o->nv,
+                               (T->poff ? T->poff[T->n] : 0) +
+                                   (size_t)o->nv * maxpay));
+  }
   for (pa_idx j = 0; j < o->nv; j++) {
     pa_idx i = pc->match[j];
     if (i >= 0 && pc->skin[i] && pc->vgid[i] >= PA_ADAPT_TEMP_GID) {
@@ -759,25 +774,35 @@ static pa_status output_vertices(orecs *c) {
     } else {
       c->vg[j] = i >= 0 ? pc->vgid[i] : c->next[PA_VERTEX]++;
     }
-    pa__vertex_doubles(o, j, o->nfield, dbl);
+    pa__recs *T = i < 0 && c->Rp ? c->Rp : &c->R[PA_VERTEX];
+    size_t r = T->n;
+    T->gid[r] = c->vg[j];
+    T->ref[r] = o->vref[j];
+    T->flag[r] = o->vflag[j];
+    T->aux[r] = it->rank;
+    int nd = pa__vertex_doubles(o, j, o->nfield, T->dbl + (size_t)T->ndbl * r);
+    PA_ASSERT(nd == T->ndbl);
+    (void)nd;
     /* a vertex the remesher kept keeps its user values (gathered with it),
      * a new one gets zeros */
-    const unsigned char *vp = c->pay;
+    const unsigned char *vp;
     size_t pl;
-    const size_t *vo = pc->kpoff[PA_VERTEX];
     if (vo && i >= 0 && i < pc->n0[PA_VERTEX] &&
         o->vref[j] == pc->in->vref[i]) {
       vp = pc->kpay[PA_VERTEX] + vo[i];
       pl = vo[i + 1] - vo[i];
     } else {
+      vp = c->pay;
       pl = payload_of(&c->pcache, it->dm, PA_VERTEX, o->vref[j], c->done, 0,
                       c->pay);
     }
-    PA_CALL(pa__recs_add(i < 0 && c->Rp ? c->Rp : &c->R[PA_VERTEX], c->vg[j],
-                         NULL, o->vref[j], o->vflag[j], it->rank, dbl, vp, pl));
+    if (T->poff) {
+      memcpy(T->pay + T->poff[r], vp, pl);
+      T->poff[r + 1] = T->poff[r] + pl;
+    }
+    T->n = r + 1;
   }
 cleanup:
-  pa__free(dbl);
   return st;
 }
 
@@ -849,53 +874,108 @@ static inline uint8_t elem_done(const orecs *c, const pa_gid *vg,
   return dv;
 }
 
+/* The "done" values of the output's elements (dv) and the global ids of
+ * their vertices, written straight into the element records from slot i0
+ * on; nve a constant once inlined. */
+static inline void elems_done(const orecs *c, uint8_t dv0, size_t i0,
+                              uint8_t *dv, const int nve) {
+  const pa_mesh *o = c->o;
+  const pa_gid *vg = c->vg;
+  const uint8_t *dist = c->dist;
+  pa_gid *rv = c->R[PA_ELEMENT].vgid + (size_t)nve * i0;
+  for (pa_idx e = 0; e < o->ne; e++)
+    dv[e] = elem_done(c, vg, dist, e, dv0, nve, rv + (size_t)nve * e);
+}
+
 /* The output's elements, each with its "done" value (see the file
  * comment); one that is an input element keeps its id and values, with
- * done updated, the others get fresh ids and zeros. */
+ * done updated, the others get fresh ids and zeros. The records were
+ * reserved for every output element (staying_records, patch_records), so
+ * they are written array by array, in output order. */
 static pa_status output_elements(orecs *c) {
   pa_status st = PA_SUCCESS;
   pa__iter *it = c->it;
   pa_dmesh *dm = it->dm;
   const pa__piece *pc = c->pc;
   const pa_mesh *o = c->o;
-  unsigned char *pay = c->pay;
-  int d = o->dim;
-  uint8_t dv0 = it->piece_failed[pc->id] ? 0 : PA_ADAPT_DONE;
-  int cells = c->R[PA_ELEMENT].ndbl > 0;
-  /* (in locals: the compiler cannot tell that the records' stores leave
-   * them alone) */
-  const pa_gid *vg = c->vg;
-  const uint8_t *dist = c->dist;
+  pa_idx ne = o->ne;
+  int nve = o->dim + 1;
+  uint8_t dv0 = it->piece_failed[pc->id] ? 0 : PA_ADAPT_DONE, *dv = NULL;
   const pa_idx *reuse = pc->reuse[PA_ELEMENT];
-  const int *dest = c->dest;
   pa__recs *R = &c->R[PA_ELEMENT];
-  for (pa_idx e = 0; e < o->ne; e++) {
-    pa_gid ev[4];
-    uint8_t dv = d == 2 ? elem_done(c, vg, dist, e, dv0, 3, ev)
-                        : elem_done(c, vg, dist, e, dv0, 4, ev);
-    pa_idx q = reuse[e];
-    if (q >= 0) { /* an input element: its id and values, done updated */
-      const size_t *po = pc->kpoff[PA_ELEMENT];
-      size_t pl = po[q + 1] - po[q];
-      size_t at = done_offset(dm, o->eref[e], c->done);
-      PA_CHECK(at != (size_t)-1 && at < pl, PA_ERR_INTERNAL,
-               "element payload without its done value");
-      memcpy(pay, pc->kpay[PA_ELEMENT] + po[q], pl);
-      pay[at] = dv;
-      c->pcache.len = (size_t)-1; /* pay no longer holds the cached payload */
-      PA_CALL(pa__recs_add(R, pc->kgid[PA_ELEMENT][q], ev, o->eref[e],
-                           o->eflag[e], dest[e],
-                           cells ? cell_doubles(c, PA_ELEMENT, e) : NULL, pay,
-                           pl));
-      continue;
+  size_t maxpay = 0, i0 = R->n;
+  unsigned char *tmpl = NULL; /* a fresh element's payload, done 0 */
+  for (int k = 0; k < dm->nvalue; k++)
+    if (dm->value[k]->kind == PA_ELEMENT) maxpay += dm->value[k]->unit;
+  PA_CALL(pa__recs_reserve(R, i0 + (size_t)ne,
+                           (R->poff ? R->poff[i0] : 0) + (size_t)ne * maxpay));
+  PA_ALLOC(dv, ne ? ne : 1);
+  PA_ALLOC(tmpl, maxpay + 1);
+  if (nve == 3) elems_done(c, dv0, i0, dv, 3);
+  else elems_done(c, dv0, i0, dv, 4);
+  memcpy(R->ref + i0, o->eref, (size_t)ne * sizeof *R->ref);
+  memcpy(R->flag + i0, o->eflag, (size_t)ne * sizeof *R->flag);
+  if (c->dest) memcpy(R->aux + i0, c->dest, (size_t)ne * sizeof *R->aux);
+  else
+    for (pa_idx e = 0; e < ne; e++) R->aux[i0 + (size_t)e] = it->rank;
+  for (pa_idx e = 0; R->ndbl && e < ne; e++)
+    pa__entity_doubles(o, PA_ELEMENT, e, R->dbl + (size_t)R->ndbl * (i0 + e));
+  /* the usual output: no input element given back, one reference, and
+   * the done value alone in the payload: ids, offsets and payloads in
+   * bulk (the payloads are the done values) */
+  int bulk = R->poff != NULL && ne > 0;
+  for (pa_idx e = 0; bulk && e < ne; e++)
+    bulk = reuse[e] < 0 && o->eref[e] == o->eref[0];
+  if (bulk)
+    bulk = pa__new_payload(dm, PA_ELEMENT, o->eref[0], c->done, 0, tmpl) == 1 &&
+           done_offset(dm, o->eref[0], c->done) == 0;
+  if (bulk) {
+    pa_gid g0 = c->next[PA_ELEMENT];
+    size_t p0 = R->poff[i0];
+    for (pa_idx e = 0; e < ne; e++) {
+      R->gid[i0 + (size_t)e] = g0 + e;
+      R->poff[i0 + (size_t)e + 1] = p0 + (size_t)e + 1;
     }
-    size_t pl = payload_of(&c->pcache, dm, PA_ELEMENT, o->eref[e], c->done, dv,
-                           pay);
-    PA_CALL(pa__recs_add(R, c->next[PA_ELEMENT]++, ev, o->eref[e], o->eflag[e],
-                         dest[e], cells ? cell_doubles(c, PA_ELEMENT, e) : NULL,
-                         pay, pl));
+    memcpy(R->pay + p0, dv, (size_t)ne);
+    c->next[PA_ELEMENT] += ne;
+  } else {
+    int32_t tref = 0;
+    size_t tlen = (size_t)-1, tat = (size_t)-1; /* tlen -1: tmpl empty */
+    for (pa_idx e = 0; e < ne; e++) {
+      size_t i = i0 + (size_t)e, pl, at;
+      const unsigned char *src;
+      pa_idx q = reuse[e];
+      if (q >= 0) { /* an input element: its id and values, done updated */
+        const size_t *po = pc->kpoff[PA_ELEMENT];
+        R->gid[i] = pc->kgid[PA_ELEMENT][q];
+        src = pc->kpay[PA_ELEMENT] + po[q];
+        pl = po[q + 1] - po[q];
+        at = done_offset(dm, o->eref[e], c->done);
+        PA_CHECK(at != (size_t)-1 && at < pl, PA_ERR_INTERNAL,
+                 "element payload without its done value");
+      } else {
+        R->gid[i] = c->next[PA_ELEMENT]++;
+        if (tlen == (size_t)-1 || tref != o->eref[e]) {
+          tref = o->eref[e];
+          tlen = pa__new_payload(dm, PA_ELEMENT, tref, c->done, 0, tmpl);
+          tat = done_offset(dm, tref, c->done);
+        }
+        src = tmpl;
+        pl = tlen;
+        at = tat;
+      }
+      if (!R->poff) continue;
+      unsigned char *p = R->pay + R->poff[i];
+      if (pl == 1) p[0] = src[0];
+      else memcpy(p, src, pl);
+      if (at != (size_t)-1) p[at] = dv[e];
+      R->poff[i + 1] = R->poff[i] + pl;
+    }
   }
+  R->n = i0 + (size_t)ne;
 cleanup:
+  pa__free(dv);
+  pa__free(tmpl);
   return st;
 }
 
@@ -958,7 +1038,7 @@ static pa_status output_records(pa__iter *it, pa__piece *pc, const uint8_t *bemi
   c.pay = pay;
   c.pcache.len = (size_t)-1;
   c.dest = pc->dest;
-  for (pa_idx e = 0; Rp && e < c.o->ne; e++)
+  for (pa_idx e = 0; Rp && c.dest && e < c.o->ne; e++)
     if (c.dest[e] != it->rank) Rp = NULL;
   c.Rp = Rp;
   {

@@ -231,6 +231,7 @@ typedef struct bstate {
   /* private vertices (pa__dmesh_build_priv): records kept here, sorted by
    * gid, out of the directory; upriv[u]: vertex u is one of them */
   pa__recs *P;
+  size_t npriv;             /* P's records (P is emptied when they join LV) */
   uint8_t *upriv;
 } bstate;
 
@@ -370,7 +371,8 @@ cleanup:
  * layers to build), the owned elements around each (CSR ustart/uelem).
  * When the gids of the slots are dense (uix is an array over their range:
  * the usual case), marking the range and one scan of it number the
- * vertices in ascending gid order, with no sort; otherwise they are
+ * vertices in ascending gid order, with no sort, and without csr uslot
+ * stays NULL (assemble reads uix, as cheap as uslot); otherwise they are
  * numbered by hashing and only the nu unique gids are sorted (not the
  * (dim+1) nown element slots). */
 static pa_status owned_csr(bstate *s, pa_idx nown, int csr) {
@@ -379,7 +381,6 @@ static pa_status owned_csr(bstate *s, pa_idx nown, int csr) {
   pa_idx *slotu = NULL, *ord = NULL, *rankof = NULL;
   pa_gid *key = NULL, lo = INT64_MAX, hi = -1;
   const pa_gid *vg = s->L.vgid;
-  PA_ALLOC(slotu, np);
   for (size_t p = 0; p < np; p++) {
     if (vg[p] < lo) lo = vg[p];
     if (vg[p] > hi) hi = vg[p];
@@ -401,8 +402,12 @@ static pa_status owned_csr(bstate *s, pa_idx nown, int csr) {
         s->ukey[k] = g;
         u[g - lo] = (pa_idx)k++;
       }
-    for (size_t p = 0; p < np; p++) slotu[p] = u[vg[p] - lo];
+    if (csr) {
+      PA_ALLOC(slotu, np);
+      for (size_t p = 0; p < np; p++) slotu[p] = u[vg[p] - lo];
+    }
   } else {
+    PA_ALLOC(slotu, np);
     for (size_t p = 0; p < np; p++) {
       int found;
       pa_idx old;
@@ -786,18 +791,86 @@ cleanup:
   return st;
 }
 
+/* The first of the n gids g (ascending) above x (n if none). */
+static size_t first_above(const pa_gid *g, size_t n, pa_gid x) {
+  size_t lo = 0, hi = n;
+  while (lo < hi) {
+    size_t mid = lo + (hi - lo) / 2;
+    if (g[mid] > x) hi = mid;
+    else lo = mid + 1;
+  }
+  return lo;
+}
+
+/* Records [from, from + n) of src to [k, k + n) of dst (the same layout,
+ * without vertex ids or payloads; the ranges may overlap). */
+static void move_run(pa__recs *dst, size_t k, const pa__recs *src,
+                     size_t from, size_t n) {
+  size_t nd = (size_t)dst->ndbl;
+  memmove(dst->gid + k, src->gid + from, n * sizeof *dst->gid);
+  memmove(dst->ref + k, src->ref + from, n * sizeof *dst->ref);
+  memmove(dst->flag + k, src->flag + from, n * sizeof *dst->flag);
+  memmove(dst->aux + k, src->aux + from, n * sizeof *dst->aux);
+  if (nd) memmove(dst->dbl + nd * k, src->dbl + nd * from, nd * n * sizeof *dst->dbl);
+}
+
+/* Merge LV into P from the back, in place (P grown to hold both: the
+ * records are moved by runs, and P's pages, already touched, are reused
+ * instead of a fresh copy of both); both sorted by gid, without payloads. */
+static pa_status merge_into_private(bstate *s) {
+  pa_status st = PA_SUCCESS;
+  pa__recs *P = s->P, *V = &s->LV;
+  size_t i = V->n, j = P->n, k = V->n + P->n;
+  PA_CALL(pa__recs_reserve(P, k, 0));
+  while (i > 0) {
+    /* the run of P above V's last record, then the run of V above P's
+     * last (binary searches: the runs are long) */
+    size_t lo = first_above(P->gid, j, V->gid[i - 1]);
+    PA_CHECK(lo == 0 || P->gid[lo - 1] != V->gid[i - 1], PA_ERR_INTERNAL,
+             "private vertex %lld is also in the directory",
+             (long long)V->gid[i - 1]);
+    k -= j - lo;
+    move_run(P, k, P, lo, j - lo);
+    j = lo;
+    lo = j ? first_above(V->gid, i, P->gid[j - 1]) : 0;
+    k -= i - lo;
+    move_run(P, k, V, lo, i - lo);
+    i = lo;
+  }
+  PA_ASSERT(k == j);
+  P->n += V->n;
+  pa__recs_free(V);
+  *V = *P;
+  pa__recs_init(P, PA_VERTEX, 0, V->ndbl);
+cleanup:
+  return st;
+}
+
 /* The private vertices join LV (owned here; both sorted by gid, merged),
  * and the boundary entities and edges whose smallest vertex is private,
- * which stayed here out of the directory, join LB and LD. */
+ * which stayed here out of the directory, join LB and LD. Without
+ * payloads the merge takes P's arrays (merge_into_private), which are then
+ * LV's. */
 static pa_status add_private(bstate *s) {
   pa_status st = PA_SUCCESS;
   pa__recs *P = s->P;
   pa__recs M;
   pa__recs_init(&M, PA_VERTEX, 0, s->LV.ndbl);
+  for (int t = 0; t < 2; t++) {
+    const pa__recs *R = t ? &s->D : &s->B;
+    pa__recs *L = t ? &s->LD : &s->LB;
+    for (size_t i = 0; i < R->n; i++) /* (their owner: assemble) */
+      if (is_private(s, min_vgid(R, i))) PA_CALL(pa__recs_append(L, R, i, 1));
+  }
+  for (size_t j = 0; j < P->n; j++) P->aux[j] = s->rank;
+  s->npriv = P->n;
+  if (!P->poff && !s->LV.poff && P->ndbl == s->LV.ndbl) {
+    PA_CALL(merge_into_private(s));
+    goto cleanup;
+  }
   size_t pb = (s->LV.poff ? s->LV.poff[s->LV.n] : 0) +
               (P->poff ? P->poff[P->n] : 0);
   PA_CALL(pa__recs_reserve(&M, s->LV.n + P->n, pb));
-  for (size_t j = 0; j < P->n; j++) P->aux[j] = s->rank;
   /* merged by runs, copied array by array */
   for (size_t i = 0, j = 0; i < s->LV.n || j < P->n;) {
     PA_CHECK(i >= s->LV.n || j >= P->n || s->LV.gid[i] != P->gid[j],
@@ -815,12 +888,6 @@ static pa_status add_private(bstate *s) {
   pa__recs_free(&s->LV);
   s->LV = M;
   memset(&M, 0, sizeof M);
-  for (int t = 0; t < 2; t++) {
-    const pa__recs *R = t ? &s->D : &s->B;
-    pa__recs *L = t ? &s->LD : &s->LB;
-    for (size_t i = 0; i < R->n; i++) /* (their owner: assemble) */
-      if (is_private(s, min_vgid(R, i))) PA_CALL(pa__recs_append(L, R, i, 1));
-  }
 cleanup:
   pa__recs_free(&M);
   return st;
@@ -965,9 +1032,9 @@ static pa_status owned_vertex_records(bstate *s) {
     s->ulv[u] = i < s->LV.n && s->LV.gid[i] == s->ukey[u] ? (pa_idx)i : -1;
     npriv += s->upriv && s->upriv[u];
   }
-  PA_CHECK(!s->P || npriv == s->P->n, PA_ERR_INTERNAL,
+  PA_CHECK(!s->P || npriv == s->npriv, PA_ERR_INTERNAL,
            "%zu private vertices are in no owned element",
-           s->P ? s->P->n - npriv : 0);
+           s->P ? s->npriv - npriv : 0);
 cleanup:
   return st;
 }
@@ -1015,14 +1082,26 @@ cleanup:
 }
 
 /* Order of local entities: owned (aux == rank) first, each group by gid (and
- * elements by layer). out[k] = record index of local entity k. A stable
+ * elements by layer). out[k] = record index of local entity k; *ident: 1
+ * if that is the identity. A stable
  * counting pass by group, then a sort by gid of each group, skipped when it
  * is already in order (the owned elements and the vertices arrive sorted). */
 static pa_status number_local(const pa__recs *R, const uint8_t *layer,
-                              int rank, pa_idx *out, pa_idx *nown) {
+                              int rank, pa_idx *out, pa_idx *nown,
+                              uint8_t *ident) {
   pa_status st = PA_SUCCESS;
-  size_t c[258] = {0};
+  size_t c[258] = {0}, i0 = 0;
 #define GROUP(i) (layer ? layer[i] : (R->aux[i] == rank ? 0 : 1))
+  /* (the leading owned records in gid order keep their places: all of
+   * them when only owned elements arrive) */
+  while (i0 < R->n && GROUP(i0) == 0 && (!i0 || R->gid[i0] >= R->gid[i0 - 1]))
+    i0++;
+  *ident = i0 == R->n;
+  if (*ident) {
+    for (size_t i = 0; i < R->n; i++) out[i] = (pa_idx)i;
+    *nown = (pa_idx)R->n;
+    return PA_SUCCESS;
+  }
   for (size_t i = 0; i < R->n; i++) c[GROUP(i) + 2]++;
   for (int b = 0; b < 256; b++) c[b + 2] += c[b + 1];
   *nown = (pa_idx)c[2];
@@ -1043,7 +1122,7 @@ cleanup:
  * payload is the same (checked) and the values are filled one after the
  * other. */
 static void unpack_payloads(pa_dmesh *dm, int kind, const pa__recs *R,
-                            const pa_idx *ord, pa_idx n) {
+                            const pa_idx *ord, int ident, pa_idx n) {
   if (!R->poff) return;
   int anyref = 0;
   size_t off = 0, tot = 0;
@@ -1058,11 +1137,18 @@ static void unpack_payloads(pa_dmesh *dm, int kind, const pa__recs *R,
     for (int k = 0; k < dm->nvalue; k++) {
       pa_dmesh_value *v = dm->value[k];
       if ((int)v->kind != kind) continue;
+      if (ident && v->unit == tot && !v->slot && n) {
+        /* the only value of its kind, records in local order: the
+         * payloads are its data, one after the other */
+        memcpy(v->data, R->pay + R->poff[0], (size_t)n * tot);
+        continue;
+      }
       for (pa_idx e = 0; e < n; e++) {
         const unsigned char *p = R->pay + R->poff[ord[e]] + off;
         pa_idx slot = v->slot ? v->slot[e] : e;
         unsigned char *q = v->data + v->unit * (size_t)slot;
-        for (size_t b = 0; b < v->unit; b++) q[b] = p[b];
+        if (v->unit == 1) q[0] = p[0]; /* (the adaptation's done values) */
+        else memcpy(q, p, v->unit);
       }
       off += v->unit;
     }
@@ -1085,9 +1171,11 @@ static void unpack_payloads(pa_dmesh *dm, int kind, const pa__recs *R,
 /* What the phases of assemble share: the local order of the records of
  * each kind (ord[kind][k] = record of local entity k), the local vertex of
  * each vertex record (lvof) and of each vertex global id (lv), and the local
- * mesh being filled. */
+ * mesh being filled. With the identity (ident) the records' arrays of ids,
+ * owners and layers become dm's. */
 typedef struct assembly {
   pa_idx *ord[PA_DMESH_NKIND];
+  uint8_t ident[PA_DMESH_NKIND]; /* ord[kind] is the identity */
   pa_idx *lvof;
   pa__gidindex lv;
   pa_mesh *m;
@@ -1100,7 +1188,7 @@ static pa_status number_vertices_elements(pa_dmesh *dm, bstate *s,
   pa_status st = PA_SUCCESS;
   PA_ALLOC(a->ord[PA_VERTEX], s->LV.n);
   PA_CALL(number_local(&s->LV, NULL, s->rank, a->ord[PA_VERTEX],
-                       &dm->nown[PA_VERTEX]));
+                       &dm->nown[PA_VERTEX], &a->ident[PA_VERTEX]));
   dm->nloc[PA_VERTEX] = (pa_idx)s->LV.n;
   PA_CALL(pa__gidindex_init_keys(&a->lv, s->LV.gid, s->LV.n));
   PA_ALLOC(a->lvof, s->LV.n);
@@ -1111,7 +1199,7 @@ static pa_status number_vertices_elements(pa_dmesh *dm, bstate *s,
   }
   PA_ALLOC(a->ord[PA_ELEMENT], s->L.n);
   PA_CALL(number_local(&s->L, s->layer, s->rank, a->ord[PA_ELEMENT],
-                       &dm->nown[PA_ELEMENT]));
+                       &dm->nown[PA_ELEMENT], &a->ident[PA_ELEMENT]));
   dm->nloc[PA_ELEMENT] = (pa_idx)s->L.n;
 cleanup:
   return st;
@@ -1156,9 +1244,12 @@ static inline int elem_vertices(const pa_dmesh *dm, const bstate *s,
   for (size_t k = 0; k < s->L.n; k++) {
     size_t i = (size_t)ord[k];
     pa_idx *dst = elem + (size_t)nve * k;
-    if (i < nown) {
+    if (i < nown && s->uslot) {
       const pa_idx *us = s->uslot + (size_t)nve * i;
       for (int j = 0; j < nve; j++) dst[j] = ulv[us[j]];
+    } else if (i < nown) { /* uix dense (owned_csr) */
+      const pa_gid *vg = s->L.vgid + (size_t)nve * i;
+      for (int j = 0; j < nve; j++) dst[j] = ulv[s->uix.dense[vg[j] - s->uix.lo]];
     } else {
       for (int j = 0; j < nve; j++)
         dst[j] = pa__gidindex_get(&a->lv, s->L.vgid[(size_t)nve * i + j]);
@@ -1169,8 +1260,8 @@ static inline int elem_vertices(const pa_dmesh *dm, const bstate *s,
 }
 
 /* Step 7b: the local mesh's elements. Owned elements (records [0, nown)):
- * vertex slot -> u -> LV record -> local vertex, two array reads; ghost
- * elements through the index lv. */
+ * vertex slot (or gid, through uix dense) -> u -> LV record -> local
+ * vertex, two array reads; ghost elements through the index lv. */
 static pa_status fill_elements(pa_dmesh *dm, bstate *s, assembly *a) {
   pa_status st = PA_SUCCESS;
   int d = s->dim;
@@ -1179,10 +1270,18 @@ static pa_status fill_elements(pa_dmesh *dm, bstate *s, assembly *a) {
     if (s->ulv[u] >= 0) s->ulv[u] = a->lvof[s->ulv[u]];
   PA_CHECK(!(d == 2 ? elem_vertices(dm, s, a, 3) : elem_vertices(dm, s, a, 4)),
            PA_ERR_INTERNAL, "element vertex not fetched");
+  if (a->ident[PA_ELEMENT] && s->L.n) {
+    memcpy(m->eref, s->L.ref, s->L.n * sizeof *m->eref);
+    memcpy(m->eflag, s->L.flag, s->L.n * sizeof *m->eflag);
+  }
   for (size_t k = 0; k < s->L.n; k++) {
     size_t i = (size_t)a->ord[PA_ELEMENT][k];
-    m->eref[k] = s->L.ref[i];
-    m->eflag[k] = s->L.flag[i];
+    if (!a->ident[PA_ELEMENT]) {
+      m->eref[k] = s->L.ref[i];
+      m->eflag[k] = s->L.flag[i];
+    } else if (!s->L.ndbl) {
+      break;
+    }
     if (s->L.ndbl)
       pa__entity_set_doubles(m, PA_ELEMENT, (pa_idx)k, s->L.dbl + (size_t)s->L.ndbl * i);
   }
@@ -1190,6 +1289,7 @@ static pa_status fill_elements(pa_dmesh *dm, bstate *s, assembly *a) {
   pa__free(s->uslot);
   pa__free(s->ulv);
   s->uslot = s->ulv = NULL;
+  pa__gidindex_free(&s->uix);
   pa__free(s->L.vgid); /* in the mesh now */
   s->L.vgid = NULL;
 cleanup:
@@ -1301,11 +1401,11 @@ static pa_status fill_subentities(pa_dmesh *dm, bstate *s, assembly *a) {
     PA_CALL(own_subentities(dm, s, a, SB[t], vstart, vel));
   PA_ALLOC(a->ord[PA_BOUNDARY], s->LB.n);
   PA_CALL(number_local(&s->LB, NULL, s->rank, a->ord[PA_BOUNDARY],
-                       &dm->nown[PA_BOUNDARY]));
+                       &dm->nown[PA_BOUNDARY], &a->ident[PA_BOUNDARY]));
   dm->nloc[PA_BOUNDARY] = (pa_idx)s->LB.n;
   PA_ALLOC(a->ord[PA_EDGE], s->LD.n);
   PA_CALL(number_local(&s->LD, NULL, s->rank, a->ord[PA_EDGE],
-                       &dm->nown[PA_EDGE]));
+                       &dm->nown[PA_EDGE], &a->ident[PA_EDGE]));
   dm->nloc[PA_EDGE] = (pa_idx)s->LD.n;
   PA_CALL(pa_mesh_reserve(m, 0, 0, (pa_idx)s->LB.n, (pa_idx)s->LD.n));
   for (size_t k = 0; k < s->LB.n; k++) {
@@ -1340,10 +1440,17 @@ cleanup:
  * payloads). */
 static pa_status fill_dmesh(pa_dmesh *dm, bstate *s, assembly *a) {
   pa_status st = PA_SUCCESS;
-  const pa__recs *R[PA_DMESH_NKIND] = {&s->LV, &s->L, &s->LB, &s->LD};
+  pa__recs *R[PA_DMESH_NKIND] = {&s->LV, &s->L, &s->LB, &s->LD};
   int any = 0;
   for (int kind = 0; kind < PA_DMESH_NKIND; kind++) {
     pa_idx n = dm->nloc[kind];
+    if (a->ident[kind] && n) { /* the records' arrays, as they are */
+      dm->gid[kind] = R[kind]->gid;
+      dm->owner[kind] = R[kind]->aux;
+      R[kind]->gid = NULL;
+      R[kind]->aux = NULL;
+      continue;
+    }
     PA_ALLOC(dm->gid[kind], n);
     PA_ALLOC(dm->owner[kind], n);
     for (pa_idx k = 0; k < n; k++) {
@@ -1351,9 +1458,15 @@ static pa_status fill_dmesh(pa_dmesh *dm, bstate *s, assembly *a) {
       dm->owner[kind][k] = R[kind]->aux[a->ord[kind][k]];
     }
   }
-  PA_ALLOC(dm->layer, dm->nloc[PA_ELEMENT]);
-  for (pa_idx k = 0; k < dm->nloc[PA_ELEMENT]; k++)
-    dm->layer[k] = s->layer[a->ord[PA_ELEMENT][k]];
+  if (a->ident[PA_ELEMENT] && dm->nloc[PA_ELEMENT]) {
+    dm->layer = s->layer;
+    s->layer = NULL;
+    s->caplayer = 0;
+  } else {
+    PA_ALLOC(dm->layer, dm->nloc[PA_ELEMENT]);
+    for (pa_idx k = 0; k < dm->nloc[PA_ELEMENT]; k++)
+      dm->layer[k] = s->layer[a->ord[PA_ELEMENT][k]];
+  }
   dm->mesh = a->m;
   a->m = NULL;
   for (int kind = 0; kind < PA_DMESH_NKIND; kind++)
@@ -1362,7 +1475,8 @@ static pa_status fill_dmesh(pa_dmesh *dm, bstate *s, assembly *a) {
     /* slots from the references (local); sfs are built later */
     for (int k = 0; k < dm->nvalue; k++) PA_CALL(pa__value_alloc(dm, dm->value[k]));
     for (int kind = 0; kind < PA_DMESH_NKIND; kind++)
-      unpack_payloads(dm, kind, R[kind], a->ord[kind], dm->nloc[kind]);
+      unpack_payloads(dm, kind, R[kind], a->ord[kind], a->ident[kind],
+                      dm->nloc[kind]);
   }
 cleanup:
   return st;
@@ -1564,7 +1678,8 @@ cleanup:
 
 /* After the fetch: free the directory, the touch lists and messages and
  * the index of the owned elements' vertices; keep the local records and
- * what assemble reads (uslot, ulv and their count nu). */
+ * what assemble reads (uslot, or uix without it, ulv and their count
+ * nu). */
 static void drop_directory(bstate *s) {
   bstate keep = *s;
   memset(&keep.V, 0, sizeof keep.V);
@@ -1580,7 +1695,8 @@ static void drop_directory(bstate *s) {
   memset(&keep.emap, 0, sizeof keep.emap);
   keep.ukey = NULL; /* keep.nu stays: the count of keep.ulv */
   keep.ustart = keep.uelem = NULL;
-  memset(&keep.uix, 0, sizeof keep.uix);
+  if (keep.uslot) memset(&keep.uix, 0, sizeof keep.uix);
+  else memset(&s->uix, 0, sizeof s->uix);
   s->uslot = s->ulv = NULL;
   /* free what keep no longer references */
   memset(&s->L, 0, sizeof s->L);

@@ -178,15 +178,14 @@ size_t pa__sf_memory(const pa__sf *sf) {
 
 /* The leaves of a star forest: the ghosts (owner[i] != rank) grouped by
  * owner rank, sorted by gid within a rank, into *orderp (*nleafp of them);
- * cnt[r] (size zeroed entries) becomes the number of ghosts rank r owns. */
+ * cnt[r] (size zeroed entries) becomes the number of ghosts rank r owns.
+ * The i0 entities that lead are owned (usually all the owned ones): the
+ * leaves are searched for only past them. */
 static pa_status order_leaves(pa_idx n, const pa_gid *gid, const int *owner,
-                              int rank, int size, size_t *cnt,
+                              int rank, int size, pa_idx i0, size_t *cnt,
                               pa_idx **orderp, pa_idx *nleafp) {
   pa_status st = PA_SUCCESS;
-  pa_idx nleaf = 0, i0 = 0;
-  /* (the owned entities usually come first: the leaves are searched for
-   * only past them) */
-  while (i0 < n && owner[i0] == rank) i0++;
+  pa_idx nleaf = 0;
   for (pa_idx i = i0; i < n; i++)
     if (owner[i] != rank) {
       PA_CHECK(owner[i] >= 0 && owner[i] < size, PA_ERR_INTERNAL,
@@ -363,17 +362,16 @@ pa_status pa__sf_build(MPI_Comm comm, pa_idx n, const pa_gid *gid,
   PA_CALL_MPI(MPI_Comm_rank(comm, &rank));
   PA_CALL_MPI(MPI_Comm_size(comm, &size));
   PA_CALLOC(cnt, size);
-  pa_idx nleaf = 0;
-  PA_CALL(order_leaves(n, gid, owner, rank, size, cnt, &order, &nleaf));
+  pa_idx nleaf = 0, nown = 0;
+  /* owned first with gids strictly increasing: only the first can be
+   * negative */
+  int sorted = owned_first_sorted(n, gid, owner, rank, &nown);
+  PA_CALL(order_leaves(n, gid, owner, rank, size, nown, cnt, &order, &nleaf));
   PA_CALL(set_leaves(sf, size, cnt, order, nleaf));
   /* Each leaf asks its owner for the gid. */
   PA_ALLOC(sendg, nleaf);
   for (pa_idx j = 0; j < nleaf; j++) sendg[j] = gid[order[j]];
   for (int r = 0; r < size; r++) cnt[r] *= sizeof(pa_gid);
-  /* owned first with gids strictly increasing: only the first can be
-   * negative */
-  pa_idx nown = 0;
-  int sorted = owned_first_sorted(n, gid, owner, rank, &nown);
   for (pa_idx i = 0; i < (sorted ? (nown > 0) : n); i++)
     PA_CHECK(owner[i] != rank || gid[i] >= 0, PA_ERR_ARG,
              "negative global id %lld", (long long)gid[i]);

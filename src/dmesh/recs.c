@@ -68,6 +68,17 @@ cleanup:
   return st;
 }
 
+/* The payload offsets of r, created when its first payload comes: the
+ * records so far have none (zeros up to n; the offsets beyond are written
+ * as records are added, so the rest is left as it is). */
+static pa_status poff_create(pa__recs *r) {
+  pa_status st = PA_SUCCESS;
+  PA_ALLOC(r->poff, r->cap + 1);
+  for (size_t i = 0; i <= r->n; i++) r->poff[i] = 0;
+cleanup:
+  return st;
+}
+
 static pa_status recs_grow(pa__recs *r, size_t need) {
   return recs_grow_to(r, need, 0);
 }
@@ -76,7 +87,7 @@ pa_status pa__recs_room(pa__recs *r, size_t paylen) {
   pa_status st = PA_SUCCESS;
   PA_CALL(recs_grow(r, r->n + 1));
   if (paylen && !r->poff) {
-    PA_CALLOC(r->poff, r->cap + 1);
+    PA_CALL(poff_create(r));
   }
   if (r->poff) PA_GROW(r->pay, r->paycap, r->poff[r->n] + paylen);
 cleanup:
@@ -91,7 +102,7 @@ pa_status pa__recs_append(pa__recs *r, const pa__recs *in, size_t k0,
   PA_ASSERT(in->nv == r->nv && in->ndbl == r->ndbl);
   if (!n) return PA_SUCCESS;
   PA_CALL(recs_grow(r, i0 + n));
-  if (pay && !r->poff) PA_CALLOC(r->poff, r->cap + 1);
+  if (pay && !r->poff) PA_CALL(poff_create(r));
   memcpy(r->gid + i0, in->gid + k0, n * sizeof *r->gid);
   if (nv)
     memcpy(r->vgid + nv * i0, in->vgid + nv * k0, nv * n * sizeof *r->vgid);
@@ -213,7 +224,7 @@ pa_status pa__recs_reserve(pa__recs *r, size_t n, size_t paybytes) {
   pa_status st = PA_SUCCESS;
   PA_CALL(recs_grow_to(r, n, 1));
   if (paybytes && !r->poff) {
-    PA_CALLOC(r->poff, r->cap + 1);
+    PA_CALL(poff_create(r));
   }
   if (r->poff && paybytes > r->paycap) {
     void *p = pa__realloc(r->pay, paybytes);
@@ -241,7 +252,7 @@ pa_status pa__recs_get(pa__recs *r, const unsigned char *p, size_t *pos) {
   }
   /* grown by a factor: callers that know the total reserve it first */
   PA_CALL(recs_grow(r, n0 + n));
-  if (b.paybytes && !r->poff) PA_CALLOC(r->poff, r->cap + 1);
+  if (b.paybytes && !r->poff) PA_CALL(poff_create(r));
   if (r->poff) PA_GROW(r->pay, r->paycap, pay0 + b.paybytes);
   memcpy(r->gid + n0, b.gid, n * sizeof(pa_gid));
   memcpy(r->vgid + (size_t)nv * n0, b.vgid, (size_t)nv * n * sizeof(pa_gid));
@@ -531,24 +542,40 @@ static pa_status migrate(MPI_Comm comm, pa__recs *in, const int *dest,
   PA_CALLOC(cnt, size);
   PA_CALLOC(pay, size);
   PA_CALLOC(start, (size_t)size + 1);
-  for (size_t i = 0; i < in->n; i++) {
+  size_t nstay = 0;
+  while (nstay < in->n && dest[nstay] == rank) nstay++;
+  if (nstay == in->n) {
+    /* every record stays (the adaptation's rebuild, mostly): nothing to
+     * pack, and the index of the staying records is the identity */
+    start[rank + 1] = in->n;
+    for (int r = rank + 1; r < size; r++) start[r + 1] = in->n;
+    if (in->poff) pay[rank] = in->poff[in->n] - in->poff[0];
+  }
+  for (size_t i = nstay; i < in->n; i++) {
     PA_CHECK(dest[i] >= 0 && dest[i] < size, PA_ERR_ARG,
              "destination rank %d of entity %lld out of [0, %d)", dest[i],
              (long long)in->gid[i], size);
     start[dest[i] + 1]++;
     if (in->poff) pay[dest[i]] += in->poff[i + 1] - in->poff[i];
   }
-  for (int r = 0; r < size; r++) start[r + 1] += start[r];
+  if (nstay < in->n) {
+    /* (the records before the first leaving one stay) */
+    start[rank + 1] += nstay;
+    if (in->poff) pay[rank] += in->poff[nstay] - in->poff[0];
+    for (int r = 0; r < size; r++) start[r + 1] += start[r];
+  }
   /* records by destination (stable), each destination's sorted by gid */
-  PA_ALLOC(byrank, in->n);
-  {
+  PA_ALLOC(byrank, in->n ? in->n : 1);
+  if (nstay == in->n) {
+    for (size_t i = 0; i < in->n; i++) byrank[i] = (pa_idx)i;
+  } else {
     size_t *cur;
     PA_ALLOC(cur, size);
     memcpy(cur, start, (size_t)size * sizeof *cur);
     for (size_t i = 0; i < in->n; i++) byrank[cur[dest[i]]++] = (pa_idx)i;
     pa__free(cur);
   }
-  for (int r = 0; r < size; r++)
+  for (int r = 0; r < size && nstay < in->n; r++)
     PA_CALL(pa__sort_by_gid(byrank + start[r], start[r + 1] - start[r],
                             in->gid));
   size_t total = 0, nself = start[rank + 1] - start[rank];
@@ -572,8 +599,7 @@ static pa_status migrate(MPI_Comm comm, pa__recs *in, const int *dest,
   pa__free(sbuf);
   sbuf = NULL;
   {
-    size_t tot = 0, nrec = nself, q = 0;
-    size_t npay = pa__recs_paybytes(in, byrank + start[rank], nself);
+    size_t tot = 0, nrec = nself, q = 0, npay;
     for (int r = 0; r < size; r++) tot += rcnt[r];
     if (consume && nself == in->n && !tot) {
       /* nothing moves: the input becomes the output, sorted (in place,
@@ -583,6 +609,7 @@ static pa_status migrate(MPI_Comm comm, pa__recs *in, const int *dest,
       PA_CALL(pa__recs_sort(out));
       goto cleanup;
     }
+    npay = pa__recs_paybytes(in, byrank + start[rank], nself);
     while (q < tot) {
       pa__recblock b;
       pa__recblock_map((unsigned char *)recv + q, out->nv, out->ndbl, &b);
@@ -592,6 +619,8 @@ static pa_status migrate(MPI_Comm comm, pa__recs *in, const int *dest,
     }
     PA_CHECK(q == tot, PA_ERR_INTERNAL, "record blocks of %zu bytes, %zu read",
              tot, q);
+    if (nstay == in->n) /* the identity index, sorted for the merge */
+      PA_CALL(pa__sort_by_gid(byrank, in->n, in->gid));
     PA_CALL(pa__recs_reserve(out, nrec, npay));
     PA_CALL(merge_sources(out, recv, rcnt, rank, size, in,
                           byrank + start[rank], nself));

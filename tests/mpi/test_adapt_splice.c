@@ -9,8 +9,11 @@
  * neighbour ranks, the user values with their slots), 2D and 3D, with user
  * values on every kind (one restricted to a reference). Where the splice
  * does not apply it must fall back: ghost layers (overlap 1) and a mesh
- * renumbered by pa_dmesh_reorder (its first iteration). Runs at any number
- * of ranks.
+ * renumbered by pa_dmesh_reorder (its first iteration). And the rebuild
+ * from records gives the same mesh whether or not some vertices are handed
+ * apart as private (pa__dmesh_build_priv, which the rebuild uses: the
+ * fetched vertices are merged into the private ones, in place without
+ * payloads), with and without user values. Runs at any number of ranks.
  */
 #include "testutil.h"
 #include "dmesh/dmesh.h"
@@ -154,6 +157,59 @@ static void same_dmesh(const pa_dmesh *a, const pa_dmesh *b, const char *what) {
   CHECK(bad == NULL);
 }
 
+/* dm rebuilt from the records of its owned entities (every element stays
+ * on its rank); with priv, the owned vertices with no copy on another rank
+ * and a global id not a multiple of 3 go apart as private, so that the
+ * others, fetched, fall between them. */
+static pa_dmesh *rebuilt(pa_dmesh *dm, int priv) {
+  pa__recs E, V, B, D, P;
+  pa__layout lay;
+  pa_dmesh *out = NULL;
+  uint8_t *vp = NULL;
+  pa_idx nown = dm->nown[PA_VERTEX];
+  const pa__sf *sf = &dm->sf[PA_VERTEX];
+  if (priv) {
+    vp = calloc((size_t)nown + 1, 1);
+    CHECK(vp != NULL);
+    for (pa_idx v = 0; v < nown; v++) vp[v] = dm->gid[PA_VERTEX][v] % 3 != 0;
+    for (pa_idx q = 0; sf->rootoff && q < sf->rootoff[sf->nrootrank]; q++)
+      vp[sf->rootidx[q]] = 0;
+  }
+  CHECK_OK(pa__dmesh_kept_recs(dm, NULL, NULL, &E, &V, &B, &D, vp, &P));
+  free(vp);
+  pa__dmesh_layout(dm, &lay);
+  CHECK_OK(pa__dmesh_create(dm->comm, dm->dim, &out));
+  CHECK_OK(pa__dmesh_values_like(out, dm));
+  CHECK_OK(pa__dmesh_build_priv(out, &lay, 0, &E, &V, &B, &D, &P));
+  CHECK_OK(pa_dmesh_check(out));
+  return out;
+}
+
+/* The private vertices change nothing in a rebuild, with user values on
+ * every kind (payloads) and without (the in-place merge). */
+static void test_private_vertices(void) {
+  for (int dim = 2; dim <= 3; dim++)
+    for (int values = 0; values < 2; values++) {
+      pa_dmesh *dm = NULL;
+      if (values) {
+        dm = make(dim, 0, 0);
+      } else {
+        pa_mesh *m = NULL;
+        if (pa_test_rank == 0)
+          CHECK_OK(pa_mesh_generate_box(dim, dim == 3 ? 4 : 16, &m));
+        CHECK_OK(pa_dmesh_distribute(MPI_COMM_WORLD, 0, m, 0, &dm));
+        pa_mesh_destroy(m);
+      }
+      pa_dmesh *a = rebuilt(dm, 0), *b = rebuilt(dm, 1);
+      same_dmesh(dm, a, values ? "rebuild with values" : "rebuild");
+      same_dmesh(a, b, values ? "private vertices with values"
+                              : "private vertices");
+      pa_dmesh_destroy(a);
+      pa_dmesh_destroy(b);
+      pa_dmesh_destroy(dm);
+    }
+}
+
 /* Forced splice, default choice and forced rebuild give the same mesh. */
 static void compare(int dim, int overlap, int reorder, const char *what) {
   pa_dmesh *r = adapted(dim, overlap, reorder, "rebuild");
@@ -175,4 +231,4 @@ static void test_fallback_reordered(void) {
 }
 
 TEST_MPI_MAIN(test_splice_2d, test_splice_3d, test_fallback_overlap,
-              test_fallback_reordered)
+              test_fallback_reordered, test_private_vertices)
