@@ -877,8 +877,8 @@ cleanup:
 /* A mesh shaken only for its tight crowd, jiggled whole before the last
  * band (RM3D_TIGHT_JIGGLE), is no lattice: at most this many rounds, each
  * jiggling only the vertices of tets below RM3D_SHAKE_QJIG (the first
- * round RM3D_SHAKE_QJIG_FIRST). Level-set sphere: mean quality 0.837 in
- * 1.32 s of CPU, against 0.835 in 1.59 s with the lattice's shake
+ * round RM3D_SHAKE_QJIG_FIRST). Level-set sphere: mean quality 0.836 in
+ * 1.29 s of CPU, against 0.835 in 1.65 s with the lattice's shake
  * (docs/BENCHMARKS.md, "A level set cut into the mesh") */
 #define RM3D_SHAKE_ROUNDS_TIGHT 3
 #define RM3D_SHAKE_QJIG_FIRST 0.8
