@@ -26,8 +26,9 @@ FH=${BENCH_FIELD_H:-0.01}
 mkdir -p "$WORK"
 cd "$WORK"
 
-num() { sed -n "s/.*\"$2\": *\\([-0-9.eE+]*\\).*/\\1/p" "$1" | head -1; }
-str() { sed -n "s/.*\"$2\": *\"\\([^\"]*\\)\".*/\\1/p" "$1" | head -1; }
+# a top-level key of a report (nested objects hold keys of the same names)
+num() { /usr/bin/python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])' "$1" "$2"; }
+str() { num "$1" "$2"; }
 
 row() { # row NAME JSON
   local ne t mem rss inr qw qm oc
