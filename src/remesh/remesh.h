@@ -14,6 +14,9 @@
 
 #include "metric/metric.h"
 
+#include <stdint.h>
+#include <string.h>
+
 /*
  * Adapt the triangle mesh (pa__remesh2d, src/remesh2d/driver_2d.c) or the
  * tetrahedral mesh (pa__remesh3d, src/remesh3d/driver_3d.c) in place to its
@@ -69,5 +72,22 @@ pa_status pa__remesh_skin_relax(const pa__skin_relax *r, int mc, pa_idx nv,
  * preparation does, pa__geom_hausd_bounds): the remeshers' own estimates
  * of the curvature from the facets then stand aside. */
 int pa__remesh_model_curvature(const pa_remesh_opts *o);
+
+/* A direction in the cube [-1,1]^dim (not normalised) drawn from the bits
+ * of the coordinates x[0..dim) (dim <= 3): the same on every run and for
+ * any numbering. The jiggle of a lattice crowd moves a vertex along it
+ * (pa__rm2d_jiggle_vertex, pa__rm3d_jiggle_vertex). */
+static inline void pa__remesh_hash_dir(const double *x, int dim, double *d) {
+  uint64_t h = 0x2545f4914f6cdd1dull;
+  for (int j = 0; j < dim; j++) {
+    uint64_t u;
+    memcpy(&u, x + j, sizeof u);
+    h = pa__mix64(h ^ u);
+  }
+  for (int j = 0; j < dim; j++) {
+    h = pa__mix64(h + 0x9e3779b97f4a7c15ull);
+    d[j] = (double)(h >> 11) * (2.0 / 9007199254740992.0) - 1.0;
+  }
+}
 
 #endif /* PA_REMESH_H */

@@ -661,13 +661,6 @@ int pa__rm2d_length_vertex(rm2d *rm, pa_idx k, int ip) {
   return 0;
 }
 
-/* Splitmix64 finaliser: the jiggle's directions (as smooth_3d.c). */
-static uint64_t mix64(uint64_t h) {
-  h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
-  h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
-  return h ^ (h >> 31);
-}
-
 int pa__rm2d_jiggle_vertex(rm2d *rm, pa_idx k, int ip, double delta) {
   int mc = rm->mc;
   pa_idx p = rm->tv[3 * k + ip];
@@ -679,19 +672,8 @@ int pa__rm2d_jiggle_vertex(rm2d *rm, pa_idx k, int ip, double delta) {
   double qold = ball_worst(rm, el, n);
   if (qold < 0) return 0;
   const double *xp = rm->x + 2 * (size_t)p;
-  /* a direction uniform in the square [-1,1]^2 (normalised), drawn from the
-   * coordinates' bits: the same on every run and for any numbering */
-  uint64_t h = 0x2545f4914f6cdd1dull;
-  for (int j = 0; j < 2; j++) {
-    uint64_t u;
-    memcpy(&u, xp + j, sizeof u);
-    h = mix64(h ^ u);
-  }
   double d[2];
-  for (int j = 0; j < 2; j++) {
-    h = mix64(h + 0x9e3779b97f4a7c15ull);
-    d[j] = (double)(h >> 11) * (2.0 / 9007199254740992.0) - 1.0;
-  }
+  pa__remesh_hash_dir(xp, 2, d);
   double t[3]; /* length delta in the metric of p */
   rm2d_tensor2(mc, RM2D_M(p), t);
   double lm = sqrt(pa__sqlen2(3, t, d[0], d[1]));

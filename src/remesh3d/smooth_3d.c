@@ -557,13 +557,6 @@ int pa__rm3d_curve_snap_vertex(rm3d *m, pa_idx p, pa_idx *ball) {
   return 1;
 }
 
-/* Splitmix64 finaliser: the jiggle's directions. */
-static uint64_t mix64(uint64_t h) {
-  h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
-  h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
-  return h ^ (h >> 31);
-}
-
 int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball) {
   if (m->vtag[p] & (RM3D_V_LOCK | RM3D_V_CORNER | RM3D_V_DEAD | RM3D_V_BDRY))
     return 0;
@@ -577,20 +570,9 @@ int pa__rm3d_jiggle_vertex(rm3d *m, pa_idx p, double delta, pa_idx *ball) {
     if (m->tflag[t] & RM3D_T_FROZEN) return 0;
     if (m->q[t] < qold) qold = m->q[t];
   }
-  /* A direction uniform in the cube [-1,1]^3 (normalised), drawn from the
-   * coordinates' bits: the same on every run and for any numbering. */
-  uint64_t h = 0x2545f4914f6cdd1dull;
-  for (int j = 0; j < 3; j++) {
-    uint64_t u;
-    memcpy(&u, xp + j, sizeof u);
-    h = mix64(h ^ u);
-  }
-  double d[3], s2 = 0;
-  for (int j = 0; j < 3; j++) {
-    h = mix64(h + 0x9e3779b97f4a7c15ull);
-    d[j] = (double)(h >> 11) * (2.0 / 9007199254740992.0) - 1.0;
-    s2 += d[j] * d[j];
-  }
+  double d[3];
+  pa__remesh_hash_dir(xp, 3, d);
+  double s2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
   /* length delta in the metric of p */
   double lm = mc == 1 ? sqrt(s2) / mp[0] : sqrt(pa__sqlen3_tensor(mp, d));
   if (!(lm > 0)) return 0;
