@@ -15,7 +15,7 @@
  *     collapse edges shorter than 0.7071 (no new edge longer than 1.4142),
  *     swap around elements of quality < 0.6, and relocate once the splits
  *     are few; then a lattice crowd (a bisected structured input) is
- *     jiggled (break_lattice);
+ *     jiggled (shake_lattice, as 3D's after its rounds);
  *  2. eight optimisation rounds (more while they split and collapse over 1 %
  *     of the elements): swap (quality < 0.9), relocate, length moves, split
  *     (edges longer than 1.4142), collapse (edges < RM2D_LSHORT_OPT) with a
@@ -519,7 +519,7 @@ cleanup:
  * quality 0.952), 0.25 as much as larger steps, which the ball's quality
  * refuses more often. */
 #define RM2D_JIGGLE 0.25
-static long break_lattice(rm2d *rm) {
+static long shake_lattice(rm2d *rm) {
   long bins[101] = {0}, nfree = 0, big = 0, nj = 0;
   for (pa_idx k = 0; k < rm->ne; k++) {
     if (rm->tflag[k] & (RM2D_E_DEAD | RM2D_E_FROZEN)) continue;
@@ -721,9 +721,9 @@ pa_status pa__remesh2d(pa_mesh *mesh, const pa_remesh_opts *opts,
   reordered = rm->nelive;
   if (!opts->no_insert) PA_CALL(refine_rounds(rm, &pass, &reordered));
   if (!opts->no_move && !opts->no_swap) { /* the swaps relax what it breaks */
-    long nj = break_lattice(rm);
+    long nj = shake_lattice(rm);
     DEBUG_CHECK(rm);
-    report_pass(rm, "jiggle", pass, nj);
+    report_pass(rm, "shake", pass, nj);
   }
   PA_CALL(optimise(rm, &pass, &reordered));
   PA_CALL(repair_worst(rm, &pass));

@@ -12,7 +12,8 @@
  *     (lattice_crowd: a structured input about to be refined into the next
  *     lattice, twice the tets) is broken: a wide one is first made
  *     body-centred (its longest class split, then swaps: RM3D_CROWD_TOP);
- *     the ends of the crowd's edges are jiggled, and from then on the
+ *     the ends of the crowd's edges (a tight crowd: every free interior
+ *     vertex, RM3D_TIGHT_JIGGLE) are jiggled, and from then on the
  *     splits of short edges are spread (tight: one per neighbourhood and
  *     pass; wide: an edge waits when both its ends were touched;
  *     RM3D_SPREAD_TIGHT, RM3D_SPREAD_WIDE). A large working mesh is
@@ -34,7 +35,8 @@
  *     and a poor mean quality, or a tight crowd broken at the last band):
  *     every free interior vertex jiggled, then 4 to 8 rounds of collapses
  *     (< 0.85, guard 1.35), swaps, smoothing and length moves, each after
- *     a smaller jiggle, until a round removes under 2 % of the tets;
+ *     a smaller jiggle, until a round removes under 2 % of the tets (after
+ *     a tight crowd only: 3 rounds jiggling the vertices of poor tets);
  *  4. three rounds of swaps (quality < 0.7: this lifts the mean quality by
  *     about 0.03), smoothing (below 0.75) and two sweeps of length moves
  *     (the smoothing disregards lengths), the first two preceded by a
@@ -924,13 +926,15 @@ static double length_crowd(const rm3d *m, double *qmean) {
   return nall ? (double)top / nall : 0.0;
 }
 
-/* Schedule step 3, the shake (see RM3D_SHAKE_CROWD): every free interior
- * vertex jiggled (pa__rm3d_jiggle_vertex), then rounds of collapses
- * (< RM3D_SHAKE_SHORT, guard RM3D_SHAKE_GUARD), swaps (Q < 0.7), smoothing
- * and a sweep of length moves, each round after the first starting with a
- * smaller jiggle, RM3D_SHAKE_ROUNDS and more while they remove tets
- * (RM3D_SHAKE_SETTLED); with -nomove neither jiggles nor moves. *npass
- * counts the rounds. */
+/* Schedule step 3, the shake (see RM3D_SHAKE_CROWD): rounds of a jiggle
+ * (pa__rm3d_jiggle_vertex; every free interior vertex on a lattice, after
+ * a tight crowd only those of tets below RM3D_SHAKE_QJIG_FIRST, then
+ * RM3D_SHAKE_QJIG), collapses (< RM3D_SHAKE_SHORT, guard
+ * RM3D_SHAKE_GUARD), swaps (Q < 0.7), smoothing and a sweep of length
+ * moves, the jiggle smaller after the first round; on a lattice
+ * RM3D_SHAKE_ROUNDS and more while they remove tets (RM3D_SHAKE_SETTLED),
+ * after a tight crowd RM3D_SHAKE_ROUNDS_TIGHT; with -nomove neither
+ * jiggles nor moves. *npass counts the rounds. */
 static pa_status shake_lattice(rm3d *m, const pa_remesh_opts *opts,
                                int *npass) {
   pa_status st = PA_SUCCESS;

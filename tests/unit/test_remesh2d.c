@@ -1080,7 +1080,7 @@ static void test_strong_aniso(void) {
 /* A structured square refined by bisection is a lattice of right isosceles
  * triangles (quality 0.866), which no swap or move improves: the lattice
  * crowd is jiggled after the refinement rounds (driver_2d.c,
- * break_lattice) and relaxed into a mesh of mean quality above 0.93 (0.866
+ * shake_lattice) and relaxed into a mesh of mean quality above 0.93 (0.866
  * without). */
 static void test_lattice(void) {
   pa_mesh *m = square(10, 0.0);
