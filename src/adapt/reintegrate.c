@@ -750,9 +750,7 @@ static pa_status output_vertices(orecs *c) {
   const pa__piece *pc = c->pc;
   const pa_mesh *o = c->o;
   const size_t *vo = pc->kpoff[PA_VERTEX];
-  size_t maxpay = 0;
-  for (int k = 0; k < it->dm->nvalue; k++)
-    if (it->dm->value[k]->kind == PA_VERTEX) maxpay += it->dm->value[k]->unit;
+  size_t maxpay = pa__kind_unit(it->dm, PA_VERTEX);
   PA_ALLOC(c->vg, o->nv);
   /* room for every vertex in both sets: the records are written straight
    * into their arrays */
@@ -903,10 +901,8 @@ static pa_status output_elements(orecs *c) {
   uint8_t dv0 = it->piece_failed[pc->id] ? 0 : PA_ADAPT_DONE, *dv = NULL;
   const pa_idx *reuse = pc->reuse[PA_ELEMENT];
   pa__recs *R = &c->R[PA_ELEMENT];
-  size_t maxpay = 0, i0 = R->n;
+  size_t maxpay = pa__kind_unit(dm, PA_ELEMENT), i0 = R->n;
   unsigned char *tmpl = NULL; /* a fresh element's payload, done 0 */
-  for (int k = 0; k < dm->nvalue; k++)
-    if (dm->value[k]->kind == PA_ELEMENT) maxpay += dm->value[k]->unit;
   PA_CALL(pa__recs_reserve(R, i0 + (size_t)ne,
                            (R->poff ? R->poff[i0] : 0) + (size_t)ne * maxpay));
   PA_ALLOC(dv, ne ? ne : 1);

@@ -1270,21 +1270,19 @@ static pa_status fill_elements(pa_dmesh *dm, bstate *s, assembly *a) {
     if (s->ulv[u] >= 0) s->ulv[u] = a->lvof[s->ulv[u]];
   PA_CHECK(!(d == 2 ? elem_vertices(dm, s, a, 3) : elem_vertices(dm, s, a, 4)),
            PA_ERR_INTERNAL, "element vertex not fetched");
+  const pa_idx *ord = a->ord[PA_ELEMENT];
   if (a->ident[PA_ELEMENT] && s->L.n) {
     memcpy(m->eref, s->L.ref, s->L.n * sizeof *m->eref);
     memcpy(m->eflag, s->L.flag, s->L.n * sizeof *m->eflag);
-  }
-  for (size_t k = 0; k < s->L.n; k++) {
-    size_t i = (size_t)a->ord[PA_ELEMENT][k];
-    if (!a->ident[PA_ELEMENT]) {
-      m->eref[k] = s->L.ref[i];
-      m->eflag[k] = s->L.flag[i];
-    } else if (!s->L.ndbl) {
-      break;
+  } else {
+    for (size_t k = 0; k < s->L.n; k++) {
+      m->eref[k] = s->L.ref[ord[k]];
+      m->eflag[k] = s->L.flag[ord[k]];
     }
-    if (s->L.ndbl)
-      pa__entity_set_doubles(m, PA_ELEMENT, (pa_idx)k, s->L.dbl + (size_t)s->L.ndbl * i);
   }
+  for (size_t k = 0; s->L.ndbl && k < s->L.n; k++)
+    pa__entity_set_doubles(m, PA_ELEMENT, (pa_idx)k,
+                           s->L.dbl + (size_t)s->L.ndbl * (size_t)ord[k]);
   m->ne = (pa_idx)s->L.n;
   pa__free(s->uslot);
   pa__free(s->ulv);

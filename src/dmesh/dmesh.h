@@ -83,6 +83,15 @@ struct pa_dmesh {
   pa_idx *bface;           /* boundary entity -> 2 elements (-1 if none) */
 };
 
+/* Bytes of the values attached to one entity of a kind when every value
+ * of that kind holds it (the most its payload takes). */
+static inline size_t pa__kind_unit(const pa_dmesh *dm, int kind) {
+  size_t u = 0;
+  for (int k = 0; k < dm->nvalue; k++)
+    if ((int)dm->value[k]->kind == kind) u += dm->value[k]->unit;
+  return u;
+}
+
 /* Number of vertices of one entity of a kind (vertex: 0). */
 static inline int pa__kind_nv(int dim, int kind) {
   return kind == PA_VERTEX ? 0

@@ -38,9 +38,7 @@ static pa_status kept_kind(pa_dmesh *dm, int kind, const uint8_t *keep,
                       : kind == PA_ELEMENT ? m->eflag
                       : kind == PA_BOUNDARY ? m->bflag
                                             : m->edflag;
-  size_t n[2] = {0, 0}, unit = 0, paybytes[2] = {0, 0};
-  for (int k = 0; k < dm->nvalue; k++)
-    if ((int)dm->value[k]->kind == kind) unit += dm->value[k]->unit;
+  size_t n[2] = {0, 0}, unit = pa__kind_unit(dm, kind), paybytes[2] = {0, 0};
   for (pa_idx e = 0; e < nown; e++) {
     if (keep && !keep[e]) continue;
     int t = priv && priv[e];
