@@ -426,7 +426,11 @@ static pa_status iterate(pa_dmesh *dm, const pa_adapt_opts *opts,
   memset(&ir, 0, sizeof ir);
   *end = 0;
   PA_CALL(tag_step(&it, done, L, ta, t, end));
-  if (*end) goto cleanup;
+  if (*end) { /* the last tag counts in the report's tag step */
+    PA_CALL(pa__allreduce(dm->comm, t, 1, MPI_DOUBLE, MPI_MAX));
+    L->rep.t_tag += t[0];
+    goto cleanup;
+  }
   ta = pa_wtime();
   pa__memory_window_begin();
   PA_CALL(pa__adapt_pieces(&it, pieces_wanted(dm, opts, L)));
