@@ -27,6 +27,7 @@
 #include "metric/metric2d.h"
 #include "metric/metric3d.h"
 
+#include <float.h>
 #include <math.h>
 
 /* Elements produced in this run are tagged again with looser criteria
@@ -149,20 +150,44 @@ static int fails(const pa_mesh *m, pa_idx e, double lo, double hi,
                      : fails_dim(m, e, 3, lo, hi, qmin);
 }
 
+/* The relative margin of the squared-length test of fails_sizes_dim: far
+ * above the error of the lengths the kernel computes (a few units in the
+ * last place; ~1e-13 for pa__log_mean's logarithmic form at its nearest
+ * ends), far below any spread of the lengths a remesher leaves. */
+#define SQ_MARGIN 1e-9
+
 /* fails_dim with sizes (met_ncomp 1, every -hsiz run), by the same
- * kernels with each vertex's inverse size taken once and the squared edge
- * lengths shared by the lengths (pa__len3_inv's form) and the quality
- * (pa__qual*_stat_euclid): the same values to the bit. Debug builds check
- * each answer against fails_dim. */
+ * kernels with the squared edge lengths shared by the lengths
+ * (pa__len3_inv's form) and the quality (pa__qual*_stat_euclid): the same
+ * answer to the bit. The kernel's length sqrt(s2) * pa__log_mean(1/ha,
+ * 1/hb) lies between sqrt(s2) / hmax and sqrt(s2) / hmin over the
+ * element's sizes, so an edge whose squared Euclidean length s2 lies
+ * within [lo^2 hmax^2, hi^2 hmin^2) by SQ_MARGIN passes without a square
+ * root or a division (every edge of a near-uniform size field but those
+ * near a bound); the others are measured as the kernel measures them.
+ * Debug builds check each answer against fails_dim. */
 static inline int fails_sizes_dim(const pa_mesh *m, pa_idx e, const int d,
                                   double lo, double hi, double qmin) {
   const int n = d + 1;
   const pa_idx *v = m->elem + (size_t)n * e;
   const double *x[4];
-  double iv[4], s = 0.0;
+  double h[4], s = 0.0;
   for (int i = 0; i < n; i++) {
     x[i] = m->coord + (size_t)d * v[i];
-    iv[i] = 1.0 / m->met[v[i]];
+    h[i] = m->met[v[i]];
+  }
+  /* the band of s2 that passes for sure: empty unless the sizes and their
+   * squares are positive normal numbers (NaN fails the tests) */
+  double hmin = h[0], hmax = h[0], sqlo = 1.0, sqhi = 0.0;
+  int pos = 1;
+  for (int i = 0; i < n; i++) {
+    pos &= h[i] > 0;
+    hmin = h[i] < hmin ? h[i] : hmin;
+    hmax = h[i] > hmax ? h[i] : hmax;
+  }
+  if (pos && hmin * hmin >= DBL_MIN && hmax * hmax <= DBL_MAX) {
+    sqlo = lo * lo * (hmax * hmax) * (1.0 + SQ_MARGIN);
+    sqhi = hi * hi * (hmin * hmin) * (1.0 - SQ_MARGIN);
   }
   for (int i = 0; i < n; i++)
     for (int j = i + 1; j < n; j++) {
@@ -170,7 +195,8 @@ static inline int fails_sizes_dim(const pa_mesh *m, pa_idx e, const int d,
       for (int c = 0; c < d; c++)
         s2 += (x[j][c] - x[i][c]) * (x[j][c] - x[i][c]);
       s += s2;
-      double l = sqrt(s2) * pa__log_mean(iv[i], iv[j]);
+      if (s2 >= sqlo && s2 < sqhi) continue;
+      double l = sqrt(s2) * pa__log_mean(1.0 / h[i], 1.0 / h[j]);
       if (!(l >= lo && l < hi)) return 1;
     }
   if (!(qmin > 0)) return 0;

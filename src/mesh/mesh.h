@@ -237,8 +237,26 @@ void pa__elem_face(const pa_mesh *mesh, pa_idx e, int i, pa_idx *face);
 
 /* Signed volume/area of the simplex with the given dim+1 vertex coordinates
  * (2D: cross(x1-x0, x2-x0)/2, 3D: det(x1-x0, x2-x0, x3-x0)/6), in plain
- * floating point. */
-double pa__simplex_volume(int dim, const double *const *x);
+ * floating point. Inline: the per-element loops that call it (the tag's
+ * quality, the statistics) would otherwise pay a call for a few
+ * multiplications. */
+static inline double pa__simplex_volume(int dim, const double *const *x) {
+  if (dim == 2) {
+    double ux = x[1][0] - x[0][0], uy = x[1][1] - x[0][1];
+    double vx = x[2][0] - x[0][0], vy = x[2][1] - x[0][1];
+    return 0.5 * (ux * vy - uy * vx);
+  }
+  double u[3], v[3], w[3];
+  for (int k = 0; k < 3; k++) {
+    u[k] = x[1][k] - x[0][k];
+    v[k] = x[2][k] - x[0][k];
+    w[k] = x[3][k] - x[0][k];
+  }
+  return (u[0] * (v[1] * w[2] - v[2] * w[1]) +
+          u[1] * (v[2] * w[0] - v[0] * w[2]) +
+          u[2] * (v[0] * w[1] - v[1] * w[0])) /
+         6.0;
+}
 
 /* Exact orientation predicates (predicates.c): a value with the exact sign of
  * det(b-a, c-a) (2D) or det(b-a, c-a, d-a) (3D), 0 exactly when degenerate;
