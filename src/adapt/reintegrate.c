@@ -711,8 +711,8 @@ cleanup:
  * global id of each output vertex (vg) and the destination rank of each
  * output element (dest), the vertex layers from the hot skin vertices
  * (dist) and from every skin vertex (dsk, only for BAD_NEAR_SKIN) with the
- * quality bound below which an element near the skin is marked (qband; 0:
- * none), the records to append to (R; Rp: the private vertices, NULL if
+ * quality below which an element near the skin is poor (qthr; 0: none
+ * is), the records to append to (R; Rp: the private vertices, NULL if
  * none), the next fresh ids, the "done" value, and a payload buffer with
  * its cache. */
 typedef struct orecs {
@@ -722,7 +722,7 @@ typedef struct orecs {
   pa_gid *vg, *next;
   const int *dest;
   uint8_t *dist, *dsk;
-  double qband;
+  double qthr;
   pa__recs *R, *Rp;
   const pa_dmesh_value *done;
   unsigned char *pay;
@@ -804,55 +804,42 @@ cleanup:
   return st;
 }
 
-/* The elements within NEAR_SKIN vertex layers of a hot skin vertex (dist);
- * BAD_NEAR_SKIN: the layers from any skin vertex (dsk), in the same
- * sweeps, and only if an element near the skin is poor, counted further
- * for the worst quality of the band beyond (qband). */
+/* The vertex layers from the hot skin vertices (dist) and, for
+ * BAD_NEAR_SKIN, from every skin vertex (dsk), in the same sweeps. */
 static pa_status near_skin_layers(orecs *c) {
   pa_status st = PA_SUCCESS;
   const pa__piece *pc = c->pc;
   const pa_mesh *o = c->o;
-  double qthr = c->it->piece_failed[pc->id] ||
-                        (pc->rep.nswap == 0 && pc->rep.nmove == 0)
-                    ? 0
-                    : c->it->opts->qual_threshold;
-  c->qband = 0;
+  c->qthr = c->it->piece_failed[pc->id] ||
+                    (pc->rep.nswap == 0 && pc->rep.nmove == 0)
+                ? 0
+                : c->it->opts->qual_threshold;
   PA_ALLOC(c->dist, o->nv);
-  if (qthr > 0) PA_ALLOC(c->dsk, o->nv);
+  if (c->qthr > 0) PA_ALLOC(c->dsk, o->nv);
   {
     const uint8_t *mk[2] = {pc->hot, pc->skin};
     uint8_t *const ds[2] = {c->dist, c->dsk};
-    layers_from(pc, qthr > 0 ? 2 : 1, mk, NEAR_SKIN, ds);
-  }
-  if (qthr > 0) {
-    int poor = 0;
-    for (pa_idx e = 0; !poor && e < o->ne; e++)
-      poor = elem_layer(o, c->dsk, e) < NEAR_SKIN &&
-             pa_mesh_elem_quality(pc->out, e) < qthr;
-    if (poor) {
-      /* the layers below NEAR_SKIN are made: the others go on from there */
-      uint8_t *const ds[1] = {c->dsk};
-      for (pa_idx j = 0; j < o->nv; j++)
-        if (c->dsk[j] == NEAR_SKIN) c->dsk[j] = 2 * NEAR_SKIN;
-      vertex_layers(o, NEAR_SKIN, 2 * NEAR_SKIN, 1, ds);
-      c->qband = qthr;
-      for (pa_idx e = 0; e < o->ne; e++) {
-        int l = elem_layer(o, c->dsk, e);
-        if (l >= NEAR_SKIN && l < 2 * NEAR_SKIN)
-          c->qband = fmin(c->qband, pa_mesh_elem_quality(pc->out, e));
-      }
-    }
+    layers_from(pc, c->qthr > 0 ? 2 : 1, mk, NEAR_SKIN, ds);
   }
 cleanup:
   return st;
 }
 
+/* 1 if element e of the output lies within NEAR_SKIN vertex layers of the
+ * skin (dsk) with a quality below q. */
+static int poor_near_skin(const orecs *c, pa_idx e, double q) {
+  return elem_layer(c->o, c->dsk, e) < NEAR_SKIN &&
+         pa_mesh_elem_quality(c->pc->out, e) < q;
+}
+
 /* The "done" value of output element e (see the file comment) from dv0
- * (PA_ADAPT_DONE, 0 for a rolled-back piece), and the global ids of its
- * vertices into ev; nve a constant once inlined. */
+ * (PA_ADAPT_DONE, 0 for a rolled-back piece) but for BAD_NEAR_SKIN
+ * (bad_near_skin), and the global ids of its vertices into ev; *poor |=
+ * whether e is poor near the skin (c->qthr); nve a constant once
+ * inlined. */
 static inline uint8_t elem_done(const orecs *c, const pa_gid *vg,
                                 const uint8_t *dist, pa_idx e, uint8_t dv0,
-                                const int nve, pa_gid *ev) {
+                                const int nve, pa_gid *ev, int *poor) {
   const pa_idx *v = c->o->elem + (size_t)nve * e;
   uint8_t dv = dv0;
   int nhot = 0, near = 0;
@@ -863,26 +850,48 @@ static inline uint8_t elem_done(const orecs *c, const pa_gid *vg,
   }
   if (dv && near) dv = PA_ADAPT_DONE_NEAR_SKIN;
   if (dv && nhot >= 2) dv = PA_ADAPT_DONE_ON_SKIN;
-  if (dv == PA_ADAPT_DONE && c->qband > 0 &&
-      elem_layer(c->o, c->dsk, e) < NEAR_SKIN &&
-      pa_mesh_elem_quality(c->pc->out, e) < c->qband) {
-    dv = PA_ADAPT_DONE_NEAR_SKIN; /* see BAD_NEAR_SKIN */
-  }
+  if (c->qthr > 0 && !*poor) *poor = poor_near_skin(c, e, c->qthr);
   if (dv == PA_ADAPT_DONE && c->it->npieces == 1) dv = PA_ADAPT_DONE_FREE;
   return dv;
 }
 
 /* The "done" values of the output's elements (dv) and the global ids of
  * their vertices, written straight into the element records from slot i0
- * on; nve a constant once inlined. */
+ * on; *poor: whether an element near the skin is poor; nve a constant once
+ * inlined. */
 static inline void elems_done(const orecs *c, uint8_t dv0, size_t i0,
-                              uint8_t *dv, const int nve) {
+                              uint8_t *dv, int *poor, const int nve) {
   const pa_mesh *o = c->o;
   const pa_gid *vg = c->vg;
   const uint8_t *dist = c->dist;
   pa_gid *rv = c->R[PA_ELEMENT].vgid + (size_t)nve * i0;
+  *poor = 0;
   for (pa_idx e = 0; e < o->ne; e++)
-    dv[e] = elem_done(c, vg, dist, e, dv0, nve, rv + (size_t)nve * e);
+    dv[e] = elem_done(c, vg, dist, e, dv0, nve, rv + (size_t)nve * e, poor);
+}
+
+/* BAD_NEAR_SKIN, when an element near the skin is poor: the layers from
+ * the skin go on to 2 NEAR_SKIN, the worst quality of the band beyond
+ * (qband) is found, and the elements near the skin below it that would be
+ * PA_ADAPT_DONE (PA_ADAPT_DONE_FREE from a single piece) are marked
+ * PA_ADAPT_DONE_NEAR_SKIN. */
+static void bad_near_skin(orecs *c, uint8_t *dv) {
+  const pa_mesh *o = c->o;
+  uint8_t *const ds[1] = {c->dsk};
+  uint8_t done = c->it->npieces == 1 ? PA_ADAPT_DONE_FREE : PA_ADAPT_DONE;
+  /* the layers below NEAR_SKIN are made: the others go on from there */
+  for (pa_idx j = 0; j < o->nv; j++)
+    if (c->dsk[j] == NEAR_SKIN) c->dsk[j] = 2 * NEAR_SKIN;
+  vertex_layers(o, NEAR_SKIN, 2 * NEAR_SKIN, 1, ds);
+  double qband = c->qthr;
+  for (pa_idx e = 0; e < o->ne; e++) {
+    int l = elem_layer(o, c->dsk, e);
+    if (l >= NEAR_SKIN && l < 2 * NEAR_SKIN)
+      qband = fmin(qband, pa_mesh_elem_quality(c->pc->out, e));
+  }
+  for (pa_idx e = 0; qband > 0 && e < o->ne; e++)
+    if (dv[e] == done && poor_near_skin(c, e, qband))
+      dv[e] = PA_ADAPT_DONE_NEAR_SKIN;
 }
 
 /* The output's elements, each with its "done" value (see the file
@@ -907,8 +916,10 @@ static pa_status output_elements(orecs *c) {
                            (R->poff ? R->poff[i0] : 0) + (size_t)ne * maxpay));
   PA_ALLOC(dv, ne ? ne : 1);
   PA_ALLOC(tmpl, maxpay + 1);
-  if (nve == 3) elems_done(c, dv0, i0, dv, 3);
-  else elems_done(c, dv0, i0, dv, 4);
+  int poor;
+  if (nve == 3) elems_done(c, dv0, i0, dv, &poor, 3);
+  else elems_done(c, dv0, i0, dv, &poor, 4);
+  if (poor) bad_near_skin(c, dv);
   memcpy(R->ref + i0, o->eref, (size_t)ne * sizeof *R->ref);
   memcpy(R->flag + i0, o->eflag, (size_t)ne * sizeof *R->flag);
   if (c->dest) memcpy(R->aux + i0, c->dest, (size_t)ne * sizeof *R->aux);

@@ -391,11 +391,10 @@ static pa_status owned_csr(bstate *s, pa_idx nown, int csr) {
                             (size_t)nown / (s->dim == 3 ? 5 : 2) + 16));
   if (s->uix.dense) {
     pa_idx *u = s->uix.dense; /* u[gid - lo] */
-    for (size_t p = 0; p < np; p++)
-      if (u[vg[p] - lo] == -1) { /* -2: present, not numbered yet */
-        u[vg[p] - lo] = -2;
-        nu++;
-      }
+    /* -2: present, not numbered yet (stores only, no branch on what was
+     * there: a vertex is first seen at random among its elements) */
+    for (size_t p = 0; p < np; p++) u[vg[p] - lo] = -2;
+    for (pa_gid g = lo; g <= hi; g++) nu += u[g - lo] == -2;
     PA_ALLOC(s->ukey, nu);
     for (pa_gid g = lo, k = 0; g <= hi; g++)
       if (u[g - lo] == -2) {
