@@ -510,7 +510,7 @@ static pa_status map_to_ranks(pa__iter *it) {
     if (it->label[e] >= 0) {
       buf[(size_t)it->label[e] * P + it->rank] += 1;
       buf[(size_t)np * P + it->label[e]] +=
-          it->work[e] >= 0 ? it->work[e] : pa__elem_work(m, e);
+          it->tag[e] ? it->work[e] : pa__elem_work(m, e);
     }
   PA_CALL(pa__allreduce(it->dm->comm, buf, np * P + np, MPI_DOUBLE, MPI_SUM));
   memcpy(it->piece_work, buf + (size_t)np * P, np * sizeof *buf);

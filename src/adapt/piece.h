@@ -192,8 +192,8 @@ typedef struct pa__iter {
   int iter;            /* 1-based iteration number */
   pa_idx ne;           /* owned elements */
   uint8_t *tag;        /* tagged for remeshing */
-  double *work;        /* estimated work of each owned element that may be
-                          tagged, -1 for the others (pa__elem_work) */
+  double *work;        /* estimated work of each tagged owned element
+                          (pa__elem_work); the others' entries are not set */
   int *label;          /* piece or -1 */
   int npieces;
   double *piece_work;  /* npieces: estimated work */

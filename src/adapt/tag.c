@@ -15,9 +15,10 @@
  * volume in the metric over the volume of the unit regular simplex, plus one
  * for removing the element itself (the coarsening term). Every figure is a
  * function of the element's own data, so it is the same whatever the
- * distribution. The work is computed only for the tagged elements (-1 for
- * the others); extract.c computes it for the untagged skin elements it
- * needs. An element that passed the last tag and has not changed since
+ * distribution. The work is computed only for the tagged elements (the
+ * others' entries are not written: the array of a final tag over millions
+ * of new elements is never touched); extract.c computes it for the
+ * untagged skin elements it needs. An element that passed the last tag and has not changed since
  * (PA_ADAPT_DONE_PASSED, piece.h) is not measured again: after the first
  * iteration a tag costs what the last remesh changed (debug builds measure
  * it all the same and check that it still passes).
@@ -314,9 +315,6 @@ pa_status pa__adapt_tag(pa__iter *it, pa_dmesh_value *done, int fresh) {
   PA_CALLOC(it->tag, it->ne);
   PA_ALLOC(it->work, it->ne);
   for (pa_idx e = 0; e < it->ne; e++) {
-    /* the work of an untagged element is only needed if it joins a
-     * piece's skin (extract.c computes it then) */
-    it->work[e] = -1;
     if (m->eflag[e] & PA_FLAG_REQUIRED) continue;
     uint8_t kind = dn[e] & PA_ADAPT_DONE_KIND;
     if (kind && o->user_tags_only) continue;
