@@ -124,6 +124,22 @@ static uint64_t coord_hash(const double *p, int d) {
   return h;
 }
 
+/* Slots of a cset per input vertex: the table of a piece's few thousand
+ * input vertices stays in cache, and the million output vertices looked up
+ * in it, nearly all absent, then mostly meet an empty slot first. */
+#define CSET_SLOTS_PER_VERTEX 8
+
+/* 1 if the d coordinates at a and b are the same bits. */
+static inline int same_bits(const double *a, const double *b, int d) {
+  for (int k = 0; k < d; k++) {
+    uint64_t x, y;
+    memcpy(&x, a + k, sizeof x);
+    memcpy(&y, b + k, sizeof y);
+    if (x != y) return 0;
+  }
+  return 1;
+}
+
 /* Index of the input vertex at exactly p, or -1; insert: add i if absent. */
 static pa_idx cset_find(cset *s, const double *p, pa_idx insert) {
   size_t h = coord_hash(p, s->d) & (s->cap - 1);
@@ -133,7 +149,7 @@ static pa_idx cset_find(cset *s, const double *p, pa_idx insert) {
       if (insert >= 0) s->slot[h] = insert;
       return -1;
     }
-    if (!memcmp(s->x + (size_t)s->d * i, p, s->d * sizeof *p)) return i;
+    if (same_bits(s->x + (size_t)s->d * i, p, s->d)) return i;
     h = (h + 1) & (s->cap - 1);
   }
 }
@@ -157,7 +173,7 @@ static int output_ok(const pa__iter *it, pa__piece *pc, pa_mesh *out,
                 "fields\n", pc->id);
     goto cleanup;
   }
-  while (map.cap < 2 * (size_t)in->nv + 2) map.cap *= 2;
+  while (map.cap < CSET_SLOTS_PER_VERTEX * (size_t)in->nv + 2) map.cap *= 2;
   PA_ALLOC(map.slot, map.cap);
   for (size_t h = 0; h < map.cap; h++) map.slot[h] = -1;
   for (pa_idx i = 0; i < in->nv; i++)

@@ -151,11 +151,25 @@ static int fails(const pa_mesh *m, pa_idx e, double lo, double hi,
                      : fails_dim(m, e, 3, lo, hi, qmin);
 }
 
-/* The relative margin of the squared-length test of fails_sizes_dim: far
- * above the error of the lengths the kernel computes (a few units in the
- * last place; ~1e-13 for pa__log_mean's logarithmic form at its nearest
- * ends), far below any spread of the lengths a remesher leaves. */
+/* The relative margin of the tests of fails_sizes_dim and qual2_below
+ * that skip a square root or a division: far above the error of the
+ * lengths and qualities the kernels compute (a few units in the last
+ * place; ~1e-13 for pa__log_mean's logarithmic form at its nearest ends),
+ * far below any spread of the lengths and qualities a remesher leaves. */
 #define SQ_MARGIN 1e-9
+
+/* pa__qual2_stat_euclid(x, s) < qmin, to the bit, without the division
+ * when the area scaled by PA_METRIC_QUAL_NORM_2D is below or above qmin s
+ * by SQ_MARGIN (qmin s a normal number); the kernel decides the others. */
+static inline int qual2_below(const double *const *x, double s, double qmin) {
+  double t = qmin * s;
+  if (t >= DBL_MIN && s <= DBL_MAX) {
+    double a = PA_METRIC_QUAL_NORM_2D * pa__simplex_volume(2, x);
+    if (a < t * (1.0 - SQ_MARGIN)) return 1;
+    if (a >= t * (1.0 + SQ_MARGIN)) return 0;
+  }
+  return pa__qual2_stat_euclid(x, s) < qmin;
+}
 
 /* fails_dim with sizes (met_ncomp 1, every -hsiz run), by the same
  * kernels with the squared edge lengths shared by the lengths
@@ -165,8 +179,9 @@ static int fails(const pa_mesh *m, pa_idx e, double lo, double hi,
  * element's sizes, so an edge whose squared Euclidean length s2 lies
  * within [lo^2 hmax^2, hi^2 hmin^2) by SQ_MARGIN passes without a square
  * root or a division (every edge of a near-uniform size field but those
- * near a bound); the others are measured as the kernel measures them.
- * Debug builds check each answer against fails_dim. */
+ * near a bound); the others are measured as the kernel measures them. In
+ * 2D the quality goes through qual2_below likewise. Debug builds check
+ * each answer against fails_dim. */
 static inline int fails_sizes_dim(const pa_mesh *m, pa_idx e, const int d,
                                   double lo, double hi, double qmin) {
   const int n = d + 1;
@@ -201,8 +216,7 @@ static inline int fails_sizes_dim(const pa_mesh *m, pa_idx e, const int d,
       if (!(l >= lo && l < hi)) return 1;
     }
   if (!(qmin > 0)) return 0;
-  return (d == 2 ? pa__qual2_stat_euclid(x, s) : pa__qual3_stat_euclid(x, s)) <
-         qmin;
+  return d == 2 ? qual2_below(x, s, qmin) : pa__qual3_stat_euclid(x, s) < qmin;
 }
 
 /* fails, by fails_sizes_dim when the metric is sizes. */
