@@ -221,7 +221,8 @@ typedef struct bstate {
   size_t nu;                /* vertices of owned elements */
   pa_gid *ukey;             /* their gids, ascending */
   pa_idx *ustart, *uelem;   /* CSR: u -> owned L indices */
-  pa__gidindex uix;         /* gid -> u */
+  pa__gidindex uix;         /* gid -> u (dense without uslot: gid -> local
+                             * vertex in assemble) */
   pa_idx *uslot;            /* u of each vertex slot of the owned elements */
   pa_idx *ulv;              /* LV record of each u (fetch), then its local
                              * vertex (assemble): the owned elements' vertices
@@ -372,7 +373,8 @@ cleanup:
  * When the gids of the slots are dense (uix is an array over their range:
  * the usual case), marking the range and one scan of it number the
  * vertices in ascending gid order, with no sort, and without csr uslot
- * stays NULL (assemble reads uix, as cheap as uslot); otherwise they are
+ * stays NULL (assemble turns uix into gid -> local vertex: one read a
+ * slot, cheaper than uslot's two); otherwise they are
  * numbered by hashing and only the nu unique gids are sorted (not the
  * (dim+1) nown element slots). */
 static pa_status owned_csr(bstate *s, pa_idx nown, int csr) {
@@ -1246,9 +1248,9 @@ static inline int elem_vertices(const pa_dmesh *dm, const bstate *s,
     if (i < nown && s->uslot) {
       const pa_idx *us = s->uslot + (size_t)nve * i;
       for (int j = 0; j < nve; j++) dst[j] = ulv[us[j]];
-    } else if (i < nown) { /* uix dense (owned_csr) */
+    } else if (i < nown) { /* uix dense, to local vertices (fill_elements) */
       const pa_gid *vg = s->L.vgid + (size_t)nve * i;
-      for (int j = 0; j < nve; j++) dst[j] = ulv[s->uix.dense[vg[j] - s->uix.lo]];
+      for (int j = 0; j < nve; j++) dst[j] = s->uix.dense[vg[j] - s->uix.lo];
     } else {
       for (int j = 0; j < nve; j++)
         dst[j] = pa__gidindex_get(&a->lv, s->L.vgid[(size_t)nve * i + j]);
@@ -1259,14 +1261,21 @@ static inline int elem_vertices(const pa_dmesh *dm, const bstate *s,
 }
 
 /* Step 7b: the local mesh's elements. Owned elements (records [0, nown)):
- * vertex slot (or gid, through uix dense) -> u -> LV record -> local
- * vertex, two array reads; ghost elements through the index lv. */
+ * vertex slot -> u -> LV record -> local vertex, two array reads, or
+ * without slots the gid through uix dense, turned first into gid -> local
+ * vertex (u ascends with the gid: one pass in order), one array read;
+ * ghost elements through the index lv. */
 static pa_status fill_elements(pa_dmesh *dm, bstate *s, assembly *a) {
   pa_status st = PA_SUCCESS;
   int d = s->dim;
   pa_mesh *m = a->m;
   for (size_t u = 0; u < s->nu; u++)
     if (s->ulv[u] >= 0) s->ulv[u] = a->lvof[s->ulv[u]];
+  if (!s->uslot && s->uix.dense) {
+    pa_idx *x = s->uix.dense;
+    for (size_t g = 0; g < (size_t)(s->uix.hi - s->uix.lo); g++)
+      if (x[g] >= 0) x[g] = s->ulv[x[g]];
+  }
   PA_CHECK(!(d == 2 ? elem_vertices(dm, s, a, 3) : elem_vertices(dm, s, a, 4)),
            PA_ERR_INTERNAL, "element vertex not fetched");
   const pa_idx *ord = a->ord[PA_ELEMENT];
