@@ -112,7 +112,7 @@ enum {
  * worst quality under qfree may take the edges at the moved vertex out of
  * the band, within these bounds. */
 #define RM2D_LFREE_LO 0.65
-#define RM2D_LFREE_HI 1.5
+#define RM2D_LFREE_HI PA_METRIC_LEN_HI
 /* A feature vertex moves along its curve by at most this share of the
  * record it moves along. */
 #define RM2D_FEAT_STEP 0.45
