@@ -108,23 +108,11 @@ enum {
  * remesher"). */
 #define RM2D_LTARGET 1.2
 
-/* A quality relocation keeps the edges at the moved vertex in
- * [PA_METRIC_LEN_LO, RM2D_LMOVE_HI] (one out of it may not go further out).
- * The moved vertex carries a metric interpolated in its old ball, a few
- * percent off the user's where the size varies fast (at a kink of the
- * size, twice as large), and the edges the moves leave at the top of the
- * band are out of range once the user's metric is evaluated there (the
- * UGAWG polar-1 passes, bench/ugawg.sh, from 22 start meshes: with
- * PA_METRIC_LEN_HI here 12.3 edges too long and 99.05 % in range on
- * average, with 1.35 8.9 and 99.28 %; 1.30 and 1.25 trade them for short
- * ones and more triangles). */
-#define RM2D_LMOVE_HI 1.35
 /* The polish relocation (pa__rm2d_smooth_pass with qfree > 0): balls of
- * worst quality under qfree may take the edges at the moved vertex into
- * the wider band [RM2D_LFREE_LO, PA_METRIC_LEN_HI]: shorter, but never
- * out of range long (a longer bound, 1.5, made the polish the source of
- * most edges too long on UGAWG polar-1 for a worst quality 0.65 -> 0.68). */
+ * worst quality under qfree may take the edges at the moved vertex out of
+ * the band, within these bounds. */
 #define RM2D_LFREE_LO 0.65
+#define RM2D_LFREE_HI PA_METRIC_LEN_HI
 /* A feature vertex moves along its curve by at most this share of the
  * record it moves along. */
 #define RM2D_FEAT_STEP 0.45
@@ -266,7 +254,7 @@ pa_status pa__rm2d_collapse_pass(rm2d *rm, double thr, long *n);
 long pa__rm2d_swap_pass(rm2d *rm, double qmax);
 /* The relocation pass: quality moves of the interior vertices, and with
  * feat of the feature vertices along their curves; balls of worst quality
- * under qfree may stretch their lengths to [RM2D_LFREE_LO, PA_METRIC_LEN_HI]
+ * under qfree may stretch their lengths to [RM2D_LFREE_LO, RM2D_LFREE_HI]
  * (driver_2d.c). A vertex rejected under one (qfree, feat) is marked
  * settled: the driver clears RM2D_V_SETTLED when it changes them. */
 long pa__rm2d_smooth_pass(rm2d *rm, double qfree, int feat);

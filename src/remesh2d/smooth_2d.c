@@ -165,13 +165,12 @@ static inline double len_one(const len_ball *lb, const double *y, int i) {
 }
 
 /* Whether a move of p keeps its edges in the band: every edge to nb[0..nn)
- * in [PA_METRIC_LEN_LO, RM2D_LMOVE_HI] at the old position stays in it
+ * in [PA_METRIC_LEN_LO, PA_METRIC_LEN_HI] at the old position stays in it
  * at the current one, and none out of it goes further out (the old
  * lengths lold are measured on the first call: *have; the current ones go
  * to lnew, all of them when the test passes). Balls whose worst
  * quality qold is under qfree are held to the wider band [RM2D_LFREE_LO,
- * PA_METRIC_LEN_HI] instead (their elements matter more than those
- * lengths). */
+ * RM2D_LFREE_HI] instead (their elements matter more than those lengths). */
 static int keeps_band(rm2d *rm, pa_idx p, const pa_idx *nb, int nn,
                       const double *old, len_ball *lb, double *lold, int *have,
                       double qold, double qfree, double *lnew) {
@@ -183,10 +182,10 @@ static int keeps_band(rm2d *rm, pa_idx p, const pa_idx *nb, int nn,
       lold[s] = len_one(lb, old, s);
     *have = 1;
   }
-  double lo = PA_METRIC_LEN_LO, hi = RM2D_LMOVE_HI;
+  double lo = PA_METRIC_LEN_LO, hi = PA_METRIC_LEN_HI;
   if (qold < qfree) {
     lo = RM2D_LFREE_LO;
-    hi = PA_METRIC_LEN_HI;
+    hi = RM2D_LFREE_HI;
   }
   for (int s = 0; s < nn; s++) {
     double l = lnew[s] = len_one(lb, xp, s);
