@@ -2010,6 +2010,8 @@ typedef struct pa_adapt_report {
   long npieces;        /**< pieces remeshed, all iterations */
   long nfailed;        /**< pieces rolled back, all iterations */
   double time_total;   /**< wall-clock seconds of the whole call */
+  /** wall-clock seconds of each step, the slowest rank's, summed over the
+   *  iterations (t_tag includes the tag that ends the loop) */
   double t_tag, t_pieces, t_gather, t_remesh, t_reintegrate, t_rebalance;
   /** wall-clock seconds measuring the result (fidelity), part of
    *  time_total; pa_remesh_report.time_s leaves its measurement out */
