@@ -637,9 +637,9 @@ cleanup:
 
 /* The polish rounds (schedule step 4): swaps, relocations of every free
  * vertex (feature vertices along their curves; balls of worst quality
- * under RM2D_QFREE may stretch their lengths to [RM2D_LFREE_LO,
- * RM2D_LFREE_HI]), the pass on the worst elements; at most RM2D_POLISH_ROUNDS,
- * until a round changes nothing. The length moves leave some elements near
+ * under RM2D_QFREE may shorten their edges to RM2D_LFREE_LO), the pass on
+ * the worst elements; at most RM2D_POLISH_ROUNDS, until a round changes
+ * nothing. The length moves leave some elements near
  * their quality floor (RM2D_QLEN), and the optimisation rounds' last splits
  * leave valence-4 vertices at obtuse angles, which these rounds relax (plate
  * -hsiz 0.002: worst quality 0.50 -> 0.69). */

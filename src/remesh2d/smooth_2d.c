@@ -169,8 +169,8 @@ static inline double len_one(const len_ball *lb, const double *y, int i) {
  * at the current one, and none out of it goes further out (the old
  * lengths lold are measured on the first call: *have; the current ones go
  * to lnew, all of them when the test passes). Balls whose worst
- * quality qold is under qfree are held to the wider band [RM2D_LFREE_LO,
- * RM2D_LFREE_HI] instead (their elements matter more than those lengths). */
+ * quality qold is under qfree may also shorten them to RM2D_LFREE_LO
+ * (their elements matter more than those lengths). */
 static int keeps_band(rm2d *rm, pa_idx p, const pa_idx *nb, int nn,
                       const double *old, len_ball *lb, double *lold, int *have,
                       double qold, double qfree, double *lnew) {
@@ -182,11 +182,8 @@ static int keeps_band(rm2d *rm, pa_idx p, const pa_idx *nb, int nn,
       lold[s] = len_one(lb, old, s);
     *have = 1;
   }
-  double lo = PA_METRIC_LEN_LO, hi = PA_METRIC_LEN_HI;
-  if (qold < qfree) {
-    lo = RM2D_LFREE_LO;
-    hi = RM2D_LFREE_HI;
-  }
+  const double lo = qold < qfree ? RM2D_LFREE_LO : PA_METRIC_LEN_LO,
+               hi = PA_METRIC_LEN_HI;
   for (int s = 0; s < nn; s++) {
     double l = lnew[s] = len_one(lb, xp, s);
     /* l in [min(lo, lold), max(hi, lold)] (no NaN among lo, hi, lold) */
