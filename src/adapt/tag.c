@@ -18,10 +18,11 @@
  * distribution. The work is computed only for the tagged elements (the
  * others' entries are not written: the array of a final tag over millions
  * of new elements is never touched); extract.c computes it for the
- * untagged skin elements it needs. An element that passed the last tag and has not changed since
- * (PA_ADAPT_DONE_PASSED, piece.h) is not measured again: after the first
- * iteration a tag costs what the last remesh changed (debug builds measure
- * it all the same and check that it still passes).
+ * untagged skin elements it needs. An element that passed the last tag
+ * and has not changed since (PA_ADAPT_DONE_PASSED, piece.h) is not
+ * measured again: after the first iteration a tag costs what the last
+ * remesh changed (debug builds measure it all the same and check that it
+ * still passes).
  */
 #include "adapt/piece.h"
 #include "geom/geom.h"
