@@ -639,8 +639,8 @@ cleanup:
  * vertex (feature vertices along their curves; balls of worst quality
  * under RM2D_QFREE may shorten their edges to RM2D_LFREE_LO), the pass on
  * the worst elements; at most RM2D_POLISH_ROUNDS, until a round changes
- * nothing. The length moves leave some elements near
- * their quality floor (RM2D_QLEN), and the optimisation rounds' last splits
+ * nothing. The length moves leave some elements near their quality floor
+ * (RM2D_QLEN), and the optimisation rounds' last splits
  * leave valence-4 vertices at obtuse angles, which these rounds relax (plate
  * -hsiz 0.002: worst quality 0.50 -> 0.69). */
 #define RM2D_POLISH_ROUNDS 4

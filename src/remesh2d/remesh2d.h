@@ -109,13 +109,12 @@ enum {
 #define RM2D_LTARGET 1.2
 
 /* The polish relocation (pa__rm2d_smooth_pass with qfree > 0): balls of
- * worst quality under qfree may take the edges at the moved vertex into
- * the wider band [RM2D_LFREE_LO, PA_METRIC_LEN_HI]: shorter, never too
- * long. Up to 1.5 (and 0.65) the polish made most of the edges too long of
- * the last UGAWG polar-1 passes (bench/ugawg.sh; tests/cli/
- * test_ugawg_pass.sh: 6 of 1 755 in the given metric, now 1) for a worst
- * quality 0.65 -> 0.68; without the lower bound too, more short edges and
- * worse quality (plate -hsiz 0.0005: worst 0.66 -> 0.64). */
+ * worst quality under qfree may shorten the edges at the moved vertex down
+ * to this bound, never lengthen them past PA_METRIC_LEN_HI. Letting them
+ * reach 1.5 made most of the too-long edges of the last UGAWG polar-1
+ * passes (tests/cli/test_ugawg_pass.sh: 6 of 1 755 in the given metric
+ * against 1) for a worst quality 0.65 -> 0.68; without this bound (0.7071)
+ * the plate -hsiz 0.0005 loses worst quality, 0.66 -> 0.64. */
 #define RM2D_LFREE_LO 0.65
 /* A feature vertex moves along its curve by at most this share of the
  * record it moves along. */
@@ -258,9 +257,9 @@ pa_status pa__rm2d_collapse_pass(rm2d *rm, double thr, long *n);
 long pa__rm2d_swap_pass(rm2d *rm, double qmax);
 /* The relocation pass: quality moves of the interior vertices, and with
  * feat of the feature vertices along their curves; balls of worst quality
- * under qfree may stretch their lengths to [RM2D_LFREE_LO, PA_METRIC_LEN_HI]
- * (driver_2d.c). A vertex rejected under one (qfree, feat) is marked
- * settled: the driver clears RM2D_V_SETTLED when it changes them. */
+ * under qfree may shorten their edges to RM2D_LFREE_LO (driver_2d.c). A
+ * vertex rejected under one (qfree, feat) is marked settled: the driver
+ * clears RM2D_V_SETTLED when it changes them. */
 long pa__rm2d_smooth_pass(rm2d *rm, double qfree, int feat);
 long pa__rm2d_length_pass(rm2d *rm);
 long pa__rm2d_sliver_pass(rm2d *rm, double qbad);

@@ -737,6 +737,11 @@ cleanup:
  * ends by 0.1) and spread the splits from now on (m->spread). */
 /* crowds of 30-32 % gain, one of 12.6 % loses (docs/BENCHMARKS.md) */
 #define RM3D_CROWD_WIDE 0.25
+/* A tight crowd: the share in one bin (crowd) and the share longer
+ * (longer) that lattice_crowd measures. */
+static int tight_crowd(double crowd, double longer) {
+  return crowd > 0.05 && longer < 0.1;
+}
 /* A wide crowd's lattice (more than RM3D_CROWD_WIDE in one bin, anywhere
  * in (sqrt 2, 2), and not a tight crowd) is first made body-centred: the
  * edges within this factor of the longest (a cube lattice's body
@@ -757,7 +762,7 @@ static pa_status break_lattice_crowd(rm3d *m) {
   double longer, far, crowd = lattice_crowd(m, &longer, &far);
   long nj = 0, ns = 0, nw = 0;
   pa_idx ball[RM3D_MAXBALL];
-  if (!(crowd > 0.05 && longer < 0.1) &&
+  if (!tight_crowd(crowd, longer) &&
       (crowd > RM3D_CROWD_WIDE || far > RM3D_CROWD_WIDE)) {
     double top = max_length(m) / RM3D_CROWD_TOP;
     for (pa_idx p = 0; p < m->nv; p++) m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
@@ -771,7 +776,7 @@ static pa_status break_lattice_crowd(rm3d *m) {
               100 * crowd, 100 * longer, ns, nw);
     crowd = lattice_crowd(m, &longer, &far);
   }
-  m->spread = crowd > 0.05 && longer < 0.1 ? RM3D_SPREAD_TIGHT
+  m->spread = tight_crowd(crowd, longer) ? RM3D_SPREAD_TIGHT
               : crowd > RM3D_CROWD_WIDE    ? RM3D_SPREAD_WIDE
                                            : 0;
   for (pa_idx p = 0; p < m->nv; p++) {
