@@ -886,99 +886,23 @@ static void gather_layout(pa_dmesh *dm, pa__layout *lay, int *vals,
     }
 }
 
-/* The owned records of every kind, without payloads; the doubles of the
- * gathered values vals[0..nvals) appended to the vertex records. */
-static pa_status gather_records(pa_dmesh *dm, const pa__layout *lay,
-                                const int *vals, int nvals, pa__recs *R) {
-  pa_status st = PA_SUCCESS;
-  {
-    int nvalue = dm->nvalue;
-    dm->nvalue = 0; /* no payloads */
-    st = pa__dmesh_owned_recs(dm, NULL, &R[PA_ELEMENT], &R[PA_VERTEX],
-                              &R[PA_BOUNDARY], &R[PA_EDGE]);
-    dm->nvalue = nvalue;
-    if (st) goto cleanup;
-  }
-  if (nvals) { /* append the value doubles to the vertex records */
-    int nd0 = R[PA_VERTEX].ndbl, nd = pa__layout_ndbl(lay);
-    pa__recs V2;
-    double *x;
-    pa__recs_init(&V2, PA_VERTEX, 0, nd);
-    x = pa__malloc((size_t)nd * sizeof *x);
-    PA_CHECK(x, PA_ERR_MEMORY, "out of memory");
-    for (size_t i = 0; i < R[PA_VERTEX].n && !st; i++) {
-      memcpy(x, R[PA_VERTEX].dbl + (size_t)nd0 * i, (size_t)nd0 * sizeof *x);
-      int o = nd0;
-      for (int q = 0; q < nvals; q++) {
-        const pa_dmesh_value *v = dm->value[vals[q]];
-        memcpy(x + o, v->data + v->unit * i, v->unit);
-        o += v->ncomp;
-      }
-      st = pa__recs_add(&V2, R[PA_VERTEX].gid[i], NULL, R[PA_VERTEX].ref[i],
-                        R[PA_VERTEX].flag[i], 0, x, NULL, 0);
-    }
-    pa__free(x);
-    pa__recs_free(&R[PA_VERTEX]);
-    R[PA_VERTEX] = V2;
-    if (st) goto cleanup;
-  }
-cleanup:
-  return st;
-}
-
-/* The arrays of a kind's records that go to the root, in this order. */
-enum { G_GID, G_VGID, G_DBL, G_REF, G_FLAG, G_NARRAY };
-
-/* Array a of records R: its address and bytes. */
-static const void *record_array(const pa__recs *R, int a, size_t *bytes) {
-  size_t n = R->n;
-  switch (a) {
-  case G_GID: *bytes = n * sizeof *R->gid; return R->gid;
-  case G_VGID: *bytes = n * (size_t)R->nv * sizeof *R->vgid; return R->vgid;
-  case G_DBL: *bytes = n * (size_t)R->ndbl * sizeof *R->dbl; return R->dbl;
-  case G_REF: *bytes = n * sizeof *R->ref; return R->ref;
-  default: *bytes = n * sizeof *R->flag; return R->flag;
-  }
-}
-
-/* Every other rank's records R to the root, one rank at a time, array by
- * array from where they lie (no packing: a packed copy's fresh pages cost
- * more than the copy), kept on the root as received: array a of kind k
- * from rank r in buf[(r * PA_DMESH_NKIND + k) * G_NARRAY + a] (n[...]
- * bytes). Each step is agreed before it starts, the first on st (the
- * status so far); the status of the last one is the caller's to agree. */
-static pa_status records_to_root(pa_dmesh *dm, int root, const pa__recs *R,
-                                 void **buf, size_t *n, pa_status st) {
-  for (int r = 0; r < dm->size; r++) {
-    PA_CALL(pa__agree(dm->comm, st));
-    if (r == root || (dm->rank != r && dm->rank != root)) continue;
-    for (int k = 0; k < PA_DMESH_NKIND && !st; k++)
-      for (int a = 0; a < G_NARRAY && !st; a++) {
-        size_t i = ((size_t)r * PA_DMESH_NKIND + k) * G_NARRAY + a, bytes;
-        const void *p = record_array(&R[k], a, &bytes);
-        st = dm->rank == r ? pa__xchg_send(dm->comm, root, p, bytes)
-                           : pa__xchg_recv(dm->comm, r, &buf[i], &n[i]);
-      }
-  }
-cleanup:
-  return st;
-}
-
 /* The records of one kind from one rank, where they lie (neither copied
- * nor merged: their fresh pages cost more than the copy): the arrays
- * received from another rank, or the root's own mesh, whose owned entities
- * come first (conn, vg: its connectivity and vertex global ids; dm, vals,
- * nvals: its mesh and the values whose doubles gather_records would append
- * to its vertices'). */
+ * into records nor merged: their fresh pages cost more than the reads):
+ * the arrays received from another rank, or the root's own mesh, whose
+ * owned entities come first. Connectivities are the sending rank's local
+ * vertex numbers, vg (nvg of them) their global ids. dm, vals, nvals (the
+ * root's own): its mesh, whose doubles are read in place, and the values
+ * appended to its vertices' doubles; otherwise dbl holds them packed. */
 typedef struct gview {
   size_t n;
   int nv, ndbl; /* vertex ids and doubles per record */
-  const pa_gid *gid, *vgid;
+  const pa_gid *gid;
+  const pa_idx *conn;
+  const pa_gid *vg;
+  size_t nvg;
   const double *dbl;
   const int32_t *ref;
   const uint8_t *flag;
-  const pa_idx *conn;
-  const pa_gid *vg;
   const pa_dmesh *dm;
   const int *vals;
   int nvals;
@@ -991,13 +915,17 @@ static void kind_shape(int d, const pa__layout *lay, int k, int *nv,
   *ndbl = pa__layout_kind_ndbl(lay, k);
 }
 
-/* The view of the root's own entities of kind k. */
+/* The view of a rank's own owned entities of kind k (its mesh in place). */
 static gview own_view(const pa_dmesh *dm, const pa__layout *lay, int k,
                       const int *vals, int nvals) {
   const pa_mesh *m = dm->mesh;
   gview v;
   memset(&v, 0, sizeof v);
   kind_shape(dm->dim, lay, k, &v.nv, &v.ndbl);
+  v.dm = dm;
+  v.vals = vals;
+  v.nvals = nvals;
+  if (!m) return v;
   v.n = (size_t)dm->nown[k];
   v.gid = dm->gid[k];
   v.ref = k == PA_VERTEX ? m->vref : k == PA_ELEMENT ? m->eref
@@ -1007,9 +935,7 @@ static gview own_view(const pa_dmesh *dm, const pa__layout *lay, int k,
   v.conn = k == PA_VERTEX ? NULL : k == PA_ELEMENT ? m->elem
            : k == PA_BOUNDARY ? m->bdry : m->edge;
   v.vg = dm->gid[PA_VERTEX];
-  v.dm = dm;
-  v.vals = vals;
-  v.nvals = nvals;
+  v.nvg = (size_t)m->nv;
   return v;
 }
 
@@ -1028,10 +954,68 @@ static void view_doubles(const gview *Q, int k, size_t i, double *x) {
   }
 }
 
-/* The global id of vertex q of record i of Q (not a vertex record). */
-static pa_gid view_vgid(const gview *Q, size_t i, int q) {
-  size_t j = (size_t)Q->nv * i + (size_t)q;
-  return Q->conn ? Q->vg[Q->conn[j]] : Q->vgid[j];
+/* The doubles of a view of a rank's own mesh, packed record after record
+ * into *dbl (allocated; NULL when the records have none). */
+static pa_status pack_doubles(const gview *Q, int k, double **dbl) {
+  pa_status st = PA_SUCCESS;
+  *dbl = NULL;
+  if (!Q->ndbl || !Q->n) return PA_SUCCESS;
+  PA_ALLOC(*dbl, Q->n * (size_t)Q->ndbl);
+  for (size_t i = 0; i < Q->n; i++)
+    view_doubles(Q, k, i, *dbl + (size_t)Q->ndbl * i);
+cleanup:
+  return st;
+}
+
+/* The arrays of a kind's records that go to the root, in this order (G_VG:
+ * the vertex kind's alone, the global ids of all the sender's vertices). */
+enum { G_GID, G_CONN, G_VG, G_DBL, G_REF, G_FLAG, G_NARRAY };
+
+/* Array a of the view Q of kind k: its address and bytes. */
+static const void *view_array(const gview *Q, int k, int a, size_t *bytes) {
+  size_t n = Q->n;
+  switch (a) {
+  case G_GID: *bytes = n * sizeof *Q->gid; return Q->gid;
+  case G_CONN: *bytes = n * (size_t)Q->nv * sizeof *Q->conn; return Q->conn;
+  case G_VG:
+    *bytes = k == PA_VERTEX ? Q->nvg * sizeof *Q->vg : 0;
+    return Q->vg;
+  case G_DBL: *bytes = n * (size_t)Q->ndbl * sizeof *Q->dbl; return Q->dbl;
+  case G_REF: *bytes = n * sizeof *Q->ref; return Q->ref;
+  default: *bytes = n * sizeof *Q->flag; return Q->flag;
+  }
+}
+
+/* Every other rank's owned entities to the root, one rank at a time, array
+ * by array from where they lie in its mesh (only the doubles are packed),
+ * kept on the root as received: array a of kind k from rank r in
+ * buf[(r * PA_DMESH_NKIND + k) * G_NARRAY + a] (n[...] bytes). Each step
+ * is agreed before it starts, the first on st (the status so far); the
+ * status of the last one is the caller's to agree. */
+static pa_status records_to_root(pa_dmesh *dm, int root, const pa__layout *lay,
+                                 const int *vals, int nvals, void **buf,
+                                 size_t *n, pa_status st) {
+  double *dbl = NULL;
+  for (int r = 0; r < dm->size; r++) {
+    PA_CALL(pa__agree(dm->comm, st));
+    if (r == root || (dm->rank != r && dm->rank != root)) continue;
+    for (int k = 0; k < PA_DMESH_NKIND && !st; k++) {
+      gview Q = own_view(dm, lay, k, vals, nvals);
+      if (dm->rank == r) st = pack_doubles(&Q, k, &dbl);
+      Q.dbl = dbl;
+      for (int a = 0; a < G_NARRAY && !st; a++) {
+        size_t i = ((size_t)r * PA_DMESH_NKIND + k) * G_NARRAY + a, bytes;
+        const void *p = view_array(&Q, k, a, &bytes);
+        st = dm->rank == r ? pa__xchg_send(dm->comm, root, p, bytes)
+                           : pa__xchg_recv(dm->comm, r, &buf[i], &n[i]);
+      }
+      pa__free(dbl);
+      dbl = NULL;
+    }
+  }
+cleanup:
+  pa__free(dbl);
+  return st;
 }
 
 /* On the root: V[k * size + r], the records of kind k from rank r: the
@@ -1051,23 +1035,23 @@ static pa_status map_views(const pa_dmesh *dm, int root, const pa__layout *lay,
       }
       void *const *b = buf + ((size_t)r * PA_DMESH_NKIND + k) * G_NARRAY;
       const size_t *nb = n + ((size_t)r * PA_DMESH_NKIND + k) * G_NARRAY;
-      pa__recs shape; /* the records' sizes: the sender's count */
-      memset(&shape, 0, sizeof shape);
-      kind_shape(dm->dim, lay, k, &shape.nv, &shape.ndbl);
-      shape.n = nb[G_GID] / sizeof(pa_gid);
+      void *const *bv = buf + ((size_t)r * PA_DMESH_NKIND + PA_VERTEX) * G_NARRAY;
+      const size_t *nbv = n + ((size_t)r * PA_DMESH_NKIND + PA_VERTEX) * G_NARRAY;
+      memset(v, 0, sizeof *v);
+      kind_shape(dm->dim, lay, k, &v->nv, &v->ndbl);
+      v->n = nb[G_GID] / sizeof(pa_gid); /* the sender's count */
+      v->nvg = k == PA_VERTEX ? nb[G_VG] / sizeof(pa_gid) : 0;
       for (int a = 0; a < G_NARRAY; a++) {
         size_t bytes;
-        record_array(&shape, a, &bytes);
+        view_array(v, k, a, &bytes);
         PA_CHECK(nb[a] == bytes, PA_ERR_INTERNAL,
                  "gather: %zu bytes of array %d of kind %d from rank %d, "
                  "%zu expected", nb[a], a, k, r, bytes);
       }
-      memset(v, 0, sizeof *v);
-      v->n = shape.n;
-      v->nv = shape.nv;
-      v->ndbl = shape.ndbl;
       v->gid = b[G_GID];
-      v->vgid = b[G_VGID];
+      v->conn = b[G_CONN];
+      v->vg = bv[G_VG];
+      v->nvg = nbv[G_VG] / sizeof(pa_gid);
       v->dbl = b[G_DBL];
       v->ref = b[G_REF];
       v->flag = b[G_FLAG];
@@ -1076,25 +1060,82 @@ cleanup:
   return st;
 }
 
-/* The global ids of the records of kind k of every rank end to end in key
- * (V[k * size + r]: rank r's from off[r]) and their order of increasing
- * global id in ord. */
-static pa_status order_kind(const gview *V, int size, pa_gid *key,
-                            size_t *off, pa_idx *ord) {
+/* The records of one kind of every rank in increasing global id, chunk by
+ * chunk (records of one rank in a row). When every rank's records come by
+ * increasing global id (the build numbers owned entities so), a merge of
+ * those runs; otherwise a stable sort of all global ids end to end (key,
+ * off: rank r's from off[r]) into ord. Equal global ids come by rank
+ * either way. */
+typedef struct gorder {
+  const gview *V; /* the kind's views of every rank */
+  int size;
+  size_t *pos;    /* merge: the next record of each rank */
+  pa_idx *ord;    /* sort: the order of the records end to end, or NULL */
+  size_t *off, j, n;
+} gorder;
+
+/* Up to this many ranks, the merge scans every rank's next record where
+ * the runs interleave: a scan of a handful of heads costs less than the
+ * sort's passes; above, the sort. */
+#define GATHER_MERGE_MAX_RANKS 16
+
+/* Whether the n global ids g come in non-decreasing order. */
+static int gids_sorted(const pa_gid *g, size_t n) {
+  for (size_t i = 1; i < n; i++)
+    if (g[i] < g[i - 1]) return 0;
+  return 1;
+}
+
+/* The order of the n records of views V (size ranks), with their range of
+ * global ids [*lo, *hi) (0, 0 when there are none). */
+static pa_status gorder_init(gorder *o, const gview *V, int size, size_t n,
+                             pa_gid *lo, pa_gid *hi) {
   pa_status st = PA_SUCCESS;
-  off[0] = 0;
-  for (int r = 0; r < size; r++) {
-    memcpy(key + off[r], V[r].gid, V[r].n * sizeof *key);
-    off[r + 1] = off[r] + V[r].n;
+  pa_gid *key = NULL;
+  int merge = size <= GATHER_MERGE_MAX_RANKS;
+  memset(o, 0, sizeof *o);
+  o->V = V;
+  o->size = size;
+  o->n = n;
+  for (int r = 0; r < size && merge; r++) merge = gids_sorted(V[r].gid, V[r].n);
+  *lo = INT64_MAX;
+  *hi = -1;
+  PA_CALLOC(o->pos, (size_t)size);
+  PA_ALLOC(o->off, (size_t)size + 1);
+  o->off[0] = 0;
+  for (int r = 0; r < size; r++) o->off[r + 1] = o->off[r] + V[r].n;
+  if (merge) {
+    for (int r = 0; r < size; r++) {
+      if (!V[r].n) continue;
+      if (V[r].gid[0] < *lo) *lo = V[r].gid[0];
+      if (V[r].gid[V[r].n - 1] > *hi) *hi = V[r].gid[V[r].n - 1];
+    }
+  } else {
+    PA_ALLOC(key, n ? n : 1);
+    PA_ALLOC(o->ord, n ? n : 1);
+    for (int r = 0; r < size; r++)
+      memcpy(key + o->off[r], V[r].gid, V[r].n * sizeof *key);
+    for (size_t i = 0; i < n; i++) {
+      o->ord[i] = (pa_idx)i;
+      if (key[i] < *lo) *lo = key[i];
+      if (key[i] > *hi) *hi = key[i];
+    }
+    PA_CALL(pa__sort_by_gid(o->ord, n, key));
   }
-  for (size_t i = 0; i < off[size]; i++) ord[i] = (pa_idx)i;
-  PA_CALL(pa__sort_by_gid(ord, off[size], key));
+  if (!n) *lo = 0;
+  *hi += 1;
 cleanup:
+  pa__free(key);
   return st;
 }
 
-/* The rank whose records hold position g of the records end to end (off:
- * see order_kind). */
+static void gorder_free(gorder *o) {
+  pa__free(o->pos);
+  pa__free(o->ord);
+  pa__free(o->off);
+}
+
+/* The rank whose records hold position g of the records end to end. */
 static int rank_of(const size_t *off, int size, size_t g) {
   int lo = 0, hi = size - 1;
   while (lo < hi) {
@@ -1105,6 +1146,54 @@ static int rank_of(const size_t *off, int size, size_t g) {
   return lo;
 }
 
+/* The next chunk of o: records [*i, *i + count) of rank *r; returns the
+ * count, 0 at the end. */
+static size_t gorder_next(gorder *o, int *r, size_t *i) {
+  if (o->ord) {
+    if (o->j >= o->n) return 0;
+    size_t g = (size_t)o->ord[o->j], c = 1;
+    *r = rank_of(o->off, o->size, g);
+    *i = g - o->off[*r];
+    while (o->j + c < o->n && (size_t)o->ord[o->j + c] == g + c &&
+           g + c < o->off[*r + 1])
+      c++;
+    o->j += c;
+    return c;
+  }
+  int best = -1;
+  pa_gid bg = 0, bound = INT64_MAX;
+  for (int q = 0; q < o->size; q++) {
+    if (o->pos[q] >= o->V[q].n) continue;
+    pa_gid g = o->V[q].gid[o->pos[q]];
+    if (best < 0 || g < bg) {
+      if (best >= 0) bound = bg;
+      best = q;
+      bg = g;
+    } else if (g < bound) {
+      bound = g;
+    }
+  }
+  if (best < 0) return 0;
+  const gview *Q = &o->V[best];
+  size_t p = o->pos[best], c = 1;
+  while (p + c < Q->n && Q->gid[p + c] < bound) c++;
+  *r = best;
+  *i = p;
+  o->pos[best] = p + c;
+  return c;
+}
+
+/* The global id of vertex q of record i of Q (not a vertex record): its
+ * local number checked against the sender's vertex count. */
+static pa_status view_vertex(const gview *Q, size_t i, int q, pa_gid *g) {
+  pa_idx v = Q->conn[(size_t)Q->nv * i + (size_t)q];
+  if (v < 0 || (size_t)v >= Q->nvg)
+    return pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
+                     "gather: local vertex %lld of %zu", (long long)v, Q->nvg);
+  *g = Q->vg[v];
+  return PA_SUCCESS;
+}
+
 /* On the root: the mesh of the gathered records V (see map_views), every
  * kind by increasing global id (whatever the ranks' order), element
  * vertices found by global id. */
@@ -1113,14 +1202,12 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
   pa_status st = PA_SUCCESS;
   pa_mesh *m = NULL;
   pa__gidindex vmap = {0};
-  pa_idx *ord = NULL;
-  pa_gid *key = NULL;
+  gorder o;
   double *xbuf = NULL;
-  size_t *off = NULL, nk[PA_DMESH_NKIND] = {0}, nmax = 0;
-  for (int k = 0; k < PA_DMESH_NKIND; k++) {
+  size_t nk[PA_DMESH_NKIND] = {0};
+  memset(&o, 0, sizeof o);
+  for (int k = 0; k < PA_DMESH_NKIND; k++)
     for (int r = 0; r < size; r++) nk[k] += V[k * size + r].n;
-    nmax = nk[k] > nmax ? nk[k] : nmax;
-  }
   PA_CALL(pa_mesh_create(d, &m));
   m->met_ncomp = lay->met_ncomp;
   m->nfield = lay->nfield;
@@ -1132,9 +1219,6 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
   PA_CALL(pa_mesh_reserve(m, (pa_idx)nk[PA_VERTEX], (pa_idx)nk[PA_ELEMENT],
                           (pa_idx)nk[PA_BOUNDARY], (pa_idx)nk[PA_EDGE]));
   PA_CALL(pa__layout_cell_fields(lay, m));
-  PA_ALLOC(ord, nmax ? nmax : 1);
-  PA_ALLOC(key, nmax ? nmax : 1);
-  PA_ALLOC(off, (size_t)size + 1);
   {
     int nd = 1;
     for (int k = 0; k < PA_DMESH_NKIND; k++)
@@ -1143,43 +1227,47 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
   }
   for (int k = 0; k < PA_DMESH_NKIND; k++) {
     const gview *Vk = V + (size_t)k * size;
-    PA_CALL(order_kind(Vk, size, key, off, ord));
-    if (k == PA_VERTEX)
-      PA_CALL(pa__gidindex_init_keys(&vmap, key, nk[PA_VERTEX]));
-    for (size_t j = 0; j < nk[k]; j++) {
-      size_t g = (size_t)ord[j];
-      int r = rank_of(off, size, g);
+    pa_gid lo, hi;
+    int r;
+    size_t i0, c, j = 0;
+    PA_CALL(gorder_init(&o, Vk, size, nk[k], &lo, &hi));
+    if (k == PA_VERTEX) PA_CALL(pa__gidindex_init(&vmap, lo, hi, nk[k]));
+    pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
+    int32_t *ref = k == PA_VERTEX ? m->vref : k == PA_ELEMENT ? m->eref
+                   : k == PA_BOUNDARY ? m->bref : m->edref;
+    uint8_t *flag = k == PA_VERTEX ? m->vflag : k == PA_ELEMENT ? m->eflag
+                    : k == PA_BOUNDARY ? m->bflag : m->edflag;
+    while ((c = gorder_next(&o, &r, &i0)) > 0) {
       const gview *Q = &Vk[r];
-      size_t i = g - off[r];
-      if (k == PA_VERTEX) {
-        view_doubles(Q, k, i, xbuf);
-        pa__vertex_set_doubles(m, (pa_idx)j, xbuf);
-        m->vref[j] = Q->ref[i];
-        m->vflag[j] = Q->flag[i];
-        int found;
-        PA_CALL(pa__gidindex_put(&vmap, Q->gid[i], (pa_idx)j, &found, NULL));
-        PA_CHECK(!found, PA_ERR_MESH, "vertex global id %lld owned twice",
-                 (long long)Q->gid[i]);
-        continue;
-      }
-      int nv = Q->nv;
-      pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
-      int32_t *ref = k == PA_ELEMENT ? m->eref : k == PA_BOUNDARY ? m->bref : m->edref;
-      uint8_t *flag = k == PA_ELEMENT ? m->eflag : k == PA_BOUNDARY ? m->bflag : m->edflag;
-      for (int q = 0; q < nv; q++) {
-        pa_gid g = view_vgid(Q, i, q);
-        pa_idx v = pa__gidindex_get(&vmap, g);
-        PA_CHECK(v >= 0, PA_ERR_MESH, "gather: vertex %lld is owned by no rank",
-                 (long long)g);
-        conn[(size_t)nv * j + q] = v;
-      }
-      ref[j] = Q->ref[i];
-      flag[j] = Q->flag[i];
-      if (Q->ndbl) {
-        view_doubles(Q, k, i, xbuf);
-        pa__entity_set_doubles(m, k, (pa_idx)j, xbuf);
+      for (size_t i = i0; i < i0 + c; i++, j++) {
+        ref[j] = Q->ref[i];
+        flag[j] = Q->flag[i];
+        if (k == PA_VERTEX) {
+          view_doubles(Q, k, i, xbuf);
+          pa__vertex_set_doubles(m, (pa_idx)j, xbuf);
+          int found;
+          PA_CALL(pa__gidindex_put(&vmap, Q->gid[i], (pa_idx)j, &found, NULL));
+          PA_CHECK(!found, PA_ERR_MESH, "vertex global id %lld owned twice",
+                   (long long)Q->gid[i]);
+          continue;
+        }
+        int nv = Q->nv;
+        for (int q = 0; q < nv; q++) {
+          pa_gid g = -1;
+          PA_CALL(view_vertex(Q, i, q, &g));
+          pa_idx v = pa__gidindex_get(&vmap, g);
+          PA_CHECK(v >= 0, PA_ERR_MESH,
+                   "gather: vertex %lld is owned by no rank", (long long)g);
+          conn[(size_t)nv * j + q] = v;
+        }
+        if (Q->ndbl) {
+          view_doubles(Q, k, i, xbuf);
+          pa__entity_set_doubles(m, k, (pa_idx)j, xbuf);
+        }
       }
     }
+    gorder_free(&o);
+    memset(&o, 0, sizeof o);
   }
   m->nv = (pa_idx)nk[PA_VERTEX];
   m->ne = (pa_idx)nk[PA_ELEMENT];
@@ -1190,31 +1278,26 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
 cleanup:
   pa_mesh_destroy(m);
   pa__gidindex_free(&vmap);
-  pa__free(ord);
-  pa__free(key);
+  gorder_free(&o);
   pa__free(xbuf);
-  pa__free(off);
   return st;
 }
 
 pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
   pa_status st = PA_SUCCESS;
-  pa__recs R[PA_DMESH_NKIND];
   pa__layout lay;
   void **buf = NULL;
   size_t *nbuf = NULL, nb = 0;
   gview *V = NULL;
   int vals[PA_MESH_MAX_FIELDS], nvals = 0;
-  double t0 = pa_wtime(), t1, t2;
-  memset(R, 0, sizeof R);
+  double t1, t2;
   PA_CHECK(dm && meshp, PA_ERR_ARG, "pa_dmesh_gather: NULL argument");
   pa__agree_reset();
   *meshp = NULL;
   PA_CHECK(root >= 0 && root < dm->size, PA_ERR_ARG, "root %d out of range",
            root);
   gather_layout(dm, &lay, vals, &nvals);
-  if (dm->rank != root) st = gather_records(dm, &lay, vals, nvals, R);
-  if (!st && dm->rank == root) {
+  if (dm->rank == root) {
     nb = (size_t)dm->size * PA_DMESH_NKIND * G_NARRAY;
     buf = pa__calloc(nb, sizeof *buf);
     nbuf = pa__calloc(nb, sizeof *nbuf);
@@ -1223,20 +1306,19 @@ pa_status pa_dmesh_gather(pa_dmesh *dm, int root, pa_mesh **meshp) {
       st = pa__error(PA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
   }
   t1 = pa_wtime();
-  st = records_to_root(dm, root, R, buf, nbuf, st);
+  st = records_to_root(dm, root, &lay, vals, nvals, buf, nbuf, st);
   t2 = pa_wtime();
   if (st || dm->rank != root) goto cleanup;
   PA_CALL(map_views(dm, root, &lay, vals, nvals, buf, nbuf, V));
   PA_CALL(assemble_by_gid(dm->dim, &lay, dm->size, V, meshp));
-  pa__info(2, "padapt: rank %d: gather: records %.3f s, to the root %.3f s, "
-              "assembly %.3f s\n", dm->rank, t1 - t0, t2 - t1, pa_wtime() - t2);
+  pa__info(2, "padapt: rank %d: gather: to the root %.3f s, assembly %.3f s\n",
+           dm->rank, t2 - t1, pa_wtime() - t2);
 cleanup:
   if (dm) st = pa__agree_end(dm->comm, st);
   if (st && meshp && *meshp) {
     pa_mesh_destroy(*meshp);
     *meshp = NULL;
   }
-  for (int k = 0; k < PA_DMESH_NKIND; k++) pa__recs_free(&R[k]);
   for (size_t i = 0; buf && i < nb; i++) pa__free(buf[i]);
   pa__free(buf);
   pa__free(nbuf);
