@@ -1048,6 +1048,9 @@ static pa_status map_views(const pa_dmesh *dm, int root, const pa__layout *lay,
                  "gather: %zu bytes of array %d of kind %d from rank %d, "
                  "%zu expected", nb[a], a, k, r, bytes);
       }
+      PA_CHECK(k != PA_VERTEX || v->n <= v->nvg, PA_ERR_INTERNAL,
+               "gather: %zu vertices owned of %zu from rank %d", v->n, v->nvg,
+               r);
       v->gid = b[G_GID];
       v->conn = b[G_CONN];
       v->vg = bv[G_VG];
@@ -1175,23 +1178,34 @@ static size_t gorder_next(gorder *o, int *r, size_t *i) {
   }
   if (best < 0) return 0;
   const gview *Q = &o->V[best];
-  size_t p = o->pos[best], c = 1;
-  while (p + c < Q->n && Q->gid[p + c] < bound) c++;
+  size_t p = o->pos[best], c = 1, step = 1, hi;
+  /* the first of the run's next records not below bound, found by
+   * doubling then halving (runs are long where ranks own ranges) */
+  while (p + c + step <= Q->n && Q->gid[p + c + step - 1] < bound) {
+    c += step;
+    step *= 2;
+  }
+  hi = p + c + step < Q->n ? c + step - 1 : Q->n - p; /* gid[p + hi] >= bound */
+  while (c < hi) {
+    size_t mid = c + (hi - c) / 2;
+    if (Q->gid[p + mid] < bound) c = mid + 1;
+    else hi = mid;
+  }
   *r = best;
   *i = p;
   o->pos[best] = p + c;
   return c;
 }
 
-/* The global id of vertex q of record i of Q (not a vertex record): its
- * local number checked against the sender's vertex count. */
-static pa_status view_vertex(const gview *Q, size_t i, int q, pa_gid *g) {
-  pa_idx v = Q->conn[(size_t)Q->nv * i + (size_t)q];
-  if (v < 0 || (size_t)v >= Q->nvg)
-    return pa__error(PA_ERR_INTERNAL, __FILE__, __LINE__,
-                     "gather: local vertex %lld of %zu", (long long)v, Q->nvg);
-  *g = Q->vg[v];
-  return PA_SUCCESS;
+/* The output vertices of rank r's local vertices, loc[off[r] ..
+ * off[r] + V[r].nvg) (V: the vertex views; off: their starts, off[size]
+ * the total): its owned ones are set as they are assembled; its ghosts
+ * here through vmap (-1: owned by no rank). */
+static void ghost_vertices(const gview *V, int size, const size_t *off,
+                           const pa__gidindex *vmap, pa_idx *loc) {
+  for (int r = 0; r < size; r++)
+    for (size_t i = V[r].n; i < V[r].nvg; i++)
+      loc[off[r] + i] = pa__gidindex_get(vmap, V[r].vg[i]);
 }
 
 /* On the root: the mesh of the gathered records V (see map_views), every
@@ -1204,10 +1218,15 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
   pa__gidindex vmap = {0};
   gorder o;
   double *xbuf = NULL;
-  size_t nk[PA_DMESH_NKIND] = {0};
+  pa_idx *loc = NULL; /* see ghost_vertices */
+  size_t nk[PA_DMESH_NKIND] = {0}, *loff = NULL;
   memset(&o, 0, sizeof o);
   for (int k = 0; k < PA_DMESH_NKIND; k++)
     for (int r = 0; r < size; r++) nk[k] += V[k * size + r].n;
+  PA_ALLOC(loff, (size_t)size + 1);
+  loff[0] = 0;
+  for (int r = 0; r < size; r++) loff[r + 1] = loff[r] + V[PA_VERTEX * size + r].nvg;
+  PA_ALLOC(loc, loff[size] ? loff[size] : 1);
   PA_CALL(pa_mesh_create(d, &m));
   m->met_ncomp = lay->met_ncomp;
   m->nfield = lay->nfield;
@@ -1249,16 +1268,20 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
           PA_CALL(pa__gidindex_put(&vmap, Q->gid[i], (pa_idx)j, &found, NULL));
           PA_CHECK(!found, PA_ERR_MESH, "vertex global id %lld owned twice",
                    (long long)Q->gid[i]);
+          loc[loff[r] + i] = (pa_idx)j;
           continue;
         }
         int nv = Q->nv;
+        const pa_idx *lr = loc + loff[r], *cq = Q->conn + (size_t)nv * i;
         for (int q = 0; q < nv; q++) {
-          pa_gid g = -1;
-          PA_CALL(view_vertex(Q, i, q, &g));
-          pa_idx v = pa__gidindex_get(&vmap, g);
-          PA_CHECK(v >= 0, PA_ERR_MESH,
-                   "gather: vertex %lld is owned by no rank", (long long)g);
-          conn[(size_t)nv * j + q] = v;
+          pa_idx c = cq[q];
+          PA_CHECK(c >= 0 && (size_t)c < Q->nvg, PA_ERR_INTERNAL,
+                   "gather: local vertex %lld of rank %d out of range",
+                   (long long)c, r);
+          PA_CHECK(lr[c] >= 0, PA_ERR_MESH,
+                   "gather: vertex %lld is owned by no rank",
+                   (long long)Q->vg[c]);
+          conn[(size_t)nv * j + q] = lr[c];
         }
         if (Q->ndbl) {
           view_doubles(Q, k, i, xbuf);
@@ -1268,6 +1291,10 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
     }
     gorder_free(&o);
     memset(&o, 0, sizeof o);
+    if (k == PA_VERTEX) {
+      ghost_vertices(Vk, size, loff, &vmap, loc);
+      pa__gidindex_free(&vmap);
+    }
   }
   m->nv = (pa_idx)nk[PA_VERTEX];
   m->ne = (pa_idx)nk[PA_ELEMENT];
@@ -1280,6 +1307,8 @@ cleanup:
   pa__gidindex_free(&vmap);
   gorder_free(&o);
   pa__free(xbuf);
+  pa__free(loc);
+  pa__free(loff);
   return st;
 }
 
