@@ -890,16 +890,18 @@ static void gather_layout(pa_dmesh *dm, pa__layout *lay, int *vals,
  * into records nor merged: their fresh pages cost more than the reads):
  * the arrays received from another rank, or the root's own mesh, whose
  * owned entities come first. Connectivities are the sending rank's local
- * vertex numbers, vg (nvg of them) their global ids. dm, vals, nvals (the
- * root's own): its mesh, whose doubles are read in place, and the values
- * appended to its vertices' doubles; otherwise dbl holds them packed. */
+ * vertex numbers: its n owned vertices (global ids gid of its vertex
+ * records), then its nghost ghosts (global ids ghost, in the vertex view
+ * alone). dm, vals, nvals (the root's own): its mesh, whose doubles are
+ * read in place, and the values appended to its vertices' doubles;
+ * otherwise dbl holds them packed. */
 typedef struct gview {
   size_t n;
   int nv, ndbl; /* vertex ids and doubles per record */
   const pa_gid *gid;
   const pa_idx *conn;
-  const pa_gid *vg;
-  size_t nvg;
+  const pa_gid *ghost;
+  size_t nghost;
   const double *dbl;
   const int32_t *ref;
   const uint8_t *flag;
@@ -934,8 +936,10 @@ static gview own_view(const pa_dmesh *dm, const pa__layout *lay, int k,
            : k == PA_BOUNDARY ? m->bflag : m->edflag;
   v.conn = k == PA_VERTEX ? NULL : k == PA_ELEMENT ? m->elem
            : k == PA_BOUNDARY ? m->bdry : m->edge;
-  v.vg = dm->gid[PA_VERTEX];
-  v.nvg = (size_t)m->nv;
+  if (k == PA_VERTEX) {
+    v.ghost = dm->gid[PA_VERTEX] + v.n;
+    v.nghost = (size_t)m->nv - v.n;
+  }
   return v;
 }
 
@@ -945,13 +949,26 @@ static void view_doubles(const gview *Q, int k, size_t i, double *x) {
     memcpy(x, Q->dbl + (size_t)Q->ndbl * i, (size_t)Q->ndbl * sizeof *x);
     return;
   }
-  int o = pa__entity_doubles(Q->dm->mesh, k, (pa_idx)i, x);
-  if (k != PA_VERTEX) return;
+  const pa_mesh *m = Q->dm->mesh;
+  if (k != PA_VERTEX) {
+    pa__entity_doubles(m, k, (pa_idx)i, x);
+    return;
+  }
+  int o = pa__vertex_doubles(m, (pa_idx)i, m->nfield, x);
   for (int q = 0; q < Q->nvals; q++) {
     const pa_dmesh_value *v = Q->dm->value[Q->vals[q]];
     memcpy(x + o, v->data + v->unit * i, v->unit);
     o += v->ncomp;
   }
+}
+
+/* The doubles of record i of kind k of Q: where they lie when packed,
+ * otherwise gathered into x. */
+static const double *record_doubles(const gview *Q, int k, size_t i,
+                                    double *x) {
+  if (!Q->dm) return Q->dbl + (size_t)Q->ndbl * i;
+  view_doubles(Q, k, i, x);
+  return x;
 }
 
 /* The doubles of a view of a rank's own mesh, packed record after record
@@ -967,9 +984,9 @@ cleanup:
   return st;
 }
 
-/* The arrays of a kind's records that go to the root, in this order (G_VG:
- * the vertex kind's alone, the global ids of all the sender's vertices). */
-enum { G_GID, G_CONN, G_VG, G_DBL, G_REF, G_FLAG, G_NARRAY };
+/* The arrays of a kind's records that go to the root, in this order
+ * (G_GHOST: the vertex kind's alone). */
+enum { G_GID, G_CONN, G_GHOST, G_DBL, G_REF, G_FLAG, G_NARRAY };
 
 /* Array a of the view Q of kind k: its address and bytes. */
 static const void *view_array(const gview *Q, int k, int a, size_t *bytes) {
@@ -977,9 +994,9 @@ static const void *view_array(const gview *Q, int k, int a, size_t *bytes) {
   switch (a) {
   case G_GID: *bytes = n * sizeof *Q->gid; return Q->gid;
   case G_CONN: *bytes = n * (size_t)Q->nv * sizeof *Q->conn; return Q->conn;
-  case G_VG:
-    *bytes = k == PA_VERTEX ? Q->nvg * sizeof *Q->vg : 0;
-    return Q->vg;
+  case G_GHOST:
+    *bytes = k == PA_VERTEX ? Q->nghost * sizeof *Q->ghost : 0;
+    return Q->ghost;
   case G_DBL: *bytes = n * (size_t)Q->ndbl * sizeof *Q->dbl; return Q->dbl;
   case G_REF: *bytes = n * sizeof *Q->ref; return Q->ref;
   default: *bytes = n * sizeof *Q->flag; return Q->flag;
@@ -1035,12 +1052,10 @@ static pa_status map_views(const pa_dmesh *dm, int root, const pa__layout *lay,
       }
       void *const *b = buf + ((size_t)r * PA_DMESH_NKIND + k) * G_NARRAY;
       const size_t *nb = n + ((size_t)r * PA_DMESH_NKIND + k) * G_NARRAY;
-      void *const *bv = buf + ((size_t)r * PA_DMESH_NKIND + PA_VERTEX) * G_NARRAY;
-      const size_t *nbv = n + ((size_t)r * PA_DMESH_NKIND + PA_VERTEX) * G_NARRAY;
       memset(v, 0, sizeof *v);
       kind_shape(dm->dim, lay, k, &v->nv, &v->ndbl);
       v->n = nb[G_GID] / sizeof(pa_gid); /* the sender's count */
-      v->nvg = k == PA_VERTEX ? nb[G_VG] / sizeof(pa_gid) : 0;
+      v->nghost = k == PA_VERTEX ? nb[G_GHOST] / sizeof(pa_gid) : 0;
       for (int a = 0; a < G_NARRAY; a++) {
         size_t bytes;
         view_array(v, k, a, &bytes);
@@ -1048,13 +1063,9 @@ static pa_status map_views(const pa_dmesh *dm, int root, const pa__layout *lay,
                  "gather: %zu bytes of array %d of kind %d from rank %d, "
                  "%zu expected", nb[a], a, k, r, bytes);
       }
-      PA_CHECK(k != PA_VERTEX || v->n <= v->nvg, PA_ERR_INTERNAL,
-               "gather: %zu vertices owned of %zu from rank %d", v->n, v->nvg,
-               r);
       v->gid = b[G_GID];
       v->conn = b[G_CONN];
-      v->vg = bv[G_VG];
-      v->nvg = nbv[G_VG] / sizeof(pa_gid);
+      v->ghost = b[G_GHOST];
       v->dbl = b[G_DBL];
       v->ref = b[G_REF];
       v->flag = b[G_FLAG];
@@ -1197,15 +1208,53 @@ static size_t gorder_next(gorder *o, int *r, size_t *i) {
   return c;
 }
 
-/* The output vertices of rank r's local vertices, loc[off[r] ..
- * off[r] + V[r].nvg) (V: the vertex views; off: their starts, off[size]
- * the total): its owned ones are set as they are assembled; its ghosts
- * here through vmap (-1: owned by no rank). */
-static void ghost_vertices(const gview *V, int size, const size_t *off,
-                           const pa__gidindex *vmap, pa_idx *loc) {
+/* The global id of local vertex c of the rank of vertex view Q. */
+static pa_gid local_gid(const gview *Q, size_t c) {
+  return c < Q->n ? Q->gid[c] : Q->ghost[c - Q->n];
+}
+
+/* The position of global id g among the n sorted ids a, or -1. */
+static ptrdiff_t find_gid(const pa_gid *a, size_t n, pa_gid g) {
+  size_t lo = 0, hi = n;
+  while (lo < hi) {
+    size_t mid = lo + (hi - lo) / 2;
+    if (a[mid] < g) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo < n && a[lo] == g ? (ptrdiff_t)lo : -1;
+}
+
+/* The output vertices of every rank's local vertices: rank r's in
+ * loc[off[r] .. off[r + 1]) (V: the vertex views), its owned ones set as
+ * they were assembled, its ghosts here (-1: owned by no rank): found by
+ * bisection in the owning rank's records when every rank's come sorted,
+ * otherwise through an index of the owned global ids, in [lo, hi). */
+static pa_status ghost_vertices(const gview *V, int size, const size_t *off,
+                                int sorted, pa_gid lo, pa_gid hi,
+                                pa_idx *loc) {
+  pa_status st = PA_SUCCESS;
+  pa__gidindex vmap = {0};
+  if (!sorted) {
+    PA_CALL(pa__gidindex_init(&vmap, lo, hi, off[size]));
+    for (int r = 0; r < size; r++)
+      for (size_t i = 0; i < V[r].n; i++)
+        PA_CALL(pa__gidindex_put(&vmap, V[r].gid[i], loc[off[r] + i], NULL,
+                                 NULL));
+  }
   for (int r = 0; r < size; r++)
-    for (size_t i = V[r].n; i < V[r].nvg; i++)
-      loc[off[r] + i] = pa__gidindex_get(vmap, V[r].vg[i]);
+    for (size_t i = 0; i < V[r].nghost; i++) {
+      pa_gid g = V[r].ghost[i];
+      pa_idx v = -1;
+      if (!sorted) v = pa__gidindex_get(&vmap, g);
+      for (int q = 0; q < size && sorted && v < 0; q++) {
+        ptrdiff_t p = q == r ? -1 : find_gid(V[q].gid, V[q].n, g);
+        if (p >= 0) v = loc[off[q] + (size_t)p];
+      }
+      loc[off[r] + V[r].n + i] = v;
+    }
+cleanup:
+  pa__gidindex_free(&vmap);
+  return st;
 }
 
 /* On the root: the mesh of the gathered records V (see map_views), every
@@ -1215,7 +1264,6 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
                                  const gview *V, pa_mesh **mp) {
   pa_status st = PA_SUCCESS;
   pa_mesh *m = NULL;
-  pa__gidindex vmap = {0};
   gorder o;
   double *xbuf = NULL;
   pa_idx *loc = NULL; /* see ghost_vertices */
@@ -1225,7 +1273,9 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
     for (int r = 0; r < size; r++) nk[k] += V[k * size + r].n;
   PA_ALLOC(loff, (size_t)size + 1);
   loff[0] = 0;
-  for (int r = 0; r < size; r++) loff[r + 1] = loff[r] + V[PA_VERTEX * size + r].nvg;
+  for (int r = 0; r < size; r++)
+    loff[r + 1] = loff[r] + V[PA_VERTEX * size + r].n +
+                  V[PA_VERTEX * size + r].nghost;
   PA_ALLOC(loc, loff[size] ? loff[size] : 1);
   PA_CALL(pa_mesh_create(d, &m));
   m->met_ncomp = lay->met_ncomp;
@@ -1246,11 +1296,10 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
   }
   for (int k = 0; k < PA_DMESH_NKIND; k++) {
     const gview *Vk = V + (size_t)k * size;
-    pa_gid lo, hi;
+    pa_gid lo, hi, last = -1;
     int r;
     size_t i0, c, j = 0;
     PA_CALL(gorder_init(&o, Vk, size, nk[k], &lo, &hi));
-    if (k == PA_VERTEX) PA_CALL(pa__gidindex_init(&vmap, lo, hi, nk[k]));
     pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
     int32_t *ref = k == PA_VERTEX ? m->vref : k == PA_ELEMENT ? m->eref
                    : k == PA_BOUNDARY ? m->bref : m->edref;
@@ -1262,39 +1311,36 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
         ref[j] = Q->ref[i];
         flag[j] = Q->flag[i];
         if (k == PA_VERTEX) {
-          view_doubles(Q, k, i, xbuf);
-          pa__vertex_set_doubles(m, (pa_idx)j, xbuf);
-          int found;
-          PA_CALL(pa__gidindex_put(&vmap, Q->gid[i], (pa_idx)j, &found, NULL));
-          PA_CHECK(!found, PA_ERR_MESH, "vertex global id %lld owned twice",
-                   (long long)Q->gid[i]);
+          pa__vertex_set_doubles(m, (pa_idx)j, record_doubles(Q, k, i, xbuf));
+          PA_CHECK(j == 0 || Q->gid[i] != last, PA_ERR_MESH,
+                   "vertex global id %lld owned twice", (long long)last);
+          last = Q->gid[i];
           loc[loff[r] + i] = (pa_idx)j;
           continue;
         }
         int nv = Q->nv;
         const pa_idx *lr = loc + loff[r], *cq = Q->conn + (size_t)nv * i;
+        size_t nl = loff[r + 1] - loff[r];
         for (int q = 0; q < nv; q++) {
           pa_idx c = cq[q];
-          PA_CHECK(c >= 0 && (size_t)c < Q->nvg, PA_ERR_INTERNAL,
+          PA_CHECK(c >= 0 && (size_t)c < nl, PA_ERR_INTERNAL,
                    "gather: local vertex %lld of rank %d out of range",
                    (long long)c, r);
           PA_CHECK(lr[c] >= 0, PA_ERR_MESH,
                    "gather: vertex %lld is owned by no rank",
-                   (long long)Q->vg[c]);
+                   (long long)local_gid(&V[PA_VERTEX * size + r], (size_t)c));
           conn[(size_t)nv * j + q] = lr[c];
         }
         if (Q->ndbl) {
-          view_doubles(Q, k, i, xbuf);
-          pa__entity_set_doubles(m, k, (pa_idx)j, xbuf);
+          pa__entity_set_doubles(m, k, (pa_idx)j, record_doubles(Q, k, i, xbuf));
         }
       }
     }
+    int sorted = o.ord == NULL;
     gorder_free(&o);
     memset(&o, 0, sizeof o);
-    if (k == PA_VERTEX) {
-      ghost_vertices(Vk, size, loff, &vmap, loc);
-      pa__gidindex_free(&vmap);
-    }
+    if (k == PA_VERTEX)
+      PA_CALL(ghost_vertices(Vk, size, loff, sorted, lo, hi, loc));
   }
   m->nv = (pa_idx)nk[PA_VERTEX];
   m->ne = (pa_idx)nk[PA_ELEMENT];
@@ -1304,7 +1350,6 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
   m = NULL;
 cleanup:
   pa_mesh_destroy(m);
-  pa__gidindex_free(&vmap);
   gorder_free(&o);
   pa__free(xbuf);
   pa__free(loc);
