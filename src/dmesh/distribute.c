@@ -971,15 +971,22 @@ static const double *record_doubles(const gview *Q, int k, size_t i,
   return x;
 }
 
-/* The doubles of a view of a rank's own mesh, packed record after record
- * into *dbl (allocated; NULL when the records have none). */
-static pa_status pack_doubles(const gview *Q, int k, double **dbl) {
+/* The doubles of a view of a rank's own mesh, packed record after record:
+ * the mesh's coordinates when the records hold nothing else, otherwise
+ * *dbl (allocated; NULL when the records have none). */
+static pa_status pack_doubles(const gview *Q, int k, const double **packed,
+                              double **dbl) {
   pa_status st = PA_SUCCESS;
-  *dbl = NULL;
+  *packed = *dbl = NULL;
   if (!Q->ndbl || !Q->n) return PA_SUCCESS;
+  if (k == PA_VERTEX && Q->ndbl == Q->dm->dim) { /* no metric, field, value */
+    *packed = Q->dm->mesh->coord;
+    return PA_SUCCESS;
+  }
   PA_ALLOC(*dbl, Q->n * (size_t)Q->ndbl);
   for (size_t i = 0; i < Q->n; i++)
     view_doubles(Q, k, i, *dbl + (size_t)Q->ndbl * i);
+  *packed = *dbl;
 cleanup:
   return st;
 }
@@ -1018,8 +1025,7 @@ static pa_status records_to_root(pa_dmesh *dm, int root, const pa__layout *lay,
     if (r == root || (dm->rank != r && dm->rank != root)) continue;
     for (int k = 0; k < PA_DMESH_NKIND && !st; k++) {
       gview Q = own_view(dm, lay, k, vals, nvals);
-      if (dm->rank == r) st = pack_doubles(&Q, k, &dbl);
-      Q.dbl = dbl;
+      if (dm->rank == r) st = pack_doubles(&Q, k, &Q.dbl, &dbl);
       for (int a = 0; a < G_NARRAY && !st; a++) {
         size_t i = ((size_t)r * PA_DMESH_NKIND + k) * G_NARRAY + a, bytes;
         const void *p = view_array(&Q, k, a, &bytes);
