@@ -890,15 +890,17 @@ static void gather_layout(pa_dmesh *dm, pa__layout *lay, int *vals,
  * into records nor merged: their fresh pages cost more than the reads):
  * the arrays received from another rank, or the root's own mesh, whose
  * owned entities come first. Connectivities are the sending rank's local
- * vertex numbers: its n owned vertices (global ids gid of its vertex
- * records), then its nghost ghosts (global ids ghost, in the vertex view
- * alone). dm, vals, nvals (the root's own): its mesh, whose doubles are
+ * vertex numbers: its n owned vertices (global ids of its vertex records),
+ * then its nghost ghosts (global ids ghost, in the vertex view alone). The
+ * records' global ids: gid, or gid0 + i when gid is NULL (consecutive ids,
+ * sent as the first). dm, vals, nvals (the root's own): its mesh, whose doubles are
  * read in place, and the values appended to its vertices' doubles;
  * otherwise dbl holds them packed. */
 typedef struct gview {
   size_t n;
   int nv, ndbl; /* vertex ids and doubles per record */
   const pa_gid *gid;
+  pa_gid gid0;
   const pa_idx *conn;
   const pa_gid *ghost;
   size_t nghost;
@@ -991,15 +993,30 @@ cleanup:
   return st;
 }
 
+/* The global id of record i of Q. */
+static inline pa_gid view_gid(const gview *Q, size_t i) {
+  return Q->gid ? Q->gid[i] : Q->gid0 + (pa_gid)i;
+}
+
+/* Whether the n global ids g are consecutive (g[0] + i). */
+static int gids_consecutive(const pa_gid *g, size_t n) {
+  for (size_t i = 1; i < n; i++)
+    if (g[i] != g[0] + (pa_gid)i) return 0;
+  return 1;
+}
+
 /* The arrays of a kind's records that go to the root, in this order
- * (G_GHOST: the vertex kind's alone). */
+ * (G_GHOST: the vertex kind's alone; G_GID: the first id alone when more
+ * than one are consecutive, which the build's numbering makes common). */
 enum { G_GID, G_CONN, G_GHOST, G_DBL, G_REF, G_FLAG, G_NARRAY };
 
 /* Array a of the view Q of kind k: its address and bytes. */
 static const void *view_array(const gview *Q, int k, int a, size_t *bytes) {
   size_t n = Q->n;
   switch (a) {
-  case G_GID: *bytes = n * sizeof *Q->gid; return Q->gid;
+  case G_GID:
+    *bytes = (Q->gid || !n ? n : 1) * sizeof *Q->gid;
+    return Q->gid ? (const void *)Q->gid : &Q->gid0;
   case G_CONN: *bytes = n * (size_t)Q->nv * sizeof *Q->conn; return Q->conn;
   case G_GHOST:
     *bytes = k == PA_VERTEX ? Q->nghost * sizeof *Q->ghost : 0;
@@ -1026,6 +1043,10 @@ static pa_status records_to_root(pa_dmesh *dm, int root, const pa__layout *lay,
     for (int k = 0; k < PA_DMESH_NKIND && !st; k++) {
       gview Q = own_view(dm, lay, k, vals, nvals);
       if (dm->rank == r) st = pack_doubles(&Q, k, &Q.dbl, &dbl);
+      if (dm->rank == r && Q.n > 1 && gids_consecutive(Q.gid, Q.n)) {
+        Q.gid0 = Q.gid[0];
+        Q.gid = NULL;
+      }
       for (int a = 0; a < G_NARRAY && !st; a++) {
         size_t i = ((size_t)r * PA_DMESH_NKIND + k) * G_NARRAY + a, bytes;
         const void *p = view_array(&Q, k, a, &bytes);
@@ -1060,8 +1081,13 @@ static pa_status map_views(const pa_dmesh *dm, int root, const pa__layout *lay,
       const size_t *nb = n + ((size_t)r * PA_DMESH_NKIND + k) * G_NARRAY;
       memset(v, 0, sizeof *v);
       kind_shape(dm->dim, lay, k, &v->nv, &v->ndbl);
-      v->n = nb[G_GID] / sizeof(pa_gid); /* the sender's count */
+      v->n = nb[G_REF] / sizeof(int32_t); /* the sender's count */
       v->nghost = k == PA_VERTEX ? nb[G_GHOST] / sizeof(pa_gid) : 0;
+      v->gid = b[G_GID]; /* NULL or 8 bytes: consecutive */
+      if (v->n > 1 && nb[G_GID] == sizeof(pa_gid)) {
+        v->gid0 = v->gid[0];
+        v->gid = NULL;
+      }
       for (int a = 0; a < G_NARRAY; a++) {
         size_t bytes;
         view_array(v, k, a, &bytes);
@@ -1069,7 +1095,6 @@ static pa_status map_views(const pa_dmesh *dm, int root, const pa__layout *lay,
                  "gather: %zu bytes of array %d of kind %d from rank %d, "
                  "%zu expected", nb[a], a, k, r, bytes);
       }
-      v->gid = b[G_GID];
       v->conn = b[G_CONN];
       v->ghost = b[G_GHOST];
       v->dbl = b[G_DBL];
@@ -1117,7 +1142,8 @@ static pa_status gorder_init(gorder *o, const gview *V, int size, size_t n,
   o->V = V;
   o->size = size;
   o->n = n;
-  for (int r = 0; r < size && merge; r++) merge = gids_sorted(V[r].gid, V[r].n);
+  for (int r = 0; r < size && merge; r++)
+    merge = !V[r].gid || gids_sorted(V[r].gid, V[r].n);
   *lo = INT64_MAX;
   *hi = -1;
   PA_CALLOC(o->pos, (size_t)size);
@@ -1127,14 +1153,14 @@ static pa_status gorder_init(gorder *o, const gview *V, int size, size_t n,
   if (merge) {
     for (int r = 0; r < size; r++) {
       if (!V[r].n) continue;
-      if (V[r].gid[0] < *lo) *lo = V[r].gid[0];
-      if (V[r].gid[V[r].n - 1] > *hi) *hi = V[r].gid[V[r].n - 1];
+      if (view_gid(&V[r], 0) < *lo) *lo = view_gid(&V[r], 0);
+      if (view_gid(&V[r], V[r].n - 1) > *hi) *hi = view_gid(&V[r], V[r].n - 1);
     }
   } else {
     PA_ALLOC(key, n ? n : 1);
     PA_ALLOC(o->ord, n ? n : 1);
     for (int r = 0; r < size; r++)
-      memcpy(key + o->off[r], V[r].gid, V[r].n * sizeof *key);
+      for (size_t i = 0; i < V[r].n; i++) key[o->off[r] + i] = view_gid(&V[r], i);
     for (size_t i = 0; i < n; i++) {
       o->ord[i] = (pa_idx)i;
       if (key[i] < *lo) *lo = key[i];
@@ -1184,7 +1210,7 @@ static size_t gorder_next(gorder *o, int *r, size_t *i) {
   pa_gid bg = 0, bound = INT64_MAX;
   for (int q = 0; q < o->size; q++) {
     if (o->pos[q] >= o->V[q].n) continue;
-    pa_gid g = o->V[q].gid[o->pos[q]];
+    pa_gid g = view_gid(&o->V[q], o->pos[q]);
     if (best < 0 || g < bg) {
       if (best >= 0) bound = bg;
       best = q;
@@ -1198,14 +1224,14 @@ static size_t gorder_next(gorder *o, int *r, size_t *i) {
   size_t p = o->pos[best], c = 1, step = 1, hi;
   /* the first of the run's next records not below bound, found by
    * doubling then halving (runs are long where ranks own ranges) */
-  while (p + c + step <= Q->n && Q->gid[p + c + step - 1] < bound) {
+  while (p + c + step <= Q->n && view_gid(Q, p + c + step - 1) < bound) {
     c += step;
     step *= 2;
   }
   hi = p + c + step < Q->n ? c + step - 1 : Q->n - p; /* gid[p + hi] >= bound */
   while (c < hi) {
     size_t mid = c + (hi - c) / 2;
-    if (Q->gid[p + mid] < bound) c = mid + 1;
+    if (view_gid(Q, p + mid) < bound) c = mid + 1;
     else hi = mid;
   }
   *r = best;
@@ -1216,18 +1242,19 @@ static size_t gorder_next(gorder *o, int *r, size_t *i) {
 
 /* The global id of local vertex c of the rank of vertex view Q. */
 static pa_gid local_gid(const gview *Q, size_t c) {
-  return c < Q->n ? Q->gid[c] : Q->ghost[c - Q->n];
+  return c < Q->n ? view_gid(Q, c) : Q->ghost[c - Q->n];
 }
 
-/* The position of global id g among the n sorted ids a, or -1. */
-static ptrdiff_t find_gid(const pa_gid *a, size_t n, pa_gid g) {
-  size_t lo = 0, hi = n;
+/* The position of global id g among the sorted ids of the records of Q,
+ * or -1. */
+static ptrdiff_t find_gid(const gview *Q, pa_gid g) {
+  size_t lo = 0, hi = Q->n;
   while (lo < hi) {
     size_t mid = lo + (hi - lo) / 2;
-    if (a[mid] < g) lo = mid + 1;
+    if (view_gid(Q, mid) < g) lo = mid + 1;
     else hi = mid;
   }
-  return lo < n && a[lo] == g ? (ptrdiff_t)lo : -1;
+  return lo < Q->n && view_gid(Q, lo) == g ? (ptrdiff_t)lo : -1;
 }
 
 /* The output vertices of every rank's local vertices: rank r's in
@@ -1244,8 +1271,8 @@ static pa_status ghost_vertices(const gview *V, int size, const size_t *off,
     PA_CALL(pa__gidindex_init(&vmap, lo, hi, off[size]));
     for (int r = 0; r < size; r++)
       for (size_t i = 0; i < V[r].n; i++)
-        PA_CALL(pa__gidindex_put(&vmap, V[r].gid[i], loc[off[r] + i], NULL,
-                                 NULL));
+        PA_CALL(pa__gidindex_put(&vmap, view_gid(&V[r], i), loc[off[r] + i],
+                                 NULL, NULL));
   }
   for (int r = 0; r < size; r++)
     for (size_t i = 0; i < V[r].nghost; i++) {
@@ -1253,7 +1280,7 @@ static pa_status ghost_vertices(const gview *V, int size, const size_t *off,
       pa_idx v = -1;
       if (!sorted) v = pa__gidindex_get(&vmap, g);
       for (int q = 0; q < size && sorted && v < 0; q++) {
-        ptrdiff_t p = q == r ? -1 : find_gid(V[q].gid, V[q].n, g);
+        ptrdiff_t p = q == r ? -1 : find_gid(&V[q], g);
         if (p >= 0) v = loc[off[q] + (size_t)p];
       }
       loc[off[r] + V[r].n + i] = v;
@@ -1318,9 +1345,10 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
         flag[j] = Q->flag[i];
         if (k == PA_VERTEX) {
           pa__vertex_set_doubles(m, (pa_idx)j, record_doubles(Q, k, i, xbuf));
-          PA_CHECK(j == 0 || Q->gid[i] != last, PA_ERR_MESH,
+          pa_gid g = view_gid(Q, i);
+          PA_CHECK(j == 0 || g != last, PA_ERR_MESH,
                    "vertex global id %lld owned twice", (long long)last);
-          last = Q->gid[i];
+          last = g;
           loc[loff[r] + i] = (pa_idx)j;
           continue;
         }
