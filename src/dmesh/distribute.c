@@ -886,16 +886,16 @@ static void gather_layout(pa_dmesh *dm, pa__layout *lay, int *vals,
     }
 }
 
-/* The records of one kind from one rank, where they lie (neither copied
- * into records nor merged: their fresh pages cost more than the reads):
+/* The records of one kind from one rank, where they lie (not copied into
+ * records nor end to end: their fresh pages cost more than the reads):
  * the arrays received from another rank, or the root's own mesh, whose
  * owned entities come first. Connectivities are the sending rank's local
  * vertex numbers: its n owned vertices (global ids of its vertex records),
  * then its nghost ghosts (global ids ghost, in the vertex view alone). The
  * records' global ids: gid, or gid0 + i when gid is NULL (consecutive ids,
- * sent as the first). dm, vals, nvals (the root's own): its mesh, whose doubles are
- * read in place, and the values appended to its vertices' doubles;
- * otherwise dbl holds them packed. */
+ * sent as the first). dm, vals, nvals (the root's own): its mesh, whose
+ * doubles are read in place, and the values appended to its vertices'
+ * doubles; otherwise dbl holds them packed. */
 typedef struct gview {
   size_t n;
   int nv, ndbl; /* vertex ids and doubles per record */
@@ -1154,13 +1154,15 @@ static pa_status gorder_init(gorder *o, const gview *V, int size, size_t n,
     for (int r = 0; r < size; r++) {
       if (!V[r].n) continue;
       if (view_gid(&V[r], 0) < *lo) *lo = view_gid(&V[r], 0);
-      if (view_gid(&V[r], V[r].n - 1) > *hi) *hi = view_gid(&V[r], V[r].n - 1);
+      pa_gid last = view_gid(&V[r], V[r].n - 1);
+      if (last > *hi) *hi = last;
     }
   } else {
     PA_ALLOC(key, n ? n : 1);
     PA_ALLOC(o->ord, n ? n : 1);
     for (int r = 0; r < size; r++)
-      for (size_t i = 0; i < V[r].n; i++) key[o->off[r] + i] = view_gid(&V[r], i);
+      for (size_t i = 0; i < V[r].n; i++)
+        key[o->off[r] + i] = view_gid(&V[r], i);
     for (size_t i = 0; i < n; i++) {
       o->ord[i] = (pa_idx)i;
       if (key[i] < *lo) *lo = key[i];
@@ -1228,7 +1230,7 @@ static size_t gorder_next(gorder *o, int *r, size_t *i) {
     c += step;
     step *= 2;
   }
-  hi = p + c + step < Q->n ? c + step - 1 : Q->n - p; /* gid[p + hi] >= bound */
+  hi = p + c + step <= Q->n ? c + step - 1 : Q->n - p; /* it is in [c, hi] */
   while (c < hi) {
     size_t mid = c + (hi - c) / 2;
     if (view_gid(Q, p + mid) < bound) c = mid + 1;
@@ -1333,7 +1335,8 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
     int r;
     size_t i0, c, j = 0;
     PA_CALL(gorder_init(&o, Vk, size, nk[k], &lo, &hi));
-    pa_idx *conn = k == PA_ELEMENT ? m->elem : k == PA_BOUNDARY ? m->bdry : m->edge;
+    pa_idx *conn = k == PA_ELEMENT ? m->elem
+                   : k == PA_BOUNDARY ? m->bdry : m->edge;
     int32_t *ref = k == PA_VERTEX ? m->vref : k == PA_ELEMENT ? m->eref
                    : k == PA_BOUNDARY ? m->bref : m->edref;
     uint8_t *flag = k == PA_VERTEX ? m->vflag : k == PA_ELEMENT ? m->eflag
@@ -1356,18 +1359,18 @@ static pa_status assemble_by_gid(int d, const pa__layout *lay, int size,
         const pa_idx *lr = loc + loff[r], *cq = Q->conn + (size_t)nv * i;
         size_t nl = loff[r + 1] - loff[r];
         for (int q = 0; q < nv; q++) {
-          pa_idx c = cq[q];
-          PA_CHECK(c >= 0 && (size_t)c < nl, PA_ERR_INTERNAL,
+          pa_idx lv = cq[q];
+          PA_CHECK(lv >= 0 && (size_t)lv < nl, PA_ERR_INTERNAL,
                    "gather: local vertex %lld of rank %d out of range",
-                   (long long)c, r);
-          PA_CHECK(lr[c] >= 0, PA_ERR_MESH,
+                   (long long)lv, r);
+          PA_CHECK(lr[lv] >= 0, PA_ERR_MESH,
                    "gather: vertex %lld is owned by no rank",
-                   (long long)local_gid(&V[PA_VERTEX * size + r], (size_t)c));
-          conn[(size_t)nv * j + q] = lr[c];
+                   (long long)local_gid(&V[PA_VERTEX * size + r], (size_t)lv));
+          conn[(size_t)nv * j + q] = lr[lv];
         }
-        if (Q->ndbl) {
-          pa__entity_set_doubles(m, k, (pa_idx)j, record_doubles(Q, k, i, xbuf));
-        }
+        if (Q->ndbl)
+          pa__entity_set_doubles(m, k, (pa_idx)j,
+                                 record_doubles(Q, k, i, xbuf));
       }
     }
     int sorted = o.ord == NULL;
