@@ -463,8 +463,8 @@ pa_status pa__adapt_entity_balls(pa__iter *it) {
     const pa_idx *f = m->edge + 2 * (size_t)b;
     if (pa__adapt_near_piece(it, f, 2)) need[f[0]] = 1;
   }
-  PA_CALL(pa__balls_of(m->elem, dm->nown[PA_ELEMENT], it->nve, dm->nloc[PA_VERTEX], need,
-                       &it->bstart, &it->belem));
+  PA_CALL(pa__balls_of(m->elem, dm->nown[PA_ELEMENT], it->nve,
+                       dm->nloc[PA_VERTEX], need, &it->bstart, &it->belem));
 cleanup:
   pa__free(need);
   return st;
