@@ -145,6 +145,7 @@ static pa_status pair_records(pa__iter *it, int kind, const pa_idx *bstart,
     const pa_idx *conn = kind == PA_BOUNDARY ? m->bdry : m->edge;
     for (pa_idx b = 0; b < nloc; b++) {
       const pa_idx *f = conn + (size_t)nv * b;
+      if (!pa__adapt_near_piece(it, f, nv)) continue;
       for (pa_idx q = bstart[f[0]]; q < bstart[f[0] + 1]; q++) {
         pa_idx e = belem[q];
         if (it->label[e] < 0 || !contains(m, e, f, nv)) continue;
@@ -565,7 +566,7 @@ cleanup:
 static pa_status pair_records_all(pa__iter *it, pa__recs *S, int **dest) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
-  if (!it->bstart) PA_CALL(pa__owned_balls(dm, &it->bstart, &it->belem));
+  PA_CALL(pa__adapt_entity_balls(it));
   for (int k = 0; k < dm->nvalue; k++)
     if ((int)dm->value[k]->kind != PA_ELEMENT)
       PA_CALL(pa_dmesh_halo(dm, dm->value[k]));

@@ -199,8 +199,9 @@ typedef struct pa__iter {
   double *piece_work;  /* npieces: estimated work */
   int *piece_rank;     /* npieces: destination rank */
   int *piece_failed;   /* npieces: 1 if the piece was rolled back */
-  pa_idx *bstart, *belem; /* owned balls (pa__owned_balls), built by
-                             extract.c, reused by reintegrate.c */
+  pa_idx *bstart, *belem; /* owned balls of the entities near a piece
+                             (pa__adapt_entity_balls), built by pieces.c,
+                             reused by extract.c and reintegrate.c */
   int npiece_local;
   pa__piece *pieces;   /* the pieces remeshed by this rank */
   double bytes_moved;  /* record bytes this rank sent to other ranks */
@@ -271,8 +272,21 @@ pa_status pa__adapt_restore(MPI_Comm comm, const char *dir,
                             const pa_adapt_opts *opts, pa_dmesh **dm,
                             pa__loop *L);
 
-/* Owned vertex -> owned elements (CSR), built on the local mesh. */
-pa_status pa__owned_balls(pa_dmesh *dm, pa_idx **start, pa_idx **elems);
+/* 1 if one of the n vertices v of an entity lies in a labelled element
+ * on some rank (it->vlab); only such entities can belong to a piece or
+ * touch one. */
+static inline int pa__adapt_near_piece(const pa__iter *it, const pa_idx *v,
+                                       int n) {
+  for (int k = 0; k < n; k++)
+    if (it->vlab[4 * (size_t)v[k]] != PA_ADAPT_NOLABEL) return 1;
+  return 0;
+}
+
+/* it->bstart, it->belem (unless built already): vertex -> owned elements
+ * (CSR) for the first vertex of every boundary entity and edge near a
+ * piece (pa__adapt_near_piece), the only balls pieces.c, extract.c and
+ * reintegrate.c look up; the others are empty. Needs it->vlab. */
+pa_status pa__adapt_entity_balls(pa__iter *it);
 
 /* Estimated work of local element e: expected output elements + 1. */
 double pa__elem_work(const pa_mesh *m, pa_idx e);

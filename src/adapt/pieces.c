@@ -90,9 +90,12 @@ cleanup:
  * in one plane (one line in 2D), over every rank: a skin edge there is not
  * bisected (its midpoint would lie on the chord, inside a curved boundary,
  * and stay there frozen). Per vertex, the smallest and largest component of
- * the unit normals of its boundary entities (sign made canonical), reduced. */
-static pa_status curved_vertices(pa_dmesh *dm, uint8_t *curved) {
+ * the unit normals of its boundary entities (sign made canonical), reduced.
+ * Found for the vertices near a piece only (pa__adapt_near_piece): 0 for
+ * the others. */
+static pa_status curved_vertices(pa__iter *it, uint8_t *curved) {
   pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
   const pa_mesh *m = dm->mesh;
   int d = dm->dim;
   pa_idx nv = dm->nloc[PA_VERTEX];
@@ -104,6 +107,7 @@ static pa_status curved_vertices(pa_dmesh *dm, uint8_t *curved) {
     for (size_t i = 0; i < (size_t)2 * d * nv; i++) x[i] = HUGE_VAL;
     for (pa_idx b = 0; b < m->nb; b++) {
       const pa_idx *f = m->bdry + (size_t)d * b;
+      if (!pa__adapt_near_piece(it, f, d)) continue;
       const double *p0 = m->coord + (size_t)d * f[0], *p1 = m->coord + (size_t)d * f[1];
       double n[3] = {0, 0, 0};
       if (d == 2) {
@@ -207,7 +211,8 @@ static int face_normal(const pa_mesh *m, pa_idx e, const pa_idx *f, double *n) {
  * per local vertex the unit normal of such a vertex (the normalised
  * area-weighted sum; 0 for the others) and the Bloom mask of its boundary
  * neighbours' global ids (edges of boundary entities), reduced over the
- * ranks, the same bits on every copy. */
+ * ranks, the same bits on every copy. Found for the vertices near a piece
+ * only (pa__adapt_near_piece): the others get 0 and no mask. */
 static pa_status surface_vertices(pa__iter *it, uint8_t *smooth) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
@@ -215,7 +220,7 @@ static pa_status surface_vertices(pa__iter *it, uint8_t *smooth) {
   pa_idx nv = dm->nloc[PA_VERTEX];
   pa_dmesh_value *val = NULL;
   double spread = 2 * sin(PA_LEB_SMOOTH_DEG * M_PI / 360);
-  if (!it->bstart) PA_CALL(pa__owned_balls(dm, &it->bstart, &it->belem));
+  PA_CALL(pa__adapt_entity_balls(it));
   PA_CALL(pa_dmesh_value_add(dm, PA_VERTEX, "pa.adapt.surface", MPI_DOUBLE,
                              SV_N, -1, &val));
   double *x = pa_dmesh_value_data(val, NULL, NULL);
@@ -224,6 +229,7 @@ static pa_status surface_vertices(pa__iter *it, uint8_t *smooth) {
       x[(size_t)SV_N * v + k] = k >= SV_MIN && k < SV_MASK ? HUGE_VAL : 0;
   for (pa_idx b = 0; b < m->nb; b++) {
     const pa_idx *f = m->bdry + 3 * (size_t)b;
+    if (!pa__adapt_near_piece(it, f, 3)) continue;
     for (int j = 0; j < 3; j++) /* the masks: every edge of b */
       for (int i = 0; i < 3; i++) {
         double *y = x + (size_t)SV_N * f[j] + SV_MASK;
@@ -442,11 +448,35 @@ cleanup:
   return st;
 }
 
+pa_status pa__adapt_entity_balls(pa__iter *it) {
+  pa_status st = PA_SUCCESS;
+  pa_dmesh *dm = it->dm;
+  const pa_mesh *m = dm->mesh;
+  uint8_t *need = NULL;
+  if (it->bstart) goto cleanup;
+  PA_CALLOC(need, dm->nloc[PA_VERTEX] ? dm->nloc[PA_VERTEX] : 1);
+  for (pa_idx b = 0; b < m->nb; b++) {
+    const pa_idx *f = m->bdry + (size_t)it->dim * b;
+    if (pa__adapt_near_piece(it, f, it->dim)) need[f[0]] = 1;
+  }
+  for (pa_idx b = 0; b < m->ned; b++) {
+    const pa_idx *f = m->edge + 2 * (size_t)b;
+    if (pa__adapt_near_piece(it, f, 2)) need[f[0]] = 1;
+  }
+  PA_CALL(pa__balls_of(m->elem, dm->nown[PA_ELEMENT], it->nve,
+                       dm->nloc[PA_VERTEX], need, &it->bstart, &it->belem));
+cleanup:
+  pa__free(need);
+  return st;
+}
+
 /* Step 4b: it->bside, which boundary entities lie inside the domain
  * (held by two elements) and which are held by elements of two labels (a
  * labelled and an unlabelled one included): per entity, the smallest and
  * largest global id and label of the owned elements holding it, reduced
- * (MIN) over the ranks and sent back to the ghosts. */
+ * (MIN) over the ranks and sent back to the ghosts. Found for the entities
+ * near a piece only (pa__adapt_near_piece, the same on every copy): 0 for
+ * the others. */
 static pa_status boundary_sides(pa__iter *it) {
   pa_status st = PA_SUCCESS;
   pa_dmesh *dm = it->dm;
@@ -454,15 +484,19 @@ static pa_status boundary_sides(pa__iter *it) {
   pa_dmesh_value *val = NULL;
   pa_idx nb = dm->nloc[PA_BOUNDARY];
   int d = it->dim;
-  if (!it->bstart) PA_CALL(pa__owned_balls(dm, &it->bstart, &it->belem));
+  PA_CALL(pa__adapt_entity_balls(it));
   PA_CALL(pa_dmesh_value_add(dm, PA_BOUNDARY, "pa.adapt.bside", MPI_INT64_T,
                              4, -1, &val));
   {
     int64_t *x = pa_dmesh_value_data(val, NULL, NULL);
     for (pa_idx b = 0; b < nb; b++) {
       int64_t *y = x + 4 * (size_t)b;
-      y[0] = y[1] = y[2] = y[3] = INT64_MAX;
       const pa_idx *f = m->bdry + (size_t)d * b;
+      if (!pa__adapt_near_piece(it, f, d)) { /* both bits 0 */
+        y[0] = y[1] = y[2] = y[3] = 0;
+        continue;
+      }
+      y[0] = y[1] = y[2] = y[3] = INT64_MAX;
       for (pa_idx q = it->bstart[f[0]]; q < it->bstart[f[0] + 1]; q++) {
         pa_idx e = it->belem[q];
         const pa_idx *ev = m->elem + (size_t)it->nve * e;
@@ -525,7 +559,7 @@ static pa_status inner_vertices(pa__iter *it, pa_dmesh_value *val) {
   PA_CALL(pa_dmesh_halo(dm, val));
   PA_ALLOC(it->vinner, nloc);
   PA_ALLOC(smooth, nloc);
-  PA_CALL(curved_vertices(dm, it->vinner)); /* 1: curved, for now */
+  PA_CALL(curved_vertices(it, it->vinner)); /* 1: curved, for now */
   if (dm->dim == 3) /* 2D: no surface vertices (bisect.c) */
     PA_CALL(surface_vertices(it, smooth));
   else

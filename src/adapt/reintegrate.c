@@ -448,7 +448,9 @@ static size_t payload_of(paycache *c, const pa_dmesh *dm, int kind,
 }
 
 /* Per-entity "kept" flags of a kind: 1 if a staying owned element (keep)
- * contains it, MAX-reduced over the ranks; *out receives the owned flags. */
+ * contains it, MAX-reduced over the ranks; *out receives the owned flags.
+ * A boundary entity or edge away from every piece (pa__adapt_near_piece)
+ * lies in staying elements only: kept without a look at them. */
 static pa_status kept_flags(pa__iter *it, int kind, const uint8_t *keep,
                             const pa_idx *bstart, const pa_idx *belem,
                             uint8_t **out) {
@@ -480,6 +482,10 @@ static pa_status kept_flags(pa__iter *it, int kind, const uint8_t *keep,
       for (pa_idx b = 0; b < n; b++) {
         const pa_idx *f = conn + (size_t)nv * b;
         int *y = x + 3 * b;
+        if (!pa__adapt_near_piece(it, f, nv)) {
+          y[0] = 1;
+          continue;
+        }
         for (pa_idx q = bstart[f[0]]; q < bstart[f[0] + 1] && !y[0]; q++) {
           pa_idx e = belem[q];
           const pa_idx *ev = m->elem + (size_t)it->nve * e;
@@ -1356,12 +1362,11 @@ cleanup:
 }
 
 /* Step 2: the kept vertices, boundary entities and edges (kept_flags).
- * The balls of the owned elements go after: they describe the mesh about
- * to be rebuilt. */
+ * The balls (pa__adapt_entity_balls) go after: they describe the mesh
+ * about to be rebuilt. */
 static pa_status kept_entities(pa__iter *it, reint *r) {
   pa_status st = PA_SUCCESS;
-  pa_dmesh *dm = it->dm;
-  if (!it->bstart) PA_CALL(pa__owned_balls(dm, &it->bstart, &it->belem));
+  PA_CALL(pa__adapt_entity_balls(it));
   PA_CALL(kept_flags(it, PA_VERTEX, r->keep, it->bstart, it->belem, &r->kv));
   PA_CALL(kept_flags(it, PA_BOUNDARY, r->keep, it->bstart, it->belem, &r->kb));
   PA_CALL(kept_flags(it, PA_EDGE, r->keep, it->bstart, it->belem, &r->kd));

@@ -97,14 +97,6 @@ static void criteria(uint8_t dn, double qual_threshold, double *lo, double *hi,
     *qmin = fmin(QUAL_CLEARLY_BAD, qual_threshold);
 }
 
-pa_status pa__owned_balls(pa_dmesh *dm, pa_idx **startp, pa_idx **elemsp) {
-  pa_status st = PA_SUCCESS;
-  PA_CALL(pa__balls(dm->mesh->elem, dm->nown[PA_ELEMENT], dm->dim + 1,
-                    dm->nloc[PA_VERTEX], startp, elemsp));
-cleanup:
-  return st;
-}
-
 double pa__elem_work(const pa_mesh *m, pa_idx e) {
   int d = m->dim, nc = m->met_ncomp, tc = pa__tensor_ncomp(d);
   const pa_idx *v = m->elem + (size_t)(d + 1) * e;
