@@ -178,7 +178,7 @@ typedef struct pa__piece {
   pa_idx *reuse[4];    /* per output element, boundary entity or edge: the
                           input one it is (same vertices, none added by
                           bisect.c, same reference: it keeps its id and
-                          values), or -1 */
+                          values), or -1; NULL: none is */
   int *dest;           /* out->ne: the rank each output element goes to
                         * (NULL: this rank, all of them) */
   pa_remesh_report rep;

@@ -358,11 +358,19 @@ cleanup:
  * element whose nearest vertex is at k - 1 (an element with a vertex
  * nearer than that has no vertex beyond k - 1). For the NEAR_SKIN layers
  * one pass over the output, cheaper than the vertex balls a breadth-first
- * search would need. */
+ * search would need. front (NULL: none): 1 at the vertices at k - 1 in
+ * some array (the sweep does not change them), so that an element far from
+ * them is passed over at one read a vertex, not nd. */
 static inline void layer_sweep(const pa_mesh *o, int k, const int nd,
-                               uint8_t *const *dist, const int nve) {
+                               uint8_t *const *dist, const uint8_t *front,
+                               const int nve) {
   for (pa_idx e = 0; e < o->ne; e++) {
     const pa_idx *v = o->elem + (size_t)nve * e;
+    if (front) {
+      int any = 0;
+      for (int i = 0; i < nve; i++) any |= front[v[i]];
+      if (!any) continue;
+    }
     for (int a = 0; a < nd; a++) {
       uint8_t *x = dist[a];
       int mn = x[v[0]];
@@ -374,14 +382,18 @@ static inline void layer_sweep(const pa_mesh *o, int k, const int nd,
   }
 }
 
+/* front: scratch of o->nv bytes for nd 2 (NULL: none, or nd 1). */
 static void vertex_layers(const pa_mesh *o, int k0, int nl, int nd,
-                          uint8_t *const *dist) {
+                          uint8_t *const *dist, uint8_t *front) {
   /* (nd and nve constants in each call: the loops unrolled) */
   for (int k = k0; k < nl; k++) {
-    if (o->dim == 2 && nd == 1) layer_sweep(o, k, 1, dist, 3);
-    else if (o->dim == 2) layer_sweep(o, k, 2, dist, 3);
-    else if (nd == 1) layer_sweep(o, k, 1, dist, 4);
-    else layer_sweep(o, k, 2, dist, 4);
+    if (front && nd == 2)
+      for (pa_idx j = 0; j < o->nv; j++)
+        front[j] = (uint8_t)(dist[0][j] == k - 1 || dist[1][j] == k - 1);
+    if (o->dim == 2 && nd == 1) layer_sweep(o, k, 1, dist, NULL, 3);
+    else if (o->dim == 2) layer_sweep(o, k, 2, dist, front, 3);
+    else if (nd == 1) layer_sweep(o, k, 1, dist, NULL, 4);
+    else layer_sweep(o, k, 2, dist, front, 4);
   }
 }
 
@@ -397,17 +409,17 @@ static inline int elem_layer(const pa_mesh *o, const uint8_t *dist,
 
 /* dist[a] over the output of pc for each of the nd marks mark[a] (pc->hot,
  * pc->skin): 0 at the output vertices matching a marked input vertex, else
- * the vertex layers from them, at most nl. */
+ * the vertex layers from them, at most nl; front: as in vertex_layers. */
 static void layers_from(const pa__piece *pc, int nd,
                         const uint8_t *const *mark, int nl,
-                        uint8_t *const *dist) {
+                        uint8_t *const *dist, uint8_t *front) {
   const pa_mesh *o = pc->out;
   for (int a = 0; a < nd; a++)
     for (pa_idx j = 0; j < o->nv; j++) {
       pa_idx i = pc->match[j];
       dist[a][j] = (uint8_t)(i >= 0 && mark[a][i] ? 0 : nl);
     }
-  vertex_layers(o, 1, nl, nd, dist);
+  vertex_layers(o, 1, nl, nd, dist, front);
 }
 
 size_t pa__new_payload(const pa_dmesh *dm, int kind, int32_t ref,
@@ -519,12 +531,17 @@ cleanup:
   return st;
 }
 
+/* The input entity output entity e is (ru: pc->reuse of its kind), or -1. */
+static inline pa_idx reused(const pa_idx *ru, pa_idx e) {
+  return ru ? ru[e] : -1;
+}
+
 /* 1 if boundary entity b of an output lies on the skin: an artificial skin
  * face, or an input entity frozen on the piece's outer surface (bfix). */
 static int on_skin(const pa_mesh *out, const pa_idx *breuse,
                    const uint8_t *bfix, pa_idx b) {
   return out->bref[b] == PA_ADAPT_SKIN_REF ||
-         (bfix && breuse[b] >= 0 && bfix[breuse[b]]);
+         (bfix && reused(breuse, b) >= 0 && bfix[breuse[b]]);
 }
 
 /* Which boundary entities / edges of an output to give (not on the skin);
@@ -560,13 +577,13 @@ static pa_status output_emit(const pa_mesh *out, const pa_idx *breuse,
     pa_idx k[3];
     tkey(out->bdry + (size_t)d * b, d, k);
     (*bemit)[b] = !tset_find(&fs, k, 0);
-    cnt[PA_BOUNDARY] += (*bemit)[b] && breuse[b] < 0;
+    cnt[PA_BOUNDARY] += (*bemit)[b] && reused(breuse, b) < 0;
   }
   for (pa_idx b = 0; b < out->ned; b++) {
     pa_idx k[3];
     tkey(out->edge + (size_t)2 * b, 2, k);
     (*demit)[b] = !tset_find(&es, k, 0);
-    cnt[PA_EDGE] += (*demit)[b] && dreuse[b] < 0;
+    cnt[PA_EDGE] += (*demit)[b] && reused(dreuse, b) < 0;
   }
 cleanup:
   tset_free(&fs);
@@ -594,10 +611,11 @@ static void ent_key(const pa_idx *v, int nvk, const pa_idx *map, pa_idx *k) {
 
 /* pc->reuse[kind]: the input entity each output entity of a kind
  * (elements, boundary entities, edges) is (same vertices, none of them
- * added by bisect.c, and same reference), or -1. Such an entity keeps its
- * global id and values; with a rolled-back piece, every one bisect.c left
- * whole. */
-static pa_status output_reuse(pa__piece *pc, int kind) {
+ * added by bisect.c, and same reference), or -1; NULL when none is (most
+ * outputs: no array of millions of -1 to write and read). Such an entity
+ * keeps its global id and values; with a rolled-back piece, every one
+ * bisect.c left whole. *nreuse: how many are. */
+static pa_status output_reuse(pa__piece *pc, int kind, pa_idx *nreuse) {
   pa_status st = PA_SUCCESS;
   const pa_mesh *in = pc->in, *o = pc->out;
   int nvk;
@@ -611,7 +629,7 @@ static pa_status output_reuse(pa__piece *pc, int kind) {
                          vertices; -1 empty */
   pa__free(pc->reuse[kind]);
   pc->reuse[kind] = NULL;
-  PA_ALLOC(pc->reuse[kind], no ? no : 1);
+  *nreuse = 0;
   while (cap < 2 * (size_t)n0 + 2) cap *= 2;
   PA_ALLOC(tab, cap);
   for (size_t i = 0; i < cap; i++) tab[i] = -1;
@@ -627,7 +645,6 @@ static pa_status output_reuse(pa__piece *pc, int kind) {
     const pa_idx *v = oc + (size_t)nvk * e;
     pa_idx k[4];
     int ok = 1;
-    pc->reuse[kind][e] = -1;
     for (int i = 0; i < nvk && ok; i++) {
       pa_idx j = pc->match[v[i]];
       ok = j >= 0 && j < pc->nv0;
@@ -639,7 +656,13 @@ static pa_status output_reuse(pa__piece *pc, int kind) {
       pa_idx q = tab[h], kq[4];
       ent_key(ic + (size_t)nvk * q, nvk, NULL, kq);
       if (!memcmp(kq, k, sizeof k)) {
-        if (iref[q] == oref[e]) pc->reuse[kind][e] = q;
+        if (iref[q] != oref[e]) break;
+        if (!pc->reuse[kind]) { /* the first one */
+          PA_ALLOC(pc->reuse[kind], no);
+          for (pa_idx f = 0; f < no; f++) pc->reuse[kind][f] = -1;
+        }
+        pc->reuse[kind][e] = q;
+        ++*nreuse;
         break;
       }
     }
@@ -783,6 +806,11 @@ static pa_status output_vertices(orecs *c) {
                                (T->poff ? T->poff[T->n] : 0) +
                                    (size_t)o->nv * maxpay));
   }
+  if (c->Rp) { /* the new vertices, nearly all, are written in bulk there */
+    size_t nnew = 0;
+    for (pa_idx j = 0; j < o->nv; j++) nnew += pc->match[j] < 0;
+    pa__recs_prefault(c->Rp, c->Rp->n, nnew);
+  }
   for (pa_idx j = 0; j < o->nv; j++) {
     pa_idx i = pc->match[j];
     if (i >= 0 && pc->skin[i] && pc->vgid[i] >= PA_ADAPT_TEMP_GID) {
@@ -836,14 +864,19 @@ static pa_status near_skin_layers(orecs *c) {
                     (pc->rep.nswap == 0 && pc->rep.nmove == 0)
                 ? 0
                 : c->it->opts->qual_threshold;
+  uint8_t *front = NULL;
   PA_ALLOC(c->dist, o->nv);
-  if (c->qthr > 0) PA_ALLOC(c->dsk, o->nv);
+  if (c->qthr > 0) {
+    PA_ALLOC(c->dsk, o->nv);
+    PA_ALLOC(front, o->nv);
+  }
   {
     const uint8_t *mk[2] = {pc->hot, pc->skin};
     uint8_t *const ds[2] = {c->dist, c->dsk};
-    layers_from(pc, c->qthr > 0 ? 2 : 1, mk, NEAR_SKIN, ds);
+    layers_from(pc, c->qthr > 0 ? 2 : 1, mk, NEAR_SKIN, ds, front);
   }
 cleanup:
+  pa__free(front);
   return st;
 }
 
@@ -904,7 +937,7 @@ static void bad_near_skin(orecs *c, uint8_t *dv) {
   /* the layers below NEAR_SKIN are made: the others go on from there */
   for (pa_idx j = 0; j < o->nv; j++)
     if (c->dsk[j] == NEAR_SKIN) c->dsk[j] = 2 * NEAR_SKIN;
-  vertex_layers(o, NEAR_SKIN, 2 * NEAR_SKIN, 1, ds);
+  vertex_layers(o, NEAR_SKIN, 2 * NEAR_SKIN, 1, ds, NULL);
   double qband = c->qthr;
   for (pa_idx e = 0; e < o->ne; e++) {
     int l = elem_layer(o, c->dsk, e);
@@ -936,8 +969,18 @@ static pa_status output_elements(orecs *c) {
   unsigned char *tmpl = NULL; /* a fresh element's payload, done 0 */
   PA_CALL(pa__recs_reserve(R, i0 + (size_t)ne,
                            (R->poff ? R->poff[i0] : 0) + (size_t)ne * maxpay));
-  PA_ALLOC(dv, ne ? ne : 1);
+  pa__recs_prefault(R, i0, (size_t)ne);
   PA_ALLOC(tmpl, maxpay + 1);
+  /* the usual output: no input element given back, one reference, and
+   * the done value alone in the payload: ids, offsets and payloads in
+   * bulk, the done values written straight as the payloads */
+  int bulk = R->poff != NULL && ne > 0 && !reuse;
+  for (pa_idx e = 0; bulk && e < ne; e++) bulk = o->eref[e] == o->eref[0];
+  if (bulk)
+    bulk = pa__new_payload(dm, PA_ELEMENT, o->eref[0], c->done, 0, tmpl) == 1 &&
+           done_offset(dm, o->eref[0], c->done) == 0;
+  if (bulk) dv = R->pay + R->poff[i0];
+  else PA_ALLOC(dv, ne ? ne : 1);
   int poor;
   if (nve == 3) elems_done(c, dv0, i0, dv, &poor, 3);
   else elems_done(c, dv0, i0, dv, &poor, 4);
@@ -949,15 +992,6 @@ static pa_status output_elements(orecs *c) {
     for (pa_idx e = 0; e < ne; e++) R->aux[i0 + (size_t)e] = it->rank;
   for (pa_idx e = 0; R->ndbl && e < ne; e++)
     pa__entity_doubles(o, PA_ELEMENT, e, R->dbl + (size_t)R->ndbl * (i0 + e));
-  /* the usual output: no input element given back, one reference, and
-   * the done value alone in the payload: ids, offsets and payloads in
-   * bulk (the payloads are the done values) */
-  int bulk = R->poff != NULL && ne > 0;
-  for (pa_idx e = 0; bulk && e < ne; e++)
-    bulk = reuse[e] < 0 && o->eref[e] == o->eref[0];
-  if (bulk)
-    bulk = pa__new_payload(dm, PA_ELEMENT, o->eref[0], c->done, 0, tmpl) == 1 &&
-           done_offset(dm, o->eref[0], c->done) == 0;
   if (bulk) {
     pa_gid g0 = c->next[PA_ELEMENT];
     size_t p0 = R->poff[i0];
@@ -965,15 +999,15 @@ static pa_status output_elements(orecs *c) {
       R->gid[i0 + (size_t)e] = g0 + e;
       R->poff[i0 + (size_t)e + 1] = p0 + (size_t)e + 1;
     }
-    memcpy(R->pay + p0, dv, (size_t)ne);
     c->next[PA_ELEMENT] += ne;
+    dv = NULL; /* (R's payloads) */
   } else {
     int32_t tref = 0;
     size_t tlen = (size_t)-1, tat = (size_t)-1; /* tlen -1: tmpl empty */
     for (pa_idx e = 0; e < ne; e++) {
       size_t i = i0 + (size_t)e, pl, at;
       const unsigned char *src;
-      pa_idx q = reuse[e];
+      pa_idx q = reused(reuse, e);
       if (q >= 0) { /* an input element: its id and values, done updated */
         const size_t *po = pc->kpoff[PA_ELEMENT];
         R->gid[i] = pc->kgid[PA_ELEMENT][q];
@@ -1029,7 +1063,7 @@ static pa_status output_subentities(orecs *c, const uint8_t *bemit,
       if (!emit[b]) continue;
       pa_gid bv[3];
       for (int k = 0; k < nvk; k++) bv[k] = c->vg[conn[(size_t)nvk * b + k]];
-      pa_idx q = pc->reuse[kind][b];
+      pa_idx q = reused(pc->reuse[kind], b);
       if (q >= 0) { /* an input entity: its id and values */
         PA_CALL(pa__recs_add(&c->R[kind], pc->kgid[kind][q], bv, ref[b], fl[b],
                              it->rank, cell_doubles(c, kind, b),
@@ -1400,9 +1434,11 @@ static pa_status count_fresh(pa__iter *it, reint *r) {
      * not on the skin, so its owner does not keep it: an element, boundary
      * entity or edge that a piece shares with the outside lies on a skin
      * face) */
-    for (int k = PA_ELEMENT; k <= PA_EDGE; k++) PA_CALL(output_reuse(pc, k));
-    for (pa_idx e = 0; e < pc->out->ne; e++)
-      r->cnt[PA_ELEMENT] += pc->reuse[PA_ELEMENT][e] < 0;
+    pa_idx nre = 0, nrb, nrd;
+    PA_CALL(output_reuse(pc, PA_ELEMENT, &nre));
+    PA_CALL(output_reuse(pc, PA_BOUNDARY, &nrb));
+    PA_CALL(output_reuse(pc, PA_EDGE, &nrd));
+    r->cnt[PA_ELEMENT] += pc->out->ne - nre;
     PA_CALL(output_emit(pc->out, pc->reuse[PA_BOUNDARY], pc->reuse[PA_EDGE],
                         pc->bfix, &r->bemit[q], &r->demit[q], r->cnt));
     PA_CALL(output_dest(it, pc, &pc->dest));

@@ -396,12 +396,14 @@ static pa_status owned_csr(bstate *s, pa_idx nown, int csr) {
     /* -2: present, not numbered yet (stores only, no branch on what was
      * there: a vertex is first seen at random among its elements) */
     for (size_t p = 0; p < np; p++) u[vg[p] - lo] = -2;
-    for (pa_gid g = lo; g <= hi; g++) nu += u[g - lo] == -2;
-    PA_ALLOC(s->ukey, nu);
-    for (pa_gid g = lo, k = 0; g <= hi; g++)
+    /* ukey sized to at most the range or the slots (the pages beyond nu
+     * stay untouched): one scan numbers the vertices */
+    size_t ncap = (size_t)(hi - lo) + 1 < np ? (size_t)(hi - lo) + 1 : np;
+    PA_ALLOC(s->ukey, ncap);
+    for (pa_gid g = lo; g <= hi; g++)
       if (u[g - lo] == -2) {
-        s->ukey[k] = g;
-        u[g - lo] = (pa_idx)k++;
+        s->ukey[nu] = g;
+        u[g - lo] = (pa_idx)nu++;
       }
     if (csr) {
       PA_ALLOC(slotu, np);
@@ -1171,37 +1173,63 @@ static void unpack_payloads(pa_dmesh *dm, int kind, const pa__recs *R,
 
 /* What the phases of assemble share: the local order of the records of
  * each kind (ord[kind][k] = record of local entity k), the local vertex of
- * each vertex record (lvof) and of each vertex global id (lv), and the local
- * mesh being filled. With the identity (ident) the records' arrays of ids,
- * owners and layers become dm's. */
+ * each vertex record (lvof) and, for many lookups, of each vertex global
+ * id (lv), and the local mesh being filled. With the identity (ident) the
+ * records' arrays of ids, owners and layers become dm's. */
 typedef struct assembly {
   pa_idx *ord[PA_DMESH_NKIND];
   uint8_t ident[PA_DMESH_NKIND]; /* ord[kind] is the identity */
   pa_idx *lvof;
-  pa__gidindex lv;
+  pa__gidindex lv; /* built only for many lookups (uselv) */
+  int uselv;
   pa_mesh *m;
 } assembly;
 
-/* Step 6: number the local vertices and elements (owned first) and index
- * the vertices by global id. */
+/* Lookups of local vertices by gid (the vertices of ghost elements; of
+ * boundary entities and edges, each looked up about twice) per local
+ * vertex below which a binary search in the sorted vertex records (some
+ * 20 steps each) costs less than indexing them all (a store a vertex, and
+ * an array over their gid range): 1/16. */
+#define LV_SEARCH_SHARE 16
+
+/* The local vertex of global id g, or -1: through the index lv when the
+ * lookups are many (uselv), else by a binary search in the vertex records
+ * (sorted by gid). */
+static pa_idx local_vertex(const bstate *s, const assembly *a, pa_gid g) {
+  if (a->uselv) return pa__gidindex_get(&a->lv, g);
+  size_t lo = 0, hi = s->LV.n;
+  const pa_gid *k = s->LV.gid;
+  while (lo < hi) {
+    size_t mid = lo + (hi - lo) / 2;
+    if (k[mid] < g) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo < s->LV.n && k[lo] == g ? a->lvof[lo] : -1;
+}
+
+/* Step 6: number the local elements and vertices (owned first) and index
+ * the vertices by global id if the lookups are many. */
 static pa_status number_vertices_elements(pa_dmesh *dm, bstate *s,
                                           assembly *a) {
   pa_status st = PA_SUCCESS;
-  PA_ALLOC(a->ord[PA_VERTEX], s->LV.n);
-  PA_CALL(number_local(&s->LV, NULL, s->rank, a->ord[PA_VERTEX],
-                       &dm->nown[PA_VERTEX], &a->ident[PA_VERTEX]));
-  dm->nloc[PA_VERTEX] = (pa_idx)s->LV.n;
-  PA_CALL(pa__gidindex_init_keys(&a->lv, s->LV.gid, s->LV.n));
-  PA_ALLOC(a->lvof, s->LV.n);
-  for (size_t k = 0; k < s->LV.n; k++) {
-    pa_idx r = a->ord[PA_VERTEX][k];
-    PA_CALL(pa__gidindex_put(&a->lv, s->LV.gid[r], (pa_idx)k, NULL, NULL));
-    a->lvof[r] = (pa_idx)k;
-  }
   PA_ALLOC(a->ord[PA_ELEMENT], s->L.n);
   PA_CALL(number_local(&s->L, s->layer, s->rank, a->ord[PA_ELEMENT],
                        &dm->nown[PA_ELEMENT], &a->ident[PA_ELEMENT]));
   dm->nloc[PA_ELEMENT] = (pa_idx)s->L.n;
+  a->uselv = (s->L.n - (size_t)dm->nown[PA_ELEMENT]) * (size_t)s->nve +
+                  (s->LB.n * (size_t)s->LB.nv + s->LD.n * 2) * 2 >
+              s->LV.n / LV_SEARCH_SHARE;
+  PA_ALLOC(a->ord[PA_VERTEX], s->LV.n);
+  PA_CALL(number_local(&s->LV, NULL, s->rank, a->ord[PA_VERTEX],
+                       &dm->nown[PA_VERTEX], &a->ident[PA_VERTEX]));
+  dm->nloc[PA_VERTEX] = (pa_idx)s->LV.n;
+  PA_ALLOC(a->lvof, s->LV.n);
+  for (size_t k = 0; k < s->LV.n; k++) a->lvof[a->ord[PA_VERTEX][k]] = (pa_idx)k;
+  if (a->uselv) {
+    PA_CALL(pa__gidindex_init_keys(&a->lv, s->LV.gid, s->LV.n));
+    for (size_t r = 0; r < s->LV.n; r++)
+      PA_CALL(pa__gidindex_put(&a->lv, s->LV.gid[r], a->lvof[r], NULL, NULL));
+  }
 cleanup:
   return st;
 }
@@ -1253,7 +1281,7 @@ static inline int elem_vertices(const pa_dmesh *dm, const bstate *s,
       for (int j = 0; j < nve; j++) dst[j] = s->uix.dense[vg[j] - s->uix.lo];
     } else {
       for (int j = 0; j < nve; j++)
-        dst[j] = pa__gidindex_get(&a->lv, s->L.vgid[(size_t)nve * i + j]);
+        dst[j] = local_vertex(s, a, s->L.vgid[(size_t)nve * i + j]);
     }
     for (int j = 0; j < nve; j++) bad |= dst[j] < 0;
   }
@@ -1263,18 +1291,19 @@ static inline int elem_vertices(const pa_dmesh *dm, const bstate *s,
 /* Step 7b: the local mesh's elements. Owned elements (records [0, nown)):
  * vertex slot -> u -> LV record -> local vertex, two array reads, or
  * without slots the gid through uix dense, turned first into gid -> local
- * vertex (u ascends with the gid: one pass in order), one array read;
- * ghost elements through the index lv. */
+ * vertex (one pass in order), one array read; ghost elements through
+ * local_vertex. */
 static pa_status fill_elements(pa_dmesh *dm, bstate *s, assembly *a) {
   pa_status st = PA_SUCCESS;
   int d = s->dim;
   pa_mesh *m = a->m;
-  for (size_t u = 0; u < s->nu; u++)
-    if (s->ulv[u] >= 0) s->ulv[u] = a->lvof[s->ulv[u]];
-  if (!s->uslot && s->uix.dense) {
+  if (!s->uslot && s->uix.dense) { /* gid -> u -> LV record -> local */
     pa_idx *x = s->uix.dense;
     for (size_t g = 0; g < (size_t)(s->uix.hi - s->uix.lo); g++)
-      if (x[g] >= 0) x[g] = s->ulv[x[g]];
+      if (x[g] >= 0) x[g] = s->ulv[x[g]] >= 0 ? a->lvof[s->ulv[x[g]]] : -1;
+  } else {
+    for (size_t u = 0; u < s->nu; u++)
+      if (s->ulv[u] >= 0) s->ulv[u] = a->lvof[s->ulv[u]];
   }
   PA_CHECK(!(d == 2 ? elem_vertices(dm, s, a, 3) : elem_vertices(dm, s, a, 4)),
            PA_ERR_INTERNAL, "element vertex not fetched");
@@ -1321,7 +1350,7 @@ static pa_status own_subentities(pa_dmesh *dm, bstate *s, assembly *a,
     pa_idx lvx[4];
     int ok = 1;
     for (int j = 0; j < nv; j++) {
-      lvx[j] = pa__gidindex_get(&a->lv, R->vgid[(size_t)nv * i + j]);
+      lvx[j] = local_vertex(s, a, R->vgid[(size_t)nv * i + j]);
       if (lvx[j] < 0) ok = 0;
     }
     if (!ok) continue;
@@ -1396,7 +1425,7 @@ static pa_status fill_subentities(pa_dmesh *dm, bstate *s, assembly *a) {
   PA_CALLOC(need, m->nv);
   for (int t = 0; t < 2; t++)
     for (size_t i = 0; i < SB[t]->n; i++) {
-      pa_idx v = pa__gidindex_get(&a->lv, SB[t]->vgid[(size_t)SB[t]->nv * i]);
+      pa_idx v = local_vertex(s, a, SB[t]->vgid[(size_t)SB[t]->nv * i]);
       if (v >= 0) need[v] = 1;
     }
   PA_CALL(pa__balls_of(m->elem, m->ne, m->dim + 1, m->nv, need, &vstart,
@@ -1418,7 +1447,7 @@ static pa_status fill_subentities(pa_dmesh *dm, bstate *s, assembly *a) {
     size_t i = (size_t)a->ord[PA_BOUNDARY][k];
     for (int j = 0; j < d; j++)
       m->bdry[(size_t)d * k + j] =
-          pa__gidindex_get(&a->lv, s->LB.vgid[(size_t)d * i + j]);
+          local_vertex(s, a, s->LB.vgid[(size_t)d * i + j]);
     m->bref[k] = s->LB.ref[i];
     m->bflag[k] = s->LB.flag[i];
     if (s->LB.ndbl)
@@ -1429,7 +1458,7 @@ static pa_status fill_subentities(pa_dmesh *dm, bstate *s, assembly *a) {
   for (size_t k = 0; k < s->LD.n; k++) {
     size_t i = (size_t)a->ord[PA_EDGE][k];
     for (int j = 0; j < 2; j++)
-      m->edge[2 * k + j] = pa__gidindex_get(&a->lv, s->LD.vgid[2 * i + j]);
+      m->edge[2 * k + j] = local_vertex(s, a, s->LD.vgid[2 * i + j]);
     m->edref[k] = s->LD.ref[i];
     m->edflag[k] = s->LD.flag[i];
   }

@@ -200,6 +200,10 @@ size_t pa__recs_put(const pa__recs *r, const pa_idx *idx, size_t n,
 pa_status pa__recs_get(pa__recs *r, const unsigned char *p, size_t *pos);
 /* Reserve room for n records and paybytes payload bytes in total. */
 pa_status pa__recs_reserve(pa__recs *r, size_t n, size_t paybytes);
+/* Map the pages of records [i0, i0 + n) (reserved) in one system call
+ * per array, where the kernel supports it: for records about to be
+ * written in bulk into fresh memory. */
+void pa__recs_prefault(pa__recs *r, size_t i0, size_t n);
 /* Sort records by gid (stable; nothing done if already sorted). */
 pa_status pa__recs_sort(pa__recs *r);
 

@@ -17,6 +17,9 @@
  */
 #include "dmesh/dmesh.h"
 
+#include <sys/mman.h>
+#include <unistd.h>
+
 void pa__recs_init(pa__recs *r, int kind, int nv, int ndbl) {
   memset(r, 0, sizeof *r);
   r->kind = kind;
@@ -235,6 +238,40 @@ pa_status pa__recs_reserve(pa__recs *r, size_t n, size_t paybytes) {
   }
 cleanup:
   return st;
+}
+
+/* Records smaller than this are not worth a system call to prefault. */
+#define PREFAULT_MIN_BYTES (1u << 22)
+
+/* Ask the kernel to map the pages of [p, p + bytes) now, in one call
+ * (MADV_POPULATE_WRITE, Linux 5.14 on): a fresh page then costs its
+ * clearing, not a fault each; a no-op where unsupported. */
+static void prefault(void *p, size_t bytes) {
+#ifdef MADV_POPULATE_WRITE
+  if (bytes < PREFAULT_MIN_BYTES) return;
+  uintptr_t pg = (uintptr_t)sysconf(_SC_PAGESIZE);
+  uintptr_t a = ((uintptr_t)p + pg - 1) & ~(pg - 1);
+  uintptr_t b = ((uintptr_t)p + bytes) & ~(pg - 1);
+  if (b > a) (void)madvise((void *)a, b - a, MADV_POPULATE_WRITE);
+#else
+  (void)p;
+  (void)bytes;
+#endif
+}
+
+void pa__recs_prefault(pa__recs *r, size_t i0, size_t n) {
+  size_t nv = (size_t)r->nv, nd = (size_t)r->ndbl;
+  if (i0 + n > r->cap) return;
+  prefault(r->gid + i0, n * sizeof *r->gid);
+  if (nv) prefault(r->vgid + nv * i0, nv * n * sizeof *r->vgid);
+  prefault(r->ref + i0, n * sizeof *r->ref);
+  prefault(r->flag + i0, n * sizeof *r->flag);
+  prefault(r->aux + i0, n * sizeof *r->aux);
+  if (nd) prefault(r->dbl + nd * i0, nd * n * sizeof *r->dbl);
+  if (r->poff) {
+    prefault(r->poff + i0 + 1, n * sizeof *r->poff);
+    prefault(r->pay + r->poff[i0], r->paycap - r->poff[i0]);
+  }
 }
 
 pa_status pa__recs_get(pa__recs *r, const unsigned char *p, size_t *pos) {
@@ -544,6 +581,7 @@ static pa_status migrate(MPI_Comm comm, pa__recs *in, const int *dest,
   PA_CALLOC(start, (size_t)size + 1);
   size_t nstay = 0;
   while (nstay < in->n && dest[nstay] == rank) nstay++;
+  int allstay = nstay == in->n; /* (in may be freed before the merge) */
   if (nstay == in->n) {
     /* every record stays (the adaptation's rebuild, mostly): nothing to
      * pack, and the index of the staying records is the identity */
@@ -564,11 +602,10 @@ static pa_status migrate(MPI_Comm comm, pa__recs *in, const int *dest,
     if (in->poff) pay[rank] += in->poff[nstay] - in->poff[0];
     for (int r = 0; r < size; r++) start[r + 1] += start[r];
   }
-  /* records by destination (stable), each destination's sorted by gid */
-  PA_ALLOC(byrank, in->n ? in->n : 1);
-  if (nstay == in->n) {
-    for (size_t i = 0; i < in->n; i++) byrank[i] = (pa_idx)i;
-  } else {
+  /* records by destination (stable), each destination's sorted by gid;
+   * when every record stays, the identity, made only if blocks arrive */
+  if (nstay < in->n) {
+    PA_ALLOC(byrank, in->n);
     size_t *cur;
     PA_ALLOC(cur, size);
     memcpy(cur, start, (size_t)size * sizeof *cur);
@@ -609,6 +646,11 @@ static pa_status migrate(MPI_Comm comm, pa__recs *in, const int *dest,
       PA_CALL(pa__recs_sort(out));
       goto cleanup;
     }
+    if (allstay) { /* the identity index, sorted for the merge */
+      PA_ALLOC(byrank, in->n ? in->n : 1);
+      for (size_t i = 0; i < in->n; i++) byrank[i] = (pa_idx)i;
+      PA_CALL(pa__sort_by_gid(byrank, in->n, in->gid));
+    }
     npay = pa__recs_paybytes(in, byrank + start[rank], nself);
     while (q < tot) {
       pa__recblock b;
@@ -619,8 +661,6 @@ static pa_status migrate(MPI_Comm comm, pa__recs *in, const int *dest,
     }
     PA_CHECK(q == tot, PA_ERR_INTERNAL, "record blocks of %zu bytes, %zu read",
              tot, q);
-    if (nstay == in->n) /* the identity index, sorted for the merge */
-      PA_CALL(pa__sort_by_gid(byrank, in->n, in->gid));
     PA_CALL(pa__recs_reserve(out, nrec, npay));
     PA_CALL(merge_sources(out, recv, rcnt, rank, size, in,
                           byrank + start[rank], nself));
