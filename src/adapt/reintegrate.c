@@ -1434,11 +1434,10 @@ static pa_status count_fresh(pa__iter *it, reint *r) {
      * not on the skin, so its owner does not keep it: an element, boundary
      * entity or edge that a piece shares with the outside lies on a skin
      * face) */
-    pa_idx nre = 0, nrb, nrd;
-    PA_CALL(output_reuse(pc, PA_ELEMENT, &nre));
-    PA_CALL(output_reuse(pc, PA_BOUNDARY, &nrb));
-    PA_CALL(output_reuse(pc, PA_EDGE, &nrd));
-    r->cnt[PA_ELEMENT] += pc->out->ne - nre;
+    pa_idx nreuse[PA_DMESH_NKIND] = {0};
+    for (int k = PA_ELEMENT; k <= PA_EDGE; k++)
+      PA_CALL(output_reuse(pc, k, &nreuse[k]));
+    r->cnt[PA_ELEMENT] += pc->out->ne - nreuse[PA_ELEMENT];
     PA_CALL(output_emit(pc->out, pc->reuse[PA_BOUNDARY], pc->reuse[PA_EDGE],
                         pc->bfix, &r->bemit[q], &r->demit[q], r->cnt));
     PA_CALL(output_dest(it, pc, &pc->dest));

@@ -279,13 +279,8 @@ static void bstate_free(bstate *s) {
 /* 1 if g is the gid of a private vertex (binary search in s->P). */
 static int is_private(const bstate *s, pa_gid g) {
   if (!s->P || !s->P->n) return 0;
-  size_t lo = 0, hi = s->P->n;
-  while (lo < hi) {
-    size_t mid = lo + (hi - lo) / 2;
-    if (s->P->gid[mid] < g) lo = mid + 1;
-    else hi = mid;
-  }
-  return lo < s->P->n && s->P->gid[lo] == g;
+  size_t k = pa__gid_lower_bound(s->P->gid, s->P->n, g);
+  return k < s->P->n && s->P->gid[k] == g;
 }
 
 static pa_gid min_vgid(const pa__recs *r, size_t i) {
@@ -1197,14 +1192,8 @@ typedef struct assembly {
  * (sorted by gid). */
 static pa_idx local_vertex(const bstate *s, const assembly *a, pa_gid g) {
   if (a->uselv) return pa__gidindex_get(&a->lv, g);
-  size_t lo = 0, hi = s->LV.n;
-  const pa_gid *k = s->LV.gid;
-  while (lo < hi) {
-    size_t mid = lo + (hi - lo) / 2;
-    if (k[mid] < g) lo = mid + 1;
-    else hi = mid;
-  }
-  return lo < s->LV.n && k[lo] == g ? a->lvof[lo] : -1;
+  size_t k = pa__gid_lower_bound(s->LV.gid, s->LV.n, g);
+  return k < s->LV.n && s->LV.gid[k] == g ? a->lvof[k] : -1;
 }
 
 /* Step 6: number the local elements and vertices (owned first) and index

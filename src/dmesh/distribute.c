@@ -1250,13 +1250,11 @@ static pa_gid local_gid(const gview *Q, size_t c) {
 /* The position of global id g among the sorted ids of the records of Q,
  * or -1. */
 static ptrdiff_t find_gid(const gview *Q, pa_gid g) {
-  size_t lo = 0, hi = Q->n;
-  while (lo < hi) {
-    size_t mid = lo + (hi - lo) / 2;
-    if (view_gid(Q, mid) < g) lo = mid + 1;
-    else hi = mid;
-  }
-  return lo < Q->n && view_gid(Q, lo) == g ? (ptrdiff_t)lo : -1;
+  if (!Q->gid) /* consecutive */
+    return g >= Q->gid0 && g < Q->gid0 + (pa_gid)Q->n ? (ptrdiff_t)(g - Q->gid0)
+                                                      : -1;
+  size_t k = pa__gid_lower_bound(Q->gid, Q->n, g);
+  return k < Q->n && Q->gid[k] == g ? (ptrdiff_t)k : -1;
 }
 
 /* The output vertices of every rank's local vertices: rank r's in

@@ -282,13 +282,8 @@ static int owned_first_sorted(pa_idx n, const pa_gid *gid, const int *owner,
 static void resolve_sorted(pa__sf *sf, const pa_gid *gid, pa_idx nown,
                            const pa_gid *rg, size_t nroot) {
   for (size_t j = 0; j < nroot; j++) {
-    pa_idx lo = 0, hi = nown;
-    while (lo < hi) {
-      pa_idx mid = lo + (hi - lo) / 2;
-      if (gid[mid] < rg[j]) lo = mid + 1;
-      else hi = mid;
-    }
-    sf->rootidx[j] = lo < nown && gid[lo] == rg[j] ? lo : -1;
+    size_t k = pa__gid_lower_bound(gid, (size_t)nown, rg[j]);
+    sf->rootidx[j] = k < (size_t)nown && gid[k] == rg[j] ? (pa_idx)k : -1;
   }
 }
 

@@ -111,6 +111,18 @@ static inline void pa__buf_free(pa__buf *b) {
 }
 /* Sort gids ascending and remove duplicates; returns the new count. */
 size_t pa__gid_sort_unique(pa_gid *a, size_t n);
+/* The position of the first of the n ascending gids g not below x (n if
+ * none): a binary search. */
+static inline size_t pa__gid_lower_bound(const pa_gid *g, size_t n,
+                                         pa_gid x) {
+  size_t lo = 0, hi = n;
+  while (lo < hi) {
+    size_t mid = lo + (hi - lo) / 2;
+    if (g[mid] < x) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
+}
 /* Sort idx[0..n) so that key[idx[i]] is ascending (stable). */
 pa_status pa__sort_by_gid(pa_idx *idx, size_t n, const pa_gid *key);
 /* 1 if n global ids in [lo, hi] span little enough (at most 3 values per

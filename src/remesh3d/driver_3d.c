@@ -776,9 +776,9 @@ static pa_status break_lattice_crowd(rm3d *m) {
               100 * crowd, 100 * longer, ns, nw);
     crowd = lattice_crowd(m, &longer, &far);
   }
-  m->spread = tight_crowd(crowd, longer) ? RM3D_SPREAD_TIGHT
-              : crowd > RM3D_CROWD_WIDE    ? RM3D_SPREAD_WIDE
-                                           : 0;
+  m->spread = tight_crowd(crowd, longer)  ? RM3D_SPREAD_TIGHT
+              : crowd > RM3D_CROWD_WIDE ? RM3D_SPREAD_WIDE
+                                        : 0;
   for (pa_idx p = 0; p < m->nv; p++) {
     int crowded = (m->vtag[p] & RM3D_V_TODO) != 0;
     m->vtag[p] &= (uint8_t)~RM3D_V_TODO;
